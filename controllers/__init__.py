@@ -1,0 +1,19 @@
+"""Force laws of the fork and tire, injected into MuJoCo through its control callback.
+
+Installed as ``mtbmj.controllers``. Each law is a small immutable object; ``ForkLaw`` composes a
+spring, a damper and a friction law; ``ForkCallback`` and ``installed`` put it into MuJoCo.
+"""
+from .callback import ForkCallback, installed
+from .damper import BilinearDamper, LinearDamper, TableDamper
+from .fork import ForkLaw
+from .friction import Coulomb, CoulombViscous, LuGre, NoFriction, Stiction, Stribeck, smooth_sign
+from .spring import BilinearSpring, DirectionalSpring, LinearSpring, ProgressiveSpring, TopOutSpring
+from .tire import KelvinVoigt, TireLaw
+
+__all__ = [
+    "ForkCallback", "installed", "ForkLaw",
+    "LinearSpring", "BilinearSpring", "ProgressiveSpring", "DirectionalSpring", "TopOutSpring",
+    "LinearDamper", "BilinearDamper", "TableDamper",
+    "NoFriction", "Coulomb", "CoulombViscous", "Stiction", "Stribeck", "LuGre", "smooth_sign",
+    "KelvinVoigt", "TireLaw",
+]

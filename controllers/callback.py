@@ -1,0 +1,58 @@
+"""Injecting the fork force law into MuJoCo through ``mujoco.set_mjcb_control``.
+
+The control callback is process-global, fires for every model stepped while installed (dm_control
+included) and, with RK4, four times per step at the stage states. ``ForkCallback`` therefore acts
+only on the model it was built for, reads the state it is handed (so RK4 stages are right), and
+assigns (never adds to) ``qfrc_applied``, which MuJoCo does not clear. ``installed`` restores the
+previous callback however the run ends.
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+import mujoco
+
+
+class ForkCallback:
+    """Writes -F_fork into the fork joint's generalized force and, for LuGre, dz/dt into the
+    control of an integrator actuator whose activation is the bristle state z."""
+
+    def __init__(self, model, fork_law, fork_joint: str = "fork", state_actuator: str = "friction_state"):
+        self.law = fork_law
+        self._model = model
+        self._model_address = model._address
+        joint = model.joint(fork_joint)
+        self.qpos_index = int(joint.qposadr[0])
+        self.dof_index = int(joint.dofadr[0])
+        self.has_state = fork_law.has_state
+        actuator = model.actuator(state_actuator)
+        self.ctrl_index = int(actuator.id)
+        self.act_index = int(model.actuator_actadr[actuator.id])
+        self.calls = 0
+
+    def __call__(self, m, d):
+        if m is not self._model and m._address != self._model_address:
+            return
+        self.calls += 1
+        x = d.qpos[self.qpos_index]
+        v = d.qvel[self.dof_index]
+        if self.has_state:
+            z = d.act[self.act_index]
+            d.ctrl[self.ctrl_index] = self.law.state_rate(v, z)
+            d.qfrc_applied[self.dof_index] = -self.law.force(x, v, z)
+        else:
+            d.qfrc_applied[self.dof_index] = -self.law.force(x, v)
+
+
+@contextmanager
+def installed(callback):
+    """Install ``callback`` as MuJoCo's control callback for the duration of a with-block."""
+    previous = mujoco.get_mjcb_control()
+    mujoco.set_mjcb_control(callback)
+    try:
+        yield callback
+    finally:
+        mujoco.set_mjcb_control(previous)
+
+
+__all__ = ["ForkCallback", "installed"]

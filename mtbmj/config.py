@@ -1,0 +1,308 @@
+"""Configurations: TOML files with units in the key names, validated into a flat mapping.
+
+A configuration is a TOML file whose tables mirror the model (``[sled]``, ``[fork.spring]``,
+``[fork.damper]``, ``[fork.friction]``, ``[tire]``, ``[solver]``). A file may name a ``base`` (a
+preset name or a path) whose values it overrides; the presets S1-S14 all build on ``reference``.
+Values are plain numbers in the unit their key names (SI inside the package after conversion in
+``mtbmj.compose``). Every problem raises ``ConfigError`` naming the key.
+"""
+from __future__ import annotations
+
+import difflib
+import hashlib
+import json
+import math
+import sys
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any, Mapping
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+from .errors import ConfigError
+
+# kinds: "pos" > 0, "nonneg" >= 0, "list" of finite numbers, "bool", "text", or a tuple of
+# allowed strings.
+SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive")
+DAMPER_MODELS = ("linear", "bilinear", "table")
+FRICTION_MODELS = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")
+TIRE_MODELS = ("impact", "switch", "undamped", "static")
+INTEGRATORS = ("euler", "implicitfast", "implicit", "rk4")
+ODE_METHODS = ("Radau", "BDF", "LSODA")
+
+SCHEMA: dict[str, Any] = {
+    "description": "text",
+    "reading": "text",
+    "sled.body_mass_kg": "pos",
+    "sled.wheel_mass_kg": "pos",
+    "sled.drop_height_mm": "nonneg",
+    "sled.gravity_m_per_s2": "pos",
+    "fork.travel_mm": "pos",
+    "fork.length_mm": "pos",
+    "fork.spring.model": SPRING_MODELS,
+    "fork.spring.rate_N_per_mm": "pos",
+    "fork.spring.compression_rate_N_per_mm": "pos",
+    "fork.spring.rebound_rate_N_per_mm": "pos",
+    "fork.spring.knee_mm": "pos",
+    "fork.spring.rate_below_knee_N_per_mm": "pos",
+    "fork.spring.rate_above_knee_N_per_mm": "pos",
+    "fork.spring.progressive_rate_N_per_mm": "pos",
+    "fork.spring.progressive_cubic_N_per_mm3": "nonneg",
+    "fork.spring.top_out": "bool",
+    "fork.spring.top_out_rate_N_per_mm": "pos",
+    "fork.spring.preload": "bool",
+    "fork.spring.preload_N": "nonneg",
+    "fork.spring.direction_band_mm_per_s": "pos",
+    "fork.damper.model": DAMPER_MODELS,
+    "fork.damper.coefficient_N_s_per_m": "nonneg",
+    "fork.damper.compression_N_s_per_m": "nonneg",
+    "fork.damper.rebound_N_s_per_m": "nonneg",
+    "fork.damper.velocity_mm_per_s": "list",
+    "fork.damper.force_N": "list",
+    "fork.friction.model": FRICTION_MODELS,
+    "fork.friction.coulomb_N": "nonneg",
+    "fork.friction.breakaway_N": "nonneg",
+    "fork.friction.viscous_N_s_per_m": "nonneg",
+    "fork.friction.stiction_band_mm_per_s": "pos",
+    "fork.friction.stribeck_velocity_mm_per_s": "pos",
+    "fork.friction.stribeck_exponent": "pos",
+    "fork.friction.sign_band_mm_per_s": "pos",
+    "fork.friction.bristle_stiffness_N_per_mm": "pos",
+    "fork.friction.bristle_damping_N_s_per_m": "nonneg",
+    "tire.model": TIRE_MODELS,
+    "tire.radius_mm": "pos",
+    "tire.impact_rate_N_per_mm": "pos",
+    "tire.impact_damping_N_s_per_m": "nonneg",
+    "tire.contact_rate_N_per_mm": "pos",
+    "tire.contact_damping_N_s_per_m": "nonneg",
+    "tire.static_rate_N_per_mm": "pos",
+    "tire.max_deflection_mm": "pos",
+    "solver.duration_s": "pos",
+    "solver.timestep_s": "pos",
+    "solver.integrator": INTEGRATORS,
+    "solver.ode_method": ODE_METHODS,
+    "solver.ode_rtol": "pos",
+    "solver.ode_atol_mm": "pos",
+    "solver.sample_rate_Hz": "pos",
+    "solver.antialias_Hz": "pos",
+}
+
+UNIT_SUFFIXES = (
+    "_N_s_per_m", "_N_per_mm3", "_N_per_mm", "_mm_per_s", "_m_per_s2", "_kg", "_mm", "_N", "_s", "_Hz",
+)
+
+
+def _stem(key: str) -> str:
+    for suffix in UNIT_SUFFIXES:
+        if key.endswith(suffix):
+            return key[: -len(suffix)]
+    return key
+
+
+_STEMS = {_stem(k): k for k in SCHEMA if _stem(k) != k}
+
+
+def _flatten(table: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    flat: dict[str, Any] = {}
+    for key, value in table.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            flat.update(_flatten(value, name + "."))
+        else:
+            flat[name] = value
+    return flat
+
+
+def check_value(key: str, value: Any) -> Any:
+    """Validate one value against the schema; return it (lists as tuples of floats)."""
+    if key not in SCHEMA:
+        if key in _STEMS:
+            raise ConfigError(f"{key}: value without its unit; the key is {_STEMS[key]}")
+        close = difflib.get_close_matches(key, list(SCHEMA), n=1, cutoff=0.6)
+        hint = f" (did you mean {close[0]}?)" if close else ""
+        raise ConfigError(f"{key}: unknown key{hint}")
+    kind = SCHEMA[key]
+    if kind == "bool":
+        if not isinstance(value, bool):
+            raise ConfigError(f"{key}: must be true or false, got {value!r}")
+        return value
+    if kind == "text":
+        if not isinstance(value, str):
+            raise ConfigError(f"{key}: must be text")
+        return value
+    if isinstance(kind, tuple):
+        if value not in kind:
+            raise ConfigError(f"{key}: {value!r} is not one of {', '.join(kind)}")
+        return value
+    if kind == "list":
+        if not isinstance(value, (list, tuple)) or not all(_is_number(v) for v in value):
+            raise ConfigError(f"{key}: must be a list of numbers")
+        if not all(math.isfinite(v) for v in value):
+            raise ConfigError(f"{key}: contains NaN or infinity")
+        return tuple(float(v) for v in value)
+    if isinstance(value, str):
+        raise ConfigError(f"{key}: must be a plain number (the unit is in the key name), got {value!r}")
+    if not _is_number(value):
+        raise ConfigError(f"{key}: must be a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ConfigError(f"{key}: must be finite, got {value}")
+    if kind == "pos" and value <= 0.0:
+        raise ConfigError(f"{key}: must be positive, got {value:g}")
+    if kind == "nonneg" and value < 0.0:
+        raise ConfigError(f"{key}: must not be negative, got {value:g}")
+    return value
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def preset_names() -> list[str]:
+    files = resources.files("mtbmj.presets").iterdir()
+    names = [f.name[:-5] for f in files if f.name.endswith(".toml")]
+    return sorted(names, key=lambda n: (not n.startswith("S"), int(n[1:]) if n[1:].isdigit() else 0, n))
+
+
+def study_presets() -> list[str]:
+    return [f"S{i}" for i in range(1, 15)]
+
+
+@dataclass(frozen=True)
+class Config:
+    """A validated configuration: ``values`` maps dotted keys (``fork.spring.rate_N_per_mm``)
+    to numbers, strings or tuples of numbers."""
+
+    name: str
+    values: Mapping[str, Any]
+    sources: tuple[str, ...] = field(default=())
+
+    def __getitem__(self, key: str) -> Any:
+        return self.require(key)
+
+    def get(self, key: str, default: Any = None) -> Any:
+        return self.values.get(key, default)
+
+    def require(self, key: str, why: str = "") -> Any:
+        if key not in self.values:
+            reason = f" ({why})" if why else ""
+            raise ConfigError(f"{key}: missing{reason}")
+        return self.values[key]
+
+    def with_overrides(self, overrides: Mapping[str, Any]) -> "Config":
+        values = dict(self.values)
+        for key, value in overrides.items():
+            values[key] = check_value(key, value)
+        return Config(self.name, values, self.sources)
+
+    def digest(self) -> str:
+        """SHA-256 of the canonical JSON of the values: the config hash in manifests."""
+        text = json.dumps({k: self.values[k] for k in sorted(self.values)}, sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def to_toml(self) -> str:
+        """The configuration as TOML, tables in schema order; loads back to the same values."""
+        sections: dict[str, list[str]] = {}
+        for key in sorted(self.values, key=lambda k: list(SCHEMA).index(k)):
+            section, _, leaf = key.rpartition(".")
+            sections.setdefault(section, []).append(f"{leaf} = {_toml_value(self.values[key])}")
+        chunks = ["\n".join(sections.pop(""))] if "" in sections else []
+        chunks += [f"[{s}]\n" + "\n".join(lines) for s, lines in sections.items()]
+        return "\n\n".join(chunks) + "\n"
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, tuple):
+        return "[" + ", ".join(repr(float(v)) for v in value) + "]"
+    return repr(float(value))
+
+
+def parse_assignment(text: str) -> tuple[str, Any]:
+    """Parse a ``--set key=value`` override; the value is read as TOML (numbers, lists) or,
+    failing that, as a bare word (model names)."""
+    if "=" not in text:
+        raise ConfigError(f"--set {text}: expected key=value")
+    key, raw = (part.strip() for part in text.split("=", 1))
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return key, value
+
+
+def _read_toml(path: Path) -> dict[str, Any]:
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ConfigError(f"{path}: cannot read ({exc.strerror})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML ({exc})") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"{path}: not a text file") from None
+
+
+def _locate(ref: str, relative_to: Path | None = None) -> tuple[str, Path | Any]:
+    """Resolve a preset name (case-insensitive) or a TOML path."""
+    for name in preset_names():
+        if ref.lower() == name.lower():
+            return name, resources.files("mtbmj.presets") / f"{name}.toml"
+    path = Path(ref)
+    if relative_to is not None and not path.is_absolute():
+        candidate = relative_to / path
+        if candidate.exists():
+            path = candidate
+    if path.suffix.lower() == ".toml" or path.exists():
+        if not path.exists():
+            raise ConfigError(f"{ref}: no such configuration file")
+        return path.stem, path
+    known = ", ".join(preset_names())
+    raise ConfigError(f"{ref}: unknown preset (known: {known}) and no such file")
+
+
+def load(ref: str | Path, overrides: Mapping[str, Any] | None = None, _depth: int = 0) -> Config:
+    """Load a preset name or a TOML file, following ``base`` links, then apply overrides."""
+    if _depth > 8:
+        raise ConfigError(f"{ref}: base chain too deep (a cycle?)")
+    name, location = _locate(str(ref))
+    if isinstance(location, Path):
+        table = _read_toml(location)
+        parent = location.parent
+    else:
+        table = tomllib.loads(location.read_text())
+        parent = None
+    flat = _flatten(table)
+    values: dict[str, Any] = {}
+    sources: tuple[str, ...] = ()
+    base = flat.pop("base", None)
+    if base is not None:
+        if not isinstance(base, str):
+            raise ConfigError(f"{location}: base must be a preset name or a path")
+        if parent is not None and not any(base.lower() == n.lower() for n in preset_names()):
+            base = str(parent / base) if not Path(base).is_absolute() else base
+        parent_config = load(base, _depth=_depth + 1)
+        values.update(parent_config.values)
+        sources = parent_config.sources
+        values.pop("description", None)
+        values.pop("reading", None)
+    for key, value in flat.items():
+        try:
+            values[key] = check_value(key, value)
+        except ConfigError as exc:
+            raise ConfigError(f"{location}: {exc}") from None
+    config = Config(name, values, sources + (str(location),))
+    if overrides:
+        config = config.with_overrides(overrides)
+    return config
+
+
+__all__ = ["Config", "ConfigError", "load", "parse_assignment", "preset_names", "study_presets", "SCHEMA"]

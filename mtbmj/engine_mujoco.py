@@ -1,0 +1,106 @@
+"""The drop on MuJoCo: the scene from ``mtbmj.scene``, the fork law through the control callback,
+the tire as calibrated soft contact, the tire-law switch applied between steps."""
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from mtbmj.controllers import ForkCallback, installed
+from . import scene as scene_mod
+from .compose import Setup
+from .errors import RunError
+from .trace import RawTrace
+
+def _warning(data) -> str | None:
+    for i, w in enumerate(data.warning):
+        if w.number:
+            return mujoco.mjtWarning(i).name.removeprefix("mjWARN_")
+    return None
+
+
+def _state_layout(model) -> tuple[int, slice, slice, slice]:
+    """Offsets of time, qpos, qvel and act in MuJoCo's full-physics state vector."""
+    size = lambda spec: mujoco.mj_stateSize(model, spec)
+    t = size(mujoco.mjtState.mjSTATE_TIME)
+    nq, nv = size(mujoco.mjtState.mjSTATE_QPOS), size(mujoco.mjtState.mjSTATE_QVEL)
+    na = size(mujoco.mjtState.mjSTATE_ACT)
+    return 0, slice(t, t + nq), slice(t + nq, t + nq + nv), slice(t + nq + nv, t + nq + nv + na)
+
+
+def run(setup: Setup, duration: float | None = None, progress=None, chunk: int = 1000) -> RawTrace:
+    """Integrate the drop from tire touch (t = 0, both bodies at the impact speed).
+
+    Steps run in chunks through ``mujoco.rollout`` (the loop and the recording stay in C++; the
+    control callback still supplies the fork force). When the tire law switches, the chunk is cut
+    at the step where the fork tops out, the contact is re-parameterised and stepping resumes
+    from that state, exactly as if the switch had been made between two single steps.
+    """
+    duration = setup.duration if duration is None else duration
+    sc = scene_mod.build(setup)
+    model = sc.model
+    data = mujoco.MjData(model)
+    data.qvel[sc.sled_dof] = setup.impact_speed
+    mujoco.mj_forward(model, data)
+    callback = ForkCallback(model, setup.fork)
+    steps = int(round(duration / setup.timestep))
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(model, spec))
+    mujoco.mj_getState(model, data, state, spec)
+    it, iq, iv, ia = _state_layout(model)
+    record = np.empty((steps + 1, state.size))
+    record[0] = state
+    phase = np.zeros(steps + 1, dtype=np.int8)
+    tire = setup.tire
+    current_phase = 0
+    done = 0
+    fork_col = iq.start + sc.fork_qpos
+    with installed(callback):
+        while done < steps:
+            n = min(chunk, steps - done)
+            states, _ = rollout.rollout(model, data, state[None, :], nstep=n)
+            states = states[0]
+            keep = n
+            switch = False
+            if tire.switches and current_phase == 0:
+                x = np.concatenate(([record[done, fork_col]], states[:, fork_col]))
+                crossed = np.flatnonzero((x[:-1] > 0.0) & (x[1:] <= 0.0))
+                if crossed.size:
+                    keep = int(crossed[0]) + 1
+                    switch = True
+            record[done + 1: done + 1 + keep] = states[:keep]
+            phase[done + 1: done + 1 + keep] = current_phase
+            done += keep
+            state = record[done].copy()
+            _check(data, states[:keep], done, setup)
+            if switch:
+                current_phase = 1
+                values = tire.values(1)
+                sc.set_tire(values.rate, values.damping)
+            if progress is not None:
+                progress(done / steps)
+    return RawTrace(
+        engine="mujoco",
+        time=record[:, it],
+        sled=record[:, iq.start + sc.sled_qpos],
+        fork=record[:, fork_col],
+        sled_velocity=record[:, iv.start + sc.sled_dof],
+        fork_velocity=record[:, iv.start + sc.fork_dof],
+        friction_state=record[:, ia.start + callback.act_index] if model.na else np.zeros(steps + 1),
+        tire_phase=phase,
+        info={"steps": steps, "callback_calls": callback.calls, "integrator": setup.integrator,
+              "timestep_s": setup.timestep, "contact_inverse_inertia_per_kg": sc.inverse_inertia},
+    )
+
+
+def _check(data, states, done: int, setup: Setup) -> None:
+    """Stop on a MuJoCo warning or a non-finite or runaway state, naming the time."""
+    t = done * setup.timestep
+    warning = _warning(data)
+    if warning is not None:
+        raise RunError(f"run diverged before t = {t:.4f} s: MuJoCo warning {warning}")
+    if not np.all(np.isfinite(states)):
+        bad = int(np.flatnonzero(~np.all(np.isfinite(states), axis=1))[0])
+        raise RunError(f"run diverged at t = {(done - len(states) + bad + 1) * setup.timestep:.4f} s: state is not finite")
+    if np.max(np.abs(states[:, 1:3])) > 10.0:
+        raise RunError(f"run diverged before t = {t:.4f} s: displacement beyond 10 m")

@@ -1,0 +1,149 @@
+"""The independent reference: the same force laws integrated by scipy's ``solve_ivp``.
+
+State y = [s, x, ds/dt, dx/dt, z]: sled descent, fork compression, their rates and the friction
+state. Equations (paper eqs. 2-3 with the fork force F_f pushing sled and wheel apart and the tire
+force F_t pushing the wheel up):
+
+    m_b s'' = m_b g - F_f
+    m_w w'' = m_w g + F_f - F_t,   w = s - x (wheel descent = tire deflection)
+
+Every piecewise law exposes guards (see ``controllers.spring``). The integration runs in segments
+with each law's branch frozen; a terminal event stops a segment exactly where a guard changes
+sign (tire touch or separation, the knee, the top-out hand-over, a table breakpoint, the tire-law
+switch), so no step ever integrates across a discontinuity or a kink.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from .compose import Setup
+from .errors import RunError
+from .trace import RawTrace
+
+MAX_SEGMENTS = 20000
+
+
+class _Model:
+    def __init__(self, setup: Setup):
+        self.s = setup
+        self.fork = setup.fork
+        self.tire = setup.tire
+        self.nf = setup.fork.n_guards
+
+    def guards(self, y, phase):
+        s, x, sd, xd, z = y
+        tv = self.tire.values(phase)
+        deflection, rate = s - x, sd - xd
+        return self.fork.guards(x, xd) + (deflection, tv.rate * deflection + tv.damping * rate)
+
+    def rhs(self, t, y, sides, phase):
+        s, x, sd, xd, z = y
+        nf = self.nf
+        fork_sides = sides[:nf] if sides is not None else None
+        f_fork = self.fork.force(x, xd, z, fork_sides)
+        tv = self.tire.values(phase)
+        if sides is None:
+            f_tire = tv.force(s - x, sd - xd)
+        elif sides[nf] and sides[nf + 1]:
+            f_tire = tv.rate * (s - x) + tv.damping * (sd - xd)
+        else:
+            f_tire = 0.0
+        g = self.s.gravity
+        sdd = g - f_fork / self.s.body_mass
+        wdd = g + (f_fork - f_tire) / self.s.wheel_mass
+        return np.array([sd, xd, sdd, sdd - wdd, self.fork.state_rate(xd, z, fork_sides)])
+
+
+def _initial_sides(model: _Model, y0, phase):
+    """Branch of each guard at the start; a guard that is exactly zero takes the side it moves to."""
+    values = np.array(model.guards(y0, phase))
+    sides = list(values >= 0.0)
+    zero = np.flatnonzero(values == 0.0)
+    if zero.size:
+        y = np.array(y0, dtype=float)
+        for eps in (1e-9, 1e-7, 1e-5):
+            probe = model.guards(y + eps * model.rhs(0.0, y, None, phase), phase)
+            for i in zero:
+                if probe[i] != 0.0:
+                    sides[i] = probe[i] > 0.0
+            if all(p != 0.0 for p in (probe[i] for i in zero)):
+                break
+    return tuple(bool(v) for v in sides)
+
+
+def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
+    duration = setup.duration if duration is None else duration
+    model = _Model(setup)
+    grid = np.arange(int(round(duration / setup.timestep)) + 1) * setup.timestep
+    y = np.array([0.0, 0.0, setup.impact_speed, 0.0, 0.0])
+    phase = 0
+    sides = _initial_sides(model, y, phase)
+    out = np.empty((grid.size, 5))
+    phases = np.zeros(grid.size, dtype=np.int8)
+    filled = 0
+    t = 0.0
+    solver_steps = 0
+    events_log: list[tuple[float, str]] = []
+    n_guards = len(sides)
+    for _segment in range(MAX_SEGMENTS):
+        events = []
+        for i in range(n_guards):
+            def event(tt, yy, sides_, phase_, i=i):  # solve_ivp passes args to events too
+                return model.guards(yy, phase_)[i]
+            event.terminal = True
+            event.direction = -1.0 if sides[i] else 1.0
+            events.append(event)
+        if setup.tire.switches and phase == 0:
+            def topping(tt, yy, sides_, phase_):
+                return yy[1]
+            topping.terminal = True
+            topping.direction = -1.0
+            events.append(topping)
+        sol = solve_ivp(model.rhs, (t, duration), y, method=setup.ode_method, rtol=setup.ode_rtol,
+                        atol=setup.ode_atol, events=events, dense_output=True, args=(sides, phase))
+        if sol.status < 0:
+            raise RunError(f"ODE reference failed at t = {t:.4f} s: {sol.message}")
+        solver_steps += len(sol.t) - 1
+        t_end = sol.t[-1]
+        stop = np.searchsorted(grid, t_end, side="right") if sol.status == 1 else grid.size
+        if stop > filled:
+            out[filled:stop] = sol.sol(grid[filled:stop]).T
+            phases[filled:stop] = phase
+            filled = stop
+        if progress is not None:
+            progress(t_end / duration)
+        if sol.status == 0:
+            break
+        y = sol.y[:, -1].copy()
+        t = t_end
+        fired = [k for k, te in enumerate(sol.t_events) if len(te)]
+        new_sides = list(sides)
+        for k in fired:
+            if k < n_guards:
+                new_sides[k] = not new_sides[k]
+                events_log.append((t, f"guard {k}"))
+            else:
+                phase = 1
+                events_log.append((t, "tire switch"))
+        sides = tuple(new_sides)
+        if phase == 1 and any(k >= n_guards for k in fired):
+            # The tire guards depend on the tire values: take them afresh for the new phase.
+            fresh = _initial_sides(model, y, phase)
+            sides = sides[: n_guards - 2] + fresh[n_guards - 2:]
+        if not np.all(np.isfinite(y)):
+            raise RunError(f"ODE reference diverged at t = {t:.4f} s")
+    else:
+        raise RunError(f"ODE reference: more than {MAX_SEGMENTS} law switches before t = {t:.4f} s (chattering)")
+    return RawTrace(
+        engine="ode",
+        time=grid,
+        sled=out[:, 0],
+        fork=out[:, 1],
+        sled_velocity=out[:, 2],
+        fork_velocity=out[:, 3],
+        friction_state=out[:, 4],
+        tire_phase=phases,
+        info={"method": setup.ode_method, "rtol": setup.ode_rtol, "atol_m": setup.ode_atol,
+              "solver_steps": solver_steps, "segments": len(events_log) + 1, "events": events_log},
+    )

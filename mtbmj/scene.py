@@ -1,0 +1,87 @@
+"""Build the MuJoCo drop scene from the bundled MJCF and a configuration.
+
+The tire is a MuJoCo soft contact calibrated to behave as the configured radial spring K (N/m)
+and damper B (N s/m). MuJoCo's "direct" solref (-stiffness, -damping) is scaled by the contact's
+inverse inertia A and its impedance d (REFERENCE.md §4); with a constant impedance d (solimp
+d0 = dwidth = d), ``diagexact`` and an elliptic cone, the contact force is
+f = max(0, K pen + B pen_rate) when solref = (-K A (1-d), -B A (1-d)). A is computed from the
+compiled model (J M^-1 J^T at the tire's contact point), not assumed.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from mtbmj import mjcf
+from .compose import Setup
+
+INTEGRATORS = {
+    "euler": mujoco.mjtIntegrator.mjINT_EULER,
+    "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+    "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+    "rk4": mujoco.mjtIntegrator.mjINT_RK4,
+}
+
+
+@dataclass
+class DropScene:
+    model: mujoco.MjModel
+    inverse_inertia: float  # A, 1/kg, at the tire contact along the normal
+    sled_qpos: int
+    sled_dof: int
+    fork_qpos: int
+    fork_dof: int
+    tire_geom: int
+
+    def set_tire(self, rate: float, damping: float) -> None:
+        """Calibrated solref for a radial spring ``rate`` (N/m) and damper ``damping`` (N s/m)."""
+        d = float(self.model.geom_solimp[self.tire_geom, 0])
+        scale = self.inverse_inertia * (1.0 - d)
+        self.model.geom_solref[self.tire_geom] = (-rate * scale, -damping * scale)
+
+
+def contact_inverse_inertia(model: mujoco.MjModel, geom: str = "tire") -> float:
+    """J M^-1 J^T for the vertical direction at the lowest point of the tire geom, at qpos0."""
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    g = model.geom(geom)
+    point = data.geom_xpos[g.id] - np.array([0.0, 0.0, model.geom_size[g.id, 0]])
+    jacp = np.zeros((3, model.nv))
+    mujoco.mj_jac(model, data, jacp, None, point, int(model.geom_bodyid[g.id]))
+    jz = jacp[2].copy()
+    minv_j = np.zeros(model.nv)
+    mujoco.mj_solveM(model, data, minv_j.reshape(1, -1), jz.reshape(1, -1))
+    return float(jz @ minv_j)
+
+
+def build(setup: Setup, scene: str = "drop_scene.xml") -> DropScene:
+    """Compile the drop scene with the configuration's masses, geometry, gravity and solver."""
+    spec = mujoco.MjSpec.from_file(str(mjcf.path(scene)))
+    spec.option.timestep = setup.timestep
+    spec.option.integrator = INTEGRATORS[setup.integrator]
+    spec.option.gravity = [0.0, 0.0, -setup.gravity]
+    sled = spec.body("sled")
+    sled.mass = setup.body_mass
+    # At qpos = 0 the tread just touches the floor: the sled's zero and the paper's t = 0.
+    sled.pos = [0.0, 0.0, setup.tire_radius + setup.fork_length]
+    lower = spec.body("fork_lower")
+    lower.mass = setup.wheel_mass
+    lower.pos = [0.0, 0.0, -setup.fork_length]
+    spec.geom("tire").size = [setup.tire_radius, 0.0, 0.0]
+    model = spec.compile()
+    sled_joint = model.joint("sled")
+    fork_joint = model.joint("fork")
+    scene_obj = DropScene(
+        model=model,
+        inverse_inertia=contact_inverse_inertia(model),
+        sled_qpos=int(sled_joint.qposadr[0]),
+        sled_dof=int(sled_joint.dofadr[0]),
+        fork_qpos=int(fork_joint.qposadr[0]),
+        fork_dof=int(fork_joint.dofadr[0]),
+        tire_geom=int(model.geom("tire").id),
+    )
+    first = setup.tire.values(0)
+    scene_obj.set_tire(first.rate, first.damping)
+    return scene_obj
