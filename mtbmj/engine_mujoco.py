@@ -47,7 +47,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, chunk: int =
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state, spec)
-    it, iq, iv, ia = _state_layout(model)
+    _, iq, iv, ia = _state_layout(model)
     record = np.empty((steps + 1, state.size))
     record[0] = state
     phase = np.zeros(steps + 1, dtype=np.int8)
@@ -81,7 +81,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, chunk: int =
                 progress(done / steps)
     return RawTrace(
         engine="mujoco",
-        time=record[:, it],
+        time=np.arange(steps + 1) * setup.timestep,
         sled=record[:, iq.start + sc.sled_qpos],
         fork=record[:, fork_col],
         sled_velocity=record[:, iv.start + sc.sled_dof],

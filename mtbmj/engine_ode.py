@@ -30,6 +30,16 @@ class _Model:
         self.fork = setup.fork
         self.tire = setup.tire
         self.nf = setup.fork.n_guards
+        self._cache_key = None
+        self._cache_value = ()
+
+    def cached_guards(self, t, y, phase):
+        """solve_ivp evaluates every event at the same (t, y): compute the guards once."""
+        key = (t, phase, y.tobytes())
+        if key != self._cache_key:
+            self._cache_key = key
+            self._cache_value = self.guards(y, phase)
+        return self._cache_value
 
     def guards(self, y, phase):
         s, x, sd, xd, z = y
@@ -75,7 +85,7 @@ def _initial_sides(model: _Model, y0, phase):
 def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
     duration = setup.duration if duration is None else duration
     model = _Model(setup)
-    grid = np.arange(int(round(duration / setup.timestep)) + 1) * setup.timestep
+    grid = np.arange(int(round(duration / setup.timestep)) + 1) * setup.timestep  # the MuJoCo step times
     y = np.array([0.0, 0.0, setup.impact_speed, 0.0, 0.0])
     phase = 0
     sides = _initial_sides(model, y, phase)
@@ -90,7 +100,7 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
         events = []
         for i in range(n_guards):
             def event(tt, yy, sides_, phase_, i=i):  # solve_ivp passes args to events too
-                return model.guards(yy, phase_)[i]
+                return model.cached_guards(tt, yy, phase_)[i]
             event.terminal = True
             event.direction = -1.0 if sides[i] else 1.0
             events.append(event)

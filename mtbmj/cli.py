@@ -1,0 +1,157 @@
+"""The ``mtbmj`` command: drop, study, crosscheck, presets. Headless; bad input gets one line on
+stderr and exit status 2; results are written atomically."""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import warnings
+from pathlib import Path
+
+from . import __version__
+from .config import parse_assignment, preset_names
+from .errors import MtbmjError
+
+EXIT_BAD_INPUT = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, not usage + message
+        raise MtbmjError(message)
+
+
+class Progress:
+    """A progress line on stderr: redrawn in place on a terminal, a few plain lines otherwise."""
+
+    def __init__(self, label: str, enabled: bool = True):
+        self.label = label
+        self.enabled = enabled
+        self.tty = sys.stderr.isatty()
+        self.start = time.perf_counter()
+        self.last = -1
+
+    def __call__(self, fraction: float) -> None:
+        if not self.enabled:
+            return
+        step = int(fraction * 10)
+        if self.tty:
+            bar = "#" * int(fraction * 30)
+            print(f"\r{self.label} [{bar:<30}] {fraction * 100:5.1f}%", end="", file=sys.stderr, flush=True)
+        elif step > self.last and step in (5, 10):
+            print(f"{self.label}: {fraction * 100:.0f}%", file=sys.stderr, flush=True)
+        self.last = step
+
+    def done(self) -> None:
+        if self.enabled:
+            end = "\n" if self.tty else ""
+            print(f"{end}{self.label}: done in {time.perf_counter() - self.start:.2f} s", file=sys.stderr)
+
+
+def _overrides(pairs) -> dict:
+    return dict(parse_assignment(p) for p in pairs or [])
+
+
+def cmd_drop(args) -> int:
+    from .drop import run_drop
+
+    progress = Progress(f"{args.config} on {args.engine}", not args.quiet)
+    result = run_drop(args.config, args.engine, _overrides(args.set), args.duration, progress)
+    progress.done()
+    written = result.write(args.out)
+    s = result.summary
+    lift = f"{s['lift_off_s']:.3f} s" if s["lift_off_s"] is not None else "never"
+    print(f"{result.name} ({args.engine}): fork peak {s['max_fork_mm']:.1f} mm "
+          f"({s['travel_used_percent']:.0f} % of travel), tire peak {s['max_tire_mm']:.1f} mm, lift-off {lift}, "
+          f"{'at rest' if s['at_rest'] else 'still moving'} at the end; wrote {len(written)} files to {args.out}")
+    return 0
+
+
+def cmd_study(args) -> int:
+    from .study import run_study, write_study
+
+    start = time.perf_counter()
+    log = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
+    presets = args.presets.split(",") if args.presets else None
+    results, checks = run_study(presets, _overrides(args.set), args.duration, args.workers, log)
+    written = write_study(args.out, results, checks)
+    worst = max(checks, key=lambda c: c.worst[1])
+    print(f"study: {len(checks)} configurations x 2 engines in {time.perf_counter() - start:.1f} s; "
+          f"largest MuJoCo-ODE difference {worst.worst[1]:.4f} mm ({worst.name}, {worst.worst[0]}); "
+          f"wrote {len(written)} files to {args.out}")
+    return 0
+
+
+def cmd_crosscheck(args) -> int:
+    from mtbmj.validation import crosscheck
+
+    check = crosscheck(args.config, args.tolerance_mm, _overrides(args.set), args.duration)
+    print(check.line())
+    return 0 if check.passed else 1
+
+
+def cmd_presets(args) -> int:
+    from .config import load
+
+    for name in preset_names():
+        print(f"{name:10s} {load(name).get('description', '')}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="mtbmj", description="Mountain-bike fork + tire drop-sled study on MuJoCo with an ODE reference.")
+    parser.add_argument("--version", action="version", version=f"mtbmj {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    def common(p):
+        p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                       help="override a configuration key, e.g. fork.spring.preload_N=300 (repeatable)")
+        p.add_argument("--duration", type=float, help="simulated time in s (default: solver.duration_s)")
+
+    p = sub.add_parser("drop", help="run one configuration on one engine")
+    p.add_argument("config", help="preset name (S1..S14, reference) or a TOML file")
+    p.add_argument("--engine", choices=("mujoco", "ode"), default="mujoco")
+    p.add_argument("--out", type=Path, default=Path("out/drop"), help="output directory (default out/drop)")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    common(p)
+    p.set_defaults(func=cmd_drop)
+
+    p = sub.add_parser("study", help="run S1-S14 on both engines, write figures and the difference table")
+    p.add_argument("--out", type=Path, default=Path("out/study"), help="output directory (default out/study)")
+    p.add_argument("--presets", help="comma-separated subset, e.g. S1,S12")
+    p.add_argument("--workers", type=int, help="processes (default: one per core)")
+    p.add_argument("--quiet", action="store_true")
+    common(p)
+    p.set_defaults(func=cmd_study)
+
+    p = sub.add_parser("crosscheck", help="run both engines; exit 1 when they differ by more than the tolerance")
+    p.add_argument("config")
+    p.add_argument("--tolerance-mm", type=float, default=0.1, help="largest allowed difference in mm (default 0.1)")
+    common(p)
+    p.set_defaults(func=cmd_crosscheck)
+
+    p = sub.add_parser("presets", help="list the bundled presets")
+    p.set_defaults(func=cmd_presets)
+    return parser
+
+
+def main(argv=None) -> int:
+    try:
+        args = build_parser().parse_args(argv)
+        if getattr(args, "duration", None) is not None and not args.duration > 0:
+            raise MtbmjError(f"--duration: must be positive, got {args.duration}")
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)
+            return args.func(args)
+    except MtbmjError as exc:
+        print(f"mtbmj: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except RuntimeWarning as exc:
+        print(f"mtbmj: error: run diverged ({exc})", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("mtbmj: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

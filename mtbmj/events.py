@@ -1,0 +1,120 @@
+"""Summary figures of a drop: peaks, valleys, lift-off, landing, rest, energy."""
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import find_peaks
+
+from .compose import Setup
+from .trace import RawTrace
+
+REST_WINDOW_S = 0.2  # the last 0.2 s decide whether the system is at rest
+REST_TOLERANCE_MM = 0.5  # peak-to-peak sled motion allowed "at rest"
+MIN_AIRTIME_S = 0.002  # shorter losses of contact are not a lift-off
+
+
+def _contact_changes(t, tire_force):
+    """Lift-off and landing times from the tire force (not geometric overlap)."""
+    contact = tire_force > 0.0
+    start = int(np.argmax(contact)) if contact.any() else None
+    if start is None:
+        return None, None
+    loss = np.flatnonzero(~contact[start:]) + start
+    for i in loss:
+        back = np.flatnonzero(contact[i:])
+        duration = (t[i + back[0]] - t[i]) if back.size else t[-1] - t[i]
+        if duration >= MIN_AIRTIME_S:
+            landing = i + back[0] if back.size else None
+            return i, landing
+    return None, None
+
+
+def _event(t, y, i):
+    return {"time_s": float(t[i]), "value_mm": float(y[i])}
+
+
+def signal_events(t, y, lift, land):
+    """Peak 1, topping (minimum in the air), Peak 2, Valley 1, Peak 3 of one displacement signal."""
+    ev: dict[str, dict | None] = {"peak1": None, "topping": None, "peak2": None, "valley1": None, "peak3": None}
+    end1 = lift if lift is not None else len(y)
+    ev["peak1"] = _event(t, y, int(np.argmax(y[:end1])))
+    prominence = 0.05 * max(float(np.ptp(y)), 1e-9)
+    if lift is not None:
+        air_end = land if land is not None else len(y)
+        ev["topping"] = _event(t, y, lift + int(np.argmin(y[lift:air_end])))
+        if land is None:
+            return ev
+        after = y[land:]
+        peaks, _ = find_peaks(after, prominence=prominence)
+        if not peaks.size:
+            return ev
+        p2 = land + int(peaks[0])
+    else:
+        valleys, _ = find_peaks(-y, prominence=prominence)
+        valleys = valleys[valleys > np.argmax(y)]
+        if not valleys.size:
+            return ev
+        v = int(valleys[0])
+        peaks, _ = find_peaks(y[v:], prominence=prominence)
+        if not peaks.size:
+            return ev
+        p2 = v + int(peaks[0])
+    ev["peak2"] = _event(t, y, p2)
+    valleys, _ = find_peaks(-y[p2:], prominence=prominence)
+    if valleys.size:
+        v1 = p2 + int(valleys[0])
+        ev["valley1"] = _event(t, y, v1)
+        peaks, _ = find_peaks(y[v1:], prominence=prominence)
+        if peaks.size:
+            ev["peak3"] = _event(t, y, v1 + int(peaks[0]))
+    return ev
+
+
+def energy(setup: Setup, trace: RawTrace) -> dict[str, float]:
+    """Energy balance (J) with the tread-touch position as the height datum: input kinetic energy
+    at impact, mechanical energy left at the end, and their difference, the energy dissipated."""
+    mb, mw, g = setup.body_mass, setup.wheel_mass, setup.gravity
+    e_in = 0.5 * (mb + mw) * setup.impact_speed**2
+
+    def mechanical(i):
+        s, x, sd, xd = trace.sled[i], trace.fork[i], trace.sled_velocity[i], trace.fork_velocity[i]
+        w, wd = s - x, sd - xd
+        kinetic = 0.5 * mb * sd**2 + 0.5 * mw * wd**2
+        gravity = -mb * g * s - mw * g * w
+        tire = setup.tire.values(int(trace.tire_phase[i]))
+        stored = setup.fork.elastic_energy(x) + (0.5 * tire.rate * w * w if w > 0 else 0.0)
+        friction = setup.fork.friction
+        if friction.has_state:
+            stored += 0.5 * friction.stiffness * trace.friction_state[i] ** 2
+        return kinetic + gravity + stored
+
+    e_end = mechanical(len(trace.time) - 1)
+    return {"input_J": float(e_in), "mechanical_end_J": float(e_end), "dissipated_J": float(e_in - e_end)}
+
+
+def summarize(setup: Setup, trace: RawTrace, logged: dict[str, np.ndarray], raw: dict[str, np.ndarray]) -> dict:
+    """JSON-ready summary. Events come from the logged (1 kHz) signals, contact from the raw
+    tire force; a run that never lifts off or never settles says so instead of guessing."""
+    lift_raw, land_raw = _contact_changes(raw["time_s"], raw["tire_force_N"])
+    t = logged["time_s"]
+    to_logged = lambda i: None if i is None else int(min(np.searchsorted(t, raw["time_s"][i]), len(t) - 1))
+    lift, land = to_logged(lift_raw), to_logged(land_raw)
+    events = {name: signal_events(t, logged[f"{name}_mm"], lift, land) for name in ("sled", "fork", "tire")}
+    window = t >= t[-1] - REST_WINDOW_S
+    rest = {name: float(np.mean(logged[f"{name}_mm"][window])) for name in ("sled", "fork", "tire")}
+    motion = float(np.ptp(logged["sled_mm"][window]))
+    return {
+        "impact_speed_m_per_s": setup.impact_speed,
+        "lift_off_s": None if lift_raw is None else float(raw["time_s"][lift_raw]),
+        "landing_s": None if land_raw is None else float(raw["time_s"][land_raw]),
+        "lifts_off": lift_raw is not None,
+        "fork_tops_out": bool(np.any(raw["fork_mm"][raw["time_s"] > 0.01] <= 0.0)),
+        "events": events,
+        "rest_mm": rest,
+        "rest_motion_mm": motion,
+        "at_rest": motion < REST_TOLERANCE_MM,
+        "max_fork_mm": float(np.max(raw["fork_mm"])),
+        "travel_used_percent": float(np.max(raw["fork_mm"]) / (setup.travel * 1e3) * 100.0),
+        "bottoms_out": bool(np.max(raw["fork_mm"]) > setup.travel * 1e3),
+        "max_tire_mm": float(np.max(raw["tire_mm"])),
+        "energy": energy(setup, trace),
+    }

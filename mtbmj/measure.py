@@ -1,0 +1,63 @@
+"""Engine traces seen through the sled's instruments.
+
+Conventions (paper, "Test Setup"): sled zero when the tread just touches the ground, fork zero at
+unloaded full extension, tire = sled - fork, compression positive, all in mm. The logger samples
+at 1 kHz behind a 400 Hz anti-aliasing filter; here a causal 4th-order Butterworth low-pass (the
+usual analog anti-aliasing response) runs on the engine-rate trace before decimation.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy import signal
+
+from .compose import Setup
+from .trace import RawTrace
+
+COLUMNS = (
+    "time_s", "sled_mm", "fork_mm", "tire_mm",
+    "sled_velocity_mm_per_s", "fork_velocity_mm_per_s", "tire_velocity_mm_per_s",
+    "fork_force_N", "tire_force_N",
+)
+
+
+def forces(setup: Setup, trace: RawTrace) -> tuple[np.ndarray, np.ndarray]:
+    """Fork force (N, pushing apart) and tire force (N, pushing up) along a trace, from the laws."""
+    fork_law, tire_law = setup.fork, setup.tire
+    x, v, z = trace.fork, trace.fork_velocity, trace.friction_state
+    d, dv, ph = trace.tire, trace.tire_velocity, trace.tire_phase
+    fork = np.fromiter((fork_law.force(x[i], v[i], z[i]) for i in range(x.size)), float, x.size)
+    tire = np.fromiter((tire_law.force(d[i], dv[i], ph[i]) for i in range(d.size)), float, d.size)
+    return fork, tire
+
+
+def engine_signals(setup: Setup, trace: RawTrace) -> dict[str, np.ndarray]:
+    """The raw trace in the output columns and units, at the engine rate."""
+    fork_force, tire_force = forces(setup, trace)
+    return {
+        "time_s": trace.time,
+        "sled_mm": trace.sled * 1e3,
+        "fork_mm": trace.fork * 1e3,
+        "tire_mm": trace.tire * 1e3,
+        "sled_velocity_mm_per_s": trace.sled_velocity * 1e3,
+        "fork_velocity_mm_per_s": trace.fork_velocity * 1e3,
+        "tire_velocity_mm_per_s": trace.tire_velocity * 1e3,
+        "fork_force_N": fork_force,
+        "tire_force_N": tire_force,
+    }
+
+
+def logged(setup: Setup, raw: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Anti-alias filter and resample the engine-rate signals to the logger's rate."""
+    t = raw["time_s"]
+    dt = t[1] - t[0]
+    ratio = int(round(1.0 / (setup.sample_rate * dt)))
+    sos = signal.butter(4, setup.antialias, fs=1.0 / dt, output="sos")
+    zi = signal.sosfilt_zi(sos)
+    out = {"time_s": t[::ratio].copy()}
+    for name, values in raw.items():
+        if name == "time_s":
+            continue
+        # Start the filter in steady state on the first value, as a logger running before t = 0.
+        filtered, _ = signal.sosfilt(sos, values, zi=zi * values[0])
+        out[name] = filtered[::ratio]
+    return out

@@ -1,0 +1,102 @@
+"""The S1-S14 study on both engines: the paper's figures and an engine-vs-reference table."""
+from __future__ import annotations
+
+import io
+import os
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Callable, Sequence
+
+from mtbmj.validation import Crosscheck, from_results
+from . import output
+from .config import Config, study_presets
+from .drop import resolve, run_drop
+from .result import DISPLACEMENTS, DropResult
+
+GROUPS = {
+    "spring": ("Fork spring study S1-S7", [f"S{i}" for i in range(1, 8)]),
+    "damper": ("Fork damping study S8-S10", ["S8", "S9", "S10"]),
+    "tire": ("Tire study S11-S14", ["S11", "S12", "S13", "S14"]),
+}
+
+
+def _run(job: tuple[Config, str, float | None]) -> DropResult:
+    config, engine, duration = job
+    return run_drop(config, engine, duration=duration)
+
+
+def run_study(presets: Sequence[str] | None = None, overrides=None, duration: float | None = None,
+              workers: int | None = None, progress: Callable[[str], None] | None = None):
+    """Run every preset on MuJoCo and on the ODE reference, in parallel processes.
+
+    Returns ``(results, crosschecks)``: ``results[name][engine]`` and one ``Crosscheck`` per preset.
+    """
+    names = list(presets or study_presets())
+    configs = [resolve(n, overrides) for n in names]
+    jobs = [(c, e, duration) for c in configs for e in ("ode", "mujoco")]
+    workers = workers or min(len(jobs), os.cpu_count() or 1)
+    results: dict[str, dict[str, DropResult]] = {n: {} for n in names}
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        for done, result in enumerate(pool.map(_run, jobs), 1):
+            results[result.name][result.engine] = result
+            if progress is not None:
+                progress(f"[{done}/{len(jobs)}] {result.name} {result.engine}: {result.wall_time_s:.2f} s")
+    checks = [from_results(results[n]["mujoco"], results[n]["ode"]) for n in names]
+    return results, checks
+
+
+def group_figure(results, title: str, names: Sequence[str]):
+    """Sled, fork and tire histories of one group: MuJoCo solid, ODE reference dashed."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 8), constrained_layout=True)
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for k, name in enumerate(n for n in names if n in results):
+        colour = colours[k % len(colours)]
+        results[name]["mujoco"].plot(axes, label=f"{name} MuJoCo", color=colour, lw=1.4)
+        if "ode" in results[name]:
+            results[name]["ode"].plot(axes, label=f"{name} ODE", color=colour, lw=0.9, ls="--")
+    fig.suptitle(title)
+    return fig
+
+
+def png_bytes(fig) -> bytes:
+    import matplotlib.pyplot as plt
+
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    plt.close(fig)
+    return buffer.getvalue()
+
+
+def table_markdown(checks: Sequence[Crosscheck]) -> str:
+    lines = ["| config | sled max diff [mm] | fork max diff [mm] | tire max diff [mm] | worst at [s] | within tol. | MuJoCo [s] | ODE [s] |",
+             "|---|---|---|---|---|---|---|---|"]
+    for c in checks:
+        d = c.differences
+        lines.append(f"| {c.name} | {d['sled_mm']['max_abs_mm']:.4f} | {d['fork_mm']['max_abs_mm']:.4f} | "
+                     f"{d['tire_mm']['max_abs_mm']:.4f} | {c.worst[2]:.4f} | {'yes' if c.passed else 'NO'} | "
+                     f"{c.mujoco_wall_s:.3f} | {c.ode_wall_s:.3f} |")
+    return "\n".join(lines) + "\n"
+
+
+def study_files(results, checks) -> dict[str, bytes]:
+    files = {}
+    for key, (title, names) in GROUPS.items():
+        if any(n in results for n in names):
+            files[f"study_{key}.png"] = png_bytes(group_figure(results, title, names))
+    rows = [c.row() for c in checks]
+    columns = list(rows[0])
+    csv = ",".join(columns) + "\n" + "\n".join(",".join(str(r[c]) for c in columns) for r in rows) + "\n"
+    files["engine_vs_reference.csv"] = csv.encode()
+    files["engine_vs_reference.md"] = table_markdown(checks).encode()
+    summary = {name: {engine: r.summary for engine, r in per.items()} for name, per in results.items()}
+    files["study_summary.json"] = output.json_bytes(summary)
+    return files
+
+
+def write_study(out_dir: str | Path, results, checks) -> list[Path]:
+    return output.write_atomically(out_dir, study_files(results, checks))
