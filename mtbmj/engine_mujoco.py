@@ -54,6 +54,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, chunk: int =
     tire = setup.tire
     current_phase = 0
     done = 0
+    discarded = 0  # steps computed past a tire-law switch and recomputed with the new law
     fork_col = iq.start + sc.fork_qpos
     with installed(callback):
         while done < steps:
@@ -68,6 +69,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, chunk: int =
                 if crossed.size:
                     keep = int(crossed[0]) + 1
                     switch = True
+            discarded += n - keep
             record[done + 1: done + 1 + keep] = states[:keep]
             phase[done + 1: done + 1 + keep] = current_phase
             done += keep
@@ -88,7 +90,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, chunk: int =
         fork_velocity=record[:, iv.start + sc.fork_dof],
         friction_state=record[:, ia.start + callback.act_index] if model.na else np.zeros(steps + 1),
         tire_phase=phase,
-        info={"steps": steps, "callback_calls": callback.calls, "integrator": setup.integrator,
+        info={"steps": steps, "steps_discarded": discarded, "callback_calls": callback.calls, "integrator": setup.integrator,
               "timestep_s": setup.timestep, "contact_inverse_inertia_per_kg": sc.inverse_inertia},
     )
 

@@ -82,6 +82,24 @@ def _initial_sides(model: _Model, y0, phase):
     return tuple(bool(v) for v in sides)
 
 
+PROBE_S = 1e-7  # look-ahead that decides which side of a root a guard is on
+
+
+def _resync(model: _Model, y, phase, sides: list, fired) -> tuple:
+    """After an event, bring every other guard's side in line with where the state is going.
+
+    Two guards can share a root (the damper table and LuGre both switch at v = 0): the solver
+    stops at one, and the other sits within rounding of its root, where its direction-filtered
+    event may never fire. Each guard's side is therefore taken from the state PROBE_S ahead
+    along the new branch, which is decisive even when the value at the event is rounding noise.
+    """
+    probe = model.guards(y + PROBE_S * model.rhs(0.0, y, tuple(sides), phase), phase)
+    for i, value in enumerate(probe):
+        if i not in fired and value != 0.0 and (value > 0.0) != sides[i]:
+            sides[i] = not sides[i]
+    return tuple(sides)
+
+
 def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
     duration = setup.duration if duration is None else duration
     model = _Model(setup)
@@ -136,7 +154,7 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
             else:
                 phase = 1
                 events_log.append((t, "tire switch"))
-        sides = tuple(new_sides)
+        sides = _resync(model, y, phase, new_sides, fired)
         if phase == 1 and any(k >= n_guards for k in fired):
             # The tire guards depend on the tire values: take them afresh for the new phase.
             fresh = _initial_sides(model, y, phase)

@@ -15,6 +15,7 @@ import mujoco
 import numpy as np
 
 from mtbmj import mjcf
+from mtbmj.controllers import installed
 from .compose import Setup
 
 INTEGRATORS = {
@@ -70,12 +71,17 @@ def build(setup: Setup, scene: str = "drop_scene.xml") -> DropScene:
     lower.mass = setup.wheel_mass
     lower.pos = [0.0, 0.0, -setup.fork_length]
     spec.geom("tire").size = [setup.tire_radius, 0.0, 0.0]
-    model = spec.compile()
+    # The control callback is process-global and compiling runs the model forward: a Python
+    # callback installed by someone else would fire on a half-built model (MuJoCo then fails
+    # with "Python exception raised"). Compile and calibrate with no callback installed.
+    with installed(None):
+        model = spec.compile()
+        inverse_inertia = contact_inverse_inertia(model)
     sled_joint = model.joint("sled")
     fork_joint = model.joint("fork")
     scene_obj = DropScene(
         model=model,
-        inverse_inertia=contact_inverse_inertia(model),
+        inverse_inertia=inverse_inertia,
         sled_qpos=int(sled_joint.qposadr[0]),
         sled_dof=int(sled_joint.dofadr[0]),
         fork_qpos=int(fork_joint.qposadr[0]),

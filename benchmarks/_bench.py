@@ -1,0 +1,39 @@
+"""Shared helpers of the benchmark scripts (not a test module)."""
+from __future__ import annotations
+
+import json
+import os
+import platform
+import time
+from pathlib import Path
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+def environment() -> dict:
+    import mujoco
+    import numpy
+    import scipy
+
+    import mtbmj
+
+    return {"mtbmj": mtbmj.__version__, "mujoco": mujoco.__version__, "scipy": scipy.__version__,
+            "numpy": numpy.__version__, "python": platform.python_version(), "cpus": os.cpu_count(),
+            "load_average_1min": os.getloadavg()[0], "date": time.strftime("%Y-%m-%d %H:%M:%S")}
+
+
+def write_json(script: str, payload: dict) -> Path:
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    path = RESULTS / f"{Path(script).stem}.json"
+    path.write_text(json.dumps({"environment": environment(), **payload}, indent=2, default=float) + "\n")
+    return path
+
+
+def best_of(fn, repeat: int = 3):
+    """(best wall time in s, all times, last return value) of ``repeat`` calls of ``fn``."""
+    times, value = [], None
+    for _ in range(repeat):
+        start = time.perf_counter()
+        value = fn()
+        times.append(time.perf_counter() - start)
+    return min(times), times, value
