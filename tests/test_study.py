@@ -1,0 +1,61 @@
+"""The S1-S14 study: every preset on both engines, the figures and the difference table."""
+import csv
+import subprocess
+import sys
+
+import pytest
+
+from mtbmj.study import run_study, write_study
+
+
+@pytest.fixture(scope="module")
+def study():
+    return run_study(workers=2)
+
+
+def test_mujoco_matches_the_ode_reference_for_every_preset(study):
+    """Accuracy target at default settings: <= 0.1 mm in sled, fork and tire over 1.5 s."""
+    results, checks = study
+    assert [c.name for c in checks] == [f"S{i}" for i in range(1, 15)]
+    for check in checks:
+        assert check.passed, check.line()
+        assert check.worst[1] > 0.0  # two different integrators never agree bit for bit
+
+
+def test_study_reproduces_the_papers_findings_in_kind(study):
+    results, _ = study
+    s = {name: per["mujoco"].summary for name, per in results.items()}
+    fork_peak = {n: v["events"]["fork"]["peak1"]["value_mm"] for n, v in s.items()}
+    tire_peak = {n: v["events"]["tire"]["peak1"]["value_mm"] for n, v in s.items()}
+    # S1 overshoots most and never comes to rest
+    assert fork_peak["S1"] == max(fork_peak.values())
+    assert not s["S1"]["at_rest"]
+    # the full model uses about 80 % of the travel and lifts off with a topping event
+    assert 70.0 < s["S12"]["travel_used_percent"] < 90.0
+    assert s["S12"]["lifts_off"] and s["S12"]["fork_tops_out"]
+    # S14's softer static tire deflects much more at Peak 1 than the dynamic-rate tires
+    assert tire_peak["S14"] > 1.1 * tire_peak["S11"]
+    # S8 is S7 by construction
+    assert fork_peak["S8"] == fork_peak["S7"]
+
+
+def test_study_writes_figures_and_table(study, tmp_path):
+    results, checks = study
+    written = write_study(tmp_path / "study", results, checks)
+    names = {p.name for p in written}
+    assert {"study_spring.png", "study_damper.png", "study_tire.png", "engine_vs_reference.csv",
+            "engine_vs_reference.md", "study_summary.json"} <= names
+    for png in ("study_spring.png", "study_damper.png", "study_tire.png"):
+        assert (tmp_path / "study" / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    rows = list(csv.DictReader(open(tmp_path / "study" / "engine_vs_reference.csv")))
+    assert len(rows) == 14 and all(float(r["max_diff_fork_mm"]) < 0.1 for r in rows)
+
+
+def test_study_cli_on_a_subset(tmp_path):
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-m", "mtbmj.cli", "study", "--presets", "S1,S12", "--duration", "0.3",
+                           "--out", str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "[4/4]" in done.stderr  # progress on stderr
+    assert (out / "study_spring.png").exists() and (out / "study_tire.png").exists()
+    assert not (out / "study_damper.png").exists()  # no damper-group preset asked for
