@@ -14,6 +14,8 @@ from .config import Config, load as load_config, preset_names, study_presets  # 
 from .drop import run_drop  # noqa: E402
 from .errors import ConfigError, MtbmjError, RunError  # noqa: E402
 from .result import DropResult  # noqa: E402
+from .study import run_study, write_study  # noqa: E402
+from mtbmj.validation import crosscheck  # noqa: E402
 
 __all__ = ["__version__", "Config", "load_config", "preset_names", "study_presets", "run_drop",
-           "DropResult", "MtbmjError", "ConfigError", "RunError"]
+           "run_study", "write_study", "crosscheck", "DropResult", "MtbmjError", "ConfigError", "RunError"]
