@@ -112,43 +112,47 @@ class DirectionalSpring:
 
 @dataclass(frozen=True)
 class TopOutSpring:
-    """Main spring (with optional preload) working against a top-out spring.
+    """Main spring (with optional preload P) working against a top-out spring of rate k_t.
 
-    The net force is F = min(k_top x, P + F_main(x, v)), where k_top is the rate measured when
-    the fork is pulled past full extension (x < 0, paper Fig. 3c) and P the preload. At x = 0 the
-    preloaded main spring sits against the top-out spring and the net force is zero; near full
-    extension the stiff top-out rate governs until it meets the preloaded main curve. The force is
-    continuous everywhere, so integrators do not chatter at full extension.
+    The two springs oppose each other. The top-out spring is engaged below x_e = P / k_t, where
+    it pushes back with k_t (x_e - x); at x = 0 it exactly balances the preload, so the fork rests
+    unloaded at full extension and the net force
+
+        F(x) = P + F_main(x, v) - k_t max(0, x_e - x)
+
+    is continuous, zero at x = 0 and steep near full extension (rate k_main + k_t), and equals the
+    preloaded main curve beyond x_e. Pulled past full extension (x < 0) the fork's rate is
+    k_main + k_t, which is what a dyno measures there (paper Fig. 3c). Without preload x_e = 0 and
+    the top-out spring acts only in extension.
     """
 
     main: object
-    top_out_rate: float  # N/m
+    top_out_rate: float  # N/m, the top-out spring's own rate
     preload: float = 0.0  # N
+
+    @property
+    def engagement(self) -> float:
+        """x_e (m): compression where the top-out spring comes free."""
+        return self.preload / self.top_out_rate
 
     @property
     def n_guards(self):
         return self.main.n_guards + 1
 
     def guards(self, x, v):
-        return self.main.guards(x, v) + (self.top_out_rate * x - self.preload - self.main.force(x, v),)
+        return self.main.guards(x, v) + (x - self.engagement,)
 
     def force(self, x, v, sides=None):
         nm = self.main.n_guards
-        main = self.preload + self.main.force(x, v, None if sides is None else sides[:nm])
-        top = self.top_out_rate * x
-        if _side(top - main, sides, nm):
-            return main
-        return top
+        force = self.preload + self.main.force(x, v, None if sides is None else sides[:nm])
+        if not _side(x - self.engagement, sides, nm):
+            force -= self.top_out_rate * (self.engagement - x)
+        return force
 
     def energy(self, x):
-        # Integrate the zero-velocity curve numerically: the min() has no simple closed form.
-        n = 200
-        h = x / n
-        total = 0.0
-        for i in range(n):
-            xi = (i + 0.5) * h
-            total += self.force(xi, 0.0) * h
-        return total
+        xe = self.engagement
+        engaged = xe * x - 0.5 * x * x if x <= xe else 0.5 * xe * xe
+        return self.preload * x + self.main.energy(x) - self.top_out_rate * engaged
 
 
 __all__ = ["LinearSpring", "BilinearSpring", "ProgressiveSpring", "DirectionalSpring", "TopOutSpring"]

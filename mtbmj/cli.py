@@ -21,30 +21,29 @@ class _Parser(argparse.ArgumentParser):
 
 
 class Progress:
-    """A progress line on stderr: redrawn in place on a terminal, a few plain lines otherwise."""
+    """A progress bar on stderr, redrawn in place, on a terminal only: when stderr is a file or a
+    pipe it stays free for the one-line error report."""
 
     def __init__(self, label: str, enabled: bool = True):
         self.label = label
-        self.enabled = enabled
         self.tty = sys.stderr.isatty()
+        self.enabled = enabled and self.tty
         self.start = time.perf_counter()
-        self.last = -1
 
     def __call__(self, fraction: float) -> None:
         if not self.enabled:
             return
-        step = int(fraction * 10)
-        if self.tty:
-            bar = "#" * int(fraction * 30)
-            print(f"\r{self.label} [{bar:<30}] {fraction * 100:5.1f}%", end="", file=sys.stderr, flush=True)
-        elif step > self.last and step in (5, 10):
-            print(f"{self.label}: {fraction * 100:.0f}%", file=sys.stderr, flush=True)
-        self.last = step
+        bar = "#" * int(fraction * 30)
+        print(f"\r{self.label} [{bar:<30}] {fraction * 100:5.1f}%", end="", file=sys.stderr, flush=True)
 
     def done(self) -> None:
         if self.enabled:
-            end = "\n" if self.tty else ""
-            print(f"{end}{self.label}: done in {time.perf_counter() - self.start:.2f} s", file=sys.stderr)
+            print(f"\r{self.label}: done in {time.perf_counter() - self.start:.2f} s" + " " * 30, file=sys.stderr)
+
+    def abandon(self) -> None:
+        """Clear the bar so an error report starts on a clean line."""
+        if self.enabled:
+            print("\r" + " " * 80 + "\r", end="", file=sys.stderr, flush=True)
 
 
 def _overrides(pairs) -> dict:
@@ -55,7 +54,11 @@ def cmd_drop(args) -> int:
     from .drop import run_drop
 
     progress = Progress(f"{args.config} on {args.engine}", not args.quiet)
-    result = run_drop(args.config, args.engine, _overrides(args.set), args.duration, progress)
+    try:
+        result = run_drop(args.config, args.engine, _overrides(args.set), args.duration, progress)
+    except BaseException:
+        progress.abandon()
+        raise
     progress.done()
     written = result.write(args.out)
     s = result.summary

@@ -81,10 +81,11 @@ def _spring(c: Config) -> object:
             )
         return main
     top = c.require("fork.spring.top_out_rate_N_per_mm", "needed by fork.spring.top_out = true") * N_PER_MM
-    # The top-out rate must exceed the main rate near full extension or min() never hands over.
-    if top <= main.force(1e-3, 0.0) / 1e-3:
-        raise ConfigError("fork.spring.top_out_rate_N_per_mm: must exceed the main spring rate")
-    return law.TopOutSpring(main, top, preload)
+    spring = law.TopOutSpring(main, top, preload)
+    if spring.engagement >= travel * MM:
+        raise ConfigError("fork.spring.preload_N: the top-out spring would stay engaged over the whole travel "
+                          "(preload / top-out rate exceeds fork.travel_mm)")
+    return spring
 
 
 def _damper(c: Config) -> object:
@@ -130,6 +131,13 @@ def _friction(c: Config) -> object:
         return law.Coulomb(get("coulomb_N"), band)
     if model == "coulomb_viscous":
         return law.CoulombViscous(get("coulomb_N"), get("viscous_N_s_per_m"), band)
+    if model in ("stiction", "stribeck"):
+        width_key = "stiction_band_mm_per_s" if model == "stiction" else "stribeck_velocity_mm_per_s"
+        if band > 0.25 * get(width_key, MM):
+            raise ConfigError(
+                f"fork.friction.sign_band_mm_per_s: {band / MM:g} mm/s is more than a quarter of "
+                f"fork.friction.{width_key}; the regularised sign would hide the breakaway peak"
+            )
     if model == "stiction":
         return law.Stiction(get("coulomb_N"), get("breakaway_N"), get("viscous_N_s_per_m"),
                             get("stiction_band_mm_per_s", MM), band)
@@ -214,6 +222,12 @@ def stiffest_rates(s: Setup) -> tuple[float, float]:
     return k_fork + k_tire, c_fork + c_tire
 
 
+def _round_down(value: float, digits: int = 2) -> str:
+    """``value`` to ``digits`` significant digits, never above it (a limit stated must hold)."""
+    exponent = math.floor(math.log10(value)) - digits + 1
+    return f"{math.floor(value / 10**exponent) * 10**exponent:.{digits}g}"
+
+
 def check_timestep(s: Setup) -> None:
     """Reject a MuJoCo timestep too large for the stiffest element: at least 25 steps per period
     of the wheel on the combined fork and tire stiffness, a damping slope the explicit force
@@ -229,5 +243,5 @@ def check_timestep(s: Setup) -> None:
     if s.timestep > limit:
         raise ConfigError(
             f"solver.timestep_s: {s.timestep:g} s is too large for the configured stiffness "
-            f"({k / 1e3:.0f} N/mm, {c:.0f} N s/m on the wheel); use at most {limit:.2g} s"
+            f"({k / 1e3:.0f} N/mm, {c:.0f} N s/m on the wheel); use at most {_round_down(limit)} s"
         )

@@ -4,9 +4,11 @@ from __future__ import annotations
 import time
 from typing import Callable, Mapping
 
+import numpy as np
+
 from . import compose, config as config_mod, engine_mujoco, engine_ode, events, measure
 from .config import Config
-from .errors import ConfigError
+from .errors import ConfigError, RunError
 from .result import DropResult
 
 ENGINES = {"mujoco": engine_mujoco.run, "ode": engine_ode.run}
@@ -31,6 +33,11 @@ def run_drop(config: Config | str, engine: str = "mujoco", overrides: Mapping | 
     start = time.perf_counter()
     trace = ENGINES[engine](setup, duration, progress)
     wall = time.perf_counter() - start
+    for name in ("sled", "fork", "sled_velocity", "fork_velocity", "friction_state"):
+        values = getattr(trace, name)
+        if not np.all(np.isfinite(values)):
+            at = trace.time[int(np.argmax(~np.isfinite(values)))]
+            raise RunError(f"run diverged at t = {at:.4f} s: {name.replace('_', ' ')} is not finite ({engine})")
     raw = measure.engine_signals(setup, trace)
     logged = measure.logged(setup, raw)
     summary = events.summarize(setup, trace, logged, raw)

@@ -2,6 +2,8 @@
 the tire as calibrated soft contact, the tire-law switch applied between steps."""
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import mujoco
 import numpy as np
 from mujoco import rollout
@@ -10,13 +12,25 @@ from mtbmj.controllers import ForkCallback, installed
 from . import scene as scene_mod
 from .compose import Setup
 from .errors import RunError
-from .trace import RawTrace
+from .trace import MAX_DISPLACEMENT_M, RawTrace
 
 def _warning(data) -> str | None:
     for i, w in enumerate(data.warning):
         if w.number:
             return mujoco.mjtWarning(i).name.removeprefix("mjWARN_")
     return None
+
+
+@contextmanager
+def _collected_warnings(messages: list):
+    """Route MuJoCo's warning text into ``messages`` for the run (by default MuJoCo prints it
+    and appends it to MUJOCO_LOG.TXT in the working directory); restore the handler after."""
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(messages.append)
+    try:
+        yield messages
+    finally:
+        mujoco.set_mju_user_warning(previous)
 
 
 def _state_layout(model) -> tuple[int, slice, slice, slice]:
@@ -56,7 +70,8 @@ def run(setup: Setup, duration: float | None = None, progress=None, chunk: int =
     done = 0
     discarded = 0  # steps computed past a tire-law switch and recomputed with the new law
     fork_col = iq.start + sc.fork_qpos
-    with installed(callback):
+    messages: list[str] = []
+    with installed(callback), _collected_warnings(messages):
         while done < steps:
             n = min(chunk, steps - done)
             states, _ = rollout.rollout(model, data, state[None, :], nstep=n)
@@ -74,7 +89,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, chunk: int =
             phase[done + 1: done + 1 + keep] = current_phase
             done += keep
             state = record[done].copy()
-            _check(data, states[:keep], done, setup)
+            _check(data, states[:keep], done, setup, messages)
             if switch:
                 current_phase = 1
                 values = tire.values(1)
@@ -95,14 +110,15 @@ def run(setup: Setup, duration: float | None = None, progress=None, chunk: int =
     )
 
 
-def _check(data, states, done: int, setup: Setup) -> None:
+def _check(data, states, done: int, setup: Setup, messages=()) -> None:
     """Stop on a MuJoCo warning or a non-finite or runaway state, naming the time."""
     t = done * setup.timestep
     warning = _warning(data)
-    if warning is not None:
-        raise RunError(f"run diverged before t = {t:.4f} s: MuJoCo warning {warning}")
+    if warning is not None or messages:
+        text = messages[0] if messages else warning
+        raise RunError(f"run diverged before t = {t:.4f} s: MuJoCo warning {warning}: {text}")
     if not np.all(np.isfinite(states)):
         bad = int(np.flatnonzero(~np.all(np.isfinite(states), axis=1))[0])
         raise RunError(f"run diverged at t = {(done - len(states) + bad + 1) * setup.timestep:.4f} s: state is not finite")
-    if np.max(np.abs(states[:, 1:3])) > 10.0:
+    if np.max(np.abs(states[:, 1:3])) > MAX_DISPLACEMENT_M:
         raise RunError(f"run diverged before t = {t:.4f} s: displacement beyond 10 m")

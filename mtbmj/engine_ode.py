@@ -19,7 +19,7 @@ from scipy.integrate import solve_ivp
 
 from .compose import Setup
 from .errors import RunError
-from .trace import RawTrace
+from .trace import MAX_DISPLACEMENT_M, RawTrace
 
 MAX_SEGMENTS = 20000
 
@@ -141,6 +141,8 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
             filled = stop
         if progress is not None:
             progress(t_end / duration)
+        if not np.all(np.isfinite(sol.y)) or np.max(np.abs(sol.y[:2])) > MAX_DISPLACEMENT_M:
+            raise RunError(f"ODE reference diverged before t = {t_end:.4f} s: displacement not finite or beyond 10 m")
         if sol.status == 0:
             break
         y = sol.y[:, -1].copy()
@@ -159,8 +161,6 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
             # The tire guards depend on the tire values: take them afresh for the new phase.
             fresh = _initial_sides(model, y, phase)
             sides = sides[: n_guards - 2] + fresh[n_guards - 2:]
-        if not np.all(np.isfinite(y)):
-            raise RunError(f"ODE reference diverged at t = {t:.4f} s")
     else:
         raise RunError(f"ODE reference: more than {MAX_SEGMENTS} law switches before t = {t:.4f} s (chattering)")
     return RawTrace(

@@ -5,6 +5,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+MAX_DISPLACEMENT_M = 10.0  # a sled or fork beyond this has run away: both engines stop there
+
 
 @dataclass(frozen=True)
 class RawTrace:

@@ -340,8 +340,8 @@ def test_bad_override_names_the_key(key, value, needles):
     # preload without top-out
     ("S1", {"fork.spring.preload": True}, "fork.spring.preload"),
     ("S5", {"fork.spring.top_out": False, "fork.spring.preload": True}, "fork.spring.preload"),
-    # top-out softer than the main spring
-    ("S5", {"fork.spring.top_out_rate_N_per_mm": 5.0}, "fork.spring.top_out_rate_N_per_mm"),
+    # a top-out spring so soft the preload keeps it engaged over the whole travel
+    ("S7", {"fork.spring.top_out_rate_N_per_mm": 1.0}, "fork.spring.preload_N"),
     # timestep too large for the stiffness
     ("S1", {"solver.timestep_s": 0.01}, "solver.timestep_s"),
     ("S12", {"solver.timestep_s": 0.002}, "solver.timestep_s"),
