@@ -9,16 +9,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .guards import SmoothLaw, on_positive_side
+
 
 @dataclass(frozen=True)
-class LinearDamper:
+class LinearDamper(SmoothLaw):
     """F = c v with one coefficient (the average of compression and rebound; S1-S8)."""
 
     coefficient: float  # N s/m
-    n_guards = 0
-
-    def guards(self, x, v):
-        return ()
 
     def force(self, v, sides=None):
         return self.coefficient * v
@@ -36,7 +34,7 @@ class BilinearDamper:
         return (v,)
 
     def force(self, v, sides=None):
-        positive = v >= 0.0 if sides is None else sides[0]
+        positive = on_positive_side(v, sides, 0)
         return (self.compression if positive else self.rebound) * v
 
 

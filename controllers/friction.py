@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from .guards import SmoothLaw, on_positive_side
+
 
 def smooth_sign(v: float, band: float) -> float:
     """tanh(v / band): sgn(v) for |v| >> band, linear with slope 1/band near zero."""
@@ -19,46 +21,28 @@ def smooth_sign(v: float, band: float) -> float:
 
 
 @dataclass(frozen=True)
-class NoFriction:
-    n_guards = 0
-    has_state = False
-
-    def guards(self, x, v):
-        return ()
-
+class NoFriction(SmoothLaw):
     def force(self, v, z=0.0, sides=None):
         return 0.0
 
 
 @dataclass(frozen=True)
-class Coulomb:
+class Coulomb(SmoothLaw):
     """F = F_C sgn(v) (Olsson 1998, Fig. 1a); the friction offset seen on a dyno at v = 0."""
 
     coulomb: float  # N
     band: float  # m/s
-    n_guards = 0
-    has_state = False
-
-    def guards(self, x, v):
-        return ()
-
     def force(self, v, z=0.0, sides=None):
         return self.coulomb * smooth_sign(v, self.band)
 
 
 @dataclass(frozen=True)
-class CoulombViscous:
+class CoulombViscous(SmoothLaw):
     """F = F_C sgn(v) + F_v v (Olsson 1998, Fig. 1b)."""
 
     coulomb: float  # N
     viscous: float  # N s/m
     band: float
-    n_guards = 0
-    has_state = False
-
-    def guards(self, x, v):
-        return ()
-
     def force(self, v, z=0.0, sides=None):
         return self.coulomb * smooth_sign(v, self.band) + self.viscous * v
 
@@ -85,8 +69,8 @@ class Stiction:
         return (v - self.stiction_band, v + self.stiction_band)
 
     def force(self, v, z=0.0, sides=None):
-        outside = (v - self.stiction_band >= 0.0 if sides is None else sides[0]) or not (
-            v + self.stiction_band >= 0.0 if sides is None else sides[1]
+        outside = on_positive_side(v - self.stiction_band, sides, 0) or not on_positive_side(
+            v + self.stiction_band, sides, 1
         )
         level = self.coulomb
         if not outside:
@@ -95,7 +79,7 @@ class Stiction:
 
 
 @dataclass(frozen=True)
-class Stribeck:
+class Stribeck(SmoothLaw):
     """F = [F_C + (F_S - F_C) exp(-|v/v_S|^delta)] sgn(v) + F_v v (Olsson 1998, eq. 3, Fig. 1d)."""
 
     coulomb: float
@@ -104,12 +88,6 @@ class Stribeck:
     stribeck_velocity: float  # m/s
     exponent: float
     band: float
-    n_guards = 0
-    has_state = False
-
-    def guards(self, x, v):
-        return ()
-
     def force(self, v, z=0.0, sides=None):
         level = self.coulomb + (self.breakaway - self.coulomb) * math.exp(
             -abs(v / self.stribeck_velocity) ** self.exponent
@@ -143,7 +121,7 @@ class LuGre:
         return self.coulomb + (self.breakaway - self.coulomb) * math.exp(-((v / self.stribeck_velocity) ** 2))
 
     def state_rate(self, v, z, sides=None):
-        speed = abs(v) if sides is None else (v if sides[0] else -v)
+        speed = v if on_positive_side(v, sides, 0) else -v
         return v - self.stiffness * speed * z / self.g(v)
 
     def force(self, v, z=0.0, sides=None):

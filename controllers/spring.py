@@ -1,33 +1,20 @@
 """Fork spring laws: force in N (positive pushes the fork apart) from compression x (m) and
-compression velocity v (m/s), compression positive.
-
-Every law offers ``force(x, v, sides=None)`` and ``guards(x, v)``. A guard is a smooth function
-whose sign selects the branch of a piecewise law; ``sides`` (a tuple of booleans, one per guard,
-True for guard >= 0) freezes the branch so an ODE integrator can step up to a branch change
-without evaluating the other formula (see ``mtbmj.engine_ode``). With ``sides=None`` the branch
-follows the state, which is what the MuJoCo callback uses.
+compression velocity v (m/s), compression positive. Piecewise laws follow the guard protocol of
+``controllers.guards``; every law also gives its stored ``energy(x)`` for the energy balance.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 from .friction import smooth_sign
-
-
-def _side(value: float, sides, index: int) -> bool:
-    """True when the guard at ``index`` is on its non-negative side (frozen or live)."""
-    return value >= 0.0 if sides is None else sides[index]
+from .guards import SmoothLaw, on_positive_side as _side
 
 
 @dataclass(frozen=True)
-class LinearSpring:
+class LinearSpring(SmoothLaw):
     """F = k x, the same rate in compression and extension (the classic quarter car, S1)."""
 
     rate: float  # N/m
-    n_guards = 0
-
-    def guards(self, x, v):
-        return ()
 
     def force(self, x, v, sides=None):
         return self.rate * x
@@ -61,15 +48,11 @@ class BilinearSpring:
 
 
 @dataclass(frozen=True)
-class ProgressiveSpring:
+class ProgressiveSpring(SmoothLaw):
     """F = k x + c x^3: the slightly rising rate of a coil fork with trapped air (paper Fig. 3d)."""
 
     rate: float  # N/m
     cubic: float  # N/m^3
-    n_guards = 0
-
-    def guards(self, x, v):
-        return ()
 
     def force(self, x, v, sides=None):
         return self.rate * x + self.cubic * x * x * x

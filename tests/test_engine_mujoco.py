@@ -72,13 +72,20 @@ def test_rk4_is_more_accurate_than_euler_on_the_smooth_linear_model():
 
 
 def test_lugre_state_is_integrated_by_mujoco():
-    """LuGre's bristle state lives in an actuator activation and matches the ODE reference."""
+    """LuGre's bristle state lives in an actuator activation that MuJoCo integrates with the rest of
+    the state: at default settings the displacements follow the reference within 0.1 mm; with RK4
+    the bristle state itself follows it within 1 % and the displacements within 0.01 mm."""
     overrides = {"fork.friction.model": "lugre", "fork.friction.coulomb_N": 20.0, "fork.friction.breakaway_N": 30.0}
     mj = mtbmj.run_drop("S12", overrides=overrides, duration=0.6)
     ode = mtbmj.run_drop("S12", engine="ode", overrides=overrides, duration=0.6)
-    assert np.max(np.abs(mj.trace.friction_state)) > 1e-5  # the bristles deflect
-    assert np.max(np.abs(mj.trace.friction_state - ode.trace.friction_state)) < 0.05 * np.max(np.abs(ode.trace.friction_state))
     assert max(d["max_abs_mm"] for d in mj.difference(ode).values()) < 0.1
+    rk4 = {**overrides, "solver.integrator": "rk4"}
+    mj = mtbmj.run_drop("S12", overrides=rk4, duration=0.6)
+    ode = mtbmj.run_drop("S12", engine="ode", overrides=rk4, duration=0.6)
+    z_ref = ode.trace.friction_state
+    assert np.max(np.abs(z_ref)) > 1e-4  # the bristles deflect (about F_C / sigma0)
+    assert np.max(np.abs(mj.trace.friction_state - z_ref)) < 0.01 * np.max(np.abs(z_ref))
+    assert max(d["max_abs_mm"] for d in mj.difference(ode).values()) < 0.01
 
 
 @pytest.mark.parametrize("path", scenes.scenes(), ids=lambda p: p.name)

@@ -1,0 +1,23 @@
+"""The guard protocol shared by the force laws.
+
+A piecewise law exposes ``n_guards`` smooth functions ``guards(x, v)`` whose signs select its
+branch, and accepts ``sides`` (one boolean per guard, True for guard >= 0) to freeze the branch:
+the ODE reference integrates with every branch frozen and stops at each guard's root, so no step
+crosses a kink or a jump. With ``sides=None`` the branch follows the state (the MuJoCo callback).
+"""
+from __future__ import annotations
+
+
+def on_positive_side(value: float, sides, index: int) -> bool:
+    """True when guard ``index`` is on its non-negative side: frozen if ``sides`` is given, else live."""
+    return value >= 0.0 if sides is None else sides[index]
+
+
+class SmoothLaw:
+    """A law with a single smooth branch: no guards."""
+
+    n_guards = 0
+    has_state = False
+
+    def guards(self, x, v):
+        return ()
