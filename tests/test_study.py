@@ -23,20 +23,31 @@ def test_mujoco_matches_the_ode_reference_for_every_preset(study):
 
 
 def test_study_reproduces_the_papers_findings_in_kind(study):
+    """The findings of the paper's §Discussion that the calibrated reference set reproduces
+    (README, "Study results", lists the ones it does not)."""
     results, _ = study
     s = {name: per["mujoco"].summary for name, per in results.items()}
-    fork_peak = {n: v["events"]["fork"]["peak1"]["value_mm"] for n, v in s.items()}
+    fork = {n: v["events"]["fork"] for n, v in s.items()}
     tire_peak = {n: v["events"]["tire"]["peak1"]["value_mm"] for n, v in s.items()}
-    # S1 overshoots most and never comes to rest
-    assert fork_peak["S1"] == max(fork_peak.values())
+    # S1 never comes to rest: the largest motion left at the end of all presets
     assert not s["S1"]["at_rest"]
-    # the full model uses about 80 % of the travel and lifts off with a topping event
-    assert 70.0 < s["S12"]["travel_used_percent"] < 90.0
-    assert s["S12"]["lifts_off"] and s["S12"]["fork_tops_out"]
-    # S14's softer static tire deflects much more at Peak 1 than the dynamic-rate tires
-    assert tire_peak["S14"] > 1.1 * tire_peak["S11"]
+    assert s["S1"]["rest_motion_mm"] == max(v["rest_motion_mm"] for v in s.values())
+    # the full model: about 80 % of the travel, the tire about 40 % of its 48.7 mm, one bounce with
+    # a topping event in the air, then rest
+    assert 75.0 < s["S12"]["travel_used_percent"] < 85.0
+    assert 0.35 * 48.7 < tire_peak["S12"] < 0.45 * 48.7
+    assert s["S12"]["lifts_off"] and s["S12"]["fork_tops_out"] and s["S12"]["at_rest"]
+    assert fork["S12"]["peak2"] and fork["S12"]["valley1"] and fork["S12"]["peak3"]
+    # S10's friction reduces the ringing at top-out and fixes the resting position
+    assert fork["S10"]["topping"]["value_mm"] > fork["S8"]["topping"]["value_mm"]
+    assert s["S10"]["at_rest"] and not s["S8"]["at_rest"]
+    # in-contact tire values move the resting tire deflection (S12 vs S11)
+    assert abs(s["S12"]["rest_mm"]["tire"] - s["S11"]["rest_mm"]["tire"]) > 0.5
+    # S14's static tire overshoots at Peak 1 and keeps the system oscillating
+    assert tire_peak["S14"] > 1.2 * max(tire_peak[n] for n in ("S11", "S12", "S13"))
+    assert not s["S14"]["at_rest"]
     # S8 is S7 by construction
-    assert fork_peak["S8"] == fork_peak["S7"]
+    assert fork["S8"]["peak1"] == fork["S7"]["peak1"]
 
 
 def test_study_writes_figures_and_table(study, tmp_path):
