@@ -29,19 +29,31 @@ class ForkCallback:
         self.ctrl_index = int(actuator.id)
         self.act_index = int(model.actuator_actadr[actuator.id])
         self.calls = 0
+        self._data = None
+        self._arrays = None
+
+    def bind(self, data) -> None:
+        """Keep views of ``data``'s arrays: the binding creates a new view at every attribute
+        access, which costs more than the force law itself. Other data are still served."""
+        self._data = data
+        self._arrays = (data.qpos, data.qvel, data.act, data.ctrl, data.qfrc_applied)
 
     def __call__(self, m, d):
         if m is not self._model and m._address != self._model_address:
             return
         self.calls += 1
-        x = d.qpos[self.qpos_index]
-        v = d.qvel[self.dof_index]
-        if self.has_state:
-            z = d.act[self.act_index]
-            d.ctrl[self.ctrl_index] = self.law.state_rate(v, z)
-            d.qfrc_applied[self.dof_index] = -self.law.force(x, v, z)
+        if d is self._data:
+            qpos, qvel, act, ctrl, qfrc = self._arrays
         else:
-            d.qfrc_applied[self.dof_index] = -self.law.force(x, v)
+            qpos, qvel, act, ctrl, qfrc = d.qpos, d.qvel, d.act, d.ctrl, d.qfrc_applied
+        x = qpos[self.qpos_index]
+        v = qvel[self.dof_index]
+        if self.has_state:
+            z = act[self.act_index]
+            ctrl[self.ctrl_index] = self.law.state_rate(v, z)
+            qfrc[self.dof_index] = -self.law.force(x, v, z)
+        else:
+            qfrc[self.dof_index] = -self.law.force(x, v)
 
 
 @contextmanager

@@ -43,6 +43,8 @@ class ForkLaw:
         )
 
     def force(self, x, v, z=0.0, sides=None):
+        if sides is None:  # the live path, once per MuJoCo callback: keep it lean
+            return self.spring.force(x, v) + self.damper.force(v) + self.friction.force(v, z)
         ss, ds, fs = self._split(sides)
         return self.spring.force(x, v, ss) + self.damper.force(v, ds) + self.friction.force(v, z, fs)
 

@@ -231,7 +231,12 @@ def test_drop_writes_results(runs):
     assert np.allclose(col["tire_mm"], col["sled_mm"] - col["fork_mm"], atol=1e-5)
     assert col["sled_velocity_mm_per_s"][0] == pytest.approx((2 * 9.81 * 0.095) ** 0.5 * 1e3, rel=1e-6)
     assert 80 < col["fork_mm"].max() < 200  # the fork compresses on impact
-    assert np.all(col["tire_force_N"] >= -1e-6)  # the tire never pulls
+    # the tire never pulls: in the engine trace; the logged force may ring slightly below zero
+    # after lift-off, as any anti-aliasing filter does after a sharp drop
+    raw_rows = [line for line in (out / "timeseries_raw.csv").read_text().splitlines() if not line.startswith("#")]
+    raw = np.loadtxt(io.StringIO("\n".join(raw_rows[1:])), delimiter=",")
+    assert np.all(raw[:, header.index("tire_force_N")] >= 0.0)
+    assert np.all(col["tire_force_N"] >= -0.02 * col["tire_force_N"].max())
 
     # summary.json
     summary = json.loads((out / "summary.json").read_text())

@@ -115,13 +115,15 @@ def test_dm_control_physics_steps_the_drop_scene_like_the_engine():
     # the same masses and geometry as the engine's compiled scene (defaults of the preset)
     assert np.allclose(model.body_mass, ours.model.body_mass)
     physics.named.data.qvel["sled"] = setup.impact_speed
+    physics.named.data.qpos["sled"] = engine_mujoco.TOUCH_DEPTH_M  # the engine's start at tread touch
     steps = 3000
     callback = ForkCallback(model, setup.fork)
     fork = np.empty(steps)
     with installed(callback):
+        physics.forward()  # dm_control steps as mj_step2 + mj_step1: refresh after setting the state
         for i in range(steps):
             physics.step()
             fork[i] = physics.named.data.qpos["fork"][0]
     engine = engine_mujoco.run(setup, duration=steps * setup.timestep)
-    assert callback.calls == steps
+    assert callback.calls == steps + 1  # one forward to start, one per step
     assert np.max(np.abs(fork - engine.fork[1:])) < 1e-9
