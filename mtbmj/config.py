@@ -215,6 +215,33 @@ class Config:
         return "\n\n".join(chunks) + "\n"
 
 
+def parameter_set_toml(values: Mapping[str, Any], base: str = "reference", description: str = "",
+                       comments: Mapping[str, str] | None = None) -> str:
+    """A configuration file holding ``values`` on top of ``base``: what identification writes.
+
+    Every value is validated, and the text is checked to load back to the same values, so the
+    file is accepted by ``mtbmj drop`` as is."""
+    checked = {k: check_value(k, v) for k, v in values.items()}
+    comments = comments or {}
+    head = []
+    if description:
+        head.append(f"description = {json.dumps(description)}")
+    head.append(f"base = {json.dumps(base)}")
+    sections: dict[str, list[str]] = {}
+    for key in sorted(checked, key=lambda k: list(SCHEMA).index(k)):
+        section, _, leaf = key.rpartition(".")
+        note = f"  # {comments[key]}" if key in comments else ""
+        sections.setdefault(section, []).append(f"{leaf} = {_toml_value(checked[key])}{note}")
+    chunks = ["\n".join(head + sections.pop("", []))]
+    chunks += [f"[{s}]\n" + "\n".join(lines) for s, lines in sections.items()]
+    text = "\n\n".join(chunks) + "\n"
+    back = _flatten(tomllib.loads(text))
+    back.pop("base", None)
+    back.pop("description", None)
+    assert {k: check_value(k, v) for k, v in back.items()} == checked
+    return text
+
+
 def _toml_value(value: Any) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"

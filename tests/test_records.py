@@ -1,0 +1,77 @@
+"""Reading bench and drop records: units in column names, comments, delimiters, .mat, bad input."""
+import numpy as np
+import pytest
+from scipy.io import savemat
+
+from mtbmj.identify.records import RecordError, read_record, split_unit, write_csv_text
+
+
+def test_units_are_parsed_from_column_names():
+    assert split_unit("displacement_mm") == ("displacement", "mm")
+    assert split_unit("velocity_mm_per_s") == ("velocity", "mm_per_s")
+    assert split_unit("force_N") == ("force", "N")
+    assert split_unit("time_s") == ("time", "s")
+    assert split_unit("force") is None
+
+
+@pytest.mark.parametrize("delimiter", [",", ";", "\t"])
+def test_csv_with_comments_and_any_delimiter_is_read_in_si(tmp_path, delimiter):
+    path = tmp_path / "spring.csv"
+    path.write_text(f"# synthetic dyno record\n# rate 10 N/mm\n"
+                    f"time_s{delimiter}displacement_mm{delimiter}force_N\n"
+                    f"0{delimiter}0{delimiter}0\n\n0.1{delimiter}10{delimiter}100.5\n# a note\n0.2{delimiter}20{delimiter}201\n")
+    r = read_record(path).require("displacement", "force", min_points=3)
+    assert np.allclose(r["displacement"], [0.0, 0.01, 0.02])  # mm -> m
+    assert np.allclose(r["force"], [0.0, 100.5, 201.0])
+    assert r.synthetic and r.units["displacement"] == "mm" and len(r) == 3
+
+
+def test_mat_export_reads_like_the_csv(tmp_path):
+    x = np.linspace(0, 100, 50)
+    savemat(tmp_path / "r.mat", {"displacement_mm": x, "force_N": 10 * x, "description": "synthetic test"})
+    (tmp_path / "r.csv").write_text(write_csv_text({"displacement_mm": x, "force_N": 10 * x}, ["synthetic test"]))
+    a, b = read_record(tmp_path / "r.mat"), read_record(tmp_path / "r.csv")
+    for q in ("displacement", "force"):
+        assert np.allclose(a[q], b[q])
+    assert a.synthetic and b.synthetic
+
+
+@pytest.mark.parametrize("text, needle", [
+    ("displacement,force_N\n1,2\n", "'displacement' has no unit"),
+    ("displacement_mm,force_N\n1,abc\n", "line 2: 'abc' is not a number"),
+    ("displacement_mm,force_N\n1,2,3\n", "line 2: 3 cells for 2 columns"),
+    ("displacement_mm,force_N\n1,nan\n", "line 2: NaN"),
+    ("# only a comment\n", "no header row"),
+    ("displacement_mm,force_N\n", "no data rows"),
+    ("displacement_mm,displacement_m\n1,2\n", "displacement appears twice"),
+])
+def test_bad_csv_names_file_line_or_column(tmp_path, text, needle):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with pytest.raises(RecordError) as exc:
+        read_record(path)
+    assert needle in str(exc.value) and str(path) in str(exc.value)
+    assert "\n" not in str(exc.value)
+
+
+def test_required_columns_point_count_and_time_order(tmp_path):
+    path = tmp_path / "r.csv"
+    path.write_text("time_s,force_N\n0,1\n0.1,2\n0.1,3\n0.3,4\n")
+    r = read_record(path)
+    with pytest.raises(RecordError, match="missing column displacement_<unit>"):
+        r.require("displacement", "force", min_points=2)
+    with pytest.raises(RecordError, match="too few points"):
+        r.require("force", min_points=10)
+    with pytest.raises(RecordError, match="time is not increasing at row 3"):
+        r.require("force", min_points=2)
+
+
+def test_missing_binary_and_not_mat_files(tmp_path):
+    with pytest.raises(RecordError, match="no such file"):
+        read_record(tmp_path / "none.csv")
+    (tmp_path / "bin.csv").write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe")
+    with pytest.raises(RecordError, match="not a text file"):
+        read_record(tmp_path / "bin.csv")
+    (tmp_path / "x.mat").write_text("hello")
+    with pytest.raises(RecordError, match="not a readable MATLAB"):
+        read_record(tmp_path / "x.mat")
