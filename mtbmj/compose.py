@@ -65,7 +65,7 @@ def _spring(c: Config) -> object:
         if not 0.0 < knee < travel:
             raise ConfigError(f"fork.spring.knee_mm: {knee:g} mm is outside the travel (0, {travel:g}) mm")
         main = law.BilinearSpring(rate("rate_below_knee_N_per_mm"), rate("rate_above_knee_N_per_mm"), knee * MM)
-        if "fork.spring.rebound_rate_N_per_mm" in c.values:
+        if c.get("fork.spring.rebound_curve", False):  # S3, S4, S6: extending on S2's rebound rate
             main = law.DirectionalSpring(main, law.LinearSpring(rate("rebound_rate_N_per_mm")), band)
     else:  # progressive
         cubic = c.require("fork.spring.progressive_cubic_N_per_mm3", "needed by fork.spring.model = progressive")

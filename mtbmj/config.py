@@ -50,6 +50,7 @@ SCHEMA: dict[str, Any] = {
     "fork.spring.knee_mm": "pos",
     "fork.spring.rate_below_knee_N_per_mm": "pos",
     "fork.spring.rate_above_knee_N_per_mm": "pos",
+    "fork.spring.rebound_curve": "bool",
     "fork.spring.progressive_rate_N_per_mm": "pos",
     "fork.spring.progressive_cubic_N_per_mm3": "nonneg",
     "fork.spring.top_out": "bool",

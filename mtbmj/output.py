@@ -44,9 +44,9 @@ def write_atomically(out_dir: str | Path, files: Mapping[str, bytes]) -> list[Pa
             target = out / name
             target.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+            staged.append((tmp, target))  # before writing: a failed write must be cleaned up too
             with os.fdopen(fd, "wb") as handle:
                 handle.write(content)
-            staged.append((tmp, target))
         for tmp, target in staged:
             os.replace(tmp, target)
     except OSError as exc:

@@ -1,0 +1,362 @@
+"""Fork damper and friction from dyno peak force vs velocity (paper Fig. 6).
+
+The record is either the dyno's peak points (columns velocity, force) or its time series (time,
+displacement and/or velocity, force), which is reduced to one peak point per half-cycle first
+(``dyno_synthetic.peak_points``). Compression velocity and force are positive, rebound negative.
+
+Every fit models the measured force as hydraulic part + friction law, F = H(v) + R(v), with R one
+of the library's friction laws (``controllers.friction``, sign regularised with the configuration's
+default band of 5 mm/s) and solved by ``scipy.optimize.least_squares``:
+
+* hydraulic ``linear``: one coefficient c (the average of compression and rebound), + Coulomb;
+* hydraulic ``bilinear``: c_c for v > 0, c_r for v < 0, + Coulomb;
+* hydraulic ``table``: the Coulomb offset at zero velocity from the test speeds of 20-150 mm/s
+  (at least the 4 slowest at or above 20 mm/s) of each side (quadratic through the origin per side + a shared offset), then the hydraulic part at each test
+  speed = mean of (force - offset), with (0, 0) added and force made non-decreasing: the rules of
+  ``fork.damper.velocity_mm_per_s`` / ``force_N`` (>= 4 points, strictly increasing velocity);
+* friction models, each with the bilinear hydraulic part: ``none``, ``coulomb``,
+  ``coulomb_viscous`` (the viscous term is the slope common to both sides: min(c_c, c_r); the
+  damper keeps the excess), ``stiction`` (Karnopp band), ``stribeck`` (exponent 2) and ``lugre``
+  (its steady state, identical to Stribeck with exponent 2; the bristle stiffness and damping need
+  time-domain pre-sliding data, which a peak record does not hold, so they are not fitted).
+
+``select(results)`` picks the lowest BIC, so the friction model is chosen by the residual and the
+number of parameters, not by default. Breakaway and Stribeck/stiction velocity are reported as
+supported only when the record has test speeds low enough to show them.
+"""
+from __future__ import annotations
+
+import math
+from typing import Iterable, Mapping
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from mtbmj import controllers as law
+from mtbmj.errors import MtbmjError
+from .dyno_synthetic import peak_points
+from .fitresult import FitResult, covariance_stderr
+from .records import Record, RecordError
+
+HYDRAULIC = ("linear", "bilinear", "table")
+FRICTION = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")
+MODELS = HYDRAULIC + FRICTION
+BAND = 5e-3  # m/s: fork.friction.sign_band_mm_per_s default
+MIN_WIDTH = 4.0 * BAND  # compose: the sign band must be at most a quarter of the Stribeck/stiction velocity
+MIN_POINTS = 6
+D, R = "fork.damper.", "fork.friction."
+
+
+class DamperFitError(MtbmjError):
+    """A damper fit cannot be done on this record (one line, names the cause)."""
+
+
+def peaks(record: Record) -> Record:
+    """The record as peak points (velocity, force): a time series is reduced first."""
+    if "time" in record.columns and ("displacement" in record.columns or "velocity" in record.columns):
+        record = peak_points(record)
+    record.require("velocity", "force", min_points=MIN_POINTS)
+    v = record["velocity"]
+    if np.sum(v > 0) < 2 or np.sum(v < 0) < 2:
+        raise RecordError(f"{record.path}: the damper fit needs compression (v > 0) and rebound (v < 0) points")
+    return record
+
+
+# --- friction laws as vectorised functions of the parameters -------------------------------------
+
+def _friction_law(name: str, q: np.ndarray):
+    if name == "none":
+        return law.NoFriction()
+    if name == "coulomb":
+        return law.Coulomb(q[0], BAND)
+    if name == "coulomb_viscous":
+        return law.CoulombViscous(q[0], q[1], BAND)
+    if name == "stiction":
+        return law.Stiction(q[0], q[1], 0.0, q[2], BAND)
+    if name == "stribeck":
+        return law.Stribeck(q[0], q[1], 0.0, q[2], 2.0, BAND)
+    raise ValueError(name)
+
+
+def _friction_force(name: str, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    if name == "lugre":  # steady state: g(v) sgn(v) (+ sigma2 v, here in the damper)
+        g = q[0] + (q[1] - q[0]) * np.exp(-((v / q[2]) ** 2))
+        return g * np.sign(v)
+    friction = _friction_law(name, q)
+    return np.array([friction.force(float(vi)) for vi in v])
+
+
+_FRICTION_PARAMS = {
+    "none": [], "coulomb": ["coulomb_N"], "coulomb_viscous": ["coulomb_N", "viscous_N_s_per_m"],
+    "stiction": ["coulomb_N", "breakaway_N", "stiction_band_mm_per_s"],
+    "stribeck": ["coulomb_N", "breakaway_N", "stribeck_velocity_mm_per_s"],
+    "lugre": ["coulomb_N", "breakaway_N", "stribeck_velocity_mm_per_s"],
+}
+
+
+def _hydraulic(name: str, p: np.ndarray, v: np.ndarray) -> np.ndarray:
+    if name == "linear":
+        return p[0] * v
+    return np.where(v > 0, p[0] * v, p[1] * v)
+
+
+# --- fits ----------------------------------------------------------------------------------------
+
+def _parametric(rec: Record, hydraulic: str, friction: str, name: str) -> FitResult:
+    v, f = np.asarray(rec["velocity"], float), np.asarray(rec["force"], float)
+    nh = 1 if hydraulic == "linear" else 2
+    fric = "coulomb" if friction == "coulomb_viscous" else friction  # reparametrised afterwards
+    names = _FRICTION_PARAMS[fric]
+    # start: slopes per side from the fast half, offset from the intercepts
+    fast = np.abs(v) >= np.median(np.abs(v))
+    cc = np.polyfit(v[fast & (v > 0)], f[fast & (v > 0)], 1) if np.sum(fast & (v > 0)) >= 2 else (100.0, 0.0)
+    cr = np.polyfit(v[fast & (v < 0)], f[fast & (v < 0)], 1) if np.sum(fast & (v < 0)) >= 2 else (100.0, 0.0)
+    fc0 = max(0.5 * (cc[1] - cr[1]), 1.0)
+    h0 = [0.5 * (cc[0] + cr[0])] if nh == 1 else [cc[0], cr[0]]
+    q0, lo, hi = [], [], []
+    for n in names:
+        if n == "coulomb_N":
+            q0.append(fc0), lo.append(0.0), hi.append(np.inf)
+        elif n == "breakaway_N":
+            q0.append(1.2 * fc0), lo.append(0.0), hi.append(np.inf)
+        else:  # a velocity width, m/s
+            q0.append(2.0 * MIN_WIDTH), lo.append(MIN_WIDTH), hi.append(1.0)
+    x0 = np.array([max(h, 1.0) for h in h0] + q0, float)
+    lower = np.array([0.0] * nh + lo, float)
+    upper = np.array([np.inf] * nh + hi, float)
+    scale = np.maximum(np.abs(x0), 1e-3)
+
+    def resid(z):
+        p = z * scale
+        return _hydraulic(hydraulic, p[:nh], v) + _friction_force(fric, p[nh:], v) - f
+
+    starts = [x0]
+    if fric in ("stribeck", "stiction", "lugre"):  # the width is multimodal: try a few
+        for w in (1.5 * MIN_WIDTH, 4 * MIN_WIDTH, 10 * MIN_WIDTH):
+            z = x0.copy()
+            z[-1] = w
+            starts.append(z)
+    best = None
+    for z0 in starts:
+        sol = least_squares(resid, np.clip(z0, lower, upper) / scale, bounds=(lower / scale, upper / scale),
+                            method="trf", x_scale="jac")
+        if best is None or sol.cost < best.cost:
+            best = sol
+    p = best.x * scale
+    r = resid(best.x)
+    std, corr = covariance_stderr(best.jac / scale, r, len(p))
+    values, stderr = {}, {}
+    notes = []
+    if hydraulic == "linear":
+        values[D + "coefficient_N_s_per_m"], stderr[D + "coefficient_N_s_per_m"] = float(p[0]), float(std[0])
+    else:
+        values[D + "compression_N_s_per_m"], stderr[D + "compression_N_s_per_m"] = float(p[0]), float(std[0])
+        values[D + "rebound_N_s_per_m"], stderr[D + "rebound_N_s_per_m"] = float(p[1]), float(std[1])
+    for i, n in enumerate(names):
+        scale_out = 1e3 if n.endswith("mm_per_s") else 1.0
+        values[R + n] = float(p[nh + i] * scale_out)
+        stderr[R + n] = float(std[nh + i] * scale_out)
+    if fric in ("stiction", "stribeck", "lugre"):
+        values[R + "viscous_N_s_per_m"] = 0.0
+        notes.append("viscous friction term fixed at 0: on peak data it is not separable from the damper slope")
+        width = p[-1]
+        slow = np.sum(np.abs(v) < 2.0 * width)
+        rel = [stderr[R + "breakaway_N"] / max(values[R + "breakaway_N"], 1e-9),
+               std[-1] / max(width, 1e-12)]
+        peak = values[R + "breakaway_N"] - values[R + "coulomb_N"]
+        supported = bool(slow >= 4 and max(rel) < 0.3 and peak > 2.0 * stderr[R + "breakaway_N"])
+        if peak <= 2.0 * stderr[R + "breakaway_N"]:
+            notes.append(f"no breakaway peak in the data: breakaway - Coulomb = {peak:.1f} N is within "
+                         f"2 standard errors ({2 * stderr[R + 'breakaway_N']:.1f} N)")
+        if not supported:
+            notes.append(f"not supported by the data: {slow} points below 2 x the fitted width "
+                         f"({2e3 * width:.0f} mm/s) and relative errors {rel[0]:.2g}/{rel[1]:.2g}; record "
+                         "lower test speeds to identify breakaway and its velocity")
+    else:
+        supported = True
+    if friction == "coulomb_viscous":
+        common = min(values.get(D + "compression_N_s_per_m", values.get(D + "coefficient_N_s_per_m")),
+                     values.get(D + "rebound_N_s_per_m", values.get(D + "coefficient_N_s_per_m")))
+        for key in (D + "compression_N_s_per_m", D + "rebound_N_s_per_m", D + "coefficient_N_s_per_m"):
+            if key in values:
+                values[key] -= common
+        values[R + "viscous_N_s_per_m"] = float(common)
+        stderr[R + "viscous_N_s_per_m"] = float(min(std[:nh]))
+        notes.append("viscous term = the slope common to compression and rebound; the damper keeps the excess")
+    if friction == "lugre":
+        notes.append("LuGre bristle stiffness and damping are not identified: they need time-domain pre-sliding "
+                     "data (small strokes below the breakaway force); the base configuration's values are kept")
+    grid = np.linspace(min(v.min(), 0.0), max(v.max(), 0.0), 400)
+    curve_f = _hydraulic(hydraulic, p[:nh], grid) + _friction_force(fric, p[nh:], grid)
+    return FitResult("damper", name, values, stderr, float(np.sqrt(np.mean(r ** 2))), "N", len(v), len(p),
+                     {"model_keys": {D + "model": hydraulic, R + "model": friction}, "hydraulic": hydraulic,
+                      "friction": friction, "curve": (grid * 1e3, curve_f), "correlation": corr,
+                      "supported": supported, "notes": notes,
+                      **({"unidentified": [R + "bristle_stiffness_N_per_mm", R + "bristle_damping_N_s_per_m"]}
+                         if friction == "lugre" else {})})
+
+
+def _clusters(speed: np.ndarray) -> list[np.ndarray]:
+    """Indices grouped by test speed (sorted |v| within 10 % of the group's first)."""
+    order = np.argsort(speed)
+    groups, current = [], [order[0]]
+    for i in order[1:]:
+        if speed[i] > 1.1 * speed[current[0]]:
+            groups.append(np.array(current))
+            current = []
+        current.append(i)
+    groups.append(np.array(current))
+    return groups
+
+
+def _table(rec: Record) -> FitResult:
+    v, f = np.asarray(rec["velocity"], float), np.asarray(rec["force"], float)
+    # Coulomb offset at zero velocity: per side a quadratic through the origin on the slowest
+    # test speeds, with a shared offset +/- F_C (regularised sign, as in the drop model).
+    slow = []
+    for idx in (np.flatnonzero(v >= MIN_WIDTH), np.flatnonzero(v <= -MIN_WIDTH)):
+        groups = _clusters(np.abs(v[idx])) if len(idx) else []
+        if groups:  # the slowest speeds up to 150 mm/s, at least 4 of them
+            speeds = [float(np.mean(np.abs(v[idx[g]]))) for g in groups]
+            n = max(4, sum(sp <= 0.15 for sp in speeds))
+            slow.append(idx[np.concatenate(groups[:n])])
+        else:
+            slow.append(idx)
+    if min(len(s) for s in slow) < 3:
+        raise DamperFitError(f"{rec.path}: too few points above {MIN_WIDTH * 1e3:g} mm/s on each side to find "
+                             "the friction offset")
+    vc, vr = v[slow[0]], v[slow[1]]
+    vs = np.concatenate([vc, vr])
+    fs = np.concatenate([f[slow[0]], f[slow[1]]])
+    isc = np.concatenate([np.ones(len(vc)), np.zeros(len(vr))])
+    a = np.column_stack([np.tanh(vs / BAND), isc * vs, isc * vs ** 2, (1 - isc) * vs, (1 - isc) * vs ** 2])
+    sol = least_squares(lambda z: a @ z - fs, np.zeros(a.shape[1]))
+    res_slow = a @ sol.x - fs
+    std_slow, _ = covariance_stderr(a, res_slow, a.shape[1])
+    fc, fc_err = max(float(sol.x[0]), 0.0), float(std_slow[0])
+    hyd = f - fc * np.tanh(v / BAND)
+    nodes_v, nodes_f, nodes_se, counts = [0.0], [0.0], [0.0], []
+    for side in (1, -1):
+        idx = np.flatnonzero(np.sign(v) == side)
+        for g in _clusters(np.abs(v[idx])):
+            sel = idx[g]
+            nodes_v.append(float(np.mean(v[sel])))
+            nodes_f.append(float(np.mean(hyd[sel])))
+            nodes_se.append(float(np.std(hyd[sel], ddof=1) / math.sqrt(len(sel))) if len(sel) > 1 else float("nan"))
+            counts.append(len(sel))
+    order = np.argsort(nodes_v)
+    tv = np.asarray(nodes_v)[order]
+    tf = np.asarray(nodes_f)[order]
+    tse = np.asarray(nodes_se)[order]
+    zero = int(np.flatnonzero(tv == 0.0)[0])
+    # non-decreasing force (a damper dissipates): running max above zero, running min below it
+    tf[zero:] = np.maximum.accumulate(np.maximum(tf[zero:], 0.0))
+    tf[:zero + 1] = np.minimum.accumulate(np.minimum(tf[:zero + 1], 0.0)[::-1])[::-1]
+    if len(tv) < 4 or np.any(np.diff(tv) <= 0):
+        raise DamperFitError(f"{rec.path}: a lookup table needs at least 4 distinct test speeds (found {len(tv)} "
+                             "velocities including 0)")
+    damper = law.TableDamper(tv, tf)
+    pred = np.array([damper.force(float(vi)) for vi in v]) + fc * np.tanh(v / BAND)
+    r = pred - f
+    grid = np.linspace(min(v.min(), 0.0), max(v.max(), 0.0), 400)
+    curve_f = np.array([damper.force(float(g)) for g in grid]) + fc * np.tanh(grid / BAND)
+    values = {D + "velocity_mm_per_s": tuple(float(x) for x in np.round(tv * 1e3, 3)),
+              D + "force_N": tuple(float(x) for x in np.round(tf, 3)),
+              R + "coulomb_N": fc}
+    stderr = {R + "coulomb_N": fc_err, D + "force_N": float(np.nanmax(tse)) if np.any(np.isfinite(tse)) else float("nan")}
+    return FitResult("damper", "table", values, stderr, float(np.sqrt(np.mean(r ** 2))), "N", len(v),
+                     len(tv) - 1 + 1,
+                     {"model_keys": {D + "model": "table", R + "model": "coulomb"}, "hydraulic": "table",
+                      "friction": "coulomb", "curve": (grid * 1e3, curve_f), "force_stderr_N": tse.tolist(),
+                      "supported": True,
+                      "notes": [f"Coulomb offset at zero velocity {fc:.1f} +/- {fc_err:.2g} N from the test speeds "
+                                f"{MIN_WIDTH * 1e3:g}-150 mm/s (at least 4) per side; table = mean force - offset per test speed, through (0, 0)"]})
+
+
+def fit_damper(record: Record, model: str = "bilinear", *, friction: str | None = None) -> FitResult:
+    """Fit one model (see the module doc). ``model`` is a hydraulic model (``linear``,
+    ``bilinear``, ``table``; friction ``coulomb`` unless ``friction`` names another) or a friction
+    model (fitted with the bilinear hydraulic part)."""
+    if model not in MODELS:
+        raise MtbmjError(f"fit damper: unknown model {model!r} (one of {', '.join(MODELS)})")
+    if friction is not None and friction not in FRICTION:
+        raise MtbmjError(f"fit damper: unknown friction model {friction!r} (one of {', '.join(FRICTION)})")
+    rec = peaks(record)
+    if model == "table":
+        if friction not in (None, "coulomb"):
+            raise MtbmjError("fit damper: the table is fitted with the Coulomb offset only (the table absorbs the rest)")
+        return _table(rec)
+    if model in HYDRAULIC:
+        return _parametric(rec, model, friction or "coulomb", model)
+    return _parametric(rec, "bilinear", model, model)
+
+
+def fit_damper_all(record: Record) -> dict[str, FitResult]:
+    """Every hydraulic model (with Coulomb friction) and every friction model (with the bilinear
+    hydraulic part), keyed by model name."""
+    rec = peaks(record)
+    out = {}
+    for name in MODELS:
+        try:
+            out[name] = fit_damper(rec, name)
+        except DamperFitError:
+            if name != "table":
+                raise
+    return out
+
+
+def select(results: Mapping[str, FitResult] | Iterable[FitResult]) -> FitResult:
+    """The result with the lowest BIC (ties: fewer parameters, then the order given)."""
+    items = list(results.values()) if isinstance(results, Mapping) else list(results)
+    if not items:
+        raise MtbmjError("select: no fit results to choose from")
+    return min(enumerate(items), key=lambda t: (round(t[1].bic, 6), t[1].n_params, t[0]))[1]
+
+
+def plot_damper(record: Record, results: Mapping[str, FitResult] | FitResult):
+    """Peak force vs velocity in the style of the paper's Fig. 6: dyno points and fitted curves
+    (left: hydraulic models; right: friction models near zero velocity)."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    if isinstance(results, FitResult):
+        results = {results.model: results}
+    rec = peaks(record)
+    v, f = rec["velocity"] * 1e3, rec["force"]
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    styles = {"linear": ("tab:green", "--"), "bilinear": ("tab:red", "-"), "table": ("tab:purple", "-.")}
+    for ax in (ax1, ax2):
+        ax.plot(v, f, "o", ms=3, color="k", label="dyno peaks")
+        ax.axhline(0, color="0.7", lw=0.6)
+        ax.axvline(0, color="0.7", lw=0.6)
+        ax.set_xlabel("velocity (mm/s, compression +)")
+        ax.set_ylabel("force (N)")
+        ax.grid(alpha=0.3)
+    for name, r in results.items():
+        if "curve" not in r.extra:
+            continue
+        if name in HYDRAULIC:
+            color, ls = styles[name]
+            ax1.plot(*r.extra["curve"], ls, color=color, lw=1.3, label=f"{name} (RMS {r.rms:.1f} N)")
+        else:
+            ax2.plot(*r.extra["curve"], lw=1.2, label=f"{name} (BIC {r.bic:.0f})")
+    lim = max(0.15 * np.max(np.abs(v)), 60.0)
+    near = np.abs(v) <= lim
+    ax2.set_xlim(-lim, lim)
+    if np.any(near):
+        span = np.max(np.abs(f[near]))
+        ax2.set_ylim(-1.3 * span, 1.3 * span)
+    ax1.set_title("damping: peak force vs velocity", fontsize=9)
+    ax2.set_title("friction models near zero velocity", fontsize=9)
+    ax1.legend(fontsize=7)
+    ax2.legend(fontsize=7)
+    synthetic = " (synthetic record)" if getattr(rec, "synthetic", False) else ""
+    fig.suptitle(f"Fork damper{synthetic}", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+__all__ = ["MODELS", "HYDRAULIC", "FRICTION", "DamperFitError", "peaks", "fit_damper", "fit_damper_all",
+           "select", "plot_damper"]
