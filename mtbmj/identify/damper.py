@@ -142,6 +142,8 @@ def _parametric(rec: Record, hydraulic: str, friction: str, name: str) -> FitRes
                             method="trf", x_scale="jac")
         if best is None or sol.cost < best.cost:
             best = sol
+    if best.status <= 0 or not np.all(np.isfinite(best.x)):
+        raise RecordError(f"{rec.path}: the {name} damper fit did not converge ({best.message})")
     p = best.x * scale
     r = resid(best.x)
     std, corr = covariance_stderr(best.jac / scale, r, len(p))

@@ -194,6 +194,9 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
                                      xtol=xtol, ftol=ftol, gtol=1e-10, max_nfev=max_nfev)
         if not np.all(np.isfinite(sol.x)) or np.max(np.abs(sol.fun)) >= penalty:
             raise MtbmjError("fit_drop: the fit did not converge (the model run fails at the optimum)")
+        if sol.status <= 0:  # 0: the evaluation budget ran out before any tolerance was met
+            raise MtbmjError(f"fit drop: did not converge within {sol.nfev} evaluations ({runs['n']} engine runs); "
+                             "free fewer parameters, narrow the bounds or start closer")
         final_jac = sol.jac
     finally:
         if pool is not None:

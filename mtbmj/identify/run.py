@@ -98,7 +98,8 @@ def _result_json(r: FitResult) -> dict:
     return out
 
 
-SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive")
+SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive")  # candidates for "auto"
+SPRING_PARTS = SPRING_MODELS + ("top_out", "preload")  # may be asked for by name
 HYDRAULIC_MODELS = ("linear", "bilinear", "table")
 FRICTION_MODELS = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")
 
@@ -118,7 +119,7 @@ def _choose(results: dict[str, FitResult], names: Sequence[str], requested: str,
 
 
 def _spring(records, results, model, plot_fn) -> Identification:
-    main = _choose(results, SPRING_MODELS, model, "model")
+    main = _choose(results, SPRING_PARTS if model != "auto" else SPRING_MODELS, model, "model")
     notes = ["models compared by BIC: " + ", ".join(
         f"{n} {results[n].bic:.1f}" for n in SPRING_MODELS if n in results)]
     if "friction_N" in results[main].extra:
@@ -149,6 +150,8 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
         from . import spring
 
         results = spring.fit_spring_all(records[0])
+        if model not in ("auto", *results):
+            results[model] = spring.fit_spring(records[0], model)  # raises the precise cause, e.g. no extension
         return _spring(records, results, model, spring.plot_spring)
     if kind == "damper":
         from . import damper

@@ -182,6 +182,9 @@ def _fit(data: _Data, main: str, top_out: bool, preload: bool):
     scale = np.maximum(np.abs(theta0), 1e-3)
     sol = least_squares(lambda th: model.predict(th * scale, x, s) - f, theta0 / scale,
                         bounds=(lower / scale, upper / scale), method="trf", x_scale="jac")
+    if sol.status <= 0 or not np.all(np.isfinite(sol.x)):
+        raise SpringFitError(f"fit spring: the {model.name if hasattr(model, 'name') else 'spring'} fit did not "
+                             f"converge ({sol.message})")
     theta = sol.x * scale
     resid = model.predict(theta, x, s) - f
     std, corr = covariance_stderr(sol.jac / scale, resid, len(theta))
