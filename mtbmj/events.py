@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import find_peaks
 
 from .compose import Setup
 from .trace import RawTrace
@@ -28,47 +27,6 @@ def _contact_changes(t, tire_force):
     return None, None
 
 
-def _event(t, y, i):
-    return {"time_s": float(t[i]), "value_mm": float(y[i])}
-
-
-def signal_events(t, y, lift, land):
-    """Peak 1, topping (minimum in the air), Peak 2, Valley 1, Peak 3 of one displacement signal."""
-    ev: dict[str, dict | None] = {"peak1": None, "topping": None, "peak2": None, "valley1": None, "peak3": None}
-    end1 = lift if lift is not None else len(y)
-    ev["peak1"] = _event(t, y, int(np.argmax(y[:end1])))
-    prominence = 0.05 * max(float(np.ptp(y)), 1e-9)
-    if lift is not None:
-        air_end = land if land is not None else len(y)
-        ev["topping"] = _event(t, y, lift + int(np.argmin(y[lift:air_end])))
-        if land is None:
-            return ev
-        after = y[land:]
-        peaks, _ = find_peaks(after, prominence=prominence)
-        if not peaks.size:
-            return ev
-        p2 = land + int(peaks[0])
-    else:
-        valleys, _ = find_peaks(-y, prominence=prominence)
-        valleys = valleys[valleys > np.argmax(y)]
-        if not valleys.size:
-            return ev
-        v = int(valleys[0])
-        peaks, _ = find_peaks(y[v:], prominence=prominence)
-        if not peaks.size:
-            return ev
-        p2 = v + int(peaks[0])
-    ev["peak2"] = _event(t, y, p2)
-    valleys, _ = find_peaks(-y[p2:], prominence=prominence)
-    if valleys.size:
-        v1 = p2 + int(valleys[0])
-        ev["valley1"] = _event(t, y, v1)
-        peaks, _ = find_peaks(y[v1:], prominence=prominence)
-        if peaks.size:
-            ev["peak3"] = _event(t, y, v1 + int(peaks[0]))
-    return ev
-
-
 def energy(setup: Setup, trace: RawTrace) -> dict[str, float]:
     """Energy balance (J) with the tread-touch position as the height datum: input kinetic energy
     at impact, mechanical energy left at the end, and their difference, the energy dissipated."""
@@ -92,13 +50,20 @@ def energy(setup: Setup, trace: RawTrace) -> dict[str, float]:
 
 
 def summarize(setup: Setup, trace: RawTrace, logged: dict[str, np.ndarray], raw: dict[str, np.ndarray]) -> dict:
-    """JSON-ready summary. Events come from the logged (1 kHz) signals, contact from the raw
-    tire force; a run that never lifts off or never settles says so instead of guessing."""
+    """JSON-ready summary. Events come from the logged (1 kHz) signals through
+    ``validation.events.detect`` (robust to noise; a missing event is None, never forced), contact
+    times from the raw tire force; a run that never lifts off or never settles says so."""
+    from mtbmj.validation.events import detect  # the same detector that validates against sled data
+
     lift_raw, land_raw = _contact_changes(raw["time_s"], raw["tire_force_N"])
     t = logged["time_s"]
-    to_logged = lambda i: None if i is None else int(min(np.searchsorted(t, raw["time_s"][i]), len(t) - 1))
-    lift, land = to_logged(lift_raw), to_logged(land_raw)
-    events = {name: signal_events(t, logged[f"{name}_mm"], lift, land) for name in ("sled", "fork", "tire")}
+    try:
+        found = detect(logged)
+        events = {name: {e: (ev.to_dict() if ev else None) for e, ev in per.items() if e != "rest"}
+                  for name, per in found.signals.items()}
+        flags = list(found.flags)
+    except ValueError as exc:  # a run too short to hold any event
+        events, flags = {}, [str(exc)]
     window = t >= t[-1] - REST_WINDOW_S
     rest = {name: float(np.mean(logged[f"{name}_mm"][window])) for name in ("sled", "fork", "tire")}
     motion = float(np.ptp(logged["sled_mm"][window]))
@@ -109,6 +74,7 @@ def summarize(setup: Setup, trace: RawTrace, logged: dict[str, np.ndarray], raw:
         "lifts_off": lift_raw is not None,
         "fork_tops_out": bool(np.any(raw["fork_mm"][raw["time_s"] > 0.01] <= 0.0)),
         "events": events,
+        "event_flags": flags,
         "rest_mm": rest,
         "rest_motion_mm": motion,
         "at_rest": motion < REST_TOLERANCE_MM,
