@@ -1,0 +1,535 @@
+"""The front end rolling over terrain: the drop study's fork and tire laws on a planar front end.
+
+``run_roll(scenario, speed_m_per_s, config="S12", head_angle_deg=65, duration=None)`` builds
+``mjcf/rolling_scene.xml`` for the configuration (masses, tire radius, fork length, solver) and a
+head angle, puts the wheel at rest (static sag) at the start of the terrain, and rolls it at the
+set speed: a PD servo on the chassis' horizontal joint tracks x0 + v t. The fork law (spring,
+damper, friction, as ``compose.setup``) and the radial tire (``mtbmj.tire_model``, the
+configuration's tire values) are applied by one control callback through motors, so MuJoCo's
+``actuatorfrc`` sensors record the exact forces of every step.
+
+Conventions: fork_mm compression positive, zero at unloaded full extension; tire_mm radial
+deflection (compression positive, negative = clearance when airborne); body_z_mm and axle_z_mm
+heights relative to the start (up positive); axle forces on the axle from the ground, x forward,
+z up; SI inside, units in every external name.
+
+The tire uses the in-contact values of a switching tire law (rolling is sustained contact; the
+impact values of the coefficient-of-restitution method belong to the drop's first impact).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Mapping
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from mtbmj import mjcf
+from mtbmj.controllers import installed
+from . import compose, measure, output, terrain as terrain_mod
+from .config import Config
+from .errors import ConfigError, RunError
+from .tire_model import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
+
+DEFAULT_HEAD_ANGLE_DEG = 65.0
+DRIVE_HZ = 10.0  # bandwidth of the speed servo (critically damped)
+CHUNK = 10000
+SCENE = "rolling_scene.xml"
+COLUMNS = (
+    "time_s", "x_m", "speed_m_per_s", "terrain_mm", "body_z_mm", "axle_z_mm", "fork_mm", "tire_mm",
+    "body_z_velocity_mm_per_s", "fork_velocity_mm_per_s", "fork_force_N", "axle_force_x_N", "axle_force_z_N",
+    "tire_force_N", "drive_force_N",
+)
+
+
+@dataclass(frozen=True)
+class FrontEnd:
+    """A compiled front end and the numbers the callback needs (all SI)."""
+
+    model: mujoco.MjModel
+    head_angle: float  # rad, from the horizontal
+    fork_length: float
+    chassis_x0: float  # world position of the chassis (crown) at qpos = 0
+    chassis_z0: float
+    drum_dof: int | None = None
+
+    @property
+    def axis(self) -> tuple[float, float]:
+        """(cos, sin) of the head angle: the fork compresses along (-cos, +sin) in x-z."""
+        return math.cos(self.head_angle), math.sin(self.head_angle)
+
+    def axle(self, qx, qz, qf):
+        c, s = self.axis
+        return self.chassis_x0 + qx + (self.fork_length - qf) * c, self.chassis_z0 + qz - (self.fork_length - qf) * s
+
+
+def _check_inputs(speed, head_angle_deg, duration):
+    if not isinstance(speed, (int, float)) or isinstance(speed, bool) or not math.isfinite(speed) or speed <= 0:
+        raise ConfigError(f"speed: must be a positive number of m/s, got {speed!r}")
+    if not isinstance(head_angle_deg, (int, float)) or not math.isfinite(head_angle_deg) or not 45.0 < head_angle_deg <= 90.0:
+        raise ConfigError(f"head angle: must be in (45, 90] degrees from the horizontal, got {head_angle_deg!r}")
+    if duration is not None and not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
+        raise ConfigError(f"duration: must be positive, got {duration!r}")
+
+
+def build_front_end(setup: compose.Setup, terrain, head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG) -> FrontEnd:
+    """Compile the rolling scene for ``setup`` and ``terrain`` at ``head_angle_deg``."""
+    from .scene import INTEGRATORS
+
+    spec = mujoco.MjSpec.from_file(str(mjcf.path(SCENE)))
+    spec.option.timestep = setup.timestep
+    spec.option.integrator = INTEGRATORS[setup.integrator]
+    spec.option.gravity = [0.0, 0.0, -setup.gravity]
+    a = math.radians(head_angle_deg)
+    c, s = math.cos(a), math.sin(a)
+    L, r = setup.fork_length, setup.tire_radius
+    h0 = terrain.start_height()
+    x0 = terrain.start_x - L * c
+    z0 = h0 + r + L * s  # at qpos = 0 the tread just touches the ground under the start
+    chassis = spec.body("chassis")
+    chassis.pos = [x0, 0.0, z0]
+    chassis.mass = setup.body_mass
+    lower = spec.body("fork_lower")
+    lower.pos = [L * c, 0.0, -L * s]
+    # The unsprung mass m_w is split 0.5 : 1.8 between lower legs and wheel as in the XML; only
+    # the sum enters the planar dynamics (the wheel's hinge sits at the lower's origin).
+    lower.mass = setup.wheel_mass * 0.5 / 2.3
+    wheel = spec.body("wheel")
+    wheel.mass = setup.wheel_mass * 1.8 / 2.3
+    hoop = wheel.mass * r * r  # thin hoop: rim + tire carry the mass
+    wheel.inertia = [hoop / 2, hoop, hoop / 2]
+    spec.joint("fork").axis = [-c, 0.0, s]
+    spec.geom("stanchion").fromto = [0.0, 0.0, 0.0, 0.6 * L * c, 0.0, -0.6 * L * s]
+    spec.geom("lower_leg").fromto = [0.0, 0.0, 0.0, -0.6 * L * c, 0.0, 0.6 * L * s]
+    spec.geom("tire").size = [r, 0.03, 0.0]
+    spec.geom("rim").size = [max(r - 0.06, 0.05), 0.0125, 0.0]
+    spec.geom("spoke_marker").size = [max(r - 0.07, 0.04), 0.005, 0.01]
+    total = setup.body_mass + setup.wheel_mass
+    kp = total * (2 * math.pi * DRIVE_HZ) ** 2
+    kv = 2.0 * math.sqrt(kp * total)
+    for act in spec.actuators:
+        if act.name == "drive_position":
+            act.gainprm[0] = kp
+            act.biasprm[1] = -kp
+        elif act.name == "drive_velocity":
+            act.gainprm[0] = kv
+            act.biasprm[2] = -kv
+    _add_terrain_visual(spec, terrain)
+    with installed(None):
+        model = spec.compile()
+    drum_dof = int(model.joint("drum").dofadr[0]) if isinstance(terrain, terrain_mod.DrumTerrain) else None
+    return FrontEnd(model, a, L, x0, z0, drum_dof)
+
+
+def _add_terrain_visual(spec, terrain) -> None:
+    world = spec.worldbody
+    if isinstance(terrain, terrain_mod.DrumTerrain):
+        R = terrain.radius
+        body = world.add_body(name="drum", pos=[0.0, 0.0, -R])
+        body.add_joint(name="drum", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0.0, 1.0, 0.0])
+        body.mass = 100.0
+        body.inertia = [10.0, 10.0, 10.0]
+        body.add_geom(name="drum_shell", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[R, 0.15, 0.0],
+                      euler=[math.pi / 2, 0.0, 0.0], contype=0, conaffinity=0, group=1, rgba=[0.5, 0.5, 0.55, 1])
+        p = terrain.params
+        a0 = math.radians(p["cleat_at_deg"])
+        h, w = p["cleat_height_mm"] * 1e-3, p["cleat_width_mm"] * 1e-3
+        if h > 0:
+            body.add_geom(name="cleat", type=mujoco.mjtGeom.mjGEOM_BOX, size=[w / 2, 0.15, h / 2 + 0.002],
+                          pos=[(R + h / 2) * math.sin(a0), 0.0, (R + h / 2) * math.cos(a0)], euler=[0.0, a0, 0.0],
+                          contype=0, conaffinity=0, group=1, rgba=[0.8, 0.3, 0.1, 1])
+        return
+    x_lo, x_hi = float(terrain.x[0]), float(terrain.x[-1])
+    n = int(min(20000, max(64, (x_hi - x_lo) / 0.005)))
+    xs = np.linspace(x_lo, x_hi, n)
+    zs = terrain.height(xs)
+    lo, hi = float(zs.min()), float(zs.max())
+    span = max(hi - lo, 1e-3)
+    base = 0.05
+    spec.add_hfield(name="terrain", size=[(x_hi - x_lo) / 2, 0.3, span, base], nrow=2, ncol=n,
+                    userdata=list(np.tile((zs - lo) / span, 2)))
+    world.add_geom(name="terrain", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="terrain",
+                   pos=[(x_lo + x_hi) / 2, 0.0, lo], contype=0, conaffinity=0, group=1, material="terrain")
+
+
+class RollCallback:
+    """Fork law + radial tire + speed servo reference, written into ``ctrl`` each step.
+
+    Acts only on its own model; assigns, never accumulates. The terrain geometry (contact
+    patches) is refreshed every ``refresh`` seconds of simulated time or 5 mm of axle travel.
+    ``damper_scale`` (None = passive) multiplies the fork's hydraulic damper force: the
+    semi-active command of ``mtbmj.env``."""
+
+    def __init__(self, front: FrontEnd, fork_law, tire: RadialTire, speed: float, x_ref0: float,
+                 refresh: float = REFRESH_S):
+        m = front.model
+        self._model = m
+        self._address = m._address
+        self.front = front
+        self.law = fork_law
+        self.tire = tire
+        self.speed = float(speed)
+        self.x_ref0 = float(x_ref0)
+        self.refresh = float(refresh)
+        j = lambda name: (int(m.joint(name).qposadr[0]), int(m.joint(name).dofadr[0]))
+        self.xq, self.xv = j("chassis_x")
+        self.zq, self.zv = j("chassis_z")
+        self.fq, self.fv = j("fork")
+        a = lambda name: int(m.actuator(name).id)
+        self.a_state, self.a_fork = a("friction_state"), a("fork_force")
+        self.a_dp, self.a_dv, self.a_tx, self.a_tz = a("drive_position"), a("drive_velocity"), a("tire_x"), a("tire_z")
+        self.a_probe = a("tire_deflection_probe")
+        self.act_index = int(m.actuator_actadr[self.a_state])
+        self.has_state = fork_law.has_state
+        self.cos, self.sin = front.axis
+        self.patches: list = []
+        self.patch_time = 0.0
+        self.next_refresh = -math.inf
+        self.last_x = math.inf
+        self.refreshes = 0
+        self.calls = 0
+        self.damper_scale = None
+        self._data = None
+        self._arrays = None
+
+    def bind(self, data) -> None:
+        self._data = data
+        self._arrays = (data.qpos, data.qvel, data.act, data.ctrl)
+
+    def reset(self) -> None:
+        self.patches, self.next_refresh, self.last_x = [], -math.inf, math.inf
+
+    def axle_state(self, qpos, qvel):
+        f = self.front
+        qf = qpos[self.fq]
+        vf = qvel[self.fv]
+        cx = f.chassis_x0 + qpos[self.xq] + (f.fork_length - qf) * self.cos
+        cz = f.chassis_z0 + qpos[self.zq] - (f.fork_length - qf) * self.sin
+        return cx, cz, qvel[self.xv] - vf * self.cos, qvel[self.zv] + vf * self.sin
+
+    def __call__(self, m, d):
+        if m is not self._model and m._address != self._address:
+            return
+        self.calls += 1
+        if d is self._data:
+            qpos, qvel, act, ctrl = self._arrays
+        else:
+            qpos, qvel, act, ctrl = d.qpos, d.qvel, d.act, d.ctrl
+        t = d.time
+        x = qpos[self.fq]
+        v = qvel[self.fv]
+        law = self.law
+        z = act[self.act_index] if self.has_state else 0.0
+        if self.damper_scale is None:
+            force = law.force(x, v, z) if self.has_state else law.force(x, v)
+        else:
+            force = law.spring.force(x, v) + self.damper_scale * law.damper.force(v) + law.friction.force(v, z)
+        if self.has_state:
+            ctrl[self.a_state] = law.state_rate(v, z)
+        ctrl[self.a_fork] = -force
+        cx, cz, vx, vz = self.axle_state(qpos, qvel)
+        if t >= self.next_refresh or abs(cx - self.last_x) > REFRESH_DISTANCE_M:
+            self.patches = self.tire.patches(cx, cz, t)
+            self.patch_time = t
+            self.next_refresh = t + self.refresh - 1e-12
+            self.last_x = cx
+            self.refreshes += 1
+        patches = self.patches
+        if patches and self.tire.terrain.moving:
+            dt = t - self.patch_time
+            patches = [(qx + sx * dt, qz + sz * dt, nx, nz, sx, sz) for qx, qz, nx, nz, sx, sz in patches]
+        fx, fz, deflection, _, _ = self.tire.force(cx, cz, vx, vz, patches)
+        ctrl[self.a_probe] = deflection
+        ctrl[self.a_tx] = fx
+        ctrl[self.a_tz] = fz
+        ctrl[self.a_dp] = self.x_ref0 + self.speed * t
+        ctrl[self.a_dv] = self.speed
+
+
+def static_sag(setup: compose.Setup, head_angle: float) -> tuple[float, float]:
+    """(fork compression m, tire deflection m) at rest on flat ground: the spring carries the
+    body weight's component along the fork, m_b g sin(head angle); the tire all the weight."""
+    target = setup.body_mass * setup.gravity * math.sin(head_angle)
+    lo, hi = -0.05, setup.travel * 1.5
+    spring = setup.fork.spring
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if spring.force(mid, 0.0) < target:
+            lo = mid
+        else:
+            hi = mid
+    rate = tire_values(setup)[0]
+    return 0.5 * (lo + hi), (setup.body_mass + setup.wheel_mass) * setup.gravity / rate
+
+
+def tire_values(setup: compose.Setup) -> tuple[float, float]:
+    """(rate N/m, damping N s/m) of the rolling tire: in-contact values when the law switches."""
+    v = setup.tire.values(1)
+    return v.rate, v.damping
+
+
+@dataclass
+class Prepared:
+    setup: compose.Setup
+    terrain: object
+    front: FrontEnd
+    tire: RadialTire
+    callback: RollCallback
+    data: mujoco.MjData
+    speed: float
+    chassis_speed: float
+
+
+def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG,
+            overrides: Mapping | None = None, fork_law=None, settled: bool = True) -> Prepared:
+    """Everything a rolling run needs, with the data at t = 0 (at rest on the start, at speed)."""
+    from .drop import resolve
+
+    _check_inputs(speed_m_per_s, head_angle_deg, None)
+    ter = terrain_mod.make(scenario)
+    cfg = resolve(config, overrides)
+    setup = compose.setup(cfg)
+    drum = isinstance(ter, terrain_mod.DrumTerrain)
+    if drum:
+        ter = ter.with_speed(float(speed_m_per_s))
+    chassis_speed = 0.0 if drum else float(speed_m_per_s)
+    front = build_front_end(setup, ter, head_angle_deg)
+    rate, damping = tire_values(setup)
+    tire = RadialTire(ter, setup.tire_radius, rate, damping)
+    model = front.model
+    data = mujoco.MjData(model)
+    c, s = front.axis
+    xf, dt = static_sag(setup, front.head_angle) if settled else (0.0, 0.0)
+    qx = xf * c
+    data.qpos[model.joint("fork").qposadr[0]] = xf
+    data.qpos[model.joint("chassis_x").qposadr[0]] = qx
+    data.qpos[model.joint("chassis_z").qposadr[0]] = -dt - xf * s
+    data.qvel[model.joint("chassis_x").dofadr[0]] = chassis_speed
+    data.qvel[model.joint("wheel_spin").dofadr[0]] = float(speed_m_per_s) / setup.tire_radius
+    if front.drum_dof is not None:
+        data.qvel[front.drum_dof] = -float(speed_m_per_s) / ter.radius
+    refresh = min(REFRESH_S, REFRESH_DISTANCE_M / max(float(speed_m_per_s), 1e-9))
+    cb = RollCallback(front, fork_law or setup.fork, tire, chassis_speed, qx, refresh)
+    cb.bind(data)
+    with installed(cb):
+        mujoco.mj_forward(model, data)
+    return Prepared(setup, ter, front, tire, cb, data, float(speed_m_per_s), chassis_speed)
+
+
+def default_duration(p: Prepared) -> float:
+    return max(1.0, p.terrain.length / p.speed)
+
+
+def simulate(p: Prepared, duration: float, progress=None):
+    """(states (n+1, nstate) incl. t = 0, sensordata (n, nsensor) of each step's start state)."""
+    model, data = p.front.model, p.data
+    steps = int(round(duration / p.setup.timestep))
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(model, spec))
+    mujoco.mj_getState(model, data, state, spec)
+    states = np.empty((steps + 1, state.size))
+    sensors = np.empty((steps, model.nsensordata))
+    states[0] = state
+    done = 0
+    messages: list[str] = []
+    from .engine_mujoco import _collected_warnings, _warning
+
+    with installed(p.callback), _collected_warnings(messages):
+        while done < steps:
+            n = min(CHUNK, steps - done)
+            st, se = rollout.rollout(model, data, states[done][None, :], nstep=n)
+            states[done + 1: done + 1 + n] = st[0]
+            sensors[done: done + n] = se[0]
+            done += n
+            warning = _warning(data)
+            if warning is not None or messages or not np.all(np.isfinite(st)):
+                raise RunError(f"rolling run diverged before t = {done * p.setup.timestep:.4f} s: "
+                               f"{messages[0] if messages else warning or 'state is not finite'}")
+            if progress is not None:
+                progress(done / steps)
+    return states, sensors
+
+
+def _signals(p: Prepared, states, sensors) -> dict[str, np.ndarray]:
+    model = p.front.model
+    t0 = 0
+    n = sensors.shape[0]
+    st = states[:n]
+    nq = model.nq
+    qpos = st[:, 1:1 + nq]
+    qvel = st[:, 1 + nq:1 + nq + model.nv]
+    cb = p.callback
+    cx, cz, vx, vz = cb.axle_state(qpos.T, qvel.T)
+    sens = lambda name: sensors[:, model.sensor_adr[model.sensor(name).id]]
+    fx, fz = sens("tire_force_x"), sens("tire_force_z")
+    q0 = states[0, 1:1 + nq]
+    qz0 = q0[cb.zq]
+    cz0 = cb.axle_state(q0, states[0, 1 + nq:1 + nq + model.nv])[1]
+    times = st[:, t0]
+    defl = sens("tire_deflection")  # deepest patch, as the callback applied it
+    ground = p.terrain.height(cx) if not p.terrain.moving else p.terrain.height(np.zeros(n))
+    return {
+        "time_s": times,
+        "x_m": cx,
+        "speed_m_per_s": qvel[:, cb.xv] if p.chassis_speed else np.full(n, p.speed),
+        "terrain_mm": ground * 1e3,
+        "body_z_mm": (qpos[:, cb.zq] - qz0) * 1e3,
+        "axle_z_mm": (cz - cz0) * 1e3,
+        "fork_mm": qpos[:, cb.fq] * 1e3,
+        "tire_mm": defl * 1e3,
+        "body_z_velocity_mm_per_s": qvel[:, cb.zv] * 1e3,
+        "fork_velocity_mm_per_s": qvel[:, cb.fv] * 1e3,
+        "fork_force_N": -sens("fork_force"),
+        "axle_force_x_N": fx,
+        "axle_force_z_N": fz,
+        "tire_force_N": np.hypot(fx, fz),
+        "drive_force_N": sens("drive_force_pos") + sens("drive_force_vel"),
+    }
+
+
+def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
+    travel_mm = p.setup.travel * 1e3
+    fork = raw["fork_mm"]
+    out = {
+        "scenario": p.terrain.describe(),
+        "speed_m_per_s": p.speed,
+        "head_angle_deg": math.degrees(p.front.head_angle),
+        "duration_s": float(raw["time_s"][-1] + p.setup.timestep),
+        "tire_rate_N_per_mm": p.tire.rate / 1e3,
+        "tire_damping_N_s_per_m": p.tire.damping,
+        "static_fork_mm": float(fork[0]),
+        "static_tire_mm": float(raw["tire_mm"][0]),
+        "max_fork_mm": float(fork.max()),
+        "min_fork_mm": float(fork.min()),
+        "travel_used_percent": float(fork.max() / travel_mm * 100.0),
+        "max_tire_mm": float(raw["tire_mm"].max()),
+        "tire_off_ground_s": float(np.sum(raw["tire_force_N"] <= 0.0) * p.setup.timestep),
+        "max_axle_force_x_N": float(raw["axle_force_x_N"].max()),
+        "min_axle_force_x_N": float(raw["axle_force_x_N"].min()),
+        "max_axle_force_z_N": float(raw["axle_force_z_N"].max()),
+        "max_fork_velocity_mm_per_s": float(raw["fork_velocity_mm_per_s"].max()),
+        "min_fork_velocity_mm_per_s": float(raw["fork_velocity_mm_per_s"].min()),
+    }
+    try:
+        from . import ride_metrics
+    except ImportError:  # written by a parallel piece of work; the summary stands without it
+        out["ride_metrics"] = None
+    else:
+        out["ride_metrics"] = ride_metrics.summarize(logged["time_s"], logged["fork_mm"], travel_mm,
+                                                     velocity_mm_per_s=logged["fork_velocity_mm_per_s"])
+    return out
+
+
+@dataclass
+class RollResult:
+    """A rolling run: ``signals`` at the logger rate (1 kHz after the 400 Hz low-pass, like the
+    drop), ``raw`` at the engine step, ``summary`` (peaks, rider metrics)."""
+
+    name: str
+    scenario: str
+    config: Config
+    signals: dict[str, np.ndarray]
+    raw: dict[str, np.ndarray]
+    summary: dict
+    wall_time_s: float
+    info: dict = field(default_factory=dict)
+
+    @property
+    def time(self) -> np.ndarray:
+        return self.signals["time_s"]
+
+    def __getitem__(self, column: str) -> np.ndarray:
+        return self.signals[column]
+
+    def csv_bytes(self, raw: bool = False) -> bytes:
+        data = self.raw if raw else self.signals
+        rate = "engine rate" if raw else "1 kHz after a 400 Hz anti-aliasing low-pass"
+        header = (f"mtbmj roll {self.scenario}, config {self.name}, {rate}\n"
+                  "fork compression positive from unloaded full extension; tire radial deflection positive; "
+                  "heights from the start, up positive; axle forces from the ground, x forward, z up")
+        return output.csv_bytes({k: data[k] for k in COLUMNS}, header)
+
+    def to_pandas(self, raw: bool = False):
+        import pandas as pd
+
+        data = self.raw if raw else self.signals
+        return pd.DataFrame({k: data[k] for k in COLUMNS}).set_index("time_s")
+
+    def manifest(self) -> dict:
+        from .result import versions
+
+        return {"name": self.name, "scenario": self.scenario, "engine": "mujoco", "config_sha256": self.config.digest(),
+                "config_sources": list(self.config.sources), "versions": versions(),
+                "wall_time_s": self.wall_time_s, "engine_info": self.info}
+
+    def files(self) -> dict[str, bytes]:
+        return {
+            "timeseries.csv": self.csv_bytes(),
+            "timeseries_raw.csv": self.csv_bytes(raw=True),
+            "summary.json": output.json_bytes(self.summary),
+            "manifest.json": output.json_bytes(self.manifest()),
+            "config.toml": self.config.to_toml().encode(),
+        }
+
+    def write(self, out_dir: str | Path) -> list[Path]:
+        return output.write_atomically(out_dir, self.files())
+
+    def plot(self):
+        import matplotlib
+
+        matplotlib.use("Agg", force=False)
+        import matplotlib.pyplot as plt
+
+        names = ("terrain_mm", "fork_mm", "tire_mm", "axle_force_z_N", "axle_force_x_N")
+        fig, axes = plt.subplots(len(names), 1, sharex=True, figsize=(7, 9), constrained_layout=True)
+        for ax, name in zip(axes, names):
+            ax.plot(self.time, self.signals[name])
+            ax.set_ylabel(name)
+            ax.grid(True, alpha=0.3)
+        axes[-1].set_xlabel("time [s]")
+        return fig
+
+
+def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
+             head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG, duration: float | None = None,
+             overrides: Mapping | None = None, progress: Callable[[float], None] | None = None) -> RollResult:
+    """Roll the front end over ``scenario`` (a terrain spec, CSV path or ``Terrain``) at
+    ``speed_m_per_s`` with the fork and tire of ``config``; ``duration`` defaults to the time to
+    cross the feature and settle (the drum: its revolutions)."""
+    _check_inputs(speed_m_per_s, head_angle_deg, duration)
+    p = prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides)
+    duration = default_duration(p) if duration is None else duration
+    start = time.perf_counter()
+    states, sensors = simulate(p, duration, progress)
+    wall = time.perf_counter() - start
+    raw = _signals(p, states, sensors)
+    logged = measure.logged(p.setup, raw)
+    summary = _summary(p, logged, raw)
+    info = {"steps": int(sensors.shape[0]), "timestep_s": p.setup.timestep, "integrator": p.setup.integrator,
+            "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
+            "real_time_factor": duration / wall if wall > 0 else None}
+    return RollResult(p.setup.config.name, str(scenario), p.setup.config, logged, raw, summary, wall, info)
+
+
+def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12",
+                    head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG, duration: float | None = None,
+                    overrides: Mapping | None = None, fps: float = 60.0):
+    """(model, times, qpos) of a rolling run sampled at ``fps`` for rendering; the model has the
+    terrain as a visual heightfield (group 1) or the drum with its cleat."""
+    _check_inputs(speed_m_per_s, head_angle_deg, duration)
+    p = prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides)
+    duration = default_duration(p) if duration is None else duration
+    states, _ = simulate(p, duration)
+    dt = p.setup.timestep
+    every = max(1, int(round(1.0 / (fps * dt))))
+    rows = states[::every]
+    nq = p.front.model.nq
+    return p.front.model, rows[:, 0].copy(), rows[:, 1:1 + nq].copy()
+
+
+__all__ = ["run_roll", "roll_trajectory", "RollResult", "RollCallback", "FrontEnd", "build_front_end", "prepare",
+           "simulate", "static_sag", "tire_values", "COLUMNS", "DEFAULT_HEAD_ANGLE_DEG"]

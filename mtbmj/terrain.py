@@ -1,0 +1,359 @@
+"""Terrain library for rolling runs: 2-D profiles in the x-z plane (x forward, z up, SI).
+
+Every terrain is a polyline ``(x, z)`` with ``x`` non-decreasing (two points with the same ``x``
+make a vertical wall: steps, square edges, drops), flat lead-in before the feature so the wheel
+starts at rest on flat ground, and flat continuation past the last point. The drum rig is the one
+moving terrain: a cylinder with a cleat that turns under a wheel held in place.
+
+Specs (``make``): a name with optional ``key=value`` parameters, units in the key names, e.g.
+``"root"``, ``"root:radius_mm=60"``, ``"iso8608:class=D,seed=3"``, or a path to a CSV file with
+columns ``distance_m`` and ``height_mm``. Bad specs raise ``TerrainError`` (one line, naming the
+cause).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import MtbmjError
+
+MM = 1e-3
+LEAD_IN_M = 1.5  # flat ground before the feature: the wheel starts at rest on it
+RUN_OUT_M = 3.0  # flat ground past the feature (the profile continues flat beyond anyway)
+ISO8608_GD_N0 = {  # geometric mean of each class, Gd(n0 = 0.1 cycle/m) in m^3 (ISO 8608:2016 Table 1)
+    "A": 16e-6, "B": 64e-6, "C": 256e-6, "D": 1024e-6,
+    "E": 4096e-6, "F": 16384e-6, "G": 65536e-6, "H": 262144e-6,
+}
+
+
+class TerrainError(MtbmjError):
+    """A terrain spec that cannot be built: unknown name, bad parameter, bad CSV."""
+
+
+@dataclass(frozen=True)
+class Terrain:
+    """A static profile: polyline ``x``, ``z`` (m), the axle's start ``start_x`` and the distance
+    ``length`` (m) a run needs to cross the feature and settle after it."""
+
+    name: str
+    x: np.ndarray
+    z: np.ndarray
+    start_x: float
+    length: float
+    params: dict = field(default_factory=dict)
+    moving: bool = False
+
+    def height(self, x) -> np.ndarray:
+        """Surface height (m) at ``x``; on a vertical wall the upper end."""
+        x = np.asarray(x, dtype=float)
+        # np.interp takes the last of equal abscissae: the right side of a wall; the upper end
+        # is the max of both sides.
+        right = np.interp(x, self.x, self.z)
+        left = -np.interp(-x, -self.x[::-1], -self.z[::-1])
+        return np.maximum(left, right)
+
+    def polyline(self, x_lo: float, x_hi: float, t: float = 0.0):
+        """Points of the profile covering [x_lo, x_hi] (one point beyond each end, extended flat):
+        (px, pz, surface velocity x, surface velocity z); static terrain has zero velocity."""
+        i = max(int(np.searchsorted(self.x, x_lo, side="left")) - 1, 0)
+        j = min(int(np.searchsorted(self.x, x_hi, side="right")) + 1, self.x.size)
+        px, pz = self.x[i:j], self.z[i:j]
+        if px[0] > x_lo:
+            px = np.concatenate(([x_lo - 1.0], px))
+            pz = np.concatenate(([pz[0]], pz))
+        if px[-1] < x_hi:
+            px = np.concatenate((px, [x_hi + 1.0]))
+            pz = np.concatenate((pz, [pz[-1]]))
+        return px, pz, 0.0, 0.0
+
+    def surface_velocity(self, qx: float, qz: float, t: float) -> tuple[float, float]:
+        return 0.0, 0.0
+
+    def start_height(self) -> float:
+        return float(self.height(self.start_x))
+
+    def describe(self) -> dict:
+        return {"name": self.name, **{k: v for k, v in self.params.items()}}
+
+
+@dataclass(frozen=True)
+class DrumTerrain(Terrain):
+    """A drum rig: a cylinder of ``radius`` (m) whose top is at z = 0 under x = 0, turning so
+    that its surface moves at ``surface_speed`` (m/s) towards -x, with ``cleat`` points
+    ((angle, radius) pairs in the drum frame) on its surface."""
+
+    radius: float = 0.5
+    surface_speed: float = 0.0
+    polar: np.ndarray | None = None  # (n, 2): angle (rad, 0 = top at t = 0, positive towards +x), radius
+
+    @property
+    def omega(self) -> float:
+        return self.surface_speed / self.radius
+
+    def with_speed(self, speed: float) -> "DrumTerrain":
+        return DrumTerrain(self.name, self.x, self.z, self.start_x, self.length, self.params, True,
+                           self.radius, speed, self.polar)
+
+    def polyline(self, x_lo: float, x_hi: float, t: float = 0.0):
+        angle = self.polar[:, 0] - self.omega * t  # the top moves towards -x: angles decrease
+        lim = math.asin(min(1.0, max(abs(x_lo), abs(x_hi)) / self.radius)) + 0.05
+        wrapped = (angle + math.pi) % (2 * math.pi) - math.pi
+        keep = np.abs(wrapped) <= lim
+        a, r = wrapped[keep], self.polar[keep, 1]
+        order = np.argsort(a, kind="stable")
+        a, r = a[order], r[order]
+        px = r * np.sin(a)
+        pz = r * np.cos(a) - self.radius
+        return px, pz, 0.0, 0.0
+
+    def surface_velocity(self, qx: float, qz: float, t: float) -> tuple[float, float]:
+        # Rotation about the drum centre (0, -R): in the x-z view the top moves towards -x.
+        w = self.omega
+        return -w * (qz + self.radius), w * qx
+
+    def height(self, x) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        return np.sqrt(np.maximum(self.radius**2 - x**2, 0.0)) - self.radius
+
+
+def _profile(name, pieces, start_x=0.0, length=None, params=None) -> Terrain:
+    x = np.concatenate([np.asarray(p[0], float) for p in pieces])
+    z = np.concatenate([np.asarray(p[1], float) for p in pieces])
+    if length is None:
+        length = float(x[-1] - start_x)
+    return Terrain(name, x, z, start_x, length, dict(params or {}))
+
+
+def _flat(a: float, b: float, h: float = 0.0):
+    return [a, b], [h, h]
+
+
+def flat(length_m: float = 10.0) -> Terrain:
+    return _profile("flat", [_flat(-LEAD_IN_M, length_m)], length=length_m, params={"length_m": length_m})
+
+
+def step_up(height_mm: float = 50.0, at_m: float = LEAD_IN_M) -> Terrain:
+    h = height_mm * MM
+    return _profile("step_up", [_flat(-LEAD_IN_M, at_m), _flat(at_m, at_m + RUN_OUT_M, h)],
+                    length=at_m + 2.0, params={"height_mm": height_mm, "at_m": at_m})
+
+
+def step_down(height_mm: float = 50.0, at_m: float = LEAD_IN_M) -> Terrain:
+    h = height_mm * MM
+    return _profile("step_down", [_flat(-LEAD_IN_M, at_m, h), _flat(at_m, at_m + RUN_OUT_M)],
+                    length=at_m + 2.0, params={"height_mm": height_mm, "at_m": at_m})
+
+
+def square_edge(height_mm: float = 50.0, width_mm: float = 100.0, at_m: float = LEAD_IN_M) -> Terrain:
+    """A square-edged block (a curb, a sleeper) ``height_mm`` high and ``width_mm`` long."""
+    h, w = height_mm * MM, width_mm * MM
+    return _profile("square_edge", [_flat(-LEAD_IN_M, at_m), _flat(at_m, at_m + w, h),
+                                    _flat(at_m + w, at_m + w + RUN_OUT_M)],
+                    length=at_m + w + 2.0, params={"height_mm": height_mm, "width_mm": width_mm, "at_m": at_m})
+
+
+def _arc(cx: float, a: float, b: float, n: int):
+    """Upper half-ellipse centred at cx on the ground, semi-axes a (along x) and b (height)."""
+    phi = np.linspace(math.pi, 0.0, n)
+    return cx + a * np.cos(phi), b * np.sin(phi)
+
+
+def root(radius_mm: float = 50.0, at_m: float = LEAD_IN_M) -> Terrain:
+    """A root lying across the trail: a half-cylinder of ``radius_mm`` (polygon, 181 points:
+    the chord sags at most r (1 - cos 0.5 deg) = 4e-5 r below the circle)."""
+    r = radius_mm * MM
+    ax, az = _arc(at_m + r, r, r, 181)
+    return _profile("root", [_flat(-LEAD_IN_M, at_m), (ax[1:-1], az[1:-1]), _flat(at_m + 2 * r, at_m + 2 * r + RUN_OUT_M)],
+                    length=at_m + 2 * r + 2.0, params={"radius_mm": radius_mm, "at_m": at_m})
+
+
+def rock(height_mm: float = 100.0, length_mm: float = 300.0, at_m: float = LEAD_IN_M) -> Terrain:
+    """A rock: a half-ellipse ``length_mm`` long and ``height_mm`` high (steep flanks, round top)."""
+    h, L = height_mm * MM, length_mm * MM
+    ax, az = _arc(at_m + L / 2, L / 2, h, 181)
+    return _profile("rock", [_flat(-LEAD_IN_M, at_m), (ax[1:-1], az[1:-1]), _flat(at_m + L, at_m + L + RUN_OUT_M)],
+                    length=at_m + L + 2.0, params={"height_mm": height_mm, "length_mm": length_mm, "at_m": at_m})
+
+
+def drop(height_mm: float = 300.0, at_m: float = LEAD_IN_M) -> Terrain:
+    """Drop to flat: a ledge ``height_mm`` high, then flat ground (a step down taken at speed)."""
+    t = step_down(height_mm, at_m)
+    return Terrain("drop", t.x, t.z, t.start_x, at_m + 4.0, {"height_mm": height_mm, "at_m": at_m})
+
+
+def washboard(height_mm: float = 20.0, wavelength_mm: float = 300.0, length_m: float = 60.0,
+              at_m: float = LEAD_IN_M) -> Terrain:
+    """Washboard (braking bumps): z = h/2 (1 - cos 2 pi s / wavelength), ``height_mm`` peak to
+    peak, from ``at_m`` for ``length_m``, sampled at 5 mm (chord sag below 0.02 mm)."""
+    h, lam = height_mm * MM, wavelength_mm * MM
+    n = int(math.ceil(length_m / lam))
+    s = np.linspace(0.0, n * lam, max(2, int(round(n * lam / 0.005)) + 1))
+    z = 0.5 * h * (1.0 - np.cos(2 * math.pi * s / lam))
+    return _profile("washboard", [_flat(-LEAD_IN_M, at_m), (at_m + s[1:-1], z[1:-1]),
+                                  _flat(at_m + n * lam, at_m + n * lam + RUN_OUT_M)],
+                    length=at_m + n * lam + 1.0,
+                    params={"height_mm": height_mm, "wavelength_mm": wavelength_mm, "length_m": length_m, "at_m": at_m})
+
+
+def iso8608(road_class: str = "C", seed: int = 0, length_m: float = 100.0, sample_mm: float = 10.0,
+            at_m: float = LEAD_IN_M) -> Terrain:
+    """Random road profile of ISO 8608 class A-H: displacement PSD Gd(n) = Gd(n0) (n / n0)^-2,
+    n0 = 0.1 cycle/m, over 0.011-2.83 cycles/m (the standard's band); spectral synthesis with
+    deterministic amplitudes sqrt(2 Gd dn) and seeded uniform random phases (numpy), faded in
+    over the first 2 m so the wheel starts on flat."""
+    key = str(road_class).upper()
+    if key not in ISO8608_GD_N0:
+        raise TerrainError(f"iso8608: class {road_class!r} is not one of {', '.join(ISO8608_GD_N0)}")
+    dx = sample_mm * MM
+    n_pts = int(round(length_m / dx)) + 1
+    s = np.arange(n_pts) * dx
+    n0, n_lo, n_hi = 0.1, 0.011, 2.83
+    dn = 1.0 / max(length_m, 1.0 / n_lo)
+    n = np.arange(max(dn, n_lo), n_hi, dn)
+    amp = np.sqrt(2.0 * ISO8608_GD_N0[key] * (n / n0) ** -2 * dn)
+    phase = np.random.default_rng(int(seed)).uniform(0.0, 2 * math.pi, n.size)
+    z = np.zeros(n_pts)
+    for k in range(0, n.size, 256):  # chunks: bounded memory for long profiles
+        z += (amp[k:k + 256, None] * np.cos(2 * math.pi * n[k:k + 256, None] * s[None, :] + phase[k:k + 256, None])).sum(0)
+    fade = np.clip(s / 2.0, 0.0, 1.0)
+    fade = fade * fade * (3 - 2 * fade)
+    z = (z - z[0]) * fade
+    return _profile("iso8608", [_flat(-LEAD_IN_M, at_m), (at_m + s[1:], z[1:]),
+                                _flat(at_m + s[-1], at_m + s[-1] + RUN_OUT_M, z[-1])],
+                    length=at_m + length_m,
+                    params={"class": key, "seed": int(seed), "length_m": length_m, "sample_mm": sample_mm, "at_m": at_m})
+
+
+def drum(radius_mm: float = 500.0, cleat_height_mm: float = 20.0, cleat_width_mm: float = 40.0,
+         cleat_at_deg: float = 30.0, revolutions: float = 2.0) -> DrumTerrain:
+    """Drum rig: the wheel stays at x = 0 on top of a drum of ``radius_mm``; a square cleat
+    (``cleat_height_mm`` x ``cleat_width_mm``) starts ``cleat_at_deg`` ahead of the top. The
+    surface speed is the run's speed; the run lasts ``revolutions`` turns."""
+    R, h, w = radius_mm * MM, cleat_height_mm * MM, cleat_width_mm * MM
+    if w >= R:
+        raise TerrainError("drum: cleat_width_mm must be smaller than radius_mm")
+    step = math.radians(0.1)
+    base = np.arange(-math.pi, math.pi, step)
+    a0 = math.radians(cleat_at_deg)
+    half = w / (2 * R)
+    out = (base < a0 - half) | (base > a0 + half)
+    ang = np.concatenate((base[out], [a0 - half, a0 - half], np.linspace(a0 - half, a0 + half, 9)[1:-1],
+                          [a0 + half, a0 + half]))
+    rad = np.concatenate((np.full(out.sum(), R), [R, R + h], np.full(7, R + h), [R + h, R]))
+    # at equal angles, the order of the wall points must follow the surface: sort by angle, then
+    # radius ascending on the leading wall and descending on the trailing one
+    key = np.where(np.isclose(ang, a0 + half), -rad, rad)
+    order = np.lexsort((key, ang))
+    polar = np.column_stack((ang[order], rad[order]))
+    xs = np.linspace(-R, R, 401)
+    t = DrumTerrain("drum", xs, np.sqrt(np.maximum(R**2 - xs**2, 0)) - R, 0.0, revolutions * 2 * math.pi * R,
+                    {"radius_mm": radius_mm, "cleat_height_mm": cleat_height_mm, "cleat_width_mm": cleat_width_mm,
+                     "cleat_at_deg": cleat_at_deg, "revolutions": revolutions},
+                    True, R, 0.0, polar)
+    return t
+
+
+def from_csv(path: str | Path) -> Terrain:
+    """A profile from a CSV record: columns ``distance_m`` (non-decreasing) and ``height_mm``;
+    read by ``mtbmj.identify.records.read_record`` (units converted to SI there). The wheel starts
+    at the first distance on a flat lead-in at the first height."""
+    from .identify.records import read_record
+
+    rec = read_record(path)
+    if set(rec.units) != {"distance", "height"} or rec.units.get("distance") != "m" or rec.units.get("height") != "mm":
+        have = ", ".join(f"{q}_{u}" for q, u in rec.units.items())
+        raise TerrainError(f"{path}: terrain CSV needs exactly the columns distance_m, height_mm (has {have})")
+    x, z = rec["distance"], rec["height"]
+    if x.size < 2:
+        raise TerrainError(f"{path}: terrain CSV needs at least 2 rows")
+    if np.any(np.diff(x) < 0):
+        i = int(np.argmax(np.diff(x) < 0)) + 2
+        raise TerrainError(f"{path}: distance_m decreases at data row {i}")
+    x0 = float(x[0])
+    return _profile(Path(path).stem, [_flat(x0 - LEAD_IN_M, x0, z[0]), (x[1:], z[1:]), _flat(x[-1], x[-1] + RUN_OUT_M, z[-1])],
+                    start_x=x0, length=float(x[-1] - x0) + 1.0, params={"csv": str(path)})
+
+
+# name -> (builder, {parameter: kind}); kinds: "height" (>= 0, mm), "pos" (> 0), "nonneg", "int", "text"
+LIBRARY = {
+    "flat": (flat, {"length_m": "pos"}),
+    "step_up": (step_up, {"height_mm": "height", "at_m": "nonneg"}),
+    "step_down": (step_down, {"height_mm": "height", "at_m": "nonneg"}),
+    "square_edge": (square_edge, {"height_mm": "height", "width_mm": "pos", "at_m": "nonneg"}),
+    "root": (root, {"radius_mm": "pos", "at_m": "nonneg"}),
+    "rock": (rock, {"height_mm": "pos", "length_mm": "pos", "at_m": "nonneg"}),
+    "drop": (drop, {"height_mm": "height", "at_m": "nonneg"}),
+    "washboard": (washboard, {"height_mm": "height", "wavelength_mm": "pos", "length_m": "pos", "at_m": "nonneg"}),
+    "iso8608": (iso8608, {"class": "text", "seed": "int", "length_m": "pos", "sample_mm": "pos", "at_m": "nonneg"}),
+    "drum": (drum, {"radius_mm": "pos", "cleat_height_mm": "height", "cleat_width_mm": "pos",
+                    "cleat_at_deg": "any", "revolutions": "pos"}),
+}
+ARGUMENT = {"class": "road_class"}
+
+
+def parse(spec: str) -> tuple[str, dict]:
+    """``"name:key=value,key=value"`` -> (name, {key: value})."""
+    name, _, rest = str(spec).strip().partition(":")
+    params = {}
+    for item in filter(None, (p.strip() for p in rest.split(","))):
+        key, eq, value = item.partition("=")
+        if not eq or not key.strip():
+            raise TerrainError(f"terrain {spec!r}: expected key=value, got {item!r}")
+        params[key.strip()] = value.strip()
+    return name.strip(), params
+
+
+def _value(name: str, key: str, kind: str, value):
+    if kind == "text":
+        return str(value)
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise TerrainError(f"terrain {name}: {key} must be a number, got {value!r}") from None
+    if not math.isfinite(number):
+        raise TerrainError(f"terrain {name}: {key} must be finite, got {value!r}")
+    if kind == "int":
+        if number != int(number) or number < 0:
+            raise TerrainError(f"terrain {name}: {key} must be a non-negative integer, got {value!r}")
+        return int(number)
+    if kind in ("height", "nonneg") and number < 0:
+        raise TerrainError(f"terrain {name}: {key} must not be negative, got {number:g}")
+    if kind == "pos" and number <= 0:
+        raise TerrainError(f"terrain {name}: {key} must be positive, got {number:g}")
+    return number
+
+
+def make(spec, **params) -> Terrain:
+    """A terrain from a spec string (``"root:radius_mm=60"``), a CSV path, or a ``Terrain``;
+    keyword parameters override those in the string."""
+    if isinstance(spec, Terrain):
+        if params:
+            raise TerrainError("terrain: parameters given with a ready-made Terrain")
+        return spec
+    text = str(spec)
+    if text.lower().endswith(".csv") or (Path(text).suffix and Path(text).exists()):
+        if params:
+            raise TerrainError(f"terrain {text}: a CSV profile takes no parameters")
+        return from_csv(text)
+    name, given = parse(text)
+    given.update(params)
+    if name not in LIBRARY:
+        raise TerrainError(f"terrain: unknown scenario {name!r} (known: {', '.join(LIBRARY)}, or a .csv profile)")
+    builder, kinds = LIBRARY[name]
+    kwargs = {}
+    for key, value in given.items():
+        if key not in kinds:
+            raise TerrainError(f"terrain {name}: unknown parameter {key!r} (known: {', '.join(kinds)})")
+        kwargs[ARGUMENT.get(key, key)] = _value(name, key, kinds[key], value)
+    return builder(**kwargs)
+
+
+def names() -> list[str]:
+    return list(LIBRARY)
+
+
+__all__ = ["Terrain", "DrumTerrain", "TerrainError", "LIBRARY", "make", "parse", "names", "flat", "step_up",
+           "step_down", "square_edge", "root", "rock", "drop", "washboard", "iso8608", "drum", "from_csv"]
