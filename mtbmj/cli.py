@@ -170,10 +170,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     from mtbmj.validation import cli_validate
 
-    from . import cli_roll
+    from . import cli_render, cli_roll, cli_telemetry
 
     cli_validate.add_parser(sub)
     cli_roll.add_parser(sub)
+    cli_telemetry.add_parser(sub)
+    cli_render.add_parser(sub)
 
     p = sub.add_parser("presets", help="list the bundled presets")
     p.set_defaults(func=cmd_presets)

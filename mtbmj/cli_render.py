@@ -1,0 +1,36 @@
+"""``mtbmj render RUN_OR_CONFIG --out video.mp4|.gif``: a headless video of a drop or rolling run.
+
+Wired into ``mtbmj.cli.build_parser`` with::
+
+    from . import cli_render
+    cli_render.add_parser(sub)
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def add_parser(subparsers):
+    """Add the ``render`` sub-command to an argparse sub-parser collection."""
+    p = subparsers.add_parser(
+        "render", help="write an MP4 or GIF of a drop or rolling run (headless, EGL or OSMesa)",
+        description="Render a run headless through mujoco.Renderer (EGL, else OSMesa; MUJOCO_GL=egl|osmesa forces "
+                    "one): a run directory written by mtbmj drop/roll is replayed, a preset or TOML file is run "
+                    "on MuJoCo first. The format follows the extension of --out: .mp4 (H.264) or .gif.")
+    p.add_argument("source", metavar="RUN_OR_CONFIG", help="run directory, preset name (S1..S14) or TOML file")
+    p.add_argument("--out", type=Path, default=Path("out/render.mp4"), help="video file, .mp4 or .gif (default out/render.mp4)")
+    p.add_argument("--fps", type=float, default=30.0, help="frames per second of simulated time (default 30)")
+    p.add_argument("--width", type=int, default=640, help="pixels (default 640)")
+    p.add_argument("--height", type=int, default=480, help="pixels (default 480)")
+    p.add_argument("--duration", type=float, help="simulated time after touch in s (default: the whole run)")
+    p.set_defaults(func=cmd_render)
+    return p
+
+
+def cmd_render(args) -> int:
+    from .render import render
+
+    done = render(args.source, args.out, fps=args.fps, width=args.width, height=args.height, duration=args.duration)
+    print(f"{done['label']}: {done['frames']} frames, {done['width']}x{done['height']} at {done['fps']:g} fps "
+          f"({done['duration_s']:.2f} s, {done['backend']}); wrote {done['path']}")
+    return 0

@@ -1,0 +1,208 @@
+"""``mtbmj telemetry FILE.SST [--compare RUN_DIR ...] [--out DIR]``: the rider's metrics of a real
+ride, and the same metrics of simulated runs on the same axes.
+
+Wired into ``mtbmj.cli.build_parser`` with::
+
+    from . import cli_telemetry
+    cli_telemetry.add_parser(sub)
+
+Writes ``telemetry.json`` (metrics of the fork and rear of the ride and of the fork of every
+compared run) and ``telemetry.png`` (travel histogram in % of travel and velocity histogram with
+the high/low-speed split, both in % of time), atomically.
+"""
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+
+from . import output, ride_metrics, telemetry
+from .errors import MtbmjError
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python < 3.11
+    import tomli as tomllib
+
+SPLIT_LABELS = {"high_speed_compression": "HSC", "low_speed_compression": "LSC",
+                "low_speed_rebound": "LSR", "high_speed_rebound": "HSR"}
+
+
+def add_parser(subparsers):
+    """Add the ``telemetry`` sub-command to an argparse sub-parser collection."""
+    p = subparsers.add_parser(
+        "telemetry", help="metrics of a real ride (SST file), optionally against simulated runs",
+        description="Read a Sufni Suspension Telemetry (SST v3) file, compute the travel histogram (%% of travel), "
+                    "the velocity histogram (compression positive) with the high/low-speed split, bottom-outs and "
+                    "airtime for the fork and the rear wheel, and plot simulated runs' fork on the same axes.")
+    p.add_argument("sst", type=Path, metavar="FILE.SST", help="SST v3 recording, or 'example' for the shipped 00649.SST")
+    p.add_argument("--compare", type=Path, nargs="+", action="extend", metavar="RUN_DIR",
+                   help="run directories (mtbmj drop/roll --out) whose timeseries.csv fork_mm is compared")
+    p.add_argument("--out", type=Path, default=Path("out/telemetry"), help="output directory (default out/telemetry)")
+    p.add_argument("--threshold-mm-per-s", type=float, default=100.0,
+                   help="high/low-speed split of the velocity histogram (default 100)")
+    p.add_argument("--bin-percent", type=float, default=5.0, help="travel histogram bin width in %% of travel (default 5)")
+    p.add_argument("--fork-max-mm", type=float, default=telemetry.FORK_TRAVEL_MAX_MM,
+                   help=f"fork travel of the recorded bike (default {telemetry.FORK_TRAVEL_MAX_MM:g})")
+    p.add_argument("--shock-max-mm", type=float, default=telemetry.SHOCK_STROKE_MAX_MM,
+                   help=f"rear shock stroke of the recorded bike (default {telemetry.SHOCK_STROKE_MAX_MM:g})")
+    p.set_defaults(func=cmd_telemetry)
+    return p
+
+
+def load_run(run_dir: Path) -> dict:
+    """Fork travel of a run directory: name, time_s, fork_mm, fork velocity (or None), travel max."""
+    run_dir = Path(run_dir)
+    csv_path = run_dir / "timeseries.csv"
+    if not run_dir.is_dir():
+        raise MtbmjError(f"--compare {run_dir}: not a run directory")
+    if not csv_path.is_file():
+        raise MtbmjError(f"--compare {run_dir}: no timeseries.csv (write one with mtbmj drop ... --out {run_dir})")
+    try:
+        lines = [line for line in csv_path.read_text().splitlines() if line.strip() and not line.startswith("#")]
+        names = [n.strip() for n in lines[0].split(",")]
+        table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
+    except (OSError, ValueError, IndexError) as exc:
+        raise MtbmjError(f"{csv_path}: cannot read ({exc})") from None
+    if table.shape[1] != len(names):
+        raise MtbmjError(f"{csv_path}: {table.shape[1]} values per row for {len(names)} columns")
+    columns = dict(zip(names, table.T))
+    for need in ("time_s", "fork_mm"):
+        if need not in columns:
+            raise MtbmjError(f"{csv_path}: no {need} column")
+    travel_max = None
+    config_path = run_dir / "config.toml"
+    if config_path.is_file():
+        try:
+            travel_max = tomllib.loads(config_path.read_text()).get("fork", {}).get("travel_mm")
+        except (OSError, tomllib.TOMLDecodeError) as exc:
+            raise MtbmjError(f"{config_path}: cannot read ({exc})") from None
+    if not isinstance(travel_max, (int, float)) or not travel_max > 0:
+        raise MtbmjError(f"--compare {run_dir}: config.toml gives no fork.travel_mm")
+    name = run_dir.name
+    manifest_path = run_dir / "manifest.json"
+    if manifest_path.is_file():
+        try:
+            manifest = json.loads(manifest_path.read_text())
+            name = f"{manifest.get('name', name)} ({manifest.get('engine', manifest.get('kind', 'sim'))})"
+        except (OSError, ValueError):
+            pass
+    return {"name": name, "dir": str(run_dir), "time_s": columns["time_s"], "fork_mm": columns["fork_mm"],
+            "velocity_mm_per_s": columns.get("fork_velocity_mm_per_s"), "travel_max_mm": float(travel_max)}
+
+
+def compare(record: telemetry.TelemetryRecord, runs: list[dict], threshold_mm_per_s: float = 100,
+            bin_percent: float = 5) -> dict:
+    """Metrics of the ride and of each run's fork, with shared velocity bins; JSON-ready."""
+    signals = [v for v in (record.fork_mm, record.rear_mm) if v is not None]
+    velocities = [ride_metrics.velocity(record.time_s, v) for v in signals]
+    for run in runs:
+        try:
+            velocities.append(run["velocity_mm_per_s"] if run["velocity_mm_per_s"] is not None
+                              else ride_metrics.velocity(run["time_s"], run["fork_mm"]))
+        except ride_metrics.MetricsError as exc:
+            raise MtbmjError(f"--compare {run['dir']}: {exc}") from None
+    edges = ride_metrics.velocity_bins(velocities)
+    air = record.airtime()
+    measured = {"file": record.name, "path": record.path, "version": record.version,
+                "sample_rate_Hz": record.sample_rate_Hz, "timestamp": record.timestamp,
+                "duration_s": record.duration_s, "samples": int(record.time_s.size)}
+    for end, travel, top in (("fork", record.fork_mm, record.fork_max_mm), ("rear", record.rear_mm, record.rear_max_mm)):
+        if travel is not None:
+            measured[end] = ride_metrics.summarize(record.time_s, travel, top, threshold_mm_per_s=threshold_mm_per_s,
+                                                   bin_percent=bin_percent, velocity_edges=edges, airborne=air)
+    if record.shock_mm is not None:
+        measured["rear"]["shock_stroke_max_mm"] = float(np.max(record.shock_mm))
+        measured["rear"]["shock_stroke_limit_mm"] = record.shock_max_mm
+    simulated = []
+    for run, v in zip(runs, velocities[len(signals):]):
+        try:
+            metrics = ride_metrics.summarize(run["time_s"], run["fork_mm"], run["travel_max_mm"], velocity_mm_per_s=v,
+                                             threshold_mm_per_s=threshold_mm_per_s, bin_percent=bin_percent,
+                                             velocity_edges=edges)
+        except ride_metrics.MetricsError as exc:
+            raise MtbmjError(f"--compare {run['dir']}: {exc}") from None
+        simulated.append({"name": run["name"], "dir": run["dir"], "fork": metrics})
+    return {"measured": measured, "simulated": simulated,
+            "conventions": "travel mm from full extension and % of travel; velocity mm/s, compression positive; "
+                           "histograms in % of time"}
+
+
+def _split_label(metrics: dict) -> str:
+    split = metrics["velocity"]["split_percent"]
+    return " ".join(f"{SPLIT_LABELS[k]} {split[k]:.0f}%" for k in ride_metrics.SPLIT_NAMES)
+
+
+def figure_png(summary: dict) -> bytes:
+    """Travel and velocity histograms, measured bars and simulated steps on the same axes."""
+    from matplotlib.figure import Figure
+
+    measured = summary["measured"]
+    ends = [e for e in ("fork", "rear") if e in measured]
+    fig = Figure(figsize=(12, 3.8 * len(ends)), constrained_layout=True)
+    axes = fig.subplots(len(ends), 2, squeeze=False)
+    colors = ["tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink"]
+    for row, end in zip(axes, ends):
+        m = measured[end]
+        ax_t, ax_v = row
+        th, vh = m["travel_histogram"], m["velocity"]
+        edges_t, edges_v = np.array(th["bin_edges_percent"]), np.array(vh["bin_edges_mm_per_s"])
+        label = f"measured {end} ({measured['file']})"
+        ax_t.bar(edges_t[:-1], th["time_percent"], width=np.diff(edges_t), align="edge", color="tab:blue",
+                 alpha=0.55, edgecolor="white", label=f"{label}, max {m['travel']['max_percent']:.0f}%")
+        ax_v.bar(edges_v[:-1], vh["time_percent"], width=np.diff(edges_v), align="edge", color="tab:blue",
+                 alpha=0.55, edgecolor="white", label=f"{label}: {_split_label(m)}")
+        if end == "fork":
+            for color, run in zip(colors * 4, summary["simulated"]):
+                s = run["fork"]
+                st, sv = s["travel_histogram"], s["velocity"]
+                ax_t.stairs(st["time_percent"], st["bin_edges_percent"], color=color, linewidth=2,
+                            label=f"simulated {run['name']}, max {s['travel']['max_percent']:.0f}%")
+                ax_v.stairs(sv["time_percent"], sv["bin_edges_mm_per_s"], color=color, linewidth=2,
+                            label=f"simulated {run['name']}: {_split_label(s)}")
+        thr = vh["threshold_mm_per_s"]
+        for x in (-thr, thr):
+            ax_v.axvline(x, color="k", linestyle="--", linewidth=1)
+        ax_v.axvspan(edges_v[0], -thr, color="0.94", zorder=0)
+        ax_v.axvspan(thr, edges_v[-1], color="0.94", zorder=0)
+        ax_t.set_xlim(0, 100)
+        ax_t.set_xlabel(f"{end} travel [% of {m['travel_max_mm']:.0f} mm]")
+        ax_v.set_xlabel(f"{end} velocity [mm/s], compression positive")
+        used = np.flatnonzero(np.asarray(vh["time_percent"]) > 0.05)  # bins with more than 0.05 % of time
+        limit = max(3 * thr, float(np.max(np.abs(edges_v[[used[0], used[-1] + 1]]))) if used.size else 3 * thr)
+        ax_v.set_xlim(-limit, limit)
+        for ax, title in ((ax_t, None), (ax_v, f"high speed: |v| > {thr:g} mm/s (shaded)")):
+            ax.set_ylabel("time [%]")
+            ax.grid(True, alpha=0.3)
+            ax.legend(fontsize="x-small", title_fontsize="x-small", loc="upper left", title=title)
+    bottoms = measured.get("fork", measured.get("rear"))
+    fig.suptitle(f"{measured['file']}: {measured['duration_s']:.1f} s, airtime {bottoms['airtime']['count']} "
+                 f"({bottoms['airtime']['total_s']:.2f} s), bottom-outs fork {measured.get('fork', {}).get('bottom_outs', {}).get('count', '-')}"
+                 f" rear {measured.get('rear', {}).get('bottom_outs', {}).get('count', '-')}; histograms exclude airtime")
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=100)
+    return buffer.getvalue()
+
+
+def cmd_telemetry(args) -> int:
+    path = telemetry.example_path() if str(args.sst) == "example" else args.sst
+    record = telemetry.read_sst(path, fork_max_mm=args.fork_max_mm, shock_max_mm=args.shock_max_mm)
+    runs = [load_run(d) for d in args.compare or []]
+    summary = compare(record, runs, args.threshold_mm_per_s, args.bin_percent)
+    written = output.write_atomically(args.out, {"telemetry.json": output.json_bytes(summary),
+                                                 "telemetry.png": figure_png(summary)})
+    m = summary["measured"]
+    parts = []
+    for end in ("fork", "rear"):
+        if end in m:
+            e = m[end]
+            lo, hi = e["travel_histogram"]["peak_bin_percent"]
+            parts.append(f"{end} peak {lo:.0f}-{hi:.0f} % of {e['travel_max_mm']:.0f} mm, "
+                         f"{e['velocity']['high_speed_percent']:.1f} % high-speed, {e['bottom_outs']['count']} bottom-outs")
+    air = m.get("fork", m.get("rear"))["airtime"]
+    print(f"{m['file']}: {m['duration_s']:.1f} s at {m['sample_rate_Hz']:g} Hz; {'; '.join(parts)}; "
+          f"airtime {air['count']} ({air['total_s']:.2f} s); compared {len(runs)} run(s); "
+          f"wrote {', '.join(p.name for p in written)} to {args.out}")
+    return 0

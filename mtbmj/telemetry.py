@@ -1,0 +1,229 @@
+"""Real ride telemetry: Sufni Suspension Telemetry (SST) files into fork and rear travel.
+
+SST version 3, little-endian (format in ``mtbmj/data/sst/README.md``): a 16-byte header (magic
+``SST``, version uint8, sample rate uint16 in Hz, padding uint16, Unix timestamp int64), then
+4-byte records of two uint16 AS5600 encoder counts (fork, shock; 0..4095). 0xFFFF in the first
+record marks an absent sensor; a trailing partial record is ignored.
+
+Counts become travel through the sensor linkages of the recorded bike ("Clash 2022", the
+defaults here; pass your own ``IsoscelesTriangle``/``Triangle``/``LeverageCurve`` and travel
+maxima for another bike):
+
+- fork ("as5600-isosceles-triangle"): travel = max - 2 arm cos(2 pi s / 4096 + a0),
+  a0 = acos(max / (2 arm)); counts above 1024 are the sensor wrapping just below zero -> 0;
+- shock ("as5600-triangle"): stroke = max - sqrt(arm1^2 + arm2^2 - 2 arm1 arm2 cos(a0 - 2 pi s / 4096)),
+  a0 = acos((arm1^2 + arm2^2 - max^2) / (2 arm1 arm2)); counts above 2048 wrap -> 0;
+- rear wheel travel from the stroke through the leverage curve (wheel travel, leverage ratio):
+  stroke(w) = integral of dw / ratio(w), inverted by interpolation.
+"""
+from __future__ import annotations
+
+import math
+import struct
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import ride_metrics
+from .errors import MtbmjError
+
+MAGIC = b"SST"
+VERSION = 3
+HEADER = struct.Struct("<3sBHHq")  # magic, version, sample rate (Hz), padding, Unix time (s)
+RECORD_BYTES = 4
+ABSENT = 0xFFFF
+COUNTS = 4096
+
+FORK_TRAVEL_MAX_MM = 180.0  # notes.txt: front_stroke
+SHOCK_STROKE_MAX_MM = 65.0  # notes.txt: rear_stroke
+HEAD_ANGLE_DEG = 63.5  # notes.txt: head_angle (recorded for reference; travel is along the fork)
+
+
+class TelemetryError(MtbmjError):
+    """A telemetry file cannot be read: names the file and the cause."""
+
+
+@dataclass(frozen=True)
+class IsoscelesTriangle:
+    """Front sensor "as5600-isosceles-triangle": two equal arms, the fork stroke as the base."""
+
+    arm_mm: float = 134.9375
+    max_mm: float = 234.15625
+
+    def travel_mm(self, counts: np.ndarray) -> np.ndarray:
+        s = np.asarray(counts, dtype=float)
+        s = np.where(s > COUNTS / 4, 0.0, s)
+        start = math.acos(self.max_mm / (2.0 * self.arm_mm))
+        return self.max_mm - 2.0 * self.arm_mm * np.cos(2.0 * np.pi / COUNTS * s + start)
+
+
+@dataclass(frozen=True)
+class Triangle:
+    """Rear sensor "as5600-triangle": arms ``arm1``, ``arm2``; the shock's eye-to-eye as the third side."""
+
+    arm1_mm: float = 98.9
+    arm2_mm: float = 202.8
+    max_mm: float = 230.0
+
+    def stroke_mm(self, counts: np.ndarray) -> np.ndarray:
+        s = np.asarray(counts, dtype=float)
+        s = np.where(s > COUNTS / 2, 0.0, s)
+        a, b = self.arm1_mm, self.arm2_mm
+        start = math.acos((a * a + b * b - self.max_mm ** 2) / (2.0 * a * b))
+        return self.max_mm - np.sqrt(a * a + b * b - 2.0 * a * b * np.cos(start - 2.0 * np.pi / COUNTS * s))
+
+
+# Clash 2022 leverage ratio against rear wheel travel (mm), 1 mm steps, from notes.txt. The row
+# for 25 mm is garbled there ("3.clash2022_lr_sensitive.csv008"); 3.008 is read from it and lies
+# between its neighbours 3.014 and 3.002.
+CLASH_2022_LEVERAGE_RATIO = (
+    3.18, 3.173, 3.165, 3.157, 3.149, 3.142, 3.134, 3.126, 3.119, 3.113, 3.106, 3.1, 3.093, 3.087, 3.08,
+    3.073, 3.067, 3.06, 3.053, 3.047, 3.04, 3.033, 3.027, 3.02, 3.014, 3.008, 3.002, 2.995, 2.989, 2.983,
+    2.977, 2.971, 2.965, 2.958, 2.952, 2.946, 2.94, 2.934, 2.928, 2.922, 2.916, 2.91, 2.905, 2.899, 2.893,
+    2.888, 2.882, 2.876, 2.871, 2.865, 2.859, 2.854, 2.849, 2.844, 2.838, 2.833, 2.828, 2.823, 2.817, 2.812,
+    2.807, 2.801, 2.796, 2.791, 2.786, 2.78, 2.775, 2.77, 2.766, 2.761, 2.756, 2.751, 2.746, 2.741, 2.736,
+    2.731, 2.726, 2.722, 2.717, 2.712, 2.707, 2.703, 2.698, 2.694, 2.689, 2.685, 2.68, 2.676, 2.671, 2.667,
+    2.662, 2.658, 2.653, 2.649, 2.644, 2.64, 2.635, 2.631, 2.626, 2.622, 2.618, 2.613, 2.609, 2.605, 2.601,
+    2.597, 2.593, 2.589, 2.585, 2.581, 2.577, 2.573, 2.569, 2.565, 2.561, 2.557, 2.553, 2.549, 2.544, 2.54,
+    2.536, 2.533, 2.529, 2.525, 2.522, 2.518, 2.514, 2.511, 2.507, 2.503, 2.499, 2.496, 2.492, 2.488, 2.485,
+    2.481, 2.478, 2.475, 2.471, 2.468, 2.465, 2.462, 2.458, 2.455, 2.452, 2.448, 2.445, 2.442, 2.439, 2.436,
+    2.433, 2.43, 2.427, 2.424, 2.421, 2.418, 2.415, 2.411, 2.408, 2.405, 2.402, 2.4, 2.397, 2.395, 2.392,
+    2.389, 2.387, 2.384, 2.381, 2.379, 2.376, 2.374, 2.371, 2.368, 2.366,
+)
+
+
+@dataclass(frozen=True)
+class LeverageCurve:
+    """Leverage ratio (wheel travel per shock stroke) against rear wheel travel."""
+
+    wheel_mm: tuple = tuple(float(i) for i in range(len(CLASH_2022_LEVERAGE_RATIO)))
+    ratio: tuple = CLASH_2022_LEVERAGE_RATIO
+
+    def __post_init__(self):
+        w, r = np.asarray(self.wheel_mm, float), np.asarray(self.ratio, float)
+        if w.ndim != 1 or w.shape != r.shape or w.size < 2 or np.any(np.diff(w) <= 0) or np.any(r <= 0):
+            raise TelemetryError("leverage curve: needs increasing wheel travel and positive ratios of equal length")
+
+    def _stroke_table(self) -> tuple[np.ndarray, np.ndarray]:
+        w, r = np.asarray(self.wheel_mm, float), np.asarray(self.ratio, float)
+        stroke = np.concatenate(([0.0], np.cumsum(np.diff(w) * 0.5 * (1.0 / r[1:] + 1.0 / r[:-1]))))
+        return w - w[0], stroke
+
+    def stroke_mm(self, wheel_travel_mm) -> np.ndarray:
+        w, s = self._stroke_table()
+        x = np.asarray(wheel_travel_mm, dtype=float)
+        beyond = s[-1] + (x - w[-1]) / self.ratio[-1]  # past the table: the last ratio holds
+        return np.where(x > w[-1], beyond, np.interp(x, w, s))
+
+    def wheel_travel_mm(self, stroke_mm) -> np.ndarray:
+        w, s = self._stroke_table()
+        x = np.asarray(stroke_mm, dtype=float)
+        beyond = w[-1] + (x - s[-1]) * self.ratio[-1]
+        return np.where(x > s[-1], beyond, np.interp(x, s, w))
+
+
+@dataclass(frozen=True)
+class TelemetryRecord:
+    """One ride: fork travel, shock stroke and rear wheel travel (mm, zero at full extension,
+    compression positive) on a uniform time grid from 0 s; a series is None when its sensor is absent."""
+
+    path: str
+    version: int
+    sample_rate_Hz: float
+    timestamp: int  # Unix time of the recording start (s)
+    time_s: np.ndarray
+    fork_mm: np.ndarray | None
+    shock_mm: np.ndarray | None
+    rear_mm: np.ndarray | None
+    fork_max_mm: float = FORK_TRAVEL_MAX_MM
+    shock_max_mm: float = SHOCK_STROKE_MAX_MM
+    rear_max_mm: float = field(default=float("nan"))
+    counts: np.ndarray | None = field(default=None, repr=False)  # raw (n, 2) uint16
+
+    @property
+    def duration_s(self) -> float:
+        return self.time_s.size / self.sample_rate_Hz
+
+    @property
+    def name(self) -> str:
+        return Path(self.path).name
+
+    def airtime(self, **rule) -> ride_metrics.Airtime:
+        """Airborne periods over both ends (the fork alone, or the rear alone, without the other)."""
+        if self.fork_mm is not None:
+            return ride_metrics.airtime(self.fork_mm, self.fork_max_mm, self.time_s,
+                                        self.rear_mm, self.rear_max_mm if self.rear_mm is not None else None, **rule)
+        return ride_metrics.airtime(self.rear_mm, self.rear_max_mm, self.time_s, **rule)
+
+    def metrics(self, threshold_mm_per_s: float = 100, bin_percent: float = 5, margin_mm: float = 3.0) -> dict:
+        """Fork and rear metrics (``ride_metrics.summarize``) with shared airtime; JSON-ready."""
+        air = self.airtime()
+        out = {"file": self.name, "version": self.version, "sample_rate_Hz": self.sample_rate_Hz,
+               "timestamp": self.timestamp, "duration_s": self.duration_s, "samples": int(self.time_s.size)}
+        for end, travel, top in (("fork", self.fork_mm, self.fork_max_mm), ("rear", self.rear_mm, self.rear_max_mm)):
+            if travel is not None:
+                out[end] = ride_metrics.summarize(self.time_s, travel, top, threshold_mm_per_s=threshold_mm_per_s,
+                                                  bin_percent=bin_percent, margin_mm=margin_mm, airborne=air)
+        if self.shock_mm is not None:
+            out["rear"]["shock_stroke_max_mm"] = float(np.max(self.shock_mm))
+            out["rear"]["shock_stroke_limit_mm"] = self.shock_max_mm
+        if self.fork_mm is not None and self.rear_mm is not None:
+            out["balance"] = {"fork_mean_percent": out["fork"]["travel"]["mean_percent"],
+                              "rear_mean_percent": out["rear"]["travel"]["mean_percent"]}
+        return out
+
+
+def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_max_mm: float = SHOCK_STROKE_MAX_MM,
+             front: IsoscelesTriangle = IsoscelesTriangle(), rear: Triangle = Triangle(),
+             leverage: LeverageCurve = LeverageCurve()) -> TelemetryRecord:
+    """Read an SST v3 file into travel time series; every problem is one ``TelemetryError`` line."""
+    path = Path(path)
+    name = str(path)
+    try:
+        blob = path.read_bytes()
+    except FileNotFoundError:
+        raise TelemetryError(f"{name}: no such file") from None
+    except IsADirectoryError:
+        raise TelemetryError(f"{name}: is a directory, not an SST file") from None
+    except OSError as exc:
+        raise TelemetryError(f"{name}: cannot read ({exc.strerror})") from None
+    if len(blob) >= 3 and blob[:3] != MAGIC:
+        raise TelemetryError(f"{name}: not an SST file (starts with {blob[:3]!r}, expected {MAGIC!r})")
+    if len(blob) < HEADER.size:
+        raise TelemetryError(f"{name}: truncated header ({len(blob)} of {HEADER.size} bytes)")
+    magic, version, rate, _, timestamp = HEADER.unpack_from(blob)
+    if version != VERSION:
+        raise TelemetryError(f"{name}: unknown SST version {version} (this reader knows version {VERSION})")
+    if rate == 0:
+        raise TelemetryError(f"{name}: sample rate is 0 Hz in the header")
+    for label, value in (("fork_max_mm", fork_max_mm), ("shock_max_mm", shock_max_mm)):
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise TelemetryError(f"{name}: {label} must be a positive number of mm, got {value!r}")
+    n = (len(blob) - HEADER.size) // RECORD_BYTES
+    if n < 2:
+        raise TelemetryError(f"{name}: truncated: {n} sample{'s' if n != 1 else ''} after the header")
+    counts = np.frombuffer(blob, dtype="<u2", count=2 * n, offset=HEADER.size).reshape(n, 2)
+    present = counts[0] != ABSENT
+    if not present.any():
+        raise TelemetryError(f"{name}: both sensors are marked absent (0xFFFF in the first record)")
+    for column, label in ((0, "fork"), (1, "shock")):
+        if present[column]:
+            bad = np.flatnonzero(counts[:, column] >= COUNTS)
+            if bad.size:
+                raise TelemetryError(f"{name}: {label} count {int(counts[bad[0], column])} at sample {int(bad[0])} "
+                                     f"is outside 0..{COUNTS - 1}")
+    fork = front.travel_mm(counts[:, 0]) if present[0] else None
+    shock = rear.stroke_mm(counts[:, 1]) if present[1] else None
+    wheel = leverage.wheel_travel_mm(shock) if shock is not None else None
+    return TelemetryRecord(
+        path=name, version=int(version), sample_rate_Hz=float(rate), timestamp=int(timestamp),
+        time_s=np.arange(n) / float(rate), fork_mm=fork, shock_mm=shock, rear_mm=wheel,
+        fork_max_mm=float(fork_max_mm), shock_max_mm=float(shock_max_mm),
+        rear_max_mm=float(leverage.wheel_travel_mm(shock_max_mm)), counts=counts.copy(),
+    )
+
+
+def example_path() -> Path:
+    """The shipped ride recording (00649.SST, MIT, from the Sufni Suspension Telemetry project)."""
+    return Path(__file__).parent / "data" / "sst" / "00649.SST"

@@ -1,0 +1,255 @@
+"""Real ride telemetry (SST files) and the rider's metrics: decoding the shipped recording against
+the format's own numbers, the metrics on signals with closed-form answers, malformed files as one
+line with exit status 2, and the measured-vs-simulated comparison."""
+import json
+import math
+import struct
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mtbmj import cli, cli_telemetry, ride_metrics, telemetry
+from mtbmj.errors import MtbmjError
+
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "sst"
+SHIPPED = telemetry.example_path()
+
+
+def run_cli(argv):
+    """``mtbmj`` main, with the telemetry sub-command added if cli.py does not wire it yet."""
+    parser = cli.build_parser()
+    sub = next(a for a in parser._actions if a.__class__.__name__ == "_SubParsersAction")
+    if "telemetry" in sub.choices:
+        return cli.main(argv)
+    original = cli.build_parser
+
+    def build():
+        p = original()
+        cli_telemetry.add_parser(next(a for a in p._actions if a.__class__.__name__ == "_SubParsersAction"))
+        return p
+
+    cli.build_parser = build
+    try:
+        return cli.main(argv)
+    finally:
+        cli.build_parser = original
+
+
+@pytest.fixture(scope="module")
+def record():
+    return telemetry.read_sst(SHIPPED)
+
+
+# --- decoding ---------------------------------------------------------------------------------
+
+def test_shipped_file_decodes(record):
+    samples = (SHIPPED.stat().st_size - 16) // 4
+    assert record.version == 3 and record.sample_rate_Hz == 1000
+    assert record.time_s.size == samples == 76399
+    assert record.duration_s == pytest.approx(samples / 1000)
+    assert record.time_s[1] - record.time_s[0] == pytest.approx(1e-3)
+    assert 0 <= record.fork_mm.min() and record.fork_mm.max() <= 180
+    assert record.fork_mm.max() > 100  # a real ride uses the travel
+    assert 0 <= record.shock_mm.min() and record.shock_mm.max() <= 65
+    assert 0 <= record.rear_mm.min() and record.rear_mm.max() <= record.rear_max_mm
+    assert record.timestamp > 1.6e9  # 2023
+    assert (SHIPPED.parent / "LICENSE").read_text().startswith("MIT License")
+
+
+@pytest.mark.skipif(not (SHARED / "00642.SST").exists(), reason="../shared/data/sst not present")
+def test_readme_check_00642():
+    """The data README: 00642.SST decodes to 103.3 s at 1 kHz, front travel 0 .. 155 mm."""
+    r = telemetry.read_sst(SHARED / "00642.SST")
+    assert r.duration_s == pytest.approx(103.3, abs=0.05)
+    assert r.fork_mm.min() == pytest.approx(0, abs=0.01)
+    assert r.fork_mm.max() == pytest.approx(155, abs=0.5)
+
+
+def test_calibrations():
+    front, rear = telemetry.IsoscelesTriangle(), telemetry.Triangle()
+    assert front.travel_mm([0])[0] == pytest.approx(0, abs=1e-9)
+    assert front.travel_mm([4090])[0] == pytest.approx(0, abs=1e-9)  # wrapped just below zero
+    assert np.all(np.diff(front.travel_mm(np.arange(0, 800))) > 0)
+    assert rear.stroke_mm([0])[0] == pytest.approx(0, abs=1e-9)
+    lev = telemetry.LeverageCurve()
+    w = np.linspace(0, 170, 50)
+    assert lev.wheel_travel_mm(lev.stroke_mm(w)) == pytest.approx(w, abs=1e-9)
+    # The bike: about 174 mm of rear wheel travel for the 65 mm stroke (leverage 3.18 .. 2.37).
+    assert lev.wheel_travel_mm(65.0) == pytest.approx(174.5, abs=1.0)
+    assert lev.stroke_mm(1.0) == pytest.approx(1 / 3.18, rel=0.01)
+
+
+# --- metrics with known answers ---------------------------------------------------------------
+
+def sine(amplitude=60.0, mean=90.0, freq=2.0, seconds=10.0, rate=1000.0):
+    t = np.arange(int(seconds * rate)) / rate
+    return t, mean + amplitude * np.sin(2 * np.pi * freq * t)
+
+
+def test_travel_histogram_of_a_sine():
+    """Time share in a band of a sine is the arcsine law: (asin(b) - asin(a)) / pi."""
+    t, x = sine(amplitude=60, mean=90, rate=20000)  # fine sampling: a crossing is off by < 1/20000 s
+    h = ride_metrics.travel_histogram(x, 180, bin_percent=5)
+    assert h.edges_percent[0] == 0 and h.edges_percent[-1] == 100 and h.time_percent.size == 20
+    assert h.time_percent.sum() == pytest.approx(100)
+    lo, hi = h.edges_percent[:-1] * 1.8, h.edges_percent[1:] * 1.8
+    u = lambda mm: np.arcsin(np.clip((mm - 90) / 60, -1, 1))
+    expected = (u(hi) - u(lo)) / np.pi * 100
+    assert h.time_percent == pytest.approx(expected, abs=0.05)
+    assert h.time_percent[:3].sum() == 0 and h.time_percent[-3:].sum() == 0  # 30..150 mm = 17..83 % only
+    assert h.peak_bin_percent in ((15.0, 20.0), (80.0, 85.0))  # the sine lingers at its extremes
+
+
+def test_velocity_of_a_sine_and_the_split():
+    amplitude, freq = 60.0, 2.0
+    t, x = sine(amplitude, 90, freq)
+    v = ride_metrics.velocity(t, x)
+    peak = amplitude * 2 * np.pi * freq  # 754 mm/s
+    assert v == pytest.approx(peak * np.cos(2 * np.pi * freq * t), abs=0.005 * peak)
+    h = ride_metrics.velocity_histogram(v, threshold_mm_per_s=100)
+    high = 2 / np.pi * np.arccos(100 / peak) * 100  # % of time with |v| > 100
+    assert h.high_speed_percent == pytest.approx(high, abs=0.3)
+    assert h.split_percent["high_speed_compression"] == pytest.approx(high / 2, abs=0.3)
+    assert h.split_percent["high_speed_rebound"] == pytest.approx(high / 2, abs=0.3)
+    assert sum(h.split_percent.values()) == pytest.approx(100)
+    assert h.time_percent.sum() == pytest.approx(100)
+    assert h.compression["max_mm_per_s"] == pytest.approx(peak, rel=0.01)
+    assert h.compression["mean_mm_per_s"] == pytest.approx(2 / np.pi * peak, rel=0.01)
+    assert h.rebound["max_mm_per_s"] == pytest.approx(-peak, rel=0.01)
+
+
+def test_velocity_smooths_encoder_steps():
+    """One encoder count (~0.2 mm) per sample would read as 200 mm/s by differences."""
+    t, x = sine(amplitude=20, mean=60, freq=1.0)
+    quantised = np.round(x / 0.2) * 0.2
+    v = ride_metrics.velocity(t, quantised)
+    exact = 20 * 2 * np.pi * np.cos(2 * np.pi * t)
+    assert np.max(np.abs(np.diff(quantised) * 1000 - exact[1:])) > 100
+    assert np.max(np.abs(v - exact)) < 10
+
+
+def test_bottom_outs_counts_distinct_events():
+    t = np.arange(20000) / 1000.0
+    x = np.full(t.size, 50.0)
+    for k, centre in enumerate((2, 6, 10, 14)):  # four hits, each with chatter at the end stop
+        hit = np.abs(t - centre) < 0.3
+        x[hit] = 180 - 130 * np.abs(t[hit] - centre) / 0.3
+        chatter = np.abs(t - centre) < 0.02
+        x[chatter] = 179 - 3.0 * (np.arange(chatter.sum()) % 2)  # 179, 176, 179 ...
+    near = np.abs(t - 18) < 0.3
+    x[near] = 170 - 120 * np.abs(t[near] - 18) / 0.3  # 10 mm short of the end: not a bottom-out
+    assert ride_metrics.bottom_outs(x, 180, margin_mm=3) == 4
+    assert ride_metrics.bottom_outs(x, 180, margin_mm=11) == 5
+    assert ride_metrics.bottom_outs(x, 180, margin_mm=3, release_mm=0) > 4  # without hysteresis: chatter
+
+
+def test_airtime_rule():
+    rate = 1000
+    t = np.arange(10 * rate) / rate
+    x = np.full(t.size, 50.0)  # riding at 28 % sag
+    x[: rate] = 0.0  # parked at the start: fully extended, not airtime
+    x[3000:3400] = 0.0  # a 0.4 s jump ...
+    x[3400:3500] = np.linspace(0, 120, 100)  # ... and its landing
+    x[6000:6020] = 0.0  # a 20 ms top-out on rebound: not airtime
+    x[8000:8300] = 0.0  # extended 0.3 s but no landing follows (a gentle unweighting)
+    air = ride_metrics.airtime(x, 180, t)
+    assert air.count == 1
+    assert air.periods_s[0] == pytest.approx((3.0, 3.4), abs=0.01)  # until the landing passes 3 % of travel
+    assert air.total_s == pytest.approx(0.4, abs=0.01)
+    # With a rear sensor the bike is airborne only while both ends are extended.
+    rear = np.full(t.size, 40.0)
+    rear[3000:3200] = 0.0
+    rear[3200:3400] = 40.0
+    both = ride_metrics.airtime(x, 180, t, rear, 150)
+    assert both.count == 0  # rear loaded for the last 0.2 s: no landing after the shared 0.2 s
+    summary = ride_metrics.summarize(t, x, 180)
+    json.dumps(summary)
+    assert summary["airtime"]["count"] == 1 and summary["bottom_outs"]["count"] == 0
+    assert summary["histograms_exclude_airtime"] is True
+
+
+def test_metrics_reject_bad_signals():
+    with pytest.raises(MtbmjError, match="uniformly"):
+        ride_metrics.velocity([0, 1, 3, 4, 5, 6, 7, 8], np.zeros(8))
+    with pytest.raises(MtbmjError, match="not finite"):
+        ride_metrics.travel_histogram([1.0, np.nan], 180)
+    with pytest.raises(MtbmjError, match="travel_max_mm"):
+        ride_metrics.travel_histogram([1.0], 0)
+
+
+def test_shipped_metrics(record):
+    m = record.metrics()
+    json.dumps(m)
+    fork = m["fork"]
+    assert fork["travel_histogram"]["peak_bin_percent"] == [25.0, 30.0]
+    assert 20 < fork["velocity"]["high_speed_percent"] < 45
+    assert fork["bottom_outs"]["count"] == 0  # 120 mm used of 180
+    assert fork["airtime"]["count"] == 3
+    assert fork["airtime"]["total_s"] == pytest.approx(0.852, abs=0.01)
+    assert m["rear"]["travel_histogram"]["peak_bin_percent"] == [25.0, 30.0]
+
+
+# --- malformed files --------------------------------------------------------------------------
+
+def sst_bytes(magic=b"SST", version=3, rate=1000, records=((100, 50),) * 10, tail=b""):
+    head = struct.pack("<3sBHHq", magic, version, rate, 0, 1_690_000_000)
+    return head + b"".join(struct.pack("<HH", a, b) for a, b in records) + tail
+
+
+@pytest.mark.parametrize("content, cause", [
+    (sst_bytes(magic=b"PNG"), "not an SST file"),
+    (b"SST\x03\xe8\x03", "truncated header (6 of 16 bytes)"),
+    (sst_bytes(version=4), "unknown SST version 4"),
+    (sst_bytes(records=((0xFFFF, 0xFFFF),) * 5), "both sensors are marked absent"),
+    (sst_bytes(records=((1, 1),)), "truncated"),
+    (sst_bytes(rate=0), "sample rate is 0"),
+    (sst_bytes(records=((1, 1), (5000, 1), (1, 1))), "fork count 5000 at sample 1"),
+])
+def test_malformed_files_are_one_line(tmp_path, capsys, content, cause):
+    path = tmp_path / "ride.SST"
+    path.write_bytes(content)
+    with pytest.raises(telemetry.TelemetryError) as info:
+        telemetry.read_sst(path)
+    assert str(path) in str(info.value) and cause in str(info.value)
+    assert run_cli(["telemetry", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and cause in err and "Traceback" not in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_absent_sensor_and_partial_record(tmp_path):
+    rows = [(0xFFFF, 20)] + [(0xFFFF, 20 + i % 7) for i in range(2000)]
+    path = tmp_path / "rear_only.SST"
+    path.write_bytes(sst_bytes(records=rows, tail=b"\x01\x02"))  # a partial record is ignored
+    r = telemetry.read_sst(path)
+    assert r.fork_mm is None and r.rear_mm is not None and r.time_s.size == 2001
+    m = r.metrics()
+    assert "fork" not in m and "rear" in m
+    assert run_cli(["telemetry", str(path), "--out", str(tmp_path / "out")]) == 0
+    assert run_cli(["telemetry", str(tmp_path / "missing.SST"), "--out", str(tmp_path / "o2")]) == 2
+
+
+# --- the comparison -------------------------------------------------------------------------------
+
+def test_compare_with_a_drop_run(tmp_path, capsys):
+    import mtbmj
+
+    run_dir = tmp_path / "s1"
+    mtbmj.run_drop("S1", duration=0.4).write(run_dir)
+    out = tmp_path / "tel"
+    assert run_cli(["telemetry", str(SHIPPED), "--compare", str(run_dir), "--out", str(out)]) == 0
+    line = capsys.readouterr().out
+    assert "00649.SST" in line and "compared 1 run" in line
+    png = (out / "telemetry.png").read_bytes()
+    assert png.startswith(b"\x89PNG") and len(png) > 20000
+    summary = json.loads((out / "telemetry.json").read_text())
+    measured, (sim,) = summary["measured"], summary["simulated"]
+    assert measured["file"] == "00649.SST" and sim["name"].startswith("S1")
+    # Same axes: the same travel bins in % and the same velocity bins for measured and simulated.
+    assert sim["fork"]["travel_histogram"]["bin_edges_percent"] == measured["fork"]["travel_histogram"]["bin_edges_percent"]
+    assert sim["fork"]["velocity"]["bin_edges_mm_per_s"] == measured["fork"]["velocity"]["bin_edges_mm_per_s"]
+    assert sum(sim["fork"]["travel_histogram"]["time_percent"]) == pytest.approx(100)
+    assert sim["fork"]["travel_max_mm"] == 120.0  # from the run's config.toml
+    assert run_cli(["telemetry", str(SHIPPED), "--compare", str(tmp_path / "nothing"), "--out", str(tmp_path / "x")]) == 2
+    assert "not a run directory" in capsys.readouterr().err
