@@ -170,9 +170,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     from mtbmj.validation import cli_validate
 
-    from . import cli_render, cli_roll, cli_telemetry
+    from . import cli_render, cli_roll, cli_sweep, cli_telemetry
 
     cli_validate.add_parser(sub)
+    cli_sweep.add_parser(sub)
     cli_roll.add_parser(sub)
     cli_telemetry.add_parser(sub)
     cli_render.add_parser(sub)

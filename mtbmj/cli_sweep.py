@@ -1,0 +1,180 @@
+"""``mtbmj sweep`` and ``mtbmj sensitivity``.
+
+Wired into ``mtbmj.cli.build_parser`` with::
+
+    from . import cli_sweep
+    cli_sweep.add_parser(sub)
+
+``python -m mtbmj.cli_sweep sweep ...`` runs them stand-alone (same errors and exit statuses).
+"""
+from __future__ import annotations
+
+import sys
+import warnings
+from pathlib import Path
+
+from .config import parse_assignment
+from .errors import ConfigError, MtbmjError
+
+
+def _overrides(pairs) -> dict:
+    return dict(parse_assignment(p) for p in pairs or [])
+
+
+def _positive(flag: str, value, minimum: int = 1):
+    if value is not None and value < minimum:
+        raise ConfigError(f"{flag}: must be at least {minimum}, got {value}")
+
+
+def variants_from_args(args) -> tuple[list[dict], dict]:
+    """The override sets a ``sweep`` command asks for, and a description for the manifest."""
+    from . import sweep
+
+    given = [bool(args.vary), args.from_csv is not None]
+    if args.from_csv is not None and (args.vary or args.samples is not None):
+        raise ConfigError("--from-csv: give either --from-csv or --vary (and --samples), not both")
+    if not any(given):
+        raise ConfigError("sweep: give --vary key=lo:hi:n, --samples N with --vary key=lo:hi, or --from-csv FILE")
+    if args.from_csv is not None:
+        return sweep.from_csv(args.from_csv), {"kind": "csv", "file": str(args.from_csv)}
+    if args.samples is not None:
+        _positive("--samples", args.samples)
+        ranges = [sweep.parse_vary(v, count=False) for v in args.vary]
+        method = args.method or "lhs"
+        return (sweep.sample(ranges, args.samples, method, args.seed),
+                {"kind": method, "samples": args.samples, "seed": args.seed,
+                 "ranges": [[r.key, r.lo, r.hi] for r in ranges]})
+    if args.method is not None and args.method != "lhs":
+        raise ConfigError("--method: only with --samples N")
+    ranges = [sweep.parse_vary(v, count=True) for v in args.vary]
+    return sweep.grid(ranges), {"kind": "grid", "ranges": [[r.key, r.lo, r.hi, r.n] for r in ranges]}
+
+
+def _check_common(args) -> None:
+    _positive("--workers", args.workers)
+    if args.backend == "dask" and not args.scheduler:
+        raise ConfigError("--backend dask needs --scheduler ADDRESS (e.g. tcp://10.0.0.5:8786)")
+    if args.scheduler and args.backend != "dask":
+        raise ConfigError("--scheduler: only with --backend dask")
+
+
+def cmd_sweep(args) -> int:
+    from .sweep import SweepProgress, run_sweep
+
+    _check_common(args)
+    _positive("--batch-size", args.batch_size)
+    variants, how = variants_from_args(args)
+    bar = SweepProgress(len(variants), enabled=not args.quiet)
+    try:
+        result = run_sweep(args.config, variants, args.out, engine=args.engine, duration=args.duration,
+                           base_overrides=_overrides(args.set), workers=args.workers, batch_size=args.batch_size,
+                           backend=args.backend, scheduler=args.scheduler, traces=args.traces, csv=args.csv,
+                           resume=args.resume, progress=bar, manifest_extra={"variants_from": how})
+    except KeyboardInterrupt:
+        print(f"mtbmj: sweep interrupted; finished variants are journaled in {args.out / 'journal'}: "
+              f"continue with the same command and --resume", file=sys.stderr)
+        raise
+    print(f"sweep {args.config}: {result.line()}")
+    return 0
+
+
+def cmd_sensitivity(args) -> int:
+    from . import sweep
+    from .sensitivity import run_sensitivity
+
+    _check_common(args)
+    if not args.vary:
+        raise ConfigError("sensitivity: give at least one --vary key=lo:hi")
+    ranges = [sweep.parse_vary(v, count=False) for v in args.vary]
+    outputs = args.output.split(",")
+    bar = sweep.SweepProgress(0, enabled=not args.quiet, label="sensitivity")
+    try:
+        result = run_sensitivity(args.config, ranges, outputs, args.out, method=args.method, n=args.samples,
+                                 seed=args.seed, levels=args.levels, engine=args.engine, duration=args.duration,
+                                 base_overrides=_overrides(args.set), workers=args.workers, backend=args.backend,
+                                 scheduler=args.scheduler, resume=args.resume, progress=bar)
+    except KeyboardInterrupt:
+        print(f"mtbmj: sensitivity interrupted; finished runs are journaled in {args.out / 'journal'}: "
+              f"continue with the same command and --resume", file=sys.stderr)
+        raise
+    print(f"sensitivity {args.config}: {result.line()}; wrote {len(result.files)} files to {args.out}")
+    return 0
+
+
+def _common(p) -> None:
+    p.add_argument("config", help="preset name (S1..S14, reference) or a TOML file")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a key of the base configuration (repeatable)")
+    p.add_argument("--duration", type=float, help="simulated time in s (default: solver.duration_s)")
+    p.add_argument("--engine", choices=("mujoco", "ode"), default="mujoco")
+    p.add_argument("--workers", type=int, help="processes on the local backend (default: one per core)")
+    p.add_argument("--backend", choices=("local", "dask"), default="local",
+                   help="local processes, or a Dask distributed cluster (with --scheduler)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler address, e.g. tcp://10.0.0.5:8786")
+    p.add_argument("--resume", action="store_true", help="continue an interrupted run in --out: compute only missing variants")
+    p.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+
+
+def add_parser(subparsers) -> None:
+    """Add ``sweep`` and ``sensitivity`` to an argparse sub-parser collection."""
+    p = subparsers.add_parser(
+        "sweep", help="run many variants of a configuration: grids, LHS/Sobol samples or a CSV; one table",
+        description="Run variants of CONFIG batched over processes (or a Dask cluster) and write one table "
+                    "(sweep.parquet; sweep.csv with --csv) of every variant's inputs and summary outputs, and "
+                    "with --traces the sled/fork/tire histories in traces.h5. Finished variants are journaled: an "
+                    "interrupted sweep continues with --resume; a failing variant is recorded with its reason.")
+    _common(p)
+    p.add_argument("--vary", action="append", metavar="KEY=LO:HI[:N]",
+                   help="a grid of N values (repeatable: full factorial), or with --samples a range")
+    p.add_argument("--samples", type=int, metavar="N", help="N sampled variants in the --vary ranges")
+    p.add_argument("--method", choices=("lhs", "sobol"), help="sampling: Latin hypercube (default) or Sobol")
+    p.add_argument("--from-csv", type=Path, metavar="FILE", help="explicit variants: columns = configuration keys")
+    p.add_argument("--out", type=Path, default=Path("out/sweep"), help="output directory (default out/sweep)")
+    p.add_argument("--traces", action="store_true", help="also write the histories to traces.h5")
+    p.add_argument("--csv", action="store_true", help="also write the table as sweep.csv")
+    p.add_argument("--batch-size", type=int, help="variants per journaled batch (default: automatic, <= 16)")
+    p.set_defaults(func=cmd_sweep)
+
+    p = subparsers.add_parser(
+        "sensitivity", help="Sobol or Morris sensitivity indices of drop outputs (SALib), with CIs and a plot",
+        description="Sample the --vary ranges (Saltelli for Sobol, trajectories for Morris), run the samples "
+                    "through the sweep, and write sensitivity.json, sensitivity.csv and sensitivity.png "
+                    "(indices with 95 % confidence intervals) next to the sweep table.")
+    _common(p)
+    p.add_argument("--vary", action="append", metavar="KEY=LO:HI", help="a parameter range (repeatable)")
+    p.add_argument("--output", default="fork_peak1_mm",
+                   help="comma-separated sweep outputs, e.g. fork_peak1_mm,tire_peak1_mm (default fork_peak1_mm)")
+    p.add_argument("--method", choices=("sobol", "morris"), default="sobol")
+    p.add_argument("--samples", type=int, default=64,
+                   help="base samples N: N(D+2) runs for Sobol, N(D+1) trajectories' runs for Morris (default 64)")
+    p.add_argument("--levels", type=int, default=4, help="Morris grid levels (default 4)")
+    p.add_argument("--out", type=Path, default=Path("out/sensitivity"), help="output directory (default out/sensitivity)")
+    p.set_defaults(func=cmd_sensitivity)
+
+
+def main(argv=None) -> int:
+    """Stand-alone entry with ``mtbmj.cli``'s error handling (one line, exit 2)."""
+    from .cli import EXIT_BAD_INPUT, _Parser
+
+    parser = _Parser(prog="mtbmj")
+    add_parser(parser.add_subparsers(dest="command", required=True, parser_class=_Parser))
+    try:
+        args = parser.parse_args(argv)
+        if getattr(args, "duration", None) is not None and not args.duration > 0:
+            raise MtbmjError(f"--duration: must be positive, got {args.duration}")
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)
+            return args.func(args)
+    except MtbmjError as exc:
+        print(f"mtbmj: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except RuntimeWarning as exc:
+        print(f"mtbmj: error: run diverged ({exc})", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("mtbmj: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

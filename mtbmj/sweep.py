@@ -1,0 +1,825 @@
+"""Sweeps: many variants of one configuration, run batched over processes (or a Dask cluster),
+journaled so that nothing is lost, assembled into one table.
+
+Variants are override sets on a base configuration:
+
+- grids: ``--vary key=lo:hi:n`` (several keys: the full factorial, the first key slowest);
+- samples: ``--samples N --method lhs|sobol`` over ``--vary key=lo:hi`` ranges (scipy.stats.qmc,
+  seeded, so the same command gives the same variants);
+- explicit: ``--from-csv FILE`` (one variant per row, columns = configuration keys, empty cells
+  keep the base value).
+
+Each variant has an id, the SHA-256 of the base configuration's digest, the engine, the duration
+and its canonical overrides: the same variant of the same sweep always has the same id.
+
+**Nothing lost.** Variants run in batches; every finished batch is committed to
+``OUT/journal/`` as one JSON part file (and, with traces, one ``.npz`` beside it, written first),
+each written to a temporary name, fsynced and renamed into place, so a part is there whole or
+not at all. ``--resume`` reads the journal and computes only the variants it lacks; the final
+table is assembled from the journal (one row per variant, in plan order) and written
+atomically. A variant that fails (bad parameters, a run that diverges) is journaled with its
+reason and the sweep goes on.
+
+**Runners.** The work of one batch is ``runner(job: BatchJob) -> list[record]``; the default,
+:func:`run_batch`, calls ``job.drop`` (``mtbmj.drop.run_drop``) per variant. A batched rollout
+path replaces ``runner`` (see :func:`run_sweep`) without touching the journal, the table or the
+backends.
+"""
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import itertools
+import json
+import math
+import os
+import re
+import sys
+import tempfile
+import threading
+import time
+import uuid
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable, Mapping, Sequence
+
+import numpy as np
+
+from .config import SCHEMA, Config, check_value
+from .errors import ConfigError, MtbmjError
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+SIGNALS = ("sled", "fork", "tire")
+EVENTS = ("peak1", "topping", "peak2", "valley1", "peak3")
+NUMERIC_KINDS = ("pos", "nonneg")
+SAMPLING_METHODS = ("lhs", "sobol")
+BACKENDS = ("local", "dask")
+TABLE = "sweep.parquet"
+TABLE_CSV = "sweep.csv"
+TRACES = "traces.h5"
+MANIFEST = "sweep.json"
+JOURNAL = "journal"
+
+# The summary flattened into table columns, in this order (see ``flatten_summary``).
+OUTPUT_COLUMNS = (
+    [f"{s}_{e}_{q}" for s in SIGNALS for e in EVENTS for q in ("mm", "s")]
+    + ["lift_off_s", "landing_s", "lifts_off", "fork_tops_out"]
+    + [f"rest_{s}_mm" for s in SIGNALS]
+    + ["rest_motion_mm", "at_rest", "max_fork_mm", "travel_used_percent", "bottoms_out", "max_tire_mm",
+       "impact_speed_m_per_s", "energy_input_J", "energy_mechanical_end_J", "energy_dissipated_J"]
+)
+STATUS_COLUMNS = ["status", "reason", "wall_time_s"]
+
+
+# --------------------------------------------------------------------------------------------
+# Variant generation
+
+
+@dataclass(frozen=True)
+class Range:
+    """One ``--vary`` range: ``n`` values from ``lo`` to ``hi`` (``n`` is None for sampling)."""
+
+    key: str
+    lo: float
+    hi: float
+    n: int | None = None
+
+    def values(self) -> list[float]:
+        return [float(v) for v in np.linspace(self.lo, self.hi, self.n or 2)]
+
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+def numeric_key(key: str, flag: str = "--vary") -> str:
+    """``key`` if it names a numeric configuration key, else a ``ConfigError`` naming it."""
+    if key not in SCHEMA:
+        try:
+            check_value(key, 0.0)  # the schema's own message: unit hints and "did you mean"
+        except ConfigError as exc:
+            raise ConfigError(f"{flag}: {exc}") from None
+    if SCHEMA[key] not in NUMERIC_KINDS:
+        raise ConfigError(f"{flag}: {key} is not a number that can be varied (it is {SCHEMA[key]!r})")
+    return key
+
+
+def parse_vary(text: str, count: bool | None = None) -> Range:
+    """Parse ``key=lo:hi:n`` (a grid) or ``key=lo:hi`` (a sampling range).
+
+    ``count`` True requires ``n``, False forbids it, None accepts both."""
+    key, eq, span = (part.strip() for part in text.partition("="))
+    parts = [p.strip() for p in span.split(":")]
+    if not eq or not key or len(parts) not in (2, 3) or not all(re.fullmatch(_NUMBER, p) for p in parts[:2]):
+        raise ConfigError(f"--vary {text}: expected key=lo:hi:n (a grid) or key=lo:hi (with --samples)")
+    key = numeric_key(key)
+    lo, hi = float(parts[0]), float(parts[1])
+    if not lo < hi:
+        raise ConfigError(f"--vary {text}: lo must be below hi, got {lo:g} >= {hi:g}")
+    n = None
+    if len(parts) == 3:
+        if not re.fullmatch(r"[-+]?\d+", parts[2]):
+            raise ConfigError(f"--vary {text}: n must be a whole number, got {parts[2]!r}")
+        n = int(parts[2])
+        if n < 1:
+            raise ConfigError(f"--vary {text}: n must be at least 1, got {n}")
+    if count is True and n is None:
+        raise ConfigError(f"--vary {text}: a grid needs a count, key=lo:hi:n (or give --samples N)")
+    if count is False and n is not None:
+        raise ConfigError(f"--vary {text}: with --samples give the range only, key=lo:hi")
+    return Range(key, lo, hi, n)
+
+
+def _unique_keys(ranges: Sequence[Range]) -> None:
+    seen = set()
+    for r in ranges:
+        if r.key in seen:
+            raise ConfigError(f"--vary: {r.key} is given twice")
+        seen.add(r.key)
+
+
+def grid(ranges: Sequence[Range]) -> list[dict[str, float]]:
+    """The full factorial of the ranges' values, the first range slowest."""
+    if not ranges:
+        raise ConfigError("--vary: no ranges given")
+    _unique_keys(ranges)
+    keys = [r.key for r in ranges]
+    return [dict(zip(keys, combo)) for combo in itertools.product(*(r.values() for r in ranges))]
+
+
+def sample(ranges: Sequence[Range], n: int, method: str = "lhs", seed: int = 0) -> list[dict[str, float]]:
+    """``n`` points in the box of the ranges: Latin hypercube or scrambled Sobol, seeded."""
+    from scipy.stats import qmc
+
+    if not ranges:
+        raise ConfigError("--samples: needs at least one --vary key=lo:hi range")
+    _unique_keys(ranges)
+    if n < 1:
+        raise ConfigError(f"--samples: must be at least 1, got {n}")
+    if method not in SAMPLING_METHODS:
+        raise ConfigError(f"--method: {method!r} is not one of {', '.join(SAMPLING_METHODS)}")
+    rng = np.random.default_rng(seed)
+    d = len(ranges)
+    engine = qmc.LatinHypercube(d, rng=rng) if method == "lhs" else qmc.Sobol(d, rng=rng)
+    with warnings.catch_warnings():  # Sobol's "n should be a power of 2" balance note
+        warnings.simplefilter("ignore")
+        unit = engine.random(n)
+    points = qmc.scale(unit, [r.lo for r in ranges], [r.hi for r in ranges])
+    return [{r.key: float(v) for r, v in zip(ranges, row)} for row in points]
+
+
+def _cell(text: str) -> Any:
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def from_csv(path: str | Path) -> list[dict[str, Any]]:
+    """Explicit variants: a CSV whose header names configuration keys, one variant per row.
+    Values are read like ``--set`` values; an empty cell keeps the base value; ``#`` lines are
+    comments."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ConfigError(f"--from-csv {path}: cannot read ({exc.strerror})") from None
+    except UnicodeDecodeError:
+        raise ConfigError(f"--from-csv {path}: not a text file") from None
+    lines = [line for line in text.splitlines() if line.strip() and not line.lstrip().startswith("#")]
+    if not lines:
+        raise ConfigError(f"--from-csv {path}: no header line")
+    try:
+        dialect = csv.Sniffer().sniff(lines[0], delimiters=",;\t")
+    except csv.Error:
+        dialect = csv.excel
+    rows = list(csv.reader(lines, dialect))
+    header = [h.strip() for h in rows[0]]
+    for name in header:
+        if not name:
+            raise ConfigError(f"--from-csv {path}: empty column name in the header")
+        if name not in SCHEMA:
+            try:
+                check_value(name, 0.0)
+            except ConfigError as exc:
+                raise ConfigError(f"--from-csv {path}: column {exc}") from None
+    if len(set(header)) != len(header):
+        raise ConfigError(f"--from-csv {path}: a column is named twice")
+    variants = []
+    for number, row in enumerate(rows[1:], 2):
+        if len(row) != len(header):
+            raise ConfigError(f"--from-csv {path}: row {number} has {len(row)} cells, the header {len(header)}")
+        variants.append({k: _cell(v.strip()) for k, v in zip(header, row) if v.strip()})
+    if not variants:
+        raise ConfigError(f"--from-csv {path}: no variants (only a header)")
+    return variants
+
+
+# --------------------------------------------------------------------------------------------
+# Variants, ids, jobs
+
+
+def _canonical(key: str, value: Any) -> Any:
+    try:
+        value = check_value(key, value)
+    except ConfigError:
+        return repr(value)  # invalid: it fails when run, its id only has to be stable
+    return list(value) if isinstance(value, tuple) else value
+
+
+def variant_id(config: Config, overrides: Mapping[str, Any], engine: str = "mujoco",
+               duration: float | None = None) -> str:
+    """Stable id of a variant: hash of the base configuration's digest, the run settings and the
+    canonical overrides (16 hex digits)."""
+    payload = {"config": config.digest(), "engine": engine, "duration": duration,
+               "overrides": {k: _canonical(k, overrides[k]) for k in sorted(overrides)}}
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class Variant:
+    index: int
+    id: str
+    overrides: dict
+
+
+@dataclass
+class BatchJob:
+    """What a runner gets: the base configuration, the run settings and a batch of variants.
+    ``drop`` is the per-variant run (``mtbmj.drop.run_drop`` or a drop-in replacement)."""
+
+    config: Config
+    engine: str
+    duration: float | None
+    variants: list[Variant]
+    traces: bool = False
+    drop: Callable | None = None
+
+
+def _json_value(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, (np.floating,)):
+        return _json_value(float(value))
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+def flatten_summary(summary: Mapping) -> dict[str, Any]:
+    """A drop summary as flat table columns: ``fork_peak1_mm``/``fork_peak1_s`` per signal and
+    event, ``lift_off_s``, ``rest_fork_mm``, ``energy_dissipated_J``, ...; keys this function does
+    not know are kept (nested ones joined with ``_``, lists as JSON text)."""
+    flat: dict[str, Any] = {}
+    for key, value in summary.items():
+        if key == "events":
+            for sig, events in value.items():
+                for ev, point in events.items():
+                    flat[f"{sig}_{ev}_mm"] = None if point is None else point["value_mm"]
+                    flat[f"{sig}_{ev}_s"] = None if point is None else point["time_s"]
+        elif key == "rest_mm":
+            for sig, v in value.items():
+                flat[f"rest_{sig}_mm"] = v
+        elif isinstance(value, dict):
+            for k, v in value.items():
+                flat[f"{key}_{k}"] = json.dumps(v) if isinstance(v, (list, dict)) else v
+        elif isinstance(value, (list, tuple)):
+            flat[key] = json.dumps(list(value))
+        else:
+            flat[key] = value
+    return {k: _json_value(v) for k, v in flat.items()}
+
+
+_RUN_LOCK = threading.Lock()  # MuJoCo's control callback is process-global: one drop at a time
+
+
+def run_variant(job: BatchJob, variant: Variant) -> dict:
+    """One variant as a journal record; every error becomes ``status = "failed"`` with its reason."""
+    from .drop import run_drop
+
+    drop = job.drop or run_drop
+    start = time.perf_counter()
+    record: dict[str, Any] = {"id": variant.id, "status": "ok", "reason": "", "outputs": {}}
+    traces = None
+    try:
+        with _RUN_LOCK, warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)  # as the command line does
+            result = drop(job.config, job.engine, variant.overrides, job.duration)
+        record["outputs"] = flatten_summary(result.summary)
+        if job.traces:
+            traces = {"time_s": np.asarray(result.signals["time_s"], dtype=float)}
+            traces.update({f"{s}_mm": np.asarray(result.signals[f"{s}_mm"], dtype=float) for s in SIGNALS})
+    except MtbmjError as exc:
+        record.update(status="failed", reason=str(exc))
+    except RuntimeWarning as exc:
+        record.update(status="failed", reason=f"run diverged ({exc})")
+    except Exception as exc:  # a bug must not stop the other variants; it is recorded
+        record.update(status="failed", reason=f"internal error: {type(exc).__name__}: {exc}")
+    record["wall_time_s"] = time.perf_counter() - start
+    record["traces"] = traces
+    return record
+
+
+def run_batch(job: BatchJob) -> list[dict]:
+    """The default runner: the variants of ``job`` one after the other through ``job.drop``.
+
+    A runner returns one record per variant of the batch (any order): ``{"id": variant id,
+    "status": "ok" | "failed", "reason": str, "outputs": flatten_summary(summary),
+    "wall_time_s": float, "traces": None | {"time_s", "sled_mm", "fork_mm", "tire_mm": arrays}}``
+    and never raises for a bad variant. A batched path (one ``mujoco.rollout`` over the batch's
+    models on several threads) is a drop-in replacement with this contract."""
+    return [run_variant(job, v) for v in job.variants]
+
+
+# --------------------------------------------------------------------------------------------
+# Journal
+
+
+def _fsync_dir(path: Path) -> None:
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _commit(path: Path, write: Callable[[Any], None]) -> None:
+    """Write a file durably and atomically: temporary name, fsync, rename, fsync the directory."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            write(handle)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    _fsync_dir(path.parent)
+
+
+class Journal:
+    """``OUT/journal/part-*.json``: one committed batch each; ``part-*.npz`` holds its traces
+    (committed before the JSON that names it, so a JSON part is the commit of both)."""
+
+    def __init__(self, out_dir: Path):
+        self.dir = Path(out_dir) / JOURNAL
+
+    def parts(self) -> list[Path]:
+        return sorted(self.dir.glob("part-*.json")) if self.dir.is_dir() else []
+
+    def records(self) -> dict[str, dict]:
+        """id -> record (the last committed one; with traces preferred to without)."""
+        found: dict[str, dict] = {}
+        for part in self.parts():
+            try:
+                data = json.loads(part.read_text())
+                records = data["records"]
+            except (OSError, ValueError, KeyError, TypeError):
+                continue  # unreadable: its variants are computed again
+            for rec in records:
+                if not isinstance(rec, dict) or "id" not in rec:
+                    continue
+                rec["_part"] = part
+                old = found.get(rec["id"])
+                if old is None or rec.get("has_traces") or not old.get("has_traces"):
+                    found[rec["id"]] = rec
+        return found
+
+    def append(self, records: list[dict]) -> None:
+        self.dir.mkdir(parents=True, exist_ok=True)
+        stem = f"part-{time.strftime('%Y%m%dT%H%M%S')}-{uuid.uuid4().hex[:12]}"
+        with_traces = [r for r in records if r.get("traces") is not None]
+        if with_traces:
+            arrays = {}
+            for r in with_traces:
+                for name, values in r["traces"].items():
+                    arrays[f"{r['id']}/{name}"] = values
+            _commit(self.dir / f"{stem}.npz", lambda h: np.savez_compressed(h, **arrays))
+        rows = []
+        for r in records:
+            row = {k: v for k, v in r.items() if k != "traces"}
+            row["has_traces"] = r.get("traces") is not None
+            rows.append(row)
+        payload = json.dumps({"records": rows, "traces": f"{stem}.npz" if with_traces else None}).encode()
+        _commit(self.dir / f"{stem}.json", lambda h: h.write(payload))
+
+    def traces(self, record: dict) -> dict[str, np.ndarray] | None:
+        if not record.get("has_traces"):
+            return None
+        npz = record["_part"].with_suffix(".npz")
+        with np.load(npz) as data:
+            prefix = f"{record['id']}/"
+            return {k[len(prefix):]: data[k] for k in data.files if k.startswith(prefix)}
+
+
+# --------------------------------------------------------------------------------------------
+# Progress
+
+
+class SweepProgress:
+    """Progress on stderr: a bar with rate and ETA redrawn in place on a terminal, otherwise one
+    line every ``interval`` seconds."""
+
+    def __init__(self, total: int, already: int = 0, label: str = "sweep", stream=None,
+                 interval: float = 10.0, enabled: bool = True):
+        self.total, self.already, self.label = total, already, label
+        self.stream = stream if stream is not None else sys.stderr
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.enabled = enabled
+        self.interval = interval
+        self.done = 0
+        self.failed = 0
+        self.start = time.perf_counter()
+        self.last_line = self.start
+
+    def text(self) -> str:
+        elapsed = time.perf_counter() - self.start
+        todo = self.total - self.already
+        rate = self.done / elapsed if elapsed > 0 and self.done else 0.0
+        eta = (todo - self.done) / rate if rate else float("nan")
+        count = f"{self.already + self.done}/{self.total}"
+        failed = f", {self.failed} failed" if self.failed else ""
+        eta_text = _duration(eta) if math.isfinite(eta) else "?"
+        return f"{count} variants{failed}, {rate:.1f}/s, elapsed {_duration(elapsed)}, ETA {eta_text}"
+
+    def update(self, done: int, failed: int = 0) -> None:
+        self.done += done
+        self.failed += failed
+        if not self.enabled:
+            return
+        if self.tty:
+            fraction = (self.already + self.done) / max(self.total, 1)
+            bar = "#" * int(fraction * 30)
+            print(f"\r{self.label} [{bar:<30}] {fraction * 100:5.1f}% {self.text()}   ", end="",
+                  file=self.stream, flush=True)
+        elif time.perf_counter() - self.last_line >= self.interval and self.already + self.done < self.total:
+            self.last_line = time.perf_counter()
+            print(f"{self.label}: {self.text()}", file=self.stream, flush=True)
+
+    def finish(self) -> None:
+        if self.enabled:
+            if not self.done:
+                print(("\r" if self.tty else "") + f"{self.label}: all {self.total} variants from the journal",
+                      file=self.stream, flush=True)
+                return
+            print(("\r" if self.tty else "") + f"{self.label}: {self.text()}" + (" " * 10 if self.tty else ""),
+                  file=self.stream, flush=True)
+
+    def abandon(self) -> None:
+        if self.enabled and self.tty:
+            print("\r" + " " * 100 + "\r", end="", file=self.stream, flush=True)
+
+
+def _duration(seconds: float) -> str:
+    seconds = int(round(seconds))
+    h, rest = divmod(seconds, 3600)
+    m, s = divmod(rest, 60)
+    return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
+
+
+# --------------------------------------------------------------------------------------------
+# Backends
+
+
+def _batches(variants: list[Variant], size: int) -> list[list[Variant]]:
+    return [variants[i:i + size] for i in range(0, len(variants), size)]
+
+
+def _exit_with_parent(parent: int) -> None:
+    """Worker initializer: a worker whose sweep process is killed (kill -9) exits too instead of
+    idling as an orphan (Linux: the parent-death signal; elsewhere a watchdog thread)."""
+    try:
+        import ctypes
+        import signal
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(1, signal.SIGKILL, 0, 0, 0) == 0:  # PR_SET_PDEATHSIG
+            if os.getppid() != parent:  # the parent died before prctl took effect
+                os._exit(1)
+            return
+    except (OSError, AttributeError):
+        pass
+
+    def watch():
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
+def _run_local(jobs: list[BatchJob], runner, workers: int, on_done) -> list[str]:
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    problems = []
+    pool = ProcessPoolExecutor(max_workers=min(workers, len(jobs)), initializer=_exit_with_parent,
+                               initargs=(os.getpid(),))
+    try:
+        futures = {pool.submit(runner, job): job for job in jobs}
+        for future in as_completed(futures):
+            try:
+                records = future.result()
+            except Exception as exc:  # a worker died (killed, out of memory): not journaled
+                problems.append(f"{type(exc).__name__}: {exc}")
+                continue
+            on_done(records)
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+    return problems
+
+
+def _client(scheduler):
+    try:
+        from distributed import Client
+    except ImportError:  # pragma: no cover
+        raise MtbmjError("--backend dask needs dask distributed: pip install 'dask[distributed]'") from None
+    if scheduler is None:
+        raise MtbmjError("--backend dask needs --scheduler ADDRESS (e.g. tcp://10.0.0.5:8786)")
+    if not isinstance(scheduler, str):
+        return scheduler, False  # a Client given from Python
+    try:
+        return Client(scheduler, timeout="20s"), True
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise MtbmjError(f"--scheduler {scheduler}: cannot connect ({exc})") from None
+
+
+def _run_dask(jobs: list[BatchJob], runner, scheduler, on_done) -> list[str]:
+    from distributed import as_completed
+
+    client, own = _client(scheduler)
+    problems = []
+    futures = []
+    try:
+        futures = [client.submit(runner, job, pure=False) for job in jobs]
+        for future in as_completed(futures):
+            try:
+                records = future.result()
+            except Exception as exc:  # a lost worker (KilledWorker): not journaled
+                problems.append(f"{type(exc).__name__}: {exc}")
+                continue
+            on_done(records)
+    except BaseException:
+        client.cancel(futures)
+        raise
+    finally:
+        if own:
+            client.close()
+    return problems
+
+
+# --------------------------------------------------------------------------------------------
+# The sweep
+
+
+@dataclass
+class SweepResult:
+    table: Any  # pandas.DataFrame: one row per variant, in plan order
+    files: list[Path]
+    total: int
+    computed: int  # variants computed by this call
+    reused: int  # variants taken from the journal
+    failed: int
+    wall_time_s: float
+    out_dir: Path
+    problems: list[str] = field(default_factory=list)
+
+    def line(self) -> str:
+        failed = f", {self.failed} failed" if self.failed else ""
+        return (f"{self.total} variants ({self.computed} computed, {self.reused} from the journal{failed}) in "
+                f"{self.wall_time_s:.1f} s; wrote {', '.join(p.name for p in self.files)} to {self.out_dir}")
+
+
+def plan(config: Config, overrides_list: Iterable[Mapping[str, Any]], engine: str = "mujoco",
+         duration: float | None = None) -> list[Variant]:
+    return [Variant(i, variant_id(config, ov, engine, duration), dict(ov)) for i, ov in enumerate(overrides_list)]
+
+
+def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_dir: str | Path, *,
+              engine: str = "mujoco", duration: float | None = None, base_overrides: Mapping | None = None,
+              workers: int | None = None, batch_size: int | None = None, backend: str = "local",
+              scheduler=None, traces: bool = False, csv: bool = False, resume: bool = False,
+              progress: bool | SweepProgress = False, runner: Callable[[BatchJob], list[dict]] = run_batch,
+              drop: Callable | None = None, manifest_extra: Mapping | None = None) -> SweepResult:
+    """Run ``variants`` (override sets) of ``config`` and write ``OUT/sweep.parquet`` (and
+    ``sweep.csv``, ``traces.h5`` on request, ``sweep.json`` always).
+
+    ``runner(job)`` computes one batch (default :func:`run_batch`, which calls ``drop`` -
+    ``mtbmj.drop.run_drop`` - per variant); it must be a picklable top-level function. With
+    ``resume`` the journal in ``out_dir`` is reused and only missing variants run."""
+    from .drop import ENGINES, resolve
+
+    started = time.perf_counter()
+    if engine not in ENGINES:
+        raise ConfigError(f"engine: {engine!r} is not one of {', '.join(ENGINES)}")
+    if backend not in BACKENDS:
+        raise ConfigError(f"--backend: {backend!r} is not one of {', '.join(BACKENDS)}")
+    if duration is not None and not duration > 0:
+        raise ConfigError(f"duration: must be positive, got {duration}")
+    if workers is not None and workers < 1:
+        raise ConfigError(f"--workers: must be at least 1, got {workers}")
+    if batch_size is not None and batch_size < 1:
+        raise ConfigError(f"--batch-size: must be at least 1, got {batch_size}")
+    if not variants:
+        raise ConfigError("sweep: no variants")
+    cfg = resolve(config, base_overrides)
+    out = Path(out_dir)
+    planned = plan(cfg, variants, engine, duration)
+    journal = Journal(out)
+    known = journal.records()
+    if known and not resume:
+        raise MtbmjError(f"{out}: holds the journal of a sweep ({len(known)} variants); "
+                         f"pass --resume to continue it, or choose another --out")
+
+    def complete(rec):
+        return rec is not None and (rec.get("has_traces") or not traces or rec.get("status") != "ok")
+
+    todo, seen = [], set()
+    for v in planned:
+        if not complete(known.get(v.id)) and v.id not in seen:
+            todo.append(v)
+            seen.add(v.id)
+    unique = len({v.id for v in planned})
+    reused = unique - len(todo)
+    workers = workers or (os.cpu_count() or 1)
+    if batch_size is None:
+        batch_size = max(1, min(16, len(todo) // (workers * 8)))
+    jobs = [BatchJob(cfg, engine, duration, batch, traces, drop) for batch in _batches(todo, batch_size)]
+
+    bar = progress if isinstance(progress, SweepProgress) else SweepProgress(unique, reused, enabled=bool(progress))
+    bar.total, bar.already = unique, reused
+    counts = {"computed": 0}
+
+    def on_done(records):
+        journal.append(records)
+        counts["computed"] += len(records)
+        bar.update(len(records), sum(r["status"] != "ok" for r in records))
+
+    problems: list[str] = []
+    try:
+        if jobs:
+            if backend == "local":
+                problems = _run_local(jobs, runner, workers, on_done)
+            else:
+                problems = _run_dask(jobs, runner, scheduler, on_done)
+    except BaseException:
+        bar.abandon()
+        raise
+    bar.finish()
+    if problems:
+        missing = len(todo) - counts["computed"]
+        raise MtbmjError(f"{missing} variants were not computed ({problems[0]}); the others are journaled "
+                         f"in {journal.dir}: run again with --resume")
+
+    records = journal.records()
+    table = assemble(planned, records)
+    files = {TABLE: parquet_bytes(table)}
+    if csv:
+        files[TABLE_CSV] = table.to_csv(index=False).encode()
+    manifest = {
+        "config": cfg.name, "config_sha256": cfg.digest(), "config_sources": list(cfg.sources),
+        "base_overrides": {k: _canonical(k, v) for k, v in (base_overrides or {}).items()},
+        "engine": engine, "duration_s": duration, "variants": len(planned),
+        "failed": int((table["status"] != "ok").sum()), "backend": backend,
+        "versions": _versions(), **(manifest_extra or {}),
+    }
+    files[MANIFEST] = (json.dumps(manifest, indent=2, default=_json_default) + "\n").encode()
+    written = []
+    if traces:
+        written.append(write_traces(out / TRACES, planned, records, journal, cfg, engine))
+    from .output import write_atomically
+
+    written += write_atomically(out, files)
+    return SweepResult(table=table, files=written, total=len(planned), computed=counts["computed"],
+                       reused=reused, failed=manifest["failed"], wall_time_s=time.perf_counter() - started,
+                       out_dir=out, problems=problems)
+
+
+def _json_default(value):
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    if isinstance(value, (set, tuple)):
+        return list(value)
+    return str(value)
+
+
+def _versions() -> dict:
+    from .result import versions
+
+    return versions()
+
+
+def assemble(planned: Sequence[Variant], records: Mapping[str, dict]):
+    """The table: one row per planned variant (inputs, outputs, status), in plan order."""
+    import pandas as pd
+
+    inputs = list(dict.fromkeys(k for v in planned for k in v.overrides))
+    extras = list(dict.fromkeys(k for r in records.values() for k in r.get("outputs", {}) if k not in OUTPUT_COLUMNS))
+    outputs = OUTPUT_COLUMNS + extras
+    rows = []
+    for v in planned:
+        rec = records[v.id]
+        row = {"variant": v.index, "variant_id": v.id}
+        row.update({k: v.overrides.get(k) for k in inputs})
+        got = rec.get("outputs") or {}
+        row.update({k: got.get(k) for k in outputs})
+        row.update(status=rec["status"], reason=rec.get("reason", ""), wall_time_s=rec.get("wall_time_s"))
+        rows.append(row)
+    table = pd.DataFrame(rows, columns=["variant", "variant_id"] + inputs + outputs + STATUS_COLUMNS)
+    for column in outputs + inputs:  # numbers with gaps: float with NaN (not object)
+        values = [x for x in table[column] if x is not None and not (isinstance(x, float) and math.isnan(x))]
+        if values and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in values):
+            table[column] = pd.to_numeric(table[column], errors="coerce").astype(float)
+        elif not values:
+            table[column] = table[column].astype(float)
+    return table
+
+
+def parquet_bytes(table) -> bytes:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    buffer = io.BytesIO()
+    pq.write_table(pa.Table.from_pandas(table, preserve_index=False), buffer, compression="zstd")
+    return buffer.getvalue()
+
+
+def write_traces(path: Path, planned: Sequence[Variant], records: Mapping[str, dict], journal: Journal,
+                 config: Config, engine: str) -> Path:
+    """Traces as HDF5: ``sled_mm``, ``fork_mm``, ``tire_mm`` as [variant, time] (chunked, gzip),
+    ``time_s`` as [time] (or [variant, time] when the grids differ), ``variant_id`` as [variant];
+    a failed variant's row is NaN. Written to a temporary file and renamed into place."""
+    import h5py
+
+    cache: dict[str, dict | None] = {}
+    lengths, grids = [], []
+    for v in planned:
+        tr = cache.setdefault(v.id, journal.traces(records[v.id]))
+        if tr is not None:
+            lengths.append(len(tr["time_s"]))
+            grids.append(tr["time_s"])
+    length = max(lengths, default=0)
+    common = all(len(g) == len(grids[0]) and np.array_equal(g, grids[0]) for g in grids) if grids else True
+    n = len(planned)
+    chunk_rows = max(1, min(n, max(1, (1 << 20) // max(8 * length, 1))))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        with h5py.File(tmp, "w") as h5:
+            h5.attrs.update({"config": config.name, "config_sha256": config.digest(), "engine": engine,
+                             "conventions": "sled zero at tire touch, fork zero at unloaded full extension, "
+                                            "tire = sled - fork, compression positive; 1 kHz logged signals",
+                             "failed_rows": "NaN"})
+            h5.create_dataset("variant_id", data=np.array([v.id for v in planned], dtype="S16"))
+            h5.create_dataset("variant", data=np.array([v.index for v in planned], dtype=np.int64))
+            kw = dict(shape=(n, length), dtype="f8", chunks=(chunk_rows, max(length, 1)) if length else None,
+                      compression="gzip" if length else None, compression_opts=4 if length else None,
+                      shuffle=bool(length), fillvalue=np.nan)
+            names = [f"{s}_mm" for s in SIGNALS]
+            sets = {name: h5.create_dataset(name, **kw) for name in names}
+            if common:
+                h5.create_dataset("time_s", data=grids[0] if grids else np.zeros(0))
+            else:
+                sets["time_s"] = h5.create_dataset("time_s", **kw)
+            for i, v in enumerate(planned):
+                tr = cache[v.id]
+                if tr is None:
+                    continue
+                for name, ds in sets.items():
+                    ds[i, : len(tr[name])] = tr[name]
+            for name in names:
+                sets[name].attrs["unit"] = "mm"
+        with open(tmp, "rb+") as handle:
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def read_table(out_dir: str | Path):
+    """The sweep table of ``out_dir`` as a ``pandas.DataFrame``."""
+    import pandas as pd
+
+    return pd.read_parquet(Path(out_dir) / TABLE)
+
+
+__all__ = ["Range", "Variant", "BatchJob", "SweepResult", "SweepProgress", "Journal", "parse_vary", "grid",
+           "sample", "from_csv", "variant_id", "plan", "run_sweep", "run_batch", "run_variant",
+           "flatten_summary", "assemble", "read_table", "OUTPUT_COLUMNS"]
