@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from mtbmj.controllers import ForkCallback, installed
+from mtbmj.controllers import installed
 from . import scene as scene_mod
 from .compose import Setup
 from .errors import RunError
@@ -65,7 +65,10 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
     data.qvel[sc.sled_dof] = setup.impact_speed
     data.qpos[sc.sled_qpos] = TOUCH_DEPTH_M
     mujoco.mj_forward(model, data)
-    callback = ForkCallback(model, setup.fork)
+    from mtbmj.controllers.compiled import make_callback  # numba is imported on the first run only
+
+    # compiled (numba) force laws read and write mjData directly; the Python laws are the fallback
+    callback = make_callback(model, setup.fork)
     callback.bind(data)
     steps = int(round(duration / setup.timestep))
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS

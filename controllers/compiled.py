@@ -1,0 +1,680 @@
+"""Compiled fork force laws: the same laws as ``controllers.spring/damper/friction/fork``, run as
+native code that MuJoCo calls without the GIL.
+
+The plain-Python laws stay the specification and the test oracle; this module evaluates the same
+arithmetic in the same order (bit-identical results in practice, ~1e-12 at worst) so that threads
+in ``mujoco.rollout`` run in parallel.
+
+Design
+------
+* A ``ForkLaw`` is flattened into one row of integer codes and one row of float64 parameters
+  (``flatten``): the spring tree (Linear, Bilinear, Progressive, Directional, TopOut, nested at
+  will) becomes a short postfix program, the damper (Linear, Bilinear, Table) and the friction law
+  (NoFriction, Coulomb, CoulombViscous, Stiction, Stribeck, LuGre) one code each.
+* The rows live in a process-wide registry (two numpy arrays that are never reallocated), one slot
+  per ``CompiledForkCallback``, keyed by the ``mjModel*`` it was built for. One numba ``cfunc``
+  (compiled once per process; the law interpreter it calls is cached on disk) serves every slot:
+  it looks the ``mjModel*`` argument up in the registry and leaves every unregistered model alone,
+  so a new law or a new model costs no compilation. A slot is freed when its callback object is
+  collected (the callback keeps its model alive, so the address cannot be reused meanwhile).
+* The state is read and the force written through the ``mjData*`` argument: the byte offsets of
+  the ``qpos``, ``qvel``, ``act``, ``ctrl`` and ``qfrc_applied`` pointer fields come from mujoco's
+  own struct description (``mujoco.introspect``, generated from its headers) laid out with ctypes,
+  and are checked against the live arrays of every model at start-up (pointer values equal to the
+  numpy arrays' addresses, and a sentinel written through the pointer read back through numpy).
+* ``CompiledForkCallback`` *is* a ctypes function pointer (a ``ctypes._CFuncPtr`` subclass), which
+  is what ``mujoco.set_mjcb_control`` accepts for a C callback; ``installed(callback)`` works with
+  it unchanged. Its ``calls`` counts the calls for its model (atomically, across threads).
+
+If numba is missing (or the struct layout cannot be verified) ``make_callback`` returns the Python
+``ForkCallback`` and warns once.
+"""
+from __future__ import annotations
+
+import ctypes
+import math
+import sys
+import threading
+import time
+import warnings
+import weakref
+from contextlib import contextmanager
+
+import mujoco
+import numpy as np
+
+from . import damper as _damper
+from . import friction as _friction
+from . import spring as _spring
+from .callback import ForkCallback
+from .fork import ForkLaw
+
+try:  # numba is optional: without it mtbmj runs the Python laws
+    import numba as _numba
+    from llvmlite import ir as _ir
+    from numba import types as _t
+    from numba.core import cgutils as _cgutils
+    from numba.extending import intrinsic as _intrinsic
+    _NUMBA_ERROR: Exception | None = None
+except ImportError as error:  # pragma: no cover - exercised in a subprocess by the tests
+    _numba = None
+    _NUMBA_ERROR = error
+
+FALLBACK_MESSAGE = "numba not installed: using the Python force laws"
+
+# ----------------------------------------------------------------------------------------------
+# Codes and registry layout
+# ----------------------------------------------------------------------------------------------
+SP_LINEAR, SP_BILINEAR, SP_PROGRESSIVE, SP_DIRECTIONAL, SP_TOPOUT = 1, 2, 3, 4, 5
+DA_LINEAR, DA_BILINEAR, DA_TABLE = 1, 2, 3
+FR_NONE, FR_COULOMB, FR_COULOMB_VISCOUS, FR_STICTION, FR_STRIBECK, FR_LUGRE = 0, 1, 2, 3, 4, 5
+
+# integer row of a slot
+I_MODEL, I_QPOS, I_DOF, I_STATE, I_ACT, I_CTRL, I_COUNT, I_CALLS = 0, 1, 2, 3, 4, 5, 6, 7
+I_DAMPER, I_DAMPER_AT, I_DAMPER_N, I_FRICTION, I_FRICTION_AT, I_NSPRING = 8, 9, 10, 11, 12, 13
+I_SPRING = 14  # then (opcode, parameter offset) pairs
+MAX_SPRING_OPS = 24
+INT_WIDTH = I_SPRING + 2 * MAX_SPRING_OPS  # 62
+FLOAT_WIDTH = 1024
+STACK_DEPTH = 16
+SLOTS = 256
+
+_INTS = np.zeros((SLOTS, INT_WIDTH), dtype=np.int64)
+_FLOATS = np.zeros((SLOTS, FLOAT_WIDTH), dtype=np.float64)
+# Registry header, read by the compiled dispatcher through an external symbol (see _registry):
+M_USED, M_INTS, M_FLOATS, M_QPOS, M_QVEL, M_ACT, M_CTRL, M_QFRC = range(8)
+META_WIDTH = 8
+_META = np.zeros(META_WIDTH, dtype=np.int64)  # slots in use (high-water mark), addresses, offsets
+_META[M_INTS], _META[M_FLOATS] = _INTS.ctypes.data, _FLOATS.ctypes.data
+REGISTRY_SYMBOL = "mtbmj_fork_registry_v1"
+_OWNED = np.zeros(SLOTS, dtype=bool)  # slot held by a live CompiledForkCallback (served or retired)
+_REGISTRY_LOCK = threading.Lock()
+
+MJDATA_FIELDS = ("qpos", "qvel", "act", "ctrl", "qfrc_applied")
+
+
+class UnsupportedLaw(TypeError):
+    """A law this module cannot compile (the Python path still runs it)."""
+
+
+# ----------------------------------------------------------------------------------------------
+# Flattening a ForkLaw into codes and parameters (pure Python; no numba needed)
+# ----------------------------------------------------------------------------------------------
+def flatten(law: ForkLaw) -> tuple[list[int], list[float]]:
+    """(integer row, float row) of ``law``, without the slot header (model, indices, counters)."""
+    ints = [0] * INT_WIDTH
+    floats: list[float] = []
+
+    def put(*values) -> int:
+        at = len(floats)
+        floats.extend(float(a) for a in values)
+        return at
+
+    program: list[tuple[int, int]] = []
+    depth = [0, 0]  # current, maximum
+
+    def push():
+        depth[0] += 1
+        depth[1] = max(depth[1], depth[0])
+
+    def spring(s):
+        # Exact types only: a subclass may override force() and must run on the Python path.
+        kind = type(s)
+        if kind is _spring.LinearSpring:
+            program.append((SP_LINEAR, put(s.rate)))
+            push()
+        elif kind is _spring.BilinearSpring:
+            program.append((SP_BILINEAR, put(s.rate, s.rate_above_knee, s.knee)))
+            push()
+        elif kind is _spring.ProgressiveSpring:
+            program.append((SP_PROGRESSIVE, put(s.rate, s.cubic)))
+            push()
+        elif kind is _spring.DirectionalSpring:
+            spring(s.compression)
+            spring(s.rebound)
+            program.append((SP_DIRECTIONAL, put(s.band)))
+            depth[0] -= 1
+        elif kind is _spring.TopOutSpring:
+            spring(s.main)
+            program.append((SP_TOPOUT, put(s.top_out_rate, s.preload, s.engagement)))
+        else:
+            raise UnsupportedLaw(f"spring law {kind.__name__} has no compiled form")
+
+    if type(law) is not ForkLaw:
+        raise UnsupportedLaw(f"{type(law).__name__} is not a ForkLaw")
+    spring(law.spring)
+    if len(program) > MAX_SPRING_OPS or depth[1] > STACK_DEPTH:
+        raise UnsupportedLaw("spring law too deeply composed to compile")
+    ints[I_NSPRING] = len(program)
+    for k, (op, at) in enumerate(program):
+        ints[I_SPRING + 2 * k] = op
+        ints[I_SPRING + 2 * k + 1] = at
+
+    d = law.damper
+    kind = type(d)
+    if kind is _damper.LinearDamper:
+        ints[I_DAMPER], ints[I_DAMPER_AT] = DA_LINEAR, put(d.coefficient)
+    elif kind is _damper.BilinearDamper:
+        ints[I_DAMPER], ints[I_DAMPER_AT] = DA_BILINEAR, put(d.compression, d.rebound)
+    elif kind is _damper.TableDamper:
+        n = len(d.velocity)
+        ints[I_DAMPER], ints[I_DAMPER_N] = DA_TABLE, n
+        ints[I_DAMPER_AT] = put(*d.velocity, *d.force_table, *d._slopes)
+    else:
+        raise UnsupportedLaw(f"damper law {kind.__name__} has no compiled form")
+
+    f = law.friction
+    kind = type(f)
+    if kind is _friction.NoFriction:
+        ints[I_FRICTION], ints[I_FRICTION_AT] = FR_NONE, put(0.0)
+    elif kind is _friction.Coulomb:
+        ints[I_FRICTION], ints[I_FRICTION_AT] = FR_COULOMB, put(f.coulomb, f.band)
+    elif kind is _friction.CoulombViscous:
+        ints[I_FRICTION], ints[I_FRICTION_AT] = FR_COULOMB_VISCOUS, put(f.coulomb, f.viscous, f.band)
+    elif kind is _friction.Stiction:
+        ints[I_FRICTION] = FR_STICTION
+        ints[I_FRICTION_AT] = put(f.coulomb, f.breakaway, f.viscous, f.stiction_band, f.band)
+    elif kind is _friction.Stribeck:
+        ints[I_FRICTION] = FR_STRIBECK
+        ints[I_FRICTION_AT] = put(f.coulomb, f.breakaway, f.viscous, f.stribeck_velocity, f.exponent, f.band)
+    elif kind is _friction.LuGre:
+        ints[I_FRICTION] = FR_LUGRE
+        # 2.0 is stored, not written as a literal, so that (v / v_S) ** 2 is the same libm pow()
+        # call Python makes for float ** int (a literal could be folded into v * v).
+        ints[I_FRICTION_AT] = put(f.coulomb, f.breakaway, f.stribeck_velocity, f.stiffness, f.damping,
+                                  f.viscous, 2.0)
+    else:
+        raise UnsupportedLaw(f"friction law {kind.__name__} has no compiled form")
+    if len(floats) > FLOAT_WIDTH:
+        raise UnsupportedLaw(f"law needs {len(floats)} parameters, more than {FLOAT_WIDTH}")
+    ints[I_STATE] = int(bool(law.has_state))
+    return ints, floats
+
+
+# ----------------------------------------------------------------------------------------------
+# mjData layout from mujoco's own struct description, checked against live arrays
+# ----------------------------------------------------------------------------------------------
+_SCALARS = {
+    "mjtNum": ctypes.c_double, "double": ctypes.c_double, "float": ctypes.c_float, "int": ctypes.c_int,
+    "unsigned int": ctypes.c_uint, "mjtSize": ctypes.c_int64, "int64_t": ctypes.c_int64,
+    "uint64_t": ctypes.c_uint64, "size_t": ctypes.c_size_t, "uintptr_t": ctypes.c_size_t,
+    "mjtBool": ctypes.c_ubyte, "mjtByte": ctypes.c_ubyte, "char": ctypes.c_char,
+}
+_STRUCT_CACHE: dict = {}
+_LAYOUT: dict | None = None
+
+
+def _ctype(t):
+    from mujoco.introspect import ast_nodes, structs
+
+    if isinstance(t, ast_nodes.PointerType):
+        return ctypes.c_void_p
+    if isinstance(t, ast_nodes.ArrayType):
+        return _ctype(t.inner_type) * int(np.prod(t.extents))
+    if t.name in _SCALARS:
+        return _SCALARS[t.name]
+    if t.name in structs.STRUCTS:
+        return _struct(t.name)
+    raise TypeError(f"no ctypes equivalent for {t.name!r} in mujoco's struct description")
+
+
+def _struct(name: str):
+    from mujoco.introspect import ast_nodes, structs
+
+    if name not in _STRUCT_CACHE:
+        fields = []
+        for f in structs.STRUCTS[name].fields:
+            if not isinstance(f, ast_nodes.StructFieldDecl):
+                raise TypeError(f"{name}: anonymous struct/union members are not supported")
+            fields.append((f.name, _ctype(f.type)))
+        _STRUCT_CACHE[name] = type(name, (ctypes.Structure,), {"_fields_": fields})
+    return _STRUCT_CACHE[name]
+
+
+def mjdata_layout() -> dict:
+    """Byte offsets in ``mjData`` of the pointer fields the callback uses (and of ``time``, for
+    the check), laid out with ctypes from ``mujoco.introspect`` (mujoco's header description)."""
+    global _LAYOUT
+    if _LAYOUT is None:
+        s = _struct("mjData")
+        _LAYOUT = {name: getattr(s, name).offset for name in MJDATA_FIELDS + ("time",)}
+    return dict(_LAYOUT)
+
+
+def check_layout(model, layout: dict | None = None) -> None:
+    """Check the offsets against a live ``MjData`` of ``model``: each pointer field holds the address
+    of the numpy array mujoco exposes, and a sentinel written through it is read back by numpy.
+    Raises RuntimeError on any mismatch."""
+    layout = mjdata_layout() if layout is None else layout
+    data = mujoco.MjData(model)
+    data.time = 0.123456789
+    base = data._address
+    if ctypes.c_double.from_address(base + layout["time"]).value != data.time:
+        raise RuntimeError("mjData layout check failed: 'time' is not where mujoco's struct description puts it")
+    for name in MJDATA_FIELDS:
+        array = getattr(data, name)
+        pointer = ctypes.c_void_p.from_address(base + layout[name]).value
+        if array.size == 0:
+            continue
+        if pointer != array.ctypes.data:
+            raise RuntimeError(f"mjData layout check failed: pointer field {name!r} at byte {layout[name]} "
+                               f"does not hold the address of data.{name}")
+        cell = ctypes.c_double.from_address(pointer + 8 * (array.size - 1))
+        old = float(array.flat[-1])
+        cell.value = 1234.5678
+        ok = array.flat[-1] == 1234.5678
+        cell.value = old
+        if not ok:
+            raise RuntimeError(f"mjData layout check failed: a sentinel written through {name!r} was not read back")
+
+
+# ----------------------------------------------------------------------------------------------
+# The compiled interpreter and dispatcher
+# ----------------------------------------------------------------------------------------------
+COMPILE_SECONDS: float | None = None  # wall time to compile (or load from numba's cache) the kernels
+if _numba is not None:
+    import llvmlite.binding as _llvm
+
+    _compile_start = time.perf_counter()
+
+    _llvm.add_symbol(REGISTRY_SYMBOL, _META.ctypes.data)
+
+    @_intrinsic
+    def _address_of(typingctx, pointer):
+        """voidptr -> integer address."""
+        def codegen(context, builder, signature, args):
+            return builder.ptrtoint(args[0], context.get_value_type(_t.intp))
+        return _t.intp(_t.voidptr), codegen
+
+    @_intrinsic
+    def _f64_pointer(typingctx, address):
+        """integer address -> double*."""
+        def codegen(context, builder, signature, args):
+            return builder.inttoptr(args[0], context.get_value_type(_t.CPointer(_t.float64)))
+        return _t.CPointer(_t.float64)(_t.intp), codegen
+
+    @_intrinsic
+    def _i64_pointer(typingctx, address):
+        """integer address -> int64*."""
+        def codegen(context, builder, signature, args):
+            return builder.inttoptr(args[0], context.get_value_type(_t.CPointer(_t.int64)))
+        return _t.CPointer(_t.int64)(_t.intp), codegen
+
+    @_intrinsic
+    def _pointer_field(typingctx, base, offset):
+        """The double* stored at byte ``offset`` of the struct at ``base`` (an mjData pointer field)."""
+        def codegen(context, builder, signature, args):
+            struct, at = args
+            slot_address = builder.add(builder.ptrtoint(struct, context.get_value_type(_t.intp)), at)
+            value = builder.load(builder.inttoptr(slot_address, context.get_value_type(_t.CPointer(_t.intp))))
+            return builder.inttoptr(value, context.get_value_type(_t.CPointer(_t.float64)))
+        return _t.CPointer(_t.float64)(_t.voidptr, _t.intp), codegen
+
+    @_intrinsic
+    def _atomic_increment(typingctx, pointer):
+        """*pointer += 1, atomically (the per-slot call counter; threads share it)."""
+        def codegen(context, builder, signature, args):
+            builder.atomic_rmw("add", args[0], _ir.Constant(_ir.IntType(64), 1), "monotonic")
+            return context.get_dummy_value()
+        return _t.void(_t.CPointer(_t.int64)), codegen
+
+    @_intrinsic
+    def _stack_buffer(typingctx):
+        """A double[STACK_DEPTH] on the native stack (no allocation per call)."""
+        def codegen(context, builder, signature, args):
+            return _cgutils.alloca_once(builder, _ir.DoubleType(), size=STACK_DEPTH)
+        return _t.CPointer(_t.float64)(), codegen
+
+    _jit = dict(cache=True, error_model="numpy", nogil=True)
+
+    @_numba.njit(**_jit)
+    def _spring_force(I, P, x, v):
+        stack = _stack_buffer()
+        top = 0
+        for k in range(I[I_NSPRING]):
+            op = I[I_SPRING + 2 * k]
+            o = I[I_SPRING + 2 * k + 1]
+            if op == SP_LINEAR:  # LinearSpring.force
+                stack[top] = P[o] * x
+                top += 1
+            elif op == SP_BILINEAR:  # BilinearSpring.force
+                knee = P[o + 2]
+                if x - knee >= 0.0:
+                    stack[top] = P[o] * knee + P[o + 1] * (x - knee)
+                else:
+                    stack[top] = P[o] * x
+                top += 1
+            elif op == SP_PROGRESSIVE:  # ProgressiveSpring.force
+                stack[top] = P[o] * x + P[o + 1] * x * x * x
+                top += 1
+            elif op == SP_DIRECTIONAL:  # DirectionalSpring.force
+                rebound = stack[top - 1]
+                compression = stack[top - 2]
+                top -= 2
+                w = 0.5 * (1.0 + math.tanh(v / P[o]))
+                stack[top] = w * compression + (1.0 - w) * rebound
+                top += 1
+            else:  # SP_TOPOUT, TopOutSpring.force
+                engagement = P[o + 2]
+                force = P[o + 1] + stack[top - 1]
+                if not (x - engagement >= 0.0):
+                    force -= P[o] * (engagement - x)
+                stack[top - 1] = force
+        return stack[0]
+
+    @_numba.njit(**_jit)
+    def _damper_force(I, P, v):
+        code = I[I_DAMPER]
+        o = I[I_DAMPER_AT]
+        if code == DA_LINEAR:  # LinearDamper.force
+            return P[o] * v
+        if code == DA_BILINEAR:  # BilinearDamper.force
+            return (P[o] if v >= 0.0 else P[o + 1]) * v
+        n = I[I_DAMPER_N]  # TableDamper.force: velocity[n], force[n], slopes[n - 1]
+        i = 0
+        for j in range(1, n - 1):
+            if v >= P[o + j]:
+                i += 1
+            else:
+                break
+        return P[o + n + i] + P[o + 2 * n + i] * (v - P[o + i])
+
+    @_numba.njit(**_jit)
+    def _lugre_rate(P, o, v, z):
+        g = P[o] + (P[o + 1] - P[o]) * math.exp(-((v / P[o + 2]) ** P[o + 6]))  # LuGre.g
+        speed = v if v >= 0.0 else -v
+        return v - P[o + 3] * speed * z / g
+
+    @_numba.njit(**_jit)
+    def _friction_force(I, P, v, z):
+        code = I[I_FRICTION]
+        o = I[I_FRICTION_AT]
+        if code == FR_NONE:
+            return 0.0
+        if code == FR_COULOMB:
+            return P[o] * math.tanh(v / P[o + 1])
+        if code == FR_COULOMB_VISCOUS:
+            return P[o] * math.tanh(v / P[o + 2]) + P[o + 1] * v
+        if code == FR_STICTION:
+            dv = P[o + 3]
+            outside = v - dv >= 0.0 or not (v + dv >= 0.0)
+            level = P[o]
+            if not outside:
+                level += (P[o + 1] - P[o]) * (1.0 - abs(v) / dv)
+            return level * math.tanh(v / P[o + 4]) + P[o + 2] * v
+        if code == FR_STRIBECK:
+            level = P[o] + (P[o + 1] - P[o]) * math.exp(-abs(v / P[o + 3]) ** P[o + 4])
+            return level * math.tanh(v / P[o + 5]) + P[o + 2] * v
+        return P[o + 3] * z + P[o + 4] * _lugre_rate(P, o, v, z) + P[o + 5] * v  # LuGre.force
+
+    @_numba.njit(**_jit)
+    def fork_force(I, P, x, v, z):
+        """ForkLaw.force(x, v, z) from a flattened law."""
+        return _spring_force(I, P, x, v) + _damper_force(I, P, v) + _friction_force(I, P, v, z)
+
+    @_numba.njit(**_jit)
+    def state_rate(I, P, v, z):
+        """ForkLaw.state_rate(v, z) from a flattened law."""
+        if I[I_FRICTION] != FR_LUGRE:
+            return 0.0
+        return _lugre_rate(P, I[I_FRICTION_AT], v, z)
+
+    @_intrinsic
+    def _registry(typingctx, index):
+        """Entry ``index`` of the registry header, reached through the external symbol
+        ``REGISTRY_SYMBOL`` (bound to ``_META`` with llvmlite's add_symbol at import): no address
+        is baked into the code, so the dispatcher is cached on disk like the kernels."""
+        def codegen(context, builder, signature, args):
+            module = builder.module
+            table = _ir.ArrayType(_ir.IntType(64), META_WIDTH)
+            try:
+                symbol = module.get_global(REGISTRY_SYMBOL)
+            except KeyError:
+                symbol = _ir.GlobalVariable(module, table, REGISTRY_SYMBOL)
+                symbol.linkage = "external"
+            at = builder.gep(symbol, [_ir.Constant(_ir.IntType(32), 0), args[0]])
+            return builder.load(at)
+        return _t.int64(_t.intp), codegen
+
+    @_numba.cfunc(_t.void(_t.voidptr, _t.voidptr), cache=True, error_model="numpy")
+    def _dispatch(m, d):
+        model = _address_of(m)
+        ints = _numba.carray(_i64_pointer(_registry(M_INTS)), (SLOTS, INT_WIDTH))
+        slot = -1
+        for s in range(_registry(M_USED)):
+            if ints[s, I_MODEL] == model:
+                slot = s
+                break
+        if slot < 0:
+            return  # not one of ours: leave the model alone
+        I = ints[slot]
+        P = _numba.carray(_f64_pointer(_registry(M_FLOATS) + 8 * FLOAT_WIDTH * slot), (FLOAT_WIDTH,))
+        if I[I_COUNT]:
+            _atomic_increment(_i64_pointer(_registry(M_INTS) + 8 * (INT_WIDTH * slot + I_CALLS)))
+        x = _pointer_field(d, _registry(M_QPOS))[I[I_QPOS]]
+        v = _pointer_field(d, _registry(M_QVEL))[I[I_DOF]]
+        qfrc = _pointer_field(d, _registry(M_QFRC))
+        if I[I_STATE]:
+            z = _pointer_field(d, _registry(M_ACT))[I[I_ACT]]
+            _pointer_field(d, _registry(M_CTRL))[I[I_CTRL]] = state_rate(I, P, v, z)
+            qfrc[I[I_DOF]] = -fork_force(I, P, x, v, z)
+        else:
+            qfrc[I[I_DOF]] = -fork_force(I, P, x, v, 0.0)
+
+    COMPILE_SECONDS = time.perf_counter() - _compile_start
+
+_DISPATCHER = None
+_DISPATCHER_LOCK = threading.Lock()
+_UNAVAILABLE: str | None = None
+
+
+def _dispatcher(model=None):
+    """The compiled dispatcher, its registry header filled with the mjData offsets; the first
+    call (with a model) checks those offsets against live arrays of that model."""
+    global _DISPATCHER, _UNAVAILABLE
+    with _DISPATCHER_LOCK:
+        if _DISPATCHER is None:
+            if _numba is None:
+                raise RuntimeError(FALLBACK_MESSAGE)
+            layout = mjdata_layout()
+            if model is not None:
+                try:
+                    check_layout(model, layout)
+                except RuntimeError as error:
+                    _UNAVAILABLE = f"compiled force laws unavailable ({error}): using the Python force laws"
+                    raise RuntimeError(_UNAVAILABLE) from None
+            for index, name in ((M_QPOS, "qpos"), (M_QVEL, "qvel"), (M_ACT, "act"), (M_CTRL, "ctrl"),
+                                (M_QFRC, "qfrc_applied")):
+                _META[index] = layout[name]
+            _DISPATCHER = _dispatch
+        return _DISPATCHER
+
+
+def available() -> bool:
+    """True when the compiled path can run here (numba importable, mjData layout resolvable)."""
+    return unavailable_reason() is None
+
+
+def unavailable_reason() -> str | None:
+    global _UNAVAILABLE
+    if _numba is None:
+        return FALLBACK_MESSAGE
+    if _UNAVAILABLE is None:
+        try:
+            mjdata_layout()
+        except Exception as error:  # noqa: BLE001 - any failure means: use the Python path
+            _UNAVAILABLE = f"compiled force laws unavailable ({error}): using the Python force laws"
+    return _UNAVAILABLE or None
+
+
+# ----------------------------------------------------------------------------------------------
+# The callback object
+# ----------------------------------------------------------------------------------------------
+def _release(slot: int) -> None:
+    with _REGISTRY_LOCK:
+        _INTS[slot, I_MODEL] = 0  # first: the dispatcher stops serving the slot
+        _INTS[slot] = 0
+        _FLOATS[slot] = 0.0
+        _OWNED[slot] = False
+        while _META[M_USED] > 0 and not _OWNED[_META[M_USED] - 1]:
+            _META[M_USED] -= 1
+
+
+class CompiledForkCallback(ctypes._CFuncPtr):
+    """Compiled counterpart of ``ForkCallback``: a C function pointer for
+    ``mujoco.set_mjcb_control`` (or ``controllers.installed``) that writes -F_fork into the fork
+    joint's ``qfrc_applied`` and, for LuGre, dz/dt into the integrator actuator's ``ctrl``.
+
+    It acts only on ``model`` (and on the models of other live ``CompiledForkCallback`` objects,
+    each with its own law: they share one compiled dispatcher), never on any other model. The
+    newest callback built for a model defines its law: an older one for the same model is retired
+    (it no longer acts; its ``calls`` stays readable). ``calls`` counts the calls for ``model``;
+    pass ``count_calls=False`` to skip the atomic counter.
+    """
+
+    _flags_ = ctypes._FUNCFLAG_CDECL
+    _argtypes_ = (ctypes.c_void_p, ctypes.c_void_p)
+    _restype_ = None
+
+    def __new__(cls, model, fork_law, fork_joint: str = "fork", state_actuator: str = "friction_state",
+                count_calls: bool = True):
+        reason = unavailable_reason()
+        if reason is not None:
+            raise RuntimeError(reason)
+        return super().__new__(cls, _dispatcher(model).address)
+
+    def __init__(self, model, fork_law, fork_joint: str = "fork", state_actuator: str = "friction_state",
+                 count_calls: bool = True):
+        ints, floats = flatten(fork_law)
+        joint = model.joint(fork_joint)
+        actuator = model.actuator(state_actuator)
+        self.law = fork_law
+        self._model = model  # keeps the mjModel (and so its address) alive while the slot is used
+        self.qpos_index = int(joint.qposadr[0])
+        self.dof_index = int(joint.dofadr[0])
+        self.has_state = fork_law.has_state
+        self.ctrl_index = int(actuator.id)
+        self.act_index = int(model.actuator_actadr[actuator.id])
+        ints[I_QPOS], ints[I_DOF] = self.qpos_index, self.dof_index
+        ints[I_ACT], ints[I_CTRL] = self.act_index, self.ctrl_index
+        ints[I_COUNT] = int(bool(count_calls))
+        with _REGISTRY_LOCK:
+            free = np.flatnonzero(~_OWNED)
+            if not free.size:
+                raise RuntimeError(f"more than {SLOTS} compiled fork callbacks alive at once")
+            slot = int(free[0])
+            _OWNED[slot] = True
+            _INTS[_INTS[:, I_MODEL] == model._address, I_MODEL] = 0  # retire older ones of this model
+            _FLOATS[slot, : len(floats)] = floats
+            row = np.asarray(ints, dtype=np.int64)
+            row[I_MODEL] = 0
+            _INTS[slot] = row
+            _INTS[slot, I_MODEL] = model._address  # last: the slot goes live complete
+            _META[M_USED] = max(_META[M_USED], slot + 1)
+        self.slot = slot
+        self._finalizer = weakref.finalize(self, _release, slot)
+
+    @property
+    def address(self) -> int:
+        """The C function's address (``set_mjcb_control`` takes this object itself)."""
+        return ctypes.cast(self, ctypes.c_void_p).value
+
+    @property
+    def active(self) -> bool:
+        """True while this callback defines its model's law (not retired, not closed)."""
+        return bool(_OWNED[self.slot]) and _INTS[self.slot, I_MODEL] == self._model._address and \
+            self._finalizer.alive
+
+    @property
+    def calls(self) -> int:
+        return int(_INTS[self.slot, I_CALLS]) if self._finalizer.alive else self._closed_calls
+
+    @calls.setter
+    def calls(self, value: int) -> None:
+        _INTS[self.slot, I_CALLS] = value
+
+    def __call__(self, m, d):
+        """Call the compiled function from Python (as ``ForkCallback(m, d)``), e.g. in a test."""
+        super().__call__(m._address, d._address)
+
+    def bind(self, data) -> None:
+        """No-op (``ForkCallback`` caches numpy views; the compiled path reads ``mjData*``)."""
+
+    def close(self) -> None:
+        """Free the registry slot now (also done when the object is collected)."""
+        if self._finalizer.alive:
+            self._closed_calls = self.calls
+            self._finalizer()
+
+    def __repr__(self):
+        return f"<CompiledForkCallback slot={getattr(self, 'slot', None)} law={getattr(self, 'law', None)!r}>"
+
+
+# ----------------------------------------------------------------------------------------------
+# Choosing the path, and running a drop with a given callback
+# ----------------------------------------------------------------------------------------------
+_WARNED: set = set()
+
+
+def _warn_once(message: str) -> None:
+    if message not in _WARNED:
+        _WARNED.add(message)
+        warnings.warn(message, RuntimeWarning, stacklevel=3)
+
+
+def make_callback(model, law, prefer_compiled: bool = True, **kwargs):
+    """``CompiledForkCallback`` when possible, else the Python ``ForkCallback`` (with a warning,
+    once per reason: numba missing, layout not verifiable, or a law with no compiled form)."""
+    if prefer_compiled:
+        reason = unavailable_reason()
+        if reason is None:
+            try:
+                return CompiledForkCallback(model, law, **kwargs)
+            except UnsupportedLaw as error:
+                _warn_once(f"{error}: using the Python force laws")
+            except RuntimeError as error:  # the mjData layout check failed
+                _warn_once(str(error))
+        else:
+            _warn_once(reason)
+    kwargs.pop("count_calls", None)
+    return ForkCallback(model, law, **kwargs)
+
+
+_make_callback = make_callback
+_RUN_LOCK = threading.Lock()
+
+
+@contextmanager
+def _engine_callback(factory):
+    """Make ``mtbmj.engine_mujoco.run`` build its fork callback with ``factory(model, law)``,
+    whether the engine calls ``ForkCallback`` or ``make_callback`` (imported at module level or
+    from this module inside ``run``)."""
+    from mtbmj import engine_mujoco
+
+    build = lambda model, law, *a, **k: factory(model, law)  # noqa: E731
+    targets = [(engine_mujoco, name) for name in ("ForkCallback", "make_callback") if hasattr(engine_mujoco, name)]
+    targets.append((sys.modules[__name__], "make_callback"))
+    with _RUN_LOCK:
+        saved = [(obj, name, getattr(obj, name)) for obj, name in targets]
+        try:
+            for obj, name in targets:
+                setattr(obj, name, build)
+            yield
+        finally:
+            for obj, name, value in saved:
+                setattr(obj, name, value)
+
+
+def run_with(setup, callback="compiled", duration: float | None = None, progress=None):
+    """``mtbmj.engine_mujoco.run`` with the fork callback chosen: ``"compiled"``, ``"python"``,
+    ``"auto"`` (``make_callback``: compiled if possible) or a factory ``f(model, fork_law)``.
+    Same chunking, tire-law switch and checks as the engine."""
+    from mtbmj import engine_mujoco
+
+    factory = {"compiled": CompiledForkCallback, "python": ForkCallback, "auto": _make_callback}.get(callback, callback)
+    with _engine_callback(factory):
+        return engine_mujoco.run(setup, duration, progress)
+
+
+__all__ = ["CompiledForkCallback", "make_callback", "available", "unavailable_reason", "flatten",
+           "mjdata_layout", "check_layout", "run_with", "UnsupportedLaw", "FALLBACK_MESSAGE"]
