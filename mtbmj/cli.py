@@ -45,6 +45,16 @@ class Progress:
         if self.enabled:
             print("\r" + " " * 80 + "\r", end="", file=sys.stderr, flush=True)
 
+    def around(self, work):
+        """``work(progress)`` with the bar shown, finished, or cleared if it fails."""
+        try:
+            result = work(self)
+        except BaseException:
+            self.abandon()
+            raise
+        self.done()
+        return result
+
 
 def _overrides(pairs) -> dict:
     return dict(parse_assignment(p) for p in pairs or [])
@@ -53,13 +63,8 @@ def _overrides(pairs) -> dict:
 def cmd_drop(args) -> int:
     from .drop import run_drop
 
-    progress = Progress(f"{args.config} on {args.engine}", not args.quiet)
-    try:
-        result = run_drop(args.config, args.engine, _overrides(args.set), args.duration, progress)
-    except BaseException:
-        progress.abandon()
-        raise
-    progress.done()
+    result = Progress(f"{args.config} on {args.engine}", not args.quiet).around(
+        lambda progress: run_drop(args.config, args.engine, _overrides(args.set), args.duration, progress))
     written = result.write(args.out)
     s = result.summary
     lift = f"{s['lift_off_s']:.3f} s" if s["lift_off_s"] is not None else "never"
@@ -184,8 +189,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    return run(build_parser(), argv)
+
+
+def run(parser: argparse.ArgumentParser, argv=None) -> int:
+    """Parse and run a command: bad input is one line on stderr and exit status 2."""
     try:
-        args = build_parser().parse_args(argv)
+        args = parser.parse_args(argv)
         if getattr(args, "duration", None) is not None and not args.duration > 0:
             raise MtbmjError(f"--duration: must be positive, got {args.duration}")
         with warnings.catch_warnings():

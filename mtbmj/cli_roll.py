@@ -10,14 +10,9 @@ def cmd_roll(args) -> int:
     from .cli import Progress, _overrides
     from .rolling import run_roll
 
-    progress = Progress(f"roll {args.scenario}", not args.quiet)
-    try:
-        result = run_roll(args.scenario, args.speed, args.config, args.head_angle, args.duration,
-                          _overrides(args.set), progress)
-    except BaseException:
-        progress.abandon()
-        raise
-    progress.done()
+    result = Progress(f"roll {args.scenario}", not args.quiet).around(
+        lambda progress: run_roll(args.scenario, args.speed, args.config, args.head_angle, args.duration,
+                                  _overrides(args.set), progress))
     written = result.write(args.out)
     s = result.summary
     print(f"roll {args.scenario} at {args.speed:g} m/s ({result.name}, head angle {args.head_angle:g} deg): "

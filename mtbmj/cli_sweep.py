@@ -10,11 +10,10 @@ Wired into ``mtbmj.cli.build_parser`` with::
 from __future__ import annotations
 
 import sys
-import warnings
 from pathlib import Path
 
 from .config import parse_assignment
-from .errors import ConfigError, MtbmjError
+from .errors import ConfigError
 
 
 def _overrides(pairs) -> dict:
@@ -154,26 +153,11 @@ def add_parser(subparsers) -> None:
 
 def main(argv=None) -> int:
     """Stand-alone entry with ``mtbmj.cli``'s error handling (one line, exit 2)."""
-    from .cli import EXIT_BAD_INPUT, _Parser
+    from .cli import _Parser, run
 
     parser = _Parser(prog="mtbmj")
     add_parser(parser.add_subparsers(dest="command", required=True, parser_class=_Parser))
-    try:
-        args = parser.parse_args(argv)
-        if getattr(args, "duration", None) is not None and not args.duration > 0:
-            raise MtbmjError(f"--duration: must be positive, got {args.duration}")
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", RuntimeWarning)
-            return args.func(args)
-    except MtbmjError as exc:
-        print(f"mtbmj: error: {exc}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except RuntimeWarning as exc:
-        print(f"mtbmj: error: run diverged ({exc})", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        print("mtbmj: interrupted", file=sys.stderr)
-        return 130
+    return run(parser, argv)
 
 
 if __name__ == "__main__":

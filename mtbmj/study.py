@@ -11,7 +11,7 @@ from mtbmj.validation import Crosscheck, from_results
 from . import output
 from .config import Config, study_presets
 from .drop import resolve, run_drop
-from .result import DISPLACEMENTS, DropResult
+from .result import DropResult
 
 GROUPS = {
     "spring": ("Fork spring study S1-S7", [f"S{i}" for i in range(1, 8)]),

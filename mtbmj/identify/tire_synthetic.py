@@ -122,7 +122,7 @@ def tire_drop_record(truth: TireTruth | None = None, mass_kg: float = 25.0, drop
         f"synthetic tire drop record (mtbmj.identify.tire_synthetic), true values: {true}",
         f"mass_kg = {mass_kg:g}",
         f"drop_height_mm = {drop_height_mm:g}; gravity_m_per_s2 = {gravity:g}",
-        f"first contact: impact values; later contacts: in-contact values; Kelvin-Voigt, pushes only",
+        "first contact: impact values; later contacts: in-contact values; Kelvin-Voigt, pushes only",
         f"1 kHz after a 4th-order Butterworth {antialias_Hz:g} Hz low-pass; noise {noise_mm:g} mm rms, "
         f"quantum {quantum_mm:g} mm; seed {seed}",
     ]
