@@ -6,7 +6,11 @@ head angle, puts the wheel at rest (static sag) at the start of the terrain, and
 set speed: a PD servo on the chassis' horizontal joint tracks x0 + v t. The fork law (spring,
 damper, friction, as ``compose.setup``) and the radial tire (``mtbmj.tire_model``, the
 configuration's tire values) are applied by one control callback through motors, so MuJoCo's
-``actuatorfrc`` sensors record the exact forces of every step.
+``actuatorfrc`` sensors record the exact forces of every step. ``RollCallback`` (Python) is that
+callback's specification; by default runs use its compiled twin
+(``mtbmj.controllers.compiled_rolling``: the fork law, the tire and its patch search in numba,
+same results), and fall back to ``RollCallback`` with a warning when numba is missing
+(``callback="python"`` forces it).
 
 Conventions: fork_mm compression positive, zero at unloaded full extension; tire_mm radial
 deflection (compression positive, negative = clearance when airborne); body_z_mm and axle_z_mm
@@ -38,6 +42,7 @@ from .tire_model import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 DEFAULT_HEAD_ANGLE_DEG = 65.0
 DRIVE_HZ = 10.0  # bandwidth of the speed servo (critically damped)
 CHUNK = 10000
+CALLBACKS = ("auto", "compiled", "python")
 SCENE = "rolling_scene.xml"
 COLUMNS = (
     "time_s", "x_m", "speed_m_per_s", "terrain_mm", "body_z_mm", "axle_z_mm", "fork_mm", "tire_mm",
@@ -285,11 +290,16 @@ class Prepared:
 
 
 def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG,
-            overrides: Mapping | None = None, fork_law=None, settled: bool = True) -> Prepared:
-    """Everything a rolling run needs, with the data at t = 0 (at rest on the start, at speed)."""
+            overrides: Mapping | None = None, fork_law=None, settled: bool = True, callback: str = "auto") -> Prepared:
+    """Everything a rolling run needs, with the data at t = 0 (at rest on the start, at speed).
+
+    ``callback``: ``"auto"`` (the compiled callback of ``controllers.compiled_rolling`` when numba
+    is available, else ``RollCallback`` with a warning), ``"compiled"`` or ``"python"``."""
     from .drop import resolve
 
     _check_inputs(speed_m_per_s, head_angle_deg, None)
+    if callback not in CALLBACKS:
+        raise ConfigError(f"callback: must be one of {', '.join(CALLBACKS)}, got {callback!r}")
     ter = terrain_mod.make(scenario)
     cfg = resolve(config, overrides)
     setup = compose.setup(cfg)
@@ -313,11 +323,33 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
     if front.drum_dof is not None:
         data.qvel[front.drum_dof] = -float(speed_m_per_s) / ter.radius
     refresh = min(REFRESH_S, REFRESH_DISTANCE_M / max(float(speed_m_per_s), 1e-9))
-    cb = RollCallback(front, fork_law or setup.fork, tire, chassis_speed, qx, refresh)
+    cb = _make_callback(callback, front, fork_law or setup.fork, tire, chassis_speed, qx, refresh)
     cb.bind(data)
     with installed(cb):
         mujoco.mj_forward(model, data)
     return Prepared(setup, ter, front, tire, cb, data, float(speed_m_per_s), chassis_speed)
+
+
+def _make_callback(kind: str, front, law, tire, speed, x_ref0, refresh):
+    if kind == "python":
+        return RollCallback(front, law, tire, speed, x_ref0, refresh)
+    from mtbmj.controllers import compiled_rolling  # numba is imported on the first compiled run only
+
+    if kind == "compiled":
+        return compiled_rolling.CompiledRollCallback(front, law, tire, speed, x_ref0, refresh)
+    return compiled_rolling.make_roll_callback(front, law, tire, speed, x_ref0, refresh)
+
+
+def callback_kind(callback) -> str:
+    """"python" for ``RollCallback``, "compiled" for the compiled callback."""
+    return "python" if isinstance(callback, RollCallback) else "compiled"
+
+
+def _python_twin(cb) -> RollCallback:
+    """A fresh Python ``RollCallback`` with the settings of ``cb`` (for a rerun on the Python path)."""
+    twin = RollCallback(cb.front, cb.law, cb.tire, cb.speed, cb.x_ref0, cb.refresh)
+    twin.damper_scale = cb.damper_scale
+    return twin
 
 
 def default_duration(p: Prepared) -> float:
@@ -325,7 +357,24 @@ def default_duration(p: Prepared) -> float:
 
 
 def simulate(p: Prepared, duration: float, progress=None):
-    """(states (n+1, nstate) incl. t = 0, sensordata (n, nsensor) of each step's start state)."""
+    """(states (n+1, nstate) incl. t = 0, sensordata (n, nsensor) of each step's start state).
+
+    If the compiled callback met more contact patches than it holds (``overflowed``), the run is
+    redone on the Python path (``p.callback`` becomes that ``RollCallback``), with a warning."""
+    states, sensors = _simulate(p, duration, progress)
+    if getattr(p.callback, "overflowed", False):
+        import warnings
+
+        warnings.warn("compiled rolling callback: too many contact patches, rerunning on the Python path",
+                      RuntimeWarning, stacklevel=2)
+        p.callback = _python_twin(p.callback)
+        p.callback.bind(p.data)
+        mujoco.mj_setState(p.front.model, p.data, states[0], mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        states, sensors = _simulate(p, duration, progress)
+    return states, sensors
+
+
+def _simulate(p: Prepared, duration: float, progress=None):
     model, data = p.front.model, p.data
     steps = int(round(duration / p.setup.timestep))
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -496,12 +545,14 @@ class RollResult:
 
 def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
              head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG, duration: float | None = None,
-             overrides: Mapping | None = None, progress: Callable[[float], None] | None = None) -> RollResult:
+             overrides: Mapping | None = None, progress: Callable[[float], None] | None = None,
+             callback: str = "auto") -> RollResult:
     """Roll the front end over ``scenario`` (a terrain spec, CSV path or ``Terrain``) at
     ``speed_m_per_s`` with the fork and tire of ``config``; ``duration`` defaults to the time to
-    cross the feature and settle (the drum: its revolutions)."""
+    cross the feature and settle (the drum: its revolutions). ``callback``: ``"auto"`` (compiled
+    when numba is available), ``"compiled"`` or ``"python"`` (the specification; same results)."""
     _check_inputs(speed_m_per_s, head_angle_deg, duration)
-    p = prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides)
+    p = prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, callback=callback)
     duration = default_duration(p) if duration is None else duration
     start = time.perf_counter()
     states, sensors = simulate(p, duration, progress)
@@ -510,6 +561,7 @@ def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
     logged = measure.logged(p.setup, raw)
     summary = _summary(p, logged, raw)
     info = {"steps": int(sensors.shape[0]), "timestep_s": p.setup.timestep, "integrator": p.setup.integrator,
+            "callback": callback_kind(p.callback),
             "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
             "real_time_factor": duration / wall if wall > 0 else None}
     return RollResult(p.setup.config.name, str(scenario), p.setup.config, logged, raw, summary, wall, info)
@@ -532,4 +584,4 @@ def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12"
 
 
 __all__ = ["run_roll", "roll_trajectory", "RollResult", "RollCallback", "FrontEnd", "build_front_end", "prepare",
-           "simulate", "static_sag", "tire_values", "COLUMNS", "DEFAULT_HEAD_ANGLE_DEG"]
+           "simulate", "static_sag", "tire_values", "callback_kind", "COLUMNS", "CALLBACKS", "DEFAULT_HEAD_ANGLE_DEG"]

@@ -1,0 +1,654 @@
+"""Compiled rolling callback: the fork law, the radial tire and the speed servo of
+``mtbmj.rolling.RollCallback`` as native code that MuJoCo calls every step.
+
+``RollCallback`` (Python) stays the specification and the fallback; this module evaluates the same
+arithmetic in the same order, including the terrain geometry (``RadialTire.patches`` on the
+terrain polyline, refreshed on the same schedule: every ``refresh`` s of simulated time or 5 mm of
+axle travel), so the results agree with the Python path to round-off (~1e-12 m; bit-identical in
+practice on static terrain).
+
+Design
+------
+* The fork law is flattened by ``controllers.compiled.flatten`` and evaluated by its compiled
+  interpreter (``fork_force``, ``state_rate``, and the spring/damper/friction parts for a scaled
+  damper); nothing of it is repeated here.
+* One numba ``cfunc`` serves every ``CompiledRollCallback``: it looks the ``mjModel*`` up in a
+  registry of its own (separate from the fork-only registry of ``controllers.compiled``, so neither
+  dispatcher ever acts on the other's models) and leaves every other model alone. A slot holds
+  integer indices (joints, actuators, array addresses, counters) and float parameters plus the
+  callback's state: the contact patches (closest point q, normal n, surface velocity) of the last
+  refresh, its time, the next refresh time, the axle x at the refresh.
+* The terrain polyline (static profile x, z; or the drum's polar cleat profile) and scratch
+  buffers are numpy arrays owned by the callback object; the slot holds their addresses. The patch
+  search (``Terrain.polyline`` + ``RadialTire.segment_distances`` + ``RadialTire.patches``) runs
+  in compiled code, streaming over the pieces without allocating.
+* ``mjData`` is read through the offsets of ``controllers.compiled.mjdata_layout`` (mujoco's own
+  struct description), checked against live arrays before first use.
+* The callback state is per model, like ``RollCallback``'s: one ``mjData`` at a time per model.
+
+Limits: at most ``MAX_PATCHES`` patches at once (far more than any terrain meets under one tire);
+beyond that the slot raises its overflow flag and ``mtbmj.rolling.simulate`` reruns on the Python
+path. A terrain or tire subclass, or a law with no compiled form, runs on the Python path.
+"""
+from __future__ import annotations
+
+import ctypes
+import math
+import threading
+import time
+import weakref
+
+import numpy as np
+
+from . import compiled as _c
+from .compiled import FALLBACK_MESSAGE, UnsupportedLaw, flatten, mjdata_layout, unavailable_reason
+
+_numba = _c._numba
+
+MAX_PATCHES = 64
+SLOTS = 64
+LAW_INT_WIDTH = _c.INT_WIDTH
+LAW_FLOAT_WIDTH = _c.FLOAT_WIDTH
+
+# integer row of a slot
+(R_MODEL, R_XQ, R_XV, R_ZQ, R_ZV, R_FQ, R_FV, R_A_STATE, R_A_FORK, R_A_DP, R_A_DV, R_A_TX, R_A_TZ, R_A_PROBE,
+ R_ACT, R_HAS_STATE, R_DRUM, R_MOVING, R_NPTS, R_TX, R_TZ, R_SCRATCH, R_ISCRATCH, R_CAP, R_CALLS, R_REFRESHES,
+ R_NPATCH, R_OVERFLOW, R_SCALED) = range(29)
+INT_WIDTH = 32
+# float row of a slot: parameters, state, then MAX_PATCHES x (qx, qz, nx, nz, sx, sz)
+(F_X0, F_Z0, F_L, F_COS, F_SIN, F_RADIUS, F_RATE, F_DAMPING, F_MARGIN, F_SPEED, F_XREF0, F_REFRESH, F_DRUM_R,
+ F_OMEGA, F_PATCH_TIME, F_NEXT_REFRESH, F_LAST_X, F_REFRESH_DISTANCE, F_PIECE, F_DAMPER_SCALE) = range(20)
+F_PATCHES = 24
+FLOAT_WIDTH = F_PATCHES + 6 * MAX_PATCHES
+
+_INTS = np.zeros((SLOTS, INT_WIDTH), dtype=np.int64)
+_FLOATS = np.zeros((SLOTS, FLOAT_WIDTH), dtype=np.float64)
+_LAW_INTS = np.zeros((SLOTS, LAW_INT_WIDTH), dtype=np.int64)
+_LAW_FLOATS = np.zeros((SLOTS, LAW_FLOAT_WIDTH), dtype=np.float64)
+M_USED, M_INTS, M_FLOATS, M_LAW_INTS, M_LAW_FLOATS, M_QPOS, M_QVEL, M_ACT, M_CTRL, M_TIME = range(10)
+META_WIDTH = 10
+_META = np.zeros(META_WIDTH, dtype=np.int64)
+_META[M_INTS], _META[M_FLOATS] = _INTS.ctypes.data, _FLOATS.ctypes.data
+_META[M_LAW_INTS], _META[M_LAW_FLOATS] = _LAW_INTS.ctypes.data, _LAW_FLOATS.ctypes.data
+REGISTRY_SYMBOL = "mtbmj_rolling_registry_v1"
+_OWNED = np.zeros(SLOTS, dtype=bool)
+_REGISTRY_LOCK = threading.Lock()
+
+
+class UnsupportedRolling(TypeError):
+    """A tire or terrain this module cannot compile (the Python path still runs it)."""
+
+
+COMPILE_SECONDS: float | None = None
+if _numba is not None:
+    import llvmlite.binding as _llvm
+    from llvmlite import ir as _ir
+    from numba import types as _t
+    from numba.extending import intrinsic as _intrinsic
+
+    _compile_start = time.perf_counter()
+    _llvm.add_symbol(REGISTRY_SYMBOL, _META.ctypes.data)
+
+    _address_of, _f64_pointer, _i64_pointer, _pointer_field = (
+        _c._address_of, _c._f64_pointer, _c._i64_pointer, _c._pointer_field)
+    _fork_force, _state_rate = _c.fork_force, _c.state_rate
+    _spring_force, _damper_force, _friction_force = _c._spring_force, _c._damper_force, _c._friction_force
+
+    @_intrinsic
+    def _registry(typingctx, index):
+        """Entry ``index`` of this module's registry header (external symbol ``REGISTRY_SYMBOL``)."""
+        def codegen(context, builder, signature, args):
+            module = builder.module
+            table = _ir.ArrayType(_ir.IntType(64), META_WIDTH)
+            try:
+                symbol = module.get_global(REGISTRY_SYMBOL)
+            except KeyError:
+                symbol = _ir.GlobalVariable(module, table, REGISTRY_SYMBOL)
+                symbol.linkage = "external"
+            at = builder.gep(symbol, [_ir.Constant(_ir.IntType(32), 0), args[0]])
+            return builder.load(at)
+        return _t.int64(_t.intp), codegen
+
+    _jit = dict(cache=True, error_model="numpy", nogil=True)
+
+    @_numba.njit(**_jit)
+    def _clip01(value):
+        """np.clip(value, 0.0, 1.0)"""
+        if value < 0.0:
+            return 0.0
+        if value > 1.0:
+            return 1.0
+        return value
+
+    @_numba.njit(**_jit)
+    def static_window(X, Z, n, x_lo, x_hi, PX, PZ):
+        """Terrain.polyline(x_lo, x_hi) into PX, PZ; returns the number of points."""
+        lo, hi = 0, n
+        while lo < hi:  # np.searchsorted(X, x_lo, side="left")
+            mid = (lo + hi) >> 1
+            if X[mid] < x_lo:
+                lo = mid + 1
+            else:
+                hi = mid
+        i = max(lo - 1, 0)
+        lo, hi = 0, n
+        while lo < hi:  # np.searchsorted(X, x_hi, side="right")
+            mid = (lo + hi) >> 1
+            if X[mid] <= x_hi:
+                lo = mid + 1
+            else:
+                hi = mid
+        j = min(lo + 1, n)
+        m = 0
+        if X[i] > x_lo:
+            PX[0] = x_lo - 1.0
+            PZ[0] = Z[i]
+            m = 1
+        for k in range(i, j):
+            PX[m] = X[k]
+            PZ[m] = Z[k]
+            m += 1
+        if X[j - 1] < x_hi:
+            PX[m] = x_hi + 1.0
+            PZ[m] = Z[j - 1]
+            m += 1
+        return m
+
+    @_numba.njit(**_jit)
+    def drum_window(A, RAD, n, omega, radius, t, x_lo, x_hi, PX, PZ, W, W2, J, J2):
+        """DrumTerrain.polyline(x_lo, x_hi, t) into PX, PZ (W, W2, J, J2: scratch of n)."""
+        wt = omega * t
+        lim = math.asin(min(1.0, max(abs(x_lo), abs(x_hi)) / radius)) + 0.05
+        # Candidates: the angles (sorted ascending) within lim (+ a margin far above round-off)
+        # of wt modulo 2 pi, found by bisection, in index order; the exact test of
+        # DrumTerrain.polyline then decides on each.
+        centre = (wt + math.pi) % (2 * math.pi) - math.pi
+        reach = lim + 1e-6
+        m = 0
+        turn = 2 * math.pi
+        first = int(math.floor((A[0] - centre - reach) / turn))
+        last = int(math.ceil((A[n - 1] - centre + reach) / turn))
+        for q in range(first, last + 1):
+            shift = q * turn
+            lo_angle = centre + shift - reach
+            hi_angle = centre + shift + reach
+            if hi_angle < A[0] or lo_angle > A[n - 1]:
+                continue
+            lo, hi = 0, n
+            while lo < hi:  # first index with A >= lo_angle
+                mid = (lo + hi) >> 1
+                if A[mid] < lo_angle:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            for k in range(lo, n):
+                if A[k] > hi_angle:
+                    break
+                w = (A[k] - wt + math.pi) % (2 * math.pi) - math.pi
+                if abs(w) <= lim:
+                    W[m] = w
+                    J[m] = k
+                    m += 1
+        # np.argsort(kind="stable"): the kept angles are a rotated sorted run; rotate at the
+        # first descent, then an insertion sort on (angle, index) (linear when already sorted)
+        start = 0
+        for k in range(1, m):
+            if W[k] < W[k - 1]:
+                start = k
+                break
+        for k in range(m):
+            W2[k] = W[(start + k) % m]
+            J2[k] = J[(start + k) % m]
+        for k in range(1, m):
+            w, j = W2[k], J2[k]
+            i = k - 1
+            while i >= 0 and (W2[i] > w or (W2[i] == w and J2[i] > j)):
+                W2[i + 1] = W2[i]
+                J2[i + 1] = J2[i]
+                i -= 1
+            W2[i + 1] = w
+            J2[i + 1] = j
+        for k in range(m):
+            a = W2[k]
+            r = RAD[J2[k]]
+            PX[k] = r * math.sin(a)
+            PZ[k] = r * math.cos(a) - radius
+        return m
+
+    @_numba.njit(**_jit)
+    def _emit(F, I, best, bx, bz, cx, cz):
+        if best <= 1e-9:
+            return
+        p = I[R_NPATCH]
+        if p >= MAX_PATCHES:
+            I[R_OVERFLOW] = 1
+            return
+        o = F_PATCHES + 6 * p
+        F[o] = bx
+        F[o + 1] = bz
+        F[o + 2] = (cx - bx) / best
+        F[o + 3] = (cz - bz) / best
+        if I[R_DRUM]:  # DrumTerrain.surface_velocity
+            w = F[F_OMEGA]
+            F[o + 4] = -w * (bz + F[F_DRUM_R])
+            F[o + 5] = w * bx
+        else:
+            F[o + 4] = 0.0
+            F[o + 5] = 0.0
+        I[R_NPATCH] = p + 1
+
+    @_numba.njit(**_jit)
+    def find_patches(I, F, PX, PZ, m, cx, cz):
+        """RadialTire.patches(cx, cz) over the polyline PX[:m], PZ[:m], streamed piece by piece
+        (RadialTire.segment_distances), into the slot's patch rows."""
+        I[R_NPATCH] = 0
+        reach = F[F_RADIUS] + F[F_MARGIN]
+        piece = F[F_PIECE]
+        # A segment whose bounding box is farther than reach (with a margin far above round-off)
+        # has no piece near the axle: skipping its pieces changes nothing but the time.
+        far2 = (reach * (1.0 + 1e-9)) ** 2
+        in_run = False
+        best = bx = bz = 0.0
+        for k in range(m - 1):
+            ax = PX[k]
+            az = PZ[k]
+            bx1 = PX[k + 1]
+            bz1 = PZ[k + 1]
+            gx = max(min(ax, bx1) - cx, cx - max(ax, bx1), 0.0)
+            gz = max(min(az, bz1) - cz, cz - max(az, bz1), 0.0)
+            if gx * gx + gz * gz > far2:
+                if in_run:
+                    in_run = False
+                    _emit(F, I, best, bx, bz, cx, cz)
+                continue
+            ex = bx1 - ax
+            ez = bz1 - az
+            if ex != 0.0:
+                t0 = _clip01((cx - reach - ax) / ex)
+                t1 = _clip01((cx + reach - ax) / ex)
+            else:
+                t0 = 0.0
+                t1 = 1.0
+            ax, az, ex, ez = ax + t0 * ex, az + t0 * ez, (t1 - t0) * ex, (t1 - t0) * ez
+            length = math.hypot(ex, ez)
+            kk = int(max(1.0, math.ceil(length / piece)))
+            for p in range(kk):
+                f0 = p / kk
+                f1 = f0 + 1.0 / kk
+                pax = ax + f0 * ex
+                paz = az + f0 * ez
+                pex = (f1 - f0) * ex
+                pez = (f1 - f0) * ez
+                length2 = pex * pex + pez * pez
+                if not (length2 > 0.0):
+                    length2 = 1.0
+                s = _clip01(((cx - pax) * pex + (cz - paz) * pez) / length2)
+                qx = pax + s * pex
+                qz = paz + s * pez
+                d = math.hypot(cx - qx, cz - qz)
+                if d < reach:
+                    if not in_run:
+                        in_run = True
+                        best, bx, bz = d, qx, qz
+                    elif d < best:
+                        best, bx, bz = d, qx, qz
+                elif in_run:
+                    in_run = False
+                    _emit(F, I, best, bx, bz, cx, cz)
+        if in_run:
+            _emit(F, I, best, bx, bz, cx, cz)
+
+    @_numba.njit(**_jit)
+    def refresh_patches(I, F, cx, cz, t):
+        """The patch search of RollCallback at a refresh, on the slot's terrain arrays."""
+        n = I[R_NPTS]
+        cap = I[R_CAP]
+        reach = F[F_RADIUS] + F[F_MARGIN]
+        S = _numba.carray(_f64_pointer(I[R_SCRATCH]), (4 * cap,))
+        PX, PZ = S[:cap], S[cap:2 * cap]
+        A = _numba.carray(_f64_pointer(I[R_TX]), (n,))
+        B = _numba.carray(_f64_pointer(I[R_TZ]), (n,))
+        if I[R_DRUM]:
+            J = _numba.carray(_i64_pointer(I[R_ISCRATCH]), (2 * cap,))
+            m = drum_window(A, B, n, F[F_OMEGA], F[F_DRUM_R], t, cx - reach, cx + reach, PX, PZ,
+                            S[2 * cap:3 * cap], S[3 * cap:], J[:cap], J[cap:])
+        else:
+            m = static_window(A, B, n, cx - reach, cx + reach, PX, PZ)
+        find_patches(I, F, PX, PZ, m, cx, cz)
+
+    @_numba.cfunc(_t.void(_t.voidptr, _t.voidptr), cache=True, error_model="numpy")
+    def _dispatch(m, d):
+        model = _address_of(m)
+        ints = _numba.carray(_i64_pointer(_registry(M_INTS)), (SLOTS, INT_WIDTH))
+        slot = -1
+        for s in range(_registry(M_USED)):
+            if ints[s, R_MODEL] == model:
+                slot = s
+                break
+        if slot < 0:
+            return  # not one of ours: leave the model alone
+        I = ints[slot]
+        F = _numba.carray(_f64_pointer(_registry(M_FLOATS) + 8 * FLOAT_WIDTH * slot), (FLOAT_WIDTH,))
+        LI = _numba.carray(_i64_pointer(_registry(M_LAW_INTS) + 8 * LAW_INT_WIDTH * slot), (LAW_INT_WIDTH,))
+        LP = _numba.carray(_f64_pointer(_registry(M_LAW_FLOATS) + 8 * LAW_FLOAT_WIDTH * slot), (LAW_FLOAT_WIDTH,))
+        I[R_CALLS] += 1
+        qpos = _pointer_field(d, _registry(M_QPOS))
+        qvel = _pointer_field(d, _registry(M_QVEL))
+        ctrl = _pointer_field(d, _registry(M_CTRL))
+        t = _f64_pointer(_address_of(d) + _registry(M_TIME))[0]
+        # the fork (RollCallback: law.force, or the semi-active scaled damper)
+        x = qpos[I[R_FQ]]
+        v = qvel[I[R_FV]]
+        z = _pointer_field(d, _registry(M_ACT))[I[R_ACT]] if I[R_HAS_STATE] else 0.0
+        if I[R_SCALED]:
+            force = _spring_force(LI, LP, x, v) + F[F_DAMPER_SCALE] * _damper_force(LI, LP, v) + \
+                _friction_force(LI, LP, v, z)
+        else:
+            force = _fork_force(LI, LP, x, v, z)
+        if I[R_HAS_STATE]:
+            ctrl[I[R_A_STATE]] = _state_rate(LI, LP, v, z)
+        ctrl[I[R_A_FORK]] = -force
+        # the axle (RollCallback.axle_state)
+        qf = qpos[I[R_FQ]]
+        vf = qvel[I[R_FV]]
+        c = F[F_COS]
+        sn = F[F_SIN]
+        cx = F[F_X0] + qpos[I[R_XQ]] + (F[F_L] - qf) * c
+        cz = F[F_Z0] + qpos[I[R_ZQ]] - (F[F_L] - qf) * sn
+        vx = qvel[I[R_XV]] - vf * c
+        vz = qvel[I[R_ZV]] + vf * sn
+        if t >= F[F_NEXT_REFRESH] or abs(cx - F[F_LAST_X]) > F[F_REFRESH_DISTANCE]:
+            refresh_patches(I, F, cx, cz, t)
+            F[F_PATCH_TIME] = t
+            F[F_NEXT_REFRESH] = t + F[F_REFRESH] - 1e-12
+            F[F_LAST_X] = cx
+            I[R_REFRESHES] += 1
+        # the tire (RadialTire.force), patches moved with a moving surface since the refresh
+        r = F[F_RADIUS]
+        k = F[F_RATE]
+        b = F[F_DAMPING]
+        npatch = I[R_NPATCH]
+        shift = npatch > 0 and I[R_MOVING] != 0
+        dt = t - F[F_PATCH_TIME]
+        fx = 0.0
+        fz = 0.0
+        deepest = -math.inf
+        for p in range(npatch):
+            o = F_PATCHES + 6 * p
+            qx, qz, nx, nz, sx, sz = F[o], F[o + 1], F[o + 2], F[o + 3], F[o + 4], F[o + 5]
+            if shift:
+                qx = qx + sx * dt
+                qz = qz + sz * dt
+            dp = r - ((cx - qx) * nx + (cz - qz) * nz)
+            rate = -((vx - sx) * nx + (vz - sz) * nz)
+            if dp > deepest:
+                deepest = dp
+            if dp > 0.0:
+                f = k * dp + b * rate
+                if f > 0.0:
+                    fx += f * nx
+                    fz += f * nz
+        if deepest == -math.inf:
+            deepest = r - F[F_RADIUS] - F[F_MARGIN]
+        ctrl[I[R_A_PROBE]] = deepest
+        ctrl[I[R_A_TX]] = fx
+        ctrl[I[R_A_TZ]] = fz
+        ctrl[I[R_A_DP]] = F[F_XREF0] + F[F_SPEED] * t
+        ctrl[I[R_A_DV]] = F[F_SPEED]
+
+    COMPILE_SECONDS = time.perf_counter() - _compile_start
+
+_DISPATCHER = None
+_DISPATCHER_LOCK = threading.Lock()
+
+
+def _dispatcher(model):
+    """The compiled rolling dispatcher, its registry header filled with the mjData offsets
+    (checked against live arrays of ``model`` by ``controllers.compiled`` on first use)."""
+    global _DISPATCHER
+    with _DISPATCHER_LOCK:
+        if _DISPATCHER is None:
+            if _numba is None:
+                raise RuntimeError(FALLBACK_MESSAGE)
+            _c._dispatcher(model)  # runs (once) the live layout check; raises RuntimeError on mismatch
+            layout = mjdata_layout()
+            for index, name in ((M_QPOS, "qpos"), (M_QVEL, "qvel"), (M_ACT, "act"), (M_CTRL, "ctrl"),
+                                (M_TIME, "time")):
+                _META[index] = layout[name]
+            _DISPATCHER = _dispatch
+        return _DISPATCHER
+
+
+def available() -> bool:
+    """True when the compiled rolling path can run here."""
+    return unavailable_reason() is None
+
+
+def _release(slot: int) -> None:
+    with _REGISTRY_LOCK:
+        _INTS[slot, R_MODEL] = 0  # first: the dispatcher stops serving the slot
+        _INTS[slot] = 0
+        _FLOATS[slot] = 0.0
+        _LAW_INTS[slot] = 0
+        _LAW_FLOATS[slot] = 0.0
+        _OWNED[slot] = False
+        while _META[M_USED] > 0 and not _OWNED[_META[M_USED] - 1]:
+            _META[M_USED] -= 1
+
+
+def _float_field(index: int, doc: str):
+    def get(self):
+        return float(_FLOATS[self.slot, index])
+
+    def set(self, value):
+        _FLOATS[self.slot, index] = float(value)
+
+    return property(get, set, doc=doc)
+
+
+def _int_field(index: int, doc: str):
+    def get(self):
+        return int(_INTS[self.slot, index]) if self._finalizer.alive else self._closed.get(index, 0)
+
+    def set(self, value):
+        _INTS[self.slot, index] = int(value)
+
+    return property(get, set, doc=doc)
+
+
+class CompiledRollCallback(ctypes._CFuncPtr):
+    """Compiled counterpart of ``mtbmj.rolling.RollCallback`` (same constructor, same attributes):
+    a C function pointer for ``mujoco.set_mjcb_control`` / ``controllers.installed`` that writes
+    the fork force, the LuGre state rate, the tire force and deflection probe and the speed
+    servo's references into ``ctrl``.
+
+    It acts only on ``front.model`` (a newer callback for the same model retires it). ``speed``,
+    ``x_ref0``, ``refresh`` and ``damper_scale`` can be changed between steps; ``reset()`` forgets
+    the contact patches (the next step recomputes them); ``calls``, ``refreshes`` and
+    ``overflowed`` are read back from the compiled slot.
+    """
+
+    _flags_ = ctypes._FUNCFLAG_CDECL
+    _argtypes_ = (ctypes.c_void_p, ctypes.c_void_p)
+    _restype_ = None
+
+    def __new__(cls, front, fork_law, tire, speed, x_ref0, refresh=None):
+        reason = unavailable_reason()
+        if reason is not None:
+            raise RuntimeError(reason)
+        return super().__new__(cls, _dispatcher(front.model).address)
+
+    def __init__(self, front, fork_law, tire, speed, x_ref0, refresh=None):
+        from mtbmj import terrain as terrain_mod
+        from mtbmj import tire_model
+
+        law_ints, law_floats = flatten(fork_law)  # UnsupportedLaw for a law with no compiled form
+        if type(tire) is not tire_model.RadialTire:
+            raise UnsupportedRolling(f"tire {type(tire).__name__} has no compiled form")
+        ter = tire.terrain
+        drum = type(ter) is terrain_mod.DrumTerrain
+        if not drum and type(ter) is not terrain_mod.Terrain:
+            raise UnsupportedRolling(f"terrain {type(ter).__name__} has no compiled form")
+        m = front.model
+        self._model = m  # keeps the mjModel (and so its address) alive while the slot is used
+        self._address = m._address
+        self.front, self.law, self.tire = front, fork_law, tire
+        j = lambda name: (int(m.joint(name).qposadr[0]), int(m.joint(name).dofadr[0]))  # noqa: E731
+        self.xq, self.xv = j("chassis_x")
+        self.zq, self.zv = j("chassis_z")
+        self.fq, self.fv = j("fork")
+        a = lambda name: int(m.actuator(name).id)  # noqa: E731
+        self.a_state, self.a_fork = a("friction_state"), a("fork_force")
+        self.a_dp, self.a_dv, self.a_tx, self.a_tz = a("drive_position"), a("drive_velocity"), a("tire_x"), a("tire_z")
+        self.a_probe = a("tire_deflection_probe")
+        self.act_index = int(m.actuator_actadr[self.a_state])
+        self.has_state = fork_law.has_state
+        self.cos, self.sin = front.axis
+        if drum:
+            self._ta = np.ascontiguousarray(ter.polar[:, 0], dtype=np.float64)
+            self._tb = np.ascontiguousarray(ter.polar[:, 1], dtype=np.float64)
+        else:
+            self._ta = np.ascontiguousarray(ter.x, dtype=np.float64)
+            self._tb = np.ascontiguousarray(ter.z, dtype=np.float64)
+        n = int(self._ta.size)
+        if n < 1 or self._tb.size != n:
+            raise UnsupportedRolling("terrain profile is empty or ragged")
+        if not np.all(np.diff(self._ta) >= 0.0):  # the bisections assume sorted x (drum: angles)
+            raise UnsupportedRolling("terrain profile is not sorted")
+        cap = n + 2
+        self._scratch = np.zeros(4 * cap, dtype=np.float64)
+        self._iscratch = np.zeros(2 * cap, dtype=np.int64)
+        self._closed: dict = {}
+
+        ints = np.zeros(INT_WIDTH, dtype=np.int64)
+        ints[[R_XQ, R_XV, R_ZQ, R_ZV, R_FQ, R_FV]] = [self.xq, self.xv, self.zq, self.zv, self.fq, self.fv]
+        ints[[R_A_STATE, R_A_FORK, R_A_DP, R_A_DV, R_A_TX, R_A_TZ, R_A_PROBE, R_ACT]] = [
+            self.a_state, self.a_fork, self.a_dp, self.a_dv, self.a_tx, self.a_tz, self.a_probe, self.act_index]
+        ints[R_HAS_STATE] = int(bool(self.has_state))
+        ints[R_DRUM], ints[R_MOVING] = int(drum), int(bool(ter.moving))
+        ints[R_NPTS], ints[R_CAP] = n, cap
+        ints[R_TX], ints[R_TZ] = self._ta.ctypes.data, self._tb.ctypes.data
+        ints[R_SCRATCH], ints[R_ISCRATCH] = self._scratch.ctypes.data, self._iscratch.ctypes.data
+        floats = np.zeros(FLOAT_WIDTH, dtype=np.float64)
+        floats[[F_X0, F_Z0, F_L, F_COS, F_SIN]] = [front.chassis_x0, front.chassis_z0, front.fork_length,
+                                                    self.cos, self.sin]
+        floats[[F_RADIUS, F_RATE, F_DAMPING, F_MARGIN]] = [tire.radius, tire.rate, tire.damping, tire.margin]
+        floats[F_SPEED], floats[F_XREF0] = float(speed), float(x_ref0)
+        floats[F_REFRESH] = float(tire_model.REFRESH_S if refresh is None else refresh)
+        floats[F_REFRESH_DISTANCE], floats[F_PIECE] = tire_model.REFRESH_DISTANCE_M, tire_model.PIECE_M
+        if drum:
+            floats[F_DRUM_R], floats[F_OMEGA] = ter.radius, ter.omega
+        floats[F_NEXT_REFRESH], floats[F_LAST_X] = -math.inf, math.inf
+        with _REGISTRY_LOCK:
+            free = np.flatnonzero(~_OWNED)
+            if not free.size:
+                raise RuntimeError(f"more than {SLOTS} compiled rolling callbacks alive at once")
+            slot = int(free[0])
+            _OWNED[slot] = True
+            _INTS[_INTS[:, R_MODEL] == m._address, R_MODEL] = 0  # retire older ones of this model
+            _LAW_INTS[slot] = 0
+            _LAW_INTS[slot, :len(law_ints)] = law_ints
+            _LAW_FLOATS[slot] = 0.0
+            _LAW_FLOATS[slot, :len(law_floats)] = law_floats
+            _FLOATS[slot] = floats
+            _INTS[slot] = ints
+            _INTS[slot, R_MODEL] = m._address  # last: the slot goes live complete
+            _META[M_USED] = max(_META[M_USED], slot + 1)
+        self.slot = slot
+        self._finalizer = weakref.finalize(self, _release, slot)
+
+    speed = _float_field(F_SPEED, "servo speed (m/s)")
+    x_ref0 = _float_field(F_XREF0, "servo reference at t = 0 (m)")
+    refresh = _float_field(F_REFRESH, "geometry refresh interval (s)")
+    patch_time = _float_field(F_PATCH_TIME, "simulated time of the last refresh (s)")
+    next_refresh = _float_field(F_NEXT_REFRESH, "time of the next refresh (s)")
+    last_x = _float_field(F_LAST_X, "axle x at the last refresh (m)")
+    calls = _int_field(R_CALLS, "calls for this callback's model")
+    refreshes = _int_field(R_REFRESHES, "geometry refreshes")
+
+    @property
+    def overflowed(self) -> bool:
+        """True if more than MAX_PATCHES patches were met (the run must be redone in Python)."""
+        return bool(self._int(R_OVERFLOW))
+
+    def _int(self, index):
+        return int(_INTS[self.slot, index]) if self._finalizer.alive else self._closed.get(index, 0)
+
+    @property
+    def damper_scale(self):
+        """None (passive) or the factor on the hydraulic damper force (semi-active command)."""
+        return float(_FLOATS[self.slot, F_DAMPER_SCALE]) if _INTS[self.slot, R_SCALED] else None
+
+    @damper_scale.setter
+    def damper_scale(self, value) -> None:
+        if value is None:
+            _INTS[self.slot, R_SCALED] = 0
+        else:
+            _FLOATS[self.slot, F_DAMPER_SCALE] = float(value)
+            _INTS[self.slot, R_SCALED] = 1
+
+    @property
+    def patches(self) -> list[tuple[float, ...]]:
+        """The contact patches of the last refresh: (qx, qz, nx, nz, surface vx, surface vz)."""
+        n = int(_INTS[self.slot, R_NPATCH])
+        rows = _FLOATS[self.slot, F_PATCHES:F_PATCHES + 6 * n].reshape(n, 6)
+        return [tuple(float(v) for v in row) for row in rows]
+
+    @property
+    def active(self) -> bool:
+        return bool(_OWNED[self.slot]) and _INTS[self.slot, R_MODEL] == self._address and self._finalizer.alive
+
+    def reset(self) -> None:
+        """Forget the patches: the next step recomputes them (RollCallback.reset)."""
+        _INTS[self.slot, R_NPATCH] = 0
+        _FLOATS[self.slot, F_NEXT_REFRESH] = -math.inf
+        _FLOATS[self.slot, F_LAST_X] = math.inf
+
+    def bind(self, data) -> None:
+        """No-op (``RollCallback`` caches numpy views; the compiled path reads ``mjData*``)."""
+
+    def axle_state(self, qpos, qvel):
+        from mtbmj.rolling import RollCallback
+
+        return RollCallback.axle_state(self, qpos, qvel)
+
+    @property
+    def address(self) -> int:
+        return ctypes.cast(self, ctypes.c_void_p).value
+
+    def __call__(self, m, d):
+        """Call the compiled function from Python (as ``RollCallback(m, d)``)."""
+        super().__call__(m._address, d._address)
+
+    def close(self) -> None:
+        """Free the registry slot now (also done when the object is collected)."""
+        if self._finalizer.alive:
+            self._closed = {i: int(_INTS[self.slot, i]) for i in (R_CALLS, R_REFRESHES, R_OVERFLOW)}
+            self._finalizer()
+
+    def __repr__(self):
+        return f"<CompiledRollCallback slot={getattr(self, 'slot', None)} law={getattr(self, 'law', None)!r}>"
+
+
+def make_roll_callback(front, fork_law, tire, speed, x_ref0, refresh=None, prefer_compiled: bool = True):
+    """``CompiledRollCallback`` when possible, else the Python ``RollCallback`` (with a warning,
+    once per reason: numba missing, layout not verifiable, a law/tire/terrain with no compiled form)."""
+    from mtbmj.rolling import RollCallback
+    from mtbmj.tire_model import REFRESH_S
+
+    refresh = REFRESH_S if refresh is None else refresh
+    if prefer_compiled:
+        reason = unavailable_reason()
+        if reason is None:
+            try:
+                return CompiledRollCallback(front, fork_law, tire, speed, x_ref0, refresh)
+            except (UnsupportedLaw, UnsupportedRolling) as error:
+                _c._warn_once(f"{error}: using the Python rolling callback")
+            except RuntimeError as error:  # the mjData layout check failed
+                _c._warn_once(str(error))
+        else:
+            _c._warn_once(reason)
+    return RollCallback(front, fork_law, tire, speed, x_ref0, refresh)
+
+
+__all__ = ["CompiledRollCallback", "make_roll_callback", "available", "UnsupportedRolling", "MAX_PATCHES"]
