@@ -2,10 +2,16 @@
 table written) against ``mujoco.rollout`` of the bare scene for the same variants.
 
 The issue's figure is a 10 000-variant S12 sweep (1.5 s drops, default settings) on 2 cores,
-compared with the bare-scene rollout (target <= 1.2x). On the Python force-law path that takes
-about an hour, so ``--variants`` sets the size:
+compared with the bare-scene rollout (target <= 1.2x). ``--variants`` sets the size:
 
     /work/venv/bin/python benchmarks/sweep.py --variants 200 [--workers 2] [--duration 1.5]
+        [--runner batch|single] [--threads 1]
+
+``--runner batch`` (the default: ``mtbmj.batch.run_batch_rollout``, variants of a batch stepped
+together through ``mujoco.rollout`` on the compiled laws) or ``single`` (``run_drop`` per
+variant); ``--threads``: rollout threads per worker process. The per-variant costs of the batched
+runner's phases (prepare, step, post-process) are measured in-process on ``--phase-variants``
+variants against the bare rollout of the same variants on one thread.
 
 Bare scene: ``mtbmj.scene.build(compose.setup(load_config("S12")))`` with no control callback
 (no fork law: MuJoCo's own contact and joints only), one rollout per variant from tire touch at
@@ -39,18 +45,63 @@ def variants(n: int, seed: int) -> list[dict]:
     return sweep.sample([sweep.parse_vary(r, count=False) for r in RANGES], n, "lhs", seed)
 
 
-def run_sweep(vs, workers: int, duration, out: Path):
+def run_sweep(vs, workers: int, duration, out: Path, runner: str = "batch", threads: int = 1):
     start = time.perf_counter()
-    result = sweep.run_sweep("S12", vs, out, duration=duration, workers=workers, progress=True)
+    result = sweep.run_sweep("S12", vs, out, duration=duration, workers=workers, progress=True, runner=runner,
+                             threads=threads)
     return time.perf_counter() - start, result
 
 
-def bare_rollout(vs, threads: int, duration, chunk: int = 32) -> tuple[float, int]:
-    """Wall time of the bare-scene rollouts of ``vs`` (scene built once, outside the timing)."""
+def phase_costs(vs, duration) -> dict:
+    """Per-variant wall time (ms) of the batched runner's phases, one process, one thread, against
+    the bare-scene rollout of the same variants (best of 3 each, interleaved)."""
+    from mtbmj import batch
+
+    cfg = mtbmj.load_config("S12")
+    variants = sweep.plan(cfg, vs, duration=duration)
+    job = sweep.BatchJob(cfg, "mujoco", duration, variants)
+    batch.run_batch_rollout(job)  # warm-up (numba cache load, scene cache)
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    best = {}
+
+    def note(name, seconds):
+        best[name] = min(best.get(name, float("inf")), seconds * 1e3 / len(vs))
+
+    for _ in range(3):
+        t0 = time.perf_counter()
+        runs = [batch._prepare(job, v, spec) for v in variants]
+        t1 = time.perf_counter()
+        datas = [mujoco.MjData(runs[0].scene.model)]
+        with installed(runs[0].callback):
+            batch._step_group(runs, datas, None, spec)
+        t2 = time.perf_counter()
+        for r in runs:
+            batch.summarize(r)
+        t3 = time.perf_counter()
+        note("prepare_ms", t1 - t0)
+        note("step_ms", t2 - t1)
+        note("post_process_ms", t3 - t2)
+        note("bare_rollout_ms", bare_rollout(vs, 1, duration)[0])
+        t4 = time.perf_counter()
+        batch.run_batch_rollout(job)
+        note("whole_runner_ms", time.perf_counter() - t4)
+    best["post_process_share_of_runner"] = best["post_process_ms"] / best["whole_runner_ms"]
+    best["runner_over_bare"] = best["whole_runner_ms"] / best["bare_rollout_ms"]
+    return best
+
+
+def bare_rollout(vs, threads: int, duration, chunk: int = 32, builtin: bool = False) -> tuple[float, int]:
+    """Wall time of the bare-scene rollouts of ``vs`` (scene built once, outside the timing).
+    ``builtin``: the fork as MuJoCo joint stiffness/preload/damping (``benchmarks/compiled.py``'s
+    built-in-elements scene, dynamics close to the real fork) instead of no fork force at all."""
     base = mtbmj.load_config("S12")
     setup = compose.setup(base)
     sc = scene.build(setup)
     model = sc.model
+    if builtin:
+        from compiled import builtin_model  # benchmarks/compiled.py
+
+        model = builtin_model(sc, setup)
     steps = int(round((duration or setup.duration) / setup.timestep))
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     states = []
@@ -84,32 +135,51 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, help="sweep output directory (default: a temporary one)")
     parser.add_argument("--skip-rollout", action="store_true")
+    parser.add_argument("--runner", choices=sweep.RUNNERS, default="batch")
+    parser.add_argument("--threads", type=int, default=1, help="rollout threads per worker process (default 1)")
+    parser.add_argument("--phase-variants", type=int, default=32, help="variants for the phase costs (0: skip)")
+    parser.add_argument("--name", help="results file name (default sweep.json)")
     args = parser.parse_args()
 
     vs = variants(args.variants, args.seed)
     with tempfile.TemporaryDirectory() as tmp:
         out = args.out or Path(tmp) / "sweep"
-        wall, result = run_sweep(vs, args.workers, args.duration, out)
+        wall, result = run_sweep(vs, args.workers, args.duration, out, args.runner, args.threads)
         table_bytes = (out / sweep.TABLE).stat().st_size
     drop_s = float(result.table["wall_time_s"].median())
-    print(f"S12 sweep: {args.variants} variants on {args.workers} processes in {wall:.2f} s end to end "
+    print(f"S12 sweep ({args.runner} runner, {args.threads} rollout thread(s) per process): {args.variants} variants "
+          f"on {args.workers} processes in {wall:.2f} s end to end "
           f"({args.variants / wall:.1f} variants/s; median drop {drop_s:.3f} s in its worker; "
           f"{result.failed} failed; table {table_bytes / 1e3:.0f} kB)")
-    payload = {"variants": args.variants, "workers": args.workers, "duration_s": args.duration or 1.5,
+    payload = {"variants": args.variants, "workers": args.workers, "runner": args.runner,
+               "threads_per_process": args.threads, "duration_s": args.duration or 1.5,
                "ranges": RANGES, "sweep_wall_s": wall, "variants_per_s": args.variants / wall,
                "median_drop_wall_s": drop_s, "failed": result.failed, "table_bytes": table_bytes}
     if not args.skip_rollout:
-        bare, steps = bare_rollout(vs, args.workers, args.duration)
+        bare, steps = bare_rollout(vs, args.workers * args.threads, args.duration)
         ratio = wall / bare
         print(f"bare-scene mujoco.rollout of the same {args.variants} variants ({steps} steps each, "
-              f"{args.workers} threads): {bare:.2f} s ({args.variants * steps / bare / 1e3:.0f} k steps/s); "
-              f"sweep / rollout = {ratio:.1f}x (issue target <= 1.2x, for the compiled path)")
+              f"{args.workers * args.threads} threads): {bare:.2f} s ({args.variants * steps / bare / 1e3:.0f} k steps/s, "
+              f"{args.variants / bare:.1f} drops/s); sweep / rollout = {ratio:.2f}x (target <= 1.2x), "
+              f"throughput ratio {bare / wall:.2f} (target >= 0.9)")
+        builtin, _ = bare_rollout(vs, args.workers * args.threads, args.duration, builtin=True)
+        print(f"built-in-elements scene rollout (fork as joint stiffness + damping, as benchmarks/compiled.py): "
+              f"{builtin:.2f} s; sweep / rollout = {wall / builtin:.2f}x, throughput ratio {builtin / wall:.2f}")
+        payload.update({"builtin_rollout_wall_s": builtin, "ratio_sweep_over_builtin_rollout": wall / builtin,
+                        "throughput_ratio_sweep_to_builtin_rollout": builtin / wall})
         payload.update({"bare_rollout_wall_s": bare, "steps_per_variant": steps,
-                        "bare_rollout_steps_per_s": args.variants * steps / bare, "ratio_sweep_over_rollout": ratio})
+                        "bare_rollout_steps_per_s": args.variants * steps / bare,
+                        "bare_rollout_drops_per_s": args.variants / bare, "ratio_sweep_over_rollout": ratio,
+                        "throughput_ratio_sweep_to_rollout": bare / wall})
+    if args.phase_variants and args.runner == "batch":
+        phases = phase_costs(vs[: args.phase_variants], args.duration)
+        payload["batch_runner_phases_per_variant"] = phases
+        print("batched runner, per variant (1 process, 1 thread): " + ", ".join(
+            f"{k} {v:.2f}" for k, v in phases.items()))
     estimate = 10000 / args.variants * wall
     payload["extrapolated_10000_variant_sweep_s"] = estimate
-    print(f"extrapolated 10 000-variant sweep on this path: {estimate / 60:.0f} min")
-    path = write_json(__file__, payload)
+    print(f"extrapolated 10 000-variant sweep on this path: {estimate / 60:.1f} min")
+    path = write_json(args.name or __file__, payload)
     print(f"wrote {path}")
 
 

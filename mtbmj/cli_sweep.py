@@ -62,13 +62,15 @@ def cmd_sweep(args) -> int:
 
     _check_common(args)
     _positive("--batch-size", args.batch_size)
+    _positive("--threads", args.threads)
     variants, how = variants_from_args(args)
     bar = SweepProgress(len(variants), enabled=not args.quiet)
     try:
         result = run_sweep(args.config, variants, args.out, engine=args.engine, duration=args.duration,
                            base_overrides=_overrides(args.set), workers=args.workers, batch_size=args.batch_size,
                            backend=args.backend, scheduler=args.scheduler, traces=args.traces, csv=args.csv,
-                           resume=args.resume, progress=bar, manifest_extra={"variants_from": how})
+                           resume=args.resume, progress=bar, manifest_extra={"variants_from": how},
+                           runner=args.runner, threads=args.threads)
     except KeyboardInterrupt:
         print(f"mtbmj: sweep interrupted; finished variants are journaled in {args.out / 'journal'}: "
               f"continue with the same command and --resume", file=sys.stderr)
@@ -132,6 +134,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--traces", action="store_true", help="also write the histories to traces.h5")
     p.add_argument("--csv", action="store_true", help="also write the table as sweep.csv")
     p.add_argument("--batch-size", type=int, help="variants per journaled batch (default: automatic, <= 16)")
+    p.add_argument("--runner", choices=("batch", "single"),
+                   help="batch: variants stepped together in mujoco.rollout on the compiled laws (default for "
+                        "--engine mujoco); single: one run_drop per variant")
+    p.add_argument("--threads", type=int, default=1, help="rollout threads per process with --runner batch (default 1)")
     p.set_defaults(func=cmd_sweep)
 
     p = subparsers.add_parser(

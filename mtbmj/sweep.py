@@ -20,10 +20,12 @@ table is assembled from the journal (one row per variant, in plan order) and wri
 atomically. A variant that fails (bad parameters, a run that diverges) is journaled with its
 reason and the sweep goes on.
 
-**Runners.** The work of one batch is ``runner(job: BatchJob) -> list[record]``; the default,
-:func:`run_batch`, calls ``job.drop`` (``mtbmj.drop.run_drop``) per variant. A batched rollout
-path replaces ``runner`` (see :func:`run_sweep`) without touching the journal, the table or the
-backends.
+**Runners.** The work of one batch is ``runner(job: BatchJob) -> list[record]``. For the MuJoCo
+engine the default is ``"batch"``, :func:`mtbmj.batch.run_batch_rollout` (the batch's variants
+stepped together through ``mujoco.rollout`` on the compiled force laws); ``"single"``,
+:func:`run_batch`, calls ``job.drop`` (``mtbmj.drop.run_drop``) per variant (the default for the
+ODE engine or with a custom ``drop``). Either gives the same records; the runner does not touch
+the journal, the table or the backends.
 """
 from __future__ import annotations
 
@@ -60,6 +62,7 @@ EVENTS = ("peak1", "topping", "peak2", "valley1", "peak3")
 NUMERIC_KINDS = ("pos", "nonneg")
 SAMPLING_METHODS = ("lhs", "sobol")
 BACKENDS = ("local", "dask")
+RUNNERS = ("batch", "single")
 TABLE = "sweep.parquet"
 TABLE_CSV = "sweep.csv"
 TRACES = "traces.h5"
@@ -259,6 +262,7 @@ class BatchJob:
     variants: list[Variant]
     traces: bool = False
     drop: Callable | None = None
+    threads: int = 1  # rollout threads per process (the batched runner, ``mtbmj.batch``)
 
 
 def _json_value(value: Any) -> Any:
@@ -613,13 +617,15 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
               engine: str = "mujoco", duration: float | None = None, base_overrides: Mapping | None = None,
               workers: int | None = None, batch_size: int | None = None, backend: str = "local",
               scheduler=None, traces: bool = False, csv: bool = False, resume: bool = False,
-              progress: bool | SweepProgress = False, runner: Callable[[BatchJob], list[dict]] = run_batch,
-              drop: Callable | None = None, manifest_extra: Mapping | None = None) -> SweepResult:
+              progress: bool | SweepProgress = False, runner: Callable[[BatchJob], list[dict]] | str | None = None,
+              drop: Callable | None = None, manifest_extra: Mapping | None = None, threads: int = 1) -> SweepResult:
     """Run ``variants`` (override sets) of ``config`` and write ``OUT/sweep.parquet`` (and
     ``sweep.csv``, ``traces.h5`` on request, ``sweep.json`` always).
 
-    ``runner(job)`` computes one batch (default :func:`run_batch`, which calls ``drop`` -
-    ``mtbmj.drop.run_drop`` - per variant); it must be a picklable top-level function. With
+    ``runner(job)`` computes one batch: ``"batch"`` (:func:`mtbmj.batch.run_batch_rollout`, the
+    default for engine "mujoco" without a custom ``drop``), ``"single"`` (:func:`run_batch`, which
+    calls ``drop`` - ``mtbmj.drop.run_drop`` - per variant) or a picklable top-level function.
+    ``threads``: rollout threads per worker process for the batched runner. With
     ``resume`` the journal in ``out_dir`` is reused and only missing variants run."""
     from .drop import ENGINES, resolve
 
@@ -634,8 +640,19 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
         raise ConfigError(f"--workers: must be at least 1, got {workers}")
     if batch_size is not None and batch_size < 1:
         raise ConfigError(f"--batch-size: must be at least 1, got {batch_size}")
+    if threads < 1:
+        raise ConfigError(f"threads: must be at least 1, got {threads}")
     if not variants:
         raise ConfigError("sweep: no variants")
+    if runner is None:
+        runner = "batch" if engine == "mujoco" and drop is None else "single"
+    if isinstance(runner, str):
+        if runner not in RUNNERS:
+            raise ConfigError(f"--runner: {runner!r} is not one of {', '.join(RUNNERS)}")
+        if runner == "batch":
+            from .batch import run_batch_rollout as runner
+        else:
+            runner = run_batch
     cfg = resolve(config, base_overrides)
     out = Path(out_dir)
     planned = plan(cfg, variants, engine, duration)
@@ -658,7 +675,7 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
     workers = workers or (os.cpu_count() or 1)
     if batch_size is None:
         batch_size = max(1, min(16, len(todo) // (workers * 8)))
-    jobs = [BatchJob(cfg, engine, duration, batch, traces, drop) for batch in _batches(todo, batch_size)]
+    jobs = [BatchJob(cfg, engine, duration, batch, traces, drop, threads) for batch in _batches(todo, batch_size)]
 
     bar = progress if isinstance(progress, SweepProgress) else SweepProgress(unique, reused, enabled=bool(progress))
     bar.total, bar.already = unique, reused

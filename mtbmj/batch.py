@@ -1,0 +1,393 @@
+"""Batched sweep runner: a batch of variants stepped together through ``mujoco.rollout`` on the
+compiled force laws, with a vectorised post-processing. A drop-in ``runner`` for
+``mtbmj.sweep.run_sweep`` (the default for the MuJoCo engine); records equal those of
+:func:`mtbmj.sweep.run_batch` (which calls ``run_drop`` per variant).
+
+How a batch runs
+----------------
+* **Prepare** each variant as ``run_drop`` does (overrides, ``compose.setup`` with its checks, the
+  scene, the initial state at tire touch), one ``mjModel`` per variant: ``mujoco.rollout`` takes a
+  list of models, one per initial state, and the compiled dispatcher
+  (``controllers.compiled``) serves each model's own fork law by its ``mjModel*``. Scenes are
+  compiled once per distinct geometry/mass/solver set and copied (the compiled model depends on
+  nothing else; the tire's solref is set per variant).
+* **Step** in rounds: every round advances all unfinished variants by the same number of steps in
+  one rollout call (``threads`` MjData, i.e. threads, per process). While a variant's tire law may
+  still switch, rounds are short (``SWITCH_ROUND`` steps): when the fork tops out inside a round,
+  the variant keeps its states up to that step, its model gets the new tire solref and it goes on
+  from there in the next round (steps past the switch are discarded, as the engine does). Chunk
+  boundaries do not change MuJoCo's results here (tested: bit-identical traces for any chunking),
+  so the batched traces equal the engine's.
+* **Post-process** each variant with only what the summary needs: the tire force along the trace
+  vectorised with numpy (the fork force is not part of the summary), the logger's filter and
+  decimation on the three displacement signals only, then ``events.summarize`` itself (the same
+  detector and rest/energy code as ``run_drop``).
+* **Anything unusual** (a bad parameter, a fork law without a compiled form, a MuJoCo warning, a
+  non-finite or runaway state, a numpy RuntimeWarning in the post-processing) sends the variant to
+  the single-variant path (``sweep.run_variant``), which records it exactly as the old runner
+  does, with its reason; the other variants of the batch go on.
+"""
+from __future__ import annotations
+
+import copy
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+from mujoco import rollout as _rollout
+from scipy import signal
+
+from . import compose, engine_mujoco, events
+from . import scene as scene_mod
+from .controllers import installed
+from .sweep import SIGNALS, BatchJob, Variant, flatten_summary, run_batch, run_variant
+from .trace import MAX_DISPLACEMENT_M, RawTrace
+
+SWITCH_ROUND = 400  # steps per round while some variant's tire law may still switch (waste vs rounds)
+MAX_ROUND = 20000  # steps per round otherwise
+ROUND_BUFFER_VALUES = 4_000_000  # cap on nbatch * nstep * nstate of one round's state buffer (32 MB)
+MAX_BATCH = 64  # variants stepped together (a larger job runs in slices)
+
+_SCENES: dict = {}  # per process: compiled scenes by what ``scene.build`` depends on
+_SCENE_CACHE_SIZE = 64
+
+
+def _scene_key(setup) -> tuple:
+    return (setup.timestep, setup.integrator, setup.gravity, setup.body_mass, setup.wheel_mass,
+            setup.fork_length, setup.tire_radius)
+
+
+def build_scene(setup) -> scene_mod.DropScene:
+    """``scene.build(setup)``, compiled once per distinct geometry/mass/solver set and copied."""
+    key = _scene_key(setup)
+    proto = _SCENES.get(key)
+    if proto is None:
+        proto = scene_mod.build(setup)
+        if len(_SCENES) >= _SCENE_CACHE_SIZE:
+            _SCENES.pop(next(iter(_SCENES)))
+        _SCENES[key] = proto
+    sc = copy.copy(proto)
+    sc.model = copy.deepcopy(proto.model)
+    first = setup.tire.values(0)
+    sc.set_tire(first.rate, first.damping)
+    return sc
+
+
+@dataclass
+class _Run:
+    """One variant in flight."""
+
+    variant: Variant
+    setup: object
+    scene: scene_mod.DropScene
+    callback: object
+    steps: int
+    record: np.ndarray  # (steps + 1, nstate)
+    phase: np.ndarray
+    done: int = 0
+    current_phase: int = 0
+    discarded: int = 0
+    failed: bool = False
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def pending(self) -> bool:
+        return self.setup.tire.switches and self.current_phase == 0
+
+
+# ----------------------------------------------------------------------------------------------
+# compose.setup with a vectorised timestep check
+#
+# ``compose.setup`` spends most of its time in ``check_timestep``'s scan of the fork law
+# (``stiffest_rates``: ~1600 Python law evaluations). Here the same scan runs on the compiled
+# interpreter over arrays, and its rates are raised by ``RATE_MARGIN`` so that the check is never
+# more lenient than the exact one: a variant it accepts is accepted by ``compose.setup``; one it
+# rejects (or whose law has no compiled form) goes through ``compose.setup`` itself, which
+# decides and words the error. ``setup`` and ``check_timestep`` are used as they are, with their
+# module globals rebound in private copies (``compose`` itself is not touched).
+
+RATE_MARGIN = 1e-6
+_FAST_SETUP = None
+
+
+def _fast_rates_kernel():
+    import numba
+
+    from .controllers import compiled
+
+    @numba.njit(cache=True, error_model="numpy", nogil=True)
+    def rates(I, P, xs, vs, dx, dv, x_damp):
+        k = 0.0
+        for x in xs:
+            k = max(k, abs(compiled._spring_force(I, P, x + dx, 0.0) - compiled._spring_force(I, P, x, 0.0)) / dx)
+        c = 0.0
+        for v in vs:
+            c = max(c, abs(compiled.fork_force(I, P, x_damp, v + dv, 0.0) - compiled.fork_force(I, P, x_damp, v, 0.0)) / dv)
+        return k, c
+
+    return rates
+
+
+def _fast_setup():
+    """A copy of ``compose.setup`` whose ``check_timestep`` uses the compiled scan (or None)."""
+    global _FAST_SETUP
+    if _FAST_SETUP is None:
+        import types
+
+        from .controllers import compiled
+
+        kernel = _fast_rates_kernel()
+
+        def stiffest_rates(s):
+            ints, floats = compiled.flatten(s.fork)  # UnsupportedLaw: the caller uses compose.setup
+            k_fork, c_fork = kernel(np.asarray(ints, dtype=np.int64), np.asarray(floats + [0.0], dtype=np.float64),
+                                    np.linspace(-0.02, s.travel * 1.2, 400), np.linspace(-3.0, 3.0, 601),
+                                    1e-4, 1e-5, 0.05)
+            tires = [s.tire.impact] + ([s.tire.in_contact] if s.tire.in_contact else [])
+            k = (k_fork + max(t.rate for t in tires)) * (1.0 + RATE_MARGIN)
+            c = (c_fork + max(t.damping for t in tires)) * (1.0 + RATE_MARGIN)
+            return k, c
+
+        def rebind(function, **names):
+            return types.FunctionType(function.__code__, {**function.__globals__, **names}, function.__name__,
+                                      function.__defaults__, function.__closure__)
+
+        check = rebind(compose.check_timestep, stiffest_rates=stiffest_rates)
+        _FAST_SETUP = rebind(compose.setup, check_timestep=check)
+    return _FAST_SETUP
+
+
+def setup_of(cfg):
+    """``compose.setup(cfg)``, the timestep check on the compiled scan when it clearly passes."""
+    try:
+        return _fast_setup()(cfg)
+    except Exception:  # noqa: BLE001 - rejected or not compilable: the exact path decides
+        return compose.setup(cfg)
+
+
+def _prepare(job: BatchJob, variant: Variant, spec) -> _Run:
+    """What ``run_drop`` and ``engine_mujoco.run`` do before stepping (raises as they do)."""
+    from .controllers.compiled import CompiledForkCallback
+    from .drop import resolve
+    from .errors import ConfigError
+
+    cfg = resolve(job.config, variant.overrides)
+    if job.duration is not None and not job.duration > 0:
+        raise ConfigError(f"duration: must be positive, got {job.duration}")
+    setup = setup_of(cfg)
+    duration = setup.duration if job.duration is None else job.duration
+    sc = build_scene(setup)
+    model = sc.model
+    data = mujoco.MjData(model)
+    data.qvel[sc.sled_dof] = setup.impact_speed
+    data.qpos[sc.sled_qpos] = engine_mujoco.TOUCH_DEPTH_M
+    mujoco.mj_forward(model, data)
+    callback = CompiledForkCallback(model, setup.fork, count_calls=False)  # UnsupportedLaw: single path
+    steps = int(round(duration / setup.timestep))
+    state = np.empty(mujoco.mj_stateSize(model, spec))
+    mujoco.mj_getState(model, data, state, spec)
+    record = np.empty((steps + 1, state.size))
+    record[0] = state
+    return _Run(variant, setup, sc, callback, steps, record, np.zeros(steps + 1, dtype=np.int8))
+
+
+def _signature(run: _Run) -> tuple:
+    m = run.scene.model
+    return (m.nq, m.nv, m.na, m.nu, run.record.shape[1])
+
+
+def _step_group(runs: list[_Run], datas, pool, spec) -> None:
+    """Advance ``runs`` (same model sizes) to their ends in rounds of one rollout call each."""
+    _, iq, _, _ = engine_mujoco._state_layout(runs[0].scene.model)
+    nstate = runs[0].record.shape[1]
+    messages: list[str] = []
+    active = [r for r in runs if r.steps > 0]
+    size = min(ROUND_BUFFER_VALUES, len(active) * min(MAX_ROUND, max((r.steps for r in active), default=1)) * nstate)
+    buffer = np.empty(max(size, nstate))  # one state buffer for all rounds (views of it, C-contiguous)
+    with engine_mujoco._collected_warnings(messages):
+        while active:
+            remaining = min(r.steps - r.done for r in active)
+            limit = SWITCH_ROUND if any(r.pending for r in active) else MAX_ROUND
+            n = max(1, min(remaining, limit, buffer.size // (len(active) * nstate)))
+            start = np.array([r.record[r.done] for r in active])
+            out = buffer[: len(active) * n * nstate].reshape(len(active), n, nstate)
+            models = [r.scene.model for r in active]
+            if pool is None:
+                _rollout.rollout(models, datas[0], start, nstep=n, state=out)
+            else:
+                pool.rollout(models, datas, start, nstep=n, state=out)
+            if messages or any(d.warning.number.any() for d in datas):
+                # which variant warned is not known: all of this round go to the single path
+                for r in active:
+                    r.failed = True
+                messages.clear()
+                return
+            # diverged (non-finite or runaway; checked on the whole round, which is never more
+            # lenient than the engine's check of the kept steps): the single path says where
+            bad = ~np.isfinite(out).all(axis=(1, 2)) | (np.abs(out[:, :, 1:3]).max(axis=(1, 2)) > MAX_DISPLACEMENT_M)
+            still = []
+            for r, states, diverged in zip(active, out, bad):
+                if diverged:
+                    r.failed = True
+                    continue
+                keep, switch = n, False
+                if r.pending:
+                    fork_col = iq.start + r.scene.fork_qpos
+                    x = np.concatenate(([r.record[r.done, fork_col]], states[:, fork_col]))
+                    crossed = np.flatnonzero((x[:-1] > 0.0) & (x[1:] <= 0.0))
+                    if crossed.size:
+                        keep, switch = int(crossed[0]) + 1, True
+                r.discarded += n - keep
+                r.record[r.done + 1: r.done + 1 + keep] = states[:keep]
+                r.phase[r.done + 1: r.done + 1 + keep] = r.current_phase
+                r.done += keep
+                if switch:
+                    r.current_phase = 1
+                    values = r.setup.tire.values(1)
+                    r.scene.set_tire(values.rate, values.damping)
+                if r.done < r.steps:
+                    still.append(r)
+            active = still
+
+
+def _trace(run: _Run) -> RawTrace:
+    sc, setup, record = run.scene, run.setup, run.record
+    model = sc.model
+    _, iq, iv, ia = engine_mujoco._state_layout(model)
+    return RawTrace(
+        engine="mujoco",
+        time=np.arange(run.steps + 1) * setup.timestep,
+        sled=record[:, iq.start + sc.sled_qpos],
+        fork=record[:, iq.start + sc.fork_qpos],
+        sled_velocity=record[:, iv.start + sc.sled_dof],
+        fork_velocity=record[:, iv.start + sc.fork_dof],
+        friction_state=record[:, ia.start + run.callback.act_index] if model.na else np.zeros(run.steps + 1),
+        tire_phase=run.phase,
+        info={"steps": run.steps, "steps_discarded": run.discarded, "integrator": setup.integrator,
+              "timestep_s": setup.timestep, "contact_inverse_inertia_per_kg": sc.inverse_inertia},
+    )
+
+
+def tire_forces(tire_law, deflection, rate, phase) -> np.ndarray:
+    """``TireLaw.force(d, dd/dt, phase)`` along a trace, vectorised (same arithmetic)."""
+    out = np.zeros(deflection.shape)
+    for p in np.unique(phase):
+        law = tire_law.values(int(p))
+        at = (phase == p) & (deflection > 0.0)
+        out[at] = np.maximum(0.0, law.rate * deflection[at] + law.damping * rate[at])
+    return out
+
+
+_SOS: dict = {}
+
+
+def logged(setup, raw: dict, names) -> dict:
+    """``measure.logged`` for the signals ``names`` only (each signal is filtered on its own)."""
+    t = raw["time_s"]
+    dt = t[1] - t[0]
+    ratio = int(round(1.0 / (setup.sample_rate * dt)))
+    key = (setup.antialias, 1.0 / dt)
+    if key not in _SOS:
+        sos = signal.butter(4, setup.antialias, fs=1.0 / dt, output="sos")
+        _SOS[key] = (sos, signal.sosfilt_zi(sos))
+    sos, zi = _SOS[key]
+    values = np.array([raw[name] for name in names])
+    filtered, _ = signal.sosfilt(sos, values, axis=-1, zi=zi[:, None, :] * values[:, 0][None, :, None])
+    out = {"time_s": t[::ratio].copy()}
+    for k, name in enumerate(names):
+        out[name] = filtered[k, ::ratio]
+    return out
+
+
+def summarize(run: _Run) -> tuple[dict, dict]:
+    """(summary, logged displacement signals) of a finished run, as ``run_drop`` computes them."""
+    trace = _trace(run)
+    for name in ("sled", "fork", "sled_velocity", "fork_velocity", "friction_state"):
+        if not np.all(np.isfinite(getattr(trace, name))):
+            raise FloatingPointError(name)  # the single path reports it
+    setup = run.setup
+    tire = trace.tire
+    raw = {
+        "time_s": trace.time,
+        "sled_mm": trace.sled * 1e3,
+        "fork_mm": trace.fork * 1e3,
+        "tire_mm": tire * 1e3,
+        "tire_force_N": tire_forces(setup.tire, tire, trace.tire_velocity, trace.tire_phase),
+    }
+    log = logged(setup, raw, [f"{s}_mm" for s in SIGNALS])
+    return events.summarize(setup, trace, log, raw), log
+
+
+def run_batch_rollout(job: BatchJob) -> list[dict]:
+    """The batched runner: the variants of ``job`` stepped together through ``mujoco.rollout`` on
+    ``job.threads`` threads (default 1) with the compiled force laws; same records as
+    :func:`mtbmj.sweep.run_batch`. Falls back to ``run_batch`` for another engine, a custom
+    ``job.drop`` or when the compiled laws are unavailable. A large batch runs in slices of
+    ``MAX_BATCH`` variants (each variant holds a compiled-law registry slot while it runs)."""
+    from .controllers import compiled
+
+    if job.engine != "mujoco" or job.drop is not None or not compiled.available():
+        return run_batch(job)
+    records: list[dict] = []
+    for at in range(0, len(job.variants), MAX_BATCH):
+        records.extend(_run_slice(job, job.variants[at: at + MAX_BATCH]))
+    return records
+
+
+def _run_slice(job: BatchJob, variants: list[Variant]) -> list[dict]:
+    start = time.perf_counter()
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    threads = max(1, int(getattr(job, "threads", 1) or 1))
+    runs: list[_Run] = []
+    single: list[Variant] = []
+    outputs: list[dict] = []
+    try:
+        for v in variants:
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("error", RuntimeWarning)
+                    runs.append(_prepare(job, v, spec))
+            except Exception:  # noqa: BLE001 - the single path records it with its reason
+                single.append(v)
+
+        groups: dict[tuple, list[_Run]] = {}
+        for r in runs:
+            groups.setdefault(_signature(r), []).append(r)
+        pool = _rollout.Rollout(nthread=threads) if threads > 1 and len(runs) > 1 else None
+        try:
+            for group in groups.values():
+                datas = [mujoco.MjData(group[0].scene.model) for _ in range(threads if pool else 1)]
+                with installed(group[0].callback):
+                    _step_group(group, datas, pool, spec)
+        finally:
+            if pool is not None:
+                pool.close()
+
+        for r in runs:
+            if r.failed:
+                single.append(r.variant)
+                continue
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("error", RuntimeWarning)  # as the single path does
+                    summary, log = summarize(r)
+                rec = {"id": r.variant.id, "status": "ok", "reason": "", "outputs": flatten_summary(summary)}
+                rec["traces"] = ({"time_s": np.asarray(log["time_s"], dtype=float),
+                                  **{f"{s}_mm": np.asarray(log[f"{s}_mm"], dtype=float) for s in SIGNALS}}
+                                 if job.traces else None)
+                outputs.append(rec)
+            except Exception:  # noqa: BLE001
+                single.append(r.variant)
+    finally:
+        for r in runs:
+            r.callback.close()  # free the registry slots now
+    if outputs:
+        each = (time.perf_counter() - start) / len(outputs)
+        for rec in outputs:
+            rec["wall_time_s"] = each
+    return outputs + [run_variant(job, v) for v in single]
+
+
+__all__ = ["run_batch_rollout", "build_scene", "tire_forces", "logged", "summarize"]
