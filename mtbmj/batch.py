@@ -336,6 +336,17 @@ def run_batch_rollout(job: BatchJob) -> list[dict]:
     return records
 
 
+def drop_traces(config, overrides: list[dict], duration: float | None = None, threads: int = 1) -> list:
+    """The logged signals of ``run_drop(config, "mujoco", o, duration)`` for each override set
+    ``o``, stepped as one batch (``run_batch_rollout`` with traces): per set, in order, a dict
+    ``{"time_s", "sled_mm", "fork_mm", "tire_mm": arrays}`` or, for a run that fails, its reason
+    (a string). ``config`` is a resolved ``Config``."""
+    variants = [Variant(i, str(i), dict(o)) for i, o in enumerate(overrides)]
+    job = BatchJob(config, "mujoco", duration, variants, traces=True, threads=max(1, int(threads)))
+    by_id = {rec["id"]: rec for rec in run_batch_rollout(job)}
+    return [by_id[v.id]["traces"] if by_id[v.id]["status"] == "ok" else by_id[v.id]["reason"] for v in variants]
+
+
 def _run_slice(job: BatchJob, variants: list[Variant]) -> list[dict]:
     start = time.perf_counter()
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -390,4 +401,4 @@ def _run_slice(job: BatchJob, variants: list[Variant]) -> list[dict]:
     return outputs + [run_variant(job, v) for v in single]
 
 
-__all__ = ["run_batch_rollout", "build_scene", "tire_forces", "logged", "summarize"]
+__all__ = ["run_batch_rollout", "drop_traces", "build_scene", "tire_forces", "logged", "summarize"]

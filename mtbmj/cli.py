@@ -110,7 +110,8 @@ def cmd_fit(args) -> int:
             raise MtbmjError(f"--bound {text}: expected key=low:high with numbers") from None
     free = [k.strip() for k in (args.free or "").split(",") if k.strip()]
     ident = identify(args.kind, args.data, model=args.model, friction=args.friction, mass_kg=args.mass_kg,
-                     config=args.config, free=free, bounds=bounds or None, engine=args.engine)
+                     config=args.config, free=free, bounds=bounds or None, engine=args.engine,
+                     starts=args.starts)
     written = ident.write(args.out)
     for name in ident.chosen:
         print(ident.results[name].line())
@@ -170,6 +171,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--free", help="drop: comma-separated configuration keys to fit")
     p.add_argument("--bound", action="append", metavar="KEY=LOW:HIGH", help="drop: bounds of a free key (repeatable)")
     p.add_argument("--engine", choices=("mujoco", "ode"), default="mujoco", help="drop: engine to fit with")
+    p.add_argument("--starts", type=int, default=1, metavar="N",
+                   help="drop: fit from N start points (the start values and N-1 Latin hypercube points "
+                        "within the bounds); the best fit wins (default 1)")
     p.add_argument("--out", type=Path, default=Path("out/fit"), help="output directory (default out/fit)")
     p.set_defaults(func=cmd_fit)
 

@@ -5,8 +5,13 @@ The residual is model - data of the sled, fork and (when recorded) tire displace
 record's time stamps; the model is ``run_drop`` on either engine, its 1 kHz logged signals (the
 same 400 Hz anti-aliasing view the sled logger has) interpolated onto the record's times. The
 Jacobian is a forward difference with a relative step (1e-3 by default: the drop is smooth in its
-parameters there -- steps of 1e-4 and 1e-3 agree to about 0.1 %, 1e-2 already bends), its columns
-run in parallel in a pool of worker processes (2 by default), one engine run each. Confidence
+parameters there -- steps of 1e-4 and 1e-3 agree to about 0.1 %, 1e-2 already bends), one engine
+run per column. On the MuJoCo engine its parameter points (with the base point when it is not
+known yet) run as one batch through ``mtbmj.batch.drop_traces`` (``mujoco.rollout`` on the
+compiled laws, ``workers`` threads, bit-identical to ``run_drop``); on the ODE engine (or without
+the compiled laws) the columns run in a pool of ``workers`` processes (2 by default). With
+``starts=N`` the fit runs from the configuration's start values and N - 1 Latin hypercube points
+within the bounds (their first evaluations batched together); the lowest final cost wins. Confidence
 intervals (95 %, Student t) and the correlation matrix come from the Jacobian at the optimum: a
 Gauss-Newton sandwich that allows the channels' noise to be correlated (``channel_sandwich``; the
 tire trace is sled - fork); ``extra["stderr_iid"]`` has the plain ``fitresult.covariance_stderr``.
@@ -42,6 +47,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 from scipy import optimize, stats
+from scipy.stats import qmc
 
 from mtbmj.config import SCHEMA, Config
 from mtbmj.drop import resolve, run_drop
@@ -76,8 +82,13 @@ def _model(values: Sequence[float], keys: Sequence[str], config: Config | None =
         result = run_drop(config, engine, overrides=dict(zip(keys, map(float, values))), duration=duration)
     except MtbmjError as exc:
         return str(exc)
-    t = result.signals["time_s"]
-    return np.concatenate([np.interp(times, t, result.signals[f"{c}_mm"]) for c in channels])
+    return _sample(result.signals, times, channels)
+
+
+def _sample(signals: Mapping, times: np.ndarray, channels: tuple) -> np.ndarray:
+    """The channels of logged ``signals`` interpolated onto ``times``, stacked (mm)."""
+    t = signals["time_s"]
+    return np.concatenate([np.interp(times, t, signals[f"{c}_mm"]) for c in channels])
 
 
 def channel_sandwich(jac: np.ndarray, residual: np.ndarray, n_params: int, n_channels: int):
@@ -108,13 +119,18 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
              bounds: Mapping[str, tuple[float, float]] | None = None, engine: str = "mujoco",
              overrides: Mapping | None = None, workers: int = 2, diff_step: float = 1e-3,
              max_nfev: int = 40, xtol: float = 1e-6, ftol: float = 1e-8,
-             progress=None) -> FitResult:
+             progress=None, starts: int = 1, seed: int = 0, batched: bool | None = None) -> FitResult:
     """Fit the ``free`` configuration keys of ``config`` (with ``overrides``) to a sled drop record.
 
     ``bounds`` maps a free key to (low, high) in its config unit; unlisted keys get +/- 50 %
     around the start value. Returns a ``FitResult`` with values keyed by the free keys, and in
     ``extra``: ``ci95``, ``correlation`` (with ``correlation_keys``), ``engine_runs``,
     ``model_keys``, ``start``, ``bounds``, ``wall_time_s``, ``status`` and ``curves`` for plots.
+
+    ``starts``: the number of fits (the start values, then Latin hypercube points in the bounds
+    drawn with ``seed``); the one with the lowest final cost is returned, ``extra["starts"]``
+    lists each. ``batched``: evaluate the Jacobian's points as one ``mujoco.rollout`` batch
+    (default: on the MuJoCo engine when the compiled laws are available).
     """
     start_time = time.perf_counter()
     rec = _as_record(record)
@@ -154,53 +170,87 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
     duration = float(times[-1]) + 0.003
     scale = np.maximum(np.abs(x0), 1e-3 * (hi - lo))
     runs = {"n": 0}
-    cache: dict[bytes, np.ndarray] = {}
+    cache: dict[bytes, np.ndarray | str] = {}  # model (or a failed run's reason) by point
     penalty = 1e3  # mm: a failed run (e.g. a preload the top-out spring cannot hold) is far off
+    starts = max(1, int(starts))
+    workers = max(1, int(workers))
+    if batched is None:
+        from mtbmj.controllers import compiled
+
+        batched = engine == "mujoco" and compiled.available()
+    if batched and engine != "mujoco":
+        raise ConfigError("fit_drop: the batched path runs the mujoco engine only")
 
     def to_residual(model):
         if isinstance(model, str):
             return np.full(data.size, penalty)
         return model - data
 
-    def fun(x):
-        key = x.tobytes()
-        if key not in cache:
-            runs["n"] += 1
-            cache[key] = to_residual(_model(x, free, cfg, engine, duration, times, channels))
-            if progress:
-                progress(runs["n"], x, float(np.sqrt(np.mean(cache[key] ** 2))))
-        return cache[key]
-
-    workers = max(1, int(workers))
     context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
     pool = (ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker,
-                                initargs=(cfg, engine, duration, times, channels)) if workers > 1 else None)
+                                initargs=(cfg, engine, duration, times, channels))
+            if workers > 1 and not batched else None)
+
+    def evaluate(points) -> list[np.ndarray]:
+        """Residuals at ``points``; the ones not known yet run together (one batch or the pool)."""
+        new = list({p.tobytes(): p for p in points if p.tobytes() not in cache}.values())
+        if len(new) == 1:
+            models = [_model(new[0], free, cfg, engine, duration, times, channels)]
+        elif new and batched:
+            from mtbmj.batch import drop_traces
+
+            out = drop_traces(cfg, [dict(zip(free, map(float, p))) for p in new], duration, threads=workers)
+            models = [m if isinstance(m, str) else _sample(m, times, channels) for m in out]
+        elif new and pool is not None:
+            models = list(pool.map(_model, new, [free] * len(new)))
+        else:
+            models = [_model(p, free, cfg, engine, duration, times, channels) for p in new]
+        for p, m in zip(new, models):
+            runs["n"] += 1
+            cache[p.tobytes()] = m
+            if progress:
+                progress(runs["n"], p, float(np.sqrt(np.mean(to_residual(m) ** 2))))
+        return [to_residual(cache[p.tobytes()]) for p in points]
+
+    def fun(x):
+        return evaluate([x])[0]
 
     def jac(x):
-        r0 = fun(x)
         steps = diff_step * np.maximum(np.abs(x), scale)
         steps = np.where(x + steps > hi, -steps, steps)  # step inwards at an upper bound
         points = [x + np.eye(x.size)[i] * steps[i] for i in range(x.size)]
-        if pool is not None:
-            models = list(pool.map(_model, points, [free] * len(points)))
-        else:
-            models = [_model(p, free, cfg, engine, duration, times, channels) for p in points]
-        runs["n"] += len(points)
-        cols = [(to_residual(m) - r0) / h for m, h in zip(models, steps)]
-        return np.column_stack(cols)
+        r0, *rs = evaluate([x] + points)
+        return np.column_stack([(r - r0) / h for r, h in zip(rs, steps)])
 
-    try:
-        sol = optimize.least_squares(fun, x0, jac=jac, bounds=(lo, hi), x_scale=scale, method="trf",
-                                     xtol=xtol, ftol=ftol, gtol=1e-10, max_nfev=max_nfev)
+    def failure(sol) -> str | None:
         if not np.all(np.isfinite(sol.x)) or np.max(np.abs(sol.fun)) >= penalty:
-            raise MtbmjError("fit_drop: the fit did not converge (the model run fails at the optimum)")
+            return "fit_drop: the fit did not converge (the model run fails at the optimum)"
         if sol.status <= 0:  # 0: the evaluation budget ran out before any tolerance was met
-            raise MtbmjError(f"fit drop: did not converge within {sol.nfev} evaluations ({runs['n']} engine runs); "
-                             "free fewer parameters, narrow the bounds or start closer")
-        final_jac = sol.jac
+            return (f"fit drop: did not converge within {sol.nfev} evaluations ({runs['n']} engine runs); "
+                    "free fewer parameters, narrow the bounds or start closer")
+        return None
+
+    points = [x0]
+    if starts > 1:
+        points += list(qmc.scale(qmc.LatinHypercube(d=x0.size, seed=seed).random(starts - 1), lo, hi))
+    fits = []
+    try:
+        if starts > 1:
+            evaluate(points)  # the start points' first evaluations, together
+        for point in points:
+            sol = optimize.least_squares(fun, point, jac=jac, bounds=(lo, hi), x_scale=scale, method="trf",
+                                         xtol=xtol, ftol=ftol, gtol=1e-10, max_nfev=max_nfev)
+            fits.append((sol, failure(sol)))
     finally:
         if pool is not None:
             pool.shutdown()
+    good = [f for f in fits if f[1] is None]
+    if not good:
+        raise MtbmjError(fits[0][1])
+    sol = min(good, key=lambda f: f[0].cost)[0]
+    best = next(i for i, f in enumerate(fits) if f[0] is sol)
+    final_jac = sol.jac
+    runs_in_fit = runs["n"]
     residual = sol.fun
     n = x0.size
     std_iid, _ = covariance_stderr(final_jac, residual, n)
@@ -209,8 +259,8 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
     tq = float(stats.t.ppf(0.975, dof))
     values = {k: float(v) for k, v in zip(free, sol.x)}
     at_bound = [k for k, a in zip(free, sol.active_mask) if a != 0]
-    model = _model(sol.x, free, cfg, engine, duration, times, channels)
-    runs["n"] += 1
+    model = cache[sol.x.tobytes()] if sol.x.tobytes() in cache else _model(sol.x, free, cfg, engine, duration,
+                                                                            times, channels)
     per_channel = {}
     curves = {"time_s": times}
     for i, c in enumerate(channels):
@@ -218,8 +268,9 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
         per_channel[c] = float(np.sqrt(np.mean(residual[part] ** 2)))
         curves[f"{c}_data_mm"] = data[part]
         curves[f"{c}_model_mm"] = model[part] if not isinstance(model, str) else np.full(times.size, np.nan)
-    start_model = _model(x0, free, cfg, engine, duration, times, channels)
-    runs["n"] += 1
+    start_model = cache.get(x0.tobytes())
+    if start_model is None:
+        start_model = _model(x0, free, cfg, engine, duration, times, channels)
     if not isinstance(start_model, str):
         for i, c in enumerate(channels):
             curves[f"{c}_start_mm"] = start_model[i * times.size:(i + 1) * times.size]
@@ -232,7 +283,11 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
             "stderr_iid": {k: float(e) for k, e in zip(free, std_iid)},
             "ci95": {k: (float(v - tq * s), float(v + tq * s)) for k, v, s in zip(free, sol.x, std)},
             "correlation": corr.tolist(), "correlation_keys": list(free),
-            "engine_runs": runs["n"], "engine_runs_in_fit": runs["n"] - 2,
+            "engine_runs": runs["n"] + (sol.x.tobytes() not in cache) + (x0.tobytes() not in cache),
+            "engine_runs_in_fit": runs_in_fit, "batched": bool(batched),
+            "starts": [{"start": {k: float(v) for k, v in zip(free, p)}, "cost": float(f.cost),
+                        "status": int(f.status), "nfev": int(f.nfev), "failed": why}
+                       for p, (f, why) in zip(points, fits)], "best_start": best,
             "iterations": int(sol.njev or 0), "nfev": int(sol.nfev),
             "status": int(sol.status), "message": sol.message, "at_bound": at_bound,
             "start": {k: float(v) for k, v in zip(free, x0)},

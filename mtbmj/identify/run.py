@@ -139,8 +139,9 @@ def _damper(records, results, model, friction, module) -> Identification:
 
 def identify(kind: str, data: Sequence[str | Path], model: str = "auto", friction: str = "auto",
              mass_kg: float | None = None, config: str = "S12", free: Sequence[str] = (),
-             bounds: dict | None = None, engine: str = "mujoco") -> Identification:
-    """Fit ``kind`` ("spring", "damper", "tire", "drop") to the record(s) in ``data``."""
+             bounds: dict | None = None, engine: str = "mujoco", starts: int = 1) -> Identification:
+    """Fit ``kind`` ("spring", "damper", "tire", "drop") to the record(s) in ``data``; ``starts``:
+    drop fits from that many start points (the best wins)."""
     if kind not in KINDS:
         raise MtbmjError(f"fit: unknown kind {kind!r} (one of {', '.join(KINDS)})")
     if not data:
@@ -173,6 +174,7 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
 
     if not free:
         raise MtbmjError("fit drop: name the free parameters with --free key,key,...")
-    result = dropfit.fit_drop(records[0], config=config, free=list(free), bounds=bounds, engine=engine)
+    result = dropfit.fit_drop(records[0], config=config, free=list(free), bounds=bounds, engine=engine,
+                              starts=starts)
     return Identification("drop", records, {"drop": result}, ["drop"],
                           lambda: dropfit.plot_drop(records[0], result), base=config)
