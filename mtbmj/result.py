@@ -26,20 +26,12 @@ def versions() -> dict[str, str]:
             "numpy": np.__version__, "matplotlib": matplotlib.__version__, "python": platform.python_version()}
 
 
-@dataclass
-class DropResult:
-    """A drop run: ``signals`` as the sled logger records them (1 kHz, mm, N; see
-    ``measure.COLUMNS``), ``raw`` at the engine rate, ``summary`` (events, rest, energy)."""
+class RunOutput:
+    """What every run result shares: signals by column, pandas export, and the output directory
+    (time series, raw trace, summary, manifest, configuration) written all at once. A subclass
+    sets ``COLUMNS`` and provides ``csv_bytes`` and ``manifest``."""
 
-    name: str
-    engine: str
-    config: Config
-    signals: dict[str, np.ndarray]
-    raw: dict[str, np.ndarray]
-    trace: RawTrace
-    summary: dict
-    wall_time_s: float
-    info: dict = field(default_factory=dict)
+    COLUMNS: tuple[str, ...] = COLUMNS
 
     @property
     def time(self) -> np.ndarray:
@@ -55,7 +47,36 @@ class DropResult:
         except ImportError:  # pragma: no cover - pandas is an optional extra
             raise ImportError("to_pandas needs pandas: pip install 'mtbmj[pandas]'") from None
         data = self.raw if raw else self.signals
-        return pd.DataFrame({k: data[k] for k in COLUMNS}).set_index("time_s")
+        return pd.DataFrame({k: data[k] for k in self.COLUMNS}).set_index("time_s")
+
+    def files(self) -> dict[str, bytes]:
+        """Everything ``write`` puts in an output directory."""
+        return {
+            "timeseries.csv": self.csv_bytes(),
+            "timeseries_raw.csv": self.csv_bytes(raw=True),
+            "summary.json": output.json_bytes(self.summary),
+            "manifest.json": output.json_bytes(self.manifest()),
+            "config.toml": self.config.to_toml().encode(),
+        }
+
+    def write(self, out_dir: str | Path) -> list[Path]:
+        return output.write_atomically(out_dir, self.files())
+
+
+@dataclass
+class DropResult(RunOutput):
+    """A drop run: ``signals`` as the sled logger records them (1 kHz, mm, N; see
+    ``measure.COLUMNS``), ``raw`` at the engine rate, ``summary`` (events, rest, energy)."""
+
+    name: str
+    engine: str
+    config: Config
+    signals: dict[str, np.ndarray]
+    raw: dict[str, np.ndarray]
+    trace: RawTrace
+    summary: dict
+    wall_time_s: float
+    info: dict = field(default_factory=dict)
 
     def csv_bytes(self, raw: bool = False) -> bytes:
         data = self.raw if raw else self.signals
@@ -79,19 +100,6 @@ class DropResult:
             "wall_time_s": self.wall_time_s,
             "engine_info": {k: v for k, v in self.trace.info.items() if k != "events"},
         }
-
-    def files(self) -> dict[str, bytes]:
-        """Everything ``write`` puts in an output directory."""
-        return {
-            "timeseries.csv": self.csv_bytes(),
-            "timeseries_raw.csv": self.csv_bytes(raw=True),
-            "summary.json": output.json_bytes(self.summary),
-            "manifest.json": output.json_bytes(self.manifest()),
-            "config.toml": self.config.to_toml().encode(),
-        }
-
-    def write(self, out_dir: str | Path) -> list[Path]:
-        return output.write_atomically(out_dir, self.files())
 
     def difference(self, other: "DropResult", raw: bool = True) -> dict[str, dict[str, float]]:
         """Largest |self - other| per displacement (mm) and where it occurs (s), on the shared grid."""

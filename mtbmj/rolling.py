@@ -25,7 +25,6 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Callable, Mapping
 
 import mujoco
@@ -37,6 +36,7 @@ from mtbmj.controllers import installed
 from . import compose, measure, output, terrain as terrain_mod
 from .config import Config
 from .errors import ConfigError, RunError
+from .result import RunOutput
 from .tire_model import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 
 DEFAULT_HEAD_ANGLE_DEG = 65.0
@@ -474,7 +474,7 @@ def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
 
 
 @dataclass
-class RollResult:
+class RollResult(RunOutput):
     """A rolling run: ``signals`` at the logger rate (1 kHz after the 400 Hz low-pass, like the
     drop), ``raw`` at the engine step, ``summary`` (peaks, rider metrics)."""
 
@@ -486,13 +486,7 @@ class RollResult:
     summary: dict
     wall_time_s: float
     info: dict = field(default_factory=dict)
-
-    @property
-    def time(self) -> np.ndarray:
-        return self.signals["time_s"]
-
-    def __getitem__(self, column: str) -> np.ndarray:
-        return self.signals[column]
+    COLUMNS = COLUMNS
 
     def csv_bytes(self, raw: bool = False) -> bytes:
         data = self.raw if raw else self.signals
@@ -502,30 +496,12 @@ class RollResult:
                   "heights from the start, up positive; axle forces from the ground, x forward, z up")
         return output.csv_bytes({k: data[k] for k in COLUMNS}, header)
 
-    def to_pandas(self, raw: bool = False):
-        import pandas as pd
-
-        data = self.raw if raw else self.signals
-        return pd.DataFrame({k: data[k] for k in COLUMNS}).set_index("time_s")
-
     def manifest(self) -> dict:
         from .result import versions
 
         return {"name": self.name, "scenario": self.scenario, "engine": "mujoco", "config_sha256": self.config.digest(),
                 "config_sources": list(self.config.sources), "versions": versions(),
                 "wall_time_s": self.wall_time_s, "engine_info": self.info}
-
-    def files(self) -> dict[str, bytes]:
-        return {
-            "timeseries.csv": self.csv_bytes(),
-            "timeseries_raw.csv": self.csv_bytes(raw=True),
-            "summary.json": output.json_bytes(self.summary),
-            "manifest.json": output.json_bytes(self.manifest()),
-            "config.toml": self.config.to_toml().encode(),
-        }
-
-    def write(self, out_dir: str | Path) -> list[Path]:
-        return output.write_atomically(out_dir, self.files())
 
     def plot(self):
         import matplotlib
