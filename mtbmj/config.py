@@ -24,6 +24,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 from .errors import ConfigError
+from .textfile import read_text
 
 # kinds: "pos" > 0, "nonneg" >= 0, "list" of finite numbers, "bool", "text", or a tuple of
 # allowed strings.
@@ -267,12 +268,7 @@ def parse_assignment(text: str) -> tuple[str, Any]:
 
 
 def _read_toml(path: Path) -> dict[str, Any]:
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise ConfigError(f"{path}: not a text file, so not a TOML configuration") from None
+    text = read_text(path, ConfigError, str(path), "not a text file, so not a TOML configuration")
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -51,6 +51,7 @@ import numpy as np
 
 from .config import SCHEMA, Config, check_value
 from .errors import ConfigError, MtbmjError
+from .textfile import read_text
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -188,12 +189,7 @@ def from_csv(path: str | Path) -> list[dict[str, Any]]:
     Values are read like ``--set`` values; an empty cell keeps the base value; ``#`` lines are
     comments."""
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise ConfigError(f"--from-csv {path}: cannot read ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise ConfigError(f"--from-csv {path}: not a text file") from None
+    text = read_text(path, ConfigError, f"--from-csv {path}", "not a text file")
     lines = [line for line in text.splitlines() if line.strip() and not line.lstrip().startswith("#")]
     if not lines:
         raise ConfigError(f"--from-csv {path}: no header line")

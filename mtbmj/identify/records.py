@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from mtbmj.errors import MtbmjError
+from mtbmj.textfile import read_text
 
 # unit suffix -> factor to SI
 UNITS = {
@@ -95,12 +96,7 @@ def _convert(path: str, names: list[str], data: np.ndarray, comments=()) -> Reco
 
 def read_csv(path: str | Path) -> Record:
     path = Path(path)
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise RecordError(f"{path}: cannot read ({exc.strerror})") from None
-    except UnicodeDecodeError:
-        raise RecordError(f"{path}: not a text file, so not a CSV record") from None
+    text = read_text(path, RecordError, str(path), "not a text file, so not a CSV record")
     comments, lines = [], []
     for number, line in enumerate(text.splitlines(), 1):
         stripped = line.strip()
