@@ -23,7 +23,9 @@ import mujoco
 import numpy as np
 
 import mtbmj
-from mtbmj import compose, engine_mujoco, scene
+from mtbmj import compose
+from mtbmj.drop import engine_mujoco
+from mtbmj.drop import scene
 from _bench import write_json
 
 DEFAULT = {}

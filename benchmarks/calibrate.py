@@ -29,7 +29,8 @@ import numpy as np
 from scipy.optimize import brentq, least_squares
 from scipy.signal import butter, filtfilt
 
-from mtbmj import compose, config, engine_mujoco
+from mtbmj import compose, config
+from mtbmj.drop import engine_mujoco
 from mtbmj.controllers import ProgressiveSpring, TopOutSpring
 
 REFERENCE = Path(__file__).resolve().parents[1] / "mtbmj" / "presets" / "reference.toml"

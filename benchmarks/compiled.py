@@ -25,7 +25,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _bench import environment, write_json  # noqa: E402
 
 import mtbmj  # noqa: E402
-from mtbmj import compose, scene  # noqa: E402
+from mtbmj import compose  # noqa: E402
+from mtbmj.drop import engine_mujoco, scene  # noqa: E402
 from mtbmj.controllers import ForkCallback, installed  # noqa: E402
 
 start_import = time.perf_counter()
@@ -107,8 +108,8 @@ def main(argv=None):
         "compiled": rollout_runner(sc.model, one, nstep, 1, comp),
         "builtin": rollout_runner(bare, one, nstep, 1, None),
         "python": rollout_runner(sc.model, one, nstep, 1, python),
-        "engine_compiled": lambda: compiled.run_with(setup, "compiled"),
-        "engine_python": lambda: compiled.run_with(setup, "python"),
+        "engine_compiled": lambda: engine_mujoco.run(setup, callback="compiled"),
+        "engine_python": lambda: engine_mujoco.run(setup, callback="python"),
     }, args.repeat + 2)
     t_comp, t_bare, t_py, t_engine_c, t_engine_p = (t[k] for k in ("compiled", "builtin", "python", "engine_compiled",
                                                                      "engine_python"))

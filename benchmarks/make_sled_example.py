@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
-from mtbmj.drop import run_drop
+from mtbmj.drop.run import run_drop
 
 OVERRIDES = {
     "fork.friction.model": "lugre",                 # bristle friction, not S1-S14's Coulomb

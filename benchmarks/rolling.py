@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from mtbmj.rolling import run_roll
+from mtbmj.rolling.frontend import run_roll
 from _bench import write_json
 
 SIMULATED_S = 10.0

@@ -8,7 +8,7 @@ and the end-to-end study.
     Both via one ``mujoco.rollout.rollout`` chunk and both via ``mujoco.mj_step(m, d, nstep=N)``;
     the trajectories are compared (mm) to show it is the same physics.
 (c) ``mtbmj study --out <tmpdir>`` end to end as a subprocess (target < 20 s on 2 cores), and the
-    28 runs alone (``mtbmj.study.run_study()`` in-process: process pool, no figures, no files).
+    28 runs alone (``mtbmj.drop.study.run_study()`` in-process: process pool, no figures, no files).
 
     /work/venv/bin/python benchmarks/speed.py [--repeat N] [--study-repeat N] [--skip-study]
 
@@ -30,7 +30,8 @@ import numpy as np
 from mujoco import rollout
 
 import mtbmj
-from mtbmj import compose, scene
+from mtbmj import compose
+from mtbmj.drop import scene
 from mtbmj.controllers import ForkCallback, installed
 from _bench import best_of, write_json
 
@@ -176,7 +177,7 @@ def part_b(repeat: int) -> dict:
 
 
 def part_c(repeat: int) -> dict:
-    from mtbmj.study import run_study
+    from mtbmj.drop.study import run_study
 
     print(f"\n(c) study, best of {repeat}")
     e2e = []

@@ -7,13 +7,13 @@ compared with the bare-scene rollout (target <= 1.2x). ``--variants`` sets the s
     /work/venv/bin/python benchmarks/sweep.py --variants 200 [--workers 2] [--duration 1.5]
         [--runner batch|single] [--threads 1]
 
-``--runner batch`` (the default: ``mtbmj.batch.run_batch_rollout``, variants of a batch stepped
+``--runner batch`` (the default: ``mtbmj.sweep.batch.run_batch_rollout``, variants of a batch stepped
 together through ``mujoco.rollout`` on the compiled laws) or ``single`` (``run_drop`` per
 variant); ``--threads``: rollout threads per worker process. The per-variant costs of the batched
 runner's phases (prepare, step, post-process) are measured in-process on ``--phase-variants``
 variants against the bare rollout of the same variants on one thread.
 
-Bare scene: ``mtbmj.scene.build(compose.setup(load_config("S12")))`` with no control callback
+Bare scene: ``mtbmj.drop.scene.build(compose.setup(load_config("S12")))`` with no control callback
 (no fork law: MuJoCo's own contact and joints only), one rollout per variant from tire touch at
 that variant's impact speed, the same number of steps, ``--workers`` rollout threads, states
 recorded (as the sweep does), in chunks to bound memory.
@@ -33,7 +33,9 @@ import numpy as np
 from mujoco import rollout
 
 import mtbmj
-from mtbmj import compose, scene, sweep
+from mtbmj import compose
+from mtbmj.drop import scene
+from mtbmj import sweep
 from mtbmj.controllers import installed
 from _bench import write_json
 
@@ -55,7 +57,7 @@ def run_sweep(vs, workers: int, duration, out: Path, runner: str = "batch", thre
 def phase_costs(vs, duration) -> dict:
     """Per-variant wall time (ms) of the batched runner's phases, one process, one thread, against
     the bare-scene rollout of the same variants (best of 3 each, interleaved)."""
-    from mtbmj import batch
+    from mtbmj.sweep import batch
 
     cfg = mtbmj.load_config("S12")
     variants = sweep.plan(cfg, vs, duration=duration)

@@ -3,12 +3,12 @@
 Installed as ``mtbmj.controllers``. Each law is a small immutable object; ``ForkLaw`` composes a
 spring, a damper and a friction law; ``ForkCallback`` and ``installed`` put it into MuJoCo.
 """
-from .callback import ForkCallback, installed
-from .damper import BilinearDamper, LinearDamper, TableDamper
-from .fork import ForkLaw
-from .friction import Coulomb, CoulombViscous, LuGre, NoFriction, Stiction, Stribeck, smooth_sign
-from .spring import BilinearSpring, DirectionalSpring, LinearSpring, ProgressiveSpring, TopOutSpring
-from .tire import KelvinVoigt, TireLaw
+from mtbmj.controllers.callback import ForkCallback, installed
+from mtbmj.controllers.damper import BilinearDamper, LinearDamper, TableDamper
+from mtbmj.controllers.fork import ForkLaw
+from mtbmj.controllers.friction import Coulomb, CoulombViscous, LuGre, NoFriction, Stiction, Stribeck, smooth_sign
+from mtbmj.controllers.spring import BilinearSpring, DirectionalSpring, LinearSpring, ProgressiveSpring, TopOutSpring
+from mtbmj.controllers.tire import KelvinVoigt, TireLaw
 
 __all__ = [
     "ForkCallback", "installed", "ForkLaw",

@@ -33,21 +33,19 @@ from __future__ import annotations
 
 import ctypes
 import math
-import sys
 import threading
 import time
 import warnings
 import weakref
-from contextlib import contextmanager
 
 import mujoco
 import numpy as np
 
-from . import damper as _damper
-from . import friction as _friction
-from . import spring as _spring
-from .callback import ForkCallback
-from .fork import ForkLaw
+from mtbmj.controllers import damper as _damper
+from mtbmj.controllers import friction as _friction
+from mtbmj.controllers import spring as _spring
+from mtbmj.controllers.callback import ForkCallback
+from mtbmj.controllers.fork import ForkLaw
 
 try:  # numba is optional: without it mtbmj runs the Python laws
     import numba as _numba
@@ -640,41 +638,5 @@ def make_callback(model, law, prefer_compiled: bool = True, **kwargs):
     return ForkCallback(model, law, **kwargs)
 
 
-_make_callback = make_callback
-_RUN_LOCK = threading.Lock()
-
-
-@contextmanager
-def _engine_callback(factory):
-    """Make ``mtbmj.engine_mujoco.run`` build its fork callback with ``factory(model, law)``,
-    whether the engine calls ``ForkCallback`` or ``make_callback`` (imported at module level or
-    from this module inside ``run``)."""
-    from mtbmj import engine_mujoco
-
-    build = lambda model, law, *a, **k: factory(model, law)  # noqa: E731
-    targets = [(engine_mujoco, name) for name in ("ForkCallback", "make_callback") if hasattr(engine_mujoco, name)]
-    targets.append((sys.modules[__name__], "make_callback"))
-    with _RUN_LOCK:
-        saved = [(obj, name, getattr(obj, name)) for obj, name in targets]
-        try:
-            for obj, name in targets:
-                setattr(obj, name, build)
-            yield
-        finally:
-            for obj, name, value in saved:
-                setattr(obj, name, value)
-
-
-def run_with(setup, callback="compiled", duration: float | None = None, progress=None):
-    """``mtbmj.engine_mujoco.run`` with the fork callback chosen: ``"compiled"``, ``"python"``,
-    ``"auto"`` (``make_callback``: compiled if possible) or a factory ``f(model, fork_law)``.
-    Same chunking, tire-law switch and checks as the engine."""
-    from mtbmj import engine_mujoco
-
-    factory = {"compiled": CompiledForkCallback, "python": ForkCallback, "auto": _make_callback}.get(callback, callback)
-    with _engine_callback(factory):
-        return engine_mujoco.run(setup, duration, progress)
-
-
 __all__ = ["CompiledForkCallback", "make_callback", "available", "unavailable_reason", "flatten",
-           "mjdata_layout", "check_layout", "run_with", "UnsupportedLaw", "FALLBACK_MESSAGE"]
+           "mjdata_layout", "check_layout", "UnsupportedLaw", "FALLBACK_MESSAGE"]

@@ -1,5 +1,5 @@
 """Compiled rolling callback: the fork law, the radial tire and the speed servo of
-``mtbmj.rolling.RollCallback`` as native code that MuJoCo calls every step.
+``mtbmj.rolling.frontend.RollCallback`` as native code that MuJoCo calls every step.
 
 ``RollCallback`` (Python) stays the specification and the fallback; this module evaluates the same
 arithmetic in the same order, including the terrain geometry (``RadialTire.patches`` on the
@@ -27,7 +27,7 @@ Design
 * The callback state is per model, like ``RollCallback``'s: one ``mjData`` at a time per model.
 
 Limits: at most ``MAX_PATCHES`` patches at once (far more than any terrain meets under one tire);
-beyond that the slot raises its overflow flag and ``mtbmj.rolling.simulate`` reruns on the Python
+beyond that the slot raises its overflow flag and ``mtbmj.rolling.frontend.simulate`` reruns on the Python
 path. A terrain or tire subclass, or a law with no compiled form, runs on the Python path.
 """
 from __future__ import annotations
@@ -40,8 +40,8 @@ import weakref
 
 import numpy as np
 
-from . import compiled as _c
-from .compiled import FALLBACK_MESSAGE, UnsupportedLaw, flatten, mjdata_layout, unavailable_reason
+from mtbmj.controllers import compiled as _c
+from mtbmj.controllers.compiled import FALLBACK_MESSAGE, UnsupportedLaw, flatten, mjdata_layout, unavailable_reason
 
 _numba = _c._numba
 
@@ -457,7 +457,7 @@ def _int_field(index: int, doc: str):
 
 
 class CompiledRollCallback(ctypes._CFuncPtr):
-    """Compiled counterpart of ``mtbmj.rolling.RollCallback`` (same constructor, same attributes):
+    """Compiled counterpart of ``mtbmj.rolling.frontend.RollCallback`` (same constructor, same attributes):
     a C function pointer for ``mujoco.set_mjcb_control`` / ``controllers.installed`` that writes
     the fork force, the LuGre state rate, the tire force and deflection probe and the speed
     servo's references into ``ctrl``.
@@ -479,8 +479,8 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         return super().__new__(cls, _dispatcher(front.model).address)
 
     def __init__(self, front, fork_law, tire, speed, x_ref0, refresh=None):
-        from mtbmj import terrain as terrain_mod
-        from mtbmj import tire_model
+        from mtbmj.rolling import terrain as terrain_mod
+        from mtbmj.rolling import tire as tire_model
 
         law_ints, law_floats = flatten(fork_law)  # UnsupportedLaw for a law with no compiled form
         if type(tire) is not tire_model.RadialTire:
@@ -608,9 +608,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         """No-op (``RollCallback`` caches numpy views; the compiled path reads ``mjData*``)."""
 
     def axle_state(self, qpos, qvel):
-        from mtbmj.rolling import RollCallback
-
-        return RollCallback.axle_state(self, qpos, qvel)
+        return self.front.axle_state(qpos, qvel, (self.xq, self.zq, self.fq, self.xv, self.zv, self.fv))
 
     @property
     def address(self) -> int:
@@ -630,25 +628,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         return f"<CompiledRollCallback slot={getattr(self, 'slot', None)} law={getattr(self, 'law', None)!r}>"
 
 
-def make_roll_callback(front, fork_law, tire, speed, x_ref0, refresh=None, prefer_compiled: bool = True):
-    """``CompiledRollCallback`` when possible, else the Python ``RollCallback`` (with a warning,
-    once per reason: numba missing, layout not verifiable, a law/tire/terrain with no compiled form)."""
-    from mtbmj.rolling import RollCallback
-    from mtbmj.tire_model import REFRESH_S
-
-    refresh = REFRESH_S if refresh is None else refresh
-    if prefer_compiled:
-        reason = unavailable_reason()
-        if reason is None:
-            try:
-                return CompiledRollCallback(front, fork_law, tire, speed, x_ref0, refresh)
-            except (UnsupportedLaw, UnsupportedRolling) as error:
-                _c._warn_once(f"{error}: using the Python rolling callback")
-            except RuntimeError as error:  # the mjData layout check failed
-                _c._warn_once(str(error))
-        else:
-            _c._warn_once(reason)
-    return RollCallback(front, fork_law, tire, speed, x_ref0, refresh)
+warn_once = _c._warn_once
 
 
-__all__ = ["CompiledRollCallback", "make_roll_callback", "available", "UnsupportedRolling", "MAX_PATCHES"]
+__all__ = ["CompiledRollCallback", "UnsupportedLaw", "warn_once", "available", "UnsupportedRolling", "MAX_PATCHES"]

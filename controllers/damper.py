@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .guards import SmoothLaw, on_positive_side
+from mtbmj.controllers.guards import SmoothLaw, on_positive_side
 
 
 @dataclass(frozen=True)

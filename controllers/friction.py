@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .guards import SmoothLaw, on_positive_side
+from mtbmj.controllers.guards import SmoothLaw, on_positive_side
 
 
 def smooth_sign(v: float, band: float) -> float:

@@ -1,4 +1,4 @@
-"""Skyhook control of a semi-active fork damper (Karnopp et al. 1974), for ``mtbmj.env``.
+"""Skyhook control of a semi-active fork damper (Karnopp et al. 1974), for ``mtbmj.rolling.env``.
 
 The ideal skyhook damper pushes the body with F_z = -c_sky v_body (a damper to the sky). The fork
 pushes the body along its axis, so the wanted fork force (pushing apart positive) is
@@ -26,7 +26,7 @@ class Skyhook:
         return float(np.clip(wanted / passive, self.scale_min, self.scale_max))
 
     def command(self, observation) -> np.ndarray:
-        """Action in [0, 1] from a ``mtbmj.env`` observation."""
+        """Action in [0, 1] from a ``mtbmj.rolling.env`` observation."""
         s = self.scale(float(observation["body_z_velocity"][0]), float(observation["damper_force_per_scale"][0]),
                        float(observation["head_angle_sin"][0]))
         return np.array([(s - self.scale_min) / (self.scale_max - self.scale_min)])

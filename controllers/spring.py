@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .friction import smooth_sign
-from .guards import SmoothLaw, on_positive_side as _side
+from mtbmj.controllers.friction import smooth_sign
+from mtbmj.controllers.guards import SmoothLaw, on_positive_side as _side
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Tire laws: a radial Kelvin-Voigt spring and damper that pushes but never pulls.
 
-The MuJoCo engine realises the law as a calibrated soft contact (``mtbmj.scene``); the ODE
+The MuJoCo engine realises the law as a calibrated soft contact (``mtbmj.drop.scene``); the ODE
 reference evaluates ``force`` directly. Deflection is positive into the ground.
 """
 from __future__ import annotations

@@ -1,21 +1,49 @@
-"""mtbmj: a mountain-bike front suspension (coil fork + tire) on MuJoCo, with an independent
-scipy ODE reference, reproducing the drop-sled study S1-S14 of Schoeneck, Sadauckas & Nagurka
-(BMD 2023).
+"""mtbmj: a mountain-bike front suspension (fork + tire) on MuJoCo, with an independent scipy ODE
+reference, reproducing the drop-sled study S1-S14 of Schoeneck, Sadauckas & Nagurka (BMD 2023).
 
     >>> import mtbmj
     >>> result = mtbmj.run_drop("S12")              # MuJoCo engine
     >>> reference = mtbmj.run_drop("S12", engine="ode")
     >>> result.difference(reference)["fork_mm"]["max_abs_mm"] < 0.1
     True
+
+The names below are imported on first use, so ``import mtbmj`` stays cheap. Subsystems:
+``mtbmj.drop`` (the drop test), ``mtbmj.rolling`` (front end on terrain), ``mtbmj.ride``
+(telemetry), ``mtbmj.sweep`` (sweeps and sensitivity), ``mtbmj.identify`` (fits),
+``mtbmj.validation`` (engine cross-check, sled records), ``mtbmj.cli`` (the command line).
 """
-__version__ = "0.1.0"
+from mtbmj._version import __version__  # noqa: F401
 
-from .config import Config, load as load_config, preset_names, study_presets  # noqa: E402
-from .drop import run_drop  # noqa: E402
-from .errors import ConfigError, MtbmjError, RunError  # noqa: E402
-from .result import DropResult  # noqa: E402
-from .study import run_study, write_study  # noqa: E402
-from mtbmj.validation import crosscheck  # noqa: E402
+_LAZY = {
+    "Config": "mtbmj.config",
+    "load_config": "mtbmj.config:load",
+    "preset_names": "mtbmj.config",
+    "study_presets": "mtbmj.config",
+    "run_drop": "mtbmj.drop.run",
+    "DropResult": "mtbmj.drop.result",
+    "run_study": "mtbmj.drop.study",
+    "write_study": "mtbmj.drop.study",
+    "crosscheck": "mtbmj.validation.compare",
+    "run_roll": "mtbmj.rolling.frontend",
+    "RollResult": "mtbmj.rolling.frontend",
+    "MtbmjError": "mtbmj.errors",
+    "ConfigError": "mtbmj.errors",
+    "RunError": "mtbmj.errors",
+}
+__all__ = ['Config', 'ConfigError', 'DropResult', 'MtbmjError', 'RollResult', 'RunError', 'crosscheck', 'load_config', 'preset_names', 'run_drop', 'run_roll', 'run_study', 'study_presets', 'write_study']
 
-__all__ = ["__version__", "Config", "load_config", "preset_names", "study_presets", "run_drop",
-           "run_study", "write_study", "crosscheck", "DropResult", "MtbmjError", "ConfigError", "RunError"]
+
+def __getattr__(name):  # PEP 562: import a submodule only when one of its names is asked for
+    try:
+        module, _, attribute = _LAZY[name].partition(":")  # "module" or "module:name there"
+    except KeyError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    import importlib
+
+    value = getattr(importlib.import_module(module), attribute or name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

@@ -10,8 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mtbmj import controllers as law
-from .config import Config
-from .errors import ConfigError
+from mtbmj.config import Config
+from mtbmj.errors import ConfigError
 
 MM = 1e-3
 N_PER_MM = 1e3

@@ -23,8 +23,8 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-from .errors import ConfigError
-from .textfile import read_text
+from mtbmj.errors import ConfigError
+from mtbmj.textfile import read_text
 
 # kinds: "pos" > 0, "nonneg" >= 0, "list" of finite numbers, "bool", "text", or a tuple of
 # allowed strings.

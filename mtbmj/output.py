@@ -11,7 +11,7 @@ from typing import Mapping
 
 import numpy as np
 
-from .errors import MtbmjError
+from mtbmj.errors import MtbmjError
 
 
 def csv_bytes(columns: Mapping[str, np.ndarray], header: str = "") -> bytes:

@@ -1,26 +1,20 @@
-"""The result of one drop: one object that holds the numbers, plots itself and exports."""
+"""What every run result shares (signals by column, pandas export, the output folder) and the
+versions written into each manifest."""
 from __future__ import annotations
 
 import platform
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from . import output
-from .config import Config
-from .measure import COLUMNS
-from .trace import RawTrace
-
-DISPLACEMENTS = ("sled_mm", "fork_mm", "tire_mm")
-
+from mtbmj import output
 
 def versions() -> dict[str, str]:
     import matplotlib
     import mujoco
     import scipy
 
-    from . import __version__
+    from mtbmj._version import __version__
 
     return {"mtbmj": __version__, "mujoco": mujoco.__version__, "scipy": scipy.__version__,
             "numpy": np.__version__, "matplotlib": matplotlib.__version__, "python": platform.python_version()}
@@ -31,7 +25,7 @@ class RunOutput:
     (time series, raw trace, summary, manifest, configuration) written all at once. A subclass
     sets ``COLUMNS`` and provides ``csv_bytes`` and ``manifest``."""
 
-    COLUMNS: tuple[str, ...] = COLUMNS
+    COLUMNS: tuple[str, ...] = ()
 
     @property
     def time(self) -> np.ndarray:
@@ -61,75 +55,3 @@ class RunOutput:
 
     def write(self, out_dir: str | Path) -> list[Path]:
         return output.write_atomically(out_dir, self.files())
-
-
-@dataclass
-class DropResult(RunOutput):
-    """A drop run: ``signals`` as the sled logger records them (1 kHz, mm, N; see
-    ``measure.COLUMNS``), ``raw`` at the engine rate, ``summary`` (events, rest, energy)."""
-
-    name: str
-    engine: str
-    config: Config
-    signals: dict[str, np.ndarray]
-    raw: dict[str, np.ndarray]
-    trace: RawTrace
-    summary: dict
-    wall_time_s: float
-    info: dict = field(default_factory=dict)
-
-    def csv_bytes(self, raw: bool = False) -> bytes:
-        data = self.raw if raw else self.signals
-        rate = "engine rate" if raw else "1 kHz after a 400 Hz anti-aliasing low-pass"
-        header = (f"mtbmj drop {self.name}, engine {self.engine}, {rate}\n"
-                  "sled zero at tire touch, fork zero at unloaded full extension, tire = sled - fork, compression positive")
-        return output.csv_bytes({k: data[k] for k in COLUMNS}, header)
-
-    def to_csv(self, path: str | Path, raw: bool = False) -> Path:
-        path = Path(path)
-        output.write_atomically(path.parent, {path.name: self.csv_bytes(raw)})
-        return path
-
-    def manifest(self) -> dict:
-        return {
-            "name": self.name,
-            "engine": self.engine,
-            "config_sha256": self.config.digest(),
-            "config_sources": list(self.config.sources),
-            "versions": versions(),
-            "wall_time_s": self.wall_time_s,
-            "engine_info": {k: v for k, v in self.trace.info.items() if k != "events"},
-        }
-
-    def difference(self, other: "DropResult", raw: bool = True) -> dict[str, dict[str, float]]:
-        """Largest |self - other| per displacement (mm) and where it occurs (s), on the shared grid."""
-        a, b = (self.raw, other.raw) if raw else (self.signals, other.signals)
-        n = min(len(a["time_s"]), len(b["time_s"]))
-        if not np.allclose(a["time_s"][:n], b["time_s"][:n], atol=1e-9):
-            raise ValueError("results are not on the same time grid")
-        out = {}
-        for column in DISPLACEMENTS:
-            diff = np.abs(a[column][:n] - b[column][:n])
-            i = int(np.argmax(diff))
-            out[column] = {"max_abs_mm": float(diff[i]), "at_time_s": float(a["time_s"][i])}
-        return out
-
-    def plot(self, axes=None, label: str | None = None, **line_kwargs):
-        """Sled, fork and tire displacement histories on three stacked axes; returns the figure."""
-        import matplotlib
-
-        if axes is None:
-            matplotlib.use("Agg", force=False)
-            import matplotlib.pyplot as plt
-
-            fig, axes = plt.subplots(3, 1, sharex=True, figsize=(7, 7), constrained_layout=True)
-        else:
-            fig = axes[0].figure
-        label = label or f"{self.name} ({self.engine})"
-        for ax, column in zip(axes, DISPLACEMENTS):
-            ax.plot(self.time, self.signals[column], label=label, **line_kwargs)
-            ax.set_ylabel(column.replace("_mm", " [mm]"))
-            ax.grid(True, alpha=0.3)
-        axes[-1].set_xlabel("time [s]")
-        axes[0].legend(fontsize="small", ncol=2)
-        return fig

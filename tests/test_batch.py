@@ -1,4 +1,4 @@
-"""The batched sweep runner (``mtbmj.batch``): the same records as ``run_drop`` per variant, failing
+"""The batched sweep runner (``mtbmj.sweep.batch``): the same records as ``run_drop`` per variant, failing
 variants recorded while the others go on, and the journal/resume contract kept."""
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ import pandas as pd
 import pytest
 
 import mtbmj
-from mtbmj import batch, sweep
+from mtbmj.sweep import batch
+from mtbmj import sweep
 from mtbmj.controllers import compiled
 
 pytestmark = pytest.mark.skipif(not compiled.available(), reason="compiled force laws unavailable")

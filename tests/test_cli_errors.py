@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 import mtbmj
-from mtbmj import cli, drop
+from mtbmj import cli
+from mtbmj.drop import run as drop
 from mtbmj.config import load
 
 PNG = b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00\x00\x01\xff\xfe"

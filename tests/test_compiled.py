@@ -11,7 +11,8 @@ import pytest
 from mujoco import rollout
 
 import mtbmj
-from mtbmj import compose, scene
+from mtbmj import compose
+from mtbmj.drop import engine_mujoco, scene
 from mtbmj import controllers as law
 from mtbmj.controllers import ForkCallback, installed
 
@@ -128,8 +129,8 @@ def test_unsupported_laws_are_refused_and_fall_back():
 # Whole drops: compiled path == Python path, every preset and law, every integrator
 # ---------------------------------------------------------------------------------------------
 def _compare(setup, duration=DURATION):
-    fast = compiled.run_with(setup, "compiled", duration=duration)
-    slow = compiled.run_with(setup, "python", duration=duration)
+    fast = engine_mujoco.run(setup, callback="compiled", duration=duration)
+    slow = engine_mujoco.run(setup, callback="python", duration=duration)
     for name in ("sled", "fork", "sled_velocity", "fork_velocity", "friction_state"):
         worst = np.max(np.abs(getattr(fast, name) - getattr(slow, name)))
         assert worst <= (TOL_M if name in ("sled", "fork") else 1e3 * TOL_M), (name, worst)
@@ -346,13 +347,14 @@ sys.modules["numba"] = None
 warnings.simplefilter("always")
 with warnings.catch_warnings(record=True) as caught:
     import mtbmj
-    from mtbmj import compose, scene
+    from mtbmj import compose
+    from mtbmj.drop import engine_mujoco, scene
     from mtbmj.controllers import compiled, ForkCallback
     setup = compose.setup(mtbmj.load_config("S1"))
     model = scene.build(setup).model
     assert not compiled.available()
     assert all(isinstance(compiled.make_callback(model, setup.fork), ForkCallback) for _ in range(3))
-    trace = compiled.run_with(setup, "auto", duration=0.05)
+    trace = engine_mujoco.run(setup, callback="auto", duration=0.05)
 messages = [str(w.message) for w in caught if "numba" in str(w.message)]
 assert messages == [compiled.FALLBACK_MESSAGE], messages
 print("ok", trace.fork.size)

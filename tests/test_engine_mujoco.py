@@ -5,7 +5,9 @@ import pytest
 from dm_control import mjcf
 
 import mtbmj
-from mtbmj import compose, engine_mujoco, mjcf as scenes, scene
+from mtbmj import compose, mjcf as scenes
+from mtbmj.drop import engine_mujoco
+from mtbmj.drop import scene
 from mtbmj.controllers import ForkCallback, installed
 from mtbmj.errors import RunError
 

@@ -8,7 +8,8 @@ from scipy.linalg import expm
 from scipy.optimize import brentq
 
 import mtbmj
-from mtbmj import compose, scene
+from mtbmj import compose
+from mtbmj.drop import scene
 
 G = 9.81
 

@@ -3,7 +3,9 @@ between frames) and the GIF and MP4 files decode. Skips only when no GL backend 
 import numpy as np
 import pytest
 
-from mtbmj import cli, cli_render, render
+from mtbmj import cli
+from mtbmj.cli import render as cli_render
+from mtbmj.rolling import render
 
 SIZE = (160, 120)
 
@@ -127,8 +129,8 @@ def test_disabled_gl_is_one_line(monkeypatch):
 
 
 def test_rolling_run_directory(backend, tmp_path):
-    """A rolling run directory is re-simulated through mtbmj.rolling.roll_trajectory and rendered."""
-    rolling = pytest.importorskip("mtbmj.rolling", reason="mtbmj.rolling not present")
+    """A rolling run directory is re-simulated through mtbmj.rolling.frontend.roll_trajectory and rendered."""
+    rolling = pytest.importorskip("mtbmj.rolling.frontend", reason="mtbmj.rolling.frontend not present")
     run_dir = tmp_path / "roll"
     rolling.run_roll("washboard", 4.0, duration=0.3).write(run_dir)
     done = render.render(run_dir, tmp_path / "roll.gif", fps=20, width=96, height=64)

@@ -6,7 +6,8 @@ import pandas as pd
 import pytest
 
 import mtbmj
-from mtbmj import compose, measure
+from mtbmj import compose
+from mtbmj.drop import measure
 
 
 @pytest.fixture(scope="module")

@@ -9,10 +9,10 @@ os.environ.setdefault("MUJOCO_GL", "disable")
 import numpy as np
 import pytest
 
-from mtbmj import rolling as R
-from mtbmj import terrain as T
+from mtbmj.rolling import frontend as R
+from mtbmj.rolling import terrain as T
 from mtbmj.errors import MtbmjError
-from mtbmj.tire_model import RadialTire
+from mtbmj.rolling.tire import RadialTire
 
 
 # --- the tire's stiffness on any terrain -------------------------------------------------------
@@ -225,10 +225,11 @@ def test_bad_run_inputs(kwargs, match):
 
 
 def _cli(argv):
-    from mtbmj import cli, cli_roll
+    from mtbmj.cli import roll as cli_roll
+    from mtbmj.cli.common import Parser
 
-    parser = cli._Parser(prog="mtbmj")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=cli._Parser)
+    parser = Parser(prog="mtbmj")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     cli_roll.add_parser(sub)
     args = parser.parse_args(argv)
     return args.func(args)
@@ -268,7 +269,7 @@ def test_trajectory_for_rendering():
 def test_env_episode_with_skyhook():
     import mujoco
 
-    from mtbmj import env as E
+    from mtbmj.rolling import env as E
     from mtbmj.controllers.skyhook import Skyhook
 
     e = E.load("root:at_m=0.3", 4.0, duration=0.4)

@@ -11,9 +11,10 @@ import numpy as np
 import pytest
 
 import mtbmj
-from mtbmj import compose, scene
-from mtbmj import rolling as R
-from mtbmj import terrain as T
+from mtbmj import compose
+from mtbmj.drop import scene
+from mtbmj.rolling import frontend as R
+from mtbmj.rolling import terrain as T
 from mtbmj.controllers import installed
 
 compiled = pytest.importorskip("mtbmj.controllers.compiled")
@@ -151,7 +152,7 @@ def test_default_path_is_compiled_and_settable_fields_reach_the_slot():
 
 
 def test_scaled_damper_agrees():
-    """The semi-active damper scale (mtbmj.env's command) on both paths."""
+    """The semi-active damper scale (mtbmj.rolling.env's command) on both paths."""
     out = {}
     for kind in ("python", "compiled"):
         p = R.prepare("root:radius_mm=60,at_m=0.3", 4.0, callback=kind)
@@ -260,7 +261,7 @@ import sys, warnings
 sys.modules["numba"] = None
 warnings.simplefilter("always")
 with warnings.catch_warnings(record=True) as caught:
-    from mtbmj import rolling
+    from mtbmj.rolling import frontend as rolling
     from mtbmj.controllers import compiled_rolling
     assert not compiled_rolling.available()
     r = rolling.run_roll("washboard", 5.0, duration=0.05)

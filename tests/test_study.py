@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-from mtbmj.study import run_study, write_study
+from mtbmj.drop.study import run_study, write_study
 
 
 @pytest.fixture(scope="module")

@@ -14,7 +14,8 @@ import pandas as pd
 import pytest
 
 import mtbmj
-from mtbmj import cli_sweep, sweep
+from mtbmj import cli
+from mtbmj import sweep
 from mtbmj.errors import RunError
 
 DURATION = 0.2
@@ -165,7 +166,7 @@ def test_killed_sweep_resumes_with_only_the_missing_variants(tmp_path):
     vary = [f"{RATE}=14:18:8", f"{TIRE}=75:95:5"]  # 40 variants
     args = ["sweep", "S1", "--duration", str(DURATION), "--quiet"] + [a for v in vary for a in ("--vary", v)]
     out = tmp_path / "killed"
-    code = "import sys; from mtbmj.cli_sweep import main; sys.exit(main(sys.argv[1:]))"
+    code = "import sys; from mtbmj.cli import main; sys.exit(main(sys.argv[1:]))"
     proc = subprocess.Popen([sys.executable, "-c", code, *args, "--out", str(out), "--workers", "1", "--batch-size", "1"],
                             start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     journal = out / "journal"
@@ -184,7 +185,7 @@ def test_killed_sweep_resumes_with_only_the_missing_variants(tmp_path):
     assert 3 <= journaled < 40
     (journal / ".part-stray.json.tmp").write_text('{"records": [')  # a half-written temporary file
 
-    assert cli_sweep.main(args + ["--out", str(out), "--resume", "--workers", "2"]) == 0
+    assert cli.main(args + ["--out", str(out), "--resume", "--workers", "2"]) == 0
     resumed = pd.read_parquet(out / "sweep.parquet")
     manifest = json.loads((out / "sweep.json").read_text())
     assert manifest["variants"] == 40
@@ -193,7 +194,7 @@ def test_killed_sweep_resumes_with_only_the_missing_variants(tmp_path):
     assert len(ids) == len(set(ids)) == 40  # each variant computed exactly once over both runs
 
     clean = tmp_path / "clean"
-    assert cli_sweep.main(args + ["--out", str(clean), "--workers", "2"]) == 0
+    assert cli.main(args + ["--out", str(clean), "--workers", "2"]) == 0
     pd.testing.assert_frame_equal(_comparable(resumed), _comparable(pd.read_parquet(clean / "sweep.parquet")))
 
 
@@ -223,7 +224,7 @@ def test_dask_backend_gives_identical_results(reference, tmp_path):
 @pytest.mark.parametrize("method,n,keys", [("sobol", 8, ("S1", "S1_conf", "ST", "ST_conf")),
                                            ("morris", 4, ("mu", "mu_star", "sigma", "mu_star_conf"))])
 def test_sensitivity(tmp_path, method, n, keys):
-    from mtbmj.sensitivity import run_sensitivity
+    from mtbmj.sweep.sensitivity import run_sensitivity
 
     ranges = [sweep.parse_vary(f"{RATE}=14:18", count=False), sweep.parse_vary(f"{TIRE}=75:95", count=False)]
     result = run_sensitivity("S1", ranges, ["fork_peak1_mm", "tire_peak1_mm"], tmp_path, method=method, n=n,
@@ -276,7 +277,7 @@ def test_cli_bad_input_is_one_line_exit_2(tmp_path, capsys, argv, message):
     (tmp_path / "unknown.csv").write_text(f"{RATE},foo\n16,1\n")
     argv = [str(tmp_path / "unknown.csv") if a == "CSV_UNKNOWN" else str(tmp_path / "none.csv") if a == "CSV_MISSING"
             else a for a in argv]
-    assert cli_sweep.main(argv + ["--out", str(tmp_path / "out"), "--quiet"]) == 2
+    assert cli.main(argv + ["--out", str(tmp_path / "out"), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("mtbmj: error: ") and err.count("\n") == 1 and message in err, err
     assert not (tmp_path / "out" / "sweep.parquet").exists()
@@ -287,8 +288,6 @@ def test_cli_sweep_wired_into_mtbmj(tmp_path, capsys):
 
     parser = cli.build_parser()
     choices = next(a for a in parser._actions if a.dest == "command").choices
-    if "sweep" not in choices:
-        pytest.skip("mtbmj.cli does not wire cli_sweep.add_parser yet")
-    assert "sensitivity" in choices
+    assert "sweep" in choices and "sensitivity" in choices
     assert cli.main(["sweep", "S1", "--vary", f"{RATE}=14:18:1", "--duration", "0.1", "--out", str(tmp_path), "--quiet"]) == 0
     assert "1 variants (1 computed" in capsys.readouterr().out

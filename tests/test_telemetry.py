@@ -9,7 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mtbmj import cli, cli_telemetry, ride_metrics, telemetry
+from mtbmj import cli
+from mtbmj.cli import telemetry as cli_telemetry
+from mtbmj.ride import metrics as ride_metrics
+from mtbmj.ride import telemetry
 from mtbmj.errors import MtbmjError
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "sst"

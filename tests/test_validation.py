@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mtbmj.drop import run_drop
+from mtbmj.drop.run import run_drop
 from mtbmj.errors import MtbmjError
 from mtbmj.validation import sled_data
-from mtbmj.validation.cli_validate import parse_presets
+from mtbmj.cli.validate import parse_presets
 from mtbmj.validation.events import EVENTS, SIGNALS, detect
 from mtbmj.validation.metrics import PHASES, compare
 from mtbmj.validation.report import run_validation

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from mtbmj.drop import resolve, run_drop
-from mtbmj.result import DISPLACEMENTS, DropResult
+from mtbmj.drop.run import resolve, run_drop
+from mtbmj.drop.result import DISPLACEMENTS, DropResult
 
 DEFAULT_TOLERANCE_MM = 0.1  # the accuracy target at default settings (1e-4 s, implicitfast)
 

@@ -257,7 +257,7 @@ def detect(signals: Mapping[str, np.ndarray], start_s: float = 0.0) -> Events:
     # rest
     window = t >= t[-1] - REST_WINDOW_S
     motion = {s: float(np.ptp(sm[s][window])) for s in SIGNALS}
-    # the sled decides (as in mtbmj.events): friction lets the fork creep by a fraction of a mm
+    # the sled decides (as in mtbmj.drop.events): friction lets the fork creep by a fraction of a mm
     at_rest = bool(t[-1] >= REST_WINDOW_S and motion["sled"] <= REST_TOLERANCE_MM + 4.0 * noise["sled"])
     if at_rest:
         for s in SIGNALS:

@@ -22,13 +22,13 @@ import numpy as np
 
 from mtbmj import output
 from mtbmj.config import Config
-from mtbmj.drop import ENGINES, resolve, run_drop
+from mtbmj.drop.run import ENGINES, resolve, run_drop
 from mtbmj.errors import ConfigError
-from mtbmj.result import DropResult
+from mtbmj.drop.result import DropResult
 
-from . import sled_data
-from .events import EVENTS, LABELS, SIGNALS, Events, detect
-from .metrics import PHASES, Metrics, compare
+from mtbmj.validation import sled_data
+from mtbmj.validation.events import EVENTS, LABELS, SIGNALS, Events, detect
+from mtbmj.validation.metrics import PHASES, Metrics, compare
 
 # The paper's three studies and their colours (Fig. 10): spring blue, damper red, tire green.
 GROUPS = {
@@ -106,7 +106,7 @@ class Validation:
         return {n: self.metrics[n].amplitude_errors() for n in self.configs}
 
     def summary(self) -> dict:
-        from mtbmj import __version__
+        from mtbmj._version import __version__
 
         data = {
             "mtbmj_version": __version__,
@@ -383,7 +383,7 @@ img{max-width:100%;height:auto;display:block;margin:0.5em 0}.small{font-size:0.8
 
 
 def _html(v: Validation, images: Mapping[str, bytes]) -> str:
-    from mtbmj import __version__
+    from mtbmj._version import __version__
 
     e = html.escape
 

@@ -23,6 +23,7 @@ group delay, which is taken off so that t = 0 is the physical touch, like the si
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 from typing import Mapping
 
@@ -41,7 +42,7 @@ LENGTH_UNITS = ("mm", "m")
 TIME_UNITS = ("s", "ms")
 GAP_FACTOR = 1.5         # a step longer than 1.5 x the typical step is a gap
 MIN_AFTER_TOUCH_S = 0.05  # a record must go on at least this long after touch
-EXAMPLE = Path(__file__).resolve().parent.parent / "mtbmj" / "data" / "sled_example.csv"
+EXAMPLE = Path(str(resources.files("mtbmj") / "data" / "sled_example.csv"))
 
 
 class SledDataError(RecordError):

@@ -2,8 +2,8 @@
 restitution, chosen model parameters from a sled drop record. ``identify`` is the one entry
 point; each part lives in its own module (``spring``, ``damper``, ``tire``, ``dropfit``) with its
 synthetic-record generator (``dyno_synthetic``, ``tire_synthetic``, ``drop_synthetic``)."""
-from .fitresult import FitResult
-from .records import Record, RecordError, read_record
-from .run import Identification, identify
+from mtbmj.identify.fitresult import FitResult
+from mtbmj.identify.records import Record, RecordError, read_record
+from mtbmj.identify.run import Identification, identify
 
 __all__ = ["identify", "Identification", "FitResult", "Record", "RecordError", "read_record"]

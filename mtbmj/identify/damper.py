@@ -34,9 +34,9 @@ from scipy.optimize import least_squares
 
 from mtbmj import controllers as law
 from mtbmj.errors import MtbmjError
-from .dyno_synthetic import peak_points
-from .fitresult import FitResult, covariance_stderr
-from .records import Record, RecordError
+from mtbmj.identify.dyno_synthetic import peak_points
+from mtbmj.identify.fitresult import FitResult, covariance_stderr
+from mtbmj.identify.records import Record, RecordError
 
 HYDRAULIC = ("linear", "bilinear", "table")
 FRICTION = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")

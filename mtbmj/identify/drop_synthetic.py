@@ -17,9 +17,9 @@ from typing import Mapping
 
 import numpy as np
 
-from mtbmj.drop import resolve, run_drop
+from mtbmj.drop.run import resolve, run_drop
 
-from .records import Record, read_record, write_csv_text
+from mtbmj.identify.records import Record, read_record, write_csv_text
 
 
 def drop_record_columns(config="S12", overrides: Mapping | None = None, noise_mm: float = 0.05,

@@ -7,7 +7,7 @@ same 400 Hz anti-aliasing view the sled logger has) interpolated onto the record
 Jacobian is a forward difference with a relative step (1e-3 by default: the drop is smooth in its
 parameters there -- steps of 1e-4 and 1e-3 agree to about 0.1 %, 1e-2 already bends), one engine
 run per column. On the MuJoCo engine its parameter points (with the base point when it is not
-known yet) run as one batch through ``mtbmj.batch.drop_traces`` (``mujoco.rollout`` on the
+known yet) run as one batch through ``mtbmj.sweep.batch.drop_traces`` (``mujoco.rollout`` on the
 compiled laws, ``workers`` threads, bit-identical to ``run_drop``); on the ODE engine (or without
 the compiled laws) the columns run in a pool of ``workers`` processes (2 by default). With
 ``starts=N`` the fit runs from the configuration's start values and N - 1 Latin hypercube points
@@ -50,11 +50,11 @@ from scipy import optimize, stats
 from scipy.stats import qmc
 
 from mtbmj.config import SCHEMA, Config
-from mtbmj.drop import resolve, run_drop
+from mtbmj.drop.run import resolve, run_drop
 from mtbmj.errors import ConfigError, MtbmjError
 
-from .fitresult import FitResult, covariance_stderr
-from .records import Record, read_record
+from mtbmj.identify.fitresult import FitResult, covariance_stderr
+from mtbmj.identify.records import Record, read_record
 
 CHANNELS = ("sled", "fork", "tire")
 MODEL_KEYS = ("fork.spring.model", "fork.spring.top_out", "fork.spring.preload", "fork.damper.model",
@@ -197,7 +197,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
         if len(new) == 1:
             models = [_model(new[0], free, cfg, engine, duration, times, channels)]
         elif new and batched:
-            from mtbmj.batch import drop_traces
+            from mtbmj.sweep.batch import drop_traces
 
             out = drop_traces(cfg, [dict(zip(free, map(float, p))) for p in new], duration, threads=workers)
             models = [m if isinstance(m, str) else _sample(m, times, channels) for m in out]

@@ -10,8 +10,8 @@ from typing import Callable, Sequence
 from mtbmj import output
 from mtbmj.config import parameter_set_toml
 from mtbmj.errors import MtbmjError
-from .fitresult import FitResult
-from .records import Record, read_record
+from mtbmj.identify.fitresult import FitResult
+from mtbmj.identify.records import Record, read_record
 
 KINDS = ("spring", "damper", "tire", "drop")
 
@@ -148,19 +148,19 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
         raise MtbmjError(f"fit {kind}: no data file given")
     records = [read_record(p) for p in data]
     if kind == "spring":
-        from . import spring
+        from mtbmj.identify import spring
 
         results = spring.fit_spring_all(records[0])
         if model not in ("auto", *results):
             results[model] = spring.fit_spring(records[0], model)  # raises the precise cause, e.g. no extension
         return _spring(records, results, model, spring.plot_spring)
     if kind == "damper":
-        from . import damper
+        from mtbmj.identify import damper
 
         results = damper.fit_damper_all(records[0])
         return _damper(records, results, model, friction, damper)
     if kind == "tire":
-        from . import tire
+        from mtbmj.identify import tire
 
         drops = [r for r in records if "time" in r.columns]
         ramps = [r for r in records if "time" not in r.columns]
@@ -170,7 +170,7 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
         results = tire.fit_tire(drops[0], mass_kg, ramp=ramps[0] if ramps else None)
         order = [part for part in ("static", "impact", "contact") if part in results]  # as tire.tire_overrides
         return Identification("tire", records, results, order, lambda: tire.plot_tire(drops[0], results))
-    from . import dropfit
+    from mtbmj.identify import dropfit
 
     if not free:
         raise MtbmjError("fit drop: name the free parameters with --free key,key,...")

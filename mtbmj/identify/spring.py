@@ -33,8 +33,8 @@ from scipy.optimize import least_squares, lsq_linear, minimize_scalar
 from scipy.signal import savgol_filter
 
 from mtbmj.errors import MtbmjError
-from .fitresult import FitResult, covariance_stderr
-from .records import Record, RecordError
+from mtbmj.identify.fitresult import FitResult, covariance_stderr
+from mtbmj.identify.records import Record, RecordError
 
 MODELS = ("linear", "compression_rebound", "bilinear", "progressive", "top_out", "preload")
 MAIN_MODELS = MODELS[:4]

@@ -34,8 +34,8 @@ from scipy import optimize
 
 from mtbmj.errors import MtbmjError
 
-from .fitresult import FitResult, covariance_stderr
-from .records import Record
+from mtbmj.identify.fitresult import FitResult, covariance_stderr
+from mtbmj.identify.records import Record
 
 G = 9.81
 

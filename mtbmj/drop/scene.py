@@ -16,7 +16,7 @@ import numpy as np
 
 from mtbmj import mjcf
 from mtbmj.controllers import installed
-from .compose import Setup
+from mtbmj.compose import Setup
 
 INTEGRATORS = {
     "euler": mujoco.mjtIntegrator.mjINT_EULER,

@@ -11,7 +11,7 @@ and ``damper_force_per_scale`` (the passive damper force D(v) at the current for
 so a controller can turn a wanted force into a command). Reward: ride comfort in (0, 1],
 1 / (1 + (a_z / g)^2) with a_z the body's vertical acceleration.
 
-The fork, tire and speed servo act through ``mtbmj.rolling.RollCallback``; MuJoCo's control
+The fork, tire and speed servo act through ``mtbmj.rolling.frontend.RollCallback``; MuJoCo's control
 callback is process-global, so the environment installs it only while it steps and restores the
 previous one after (also on errors).
 """
@@ -26,7 +26,7 @@ from dm_control.suite import base
 from dm_env import specs
 
 from mtbmj.controllers import installed
-from . import rolling
+from mtbmj.rolling import frontend as rolling
 
 SCALE_MIN = 0.2
 SCALE_MAX = 3.0

@@ -1,10 +1,5 @@
 """``mtbmj validate``: configurations against a sled record (or the ODE reference), the paper's
 Fig. 10 and a self-contained HTML report.
-
-Wired into ``mtbmj.cli.build_parser`` with::
-
-    from mtbmj.validation import cli_validate
-    cli_validate.add_parser(sub)
 """
 from __future__ import annotations
 
@@ -67,8 +62,8 @@ def add_parser(subparsers):
 
 
 def cmd_validate(args) -> int:
-    from .report import run_validation
-    from .sled_data import example_path
+    from mtbmj.validation.report import run_validation
+    from mtbmj.validation.sled_data import example_path
 
     start = time.perf_counter()
     configs = (parse_presets(args.presets) if args.presets else []) + list(args.configs or [])

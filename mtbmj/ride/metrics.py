@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
-from .errors import MtbmjError
+from mtbmj.errors import MtbmjError
 
 VELOCITY_WINDOW_S = 0.051
 VELOCITY_POLYORDER = 3

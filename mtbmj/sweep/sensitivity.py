@@ -16,8 +16,8 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from .errors import ConfigError, MtbmjError
-from .sweep import OUTPUT_COLUMNS, Range, run_sweep
+from mtbmj.errors import ConfigError, MtbmjError
+from mtbmj.sweep.runner import OUTPUT_COLUMNS, Range, run_sweep
 
 METHODS = ("sobol", "morris")
 CONF_LEVEL = 0.95
@@ -142,7 +142,7 @@ def run_sensitivity(config, ranges: Sequence[Range], outputs: Sequence[str], out
         "sensitivity.csv": _csv(method, outputs, indices),
         "sensitivity.png": _plot(method, prob, outputs, indices, len(x)),
     }
-    from .output import write_atomically
+    from mtbmj.output import write_atomically
 
     written = write_atomically(out_dir, files)
     return SensitivityResult(method, prob, outputs, indices, len(x), written + sweep.files, sweep)

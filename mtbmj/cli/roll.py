@@ -5,14 +5,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from mtbmj.cli.common import Progress, overrides
+
 
 def cmd_roll(args) -> int:
-    from .cli import Progress, _overrides
-    from .rolling import run_roll
+    from mtbmj.rolling.frontend import run_roll
 
     result = Progress(f"roll {args.scenario}", not args.quiet).around(
         lambda progress: run_roll(args.scenario, args.speed, args.config, args.head_angle, args.duration,
-                                  _overrides(args.set), progress))
+                                  overrides(args.set), progress))
     written = result.write(args.out)
     s = result.summary
     print(f"roll {args.scenario} at {args.speed:g} m/s ({result.name}, head angle {args.head_angle:g} deg): "
@@ -24,8 +25,8 @@ def cmd_roll(args) -> int:
 
 
 def add_parser(subparsers) -> None:
-    from .rolling import DEFAULT_HEAD_ANGLE_DEG
-    from .terrain import names
+    from mtbmj.rolling.frontend import DEFAULT_HEAD_ANGLE_DEG
+    from mtbmj.rolling.terrain import names
 
     p = subparsers.add_parser("roll", help="roll the front end over terrain at a set speed")
     p.add_argument("scenario", help=f"terrain: {', '.join(names())} (optionally name:key=value,...) or a CSV "

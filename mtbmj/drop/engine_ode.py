@@ -17,9 +17,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .compose import Setup
-from .errors import RunError
-from .trace import MAX_DISPLACEMENT_M, RawTrace
+from mtbmj.compose import Setup
+from mtbmj.errors import RunError
+from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
 
 MAX_SEGMENTS = 20000
 

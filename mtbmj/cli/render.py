@@ -1,9 +1,4 @@
 """``mtbmj render RUN_OR_CONFIG --out video.mp4|.gif``: a headless video of a drop or rolling run.
-
-Wired into ``mtbmj.cli.build_parser`` with::
-
-    from . import cli_render
-    cli_render.add_parser(sub)
 """
 from __future__ import annotations
 
@@ -28,7 +23,7 @@ def add_parser(subparsers):
 
 
 def cmd_render(args) -> int:
-    from .render import render
+    from mtbmj.rolling.render import render
 
     done = render(args.source, args.out, fps=args.fps, width=args.width, height=args.height, duration=args.duration)
     print(f"{done['label']}: {done['frames']} frames, {done['width']}x{done['height']} at {done['fps']:g} fps "

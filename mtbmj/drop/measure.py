@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
-from .compose import Setup
-from .trace import RawTrace
+from mtbmj.compose import Setup
+from mtbmj.trace import RawTrace
 
 COLUMNS = (
     "time_s", "sled_mm", "fork_mm", "tire_mm",

@@ -8,10 +8,10 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from mtbmj.validation import Crosscheck, from_results
-from . import output
-from .config import Config, study_presets
-from .drop import resolve, run_drop
-from .result import DropResult
+from mtbmj import output
+from mtbmj.config import Config, study_presets
+from mtbmj.drop.run import resolve, run_drop
+from mtbmj.drop.result import DropResult
 
 GROUPS = {
     "spring": ("Fork spring study S1-S7", [f"S{i}" for i in range(1, 8)]),

@@ -5,7 +5,7 @@ sled and fork positions set ``qpos`` frame by frame (positions interpolated to t
 the free fall from the drop height before tire touch is prepended). A preset or TOML file is run
 on the MuJoCo engine first. A rolling run directory (``manifest.json`` with ``"kind": "roll"``
 or a ``"scenario"``) is re-simulated, deterministically, through
-``mtbmj.rolling.roll_trajectory(scenario, speed, config=..., head_angle_deg=..., duration=..., fps=...)
+``mtbmj.rolling.frontend.roll_trajectory(scenario, speed, config=..., head_angle_deg=..., duration=..., fps=...)
 -> (model, times, qpos)`` when that module is present; the scene's camera "side" is used if it has one.
 
 GL backend: MuJoCo picks its OpenGL context class from ``MUJOCO_GL`` when ``mujoco`` is first
@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import MtbmjError
+from mtbmj.errors import MtbmjError
 
 FORMATS = (".mp4", ".gif")
 BACKENDS = ("egl", "osmesa")
@@ -147,7 +147,9 @@ def _run_name(run_dir: Path) -> str | None:
 def drop_trajectory(source: str | Path, fps: float = 30.0, duration: float | None = None,
                     include_fall: bool = True) -> Trajectory:
     """Frames of a drop from a run directory (replayed) or a preset/TOML file (run on MuJoCo)."""
-    from . import compose, config as config_mod, engine_mujoco, scene as scene_mod
+    from mtbmj import compose, config as config_mod
+    from mtbmj.drop import engine_mujoco
+    from mtbmj.drop import scene as scene_mod
 
     path = Path(source)
     if path.is_dir():
@@ -186,14 +188,14 @@ def drop_trajectory(source: str | Path, fps: float = 30.0, duration: float | Non
 
 def roll_trajectory(run_dir: Path, fps: float = 30.0, duration: float | None = None) -> Trajectory:
     """Frames of a rolling run directory, re-simulated (deterministic) by
-    ``mtbmj.rolling.roll_trajectory`` from its manifest (scenario), summary (speed, head angle,
+    ``mtbmj.rolling.frontend.roll_trajectory`` from its manifest (scenario), summary (speed, head angle,
     duration) and resolved config.toml."""
     run_dir = Path(run_dir)
     try:
-        rolling = importlib.import_module("mtbmj.rolling")
+        rolling = importlib.import_module("mtbmj.rolling.frontend")
         source = rolling.roll_trajectory
     except (ImportError, AttributeError):
-        raise RenderError(f"{run_dir}: a rolling run, but this mtbmj has no mtbmj.rolling.roll_trajectory") from None
+        raise RenderError(f"{run_dir}: a rolling run, but this mtbmj has no mtbmj.rolling.frontend.roll_trajectory") from None
     try:
         manifest = json.loads((run_dir / "manifest.json").read_text())
         summary = json.loads((run_dir / "summary.json").read_text())
@@ -216,7 +218,7 @@ def roll_trajectory(run_dir: Path, fps: float = 30.0, duration: float | None = N
 
 
 def rolling_frames(model, t, q, fps: float = 30.0, duration: float | None = None, label: str = "roll") -> Trajectory:
-    """A ``Trajectory`` from (model, times, qpos) as ``mtbmj.rolling.roll_trajectory`` returns them."""
+    """A ``Trajectory`` from (model, times, qpos) as ``mtbmj.rolling.frontend.roll_trajectory`` returns them."""
     t = np.asarray(t, dtype=float).ravel()
     q = np.asarray(q, dtype=float).reshape(t.size, -1)
     end = float(t[-1]) if duration is None else min(float(t[-1]), float(t[0]) + float(duration))

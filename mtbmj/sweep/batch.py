@@ -1,7 +1,7 @@
 """Batched sweep runner: a batch of variants stepped together through ``mujoco.rollout`` on the
 compiled force laws, with a vectorised post-processing. A drop-in ``runner`` for
-``mtbmj.sweep.run_sweep`` (the default for the MuJoCo engine); records equal those of
-:func:`mtbmj.sweep.run_batch` (which calls ``run_drop`` per variant).
+``mtbmj.sweep.runner.run_sweep`` (the default for the MuJoCo engine); records equal those of
+:func:`mtbmj.sweep.runner.run_batch` (which calls ``run_drop`` per variant).
 
 How a batch runs
 ----------------
@@ -39,11 +39,14 @@ import numpy as np
 from mujoco import rollout as _rollout
 from scipy import signal
 
-from . import compose, engine_mujoco, events
-from . import scene as scene_mod
-from .controllers import installed
-from .sweep import SIGNALS, BatchJob, Variant, flatten_summary, run_batch, run_variant
-from .trace import MAX_DISPLACEMENT_M, RawTrace
+from mtbmj import compose
+from mtbmj.drop import engine_mujoco
+from mtbmj.drop import events
+from mtbmj.drop import scene as scene_mod
+from mtbmj.controllers import installed
+from mtbmj.sweep.variants import SIGNALS, BatchJob, Variant, flatten_summary
+from mtbmj.sweep.single import run_batch, run_variant
+from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
 
 SWITCH_ROUND = 400  # steps per round while some variant's tire law may still switch (waste vs rounds)
 MAX_ROUND = 20000  # steps per round otherwise
@@ -115,7 +118,7 @@ _FAST_SETUP = None
 def _fast_rates_kernel():
     import numba
 
-    from .controllers import compiled
+    from mtbmj.controllers import compiled
 
     @numba.njit(cache=True, error_model="numpy", nogil=True)
     def rates(I, P, xs, vs, dx, dv, x_damp):
@@ -136,7 +139,7 @@ def _fast_setup():
     if _FAST_SETUP is None:
         import types
 
-        from .controllers import compiled
+        from mtbmj.controllers import compiled
 
         kernel = _fast_rates_kernel()
 
@@ -169,9 +172,9 @@ def setup_of(cfg):
 
 def _prepare(job: BatchJob, variant: Variant, spec) -> _Run:
     """What ``run_drop`` and ``engine_mujoco.run`` do before stepping (raises as they do)."""
-    from .controllers.compiled import CompiledForkCallback
-    from .drop import resolve
-    from .errors import ConfigError
+    from mtbmj.controllers.compiled import CompiledForkCallback
+    from mtbmj.drop.run import resolve
+    from mtbmj.errors import ConfigError
 
     cfg = resolve(job.config, variant.overrides)
     if job.duration is not None and not job.duration > 0:
@@ -323,10 +326,10 @@ def summarize(run: _Run) -> tuple[dict, dict]:
 def run_batch_rollout(job: BatchJob) -> list[dict]:
     """The batched runner: the variants of ``job`` stepped together through ``mujoco.rollout`` on
     ``job.threads`` threads (default 1) with the compiled force laws; same records as
-    :func:`mtbmj.sweep.run_batch`. Falls back to ``run_batch`` for another engine, a custom
+    :func:`mtbmj.sweep.runner.run_batch`. Falls back to ``run_batch`` for another engine, a custom
     ``job.drop`` or when the compiled laws are unavailable. A large batch runs in slices of
     ``MAX_BATCH`` variants (each variant holds a compiled-law registry slot while it runs)."""
-    from .controllers import compiled
+    from mtbmj.controllers import compiled
 
     if job.engine != "mujoco" or job.drop is not None or not compiled.available():
         return run_batch(job)

@@ -6,10 +6,14 @@ from typing import Callable, Mapping
 
 import numpy as np
 
-from . import compose, config as config_mod, engine_mujoco, engine_ode, events, measure
-from .config import Config
-from .errors import ConfigError, RunError
-from .result import DropResult
+from mtbmj import compose, config as config_mod
+from mtbmj.drop import engine_mujoco
+from mtbmj.drop import engine_ode
+from mtbmj.drop import events
+from mtbmj.drop import measure
+from mtbmj.config import Config
+from mtbmj.errors import ConfigError, RunError
+from mtbmj.drop.result import DropResult
 
 ENGINES = {"mujoco": engine_mujoco.run, "ode": engine_ode.run}
 

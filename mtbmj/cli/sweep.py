@@ -1,33 +1,22 @@
-"""``mtbmj sweep`` and ``mtbmj sensitivity``.
-
-Wired into ``mtbmj.cli.build_parser`` with::
-
-    from . import cli_sweep
-    cli_sweep.add_parser(sub)
-
-``python -m mtbmj.cli_sweep sweep ...`` runs them stand-alone (same errors and exit statuses).
-"""
+"""``mtbmj sweep``: many variants of a configuration (grids, samples, a CSV) into one table, and
+the options it shares with ``mtbmj sensitivity``."""
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
-from .config import parse_assignment
-from .errors import ConfigError
+from mtbmj.cli.common import overrides
+from mtbmj.errors import ConfigError
 
 
-def _overrides(pairs) -> dict:
-    return dict(parse_assignment(p) for p in pairs or [])
-
-
-def _positive(flag: str, value, minimum: int = 1):
+def positive(flag: str, value, minimum: int = 1):
     if value is not None and value < minimum:
         raise ConfigError(f"{flag}: must be at least {minimum}, got {value}")
 
 
 def variants_from_args(args) -> tuple[list[dict], dict]:
     """The override sets a ``sweep`` command asks for, and a description for the manifest."""
-    from . import sweep
+    from mtbmj import sweep
 
     given = [bool(args.vary), args.from_csv is not None]
     if args.from_csv is not None and (args.vary or args.samples is not None):
@@ -37,7 +26,7 @@ def variants_from_args(args) -> tuple[list[dict], dict]:
     if args.from_csv is not None:
         return sweep.from_csv(args.from_csv), {"kind": "csv", "file": str(args.from_csv)}
     if args.samples is not None:
-        _positive("--samples", args.samples)
+        positive("--samples", args.samples)
         ranges = [sweep.parse_vary(v, count=False) for v in args.vary]
         method = args.method or "lhs"
         return (sweep.sample(ranges, args.samples, method, args.seed),
@@ -49,8 +38,8 @@ def variants_from_args(args) -> tuple[list[dict], dict]:
     return sweep.grid(ranges), {"kind": "grid", "ranges": [[r.key, r.lo, r.hi, r.n] for r in ranges]}
 
 
-def _check_common(args) -> None:
-    _positive("--workers", args.workers)
+def check_shared_options(args) -> None:
+    positive("--workers", args.workers)
     if args.backend == "dask" and not args.scheduler:
         raise ConfigError("--backend dask needs --scheduler ADDRESS (e.g. tcp://10.0.0.5:8786)")
     if args.scheduler and args.backend != "dask":
@@ -58,16 +47,16 @@ def _check_common(args) -> None:
 
 
 def cmd_sweep(args) -> int:
-    from .sweep import SweepProgress, run_sweep
+    from mtbmj.sweep.runner import SweepProgress, run_sweep
 
-    _check_common(args)
-    _positive("--batch-size", args.batch_size)
-    _positive("--threads", args.threads)
+    check_shared_options(args)
+    positive("--batch-size", args.batch_size)
+    positive("--threads", args.threads)
     variants, how = variants_from_args(args)
     bar = SweepProgress(len(variants), enabled=not args.quiet)
     try:
         result = run_sweep(args.config, variants, args.out, engine=args.engine, duration=args.duration,
-                           base_overrides=_overrides(args.set), workers=args.workers, batch_size=args.batch_size,
+                           base_overrides=overrides(args.set), workers=args.workers, batch_size=args.batch_size,
                            backend=args.backend, scheduler=args.scheduler, traces=args.traces, csv=args.csv,
                            resume=args.resume, progress=bar, manifest_extra={"variants_from": how},
                            runner=args.runner, threads=args.threads)
@@ -79,30 +68,7 @@ def cmd_sweep(args) -> int:
     return 0
 
 
-def cmd_sensitivity(args) -> int:
-    from . import sweep
-    from .sensitivity import run_sensitivity
-
-    _check_common(args)
-    if not args.vary:
-        raise ConfigError("sensitivity: give at least one --vary key=lo:hi")
-    ranges = [sweep.parse_vary(v, count=False) for v in args.vary]
-    outputs = args.output.split(",")
-    bar = sweep.SweepProgress(0, enabled=not args.quiet, label="sensitivity")
-    try:
-        result = run_sensitivity(args.config, ranges, outputs, args.out, method=args.method, n=args.samples,
-                                 seed=args.seed, levels=args.levels, engine=args.engine, duration=args.duration,
-                                 base_overrides=_overrides(args.set), workers=args.workers, backend=args.backend,
-                                 scheduler=args.scheduler, resume=args.resume, progress=bar)
-    except KeyboardInterrupt:
-        print(f"mtbmj: sensitivity interrupted; finished runs are journaled in {args.out / 'journal'}: "
-              f"continue with the same command and --resume", file=sys.stderr)
-        raise
-    print(f"sensitivity {args.config}: {result.line()}; wrote {len(result.files)} files to {args.out}")
-    return 0
-
-
-def _common(p) -> None:
+def add_shared_options(p) -> None:
     p.add_argument("config", help="preset name (S1..S14, reference) or a TOML file")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a key of the base configuration (repeatable)")
     p.add_argument("--duration", type=float, help="simulated time in s (default: solver.duration_s)")
@@ -117,14 +83,13 @@ def _common(p) -> None:
 
 
 def add_parser(subparsers) -> None:
-    """Add ``sweep`` and ``sensitivity`` to an argparse sub-parser collection."""
     p = subparsers.add_parser(
         "sweep", help="run many variants of a configuration: grids, LHS/Sobol samples or a CSV; one table",
         description="Run variants of CONFIG batched over processes (or a Dask cluster) and write one table "
                     "(sweep.parquet; sweep.csv with --csv) of every variant's inputs and summary outputs, and "
                     "with --traces the sled/fork/tire histories in traces.h5. Finished variants are journaled: an "
                     "interrupted sweep continues with --resume; a failing variant is recorded with its reason.")
-    _common(p)
+    add_shared_options(p)
     p.add_argument("--vary", action="append", metavar="KEY=LO:HI[:N]",
                    help="a grid of N values (repeatable: full factorial), or with --samples a range")
     p.add_argument("--samples", type=int, metavar="N", help="N sampled variants in the --vary ranges")
@@ -139,32 +104,3 @@ def add_parser(subparsers) -> None:
                         "--engine mujoco); single: one run_drop per variant")
     p.add_argument("--threads", type=int, default=1, help="rollout threads per process with --runner batch (default 1)")
     p.set_defaults(func=cmd_sweep)
-
-    p = subparsers.add_parser(
-        "sensitivity", help="Sobol or Morris sensitivity indices of drop outputs (SALib), with CIs and a plot",
-        description="Sample the --vary ranges (Saltelli for Sobol, trajectories for Morris), run the samples "
-                    "through the sweep, and write sensitivity.json, sensitivity.csv and sensitivity.png "
-                    "(indices with 95 % confidence intervals) next to the sweep table.")
-    _common(p)
-    p.add_argument("--vary", action="append", metavar="KEY=LO:HI", help="a parameter range (repeatable)")
-    p.add_argument("--output", default="fork_peak1_mm",
-                   help="comma-separated sweep outputs, e.g. fork_peak1_mm,tire_peak1_mm (default fork_peak1_mm)")
-    p.add_argument("--method", choices=("sobol", "morris"), default="sobol")
-    p.add_argument("--samples", type=int, default=64,
-                   help="base samples N: N(D+2) runs for Sobol, N(D+1) trajectories' runs for Morris (default 64)")
-    p.add_argument("--levels", type=int, default=4, help="Morris grid levels (default 4)")
-    p.add_argument("--out", type=Path, default=Path("out/sensitivity"), help="output directory (default out/sensitivity)")
-    p.set_defaults(func=cmd_sensitivity)
-
-
-def main(argv=None) -> int:
-    """Stand-alone entry with ``mtbmj.cli``'s error handling (one line, exit 2)."""
-    from .cli import _Parser, run
-
-    parser = _Parser(prog="mtbmj")
-    add_parser(parser.add_subparsers(dest="command", required=True, parser_class=_Parser))
-    return run(parser, argv)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,11 +1,6 @@
 """``mtbmj telemetry FILE.SST [--compare RUN_DIR ...] [--out DIR]``: the rider's metrics of a real
 ride, and the same metrics of simulated runs on the same axes.
 
-Wired into ``mtbmj.cli.build_parser`` with::
-
-    from . import cli_telemetry
-    cli_telemetry.add_parser(sub)
-
 Writes ``telemetry.json`` (metrics of the fork and rear of the ride and of the fork of every
 compared run) and ``telemetry.png`` (travel histogram in % of travel and velocity histogram with
 the high/low-speed split, both in % of time), atomically.
@@ -18,8 +13,10 @@ from pathlib import Path
 
 import numpy as np
 
-from . import output, ride_metrics, telemetry
-from .errors import MtbmjError
+from mtbmj import output
+from mtbmj.ride import metrics as ride_metrics
+from mtbmj.ride import telemetry
+from mtbmj.errors import MtbmjError
 
 try:
     import tomllib

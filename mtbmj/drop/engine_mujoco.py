@@ -1,4 +1,4 @@
-"""The drop on MuJoCo: the scene from ``mtbmj.scene``, the fork law through the control callback,
+"""The drop on MuJoCo: the scene from ``mtbmj.drop.scene``, the fork law through the control callback,
 the tire as calibrated soft contact, the tire-law switch applied between steps."""
 from __future__ import annotations
 
@@ -8,11 +8,11 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from mtbmj.controllers import installed
-from . import scene as scene_mod
-from .compose import Setup
-from .errors import RunError
-from .trace import MAX_DISPLACEMENT_M, RawTrace
+from mtbmj.controllers import ForkCallback, installed
+from mtbmj.drop import scene as scene_mod
+from mtbmj.compose import Setup
+from mtbmj.errors import RunError
+from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
 
 def _warning(data) -> str | None:
     for i, w in enumerate(data.warning):
@@ -50,13 +50,33 @@ CHUNK = 20000  # steps per rollout otherwise (each call costs setup time; progre
 TOUCH_DEPTH_M = 1e-12
 
 
-def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
+CALLBACKS = ("auto", "compiled", "python")
+
+
+def fork_callback(model, law, kind="auto"):
+    """The fork callback for ``model``: ``"auto"`` (the compiled laws when possible, else the Python
+    laws with a one-time warning), ``"compiled"``, ``"python"``, or a factory ``f(model, law)``."""
+    if callable(kind):
+        return kind(model, law)
+    if kind == "python":
+        return ForkCallback(model, law)
+    from mtbmj.controllers import compiled  # numba is imported on the first run only
+
+    if kind == "compiled":
+        return compiled.CompiledForkCallback(model, law)
+    if kind == "auto":
+        return compiled.make_callback(model, law)
+    raise ValueError(f"callback: expected one of {', '.join(CALLBACKS)} or a factory, got {kind!r}")
+
+
+def run(setup: Setup, duration: float | None = None, progress=None, callback="auto") -> RawTrace:
     """Integrate the drop from tire touch (t = 0, both bodies at the impact speed).
 
     Steps run in chunks through ``mujoco.rollout`` (the loop and the recording stay in C++; the
     control callback still supplies the fork force). When the tire law switches, the chunk is cut
     at the step where the fork tops out, the contact is re-parameterised and stepping resumes
     from that state, exactly as if the switch had been made between two single steps.
+    ``callback`` chooses the fork callback (see :func:`fork_callback`).
     """
     duration = setup.duration if duration is None else duration
     sc = scene_mod.build(setup)
@@ -65,10 +85,8 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
     data.qvel[sc.sled_dof] = setup.impact_speed
     data.qpos[sc.sled_qpos] = TOUCH_DEPTH_M
     mujoco.mj_forward(model, data)
-    from mtbmj.controllers.compiled import make_callback  # numba is imported on the first run only
-
     # compiled (numba) force laws read and write mjData directly; the Python laws are the fallback
-    callback = make_callback(model, setup.fork)
+    callback = fork_callback(model, setup.fork, callback)
     callback.bind(data)
     steps = int(round(duration / setup.timestep))
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .compose import Setup
-from .trace import RawTrace
+from mtbmj.compose import Setup
+from mtbmj.trace import RawTrace
 
 REST_WINDOW_S = 0.2  # the last 0.2 s decide whether the system is at rest
 REST_TOLERANCE_MM = 0.5  # peak-to-peak sled motion allowed "at rest"

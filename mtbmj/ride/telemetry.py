@@ -21,12 +21,13 @@ from __future__ import annotations
 import math
 import struct
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
-from . import ride_metrics
-from .errors import MtbmjError
+from mtbmj.ride import metrics as ride_metrics
+from mtbmj.errors import MtbmjError
 
 MAGIC = b"SST"
 VERSION = 3
@@ -226,4 +227,4 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
 
 def example_path() -> Path:
     """The shipped ride recording (00649.SST, MIT, from the Sufni Suspension Telemetry project)."""
-    return Path(__file__).parent / "data" / "sst" / "00649.SST"
+    return Path(str(resources.files("mtbmj") / "data" / "sst" / "00649.SST"))

@@ -4,7 +4,7 @@
 ``mjcf/rolling_scene.xml`` for the configuration (masses, tire radius, fork length, solver) and a
 head angle, puts the wheel at rest (static sag) at the start of the terrain, and rolls it at the
 set speed: a PD servo on the chassis' horizontal joint tracks x0 + v t. The fork law (spring,
-damper, friction, as ``compose.setup``) and the radial tire (``mtbmj.tire_model``, the
+damper, friction, as ``compose.setup``) and the radial tire (``mtbmj.rolling.tire``, the
 configuration's tire values) are applied by one control callback through motors, so MuJoCo's
 ``actuatorfrc`` sensors record the exact forces of every step. ``RollCallback`` (Python) is that
 callback's specification; by default runs use its compiled twin
@@ -33,11 +33,13 @@ from mujoco import rollout
 
 from mtbmj import mjcf
 from mtbmj.controllers import installed
-from . import compose, measure, output, terrain as terrain_mod
-from .config import Config
-from .errors import ConfigError, RunError
-from .result import RunOutput
-from .tire_model import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
+from mtbmj import compose, output
+from mtbmj.drop import measure
+from mtbmj.rolling import terrain as terrain_mod
+from mtbmj.config import Config
+from mtbmj.errors import ConfigError, RunError
+from mtbmj.result import RunOutput
+from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 
 DEFAULT_HEAD_ANGLE_DEG = 65.0
 DRIVE_HZ = 10.0  # bandwidth of the speed servo (critically damped)
@@ -67,6 +69,17 @@ class FrontEnd:
         """(cos, sin) of the head angle: the fork compresses along (-cos, +sin) in x-z."""
         return math.cos(self.head_angle), math.sin(self.head_angle)
 
+    def axle_state(self, qpos, qvel, joints):
+        """Axle position (x, z) and velocity (vx, vz) in the world from the state, for the joint
+        addresses ``joints`` = (chassis x, chassis z, fork) qpos indices + the same dof indices."""
+        xq, zq, fq, xv, zv, fv = joints
+        c, s = self.axis
+        qf = qpos[fq]
+        vf = qvel[fv]
+        cx = self.chassis_x0 + qpos[xq] + (self.fork_length - qf) * c
+        cz = self.chassis_z0 + qpos[zq] - (self.fork_length - qf) * s
+        return cx, cz, qvel[xv] - vf * c, qvel[zv] + vf * s
+
     def axle(self, qx, qz, qf):
         c, s = self.axis
         return self.chassis_x0 + qx + (self.fork_length - qf) * c, self.chassis_z0 + qz - (self.fork_length - qf) * s
@@ -83,7 +96,7 @@ def _check_inputs(speed, head_angle_deg, duration):
 
 def build_front_end(setup: compose.Setup, terrain, head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG) -> FrontEnd:
     """Compile the rolling scene for ``setup`` and ``terrain`` at ``head_angle_deg``."""
-    from .scene import INTEGRATORS
+    from mtbmj.drop.scene import INTEGRATORS
 
     spec = mujoco.MjSpec.from_file(str(mjcf.path(SCENE)))
     spec.option.timestep = setup.timestep
@@ -167,7 +180,7 @@ class RollCallback:
     Acts only on its own model; assigns, never accumulates. The terrain geometry (contact
     patches) is refreshed every ``refresh`` seconds of simulated time or 5 mm of axle travel.
     ``damper_scale`` (None = passive) multiplies the fork's hydraulic damper force: the
-    semi-active command of ``mtbmj.env``."""
+    semi-active command of ``mtbmj.rolling.env``."""
 
     def __init__(self, front: FrontEnd, fork_law, tire: RadialTire, speed: float, x_ref0: float,
                  refresh: float = REFRESH_S):
@@ -209,12 +222,7 @@ class RollCallback:
         self.patches, self.next_refresh, self.last_x = [], -math.inf, math.inf
 
     def axle_state(self, qpos, qvel):
-        f = self.front
-        qf = qpos[self.fq]
-        vf = qvel[self.fv]
-        cx = f.chassis_x0 + qpos[self.xq] + (f.fork_length - qf) * self.cos
-        cz = f.chassis_z0 + qpos[self.zq] - (f.fork_length - qf) * self.sin
-        return cx, cz, qvel[self.xv] - vf * self.cos, qvel[self.zv] + vf * self.sin
+        return self.front.axle_state(qpos, qvel, (self.xq, self.zq, self.fq, self.xv, self.zv, self.fv))
 
     def __call__(self, m, d):
         if m is not self._model and m._address != self._address:
@@ -295,7 +303,7 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
 
     ``callback``: ``"auto"`` (the compiled callback of ``controllers.compiled_rolling`` when numba
     is available, else ``RollCallback`` with a warning), ``"compiled"`` or ``"python"``."""
-    from .drop import resolve
+    from mtbmj.drop.run import resolve
 
     _check_inputs(speed_m_per_s, head_angle_deg, None)
     if callback not in CALLBACKS:
@@ -337,7 +345,19 @@ def _make_callback(kind: str, front, law, tire, speed, x_ref0, refresh):
 
     if kind == "compiled":
         return compiled_rolling.CompiledRollCallback(front, law, tire, speed, x_ref0, refresh)
-    return compiled_rolling.make_roll_callback(front, law, tire, speed, x_ref0, refresh)
+    # "auto": the compiled callback when possible, else this one with a warning (once per reason:
+    # numba missing, layout not verifiable, a law/tire/terrain with no compiled form)
+    reason = compiled_rolling.unavailable_reason()
+    if reason is None:
+        try:
+            return compiled_rolling.CompiledRollCallback(front, law, tire, speed, x_ref0, refresh)
+        except (compiled_rolling.UnsupportedLaw, compiled_rolling.UnsupportedRolling) as error:  # noqa: E501
+            compiled_rolling.warn_once(f"{error}: using the Python rolling callback")
+        except RuntimeError as error:  # the mjData layout check failed
+            compiled_rolling.warn_once(str(error))
+    else:
+        compiled_rolling.warn_once(reason)
+    return RollCallback(front, law, tire, speed, x_ref0, refresh)
 
 
 def callback_kind(callback) -> str:
@@ -385,7 +405,7 @@ def _simulate(p: Prepared, duration: float, progress=None):
     states[0] = state
     done = 0
     messages: list[str] = []
-    from .engine_mujoco import _collected_warnings, _warning
+    from mtbmj.drop.engine_mujoco import _collected_warnings, _warning
 
     with installed(p.callback), _collected_warnings(messages):
         while done < steps:
@@ -464,7 +484,7 @@ def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
         "min_fork_velocity_mm_per_s": float(raw["fork_velocity_mm_per_s"].min()),
     }
     try:
-        from . import ride_metrics
+        from mtbmj.ride import metrics as ride_metrics
     except ImportError:  # written by a parallel piece of work; the summary stands without it
         out["ride_metrics"] = None
     else:
@@ -497,7 +517,7 @@ class RollResult(RunOutput):
         return output.csv_bytes({k: data[k] for k in COLUMNS}, header)
 
     def manifest(self) -> dict:
-        from .result import versions
+        from mtbmj.result import versions
 
         return {"name": self.name, "scenario": self.scenario, "engine": "mujoco", "config_sha256": self.config.digest(),
                 "config_sources": list(self.config.sources), "versions": versions(),

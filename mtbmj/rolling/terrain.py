@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import MtbmjError
+from mtbmj.errors import MtbmjError
 
 MM = 1e-3
 LEAD_IN_M = 1.5  # flat ground before the feature: the wheel starts at rest on it
@@ -260,7 +260,7 @@ def from_csv(path: str | Path) -> Terrain:
     """A profile from a CSV record: columns ``distance_m`` (non-decreasing) and ``height_mm``;
     read by ``mtbmj.identify.records.read_record`` (units converted to SI there). The wheel starts
     at the first distance on a flat lead-in at the first height."""
-    from .identify.records import read_record
+    from mtbmj.identify.records import read_record
 
     rec = read_record(path)
     if set(rec.units) != {"distance", "height"} or rec.units.get("distance") != "m" or rec.units.get("height") != "mm":

@@ -1,0 +1,85 @@
+"""What every command shares: the parser that reports bad input in one line, the progress bar,
+``--set`` overrides, and ``run`` (parse, run, map errors to exit statuses)."""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import warnings
+
+from mtbmj.config import parse_assignment
+from mtbmj.errors import MtbmjError
+
+EXIT_BAD_INPUT = 2
+
+
+class Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, not usage + message
+        raise MtbmjError(message)
+
+
+class Progress:
+    """A progress bar on stderr, redrawn in place, on a terminal only: when stderr is a file or a
+    pipe it stays free for the one-line error report."""
+
+    def __init__(self, label: str, enabled: bool = True):
+        self.label = label
+        self.tty = sys.stderr.isatty()
+        self.enabled = enabled and self.tty
+        self.start = time.perf_counter()
+
+    def __call__(self, fraction: float) -> None:
+        if not self.enabled:
+            return
+        bar = "#" * int(fraction * 30)
+        print(f"\r{self.label} [{bar:<30}] {fraction * 100:5.1f}%", end="", file=sys.stderr, flush=True)
+
+    def done(self) -> None:
+        if self.enabled:
+            print(f"\r{self.label}: done in {time.perf_counter() - self.start:.2f} s" + " " * 30, file=sys.stderr)
+
+    def abandon(self) -> None:
+        """Clear the bar so an error report starts on a clean line."""
+        if self.enabled:
+            print("\r" + " " * 80 + "\r", end="", file=sys.stderr, flush=True)
+
+    def around(self, work):
+        """``work(progress)`` with the bar shown, finished, or cleared if it fails."""
+        try:
+            result = work(self)
+        except BaseException:
+            self.abandon()
+            raise
+        self.done()
+        return result
+
+
+def overrides(pairs) -> dict:
+    return dict(parse_assignment(p) for p in pairs or [])
+
+
+def add_run_options(p) -> None:
+    """``--set KEY=VALUE`` (repeatable) and ``--duration`` for a command that runs a configuration."""
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a configuration key, e.g. fork.spring.preload_N=300 (repeatable)")
+    p.add_argument("--duration", type=float, help="simulated time in s (default: solver.duration_s)")
+
+
+def run(parser: argparse.ArgumentParser, argv=None) -> int:
+    """Parse and run a command: bad input is one line on stderr and exit status 2."""
+    try:
+        args = parser.parse_args(argv)
+        if getattr(args, "duration", None) is not None and not args.duration > 0:
+            raise MtbmjError(f"--duration: must be positive, got {args.duration}")
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)
+            return args.func(args)
+    except MtbmjError as exc:
+        print(f"mtbmj: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except RuntimeWarning as exc:
+        print(f"mtbmj: error: run diverged ({exc})", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("mtbmj: interrupted", file=sys.stderr)
+        return 130

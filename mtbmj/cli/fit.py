@@ -1,0 +1,49 @@
+"""``mtbmj fit spring|damper|tire|drop``: parameters from bench data or a drop record, written as a
+configuration that ``mtbmj drop`` runs as is."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from mtbmj.errors import MtbmjError
+
+
+def cmd_fit(args) -> int:
+    from mtbmj.identify.run import identify
+
+    bounds = {}
+    for text in args.bound or []:
+        key, _, span = text.partition("=")
+        lo, _, hi = span.partition(":")
+        try:
+            bounds[key.strip()] = (float(lo), float(hi))
+        except ValueError:
+            raise MtbmjError(f"--bound {text}: expected key=low:high with numbers") from None
+    free = [k.strip() for k in (args.free or "").split(",") if k.strip()]
+    ident = identify(args.kind, args.data, model=args.model, friction=args.friction, mass_kg=args.mass_kg,
+                     config=args.config, free=free, bounds=bounds or None, engine=args.engine,
+                     starts=args.starts)
+    written = ident.write(args.out)
+    for name in ident.chosen:
+        print(ident.results[name].line())
+    for note in ident.notes:
+        print(f"note: {note}")
+    print(f"wrote {', '.join(p.name for p in written)} to {args.out}; run it with: mtbmj drop {args.out / 'fit.toml'}")
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("fit", help="identify parameters from bench data or a drop record; writes fit.toml")
+    p.add_argument("kind", choices=("spring", "damper", "tire", "drop"))
+    p.add_argument("data", nargs="+", help="record file(s): CSV with units in the column names, or .mat")
+    p.add_argument("--model", default="auto", help="spring/damper model to write (default: best by BIC)")
+    p.add_argument("--friction", default="auto", help="damper friction model to write (default: best by BIC)")
+    p.add_argument("--mass-kg", type=float, help="tire: the mass dropped on the tire")
+    p.add_argument("--config", default="S12", help="drop: the configuration whose free parameters are fitted")
+    p.add_argument("--free", help="drop: comma-separated configuration keys to fit")
+    p.add_argument("--bound", action="append", metavar="KEY=LOW:HIGH", help="drop: bounds of a free key (repeatable)")
+    p.add_argument("--engine", choices=("mujoco", "ode"), default="mujoco", help="drop: engine to fit with")
+    p.add_argument("--starts", type=int, default=1, metavar="N",
+                   help="drop: fit from N start points (the start values and N-1 Latin hypercube points "
+                        "within the bounds); the best fit wins (default 1)")
+    p.add_argument("--out", type=Path, default=Path("out/fit"), help="output directory (default out/fit)")
+    p.set_defaults(func=cmd_fit)

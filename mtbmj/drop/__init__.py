@@ -1,0 +1,31 @@
+"""The drop test: the sled scene, the MuJoCo and ODE engines, the logger's view, events, the study.
+
+Flow of one drop: configuration -> ``compose.setup`` (force laws in SI) -> engine
+(``engine_mujoco.run`` or ``engine_ode.run``, a ``RawTrace``) -> ``measure`` (sled conventions,
+anti-aliasing, 1 kHz) -> ``events`` (Peak 1, topping, ...) -> ``result.DropResult``.
+"""
+_LAZY = {
+    "run_drop": "mtbmj.drop.run",
+    "resolve": "mtbmj.drop.run",
+    "ENGINES": "mtbmj.drop.run",
+    "DropResult": "mtbmj.drop.result",
+    "run_study": "mtbmj.drop.study",
+    "write_study": "mtbmj.drop.study",
+}
+__all__ = ['DropResult', 'ENGINES', 'resolve', 'run_drop', 'run_study', 'write_study']
+
+
+def __getattr__(name):  # PEP 562: import a submodule only when one of its names is asked for
+    try:
+        module, _, attribute = _LAZY[name].partition(":")  # "module" or "module:name there"
+    except KeyError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    import importlib
+
+    value = getattr(importlib.import_module(module), attribute or name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

@@ -1,0 +1,89 @@
+"""The result of one drop: one object that holds the numbers, plots itself and exports."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from mtbmj import output
+from mtbmj.config import Config
+from mtbmj.drop.measure import COLUMNS
+from mtbmj.result import RunOutput, versions
+from mtbmj.trace import RawTrace
+
+DISPLACEMENTS = ("sled_mm", "fork_mm", "tire_mm")
+
+
+@dataclass
+class DropResult(RunOutput):
+    """A drop run: ``signals`` as the sled logger records them (1 kHz, mm, N; see
+    ``measure.COLUMNS``), ``raw`` at the engine rate, ``summary`` (events, rest, energy)."""
+
+    COLUMNS = COLUMNS  # not a field: the columns written and exported
+
+    name: str
+    engine: str
+    config: Config
+    signals: dict[str, np.ndarray]
+    raw: dict[str, np.ndarray]
+    trace: RawTrace
+    summary: dict
+    wall_time_s: float
+    info: dict = field(default_factory=dict)
+
+    def csv_bytes(self, raw: bool = False) -> bytes:
+        data = self.raw if raw else self.signals
+        rate = "engine rate" if raw else "1 kHz after a 400 Hz anti-aliasing low-pass"
+        header = (f"mtbmj drop {self.name}, engine {self.engine}, {rate}\n"
+                  "sled zero at tire touch, fork zero at unloaded full extension, tire = sled - fork, compression positive")
+        return output.csv_bytes({k: data[k] for k in COLUMNS}, header)
+
+    def to_csv(self, path: str | Path, raw: bool = False) -> Path:
+        path = Path(path)
+        output.write_atomically(path.parent, {path.name: self.csv_bytes(raw)})
+        return path
+
+    def manifest(self) -> dict:
+        return {
+            "name": self.name,
+            "engine": self.engine,
+            "config_sha256": self.config.digest(),
+            "config_sources": list(self.config.sources),
+            "versions": versions(),
+            "wall_time_s": self.wall_time_s,
+            "engine_info": {k: v for k, v in self.trace.info.items() if k != "events"},
+        }
+
+    def difference(self, other: "DropResult", raw: bool = True) -> dict[str, dict[str, float]]:
+        """Largest |self - other| per displacement (mm) and where it occurs (s), on the shared grid."""
+        a, b = (self.raw, other.raw) if raw else (self.signals, other.signals)
+        n = min(len(a["time_s"]), len(b["time_s"]))
+        if not np.allclose(a["time_s"][:n], b["time_s"][:n], atol=1e-9):
+            raise ValueError("results are not on the same time grid")
+        out = {}
+        for column in DISPLACEMENTS:
+            diff = np.abs(a[column][:n] - b[column][:n])
+            i = int(np.argmax(diff))
+            out[column] = {"max_abs_mm": float(diff[i]), "at_time_s": float(a["time_s"][i])}
+        return out
+
+    def plot(self, axes=None, label: str | None = None, **line_kwargs):
+        """Sled, fork and tire displacement histories on three stacked axes; returns the figure."""
+        import matplotlib
+
+        if axes is None:
+            matplotlib.use("Agg", force=False)
+            import matplotlib.pyplot as plt
+
+            fig, axes = plt.subplots(3, 1, sharex=True, figsize=(7, 7), constrained_layout=True)
+        else:
+            fig = axes[0].figure
+        label = label or f"{self.name} ({self.engine})"
+        for ax, column in zip(axes, DISPLACEMENTS):
+            ax.plot(self.time, self.signals[column], label=label, **line_kwargs)
+            ax.set_ylabel(column.replace("_mm", " [mm]"))
+            ax.grid(True, alpha=0.3)
+        axes[-1].set_xlabel("time [s]")
+        axes[0].legend(fontsize="small", ncol=2)
+        return fig

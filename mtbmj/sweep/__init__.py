@@ -1,0 +1,46 @@
+"""Sweeps: plans of variants (``variants``), the single and batched runners (``single``, ``batch``),
+the journaled driver that writes one table (``runner``), and SALib sensitivity (``sensitivity``).
+"""
+_LAZY = {
+    "run_sweep": "mtbmj.sweep.runner",
+    "read_table": "mtbmj.sweep.runner",
+    "plan": "mtbmj.sweep.runner",
+    "Journal": "mtbmj.sweep.runner",
+    "SweepProgress": "mtbmj.sweep.runner",
+    "SweepResult": "mtbmj.sweep.runner",
+    "run_sensitivity": "mtbmj.sweep.sensitivity",
+    "Range": "mtbmj.sweep.variants",
+    "parse_vary": "mtbmj.sweep.variants",
+    "grid": "mtbmj.sweep.variants",
+    "sample": "mtbmj.sweep.variants",
+    "from_csv": "mtbmj.sweep.variants",
+    "variant_id": "mtbmj.sweep.variants",
+    "BatchJob": "mtbmj.sweep.variants",
+    "Variant": "mtbmj.sweep.variants",
+    "flatten_summary": "mtbmj.sweep.variants",
+    "OUTPUT_COLUMNS": "mtbmj.sweep.variants",
+    "RUNNERS": "mtbmj.sweep.variants",
+    "TABLE": "mtbmj.sweep.variants",
+    "TABLE_CSV": "mtbmj.sweep.variants",
+    "TRACES": "mtbmj.sweep.variants",
+    "MANIFEST": "mtbmj.sweep.variants",
+    "run_batch": "mtbmj.sweep.single",
+    "run_variant": "mtbmj.sweep.single",
+}
+__all__ = ['BatchJob', 'Journal', 'MANIFEST', 'OUTPUT_COLUMNS', 'RUNNERS', 'Range', 'SweepProgress', 'SweepResult', 'TABLE', 'TABLE_CSV', 'TRACES', 'Variant', 'flatten_summary', 'from_csv', 'grid', 'parse_vary', 'plan', 'read_table', 'run_batch', 'run_sensitivity', 'run_sweep', 'run_variant', 'sample', 'variant_id']
+
+
+def __getattr__(name):  # PEP 562: import a submodule only when one of its names is asked for
+    try:
+        module, _, attribute = _LAZY[name].partition(":")  # "module" or "module:name there"
+    except KeyError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    import importlib
+
+    value = getattr(importlib.import_module(module), attribute or name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

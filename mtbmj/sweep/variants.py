@@ -1,0 +1,266 @@
+"""Sweep plans: the ranges and samples of ``--vary``, CSV variants, variant ids, the job a runner
+gets, and the summary flattened into table columns."""
+from __future__ import annotations
+
+import csv
+import hashlib
+import itertools
+import json
+import math
+import re
+import sys
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from mtbmj.config import SCHEMA, Config, check_value
+from mtbmj.errors import ConfigError
+from mtbmj.textfile import read_text
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+SIGNALS = ("sled", "fork", "tire")
+EVENTS = ("peak1", "topping", "peak2", "valley1", "peak3")
+NUMERIC_KINDS = ("pos", "nonneg")
+SAMPLING_METHODS = ("lhs", "sobol")
+BACKENDS = ("local", "dask")
+RUNNERS = ("batch", "single")
+TABLE = "sweep.parquet"
+TABLE_CSV = "sweep.csv"
+TRACES = "traces.h5"
+MANIFEST = "sweep.json"
+JOURNAL = "journal"
+
+# The summary flattened into table columns, in this order (see ``flatten_summary``).
+OUTPUT_COLUMNS = (
+    [f"{s}_{e}_{q}" for s in SIGNALS for e in EVENTS for q in ("mm", "s")]
+    + ["lift_off_s", "landing_s", "lifts_off", "fork_tops_out"]
+    + [f"rest_{s}_mm" for s in SIGNALS]
+    + ["rest_motion_mm", "at_rest", "max_fork_mm", "travel_used_percent", "bottoms_out", "max_tire_mm",
+       "impact_speed_m_per_s", "energy_input_J", "energy_mechanical_end_J", "energy_dissipated_J"]
+)
+STATUS_COLUMNS = ["status", "reason", "wall_time_s"]
+
+
+# --------------------------------------------------------------------------------------------
+# Variant generation
+
+
+@dataclass(frozen=True)
+class Range:
+    """One ``--vary`` range: ``n`` values from ``lo`` to ``hi`` (``n`` is None for sampling)."""
+
+    key: str
+    lo: float
+    hi: float
+    n: int | None = None
+
+    def values(self) -> list[float]:
+        return [float(v) for v in np.linspace(self.lo, self.hi, self.n or 2)]
+
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+def numeric_key(key: str, flag: str = "--vary") -> str:
+    """``key`` if it names a numeric configuration key, else a ``ConfigError`` naming it."""
+    if key not in SCHEMA:
+        try:
+            check_value(key, 0.0)  # the schema's own message: unit hints and "did you mean"
+        except ConfigError as exc:
+            raise ConfigError(f"{flag}: {exc}") from None
+    if SCHEMA[key] not in NUMERIC_KINDS:
+        raise ConfigError(f"{flag}: {key} is not a number that can be varied (it is {SCHEMA[key]!r})")
+    return key
+
+
+def parse_vary(text: str, count: bool | None = None) -> Range:
+    """Parse ``key=lo:hi:n`` (a grid) or ``key=lo:hi`` (a sampling range).
+
+    ``count`` True requires ``n``, False forbids it, None accepts both."""
+    key, eq, span = (part.strip() for part in text.partition("="))
+    parts = [p.strip() for p in span.split(":")]
+    if not eq or not key or len(parts) not in (2, 3) or not all(re.fullmatch(_NUMBER, p) for p in parts[:2]):
+        raise ConfigError(f"--vary {text}: expected key=lo:hi:n (a grid) or key=lo:hi (with --samples)")
+    key = numeric_key(key)
+    lo, hi = float(parts[0]), float(parts[1])
+    if not lo < hi:
+        raise ConfigError(f"--vary {text}: lo must be below hi, got {lo:g} >= {hi:g}")
+    n = None
+    if len(parts) == 3:
+        if not re.fullmatch(r"[-+]?\d+", parts[2]):
+            raise ConfigError(f"--vary {text}: n must be a whole number, got {parts[2]!r}")
+        n = int(parts[2])
+        if n < 1:
+            raise ConfigError(f"--vary {text}: n must be at least 1, got {n}")
+    if count is True and n is None:
+        raise ConfigError(f"--vary {text}: a grid needs a count, key=lo:hi:n (or give --samples N)")
+    if count is False and n is not None:
+        raise ConfigError(f"--vary {text}: with --samples give the range only, key=lo:hi")
+    return Range(key, lo, hi, n)
+
+
+def _unique_keys(ranges: Sequence[Range]) -> None:
+    seen = set()
+    for r in ranges:
+        if r.key in seen:
+            raise ConfigError(f"--vary: {r.key} is given twice")
+        seen.add(r.key)
+
+
+def grid(ranges: Sequence[Range]) -> list[dict[str, float]]:
+    """The full factorial of the ranges' values, the first range slowest."""
+    if not ranges:
+        raise ConfigError("--vary: no ranges given")
+    _unique_keys(ranges)
+    keys = [r.key for r in ranges]
+    return [dict(zip(keys, combo)) for combo in itertools.product(*(r.values() for r in ranges))]
+
+
+def sample(ranges: Sequence[Range], n: int, method: str = "lhs", seed: int = 0) -> list[dict[str, float]]:
+    """``n`` points in the box of the ranges: Latin hypercube or scrambled Sobol, seeded."""
+    from scipy.stats import qmc
+
+    if not ranges:
+        raise ConfigError("--samples: needs at least one --vary key=lo:hi range")
+    _unique_keys(ranges)
+    if n < 1:
+        raise ConfigError(f"--samples: must be at least 1, got {n}")
+    if method not in SAMPLING_METHODS:
+        raise ConfigError(f"--method: {method!r} is not one of {', '.join(SAMPLING_METHODS)}")
+    rng = np.random.default_rng(seed)
+    d = len(ranges)
+    engine = qmc.LatinHypercube(d, rng=rng) if method == "lhs" else qmc.Sobol(d, rng=rng)
+    with warnings.catch_warnings():  # Sobol's "n should be a power of 2" balance note
+        warnings.simplefilter("ignore")
+        unit = engine.random(n)
+    points = qmc.scale(unit, [r.lo for r in ranges], [r.hi for r in ranges])
+    return [{r.key: float(v) for r, v in zip(ranges, row)} for row in points]
+
+
+def _cell(text: str) -> Any:
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def from_csv(path: str | Path) -> list[dict[str, Any]]:
+    """Explicit variants: a CSV whose header names configuration keys, one variant per row.
+    Values are read like ``--set`` values; an empty cell keeps the base value; ``#`` lines are
+    comments."""
+    path = Path(path)
+    text = read_text(path, ConfigError, f"--from-csv {path}", "not a text file")
+    lines = [line for line in text.splitlines() if line.strip() and not line.lstrip().startswith("#")]
+    if not lines:
+        raise ConfigError(f"--from-csv {path}: no header line")
+    try:
+        dialect = csv.Sniffer().sniff(lines[0], delimiters=",;\t")
+    except csv.Error:
+        dialect = csv.excel
+    rows = list(csv.reader(lines, dialect))
+    header = [h.strip() for h in rows[0]]
+    for name in header:
+        if not name:
+            raise ConfigError(f"--from-csv {path}: empty column name in the header")
+        if name not in SCHEMA:
+            try:
+                check_value(name, 0.0)
+            except ConfigError as exc:
+                raise ConfigError(f"--from-csv {path}: column {exc}") from None
+    if len(set(header)) != len(header):
+        raise ConfigError(f"--from-csv {path}: a column is named twice")
+    variants = []
+    for number, row in enumerate(rows[1:], 2):
+        if len(row) != len(header):
+            raise ConfigError(f"--from-csv {path}: row {number} has {len(row)} cells, the header {len(header)}")
+        variants.append({k: _cell(v.strip()) for k, v in zip(header, row) if v.strip()})
+    if not variants:
+        raise ConfigError(f"--from-csv {path}: no variants (only a header)")
+    return variants
+
+
+# --------------------------------------------------------------------------------------------
+# Variants, ids, jobs
+
+
+def _canonical(key: str, value: Any) -> Any:
+    try:
+        value = check_value(key, value)
+    except ConfigError:
+        return repr(value)  # invalid: it fails when run, its id only has to be stable
+    return list(value) if isinstance(value, tuple) else value
+
+
+def variant_id(config: Config, overrides: Mapping[str, Any], engine: str = "mujoco",
+               duration: float | None = None) -> str:
+    """Stable id of a variant: hash of the base configuration's digest, the run settings and the
+    canonical overrides (16 hex digits)."""
+    payload = {"config": config.digest(), "engine": engine, "duration": duration,
+               "overrides": {k: _canonical(k, overrides[k]) for k in sorted(overrides)}}
+    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class Variant:
+    index: int
+    id: str
+    overrides: dict
+
+
+@dataclass
+class BatchJob:
+    """What a runner gets: the base configuration, the run settings and a batch of variants.
+    ``drop`` is the per-variant run (``mtbmj.drop.run.run_drop`` or a drop-in replacement)."""
+
+    config: Config
+    engine: str
+    duration: float | None
+    variants: list[Variant]
+    traces: bool = False
+    drop: Callable | None = None
+    threads: int = 1  # rollout threads per process (the batched runner, ``mtbmj.sweep.batch``)
+
+
+def _json_value(value: Any) -> Any:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, (np.floating,)):
+        return _json_value(float(value))
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.bool_):
+        return bool(value)
+    return value
+
+
+def flatten_summary(summary: Mapping) -> dict[str, Any]:
+    """A drop summary as flat table columns: ``fork_peak1_mm``/``fork_peak1_s`` per signal and
+    event, ``lift_off_s``, ``rest_fork_mm``, ``energy_dissipated_J``, ...; keys this function does
+    not know are kept (nested ones joined with ``_``, lists as JSON text)."""
+    flat: dict[str, Any] = {}
+    for key, value in summary.items():
+        if key == "events":
+            for sig, events in value.items():
+                for ev, point in events.items():
+                    flat[f"{sig}_{ev}_mm"] = None if point is None else point["value_mm"]
+                    flat[f"{sig}_{ev}_s"] = None if point is None else point["time_s"]
+        elif key == "rest_mm":
+            for sig, v in value.items():
+                flat[f"rest_{sig}_mm"] = v
+        elif isinstance(value, dict):
+            for k, v in value.items():
+                flat[f"{key}_{k}"] = json.dumps(v) if isinstance(v, (list, dict)) else v
+        elif isinstance(value, (list, tuple)):
+            flat[key] = json.dumps(list(value))
+        else:
+            flat[key] = value
+    return {k: _json_value(v) for k, v in flat.items()}
+
+
