@@ -6,7 +6,9 @@ spring, a damper and a friction law; ``ForkCallback`` and ``installed`` put it i
 from mtbmj.controllers.callback import ForkCallback, installed
 from mtbmj.controllers.damper import BilinearDamper, LinearDamper, TableDamper
 from mtbmj.controllers.fork import ForkLaw
-from mtbmj.controllers.friction import Coulomb, CoulombViscous, LuGre, NoFriction, Stiction, Stribeck, smooth_sign
+from mtbmj.controllers.friction import (Coulomb, CoulombViscous, LuGre, NoFriction, Stiction, Sticking, Stribeck,
+                                       smooth_sign)
+from mtbmj.controllers.stops import EndStops, Rim
 from mtbmj.controllers.spring import BilinearSpring, DirectionalSpring, LinearSpring, ProgressiveSpring, TopOutSpring
 from mtbmj.controllers.tire import KelvinVoigt, TireLaw
 
@@ -14,6 +16,7 @@ __all__ = [
     "ForkCallback", "installed", "ForkLaw",
     "LinearSpring", "BilinearSpring", "ProgressiveSpring", "DirectionalSpring", "TopOutSpring",
     "LinearDamper", "BilinearDamper", "TableDamper",
-    "NoFriction", "Coulomb", "CoulombViscous", "Stiction", "Stribeck", "LuGre", "smooth_sign",
+    "NoFriction", "Coulomb", "CoulombViscous", "Stiction", "Stribeck", "LuGre", "Sticking", "smooth_sign",
+    "EndStops", "Rim",
     "KelvinVoigt", "TireLaw",
 ]

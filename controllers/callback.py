@@ -14,11 +14,17 @@ import mujoco
 
 
 class ForkCallback:
-    """Writes -F_fork into the fork joint's generalized force and, for LuGre, dz/dt into the
-    control of an integrator actuator whose activation is the bristle state z."""
+    """Writes -F_fork into the fork joint's generalized force and, for a friction law with a state
+    (LuGre, Sticking), dz/dt into the control of an integrator actuator whose activation is the
+    bristle state z; with ``rim``, the rim-strike force on the sled and fork joints."""
 
-    def __init__(self, model, fork_law, fork_joint: str = "fork", state_actuator: str = "friction_state"):
+    def __init__(self, model, fork_law, fork_joint: str = "fork", state_actuator: str = "friction_state",
+                 rim=None, sled_joint: str = "sled"):
         self.law = fork_law
+        self.rim = rim  # controllers.stops.Rim on the tire deflection sled - fork (the drop scene), or None
+        if rim is not None:
+            sled = model.joint(sled_joint)
+            self.sled_qpos, self.sled_dof = int(sled.qposadr[0]), int(sled.dofadr[0])
         self._model = model
         self._model_address = model._address
         joint = model.joint(fork_joint)
@@ -51,9 +57,14 @@ class ForkCallback:
         if self.has_state:
             z = act[self.act_index]
             ctrl[self.ctrl_index] = self.law.state_rate(v, z)
-            qfrc[self.dof_index] = -self.law.force(x, v, z)
+            force = -self.law.force(x, v, z)
         else:
-            qfrc[self.dof_index] = -self.law.force(x, v)
+            force = -self.law.force(x, v)
+        if self.rim is not None:  # pushes the wheel up and the sled back: generalized -F on sled, +F on fork
+            rim = self.rim.force(qpos[self.sled_qpos] - x, qvel[self.sled_dof] - v)
+            qfrc[self.sled_dof] = -rim
+            force += rim
+        qfrc[self.dof_index] = force
 
 
 @contextmanager

@@ -44,6 +44,7 @@ import numpy as np
 from mtbmj.controllers import damper as _damper
 from mtbmj.controllers import friction as _friction
 from mtbmj.controllers import spring as _spring
+from mtbmj.controllers import stops as _stops
 from mtbmj.controllers.callback import ForkCallback
 from mtbmj.controllers.fork import ForkLaw
 
@@ -63,16 +64,19 @@ FALLBACK_MESSAGE = "numba not installed: using the Python force laws"
 # ----------------------------------------------------------------------------------------------
 # Codes and registry layout
 # ----------------------------------------------------------------------------------------------
-SP_LINEAR, SP_BILINEAR, SP_PROGRESSIVE, SP_DIRECTIONAL, SP_TOPOUT = 1, 2, 3, 4, 5
+SP_LINEAR, SP_BILINEAR, SP_PROGRESSIVE, SP_DIRECTIONAL, SP_TOPOUT, SP_STOPS = 1, 2, 3, 4, 5, 6
 DA_LINEAR, DA_BILINEAR, DA_TABLE = 1, 2, 3
 FR_NONE, FR_COULOMB, FR_COULOMB_VISCOUS, FR_STICTION, FR_STRIBECK, FR_LUGRE = 0, 1, 2, 3, 4, 5
+FR_STICKING = 6  # Sticking around one of the static laws: I_FRICTION_INNER holds that law's code
 
 # integer row of a slot
 I_MODEL, I_QPOS, I_DOF, I_STATE, I_ACT, I_CTRL, I_COUNT, I_CALLS = 0, 1, 2, 3, 4, 5, 6, 7
 I_DAMPER, I_DAMPER_AT, I_DAMPER_N, I_FRICTION, I_FRICTION_AT, I_NSPRING = 8, 9, 10, 11, 12, 13
 I_SPRING = 14  # then (opcode, parameter offset) pairs
 MAX_SPRING_OPS = 24
-INT_WIDTH = I_SPRING + 2 * MAX_SPRING_OPS  # 62
+I_FRICTION_INNER = I_SPRING + 2 * MAX_SPRING_OPS  # 62
+I_RIM, I_RIM_AT, I_SLED_QPOS, I_SLED_DOF = 63, 64, 65, 66  # the rim strike (drop scene only)
+INT_WIDTH = 67
 FLOAT_WIDTH = 1024
 STACK_DEPTH = 16
 SLOTS = 256
@@ -135,6 +139,10 @@ def flatten(law: ForkLaw) -> tuple[list[int], list[float]]:
         elif kind is _spring.TopOutSpring:
             spring(s.main)
             program.append((SP_TOPOUT, put(s.top_out_rate, s.preload, s.engagement)))
+        elif kind is _stops.EndStops:
+            spring(s.main)
+            program.append((SP_STOPS, put(s.bumper_start, s.bumper_length, s.bumper_force, s.travel,
+                                          s.stop_rate, s.stop_damping, s.extension)))
         else:
             raise UnsupportedLaw(f"spring law {kind.__name__} has no compiled form")
 
@@ -163,7 +171,19 @@ def flatten(law: ForkLaw) -> tuple[list[int], list[float]]:
 
     f = law.friction
     kind = type(f)
-    if kind is _friction.NoFriction:
+    if kind is _friction.Sticking:
+        ints[I_FRICTION] = FR_STICKING
+        inner = f.inner
+        codes = {_friction.Coulomb: FR_COULOMB, _friction.CoulombViscous: FR_COULOMB_VISCOUS,
+                 _friction.Stiction: FR_STICTION, _friction.Stribeck: FR_STRIBECK}
+        if type(inner) not in codes:
+            raise UnsupportedLaw(f"friction law Sticking({type(inner).__name__}) has no compiled form")
+        ints[I_FRICTION_INNER] = codes[type(inner)]
+        ints[I_FRICTION_AT] = put(f.stiffness, f.damping, f.elastic, inner.coulomb,
+                                  getattr(inner, "breakaway", 0.0), getattr(inner, "viscous", 0.0),
+                                  getattr(inner, "stiction_band", 0.0) or getattr(inner, "stribeck_velocity", 1.0),
+                                  getattr(inner, "exponent", 2.0), f.damping_velocity, 2.0)
+    elif kind is _friction.NoFriction:
         ints[I_FRICTION], ints[I_FRICTION_AT] = FR_NONE, put(0.0)
     elif kind is _friction.Coulomb:
         ints[I_FRICTION], ints[I_FRICTION_AT] = FR_COULOMB, put(f.coulomb, f.band)
@@ -352,12 +372,31 @@ if _numba is not None:
                 w = 0.5 * (1.0 + math.tanh(v / P[o]))
                 stack[top] = w * compression + (1.0 - w) * rebound
                 top += 1
-            else:  # SP_TOPOUT, TopOutSpring.force
+            elif op == SP_TOPOUT:  # TopOutSpring.force
                 engagement = P[o + 2]
                 force = P[o + 1] + stack[top - 1]
                 if not (x - engagement >= 0.0):
                     force -= P[o] * (engagement - x)
                 stack[top - 1] = force
+            else:  # SP_STOPS, EndStops.force: bumper, compression stop, extension stop
+                bumper = 0.0
+                s = x - P[o]
+                if s >= 0.0:
+                    r = s / P[o + 1]
+                    bumper = P[o + 2] * r * r
+                stop = 0.0
+                p = x - P[o + 3]
+                if p >= 0.0:
+                    f = P[o + 4] * p + P[o + 5] * v
+                    if f >= 0.0:
+                        stop = f
+                top_stop = 0.0
+                q = -P[o + 6] - x
+                if q >= 0.0:
+                    f = P[o + 4] * q - P[o + 5] * v
+                    if f >= 0.0:
+                        top_stop = f
+                stack[top - 1] = stack[top - 1] + bumper + stop - top_stop
         return stack[0]
 
     @_numba.njit(**_jit)
@@ -384,9 +423,42 @@ if _numba is not None:
         return v - P[o + 3] * speed * z / g
 
     @_numba.njit(**_jit)
+    def _sliding_level(code, P, o, v):
+        """controllers.friction.sliding_level for the law stored at P[o + 3:] of a Sticking row."""
+        fc = P[o + 3]
+        if code == FR_STRIBECK:
+            return fc + (P[o + 4] - fc) * math.exp(-abs(v / P[o + 6]) ** P[o + 7])
+        if code == FR_STICTION:
+            dv = P[o + 6]
+            outside = v - dv >= 0.0 or not (v + dv >= 0.0)
+            if not outside:
+                return fc + (P[o + 4] - fc) * (1.0 - abs(v) / dv)
+        return fc
+
+    @_numba.njit(**_jit)
+    def _sticking_rate(I, P, v, z):
+        """Sticking.state_rate."""
+        o = I[I_FRICTION_AT]
+        z_ss = _sliding_level(I[I_FRICTION_INNER], P, o, v) / P[o]
+        if (z > 0.0) != (v >= 0.0) or z == 0.0:
+            return v
+        r = abs(z) / z_ss
+        elastic = P[o + 2]
+        if r <= elastic:
+            return v
+        if r >= 1.0:
+            alpha = 1.0
+        else:
+            alpha = 0.5 + 0.5 * math.sin(math.pi * (r - 0.5 * (1.0 + elastic)) / (1.0 - elastic))
+        return v * (1.0 - alpha * r)
+
+    @_numba.njit(**_jit)
     def _friction_force(I, P, v, z):
         code = I[I_FRICTION]
         o = I[I_FRICTION_AT]
+        if code == FR_STICKING:  # Sticking.force
+            damping = P[o + 1] * math.exp(-((v / P[o + 8]) ** P[o + 9]))
+            return P[o] * z + damping * _sticking_rate(I, P, v, z) + P[o + 5] * v
         if code == FR_NONE:
             return 0.0
         if code == FR_COULOMB:
@@ -413,6 +485,8 @@ if _numba is not None:
     @_numba.njit(**_jit)
     def state_rate(I, P, v, z):
         """ForkLaw.state_rate(v, z) from a flattened law."""
+        if I[I_FRICTION] == FR_STICKING:
+            return _sticking_rate(I, P, v, z)
         if I[I_FRICTION] != FR_LUGRE:
             return 0.0
         return _lugre_rate(P, I[I_FRICTION_AT], v, z)
@@ -455,9 +529,22 @@ if _numba is not None:
         if I[I_STATE]:
             z = _pointer_field(d, _registry(M_ACT))[I[I_ACT]]
             _pointer_field(d, _registry(M_CTRL))[I[I_CTRL]] = state_rate(I, P, v, z)
-            qfrc[I[I_DOF]] = -fork_force(I, P, x, v, z)
+            force = -fork_force(I, P, x, v, z)
         else:
-            qfrc[I[I_DOF]] = -fork_force(I, P, x, v, 0.0)
+            force = -fork_force(I, P, x, v, 0.0)
+        if I[I_RIM]:  # Rim.force on the tire deflection (sled - fork), pushing the wheel up
+            qpos = _pointer_field(d, _registry(M_QPOS))
+            qvel = _pointer_field(d, _registry(M_QVEL))
+            o = I[I_RIM_AT]
+            p = qpos[I[I_SLED_QPOS]] - x - P[o]
+            rim = 0.0
+            if p >= 0.0:
+                f = P[o + 1] * p + P[o + 2] * (qvel[I[I_SLED_DOF]] - v)
+                if f >= 0.0:
+                    rim = f
+            qfrc[I[I_SLED_DOF]] = -rim
+            force += rim
+        qfrc[I[I_DOF]] = force
 
     COMPILE_SECONDS = time.perf_counter() - _compile_start
 
@@ -535,15 +622,23 @@ class CompiledForkCallback(ctypes._CFuncPtr):
     _restype_ = None
 
     def __new__(cls, model, fork_law, fork_joint: str = "fork", state_actuator: str = "friction_state",
-                count_calls: bool = True):
+                count_calls: bool = True, rim=None, sled_joint: str = "sled"):
         reason = unavailable_reason()
         if reason is not None:
             raise RuntimeError(reason)
         return super().__new__(cls, _dispatcher(model).address)
 
     def __init__(self, model, fork_law, fork_joint: str = "fork", state_actuator: str = "friction_state",
-                 count_calls: bool = True):
+                 count_calls: bool = True, rim=None, sled_joint: str = "sled"):
         ints, floats = flatten(fork_law)
+        self.rim = rim
+        if rim is not None:  # the rim strike on the tire deflection sled - fork (the drop scene)
+            sled = model.joint(sled_joint)
+            ints[I_RIM], ints[I_SLED_QPOS], ints[I_SLED_DOF] = 1, int(sled.qposadr[0]), int(sled.dofadr[0])
+            ints[I_RIM_AT] = len(floats)
+            floats = floats + [rim.max_deflection, rim.rate, rim.damping]
+            if len(floats) > FLOAT_WIDTH:
+                raise UnsupportedLaw(f"law needs {len(floats)} parameters, more than {FLOAT_WIDTH}")
         joint = model.joint(fork_joint)
         actuator = model.actuator(state_actuator)
         self.law = fork_law
@@ -620,7 +715,7 @@ def _warn_once(message: str) -> None:
         warnings.warn(message, RuntimeWarning, stacklevel=3)
 
 
-def make_callback(model, law, prefer_compiled: bool = True, **kwargs):
+def make_callback(model, law, prefer_compiled: bool = True, **kwargs):  # kwargs: rim=..., count_calls=...
     """``CompiledForkCallback`` when possible, else the Python ``ForkCallback`` (with a warning,
     once per reason: numba missing, layout not verifiable, or a law with no compiled form)."""
     if prefer_compiled:

@@ -128,4 +128,89 @@ class LuGre:
         return self.stiffness * z + self.damping * self.state_rate(v, z, sides) + self.viscous * v
 
 
-__all__ = ["smooth_sign", "NoFriction", "Coulomb", "CoulombViscous", "Stiction", "Stribeck", "LuGre"]
+def sliding_level(law, v, sides=None) -> tuple[float, float]:
+    """(level, viscous) of a static law: |F(v)| without its viscous part, and that part's
+    coefficient. The level is what ``Sticking`` slides at."""
+    kind = type(law)
+    if kind is Coulomb:
+        return law.coulomb, 0.0
+    if kind is CoulombViscous:
+        return law.coulomb, law.viscous
+    if kind is Stribeck:
+        return law.coulomb + (law.breakaway - law.coulomb) * math.exp(
+            -abs(v / law.stribeck_velocity) ** law.exponent), law.viscous
+    if kind is Stiction:
+        outside = on_positive_side(v - law.stiction_band, sides, 0) or not on_positive_side(
+            v + law.stiction_band, sides, 1)
+        level = law.coulomb
+        if not outside:
+            level += (law.breakaway - law.coulomb) * (1.0 - abs(v) / law.stiction_band)
+        return level, law.viscous
+    raise TypeError(f"{kind.__name__} has no sliding level")
+
+
+@dataclass(frozen=True)
+class Sticking:
+    """A static friction law that sticks: the elasto-plastic bristle model of Dupont, Hayward,
+    Armstrong & Altpeter (2002), "Single state elastoplastic friction models", IEEE TAC 47(5):787-792.
+
+    The bristle deflection z (m) is a state integrated with the rest (MuJoCo: an actuator
+    activation, as LuGre's). With z_ss(v) = level(v) / sigma0 the steady sliding deflection
+    (``level`` from the wrapped law: F_C, or its Stribeck/stiction curve),
+
+        dz/dt = v (1 - alpha(z, v) |z| / z_ss(v)),    F = sigma0 z + sigma1 dz/dt + F_v v,
+
+    where sigma1 fades with speed, sigma1 exp(-(v / v_d)^2), so that it damps the stuck fork without
+    adding damping to the stroke; and alpha = 0 while |z| <= elastic * z_ss or z and v have opposite signs (pure stick: z follows
+    the stroke exactly, so a fork at rest under a load below the breakaway does not creep), alpha = 1
+    for |z| >= z_ss (sliding at the wrapped law's level), and a C1 half-sine between. Unlike the
+    regularised sign of the static laws (which lets the fork creep towards the frictionless
+    balance) and unlike LuGre (which drifts under small oscillating loads), the fork stays where
+    it stuck. The price: a presliding displacement up to z_ss, and a stiff z equation while sliding
+    (rate |v| / z_ss), which the step rule accounts for.
+    """
+
+    inner: object  # Coulomb, CoulombViscous, Stribeck or Stiction
+    stiffness: float  # sigma0, N/m
+    damping: float  # sigma1, N s/m, at rest
+    damping_velocity: float = 0.01  # m/s: sigma1 fades as exp(-(v / this)^2) (Dupont et al. 2002, eq. 14)
+    elastic: float = 0.5  # z_ba / z_ss
+    has_state = True
+
+    @property
+    def coulomb(self) -> float:
+        return self.inner.coulomb
+
+    @property
+    def n_guards(self):
+        # No guard at v = 0: dz/dt is continuous there (zero on both sides), and a stuck fork's
+        # velocity decays to zero, where a guard would fire at every rounding error.
+        return self.inner.n_guards
+
+    def guards(self, x, v):
+        return self.inner.guards(x, v)
+
+    def state_rate(self, v, z, sides=None):
+        ni = self.inner.n_guards
+        level, _ = sliding_level(self.inner, v, None if sides is None else sides[:ni])
+        z_ss = level / self.stiffness
+        if (z > 0.0) != (v >= 0.0) or z == 0.0:
+            return v
+        r = abs(z) / z_ss
+        if r <= self.elastic:
+            return v
+        if r >= 1.0:
+            alpha = 1.0
+        else:
+            alpha = 0.5 + 0.5 * math.sin(math.pi * (r - 0.5 * (1.0 + self.elastic)) / (1.0 - self.elastic))
+        return v * (1.0 - alpha * r)
+
+    def force(self, v, z=0.0, sides=None):
+        ni = self.inner.n_guards
+        _, viscous = sliding_level(self.inner, v, None if sides is None else sides[:ni])
+        damping = self.damping * math.exp(-((v / self.damping_velocity) ** 2))
+        return self.stiffness * z + damping * self.state_rate(v, z, sides) + viscous * v
+
+
+__all__ = ["smooth_sign", "NoFriction", "Coulomb", "CoulombViscous", "Stiction", "Stribeck", "LuGre", "Sticking",
+           "sliding_level"]

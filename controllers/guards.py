@@ -9,8 +9,11 @@ from __future__ import annotations
 
 
 def on_positive_side(value: float, sides, index: int) -> bool:
-    """True when guard ``index`` is on its non-negative side: frozen if ``sides`` is given, else live."""
-    return value >= 0.0 if sides is None else sides[index]
+    """True when guard ``index`` is on its non-negative side: frozen if ``sides`` is given (an
+    entry None is live: a guard the reference has released, see ``mtbmj.drop.engine_ode``), else live."""
+    if sides is None or sides[index] is None:
+        return value >= 0.0
+    return sides[index]
 
 
 class SmoothLaw:

@@ -5,7 +5,7 @@ This is the one place where external units (mm, N/mm, mm/s) become SI (m, N/m, m
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -46,7 +46,40 @@ class Setup:
         return math.sqrt(2.0 * self.gravity * self.drop_height)
 
 
+# End stops and rim (assumed values, see README "Parameters"): the defaults of keys a user file may omit.
+STOP_DEFAULTS = {
+    "fork.stops.bumper_length_mm": 8.0,
+    "fork.stops.bumper_force_N": 3000.0,
+    "fork.stops.stop_rate_N_per_mm": 20000.0,
+    "fork.stops.stop_damping_N_s_per_m": 2000.0,
+    "fork.stops.extension_mm": 5.0,
+    "tire.rim_rate_N_per_mm": 30000.0,
+    "tire.rim_damping_N_s_per_m": 3000.0,
+}
+STICK_DEFAULTS = {"fork.friction.stick": True, "fork.friction.stick_stiffness_N_per_mm": 30.0,
+                  "fork.friction.stick_damping_N_s_per_m": 2500.0,
+                  "fork.friction.stick_damping_velocity_mm_per_s": 50.0}
+
+
+def _get(c: Config, key: str):
+    return c.get(key, STOP_DEFAULTS.get(key, STICK_DEFAULTS.get(key)))
+
+
+def _stops(c: Config, main) -> law.EndStops:
+    travel = c.require("fork.travel_mm")
+    bumper = _get(c, "fork.stops.bumper_length_mm")
+    if bumper >= travel:
+        raise ConfigError(f"fork.stops.bumper_length_mm: {bumper:g} mm is not shorter than fork.travel_mm ({travel:g} mm)")
+    return law.EndStops(main, travel * MM, bumper * MM, _get(c, "fork.stops.bumper_force_N"),
+                        _get(c, "fork.stops.stop_rate_N_per_mm") * N_PER_MM, _get(c, "fork.stops.stop_damping_N_s_per_m"),
+                        _get(c, "fork.stops.extension_mm") * MM)
+
+
 def _spring(c: Config) -> object:
+    return _stops(c, _main_spring(c))
+
+
+def _main_spring(c: Config) -> object:
     model = c.require("fork.spring.model")
     band = c.get("fork.spring.direction_band_mm_per_s", 20.0) * MM
     travel = c.require("fork.travel_mm")
@@ -118,6 +151,17 @@ def _damper(c: Config) -> object:
 
 
 def _friction(c: Config) -> object:
+    friction = _static_friction(c)
+    if friction.has_state or type(friction) is law.NoFriction or not _get(c, "fork.friction.stick"):
+        return friction
+    if friction.coulomb == 0.0:
+        return friction  # nothing to stick with: the viscous part alone
+    return law.Sticking(friction, _get(c, "fork.friction.stick_stiffness_N_per_mm") * N_PER_MM,
+                        _get(c, "fork.friction.stick_damping_N_s_per_m"),
+                        _get(c, "fork.friction.stick_damping_velocity_mm_per_s") * MM)
+
+
+def _static_friction(c: Config) -> object:
     model = c.get("fork.friction.model", "none")
     why = f"needed by fork.friction.model = {model}"
 
@@ -149,21 +193,31 @@ def _friction(c: Config) -> object:
                      c.get("fork.friction.viscous_N_s_per_m", 0.0))
 
 
+def _rim(c: Config) -> law.Rim:
+    radius = c.require("tire.radius_mm")
+    deepest = c.require("tire.max_deflection_mm", "the rim strikes past it")
+    if deepest >= radius:
+        raise ConfigError(f"tire.max_deflection_mm: {deepest:g} mm is not smaller than tire.radius_mm ({radius:g} mm)")
+    return law.Rim(deepest * MM, _get(c, "tire.rim_rate_N_per_mm") * N_PER_MM, _get(c, "tire.rim_damping_N_s_per_m"))
+
+
 def _tire(c: Config) -> law.TireLaw:
     model = c.require("tire.model")
     why = f"needed by tire.model = {model}"
     k_impact = c.require("tire.impact_rate_N_per_mm", why) * N_PER_MM
     b_impact = c.require("tire.impact_damping_N_s_per_m", why)
+    rim = _rim(c)
     if model == "impact":
-        return law.TireLaw(law.KelvinVoigt(k_impact, b_impact))
+        return law.TireLaw(law.KelvinVoigt(k_impact, b_impact), rim=rim)
     if model == "undamped":
-        return law.TireLaw(law.KelvinVoigt(k_impact, 0.0))
+        return law.TireLaw(law.KelvinVoigt(k_impact, 0.0), rim=rim)
     if model == "static":
-        return law.TireLaw(law.KelvinVoigt(c.require("tire.static_rate_N_per_mm", why) * N_PER_MM, b_impact))
+        return law.TireLaw(law.KelvinVoigt(c.require("tire.static_rate_N_per_mm", why) * N_PER_MM, b_impact), rim=rim)
     return law.TireLaw(
         law.KelvinVoigt(k_impact, b_impact),
         law.KelvinVoigt(c.require("tire.contact_rate_N_per_mm", why) * N_PER_MM,
                         c.require("tire.contact_damping_N_s_per_m", why)),
+        rim=rim,
     )
 
 
@@ -189,37 +243,60 @@ def setup(c: Config) -> Setup:
         fork=fork,
         tire=tire,
         duration=c.get("solver.duration_s", 1.5),
-        timestep=c.get("solver.timestep_s", 1e-4),
-        integrator=c.get("solver.integrator", "implicitfast"),
+        timestep=c.get("solver.timestep_s", 0.0),  # 0: chosen below by the step rule
+        integrator=c.get("solver.integrator", DEFAULT_INTEGRATOR),
         ode_method=c.get("solver.ode_method", "Radau"),
         ode_rtol=c.get("solver.ode_rtol", 1e-8),
         ode_atol=c.get("solver.ode_atol_mm", 1e-7) * MM,
         sample_rate=c.get("solver.sample_rate_Hz", 1000.0),
         antialias=c.get("solver.antialias_Hz", 400.0),
     )
-    check_timestep(s)
+    s = choose_timestep(s)
     if s.antialias >= s.sample_rate / 2:
         raise ConfigError(
             f"solver.antialias_Hz: {s.antialias:g} Hz must be below half of solver.sample_rate_Hz ({s.sample_rate:g} Hz)"
         )
-    if 1.0 / s.timestep < 2 * s.sample_rate:
-        raise ConfigError("solver.timestep_s: must resolve at least twice solver.sample_rate_Hz")
     return s
 
 
-def stiffest_rates(s: Setup) -> tuple[float, float]:
-    """Largest stiffness (N/m) and damping-like slope (N s/m) the wheel meets, for the step rule."""
-    k_fork = max(
-        abs(s.fork.spring.force(x + 1e-4, 0.0) - s.fork.spring.force(x, 0.0)) / 1e-4
-        for x in np.linspace(-0.02, s.travel * 1.2, 400)
-    )
+DEFAULT_INTEGRATOR = "rk4"
+# Steps per period of the stiffest oscillation the wheel can meet (hard stops and rim included)
+# for RK4, and of the stiffest one over the working stroke (spring, bumper, tire) for the
+# first-order integrators, whose error grows with the step (calibrated on the random envelope of
+# tests/test_envelope.py against the ODE reference: <= 0.05 mm).
+STEPS_PER_PERIOD = {"rk4": 16.0, "implicitfast": 250.0, "implicit": 250.0, "euler": 250.0}
+# The same for the brief, stiff contacts of a hard stop or the rim (a half period each).
+STOP_STEPS_PER_PERIOD = {"rk4": 6.0, "implicitfast": 20.0, "implicit": 20.0, "euler": 20.0}
+# A fixed step keeps the output grid regular: the largest of these within the limit is chosen.
+STEP_LADDER = (5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5, 5e-6, 2e-6, 1e-6)
+
+
+def stiffest_rates(s: Setup) -> dict[str, float]:
+    """Stiffness (N/m) and damping-like slopes (N s/m) the wheel meets: ``working`` (the spring's
+    steepest slope over the whole stroke, top-out included, sampled finely, plus the stiffer tire
+    rate), ``stops`` (that plus the bumper at full travel, a hard stop and the rim, engaged
+    together in the worst case) and ``damping`` (fork damping slope over the velocity range,
+    stops, tire and rim)."""
+    spring = s.fork.spring
+    main = getattr(spring, "main", spring)
+    extension = getattr(spring, "extension", 0.02)
+    xs = np.linspace(-extension, s.travel, 2001)
+    force = np.array([main.force(x, 0.0) for x in xs])
+    k_spring = float(np.max(np.abs(np.diff(force)) / np.diff(xs)))
+    k_bumper = 2.0 * spring.bumper_force / spring.bumper_length if hasattr(spring, "bumper_force") else 0.0
     tires = [s.tire.impact] + ([s.tire.in_contact] if s.tire.in_contact else [])
     k_tire = max(t.rate for t in tires)
     c_tire = max(t.damping for t in tires)
-    c_fork = max(
-        abs(s.fork.force(0.05, v + 1e-5) - s.fork.force(0.05, v)) / 1e-5 for v in np.linspace(-3.0, 3.0, 601)
-    )
-    return k_fork + k_tire, c_fork + c_tire
+    rim = s.tire.rim
+    k_stop = getattr(spring, "stop_rate", 0.0)
+    c_stop = getattr(spring, "stop_damping", 0.0)
+    vs = np.linspace(-4.0, 4.0, 801)
+    fork = [s.fork.damper.force(v) for v in vs]
+    c_fork = float(np.max(np.abs(np.diff(fork)) / np.diff(vs))) + getattr(s.fork.friction, "damping", 0.0)
+    return {"working": k_spring + k_tire,
+            "stops": k_spring + k_bumper + k_tire + k_stop + (rim.rate if rim is not None else 0.0),
+            "damping": c_fork + c_tire,
+            "stop_damping": c_fork + c_tire + c_stop + (rim.damping if rim is not None else 0.0)}
 
 
 def _round_down(value: float, digits: int = 2) -> str:
@@ -228,20 +305,54 @@ def _round_down(value: float, digits: int = 2) -> str:
     return f"{math.floor(value / 10**exponent) * 10**exponent:.{digits}g}"
 
 
-def check_timestep(s: Setup) -> None:
-    """Reject a MuJoCo timestep too large for the stiffest element: at least 25 steps per period
-    of the wheel on the combined fork and tire stiffness, a damping slope the explicit force
-    callback can follow (c dt / m <= 0.5), and for LuGre a bristle state it can follow."""
-    k, c = stiffest_rates(s)
+def timestep_limit(s: Setup) -> tuple[float, str]:
+    """(largest MuJoCo step in s for this configuration and integrator, what sets it)."""
+    rates = stiffest_rates(s)
+    wheel = s.wheel_mass
     reduced = s.wheel_mass * s.body_mass / (s.wheel_mass + s.body_mass)
-    period = 2.0 * math.pi * math.sqrt(s.wheel_mass / k)
-    limit = min(period / 25.0, 0.5 * reduced / c if c > 0 else math.inf)
+    limits = []
+    for name, table, what in (("working", STEPS_PER_PERIOD, "spring and tire over the stroke"),
+                              ("stops", STOP_STEPS_PER_PERIOD, "bumper, hard stops and rim")):
+        per_period = table[s.integrator]
+        limits.append((2.0 * math.pi * math.sqrt(wheel / rates[name]) / per_period,
+                       f"{per_period:g} steps per period of the wheel on the {what} ({rates[name] / 1e3:.0f} N/mm)"))
+    if rates["stop_damping"] > 0:  # brief contacts: the stability bound of explicit damping
+        limits.append((0.5 * reduced / rates["stop_damping"],
+                       f"explicit damping with a stop engaged ({rates['stop_damping']:.0f} N s/m on the wheel)"))
+    if rates["damping"] > 0:
+        # the callback's damping forces are explicit: c dt / m <= 0.25 (0.5 is the stability
+        # bound of explicit Euler; the envelope test needs the margin for 0.05 mm)
+        limits.append((0.25 * reduced / rates["damping"], f"explicit damping ({rates['damping']:.0f} N s/m on the wheel)"))
     friction = s.fork.friction
-    if friction.has_state:
-        # Explicit integration of the bristle state: rate sigma0 |v| / F_C at strokes up to 2 m/s.
-        limit = min(limit, friction.coulomb / (friction.stiffness * 2.0))
-    if s.timestep > limit:
-        raise ConfigError(
-            f"solver.timestep_s: {s.timestep:g} s is too large for the configured stiffness "
-            f"({k / 1e3:.0f} N/mm, {c:.0f} N s/m on the wheel); use at most {_round_down(limit)} s"
-        )
+    v_max = 1.5 * math.sqrt(2.0 * s.gravity * (s.drop_height + s.travel))  # a bound on the stroke speed
+    if isinstance(friction, law.LuGre):
+        limits.append((friction.coulomb / (friction.stiffness * v_max), "the LuGre bristle state"))
+    elif isinstance(friction, law.Sticking):
+        z_ss = friction.coulomb / friction.stiffness
+        rate = v_max / z_ss * (1.0 + math.pi / (2.0 * (1.0 - friction.elastic)))
+        limits.append((2.0 / rate, f"the stick state (presliding {z_ss * 1e3:.2f} mm at {v_max:.1f} m/s)"))
+    limits.append((0.5 / s.sample_rate, f"twice solver.sample_rate_Hz ({s.sample_rate:g} Hz)"))
+    return min(limits)
+
+
+def choose_timestep(s: Setup) -> Setup:
+    """The step for MuJoCo: the user's ``solver.timestep_s`` if within the limit (else one line
+    naming it), or the largest step of ``STEP_LADDER`` within it."""
+    limit, what = timestep_limit(s)
+    if s.timestep > 0.0:
+        if s.timestep > limit:
+            raise ConfigError(
+                f"solver.timestep_s: {s.timestep:g} s is too large for solver.integrator = {s.integrator} "
+                f"with this configuration ({what}); use at most {_round_down(limit)} s, or leave it out to "
+                f"have it chosen")
+        return s
+    for step in STEP_LADDER:
+        if step <= limit:
+            return replace(s, timestep=step)
+    raise ConfigError(f"solver.timestep_s: this configuration needs a step below {_round_down(limit)} s ({what}); "
+                      f"check its rates and masses")
+
+
+def check_timestep(s: Setup) -> None:
+    """Refuse a step above the limit (``timestep_limit``)."""
+    choose_timestep(s)

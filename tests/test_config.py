@@ -80,16 +80,19 @@ def test_preset_names_are_case_insensitive():
 def test_units_are_converted_to_si_by_compose():
     c1 = load("S1")
     s = compose.setup(c1)
-    assert s.fork.spring.rate == pytest.approx(c1["fork.spring.rate_N_per_mm"] * 1e3)  # N/mm -> N/m
+    assert s.fork.spring.main.rate == pytest.approx(c1["fork.spring.rate_N_per_mm"] * 1e3)  # N/mm -> N/m
     assert s.fork.damper.coefficient == c1["fork.damper.coefficient_N_s_per_m"]
     assert s.tire.impact.rate == pytest.approx(c1["tire.impact_rate_N_per_mm"] * 1e3)
     assert s.tire.impact.damping == c1["tire.impact_damping_N_s_per_m"]
     assert s.drop_height == pytest.approx(0.095) and s.tire_radius == pytest.approx(0.37)
     c12 = load("S12")
     s12 = compose.setup(c12)
-    assert s12.fork.spring.preload == c12["fork.spring.preload_N"]
-    assert s12.fork.spring.top_out_rate == pytest.approx(c12["fork.spring.top_out_rate_N_per_mm"] * 1e3)
-    assert s12.fork.spring.main.cubic == pytest.approx(c12["fork.spring.progressive_cubic_N_per_mm3"] * 1e9)
+    assert s12.fork.spring.main.preload == c12["fork.spring.preload_N"]
+    assert s12.fork.spring.main.top_out_rate == pytest.approx(c12["fork.spring.top_out_rate_N_per_mm"] * 1e3)
+    assert s12.fork.spring.main.main.cubic == pytest.approx(c12["fork.spring.progressive_cubic_N_per_mm3"] * 1e9)
+    stops = s12.fork.spring  # the end stops wrap the spring: the stop keys in SI
+    assert stops.travel == pytest.approx(0.12) and stops.stop_rate == pytest.approx(c12["fork.stops.stop_rate_N_per_mm"] * 1e3)
+    assert s12.tire.rim.max_deflection == pytest.approx(c12["tire.max_deflection_mm"] * 1e-3)
     assert s12.fork.damper.velocity[0] == pytest.approx(c12["fork.damper.velocity_mm_per_s"][0] * 1e-3)
     assert s12.tire.switches
     assert s12.tire.in_contact.rate == pytest.approx(c12["tire.contact_rate_N_per_mm"] * 1e3)
@@ -193,7 +196,7 @@ def test_overrides_apply_and_validate():
     assert c["fork.damper.velocity_mm_per_s"] == (-1.0, 1.0)
     assert load("S1")["fork.spring.rate_N_per_mm"] != 12.0  # the preset is untouched
     assert c.digest() != load("S1").digest()
-    assert compose.setup(c).fork.spring.rate == pytest.approx(12e3)
+    assert compose.setup(c).fork.spring.main.rate == pytest.approx(12e3)
     # with_overrides on a Config validates too
     with pytest.raises(ConfigError) as exc:
         load("S1").with_overrides({"sled.body_mass_kg": -1})

@@ -66,8 +66,10 @@ def test_every_integrator_agrees_with_the_reference(integrator, calls_per_step):
 
 def test_rk4_is_more_accurate_than_euler_on_the_smooth_linear_model():
     ref = mtbmj.run_drop("S1", engine="ode", duration=0.6)
-    euler = mtbmj.run_drop("S1", overrides={"solver.integrator": "euler"}, duration=0.6)
-    rk4 = mtbmj.run_drop("S1", overrides={"solver.integrator": "rk4"}, duration=0.6)
+    step = {"solver.timestep_s": 5e-5}  # the same grid for both (and within euler's limit)
+    ref = mtbmj.run_drop("S1", engine="ode", overrides=step, duration=0.6)
+    euler = mtbmj.run_drop("S1", overrides={**step, "solver.integrator": "euler"}, duration=0.6)
+    rk4 = mtbmj.run_drop("S1", overrides={**step, "solver.integrator": "rk4"}, duration=0.6)
     e_euler = euler.difference(ref)["fork_mm"]["max_abs_mm"]
     e_rk4 = rk4.difference(ref)["fork_mm"]["max_abs_mm"]
     assert e_rk4 < 0.01 < e_euler
@@ -107,10 +109,11 @@ def test_every_scene_compiles_and_steps_without_warnings(path):
 def test_dm_control_physics_steps_the_drop_scene_like_the_engine():
     """The bundled scene through dm_control.mjcf and a dm_control Physics, with our callback,
     reproduces the engine's trace."""
-    setup = compose.setup(mtbmj.load_config("S6"))
+    setup = compose.setup(mtbmj.load_config("S6", {"solver.integrator": "implicitfast", "solver.timestep_s": 5e-5}))
     ours = scene.build(setup)
     root = mjcf.from_path(str(scenes.path("drop_scene.xml")))
     root.option.integrator = "implicitfast"
+    root.option.timestep = setup.timestep
     physics = mjcf.Physics.from_mjcf_model(root)
     model = physics.model.ptr
     np.copyto(model.geom_solref, ours.model.geom_solref)

@@ -405,12 +405,13 @@ def test_tire_law_switch_semantics():
     assert switching.values(0) is impact and switching.values(1) is contact
     assert switching.force(0.01, 0.1) == pytest.approx(800.0 + 15.0)
     assert switching.force(0.01, 0.1, phase=1) == pytest.approx(700.0 + 12.0)
-    # the event: fork compression crosses zero going into extension
-    assert TireLaw.topped_out(0.001, 0.0)
-    assert TireLaw.topped_out(0.001, -0.001)
-    assert not TireLaw.topped_out(0.0, -0.001)  # already extended
-    assert not TireLaw.topped_out(-0.001, 0.001)  # compressing
-    assert not TireLaw.topped_out(0.002, 0.001)  # still compressed
+    # the event: the tire leaves the ground, or the fork turns from extension into compression
+    assert TireLaw.switch_now(0.001, 0.0, 0.5, 0.4)  # deflection falls to zero
+    assert TireLaw.switch_now(0.001, -0.001, -0.5, -0.4)
+    assert TireLaw.switch_now(0.01, 0.01, -0.01, 0.0)  # rebound stroke ends on the ground
+    assert not TireLaw.switch_now(0.0, -0.001, 0.1, 0.2)  # already in the air
+    assert not TireLaw.switch_now(0.01, 0.011, 0.0, 0.1)  # compressing from rest (the impact itself)
+    assert not TireLaw.switch_now(0.01, 0.009, 0.1, -0.1)  # Peak 1: compression turns into extension
 
 
 # ------------------------------------------------------------------------ sides / guards mechanism

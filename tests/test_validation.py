@@ -27,7 +27,7 @@ FILES = {"fig10_amplitude_errors.png", "overlay_tire.png", "validation_metrics.c
 
 @pytest.fixture(scope="module")
 def s12():
-    return run_drop("S12", duration=1.5)
+    return run_drop("S12", duration=2.0)
 
 
 @pytest.fixture(scope="module")

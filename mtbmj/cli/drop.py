@@ -10,6 +10,7 @@ from mtbmj.cli.common import Progress, add_run_options, overrides
 
 
 def cmd_drop(args) -> int:
+    from mtbmj.drop.events import envelope_line
     from mtbmj.drop.run import run_drop
 
     result = Progress(f"{args.config} on {args.engine}", not args.quiet).around(
@@ -19,7 +20,8 @@ def cmd_drop(args) -> int:
     lift = f"{s['lift_off_s']:.3f} s" if s["lift_off_s"] is not None else "never"
     print(f"{result.name} ({args.engine}): fork peak {s['max_fork_mm']:.1f} mm "
           f"({s['travel_used_percent']:.0f} % of travel), tire peak {s['max_tire_mm']:.1f} mm, lift-off {lift}, "
-          f"{'at rest' if s['at_rest'] else 'still moving'} at the end; wrote {len(written)} files to {args.out}")
+          f"{'at rest' if s['at_rest'] else 'still moving'} at the end{envelope_line(s)}; "
+          f"wrote {len(written)} files to {args.out}")
     return 0
 
 

@@ -42,8 +42,8 @@ def _state_layout(model) -> tuple[int, slice, slice, slice]:
     return 0, slice(t, t + nq), slice(t + nq, t + nq + nv), slice(t + nq + nv, t + nq + nv + na)
 
 
-SWITCH_CHUNK = 1000  # steps per rollout while a tire-law switch is pending (the most recomputed)
-CHUNK = 20000  # steps per rollout otherwise (each call costs setup time; progress per chunk)
+SWITCH_CHUNK_S = 0.1  # simulated time per rollout while a tire-law switch is pending (the most recomputed)
+CHUNK_S = 2.0  # simulated time per rollout otherwise (each call costs setup time; progress per chunk)
 # MuJoCo gives a contact at exactly zero distance no constraint row: at t = 0 the tread would
 # push with neither spring nor damper for one step. Start it touching by a rounding error, as the
 # ODE reference's guard takes the touchdown side at a zero distance.
@@ -53,20 +53,34 @@ TOUCH_DEPTH_M = 1e-12
 CALLBACKS = ("auto", "compiled", "python")
 
 
-def fork_callback(model, law, kind="auto"):
+def fork_callback(model, law, kind="auto", rim=None):
     """The fork callback for ``model``: ``"auto"`` (the compiled laws when possible, else the Python
-    laws with a one-time warning), ``"compiled"``, ``"python"``, or a factory ``f(model, law)``."""
+    laws with a one-time warning), ``"compiled"``, ``"python"``, or a factory ``f(model, law)``.
+    ``rim`` (a ``controllers.Rim``) adds the rim strike on the tire deflection."""
     if callable(kind):
         return kind(model, law)
     if kind == "python":
-        return ForkCallback(model, law)
+        return ForkCallback(model, law, rim=rim)
     from mtbmj.controllers import compiled  # numba is imported on the first run only
 
     if kind == "compiled":
-        return compiled.CompiledForkCallback(model, law)
+        return compiled.CompiledForkCallback(model, law, rim=rim)
     if kind == "auto":
-        return compiled.make_callback(model, law)
+        return compiled.make_callback(model, law, rim=rim)
     raise ValueError(f"callback: expected one of {', '.join(CALLBACKS)} or a factory, got {kind!r}")
+
+
+def switch_index(previous, states, columns) -> int | None:
+    """The tire-law switch (``controllers.tire.SWITCH_RULE``) in a chunk of recorded states: the
+    index of the first state at which the tire has left the ground (deflection <= 0 after > 0) or
+    the fork has turned from extension back into compression (velocity >= 0 after < 0), or None.
+    ``previous`` is the state before the chunk; ``columns`` are the sled and fork position and the
+    fork velocity columns of a state row."""
+    sled, fork, fork_velocity = columns
+    deflection = np.concatenate(([previous[sled] - previous[fork]], states[:, sled] - states[:, fork]))
+    v = np.concatenate(([previous[fork_velocity]], states[:, fork_velocity]))
+    found = np.flatnonzero(((deflection[:-1] > 0.0) & (deflection[1:] <= 0.0)) | ((v[:-1] < 0.0) & (v[1:] >= 0.0)))
+    return int(found[0]) if found.size else None
 
 
 def run(setup: Setup, duration: float | None = None, progress=None, callback="auto") -> RawTrace:
@@ -86,9 +100,11 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
     data.qpos[sc.sled_qpos] = TOUCH_DEPTH_M
     mujoco.mj_forward(model, data)
     # compiled (numba) force laws read and write mjData directly; the Python laws are the fallback
-    callback = fork_callback(model, setup.fork, callback)
+    callback = fork_callback(model, setup.fork, callback, setup.tire.rim)
     callback.bind(data)
     steps = int(round(duration / setup.timestep))
+    switch_chunk = max(1, int(round(SWITCH_CHUNK_S / setup.timestep)))
+    chunk = max(1, int(round(CHUNK_S / setup.timestep)))
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state, spec)
@@ -101,20 +117,21 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
     done = 0
     discarded = 0  # steps computed past a tire-law switch and recomputed with the new law
     fork_col = iq.start + sc.fork_qpos
+    sled_col = iq.start + sc.sled_qpos
+    fork_vcol = iv.start + sc.fork_dof
     messages: list[str] = []
     with installed(callback), _collected_warnings(messages):
         while done < steps:
             pending = tire.switches and current_phase == 0
-            n = min(SWITCH_CHUNK if pending else CHUNK, steps - done)
+            n = min(switch_chunk if pending else chunk, steps - done)
             states, _ = rollout.rollout(model, data, state[None, :], nstep=n)
             states = states[0]
             keep = n
             switch = False
             if pending:
-                x = np.concatenate(([record[done, fork_col]], states[:, fork_col]))
-                crossed = np.flatnonzero((x[:-1] > 0.0) & (x[1:] <= 0.0))
-                if crossed.size:
-                    keep = int(crossed[0]) + 1
+                k = switch_index(record[done], states, (sled_col, fork_col, fork_vcol))
+                if k is not None:
+                    keep = k + 1
                     switch = True
             discarded += n - keep
             record[done + 1: done + 1 + keep] = states[:keep]

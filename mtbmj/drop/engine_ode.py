@@ -9,8 +9,8 @@ force F_t pushing the wheel up):
 
 Every piecewise law exposes guards (see ``controllers.spring``). The integration runs in segments
 with each law's branch frozen; a terminal event stops a segment exactly where a guard changes
-sign (tire touch or separation, the knee, the top-out hand-over, a table breakpoint, the tire-law
-switch), so no step ever integrates across a discontinuity or a kink.
+sign (tire touch or separation, the knee, the top-out hand-over, a table breakpoint, a stop or
+the rim engaging, the tire-law switch), so no step ever integrates across a discontinuity or a kink.
 """
 from __future__ import annotations
 
@@ -45,7 +45,8 @@ class _Model:
         s, x, sd, xd, z = y
         tv = self.tire.values(phase)
         deflection, rate = s - x, sd - xd
-        return self.fork.guards(x, xd) + (deflection, tv.rate * deflection + tv.damping * rate)
+        rim = self.tire.rim.guards(deflection, rate) if self.tire.rim is not None else ()
+        return self.fork.guards(x, xd) + (deflection, tv.rate * deflection + tv.damping * rate) + rim
 
     def rhs(self, t, y, sides, phase):
         s, x, sd, xd, z = y
@@ -54,11 +55,11 @@ class _Model:
         f_fork = self.fork.force(x, xd, z, fork_sides)
         tv = self.tire.values(phase)
         if sides is None:
-            f_tire = tv.force(s - x, sd - xd)
-        elif sides[nf] and sides[nf + 1]:
-            f_tire = tv.rate * (s - x) + tv.damping * (sd - xd)
+            f_tire = self.tire.force(s - x, sd - xd, phase)
         else:
-            f_tire = 0.0
+            f_tire = tv.rate * (s - x) + tv.damping * (sd - xd) if sides[nf] and sides[nf + 1] else 0.0
+            if self.tire.rim is not None:
+                f_tire += self.tire.rim.force(s - x, sd - xd, sides[nf + 2:nf + 4])
         g = self.s.gravity
         sdd = g - f_fork / self.s.body_mass
         wdd = g + (f_fork - f_tire) / self.s.wheel_mass
@@ -83,6 +84,9 @@ def _initial_sides(model: _Model, y0, phase):
 
 
 PROBE_S = 1e-7  # look-ahead that decides which side of a root a guard is on
+CHATTER_S = 1e-6  # a segment this short that ends on the same guard as the last one ...
+CHATTER_COUNT = 5  # ... this many times in a row releases that guard
+REARM_MAGNITUDE = 1e-4  # a released guard is re-armed once |its value| exceeds this (m, m/s or N)
 
 
 def _resync(model: _Model, y, phase, sides: list, fired) -> tuple:
@@ -95,7 +99,7 @@ def _resync(model: _Model, y, phase, sides: list, fired) -> tuple:
     """
     probe = model.guards(y + PROBE_S * model.rhs(0.0, y, tuple(sides), phase), phase)
     for i, value in enumerate(probe):
-        if i not in fired and value != 0.0 and (value > 0.0) != sides[i]:
+        if i not in fired and sides[i] is not None and value != 0.0 and (value > 0.0) != sides[i]:
             sides[i] = not sides[i]
     return tuple(sides)
 
@@ -114,20 +118,46 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
     solver_steps = 0
     events_log: list[tuple[float, str]] = []
     n_guards = len(sides)
+    extended = False  # the fork has been extending (its first rebound stroke has begun)
+    released: set[int] = set()  # guards evaluated live (they chattered: see CHATTER_*)
+    last_fired, short_runs = None, 0
     for _segment in range(MAX_SEGMENTS):
+        if released:  # re-arm a released guard once its value has clearly left its root
+            values = model.guards(y, phase)
+            for i in list(released):
+                if abs(values[i]) > REARM_MAGNITUDE:
+                    released.discard(i)
+                    sides = sides[:i] + (bool(values[i] > 0.0),) + sides[i + 1:]
+        # extending, or at a turning point into extension (a segment that ended on v = 0)
+        extended = extended or y[3] < 0.0 or (abs(y[3]) < 1e-9 and model.rhs(t, y, sides, phase)[3] < 0.0)
+        armed = [i for i in range(n_guards) if i not in released]
         events = []
-        for i in range(n_guards):
+        for i in armed:
             def event(tt, yy, sides_, phase_, i=i):  # solve_ivp passes args to events too
                 return model.cached_guards(tt, yy, phase_)[i]
             event.terminal = True
             event.direction = -1.0 if sides[i] else 1.0
             events.append(event)
         if setup.tire.switches and phase == 0:
-            def topping(tt, yy, sides_, phase_):
-                return yy[1]
-            topping.terminal = True
-            topping.direction = -1.0
-            events.append(topping)
+            # The tire-law switch (controllers.tire.SWITCH_RULE): the tire leaves the ground, or,
+            # once the fork has been extending, it turns back into compression.
+            def separation(tt, yy, sides_, phase_):
+                return yy[0] - yy[1]
+            separation.terminal = True
+            separation.direction = -1.0
+            events.append(separation)
+            if not extended:
+                def fork_turns(tt, yy, sides_, phase_):  # compression -> extension: only marks the segment
+                    return yy[3]
+                fork_turns.terminal = True
+                fork_turns.direction = -1.0
+                events.append(fork_turns)
+            else:
+                def rebound_end(tt, yy, sides_, phase_):
+                    return yy[3]
+                rebound_end.terminal = True
+                rebound_end.direction = 1.0
+                events.append(rebound_end)
         sol = solve_ivp(model.rhs, (t, duration), y, method=setup.ode_method, rtol=setup.ode_rtol,
                         atol=setup.ode_atol, events=events, dense_output=True, args=(sides, phase))
         if sol.status < 0:
@@ -147,20 +177,51 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
             break
         y = sol.y[:, -1].copy()
         t = t_end
-        fired = [k for k, te in enumerate(sol.t_events) if len(te)]
+        fired_events = [k for k, te in enumerate(sol.t_events) if len(te)]
+        switch_events = events[len(armed):]
+        fired = [armed[k] for k in fired_events if k < len(armed)]
         new_sides = list(sides)
         for k in fired:
-            if k < n_guards:
-                new_sides[k] = not new_sides[k]
-                events_log.append((t, f"guard {k}"))
+            new_sides[k] = not new_sides[k]
+            events_log.append((t, f"guard {k}"))
+        switched = False
+        for k in fired_events:
+            if k < len(armed):
+                continue
+            if switch_events[k - len(armed)].__name__ == "fork_turns":
+                extended = True
             else:
-                phase = 1
+                phase, switched = 1, True
                 events_log.append((t, "tire switch"))
+        if setup.tire.switches and phase == 0 and not switched and fired:
+            # A guard sharing the switch's root (the damper table's v = 0 breakpoint, the tire's
+            # own touch guard) may end the segment first: solve_ivp then drops the other root.
+            rates = model.rhs(t, y, tuple(new_sides), phase)
+            leaves = abs(y[0] - y[1]) < 1e-12 and rates[0] - rates[1] < 0.0 and np.max(sol.y[0] - sol.y[1]) > 0.0
+            turns = extended and abs(y[3]) < 1e-9 and rates[3] > 0.0 and np.min(sol.y[3]) < 0.0
+            if leaves or turns:
+                phase, switched = 1, True
+                events_log.append((t, "tire switch"))
+        # A guard whose root the state sits on (a stuck fork's velocity decaying to zero at a damper
+        # breakpoint) fires again and again on rounding errors: after CHATTER_COUNT segments
+        # shorter than CHATTER_S ending on it, it is released (evaluated live, no event) until
+        # its value clearly leaves the root. Laws are continuous at such guards (kinks only).
+        if fired and t_end - sol.t[0] < CHATTER_S and fired[0] == last_fired:
+            short_runs += 1
+            if short_runs >= CHATTER_COUNT:
+                released.add(fired[0])
+                new_sides[fired[0]] = None
+                short_runs = 0
+        else:
+            short_runs = 0
+        last_fired = fired[0] if fired else None
         sides = _resync(model, y, phase, new_sides, fired)
-        if phase == 1 and any(k >= n_guards for k in fired):
+        if switched:
             # The tire guards depend on the tire values: take them afresh for the new phase.
             fresh = _initial_sides(model, y, phase)
-            sides = sides[: n_guards - 2] + fresh[n_guards - 2:]
+            sides = sides[: model.nf] + fresh[model.nf:]
+            released = {i for i in released if i < model.nf}
+
     else:
         raise RunError(f"ODE reference: more than {MAX_SEGMENTS} law switches before t = {t:.4f} s (chattering)")
     return RawTrace(

@@ -100,74 +100,9 @@ class _Run:
         return self.setup.tire.switches and self.current_phase == 0
 
 
-# ----------------------------------------------------------------------------------------------
-# compose.setup with a vectorised timestep check
-#
-# ``compose.setup`` spends most of its time in ``check_timestep``'s scan of the fork law
-# (``stiffest_rates``: ~1600 Python law evaluations). Here the same scan runs on the compiled
-# interpreter over arrays, and its rates are raised by ``RATE_MARGIN`` so that the check is never
-# more lenient than the exact one: a variant it accepts is accepted by ``compose.setup``; one it
-# rejects (or whose law has no compiled form) goes through ``compose.setup`` itself, which
-# decides and words the error. ``setup`` and ``check_timestep`` are used as they are, with their
-# module globals rebound in private copies (``compose`` itself is not touched).
-
-RATE_MARGIN = 1e-6
-_FAST_SETUP = None
-
-
-def _fast_rates_kernel():
-    import numba
-
-    from mtbmj.controllers import compiled
-
-    @numba.njit(cache=True, error_model="numpy", nogil=True)
-    def rates(I, P, xs, vs, dx, dv, x_damp):
-        k = 0.0
-        for x in xs:
-            k = max(k, abs(compiled._spring_force(I, P, x + dx, 0.0) - compiled._spring_force(I, P, x, 0.0)) / dx)
-        c = 0.0
-        for v in vs:
-            c = max(c, abs(compiled.fork_force(I, P, x_damp, v + dv, 0.0) - compiled.fork_force(I, P, x_damp, v, 0.0)) / dv)
-        return k, c
-
-    return rates
-
-
-def _fast_setup():
-    """A copy of ``compose.setup`` whose ``check_timestep`` uses the compiled scan (or None)."""
-    global _FAST_SETUP
-    if _FAST_SETUP is None:
-        import types
-
-        from mtbmj.controllers import compiled
-
-        kernel = _fast_rates_kernel()
-
-        def stiffest_rates(s):
-            ints, floats = compiled.flatten(s.fork)  # UnsupportedLaw: the caller uses compose.setup
-            k_fork, c_fork = kernel(np.asarray(ints, dtype=np.int64), np.asarray(floats + [0.0], dtype=np.float64),
-                                    np.linspace(-0.02, s.travel * 1.2, 400), np.linspace(-3.0, 3.0, 601),
-                                    1e-4, 1e-5, 0.05)
-            tires = [s.tire.impact] + ([s.tire.in_contact] if s.tire.in_contact else [])
-            k = (k_fork + max(t.rate for t in tires)) * (1.0 + RATE_MARGIN)
-            c = (c_fork + max(t.damping for t in tires)) * (1.0 + RATE_MARGIN)
-            return k, c
-
-        def rebind(function, **names):
-            return types.FunctionType(function.__code__, {**function.__globals__, **names}, function.__name__,
-                                      function.__defaults__, function.__closure__)
-
-        check = rebind(compose.check_timestep, stiffest_rates=stiffest_rates)
-        _FAST_SETUP = rebind(compose.setup, check_timestep=check)
-    return _FAST_SETUP
-
-
 def setup_of(cfg):
-    """``compose.setup(cfg)``, the timestep check on the compiled scan when it clearly passes."""
-    try:
-        return _fast_setup()(cfg)
-    except Exception:  # noqa: BLE001 - rejected or not compilable: the exact path decides
-        return compose.setup(cfg)
+    """``compose.setup(cfg)``: laws in SI and the step chosen by the step rule."""
+    return compose.setup(cfg)
 
 
 def _prepare(job: BatchJob, variant: Variant, spec) -> _Run:
@@ -187,7 +122,7 @@ def _prepare(job: BatchJob, variant: Variant, spec) -> _Run:
     data.qvel[sc.sled_dof] = setup.impact_speed
     data.qpos[sc.sled_qpos] = engine_mujoco.TOUCH_DEPTH_M
     mujoco.mj_forward(model, data)
-    callback = CompiledForkCallback(model, setup.fork, count_calls=False)  # UnsupportedLaw: single path
+    callback = CompiledForkCallback(model, setup.fork, count_calls=False, rim=setup.tire.rim)  # UnsupportedLaw: single path
     steps = int(round(duration / setup.timestep))
     state = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state, spec)
@@ -203,7 +138,7 @@ def _signature(run: _Run) -> tuple:
 
 def _step_group(runs: list[_Run], datas, pool, spec) -> None:
     """Advance ``runs`` (same model sizes) to their ends in rounds of one rollout call each."""
-    _, iq, _, _ = engine_mujoco._state_layout(runs[0].scene.model)
+    _, iq, iv, _ = engine_mujoco._state_layout(runs[0].scene.model)
     nstate = runs[0].record.shape[1]
     messages: list[str] = []
     active = [r for r in runs if r.steps > 0]
@@ -237,11 +172,10 @@ def _step_group(runs: list[_Run], datas, pool, spec) -> None:
                     continue
                 keep, switch = n, False
                 if r.pending:
-                    fork_col = iq.start + r.scene.fork_qpos
-                    x = np.concatenate(([r.record[r.done, fork_col]], states[:, fork_col]))
-                    crossed = np.flatnonzero((x[:-1] > 0.0) & (x[1:] <= 0.0))
-                    if crossed.size:
-                        keep, switch = int(crossed[0]) + 1, True
+                    columns = (iq.start + r.scene.sled_qpos, iq.start + r.scene.fork_qpos, iv.start + r.scene.fork_dof)
+                    k = engine_mujoco.switch_index(r.record[r.done], states, columns)
+                    if k is not None:
+                        keep, switch = k + 1, True
                 r.discarded += n - keep
                 r.record[r.done + 1: r.done + 1 + keep] = states[:keep]
                 r.phase[r.done + 1: r.done + 1 + keep] = r.current_phase
@@ -280,6 +214,10 @@ def tire_forces(tire_law, deflection, rate, phase) -> np.ndarray:
         law = tire_law.values(int(p))
         at = (phase == p) & (deflection > 0.0)
         out[at] = np.maximum(0.0, law.rate * deflection[at] + law.damping * rate[at])
+    rim = tire_law.rim
+    if rim is not None:
+        at = deflection - rim.max_deflection >= 0.0
+        out[at] += np.maximum(0.0, rim.rate * (deflection[at] - rim.max_deflection) + rim.damping * rate[at])
     return out
 
 
@@ -318,6 +256,8 @@ def summarize(run: _Run) -> tuple[dict, dict]:
         "fork_mm": trace.fork * 1e3,
         "tire_mm": tire * 1e3,
         "tire_force_N": tire_forces(setup.tire, tire, trace.tire_velocity, trace.tire_phase),
+        "fork_velocity_mm_per_s": trace.fork_velocity * 1e3,
+        "tire_velocity_mm_per_s": trace.tire_velocity * 1e3,
     }
     log = logged(setup, raw, [f"{s}_mm" for s in SIGNALS])
     return events.summarize(setup, trace, log, raw), log

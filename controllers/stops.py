@@ -1,0 +1,111 @@
+"""The fork's end stops: a bottom-out bumper, and hard stops at both ends of the stroke.
+
+``EndStops`` wraps a main spring law (coil, progressive, top-out, ...) and adds
+
+* a **bottom-out bumper** that engages over the last ``bumper_length`` of travel and rises
+  progressively (quadratically, continuous with zero slope at engagement) to ``bumper_force`` at
+  full travel: the elastomer or hydraulic bottom-out of a real fork;
+* a **hard stop** at full compression (x = travel) and one at full extension (x = -extension,
+  the top-out bumper fully compressed): a stiff, damped contact that pushes but never pulls,
+  F = max(0, k p + c dp/dt) for a penetration p > 0, as the tire's law.
+
+Force in N (positive pushes the fork apart), compression x in m, velocity v in m/s. The stop's
+compliance F / k is what the fork may pass its travel by. Every kink is a guard for the ODE
+reference (``controllers.guards``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from mtbmj.controllers.guards import on_positive_side as _side
+
+
+@dataclass(frozen=True)
+class EndStops:
+    main: object
+    travel: float  # m
+    bumper_length: float  # m, engages at travel - bumper_length
+    bumper_force: float  # N at full travel
+    stop_rate: float  # N/m, hard stops
+    stop_damping: float  # N s/m, hard stops
+    extension: float  # m, hard top stop at x = -extension
+
+    @property
+    def bumper_start(self) -> float:
+        return self.travel - self.bumper_length
+
+    @property
+    def n_guards(self):
+        return self.main.n_guards + 5
+
+    def guards(self, x, v):
+        p = x - self.travel
+        q = -self.extension - x
+        return self.main.guards(x, v) + (
+            x - self.bumper_start, p, self.stop_rate * p + self.stop_damping * v,
+            q, self.stop_rate * q - self.stop_damping * v)
+
+    def stop_forces(self, x, v, sides=None):
+        """(bumper, compression stop, extension stop) forces in N, each >= 0 in its own direction."""
+        o = self.main.n_guards
+        s = x - self.bumper_start
+        bumper = 0.0
+        if _side(s, sides, o):
+            r = s / self.bumper_length
+            bumper = self.bumper_force * r * r
+        p = x - self.travel
+        stop = 0.0
+        if _side(p, sides, o + 1):
+            f = self.stop_rate * p + self.stop_damping * v
+            if _side(f, sides, o + 2):
+                stop = f
+        q = -self.extension - x
+        top = 0.0
+        if _side(q, sides, o + 3):
+            f = self.stop_rate * q - self.stop_damping * v
+            if _side(f, sides, o + 4):
+                top = f
+        return bumper, stop, top
+
+    def force(self, x, v, sides=None):
+        main = self.main.force(x, v, None if sides is None else sides[: self.main.n_guards])
+        bumper, stop, top = self.stop_forces(x, v, sides)
+        return main + bumper + stop - top
+
+    def energy(self, x):
+        """Elastic energy (J): the main spring, the bumper and the stops' springs."""
+        e = self.main.energy(x)
+        s = x - self.bumper_start
+        if s > 0.0:
+            e += self.bumper_force * s ** 3 / (3.0 * self.bumper_length ** 2)
+        p = x - self.travel
+        if p > 0.0:
+            e += 0.5 * self.stop_rate * p * p
+        q = -self.extension - x
+        if q > 0.0:
+            e += 0.5 * self.stop_rate * q * q
+        return e
+
+
+@dataclass(frozen=True)
+class Rim:
+    """The rim striking through the tire: past ``max_deflection`` a stiff, damped contact,
+    F = max(0, k p + c dp/dt) for p = deflection - max_deflection > 0, added to the tire force."""
+
+    max_deflection: float  # m
+    rate: float  # N/m
+    damping: float  # N s/m
+
+    def guards(self, deflection, rate):
+        p = deflection - self.max_deflection
+        return (p, self.rate * p + self.damping * rate)
+
+    def force(self, deflection, rate, sides=None):
+        p = deflection - self.max_deflection
+        if not _side(p, sides, 0):
+            return 0.0
+        f = self.rate * p + self.damping * rate
+        return f if _side(f, sides, 1) else 0.0
+
+
+__all__ = ["EndStops", "Rim"]
