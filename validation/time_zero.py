@@ -36,6 +36,7 @@ FALL_WINDOW_S = 0.06      # the part of the fall fitted with the parabola
 START_BAND_MM = 3.0       # a record starting within this of zero (or the noise band) starts at impact
 START_RISE_S = 0.03       # ... and must be clearly loaded within this time
 MIN_AFTER_TOUCH_S = 0.05  # a record must go on at least this long after touch
+MAX_TOUCH_BEFORE_S = 0.5  # a touch given may lie this far before the record's start (cut after touch)
 KINDS = ("free fall", "starts at impact", "given")
 
 
@@ -119,10 +120,11 @@ def find_touch(time_s, tire_mm, name: str = "record", antialias_Hz: float | None
     t = np.asarray(time_s, float)
     y = np.asarray(tire_mm, float)
     if touch_s is not None:
-        if not np.isfinite(touch_s) or not t[0] - 0.01 <= touch_s <= t[-1] - MIN_AFTER_TOUCH_S:
+        if not np.isfinite(touch_s) or not t[0] - MAX_TOUCH_BEFORE_S <= touch_s <= t[-1] - MIN_AFTER_TOUCH_S:
             raise TouchError(f"{name}: --touch-s {touch_s:g} is not within the record "
-                             f"({t[0]:.4f} s to {t[-1] - MIN_AFTER_TOUCH_S:.4f} s, leaving "
-                             f"{MIN_AFTER_TOUCH_S * 1e3:.0f} ms after touch)")
+                             f"({t[0] - MAX_TOUCH_BEFORE_S:.4f} s to {t[-1] - MIN_AFTER_TOUCH_S:.4f} s: at most "
+                             f"{MAX_TOUCH_BEFORE_S:g} s before its start and {MIN_AFTER_TOUCH_S * 1e3:.0f} ms "
+                             "before its end)")
         return Touch(float(touch_s), "given")
     dt = float(np.median(np.diff(t)))
     sigma = noise_sigma(y)

@@ -31,12 +31,23 @@ class FitResult:
     @property
     def aic(self) -> float:
         n = max(self.n_points, 1)
-        return n * math.log(max(self.rms, 1e-300) ** 2) + 2 * self.n_params
+        return n * log_ms(self.rms) + 2 * self.n_params
 
     @property
     def bic(self) -> float:
+        return self.bic_with_floor(0.0)
+
+    def bic_with_floor(self, rms_floor: float) -> float:
+        """BIC with the residual RMS taken as at least ``rms_floor`` (the data's resolution): fits
+        better than the data can tell apart then count as equal, and only their size differs."""
         n = max(self.n_points, 1)
-        return n * math.log(max(self.rms, 1e-300) ** 2) + self.n_params * math.log(n)
+        return n * log_ms(max(self.rms, rms_floor)) + self.n_params * math.log(n)
+
+    @property
+    def saturated(self) -> bool:
+        """As many parameters as half the points or more: the model can follow the points
+        themselves, so its small residual is no evidence (never chosen by the criterion)."""
+        return self.n_points < 2 * self.n_params
 
     def overrides(self) -> dict[str, Any]:
         """Configuration keys to apply: the fitted values plus the model choices."""
@@ -54,6 +65,11 @@ class FitResult:
             unc = f" +/- {err:.3g}" if err is not None and np.isfinite(err) else ""
             parts.append(f"{key.rsplit('.', 1)[-1]} = {value:.6g}{unc}")
         return f"{self.kind} {self.model}: " + ", ".join(parts) + f"; residual RMS {self.rms:.4g} {self.residual_unit}"
+
+
+def log_ms(rms: float) -> float:
+    """log of the mean square residual, finite for a zero residual (noise-free data)."""
+    return 2.0 * math.log(max(float(rms), 1e-150))
 
 
 def covariance_stderr(jac: np.ndarray, residuals: np.ndarray, n_params: int) -> tuple[np.ndarray, np.ndarray]:
