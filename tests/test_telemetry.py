@@ -2,7 +2,6 @@
 the format's own numbers, the metrics on signals with closed-form answers, malformed files as one
 line with exit status 2, and the measured-vs-simulated comparison."""
 import json
-import math
 import struct
 from pathlib import Path
 

@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 from mtbmj.drop.run import resolve, run_drop
-from mtbmj.errors import MtbmjError
 from mtbmj.identify.drop_synthetic import drop_record_columns, make_drop_record
 from mtbmj.identify.dropfit import fit_drop
 from mtbmj.identify.records import write_csv_text
@@ -163,3 +162,27 @@ def test_fall_parabola_gives_touch_on_a_closed_form_record():
     assert found.kind == "free fall"
     assert found.touch_s == pytest.approx(touch, abs=2e-5)
     assert found.impact_speed_m_per_s == pytest.approx(v * 1e-3, rel=1e-3)
+
+
+def test_fork_topping_time_is_where_it_reaches_full_extension():
+    """The fork's topping is the start of its plateau at full extension: the same under sensor
+    noise (a plateau's minimum would wander along it) and shifted with the run."""
+    from mtbmj.validation.events import detect
+
+    signals = run_drop("S12", "mujoco", duration=0.8).signals
+    clean = detect(signals).get("fork", "topping")
+    rng = np.random.default_rng(8)
+    for seed in range(3):
+        noisy = dict(signals)
+        r = np.random.default_rng(seed)
+        noisy["sled_mm"] = signals["sled_mm"] + r.normal(0, 0.1, signals["sled_mm"].size)
+        noisy["fork_mm"] = signals["fork_mm"] + r.normal(0, 0.1, signals["fork_mm"].size)
+        noisy["tire_mm"] = noisy["sled_mm"] - noisy["fork_mm"]
+        assert detect(noisy).get("fork", "topping").time_s == pytest.approx(clean.time_s, abs=0.004)
+    shift = float(rng.uniform(0.003, 0.02))
+    late = {k: (v + shift if k == "time_s" else v) for k, v in signals.items()}
+    assert detect(late, start_s=shift).get("fork", "topping").time_s == pytest.approx(clean.time_s + shift, abs=5e-4)
+    # at that moment the fork is within the band of its value at full extension, and before it is not
+    t, fork = signals["time_s"], signals["fork_mm"]
+    assert np.interp(clean.time_s + 0.002, t, fork) <= clean.value_mm + 0.5
+    assert np.interp(clean.time_s - 0.01, t, fork) > clean.value_mm + 0.3

@@ -155,8 +155,12 @@ def find_touch(time_s, tire_mm, name: str = "record", antialias_Hz: float | None
             if pick.size >= 5:
                 tau = t[pick] - crude
                 (b, a), cov = np.polyfit(tau, y[pick] - 0.5 * GRAVITY_MM_PER_S2 * tau**2, 1, cov="unscaled")
-                spread = float(np.std(y[pick] - 0.5 * GRAVITY_MM_PER_S2 * tau**2 - (a + b * tau)))
-                sigma_fit = max(spread, sigma) * np.sqrt(pick.size / max(pick.size - 2, 1))
+                resid = y[pick] - 0.5 * GRAVITY_MM_PER_S2 * tau**2 - (a + b * tau)
+                spread = float(np.std(resid))
+                # coloured noise (the anti-aliasing filter): inflate by the AR(1) variance factor
+                rho = float(np.clip(resid[1:] @ resid[:-1] / max(resid @ resid, 1e-300), 0.0, 0.95))
+                sigma_fit = (max(spread, sigma) * np.sqrt(pick.size / max(pick.size - 2, 1))
+                             * np.sqrt((1 + rho) / (1 - rho)))
                 # a + b tau + g/2 tau^2 = 0 near tau = 0
                 disc = b * b - 2.0 * GRAVITY_MM_PER_S2 * a
                 if b > 0 and disc >= 0:

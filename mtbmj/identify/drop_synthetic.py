@@ -37,8 +37,8 @@ def drop_record_columns(config="S12", overrides: Mapping | None = None, noise_mm
     samples); ``sensor_noise_mm``: white potentiometer noise at the engine rate, before the
     anti-aliasing filter (coloured in the record); ``noise_mm``: white noise on the logged samples.
     The engine-rate trace passes through the logger's filter (the same 4th-order Butterworth as
-    ``mtbmj.drop.measure``) with the fall in front of it, so a record with a free fall is what a
-    logger running through the release would see."""
+    ``mtbmj.drop.measure``) with the whole fall in front of it (from the sled hanging still), then
+    the last ``fall_s`` before touch are kept: what a logger running through the release records."""
     from scipy import signal
 
     cfg = resolve(config, overrides)
@@ -51,6 +51,8 @@ def drop_record_columns(config="S12", overrides: Mapping | None = None, noise_mm
     height = cfg["sled.drop_height_mm"] * 1e-3
     v_i = float(np.sqrt(2 * g * height))
     pre = int(round(max(fall_s, 0.0) / dt))
+    if pre:  # the logger runs through the release: filter from the sled hanging still, keep the last fall_s
+        pre += ratio * int(np.ceil((v_i / g + 0.02) / (ratio * dt)))
     tau = (np.arange(-pre, 0)) * dt  # engine-rate times before touch
     release = -v_i / g
     fall_mm = np.where(tau < release, -height, v_i * tau + 0.5 * g * tau**2) * 1e3
@@ -66,6 +68,9 @@ def drop_record_columns(config="S12", overrides: Mapping | None = None, noise_mm
         filtered, _ = signal.sosfilt(sos, reading, zi=zi * reading[0])
         logged = filtered[::ratio] + rng.normal(0.0, noise_mm, columns["time_s"].size)
         columns[f"{name}_mm"] = np.round(logged / q[name]) * q[name]
+    if pre:
+        keep = columns["time_s"] >= clock_offset_s - fall_s - 1e-9
+        columns = {k: v[keep] for k, v in columns.items()}
     columns["tire_mm"] = columns["sled_mm"] - columns["fork_mm"]
     truth = ", ".join(f"{k} = {v:g}" for k, v in (overrides or {}).items() if isinstance(v, (int, float)))
     touch = clock_offset_s
@@ -75,7 +80,7 @@ def drop_record_columns(config="S12", overrides: Mapping | None = None, noise_mm
         f"engine {engine}; 1 kHz after the 400 Hz anti-aliasing low-pass; pot noise {noise_mm:g} mm rms on the "
         f"samples, {sensor_noise_mm:g} mm rms before the filter; {adc_bits}-bit over {sled_range_mm:g} mm (sled) "
         f"and {fork_range_mm:g} mm (fork); seed {seed}",
-        (f"{pre * dt * 1e3:.1f} ms of free fall before touch; true touch at t = {touch:.6f} s on this clock"
+        (f"{fall_s * 1e3:.1f} ms of free fall before touch; true touch at t = {touch:.6f} s on this clock"
          if pre else f"the record starts at touch, t = {touch:.6f} s on this clock")
         + "; sled zero at tread touch, fork zero at full extension, tire = sled - fork",
     ]

@@ -11,12 +11,23 @@ known yet) run as one batch through ``mtbmj.sweep.batch.drop_traces`` (``mujoco.
 compiled laws, ``workers`` threads, bit-identical to ``run_drop``); on the ODE engine (or without
 the compiled laws) the columns run in a pool of ``workers`` processes (2 by default). With
 ``starts=N`` the fit runs from the configuration's start values and N - 1 Latin hypercube points
-within the bounds (their first evaluations batched together); the lowest final cost wins. Confidence
-intervals (95 %, Student t) and the correlation matrix come from the Jacobian at the optimum: a
-Gauss-Newton sandwich that allows the channels' noise to be correlated (``channel_sandwich``; the
-tire trace is sled - fork); ``extra["stderr_iid"]`` has the plain ``fitresult.covariance_stderr``.
-They cover measurement noise only: a model that cannot reproduce the data exactly (another
-engine, another law) biases the values by more than these intervals say.
+within the bounds (their first evaluations batched together); the lowest final cost wins.
+
+Time zero comes from ``validation.time_zero`` (the rule ``mtbmj validate`` uses): a record with a
+free fall on any clock, or one that starts at impact, or ``touch_s`` given. The fit starts
+``FIT_FROM_S`` after touch: before, a real logger's filter still carries the free fall, which the
+model's logger (started at touch) does not see.
+
+Confidence intervals (95 %) and the correlation matrix: the residuals are not white (the 400 Hz
+filter colours the noise; sled, fork and tire share the pots; the engine has its own error), so
+the covariance is the Newey-West sandwich of the scores over time (``fitresult.hac_covariance``,
+Bartlett bandwidth by Andrews' rule, channels pooled per time stamp), plus the squares of two
+biases carried to the parameters through the Jacobian: the engine's own error (the other engine
+run once at the optimum, ``engine_error``) and one standard error of the touch time. The Student t
+quantile uses the effective number of independent samples (time samples / bandwidth).
+``extra["stderr_white"]`` keeps the white-in-time channel sandwich, ``extra["stderr_iid"]`` the
+plain ``covariance_stderr``. ``benchmarks/coverage.py`` measures the coverage. The intervals
+assume the configuration's laws are right.
 
 Why ``scipy.optimize.least_squares`` and not ``mujoco.minimize.least_squares``: both are bounded
 Gauss-Newton/Levenberg-Marquardt type solvers that finite-difference a residual, and mujoco's

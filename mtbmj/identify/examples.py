@@ -57,7 +57,7 @@ def write_examples(out_dir: str | Path | None = None) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     written = [dyno.write_csv(out / "spring_example.csv", dyno.spring_record(sample_Hz=200.0)),
                dyno.write_csv(out / "damper_example.csv", dyno.peak_points(dyno.damper_record(dyno.DAMPER_BILINEAR)))]
-    for name, body in (("tire_drop_example.csv", tires.tire_drop_record(duration_s=1.0)),
+    for name, body in (("tire_drop_example.csv", tires.tire_drop_record(duration_s=2.0)),
                        ("tire_ramp_example.csv", tires.tire_ramp_record())):
         (out / name).write_text(body)
         written.append(out / name)
