@@ -14,11 +14,11 @@ the call that makes them again.
   (made by ``benchmarks/make_sled_example.py``: an S12 variant with LuGre friction on the ODE
   reference).
 
-Make the first three again with ``python -m mtbmj.identify.examples [--out DIR]`` (deterministic).
+Make the first three again with ``python -c "from mtbmj.identify.examples import write_examples;
+write_examples('DIR')"`` (deterministic: the shipped files are what it writes).
 """
 from __future__ import annotations
 
-import argparse
 from importlib import resources
 from pathlib import Path
 
@@ -62,19 +62,6 @@ def write_examples(out_dir: str | Path | None = None) -> list[Path]:
         (out / name).write_text(body)
         written.append(out / name)
     return written
-
-
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description="Write the synthetic example records of mtbmj fit.")
-    parser.add_argument("--out", type=Path, help="folder (default: the installed package's data folder)")
-    args = parser.parse_args(argv)
-    for path in write_examples(args.out):
-        print(f"wrote {path}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())
 
 
 __all__ = ["FILES", "example_paths", "write_examples"]
