@@ -186,3 +186,26 @@ def test_fork_topping_time_is_where_it_reaches_full_extension():
     t, fork = signals["time_s"], signals["fork_mm"]
     assert np.interp(clean.time_s + 0.002, t, fork) <= clean.value_mm + 0.5
     assert np.interp(clean.time_s - 0.01, t, fork) > clean.value_mm + 0.3
+
+
+def test_mtbmj_drop_output_fits_back_to_its_parameters(tmp_path):
+    """`mtbmj drop` with two values changed (drawn at random), cut at a random length >= 0.3 s,
+    fitted from the unchanged S12 on the other engine: back within 1 %."""
+    import json
+
+    rng = np.random.default_rng(31)
+    truth = {"fork.spring.preload_N": round(float(rng.uniform(200, 260)), 1),
+             "tire.impact_rate_N_per_mm": round(float(rng.uniform(70, 90)), 1)}
+    length = float(rng.uniform(0.3, 0.6))
+    sets = [a for k, v in truth.items() for a in ("--set", f"{k}={v}")]
+    done = run_cli("drop", "S12", *sets, "--engine", "ode", "--duration", "0.7", "--out", tmp_path / "drop")
+    assert done.returncode == 0, done.stderr
+    lines = (tmp_path / "drop" / "timeseries.csv").read_text().splitlines()
+    body = [ln for ln in lines if not ln.startswith("#")]
+    (tmp_path / "cut.csv").write_text("\n".join(body[:1 + int(length * 1000)]) + "\n")
+    done = run_cli("fit", "drop", tmp_path / "cut.csv", "--free", ",".join(truth), "--out", tmp_path / "fit")
+    assert done.returncode == 0, done.stderr
+    assert "the record starts at impact" in done.stdout
+    fitted = json.loads((tmp_path / "fit" / "fit.json").read_text())["parameter_set"]
+    for key, value in truth.items():
+        assert fitted[key] == pytest.approx(value, rel=0.01), key
