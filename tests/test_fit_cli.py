@@ -122,8 +122,9 @@ def test_drop_fit_bad_free_key_and_bounds(records, tmp_path, capsys):
     out = tmp_path / "out"
     assert cli.main(["fit", "drop", str(sled), "--free", "fork.spring.prelod_N", "--out", str(out)]) == 2
     assert "fork.spring.prelod_N" in capsys.readouterr().err
-    assert cli.main(["fit", "drop", str(sled), "--out", str(out)]) == 2
-    assert "--free" in capsys.readouterr().err
+    # without --free the default pair is fitted, and the output says so
+    assert cli.main(["fit", "drop", str(sled), "--out", str(tmp_path / "default")]) == 0
+    assert "no --free given: fitting tire.impact_rate_N_per_mm, fork.spring.preload_N" in capsys.readouterr().out
     assert cli.main(["fit", "drop", str(sled), "--free", "fork.spring.preload_N", "--bound", "x", "--out", str(out)]) == 2
     assert "--bound" in capsys.readouterr().err
     assert not out.exists()

@@ -2,7 +2,6 @@
 the format's own numbers, the metrics on signals with closed-form answers, malformed files as one
 line with exit status 2, and the measured-vs-simulated comparison."""
 import json
-import math
 import struct
 from pathlib import Path
 
@@ -256,3 +255,30 @@ def test_compare_with_a_drop_run(tmp_path, capsys):
     assert sim["fork"]["travel_max_mm"] == 120.0  # from the run's config.toml
     assert run_cli(["telemetry", str(SHIPPED), "--compare", str(tmp_path / "nothing"), "--out", str(tmp_path / "x")]) == 2
     assert "not a run directory" in capsys.readouterr().err
+
+
+def test_comparison_figure_labels_each_travel_and_shows_every_tail(record):
+    """A simulated run faster than the ride (a 120 mm fork, random amplitude) against the shipped
+    ride (a 180 mm fork): each histogram is in % of its own travel and says so, the velocity axis
+    reaches the simulated tails, and the split's abbreviations are defined."""
+    from mtbmj.cli import telemetry as tcli
+
+    rng = np.random.default_rng(12)
+    amplitude, freq = rng.uniform(30, 50), rng.uniform(5, 8)
+    t = np.arange(0, 4, 0.001)
+    fork = 50 + amplitude * np.sin(2 * np.pi * freq * t)
+    peak_v = 2 * np.pi * freq * amplitude
+    run = {"name": "fast", "dir": "fast", "time_s": t, "fork_mm": fork,
+           "velocity_mm_per_s": np.gradient(fork, t), "travel_max_mm": 120.0}
+    summary = tcli.compare(record, [run])
+    assert summary["simulated"][0]["fork"]["travel_max_mm"] == 120.0
+    assert set(summary["abbreviations"]) == {"HSC", "LSC", "LSR", "HSR"}
+    fig = tcli.figure(summary)
+    ax_t, ax_v = fig.axes[0], fig.axes[1]
+    labels = [text.get_text() for text in ax_t.get_legend().get_texts()]
+    assert any("% of 120 mm" in s for s in labels)
+    assert any(f"% of {record.fork_max_mm:.0f} mm" in s for s in labels)
+    assert "own travel" in ax_t.get_xlabel()
+    low, high = ax_v.get_xlim()
+    assert high >= peak_v * 0.98 and low <= -peak_v * 0.98
+    assert "HSC" in ax_v.get_legend().get_title().get_text()

@@ -13,9 +13,13 @@ contact Valley 1, Peak 3 and rest. Detection, on signals aligned to t = 0 at tir
    ringing are not events. A run that never lifts off has no topping; Peak 2 is then the next
    prominent peak after the rebound valley.
 4. The fork and tire take their extreme in the window around each sled event (from halfway to the
-   previous sled event to halfway to the next; the topping is their extreme in the air), so a
-   ringing tire gives its largest excursion there, not one of its wiggles. An extreme at the edge
-   of its window is no peak: the event is None.
+   previous sled event to halfway to the next), so a ringing tire gives its largest excursion
+   there, not one of its wiggles. An extreme at the edge of its window is no peak: the event is None.
+   Topping: the sled and the tire take their lowest point in the air (the top of the flight, a
+   rounded minimum); the fork, which sits on a flat plateau at full extension while in the air,
+   takes the moment it reaches full extension: the first time after Peak 1 (before landing) that
+   its smoothed signal comes within ``TOP_BAND_MM`` (or 5 x its noise) of its lowest value there,
+   with that lowest value as the event's value. The minimum of a plateau has no time; its start has.
 5. Rest: the system is at rest when the sled moves less than ``REST_TOLERANCE_MM`` (plus
    noise) over the last ``REST_WINDOW_S`` (as ``mtbmj drop`` decides); the rest value is the mean there and its time the
    settling time (the last exit from a band around it). Otherwise rest is None and the run is
@@ -41,6 +45,7 @@ REST_WINDOW_S = 0.2         # the last 0.2 s decide whether the system is at res
 REST_TOLERANCE_MM = 0.5     # peak-to-peak motion allowed at rest (plus noise)
 SETTLE_BAND_MM = 1.0        # the settling time is the last exit from rest +/- this (plus noise)
 PROMINENCE_FRACTION = 0.02  # of the sled's range after touch
+TOP_BAND_MM = 0.3           # the fork "reaches full extension" within this of its lowest value in the air
 
 
 @dataclass(frozen=True)
@@ -128,6 +133,13 @@ def _crossing(t, y, i, j) -> float:
     if y[j] == y[i]:
         return float(t[i])
     return float(t[i] + (t[j] - t[i]) * (-y[i]) / (y[j] - y[i]))
+
+
+def _entry_time(t, y, k, level) -> float:
+    """Time the falling ``y`` crosses ``level`` between samples k - 1 and k (sub-sample)."""
+    if k == 0 or y[k - 1] == y[k]:
+        return float(t[k])
+    return float(t[k - 1] + (t[k] - t[k - 1]) * (y[k - 1] - level) / (y[k - 1] - y[k]))
 
 
 def _contact(t, tire_s, sigma, start) -> tuple[int | None, float | None, int | None, float | None]:
@@ -247,7 +259,13 @@ def detect(signals: Mapping[str, np.ndarray], start_s: float = 0.0) -> Events:
     for name, window in windows.items():
         lo, hi, kind = window
         for s in ("fork", "tire"):
-            if name == "topping":  # the extreme in the air, whatever its shape
+            if name == "topping" and s == "fork":  # the moment it reaches full extension
+                start = idx["peak1"] if idx["peak1"] is not None else lo
+                seg = sm[s][start:hi + 1]
+                lowest = float(np.min(seg))
+                k = start + int(np.argmax(seg <= lowest + max(TOP_BAND_MM, 5.0 * noise[s])))
+                out[s][name] = Event(_entry_time(t, sm[s], k, lowest + max(TOP_BAND_MM, 5.0 * noise[s])), lowest)
+            elif name == "topping":  # the lowest point in the air
                 seg = sm[s][lo:hi + 1]
                 k = lo + int(np.argmin(seg))
                 out[s][name] = _refine(t, sm[s], k, raw[s], noise[s])

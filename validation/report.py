@@ -238,13 +238,14 @@ class Validation:
 # -- running -------------------------------------------------------------------------------------
 def run_validation(data, configs: Sequence, reference_engine: str | None = None, engine: str = "mujoco",
                    duration: float | None = None, *, overrides=None, workers: int | None = None,
-                   sled_offset_mm: float = 0.0, fork_offset_mm: float = 0.0,
+                   sled_offset_mm: float = 0.0, fork_offset_mm: float = 0.0, touch_s: float | None = None,
                    progress: Callable[[str], None] | None = None) -> Validation:
     """Run ``configs`` (preset names, TOML paths or ``Config``) on ``engine`` and compare each with
     the measurement: the sled record ``data`` (a path or a ``SledRecord``), or, with
     ``reference_engine="ode"``, the ODE run of the same configuration (``data`` may then be None;
     given, it only sets the default duration). ``duration``: simulated time after touch (default:
-    the record's length after touch, or the configuration's own). Runs go to a process pool."""
+    the record's length after touch, or the configuration's own). ``touch_s``: time zero on the
+    record's clock (default: found by ``validation.time_zero``). Runs go to a process pool."""
     if engine not in ENGINES:
         raise ConfigError(f"engine: {engine!r} is not one of {', '.join(ENGINES)}")
     if reference_engine is not None:
@@ -261,8 +262,9 @@ def run_validation(data, configs: Sequence, reference_engine: str | None = None,
         if isinstance(data, sled_data.SledRecord):
             record = data
         else:
-            record = sled_data.read_sled(data, sled_offset_mm=sled_offset_mm, fork_offset_mm=fork_offset_mm) \
-                if isinstance(data, (str, Path)) else sled_data.load(data)
+            record = sled_data.read_sled(data, sled_offset_mm=sled_offset_mm, fork_offset_mm=fork_offset_mm,
+                                         touch_s=touch_s) \
+                if isinstance(data, (str, Path)) else sled_data.load(data, touch_s=touch_s)
     elif reference_engine is None:
         raise ConfigError("validate: no sled data given (a record file, or reference_engine='ode')")
     if duration is None and record is not None:
@@ -401,6 +403,7 @@ def _html(v: Validation, images: Mapping[str, bytes]) -> str:
     if v.record is not None and not v.reference_engine:
         info = v.record.info()
         meta += [("touch (time zero) on the record's clock", f"{info['touch_in_file_s']:.4f} s"),
+                 ("how time zero was found", info["time_zero"]),
                  ("sample rate", f"{info['sample_rate_Hz']:.0f} Hz"),
                  ("sensor noise (std)", ", ".join(f"{k} {val:.3f} mm" for k, val in info["noise_mm"].items())),
                  ("tire", info["tire"])]

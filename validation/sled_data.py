@@ -13,12 +13,9 @@ Conventions are the paper's: sled zero when the tread just touches the ground, f
 unloaded full extension, compression positive. Readings taken against another zero are corrected
 with ``sled_offset_mm`` / ``fork_offset_mm`` (the reading at the true zero, subtracted).
 
-Time zero is found from the data: the tire signal is the (negative) gap between tread and ground
-while the sled falls and rises through zero at touch. The rising edge is located on a smoothed
-copy above the noise, then a straight line fitted to the samples within a few mm of zero gives the
-crossing (sub-sample, insensitive to noise); the logger's anti-aliasing filter delays a ramp by its
-group delay, which is taken off so that t = 0 is the physical touch, like the simulations' t = 0
-(the simulated signals pass through the same filter after t = 0).
+Time zero is found from the data by the one rule of ``validation.time_zero`` (free fall then
+impact, a record that starts at impact, or a logger clock with a pre-trigger), or given as
+``touch_s`` on the record's clock; ``SledRecord.touch`` says which and where.
 """
 from __future__ import annotations
 
@@ -30,6 +27,8 @@ from typing import Mapping
 import numpy as np
 
 from mtbmj.identify.records import Record, RecordError, read_record
+from mtbmj.validation import time_zero
+from mtbmj.validation.time_zero import antialias_delay_s, noise_sigma
 
 DISPLACEMENTS = ("sled", "fork", "tire")
 ALIASES = {
@@ -41,7 +40,7 @@ ALIASES = {
 LENGTH_UNITS = ("mm", "m")
 TIME_UNITS = ("s", "ms")
 GAP_FACTOR = 1.5         # a step longer than 1.5 x the typical step is a gap
-MIN_AFTER_TOUCH_S = 0.05  # a record must go on at least this long after touch
+MIN_AFTER_TOUCH_S = time_zero.MIN_AFTER_TOUCH_S  # a record must go on at least this long after touch
 EXAMPLE = Path(str(resources.files("mtbmj") / "data" / "sled_example.csv"))
 
 
@@ -76,6 +75,7 @@ class SledRecord:
     path: str | None = None
     comments: tuple[str, ...] = field(default=())
     tire_computed: bool = True     # tire = sled - fork (not a column of the file)
+    touch: time_zero.Touch | None = None  # how time zero was found (None: given aligned)
 
     @property
     def synthetic(self) -> bool:
@@ -102,82 +102,20 @@ class SledRecord:
 
     def info(self) -> dict:
         return {"name": self.name, "path": self.path, "synthetic": self.synthetic,
-                "touch_in_file_s": self.touch_s, "sample_rate_Hz": self.sample_rate_Hz,
+                "touch_in_file_s": self.touch_s,
+                "time_zero": self.touch.describe() if self.touch else "t = 0 at touch (simulated run)", "sample_rate_Hz": self.sample_rate_Hz,
                 "duration_after_touch_s": self.duration_s, "points": int(self.time_s.size),
                 "noise_mm": self.noise_mm, "tire": "sled - fork" if self.tire_computed else "column of the file",
                 "comments": list(self.comments)}
 
 
-def noise_sigma(y: np.ndarray) -> float:
-    """Standard deviation of white sensor noise, from the third differences (robust: median
-    absolute deviation), which the smooth motion hardly contributes to at 1 kHz."""
-    if y.size < 8:
-        return 0.0
-    d3 = np.diff(y, 3)
-    mad = float(np.median(np.abs(d3 - np.median(d3))))
-    return 1.4826 * mad / np.sqrt(20.0)  # var(d3) = 20 var(noise)
-
-
-def antialias_delay_s(antialias_Hz: float | None, order: int = 4) -> float:
-    """Group delay at low frequency of an order-``order`` Butterworth low-pass: what it delays a ramp."""
-    if not antialias_Hz:
-        return 0.0
-    poles = np.exp(1j * np.pi * (2 * np.arange(1, order + 1) + order - 1) / (2 * order))
-    return float(np.sum(-1.0 / poles).real / (2 * np.pi * antialias_Hz))
-
-
-def _smooth(y: np.ndarray, width: int) -> np.ndarray:
-    if width <= 1 or y.size < width:
-        return y.astype(float)
-    kernel = np.ones(width) / width
-    padded = np.concatenate([np.full(width // 2, y[0]), y, np.full(width - 1 - width // 2, y[-1])])
-    return np.convolve(padded, kernel, mode="valid")
-
-
 def find_touch(time_s: np.ndarray, tire_mm: np.ndarray, name: str = "record",
                antialias_Hz: float | None = 400.0) -> float:
-    """Time of tire touch on the record's clock: the first rise of the tire signal through zero
-    that goes clearly above the noise (see the module docstring)."""
-    t = np.asarray(time_s, float)
-    y = np.asarray(tire_mm, float)
-    dt = float(np.median(np.diff(t)))
-    sigma = noise_sigma(y)
-    level = max(2.0, 8.0 * sigma)  # "clearly in contact"
-    smooth = _smooth(y, max(1, int(round(0.003 / dt)) | 1))
-    air = np.flatnonzero(smooth < -level)
-    if air.size:  # the usual record: free fall, then the first rise clearly into contact
-        rises = np.flatnonzero(smooth[air[0]:] > level) + air[0]
-        if rises.size == 0:
-            raise SledDataError(f"{name}: no impact in the record (after the free fall the tire deflection never "
-                                f"exceeds {level:.1f} mm; largest {float(np.max(y[air[0]:])):.2f} mm)")
-        first = int(rises[0])
-        start = int(np.flatnonzero(smooth[:first] < -level)[-1])
-    else:  # no free fall recorded: only a record that starts at touch and rises is accepted
-        rises = np.flatnonzero(smooth > level)
-        if rises.size == 0:
-            raise SledDataError(f"{name}: no impact in the record (tire deflection never exceeds {level:.1f} mm; "
-                                f"largest {float(np.max(y)):.2f} mm)")
-        if abs(smooth[0]) > level or rises[0] > int(round(0.05 / dt)):
-            raise SledDataError(f"{name}: no impact in the record (no free fall before the tire is loaded; "
-                                "is tire = sled - fork zeroed at tread touch?)")
-        first, start = int(rises[0]), 0
-    band = max(3.0, 10.0 * sigma)
-    window = np.arange(start, min(first + int(round(0.006 / dt)) + 1, y.size))
-    window = window[np.abs(smooth[window]) <= band]
-    if window.size >= 3:
-        slope, intercept = np.polyfit(t[window], y[window], 1)
-        touch = -intercept / slope if slope > 0 else float(t[first])
-    else:  # a very fast edge: interpolate the smoothed crossing
-        j = max(start, first - 1)
-        while j > start and smooth[j] > 0:
-            j -= 1
-        y0, y1 = smooth[j], smooth[j + 1]
-        touch = float(t[j] + (t[j + 1] - t[j]) * (-y0 / (y1 - y0))) if y1 != y0 else float(t[j])
-    touch = float(np.clip(touch, t[max(start, 0)], t[first])) - antialias_delay_s(antialias_Hz)
-    if t[-1] - touch < MIN_AFTER_TOUCH_S:
-        raise SledDataError(f"{name}: the record ends {max(t[-1] - touch, 0.0) * 1e3:.0f} ms after the tire "
-                            f"touches the ground; the impact is not in it")
-    return touch
+    """Time of tire touch on the record's clock (``validation.time_zero.find_touch``)."""
+    try:
+        return time_zero.find_touch(time_s, tire_mm, name, antialias_Hz).touch_s
+    except time_zero.TouchError as exc:
+        raise SledDataError(str(exc)) from None
 
 
 def _pick(record: Record, quantity: str) -> str | None:
@@ -206,7 +144,8 @@ def _check_time(name: str, t: np.ndarray) -> None:
 
 def from_arrays(time_s, sled_mm=None, fork_mm=None, tire_mm=None, *, sled_offset_mm: float = 0.0,
                 fork_offset_mm: float = 0.0, name: str = "record", path: str | None = None,
-                comments=(), align: bool = True, antialias_Hz: float | None = 400.0) -> SledRecord:
+                comments=(), align: bool = True, antialias_Hz: float | None = 400.0,
+                touch_s: float | None = None) -> SledRecord:
     """A ``SledRecord`` from arrays in s and mm (any two of sled, fork, tire), zeroed and aligned."""
     t = np.asarray(time_s, float)
     given = {k: None if v is None else np.asarray(v, float) for k, v in
@@ -237,14 +176,21 @@ def from_arrays(time_s, sled_mm=None, fork_mm=None, tire_mm=None, *, sled_offset
         sled = fork + tire
     elif fork is None:
         fork = sled - tire
-    touch = find_touch(t, tire, name, antialias_Hz) if align else 0.0
+    found = None
+    if align or touch_s is not None:
+        try:
+            found = time_zero.find_touch(t, tire, name, antialias_Hz, touch_s=touch_s)
+        except time_zero.TouchError as exc:
+            raise SledDataError(str(exc)) from None
+    touch = found.touch_s if found else 0.0
     noise = {k: float(noise_sigma(v)) for k, v in (("sled", sled), ("fork", fork), ("tire", tire))}
     return SledRecord(name=name, time_s=t - touch, sled_mm=sled, fork_mm=fork, tire_mm=tire, touch_s=float(touch),
-                      noise_mm=noise, path=path, comments=tuple(comments), tire_computed=tire_computed)
+                      noise_mm=noise, path=path, comments=tuple(comments), tire_computed=tire_computed,
+                      touch=found)
 
 
 def read_sled(path: str | Path, *, sled_offset_mm: float = 0.0, fork_offset_mm: float = 0.0,
-              antialias_Hz: float | None = 400.0) -> SledRecord:
+              antialias_Hz: float | None = 400.0, touch_s: float | None = None) -> SledRecord:
     """Read, check, zero and align a sled record (CSV or .mat). Raises ``SledDataError`` /
     ``RecordError`` (``MtbmjError``) with one line naming the file and the cause."""
     path = Path(path)
@@ -262,7 +208,15 @@ def read_sled(path: str | Path, *, sled_offset_mm: float = 0.0, fork_offset_mm: 
         if path.exists() and ("line" in text or "no unit" in text or "no header" in text):
             text += " (not a CSV sled record: expected columns like time_s, sled_mm, fork_mm)"
         raise SledDataError(text) from None
-    name = str(path)
+    return from_record(record, sled_offset_mm=sled_offset_mm, fork_offset_mm=fork_offset_mm,
+                       antialias_Hz=antialias_Hz, touch_s=touch_s)
+
+
+def from_record(record: Record, *, sled_offset_mm: float = 0.0, fork_offset_mm: float = 0.0,
+                antialias_Hz: float | None = 400.0, touch_s: float | None = None) -> SledRecord:
+    """A ``SledRecord`` from a ``Record`` already read (``identify.records.read_record``): the sled,
+    fork and tire columns picked by name, zeroed and aligned to the touch."""
+    name = str(record.path)
     time_key = _pick(record, "time")
     if time_key is None:
         have = ", ".join(f"{q}_{record.units[q]}" for q in record.columns) or "none"
@@ -286,7 +240,7 @@ def read_sled(path: str | Path, *, sled_offset_mm: float = 0.0, fork_offset_mm: 
                             f"fork_mm, tire_mm; columns: {have})")
     return from_arrays(record.columns[time_key], columns.get("sled"), columns.get("fork"), columns.get("tire"),
                        sled_offset_mm=sled_offset_mm, fork_offset_mm=fork_offset_mm, name=name, path=name,
-                       comments=record.comments, antialias_Hz=antialias_Hz)
+                       comments=record.comments, antialias_Hz=antialias_Hz, touch_s=touch_s)
 
 
 def from_result(result, name: str | None = None) -> SledRecord:
@@ -300,16 +254,20 @@ def from_result(result, name: str | None = None) -> SledRecord:
                       comments=(f"simulated: {result.name} on {result.engine}",), tire_computed=False)
 
 
-def load(data) -> SledRecord:
-    """A ``SledRecord`` from a path, a ``SledRecord``, or a mapping of columns (time_s, sled_mm ...)."""
+def load(data, touch_s: float | None = None) -> SledRecord:
+    """A ``SledRecord`` from a path, a ``Record``, a ``SledRecord``, or a mapping of columns
+    (time_s, sled_mm ...); ``touch_s``: time zero on the record's clock (default: found)."""
     if isinstance(data, SledRecord):
         return data
     if isinstance(data, (str, Path)):
-        return read_sled(data)
+        return read_sled(data, touch_s=touch_s)
+    if isinstance(data, Record):
+        return from_record(data, touch_s=touch_s)
     if isinstance(data, Mapping):
-        return from_arrays(data["time_s"], data.get("sled_mm"), data.get("fork_mm"), data.get("tire_mm"))
+        return from_arrays(data["time_s"], data.get("sled_mm"), data.get("fork_mm"), data.get("tire_mm"),
+                           touch_s=touch_s)
     raise SledDataError(f"sled data: expected a file path or a SledRecord, got {type(data).__name__}")
 
 
-__all__ = ["SledRecord", "SledDataError", "read_sled", "from_arrays", "from_result", "find_touch", "load",
+__all__ = ["SledRecord", "SledDataError", "read_sled", "from_record", "from_arrays", "from_result", "find_touch", "load",
            "example_path", "noise_sigma", "antialias_delay_s"]

@@ -18,6 +18,26 @@ class Parser(argparse.ArgumentParser):
         raise MtbmjError(message)
 
 
+def intermixed(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """Let a sub-command's options and positional arguments come in any order
+    (``validate my.csv --presets S12 mine.toml``): its parse goes through argparse's
+    ``parse_known_intermixed_args``, which itself calls ``parse_known_args`` twice."""
+    plain = parser.parse_known_args
+    busy = []
+
+    def parse_known_args(args=None, namespace=None):
+        if busy:
+            return plain(args, namespace)
+        busy.append(True)
+        try:
+            return parser.parse_known_intermixed_args(args, namespace)
+        finally:
+            busy.pop()
+
+    parser.parse_known_args = parse_known_args
+    return parser
+
+
 class Progress:
     """A progress bar on stderr, redrawn in place, on a terminal only: when stderr is a file or a
     pipe it stays free for the one-line error report."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from mtbmj.cli.common import intermixed
 from mtbmj.errors import MtbmjError
 
 
@@ -19,9 +20,14 @@ def cmd_fit(args) -> int:
         except ValueError:
             raise MtbmjError(f"--bound {text}: expected key=low:high with numbers") from None
     free = [k.strip() for k in (args.free or "").split(",") if k.strip()]
-    ident = identify(args.kind, args.data, model=args.model, friction=args.friction, mass_kg=args.mass_kg,
+    data = list(args.data)
+    if data == ["example"] and not Path("example").exists():
+        from mtbmj.identify.examples import example_paths
+
+        data = example_paths(args.kind)
+    ident = identify(args.kind, data, model=args.model, friction=args.friction, mass_kg=args.mass_kg,
                      config=args.config, free=free, bounds=bounds or None, engine=args.engine,
-                     starts=args.starts)
+                     starts=args.starts, touch_s=args.touch_s)
     written = ident.write(args.out)
     for name in ident.chosen:
         print(ident.results[name].line())
@@ -34,12 +40,16 @@ def cmd_fit(args) -> int:
 def add_parser(sub) -> None:
     p = sub.add_parser("fit", help="identify parameters from bench data or a drop record; writes fit.toml")
     p.add_argument("kind", choices=("spring", "damper", "tire", "drop"))
-    p.add_argument("data", nargs="+", help="record file(s): CSV with units in the column names, or .mat")
+    p.add_argument("data", nargs="+", help="record file(s): CSV with units in the column names, or .mat; "
+                                           "'example' for the shipped synthetic example of the kind")
     p.add_argument("--model", default="auto", help="spring/damper model to write (default: best by BIC)")
     p.add_argument("--friction", default="auto", help="damper friction model to write (default: best by BIC)")
     p.add_argument("--mass-kg", type=float, help="tire: the mass dropped on the tire")
     p.add_argument("--config", default="S12", help="drop: the configuration whose free parameters are fitted")
-    p.add_argument("--free", help="drop: comma-separated configuration keys to fit")
+    p.add_argument("--free", help="drop: comma-separated configuration keys to fit (default: "
+                                  "tire.impact_rate_N_per_mm,fork.spring.preload_N)")
+    p.add_argument("--touch-s", type=float, metavar="SECONDS",
+                   help="drop: time zero (tire touch) on the record's clock; default: found from the record")
     p.add_argument("--bound", action="append", metavar="KEY=LOW:HIGH", help="drop: bounds of a free key (repeatable)")
     p.add_argument("--engine", choices=("mujoco", "ode"), default="mujoco", help="drop: engine to fit with")
     p.add_argument("--starts", type=int, default=1, metavar="N",
@@ -47,3 +57,4 @@ def add_parser(sub) -> None:
                         "within the bounds); the best fit wins (default 1)")
     p.add_argument("--out", type=Path, default=Path("out/fit"), help="output directory (default out/fit)")
     p.set_defaults(func=cmd_fit)
+    intermixed(p)

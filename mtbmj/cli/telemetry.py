@@ -25,6 +25,12 @@ except ModuleNotFoundError:  # Python < 3.11
 
 SPLIT_LABELS = {"high_speed_compression": "HSC", "low_speed_compression": "LSC",
                 "low_speed_rebound": "LSR", "high_speed_rebound": "HSR"}
+ABBREVIATIONS = {
+    "HSC": "high-speed compression: share of time with velocity > +threshold",
+    "LSC": "low-speed compression: 0 <= velocity <= +threshold",
+    "LSR": "low-speed rebound: -threshold <= velocity < 0",
+    "HSR": "high-speed rebound: velocity < -threshold",
+}
 
 
 def add_parser(subparsers):
@@ -123,8 +129,11 @@ def compare(record: telemetry.TelemetryRecord, runs: list[dict], threshold_mm_pe
             raise MtbmjError(f"--compare {run['dir']}: {exc}") from None
         simulated.append({"name": run["name"], "dir": run["dir"], "fork": metrics})
     return {"measured": measured, "simulated": simulated,
-            "conventions": "travel mm from full extension and % of travel; velocity mm/s, compression positive; "
-                           "histograms in % of time"}
+            "conventions": "travel mm from full extension and % of each run's own travel (the ride's fork "
+                           "travel for the ride, fork.travel_mm for a simulated run); velocity mm/s, "
+                           "compression positive; histograms in % of time",
+            "abbreviations": {k: v.replace("threshold", f"{threshold_mm_per_s:g} mm/s")
+                              for k, v in ABBREVIATIONS.items()}}
 
 
 def _split_label(metrics: dict) -> str:
@@ -133,7 +142,15 @@ def _split_label(metrics: dict) -> str:
 
 
 def figure_png(summary: dict) -> bytes:
-    """Travel and velocity histograms, measured bars and simulated steps on the same axes."""
+    """``figure`` as PNG bytes."""
+    buffer = io.BytesIO()
+    figure(summary).savefig(buffer, format="png", dpi=100)
+    return buffer.getvalue()
+
+
+def figure(summary: dict):
+    """Travel and velocity histograms, measured bars and simulated steps on the same axes (each
+    run's travel in % of its own travel; the velocity axis wide enough for every run's tails)."""
     from matplotlib.figure import Figure
 
     measured = summary["measured"]
@@ -146,7 +163,7 @@ def figure_png(summary: dict) -> bytes:
         ax_t, ax_v = row
         th, vh = m["travel_histogram"], m["velocity"]
         edges_t, edges_v = np.array(th["bin_edges_percent"]), np.array(vh["bin_edges_mm_per_s"])
-        label = f"measured {end} ({measured['file']})"
+        label = f"measured {end} ({measured['file']}, % of {m['travel_max_mm']:.0f} mm)"
         ax_t.bar(edges_t[:-1], th["time_percent"], width=np.diff(edges_t), align="edge", color="tab:blue",
                  alpha=0.55, edgecolor="white", label=f"{label}, max {m['travel']['max_percent']:.0f}%")
         ax_v.bar(edges_v[:-1], vh["time_percent"], width=np.diff(edges_v), align="edge", color="tab:blue",
@@ -156,7 +173,8 @@ def figure_png(summary: dict) -> bytes:
                 s = run["fork"]
                 st, sv = s["travel_histogram"], s["velocity"]
                 ax_t.stairs(st["time_percent"], st["bin_edges_percent"], color=color, linewidth=2,
-                            label=f"simulated {run['name']}, max {s['travel']['max_percent']:.0f}%")
+                            label=f"simulated {run['name']} (% of {s['travel_max_mm']:.0f} mm), "
+                                  f"max {s['travel']['max_percent']:.0f}%")
                 ax_v.stairs(sv["time_percent"], sv["bin_edges_mm_per_s"], color=color, linewidth=2,
                             label=f"simulated {run['name']}: {_split_label(s)}")
         thr = vh["threshold_mm_per_s"]
@@ -165,12 +183,19 @@ def figure_png(summary: dict) -> bytes:
         ax_v.axvspan(edges_v[0], -thr, color="0.94", zorder=0)
         ax_v.axvspan(thr, edges_v[-1], color="0.94", zorder=0)
         ax_t.set_xlim(0, 100)
-        ax_t.set_xlabel(f"{end} travel [% of {m['travel_max_mm']:.0f} mm]")
+        ax_t.set_xlabel(f"{end} travel [% of each run's own travel]")
         ax_v.set_xlabel(f"{end} velocity [mm/s], compression positive")
-        used = np.flatnonzero(np.asarray(vh["time_percent"]) > 0.05)  # bins with more than 0.05 % of time
-        limit = max(3 * thr, float(np.max(np.abs(edges_v[[used[0], used[-1] + 1]]))) if used.size else 3 * thr)
+        shown = [vh] + ([r["fork"]["velocity"] for r in summary["simulated"]] if end == "fork" else [])
+        limit = 3 * thr  # every bin any shown histogram uses, so no run's tails are cut off
+        for h in shown:
+            used = np.flatnonzero(np.asarray(h["time_percent"]) > 0)
+            if used.size:
+                e = np.asarray(h["bin_edges_mm_per_s"])
+                limit = max(limit, float(np.max(np.abs(e[[used[0], used[-1] + 1]]))))
         ax_v.set_xlim(-limit, limit)
-        for ax, title in ((ax_t, None), (ax_v, f"high speed: |v| > {thr:g} mm/s (shaded)")):
+        split_title = (f"high speed: |v| > {thr:g} mm/s (shaded); HSC/LSC high/low-speed compression, "
+                       "LSR/HSR low/high-speed rebound")
+        for ax, title in ((ax_t, None), (ax_v, split_title)):
             ax.set_ylabel("time [%]")
             ax.grid(True, alpha=0.3)
             ax.legend(fontsize="x-small", title_fontsize="x-small", loc="upper left", title=title)
@@ -178,9 +203,7 @@ def figure_png(summary: dict) -> bytes:
     fig.suptitle(f"{measured['file']}: {measured['duration_s']:.1f} s, airtime {bottoms['airtime']['count']} "
                  f"({bottoms['airtime']['total_s']:.2f} s), bottom-outs fork {measured.get('fork', {}).get('bottom_outs', {}).get('count', '-')}"
                  f" rear {measured.get('rear', {}).get('bottom_outs', {}).get('count', '-')}; histograms exclude airtime")
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=100)
-    return buffer.getvalue()
+    return fig
 
 
 def cmd_telemetry(args) -> int:

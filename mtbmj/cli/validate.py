@@ -8,6 +8,7 @@ import sys
 import time
 from pathlib import Path
 
+from mtbmj.cli.common import intermixed
 from mtbmj.config import parse_assignment, study_presets
 from mtbmj.errors import ConfigError
 
@@ -53,12 +54,15 @@ def add_parser(subparsers):
                    help="sled reading at tread touch, subtracted (default 0: already zeroed)")
     p.add_argument("--fork-offset-mm", type=float, default=0.0,
                    help="fork reading at unloaded full extension, subtracted (default 0)")
+    p.add_argument("--touch-s", type=float, metavar="SECONDS",
+                   help="time zero (tire touch) on the record's clock; default: found from the record "
+                        "(free fall then impact, or a record that starts at impact)")
     p.add_argument("--workers", type=int, help="processes (default: one per core)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a key in every configuration")
     p.add_argument("--duration", type=float, help="simulated time after touch in s (default: the record's)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(func=cmd_validate)
-    return p
+    return intermixed(p)
 
 
 def cmd_validate(args) -> int:
@@ -80,7 +84,7 @@ def cmd_validate(args) -> int:
     validation = run_validation(data, configs, reference_engine=args.reference, engine=args.engine,
                                 duration=args.duration, overrides=overrides, workers=args.workers,
                                 sled_offset_mm=args.sled_offset_mm, fork_offset_mm=args.fork_offset_mm,
-                                progress=log)
+                                touch_s=args.touch_s, progress=log)
     written = validation.write(args.out)
     worst = [(n, validation.metrics[n].worst_amplitude()) for n in validation.configs]
     worst = [(n, w) for n, w in worst if w is not None]
@@ -89,6 +93,8 @@ def cmd_validate(args) -> int:
         name, (signal, event, value) = max(worst, key=lambda p: abs(p[1][2]))
         detail = f"; largest amplitude error {value:+.2f} mm ({name}, {signal} {event})"
     count = len(validation.configs)
+    if validation.record is not None and validation.record.touch is not None and not args.reference:
+        print(f"{validation.record.name}: {validation.record.touch.describe()}")
     print(f"validate: {count} configuration{'s' if count != 1 else ''} on {args.engine} against "
           f"{validation.measurement} in {time.perf_counter() - start:.1f} s{detail}; "
           f"wrote {len(written)} files to {args.out} (report: {args.out / 'validation_report.html'})")

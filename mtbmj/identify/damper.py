@@ -308,11 +308,12 @@ def fit_damper_all(record: Record) -> dict[str, FitResult]:
 
 
 def select(results: Mapping[str, FitResult] | Iterable[FitResult]) -> FitResult:
-    """The result with the lowest BIC (ties: fewer parameters, then the order given)."""
+    """The result with the lowest BIC (ties: fewer parameters, then the order given); a saturated
+    model (``FitResult.saturated``) only when every model is."""
     items = list(results.values()) if isinstance(results, Mapping) else list(results)
     if not items:
         raise MtbmjError("select: no fit results to choose from")
-    return min(enumerate(items), key=lambda t: (round(t[1].bic, 6), t[1].n_params, t[0]))[1]
+    return min(enumerate(items), key=lambda t: (t[1].saturated, round(t[1].bic, 6), t[1].n_params, t[0]))[1]
 
 
 def plot_damper(record: Record, results: Mapping[str, FitResult] | FitResult):

@@ -11,12 +11,23 @@ known yet) run as one batch through ``mtbmj.sweep.batch.drop_traces`` (``mujoco.
 compiled laws, ``workers`` threads, bit-identical to ``run_drop``); on the ODE engine (or without
 the compiled laws) the columns run in a pool of ``workers`` processes (2 by default). With
 ``starts=N`` the fit runs from the configuration's start values and N - 1 Latin hypercube points
-within the bounds (their first evaluations batched together); the lowest final cost wins. Confidence
-intervals (95 %, Student t) and the correlation matrix come from the Jacobian at the optimum: a
-Gauss-Newton sandwich that allows the channels' noise to be correlated (``channel_sandwich``; the
-tire trace is sled - fork); ``extra["stderr_iid"]`` has the plain ``fitresult.covariance_stderr``.
-They cover measurement noise only: a model that cannot reproduce the data exactly (another
-engine, another law) biases the values by more than these intervals say.
+within the bounds (their first evaluations batched together); the lowest final cost wins.
+
+Time zero comes from ``validation.time_zero`` (the rule ``mtbmj validate`` uses): a record with a
+free fall on any clock, or one that starts at impact, or ``touch_s`` given. The fit starts
+``FIT_FROM_S`` after touch: before, a real logger's filter still carries the free fall, which the
+model's logger (started at touch) does not see.
+
+Confidence intervals (95 %) and the correlation matrix: the residuals are not white (the 400 Hz
+filter colours the noise; sled, fork and tire share the pots; the engine has its own error), so
+the covariance is the Newey-West sandwich of the scores over time (``fitresult.hac_covariance``,
+Bartlett bandwidth by Andrews' rule, channels pooled per time stamp), plus the squares of two
+biases carried to the parameters through the Jacobian: the engine's own error (the other engine
+run once at the optimum, ``engine_error``) and one standard error of the touch time. The Student t
+quantile uses the effective number of independent samples (time samples / bandwidth).
+``extra["stderr_white"]`` keeps the white-in-time channel sandwich, ``extra["stderr_iid"]`` the
+plain ``covariance_stderr``. ``benchmarks/coverage.py`` measures the coverage. The intervals
+assume the configuration's laws are right.
 
 Why ``scipy.optimize.least_squares`` and not ``mujoco.minimize.least_squares``: both are bounded
 Gauss-Newton/Levenberg-Marquardt type solvers that finite-difference a residual, and mujoco's
@@ -53,10 +64,13 @@ from mtbmj.config import SCHEMA, Config
 from mtbmj.drop.run import resolve, run_drop
 from mtbmj.errors import ConfigError, MtbmjError
 
-from mtbmj.identify.fitresult import FitResult, covariance_stderr
+from mtbmj.identify.fitresult import FitResult, correlated_pairs, correlation, covariance_stderr, hac_covariance
 from mtbmj.identify.records import Record, read_record
+from mtbmj.validation import sled_data
 
 CHANNELS = ("sled", "fork", "tire")
+FIT_FROM_S = 0.005  # fitted from 5 ms after touch: before, a logger's filter still carries the free fall
+OTHER_ENGINE = {"mujoco": "ode", "ode": "mujoco"}
 MODEL_KEYS = ("fork.spring.model", "fork.spring.top_out", "fork.spring.preload", "fork.damper.model",
               "fork.friction.model", "tire.model")
 
@@ -91,6 +105,12 @@ def _sample(signals: Mapping, times: np.ndarray, channels: tuple) -> np.ndarray:
     return np.concatenate([np.interp(times, t, signals[f"{c}_mm"]) for c in channels])
 
 
+def _shifted(model: np.ndarray, times: np.ndarray, n_channels: int, shift_s: float) -> np.ndarray:
+    """The stacked channels of ``model`` read ``shift_s`` later (linear interpolation)."""
+    parts = model.reshape(n_channels, times.size)
+    return np.concatenate([np.interp(times + shift_s, times, p) for p in parts])
+
+
 def channel_sandwich(jac: np.ndarray, residual: np.ndarray, n_params: int, n_channels: int):
     """Standard errors and correlation for residuals stacked by channel, white in time but
     correlated across channels at each time stamp (the tire trace is sled - fork of the same
@@ -119,7 +139,8 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
              bounds: Mapping[str, tuple[float, float]] | None = None, engine: str = "mujoco",
              overrides: Mapping | None = None, workers: int = 2, diff_step: float = 1e-3,
              max_nfev: int = 40, xtol: float = 1e-6, ftol: float = 1e-8,
-             progress=None, starts: int = 1, seed: int = 0, batched: bool | None = None) -> FitResult:
+             progress=None, starts: int = 1, seed: int = 0, batched: bool | None = None,
+             touch_s: float | None = None, engine_error: bool = True) -> FitResult:
     """Fit the ``free`` configuration keys of ``config`` (with ``overrides``) to a sled drop record.
 
     ``bounds`` maps a free key to (low, high) in its config unit; unlisted keys get +/- 50 %
@@ -134,8 +155,8 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
     """
     start_time = time.perf_counter()
     rec = _as_record(record)
-    rec.require("time", "sled", "fork", min_points=20)
-    channels = tuple(c for c in CHANNELS if c in rec.columns)
+    aligned = sled_data.from_record(rec, touch_s=touch_s)  # the one time-zero rule (validation.time_zero)
+    channels = ("sled", "fork") + (() if aligned.tire_computed else ("tire",))
     cfg = resolve(config, overrides)
     free = list(free)
     if not free:
@@ -165,8 +186,11 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
         lo.append(low)
         hi.append(high)
     x0, lo, hi = np.array(x0), np.array(lo), np.array(hi)
-    times = rec["time"]
-    data = np.concatenate([rec[c] * 1e3 for c in channels])
+    keep = aligned.time_s >= FIT_FROM_S - 1e-9
+    times = aligned.time_s[keep]
+    if times.size < 20:
+        raise MtbmjError(f"{rec.path}: too few points after touch to fit ({times.size})")
+    data = np.concatenate([getattr(aligned, f"{c}_mm")[keep] for c in channels])
     duration = float(times[-1]) + 0.003
     scale = np.maximum(np.abs(x0), 1e-3 * (hi - lo))
     runs = {"n": 0}
@@ -254,13 +278,31 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
     residual = sol.fun
     n = x0.size
     std_iid, _ = covariance_stderr(final_jac, residual, n)
-    std, corr = channel_sandwich(final_jac, residual, n, len(channels))
-    dof = max(residual.size - n, 1)
-    tq = float(stats.t.ppf(0.975, dof))
+    std_white, _ = channel_sandwich(final_jac, residual, n, len(channels))
+    cov, hac = hac_covariance(final_jac, residual, n, len(channels))
     values = {k: float(v) for k, v in zip(free, sol.x)}
     at_bound = [k for k, a in zip(free, sol.active_mask) if a != 0]
     model = cache[sol.x.tobytes()] if sol.x.tobytes() in cache else _model(sol.x, free, cfg, engine, duration,
                                                                             times, channels)
+    engine_shift = np.zeros(n)
+    if engine_error and not isinstance(model, str):
+        # the engine's own error: the other engine at the optimum, its difference carried to the
+        # parameters through the same Jacobian (a bias, added to the covariance as its square)
+        other = _model(sol.x, free, cfg, OTHER_ENGINE[engine], duration, times, channels)
+        if not isinstance(other, str):
+            engine_shift = np.linalg.pinv(final_jac) @ (other - model)
+            cov = cov + np.outer(engine_shift, engine_shift)
+    touch_shift = np.zeros(n)
+    touch_err = aligned.touch.stderr_s if aligned.touch else 0.0
+    if touch_err > 0 and not isinstance(model, str):
+        # the uncertainty of time zero: the model shifted by one standard error of the touch
+        shifted = _shifted(model, times, len(channels), touch_err)
+        touch_shift = np.linalg.pinv(final_jac) @ (shifted - model)
+        cov = cov + np.outer(touch_shift, touch_shift)
+    std, corr = correlation(cov)
+    # Student t on the effective number of independent samples (time samples / bandwidth)
+    dof = max(times.size / max(hac["bandwidth_samples"], 1.0) - n, 1.0)
+    tq = float(stats.t.ppf(0.975, dof))
     per_channel = {}
     curves = {"time_s": times}
     for i, c in enumerate(channels):
@@ -281,6 +323,12 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
         rms=float(np.sqrt(np.mean(residual**2))), residual_unit="mm", n_points=int(residual.size), n_params=n,
         extra={
             "stderr_iid": {k: float(e) for k, e in zip(free, std_iid)},
+            "stderr_white": {k: float(e) for k, e in zip(free, std_white)},
+            "engine_error_shift": {k: float(e) for k, e in zip(free, engine_shift)},
+            "touch_error_shift": {k: float(e) for k, e in zip(free, touch_shift)},
+            "hac_bandwidth_s": float(hac["bandwidth_samples"] * np.median(np.diff(times))),
+            "effective_dof": float(dof), "time_zero": aligned.touch.to_dict() if aligned.touch else None,
+            "notes": correlated_pairs(free, corr),
             "ci95": {k: (float(v - tq * s), float(v + tq * s)) for k, v, s in zip(free, sol.x, std)},
             "correlation": corr.tolist(), "correlation_keys": list(free),
             "engine_runs": runs["n"] + (sol.x.tobytes() not in cache) + (x0.tobytes() not in cache),

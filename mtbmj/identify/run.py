@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Sequence
 
+import numpy as np
+
 from mtbmj import output
 from mtbmj.config import parameter_set_toml
 from mtbmj.errors import MtbmjError
@@ -14,6 +16,7 @@ from mtbmj.identify.fitresult import FitResult
 from mtbmj.identify.records import Record, read_record
 
 KINDS = ("spring", "damper", "tire", "drop")
+DEFAULT_DROP_FREE = ("tire.impact_rate_N_per_mm", "fork.spring.preload_N")  # fit drop without --free
 
 
 @dataclass
@@ -104,49 +107,101 @@ HYDRAULIC_MODELS = ("linear", "bilinear", "table")
 FRICTION_MODELS = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")
 
 
-def _choose(results: dict[str, FitResult], names: Sequence[str], requested: str, what: str) -> str:
-    """The requested model, or with "auto" the lowest BIC among the models fitted to the same
-    (largest) set of points and supported by the data."""
+INDISTINGUISHABLE_BIC = 2.0  # BIC differences below this are no evidence either way (Kass & Raftery 1995)
+RESOLUTION = 1e-6  # residuals below this fraction of the data's RMS count as zero in the comparison
+
+
+def _floor(records: Sequence[Record], quantity: str) -> float:
+    values = records[0].columns.get(quantity)
+    if values is None or values.size == 0:
+        return 0.0
+    unit = records[0].units[quantity]
+    from mtbmj.identify.records import UNITS
+
+    return RESOLUTION * float(np.sqrt(np.mean(values**2))) / UNITS[unit]
+
+
+def _choose(results: dict[str, FitResult], names: Sequence[str], requested: str, what: str,
+            floor: float = 0.0) -> str:
+    """The requested model, or with "auto" the lowest BIC (residuals below ``floor`` counted as
+    ``floor``; ties go to fewer parameters) among the models fitted to the same (largest) set of
+    points, supported by the data and not saturated (fewer than half as many parameters as
+    points)."""
     fitted = [n for n in names if n in results]
     if requested != "auto":
         if requested not in fitted:
             raise MtbmjError(f"--{what} {requested}: not among the fitted models ({', '.join(fitted)})")
         return requested
+    eligible = [n for n in _eligible(results, fitted)]
+    if not eligible:
+        raise MtbmjError(f"fit: too few points to choose a {what} (every model has at least half as many "
+                         "parameters as the record has points); name one with --" + what)
+    return min(eligible, key=lambda n: (round(results[n].bic_with_floor(floor), 6), results[n].n_params))
+
+
+def _eligible(results: dict[str, FitResult], fitted: Sequence[str]) -> list[str]:
     supported = [n for n in fitted if results[n].extra.get("supported", True)]
+    if not supported:
+        return []
     most = max(results[n].n_points for n in supported)
-    comparable = [n for n in supported if results[n].n_points == most]
-    return min(comparable, key=lambda n: results[n].bic)
+    return [n for n in supported if results[n].n_points == most and not results[n].saturated]
+
+
+def _comparison(results: dict[str, FitResult], names: Sequence[str], chosen: str, floor: float, label: str) -> list[str]:
+    """Notes: the BIC of each model, the models left out (saturated, unsupported) and the ones the
+    data cannot tell from the chosen one."""
+    fitted = [n for n in names if n in results]
+    eligible = _eligible(results, fitted)
+    bic = {n: results[n].bic_with_floor(floor) for n in fitted}
+    notes = [f"{label} by BIC: " + ", ".join(f"{n} {bic[n]:.1f}" for n in eligible)]
+    saturated = [n for n in fitted if results[n].saturated]
+    if saturated:
+        notes.append(", ".join(f"{n} ({results[n].n_params} parameters for {results[n].n_points} points)"
+                               for n in saturated) + ": as many parameters as the data can carry, not compared")
+    if chosen in bic:
+        close = [n for n in eligible if n != chosen and bic[n] - bic[chosen] < INDISTINGUISHABLE_BIC]
+        if close:
+            notes.append(f"the data cannot distinguish {chosen} from {', '.join(close)} "
+                         f"(BIC within {INDISTINGUISHABLE_BIC:g}); {chosen} has the fewest parameters or lowest BIC")
+    return notes
 
 
 def _spring(records, results, model, plot_fn) -> Identification:
-    main = _choose(results, SPRING_PARTS if model != "auto" else SPRING_MODELS, model, "model")
-    notes = ["models compared by BIC: " + ", ".join(
-        f"{n} {results[n].bic:.1f}" for n in SPRING_MODELS if n in results)]
+    floor = _floor(records, "force")
+    main = _choose(results, SPRING_PARTS if model != "auto" else SPRING_MODELS, model, "model", floor)
+    notes = _comparison(results, SPRING_MODELS, main, floor, "models compared")
     if "friction_N" in results[main].extra:
         notes.append(f"hysteresis half-width (friction) {results[main].extra['friction_N']:.1f} N")
     return Identification("spring", records, results, [main], lambda: plot_fn(records[0], results), notes=notes)
 
 
 def _damper(records, results, model, friction, module) -> Identification:
-    hydraulic = _choose(results, HYDRAULIC_MODELS, model, "model")
-    chosen_friction = _choose(results, FRICTION_MODELS, friction, "friction")
-    supported = [n for n in FRICTION_MODELS if n in results and results[n].extra.get("supported", True)]
-    notes = ["hydraulic models by BIC: " + ", ".join(f"{n} {results[n].bic:.1f}" for n in HYDRAULIC_MODELS if n in results),
-             "friction models by BIC: " + ", ".join(f"{n} {results[n].bic:.1f}" for n in supported)]
+    floor = _floor(records, "force")
+    hydraulic = _choose(results, HYDRAULIC_MODELS, model, "model", floor)
+    chosen_friction = _choose(results, FRICTION_MODELS, friction, "friction", floor)
+    notes = (_comparison(results, HYDRAULIC_MODELS, hydraulic, floor, "hydraulic models")
+             + _comparison(results, FRICTION_MODELS, chosen_friction, floor, "friction models"))
     return Identification("damper", records, results, [hydraulic], lambda: module.plot_damper(records[0], results),
                           notes=notes, friction=chosen_friction)
 
 
 def identify(kind: str, data: Sequence[str | Path], model: str = "auto", friction: str = "auto",
              mass_kg: float | None = None, config: str = "S12", free: Sequence[str] = (),
-             bounds: dict | None = None, engine: str = "mujoco", starts: int = 1) -> Identification:
+             bounds: dict | None = None, engine: str = "mujoco", starts: int = 1,
+             touch_s: float | None = None) -> Identification:
     """Fit ``kind`` ("spring", "damper", "tire", "drop") to the record(s) in ``data``; ``starts``:
-    drop fits from that many start points (the best wins)."""
+    drop fits from that many start points (the best wins); ``free``: the drop fit's free keys
+    (default ``DEFAULT_DROP_FREE``); ``touch_s``: the drop record's time zero on its clock
+    (default: found by ``validation.time_zero``)."""
     if kind not in KINDS:
         raise MtbmjError(f"fit: unknown kind {kind!r} (one of {', '.join(KINDS)})")
     if not data:
         raise MtbmjError(f"fit {kind}: no data file given")
     records = [read_record(p) for p in data]
+    if kind in ("spring", "damper"):
+        force = records[0].columns.get("force")
+        if force is not None and force.size and float(np.ptp(force)) == 0.0:
+            raise MtbmjError(f"{records[0].path}: the force column is {force[0]:g} N everywhere: nothing to fit")
     if kind == "spring":
         from mtbmj.identify import spring
 
@@ -172,9 +227,18 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
         return Identification("tire", records, results, order, lambda: tire.plot_tire(drops[0], results))
     from mtbmj.identify import dropfit
 
+    notes = []
     if not free:
-        raise MtbmjError("fit drop: name the free parameters with --free key,key,...")
+        free = DEFAULT_DROP_FREE
+        notes.append(f"no --free given: fitting {', '.join(free)}")
     result = dropfit.fit_drop(records[0], config=config, free=list(free), bounds=bounds, engine=engine,
-                              starts=starts)
+                              starts=starts, touch_s=touch_s)
+    x = result.extra
+    if x.get("time_zero"):
+        notes.append(x["time_zero"]["description"])
+    notes.append(f"95 % intervals: Newey-West over residuals correlated for {x['hac_bandwidth_s'] * 1e3:.1f} ms, "
+                 f"plus the engine's own error (the other engine at the optimum) and the touch's uncertainty; "
+                 f"Student t on {x['effective_dof']:.0f} effective samples")
+    notes += x.get("notes", [])
     return Identification("drop", records, {"drop": result}, ["drop"],
-                          lambda: dropfit.plot_drop(records[0], result), base=config)
+                          lambda: dropfit.plot_drop(records[0], result), base=config, notes=notes)
