@@ -7,12 +7,14 @@ from mtbmj.controllers.callback import ForkCallback, installed
 from mtbmj.controllers.damper import BilinearDamper, LinearDamper, TableDamper
 from mtbmj.controllers.fork import ForkLaw
 from mtbmj.controllers.friction import Coulomb, CoulombViscous, LuGre, NoFriction, Stiction, Stribeck, smooth_sign
-from mtbmj.controllers.spring import BilinearSpring, DirectionalSpring, LinearSpring, ProgressiveSpring, TopOutSpring
+from mtbmj.controllers.spring import (
+    P_ATM, AirSpring, BilinearSpring, DirectionalSpring, LinearSpring, ProgressiveSpring, TopOutSpring,
+)
 from mtbmj.controllers.tire import KelvinVoigt, TireLaw
 
 __all__ = [
     "ForkCallback", "installed", "ForkLaw",
-    "LinearSpring", "BilinearSpring", "ProgressiveSpring", "DirectionalSpring", "TopOutSpring",
+    "LinearSpring", "BilinearSpring", "ProgressiveSpring", "DirectionalSpring", "TopOutSpring", "AirSpring", "P_ATM",
     "LinearDamper", "BilinearDamper", "TableDamper",
     "NoFriction", "Coulomb", "CoulombViscous", "Stiction", "Stribeck", "LuGre", "smooth_sign",
     "KelvinVoigt", "TireLaw",

@@ -15,6 +15,8 @@ from mtbmj.errors import ConfigError
 
 MM = 1e-3
 N_PER_MM = 1e3
+PSI = 6894.757293168  # Pa per psi (1 lbf/in^2, exact by the definitions of the pound and the inch)
+CM3 = 1e-6  # m^3 per cm^3
 
 
 @dataclass(frozen=True)
@@ -67,6 +69,8 @@ def _spring(c: Config) -> object:
         main = law.BilinearSpring(rate("rate_below_knee_N_per_mm"), rate("rate_above_knee_N_per_mm"), knee * MM)
         if c.get("fork.spring.rebound_curve", False):  # S3, S4, S6: extending on S2's rebound rate
             main = law.DirectionalSpring(main, law.LinearSpring(rate("rebound_rate_N_per_mm")), band)
+    elif model == "air":
+        return _air_spring(c, travel)
     else:  # progressive
         cubic = c.require("fork.spring.progressive_cubic_N_per_mm3", "needed by fork.spring.model = progressive")
         main = law.ProgressiveSpring(rate("progressive_rate_N_per_mm"), cubic * N_PER_MM / MM**2)
@@ -85,6 +89,66 @@ def _spring(c: Config) -> object:
     if spring.engagement >= travel * MM:
         raise ConfigError("fork.spring.preload_N: the top-out spring would stay engaged over the whole travel "
                           "(preload / top-out rate exceeds fork.travel_mm)")
+    return spring
+
+
+def air_volume(c: Config) -> float:
+    """Positive-chamber volume (m^3) at full extension with the volume spacers in, refused (naming
+    ``fork.spring.tokens``) when the spacers fill the chamber."""
+    why = "needed by fork.spring.model = air"
+    volume = c.require("fork.spring.air_volume_cm3", why) * CM3
+    tokens = c.get("fork.spring.tokens", 0.0)
+    if tokens != int(tokens):
+        raise ConfigError(f"fork.spring.tokens: must be a whole number of volume spacers, got {tokens:g}")
+    if tokens:
+        volume -= tokens * c.require("fork.spring.token_volume_cm3", "needed by fork.spring.tokens") * CM3
+        if volume <= 0.0:
+            raise ConfigError(f"fork.spring.tokens: {tokens:g} spacers fill the air chamber "
+                              f"(fork.spring.air_volume_cm3 = {c['fork.spring.air_volume_cm3']:g})")
+    return volume
+
+
+def _air_spring(c: Config, travel_mm: float) -> object:
+    """``fork.spring.model = "air"``: ``law.AirSpring`` with the top-out spring carrying its force at
+    full extension (the air's own preload) the way ``TopOutSpring`` carries a coil's preload."""
+    why = "needed by fork.spring.model = air"
+    gauge = c.require("fork.spring.air_pressure_psi", why)
+    if gauge * PSI <= -law.P_ATM:
+        raise ConfigError(f"fork.spring.air_pressure_psi: {gauge:g} psi gauge is at or below vacuum "
+                          f"({-law.P_ATM / PSI:.2f} psi gauge)")
+    diameter = c.require("fork.spring.piston_diameter_mm", why) * MM
+    area = math.pi * diameter * diameter / 4.0
+    volume = air_volume(c)
+    travel = travel_mm * MM
+    swept = area * travel
+    if swept >= volume:
+        raise ConfigError(f"fork.spring.air_volume_cm3: the travel ({travel_mm:g} mm) would compress the air chamber "
+                          f"to zero volume (piston sweeps {swept / CM3:.1f} cm3, chamber holds {volume / CM3:.1f} cm3 "
+                          f"with its spacers)")
+    index = c.require("fork.spring.polytropic_index", why)
+    if not 1.0 <= index <= 1.4:
+        raise ConfigError(f"fork.spring.polytropic_index: {index:g} is outside 1 (isothermal) to 1.4 (adiabatic air)")
+    negative = c.get("fork.spring.negative_volume_cm3", 0.0) * CM3
+    port = c.get("fork.spring.transfer_port_mm", 0.0)
+    if not 0.0 <= port < travel_mm:
+        raise ConfigError(f"fork.spring.transfer_port_mm: {port:g} mm is outside the travel [0, {travel_mm:g}) mm")
+    if c.get("fork.spring.preload", False):
+        raise ConfigError("fork.spring.preload: an air spring takes its preload from fork.spring.air_pressure_psi; "
+                          "set fork.spring.preload = false")
+    spring = law.AirSpring(area, gauge * PSI, volume, index, negative, port * MM, travel)
+    preload = max(0.0, spring.force(0.0, 0.0))
+    use_top_out = c.get("fork.spring.top_out", "fork.spring.top_out_rate_N_per_mm" in c.values)
+    if not use_top_out:
+        if preload > 0.0:
+            raise ConfigError("fork.spring.top_out: an air spring without a negative chamber pushes with "
+                              f"{preload:.0f} N at full extension; it needs the top-out spring (fork.spring.top_out = true)")
+        return spring
+    top = c.require("fork.spring.top_out_rate_N_per_mm", "needed by fork.spring.top_out = true") * N_PER_MM
+    spring = law.TopOutSpring(law.AirSpring(area, gauge * PSI, volume, index, negative, port * MM, travel, preload),
+                              top, preload)
+    if spring.engagement >= travel:
+        raise ConfigError("fork.spring.air_pressure_psi: the top-out spring would stay engaged over the whole travel "
+                          "(force at full extension / top-out rate exceeds fork.travel_mm)")
     return spring
 
 

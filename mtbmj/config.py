@@ -26,9 +26,9 @@ else:  # pragma: no cover
 from mtbmj.errors import ConfigError
 from mtbmj.textfile import read_text
 
-# kinds: "pos" > 0, "nonneg" >= 0, "list" of finite numbers, "bool", "text", or a tuple of
-# allowed strings.
-SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive")
+# kinds: "pos" > 0, "nonneg" >= 0, "real" any finite number, "list" of finite numbers, "bool",
+# "text", or a tuple of allowed strings.
+SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive", "air")
 DAMPER_MODELS = ("linear", "bilinear", "table")
 FRICTION_MODELS = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")
 TIRE_MODELS = ("impact", "switch", "undamped", "static")
@@ -59,6 +59,14 @@ SCHEMA: dict[str, Any] = {
     "fork.spring.preload": "bool",
     "fork.spring.preload_N": "nonneg",
     "fork.spring.direction_band_mm_per_s": "pos",
+    "fork.spring.air_pressure_psi": "real",
+    "fork.spring.piston_diameter_mm": "pos",
+    "fork.spring.air_volume_cm3": "pos",
+    "fork.spring.tokens": "nonneg",
+    "fork.spring.token_volume_cm3": "pos",
+    "fork.spring.negative_volume_cm3": "nonneg",
+    "fork.spring.transfer_port_mm": "nonneg",
+    "fork.spring.polytropic_index": "pos",
     "fork.damper.model": DAMPER_MODELS,
     "fork.damper.coefficient_N_s_per_m": "nonneg",
     "fork.damper.compression_N_s_per_m": "nonneg",
@@ -95,6 +103,7 @@ SCHEMA: dict[str, Any] = {
 
 UNIT_SUFFIXES = (
     "_N_s_per_m", "_N_per_mm3", "_N_per_mm", "_mm_per_s", "_m_per_s2", "_kg", "_mm", "_N", "_s", "_Hz",
+    "_psi", "_cm3",
 )
 
 
