@@ -145,10 +145,12 @@ P_ATM = 101325.0  # Pa, standard atmosphere (ISO 2533): the absolute pressure of
 def _polytropic_work(volume: float, ratio: float, n: float) -> float:
     """W / p0 (m^3) of a polytropic change from ``volume`` to ``volume / ratio`` at the starting
     absolute pressure p0: the integral of (p / p0) dV swept, V (ratio^(n-1) - 1) / (n - 1), or
-    V ln(ratio) for the isothermal n = 1. Negative when the gas expands (ratio < 1)."""
+    V ln(ratio) for the isothermal n = 1 (expm1 keeps n close to 1 exact). Negative when the gas
+    expands (ratio < 1)."""
+    log_ratio = math.log(ratio)
     if n == 1.0:
-        return volume * math.log(ratio)
-    return volume * (ratio ** (n - 1.0) - 1.0) / (n - 1.0)
+        return volume * log_ratio
+    return volume * math.expm1((n - 1.0) * log_ratio) / (n - 1.0)
 
 
 @dataclass(frozen=True)
