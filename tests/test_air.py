@@ -5,16 +5,17 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from mtbmj.controllers import AirSpring, TopOutSpring
+from mtbmj.validation import crosscheck
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
 import mtbmj
 from mtbmj import compose
 from mtbmj.config import load, preset_names
-from mtbmj.controllers import AirSpring, TopOutSpring
 from mtbmj.errors import ConfigError
-from mtbmj.validation import crosscheck
 
 PSI = 6894.757293168
 P_ATM = 101325.0
