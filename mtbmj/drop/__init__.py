@@ -10,9 +10,11 @@ _LAZY = {
     "ENGINES": "mtbmj.drop.run",
     "DropResult": "mtbmj.drop.result",
     "run_study": "mtbmj.drop.study",
+    "solve_sag": "mtbmj.drop.sag",
+    "SagSetting": "mtbmj.drop.sag",
     "write_study": "mtbmj.drop.study",
 }
-__all__ = ['DropResult', 'ENGINES', 'resolve', 'run_drop', 'run_study', 'write_study']
+__all__ = ['DropResult', 'ENGINES', 'SagSetting', 'resolve', 'run_drop', 'run_study', 'solve_sag', 'write_study']
 
 
 def __getattr__(name):  # PEP 562: import a submodule only when one of its names is asked for
