@@ -213,9 +213,27 @@ def _friction(c: Config) -> object:
                      c.get("fork.friction.viscous_N_s_per_m", 0.0))
 
 
+def tire_rates_from_pressure(pressure_psi: float) -> dict[str, float]:
+    """``tire.pressure_psi`` -> the tire's static, impact and in-contact rates (N/mm), from
+    ``controllers.tire.static_rate_from_pressure`` and the sourced dynamic/static ratios; refused
+    (naming the key) outside the model's range."""
+    from mtbmj.controllers import tire as tire_model
+
+    low, high = (p / PSI for p in tire_model.PRESSURE_RANGE)
+    if not low <= pressure_psi <= high:
+        raise ConfigError(f"tire.pressure_psi: {pressure_psi:g} psi is outside the tire model's range "
+                          f"{low:g}-{high:g} psi (the published measurements it rests on)")
+    static = tire_model.static_rate_from_pressure(pressure_psi * PSI) / N_PER_MM
+    return {"tire.static_rate_N_per_mm": static,
+            "tire.impact_rate_N_per_mm": static * tire_model.IMPACT_OVER_STATIC,
+            "tire.contact_rate_N_per_mm": static * tire_model.CONTACT_OVER_STATIC}
+
+
 def _tire(c: Config) -> law.TireLaw:
     model = c.require("tire.model")
     why = f"needed by tire.model = {model}"
+    if "tire.pressure_psi" in c.values:  # the pressure sets the rates (the damping stays as configured)
+        c = c.with_overrides(tire_rates_from_pressure(c["tire.pressure_psi"]))
     k_impact = c.require("tire.impact_rate_N_per_mm", why) * N_PER_MM
     b_impact = c.require("tire.impact_damping_N_s_per_m", why)
     if model == "impact":

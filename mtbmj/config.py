@@ -91,6 +91,7 @@ SCHEMA: dict[str, Any] = {
     "tire.contact_damping_N_s_per_m": "nonneg",
     "tire.static_rate_N_per_mm": "pos",
     "tire.max_deflection_mm": "pos",
+    "tire.pressure_psi": "real",
     "solver.duration_s": "pos",
     "solver.timestep_s": "pos",
     "solver.integrator": INTEGRATORS,
