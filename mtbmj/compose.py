@@ -161,6 +161,8 @@ def _damper(c: Config) -> object:
         return law.BilinearDamper(
             c.require("fork.damper.compression_N_s_per_m", why), c.require("fork.damper.rebound_N_s_per_m", why)
         )
+    if model == "clicks":
+        return _clicks_damper(c)
     v = np.asarray(c.require("fork.damper.velocity_mm_per_s", why)) * MM
     f = np.asarray(c.require("fork.damper.force_N", why))
     if len(v) != len(f):
@@ -179,6 +181,48 @@ def _damper(c: Config) -> object:
     if zero.size and f[zero[0]] != 0.0:
         raise ConfigError("fork.damper.force_N: force at zero velocity must be 0; put the offset in fork.friction")
     return law.TableDamper(v, f)
+
+
+def clicks_curve(c: Config, circuit: str, points: int) -> np.ndarray:
+    """Force (N) of one damper circuit ("compression" or "rebound") at its adjuster setting
+    ``fork.damper.<circuit>_clicks``: each velocity's force interpolated linearly in clicks between
+    the two neighbouring positions of ``<circuit>_clicks_measured`` (rows of ``<circuit>_force_N``)."""
+    why = "needed by fork.damper.model = clicks"
+    key = f"fork.damper.{circuit}"
+    measured = np.asarray(c.require(f"{key}_clicks_measured", why))
+    rows = c.require(f"{key}_force_N", why)
+    setting = c.require(f"{key}_clicks", why)
+    if len(measured) < 1 or np.any(measured != np.round(measured)) or np.any(measured < 0) or \
+            np.any(np.diff(measured) <= 0):
+        raise ConfigError(f"{key}_clicks_measured: must be whole clicks from closed, strictly increasing")
+    if len(rows) != len(measured):
+        raise ConfigError(f"{key}_force_N: {len(rows)} rows for {len(measured)} positions in {key}_clicks_measured")
+    side = "compression (> 0)" if circuit == "compression" else "rebound (< 0)"
+    for i, row in enumerate(rows):
+        if len(row) != points:
+            raise ConfigError(f"{key}_force_N: row {i + 1} has {len(row)} forces for the {points} {side} velocities "
+                              "of fork.damper.velocity_mm_per_s")
+        f = np.asarray(row)
+        if np.any(np.diff(f) < 0) or (np.any(f < 0) if circuit == "compression" else np.any(f > 0)):
+            raise ConfigError(f"{key}_force_N: row {i + 1} must rise with velocity and keep the sign of the "
+                              f"{circuit} stroke (a damper dissipates)")
+    if setting != round(setting):
+        raise ConfigError(f"{key}_clicks: {setting:g} is not a whole number of clicks")
+    if not measured[0] <= setting <= measured[-1]:
+        raise ConfigError(f"{key}_clicks: {setting:g} is outside the measured positions "
+                          f"{measured[0]:g}-{measured[-1]:g} clicks from closed")
+    table = np.asarray(rows)
+    return np.array([np.interp(setting, measured, table[:, j]) for j in range(points)])
+
+
+def _clicks_damper(c: Config) -> object:
+    """``fork.damper.model = "clicks"``: a lookup-table damper whose compression half (v > 0) and
+    rebound half (v < 0) come from dyno curves measured at several adjuster positions."""
+    v = np.asarray(c.require("fork.damper.velocity_mm_per_s", "needed by fork.damper.model = clicks"))
+    force = np.zeros(len(v))
+    force[v > 0] = clicks_curve(c, "compression", int(np.sum(v > 0)))
+    force[v < 0] = clicks_curve(c, "rebound", int(np.sum(v < 0)))
+    return _damper(c.with_overrides({"fork.damper.model": "table", "fork.damper.force_N": tuple(force)}))
 
 
 def _friction(c: Config) -> object:

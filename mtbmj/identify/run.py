@@ -139,9 +139,11 @@ def _damper(records, results, model, friction, module) -> Identification:
 
 def identify(kind: str, data: Sequence[str | Path], model: str = "auto", friction: str = "auto",
              mass_kg: float | None = None, config: str = "S12", free: Sequence[str] = (),
-             bounds: dict | None = None, engine: str = "mujoco", starts: int = 1) -> Identification:
+             bounds: dict | None = None, engine: str = "mujoco", starts: int = 1,
+             clicks: Sequence[float] | None = None) -> Identification:
     """Fit ``kind`` ("spring", "damper", "tire", "drop") to the record(s) in ``data``; ``starts``:
-    drop fits from that many start points (the best wins)."""
+    drop fits from that many start points (the best wins); ``clicks``: damper fits from several
+    dyno files, the adjuster position (clicks from closed) of each, giving a ``clicks`` damper."""
     if kind not in KINDS:
         raise MtbmjError(f"fit: unknown kind {kind!r} (one of {', '.join(KINDS)})")
     if not data:
@@ -157,6 +159,13 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
     if kind == "damper":
         from mtbmj.identify import damper
 
+        if clicks:
+            result = damper.fit_clicks(records, list(clicks))
+            return Identification("damper", records, {"clicks": result}, ["clicks"],
+                                  lambda: damper.plot_clicks(records, result, list(clicks)),
+                                  notes=result.extra["notes"])
+        if len(records) > 1:
+            raise MtbmjError("fit damper: several dyno files need --clicks (the adjuster position of each)")
         results = damper.fit_damper_all(records[0])
         return _damper(records, results, model, friction, damper)
     if kind == "tire":
