@@ -98,7 +98,7 @@ def _result_json(r: FitResult) -> dict:
     return out
 
 
-SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive")  # candidates for "auto"
+SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive", "air")  # candidates for "auto"
 SPRING_PARTS = SPRING_MODELS + ("top_out", "preload")  # may be asked for by name
 HYDRAULIC_MODELS = ("linear", "bilinear", "table")
 FRICTION_MODELS = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")
@@ -118,13 +118,14 @@ def _choose(results: dict[str, FitResult], names: Sequence[str], requested: str,
     return min(comparable, key=lambda n: results[n].bic)
 
 
-def _spring(records, results, model, plot_fn) -> Identification:
+def _spring(records, results, model, plot_fn, base="reference") -> Identification:
     main = _choose(results, SPRING_PARTS if model != "auto" else SPRING_MODELS, model, "model")
     notes = ["models compared by BIC: " + ", ".join(
         f"{n} {results[n].bic:.1f}" for n in SPRING_MODELS if n in results)]
     if "friction_N" in results[main].extra:
         notes.append(f"hysteresis half-width (friction) {results[main].extra['friction_N']:.1f} N")
-    return Identification("spring", records, results, [main], lambda: plot_fn(records[0], results), notes=notes)
+    return Identification("spring", records, results, [main], lambda: plot_fn(records[0], results), base=base,
+                          notes=notes)
 
 
 def _damper(records, results, model, friction, module) -> Identification:
@@ -152,10 +153,20 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
     if kind == "spring":
         from mtbmj.identify import spring
 
+        from mtbmj.config import load
+
         results = spring.fit_spring_all(records[0])
+        geometry = load(config)
+        base = "reference"
+        if geometry.get("fork.spring.model") == "air":  # an air fork's geometry: offer the air model
+            results["air"] = spring.fit_air(records[0], geometry)
+            from mtbmj.config import preset_names
+
+            named = any(str(config).lower() == n.lower() for n in preset_names())
+            base = geometry.name if named else str(Path(config).resolve())
         if model not in ("auto", *results):
             results[model] = spring.fit_spring(records[0], model)  # raises the precise cause, e.g. no extension
-        return _spring(records, results, model, spring.plot_spring)
+        return _spring(records, results, model, spring.plot_spring, base)
     if kind == "damper":
         from mtbmj.identify import damper
 
