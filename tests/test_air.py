@@ -212,3 +212,28 @@ def test_bad_air_input_from_the_command_line_exits_2_and_writes_nothing(tmp_path
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and key in err[0]
         assert not out.exists()
+
+
+# ------------------------------------------------------------------------ sweeps and rolling
+def test_a_batched_sweep_varies_pressure_and_spacers_like_single_runs(tmp_path):
+    from mtbmj.sweep import read_table, run_sweep
+
+    rng = np.random.default_rng(1606)
+    variants = [{"fork.spring.air_pressure_psi": float(p), "fork.spring.tokens": float(t)}
+                for p, t in zip(rng.uniform(70, 100, 3), rng.integers(0, 4, 3))]
+    run_sweep("air120", variants, tmp_path / "sweep", duration=0.4)
+    table = read_table(tmp_path / "sweep")
+    assert list(table["status"]) == ["ok"] * 3
+    for v in variants:
+        row = table[np.isclose(table["fork.spring.air_pressure_psi"], v["fork.spring.air_pressure_psi"])].iloc[0]
+        single = mtbmj.run_drop("air120", overrides=v, duration=0.4)
+        assert row["fork_peak1_mm"] == pytest.approx(single.summary["events"]["fork"]["peak1"]["value_mm"], abs=1e-6)
+
+
+def test_rolling_front_end_runs_the_air_law_compiled_as_in_python():
+    from mtbmj.rolling.frontend import run_roll
+
+    compiled = run_roll("square_edge", 4.0, "air120", duration=0.6, callback="auto")
+    python = run_roll("square_edge", 4.0, "air120", duration=0.6, callback="python")
+    assert np.max(np.abs(np.asarray(compiled.signals["fork_mm"]) - np.asarray(python.signals["fork_mm"]))) < 1e-6
+    assert np.max(compiled.signals["fork_mm"]) > 10.0  # the edge compresses the fork

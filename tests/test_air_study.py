@@ -1,7 +1,6 @@
 """``mtbmj air-study``: every variant on both engines, the figures and the table."""
 import csv
 
-import pytest
 
 from mtbmj import cli
 from mtbmj.config import load
@@ -10,7 +9,7 @@ from mtbmj.drop.air_study import static_sag_mm, variants
 
 def test_variants_cover_spacers_pressures_and_tire_pressures():
     groups = {}
-    for name, (group, change) in variants(load("air120")).items():
+    for group, change in variants(load("air120")).values():
         groups.setdefault(group, []).append(change)
     assert [c["fork.spring.tokens"] for c in groups["spacers"]] == [0.0, 1.0, 2.0, 3.0]
     assert len([c for c in groups["pressure"] if c]) == 2 and len(groups["tire"]) == 2
