@@ -1,7 +1,6 @@
 """``mtbmj air-study``: every variant on both engines, the figures and the table."""
 import csv
 
-
 from mtbmj import cli
 from mtbmj.config import load
 from mtbmj.drop.air_study import static_sag_mm, variants
