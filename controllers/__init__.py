@@ -9,12 +9,14 @@ from mtbmj.controllers.fork import ForkLaw
 from mtbmj.controllers.friction import (Coulomb, CoulombViscous, LuGre, NoFriction, Stiction, Sticking, Stribeck,
                                        smooth_sign)
 from mtbmj.controllers.stops import EndStops, Rim
-from mtbmj.controllers.spring import BilinearSpring, DirectionalSpring, LinearSpring, ProgressiveSpring, TopOutSpring
+from mtbmj.controllers.spring import (
+    P_ATM, AirSpring, BilinearSpring, DirectionalSpring, LinearSpring, ProgressiveSpring, TopOutSpring,
+)
 from mtbmj.controllers.tire import KelvinVoigt, TireLaw
 
 __all__ = [
     "ForkCallback", "installed", "ForkLaw",
-    "LinearSpring", "BilinearSpring", "ProgressiveSpring", "DirectionalSpring", "TopOutSpring",
+    "LinearSpring", "BilinearSpring", "ProgressiveSpring", "DirectionalSpring", "TopOutSpring", "AirSpring", "P_ATM",
     "LinearDamper", "BilinearDamper", "TableDamper",
     "NoFriction", "Coulomb", "CoulombViscous", "Stiction", "Stribeck", "LuGre", "Sticking", "smooth_sign",
     "EndStops", "Rim",

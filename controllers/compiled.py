@@ -8,8 +8,8 @@ in ``mujoco.rollout`` run in parallel.
 Design
 ------
 * A ``ForkLaw`` is flattened into one row of integer codes and one row of float64 parameters
-  (``flatten``): the spring tree (Linear, Bilinear, Progressive, Directional, TopOut, nested at
-  will) becomes a short postfix program, the damper (Linear, Bilinear, Table) and the friction law
+  (``flatten``): the spring tree (Linear, Bilinear, Progressive, Air, Directional, TopOut, nested
+  at will) becomes a short postfix program, the damper (Linear, Bilinear, Table) and the friction law
   (NoFriction, Coulomb, CoulombViscous, Stiction, Stribeck, LuGre) one code each.
 * The rows live in a process-wide registry (two numpy arrays that are never reallocated), one slot
   per ``CompiledForkCallback``, keyed by the ``mjModel*`` it was built for. One numba ``cfunc``
@@ -65,6 +65,7 @@ FALLBACK_MESSAGE = "numba not installed: using the Python force laws"
 # Codes and registry layout
 # ----------------------------------------------------------------------------------------------
 SP_LINEAR, SP_BILINEAR, SP_PROGRESSIVE, SP_DIRECTIONAL, SP_TOPOUT, SP_STOPS = 1, 2, 3, 4, 5, 6
+SP_AIR = 7
 DA_LINEAR, DA_BILINEAR, DA_TABLE = 1, 2, 3
 FR_NONE, FR_COULOMB, FR_COULOMB_VISCOUS, FR_STICTION, FR_STRIBECK, FR_LUGRE = 0, 1, 2, 3, 4, 5
 FR_STICKING = 6  # Sticking around one of the static laws: I_FRICTION_INNER holds that law's code
@@ -143,6 +144,11 @@ def flatten(law: ForkLaw) -> tuple[list[int], list[float]]:
             spring(s.main)
             program.append((SP_STOPS, put(s.bumper_start, s.bumper_length, s.bumper_force, s.travel,
                                           s.stop_rate, s.stop_damping, s.extension)))
+        elif kind is _spring.AirSpring:
+            program.append((SP_AIR, put(s.area, s.absolute, s.volume, s.index, s.atmospheric,
+                                        float(s.has_negative), s.positive_at_port, s.negative_at_port, s.port,
+                                        s.limit, s.limit_force, s.limit_rate, s.offset)))
+            push()
         else:
             raise UnsupportedLaw(f"spring law {kind.__name__} has no compiled form")
 
@@ -346,6 +352,24 @@ if _numba is not None:
     _jit = dict(cache=True, error_model="numpy", nogil=True)
 
     @_numba.njit(**_jit)
+    def _air_force(P, o, x):
+        """AirSpring.force; P[o:] = area, p + p_a, V, n, p_a, negative?, V_p, V_m, port, limit,
+        force and rate at the limit, offset."""
+        a = P[o]
+        n = P[o + 3]
+        negative = P[o + 5] != 0.0
+        if negative and not (x - P[o + 8] >= 0.0):
+            return -P[o + 12]
+        if x - P[o + 9] >= 0.0:
+            return P[o + 10] + P[o + 11] * (x - P[o + 9]) - P[o + 12]
+        if negative:
+            d = x - P[o + 8]
+            vp = P[o + 6]
+            vm = P[o + 7]
+            return a * P[o + 1] * ((vp / (vp - a * d)) ** n - (vm / (vm + a * d)) ** n) - P[o + 12]
+        return a * (P[o + 1] * (P[o + 2] / (P[o + 2] - a * x)) ** n - P[o + 4]) - P[o + 12]
+
+    @_numba.njit(**_jit)
     def _spring_force(I, P, x, v):
         stack = _stack_buffer()
         top = 0
@@ -371,6 +395,9 @@ if _numba is not None:
                 top -= 2
                 w = 0.5 * (1.0 + math.tanh(v / P[o]))
                 stack[top] = w * compression + (1.0 - w) * rebound
+                top += 1
+            elif op == SP_AIR:  # AirSpring.force
+                stack[top] = _air_force(P, o, x)
                 top += 1
             elif op == SP_TOPOUT:  # TopOutSpring.force
                 engagement = P[o + 2]

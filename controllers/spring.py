@@ -4,6 +4,7 @@ compression velocity v (m/s), compression positive. Piecewise laws follow the gu
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from mtbmj.controllers.friction import smooth_sign
@@ -138,4 +139,148 @@ class TopOutSpring:
         return self.preload * x + self.main.energy(x) - self.top_out_rate * engaged
 
 
-__all__ = ["LinearSpring", "BilinearSpring", "ProgressiveSpring", "DirectionalSpring", "TopOutSpring"]
+P_ATM = 101325.0  # Pa, standard atmosphere (ISO 2533): the absolute pressure of a gauge reading of 0
+
+
+def _polytropic_work(volume: float, ratio: float, n: float) -> float:
+    """W / p0 (m^3) of a polytropic change from ``volume`` to ``volume / ratio`` at the starting
+    absolute pressure p0: the integral of (p / p0) dV swept, V (ratio^(n-1) - 1) / (n - 1), or
+    V ln(ratio) for the isothermal n = 1 (expm1 keeps n close to 1 exact). Negative when the gas
+    expands (ratio < 1)."""
+    log_ratio = math.log(ratio)
+    if n == 1.0:
+        return volume * log_ratio
+    return volume * math.expm1((n - 1.0) * log_ratio) / (n - 1.0)
+
+
+@dataclass(frozen=True)
+class AirSpring:
+    """An air spring: the positive chamber of an air fork, optionally with a negative chamber.
+
+    Positive chamber alone (``negative_volume`` = 0), a polytropic gas of index n compressed by a
+    piston of area A from its volume V at full extension (gauge pressure p there, atmospheric
+    pressure p_a on the other side of the piston):
+
+        F(x) = A [(p + p_a) (V / (V - A x))^n - p_a]
+
+    Negative chamber (``negative_volume`` = V_n > 0): a second chamber below the same piston that
+    grows as the fork compresses and pulls the fork into its travel. Model (after the single-valve
+    "dimple" forks, e.g. RockShox DebonAir as described by Bike Magazine, "RockShox updates its
+    DebonAir spring", 2020): a transfer port at compression x_p (``port``, at or near full
+    extension) joins the two chambers while the piston seal is above it, so there they share one
+    pressure p + p_a and, acting on the same area, cancel (zero net force for x <= x_p). Below the
+    port each chamber is sealed and polytropic from the state it had at the port:
+
+        F(x) = A (p + p_a) [(V_p / (V_p - A d))^n - (V_m / (V_m + A d))^n],  d = x - x_p
+
+    with V_p = V - A x_p and V_m = V_n + A x_p. Assumptions: the shaft area is neglected (the
+    negative chamber acts on the full piston area A), both chambers follow the same index n, no
+    leakage across the seal. The force is continuous at the port, where its slope jumps (a guard).
+
+    Past ``limit`` (normally the travel, where the fork's end stop takes over) the curve continues
+    along its tangent, so the force stays finite for any compression; a configuration whose travel
+    would compress the chamber to zero volume is refused in ``mtbmj.compose``. ``offset`` (N) is
+    subtracted from the force so that a ``TopOutSpring`` can carry the force at full extension as
+    its preload (``mtbmj.compose`` sets both to that force).
+    """
+
+    area: float  # m^2, piston area A
+    pressure: float  # Pa, gauge pressure of the positive chamber at full extension
+    volume: float  # m^3, positive chamber at full extension (volume spacers already taken out)
+    index: float  # polytropic index n (1 isothermal, 1.4 adiabatic air)
+    negative_volume: float = 0.0  # m^3, negative chamber at full extension; 0 = no negative chamber
+    port: float = 0.0  # m, compression of the transfer port
+    limit: float = math.inf  # m, compression beyond which the curve continues along its tangent
+    offset: float = 0.0  # N, subtracted from the force (carried as a TopOutSpring preload)
+    atmospheric: float = P_ATM  # Pa
+
+    @property
+    def has_negative(self) -> bool:
+        return self.negative_volume > 0.0
+
+    @property
+    def n_guards(self) -> int:
+        return 1 if self.has_negative else 0
+
+    has_state = False
+
+    def guards(self, x, v):
+        return (x - self.port,) if self.has_negative else ()
+
+    @property
+    def absolute(self) -> float:
+        """p + p_a (Pa): absolute pressure at full extension."""
+        return self.pressure + self.atmospheric
+
+    @property
+    def positive_at_port(self) -> float:
+        """V_p (m^3): the positive chamber where the transfer port closes."""
+        return self.volume - self.area * self.port
+
+    @property
+    def negative_at_port(self) -> float:
+        """V_m (m^3): the negative chamber where the transfer port closes."""
+        return self.negative_volume + self.area * self.port
+
+    def air_force(self, x: float, below_port: bool = True) -> float:
+        """The air force (N) at compression x on its formula (no tangent continuation, no offset);
+        ``below_port`` picks the sealed branch of the negative-chamber model."""
+        a, n = self.area, self.index
+        if self.has_negative:
+            if not below_port:
+                return 0.0
+            d = x - self.port
+            vp, vm = self.positive_at_port, self.negative_at_port
+            return a * self.absolute * ((vp / (vp - a * d)) ** n - (vm / (vm + a * d)) ** n)
+        return a * (self.absolute * (self.volume / (self.volume - a * x)) ** n - self.atmospheric)
+
+    def air_rate(self, x: float) -> float:
+        """dF/dx (N/m) of ``air_force`` at x (sealed branch)."""
+        a, n = self.area, self.index
+        if self.has_negative:
+            d = x - self.port
+            vp, vm = self.positive_at_port, self.negative_at_port
+            up, um = vp - a * d, vm + a * d
+            return a * a * self.absolute * n * ((vp / up) ** n / up + (vm / um) ** n / um)
+        u = self.volume - self.area * x
+        return a * a * self.absolute * n * (self.volume / u) ** n / u
+
+    @property
+    def limit_force(self) -> float:
+        return self.air_force(self.limit) if math.isfinite(self.limit) else math.nan
+
+    @property
+    def limit_rate(self) -> float:
+        return self.air_rate(self.limit) if math.isfinite(self.limit) else math.nan
+
+    def force(self, x, v, sides=None):
+        if self.has_negative and not _side(x - self.port, sides, 0):
+            return -self.offset
+        if x - self.limit >= 0.0:
+            return self.limit_force + self.limit_rate * (x - self.limit) - self.offset
+        return self.air_force(x) - self.offset
+
+    def _air_energy(self, x: float) -> float:
+        a, n = self.area, self.index
+        if self.has_negative:
+            if x <= self.port:
+                return 0.0
+            d = x - self.port
+            vp, vm = self.positive_at_port, self.negative_at_port
+            return self.absolute * (_polytropic_work(vp, vp / (vp - a * d), n)
+                                    + _polytropic_work(vm, vm / (vm + a * d), n))
+        return (self.absolute * _polytropic_work(self.volume, self.volume / (self.volume - a * x), n)
+                - self.atmospheric * a * x)
+
+    def energy(self, x):
+        """Work (J) done compressing the spring from full extension to x: the integral of force."""
+        if x > self.limit:
+            d = x - self.limit
+            stored = self._air_energy(self.limit) + self.limit_force * d + 0.5 * self.limit_rate * d * d
+        else:
+            stored = self._air_energy(x)
+        return stored - self.offset * x
+
+
+__all__ = ["LinearSpring", "BilinearSpring", "ProgressiveSpring", "DirectionalSpring", "TopOutSpring",
+           "AirSpring", "P_ATM"]

@@ -65,4 +65,28 @@ class TireLaw:
         return (previous_deflection > 0.0 >= deflection) or (previous_fork_velocity < 0.0 <= fork_velocity)
 
 
-__all__ = ["KelvinVoigt", "TireLaw"]
+PSI = 6894.757293168  # Pa per psi
+
+# Tire rates from the inflation pressure (``tire.pressure_psi``), a 29 x 2.3 in knobby tire:
+REFERENCE_STATIC_RATE = 62e3  # N/m, sourced (secondhand): static radial stiffness at 25 psi
+REFERENCE_PRESSURE = 25.0 * PSI  # Pa, sourced: 1.72 bar, with the rate above (Dressel & Sadauckas 2020)
+PRESSURE_RANGE = (15.0 * PSI, 25.0 * PSI)  # Pa: 1.03 bar (sourced, their largest deflection) to 1.72 bar
+IMPACT_OVER_STATIC = 1.38  # sourced (secondhand): first-impact dynamic / static (Sadauckas et al. 2024)
+CONTACT_OVER_STATIC = 1.19  # sourced (secondhand): settled in-contact dynamic / static (same source)
+
+
+def static_rate_from_pressure(pressure: float) -> float:
+    """Static radial stiffness (N/m) of the tire at gauge ``pressure`` (Pa).
+
+    Model: a tire whose walls do not stretch carries its load by the inflation pressure over the
+    contact patch (Renart & Roura-Grabulosa, "Deformation of an inflated bicycle tire when loaded",
+    Am. J. Phys. 87, 102, 2019), so at a given deflection the force, and the rate, scale with the
+    gauge pressure: k(p) = k_ref p / p_ref, anchored at 62 N/mm and 25 psi (Dressel & Sadauckas
+    2020, Appl. Sci. 10(9):3156). Assumed: the carcass's own stiffness is neglected. Valid over
+    ``PRESSURE_RANGE``; ``mtbmj.compose`` refuses pressures outside it.
+    """
+    return REFERENCE_STATIC_RATE * pressure / REFERENCE_PRESSURE
+
+
+__all__ = ["KelvinVoigt", "TireLaw", "static_rate_from_pressure", "PRESSURE_RANGE", "IMPACT_OVER_STATIC",
+           "CONTACT_OVER_STATIC"]

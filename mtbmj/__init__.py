@@ -23,6 +23,7 @@ _LAZY = {
     "DropResult": "mtbmj.drop.result",
     "run_study": "mtbmj.drop.study",
     "write_study": "mtbmj.drop.study",
+    "solve_sag": "mtbmj.drop.sag",
     "crosscheck": "mtbmj.validation.compare",
     "run_roll": "mtbmj.rolling.frontend",
     "RollResult": "mtbmj.rolling.frontend",
@@ -30,7 +31,7 @@ _LAZY = {
     "ConfigError": "mtbmj.errors",
     "RunError": "mtbmj.errors",
 }
-__all__ = ['Config', 'ConfigError', 'DropResult', 'MtbmjError', 'RollResult', 'RunError', 'crosscheck', 'load_config', 'preset_names', 'run_drop', 'run_roll', 'run_study', 'study_presets', 'write_study']
+__all__ = ['Config', 'ConfigError', 'DropResult', 'MtbmjError', 'RollResult', 'RunError', 'crosscheck', 'load_config', 'preset_names', 'run_drop', 'run_roll', 'run_study', 'solve_sag', 'study_presets', 'write_study']
 
 
 def __getattr__(name):  # PEP 562: import a submodule only when one of its names is asked for

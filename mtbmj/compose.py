@@ -15,6 +15,8 @@ from mtbmj.errors import ConfigError
 
 MM = 1e-3
 N_PER_MM = 1e3
+PSI = 6894.757293168  # Pa per psi (1 lbf/in^2, exact by the definitions of the pound and the inch)
+CM3 = 1e-6  # m^3 per cm^3
 
 
 @dataclass(frozen=True)
@@ -100,6 +102,8 @@ def _main_spring(c: Config) -> object:
         main = law.BilinearSpring(rate("rate_below_knee_N_per_mm"), rate("rate_above_knee_N_per_mm"), knee * MM)
         if c.get("fork.spring.rebound_curve", False):  # S3, S4, S6: extending on S2's rebound rate
             main = law.DirectionalSpring(main, law.LinearSpring(rate("rebound_rate_N_per_mm")), band)
+    elif model == "air":
+        return _air_spring(c, travel)
     else:  # progressive
         cubic = c.require("fork.spring.progressive_cubic_N_per_mm3", "needed by fork.spring.model = progressive")
         main = law.ProgressiveSpring(rate("progressive_rate_N_per_mm"), cubic * N_PER_MM / MM**2)
@@ -121,6 +125,66 @@ def _main_spring(c: Config) -> object:
     return spring
 
 
+def air_volume(c: Config) -> float:
+    """Positive-chamber volume (m^3) at full extension with the volume spacers in, refused (naming
+    ``fork.spring.tokens``) when the spacers fill the chamber."""
+    why = "needed by fork.spring.model = air"
+    volume = c.require("fork.spring.air_volume_cm3", why) * CM3
+    tokens = c.get("fork.spring.tokens", 0.0)
+    if tokens != int(tokens):
+        raise ConfigError(f"fork.spring.tokens: must be a whole number of volume spacers, got {tokens:g}")
+    if tokens:
+        volume -= tokens * c.require("fork.spring.token_volume_cm3", "needed by fork.spring.tokens") * CM3
+        if volume <= 0.0:
+            raise ConfigError(f"fork.spring.tokens: {tokens:g} spacers fill the air chamber "
+                              f"(fork.spring.air_volume_cm3 = {c['fork.spring.air_volume_cm3']:g})")
+    return volume
+
+
+def _air_spring(c: Config, travel_mm: float) -> object:
+    """``fork.spring.model = "air"``: ``law.AirSpring`` with the top-out spring carrying its force at
+    full extension (the air's own preload) the way ``TopOutSpring`` carries a coil's preload."""
+    why = "needed by fork.spring.model = air"
+    gauge = c.require("fork.spring.air_pressure_psi", why)
+    if gauge * PSI <= -law.P_ATM:
+        raise ConfigError(f"fork.spring.air_pressure_psi: {gauge:g} psi gauge is at or below vacuum "
+                          f"({-law.P_ATM / PSI:.2f} psi gauge)")
+    diameter = c.require("fork.spring.piston_diameter_mm", why) * MM
+    area = math.pi * diameter * diameter / 4.0
+    volume = air_volume(c)
+    travel = travel_mm * MM
+    swept = area * travel
+    if swept >= volume:
+        raise ConfigError(f"fork.spring.air_volume_cm3: the travel ({travel_mm:g} mm) would compress the air chamber "
+                          f"to zero volume (piston sweeps {swept / CM3:.1f} cm3, chamber holds {volume / CM3:.1f} cm3 "
+                          f"with its spacers)")
+    index = c.require("fork.spring.polytropic_index", why)
+    if not 1.0 <= index <= 1.4:
+        raise ConfigError(f"fork.spring.polytropic_index: {index:g} is outside 1 (isothermal) to 1.4 (adiabatic air)")
+    negative = c.get("fork.spring.negative_volume_cm3", 0.0) * CM3
+    port = c.get("fork.spring.transfer_port_mm", 0.0)
+    if not 0.0 <= port < travel_mm:
+        raise ConfigError(f"fork.spring.transfer_port_mm: {port:g} mm is outside the travel [0, {travel_mm:g}) mm")
+    if c.get("fork.spring.preload", False):
+        raise ConfigError("fork.spring.preload: an air spring takes its preload from fork.spring.air_pressure_psi; "
+                          "set fork.spring.preload = false")
+    spring = law.AirSpring(area, gauge * PSI, volume, index, negative, port * MM, travel)
+    preload = max(0.0, spring.force(0.0, 0.0))
+    use_top_out = c.get("fork.spring.top_out", "fork.spring.top_out_rate_N_per_mm" in c.values)
+    if not use_top_out:
+        if preload > 0.0:
+            raise ConfigError("fork.spring.top_out: an air spring without a negative chamber pushes with "
+                              f"{preload:.0f} N at full extension; it needs the top-out spring (fork.spring.top_out = true)")
+        return spring
+    top = c.require("fork.spring.top_out_rate_N_per_mm", "needed by fork.spring.top_out = true") * N_PER_MM
+    spring = law.TopOutSpring(law.AirSpring(area, gauge * PSI, volume, index, negative, port * MM, travel, preload),
+                              top, preload)
+    if spring.engagement >= travel:
+        raise ConfigError("fork.spring.air_pressure_psi: the top-out spring would stay engaged over the whole travel "
+                          "(force at full extension / top-out rate exceeds fork.travel_mm)")
+    return spring
+
+
 def _damper(c: Config) -> object:
     model = c.require("fork.damper.model")
     why = f"needed by fork.damper.model = {model}"
@@ -130,6 +194,8 @@ def _damper(c: Config) -> object:
         return law.BilinearDamper(
             c.require("fork.damper.compression_N_s_per_m", why), c.require("fork.damper.rebound_N_s_per_m", why)
         )
+    if model == "clicks":
+        return _clicks_damper(c)
     v = np.asarray(c.require("fork.damper.velocity_mm_per_s", why)) * MM
     f = np.asarray(c.require("fork.damper.force_N", why))
     if len(v) != len(f):
@@ -148,6 +214,48 @@ def _damper(c: Config) -> object:
     if zero.size and f[zero[0]] != 0.0:
         raise ConfigError("fork.damper.force_N: force at zero velocity must be 0; put the offset in fork.friction")
     return law.TableDamper(v, f)
+
+
+def clicks_curve(c: Config, circuit: str, points: int) -> np.ndarray:
+    """Force (N) of one damper circuit ("compression" or "rebound") at its adjuster setting
+    ``fork.damper.<circuit>_clicks``: each velocity's force interpolated linearly in clicks between
+    the two neighbouring positions of ``<circuit>_clicks_measured`` (rows of ``<circuit>_force_N``)."""
+    why = "needed by fork.damper.model = clicks"
+    key = f"fork.damper.{circuit}"
+    measured = np.asarray(c.require(f"{key}_clicks_measured", why))
+    rows = c.require(f"{key}_force_N", why)
+    setting = c.require(f"{key}_clicks", why)
+    if len(measured) < 1 or np.any(measured != np.round(measured)) or np.any(measured < 0) or \
+            np.any(np.diff(measured) <= 0):
+        raise ConfigError(f"{key}_clicks_measured: must be whole clicks from closed, strictly increasing")
+    if len(rows) != len(measured):
+        raise ConfigError(f"{key}_force_N: {len(rows)} rows for {len(measured)} positions in {key}_clicks_measured")
+    side = "compression (> 0)" if circuit == "compression" else "rebound (< 0)"
+    for i, row in enumerate(rows):
+        if len(row) != points:
+            raise ConfigError(f"{key}_force_N: row {i + 1} has {len(row)} forces for the {points} {side} velocities "
+                              "of fork.damper.velocity_mm_per_s")
+        f = np.asarray(row)
+        if np.any(np.diff(f) < 0) or (np.any(f < 0) if circuit == "compression" else np.any(f > 0)):
+            raise ConfigError(f"{key}_force_N: row {i + 1} must rise with velocity and keep the sign of the "
+                              f"{circuit} stroke (a damper dissipates)")
+    if setting != round(setting):
+        raise ConfigError(f"{key}_clicks: {setting:g} is not a whole number of clicks")
+    if not measured[0] <= setting <= measured[-1]:
+        raise ConfigError(f"{key}_clicks: {setting:g} is outside the measured positions "
+                          f"{measured[0]:g}-{measured[-1]:g} clicks from closed")
+    table = np.asarray(rows)
+    return np.array([np.interp(setting, measured, table[:, j]) for j in range(points)])
+
+
+def _clicks_damper(c: Config) -> object:
+    """``fork.damper.model = "clicks"``: a lookup-table damper whose compression half (v > 0) and
+    rebound half (v < 0) come from dyno curves measured at several adjuster positions."""
+    v = np.asarray(c.require("fork.damper.velocity_mm_per_s", "needed by fork.damper.model = clicks"))
+    force = np.zeros(len(v))
+    force[v > 0] = clicks_curve(c, "compression", int(np.sum(v > 0)))
+    force[v < 0] = clicks_curve(c, "rebound", int(np.sum(v < 0)))
+    return _damper(c.with_overrides({"fork.damper.model": "table", "fork.damper.force_N": tuple(force)}))
 
 
 def _friction(c: Config) -> object:
@@ -201,9 +309,27 @@ def _rim(c: Config) -> law.Rim:
     return law.Rim(deepest * MM, _get(c, "tire.rim_rate_N_per_mm") * N_PER_MM, _get(c, "tire.rim_damping_N_s_per_m"))
 
 
+def tire_rates_from_pressure(pressure_psi: float) -> dict[str, float]:
+    """``tire.pressure_psi`` -> the tire's static, impact and in-contact rates (N/mm), from
+    ``controllers.tire.static_rate_from_pressure`` and the sourced dynamic/static ratios; refused
+    (naming the key) outside the model's range."""
+    from mtbmj.controllers import tire as tire_model
+
+    low, high = (p / PSI for p in tire_model.PRESSURE_RANGE)
+    if not low <= pressure_psi <= high:
+        raise ConfigError(f"tire.pressure_psi: {pressure_psi:g} psi is outside the tire model's range "
+                          f"{low:g}-{high:g} psi (the published measurements it rests on)")
+    static = tire_model.static_rate_from_pressure(pressure_psi * PSI) / N_PER_MM
+    return {"tire.static_rate_N_per_mm": static,
+            "tire.impact_rate_N_per_mm": static * tire_model.IMPACT_OVER_STATIC,
+            "tire.contact_rate_N_per_mm": static * tire_model.CONTACT_OVER_STATIC}
+
+
 def _tire(c: Config) -> law.TireLaw:
     model = c.require("tire.model")
     why = f"needed by tire.model = {model}"
+    if "tire.pressure_psi" in c.values:  # the pressure sets the rates (the damping stays as configured)
+        c = c.with_overrides(tire_rates_from_pressure(c["tire.pressure_psi"]))
     k_impact = c.require("tire.impact_rate_N_per_mm", why) * N_PER_MM
     b_impact = c.require("tire.impact_damping_N_s_per_m", why)
     rim = _rim(c)

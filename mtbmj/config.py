@@ -26,10 +26,10 @@ else:  # pragma: no cover
 from mtbmj.errors import ConfigError
 from mtbmj.textfile import read_text
 
-# kinds: "pos" > 0, "nonneg" >= 0, "list" of finite numbers, "bool", "text", or a tuple of
-# allowed strings.
-SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive")
-DAMPER_MODELS = ("linear", "bilinear", "table")
+# kinds: "pos" > 0, "nonneg" >= 0, "real" any finite number, "list" of finite numbers, "rows" a
+# list of such lists (a table, one row each), "bool", "text", or a tuple of allowed strings.
+SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive", "air")
+DAMPER_MODELS = ("linear", "bilinear", "table", "clicks")
 FRICTION_MODELS = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")
 TIRE_MODELS = ("impact", "switch", "undamped", "static")
 INTEGRATORS = ("euler", "implicitfast", "implicit", "rk4")
@@ -59,12 +59,26 @@ SCHEMA: dict[str, Any] = {
     "fork.spring.preload": "bool",
     "fork.spring.preload_N": "nonneg",
     "fork.spring.direction_band_mm_per_s": "pos",
+    "fork.spring.air_pressure_psi": "real",
+    "fork.spring.piston_diameter_mm": "pos",
+    "fork.spring.air_volume_cm3": "pos",
+    "fork.spring.tokens": "nonneg",
+    "fork.spring.token_volume_cm3": "pos",
+    "fork.spring.negative_volume_cm3": "nonneg",
+    "fork.spring.transfer_port_mm": "nonneg",
+    "fork.spring.polytropic_index": "pos",
     "fork.damper.model": DAMPER_MODELS,
     "fork.damper.coefficient_N_s_per_m": "nonneg",
     "fork.damper.compression_N_s_per_m": "nonneg",
     "fork.damper.rebound_N_s_per_m": "nonneg",
     "fork.damper.velocity_mm_per_s": "list",
     "fork.damper.force_N": "list",
+    "fork.damper.compression_clicks": "nonneg",
+    "fork.damper.rebound_clicks": "nonneg",
+    "fork.damper.compression_clicks_measured": "list",
+    "fork.damper.rebound_clicks_measured": "list",
+    "fork.damper.compression_force_N": "rows",
+    "fork.damper.rebound_force_N": "rows",
     "fork.friction.model": FRICTION_MODELS,
     "fork.friction.coulomb_N": "nonneg",
     "fork.friction.breakaway_N": "nonneg",
@@ -94,6 +108,7 @@ SCHEMA: dict[str, Any] = {
     "tire.max_deflection_mm": "pos",
     "tire.rim_rate_N_per_mm": "pos",
     "tire.rim_damping_N_s_per_m": "nonneg",
+    "tire.pressure_psi": "real",
     "solver.duration_s": "pos",
     "solver.timestep_s": "pos",
     "solver.integrator": INTEGRATORS,
@@ -106,6 +121,7 @@ SCHEMA: dict[str, Any] = {
 
 UNIT_SUFFIXES = (
     "_N_s_per_m", "_N_per_mm3", "_N_per_mm", "_mm_per_s", "_m_per_s2", "_kg", "_mm", "_N", "_s", "_Hz",
+    "_psi", "_cm3",
 )
 
 
@@ -151,6 +167,13 @@ def check_value(key: str, value: Any) -> Any:
         if value not in kind:
             raise ConfigError(f"{key}: {value!r} is not one of {', '.join(kind)}")
         return value
+    if kind == "rows":
+        if not isinstance(value, (list, tuple)) or not value or not all(
+                isinstance(row, (list, tuple)) and all(_is_number(v) for v in row) for row in value):
+            raise ConfigError(f"{key}: must be a list of lists of numbers (one list per row)")
+        if not all(math.isfinite(v) for row in value for v in row):
+            raise ConfigError(f"{key}: contains NaN or infinity")
+        return tuple(tuple(float(v) for v in row) for row in value)
     if kind == "list":
         if not isinstance(value, (list, tuple)) or not all(_is_number(v) for v in value):
             raise ConfigError(f"{key}: must be a list of numbers")
@@ -261,6 +284,8 @@ def _toml_value(value: Any) -> str:
     if isinstance(value, str):
         return json.dumps(value)
     if isinstance(value, tuple):
+        if value and isinstance(value[0], tuple):
+            return "[" + ", ".join(_toml_value(row) for row in value) + "]"
         return "[" + ", ".join(repr(float(v)) for v in value) + "]"
     return repr(float(value))
 

@@ -9,7 +9,7 @@ from mtbmj import compose
 from mtbmj.config import SCHEMA, Config, load, parse_assignment, preset_names, study_presets
 from mtbmj.errors import ConfigError
 
-PRESETS = [f"S{i}" for i in range(1, 15)] + ["reference"]
+PRESETS = [f"S{i}" for i in range(1, 15)] + ["air120", "reference"]
 
 # What each preset chooses (spring model, top_out, preload, damper, friction, tire).
 EXPECTED = {
@@ -47,7 +47,7 @@ def assert_names(exc_info, *needles):
 
 def test_preset_names():
     assert preset_names() == PRESETS
-    assert study_presets() == PRESETS[:-1]
+    assert study_presets() == PRESETS[:14]
 
 
 @pytest.mark.parametrize("name", PRESETS)

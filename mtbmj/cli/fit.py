@@ -20,6 +20,12 @@ def cmd_fit(args) -> int:
         except ValueError:
             raise MtbmjError(f"--bound {text}: expected key=low:high with numbers") from None
     free = [k.strip() for k in (args.free or "").split(",") if k.strip()]
+    clicks = None
+    if args.clicks:
+        try:
+            clicks = [float(c) for c in args.clicks.split(",")]
+        except ValueError:
+            raise MtbmjError(f"--clicks {args.clicks}: expected comma-separated numbers of clicks") from None
     data = list(args.data)
     if data == ["example"] and not Path("example").exists():
         from mtbmj.identify.examples import example_paths
@@ -27,7 +33,7 @@ def cmd_fit(args) -> int:
         data = example_paths(args.kind)
     ident = identify(args.kind, data, model=args.model, friction=args.friction, mass_kg=args.mass_kg,
                      config=args.config, free=free, bounds=bounds or None, engine=args.engine,
-                     starts=args.starts, touch_s=args.touch_s)
+                     starts=args.starts, touch_s=args.touch_s, clicks=clicks)
     written = ident.write(args.out)
     for name in ident.chosen:
         print(ident.results[name].line())
@@ -55,6 +61,8 @@ def add_parser(sub) -> None:
     p.add_argument("--starts", type=int, default=1, metavar="N",
                    help="drop: fit from N start points (the start values and N-1 Latin hypercube points "
                         "within the bounds); the best fit wins (default 1)")
+    p.add_argument("--clicks", help="damper: the adjuster position of each dyno file, in clicks from closed, "
+                                    "e.g. 0,6,12 (writes a clicks damper)")
     p.add_argument("--out", type=Path, default=Path("out/fit"), help="output directory (default out/fit)")
     p.set_defaults(func=cmd_fit)
     intermixed(p)

@@ -10,9 +10,13 @@ _LAZY = {
     "ENGINES": "mtbmj.drop.run",
     "DropResult": "mtbmj.drop.result",
     "run_study": "mtbmj.drop.study",
+    "solve_sag": "mtbmj.drop.sag",
+    "run_air_study": "mtbmj.drop.air_study",
+    "write_air_study": "mtbmj.drop.air_study",
+    "SagSetting": "mtbmj.drop.sag",
     "write_study": "mtbmj.drop.study",
 }
-__all__ = ['DropResult', 'ENGINES', 'resolve', 'run_drop', 'run_study', 'write_study']
+__all__ = ['DropResult', 'ENGINES', 'SagSetting', 'resolve', 'run_air_study', 'run_drop', 'run_study', 'solve_sag', 'write_air_study', 'write_study']
 
 
 def __getattr__(name):  # PEP 562: import a submodule only when one of its names is asked for

@@ -307,6 +307,74 @@ def fit_damper_all(record: Record) -> dict[str, FitResult]:
     return out
 
 
+def fit_clicks(records: list[Record], clicks: list[float]) -> FitResult:
+    """A ``clicks`` damper from dyno records taken at several adjuster positions (``clicks[i]``
+    clicks from closed for ``records[i]``, compression and rebound adjusters alike): each record's
+    lookup table (``_table``: Coulomb offset removed) resampled on the velocities common to all of
+    them, one row per position; the Coulomb level is the mean of the records' offsets (friction
+    does not depend on the adjusters). The setting written is the middle measured position."""
+    if len(clicks) != len(records):
+        raise DamperFitError(f"--clicks: {len(clicks)} positions for {len(records)} dyno files")
+    clicks = [float(c) for c in clicks]
+    if any(c < 0 or c != round(c) for c in clicks) or len(set(clicks)) != len(clicks):
+        raise DamperFitError("--clicks: positions must be distinct whole numbers of clicks from closed")
+    if len(records) < 2:
+        raise DamperFitError("fit damper --clicks: give at least two dyno files taken at different positions")
+    order = np.argsort(clicks)
+    fits = [_table(peaks(records[i])) for i in order]
+    grids = [np.asarray(f.values[D + "velocity_mm_per_s"]) for f in fits]
+    if len({len(g) for g in grids}) != 1 or any(np.any(np.sign(g) != np.sign(grids[0])) for g in grids):
+        raise DamperFitError("fit damper --clicks: the dyno files do not share their test speeds "
+                             f"({', '.join(str(len(g)) for g in grids)} velocities)")
+    grid = np.round(np.mean(grids, axis=0), 3)
+    rows = np.array([np.interp(grid, g, f.values[D + "force_N"]) for g, f in zip(grids, fits)])
+    rows = np.round(rows, 3)
+    pos, neg = grid > 0, grid < 0
+    measured = tuple(clicks[i] for i in order)
+    middle = measured[(len(measured) - 1) // 2]
+    coulomb = float(np.mean([f.values[R + "coulomb_N"] for f in fits]))
+    n_points = sum(f.n_points for f in fits)
+    rms = float(np.sqrt(sum(f.rms ** 2 * f.n_points for f in fits) / n_points))
+    values = {D + "velocity_mm_per_s": tuple(float(x) for x in grid),
+              D + "compression_clicks_measured": measured, D + "rebound_clicks_measured": measured,
+              D + "compression_force_N": tuple(tuple(float(x) for x in r[pos]) for r in rows),
+              D + "rebound_force_N": tuple(tuple(float(x) for x in r[neg]) for r in rows),
+              D + "compression_clicks": middle, D + "rebound_clicks": middle, R + "coulomb_N": coulomb}
+    stderr = {R + "coulomb_N": float(np.std([f.values[R + "coulomb_N"] for f in fits], ddof=1)
+                                     / math.sqrt(len(fits)))}
+    return FitResult("damper", "clicks", values, stderr, rms, "N", n_points, sum(f.n_params for f in fits),
+                     {"model_keys": {D + "model": "clicks", R + "model": "coulomb"}, "supported": True,
+                      "curves": [(c, f.extra["curve"]) for c, f in zip(measured, fits)],
+                      "notes": [f"tables at {', '.join(f'{c:g}' for c in measured)} clicks from closed on "
+                                f"{len(grid)} common velocities; Coulomb offset {coulomb:.1f} N (mean of the files)"]})
+
+
+def plot_clicks(records: list[Record], result: FitResult, clicks: list[float]):
+    """Each dyno file's peak points and its fitted curve, coloured by adjuster position."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.5, 4.5))
+    colours = plt.cm.viridis(np.linspace(0, 0.9, len(records)))
+    by_clicks = dict(result.extra["curves"])
+    for rec, c, colour in sorted(zip(records, clicks, colours), key=lambda t: t[1]):
+        pts = peaks(rec)
+        ax.plot(pts["velocity"] * 1e3, pts["force"], "o", ms=3, color=colour)
+        ax.plot(*by_clicks[float(c)], "-", color=colour, lw=1.2, label=f"{c:g} clicks from closed")
+    ax.axhline(0, color="0.7", lw=0.6)
+    ax.axvline(0, color="0.7", lw=0.6)
+    ax.set_xlabel("velocity (mm/s, compression +)")
+    ax.set_ylabel("force (N)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    synthetic = " (synthetic records)" if any(getattr(r, "synthetic", False) for r in records) else ""
+    ax.set_title(f"Fork damper by adjuster position{synthetic}", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
 def select(results: Mapping[str, FitResult] | Iterable[FitResult]) -> FitResult:
     """The result with the lowest BIC (ties: fewer parameters, then the order given); a saturated
     model (``FitResult.saturated``) only when every model is."""
@@ -362,4 +430,4 @@ def plot_damper(record: Record, results: Mapping[str, FitResult] | FitResult):
 
 
 __all__ = ["MODELS", "HYDRAULIC", "FRICTION", "DamperFitError", "peaks", "fit_damper", "fit_damper_all",
-           "select", "plot_damper"]
+           "fit_clicks", "select", "plot_damper", "plot_clicks"]

@@ -167,7 +167,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
     for key in free:
         if key not in SCHEMA:
             raise ConfigError(f"{key}: unknown key (free parameters are configuration keys)")
-        if SCHEMA[key] not in ("pos", "nonneg"):
+        if SCHEMA[key] not in ("pos", "nonneg", "real"):
             raise ConfigError(f"{key}: only numeric scalar keys can be free parameters")
         value = float(cfg.require(key, "a free parameter needs a start value"))
         if bounds and key in bounds:

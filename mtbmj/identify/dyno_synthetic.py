@@ -139,7 +139,9 @@ def truth_fork(truth: Mapping[str, Any]):
 def _describe(truth: Mapping[str, Any]) -> str:
     parts = []
     for key, value in truth.items():
-        if isinstance(value, (list, tuple)):
+        if isinstance(value, (list, tuple)) and value and isinstance(value[0], (list, tuple)):
+            value = "[" + " ".join("[" + " ".join(f"{v:g}" for v in row) + "]" for row in value) + "]"
+        elif isinstance(value, (list, tuple)):
             value = "[" + " ".join(f"{v:g}" for v in value) + "]"
         elif isinstance(value, bool):
             value = "true" if value else "false"
@@ -403,6 +405,13 @@ def write_record(path: str | Path, record: Record) -> Path:
     return write_mat(path, record) if Path(path).suffix.lower() == ".mat" else write_csv(path, record)
 
 
+def config_truth(config: Config, part: str) -> dict[str, Any]:
+    """The keys of ``config`` that define its fork ``part`` ("spring" or "damper") and friction:
+    the truth a synthetic record of that configuration is generated from."""
+    prefixes = (f"fork.{part}.", "fork.friction.")
+    return {k: v for k, v in config.values.items() if k.startswith(prefixes) or k == "fork.travel_mm"}
+
+
 def write_spring_record(path: str | Path, truth: Mapping[str, Any] | None = None, **kwargs) -> Path:
     """Generate a spring record (``spring_record`` arguments) and write it (.csv or .mat)."""
     return write_record(path, spring_record(truth, **kwargs))
@@ -418,5 +427,5 @@ def write_damper_record(path: str | Path, truth: Mapping[str, Any] | None = None
 
 __all__ = ["SPRING_PROGRESSIVE", "SPRING_BILINEAR", "SPRING_COMPRESSION_REBOUND", "DAMPER_TABLE",
            "DAMPER_BILINEAR", "DAMPER_STRIBECK", "TEST_SPEEDS_MM_PER_S", "LOW_SPEEDS_MM_PER_S",
-           "truth_fork", "quantise", "spring_record", "damper_record", "peak_points", "write_csv",
+           "truth_fork", "config_truth", "quantise", "spring_record", "damper_record", "peak_points", "write_csv",
            "write_mat", "write_record", "write_spring_record", "write_damper_record"]

@@ -101,7 +101,7 @@ def _result_json(r: FitResult) -> dict:
     return out
 
 
-SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive")  # candidates for "auto"
+SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive", "air")  # candidates for "auto"
 SPRING_PARTS = SPRING_MODELS + ("top_out", "preload")  # may be asked for by name
 HYDRAULIC_MODELS = ("linear", "bilinear", "table")
 FRICTION_MODELS = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")
@@ -166,13 +166,14 @@ def _comparison(results: dict[str, FitResult], names: Sequence[str], chosen: str
     return notes
 
 
-def _spring(records, results, model, plot_fn) -> Identification:
+def _spring(records, results, model, plot_fn, base="reference") -> Identification:
     floor = _floor(records, "force")
     main = _choose(results, SPRING_PARTS if model != "auto" else SPRING_MODELS, model, "model", floor)
     notes = _comparison(results, SPRING_MODELS, main, floor, "models compared")
     if "friction_N" in results[main].extra:
         notes.append(f"hysteresis half-width (friction) {results[main].extra['friction_N']:.1f} N")
-    return Identification("spring", records, results, [main], lambda: plot_fn(records[0], results), notes=notes)
+    return Identification("spring", records, results, [main], lambda: plot_fn(records[0], results), base=base,
+                          notes=notes)
 
 
 def _damper(records, results, model, friction, module) -> Identification:
@@ -188,11 +189,12 @@ def _damper(records, results, model, friction, module) -> Identification:
 def identify(kind: str, data: Sequence[str | Path], model: str = "auto", friction: str = "auto",
              mass_kg: float | None = None, config: str = "S12", free: Sequence[str] = (),
              bounds: dict | None = None, engine: str = "mujoco", starts: int = 1,
-             touch_s: float | None = None) -> Identification:
+             touch_s: float | None = None, clicks: Sequence[float] | None = None) -> Identification:
     """Fit ``kind`` ("spring", "damper", "tire", "drop") to the record(s) in ``data``; ``starts``:
     drop fits from that many start points (the best wins); ``free``: the drop fit's free keys
     (default ``DEFAULT_DROP_FREE``); ``touch_s``: the drop record's time zero on its clock
-    (default: found by ``validation.time_zero``)."""
+    (default: found by ``validation.time_zero``); ``clicks``: damper fits from several dyno files,
+    the adjuster position (clicks from closed) of each, giving a ``clicks`` damper."""
     if kind not in KINDS:
         raise MtbmjError(f"fit: unknown kind {kind!r} (one of {', '.join(KINDS)})")
     if not data:
@@ -205,13 +207,30 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
     if kind == "spring":
         from mtbmj.identify import spring
 
+        from mtbmj.config import load
+
         results = spring.fit_spring_all(records[0])
+        geometry = load(config)
+        base = "reference"
+        if geometry.get("fork.spring.model") == "air":  # an air fork's geometry: offer the air model
+            results["air"] = spring.fit_air(records[0], geometry)
+            from mtbmj.config import preset_names
+
+            named = any(str(config).lower() == n.lower() for n in preset_names())
+            base = geometry.name if named else str(Path(config).resolve())
         if model not in ("auto", *results):
             results[model] = spring.fit_spring(records[0], model)  # raises the precise cause, e.g. no extension
-        return _spring(records, results, model, spring.plot_spring)
+        return _spring(records, results, model, spring.plot_spring, base)
     if kind == "damper":
         from mtbmj.identify import damper
 
+        if clicks:
+            result = damper.fit_clicks(records, list(clicks))
+            return Identification("damper", records, {"clicks": result}, ["clicks"],
+                                  lambda: damper.plot_clicks(records, result, list(clicks)),
+                                  notes=result.extra["notes"])
+        if len(records) > 1:
+            raise MtbmjError("fit damper: several dyno files need --clicks (the adjuster position of each)")
         results = damper.fit_damper_all(records[0])
         return _damper(records, results, model, friction, damper)
     if kind == "tire":

@@ -21,6 +21,11 @@ left out. The elastic curve uses the library's laws in configuration units (mm, 
 * ``preload`` (with top-out): P = k_t x_e with x_e fitted; without it x_e = 0.
 * ``top_out`` and ``preload`` as model names: the top-out rate and preload of the full
   (progressive main curve) model, as a result holding only those keys.
+* ``air`` (``fit_air``, offered when the fit is given an air configuration): the gauge pressure and
+  the positive-chamber volume of ``controllers.AirSpring`` (built by ``mtbmj.compose``, so exactly
+  the simulated law, top-out spring and negative chamber included) with the fork's geometry
+  (piston, spacers, negative chamber, port, polytropic index, top-out rate) from that
+  configuration; the whole stroke, nonlinear least squares.
 
 Linear parameters are solved by bounded linear least squares (``scipy.optimize.lsq_linear``) for a
 profile over the knee and the engagement; the best point is then polished by
@@ -275,6 +280,55 @@ def fit_spring(record: Record, model: str = "progressive", *, top_out: bool | No
     return FitResult("spring", model, values, stderr, float(np.sqrt(np.mean(resid ** 2))), "N", n, len(theta), extra)
 
 
+def fit_air(record: Record, config) -> FitResult:
+    """Fit ``fork.spring.air_pressure_psi`` and ``fork.spring.air_volume_cm3`` (with the loop's
+    friction half-width) to a dyno stroke, the rest of the air spring taken from ``config`` (an air
+    configuration). See the module doc."""
+    from mtbmj import compose
+    from mtbmj.errors import ConfigError
+
+    if config.get("fork.spring.model") != "air":
+        raise SpringFitError(f"fit spring air: {config.name} is not an air configuration (fork.spring.model = air)")
+    data = _Data(record)
+    x, s, f = data.x * 1e-3, data.s, data.f  # the whole stroke: the law includes the top-out spring
+    keys = (K + "air_pressure_psi", K + "air_volume_cm3")
+
+    def curve(theta, xs):
+        try:
+            spring = compose.fork_law(config.with_overrides(dict(zip(keys, theta)))).spring
+        except ConfigError:
+            return None
+        return np.array([spring.force(float(xi), 0.0) for xi in xs])
+
+    def residual(q):
+        elastic = curve(q[:2], x)
+        if elastic is None:  # e.g. a volume the travel would compress to zero: far off
+            return np.full(len(x), 1e6)
+        return elastic + q[2] * s - f
+
+    start = np.array([config[keys[0]], config[keys[1]], 10.0])
+    sol = least_squares(residual, start, x_scale=np.array([10.0, 20.0, 5.0]), method="trf")
+    if sol.status <= 0 or not np.all(np.isfinite(sol.x)) or curve(sol.x[:2], x[:1]) is None:
+        raise SpringFitError(f"{data.path}: the air spring fit did not converge ({sol.message})")
+    theta = sol.x
+    r = residual(theta)
+    std, corr = covariance_stderr(sol.jac, r, len(theta))
+    grid = np.linspace(min(float(data.x_all.min()), 0.0), float(data.x_all.max()), 300)
+    mid = curve(theta[:2], grid * 1e-3)
+    values = {keys[0]: float(theta[0]), keys[1]: float(theta[1])}
+    stderr = {keys[0]: float(std[0]), keys[1]: float(std[1])}
+    extra = {
+        "model_keys": {K + "model": "air", K + "preload": False},
+        "curve": (grid, mid),
+        "branches": {"compression": (grid, mid + theta[2]), "rebound": (grid, mid - theta[2]), "friction_N": theta[2]},
+        "friction_N": float(theta[2]), "friction_stderr_N": float(std[2]), "correlation": corr,
+        "parameters": ["air_pressure_psi", "air_volume_cm3", "friction"],
+        "notes": [f"air spring of {config.name} with its piston, spacers, negative chamber, port, index and top-out "
+                  f"rate; loop half-width {theta[2]:.1f} +/- {std[2]:.2g} N"],
+    }
+    return FitResult("spring", "air", values, stderr, float(np.sqrt(np.mean(r ** 2))), "N", len(x), 3, extra)
+
+
 def fit_spring_all(record: Record) -> dict[str, FitResult]:
     """Every spring model this record supports (top-out and preload when it reaches extension)."""
     data = _Data(record)
@@ -295,7 +349,7 @@ def plot_spring(record: Record, results: dict[str, FitResult] | FitResult):
 
     if isinstance(results, FitResult):
         results = {results.model: results}
-    shown = {k: r for k, r in results.items() if k in MAIN_MODELS} or dict(results)
+    shown = {k: r for k, r in results.items() if k in MAIN_MODELS + ("air",)} or dict(results)
     n = max(len(shown), 1)
     cols = 2 if n > 1 else 1
     rows = (n + cols - 1) // cols
@@ -328,4 +382,4 @@ def plot_spring(record: Record, results: dict[str, FitResult] | FitResult):
     return fig
 
 
-__all__ = ["MODELS", "SpringFitError", "fit_spring", "fit_spring_all", "plot_spring"]
+__all__ = ["MODELS", "SpringFitError", "fit_spring", "fit_spring_all", "fit_air", "plot_spring"]

@@ -27,7 +27,7 @@ else:  # pragma: no cover
 
 SIGNALS = ("sled", "fork", "tire")
 EVENTS = ("peak1", "topping", "peak2", "valley1", "peak3")
-NUMERIC_KINDS = ("pos", "nonneg")
+NUMERIC_KINDS = ("pos", "nonneg", "real")
 SAMPLING_METHODS = ("lhs", "sobol")
 BACKENDS = ("local", "dask")
 RUNNERS = ("batch", "single")

@@ -1,0 +1,27 @@
+"""``mtbmj sag``: the air pressure or coil preload for a sag in percent of travel under a load,
+written as a configuration that ``mtbmj drop`` runs as is."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from mtbmj.cli.common import overrides
+
+
+def cmd_sag(args) -> int:
+    from mtbmj.drop.sag import solve_sag
+
+    setting = solve_sag(args.config, args.load_kg, args.sag_percent, overrides(args.set))
+    written = setting.write(args.out)
+    print(f"{setting.line()}; wrote {written[0]}; run it with: mtbmj drop {written[0]}")
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("sag", help="air pressure (air spring) or preload (coil) for a static sag; writes config.toml")
+    p.add_argument("config", help="preset name (air120, S12, ...) or a TOML file")
+    p.add_argument("--load-kg", type=float, required=True, help="mass the fork carries (on the sled: the body mass)")
+    p.add_argument("--sag-percent", type=float, required=True, help="static sag in percent of the travel")
+    p.add_argument("--out", type=Path, default=Path("out/sag"), help="output directory (default out/sag)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a configuration key before solving, e.g. fork.spring.tokens=2 (repeatable)")
+    p.set_defaults(func=cmd_sag)

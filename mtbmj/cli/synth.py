@@ -1,0 +1,45 @@
+"""``mtbmj synth spring|damper``: a synthetic shock-dyno record generated from a configuration's own
+laws (marked synthetic in its first comment line), to try ``mtbmj fit`` on a known truth."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from mtbmj.cli.common import overrides
+from mtbmj.errors import MtbmjError
+
+
+def cmd_synth(args) -> int:
+    from mtbmj.drop.run import resolve
+    from mtbmj.identify import dyno_synthetic as synth
+
+    if args.out.suffix.lower() not in (".csv", ".mat"):
+        raise MtbmjError(f"--out {args.out}: the record file must end in .csv or .mat")
+    if args.out.exists():
+        raise MtbmjError(f"--out {args.out}: file exists; not overwriting it")
+    config = resolve(args.config, overrides(args.set))
+    truth = synth.config_truth(config, args.kind)
+    if args.kind == "spring":
+        record = synth.spring_record(truth, seed=args.seed)
+    else:
+        record = synth.damper_record(truth, seed=args.seed)
+    try:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        staged = args.out.with_name(f".{args.out.stem}.partial{args.out.suffix}")
+        synth.write_record(staged, record)
+        os.replace(staged, args.out)  # the record appears whole or not at all
+    except OSError as exc:
+        raise MtbmjError(f"--out {args.out}: cannot write the record ({exc.strerror})") from None
+    print(f"wrote a synthetic {args.kind} dyno record of {config.name} to {args.out}")
+    return 0
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("synth", help="write a synthetic dyno record (spring stroke or damper test) of a configuration")
+    p.add_argument("kind", choices=("spring", "damper"))
+    p.add_argument("config", help="preset name (air120, S12, ...) or a TOML file: the true fork")
+    p.add_argument("--out", type=Path, required=True, help="record file to write (.csv or .mat)")
+    p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a configuration key of the truth, e.g. fork.spring.air_pressure_psi=90 (repeatable)")
+    p.set_defaults(func=cmd_synth)

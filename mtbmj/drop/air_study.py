@@ -1,0 +1,151 @@
+"""The air-fork study: the paper's drop for an air fork set the way riders set it (0-3 volume
+spacers, two air pressures, two tire pressures) on both engines, and the spring curves in the
+style of the paper's Fig. 3."""
+from __future__ import annotations
+
+import os
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Callable, Mapping
+
+import numpy as np
+from scipy.optimize import brentq
+
+from mtbmj import compose, output
+from mtbmj.config import Config
+from mtbmj.drop.run import resolve
+from mtbmj.drop.study import _run, group_figure, png_bytes, table_markdown
+from mtbmj.validation import from_results
+
+SPACERS = (0, 1, 2, 3)
+PRESSURES_PSI = (75.0, 95.0)
+TIRE_PRESSURES_PSI = (18.0, 24.0)
+
+
+def variants(base: Config) -> dict[str, tuple[str, dict]]:
+    """name -> (group, overrides) of every run of the study."""
+    psi = base["fork.spring.air_pressure_psi"]
+    out: dict[str, tuple[str, dict]] = {}
+    for n in SPACERS:
+        out[f"{n} spacer{'' if n == 1 else 's'}"] = ("spacers", {"fork.spring.tokens": float(n)})
+    for p in PRESSURES_PSI:
+        out[f"{p:g} psi"] = ("pressure", {"fork.spring.air_pressure_psi": p})
+    for p in TIRE_PRESSURES_PSI:
+        out[f"tire {p:g} psi"] = ("tire", {"tire.pressure_psi": p})
+    out[f"{psi:g} psi base"] = ("pressure", {})
+    return out
+
+
+def _titles(base: Config) -> dict[str, str]:
+    psi, tokens = base["fork.spring.air_pressure_psi"], base.get("fork.spring.tokens", 0.0)
+    return {"spacers": f"Air fork: volume spacers at {psi:g} psi",
+            "pressure": f"Air fork: air pressure with {tokens:g} spacer(s)",
+            "tire": f"Air fork: tire pressure ({psi:g} psi, {tokens:g} spacer(s))"}
+
+
+def run_air_study(config: Config | str = "air120", overrides: Mapping | None = None, duration: float | None = None,
+                  workers: int | None = None, progress: Callable[[str], None] | None = None):
+    """Every variant on MuJoCo and on the ODE reference, in parallel processes. Returns
+    ``(base, results, checks)``: ``results[name][engine]`` and one ``Crosscheck`` per variant."""
+    base = resolve(config, overrides)
+    if base.get("fork.spring.model") != "air":
+        from mtbmj.errors import ConfigError
+
+        raise ConfigError(f"fork.spring.model: the air study needs an air configuration, {base.name} is "
+                          f"{base.get('fork.spring.model')!r}")
+    configs = []
+    for name, (_, change) in variants(base).items():
+        c = base.with_overrides(change)
+        compose.setup(c)  # every variant is valid before any runs
+        configs.append(Config(name, c.values, c.sources))
+    jobs = [(c, e, duration) for c in configs for e in ("ode", "mujoco")]
+    workers = workers or min(len(jobs), os.cpu_count() or 1)
+    results: dict[str, dict] = {c.name: {} for c in configs}
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        for done, result in enumerate(pool.map(_run, jobs), 1):
+            results[result.name][result.engine] = result
+            if progress is not None:
+                progress(f"[{done}/{len(jobs)}] {result.name} {result.engine}: {result.wall_time_s:.2f} s")
+    checks = [from_results(results[c.name]["mujoco"], results[c.name]["ode"]) for c in configs]
+    return base, results, checks
+
+
+def static_sag_mm(config: Config) -> float:
+    """Fork compression (mm) where the spring carries the body's weight."""
+    setup = compose.setup(config)
+    weight = setup.body_mass * setup.gravity
+    return brentq(lambda x: setup.fork.spring.force(x, 0.0) - weight, -0.02, setup.travel) * 1e3
+
+
+def spring_curves_figure(base: Config):
+    """Fork spring force vs compression (paper Fig. 3 style): 0-3 spacers at the base pressure,
+    and the two study pressures, with the body's weight and each static sag marked."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    travel = base["fork.travel_mm"]
+    x = np.linspace(-10.0, travel, 400)
+    weight = base["sled.body_mass_kg"] * base.get("sled.gravity_m_per_s2", 9.81)
+    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True, constrained_layout=True)
+    for ax, group in ((left, "spacers"), (right, "pressure")):
+        for name, (g, change) in variants(base).items():
+            if g != group:
+                continue
+            c = base.with_overrides(change)
+            spring = compose.fork_law(c).spring
+            line, = ax.plot(x, [spring.force(v * 1e-3, 0.0) for v in x], lw=1.4, label=name)
+            ax.plot([static_sag_mm(c)], [weight], "o", color=line.get_color(), ms=4)
+        ax.axhline(weight, color="0.5", ls=":", lw=1)
+        ax.axvline(0.0, color="0.7", lw=0.6)
+        ax.set_xlabel("fork compression (mm)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper left")
+    left.set_ylabel("spring force (N)")
+    left.set_title(f"(a) volume spacers, {base['fork.spring.air_pressure_psi']:g} psi", fontsize=9)
+    right.set_title("(b) air pressure; dots: static sag under the sled's weight (dotted)", fontsize=9)
+    fig.suptitle(f"{base.name}: air spring curves (top-out spring and negative chamber included)")
+    return fig
+
+
+def study_rows(results, checks) -> list[dict]:
+    rows = []
+    for check in checks:
+        result = results[check.name]["mujoco"]
+        s = result.summary
+        rows.append({"variant": check.name, "static_sag_mm": round(static_sag_mm(result.config), 2),
+                     "fork_peak1_mm": round(s["events"]["fork"]["peak1"]["value_mm"], 2),
+                     "tire_peak1_mm": round(s["events"]["tire"]["peak1"]["value_mm"], 2),
+                     "travel_used_percent": round(s["travel_used_percent"], 1),
+                     "lift_off_s": None if s["lift_off_s"] is None else round(s["lift_off_s"], 3),
+                     "max_mujoco_ode_diff_mm": round(check.worst[1], 4)})
+    return rows
+
+
+def air_study_files(base: Config, results, checks) -> dict[str, bytes]:
+    titles = _titles(base)
+    groups: dict[str, list[str]] = {}
+    for name, (group, _) in variants(base).items():
+        groups.setdefault(group, []).append(name)
+    psi = base["fork.spring.air_pressure_psi"]
+    groups["tire"] = [f"{psi:g} psi base"] + groups["tire"]
+    files = {f"air_{g}.png": png_bytes(group_figure(results, titles[g], names)) for g, names in groups.items()}
+    files["air_spring_curves.png"] = png_bytes(spring_curves_figure(base))
+    rows = study_rows(results, checks)
+    columns = list(rows[0])
+    text = ",".join(columns) + "\n" + "\n".join(",".join("" if r[c] is None else str(r[c]) for c in columns)
+                                                 for r in rows) + "\n"
+    files["air_study.csv"] = text.encode()
+    files["engine_vs_reference.md"] = table_markdown(checks).encode()
+    files["air_study_summary.json"] = output.json_bytes(
+        {name: {engine: r.summary for engine, r in per.items()} for name, per in results.items()})
+    return files
+
+
+def write_air_study(out_dir: str | Path, base: Config, results, checks) -> list[Path]:
+    return output.write_atomically(out_dir, air_study_files(base, results, checks))
+
+
+__all__ = ["run_air_study", "write_air_study", "air_study_files", "spring_curves_figure", "static_sag_mm",
+           "study_rows", "variants"]
