@@ -6,7 +6,7 @@ import sys
 import time
 from pathlib import Path
 
-from mtbmj.cli.common import Progress, add_run_options, overrides
+from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, Progress, add_run_options, overrides
 
 
 def cmd_drop(args) -> int:
@@ -49,7 +49,7 @@ def cmd_crosscheck(args) -> int:
 def add_parser(sub) -> None:
     p = sub.add_parser("drop", help="run one configuration on one engine")
     p.add_argument("config", help="preset name (S1..S14, reference) or a TOML file")
-    p.add_argument("--engine", choices=("mujoco", "ode"), default="mujoco")
+    p.add_argument("--engine", choices=ENGINE_NAMES, default="mujoco", help=ENGINE_HELP)
     p.add_argument("--out", type=Path, default=Path("out/drop"), help="output directory (default out/drop)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     add_run_options(p)
