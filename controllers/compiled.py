@@ -208,7 +208,7 @@ def fork_forces_along(law: ForkLaw, x, v, z) -> np.ndarray | None:
         I, P = law_arrays(law)
     except UnsupportedLaw:
         return None
-    x, v, z = (np.ascontiguousarray(a, dtype=np.float64) for a in (x, v, z))
+    x, v, z = (np.asarray(a, dtype=np.float64) for a in (x, v, z))  # strided views stay views
     out = np.empty(x.size)
     fork_forces(I, P, x, v, z, out)
     return out

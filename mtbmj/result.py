@@ -50,15 +50,20 @@ class RunOutput:
         data = self.raw if raw else self.signals
         return pd.DataFrame({k: data[k] for k in self.COLUMNS}).set_index("time_s")
 
-    def files(self) -> dict[str, bytes]:
-        """Everything ``write`` puts in an output directory."""
+    def csv_chunks(self, raw: bool = False):
+        """The CSV as bytes chunks (``csv_bytes`` in one chunk unless a subclass streams it)."""
+        yield self.csv_bytes(raw)
+
+    def files(self, stream: bool = False) -> dict:
+        """Everything ``write`` puts in an output directory (name -> bytes; with ``stream`` the
+        engine-rate CSV is an iterable of chunks, so a long run is never all text in memory)."""
         return {
             "timeseries.csv": self.csv_bytes(),
-            "timeseries_raw.csv": self.csv_bytes(raw=True),
+            "timeseries_raw.csv": self.csv_chunks(raw=True) if stream else self.csv_bytes(raw=True),
             "summary.json": output.json_bytes(self.summary),
             "manifest.json": output.json_bytes(self.manifest()),
             "config.toml": self.config.to_toml().encode(),
         }
 
     def write(self, out_dir: str | Path) -> list[Path]:
-        return output.write_atomically(out_dir, self.files())
+        return output.write_atomically(out_dir, self.files(stream=True))

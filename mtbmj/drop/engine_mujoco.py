@@ -135,7 +135,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
                 progress(done / steps)
     return RawTrace(
         engine="mujoco",
-        time=np.arange(steps + 1) * setup.timestep,
+        time=np.arange(steps + 1, dtype=float) * setup.timestep,
         sled=record[:, 0],
         fork=record[:, 1],
         sled_velocity=record[:, 2],
