@@ -296,7 +296,7 @@ def check_layout(model, layout: dict | None = None) -> None:
 # ----------------------------------------------------------------------------------------------
 COMPILE_SECONDS: float | None = None  # wall time to compile (or load from numba's cache) the kernels
 COMPILE_LOG = logging.getLogger("mtbmj.compile")
-COMPILE_NOTICE_S = 1.5  # loading from numba's cache takes ~0.1-0.3 s; longer means compiling
+COMPILE_NOTICE_S = 3.0  # loading from numba's cache takes ~0.1-2 s (a loaded machine); compiling 10 s or more
 
 
 def _notice(what: str) -> threading.Timer:
