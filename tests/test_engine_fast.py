@@ -89,3 +89,29 @@ def test_cli_fast_drop_and_cold_compile_notice(tmp_path):
     assert second.returncode == 0, second.stderr
     assert "compiling" not in second.stderr
     assert (tmp_path / "a" / "timeseries.csv").read_bytes() == (tmp_path / "b" / "timeseries.csv").read_bytes()
+
+
+def test_fast_sweep_runner_gives_run_drop_records():
+    """The fast sweep runner's records equal one run_drop(engine="fast") per variant, on sampled
+    variants (one of them refused by the configuration checks)."""
+    from mtbmj.sweep.fast import run_batch_fast
+    from mtbmj.sweep.single import run_batch
+    from mtbmj.sweep.variants import BatchJob, Variant
+
+    rng = np.random.default_rng(5)
+    overrides = [{"fork.spring.preload_N": float(rng.uniform(150, 300)),
+                  "tire.impact_rate_N_per_mm": float(rng.uniform(75, 95))} for _ in range(4)]
+    overrides.append({"fork.spring.preload_N": 1e5})  # the top-out spring engaged over the whole travel
+    variants = [Variant(i, f"v{i}", o) for i, o in enumerate(overrides)]
+    job = BatchJob(config.load("S12"), "fast", 0.8, variants, traces=True)
+    fast = {r["id"]: r for r in run_batch_fast(job)}
+    single = {r["id"]: r for r in run_batch(job)}
+    assert set(fast) == set(single)
+    for key, want in single.items():
+        got = fast[key]
+        assert (got["status"], got["reason"]) == (want["status"], want["reason"])
+        assert got["outputs"] == want["outputs"]
+        if want["status"] == "ok":
+            for name, values in want["traces"].items():
+                assert np.array_equal(got["traces"][name], values)
+    assert fast["v4"]["status"] == "failed" and "preload" in fast["v4"]["reason"]
