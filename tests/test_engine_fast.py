@@ -115,3 +115,17 @@ def test_fast_sweep_runner_gives_run_drop_records():
             for name, values in want["traces"].items():
                 assert np.array_equal(got["traces"][name], values)
     assert fast["v4"]["status"] == "failed" and "preload" in fast["v4"]["reason"]
+
+
+def test_fit_model_on_fast_engine_is_run_drop():
+    """The drop fit's model on the fast engine samples the same logged signals as run_drop."""
+    from mtbmj.identify.dropfit import _model, _sample
+
+    cfg = config.load("S12")
+    rng = np.random.default_rng(9)
+    keys = ["fork.spring.preload_N", "tire.contact_rate_N_per_mm"]
+    values = [float(rng.uniform(150, 300)), float(rng.uniform(60, 90))]
+    times = np.sort(rng.uniform(0.0, 0.5, 300))
+    got = _model(values, keys, cfg, "fast", 0.5, times, ("sled", "fork", "tire"))
+    want = run_drop(cfg, "fast", overrides=dict(zip(keys, values)), duration=0.5)
+    assert np.array_equal(got, _sample(want.signals, times, ("sled", "fork", "tire")))
