@@ -129,3 +129,22 @@ def test_fit_model_on_fast_engine_is_run_drop():
     got = _model(values, keys, cfg, "fast", 0.5, times, ("sled", "fork", "tire"))
     want = run_drop(cfg, "fast", overrides=dict(zip(keys, values)), duration=0.5)
     assert np.array_equal(got, _sample(want.signals, times, ("sled", "fork", "tire")))
+
+
+def test_study_and_crosscheck_compare_three_engines(tmp_path):
+    """The study's table and the crosscheck lines say which engine each figure comes from."""
+    from mtbmj.drop.study import run_study, table_markdown
+    from mtbmj.validation import crosscheck_all
+
+    results, checks = run_study(["S1"], duration=0.4, workers=1, engines=("mujoco", "ode", "fast"))
+    assert set(results["S1"]) == {"mujoco", "ode", "fast"}
+    assert [(c.name, c.engine) for c in checks] == [("S1", "mujoco"), ("S1", "fast")]
+    table = table_markdown(checks)
+    assert "| S1 | mujoco |" in table and "| S1 | fast |" in table
+    fast_check = checks[1]
+    assert fast_check.worst[1] < checks[0].worst[1]  # the fast engine integrates the reference's ODE
+    lines = [c.line() for c in crosscheck_all("S1", ("mujoco", "fast"), duration=0.4)]
+    assert "MuJoCo-ODE" in lines[0] and "fast-engine-ODE" in lines[1]
+    bad = subprocess.run([sys.executable, "-m", "mtbmj.cli", "crosscheck", "S1", "--engines", "mujoco,warp"],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--engines" in bad.stderr
