@@ -69,11 +69,19 @@ def add_run_options(p) -> None:
     p.add_argument("--duration", type=float, help="simulated time in s (default: solver.duration_s)")
 
 
+class _Stderr(logging.Handler):
+    """Log records as lines on whatever ``sys.stderr`` is when they come (not the stream of the
+    moment the handler was made)."""
+
+    def emit(self, record):
+        print(self.format(record), file=sys.stderr, flush=True)
+
+
 def show_compile_notices() -> None:
     """Print the compiled laws' "compiling ..." notice (a cold first run) on stderr."""
     log = logging.getLogger("mtbmj.compile")
     if not log.handlers:
-        handler = logging.StreamHandler(sys.stderr)
+        handler = _Stderr()
         handler.setFormatter(logging.Formatter("mtbmj: %(message)s"))
         log.addHandler(handler)
         log.setLevel(logging.INFO)
