@@ -31,7 +31,9 @@ If numba is missing (or the struct layout cannot be verified) ``make_callback`` 
 """
 from __future__ import annotations
 
+import contextlib
 import ctypes
+import logging
 import math
 import threading
 import time
@@ -215,6 +217,29 @@ def flatten(law: ForkLaw) -> tuple[list[int], list[float]]:
     return ints, floats
 
 
+def law_arrays(law: ForkLaw) -> tuple[np.ndarray, np.ndarray]:
+    """``flatten(law)`` as the (int64, float64) arrays the kernels take (``fork_force(I, P, ...)``)."""
+    ints, floats = flatten(law)
+    P = np.zeros(FLOAT_WIDTH)
+    P[: len(floats)] = floats
+    return np.asarray(ints, dtype=np.int64), P
+
+
+def fork_forces_along(law: ForkLaw, x, v, z) -> np.ndarray | None:
+    """ForkLaw.force along arrays through the compiled kernel, or None when it cannot run here
+    (numba missing, or a law with no compiled form): the caller then uses the Python law."""
+    if _numba is None:
+        return None
+    try:
+        I, P = law_arrays(law)
+    except UnsupportedLaw:
+        return None
+    x, v, z = (np.asarray(a, dtype=np.float64) for a in (x, v, z))  # strided views stay views
+    out = np.empty(x.size)
+    fork_forces(I, P, x, v, z, out)
+    return out
+
+
 # ----------------------------------------------------------------------------------------------
 # mjData layout from mujoco's own struct description, checked against live arrays
 # ----------------------------------------------------------------------------------------------
@@ -296,10 +321,36 @@ def check_layout(model, layout: dict | None = None) -> None:
 # The compiled interpreter and dispatcher
 # ----------------------------------------------------------------------------------------------
 COMPILE_SECONDS: float | None = None  # wall time to compile (or load from numba's cache) the kernels
+COMPILE_LOG = logging.getLogger("mtbmj.compile")
+COMPILE_NOTICE_S = 3.0  # loading from numba's cache takes ~0.1-2 s (a loaded machine); compiling 10 s or more
+
+
+def _notice(what: str) -> threading.Timer:
+    """Log (INFO, logger ``mtbmj.compile``) that ``what`` is being compiled, if it is still going
+    after ``COMPILE_NOTICE_S``: a cold first run says why it waits; a cached load stays silent.
+    The library only logs; the command line shows the message on stderr."""
+    timer = threading.Timer(COMPILE_NOTICE_S, COMPILE_LOG.info,
+                            (f"compiling {what} for this machine (first run only; numba caches it)...",))
+    timer.daemon = True
+    timer.start()
+    return timer
+
+
+@contextlib.contextmanager
+def compiling(what: str):
+    """Around code that may compile numba functions: see ``_notice``."""
+    timer = _notice(what)
+    try:
+        yield
+    finally:
+        timer.cancel()
+
+
 if _numba is not None:
     import llvmlite.binding as _llvm
 
     _compile_start = time.perf_counter()
+    _compile_notice = _notice("the force laws")
 
     _llvm.add_symbol(REGISTRY_SYMBOL, _META.ctypes.data)
 
@@ -518,6 +569,12 @@ if _numba is not None:
             return 0.0
         return _lugre_rate(P, I[I_FRICTION_AT], v, z)
 
+    @_numba.njit(**_jit)
+    def fork_forces(I, P, x, v, z, out):
+        """``fork_force`` along a trace: out[i] = ForkLaw.force(x[i], v[i], z[i])."""
+        for i in range(x.size):
+            out[i] = fork_force(I, P, x[i], v[i], z[i])
+
     @_intrinsic
     def _registry(typingctx, index):
         """Entry ``index`` of the registry header, reached through the external symbol
@@ -574,6 +631,7 @@ if _numba is not None:
         qfrc[I[I_DOF]] = force
 
     COMPILE_SECONDS = time.perf_counter() - _compile_start
+    _compile_notice.cancel()
 
 _DISPATCHER = None
 _DISPATCHER_LOCK = threading.Lock()
@@ -760,5 +818,6 @@ def make_callback(model, law, prefer_compiled: bool = True, **kwargs):  # kwargs
     return ForkCallback(model, law, **kwargs)
 
 
-__all__ = ["CompiledForkCallback", "make_callback", "available", "unavailable_reason", "flatten",
+__all__ = ["CompiledForkCallback", "make_callback", "available", "unavailable_reason", "flatten", "law_arrays",
+           "fork_forces_along",
            "mjdata_layout", "check_layout", "UnsupportedLaw", "FALLBACK_MESSAGE"]

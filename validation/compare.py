@@ -1,4 +1,5 @@
-"""Lining a MuJoCo run up against the ODE reference of the same configuration."""
+"""Lining an engine's run (MuJoCo by default, or the fast engine) up against the ODE reference of
+the same configuration."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -6,7 +7,13 @@ from dataclasses import dataclass
 from mtbmj.drop.run import resolve, run_drop
 from mtbmj.drop.result import DISPLACEMENTS, DropResult
 
-DEFAULT_TOLERANCE_MM = 0.1  # the accuracy target at default settings (1e-4 s, implicitfast)
+DEFAULT_TOLERANCE_MM = 0.1
+LABELS = {"mujoco": "MuJoCo", "fast": "fast-engine"}  # the accuracy target at default settings (1e-4 s, implicitfast)
+
+
+def mm(value: float) -> str:
+    """A difference in mm: four decimals, or two significant digits below a micrometre."""
+    return f"{value:.4f}" if value >= 1e-3 or value == 0.0 else f"{value:.1e}"
 
 
 @dataclass(frozen=True)
@@ -16,8 +23,9 @@ class Crosscheck:
     name: str
     tolerance_mm: float
     differences: dict  # column -> {"max_abs_mm", "at_time_s"}
-    mujoco_wall_s: float
+    mujoco_wall_s: float  # wall time of the engine under test (``engine``; MuJoCo unless told)
     ode_wall_s: float
+    engine: str = "mujoco"
 
     @property
     def worst(self) -> tuple[str, float, float]:
@@ -32,11 +40,12 @@ class Crosscheck:
     def line(self) -> str:
         column, value, at = self.worst
         verdict = "within" if self.passed else "EXCEEDS"
-        return (f"{self.name}: largest MuJoCo-ODE difference {value:.4f} mm in {column.removesuffix('_mm')} "
+        return (f"{self.name}: largest {LABELS.get(self.engine, self.engine)}-ODE difference {mm(value)} mm in "
+                f"{column.removesuffix('_mm')} "
                 f"at t = {at:.4f} s, {verdict} the tolerance {self.tolerance_mm:g} mm")
 
     def row(self) -> dict:
-        row = {"config": self.name}
+        row = {"config": self.name, "engine": self.engine}
         for column in DISPLACEMENTS:
             row[f"max_diff_{column}"] = self.differences[column]["max_abs_mm"]
             row[f"at_time_{column.removesuffix('_mm')}_s"] = self.differences[column]["at_time_s"]
@@ -46,12 +55,20 @@ class Crosscheck:
 
 
 def from_results(mujoco: DropResult, ode: DropResult, tolerance_mm: float = DEFAULT_TOLERANCE_MM) -> Crosscheck:
+    """The check of ``mujoco`` (a run on any engine but the reference) against ``ode``."""
     return Crosscheck(mujoco.name, tolerance_mm, mujoco.difference(ode, raw=True),
-                      mujoco.wall_time_s, ode.wall_time_s)
+                      mujoco.wall_time_s, ode.wall_time_s, mujoco.engine)
 
 
-def crosscheck(config, tolerance_mm: float = DEFAULT_TOLERANCE_MM, overrides=None, duration=None) -> Crosscheck:
-    """Run ``config`` on both engines and compare sled, fork and tire displacement."""
+def crosscheck(config, tolerance_mm: float = DEFAULT_TOLERANCE_MM, overrides=None, duration=None,
+               engine: str = "mujoco") -> Crosscheck:
+    """Run ``config`` on ``engine`` and on the ODE reference and compare sled, fork and tire."""
+    return crosscheck_all(config, (engine,), tolerance_mm, overrides, duration)[0]
+
+
+def crosscheck_all(config, engines=("mujoco",), tolerance_mm: float = DEFAULT_TOLERANCE_MM, overrides=None,
+                   duration=None) -> list[Crosscheck]:
+    """One ``Crosscheck`` per engine of ``engines`` against one ODE reference run."""
     cfg = resolve(config, overrides)
-    return from_results(run_drop(cfg, "mujoco", duration=duration), run_drop(cfg, "ode", duration=duration),
-                        tolerance_mm)
+    ode = run_drop(cfg, "ode", duration=duration)
+    return [from_results(run_drop(cfg, e, duration=duration), ode, tolerance_mm) for e in engines]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 import time
 import warnings
@@ -11,6 +12,9 @@ from mtbmj.config import parse_assignment
 from mtbmj.errors import MtbmjError
 
 EXIT_BAD_INPUT = 2
+# The drop engines (``mtbmj.drop.run.ENGINES``), named here so the parser needs no engine imported.
+ENGINE_NAMES = ("mujoco", "ode", "fast")
+ENGINE_HELP = "mujoco (default), ode (the scipy reference) or fast (the same ODE natively on the compiled laws)"
 
 
 class Parser(argparse.ArgumentParser):
@@ -85,8 +89,28 @@ def add_run_options(p) -> None:
     p.add_argument("--duration", type=float, help="simulated time in s (default: solver.duration_s)")
 
 
+class _Stderr(logging.Handler):
+    """Log records as lines on whatever ``sys.stderr`` is when they come (not the stream of the
+    moment the handler was made)."""
+
+    def emit(self, record):
+        print(self.format(record), file=sys.stderr, flush=True)
+
+
+def show_compile_notices() -> None:
+    """Print the compiled laws' "compiling ..." notice (a cold first run) on stderr."""
+    log = logging.getLogger("mtbmj.compile")
+    if not log.handlers:
+        handler = _Stderr()
+        handler.setFormatter(logging.Formatter("mtbmj: %(message)s"))
+        log.addHandler(handler)
+        log.setLevel(logging.INFO)
+        log.propagate = False
+
+
 def run(parser: argparse.ArgumentParser, argv=None) -> int:
     """Parse and run a command: bad input is one line on stderr and exit status 2."""
+    show_compile_notices()
     try:
         args = parser.parse_args(argv)
         if getattr(args, "duration", None) is not None and not args.duration > 0:

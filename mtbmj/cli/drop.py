@@ -6,7 +6,7 @@ import sys
 import time
 from pathlib import Path
 
-from mtbmj.cli.common import Progress, add_run_options, overrides
+from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, Progress, add_run_options, overrides
 
 
 def cmd_drop(args) -> int:
@@ -27,46 +27,73 @@ def cmd_drop(args) -> int:
 
 def cmd_study(args) -> int:
     from mtbmj.drop.study import run_study, write_study
+    from mtbmj.validation.compare import mm
 
     start = time.perf_counter()
     log = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
     presets = args.presets.split(",") if args.presets else None
-    results, checks = run_study(presets, overrides(args.set), args.duration, args.workers, log)
+    engines = _engines(args.engines)
+    results, checks = run_study(presets, overrides(args.set), args.duration, args.workers, log, engines)
     written = write_study(args.out, results, checks)
-    worst = max(checks, key=lambda c: c.worst[1])
-    print(f"study: {len(checks)} configurations x 2 engines in {time.perf_counter() - start:.1f} s; "
-          f"largest MuJoCo-ODE difference {worst.worst[1]:.4f} mm ({worst.name}, {worst.worst[0]}); "
-          f"wrote {len(written)} files to {args.out}")
+    largest = []
+    for engine in engines:
+        mine = [c for c in checks if c.engine == engine]
+        if mine:
+            worst = max(mine, key=lambda c: c.worst[1])
+            largest.append(f"largest {engine}-ODE difference {mm(worst.worst[1])} mm ({worst.name}, {worst.worst[0]})")
+    print(f"study: {len(results)} configurations x {len(engines)} engines in {time.perf_counter() - start:.1f} s; "
+          f"{'; '.join(largest) or 'no reference run, no differences'}; wrote {len(written)} files to {args.out}")
     return 0
 
 
-def cmd_crosscheck(args) -> int:
-    from mtbmj.validation import crosscheck
+def _engines(text: str) -> list[str]:
+    from mtbmj.errors import MtbmjError
 
-    check = crosscheck(args.config, args.tolerance_mm, overrides(args.set), args.duration)
-    print(check.line())
-    return 0 if check.passed else 1
+    engines = [e.strip() for e in text.split(",") if e.strip()]
+    for e in engines:
+        if e not in ENGINE_NAMES:
+            raise MtbmjError(f"--engines: {e!r} is not one of {', '.join(ENGINE_NAMES)}")
+    if not engines:
+        raise MtbmjError("--engines: no engine named")
+    return engines
+
+
+def cmd_crosscheck(args) -> int:
+    from mtbmj.validation import crosscheck_all
+
+    engines = [e for e in _engines(args.engines) if e != "ode"] or ["mujoco"]
+    checks = crosscheck_all(args.config, engines, args.tolerance_mm, overrides(args.set), args.duration)
+    for check in checks:
+        print(check.line())
+    return 0 if all(c.passed for c in checks) else 1
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser("drop", help="run one configuration on one engine")
     p.add_argument("config", help="preset name (S1..S14, reference) or a TOML file")
-    p.add_argument("--engine", choices=("mujoco", "ode"), default="mujoco")
+    p.add_argument("--engine", choices=ENGINE_NAMES, default="mujoco", help=ENGINE_HELP)
     p.add_argument("--out", type=Path, default=Path("out/drop"), help="output directory (default out/drop)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     add_run_options(p)
     p.set_defaults(func=cmd_drop)
 
-    p = sub.add_parser("study", help="run S1-S14 on both engines, write figures and the difference table")
+    p = sub.add_parser("study", help="run S1-S14 on the engines (MuJoCo and the ODE reference by default), write "
+                                     "figures and the difference table")
     p.add_argument("--out", type=Path, default=Path("out/study"), help="output directory (default out/study)")
     p.add_argument("--presets", help="comma-separated subset, e.g. S1,S12")
     p.add_argument("--workers", type=int, help="processes (default: one per core)")
+    p.add_argument("--engines", default="mujoco,ode",
+                   help="comma-separated engines to run (default mujoco,ode; e.g. mujoco,ode,fast): each is "
+                        "compared with ode when ode is among them")
     p.add_argument("--quiet", action="store_true")
     add_run_options(p)
     p.set_defaults(func=cmd_study)
 
-    p = sub.add_parser("crosscheck", help="run both engines; exit 1 when they differ by more than the tolerance")
+    p = sub.add_parser("crosscheck", help="run an engine (or several) and the ODE reference; exit 1 when they "
+                                          "differ by more than the tolerance")
     p.add_argument("config")
     p.add_argument("--tolerance-mm", type=float, default=0.1, help="largest allowed difference in mm (default 0.1)")
+    p.add_argument("--engines", default="mujoco",
+                   help="comma-separated engines to compare with the ODE reference (default mujoco; e.g. mujoco,fast)")
     add_run_options(p)
     p.set_defaults(func=cmd_crosscheck)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mtbmj.cli.common import intermixed
+from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, intermixed  # noqa: F401
 from mtbmj.errors import MtbmjError
 
 
@@ -57,7 +57,7 @@ def add_parser(sub) -> None:
     p.add_argument("--touch-s", type=float, metavar="SECONDS",
                    help="drop: time zero (tire touch) on the record's clock; default: found from the record")
     p.add_argument("--bound", action="append", metavar="KEY=LOW:HIGH", help="drop: bounds of a free key (repeatable)")
-    p.add_argument("--engine", choices=("mujoco", "ode"), default="mujoco", help="drop: engine to fit with")
+    p.add_argument("--engine", choices=ENGINE_NAMES, default="mujoco", help=f"drop: engine to fit with: {ENGINE_HELP}")
     p.add_argument("--starts", type=int, default=1, metavar="N",
                    help="drop: fit from N start points (the start values and N-1 Latin hypercube points "
                         "within the bounds); the best fit wins (default 1)")

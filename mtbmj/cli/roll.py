@@ -25,8 +25,7 @@ def cmd_roll(args) -> int:
 
 
 def add_parser(subparsers) -> None:
-    from mtbmj.rolling.frontend import DEFAULT_HEAD_ANGLE_DEG
-    from mtbmj.rolling.terrain import names
+    from mtbmj.rolling.terrain import DEFAULT_HEAD_ANGLE_DEG, names
 
     p = subparsers.add_parser("roll", help="roll the front end over terrain at a set speed")
     p.add_argument("scenario", help=f"terrain: {', '.join(names())} (optionally name:key=value,...) or a CSV "

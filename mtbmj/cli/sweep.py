@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from mtbmj.cli.common import overrides
+from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, overrides
 from mtbmj.errors import ConfigError
 
 
@@ -72,7 +72,7 @@ def add_shared_options(p) -> None:
     p.add_argument("config", help="preset name (S1..S14, reference) or a TOML file")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a key of the base configuration (repeatable)")
     p.add_argument("--duration", type=float, help="simulated time in s (default: solver.duration_s)")
-    p.add_argument("--engine", choices=("mujoco", "ode"), default="mujoco")
+    p.add_argument("--engine", choices=ENGINE_NAMES, default="mujoco", help=ENGINE_HELP)
     p.add_argument("--workers", type=int, help="processes on the local backend (default: one per core)")
     p.add_argument("--backend", choices=("local", "dask"), default="local",
                    help="local processes, or a Dask distributed cluster (with --scheduler)")

@@ -109,14 +109,19 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
     state = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state, spec)
     _, iq, iv, ia = _state_layout(model)
-    record = np.empty((steps + 1, state.size))
-    record[0] = state
+    fork_col = iq.start + sc.fork_qpos
+    # Only the columns the trace needs are kept (sled, fork, their velocities, the friction
+    # state): memory grows with the run by 40 bytes a step, not by the whole physics state.
+    columns = [iq.start + sc.sled_qpos, fork_col, iv.start + sc.sled_dof, iv.start + sc.fork_dof]
+    if model.na:
+        columns.append(ia.start + callback.act_index)
+    record = np.zeros((steps + 1, 5))
+    record[0, : len(columns)] = state[columns]
     phase = np.zeros(steps + 1, dtype=np.int8)
     tire = setup.tire
     current_phase = 0
     done = 0
     discarded = 0  # steps computed past a tire-law switch and recomputed with the new law
-    fork_col = iq.start + sc.fork_qpos
     sled_col = iq.start + sc.sled_qpos
     fork_vcol = iv.start + sc.fork_dof
     messages: list[str] = []
@@ -129,15 +134,15 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
             keep = n
             switch = False
             if pending:
-                k = switch_index(record[done], states, (sled_col, fork_col, fork_vcol))
+                k = switch_index(state, states, (sled_col, fork_col, fork_vcol))
                 if k is not None:
                     keep = k + 1
                     switch = True
             discarded += n - keep
-            record[done + 1: done + 1 + keep] = states[:keep]
+            record[done + 1: done + 1 + keep, : len(columns)] = states[:keep, columns]
             phase[done + 1: done + 1 + keep] = current_phase
             done += keep
-            state = record[done].copy()
+            state = states[keep - 1].copy()
             _check(data, states[:keep], done, setup, messages)
             if switch:
                 current_phase = 1
@@ -147,12 +152,12 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
                 progress(done / steps)
     return RawTrace(
         engine="mujoco",
-        time=np.arange(steps + 1) * setup.timestep,
-        sled=record[:, iq.start + sc.sled_qpos],
-        fork=record[:, fork_col],
-        sled_velocity=record[:, iv.start + sc.sled_dof],
-        fork_velocity=record[:, iv.start + sc.fork_dof],
-        friction_state=record[:, ia.start + callback.act_index] if model.na else np.zeros(steps + 1),
+        time=np.arange(steps + 1, dtype=float) * setup.timestep,
+        sled=record[:, 0],
+        fork=record[:, 1],
+        sled_velocity=record[:, 2],
+        fork_velocity=record[:, 3],
+        friction_state=record[:, 4],
         tire_phase=phase,
         info={"steps": steps, "steps_discarded": discarded, "callback_calls": callback.calls, "integrator": setup.integrator,
               "timestep_s": setup.timestep, "contact_inverse_inertia_per_kg": sc.inverse_inertia},

@@ -123,7 +123,7 @@ def summarize(setup: Setup, trace: RawTrace, logged: dict[str, np.ndarray], raw:
         "lift_off_s": None if lift_raw is None else float(raw["time_s"][lift_raw]),
         "landing_s": None if land_raw is None else float(raw["time_s"][land_raw]),
         "lifts_off": lift_raw is not None,
-        "fork_tops_out": bool(np.any(raw["fork_mm"][raw["time_s"] > 0.01] <= 0.0)),
+        "fork_tops_out": bool(np.any(raw["fork_mm"][np.searchsorted(raw["time_s"], 0.01, side="right"):] <= 0.0)),
         "events": events,
         "event_flags": flags,
         "rest_mm": rest,

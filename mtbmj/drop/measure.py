@@ -8,7 +8,6 @@ usual analog anti-aliasing response) runs on the engine-rate trace before decima
 from __future__ import annotations
 
 import numpy as np
-from scipy import signal
 
 from mtbmj.compose import Setup
 from mtbmj.trace import RawTrace
@@ -20,44 +19,82 @@ COLUMNS = (
 )
 
 
-def forces(setup: Setup, trace: RawTrace) -> tuple[np.ndarray, np.ndarray]:
-    """Fork force (N, pushing apart) and tire force (N, pushing up) along a trace, from the laws."""
-    fork_law, tire_law = setup.fork, setup.tire
+def tire_forces(tire_law, deflection, rate, phase) -> np.ndarray:
+    """``TireLaw.force(d, dd/dt, phase)`` along a trace, vectorised (the same arithmetic)."""
+    out = np.zeros(deflection.shape)
+    touching = deflection > 0.0
+    for p in np.unique(phase):
+        law = tire_law.values(int(p))
+        force = law.rate * deflection
+        force += law.damping * rate
+        np.maximum(0.0, force, out=force)
+        np.copyto(out, force, where=touching & (phase == p))
+    rim = tire_law.rim
+    if rim is not None:  # Rim.force: past the maximum deflection, pushing only
+        at = deflection - rim.max_deflection >= 0.0
+        out[at] += np.maximum(0.0, rim.rate * (deflection[at] - rim.max_deflection) + rim.damping * rate[at])
+    return out
+
+
+def forces(setup: Setup, trace: RawTrace, tire=None, tire_velocity=None) -> tuple[np.ndarray, np.ndarray]:
+    """Fork force (N, pushing apart) and tire force (N, pushing up) along a trace, from the laws:
+    the fork through the compiled kernel when it can run (the Python law otherwise), the tire
+    vectorised. Both give the Python laws' numbers bit for bit. ``tire`` and ``tire_velocity``
+    (m, m/s), when given, save recomputing them from the trace."""
+    from mtbmj.controllers import compiled  # numba: loaded on the first run only
+
     x, v, z = trace.fork, trace.fork_velocity, trace.friction_state
-    d, dv, ph = trace.tire, trace.tire_velocity, trace.tire_phase
-    fork = np.fromiter((fork_law.force(x[i], v[i], z[i]) for i in range(x.size)), float, x.size)
-    tire = np.fromiter((tire_law.force(d[i], dv[i], ph[i]) for i in range(d.size)), float, d.size)
-    return fork, tire
+    fork = compiled.fork_forces_along(setup.fork, x, v, z)
+    if fork is None:
+        law = setup.fork
+        fork = np.fromiter((law.force(x[i], v[i], z[i]) for i in range(x.size)), float, x.size)
+    tire = trace.tire if tire is None else tire
+    tire_velocity = trace.tire_velocity if tire_velocity is None else tire_velocity
+    return fork, tire_forces(setup.tire, tire, tire_velocity, trace.tire_phase)
 
 
 def engine_signals(setup: Setup, trace: RawTrace) -> dict[str, np.ndarray]:
-    """The raw trace in the output columns and units, at the engine rate."""
-    fork_force, tire_force = forces(setup, trace)
+    """The raw trace in the output columns and units, at the engine rate (scaled in place where
+    it can: a long run holds no more engine-rate arrays than it returns)."""
+    tire, tire_velocity = trace.tire, trace.tire_velocity
+    fork_force, tire_force = forces(setup, trace, tire, tire_velocity)
+    tire *= 1e3
+    tire_velocity *= 1e3
     return {
         "time_s": trace.time,
         "sled_mm": trace.sled * 1e3,
         "fork_mm": trace.fork * 1e3,
-        "tire_mm": trace.tire * 1e3,
+        "tire_mm": tire,
         "sled_velocity_mm_per_s": trace.sled_velocity * 1e3,
         "fork_velocity_mm_per_s": trace.fork_velocity * 1e3,
-        "tire_velocity_mm_per_s": trace.tire_velocity * 1e3,
+        "tire_velocity_mm_per_s": tire_velocity,
         "fork_force_N": fork_force,
         "tire_force_N": tire_force,
     }
 
 
+FILTER_CHUNK = 1 << 16  # samples filtered at a time (the filter state carries over: same numbers)
+
+
 def logged(setup: Setup, raw: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """Anti-alias filter and resample the engine-rate signals to the logger's rate."""
+    from scipy import signal  # ~0.7 s to import: deferred to the first run
+
     t = raw["time_s"]
     dt = t[1] - t[0]
     ratio = int(round(1.0 / (setup.sample_rate * dt)))
     sos = signal.butter(4, setup.antialias, fs=1.0 / dt, output="sos")
     zi = signal.sosfilt_zi(sos)
     out = {"time_s": t[::ratio].copy()}
+    chunk = FILTER_CHUNK - FILTER_CHUNK % ratio  # a multiple of the ratio: every chunk starts on a sample kept
     for name, values in raw.items():
         if name == "time_s":
             continue
         # Start the filter in steady state on the first value, as a logger running before t = 0.
-        filtered, _ = signal.sosfilt(sos, values, zi=zi * values[0])
-        out[name] = filtered[::ratio]
+        state = zi * values[0]
+        kept = []
+        for start in range(0, values.size, chunk):
+            filtered, state = signal.sosfilt(sos, values[start: start + chunk], zi=state)
+            kept.append(filtered[::ratio])
+        out[name] = np.concatenate(kept)
     return out

@@ -32,16 +32,19 @@ class DropResult(RunOutput):
     wall_time_s: float
     info: dict = field(default_factory=dict)
 
-    def csv_bytes(self, raw: bool = False) -> bytes:
+    def csv_chunks(self, raw: bool = False):
         data = self.raw if raw else self.signals
         rate = "engine rate" if raw else "1 kHz after a 400 Hz anti-aliasing low-pass"
         header = (f"mtbmj drop {self.name}, engine {self.engine}, {rate}\n"
                   "sled zero at tire touch, fork zero at unloaded full extension, tire = sled - fork, compression positive")
-        return output.csv_bytes({k: data[k] for k in COLUMNS}, header)
+        return output.csv_chunks({k: data[k] for k in COLUMNS}, header)
+
+    def csv_bytes(self, raw: bool = False) -> bytes:
+        return b"".join(self.csv_chunks(raw))
 
     def to_csv(self, path: str | Path, raw: bool = False) -> Path:
         path = Path(path)
-        output.write_atomically(path.parent, {path.name: self.csv_bytes(raw)})
+        output.write_atomically(path.parent, {path.name: self.csv_chunks(raw)})
         return path
 
     def manifest(self) -> dict:

@@ -8,10 +8,12 @@ from pathlib import Path
 from typing import Callable, Sequence
 
 from mtbmj.validation import Crosscheck, from_results
+from mtbmj.validation.compare import mm
 from mtbmj import output
 from mtbmj.config import Config, study_presets
 from mtbmj.drop.run import resolve, run_drop
 from mtbmj.drop.result import DropResult
+from mtbmj.errors import ConfigError
 
 GROUPS = {
     "spring": ("Fork spring study S1-S7", [f"S{i}" for i in range(1, 8)]),
@@ -25,15 +27,28 @@ def _run(job: tuple[Config, str, float | None]) -> DropResult:
     return run_drop(config, engine, duration=duration)
 
 
-def run_study(presets: Sequence[str] | None = None, overrides=None, duration: float | None = None,
-              workers: int | None = None, progress: Callable[[str], None] | None = None):
-    """Run every preset on MuJoCo and on the ODE reference, in parallel processes.
+STUDY_ENGINES = ("mujoco", "ode")
 
-    Returns ``(results, crosschecks)``: ``results[name][engine]`` and one ``Crosscheck`` per preset.
-    """
+
+def run_study(presets: Sequence[str] | None = None, overrides=None, duration: float | None = None,
+              workers: int | None = None, progress: Callable[[str], None] | None = None,
+              engines: Sequence[str] = STUDY_ENGINES):
+    """Run every preset on each of ``engines`` (MuJoCo and the ODE reference unless told; add
+    "fast" for the native engine), in parallel processes.
+
+    Returns ``(results, crosschecks)``: ``results[name][engine]`` and, when the reference is among
+    the engines, one ``Crosscheck`` per preset and engine against it (preset order, then engine)."""
+    from mtbmj.drop.run import ENGINES
+
+    engines = list(dict.fromkeys(engines))
+    unknown = [e for e in engines if e not in ENGINES]
+    if unknown:
+        raise ConfigError(f"engines: {unknown[0]!r} is not one of {', '.join(ENGINES)}")
     names = list(presets or study_presets())
     configs = [resolve(n, overrides) for n in names]
-    jobs = [(c, e, duration) for c in configs for e in ("ode", "mujoco")]
+    # the reference first: it is the slowest, so the pool starts on it
+    order = sorted(engines, key=lambda e: e != "ode")
+    jobs = [(c, e, duration) for c in configs for e in order]
     workers = workers or min(len(jobs), os.cpu_count() or 1)
     results: dict[str, dict[str, DropResult]] = {n: {} for n in names}
     with ProcessPoolExecutor(max_workers=workers) as pool:
@@ -41,12 +56,17 @@ def run_study(presets: Sequence[str] | None = None, overrides=None, duration: fl
             results[result.name][result.engine] = result
             if progress is not None:
                 progress(f"[{done}/{len(jobs)}] {result.name} {result.engine}: {result.wall_time_s:.2f} s")
-    checks = [from_results(results[n]["mujoco"], results[n]["ode"]) for n in names]
+    checks = [from_results(results[n][e], results[n]["ode"]) for n in names for e in engines
+              if e != "ode" and "ode" in engines]
     return results, checks
 
 
+STYLES = {"mujoco": ("MuJoCo", 1.4, "-"), "ode": ("ODE", 0.9, "--"), "fast": ("fast", 0.9, ":")}
+
+
 def group_figure(results, title: str, names: Sequence[str]):
-    """Sled, fork and tire histories of one group: MuJoCo solid, ODE reference dashed."""
+    """Sled, fork and tire histories of one group: MuJoCo solid, ODE reference dashed, the fast
+    engine dotted."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -56,9 +76,9 @@ def group_figure(results, title: str, names: Sequence[str]):
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for k, name in enumerate(n for n in names if n in results):
         colour = colours[k % len(colours)]
-        results[name]["mujoco"].plot(axes, label=f"{name} MuJoCo", color=colour, lw=1.4)
-        if "ode" in results[name]:
-            results[name]["ode"].plot(axes, label=f"{name} ODE", color=colour, lw=0.9, ls="--")
+        for engine, (label, width, style) in STYLES.items():
+            if engine in results[name]:
+                results[name][engine].plot(axes, label=f"{name} {label}", color=colour, lw=width, ls=style)
     fig.suptitle(title)
     return fig
 
@@ -73,12 +93,12 @@ def png_bytes(fig) -> bytes:
 
 
 def table_markdown(checks: Sequence[Crosscheck]) -> str:
-    lines = ["| config | sled max diff [mm] | fork max diff [mm] | tire max diff [mm] | worst at [s] | within tol. | MuJoCo [s] | ODE [s] |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = ["| config | engine | sled max diff [mm] | fork max diff [mm] | tire max diff [mm] | worst at [s] | within tol. | engine [s] | ODE [s] |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for c in checks:
         d = c.differences
-        lines.append(f"| {c.name} | {d['sled_mm']['max_abs_mm']:.4f} | {d['fork_mm']['max_abs_mm']:.4f} | "
-                     f"{d['tire_mm']['max_abs_mm']:.4f} | {c.worst[2]:.4f} | {'yes' if c.passed else 'NO'} | "
+        lines.append(f"| {c.name} | {c.engine} | {mm(d['sled_mm']['max_abs_mm'])} | {mm(d['fork_mm']['max_abs_mm'])} | "
+                     f"{mm(d['tire_mm']['max_abs_mm'])} | {c.worst[2]:.4f} | {'yes' if c.passed else 'NO'} | "
                      f"{c.mujoco_wall_s:.3f} | {c.ode_wall_s:.3f} |")
     return "\n".join(lines) + "\n"
 
@@ -89,10 +109,11 @@ def study_files(results, checks) -> dict[str, bytes]:
         if any(n in results for n in names):
             files[f"study_{key}.png"] = png_bytes(group_figure(results, title, names))
     rows = [c.row() for c in checks]
-    columns = list(rows[0])
-    csv = ",".join(columns) + "\n" + "\n".join(",".join(str(r[c]) for c in columns) for r in rows) + "\n"
-    files["engine_vs_reference.csv"] = csv.encode()
-    files["engine_vs_reference.md"] = table_markdown(checks).encode()
+    if rows:  # none when the reference was not among the engines
+        columns = list(rows[0])
+        csv = ",".join(columns) + "\n" + "\n".join(",".join(str(r[c]) for c in columns) for r in rows) + "\n"
+        files["engine_vs_reference.csv"] = csv.encode()
+        files["engine_vs_reference.md"] = table_markdown(checks).encode()
     summary = {name: {engine: r.summary for engine, r in per.items()} for name, per in results.items()}
     files["study_summary.json"] = output.json_bytes(summary)
     return files

@@ -92,11 +92,26 @@ def _model(values: Sequence[float], keys: Sequence[str], config: Config | None =
     duration = duration if duration is not None else w["duration"]
     times = times if times is not None else w["times"]
     channels = channels or w["channels"]
+    overrides = dict(zip(keys, map(float, values)))
     try:
-        result = run_drop(config, engine, overrides=dict(zip(keys, map(float, values))), duration=duration)
+        if engine == "fast":
+            return _sample(_fast_signals(config, overrides, duration, channels), times, channels)
+        result = run_drop(config, engine, overrides=overrides, duration=duration)
     except MtbmjError as exc:
         return str(exc)
     return _sample(result.signals, times, channels)
+
+
+def _fast_signals(config: Config, overrides: Mapping, duration: float, channels: tuple) -> dict:
+    """The logged channels of ``run_drop(config, "fast", overrides, duration)`` (the same numbers),
+    without what a fit does not read: the other signals and the summary."""
+    from mtbmj.drop import engine_fast
+    from mtbmj.sweep.batch import logged, setup_of
+
+    setup = setup_of(config.with_overrides(overrides))
+    trace = engine_fast.run(setup, duration)
+    raw = {"time_s": trace.time, "sled_mm": trace.sled * 1e3, "fork_mm": trace.fork * 1e3, "tire_mm": trace.tire * 1e3}
+    return logged(setup, raw, [f"{c}_mm" for c in channels])
 
 
 def _sample(signals: Mapping, times: np.ndarray, channels: tuple) -> np.ndarray:

@@ -30,7 +30,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from mtbmj.errors import MtbmjError
 
@@ -88,6 +87,8 @@ def velocity(time_s, travel_mm, window_s: float = VELOCITY_WINDOW_S, polyorder: 
     window = min(window, x.size if x.size % 2 else x.size - 1)
     if window <= polyorder:
         raise MetricsError(f"travel_mm: {x.size} samples are too few for a polynomial of order {polyorder}")
+    from scipy import signal  # scipy.signal takes ~0.7 s to import: only when a velocity is needed
+
     return signal.savgol_filter(x, window, polyorder, deriv=1, delta=dt, mode="interp")
 
 

@@ -36,12 +36,12 @@ from mtbmj.controllers import installed
 from mtbmj import compose, output
 from mtbmj.drop import measure
 from mtbmj.rolling import terrain as terrain_mod
+from mtbmj.rolling.terrain import DEFAULT_HEAD_ANGLE_DEG
 from mtbmj.config import Config
 from mtbmj.errors import ConfigError, RunError
 from mtbmj.result import RunOutput
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 
-DEFAULT_HEAD_ANGLE_DEG = 65.0
 DRIVE_HZ = 10.0  # bandwidth of the speed servo (critically damped)
 CHUNK = 10000
 CALLBACKS = ("auto", "compiled", "python")

@@ -23,6 +23,9 @@ from mtbmj.errors import MtbmjError
 MM = 1e-3
 LEAD_IN_M = 1.5  # flat ground before the feature: the wheel starts at rest on it
 RUN_OUT_M = 3.0  # flat ground past the feature (the profile continues flat beyond anyway)
+# The front end's head angle unless told (degrees from the horizontal); kept here, beside the
+# terrain, so the command line can show it without loading MuJoCo and the front end.
+DEFAULT_HEAD_ANGLE_DEG = 65.0
 ISO8608_GD_N0 = {  # geometric mean of each class, Gd(n0 = 0.1 cycle/m) in m^3 (ISO 8608:2016 Table 1)
     "A": 16e-6, "B": 64e-6, "C": 256e-6, "D": 1024e-6,
     "E": 4096e-6, "F": 16384e-6, "G": 65536e-6, "H": 262144e-6,

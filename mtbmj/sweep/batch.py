@@ -37,11 +37,11 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 from mujoco import rollout as _rollout
-from scipy import signal
 
 from mtbmj import compose
 from mtbmj.drop import engine_mujoco
 from mtbmj.drop import events
+from mtbmj.drop.measure import tire_forces
 from mtbmj.drop import scene as scene_mod
 from mtbmj.controllers import installed
 from mtbmj.sweep.variants import SIGNALS, BatchJob, Variant, flatten_summary
@@ -207,20 +207,6 @@ def _trace(run: _Run) -> RawTrace:
     )
 
 
-def tire_forces(tire_law, deflection, rate, phase) -> np.ndarray:
-    """``TireLaw.force(d, dd/dt, phase)`` along a trace, vectorised (same arithmetic)."""
-    out = np.zeros(deflection.shape)
-    for p in np.unique(phase):
-        law = tire_law.values(int(p))
-        at = (phase == p) & (deflection > 0.0)
-        out[at] = np.maximum(0.0, law.rate * deflection[at] + law.damping * rate[at])
-    rim = tire_law.rim
-    if rim is not None:
-        at = deflection - rim.max_deflection >= 0.0
-        out[at] += np.maximum(0.0, rim.rate * (deflection[at] - rim.max_deflection) + rim.damping * rate[at])
-    return out
-
-
 _SOS: dict = {}
 
 
@@ -231,11 +217,15 @@ def logged(setup, raw: dict, names) -> dict:
     ratio = int(round(1.0 / (setup.sample_rate * dt)))
     key = (setup.antialias, 1.0 / dt)
     if key not in _SOS:
+        from scipy import signal  # ~0.7 s to import: deferred to the first run
+
         sos = signal.butter(4, setup.antialias, fs=1.0 / dt, output="sos")
         _SOS[key] = (sos, signal.sosfilt_zi(sos))
     sos, zi = _SOS[key]
     values = np.array([raw[name] for name in names])
-    filtered, _ = signal.sosfilt(sos, values, axis=-1, zi=zi[:, None, :] * values[:, 0][None, :, None])
+    from scipy.signal import sosfilt
+
+    filtered, _ = sosfilt(sos, values, axis=-1, zi=zi[:, None, :] * values[:, 0][None, :, None])
     out = {"time_s": t[::ratio].copy()}
     for k, name in enumerate(names):
         out[name] = filtered[k, ::ratio]

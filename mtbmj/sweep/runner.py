@@ -359,11 +359,13 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
     if not variants:
         raise ConfigError("sweep: no variants")
     if runner is None:
-        runner = "batch" if engine == "mujoco" and drop is None else "single"
+        runner = "batch" if engine in ("mujoco", "fast") and drop is None else "single"
     if isinstance(runner, str):
         if runner not in RUNNERS:
             raise ConfigError(f"--runner: {runner!r} is not one of {', '.join(RUNNERS)}")
-        if runner == "batch":
+        if runner == "batch" and engine == "fast":
+            from mtbmj.sweep.fast import run_batch_fast as runner
+        elif runner == "batch":
             from mtbmj.sweep.batch import run_batch_rollout as runner
         else:
             runner = run_batch

@@ -1,0 +1,244 @@
+"""The fast engine: the drop's five-state ODE integrated natively on the compiled force laws.
+
+The same equations as the reference (``engine_ode``; paper eqs. 2-3)
+
+    m_b s'' = m_b g - F_f(x, x', z)
+    m_w w'' = m_w g + F_f - F_t(w, w', phase),   w = s - x,   z' = dz/dt of the friction law
+
+stepped by classical fourth-order Runge-Kutta inside one numba function. The fork force is the
+compiled kernel of ``controllers.compiled`` (``fork_force`` and ``state_rate`` on the law flattened
+by ``compiled.flatten``), the one the MuJoCo callback runs: a law added there is a law this engine
+has, with nothing to write here.
+
+Events are located, not stepped over. :func:`_guards` lists every function whose sign change is
+an event: tire touchdown and separation (the deflection and the Kelvin-Voigt force, where the tire
+force jumps or kinks) and the tire-law switch (fork compression crossing zero into extension,
+``TireLaw.topped_out``); :func:`_on_event` says what an event changes (the tire phase). A step
+over which a guard changes sign is cut where it does (bisection on the step length to ~1e-15 s)
+and resumed from there, so no Runge-Kutta step integrates across a jump. To locate another event
+(an end stop, a stick-slip state), add its guard to ``_guards`` and its effect to ``_on_event``.
+
+The state is sampled on the run's grid (``solver.timestep_s``) as in the other engines; the
+integration step is that step divided into equal sub-steps no longer than ``MAX_STEP_S``, so the
+accuracy does not depend on the output rate. Needs numba; this is the engine for many drops
+(sweeps, fits); MuJoCo stays the default engine and the only one that rolls over terrain.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mtbmj.compose import Setup
+from mtbmj.controllers import compiled as _compiled
+from mtbmj.errors import ConfigError, RunError
+from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
+
+MAX_STEP_S = 1e-4  # longest Runge-Kutta step (s); see benchmarks/fast_engine.py for the accuracy
+CHUNK_S = 0.25  # simulated time per kernel call (progress is reported between calls)
+MAX_EVENTS_PER_STEP = 16  # more than this in one step is chattering: the step is taken as it is
+
+# parameter vector of the kernel
+(Q_MB, Q_MW, Q_G, Q_K0, Q_B0, Q_K1, Q_B1, Q_SWITCHES, Q_H, Q_SUB, Q_LIMIT) = range(11)
+Q_WIDTH = 11
+
+# status codes
+OK, DIVERGED = 0, 1
+
+_numba = _compiled._numba
+if _numba is not None:
+    # Module level, as numba's on-disk cache needs (a function built inside another is compiled
+    # afresh in every process).
+    fork_force, state_rate = _compiled.fork_force, _compiled.state_rate
+    numba = _numba
+    jit = dict(cache=True, error_model="numpy", nogil=True)
+
+    @numba.njit(**jit)
+    def tire_force(d, dd, phase, q):
+        """TireLaw.force(d, dd, phase): KelvinVoigt of the phase, pushing only."""
+        if d <= 0.0:
+            return 0.0
+        if phase == 1:
+            f = q[Q_K1] * d + q[Q_B1] * dd
+        else:
+            f = q[Q_K0] * d + q[Q_B0] * dd
+        return f if f > 0.0 else 0.0
+
+    @numba.njit(**jit)
+    def rhs(I, P, q, s, x, sd, xd, z, phase):
+        """(ds, dx, dsd, dxd, dz)/dt: the equations of ``engine_ode._Model.rhs``."""
+        f_fork = fork_force(I, P, x, xd, z)
+        f_tire = tire_force(s - x, sd - xd, phase, q)
+        sdd = q[Q_G] - f_fork / q[Q_MB]
+        wdd = q[Q_G] + (f_fork - f_tire) / q[Q_MW]
+        return sd, xd, sdd, sdd - wdd, state_rate(I, P, xd, z)
+
+    @numba.njit(**jit)
+    def guards(y, phase, q):
+        """The event functions (see the module docstring): their signs change at an event."""
+        d = y[0] - y[1]
+        dd = y[2] - y[3]
+        if phase == 1:
+            force = q[Q_K1] * d + q[Q_B1] * dd
+        else:
+            force = q[Q_K0] * d + q[Q_B0] * dd
+        # touchdown / separation (geometric); the contact stops pushing (separation);
+        # the tire-law switch: fork compression crosses zero into extension, once
+        topping = y[1] if (q[Q_SWITCHES] != 0.0 and phase == 0) else 1.0
+        return d > 0.0, force > 0.0, topping > 0.0
+
+    @numba.njit(**jit)
+    def on_event(y, phase, before, after):
+        """The tire phase after an event (guard signs ``before`` -> ``after`` across it)."""
+        if phase == 0 and before[2] and not after[2]:
+            return 1
+        return phase
+
+    @numba.njit(**jit)
+    def rk4(I, P, q, y, phase, h):
+        s, x, sd, xd, z = y
+        a = rhs(I, P, q, s, x, sd, xd, z, phase)
+        b = rhs(I, P, q, s + 0.5 * h * a[0], x + 0.5 * h * a[1], sd + 0.5 * h * a[2], xd + 0.5 * h * a[3],
+                z + 0.5 * h * a[4], phase)
+        c = rhs(I, P, q, s + 0.5 * h * b[0], x + 0.5 * h * b[1], sd + 0.5 * h * b[2], xd + 0.5 * h * b[3],
+                z + 0.5 * h * b[4], phase)
+        d = rhs(I, P, q, s + h * c[0], x + h * c[1], sd + h * c[2], xd + h * c[3], z + h * c[4], phase)
+        w = h / 6.0
+        return (s + w * (a[0] + 2.0 * b[0] + 2.0 * c[0] + d[0]), x + w * (a[1] + 2.0 * b[1] + 2.0 * c[1] + d[1]),
+                sd + w * (a[2] + 2.0 * b[2] + 2.0 * c[2] + d[2]), xd + w * (a[3] + 2.0 * b[3] + 2.0 * c[3] + d[3]),
+                z + w * (a[4] + 2.0 * b[4] + 2.0 * c[4] + d[4]))
+
+    @numba.njit(**jit)
+    def integrate(I, P, q, y0, phase, first, last, out, phases, counts):
+        """Step from grid index ``first`` (state ``y0``, tire ``phase``) to ``last``, writing the
+        state at each grid point into ``out`` (and back into ``y0``) and the phase into
+        ``phases``. ``counts`` gets [events, steps, status, index where it stopped]. Returns
+        the phase at the end."""
+        h_grid, sub = q[Q_H], int(q[Q_SUB])
+        h = h_grid / sub
+        y = (y0[0], y0[1], y0[2], y0[3], y0[4])
+        for i in range(first, last):
+            for _ in range(sub):
+                left = h
+                for event in range(MAX_EVENTS_PER_STEP + 1):
+                    y1 = rk4(I, P, q, y, phase, left)
+                    counts[1] += 1
+                    g0 = guards(y, phase, q)
+                    if event == MAX_EVENTS_PER_STEP or g0 == guards(y1, phase, q):
+                        y = y1
+                        break
+                    # the first sign change in (0, left]: bisect on the step length
+                    lo, hi = 0.0, left
+                    for _b in range(60):
+                        mid = 0.5 * (lo + hi)
+                        if mid <= lo or mid >= hi:
+                            break
+                        if guards(rk4(I, P, q, y, phase, mid), phase, q) == g0:
+                            lo = mid
+                        else:
+                            hi = mid
+                    ye = rk4(I, P, q, y, phase, hi)
+                    phase = on_event(ye, phase, g0, guards(ye, phase, q))
+                    counts[0] += 1
+                    y = ye
+                    left -= hi
+                    if left <= 0.0:
+                        break
+            for j in range(5):
+                out[i + 1, j] = y[j]
+            phases[i + 1] = phase
+            bad = False
+            for j in range(5):
+                if not math.isfinite(y[j]):
+                    bad = True
+            if bad or abs(y[0]) > q[Q_LIMIT] or abs(y[1]) > q[Q_LIMIT]:
+                counts[2] = DIVERGED
+                counts[3] = i + 1
+                break
+        for j in range(5):
+            y0[j] = y[j]
+        return phase
+
+
+_WARM = False
+
+
+def kernel():
+    """The compiled integrator; the first call in a process loads it from numba's cache (or, on
+    a cold first run, compiles it, saying so through ``controllers.compiled.compiling``)."""
+    global _WARM
+    if _numba is None:
+        raise ConfigError(f"engine: fast needs numba ({_compiled.FALLBACK_MESSAGE.split(':')[0]}); "
+                          "use engine mujoco or ode")
+    if not _WARM:
+        with _compiled.compiling("the fast engine"):
+            _warm(integrate)
+        _WARM = True
+    return integrate
+
+
+def _warm(integrate) -> None:
+    """Run the kernel once on a trivial law so its compilation happens here, inside the notice."""
+    from mtbmj.controllers import ForkLaw, LinearDamper, LinearSpring, NoFriction
+
+    I, P = _compiled.law_arrays(ForkLaw(LinearSpring(1e4), LinearDamper(100.0), NoFriction()))
+    q = np.array([50.0, 2.0, 9.81, 8e4, 100.0, 8e4, 100.0, 1.0, 1e-4, 1.0, 10.0])
+    integrate(I, P, q, np.array([0.0, 0.0, 1.0, 0.0, 0.0]), 0, 0, 2, np.zeros((3, 5)),
+              np.zeros(3, dtype=np.int8), np.zeros(4, dtype=np.int64))
+
+
+def parameters(setup: Setup, substeps: int) -> np.ndarray:
+    """The kernel's parameter vector for ``setup``."""
+    impact = setup.tire.values(0)
+    contact = setup.tire.values(1)
+    q = np.zeros(Q_WIDTH)
+    q[Q_MB], q[Q_MW], q[Q_G] = setup.body_mass, setup.wheel_mass, setup.gravity
+    q[Q_K0], q[Q_B0], q[Q_K1], q[Q_B1] = impact.rate, impact.damping, contact.rate, contact.damping
+    q[Q_SWITCHES] = 1.0 if setup.tire.switches else 0.0
+    q[Q_H], q[Q_SUB], q[Q_LIMIT] = setup.timestep, substeps, MAX_DISPLACEMENT_M
+    return q
+
+
+def law_arrays(setup: Setup):
+    try:
+        return _compiled.law_arrays(setup.fork)
+    except _compiled.UnsupportedLaw as error:
+        raise ConfigError(f"engine: fast cannot run this fork ({error}); use engine mujoco or ode") from None
+
+
+def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
+    """Integrate the drop from tire touch (t = 0, both bodies at the impact speed)."""
+    duration = setup.duration if duration is None else duration
+    integrate = kernel()
+    I, P = law_arrays(setup)
+    steps = int(round(duration / setup.timestep))
+    substeps = max(1, math.ceil(setup.timestep / MAX_STEP_S - 1e-9))
+    q = parameters(setup, substeps)
+    out = np.empty((steps + 1, 5))
+    phases = np.zeros(steps + 1, dtype=np.int8)
+    y = np.array([0.0, 0.0, setup.impact_speed, 0.0, 0.0])
+    out[0] = y
+    counts = np.zeros(4, dtype=np.int64)
+    chunk = max(1, int(round(CHUNK_S / setup.timestep)))
+    phase = 0
+    done = 0
+    while done < steps:
+        end = min(steps, done + chunk)
+        phase = integrate(I, P, q, y, phase, done, end, out, phases, counts)
+        if counts[2] == DIVERGED:
+            at = int(counts[3]) * setup.timestep
+            raise RunError(f"run diverged at t = {at:.4f} s: state not finite or beyond 10 m (fast)")
+        done = end
+        if progress is not None:
+            progress(done / steps)
+    return RawTrace(
+        engine="fast",
+        time=np.arange(steps + 1) * setup.timestep,
+        sled=out[:, 0], fork=out[:, 1], sled_velocity=out[:, 2], fork_velocity=out[:, 3],
+        friction_state=out[:, 4], tire_phase=phases,
+        info={"method": "rk4", "step_s": setup.timestep / substeps, "substeps": substeps,
+              "rk4_steps": int(counts[1]), "events": int(counts[0]), "timestep_s": setup.timestep},
+    )
+
+
+__all__ = ["run", "kernel", "parameters", "MAX_STEP_S"]
