@@ -12,8 +12,8 @@ has, with nothing to write here.
 
 Events are located, not stepped over. :func:`_guards` lists every function whose sign change is
 an event: tire touchdown and separation (the deflection and the Kelvin-Voigt force, where the tire
-force jumps or kinks) and the tire-law switch (fork compression crossing zero into extension,
-``TireLaw.topped_out``); :func:`_on_event` says what an event changes (the tire phase). A step
+force jumps or kinks), the fork's direction (the tire-law switch, ``controllers.tire.SWITCH_RULE``)
+and the rim; :func:`_on_event` says what an event changes (the tire phase). A step
 over which a guard changes sign is cut where it does (bisection on the step length to ~1e-15 s)
 and resumed from there, so no Runge-Kutta step integrates across a jump. To locate another event
 (an end stop, a stick-slip state), add its guard to ``_guards`` and its effect to ``_on_event``.
@@ -39,8 +39,9 @@ CHUNK_S = 0.25  # simulated time per kernel call (progress is reported between c
 MAX_EVENTS_PER_STEP = 16  # more than this in one step is chattering: the step is taken as it is
 
 # parameter vector of the kernel
-(Q_MB, Q_MW, Q_G, Q_K0, Q_B0, Q_K1, Q_B1, Q_SWITCHES, Q_H, Q_SUB, Q_LIMIT) = range(11)
-Q_WIDTH = 11
+(Q_MB, Q_MW, Q_G, Q_K0, Q_B0, Q_K1, Q_B1, Q_SWITCHES, Q_H, Q_SUB, Q_LIMIT,
+ Q_RIM, Q_RIM_D, Q_RIM_K, Q_RIM_C) = range(15)
+Q_WIDTH = 15
 
 # status codes
 OK, DIVERGED = 0, 1
@@ -55,14 +56,21 @@ if _numba is not None:
 
     @numba.njit(**jit)
     def tire_force(d, dd, phase, q):
-        """TireLaw.force(d, dd, phase): KelvinVoigt of the phase, pushing only."""
+        """TireLaw.force(d, dd, phase): KelvinVoigt of the phase, pushing only, plus the rim."""
         if d <= 0.0:
             return 0.0
         if phase == 1:
             f = q[Q_K1] * d + q[Q_B1] * dd
         else:
             f = q[Q_K0] * d + q[Q_B0] * dd
-        return f if f > 0.0 else 0.0
+        f = f if f > 0.0 else 0.0
+        if q[Q_RIM] != 0.0:  # Rim.force
+            p = d - q[Q_RIM_D]
+            if p >= 0.0:
+                r = q[Q_RIM_K] * p + q[Q_RIM_C] * dd
+                if r >= 0.0:
+                    f += r
+        return f
 
     @numba.njit(**jit)
     def rhs(I, P, q, s, x, sd, xd, z, phase):
@@ -82,15 +90,18 @@ if _numba is not None:
             force = q[Q_K1] * d + q[Q_B1] * dd
         else:
             force = q[Q_K0] * d + q[Q_B0] * dd
-        # touchdown / separation (geometric); the contact stops pushing (separation);
-        # the tire-law switch: fork compression crosses zero into extension, once
-        topping = y[1] if (q[Q_SWITCHES] != 0.0 and phase == 0) else 1.0
-        return d > 0.0, force > 0.0, topping > 0.0
+        # touchdown / separation (geometric); the contact stops pushing (separation); the fork's
+        # direction (the tire-law switch at the end of its first rebound stroke); the rim
+        p = d - q[Q_RIM_D]
+        rim = q[Q_RIM] != 0.0 and p >= 0.0 and q[Q_RIM_K] * p + q[Q_RIM_C] * dd >= 0.0
+        return d > 0.0, force > 0.0, y[3] >= 0.0, rim
 
     @numba.njit(**jit)
-    def on_event(y, phase, before, after):
-        """The tire phase after an event (guard signs ``before`` -> ``after`` across it)."""
-        if phase == 0 and before[2] and not after[2]:
+    def on_event(y, phase, before, after, q):
+        """The tire phase after an event (guard signs ``before`` -> ``after`` across it): the
+        switch (``controllers.tire.SWITCH_RULE``) when the tire leaves the ground or the fork turns
+        from extension into compression, once, for a tire that switches."""
+        if phase == 0 and q[Q_SWITCHES] != 0.0 and ((before[0] and not after[0]) or (not before[2] and after[2])):
             return 1
         return phase
 
@@ -138,7 +149,7 @@ if _numba is not None:
                         else:
                             hi = mid
                     ye = rk4(I, P, q, y, phase, hi)
-                    phase = on_event(ye, phase, g0, guards(ye, phase, q))
+                    phase = on_event(ye, phase, g0, guards(ye, phase, q), q)
                     counts[0] += 1
                     y = ye
                     left -= hi
@@ -196,6 +207,9 @@ def parameters(setup: Setup, substeps: int) -> np.ndarray:
     q[Q_K0], q[Q_B0], q[Q_K1], q[Q_B1] = impact.rate, impact.damping, contact.rate, contact.damping
     q[Q_SWITCHES] = 1.0 if setup.tire.switches else 0.0
     q[Q_H], q[Q_SUB], q[Q_LIMIT] = setup.timestep, substeps, MAX_DISPLACEMENT_M
+    rim = setup.tire.rim
+    if rim is not None:
+        q[Q_RIM], q[Q_RIM_D], q[Q_RIM_K], q[Q_RIM_C] = 1.0, rim.max_deflection, rim.rate, rim.damping
     return q
 
 
