@@ -145,7 +145,7 @@ def flatten(law: ForkLaw) -> tuple[list[int], list[float]]:
         elif kind is _stops.EndStops:
             spring(s.main)
             program.append((SP_STOPS, put(s.bumper_start, s.bumper_length, s.bumper_force, s.travel,
-                                          s.stop_rate, s.stop_damping, s.extension)))
+                                          s.stop_rate, s.stop_damping, s.extension, _stops.STIFFENING_M)))
         elif kind is _spring.AirSpring:
             program.append((SP_AIR, put(s.area, s.absolute, s.volume, s.index, s.atmospheric,
                                         float(s.has_negative), s.positive_at_port, s.negative_at_port, s.port,
@@ -465,13 +465,15 @@ if _numba is not None:
                 stop = 0.0
                 p = x - P[o + 3]
                 if p >= 0.0:
-                    f = P[o + 4] * p + P[o + 5] * v
+                    r = p / P[o + 7]
+                    f = P[o + 4] * p * (1.0 + r * r) + P[o + 5] * v
                     if f >= 0.0:
                         stop = f
                 top_stop = 0.0
                 q = -P[o + 6] - x
                 if q >= 0.0:
-                    f = P[o + 4] * q - P[o + 5] * v
+                    r = q / P[o + 7]
+                    f = P[o + 4] * q * (1.0 + r * r) - P[o + 5] * v
                     if f >= 0.0:
                         top_stop = f
                 stack[top - 1] = stack[top - 1] + bumper + stop - top_stop
@@ -623,7 +625,8 @@ if _numba is not None:
             p = qpos[I[I_SLED_QPOS]] - x - P[o]
             rim = 0.0
             if p >= 0.0:
-                f = P[o + 1] * p + P[o + 2] * (qvel[I[I_SLED_DOF]] - v)
+                r = p / P[o + 3]
+                f = P[o + 1] * p * (1.0 + r * r) + P[o + 2] * (qvel[I[I_SLED_DOF]] - v)
                 if f >= 0.0:
                     rim = f
             qfrc[I[I_SLED_DOF]] = -rim
@@ -721,7 +724,7 @@ class CompiledForkCallback(ctypes._CFuncPtr):
             sled = model.joint(sled_joint)
             ints[I_RIM], ints[I_SLED_QPOS], ints[I_SLED_DOF] = 1, int(sled.qposadr[0]), int(sled.dofadr[0])
             ints[I_RIM_AT] = len(floats)
-            floats = floats + [rim.max_deflection, rim.rate, rim.damping]
+            floats = floats + [rim.max_deflection, rim.rate, rim.damping, _stops.STIFFENING_M]
             if len(floats) > FLOAT_WIDTH:
                 raise UnsupportedLaw(f"law needs {len(floats)} parameters, more than {FLOAT_WIDTH}")
         joint = model.joint(fork_joint)

@@ -41,6 +41,7 @@ import weakref
 import numpy as np
 
 from mtbmj.controllers import compiled as _c
+from mtbmj.controllers.stops import STIFFENING_M
 from mtbmj.controllers.compiled import FALLBACK_MESSAGE, UnsupportedLaw, flatten, mjdata_layout, unavailable_reason
 
 _numba = _c._numba
@@ -57,8 +58,9 @@ LAW_FLOAT_WIDTH = _c.FLOAT_WIDTH
 INT_WIDTH = 32
 # float row of a slot: parameters, state, then MAX_PATCHES x (qx, qz, nx, nz, sx, sz)
 (F_X0, F_Z0, F_L, F_COS, F_SIN, F_RADIUS, F_RATE, F_DAMPING, F_MARGIN, F_SPEED, F_XREF0, F_REFRESH, F_DRUM_R,
- F_OMEGA, F_PATCH_TIME, F_NEXT_REFRESH, F_LAST_X, F_REFRESH_DISTANCE, F_PIECE, F_DAMPER_SCALE) = range(20)
-F_PATCHES = 24
+ F_OMEGA, F_PATCH_TIME, F_NEXT_REFRESH, F_LAST_X, F_REFRESH_DISTANCE, F_PIECE, F_DAMPER_SCALE,
+ F_RIM_D, F_RIM_K, F_RIM_C, F_RIM_P0) = range(24)  # the rim: max deflection, rate (0: no rim), damping
+F_PATCHES = 24  # (F_RIM_P0 = 23 is the last parameter)
 FLOAT_WIDTH = F_PATCHES + 6 * MAX_PATCHES
 
 _INTS = np.zeros((SLOTS, INT_WIDTH), dtype=np.int64)
@@ -385,6 +387,14 @@ if _numba is not None:
                 deepest = dp
             if dp > 0.0:
                 f = k * dp + b * rate
+                if f < 0.0:
+                    f = 0.0
+                if F[F_RIM_K] > 0.0 and dp - F[F_RIM_D] >= 0.0:  # the rim strikes (Rim.force)
+                    pr = dp - F[F_RIM_D]
+                    sr = pr / F[F_RIM_P0]
+                    fr = F[F_RIM_K] * pr * (1.0 + sr * sr) + F[F_RIM_C] * rate
+                    if fr >= 0.0:
+                        f += fr
                 if f > 0.0:
                     fx += f * nx
                     fz += f * nz
@@ -533,6 +543,9 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         floats[[F_X0, F_Z0, F_L, F_COS, F_SIN]] = [front.chassis_x0, front.chassis_z0, front.fork_length,
                                                     self.cos, self.sin]
         floats[[F_RADIUS, F_RATE, F_DAMPING, F_MARGIN]] = [tire.radius, tire.rate, tire.damping, tire.margin]
+        if tire.rim is not None:
+            floats[[F_RIM_D, F_RIM_K, F_RIM_C, F_RIM_P0]] = [tire.rim.max_deflection, tire.rim.rate, tire.rim.damping,
+                                                            STIFFENING_M]
         floats[F_SPEED], floats[F_XREF0] = float(speed), float(x_ref0)
         floats[F_REFRESH] = float(tire_model.REFRESH_S if refresh is None else refresh)
         floats[F_REFRESH_DISTANCE], floats[F_PIECE] = tire_model.REFRESH_DISTANCE_M, tire_model.PIECE_M

@@ -6,8 +6,10 @@
   progressively (quadratically, continuous with zero slope at engagement) to ``bumper_force`` at
   full travel: the elastomer or hydraulic bottom-out of a real fork;
 * a **hard stop** at full compression (x = travel) and one at full extension (x = -extension,
-  the top-out bumper fully compressed): a stiff, damped contact that pushes but never pulls,
-  F = max(0, k p + c dp/dt) for a penetration p > 0, as the tire's law.
+  the top-out bumper fully compressed): a stiff, damped contact that pushes but never pulls and
+  stiffens as it goes (metal taking the load), F = max(0, k p (1 + (p / p0)^2) + c dp/dt) for a
+  penetration p > 0, p0 = ``STIFFENING_M``: a hard landing of a heavy rider on a soft fork passes
+  the travel by about 2 mm at most.
 
 Force in N (positive pushes the fork apart), compression x in m, velocity v in m/s. The stop's
 compliance F / k is what the fork may pass its travel by. Every kink is a guard for the ODE
@@ -18,6 +20,19 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from mtbmj.controllers.guards import on_positive_side as _side
+
+STIFFENING_M = 0.6e-3  # p0 of the stops' and the rim's stiffening: 12x the linear force at 2 mm
+
+
+def stop_spring(rate: float, p: float) -> float:
+    """The elastic part of a hard stop or the rim at penetration p >= 0: k p (1 + (p / p0)^2)."""
+    r = p / STIFFENING_M
+    return rate * p * (1.0 + r * r)
+
+
+def stop_energy(rate: float, p: float) -> float:
+    """Its stored energy: k (p^2 / 2 + p^4 / (4 p0^2))."""
+    return rate * (0.5 * p * p + 0.25 * p ** 4 / STIFFENING_M ** 2)
 
 
 @dataclass(frozen=True)
@@ -42,8 +57,8 @@ class EndStops:
         p = x - self.travel
         q = -self.extension - x
         return self.main.guards(x, v) + (
-            x - self.bumper_start, p, self.stop_rate * p + self.stop_damping * v,
-            q, self.stop_rate * q - self.stop_damping * v)
+            x - self.bumper_start, p, stop_spring(self.stop_rate, p) + self.stop_damping * v,
+            q, stop_spring(self.stop_rate, q) - self.stop_damping * v)
 
     def stop_forces(self, x, v, sides=None):
         """(bumper, compression stop, extension stop) forces in N, each >= 0 in its own direction."""
@@ -56,13 +71,13 @@ class EndStops:
         p = x - self.travel
         stop = 0.0
         if _side(p, sides, o + 1):
-            f = self.stop_rate * p + self.stop_damping * v
+            f = stop_spring(self.stop_rate, p) + self.stop_damping * v
             if _side(f, sides, o + 2):
                 stop = f
         q = -self.extension - x
         top = 0.0
         if _side(q, sides, o + 3):
-            f = self.stop_rate * q - self.stop_damping * v
+            f = stop_spring(self.stop_rate, q) - self.stop_damping * v
             if _side(f, sides, o + 4):
                 top = f
         return bumper, stop, top
@@ -80,17 +95,18 @@ class EndStops:
             e += self.bumper_force * s ** 3 / (3.0 * self.bumper_length ** 2)
         p = x - self.travel
         if p > 0.0:
-            e += 0.5 * self.stop_rate * p * p
+            e += stop_energy(self.stop_rate, p)
         q = -self.extension - x
         if q > 0.0:
-            e += 0.5 * self.stop_rate * q * q
+            e += stop_energy(self.stop_rate, q)
         return e
 
 
 @dataclass(frozen=True)
 class Rim:
-    """The rim striking through the tire: past ``max_deflection`` a stiff, damped contact,
-    F = max(0, k p + c dp/dt) for p = deflection - max_deflection > 0, added to the tire force."""
+    """The rim striking through the tire: past ``max_deflection`` a stiff, damped contact that
+    stiffens like the hard stops, F = max(0, k p (1 + (p / p0)^2) + c dp/dt) for
+    p = deflection - max_deflection > 0, added to the tire force."""
 
     max_deflection: float  # m
     rate: float  # N/m
@@ -98,14 +114,18 @@ class Rim:
 
     def guards(self, deflection, rate):
         p = deflection - self.max_deflection
-        return (p, self.rate * p + self.damping * rate)
+        return (p, stop_spring(self.rate, p) + self.damping * rate)
 
     def force(self, deflection, rate, sides=None):
         p = deflection - self.max_deflection
         if not _side(p, sides, 0):
             return 0.0
-        f = self.rate * p + self.damping * rate
+        f = stop_spring(self.rate, p) + self.damping * rate
         return f if _side(f, sides, 1) else 0.0
 
+    def energy(self, deflection):
+        p = deflection - self.max_deflection
+        return stop_energy(self.rate, p) if p > 0.0 else 0.0
 
-__all__ = ["EndStops", "Rim"]
+
+__all__ = ["EndStops", "Rim", "STIFFENING_M", "stop_spring", "stop_energy"]

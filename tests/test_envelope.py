@@ -48,3 +48,65 @@ def test_envelope_reaches_the_stops():
         r = run_drop(mtbmj.load_config(preset, overrides), "mujoco", duration=0.4)
         hits += r.summary["bottoms_out"]["count"] + r.summary["rim_strikes"]["count"]
     assert hits > 0
+
+
+def test_s12_switches_by_contact_on_a_drop_too_small_to_top_out():
+    """At 40 mm the fork never tops out: the in-contact values still take over (end of the first
+    rebound stroke or lift-off), so S12 differs from S11, on both engines alike."""
+    drop = {"sled.drop_height_mm": 40.0}
+    s11 = run_drop("S11", overrides=drop, duration=1.0)
+    s12 = run_drop("S12", overrides=drop, duration=1.0)
+    assert np.any(s12.trace.tire_phase == 1) and not np.any(s11.trace.tire_phase == 1)
+    assert np.max(np.abs(s12.raw["tire_mm"] - s11.raw["tire_mm"])) > 0.1
+    ode = run_drop("S12", engine="ode", overrides=drop, duration=1.0)
+    first = lambda r: r.raw["time_s"][np.argmax(r.trace.tire_phase == 1)]
+    assert first(ode) == pytest.approx(first(s12), abs=2 * s12.trace.info["timestep_s"])
+    assert max(d["max_abs_mm"] for d in s12.difference(ode).values()) <= 0.05
+
+
+def test_the_fork_stays_where_it_stuck():
+    """S12's rest position does not depend on the run length, and the engines agree through the stick."""
+    short = run_drop("S12", duration=3.0)
+    long = run_drop("S12", duration=6.0)
+    assert abs(short.raw["fork_mm"][-1] - long.raw["fork_mm"][-1]) <= 0.01
+    ode = run_drop("S12", engine="ode", duration=3.0)
+    assert max(d["max_abs_mm"] for d in short.difference(ode).values()) <= 0.1
+    # the regularised law it replaces creeps: the same fork moves on between 3 s and 6 s
+    creep = {"fork.friction.stick": False}
+    a = run_drop("S12", overrides=creep, duration=3.0).raw["fork_mm"][-1]
+    b = run_drop("S12", overrides=creep, duration=6.0).raw["fork_mm"][-1]
+    assert abs(a - b) > 0.02
+
+
+def test_a_hard_bottom_out_is_held_and_reported(tmp_path, capsys):
+    """A heavy rider on a soft fork dropped 300 mm: the fork reaches its hard stop, passes its travel
+    by no more than the stop's compliance, and the command says so on its one line."""
+    from mtbmj import cli
+
+    hard = {"sled.body_mass_kg": 110.0, "sled.drop_height_mm": 300.0, "fork.spring.progressive_rate_N_per_mm": 6.0,
+            "fork.spring.progressive_cubic_N_per_mm3": 0.0, "fork.damper.force_N": [f / 4 for f in _table()]}
+    r = run_drop("S12", overrides=hard, duration=0.5)
+    bottom = r.summary["bottoms_out"]
+    assert bottom["count"] >= 1 and 120.0 <= bottom["deepest_mm"] <= 120.0 + STOP_COMPLIANCE_MM
+    assert bottom["peak_force_N"] > 3000.0  # past the bumper's force at full travel: the hard stop carried it
+    argv = ["drop", "S12", "--duration", "0.5", "--quiet", "--out", str(tmp_path / "out")]
+    for key, value in hard.items():
+        argv += ["--set", f"{key}={value}" if not isinstance(value, list) else f"{key}={value!r}"]
+    assert cli.main(argv) == 0
+    assert "bottomed out" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("key,value,cause", [
+    ("fork.stops.bumper_length_mm", 130.0, "fork.stops.bumper_length_mm"),
+    ("fork.stops.stop_rate_N_per_mm", -5.0, "fork.stops.stop_rate_N_per_mm"),
+    ("tire.max_deflection_mm", 400.0, "tire.max_deflection_mm"),
+    ("solver.timestep_s", 2e-3, "use at most"),
+])
+def test_bad_stop_and_step_values_are_one_line(tmp_path, capsys, key, value, cause):
+    from mtbmj import cli
+
+    out = tmp_path / "out"
+    assert cli.main(["drop", "S12", "--set", f"{key}={value}", "--quiet", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and cause in err, err
+    assert not out.exists()

@@ -31,6 +31,7 @@ import numpy as np
 
 from mtbmj.compose import Setup
 from mtbmj.controllers import compiled as _compiled
+from mtbmj.controllers.stops import STIFFENING_M
 from mtbmj.errors import ConfigError, RunError
 from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
 
@@ -40,8 +41,8 @@ MAX_EVENTS_PER_STEP = 16  # more than this in one step is chattering: the step i
 
 # parameter vector of the kernel
 (Q_MB, Q_MW, Q_G, Q_K0, Q_B0, Q_K1, Q_B1, Q_SWITCHES, Q_H, Q_SUB, Q_LIMIT,
- Q_RIM, Q_RIM_D, Q_RIM_K, Q_RIM_C) = range(15)
-Q_WIDTH = 15
+ Q_RIM, Q_RIM_D, Q_RIM_K, Q_RIM_C, Q_RIM_P0) = range(16)
+Q_WIDTH = 16
 
 # status codes
 OK, DIVERGED = 0, 1
@@ -67,7 +68,8 @@ if _numba is not None:
         if q[Q_RIM] != 0.0:  # Rim.force
             p = d - q[Q_RIM_D]
             if p >= 0.0:
-                r = q[Q_RIM_K] * p + q[Q_RIM_C] * dd
+                s = p / q[Q_RIM_P0]
+                r = q[Q_RIM_K] * p * (1.0 + s * s) + q[Q_RIM_C] * dd
                 if r >= 0.0:
                     f += r
         return f
@@ -93,7 +95,7 @@ if _numba is not None:
         # touchdown / separation (geometric); the contact stops pushing (separation); the fork's
         # direction (the tire-law switch at the end of its first rebound stroke); the rim
         p = d - q[Q_RIM_D]
-        rim = q[Q_RIM] != 0.0 and p >= 0.0 and q[Q_RIM_K] * p + q[Q_RIM_C] * dd >= 0.0
+        rim = q[Q_RIM] != 0.0 and p >= 0.0 and q[Q_RIM_K] * p * (1.0 + (p / q[Q_RIM_P0]) ** 2) + q[Q_RIM_C] * dd >= 0.0
         return d > 0.0, force > 0.0, y[3] >= 0.0, rim
 
     @numba.njit(**jit)
@@ -210,6 +212,7 @@ def parameters(setup: Setup, substeps: int) -> np.ndarray:
     rim = setup.tire.rim
     if rim is not None:
         q[Q_RIM], q[Q_RIM_D], q[Q_RIM_K], q[Q_RIM_C] = 1.0, rim.max_deflection, rim.rate, rim.damping
+        q[Q_RIM_P0] = STIFFENING_M
     return q
 
 

@@ -40,9 +40,8 @@ def energy(setup: Setup, trace: RawTrace) -> dict[str, float]:
         gravity = -mb * g * s - mw * g * w
         tire = setup.tire.values(int(trace.tire_phase[i]))
         stored = setup.fork.elastic_energy(x) + (0.5 * tire.rate * w * w if w > 0 else 0.0)
-        rim = setup.tire.rim
-        if rim is not None and w > rim.max_deflection:
-            stored += 0.5 * rim.rate * (w - rim.max_deflection) ** 2
+        if setup.tire.rim is not None:
+            stored += setup.tire.rim.energy(w)
         friction = setup.fork.friction
         if friction.has_state:
             stored += 0.5 * friction.stiffness * trace.friction_state[i] ** 2

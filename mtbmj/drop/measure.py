@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from mtbmj.compose import Setup
+from mtbmj.controllers.stops import STIFFENING_M
 from mtbmj.trace import RawTrace
 
 COLUMNS = (
@@ -32,7 +33,9 @@ def tire_forces(tire_law, deflection, rate, phase) -> np.ndarray:
     rim = tire_law.rim
     if rim is not None:  # Rim.force: past the maximum deflection, pushing only
         at = deflection - rim.max_deflection >= 0.0
-        out[at] += np.maximum(0.0, rim.rate * (deflection[at] - rim.max_deflection) + rim.damping * rate[at])
+        p = deflection[at] - rim.max_deflection
+        s = p / STIFFENING_M
+        out[at] += np.maximum(0.0, rim.rate * p * (1.0 + s * s) + rim.damping * rate[at])
     return out
 
 

@@ -317,7 +317,7 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
     chassis_speed = 0.0 if drum else float(speed_m_per_s)
     front = build_front_end(setup, ter, head_angle_deg)
     rate, damping = tire_values(setup)
-    tire = RadialTire(ter, setup.tire_radius, rate, damping)
+    tire = RadialTire(ter, setup.tire_radius, rate, damping, rim=setup.tire.rim)
     model = front.model
     data = mujoco.MjData(model)
     c, s = front.axis

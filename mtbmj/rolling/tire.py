@@ -40,7 +40,8 @@ PIECE_M = 0.01
 class RadialTire:
     """Tire of ``radius`` (m), radial ``rate`` (N/m) and ``damping`` (N s/m) on ``terrain``."""
 
-    def __init__(self, terrain, radius: float, rate: float, damping: float, margin: float = MARGIN_M):
+    def __init__(self, terrain, radius: float, rate: float, damping: float, margin: float = MARGIN_M, rim=None):
+        self.rim = rim  # controllers.Rim: past its maximum deflection the rim strikes, or None
         self.terrain = terrain
         self.radius = float(radius)
         self.rate = float(rate)
@@ -111,7 +112,9 @@ class RadialTire:
             if d > deepest:
                 deepest, deepest_rate = d, rate
             if d > 0.0:
-                f = k * d + b * rate
+                f = max(0.0, k * d + b * rate)
+                if self.rim is not None:
+                    f += self.rim.force(d, rate)
                 if f > 0.0:
                     fx += f * nx
                     fz += f * nz
