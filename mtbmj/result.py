@@ -10,14 +10,17 @@ import numpy as np
 from mtbmj import output
 
 def versions() -> dict[str, str]:
-    import matplotlib
+    from importlib.metadata import version
+
     import mujoco
     import scipy
 
     from mtbmj._version import __version__
 
+    # matplotlib's version from its metadata: importing it only for that would make it look for a
+    # writable config directory (a warning on stderr for a user without a home)
     return {"mtbmj": __version__, "mujoco": mujoco.__version__, "scipy": scipy.__version__,
-            "numpy": np.__version__, "matplotlib": matplotlib.__version__, "python": platform.python_version()}
+            "numpy": np.__version__, "matplotlib": version("matplotlib"), "python": platform.python_version()}
 
 
 class RunOutput:

@@ -48,12 +48,11 @@ def run_study(presets: Sequence[str] | None = None, overrides=None, duration: fl
 def group_figure(results, title: str, names: Sequence[str]):
     """Sled, fork and tire histories of one group: MuJoCo solid, ODE reference dashed."""
     import matplotlib
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 8), constrained_layout=True)
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    fig = Figure(figsize=(8, 8), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
+    colours = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     for k, name in enumerate(n for n in names if n in results):
         colour = colours[k % len(colours)]
         results[name]["mujoco"].plot(axes, label=f"{name} MuJoCo", color=colour, lw=1.4)
@@ -64,11 +63,8 @@ def group_figure(results, title: str, names: Sequence[str]):
 
 
 def png_bytes(fig) -> bytes:
-    import matplotlib.pyplot as plt
-
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110)
-    plt.close(fig)
     return buffer.getvalue()
 
 

@@ -427,9 +427,6 @@ def tire_overrides(results: dict[str, FitResult]) -> dict:
 def plot_tire(record: Record | None, results: dict[str, FitResult]):
     """Figure: the drop record with the flight fits around the first impact, the settled
     oscillation fit, and the static ramp (whichever parts are present)."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
     from matplotlib.figure import Figure
 
     panels = [p for p in ("impact", "contact", "static") if p in results]

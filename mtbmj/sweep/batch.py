@@ -120,7 +120,7 @@ def _fast_rates_kernel():
 
     from mtbmj.controllers import compiled
 
-    @numba.njit(cache=True, error_model="numpy", nogil=True)
+    @numba.njit(cache=compiled.can_cache(lambda: None), error_model="numpy", nogil=True)
     def rates(I, P, xs, vs, dx, dv, x_damp):
         k = 0.0
         for x in xs:
