@@ -21,7 +21,7 @@ def _tracked_text_files():
 
 def _sections(doc: Path) -> set[str]:
     """Section numbers of a doc's numbered headings (``## 4.`` and ``### 4.2``)."""
-    return set(re.findall(r"^#{2,3} (\d+(?:\.\d+)?)\.? ", doc.read_text(), flags=re.M))
+    return set(re.findall(r"^#{2,3} (\d+(?:\.\d+)?)\.? ", doc.read_text(), flags=re.MULTILINE))
 
 
 def test_every_docs_citation_resolves():

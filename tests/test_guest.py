@@ -50,7 +50,7 @@ def test_no_numba_cache_directory_compiles_in_memory(tmp_path):
     out = tmp_path / "run.csv"
     env = _clean_env(HOME=str(tmp_path / "no" / "home"), NUMBA_CACHE_LOCATOR_CLASSES="ZipCacheLocator")
     done = subprocess.run([sys.executable, "-c", DROP, str(out)], cwd=tmp_path, env=env, capture_output=True,
-                          text=True, timeout=600)
+                          text=True, check=False, timeout=600)
     assert done.returncode == 0, done.stderr
     assert done.stderr == ""
     assert done.stdout.split() == ["cache", "False"]
@@ -61,7 +61,7 @@ def test_no_numba_cache_directory_compiles_in_memory(tmp_path):
 def _read_only_mounts_work() -> bool:
     if not shutil.which("unshare") or os.geteuid() != 0:
         return False
-    probe = subprocess.run(["unshare", "-m", "--propagation", "private", "true"], capture_output=True, timeout=30)
+    probe = subprocess.run(["unshare", "-m", "--propagation", "private", "true"], capture_output=True, check=False, timeout=30)
     return probe.returncode == 0
 
 
@@ -82,7 +82,7 @@ def test_read_only_install_without_a_home_runs_the_cli(tmp_path):
                          + [" ".join(f"'{a}'" for a in c) for c in commands])
     env = _clean_env(HOME=str(home / "user"))
     done = subprocess.run(["unshare", "-m", "--propagation", "private", "sh", "-c", script], cwd=tmp_path, env=env,
-                          capture_output=True, text=True, timeout=600)
+                          capture_output=True, text=True, check=False, timeout=600)
     assert done.returncode == 0, done.stderr
     assert done.stderr == ""
     assert sorted(p.name for p in out.iterdir()) == ["drop", "roll"]
@@ -167,7 +167,7 @@ print(len(figures))
 @pytest.mark.parametrize("backend", ["pdf", "svg"])
 def test_plots_keep_the_users_backend(backend, tmp_path):
     done = subprocess.run([sys.executable, "-c", PLOTS, backend, str(tmp_path)], env=_clean_env(),
-                          capture_output=True, text=True, timeout=600)
+                          capture_output=True, text=True, check=False, timeout=600)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "3"
     for k in range(3):
@@ -196,6 +196,6 @@ def test_no_dm_control_names_the_rl_extra():
     """Without dm_control the environment module says which extra brings it."""
     code = ("import sys; sys.modules['dm_control'] = None\n"
             "try:\n    import mtbmj.rolling.env\nexcept ImportError as e:\n    print(e)\n")
-    done = subprocess.run([sys.executable, "-c", code], env=_clean_env(), capture_output=True, text=True, timeout=300)
+    done = subprocess.run([sys.executable, "-c", code], env=_clean_env(), capture_output=True, text=True, check=False, timeout=300)
     assert done.returncode == 0, done.stderr
     assert "pip install 'mtbmj[rl]'" in done.stdout
