@@ -32,7 +32,8 @@ print("cache", compiled.CACHE)
 
 
 def _clean_env(**extra):
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "NUMBA_CACHE_DIR", "XDG_CACHE_HOME")}
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("PYTHONPATH", "NUMBA_CACHE_DIR", "XDG_CACHE_HOME", "PYOPENGL_PLATFORM")}
     env.update(MUJOCO_GL="disable", **extra)
     return env
 

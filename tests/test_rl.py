@@ -17,7 +17,8 @@ README = (REPO / "README.md").read_text()
 
 
 def _headless_env(**extra):
-    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "DISPLAY", "WAYLAND_DISPLAY", "PYTHONPATH")}
+    drop = ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY", "WAYLAND_DISPLAY", "PYTHONPATH")  # as a user's shell has
+    env = {k: v for k, v in os.environ.items() if k not in drop}
     env.update(extra)
     return env
 

@@ -66,7 +66,11 @@ try:
     from dm_control.suite import base
     from dm_env import specs
 except ImportError as error:
-    raise ImportError(f"mtbmj.rolling.env needs dm-control ({error}): pip install 'mtbmj[rl]'") from error
+    from mtbmj.extras import missing
+
+    if missing(["dm_control", "dm_env"]):  # not installed; any other import failure speaks for itself
+        raise ImportError(f"mtbmj.rolling.env needs dm-control ({error}): pip install 'mtbmj[rl]'") from error
+    raise
 
 from mtbmj.controllers import installed
 from mtbmj.rolling import frontend as rolling
