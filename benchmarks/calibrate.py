@@ -6,7 +6,7 @@
    Its few free values are fitted with scipy.optimize.least_squares on engine_mujoco.run so that S12
    reproduces the paper's reported outcomes (fork peak ~96 mm = 80 % of travel, tire peak ~40 % of
    48.7 mm, lift-off near 0.2 s, one bounce with a topping in the air, rest by 1.5 s), with sag and
-   the literature ranges of REFERENCE.md section 3 as bounds and weak priors.
+   the literature ranges of docs/reference.md section 3 as bounds and weak priors.
 2. The simpler models of S1-S9 are then derived from the true fork the way a dyno fit would be:
    least-squares fits (numpy.linalg.lstsq / scipy.optimize.least_squares) of the true
    force-displacement loop (true spring +/- Coulomb friction, 0-96 mm) and of the damper table.
@@ -35,7 +35,7 @@ from mtbmj.controllers import ProgressiveSpring, TopOutSpring
 
 REFERENCE = Path(__file__).resolve().parents[1] / "mtbmj" / "presets" / "reference.toml"
 
-# ---------------------------------------------------------------- sourced values (REFERENCE.md)
+# ---------------------------------------------------------------- sourced values (docs/reference.md section 3)
 G = 9.81
 BODY, WHEEL, H0 = 53.2, 2.3, 0.095            # paper
 TRAVEL = 120.0                                # mm, paper
@@ -68,7 +68,7 @@ PRIOR_SIGMA = np.array([10.0, 4.0e-4, 150.0, 20.0, 150.0, 150.0, 10.0, 6.0])
 LOWER = np.array([3.0, 0.0, 0.0, 15.0, 30.0, 30.0, 0.0, TIRE_RATE_RANGE[0]])
 # Coulomb <= 45 N: above it the regularised sign (band 5 mm/s) is too steep for dt = 1e-4 s.
 UPPER = np.array([30.0, 2.0e-3, 600.0, 300.0, 1500.0, 1500.0, 45.0, TIRE_RATE_RANGE[1]])
-# Start: the hand check of REFERENCE.md section 3 (progressive instead of bilinear).
+# Start: the hand check of docs/reference.md section 4.1 (progressive instead of bilinear).
 START = np.array([10.0, 2.0e-4, 250.0, 40.0, 300.0, 150.0, 20.0, 80.0])
 # Stored result of a full run (used only by --quick and as a record; the default run starts at PRIOR).
 CALIBRATED = [11.37, 3.26e-4, 211.1, 35.3, 133.2, 237.2, 34.2, 85.1]

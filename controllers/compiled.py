@@ -346,6 +346,23 @@ def compiling(what: str):
         timer.cancel()
 
 
+
+
+def can_cache(probe) -> bool:
+    """Whether numba can keep compiled code on disk for the file that defines ``probe`` (any
+    function). A read-only install run by a user without a writable home (services, containers)
+    offers no cache directory: numba then raises at decoration ("no locator available"), and the
+    kernels are compiled in memory for the process instead (same code, same results)."""
+    try:
+        _numba.njit(cache=True)(probe)  # lazy: nothing is compiled or written
+    except RuntimeError as error:
+        if "cannot cache" not in str(error):
+            raise
+        return False
+    return True
+
+
+CACHE: bool | None = None  # whether the kernels below are cached on disk (None: numba missing)
 if _numba is not None:
     import llvmlite.binding as _llvm
 
@@ -400,7 +417,8 @@ if _numba is not None:
             return _cgutils.alloca_once(builder, _ir.DoubleType(), size=STACK_DEPTH)
         return _t.CPointer(_t.float64)(), codegen
 
-    _jit = dict(cache=True, error_model="numpy", nogil=True)
+    CACHE = can_cache(lambda: None)
+    _jit = dict(cache=CACHE, error_model="numpy", nogil=True)
 
     @_numba.njit(**_jit)
     def _air_force(P, o, x):
@@ -594,7 +612,7 @@ if _numba is not None:
             return builder.load(at)
         return _t.int64(_t.intp), codegen
 
-    @_numba.cfunc(_t.void(_t.voidptr, _t.voidptr), cache=True, error_model="numpy")
+    @_numba.cfunc(_t.void(_t.voidptr, _t.voidptr), cache=CACHE, error_model="numpy")
     def _dispatch(m, d):
         model = _address_of(m)
         ints = _numba.carray(_i64_pointer(_registry(M_INTS)), (SLOTS, INT_WIDTH))

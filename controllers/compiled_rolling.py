@@ -111,7 +111,8 @@ if _numba is not None:
             return builder.load(at)
         return _t.int64(_t.intp), codegen
 
-    _jit = dict(cache=True, error_model="numpy", nogil=True)
+    CACHE = _c.can_cache(lambda: None)  # this file's cache directory (see compiled.can_cache)
+    _jit = dict(cache=CACHE, error_model="numpy", nogil=True)
 
     @_numba.njit(**_jit)
     def _clip01(value):
@@ -318,7 +319,7 @@ if _numba is not None:
             m = static_window(A, B, n, cx - reach, cx + reach, PX, PZ)
         find_patches(I, F, PX, PZ, m, cx, cz)
 
-    @_numba.cfunc(_t.void(_t.voidptr, _t.voidptr), cache=True, error_model="numpy")
+    @_numba.cfunc(_t.void(_t.voidptr, _t.voidptr), cache=CACHE, error_model="numpy")
     def _dispatch(m, d):
         model = _address_of(m)
         ints = _numba.carray(_i64_pointer(_registry(M_INTS)), (SLOTS, INT_WIDTH))

@@ -2,7 +2,6 @@
 import mujoco
 import numpy as np
 import pytest
-from dm_control import mjcf
 
 import mtbmj
 from mtbmj import compose, mjcf as scenes
@@ -106,9 +105,11 @@ def test_every_scene_compiles_and_steps_without_warnings(path):
             assert getattr(model, kind)(i).name, f"unnamed {kind} {i} in {path.name}"
 
 
+@pytest.mark.rl
 def test_dm_control_physics_steps_the_drop_scene_like_the_engine():
     """The bundled scene through dm_control.mjcf and a dm_control Physics, with our callback,
     reproduces the engine's trace."""
+    mjcf = pytest.importorskip("dm_control.mjcf", reason="dm_control is the [rl] extra")
     setup = compose.setup(mtbmj.load_config("S6", {"solver.integrator": "implicitfast", "solver.timestep_s": 5e-5}))
     ours = scene.build(setup)
     root = mjcf.from_path(str(scenes.path("drop_scene.xml")))

@@ -266,9 +266,11 @@ def test_trajectory_for_rendering():
 
 # --- dm_control ----------------------------------------------------------------------------------
 
+@pytest.mark.rl
 def test_env_episode_with_skyhook():
     import mujoco
 
+    pytest.importorskip("dm_control", reason="dm_control is the [rl] extra")
     from mtbmj.rolling import env as E
     from mtbmj.controllers.skyhook import Skyhook
 

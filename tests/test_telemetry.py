@@ -282,3 +282,28 @@ def test_comparison_figure_labels_each_travel_and_shows_every_tail(record):
     low, high = ax_v.get_xlim()
     assert high >= peak_v * 0.98 and low <= -peak_v * 0.98
     assert "HSC" in ax_v.get_legend().get_title().get_text()
+
+
+def test_defaults_match_the_shipped_setup_notes():
+    """The reader's calibrations, strokes and leverage curve are those of the recording's own setup
+    notes (``mtbmj/data/sst/notes.txt``, shipped with the ride), parsed here from its JSON lines."""
+    notes = SHIPPED.parent / "notes.txt"
+    records = [json.loads(line) for line in notes.read_text().splitlines() if line.startswith(("{", "[{"))]
+    calibrations = {r["id"]: r for r in records if "inputs" in r}
+    linkage = next(r for r in records if "front_stroke" in r)
+    front, rear = telemetry.IsoscelesTriangle(), telemetry.Triangle()
+    assert (front.arm_mm, front.max_mm) == (calibrations[1]["inputs"]["arm"], calibrations[1]["inputs"]["max"])
+    assert (rear.arm1_mm, rear.arm2_mm, rear.max_mm) == tuple(calibrations[2]["inputs"][k] for k in ("arm1", "arm2", "max"))
+    assert telemetry.FORK_TRAVEL_MAX_MM == linkage["front_stroke"]
+    assert telemetry.SHOCK_STROKE_MAX_MM == linkage["rear_stroke"]
+    assert telemetry.HEAD_ANGLE_DEG == linkage["head_angle"]
+    rows = [line.split(",") for line in linkage["data"].splitlines()]
+    curve = telemetry.LeverageCurve()
+    assert len(rows) == len(curve.ratio)
+    for (wheel, ratio), ours_wheel, ours_ratio in zip(rows, curve.wheel_mm, curve.ratio):
+        assert float(wheel) == ours_wheel
+        try:
+            assert float(ratio) == ours_ratio
+        except ValueError:  # the one garbled row: digits around the inserted file name
+            assert ratio.startswith("3.") and ratio.endswith("008") and ours_ratio == 3.008
+    assert (SHIPPED.parent / "LICENSE").read_text().startswith("MIT License")

@@ -148,7 +148,6 @@ class Validation:
     def fig10(self):
         """The paper's Fig. 10: amplitude error per event, one bar per configuration, grouped
         spring (blue) / damper (red) / tire (green), panels sled, fork, tire."""
-        plt = _pyplot()
         colours = self._colours()
         order = [n for key in GROUPS for n in self.configs if group_of(n) == key]
         groups = [group_of(n) for n in order]
@@ -162,8 +161,7 @@ class Validation:
         span = max(pos, 1.0)
         width = 0.8 / span
         offsets = [(s - (span - 1.0) / 2.0) * width for s in slots]
-        fig, axes = plt.subplots(3, 1, sharex=True, figsize=(max(8.0, 1.2 + 0.18 * len(order) * len(EVENTS)), 8.5),
-                                 constrained_layout=True)
+        fig, axes = _subplots(3, 1, sharex=True, figsize=(max(8.0, 1.2 + 0.18 * len(order) * len(EVENTS)), 8.5))
         x = np.arange(len(EVENTS))
         for ax, s in zip(axes, SIGNALS):
             for name, off in zip(order, offsets):
@@ -188,12 +186,11 @@ class Validation:
     def overlay_figures(self) -> dict[str, object]:
         """Measured and simulated histories: one figure per study group (data mode) or per
         configuration (reference mode); the measurement black dash-dot as in the paper."""
-        plt = _pyplot()
         colours = self._colours()
         figures = {}
         if self.reference_engine:
             for name in self.configs:
-                fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 7.5), constrained_layout=True)
+                fig, axes = _subplots(3, 1, sharex=True, figsize=(8, 7.5))
                 ref = self.references[name].signals
                 _plot(axes, ref, f"{name} {self.reference_engine} (reference)", color="black", lw=1.2, ls="-.")
                 _plot(axes, self.results[name].signals, f"{name} {self.engine}", color=colours[name], lw=1.0)
@@ -206,7 +203,7 @@ class Validation:
             members = [n for n in self.configs if group_of(n) == key]
             if not members:
                 continue
-            fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 7.5), constrained_layout=True)
+            fig, axes = _subplots(3, 1, sharex=True, figsize=(8, 7.5))
             _plot(axes, measured, "measured" + (" (synthetic)" if self.record.synthetic else ""),
                   color="black", lw=1.2, ls="-.")
             for name in members:
@@ -319,20 +316,17 @@ def _safe(name: str) -> str:
     return "".join(ch if ch.isalnum() or ch in "-_" else "_" for ch in name)
 
 
-def _pyplot():
-    import matplotlib
+def _subplots(rows: int, cols: int, figsize, **kwargs):
+    """A figure of its own (object API: no pyplot, the user's backend untouched) and its axes."""
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    return plt
+    fig = Figure(figsize=figsize, layout="constrained")
+    return fig, fig.subplots(rows, cols, **kwargs)
 
 
 def _png(fig) -> bytes:
-    plt = _pyplot()
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=100)
-    plt.close(fig)
     return buffer.getvalue()
 
 

@@ -37,7 +37,7 @@ def add_parser(subparsers):
     """Add the ``telemetry`` sub-command to an argparse sub-parser collection."""
     p = subparsers.add_parser(
         "telemetry", help="metrics of a real ride (SST file), optionally against simulated runs",
-        description="Read a Sufni Suspension Telemetry (SST v3) file, compute the travel histogram (%% of travel), "
+        description="Read a Sufni Suspension Telemetry (SST v3) file, compute the travel histogram (% of travel), "
                     "the velocity histogram (compression positive) with the high/low-speed split, bottom-outs and "
                     "airtime for the fork and the rear wheel, and plot simulated runs' fork on the same axes.")
     p.add_argument("sst", type=Path, metavar="FILE.SST", help="SST v3 recording, or 'example' for the shipped 00649.SST")

@@ -73,13 +73,11 @@ class DropResult(RunOutput):
 
     def plot(self, axes=None, label: str | None = None, **line_kwargs):
         """Sled, fork and tire displacement histories on three stacked axes; returns the figure."""
-        import matplotlib
-
         if axes is None:
-            matplotlib.use("Agg", force=False)
-            import matplotlib.pyplot as plt
+            from matplotlib.figure import Figure
 
-            fig, axes = plt.subplots(3, 1, sharex=True, figsize=(7, 7), constrained_layout=True)
+            fig = Figure(figsize=(7, 7), layout="constrained")
+            axes = fig.subplots(3, 1, sharex=True)
         else:
             fig = axes[0].figure
         label = label or f"{self.name} ({self.engine})"

@@ -2,7 +2,7 @@
 
 The tire is a MuJoCo soft contact calibrated to behave as the configured radial spring K (N/m)
 and damper B (N s/m). MuJoCo's "direct" solref (-stiffness, -damping) is scaled by the contact's
-inverse inertia A and its impedance d (REFERENCE.md §4); with a constant impedance d (solimp
+inverse inertia A and its impedance d (docs/mujoco.md §2); with a constant impedance d (solimp
 d0 = dwidth = d), ``diagexact`` and an elliptic cone, the contact force is
 f = max(0, K pen + B pen_rate) when solref = (-K A (1-d), -B A (1-d)). A is computed from the
 compiled model (J M^-1 J^T at the tire's contact point), not assumed.

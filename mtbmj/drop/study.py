@@ -68,12 +68,11 @@ def group_figure(results, title: str, names: Sequence[str]):
     """Sled, fork and tire histories of one group: MuJoCo solid, ODE reference dashed, the fast
     engine dotted."""
     import matplotlib
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 8), constrained_layout=True)
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    fig = Figure(figsize=(8, 8), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
+    colours = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
     for k, name in enumerate(n for n in names if n in results):
         colour = colours[k % len(colours)]
         for engine, (label, width, style) in STYLES.items():
@@ -84,11 +83,8 @@ def group_figure(results, title: str, names: Sequence[str]):
 
 
 def png_bytes(fig) -> bytes:
-    import matplotlib.pyplot as plt
-
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110)
-    plt.close(fig)
     return buffer.getvalue()
 
 

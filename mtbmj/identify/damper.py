@@ -387,16 +387,14 @@ def select(results: Mapping[str, FitResult] | Iterable[FitResult]) -> FitResult:
 def plot_damper(record: Record, results: Mapping[str, FitResult] | FitResult):
     """Peak force vs velocity in the style of the paper's Fig. 6: dyno points and fitted curves
     (left: hydraulic models; right: friction models near zero velocity)."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     if isinstance(results, FitResult):
         results = {results.model: results}
     rec = peaks(record)
     v, f = rec["velocity"] * 1e3, rec["force"]
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig = Figure(figsize=(11, 4.2))
+    ax1, ax2 = fig.subplots(1, 2)
     styles = {"linear": ("tab:green", "--"), "bilinear": ("tab:red", "-"), "table": ("tab:purple", "-.")}
     for ax in (ax1, ax2):
         ax.plot(v, f, "o", ms=3, color="k", label="dyno peaks")

@@ -367,9 +367,6 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
 def plot_drop(record: Record | None, result: FitResult):
     """Figure: data and fitted model of each channel (and the start model, dashed), with the
     residual underneath."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
     from matplotlib.figure import Figure
 
     cur = result.extra["curves"]

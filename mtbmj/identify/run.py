@@ -76,12 +76,9 @@ class Identification:
         return self.plot_fn()
 
     def files(self) -> dict[str, bytes]:
-        import matplotlib.pyplot as plt
-
         fig = self.plot()
         png = io.BytesIO()
         fig.savefig(png, format="png", dpi=110)
-        plt.close(fig)
         return {"fit.toml": self.toml().encode(), "fit.json": output.json_bytes(self.summary()),
                 "fit.png": png.getvalue()}
 

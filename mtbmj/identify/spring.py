@@ -342,10 +342,7 @@ def fit_spring_all(record: Record) -> dict[str, FitResult]:
 def plot_spring(record: Record, results: dict[str, FitResult] | FitResult):
     """Force vs displacement in the style of the paper's Fig. 3: the dyno loop (points) and, one
     panel per model, the fitted compression and rebound curves and the elastic mid-line."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     if isinstance(results, FitResult):
         results = {results.model: results}
@@ -353,7 +350,8 @@ def plot_spring(record: Record, results: dict[str, FitResult] | FitResult):
     n = max(len(shown), 1)
     cols = 2 if n > 1 else 1
     rows = (n + cols - 1) // cols
-    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 3.9 * rows), squeeze=False)
+    fig = Figure(figsize=(5.2 * cols, 3.9 * rows))
+    axes = fig.subplots(rows, cols, squeeze=False)
     x = np.asarray(record["displacement"]) * 1e3
     f = np.asarray(record["force"])
     step = max(len(x) // 2000, 1)

@@ -1,4 +1,4 @@
-"""Tire identification by the coefficient-of-restitution method (Sadauckas 2023; REFERENCE.md §3).
+"""Tire identification by the coefficient-of-restitution method (Sadauckas 2023; derivation in docs/reference.md §4.2).
 
 A mass m dropped on the tire: the first impact gives the contact time t_c (deflection > 0) and the
 restitution e = v_out / v_in, both found from the data. For a linear Kelvin-Voigt contact that
@@ -427,9 +427,6 @@ def tire_overrides(results: dict[str, FitResult]) -> dict:
 def plot_tire(record: Record | None, results: dict[str, FitResult]):
     """Figure: the drop record with the flight fits around the first impact, the settled
     oscillation fit, and the static ramp (whichever parts are present)."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
     from matplotlib.figure import Figure
 
     panels = [p for p in ("impact", "contact", "static") if p in results]

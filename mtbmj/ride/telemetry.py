@@ -36,9 +36,9 @@ RECORD_BYTES = 4
 ABSENT = 0xFFFF
 COUNTS = 4096
 
-FORK_TRAVEL_MAX_MM = 180.0  # notes.txt: front_stroke
-SHOCK_STROKE_MAX_MM = 65.0  # notes.txt: rear_stroke
-HEAD_ANGLE_DEG = 63.5  # notes.txt: head_angle (recorded for reference; travel is along the fork)
+FORK_TRAVEL_MAX_MM = 180.0  # data/sst/notes.txt: front_stroke
+SHOCK_STROKE_MAX_MM = 65.0  # data/sst/notes.txt: rear_stroke
+HEAD_ANGLE_DEG = 63.5  # data/sst/notes.txt: head_angle (recorded for reference; travel is along the fork)
 
 
 class TelemetryError(MtbmjError):
@@ -75,7 +75,7 @@ class Triangle:
         return self.max_mm - np.sqrt(a * a + b * b - 2.0 * a * b * np.cos(start - 2.0 * np.pi / COUNTS * s))
 
 
-# Clash 2022 leverage ratio against rear wheel travel (mm), 1 mm steps, from notes.txt. The row
+# Clash 2022 leverage ratio against rear wheel travel (mm), 1 mm steps, from data/sst/notes.txt. The row
 # for 25 mm is garbled there ("3.clash2022_lr_sensitive.csv008"); 3.008 is read from it and lies
 # between its neighbours 3.014 and 3.002.
 CLASH_2022_LEVERAGE_RATIO = (

@@ -5,11 +5,27 @@ configuration's law, e.g. S12's table) is scaled by ``SCALE_MIN + u (SCALE_MAX -
 a valve that can make the damper softer or firmer but never push on its own (the force keeps the
 sign of the compression velocity): semi-active. Spring and friction stay passive.
 
-Observations (SI, compression positive): ``body_z_velocity`` (up positive), ``body_z_acceleration``,
-``fork_compression``, ``fork_velocity``, ``tire_deflection``, ``axle_force`` (x forward, z up)
-and ``damper_force_per_scale`` (the passive damper force D(v) at the current fork velocity, N,
-so a controller can turn a wanted force into a command). Reward: ride comfort in (0, 1],
-1 / (1 + (a_z / g)^2) with a_z the body's vertical acceleration.
+Observations (SI, compression positive; each a float64 array):
+
+- ``body_z_velocity`` (1,): vertical velocity of the body (the chassis the fork hangs from), m/s,
+  up positive.
+- ``body_z_acceleration`` (1,): its vertical acceleration, m/s^2, up positive (what the reward
+  penalises).
+- ``fork_compression`` (1,): fork travel used, m, from full extension along the fork axis.
+- ``fork_velocity`` (1,): its rate, m/s, compression positive.
+- ``tire_deflection`` (1,): radial tire deflection at the deepest contact patch, m (0 in the air).
+- ``axle_force`` (2,): force of the terrain on the wheel, N, (x forward, z up).
+- ``damper_force_per_scale`` (1,): the passive damper force D(v) at the current fork velocity, N
+  (the force at scale 1), so a controller can turn a wanted force into a command.
+- ``head_angle_sin`` (1,): sine of the head angle (constant in an episode): the fork acts on the
+  body along its axis, so a fork force F lifts the body by F sin(head angle).
+
+Reward: ride comfort in (0, 1], 1 / (1 + (a_z / g)^2) with a_z the body's vertical acceleration.
+
+Headless: dm_control chooses its OpenGL backend when first imported and, left alone, tries GLFW
+first (an error message on a machine without a display). Importing this module before dm_control,
+with ``MUJOCO_GL`` unset and no display, sets ``MUJOCO_GL`` to ``egl`` (or ``osmesa``, or
+``disable`` when neither library is found); a value the user set is never changed.
 
 The fork, tire and speed servo act through ``mtbmj.rolling.frontend.RollCallback``; MuJoCo's control
 callback is process-global, so the environment installs it only while it steps and restores the
@@ -18,12 +34,43 @@ previous one after (also on errors).
 from __future__ import annotations
 
 import collections
+import ctypes.util
+import os
+import sys
 
 import numpy as np
-from dm_control import mujoco as dm_mujoco
-from dm_control.rl import control
-from dm_control.suite import base
-from dm_env import specs
+
+
+def _default_gl() -> str | None:
+    """The OpenGL backend to name for dm_control when the user named none, or None to leave it.
+
+    dm_control picks its backend once, when first imported; left to itself it tries GLFW first,
+    which prints a "DISPLAY missing" error on a headless machine. This environment never renders,
+    so with no display it names a headless backend: EGL, else OSMesa, else none at all."""
+    if os.environ.get("MUJOCO_GL") or "dm_control" in sys.modules:
+        return None  # the user's choice, or dm_control has chosen already
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
+        return None  # a desktop: dm_control's own order (GLFW first) works there
+    for name, library in (("egl", "EGL"), ("osmesa", "OSMesa")):
+        if ctypes.util.find_library(library):
+            return name
+    return "disable"
+
+
+if (_gl := _default_gl()) is not None:
+    os.environ["MUJOCO_GL"] = _gl  # only ever set where it was unset (see _default_gl)
+
+try:
+    from dm_control import mujoco as dm_mujoco
+    from dm_control.rl import control
+    from dm_control.suite import base
+    from dm_env import specs
+except ImportError as error:
+    from mtbmj.extras import missing
+
+    if missing(["dm_control", "dm_env"]):  # not installed; any other import failure speaks for itself
+        raise ImportError(f"mtbmj.rolling.env needs dm-control ({error}): pip install 'mtbmj[rl]'") from error
+    raise
 
 from mtbmj.controllers import installed
 from mtbmj.rolling import frontend as rolling

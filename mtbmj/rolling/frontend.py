@@ -524,13 +524,11 @@ class RollResult(RunOutput):
                 "wall_time_s": self.wall_time_s, "engine_info": self.info}
 
     def plot(self):
-        import matplotlib
-
-        matplotlib.use("Agg", force=False)
-        import matplotlib.pyplot as plt
+        from matplotlib.figure import Figure
 
         names = ("terrain_mm", "fork_mm", "tire_mm", "axle_force_z_N", "axle_force_x_N")
-        fig, axes = plt.subplots(len(names), 1, sharex=True, figsize=(7, 9), constrained_layout=True)
+        fig = Figure(figsize=(7, 9), layout="constrained")
+        axes = fig.subplots(len(names), 1, sharex=True)
         for ax, name in zip(axes, names):
             ax.plot(self.time, self.signals[name])
             ax.set_ylabel(name)

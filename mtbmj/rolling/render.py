@@ -322,10 +322,7 @@ def _write_gif(path: str, images, fps: float) -> int:
 
 
 def _write_mp4(path: str, images, fps: float, width: int, height: int) -> int:
-    try:
-        import imageio_ffmpeg
-    except ImportError:
-        raise RenderError("MP4 needs imageio-ffmpeg (pip install imageio-ffmpeg), or write a .gif") from None
+    import imageio_ffmpeg  # present: check_output asked for it before any work
     writer = imageio_ffmpeg.write_frames(path, (width, height), fps=fps, codec="libx264", pix_fmt_out="yuv420p",
                                          quality=7, macro_block_size=2, ffmpeg_log_level="error")
     writer.send(None)
@@ -348,6 +345,10 @@ def check_output(out: str | Path, width: int, height: int, fps: float) -> str:
         raise RenderError(f"--width/--height: must be whole numbers of pixels in 16..4096, got {width}x{height}")
     if ext == ".mp4" and (width % 2 or height % 2):
         raise RenderError(f"--width/--height: MP4 (H.264, yuv420p) needs even sizes, got {width}x{height}")
+    if ext == ".mp4":
+        from mtbmj.extras import require
+
+        require("video", "MP4 video", otherwise="write a .gif")
     if not (math.isfinite(fps) and 1 <= fps <= 240):
         raise RenderError(f"--fps: must be in 1..240, got {fps:g}")
     return ext

@@ -1,6 +1,6 @@
 """The tire on terrain: a radial Kelvin-Voigt spring per contact patch, exact on any profile.
 
-Why not MuJoCo contacts (REFERENCE.md §4): a heightfield or mesh makes one contact per cell or
+Why not MuJoCo contacts (docs/mujoco.md §2-3): a heightfield or mesh makes one contact per cell or
 triangle in reach, each a full spring, so the stiffness multiplies by their number (11.8x on a
 bump in the measurement), and the calibration of negative solref needs the inverse inertia A
 along each contact normal, which changes on every edge and slope. Dividing solref by the contact

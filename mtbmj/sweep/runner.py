@@ -358,6 +358,12 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
         raise ConfigError(f"threads: must be at least 1, got {threads}")
     if not variants:
         raise ConfigError("sweep: no variants")
+    from mtbmj.extras import require
+
+    # before any work: the table needs pandas and pyarrow, the traces h5py
+    require("sweep", "mtbmj sweep", ["pandas", "pyarrow"] + (["h5py"] if traces else []))
+    if backend == "dask":
+        require("dask", "--backend dask")
     if runner is None:
         runner = "batch" if engine in ("mujoco", "fast") and drop is None else "single"
     if isinstance(runner, str):

@@ -116,6 +116,9 @@ def run_sensitivity(config, ranges: Sequence[Range], outputs: Sequence[str], out
                     runner=None) -> SensitivityResult:
     """Sample, run through the sweep (journal and table in ``out_dir``), analyse, and write
     ``sensitivity.json``, ``sensitivity.csv`` and ``sensitivity.png``."""
+    from mtbmj.extras import require
+
+    require("sweep", "mtbmj sensitivity", ["SALib", "pandas", "pyarrow"])
     outputs = check_outputs(outputs)
     prob = problem(ranges)
     x = samples(prob, n, method, seed, levels)
@@ -169,14 +172,11 @@ def _csv(method, outputs, indices) -> bytes:
 
 
 def _plot(method, prob, outputs, indices, runs) -> bytes:
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     names = prob["names"]
-    fig, axes = plt.subplots(len(outputs), 1, figsize=(max(6, 1.6 * len(names) + 3), 2.8 * len(outputs) + 0.6),
-                             squeeze=False, constrained_layout=True)
+    fig = Figure(figsize=(max(6, 1.6 * len(names) + 3), 2.8 * len(outputs) + 0.6), layout="constrained")
+    axes = fig.subplots(len(outputs), 1, squeeze=False)
     pos = np.arange(len(names))
     bars = (("S1", "S1_conf", "first order S1"), ("ST", "ST_conf", "total ST")) if method == "sobol" else \
         (("mu_star", "mu_star_conf", "mu* (mean |effect|)"), ("sigma", None, "sigma"))
@@ -195,7 +195,6 @@ def _plot(method, prob, outputs, indices, runs) -> bytes:
     fig.suptitle(f"{title} ({runs} runs)")
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=110)
-    plt.close(fig)
     return buffer.getvalue()
 
 
