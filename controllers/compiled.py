@@ -35,6 +35,7 @@ import contextlib
 import ctypes
 import logging
 import math
+import os
 import threading
 import time
 import warnings
@@ -322,7 +323,8 @@ def check_layout(model, layout: dict | None = None) -> None:
 # ----------------------------------------------------------------------------------------------
 COMPILE_SECONDS: float | None = None  # wall time to compile (or load from numba's cache) the kernels
 COMPILE_LOG = logging.getLogger("mtbmj.compile")
-COMPILE_NOTICE_S = 3.0  # loading from numba's cache takes ~0.1-2 s (a loaded machine); compiling 10 s or more
+# loading from numba's cache takes ~0.1-2 s (a loaded machine); compiling 10 s or more (MTBMJ_COMPILE_NOTICE_S sets it)
+COMPILE_NOTICE_S = float(os.environ.get("MTBMJ_COMPILE_NOTICE_S", "3.0"))
 
 
 def _notice(what: str) -> threading.Timer:

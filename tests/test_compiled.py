@@ -356,10 +356,11 @@ with warnings.catch_warnings(record=True) as caught:
     assert not compiled.available()
     assert all(isinstance(compiled.make_callback(model, setup.fork), ForkCallback) for _ in range(3))
     trace = engine_mujoco.run(setup, callback="auto", duration=0.05)
+    assert trace.fork.size == round(0.05 / setup.timestep) + 1
 messages = [str(w.message) for w in caught if "numba" in str(w.message)]
 assert messages == [compiled.FALLBACK_MESSAGE], messages
 print("ok", trace.fork.size)
 """
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
-    assert out.stdout.startswith("ok 501")
+    assert out.stdout.startswith("ok ")

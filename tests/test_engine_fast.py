@@ -80,7 +80,8 @@ def test_diverging_run_reports_the_time():
 
 def test_cli_fast_drop_and_cold_compile_notice(tmp_path):
     """A cold numba cache says it compiles; the second process loads it silently; same output."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    # a notice after 0.5 s: a cold compile takes longer on any machine, a cached load far less
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), MTBMJ_COMPILE_NOTICE_S="0.5")
     command = [sys.executable, "-m", "mtbmj.cli", "drop", "S1", "--engine", "fast", "--duration", "0.3", "--quiet"]
     first = subprocess.run(command + ["--out", str(tmp_path / "a")], env=env, capture_output=True, text=True)
     assert first.returncode == 0, first.stderr

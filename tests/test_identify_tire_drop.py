@@ -118,8 +118,12 @@ def test_drop_fit_recovers_s12_values(engine, tmp_path):
     for key, true in S12_TRUTH.items():
         assert res.values[key] == pytest.approx(true, rel=0.03), key
         if engine == "mujoco":
+            # One draw against a 95 % interval misses 5 % of the time by design (coverage itself is
+            # measured over many records by benchmarks/coverage.py): here the 99.9 % interval,
+            # the 95 % one widened by 3.29 / 1.96, must hold the truth.
             low, high = res.extra["ci95"][key]
-            assert low <= true <= high, key
+            centre, half = 0.5 * (low + high), 0.5 * (high - low) * 3.29 / 1.96
+            assert centre - half <= true <= centre + half, key
     corr = np.array(res.extra["correlation"])
     assert corr.shape == (3, 3) and np.allclose(np.diag(corr), 1.0)
     assert 4 <= res.extra["engine_runs"] < 80

@@ -80,15 +80,13 @@ def static_sag_mm(config: Config) -> float:
 def spring_curves_figure(base: Config):
     """Fork spring force vs compression (paper Fig. 3 style): 0-3 spacers at the base pressure,
     and the two study pressures, with the body's weight and each static sag marked."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # the object API: the caller's backend is left alone
 
     travel = base["fork.travel_mm"]
     x = np.linspace(-10.0, travel, 400)
     weight = base["sled.body_mass_kg"] * base.get("sled.gravity_m_per_s2", 9.81)
-    fig, (left, right) = plt.subplots(1, 2, figsize=(11, 4.2), sharey=True, constrained_layout=True)
+    fig = Figure(figsize=(11, 4.2), layout="constrained")
+    left, right = fig.subplots(1, 2, sharey=True)
     for ax, group in ((left, "spacers"), (right, "pressure")):
         for name, (g, change) in variants(base).items():
             if g != group:

@@ -35,14 +35,14 @@ from mtbmj.controllers.stops import STIFFENING_M
 from mtbmj.errors import ConfigError, RunError
 from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
 
-MAX_STEP_S = 1e-4  # longest Runge-Kutta step (s); see benchmarks/fast_engine.py for the accuracy
+MAX_STEP_S = 5e-5  # longest Runge-Kutta step (s); see benchmarks/fast_engine.py for the accuracy
 CHUNK_S = 0.25  # simulated time per kernel call (progress is reported between calls)
 MAX_EVENTS_PER_STEP = 16  # more than this in one step is chattering: the step is taken as it is
 
 # parameter vector of the kernel
 (Q_MB, Q_MW, Q_G, Q_K0, Q_B0, Q_K1, Q_B1, Q_SWITCHES, Q_H, Q_SUB, Q_LIMIT,
- Q_RIM, Q_RIM_D, Q_RIM_K, Q_RIM_C, Q_RIM_P0) = range(16)
-Q_WIDTH = 16
+ Q_RIM, Q_RIM_D, Q_RIM_K, Q_RIM_C, Q_RIM_P0, Q_BUMPER, Q_TRAVEL, Q_TOP) = range(19)
+Q_WIDTH = 19
 
 # status codes
 OK, DIVERGED = 0, 1
@@ -96,7 +96,9 @@ if _numba is not None:
         # direction (the tire-law switch at the end of its first rebound stroke); the rim
         p = d - q[Q_RIM_D]
         rim = q[Q_RIM] != 0.0 and p >= 0.0 and q[Q_RIM_K] * p * (1.0 + (p / q[Q_RIM_P0]) ** 2) + q[Q_RIM_C] * dd >= 0.0
-        return d > 0.0, force > 0.0, y[3] >= 0.0, rim
+        # the fork's end stops: the bumper's and the hard stops' engagement (kinks of its force)
+        x = y[1]
+        return d > 0.0, force > 0.0, y[3] >= 0.0, rim, x >= q[Q_BUMPER], x >= q[Q_TRAVEL], x <= q[Q_TOP]
 
     @numba.njit(**jit)
     def on_event(y, phase, before, after, q):
@@ -209,6 +211,9 @@ def parameters(setup: Setup, substeps: int) -> np.ndarray:
     q[Q_K0], q[Q_B0], q[Q_K1], q[Q_B1] = impact.rate, impact.damping, contact.rate, contact.damping
     q[Q_SWITCHES] = 1.0 if setup.tire.switches else 0.0
     q[Q_H], q[Q_SUB], q[Q_LIMIT] = setup.timestep, substeps, MAX_DISPLACEMENT_M
+    spring = setup.fork.spring
+    q[Q_BUMPER], q[Q_TRAVEL], q[Q_TOP] = (
+        (spring.bumper_start, spring.travel, -spring.extension) if hasattr(spring, "bumper_start") else (1e9, 1e9, -1e9))
     rim = setup.tire.rim
     if rim is not None:
         q[Q_RIM], q[Q_RIM_D], q[Q_RIM_K], q[Q_RIM_C] = 1.0, rim.max_deflection, rim.rate, rim.damping

@@ -351,13 +351,12 @@ def fit_clicks(records: list[Record], clicks: list[float]) -> FitResult:
 
 def plot_clicks(records: list[Record], result: FitResult, clicks: list[float]):
     """Each dyno file's peak points and its fitted curve, coloured by adjuster position."""
-    import matplotlib
+    from matplotlib import colormaps
+    from matplotlib.figure import Figure  # the object API: the caller's backend is left alone
 
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7.5, 4.5))
-    colours = plt.cm.viridis(np.linspace(0, 0.9, len(records)))
+    fig = Figure(figsize=(7.5, 4.5))
+    ax = fig.subplots()
+    colours = colormaps["viridis"](np.linspace(0, 0.9, len(records)))
     by_clicks = dict(result.extra["curves"])
     for rec, c, colour in sorted(zip(records, clicks, colours), key=lambda t: t[1]):
         pts = peaks(rec)
