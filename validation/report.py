@@ -13,7 +13,6 @@ import csv
 import html
 import io
 import os
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
@@ -25,6 +24,7 @@ from mtbmj.config import Config
 from mtbmj.drop.run import ENGINES, resolve, run_drop
 from mtbmj.errors import ConfigError
 from mtbmj.drop.result import DropResult
+from mtbmj.workers import process_pool
 
 from mtbmj.validation import sled_data
 from mtbmj.validation.events import EVENTS, LABELS, SIGNALS, Events, detect
@@ -63,7 +63,7 @@ def _run_all(jobs, workers, progress):
         mapped = map(_run, jobs)
         pool = None
     else:
-        pool = ProcessPoolExecutor(max_workers=workers)
+        pool = process_pool(workers)
         mapped = pool.map(_run, jobs)
     try:
         for done, result in enumerate(mapped, 1):

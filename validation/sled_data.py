@@ -30,6 +30,7 @@ from typing import Mapping
 import numpy as np
 
 from mtbmj.identify.records import Record, RecordError, read_record
+from mtbmj.textfile import read_bytes
 
 DISPLACEMENTS = ("sled", "fork", "tire")
 ALIASES = {
@@ -250,9 +251,10 @@ def read_sled(path: str | Path, *, sled_offset_mm: float = 0.0, fork_offset_mm: 
     path = Path(path)
     if path.is_dir():
         raise SledDataError(f"{path}: is a directory, not a sled record")
-    raw = path.read_bytes()[:4096] if path.exists() else b""
-    if path.suffix.lower() != ".mat" and b"\x00" in raw:
-        raise SledDataError(f"{path}: not a CSV file (binary content)")
+    if path.suffix.lower() != ".mat" and path.exists():
+        raw = read_bytes(path, SledDataError, str(path), "record")[:4096]
+        if b"\x00" in raw:
+            raise SledDataError(f"{path}: not a CSV file (binary content)")
     try:
         record = read_record(path)
     except SledDataError:

@@ -9,6 +9,7 @@ import warnings
 
 from mtbmj.config import parse_assignment
 from mtbmj.errors import MtbmjError
+from mtbmj.limits import check_duration
 
 EXIT_BAD_INPUT = 2
 
@@ -69,8 +70,7 @@ def run(parser: argparse.ArgumentParser, argv=None) -> int:
     """Parse and run a command: bad input is one line on stderr and exit status 2."""
     try:
         args = parser.parse_args(argv)
-        if getattr(args, "duration", None) is not None and not args.duration > 0:
-            raise MtbmjError(f"--duration: must be positive, got {args.duration}")
+        check_duration("--duration", getattr(args, "duration", None))
         with warnings.catch_warnings():
             warnings.simplefilter("error", RuntimeWarning)
             return args.func(args)

@@ -41,8 +41,7 @@ class DropResult(RunOutput):
 
     def to_csv(self, path: str | Path, raw: bool = False) -> Path:
         path = Path(path)
-        output.write_atomically(path.parent, {path.name: self.csv_bytes(raw)})
-        return path
+        return output.write_file_atomically(path, self.csv_bytes(raw))
 
     def manifest(self) -> dict:
         return {

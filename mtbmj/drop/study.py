@@ -3,15 +3,15 @@ from __future__ import annotations
 
 import io
 import os
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Callable, Sequence
 
 from mtbmj.validation import Crosscheck, from_results
-from mtbmj import output
+from mtbmj import compose, limits, output
 from mtbmj.config import Config, study_presets
 from mtbmj.drop.run import resolve, run_drop
 from mtbmj.drop.result import DropResult
+from mtbmj.workers import process_pool
 
 GROUPS = {
     "spring": ("Fork spring study S1-S7", [f"S{i}" for i in range(1, 8)]),
@@ -33,10 +33,14 @@ def run_study(presets: Sequence[str] | None = None, overrides=None, duration: fl
     """
     names = list(presets or study_presets())
     configs = [resolve(n, overrides) for n in names]
+    for c in configs:  # refused here, before any worker starts
+        setup = compose.setup(c)
+        limits.check_run(setup.duration if duration is None else duration, setup.timestep, setup.sample_rate,
+                         f"{c.name}: duration", runs=2)
     jobs = [(c, e, duration) for c in configs for e in ("ode", "mujoco")]
     workers = workers or min(len(jobs), os.cpu_count() or 1)
     results: dict[str, dict[str, DropResult]] = {n: {} for n in names}
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    with process_pool(workers) as pool:
         for done, result in enumerate(pool.map(_run, jobs), 1):
             results[result.name][result.engine] = result
             if progress is not None:

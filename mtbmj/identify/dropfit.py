@@ -42,7 +42,6 @@ from __future__ import annotations
 import multiprocessing
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -55,6 +54,7 @@ from mtbmj.errors import ConfigError, MtbmjError
 
 from mtbmj.identify.fitresult import FitResult, covariance_stderr
 from mtbmj.identify.records import Record, read_record
+from mtbmj.workers import process_pool
 
 CHANNELS = ("sled", "fork", "tire")
 MODEL_KEYS = ("fork.spring.model", "fork.spring.top_out", "fork.spring.preload", "fork.damper.model",
@@ -187,8 +187,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
         return model - data
 
     context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    pool = (ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker,
-                                initargs=(cfg, engine, duration, times, channels))
+    pool = (process_pool(workers, _init_worker, (cfg, engine, duration, times, channels), context)
             if workers > 1 and not batched else None)
 
     def evaluate(points) -> list[np.ndarray]:

@@ -216,35 +216,13 @@ def _batches(variants: list[Variant], size: int) -> list[list[Variant]]:
     return [variants[i:i + size] for i in range(0, len(variants), size)]
 
 
-def _exit_with_parent(parent: int) -> None:
-    """Worker initializer: a worker whose sweep process is killed (kill -9) exits too instead of
-    idling as an orphan (Linux: the parent-death signal; elsewhere a watchdog thread)."""
-    try:
-        import ctypes
-        import signal
-
-        libc = ctypes.CDLL(None, use_errno=True)
-        if libc.prctl(1, signal.SIGKILL, 0, 0, 0) == 0:  # PR_SET_PDEATHSIG
-            if os.getppid() != parent:  # the parent died before prctl took effect
-                os._exit(1)
-            return
-    except (OSError, AttributeError):
-        pass
-
-    def watch():
-        while os.getppid() == parent:
-            time.sleep(1.0)
-        os._exit(1)
-
-    threading.Thread(target=watch, daemon=True).start()
-
-
 def _run_local(jobs: list[BatchJob], runner, workers: int, on_done) -> list[str]:
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures import as_completed
+
+    from mtbmj.workers import process_pool
 
     problems = []
-    pool = ProcessPoolExecutor(max_workers=min(workers, len(jobs)), initializer=_exit_with_parent,
-                               initargs=(os.getpid(),))
+    pool = process_pool(min(workers, len(jobs)))
     try:
         futures = {pool.submit(runner, job): job for job in jobs}
         for future in as_completed(futures):

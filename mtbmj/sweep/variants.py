@@ -147,7 +147,7 @@ def sample(ranges: Sequence[Range], n: int, method: str = "lhs", seed: int = 0) 
 def _cell(text: str) -> Any:
     try:
         return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, RecursionError):
         return text
 
 
@@ -156,7 +156,7 @@ def from_csv(path: str | Path) -> list[dict[str, Any]]:
     Values are read like ``--set`` values; an empty cell keeps the base value; ``#`` lines are
     comments."""
     path = Path(path)
-    text = read_text(path, ConfigError, f"--from-csv {path}", "not a text file")
+    text = read_text(path, ConfigError, f"--from-csv {path}", "not a text file", "table")
     lines = [line for line in text.splitlines() if line.strip() and not line.lstrip().startswith("#")]
     if not lines:
         raise ConfigError(f"--from-csv {path}: no header line")
