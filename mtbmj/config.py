@@ -160,8 +160,8 @@ def check_value(key: str, value: Any) -> Any:
     if not _is_finite(value):
         raise ConfigError(f"{key}: must be finite, got {value if isinstance(value, float) else 'a number too large'}")
     value = float(value)
-    if not math.isfinite(value):
-        raise ConfigError(f"{key}: must be finite, got {value}")
+    if abs(value) > MAX_MAGNITUDE:
+        raise ConfigError(f"{key}: {value:g} is beyond any physical fork or sled (at most {MAX_MAGNITUDE:g} in its unit)")
     if kind == "pos" and value <= 0.0:
         raise ConfigError(f"{key}: must be positive, got {value:g}")
     if kind == "nonneg" and value < 0.0:
@@ -181,6 +181,9 @@ def _is_finite(value: int | float) -> bool:
 
 
 MAX_LIST = 10_000  # values in a list key (a damper table)
+# No key's value is anywhere near this in its unit (N/mm, kg, mm, s); beyond it MuJoCo's model
+# becomes singular (a 1e200 kg wheel) and it prints its own warnings before failing.
+MAX_MAGNITUDE = 1e12
 
 
 def preset_names() -> list[str]:

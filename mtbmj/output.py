@@ -43,19 +43,17 @@ def csv_bytes(columns: Mapping[str, np.ndarray], header: str = "") -> bytes:
     return buffer.getvalue().encode()
 
 
-def csv_cell(value) -> str:
-    """One CSV cell of text a user may have chosen (a file name, a configuration name): quoted
-    when needed, and a leading ``= + - @`` (or tab, carriage return) that a spreadsheet would
-    run as a formula is defused with a leading apostrophe."""
-    text = str(value)
-    if text[:1] in ("=", "+", "-", "@", "\t", "\r"):
-        try:
-            float(text)  # a negative number stays a number
-        except ValueError:
-            text = "'" + text
-    if any(c in text for c in ',"\n\r'):
-        text = '"' + text.replace('"', '""') + '"'
-    return text
+def spreadsheet_text(value):
+    """Text a user may have chosen (a file or configuration name, a reason), made safe for a CSV
+    cell that a spreadsheet opens: a leading ``= + - @`` (or tab, carriage return) that it would
+    run as a formula gets a leading apostrophe. Numbers and other values pass unchanged."""
+    if not isinstance(value, str) or value[:1] not in ("=", "+", "-", "@", "\t", "\r"):
+        return value
+    try:
+        float(value)  # a negative number stays a number
+        return value
+    except ValueError:
+        return "'" + value
 
 
 def json_bytes(data) -> bytes:

@@ -128,8 +128,8 @@ class Validation:
         writer = csv.writer(buffer, lineterminator="\n")
         writer.writerow(CSV_COLUMNS)
         for row in self.rows():
-            writer.writerow(["" if row[c] is None else (f"{row[c]:.6g}" if isinstance(row[c], float) else row[c])
-                             for c in CSV_COLUMNS])
+            writer.writerow(["" if row[c] is None else (f"{row[c]:.6g}" if isinstance(row[c], float)
+                                                        else output.spreadsheet_text(row[c])) for c in CSV_COLUMNS])
         return buffer.getvalue().encode()
 
     # -- figures ---------------------------------------------------------------------------------

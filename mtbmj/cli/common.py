@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import io
+import os
 import sys
 import time
 import warnings
@@ -83,3 +85,26 @@ def run(parser: argparse.ArgumentParser, argv=None) -> int:
     except KeyboardInterrupt:
         print("mtbmj: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader went away (``mtbmj presets | head -1``): stop quietly
+        _silence_stdout()
+        return EXIT_BROKEN_PIPE
+    except RecursionError:
+        print("mtbmj: error: input nested too deeply", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as exc:  # the machine refused (disk full, read-only, permissions): one line too
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"mtbmj: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a command whose reader quit
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so the interpreter's final flush does not fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        pass

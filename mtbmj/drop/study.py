@@ -1,6 +1,7 @@
 """The S1-S14 study on both engines: the paper's figures and an engine-vs-reference table."""
 from __future__ import annotations
 
+import csv as _csv
 import io
 import os
 from pathlib import Path
@@ -94,7 +95,11 @@ def study_files(results, checks) -> dict[str, bytes]:
             files[f"study_{key}.png"] = png_bytes(group_figure(results, title, names))
     rows = [c.row() for c in checks]
     columns = list(rows[0])
-    csv = ",".join(columns) + "\n" + "\n".join(",".join(str(r[c]) for c in columns) for r in rows) + "\n"
+    buffer = io.StringIO()
+    writer = _csv.writer(buffer, lineterminator="\n")
+    writer.writerow(columns)
+    writer.writerows([output.spreadsheet_text(str(r[c])) for c in columns] for r in rows)
+    csv = buffer.getvalue()
     files["engine_vs_reference.csv"] = csv.encode()
     files["engine_vs_reference.md"] = table_markdown(checks).encode()
     summary = {name: {engine: r.summary for engine, r in per.items()} for name, per in results.items()}

@@ -31,12 +31,12 @@ class FitResult:
     @property
     def aic(self) -> float:
         n = max(self.n_points, 1)
-        return n * math.log(max(self.rms, 1e-300) ** 2) + 2 * self.n_params
+        return 2 * n * math.log(max(self.rms, 1e-300)) + 2 * self.n_params  # log(rms**2), no underflow
 
     @property
     def bic(self) -> float:
         n = max(self.n_points, 1)
-        return n * math.log(max(self.rms, 1e-300) ** 2) + self.n_params * math.log(n)
+        return 2 * n * math.log(max(self.rms, 1e-300)) + self.n_params * math.log(n)  # log(rms**2), no underflow
 
     def overrides(self) -> dict[str, Any]:
         """Configuration keys to apply: the fitted values plus the model choices."""
