@@ -183,7 +183,7 @@ def _is_finite(value: int | float) -> bool:
 MAX_LIST = 10_000  # values in a list key (a damper table)
 # No key's value is anywhere near this in its unit (N/mm, kg, mm, s); beyond it MuJoCo's model
 # becomes singular (a 1e200 kg wheel) and it prints its own warnings before failing.
-MAX_MAGNITUDE = 1e12
+MAX_MAGNITUDE = 1e30
 
 
 def preset_names() -> list[str]:

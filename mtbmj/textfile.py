@@ -28,8 +28,6 @@ def read_bytes(path: Path, error: type[Exception], label: str, kind: str) -> byt
     limit = LIMITS[kind]
     try:
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
-    except FileNotFoundError:
-        raise error(f"{label}: no such file") from None
     except IsADirectoryError:
         raise error(f"{label}: is a directory, not a file") from None
     except OSError as exc:
