@@ -57,7 +57,7 @@ def _run(job: tuple[Config, str, float | None]) -> DropResult:
 def _run_all(jobs, workers, progress):
     if not jobs:
         return []
-    workers = workers or min(len(jobs), os.cpu_count() or 1)
+    workers = min(workers or os.cpu_count() or 1, len(jobs))  # never more processes than jobs
     results = []
     if workers <= 1 or len(jobs) == 1:
         mapped = map(_run, jobs)

@@ -7,6 +7,9 @@ from pathlib import Path
 from mtbmj.errors import MtbmjError
 
 
+MAX_STARTS = 1000  # start points of a drop fit (each is a whole least-squares fit)
+
+
 def cmd_fit(args) -> int:
     from mtbmj.identify.run import identify
 
@@ -18,6 +21,8 @@ def cmd_fit(args) -> int:
             bounds[key.strip()] = (float(lo), float(hi))
         except ValueError:
             raise MtbmjError(f"--bound {text}: expected key=low:high with numbers") from None
+    if not 1 <= args.starts <= MAX_STARTS:
+        raise MtbmjError(f"--starts: must be in 1..{MAX_STARTS}, got {args.starts}")
     free = [k.strip() for k in (args.free or "").split(",") if k.strip()]
     ident = identify(args.kind, args.data, model=args.model, friction=args.friction, mass_kg=args.mass_kg,
                      config=args.config, free=free, bounds=bounds or None, engine=args.engine,

@@ -12,6 +12,7 @@ from mtbmj import compose, limits, output
 from mtbmj.config import Config, study_presets
 from mtbmj.drop.run import resolve, run_drop
 from mtbmj.drop.result import DropResult
+from mtbmj.errors import ConfigError
 from mtbmj.workers import process_pool
 
 GROUPS = {
@@ -39,7 +40,9 @@ def run_study(presets: Sequence[str] | None = None, overrides=None, duration: fl
         limits.check_run(setup.duration if duration is None else duration, setup.timestep, setup.sample_rate,
                          f"{c.name}: duration", runs=2)
     jobs = [(c, e, duration) for c in configs for e in ("ode", "mujoco")]
-    workers = workers or min(len(jobs), os.cpu_count() or 1)
+    if workers is not None and workers < 1:
+        raise ConfigError(f"--workers: must be at least 1, got {workers}")
+    workers = min(workers or os.cpu_count() or 1, len(jobs))  # never more processes than jobs
     results: dict[str, dict[str, DropResult]] = {n: {} for n in names}
     with process_pool(workers) as pool:
         for done, result in enumerate(pool.map(_run, jobs), 1):
