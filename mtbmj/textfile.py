@@ -14,12 +14,13 @@ from pathlib import Path
 MiB = 1 << 20
 
 # The largest file of each kind that is read, in bytes: far above any real one (a 10-minute
-# 1 kHz sled record is a few MB of CSV; an hour of SST telemetry at 1 kHz about 30 MB).
+# 1 kHz sled record is a few MB of CSV, ten minutes of a 10 kHz dyno about 200 MB; an hour of
+# SST telemetry at 1 kHz about 15 MB), and small enough that what is built from it fits in memory.
 LIMITS = {
     "config": 1 * MiB,
-    "table": 64 * MiB,     # --from-csv variant tables, terrain profiles
-    "record": 512 * MiB,   # CSV or .mat records for fits and validation
-    "telemetry": 512 * MiB,
+    "table": 64 * MiB,     # --from-csv variant tables
+    "record": 256 * MiB,   # CSV or .mat records for fits, validation and terrain profiles
+    "telemetry": 256 * MiB,
 }
 
 
