@@ -348,7 +348,7 @@ DURATIONS = st.one_of(st.sampled_from(["0.002", "0.001", "0.005", "0", "-1", "1e
                                        "1e309", "", "abc", "0x10", "1e-320", "1e5"]),
                       FLOATS.filter(lambda x: not (0 < x < 1e6)).map(repr))
 SETS = st.one_of(st.tuples(st.sampled_from(sorted(SCHEMA)), st.one_of(SCALARS.map(toml_value), NUMBERS)).map("=".join),
-                 st.text(max_size=12))
+                 st.text(max_size=12), st.sampled_from(["a\nb", "fork.spring.model=li\nnear", "=", "=1"]))
 
 
 @st.composite

@@ -200,6 +200,12 @@ def test_deep_nesting_and_huge_numbers_are_one_line(tmp_path, capsys, text, need
 # --- 8, 9, 10, 13: single reproducers -----------------------------------------------------------
 
 
+@pytest.mark.parametrize("argv", [["drop", "S12", "--set", "a\nb"], ["drop", "x\ny.toml"],
+                                  ["drop", "S12", "--set", "fork.spring.model=li\r\nnear"]])
+def test_a_line_break_in_user_input_keeps_the_report_one_line(tmp_path, capsys, argv):
+    one_line(capsys, argv + ["--out", tmp_path / "out"], "\\n")
+
+
 def test_fit_damper_on_an_all_zero_force_column(tmp_path, capsys):
     from mtbmj.identify import dyno_synthetic as dyno
 

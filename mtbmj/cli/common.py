@@ -77,10 +77,10 @@ def run(parser: argparse.ArgumentParser, argv=None) -> int:
             warnings.simplefilter("error", RuntimeWarning)
             return args.func(args)
     except MtbmjError as exc:
-        print(f"mtbmj: error: {exc}", file=sys.stderr)
+        _report(str(exc))
         return EXIT_BAD_INPUT
     except RuntimeWarning as exc:
-        print(f"mtbmj: error: run diverged ({exc})", file=sys.stderr)
+        _report(f"run diverged ({exc})")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("mtbmj: interrupted", file=sys.stderr)
@@ -93,8 +93,15 @@ def run(parser: argparse.ArgumentParser, argv=None) -> int:
         return EXIT_BAD_INPUT
     except OSError as exc:  # the machine refused (disk full, read-only, permissions): one line too
         where = f"{exc.filename}: " if exc.filename else ""
-        print(f"mtbmj: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        _report(f"{where}{exc.strerror or exc}")
         return EXIT_BAD_INPUT
+
+
+def _report(message: str) -> None:
+    """The one line on stderr: a line break in the message (from a file name or a value the
+    user gave) is shown escaped, so the report stays one line."""
+    one = message.replace("\r", "\\r").replace("\n", "\\n")
+    print(f"mtbmj: error: {one}", file=sys.stderr)
 
 
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a command whose reader quit
