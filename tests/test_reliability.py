@@ -2,7 +2,6 @@
 output folders appear at once (also under SIGKILL mid-write); workers die with their parent."""
 from __future__ import annotations
 
-import fcntl
 import os
 import signal
 import stat
@@ -71,17 +70,32 @@ def test_sweep_table_writes_with_word_and_number_columns_and_is_byte_identical(t
     assert list(table["fork.spring.preload"].isna()) == [False, True, False] and not table["fork.spring.preload"][2]
 
 
+HOLDER = textwrap.dedent("""
+    import fcntl, os, sys, time
+    fd = os.open(sys.argv[1], os.O_RDWR | os.O_CREAT)
+    fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    print("locked", flush=True)
+    time.sleep(60)
+""")
+
+
 def test_one_sweep_per_out_folder(tmp_path, capsys):
+    """Another process holds the folder's lock (as a running sweep does): refused at once; when
+    that process is gone (even killed), the folder is free again."""
     out = tmp_path / "sw"
     out.mkdir()
-    fd = os.open(out / ".lock", os.O_RDWR | os.O_CREAT)
-    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # another sweep holds the folder
+    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(out / ".lock")], stdout=subprocess.PIPE, text=True)
     try:
+        assert holder.stdout.readline().strip() == "locked"
         one_line(capsys, ["sweep", "S12", "--vary", f"{PRESET_RATE}=150:300:2", "--duration", "0.05", "--out", out,
                           "--quiet"], "another sweep is writing to this folder")
+        assert sorted(p.name for p in out.iterdir()) == [".lock"]
     finally:
-        os.close(fd)
-    assert sorted(p.name for p in out.iterdir()) == [".lock"]
+        holder.kill()
+        holder.wait()
+        holder.stdout.close()
+    assert main(["sweep", "S12", "--vary", f"{PRESET_RATE}=150:300:2", "--duration", "0.05", "--workers", "1",
+                 "--out", str(out), "--quiet"]) == 0
 
 
 # --- 5: unwritable --out ------------------------------------------------------------------------

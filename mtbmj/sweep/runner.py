@@ -319,7 +319,7 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
 
     Before any work: every variant's values are checked to fit their columns, the base run's
     length against the memory available, and ``out_dir`` must be writable and not in use by
-    another sweep (an flock on ``OUT/.lock``). The finished folder (journal, table, manifest,
+    another sweep (a lock on ``OUT/.lock``). The finished folder (journal, table, manifest,
     timings, traces) replaces the old one in one step (:mod:`mtbmj.output`)."""
     from mtbmj.drop.run import ENGINES, resolve
 
@@ -374,10 +374,12 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
 
 
 class _Lock:
-    """One writer per sweep folder: an exclusive ``flock`` on ``OUT/.lock``, refused at once when
-    another sweep holds it. The lock file is carried into every new version of the folder as the
-    same file (a hard link), so the lock holds across the final swap. A folder this sweep made
-    and left without a journal (a refusal, an interrupt before the first batch) is removed."""
+    """One writer per sweep folder: an exclusive POSIX lock (``lockf``) on ``OUT/.lock``, refused
+    at once when another sweep holds it. A POSIX lock belongs to the process, so the sweep's
+    workers (forked) do not hold it and it goes when the sweep's process does, even killed. The
+    lock file is carried into every new version of the folder as the same file (a hard link), so
+    the lock holds across the final swap. A folder this sweep made and left without a journal (a
+    refusal, an interrupt before the first batch) is removed."""
 
     def __init__(self, out: Path):
         self.out = out
@@ -397,7 +399,7 @@ class _Lock:
             self._clean()
             raise MtbmjError(f"{self.out}: cannot write output here ({exc.strerror})") from None
         try:
-            fcntl.flock(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            fcntl.lockf(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
             os.close(self.fd)
             self.fd = None
@@ -415,7 +417,7 @@ class _Lock:
 
             shutil.rmtree(self.out, ignore_errors=True)
         if self.fd is not None:
-            os.close(self.fd)  # releases the flock
+            os.close(self.fd)  # releases the lock
             self.fd = None
 
 
