@@ -27,6 +27,11 @@ import numpy as np
 
 from mtbmj.errors import MtbmjError
 
+# An existing folder is replaced only when it is empty or holds an mtbmj result, recognised by
+# the summary file each command writes (or a sweep's journal): never a folder of other files.
+RESULT_FILES = ("manifest.json", "sweep.json", "fit.json", "telemetry.json", "study_summary.json",
+                "validation_summary.json", "sensitivity.json", "journal", ".lock")
+
 _RENAME_EXCHANGE = 2
 _AT_FDCWD = -100
 
@@ -91,11 +96,18 @@ def write_file_atomically(path: str | Path, content: bytes) -> Path:
 
 
 def check_target(out_dir: str | Path) -> Path:
-    """Refuse, before any work, an output folder that cannot be written: a file in its place, or
-    a parent where no folder can be made. Creates nothing that stays."""
+    """Refuse, before any work, an output folder that cannot be written: a file in its place, a
+    parent where no folder can be made, the current directory, or a folder of other files (see
+    :data:`RESULT_FILES`). Creates nothing that stays."""
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise MtbmjError(f"{out}: exists and is not a directory; choose another --out")
+    here = Path.cwd().resolve()
+    if out.resolve() == here or out.resolve() in here.parents:
+        raise MtbmjError(f"{out}: is the current directory or holds it; choose another --out")
+    if out.is_dir() and not any((out / name).exists() for name in RESULT_FILES) and any(out.iterdir()):
+        raise MtbmjError(f"{out}: holds files that are not an mtbmj result, which writing here would replace; "
+                         f"choose another --out")
     parent = _existing_ancestor(out.parent)
     if not parent.is_dir():
         raise MtbmjError(f"{parent}: is not a directory, so {out} cannot be made")

@@ -279,6 +279,22 @@ def test_overwriting_a_result_leaves_only_the_new_one(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["run"]
 
 
+def test_a_folder_of_other_files_or_the_current_directory_is_not_replaced(tmp_path, capsys, monkeypatch):
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "thesis.tex").write_text("years of work\n")
+    one_line(capsys, ["drop", "S12", "--duration", "0.05", "--out", mine], "not an mtbmj result")
+    one_line(capsys, ["sweep", "S12", "--vary", f"{PRESET_RATE}=150:300:2", "--out", mine, "--quiet"],
+             "not an mtbmj result")
+    assert [p.name for p in mine.iterdir()] == ["thesis.tex"]
+    monkeypatch.chdir(mine)
+    one_line(capsys, ["drop", "S12", "--duration", "0.05", "--out", "."], "current directory")
+    one_line(capsys, ["drop", "S12", "--duration", "0.05", "--out", ".."], "current directory")
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["drop", "S12", "--duration", "0.05", "--quiet", "--out", str(empty)]) == 0
+
+
 @pytest.mark.parametrize("umask", [0o022, 0o077, 0o002])
 def test_modes_follow_the_umask(tmp_path, umask):
     old = os.umask(umask)
@@ -294,7 +310,7 @@ def test_modes_follow_the_umask(tmp_path, umask):
 
 def test_a_failed_write_keeps_the_old_folder_whole(tmp_path, monkeypatch):
     out = tmp_path / "o"
-    output.write_atomically(out, {"a": b"old a\n", "b": b"old b\n"})
+    output.write_atomically(out, {"a": b"old a\n", "manifest.json": b"old b\n"})
     real, calls = output.write_file, []
 
     def failing(path, content):
@@ -306,7 +322,7 @@ def test_a_failed_write_keeps_the_old_folder_whole(tmp_path, monkeypatch):
     monkeypatch.setattr(output, "write_file", failing)
     with pytest.raises(MtbmjError, match="No space left"):
         output.write_atomically(out, {"a": b"new a\n", "c": b"new c\n"})
-    assert {p.name: p.read_text() for p in out.iterdir()} == {"a": "old a\n", "b": "old b\n"}
+    assert {p.name: p.read_text() for p in out.iterdir()} == {"a": "old a\n", "manifest.json": "old b\n"}
     assert [p.name for p in tmp_path.iterdir()] == ["o"]
 
 
@@ -318,6 +334,7 @@ WRITER = textwrap.dedent("""
         tag = str(version).encode()
         files = {f"part{i}.bin": tag + b"|" + bytes(200_000) for i in range(6)}
         files["sub/last.txt"] = tag
+        files["manifest.json"] = tag
         output.write_atomically(out, files)
         print(version, flush=True)
 """)
@@ -337,9 +354,9 @@ def test_sigkill_mid_write_leaves_the_old_folder_or_the_new_one(tmp_path):
         proc.wait()
         proc.stdout.close()
         names = sorted(p.name for p in out.iterdir())
-        assert names == [f"part{i}.bin" for i in range(6)] + ["sub"], names
+        assert names == ["manifest.json"] + [f"part{i}.bin" for i in range(6)] + ["sub"], names
         tags = {(out / f"part{i}.bin").read_bytes().split(b"|")[0] for i in range(6)}
-        tags.add((out / "sub" / "last.txt").read_bytes())
+        tags |= {(out / "sub" / "last.txt").read_bytes(), (out / "manifest.json").read_bytes()}
         assert len(tags) == 1, tags  # never a mix of two versions
         seen |= tags
     output.write_atomically(out, {"x": b"1"})
