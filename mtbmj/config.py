@@ -135,12 +135,17 @@ def _stem(key: str) -> str:
 _STEMS = {_stem(k): k for k in SCHEMA if _stem(k) != k}
 
 
-def _flatten(table: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+MAX_TABLE_DEPTH = 6  # the schema nests 3 deep (fork.spring.rate_N_per_mm)
+
+
+def _flatten(table: Mapping[str, Any], prefix: str = "", depth: int = 0) -> dict[str, Any]:
+    if depth > MAX_TABLE_DEPTH:
+        raise ConfigError(f"{prefix[:60]}...: tables nested deeper than {MAX_TABLE_DEPTH} levels")
     flat: dict[str, Any] = {}
     for key, value in table.items():
         name = f"{prefix}{key}"
         if isinstance(value, dict):
-            flat.update(_flatten(value, name + "."))
+            flat.update(_flatten(value, name + ".", depth + 1))
         else:
             flat[name] = value
     return flat
@@ -177,16 +182,20 @@ def check_value(key: str, value: Any) -> Any:
     if kind == "list":
         if not isinstance(value, (list, tuple)) or not all(_is_number(v) for v in value):
             raise ConfigError(f"{key}: must be a list of numbers")
-        if not all(math.isfinite(v) for v in value):
-            raise ConfigError(f"{key}: contains NaN or infinity")
+        if len(value) > MAX_LIST:
+            raise ConfigError(f"{key}: more than {MAX_LIST} values")
+        if not all(_is_finite(v) for v in value):
+            raise ConfigError(f"{key}: contains NaN, infinity or a number too large")
         return tuple(float(v) for v in value)
     if isinstance(value, str):
         raise ConfigError(f"{key}: must be a plain number (the unit is in the key name), got {value!r}")
     if not _is_number(value):
         raise ConfigError(f"{key}: must be a number, got {value!r}")
+    if not _is_finite(value):
+        raise ConfigError(f"{key}: must be finite, got {value if isinstance(value, float) else 'a number too large'}")
     value = float(value)
-    if not math.isfinite(value):
-        raise ConfigError(f"{key}: must be finite, got {value}")
+    if abs(value) > MAX_MAGNITUDE:
+        raise ConfigError(f"{key}: {value:g} is beyond any physical fork or sled (at most {MAX_MAGNITUDE:g} in its unit)")
     if kind == "pos" and value <= 0.0:
         raise ConfigError(f"{key}: must be positive, got {value:g}")
     if kind == "nonneg" and value < 0.0:
@@ -196,6 +205,19 @@ def check_value(key: str, value: Any) -> Any:
 
 def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _is_finite(value: int | float) -> bool:
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:  # an integer beyond the float range
+        return False
+
+
+MAX_LIST = 10_000  # values in a list key (a damper table)
+# No key's value is anywhere near this in its unit (N/mm, kg, mm, s); beyond it MuJoCo's model
+# becomes singular (a 1e200 kg wheel) and it prints its own warnings before failing.
+MAX_MAGNITUDE = 1e30
 
 
 def preset_names() -> list[str]:
@@ -300,6 +322,8 @@ def parse_assignment(text: str) -> tuple[str, Any]:
         value = tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw
+    except RecursionError:
+        raise ConfigError(f"--set {key}: value nested too deeply") from None
     return key, value
 
 
@@ -309,18 +333,16 @@ def _read_toml(path: Path) -> dict[str, Any]:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML ({exc})") from None
+    except RecursionError:
+        raise ConfigError(f"{path}: arrays or tables nested too deeply") from None
 
 
-def _locate(ref: str, relative_to: Path | None = None) -> tuple[str, Path | Any]:
+def _locate(ref: str) -> tuple[str, Path | Any]:
     """Resolve a preset name (case-insensitive) or a TOML path."""
     for name in preset_names():
         if ref.lower() == name.lower():
             return name, resources.files("mtbmj.presets") / f"{name}.toml"
     path = Path(ref)
-    if relative_to is not None and not path.is_absolute():
-        candidate = relative_to / path
-        if candidate.exists():
-            path = candidate
     if path.suffix.lower() == ".toml" or path.exists():
         if not path.exists():
             raise ConfigError(f"{ref}: no such configuration file")
@@ -329,27 +351,59 @@ def _locate(ref: str, relative_to: Path | None = None) -> tuple[str, Path | Any]
     raise ConfigError(f"{ref}: unknown preset (known: {known}) and no such file")
 
 
-def load(ref: str | Path, overrides: Mapping[str, Any] | None = None, _depth: int = 0) -> Config:
-    """Load a preset name or a TOML file, following ``base`` links, then apply overrides."""
-    if _depth > 8:
-        raise ConfigError(f"{ref}: base chain too deep (a cycle?)")
+def _is_preset(name: str) -> bool:
+    return any(name.lower() == n.lower() for n in preset_names())
+
+
+def _base_path(base: str, including: Path, roots: tuple[Path, ...]) -> str:
+    """Where a ``base`` path of the file ``including`` points, if it is allowed there.
+
+    The rule: a base is a preset name or a ``.toml`` file; a relative path is relative to the
+    folder of the file that names it; and the file must lie (symbolic links resolved) inside the
+    current directory or the folder of the configuration named on the command line, or below
+    either. So a configuration cannot make mtbmj read, or name keys of, files elsewhere."""
+    if Path(base).suffix.lower() != ".toml":
+        raise ConfigError(f"{including}: base {base!r} must be a preset name or a .toml file")
+    path = Path(base) if Path(base).is_absolute() else including.parent / base
+    try:
+        real = path.resolve()
+    except (OSError, RuntimeError) as exc:  # a symbolic-link loop
+        raise ConfigError(f"{including}: base {base!r} cannot be resolved ({exc})") from None
+    if not any(real.is_relative_to(root) for root in roots):
+        raise ConfigError(f"{including}: base {base!r} lies outside the current directory and the folder of "
+                          f"the configuration named on the command line; copy it there")
+    return str(path)
+
+
+MAX_BASE_DEPTH = 8
+
+
+def load(ref: str | Path, overrides: Mapping[str, Any] | None = None, _depth: int = 0,
+         _roots: tuple[Path, ...] | None = None) -> Config:
+    """Load a preset name or a TOML file, following ``base`` links (see :func:`_base_path` for
+    where a base may be), then apply overrides."""
+    if _depth > MAX_BASE_DEPTH:
+        raise ConfigError(f"{ref}: base chain longer than {MAX_BASE_DEPTH} (a cycle?)")
     name, location = _locate(str(ref))
     if isinstance(location, Path):
         table = _read_toml(location)
-        parent = location.parent
+        if _roots is None:
+            _roots = (Path.cwd().resolve(), location.resolve().parent)
     else:
         table = tomllib.loads(location.read_text())
-        parent = None
-    flat = _flatten(table)
     values: dict[str, Any] = {}
     sources: tuple[str, ...] = ()
-    base = flat.pop("base", None)
+    base = table.pop("base", None)
+    try:
+        flat = _flatten(table)
+    except ConfigError as exc:
+        raise ConfigError(f"{location}: {exc}") from None
     if base is not None:
         if not isinstance(base, str):
             raise ConfigError(f"{location}: base must be a preset name or a path")
-        if parent is not None and not any(base.lower() == n.lower() for n in preset_names()):
-            base = str(parent / base) if not Path(base).is_absolute() else base
-        parent_config = load(base, _depth=_depth + 1)
+        if isinstance(location, Path) and not _is_preset(base):
+            base = _base_path(base, location, _roots or ())
+        parent_config = load(base, _depth=_depth + 1, _roots=_roots)
         values.update(parent_config.values)
         sources = parent_config.sources
         values.pop("description", None)

@@ -1,16 +1,72 @@
-"""Reading a user's text input file (configuration, record, variant table) or failing with one
-line that names the file and the cause."""
+"""Reading a user's input file (configuration, record, variant table, telemetry) or failing with
+one line that names the file and the cause.
+
+Only regular files are read: a FIFO, a device (``/dev/zero``) or a socket is refused without
+waiting on it (the file is opened non-blocking and checked before any byte is read), and so is a
+file larger than the limit of its kind (:data:`LIMITS`), before it is read into memory.
+"""
 from __future__ import annotations
 
+import os
+import stat
 from pathlib import Path
 
+MiB = 1 << 20
 
-def read_text(path: Path, error: type[Exception], label: str, not_text: str) -> str:
-    """The file's text; ``error(f"{label}: cannot read (...)")`` when it cannot be read and
-    ``error(f"{label}: {not_text}")`` when it is not text (not UTF-8)."""
+# The largest file of each kind that is read, in bytes: far above any real one (a 10-minute
+# 1 kHz sled record is a few MB of CSV, ten minutes of a 10 kHz dyno about 200 MB; an hour of
+# SST telemetry at 1 kHz about 15 MB), and small enough that what is built from it fits in memory.
+LIMITS = {
+    "config": 1 * MiB,
+    "table": 64 * MiB,     # --from-csv variant tables
+    "record": 256 * MiB,   # CSV or .mat records for fits, validation and terrain profiles
+    "telemetry": 256 * MiB,
+}
+
+
+def read_bytes(path: Path, error: type[Exception], label: str, kind: str) -> bytes:
+    """The bytes of a regular file of at most ``LIMITS[kind]`` bytes, or ``error(one line)``."""
+    limit = LIMITS[kind]
     try:
-        return Path(path).read_text()
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    except IsADirectoryError:
+        raise error(f"{label}: is a directory, not a file") from None
     except OSError as exc:
         raise error(f"{label}: cannot read ({exc.strerror})") from None
+    try:
+        info = os.fstat(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise error(f"{label}: is a directory, not a file")
+        if not stat.S_ISREG(info.st_mode):
+            raise error(f"{label}: not a regular file (a pipe, device or socket is not read)")
+        if info.st_size > limit:
+            raise error(f"{label}: too large ({info.st_size / MiB:.1f} MiB; the limit for a {kind} file is "
+                        f"{limit / MiB:g} MiB)")
+        chunks, size = [], 0
+        while True:
+            chunk = os.read(fd, min(limit + 1 - size, 1 << 24))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+            if size > limit:  # grew while being read
+                raise error(f"{label}: too large (over the limit of {limit / MiB:g} MiB for a {kind} file)")
+        return b"".join(chunks)
+    except OSError as exc:
+        raise error(f"{label}: cannot read ({exc.strerror})") from None
+    finally:
+        os.close(fd)
+
+
+def read_text(path: Path, error: type[Exception], label: str, not_text: str, kind: str = "config") -> str:
+    """The file's text; ``error(f"{label}: cannot read (...)")`` when it cannot be read (see
+    :func:`read_bytes` for what is refused) and ``error(f"{label}: {not_text}")`` when it is not
+    text (not UTF-8, or holding NUL bytes)."""
+    blob = read_bytes(Path(path), error, label, kind)
+    try:
+        text = blob.decode()
     except UnicodeDecodeError:
         raise error(f"{label}: {not_text}") from None
+    if "\x00" in text:
+        raise error(f"{label}: {not_text}")
+    return text.replace("\r\n", "\n").replace("\r", "\n")  # universal newlines, as open() reads

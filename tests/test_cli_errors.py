@@ -67,7 +67,8 @@ ERRORS = {
     # and a floating-point overflow in the ODE reference (a RuntimeWarning).
     "diverge_mujoco_warning": (["S1", "--set", "sled.drop_height_mm=1e25"], ["diverged", "BADQVEL"]),
     "diverge_runaway": (["S1", "--set", "sled.drop_height_mm=1e7"], ["diverged"]),
-    "diverge_ode_overflow": (["S1", "--engine", "ode", "--set", "sled.drop_height_mm=1e300"], ["diverged"]),
+    "diverge_ode_overflow": (["S1", "--engine", "ode", "--set", "sled.drop_height_mm=1e30"], ["diverged"]),
+    "beyond_any_fork": (["S12", "--set", "sled.wheel_mass_kg=1e200"], ["sled.wheel_mass_kg", "beyond"]),
 }
 # cases whose --out directory exists beforehand (with a file in it) and must be left unchanged
 EXISTING_OUT = {

@@ -226,9 +226,9 @@ def test_run_validation_writes_every_file(tmp_path, validation):
 
 
 def test_write_is_all_or_nothing(tmp_path, validation, monkeypatch):
-    import tempfile
+    from mtbmj import output
 
-    real = tempfile.mkstemp
+    real = output.write_file
     calls = []
 
     def failing(*args, **kwargs):  # the disk fills up at the third file
@@ -237,11 +237,11 @@ def test_write_is_all_or_nothing(tmp_path, validation, monkeypatch):
             raise OSError(28, "No space left on device")
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(tempfile, "mkstemp", failing)
+    monkeypatch.setattr(output, "write_file", failing)
     with pytest.raises(MtbmjError) as info:
         validation.write(tmp_path / "failed")
     assert "\n" not in str(info.value) and len(calls) == 3
-    assert not (tmp_path / "failed").exists()
+    assert not (tmp_path / "failed").exists() and not list(tmp_path.iterdir())
 
 
 def test_reference_mode_shows_engine_against_ode(tmp_path):

@@ -35,6 +35,12 @@ from typing import Mapping
 import numpy as np
 from scipy.signal import find_peaks, savgol_filter
 
+from mtbmj.errors import MtbmjError
+
+
+class EventsError(MtbmjError, ValueError):
+    """Too little of a run or record to find its events (one line; also a ValueError, as before)."""
+
 SIGNALS = ("sled", "fork", "tire")
 EVENTS = ("peak1", "topping", "peak2", "valley1", "peak3", "rest")
 LABELS = {"peak1": "Peak 1", "topping": "Topping", "peak2": "Peak 2", "valley1": "Valley 1",
@@ -190,7 +196,8 @@ def detect(signals: Mapping[str, np.ndarray], start_s: float = 0.0) -> Events:
     keep = t_all >= start_s - 1e-12
     t = t_all[keep]
     if t.size < 20:
-        raise ValueError("too few points after touch to find events")
+        raise EventsError(f"{t.size} samples after touch, too few to find the events (at least 20; "
+                          f"a longer --duration)")
     dt = float(np.median(np.diff(t)))
     raw = {s: np.asarray(signals[f"{s}_mm"], float)[keep] for s in SIGNALS}
     noise = {s: _noise(raw[s]) for s in SIGNALS}

@@ -13,7 +13,6 @@ import csv
 import html
 import io
 import os
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
@@ -25,6 +24,7 @@ from mtbmj.config import Config
 from mtbmj.drop.run import ENGINES, resolve, run_drop
 from mtbmj.errors import ConfigError
 from mtbmj.drop.result import DropResult
+from mtbmj.workers import process_pool
 
 from mtbmj.validation import sled_data
 from mtbmj.validation.events import EVENTS, LABELS, SIGNALS, Events, detect
@@ -57,13 +57,13 @@ def _run(job: tuple[Config, str, float | None]) -> DropResult:
 def _run_all(jobs, workers, progress):
     if not jobs:
         return []
-    workers = workers or min(len(jobs), os.cpu_count() or 1)
+    workers = min(workers or os.cpu_count() or 1, len(jobs))  # never more processes than jobs
     results = []
     if workers <= 1 or len(jobs) == 1:
         mapped = map(_run, jobs)
         pool = None
     else:
-        pool = ProcessPoolExecutor(max_workers=workers)
+        pool = process_pool(workers)
         mapped = pool.map(_run, jobs)
     try:
         for done, result in enumerate(mapped, 1):
@@ -128,8 +128,8 @@ class Validation:
         writer = csv.writer(buffer, lineterminator="\n")
         writer.writerow(CSV_COLUMNS)
         for row in self.rows():
-            writer.writerow(["" if row[c] is None else (f"{row[c]:.6g}" if isinstance(row[c], float) else row[c])
-                             for c in CSV_COLUMNS])
+            writer.writerow(["" if row[c] is None else (f"{row[c]:.6g}" if isinstance(row[c], float)
+                                                        else output.spreadsheet_text(row[c])) for c in CSV_COLUMNS])
         return buffer.getvalue().encode()
 
     # -- figures ---------------------------------------------------------------------------------

@@ -29,6 +29,7 @@ import numpy as np
 from mtbmj.identify.records import Record, RecordError, read_record
 from mtbmj.validation import time_zero
 from mtbmj.validation.time_zero import antialias_delay_s, noise_sigma
+from mtbmj.textfile import read_bytes
 
 DISPLACEMENTS = ("sled", "fork", "tire")
 ALIASES = {
@@ -196,9 +197,10 @@ def read_sled(path: str | Path, *, sled_offset_mm: float = 0.0, fork_offset_mm: 
     path = Path(path)
     if path.is_dir():
         raise SledDataError(f"{path}: is a directory, not a sled record")
-    raw = path.read_bytes()[:4096] if path.exists() else b""
-    if path.suffix.lower() != ".mat" and b"\x00" in raw:
-        raise SledDataError(f"{path}: not a CSV file (binary content)")
+    if path.suffix.lower() != ".mat" and path.exists():
+        raw = read_bytes(path, SledDataError, str(path), "record")[:4096]
+        if b"\x00" in raw:
+            raise SledDataError(f"{path}: not a CSV file (binary content)")
     try:
         record = read_record(path)
     except SledDataError:

@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import io
 import logging
+import os
 import sys
 import time
 import warnings
 
 from mtbmj.config import parse_assignment
 from mtbmj.errors import MtbmjError
+from mtbmj.limits import check_duration
 
 EXIT_BAD_INPUT = 2
 # The drop engines (``mtbmj.drop.run.ENGINES``), named here so the parser needs no engine imported.
@@ -113,17 +116,46 @@ def run(parser: argparse.ArgumentParser, argv=None) -> int:
     show_compile_notices()
     try:
         args = parser.parse_args(argv)
-        if getattr(args, "duration", None) is not None and not args.duration > 0:
-            raise MtbmjError(f"--duration: must be positive, got {args.duration}")
+        check_duration("--duration", getattr(args, "duration", None))
         with warnings.catch_warnings():
             warnings.simplefilter("error", RuntimeWarning)
             return args.func(args)
     except MtbmjError as exc:
-        print(f"mtbmj: error: {exc}", file=sys.stderr)
+        _report(str(exc))
         return EXIT_BAD_INPUT
     except RuntimeWarning as exc:
-        print(f"mtbmj: error: run diverged ({exc})", file=sys.stderr)
+        _report(f"run diverged ({exc})")
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("mtbmj: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader went away (``mtbmj presets | head -1``): stop quietly
+        _silence_stdout()
+        return EXIT_BROKEN_PIPE
+    except RecursionError:
+        print("mtbmj: error: input nested too deeply", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as exc:  # the machine refused (disk full, read-only, permissions): one line too
+        where = f"{exc.filename}: " if exc.filename else ""
+        _report(f"{where}{exc.strerror or exc}")
+        return EXIT_BAD_INPUT
+
+
+def _report(message: str) -> None:
+    """The one line on stderr: a line break in the message (from a file name or a value the
+    user gave) is shown escaped, so the report stays one line."""
+    one = message.replace("\r", "\\r").replace("\n", "\\n")
+    print(f"mtbmj: error: {one}", file=sys.stderr)
+
+
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a command whose reader quit
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so the interpreter's final flush does not fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
+        pass

@@ -8,6 +8,9 @@ from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, intermixed  # noqa: F401
 from mtbmj.errors import MtbmjError
 
 
+MAX_STARTS = 1000  # start points of a drop fit (each is a whole least-squares fit)
+
+
 def cmd_fit(args) -> int:
     from mtbmj.identify.run import identify
 
@@ -19,6 +22,8 @@ def cmd_fit(args) -> int:
             bounds[key.strip()] = (float(lo), float(hi))
         except ValueError:
             raise MtbmjError(f"--bound {text}: expected key=low:high with numbers") from None
+    if not 1 <= args.starts <= MAX_STARTS:
+        raise MtbmjError(f"--starts: must be in 1..{MAX_STARTS}, got {args.starts}")
     free = [k.strip() for k in (args.free or "").split(",") if k.strip()]
     clicks = None
     if args.clicks:

@@ -17,6 +17,7 @@ from mtbmj import output
 from mtbmj.ride import metrics as ride_metrics
 from mtbmj.ride import telemetry
 from mtbmj.errors import MtbmjError
+from mtbmj.textfile import read_text
 
 try:
     import tomllib
@@ -63,8 +64,9 @@ def load_run(run_dir: Path) -> dict:
         raise MtbmjError(f"--compare {run_dir}: not a run directory")
     if not csv_path.is_file():
         raise MtbmjError(f"--compare {run_dir}: no timeseries.csv (write one with mtbmj drop ... --out {run_dir})")
+    text = read_text(csv_path, MtbmjError, str(csv_path), "not a text file", "record")
     try:
-        lines = [line for line in csv_path.read_text().splitlines() if line.strip() and not line.startswith("#")]
+        lines = [line for line in text.splitlines() if line.strip() and not line.startswith("#")]
         names = [n.strip() for n in lines[0].split(",")]
         table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
     except (OSError, ValueError, IndexError) as exc:
@@ -78,19 +80,22 @@ def load_run(run_dir: Path) -> dict:
     travel_max = None
     config_path = run_dir / "config.toml"
     if config_path.is_file():
+        text = read_text(config_path, MtbmjError, str(config_path), "not a text file")
         try:
-            travel_max = tomllib.loads(config_path.read_text()).get("fork", {}).get("travel_mm")
-        except (OSError, tomllib.TOMLDecodeError) as exc:
-            raise MtbmjError(f"{config_path}: cannot read ({exc})") from None
-    if not isinstance(travel_max, (int, float)) or not travel_max > 0:
+            fork = tomllib.loads(text).get("fork")
+        except (tomllib.TOMLDecodeError, RecursionError) as exc:
+            raise MtbmjError(f"{config_path}: not valid TOML ({exc})") from None
+        travel_max = fork.get("travel_mm") if isinstance(fork, dict) else None
+    if isinstance(travel_max, bool) or not isinstance(travel_max, (int, float)) or not 0 < travel_max < 1e6:
         raise MtbmjError(f"--compare {run_dir}: config.toml gives no fork.travel_mm")
     name = run_dir.name
     manifest_path = run_dir / "manifest.json"
     if manifest_path.is_file():
         try:
-            manifest = json.loads(manifest_path.read_text())
-            name = f"{manifest.get('name', name)} ({manifest.get('engine', manifest.get('kind', 'sim'))})"
-        except (OSError, ValueError):
+            manifest = json.loads(read_text(manifest_path, MtbmjError, str(manifest_path), "not a text file"))
+            if isinstance(manifest, dict):
+                name = f"{manifest.get('name', name)} ({manifest.get('engine', manifest.get('kind', 'sim'))})"
+        except (MtbmjError, ValueError, RecursionError):
             pass
     return {"name": name, "dir": str(run_dir), "time_s": columns["time_s"], "fork_mm": columns["fork_mm"],
             "velocity_mm_per_s": columns.get("fork_velocity_mm_per_s"), "travel_max_mm": float(travel_max)}

@@ -26,6 +26,8 @@ def parse_presets(text: str) -> list[str]:
             a, i, b, j = match.group(1), int(match.group(2)), match.group(3) or match.group(1), int(match.group(4))
             if a != b or j < i:
                 raise ConfigError(f"--presets: {part!r} is not a range like S1..S14")
+            if j - i >= 1000:
+                raise ConfigError(f"--presets: {part!r} names {j - i + 1} presets; a range names at most 1000")
             names += [f"{a}{k}" for k in range(i, j + 1)]
         else:
             names.append(part)

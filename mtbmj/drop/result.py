@@ -44,8 +44,7 @@ class DropResult(RunOutput):
 
     def to_csv(self, path: str | Path, raw: bool = False) -> Path:
         path = Path(path)
-        output.write_atomically(path.parent, {path.name: self.csv_chunks(raw)})
-        return path
+        return output.write_file_atomically(path, self.csv_chunks(raw))
 
     def manifest(self) -> dict:
         return {

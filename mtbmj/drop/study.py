@@ -1,19 +1,20 @@
 """The S1-S14 study on both engines: the paper's figures and an engine-vs-reference table."""
 from __future__ import annotations
 
+import csv as _csv
 import io
 import os
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Callable, Sequence
 
 from mtbmj.validation import Crosscheck, from_results
 from mtbmj.validation.compare import mm
-from mtbmj import output
+from mtbmj import compose, limits, output
 from mtbmj.config import Config, study_presets
 from mtbmj.drop.run import resolve, run_drop
 from mtbmj.drop.result import DropResult
 from mtbmj.errors import ConfigError
+from mtbmj.workers import process_pool
 
 GROUPS = {
     "spring": ("Fork spring study S1-S7", [f"S{i}" for i in range(1, 8)]),
@@ -46,12 +47,18 @@ def run_study(presets: Sequence[str] | None = None, overrides=None, duration: fl
         raise ConfigError(f"engines: {unknown[0]!r} is not one of {', '.join(ENGINES)}")
     names = list(presets or study_presets())
     configs = [resolve(n, overrides) for n in names]
+    for c in configs:  # refused here, before any worker starts
+        setup = compose.setup(c)
+        limits.check_run(setup.duration if duration is None else duration, setup.timestep, setup.sample_rate,
+                         f"{c.name}: duration", runs=len(engines))
     # the reference first: it is the slowest, so the pool starts on it
     order = sorted(engines, key=lambda e: e != "ode")
     jobs = [(c, e, duration) for c in configs for e in order]
-    workers = workers or min(len(jobs), os.cpu_count() or 1)
+    if workers is not None and workers < 1:
+        raise ConfigError(f"--workers: must be at least 1, got {workers}")
+    workers = min(workers or os.cpu_count() or 1, len(jobs))  # never more processes than jobs
     results: dict[str, dict[str, DropResult]] = {n: {} for n in names}
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    with process_pool(workers) as pool:
         for done, result in enumerate(pool.map(_run, jobs), 1):
             results[result.name][result.engine] = result
             if progress is not None:
@@ -107,8 +114,11 @@ def study_files(results, checks) -> dict[str, bytes]:
     rows = [c.row() for c in checks]
     if rows:  # none when the reference was not among the engines
         columns = list(rows[0])
-        csv = ",".join(columns) + "\n" + "\n".join(",".join(str(r[c]) for c in columns) for r in rows) + "\n"
-        files["engine_vs_reference.csv"] = csv.encode()
+        buffer = io.StringIO()
+        writer = _csv.writer(buffer, lineterminator="\n")
+        writer.writerow(columns)
+        writer.writerows([output.spreadsheet_text(str(r[c])) for c in columns] for r in rows)
+        files["engine_vs_reference.csv"] = buffer.getvalue().encode()
         files["engine_vs_reference.md"] = table_markdown(checks).encode()
     summary = {name: {engine: r.summary for engine, r in per.items()} for name, per in results.items()}
     files["study_summary.json"] = output.json_bytes(summary)

@@ -59,6 +59,8 @@ def peaks(record: Record) -> Record:
     v = record["velocity"]
     if np.sum(v > 0) < 2 or np.sum(v < 0) < 2:
         raise RecordError(f"{record.path}: the damper fit needs compression (v > 0) and rebound (v < 0) points")
+    if not np.any(record["force"] != 0.0):
+        raise RecordError(f"{record.path}: the force is zero at every point: no damping or friction to fit")
     return record
 
 
@@ -413,7 +415,7 @@ def plot_damper(record: Record, results: Mapping[str, FitResult] | FitResult):
     lim = max(0.15 * np.max(np.abs(v)), 60.0)
     near = np.abs(v) <= lim
     ax2.set_xlim(-lim, lim)
-    if np.any(near):
+    if np.any(near) and np.max(np.abs(f[near])) > 0:
         span = np.max(np.abs(f[near]))
         ax2.set_ylim(-1.3 * span, 1.3 * span)
     ax1.set_title("damping: peak force vs velocity", fontsize=9)

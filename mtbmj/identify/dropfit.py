@@ -53,7 +53,6 @@ from __future__ import annotations
 import multiprocessing
 import os
 import time
-from concurrent.futures import ProcessPoolExecutor
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -67,6 +66,7 @@ from mtbmj.errors import ConfigError, MtbmjError
 from mtbmj.identify.fitresult import FitResult, correlated_pairs, correlation, covariance_stderr, hac_covariance
 from mtbmj.identify.records import Record, read_record
 from mtbmj.validation import sled_data
+from mtbmj.workers import process_pool
 
 CHANNELS = ("sled", "fork", "tire")
 FIT_FROM_S = 0.005  # fitted from 5 ms after touch: before, a logger's filter still carries the free fall
@@ -226,8 +226,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
         return model - data
 
     context = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn")
-    pool = (ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker,
-                                initargs=(cfg, engine, duration, times, channels))
+    pool = (process_pool(workers, _init_worker, (cfg, engine, duration, times, channels), context)
             if workers > 1 and not batched else None)
 
     def evaluate(points) -> list[np.ndarray]:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from mtbmj.errors import MtbmjError
-from mtbmj.textfile import read_text
+from mtbmj.textfile import read_bytes, read_text
 
 # unit suffix -> factor to SI
 UNITS = {
@@ -96,7 +96,7 @@ def _convert(path: str, names: list[str], data: np.ndarray, comments=()) -> Reco
 
 def read_csv(path: str | Path) -> Record:
     path = Path(path)
-    text = read_text(path, RecordError, str(path), "not a text file, so not a CSV record")
+    text = read_text(path, RecordError, str(path), "not a text file, so not a CSV record", "record")
     comments, lines = [], []
     for number, line in enumerate(text.splitlines(), 1):
         stripped = line.strip()
@@ -143,8 +143,9 @@ def read_mat(path: str | Path) -> Record:
     from scipy.io import loadmat
 
     path = Path(path)
+    blob = read_bytes(path, RecordError, str(path), "record")
     try:
-        content = loadmat(path, squeeze_me=True)
+        content = loadmat(io.BytesIO(blob), squeeze_me=True)
     except Exception as exc:  # scipy raises several types for a file that is not MAT
         raise RecordError(f"{path}: not a readable MATLAB .mat file ({type(exc).__name__})") from None
     names = [k for k in content if not k.startswith("__")]

@@ -110,6 +110,9 @@ class TravelHistogram:
                 "time_percent": _list(self.time_percent), "peak_bin_percent": list(self.peak_bin_percent)}
 
 
+MIN_BIN_PERCENT = 0.01  # 10 000 travel bins: far finer than any sensor resolves
+
+
 def travel_histogram(travel_mm, travel_max_mm: float, bin_percent: float = 5) -> TravelHistogram:
     """Travel histogram in % of travel, ``bin_percent`` wide bins, normalised to % of time."""
     x = _array(travel_mm, "travel_mm")
@@ -117,6 +120,9 @@ def travel_histogram(travel_mm, travel_max_mm: float, bin_percent: float = 5) ->
     width = _positive(bin_percent, "bin_percent")
     if width > 100:
         raise MetricsError(f"bin_percent: must be at most 100, got {width:g}")
+    if width < MIN_BIN_PERCENT:
+        raise MetricsError(f"bin_percent: must be at least {MIN_BIN_PERCENT:g} (at most {100 / MIN_BIN_PERCENT:g} bins), "
+                           f"got {width:g}")
     n = int(np.ceil(100.0 / width - 1e-9))
     edges = np.minimum(np.arange(n + 1) * width, 100.0)
     percent = np.clip(x / top * 100.0, 0.0, 100.0)
@@ -146,6 +152,9 @@ class VelocityHistogram:
                 "time_percent": _list(self.time_percent)}
 
 
+MAX_VELOCITY_BINS = 100_000
+
+
 def velocity_bins(velocities, step_mm_per_s: float = VELOCITY_BIN_MM_PER_S,
                   limit_mm_per_s: float = VELOCITY_LIMIT_MM_PER_S) -> np.ndarray:
     """Symmetric bin edges, ``step`` wide, wide enough for every given signal up to ``limit``."""
@@ -153,6 +162,8 @@ def velocity_bins(velocities, step_mm_per_s: float = VELOCITY_BIN_MM_PER_S,
     peak = max((float(np.max(np.abs(_array(v, "velocity_mm_per_s")))) for v in velocities), default=step)
     half = min(max(peak, step), _positive(limit_mm_per_s, "limit_mm_per_s"))
     n = int(np.ceil(half / step - 1e-9))
+    if n > MAX_VELOCITY_BINS:
+        raise MetricsError(f"step_mm_per_s: {step:g} mm/s makes {2 * n} velocity bins (at most {2 * MAX_VELOCITY_BINS})")
     return np.arange(-n, n + 1) * step
 
 

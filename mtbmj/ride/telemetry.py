@@ -28,6 +28,7 @@ import numpy as np
 
 from mtbmj.ride import metrics as ride_metrics
 from mtbmj.errors import MtbmjError
+from mtbmj.textfile import read_bytes
 
 MAGIC = b"SST"
 VERSION = 3
@@ -181,14 +182,7 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
     """Read an SST v3 file into travel time series; every problem is one ``TelemetryError`` line."""
     path = Path(path)
     name = str(path)
-    try:
-        blob = path.read_bytes()
-    except FileNotFoundError:
-        raise TelemetryError(f"{name}: no such file") from None
-    except IsADirectoryError:
-        raise TelemetryError(f"{name}: is a directory, not an SST file") from None
-    except OSError as exc:
-        raise TelemetryError(f"{name}: cannot read ({exc.strerror})") from None
+    blob = read_bytes(path, TelemetryError, name, "telemetry")
     if len(blob) >= 3 and blob[:3] != MAGIC:
         raise TelemetryError(f"{name}: not an SST file (starts with {blob[:3]!r}, expected {MAGIC!r})")
     if len(blob) < HEADER.size:

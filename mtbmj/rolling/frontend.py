@@ -39,6 +39,7 @@ from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.terrain import DEFAULT_HEAD_ANGLE_DEG
 from mtbmj.config import Config
 from mtbmj.errors import ConfigError, RunError
+from mtbmj.limits import check_run
 from mtbmj.result import RunOutput
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 
@@ -548,6 +549,7 @@ def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
     _check_inputs(speed_m_per_s, head_angle_deg, duration)
     p = prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, callback=callback)
     duration = default_duration(p) if duration is None else duration
+    check_run(duration, p.setup.timestep, p.setup.sample_rate)
     start = time.perf_counter()
     states, sensors = simulate(p, duration, progress)
     wall = time.perf_counter() - start
@@ -569,6 +571,7 @@ def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12"
     _check_inputs(speed_m_per_s, head_angle_deg, duration)
     p = prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides)
     duration = default_duration(p) if duration is None else duration
+    check_run(duration, p.setup.timestep, p.setup.sample_rate)
     states, _ = simulate(p, duration)
     dt = p.setup.timestep
     every = max(1, int(round(1.0 / (fps * dt))))

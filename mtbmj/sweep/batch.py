@@ -116,6 +116,9 @@ def _prepare(job: BatchJob, variant: Variant, spec) -> _Run:
         raise ConfigError(f"duration: must be positive, got {job.duration}")
     setup = setup_of(cfg)
     duration = setup.duration if job.duration is None else job.duration
+    from mtbmj.limits import check_run
+
+    check_run(duration, setup.timestep, setup.sample_rate)
     sc = build_scene(setup)
     model = sc.model
     data = mujoco.MjData(model)

@@ -34,8 +34,6 @@ import json
 import math
 import os
 import sys
-import tempfile
-import threading
 import time
 import uuid
 from dataclasses import dataclass, field
@@ -44,15 +42,11 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from mtbmj.config import Config
+from mtbmj.config import SCHEMA, Config
 from mtbmj.errors import ConfigError, MtbmjError
 
-if sys.version_info >= (3, 11):
-    pass
-else:  # pragma: no cover
-    pass
-
-from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, MANIFEST, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TRACES, Variant, _canonical, flatten_summary, from_csv, grid, parse_vary, sample, variant_id)
+from mtbmj import output
+from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, LOCK, MANIFEST, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TIMINGS, TRACES, Variant, _canonical, check_types, flatten_summary, from_csv, grid, parse_vary, sample, variant_id)
 from mtbmj.sweep.single import run_batch, run_variant
 
 
@@ -75,7 +69,8 @@ def _fsync_dir(path: Path) -> None:
 
 def _commit(path: Path, write: Callable[[Any], None]) -> None:
     """Write a file durably and atomically: temporary name, fsync, rename, fsync the directory."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    tmp = path.parent / f".{path.name}.{uuid.uuid4().hex[:12]}.tmp"
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask decides the mode
     try:
         with os.fdopen(fd, "wb") as handle:
             write(handle)
@@ -216,35 +211,13 @@ def _batches(variants: list[Variant], size: int) -> list[list[Variant]]:
     return [variants[i:i + size] for i in range(0, len(variants), size)]
 
 
-def _exit_with_parent(parent: int) -> None:
-    """Worker initializer: a worker whose sweep process is killed (kill -9) exits too instead of
-    idling as an orphan (Linux: the parent-death signal; elsewhere a watchdog thread)."""
-    try:
-        import ctypes
-        import signal
-
-        libc = ctypes.CDLL(None, use_errno=True)
-        if libc.prctl(1, signal.SIGKILL, 0, 0, 0) == 0:  # PR_SET_PDEATHSIG
-            if os.getppid() != parent:  # the parent died before prctl took effect
-                os._exit(1)
-            return
-    except (OSError, AttributeError):
-        pass
-
-    def watch():
-        while os.getppid() == parent:
-            time.sleep(1.0)
-        os._exit(1)
-
-    threading.Thread(target=watch, daemon=True).start()
-
-
 def _run_local(jobs: list[BatchJob], runner, workers: int, on_done) -> list[str]:
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from concurrent.futures import as_completed
+
+    from mtbmj.workers import process_pool
 
     problems = []
-    pool = ProcessPoolExecutor(max_workers=min(workers, len(jobs)), initializer=_exit_with_parent,
-                               initargs=(os.getpid(),))
+    pool = process_pool(min(workers, len(jobs)))
     try:
         futures = {pool.submit(runner, job): job for job in jobs}
         for future in as_completed(futures):
@@ -332,7 +305,8 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
               workers: int | None = None, batch_size: int | None = None, backend: str = "local",
               scheduler=None, traces: bool = False, csv: bool = False, resume: bool = False,
               progress: bool | SweepProgress = False, runner: Callable[[BatchJob], list[dict]] | str | None = None,
-              drop: Callable | None = None, manifest_extra: Mapping | None = None, threads: int = 1) -> SweepResult:
+              drop: Callable | None = None, manifest_extra: Mapping | None = None, threads: int = 1,
+              extra_files: Callable[[Any], Mapping[str, bytes]] | None = None) -> SweepResult:
     """Run ``variants`` (override sets) of ``config`` and write ``OUT/sweep.parquet`` (and
     ``sweep.csv``, ``traces.h5`` on request, ``sweep.json`` always).
 
@@ -340,7 +314,13 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
     default for engine "mujoco" without a custom ``drop``), ``"single"`` (:func:`run_batch`, which
     calls ``drop`` - ``mtbmj.drop.run.run_drop`` - per variant) or a picklable top-level function.
     ``threads``: rollout threads per worker process for the batched runner. With
-    ``resume`` the journal in ``out_dir`` is reused and only missing variants run."""
+    ``resume`` the journal in ``out_dir`` is reused and only missing variants run.
+    ``extra_files(table)`` adds files (name -> bytes) to the folder, written with the table.
+
+    Before any work: every variant's values are checked to fit their columns, the base run's
+    length against the memory available, and ``out_dir`` must be writable and not in use by
+    another sweep (a lock on ``OUT/.lock``). The finished folder (journal, table, manifest,
+    timings, traces) replaces the old one in one step (:mod:`mtbmj.output`)."""
     from mtbmj.drop.run import ENGINES, resolve
 
     started = time.perf_counter()
@@ -375,15 +355,83 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
             from mtbmj.sweep.batch import run_batch_rollout as runner
         else:
             runner = run_batch
+    check_types(variants)
     cfg = resolve(config, base_overrides)
+    if cfg.get("solver.timestep_s") is not None or duration is not None:  # the base run's length, before any work
+        from mtbmj.compose import setup as compose_setup
+        from mtbmj.limits import check_run
+
+        base_setup = compose_setup(cfg)
+        check_run(base_setup.duration if duration is None else duration, base_setup.timestep, base_setup.sample_rate)
     out = Path(out_dir)
     planned = plan(cfg, variants, engine, duration)
-    journal = Journal(out)
-    known = journal.records()
-    if known and not resume:
-        raise MtbmjError(f"{out}: holds the journal of a sweep ({len(known)} variants); "
-                         f"pass --resume to continue it, or choose another --out")
+    with _Lock(out) as lock:
+        journal = Journal(out)
+        known = journal.records()
+        if known and not resume:
+            raise MtbmjError(f"{out}: holds the journal of a sweep ({len(known)} variants); "
+                             f"pass --resume to continue it, or choose another --out")
+        try:
+            return _sweep(planned, cfg, out, journal, known, started, engine=engine, duration=duration,
+                          base_overrides=base_overrides, workers=workers, batch_size=batch_size, backend=backend,
+                          scheduler=scheduler, traces=traces, csv=csv, progress=progress, runner=runner,
+                          drop=drop, manifest_extra=manifest_extra, threads=threads, extra_files=extra_files)
+        except BaseException:
+            lock.failed = True
+            raise
 
+
+class _Lock:
+    """One writer per sweep folder: an exclusive POSIX lock (``lockf``) on ``OUT/.lock``, refused
+    at once when another sweep holds it. A POSIX lock belongs to the process, so the sweep's
+    workers (forked) do not hold it and it goes when the sweep's process does, even killed. The
+    lock file is carried into every new version of the folder as the same file (a hard link), so
+    the lock holds across the final swap. A folder this sweep made and left without a journal (a
+    refusal, an interrupt before the first batch) is removed."""
+
+    def __init__(self, out: Path):
+        self.out = out
+        self.failed = False
+        self.fd = None
+        self.made = False
+
+    def __enter__(self):
+        import fcntl
+
+        output.check_target(self.out)
+        try:
+            self.made = not self.out.exists()
+            self.out.mkdir(parents=True, exist_ok=True)
+            self.fd = os.open(self.out / LOCK, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o666)
+        except OSError as exc:
+            self._clean()
+            raise MtbmjError(f"{self.out}: cannot write output here ({exc.strerror})") from None
+        try:
+            fcntl.lockf(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(self.fd)
+            self.fd = None
+            raise MtbmjError(f"{self.out}: another sweep is writing to this folder; wait for it or choose "
+                             f"another --out") from None
+        return self
+
+    def __exit__(self, *exc):
+        self._clean()
+        return False
+
+    def _clean(self):
+        if self.made and not Journal(self.out).parts() and not (self.out / TABLE).exists():
+            import shutil
+
+            shutil.rmtree(self.out, ignore_errors=True)
+        if self.fd is not None:
+            os.close(self.fd)  # releases the lock
+            self.fd = None
+
+
+def _sweep(planned, cfg, out, journal, known, started, *, engine, duration, base_overrides, workers, batch_size,
+           backend, scheduler, traces, csv, progress, runner, drop, manifest_extra, threads,
+           extra_files) -> SweepResult:
     def complete(rec):
         return rec is not None and (rec.get("has_traces") or not traces or rec.get("status") != "ok")
 
@@ -404,7 +452,10 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
     counts = {"computed": 0}
 
     def on_done(records):
-        journal.append(records)
+        try:
+            journal.append(records)
+        except OSError as exc:
+            raise MtbmjError(f"{journal.dir}: cannot write the journal ({exc.strerror or exc})") from None
         counts["computed"] += len(records)
         bar.update(len(records), sum(r["status"] != "ok" for r in records))
 
@@ -426,9 +477,9 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
 
     records = journal.records()
     table = assemble(planned, records)
-    files = {TABLE: parquet_bytes(table)}
+    files = {TABLE: parquet_bytes(table), TIMINGS: timings_csv(planned, records)}
     if csv:
-        files[TABLE_CSV] = table.to_csv(index=False).encode()
+        files[TABLE_CSV] = table.map(output.spreadsheet_text).to_csv(index=False).encode()
     manifest = {
         "config": cfg.name, "config_sha256": cfg.digest(), "config_sources": list(cfg.sources),
         "base_overrides": {k: _canonical(k, v) for k, v in (base_overrides or {}).items()},
@@ -437,15 +488,26 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
         "versions": _versions(), **(manifest_extra or {}),
     }
     files[MANIFEST] = (json.dumps(manifest, indent=2, default=_json_default) + "\n").encode()
-    written = []
-    if traces:
-        written.append(write_traces(out / TRACES, planned, records, journal, cfg, engine))
-    from mtbmj.output import write_atomically
-
-    written += write_atomically(out, files)
+    if extra_files is not None:
+        files.update(extra_files(table))
+    with output.staged_folder(out, keep=(JOURNAL, LOCK)) as stage:
+        if traces:
+            write_traces(stage / TRACES, planned, records, journal, cfg, engine)
+        for name, content in files.items():
+            output.write_file(stage / name, content)
+    written = ([out / TRACES] if traces else []) + [out / name for name in files]
     return SweepResult(table=table, files=written, total=len(planned), computed=counts["computed"],
                        reused=reused, failed=manifest["failed"], wall_time_s=time.perf_counter() - started,
                        out_dir=out, problems=problems)
+
+
+def timings_csv(planned: Sequence[Variant], records: Mapping[str, dict]) -> bytes:
+    """``variant,variant_id,wall_time_s``: how long each variant took (empty: unknown)."""
+    lines = ["variant,variant_id,wall_time_s"]
+    for v in planned:
+        wall = records[v.id].get("wall_time_s")
+        lines.append(f"{v.index},{v.id},{'' if wall is None else repr(float(wall))}")
+    return ("\n".join(lines) + "\n").encode()
 
 
 def _json_default(value):
@@ -463,7 +525,12 @@ def _versions() -> dict:
 
 
 def assemble(planned: Sequence[Variant], records: Mapping[str, dict]):
-    """The table: one row per planned variant (inputs, outputs, status), in plan order."""
+    """The table: one row per planned variant (inputs, outputs, status), in plan order.
+
+    Every column has one type whatever the values: an input column the type of its key (a
+    number: float, NaN where the base value is kept; a word or a list: text, a list as JSON), an
+    output column float when its values are numbers, else text; so the table always writes.
+    Timings are not in the table (see :func:`timings_csv`): equal sweeps give equal tables."""
     import pandas as pd
 
     inputs = list(dict.fromkeys(k for v in planned for k in v.overrides))
@@ -476,16 +543,44 @@ def assemble(planned: Sequence[Variant], records: Mapping[str, dict]):
         row.update({k: v.overrides.get(k) for k in inputs})
         got = rec.get("outputs") or {}
         row.update({k: got.get(k) for k in outputs})
-        row.update(status=rec["status"], reason=rec.get("reason", ""), wall_time_s=rec.get("wall_time_s"))
+        row.update(status=str(rec["status"]), reason=str(rec.get("reason", "") or ""))
         rows.append(row)
     table = pd.DataFrame(rows, columns=["variant", "variant_id"] + inputs + outputs + STATUS_COLUMNS)
-    for column in outputs + inputs:  # numbers with gaps: float with NaN (not object)
-        values = [x for x in table[column] if x is not None and not (isinstance(x, float) and math.isnan(x))]
-        if values and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in values):
-            table[column] = pd.to_numeric(table[column], errors="coerce").astype(float)
-        elif not values:
-            table[column] = table[column].astype(float)
+    for column in inputs:
+        kind = SCHEMA.get(column)
+        numeric = kind in ("pos", "nonneg")
+        table[column] = _typed(table[column], numeric=numeric, boolean=kind == "bool")
+    for column in outputs:
+        table[column] = _typed(table[column])
     return table
+
+
+def _present(x) -> bool:
+    return x is not None and not (isinstance(x, float) and math.isnan(x))
+
+
+def _typed(series, numeric: bool | None = None, boolean: bool = False):
+    """``series`` as one type: float (numbers, NaN for gaps), nullable boolean, or text (None for
+    gaps). ``numeric`` None: float when every value present is a number."""
+    import pandas as pd
+
+    values = [x for x in series if _present(x)]
+    is_num = [isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, (bool, np.bool_)) for x in values]
+    if numeric is None:
+        numeric = all(is_num)
+    if numeric and all(is_num):
+        return pd.to_numeric(series, errors="coerce").astype(float)
+    if boolean and all(isinstance(x, (bool, np.bool_)) for x in values):
+        return series.astype("boolean")
+    def text(x):
+        if not _present(x):
+            return None
+        if isinstance(x, str):
+            return x
+        if isinstance(x, (list, tuple)):
+            return json.dumps([float(v) if isinstance(v, (int, float)) else str(v) for v in x])
+        return json.dumps(x, default=str)
+    return series.map(text).astype(object)
 
 
 def parquet_bytes(table) -> bytes:
@@ -516,8 +611,7 @@ def write_traces(path: Path, planned: Sequence[Variant], records: Mapping[str, d
     n = len(planned)
     chunk_rows = max(1, min(n, max(1, (1 << 20) // max(8 * length, 1))))
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
+    tmp = path.parent / f".{path.name}.{uuid.uuid4().hex[:12]}.tmp"  # h5py creates it, mode per the umask
     try:
         with h5py.File(tmp, "w") as h5:
             h5.attrs.update({"config": config.name, "config_sha256": config.digest(), "engine": engine,

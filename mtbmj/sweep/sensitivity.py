@@ -124,31 +124,34 @@ def run_sensitivity(config, ranges: Sequence[Range], outputs: Sequence[str], out
     x = samples(prob, n, method, seed, levels)
     variants = [dict(zip(prob["names"], map(float, row))) for row in x]
     extra = {"runner": runner} if runner is not None else {}
+    found: dict = {}
+
+    def analysed(table) -> dict[str, bytes]:
+        """The indices, written with the sweep's table in one step; a failure writes neither."""
+        failed = table[table["status"] != "ok"]
+        if len(failed):
+            raise MtbmjError(f"sensitivity: {len(failed)} of {len(table)} runs failed (first: "
+                             f"{failed['reason'].iloc[0]}); narrow the --vary ranges (the runs are journaled in "
+                             f"{Path(out_dir) / 'journal'})")
+        indices = {}
+        for out in outputs:
+            y = table[out].to_numpy(dtype=float)
+            if not np.all(np.isfinite(y)):
+                raise MtbmjError(f"sensitivity: {out} is undefined in {int(np.sum(~np.isfinite(y)))} of {len(y)} "
+                                 f"runs (the event does not occur); choose another --output or a longer --duration")
+            indices[out] = analyze(prob, x, y, method, seed, levels)
+        found["indices"] = indices
+        return {
+            "sensitivity.json": _json(method, prob, n, len(x), outputs, indices, seed),
+            "sensitivity.csv": _csv(method, outputs, indices),
+            "sensitivity.png": _plot(method, prob, outputs, indices, len(x)),
+        }
+
     sweep = run_sweep(config, variants, out_dir, engine=engine, duration=duration, base_overrides=base_overrides,
                       workers=workers, backend=backend, scheduler=scheduler, resume=resume, progress=progress,
                       manifest_extra={"sensitivity": {"method": method, "samples": n, "seed": seed,
-                                                      "problem": prob}}, **extra)
-    table = sweep.table
-    failed = table[table["status"] != "ok"]
-    if len(failed):
-        raise MtbmjError(f"sensitivity: {len(failed)} of {len(table)} runs failed (first: {failed['reason'].iloc[0]}); "
-                         f"narrow the --vary ranges (the runs are in {Path(out_dir) / 'sweep.parquet'})")
-    indices = {}
-    for out in outputs:
-        y = table[out].to_numpy(dtype=float)
-        if not np.all(np.isfinite(y)):
-            raise MtbmjError(f"sensitivity: {out} is undefined in {int(np.sum(~np.isfinite(y)))} of {len(y)} runs "
-                             f"(the event does not occur); choose another --output or a longer --duration")
-        indices[out] = analyze(prob, x, y, method, seed, levels)
-    files = {
-        "sensitivity.json": _json(method, prob, n, len(x), outputs, indices, seed),
-        "sensitivity.csv": _csv(method, outputs, indices),
-        "sensitivity.png": _plot(method, prob, outputs, indices, len(x)),
-    }
-    from mtbmj.output import write_atomically
-
-    written = write_atomically(out_dir, files)
-    return SensitivityResult(method, prob, outputs, indices, len(x), written + sweep.files, sweep)
+                                                      "problem": prob}}, extra_files=analysed, **extra)
+    return SensitivityResult(method, prob, outputs, found["indices"], len(x), sweep.files, sweep)
 
 
 def _json(method, prob, n, runs, outputs, indices, seed) -> bytes:

@@ -36,6 +36,9 @@ TABLE_CSV = "sweep.csv"
 TRACES = "traces.h5"
 MANIFEST = "sweep.json"
 JOURNAL = "journal"
+TIMINGS = "timings.csv"  # wall time per variant, kept out of the table so equal sweeps give equal tables
+LOCK = ".lock"  # one writer per output folder: the sweep holds a POSIX lock on OUT/.lock
+MAX_VARIANTS = 1_000_000
 
 # The summary flattened into table columns, in this order (see ``flatten_summary``).
 OUTPUT_COLUMNS = (
@@ -47,7 +50,7 @@ OUTPUT_COLUMNS = (
        "max_tire_mm",
        "impact_speed_m_per_s", "energy_input_J", "energy_mechanical_end_J", "energy_dissipated_J"]
 )
-STATUS_COLUMNS = ["status", "reason", "wall_time_s"]
+STATUS_COLUMNS = ["status", "reason"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -121,6 +124,9 @@ def grid(ranges: Sequence[Range]) -> list[dict[str, float]]:
     if not ranges:
         raise ConfigError("--vary: no ranges given")
     _unique_keys(ranges)
+    count = math.prod(len(r.values()) for r in ranges)
+    if count > MAX_VARIANTS:
+        raise ConfigError(f"--vary: the grid has {count:.3g} variants, more than the {MAX_VARIANTS} a sweep may plan")
     keys = [r.key for r in ranges]
     return [dict(zip(keys, combo)) for combo in itertools.product(*(r.values() for r in ranges))]
 
@@ -134,6 +140,8 @@ def sample(ranges: Sequence[Range], n: int, method: str = "lhs", seed: int = 0) 
     _unique_keys(ranges)
     if n < 1:
         raise ConfigError(f"--samples: must be at least 1, got {n}")
+    if n > MAX_VARIANTS:
+        raise ConfigError(f"--samples: {n} is more than the {MAX_VARIANTS} variants a sweep may plan")
     if method not in SAMPLING_METHODS:
         raise ConfigError(f"--method: {method!r} is not one of {', '.join(SAMPLING_METHODS)}")
     rng = np.random.default_rng(seed)
@@ -149,7 +157,7 @@ def sample(ranges: Sequence[Range], n: int, method: str = "lhs", seed: int = 0) 
 def _cell(text: str) -> Any:
     try:
         return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, RecursionError):
         return text
 
 
@@ -158,7 +166,7 @@ def from_csv(path: str | Path) -> list[dict[str, Any]]:
     Values are read like ``--set`` values; an empty cell keeps the base value; ``#`` lines are
     comments."""
     path = Path(path)
-    text = read_text(path, ConfigError, f"--from-csv {path}", "not a text file")
+    text = read_text(path, ConfigError, f"--from-csv {path}", "not a text file", "table")
     lines = [line for line in text.splitlines() if line.strip() and not line.lstrip().startswith("#")]
     if not lines:
         raise ConfigError(f"--from-csv {path}: no header line")
@@ -178,14 +186,50 @@ def from_csv(path: str | Path) -> list[dict[str, Any]]:
                 raise ConfigError(f"--from-csv {path}: column {exc}") from None
     if len(set(header)) != len(header):
         raise ConfigError(f"--from-csv {path}: a column is named twice")
+    if len(rows) - 1 > MAX_VARIANTS:
+        raise ConfigError(f"--from-csv {path}: {len(rows) - 1} rows, more than the {MAX_VARIANTS} variants a sweep may plan")
     variants = []
     for number, row in enumerate(rows[1:], 2):
         if len(row) != len(header):
             raise ConfigError(f"--from-csv {path}: row {number} has {len(row)} cells, the header {len(header)}")
-        variants.append({k: _cell(v.strip()) for k, v in zip(header, row) if v.strip()})
+        variant = {k: _cell(v.strip()) for k, v in zip(header, row) if v.strip()}
+        for key, value in variant.items():
+            problem = type_problem(key, value)
+            if problem:
+                raise ConfigError(f"--from-csv {path}: row {number}, column {key}: {problem}")
+        variants.append(variant)
     if not variants:
         raise ConfigError(f"--from-csv {path}: no variants (only a header)")
     return variants
+
+
+def type_problem(key: str, value: Any) -> str | None:
+    """Why ``value`` cannot be in the column ``key`` of a sweep table (None when it can): the
+    kind of value a key takes (a number, a word, true/false, a list of numbers) fixes the
+    column's type before any variant runs. A value of the right kind but out of range (a
+    negative mass) is not refused here: that variant fails and is journaled with its reason."""
+    kind = SCHEMA.get(key)
+    if kind is None:
+        return None  # an unknown key fails when its variant runs, with the schema's message
+    is_number = isinstance(value, (int, float)) and not isinstance(value, bool)
+    if kind in NUMERIC_KINDS:
+        return None if is_number else f"{value!r} is not a number"
+    if kind == "bool":
+        return None if isinstance(value, bool) else f"{value!r} is not true or false"
+    if kind == "list":
+        ok = isinstance(value, (list, tuple)) and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+        return None if ok else f"{value!r} is not a list of numbers"
+    return None if isinstance(value, str) else f"{value!r} is not a word"
+
+
+def check_types(variants: Sequence[Mapping[str, Any]]) -> None:
+    """Refuse, before any work, a variant whose value does not fit its column (see
+    :func:`type_problem`)."""
+    for index, overrides in enumerate(variants):
+        for key, value in overrides.items():
+            problem = type_problem(key, value)
+            if problem:
+                raise ConfigError(f"variant {index}: {key}: {problem}")
 
 
 # --------------------------------------------------------------------------------------------
