@@ -12,7 +12,7 @@ The names below are imported on first use, so ``import mtbmj`` stays cheap. Subs
 (telemetry), ``mtbmj.sweep`` (sweeps and sensitivity), ``mtbmj.identify`` (fits),
 ``mtbmj.validation`` (engine cross-check, sled records), ``mtbmj.cli`` (the command line).
 """
-from mtbmj._version import __version__  # noqa: F401
+from mtbmj._package import __version__, lazy_exports  # noqa: F401
 
 _LAZY = {
     "Config": "mtbmj.config",
@@ -34,17 +34,4 @@ _LAZY = {
 __all__ = ['Config', 'ConfigError', 'DropResult', 'MtbmjError', 'RollResult', 'RunError', 'crosscheck', 'load_config', 'preset_names', 'run_drop', 'run_roll', 'run_study', 'solve_sag', 'study_presets', 'write_study']
 
 
-def __getattr__(name):  # PEP 562: import a submodule only when one of its names is asked for
-    try:
-        module, _, attribute = _LAZY[name].partition(":")  # "module" or "module:name there"
-    except KeyError:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
-    import importlib
-
-    value = getattr(importlib.import_module(module), attribute or name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

@@ -392,7 +392,7 @@ DEFAULT_INTEGRATOR = "rk4"
 # tests/test_envelope.py against the ODE reference: <= 0.05 mm).
 STEPS_PER_PERIOD = {"rk4": 16.0, "implicitfast": 250.0, "implicit": 250.0, "euler": 250.0}
 # The same for the brief, stiff contacts of a hard stop or the rim (a half period each).
-STOP_STEPS_PER_PERIOD = {"rk4": 6.0, "implicitfast": 20.0, "implicit": 20.0, "euler": 20.0}
+STOP_STEPS_PER_PERIOD = {"rk4": 12.0, "implicitfast": 40.0, "implicit": 40.0, "euler": 40.0}
 # A fixed step keeps the output grid regular: the largest of these within the limit is chosen.
 STEP_LADDER = (5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5, 5e-6, 2e-6, 1e-6)
 

@@ -156,7 +156,7 @@ def staged_folder(out_dir: str | Path, keep: Iterable[str] = ()) -> Iterator[Pat
                 if (out / name).exists():
                     _link_tree(out / name, stage / name)
         yield stage
-        _fsync_dir(stage)
+        fsync_dir(stage)
         _swap_into_place(stage, out)
     except OSError as exc:
         shutil.rmtree(stage, ignore_errors=True)
@@ -183,7 +183,7 @@ def write_atomically(out_dir: str | Path, files: Mapping[str, bytes], keep: Iter
 def _swap_into_place(stage: Path, out: Path) -> None:
     try:
         os.rename(stage, out)  # no folder (or an empty one) at the target: one rename
-        _fsync_dir(out.parent)
+        fsync_dir(out.parent)
         return
     except OSError as exc:
         if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST, errno.ENOTDIR, errno.EISDIR):
@@ -197,7 +197,7 @@ def _swap_into_place(stage: Path, out: Path) -> None:
         os.rename(out, old)
         os.rename(stage, out)
         shutil.rmtree(old, ignore_errors=True)
-    _fsync_dir(out.parent)
+    fsync_dir(out.parent)
 
 
 def _exchange(a: Path, b: Path) -> bool:
@@ -278,7 +278,8 @@ def _remove_empty(paths: list[Path]) -> None:
             return
 
 
-def _fsync_dir(path: Path) -> None:
+def fsync_dir(path: Path) -> None:
+    """Flush a folder's entries (a rename into it) to disk; best effort."""
     try:
         fd = os.open(path, os.O_RDONLY)
     except OSError:

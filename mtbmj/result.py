@@ -17,7 +17,7 @@ def versions() -> dict[str, str]:
     import mujoco
     import scipy
 
-    from mtbmj._version import __version__
+    from mtbmj._package import __version__
 
     try:
         matplotlib = metadata.version("matplotlib")

@@ -229,7 +229,7 @@ def test_fit_damper_on_an_all_zero_force_column(tmp_path, capsys):
     column = data[0].split(",").index("force_N")
     zeroed = [data[0]] + [",".join("0" if j == column else c for j, c in enumerate(r.split(","))) for r in data[1:]]
     (tmp_path / "z.csv").write_text("\n".join(zeroed) + "\n")
-    one_line(capsys, ["fit", "damper", tmp_path / "z.csv", "--out", tmp_path / "out"], "force is zero")
+    one_line(capsys, ["fit", "damper", tmp_path / "z.csv", "--out", tmp_path / "out"], "force column is 0 N everywhere")
 
 
 def test_telemetry_compare_with_a_broken_run_config(tmp_path, capsys):

@@ -106,7 +106,7 @@ class Validation:
         return {n: self.metrics[n].amplitude_errors() for n in self.configs}
 
     def summary(self) -> dict:
-        from mtbmj._version import __version__
+        from mtbmj._package import __version__
 
         data = {
             "mtbmj_version": __version__,
@@ -379,7 +379,7 @@ img{max-width:100%;height:auto;display:block;margin:0.5em 0}.small{font-size:0.8
 
 
 def _html(v: Validation, images: Mapping[str, bytes]) -> str:
-    from mtbmj._version import __version__
+    from mtbmj._package import __version__
 
     e = html.escape
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 
-from mtbmj._version import __version__
+from mtbmj._package import __version__
 from mtbmj.cli.common import EXIT_BAD_INPUT, Parser, run  # noqa: F401  (the exit status, for callers)
 
 COMMANDS = ("drop", "airstudy", "sag", "fit", "synth", "validate", "sweep", "sensitivity", "roll", "telemetry", "render", "presets")

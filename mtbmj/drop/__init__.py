@@ -4,6 +4,8 @@ Flow of one drop: configuration -> ``compose.setup`` (force laws in SI) -> engin
 (``engine_mujoco.run`` or ``engine_ode.run``, a ``RawTrace``) -> ``measure`` (sled conventions,
 anti-aliasing, 1 kHz) -> ``events`` (Peak 1, topping, ...) -> ``result.DropResult``.
 """
+from mtbmj._package import lazy_exports
+
 _LAZY = {
     "run_drop": "mtbmj.drop.run",
     "resolve": "mtbmj.drop.run",
@@ -19,17 +21,4 @@ _LAZY = {
 __all__ = ['DropResult', 'ENGINES', 'SagSetting', 'resolve', 'run_air_study', 'run_drop', 'run_study', 'solve_sag', 'write_air_study', 'write_study']
 
 
-def __getattr__(name):  # PEP 562: import a submodule only when one of its names is asked for
-    try:
-        module, _, attribute = _LAZY[name].partition(":")  # "module" or "module:name there"
-    except KeyError:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
-    import importlib
-
-    value = getattr(importlib.import_module(module), attribute or name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

@@ -10,7 +10,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from mtbmj import output
-from mtbmj.config import parameter_set_toml
+from mtbmj.config import load as load_config, parameter_set_toml, preset_names
 from mtbmj.errors import MtbmjError
 from mtbmj.identify.fitresult import FitResult
 from mtbmj.identify.records import Record, read_record
@@ -58,8 +58,13 @@ class Identification:
                 comments[key] = f"+/- {err:.3g} (1 sigma), {self.kind} fit '{name}'"
         sources = ", ".join(Path(r.path).name for r in self.records)
         synthetic = " (synthetic data)" if any(r.synthetic for r in self.records) else ""
-        return parameter_set_toml(self.parameter_set(), self.base,
-                                  f"mtbmj fit {self.kind} from {sources}{synthetic}", comments)
+        values, base = self.parameter_set(), self.base
+        if base not in preset_names():
+            # a configuration file: its values go into fit.toml, which then stands alone (a base
+            # outside the fit's folder would not be read back: mtbmj.config's base rule)
+            own = {k: v for k, v in load_config(base).values.items() if k not in ("description", "reading")}
+            values, base = {**own, **values}, "reference"
+        return parameter_set_toml(values, base, f"mtbmj fit {self.kind} from {sources}{synthetic}", comments)
 
     def summary(self) -> dict:
         return {

@@ -1,6 +1,8 @@
 """Sweeps: plans of variants (``variants``), the single and batched runners (``single``, ``batch``),
 the journaled driver that writes one table (``runner``), and SALib sensitivity (``sensitivity``).
 """
+from mtbmj._package import lazy_exports
+
 _LAZY = {
     "run_sweep": "mtbmj.sweep.runner",
     "read_table": "mtbmj.sweep.runner",
@@ -30,17 +32,4 @@ _LAZY = {
 __all__ = ['BatchJob', 'Journal', 'MANIFEST', 'OUTPUT_COLUMNS', 'RUNNERS', 'Range', 'SweepProgress', 'SweepResult', 'TABLE', 'TABLE_CSV', 'TRACES', 'Variant', 'flatten_summary', 'from_csv', 'grid', 'parse_vary', 'plan', 'read_table', 'run_batch', 'run_sensitivity', 'run_sweep', 'run_variant', 'sample', 'variant_id']
 
 
-def __getattr__(name):  # PEP 562: import a submodule only when one of its names is asked for
-    try:
-        module, _, attribute = _LAZY[name].partition(":")  # "module" or "module:name there"
-    except KeyError:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
-    import importlib
-
-    value = getattr(importlib.import_module(module), attribute or name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

@@ -46,25 +46,12 @@ from mtbmj.config import SCHEMA, Config
 from mtbmj.errors import ConfigError, MtbmjError
 
 from mtbmj import output
-from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, LOCK, MANIFEST, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TIMINGS, TRACES, Variant, _canonical, check_types, flatten_summary, from_csv, grid, parse_vary, sample, variant_id)
+from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, LOCK, MANIFEST, NUMERIC_KINDS, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TIMINGS, TRACES, Variant, _canonical, check_types, flatten_summary, from_csv, grid, parse_vary, sample, variant_id)
 from mtbmj.sweep.single import run_batch, run_variant
 
 
 # --------------------------------------------------------------------------------------------
 # Journal
-
-
-def _fsync_dir(path: Path) -> None:
-    try:
-        fd = os.open(path, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
 
 
 def _commit(path: Path, write: Callable[[Any], None]) -> None:
@@ -80,7 +67,7 @@ def _commit(path: Path, write: Callable[[Any], None]) -> None:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-    _fsync_dir(path.parent)
+    output.fsync_dir(path.parent)
 
 
 class Journal:
@@ -548,7 +535,7 @@ def assemble(planned: Sequence[Variant], records: Mapping[str, dict]):
     table = pd.DataFrame(rows, columns=["variant", "variant_id"] + inputs + outputs + STATUS_COLUMNS)
     for column in inputs:
         kind = SCHEMA.get(column)
-        numeric = kind in ("pos", "nonneg")
+        numeric = kind in NUMERIC_KINDS
         table[column] = _typed(table[column], numeric=numeric, boolean=kind == "bool")
     for column in outputs:
         table[column] = _typed(table[column])
