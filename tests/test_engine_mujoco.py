@@ -65,13 +65,13 @@ def test_every_integrator_agrees_with_the_reference(integrator, calls_per_step):
 
 def test_rk4_is_more_accurate_than_euler_on_the_smooth_linear_model():
     ref = mtbmj.run_drop("S1", engine="ode", duration=0.6)
-    step = {"solver.timestep_s": 5e-5}  # the same grid for both (and within euler's limit)
+    step = {"solver.timestep_s": 2e-5}  # the same grid for both (and within euler's limit)
     ref = mtbmj.run_drop("S1", engine="ode", overrides=step, duration=0.6)
     euler = mtbmj.run_drop("S1", overrides={**step, "solver.integrator": "euler"}, duration=0.6)
     rk4 = mtbmj.run_drop("S1", overrides={**step, "solver.integrator": "rk4"}, duration=0.6)
     e_euler = euler.difference(ref)["fork_mm"]["max_abs_mm"]
     e_rk4 = rk4.difference(ref)["fork_mm"]["max_abs_mm"]
-    assert e_rk4 < 0.01 < e_euler
+    assert e_rk4 < 0.01 and e_rk4 < 0.1 * e_euler  # fourth order against first, on the same grid
 
 
 def test_lugre_state_is_integrated_by_mujoco():
@@ -110,7 +110,7 @@ def test_dm_control_physics_steps_the_drop_scene_like_the_engine():
     """The bundled scene through dm_control.mjcf and a dm_control Physics, with our callback,
     reproduces the engine's trace."""
     mjcf = pytest.importorskip("dm_control.mjcf", reason="dm_control is the [rl] extra")
-    setup = compose.setup(mtbmj.load_config("S6", {"solver.integrator": "implicitfast", "solver.timestep_s": 5e-5}))
+    setup = compose.setup(mtbmj.load_config("S6", {"solver.integrator": "implicitfast", "solver.timestep_s": 2e-5}))
     ours = scene.build(setup)
     root = mjcf.from_path(str(scenes.path("drop_scene.xml")))
     root.option.integrator = "implicitfast"
