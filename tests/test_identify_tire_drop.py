@@ -119,7 +119,7 @@ def test_drop_fit_recovers_s12_values(engine, tmp_path):
         assert res.values[key] == pytest.approx(true, rel=0.03), key
         if engine == "mujoco":
             # One draw against a 95 % interval misses 5 % of the time by design (coverage itself is
-            # measured over many records by benchmarks/coverage.py): here the 99.9 % interval,
+            # measured over many records by benchmarks/interval_coverage.py): here the 99.9 % interval,
             # the 95 % one widened by 3.29 / 1.96, must hold the truth.
             low, high = res.extra["ci95"][key]
             centre, half = 0.5 * (low + high), 0.5 * (high - low) * 3.29 / 1.96

@@ -26,7 +26,7 @@ biases carried to the parameters through the Jacobian: the engine's own error (t
 run once at the optimum, ``engine_error``) and one standard error of the touch time. The Student t
 quantile uses the effective number of independent samples (time samples / bandwidth).
 ``extra["stderr_white"]`` keeps the white-in-time channel sandwich, ``extra["stderr_iid"]`` the
-plain ``covariance_stderr``. ``benchmarks/coverage.py`` measures the coverage. The intervals
+plain ``covariance_stderr``. ``benchmarks/interval_coverage.py`` measures the coverage. The intervals
 assume the configuration's laws are right.
 
 Why ``scipy.optimize.least_squares`` and not ``mujoco.minimize.least_squares``: both are bounded

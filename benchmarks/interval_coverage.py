@@ -14,22 +14,17 @@ Reported: the coverage of the reported intervals (Newey-West + engine error + to
 and, for comparison, of the white-noise intervals they replace (channel sandwich, normal
 quantile); the largest error in %; the wall time per fit (median, spread).
 
-    python benchmarks/coverage.py [--records 20] [--seed 1]
+    python benchmarks/interval_coverage.py [--records 20] [--seed 1]
 
-Writes benchmarks/results/coverage.json. Not a test: nothing is asserted.
+Writes benchmarks/results/interval_coverage.json. Not a test: nothing is asserted.
 """
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 from _bench import write_json
 
-# this script's name is also the name of the ``coverage`` package that numba looks for: take its
-# folder off the path so that import finds the package (or nothing), not this file
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
 
 import numpy as np  # noqa: E402
 
