@@ -191,8 +191,10 @@ class Sticking:
         return self.inner.guards(x, v)
 
     def state_rate(self, v, z, sides=None):
-        ni = self.inner.n_guards
-        level, _ = sliding_level(self.inner, v, None if sides is None else sides[:ni])
+        level, _ = sliding_level(self.inner, v, None if sides is None else sides[: self.inner.n_guards])
+        return self._rate(v, z, level)
+
+    def _rate(self, v, z, level):
         z_ss = level / self.stiffness
         if (z > 0.0) != (v >= 0.0) or z == 0.0:
             return v
@@ -206,10 +208,9 @@ class Sticking:
         return v * (1.0 - alpha * r)
 
     def force(self, v, z=0.0, sides=None):
-        ni = self.inner.n_guards
-        _, viscous = sliding_level(self.inner, v, None if sides is None else sides[:ni])
+        level, viscous = sliding_level(self.inner, v, None if sides is None else sides[: self.inner.n_guards])
         damping = self.damping * math.exp(-((v / self.damping_velocity) ** 2))
-        return self.stiffness * z + damping * self.state_rate(v, z, sides) + viscous * v
+        return self.stiffness * z + damping * self._rate(v, z, level) + viscous * v
 
 
 __all__ = ["smooth_sign", "NoFriction", "Coulomb", "CoulombViscous", "Stiction", "Stribeck", "LuGre", "Sticking",

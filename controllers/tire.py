@@ -56,14 +56,6 @@ class TireLaw:
             f += self.rim.force(deflection, rate)
         return f
 
-    @staticmethod
-    def switch_now(previous_deflection: float, deflection: float, previous_fork_velocity: float,
-                   fork_velocity: float) -> bool:
-        """The switching event between two states of phase 0 after the first impact: the tire
-        leaves the ground (deflection falls to <= 0) or the fork ends its first rebound stroke
-        (velocity crosses from < 0 to >= 0)."""
-        return (previous_deflection > 0.0 >= deflection) or (previous_fork_velocity < 0.0 <= fork_velocity)
-
 
 PSI = 6894.757293168  # Pa per psi
 

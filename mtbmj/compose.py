@@ -477,8 +477,3 @@ def choose_timestep(s: Setup) -> Setup:
             return replace(s, timestep=step)
     raise ConfigError(f"solver.timestep_s: this configuration needs a step below {_round_down(limit)} s ({what}); "
                       f"check its rates and masses")
-
-
-def check_timestep(s: Setup) -> None:
-    """Refuse a step above the limit (``timestep_limit``)."""
-    choose_timestep(s)

@@ -405,13 +405,20 @@ def test_tire_law_switch_semantics():
     assert switching.values(0) is impact and switching.values(1) is contact
     assert switching.force(0.01, 0.1) == pytest.approx(800.0 + 15.0)
     assert switching.force(0.01, 0.1, phase=1) == pytest.approx(700.0 + 12.0)
-    # the event: the tire leaves the ground, or the fork turns from extension into compression
-    assert TireLaw.switch_now(0.001, 0.0, 0.5, 0.4)  # deflection falls to zero
-    assert TireLaw.switch_now(0.001, -0.001, -0.5, -0.4)
-    assert TireLaw.switch_now(0.01, 0.01, -0.01, 0.0)  # rebound stroke ends on the ground
-    assert not TireLaw.switch_now(0.0, -0.001, 0.1, 0.2)  # already in the air
-    assert not TireLaw.switch_now(0.01, 0.011, 0.0, 0.1)  # compressing from rest (the impact itself)
-    assert not TireLaw.switch_now(0.01, 0.009, 0.1, -0.1)  # Peak 1: compression turns into extension
+    # the event (controllers.tire.SWITCH_RULE, found by engine_mujoco.switch_index, which the MuJoCo
+    # engine and the batched runner use): the tire leaves the ground, or the fork turns from
+    # extension into compression. A state row here is (sled, fork, fork velocity).
+    from mtbmj.drop.engine_mujoco import switch_index
+
+    def switches(d0, d1, v0, v1):
+        return switch_index(np.array([d0, 0.0, v0]), np.array([[d1, 0.0, v1]]), (0, 1, 2)) == 0
+
+    assert switches(0.001, 0.0, 0.5, 0.4)  # deflection falls to zero
+    assert switches(0.001, -0.001, -0.5, -0.4)
+    assert switches(0.01, 0.01, -0.01, 0.0)  # rebound stroke ends on the ground
+    assert not switches(0.0, -0.001, 0.1, 0.2)  # already in the air
+    assert not switches(0.01, 0.011, 0.0, 0.1)  # compressing from rest (the impact itself)
+    assert not switches(0.01, 0.009, 0.1, -0.1)  # Peak 1: compression turns into extension
 
 
 # ------------------------------------------------------------------------ sides / guards mechanism
