@@ -229,8 +229,9 @@ def _link_tree(src: Path, dst: Path) -> None:
 
 
 def _clear_stale(out: Path) -> None:
-    """Remove staging folders of ``out`` left by runs that were killed (their process is gone)."""
-    for prefix in (f".{out.name}.new-", f".{out.name}.old-"):
+    """Remove staging and probe folders of ``out`` left by runs that were killed (their process
+    is gone)."""
+    for prefix in (f".{out.name}.new-", f".{out.name}.old-", f".{out.name}.probe-"):
         for path in out.parent.glob(f"{_glob_escape(prefix)}*"):
             pid = path.name[len(prefix):].split("-", 1)[0]
             if pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):

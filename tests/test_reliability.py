@@ -364,6 +364,28 @@ def test_sigkill_mid_write_leaves_the_old_folder_or_the_new_one(tmp_path):
     assert len(seen) > 1
 
 
+
+@pytest.mark.parametrize("kind", ["new", "old", "probe"])
+def test_leftovers_of_a_dead_writer_are_removed_and_a_live_ones_kept(tmp_path, kind):
+    """A writer killed between making and removing its staging, old-version or probe folder
+    leaves it behind; the next write removes it when that process is gone and keeps it while
+    the process lives (it may still be writing)."""
+    done = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    dead_pid = int(done.stdout)
+    live = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        dead = tmp_path / f".o.{kind}-{dead_pid}-0badc0de"
+        alive = tmp_path / f".o.{kind}-{live.pid}-0badc0de"
+        for path in (dead, alive):
+            path.mkdir()
+        (dead / "part.bin").write_bytes(b"half")
+        output.write_atomically(tmp_path / "o", {"x": b"1"})
+        assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["o", alive.name])
+    finally:
+        live.kill()
+        live.wait()
+
+
 # --- 2: workers die with their parent --------------------------------------------------------------
 
 POOL = textwrap.dedent("""
