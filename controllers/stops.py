@@ -53,6 +53,14 @@ class EndStops:
     def n_guards(self):
         return self.main.n_guards + 5
 
+    @property
+    def live_guards(self) -> tuple[int, ...]:
+        """Guards the ODE reference evaluates live instead of locating: the stops' "pushes, never
+        pulls" kinks, where the force is continuous. Located, a root that a stop resting under
+        load crosses twice within one solver step is missed, and the stop then stays off."""
+        o = self.main.n_guards
+        return (o + 2, o + 4)
+
     def guards(self, x, v):
         p = x - self.travel
         q = -self.extension - x
@@ -111,6 +119,8 @@ class Rim:
     max_deflection: float  # m
     rate: float  # N/m
     damping: float  # N s/m
+
+    live_guards = (1,)  # as EndStops.live_guards
 
     def guards(self, deflection, rate):
         p = deflection - self.max_deflection

@@ -41,6 +41,13 @@ class Setup:
     ode_atol: float
     sample_rate: float
     antialias: float
+    # MuJoCo steps per ``timestep`` while an end stop or the rim may be engaged (the drop engine
+    # refines there; engines that do not refine step at ``fine_timestep`` throughout)
+    substeps: int = 1
+
+    @property
+    def fine_timestep(self) -> float:
+        return self.timestep / self.substeps
 
     @property
     def impact_speed(self) -> float:
@@ -431,39 +438,105 @@ def _round_down(value: float, digits: int = 2) -> str:
     return f"{math.floor(value / 10**exponent) * 10**exponent:.{digits}g}"
 
 
-def timestep_limit(s: Setup) -> tuple[float, str]:
-    """(largest MuJoCo step in s for this configuration and integrator, what sets it)."""
+# Steps per wheel time constant m / c on the steep force-velocity slope some laws have near rest
+# (a direction-dependent spring, regularised Coulomb friction): met only within a few bands of
+# v = 0, where the drop engine refines (calibrated on the envelope of tests/test_envelope.py).
+BAND_STEP = {"rk4": 2.0, "implicitfast": 1.0, "implicit": 1.0, "euler": 1.0}
+BAND_WIDTHS = 3.0  # the refined velocity zone, in bands: tanh's slope is 1 % of its peak there
+
+
+def _bands(law_object) -> list[float]:
+    """The velocity bands (m/s) of the laws inside a spring or friction law."""
+    found = []
+    band = getattr(law_object, "band", None)
+    if isinstance(band, float) and band > 0.0:
+        found.append(band)
+    for name in ("main", "inner", "compression", "rebound"):
+        part = getattr(law_object, name, None)
+        if part is not None and not isinstance(part, (int, float)):
+            found += _bands(part)
+    return found
+
+
+def velocity_band(s: Setup) -> tuple[float, float]:
+    """(half-width in m/s of the zone around v = 0 where the fork force changes steeply with the
+    stroke velocity, the steepest slope there in N s/m); (0, 0) if there is none."""
+    spring = s.fork.spring
+    main = getattr(spring, "main", spring)
+    friction = s.fork.friction
+    bands = _bands(main) + ([] if friction.has_state else _bands(friction))
+    if not bands:
+        return 0.0, 0.0
+    dv = 1e-3 * min(bands)
+    xs = np.linspace(-getattr(spring, "extension", 0.02), s.travel, 101)
+    slope = max(abs(main.force(x, dv) - main.force(x, -dv)) for x in xs) / (2.0 * dv)
+    if not friction.has_state:
+        slope += abs(friction.force(dv) - friction.force(-dv)) / (2.0 * dv)
+    return BAND_WIDTHS * max(bands), slope
+
+
+def refined_band(s: Setup) -> float:
+    """The velocity half-width (m/s) around rest that the drop engine steps finely, 0 where the
+    slope there does not need it at ``s.timestep``."""
+    half_width, slope = velocity_band(s)
+    reduced = s.wheel_mass * s.body_mass / (s.wheel_mass + s.body_mass)
+    return half_width if slope > 0.0 and BAND_STEP[s.integrator] * reduced / slope < s.timestep else 0.0
+
+
+def _limits(s: Setup) -> tuple[list, list]:
+    """The step limits (s, what sets it) of the working stroke, and those of the end stops, the
+    rim and the band around rest, which the drop engine meets with ``substeps`` finer steps only
+    while they may act."""
     rates = stiffest_rates(s)
     wheel = s.wheel_mass
     reduced = s.wheel_mass * s.body_mass / (s.wheel_mass + s.body_mass)
-    limits = []
-    for name, table, what in (("working", STEPS_PER_PERIOD, "spring and tire over the stroke"),
-                              ("stops", STOP_STEPS_PER_PERIOD, "bumper, hard stops and rim")):
+
+    def period(name, table, what):
         per_period = table[s.integrator]
-        limits.append((2.0 * math.pi * math.sqrt(wheel / rates[name]) / per_period,
-                       f"{per_period:g} steps per period of the wheel on the {what} ({rates[name] / 1e3:.0f} N/mm)"))
+        return (2.0 * math.pi * math.sqrt(wheel / rates[name]) / per_period,
+                f"{per_period:g} steps per period of the wheel on the {what} ({rates[name] / 1e3:.0f} N/mm)")
+
+    working = [period("working", STEPS_PER_PERIOD, "spring and tire over the stroke")]
+    stops = [period("stops", STOP_STEPS_PER_PERIOD, "bumper, hard stops and rim")]
     if rates["stop_damping"] > 0:  # brief contacts: the stability bound of explicit damping
-        limits.append((0.5 * reduced / rates["stop_damping"],
-                       f"explicit damping with a stop engaged ({rates['stop_damping']:.0f} N s/m on the wheel)"))
+        stops.append((0.5 * reduced / rates["stop_damping"],
+                      f"explicit damping with a stop engaged ({rates['stop_damping']:.0f} N s/m on the wheel)"))
     if rates["damping"] > 0:
         # the callback's damping forces are explicit: c dt / m <= 0.25 (0.5 is the stability
         # bound of explicit Euler; the envelope test needs the margin for 0.05 mm)
-        limits.append((0.25 * reduced / rates["damping"], f"explicit damping ({rates['damping']:.0f} N s/m on the wheel)"))
+        working.append((0.25 * reduced / rates["damping"], f"explicit damping ({rates['damping']:.0f} N s/m on the wheel)"))
     friction = s.fork.friction
     v_max = 1.5 * math.sqrt(2.0 * s.gravity * (s.drop_height + s.travel))  # a bound on the stroke speed
     if isinstance(friction, law.LuGre):
-        limits.append((friction.coulomb / (friction.stiffness * v_max), "the LuGre bristle state"))
+        working.append((friction.coulomb / (friction.stiffness * v_max), "the LuGre bristle state"))
     elif isinstance(friction, law.Sticking):
         z_ss = friction.coulomb / friction.stiffness
         rate = v_max / z_ss * (1.0 + math.pi / (2.0 * (1.0 - friction.elastic)))
-        limits.append((2.0 / rate, f"the stick state (presliding {z_ss * 1e3:.2f} mm at {v_max:.1f} m/s)"))
-    limits.append((0.5 / s.sample_rate, f"twice solver.sample_rate_Hz ({s.sample_rate:g} Hz)"))
-    return min(limits)
+        working.append((2.0 / rate, f"the stick state (presliding {z_ss * 1e3:.2f} mm at {v_max:.1f} m/s)"))
+    working.append((0.5 / s.sample_rate, f"twice solver.sample_rate_Hz ({s.sample_rate:g} Hz)"))
+    half_width, slope = velocity_band(s)
+    if slope > 0.0:
+        stops.append((BAND_STEP[s.integrator] * reduced / slope,
+                      f"the force-velocity slope near rest ({slope:.0f} N s/m within {half_width * 1e3:.0f} mm/s)"))
+    return working, stops
+
+
+def timestep_limit(s: Setup) -> tuple[float, str]:
+    """(largest MuJoCo step in s for this configuration and integrator over the working stroke,
+    what sets it). While a stop may act the drop engine steps finer (:func:`fine_limit`)."""
+    return min(_limits(s)[0])
+
+
+def fine_limit(s: Setup) -> tuple[float, str]:
+    """(largest step while an end stop or the rim may be engaged, what sets it)."""
+    working, stops = _limits(s)
+    return min(working + stops)
 
 
 def choose_timestep(s: Setup) -> Setup:
     """The step for MuJoCo: the user's ``solver.timestep_s`` if within the limit (else one line
-    naming it), or the largest step of ``STEP_LADDER`` within it."""
+    naming it), or the largest step of ``STEP_LADDER`` within it; and the number of finer steps
+    it is cut into while a stop may act (``substeps``)."""
     limit, what = timestep_limit(s)
     if s.timestep > 0.0:
         if s.timestep > limit:
@@ -471,9 +544,18 @@ def choose_timestep(s: Setup) -> Setup:
                 f"solver.timestep_s: {s.timestep:g} s is too large for solver.integrator = {s.integrator} "
                 f"with this configuration ({what}); use at most {_round_down(limit)} s, or leave it out to "
                 f"have it chosen")
-        return s
-    for step in STEP_LADDER:
-        if step <= limit:
-            return replace(s, timestep=step)
-    raise ConfigError(f"solver.timestep_s: this configuration needs a step below {_round_down(limit)} s ({what}); "
-                      f"check its rates and masses")
+        step = s.timestep
+    else:
+        step = next((h for h in STEP_LADDER if h <= limit), None)
+        if step is None:
+            raise ConfigError(f"solver.timestep_s: this configuration needs a step below {_round_down(limit)} s "
+                              f"({what}); check its rates and masses")
+    fine, what = fine_limit(s)
+    # the largest step of the ladder within the limit that divides the step, else an even cut
+    ratios = [step / h for h in STEP_LADDER if h <= min(fine, step)]
+    whole = [round(r) for r in ratios if abs(r - round(r)) < 1e-9]
+    substeps = whole[0] if whole else max(1, math.ceil(step / fine * (1.0 - 1e-12)))
+    if substeps > 1 and fine < STEP_LADDER[-1]:
+        raise ConfigError(f"solver.timestep_s: this configuration needs a step below {_round_down(fine)} s "
+                          f"while a stop acts ({what}); check its rates and masses")
+    return replace(s, timestep=step, substeps=substeps)

@@ -58,7 +58,10 @@ def test_every_integrator_agrees_with_the_reference(integrator, calls_per_step):
     reference = mtbmj.run_drop("S12", engine="ode", overrides=overrides, duration=0.5)
     info = result.trace.info
     assert info["steps_discarded"] > 0  # S12 switches its tire law: a chunk was cut and resumed
-    assert info["callback_calls"] == calls_per_step * (info["steps"] + info["steps_discarded"])
+    assert info["steps_computed"] >= info["steps"] + info["steps_discarded"]
+    if info["substeps"] == 1:
+        assert info["steps_computed"] == info["steps"] + info["steps_discarded"]
+    assert info["callback_calls"] == calls_per_step * info["steps_computed"]
     worst = max(d["max_abs_mm"] for d in result.difference(reference).values())
     assert worst < 0.1
 

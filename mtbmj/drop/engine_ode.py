@@ -41,6 +41,13 @@ class _Model:
             self._cache_value = self.guards(y, phase)
         return self._cache_value
 
+    def live_guards(self) -> set[int]:
+        """Indices of the guards evaluated live, never located (``live_guards`` of the laws)."""
+        live = set(getattr(self.fork.spring, "live_guards", ()))
+        if self.tire.rim is not None:
+            live |= {self.nf + 2 + i for i in self.tire.rim.live_guards}
+        return live
+
     def guards(self, y, phase):
         s, x, sd, xd, z = y
         tv = self.tire.values(phase)
@@ -119,12 +126,14 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
     events_log: list[tuple[float, str]] = []
     n_guards = len(sides)
     extended = False  # the fork has been extending (its first rebound stroke has begun)
-    released: set[int] = set()  # guards evaluated live (they chattered: see CHATTER_*)
+    live = model.live_guards()  # never located: kinks of a continuous force (see EndStops.live_guards)
+    sides = tuple(None if i in live else side for i, side in enumerate(sides))
+    released: set[int] = set(live)  # guards evaluated live (and those that chattered: see CHATTER_*)
     last_fired, short_runs = None, 0
     for _segment in range(MAX_SEGMENTS):
-        if released:  # re-arm a released guard once its value has clearly left its root
+        if released - live:  # re-arm a released guard once its value has clearly left its root
             values = model.guards(y, phase)
-            for i in list(released):
+            for i in list(released - live):
                 if abs(values[i]) > REARM_MAGNITUDE:
                     released.discard(i)
                     sides = sides[:i] + (bool(values[i] > 0.0),) + sides[i + 1:]
@@ -220,7 +229,8 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
             # The tire guards depend on the tire values: take them afresh for the new phase.
             fresh = _initial_sides(model, y, phase)
             sides = sides[: model.nf] + fresh[model.nf:]
-            released = {i for i in released if i < model.nf}
+            released = {i for i in released if i < model.nf} | live
+            sides = tuple(None if i in live else side for i, side in enumerate(sides))
 
     else:
         raise RunError(f"ODE reference: more than {MAX_SEGMENTS} law switches before t = {t:.4f} s (chattering)")

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable, Mapping
 
 import mujoco
@@ -312,6 +312,8 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
     ter = terrain_mod.make(scenario)
     cfg = resolve(config, overrides)
     setup = compose.setup(cfg)
+    # the front end does not refine near a stop or the rim: it steps at the fine step throughout
+    setup = replace(setup, timestep=setup.fine_timestep, substeps=1)
     drum = isinstance(ter, terrain_mod.DrumTerrain)
     if drum:
         ter = ter.with_speed(float(speed_m_per_s))

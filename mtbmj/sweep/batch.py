@@ -96,6 +96,16 @@ class _Run:
     extra: dict = field(default_factory=dict)
 
     @property
+    def zones(self) -> tuple:
+        return engine_mujoco.stop_zones(self.setup)
+
+    @property
+    def stop_columns(self) -> tuple:
+        _, iq, iv, _ = engine_mujoco._state_layout(self.scene.model)
+        sc = self.scene
+        return (iq.start + sc.sled_qpos, iq.start + sc.fork_qpos, iv.start + sc.sled_dof, iv.start + sc.fork_dof)
+
+    @property
     def pending(self) -> bool:
         return self.setup.tire.switches and self.current_phase == 0
 
@@ -173,6 +183,10 @@ def _step_group(runs: list[_Run], datas, pool, spec) -> None:
                 if diverged:
                     r.failed = True
                     continue
+                if r.setup.substeps > 1 and engine_mujoco.stop_index(
+                        r.record[r.done], states, r.stop_columns, r.zones, r.setup.timestep) is not None:
+                    r.failed = True  # a stop may act: the single path steps it finer there
+                    continue
                 keep, switch = n, False
                 if r.pending:
                     columns = (iq.start + r.scene.sled_qpos, iq.start + r.scene.fork_qpos, iv.start + r.scene.fork_dof)
@@ -205,7 +219,8 @@ def _trace(run: _Run) -> RawTrace:
         fork_velocity=record[:, iv.start + sc.fork_dof],
         friction_state=record[:, ia.start + run.callback.act_index] if model.na else np.zeros(run.steps + 1),
         tire_phase=run.phase,
-        info={"steps": run.steps, "steps_discarded": run.discarded, "integrator": setup.integrator,
+        info={"steps": run.steps, "steps_discarded": run.discarded, "steps_refined": 0,
+              "substeps": setup.substeps, "steps_computed": run.steps + run.discarded, "integrator": setup.integrator,
               "timestep_s": setup.timestep, "contact_inverse_inertia_per_kg": sc.inverse_inertia},
     )
 
