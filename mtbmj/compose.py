@@ -401,7 +401,7 @@ STEPS_PER_PERIOD = {"rk4": 16.0, "implicitfast": 250.0, "implicit": 250.0, "eule
 # The same for the brief, stiff contacts of a hard stop or the rim (a half period each).
 STOP_STEPS_PER_PERIOD = {"rk4": 12.0, "implicitfast": 40.0, "implicit": 40.0, "euler": 40.0}
 # A fixed step keeps the output grid regular: the largest of these within the limit is chosen.
-STEP_LADDER = (5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5, 5e-6, 2e-6, 1e-6)
+STEP_LADDER = (1e-3, 5e-4, 2e-4, 1e-4, 5e-5, 2e-5, 1e-5, 5e-6, 2e-6, 1e-6)
 
 
 def stiffest_rates(s: Setup) -> dict[str, float]:
@@ -438,6 +438,8 @@ def _round_down(value: float, digits: int = 2) -> str:
     return f"{math.floor(value / 10**exponent) * 10**exponent:.{digits}g}"
 
 
+# c dt / m for the callback's explicit damping (fork, tire, the stick's damping) over the working stroke.
+DAMPING_STEP = {"rk4": 1.5, "implicitfast": 0.25, "implicit": 0.25, "euler": 0.25}
 # Steps per wheel time constant m / c on the steep force-velocity slope some laws have near rest
 # (a direction-dependent spring, regularised Coulomb friction): met only within a few bands of
 # v = 0, where the drop engine refines (calibrated on the envelope of tests/test_envelope.py).
@@ -475,6 +477,42 @@ def velocity_band(s: Setup) -> tuple[float, float]:
     return BAND_WIDTHS * max(bands), slope
 
 
+STICK_SLIDING_STEP = 2.0  # RK4: dt |v| / z_ss while sliding (its stability bound is 2.8)
+
+
+def stroke_speed_bound(s: Setup) -> float:
+    """A bound on the fork's stroke speed (m/s): 1.5 times the speed of a fall from the drop
+    height plus the travel."""
+    return 1.5 * math.sqrt(2.0 * s.gravity * (s.drop_height + s.travel))
+
+
+def state_step_per_speed(s: Setup) -> tuple[float, str]:
+    """(L in m, what it is) where the friction state limits the step to L / |v| at stroke speed v
+    (its rate grows with the speed); (0, "") for a law without a state."""
+    friction = s.fork.friction
+    if isinstance(friction, law.LuGre):
+        return friction.coulomb / friction.stiffness, "the LuGre bristle state"
+    if isinstance(friction, law.Sticking):
+        # sliding, z relaxes at |v| / z_ss; through the elastic-to-sliding blend its slope peaks
+        # at (1 + pi / (2 (1 - elastic))) times that. First-order integrators stay within 2 on
+        # the peak; RK4 within STICK_SLIDING_STEP on the sliding rate (calibrated on the envelope)
+        z_ss = friction.coulomb / friction.stiffness
+        if s.integrator == "rk4":
+            return STICK_SLIDING_STEP * z_ss, f"the stick state (presliding {z_ss * 1e3:.2f} mm)"
+        return (2.0 * z_ss / (1.0 + math.pi / (2.0 * (1.0 - friction.elastic))),
+                f"the stick state (presliding {z_ss * 1e3:.2f} mm)")
+    return 0.0, ""
+
+
+def refined_speed(s: Setup) -> float:
+    """The stroke speed (m/s) above which the drop engine steps finely for the friction state,
+    inf where ``s.timestep`` holds it at every speed."""
+    per_speed, _ = state_step_per_speed(s)
+    if per_speed <= 0.0 or per_speed / stroke_speed_bound(s) >= s.timestep:
+        return math.inf
+    return per_speed / s.timestep
+
+
 def refined_band(s: Setup) -> float:
     """The velocity half-width (m/s) around rest that the drop engine steps finely, 0 where the
     slope there does not need it at ``s.timestep``."""
@@ -502,18 +540,16 @@ def _limits(s: Setup) -> tuple[list, list]:
         stops.append((0.5 * reduced / rates["stop_damping"],
                       f"explicit damping with a stop engaged ({rates['stop_damping']:.0f} N s/m on the wheel)"))
     if rates["damping"] > 0:
-        # the callback's damping forces are explicit: c dt / m <= 0.25 (0.5 is the stability
-        # bound of explicit Euler; the envelope test needs the margin for 0.05 mm)
-        working.append((0.25 * reduced / rates["damping"], f"explicit damping ({rates['damping']:.0f} N s/m on the wheel)"))
-    friction = s.fork.friction
-    v_max = 1.5 * math.sqrt(2.0 * s.gravity * (s.drop_height + s.travel))  # a bound on the stroke speed
-    if isinstance(friction, law.LuGre):
-        working.append((friction.coulomb / (friction.stiffness * v_max), "the LuGre bristle state"))
-    elif isinstance(friction, law.Sticking):
-        z_ss = friction.coulomb / friction.stiffness
-        rate = v_max / z_ss * (1.0 + math.pi / (2.0 * (1.0 - friction.elastic)))
-        working.append((2.0 / rate, f"the stick state (presliding {z_ss * 1e3:.2f} mm at {v_max:.1f} m/s)"))
-    working.append((0.5 / s.sample_rate, f"twice solver.sample_rate_Hz ({s.sample_rate:g} Hz)"))
+        # the callback's damping forces are explicit: c dt / m within DAMPING_STEP (the stability
+        # bounds are 2 for explicit Euler, 2.8 for RK4; the margin keeps the envelope at 0.05 mm)
+        factor = DAMPING_STEP[s.integrator]
+        working.append((factor * reduced / rates["damping"],
+                        f"explicit damping, c dt / m <= {factor:g} ({rates['damping']:.0f} N s/m on the wheel)"))
+    per_speed, what = state_step_per_speed(s)
+    if per_speed > 0.0:  # the friction state stiffens with the stroke speed: refined when fast
+        v_max = stroke_speed_bound(s)
+        stops.append((per_speed / v_max, f"{what} at {v_max:.1f} m/s"))
+    working.append((1.0 / s.sample_rate, f"solver.sample_rate_Hz ({s.sample_rate:g} Hz)"))
     half_width, slope = velocity_band(s)
     if slope > 0.0:
         stops.append((BAND_STEP[s.integrator] * reduced / slope,
@@ -559,3 +595,9 @@ def choose_timestep(s: Setup) -> Setup:
         raise ConfigError(f"solver.timestep_s: this configuration needs a step below {_round_down(fine)} s "
                           f"while a stop acts ({what}); check its rates and masses")
     return replace(s, timestep=step, substeps=substeps)
+
+
+def at_fine_step(s: Setup) -> Setup:
+    """``s`` stepped at its fine step throughout (``substeps`` 1): for a model stepped directly,
+    without the drop engine's refinement near stops (the rolling front end, raw rollouts)."""
+    return replace(s, timestep=s.fine_timestep, substeps=1)

@@ -44,7 +44,7 @@ def test_refined_run_equals_a_run_at_the_fine_step(preset, overrides):
     assert max(d["max_abs_mm"] for d in coarse.difference(ode).values()) <= 0.1  # the envelope's bound
 
 
-ZONES = (0.112, -0.005, 0.0487, 0.0)  # bumper start, extension stop, rim, no velocity band
+ZONES = (0.112, -0.005, 0.0487, 0.0, math.inf)  # bumper start, extension stop, rim, no velocity band or speed
 COLUMNS = (0, 1, 2, 3)  # sled, fork, sled velocity, fork velocity
 
 
@@ -66,7 +66,7 @@ def test_scan_flags_every_step_that_reaches_a_zone(x0, x1, v, tire):
 
 
 def test_scan_flags_the_velocity_band_and_a_reversal():
-    zones = (math.inf, -math.inf, math.inf, 0.06)
+    zones = (math.inf, -math.inf, math.inf, 0.06, math.inf)
     rows = np.zeros((4, 4))
     rows[:, 0] = 0.01  # the tire well into contact
     rows[:, 3] = [0.5, 0.45, -0.3, -0.5]  # crosses zero between rows 1 and 2
@@ -87,3 +87,43 @@ def test_ode_resolves_a_fork_resting_on_its_stop_at_any_tolerance():
     assert max(d["max_abs_mm"] for d in loose.difference(tight).values()) <= 0.01
     mj = run_drop(preset, overrides=overrides, duration=0.8)
     assert max(d["max_abs_mm"] for d in mj.difference(tight).values()) <= 0.1
+
+
+@pytest.mark.parametrize("dt", [1e-3, 5e-4, 1e-4, 2e-5])
+def test_logger_filter_is_the_analog_butterworth_at_any_step(dt):
+    """A ramp through the logger's filter lags by the analog 4th-order Butterworth's DC group
+    delay, sum over its poles of -1/p = 2.6131 / (2 pi f_c), whatever the engine step; and the
+    filter passes a constant unchanged."""
+    from scipy import signal
+
+    from mtbmj.drop import measure
+
+    cutoff = 400.0
+    sos, zi = measure.antialias_filter(cutoff, dt)
+    t = np.arange(0.0, 0.05, dt)
+    out, _ = signal.sosfilt(sos, t, zi=zi * 0.0)
+    poles = signal.butter(4, 2.0 * math.pi * cutoff, analog=True, output="zpk")[1]
+    delay = float(np.sum(-1.0 / poles).real)
+    assert delay == pytest.approx(2.6131 / (2.0 * math.pi * cutoff), rel=1e-4)
+    late = t > 0.02  # transients gone
+    assert np.max(np.abs(out[late] - (t[late] - delay))) < 1e-9
+    level, _ = signal.sosfilt(sos, np.full(50, 3.0), zi=zi * 3.0)
+    assert np.allclose(level, 3.0, atol=1e-12)
+
+
+def test_logged_record_does_not_depend_on_the_engine_step():
+    """S1 logged from a 1 ms and from a 0.05 ms engine trace: the same record, but for what
+    joining the 1 ms samples by straight lines misses of the path, h^2 |a| / 8 (a from the fine
+    trace), plus the engines' own 0.005 mm."""
+    coarse = run_drop("S1", duration=0.6)
+    fine = run_drop("S1", overrides={"solver.timestep_s": 5e-5}, duration=0.6)
+    h = coarse.trace.info["timestep_s"]
+    assert h == 1e-3
+    for name, velocity in (("sled_mm", "sled_velocity"), ("fork_mm", "fork_velocity"), ("tire_mm", None)):
+        if velocity is None:
+            v = fine.trace.sled_velocity - fine.trace.fork_velocity
+        else:
+            v = getattr(fine.trace, velocity)
+        a_max = np.max(np.abs(np.diff(v))) / fine.trace.info["timestep_s"]
+        bound = h * h * a_max / 8.0 * 1e3 + 0.005
+        assert np.max(np.abs(coarse.signals[name] - fine.signals[name])) <= bound, name

@@ -18,10 +18,8 @@ from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
 
 
 def _warning(data) -> str | None:
-    for i, w in enumerate(data.warning):
-        if w.number:
-            return mujoco.mjtWarning(i).name.removeprefix("mjWARN_")
-    return None
+    raised = np.flatnonzero(data.warning.number)  # one array read (iterating the structs costs 0.1 ms)
+    return mujoco.mjtWarning(int(raised[0])).name.removeprefix("mjWARN_") if raised.size else None
 
 
 def _steps_clean(start, states) -> bool:
@@ -100,15 +98,16 @@ REFINED_CHUNK_S = 0.01  # simulated time per rollout at the fine step
 AFTER_REFINED_CHUNK_S = 0.01  # the first coarse rollout after one: doubled while none is cut
 
 
-def stop_zones(setup: Setup) -> tuple[float, float, float, float]:
+def stop_zones(setup: Setup) -> tuple[float, float, float, float, float]:
     """Where the engine refines: (fork compression at the bumper or the compression stop, fork
     compression at the extension stop, tire deflection at the rim, +-inf where there is none;
-    the half-width of the steep velocity band around rest, ``compose.refined_band``)."""
+    the half-width of the steep velocity band around rest, ``compose.refined_band``; the stroke
+    speed above which the friction state is stiff, ``compose.refined_speed``)."""
     spring = setup.fork.spring
     compress = getattr(spring, "bumper_start", math.inf)
     extend = -getattr(spring, "extension", math.inf)
     rim = setup.tire.rim.max_deflection if setup.tire.rim is not None else math.inf
-    return compress, extend, rim, compose.refined_band(setup)
+    return compress, extend, rim, compose.refined_band(setup), compose.refined_speed(setup)
 
 
 def stop_index(previous, states, columns, zones, step: float) -> int | None:
@@ -117,7 +116,7 @@ def stop_index(previous, states, columns, zones, step: float) -> int | None:
     or None. ``columns`` are the sled and fork position and
     velocity columns of a state row; ``zones`` as :func:`stop_zones`."""
     sled, fork, sled_v, fork_v = columns
-    compress, extend, rim, band = zones
+    compress, extend, rim, band, fast = zones
     rows = np.concatenate((previous[None, :], states))
     x, v = rows[:, fork], rows[:, fork_v]
     d, w = rows[:, sled] - x, rows[:, sled_v] - v
@@ -136,8 +135,95 @@ def stop_index(previous, states, columns, zones, step: float) -> int | None:
         a, b = v[:-1], v[1:]
         slowest = np.where(a * b <= 0.0, 0.0, np.minimum(np.abs(a), np.abs(b)) - np.abs(b - a))
         near |= slowest < band
+    if fast < math.inf:  # the stroke speed may pass the friction state's limit within the step
+        a, b = np.abs(v[:-1]), np.abs(v[1:])
+        near |= np.maximum(a, b) + np.abs(v[1:] - v[:-1]) > fast
     found = np.flatnonzero(near)
     return int(found[0]) if found.size else None
+
+
+class Stepping:
+    """The stepping decisions of one drop run, shared by :func:`run` and the batched sweep:
+    how many output steps the next rollout makes and at which step (:meth:`size`, ``fine``),
+    and, from what it returned, how many to keep and what comes next (:meth:`keep`).
+
+    ``columns`` are the sled and fork position and velocity columns of a recorded state row.
+    Chunks are sized in simulated time; at the coarse step they start short after a refined
+    stretch (a cut discards the rest of a chunk) and double while none is cut.
+    """
+
+    def __init__(self, setup: Setup, columns):
+        h = setup.timestep
+        self.setup = setup
+        self.substeps = setup.substeps
+        self.stop_columns = tuple(columns)
+        sled, fork, _, fork_v = self.stop_columns
+        self.switch_columns = (sled, fork, fork_v)
+        self.zones = stop_zones(setup)
+        self.chunk = max(1, int(round(CHUNK_S / h)))
+        self.switch_chunk = max(1, int(round(SWITCH_CHUNK_S / h)))
+        self.refined_chunk = max(1, int(round(REFINED_CHUNK_S / h)))
+        self.after_refined = min(self.chunk, max(1, int(round(AFTER_REFINED_CHUNK_S / h))))
+        self.coarse_chunk = self.after_refined if self.substeps > 1 else self.chunk
+        self.fine = False
+        self.phase = 0
+
+    @property
+    def pending(self) -> bool:
+        """The tire-law switch is still to come."""
+        return self.setup.tire.switches and self.phase == 0
+
+    def size(self, remaining: int) -> int:
+        """Output steps for the next rollout (at ``setup.fine_timestep`` if ``fine``)."""
+        if self.fine:
+            return min(self.refined_chunk, remaining)
+        return min(min(self.switch_chunk, self.coarse_chunk) if self.pending else self.coarse_chunk, remaining)
+
+    def keep(self, previous, states, fine_states=None) -> tuple[int, bool]:
+        """(how many of ``states``, recorded from ``previous``, to keep; whether the tire law
+        switches after the last kept one), and the mode of the next rollout. At the fine step,
+        ``fine_states`` are all the states the output ``states`` were taken from: the switch is
+        looked for in them (a bounce off a stop turns the fork and back within one output step)
+        and made at the end of the output step it falls in."""
+        n = len(states)
+        keep, switch = n, False
+        if self.substeps > 1 and not self.fine:
+            k = stop_index(previous, states, self.stop_columns, self.zones, self.setup.timestep)
+            if k is not None:
+                keep = k
+        if self.pending and keep:
+            if fine_states is not None:
+                k = switch_index(previous, fine_states, self.switch_columns)
+                k = None if k is None else k // self.substeps
+            else:
+                k = switch_index(previous, states[:keep], self.switch_columns)
+            if k is not None:
+                keep, switch = k + 1, True
+        if self.fine:  # back to the coarse step once the last step is clear of every zone
+            before = previous if keep == 1 else states[keep - 2]
+            self.fine = stop_index(before, states[keep - 1: keep], self.stop_columns, self.zones,
+                                   self.setup.timestep) is not None
+            self.coarse_chunk = self.after_refined
+        elif keep < n and not switch:
+            self.fine = True
+        elif keep == n:
+            self.coarse_chunk = min(self.chunk, 2 * self.coarse_chunk)
+        if switch:
+            self.phase = 1
+        return keep, switch
+
+
+def fine_rollout(model, data, start, n: int, substeps: int):
+    """``mujoco.rollout`` of ``n`` output steps from one state at ``model.opt.timestep /
+    substeps`` (the model's step is restored after): (the states of every ``substeps``-th step,
+    all the states)."""
+    h = model.opt.timestep
+    model.opt.timestep = h / substeps
+    try:
+        states, _ = rollout.rollout(model, data, start, nstep=n * substeps)
+    finally:
+        model.opt.timestep = h
+    return states[0, substeps - 1:: substeps], states[0]
 
 
 def run(setup: Setup, duration: float | None = None, progress=None, callback="auto") -> RawTrace:
@@ -164,65 +250,37 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
     callback = fork_callback(model, setup.fork, callback, setup.tire.rim)
     callback.bind(data)
     steps = int(round(duration / setup.timestep))
-    h, substeps = setup.timestep, setup.substeps
-    switch_chunk = max(1, int(round(SWITCH_CHUNK_S / h)))
-    chunk = max(1, int(round(CHUNK_S / h)))
-    refined_chunk = max(1, int(round(REFINED_CHUNK_S / h)))
+    substeps = setup.substeps
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state, spec)
     _, iq, iv, ia = _state_layout(model)
-    fork_col = iq.start + sc.fork_qpos
     # Only the columns the trace needs are kept (sled, fork, their velocities, the friction
     # state): memory grows with the run by 40 bytes a step, not by the whole physics state.
-    columns = [iq.start + sc.sled_qpos, fork_col, iv.start + sc.sled_dof, iv.start + sc.fork_dof]
+    columns = [iq.start + sc.sled_qpos, iq.start + sc.fork_qpos, iv.start + sc.sled_dof, iv.start + sc.fork_dof]
     if model.na:
         columns.append(ia.start + callback.act_index)
     record = np.zeros((steps + 1, 5))
     record[0, : len(columns)] = state[columns]
     phase = np.zeros(steps + 1, dtype=np.int8)
-    tire = setup.tire
-    current_phase = 0
+    plan = Stepping(setup, columns[:4])
     done = 0
-    discarded = 0  # steps computed past a tire-law switch or into a stop, and recomputed
+    discarded = 0  # output steps computed past a tire-law switch or into a zone, and recomputed
     refined = 0  # output steps made at the fine step
     computed = 0  # MuJoCo steps made (fine ones each counted), discarded ones included
-    sled_col = iq.start + sc.sled_qpos
-    fork_vcol = iv.start + sc.fork_dof
-    stop_columns = tuple(columns[:4])
-    zones = stop_zones(setup)
-    fine = False
-    coarse_chunk = chunk
     messages: list[str] = []
     with installed(callback), _collected_warnings(messages):
         while done < steps:
-            pending = tire.switches and current_phase == 0
+            n = plan.size(steps - done)
+            current_phase, fine = plan.phase, plan.fine
             if fine:
-                n = min(refined_chunk, steps - done)
-                model.opt.timestep = h / substeps
-                try:
-                    states, _ = rollout.rollout(model, data, state[None, :], nstep=n * substeps)
-                    computed += n * substeps
-                finally:
-                    model.opt.timestep = h
-                states = states[0, substeps - 1:: substeps]
+                states, fine_states = fine_rollout(model, data, state[None, :], n, substeps)
+                computed += n * substeps
                 refined += n
             else:
-                n = min(switch_chunk if pending else coarse_chunk, steps - done)
-                states, _ = rollout.rollout(model, data, state[None, :], nstep=n)
+                states, fine_states = rollout.rollout(model, data, state[None, :], nstep=n)[0][0], None
                 computed += n
-                states = states[0]
-            keep = n
-            switch = False
-            if substeps > 1 and not fine:
-                k = stop_index(state, states, stop_columns, zones, h)
-                if k is not None:
-                    keep = k
-            if pending and keep:
-                k = switch_index(state, states[:keep], (sled_col, fork_col, fork_vcol))
-                if k is not None:
-                    keep = k + 1
-                    switch = True
+            keep, switch = plan.keep(state, states, fine_states)
             discarded += n - keep
             if keep < n and (messages or _warning(data) is not None) and _steps_clean(state, states[:keep]):
                 # the warning came from steps past the cut, which are thrown away
@@ -232,19 +290,10 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
                 record[done + 1: done + 1 + keep, : len(columns)] = states[:keep, columns]
                 phase[done + 1: done + 1 + keep] = current_phase
                 _check(data, states[:keep], done + keep, setup, messages)
-                previous = state if keep == 1 else states[keep - 2]
                 state = states[keep - 1].copy()
                 done += keep
-            if fine:  # back to the coarse step once the last step is clear of every stop
-                fine = stop_index(previous, state[None, :], stop_columns, zones, h) is not None
-                coarse_chunk = max(1, int(round(AFTER_REFINED_CHUNK_S / h)))
-            elif keep < n and not switch:
-                fine = True
-            elif keep == n:
-                coarse_chunk = min(chunk, 2 * coarse_chunk)
             if switch:
-                current_phase = 1
-                values = tire.values(1)
+                values = setup.tire.values(1)
                 sc.set_tire(values.rate, values.damping)
             if progress is not None:
                 progress(done / steps)

@@ -19,6 +19,7 @@ from typing import Mapping
 
 import numpy as np
 
+from mtbmj.drop.measure import antialias_filter
 from mtbmj.drop.run import resolve, run_drop
 
 from mtbmj.identify.records import Record, read_record, write_csv_text
@@ -59,8 +60,7 @@ def drop_record_columns(config="S12", overrides: Mapping | None = None, noise_mm
     true = {"sled": np.concatenate([fall_mm, raw["sled_mm"]]),
             "fork": np.concatenate([np.zeros(pre), raw["fork_mm"]])}
     time = np.concatenate([tau, raw["time_s"]])
-    sos = signal.butter(4, cfg["solver.antialias_Hz"], fs=1.0 / dt, output="sos")
-    zi = signal.sosfilt_zi(sos)
+    sos, zi = antialias_filter(cfg["solver.antialias_Hz"], dt)
     q = {"sled": sled_range_mm / 2**adc_bits, "fork": fork_range_mm / 2**adc_bits}
     columns = {"time_s": time[::ratio] + clock_offset_s}
     for name in ("sled", "fork"):

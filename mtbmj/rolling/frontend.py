@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Callable, Mapping
 
 import mujoco
@@ -313,7 +313,7 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
     cfg = resolve(config, overrides)
     setup = compose.setup(cfg)
     # the front end does not refine near a stop or the rim: it steps at the fine step throughout
-    setup = replace(setup, timestep=setup.fine_timestep, substeps=1)
+    setup = compose.at_fine_step(setup)
     drum = isinstance(ter, terrain_mod.DrumTerrain)
     if drum:
         ter = ter.with_speed(float(speed_m_per_s))

@@ -11,19 +11,20 @@ How a batch runs
   (``controllers.compiled``) serves each model's own fork law by its ``mjModel*``. Scenes are
   compiled once per distinct geometry/mass/solver set and copied (the compiled model depends on
   nothing else; the tire's solref is set per variant).
-* **Step** in rounds: every round advances all unfinished variants by the same number of steps in
-  one rollout call (``threads`` MjData, i.e. threads, per process). While a variant's tire law may
-  still switch, rounds are short (``SWITCH_ROUND`` steps): when the fork tops out inside a round,
-  the variant keeps its states up to that step, its model gets the new tire solref and it goes on
-  from there in the next round (steps past the switch are discarded, as the engine does). Chunk
-  boundaries do not change MuJoCo's results here (tested: bit-identical traces for any chunking),
-  so the batched traces equal the engine's.
+* **Step** in rounds: every round advances the variants at their coarse step by the same number
+  of steps in one rollout call (``threads`` MjData, i.e. threads, per process), and each variant
+  at its fine step (near a stop, the rim, touchdown, fast sliding) in a call of its own; the
+  decisions are the engine's own (``engine_mujoco.Stepping``): where a variant's chunk is cut (a
+  zone ahead, the tire-law switch), it keeps its states up to that step, its model gets the new
+  tire solref if the law switched, and it goes on from there in the next round (steps past the
+  cut are discarded, as the engine does). Chunk boundaries change MuJoCo's results only through
+  the contact solver's warm start (about 1e-11 mm), so the batched traces equal the engine's.
 * **Post-process** each variant with only what the summary needs: the tire force along the trace
   vectorised with numpy (the fork force is not part of the summary), the logger's filter and
   decimation on the three displacement signals only, then ``events.summarize`` itself (the same
   detector and rest/energy code as ``run_drop``).
-* **Anything unusual** (a bad parameter, a fork law without a compiled form, a MuJoCo warning, a
-  non-finite or runaway state, a numpy RuntimeWarning in the post-processing) sends the variant to
+* **Anything unusual** (a bad parameter, a fork law without a compiled form, a MuJoCo reset after
+  a warning in the steps kept, a non-finite or runaway state, a numpy RuntimeWarning in the post-processing) sends the variant to
   the single-variant path (``sweep.run_variant``), which records it exactly as the old runner
   does, with its reason; the other variants of the batch go on.
 """
@@ -41,6 +42,7 @@ from mujoco import rollout as _rollout
 from mtbmj import compose
 from mtbmj.drop import engine_mujoco
 from mtbmj.drop import events
+from mtbmj.drop import measure
 from mtbmj.drop.measure import tire_forces
 from mtbmj.drop import scene as scene_mod
 from mtbmj.controllers import installed
@@ -48,7 +50,6 @@ from mtbmj.sweep.variants import SIGNALS, BatchJob, Variant, flatten_summary
 from mtbmj.sweep.single import run_batch, run_variant
 from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
 
-SWITCH_ROUND = 400  # steps per round while some variant's tire law may still switch (waste vs rounds)
 MAX_ROUND = 20000  # steps per round otherwise
 ROUND_BUFFER_VALUES = 4_000_000  # cap on nbatch * nstep * nstate of one round's state buffer (32 MB)
 MAX_BATCH = 64  # variants stepped together (a larger job runs in slices)
@@ -90,24 +91,10 @@ class _Run:
     record: np.ndarray  # (steps + 1, nstate)
     phase: np.ndarray
     done: int = 0
-    current_phase: int = 0
     discarded: int = 0
     failed: bool = False
     extra: dict = field(default_factory=dict)
-
-    @property
-    def zones(self) -> tuple:
-        return engine_mujoco.stop_zones(self.setup)
-
-    @property
-    def stop_columns(self) -> tuple:
-        _, iq, iv, _ = engine_mujoco._state_layout(self.scene.model)
-        sc = self.scene
-        return (iq.start + sc.sled_qpos, iq.start + sc.fork_qpos, iv.start + sc.sled_dof, iv.start + sc.fork_dof)
-
-    @property
-    def pending(self) -> bool:
-        return self.setup.tire.switches and self.current_phase == 0
+    plan: engine_mujoco.Stepping | None = None
 
 
 def setup_of(cfg):
@@ -141,7 +128,10 @@ def _prepare(job: BatchJob, variant: Variant, spec) -> _Run:
     mujoco.mj_getState(model, data, state, spec)
     record = np.empty((steps + 1, state.size))
     record[0] = state
-    return _Run(variant, setup, sc, callback, steps, record, np.zeros(steps + 1, dtype=np.int8))
+    _, iq, iv, _ = engine_mujoco._state_layout(model)
+    columns = (iq.start + sc.sled_qpos, iq.start + sc.fork_qpos, iv.start + sc.sled_dof, iv.start + sc.fork_dof)
+    return _Run(variant, setup, sc, callback, steps, record, np.zeros(steps + 1, dtype=np.int8),
+                plan=engine_mujoco.Stepping(setup, columns))
 
 
 def _signature(run: _Run) -> tuple:
@@ -150,8 +140,9 @@ def _signature(run: _Run) -> tuple:
 
 
 def _step_group(runs: list[_Run], datas, pool, spec) -> None:
-    """Advance ``runs`` (same model sizes) to their ends in rounds of one rollout call each."""
-    _, iq, iv, _ = engine_mujoco._state_layout(runs[0].scene.model)
+    """Advance ``runs`` (same model sizes) to their ends in rounds: one rollout call for the runs
+    at their coarse step, one for each run at its fine step (``engine_mujoco.Stepping`` decides,
+    as for a single run)."""
     nstate = runs[0].record.shape[1]
     messages: list[str] = []
     active = [r for r in runs if r.steps > 0]
@@ -159,50 +150,51 @@ def _step_group(runs: list[_Run], datas, pool, spec) -> None:
     buffer = np.empty(max(size, nstate))  # one state buffer for all rounds (views of it, C-contiguous)
     with engine_mujoco._collected_warnings(messages):
         while active:
-            remaining = min(r.steps - r.done for r in active)
-            limit = SWITCH_ROUND if any(r.pending for r in active) else MAX_ROUND
-            n = max(1, min(remaining, limit, buffer.size // (len(active) * nstate)))
-            start = np.array([r.record[r.done] for r in active])
-            out = buffer[: len(active) * n * nstate].reshape(len(active), n, nstate)
-            models = [r.scene.model for r in active]
-            if pool is None:
-                _rollout.rollout(models, datas[0], start, nstep=n, state=out)
-            else:
-                pool.rollout(models, datas, start, nstep=n, state=out)
-            if messages or any(d.warning.number.any() for d in datas):
-                # which variant warned is not known: all of this round go to the single path
-                for r in active:
-                    r.failed = True
-                messages.clear()
-                return
-            # diverged (non-finite or runaway; checked on the whole round, which is never more
-            # lenient than the engine's check of the kept steps): the single path says where
-            bad = ~np.isfinite(out).all(axis=(1, 2)) | (np.abs(out[:, :, 1:3]).max(axis=(1, 2)) > MAX_DISPLACEMENT_M)
+            made = []
+            coarse = [r for r in active if not r.plan.fine]
+            if coarse:
+                n = min(r.plan.size(r.steps - r.done) for r in coarse)
+                n = max(1, min(n, MAX_ROUND, buffer.size // (len(coarse) * nstate)))
+                start = np.array([r.record[r.done] for r in coarse])
+                out = buffer[: len(coarse) * n * nstate].reshape(len(coarse), n, nstate)
+                models = [r.scene.model for r in coarse]
+                if pool is None:
+                    _rollout.rollout(models, datas[0], start, nstep=n, state=out)
+                else:
+                    pool.rollout(models, datas, start, nstep=n, state=out)
+                made += [(r, states, None) for r, states in zip(coarse, out)]
+            for r in active:
+                if r.plan.fine:
+                    n = r.plan.size(r.steps - r.done)
+                    states, fine_states = engine_mujoco.fine_rollout(r.scene.model, datas[0], r.record[r.done][None, :],
+                                                                     n, r.setup.substeps)
+                    made.append((r, states, fine_states))
+            # A warning is not traced to its variant: a run whose kept steps show no reset (MuJoCo
+            # restarts a run that goes unstable) is sound; the others go to the single path.
+            warned = bool(messages) or any(d.warning.number.any() for d in datas)
             still = []
-            for r, states, diverged in zip(active, out, bad):
-                if diverged:
-                    r.failed = True
+            for r, states, fine_states in made:
+                start = r.record[r.done]
+                phase = r.plan.phase
+                keep, switch = r.plan.keep(start, states, fine_states)
+                kept = states[:keep]
+                if (not np.all(np.isfinite(kept)) or (keep and np.max(np.abs(kept[:, 1:3])) > MAX_DISPLACEMENT_M)
+                        or (warned and not engine_mujoco._steps_clean(start, kept))):
+                    r.failed = True  # the single path says where and why
                     continue
-                if r.setup.substeps > 1 and engine_mujoco.stop_index(
-                        r.record[r.done], states, r.stop_columns, r.zones, r.setup.timestep) is not None:
-                    r.failed = True  # a stop may act: the single path steps it finer there
-                    continue
-                keep, switch = n, False
-                if r.pending:
-                    columns = (iq.start + r.scene.sled_qpos, iq.start + r.scene.fork_qpos, iv.start + r.scene.fork_dof)
-                    k = engine_mujoco.switch_index(r.record[r.done], states, columns)
-                    if k is not None:
-                        keep, switch = k + 1, True
-                r.discarded += n - keep
-                r.record[r.done + 1: r.done + 1 + keep] = states[:keep]
-                r.phase[r.done + 1: r.done + 1 + keep] = r.current_phase
+                r.discarded += len(states) - keep
+                r.record[r.done + 1: r.done + 1 + keep] = kept
+                r.phase[r.done + 1: r.done + 1 + keep] = phase
                 r.done += keep
                 if switch:
-                    r.current_phase = 1
                     values = r.setup.tire.values(1)
                     r.scene.set_tire(values.rate, values.damping)
                 if r.done < r.steps:
                     still.append(r)
+            if warned:
+                for d in datas:
+                    d.warning.number[:] = 0
+                messages.clear()
             active = still
 
 
@@ -225,21 +217,12 @@ def _trace(run: _Run) -> RawTrace:
     )
 
 
-_SOS: dict = {}
-
-
 def logged(setup, raw: dict, names) -> dict:
     """``measure.logged`` for the signals ``names`` only (each signal is filtered on its own)."""
     t = raw["time_s"]
     dt = t[1] - t[0]
     ratio = int(round(1.0 / (setup.sample_rate * dt)))
-    key = (setup.antialias, 1.0 / dt)
-    if key not in _SOS:
-        from scipy import signal  # ~0.7 s to import: deferred to the first run
-
-        sos = signal.butter(4, setup.antialias, fs=1.0 / dt, output="sos")
-        _SOS[key] = (sos, signal.sosfilt_zi(sos))
-    sos, zi = _SOS[key]
+    sos, zi = measure.antialias_filter(setup.antialias, dt)
     values = np.array([raw[name] for name in names])
     from scipy.signal import sosfilt
 
