@@ -573,7 +573,8 @@ def choose_timestep(s: Setup) -> Setup:
     """The step for MuJoCo: the user's ``solver.timestep_s`` if within the limit (else one line
     naming it), or the largest step of ``STEP_LADDER`` within it; and the number of finer steps
     it is cut into while a stop may act (``substeps``)."""
-    limit, what = timestep_limit(s)
+    working, stops = _limits(s)
+    limit, what = min(working)
     if s.timestep > 0.0:
         if s.timestep > limit:
             raise ConfigError(
@@ -586,7 +587,7 @@ def choose_timestep(s: Setup) -> Setup:
         if step is None:
             raise ConfigError(f"solver.timestep_s: this configuration needs a step below {_round_down(limit)} s "
                               f"({what}); check its rates and masses")
-    fine, what = fine_limit(s)
+    fine, what = min(working + stops)
     # the largest step of the ladder within the limit that divides the step, else an even cut
     ratios = [step / h for h in STEP_LADDER if h <= min(fine, step)]
     whole = [round(r) for r in ratios if abs(r - round(r)) < 1e-9]

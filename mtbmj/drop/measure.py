@@ -110,14 +110,16 @@ def logged(setup: Setup, raw: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     sos, zi = antialias_filter(setup.antialias, dt)
     out = {"time_s": t[::ratio].copy()}
     chunk = FILTER_CHUNK - FILTER_CHUNK % ratio  # a multiple of the ratio: every chunk starts on a sample kept
-    for name, values in raw.items():
-        if name == "time_s":
-            continue
-        # Start the filter in steady state on the first value, as a logger running before t = 0.
-        state = zi * values[0]
-        kept = []
-        for start in range(0, values.size, chunk):
-            filtered, state = signal.sosfilt(sos, values[start: start + chunk], zi=state)
-            kept.append(filtered[::ratio])
-        out[name] = np.concatenate(kept)
+    names = [name for name in raw if name != "time_s"]
+    # Start the filter in steady state on the first values, as a logger running before t = 0;
+    # all signals at once (one call per chunk), the state carried from chunk to chunk.
+    state = zi[:, None, :] * np.array([raw[name][0] for name in names])[None, :, None]
+    kept = []
+    for start in range(0, t.size, chunk):
+        block = np.array([raw[name][start: start + chunk] for name in names])
+        filtered, state = signal.sosfilt(sos, block, axis=-1, zi=state)
+        kept.append(filtered[:, ::ratio])
+    joined = np.concatenate(kept, axis=1)
+    for k, name in enumerate(names):
+        out[name] = joined[k]
     return out
