@@ -4,9 +4,8 @@ The tire is a MuJoCo soft contact calibrated to behave as the configured radial 
 and damper B (N s/m). MuJoCo's "direct" solref (-stiffness, -damping) is scaled by the contact's
 inverse inertia A and its impedance d (docs/mujoco.md §2); with a constant impedance d (solimp
 d0 = dwidth = d), ``diagexact`` and an elliptic cone, the contact force is
-f = max(0, K pen + B pen_rate) when solref = (-K A, -B A), to d times the force the unconstrained
-acceleration would need (4e-6 relative in the drop). A is computed from the compiled model
-(J M^-1 J^T at the tire's contact point), not assumed.
+f = max(0, K pen + B pen_rate) when solref = (-K A (1-d), -B A (1-d)). A is computed from the
+compiled model (J M^-1 J^T at the tire's contact point), not assumed.
 """
 from __future__ import annotations
 
@@ -39,7 +38,8 @@ class DropScene:
 
     def set_tire(self, rate: float, damping: float) -> None:
         """Calibrated solref for a radial spring ``rate`` (N/m) and damper ``damping`` (N s/m)."""
-        scale = self.inverse_inertia
+        d = float(self.model.geom_solimp[self.tire_geom, 0])
+        scale = self.inverse_inertia * (1.0 - d)
         self.model.geom_solref[self.tire_geom] = (-rate * scale, -damping * scale)
 
 
