@@ -18,9 +18,11 @@ over which a guard changes sign is cut where it does (bisection on the step leng
 and resumed from there, so no Runge-Kutta step integrates across a jump. To locate another event
 (an end stop, a stick-slip state), add its guard to ``_guards`` and its effect to ``_on_event``.
 
-The state is sampled on the run's grid (``solver.timestep_s``) as in the other engines; the
-integration step is that step divided into equal sub-steps no longer than ``MAX_STEP_S``, so the
-accuracy does not depend on the output rate. Needs numba; this is the engine for many drops
+The state is sampled on the run's grid (``solver.timestep_s``) as in the other engines. Each grid
+step is taken as one Runge-Kutta step where the step rule allows it; where that step comes near
+something stiffer (an end stop, the rim, the tire at the ground, the steep band around rest, a
+stroke faster than the friction state allows: the zones the MuJoCo engine refines in) it is
+redone in equal sub-steps no longer than ``MAX_STEP_S``. Needs numba; this is the engine for many drops
 (sweeps, fits); MuJoCo stays the default engine and the only one that rolls over terrain.
 """
 from __future__ import annotations
@@ -29,6 +31,7 @@ import math
 
 import numpy as np
 
+from mtbmj import compose
 from mtbmj.compose import Setup
 from mtbmj.controllers import compiled as _compiled
 from mtbmj.controllers.stops import STIFFENING_M
@@ -41,8 +44,9 @@ MAX_EVENTS_PER_STEP = 16  # more than this in one step is chattering: the step i
 
 # parameter vector of the kernel
 (Q_MB, Q_MW, Q_G, Q_K0, Q_B0, Q_K1, Q_B1, Q_SWITCHES, Q_H, Q_SUB, Q_LIMIT,
- Q_RIM, Q_RIM_D, Q_RIM_K, Q_RIM_C, Q_RIM_P0, Q_BUMPER, Q_TRAVEL, Q_TOP) = range(19)
-Q_WIDTH = 19
+ Q_RIM, Q_RIM_D, Q_RIM_K, Q_RIM_C, Q_RIM_P0, Q_BUMPER, Q_TRAVEL, Q_TOP,
+ Q_COARSE, Q_MARGIN, Q_BAND, Q_FAST) = range(23)
+Q_WIDTH = 23
 
 # status codes
 OK, DIVERGED = 0, 1
@@ -124,41 +128,78 @@ if _numba is not None:
                 z + w * (a[4] + 2.0 * b[4] + 2.0 * c[4] + d[4]))
 
     @numba.njit(**jit)
+    def advance(I, P, q, y, phase, h, counts):
+        """One Runge-Kutta step of length ``h`` from ``y``, cut at every event in it (bisection on
+        the step length to ~1e-15 s) and resumed from there: (state, phase) at its end."""
+        left = h
+        for event in range(MAX_EVENTS_PER_STEP + 1):
+            y1 = rk4(I, P, q, y, phase, left)
+            counts[1] += 1
+            g0 = guards(y, phase, q)
+            if event == MAX_EVENTS_PER_STEP or g0 == guards(y1, phase, q):
+                return y1, phase
+            # the first sign change in (0, left]: bisect on the step length
+            lo, hi = 0.0, left
+            for _b in range(60):
+                mid = 0.5 * (lo + hi)
+                if mid <= lo or mid >= hi:
+                    break
+                if guards(rk4(I, P, q, y, phase, mid), phase, q) == g0:
+                    lo = mid
+                else:
+                    hi = mid
+            ye = rk4(I, P, q, y, phase, hi)
+            phase = on_event(ye, phase, g0, guards(ye, phase, q), q)
+            counts[0] += 1
+            y = ye
+            left -= hi
+            if left <= 0.0:
+                break
+        return y, phase
+
+    @numba.njit(**jit)
+    def near(y0, y1, h, q):
+        """Whether a step of length ``h`` from ``y0`` to ``y1`` may have met something stiffer
+        than the coarse step allows (``engine_mujoco.stop_index``'s zones): an end stop, the rim,
+        the tire at the ground (located, but the step is short there as in MuJoCo), the steep
+        band around rest, a stroke faster than the friction state allows."""
+        x0, x1, v0, v1 = y0[1], y1[1], y0[3], y1[3]
+        dv = abs(v1 - v0)
+        margin = h * (abs(v0) + abs(v1) + dv) + q[Q_MARGIN]
+        if max(x0, x1) + margin > q[Q_BUMPER] or min(x0, x1) - margin < q[Q_TOP]:
+            return True
+        d0, d1 = y0[0] - y0[1], y1[0] - y1[1]
+        w0, w1 = y0[2] - y0[3], y1[2] - y1[3]
+        reach = h * (abs(w0) + abs(w1) + abs(w1 - w0)) + q[Q_MARGIN]
+        if q[Q_RIM] != 0.0 and max(d0, d1) + reach > q[Q_RIM_D]:
+            return True
+        if min(d0, d1) - reach < 0.0 < max(d0, d1) + reach:  # touchdown, lift-off
+            return True
+        if q[Q_BAND] > 0.0 and (v0 * v1 <= 0.0 or min(abs(v0), abs(v1)) - dv < q[Q_BAND]):
+            return True
+        return max(abs(v0), abs(v1)) + dv > q[Q_FAST]
+
+    @numba.njit(**jit)
     def integrate(I, P, q, y0, phase, first, last, out, phases, counts):
         """Step from grid index ``first`` (state ``y0``, tire ``phase``) to ``last``, writing the
         state at each grid point into ``out`` (and back into ``y0``) and the phase into
-        ``phases``. ``counts`` gets [events, steps, status, index where it stopped]. Returns
-        the phase at the end."""
+        ``phases``. Each grid step is one coarse step (``q[Q_COARSE]`` set) unless that step
+        comes ``near`` a stiff zone, where it is redone in ``q[Q_SUB]`` fine steps. ``counts``
+        gets [events, steps, status, index where it stopped, grid steps refined]. Returns the
+        phase at the end."""
         h_grid, sub = q[Q_H], int(q[Q_SUB])
         h = h_grid / sub
         y = (y0[0], y0[1], y0[2], y0[3], y0[4])
         for i in range(first, last):
-            for _ in range(sub):
-                left = h
-                for event in range(MAX_EVENTS_PER_STEP + 1):
-                    y1 = rk4(I, P, q, y, phase, left)
-                    counts[1] += 1
-                    g0 = guards(y, phase, q)
-                    if event == MAX_EVENTS_PER_STEP or g0 == guards(y1, phase, q):
-                        y = y1
-                        break
-                    # the first sign change in (0, left]: bisect on the step length
-                    lo, hi = 0.0, left
-                    for _b in range(60):
-                        mid = 0.5 * (lo + hi)
-                        if mid <= lo or mid >= hi:
-                            break
-                        if guards(rk4(I, P, q, y, phase, mid), phase, q) == g0:
-                            lo = mid
-                        else:
-                            hi = mid
-                    ye = rk4(I, P, q, y, phase, hi)
-                    phase = on_event(ye, phase, g0, guards(ye, phase, q), q)
-                    counts[0] += 1
-                    y = ye
-                    left -= hi
-                    if left <= 0.0:
-                        break
+            fine = True
+            if q[Q_COARSE] != 0.0:
+                yc, pc = advance(I, P, q, y, phase, h_grid, counts)
+                if not near(y, yc, h_grid, q):
+                    y, phase, fine = yc, pc, False
+            if fine:
+                counts[4] += 1
+                for _ in range(sub):
+                    y, phase = advance(I, P, q, y, phase, h, counts)
             for j in range(5):
                 out[i + 1, j] = y[j]
             phases[i + 1] = phase
@@ -197,9 +238,11 @@ def _warm(integrate) -> None:
     from mtbmj.controllers import ForkLaw, LinearDamper, LinearSpring, NoFriction
 
     I, P = _compiled.law_arrays(ForkLaw(LinearSpring(1e4), LinearDamper(100.0), NoFriction()))
-    q = np.array([50.0, 2.0, 9.81, 8e4, 100.0, 8e4, 100.0, 1.0, 1e-4, 1.0, 10.0])
+    q = np.zeros(Q_WIDTH)
+    q[:11] = [50.0, 2.0, 9.81, 8e4, 100.0, 8e4, 100.0, 1.0, 1e-4, 1.0, 10.0]
+    q[Q_BUMPER], q[Q_TRAVEL], q[Q_TOP], q[Q_COARSE], q[Q_FAST] = 1e9, 1e9, -1e9, 1.0, 1e9
     integrate(I, P, q, np.array([0.0, 0.0, 1.0, 0.0, 0.0]), 0, 0, 2, np.zeros((3, 5)),
-              np.zeros(3, dtype=np.int8), np.zeros(4, dtype=np.int64))
+              np.zeros(3, dtype=np.int8), np.zeros(5, dtype=np.int64))
 
 
 def parameters(setup: Setup, substeps: int) -> np.ndarray:
@@ -218,6 +261,13 @@ def parameters(setup: Setup, substeps: int) -> np.ndarray:
     if rim is not None:
         q[Q_RIM], q[Q_RIM_D], q[Q_RIM_K], q[Q_RIM_C] = 1.0, rim.max_deflection, rim.rate, rim.damping
         q[Q_RIM_P0] = STIFFENING_M
+    # the grid step is taken whole where the step rule allows it (away from the zones the MuJoCo
+    # engine refines in), else in sub-steps of at most MAX_STEP_S
+    q[Q_COARSE] = 1.0 if setup.substeps > 1 else 0.0
+    q[Q_MARGIN] = compose.STOP_MARGIN_M
+    q[Q_BAND] = compose.refined_band(setup)
+    speed = compose.refined_speed(setup)
+    q[Q_FAST] = speed if math.isfinite(speed) else 1e30
     return q
 
 
@@ -240,7 +290,7 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
     phases = np.zeros(steps + 1, dtype=np.int8)
     y = np.array([0.0, 0.0, setup.impact_speed, 0.0, 0.0])
     out[0] = y
-    counts = np.zeros(4, dtype=np.int64)
+    counts = np.zeros(5, dtype=np.int64)
     chunk = max(1, int(round(CHUNK_S / setup.timestep)))
     phase = 0
     done = 0
@@ -259,7 +309,8 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
         sled=out[:, 0], fork=out[:, 1], sled_velocity=out[:, 2], fork_velocity=out[:, 3],
         friction_state=out[:, 4], tire_phase=phases,
         info={"method": "rk4", "step_s": setup.timestep / substeps, "substeps": substeps,
-              "rk4_steps": int(counts[1]), "events": int(counts[0]), "timestep_s": setup.timestep},
+              "rk4_steps": int(counts[1]), "events": int(counts[0]), "steps_refined": int(counts[4]),
+              "timestep_s": setup.timestep},
     )
 
 

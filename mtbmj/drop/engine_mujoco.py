@@ -91,9 +91,7 @@ def switch_index(previous, states, columns) -> int | None:
     return int(found[0]) if found.size else None
 
 
-# A coarse step is refined (``setup.substeps`` finer steps) when, at either end, the fork or the
-# tire is within this distance plus what the step can cover of a stop's or the rim's reach.
-STOP_MARGIN_M = 0.2e-3
+STOP_MARGIN_M = compose.STOP_MARGIN_M  # see stop_index
 REFINED_CHUNK_S = 0.01  # simulated time per rollout at the fine step
 AFTER_REFINED_CHUNK_S = 0.01  # the first coarse rollout after one: doubled while none is cut
 
