@@ -586,22 +586,44 @@ def fine_limit(s: Setup) -> tuple[float, str]:
     return min(working + stops)
 
 
+def _whole_fraction(interval: float, step: float) -> bool:
+    """Whether ``step`` goes into ``interval`` a whole number of times."""
+    ratio = interval / step
+    return round(ratio) >= 1 and abs(ratio - round(ratio)) <= 1e-6 * ratio
+
+
+def _fraction_within(interval: float, limit: float) -> float:
+    """The largest whole fraction interval / k not above ``limit``."""
+    return interval / max(1, math.ceil(interval / limit * (1.0 - 1e-12)))
+
+
 def choose_timestep(s: Setup) -> Setup:
-    """The step for MuJoCo: the user's ``solver.timestep_s`` if within the limit (else one line
-    naming it), or the largest step of ``STEP_LADDER`` within it; and the number of finer steps
-    it is cut into while a stop may act (``substeps``)."""
+    """The step for MuJoCo: the user's ``solver.timestep_s`` if within the limit and a whole
+    fraction of the logger's sample interval (else one line naming the limit), or the largest
+    step of ``STEP_LADDER`` within the limit that is such a fraction (else the largest fraction
+    within it); and the number of finer steps it is cut into where the drop engine refines
+    (``substeps``). The output is the step's grid decimated to the logger's rate: a step that
+    did not divide its interval would log at another rate than the one asked for."""
     working, stops = _limits(s)
     limit, what = min(working)
+    interval = 1.0 / s.sample_rate
     if s.timestep > 0.0:
         if s.timestep > limit:
             raise ConfigError(
                 f"solver.timestep_s: {s.timestep:g} s is too large for solver.integrator = {s.integrator} "
-                f"with this configuration ({what}); use at most {_round_down(limit)} s, or leave it out to "
-                f"have it chosen")
+                f"with this configuration ({what}); use at most {_fraction_within(interval, limit):.10g} s, or "
+                f"leave it out to have it chosen")
+        if not _whole_fraction(interval, s.timestep):
+            raise ConfigError(
+                f"solver.timestep_s: {s.timestep:g} s does not go a whole number of times into the logger's "
+                f"sample interval (1 / solver.sample_rate_Hz = {interval:.10g} s); use "
+                f"{_fraction_within(interval, s.timestep):.10g} s or another whole fraction of it")
         step = s.timestep
     else:
-        step = next((h for h in STEP_LADDER if h <= limit), None)
+        step = next((h for h in STEP_LADDER if h <= limit and _whole_fraction(interval, h)), None)
         if step is None:
+            step = _fraction_within(interval, limit)
+        if step < STEP_LADDER[-1]:
             raise ConfigError(f"solver.timestep_s: this configuration needs a step below {_round_down(limit)} s "
                               f"({what}); check its rates and masses")
     fine, what = min(working + stops)

@@ -127,3 +127,22 @@ def test_logged_record_does_not_depend_on_the_engine_step():
         a_max = np.max(np.abs(np.diff(v))) / fine.trace.info["timestep_s"]
         bound = h * h * a_max / 8.0 * 1e3 + 0.005
         assert np.max(np.abs(coarse.signals[name] - fine.signals[name])) <= bound, name
+
+
+@settings(max_examples=40, deadline=None, derandomize=True, database=None)
+@given(rate=st.integers(150, 2500))
+def test_the_chosen_step_logs_at_the_rate_asked_for(rate):
+    """Any logger rate: the chosen step goes a whole number of times into its sample interval
+    (the record is the step grid decimated), within the step rule's limit."""
+    s = compose.setup(mtbmj.load_config("S12", {"solver.sample_rate_Hz": float(rate),
+                                                 "solver.antialias_Hz": 0.4 * rate}))
+    ratio = 1.0 / (rate * s.timestep)
+    assert abs(ratio - round(ratio)) <= 1e-6 * ratio and round(ratio) >= 1
+    assert s.timestep <= compose.timestep_limit(s)[0]
+
+
+def test_an_odd_logger_rate_is_logged_at_that_rate_and_a_step_that_does_not_divide_is_refused():
+    run = run_drop("S1", overrides={"solver.sample_rate_Hz": 300.0, "solver.antialias_Hz": 100.0}, duration=0.2)
+    assert np.allclose(np.diff(run.signals["time_s"]), 1.0 / 300.0, rtol=1e-9)
+    with pytest.raises(mtbmj.ConfigError, match="solver.timestep_s: 0.0003 s does not go a whole number"):
+        compose.setup(mtbmj.load_config("S1", {"solver.timestep_s": 3e-4}))
