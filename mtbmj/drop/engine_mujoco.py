@@ -177,14 +177,19 @@ class Stepping:
             return min(self.refined_chunk, remaining)
         return min(min(self.switch_chunk, self.coarse_chunk) if self.pending else self.coarse_chunk, remaining)
 
-    def keep(self, previous, states, fine_states=None) -> tuple[int, bool]:
+    def keep(self, previous, states, fine_states=None) -> tuple[int, bool, tuple | None]:
         """(how many of ``states``, recorded from ``previous``, to keep; whether the tire law
-        switches after the last kept one), and the mode of the next rollout. At the fine step,
-        ``fine_states`` are all the states the output ``states`` were taken from: the switch is
-        looked for in them (a bounce off a stop turns the fork and back within one output step)
-        and made at the end of the output step it falls in."""
+        switches after them; ``None``, or (i, m) when it switches inside the next output step:
+        after fine state ``fine_states[i]``, with ``m`` fine steps left to finish that output
+        step under the new law), and the mode of the next rollout.
+
+        At the fine step ``fine_states`` are all the states the output ``states`` were taken
+        from, and the switch is made at the fine step it falls in. At a coarse step that may
+        hold the switch, the chunk is cut before that step and stepped finely: the switch lands
+        within a fine step, as the reference's event does (1 ms late, it moved a random S12 fork
+        0.7 mm)."""
         n = len(states)
-        keep, switch = n, False
+        keep, switch, partial = n, False, None
         if self.substeps > 1 and not self.fine:
             k = stop_index(previous, states, self.stop_columns, self.zones, self.setup.timestep)
             if k is not None:
@@ -192,12 +197,20 @@ class Stepping:
         if self.pending and keep:
             if fine_states is not None:
                 k = switch_index(previous, fine_states, self.switch_columns)
-                k = None if k is None else k // self.substeps
+                if k is not None:
+                    whole, part = divmod(k + 1, self.substeps)
+                    keep, switch = whole, True
+                    if part:
+                        partial = (k, self.substeps - part)
             else:
                 k = switch_index(previous, states[:keep], self.switch_columns)
-            if k is not None:
-                keep, switch = k + 1, True
-        if self.fine:  # back to the coarse step once the last step is clear of every zone
+                if k is not None and self.substeps > 1:
+                    keep = k  # refine the step that holds it
+                elif k is not None:
+                    keep, switch = k + 1, True
+        if switch and self.fine:
+            pass  # stays fine for one more chunk: the exit is judged on whole output steps
+        elif self.fine:  # back to the coarse step once the last step is clear of every zone
             before = previous if keep == 1 else states[keep - 2]
             self.fine = stop_index(before, states[keep - 1: keep], self.stop_columns, self.zones,
                                    self.setup.timestep) is not None
@@ -208,17 +221,17 @@ class Stepping:
             self.coarse_chunk = min(self.chunk, 2 * self.coarse_chunk)
         if switch:
             self.phase = 1
-        return keep, switch
+        return keep, switch, partial
 
 
-def fine_rollout(model, data, start, n: int, substeps: int):
-    """``mujoco.rollout`` of ``n`` output steps from one state at ``model.opt.timestep /
-    substeps`` (the model's step is restored after): (the states of every ``substeps``-th step,
-    all the states)."""
+def fine_rollout(model, data, start, n: int, substeps: int, nstep: int | None = None):
+    """``mujoco.rollout`` of ``n`` output steps (or ``nstep`` fine steps) from one state at
+    ``model.opt.timestep / substeps`` (the model's step is restored after): (the states of
+    every ``substeps``-th step, all the states)."""
     h = model.opt.timestep
     model.opt.timestep = h / substeps
     try:
-        states, _ = rollout.rollout(model, data, start, nstep=n * substeps)
+        states, _ = rollout.rollout(model, data, start, nstep=n * substeps if nstep is None else nstep)
     finally:
         model.opt.timestep = h
     return states[0, substeps - 1:: substeps], states[0]
@@ -278,7 +291,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
             else:
                 states, fine_states = rollout.rollout(model, data, state[None, :], nstep=n)[0][0], None
                 computed += n
-            keep, switch = plan.keep(state, states, fine_states)
+            keep, switch, partial = plan.keep(state, states, fine_states)
             discarded += n - keep
             if keep < n and (messages or _warning(data) is not None) and _steps_clean(state, states[:keep]):
                 # the warning came from steps past the cut, which are thrown away
@@ -293,6 +306,16 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
             if switch:
                 values = setup.tire.values(1)
                 sc.set_tire(values.rate, values.damping)
+            if partial is not None:  # the switch fell inside an output step: finish it under the new law
+                at, left = partial
+                _, rest = fine_rollout(model, data, fine_states[at][None, :], 0, substeps, nstep=left)
+                computed += left
+                discarded -= 1  # that output step is made, not thrown away
+                record[done + 1, : len(columns)] = rest[-1, columns]
+                phase[done + 1] = plan.phase
+                _check(data, rest, done + 1, setup, messages)
+                state = rest[-1].copy()
+                done += 1
             if progress is not None:
                 progress(done / steps)
     return RawTrace(

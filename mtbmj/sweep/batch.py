@@ -176,7 +176,7 @@ def _step_group(runs: list[_Run], datas, pool, spec) -> None:
             for r, states, fine_states in made:
                 start = r.record[r.done]
                 phase = r.plan.phase
-                keep, switch = r.plan.keep(start, states, fine_states)
+                keep, switch, partial = r.plan.keep(start, states, fine_states)
                 kept = states[:keep]
                 if (not np.all(np.isfinite(kept)) or (keep and np.max(np.abs(kept[:, 1:3])) > MAX_DISPLACEMENT_M)
                         or (warned and not engine_mujoco._steps_clean(start, kept))):
@@ -189,6 +189,17 @@ def _step_group(runs: list[_Run], datas, pool, spec) -> None:
                 if switch:
                     values = r.setup.tire.values(1)
                     r.scene.set_tire(values.rate, values.damping)
+                if partial is not None:  # as engine_mujoco.run: finish the output step under the new law
+                    at, left = partial
+                    _, rest = engine_mujoco.fine_rollout(r.scene.model, datas[0], fine_states[at][None, :], 0,
+                                                         r.setup.substeps, nstep=left)
+                    if not np.all(np.isfinite(rest)):
+                        r.failed = True
+                        continue
+                    r.discarded -= 1
+                    r.record[r.done + 1] = rest[-1]
+                    r.phase[r.done + 1] = r.plan.phase
+                    r.done += 1
                 if r.done < r.steps:
                     still.append(r)
             if warned:
