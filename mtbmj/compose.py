@@ -10,6 +10,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from mtbmj import controllers as law
+from mtbmj.controllers.stops import STIFFENING_M
 from mtbmj.config import Config
 from mtbmj.errors import ConfigError
 
@@ -416,12 +417,51 @@ def _along(fork_law, xs, vs, python) -> np.ndarray:
     return out
 
 
+# The stops' and the rim's stiffening is met at this penetration when the step is chosen: the
+# depth a hard landing reaches at most (controllers.stops), where their tangent rate is
+# k (1 + 3 (p / p0)^2), 34 times the linear rate.
+STOP_DEPTH_M = 2.0e-3
+
+
+def reachable(s: Setup) -> dict[str, bool]:
+    """Which of the bumper, the compression stop, the extension stop and the rim the run can
+    reach at all, by an energy bound: the fall's kinetic energy plus the work of gravity as the
+    sled and wheel go down can at most fill the spring (its lower curve, of compression and
+    rebound, friction and damping left out) and the softest tire. What cannot be reached does
+    not set the fine step."""
+    spring = s.fork.spring
+    main = getattr(spring, "main", spring)
+    extension = getattr(spring, "extension", 0.02)
+    g, mb, mw = s.gravity, s.body_mass, s.wheel_mass
+    xs = np.linspace(-extension, s.travel, 2001)
+    free = law.ForkLaw(main, law.LinearDamper(0.0), law.NoFriction())
+    low = np.minimum.reduce([_along(free, xs, np.full_like(xs, v), lambda x, v=v: main.force(x, v))
+                             for v in (-1.0, 0.0, 1.0)])
+    energy = np.concatenate(([0.0], np.cumsum(0.5 * (low[1:] + low[:-1]) * np.diff(xs))))
+    energy -= np.interp(0.0, xs, energy)  # from full extension
+    k_tire = min(t.rate for t in [s.tire.impact] + ([s.tire.in_contact] if s.tire.in_contact else []))
+    weight = (mb + mw) * g
+    fork_budget = weight * s.drop_height + mb * g * xs - energy  # fork at x, nothing else stored
+    tire_best = weight ** 2 / (2.0 * k_tire)  # the most the tire's fall can add beyond its storage
+    out = {"bumper": bool(np.interp(getattr(spring, "bumper_start", s.travel), xs, fork_budget) + tire_best >= 0.0),
+           "compression_stop": bool(fork_budget[-1] + tire_best >= 0.0),
+           "extension_stop": bool(fork_budget[0] + tire_best >= 0.0)}
+    rim = s.tire.rim
+    if rim is not None:
+        d = rim.max_deflection
+        out["rim"] = bool(np.max(fork_budget) + weight * d - 0.5 * k_tire * d * d >= 0.0)
+    else:
+        out["rim"] = False
+    return out
+
+
 def stiffest_rates(s: Setup) -> dict[str, float]:
     """Stiffness (N/m) and damping-like slopes (N s/m) the wheel meets: ``working`` (the spring's
     steepest slope over the whole stroke, top-out included, sampled finely, plus the stiffer tire
-    rate), ``stops`` (that plus the bumper at full travel, a hard stop and the rim, engaged
-    together in the worst case) and ``damping`` (fork damping slope over the velocity range,
-    stops, tire and rim)."""
+    rate), ``stops`` (that plus the bumper at full travel, a hard stop and the rim at their
+    tangent rate ``STOP_DEPTH_M`` deep, engaged together in the worst case; only those the run
+    can reach, see :func:`reachable`) and ``damping`` (fork damping slope over the velocity
+    range, stops, tire and rim)."""
     spring = s.fork.spring
     main = getattr(spring, "main", spring)
     extension = getattr(spring, "extension", 0.02)
@@ -434,14 +474,21 @@ def stiffest_rates(s: Setup) -> dict[str, float]:
     k_tire = max(t.rate for t in tires)
     c_tire = max(t.damping for t in tires)
     rim = s.tire.rim
-    k_stop = getattr(spring, "stop_rate", 0.0)
+    reach = reachable(s)
+    stiffening = 1.0 + 3.0 * (STOP_DEPTH_M / STIFFENING_M) ** 2
+    # the extension stop is within the bound for nearly every fork (the bound leaves damping out,
+    # and a rebound past full extension is cheap): it counts at its linear rate, the compression
+    # stop at its tangent rate where the run can reach it
+    k_stop = getattr(spring, "stop_rate", 0.0) * (stiffening if reach["compression_stop"] else 1.0)
     c_stop = getattr(spring, "stop_damping", 0.0)
+    k_bumper = k_bumper if reach["bumper"] else 0.0
+    rim = rim if reach["rim"] else None
     vs = np.linspace(-4.0, 4.0, 801)
     fork = _along(law.ForkLaw(law.LinearSpring(0.0), s.fork.damper, law.NoFriction()), np.zeros_like(vs), vs,
                   lambda x, v: s.fork.damper.force(v))
     c_fork = float(np.max(np.abs(np.diff(fork)) / np.diff(vs))) + getattr(s.fork.friction, "damping", 0.0)
     return {"working": k_spring + k_tire,
-            "stops": k_spring + k_bumper + k_tire + k_stop + (rim.rate if rim is not None else 0.0),
+            "stops": k_spring + k_bumper + k_tire + k_stop + (rim.rate * stiffening if rim is not None else 0.0),
             "damping": c_fork + c_tire,
             "stop_damping": c_fork + c_tire + c_stop + (rim.damping if rim is not None else 0.0)}
 
