@@ -161,3 +161,28 @@ def test_the_tire_switch_lands_within_a_fine_step_of_the_reference():
     first = lambda r: r.raw["time_s"][np.argmax(r.trace.tire_phase == 1)]
     assert abs(first(mj) - first(ode)) <= mj.trace.info["timestep_s"]
     assert max(d["max_abs_mm"] for d in mj.difference(ode).values()) <= 0.1
+
+
+def test_the_energy_bound_never_misses_a_stop_the_run_reaches():
+    """compose.reachable is an upper bound: on random forks, a run that reaches the bumper, the
+    compression stop or the rim was told it could; the paper's S12 drop cannot bottom, and a
+    110 kg rider dropped 300 mm on S1 can."""
+    assert not compose.reachable(compose.setup(mtbmj.load_config("S12")))["compression_stop"]
+    assert compose.reachable(compose.setup(mtbmj.load_config(
+        "S1", {"sled.drop_height_mm": 300.0, "sled.body_mass_kg": 110.0})))["compression_stop"]
+    table = list(mtbmj.load_config("reference").require("fork.damper.force_N"))
+    reached = 0
+    for preset, overrides in draws(10, 5, table):
+        cfg = mtbmj.load_config(preset, overrides)
+        setup = compose.setup(cfg)
+        bound = compose.reachable(setup)
+        run = run_drop(cfg, duration=0.4)
+        if run.raw["fork_mm"].max() >= setup.fork.spring.bumper_start * 1e3:
+            assert bound["bumper"], (preset, overrides)
+            reached += 1
+        if run.summary["bottoms_out"]["count"]:
+            assert bound["compression_stop"], (preset, overrides)
+        if run.summary["rim_strikes"]["count"]:
+            assert bound["rim"], (preset, overrides)
+            reached += 1
+    assert reached > 0  # the draws do reach some of them
