@@ -417,6 +417,20 @@ def _along(fork_law, xs, vs, python) -> np.ndarray:
     return out
 
 
+def _stroke(s: Setup, points: int) -> np.ndarray:
+    """Fork compressions (m) from the extension stop to full travel."""
+    return np.linspace(-getattr(s.fork.spring, "extension", 0.02), s.travel, points)
+
+
+def _spring_along(s: Setup, xs, v: float) -> np.ndarray:
+    """The main spring's force (N; end stops left out) along compressions ``xs`` at stroke
+    velocity ``v``."""
+    spring = s.fork.spring
+    main = getattr(spring, "main", spring)
+    free = law.ForkLaw(main, law.LinearDamper(0.0), law.NoFriction())
+    return _along(free, xs, np.full_like(xs, v), lambda x, vv: main.force(x, vv))
+
+
 # The stops' and the rim's stiffening is met at this penetration when the step is chosen: the
 # depth a hard landing reaches at most (controllers.stops), where their tangent rate is
 # k (1 + 3 (p / p0)^2), 34 times the linear rate.
@@ -430,13 +444,9 @@ def reachable(s: Setup) -> dict[str, bool]:
     rebound, friction and damping left out) and the softest tire. What cannot be reached does
     not set the fine step."""
     spring = s.fork.spring
-    main = getattr(spring, "main", spring)
-    extension = getattr(spring, "extension", 0.02)
     g, mb, mw = s.gravity, s.body_mass, s.wheel_mass
-    xs = np.linspace(-extension, s.travel, 2001)
-    free = law.ForkLaw(main, law.LinearDamper(0.0), law.NoFriction())
-    low = np.minimum.reduce([_along(free, xs, np.full_like(xs, v), lambda x, v=v: main.force(x, v))
-                             for v in (-1.0, 0.0, 1.0)])
+    xs = _stroke(s, 2001)
+    low = np.minimum.reduce([_spring_along(s, xs, v) for v in (-1.0, 0.0, 1.0)])
     energy = np.concatenate(([0.0], np.cumsum(0.5 * (low[1:] + low[:-1]) * np.diff(xs))))
     energy -= np.interp(0.0, xs, energy)  # from full extension
     k_tire = min(t.rate for t in [s.tire.impact] + ([s.tire.in_contact] if s.tire.in_contact else []))
@@ -463,11 +473,8 @@ def stiffest_rates(s: Setup) -> dict[str, float]:
     can reach, see :func:`reachable`) and ``damping`` (fork damping slope over the velocity
     range, stops, tire and rim)."""
     spring = s.fork.spring
-    main = getattr(spring, "main", spring)
-    extension = getattr(spring, "extension", 0.02)
-    xs = np.linspace(-extension, s.travel, 2001)
-    force = _along(law.ForkLaw(main, law.LinearDamper(0.0), law.NoFriction()), xs, np.zeros_like(xs),
-                   lambda x, v: main.force(x, 0.0))
+    xs = _stroke(s, 2001)
+    force = _spring_along(s, xs, 0.0)
     k_spring = float(np.max(np.abs(np.diff(force)) / np.diff(xs)))
     k_bumper = 2.0 * spring.bumper_force / spring.bumper_length if hasattr(spring, "bumper_force") else 0.0
     tires = [s.tire.impact] + ([s.tire.in_contact] if s.tire.in_contact else [])
@@ -531,8 +538,8 @@ def velocity_band(s: Setup) -> tuple[float, float]:
     if not bands:
         return 0.0, 0.0
     dv = 1e-3 * min(bands)
-    xs = np.linspace(-getattr(spring, "extension", 0.02), s.travel, 101)
-    slope = max(abs(main.force(x, dv) - main.force(x, -dv)) for x in xs) / (2.0 * dv)
+    xs = _stroke(s, 101)
+    slope = float(np.max(np.abs(_spring_along(s, xs, dv) - _spring_along(s, xs, -dv)))) / (2.0 * dv)
     if not friction.has_state:
         slope += abs(friction.force(dv) - friction.force(-dv)) / (2.0 * dv)
     return BAND_WIDTHS * max(bands), slope
@@ -583,6 +590,18 @@ def refined_band(s: Setup) -> float:
     half_width, slope = velocity_band(s)
     reduced = s.wheel_mass * s.body_mass / (s.wheel_mass + s.body_mass)
     return half_width if slope > 0.0 and BAND_STEP[s.integrator] * reduced / slope < s.timestep else 0.0
+
+
+def refine_zones(s: Setup) -> tuple[float, float, float, float, float]:
+    """Where the drop engines step finely: (fork compression at the bumper or the compression
+    stop, fork compression at the extension stop, tire deflection at the rim, +-inf where there
+    is none; the half-width of the steep velocity band around rest, :func:`refined_band`; the
+    stroke speed above which the friction state is stiff, :func:`refined_speed`)."""
+    spring = s.fork.spring
+    compress = getattr(spring, "bumper_start", math.inf)
+    extend = -getattr(spring, "extension", math.inf)
+    rim = s.tire.rim.max_deflection if s.tire.rim is not None else math.inf
+    return compress, extend, rim, refined_band(s), refined_speed(s)
 
 
 def _limits(s: Setup) -> tuple[list, list]:

@@ -265,8 +265,7 @@ def parameters(setup: Setup, substeps: int) -> np.ndarray:
     # engine refines in), else in sub-steps of at most MAX_STEP_S
     q[Q_COARSE] = 1.0 if setup.substeps > 1 else 0.0
     q[Q_MARGIN] = compose.STOP_MARGIN_M
-    q[Q_BAND] = compose.refined_band(setup)
-    speed = compose.refined_speed(setup)
+    _, _, _, q[Q_BAND], speed = compose.refine_zones(setup)
     q[Q_FAST] = speed if math.isfinite(speed) else 1e30
     return q
 

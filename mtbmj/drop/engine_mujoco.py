@@ -96,23 +96,11 @@ REFINED_CHUNK_S = 0.01  # simulated time per rollout at the fine step
 AFTER_REFINED_CHUNK_S = 0.01  # the first coarse rollout after one: doubled while none is cut
 
 
-def stop_zones(setup: Setup) -> tuple[float, float, float, float, float]:
-    """Where the engine refines: (fork compression at the bumper or the compression stop, fork
-    compression at the extension stop, tire deflection at the rim, +-inf where there is none;
-    the half-width of the steep velocity band around rest, ``compose.refined_band``; the stroke
-    speed above which the friction state is stiff, ``compose.refined_speed``)."""
-    spring = setup.fork.spring
-    compress = getattr(spring, "bumper_start", math.inf)
-    extend = -getattr(spring, "extension", math.inf)
-    rim = setup.tire.rim.max_deflection if setup.tire.rim is not None else math.inf
-    return compress, extend, rim, compose.refined_band(setup), compose.refined_speed(setup)
-
-
 def stop_index(previous, states, columns, zones, step: float) -> int | None:
     """The index of the first step of a chunk of recorded states that a stop or the rim may have
     acted in, or in which the tire may have touched down or lifted off (see ``STOP_MARGIN_M``),
-    or None. ``columns`` are the sled and fork position and
-    velocity columns of a state row; ``zones`` as :func:`stop_zones`."""
+    or None. ``columns`` are the sled and fork position and velocity columns of a state row;
+    ``zones`` as ``compose.refine_zones``."""
     sled, fork, sled_v, fork_v = columns
     compress, extend, rim, band, fast = zones
     rows = np.concatenate((previous[None, :], states))
@@ -157,7 +145,7 @@ class Stepping:
         self.stop_columns = tuple(columns)
         sled, fork, _, fork_v = self.stop_columns
         self.switch_columns = (sled, fork, fork_v)
-        self.zones = stop_zones(setup)
+        self.zones = compose.refine_zones(setup)
         self.chunk = max(1, int(round(CHUNK_S / h)))
         self.switch_chunk = max(1, int(round(SWITCH_CHUNK_S / h)))
         self.refined_chunk = max(1, int(round(REFINED_CHUNK_S / h)))
