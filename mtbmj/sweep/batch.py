@@ -229,19 +229,8 @@ def _trace(run: _Run) -> RawTrace:
 
 
 def logged(setup, raw: dict, names) -> dict:
-    """``measure.logged`` for the signals ``names`` only (each signal is filtered on its own)."""
-    t = raw["time_s"]
-    dt = t[1] - t[0]
-    ratio = int(round(1.0 / (setup.sample_rate * dt)))
-    sos, zi = measure.antialias_filter(setup.antialias, dt)
-    values = np.array([raw[name] for name in names])
-    from scipy.signal import sosfilt
-
-    filtered, _ = sosfilt(sos, values, axis=-1, zi=zi[:, None, :] * values[:, 0][None, :, None])
-    out = {"time_s": t[::ratio].copy()}
-    for k, name in enumerate(names):
-        out[name] = filtered[k, ::ratio]
-    return out
+    """``measure.logged`` for the signals ``names`` only."""
+    return measure.logged(setup, {"time_s": raw["time_s"], **{name: raw[name] for name in names}})
 
 
 def summarize(run: _Run) -> tuple[dict, dict]:
