@@ -224,36 +224,100 @@ def _damper(c: Config) -> object:
     return law.TableDamper(v, f)
 
 
-def clicks_curve(c: Config, circuit: str, points: int) -> np.ndarray:
-    """Force (N) of one damper circuit ("compression" or "rebound") at its adjuster setting
-    ``fork.damper.<circuit>_clicks``: each velocity's force interpolated linearly in clicks between
-    the two neighbouring positions of ``<circuit>_clicks_measured`` (rows of ``<circuit>_force_N``)."""
+SPEED_CIRCUITS = {"compression": ("low_speed_compression", "high_speed_compression"),
+                  "rebound": ("low_speed_rebound", "high_speed_rebound")}
+# two curves measured at the same setting (the sweeps' shared reference) may differ by this much
+# (a fraction of the larger curve's peak force, plus CLICKS_AGREE_N) before they are refused
+CLICKS_AGREE = 0.10
+CLICKS_AGREE_N = 5.0
+
+
+def _clicks_rows(c: Config, circuit: str, stroke: str, points: int) -> tuple[np.ndarray, np.ndarray]:
+    """The measured positions and force rows of one adjuster (``fork.damper.<circuit>_...``),
+    checked against the stroke's share of the velocity grid."""
     why = "needed by fork.damper.model = clicks"
     key = f"fork.damper.{circuit}"
     measured = np.asarray(c.require(f"{key}_clicks_measured", why))
     rows = c.require(f"{key}_force_N", why)
-    setting = c.require(f"{key}_clicks", why)
     if len(measured) < 1 or np.any(measured != np.round(measured)) or np.any(measured < 0) or \
             np.any(np.diff(measured) <= 0):
         raise ConfigError(f"{key}_clicks_measured: must be whole clicks from closed, strictly increasing")
     if len(rows) != len(measured):
         raise ConfigError(f"{key}_force_N: {len(rows)} rows for {len(measured)} positions in {key}_clicks_measured")
-    side = "compression (> 0)" if circuit == "compression" else "rebound (< 0)"
+    side = "compression (> 0)" if stroke == "compression" else "rebound (< 0)"
     for i, row in enumerate(rows):
         if len(row) != points:
             raise ConfigError(f"{key}_force_N: row {i + 1} has {len(row)} forces for the {points} {side} velocities "
                               "of fork.damper.velocity_mm_per_s")
         f = np.asarray(row)
-        if np.any(np.diff(f) < 0) or (np.any(f < 0) if circuit == "compression" else np.any(f > 0)):
+        if np.any(np.diff(f) < 0) or (np.any(f < 0) if stroke == "compression" else np.any(f > 0)):
             raise ConfigError(f"{key}_force_N: row {i + 1} must rise with velocity and keep the sign of the "
-                              f"{circuit} stroke (a damper dissipates)")
+                              f"{stroke} stroke (a damper dissipates)")
+    return measured, np.asarray(rows, dtype=float)
+
+
+def _at_clicks(key: str, setting: float, measured: np.ndarray, table: np.ndarray) -> np.ndarray:
     if setting != round(setting):
-        raise ConfigError(f"{key}_clicks: {setting:g} is not a whole number of clicks")
+        raise ConfigError(f"{key}: {setting:g} is not a whole number of clicks")
     if not measured[0] <= setting <= measured[-1]:
-        raise ConfigError(f"{key}_clicks: {setting:g} is outside the measured positions "
+        raise ConfigError(f"{key}: {setting:g} is outside the measured positions "
                           f"{measured[0]:g}-{measured[-1]:g} clicks from closed")
-    table = np.asarray(rows)
-    return np.array([np.interp(setting, measured, table[:, j]) for j in range(points)])
+    return np.array([np.interp(setting, measured, table[:, j]) for j in range(table.shape[1])])
+
+
+def clicks_curve(c: Config, circuit: str, points: int, stroke: str | None = None) -> np.ndarray:
+    """Force (N) of one damper adjuster at its setting ``fork.damper.<circuit>_clicks``: each
+    velocity's force interpolated linearly in clicks between the two neighbouring positions of
+    ``<circuit>_clicks_measured`` (rows of ``<circuit>_force_N``). ``circuit`` is a stroke
+    ("compression", "rebound": one adjuster per stroke) or one of ``SPEED_CIRCUITS``; ``stroke``
+    defaults to the circuit's own."""
+    stroke = stroke or circuit
+    measured, table = _clicks_rows(c, circuit, stroke, points)
+    key = f"fork.damper.{circuit}_clicks"
+    return _at_clicks(key, c.require(key, "needed by fork.damper.model = clicks"), measured, table)
+
+
+def _has_speed_circuits(c: Config, stroke: str) -> bool:
+    return any(k.startswith(f"fork.damper.{circuit}_") for circuit in SPEED_CIRCUITS[stroke] for k in c.values)
+
+
+def stroke_clicks_curve(c: Config, stroke: str, points: int) -> np.ndarray:
+    """One stroke's force (N) at its adjuster settings. With one adjuster per stroke, its
+    ``clicks_curve``. With a low- and a high-speed adjuster, each measured while the other stood
+    at its ``<circuit>_reference_clicks``, the adjusters' effects are taken as additive:
+    F(L, H) = F_low(L) + F_high(H) - F(L_ref, H_ref), where both sweeps hold the reference curve
+    F(L_ref, H_ref) (their mean is used; curves that disagree by more than CLICKS_AGREE are refused)."""
+    low, high = SPEED_CIRCUITS[stroke]
+    if not _has_speed_circuits(c, stroke):
+        return clicks_curve(c, stroke, points)
+    single = [k for k in c.values if k.startswith(f"fork.damper.{stroke}_clicks") or k == f"fork.damper.{stroke}_force_N"]
+    if single:
+        raise ConfigError(f"{single[0]}: give either one {stroke} adjuster or the low- and high-speed "
+                          f"{stroke} adjusters, not both")
+    why = f"needed by the {stroke} stroke's low- and high-speed adjusters"
+    curves, bases = [], []
+    for circuit, other in ((low, high), (high, low)):
+        measured, table = _clicks_rows(c, circuit, stroke, points)
+        key = f"fork.damper.{circuit}"
+        curves.append(_at_clicks(f"{key}_clicks", c.require(f"{key}_clicks", why), measured, table))
+        ref = c.require(f"{key}_reference_clicks", why)
+        if ref not in measured:
+            raise ConfigError(f"{key}_reference_clicks: {ref:g} is not one of {key}_clicks_measured "
+                              f"(the {circuit.replace('_', '-')} adjuster's position while the "
+                              f"{other.replace('_', '-')} curves were measured)")
+        bases.append(table[list(measured).index(ref)])
+    limit = CLICKS_AGREE * max(np.max(np.abs(bases[0])), np.max(np.abs(bases[1]))) + CLICKS_AGREE_N
+    if np.max(np.abs(bases[0] - bases[1])) > limit:
+        raise ConfigError(f"fork.damper.{high}_force_N: at the reference setting it differs from "
+                          f"fork.damper.{low}_force_N by {np.max(np.abs(bases[0] - bases[1])):.0f} N "
+                          f"(more than {limit:.0f} N); both sweeps should hold the same reference curve")
+    force = curves[0] + curves[1] - 0.5 * (bases[0] + bases[1])
+    if np.any(np.diff(force) < -1e-9) or (np.any(force < 0) if stroke == "compression" else np.any(force > 0)):
+        raise ConfigError(f"fork.damper.{low}_clicks: at {c[f'fork.damper.{low}_clicks']:g} low-speed and "
+                          f"{c[f'fork.damper.{high}_clicks']:g} high-speed clicks the adjusters' summed effects "
+                          f"give a {stroke} curve that falls with velocity or changes sign; the additive model "
+                          "does not hold this far from the measured settings")
+    return force
 
 
 def _clicks_damper(c: Config) -> object:
@@ -261,8 +325,8 @@ def _clicks_damper(c: Config) -> object:
     rebound half (v < 0) come from dyno curves measured at several adjuster positions."""
     v = np.asarray(c.require("fork.damper.velocity_mm_per_s", "needed by fork.damper.model = clicks"))
     force = np.zeros(len(v))
-    force[v > 0] = clicks_curve(c, "compression", int(np.sum(v > 0)))
-    force[v < 0] = clicks_curve(c, "rebound", int(np.sum(v < 0)))
+    force[v > 0] = stroke_clicks_curve(c, "compression", int(np.sum(v > 0)))
+    force[v < 0] = stroke_clicks_curve(c, "rebound", int(np.sum(v < 0)))
     return _damper(c.with_overrides({"fork.damper.model": "table", "fork.damper.force_N": tuple(force)}))
 
 

@@ -25,12 +25,7 @@ def cmd_fit(args) -> int:
     if not 1 <= args.starts <= MAX_STARTS:
         raise MtbmjError(f"--starts: must be in 1..{MAX_STARTS}, got {args.starts}")
     free = [k.strip() for k in (args.free or "").split(",") if k.strip()]
-    clicks = None
-    if args.clicks:
-        try:
-            clicks = [float(c) for c in args.clicks.split(",")]
-        except ValueError:
-            raise MtbmjError(f"--clicks {args.clicks}: expected comma-separated numbers of clicks") from None
+    clicks = _clicks(args.clicks) if args.clicks else None
     data = list(args.data)
     if data == ["example"] and not Path("example").exists():
         from mtbmj.identify.examples import example_paths
@@ -46,6 +41,30 @@ def cmd_fit(args) -> int:
         print(f"note: {note}")
     print(f"wrote {', '.join(p.name for p in written)} to {args.out}; run it with: mtbmj drop {args.out / 'fit.toml'}")
     return 0
+
+
+def _clicks(given: list[str]) -> list:
+    """``--clicks 0,6,12`` (one position per file, both adjusters) or one ``--clicks`` per file
+    naming its adjusters, e.g. ``--clicks lsc=4,hsc=2,lsr=6,hsr=3``."""
+    if len(given) == 1 and "=" not in given[0]:
+        try:
+            return [float(c) for c in given[0].split(",")]
+        except ValueError:
+            raise MtbmjError(f"--clicks {given[0]}: expected comma-separated numbers of clicks") from None
+    settings = []
+    for text in given:
+        label = {}
+        for item in text.split(","):
+            name, eq, value = item.partition("=")
+            try:
+                label[name.strip().lower()] = float(value)
+            except ValueError:
+                raise MtbmjError(f"--clicks {text}: expected adjuster=clicks pairs, e.g. lsc=4,hsc=2,lsr=6,hsr=3") \
+                    from None
+            if not eq:
+                raise MtbmjError(f"--clicks {text}: expected adjuster=clicks pairs, e.g. lsc=4,hsc=2,lsr=6,hsr=3")
+        settings.append(label)
+    return settings
 
 
 def add_parser(sub) -> None:
@@ -66,8 +85,11 @@ def add_parser(sub) -> None:
     p.add_argument("--starts", type=int, default=1, metavar="N",
                    help="drop: fit from N start points (the start values and N-1 Latin hypercube points "
                         "within the bounds); the best fit wins (default 1)")
-    p.add_argument("--clicks", help="damper: the adjuster position of each dyno file, in clicks from closed, "
-                                    "e.g. 0,6,12 (writes a clicks damper)")
+    p.add_argument("--clicks", action="append", metavar="CLICKS",
+                   help="damper: the adjuster positions of the dyno files, in clicks from closed; writes a clicks "
+                        "damper. Either one position per file for both adjusters (--clicks 0,6,12) or one "
+                        "--clicks per file naming its adjusters: lsc, hsc, lsr, hsr (low/high-speed compression "
+                        "and rebound) or c, r (one adjuster per stroke), e.g. --clicks lsc=4,hsc=2,r=6")
     p.add_argument("--out", type=Path, default=Path("out/fit"), help="output directory (default out/fit)")
     p.set_defaults(func=cmd_fit)
     intermixed(p)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import io
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -191,12 +191,14 @@ def _damper(records, results, model, friction, module) -> Identification:
 def identify(kind: str, data: Sequence[str | Path], model: str = "auto", friction: str = "auto",
              mass_kg: float | None = None, config: str = "S12", free: Sequence[str] = (),
              bounds: dict | None = None, engine: str = "mujoco", starts: int = 1,
-             touch_s: float | None = None, clicks: Sequence[float] | None = None) -> Identification:
+             touch_s: float | None = None, clicks: Sequence[float | Mapping[str, float]] | None = None
+             ) -> Identification:
     """Fit ``kind`` ("spring", "damper", "tire", "drop") to the record(s) in ``data``; ``starts``:
     drop fits from that many start points (the best wins); ``free``: the drop fit's free keys
     (default ``DEFAULT_DROP_FREE``); ``touch_s``: the drop record's time zero on its clock
     (default: found by ``validation.time_zero``); ``clicks``: damper fits from several dyno files,
-    the adjuster position (clicks from closed) of each, giving a ``clicks`` damper."""
+    the adjuster position (clicks from closed) of each, or a mapping per file of its adjusters'
+    positions by label (``damper.ADJUSTERS``: lsc, hsc, lsr, hsr, c, r), giving a ``clicks`` damper."""
     if kind not in KINDS:
         raise MtbmjError(f"fit: unknown kind {kind!r} (one of {', '.join(KINDS)})")
     if not data:
@@ -227,9 +229,12 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
         from mtbmj.identify import damper
 
         if clicks:
-            result = damper.fit_clicks(records, list(clicks))
+            labelled = any(isinstance(c, Mapping) for c in clicks)
+            result = (damper.fit_settings(records, [dict(c) if isinstance(c, Mapping) else {"c": c, "r": c}
+                                                    for c in clicks])
+                      if labelled else damper.fit_clicks(records, list(clicks)))
             return Identification("damper", records, {"clicks": result}, ["clicks"],
-                                  lambda: damper.plot_clicks(records, result, list(clicks)),
+                                  lambda: damper.plot_clicks(records, result),
                                   notes=result.extra["notes"])
         if len(records) > 1:
             raise MtbmjError("fit damper: several dyno files need --clicks (the adjuster position of each)")
