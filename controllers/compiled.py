@@ -486,14 +486,14 @@ if _numba is not None:
                 p = x - P[o + 3]
                 if p >= 0.0:
                     r = p / P[o + 7]
-                    f = P[o + 4] * p * (1.0 + r * r) + P[o + 5] * v
+                    f = P[o + 4] * p * (1.0 + r * r) + P[o + 5] * math.tanh(3.0 * r) * v  # stops.stop_damping
                     if f >= 0.0:
                         stop = f
                 top_stop = 0.0
                 q = -P[o + 6] - x
                 if q >= 0.0:
                     r = q / P[o + 7]
-                    f = P[o + 4] * q * (1.0 + r * r) - P[o + 5] * v
+                    f = P[o + 4] * q * (1.0 + r * r) - P[o + 5] * math.tanh(3.0 * r) * v
                     if f >= 0.0:
                         top_stop = f
                 stack[top - 1] = stack[top - 1] + bumper + stop - top_stop
@@ -646,7 +646,7 @@ if _numba is not None:
             rim = 0.0
             if p >= 0.0:
                 r = p / P[o + 3]
-                f = P[o + 1] * p * (1.0 + r * r) + P[o + 2] * (qvel[I[I_SLED_DOF]] - v)
+                f = P[o + 1] * p * (1.0 + r * r) + P[o + 2] * math.tanh(3.0 * r) * (qvel[I[I_SLED_DOF]] - v)
                 if f >= 0.0:
                     rim = f
             qfrc[I[I_SLED_DOF]] = -rim

@@ -393,7 +393,7 @@ if _numba is not None:
                 if F[F_RIM_K] > 0.0 and dp - F[F_RIM_D] >= 0.0:  # the rim strikes (Rim.force)
                     pr = dp - F[F_RIM_D]
                     sr = pr / F[F_RIM_P0]
-                    fr = F[F_RIM_K] * pr * (1.0 + sr * sr) + F[F_RIM_C] * rate
+                    fr = F[F_RIM_K] * pr * (1.0 + sr * sr) + F[F_RIM_C] * math.tanh(3.0 * sr) * rate  # Rim.force
                     if fr >= 0.0:
                         f += fr
                 if f > 0.0:

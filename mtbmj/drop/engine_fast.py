@@ -22,7 +22,8 @@ The state is sampled on the run's grid (``solver.timestep_s``) as in the other e
 step is taken as one Runge-Kutta step where the step rule allows it; where that step comes near
 something stiffer (an end stop, the rim, the tire at the ground, the steep band around rest, a
 stroke faster than the friction state allows: the zones the MuJoCo engine refines in) it is
-redone in equal sub-steps no longer than ``MAX_STEP_S``. Needs numba; this is the engine for many drops
+redone in equal sub-steps no longer than ``MAX_STEP_S`` nor the MuJoCo engine's fine step
+(``Setup.fine_timestep``: 0.02 ms where the run may reach a hard stop or the rim). Needs numba; this is the engine for many drops
 (sweeps, fits); MuJoCo stays the default engine and the only one that rolls over terrain.
 """
 from __future__ import annotations
@@ -73,7 +74,7 @@ if _numba is not None:
             p = d - q[Q_RIM_D]
             if p >= 0.0:
                 s = p / q[Q_RIM_P0]
-                r = q[Q_RIM_K] * p * (1.0 + s * s) + q[Q_RIM_C] * dd
+                r = q[Q_RIM_K] * p * (1.0 + s * s) + q[Q_RIM_C] * math.tanh(3.0 * s) * dd
                 if r >= 0.0:
                     f += r
         return f
@@ -99,7 +100,10 @@ if _numba is not None:
         # touchdown / separation (geometric); the contact stops pushing (separation); the fork's
         # direction (the tire-law switch at the end of its first rebound stroke); the rim
         p = d - q[Q_RIM_D]
-        rim = q[Q_RIM] != 0.0 and p >= 0.0 and q[Q_RIM_K] * p * (1.0 + (p / q[Q_RIM_P0]) ** 2) + q[Q_RIM_C] * dd >= 0.0
+        rim = False
+        if q[Q_RIM] != 0.0 and p >= 0.0:
+            s = p / q[Q_RIM_P0]
+            rim = q[Q_RIM_K] * p * (1.0 + s * s) + q[Q_RIM_C] * math.tanh(3.0 * s) * dd >= 0.0
         # the fork's end stops: the bumper's and the hard stops' engagement (kinks of its force)
         x = y[1]
         return d > 0.0, force > 0.0, y[3] >= 0.0, rim, x >= q[Q_BUMPER], x >= q[Q_TRAVEL], x <= q[Q_TOP]
@@ -283,7 +287,9 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
     integrate = kernel()
     I, P = law_arrays(setup)
     steps = int(round(duration / setup.timestep))
-    substeps = max(1, math.ceil(setup.timestep / MAX_STEP_S - 1e-9))
+    # near a zone: sub-steps of at most MAX_STEP_S, and no longer than the MuJoCo engine's fine
+    # step (the step rule's limit while a stop or the rim may act, compose.fine_limit)
+    substeps = max(1, math.ceil(setup.timestep / MAX_STEP_S - 1e-9), setup.substeps)
     q = parameters(setup, substeps)
     out = np.empty((steps + 1, 5))
     phases = np.zeros(steps + 1, dtype=np.int8)

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from functools import lru_cache
 
+import math
+
 import numpy as np
 
 from mtbmj.compose import Setup
@@ -39,7 +41,9 @@ def tire_forces(tire_law, deflection, rate, phase) -> np.ndarray:
         at = deflection - rim.max_deflection >= 0.0
         p = deflection[at] - rim.max_deflection
         s = p / STIFFENING_M
-        out[at] += np.maximum(0.0, rim.rate * p * (1.0 + s * s) + rim.damping * rate[at])
+        # math.tanh as in Rim.force (numpy's may differ in the last bit; rim strikes are few samples)
+        ramp = np.fromiter((math.tanh(x) for x in 3.0 * s), float, s.size)
+        out[at] += np.maximum(0.0, rim.rate * p * (1.0 + s * s) + rim.damping * ramp * rate[at])
     return out
 
 
