@@ -12,6 +12,11 @@ run length.
 (d) S12's rest position at 3 s and 6 s                               target equal within 0.01 mm
 
     python benchmarks/accuracy_steps.py [--repeat 5] [--envelope 24] [--seed 7]
+    python benchmarks/accuracy_steps.py --envelope-only --envelope 24 --seed 1,2,3,7,20261123
+
+(c) also gives each fork's conditioning: how far the ODE reference itself moves when the tire's
+rates change by 1e-4 (the relative floor of MuJoCo's soft-contact impedance). A fork rattling
+between its stops can move by more than 0.1 mm for that; no engine can be compared more finely.
 
 Writes benchmarks/results/accuracy_steps.json. Not a test: nothing is asserted.
 """
@@ -80,13 +85,23 @@ def envelope(n: int, seed: int) -> dict:
     for preset, overrides in draws(n, seed, table):
         cfg = mtbmj.load_config(preset, overrides)
         m, o = run_drop(cfg, "mujoco"), run_drop(cfg, "ode")
+        # the configuration's own conditioning: how far the reference moves when the tire's rates
+        # change by 1e-4, the relative size of MuJoCo's soft-contact impedance floor (mjMINIMP)
+        rates = {k: cfg[k] * (1.0 - 1e-4) for k in cfg.values if k.startswith("tire.") and k.endswith("_N_per_mm")}
+        sensitivity = worst(o, run_drop(cfg.with_overrides(rates), "ode"))
+        fast = worst(run_drop(cfg, "fast"), o)
         travel, deepest = cfg.require("fork.travel_mm"), cfg.require("tire.max_deflection_mm")
-        rows.append({"preset": preset, "max_abs_mm": worst(m, o), "timestep_s": m.trace.info["timestep_s"],
+        rows.append({"preset": preset, "max_abs_mm": worst(m, o), "sensitivity_mm": sensitivity, "fast_mm": fast,
+                     "timestep_s": m.trace.info["timestep_s"],
                      "fork_past_travel_mm": float(max(np.max(r.raw["fork_mm"]) - travel for r in (m, o))),
                      "tire_past_max_mm": float(max(np.max(r.raw["tire_mm"]) - deepest for r in (m, o))),
                      "bottoms_out": m.summary["bottoms_out"]["count"], "rim_strikes": m.summary["rim_strikes"]["count"]})
-        print(f"(c) {preset}: {rows[-1]['max_abs_mm']:.4f} mm", flush=True)
+        print(f"(c) {preset}: {rows[-1]['max_abs_mm']:.4f} mm (fast {fast:.4f} mm; reference moves "
+              f"{sensitivity:.4f} mm with the tire rates 1e-4 off)", flush=True)
     return {"seed": seed, "cases": rows, "worst_mm": max(r["max_abs_mm"] for r in rows),
+            "beyond_0.1_mm": sum(r["max_abs_mm"] > 0.1 for r in rows),
+            "beyond_0.1_mm_and_twice_sensitivity": sum(r["max_abs_mm"] > max(0.1, 2 * r["sensitivity_mm"]) for r in rows),
+            "fast_worst_mm": max(r["fast_mm"] for r in rows),
             "worst_fork_past_travel_mm": max(r["fork_past_travel_mm"] for r in rows),
             "worst_tire_past_max_mm": max(r["tire_past_max_mm"] for r in rows)}
 
@@ -104,10 +119,24 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--envelope", type=int, default=24)
-    ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--seed", default="7", help="envelope seed(s), comma-separated")
+    ap.add_argument("--envelope-only", action="store_true",
+                    help="only (c), written to results/accuracy_envelope.json")
     args = ap.parse_args()
-    payload = {"presets": presets(), "steps": steps(args.repeat), "envelope": envelope(args.envelope, args.seed),
-               "rest": rest()}
+    seeds = [int(s) for s in args.seed.split(",")]
+    envelopes = [envelope(args.envelope, seed) for seed in seeds]
+    cases = [r for e in envelopes for r in e["cases"]]
+    totals = {"seeds": seeds, "forks": len(cases), "worst_mm": max(r["max_abs_mm"] for r in cases),
+              "beyond_0.1_mm": sum(e["beyond_0.1_mm"] for e in envelopes),
+              "beyond_0.1_mm_and_twice_sensitivity": sum(e["beyond_0.1_mm_and_twice_sensitivity"] for e in envelopes),
+              "within_0.05_mm": sum(r["max_abs_mm"] <= 0.05 for r in cases),
+              "fast_worst_mm": max(r["fast_mm"] for r in cases)}
+    print(f"(c) all seeds: {totals}", flush=True)
+    if args.envelope_only:
+        print(write_json(__file__.replace("accuracy_steps", "accuracy_envelope"), {"envelope": envelopes, "totals": totals}))
+        return
+    payload = {"presets": presets(), "steps": steps(args.repeat), "envelope": envelopes[0] if len(seeds) == 1 else envelopes,
+               "envelope_totals": totals, "rest": rest()}
     print(write_json(__file__, payload))
 
 

@@ -284,3 +284,35 @@ def test_cli_validate(tmp_path):
     bad = run(Path(__file__), "S12", "--out", tmp_path / "bad")
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "Traceback" not in bad.stderr
     assert not (tmp_path / "bad").exists()
+
+
+# --- the events' smoothing and vertex fit, against the library calls they stand in for -----------
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+@settings(max_examples=60, deadline=None)
+@given(n=st.integers(5, 400), dt=st.sampled_from([1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3]), seed=st.integers(0, 2**31))
+def test_smoothing_is_scipys_savgol_interp(n, dt, seed):
+    from scipy.signal import savgol_filter
+
+    from mtbmj.validation.events import SMOOTH_S, smooth
+
+    rng = np.random.default_rng(seed)
+    y = np.cumsum(rng.normal(size=n)) * rng.uniform(0.01, 100)
+    width = max(5, int(round(SMOOTH_S / dt)) | 1)
+    expected = savgol_filter(y, width, 3, mode="interp") if n > width else y
+    assert np.allclose(smooth(y, dt), expected, rtol=0, atol=1e-10 * (np.max(np.abs(y)) + 1e-300))
+
+
+@settings(max_examples=60, deadline=None)
+@given(k=st.integers(5, 40), span=st.floats(1e-4, 1.0), seed=st.integers(0, 2**31))
+def test_vertex_parabola_is_numpys_polyfit(k, span, seed):
+    from mtbmj.validation.events import _parabola
+
+    rng = np.random.default_rng(seed)
+    tt = np.linspace(-span, span * rng.uniform(0.2, 1.0), k)
+    yy = rng.normal() - rng.uniform(1, 1e3) * tt ** 2 / span ** 2 + rng.normal(size=k) * 0.01
+    got, expected = np.array(_parabola(tt, yy)), np.polyfit(tt, yy, 2)
+    assert np.allclose(got, expected, rtol=1e-8, atol=1e-9 * np.max(np.abs(expected)))

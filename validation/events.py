@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
-from scipy.signal import find_peaks, savgol_filter
+from scipy.signal import find_peaks
 
 from mtbmj.errors import MtbmjError
 
@@ -105,11 +105,48 @@ def _noise(y: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(d3 - np.median(d3))) / np.sqrt(20.0))
 
 
+_SAVGOL: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+
+def _savgol_operator(width: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """scipy's cubic Savitzky-Golay filter of ``width`` samples in its "interp" mode, as linear
+    operators (cached per width): the convolution kernel for the interior (``savgol_coeffs``) and,
+    for each end, the matrix that evaluates the cubic fitted to the first (last) ``width`` samples
+    at the first (last) ``width // 2`` of them. The same filter as ``savgol_filter(y, width, 3,
+    mode="interp")`` without its per-call fits of the ends (half the cost of a drop's events)."""
+    if width not in _SAVGOL:
+        from scipy.signal import savgol_coeffs
+
+        half = width // 2
+        x = np.arange(width, dtype=float)
+        vander = np.vander(x, 4)
+        project = vander @ np.linalg.pinv(vander)  # least-squares cubic through the window, evaluated on it
+        _SAVGOL[width] = (savgol_coeffs(width, 3, use="conv"), project[:half].copy(), project[width - half:].copy())
+    return _SAVGOL[width]
+
+
 def smooth(y: np.ndarray, dt: float) -> np.ndarray:
     width = max(5, int(round(SMOOTH_S / dt)) | 1)
+    y = np.asarray(y, float)
     if y.size <= width:
-        return np.asarray(y, float)
-    return savgol_filter(np.asarray(y, float), width, 3, mode="interp")
+        return y
+    kernel, head, tail = _savgol_operator(width)
+    half = width // 2
+    out = np.empty_like(y)
+    out[half:y.size - half] = np.convolve(y, kernel, mode="valid")
+    out[:half] = head @ y[:width]
+    out[y.size - half:] = tail @ y[y.size - width:]
+    return out
+
+
+def _parabola(tt: np.ndarray, yy: np.ndarray) -> tuple[float, float, float]:
+    """Least-squares a t^2 + b t + c through (tt, yy), by the normal equations on t scaled to
+    [-1, 1] (the same fit as ``np.polyfit(tt, yy, 2)``, without its SVD)."""
+    scale = max(abs(tt[0]), abs(tt[-1])) or 1.0
+    u = tt / scale
+    powers = np.vander(u, 3)
+    a, b, c = np.linalg.solve(powers.T @ powers, powers.T @ yy)
+    return a / scale ** 2, b / scale, c
 
 
 def _refine(t: np.ndarray, y: np.ndarray, i: int, raw: np.ndarray | None = None, sigma: float = 0.0) -> Event:
@@ -126,7 +163,7 @@ def _refine(t: np.ndarray, y: np.ndarray, i: int, raw: np.ndarray | None = None,
     lo, hi = max(0, min(lo, i - 2)), min(y.size - 1, max(hi, i + 2))
     if hi - lo >= 4:
         tt = t[lo:hi + 1] - t[i]
-        a, b, c = np.polyfit(tt, data[lo:hi + 1], 2)
+        a, b, c = _parabola(tt, data[lo:hi + 1])
         if a != 0:
             vertex = -b / (2 * a)
             if tt[0] <= vertex <= tt[-1]:
