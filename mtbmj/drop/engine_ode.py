@@ -167,8 +167,12 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
                 rebound_end.terminal = True
                 rebound_end.direction = 1.0
                 events.append(rebound_end)
-        sol = solve_ivp(model.rhs, (t, duration), y, method=setup.ode_method, rtol=setup.ode_rtol,
-                        atol=setup.ode_atol, events=events, dense_output=True, args=(sides, phase))
+        # scipy's finite-difference Jacobian grows its step factors until they overflow on a stiff
+        # stop (a RuntimeWarning from numpy inside num_jac, harmless: the factor is reset); the
+        # library does not print it to the caller's terminal
+        with np.errstate(over="ignore"):
+            sol = solve_ivp(model.rhs, (t, duration), y, method=setup.ode_method, rtol=setup.ode_rtol,
+                            atol=setup.ode_atol, events=events, dense_output=True, args=(sides, phase))
         if sol.status < 0:
             raise RunError(f"ODE reference failed at t = {t:.4f} s: {sol.message}")
         solver_steps += len(sol.t) - 1
