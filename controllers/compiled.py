@@ -226,6 +226,15 @@ def law_arrays(law: ForkLaw) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(ints, dtype=np.int64), P
 
 
+def modal_filter(phi, g_in, g_new, r, w, u, out) -> bool:
+    """``mtbmj.drop.measure.logger_filter``'s recursion along ``u`` (signals x samples) into
+    ``out``, ``w`` (signals x modes) updated in place; False when numba is missing."""
+    if _numba is None:
+        return False
+    _modal_filter(phi, g_in, g_new, r, w, np.ascontiguousarray(u, dtype=np.float64), out)
+    return True
+
+
 def fork_forces_along(law: ForkLaw, x, v, z) -> np.ndarray | None:
     """ForkLaw.force along arrays through the compiled kernel, or None when it cannot run here
     (numba missing, or a law with no compiled form): the caller then uses the Python law."""
@@ -590,6 +599,18 @@ if _numba is not None:
         if I[I_FRICTION] != FR_LUGRE:
             return 0.0
         return _lugre_rate(P, I[I_FRICTION_AT], v, z)
+
+    @_numba.njit(**_jit)
+    def _modal_filter(phi, g_in, g_new, r, w, u, out):
+        """measure.logger_filter's recursion: y = 2 Re sum r (w + g_new u); w <- phi w + g_in u."""
+        for s in range(u.shape[0]):
+            for k in range(u.shape[1]):
+                x = u[s, k]
+                acc = 0.0
+                for i in range(phi.size):
+                    acc += (r[i] * (w[s, i] + g_new[i] * x)).real
+                    w[s, i] = phi[i] * w[s, i] + g_in[i] * x
+                out[s, k] = 2.0 * acc
 
     @_numba.njit(**_jit)
     def fork_forces(I, P, x, v, z, out):

@@ -65,7 +65,9 @@ def test_streamed_csv_is_the_table_written_at_once(tmp_path):
 
 
 def test_filter_in_chunks_equals_one_pass():
-    """The anti-alias filter run chunk by chunk (state carried) gives the one-pass numbers."""
+    """The anti-alias filter run chunk by chunk (state carried) gives the one-pass numbers, and
+    those are scipy's: the modal filter against ``sosfilt`` of the same analog filter discretised
+    by ``cont2discrete`` ("foh"), and its numpy fallback against its compiled kernel."""
     from scipy import signal
 
     setup = compose.setup(config.load("S12"))
@@ -73,7 +75,37 @@ def test_filter_in_chunks_equals_one_pass():
     n = 3 * measure.FILTER_CHUNK + 17
     raw = {"time_s": np.arange(n) * 1e-4, "x": np.cumsum(rng.normal(size=n))}
     got = measure.logged(setup, raw)
+    coefficients = measure.logger_filter(setup.antialias, 1e-4)
+    one_pass = measure._filter_modal(coefficients, raw["x"][None, :], raw["x"][0] * coefficients[4][None, :])[0]
+    assert np.array_equal(got["x"], one_pass[::10])
     sos, zi = measure.antialias_filter(setup.antialias, 1e-4)
     want, _ = signal.sosfilt(sos, raw["x"], zi=zi * raw["x"][0])
-    assert np.array_equal(got["x"], want[::10])
-    assert np.array_equal(got["time_s"], raw["time_s"][::10])
+    assert np.max(np.abs(one_pass - want)) <= 1e-11 * np.max(np.abs(want))
+    from mtbmj.controllers import compiled
+
+    short = raw["x"][None, :3000]
+    fast = measure._filter_modal(coefficients, short, short[:, :1] * coefficients[4][None, :])
+    original = compiled.modal_filter
+    compiled.modal_filter = lambda *args: False  # the numpy recursion, as without numba
+    try:
+        slow = measure._filter_modal(coefficients, short, short[:, :1] * coefficients[4][None, :])
+    finally:
+        compiled.modal_filter = original
+    assert np.allclose(fast, slow, rtol=0, atol=1e-12 * np.max(np.abs(short)))
+
+
+@pytest.mark.parametrize("cutoff,dt", [(400.0, 1e-3), (400.0, 1e-4), (400.0, 2e-5), (100.0, 5e-4), (450.0, 1e-3)])
+def test_logger_filter_is_the_foh_butterworth(cutoff, dt):
+    """The modal form against scipy's design (butter, cont2discrete "foh", sosfilt) on a random
+    walk, at the logger's cutoff and other cutoffs and steps; and it passes a constant unchanged."""
+    from scipy import signal
+
+    rng = np.random.default_rng(int(cutoff + 1 / dt))
+    u = np.cumsum(rng.normal(size=(2, 4000)), axis=1) + 50.0
+    sos, zi = measure.antialias_filter(cutoff, dt)
+    want = np.array([signal.sosfilt(sos, x, zi=zi * x[0])[0] for x in u])
+    c = measure.logger_filter(cutoff, dt)
+    got = measure._filter_modal(c, u, u[:, :1] * c[4][None, :])
+    assert np.max(np.abs(got - want)) <= 1e-9 * np.max(np.abs(want))
+    level = measure._filter_modal(c, np.full((1, 50), 3.0), 3.0 * c[4][None, :].copy())
+    assert np.allclose(level, 3.0, rtol=1e-12)

@@ -33,7 +33,6 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
-from scipy.signal import find_peaks
 
 from mtbmj.errors import MtbmjError
 
@@ -110,18 +109,17 @@ _SAVGOL: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
 def _savgol_operator(width: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """scipy's cubic Savitzky-Golay filter of ``width`` samples in its "interp" mode, as linear
-    operators (cached per width): the convolution kernel for the interior (``savgol_coeffs``) and,
+    operators (cached per width): the convolution kernel for the interior and,
     for each end, the matrix that evaluates the cubic fitted to the first (last) ``width`` samples
     at the first (last) ``width // 2`` of them. The same filter as ``savgol_filter(y, width, 3,
     mode="interp")`` without its per-call fits of the ends (half the cost of a drop's events)."""
     if width not in _SAVGOL:
-        from scipy.signal import savgol_coeffs
-
         half = width // 2
-        x = np.arange(width, dtype=float)
-        vander = np.vander(x, 4)
+        x = np.arange(width, dtype=float) - half
+        vander = np.vander(x / half, 4)
         project = vander @ np.linalg.pinv(vander)  # least-squares cubic through the window, evaluated on it
-        _SAVGOL[width] = (savgol_coeffs(width, 3, use="conv"), project[:half].copy(), project[width - half:].copy())
+        # its middle row weighs the window for the middle sample (flipped for np.convolve)
+        _SAVGOL[width] = (project[half][::-1].copy(), project[:half].copy(), project[width - half:].copy())
     return _SAVGOL[width]
 
 
@@ -137,6 +135,63 @@ def smooth(y: np.ndarray, dt: float) -> np.ndarray:
     out[:half] = head @ y[:width]
     out[y.size - half:] = tail @ y[y.size - width:]
     return out
+
+
+DIRECT_SCAN_LIMIT = 2_000_000  # peaks x samples up to which find_peaks scans per peak
+
+
+def find_peaks(x: np.ndarray, prominence: float) -> np.ndarray:
+    """Indices of the peaks of ``x`` with at least ``prominence``, as
+    ``scipy.signal.find_peaks(x, prominence=prominence)[0]`` finds them (a flat peak at the
+    middle of its plateau, rounded down; the prominence against the higher of the lowest points
+    on either side before the signal rises above the peak), without importing ``scipy.signal``
+    (about half a second of every drop's start)."""
+    x = np.asarray(x, dtype=float)
+    if x.size < 3:
+        return np.zeros(0, dtype=np.intp)
+    # candidate peaks: a rise, then a run of equal values (possibly none), then a fall
+    change = np.flatnonzero(np.diff(x) != 0.0)  # i: x[i + 1] differs from x[i]
+    if change.size < 2:
+        return np.zeros(0, dtype=np.intp)
+    rises = x[change + 1] > x[change]
+    at = np.flatnonzero(rises[:-1] & ~rises[1:])  # a rise into change[j] + 1, a fall after change[j + 1]
+    left, right = change[at] + 1, change[at + 1]
+    peaks = (left + right) // 2
+    if peaks.size == 0:
+        return peaks.astype(np.intp)
+    if peaks.size * x.size <= DIRECT_SCAN_LIMIT:
+        lows = np.empty(peaks.size)
+        for n, i in enumerate(peaks):  # few peaks: one vectorised scan each way per peak
+            above = np.flatnonzero(x[:i] > x[i])
+            lo = above[-1] + 1 if above.size else 0
+            above = np.flatnonzero(x[i + 1:] > x[i])
+            hi = i + above[0] if above.size else x.size - 1
+            lows[n] = max(x[lo:i + 1].min(), x[i:hi + 1].min())
+        return peaks[x[peaks] - lows >= prominence].astype(np.intp)
+    # many peaks on a long record: each peak's reach by binary lifting on a table of window
+    # maxima, and the lowest point within from a table of window minima
+    highs, mins = [x], [x]
+    while 2 * (1 << (len(highs) - 1)) <= x.size:
+        half = 1 << (len(highs) - 1)
+        highs.append(np.maximum(highs[-1][:-half], highs[-1][half:]))
+        mins.append(np.minimum(mins[-1][:-half], mins[-1][half:]))
+    height = x[peaks]
+    lo, hi = peaks.copy(), peaks.copy()
+    for k in range(len(highs) - 1, -1, -1):
+        width = 1 << k
+        can = lo - width >= 0
+        step = np.where(can, highs[k][np.where(can, lo - width, 0)] <= height, False)
+        lo = np.where(step, lo - width, lo)
+        can = hi + width <= x.size - 1
+        step = np.where(can, highs[k][np.where(can, hi + 1, 0)] <= height, False)
+        hi = np.where(step, hi + width, hi)
+
+    def lowest(a, b):  # min of x[a..b] per peak
+        k = np.floor(np.log2(b - a + 1)).astype(int)
+        return np.array([min(mins[kk][aa], mins[kk][bb - (1 << kk) + 1]) for aa, bb, kk in zip(a, b, k)])
+
+    prominences = height - np.maximum(lowest(lo, peaks), lowest(peaks, hi))
+    return peaks[prominences >= prominence].astype(np.intp)
 
 
 def _parabola(tt: np.ndarray, yy: np.ndarray) -> tuple[float, float, float]:
@@ -246,8 +301,8 @@ def detect(signals: Mapping[str, np.ndarray], start_s: float = 0.0) -> Events:
     lift_i, lift_t, land_i, land_t = _contact(t, sm["tire"], noise["tire"], 0)
     sled = sm["sled"]
     prominence = max(0.5, 6.0 * noise["sled"], PROMINENCE_FRACTION * float(np.ptp(sled)))
-    peaks, _ = find_peaks(sled, prominence=prominence)
-    valleys, _ = find_peaks(-sled, prominence=prominence)
+    peaks = find_peaks(sled, prominence)
+    valleys = find_peaks(-sled, prominence)
 
     def first_after(indices, i):
         later = indices[indices > i]

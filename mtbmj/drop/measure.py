@@ -92,7 +92,9 @@ def antialias_filter(cutoff_Hz: float, dt: float) -> tuple[np.ndarray, np.ndarra
     The bilinear transform (``butter(..., fs=)``) warps the response near the cutoff by an amount
     that depends on ``dt``: on S1's sled it moved the logged record by 0.22 mm between steps of
     0.5 ms and 0.01 ms; this filter, by 0.0005 mm. ``zi`` is the steady state for a unit input.
-    Cached (scipy's ``sosfilt`` needs writable arrays, so they are not locked)."""
+    Cached (scipy's ``sosfilt`` needs writable arrays, so they are not locked). For callers that
+    filter with scipy (the synthetic records); the drop filters with ``logger_filter``, the same
+    filter in modal form."""
     from scipy import signal  # ~0.7 s to import: deferred to the first run
 
     zeros, poles, gain = signal.butter(4, 2.0 * np.pi * cutoff_Hz, analog=True, output="zpk")
@@ -101,28 +103,96 @@ def antialias_filter(cutoff_Hz: float, dt: float) -> tuple[np.ndarray, np.ndarra
     return sos, signal.sosfilt_zi(sos)  # shared between calls: callers must not write to them
 
 
+BUTTERWORTH_ORDER = 4
+
+
+def _hold_integrals(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For x = p dt: (x e^x - e^x + 1, e^x - 1 - x), the integrals of one mode over a step
+    against the hold's two ramps, times p x; by their series where |x| is small (no cancellation)."""
+    near, far = np.abs(x) < 0.5, np.abs(x) >= 0.5
+    old = np.empty_like(x)
+    new = np.empty_like(x)
+    e = np.expm1(x[far])
+    old[far], new[far] = x[far] * (1.0 + e) - e, e - x[far]
+    xs = x[near]
+    term = xs * xs / 2.0  # x^n / n!, from n = 2
+    o, n = term.copy(), term.copy()
+    for k in range(3, 30):
+        term = term * xs / k
+        o += (k - 1) * term
+        n += term
+    old[near], new[near] = o, n
+    return old, new
+
+
+@lru_cache(maxsize=32)
+def logger_filter(cutoff_Hz: float, dt: float) -> tuple[np.ndarray, ...]:
+    """The logger's anti-aliasing filter (a 4th-order analog Butterworth at ``cutoff_Hz``) for
+    samples ``dt`` apart, in modal form: its response to the samples joined by straight lines (a
+    first-order hold), exact. H(s) = sum r_i / (s - p_i) over the Butterworth poles p_i; each mode
+    over a step: z' = phi z + g_old u_k + g_new u_(k+1), with phi = e^(p dt) and the hold's
+    integrals in closed form. Kept as w = z - g_new u, so that
+    y_k = 2 Re sum r (w + g_new u_k) and w <- phi w + (phi g_new + g_old) u_k over the modes in the
+    upper half-plane (their conjugates give the conjugate terms). Returns (phi, g_in, g_new, r,
+    w_unit), w_unit being the state at rest under a unit input. The same filter as
+    ``antialias_filter``'s (``scipy.signal.cont2discrete``, "foh"), without importing
+    ``scipy.signal`` (about half a second of every command's start)."""
+    n = BUTTERWORTH_ORDER
+    k = np.arange(1, n + 1)
+    poles = 2.0 * np.pi * cutoff_Hz * np.exp(1j * np.pi * (2 * k + n - 1) / (2 * n))
+    gain = np.prod(-poles)  # unit gain at rest
+    residues = np.array([gain / np.prod(p - np.delete(poles, i)) for i, p in enumerate(poles)])
+    upper = poles.imag > 0
+    p, r = poles[upper], residues[upper]
+    x = p * dt
+    phi = np.exp(x)
+    old, new = _hold_integrals(x)
+    g_old, g_new = old / (p * x), new / (p * x)
+    g_in = phi * g_new + g_old
+    w_unit = g_in / (1.0 - phi)
+    arrays = (phi, g_in, g_new, r, w_unit)
+    for a in arrays:
+        a.flags.writeable = False
+    return arrays
+
+
+def _filter_modal(coefficients, u: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """y of ``logger_filter`` along ``u`` (signals x samples), ``w`` (signals x modes) updated in
+    place: the compiled kernel, or the same recursion in numpy (vectorised over the signals)."""
+    phi, g_in, g_new, r, _ = coefficients
+    out = np.empty(u.shape)
+    from mtbmj.controllers import compiled  # numba is loaded by the engines already
+
+    if compiled.modal_filter(phi, g_in, g_new, r, w, u, out):
+        return out
+    for k in range(u.shape[1]):
+        x = u[:, k, None]
+        out[:, k] = 2.0 * np.sum((r * (w + g_new * x)).real, axis=1)
+        w *= phi
+        w += g_in * x
+    return out
+
+
 FILTER_CHUNK = 1 << 16  # samples filtered at a time (the filter state carries over: same numbers)
 
 
 def logged(setup: Setup, raw: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """Anti-alias filter and resample the engine-rate signals to the logger's rate."""
-    from scipy import signal  # ~0.7 s to import: deferred to the first run
-
+    """Anti-alias filter (``logger_filter``) and resample the engine-rate signals to the
+    logger's rate."""
     t = raw["time_s"]
     dt = t[1] - t[0]
     ratio = int(round(1.0 / (setup.sample_rate * dt)))
-    sos, zi = antialias_filter(setup.antialias, dt)
+    coefficients = logger_filter(setup.antialias, dt)
     out = {"time_s": t[::ratio].copy()}
     chunk = FILTER_CHUNK - FILTER_CHUNK % ratio  # a multiple of the ratio: every chunk starts on a sample kept
     names = [name for name in raw if name != "time_s"]
-    # Start the filter in steady state on the first values, as a logger running before t = 0;
-    # all signals at once (one call per chunk), the state carried from chunk to chunk.
-    state = zi[:, None, :] * np.array([raw[name][0] for name in names])[None, :, None]
+    # Start the filter at rest on the first values, as a logger running before t = 0; all
+    # signals at once, the state carried from chunk to chunk.
+    state = np.array([raw[name][0] for name in names])[:, None] * coefficients[4][None, :]
     kept = []
     for start in range(0, t.size, chunk):
-        block = np.array([raw[name][start: start + chunk] for name in names])
-        filtered, state = signal.sosfilt(sos, block, axis=-1, zi=state)
-        kept.append(filtered[:, ::ratio])
+        block = np.array([raw[name][start: start + chunk] for name in names], dtype=float)
+        kept.append(_filter_modal(coefficients, block, state)[:, ::ratio])
     joined = np.concatenate(kept, axis=1)
     for k, name in enumerate(names):
         out[name] = joined[k]
