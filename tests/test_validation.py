@@ -316,3 +316,26 @@ def test_vertex_parabola_is_numpys_polyfit(k, span, seed):
     yy = rng.normal() - rng.uniform(1, 1e3) * tt ** 2 / span ** 2 + rng.normal(size=k) * 0.01
     got, expected = np.array(_parabola(tt, yy)), np.polyfit(tt, yy, 2)
     assert np.allclose(got, expected, rtol=1e-8, atol=1e-9 * np.max(np.abs(expected)))
+
+
+@settings(max_examples=200, deadline=None)
+@given(n=st.integers(0, 300), scale=st.sampled_from([0.3, 1.0, 3.0]), jitter=st.booleans(),
+       prominence=st.sampled_from([0.0, 0.5, 1.0, 3.0, 10.0]), seed=st.integers(0, 2**31), direct=st.booleans())
+def test_find_peaks_is_scipys(n, scale, jitter, prominence, seed, direct):
+    """Rounded random walks (flat peaks of every width, at the ends too), with or without a
+    little jitter; both ways of finding each peak's reach (per-peak scans, binary lifting)."""
+    from scipy.signal import find_peaks as scipy_find_peaks
+
+    from mtbmj.validation import events
+
+    rng = np.random.default_rng(seed)
+    x = np.round(np.cumsum(rng.normal(size=n)) * scale)
+    if jitter:
+        x = x + rng.normal(size=n) * 1e-3
+    limit = events.DIRECT_SCAN_LIMIT
+    events.DIRECT_SCAN_LIMIT = limit if direct else 0
+    try:
+        got = events.find_peaks(x, prominence)
+    finally:
+        events.DIRECT_SCAN_LIMIT = limit
+    assert np.array_equal(got, scipy_find_peaks(x, prominence=prominence)[0])
