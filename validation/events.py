@@ -196,11 +196,20 @@ def find_peaks(x: np.ndarray, prominence: float) -> np.ndarray:
 
 def _parabola(tt: np.ndarray, yy: np.ndarray) -> tuple[float, float, float]:
     """Least-squares a t^2 + b t + c through (tt, yy), by the normal equations on t scaled to
-    [-1, 1] (the same fit as ``np.polyfit(tt, yy, 2)``, without its SVD)."""
-    scale = max(abs(tt[0]), abs(tt[-1])) or 1.0
+    [-1, 1], solved by Cramer's rule (the same fit as ``np.polyfit(tt, yy, 2)``, without its SVD
+    or a general solver: a drop's events make 14 such fits)."""
+    scale = float(max(abs(tt[0]), abs(tt[-1]))) or 1.0
     u = tt / scale
-    powers = np.vander(u, 3)
-    a, b, c = np.linalg.solve(powers.T @ powers, powers.T @ yy)
+    u2 = u * u
+    s0, s1, s2, s3, s4 = float(u.size), float(u.sum()), float(u2.sum()), float(u2 @ u), float(u2 @ u2)
+    t0, t1, t2 = float(yy.sum()), float(u @ yy), float(u2 @ yy)
+    # | s4 s3 s2 | |a|   |t2|
+    # | s3 s2 s1 | |b| = |t1|
+    # | s2 s1 s0 | |c|   |t0|
+    det = s4 * (s2 * s0 - s1 * s1) - s3 * (s3 * s0 - s1 * s2) + s2 * (s3 * s1 - s2 * s2)
+    a = (t2 * (s2 * s0 - s1 * s1) - s3 * (t1 * s0 - s1 * t0) + s2 * (t1 * s1 - s2 * t0)) / det
+    b = (s4 * (t1 * s0 - s1 * t0) - t2 * (s3 * s0 - s1 * s2) + s2 * (s3 * t0 - t1 * s2)) / det
+    c = (s4 * (s2 * t0 - t1 * s1) - s3 * (s3 * t0 - t1 * s2) + t2 * (s3 * s1 - s2 * s2)) / det
     return a / scale ** 2, b / scale, c
 
 
