@@ -148,7 +148,9 @@ def main() -> None:
         out = args.out or Path(tmp) / "sweep"
         wall, result = run_sweep(vs, args.workers, args.duration, out, args.runner, args.threads)
         table_bytes = (out / sweep.TABLE).stat().st_size
-    drop_s = float(result.table["wall_time_s"].median())
+        # each variant's wall time is in timings.csv (variant,variant_id,wall_time_s), not the table
+        walls = np.genfromtxt(out / "timings.csv", delimiter=",", skip_header=1, usecols=2)
+    drop_s = float(np.nanmedian(walls))
     print(f"S12 sweep ({args.runner} runner, {args.threads} rollout thread(s) per process): {args.variants} variants "
           f"on {args.workers} processes in {wall:.2f} s end to end "
           f"({args.variants / wall:.1f} variants/s; median drop {drop_s:.3f} s in its worker; "
