@@ -104,8 +104,9 @@ def test_fit_with_mismatched_clicks_exits_2(tmp_path, capsys):
     assert cli.main(["fit", "damper", str(a), str(b), "--clicks", "0,6,12", "--out", str(out)]) == 2
     assert cli.main(["fit", "damper", str(a), str(b), "--out", str(out)]) == 2
     assert cli.main(["fit", "damper", str(a), str(b), "--clicks", "0,x", "--out", str(out)]) == 2
+    assert cli.main(["fit", "damper", str(a), str(b), "--clicks", "0", "--clicks", "x", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 3 and all("clicks" in line for line in err)
+    assert len(err) == 4 and all("clicks" in line for line in err)
     assert not out.exists()
 
 

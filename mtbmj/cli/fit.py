@@ -46,11 +46,12 @@ def cmd_fit(args) -> int:
 def _clicks(given: list[str]) -> list:
     """``--clicks 0,6,12`` (one position per file, both adjusters) or one ``--clicks`` per file
     naming its adjusters, e.g. ``--clicks lsc=4,hsc=2,lsr=6,hsr=3``."""
-    if len(given) == 1 and "=" not in given[0]:
+    if not any("=" in g for g in given):  # positions only: --clicks 0,6,12 (or one --clicks per file)
+        joined = ",".join(given)
         try:
-            return [float(c) for c in given[0].split(",")]
+            return [float(c) for c in joined.split(",")]
         except ValueError:
-            raise MtbmjError(f"--clicks {given[0]}: expected comma-separated numbers of clicks") from None
+            raise MtbmjError(f"--clicks {joined}: expected comma-separated numbers of clicks") from None
     settings = []
     for text in given:
         label = {}
