@@ -50,6 +50,7 @@ from mtbmj.controllers import spring as _spring
 from mtbmj.controllers import stops as _stops
 from mtbmj.controllers.callback import ForkCallback
 from mtbmj.controllers.fork import ForkLaw
+from mtbmj.errors import FallbackWarning
 
 try:  # numba is optional: without it mtbmj runs the Python laws
     import numba as _numba
@@ -841,7 +842,7 @@ _WARNED: set = set()
 def _warn_once(message: str) -> None:
     if message not in _WARNED:
         _WARNED.add(message)
-        warnings.warn(message, RuntimeWarning, stacklevel=3)
+        warnings.warn(message, FallbackWarning, stacklevel=3)
 
 
 def make_callback(model, law, prefer_compiled: bool = True, **kwargs):  # kwargs: rim=..., count_calls=...

@@ -11,6 +11,7 @@ import pytest
 from mujoco import rollout
 
 import mtbmj
+from mtbmj.errors import FallbackWarning
 from mtbmj import compose
 from mtbmj.drop import engine_mujoco, scene
 from mtbmj import controllers as law
@@ -121,7 +122,7 @@ def test_unsupported_laws_are_refused_and_fall_back():
     setup = compose.setup(mtbmj.load_config("S1"))
     sc = scene.build(setup)
     compiled._WARNED.clear()
-    with pytest.warns(RuntimeWarning, match="MySpring has no compiled form"):
+    with pytest.warns(FallbackWarning, match="MySpring has no compiled form"):
         callback = compiled.make_callback(sc.model, fork_law)
     assert isinstance(callback, ForkCallback)
 
@@ -364,3 +365,30 @@ print("ok", trace.fork.size)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.startswith("ok ")
+
+
+def test_without_numba_the_command_line_runs_and_says_so_once(tmp_path):
+    """``mtbmj drop`` and ``mtbmj sweep`` in an interpreter where ``import numba`` fails: the runs
+    complete on the Python laws (the command line used to read the fallback notice as a divergence
+    and exit 2), the same numbers as with numba, and the notice is one line on stderr."""
+    code = ("import sys; sys.modules['numba'] = None\n"
+            "from mtbmj.cli import main\n"
+            "sys.exit(main(sys.argv[1:]))\n")
+    run = subprocess.run([sys.executable, "-c", code, "drop", "S1", "--duration", "0.3", "--out", str(tmp_path / "a")],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    notes = [line for line in run.stderr.splitlines() if "numba" in line]
+    assert notes == [f"mtbmj: note: {compiled.FALLBACK_MESSAGE}"], run.stderr
+    from mtbmj.cli import main
+
+    assert main(["drop", "S1", "--duration", "0.3", "--out", str(tmp_path / "b")]) == 0
+    assert (tmp_path / "a" / "timeseries.csv").read_text() == (tmp_path / "b" / "timeseries.csv").read_text()
+    sweep = subprocess.run([sys.executable, "-c", code, "sweep", "S1", "--duration", "0.2", "--vary",
+                            "fork.spring.preload_N=100:200:2", "--out", str(tmp_path / "s")],
+                           capture_output=True, text=True, timeout=300)
+    assert sweep.returncode == 0, sweep.stderr
+    assert "2 variants (2 computed" in sweep.stdout and "failed" not in sweep.stdout, sweep.stdout
+    from mtbmj.sweep import read_table
+
+    table = read_table(tmp_path / "s")
+    assert len(table) == 2 and np.all(np.isfinite(table["sled_peak1_mm"].to_numpy(dtype=float)))

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import mtbmj
+from mtbmj.errors import FallbackWarning
 from mtbmj import compose
 from mtbmj.drop import scene
 from mtbmj.rolling import frontend as R
@@ -211,7 +212,7 @@ def test_too_many_patches_reruns_on_the_python_path():
     assert len(R.prepare(ter, 1.0, callback="python").tire.patches(0.5, 0.365)) > CR.MAX_PATCHES
     p = R.prepare(ter, 1.0, callback="compiled")
     assert p.callback.overflowed
-    with pytest.warns(RuntimeWarning, match="too many contact patches"):
+    with pytest.warns(FallbackWarning, match="too many contact patches"):
         states, sensors = R.simulate(p, 0.05)
     assert R.callback_kind(p.callback) == "python"
     q = R.prepare(ter, 1.0, callback="python")
@@ -242,7 +243,7 @@ def test_unsupported_terrain_falls_back(monkeypatch):
     base = T.make("root:at_m=0.3")
     ter = Wavy(base.name, base.x, base.z, base.start_x, base.length, base.params)
     monkeypatch.setattr(compiled, "_WARNED", set())
-    with pytest.warns(RuntimeWarning, match="no compiled form"):
+    with pytest.warns(FallbackWarning, match="no compiled form"):
         p = R.prepare(ter, 4.0)
     assert isinstance(p.callback, R.RollCallback)
     with pytest.raises(CR.UnsupportedRolling):

@@ -111,6 +111,12 @@ def show_compile_notices() -> None:
         log.propagate = False
 
 
+def _note(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings that reach the command line (a FallbackWarning: the run goes on along a slower
+    path) as one line on stderr, without the source location."""
+    print(f"mtbmj: note: {message}", file=sys.stderr)
+
+
 def run(parser: argparse.ArgumentParser, argv=None) -> int:
     """Parse and run a command: bad input is one line on stderr and exit status 2."""
     show_compile_notices()
@@ -119,6 +125,7 @@ def run(parser: argparse.ArgumentParser, argv=None) -> int:
         check_duration("--duration", getattr(args, "duration", None))
         with warnings.catch_warnings():
             warnings.simplefilter("error", RuntimeWarning)
+            warnings.showwarning = _note  # restored with the filters when the command ends
             return args.func(args)
     except MtbmjError as exc:
         _report(str(exc))

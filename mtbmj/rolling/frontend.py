@@ -38,7 +38,7 @@ from mtbmj.drop import measure
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.terrain import DEFAULT_HEAD_ANGLE_DEG
 from mtbmj.config import Config
-from mtbmj.errors import ConfigError, RunError
+from mtbmj.errors import ConfigError, FallbackWarning, RunError
 from mtbmj.limits import check_run
 from mtbmj.result import RunOutput
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
@@ -389,7 +389,7 @@ def simulate(p: Prepared, duration: float, progress=None):
         import warnings
 
         warnings.warn("compiled rolling callback: too many contact patches, rerunning on the Python path",
-                      RuntimeWarning, stacklevel=2)
+                      FallbackWarning, stacklevel=2)
         p.callback = _python_twin(p.callback)
         p.callback.bind(p.data)
         mujoco.mj_setState(p.front.model, p.data, states[0], mujoco.mjtState.mjSTATE_FULLPHYSICS)
