@@ -11,6 +11,7 @@ import numpy as np
 
 from mtbmj import controllers as law
 from mtbmj.controllers.stops import STIFFENING_M
+from mtbmj.controllers import native
 from mtbmj.config import Config
 from mtbmj.errors import ConfigError
 
@@ -473,9 +474,11 @@ def _along(fork_law, xs, vs, python) -> np.ndarray:
     """``fork_law``'s force along (xs, vs) through the compiled kernel (the same numbers as the
     Python law, 50 times faster: the step rule runs for every variant of a sweep), else
     ``python(x, v)`` point by point."""
-    from mtbmj.controllers import compiled  # numba: loaded on the first setup only
+    out = None
+    if native.loaded():  # the Python scan costs a few ms: not worth loading numba for
+        from mtbmj.controllers import compiled
 
-    out = compiled.fork_forces_along(fork_law, xs, vs, np.zeros_like(xs))
+        out = compiled.fork_forces_along(fork_law, xs, vs, np.zeros_like(xs))
     if out is None:
         out = np.array([python(x, v) for x, v in zip(xs, vs)])
     return out

@@ -15,7 +15,7 @@ from mtbmj.errors import FallbackWarning
 from mtbmj import compose
 from mtbmj.drop import engine_mujoco, scene
 from mtbmj import controllers as law
-from mtbmj.controllers import ForkCallback, installed
+from mtbmj.controllers import ForkCallback, installed, native
 
 compiled = pytest.importorskip("mtbmj.controllers.compiled")
 CALLS_PER_STEP = {"rk4": 4, "euler": 1, "implicit": 1, "implicitfast": 1}  # control callback calls per step
@@ -370,7 +370,7 @@ print("ok", trace.fork.size)
 def test_without_numba_the_command_line_runs_and_says_so_once(tmp_path):
     """``mtbmj drop`` and ``mtbmj sweep`` in an interpreter where ``import numba`` fails: the runs
     complete on the Python laws (the command line used to read the fallback notice as a divergence
-    and exit 2), the same numbers as with numba, and the notice is one line on stderr."""
+    and exit 2), the same numbers as with numba, and a notice is one line on stderr."""
     code = ("import sys; sys.modules['numba'] = None\n"
             "from mtbmj.cli import main\n"
             "sys.exit(main(sys.argv[1:]))\n")
@@ -378,7 +378,8 @@ def test_without_numba_the_command_line_runs_and_says_so_once(tmp_path):
                          capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr
     notes = [line for line in run.stderr.splitlines() if "numba" in line]
-    assert notes == [f"mtbmj: note: {compiled.FALLBACK_MESSAGE}"], run.stderr
+    # a short drop does not reach for numba at all (controllers.native); a notice is one line
+    assert notes in ([], [f"mtbmj: note: {compiled.FALLBACK_MESSAGE}"]), run.stderr
     from mtbmj.cli import main
 
     assert main(["drop", "S1", "--duration", "0.3", "--out", str(tmp_path / "b")]) == 0
@@ -392,3 +393,41 @@ def test_without_numba_the_command_line_runs_and_says_so_once(tmp_path):
 
     table = read_table(tmp_path / "s")
     assert len(table) == 2 and np.all(np.isfinite(table["sled_peak1_mm"].to_numpy(dtype=float)))
+
+
+def test_a_short_drop_in_a_fresh_process_does_not_load_numba():
+    """``controllers.native``: a default drop in a process without numba loaded runs on the Python
+    laws (loading numba would cost more than the run), with the compiled run's trajectory and
+    forces bit for bit and its logged signals within 1e-9 mm; a run long enough to repay loading
+    numba loads it, and so does a caller that announces many runs."""
+    code = """
+import sys, json
+import numpy as np
+import mtbmj
+from mtbmj.controllers import native
+short = mtbmj.run_drop("S12", duration=0.5)
+out = {"after_short": "numba" in sys.modules}
+np.save(sys.argv[1], np.vstack([short.trace.sled, short.trace.fork, short.raw["fork_force_N"], short.raw["tire_force_N"],
+                               short.signals["fork_mm"]]))
+native.COMPILED_FROM_STEPS = 400
+mtbmj.run_drop("S1", duration=0.5)
+out["after_long"] = "numba" in sys.modules
+print(json.dumps(out))
+"""
+    import json
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = f"{tmp}/short.npy"
+        run = subprocess.run([sys.executable, "-c", code, path], capture_output=True, text=True, timeout=300)
+        assert run.returncode == 0, run.stderr
+        flags = json.loads(run.stdout.strip().splitlines()[-1])
+        python = np.load(path)
+    assert flags == {"after_short": False, "after_long": True}
+    native.expect_many()  # this process: numba loaded, the compiled laws taken
+    compiled_run = mtbmj.run_drop("S12", duration=0.5)
+    assert compiled_run.trace.info["callback_calls"] > 0
+    assert np.array_equal(python[0], compiled_run.trace.sled) and np.array_equal(python[1], compiled_run.trace.fork)
+    assert np.array_equal(python[2], compiled_run.raw["fork_force_N"])
+    assert np.array_equal(python[3], compiled_run.raw["tire_force_N"])
+    assert np.max(np.abs(python[4] - compiled_run.signals["fork_mm"])) < 1e-9

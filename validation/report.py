@@ -20,6 +20,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from mtbmj import output
+from mtbmj.controllers import native
 from mtbmj.config import Config
 from mtbmj.drop.run import ENGINES, resolve, run_drop
 from mtbmj.errors import ConfigError
@@ -51,6 +52,7 @@ def group_of(name: str) -> str:
 
 def _run(job: tuple[Config, str, float | None]) -> DropResult:
     config, engine, duration = job
+    native.expect_many()  # a study's runs repay loading the compiled laws
     return run_drop(config, engine, duration=duration)
 
 

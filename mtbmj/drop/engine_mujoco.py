@@ -9,7 +9,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from mtbmj.controllers import ForkCallback, installed
+from mtbmj.controllers import ForkCallback, installed, native
 from mtbmj.drop import scene as scene_mod
 from mtbmj import compose
 from mtbmj.compose import Setup
@@ -63,7 +63,8 @@ CALLBACKS = ("auto", "compiled", "python")
 
 def fork_callback(model, law, kind="auto", rim=None):
     """The fork callback for ``model``: ``"auto"`` (the compiled laws when possible, else the Python
-    laws with a one-time warning), ``"compiled"``, ``"python"``, or a factory ``f(model, law)``.
+    laws with a one-time warning; ``run`` takes the Python laws for a short run in a process
+    without numba, see ``controllers.native``), ``"compiled"``, ``"python"``, or a factory ``f(model, law)``.
     ``rim`` (a ``controllers.Rim``) adds the rim strike on the tire deflection."""
     if callable(kind):
         return kind(model, law)
@@ -245,10 +246,13 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
     data.qvel[sc.sled_dof] = setup.impact_speed
     data.qpos[sc.sled_qpos] = TOUCH_DEPTH_M
     mujoco.mj_forward(model, data)
-    # compiled (numba) force laws read and write mjData directly; the Python laws are the fallback
+    steps = int(round(duration / setup.timestep))
+    # compiled (numba) force laws read and write mjData directly; the Python laws are the fallback,
+    # and "auto" takes them for a short run in a process without numba (controllers.native)
+    if callback == "auto" and not native.worth(steps):
+        callback = "python"
     callback = fork_callback(model, setup.fork, callback, setup.tire.rim)
     callback.bind(data)
-    steps = int(round(duration / setup.timestep))
     substeps = setup.substeps
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state = np.empty(mujoco.mj_stateSize(model, spec))

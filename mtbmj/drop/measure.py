@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from mtbmj.compose import Setup
+from mtbmj.controllers import native
 from mtbmj.controllers.stops import STIFFENING_M
 from mtbmj.trace import RawTrace
 
@@ -52,10 +53,12 @@ def forces(setup: Setup, trace: RawTrace, tire=None, tire_velocity=None) -> tupl
     the fork through the compiled kernel when it can run (the Python law otherwise), the tire
     vectorised. Both give the Python laws' numbers bit for bit. ``tire`` and ``tire_velocity``
     (m, m/s), when given, save recomputing them from the trace."""
-    from mtbmj.controllers import compiled  # numba: loaded on the first run only
-
     x, v, z = trace.fork, trace.fork_velocity, trace.friction_state
-    fork = compiled.fork_forces_along(setup.fork, x, v, z)
+    fork = None
+    if native.worth(x.size):  # numba already loaded, or a trace long enough to repay loading it
+        from mtbmj.controllers import compiled
+
+        fork = compiled.fork_forces_along(setup.fork, x, v, z)
     if fork is None:
         law = setup.fork
         fork = np.fromiter((law.force(x[i], v[i], z[i]) for i in range(x.size)), float, x.size)
@@ -161,10 +164,11 @@ def _filter_modal(coefficients, u: np.ndarray, w: np.ndarray) -> np.ndarray:
     place: the compiled kernel, or the same recursion in numpy (vectorised over the signals)."""
     phi, g_in, g_new, r, _ = coefficients
     out = np.empty(u.shape)
-    from mtbmj.controllers import compiled  # numba is loaded by the engines already
+    if native.worth(u.shape[1]):  # numba already loaded, or enough samples to repay loading it
+        from mtbmj.controllers import compiled
 
-    if compiled.modal_filter(phi, g_in, g_new, r, w, u, out):
-        return out
+        if compiled.modal_filter(phi, g_in, g_new, r, w, u, out):
+            return out
     for k in range(u.shape[1]):
         x = u[:, k, None]
         out[:, k] = 2.0 * np.sum((r * (w + g_new * x)).real, axis=1)

@@ -10,6 +10,7 @@ from typing import Callable, Sequence
 from mtbmj.validation import Crosscheck, from_results
 from mtbmj.validation.compare import mm
 from mtbmj import compose, limits, output
+from mtbmj.controllers import native
 from mtbmj.config import Config, study_presets
 from mtbmj.drop.run import resolve, run_drop
 from mtbmj.drop.result import DropResult
@@ -25,6 +26,7 @@ GROUPS = {
 
 def _run(job: tuple[Config, str, float | None]) -> DropResult:
     config, engine, duration = job
+    native.expect_many()  # a study's runs repay loading the compiled laws
     return run_drop(config, engine, duration=duration)
 
 

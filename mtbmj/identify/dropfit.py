@@ -60,6 +60,7 @@ from scipy import optimize, stats
 from scipy.stats import qmc
 
 from mtbmj.config import SCHEMA, Config
+from mtbmj.controllers import native
 from mtbmj.drop.run import resolve, run_drop
 from mtbmj.errors import ConfigError, MtbmjError
 
@@ -96,6 +97,7 @@ def _model(values: Sequence[float], keys: Sequence[str], config: Config | None =
     try:
         if engine == "fast":
             return _sample(_fast_signals(config, overrides, duration, channels), times, channels)
+        native.expect_many()  # a fit's runs repay loading the compiled laws
         result = run_drop(config, engine, overrides=overrides, duration=duration)
     except MtbmjError as exc:
         return str(exc)

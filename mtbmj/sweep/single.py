@@ -23,8 +23,10 @@ _RUN_LOCK = threading.Lock()  # MuJoCo's control callback is process-global: one
 
 def run_variant(job: BatchJob, variant: Variant) -> dict:
     """One variant as a journal record; every error becomes ``status = "failed"`` with its reason."""
+    from mtbmj.controllers import native
     from mtbmj.drop.run import run_drop
 
+    native.expect_many()  # a sweep's variants repay loading the compiled laws
     drop = job.drop or run_drop
     start = time.perf_counter()
     record: dict[str, Any] = {"id": variant.id, "status": "ok", "reason": "", "outputs": {}}
