@@ -266,16 +266,20 @@ def _at_clicks(key: str, setting: float, measured: np.ndarray, table: np.ndarray
     return np.array([np.interp(setting, measured, table[:, j]) for j in range(table.shape[1])])
 
 
-def clicks_curve(c: Config, circuit: str, points: int, stroke: str | None = None) -> np.ndarray:
-    """Force (N) of one damper adjuster at its setting ``fork.damper.<circuit>_clicks``: each
-    velocity's force interpolated linearly in clicks between the two neighbouring positions of
-    ``<circuit>_clicks_measured`` (rows of ``<circuit>_force_N``). ``circuit`` is a stroke
-    ("compression", "rebound": one adjuster per stroke) or one of ``SPEED_CIRCUITS``; ``stroke``
-    defaults to the circuit's own."""
-    stroke = stroke or circuit
+def _adjuster(c: Config, circuit: str, stroke: str, points: int, why: str):
+    """(measured positions, force rows, force at the setting ``fork.damper.<circuit>_clicks``) of
+    one adjuster of ``stroke``."""
     measured, table = _clicks_rows(c, circuit, stroke, points)
     key = f"fork.damper.{circuit}_clicks"
-    return _at_clicks(key, c.require(key, "needed by fork.damper.model = clicks"), measured, table)
+    return measured, table, _at_clicks(key, c.require(key, why), measured, table)
+
+
+def clicks_curve(c: Config, circuit: str, points: int) -> np.ndarray:
+    """Force (N) of a stroke's single adjuster (``circuit`` "compression" or "rebound") at its
+    setting ``fork.damper.<circuit>_clicks``: each velocity's force interpolated linearly in clicks
+    between the two neighbouring positions of ``<circuit>_clicks_measured`` (rows of
+    ``<circuit>_force_N``)."""
+    return _adjuster(c, circuit, circuit, points, "needed by fork.damper.model = clicks")[2]
 
 
 def _has_speed_circuits(c: Config, stroke: str) -> bool:
@@ -298,9 +302,9 @@ def stroke_clicks_curve(c: Config, stroke: str, points: int) -> np.ndarray:
     why = f"needed by the {stroke} stroke's low- and high-speed adjusters"
     curves, bases = [], []
     for circuit, other in ((low, high), (high, low)):
-        measured, table = _clicks_rows(c, circuit, stroke, points)
+        measured, table, curve = _adjuster(c, circuit, stroke, points, why)
+        curves.append(curve)
         key = f"fork.damper.{circuit}"
-        curves.append(_at_clicks(f"{key}_clicks", c.require(f"{key}_clicks", why), measured, table))
         ref = c.require(f"{key}_reference_clicks", why)
         if ref not in measured:
             raise ConfigError(f"{key}_reference_clicks: {ref:g} is not one of {key}_clicks_measured "

@@ -11,13 +11,11 @@ from __future__ import annotations
 
 from functools import lru_cache
 
-import math
-
 import numpy as np
 
 from mtbmj.compose import Setup
 from mtbmj.controllers import native
-from mtbmj.controllers.stops import STIFFENING_M
+from mtbmj.controllers.stops import STIFFENING_M, stop_damping
 from mtbmj.trace import RawTrace
 
 COLUMNS = (
@@ -42,9 +40,10 @@ def tire_forces(tire_law, deflection, rate, phase) -> np.ndarray:
         at = deflection - rim.max_deflection >= 0.0
         p = deflection[at] - rim.max_deflection
         s = p / STIFFENING_M
-        # math.tanh as in Rim.force (numpy's may differ in the last bit; rim strikes are few samples)
-        ramp = np.fromiter((math.tanh(x) for x in 3.0 * s), float, s.size)
-        out[at] += np.maximum(0.0, rim.rate * p * (1.0 + s * s) + rim.damping * ramp * rate[at])
+        # the damping through Rim.force's own function (math.tanh: numpy's may differ in the last
+        # bit; rim strikes are few samples)
+        damping = np.fromiter((stop_damping(rim.damping, pi, vi) for pi, vi in zip(p, rate[at])), float, p.size)
+        out[at] += np.maximum(0.0, rim.rate * p * (1.0 + s * s) + damping)
     return out
 
 
