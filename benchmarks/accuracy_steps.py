@@ -12,7 +12,7 @@ run length.
 (d) S12's rest position at 3 s and 6 s                               target equal within 0.01 mm
 
     python benchmarks/accuracy_steps.py [--repeat 5] [--envelope 24] [--seed 7]
-    python benchmarks/accuracy_steps.py --envelope-only --envelope 24 --seed 1,2,3,7,20261123
+    python benchmarks/accuracy_steps.py --envelope-only --envelope 24 --seed 1,2,3,7,20261123 --jobs 2
 
 (c) also gives each fork's conditioning: how far the ODE reference itself moves when the tire's
 rates change by 1e-4 (the relative floor of MuJoCo's soft-contact impedance). A fork rattling
@@ -122,9 +122,16 @@ def main() -> None:
     ap.add_argument("--seed", default="7", help="envelope seed(s), comma-separated")
     ap.add_argument("--envelope-only", action="store_true",
                     help="only (c), written to results/accuracy_envelope.json")
+    ap.add_argument("--jobs", type=int, default=1, help="seeds run in this many processes at once")
     args = ap.parse_args()
     seeds = [int(s) for s in args.seed.split(",")]
-    envelopes = [envelope(args.envelope, seed) for seed in seeds]
+    if args.jobs > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            envelopes = list(pool.map(envelope, [args.envelope] * len(seeds), seeds))
+    else:
+        envelopes = [envelope(args.envelope, seed) for seed in seeds]
     cases = [r for e in envelopes for r in e["cases"]]
     totals = {"seeds": seeds, "forks": len(cases), "worst_mm": max(r["max_abs_mm"] for r in cases),
               "beyond_0.1_mm": sum(e["beyond_0.1_mm"] for e in envelopes),

@@ -12,7 +12,7 @@ from mtbmj.controllers.stops import EndStops, Rim
 from mtbmj.controllers.spring import (
     P_ATM, AirSpring, BilinearSpring, DirectionalSpring, LinearSpring, ProgressiveSpring, TopOutSpring,
 )
-from mtbmj.controllers.tire import KelvinVoigt, TireLaw
+from mtbmj.controllers.tire import ContactFloor, KelvinVoigt, TireLaw
 
 __all__ = [
     "ForkCallback", "installed", "ForkLaw",
@@ -20,5 +20,5 @@ __all__ = [
     "LinearDamper", "BilinearDamper", "TableDamper",
     "NoFriction", "Coulomb", "CoulombViscous", "Stiction", "Stribeck", "LuGre", "Sticking", "smooth_sign",
     "EndStops", "Rim",
-    "KelvinVoigt", "TireLaw",
+    "ContactFloor", "KelvinVoigt", "TireLaw",
 ]

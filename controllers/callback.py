@@ -9,6 +9,7 @@ previous callback however the run ends.
 from __future__ import annotations
 
 from contextlib import contextmanager
+from dataclasses import replace
 
 import mujoco
 
@@ -16,13 +17,16 @@ import mujoco
 class ForkCallback:
     """Writes -F_fork into the fork joint's generalized force and, for a friction law with a state
     (LuGre, Sticking), dz/dt into the control of an integrator actuator whose activation is the
-    bristle state z; with ``rim``, the rim-strike force on the sled and fork joints."""
+    bristle state z; with ``rim``, the rim-strike force on the sled and fork joints; with
+    ``floor``, the force that makes MuJoCo's soft tire contact the Kelvin-Voigt law exactly
+    (``ContactFloor``; :meth:`set_tire` follows the tire switch)."""
 
     def __init__(self, model, fork_law, fork_joint: str = "fork", state_actuator: str = "friction_state",
-                 rim=None, sled_joint: str = "sled"):
+                 rim=None, sled_joint: str = "sled", floor=None):
         self.law = fork_law
         self.rim = rim  # controllers.stops.Rim on the tire deflection sled - fork (the drop scene), or None
-        if rim is not None:
+        self.floor = floor  # controllers.tire.ContactFloor (the drop scene), or None
+        if rim is not None or floor is not None:
             sled = model.joint(sled_joint)
             self.sled_qpos, self.sled_dof = int(sled.qposadr[0]), int(sled.dofadr[0])
         self._model = model
@@ -60,11 +64,28 @@ class ForkCallback:
             force = -self.law.force(x, v, z)
         else:
             force = -self.law.force(x, v)
-        if self.rim is not None:  # pushes the wheel up and the sled back: generalized -F on sled, +F on fork
-            rim = self.rim.force(qpos[self.sled_qpos] - x, qvel[self.sled_dof] - v)
-            qfrc[self.sled_dof] = -rim
+        if self.rim is None and self.floor is None:
+            qfrc[self.dof_index] = force
+            return
+        # forces on the wheel from the ground side (the rim, the contact's correction) push it
+        # up and not the sled: generalized -F on the sled joint, +F on the fork joint
+        deflection, rate = qpos[self.sled_qpos] - x, qvel[self.sled_dof] - v
+        sled = 0.0
+        if self.rim is not None:
+            rim = self.rim.force(deflection, rate)
+            sled = -rim
             force += rim
+        if self.floor is not None:
+            c = self.floor.correction(deflection, rate, force)
+            sled -= c
+            force += c
+        qfrc[self.sled_dof] = sled
         qfrc[self.dof_index] = force
+
+    def set_tire(self, rate: float, damping: float) -> None:
+        """The tire law's values changed (the switch): the contact correction follows."""
+        if self.floor is not None:
+            self.floor = replace(self.floor, rate=rate, damping=damping)
 
 
 @contextmanager

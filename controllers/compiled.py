@@ -40,6 +40,7 @@ import threading
 import time
 import warnings
 import weakref
+from dataclasses import replace
 
 import mujoco
 import numpy as np
@@ -81,7 +82,8 @@ I_SPRING = 14  # then (opcode, parameter offset) pairs
 MAX_SPRING_OPS = 24
 I_FRICTION_INNER = I_SPRING + 2 * MAX_SPRING_OPS  # 62
 I_RIM, I_RIM_AT, I_SLED_QPOS, I_SLED_DOF = 63, 64, 65, 66  # the rim strike (drop scene only)
-INT_WIDTH = 67
+I_FLOOR, I_FLOOR_AT = 67, 68  # the soft contact's correction (drop scene only; controllers.tire.ContactFloor)
+INT_WIDTH = 69
 FLOAT_WIDTH = 1024
 STACK_DEPTH = 16
 SLOTS = 256
@@ -192,7 +194,7 @@ def flatten(law: ForkLaw) -> tuple[list[int], list[float]]:
         ints[I_FRICTION_AT] = put(f.stiffness, f.damping, f.elastic, inner.coulomb,
                                   getattr(inner, "breakaway", 0.0), getattr(inner, "viscous", 0.0),
                                   getattr(inner, "stiction_band", 0.0) or getattr(inner, "stribeck_velocity", 1.0),
-                                  getattr(inner, "exponent", 2.0), f.damping_velocity, 2.0)
+                                  getattr(inner, "exponent", 2.0), f.damping_velocity, 2.0)  # (last: unused)
     elif kind is _friction.NoFriction:
         ints[I_FRICTION], ints[I_FRICTION_AT] = FR_NONE, put(0.0)
     elif kind is _friction.Coulomb:
@@ -432,6 +434,20 @@ if _numba is not None:
     CACHE = can_cache(lambda: None)
     _jit = dict(cache=CACHE, error_model="numpy", nogil=True)
 
+    # A numpy array handed from one compiled function to the next is reference-counted at every
+    # call (two atomic operations per array), which cost more than the law itself: 139 against
+    # 39 ns for S1's fork force. The kernels that call the laws in a loop borrow views without
+    # a reference count instead, valid while the caller holds the array.
+    @_numba.njit(**_jit)
+    def borrow_f64(a):
+        """A view of the contiguous 1-d float64 array ``a`` that is not reference-counted."""
+        return _numba.carray(_f64_pointer(a.ctypes.data), a.shape)
+
+    @_numba.njit(**_jit)
+    def borrow_i64(a):
+        """A view of the contiguous 1-d int64 array ``a`` that is not reference-counted."""
+        return _numba.carray(_i64_pointer(a.ctypes.data), a.shape)
+
     @_numba.njit(**_jit)
     def _air_force(P, o, x):
         """AirSpring.force; P[o:] = area, p + p_a, V, n, p_a, negative?, V_p, V_m, port, limit,
@@ -563,12 +579,18 @@ if _numba is not None:
         return v * (1.0 - alpha * r)
 
     @_numba.njit(**_jit)
+    def _sticking_force(P, o, v, z, rate):
+        """Sticking.force, given its state_rate ``rate``."""
+        w = v / P[o + 8]
+        damping = P[o + 1] * math.exp(-(w * w))
+        return P[o] * z + damping * rate + P[o + 5] * v
+
+    @_numba.njit(**_jit)
     def _friction_force(I, P, v, z):
         code = I[I_FRICTION]
         o = I[I_FRICTION_AT]
-        if code == FR_STICKING:  # Sticking.force
-            damping = P[o + 1] * math.exp(-((v / P[o + 8]) ** P[o + 9]))
-            return P[o] * z + damping * _sticking_rate(I, P, v, z) + P[o + 5] * v
+        if code == FR_STICKING:
+            return _sticking_force(P, o, v, z, _sticking_rate(I, P, v, z))
         if code == FR_NONE:
             return 0.0
         if code == FR_COULOMB:
@@ -591,6 +613,15 @@ if _numba is not None:
     def fork_force(I, P, x, v, z):
         """ForkLaw.force(x, v, z) from a flattened law."""
         return _spring_force(I, P, x, v) + _damper_force(I, P, v) + _friction_force(I, P, v, z)
+
+    @_numba.njit(**_jit)
+    def fork_force_rate(I, P, x, v, z):
+        """(fork_force, state_rate) at once: the stick state's rate is worked out once for both."""
+        if I[I_FRICTION] == FR_STICKING:
+            rate = _sticking_rate(I, P, v, z)
+            friction = _sticking_force(P, I[I_FRICTION_AT], v, z, rate)
+            return _spring_force(I, P, x, v) + _damper_force(I, P, v) + friction, rate
+        return fork_force(I, P, x, v, z), state_rate(I, P, v, z)
 
     @_numba.njit(**_jit)
     def state_rate(I, P, v, z):
@@ -616,6 +647,7 @@ if _numba is not None:
     @_numba.njit(**_jit)
     def fork_forces(I, P, x, v, z, out):
         """``fork_force`` along a trace: out[i] = ForkLaw.force(x[i], v[i], z[i])."""
+        I, P = borrow_i64(I), borrow_f64(P)
         for i in range(x.size):
             out[i] = fork_force(I, P, x[i], v[i], z[i])
 
@@ -656,23 +688,38 @@ if _numba is not None:
         qfrc = _pointer_field(d, _registry(M_QFRC))
         if I[I_STATE]:
             z = _pointer_field(d, _registry(M_ACT))[I[I_ACT]]
-            _pointer_field(d, _registry(M_CTRL))[I[I_CTRL]] = state_rate(I, P, v, z)
-            force = -fork_force(I, P, x, v, z)
+            f, rate = fork_force_rate(I, P, x, v, z)
+            _pointer_field(d, _registry(M_CTRL))[I[I_CTRL]] = rate
+            force = -f
         else:
             force = -fork_force(I, P, x, v, 0.0)
-        if I[I_RIM]:  # Rim.force on the tire deflection (sled - fork), pushing the wheel up
+        if I[I_RIM] or I[I_FLOOR]:  # ground-side forces on the wheel: ForkCallback.__call__
             qpos = _pointer_field(d, _registry(M_QPOS))
             qvel = _pointer_field(d, _registry(M_QVEL))
-            o = I[I_RIM_AT]
-            p = qpos[I[I_SLED_QPOS]] - x - P[o]
-            rim = 0.0
-            if p >= 0.0:
-                r = p / P[o + 3]
-                f = P[o + 1] * p * (1.0 + r * r) + P[o + 2] * math.tanh(3.0 * r) * (qvel[I[I_SLED_DOF]] - v)
-                if f >= 0.0:
-                    rim = f
-            qfrc[I[I_SLED_DOF]] = -rim
-            force += rim
+            deflection = qpos[I[I_SLED_QPOS]] - x
+            rate = qvel[I[I_SLED_DOF]] - v
+            sled = 0.0
+            if I[I_RIM]:  # Rim.force on the tire deflection (sled - fork), pushing the wheel up
+                o = I[I_RIM_AT]
+                p = deflection - P[o]
+                rim = 0.0
+                if p >= 0.0:
+                    r = p / P[o + 3]
+                    f = P[o + 1] * p * (1.0 + r * r) + P[o + 2] * math.tanh(3.0 * r) * rate
+                    if f >= 0.0:
+                        rim = f
+                sled = -rim
+                force += rim
+            if I[I_FLOOR]:  # ContactFloor.correction
+                o = I[I_FLOOR_AT]
+                c = 0.0
+                if deflection > 0.0:
+                    f = P[o + 2] * deflection + P[o + 3] * rate
+                    if f > 0.0:
+                        c = P[o] * (f + force - P[o + 1])
+                sled -= c
+                force += c
+            qfrc[I[I_SLED_DOF]] = sled
         qfrc[I[I_DOF]] = force
 
     COMPILE_SECONDS = time.perf_counter() - _compile_start
@@ -752,23 +799,28 @@ class CompiledForkCallback(ctypes._CFuncPtr):
     _restype_ = None
 
     def __new__(cls, model, fork_law, fork_joint: str = "fork", state_actuator: str = "friction_state",
-                count_calls: bool = True, rim=None, sled_joint: str = "sled"):
+                count_calls: bool = True, rim=None, sled_joint: str = "sled", floor=None):
         reason = unavailable_reason()
         if reason is not None:
             raise RuntimeError(reason)
         return super().__new__(cls, _dispatcher(model).address)
 
     def __init__(self, model, fork_law, fork_joint: str = "fork", state_actuator: str = "friction_state",
-                 count_calls: bool = True, rim=None, sled_joint: str = "sled"):
+                 count_calls: bool = True, rim=None, sled_joint: str = "sled", floor=None):
         ints, floats = flatten(fork_law)
         self.rim = rim
-        if rim is not None:  # the rim strike on the tire deflection sled - fork (the drop scene)
+        self.floor = floor
+        if rim is not None or floor is not None:  # on the tire deflection sled - fork (the drop scene)
             sled = model.joint(sled_joint)
-            ints[I_RIM], ints[I_SLED_QPOS], ints[I_SLED_DOF] = 1, int(sled.qposadr[0]), int(sled.dofadr[0])
-            ints[I_RIM_AT] = len(floats)
+            ints[I_SLED_QPOS], ints[I_SLED_DOF] = int(sled.qposadr[0]), int(sled.dofadr[0])
+        if rim is not None:  # the rim strike
+            ints[I_RIM], ints[I_RIM_AT] = 1, len(floats)
             floats = floats + [rim.max_deflection, rim.rate, rim.damping, _stops.STIFFENING_M]
-            if len(floats) > FLOAT_WIDTH:
-                raise UnsupportedLaw(f"law needs {len(floats)} parameters, more than {FLOAT_WIDTH}")
+        if floor is not None:  # the soft contact's correction
+            ints[I_FLOOR], ints[I_FLOOR_AT] = 1, len(floats)
+            floats = floats + [floor.factor, floor.wheel_weight, floor.rate, floor.damping]
+        if len(floats) > FLOAT_WIDTH:
+            raise UnsupportedLaw(f"law needs {len(floats)} parameters, more than {FLOAT_WIDTH}")
         joint = model.joint(fork_joint)
         actuator = model.actuator(state_actuator)
         self.law = fork_law
@@ -822,6 +874,13 @@ class CompiledForkCallback(ctypes._CFuncPtr):
 
     def bind(self, data) -> None:
         """No-op (``ForkCallback`` caches numpy views; the compiled path reads ``mjData*``)."""
+
+    def set_tire(self, rate: float, damping: float) -> None:
+        """The tire law's values changed (the switch): the contact correction follows."""
+        if self.floor is not None and self._finalizer.alive:
+            self.floor = replace(self.floor, rate=rate, damping=damping)
+            at = int(_INTS[self.slot, I_FLOOR_AT])
+            _FLOATS[self.slot, at + 2], _FLOATS[self.slot, at + 3] = rate, damping
 
     def close(self) -> None:
         """Free the registry slot now (also done when the object is collected)."""

@@ -209,7 +209,8 @@ class Sticking:
 
     def force(self, v, z=0.0, sides=None):
         level, viscous = sliding_level(self.inner, v, None if sides is None else sides[: self.inner.n_guards])
-        damping = self.damping * math.exp(-((v / self.damping_velocity) ** 2))
+        w = v / self.damping_velocity
+        damping = self.damping * math.exp(-(w * w))
         return self.stiffness * z + damping * self._rate(v, z, level) + viscous * v
 
 

@@ -25,6 +25,36 @@ class KelvinVoigt:
 
 
 @dataclass(frozen=True)
+class ContactFloor:
+    """The force the MuJoCo engine adds to the wheel so that its soft tire contact acts as the
+    Kelvin-Voigt law exactly (the drop scene; ``mtbmj.drop.scene``).
+
+    MuJoCo softens a contact through its impedance d, which it never lets fall below 1e-4
+    (``mjMINIMP``). With the calibrated solref the contact pushes with (1 - d) f - d F, where f is
+    the law's force and F every other force on the wheel (its weight, the fork, the rim): in
+    contact the wheel accelerates as (1 - d)(f + F) / m, as if its mass were m / (1 - d). Adding
+    C = d / (1 - d) (f + F) upward on the wheel while the contact pushes makes that (f + F) / m,
+    the reference's equation. ``rate`` and ``damping`` are the law's current values (they change
+    at the tire switch)."""
+
+    factor: float  # d / (1 - d)
+    wheel_weight: float  # N, m g
+    rate: float  # N/m
+    damping: float  # N s/m
+
+    def correction(self, deflection: float, rate: float, wheel_force: float) -> float:
+        """C (N, upward on the wheel) at tire ``deflection`` and its ``rate``, with
+        ``wheel_force`` the upward force of the fork and the rim on the wheel (the callback's
+        generalized force on the fork joint); 0 while the contact does not push."""
+        if deflection <= 0.0:
+            return 0.0
+        f = self.rate * deflection + self.damping * rate
+        if f <= 0.0:
+            return 0.0
+        return self.factor * (f + wheel_force - self.wheel_weight)
+
+
+@dataclass(frozen=True)
 class TireLaw:
     """Tire values per phase: phase 0 (impact values) through the first impact, phase 1 (the
     in-contact values of the coefficient-of-restitution method) afterwards, and the rim.

@@ -79,18 +79,25 @@ def test_diverging_run_reports_the_time():
 
 
 def test_cli_fast_drop_and_cold_compile_notice(tmp_path):
-    """A cold numba cache says it compiles; the second process loads it silently; same output."""
-    # a notice after 3 s: a cold compile of the laws and the fast engine takes 10 s or more; a
-    # cached load about 1 s on a slow machine (numba fills its registries on the first load), so
-    # 0.5 s, used before, printed the notice on the cached run too (CI failed on it once)
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), MTBMJ_COMPILE_NOTICE_S="3.0")
+    """A cold numba cache says it compiles; the second process loads it from the cache (writes
+    nothing to it) silently; same output."""
+    # The notice fires after MTBMJ_COMPILE_NOTICE_S of compiling. A cold compile of the laws or
+    # the engine takes 1.5-10 s depending on the machine, a cached load 0.4-1 s: no one
+    # threshold separates them everywhere, so the cold run is told 0.2 s, the cached one keeps
+    # the default (3 s), and the cache itself shows that nothing was compiled again.
+    cache = tmp_path / "cache"
     command = [sys.executable, "-m", "mtbmj.cli", "drop", "S1", "--engine", "fast", "--duration", "0.3", "--quiet"]
-    first = subprocess.run(command + ["--out", str(tmp_path / "a")], env=env, capture_output=True, text=True)
+    first = subprocess.run(command + ["--out", str(tmp_path / "a")], capture_output=True, text=True,
+                           env=dict(os.environ, NUMBA_CACHE_DIR=str(cache), MTBMJ_COMPILE_NOTICE_S="0.2"))
     assert first.returncode == 0, first.stderr
     assert "compiling" in first.stderr
-    second = subprocess.run(command + ["--out", str(tmp_path / "b")], env=env, capture_output=True, text=True)
+    files = {p: p.stat().st_mtime_ns for p in cache.rglob("*") if p.is_file()}
+    assert any(p.suffix == ".nbc" for p in files)
+    second = subprocess.run(command + ["--out", str(tmp_path / "b")], capture_output=True, text=True,
+                            env=dict(os.environ, NUMBA_CACHE_DIR=str(cache)))
     assert second.returncode == 0, second.stderr
     assert "compiling" not in second.stderr
+    assert {p: p.stat().st_mtime_ns for p in cache.rglob("*") if p.is_file()} == files
     assert (tmp_path / "a" / "timeseries.csv").read_bytes() == (tmp_path / "b" / "timeseries.csv").read_bytes()
 
 
@@ -145,7 +152,9 @@ def test_study_and_crosscheck_compare_three_engines(tmp_path):
     table = table_markdown(checks)
     assert "| S1 | mujoco |" in table and "| S1 | fast |" in table
     fast_check = checks[1]
-    assert fast_check.worst[1] < checks[0].worst[1]  # the fast engine integrates the reference's ODE
+    # both within their targets against the reference (since MuJoCo's contact floor is cancelled
+    # the two are of one size here, 4e-5 and 7e-5 mm)
+    assert 0.0 < fast_check.worst[1] < 0.01 and 0.0 < checks[0].worst[1] < 0.05
     lines = [c.line() for c in crosscheck_all("S1", ("mujoco", "fast"), duration=0.4)]
     assert "MuJoCo-ODE" in lines[0] and "fast-engine-ODE" in lines[1]
     bad = subprocess.run([sys.executable, "-m", "mtbmj.cli", "crosscheck", "S1", "--engines", "mujoco,warp"],

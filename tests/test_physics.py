@@ -164,3 +164,45 @@ def test_runs_are_deterministic_and_finite(preset):
     for column in ("sled_mm", "fork_mm", "tire_mm", "fork_force_N", "tire_force_N"):
         assert np.all(np.isfinite(a.raw[column]))
         assert np.array_equal(a.raw[column], b.raw[column])
+
+
+@pytest.mark.parametrize("kind", ["python", "compiled"])
+def test_mujoco_accelerations_are_the_reference_equations_in_contact(kind):
+    """At random in-contact states of random plausible forks, MuJoCo's accelerations (contact,
+    callback and gravity together) are the reference's eqs. 2-3 written out here: the soft
+    contact's impedance floor (a relative 1e-4 of the other forces on the wheel) is cancelled by
+    the callback, before and after the tire switch."""
+    from mtbmj.drop.engine_mujoco import fork_callback
+    from mtbmj.drop.envelope import draws
+    from mtbmj.controllers import installed
+
+    rng = np.random.default_rng(515)
+    table = list(mtbmj.load_config("reference").require("fork.damper.force_N"))
+    worst = 0.0
+    for preset, overrides in draws(6, 515, table):
+        setup = compose.setup(mtbmj.load_config(preset, overrides))
+        sc = scene.build(setup)
+        m, d = sc.model, mujoco.MjData(sc.model)
+        callback = fork_callback(m, setup.fork, kind, setup.tire.rim, sc.floor())
+        mb, mw, g = setup.body_mass, setup.wheel_mass, setup.gravity
+        for phase in (0, 1):
+            tire = setup.tire.values(phase)
+            sc.set_tire(tire.rate, tire.damping, callback)
+            for _ in range(20):
+                x = rng.uniform(-0.005, setup.travel)
+                deflection = rng.uniform(1e-4, 0.03)
+                v, w = rng.uniform(-3.0, 3.0, 2)
+                d.qpos[sc.sled_qpos], d.qpos[sc.fork_qpos] = x + deflection, x
+                d.qvel[sc.sled_dof], d.qvel[sc.fork_dof] = v + w, v
+                d.act[:] = rng.uniform(-1e-4, 1e-4, m.na)
+                with installed(callback):
+                    mujoco.mj_forward(m, d)
+                z = d.act[0] if m.na else 0.0
+                fork = setup.fork.force(x, v, z)
+                tire_force = setup.tire.force(deflection, w, phase)
+                sled_acc = g - fork / mb
+                wheel_acc = g + (fork - tire_force) / mw  # descent of the wheel
+                scale = (abs(fork) + abs(tire_force)) / mw + g
+                worst = max(worst, abs(d.qacc[sc.sled_dof] - sled_acc) / scale,
+                            abs(d.qacc[sc.fork_dof] - (sled_acc - wheel_acc)) / scale)
+    assert worst < 1e-8

@@ -61,21 +61,22 @@ TOUCH_DEPTH_M = 1e-12
 CALLBACKS = ("auto", "compiled", "python")
 
 
-def fork_callback(model, law, kind="auto", rim=None):
+def fork_callback(model, law, kind="auto", rim=None, floor=None):
     """The fork callback for ``model``: ``"auto"`` (the compiled laws when possible, else the Python
     laws with a one-time warning; ``run`` takes the Python laws for a short run in a process
     without numba, see ``controllers.native``), ``"compiled"``, ``"python"``, or a factory ``f(model, law)``.
-    ``rim`` (a ``controllers.Rim``) adds the rim strike on the tire deflection."""
+    ``rim`` (a ``controllers.Rim``) adds the rim strike on the tire deflection, ``floor`` (a
+    ``controllers.ContactFloor``) the soft contact's correction."""
     if callable(kind):
         return kind(model, law)
     if kind == "python":
-        return ForkCallback(model, law, rim=rim)
+        return ForkCallback(model, law, rim=rim, floor=floor)
     from mtbmj.controllers import compiled  # numba is imported on the first run only
 
     if kind == "compiled":
-        return compiled.CompiledForkCallback(model, law, rim=rim)
+        return compiled.CompiledForkCallback(model, law, rim=rim, floor=floor)
     if kind == "auto":
-        return compiled.make_callback(model, law, rim=rim)
+        return compiled.make_callback(model, law, rim=rim, floor=floor)
     raise ValueError(f"callback: expected one of {', '.join(CALLBACKS)} or a factory, got {kind!r}")
 
 
@@ -251,7 +252,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
     # and "auto" takes them for a short run in a process without numba (controllers.native)
     if callback == "auto" and not native.worth(steps):
         callback = "python"
-    callback = fork_callback(model, setup.fork, callback, setup.tire.rim)
+    callback = fork_callback(model, setup.fork, callback, setup.tire.rim, sc.floor())
     callback.bind(data)
     substeps = setup.substeps
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -297,7 +298,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
                 done += keep
             if switch:
                 values = setup.tire.values(1)
-                sc.set_tire(values.rate, values.damping)
+                sc.set_tire(values.rate, values.damping, callback)
             if partial is not None:  # the switch fell inside an output step: finish it under the new law
                 at, left = partial
                 _, rest = fine_rollout(model, data, fine_states[at][None, :], 0, substeps, nstep=left)

@@ -4,8 +4,9 @@ The tire is a MuJoCo soft contact calibrated to behave as the configured radial 
 and damper B (N s/m). MuJoCo's "direct" solref (-stiffness, -damping) is scaled by the contact's
 inverse inertia A and its impedance d (docs/mujoco.md §2); with a constant impedance d (solimp
 d0 = dwidth = d), ``diagexact`` and an elliptic cone, the contact force is
-f = max(0, K pen + B pen_rate) when solref = (-K A (1-d), -B A (1-d)). A is computed from the
-compiled model (J M^-1 J^T at the tire's contact point), not assumed.
+f = max(0, K pen + B pen_rate) when solref = (-K A (1-d), -B A (1-d)), up to a term d times the
+other forces on the wheel, which the callback cancels (``DropScene.floor``). A is computed from
+the compiled model (J M^-1 J^T at the tire's contact point), not assumed.
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ import mujoco
 import numpy as np
 
 from mtbmj import mjcf
-from mtbmj.controllers import installed
+from mtbmj.controllers import ContactFloor, installed
 from mtbmj.compose import Setup
 
 INTEGRATORS = {
@@ -35,12 +36,28 @@ class DropScene:
     fork_qpos: int
     fork_dof: int
     tire_geom: int
+    wheel_weight: float = 0.0  # N
+    tire_values: tuple[float, float] = (0.0, 0.0)  # the law's (rate N/m, damping N s/m), set by set_tire
 
-    def set_tire(self, rate: float, damping: float) -> None:
-        """Calibrated solref for a radial spring ``rate`` (N/m) and damper ``damping`` (N s/m)."""
-        d = float(self.model.geom_solimp[self.tire_geom, 0])
-        scale = self.inverse_inertia * (1.0 - d)
+    @property
+    def impedance(self) -> float:
+        return float(self.model.geom_solimp[self.tire_geom, 0])
+
+    def set_tire(self, rate: float, damping: float, callback=None) -> None:
+        """Calibrated solref for a radial spring ``rate`` (N/m) and damper ``damping`` (N s/m);
+        ``callback``'s contact correction (:meth:`floor`) follows."""
+        scale = self.inverse_inertia * (1.0 - self.impedance)
         self.model.geom_solref[self.tire_geom] = (-rate * scale, -damping * scale)
+        self.tire_values = (rate, damping)
+        if callback is not None and hasattr(callback, "set_tire"):
+            callback.set_tire(rate, damping)
+
+    def floor(self) -> ContactFloor:
+        """The correction that makes the contact the Kelvin-Voigt law exactly (its impedance
+        stays in the force otherwise: ``controllers.tire.ContactFloor``), at the current values."""
+        d = self.impedance
+        rate, damping = self.tire_values
+        return ContactFloor(factor=d / (1.0 - d), wheel_weight=self.wheel_weight, rate=rate, damping=damping)
 
 
 def contact_inverse_inertia(model: mujoco.MjModel, geom: str = "tire") -> float:
@@ -87,6 +104,7 @@ def build(setup: Setup, scene: str = "drop_scene.xml") -> DropScene:
         fork_qpos=int(fork_joint.qposadr[0]),
         fork_dof=int(fork_joint.dofadr[0]),
         tire_geom=int(model.geom("tire").id),
+        wheel_weight=setup.wheel_mass * setup.gravity,
     )
     first = setup.tire.values(0)
     scene_obj.set_tire(first.rate, first.damping)

@@ -122,7 +122,7 @@ def _prepare(job: BatchJob, variant: Variant, spec) -> _Run:
     data.qvel[sc.sled_dof] = setup.impact_speed
     data.qpos[sc.sled_qpos] = engine_mujoco.TOUCH_DEPTH_M
     mujoco.mj_forward(model, data)
-    callback = CompiledForkCallback(model, setup.fork, count_calls=False, rim=setup.tire.rim)  # UnsupportedLaw: single path
+    callback = CompiledForkCallback(model, setup.fork, count_calls=False, rim=setup.tire.rim, floor=sc.floor())  # UnsupportedLaw: single path
     steps = int(round(duration / setup.timestep))
     state = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state, spec)
@@ -188,7 +188,7 @@ def _step_group(runs: list[_Run], datas, pool, spec) -> None:
                 r.done += keep
                 if switch:
                     values = r.setup.tire.values(1)
-                    r.scene.set_tire(values.rate, values.damping)
+                    r.scene.set_tire(values.rate, values.damping, r.callback)
                 if partial is not None:  # as engine_mujoco.run: finish the output step under the new law
                     at, left = partial
                     _, rest = engine_mujoco.fine_rollout(r.scene.model, datas[0], fine_states[at][None, :], 0,
