@@ -47,23 +47,28 @@ def check_shared_options(args) -> None:
 
 
 def cmd_sweep(args) -> int:
-    from mtbmj.sweep.runner import SweepProgress, run_sweep
+    from mtbmj.sweep.runner import SweepProgress, run_sweep, start_pool
 
     check_shared_options(args)
     positive("--batch-size", args.batch_size)
     positive("--threads", args.threads)
-    variants, how = variants_from_args(args)
-    bar = SweepProgress(len(variants), enabled=not args.quiet)
+    # the workers start now and load the compiled engine while the variants are drawn
+    pool = start_pool(args.workers, args.engine) if args.backend == "local" else None
     try:
+        variants, how = variants_from_args(args)
+        bar = SweepProgress(len(variants), enabled=not args.quiet)
         result = run_sweep(args.config, variants, args.out, engine=args.engine, duration=args.duration,
                            base_overrides=overrides(args.set), workers=args.workers, batch_size=args.batch_size,
                            backend=args.backend, scheduler=args.scheduler, traces=args.traces, csv=args.csv,
                            resume=args.resume, progress=bar, manifest_extra={"variants_from": how},
-                           runner=args.runner, threads=args.threads)
+                           runner=args.runner, threads=args.threads, pool=pool)
     except KeyboardInterrupt:
         print(f"mtbmj: sweep interrupted; finished variants are journaled in {args.out / 'journal'}: "
               f"continue with the same command and --resume", file=sys.stderr)
         raise
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
     print(f"sweep {args.config}: {result.line()}")
     return 0
 

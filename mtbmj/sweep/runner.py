@@ -198,13 +198,60 @@ def _batches(variants: list[Variant], size: int) -> list[list[Variant]]:
     return [variants[i:i + size] for i in range(0, len(variants), size)]
 
 
-def _run_local(jobs: list[BatchJob], runner, workers: int, on_done) -> list[str]:
+def _warm(engine: str) -> None:
+    """A worker's first task from :func:`start_pool`: load the compiled code its batches run."""
+    from mtbmj.controllers import native
+
+    try:
+        native.expect_many()
+        if engine == "fast":
+            from mtbmj.drop import engine_fast
+
+            engine_fast.kernel()
+    except Exception:  # noqa: BLE001 - only a head start: the batches themselves report any failure
+        pass
+
+
+def start_pool(workers: int | None = None, engine: str = "mujoco"):
+    """A local worker pool for ``run_sweep(pool=...)``, its processes started now and loading
+    the engine's compiled code (numba's cache, about 0.3 s each) while the caller goes on
+    preparing the variants (the command line: ``scipy.stats`` for the samples, 0.4 s). The caller
+    owns it: ``shutdown`` it when done."""
+    from mtbmj.workers import process_pool
+
+    count = workers or (os.cpu_count() or 1)
+    pool = process_pool(count)
+    for _ in range(count):
+        pool.submit(_warm, engine)
+    return pool
+
+
+def _prefetch_table_libraries():
+    """Import pandas and pyarrow (0.3 s) in a thread while the workers compute, when this
+    process would otherwise only wait for them; joined before the table is made."""
+    import threading
+
+    def load():
+        try:
+            import pandas  # noqa: F401
+            import pyarrow.parquet  # noqa: F401
+        except Exception:  # noqa: BLE001 - the table's own import reports it
+            pass
+
+    thread = threading.Thread(target=load, name="mtbmj-sweep-prefetch", daemon=True)
+    thread.start()
+    return thread
+
+
+def _run_local(jobs: list[BatchJob], runner, workers: int, on_done, pool=None) -> list[str]:
     from concurrent.futures import as_completed
 
     from mtbmj.workers import process_pool
 
     problems = []
-    pool = process_pool(min(workers, len(jobs)))
+    owned = pool is None
+    if owned:
+        pool = process_pool(min(workers, len(jobs)))
     try:
         futures = {pool.submit(runner, job): job for job in jobs}
         for future in as_completed(futures):
@@ -215,9 +262,11 @@ def _run_local(jobs: list[BatchJob], runner, workers: int, on_done) -> list[str]
                 continue
             on_done(records)
     except BaseException:
-        pool.shutdown(wait=False, cancel_futures=True)
+        if owned:
+            pool.shutdown(wait=False, cancel_futures=True)
         raise
-    pool.shutdown(wait=True)
+    if owned:
+        pool.shutdown(wait=True)
     return problems
 
 
@@ -293,7 +342,7 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
               scheduler=None, traces: bool = False, csv: bool = False, resume: bool = False,
               progress: bool | SweepProgress = False, runner: Callable[[BatchJob], list[dict]] | str | None = None,
               drop: Callable | None = None, manifest_extra: Mapping | None = None, threads: int = 1,
-              extra_files: Callable[[Any], Mapping[str, bytes]] | None = None) -> SweepResult:
+              extra_files: Callable[[Any], Mapping[str, bytes]] | None = None, pool=None) -> SweepResult:
     """Run ``variants`` (override sets) of ``config`` and write ``OUT/sweep.parquet`` (and
     ``sweep.csv``, ``traces.h5`` on request, ``sweep.json`` always).
 
@@ -303,6 +352,7 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
     ``threads``: rollout threads per worker process for the batched runner. With
     ``resume`` the journal in ``out_dir`` is reused and only missing variants run.
     ``extra_files(table)`` adds files (name -> bytes) to the folder, written with the table.
+    ``pool`` (:func:`start_pool`, local backend) runs the batches in workers started earlier.
 
     Before any work: every variant's values are checked to fit their columns, the base run's
     length against the memory available, and ``out_dir`` must be writable and not in use by
@@ -362,7 +412,8 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
             return _sweep(planned, cfg, out, journal, known, started, engine=engine, duration=duration,
                           base_overrides=base_overrides, workers=workers, batch_size=batch_size, backend=backend,
                           scheduler=scheduler, traces=traces, csv=csv, progress=progress, runner=runner,
-                          drop=drop, manifest_extra=manifest_extra, threads=threads, extra_files=extra_files)
+                          drop=drop, manifest_extra=manifest_extra, threads=threads, extra_files=extra_files,
+                          pool=pool)
         except BaseException:
             lock.failed = True
             raise
@@ -418,7 +469,7 @@ class _Lock:
 
 def _sweep(planned, cfg, out, journal, known, started, *, engine, duration, base_overrides, workers, batch_size,
            backend, scheduler, traces, csv, progress, runner, drop, manifest_extra, threads,
-           extra_files) -> SweepResult:
+           extra_files, pool=None) -> SweepResult:
     def complete(rec):
         return rec is not None and (rec.get("has_traces") or not traces or rec.get("status") != "ok")
 
@@ -447,10 +498,11 @@ def _sweep(planned, cfg, out, journal, known, started, *, engine, duration, base
         bar.update(len(records), sum(r["status"] != "ok" for r in records))
 
     problems: list[str] = []
+    tables = _prefetch_table_libraries() if jobs else None
     try:
         if jobs:
             if backend == "local":
-                problems = _run_local(jobs, runner, workers, on_done)
+                problems = _run_local(jobs, runner, workers, on_done, pool)
             else:
                 problems = _run_dask(jobs, runner, scheduler, on_done)
     except BaseException:
@@ -462,6 +514,8 @@ def _sweep(planned, cfg, out, journal, known, started, *, engine, duration, base
         raise MtbmjError(f"{missing} variants were not computed ({problems[0]}); the others are journaled "
                          f"in {journal.dir}: run again with --resume")
 
+    if tables is not None:
+        tables.join()
     records = journal.records()
     table = assemble(planned, records)
     files = {TABLE: parquet_bytes(table), TIMINGS: timings_csv(planned, records)}

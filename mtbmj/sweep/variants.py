@@ -131,10 +131,23 @@ def grid(ranges: Sequence[Range]) -> list[dict[str, float]]:
     return [dict(zip(keys, combo)) for combo in itertools.product(*(r.values() for r in ranges))]
 
 
+def latin_hypercube(rng: np.random.Generator, n: int, d: int) -> np.ndarray:
+    """``n`` points of a randomised Latin hypercube in [0, 1)^d: the points of
+    ``scipy.stats.qmc.LatinHypercube(d, rng=rng).random(n)`` (default scrambling, no
+    optimisation), drawn the same way from the same generator (a test holds them equal).
+
+    Written out because importing ``scipy.stats`` costs 0.4 s, a third of a whole 200-variant
+    fast-engine sweep command; Sobol sequences still come from scipy."""
+    own = np.random.Generator(type(rng.bit_generator)(rng.bit_generator.seed_seq.spawn(1)[0]))
+    jitter = own.uniform(size=(n, d))
+    strata = np.tile(np.arange(1, n + 1), (d, 1))
+    for row in strata:
+        own.shuffle(row)
+    return (strata.T - jitter) / n
+
+
 def sample(ranges: Sequence[Range], n: int, method: str = "lhs", seed: int = 0) -> list[dict[str, float]]:
     """``n`` points in the box of the ranges: Latin hypercube or scrambled Sobol, seeded."""
-    from scipy.stats import qmc
-
     if not ranges:
         raise ConfigError("--samples: needs at least one --vary key=lo:hi range")
     _unique_keys(ranges)
@@ -146,11 +159,16 @@ def sample(ranges: Sequence[Range], n: int, method: str = "lhs", seed: int = 0) 
         raise ConfigError(f"--method: {method!r} is not one of {', '.join(SAMPLING_METHODS)}")
     rng = np.random.default_rng(seed)
     d = len(ranges)
-    engine = qmc.LatinHypercube(d, rng=rng) if method == "lhs" else qmc.Sobol(d, rng=rng)
-    with warnings.catch_warnings():  # Sobol's "n should be a power of 2" balance note
-        warnings.simplefilter("ignore")
-        unit = engine.random(n)
-    points = qmc.scale(unit, [r.lo for r in ranges], [r.hi for r in ranges])
+    if method == "lhs":
+        unit = latin_hypercube(rng, n, d)
+    else:
+        from scipy.stats import qmc
+
+        with warnings.catch_warnings():  # Sobol's "n should be a power of 2" balance note
+            warnings.simplefilter("ignore")
+            unit = qmc.Sobol(d, rng=rng).random(n)
+    lower, upper = np.array([r.lo for r in ranges], dtype=float), np.array([r.hi for r in ranges], dtype=float)
+    points = unit * (upper - lower) + lower  # as qmc.scale
     return [{r.key: float(v) for r, v in zip(ranges, row)} for row in points]
 
 
