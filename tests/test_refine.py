@@ -186,3 +186,47 @@ def test_the_energy_bound_never_misses_a_stop_the_run_reaches():
             assert bound["rim"], (preset, overrides)
             reached += 1
     assert reached > 0  # the draws do reach some of them
+
+
+def _plan(preset="S4"):
+    setup = compose.setup(mtbmj.load_config(preset))
+    assert setup.substeps > setup.contact_substeps > 1  # S4 can reach its stops: the two levels differ
+    return setup, engine_mujoco.Stepping(setup, COLUMNS)
+
+
+def _rows(x, deflection, v):
+    rows = np.zeros((len(x), 4))
+    rows[:, 1], rows[:, 0], rows[:, 3], rows[:, 2] = x, np.asarray(x) + deflection, v, v
+    return rows
+
+
+def test_touchdown_far_from_the_stops_is_refined_at_the_contact_level():
+    """The tire reaching the ground mid-stroke: cut there, and stepped at the other zones' level,
+    not at the stops' (a hundred fine steps per millisecond on S4)."""
+    setup, plan = _plan()
+    rows = _rows(np.full(6, 0.03), np.array([-0.004, -0.003, -0.002, -0.001, 0.0005, 0.002]), 0.0)
+    rows[:, 2] = 1.0  # the sled (and wheel) coming down at 1 m/s
+    keep, switch, _ = plan.keep(rows[0], rows[1:])
+    assert plan.fine and not switch and keep < 5
+    assert plan.substeps == plan.contact_level == setup.contact_substeps
+
+
+@settings(max_examples=60, deadline=None, derandomize=True, database=None)
+@given(x0=st.floats(0.0, 0.08), speed=st.floats(0.5, 4.0))
+def test_a_stop_coming_within_reach_at_the_contact_level_cuts_and_goes_on_at_the_stops_level(x0, speed):
+    """Stepping finely at the contact level, the fork compresses towards its bumper: the chunk is
+    kept only up to the last step clear of it, and stepping goes on at the stops' level."""
+    setup, plan = _plan()
+    plan.fine, plan.substeps = True, plan.contact_level
+    h = setup.timestep
+    x = x0 + speed * h * np.arange(12)
+    rows = _rows(x, 0.01, speed)  # tire well in contact, clear of the rim
+    fine = np.repeat(rows[1:], plan.substeps, axis=0)
+    keep, switch, _ = plan.keep(rows[0], rows[1:], fine)
+    bumper, extension = compose.refine_zones(setup)[:2]
+    margin = 2 * h * speed + engine_mujoco.STOP_MARGIN_M  # what one coarse step can cover, and the margin
+    reaches = np.flatnonzero((x[1:] + margin > bumper) | (x[:-1] - margin < extension))
+    if reaches.size and not switch:
+        assert keep == reaches[0] and plan.fine and plan.substeps == plan.stop_level
+    elif not switch:
+        assert keep == 11 and plan.substeps == plan.contact_level

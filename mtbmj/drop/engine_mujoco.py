@@ -98,11 +98,11 @@ REFINED_CHUNK_S = 0.01  # simulated time per rollout at the fine step
 AFTER_REFINED_CHUNK_S = 0.01  # the first coarse rollout after one: doubled while none is cut
 
 
-def stop_index(previous, states, columns, zones, step: float) -> int | None:
+def stop_index(previous, states, columns, zones, step: float, stops_only: bool = False) -> int | None:
     """The index of the first step of a chunk of recorded states that a stop or the rim may have
     acted in, or in which the tire may have touched down or lifted off (see ``STOP_MARGIN_M``),
-    or None. ``columns`` are the sled and fork position and velocity columns of a state row;
-    ``zones`` as ``compose.refine_zones``."""
+    or None; with ``stops_only``, of a stop or the rim only. ``columns`` are the sled and fork
+    position and velocity columns of a state row; ``zones`` as ``compose.refine_zones``."""
     sled, fork, sled_v, fork_v = columns
     compress, extend, rim, band, fast = zones
     rows = np.concatenate((previous[None, :], states))
@@ -117,8 +117,11 @@ def stop_index(previous, states, columns, zones, step: float) -> int | None:
 
     x_low, x_high = reach(x, v)
     d_low, d_high = reach(d, w)
-    # a stop, the rim, or the tire touching down or lifting off (its damping force jumps there)
-    near = (x_high > compress) | (x_low < extend) | (d_high > rim) | ((d_low < 0.0) & (d_high > 0.0))
+    near = (x_high > compress) | (x_low < extend) | (d_high > rim)  # a stop or the rim
+    if stops_only:
+        found = np.flatnonzero(near)
+        return int(found[0]) if found.size else None
+    near |= (d_low < 0.0) & (d_high > 0.0)  # the tire touching down or lifting off (its damping force jumps)
     if band > 0.0:  # the stroke velocity comes within the band of zero (or crosses it)
         a, b = v[:-1], v[1:]
         slowest = np.where(a * b <= 0.0, 0.0, np.minimum(np.abs(a), np.abs(b)) - np.abs(b - a))
@@ -143,7 +146,10 @@ class Stepping:
     def __init__(self, setup: Setup, columns):
         h = setup.timestep
         self.setup = setup
-        self.substeps = setup.substeps
+        # fine steps per output step: near a stop or the rim, and in the other zones
+        self.stop_level = setup.substeps
+        self.contact_level = min(setup.contact_substeps or setup.substeps, setup.substeps)
+        self.substeps = self.stop_level  # the level of the next fine rollout
         self.stop_columns = tuple(columns)
         sled, fork, _, fork_v = self.stop_columns
         self.switch_columns = (sled, fork, fork_v)
@@ -152,7 +158,7 @@ class Stepping:
         self.switch_chunk = max(1, int(round(SWITCH_CHUNK_S / h)))
         self.refined_chunk = max(1, int(round(REFINED_CHUNK_S / h)))
         self.after_refined = min(self.chunk, max(1, int(round(AFTER_REFINED_CHUNK_S / h))))
-        self.coarse_chunk = self.after_refined if self.substeps > 1 else self.chunk
+        self.coarse_chunk = self.after_refined if self.stop_level > 1 else self.chunk
         self.fine = False
         self.phase = 0
 
@@ -162,10 +168,16 @@ class Stepping:
         return self.setup.tire.switches and self.phase == 0
 
     def size(self, remaining: int) -> int:
-        """Output steps for the next rollout (at ``setup.fine_timestep`` if ``fine``)."""
+        """Output steps for the next rollout (at ``setup.timestep / substeps`` if ``fine``)."""
         if self.fine:
             return min(self.refined_chunk, remaining)
         return min(min(self.switch_chunk, self.coarse_chunk) if self.pending else self.coarse_chunk, remaining)
+
+    def _level(self, before, step) -> int:
+        """The fine level for output step ``step`` (a one-row array) from state ``before``: the
+        stops' where a stop or the rim may act in it, else the other zones'."""
+        near = stop_index(before, step, self.stop_columns, self.zones, self.setup.timestep, stops_only=True)
+        return self.stop_level if near is not None else self.contact_level
 
     def keep(self, previous, states, fine_states=None) -> tuple[int, bool, tuple | None]:
         """(how many of ``states``, recorded from ``previous``, to keep; whether the tire law
@@ -174,39 +186,51 @@ class Stepping:
         step under the new law), and the mode of the next rollout.
 
         At the fine step ``fine_states`` are all the states the output ``states`` were taken
-        from, and the switch is made at the fine step it falls in. At a coarse step that may
-        hold the switch, the chunk is cut before that step and stepped finely: the switch lands
-        within a fine step, as the reference's event does (1 ms late, it moved a random S12 fork
-        0.7 mm)."""
+        from (at ``substeps`` per output step, the level this rollout was made at), and the
+        switch is made at the fine step it falls in. At a coarse step that may hold the switch,
+        the chunk is cut before that step and stepped finely: the switch lands within a fine
+        step, as the reference's event does (1 ms late, it moved a random S12 fork 0.7 mm).
+        Stepped finely at the other zones' level, a chunk is cut where a stop or the rim comes
+        within reach, and goes on at the stops' level."""
         n = len(states)
+        level = self.substeps
         keep, switch, partial = n, False, None
-        if self.substeps > 1 and not self.fine:
+        if self.stop_level > 1 and not self.fine:
             k = stop_index(previous, states, self.stop_columns, self.zones, self.setup.timestep)
+            if k is not None:
+                keep = k
+        elif self.fine and level < self.stop_level:
+            k = stop_index(previous, states, self.stop_columns, self.zones, self.setup.timestep, stops_only=True)
             if k is not None:
                 keep = k
         if self.pending and keep:
             if fine_states is not None:
-                k = switch_index(previous, fine_states, self.switch_columns)
+                k = switch_index(previous, fine_states[: keep * level], self.switch_columns)
                 if k is not None:
-                    whole, part = divmod(k + 1, self.substeps)
+                    whole, part = divmod(k + 1, level)
                     keep, switch = whole, True
                     if part:
-                        partial = (k, self.substeps - part)
+                        partial = (k, level - part)
             else:
                 k = switch_index(previous, states[:keep], self.switch_columns)
-                if k is not None and self.substeps > 1:
+                if k is not None and self.stop_level > 1:
                     keep = k  # refine the step that holds it
                 elif k is not None:
                     keep, switch = k + 1, True
         if switch and self.fine:
             pass  # stays fine for one more chunk: the exit is judged on whole output steps
+        elif self.fine and keep < n:  # a stop came within reach: on at the stops' level
+            self.substeps = self.stop_level
         elif self.fine:  # back to the coarse step once the last step is clear of every zone
             before = previous if keep == 1 else states[keep - 2]
             self.fine = stop_index(before, states[keep - 1: keep], self.stop_columns, self.zones,
                                    self.setup.timestep) is not None
+            if self.fine:
+                self.substeps = self._level(before, states[keep - 1: keep])
             self.coarse_chunk = self.after_refined
         elif keep < n and not switch:
             self.fine = True
+            self.substeps = self._level(previous if keep == 0 else states[keep - 1], states[keep: keep + 1])
         elif keep == n:
             self.coarse_chunk = min(self.chunk, 2 * self.coarse_chunk)
         if switch:
@@ -236,7 +260,8 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
     re-parameterised and stepping resumes from that state, exactly as if the switch had been made
     between two single steps. Where an end stop or the rim may act (``stop_index``) the chunk is
     cut before that step and stepping goes on at ``setup.fine_timestep`` (recording every
-    ``setup.substeps``-th state, so the output grid stays ``setup.timestep``) until the fork and
+    ``setup.substeps``-th state, so the output grid stays ``setup.timestep``; at
+    ``setup.contact_substeps`` in the zones where no stop or rim can act) until the fork and
     tire are clear of them again.
     ``callback`` chooses the fork callback (see :func:`fork_callback`).
     """
@@ -276,10 +301,10 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
     with installed(callback), _collected_warnings(messages):
         while done < steps:
             n = plan.size(steps - done)
-            current_phase, fine = plan.phase, plan.fine
+            current_phase, fine, level = plan.phase, plan.fine, plan.substeps
             if fine:
-                states, fine_states = fine_rollout(model, data, state[None, :], n, substeps)
-                computed += n * substeps
+                states, fine_states = fine_rollout(model, data, state[None, :], n, level)
+                computed += n * level
                 refined += n
             else:
                 states, fine_states = rollout.rollout(model, data, state[None, :], nstep=n)[0][0], None
@@ -301,7 +326,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
                 sc.set_tire(values.rate, values.damping, callback)
             if partial is not None:  # the switch fell inside an output step: finish it under the new law
                 at, left = partial
-                _, rest = fine_rollout(model, data, fine_states[at][None, :], 0, substeps, nstep=left)
+                _, rest = fine_rollout(model, data, fine_states[at][None, :], 0, level, nstep=left)
                 computed += left
                 discarded -= 1  # that output step is made, not thrown away
                 record[done + 1, : len(columns)] = rest[-1, columns]
@@ -321,6 +346,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
         friction_state=record[:, 4],
         tire_phase=phase,
         info={"steps": steps, "steps_discarded": discarded, "steps_refined": refined, "substeps": substeps,
+              "contact_substeps": plan.contact_level,
               "steps_computed": computed, "callback_calls": callback.calls, "integrator": setup.integrator,
               "timestep_s": setup.timestep, "contact_inverse_inertia_per_kg": sc.inverse_inertia},
     )

@@ -167,7 +167,7 @@ def _step_group(runs: list[_Run], datas, pool, spec) -> None:
                 if r.plan.fine:
                     n = r.plan.size(r.steps - r.done)
                     states, fine_states = engine_mujoco.fine_rollout(r.scene.model, datas[0], r.record[r.done][None, :],
-                                                                     n, r.setup.substeps)
+                                                                     n, r.plan.substeps)
                     made.append((r, states, fine_states))
             # A warning is not traced to its variant: a run whose kept steps show no reset (MuJoCo
             # restarts a run that goes unstable) is sound; the others go to the single path.
@@ -175,7 +175,7 @@ def _step_group(runs: list[_Run], datas, pool, spec) -> None:
             still = []
             for r, states, fine_states in made:
                 start = r.record[r.done]
-                phase = r.plan.phase
+                phase, level = r.plan.phase, r.plan.substeps
                 keep, switch, partial = r.plan.keep(start, states, fine_states)
                 kept = states[:keep]
                 if (not np.all(np.isfinite(kept)) or (keep and np.max(np.abs(kept[:, 1:3])) > MAX_DISPLACEMENT_M)
@@ -192,7 +192,7 @@ def _step_group(runs: list[_Run], datas, pool, spec) -> None:
                 if partial is not None:  # as engine_mujoco.run: finish the output step under the new law
                     at, left = partial
                     _, rest = engine_mujoco.fine_rollout(r.scene.model, datas[0], fine_states[at][None, :], 0,
-                                                         r.setup.substeps, nstep=left)
+                                                         level, nstep=left)
                     if not np.all(np.isfinite(rest)):
                         r.failed = True
                         continue
