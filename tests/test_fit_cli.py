@@ -130,6 +130,29 @@ def test_drop_fit_bad_free_key_and_bounds(records, tmp_path, capsys):
     assert not out.exists()
 
 
+def test_drop_fit_on_the_fast_engine_end_to_end(tmp_path, capsys):
+    """`mtbmj fit drop --engine fast` on a record the ODE reference made (with a logger's free
+    fall and clock offset): the two parameters come back within their intervals, and the
+    parameter set it writes runs. It used to fail at the end, looking up the engine to measure
+    its own error against."""
+    import json
+
+    from mtbmj.identify import drop_synthetic
+
+    truth = {"fork.spring.preload_N": 240.0, "tire.impact_rate_N_per_mm": 84.0}
+    sled = tmp_path / "sled.csv"
+    drop_synthetic.make_drop_record("S12", truth, path=sled, duration=0.5, seed=11, fall_s=0.04, clock_offset_s=3.2)
+    out = tmp_path / "fit"
+    assert cli.main(["fit", "drop", str(sled), "--engine", "fast", "--free", ",".join(truth), "--out", str(out)]) == 0
+    fit = json.loads((out / "fit.json").read_text())["models"]["drop"]
+    assert fit["model"] == "S12 (fast)"
+    for key, value in truth.items():
+        low, high = fit["ci95"][key]
+        assert low <= value <= high and high - low < 0.01 * value, (key, low, high)
+    capsys.readouterr()
+    assert cli.main(["drop", str(out / "fit.toml"), "--quiet", "--out", str(tmp_path / "run")]) == 0
+
+
 def test_a_fit_that_does_not_converge_is_reported(records, tmp_path, capsys):
     """A drop fit given one engine run cannot converge: one line, exit 2, nothing written."""
     sled = tmp_path / "sled.csv"

@@ -71,7 +71,9 @@ from mtbmj.workers import process_pool
 
 CHANNELS = ("sled", "fork", "tire")
 FIT_FROM_S = 0.005  # fitted from 5 ms after touch: before, a logger's filter still carries the free fall
-OTHER_ENGINE = {"mujoco": "ode", "ode": "mujoco"}
+# the engine whose run at the optimum measures the fitting engine's own error (the fast engine
+# integrates the reference's equations: it is checked against the reference)
+OTHER_ENGINE = {"mujoco": "ode", "ode": "mujoco", "fast": "ode"}
 MODEL_KEYS = ("fork.spring.model", "fork.spring.top_out", "fork.spring.preload", "fork.damper.model",
               "fork.friction.model", "tire.model")
 
