@@ -474,7 +474,7 @@ STEPS_PER_PERIOD = {"rk4": 16.0, "implicitfast": 250.0, "implicit": 250.0, "eule
 # The same for the brief, stiff contacts of a hard stop or the rim (a half period each), and
 # where the run can reach the compression stop or the rim (``reachable``): a fork rattling
 # between them meets hundreds of such contacts, and an error made at each adds up (one random
-# S4 fork: 0.15 mm off the reference at 12, 0.004 mm at 24).
+# S4 fork: 0.15 mm off the reference at 12, 0.03 mm at 24).
 STOP_STEPS_PER_PERIOD = {"rk4": 12.0, "implicitfast": 40.0, "implicit": 40.0, "euler": 40.0}
 HARD_STOP_STEPS_PER_PERIOD = {"rk4": 24.0, "implicitfast": 40.0, "implicit": 40.0, "euler": 40.0}
 # A fixed step keeps the output grid regular: the largest of these within the limit is chosen.
