@@ -126,7 +126,7 @@ def test_dm_control_physics_steps_the_drop_scene_like_the_engine():
     physics.named.data.qvel["sled"] = setup.impact_speed
     physics.named.data.qpos["sled"] = engine_mujoco.TOUCH_DEPTH_M  # the engine's start at tread touch
     steps = 3000
-    callback = ForkCallback(model, setup.fork)
+    callback = ForkCallback(model, setup.fork, floor=ours.floor())  # as the engine's: the contact-floor correction
     fork = np.empty(steps)
     with installed(callback):
         physics.forward()  # dm_control steps as mj_step2 + mj_step1: refresh after setting the state
