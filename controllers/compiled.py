@@ -342,18 +342,37 @@ COMPILE_NOTICE_S = float(os.environ.get("MTBMJ_COMPILE_NOTICE_S", "3.0"))
 def _notice(what: str) -> threading.Timer:
     """Log (INFO, logger ``mtbmj.compile``) that ``what`` is being compiled, if it is still going
     after ``COMPILE_NOTICE_S``: a cold first run says why it waits; a cached load stays silent.
-    The library only logs; the command line shows the message on stderr."""
-    timer = threading.Timer(COMPILE_NOTICE_S, COMPILE_LOG.info,
-                            (f"compiling {what} for this machine (first run only; numba caches it)...",))
+    The library only logs; the command line shows the message on stderr. :func:`cold` says so at
+    once where numba's cache shows that nothing is there to load."""
+    timer = threading.Timer(COMPILE_NOTICE_S, _say_compiling, (what,))
     timer.daemon = True
     timer.start()
     return timer
 
 
+def _say_compiling(what: str) -> None:
+    COMPILE_LOG.info(f"compiling {what} for this machine (first run only; numba caches it)...")
+
+
+def cold(dispatcher) -> bool:
+    """True when numba's on-disk cache holds no compiled code for ``dispatcher`` that it can load
+    (no index, or one written for other sources): it is about to compile. False when it can load,
+    or when that cannot be told (no disk cache; a numba without these internals): the timer of
+    :func:`_notice` then decides."""
+    try:
+        return not dispatcher._cache._cache_file._load_index()
+    except Exception:  # noqa: BLE001 - numba's internals: fall back to the timer
+        return False
+
+
 @contextlib.contextmanager
-def compiling(what: str):
-    """Around code that may compile numba functions: see ``_notice``."""
+def compiling(what: str, dispatcher=None):
+    """Around code that may compile numba functions (``dispatcher``, if given, is checked with
+    :func:`cold` to say so at once): see ``_notice``."""
     timer = _notice(what)
+    if dispatcher is not None and cold(dispatcher):
+        timer.cancel()
+        _say_compiling(what)
     try:
         yield
     finally:
@@ -667,6 +686,10 @@ if _numba is not None:
             at = builder.gep(symbol, [_ir.Constant(_ir.IntType(32), 0), args[0]])
             return builder.load(at)
         return _t.int64(_t.intp), codegen
+
+    if cold(fork_force):  # the dispatcher below compiles now: with nothing to load, say so at once
+        _compile_notice.cancel()
+        _say_compiling("the force laws")
 
     @_numba.cfunc(_t.void(_t.voidptr, _t.voidptr), cache=CACHE, error_model="numpy")
     def _dispatch(m, d):

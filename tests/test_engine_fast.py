@@ -81,16 +81,17 @@ def test_diverging_run_reports_the_time():
 def test_cli_fast_drop_and_cold_compile_notice(tmp_path):
     """A cold numba cache says it compiles; the second process loads it from the cache (writes
     nothing to it) silently; same output."""
-    # The notice fires after MTBMJ_COMPILE_NOTICE_S of compiling. A cold compile of the laws or
-    # the engine takes 1.5-10 s depending on the machine, a cached load 0.4-1 s: no one
-    # threshold separates them everywhere, so the cold run is told 0.2 s, the cached one keeps
-    # the default (3 s), and the cache itself shows that nothing was compiled again.
+    # A cold compile of the laws or the engine takes 1.5-10 s depending on the machine, a cached
+    # load 0.4-1 s: no one time separates them everywhere. The notice comes at once when numba's
+    # cache holds nothing to load (controllers.compiled.cold), whatever the machine's speed (a
+    # 600 s timer here shows it does not wait for one); the cache itself shows that the second
+    # process compiled nothing again.
     cache = tmp_path / "cache"
     command = [sys.executable, "-m", "mtbmj.cli", "drop", "S1", "--engine", "fast", "--duration", "0.3", "--quiet"]
     first = subprocess.run(command + ["--out", str(tmp_path / "a")], capture_output=True, text=True,
-                           env=dict(os.environ, NUMBA_CACHE_DIR=str(cache), MTBMJ_COMPILE_NOTICE_S="0.2"))
+                           env=dict(os.environ, NUMBA_CACHE_DIR=str(cache), MTBMJ_COMPILE_NOTICE_S="600"))
     assert first.returncode == 0, first.stderr
-    assert "compiling" in first.stderr
+    assert "compiling the force laws" in first.stderr and "compiling the fast engine" in first.stderr
     files = {p: p.stat().st_mtime_ns for p in cache.rglob("*") if p.is_file()}
     assert any(p.suffix == ".nbc" for p in files)
     second = subprocess.run(command + ["--out", str(tmp_path / "b")], capture_output=True, text=True,

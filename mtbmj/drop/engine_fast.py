@@ -238,7 +238,7 @@ def kernel():
         raise ConfigError(f"engine: fast needs numba ({_compiled.FALLBACK_MESSAGE.split(':')[0]}); "
                           "use engine mujoco or ode")
     if not _WARM:
-        with _compiled.compiling("the fast engine"):
+        with _compiled.compiling("the fast engine", integrate):
             _warm(integrate)
         _WARM = True
     return integrate
