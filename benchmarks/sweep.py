@@ -11,7 +11,9 @@ compared with the bare-scene rollout (target <= 1.2x). ``--variants`` sets the s
 together through ``mujoco.rollout`` on the compiled laws) or ``single`` (``run_drop`` per
 variant); ``--threads``: rollout threads per worker process. The per-variant costs of the batched
 runner's phases (prepare, step, post-process) are measured in-process on ``--phase-variants``
-variants against the bare rollout of the same variants on one thread.
+variants against the bare rollout of the same variants on one thread, and against the bare scene
+making as many steps as the runner does with the compiled fork callback installed (what stepping
+costs without the runner's bookkeeping).
 
 Bare scene: ``mtbmj.drop.scene.build(compose.setup(load_config("S12")))`` with no control callback
 (no fork law: MuJoCo's own contact and joints only), one rollout per variant from tire touch at
@@ -84,18 +86,25 @@ def phase_costs(vs, duration) -> dict:
         note("step_ms", t2 - t1)
         note("post_process_ms", t3 - t2)
         note("bare_rollout_ms", bare_rollout(vs, 1, duration)[0])
+        steps = int(round(np.mean([r.computed for r in runs])))
+        note("bare_same_steps_with_callback_ms", bare_rollout(vs, 1, duration, steps=steps, callback=True)[0])
         t4 = time.perf_counter()
         batch.run_batch_rollout(job)
         note("whole_runner_ms", time.perf_counter() - t4)
     best["post_process_share_of_runner"] = best["post_process_ms"] / best["whole_runner_ms"]
     best["runner_over_bare"] = best["whole_runner_ms"] / best["bare_rollout_ms"]
+    best["runner_steps_per_variant"] = steps
+    best["runner_over_bare_same_steps_with_callback"] = best["whole_runner_ms"] / best["bare_same_steps_with_callback_ms"]
     return best
 
 
-def bare_rollout(vs, threads: int, duration, chunk: int = 32, builtin: bool = False) -> tuple[float, int]:
+def bare_rollout(vs, threads: int, duration, chunk: int = 32, builtin: bool = False, steps: int | None = None,
+                 callback: bool = False) -> tuple[float, int]:
     """Wall time of the bare-scene rollouts of ``vs`` (scene built once, outside the timing).
     ``builtin``: the fork as MuJoCo joint stiffness/preload/damping (``benchmarks/compiled.py``'s
-    built-in-elements scene, dynamics close to the real fork) instead of no fork force at all."""
+    built-in-elements scene, dynamics close to the real fork) instead of no fork force at all.
+    ``steps``: that many steps per variant (default: the output steps); ``callback``: with S12's
+    compiled fork callback installed (the runner's per-step cost, no refinement or chunking)."""
     base = mtbmj.load_config("S12")
     setup = compose.setup(base)
     sc = scene.build(setup)
@@ -104,7 +113,7 @@ def bare_rollout(vs, threads: int, duration, chunk: int = 32, builtin: bool = Fa
         from compiled import builtin_model  # benchmarks/compiled.py
 
         model = builtin_model(sc, setup)
-    steps = int(round((duration or setup.duration) / setup.timestep))
+    steps = int(round((duration or setup.duration) / setup.timestep)) if steps is None else steps
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     states = []
     for v in vs:
@@ -119,7 +128,12 @@ def bare_rollout(vs, threads: int, duration, chunk: int = 32, builtin: bool = Fa
     states = np.array(states)
     datas = [mujoco.MjData(model) for _ in range(threads)]
     out = np.empty((min(chunk, len(vs)), steps, states.shape[1]))
-    with installed(None):
+    fork = None
+    if callback:
+        from mtbmj.controllers.compiled import CompiledForkCallback
+
+        fork = CompiledForkCallback(model, setup.fork, count_calls=False, rim=setup.tire.rim, floor=sc.floor())
+    with installed(fork):
         rollout.rollout(model, datas, states[:1], nstep=10)  # warm-up
         start = time.perf_counter()
         for i in range(0, len(vs), chunk):
@@ -180,6 +194,14 @@ def main() -> None:
         payload["batch_runner_phases_per_variant"] = phases
         print("batched runner, per variant (1 process, 1 thread): " + ", ".join(
             f"{k} {v:.2f}" for k, v in phases.items()))
+        if not args.skip_rollout:  # the whole sweep against bare stepping of as many steps, callback installed
+            same, _ = bare_rollout(vs, args.workers * args.threads, args.duration,
+                                   steps=phases["runner_steps_per_variant"], callback=True)
+            payload.update({"bare_same_steps_with_callback_wall_s": same,
+                            "throughput_ratio_sweep_to_same_steps_with_callback": same / wall})
+            print(f"bare scene, {phases['runner_steps_per_variant']} steps per variant (as many as the runner "
+                  f"makes, the phase variants' mean), compiled callback installed: {same:.2f} s; throughput "
+                  f"ratio {same / wall:.2f}")
     estimate = 10000 / args.variants * wall
     payload["extrapolated_10000_variant_sweep_s"] = estimate
     print(f"extrapolated 10 000-variant sweep on this path: {estimate / 60:.1f} min")

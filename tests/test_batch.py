@@ -130,3 +130,27 @@ def test_sweep_default_runner_is_batched_and_resume_works(tmp_path, monkeypatch)
     pd.testing.assert_frame_equal(again.table[cols], reference.table[cols], rtol=1e-9)
     with pytest.raises(mtbmj.ConfigError, match="--runner"):
         sweep.run_sweep(cfg, variants, tmp_path / "x", duration=DURATION, runner="nope")
+
+
+@pytest.mark.parametrize("name,overrides", [("S12", {}), ("S4", {"sled.drop_height_mm": 250.0})])
+def test_batch_counts_the_steps_it_makes_as_the_engine_does(name, overrides):
+    """One variant alone makes the engine's stepping decisions: the same MuJoCo steps (fine ones
+    each counted, at both fine levels), refined output steps and discarded ones."""
+    import mujoco
+
+    from mtbmj import compose
+    from mtbmj.controllers import installed
+    from mtbmj.drop import engine_mujoco
+
+    cfg = mtbmj.load_config(name, overrides)
+    variants = sweep.plan(cfg, [{}], duration=DURATION)
+    job = sweep.BatchJob(cfg, "mujoco", DURATION, variants)
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    run = batch._prepare(job, variants[0], spec)
+    with installed(run.callback):
+        batch._step_group([run], [mujoco.MjData(run.scene.model)], None, spec)
+    ours = batch._trace(run).info
+    engine = engine_mujoco.run(compose.setup(cfg), DURATION, callback="compiled").info
+    keys = ("steps_computed", "steps_refined", "steps_discarded", "substeps", "contact_substeps")
+    assert {k: ours[k] for k in keys} == {k: engine[k] for k in keys}
+    assert ours["steps_computed"] > ours["steps"] and ours["steps_refined"] > 0
