@@ -549,7 +549,8 @@ def stiffest_rates(s: Setup, reach: dict[str, bool] | None = None) -> dict[str, 
     rate), ``stops`` (that plus the bumper at full travel, a hard stop and the rim at their
     tangent rate ``STOP_DEPTH_M`` deep, engaged together in the worst case; only those the run
     can reach, see :func:`reachable`) and ``damping`` (fork damping slope over the velocity
-    range, stops, tire and rim)."""
+    range, stops, tire and rim); ``stops_out_of_reach`` and ``stop_damping_out_of_reach``: the
+    same for this fork with every stop and the rim out of reach."""
     spring = s.fork.spring
     xs = _stroke(s, 2001)
     force = _spring_along(s, xs, 0.0)
@@ -575,7 +576,9 @@ def stiffest_rates(s: Setup, reach: dict[str, bool] | None = None) -> dict[str, 
     return {"working": k_spring + k_tire,
             "stops": k_spring + k_bumper + k_tire + k_stop + (rim.rate * stiffening if rim is not None else 0.0),
             "damping": c_fork + c_tire,
-            "stop_damping": c_fork + c_tire + c_stop + (rim.damping if rim is not None else 0.0)}
+            "stop_damping": c_fork + c_tire + c_stop + (rim.damping if rim is not None else 0.0),
+            "stops_out_of_reach": k_spring + k_tire + getattr(spring, "stop_rate", 0.0),
+            "stop_damping_out_of_reach": c_fork + c_tire + c_stop}
 
 
 def _round_down(value: float, digits: int = 2) -> str:
@@ -682,19 +685,18 @@ def refine_zones(s: Setup) -> tuple[float, float, float, float, float]:
     return compress, extend, rim, refined_band(s), refined_speed(s)
 
 
-OUT_OF_REACH = {"bumper": False, "compression_stop": False, "extension_stop": False, "rim": False}
-
-
-def _limits(s: Setup, reach: dict[str, bool] | None = None, hard: bool | None = None) -> tuple[list, list, list]:
+def _limits(s: Setup) -> tuple[list, list, list, list]:
     """The step limits (s, what sets it) of the working stroke; those of the end stops and the
-    rim, which the drop engine meets with ``substeps`` finer steps only while they may act; and
-    those of its other zones (the band around rest, fast sliding), which hold near the stops as
-    well. ``reach`` (default :func:`reachable`) says which stops the run can reach, ``hard``
-    (default: the compression stop or the rim) whether their steps per period are
-    ``HARD_STOP_STEPS_PER_PERIOD``."""
-    reach = reachable(s) if reach is None else reach
+    rim, which the drop engine meets with ``substeps`` finer steps only while they may act; those
+    of its other zones (the band around rest, fast sliding), which hold near the stops as well;
+    and, for those other zones away from the stops (``contact_substeps``), the stops' limits of
+    the same fork with every stop out of reach, at the steps per period of this one (a fork that
+    can reach its compression stop or the rim lands hard: the tire's damping force jumps by B v
+    at touchdown; one random S10 fork was 0.049 mm off the reference at 12 steps per period,
+    0.006 mm at 24)."""
+    reach = reachable(s)
     rates = stiffest_rates(s, reach)
-    hard = (reach["compression_stop"] or reach["rim"]) if hard is None else hard
+    hard = reach["compression_stop"] or reach["rim"]
     wheel = s.wheel_mass
     reduced = s.wheel_mass * s.body_mass / (s.wheel_mass + s.body_mass)
 
@@ -704,12 +706,14 @@ def _limits(s: Setup, reach: dict[str, bool] | None = None, hard: bool | None = 
                 f"{per_period:g} steps per period of the wheel on the {what} ({rates[name] / 1e3:.0f} N/mm)")
 
     working = [period("working", STEPS_PER_PERIOD, "spring and tire over the stroke")]
-    stops = [period("stops", HARD_STOP_STEPS_PER_PERIOD if hard else STOP_STEPS_PER_PERIOD,
-                    "bumper, hard stops and rim")]
+    per_stop = HARD_STOP_STEPS_PER_PERIOD if hard else STOP_STEPS_PER_PERIOD
+    stops = [period("stops", per_stop, "bumper, hard stops and rim")]
+    far = [period("stops_out_of_reach", per_stop, "stops out of reach")]
     zones = []
-    if rates["stop_damping"] > 0:  # brief contacts: the stability bound of explicit damping
-        stops.append((0.5 * reduced / rates["stop_damping"],
-                      f"explicit damping with a stop engaged ({rates['stop_damping']:.0f} N s/m on the wheel)"))
+    for name, limits in (("stop_damping", stops), ("stop_damping_out_of_reach", far)):
+        if rates[name] > 0:  # brief contacts: the stability bound of explicit damping
+            limits.append((0.5 * reduced / rates[name],
+                           f"explicit damping with a stop engaged ({rates[name]:.0f} N s/m on the wheel)"))
     if rates["damping"] > 0:
         # the callback's damping forces are explicit: c dt / m within DAMPING_STEP (the stability
         # bounds are 2 for explicit Euler, 2.8 for RK4; the margin keeps the envelope at 0.05 mm)
@@ -725,7 +729,7 @@ def _limits(s: Setup, reach: dict[str, bool] | None = None, hard: bool | None = 
     if slope > 0.0:
         zones.append((BAND_STEP[s.integrator] * reduced / slope,
                       f"the force-velocity slope near rest ({slope:.0f} N s/m within {half_width * 1e3:.0f} mm/s)"))
-    return working, stops, zones
+    return working, stops, zones, far
 
 
 def timestep_limit(s: Setup) -> tuple[float, str]:
@@ -736,7 +740,7 @@ def timestep_limit(s: Setup) -> tuple[float, str]:
 
 def fine_limit(s: Setup) -> tuple[float, str]:
     """(largest step while an end stop or the rim may be engaged, what sets it)."""
-    working, stops, zones = _limits(s)
+    working, stops, zones, _ = _limits(s)
     return min(working + stops + zones)
 
 
@@ -758,8 +762,7 @@ def choose_timestep(s: Setup) -> Setup:
     within it); and the number of finer steps it is cut into where the drop engine refines
     (``substeps``). The output is the step's grid decimated to the logger's rate: a step that
     did not divide its interval would log at another rate than the one asked for."""
-    reach = reachable(s)
-    working, stops, zones = _limits(s, reach)
+    working, stops, zones, far = _limits(s)
     limit, what = min(working)
     interval = 1.0 / s.sample_rate
     if s.timestep > 0.0:
@@ -786,12 +789,7 @@ def choose_timestep(s: Setup) -> Setup:
     if substeps > 1 and fine < STEP_LADDER[-1]:
         raise ConfigError(f"solver.timestep_s: this configuration needs a step below {_round_down(fine)} s "
                           f"while a stop acts ({what}); check its rates and masses")
-    # the other zones (touchdown, lift-off, the band, fast sliding) away from the stops: stepped
-    # as for the same fork with every stop and the rim out of reach, at the steps per period of
-    # a fork that can reach them (such a fork lands hard: the tire's damping force jumps by
-    # B v at touchdown; one random S10 fork was 0.049 mm off the reference at 12 steps per
-    # period, 0.006 mm at 24)
-    _, far, _ = _limits(s, OUT_OF_REACH, hard=reach["compression_stop"] or reach["rim"])
+    # the other zones (touchdown, lift-off, the band, fast sliding) away from the stops
     contact = min(substeps, _cuts(step, min(working + far + zones)[0]))
     return replace(s, timestep=step, substeps=substeps, contact_substeps=contact)
 
