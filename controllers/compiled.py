@@ -97,7 +97,9 @@ _META = np.zeros(META_WIDTH, dtype=np.int64)  # slots in use (high-water mark), 
 _META[M_INTS], _META[M_FLOATS] = _INTS.ctypes.data, _FLOATS.ctypes.data
 REGISTRY_SYMBOL = "mtbmj_fork_registry_v1"
 _OWNED = np.zeros(SLOTS, dtype=bool)  # slot held by a live CompiledForkCallback (served or retired)
-_REGISTRY_LOCK = threading.Lock()
+# re-entrant: a callback collected by the garbage collector frees its slot (weakref.finalize)
+# wherever the collector runs, also inside a registry operation of this thread
+_REGISTRY_LOCK = threading.RLock()
 
 MJDATA_FIELDS = ("qpos", "qvel", "act", "ctrl", "qfrc_applied")
 

@@ -74,7 +74,9 @@ _META[M_INTS], _META[M_FLOATS] = _INTS.ctypes.data, _FLOATS.ctypes.data
 _META[M_LAW_INTS], _META[M_LAW_FLOATS] = _LAW_INTS.ctypes.data, _LAW_FLOATS.ctypes.data
 REGISTRY_SYMBOL = "mtbmj_rolling_registry_v1"
 _OWNED = np.zeros(SLOTS, dtype=bool)
-_REGISTRY_LOCK = threading.Lock()
+# re-entrant: a callback collected by the garbage collector frees its slot (weakref.finalize)
+# wherever the collector runs, also inside a registry operation of this thread
+_REGISTRY_LOCK = threading.RLock()
 
 
 class UnsupportedRolling(TypeError):

@@ -431,3 +431,30 @@ print(json.dumps(out))
     assert np.array_equal(python[2], compiled_run.raw["fork_force_N"])
     assert np.array_equal(python[3], compiled_run.raw["tire_force_N"])
     assert np.max(np.abs(python[4] - compiled_run.signals["fork_mm"])) < 1e-9
+
+
+def test_a_callback_collected_during_a_registry_operation_does_not_deadlock():
+    """The garbage collector may free a dead callback (its finalizer takes the registry lock)
+    while this thread is inside a registry operation, holding that lock: a `mtbmj fit drop` in
+    CI hung for good on it. In a fresh process, with a timeout. (The rolling registry takes the
+    same re-entrant lock.)"""
+    script = """
+import gc
+import mtbmj
+from mtbmj import compose
+from mtbmj.controllers import compiled
+from mtbmj.drop import scene
+setup = compose.setup(mtbmj.load_config("S1"))
+model = scene.build(setup).model
+dead = compiled.CompiledForkCallback(model, setup.fork)
+slot = dead.slot
+cycle = [dead]
+cycle.append(cycle)  # only the cycle collector frees it
+del dead, cycle
+with compiled._REGISTRY_LOCK:  # as inside a callback's construction
+    gc.collect()  # runs the dead callback's finalizer, which takes the lock
+assert not compiled._OWNED[slot]
+print("done")
+"""
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and "done" in done.stdout, done.stderr
