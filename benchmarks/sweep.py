@@ -86,7 +86,7 @@ def phase_costs(vs, duration) -> dict:
         note("step_ms", t2 - t1)
         note("post_process_ms", t3 - t2)
         note("bare_rollout_ms", bare_rollout(vs, 1, duration)[0])
-        steps = int(round(np.mean([r.computed for r in runs])))
+        steps = int(round(np.mean([r.plan.computed for r in runs])))
         note("bare_same_steps_with_callback_ms", bare_rollout(vs, 1, duration, steps=steps, callback=True)[0])
         t4 = time.perf_counter()
         batch.run_batch_rollout(job)

@@ -140,7 +140,9 @@ class Stepping:
 
     ``columns`` are the sled and fork position and velocity columns of a recorded state row.
     Chunks are sized in simulated time; at the coarse step they start short after a refined
-    stretch (a cut discards the rest of a chunk) and double while none is cut.
+    stretch (a cut discards the rest of a chunk) and double while none is cut. ``computed`` and
+    ``refined`` count the MuJoCo steps and the refined output steps of the rollouts handed to
+    :meth:`keep` (a caller adds the fine steps that finish a switch's output step).
     """
 
     def __init__(self, setup: Setup, columns):
@@ -161,6 +163,8 @@ class Stepping:
         self.coarse_chunk = self.after_refined if self.stop_level > 1 else self.chunk
         self.fine = False
         self.phase = 0
+        self.computed = 0  # MuJoCo steps made (fine ones each counted), discarded ones included
+        self.refined = 0  # output steps made at a fine step
 
     @property
     def pending(self) -> bool:
@@ -194,6 +198,8 @@ class Stepping:
         within reach, and goes on at the stops' level."""
         n = len(states)
         level = self.substeps
+        self.computed += n if fine_states is None else len(fine_states)
+        self.refined += 0 if fine_states is None else n
         keep, switch, partial = n, False, None
         if self.stop_level > 1 and not self.fine:
             k = stop_index(previous, states, self.stop_columns, self.zones, self.setup.timestep)
@@ -295,8 +301,6 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
     plan = Stepping(setup, columns[:4])
     done = 0
     discarded = 0  # output steps computed past a tire-law switch or into a zone, and recomputed
-    refined = 0  # output steps made at the fine step
-    computed = 0  # MuJoCo steps made (fine ones each counted), discarded ones included
     messages: list[str] = []
     with installed(callback), _collected_warnings(messages):
         while done < steps:
@@ -304,11 +308,8 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
             current_phase, fine, level = plan.phase, plan.fine, plan.substeps
             if fine:
                 states, fine_states = fine_rollout(model, data, state[None, :], n, level)
-                computed += n * level
-                refined += n
             else:
                 states, fine_states = rollout.rollout(model, data, state[None, :], nstep=n)[0][0], None
-                computed += n
             keep, switch, partial = plan.keep(state, states, fine_states)
             discarded += n - keep
             if keep < n and (messages or _warning(data) is not None) and _steps_clean(state, states[:keep]):
@@ -327,7 +328,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
             if partial is not None:  # the switch fell inside an output step: finish it under the new law
                 at, left = partial
                 _, rest = fine_rollout(model, data, fine_states[at][None, :], 0, level, nstep=left)
-                computed += left
+                plan.computed += left
                 discarded -= 1  # that output step is made, not thrown away
                 record[done + 1, : len(columns)] = rest[-1, columns]
                 phase[done + 1] = plan.phase
@@ -345,9 +346,9 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
         fork_velocity=record[:, 3],
         friction_state=record[:, 4],
         tire_phase=phase,
-        info={"steps": steps, "steps_discarded": discarded, "steps_refined": refined, "substeps": substeps,
+        info={"steps": steps, "steps_discarded": discarded, "steps_refined": plan.refined, "substeps": substeps,
               "contact_substeps": plan.contact_level,
-              "steps_computed": computed, "callback_calls": callback.calls, "integrator": setup.integrator,
+              "steps_computed": plan.computed, "callback_calls": callback.calls, "integrator": setup.integrator,
               "timestep_s": setup.timestep, "contact_inverse_inertia_per_kg": sc.inverse_inertia},
     )
 

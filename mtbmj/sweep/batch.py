@@ -92,8 +92,6 @@ class _Run:
     phase: np.ndarray
     done: int = 0
     discarded: int = 0
-    computed: int = 0  # MuJoCo steps made (fine ones each counted), discarded ones included
-    refined: int = 0  # output steps made at a fine step
     failed: bool = False
     extra: dict = field(default_factory=dict)
     plan: engine_mujoco.Stepping | None = None
@@ -178,11 +176,6 @@ def _step_group(runs: list[_Run], datas, pool, spec) -> None:
             for r, states, fine_states in made:
                 start = r.record[r.done]
                 phase, level = r.plan.phase, r.plan.substeps
-                if fine_states is None:
-                    r.computed += len(states)
-                else:
-                    r.computed += len(fine_states)
-                    r.refined += len(states)
                 keep, switch, partial = r.plan.keep(start, states, fine_states)
                 kept = states[:keep]
                 if (not np.all(np.isfinite(kept)) or (keep and np.max(np.abs(kept[:, 1:3])) > MAX_DISPLACEMENT_M)
@@ -200,7 +193,7 @@ def _step_group(runs: list[_Run], datas, pool, spec) -> None:
                     at, left = partial
                     _, rest = engine_mujoco.fine_rollout(r.scene.model, datas[0], fine_states[at][None, :], 0,
                                                          level, nstep=left)
-                    r.computed += left
+                    r.plan.computed += left
                     if not np.all(np.isfinite(rest)):
                         r.failed = True
                         continue
@@ -230,9 +223,9 @@ def _trace(run: _Run) -> RawTrace:
         fork_velocity=record[:, iv.start + sc.fork_dof],
         friction_state=record[:, ia.start + run.callback.act_index] if model.na else np.zeros(run.steps + 1),
         tire_phase=run.phase,
-        info={"steps": run.steps, "steps_discarded": run.discarded, "steps_refined": run.refined,
+        info={"steps": run.steps, "steps_discarded": run.discarded, "steps_refined": run.plan.refined,
               "substeps": setup.substeps, "contact_substeps": run.plan.contact_level,
-              "steps_computed": run.computed, "integrator": setup.integrator,
+              "steps_computed": run.plan.computed, "integrator": setup.integrator,
               "timestep_s": setup.timestep, "contact_inverse_inertia_per_kg": sc.inverse_inertia},
     )
 
