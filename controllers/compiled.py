@@ -196,7 +196,7 @@ def flatten(law: ForkLaw) -> tuple[list[int], list[float]]:
         ints[I_FRICTION_AT] = put(f.stiffness, f.damping, f.elastic, inner.coulomb,
                                   getattr(inner, "breakaway", 0.0), getattr(inner, "viscous", 0.0),
                                   getattr(inner, "stiction_band", 0.0) or getattr(inner, "stribeck_velocity", 1.0),
-                                  getattr(inner, "exponent", 2.0), f.damping_velocity, 2.0)  # (last: unused)
+                                  getattr(inner, "exponent", 2.0), f.damping_velocity)
     elif kind is _friction.NoFriction:
         ints[I_FRICTION], ints[I_FRICTION_AT] = FR_NONE, put(0.0)
     elif kind is _friction.Coulomb:
@@ -356,6 +356,14 @@ def _say_compiling(what: str) -> None:
     COMPILE_LOG.info(f"compiling {what} for this machine (first run only; numba caches it)...")
 
 
+def _say_now_if_cold(timer: threading.Timer, what: str, dispatcher) -> None:
+    """With nothing in numba's cache for ``dispatcher`` (:func:`cold`), say at once that ``what``
+    compiles, instead of after ``timer``."""
+    if cold(dispatcher):
+        timer.cancel()
+        _say_compiling(what)
+
+
 def cold(dispatcher) -> bool:
     """True when numba's on-disk cache holds no compiled code for ``dispatcher`` that it can load
     (no index, or one written for other sources): it is about to compile. False when it can load,
@@ -372,9 +380,8 @@ def compiling(what: str, dispatcher=None):
     """Around code that may compile numba functions (``dispatcher``, if given, is checked with
     :func:`cold` to say so at once): see ``_notice``."""
     timer = _notice(what)
-    if dispatcher is not None and cold(dispatcher):
-        timer.cancel()
-        _say_compiling(what)
+    if dispatcher is not None:
+        _say_now_if_cold(timer, what, dispatcher)
     try:
         yield
     finally:
@@ -689,9 +696,7 @@ if _numba is not None:
             return builder.load(at)
         return _t.int64(_t.intp), codegen
 
-    if cold(fork_force):  # the dispatcher below compiles now: with nothing to load, say so at once
-        _compile_notice.cancel()
-        _say_compiling("the force laws")
+    _say_now_if_cold(_compile_notice, "the force laws", fork_force)  # the dispatcher below compiles now
 
     @_numba.cfunc(_t.void(_t.voidptr, _t.voidptr), cache=CACHE, error_model="numpy")
     def _dispatch(m, d):
