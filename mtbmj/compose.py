@@ -132,8 +132,9 @@ def _main_spring(c: Config) -> object:
     top = c.require("fork.spring.top_out_rate_N_per_mm", "needed by fork.spring.top_out = true") * N_PER_MM
     spring = law.TopOutSpring(main, top, preload)
     if spring.engagement >= travel * MM:
-        raise ConfigError("fork.spring.preload_N: the top-out spring would stay engaged over the whole travel "
-                          "(preload / top-out rate exceeds fork.travel_mm)")
+        raise ConfigError(f"fork.spring.preload_N / fork.travel_mm: the top-out spring would stay engaged over the "
+                          f"whole travel (preload {preload:g} N / top-out rate {top / N_PER_MM:g} N/mm = "
+                          f"{spring.engagement / MM:g} mm, not less than fork.travel_mm = {travel:g} mm)")
     return spring
 
 
@@ -148,8 +149,9 @@ def air_volume(c: Config) -> float:
     if tokens:
         volume -= tokens * c.require("fork.spring.token_volume_cm3", "needed by fork.spring.tokens") * CM3
         if volume <= 0.0:
-            raise ConfigError(f"fork.spring.tokens: {tokens:g} spacers fill the air chamber "
-                              f"(fork.spring.air_volume_cm3 = {c['fork.spring.air_volume_cm3']:g})")
+            raise ConfigError(f"fork.spring.tokens / fork.spring.air_volume_cm3: {tokens:g} spacers of "
+                              f"{c['fork.spring.token_volume_cm3']:g} cm3 fill the "
+                              f"{c['fork.spring.air_volume_cm3']:g} cm3 air chamber")
     return volume
 
 
@@ -158,9 +160,10 @@ def _air_spring(c: Config, travel_mm: float) -> object:
     full extension (the air's own preload) the way ``TopOutSpring`` carries a coil's preload."""
     why = "needed by fork.spring.model = air"
     gauge = c.require("fork.spring.air_pressure_psi", why)
-    if gauge * PSI <= -law.P_ATM:
-        raise ConfigError(f"fork.spring.air_pressure_psi: {gauge:g} psi gauge is at or below vacuum "
-                          f"({-law.P_ATM / PSI:.2f} psi gauge)")
+    if gauge < 0.0:
+        raise ConfigError(f"fork.spring.air_pressure_psi: {gauge:g} psi gauge is below the atmosphere's pressure "
+                          f"(a partial vacuum in the air chamber; {-law.P_ATM / PSI:.2f} psi gauge is none at all): "
+                          f"air forks are pumped above it, typically 50-150 psi")
     diameter = c.require("fork.spring.piston_diameter_mm", why) * MM
     area = math.pi * diameter * diameter / 4.0
     volume = air_volume(c)
@@ -192,8 +195,9 @@ def _air_spring(c: Config, travel_mm: float) -> object:
     spring = law.TopOutSpring(law.AirSpring(area, gauge * PSI, volume, index, negative, port * MM, travel, preload),
                               top, preload)
     if spring.engagement >= travel:
-        raise ConfigError("fork.spring.air_pressure_psi: the top-out spring would stay engaged over the whole travel "
-                          "(force at full extension / top-out rate exceeds fork.travel_mm)")
+        raise ConfigError(f"fork.spring.air_pressure_psi / fork.travel_mm: the top-out spring would stay engaged over "
+                          f"the whole travel (force at full extension {preload:.0f} N / top-out rate "
+                          f"{top / N_PER_MM:g} N/mm exceeds fork.travel_mm = {travel_mm:g} mm)")
     return spring
 
 

@@ -9,6 +9,13 @@ failed or killed run leaves the old one untouched. Files and folders are created
 0666/0777 less the user's umask, like any other program's output. A folder left behind by a
 killed run (``.NAME.new-PID-*`` or ``.NAME.old-PID-*`` whose process is gone) is removed by the
 next write to the same target.
+
+An output folder is mtbmj's when it says so: every folder written here holds a record,
+``.mtbmj-output.json``, of the command that wrote it and every file it wrote. A folder is replaced
+only when it is empty or when each entry in it is named in that record (or is the folder's lock
+file); a single file of anything else, whatever its name, means refusal. Every writer takes the
+folder's lock (:func:`claim`, a POSIX lock on ``OUT/.lock`` that names its holder), so two mtbmj
+runs never write into one folder at once.
 """
 from __future__ import annotations
 
@@ -19,18 +26,21 @@ import io
 import json
 import os
 import shutil
+import threading
 import uuid
 from pathlib import Path
 from typing import Iterable, Iterator, Mapping
 
 import numpy as np
 
-from mtbmj.errors import MtbmjError
+from mtbmj.errors import MtbmjError, check_interrupt
 
-# An existing folder is replaced only when it is empty or holds an mtbmj result, recognised by
-# the summary file each command writes (or a sweep's journal): never a folder of other files.
-RESULT_FILES = ("manifest.json", "sweep.json", "fit.json", "telemetry.json", "study_summary.json",
-                "validation_summary.json", "sensitivity.json", "journal", ".lock")
+# The record of what mtbmj wrote into a folder, and the folder's lock file: an existing folder is
+# replaced only when it is empty or every entry in it is named in its record (never by file names).
+RECORD = ".mtbmj-output.json"
+RECORD_FORMAT = "mtbmj output folder"
+LOCK = ".lock"
+BOOKKEEPING = (LOCK, RECORD)  # what every output folder holds besides the result itself
 
 CSV_CHUNK_ROWS = 20000  # rows formatted at a time when a CSV is streamed to its file
 _RENAME_EXCHANGE = 2
@@ -109,19 +119,20 @@ def write_file_atomically(path: str | Path, content: bytes) -> Path:
     return path
 
 
-def check_target(out_dir: str | Path) -> Path:
+def check_target(out_dir: str | Path, inputs: Iterable[str | Path] = ()) -> Path:
     """Refuse, before any work, an output folder that cannot be written: a file in its place, a
-    parent where no folder can be made, the current directory, or a folder of other files (see
-    :data:`RESULT_FILES`). Creates nothing that stays."""
+    parent where no folder can be made, the current directory, a folder holding anything mtbmj
+    did not write (see :func:`foreign_entry`), or one holding any of ``inputs`` (the files the
+    command reads). Creates nothing that stays."""
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise MtbmjError(f"{out}: exists and is not a directory; choose another --out")
     here = Path.cwd().resolve()
     if out.resolve() == here or out.resolve() in here.parents:
         raise MtbmjError(f"{out}: is the current directory or holds it; choose another --out")
-    if out.is_dir() and not any((out / name).exists() for name in RESULT_FILES) and any(out.iterdir()):
-        raise MtbmjError(f"{out}: holds files that are not an mtbmj result, which writing here would replace; "
-                         f"choose another --out")
+    _check_inputs(out, inputs)
+    if out.is_dir():
+        _refuse_foreign(out)
     parent = _existing_ancestor(out.parent)
     if not parent.is_dir():
         raise MtbmjError(f"{parent}: is not a directory, so {out} cannot be made")
@@ -134,38 +145,290 @@ def check_target(out_dir: str | Path) -> Path:
     return out
 
 
+def _check_inputs(out: Path, inputs: Iterable[str | Path]) -> None:
+    root = out.resolve()
+    for item in inputs:
+        path = Path(item).resolve()
+        if path == root or root in path.parents:
+            raise MtbmjError(f"{out}: holds {item}, which this command reads; replacing the folder would remove "
+                             f"it: choose another --out")
+
+
+def read_record(out: Path) -> dict | None:
+    """The record of what mtbmj wrote into ``out`` (``None``: none, or not one of ours)."""
+    try:
+        record = json.loads((out / RECORD).read_text())
+    except (OSError, ValueError, UnicodeDecodeError):
+        return None
+    if (not isinstance(record, dict) or record.get("format") != RECORD_FORMAT
+            or not isinstance(record.get("files"), list) or not isinstance(record.get("folders", []), list)):
+        return None
+    return record
+
+
+def foreign_entry(out: str | Path) -> str | None:
+    """The first entry of the folder ``out`` (a path relative to it) that mtbmj did not write,
+    or ``None`` when every entry is named in its record: the files the record lists, the folders
+    that hold them, the folders it owns whole (a sweep's journal), the record itself and the lock
+    file. Names do not count: a user's ``manifest.json`` is as foreign as their ``thesis.tex``."""
+    out = Path(out)
+    record = read_record(out) or {"files": [], "folders": []}
+    files = {str(f) for f in record["files"]} | {RECORD, LOCK}
+    folders = {str(f).rstrip("/") for f in record.get("folders", [])}
+    parents = {str(Path(f).parent) for f in files} | {str(p) for f in files for p in Path(f).parents}
+    for root, dirs, names in os.walk(out):
+        rel_root = Path(root).relative_to(out)
+        for name in sorted(dirs):
+            rel = str(rel_root / name)
+            if Path(root, name).is_symlink():
+                if rel not in files:
+                    return rel
+                dirs.remove(name)
+            elif rel in folders or any(rel.startswith(f + "/") for f in folders):
+                dirs.remove(name)
+            elif rel not in parents:
+                return rel
+        for name in sorted(names):
+            rel = str(rel_root / name)
+            if rel == LOCK and not _is_our_lock(out / LOCK):
+                return rel
+            if rel_root == Path(".") and name.startswith(f".{RECORD}.new-"):
+                continue  # a record being replaced (or left by a killed run)
+            if rel not in files and not any(rel.startswith(f + "/") for f in folders):
+                return rel
+    return None
+
+
+def _is_our_lock(path: Path) -> bool:
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(64)
+    except OSError:
+        return False
+    return head == b"" or head.startswith(b"mtbmj ")
+
+
+def _refuse_foreign(out: Path) -> None:
+    entry = foreign_entry(out)
+    if entry is not None:
+        raise MtbmjError(f"{out}: holds {entry}, which mtbmj did not write (it is not in {RECORD}); writing here "
+                         f"would replace it: choose another --out")
+
+
+class Claim:
+    """This process's hold on an output folder: its lock file open and locked (see :func:`claim`)."""
+
+    def __init__(self, out: Path, command: str):
+        self.out, self.command = out, command
+        self.fd: int | None = None
+        self.made = False  # the claim created the folder (removed again if nothing was written)
+        self.written = False  # a result was swapped in
+        self.folders: set[str] = set()
+        self.depth = 0
+
+
+_CLAIMS: dict[str, Claim] = {}
+_CLAIMS_LOCK = threading.RLock()
+
+
+@contextlib.contextmanager
+def claim(out_dir: str | Path, command: str = "python", folders: Iterable[str] = (),
+          inputs: Iterable[str | Path] = ()) -> Iterator[Claim]:
+    """``with claim(out, "drop"):`` hold the folder ``out`` for one writer, before any work.
+
+    Checks the target (:func:`check_target`), makes the folder if it is missing, and takes an
+    exclusive POSIX lock (``lockf``) on ``OUT/.lock``, writing the holder (command and process) into
+    it; a second writer, in this process or another, is refused at once with one line naming the
+    holder. The lock belongs to the process: forked workers do not hold it, and it goes when the
+    process does, even killed. Results staged while the claim is held carry the same lock file
+    (a hard link), so the lock holds across the swap. ``folders`` are sub-folders the holder
+    writes piece by piece before its result (a sweep's journal): they are recorded as mtbmj's at
+    once, so an interrupted run can be resumed. A folder the claim made and left without a
+    result is removed. Claims nest in one process (the command line's, then the writer's)."""
+    out = Path(out_dir)
+    key = os.path.abspath(out)
+    with _CLAIMS_LOCK:
+        held = _CLAIMS.get(key)
+    if held is not None:
+        if folders:
+            held.folders |= set(folders)
+            _write_record(out, held.command, _record_files(out), held.folders)
+        held.depth += 1
+        try:
+            yield held
+        finally:
+            held.depth -= 1
+        return
+    import fcntl
+
+    if out.exists() and not out.is_dir():
+        raise MtbmjError(f"{out}: exists and is not a directory; choose another --out")
+    _check_inputs(out, inputs)
+    if (out / LOCK).is_file():
+        _refuse_if_locked(out)
+    check_target(out)
+    held = Claim(out, command)
+    created = _missing_ancestors(out)
+    try:
+        held.made = not out.exists()
+        out.mkdir(parents=True, exist_ok=True)
+        held.fd = os.open(out / LOCK, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o666)
+    except OSError as exc:
+        _release(held, created)
+        raise MtbmjError(f"{out}: cannot write output here ({exc.strerror})") from None
+    try:
+        fcntl.lockf(held.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        holder = _holder(out / LOCK)
+        os.close(held.fd)
+        held.fd = None
+        raise MtbmjError(f"{out}: another mtbmj run{holder} is writing to this folder; wait for it or choose "
+                         f"another --out") from None
+    try:
+        os.ftruncate(held.fd, 0)
+        os.pwrite(held.fd, f"mtbmj {command} (process {os.getpid()})\n".encode(), 0)
+        held.folders = set(folders)
+        if held.folders:  # recorded now: a run stopped before its result can be resumed
+            _write_record(out, command, _record_files(out), held.folders | set((read_record(out) or {}).get("folders", [])))
+    except OSError as exc:
+        _release(held, created)
+        raise MtbmjError(f"{out}: cannot write output here ({exc.strerror})") from None
+    except BaseException:
+        _release(held, created)
+        raise
+    with _CLAIMS_LOCK:
+        _CLAIMS[key] = held
+    try:
+        yield held
+    finally:
+        with _CLAIMS_LOCK:
+            _CLAIMS.pop(key, None)
+        _release(held, created)
+
+
+def _refuse_if_locked(out: Path) -> None:
+    """Refuse at once when another process holds ``OUT/.lock`` (before asking whose the files are)."""
+    import fcntl
+
+    try:
+        fd = os.open(out / LOCK, os.O_RDWR | getattr(os, "O_CLOEXEC", 0))
+    except OSError:
+        return
+    try:
+        fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        raise MtbmjError(f"{out}: another mtbmj run{_holder(out / LOCK)} is writing to this folder; wait for it "
+                         f"or choose another --out") from None
+    finally:
+        os.close(fd)  # also releases the probe's lock
+
+
+def _holder(path: Path) -> str:
+    try:
+        text = path.read_bytes()[:200].decode("utf-8", "replace").strip()
+    except OSError:
+        return ""
+    if not text.startswith("mtbmj "):
+        return ""
+    return " (" + text.replace("\n", " ").replace("\r", " ") + ")"
+
+
+def _release(held: Claim, created: list[Path]) -> None:
+    out = held.out
+    try:
+        if held.made and not held.written and _only_bookkeeping(out, held.folders):
+            shutil.rmtree(out, ignore_errors=True)
+            _remove_empty(created[1:] if created and created[0] == Path(os.path.abspath(out)) else created)
+    finally:
+        if held.fd is not None:
+            os.close(held.fd)  # releases the lock
+            held.fd = None
+
+
+def _only_bookkeeping(out: Path, folders: set[str]) -> bool:
+    """``out`` holds nothing but the record, the lock and empty owned folders."""
+    try:
+        for entry in out.iterdir():
+            if entry.name in (RECORD, LOCK):
+                continue
+            if entry.name in folders and entry.is_dir() and not any(entry.iterdir()):
+                continue
+            return False
+    except OSError:
+        return False
+    return True
+
+
+def _record_files(out: Path) -> list[str]:
+    """What a record names in ``out`` as it is now (used only on folders already known to be ours)."""
+    record = read_record(out)
+    return [f for f in (record or {}).get("files", []) if (out / f).exists()] + [LOCK]
+
+
+def _record_bytes(command: str, files: Iterable[str], folders: Iterable[str]) -> bytes:
+    from mtbmj._package import __version__
+
+    return json_bytes({"format": RECORD_FORMAT, "command": command, "mtbmj": __version__,
+                       "files": sorted(set(files) - {RECORD}), "folders": sorted(set(folders))})
+
+
+def _write_record(out: Path, command: str, files: Iterable[str], folders: Iterable[str]) -> None:
+    """Replace ``OUT/.mtbmj-output.json`` (a small file: written in one call, then renamed)."""
+    tmp = out / f".{RECORD}.new-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(_record_bytes(command, files, folders))
+        os.replace(tmp, out / RECORD)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def _stage_files(stage: Path) -> list[str]:
+    names = []
+    for root, _dirs, files in os.walk(stage):
+        for name in files:
+            names.append(str((Path(root) / name).relative_to(stage)))
+    return names
+
+
 @contextlib.contextmanager
 def staged_folder(out_dir: str | Path, keep: Iterable[str] = ()) -> Iterator[Path]:
     """``with staged_folder(out) as stage:`` write the result into ``stage``; when the block ends
     without an error the folder ``out`` is replaced by it in one step (see the module doc).
     ``keep`` names entries of an existing ``out`` carried into the new folder (hard links, so
-    a sweep's journal and lock file stay the same files)."""
-    out = check_target(out_dir)
-    created = _missing_ancestors(out.parent)
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
+    a sweep's journal stays the same files); the lock file always is. The folder is claimed
+    (:func:`claim`) for the time it takes, unless this process holds it already; just before the
+    swap it is checked again, so a file someone put there meanwhile is never removed."""
+    out = Path(out_dir)
+    keep = tuple(dict.fromkeys(tuple(keep) + (LOCK,)))
+    with claim(out) as held:
         _clear_stale(out)
-        stage = out.parent / f".{out.name}.new-{os.getpid()}-{uuid.uuid4().hex[:8]}"
-        os.mkdir(stage, 0o777)
-    except OSError as exc:
-        _remove_empty(created)
-        raise MtbmjError(f"{out}: cannot write results ({exc.strerror})") from None
-    try:
-        if out.is_dir():
+        try:
+            stage = out.parent / f".{out.name}.new-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+            os.mkdir(stage, 0o777)
+        except OSError as exc:
+            raise MtbmjError(f"{out}: cannot write results ({exc.strerror})") from None
+        try:
             for name in keep:
                 if (out / name).exists():
                     _link_tree(out / name, stage / name)
-        yield stage
-        fsync_dir(stage)
-        _swap_into_place(stage, out)
-    except OSError as exc:
-        shutil.rmtree(stage, ignore_errors=True)
-        _remove_empty(created)
-        raise MtbmjError(f"{out}: cannot write results ({exc.strerror or exc})") from None
-    except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
-        _remove_empty(created)
-        raise
+            yield stage
+            kept_folders = {name for name in keep if (stage / name).is_dir()}
+            write_file(stage / RECORD, _record_bytes(held.command, _stage_files(stage), kept_folders))
+            fsync_dir(stage)
+            check_interrupt()
+            _refuse_foreign(out)
+            _swap_into_place(stage, out)
+            held.written = True
+        except OSError as exc:
+            shutil.rmtree(stage, ignore_errors=True)
+            raise MtbmjError(f"{out}: cannot write results ({exc.strerror or exc})") from None
+        except BaseException:
+            shutil.rmtree(stage, ignore_errors=True)
+            raise
 
 
 def write_atomically(out_dir: str | Path, files: Mapping[str, bytes], keep: Iterable[str] = ()) -> list[Path]:

@@ -5,7 +5,9 @@ pool with :func:`process_pool`. Each worker first arranges to exit when its pare
 when the parent is killed with SIGKILL and can clean nothing up: on Linux the kernel's
 parent-death signal (``prctl(PR_SET_PDEATHSIG, SIGKILL)``), elsewhere a watchdog thread that
 notices the worker has been re-parented. So no orphan keeps computing, holding memory and the
-caller's pipes. Ctrl-C is unchanged: the workers get SIGINT with the rest of the process group.
+caller's pipes. Workers ignore SIGINT, which a terminal's Ctrl-C sends to the whole process group:
+the parent alone reports the interrupt and ends them (:meth:`Pool.terminate`, which leaving a
+``with process_pool(...)`` block on an exception does), so no worker prints a traceback of its own.
 """
 from __future__ import annotations
 
@@ -42,17 +44,44 @@ def exit_with_parent(parent: int) -> None:
 
 
 def _start_worker(parent: int, initializer: Callable | None, initargs: tuple) -> None:
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to report
     exit_with_parent(parent)
     if initializer is not None:
         initializer(*initargs)
 
 
+class Pool(ProcessPoolExecutor):
+    """A ``ProcessPoolExecutor`` whose workers exit with this process and ignore Ctrl-C. Leaving
+    its ``with`` block on an exception (an interrupt, an error) ends the workers at once instead
+    of waiting for the tasks they are running."""
+
+    def terminate(self) -> None:
+        """Kill the workers and drop the queued tasks; returns without waiting for them."""
+        for process in list((getattr(self, "_processes", None) or {}).values()):
+            try:
+                process.kill()
+            except (OSError, ValueError, AttributeError):
+                pass
+        self.shutdown(wait=False, cancel_futures=True)
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is not None:
+            self.terminate()
+            return False
+        return super().__exit__(exc_type, exc, tb)
+
+
 def process_pool(workers: int, initializer: Callable | None = None, initargs: tuple = (),
-                 mp_context=None) -> ProcessPoolExecutor:
-    """A ``ProcessPoolExecutor`` of ``workers`` processes that exit with this one; ``initializer``
-    (a top-level function) runs in each worker after that is arranged.
+                 mp_context=None) -> Pool:
+    """A :class:`Pool` of ``workers`` processes that exit with this one; ``initializer``
+    (a top-level function) runs in each worker after that is arranged. The only way the package
+    makes a process pool (``tests/test_reliability.py`` fails on any other).
 
     Call it from the main thread: the parent-death signal follows the thread that starts the
     workers."""
-    return ProcessPoolExecutor(max_workers=workers, mp_context=mp_context, initializer=_start_worker,
-                               initargs=(os.getpid(), initializer, initargs))
+    if workers < 1:
+        raise ValueError(f"workers: must be at least 1, got {workers}")
+    return Pool(max_workers=workers, mp_context=mp_context, initializer=_start_worker,
+                initargs=(os.getpid(), initializer, initargs))

@@ -186,6 +186,8 @@ def test_mujoco_matches_the_reference_across_pressures_and_spacers(gauge, tokens
 # ------------------------------------------------------------------------------------- refusals
 @pytest.mark.parametrize("overrides,key", [
     ({"fork.spring.air_pressure_psi": -14.7}, "fork.spring.air_pressure_psi"),  # at vacuum (-14.696 psi)
+    ({"fork.spring.air_pressure_psi": -14.6}, "fork.spring.air_pressure_psi"),  # a near-vacuum, not a fork setting
+    ({"fork.spring.air_pressure_psi": -0.5}, "fork.spring.air_pressure_psi"),
     ({"fork.spring.air_pressure_psi": -30.0}, "fork.spring.air_pressure_psi"),
     ({"fork.spring.tokens": 19.0}, "fork.spring.tokens"),  # 19 x 8 cm3 > 150 cm3
     ({"fork.spring.tokens": 1.5}, "fork.spring.tokens"),

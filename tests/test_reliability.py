@@ -3,6 +3,7 @@ output folders appear at once (also under SIGKILL mid-write); workers die with t
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import stat
 import subprocess
@@ -74,6 +75,7 @@ HOLDER = textwrap.dedent("""
     import fcntl, os, sys, time
     fd = os.open(sys.argv[1], os.O_RDWR | os.O_CREAT)
     fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    os.write(fd, f"mtbmj sweep (process {os.getpid()})\\n".encode())  # what a running sweep writes there
     print("locked", flush=True)
     time.sleep(60)
 """)
@@ -88,7 +90,7 @@ def test_one_sweep_per_out_folder(tmp_path, capsys):
     try:
         assert holder.stdout.readline().strip() == "locked"
         one_line(capsys, ["sweep", "S12", "--vary", f"{PRESET_RATE}=150:300:2", "--duration", "0.05", "--out", out,
-                          "--quiet"], "another sweep is writing to this folder")
+                          "--quiet"], "another mtbmj run (mtbmj sweep (process", "is writing to this folder")
         assert sorted(p.name for p in out.iterdir()) == [".lock"]
     finally:
         holder.kill()
@@ -123,7 +125,8 @@ def test_a_full_disk_at_the_sweep_table_is_one_line_and_keeps_the_journal(tmp_pa
     out = tmp_path / "sw"
     one_line(capsys, ["sweep", "S12", "--vary", f"{PRESET_RATE}=150:300:2", "--duration", "0.05", "--workers", "1",
                       "--out", out, "--quiet"], "No space left on device")
-    assert sorted(p.name for p in out.iterdir()) == [".lock", "journal"]  # resumable
+    assert sorted(p.name for p in out.iterdir()) == [".lock", output.RECORD, "journal"]  # resumable
+    assert output.read_record(out)["folders"] == ["journal"]
     assert [p.name for p in tmp_path.iterdir()] == ["sw"]
 
 
@@ -271,11 +274,16 @@ def test_presets_into_a_closed_pipe_is_quiet(tmp_path):
 def test_overwriting_a_result_leaves_only_the_new_one(tmp_path):
     out = tmp_path / "run"
     assert main(["drop", "S1", "--duration", "0.2", "--quiet", "--out", str(out)]) == 0
-    (out / "stray.txt").write_text("from before\n")
+    (out / "results").mkdir()
+    (out / "results" / "stray.txt").write_text("a file of the user's, put into the result\n")
+    assert main(["drop", "S12", "--duration", "0.2", "--quiet", "--out", str(out)]) == 2  # never removed
+    assert (out / "results" / "stray.txt").exists() and '"name": "S1"' in (out / "manifest.json").read_text()
+    shutil.rmtree(out / "results")
     assert main(["drop", "S12", "--duration", "0.2", "--quiet", "--out", str(out)]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["config.toml", "manifest.json", "summary.json",
-                                                     "timeseries.csv", "timeseries_raw.csv"]
+    assert sorted(p.name for p in out.iterdir()) == [".lock", output.RECORD, "config.toml", "manifest.json",
+                                                     "summary.json", "timeseries.csv", "timeseries_raw.csv"]
     assert '"name": "S12"' in (out / "manifest.json").read_text()
+    assert output.read_record(out)["command"] == "drop"
     assert [p.name for p in tmp_path.iterdir()] == ["run"]
 
 
@@ -283,9 +291,9 @@ def test_a_folder_of_other_files_or_the_current_directory_is_not_replaced(tmp_pa
     mine = tmp_path / "mine"
     mine.mkdir()
     (mine / "thesis.tex").write_text("years of work\n")
-    one_line(capsys, ["drop", "S12", "--duration", "0.05", "--out", mine], "not an mtbmj result")
+    one_line(capsys, ["drop", "S12", "--duration", "0.05", "--out", mine], "thesis.tex", "mtbmj did not write")
     one_line(capsys, ["sweep", "S12", "--vary", f"{PRESET_RATE}=150:300:2", "--out", mine, "--quiet"],
-             "not an mtbmj result")
+             "thesis.tex", "mtbmj did not write")
     assert [p.name for p in mine.iterdir()] == ["thesis.tex"]
     monkeypatch.chdir(mine)
     one_line(capsys, ["drop", "S12", "--duration", "0.05", "--out", "."], "current directory")
@@ -320,9 +328,11 @@ def test_a_failed_write_keeps_the_old_folder_whole(tmp_path, monkeypatch):
         return real(path, content)
 
     monkeypatch.setattr(output, "write_file", failing)
+    record = (out / output.RECORD).read_bytes()
     with pytest.raises(MtbmjError, match="No space left"):
         output.write_atomically(out, {"a": b"new a\n", "c": b"new c\n"})
-    assert {p.name: p.read_text() for p in out.iterdir()} == {"a": "old a\n", "manifest.json": "old b\n"}
+    assert {p.name: p.read_text() for p in out.iterdir() if p.name != ".lock"} == \
+        {"a": "old a\n", "manifest.json": "old b\n", output.RECORD: record.decode()}
     assert [p.name for p in tmp_path.iterdir()] == ["o"]
 
 
@@ -354,7 +364,7 @@ def test_sigkill_mid_write_leaves_the_old_folder_or_the_new_one(tmp_path):
         proc.wait()
         proc.stdout.close()
         names = sorted(p.name for p in out.iterdir())
-        assert names == ["manifest.json"] + [f"part{i}.bin" for i in range(6)] + ["sub"], names
+        assert names == [".lock", output.RECORD, "manifest.json"] + [f"part{i}.bin" for i in range(6)] + ["sub"], names
         tags = {(out / f"part{i}.bin").read_bytes().split(b"|")[0] for i in range(6)}
         tags |= {(out / "sub" / "last.txt").read_bytes(), (out / "manifest.json").read_bytes()}
         assert len(tags) == 1, tags  # never a mix of two versions
@@ -470,4 +480,5 @@ def test_workers_die_with_a_killed_command(tmp_path, command):
     proc.stdout.close()
     proc.stderr.close()
     if command[0] != "sweep":  # (a sweep keeps its journal for --resume)
-        assert not (tmp_path / "st").exists()
+        # the folder claimed before the work holds nothing but its lock: no result, no part of one
+        assert not (tmp_path / "st").exists() or [p.name for p in (tmp_path / "st").iterdir()] == [".lock"]

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mtbmj import output
 from mtbmj.drop.run import run_drop
 from mtbmj.errors import MtbmjError
 from mtbmj.validation import sled_data
@@ -210,7 +211,7 @@ def test_bad_input_is_one_line(tmp_path, example, case):
 def test_run_validation_writes_every_file(tmp_path, validation):
     assert validation.configs == ["S11", "S12", "S14"]
     written = validation.write(tmp_path / "out")
-    assert {p.name for p in written} == FILES == set(os.listdir(tmp_path / "out"))
+    assert {p.name for p in written} == FILES == set(os.listdir(tmp_path / "out")) - set(output.BOOKKEEPING)
     summary = json.loads((tmp_path / "out" / "validation_summary.json").read_text())
     assert summary["record"]["synthetic"] and set(summary["configs"]) == {"S11", "S12", "S14"}
     rows = (tmp_path / "out" / "validation_metrics.csv").read_text().splitlines()

@@ -72,9 +72,12 @@ def _run_all(jobs, workers, progress):
             results.append(result)
             if progress is not None:
                 progress(f"[{done}/{len(jobs)}] {result.name} {result.engine}: {result.wall_time_s:.2f} s")
-    finally:
+    except BaseException:
         if pool is not None:
-            pool.shutdown(cancel_futures=True)
+            pool.terminate()  # an interrupt or an error: the workers end now
+        raise
+    if pool is not None:
+        pool.shutdown(cancel_futures=True)
     return results
 
 

@@ -1,6 +1,6 @@
 """``python -m mtbmj.cli ...`` runs the ``mtbmj`` command."""
 import sys
 
-from mtbmj.cli import main
+from mtbmj.cli._entry import main
 
 sys.exit(main())

@@ -9,6 +9,7 @@ import os
 import sys
 import time
 import warnings
+from pathlib import Path
 
 from mtbmj.config import parse_assignment
 from mtbmj.errors import MtbmjError
@@ -117,25 +118,101 @@ def _note(message, category, filename, lineno, file=None, line=None) -> None:
     print(f"mtbmj: note: {message}", file=sys.stderr)
 
 
+def add_out(p, default: str, what: str = "output directory") -> None:
+    """``--out DIR`` for a command that writes a folder: the command line claims the folder
+    before the work starts (``mtbmj.output.claim``: it must be empty or mtbmj's, hold none of
+    the command's inputs, and no other mtbmj run may be writing to it)."""
+    p.add_argument("--out", type=out_path, default=Path(default), help=f"{what} (default {default})")
+    p.set_defaults(out_folder=True)
+
+
+def out_path(text: str) -> Path:
+    """An ``--out`` name: refused when it holds a line break or another control character,
+    which would break every line that names it."""
+    if not text or any(ord(ch) < 32 or ord(ch) == 127 for ch in text):
+        shown = text.encode("unicode_escape").decode("ascii")
+        raise argparse.ArgumentTypeError(f"{shown!r}: an output name must be non-empty and hold no line break or "
+                                         f"control character")
+    return Path(text)
+
+
+def command_name(args) -> str:
+    """``drop``, ``fit spring``: the command as the user typed it, for the output folder's record."""
+    words = [getattr(args, "command", None) or "mtbmj"]
+    if isinstance(getattr(args, "kind", None), str):
+        words.append(args.kind)
+    return " ".join(words)
+
+
+def input_files(args) -> list[Path]:
+    """The existing files and folders a command was given (its positional arguments and options,
+    a telemetry comparison's run folders among them), which ``--out`` must not hold."""
+    found = []
+    for name, value in vars(args).items():
+        if name == "out" or callable(value):
+            continue
+        for item in value if isinstance(value, (list, tuple)) else [value]:
+            if isinstance(item, (str, Path)) and str(item) and "\n" not in str(item):
+                try:
+                    if Path(item).exists():
+                        found.append(Path(item))
+                except (OSError, ValueError):
+                    continue
+    return found
+
+
+def _run_claimed(args) -> int:
+    if not getattr(args, "out_folder", False):
+        return args.func(args)
+    from mtbmj import output
+
+    with output.claim(args.out, command_name(args), inputs=input_files(args)):
+        return args.func(args)
+
+
 def run(parser: argparse.ArgumentParser, argv=None) -> int:
-    """Parse and run a command: bad input is one line on stderr and exit status 2."""
+    """Parse and run a command: bad input is one line on stderr and exit status 2; Ctrl-C, at
+    any moment, the one line ``mtbmj: interrupted`` and exit status 130."""
+    from mtbmj.errors import check_interrupt, interrupt_handling, interrupted
+
     show_compile_notices()
+    try:
+        with interrupt_handling():
+            status = _run_parsed(parser, argv)
+            check_interrupt()  # an interrupt swallowed where Python could not raise it
+            return status
+    except KeyboardInterrupt as exc:  # (also one landing while the handling itself is set up or undone)
+        detail = f"; {exc.args[0]}" if exc.args and isinstance(exc.args[0], str) else ""
+        _report_line(f"mtbmj: interrupted{detail}")
+        return 130
+    except BaseException:
+        if interrupted():  # what an interrupt became on its way up (a C extension's failed import)
+            _report_line("mtbmj: interrupted")
+            return 130
+        raise
+
+
+def _report_line(line: str) -> None:
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
+
+
+def _run_parsed(parser: argparse.ArgumentParser, argv=None) -> int:
     try:
         args = parser.parse_args(argv)
         check_duration("--duration", getattr(args, "duration", None))
         with warnings.catch_warnings():
             warnings.simplefilter("error", RuntimeWarning)
             warnings.showwarning = _note  # restored with the filters when the command ends
-            return args.func(args)
+            return _run_claimed(args)
     except MtbmjError as exc:
         _report(str(exc))
         return EXIT_BAD_INPUT
     except RuntimeWarning as exc:
         _report(f"run diverged ({exc})")
         return EXIT_BAD_INPUT
-    except KeyboardInterrupt:
-        print("mtbmj: interrupted", file=sys.stderr)
-        return 130
     except BrokenPipeError:  # the reader went away (``mtbmj presets | head -1``): stop quietly
         _silence_stdout()
         return EXIT_BROKEN_PIPE
@@ -150,7 +227,11 @@ def run(parser: argparse.ArgumentParser, argv=None) -> int:
 
 def _report(message: str) -> None:
     """The one line on stderr: a line break in the message (from a file name or a value the
-    user gave) is shown escaped, so the report stays one line."""
+    user gave) is shown escaped, so the report stays one line. An error that an interrupt caused
+    (a worker's pool broken by it, a call it cut short) is reported as the interrupt."""
+    from mtbmj.errors import check_interrupt
+
+    check_interrupt()
     one = message.replace("\r", "\\r").replace("\n", "\\n")
     print(f"mtbmj: error: {one}", file=sys.stderr)
 

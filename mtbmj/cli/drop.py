@@ -6,7 +6,7 @@ import sys
 import time
 from pathlib import Path
 
-from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, Progress, add_run_options, overrides
+from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, Progress, add_out, add_run_options, overrides
 
 
 def cmd_drop(args) -> int:
@@ -72,14 +72,14 @@ def add_parser(sub) -> None:
     p = sub.add_parser("drop", help="run one configuration on one engine")
     p.add_argument("config", help="preset name (S1..S14, reference) or a TOML file")
     p.add_argument("--engine", choices=ENGINE_NAMES, default="mujoco", help=ENGINE_HELP)
-    p.add_argument("--out", type=Path, default=Path("out/drop"), help="output directory (default out/drop)")
+    add_out(p, "out/drop")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     add_run_options(p)
     p.set_defaults(func=cmd_drop)
 
     p = sub.add_parser("study", help="run S1-S14 on the engines (MuJoCo and the ODE reference by default), write "
                                      "figures and the difference table")
-    p.add_argument("--out", type=Path, default=Path("out/study"), help="output directory (default out/study)")
+    add_out(p, "out/study")
     p.add_argument("--presets", help="comma-separated subset, e.g. S1,S12")
     p.add_argument("--workers", type=int, help="processes (default: one per core)")
     p.add_argument("--engines", default="mujoco,ode",

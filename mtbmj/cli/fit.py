@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, intermixed  # noqa: F401
+from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, add_out, intermixed  # noqa: F401
 from mtbmj.errors import MtbmjError
 
 
@@ -91,6 +91,6 @@ def add_parser(sub) -> None:
                         "damper. Either one position per file for both adjusters (--clicks 0,6,12) or one "
                         "--clicks per file naming its adjusters: lsc, hsc, lsr, hsr (low/high-speed compression "
                         "and rebound) or c, r (one adjuster per stroke), e.g. --clicks lsc=4,hsc=2,r=6")
-    p.add_argument("--out", type=Path, default=Path("out/fit"), help="output directory (default out/fit)")
+    add_out(p, "out/fit")
     p.set_defaults(func=cmd_fit)
     intermixed(p)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from mtbmj.cli.common import out_path
+
 
 def add_parser(subparsers):
     """Add the ``render`` sub-command to an argparse sub-parser collection."""
@@ -13,7 +15,7 @@ def add_parser(subparsers):
                     "one): a run directory written by mtbmj drop/roll is replayed, a preset or TOML file is run "
                     "on MuJoCo first. The format follows the extension of --out: .gif, or .mp4 (H.264; the [video] extra).")
     p.add_argument("source", metavar="RUN_OR_CONFIG", help="run directory, preset name (S1..S14) or TOML file")
-    p.add_argument("--out", type=Path, default=Path("out/render.gif"), help="video file, .gif or .mp4 (default out/render.gif)")
+    p.add_argument("--out", type=out_path, default=Path("out/render.gif"), help="video file, .gif or .mp4 (default out/render.gif)")
     p.add_argument("--fps", type=float, default=30.0, help="frames per second of simulated time (default 30)")
     p.add_argument("--width", type=int, default=640, help="pixels (default 640)")
     p.add_argument("--height", type=int, default=480, help="pixels (default 480)")

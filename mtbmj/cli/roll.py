@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mtbmj.cli.common import Progress, overrides
+from mtbmj.cli.common import Progress, add_out, overrides
 
 
 def cmd_roll(args) -> int:
@@ -34,7 +34,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--head-angle", type=float, default=DEFAULT_HEAD_ANGLE_DEG,
                    help=f"head angle in degrees from the horizontal, in (45, 90] (default {DEFAULT_HEAD_ANGLE_DEG:g})")
     p.add_argument("--config", default="S12", help="preset or TOML file for the fork and tire (default S12)")
-    p.add_argument("--out", type=Path, default=Path("out/roll"), help="output directory (default out/roll)")
+    add_out(p, "out/roll")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a configuration key (repeatable)")
     p.add_argument("--duration", type=float, help="simulated time in s (default: to cross the feature and settle)")

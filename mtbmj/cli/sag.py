@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mtbmj.cli.common import overrides
+from mtbmj.cli.common import add_out, overrides
 
 
 def cmd_sag(args) -> int:
@@ -21,7 +21,7 @@ def add_parser(sub) -> None:
     p.add_argument("config", help="preset name (air120, S12, ...) or a TOML file")
     p.add_argument("--load-kg", type=float, required=True, help="mass the fork carries (on the sled: the body mass)")
     p.add_argument("--sag-percent", type=float, required=True, help="static sag in percent of the travel")
-    p.add_argument("--out", type=Path, default=Path("out/sag"), help="output directory (default out/sag)")
+    add_out(p, "out/sag")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a configuration key before solving, e.g. fork.spring.tokens=2 (repeatable)")
     p.set_defaults(func=cmd_sag)

@@ -1,10 +1,9 @@
 """``mtbmj sensitivity``: Sobol or Morris indices of drop outputs (SALib), run through the sweep."""
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
-from mtbmj.cli.common import overrides
+from mtbmj.cli.common import add_out, overrides
 from mtbmj.cli.sweep import add_shared_options, check_shared_options
 from mtbmj.errors import ConfigError
 
@@ -25,9 +24,8 @@ def cmd_sensitivity(args) -> int:
                                  base_overrides=overrides(args.set), workers=args.workers, backend=args.backend,
                                  scheduler=args.scheduler, resume=args.resume, progress=bar)
     except KeyboardInterrupt:
-        print(f"mtbmj: sensitivity interrupted; finished runs are journaled in {args.out / 'journal'}: "
-              f"continue with the same command and --resume", file=sys.stderr)
-        raise
+        raise KeyboardInterrupt(f"finished runs are journaled in {args.out / 'journal'}: continue with the same "
+                                f"command and --resume") from None
     print(f"sensitivity {args.config}: {result.line()}; wrote {len(result.files)} files to {args.out}")
     return 0
 
@@ -46,5 +44,5 @@ def add_parser(subparsers) -> None:
     p.add_argument("--samples", type=int, default=64,
                    help="base samples N: N(D+2) runs for Sobol, N(D+1) trajectories' runs for Morris (default 64)")
     p.add_argument("--levels", type=int, default=4, help="Morris grid levels (default 4)")
-    p.add_argument("--out", type=Path, default=Path("out/sensitivity"), help="output directory (default out/sensitivity)")
+    add_out(p, "out/sensitivity")
     p.set_defaults(func=cmd_sensitivity)

@@ -2,10 +2,9 @@
 the options it shares with ``mtbmj sensitivity``."""
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
-from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, overrides
+from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, add_out, overrides
 from mtbmj.errors import ConfigError
 
 
@@ -63,12 +62,16 @@ def cmd_sweep(args) -> int:
                            resume=args.resume, progress=bar, manifest_extra={"variants_from": how},
                            runner=args.runner, threads=args.threads, pool=pool)
     except KeyboardInterrupt:
-        print(f"mtbmj: sweep interrupted; finished variants are journaled in {args.out / 'journal'}: "
-              f"continue with the same command and --resume", file=sys.stderr)
-        raise
-    finally:
         if pool is not None:
-            pool.shutdown(wait=False, cancel_futures=True)
+            pool.terminate()
+        raise KeyboardInterrupt(f"finished variants are journaled in {args.out / 'journal'}: continue with the "
+                                f"same command and --resume") from None
+    except BaseException:
+        if pool is not None:
+            pool.terminate()
+        raise
+    if pool is not None:
+        pool.shutdown(wait=False, cancel_futures=True)
     print(f"sweep {args.config}: {result.line()}")
     return 0
 
@@ -100,7 +103,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--samples", type=int, metavar="N", help="N sampled variants in the --vary ranges")
     p.add_argument("--method", choices=("lhs", "sobol"), help="sampling: Latin hypercube (default) or Sobol")
     p.add_argument("--from-csv", type=Path, metavar="FILE", help="explicit variants: columns = configuration keys")
-    p.add_argument("--out", type=Path, default=Path("out/sweep"), help="output directory (default out/sweep)")
+    add_out(p, "out/sweep")
     p.add_argument("--traces", action="store_true", help="also write the histories to traces.h5")
     p.add_argument("--csv", action="store_true", help="also write the table as sweep.csv")
     p.add_argument("--batch-size", type=int, help="variants per journaled batch (default: automatic, <= 16)")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from mtbmj.cli.common import overrides
+from mtbmj.cli.common import out_path, overrides
 from mtbmj.errors import MtbmjError
 
 
@@ -15,6 +15,8 @@ def cmd_synth(args) -> int:
 
     if args.out.suffix.lower() not in (".csv", ".mat"):
         raise MtbmjError(f"--out {args.out}: the record file must end in .csv or .mat")
+    if args.seed < 0:
+        raise MtbmjError(f"--seed: must be 0 or more, got {args.seed}")
     if args.out.exists():
         raise MtbmjError(f"--out {args.out}: file exists; not overwriting it")
     config = resolve(args.config, overrides(args.set))
@@ -38,7 +40,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser("synth", help="write a synthetic dyno record (spring stroke or damper test) of a configuration")
     p.add_argument("kind", choices=("spring", "damper"))
     p.add_argument("config", help="preset name (air120, S12, ...) or a TOML file: the true fork")
-    p.add_argument("--out", type=Path, required=True, help="record file to write (.csv or .mat)")
+    p.add_argument("--out", type=out_path, required=True, help="record file to write (.csv or .mat)")
     p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a configuration key of the truth, e.g. fork.spring.air_pressure_psi=90 (repeatable)")

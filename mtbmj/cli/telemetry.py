@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from mtbmj import output
+from mtbmj.cli.common import add_out
 from mtbmj.ride import metrics as ride_metrics
 from mtbmj.ride import telemetry
 from mtbmj.errors import MtbmjError
@@ -44,7 +45,7 @@ def add_parser(subparsers):
     p.add_argument("sst", type=Path, metavar="FILE.SST", help="SST v3 recording, or 'example' for the shipped 00649.SST")
     p.add_argument("--compare", type=Path, nargs="+", action="extend", metavar="RUN_DIR",
                    help="run directories (mtbmj drop/roll --out) whose timeseries.csv fork_mm is compared")
-    p.add_argument("--out", type=Path, default=Path("out/telemetry"), help="output directory (default out/telemetry)")
+    add_out(p, "out/telemetry")
     p.add_argument("--threshold-mm-per-s", type=float, default=100.0,
                    help="high/low-speed split of the velocity histogram (default 100)")
     p.add_argument("--bin-percent", type=float, default=5.0, help="travel histogram bin width in %% of travel (default 5)")

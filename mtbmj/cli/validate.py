@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, intermixed  # noqa: F401
+from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, add_out, intermixed  # noqa: F401
 from mtbmj.config import parse_assignment, study_presets
 from mtbmj.errors import ConfigError
 
@@ -51,7 +51,7 @@ def add_parser(subparsers):
     p.add_argument("--reference", choices=("ode",),
                    help="use the ODE run of each configuration as the measurement (engine vs reference)")
     p.add_argument("--engine", choices=ENGINE_NAMES, default="mujoco", help="engine under test (default mujoco)")
-    p.add_argument("--out", type=Path, default=Path("out/validate"), help="output directory (default out/validate)")
+    add_out(p, "out/validate")
     p.add_argument("--sled-offset-mm", type=float, default=0.0,
                    help="sled reading at tread touch, subtracted (default 0: already zeroed)")
     p.add_argument("--fork-offset-mm", type=float, default=0.0,

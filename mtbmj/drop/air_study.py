@@ -4,7 +4,6 @@ style of the paper's Fig. 3."""
 from __future__ import annotations
 
 import os
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Callable, Mapping
 
@@ -16,6 +15,7 @@ from mtbmj.config import Config
 from mtbmj.drop.run import resolve
 from mtbmj.drop.study import _run, group_figure, png_bytes, table_markdown
 from mtbmj.validation import from_results
+from mtbmj.workers import process_pool
 
 SPACERS = (0, 1, 2, 3)
 PRESSURES_PSI = (75.0, 95.0)
@@ -59,9 +59,13 @@ def run_air_study(config: Config | str = "air120", overrides: Mapping | None = N
         compose.setup(c)  # every variant is valid before any runs
         configs.append(Config(name, c.values, c.sources))
     jobs = [(c, e, duration) for c in configs for e in ("ode", "mujoco")]
-    workers = workers or min(len(jobs), os.cpu_count() or 1)
+    if workers is not None and workers < 1:
+        from mtbmj.errors import ConfigError
+
+        raise ConfigError(f"--workers: must be at least 1, got {workers}")
+    workers = min(workers or os.cpu_count() or 1, len(jobs))
     results: dict[str, dict] = {c.name: {} for c in configs}
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    with process_pool(workers) as pool:
         for done, result in enumerate(pool.map(_run, jobs), 1):
             results[result.name][result.engine] = result
             if progress is not None:
@@ -70,11 +74,20 @@ def run_air_study(config: Config | str = "air120", overrides: Mapping | None = N
     return base, results, checks
 
 
-def static_sag_mm(config: Config) -> float:
-    """Fork compression (mm) where the spring carries the body's weight."""
+def static_sag_mm(config: Config) -> float | None:
+    """Fork compression (mm) where the spring carries the body's weight; ``None`` when the spring
+    cannot carry it anywhere in the travel (the fork would sit on its bumper)."""
     setup = compose.setup(config)
     weight = setup.body_mass * setup.gravity
-    return brentq(lambda x: setup.fork.spring.force(x, 0.0) - weight, -0.02, setup.travel) * 1e3
+
+    def excess(x):
+        return setup.fork.spring.force(x, 0.0) - weight
+
+    if excess(setup.travel) < 0.0:
+        return None
+    if excess(0.0) >= 0.0:
+        return 0.0  # the preload alone carries it: the fork does not sag
+    return brentq(excess, 0.0, setup.travel) * 1e3
 
 
 def spring_curves_figure(base: Config):
@@ -94,7 +107,9 @@ def spring_curves_figure(base: Config):
             c = base.with_overrides(change)
             spring = compose.fork_law(c).spring
             line, = ax.plot(x, [spring.force(v * 1e-3, 0.0) for v in x], lw=1.4, label=name)
-            ax.plot([static_sag_mm(c)], [weight], "o", color=line.get_color(), ms=4)
+            sag = static_sag_mm(c)
+            if sag is not None:
+                ax.plot([sag], [weight], "o", color=line.get_color(), ms=4)
         ax.axhline(weight, color="0.5", ls=":", lw=1)
         ax.axvline(0.0, color="0.7", lw=0.6)
         ax.set_xlabel("fork compression (mm)")
@@ -112,13 +127,23 @@ def study_rows(results, checks) -> list[dict]:
     for check in checks:
         result = results[check.name]["mujoco"]
         s = result.summary
-        rows.append({"variant": check.name, "static_sag_mm": round(static_sag_mm(result.config), 2),
-                     "fork_peak1_mm": round(s["events"]["fork"]["peak1"]["value_mm"], 2),
-                     "tire_peak1_mm": round(s["events"]["tire"]["peak1"]["value_mm"], 2),
+        rows.append({"variant": check.name, "static_sag_mm": _rounded(static_sag_mm(result.config), 2),
+                     "fork_peak1_mm": _rounded(_event(s, "fork", "peak1"), 2),
+                     "tire_peak1_mm": _rounded(_event(s, "tire", "peak1"), 2),
                      "travel_used_percent": round(s["travel_used_percent"], 1),
                      "lift_off_s": None if s["lift_off_s"] is None else round(s["lift_off_s"], 3),
                      "max_mujoco_ode_diff_mm": round(check.worst[1], 4)})
     return rows
+
+
+def _rounded(value, digits):
+    return None if value is None else round(value, digits)
+
+
+def _event(summary, signal, name):
+    """An event's value in mm, ``None`` when the run did not reach it (a run too short for Peak 1)."""
+    event = (summary.get("events", {}).get(signal) or {}).get(name)
+    return None if not event else event.get("value_mm")
 
 
 def air_study_files(base: Config, results, checks) -> dict[str, bytes]:

@@ -24,7 +24,7 @@ from mtbmj.output import write_atomically
 
 AIR_KEY = "fork.spring.air_pressure_psi"
 PRELOAD_KEY = "fork.spring.preload_N"
-AIR_RANGE_PSI = (-14.5, 600.0)  # just above vacuum to far beyond any fork's rating
+AIR_RANGE_PSI = (0.0, 600.0)  # the atmosphere (the lowest pressure accepted) to far beyond any fork's rating
 SCAN_POINTS = 241
 
 

@@ -322,7 +322,7 @@ def fit_clicks(records: list[Record], clicks: list[float]) -> FitResult:
     if len(clicks) != len(records):
         raise DamperFitError(f"--clicks: {len(clicks)} positions for {len(records)} dyno files")
     clicks = [float(c) for c in clicks]
-    if any(c < 0 or c != round(c) for c in clicks) or len(set(clicks)) != len(clicks):
+    if any(not math.isfinite(c) or c < 0 or c != round(c) for c in clicks) or len(set(clicks)) != len(clicks):
         raise DamperFitError("--clicks: positions must be distinct whole numbers of clicks from closed")
     return fit_settings(records, [{"c": c, "r": c} for c in clicks])
 

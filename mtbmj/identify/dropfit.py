@@ -283,9 +283,12 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
             sol = optimize.least_squares(fun, point, jac=jac, bounds=(lo, hi), x_scale=scale, method="trf",
                                          xtol=xtol, ftol=ftol, gtol=1e-10, max_nfev=max_nfev)
             fits.append((sol, failure(sol)))
-    finally:
+    except BaseException:
         if pool is not None:
-            pool.shutdown()
+            pool.terminate()  # an interrupt or an error: the workers end now
+        raise
+    if pool is not None:
+        pool.shutdown()
     good = [f for f in fits if f[1] is None]
     if not good:
         raise MtbmjError(fits[0][1])

@@ -46,7 +46,7 @@ from mtbmj.config import SCHEMA, Config
 from mtbmj.errors import ConfigError, MtbmjError
 
 from mtbmj import output
-from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, LOCK, MANIFEST, NUMERIC_KINDS, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TIMINGS, TRACES, Variant, _canonical, check_types, flatten_summary, from_csv, grid, parse_vary, sample, variant_id)
+from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, MANIFEST, NUMERIC_KINDS, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TIMINGS, TRACES, Variant, _canonical, check_types, flatten_summary, from_csv, grid, parse_vary, sample, variant_id)
 from mtbmj.sweep.single import run_batch, run_variant
 
 
@@ -263,7 +263,7 @@ def _run_local(jobs: list[BatchJob], runner, workers: int, on_done, pool=None) -
             on_done(records)
     except BaseException:
         if owned:
-            pool.shutdown(wait=False, cancel_futures=True)
+            pool.terminate()
         raise
     if owned:
         pool.shutdown(wait=True)
@@ -356,7 +356,7 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
 
     Before any work: every variant's values are checked to fit their columns, the base run's
     length against the memory available, and ``out_dir`` must be writable and not in use by
-    another sweep (a lock on ``OUT/.lock``). The finished folder (journal, table, manifest,
+    another mtbmj run (``mtbmj.output.claim``, a lock on ``OUT/.lock``). The finished folder (journal, table, manifest,
     timings, traces) replaces the old one in one step (:mod:`mtbmj.output`)."""
     from mtbmj.drop.run import ENGINES, resolve
 
@@ -402,69 +402,17 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
         check_run(base_setup.duration if duration is None else duration, base_setup.timestep, base_setup.sample_rate)
     out = Path(out_dir)
     planned = plan(cfg, variants, engine, duration)
-    with _Lock(out) as lock:
+    with output.claim(out, "sweep", folders=(JOURNAL,)):
         journal = Journal(out)
         known = journal.records()
         if known and not resume:
             raise MtbmjError(f"{out}: holds the journal of a sweep ({len(known)} variants); "
                              f"pass --resume to continue it, or choose another --out")
-        try:
-            return _sweep(planned, cfg, out, journal, known, started, engine=engine, duration=duration,
-                          base_overrides=base_overrides, workers=workers, batch_size=batch_size, backend=backend,
-                          scheduler=scheduler, traces=traces, csv=csv, progress=progress, runner=runner,
-                          drop=drop, manifest_extra=manifest_extra, threads=threads, extra_files=extra_files,
-                          pool=pool)
-        except BaseException:
-            lock.failed = True
-            raise
-
-
-class _Lock:
-    """One writer per sweep folder: an exclusive POSIX lock (``lockf``) on ``OUT/.lock``, refused
-    at once when another sweep holds it. A POSIX lock belongs to the process, so the sweep's
-    workers (forked) do not hold it and it goes when the sweep's process does, even killed. The
-    lock file is carried into every new version of the folder as the same file (a hard link), so
-    the lock holds across the final swap. A folder this sweep made and left without a journal (a
-    refusal, an interrupt before the first batch) is removed."""
-
-    def __init__(self, out: Path):
-        self.out = out
-        self.failed = False
-        self.fd = None
-        self.made = False
-
-    def __enter__(self):
-        import fcntl
-
-        output.check_target(self.out)
-        try:
-            self.made = not self.out.exists()
-            self.out.mkdir(parents=True, exist_ok=True)
-            self.fd = os.open(self.out / LOCK, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o666)
-        except OSError as exc:
-            self._clean()
-            raise MtbmjError(f"{self.out}: cannot write output here ({exc.strerror})") from None
-        try:
-            fcntl.lockf(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            os.close(self.fd)
-            self.fd = None
-            raise MtbmjError(f"{self.out}: another sweep is writing to this folder; wait for it or choose "
-                             f"another --out") from None
-        return self
-
-    def __exit__(self, *exc):
-        self._clean()
-        return False
-
-    def _clean(self):
-        if self.made and not Journal(self.out).parts() and not (self.out / TABLE).exists():
-            import shutil
-
-            shutil.rmtree(self.out, ignore_errors=True)
-        if self.fd is not None:
-            os.close(self.fd)  # releases the lock
-            self.fd = None
+        return _sweep(planned, cfg, out, journal, known, started, engine=engine, duration=duration,
+                      base_overrides=base_overrides, workers=workers, batch_size=batch_size, backend=backend,
+                      scheduler=scheduler, traces=traces, csv=csv, progress=progress, runner=runner,
+                      drop=drop, manifest_extra=manifest_extra, threads=threads, extra_files=extra_files,
+                      pool=pool)
 
 
 def _sweep(planned, cfg, out, journal, known, started, *, engine, duration, base_overrides, workers, batch_size,
@@ -531,7 +479,7 @@ def _sweep(planned, cfg, out, journal, known, started, *, engine, duration, base
     files[MANIFEST] = (json.dumps(manifest, indent=2, default=_json_default) + "\n").encode()
     if extra_files is not None:
         files.update(extra_files(table))
-    with output.staged_folder(out, keep=(JOURNAL, LOCK)) as stage:
+    with output.staged_folder(out, keep=(JOURNAL,)) as stage:
         if traces:
             write_traces(stage / TRACES, planned, records, journal, cfg, engine)
         for name, content in files.items():

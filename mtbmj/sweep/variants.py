@@ -37,7 +37,6 @@ TRACES = "traces.h5"
 MANIFEST = "sweep.json"
 JOURNAL = "journal"
 TIMINGS = "timings.csv"  # wall time per variant, kept out of the table so equal sweeps give equal tables
-LOCK = ".lock"  # one writer per output folder: the sweep holds a POSIX lock on OUT/.lock
 MAX_VARIANTS = 1_000_000
 
 # The summary flattened into table columns, in this order (see ``flatten_summary``).
