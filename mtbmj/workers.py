@@ -58,13 +58,28 @@ class Pool(ProcessPoolExecutor):
     of waiting for the tasks they are running."""
 
     def terminate(self) -> None:
-        """Kill the workers and drop the queued tasks; returns without waiting for them."""
+        """Kill the workers and drop the queued tasks; returns without waiting for them. Every
+        unfinished future gets ``BrokenProcessPool``; the executor's own bookkeeping of them is
+        emptied first, so its manager thread has none left to fail (Python 3.11 raises
+        ``InvalidStateError`` there for a future a ``map`` has cancelled meanwhile)."""
+        from concurrent.futures.process import BrokenProcessPool
+
+        pending = getattr(self, "_pending_work_items", None) or {}
+        items = list(pending.values())
+        pending.clear()
+        for item in items:
+            future = getattr(item, "future", None)
+            if future is not None and not future.done():
+                try:
+                    future.set_exception(BrokenProcessPool("the pool was terminated"))
+                except Exception:  # noqa: BLE001 - cancelled or finished meanwhile
+                    pass
         for process in list((getattr(self, "_processes", None) or {}).values()):
             try:
                 process.kill()
             except (OSError, ValueError, AttributeError):
                 pass
-        self.shutdown(wait=False, cancel_futures=True)
+        self.shutdown(wait=False)
 
     def __exit__(self, exc_type, exc, tb):
         if exc_type is not None:

@@ -406,9 +406,11 @@ def test_generated_option_values(tmp_path, capfd, argv):
 
 def test_enough_cases_per_run():
     """At least 1000 generated cases per run (when the four fuzz tests above ran in this session)."""
-    if set(CASES) != set(EXAMPLES):
+    if not set(EXAMPLES) <= set(CASES):
         pytest.skip("not all fuzz tests ran in this session")
-    print(f"generated cases: {sum(CASES.values())} {CASES}; exit statuses: {OUTCOMES}")
-    assert sum(CASES.values()) >= 1000, CASES
-    for name, counts in OUTCOMES.items():  # the generators reach both sides of the invariant
+    mine = {name: CASES[name] for name in EXAMPLES}  # (tests/test_fuzz_commands.py counts its own)
+    print(f"generated cases: {sum(mine.values())} {mine}; exit statuses: {OUTCOMES}")
+    assert sum(mine.values()) >= 1000, mine
+    for name in EXAMPLES:  # the generators reach both sides of the invariant
+        counts = OUTCOMES[name]
         assert counts.get(0, 0) > 0 and counts.get(2, 0) > 0, (name, counts)

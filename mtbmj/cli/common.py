@@ -129,7 +129,7 @@ def add_out(p, default: str, what: str = "output directory") -> None:
 def out_path(text: str) -> Path:
     """An ``--out`` name: refused when it holds a line break or another control character,
     which would break every line that names it."""
-    if not text or any(ord(ch) < 32 or ord(ch) == 127 for ch in text):
+    if not text or any(ord(ch) < 32 or ord(ch) == 127 or ch in LINE_BREAKS for ch in text):
         shown = text.encode("unicode_escape").decode("ascii")
         raise argparse.ArgumentTypeError(f"{shown!r}: an output name must be non-empty and hold no line break or "
                                          f"control character")
@@ -225,6 +225,10 @@ def _run_parsed(parser: argparse.ArgumentParser, argv=None) -> int:
         return EXIT_BAD_INPUT
 
 
+# every character ``str.splitlines`` breaks a line at
+LINE_BREAKS = frozenset("\n\r\v\f\x1c\x1d\x1e\x85\u2028\u2029")
+
+
 def _report(message: str) -> None:
     """The one line on stderr: a line break in the message (from a file name or a value the
     user gave) is shown escaped, so the report stays one line. An error that an interrupt caused
@@ -232,7 +236,7 @@ def _report(message: str) -> None:
     from mtbmj.errors import check_interrupt
 
     check_interrupt()
-    one = message.replace("\r", "\\r").replace("\n", "\\n")
+    one = "".join(ch.encode("unicode_escape").decode("ascii") if ch in LINE_BREAKS else ch for ch in message)
     print(f"mtbmj: error: {one}", file=sys.stderr)
 
 
