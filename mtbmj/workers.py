@@ -59,21 +59,23 @@ class Pool(ProcessPoolExecutor):
 
     def terminate(self) -> None:
         """Kill the workers and drop the queued tasks; returns without waiting for them. Every
-        unfinished future gets ``BrokenProcessPool``; the executor's own bookkeeping of them is
-        emptied first, so its manager thread has none left to fail (Python 3.11 raises
-        ``InvalidStateError`` there for a future a ``map`` has cancelled meanwhile)."""
+        unfinished future gets ``BrokenProcessPool`` now; the executor's own work items get
+        stand-in futures, so what its manager thread does with them afterwards touches no future
+        of the caller's (Python 3.11's raises ``InvalidStateError`` marking a future broken that
+        a ``map`` has cancelled meanwhile)."""
+        from concurrent.futures import Future
         from concurrent.futures.process import BrokenProcessPool
 
-        pending = getattr(self, "_pending_work_items", None) or {}
-        items = list(pending.values())
-        pending.clear()
-        for item in items:
+        for item in list((getattr(self, "_pending_work_items", None) or {}).values()):
             future = getattr(item, "future", None)
-            if future is not None and not future.done():
+            if future is None:
+                continue
+            if not future.done():
                 try:
                     future.set_exception(BrokenProcessPool("the pool was terminated"))
                 except Exception:  # noqa: BLE001 - cancelled or finished meanwhile
                     pass
+            item.future = Future()
         for process in list((getattr(self, "_processes", None) or {}).values()):
             try:
                 process.kill()

@@ -239,3 +239,18 @@ def test_rolling_front_end_runs_the_air_law_compiled_as_in_python():
     python = run_roll("square_edge", 4.0, "air120", duration=0.6, callback="python")
     assert np.max(np.abs(np.asarray(compiled.signals["fork_mm"]) - np.asarray(python.signals["fork_mm"]))) < 1e-6
     assert np.max(compiled.signals["fork_mm"]) > 10.0  # the edge compresses the fork
+
+
+@pytest.mark.parametrize("config, setting, key", [
+    ("S12", "fork.travel_mm=0.12", "fork.travel_mm"),  # metres typed into a mm key: blamed on the preload before
+    ("air120", "fork.spring.air_volume_cm3=1", "fork.spring.air_volume_cm3"),  # blamed on tokens before
+    ("air120", "fork.spring.air_pressure_psi=-14.6", "fork.spring.air_pressure_psi"),  # a near-vacuum ran before
+])
+def test_a_refusal_names_the_key_the_user_set(tmp_path, capsys, config, setting, key):
+    from mtbmj import cli
+
+    out = tmp_path / "o"
+    assert cli.main(["drop", config, "--set", setting, "--quiet", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and key in err, err
+    assert not out.exists()

@@ -16,10 +16,11 @@ import itertools
 import json
 import math
 import struct
+from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from mtbmj.cli import main
@@ -326,7 +327,11 @@ def sst_files(draw):
     return blob[:cut] if cut is not None else blob
 
 
+SHIPPED_SST = (Path(__file__).resolve().parents[1] / "mtbmj" / "data" / "sst" / "00649.SST").read_bytes()
+
+
 @fuzz_settings("sst")
+@example(blob=SHIPPED_SST, options=[])  # a real ride: the success side is reached whatever hypothesis draws
 @given(blob=sst_files(), options=st.just([]) | st.lists(st.sampled_from([
     ["--fork-max-mm", "160"], ["--fork-max-mm", "0"], ["--shock-max-mm", "nan"], ["--bin-percent", "5"],
     ["--bin-percent", "-1"], ["--bin-percent", "1e-9"], ["--threshold-mm-per-s", "inf"]]), max_size=2))

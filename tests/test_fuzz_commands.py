@@ -10,7 +10,7 @@ whole command, which is the slow part), but every test reaches both answers (che
 from __future__ import annotations
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from test_fuzz import CASES, FLOATS, NUMBERS, OUTCOMES, _fresh, check
@@ -40,6 +40,7 @@ def _sets(pairs):
 
 
 @fuzz_settings("air_study")
+@example(config="air120", duration="0.002", sets=[], workers="1")  # (the success side, whatever is drawn)
 @given(config=st.sampled_from(["air120", "air120", "S12", "nope", ""]), duration=SHORT, sets=SETS,
        workers=st.sampled_from(["1", "1", "0", "-1", "abc", "1.5", ""]))
 def test_generated_air_study(tmp_path, capfd, config, duration, sets, workers):
@@ -49,6 +50,7 @@ def test_generated_air_study(tmp_path, capfd, config, duration, sets, workers):
 
 
 @fuzz_settings("sag")
+@example(config="air120", load="60", sag="25", sets=[])
 @given(config=st.sampled_from(["air120", "S12", "S1", "reference", "x"]), load=NUMBERS, sag=NUMBERS, sets=SETS)
 def test_generated_sag(tmp_path, capfd, config, load, sag, sets):
     _, out = _fresh(tmp_path)
@@ -59,6 +61,7 @@ def test_generated_sag(tmp_path, capfd, config, load, sag, sets):
 
 
 @fuzz_settings("synth")
+@example(kind="spring", config="S12", seed="0", suffix=".csv", sets=[])
 @given(kind=st.sampled_from(["spring", "damper", "tire"]), config=st.sampled_from(["air120", "S12", "S3", "x"]),
        seed=st.sampled_from(["0", "1", "-1", "2**64", "18446744073709551616", "abc", "", "1.5", "7"]),
        suffix=st.sampled_from([".csv", ".mat", ".txt", "", ".CSV"]), sets=SETS)
@@ -92,6 +95,7 @@ CLICK_ITEMS = st.one_of(NUMBERS, st.sampled_from(["0", "6", "12", "3"]),
 
 
 @fuzz_settings("clicks")
+@example(files=3, clicks=["0,6,12"], valid=True)
 @given(files=st.integers(1, 3), clicks=st.lists(st.lists(CLICK_ITEMS, min_size=1, max_size=4).map(",".join),
                                                  min_size=1, max_size=3),
        valid=st.sampled_from([False] * 9 + [True]))
@@ -106,6 +110,7 @@ def test_generated_clicks(tmp_path, capfd, dyno_files, files, clicks, valid):
 
 
 @fuzz_settings("tire_pressure")
+@example(psi="24", duration="0.002", engine="ode", other=[])
 @given(psi=st.one_of(NUMBERS, st.sampled_from(["18", "24", "26", "30", "0", "5", "60", "-3"])),
        duration=SHORT, engine=st.sampled_from(["mujoco", "ode", "fast"]),
        other=st.lists(st.tuples(st.sampled_from(["tire.impact_rate_N_per_mm", "tire.model", "tire.damping_Ns_per_m",
@@ -127,6 +132,7 @@ BOUNDS = st.one_of(st.tuples(st.sampled_from(["tire.impact_rate_N_per_mm", "fork
 
 
 @fuzz_settings("fit_drop")
+@example(free="fork.spring.preload_N", bounds=[], starts="1", engine="fast", duration=None)
 @given(free=FREE, bounds=st.lists(BOUNDS, max_size=2), starts=st.sampled_from(["1", "0", "-1", "1001", "x", "nan"]),
        engine=st.sampled_from(["fast", "fast", "ode", "x"]), duration=st.sampled_from([None, "0.05", "0", "abc"]))
 def test_generated_fit_drop_free_keys_and_bounds(tmp_path, capfd, free, bounds, starts, engine, duration):

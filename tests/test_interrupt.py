@@ -17,6 +17,7 @@ import pytest
 
 from mtbmj import output
 from mtbmj.cli.common import Parser, run
+from test_reliability import _gone  # waits for processes to end, kills what outlives the wait
 
 CLI = [sys.executable, "-m", "mtbmj.cli"]
 
@@ -91,31 +92,6 @@ def _children(pid: int) -> list[int]:
         return []
 
 
-def _alive(pids) -> list[int]:
-    alive = []
-    for pid in pids:
-        try:
-            with open(f"/proc/{pid}/stat") as handle:
-                if handle.read().split(")")[-1].split()[0] != "Z":
-                    alive.append(pid)
-        except FileNotFoundError:
-            pass
-    return alive
-
-
-def _wait_gone(pids, timeout=10.0) -> list[int]:
-    end = time.monotonic() + timeout
-    while _alive(pids) and time.monotonic() < end:
-        time.sleep(0.05)
-    left = _alive(pids)
-    for pid in left:  # do not leave a failed test's orphans computing
-        try:
-            os.kill(pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-    return left
-
-
 def _start(argv, cwd):
     """The command in a session of its own, as in a terminal: Ctrl-C is SIGINT to the group."""
     return subprocess.Popen(CLI + argv, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
@@ -148,7 +124,7 @@ def test_air_study_killed_or_interrupted_leaves_no_orphan_and_the_old_result(tmp
     else:
         os.killpg(proc.pid, signal.SIGINT)  # the terminal's Ctrl-C reaches the whole group
     stdout, stderr = proc.communicate(timeout=60)
-    assert _wait_gone(children) == [], f"workers outlived air-study ({how})"
+    assert _gone(children), f"workers outlived air-study ({how})"
     if how == "SIGINT":
         assert proc.returncode == 130 and stderr == "mtbmj: interrupted\n", (proc.returncode, stderr)
     else:
@@ -183,7 +159,7 @@ def ctrl_c_trials(tmp_path, trials: int, seed: int, argv) -> list[tuple[float, i
         children = _children(proc.pid)
         os.killpg(proc.pid, signal.SIGINT)
         _, stderr = proc.communicate(timeout=120)
-        assert _wait_gone(children) == [], f"trial {trial}: workers outlived the interrupt"
+        assert _gone(children), f"trial {trial}: workers outlived the interrupt"
         results.append((moment, proc.returncode, stderr))
         if out.exists():  # nothing half-written: no result, or the whole one (interrupted after its swap)
             assert output.foreign_entry(out) is None
@@ -200,3 +176,32 @@ def test_25_ctrl_c_trials_on_validate(tmp_path):
     results = ctrl_c_trials(tmp_path, 25, 20261125, argv)
     bad = [(round(m, 3), s, e) for m, s, e in results if s != 130 or e != "mtbmj: interrupted\n"]
     assert bad == [], bad
+
+
+def _slow(x):
+    time.sleep(0.3)
+    return x
+
+
+def test_terminating_a_pool_mid_map_ends_its_workers_and_raises_nothing_in_its_threads(monkeypatch):
+    """A ``map`` left by an exception (its remaining futures cancelled) and the pool terminated:
+    the workers are gone at once, every future is done, and the executor's manager thread
+    raises nothing (Python 3.11's would, marking a cancelled future broken)."""
+    import threading
+
+    from mtbmj.workers import process_pool
+
+    errors = []
+    monkeypatch.setattr(threading, "excepthook", lambda args: errors.append(args.exc_value))
+    for _ in range(3):
+        pool = process_pool(2)
+        futures = [pool.submit(_slow, i) for i in range(12)]
+        mapped = pool.map(_slow, range(12))
+        next(mapped)
+        workers = list(pool._processes)
+        mapped.close()  # cancels what the map had not started
+        pool.terminate()
+        assert _gone(workers, timeout=5.0)
+        time.sleep(0.2)
+        assert all(f.done() for f in futures)
+    assert errors == []

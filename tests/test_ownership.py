@@ -21,6 +21,7 @@ import pytest
 from mtbmj import output
 from mtbmj.cli import main
 from mtbmj.errors import MtbmjError
+from test_reliability import one_line as refused  # exit 2, one line naming every needle
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -28,17 +29,6 @@ ROOT = Path(__file__).resolve().parents[1]
 def snapshot(folder: Path) -> dict:
     return {str(p.relative_to(folder)): (p.read_bytes() if p.is_file() else None)
             for p in sorted(folder.rglob("*"))}
-
-
-def refused(capsys, argv, *needles) -> str:
-    capsys.readouterr()
-    status = main([str(a) for a in argv])
-    err = capsys.readouterr().err
-    assert status == 2, err
-    assert err.count("\n") == 1 and err.startswith("mtbmj: error: ") and "Traceback" not in err, err
-    for needle in needles:
-        assert needle in err, err
-    return err
 
 
 # the names the old rule took for an mtbmj result: each alone made a folder of the user's replaceable
