@@ -64,7 +64,8 @@ from mtbmj.controllers import native
 from mtbmj.drop.run import resolve, run_drop
 from mtbmj.errors import ConfigError, MtbmjError
 
-from mtbmj.identify.fitresult import FitResult, correlated_pairs, correlation, covariance_stderr, hac_covariance
+from mtbmj.identify.fitresult import (FitResult, bound_warnings, bounds_reached, correlated_pairs, correlation,
+                                      covariance_stderr, hac_covariance, model_check)
 from mtbmj.identify.records import Record, read_record
 from mtbmj.validation import sled_data
 from mtbmj.workers import process_pool
@@ -74,6 +75,13 @@ FIT_FROM_S = 0.005  # fitted from 5 ms after touch: before, a logger's filter st
 # the engine whose run at the optimum measures the fitting engine's own error (the fast engine
 # integrates the reference's equations: it is checked against the reference)
 OTHER_ENGINE = {"mujoco": "ode", "ode": "mujoco", "fast": "ode"}
+# Default bounds of a free parameter without --bound: start / 4 to 4 x start (a positive or
+# non-negative key), start -/+ 4 |start| (a signed one); see docs/identification.md
+DEFAULT_BOUND_FACTOR = 4.0
+# keys that take whole numbers (spacers, adjuster clicks): a least-squares step cannot move them
+WHOLE_NUMBER_KEYS = ("fork.spring.tokens",)
+MODEL_CHECK_ALLOWANCE_MM = 0.1  # the crosscheck tolerance: what the engines may differ by without the model being wrong
+IMPACT_SPEED_TOLERANCE = 0.05  # the record's impact speed vs the drop height's: beyond 5 %, they disagree
 MODEL_KEYS = ("fork.spring.model", "fork.spring.top_out", "fork.spring.preload", "fork.damper.model",
               "fork.friction.model", "tire.model")
 
@@ -154,6 +162,52 @@ def _as_record(record: Record | str | os.PathLike) -> Record:
     return record if isinstance(record, Record) else read_record(record)
 
 
+def default_bounds(key: str, start: float) -> tuple[float, float]:
+    """The bounds of a free parameter given none: ``start / 4`` to ``4 x start`` for a positive or
+    non-negative key (a rate, a mass, a preload), ``start -/+ 4 |start|`` for a signed one; a start
+    of 0 has no scale, so it needs ``--bound``."""
+    if start == 0.0:
+        raise ConfigError(f"{key}: start value is 0, so it sets no scale for default bounds; give them with "
+                          f"--bound {key}=LOW:HIGH")
+    if SCHEMA.get(key) in ("pos", "nonneg") and start > 0.0:
+        return start / DEFAULT_BOUND_FACTOR, start * DEFAULT_BOUND_FACTOR
+    return start - DEFAULT_BOUND_FACTOR * abs(start), start + DEFAULT_BOUND_FACTOR * abs(start)
+
+
+def noise_floor(aligned, channels: Sequence[str], keep: np.ndarray) -> float:
+    """The record's own noise (mm, RMS over the fitted channels): each channel's white noise from
+    its third differences (``validation.time_zero.noise_sigma``, robust to the impact's few steep
+    samples) over the fitted stretch."""
+    from mtbmj.validation.time_zero import noise_sigma
+
+    sigmas = [noise_sigma(getattr(aligned, f"{c}_mm")[keep]) for c in channels]
+    return float(np.sqrt(np.mean(np.square(sigmas))))
+
+
+def impact_speed_check(aligned, cfg: Config, free: Sequence[str]) -> dict | None:
+    """The impact speed the record's free fall shows against the configuration's drop height:
+    ``None`` without a fall in the record; a ``line`` when they disagree by more than
+    ``IMPACT_SPEED_TOLERANCE`` (the drop height is then not the record's)."""
+    touch = aligned.touch
+    if touch is None or touch.impact_speed_m_per_s is None:
+        return None
+    g = float(cfg.get("sled.gravity_m_per_s2", 9.81))
+    height_mm = float(cfg["sled.drop_height_mm"])
+    expected = float(np.sqrt(2.0 * g * height_mm * 1e-3))
+    measured = float(touch.impact_speed_m_per_s)
+    implied_mm = measured**2 / (2.0 * g) * 1e3
+    out = {"record_m_per_s": measured, "config_m_per_s": expected, "config_drop_height_mm": height_mm,
+           "implied_drop_height_mm": implied_mm, "agree": True}
+    if expected > 0 and abs(measured - expected) > IMPACT_SPEED_TOLERANCE * expected:
+        out["agree"] = False
+        fitted = "sled.drop_height_mm" in free
+        out["line"] = (f"the record's free fall reaches {measured:.3f} m/s at touch, a drop from {implied_mm:.0f} mm; "
+                       f"the configuration drops from {height_mm:g} mm ({expected:.3f} m/s)"
+                       + ("" if fitted else f": give --set sled.drop_height_mm={implied_mm:.0f}, or fit it with "
+                                            f"--free ...,sled.drop_height_mm"))
+    return out
+
+
 def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", free: Sequence[str] = (),
              bounds: Mapping[str, tuple[float, float]] | None = None, engine: str = "mujoco",
              overrides: Mapping | None = None, workers: int = 2, diff_step: float = 1e-3,
@@ -162,8 +216,11 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
              touch_s: float | None = None, engine_error: bool = True) -> FitResult:
     """Fit the ``free`` configuration keys of ``config`` (with ``overrides``) to a sled drop record.
 
-    ``bounds`` maps a free key to (low, high) in its config unit; unlisted keys get +/- 50 %
-    around the start value. Returns a ``FitResult`` with values keyed by the free keys, and in
+    ``bounds`` maps a free key to (low, high) in its config unit; unlisted keys get
+    :func:`default_bounds` (start / 4 to 4 x start). A value that ends within 1 % of the span from
+    a bound is reported in ``extra["at_bound"]`` and ``extra["warnings"]``, its interval marked not
+    meaningful (``extra["ci95_meaningful"]``); ``extra["model_check"]`` compares the residual with
+    the record's noise floor, ``extra["impact_speed"]`` its free fall with the drop height. Returns a ``FitResult`` with values keyed by the free keys, and in
     ``extra``: ``ci95``, ``correlation`` (with ``correlation_keys``), ``engine_runs``,
     ``model_keys``, ``start``, ``bounds``, ``wall_time_s``, ``status`` and ``curves`` for plots.
 
@@ -182,26 +239,33 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
         raise ConfigError("fit_drop: no free parameters given")
     if len(set(free)) != len(free):
         raise ConfigError("fit_drop: a free parameter is listed twice")
+    for key in bounds or {}:
+        if key not in free:
+            raise ConfigError(f"--bound {key}: not a free parameter (free: {', '.join(free)}); add it to --free "
+                              f"or drop the bound")
     x0, lo, hi = [], [], []
     for key in free:
         if key not in SCHEMA:
             raise ConfigError(f"{key}: unknown key (free parameters are configuration keys)")
         if SCHEMA[key] not in ("pos", "nonneg", "real"):
             raise ConfigError(f"{key}: only numeric scalar keys can be free parameters")
+        if key in WHOLE_NUMBER_KEYS or key.endswith("_clicks"):
+            raise ConfigError(f"{key}: takes whole numbers, which a least-squares fit cannot step through; run each "
+                              f"setting instead (mtbmj sweep CONFIG --vary {key}=LOW:HIGH:N) and compare")
         value = float(cfg.require(key, "a free parameter needs a start value"))
-        if bounds and key in bounds:
-            low, high = map(float, bounds[key])
-        else:
-            if value == 0.0:
-                raise ConfigError(f"{key}: start value is 0, so +/- 50 % is no range; give bounds for it")
-            low, high = 0.5 * value, 1.5 * value
+        low, high = default_bounds(key, value) if not (bounds and key in bounds) else map(float, bounds[key])
+        if not (np.isfinite(low) and np.isfinite(high)):
+            raise ConfigError(f"{key}: bounds ({low:g}, {high:g}) must be finite numbers")
         if not low < high:
-            raise ConfigError(f"{key}: bounds ({low:g}, {high:g}) are empty")
+            raise ConfigError(f"{key}: bounds ({low:g}, {high:g}) are empty (the low bound must be below the high one)")
         if SCHEMA[key] == "pos" and low <= 0.0:
             raise ConfigError(f"{key}: lower bound {low:g} must be positive")
         if SCHEMA[key] == "nonneg" and low < 0.0:
             raise ConfigError(f"{key}: lower bound {low:g} must not be negative")
-        x0.append(min(max(value, low), high))
+        if not low <= value <= high:
+            raise ConfigError(f"--bound {key}={low:g}:{high:g}: excludes the start value {value:g}; start inside "
+                              f"the bounds (--set {key}=VALUE) or widen them")
+        x0.append(value)
         lo.append(low)
         hi.append(high)
     x0, lo, hi = np.array(x0), np.array(lo), np.array(hi)
@@ -321,6 +385,17 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
         touch_shift = np.linalg.pinv(final_jac) @ (shifted - model)
         cov = cov + np.outer(touch_shift, touch_shift)
     std, corr = correlation(cov)
+    bound_map = {k: (float(a), float(b)) for k, a, b in zip(free, lo, hi)}
+    reached = bounds_reached(values, bound_map)
+    warnings = bound_warnings(values, bound_map, reached)
+    speed = impact_speed_check(aligned, cfg, free)
+    if speed is not None and not speed["agree"]:
+        warnings.append(speed["line"])
+    worst = int(np.argmax(np.abs(residual)))
+    channel, sample = divmod(worst, times.size)
+    check = model_check(float(np.sqrt(np.mean(residual**2))), noise_floor(aligned, channels, keep),
+                        MODEL_CHECK_ALLOWANCE_MM, "mm",
+                        f"{residual[worst]:+.3g} mm in the {channels[channel]} trace at t = {times[sample]:.4f} s")
     # Student t on the effective number of independent samples (time samples / bandwidth)
     dof = max(times.size / max(hac["bandwidth_samples"], 1.0) - n, 1.0)
     tq = float(stats.t.ppf(0.975, dof))
@@ -358,9 +433,11 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
                         "status": int(f.status), "nfev": int(f.nfev), "failed": why}
                        for p, (f, why) in zip(points, fits)], "best_start": best,
             "iterations": int(sol.njev or 0), "nfev": int(sol.nfev),
-            "status": int(sol.status), "message": sol.message, "at_bound": at_bound,
+            "status": int(sol.status), "message": sol.message, "at_bound": reached,
+            "active_bounds": at_bound, "warnings": warnings, "model_check": check, "impact_speed": speed,
+            "ci95_meaningful": {k: k not in reached and check["passed"] for k in free},
             "start": {k: float(v) for k, v in zip(free, x0)},
-            "bounds": {k: (float(a), float(b)) for k, a, b in zip(free, lo, hi)},
+            "bounds": bound_map,
             "rms_by_channel_mm": per_channel, "channels": list(channels),
             "model_keys": model_keys, "config": cfg.name, "engine": engine,
             "workers": workers, "diff_step": diff_step,
@@ -393,9 +470,16 @@ def plot_drop(record: Record | None, result: FitResult):
     axes[1].set_ylabel("model - data (mm)")
     axes[1].set_xlabel("time from tire touch (s)")
     axes[1].grid(alpha=0.3)
-    lines = [f"{k.rsplit('.', 1)[-1]} = {v:.4g} ± {result.stderr[k]:.2g}" for k, v in result.values.items()]
+    lines = []
+    for k, v in result.values.items():
+        interval = result.interval95(k)
+        lines.append(f"{k.rsplit('.', 1)[-1]} = {v:.4g} " + (f"(95 %: {interval[0]:.4g} to {interval[1]:.4g})"
+                                                               if interval is not None else "(no interval)"))
     name = record.path if record is not None else "drop record"
-    axes[0].set_title(f"{name}: {result.model}, RMS {result.rms:.3f} mm\n" + "; ".join(lines), fontsize=8)
+    check = result.extra.get("model_check")
+    verdict = "" if check is None else (", model check passed" if check["passed"] else
+                                        f", MODEL CHECK FAILED ({check['ratio']:.0f}x the noise floor)")
+    axes[0].set_title(f"{name}: {result.model}, RMS {result.rms:.3f} mm{verdict}\n" + "; ".join(lines), fontsize=8)
     return fig
 
 

@@ -55,15 +55,44 @@ class FitResult:
         out.update(self.values)
         return out
 
+    def interval95(self, key: str) -> tuple[float, float] | None:
+        """The 95 % interval of ``key``: the fit's own (``extra["ci95"]``) or value -/+ t x stderr
+        (Student t on n_points - n_params); ``None`` where there is none or it means nothing (the
+        value stopped at a bound, the model check failed)."""
+        if not self.extra.get("ci95_meaningful", {}).get(key, True):
+            return None
+        if key in self.extra.get("ci95", {}):
+            low, high = self.extra["ci95"][key]
+            return float(low), float(high)
+        err, value = self.stderr.get(key), self.values.get(key)
+        if err is None or not np.isfinite(err) or not isinstance(value, (int, float)):
+            return None
+        from scipy import stats
+
+        t = float(stats.t.ppf(0.975, max(self.n_points - self.n_params, 1)))
+        return float(value - t * err), float(value + t * err)
+
     def line(self) -> str:
+        """One line: each value with its 95 % interval (and its bounds, when the fit had any)."""
         parts = []
+        bounds = self.extra.get("bounds", {})
+        reached = self.extra.get("at_bound", {})
         for key, value in self.values.items():
+            name = key.rsplit('.', 1)[-1]
             if isinstance(value, (tuple, list)):
-                parts.append(f"{key.rsplit('.', 1)[-1]} = [{len(value)} values]")
+                parts.append(f"{name} = [{len(value)} values]")
                 continue
-            err = self.stderr.get(key)
-            unc = f" +/- {err:.3g}" if err is not None and np.isfinite(err) else ""
-            parts.append(f"{key.rsplit('.', 1)[-1]} = {value:.6g}{unc}")
+            interval = self.interval95(key)
+            if interval is not None:
+                unc = f" (95 % interval {interval[0]:.6g} to {interval[1]:.6g})"
+            elif isinstance(reached, dict) and key in reached:
+                unc = f" (AT ITS {reached[key].upper()} BOUND: no interval)"
+            elif self.stderr.get(key) is not None:
+                unc = " (no meaningful interval)"
+            else:
+                unc = ""
+            span = f" [bounds {bounds[key][0]:g} to {bounds[key][1]:g}]" if key in bounds else ""
+            parts.append(f"{name} = {value:.6g}{unc}{span}")
         return f"{self.kind} {self.model}: " + ", ".join(parts) + f"; residual RMS {self.rms:.4g} {self.residual_unit}"
 
 
@@ -144,3 +173,49 @@ def correlated_pairs(keys, corr: np.ndarray, limit: float = 0.9) -> list[str]:
                 notes.append(f"{keys[i]} and {keys[j]} are correlated (r = {corr[i, j]:+.2f}): the record fixes "
                              "a combination of them better than each; their intervals are not independent")
     return notes
+
+
+# --- what a fit must say about itself: its bounds and whether its model explains the data -------
+
+BOUND_MARGIN = 0.01  # a value within 1 % of its bounds' span from a bound has stopped at it
+MODEL_CHECK_FACTOR = 3.0  # a residual RMS above 3 x the record's noise floor (plus the allowance) fails
+
+
+def bounds_reached(values: dict, bounds: dict) -> dict[str, str]:
+    """``{key: "lower" | "upper"}`` for the values within ``BOUND_MARGIN`` of the span of their
+    bounds ``(low, high)`` from one of them: the optimum may lie beyond, so the value and its
+    interval say nothing about the truth."""
+    reached = {}
+    for key, (low, high) in bounds.items():
+        value = values.get(key)
+        if value is None or not np.isfinite(low) or not np.isfinite(high):
+            continue
+        margin = BOUND_MARGIN * (high - low)
+        if value <= low + margin:
+            reached[key] = "lower"
+        elif value >= high - margin:
+            reached[key] = "upper"
+    return reached
+
+
+def bound_warnings(values: dict, bounds: dict, reached: dict[str, str]) -> list[str]:
+    return [f"{key} = {values[key]:.6g} stopped at its {side} bound {bounds[key][0 if side == 'lower' else 1]:g} "
+            f"(bounds {bounds[key][0]:g} to {bounds[key][1]:g}): the optimum may lie beyond it, and its interval "
+            f"means nothing; widen the bounds with --bound {key}=LOW:HIGH"
+            for key, side in reached.items()]
+
+
+def model_check(rms: float, noise: float, allowance: float, unit: str, worst: str) -> dict:
+    """Does the model explain the record? The residual RMS against ``MODEL_CHECK_FACTOR`` times
+    the record's own noise floor plus ``allowance`` (what the model may differ by without being
+    wrong: the engines' agreement, quantisation). ``worst``: where the residual is largest."""
+    limit = MODEL_CHECK_FACTOR * noise + allowance
+    passed = bool(np.isfinite(rms) and rms <= limit)
+    ratio = rms / noise if noise > 0 else float("inf")
+    line = (f"model check {'passed' if passed else 'FAILED'}: residual RMS {rms:.4g} {unit} against the record's "
+            f"noise floor {noise:.3g} {unit} ({ratio:.1f}x; limit {limit:.3g} {unit} = {MODEL_CHECK_FACTOR:g} x noise "
+            f"+ {allowance:g}); largest {worst}")
+    if not passed:
+        line += ": the model does not explain this record, so its values and intervals do not describe it"
+    return {"passed": passed, "rms": float(rms), "noise_floor": float(noise), "limit": float(limit),
+            "ratio": float(ratio), "unit": unit, "largest": worst, "line": line}

@@ -31,6 +31,22 @@ class Identification:
     base: str = "reference"
     notes: list[str] = field(default_factory=list)
     friction: str | None = None  # damper fits: the friction model whose fork.friction keys win
+    overrides: dict = field(default_factory=dict)  # the --set values the fit ran on (written with it)
+
+    @property
+    def warnings(self) -> list[str]:
+        """What the user must know before trusting the result: values stopped at a bound, a
+        record that disagrees with the configuration."""
+        return [w for name in self.chosen for w in self.results[name].extra.get("warnings", [])]
+
+    @property
+    def model_checks(self) -> list[dict]:
+        return [self.results[name].extra["model_check"] for name in self.chosen
+                if "model_check" in self.results[name].extra]
+
+    @property
+    def model_check_passed(self) -> bool:
+        return all(check["passed"] for check in self.model_checks)
 
     def _sources(self) -> dict[str, str]:
         """Configuration key -> name of the fit that supplies its value (later fits win; for a
@@ -48,23 +64,31 @@ class Identification:
         return source
 
     def parameter_set(self) -> dict:
-        return {key: self.results[name].overrides()[key] for key, name in self._sources().items()}
+        fitted = {key: self.results[name].overrides()[key] for key, name in self._sources().items()}
+        return {**self.overrides, **fitted}
 
     def toml(self) -> str:
         comments = {}
         for key, name in self._sources().items():
-            err = self.results[name].stderr.get(key)
-            if err is not None and err == err:  # not NaN
-                comments[key] = f"+/- {err:.3g} (1 sigma), {self.kind} fit '{name}'"
+            result = self.results[name]
+            interval = result.interval95(key)
+            if interval is not None:
+                comments[key] = f"95 % interval {interval[0]:.6g} to {interval[1]:.6g}, {self.kind} fit '{name}'"
+            elif result.stderr.get(key) is not None:
+                comments[key] = f"NO meaningful interval (see the header), {self.kind} fit '{name}'"
+        for key in self.overrides:
+            comments.setdefault(key, "set for the fit (--set)")
         sources = ", ".join(Path(r.path).name for r in self.records)
         synthetic = " (synthetic data)" if any(r.synthetic for r in self.records) else ""
+        problems = [c["line"] for c in self.model_checks if not c["passed"]] + self.warnings
+        warning = ("NOT A CLEAN RESULT: " + " | ".join(problems) + " | ") if problems else ""
         values, base = self.parameter_set(), self.base
         if base not in preset_names():
             # a configuration file: its values go into fit.toml, which then stands alone (a base
             # outside the fit's folder would not be read back: mtbmj.config's base rule)
             own = {k: v for k, v in load_config(base).values.items() if k not in ("description", "reading")}
             values, base = {**own, **values}, "reference"
-        return parameter_set_toml(values, base, f"mtbmj fit {self.kind} from {sources}{synthetic}", comments)
+        return parameter_set_toml(values, base, f"{warning}mtbmj fit {self.kind} from {sources}{synthetic}", comments)
 
     def summary(self) -> dict:
         return {
@@ -74,6 +98,9 @@ class Identification:
             "chosen": self.chosen + ([f"friction: {self.friction}"] if self.friction else []),
             "models": {name: _result_json(r) for name, r in self.results.items()},
             "parameter_set": {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.parameter_set().items()},
+            "set": dict(self.overrides),
+            "warnings": self.warnings,
+            "model_check_passed": self.model_check_passed,
             "notes": self.notes,
         }
 
@@ -96,7 +123,10 @@ def _result_json(r: FitResult) -> dict:
     out = {"model": r.model, "values": {k: plain(v) for k, v in r.values.items()},
            "stderr": r.stderr, "rms": r.rms, "residual_unit": r.residual_unit,
            "n_points": r.n_points, "n_params": r.n_params, "aic": r.aic, "bic": r.bic}
-    for key in ("ci95", "correlation", "engine_runs", "free", "notes"):
+    out["ci95"] = {k: r.interval95(k) for k, v in r.values.items() if not isinstance(v, (tuple, list))
+                   and r.stderr.get(k) is not None}  # null: no meaningful interval (at a bound, model check failed)
+    for key in ("correlation", "engine_runs", "free", "notes", "bounds", "at_bound", "warnings", "model_check",
+                "impact_speed"):
         if key in r.extra:
             value = r.extra[key]
             out[key] = value.tolist() if hasattr(value, "tolist") else value
@@ -191,14 +221,19 @@ def _damper(records, results, model, friction, module) -> Identification:
 def identify(kind: str, data: Sequence[str | Path], model: str = "auto", friction: str = "auto",
              mass_kg: float | None = None, config: str = "S12", free: Sequence[str] = (),
              bounds: dict | None = None, engine: str = "mujoco", starts: int = 1,
-             touch_s: float | None = None, clicks: Sequence[float | Mapping[str, float]] | None = None
-             ) -> Identification:
+             touch_s: float | None = None, clicks: Sequence[float | Mapping[str, float]] | None = None,
+             overrides: Mapping | None = None) -> Identification:
     """Fit ``kind`` ("spring", "damper", "tire", "drop") to the record(s) in ``data``; ``starts``:
     drop fits from that many start points (the best wins); ``free``: the drop fit's free keys
     (default ``DEFAULT_DROP_FREE``); ``touch_s``: the drop record's time zero on its clock
     (default: found by ``validation.time_zero``); ``clicks``: damper fits from several dyno files,
     the adjuster position (clicks from closed) of each, or a mapping per file of its adjusters'
-    positions by label (``damper.ADJUSTERS``: lsc, hsc, lsr, hsr, c, r), giving a ``clicks`` damper."""
+    positions by label (``damper.ADJUSTERS``: lsc, hsc, lsr, hsr, c, r), giving a ``clicks`` damper;
+    ``overrides``: drop fits run on ``config`` with these keys set (written into fit.toml too)."""
+    if kind not in KINDS:
+        raise MtbmjError(f"fit: unknown kind {kind!r} (one of {', '.join(KINDS)})")
+    if overrides and kind != "drop":
+        raise MtbmjError(f"fit {kind}: --set applies to drop fits (the configuration they run on)")
     if kind not in KINDS:
         raise MtbmjError(f"fit: unknown kind {kind!r} (one of {', '.join(KINDS)})")
     if not data:
@@ -258,7 +293,7 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
         free = DEFAULT_DROP_FREE
         notes.append(f"no --free given: fitting {', '.join(free)}")
     result = dropfit.fit_drop(records[0], config=config, free=list(free), bounds=bounds, engine=engine,
-                              starts=starts, touch_s=touch_s)
+                              starts=starts, touch_s=touch_s, overrides=overrides)
     x = result.extra
     if x.get("time_zero"):
         notes.append(x["time_zero"]["description"])
@@ -266,5 +301,8 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
                  f"plus the engine's own error (the other engine at the optimum) and the touch's uncertainty; "
                  f"Student t on {x['effective_dof']:.0f} effective samples")
     notes += x.get("notes", [])
+    notes.append("bounds: " + "; ".join(f"{k} {a:g} to {b:g}" for k, (a, b) in x["bounds"].items())
+                 + " (default: start / 4 to 4 x start; --bound KEY=LOW:HIGH)")
     return Identification("drop", records, {"drop": result}, ["drop"],
-                          lambda: dropfit.plot_drop(records[0], result), base=config, notes=notes)
+                          lambda: dropfit.plot_drop(records[0], result), base=config, notes=notes,
+                          overrides={k: v for k, v in (overrides or {}).items() if k not in result.values})
