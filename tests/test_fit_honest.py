@@ -24,8 +24,10 @@ FREE = ["tire.impact_rate_N_per_mm", "fork.spring.rate_N_per_mm"]
 
 
 def s1_record(path, rate_N_per_mm=None, tire_N_per_mm=None, drop_mm=None, after_s=0.18, fall_s=0.06,
-              noise_mm=0.02, clock_s=3.2, seed=0):
-    """A sled record (CSV) of S1 with the given rates and drop height: closed form, analog logger."""
+              noise_mm=0.02, clock_s=3.2, seed=0, friction_N=0.0, stalled_after_s=None):
+    """A sled record (CSV) of S1 with the given rates and drop height: closed form (or, with
+    ``friction_N`` of Coulomb friction in the fork, ``solve_ivp``'s LSODA), analog logger.
+    ``stalled_after_s``: the logger stops updating then and repeats its last reading."""
     m1, m2 = S1["sled.body_mass_kg"], S1["sled.wheel_mass_kg"]
     k = (rate_N_per_mm or S1["fork.spring.rate_N_per_mm"]) * 1e3
     c = S1["fork.damper.coefficient_N_s_per_m"]
@@ -44,11 +46,21 @@ def s1_record(path, rate_N_per_mm=None, tire_N_per_mm=None, drop_mm=None, after_
     release = -v0 / g
     time = np.arange(-int(np.ceil((0.05 - release) / fine)), int(np.ceil((after_s + 0.02) / fine))) * fine
     before, after = time[time < 0], time[time >= 0]
-    step = linalg.expm(a * fine)
     states = np.empty((after.size, 5))
     states[0] = [0.0, 0.0, v0, v0, 1.0]
-    for i in range(1, after.size):
-        states[i] = step @ states[i - 1]
+    if friction_N > 0.0:  # Coulomb friction (a 5 mm/s tanh band) against the fork's stroke: no closed form
+        from scipy.integrate import solve_ivp
+
+        def rhs(t, y):
+            f = friction_N * np.tanh((y[2] - y[3]) / 5e-3)
+            return a @ y + np.array([0.0, 0.0, -f / m1, f / m2, 0.0])
+
+        sol = solve_ivp(rhs, (0.0, after[-1]), states[0], method="LSODA", t_eval=after, rtol=1e-10, atol=1e-12)
+        states = sol.y.T
+    else:
+        step = linalg.expm(a * fine)
+        for i in range(1, after.size):
+            states[i] = step @ states[i - 1]
     fall = np.where(before < release, -h, v0 * before + 0.5 * g * before**2)
     sled = np.concatenate([fall, states[:, 0]]) * 1e3
     fork = np.concatenate([np.zeros(before.size), states[:, 0] - states[:, 1]]) * 1e3
@@ -62,7 +74,11 @@ def s1_record(path, rate_N_per_mm=None, tire_N_per_mm=None, drop_mm=None, after_
         _, y, _ = signal.lsim(system, x, time - time[0], X0=x0)
         logged = np.interp(samples, time, y) + rng.normal(0.0, noise_mm, samples.size)
         q = (275.0 if name == "sled" else 150.0) / 2**16
-        columns[f"{name}_mm"] = np.round(logged / q) * q
+        logged = np.round(logged / q) * q
+        if stalled_after_s is not None:
+            stalled = samples > stalled_after_s
+            logged[stalled] = logged[~stalled][-1]
+        columns[f"{name}_mm"] = logged
     text = "# a test's own S1 record (closed form)\ntime_s,sled_mm,fork_mm\n" + "\n".join(
         f"{t:.6f},{s:.5f},{f:.5f}" for t, s, f in zip(columns["time_s"], columns["sled_mm"], columns["fork_mm"]))
     path.write_text(text + "\n")
