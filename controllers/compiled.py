@@ -9,7 +9,7 @@ Design
 ------
 * A ``ForkLaw`` is flattened into one row of integer codes and one row of float64 parameters
   (``flatten``): the spring tree (Linear, Bilinear, Progressive, Air, Directional, TopOut, nested
-  at will) becomes a short postfix program, the damper (Linear, Bilinear, Table) and the friction law
+  at will) becomes a short postfix program, the damper (Linear, Bilinear, Digressive, Table) and the friction law
   (NoFriction, Coulomb, CoulombViscous, Stiction, Stribeck, LuGre) one code each.
 * The rows live in a process-wide registry (two numpy arrays that are never reallocated), one slot
   per ``CompiledForkCallback``, keyed by the ``mjModel*`` it was built for. One numba ``cfunc``
@@ -71,7 +71,7 @@ FALLBACK_MESSAGE = "numba not installed: using the Python force laws"
 # ----------------------------------------------------------------------------------------------
 SP_LINEAR, SP_BILINEAR, SP_PROGRESSIVE, SP_DIRECTIONAL, SP_TOPOUT, SP_STOPS = 1, 2, 3, 4, 5, 6
 SP_AIR = 7
-DA_LINEAR, DA_BILINEAR, DA_TABLE = 1, 2, 3
+DA_LINEAR, DA_BILINEAR, DA_TABLE, DA_DIGRESSIVE = 1, 2, 3, 4
 FR_NONE, FR_COULOMB, FR_COULOMB_VISCOUS, FR_STICTION, FR_STRIBECK, FR_LUGRE = 0, 1, 2, 3, 4, 5
 FR_STICKING = 6  # Sticking around one of the static laws: I_FRICTION_INNER holds that law's code
 
@@ -176,6 +176,9 @@ def flatten(law: ForkLaw) -> tuple[list[int], list[float]]:
         ints[I_DAMPER], ints[I_DAMPER_AT] = DA_LINEAR, put(d.coefficient)
     elif kind is _damper.BilinearDamper:
         ints[I_DAMPER], ints[I_DAMPER_AT] = DA_BILINEAR, put(d.compression, d.rebound)
+    elif kind is _damper.DigressiveDamper:
+        ints[I_DAMPER], ints[I_DAMPER_AT] = DA_DIGRESSIVE, put(d.compression_low, d.compression_high, d.compression_knee,
+                                                               d.rebound_low, d.rebound_high, d.rebound_knee)
     elif kind is _damper.TableDamper:
         n = len(d.velocity)
         ints[I_DAMPER], ints[I_DAMPER_N] = DA_TABLE, n
@@ -561,6 +564,14 @@ if _numba is not None:
             return P[o] * v
         if code == DA_BILINEAR:  # BilinearDamper.force
             return (P[o] if v >= 0.0 else P[o + 1]) * v
+        if code == DA_DIGRESSIVE:  # DigressiveDamper.force
+            if v >= 0.0:
+                if v - P[o + 2] >= 0.0:
+                    return P[o] * P[o + 2] + P[o + 1] * (v - P[o + 2])
+                return P[o] * v
+            if v + P[o + 5] >= 0.0:
+                return P[o + 3] * v
+            return -P[o + 3] * P[o + 5] + P[o + 4] * (v + P[o + 5])
         n = I[I_DAMPER_N]  # TableDamper.force: velocity[n], force[n], slopes[n - 1]
         i = 0
         for j in range(1, n - 1):

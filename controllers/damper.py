@@ -38,6 +38,33 @@ class BilinearDamper:
         return (self.compression if positive else self.rebound) * v
 
 
+@dataclass(frozen=True)
+class DigressiveDamper:
+    """Two stages per direction, as shimmed dampers behave: a steep low-speed rate up to a knee
+    speed, a flatter high-speed rate beyond it (continuous at the knee). Speeds in m/s, rates in
+    N s/m; rebound mirrors compression with its own three values."""
+
+    compression_low: float  # N s/m, 0 <= v <= compression_knee
+    compression_high: float  # N s/m, v > compression_knee
+    compression_knee: float  # m/s, > 0
+    rebound_low: float  # N s/m, -rebound_knee <= v < 0
+    rebound_high: float  # N s/m, v < -rebound_knee
+    rebound_knee: float  # m/s, > 0
+    n_guards = 3
+
+    def guards(self, x, v):
+        return (v, v - self.compression_knee, v + self.rebound_knee)
+
+    def force(self, v, sides=None):
+        if on_positive_side(v, sides, 0):
+            if on_positive_side(v - self.compression_knee, sides, 1):
+                return self.compression_low * self.compression_knee + self.compression_high * (v - self.compression_knee)
+            return self.compression_low * v
+        if on_positive_side(v + self.rebound_knee, sides, 2):
+            return self.rebound_low * v
+        return -self.rebound_low * self.rebound_knee + self.rebound_high * (v + self.rebound_knee)
+
+
 class TableDamper:
     """Lookup table F(v) from dyno peak force vs velocity, linear between points and extrapolated
     with the end slopes. The table passes through (0, 0); the offset at zero velocity is the
@@ -77,4 +104,4 @@ class TableDamper:
         return f"TableDamper(velocity={self.velocity}, force={self.force_table})"
 
 
-__all__ = ["LinearDamper", "BilinearDamper", "TableDamper"]
+__all__ = ["LinearDamper", "BilinearDamper", "DigressiveDamper", "TableDamper"]

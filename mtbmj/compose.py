@@ -210,6 +210,12 @@ def _damper(c: Config) -> object:
         return law.BilinearDamper(
             c.require("fork.damper.compression_N_s_per_m", why), c.require("fork.damper.rebound_N_s_per_m", why)
         )
+    if model == "digressive":
+        return law.DigressiveDamper(
+            c.require("fork.damper.compression_low_N_s_per_m", why), c.require("fork.damper.compression_high_N_s_per_m", why),
+            c.require("fork.damper.compression_knee_mm_per_s", why) * MM,
+            c.require("fork.damper.rebound_low_N_s_per_m", why), c.require("fork.damper.rebound_high_N_s_per_m", why),
+            c.require("fork.damper.rebound_knee_mm_per_s", why) * MM)
     if model == "clicks":
         return _clicks_damper(c)
     v = np.asarray(c.require("fork.damper.velocity_mm_per_s", why)) * MM

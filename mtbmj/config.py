@@ -29,7 +29,7 @@ from mtbmj.textfile import read_text
 # kinds: "pos" > 0, "nonneg" >= 0, "real" any finite number, "list" of finite numbers, "rows" a
 # list of such lists (a table, one row each), "bool", "text", or a tuple of allowed strings.
 SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive", "air")
-DAMPER_MODELS = ("linear", "bilinear", "table", "clicks")
+DAMPER_MODELS = ("linear", "bilinear", "digressive", "table", "clicks")
 FRICTION_MODELS = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")
 TIRE_MODELS = ("impact", "switch", "undamped", "static")
 INTEGRATORS = ("euler", "implicitfast", "implicit", "rk4")
@@ -71,6 +71,12 @@ SCHEMA: dict[str, Any] = {
     "fork.damper.coefficient_N_s_per_m": "nonneg",
     "fork.damper.compression_N_s_per_m": "nonneg",
     "fork.damper.rebound_N_s_per_m": "nonneg",
+    "fork.damper.compression_low_N_s_per_m": "nonneg",
+    "fork.damper.compression_high_N_s_per_m": "nonneg",
+    "fork.damper.compression_knee_mm_per_s": "pos",
+    "fork.damper.rebound_low_N_s_per_m": "nonneg",
+    "fork.damper.rebound_high_N_s_per_m": "nonneg",
+    "fork.damper.rebound_knee_mm_per_s": "pos",
     "fork.damper.velocity_mm_per_s": "list",
     "fork.damper.force_N": "list",
     "fork.damper.compression_clicks": "nonneg",

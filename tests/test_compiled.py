@@ -48,6 +48,7 @@ TABLE = law.TableDamper([-1.5, -0.8, -0.4, -0.15, -0.05, 0.0, 0.05, 0.15, 0.4, 0
 DAMPERS = {
     "linear": law.LinearDamper(201.3),
     "bilinear": law.BilinearDamper(133.2, 269.4),
+    "digressive": law.DigressiveDamper(1500.0, 300.0, 0.3, 2500.0, 500.0, 0.25),
     "table": TABLE,
     "table_no_zero": law.TableDamper([-1.0, -0.3, 0.2, 1.0], [-250.0, -60.0, 30.0, 150.0]),
 }

@@ -11,7 +11,7 @@ import pytest
 from scipy.integrate import quad
 
 from mtbmj.controllers import (
-    BilinearDamper, BilinearSpring, Coulomb, CoulombViscous, DirectionalSpring, ForkLaw, KelvinVoigt,
+    BilinearDamper, BilinearSpring, Coulomb, DigressiveDamper, CoulombViscous, DirectionalSpring, ForkLaw, KelvinVoigt,
     LinearDamper, LinearSpring, LuGre, NoFriction, ProgressiveSpring, Stiction, Stribeck, TableDamper,
     TireLaw, TopOutSpring, smooth_sign,
 )
@@ -449,6 +449,7 @@ PIECEWISE = {
     "topout_progressive": _spring_case(TopOutSpring(PROGRESSIVE, K_TOP, PRELOAD)),
     "topout_directional_bilinear": _spring_case(TopOutSpring(DIRECTIONAL_BILINEAR, K_TOP, PRELOAD)),
     "bilinear_damper": _damper_case(BilinearDamper(300.0, 150.0)),
+    "digressive_damper": _damper_case(DigressiveDamper(1500.0, 300.0, 0.3, 2500.0, 500.0, 0.25)),
     "table_damper": _damper_case(TableDamper(TABLE_V, TABLE_F)),
     "stiction": _friction_case(FRICTION_STATIC),
     "lugre": _friction_case(LUGRE, 1e-4),

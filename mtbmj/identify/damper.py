@@ -10,6 +10,8 @@ default band of 5 mm/s) and solved by ``scipy.optimize.least_squares``:
 
 * hydraulic ``linear``: one coefficient c (the average of compression and rebound), + Coulomb;
 * hydraulic ``bilinear``: c_c for v > 0, c_r for v < 0, + Coulomb;
+* hydraulic ``digressive``: per direction a low-speed rate up to a knee speed and a high-speed
+  rate beyond it (``controllers.DigressiveDamper``, what shimmed dampers do), + Coulomb;
 * hydraulic ``table``: the Coulomb offset at zero velocity from the test speeds of 20-150 mm/s
   (at least the 4 slowest at or above 20 mm/s) of each side (quadratic through the origin per side + a shared offset), then the hydraulic part at each test
   speed = mean of (force - offset), with (0, 0) added and force made non-decreasing: the rules of
@@ -38,7 +40,7 @@ from mtbmj.identify.dyno_synthetic import peak_points
 from mtbmj.identify.fitresult import FitResult, covariance_stderr
 from mtbmj.identify.records import Record, RecordError
 
-HYDRAULIC = ("linear", "bilinear", "table")
+HYDRAULIC = ("linear", "bilinear", "digressive", "table")
 FRICTION = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")
 MODELS = HYDRAULIC + FRICTION
 BAND = 5e-3  # m/s: fork.friction.sign_band_mm_per_s default
@@ -99,14 +101,50 @@ _FRICTION_PARAMS = {
 def _hydraulic(name: str, p: np.ndarray, v: np.ndarray) -> np.ndarray:
     if name == "linear":
         return p[0] * v
+    if name == "digressive":
+        damper = law.DigressiveDamper(*map(float, p[:6]))
+        return np.array([damper.force(float(vi)) for vi in v])
+    if name == "smooth_knee":  # the same two rates with a smooth knee: only for the friction check
+        speed = np.abs(v)
+        comp = p[1] * speed + (p[0] - p[1]) * p[2] * np.tanh(speed / p[2])
+        reb = p[4] * speed + (p[3] - p[4]) * p[5] * np.tanh(speed / p[5])
+        return np.where(v >= 0, comp, -reb)
+    if name == "power":  # a v^n per side: only for the friction check
+        speed = np.abs(v)
+        return np.where(v >= 0, p[0] * speed ** p[1], -p[2] * speed ** p[3])
     return np.where(v > 0, p[0] * v, p[1] * v)
+
+
+N_HYDRAULIC = {"linear": 1, "bilinear": 2, "digressive": 6, "smooth_knee": 6, "power": 4}
+CHECK_SHAPES = ("smooth_knee", "power")  # other shapes of the hydraulic force near zero speed, for the friction check
+FRICTION_AGREEMENT = 0.2  # the friction under two shapes of the hydraulic knee: more than 20 % apart, it is not told
+REJECTED_BIC = 10.0  # a BIC worse by this much is strong evidence against a model (Kass & Raftery 1995)
+DIGRESSIVE_KEYS = ("compression_low_N_s_per_m", "compression_high_N_s_per_m", "compression_knee_mm_per_s",
+                   "rebound_low_N_s_per_m", "rebound_high_N_s_per_m", "rebound_knee_mm_per_s")
+
+
+def _digressive_start(v: np.ndarray, f: np.ndarray):
+    """Start, lower and upper bounds of the digressive part: per side the slope of the slower and
+    of the faster half of the test speeds, the knee between them (within the tested speeds)."""
+    x0, lo, hi = [], [], []
+    for side in (1, -1):
+        sel = np.sign(v) == side
+        speed, force = np.abs(v[sel]), np.abs(f[sel])
+        knee = float(np.median(speed))
+        slow, fast = speed <= knee, speed >= knee
+        low = float(np.polyfit(speed[slow], force[slow], 1)[0]) if np.sum(slow) >= 2 else 100.0
+        high = float(np.polyfit(speed[fast], force[fast], 1)[0]) if np.sum(fast) >= 2 else low
+        x0 += [max(low, 1.0), max(min(high, low), 1.0), knee]
+        lo += [0.0, 0.0, float(speed.min())]
+        hi += [np.inf, np.inf, float(speed.max())]
+    return x0, lo, hi
 
 
 # --- fits ----------------------------------------------------------------------------------------
 
 def _parametric(rec: Record, hydraulic: str, friction: str, name: str) -> FitResult:
     v, f = np.asarray(rec["velocity"], float), np.asarray(rec["force"], float)
-    nh = 1 if hydraulic == "linear" else 2
+    nh = N_HYDRAULIC[hydraulic]
     fric = "coulomb" if friction == "coulomb_viscous" else friction  # reparametrised afterwards
     names = _FRICTION_PARAMS[fric]
     # start: slopes per side from the fast half, offset from the intercepts
@@ -123,9 +161,16 @@ def _parametric(rec: Record, hydraulic: str, friction: str, name: str) -> FitRes
             q0.append(1.2 * fc0), lo.append(0.0), hi.append(np.inf)
         else:  # a velocity width, m/s
             q0.append(2.0 * MIN_WIDTH), lo.append(MIN_WIDTH), hi.append(1.0)
-    x0 = np.array([max(h, 1.0) for h in h0] + q0, float)
-    lower = np.array([0.0] * nh + lo, float)
-    upper = np.array([np.inf] * nh + hi, float)
+    if hydraulic in ("digressive", "smooth_knee"):
+        h0, hlo, hhi = _digressive_start(v, f)
+    elif hydraulic == "power":  # force = a |v|^n per side, from a unit slope at 1 m/s
+        h0 = [max(h0[0] if len(h0) == 2 else 100.0, 1.0), 0.8, max(h0[-1], 1.0), 0.8]
+        hlo, hhi = [0.0, 0.1, 0.0, 0.1], [np.inf, 2.0, np.inf, 2.0]
+    else:
+        h0, hlo, hhi = [max(h, 1.0) for h in h0], [0.0] * nh, [np.inf] * nh
+    x0 = np.array(h0 + q0, float)
+    lower = np.array(hlo + lo, float)
+    upper = np.array(hhi + hi, float)
     scale = np.maximum(np.abs(x0), 1e-3)
 
     def resid(z):
@@ -133,6 +178,12 @@ def _parametric(rec: Record, hydraulic: str, friction: str, name: str) -> FitRes
         return _hydraulic(hydraulic, p[:nh], v) + _friction_force(fric, p[nh:], v) - f
 
     starts = [x0]
+    if hydraulic in ("digressive", "smooth_knee"):  # the knees are multimodal: try a few
+        for q in (0.25, 0.75):
+            z = x0.copy()
+            z[2] = float(np.quantile(np.abs(v[v > 0]), q))
+            z[5] = float(np.quantile(np.abs(v[v < 0]), q))
+            starts.append(z)
     if fric in ("stribeck", "stiction", "lugre"):  # the width is multimodal: try a few
         for w in (1.5 * MIN_WIDTH, 4 * MIN_WIDTH, 10 * MIN_WIDTH):
             z = x0.copy()
@@ -153,6 +204,10 @@ def _parametric(rec: Record, hydraulic: str, friction: str, name: str) -> FitRes
     notes = []
     if hydraulic == "linear":
         values[D + "coefficient_N_s_per_m"], stderr[D + "coefficient_N_s_per_m"] = float(p[0]), float(std[0])
+    elif hydraulic in ("digressive", "smooth_knee"):
+        for i, key in enumerate(DIGRESSIVE_KEYS):
+            unit = 1e3 if key.endswith("mm_per_s") else 1.0
+            values[D + key], stderr[D + key] = float(p[i] * unit), float(std[i] * unit)
     else:
         values[D + "compression_N_s_per_m"], stderr[D + "compression_N_s_per_m"] = float(p[0]), float(std[0])
         values[D + "rebound_N_s_per_m"], stderr[D + "rebound_N_s_per_m"] = float(p[1]), float(std[1])
@@ -190,12 +245,19 @@ def _parametric(rec: Record, hydraulic: str, friction: str, name: str) -> FitRes
     if friction == "lugre":
         notes.append("LuGre bristle stiffness and damping are not identified: they need time-domain pre-sliding "
                      "data (small strokes below the breakaway force); the base configuration's values are kept")
+    identified = True
+    if R + "coulomb_N" in values:
+        fc, se = values[R + "coulomb_N"], stderr[R + "coulomb_N"]
+        if not (np.isfinite(se) and fc - 2.0 * se > 0.0 and se <= 0.5 * fc):
+            identified = False
+            notes.append(f"the friction cannot be told from the {hydraulic} hydraulic law on this record: Coulomb "
+                         f"{fc:.1f} N with a standard error of {se:.2g} N (record slower test speeds to separate them)")
     grid = np.linspace(min(v.min(), 0.0), max(v.max(), 0.0), 400)
     curve_f = _hydraulic(hydraulic, p[:nh], grid) + _friction_force(fric, p[nh:], grid)
     return FitResult("damper", name, values, stderr, float(np.sqrt(np.mean(r ** 2))), "N", len(v), len(p),
                      {"model_keys": {D + "model": hydraulic, R + "model": friction}, "hydraulic": hydraulic,
                       "friction": friction, "curve": (grid * 1e3, curve_f), "correlation": corr,
-                      "supported": supported, "notes": notes,
+                      "supported": supported, "notes": notes, "friction_identified": identified,
                       **({"unidentified": [R + "bristle_stiffness_N_per_mm", R + "bristle_damping_N_s_per_m"]}
                          if friction == "lugre" else {})})
 
@@ -297,7 +359,8 @@ def fit_damper(record: Record, model: str = "bilinear", *, friction: str | None 
 
 def fit_damper_all(record: Record) -> dict[str, FitResult]:
     """Every hydraulic model (with Coulomb friction) and every friction model (with the bilinear
-    hydraulic part), keyed by model name."""
+    hydraulic part), keyed by model name. Each result with a Coulomb level carries
+    ``extra["friction_check"]`` (:func:`friction_check`)."""
     rec = peaks(record)
     out = {}
     for name in MODELS:
@@ -306,7 +369,49 @@ def fit_damper_all(record: Record) -> dict[str, FitResult]:
         except DamperFitError:
             if name != "table":
                 raise
+    if "digressive" in out:
+        check = friction_check(rec, out["digressive"])
+        for result in out.values():
+            if R + "coulomb_N" in result.values:
+                result.extra["friction_check"] = check
+                if not check["told"]:
+                    result.extra.setdefault("warnings", []).append(check["line"])
+                    result.extra["friction_identified"] = False
     return out
+
+
+def friction_check(rec: Record, digressive: FitResult) -> dict:
+    """Can the record tell the friction from the hydraulic law? A peak-force record shows the
+    friction only as what is left at zero speed, extrapolated from its slowest test speeds by the
+    hydraulic law. The digressive fit (a sharp knee) is refitted with other shapes of the force
+    near zero speed (``CHECK_SHAPES``: a smooth tanh knee, a power law a v^n). The friction is told
+    when the sharp knee is among the shapes the record does not reject (BIC within
+    ``REJECTED_BIC`` of the best), all those shapes give friction levels within
+    ``FRICTION_AGREEMENT`` of each other, and its interval excludes 0."""
+    fits = {"sharp knee": digressive}
+    for shape in CHECK_SHAPES:
+        try:
+            fits[shape.replace("_", " ")] = _parametric(rec, shape, "coulomb", shape)
+        except RecordError:
+            continue
+    best = min(f.bic for f in fits.values())
+    # a shape the record rejects (BIC worse by REJECTED_BIC or more) is no alternative to weigh
+    plausible = {name: f.values[R + "coulomb_N"] for name, f in fits.items() if f.bic - best < REJECTED_BIC}
+    levels = list(plausible.values())
+    sharp, se = digressive.values[R + "coulomb_N"], digressive.stderr[R + "coulomb_N"]
+    agree = max(levels) - min(levels) <= FRICTION_AGREEMENT * max(levels)
+    # told: the law written (the sharp knee) is among the shapes the record allows, they all agree,
+    # and the level's interval excludes 0
+    told = bool("sharp knee" in plausible and agree and sharp - 2.0 * se > 0.0)
+    shown = ", ".join(f"{level:.1f} N with {'a ' if 'knee' in name else ''}{name}"
+                      + ("" if name in plausible else " (rejected by the record)")
+                      for name, level in ((n, f.values[R + "coulomb_N"]) for n, f in fits.items()))
+    line = f"friction {'told' if told else 'NOT told'} from the hydraulic law: Coulomb {shown}"
+    if not told:
+        line += ("; the record cannot tell friction from how the damping approaches zero speed (record test speeds "
+                 "below 25 mm/s, or measure the friction on its own); the value written rests on the law's shape")
+    return {"told": told, "levels_N": {n: float(f.values[R + "coulomb_N"]) for n, f in fits.items()},
+            "plausible": sorted(plausible), "line": line}
 
 
 # adjuster labels of ``fit damper --clicks`` (riders' abbreviations) -> the config's circuit names
@@ -474,7 +579,8 @@ def plot_damper(record: Record, results: Mapping[str, FitResult] | FitResult):
     v, f = rec["velocity"] * 1e3, rec["force"]
     fig = Figure(figsize=(11, 4.2))
     ax1, ax2 = fig.subplots(1, 2)
-    styles = {"linear": ("tab:green", "--"), "bilinear": ("tab:red", "-"), "table": ("tab:purple", "-.")}
+    styles = {"linear": ("tab:green", "--"), "bilinear": ("tab:red", "-"), "digressive": ("tab:orange", "-"),
+              "table": ("tab:purple", "-.")}
     for ax in (ax1, ax2):
         ax.plot(v, f, "o", ms=3, color="k", label="dyno peaks")
         ax.axhline(0, color="0.7", lw=0.6)

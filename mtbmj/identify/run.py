@@ -126,7 +126,7 @@ def _result_json(r: FitResult) -> dict:
     out["ci95"] = {k: r.interval95(k) for k, v in r.values.items() if not isinstance(v, (tuple, list))
                    and r.stderr.get(k) is not None}  # null: no meaningful interval (at a bound, model check failed)
     for key in ("correlation", "engine_runs", "free", "notes", "bounds", "at_bound", "warnings", "model_check",
-                "impact_speed"):
+                "impact_speed", "friction_check"):
         if key in r.extra:
             value = r.extra[key]
             out[key] = value.tolist() if hasattr(value, "tolist") else value
@@ -135,7 +135,7 @@ def _result_json(r: FitResult) -> dict:
 
 SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive", "air")  # candidates for "auto"
 SPRING_PARTS = SPRING_MODELS + ("top_out", "preload")  # may be asked for by name
-HYDRAULIC_MODELS = ("linear", "bilinear", "table")
+HYDRAULIC_MODELS = ("linear", "bilinear", "digressive", "table")
 FRICTION_MODELS = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")
 
 
