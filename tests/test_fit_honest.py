@@ -217,3 +217,37 @@ def test_the_figure_says_what_the_fit_says(records):
     assert right.axes[1].get_ylabel() == "model - data (mm)"
     low, high = right.axes[1].get_ylim()
     assert -0.5 < low < 0 < high < 0.5  # the residual of a right model: noise-sized, not a fit's structure
+
+
+# --- the spring fit's model check: dyno strokes made here, from closed forms ---------------------
+
+def spring_stroke(path, extra=None, noise_N=4.0, seed=0):
+    """A dyno stroke 2 -> 100 -> 2 mm at 50 mm/s, 1 kHz: a 16 N/mm coil with 30 N of friction
+    (a 5 mm/s tanh band), plus ``extra(x_mm)`` N, plus white noise."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 3.92, 1e-3)
+    x = np.where(t < 1.96, 2.0 + 50.0 * t, 100.0 - 50.0 * (t - 1.96))
+    v = np.gradient(x, t)
+    force = 16.0 * x + 30.0 * np.tanh(v / 5.0) + (extra(x) if extra else 0.0) + rng.normal(0.0, noise_N, t.size)
+    path.write_text("time_s,displacement_mm,force_N\n" + "\n".join(
+        f"{a:.4f},{b:.4f},{c:.3f}" for a, b, c in zip(t, x, force)) + "\n")
+    return path
+
+
+def test_a_spring_the_library_can_describe_passes_its_check(tmp_path, capsys):
+    status = cli.main(["fit", "spring", str(spring_stroke(tmp_path / "coil.csv")), "--out", str(tmp_path / "o")])
+    printed = capsys.readouterr().out
+    fit = json.loads((tmp_path / "o" / "fit.json").read_text())
+    assert status == 0 and "model check passed" in printed and fit["model_check_passed"]
+    rate = fit["parameter_set"].get("fork.spring.rate_N_per_mm")
+    assert rate == pytest.approx(16.0, rel=0.01)
+
+
+def test_a_spring_no_law_of_the_library_follows_fails_its_check(tmp_path, capsys):
+    """A wavy force (a coil with a 40 N ripple every 30 mm, as a bent spring or a sticking seal
+    might show): no spring law follows it, and the fit says so with exit status 3."""
+    path = spring_stroke(tmp_path / "wavy.csv", extra=lambda x: 40.0 * np.sin(x / 30.0 * 2 * np.pi))
+    status = cli.main(["fit", "spring", str(path), "--out", str(tmp_path / "o")])
+    printed = capsys.readouterr().out
+    assert status == 3 and "model check FAILED" in printed
+    assert (tmp_path / "o" / "fit.toml").read_text().startswith('description = "NOT A CLEAN RESULT: model check FAILED')

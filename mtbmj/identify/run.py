@@ -204,8 +204,33 @@ def _spring(records, results, model, plot_fn, base="reference") -> Identificatio
     notes = _comparison(results, SPRING_MODELS, main, floor, "models compared")
     if "friction_N" in results[main].extra:
         notes.append(f"hysteresis half-width (friction) {results[main].extra['friction_N']:.1f} N")
+    check = _noise_check(records[0], results[main])
+    if check is not None:
+        results[main].extra["model_check"] = check
     return Identification("spring", records, results, [main], lambda: plot_fn(records[0], results), base=base,
                           notes=notes)
+
+
+SPRING_CHECK_MIN_POINTS = 30  # a stroke this long at least has a noise floor to speak of
+
+
+def _noise_check(record: Record, result: FitResult) -> dict | None:
+    """The spring fit's model check: its residual RMS against the force's own noise floor (white
+    noise from third differences along the stroke, ``validation.time_zero.noise_sigma``), limit
+    3 x noise (``fitresult.model_check``). ``None`` for a record too short to tell its noise."""
+    from mtbmj.identify.fitresult import model_check
+    from mtbmj.validation.time_zero import noise_sigma
+
+    force = record.columns.get("force")
+    if force is None or force.size < SPRING_CHECK_MIN_POINTS:
+        return None
+    noise = float(noise_sigma(np.asarray(force, float)))
+    if not noise > 0.0:
+        return None
+    check = model_check(result.rms, noise, 0.0, "N", "residual: see fit.png")
+    if not check["passed"] and result.model != "air":
+        check["line"] += "; an air spring? name an air configuration with --config (e.g. air120) to fit the air model"
+    return check
 
 
 def _damper(records, results, model, friction, module) -> Identification:
