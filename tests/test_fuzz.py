@@ -294,7 +294,8 @@ def test_generated_records(tmp_path, capfd, data, kind, derived):
         argv = command + [path]
     if kind == "tire":
         argv += data.draw(st.sampled_from([[], ["--mass-kg", "25"], ["--mass-kg", "0"], ["--mass-kg", "nan"]]))
-    check(argv + ["--out", out], out, capfd, "records")
+    # 3: a fit that ran and says its model does not explain the record (docs/identification.md)
+    check(argv + ["--out", out], out, capfd, "records", results=(0, 3))
 
 
 # --- SST telemetry ------------------------------------------------------------------------------
@@ -418,4 +419,4 @@ def test_enough_cases_per_run():
     assert sum(mine.values()) >= 1000, mine
     for name in EXAMPLES:  # the generators reach both sides of the invariant
         counts = OUTCOMES[name]
-        assert counts.get(0, 0) > 0 and counts.get(2, 0) > 0, (name, counts)
+        assert counts.get(0, 0) + counts.get(3, 0) > 0 and counts.get(2, 0) > 0, (name, counts)
