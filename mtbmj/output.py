@@ -211,8 +211,23 @@ def _is_our_lock(path: Path) -> bool:
 def _refuse_foreign(out: Path) -> None:
     entry = foreign_entry(out)
     if entry is not None:
+        older = (" (the folder looks like the result of an mtbmj older than its output records: if you no longer "
+                 "need it, remove it yourself)" if read_record(out) is None and _older_result(out) else "")
         raise MtbmjError(f"{out}: holds {entry}, which mtbmj did not write (it is not in {RECORD}); writing here "
-                         f"would replace it: choose another --out")
+                         f"would replace it: choose another --out{older}")
+
+
+def _older_result(out: Path) -> bool:
+    """``out`` holds a manifest an mtbmj before output records wrote (its ``versions`` name mtbmj).
+    Only a hint for the refusal: such a folder is still refused, never replaced."""
+    for name in ("manifest.json", "sweep.json"):
+        try:
+            manifest = json.loads((out / name).read_text())
+        except (OSError, ValueError, UnicodeDecodeError):
+            continue
+        if isinstance(manifest, dict) and isinstance(manifest.get("versions"), dict) and "mtbmj" in manifest["versions"]:
+            return True
+    return False
 
 
 class Claim:

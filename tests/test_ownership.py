@@ -272,3 +272,20 @@ def test_the_pool_finder_finds_a_plain_pool(tmp_path):
     source = "from concurrent.futures import ProcessPoolExecutor\nwith ProcessPoolExecutor(max_workers=2) as p:\n    pass\n"
     names = [n.func.id for n in ast.walk(ast.parse(source)) if isinstance(n, ast.Call) and hasattr(n.func, "id")]
     assert "ProcessPoolExecutor" in names and "ProcessPoolExecutor" in POOL_MAKERS
+
+
+def test_a_result_of_an_older_mtbmj_is_refused_with_a_hint(tmp_path, capsys):
+    """A folder an mtbmj before output records wrote (no record) is refused like any other, and
+    the line says what it is; a user's own manifest.json gets no such hint."""
+    old = tmp_path / "old"
+    assert main(["drop", "S12", "--duration", "0.05", "--quiet", "--out", str(old)]) == 0
+    (old / output.RECORD).unlink()
+    (old / ".lock").unlink()
+    before = snapshot(old)
+    refused(capsys, ["drop", "S12", "--duration", "0.05", "--quiet", "--out", old], "older than its output records")
+    assert snapshot(old) == before
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "manifest.json").write_text('{"name": "my-web-app", "versions": {"node": "20"}}\n')
+    err = refused(capsys, ["drop", "S12", "--duration", "0.05", "--quiet", "--out", mine], "manifest.json")
+    assert "older than its output records" not in err
