@@ -84,7 +84,7 @@ def _clicks(given: list[str]) -> list:
 def add_parser(sub) -> None:
     p = sub.add_parser("fit", help="identify parameters from bench data or a drop record; writes fit.toml",
                        description="Identify parameters and write fit.toml, fit.json and fit.png. Each value comes "
-                                   "with its 95 % interval. Drop and spring fits check their model: when the residual "
+                                   "with its 95 % interval. Drop, spring and tire fits check their model: when the residual "
                                    "is more than 3 x the record's noise floor (+ 0.1 mm for a drop), it says so and "
                                    "exits with status 3.")
     p.add_argument("kind", choices=("spring", "damper", "tire", "drop"))

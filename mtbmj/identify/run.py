@@ -310,6 +310,16 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
                              "static ramp (deflection_mm, force_N)")
         results = tire.fit_tire(drops[0], mass_kg, ramp=ramps[0] if ramps else None)
         order = [part for part in ("static", "impact", "contact") if part in results]  # as tire.tire_overrides
+        deflection = drops[0].columns.get("deflection")
+        if deflection is not None and deflection.size >= SPRING_CHECK_MIN_POINTS:
+            from mtbmj.identify.fitresult import model_check
+            from mtbmj.validation.time_zero import noise_sigma
+
+            noise_mm = float(noise_sigma(np.asarray(deflection, float))) * 1e3  # the record's, SI -> mm
+            for part in ("impact", "contact"):  # the fits of the drop record (the ramp's residual is in N)
+                if part in results and noise_mm > 0.0:
+                    results[part].extra["model_check"] = model_check(results[part].rms, noise_mm, 0.0, "mm",
+                                                                     f"residual of the {part} fit: see fit.png")
         return Identification("tire", records, results, order, lambda: tire.plot_tire(drops[0], results))
     from mtbmj.identify import dropfit
 
