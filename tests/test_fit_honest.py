@@ -290,3 +290,26 @@ def test_a_leaking_tire_fails_its_check(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert status == 3 and "model check FAILED" in printed
     assert (tmp_path / "o" / "fit.toml").read_text().startswith('description = "NOT A CLEAN RESULT: model check FAILED')
+
+
+def test_the_issues_preload_reproduction(tmp_path, capsys):
+    """Issue 22's first reproduction: a record of S12 with 330 N of preload, fitted from S12's
+    211 N. The old hidden bounds (0.5-1.5 x start: 105-316 N) stopped it at 316.65 with a confident
+    interval; the default bounds now find it, and those old bounds given explicitly are named."""
+    from mtbmj.identify.drop_synthetic import make_drop_record
+
+    path = tmp_path / "p330.csv"
+    make_drop_record("S12", {"fork.spring.preload_N": 330.0}, duration=1.0, fall_s=0.05, clock_offset_s=2.0,
+                     path=path)
+    free = "fork.spring.preload_N,tire.impact_rate_N_per_mm"
+    assert cli.main(["fit", "drop", str(path), "--free", free, "--out", str(tmp_path / "a")]) == 0
+    drop = json.loads((tmp_path / "a" / "fit.json").read_text())["models"]["drop"]
+    low, high = drop["ci95"]["fork.spring.preload_N"]
+    assert low <= 330.0 <= high and drop["bounds"]["fork.spring.preload_N"] == [52.775, 844.4]
+    capsys.readouterr()
+    status = cli.main(["fit", "drop", str(path), "--free", free, "--bound", "fork.spring.preload_N=105:316",
+                       "--out", str(tmp_path / "b")])
+    printed = capsys.readouterr().out
+    assert "warning: fork.spring.preload_N = 316 stopped at its upper bound 316" in printed
+    assert status == 3  # held 14 N short, the model no longer explains the record either
+    assert json.loads((tmp_path / "b" / "fit.json").read_text())["models"]["drop"]["ci95"]["fork.spring.preload_N"] is None
