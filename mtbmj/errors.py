@@ -34,6 +34,7 @@ class FallbackWarning(UserWarning):
 class RunError(MtbmjError):
     """A run diverged (NaN, a MuJoCo warning) or could not be completed."""
 
+
 _interrupt = {"interrupted": False, "active": False}
 
 

@@ -175,7 +175,7 @@ def foreign_entry(out: str | Path) -> str | None:
     record = read_record(out) or {"files": [], "folders": []}
     files = {str(f) for f in record["files"]} | {RECORD, LOCK}
     folders = {str(f).rstrip("/") for f in record.get("folders", [])}
-    parents = {str(Path(f).parent) for f in files} | {str(p) for f in files for p in Path(f).parents}
+    parents = {str(p) for f in files for p in Path(f).parents}
     for root, dirs, names in os.walk(out):
         rel_root = Path(root).relative_to(out)
         for name in sorted(dirs):
@@ -239,7 +239,6 @@ class Claim:
         self.made = False  # the claim created the folder (removed again if nothing was written)
         self.written = False  # a result was swapped in
         self.folders: set[str] = set()
-        self.depth = 0
 
 
 _CLAIMS: dict[str, Claim] = {}
@@ -268,20 +267,13 @@ def claim(out_dir: str | Path, command: str = "python", folders: Iterable[str] =
         if folders:
             held.folders |= set(folders)
             _write_record(out, held.command, _record_files(out), held.folders)
-        held.depth += 1
-        try:
-            yield held
-        finally:
-            held.depth -= 1
+        yield held
         return
     import fcntl
 
-    if out.exists() and not out.is_dir():
-        raise MtbmjError(f"{out}: exists and is not a directory; choose another --out")
-    _check_inputs(out, inputs)
     if (out / LOCK).is_file():
         _refuse_if_locked(out)
-    check_target(out)
+    check_target(out, inputs)
     held = Claim(out, command)
     created = _missing_ancestors(out)
     try:
@@ -294,11 +286,9 @@ def claim(out_dir: str | Path, command: str = "python", folders: Iterable[str] =
     try:
         fcntl.lockf(held.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
-        holder = _holder(out / LOCK)
         os.close(held.fd)
         held.fd = None
-        raise MtbmjError(f"{out}: another mtbmj run{holder} is writing to this folder; wait for it or choose "
-                         f"another --out") from None
+        raise _busy(out) from None
     try:
         os.ftruncate(held.fd, 0)
         os.pwrite(held.fd, f"mtbmj {command} (process {os.getpid()})\n".encode(), 0)
@@ -332,20 +322,19 @@ def _refuse_if_locked(out: Path) -> None:
     try:
         fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
-        raise MtbmjError(f"{out}: another mtbmj run{_holder(out / LOCK)} is writing to this folder; wait for it "
-                         f"or choose another --out") from None
+        raise _busy(out) from None
     finally:
         os.close(fd)  # also releases the probe's lock
 
 
-def _holder(path: Path) -> str:
+def _busy(out: Path) -> MtbmjError:
+    """The refusal of a folder another process holds, naming the holder its lock file names."""
     try:
-        text = path.read_bytes()[:200].decode("utf-8", "replace").strip()
+        text = (out / LOCK).read_bytes()[:200].decode("utf-8", "replace").strip()
     except OSError:
-        return ""
-    if not text.startswith("mtbmj "):
-        return ""
-    return " (" + text.replace("\n", " ").replace("\r", " ") + ")"
+        text = ""
+    holder = " (" + text.replace("\n", " ").replace("\r", " ") + ")" if text.startswith("mtbmj ") else ""
+    return MtbmjError(f"{out}: another mtbmj run{holder} is writing to this folder; wait for it or choose another --out")
 
 
 def _release(held: Claim, created: list[Path]) -> None:
@@ -353,7 +342,7 @@ def _release(held: Claim, created: list[Path]) -> None:
     try:
         if held.made and not held.written and _only_bookkeeping(out, held.folders):
             shutil.rmtree(out, ignore_errors=True)
-            _remove_empty(created[1:] if created and created[0] == Path(os.path.abspath(out)) else created)
+            _remove_empty(created[1:])  # (made: the first missing folder was ``out`` itself)
     finally:
         if held.fd is not None:
             os.close(held.fd)  # releases the lock
@@ -388,17 +377,9 @@ def _record_bytes(command: str, files: Iterable[str], folders: Iterable[str]) ->
 
 
 def _write_record(out: Path, command: str, files: Iterable[str], folders: Iterable[str]) -> None:
-    """Replace ``OUT/.mtbmj-output.json`` (a small file: written in one call, then renamed)."""
-    tmp = out / f".{RECORD}.new-{os.getpid()}-{uuid.uuid4().hex[:8]}"
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            handle.write(_record_bytes(command, files, folders))
-        os.replace(tmp, out / RECORD)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    """Replace ``OUT/.mtbmj-output.json`` (beside it, then renamed: a killed write leaves a
+    ``.mtbmj-output.json.new-*`` that :func:`foreign_entry` passes over)."""
+    write_file_atomically(out / RECORD, _record_bytes(command, files, folders))
 
 
 def _stage_files(stage: Path) -> list[str]:

@@ -94,7 +94,7 @@ def process_pool(workers: int, initializer: Callable | None = None, initargs: tu
                  mp_context=None) -> Pool:
     """A :class:`Pool` of ``workers`` processes that exit with this one; ``initializer``
     (a top-level function) runs in each worker after that is arranged. The only way the package
-    makes a process pool (``tests/test_reliability.py`` fails on any other).
+    makes a process pool (``tests/test_ownership.py`` fails on any other).
 
     Call it from the main thread: the parent-death signal follows the thread that starts the
     workers."""

@@ -118,8 +118,12 @@ def test_an_out_that_is_a_file_is_refused_before_the_work(tmp_path, capsys, comm
 
 
 def test_a_full_disk_at_the_sweep_table_is_one_line_and_keeps_the_journal(tmp_path, capsys, monkeypatch):
-    def full(*args, **kwargs):
-        raise OSError(28, "No space left on device")
+    real = output.write_file
+
+    def full(path, content):  # the disk fills while the result folder is staged (the table)
+        if ".sw.new-" in str(path):
+            raise OSError(28, "No space left on device")
+        return real(path, content)
 
     monkeypatch.setattr(output, "write_file", full)
     out = tmp_path / "sw"

@@ -9,6 +9,7 @@ a JSON summary and one self-contained HTML report (figures embedded as data URIs
 from __future__ import annotations
 
 import base64
+import contextlib
 import csv
 import html
 import io
@@ -61,23 +62,13 @@ def _run_all(jobs, workers, progress):
         return []
     workers = min(workers or os.cpu_count() or 1, len(jobs))  # never more processes than jobs
     results = []
-    if workers <= 1 or len(jobs) == 1:
-        mapped = map(_run, jobs)
-        pool = None
-    else:
-        pool = process_pool(workers)
-        mapped = pool.map(_run, jobs)
-    try:
+    # (a pool ends its workers at once when the block is left on an interrupt or an error)
+    with process_pool(workers) if workers > 1 and len(jobs) > 1 else contextlib.nullcontext() as pool:
+        mapped = pool.map(_run, jobs) if pool is not None else map(_run, jobs)
         for done, result in enumerate(mapped, 1):
             results.append(result)
             if progress is not None:
                 progress(f"[{done}/{len(jobs)}] {result.name} {result.engine}: {result.wall_time_s:.2f} s")
-    except BaseException:
-        if pool is not None:
-            pool.terminate()  # an interrupt or an error: the workers end now
-        raise
-    if pool is not None:
-        pool.shutdown(cancel_futures=True)
     return results
 
 

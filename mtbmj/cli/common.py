@@ -12,7 +12,7 @@ import warnings
 from pathlib import Path
 
 from mtbmj.config import parse_assignment
-from mtbmj.errors import MtbmjError
+from mtbmj.errors import MtbmjError, check_interrupt, interrupt_handling, interrupted
 from mtbmj.limits import check_duration
 
 EXIT_BAD_INPUT = 2
@@ -152,7 +152,7 @@ def input_files(args) -> list[Path]:
         if name == "out" or callable(value):
             continue
         for item in value if isinstance(value, (list, tuple)) else [value]:
-            if isinstance(item, (str, Path)) and str(item) and "\n" not in str(item):
+            if isinstance(item, (str, Path)) and str(item):
                 try:
                     if Path(item).exists():
                         found.append(Path(item))
@@ -173,8 +173,6 @@ def _run_claimed(args) -> int:
 def run(parser: argparse.ArgumentParser, argv=None) -> int:
     """Parse and run a command: bad input is one line on stderr and exit status 2; Ctrl-C, at
     any moment, the one line ``mtbmj: interrupted`` and exit status 130."""
-    from mtbmj.errors import check_interrupt, interrupt_handling, interrupted
-
     show_compile_notices()
     try:
         with interrupt_handling():
@@ -233,8 +231,6 @@ def _report(message: str) -> None:
     """The one line on stderr: a line break in the message (from a file name or a value the
     user gave) is shown escaped, so the report stays one line. An error that an interrupt caused
     (a worker's pool broken by it, a call it cut short) is reported as the interrupt."""
-    from mtbmj.errors import check_interrupt
-
     check_interrupt()
     one = "".join(ch.encode("unicode_escape").decode("ascii") if ch in LINE_BREAKS else ch for ch in message)
     print(f"mtbmj: error: {one}", file=sys.stderr)

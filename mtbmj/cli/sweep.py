@@ -61,14 +61,12 @@ def cmd_sweep(args) -> int:
                            backend=args.backend, scheduler=args.scheduler, traces=args.traces, csv=args.csv,
                            resume=args.resume, progress=bar, manifest_extra={"variants_from": how},
                            runner=args.runner, threads=args.threads, pool=pool)
-    except KeyboardInterrupt:
+    except BaseException as exc:
         if pool is not None:
             pool.terminate()
-        raise KeyboardInterrupt(f"finished variants are journaled in {args.out / 'journal'}: continue with the "
-                                f"same command and --resume") from None
-    except BaseException:
-        if pool is not None:
-            pool.terminate()
+        if isinstance(exc, KeyboardInterrupt):
+            raise KeyboardInterrupt(f"finished variants are journaled in {args.out / 'journal'}: continue with the "
+                                    f"same command and --resume") from None
         raise
     if pool is not None:
         pool.shutdown(wait=False, cancel_futures=True)

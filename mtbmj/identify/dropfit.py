@@ -50,6 +50,7 @@ compared against 1 kHz logged data.
 """
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import time
@@ -340,19 +341,14 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
     if starts > 1:
         points += list(qmc.scale(qmc.LatinHypercube(d=x0.size, seed=seed).random(starts - 1), lo, hi))
     fits = []
-    try:
+    # (a pool ends its workers at once when the block is left on an interrupt or an error)
+    with pool if pool is not None else contextlib.nullcontext():
         if starts > 1:
             evaluate(points)  # the start points' first evaluations, together
         for point in points:
             sol = optimize.least_squares(fun, point, jac=jac, bounds=(lo, hi), x_scale=scale, method="trf",
                                          xtol=xtol, ftol=ftol, gtol=1e-10, max_nfev=max_nfev)
             fits.append((sol, failure(sol)))
-    except BaseException:
-        if pool is not None:
-            pool.terminate()  # an interrupt or an error: the workers end now
-        raise
-    if pool is not None:
-        pool.shutdown()
     good = [f for f in fits if f[1] is None]
     if not good:
         raise MtbmjError(fits[0][1])

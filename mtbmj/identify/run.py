@@ -204,33 +204,35 @@ def _spring(records, results, model, plot_fn, base="reference") -> Identificatio
     notes = _comparison(results, SPRING_MODELS, main, floor, "models compared")
     if "friction_N" in results[main].extra:
         notes.append(f"hysteresis half-width (friction) {results[main].extra['friction_N']:.1f} N")
-    check = _noise_check(records[0], results[main])
+    check = _noise_check(records[0], "force", 1.0, results[main], "N", "residual: see fit.png")
     if check is not None:
+        if not check["passed"] and results[main].model != "air":
+            check["line"] += ("; an air spring? name an air configuration with --config (e.g. air120) to fit the "
+                              "air model")
         results[main].extra["model_check"] = check
     return Identification("spring", records, results, [main], lambda: plot_fn(records[0], results), base=base,
                           notes=notes)
 
 
-SPRING_CHECK_MIN_POINTS = 30  # a stroke this long at least has a noise floor to speak of
+NOISE_CHECK_MIN_POINTS = 30  # a record this long at least has a noise floor to speak of
 
 
-def _noise_check(record: Record, result: FitResult) -> dict | None:
-    """The spring fit's model check: its residual RMS against the force's own noise floor (white
-    noise from third differences along the stroke, ``validation.time_zero.noise_sigma``), limit
-    3 x noise (``fitresult.model_check``). ``None`` for a record too short to tell its noise."""
+def _noise_check(record: Record, quantity: str, scale: float, result: FitResult, unit: str,
+                 worst: str) -> dict | None:
+    """A bench fit's model check (spring, tire): its residual RMS against the noise floor of the
+    record's ``quantity`` (white noise from third differences along the record,
+    ``validation.time_zero.noise_sigma``; SI times ``scale`` gives ``unit``), limit 3 x noise
+    (``fitresult.model_check``). ``None`` for a record too short to tell its noise."""
     from mtbmj.identify.fitresult import model_check
     from mtbmj.validation.time_zero import noise_sigma
 
-    force = record.columns.get("force")
-    if force is None or force.size < SPRING_CHECK_MIN_POINTS:
+    values = record.columns.get(quantity)
+    if values is None or values.size < NOISE_CHECK_MIN_POINTS:
         return None
-    noise = float(noise_sigma(np.asarray(force, float)))
+    noise = float(noise_sigma(np.asarray(values, float))) * scale
     if not noise > 0.0:
         return None
-    check = model_check(result.rms, noise, 0.0, "N", "residual: see fit.png")
-    if not check["passed"] and result.model != "air":
-        check["line"] += "; an air spring? name an air configuration with --config (e.g. air120) to fit the air model"
-    return check
+    return model_check(result.rms, noise, 0.0, unit, worst)
 
 
 def _damper(records, results, model, friction, module) -> Identification:
@@ -310,16 +312,12 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
                              "static ramp (deflection_mm, force_N)")
         results = tire.fit_tire(drops[0], mass_kg, ramp=ramps[0] if ramps else None)
         order = [part for part in ("static", "impact", "contact") if part in results]  # as tire.tire_overrides
-        deflection = drops[0].columns.get("deflection")
-        if deflection is not None and deflection.size >= SPRING_CHECK_MIN_POINTS:
-            from mtbmj.identify.fitresult import model_check
-            from mtbmj.validation.time_zero import noise_sigma
-
-            noise_mm = float(noise_sigma(np.asarray(deflection, float))) * 1e3  # the record's, SI -> mm
-            for part in ("impact", "contact"):  # the fits of the drop record (the ramp's residual is in N)
-                if part in results and noise_mm > 0.0:
-                    results[part].extra["model_check"] = model_check(results[part].rms, noise_mm, 0.0, "mm",
-                                                                     f"residual of the {part} fit: see fit.png")
+        for part in ("impact", "contact"):  # the fits of the drop record (the ramp's residual is in N)
+            if part in results:
+                check = _noise_check(drops[0], "deflection", 1e3, results[part], "mm",
+                                     f"residual of the {part} fit: see fit.png")
+                if check is not None:
+                    results[part].extra["model_check"] = check
         return Identification("tire", records, results, order, lambda: tire.plot_tire(drops[0], results))
     from mtbmj.identify import dropfit
 
