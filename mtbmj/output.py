@@ -125,6 +125,8 @@ def check_target(out_dir: str | Path, inputs: Iterable[str | Path] = ()) -> Path
     did not write (see :func:`foreign_entry`), or one holding any of ``inputs`` (the files the
     command reads). Creates nothing that stays."""
     out = Path(out_dir)
+    if out.is_symlink():  # (the swap replaces a folder, never a link: refused now, not after the work)
+        raise MtbmjError(f"{out}: is a symbolic link; give the folder itself as --out")
     if out.exists() and not out.is_dir():
         raise MtbmjError(f"{out}: exists and is not a directory; choose another --out")
     here = Path.cwd().resolve()

@@ -289,3 +289,20 @@ def test_a_result_of_an_older_mtbmj_is_refused_with_a_hint(tmp_path, capsys):
     (mine / "manifest.json").write_text('{"name": "my-web-app", "versions": {"node": "20"}}\n')
     err = refused(capsys, ["drop", "S12", "--duration", "0.05", "--quiet", "--out", mine], "manifest.json")
     assert "older than its output records" not in err
+
+
+@pytest.mark.parametrize("target", ["a folder of the user's", "an empty folder", "nowhere"])
+def test_a_symbolic_link_as_out_is_refused_before_the_work_and_nothing_is_left_behind(tmp_path, capsys, target):
+    """A careless ``--out link`` (to a project, to an empty folder, dangling): one line at once,
+    and the folder it points to is not touched (no lock file left in it)."""
+    folder = tmp_path / "folder"
+    if target != "nowhere":
+        folder.mkdir()
+        if target == "a folder of the user's":
+            (folder / "a.txt").write_text("keep\n")
+    (tmp_path / "link").symlink_to(folder)
+    before = snapshot(folder) if folder.exists() else None
+    start = time.perf_counter()
+    refused(capsys, ["drop", "S12", "--quiet", "--out", tmp_path / "link"], "symbolic link")
+    assert time.perf_counter() - start < 3.0
+    assert (snapshot(folder) if folder.exists() else None) == before
