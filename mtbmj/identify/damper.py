@@ -37,7 +37,7 @@ from scipy.optimize import least_squares
 from mtbmj import controllers as law
 from mtbmj.errors import MtbmjError
 from mtbmj.identify.dyno_synthetic import peak_points
-from mtbmj.identify.fitresult import FitResult, covariance_stderr
+from mtbmj.identify.fitresult import FitResult, covariance_stderr, declare_bounds
 from mtbmj.identify.records import Record, RecordError
 
 HYDRAULIC = ("linear", "bilinear", "digressive", "table")
@@ -234,14 +234,14 @@ def _parametric(rec: Record, hydraulic: str, friction: str, name: str) -> FitRes
     else:
         supported = True
     if friction == "coulomb_viscous":
-        common = min(values.get(D + "compression_N_s_per_m", values.get(D + "coefficient_N_s_per_m")),
-                     values.get(D + "rebound_N_s_per_m", values.get(D + "coefficient_N_s_per_m")))
-        for key in (D + "compression_N_s_per_m", D + "rebound_N_s_per_m", D + "coefficient_N_s_per_m"):
-            if key in values:
-                values[key] -= common
+        rates = [k for k in values if k.startswith(D) and k.endswith("_N_s_per_m")]  # every stage's rate
+        common = min(values[k] for k in rates)
+        for key in rates:
+            values[key] -= common
         values[R + "viscous_N_s_per_m"] = float(common)
-        stderr[R + "viscous_N_s_per_m"] = float(min(std[:nh]))
-        notes.append("viscous term = the slope common to compression and rebound; the damper keeps the excess")
+        stderr[R + "viscous_N_s_per_m"] = float(min(stderr[k] for k in rates))
+        notes.append("viscous term = the slope common to compression and rebound (every stage); the damper keeps "
+                     "the excess")
     if friction == "lugre":
         notes.append("LuGre bristle stiffness and damping are not identified: they need time-domain pre-sliding "
                      "data (small strokes below the breakaway force); the base configuration's values are kept")
@@ -254,12 +254,28 @@ def _parametric(rec: Record, hydraulic: str, friction: str, name: str) -> FitRes
                          f"{fc:.1f} N with a standard error of {se:.2g} N (record slower test speeds to separate them)")
     grid = np.linspace(min(v.min(), 0.0), max(v.max(), 0.0), 400)
     curve_f = _hydraulic(hydraulic, p[:nh], grid) + _friction_force(fric, p[nh:], grid)
-    return FitResult("damper", name, values, stderr, float(np.sqrt(np.mean(r ** 2))), "N", len(v), len(p),
+    result = FitResult("damper", name, values, stderr, float(np.sqrt(np.mean(r ** 2))), "N", len(v), len(p),
                      {"model_keys": {D + "model": hydraulic, R + "model": friction}, "hydraulic": hydraulic,
+                      "residual": -r,  # data - model
                       "friction": friction, "curve": (grid * 1e3, curve_f), "correlation": corr,
                       "supported": supported, "notes": notes, "friction_identified": identified,
                       **({"unidentified": [R + "bristle_stiffness_N_per_mm", R + "bristle_damping_N_s_per_m"]}
                          if friction == "lugre" else {})})
+    if hydraulic not in CHECK_SHAPES:  # the check shapes' rates are not the written law's keys
+        keys = _parameter_keys(hydraulic, fric)
+        if friction == "coulomb_viscous":  # the rates are reparametrised: only the friction level is free as fitted
+            keys = [k if k == R + "coulomb_N" else None for k in keys]
+        unit = [1e3 if k and k.endswith("mm_per_s") else 1.0 for k in keys]
+        declare_bounds(result, {k: (lower[i] * unit[i], upper[i] * unit[i]) for i, k in enumerate(keys) if k},
+                       {k: x0[i] * unit[i] for i, k in enumerate(keys) if k})
+    return result
+
+
+def _parameter_keys(hydraulic: str, friction: str) -> list[str]:
+    """The configuration key of each fitted parameter, in the fit's order (hydraulic, friction)."""
+    hydraulic_keys = {"linear": ["coefficient_N_s_per_m"], "bilinear": ["compression_N_s_per_m", "rebound_N_s_per_m"],
+                      "digressive": list(DIGRESSIVE_KEYS)}[hydraulic]
+    return [D + k for k in hydraulic_keys] + [R + n for n in _FRICTION_PARAMS[friction]]
 
 
 def _clusters(speed: np.ndarray) -> list[np.ndarray]:
@@ -273,6 +289,55 @@ def _clusters(speed: np.ndarray) -> list[np.ndarray]:
         current.append(i)
     groups.append(np.array(current))
     return groups
+
+
+def noise_floor(rec: Record) -> tuple[float, int]:
+    """The peak force's own scatter (N) and its degrees of freedom: the points of one test speed
+    (``_clusters``) about their own straight line in velocity (their mean, with fewer than 3 points
+    or no spread of speed), pooled over the test speeds of both sides. ``(nan, 0)`` when no test
+    speed has repeated points: a record of one point per speed cannot tell its noise."""
+    v, f = np.asarray(rec["velocity"], float), np.asarray(rec["force"], float)
+    squares, dof = 0.0, 0
+    for side in (1, -1):
+        idx = np.flatnonzero(np.sign(v) == side)
+        if idx.size == 0:
+            continue
+        for g in _clusters(np.abs(v[idx])):
+            sel = idx[g]
+            if sel.size < 2:
+                continue
+            if sel.size >= 3 and np.ptp(v[sel]) > 0.0:
+                fit = np.polyfit(v[sel], f[sel], 1)
+                squares += float(np.sum((f[sel] - np.polyval(fit, v[sel])) ** 2))
+                dof += sel.size - 2
+            else:
+                squares += float(np.sum((f[sel] - f[sel].mean()) ** 2))
+                dof += sel.size - 1
+    if dof == 0:
+        return float("nan"), 0
+    return float(np.sqrt(squares / dof)), dof
+
+
+MIN_NOISE_DOF = 6  # repeated points (less the test speeds) a damper record needs for its noise floor
+
+
+def damper_model_check(rec: Record, result: FitResult) -> dict | None:
+    """A damper fit's model check: its residual RMS against the record's scatter at repeated test
+    speeds (``noise_floor``), limit ``fitresult.MODEL_CHECK_FACTOR`` x noise; where the residual is
+    largest (test speed). ``None`` when the record has too few repeated points to tell its noise."""
+    from mtbmj.identify.fitresult import model_check
+
+    noise, dof = noise_floor(rec)
+    if dof < MIN_NOISE_DOF or not noise > 0.0:
+        return None
+    v, f = np.asarray(rec["velocity"], float), np.asarray(rec["force"], float)
+    residual = result.extra.get("residual")
+    if residual is None:
+        return None
+    worst = int(np.argmax(np.abs(residual)))
+    return model_check(result.rms, noise, 0.0, "N",
+                       f"{residual[worst]:+.3g} N at {v[worst] * 1e3:+.0f} mm/s (force {f[worst]:.0f} N)",
+                       residual=[np.asarray(residual)[np.argsort(v)]])  # along the velocity
 
 
 def _table(rec: Record) -> FitResult:
@@ -330,13 +395,16 @@ def _table(rec: Record) -> FitResult:
               D + "force_N": tuple(float(x) for x in np.round(tf, 3)),
               R + "coulomb_N": fc}
     stderr = {R + "coulomb_N": fc_err, D + "force_N": float(np.nanmax(tse)) if np.any(np.isfinite(tse)) else float("nan")}
-    return FitResult("damper", "table", values, stderr, float(np.sqrt(np.mean(r ** 2))), "N", len(v),
-                     len(tv) - 1 + 1,
+    result = FitResult("damper", "table", values, stderr, float(np.sqrt(np.mean(r ** 2))), "N", len(v),
+                       len(tv) - 1 + 1,
                      {"model_keys": {D + "model": "table", R + "model": "coulomb"}, "hydraulic": "table",
+                      "residual": -r,  # data - model
                       "friction": "coulomb", "curve": (grid * 1e3, curve_f), "force_stderr_N": tse.tolist(),
                       "supported": True,
                       "notes": [f"Coulomb offset at zero velocity {fc:.1f} +/- {fc_err:.2g} N from the test speeds "
                                 f"{MIN_WIDTH * 1e3:g}-150 mm/s (at least 4) per side; table = mean force - offset per test speed, through (0, 0)"]})
+    declare_bounds(result, {R + "coulomb_N": (0.0, np.inf)}, {R + "coulomb_N": fc_err})
+    return result
 
 
 def fit_damper(record: Record, model: str = "bilinear", *, friction: str | None = None) -> FitResult:
@@ -370,14 +438,35 @@ def fit_damper_all(record: Record) -> dict[str, FitResult]:
             if name != "table":
                 raise
     if "digressive" in out:
-        check = friction_check(rec, out["digressive"])
-        for result in out.values():
-            if R + "coulomb_N" in result.values:
-                result.extra["friction_check"] = check
-                if not check["told"]:
-                    result.extra.setdefault("warnings", []).append(check["line"])
-                    result.extra["friction_identified"] = False
+        out["digressive"].extra["friction_check"] = friction_check(rec, out["digressive"])
+        _carry_friction_check(out)
     return out
+
+
+def _carry_friction_check(results: dict[str, FitResult]) -> None:
+    """Every fit with a Coulomb level carries the digressive fit's friction check (and its warning
+    when the friction is not told)."""
+    check = results["digressive"].extra["friction_check"]
+    for result in results.values():
+        if R + "coulomb_N" in result.values:
+            result.extra["friction_check"] = check
+            if not check["told"]:
+                warnings = result.extra.setdefault("warnings", [])
+                if check["line"] not in warnings:
+                    warnings.append(check["line"])
+                result.extra["friction_identified"] = False
+
+
+def refit_friction(record: Record, results: dict[str, FitResult], hydraulic: str) -> None:
+    """Fit every friction model again with the ``hydraulic`` law the fit writes (``linear`` or
+    ``digressive``) instead of the bilinear one, so the friction models are compared, and the
+    friction written, on the law that carries them (on digressive data a bilinear law bends the
+    friction to make up its shape)."""
+    rec = peaks(record)
+    for name in FRICTION:
+        results[name] = _parametric(rec, hydraulic, name, name)
+    if "digressive" in results:
+        _carry_friction_check(results)
 
 
 def friction_check(rec: Record, digressive: FitResult) -> dict:
@@ -420,7 +509,7 @@ ADJUSTERS = {"lsc": "low_speed_compression", "hsc": "high_speed_compression", "l
 STROKE_ADJUSTERS = {"compression": (("lsc", "hsc"), ("c",)), "rebound": (("lsr", "hsr"), ("r",))}
 
 
-def fit_clicks(records: list[Record], clicks: list[float]) -> FitResult:
+def fit_clicks(records: list[Record], clicks: list[float], model: str = "table") -> FitResult:
     """A ``clicks`` damper from dyno records taken at several adjuster positions (``clicks[i]``
     clicks from closed for ``records[i]``, compression and rebound adjusters alike); see
     ``fit_settings``. The setting written is the middle measured position."""
@@ -429,7 +518,7 @@ def fit_clicks(records: list[Record], clicks: list[float]) -> FitResult:
     clicks = [float(c) for c in clicks]
     if any(not math.isfinite(c) or c < 0 or c != round(c) for c in clicks) or len(set(clicks)) != len(clicks):
         raise DamperFitError("--clicks: positions must be distinct whole numbers of clicks from closed")
-    return fit_settings(records, [{"c": c, "r": c} for c in clicks])
+    return fit_settings(records, [{"c": c, "r": c} for c in clicks], model)
 
 
 def _solve_additive(rows: np.ndarray, low: list[float], high: list[float]):
@@ -464,7 +553,10 @@ def _dissipative(rows: np.ndarray, stroke: str) -> np.ndarray:
     return np.round(np.clip(rows, 0.0, None) if stroke == "compression" else np.clip(rows, None, 0.0), 3)
 
 
-def fit_settings(records: list[Record], settings: list[Mapping[str, float]]) -> FitResult:
+CLICKS_MODELS = ("table", "digressive")  # the law each dyno file of a clicks fit is read through
+
+
+def fit_settings(records: list[Record], settings: list[Mapping[str, float]], model: str = "table") -> FitResult:
     """A ``clicks`` damper from dyno records each labelled with its adjuster settings in clicks from
     closed, by ``ADJUSTERS`` label: per stroke either one adjuster (``c``, ``r``) or a low- and a
     high-speed one (``lsc``/``hsc``, ``lsr``/``hsr``). Each record's lookup table (``_table``:
@@ -473,7 +565,16 @@ def fit_settings(records: list[Record], settings: list[Mapping[str, float]]) -> 
     F = g_low(L) + g_high(H) fitted by least squares over the files (exact for one-at-a-time sweeps
     around a shared reference), written as each adjuster's rows with the other at its reference.
     The Coulomb level is the mean of the records' offsets (friction does not depend on the
-    adjusters). The settings written are the references (two adjusters) or the middle position."""
+    adjusters). The settings written are the references (two adjusters) or the middle position.
+
+    ``model``: ``table`` (each file's rows are its own mean force per test speed) or
+    ``digressive`` (each file fitted by the two-stage law with its Coulomb friction, and its rows
+    the law's force at the common velocities: the law smooths each file, and its fit is checked
+    against the file's noise). Either way each file's fit is checked against its own scatter at
+    repeated test speeds (``damper_model_check``), and the worst file's check is the result's."""
+    if model not in CLICKS_MODELS:
+        raise DamperFitError(f"fit damper --clicks: --model {model} (one of {', '.join(CLICKS_MODELS)}); "
+                             "each dyno file is read through that law")
     if len(settings) != len(records):
         raise DamperFitError(f"--clicks: {len(settings)} settings for {len(records)} dyno files")
     if len(records) < 2:
@@ -484,13 +585,18 @@ def fit_settings(records: list[Record], settings: list[Mapping[str, float]]) -> 
             raise DamperFitError(f"--clicks: unknown adjuster {unknown[0]!r} (use {', '.join(ADJUSTERS)})")
         if any(not math.isfinite(v) or v < 0 or v != round(v) for v in label.values()):
             raise DamperFitError("--clicks: positions must be whole numbers of clicks from closed")
-    fits = [_table(peaks(r)) for r in records]
-    grids = [np.asarray(f.values[D + "velocity_mm_per_s"]) for f in fits]
+    points = [peaks(r) for r in records]
+    tables = [_table(r) for r in points]
+    fits = tables if model == "table" else [_parametric(r, "digressive", "coulomb", "digressive") for r in points]
+    grids = [np.asarray(f.values[D + "velocity_mm_per_s"]) for f in tables]
     if len({len(g) for g in grids}) != 1 or any(np.any(np.sign(g) != np.sign(grids[0])) for g in grids):
         raise DamperFitError("fit damper --clicks: the dyno files do not share their test speeds "
                              f"({', '.join(str(len(g)) for g in grids)} velocities)")
     grid = np.round(np.mean(grids, axis=0), 3)
-    rows = np.array([np.interp(grid, g, f.values[D + "force_N"]) for g, f in zip(grids, fits)])
+    if model == "table":
+        rows = np.array([np.interp(grid, g, f.values[D + "force_N"]) for g, f in zip(grids, fits)])
+    else:  # the law's hydraulic force (no friction) at the common velocities
+        rows = np.array([[_digressive_law(f).force(float(x) * 1e-3) for x in grid] for f in fits])
     values: dict[str, Any] = {D + "velocity_mm_per_s": tuple(float(x) for x in grid)}
     described = []
     for stroke, side in (("compression", grid > 0), ("rebound", grid < 0)):
@@ -528,11 +634,47 @@ def fit_settings(records: list[Record], settings: list[Mapping[str, float]]) -> 
     stderr = {R + "coulomb_N": float(np.std([f.values[R + "coulomb_N"] for f in fits], ddof=1)
                                      / math.sqrt(len(fits)))}
     labels = [",".join(f"{k}={v:g}" for k, v in label.items()) for label in settings]
-    return FitResult("damper", "clicks", values, stderr, rms, "N", n_points, sum(f.n_params for f in fits),
+    checks = []
+    warnings = []
+    for label, rec, fit in zip(labels, points, fits):
+        check = damper_model_check(rec, fit)
+        if check is not None:
+            checks.append((label, check))
+        warnings += [f"file at {label}: {w}" for w in fit.extra.get("warnings", []) if "friction" not in w]
+    result = FitResult("damper", "clicks", values, stderr, rms, "N", n_points, sum(f.n_params for f in fits),
                      {"model_keys": {D + "model": "clicks", R + "model": "coulomb"}, "supported": True,
+                      "law": model, "warnings": warnings,
+                      **({"model_check": _worst_file(checks)} if checks else {}),
                       "curves": [(lab, f.extra["curve"]) for lab, f in zip(labels, fits)],
                       "notes": [f"{len(records)} dyno files on {len(grid)} common velocities; "
                                 + "; ".join(described) + f"; Coulomb offset {coulomb:.1f} N (mean of the files)"]})
+    declare_bounds(result, {R + "coulomb_N": (0.0, np.inf)}, {R + "coulomb_N": stderr[R + "coulomb_N"]})
+    if model == "digressive":
+        result.extra["per_file"] = {label: f.values for label, f in zip(labels, fits)}
+        result.extra["notes"].append("each file read through the two-stage (digressive) law: " + "; ".join(
+            f"{label}: knees {f.values[D + 'compression_knee_mm_per_s']:.0f}/{f.values[D + 'rebound_knee_mm_per_s']:.0f} "
+            f"mm/s, Coulomb {f.values[R + 'coulomb_N']:.1f} N" for label, f in zip(labels, fits)))
+    if not checks:
+        result.extra["notes"].append(f"no model check: no file has {MIN_NOISE_DOF} repeated points at its test speeds "
+                                     "to tell its noise")
+    return result
+
+
+def _digressive_law(fit: FitResult) -> law.DigressiveDamper:
+    """The two-stage law of a digressive fit (its values in configuration units)."""
+    return law.DigressiveDamper(*(fit.values[D + k] * (1e-3 if k.endswith("mm_per_s") else 1.0)
+                                  for k in DIGRESSIVE_KEYS))
+
+
+def _worst_file(checks: list[tuple[str, dict]]) -> dict:
+    """The model check of a clicks fit: the file whose residual is largest against its noise,
+    failed when any file's fails."""
+    label, worst = max(checks, key=lambda c: (not c[1]["passed"], c[1]["ratio"]))
+    out = dict(worst)
+    out["passed"] = all(c["passed"] for _, c in checks)
+    out["line"] = f"file at {label} (the worst of {len(checks)}): " + worst["line"]
+    out["per_file"] = {lab: {"passed": c["passed"], "ratio": c["ratio"]} for lab, c in checks}
+    return out
 
 
 def plot_clicks(records: list[Record], result: FitResult):

@@ -65,7 +65,7 @@ from mtbmj.controllers import native
 from mtbmj.drop.run import resolve, run_drop
 from mtbmj.errors import ConfigError, MtbmjError
 
-from mtbmj.identify.fitresult import (FitResult, bound_warnings, bounds_reached, correlated_pairs, correlation,
+from mtbmj.identify.fitresult import (DEFAULT_BOUND_FACTOR, FitResult, bound_warnings, bounds_reached, correlated_pairs, correlation,
                                       covariance_stderr, hac_covariance, model_check)
 from mtbmj.identify.records import Record, read_record
 from mtbmj.validation import sled_data
@@ -76,9 +76,6 @@ FIT_FROM_S = 0.005  # fitted from 5 ms after touch: before, a logger's filter st
 # the engine whose run at the optimum measures the fitting engine's own error (the fast engine
 # integrates the reference's equations: it is checked against the reference)
 OTHER_ENGINE = {"mujoco": "ode", "ode": "mujoco", "fast": "ode"}
-# Default bounds of a free parameter without --bound: start / 4 to 4 x start (a positive or
-# non-negative key), start -/+ 4 |start| (a signed one); see docs/identification.md
-DEFAULT_BOUND_FACTOR = 4.0
 # keys that take whole numbers (spacers, adjuster clicks): a least-squares step cannot move them
 WHOLE_NUMBER_KEYS = ("fork.spring.tokens",)
 MODEL_CHECK_ALLOWANCE_MM = 0.1  # the crosscheck tolerance: what the engines may differ by without the model being wrong
@@ -391,7 +388,8 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
     channel, sample = divmod(worst, times.size)
     check = model_check(float(np.sqrt(np.mean(residual**2))), noise_floor(aligned, channels, keep),
                         MODEL_CHECK_ALLOWANCE_MM, "mm",
-                        f"{residual[worst]:+.3g} mm in the {channels[channel]} trace at t = {times[sample]:.4f} s")
+                        f"{residual[worst]:+.3g} mm in the {channels[channel]} trace at t = {times[sample]:.4f} s",
+                        residual=list(np.asarray(residual).reshape(len(channels), times.size)))
     # Student t on the effective number of independent samples (time samples / bandwidth)
     dof = max(times.size / max(hac["bandwidth_samples"], 1.0) - n, 1.0)
     tq = float(stats.t.ppf(0.975, dof))

@@ -91,9 +91,13 @@ class FitResult:
                 unc = " (no meaningful interval)"
             else:
                 unc = ""
-            span = f" [bounds {bounds[key][0]:g} to {bounds[key][1]:g}]" if key in bounds else ""
+            span = f" [bounds {_bound_text(bounds[key][0])} to {_bound_text(bounds[key][1])}]" if key in bounds else ""
             parts.append(f"{name} = {value:.6g}{unc}{span}")
         return f"{self.kind} {self.model}: " + ", ".join(parts) + f"; residual RMS {self.rms:.4g} {self.residual_unit}"
+
+
+def _bound_text(value: float) -> str:
+    return f"{value:g}" if np.isfinite(value) else ("+inf" if value > 0 else "-inf")
 
 
 def log_ms(rms: float) -> float:
@@ -177,45 +181,140 @@ def correlated_pairs(keys, corr: np.ndarray, limit: float = 0.9) -> list[str]:
 
 # --- what a fit must say about itself: its bounds and whether its model explains the data -------
 
+# Default bounds of a free parameter with a start value (drop fits without --bound, the air spring
+# fit): start / 4 to 4 x start (a positive or non-negative key), start -/+ 4 |start| (a signed one);
+# see docs/identification.md
+DEFAULT_BOUND_FACTOR = 4.0
 BOUND_MARGIN = 0.01  # a value within 1 % of its bounds' span from a bound has stopped at it
 MODEL_CHECK_FACTOR = 3.0  # a residual RMS above 3 x the record's noise floor (plus the allowance) fails
 
 
-def bounds_reached(values: dict, bounds: dict) -> dict[str, str]:
+def bounds_reached(values: dict, bounds: dict, scales: dict | None = None) -> dict[str, str]:
     """``{key: "lower" | "upper"}`` for the values within ``BOUND_MARGIN`` of the span of their
-    bounds ``(low, high)`` from one of them: the optimum may lie beyond, so the value and its
-    interval say nothing about the truth."""
+    bounds ``(low, high)`` from one of them (or beyond it): the optimum may lie beyond, so the
+    value and its interval say nothing about the truth. A bound pair open on one side (a rate
+    bounded only by 0) has no span: there the margin is ``BOUND_MARGIN`` times ``scales[key]``
+    (the fit's start, or the value itself)."""
     reached = {}
     for key, (low, high) in bounds.items():
         value = values.get(key)
-        if value is None or not np.isfinite(low) or not np.isfinite(high):
+        if value is None or isinstance(value, (tuple, list)):
             continue
-        margin = BOUND_MARGIN * (high - low)
-        if value <= low + margin:
+        if np.isfinite(low) and np.isfinite(high):
+            margin = BOUND_MARGIN * (high - low)
+        else:
+            scale = abs((scales or {}).get(key, 0.0)) or abs(value)
+            margin = BOUND_MARGIN * scale
+        if np.isfinite(low) and value <= low + margin:
             reached[key] = "lower"
-        elif value >= high - margin:
+        elif np.isfinite(high) and value >= high - margin:
             reached[key] = "upper"
     return reached
 
 
-def bound_warnings(values: dict, bounds: dict, reached: dict[str, str]) -> list[str]:
-    return [f"{key} = {values[key]:.6g} stopped at its {side} bound {bounds[key][0 if side == 'lower' else 1]:g} "
-            f"(bounds {bounds[key][0]:g} to {bounds[key][1]:g}): the optimum may lie beyond it, and its interval "
-            f"means nothing; widen the bounds with --bound {key}=LOW:HIGH"
-            for key, side in reached.items()]
+def bound_warnings(values: dict, bounds: dict, reached: dict[str, str], hint: str | None = None) -> list[str]:
+    """One line per value that stopped at a bound. ``hint``: what the user can do (default: widen
+    the bounds with ``--bound``; a bench fit's bounds are the law's physical limits instead)."""
+    out = []
+    for key, side in reached.items():
+        low, high = bounds[key]
+        what = hint if hint is not None else f"widen the bounds with --bound {key}=LOW:HIGH"
+        out.append(f"{key} = {values[key]:.6g} stopped at its {side} bound {low if side == 'lower' else high:g} "
+                   f"(bounds {low:g} to {high:g}): the optimum may lie beyond it, and its interval means nothing; "
+                   f"{what}")
+    return out
 
 
-def model_check(rms: float, noise: float, allowance: float, unit: str, worst: str) -> dict:
-    """Does the model explain the record? The residual RMS against ``MODEL_CHECK_FACTOR`` times
-    the record's own noise floor plus ``allowance`` (what the model may differ by without being
-    wrong: the engines' agreement, quantisation). ``worst``: where the residual is largest."""
+PHYSICAL_HINT = ("the bound is the law's physical limit, so the record asks for a value the law cannot take: "
+                 "another model may serve (see the comparison in fit.json)")
+
+
+def declare_bounds(result: "FitResult", bounds: dict, scales: dict | None = None, hint: str | None = PHYSICAL_HINT,
+                   ) -> dict[str, str]:
+    """Put a fit's bounds in the open: record them in ``result.extra["bounds"]`` (the free keys,
+    in their configuration units; +/-inf where a side is open), the values that stopped at one in
+    ``extra["at_bound"]`` with a warning line each, and withdraw those values' intervals
+    (``extra["ci95_meaningful"]``). Returns the keys that stopped at a bound."""
+    bounds = {k: (float(a), float(b)) for k, (a, b) in bounds.items() if k in result.values}
+    reached = bounds_reached(result.values, bounds, scales)
+    result.extra["bounds"] = bounds
+    result.extra["bound_scales"] = dict(scales or {})
+    result.extra["at_bound"] = reached
+    warnings = result.extra.setdefault("warnings", [])
+    warnings.extend(w for w in bound_warnings(result.values, bounds, reached, hint) if w not in warnings)
+    meaningful = result.extra.setdefault("ci95_meaningful", {})
+    for key in reached:
+        meaningful[key] = False
+    return reached
+
+
+def json_bounds(bounds: dict) -> dict:
+    """Bounds for JSON: an open side (+/-inf) as null."""
+    return {k: [float(v) if np.isfinite(v) else None for v in pair] for k, pair in bounds.items()}
+
+
+STRUCTURE_Z = 4.0  # runs test: this many standard deviations too few runs (p < 4e-5 for white residuals)
+
+
+def runs_test(residual) -> dict | None:
+    """Wald-Wolfowitz runs test of the residuals' signs about their median, in their order along
+    the record (several channels: summed over the channels). White residuals make as many runs
+    as chance (z about 0); a model that misses a shape leaves long runs (z strongly negative).
+    Returns ``{"runs", "expected", "z", "lag1"}`` (``lag1``: the lag-1 autocorrelation), or
+    ``None`` with fewer than 20 residuals."""
+    segments = [np.asarray(r, float) for r in (residual if isinstance(residual, (list, tuple)) else [residual])]
+    runs = expected = var = 0.0
+    lag_num = lag_den = 0.0
+    for r in segments:
+        r = r[np.isfinite(r)]
+        if r.size < 2:
+            continue
+        above = r > np.median(r)
+        n1, n2 = float(np.sum(above)), float(np.sum(~above))
+        n = n1 + n2
+        if n1 == 0 or n2 == 0:
+            continue
+        runs += 1.0 + float(np.sum(above[1:] != above[:-1]))
+        expected += 2.0 * n1 * n2 / n + 1.0
+        var += 2.0 * n1 * n2 * (2.0 * n1 * n2 - n) / (n * n * (n - 1.0))
+        c = r - r.mean()
+        lag_num += float(c[1:] @ c[:-1])
+        lag_den += float(c @ c)
+    if sum(r.size for r in segments) < 20 or var <= 0.0:
+        return None
+    return {"runs": int(runs), "expected": float(expected), "z": float((runs - expected) / np.sqrt(var)),
+            "lag1": float(lag_num / lag_den) if lag_den > 0 else 0.0}
+
+
+def model_check(rms: float, noise: float, allowance: float, unit: str, worst: str, residual=None) -> dict:
+    """Does the model explain the record? Two tests, either fails the check:
+
+    - size: the residual RMS against ``MODEL_CHECK_FACTOR`` times the record's own noise floor
+      plus ``allowance`` (what the model may differ by without being wrong: the engines'
+      agreement, quantisation);
+    - structure (with ``residual``, in record order; a list for several channels): the runs test
+      finds the residuals' signs in runs no white noise makes (z below -``STRUCTURE_Z``) while
+      the part of the residual that is not noise, sqrt(RMS^2 - noise^2), exceeds the noise plus
+      the allowance: a systematic misfit at least as large as the noise.
+
+    ``worst``: where the residual is largest."""
     limit = MODEL_CHECK_FACTOR * noise + allowance
-    passed = bool(np.isfinite(rms) and rms <= limit)
+    size_ok = bool(np.isfinite(rms) and rms <= limit)
     ratio = rms / noise if noise > 0 else float("inf")
+    runs = runs_test(residual) if residual is not None else None
+    excess = float(np.sqrt(max(rms * rms - noise * noise, 0.0))) if np.isfinite(rms) else float("inf")
+    structured = bool(runs is not None and runs["z"] < -STRUCTURE_Z and excess > noise + allowance)
+    passed = size_ok and not structured
     line = (f"model check {'passed' if passed else 'FAILED'}: residual RMS {rms:.4g} {unit} against the record's "
             f"noise floor {noise:.3g} {unit} ({ratio:.1f}x; limit {limit:.3g} {unit} = {MODEL_CHECK_FACTOR:g} x noise "
-            f"+ {allowance:g}); largest {worst}")
+            f"+ {allowance:g})")
+    if runs is not None:
+        line += (f", residual runs {runs['runs']} against {runs['expected']:.0f} for white noise (z = {runs['z']:.1f}"
+                 f"{': STRUCTURED' if structured else ''})")
+    line += f"; largest {worst}"
     if not passed:
         line += ": the model does not explain this record, so its values and intervals do not describe it"
     return {"passed": passed, "rms": float(rms), "noise_floor": float(noise), "limit": float(limit),
-            "ratio": float(ratio), "unit": unit, "largest": worst, "line": line}
+            "ratio": float(ratio), "unit": unit, "largest": worst, "line": line,
+            "size_passed": size_ok, "structure": runs, "structured": structured,
+            "excess_over_noise": excess}

@@ -34,15 +34,25 @@ class Identification:
     overrides: dict = field(default_factory=dict)  # the --set values the fit ran on (written with it)
 
     @property
+    def _written(self) -> list[str]:
+        """The fits whose values are written (a damper's friction model only where it supplies
+        the friction keys)."""
+        return list(dict.fromkeys(self.chosen + [n for n in self._sources().values() if n not in self.chosen]))
+
+    @property
     def warnings(self) -> list[str]:
         """What the user must know before trusting the result: values stopped at a bound, a
         record that disagrees with the configuration."""
-        return [w for name in self.chosen for w in self.results[name].extra.get("warnings", [])]
+        return list(dict.fromkeys(w for name in self._written for w in self.results[name].extra.get("warnings", [])))
 
     @property
     def model_checks(self) -> list[dict]:
-        return [self.results[name].extra["model_check"] for name in self.chosen
-                if "model_check" in self.results[name].extra]
+        checks = {}  # one line each: a damper's hydraulic and friction choice can be the same fit
+        for name in self._written:
+            check = self.results[name].extra.get("model_check")
+            if check is not None:
+                checks.setdefault(check["line"], check)
+        return list(checks.values())
 
     @property
     def model_check_passed(self) -> bool:
@@ -125,7 +135,11 @@ def _result_json(r: FitResult) -> dict:
            "n_points": r.n_points, "n_params": r.n_params, "aic": r.aic, "bic": r.bic}
     out["ci95"] = {k: r.interval95(k) for k, v in r.values.items() if not isinstance(v, (tuple, list))
                    and r.stderr.get(k) is not None}  # null: no meaningful interval (at a bound, model check failed)
-    for key in ("correlation", "engine_runs", "free", "notes", "bounds", "at_bound", "warnings", "model_check",
+    if "bounds" in r.extra:
+        from mtbmj.identify.fitresult import json_bounds
+
+        out["bounds"] = json_bounds(r.extra["bounds"])  # null: that side is open
+    for key in ("correlation", "engine_runs", "free", "notes", "at_bound", "warnings", "model_check",
                 "impact_speed", "friction_check"):
         if key in r.extra:
             value = r.extra[key]
@@ -232,17 +246,28 @@ def _noise_check(record: Record, quantity: str, scale: float, result: FitResult,
     noise = float(noise_sigma(np.asarray(values, float))) * scale
     if not noise > 0.0:
         return None
-    return model_check(result.rms, noise, 0.0, unit, worst)
+    return model_check(result.rms, noise, 0.0, unit, worst, residual=result.extra.get("residual"))
 
 
 def _damper(records, results, model, friction, module) -> Identification:
     floor = _floor(records, "force")
     hydraulic = _choose(results, HYDRAULIC_MODELS, model, "model", floor)
+    if hydraulic in ("linear", "digressive"):  # the friction laws compared on the hydraulic law written
+        module.refit_friction(records[0], results, hydraulic)
     chosen_friction = _choose(results, FRICTION_MODELS, friction, "friction", floor)
     notes = (_comparison(results, HYDRAULIC_MODELS, hydraulic, floor, "hydraulic models")
              + _comparison(results, FRICTION_MODELS, chosen_friction, floor, "friction models"))
-    return Identification("damper", records, results, [hydraulic], lambda: module.plot_damper(records[0], results),
-                          notes=notes, friction=chosen_friction)
+    rec = module.peaks(records[0])
+    ident = Identification("damper", records, results, [hydraulic], lambda: module.plot_damper(records[0], results),
+                           notes=notes, friction=chosen_friction)
+    for name in set(ident._sources().values()):  # the fits whose values are written
+        check = module.damper_model_check(rec, results[name])
+        if check is not None:
+            results[name].extra["model_check"] = check
+    if "model_check" not in results[hydraulic].extra:
+        notes.append(f"no model check: the record has fewer than {module.MIN_NOISE_DOF} repeated points at its test "
+                     "speeds, so it cannot tell its own noise (record several cycles per speed)")
+    return ident
 
 
 def identify(kind: str, data: Sequence[str | Path], model: str = "auto", friction: str = "auto",
@@ -292,9 +317,10 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
 
         if clicks:
             labelled = any(isinstance(c, Mapping) for c in clicks)
+            law = "table" if model == "auto" else model  # the law each file is read through
             result = (damper.fit_settings(records, [dict(c) if isinstance(c, Mapping) else {"c": c, "r": c}
-                                                    for c in clicks])
-                      if labelled else damper.fit_clicks(records, list(clicks)))
+                                                    for c in clicks], law)
+                      if labelled else damper.fit_clicks(records, list(clicks), law))
             return Identification("damper", records, {"clicks": result}, ["clicks"],
                                   lambda: damper.plot_clicks(records, result),
                                   notes=result.extra["notes"])
@@ -318,6 +344,11 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
                                      f"residual of the {part} fit: see fit.png")
                 if check is not None:
                     results[part].extra["model_check"] = check
+        if "static" in results:  # the ramp: its force against the force's own noise along the ramp
+            check = _noise_check(ramps[0], "force", 1.0, results["static"], "N",
+                                 "residual of the static ramp: see fit.png")
+            if check is not None:
+                results["static"].extra["model_check"] = check
         return Identification("tire", records, results, order, lambda: tire.plot_tire(drops[0], results))
     from mtbmj.identify import dropfit
 

@@ -38,7 +38,7 @@ from scipy.optimize import least_squares, lsq_linear, minimize_scalar
 from scipy.signal import savgol_filter
 
 from mtbmj.errors import MtbmjError
-from mtbmj.identify.fitresult import FitResult, covariance_stderr
+from mtbmj.identify.fitresult import DEFAULT_BOUND_FACTOR, FitResult, covariance_stderr, declare_bounds
 from mtbmj.identify.records import Record, RecordError
 
 MODELS = ("linear", "compression_rebound", "bilinear", "progressive", "top_out", "preload")
@@ -193,18 +193,40 @@ def _fit(data: _Data, main: str, top_out: bool, preload: bool):
     theta = sol.x * scale
     resid = model.predict(theta, x, s) - f
     std, corr = covariance_stderr(sol.jac / scale, resid, len(theta))
+    names = model.linear_names + model.nonlinear_names
+    model.bounds = {n: (float(a), float(b)) for n, a, b in zip(names, lower, upper)}  # config units (N/mm, mm)
+    model.start = dict(zip(names, map(float, theta0)))
     return model, theta, std, corr, resid, len(x)
+
+
+def _keys(model) -> dict[str, str]:
+    """The model's parameter names -> their configuration keys (without ``fork.spring.``)."""
+    keys = {"k": "rate_N_per_mm", "kc": "compression_rate_N_per_mm", "kr": "rebound_rate_N_per_mm",
+            "k1": "rate_below_knee_N_per_mm", "k2": "rate_above_knee_N_per_mm", "knee": "knee_mm",
+            "kt": "top_out_rate_N_per_mm"}
+    if model.main == "progressive":
+        keys.update(k="progressive_rate_N_per_mm", c="progressive_cubic_N_per_mm3")
+    return keys
+
+
+def _bounds(model) -> tuple[dict, dict]:
+    """The fit's bounds and start values by configuration key (the preload, kt x_e, from x_e's)."""
+    keys = _keys(model)
+    bounds = {K + keys[n]: b for n, b in model.bounds.items() if n in keys}
+    starts = {K + keys[n]: v for n, v in model.start.items() if n in keys}
+    if "xe" in model.bounds:
+        low, high = model.bounds["xe"]
+        kt = model.start.get("kt", 0.0)
+        bounds[K + "preload_N"] = (0.0, np.inf)
+        starts[K + "preload_N"] = kt * model.start["xe"] or kt  # x_e starts at 0: 1 mm of it for the scale
+    return bounds, starts
 
 
 def _values(model, theta, std, corr):
     names = model.linear_names + model.nonlinear_names
     val = dict(zip(names, theta))
     err = dict(zip(names, std))
-    keys = {"k": "rate_N_per_mm", "kc": "compression_rate_N_per_mm", "kr": "rebound_rate_N_per_mm",
-            "k1": "rate_below_knee_N_per_mm", "k2": "rate_above_knee_N_per_mm", "knee": "knee_mm",
-            "kt": "top_out_rate_N_per_mm"}
-    if model.main == "progressive":
-        keys.update(k="progressive_rate_N_per_mm", c="progressive_cubic_N_per_mm3")
+    keys = _keys(model)
     values, stderr = {}, {}
     for name in names:
         if name in keys:
@@ -250,8 +272,12 @@ def fit_spring(record: Record, model: str = "progressive", *, top_out: bool | No
         extra = dict(full.extra)
         extra["model_keys"] = {K + "top_out": True, K + "preload": True}
         extra["main_values"] = {k: v for k, v in full.values.items() if k not in keys}
-        return FitResult("spring", model, values, {k: full.stderr[k] for k in keys}, full.rms, "N",
-                         full.n_points, full.n_params, extra)
+        result = FitResult("spring", model, values, {k: full.stderr[k] for k in keys}, full.rms, "N",
+                           full.n_points, full.n_params, {k: v for k, v in extra.items()
+                                                          if k not in ("bounds", "at_bound", "warnings",
+                                                                       "ci95_meaningful")})
+        declare_bounds(result, full.extra["bounds"], full.extra["bound_scales"])
+        return result
     if top_out is None:
         top_out = False if model in ("linear", "compression_rebound") else data.reaches_extension
     if preload is None:
@@ -271,13 +297,17 @@ def fit_spring(record: Record, model: str = "progressive", *, top_out: bool | No
         "friction_N": friction,
         "friction_stderr_N": friction_err,
         "correlation": corr,
+        "residual": -resid,  # data - model, in record order
         "parameters": m.linear_names + m.nonlinear_names,
         "notes": [f"loop half-width (friction at the stroke speed) {friction:.1f} +/- {friction_err:.2g} N; "
                   "the elastic curve is the loop's mid-line"],
     }
     if not top_out:
         extra["notes"].append("fitted on the compression side (x > 0) through 0, no top-out or preload")
-    return FitResult("spring", model, values, stderr, float(np.sqrt(np.mean(resid ** 2))), "N", n, len(theta), extra)
+    result = FitResult("spring", model, values, stderr, float(np.sqrt(np.mean(resid ** 2))), "N", n, len(theta),
+                       extra)
+    declare_bounds(result, *_bounds(m))
+    return result
 
 
 def fit_air(record: Record, config) -> FitResult:
@@ -307,7 +337,12 @@ def fit_air(record: Record, config) -> FitResult:
         return elastic + q[2] * s - f
 
     start = np.array([config[keys[0]], config[keys[1]], 10.0])
-    sol = least_squares(residual, start, x_scale=np.array([10.0, 20.0, 5.0]), method="trf")
+    # the pressure and volume within a factor DEFAULT_BOUND_FACTOR of the configuration's (a gauge
+    # pressure of 0 sets no scale: up to 4 x 100 psi); the friction non-negative
+    p_hi = DEFAULT_BOUND_FACTOR * (start[0] if start[0] > 0 else 100.0)
+    lower = np.array([start[0] / DEFAULT_BOUND_FACTOR, start[1] / DEFAULT_BOUND_FACTOR, 0.0])
+    upper = np.array([p_hi, start[1] * DEFAULT_BOUND_FACTOR, np.inf])
+    sol = least_squares(residual, start, x_scale=np.array([10.0, 20.0, 5.0]), method="trf", bounds=(lower, upper))
     if sol.status <= 0 or not np.all(np.isfinite(sol.x)) or curve(sol.x[:2], x[:1]) is None:
         raise SpringFitError(f"{data.path}: the air spring fit did not converge ({sol.message})")
     theta = sol.x
@@ -321,12 +356,16 @@ def fit_air(record: Record, config) -> FitResult:
         "model_keys": {K + "model": "air", K + "preload": False},
         "curve": (grid, mid),
         "branches": {"compression": (grid, mid + theta[2]), "rebound": (grid, mid - theta[2]), "friction_N": theta[2]},
-        "friction_N": float(theta[2]), "friction_stderr_N": float(std[2]), "correlation": corr,
+        "friction_N": float(theta[2]), "friction_stderr_N": float(std[2]), "correlation": corr, "residual": -r,
         "parameters": ["air_pressure_psi", "air_volume_cm3", "friction"],
         "notes": [f"air spring of {config.name} with its piston, spacers, negative chamber, port, index and top-out "
                   f"rate; loop half-width {theta[2]:.1f} +/- {std[2]:.2g} N"],
     }
-    return FitResult("spring", "air", values, stderr, float(np.sqrt(np.mean(r ** 2))), "N", len(x), 3, extra)
+    result = FitResult("spring", "air", values, stderr, float(np.sqrt(np.mean(r ** 2))), "N", len(x), 3, extra)
+    declare_bounds(result, {k: (lower[i], upper[i]) for i, k in enumerate(keys)}, dict(zip(keys, start[:2])),
+                   hint=f"the bounds are {DEFAULT_BOUND_FACTOR:g} x the configuration's value either way: start from "
+                        f"a configuration nearer the fork (--config)")
+    return result
 
 
 def fit_spring_all(record: Record) -> dict[str, FitResult]:

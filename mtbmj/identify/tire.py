@@ -34,7 +34,7 @@ from scipy import optimize
 
 from mtbmj.errors import MtbmjError
 
-from mtbmj.identify.fitresult import FitResult, covariance_stderr
+from mtbmj.identify.fitresult import FitResult, covariance_stderr, declare_bounds
 from mtbmj.identify.records import Record
 
 G = 9.81
@@ -365,6 +365,7 @@ def fit_contact(record: Record, mass_kg: float | None = None, guard_s: float = 0
             "natural_frequency_Hz": math.sqrt(wn2) / (2 * math.pi),
             "damping_ratio": sigma / math.sqrt(wn2),
             "static_deflection_mm": c * 1e3,
+            "residual": -sol.fun * 1e3,  # data - model, mm
             "window_s": (float(tt[0]), float(tt[-1])),
             "curves": {"window": (tt, dd * 1e3), "fit": (t_curve, _damped(sol.x, t_curve - tt[0]) * 1e3)},
         },
@@ -387,7 +388,7 @@ def fit_static(record: Record) -> FitResult:
         values={"tire.static_rate_N_per_mm": float(p[0]) / 1e3},
         stderr={"tire.static_rate_N_per_mm": float(std[0]) / 1e3},
         rms=float(np.sqrt(np.mean(r**2))), residual_unit="N", n_points=int(d.size), n_params=2,
-        extra={"model_keys": {}, "offset_N": float(p[1]),
+        extra={"model_keys": {}, "offset_N": float(p[1]), "residual": r,
                "curves": {"data": (d * 1e3, f), "fit": (d_line * 1e3, p[0] * d_line + p[1])}},
     )
 
@@ -404,15 +405,21 @@ def fit_tire(record: Record, mass_kg: float | None = None, ramp: Record | None =
     results: dict[str, FitResult] = {}
     if _is_ramp(record):
         results["static"] = fit_static(record)
-        return results
-    results["impact"] = fit_impact(record, mass_kg, gravity=gravity, gravity_correction=gravity_correction)
-    try:
-        results["contact"] = fit_contact(record, mass_kg)
-    except MtbmjError as exc:
-        results["impact"].extra["notes"] = [f"no in-contact values: {exc}"]
-    if ramp is not None:
-        results["static"] = fit_static(ramp)
+    else:
+        results["impact"] = fit_impact(record, mass_kg, gravity=gravity, gravity_correction=gravity_correction)
+        try:
+            results["contact"] = fit_contact(record, mass_kg)
+        except MtbmjError as exc:
+            results["impact"].extra["notes"] = [f"no in-contact values: {exc}"]
+        if ramp is not None:
+            results["static"] = fit_static(ramp)
+    for result in results.values():  # every tire rate and damping is positive; nothing else bounds them
+        declare_bounds(result, {key: (0.0, np.inf) for key in result.values}, hint=TIRE_BOUND_HINT)
     return results
+
+
+TIRE_BOUND_HINT = ("a tire's rate and damping are positive: the record does not show the law's behaviour (a "
+                   "growing oscillation, a slope of the wrong sign); look at fit.png")
 
 
 def tire_overrides(results: dict[str, FitResult]) -> dict:
