@@ -637,7 +637,7 @@ def fit_settings(records: list[Record], settings: list[Mapping[str, float]], mod
     checks = []
     warnings = []
     for label, rec, fit in zip(labels, points, fits):
-        check = damper_model_check(rec, fit)
+        check = damper_model_check(rec, fit)  # the clicks fit's check (worst file), attached below
         if check is not None:
             checks.append((label, check))
         warnings += [f"file at {label}: {w}" for w in fit.extra.get("warnings", []) if "friction" not in w]

@@ -205,7 +205,11 @@ def _comparison(results: dict[str, FitResult], names: Sequence[str], chosen: str
         notes.append(", ".join(f"{n} ({results[n].n_params} parameters for {results[n].n_points} points)"
                                for n in saturated) + ": as many parameters as the data can carry, not compared")
     if chosen in bic:
-        close = [n for n in eligible if n != chosen and bic[n] - bic[chosen] < INDISTINGUISHABLE_BIC]
+        close = [n for n in eligible if n != chosen and abs(bic[n] - bic[chosen]) < INDISTINGUISHABLE_BIC]
+        better = [n for n in eligible if bic[n] <= bic[chosen] - INDISTINGUISHABLE_BIC]
+        if better:  # a model named by the user that the record does not prefer
+            notes.append(f"the record prefers {', '.join(better)} to {chosen} (BIC {bic[min(better, key=bic.get)]:.1f} "
+                         f"against {bic[chosen]:.1f})")
         if close:
             notes.append(f"the data cannot distinguish {chosen} from {', '.join(close)} "
                          f"(BIC within {INDISTINGUISHABLE_BIC:g}); {chosen} has the fewest parameters or lowest BIC")
@@ -223,9 +227,19 @@ def _spring(records, results, model, plot_fn, base="reference") -> Identificatio
         if not check["passed"] and results[main].model != "air":
             check["line"] += ("; an air spring? name an air configuration with --config (e.g. air120) to fit the "
                               "air model")
-        results[main].extra["model_check"] = check
+        _attach_check(results[main], check)
     return Identification("spring", records, results, [main], lambda: plot_fn(records[0], results), base=base,
                           notes=notes)
+
+
+def _attach_check(result: FitResult, check: dict) -> None:
+    """A fit's model check, with its intervals withdrawn when the check fails (the values then
+    describe no fork, so neither do their intervals)."""
+    result.extra["model_check"] = check
+    if not check["passed"]:
+        meaningful = result.extra.setdefault("ci95_meaningful", {})
+        for key in result.stderr:
+            meaningful[key] = False
 
 
 NOISE_CHECK_MIN_POINTS = 30  # a record this long at least has a noise floor to speak of
@@ -263,7 +277,7 @@ def _damper(records, results, model, friction, module) -> Identification:
     for name in set(ident._sources().values()):  # the fits whose values are written
         check = module.damper_model_check(rec, results[name])
         if check is not None:
-            results[name].extra["model_check"] = check
+            _attach_check(results[name], check)
     if "model_check" not in results[hydraulic].extra:
         notes.append(f"no model check: the record has fewer than {module.MIN_NOISE_DOF} repeated points at its test "
                      "speeds, so it cannot tell its own noise (record several cycles per speed)")
@@ -321,6 +335,8 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
             result = (damper.fit_settings(records, [dict(c) if isinstance(c, Mapping) else {"c": c, "r": c}
                                                     for c in clicks], law)
                       if labelled else damper.fit_clicks(records, list(clicks), law))
+            if "model_check" in result.extra:
+                _attach_check(result, result.extra["model_check"])
             return Identification("damper", records, {"clicks": result}, ["clicks"],
                                   lambda: damper.plot_clicks(records, result),
                                   notes=result.extra["notes"])
@@ -343,12 +359,12 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
                 check = _noise_check(drops[0], "deflection", 1e3, results[part], "mm",
                                      f"residual of the {part} fit: see fit.png")
                 if check is not None:
-                    results[part].extra["model_check"] = check
+                    _attach_check(results[part], check)
         if "static" in results:  # the ramp: its force against the force's own noise along the ramp
             check = _noise_check(ramps[0], "force", 1.0, results["static"], "N",
                                  "residual of the static ramp: see fit.png")
             if check is not None:
-                results["static"].extra["model_check"] = check
+                _attach_check(results["static"], check)
         return Identification("tire", records, results, order, lambda: tire.plot_tire(drops[0], results))
     from mtbmj.identify import dropfit
 
