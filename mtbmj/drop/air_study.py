@@ -7,9 +7,6 @@ import os
 from pathlib import Path
 from typing import Callable, Mapping
 
-import numpy as np
-from scipy.optimize import brentq
-
 from mtbmj import compose, output
 from mtbmj.config import Config
 from mtbmj.drop.run import resolve
@@ -76,49 +73,36 @@ def run_air_study(config: Config | str = "air120", overrides: Mapping | None = N
 
 def static_sag_mm(config: Config) -> float | None:
     """Fork compression (mm) where the spring carries the body's weight; ``None`` when the spring
-    cannot carry it anywhere in the travel (the fork would sit on its bumper)."""
+    cannot carry it anywhere in the travel (the fork would sit on its bumper). The balance of
+    ``mtbmj.curves.static_sag``, which the spring-curve figure marks."""
+    from mtbmj.curves import static_sag
+
     setup = compose.setup(config)
-    weight = setup.body_mass * setup.gravity
-
-    def excess(x):
-        return setup.fork.spring.force(x, 0.0) - weight
-
-    if excess(setup.travel) < 0.0:
-        return None
-    if excess(0.0) >= 0.0:
-        return 0.0  # the preload alone carries it: the fork does not sag
-    return brentq(excess, 0.0, setup.travel) * 1e3
+    sag = static_sag(setup.fork.spring, setup.body_mass * setup.gravity, setup.travel)
+    return None if sag is None else sag * 1e3
 
 
 def spring_curves_figure(base: Config):
-    """Fork spring force vs compression (paper Fig. 3 style): 0-3 spacers at the base pressure,
-    and the two study pressures, with the body's weight and each static sag marked."""
+    """Fork spring force vs travel (paper Fig. 3 style) from the top stop to full travel (the
+    curves of ``mtbmj.curves``, y range the springs' own): 0-3 spacers at the base pressure, and
+    the two study pressures, with the body's weight and each static sag marked."""
     from matplotlib.figure import Figure  # the object API: the caller's backend is left alone
 
-    travel = base["fork.travel_mm"]
-    x = np.linspace(-10.0, travel, 400)
-    weight = base["sled.body_mass_kg"] * base.get("sled.gravity_m_per_s2", 9.81)
-    fig = Figure(figsize=(11, 4.2), layout="constrained")
-    left, right = fig.subplots(1, 2, sharey=True)
+    from mtbmj.curves import draw_spring_totals, spring_curve
+
+    fig = Figure(figsize=(11, 4.4), layout="constrained")
+    left, right = fig.subplots(1, 2)
+    grid = spring_curve(base).travel_mm
     for ax, group in ((left, "spacers"), (right, "pressure")):
-        for name, (g, change) in variants(base).items():
-            if g != group:
-                continue
-            c = base.with_overrides(change)
-            spring = compose.fork_law(c).spring
-            line, = ax.plot(x, [spring.force(v * 1e-3, 0.0) for v in x], lw=1.4, label=name)
-            sag = static_sag_mm(c)
-            if sag is not None:
-                ax.plot([sag], [weight], "o", color=line.get_color(), ms=4)
-        ax.axhline(weight, color="0.5", ls=":", lw=1)
-        ax.axvline(0.0, color="0.7", lw=0.6)
-        ax.set_xlabel("fork compression (mm)")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8, loc="upper left")
-    left.set_ylabel("spring force (N)")
+        curves = {name: spring_curve(base.with_overrides(change), travel_mm=grid)
+                  for name, (g, change) in variants(base).items() if g == group}
+        draw_spring_totals(ax, curves)
+    shared = (min(left.get_ylim()[0], right.get_ylim()[0]), max(left.get_ylim()[1], right.get_ylim()[1]))
+    for ax in (left, right):
+        ax.set_ylim(*shared)  # one force scale for both panels
     left.set_title(f"(a) volume spacers, {base['fork.spring.air_pressure_psi']:g} psi", fontsize=9)
     right.set_title("(b) air pressure; dots: static sag under the sled's weight (dotted)", fontsize=9)
-    fig.suptitle(f"{base.name}: air spring curves (top-out spring and negative chamber included)")
+    fig.suptitle(f"{base.name}: air spring curves (top-out spring, negative chamber and bumper included)")
     return fig
 
 
