@@ -7,7 +7,7 @@ import sys
 from mtbmj._package import __version__
 from mtbmj.cli.common import EXIT_BAD_INPUT, Parser, run  # noqa: F401  (the exit status, for callers)
 
-COMMANDS = ("drop", "airstudy", "sag", "curve", "fit", "synth", "validate", "sweep", "sensitivity", "roll", "telemetry", "render", "presets")
+COMMANDS = ("drop", "airstudy", "sag", "curve", "compare", "fit", "synth", "validate", "sweep", "sensitivity", "roll", "telemetry", "render", "presets")
 
 
 def build_parser() -> Parser:
