@@ -89,10 +89,14 @@ class TireLaw:
 
 PSI = 6894.757293168  # Pa per psi
 
-# Tire rates from the inflation pressure (``tire.pressure_psi``), a 29 x 2.3 in knobby tire:
-REFERENCE_STATIC_RATE = 62e3  # N/m, sourced (secondhand): static radial stiffness at 25 psi
+# Tire rates from the inflation pressure (``tire.pressure_psi``), a 29 x 2.3 in knobby tire; every
+# number with its source (docs/reference.md section 3, docs/configuration.md):
+REFERENCE_STATIC_RATE = 62e3  # N/m, sourced (secondhand): static radial stiffness at 25 psi, 418 N load
 REFERENCE_PRESSURE = 25.0 * PSI  # Pa, sourced: 1.72 bar, with the rate above (Dressel & Sadauckas 2020)
-PRESSURE_RANGE = (15.0 * PSI, 25.0 * PSI)  # Pa: 1.03 bar (sourced, their largest deflection) to 1.72 bar
+# Pa: the measured range, 1.03 bar (sourced: the pressure of their largest deflection, 48.7 mm) to
+# 1.72 bar (sourced: the anchor above). Outside it the relation is extrapolated (assumed: the same
+# proportionality, the carcass's own stiffness still neglected); mtbmj.config warns there.
+PRESSURE_RANGE = (15.0 * PSI, 25.0 * PSI)
 IMPACT_OVER_STATIC = 1.38  # sourced (secondhand): first-impact dynamic / static (Sadauckas et al. 2024)
 CONTACT_OVER_STATIC = 1.19  # sourced (secondhand): settled in-contact dynamic / static (same source)
 
@@ -104,8 +108,9 @@ def static_rate_from_pressure(pressure: float) -> float:
     contact patch (Renart & Roura-Grabulosa, "Deformation of an inflated bicycle tire when loaded",
     Am. J. Phys. 87, 102, 2019), so at a given deflection the force, and the rate, scale with the
     gauge pressure: k(p) = k_ref p / p_ref, anchored at 62 N/mm and 25 psi (Dressel & Sadauckas
-    2020, Appl. Sci. 10(9):3156). Assumed: the carcass's own stiffness is neglected. Valid over
-    ``PRESSURE_RANGE``; ``mtbmj.compose`` refuses pressures outside it.
+    2020, Appl. Sci. 10(9):3156). Assumed: the carcass's own stiffness is neglected (so the rate is
+    likely too soft at low pressure), and the proportionality holds outside the measured
+    ``PRESSURE_RANGE`` (15-25 psi), where ``mtbmj.config`` warns that the rates are extrapolated.
     """
     return REFERENCE_STATIC_RATE * pressure / REFERENCE_PRESSURE
 

@@ -401,14 +401,14 @@ def _rim(c: Config) -> law.Rim:
 
 def tire_rates_from_pressure(pressure_psi: float) -> dict[str, float]:
     """``tire.pressure_psi`` -> the tire's static, impact and in-contact rates (N/mm), from
-    ``controllers.tire.static_rate_from_pressure`` and the sourced dynamic/static ratios; refused
-    (naming the key) outside the model's range."""
+    ``controllers.tire.static_rate_from_pressure`` and the sourced dynamic/static ratios. A gauge
+    pressure of 0 or less is refused (a flat tire carries nothing on its air); outside the measured
+    ``PRESSURE_RANGE`` the rates are extrapolated, which ``mtbmj.config`` warns about when the
+    value is read."""
     from mtbmj.controllers import tire as tire_model
 
-    low, high = (p / PSI for p in tire_model.PRESSURE_RANGE)
-    if not low <= pressure_psi <= high:
-        raise ConfigError(f"tire.pressure_psi: {pressure_psi:g} psi is outside the tire model's range "
-                          f"{low:g}-{high:g} psi (the published measurements it rests on)")
+    if not pressure_psi > 0.0:
+        raise ConfigError(f"tire.pressure_psi: {pressure_psi:g} psi gauge: the tire must be inflated (above 0)")
     static = tire_model.static_rate_from_pressure(pressure_psi * PSI) / N_PER_MM
     return {"tire.static_rate_N_per_mm": static,
             "tire.impact_rate_N_per_mm": static * tire_model.IMPACT_OVER_STATIC,

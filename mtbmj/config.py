@@ -5,6 +5,13 @@ A configuration is a TOML file whose tables mirror the model (``[sled]``, ``[for
 preset name or a path) whose values it overrides; the presets S1-S14 all build on ``reference``.
 Values are plain numbers in the unit their key names (SI inside the package after conversion in
 ``mtbmj.compose``). Every problem raises ``ConfigError`` naming the key.
+
+A few keys give a value in a rider's terms and are converted as they are read, so the rest of the
+package sees only the canonical key: ``fork.spring.rate_lb_per_in`` (for ``rate_N_per_mm``), the
+pressures in bar (for psi), and the load as ``sled.rider_mass_kg``, ``sled.bike_mass_kg`` and
+``sled.front_share_percent`` (for ``sled.body_mass_kg``, see :func:`sprung_front_mass`). A value
+far outside what any bike or sled has is not refused but warned about (:func:`plausibility`,
+:class:`ConfigWarning`). Every key with its unit, default and range: docs/configuration.md.
 """
 from __future__ import annotations
 
@@ -13,6 +20,7 @@ import hashlib
 import json
 import math
 import sys
+import warnings as _warnings
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -39,6 +47,9 @@ SCHEMA: dict[str, Any] = {
     "description": "text",
     "reading": "text",
     "sled.body_mass_kg": "pos",
+    "sled.rider_mass_kg": "pos",
+    "sled.bike_mass_kg": "pos",
+    "sled.front_share_percent": "pos",
     "sled.wheel_mass_kg": "pos",
     "sled.drop_height_mm": "nonneg",
     "sled.gravity_m_per_s2": "pos",
@@ -46,6 +57,7 @@ SCHEMA: dict[str, Any] = {
     "fork.length_mm": "pos",
     "fork.spring.model": SPRING_MODELS,
     "fork.spring.rate_N_per_mm": "pos",
+    "fork.spring.rate_lb_per_in": "pos",
     "fork.spring.compression_rate_N_per_mm": "pos",
     "fork.spring.rebound_rate_N_per_mm": "pos",
     "fork.spring.knee_mm": "pos",
@@ -60,6 +72,7 @@ SCHEMA: dict[str, Any] = {
     "fork.spring.preload_N": "nonneg",
     "fork.spring.direction_band_mm_per_s": "pos",
     "fork.spring.air_pressure_psi": "real",
+    "fork.spring.air_pressure_bar": "nonneg",
     "fork.spring.piston_diameter_mm": "pos",
     "fork.spring.air_volume_cm3": "pos",
     "fork.spring.tokens": "nonneg",
@@ -130,7 +143,8 @@ SCHEMA: dict[str, Any] = {
     "tire.max_deflection_mm": "pos",
     "tire.rim_rate_N_per_mm": "pos",
     "tire.rim_damping_N_s_per_m": "nonneg",
-    "tire.pressure_psi": "real",
+    "tire.pressure_psi": "pos",
+    "tire.pressure_bar": "pos",
     "solver.duration_s": "pos",
     "solver.timestep_s": "pos",
     "solver.integrator": INTEGRATORS,
@@ -141,10 +155,21 @@ SCHEMA: dict[str, Any] = {
     "solver.antialias_Hz": "pos",
 }
 
-UNIT_SUFFIXES = (
-    "_N_s_per_m", "_N_per_mm3", "_N_per_mm", "_mm_per_s", "_m_per_s2", "_kg", "_mm", "_N", "_s", "_Hz",
-    "_psi", "_cm3",
-)
+# The unit each key name ends in (the longest match first), as messages and docs write it.
+UNITS = {
+    "_N_s_per_m": "N s/m", "_N_per_mm3": "N/mm3", "_N_per_mm": "N/mm", "_mm_per_s": "mm/s", "_m_per_s2": "m/s2",
+    "_lb_per_in": "lb/in", "_percent": "%", "_kg": "kg", "_mm": "mm", "_N": "N", "_s": "s", "_Hz": "Hz",
+    "_psi": "psi", "_bar": "bar", "_cm3": "cm3",
+}
+UNIT_SUFFIXES = tuple(UNITS)
+
+
+def unit_of(key: str) -> str:
+    """The unit a key's name states (``"N/mm"`` for ``fork.spring.rate_N_per_mm``), or ``""``."""
+    for suffix, unit in UNITS.items():
+        if key.endswith(suffix):
+            return unit
+    return ""
 
 
 def _stem(key: str) -> str:
@@ -154,7 +179,10 @@ def _stem(key: str) -> str:
     return key
 
 
-_STEMS = {_stem(k): k for k in SCHEMA if _stem(k) != k}
+_STEMS: dict[str, list[str]] = {}
+for _key in SCHEMA:
+    if _stem(_key) != _key:
+        _STEMS.setdefault(_stem(_key), []).append(_key)
 
 
 MAX_TABLE_DEPTH = 6  # the schema nests 3 deep (fork.spring.rate_N_per_mm)
@@ -177,7 +205,9 @@ def check_value(key: str, value: Any) -> Any:
     """Validate one value against the schema; return it (lists as tuples of floats)."""
     if key not in SCHEMA:
         if key in _STEMS:
-            raise ConfigError(f"{key}: value without its unit; the key is {_STEMS[key]}")
+            first, *others = _STEMS[key]
+            also = "".join(f" (or {k})" for k in others)
+            raise ConfigError(f"{key}: value without its unit; the key is {first}{also}")
         close = difflib.get_close_matches(key, list(SCHEMA), n=1, cutoff=0.6)
         hint = f" (did you mean {close[0]}?)" if close else ""
         raise ConfigError(f"{key}: unknown key{hint}")
@@ -222,6 +252,8 @@ def check_value(key: str, value: Any) -> Any:
         raise ConfigError(f"{key}: must be positive, got {value:g}")
     if kind == "nonneg" and value < 0.0:
         raise ConfigError(f"{key}: must not be negative, got {value:g}")
+    if key in UPPER_LIMITS and value > UPPER_LIMITS[key][0]:
+        raise ConfigError(f"{key}: {value:g} is more than {UPPER_LIMITS[key][1]}")
     return value
 
 
@@ -242,6 +274,199 @@ MAX_LIST = 10_000  # values in a list key (a damper table)
 MAX_MAGNITUDE = 1e30
 
 
+# --- keys a rider gives in other terms -----------------------------------------------------------
+# Converted when a configuration is read (``load``, ``Config.with_overrides``), so everything
+# downstream sees only the canonical key; a file or a set of overrides may give one key of a pair,
+# not both. A later source (a file over its base, overrides over the file) replaces the value
+# whichever key it uses.
+
+# 1 lb/in = 1 lbf / 1 in = (0.45359237 kg x 9.80665 m/s2) / 25.4 mm = 0.175126835 N/mm (the pound
+# and the inch are exact by definition, standard gravity too)
+N_PER_MM_PER_LB_PER_IN = 0.45359237 * 9.80665 / 25.4
+# 1 bar = 1e5 Pa; 1 psi = 1 lbf/in2 = 6894.757293168 Pa: 1 bar = 14.5037738 psi
+PSI_PER_BAR = 1e5 / (0.45359237 * 9.80665 / 0.0254 ** 2)
+
+ALTERNATIVES: dict[str, tuple[str, float]] = {
+    # key: (canonical key, its value per unit of the key)
+    "fork.spring.rate_lb_per_in": ("fork.spring.rate_N_per_mm", N_PER_MM_PER_LB_PER_IN),
+    "fork.spring.air_pressure_bar": ("fork.spring.air_pressure_psi", PSI_PER_BAR),
+    "tire.pressure_bar": ("tire.pressure_psi", PSI_PER_BAR),
+}
+CANONICAL = {canonical: alt for alt, (canonical, _) in ALTERNATIVES.items()}
+
+# The load as a rider gives it. The fork carries the front share of the weight of rider and bike
+# less the front wheel's own (the wheel is below the fork: unsprung):
+#   sled.body_mass_kg = sled.front_share_percent / 100 x (sled.rider_mass_kg + sled.bike_mass_kg)
+#                       - sled.wheel_mass_kg
+# (the paper's 53.2 kg is about an 85 kg rider and an 11 kg bike at 57.8 % on the front).
+RIDER_KEYS = ("sled.rider_mass_kg", "sled.bike_mass_kg", "sled.front_share_percent")
+BODY_KEY = "sled.body_mass_kg"
+WHEEL_KEY = "sled.wheel_mass_kg"
+
+# hard upper limits: (limit, what is beyond it)
+UPPER_LIMITS = {"sled.front_share_percent": (100.0, "100 %: the front cannot carry more than all of rider and bike")}
+
+
+def sprung_front_mass(rider_kg: float, bike_kg: float, front_share_percent: float, wheel_kg: float) -> float:
+    """The mass the fork carries (kg): the front share of rider and bike, less the front wheel."""
+    return front_share_percent / 100.0 * (rider_kg + bike_kg) - wheel_kg
+
+
+# --- plausibility ---------------------------------------------------------------------------------
+# What any bike or the drop sled has, wide: a value outside is more likely a unit mistake than a
+# bike. It is a warning (the run proceeds), not a refusal. 0 is exempt where a key allows it (no
+# damping, no drop). See docs/configuration.md.
+_SPRING = (0.5, 200.0)        # N/mm: a fork coil (about 3-15) to a stiff rear-shock coil (700 lb/in = 123)
+_DAMPING = (10.0, 50000.0)    # N s/m: a bike damper's slopes are about 100-5000
+_TIRE_RATE = (10.0, 500.0)    # N/mm: 62-86 for the sled's 29 x 2.3 (docs/reference.md); fat to road tires
+PLAUSIBLE: dict[str, tuple[float, float]] = {
+    "sled.body_mass_kg": (5.0, 300.0),
+    "sled.rider_mass_kg": (15.0, 250.0),
+    "sled.bike_mass_kg": (3.0, 60.0),
+    "sled.front_share_percent": (20.0, 80.0),
+    "sled.wheel_mass_kg": (0.3, 15.0),
+    "sled.drop_height_mm": (1.0, 5000.0),
+    "sled.gravity_m_per_s2": (1.0, 30.0),
+    "fork.travel_mm": (20.0, 300.0),
+    "fork.length_mm": (200.0, 1500.0),
+    "fork.spring.rate_N_per_mm": _SPRING,
+    "fork.spring.rate_lb_per_in": (3.0, 1150.0),
+    "fork.spring.compression_rate_N_per_mm": _SPRING,
+    "fork.spring.rebound_rate_N_per_mm": _SPRING,
+    "fork.spring.rate_below_knee_N_per_mm": _SPRING,
+    "fork.spring.rate_above_knee_N_per_mm": _SPRING,
+    "fork.spring.progressive_rate_N_per_mm": _SPRING,
+    "fork.spring.knee_mm": (1.0, 300.0),
+    "fork.spring.top_out_rate_N_per_mm": (0.5, 2000.0),
+    "fork.spring.preload_N": (1.0, 5000.0),
+    "fork.spring.air_pressure_psi": (15.0, 400.0),
+    "fork.spring.air_pressure_bar": (1.0, 27.5),
+    "fork.spring.piston_diameter_mm": (10.0, 80.0),
+    "fork.spring.air_volume_cm3": (20.0, 2000.0),
+    "fork.spring.token_volume_cm3": (1.0, 100.0),
+    "fork.spring.negative_volume_cm3": (1.0, 2000.0),
+    "fork.damper.coefficient_N_s_per_m": _DAMPING,
+    "fork.damper.compression_N_s_per_m": _DAMPING,
+    "fork.damper.rebound_N_s_per_m": _DAMPING,
+    "fork.damper.compression_low_N_s_per_m": _DAMPING,
+    "fork.damper.compression_high_N_s_per_m": _DAMPING,
+    "fork.damper.rebound_low_N_s_per_m": _DAMPING,
+    "fork.damper.rebound_high_N_s_per_m": _DAMPING,
+    "fork.damper.compression_knee_mm_per_s": (5.0, 5000.0),
+    "fork.damper.rebound_knee_mm_per_s": (5.0, 5000.0),
+    "fork.friction.coulomb_N": (1.0, 1000.0),
+    "fork.friction.breakaway_N": (1.0, 1000.0),
+    "fork.stops.bumper_length_mm": (0.5, 100.0),
+    "fork.stops.bumper_force_N": (10.0, 100000.0),
+    "fork.stops.stop_rate_N_per_mm": (100.0, 1e6),
+    "fork.stops.extension_mm": (0.5, 100.0),
+    "tire.radius_mm": (150.0, 500.0),
+    "tire.impact_rate_N_per_mm": _TIRE_RATE,
+    "tire.contact_rate_N_per_mm": _TIRE_RATE,
+    "tire.static_rate_N_per_mm": _TIRE_RATE,
+    "tire.impact_damping_N_s_per_m": (5.0, 10000.0),
+    "tire.contact_damping_N_s_per_m": (5.0, 10000.0),
+    "tire.max_deflection_mm": (5.0, 150.0),
+    "tire.rim_rate_N_per_mm": (100.0, 1e6),
+    "tire.pressure_psi": (5.0, 60.0),
+    "tire.pressure_bar": (0.35, 4.0),
+}
+
+# The unit mistakes a value is checked against, in order: (what was typed, this unit per one of it).
+MISTAKES: dict[str, tuple[tuple[str, float], ...]] = {
+    "mm": (("m", 1000.0), ("in", 25.4), ("cm", 10.0)),
+    "kg": (("g", 1e-3), ("lb", 0.45359237)),
+    "N/mm": (("N/m", 1e-3), ("lb/in", N_PER_MM_PER_LB_PER_IN)),
+    "lb/in": (("N/mm", 1.0 / N_PER_MM_PER_LB_PER_IN), ("N/m", 1e-3 / N_PER_MM_PER_LB_PER_IN)),
+    "N s/m": (("N s/mm", 1000.0),),
+    "mm/s": (("m/s", 1000.0),),
+    "m/s2": (("mm/s2", 1e-3), ("ft/s2", 0.3048)),
+    "psi": (("bar", PSI_PER_BAR), ("kPa", PSI_PER_BAR / 100.0)),
+    "bar": (("psi", 1.0 / PSI_PER_BAR), ("kPa", 0.01)),
+    "%": (("as a fraction", 100.0),),
+    "N": (("kN", 1000.0),),
+    "cm3": (("litres", 1000.0), ("in3", 16.387064), ("mm3", 1e-3)),
+}
+
+# The tire's pressure-to-rate relation rests on measurements from 15 to 25 psi (Dressel & Sadauckas
+# 2020, secondhand; mtbmj.controllers.tire.PRESSURE_RANGE): outside it the rates are extrapolated.
+TIRE_PRESSURE_MEASURED_PSI = (15.0, 25.0)
+
+
+class ConfigWarning(UserWarning):
+    """A configuration value far outside what any bike or sled has (most likely a unit mistake),
+    or outside the range a model rests on. The run proceeds; ``Config.warnings`` holds the same
+    text, and the command line prints each as one ``mtbmj: warning:`` line."""
+
+
+def plausibility(key: str, value: Any) -> str | None:
+    """The warning for ``key = value`` (a checked value), or None when it is plausible."""
+    if key not in PLAUSIBLE or isinstance(value, bool) or not isinstance(value, float) or value <= 0.0:
+        return None
+    low, high = PLAUSIBLE[key]
+    unit = unit_of(key)
+    if low <= value <= high:
+        canonical, per = ALTERNATIVES.get(key, (key, 1.0))
+        if canonical == "tire.pressure_psi":
+            psi = value * per
+            lo, hi = TIRE_PRESSURE_MEASURED_PSI
+            if not lo <= psi <= hi:
+                return (f"{key} = {value:g} {unit} is outside {lo:g}-{hi:g} psi, the measured range of the tire's "
+                        f"pressure-to-rate relation (Dressel & Sadauckas 2020): its rates are extrapolated "
+                        f"(rate proportional to the gauge pressure, assumed)")
+        return None
+    said = f"{key} = {value:g} {unit} is far {'below' if value < low else 'above'} what any bike or sled has"
+    for typed, per in MISTAKES.get(unit, ()):
+        if low <= value * per <= high:
+            return f"{said} ({low:g}-{high:g} {unit}): probably meant {value:g} {typed} = {value * per:.4g} {unit}"
+    return f"{said}: probably meant a value within {low:g}-{high:g} {unit}"
+
+
+def _apply(values: dict[str, Any], notes: dict[str, str], given: Mapping[str, Any]) -> None:
+    """Apply the keys one source gives (a file's table or a set of overrides, unchecked) onto
+    ``values`` and their warnings ``notes`` (keyed by the key whose value they concern), in place."""
+    checked = {key: check_value(key, value) for key, value in given.items()}
+    for alt, (canonical, _) in ALTERNATIVES.items():
+        if alt in checked and canonical in checked:
+            raise ConfigError(f"{canonical} and {alt}: the same value given in two units; give one of them")
+    rider = [k for k in RIDER_KEYS if k in checked]
+    if rider and BODY_KEY in checked:
+        raise ConfigError(f"{BODY_KEY} and {', '.join(rider)}: the load given two ways; give either {BODY_KEY} or "
+                          f"the rider inputs ({', '.join(RIDER_KEYS)})")
+    for key, value in checked.items():
+        target, per = ALTERNATIVES.get(key, (key, 1.0))
+        values[target] = value * per if per != 1.0 else value
+        notes.pop(target, None)
+        note = plausibility(key, value)
+        if note:
+            notes[target] = note
+    if BODY_KEY in checked:  # the load given as the sprung mass replaces rider inputs from below
+        for k in RIDER_KEYS:
+            values.pop(k, None)
+            notes.pop(k, None)
+    elif rider or (WHEEL_KEY in checked and all(k in values for k in RIDER_KEYS)):
+        missing = [k for k in RIDER_KEYS if k not in values]
+        if missing:
+            raise ConfigError(f"{', '.join(rider)}: the load from rider inputs needs {' and '.join(missing)} too "
+                              f"(or give {BODY_KEY} alone)")
+        if WHEEL_KEY not in values:
+            raise ConfigError(f"{WHEEL_KEY}: missing (the load from rider inputs subtracts the front wheel)")
+        mass = sprung_front_mass(*(values[k] for k in RIDER_KEYS), values[WHEEL_KEY])
+        if not mass > 0.0:
+            front = mass + values[WHEEL_KEY]
+            hints = "".join(f"; {notes[k]}" for k in RIDER_KEYS + (WHEEL_KEY,) if k in notes)  # a unit mistake?
+            raise ConfigError(f"{', '.join(RIDER_KEYS)}: the front carries {front:g} kg of rider and bike, no more than "
+                              f"{WHEEL_KEY} = {values[WHEEL_KEY]:g} kg, leaving nothing for the fork{hints}")
+        values[BODY_KEY] = mass
+        notes.pop(BODY_KEY, None)
+
+
+def warn(messages, stacklevel: int = 2) -> None:
+    """Issue each message as a :class:`ConfigWarning` (shown as the caller's filters say)."""
+    for message in messages:
+        _warnings.warn(message, ConfigWarning, stacklevel=stacklevel + 1)
+
+
 def preset_names() -> list[str]:
     files = resources.files("mtbmj.presets").iterdir()
     names = [f.name[:-5] for f in files if f.name.endswith(".toml")]
@@ -260,6 +485,13 @@ class Config:
     name: str
     values: Mapping[str, Any]
     sources: tuple[str, ...] = field(default=())
+    # the plausibility warnings of the values in effect, keyed by the key each concerns
+    notes: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
+
+    @property
+    def warnings(self) -> list[str]:
+        """One line per value far outside what any bike or sled has (see :func:`plausibility`)."""
+        return list(self.notes.values())
 
     def __getitem__(self, key: str) -> Any:
         return self.require(key)
@@ -274,20 +506,27 @@ class Config:
         return self.values[key]
 
     def with_overrides(self, overrides: Mapping[str, Any]) -> "Config":
-        values = dict(self.values)
-        for key, value in overrides.items():
-            values[key] = check_value(key, value)
-        return Config(self.name, values, self.sources)
+        """A copy with ``overrides`` applied as one source: an alternative-unit key sets its
+        canonical key, rider inputs set ``sled.body_mass_kg``; the copy's ``warnings`` cover them
+        (issued by :func:`load`, not here: fits and solvers call this in their loops)."""
+        values, notes = dict(self.values), dict(self.notes)
+        _apply(values, notes, overrides)
+        return Config(self.name, values, self.sources, notes)
 
     def digest(self) -> str:
         """SHA-256 of the canonical JSON of the values: the config hash in manifests."""
         text = json.dumps({k: self.values[k] for k in sorted(self.values)}, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()
 
+    def lines(self) -> list[tuple[str, str]]:
+        """Every key with its value as TOML writes it, in schema order (``mtbmj presets --show``)."""
+        return [(key, _toml_value(self.values[key])) for key in sorted(self.values, key=list(SCHEMA).index)]
+
     def to_toml(self) -> str:
         """The configuration as TOML, tables in schema order; loads back to the same values."""
         sections: dict[str, list[str]] = {}
-        for key in sorted(self.values, key=lambda k: list(SCHEMA).index(k)):
+        derived = {BODY_KEY} if all(k in self.values for k in RIDER_KEYS) else set()  # load() derives it again
+        for key in sorted(set(self.values) - derived, key=lambda k: list(SCHEMA).index(k)):
             section, _, leaf = key.rpartition(".")
             sections.setdefault(section, []).append(f"{leaf} = {_toml_value(self.values[key])}")
         chunks = ["\n".join(sections.pop(""))] if "" in sections else []
@@ -414,6 +653,7 @@ def load(ref: str | Path, overrides: Mapping[str, Any] | None = None, _depth: in
     else:
         table = tomllib.loads(location.read_text())
     values: dict[str, Any] = {}
+    notes: dict[str, str] = {}
     sources: tuple[str, ...] = ()
     base = table.pop("base", None)
     try:
@@ -427,18 +667,21 @@ def load(ref: str | Path, overrides: Mapping[str, Any] | None = None, _depth: in
             base = _base_path(base, location, _roots or ())
         parent_config = load(base, _depth=_depth + 1, _roots=_roots)
         values.update(parent_config.values)
+        notes.update(parent_config.notes)
         sources = parent_config.sources
         values.pop("description", None)
         values.pop("reading", None)
-    for key, value in flat.items():
-        try:
-            values[key] = check_value(key, value)
-        except ConfigError as exc:
-            raise ConfigError(f"{location}: {exc}") from None
-    config = Config(name, values, sources + (str(location),))
+    try:
+        _apply(values, notes, flat)
+    except ConfigError as exc:
+        raise ConfigError(f"{location}: {exc}") from None
+    config = Config(name, values, sources + (str(location),), notes)
     if overrides:
         config = config.with_overrides(overrides)
+    if _depth == 0:
+        warn(config.warnings)
     return config
 
 
-__all__ = ["Config", "ConfigError", "load", "parse_assignment", "preset_names", "study_presets", "SCHEMA"]
+__all__ = ["Config", "ConfigError", "ConfigWarning", "load", "parse_assignment", "preset_names", "study_presets",
+           "sprung_front_mass", "SCHEMA"]

@@ -39,8 +39,8 @@ def test_softer_tire_deflects_more_on_the_drop():
     assert peaks[0] > peaks[1] > peaks[2], peaks
 
 
-@pytest.mark.parametrize("psi", [14.9, 25.5, 0.0, -3.0])
-def test_pressure_outside_the_model_is_refused(psi, tmp_path, capsys):
+@pytest.mark.parametrize("psi", [0.0, -3.0, -0.0])
+def test_a_tire_without_air_is_refused(psi, tmp_path, capsys):
     with pytest.raises(ConfigError, match=r"tire\.pressure_psi"):
         compose.setup(load("S12", {"tire.pressure_psi": psi}))
     out = tmp_path / "out"
@@ -48,3 +48,18 @@ def test_pressure_outside_the_model_is_refused(psi, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "tire.pressure_psi" in err[0]
     assert not out.exists()
+
+
+@pytest.mark.parametrize("psi", [14.9, 25.5, 26.0, 30.0, 35.0])
+def test_pressures_riders_run_outside_the_measured_range_run_with_a_warning(psi, tmp_path, capsys):
+    """Riders run about 15-35 psi; the relation was measured at 15-25 psi (issue 23): outside it the
+    rates are extrapolated by the same proportionality, and the run says so on one line."""
+    with pytest.warns(UserWarning, match=r"tire\.pressure_psi = .* outside 15-25 psi"):
+        setup = compose.setup(load("S12", {"tire.pressure_psi": psi}))
+    assert setup.tire.impact.rate == pytest.approx(1.38 * 62.0 * psi / 25.0 * 1e3, rel=1e-12)
+    out = tmp_path / "out"
+    assert cli.main(["drop", "S12", "--engine", "fast", "--quiet", "--duration", "0.05", "--set",
+                     f"tire.pressure_psi={psi}", "--out", str(out)]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mtbmj: warning: tire.pressure_psi = ") and "extrapolated" in err[0]
+    assert (out / "summary.json").is_file()

@@ -11,8 +11,8 @@ import time
 import warnings
 from pathlib import Path
 
-from mtbmj.config import parse_assignment
-from mtbmj.errors import MtbmjError, check_interrupt, interrupt_handling, interrupted
+from mtbmj.config import ConfigWarning, parse_assignment
+from mtbmj.errors import MtbmjError, RunError, check_interrupt, interrupt_handling, interrupted
 from mtbmj.limits import check_duration
 
 EXIT_BAD_INPUT = 2
@@ -118,6 +118,30 @@ def _note(message, category, filename, lineno, file=None, line=None) -> None:
     print(f"mtbmj: note: {message}", file=sys.stderr)
 
 
+class _ConfigWarnings:
+    """The configuration's plausibility warnings (``mtbmj.config.ConfigWarning``) of one command,
+    each kept once: printed as ``mtbmj: warning:`` lines when the command has answered, and left
+    out when it is refused, whose report stays the one line naming the cause (a run that diverged
+    names them in that line: an implausible value is the likeliest cause)."""
+
+    def __init__(self):
+        self.lines: list[str] = []
+
+    def showwarning(self, message, category, filename, lineno, file=None, line=None) -> None:
+        if issubclass(category, ConfigWarning):
+            if str(message) not in self.lines:
+                self.lines.append(str(message))
+        else:
+            _note(message, category, filename, lineno, file, line)
+
+    def print(self) -> None:
+        for text in self.lines:
+            print(f"mtbmj: warning: {_one_line(text)}", file=sys.stderr)
+
+    def suffix(self) -> str:
+        return f" (implausible input: {'; '.join(self.lines)})" if self.lines else ""
+
+
 def add_out(p, default: str, what: str = "output directory") -> None:
     """``--out DIR`` for a command that writes a folder: the command line claims the folder
     before the work starts (``mtbmj.output.claim``: it must be empty or mtbmj's, hold none of
@@ -198,18 +222,25 @@ def _report_line(line: str) -> None:
 
 
 def _run_parsed(parser: argparse.ArgumentParser, argv=None) -> int:
+    config_warnings = _ConfigWarnings()
     try:
         args = parser.parse_args(argv)
         check_duration("--duration", getattr(args, "duration", None))
         with warnings.catch_warnings():
             warnings.simplefilter("error", RuntimeWarning)
-            warnings.showwarning = _note  # restored with the filters when the command ends
-            return _run_claimed(args)
+            warnings.simplefilter("always", ConfigWarning)  # each kept once by config_warnings
+            warnings.showwarning = config_warnings.showwarning  # restored with the filters when the command ends
+            status = _run_claimed(args)
+        config_warnings.print()
+        return status
+    except RunError as exc:
+        _report(f"{exc}{config_warnings.suffix()}")
+        return EXIT_BAD_INPUT
     except MtbmjError as exc:
         _report(str(exc))
         return EXIT_BAD_INPUT
     except RuntimeWarning as exc:
-        _report(f"run diverged ({exc})")
+        _report(f"run diverged ({exc}){config_warnings.suffix()}")
         return EXIT_BAD_INPUT
     except BrokenPipeError:  # the reader went away (``mtbmj presets | head -1``): stop quietly
         _silence_stdout()
@@ -232,8 +263,11 @@ def _report(message: str) -> None:
     user gave) is shown escaped, so the report stays one line. An error that an interrupt caused
     (a worker's pool broken by it, a call it cut short) is reported as the interrupt."""
     check_interrupt()
-    one = "".join(ch.encode("unicode_escape").decode("ascii") if ch in LINE_BREAKS else ch for ch in message)
-    print(f"mtbmj: error: {one}", file=sys.stderr)
+    print(f"mtbmj: error: {_one_line(message)}", file=sys.stderr)
+
+
+def _one_line(message: str) -> str:
+    return "".join(ch.encode("unicode_escape").decode("ascii") if ch in LINE_BREAKS else ch for ch in message)
 
 
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what a shell reports for a command whose reader quit

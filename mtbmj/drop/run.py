@@ -38,9 +38,15 @@ ENGINES = {"mujoco": _mujoco, "ode": _ode, "fast": _fast}
 
 
 def resolve(config: Config | str, overrides: Mapping | None = None) -> Config:
-    """A ``Config`` from a preset name, a TOML path or a ``Config``, with overrides applied."""
+    """A ``Config`` from a preset name, a TOML path or a ``Config``, with overrides applied; the
+    overrides' plausibility warnings are issued (``config_mod.ConfigWarning``) as ``load`` issues
+    a file's."""
     if isinstance(config, Config):
-        return config.with_overrides(overrides) if overrides else config
+        if not overrides:
+            return config
+        changed = config.with_overrides(overrides)
+        config_mod.warn([w for w in changed.warnings if w not in config.warnings])
+        return changed
     return config_mod.load(config, overrides)
 
 

@@ -1,0 +1,354 @@
+"""The configuration reference, docs/configuration.md, generated from ``mtbmj.config.SCHEMA``.
+
+Every key's unit (from its name), default (the reference preset's value), valid values (the
+schema's kind), plausible range (``mtbmj.config.PLAUSIBLE``) and meaning (``MEANINGS`` below).
+Regenerate the page after changing the schema; ``tests/test_config_reference.py`` fails while the
+page and the schema disagree::
+
+    python -m mtbmj.config_reference > docs/configuration.md
+"""
+from __future__ import annotations
+
+import sys
+import warnings
+
+from mtbmj import config as cfg
+
+# One sentence or two per key: what it is, which model uses it. Values and their origins are in
+# mtbmj/presets/reference.toml and the README's "Parameters".
+MEANINGS: dict[str, str] = {
+    "description": "One line saying what the configuration is (shown by `mtbmj presets`).",
+    "reading": "How the configuration reads the paper (the presets S1-S14 state it); informational.",
+    # sled
+    "sled.body_mass_kg": "Sprung mass on the fork: the sled (or the front share of rider and bike less the front "
+                         "wheel). Give it, or the three rider inputs below, not both.",
+    "sled.rider_mass_kg": "Rider mass, with gear. Rider input: with `sled.bike_mass_kg` and "
+                          "`sled.front_share_percent` it sets `sled.body_mass_kg` (see *The load in a rider's terms*).",
+    "sled.bike_mass_kg": "Whole bike mass, front wheel included. Rider input (see `sled.rider_mass_kg`).",
+    "sled.front_share_percent": "Share of the weight of rider and bike on the front wheel (what scales under the "
+                                "wheels read). Rider input (see `sled.rider_mass_kg`); at most 100.",
+    "sled.wheel_mass_kg": "Unsprung mass below the fork's spring: the front wheel with its tire (on a bike also "
+                          "the brake rotor and the fork's lower legs).",
+    "sled.drop_height_mm": "Height of the tire's tread above the ground at release (impact speed sqrt(2 g h)); "
+                           "0 sets the sled down without a drop.",
+    "sled.gravity_m_per_s2": "Gravitational acceleration.",
+    # fork
+    "fork.travel_mm": "Fork travel: compression from full extension to the bottom-out stop.",
+    "fork.length_mm": "Axle to crown (geometry of the MuJoCo model only; no effect on the drop).",
+    "fork.spring.model": "Spring law: linear (S1), compression_rebound (S2), bilinear (S3, S4, S6), progressive "
+                         "(S5, S7-S14) or air (an air spring from its chambers).",
+    "fork.spring.rate_N_per_mm": "Rate of the linear spring (model linear).",
+    "fork.spring.rate_lb_per_in": "The linear spring's rate in lb/in, as coil springs are sold; converted to "
+                                  "`fork.spring.rate_N_per_mm` when read. Give one of the two.",
+    "fork.spring.compression_rate_N_per_mm": "Rate while compressing (model compression_rebound).",
+    "fork.spring.rebound_rate_N_per_mm": "Rate while extending (model compression_rebound; bilinear with "
+                                         "`rebound_curve`).",
+    "fork.spring.knee_mm": "Compression at which the bilinear spring changes rate (model bilinear).",
+    "fork.spring.rate_below_knee_N_per_mm": "Bilinear spring's rate below the knee.",
+    "fork.spring.rate_above_knee_N_per_mm": "Bilinear spring's rate above the knee.",
+    "fork.spring.rebound_curve": "Bilinear spring extends along `rebound_rate_N_per_mm` instead of its compression "
+                                 "curve (S3, S4, S6). Default false.",
+    "fork.spring.progressive_rate_N_per_mm": "Linear term k of the progressive spring F = k x + c x^3.",
+    "fork.spring.progressive_cubic_N_per_mm3": "Cubic term c of the progressive spring F = k x + c x^3.",
+    "fork.spring.top_out": "Use the top-out spring against the main spring near full extension. Default: true "
+                           "when `top_out_rate_N_per_mm` is given.",
+    "fork.spring.top_out_rate_N_per_mm": "Rate of the top-out spring (engaged below preload / rate, and past "
+                                         "full extension).",
+    "fork.spring.preload": "Apply `preload_N` to the main spring (needs the top-out spring). Default: true when "
+                           "`preload_N` is given. Air springs take their preload from the pressure.",
+    "fork.spring.preload_N": "Main-spring force at full extension (coil preload).",
+    "fork.spring.direction_band_mm_per_s": "Speed band over which the compression and rebound curves blend "
+                                           "(numerical). Default 20.",
+    "fork.spring.air_pressure_psi": "Air spring: gauge pressure of the positive chamber at full extension "
+                                    "(model air); not below 0.",
+    "fork.spring.air_pressure_bar": "The same in bar, as some pumps read; converted to `air_pressure_psi` when "
+                                    "read. Give one of the two.",
+    "fork.spring.piston_diameter_mm": "Air spring: piston (seal head) diameter.",
+    "fork.spring.air_volume_cm3": "Air spring: positive-chamber volume at full extension, without spacers.",
+    "fork.spring.tokens": "Air spring: number of volume spacers (whole). Default 0.",
+    "fork.spring.token_volume_cm3": "Air spring: volume of one spacer.",
+    "fork.spring.negative_volume_cm3": "Air spring: negative-chamber volume at full extension. Default 0 (none).",
+    "fork.spring.transfer_port_mm": "Air spring: compression at which the seal passes the port joining the "
+                                    "chambers. Default 0.",
+    "fork.spring.polytropic_index": "Air spring: polytropic index n, from 1 (isothermal) to 1.4 (adiabatic).",
+    # damper
+    "fork.damper.model": "Damper law: linear, bilinear (compression and rebound slopes), digressive (two "
+                         "stages per direction), table (velocity-force lookup) or clicks (tables per adjuster "
+                         "position).",
+    "fork.damper.coefficient_N_s_per_m": "Linear damper's coefficient (model linear).",
+    "fork.damper.compression_N_s_per_m": "Bilinear damper: coefficient in compression.",
+    "fork.damper.rebound_N_s_per_m": "Bilinear damper: coefficient in rebound.",
+    "fork.damper.compression_low_N_s_per_m": "Digressive damper: compression slope below the knee speed.",
+    "fork.damper.compression_high_N_s_per_m": "Digressive damper: compression slope above the knee speed.",
+    "fork.damper.compression_knee_mm_per_s": "Digressive damper: compression knee speed.",
+    "fork.damper.rebound_low_N_s_per_m": "Digressive damper: rebound slope below the knee speed.",
+    "fork.damper.rebound_high_N_s_per_m": "Digressive damper: rebound slope above the knee speed.",
+    "fork.damper.rebound_knee_mm_per_s": "Digressive damper: rebound knee speed.",
+    "fork.damper.velocity_mm_per_s": "Table and clicks dampers: velocities of the table, strictly increasing, "
+                                     "negative (rebound) to positive (compression).",
+    "fork.damper.force_N": "Table damper: force at each velocity (0 at 0, never falling; the friction offset "
+                           "belongs in fork.friction).",
+    "fork.damper.compression_clicks": "Clicks damper: compression adjuster setting, clicks from closed.",
+    "fork.damper.rebound_clicks": "Clicks damper: rebound adjuster setting, clicks from closed.",
+    "fork.damper.compression_clicks_measured": "Clicks damper: compression positions measured on the dyno "
+                                               "(whole clicks, increasing).",
+    "fork.damper.rebound_clicks_measured": "Clicks damper: rebound positions measured on the dyno.",
+    "fork.damper.compression_force_N": "Clicks damper: one row of compression forces per measured position "
+                                       "(at the positive velocities).",
+    "fork.damper.rebound_force_N": "Clicks damper: one row of rebound forces per measured position (at the "
+                                   "negative velocities).",
+}
+for _circuit, _what in (("low_speed_compression", "low-speed compression"),
+                        ("high_speed_compression", "high-speed compression"),
+                        ("low_speed_rebound", "low-speed rebound"), ("high_speed_rebound", "high-speed rebound")):
+    MEANINGS.update({
+        f"fork.damper.{_circuit}_clicks": f"Clicks damper with separate adjusters: {_what} setting, clicks from "
+                                          "closed.",
+        f"fork.damper.{_circuit}_clicks_measured": f"Clicks damper: {_what} positions measured on the dyno.",
+        f"fork.damper.{_circuit}_force_N": f"Clicks damper: one row of forces per measured {_what} position.",
+        f"fork.damper.{_circuit}_reference_clicks": f"Clicks damper: where the {_what} adjuster stood while the "
+                                                    "other adjuster of its stroke was measured.",
+    })
+MEANINGS.update({
+    # friction
+    "fork.friction.model": "Friction law of seals and bushings: none, coulomb, coulomb_viscous, stiction, "
+                           "stribeck or lugre. Default none.",
+    "fork.friction.coulomb_N": "Sliding (Coulomb) friction force.",
+    "fork.friction.breakaway_N": "Breakaway (static) friction force: stiction, Stribeck and LuGre laws.",
+    "fork.friction.viscous_N_s_per_m": "Viscous friction coefficient (coulomb_viscous and the variants).",
+    "fork.friction.stiction_band_mm_per_s": "Stiction law: speed band counted as stuck (Karnopp).",
+    "fork.friction.stribeck_velocity_mm_per_s": "Stribeck and LuGre laws: Stribeck speed.",
+    "fork.friction.stribeck_exponent": "Stribeck law: shape exponent (2 = Gaussian). Default 2.",
+    "fork.friction.sign_band_mm_per_s": "Speed band of the regularised sign of the sliding velocity "
+                                        "(numerical). Default 5.",
+    "fork.friction.bristle_stiffness_N_per_mm": "LuGre law: bristle stiffness.",
+    "fork.friction.bristle_damping_N_s_per_m": "LuGre law: bristle damping.",
+    "fork.friction.stick": "Static friction laws stick at rest (an elasto-plastic bristle). Default true.",
+    "fork.friction.stick_stiffness_N_per_mm": "Stiffness of the stuck fork (presliding of seals and bushings).",
+    "fork.friction.stick_damping_N_s_per_m": "Damping of the stuck fork.",
+    "fork.friction.stick_damping_velocity_mm_per_s": "Speed above which that damping fades.",
+    # stops
+    "fork.stops.bumper_length_mm": "Bottom-out bumper: engages over this last part of the travel.",
+    "fork.stops.bumper_force_N": "Bottom-out bumper's force at full travel (quadratic rise).",
+    "fork.stops.stop_rate_N_per_mm": "Hard stops past full travel and full extension.",
+    "fork.stops.stop_damping_N_s_per_m": "Damping of the hard stops.",
+    "fork.stops.extension_mm": "Hard top stop this far past full extension.",
+    # tire
+    "tire.model": "Tire law: impact (impact values throughout), switch (impact values until the first topping "
+                  "event, then in-contact values), undamped or static.",
+    "tire.radius_mm": "Tire's outer radius (geometry; the rolling front end rolls on it).",
+    "tire.impact_rate_N_per_mm": "Radial rate on impact.",
+    "tire.impact_damping_N_s_per_m": "Radial damping on impact.",
+    "tire.contact_rate_N_per_mm": "Radial rate in settled contact (switch tire).",
+    "tire.contact_damping_N_s_per_m": "Radial damping in settled contact (switch tire).",
+    "tire.static_rate_N_per_mm": "Static radial rate (static tire).",
+    "tire.max_deflection_mm": "Tire deflection at which the rim strikes.",
+    "tire.rim_rate_N_per_mm": "Rate of a rim strike past the maximum deflection.",
+    "tire.rim_damping_N_s_per_m": "Damping of a rim strike.",
+    "tire.pressure_psi": "Gauge pressure; sets the impact, in-contact and static rates, taking precedence over "
+                         "their own keys (damping keeps its values; see *Tire pressure*). Above 0.",
+    "tire.pressure_bar": "The same in bar; converted to `tire.pressure_psi` when read. Give one of the two.",
+    # solver
+    "solver.duration_s": "Simulated time of a drop.",
+    "solver.timestep_s": "Engine step (the output grid); default chosen from the configuration's stiffness.",
+    "solver.integrator": "MuJoCo integrator.",
+    "solver.ode_method": "Integrator of the ODE reference (scipy).",
+    "solver.ode_rtol": "ODE reference: relative tolerance.",
+    "solver.ode_atol_mm": "ODE reference: absolute tolerance.",
+    "solver.sample_rate_Hz": "Logging rate of the written time series (the sled's logger: 1 kHz).",
+    "solver.antialias_Hz": "Anti-aliasing low-pass before logging; below half the sample rate.",
+})
+
+# keys whose name carries no unit
+COUNTS = {"fork.spring.tokens": "spacers"}
+
+
+def unit(key: str) -> str:
+    if cfg.unit_of(key):
+        return cfg.unit_of(key)
+    if key in COUNTS:
+        return COUNTS[key]
+    if "clicks" in key.rpartition(".")[2]:
+        return "clicks"
+    return "-"
+
+
+def valid(key: str) -> str:
+    kind = cfg.SCHEMA[key]
+    if isinstance(kind, tuple):
+        return "one of " + ", ".join(kind)
+    text = {"pos": "> 0", "nonneg": ">= 0", "real": "any number", "list": "list of numbers",
+            "rows": "list of rows of numbers", "bool": "true or false", "text": "text"}[kind]
+    if key in cfg.UPPER_LIMITS:
+        text += f", <= {cfg.UPPER_LIMITS[key][0]:g}"
+    return text
+
+
+def default(key: str, reference) -> str:
+    if key not in reference.values:
+        return "none"
+    value = reference.values[key]
+    if isinstance(value, tuple):
+        return f"{len(value)} values"
+    if isinstance(value, str):
+        return "(text)" if key in ("description", "reading") else value
+    return cfg._toml_value(value) if not isinstance(value, float) else f"{value:g}"
+
+
+def plausible(key: str) -> str:
+    if key not in cfg.PLAUSIBLE:
+        return ""
+    low, high = cfg.PLAUSIBLE[key]
+    return f"{low:g}-{high:g}"
+
+
+def _cell(text: str) -> str:
+    assert "|" not in text, text
+    return text
+
+
+def markdown() -> str:
+    missing = [k for k in cfg.SCHEMA if k not in MEANINGS]
+    stray = [k for k in MEANINGS if k not in cfg.SCHEMA]
+    if missing or stray:
+        raise SystemExit(f"mtbmj.config_reference: no meaning for {missing}; meanings of unknown keys {stray}")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        reference = cfg.load("reference")
+    lo, hi = cfg.TIRE_PRESSURE_MEASURED_PSI
+    lines = [
+        "# Configuration reference",
+        "",
+        "<!-- Generated from mtbmj.config.SCHEMA by `python -m mtbmj.config_reference > docs/configuration.md`;",
+        "     edit the meanings in mtbmj/config_reference.py, not here. tests/test_config_reference.py checks it. -->",
+        "",
+        "A configuration is a TOML file whose tables mirror the model (`[sled]`, `[fork.spring]`, ...), or a",
+        "bundled preset; a file may name a `base` (a preset or another file) whose values it overrides, and",
+        "`--set KEY=VALUE` overrides a key on the command line. Values are plain numbers in the unit their",
+        "key names. To see every value of a preset, resolved through its base:",
+        "",
+        "```bash",
+        "mtbmj presets --show S12",
+        "```",
+        "",
+        "## 1. The load in a rider's terms",
+        "",
+        "The fork carries `sled.body_mass_kg`, the sprung mass on the front. A rider can give it instead as",
+        "`sled.rider_mass_kg`, `sled.bike_mass_kg` and `sled.front_share_percent`: the front wheel carries the",
+        "front share of the weight of rider and bike, and of that the fork carries all but the front wheel",
+        "itself (unsprung, below the fork):",
+        "",
+        "    sled.body_mass_kg = sled.front_share_percent / 100 x (sled.rider_mass_kg + sled.bike_mass_kg)",
+        "                        - sled.wheel_mass_kg",
+        "",
+        "The paper's sled, 53.2 kg with a 2.3 kg wheel, is an 85 kg rider and an 11 kg bike at 57.8 % front",
+        "(58 % gives 53.4 kg). A file, or one set of `--set` overrides, gives the load one way: the sprung mass",
+        "or all three rider inputs, not both. Given on top of a base (a preset, a file or the file an",
+        "override applies to), either way replaces the other's: rider inputs on a preset replace its",
+        "53.2 kg, and one rider input on a file that has all three changes that one. A later",
+        "`sled.wheel_mass_kg` changes the sprung mass the rider inputs give.",
+        "",
+        "```bash",
+        "mtbmj drop S12 --set sled.rider_mass_kg=72 --set sled.bike_mass_kg=14.5 "
+        "--set sled.front_share_percent=40 --out out/rider",
+        "```",
+        "",
+        "## 2. Other units",
+        "",
+        "Keys in the units riders use, converted when the configuration is read (downstream everything sees",
+        "the canonical key). A file, or one set of overrides, gives one key of a pair; a later one",
+        "replaces the value whichever key it uses.",
+        "",
+        "| key | canonical key | conversion |",
+        "|---|---|---|",
+        f"| `fork.spring.rate_lb_per_in` | `fork.spring.rate_N_per_mm` | 1 lb/in = 4.4482216152605 N / 25.4 mm "
+        f"= {cfg.N_PER_MM_PER_LB_PER_IN:.8f} N/mm |",
+        f"| `fork.spring.air_pressure_bar` | `fork.spring.air_pressure_psi` | 1 bar = 1e5 Pa = "
+        f"{cfg.PSI_PER_BAR:.7f} psi (1 psi = 6894.757293168 Pa) |",
+        f"| `tire.pressure_bar` | `tire.pressure_psi` | the same |",
+        "",
+        "## 3. Tire pressure",
+        "",
+        "`tire.pressure_psi` (or `tire.pressure_bar`) sets the tire's rates from its gauge pressure p:",
+        "",
+        "    k_static = 62 N/mm x p / 25 psi,  k_impact = 1.38 k_static,  k_in-contact = 1.19 k_static",
+        "",
+        "| number | value | source |",
+        "|---|---|---|",
+        "| form: rate proportional to the gauge pressure | k ~ p | a tire whose walls do not stretch carries its load "
+        "by the pressure over the contact patch (Renart & Roura-Grabulosa, Am. J. Phys. 87, 102, 2019) |",
+        "| static rate at the anchor | 62 N/mm | sourced, secondhand: 29 x 2.3 tire on a 25 mm rim, 418 N "
+        "(Dressel & Sadauckas 2020, Appl. Sci. 10(9):3156) |",
+        "| anchor pressure | 25 psi (1.72 bar) | sourced: the same measurement |",
+        f"| measured range | {lo:g}-{hi:g} psi | sourced: 1.03 bar (their largest deflection, 48.7 mm) to "
+        "1.72 bar |",
+        "| impact / static | 1.38 | sourced, secondhand: first-impact dynamic / static (Sadauckas et al. 2024) |",
+        "| in-contact / static | 1.19 | sourced, secondhand: settled dynamic / static (same source) |",
+        "| carcass stiffness | neglected | assumed (the rate is likely too soft at low pressure) |",
+        "| the same proportionality outside the measured range | k ~ p | assumed |",
+        "",
+        f"Any pressure above 0 psi is accepted. Outside the measured {lo:g}-{hi:g} psi (riders run about",
+        "15-35) the rates are extrapolated, and the run says so in one warning line; 0 or less (a tire",
+        "without air) is refused.",
+        "",
+        "## 4. Plausibility warnings",
+        "",
+        "A value far outside what any bike or sled has is more likely a unit mistake than a bike: metres in",
+        "a mm key, N/m in an N/mm key, grams in a kg key. The run proceeds, and the command line prints one",
+        "line per such value once, after the command's own output:",
+        "",
+        "    mtbmj: warning: sled.drop_height_mm = 0.3 mm is far below what any bike or sled has (1-5000 mm): "
+        "probably meant 0.3 m = 300 mm",
+        "",
+        "The ranges are wide on purpose (the column *plausible* below; 0 is exempt where a key allows it).",
+        "For a value outside, the mistakes checked in order are, by the key's unit:",
+        "",
+        "| unit | typed instead |",
+        "|---|---|",
+    ]
+    for unit_name, mistakes in cfg.MISTAKES.items():
+        lines.append(f"| {unit_name} | {', '.join(typed for typed, _ in mistakes)} |")
+    lines += [
+        "",
+        "and the first that lands inside the range is named (\"probably meant 6000 N/m = 6 N/mm\"); when none",
+        "does, the range is. A command that is refused prints only its one error line, except that a run",
+        "that diverged names the implausible values in it. From Python, `mtbmj.load_config` and `run_drop`",
+        "issue each as a `mtbmj.config.ConfigWarning` (shown or not as your warning filters say) and the",
+        "configuration keeps them in `config.warnings`:",
+        "",
+        "```python",
+        "import mtbmj",
+        "config = mtbmj.load_config(\"S12\", {\"sled.body_mass_kg\": 48000})",
+        "print(config.warnings)",
+        "```",
+        "",
+        "## 5. Every key",
+        "",
+        "*default*: the value in the reference preset (`mtbmj/presets/reference.toml`, on which every preset",
+        "builds; a preset may choose otherwise, see `mtbmj presets --show NAME`), or *none*; the meaning",
+        "names a default the code takes when a key is left out. *valid*: what is refused otherwise (a",
+        "model may refuse more, such as a knee outside the travel). *plausible*: outside it, a warning.",
+        "",
+    ]
+    section = None
+    for key in cfg.SCHEMA:
+        head = key.rpartition(".")[0] or "top level"
+        if head != section:
+            section = head
+            lines += [f"### {section}" if head == "top level" else f"### [{section}]", "",
+                      "| key | unit | default | valid | plausible | meaning |", "|---|---|---|---|---|---|"]
+        lines.append("| " + " | ".join(_cell(c) for c in (
+            f"`{key}`", unit(key), default(key, reference), valid(key), plausible(key), MEANINGS[key])) + " |")
+        if key == list(cfg.SCHEMA)[-1] or (list(cfg.SCHEMA)[list(cfg.SCHEMA).index(key) + 1].rpartition(".")[0]
+                                            or "top level") != section:
+            lines.append("")
+    return "\n".join(lines).rstrip("\n") + "\n"
+
+
+def main() -> int:
+    sys.stdout.write(markdown())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
