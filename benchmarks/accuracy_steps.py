@@ -95,7 +95,7 @@ def envelope(n: int, seed: int) -> dict:
                      "timestep_s": m.trace.info["timestep_s"],
                      "fork_past_travel_mm": float(max(np.max(r.raw["fork_mm"]) - travel for r in (m, o))),
                      "tire_past_max_mm": float(max(np.max(r.raw["tire_mm"]) - deepest for r in (m, o))),
-                     "bottoms_out": m.summary["bottoms_out"]["count"], "rim_strikes": m.summary["rim_strikes"]["count"]})
+                     "hard_stop": m.summary["hard_stop"]["count"], "rim_strikes": m.summary["rim_strikes"]["count"]})
         print(f"(c) {preset}: {rows[-1]['max_abs_mm']:.4f} mm (fast {fast:.4f} mm; reference moves "
               f"{sensitivity:.4f} mm with the tire rates 1e-4 off)", flush=True)
     return {"seed": seed, "cases": rows, "worst_mm": max(r["max_abs_mm"] for r in rows),

@@ -54,16 +54,23 @@ class RunOutput:
         """The CSV as bytes chunks (``csv_bytes`` in one chunk unless a subclass streams it)."""
         yield self.csv_bytes(raw)
 
-    def files(self, stream: bool = False) -> dict:
+    def files(self, stream: bool = False, figure: bool = True) -> dict:
         """Everything ``write`` puts in an output directory (name -> bytes; with ``stream`` the
-        engine-rate CSV is an iterable of chunks, so a long run is never all text in memory)."""
-        return {
+        engine-rate CSV is an iterable of chunks, so a long run is never all text in memory);
+        ``figure``: the quick-look PNG (``quicklook``) too."""
+        files = {
             "timeseries.csv": self.csv_bytes(),
             "timeseries_raw.csv": self.csv_chunks(raw=True) if stream else self.csv_bytes(raw=True),
             "summary.json": output.json_bytes(self.summary),
             "manifest.json": output.json_bytes(self.manifest()),
             "config.toml": self.config.to_toml().encode(),
         }
+        if figure and hasattr(self, "quicklook"):
+            from mtbmj import quicklook
 
-    def write(self, out_dir: str | Path) -> list[Path]:
-        return output.write_atomically(out_dir, self.files(stream=True))
+            files["quicklook.png"] = quicklook.png(self.quicklook())
+        return files
+
+    def write(self, out_dir: str | Path, figure: bool = True) -> list[Path]:
+        """Write the output folder whole (``figure``: with ``quicklook.png``)."""
+        return output.write_atomically(out_dir, self.files(stream=True, figure=figure))

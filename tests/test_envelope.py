@@ -36,7 +36,7 @@ def test_random_fork_engines_agree_and_stops_hold(preset, overrides):
         assert np.max(r.raw["fork_mm"]) <= travel + STOP_COMPLIANCE_MM
         assert np.min(r.raw["fork_mm"]) >= -cfg.get("fork.stops.extension_mm", 5.0) - STOP_COMPLIANCE_MM
         assert np.max(r.raw["tire_mm"]) <= deepest + STOP_COMPLIANCE_MM
-        report = r.summary["bottoms_out"]
+        report = r.summary["hard_stop"]
         assert (report["count"] > 0) == bool(np.max(r.raw["fork_mm"]) >= travel)
 
 
@@ -63,7 +63,7 @@ def test_hard_bottom_outs_agree_across_engines(preset, overrides):
     m = run_drop(cfg, "mujoco", duration=DURATION_S)
     o = run_drop(cfg, "ode", duration=DURATION_S)
     f = run_drop(cfg, "fast", duration=DURATION_S)
-    assert m.summary["bottoms_out"]["count"] >= 1
+    assert m.summary["hard_stop"]["count"] >= 1
     for other in (m, f):
         worst = max(d["max_abs_mm"] for d in other.difference(o).values())
         assert worst <= 0.05, (preset, overrides, other.difference(o))
@@ -80,7 +80,7 @@ def test_a_fork_rattling_between_its_stop_and_the_rim_agrees():
     preset, overrides = draws(14, 2, _table())[13]
     cfg = mtbmj.load_config(preset, overrides)
     m, o = run_drop(cfg, "mujoco"), run_drop(cfg, "ode")
-    assert m.summary["bottoms_out"]["count"] >= 3 and m.summary["rim_strikes"]["count"] >= 3
+    assert m.summary["hard_stop"]["count"] >= 3 and m.summary["rim_strikes"]["count"] >= 3
     worst = max(d["max_abs_mm"] for d in m.difference(o).values())
     assert worst <= 0.05, m.difference(o)
 
@@ -107,7 +107,7 @@ def test_envelope_reaches_the_stops():
     hits = 0
     for preset, overrides in CASES[:6]:
         r = run_drop(mtbmj.load_config(preset, overrides), "mujoco", duration=0.4)
-        hits += r.summary["bottoms_out"]["count"] + r.summary["rim_strikes"]["count"]
+        hits += r.summary["hard_stop"]["count"] + r.summary["rim_strikes"]["count"]
     assert hits > 0
 
 
@@ -147,7 +147,7 @@ def test_a_hard_bottom_out_is_held_and_reported(tmp_path, capsys):
     hard = {"sled.body_mass_kg": 110.0, "sled.drop_height_mm": 300.0, "fork.spring.progressive_rate_N_per_mm": 6.0,
             "fork.spring.progressive_cubic_N_per_mm3": 0.0, "fork.damper.force_N": [f / 4 for f in _table()]}
     r = run_drop("S12", overrides=hard, duration=0.5)
-    bottom = r.summary["bottoms_out"]
+    bottom = r.summary["hard_stop"]
     assert bottom["count"] >= 1 and 120.0 <= bottom["deepest_mm"] <= 120.0 + STOP_COMPLIANCE_MM
     assert bottom["peak_force_N"] > 3000.0  # past the bumper's force at full travel: the hard stop carried it
     argv = ["drop", "S12", "--duration", "0.5", "--quiet", "--out", str(tmp_path / "out")]

@@ -10,18 +10,12 @@ from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, Progress, add_out, add_r
 
 
 def cmd_drop(args) -> int:
-    from mtbmj.drop.events import envelope_line
     from mtbmj.drop.run import run_drop
 
     result = Progress(f"{args.config} on {args.engine}", not args.quiet).around(
         lambda progress: run_drop(args.config, args.engine, overrides(args.set), args.duration, progress))
-    written = result.write(args.out)
-    s = result.summary
-    lift = f"{s['lift_off_s']:.3f} s" if s["lift_off_s"] is not None else "never"
-    print(f"{result.name} ({args.engine}): fork peak {s['max_fork_mm']:.1f} mm "
-          f"({s['travel_used_percent']:.0f} % of travel), tire peak {s['max_tire_mm']:.1f} mm, lift-off {lift}, "
-          f"{'at rest' if s['at_rest'] else 'still moving'} at the end{envelope_line(s)}; "
-          f"wrote {len(written)} files to {args.out}")
+    written = result.write(args.out, figure=not args.no_figure)
+    print(f"{result.headline()}; wrote {len(written)} files to {args.out}")
     return 0
 
 
@@ -74,6 +68,7 @@ def add_parser(sub) -> None:
     p.add_argument("--engine", choices=ENGINE_NAMES, default="mujoco", help=ENGINE_HELP)
     add_out(p, "out/drop")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.add_argument("--no-figure", action="store_true", help="do not draw quicklook.png (saves about 0.3 s)")
     add_run_options(p)
     p.set_defaults(func=cmd_drop)
 

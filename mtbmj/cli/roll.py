@@ -14,12 +14,8 @@ def cmd_roll(args) -> int:
     result = Progress(f"roll {args.scenario}", not args.quiet).around(
         lambda progress: run_roll(args.scenario, args.speed, args.config, args.head_angle, args.duration,
                                   overrides(args.set), progress))
-    written = result.write(args.out)
-    s = result.summary
-    print(f"roll {args.scenario} at {args.speed:g} m/s ({result.name}, head angle {args.head_angle:g} deg): "
-          f"fork peak {s['max_fork_mm']:.1f} mm ({s['travel_used_percent']:.0f} % of travel), "
-          f"tire peak {s['max_tire_mm']:.1f} mm, axle force peak {s['max_axle_force_z_N']:.0f} N up / "
-          f"{-s['min_axle_force_x_N']:.0f} N back; {result.info['real_time_factor']:.1f}x real time; "
+    written = result.write(args.out, figure=not args.no_figure)
+    print(f"{result.headline()}; {result.info['real_time_factor']:.1f}x real time; "
           f"wrote {len(written)} files to {args.out}")
     return 0
 
@@ -36,6 +32,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--config", default="S12", help="preset or TOML file for the fork and tire (default S12)")
     add_out(p, "out/roll")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.add_argument("--no-figure", action="store_true", help="do not draw quicklook.png")
     p.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a configuration key (repeatable)")
     p.add_argument("--duration", type=float, help="simulated time in s (default: to cross the feature and settle)")
     p.set_defaults(func=cmd_roll)

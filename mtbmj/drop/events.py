@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from mtbmj.compose import Setup
+from mtbmj.endtravel import end_of_travel
 from mtbmj.trace import RawTrace
 
 REST_WINDOW_S = 0.2  # the last 0.2 s decide whether the system is at rest
@@ -51,54 +52,6 @@ def energy(setup: Setup, trace: RawTrace) -> dict[str, float]:
     return {"input_J": float(e_in), "mechanical_end_J": float(e_end), "dissipated_J": float(e_in - e_end)}
 
 
-def _episodes(mask: np.ndarray) -> list[slice]:
-    """Runs of True in ``mask``, as slices."""
-    edges = np.flatnonzero(np.diff(np.concatenate(([0], mask.astype(np.int8), [0]))))
-    return [slice(a, b) for a, b in zip(edges[::2], edges[1::2])]
-
-
-def end_stops(setup: Setup, raw: dict[str, np.ndarray]) -> dict[str, dict]:
-    """Bottom-outs (the fork reaching its hard stop at full travel) and rim strikes (the tire
-    deflected past ``tire.max_deflection_mm``): count, deepest (mm) and peak force (N: bumper +
-    hard stop, or rim) over the run, on the engine-rate trace."""
-    spring = setup.fork.spring
-    report = {}
-    fork = raw["fork_mm"]
-    travel_mm = setup.travel * 1e3
-    runs = _episodes(fork >= travel_mm)
-    peak = 0.0
-    if runs and hasattr(spring, "stop_forces"):
-        v = raw["fork_velocity_mm_per_s"] * 1e-3
-        for run in runs:
-            for i in range(run.start, run.stop):
-                bumper, stop, _ = spring.stop_forces(fork[i] * 1e-3, v[i])
-                peak = max(peak, bumper + stop)
-    report["bottoms_out"] = {"count": len(runs), "deepest_mm": float(np.max(fork)) if runs else None,
-                             "peak_force_N": peak if runs else None}
-    tire = raw["tire_mm"]
-    rim = setup.tire.rim
-    runs = _episodes(tire > rim.max_deflection * 1e3) if rim is not None else []
-    peak = 0.0
-    if runs:
-        dv = raw["tire_velocity_mm_per_s"] * 1e-3
-        for run in runs:
-            for i in range(run.start, run.stop):
-                peak = max(peak, rim.force(tire[i] * 1e-3, dv[i]))
-    report["rim_strikes"] = {"count": len(runs), "deepest_mm": float(np.max(tire)) if runs else None,
-                             "peak_force_N": peak if runs else None}
-    return report
-
-
-def envelope_line(summary: dict) -> str:
-    """"; bottomed out 2x (deepest 121.3 mm, peak 41 kN)" etc., or "" when no stop engaged."""
-    parts = []
-    for key, what in (("bottoms_out", "bottomed out"), ("rim_strikes", "rim struck")):
-        e = summary.get(key) or {}
-        if e.get("count"):
-            parts.append(f"{what} {e['count']}x (deepest {e['deepest_mm']:.1f} mm, peak {e['peak_force_N'] / 1e3:.1f} kN)")
-    return "".join(f"; {p}" for p in parts)
-
-
 def summarize(setup: Setup, trace: RawTrace, logged: dict[str, np.ndarray], raw: dict[str, np.ndarray]) -> dict:
     """JSON-ready summary. Events come from the logged (1 kHz) signals through
     ``validation.events.detect`` (robust to noise; a missing event is None, never forced), contact
@@ -129,8 +82,8 @@ def summarize(setup: Setup, trace: RawTrace, logged: dict[str, np.ndarray], raw:
         "rest_motion_mm": motion,
         "at_rest": motion < REST_TOLERANCE_MM,
         "max_fork_mm": float(np.max(raw["fork_mm"])),
-        "travel_used_percent": float(np.max(raw["fork_mm"]) / (setup.travel * 1e3) * 100.0),
-        **end_stops(setup, raw),
+        **end_of_travel(setup, raw["fork_mm"], raw["fork_velocity_mm_per_s"], raw["tire_mm"],
+                        raw["tire_velocity_mm_per_s"]),
         "max_tire_mm": float(np.max(raw["tire_mm"])),
         "energy": energy(setup, trace),
     }

@@ -70,6 +70,27 @@ class DropResult(RunOutput):
             out[column] = {"max_abs_mm": float(diff[i]), "at_time_s": float(a["time_s"][i])}
         return out
 
+    def headline(self) -> str:
+        """The run in one line: peaks, lift-off, rest and any bottom-out or rim strike."""
+        from mtbmj.endtravel import line
+
+        s = self.summary
+        lift = f"{s['lift_off_s']:.3f} s" if s["lift_off_s"] is not None else "never"
+        return (f"{self.name} ({self.engine}): fork peak {s['max_fork_mm']:.1f} mm ({s['travel_used_percent']:.0f} % of "
+                f"travel), tire peak {s['max_tire_mm']:.1f} mm, lift-off {lift}, "
+                f"{'at rest' if s['at_rest'] else 'still moving'} at the end{line(s)}")
+
+    def quicklook(self):
+        """The quick-look figure (``mtbmj.quicklook``) on the engine-rate signals."""
+        import textwrap
+
+        from mtbmj import quicklook
+
+        r = self.raw
+        return quicklook.figure(r["time_s"], r["fork_mm"], r["tire_mm"],
+                                {"fork_force_N": r["fork_force_N"], "tire_force_N": r["tire_force_N"]},
+                                self.summary, textwrap.fill(self.headline(), 110))
+
     def plot(self, axes=None, label: str | None = None, **line_kwargs):
         """Sled, fork and tire displacement histories on three stacked axes; returns the figure."""
         if axes is None:

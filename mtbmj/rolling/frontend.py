@@ -35,6 +35,7 @@ from mtbmj import mjcf
 from mtbmj.controllers import installed
 from mtbmj import compose, output
 from mtbmj.drop import measure
+from mtbmj.endtravel import end_of_travel
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.terrain import DEFAULT_HEAD_ANGLE_DEG
 from mtbmj.config import Config
@@ -442,7 +443,7 @@ def _signals(p: Prepared, states, sensors) -> dict[str, np.ndarray]:
     qz0 = q0[cb.zq]
     cz0 = cb.axle_state(q0, states[0, 1 + nq:1 + nq + model.nv])[1]
     times = st[:, t0]
-    defl = sens("tire_deflection")  # deepest patch, as the callback applied it
+    defl = _with_clearance(p, sens("tire_deflection"), cx, cz, times)  # deepest patch, as the callback applied it
     ground = p.terrain.height(cx) if not p.terrain.moving else p.terrain.height(np.zeros(n))
     return {
         "time_s": times,
@@ -463,6 +464,42 @@ def _signals(p: Prepared, states, sensors) -> dict[str, np.ndarray]:
     }
 
 
+def _with_clearance(p: Prepared, deflection: np.ndarray, cx: np.ndarray, cz: np.ndarray,
+                    times: np.ndarray) -> np.ndarray:
+    """The tire's deflection with the clearance (negative: the gap between tire and ground,
+    radially) where the callback saw no patch within its margin and wrote its sentinel, -margin:
+    the exact distance from the axle to the terrain there, less the radius."""
+    tire = p.tire
+    sentinel = deflection <= -tire.margin + 1e-12
+    if not np.any(sentinel):
+        return deflection
+    out = deflection.copy()
+    idx = np.flatnonzero(sentinel)
+    if p.terrain.moving:  # the drum: its surface moves, ask the tire's own geometry at each time
+        for i in idx:
+            seeing = type(tire)(tire.terrain, tire.radius, tire.rate, tire.damping, margin=1.0)
+            out[i] = tire.radius - seeing.distance(float(cx[i]), float(cz[i]), float(times[i]))
+        return out
+    # the closest point is no farther than the ground straight below: look that far either side
+    reach = np.maximum(cz[idx] - p.terrain.height(cx[idx]), tire.radius) + 1e-3
+    px, pz, _, _ = p.terrain.polyline(float(np.min(cx[idx] - reach)), float(np.max(cx[idx] + reach)))
+    lo = np.maximum(np.searchsorted(px, cx[idx] - reach, side="left") - 1, 0)
+    hi = np.minimum(np.searchsorted(px, cx[idx] + reach, side="right") + 1, px.size)
+    width = int(np.max(hi - lo - 1))  # segments per sample, padded to the widest window
+    for start in range(0, idx.size, max(1, 2_000_000 // max(width, 1))):  # bounded memory
+        part = slice(start, start + max(1, 2_000_000 // max(width, 1)))
+        j = lo[part, None] + np.arange(width)[None, :]
+        valid = j < (hi[part, None] - 1)
+        j = np.minimum(j, px.size - 2)
+        ax, az, ex, ez = px[j], pz[j], px[j + 1] - px[j], pz[j + 1] - pz[j]
+        x, z = cx[idx[part], None], cz[idx[part], None]
+        length2 = np.where(ex * ex + ez * ez > 0.0, ex * ex + ez * ez, 1.0)
+        u = np.clip(((x - ax) * ex + (z - az) * ez) / length2, 0.0, 1.0)
+        dist = np.where(valid, np.hypot(x - ax - u * ex, z - az - u * ez), np.inf)
+        out[idx[part]] = tire.radius - dist.min(axis=1)
+    return out
+
+
 def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
     travel_mm = p.setup.travel * 1e3
     fork = raw["fork_mm"]
@@ -477,7 +514,7 @@ def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
         "static_tire_mm": float(raw["tire_mm"][0]),
         "max_fork_mm": float(fork.max()),
         "min_fork_mm": float(fork.min()),
-        "travel_used_percent": float(fork.max() / travel_mm * 100.0),
+        **end_of_travel(p.setup, fork, raw["fork_velocity_mm_per_s"], raw["tire_mm"], time_s=raw["time_s"]),
         "max_tire_mm": float(raw["tire_mm"].max()),
         "tire_off_ground_s": float(np.sum(raw["tire_force_N"] <= 0.0) * p.setup.timestep),
         "max_axle_force_x_N": float(raw["axle_force_x_N"].max()),
@@ -493,6 +530,10 @@ def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
     else:
         out["ride_metrics"] = ride_metrics.summarize(logged["time_s"], logged["fork_mm"], travel_mm,
                                                      velocity_mm_per_s=logged["fork_velocity_mm_per_s"])
+        # the telemetry rule, on the 1 kHz record as a logger would see it: for comparing with a
+        # recorded ride; the model's own end of travel is the bumper/hard_stop/rim_strikes above
+        out["ride_metrics"]["bottom_outs"]["rule"] = ("telemetry: within margin_mm of full travel on the 1 kHz "
+                                                     "record, as for a recorded ride")
     return out
 
 
@@ -525,6 +566,29 @@ class RollResult(RunOutput):
         return {"name": self.name, "scenario": self.scenario, "engine": "mujoco", "config_sha256": self.config.digest(),
                 "config_sources": list(self.config.sources), "versions": versions(),
                 "wall_time_s": self.wall_time_s, "engine_info": self.info}
+
+    def headline(self) -> str:
+        """The run in one line: peaks, axle forces and any bottom-out or rim strike."""
+        from mtbmj.endtravel import line
+
+        s = self.summary
+        return (f"roll {self.scenario} at {s['speed_m_per_s']:g} m/s ({self.name}, head angle {s['head_angle_deg']:g} "
+                f"deg): fork peak {s['max_fork_mm']:.1f} mm ({s['travel_used_percent']:.0f} % of travel), tire peak "
+                f"{s['max_tire_mm']:.1f} mm, axle force peak {s['max_axle_force_z_N']:.0f} N up / "
+                f"{max(0.0, -s['min_axle_force_x_N']):.0f} N back{line(s)}")
+
+    def quicklook(self):
+        """The quick-look figure (``mtbmj.quicklook``): terrain, fork, tire (its clearance in the
+        air), axle and fork forces, on the engine-rate signals."""
+        import textwrap
+
+        from mtbmj import quicklook
+
+        r = self.raw
+        return quicklook.figure(r["time_s"], r["fork_mm"], r["tire_mm"],
+                                {k: r[k] for k in ("axle_force_z_N", "axle_force_x_N", "fork_force_N")},
+                                self.summary, textwrap.fill(self.headline(), 110),
+                                extra=[("terrain under the axle", r["terrain_mm"], "mm")])
 
     def plot(self):
         from matplotlib.figure import Figure

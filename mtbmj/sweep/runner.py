@@ -539,8 +539,8 @@ def assemble(planned: Sequence[Variant], records: Mapping[str, dict]):
         kind = SCHEMA.get(column)
         numeric = kind in NUMERIC_KINDS
         table[column] = _typed(table[column], numeric=numeric, boolean=kind == "bool")
-    for column in outputs:
-        table[column] = _typed(table[column])
+    for column in outputs:  # flags stay booleans (missing where a variant failed)
+        table[column] = _typed(table[column], boolean=True)
     return table
 
 

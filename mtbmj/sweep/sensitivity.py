@@ -60,7 +60,7 @@ def check_outputs(outputs: Sequence[str]) -> list[str]:
     outputs = [o.strip() for o in outputs if o.strip()]
     if not outputs:
         raise ConfigError("--output: name at least one output, e.g. fork_peak1_mm")
-    boolean = {"lifts_off", "fork_tops_out", "at_rest", "bottoms_out"}
+    boolean = {"lifts_off", "fork_tops_out", "at_rest", "bottomed_out"}
     for o in outputs:
         if o not in OUTPUT_COLUMNS or o in boolean:
             import difflib
