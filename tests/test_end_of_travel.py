@@ -153,3 +153,19 @@ def test_the_roll_command_names_rim_strikes(tmp_path, capsys):
     assert "N back" in printed and "-0 N back" not in printed
     assert (out / "quicklook.png").exists()
     assert summary["ride_metrics"]["bottom_outs"]["rule"].startswith("telemetry")
+
+
+def test_study_and_validate_report_the_same_engagement_as_drop(tmp_path, capsys):
+    drop = mtbmj.run_drop("S4", overrides={"sled.drop_height_mm": 300.0})
+    assert drop.summary["bumper"]["count"] >= 1
+    phrase = line(drop.summary)[2:]
+    assert cli.main(["study", "--presets", "S4", "--engines", "mujoco", "--set", "sled.drop_height_mm=300",
+                     "--out", str(tmp_path / "study"), "--quiet"]) == 0
+    assert f"S4 (mujoco) {phrase}" in capsys.readouterr().out
+    study = json.loads((tmp_path / "study" / "study_summary.json").read_text())
+    assert study["S4"]["mujoco"]["bumper"] == drop.summary["bumper"]
+    assert cli.main(["validate", "example", "--presets", "S4", "--set", "sled.drop_height_mm=300",
+                     "--out", str(tmp_path / "validate"), "--quiet"]) == 0
+    assert f"S4 {phrase}" in capsys.readouterr().out
+    summary = json.loads((tmp_path / "validate" / "validation_summary.json").read_text())
+    assert summary["end_of_travel"]["S4"]["bumper"]["count"] == drop.summary["bumper"]["count"]

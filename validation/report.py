@@ -115,9 +115,22 @@ class Validation:
             "record": self.record.info() if self.record else None,
             "measured_events": self.measured_events.to_dict() if self.measured_events else None,
             "configs": {n: self.metrics[n].to_dict() for n in self.configs},
+            "end_of_travel": self.end_of_travel(),
             "notes": list(self.notes),
         }
         return data
+
+    def end_of_travel(self) -> dict[str, dict]:
+        """Each configuration's run under test: its end-of-travel report (``mtbmj.endtravel``)."""
+        keys = ("travel_mm", "travel_used_mm", "travel_used_percent", "travel_remaining_mm", "bottomed_out",
+                "bumper", "hard_stop", "rim_strikes")
+        return {n: {k: self.results[n].summary[k] for k in keys} for n in self.configs}
+
+    def envelope_lines(self) -> list[str]:
+        """One phrase per configuration whose run reached the bumper, the hard stop or the rim."""
+        from mtbmj.endtravel import line
+
+        return [f"{n} {line(self.results[n].summary)[2:]}" for n in self.configs if line(self.results[n].summary)]
 
     def csv_bytes(self) -> bytes:
         buffer = io.StringIO()

@@ -35,8 +35,13 @@ def cmd_study(args) -> int:
         if mine:
             worst = max(mine, key=lambda c: c.worst[1])
             largest.append(f"largest {engine}-ODE difference {mm(worst.worst[1])} mm ({worst.name}, {worst.worst[0]})")
+    from mtbmj.endtravel import line
+
+    envelope = [f"{name} ({engine}) {line(r.summary)[2:]}" for name, per in results.items()
+                for engine, r in per.items() if line(r.summary)]
     print(f"study: {len(results)} configurations x {len(engines)} engines in {time.perf_counter() - start:.1f} s; "
-          f"{'; '.join(largest) or 'no reference run, no differences'}; wrote {len(written)} files to {args.out}")
+          f"{'; '.join(largest) or 'no reference run, no differences'}{''.join(f'; {e}' for e in envelope)}; "
+          f"wrote {len(written)} files to {args.out}")
     return 0
 
 

@@ -97,7 +97,8 @@ def cmd_validate(args) -> int:
     count = len(validation.configs)
     if validation.record is not None and validation.record.touch is not None and not args.reference:
         print(f"{validation.record.name}: {validation.record.touch.describe()}")
+    envelope = "".join(f"; {phrase}" for phrase in validation.envelope_lines())
     print(f"validate: {count} configuration{'s' if count != 1 else ''} on {args.engine} against "
-          f"{validation.measurement} in {time.perf_counter() - start:.1f} s{detail}; "
+          f"{validation.measurement} in {time.perf_counter() - start:.1f} s{detail}{envelope}; "
           f"wrote {len(written)} files to {args.out} (report: {args.out / 'validation_report.html'})")
     return 0
