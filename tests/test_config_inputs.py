@@ -295,6 +295,18 @@ def test_a_refused_run_prints_only_its_error(tmp_path, capsys):
                       "--out", tmp_path / "out"], "tire.model")
 
 
+def test_a_refusal_caused_by_a_unit_mistake_says_so_in_its_one_line(tmp_path, capsys):
+    # 0.12 mm of travel is refused (the top-out spring would stay engaged); metres were meant
+    err = one_line(capsys, ["drop", "S12", "--set", "fork.travel_mm=0.12", "--out", tmp_path / "out"],
+                   "fork.travel_mm", "probably meant 0.12 m = 120 mm")
+    assert err.count("probably meant") == 1
+    # a warning about another key than the refusal names stays out of the line
+    err = one_line(capsys, ["drop", "S12", "--set", "fork.travel_mm=0.12", "--set", "sled.body_mass_kg=48000",
+                            "--out", tmp_path / "out"], "fork.travel_mm", "probably meant 0.12 m")
+    assert "sled.body_mass_kg" not in err
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_diverged_run_names_the_implausible_value_in_its_one_line(tmp_path, capsys):
     err = one_line(capsys, ["drop", "S1", "--set", "sled.drop_height_mm=1e7", "--out", tmp_path / "out"],
                    "diverged", "sled.drop_height_mm = 1e+07 mm")

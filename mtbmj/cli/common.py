@@ -120,9 +120,10 @@ def _note(message, category, filename, lineno, file=None, line=None) -> None:
 
 class _ConfigWarnings:
     """The configuration's plausibility warnings (``mtbmj.config.ConfigWarning``) of one command,
-    each kept once: printed as ``mtbmj: warning:`` lines when the command has answered, and left
-    out when it is refused, whose report stays the one line naming the cause (a run that diverged
-    names them in that line: an implausible value is the likeliest cause)."""
+    each kept once: printed as ``mtbmj: warning:`` lines when the command has answered. A refused
+    command's report stays the one line naming the cause; the warnings about a key that line names
+    are added to it (a travel of 0.12 mm refused for its top-out spring: metres were meant), and a
+    run that diverged names them all (an implausible value is the likeliest cause)."""
 
     def __init__(self):
         self.lines: list[str] = []
@@ -138,8 +139,10 @@ class _ConfigWarnings:
         for text in self.lines:
             print(f"mtbmj: warning: {_one_line(text)}", file=sys.stderr)
 
-    def suffix(self) -> str:
-        return f" (implausible input: {'; '.join(self.lines)})" if self.lines else ""
+    def suffix(self, message: str | None = None) -> str:
+        """The warnings to add to a refusal: those whose key ``message`` names, or all."""
+        named = [w for w in self.lines if message is None or w.split(" = ", 1)[0] in message]
+        return f" (note: {'; '.join(named)})" if named else ""
 
 
 def add_out(p, default: str, what: str = "output directory") -> None:
@@ -237,7 +240,7 @@ def _run_parsed(parser: argparse.ArgumentParser, argv=None) -> int:
         _report(f"{exc}{config_warnings.suffix()}")
         return EXIT_BAD_INPUT
     except MtbmjError as exc:
-        _report(str(exc))
+        _report(f"{exc}{config_warnings.suffix(str(exc))}")
         return EXIT_BAD_INPUT
     except RuntimeWarning as exc:
         _report(f"run diverged ({exc}){config_warnings.suffix()}")
