@@ -1,11 +1,11 @@
-"""The configuration reference, docs/configuration.md, generated from ``mtbmj.config.SCHEMA``.
+"""Writes the configuration reference, docs/configuration.md, from ``mtbmj.config.SCHEMA``.
 
 Every key's unit (from its name), default (the reference preset's value), valid values (the
 schema's kind), plausible range (``mtbmj.config.PLAUSIBLE``) and meaning (``MEANINGS`` below).
 Regenerate the page after changing the schema; ``tests/test_config_reference.py`` fails while the
 page and the schema disagree::
 
-    python -m mtbmj.config_reference > docs/configuration.md
+    python docs/configuration.py > docs/configuration.md
 """
 from __future__ import annotations
 
@@ -211,7 +211,7 @@ def markdown() -> str:
     missing = [k for k in cfg.SCHEMA if k not in MEANINGS]
     stray = [k for k in MEANINGS if k not in cfg.SCHEMA]
     if missing or stray:
-        raise SystemExit(f"mtbmj.config_reference: no meaning for {missing}; meanings of unknown keys {stray}")
+        raise SystemExit(f"docs/configuration.py: no meaning for {missing}; meanings of unknown keys {stray}")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         reference = cfg.load("reference")
@@ -219,8 +219,8 @@ def markdown() -> str:
     lines = [
         "# Configuration reference",
         "",
-        "<!-- Generated from mtbmj.config.SCHEMA by `python -m mtbmj.config_reference > docs/configuration.md`;",
-        "     edit the meanings in mtbmj/config_reference.py, not here. tests/test_config_reference.py checks it. -->",
+        "<!-- Generated from mtbmj.config.SCHEMA by `python docs/configuration.py > docs/configuration.md`;",
+        "     edit the meanings in docs/configuration.py, not here. tests/test_config_reference.py checks it. -->",
         "",
         "A configuration is a TOML file whose tables mirror the model (`[sled]`, `[fork.spring]`, ...), or a",
         "bundled preset; a file may name a `base` (a preset or another file) whose values it overrides, and",
