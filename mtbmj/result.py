@@ -66,7 +66,7 @@ class RunOutput:
             "config.toml": self.config.to_toml().encode(),
         }
         if figure and hasattr(self, "quicklook"):
-            from mtbmj import quicklook
+            from mtbmj.readout import quicklook
 
             files["quicklook.png"] = quicklook.png(self.quicklook())
         return files

@@ -1,4 +1,4 @@
-"""``mtbmj compare`` / ``mtbmj.compare``: runs made here by ``mtbmj drop`` and ``mtbmj roll``
+"""``mtbmj compare`` / ``mtbmj.readout.compare``: runs made here by ``mtbmj drop`` and ``mtbmj roll``
 overlaid (what the figure shows: one line per run on every axis, the runs' own samples, labels
 with units, the legend by folder) and tabulated (every summary figure, each run's value as its
 summary.json holds it, differences from the first run); what is not a drop or roll result, or a
@@ -11,7 +11,7 @@ import pytest
 
 from mtbmj import output
 from mtbmj.cli import main
-from mtbmj.compare import compare_runs, figure
+from mtbmj.readout.compare import compare_runs, figure
 from test_reliability import one_line
 
 

@@ -15,7 +15,7 @@ import pytest
 import mtbmj
 from mtbmj import cli
 from mtbmj.config import load
-from mtbmj.endtravel import RELEASE_MM, end_of_travel, episodes, line
+from mtbmj.readout.endtravel import RELEASE_MM, end_of_travel, episodes, line
 
 HARD = {"sled.drop_height_mm": 600.0}  # S12 from 600 mm: bumper, hard stop and rim
 
@@ -60,7 +60,7 @@ def test_a_hard_drop_reports_bumper_stop_and_rim_from_its_engine_signals(hard_dr
     assert s["bumper"]["peak_force_N"] == pytest.approx(cfg["fork.stops.bumper_force_N"] * r * r, rel=1e-9)
     assert s["travel_remaining_mm"] == pytest.approx(travel - np.max(raw["fork_mm"]))
     assert s["travel_remaining_mm"] < 0 and s["bottomed_out"] is True
-    assert "bottomed out on the bumper" in line(s) and "rim struck" in line(s) and "hit the hard stop" in line(s)
+    assert "bottomed out on the bumper" in line(s) and "struck the rim" in line(s) and "hit the hard stop" in line(s)
 
 
 def test_the_drop_command_names_the_bottom_out_and_writes_a_figure(tmp_path, capsys):
@@ -149,7 +149,7 @@ def test_the_roll_command_names_rim_strikes(tmp_path, capsys):
     assert cli.main(["roll", "drop:height_mm=600", "--speed", "5", "--out", str(out), "--quiet"]) == 0
     printed = capsys.readouterr().out
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["rim_strikes"]["count"] >= 1 and "rim struck" in printed
+    assert summary["rim_strikes"]["count"] >= 1 and "struck the rim" in printed
     assert "N back" in printed and "-0 N back" not in printed
     assert (out / "quicklook.png").exists()
     assert summary["ride_metrics"]["bottom_outs"]["rule"].startswith("telemetry")
@@ -169,3 +169,51 @@ def test_study_and_validate_report_the_same_engagement_as_drop(tmp_path, capsys)
     assert f"S4 {phrase}" in capsys.readouterr().out
     summary = json.loads((tmp_path / "validate" / "validation_summary.json").read_text())
     assert summary["end_of_travel"]["S4"]["bumper"]["count"] == drop.summary["bumper"]["count"]
+
+
+def test_a_sweep_over_one_key_draws_its_outputs_against_it(tmp_path, capsys):
+    """sweep.png: one panel per main output, its line the table's column against the key."""
+    out = tmp_path / "sweep"
+    assert cli.main(["sweep", "S12", "--vary", "sled.drop_height_mm=100:600:4", "--engine", "fast",
+                     "--out", str(out), "--quiet"]) == 0
+    printed = capsys.readouterr().out
+    import pandas as pd
+
+    from mtbmj.sweep.figure import MAIN_OUTPUTS, sweep_figure
+
+    table = pd.read_parquet(out / "sweep.parquet")
+    assert (out / "sweep.png").read_bytes()[:4] == b"\x89PNG"
+    hit = int((table["bumper_count"] > 0).sum())
+    assert hit >= 1 and f"{hit} variants bottomed out on the bumper" in printed
+    fig = sweep_figure(table, ["sled.drop_height_mm"])
+    axes = [ax for ax in fig.axes if ax.get_visible()]
+    assert [ax.get_ylabel() for ax in axes] == [label for _, label in MAIN_OUTPUTS]
+    for ax, (column, _) in zip(axes, MAIN_OUTPUTS):
+        assert ax.get_xlabel() == "sled.drop_height_mm"
+        x, y = ax.lines[0].get_data()
+        assert list(x) == [100.0, 100.0 + 500 / 3, 100.0 + 1000 / 3, 600.0]
+        assert np.allclose(y, table.sort_values("sled.drop_height_mm")[column].to_numpy(float))
+
+
+def test_a_sweep_over_two_keys_draws_heat_maps_of_the_grid(tmp_path):
+    import pandas as pd
+
+    from mtbmj.sweep.figure import sweep_figure
+
+    out = tmp_path / "sweep"
+    assert cli.main(["sweep", "S12", "--vary", "sled.drop_height_mm=100:300:3", "--vary",
+                     "fork.spring.preload_N=100:300:2", "--engine", "fast", "--out", str(out), "--quiet"]) == 0
+    table = pd.read_parquet(out / "sweep.parquet")
+    fig = sweep_figure(table, ["sled.drop_height_mm", "fork.spring.preload_N"])
+    ax = fig.axes[0]
+    grid = ax.collections[0].get_array().reshape(2, 3)  # preload rows, drop height columns
+    for _, row in table.iterrows():
+        i = [100.0, 300.0].index(row["fork.spring.preload_N"])
+        j = [100.0, 200.0, 300.0].index(row["sled.drop_height_mm"])
+        assert grid[i, j] == pytest.approx(row["max_fork_mm"])
+    assert ax.get_xlabel() == "sled.drop_height_mm" and ax.get_ylabel() == "fork.spring.preload_N"
+    three = sweep_figure(table.assign(x=1.0), ["sled.drop_height_mm", "fork.spring.preload_N", "x"])
+    assert three is None  # three keys: the table is the place to look
+    assert cli.main(["sweep", "S12", "--vary", "sled.drop_height_mm=100:300:2", "--engine", "fast",
+                     "--out", str(tmp_path / "plain"), "--quiet", "--no-figure"]) == 0
+    assert not (tmp_path / "plain" / "sweep.png").exists()

@@ -85,7 +85,7 @@ def test_ode_resolves_a_fork_resting_on_its_stop_at_any_tolerance():
     tight = run_drop(preset, engine="ode", overrides={**overrides, "solver.ode_rtol": 1e-10}, duration=0.8)
     # on and off the stop again and again (the reported engagements merge dips under 0.5 mm: count
     # the raw crossings of full travel here)
-    from mtbmj.endtravel import episodes
+    from mtbmj.readout.endtravel import episodes
 
     travel_mm = loose.config["fork.travel_mm"]
     assert len(episodes(loose.raw["fork_mm"], travel_mm, release=0.0)) >= 5

@@ -121,14 +121,14 @@ class Validation:
         return data
 
     def end_of_travel(self) -> dict[str, dict]:
-        """Each configuration's run under test: its end-of-travel report (``mtbmj.endtravel``)."""
+        """Each configuration's run under test: its end-of-travel report (``mtbmj.readout.endtravel``)."""
         keys = ("travel_mm", "travel_used_mm", "travel_used_percent", "travel_remaining_mm", "bottomed_out",
                 "bumper", "hard_stop", "rim_strikes")
         return {n: {k: self.results[n].summary[k] for k in keys} for n in self.configs}
 
     def envelope_lines(self) -> list[str]:
         """One phrase per configuration whose run reached the bumper, the hard stop or the rim."""
-        from mtbmj.endtravel import line
+        from mtbmj.readout.endtravel import line
 
         return [f"{n} {line(self.results[n].summary)[2:]}" for n in self.configs if line(self.results[n].summary)]
 

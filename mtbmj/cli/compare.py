@@ -6,7 +6,7 @@ from mtbmj.cli.common import add_out
 
 
 def cmd_compare(args) -> int:
-    from mtbmj.compare import compare_runs
+    from mtbmj.readout.compare import compare_runs
 
     comparison = compare_runs(args.runs)
     written = comparison.write(args.out)

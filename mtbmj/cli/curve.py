@@ -7,7 +7,7 @@ from mtbmj.cli.common import add_out, overrides
 
 
 def cmd_curve(args) -> int:
-    from mtbmj.curves import fork_curves
+    from mtbmj.readout.curves import fork_curves
 
     curves = fork_curves(args.config, overrides(args.set), args.max_velocity_mm_per_s)
     written = curves.write(args.out)

@@ -35,7 +35,7 @@ def cmd_study(args) -> int:
         if mine:
             worst = max(mine, key=lambda c: c.worst[1])
             largest.append(f"largest {engine}-ODE difference {mm(worst.worst[1])} mm ({worst.name}, {worst.worst[0]})")
-    from mtbmj.endtravel import line
+    from mtbmj.readout.endtravel import line
 
     envelope = [f"{name} ({engine}) {line(r.summary)[2:]}" for name, per in results.items()
                 for engine, r in per.items() if line(r.summary)]

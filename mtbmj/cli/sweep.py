@@ -60,7 +60,8 @@ def cmd_sweep(args) -> int:
                            base_overrides=overrides(args.set), workers=args.workers, batch_size=args.batch_size,
                            backend=args.backend, scheduler=args.scheduler, traces=args.traces, csv=args.csv,
                            resume=args.resume, progress=bar, manifest_extra={"variants_from": how},
-                           runner=args.runner, threads=args.threads, pool=pool)
+                           runner=args.runner, threads=args.threads, pool=pool,
+                           extra_files=None if args.no_figure else _figure_files(args.config, variants))
     except BaseException as exc:
         if pool is not None:
             pool.terminate()
@@ -88,6 +89,20 @@ def add_shared_options(p) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
 
 
+def _figure_files(config: str, variants):
+    """``extra_files`` for run_sweep: ``sweep.png`` for a sweep over one or two keys."""
+    keys = list(dict.fromkeys(k for v in variants for k in v))
+
+    def files(table) -> dict:
+        from mtbmj.readout.quicklook import png
+        from mtbmj.sweep.figure import sweep_figure
+
+        fig = sweep_figure(table, keys, f"sweep of {config} over {' and '.join(keys)}")
+        return {} if fig is None else {"sweep.png": png(fig)}
+
+    return files
+
+
 def add_parser(subparsers) -> None:
     p = subparsers.add_parser(
         "sweep", help="run many variants of a configuration: grids, LHS/Sobol samples or a CSV; one table",
@@ -104,6 +119,8 @@ def add_parser(subparsers) -> None:
     add_out(p, "out/sweep")
     p.add_argument("--traces", action="store_true", help="also write the histories to traces.h5")
     p.add_argument("--csv", action="store_true", help="also write the table as sweep.csv")
+    p.add_argument("--no-figure", action="store_true",
+                   help="do not draw sweep.png (drawn for a sweep over one or two keys: lines or heat maps)")
     p.add_argument("--batch-size", type=int, help="variants per journaled batch (default: automatic, <= 16)")
     p.add_argument("--runner", choices=("batch", "single"),
                    help="batch: variants stepped together in mujoco.rollout on the compiled laws (default for "

@@ -74,8 +74,8 @@ def run_air_study(config: Config | str = "air120", overrides: Mapping | None = N
 def static_sag_mm(config: Config) -> float | None:
     """Fork compression (mm) where the spring carries the body's weight; ``None`` when the spring
     cannot carry it anywhere in the travel (the fork would sit on its bumper). The balance of
-    ``mtbmj.curves.static_sag``, which the spring-curve figure marks."""
-    from mtbmj.curves import static_sag
+    ``mtbmj.readout.curves.static_sag``, which the spring-curve figure marks."""
+    from mtbmj.readout.curves import static_sag
 
     setup = compose.setup(config)
     sag = static_sag(setup.fork.spring, setup.body_mass * setup.gravity, setup.travel)
@@ -84,11 +84,11 @@ def static_sag_mm(config: Config) -> float | None:
 
 def spring_curves_figure(base: Config):
     """Fork spring force vs travel (paper Fig. 3 style) from the top stop to full travel (the
-    curves of ``mtbmj.curves``, y range the springs' own): 0-3 spacers at the base pressure, and
+    curves of ``mtbmj.readout.curves``, y range the springs' own): 0-3 spacers at the base pressure, and
     the two study pressures, with the body's weight and each static sag marked."""
     from matplotlib.figure import Figure  # the object API: the caller's backend is left alone
 
-    from mtbmj.curves import draw_spring_totals, spring_curve
+    from mtbmj.readout.curves import draw_spring_totals, spring_curve
 
     fig = Figure(figsize=(11, 4.4), layout="constrained")
     left, right = fig.subplots(1, 2)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from mtbmj.compose import Setup
-from mtbmj.endtravel import end_of_travel
+from mtbmj.readout.endtravel import end_of_travel
 from mtbmj.trace import RawTrace
 
 REST_WINDOW_S = 0.2  # the last 0.2 s decide whether the system is at rest

@@ -72,7 +72,7 @@ class DropResult(RunOutput):
 
     def headline(self) -> str:
         """The run in one line: peaks, lift-off, rest and any bottom-out or rim strike."""
-        from mtbmj.endtravel import line
+        from mtbmj.readout.endtravel import line
 
         s = self.summary
         lift = f"{s['lift_off_s']:.3f} s" if s["lift_off_s"] is not None else "never"
@@ -81,10 +81,10 @@ class DropResult(RunOutput):
                 f"{'at rest' if s['at_rest'] else 'still moving'} at the end{line(s)}")
 
     def quicklook(self):
-        """The quick-look figure (``mtbmj.quicklook``) on the engine-rate signals."""
+        """The quick-look figure (``mtbmj.readout.quicklook``) on the engine-rate signals."""
         import textwrap
 
-        from mtbmj import quicklook
+        from mtbmj.readout import quicklook
 
         r = self.raw
         return quicklook.figure(r["time_s"], r["fork_mm"], r["tire_mm"],

@@ -35,7 +35,7 @@ from mtbmj import mjcf
 from mtbmj.controllers import installed
 from mtbmj import compose, output
 from mtbmj.drop import measure
-from mtbmj.endtravel import end_of_travel
+from mtbmj.readout.endtravel import end_of_travel
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.terrain import DEFAULT_HEAD_ANGLE_DEG
 from mtbmj.config import Config
@@ -569,7 +569,7 @@ class RollResult(RunOutput):
 
     def headline(self) -> str:
         """The run in one line: peaks, axle forces and any bottom-out or rim strike."""
-        from mtbmj.endtravel import line
+        from mtbmj.readout.endtravel import line
 
         s = self.summary
         return (f"roll {self.scenario} at {s['speed_m_per_s']:g} m/s ({self.name}, head angle {s['head_angle_deg']:g} "
@@ -578,11 +578,11 @@ class RollResult(RunOutput):
                 f"{max(0.0, -s['min_axle_force_x_N']):.0f} N back{line(s)}")
 
     def quicklook(self):
-        """The quick-look figure (``mtbmj.quicklook``): terrain, fork, tire (its clearance in the
+        """The quick-look figure (``mtbmj.readout.quicklook``): terrain, fork, tire (its clearance in the
         air), axle and fork forces, on the engine-rate signals."""
         import textwrap
 
-        from mtbmj import quicklook
+        from mtbmj.readout import quicklook
 
         r = self.raw
         return quicklook.figure(r["time_s"], r["fork_mm"], r["tire_mm"],

@@ -328,7 +328,25 @@ class SweepResult:
     def line(self) -> str:
         failed = f", {self.failed} failed" if self.failed else ""
         return (f"{self.total} variants ({self.computed} computed, {self.reused} from the journal{failed}) in "
-                f"{self.wall_time_s:.1f} s; wrote {', '.join(p.name for p in self.files)} to {self.out_dir}")
+                f"{self.wall_time_s:.1f} s{self.envelope()}; wrote {', '.join(p.name for p in self.files)} to "
+                f"{self.out_dir}")
+
+    def envelope(self) -> str:
+        """"; 12 variants bottomed out on the bumper (deepest 121.1 mm), 3 hit the hard stop ..."
+        (``mtbmj.readout.endtravel``), or "" when none did."""
+        from mtbmj.readout.endtravel import ELEMENTS, WHAT
+
+        parts = []
+        for key in ELEMENTS:
+            column = f"{key}_count"
+            if column not in self.table:
+                continue
+            counts = self.table[column].fillna(0)
+            hit = int((counts > 0).sum())
+            if hit:
+                deepest = float(self.table[f"{key}_deepest_mm"].max())
+                parts.append(f"{hit} {'variant' if hit == 1 else 'variants'} {WHAT[key]} (deepest {deepest:.1f} mm)")
+        return "".join(f"; {p}" for p in parts)
 
 
 def plan(config: Config, overrides_list: Iterable[Mapping[str, Any]], engine: str = "mujoco",

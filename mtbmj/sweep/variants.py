@@ -17,7 +17,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from mtbmj.config import SCHEMA, Config, check_value
-from mtbmj.endtravel import TABLE_COLUMNS as END_OF_TRAVEL_COLUMNS
+from mtbmj.readout.endtravel import TABLE_COLUMNS as END_OF_TRAVEL_COLUMNS
 from mtbmj.errors import ConfigError
 from mtbmj.textfile import read_text
 
@@ -45,7 +45,7 @@ OUTPUT_COLUMNS = (
     [f"{s}_{e}_{q}" for s in SIGNALS for e in EVENTS for q in ("mm", "s")]
     + ["lift_off_s", "landing_s", "lifts_off", "fork_tops_out"]
     + [f"rest_{s}_mm" for s in SIGNALS]
-    + ["rest_motion_mm", "at_rest", "max_fork_mm"] + list(END_OF_TRAVEL_COLUMNS)  # mtbmj.endtravel, one definition
+    + ["rest_motion_mm", "at_rest", "max_fork_mm"] + list(END_OF_TRAVEL_COLUMNS)  # mtbmj.readout.endtravel, one definition
     + ["max_tire_mm",
        "impact_speed_m_per_s", "energy_input_J", "energy_mechanical_end_J", "energy_dissipated_J"]
 )

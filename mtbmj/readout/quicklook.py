@@ -1,6 +1,6 @@
 """The quick-look figure every ``drop`` and ``roll`` writes (``quicklook.png``): fork travel
 against its travel and bumper, the tire against its rim, and the forces, with every bumper
-engagement, hard-stop contact and rim strike (``mtbmj.endtravel``) shaded where it happens.
+engagement, hard-stop contact and rim strike (``mtbmj.readout.endtravel``) shaded where it happens.
 Engine-rate signals, so the deepest millimetre drawn is the one reported."""
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from mtbmj.endtravel import episodes
+from mtbmj.readout.endtravel import episodes
 
 OFF_SCALE = 4.0  # forces beyond 4 x the 99th percentile are named, not drawn to scale
 SHADES = {"bumper": ("tab:orange", "bumper"), "hard_stop": ("tab:red", "hard stop"),

@@ -27,7 +27,7 @@ import numpy as np
 
 RELEASE_MM = 0.5  # an engagement ends this far below its threshold (hysteresis)
 ELEMENTS = ("bumper", "hard_stop", "rim_strikes")
-WHAT = {"bumper": "bottomed out on the bumper", "hard_stop": "hit the hard stop", "rim_strikes": "rim struck"}
+WHAT = {"bumper": "bottomed out on the bumper", "hard_stop": "hit the hard stop", "rim_strikes": "struck the rim"}
 TABLE_COLUMNS = (["travel_used_percent", "travel_remaining_mm", "bottomed_out"]
                  + [f"{e}_{field}" for e in ELEMENTS for field in ("count", "deepest_mm", "peak_force_N")])
 
@@ -109,7 +109,7 @@ def end_of_travel(setup, fork_mm, fork_velocity_mm_per_s, tire_mm, tire_velocity
 
 def line(report: dict) -> str:
     """What the one-line summary of a command adds: "; bottomed out on the bumper 2x (deepest
-    158.5 mm, 1.9 kN); rim struck 1x (...)", or "" when nothing engaged."""
+    158.5 mm, 1.9 kN); struck the rim 1x (...)", or "" when nothing engaged."""
     parts = []
     for key in ELEMENTS:
         e = report.get(key) or {}
