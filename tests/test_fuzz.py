@@ -163,8 +163,9 @@ def test_generated_configurations(tmp_path, capfd, text, binary):
         path.write_text(text)
     status = check(["drop", path, "--duration", "0.002", "--quiet", "--out", out], out, capfd, "configs")
     if status == 0:
-        assert sorted(p.name for p in out.iterdir()) == [".lock", ".mtbmj-output.json", "config.toml", "manifest.json", "summary.json",
-                                                         "timeseries.csv", "timeseries_raw.csv"]
+        assert sorted(p.name for p in out.iterdir()) == [".lock", ".mtbmj-output.json", "config.toml", "manifest.json",
+                                                         "quicklook.png", "summary.json", "timeseries.csv",
+                                                         "timeseries_raw.csv"]
 
 
 # --- records ------------------------------------------------------------------------------------

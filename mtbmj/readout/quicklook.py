@@ -15,6 +15,24 @@ SHADES = {"bumper": ("tab:orange", "bumper"), "hard_stop": ("tab:red", "hard sto
           "rim_strikes": ("tab:red", "rim strike")}
 
 
+def figure_class():
+    """matplotlib's ``Figure`` (the object API: the caller's backend is left alone), imported so
+    that a home matplotlib cannot write to (a read-only image, a service user) costs no line on
+    stderr: matplotlib then keeps its caches in a temporary folder it removes at exit, and says so
+    through its logger, which is quietened for the import only."""
+    import logging
+
+    logger = logging.getLogger("matplotlib")
+    quiet = logging.NullHandler()
+    logger.addHandler(quiet)
+    try:
+        from matplotlib import font_manager  # noqa: F401  (its cache folder is chosen on import)
+        from matplotlib.figure import Figure
+    finally:
+        logger.removeHandler(quiet)
+    return Figure
+
+
 def _shade(ax, time: np.ndarray, signal: np.ndarray, threshold: float | None, element: str) -> int:
     if threshold is None:
         return 0
@@ -31,8 +49,7 @@ def figure(time_s: np.ndarray, fork_mm: np.ndarray, tire_mm: np.ndarray, forces:
     """The quick-look figure: ``extra`` panels (label, signal, unit) first (e.g. the terrain),
     then fork travel, tire deflection and ``forces`` (name -> N). ``report``: the run's
     end-of-travel report (``endtravel.end_of_travel``) for the lines and the shading."""
-    from matplotlib.figure import Figure  # the object API: the caller's backend is left alone
-
+    Figure = figure_class()
     t = np.asarray(time_s, float)
     n = len(extra) + 3
     fig = Figure(figsize=(8.0, 2.0 + 1.9 * n), layout="constrained")

@@ -23,8 +23,11 @@ def sweep_figure(table, keys: Sequence[str], title: str = ""):
     """The figure for a sweep whose varied keys are ``keys`` (one or two), or None."""
     if not 1 <= len(keys) <= 2:
         return None
-    from matplotlib.figure import Figure  # the object API: the caller's backend is left alone
     from matplotlib.ticker import MaxNLocator
+
+    from mtbmj.readout.quicklook import figure_class
+
+    Figure = figure_class()
 
     ok = table[table["status"] == "ok"]
     failed = int(len(table) - len(ok))
