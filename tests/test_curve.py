@@ -1,4 +1,4 @@
-"""``mtbmj curve`` / ``mtbmj.curves`` and the air study's spring-curve figure: the curves drawn are
+"""``mtbmj curve`` / ``mtbmj.readout.curves`` and the air study's spring-curve figure: the curves drawn are
 the closed forms of the configured laws (written out here from the configuration's numbers, not
 taken from the law library), the figures show what they say (axis labels with units, the stroke
 from the top stop to full travel, a y range the spring's own, one line per click)."""
@@ -11,7 +11,7 @@ import pytest
 from mtbmj import output
 from mtbmj.cli import main
 from mtbmj.config import load
-from mtbmj.curves import damper_curve, damper_figure, fork_curves, spring_curve, spring_figure
+from mtbmj.readout.curves import damper_curve, damper_figure, fork_curves, spring_curve, spring_figure
 from mtbmj.identify.dyno_synthetic import DAMPER_TABLE
 from test_reliability import one_line
 
@@ -256,3 +256,27 @@ def test_a_spring_that_cannot_carry_the_load_has_no_sag():
     curve = spring_curve("S1", soft)  # 5 N/mm x 120 mm + 100 N = 700 N < 80 kg x g
     assert curve.sag_mm is None and curve.spring_N[-1] == pytest.approx(700.0)
     assert "no sag" in fork_curves("S1", soft).line()  # drawn all the same
+
+
+def test_the_figures_page_runs_as_written(tmp_path, monkeypatch, capsys):
+    """Every command of docs/figures.md, in its order, from an empty folder: exit 0, and the files
+    the page names are there."""
+    import re
+    import shlex
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "figures.md").read_text()
+    commands = [shlex.split(line, comments=True) for block in re.findall(r"```bash\n(.*?)```", page, flags=re.S)
+                for line in block.splitlines() if line.strip() and not line.lstrip().startswith("#")]
+    assert all(c[0] == "mtbmj" for c in commands)
+    assert {c[1] for c in commands} >= {"curve", "compare"}
+    monkeypatch.chdir(tmp_path)
+    for argv in commands:
+        assert main(argv[1:]) == 0, " ".join(argv)
+    for name in ("spring_curve.png", "spring_curve.csv", "damper_curve.png", "damper_curve.csv", "curve.json"):
+        assert (tmp_path / "out" / "curve-s12" / name).is_file()
+    assert (tmp_path / "out" / "curve-clicks" / "damper_clicks.csv").is_file()
+    header = (tmp_path / "out" / "curve-air120" / "spring_curve.csv").read_text().splitlines()[1]
+    assert all(f"spring_{n}_spacers_N" in header for n in range(4))
+    for name in ("compare.png", "differences.csv", "compare.json"):
+        assert (tmp_path / "out" / "compare" / name).is_file() and (tmp_path / "out" / "compare-rock" / name).is_file()
