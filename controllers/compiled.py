@@ -464,6 +464,8 @@ if _numba is not None:
 
     CACHE = can_cache(lambda: None)
     _jit = dict(cache=CACHE, error_model="numpy", nogil=True)
+    # the stops' and the rim's force law: the one Python function, compiled from its own source
+    contact_force = _numba.njit(inline="always", **_jit)(_stops.contact_force)
 
     # A numpy array handed from one compiled function to the next is reference-counted at every
     # call (two atomic operations per array), which cost more than the law itself: 139 against
@@ -542,15 +544,13 @@ if _numba is not None:
                 stop = 0.0
                 p = x - P[o + 3]
                 if p >= 0.0:
-                    r = p / P[o + 7]
-                    f = P[o + 4] * p * (1.0 + r * r) + P[o + 5] * math.tanh(3.0 * r) * v  # stops.stop_damping
+                    f = contact_force(P[o + 4], P[o + 5], p, v)
                     if f >= 0.0:
                         stop = f
                 top_stop = 0.0
                 q = -P[o + 6] - x
                 if q >= 0.0:
-                    r = q / P[o + 7]
-                    f = P[o + 4] * q * (1.0 + r * r) - P[o + 5] * math.tanh(3.0 * r) * v
+                    f = contact_force(P[o + 4], P[o + 5], q, -v)
                     if f >= 0.0:
                         top_stop = f
                 stack[top - 1] = stack[top - 1] + bumper + stop - top_stop
@@ -745,8 +745,7 @@ if _numba is not None:
                 p = deflection - P[o]
                 rim = 0.0
                 if p >= 0.0:
-                    r = p / P[o + 3]
-                    f = P[o + 1] * p * (1.0 + r * r) + P[o + 2] * math.tanh(3.0 * r) * rate
+                    f = contact_force(P[o + 1], P[o + 2], p, rate)
                     if f >= 0.0:
                         rim = f
                 sled = -rim

@@ -41,7 +41,7 @@ import weakref
 import numpy as np
 
 from mtbmj.controllers import compiled as _c
-from mtbmj.controllers.stops import STIFFENING_M
+from mtbmj.controllers.stops import STIFFENING_M, contact_force as _stops_contact_force
 from mtbmj.controllers.compiled import FALLBACK_MESSAGE, UnsupportedLaw, flatten, mjdata_layout, unavailable_reason
 
 _numba = _c._numba
@@ -115,6 +115,7 @@ if _numba is not None:
 
     CACHE = _c.can_cache(lambda: None)  # this file's cache directory (see compiled.can_cache)
     _jit = dict(cache=CACHE, error_model="numpy", nogil=True)
+    contact_force = _numba.njit(inline="always", **_jit)(_stops_contact_force)  # the one stop/rim law
 
     @_numba.njit(**_jit)
     def _clip01(value):
@@ -393,9 +394,7 @@ if _numba is not None:
                 if f < 0.0:
                     f = 0.0
                 if F[F_RIM_K] > 0.0 and dp - F[F_RIM_D] >= 0.0:  # the rim strikes (Rim.force)
-                    pr = dp - F[F_RIM_D]
-                    sr = pr / F[F_RIM_P0]
-                    fr = F[F_RIM_K] * pr * (1.0 + sr * sr) + F[F_RIM_C] * math.tanh(3.0 * sr) * rate  # Rim.force
+                    fr = contact_force(F[F_RIM_K], F[F_RIM_C], dp - F[F_RIM_D], rate)  # Rim.force
                     if fr >= 0.0:
                         f += fr
                 if f > 0.0:

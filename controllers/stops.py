@@ -31,16 +31,14 @@ STIFFENING_M = 0.6e-3  # p0 of the stops' and the rim's stiffening: 12x the line
 DAMPING_RAMP = 3.0
 
 
-def stop_spring(rate: float, p: float) -> float:
-    """The elastic part of a hard stop or the rim at penetration p >= 0: k p (1 + (p / p0)^2)."""
+def contact_force(rate: float, damping: float, p: float, v: float) -> float:
+    """The hard stops' and the rim's force law, written once: at penetration p >= 0 and rate dp/dt
+    = v, k p (1 + (p / p0)^2) + c tanh(DAMPING_RAMP p / p0) v (the caller keeps it >= 0: it pushes,
+    never pulls). Plain arithmetic on floats: the Python laws call it, and the compiled kernels
+    (``controllers.compiled``, ``compiled_rolling``, ``drop.engine_fast``) compile this same
+    source with numba, so one edit here changes every engine."""
     r = p / STIFFENING_M
-    return rate * p * (1.0 + r * r)
-
-
-def stop_damping(damping: float, p: float, v: float) -> float:
-    """The dissipative part of a hard stop or the rim at penetration p >= 0 and rate dp/dt = v:
-    c tanh(DAMPING_RAMP p / p0) v (the compiled kernels repeat this arithmetic)."""
-    return damping * math.tanh(DAMPING_RAMP * (p / STIFFENING_M)) * v
+    return rate * p * (1.0 + r * r) + damping * math.tanh(DAMPING_RAMP * r) * v
 
 
 def stop_energy(rate: float, p: float) -> float:
@@ -78,8 +76,8 @@ class EndStops:
         p = x - self.travel
         q = -self.extension - x
         return self.main.guards(x, v) + (
-            x - self.bumper_start, p, stop_spring(self.stop_rate, p) + stop_damping(self.stop_damping, p, v),
-            q, stop_spring(self.stop_rate, q) - stop_damping(self.stop_damping, q, v))
+            x - self.bumper_start, p, contact_force(self.stop_rate, self.stop_damping, p, v),
+            q, contact_force(self.stop_rate, self.stop_damping, q, -v))
 
     def stop_forces(self, x, v, sides=None):
         """(bumper, compression stop, extension stop) forces in N, each >= 0 in its own direction."""
@@ -92,13 +90,13 @@ class EndStops:
         p = x - self.travel
         stop = 0.0
         if _side(p, sides, o + 1):
-            f = stop_spring(self.stop_rate, p) + stop_damping(self.stop_damping, p, v)
+            f = contact_force(self.stop_rate, self.stop_damping, p, v)
             if _side(f, sides, o + 2):
                 stop = f
         q = -self.extension - x
         top = 0.0
         if _side(q, sides, o + 3):
-            f = stop_spring(self.stop_rate, q) - stop_damping(self.stop_damping, q, v)
+            f = contact_force(self.stop_rate, self.stop_damping, q, -v)
             if _side(f, sides, o + 4):
                 top = f
         return bumper, stop, top
@@ -137,13 +135,13 @@ class Rim:
 
     def guards(self, deflection, rate):
         p = deflection - self.max_deflection
-        return (p, stop_spring(self.rate, p) + stop_damping(self.damping, p, rate))
+        return (p, contact_force(self.rate, self.damping, p, rate))
 
     def force(self, deflection, rate, sides=None):
         p = deflection - self.max_deflection
         if not _side(p, sides, 0):
             return 0.0
-        f = stop_spring(self.rate, p) + stop_damping(self.damping, p, rate)
+        f = contact_force(self.rate, self.damping, p, rate)
         return f if _side(f, sides, 1) else 0.0
 
     def energy(self, deflection):
@@ -151,4 +149,4 @@ class Rim:
         return stop_energy(self.rate, p) if p > 0.0 else 0.0
 
 
-__all__ = ["EndStops", "Rim", "STIFFENING_M", "DAMPING_RAMP", "stop_spring", "stop_damping", "stop_energy"]
+__all__ = ["EndStops", "Rim", "STIFFENING_M", "DAMPING_RAMP", "contact_force", "stop_energy"]

@@ -115,3 +115,22 @@ def test_command_line_code_lives_in_the_cli_package():
 def test_top_level_is_small():
     top = [p for p in (ROOT / "mtbmj").glob("*.py")]
     assert len(top) <= MAX_TOP_LEVEL_MODULES, sorted(p.name for p in top)
+
+
+def test_the_stop_and_rim_formula_is_written_once():
+    """The hard stops' and the rim's force, k p (1 + (p/p0)^2) + c tanh(3 p/p0) dp/dt, lives in
+    ``controllers/stops.py:contact_force`` only; the compiled kernels compile that function (issue
+    24). A second copy of its arithmetic anywhere in the package fails here."""
+    import re
+
+    copies = re.compile(r"tanh\(\s*(3(\.0)?|DAMPING_RAMP)\s*\*|\*\s*\w+\s*\*\s*\(1\.0 \+ (\w+) \* \3\)")
+    found = []
+    for path in modules().values():
+        if path.name == "stops.py" and path.parent.name == "controllers":
+            continue
+        for number, text in enumerate(path.read_text().splitlines(), 1):
+            if copies.search(text):
+                found.append(f"{path.relative_to(ROOT)}:{number}: {text.strip()}")
+    assert found == []
+    stops = (ROOT / "controllers" / "stops.py").read_text()
+    assert len(copies.findall(stops.split('"""', 2)[2])) == 2  # contact_force's two terms, once each

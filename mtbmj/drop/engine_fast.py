@@ -62,6 +62,7 @@ if _numba is not None:
     # afresh in every process).
     fork_force_rate = _compiled.fork_force_rate
     borrow_f64, borrow_i64 = _compiled.borrow_f64, _compiled.borrow_i64
+    contact_force = _compiled.contact_force  # the one stop/rim law (controllers.stops)
     numba = _numba
     jit = dict(cache=True, error_model="numpy", nogil=True)
 
@@ -78,8 +79,7 @@ if _numba is not None:
         if q[Q_RIM] != 0.0:  # Rim.force
             p = d - q[Q_RIM_D]
             if p >= 0.0:
-                s = p / q[Q_RIM_P0]
-                r = q[Q_RIM_K] * p * (1.0 + s * s) + q[Q_RIM_C] * math.tanh(3.0 * s) * dd
+                r = contact_force(q[Q_RIM_K], q[Q_RIM_C], p, dd)
                 if r >= 0.0:
                     f += r
         return f
@@ -107,8 +107,7 @@ if _numba is not None:
         p = d - q[Q_RIM_D]
         rim = False
         if q[Q_RIM] != 0.0 and p >= 0.0:
-            s = p / q[Q_RIM_P0]
-            rim = q[Q_RIM_K] * p * (1.0 + s * s) + q[Q_RIM_C] * math.tanh(3.0 * s) * dd >= 0.0
+            rim = contact_force(q[Q_RIM_K], q[Q_RIM_C], p, dd) >= 0.0
         # the fork's end stops: the bumper's and the hard stops' engagement (kinks of its force)
         x = y[1]
         return d > 0.0, force > 0.0, y[3] >= 0.0, rim, x >= q[Q_BUMPER], x >= q[Q_TRAVEL], x <= q[Q_TOP]

@@ -15,7 +15,7 @@ import numpy as np
 
 from mtbmj.compose import Setup
 from mtbmj.controllers import native
-from mtbmj.controllers.stops import STIFFENING_M, stop_damping
+from mtbmj.controllers.stops import contact_force
 from mtbmj.trace import RawTrace
 
 COLUMNS = (
@@ -39,11 +39,10 @@ def tire_forces(tire_law, deflection, rate, phase) -> np.ndarray:
     if rim is not None:  # Rim.force: past the maximum deflection, pushing only
         at = deflection - rim.max_deflection >= 0.0
         p = deflection[at] - rim.max_deflection
-        s = p / STIFFENING_M
-        # the damping through Rim.force's own function (math.tanh: numpy's may differ in the last
-        # bit; rim strikes are few samples)
-        damping = np.fromiter((stop_damping(rim.damping, pi, vi) for pi, vi in zip(p, rate[at])), float, p.size)
-        out[at] += np.maximum(0.0, rim.rate * p * (1.0 + s * s) + damping)
+        # through the one stop/rim formula, sample by sample (math.tanh: numpy's may differ in the
+        # last bit; rim strikes are few samples)
+        force = np.fromiter((contact_force(rim.rate, rim.damping, pi, vi) for pi, vi in zip(p, rate[at])), float, p.size)
+        out[at] += np.maximum(0.0, force)
     return out
 
 
