@@ -285,7 +285,8 @@ def test_overwriting_a_result_leaves_only_the_new_one(tmp_path):
     shutil.rmtree(out / "results")
     assert main(["drop", "S12", "--duration", "0.2", "--quiet", "--out", str(out)]) == 0
     assert sorted(p.name for p in out.iterdir()) == [".lock", output.RECORD, "config.toml", "manifest.json",
-                                                     "summary.json", "timeseries.csv", "timeseries_raw.csv"]
+                                                     "quicklook.png", "summary.json", "timeseries.csv",
+                                                     "timeseries_raw.csv"]
     assert '"name": "S12"' in (out / "manifest.json").read_text()
     assert output.read_record(out)["command"] == "drop"
     assert [p.name for p in tmp_path.iterdir()] == ["run"]
