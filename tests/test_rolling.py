@@ -197,7 +197,8 @@ def test_roll_over_root_completes_and_is_deterministic(tmp_path):
     assert np.all(a.raw["tire_force_N"] >= 0.0)
     assert a.raw["speed_m_per_s"].min() > 3.8
     written = a.write(tmp_path / "out")
-    assert {p.name for p in written} == {"timeseries.csv", "timeseries_raw.csv", "summary.json", "manifest.json", "config.toml"}
+    assert {p.name for p in written} == {"timeseries.csv", "timeseries_raw.csv", "summary.json", "manifest.json", "config.toml",
+                                         "quicklook.png"}
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["scenario"]["name"] == "root"
     header = (tmp_path / "out" / "timeseries.csv").read_text().splitlines()[2]
