@@ -270,3 +270,22 @@ def test_a_linear_tire_ramp_passes_and_a_stiffening_one_fails(tmp_path, capsys):
                                          tire_ramp(tmp_path / "stiff.csv", lambda d: 45.0 * d + 1.5 * d**2))
     assert status == 3 and not summary["models"]["static"]["model_check"]["passed"]
     assert "residual of the static ramp" in printed
+
+
+@pytest.mark.parametrize("kind, option, value, named", [
+    ("spring", "--bound", "fork.spring.rate_N_per_mm=1:2", "fit drop"),
+    ("damper", "--free", "fork.friction.coulomb_N", "fit drop"),
+    ("tire", "--starts", "5", "fit drop"),
+    ("spring", "--touch-s", "1.0", "fit drop"),
+    ("drop", "--clicks", "0,6", "fit damper"),
+    ("tire", "--model", "bilinear", "fit spring and fit damper"),
+    ("damper", "--mass-kg", "3", "fit tire"),
+    ("tire", "--config", "air120", "fit spring and fit drop"),
+    ("spring", "--set", "sled.drop_height_mm=150", "fit drop"),
+])
+def test_an_option_of_another_fit_kind_is_refused_not_ignored(tmp_path, capsys, kind, option, value, named):
+    """Every fit option applied to a kind it does not shape (today: silently ignored) is one line
+    naming it, exit 2, nothing written."""
+    one_line(capsys, ["fit", kind, "example", option, value, "--out", tmp_path / "o"], option, named,
+             f"not fit {kind}")
+    assert not (tmp_path / "o").exists()

@@ -14,8 +14,25 @@ MAX_STARTS = 1000  # start points of a drop fit (each is a whole least-squares f
 EXIT_MODEL_CHECK = 3  # the fit ran, but its model does not explain the record (docs/identification.md)
 
 
+def _applies(args) -> None:
+    """An option of another kind of fit (``fit spring --bound ...``) is refused in one line naming
+    it, not ignored: the user would read a result the option did not shape."""
+    for flags, keywords, _, helps in OPTIONS:
+        dest = flags[0].lstrip("-").replace("-", "_")
+        value = getattr(args, dest, None)
+        if args.kind in helps or value is None or value == keywords.get("default"):
+            continue
+        if args.kind == "spring" and dest == "config":
+            continue
+        kinds = " and ".join(f"fit {k}" for k in helps)
+        what = ("the configuration the fit runs on" if dest == "set" else "")
+        raise MtbmjError(f"{flags[0]}: applies to {kinds}{f' ({what})' if what else ''}, not fit {args.kind}")
+
+
 def cmd_fit(args) -> int:
     from mtbmj.identify.run import identify
+
+    _applies(args)
 
     bounds = {}
     for text in args.bound or []:
@@ -34,8 +51,6 @@ def cmd_fit(args) -> int:
         from mtbmj.identify.examples import example_paths
 
         data = example_paths(args.kind)
-    if args.set and args.kind != "drop":
-        raise MtbmjError(f"--set: applies to fit drop (the configuration it runs on), not fit {args.kind}")
     ident = identify(args.kind, data, model=args.model, friction=args.friction, mass_kg=args.mass_kg,
                      config=args.config, free=free, bounds=bounds or None, engine=args.engine,
                      starts=args.starts, touch_s=args.touch_s, clicks=clicks, overrides=overrides(args.set))
