@@ -217,3 +217,11 @@ def test_a_sweep_over_two_keys_draws_heat_maps_of_the_grid(tmp_path):
     assert cli.main(["sweep", "S12", "--vary", "sled.drop_height_mm=100:300:2", "--engine", "fast",
                      "--out", str(tmp_path / "plain"), "--quiet", "--no-figure"]) == 0
     assert not (tmp_path / "plain" / "sweep.png").exists()
+
+
+def test_a_sweep_over_metres_typed_into_a_mm_key_warns_and_runs(tmp_path, capsys):
+    assert cli.main(["sweep", "S12", "--vary", "sled.drop_height_mm=0.1:0.3:2", "--engine", "fast",
+                     "--out", str(tmp_path / "sweep"), "--quiet", "--no-figure"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("mtbmj: warning:") == 1
+    assert "--vary sled.drop_height_mm=0.1:0.3:2" in err and "probably meant 0.1 m = 100 mm" in err

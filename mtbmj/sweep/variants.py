@@ -107,6 +107,12 @@ def parse_vary(text: str, count: bool | None = None) -> Range:
         raise ConfigError(f"--vary {text}: a grid needs a count, key=lo:hi:n (or give --samples N)")
     if count is False and n is not None:
         raise ConfigError(f"--vary {text}: with --samples give the range only, key=lo:hi")
+    # an end far outside what any bike has (metres typed into a mm key): one warning, the sweep runs
+    from mtbmj.config import plausibility, warn
+
+    doubts = [m for m in dict.fromkeys((plausibility(key, lo), plausibility(key, hi))) if m]
+    if doubts:
+        warn([f"--vary {text}: {doubts[0]}"], stacklevel=3)
     return Range(key, lo, hi, n)
 
 
