@@ -6,7 +6,7 @@ run length.
     fork and tire over the default duration                           target <= 0.05 mm
 (b) S12: error and wall time per integrator and step (RK4 and implicitfast at 0.05-1 ms, the
     rule bypassed by calling the engine directly), wall times interleaved, median of --repeat;
-    the default's time over implicitfast at 1e-4 s                    target <= 0.5x (see README)
+    the default's time over implicitfast at 1e-4 s                    target <= 0.5x (see docs/measured.md)
 (c) the random envelope of ``mtbmj.drop.envelope`` (seed --seed): worst error, fork and tire
     beyond their limits                                              target <= 0.1 mm, 0 overtravel
 (d) S12's rest position at 3 s and 6 s                               target equal within 0.01 mm

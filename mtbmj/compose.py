@@ -60,7 +60,7 @@ class Setup:
         return math.sqrt(2.0 * self.gravity * self.drop_height)
 
 
-# End stops and rim (assumed values, see README "Parameters"): the defaults of keys a user file may omit.
+# End stops and rim (assumed values, see docs/model.md, "Parameters"): the defaults of keys a user file may omit.
 STOP_DEFAULTS = {
     "fork.stops.bumper_length_mm": 8.0,
     "fork.stops.bumper_force_N": 3000.0,

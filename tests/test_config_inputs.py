@@ -154,7 +154,7 @@ def test_tire_pressure_in_bar():
     c = load("S12", {"tire.pressure_bar": 1.5})
     psi = 1.5 * PSI_PER_BAR  # 21.76 psi
     assert c["tire.pressure_psi"] == pytest.approx(psi, rel=1e-12)
-    # k_static = 62 N/mm x p / 25 psi; impact 1.38 x static (README, "Tire pressure")
+    # k_static = 62 N/mm x p / 25 psi; impact 1.38 x static (docs/air.md, "Tire pressure")
     assert compose.setup(c).tire.impact.rate == pytest.approx(1.38 * 62.0 * psi / 25.0 * 1e3, rel=1e-12)
 
 

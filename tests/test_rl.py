@@ -1,5 +1,5 @@
-"""The dm_control environment as a user meets it (the ``[rl]`` extra): the README's example runs
-as written and prints what the README says, every observation is documented, and importing it
+"""The dm_control environment as a user meets it (the ``[rl]`` extra): docs/rolling.md's example runs
+as written and prints what that page says, every observation is documented, and importing it
 on a headless machine is silent and leaves a user's ``MUJOCO_GL`` alone."""
 import os
 import re

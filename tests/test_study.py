@@ -24,7 +24,7 @@ def test_mujoco_matches_the_ode_reference_for_every_preset(study):
 
 def test_study_reproduces_the_papers_findings_in_kind(study):
     """The findings of the paper's §Discussion that the calibrated reference set reproduces
-    (README, "Study results", lists the ones it does not)."""
+    (docs/validation.md, "Study results", lists the ones it does not)."""
     results, _ = study
     s = {name: per["mujoco"].summary for name, per in results.items()}
     fork = {n: v["events"]["fork"] for n, v in s.items()}
@@ -43,7 +43,7 @@ def test_study_reproduces_the_papers_findings_in_kind(study):
     assert s["S10"]["at_rest"] and not s["S8"]["at_rest"]
     # in-contact tire values move the resting tire deflection (S12 vs S11)
     assert abs(s["S12"]["rest_mm"]["tire"] - s["S11"]["rest_mm"]["tire"]) > 0.5
-    # S14's static tire overshoots at Peak 1 (with friction that sticks it comes to rest too: README)
+    # S14's static tire overshoots at Peak 1 (with friction that sticks it comes to rest too: docs/validation.md)
     assert tire_peak["S14"] > 1.2 * max(tire_peak[n] for n in ("S11", "S12", "S13"))
     # S8 is S7 by construction
     assert fork["S8"]["peak1"] == fork["S7"]["peak1"]
