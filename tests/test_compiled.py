@@ -1,6 +1,7 @@
 """Compiled force laws (controllers.compiled) against the Python laws, their specification."""
 import ctypes
 import gc
+import os
 import subprocess
 import sys
 import warnings
@@ -400,7 +401,8 @@ def test_a_short_drop_in_a_fresh_process_does_not_load_numba():
     """``controllers.native``: a default drop in a process without numba loaded runs on the Python
     laws (loading numba would cost more than the run), with the compiled run's trajectory and
     forces bit for bit and its logged signals within 1e-9 mm; a run long enough to repay loading
-    numba loads it, and so does a caller that announces many runs."""
+    numba loads it, and so does a caller that announces many runs. (With the background load of
+    a loop of drops turned off: tests/test_native_background.py tests that one.)"""
     code = """
 import sys, json
 import numpy as np
@@ -420,7 +422,8 @@ print(json.dumps(out))
 
     with tempfile.TemporaryDirectory() as tmp:
         path = f"{tmp}/short.npy"
-        run = subprocess.run([sys.executable, "-c", code, path], capture_output=True, text=True, timeout=300)
+        run = subprocess.run([sys.executable, "-c", code, path], capture_output=True, text=True, timeout=300,
+                             env={**os.environ, "MTBMJ_BACKGROUND_LOAD": "0"})
         assert run.returncode == 0, run.stderr
         flags = json.loads(run.stdout.strip().splitlines()[-1])
         python = np.load(path)

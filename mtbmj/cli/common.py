@@ -200,6 +200,9 @@ def _run_claimed(args) -> int:
 def run(parser: argparse.ArgumentParser, argv=None) -> int:
     """Parse and run a command: bad input is one line on stderr and exit status 2; Ctrl-C, at
     any moment, the one line ``mtbmj: interrupted`` and exit status 130."""
+    from mtbmj.controllers import native
+
+    native.one_shot()  # a command loads the compiled laws when its work repays it, never in the background
     show_compile_notices()
     try:
         with interrupt_handling():

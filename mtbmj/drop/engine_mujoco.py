@@ -349,6 +349,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
         info={"steps": steps, "steps_discarded": discarded, "steps_refined": plan.refined, "substeps": substeps,
               "contact_substeps": plan.contact_level,
               "steps_computed": plan.computed, "callback_calls": callback.calls, "integrator": setup.integrator,
+              "callback": "python" if isinstance(callback, ForkCallback) else "compiled",
               "timestep_s": setup.timestep, "contact_inverse_inertia_per_kg": sc.inverse_inertia},
     )
 

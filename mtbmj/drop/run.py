@@ -7,6 +7,7 @@ from typing import Callable, Mapping
 import numpy as np
 
 from mtbmj import compose, config as config_mod, limits
+from mtbmj.controllers import native
 from mtbmj.drop import events
 from mtbmj.drop import measure
 from mtbmj.config import Config
@@ -62,6 +63,7 @@ def run_drop(config: Config | str, engine: str = "mujoco", overrides: Mapping | 
         raise ConfigError(f"duration: must be positive, got {duration}")
     setup = compose.setup(cfg)
     limits.check_run(setup.duration if duration is None else duration, setup.timestep, setup.sample_rate)
+    native.drop_started()  # a process that drops again and again reaches the compiled laws on its own
     start = time.perf_counter()
     trace = ENGINES[engine](setup, duration, progress)
     wall = time.perf_counter() - start
