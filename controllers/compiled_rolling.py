@@ -42,6 +42,7 @@ import numpy as np
 
 from mtbmj.controllers import compiled as _c
 from mtbmj.controllers.stops import STIFFENING_M, contact_force as _stops_contact_force
+from mtbmj.controllers.tire import rolling_tire_force as _rolling_tire_force
 from mtbmj.controllers.compiled import FALLBACK_MESSAGE, UnsupportedLaw, flatten, mjdata_layout, unavailable_reason
 
 _numba = _c._numba
@@ -116,6 +117,7 @@ if _numba is not None:
     CACHE = _c.can_cache(lambda: None)  # this file's cache directory (see compiled.can_cache)
     _jit = dict(cache=CACHE, error_model="numpy", nogil=True)
     contact_force = _numba.njit(inline="always", **_jit)(_stops_contact_force)  # the one stop/rim law
+    tire_force = _numba.njit(inline="always", **_jit)(_rolling_tire_force)  # the one rolling tire law
 
     @_numba.njit(**_jit)
     def _clip01(value):
@@ -390,7 +392,7 @@ if _numba is not None:
             if dp > deepest:
                 deepest = dp
             if dp > 0.0:
-                f = k * dp + b * rate
+                f = tire_force(k, b, dp, rate)
                 if f < 0.0:
                     f = 0.0
                 if F[F_RIM_K] > 0.0 and dp - F[F_RIM_D] >= 0.0:  # the rim strikes (Rim.force)

@@ -15,9 +15,11 @@ The model here instead computes the tire force from the terrain polyline itself:
    the axle, with a force tilted back (the horizontal axle force of an edge), bridges holes
    shorter than its chord, and rides a heightfield as one patch, not one spring per cell.
 2. Force (``force``), per patch: radial deflection d = radius - (axle - q).n, its rate
-   dd/dt = -(v_axle - v_surface).n, f = max(0, K d + B dd/dt) when d > 0, along n. One patch on
-   one surface is exactly the configured K and B: on a flat, on a bump top, on an edge, on a
-   sampled (heightfield) profile. A contact can only push.
+   dd/dt = -(v_axle - v_surface).n, f = max(0, K d + B tanh(3 d / 3 mm) dd/dt) when d > 0, along
+   n (``controllers.tire.rolling_tire_force``): the damping sets in over the patch's first
+   millimetres, so rolling onto an edge meets no jump of c v n at first touch. One patch on one
+   surface settled deeper than 3 mm is exactly the configured K and B: on a flat, on a bump top,
+   on an edge, on a sampled (heightfield) profile. A contact can only push.
 
 Geometry is refreshed every ``refresh`` seconds (1 ms, at most 5 mm of travel) by the control
 callback; between refreshes each patch is its tangent line at q, which is exact on straight
@@ -30,6 +32,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from mtbmj.controllers.tire import rolling_tire_force
 
 MARGIN_M = 0.010
 REFRESH_S = 1e-3
@@ -112,7 +116,7 @@ class RadialTire:
             if d > deepest:
                 deepest, deepest_rate = d, rate
             if d > 0.0:
-                f = max(0.0, k * d + b * rate)
+                f = max(0.0, rolling_tire_force(k, b, d, rate))
                 if self.rim is not None:
                     f += self.rim.force(d, rate)
                 if f > 0.0:

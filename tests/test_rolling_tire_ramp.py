@@ -1,0 +1,50 @@
+"""The rolling tire meets an edge smoothly (issue 25): its damping sets in with the depth of each
+contact patch, so the force is continuous at first contact. Checked against the closed form of
+the law and on the square edge at 4 m/s, where the Kelvin-Voigt law jumped by 302 N (28 % of the
+peak) in one step; the drop keeps the paper's Kelvin-Voigt law."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import mtbmj
+from mtbmj.controllers.tire import TIRE_DAMPING_DEPTH_M, rolling_tire_force
+from mtbmj.rolling.frontend import run_roll
+
+
+def test_the_law_in_closed_form():
+    k, c = 85e3, 150.0
+    assert rolling_tire_force(k, c, 0.0, 2.0) == 0.0  # no damping at first touch: no jump
+    for d, share in ((0.2e-3, 0.197), (1e-3, 0.762), (3e-3, 0.995)):
+        assert rolling_tire_force(k, c, d, 2.0) == pytest.approx(k * d + share * c * 2.0, rel=2e-3)
+    assert rolling_tire_force(k, c, 7e-3, -1.5) == pytest.approx(k * 7e-3 - c * 1.5 * math.tanh(7.0), rel=1e-12)
+    assert TIRE_DAMPING_DEPTH_M == 3e-3
+
+
+@pytest.mark.parametrize("callback", ["compiled", "python"])
+def test_rolling_onto_a_square_edge_has_no_jump_at_first_contact(callback):
+    pytest.importorskip("numba") if callback == "compiled" else None
+    run = run_roll("square_edge", 4.0, callback=callback)
+    force = run.raw["tire_force_N"]
+    steps = np.abs(np.diff(force))
+    assert steps.max() <= 0.10 * force.max(), (steps.max(), force.max())
+    assert force.max() == pytest.approx(1075.1, abs=5.0)  # the edge's peak is the tire's spring, as before
+
+
+def test_a_settled_tire_on_flat_ground_is_the_configured_spring():
+    """Deeper than the ramp (7 mm under the static load), the law is K d: the static deflection
+    of the rolling tire on flat ground is the front's load over K, along the head-angle geometry
+    the static sag already checks (tests/test_rolling.py)."""
+    run = run_roll("flat", 3.0, duration=0.5)
+    s = run.summary
+    assert s["static_tire_mm"] > 1e3 * TIRE_DAMPING_DEPTH_M  # deeper than the ramp: full damping
+    assert np.ptp(run.raw["tire_mm"][-1000:]) < 1e-6  # and it stays settled
+
+
+def test_the_drop_keeps_the_papers_tire_law():
+    from mtbmj.controllers.tire import KelvinVoigt
+
+    setup = mtbmj.compose.setup(mtbmj.load_config("S12"))
+    assert all(isinstance(setup.tire.values(p), KelvinVoigt) for p in (0, 1))
