@@ -42,6 +42,7 @@ import numpy as np
 
 from mtbmj.controllers import compiled as _c
 from mtbmj.controllers.stops import STIFFENING_M, contact_force as _stops_contact_force
+from mtbmj.controllers.drive import Drive, drive_force as _drive_force
 from mtbmj.controllers.tire import rolling_tire_force as _rolling_tire_force
 from mtbmj.controllers.compiled import FALLBACK_MESSAGE, UnsupportedLaw, flatten, mjdata_layout, unavailable_reason
 
@@ -60,8 +61,9 @@ INT_WIDTH = 32
 # float row of a slot: parameters, state, then MAX_PATCHES x (qx, qz, nx, nz, sx, sz)
 (F_X0, F_Z0, F_L, F_COS, F_SIN, F_RADIUS, F_RATE, F_DAMPING, F_MARGIN, F_SPEED, F_XREF0, F_REFRESH, F_DRUM_R,
  F_OMEGA, F_PATCH_TIME, F_NEXT_REFRESH, F_LAST_X, F_REFRESH_DISTANCE, F_PIECE, F_DAMPER_SCALE,
- F_RIM_D, F_RIM_K, F_RIM_C, F_RIM_P0) = range(24)  # the rim: max deflection, rate (0: no rim), damping
-F_PATCHES = 24  # (F_RIM_P0 = 23 is the last parameter)
+ F_RIM_D, F_RIM_K, F_RIM_C, F_RIM_P0,  # the rim: max deflection, rate (0: no rim), damping
+ F_DRIVE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE) = range(29)  # controllers.drive
+F_PATCHES = 29  # (F_DRIVE_BRAKE = 28 is the last parameter)
 FLOAT_WIDTH = F_PATCHES + 6 * MAX_PATCHES
 
 _INTS = np.zeros((SLOTS, INT_WIDTH), dtype=np.int64)
@@ -118,6 +120,7 @@ if _numba is not None:
     _jit = dict(cache=CACHE, error_model="numpy", nogil=True)
     contact_force = _numba.njit(inline="always", **_jit)(_stops_contact_force)  # the one stop/rim law
     tire_force = _numba.njit(inline="always", **_jit)(_rolling_tire_force)  # the one rolling tire law
+    drive_force = _numba.njit(inline="always", **_jit)(_drive_force)  # the rider's drive (controllers.drive)
 
     @_numba.njit(**_jit)
     def _clip01(value):
@@ -407,8 +410,17 @@ if _numba is not None:
         ctrl[I[R_A_PROBE]] = deepest
         ctrl[I[R_A_TX]] = fx
         ctrl[I[R_A_TZ]] = fz
-        ctrl[I[R_A_DP]] = F[F_XREF0] + F[F_SPEED] * t
-        ctrl[I[R_A_DV]] = F[F_SPEED]
+        if F[F_DRIVE] == 0.0:  # controllers.drive: the ideal servo on x0 + v t
+            ctrl[I[R_A_DP]] = F[F_XREF0] + F[F_SPEED] * t
+            ctrl[I[R_A_DV]] = F[F_SPEED]
+        else:  # the rider (1) or coasting (2): position term 0, velocity term the drive's force
+            xq = qpos[I[R_XQ]]
+            vxq = qvel[I[R_XV]]
+            fd = 0.0
+            if F[F_DRIVE] == 1.0:
+                fd = drive_force(F[F_SPEED], vxq, F[F_DRIVE_KV], F[F_DRIVE_PUSH], F[F_DRIVE_POWER], F[F_DRIVE_BRAKE])
+            ctrl[I[R_A_DP]] = xq
+            ctrl[I[R_A_DV]] = vxq + fd / F[F_DRIVE_KV]
 
     COMPILE_SECONDS = time.perf_counter() - _compile_start
 
@@ -486,13 +498,13 @@ class CompiledRollCallback(ctypes._CFuncPtr):
     _argtypes_ = (ctypes.c_void_p, ctypes.c_void_p)
     _restype_ = None
 
-    def __new__(cls, front, fork_law, tire, speed, x_ref0, refresh=None):
+    def __new__(cls, front, fork_law, tire, speed, x_ref0, refresh=None, drive=None):
         reason = unavailable_reason()
         if reason is not None:
             raise RuntimeError(reason)
         return super().__new__(cls, _dispatcher(front.model).address)
 
-    def __init__(self, front, fork_law, tire, speed, x_ref0, refresh=None):
+    def __init__(self, front, fork_law, tire, speed, x_ref0, refresh=None, drive=None):
         from mtbmj.rolling import terrain as terrain_mod
         from mtbmj.rolling import tire as tire_model
 
@@ -551,6 +563,11 @@ class CompiledRollCallback(ctypes._CFuncPtr):
             floats[[F_RIM_D, F_RIM_K, F_RIM_C, F_RIM_P0]] = [tire.rim.max_deflection, tire.rim.rate, tire.rim.damping,
                                                             STIFFENING_M]
         floats[F_SPEED], floats[F_XREF0] = float(speed), float(x_ref0)
+        self.drive = drive if drive is not None else Drive("servo")
+        floats[[F_DRIVE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE]] = [
+            float(self.drive.code), self.drive.kv, self.drive.push, self.drive.power, self.drive.brake]
+        if self.drive.mode != "servo" and not self.drive.kv > 0.0:
+            raise UnsupportedRolling("a rider or coasting drive needs the velocity actuator's gain")
         floats[F_REFRESH] = float(tire_model.REFRESH_S if refresh is None else refresh)
         floats[F_REFRESH_DISTANCE], floats[F_PIECE] = tire_model.REFRESH_DISTANCE_M, tire_model.PIECE_M
         if drum:

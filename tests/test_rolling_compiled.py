@@ -134,7 +134,7 @@ def test_static_deflection_on_the_compiled_path(monkeypatch):
 
 
 def test_default_path_is_compiled_and_settable_fields_reach_the_slot():
-    p = R.prepare("washboard", 5.0)
+    p = R.prepare("washboard", 5.0, drive="servo")
     cb = p.callback
     assert isinstance(cb, CR.CompiledRollCallback) and cb.active
     assert cb.refreshes == 1 and cb.calls == 1 and len(cb.patches) == 1  # mj_forward at t = 0
@@ -148,6 +148,19 @@ def test_default_path_is_compiled_and_settable_fields_reach_the_slot():
     assert cb.refreshes == 2 and len(cb.patches) == 1
     cb.damper_scale = 0.5
     assert cb.damper_scale == 0.5
+
+
+def test_the_rider_drive_writes_its_force_through_the_servo_actuators():
+    """The rider's drive reaches MuJoCo through the servo's two actuators: the position one's
+    reference is the chassis' own x (force 0), the velocity one's v + F / kv (force F)."""
+    p = R.prepare("washboard", 5.0)
+    cb, model, data = p.callback, p.front.model, p.data
+    assert cb.drive.mode == "rider"
+    data.qvel[cb.xv] = 4.9  # 0.1 m/s slow: the rider pushes kv x 0.1, within the limits
+    cb(model, data)
+    assert data.ctrl[cb.a_dp] == data.qpos[cb.xq]
+    force = (data.ctrl[cb.a_dv] - data.qvel[cb.xv]) * cb.drive.kv
+    assert force == pytest.approx(min(cb.drive.kv * 0.1, cb.drive.power / 4.9), rel=1e-9)
     cb.damper_scale = None
     assert cb.damper_scale is None
 

@@ -26,7 +26,7 @@ def test_the_law_in_closed_form():
 @pytest.mark.parametrize("callback", ["compiled", "python"])
 def test_rolling_onto_a_square_edge_has_no_jump_at_first_contact(callback):
     pytest.importorskip("numba") if callback == "compiled" else None
-    run = run_roll("square_edge", 4.0, callback=callback)
+    run = run_roll("square_edge", 4.0, callback=callback, drive="servo")  # held at 4 m/s, as the issue measured
     force = run.raw["tire_force_N"]
     steps = np.abs(np.diff(force))
     assert steps.max() <= 0.10 * force.max(), (steps.max(), force.max())

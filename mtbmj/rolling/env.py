@@ -158,7 +158,8 @@ def load(scenario="washboard", speed_m_per_s: float = 5.0, config="S12",
     """A ready environment: terrain spec, speed, configuration, head angle, episode length (s)."""
     p = rolling.prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides)
     physics = dm_mujoco.Physics.from_model(dm_mujoco.wrapper.MjModel(p.front.model))
-    # The callback must see the Physics' own model and data (from_model may copy the model).
+    # The callback must see the Physics' own model and data (from_model may copy the model). It
+    # drives with the ideal servo (RollCallback's default): the task is a rig held at speed.
     cb = rolling.RollCallback(p.front, p.setup.fork, p.tire, p.chassis_speed, p.callback.x_ref0, p.callback.refresh)
     cb._model = physics.model.ptr
     cb._address = physics.model.ptr._address

@@ -33,6 +33,7 @@ from mujoco import rollout
 
 from mtbmj import mjcf
 from mtbmj.controllers import installed
+from mtbmj.controllers.drive import MODES as DRIVE_MODES, Drive
 from mtbmj import compose, output
 from mtbmj.drop import measure
 from mtbmj.readout.endtravel import end_of_travel
@@ -185,8 +186,9 @@ class RollCallback:
     semi-active command of ``mtbmj.rolling.env``."""
 
     def __init__(self, front: FrontEnd, fork_law, tire: RadialTire, speed: float, x_ref0: float,
-                 refresh: float = REFRESH_S):
+                 refresh: float = REFRESH_S, drive: Drive | None = None):
         m = front.model
+        self.drive = drive if drive is not None else Drive("servo")
         self._model = m
         self._address = m._address
         self.front = front
@@ -261,8 +263,13 @@ class RollCallback:
         ctrl[self.a_probe] = deflection
         ctrl[self.a_tx] = fx
         ctrl[self.a_tz] = fz
-        ctrl[self.a_dp] = self.x_ref0 + self.speed * t
-        ctrl[self.a_dv] = self.speed
+        if self.drive.mode == "servo":  # the ideal PD servo on x0 + v t (its actuators' own forces)
+            ctrl[self.a_dp] = self.x_ref0 + self.speed * t
+            ctrl[self.a_dv] = self.speed
+        else:  # the rider's (or no) force, through the same actuators: position term 0, velocity term F
+            x, vx = qpos[self.xq], qvel[self.xv]
+            ctrl[self.a_dp] = x
+            ctrl[self.a_dv] = vx + self.drive.force(self.speed, vx) / self.drive.kv
 
 
 def static_sag(setup: compose.Setup, head_angle: float) -> tuple[float, float]:
@@ -300,8 +307,13 @@ class Prepared:
 
 
 def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG,
-            overrides: Mapping | None = None, fork_law=None, settled: bool = True, callback: str = "auto") -> Prepared:
+            overrides: Mapping | None = None, fork_law=None, settled: bool = True, callback: str = "auto",
+            drive: str | Drive = "rider") -> Prepared:
     """Everything a rolling run needs, with the data at t = 0 (at rest on the start, at speed).
+
+    ``drive``: ``"rider"`` (a speed controller within a rider's force, power and braking limits),
+    ``"servo"`` (the ideal servo on x0 + v t), ``"coast"``, or a ``controllers.drive.Drive`` with
+    other limits (see ``controllers/drive.py``); a drum rig always holds its axle with the servo.
 
     ``callback``: ``"auto"`` (the compiled callback of ``controllers.compiled_rolling`` when numba
     is available, else ``RollCallback`` with a warning), ``"compiled"`` or ``"python"``."""
@@ -335,33 +347,43 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
     if front.drum_dof is not None:
         data.qvel[front.drum_dof] = -float(speed_m_per_s) / ter.radius
     refresh = min(REFRESH_S, REFRESH_DISTANCE_M / max(float(speed_m_per_s), 1e-9))
-    cb = _make_callback(callback, front, fork_law or setup.fork, tire, chassis_speed, qx, refresh)
+    kv = float(model.actuator_gainprm[model.actuator("drive_velocity").id, 0])
+    if isinstance(drive, str):
+        if drive not in DRIVE_MODES:
+            raise ConfigError(f"drive: {drive!r} is not one of {', '.join(DRIVE_MODES)}")
+        drive = Drive(drive)
+    drive = Drive("servo", kv) if drum else Drive(drive.mode, kv, drive.push, drive.power, drive.brake)
+    for name in ("push", "power", "brake"):
+        value = getattr(drive, name)
+        if not (math.isfinite(value) and value >= 0.0):
+            raise ConfigError(f"drive {name}: must be a finite number >= 0, got {value}")
+    cb = _make_callback(callback, front, fork_law or setup.fork, tire, chassis_speed, qx, refresh, drive)
     cb.bind(data)
     with installed(cb):
         mujoco.mj_forward(model, data)
     return Prepared(setup, ter, front, tire, cb, data, float(speed_m_per_s), chassis_speed)
 
 
-def _make_callback(kind: str, front, law, tire, speed, x_ref0, refresh):
+def _make_callback(kind: str, front, law, tire, speed, x_ref0, refresh, drive=None):
     if kind == "python":
-        return RollCallback(front, law, tire, speed, x_ref0, refresh)
+        return RollCallback(front, law, tire, speed, x_ref0, refresh, drive)
     from mtbmj.controllers import compiled_rolling  # numba is imported on the first compiled run only
 
     if kind == "compiled":
-        return compiled_rolling.CompiledRollCallback(front, law, tire, speed, x_ref0, refresh)
+        return compiled_rolling.CompiledRollCallback(front, law, tire, speed, x_ref0, refresh, drive)
     # "auto": the compiled callback when possible, else this one with a warning (once per reason:
     # numba missing, layout not verifiable, a law/tire/terrain with no compiled form)
     reason = compiled_rolling.unavailable_reason()
     if reason is None:
         try:
-            return compiled_rolling.CompiledRollCallback(front, law, tire, speed, x_ref0, refresh)
+            return compiled_rolling.CompiledRollCallback(front, law, tire, speed, x_ref0, refresh, drive)
         except (compiled_rolling.UnsupportedLaw, compiled_rolling.UnsupportedRolling) as error:  # noqa: E501
             compiled_rolling.warn_once(f"{error}: using the Python rolling callback")
         except RuntimeError as error:  # the mjData layout check failed
             compiled_rolling.warn_once(str(error))
     else:
         compiled_rolling.warn_once(reason)
-    return RollCallback(front, law, tire, speed, x_ref0, refresh)
+    return RollCallback(front, law, tire, speed, x_ref0, refresh, drive)
 
 
 def callback_kind(callback) -> str:
@@ -371,7 +393,7 @@ def callback_kind(callback) -> str:
 
 def _python_twin(cb) -> RollCallback:
     """A fresh Python ``RollCallback`` with the settings of ``cb`` (for a rerun on the Python path)."""
-    twin = RollCallback(cb.front, cb.law, cb.tire, cb.speed, cb.x_ref0, cb.refresh)
+    twin = RollCallback(cb.front, cb.law, cb.tire, cb.speed, cb.x_ref0, cb.refresh, cb.drive)
     twin.damper_scale = cb.damper_scale
     return twin
 
@@ -500,6 +522,35 @@ def _with_clearance(p: Prepared, deflection: np.ndarray, cx: np.ndarray, cz: np.
     return out
 
 
+def _drive_line(d: dict) -> str:
+    """"; drive rider: 0.55-3.03 m/s, 309 J put in, at its limit 0.60 s" (the servo: its peak push)."""
+    text = (f"; drive {d['mode']}: {d['min_speed_m_per_s']:.2f}-{d['max_speed_m_per_s']:.2f} m/s, "
+            f"{d['work_J']:.0f} J put in")
+    if d["mode"] == "servo":
+        return text + f", pushing up to {d['max_push_N']:.0f} N"
+    if d["mode"] == "rider" and d["limit_bound_s"] > 0.0:
+        return text + f", at its limit {d['limit_bound_s']:.2f} s"
+    return text
+
+
+def _drive_summary(p: Prepared, raw: dict) -> dict:
+    """What the drive did: its mode and limits, the speed it kept (set, lowest, highest), the work
+    it put in (J, the integral of force x speed) and its peak forces, and the time its limit bound."""
+    drive = p.callback.drive
+    force, speed = raw["drive_force_N"], raw["speed_m_per_s"]
+    dt = p.setup.timestep
+    out = {"mode": drive.mode, "set_speed_m_per_s": p.speed,
+           "min_speed_m_per_s": float(speed.min()), "max_speed_m_per_s": float(speed.max()),
+           "work_J": float(np.sum(force * speed) * dt),
+           "max_push_N": float(max(0.0, force.max())), "max_brake_N": float(max(0.0, -force.min())) + 0.0}
+    if drive.mode == "rider":
+        push = np.minimum(drive.push, np.where(speed > 0.0, drive.power / np.maximum(speed, 1e-12), np.inf))
+        bound = (force >= push * (1.0 - 1e-9)) | (force <= -drive.brake * (1.0 - 1e-9))
+        out.update(push_limit_N=drive.push, power_limit_W=drive.power, brake_limit_N=drive.brake,
+                   limit_bound_s=float(np.sum(bound) * dt))
+    return out
+
+
 def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
     travel_mm = p.setup.travel * 1e3
     fork = raw["fork_mm"]
@@ -522,6 +573,7 @@ def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
         "max_axle_force_z_N": float(raw["axle_force_z_N"].max()),
         "max_fork_velocity_mm_per_s": float(raw["fork_velocity_mm_per_s"].max()),
         "min_fork_velocity_mm_per_s": float(raw["fork_velocity_mm_per_s"].min()),
+        "drive": _drive_summary(p, raw),
     }
     try:
         from mtbmj.ride import metrics as ride_metrics
@@ -575,7 +627,7 @@ class RollResult(RunOutput):
         return (f"roll {self.scenario} at {s['speed_m_per_s']:g} m/s ({self.name}, head angle {s['head_angle_deg']:g} "
                 f"deg): fork peak {s['max_fork_mm']:.1f} mm ({s['travel_used_percent']:.0f} % of travel), tire peak "
                 f"{s['max_tire_mm']:.1f} mm, axle force peak {s['max_axle_force_z_N']:.0f} N up / "
-                f"{max(0.0, -s['min_axle_force_x_N']):.0f} N back{line(s)}")
+                f"{max(0.0, -s['min_axle_force_x_N']):.0f} N back{line(s)}{_drive_line(s['drive'])}")
 
     def quicklook(self):
         """The quick-look figure (``mtbmj.readout.quicklook``): terrain, fork, tire (its clearance in the
@@ -607,13 +659,14 @@ class RollResult(RunOutput):
 def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
              head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG, duration: float | None = None,
              overrides: Mapping | None = None, progress: Callable[[float], None] | None = None,
-             callback: str = "auto") -> RollResult:
+             callback: str = "auto", drive: str | Drive = "rider") -> RollResult:
     """Roll the front end over ``scenario`` (a terrain spec, CSV path or ``Terrain``) at
     ``speed_m_per_s`` with the fork and tire of ``config``; ``duration`` defaults to the time to
     cross the feature and settle (the drum: its revolutions). ``callback``: ``"auto"`` (compiled
-    when numba is available), ``"compiled"`` or ``"python"`` (the specification; same results)."""
+    when numba is available), ``"compiled"`` or ``"python"`` (the specification; same results);
+    ``drive``: see ``prepare`` (default ``"rider"``: within a rider's force, power and braking)."""
     _check_inputs(speed_m_per_s, head_angle_deg, duration)
-    p = prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, callback=callback)
+    p = prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, callback=callback, drive=drive)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.setup.timestep, p.setup.sample_rate)
     start = time.perf_counter()
@@ -631,11 +684,11 @@ def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
 
 def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12",
                     head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG, duration: float | None = None,
-                    overrides: Mapping | None = None, fps: float = 60.0):
+                    overrides: Mapping | None = None, fps: float = 60.0, drive: str | Drive = "rider"):
     """(model, times, qpos) of a rolling run sampled at ``fps`` for rendering; the model has the
-    terrain as a visual heightfield (group 1) or the drum with its cleat."""
+    terrain as a visual heightfield (group 1) or the drum with its cleat. ``drive`` as ``prepare``."""
     _check_inputs(speed_m_per_s, head_angle_deg, duration)
-    p = prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides)
+    p = prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, drive=drive)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.setup.timestep, p.setup.sample_rate)
     states, _ = simulate(p, duration)

@@ -208,6 +208,7 @@ def roll_trajectory(run_dir: Path, fps: float = 30.0, duration: float | None = N
     kwargs = {"config": str(run_dir / "config.toml"), "duration": end, "fps": fps}
     if head is not None:
         kwargs["head_angle_deg"] = float(head)
+    kwargs["drive"] = _drive(summary.get("drive"))
     try:
         model, t, q = source(scenario, speed, **kwargs)
     except MtbmjError:
@@ -384,3 +385,16 @@ def render(source: "str | Path | Trajectory", out: str | Path, fps: float = 30.0
         Path(tmp).unlink(missing_ok=True)
     return {"path": str(out), "frames": count, "fps": fps, "width": width, "height": height,
             "duration_s": count / fps, "backend": gl_backend(), "label": traj.label}
+
+
+def _drive(summary_drive):
+    """The drive a rolling run was made with, from its summary: a run from before the drive was
+    recorded was driven by the ideal servo."""
+    from mtbmj.controllers.drive import Drive
+
+    if not isinstance(summary_drive, dict) or "mode" not in summary_drive:
+        return "servo"
+    if summary_drive["mode"] != "rider":
+        return summary_drive["mode"]
+    return Drive("rider", push=float(summary_drive["push_limit_N"]), power=float(summary_drive["power_limit_W"]),
+                 brake=float(summary_drive["brake_limit_N"]))

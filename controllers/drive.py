@@ -1,0 +1,74 @@
+"""The rolling front end's drive: how it is kept moving along the terrain.
+
+Three modes (``mtbmj roll --drive``):
+
+* ``rider`` (the default): a speed controller whose force is what a rider and the rest of the
+  bike can put through the frame onto the front end, F = clip(kv (v_ref - v), -brake, push(v)),
+  push(v) = min(force, power / v). It pushes at most ``force`` (N), or ``power`` (W) at speed v,
+  and holds back at most ``brake`` (N). When a rock stops the wheel, the limit binds: the front
+  end loses speed, and afterwards comes back to the set speed no faster than the limits allow; it
+  never catches up the distance it lost (no position term), so it is never launched.
+* ``servo``: the ideal position servo of earlier versions, a PD on x tracking x0 + v t with
+  whatever force that takes (the scene's ``drive_position`` and ``drive_velocity`` actuators, 10 Hz
+  critically damped). Kept for comparisons with a model driven at an exact speed.
+* ``coast``: no drive force at all.
+
+The rider limits are the front end's share of a whole bike's (the front end carries 55.5 kg of
+an 85 kg rider and an 11 kg bike, 58 %): ``RIDER_PUSH_N`` = 0.58 x 720 N, a 170 N m peak crank
+torque through a 32 x 50 low gear onto a 0.37 m wheel radius; ``RIDER_POWER_W`` = 0.58 x 1000 W, a
+trained rider's peak power over a few seconds; ``RIDER_BRAKE_N`` = 0.58 x 565 N, a 0.6 g stop of
+the 96 kg. All assumed (round values of the ranges riding and cycling texts give), not measured on
+this bike. The force enters MuJoCo through the same two actuators as the servo: the callback sets
+the velocity actuator's reference so that its force is F and the position actuator's so that its
+force is 0. ``drive_force`` is written once: the Python callback calls it and the compiled
+rolling callback compiles its source.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+MODES = ("rider", "servo", "coast")
+SERVO, RIDER, COAST = 0, 1, 2  # codes the compiled callback reads
+FRONT_SHARE = 0.58
+RIDER_PUSH_N = round(FRONT_SHARE * 720.0)  # 418 N
+RIDER_POWER_W = round(FRONT_SHARE * 1000.0)  # 580 W
+RIDER_BRAKE_N = round(FRONT_SHARE * 565.0)  # 328 N
+
+
+def drive_force(v_ref: float, v: float, kv: float, push: float, power: float, brake: float) -> float:
+    """The rider's drive force (N, forward positive) at speed v (m/s) for the set speed v_ref:
+    kv (v_ref - v), at most ``push`` and ``power`` / v forward, at most ``brake`` back."""
+    f = kv * (v_ref - v)
+    limit = push
+    if v > 0.0 and power < limit * v:
+        limit = power / v
+    if f > limit:
+        f = limit
+    if f < -brake:
+        f = -brake
+    return f
+
+
+@dataclass(frozen=True)
+class Drive:
+    """A drive mode and its limits (see the module doc); ``kv`` (N s/m) is the velocity
+    actuator's gain, the rider's speed loop through it."""
+
+    mode: str = "rider"
+    kv: float = 0.0
+    push: float = RIDER_PUSH_N
+    power: float = RIDER_POWER_W
+    brake: float = RIDER_BRAKE_N
+
+    @property
+    def code(self) -> int:
+        return {"servo": SERVO, "rider": RIDER, "coast": COAST}[self.mode]
+
+    def force(self, v_ref: float, v: float) -> float:
+        """The force of the rider or coasting modes (the servo's comes from its actuators)."""
+        if self.mode == "coast":
+            return 0.0
+        return drive_force(v_ref, v, self.kv, self.push, self.power, self.brake)
+
+
+__all__ = ["Drive", "drive_force", "MODES", "RIDER_PUSH_N", "RIDER_POWER_W", "RIDER_BRAKE_N"]
