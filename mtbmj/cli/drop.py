@@ -58,13 +58,35 @@ def _engines(text: str) -> list[str]:
 
 
 def cmd_crosscheck(args) -> int:
+    if args.roll is not None:
+        return _crosscheck_roll(args)
+    from mtbmj.errors import MtbmjError
     from mtbmj.validation import crosscheck_all
+
+    if args.speed is not None or args.drive is not None or args.head_angle is not None:
+        raise MtbmjError("--speed, --drive and --head-angle: apply to a rolling cross-check (--roll SCENARIO)")
 
     engines = [e for e in _engines(args.engines) if e != "ode"] or ["mujoco"]
     checks = crosscheck_all(args.config, engines, args.tolerance_mm, overrides(args.set), args.duration)
     for check in checks:
         print(check.line())
     return 0 if all(c.passed for c in checks) else 1
+
+
+def _crosscheck_roll(args) -> int:
+    """``crosscheck CONFIG --roll SCENARIO --speed V``: one line, exit 1 when not within the tolerances."""
+    from mtbmj.errors import MtbmjError
+    from mtbmj.rolling.reference import crosscheck
+
+    if args.speed is None:
+        raise MtbmjError("--roll: give the speed with --speed M_PER_S")
+    if args.engines != "mujoco" or args.tolerance_mm != 0.1:
+        raise MtbmjError("--engines and --tolerance-mm: apply to a drop cross-check; a rolling one compares MuJoCo "
+                         "with the rolling reference at 0.02 mm and 1 %")
+    check = crosscheck(args.roll, args.speed, args.config, args.head_angle, args.duration, overrides(args.set),
+                       args.drive or "rider")
+    print(check.line())
+    return 0 if check.passed else 1
 
 
 def add_parser(sub) -> None:
@@ -95,5 +117,11 @@ def add_parser(sub) -> None:
     p.add_argument("--tolerance-mm", type=float, default=0.1, help="largest allowed difference in mm (default 0.1)")
     p.add_argument("--engines", default="mujoco",
                    help="comma-separated engines to compare with the ODE reference (default mujoco; e.g. mujoco,fast)")
+    p.add_argument("--roll", metavar="SCENARIO",
+                   help="cross-check a rolling run instead (mtbmj roll SCENARIO) against the rolling ODE reference: "
+                        "fork, body and axle within 0.02 mm, axle force peaks within 1 %%; needs --speed")
+    p.add_argument("--speed", type=float, help="--roll: speed in m/s")
+    p.add_argument("--head-angle", type=float, help="--roll: head angle in degrees (default as mtbmj roll)")
+    p.add_argument("--drive", choices=("rider", "servo", "coast"), help="--roll: the drive (default rider)")
     add_run_options(p)
     p.set_defaults(func=cmd_crosscheck)
