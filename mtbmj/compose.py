@@ -788,6 +788,9 @@ def choose_timestep(s: Setup) -> Setup:
                 f"{_fraction_within(interval, s.timestep):.10g} s or another whole fraction of it")
         step = s.timestep
     else:
+        if not limit >= STEP_LADDER[-1]:  # also a limit of 0 (a mass of 5e-324 kg) or NaN: no step would do
+            raise ConfigError(f"solver.timestep_s: this configuration needs a step below "
+                              f"{_round_down(limit) if limit > 0.0 else '0'} s ({what}); check its rates and masses")
         step = next((h for h in STEP_LADDER if h <= limit and _whole_fraction(interval, h)), None)
         if step is None:
             step = _fraction_within(interval, limit)
