@@ -1,0 +1,45 @@
+"""The rolling cross-check over the terrain library (issue 25): every fixed terrain of
+``mtbmj.rolling.terrain`` at 2 and 5 m/s, MuJoCo (``mtbmj roll``, default settings: the rider's
+drive, compiled callback) against the rolling ODE reference (``mtbmj.rolling.reference``). Reported
+per run: the largest differences of fork travel, body and axle height and tire deflection (mm) and
+of the axle force peaks (relative), whether the fork is within 0.02 mm and the peaks within 1 %, and
+both wall times. The drum (a moving surface) has no reference.
+
+    python benchmarks/rolling_crosscheck.py [--duration 1.0] [--speeds 2,5]
+
+Writes benchmarks/results/rolling_crosscheck.json. Not a test: nothing is asserted (the test suite
+checks three of these runs, tests/test_rolling_reference.py).
+"""
+from __future__ import annotations
+
+import argparse
+
+from _bench import write_json
+
+from mtbmj.rolling.reference import crosscheck
+
+TERRAINS = ("flat", "step_up", "step_down", "square_edge", "root", "rock", "drop", "washboard", "iso8608")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--duration", type=float, default=1.0, help="simulated seconds per run (the feature comes at 0.5 m)")
+    ap.add_argument("--speeds", default="2,5")
+    args = ap.parse_args()
+    rows = []
+    for speed in (float(s) for s in args.speeds.split(",")):
+        for terrain in TERRAINS:
+            check = crosscheck(terrain, speed, duration=args.duration)
+            rows.append(check.to_dict() | {"engine_wall_s": check.engine_wall_s,
+                                           "reference_wall_s": check.reference_wall_s})
+            print(check.line(), flush=True)
+    worst_fork = max(r["differences"]["fork_mm"]["max_abs_mm"] for r in rows)
+    worst_peak = max(p["relative"] for r in rows for p in r["force_peaks"].values())
+    summary = {"runs": len(rows), "passed": sum(r["passed"] for r in rows), "worst_fork_mm": worst_fork,
+               "worst_force_peak_relative": worst_peak, "duration_s": args.duration}
+    print(summary)
+    print(f"wrote {write_json(__file__, {'summary': summary, 'rows': rows})}")
+
+
+if __name__ == "__main__":
+    main()
