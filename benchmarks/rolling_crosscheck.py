@@ -23,13 +23,14 @@ TERRAINS = ("flat", "step_up", "step_down", "square_edge", "root", "rock", "drop
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--duration", type=float, default=1.0, help="simulated seconds per run (the feature comes at 0.5 m)")
+    ap.add_argument("--duration", type=float, default=1.0, help="simulated seconds per run (the feature comes at 0.4 m)")
     ap.add_argument("--speeds", default="2,5")
     args = ap.parse_args()
     rows = []
     for speed in (float(s) for s in args.speeds.split(",")):
         for terrain in TERRAINS:
-            check = crosscheck(terrain, speed, duration=args.duration)
+            spec = terrain if terrain == "flat" else f"{terrain}:at_m=0.4"  # the feature 0.4 m ahead
+            check = crosscheck(spec, speed, duration=args.duration)
             rows.append(check.to_dict() | {"engine_wall_s": check.engine_wall_s,
                                            "reference_wall_s": check.reference_wall_s})
             print(check.line(), flush=True)
