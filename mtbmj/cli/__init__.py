@@ -5,14 +5,19 @@ from __future__ import annotations
 import sys
 
 from mtbmj._package import __version__
-from mtbmj.cli.common import EXIT_BAD_INPUT, Parser, run  # noqa: F401  (the exit status, for callers)
+
+# Nothing heavy at import: ``python -m mtbmj.cli`` and the ``mtbmj`` script import this package
+# before their entry (``_entry``) installs its Ctrl-C handler, so the shared parts load after it.
 
 COMMANDS = ("drop", "airstudy", "sag", "curve", "compare", "fit", "synth", "validate", "sweep", "sensitivity", "roll", "telemetry", "render", "presets")
 
 
-def build_parser() -> Parser:
-    """The whole command line; each command module adds its sub-command(s) with ``add_parser``."""
+def build_parser():
+    """The whole command line (a ``common.Parser``); each command module adds its sub-command(s)
+    with ``add_parser``."""
     import importlib
+
+    from mtbmj.cli.common import Parser
 
     parser = Parser(prog="mtbmj", description="Mountain-bike fork + tire drop-sled study on MuJoCo with an ODE reference.")
     parser.add_argument("--version", action="version", version=f"mtbmj {__version__}")
@@ -23,7 +28,17 @@ def build_parser() -> Parser:
 
 
 def main(argv=None) -> int:
+    from mtbmj.cli.common import run
+
     return run(build_parser(), argv)
+
+
+def __getattr__(name):  # the shared names callers read from here: EXIT_BAD_INPUT, Parser, run
+    if name in ("EXIT_BAD_INPUT", "Parser", "run"):
+        from mtbmj.cli import common
+
+        return getattr(common, name)
+    raise AttributeError(f"module 'mtbmj.cli' has no attribute {name!r}")
 
 
 if __name__ == "__main__":
