@@ -46,7 +46,7 @@ def test_the_reference_converges_with_its_step():
 # in turn (benchmarks/rolling_crosscheck.py runs each at both speeds)
 LIBRARY = [("step_up:at_m=0.4", 2.0, None), ("step_down:at_m=0.4", 5.0, None), ("square_edge:at_m=0.4", 2.0, None),
            ("root:at_m=0.4", 5.0, None), ("rock:at_m=0.4", 2.0, None), ("drop:at_m=0.4", 5.0, None),
-           ("washboard:at_m=0.4", 2.0, 90.0), ("iso8608:at_m=0.4", 5.0, None)]
+           ("washboard:at_m=0.4", 2.0, 90.0), ("iso8608:at_m=0.4,length_m=1", 5.0, None)]
 
 
 @pytest.mark.parametrize("scenario, speed, head_angle", LIBRARY)
@@ -67,7 +67,7 @@ def test_the_old_geometry_refresh_fails_the_crosscheck(monkeypatch):
     for module in (frontend, tire):  # the Python callback reads the one, the compiled callback the other
         monkeypatch.setattr(module, "REFRESH_S", 1e-3)
         monkeypatch.setattr(module, "REFRESH_DISTANCE_M", 5e-3)
-    check = crosscheck("root", 4.0, duration=0.5, drive="servo")
+    check = crosscheck("root:at_m=0.4", 4.0, duration=0.3, drive="servo")
     assert not check.passed and check.differences["fork_mm"]["max_abs_mm"] > 0.05
 
 
