@@ -13,7 +13,7 @@ pytestmark = pytest.mark.rl
 pytest.importorskip("dm_control", reason="dm_control is the [rl] extra")
 
 REPO = Path(__file__).resolve().parents[1]
-README = (REPO / "README.md").read_text()
+README = (REPO / "docs" / "rolling.md").read_text()  # the page that shows the dm_control example
 
 
 def _headless_env(**extra):
