@@ -28,14 +28,15 @@ WAIT_FROM_CALL = 3  # from this drop on, a drop waits for a load under way inste
 
 _lock = threading.Lock()
 _state = {"calls": 0, "one_shot": False, "thread": None}
-_ready = threading.Event()  # the background load has finished and the compiled laws answer
 
 
 def loaded() -> bool:
-    """Whether the compiled laws can be taken now without waiting: numba is in the process and,
-    when this module's background thread is loading it, that load has finished."""
-    if _state["thread"] is not None:
-        return _ready.is_set()
+    """Whether the compiled laws can be taken now without waiting: numba is in the process and no
+    background load of it is under way (a process forked from one with a load under way, a pool's
+    worker, finds the thread stopped and numba as the fork left it)."""
+    thread = _state["thread"]
+    if thread is not None and thread.is_alive():
+        return False
     return sys.modules.get("numba") is not None
 
 
@@ -92,7 +93,6 @@ def _load() -> None:
             w = np.zeros((1, 4), complex)
             compiled.modal_filter(np.ones(4, complex), np.zeros(4, complex), np.zeros(4, complex),
                                   np.zeros(4, complex), w, np.zeros((1, 2)), np.empty((1, 2)))
-            _ready.set()
     except Exception:  # noqa: BLE001 - the Python laws stay; the drop path reports numba's absence itself
         pass
 
