@@ -1,0 +1,169 @@
+"""The planar bike in MuJoCo: ``mjcf/bike_scene.xml`` rewritten for a bike description.
+
+``build_bike(spec, tire_radius, terrain, setup)`` loads the scene with ``mujoco.MjSpec`` (as the
+rolling front end does), sets every position, mass, inertia, axis and the rider's springs from the
+``BikeSpec``, adds the terrain as a visual heightfield and compiles. The bike is placed with its
+front axle over ``start_x`` and its front tire just touching the ground at qpos = 0 (both ends at
+full extension, frame level); ``mtbmj.bike.run`` then settles it to its static equilibrium.
+
+Mass bookkeeping (``frame_body``): the frame body carries the frame and the rider's segments that
+move with the bike (feet and shanks at the pedals, hands and forearms at the bars, in de Leva's
+proportions 5.70 : 2.23); the fork lower carries the fork's unsprung mass at the front axle; each
+wheel its own mass at its axle (its spin joint is free, so its spin inertia does not enter the
+planar motion); the swingarm its mass midway between the main pivot and the rear axle.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from mtbmj import mjcf
+
+SCENE = "bike_scene.xml"
+LOWER_INERTIA = 0.02  # kg m^2, the fork lower's pitch inertia about the axle (assumed)
+PEDAL_SHARE = 5.70 / (5.70 + 2.23)  # de Leva 1996, male: (foot + shank) / (foot + shank + hand + forearm)
+JOINTS = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")
+
+
+def frame_body(spec) -> tuple[float, tuple[float, float], float]:
+    """(mass kg, centre of mass m in frame coordinates, pitch inertia kg m^2 about it) of the frame
+    body: the frame with the rider's on-bike segments at the pedals and the bars."""
+    r = spec.rider
+    parts = [(spec.frame_mass, spec.frame_com, spec.frame_inertia),
+             (r.on_bike_mass * PEDAL_SHARE, (r.leg_x, r.leg_z), 0.0),
+             (r.on_bike_mass * (1.0 - PEDAL_SHARE), (r.arm_x, r.arm_z), 0.0)]
+    m = sum(p[0] for p in parts)
+    cx = sum(p[0] * p[1][0] for p in parts) / m
+    cz = sum(p[0] * p[1][1] for p in parts) / m
+    inertia = sum(p[2] + p[0] * ((p[1][0] - cx) ** 2 + (p[1][1] - cz) ** 2) for p in parts)
+    return m, (cx, cz), inertia
+
+
+def rider_rest_lengths(spec, gravity: float) -> tuple[float, float]:
+    """Spring lengths (m) of the legs and arms that hold the rider at rest at its stance on a level
+    frame: each carries its share of the rider's weight by the lever rule about the centre of mass,
+    legs W (x_bars - x_com) / (x_bars - x_pedals), arms the rest."""
+    r = spec.rider
+    w = r.mass * gravity
+    span = r.arm_x - r.leg_x
+    legs = w * (r.arm_x - r.com[0]) / span
+    arms = w * (r.com[0] - r.leg_x) / span
+    return r.leg_length + legs / r.leg_stiffness, r.arm_length + arms / r.arm_stiffness
+
+
+@dataclass(frozen=True)
+class Bike:
+    """A compiled bike and the numbers its callback needs (SI)."""
+
+    model: mujoco.MjModel
+    spec: object  # BikeSpec
+    x0: float  # world position of the frame origin (bottom bracket) at qpos = 0
+    z0: float
+    tire_radius: float
+    legs_rest: float
+    arms_rest: float
+
+    def qpos_index(self, name: str) -> int:
+        return int(self.model.joint(name).qposadr[0])
+
+    def dof_index(self, name: str) -> int:
+        return int(self.model.joint(name).dofadr[0])
+
+
+def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, gravity: float,
+               start_x: float | None = None) -> Bike:
+    """Compile the bike scene for ``spec`` on ``terrain``; the front axle starts over ``start_x``
+    (default the terrain's start)."""
+    ms = mujoco.MjSpec.from_file(str(mjcf.path(SCENE)))
+    ms.option.timestep = timestep
+    ms.option.integrator = integrator
+    ms.option.gravity = [0.0, 0.0, -gravity]
+    a = spec.head_angle
+    c, s = math.cos(a), math.sin(a)
+    fx, fz = spec.front_axle
+    rx, rz = spec.rear_axle
+    px, pz = spec.pivot
+    start = terrain.start_x if start_x is None else float(start_x)
+    h0 = float(terrain.height(start))
+    x0 = start - fx
+    z0 = h0 + tire_radius - fz  # the front tread touches the ground at qpos = 0
+    frame = ms.body("frame")
+    frame.pos = [x0, 0.0, z0]
+    m, com, inertia = frame_body(spec)
+    frame.mass = m
+    frame.ipos = [com[0], 0.0, com[1]]
+    frame.inertia = [inertia, inertia, inertia]
+    r = spec.rider
+    ms.site("pedals").pos = [r.leg_x, 0.0, r.leg_z]
+    ms.site("bb").pos = [0.0, 0.0, 0.0]
+    ms.site("bars").pos = [r.arm_x, 0.0, r.arm_z]
+    ms.site("main_pivot").pos = [px, 0.0, pz]
+    lower = ms.body("fork_lower")
+    lower.pos = [fx, 0.0, fz]
+    lower.mass = spec.fork_lower_mass
+    lower.inertia = [LOWER_INERTIA] * 3
+    ms.joint("fork").axis = [-c, 0.0, s]
+    ms.geom("lower_leg").fromto = [0.0, 0.0, 0.0, -0.3 * c, 0.0, 0.3 * s]
+    for name, mass in (("front_wheel", spec.front_wheel_mass), ("rear_wheel", spec.rear_wheel_mass)):
+        body = ms.body(name)
+        body.mass = mass
+        i = spec.wheel_inertia
+        body.inertia = [i / 2, i, i / 2]
+    for name in ("front_tire", "rear_tire"):
+        ms.geom(name).size = [tire_radius, 0.03, 0.0]
+    for name in ("front_marker", "rear_marker"):
+        ms.geom(name).size = [max(tire_radius - 0.07, 0.04), 0.005, 0.01]
+    arm = ms.body("swingarm")
+    arm.pos = [px, 0.0, pz]
+    arm.mass = spec.swingarm_mass
+    arm.ipos = [(rx - px) / 2, 0.0, (rz - pz) / 2]
+    arm.inertia = [spec.swingarm_inertia] * 3
+    ms.geom("chainstay").fromto = [0.0, 0.0, 0.0, rx - px, 0.0, rz - pz]
+    ms.body("rear_wheel").pos = [rx - px, 0.0, rz - pz]
+    rider = ms.body("rider")
+    rider.pos = [r.com[0], 0.0, r.com[1]]
+    rider.mass = r.mass
+    rider.inertia = [r.pitch_inertia] * 3
+    hips = (r.leg_x - r.com[0], r.leg_z + r.leg_length - r.com[1])
+    shoulders = (r.arm_x - r.com[0], r.arm_z + r.arm_length - r.com[1])
+    ms.site("hips").pos = [hips[0], 0.0, hips[1]]
+    ms.site("shoulders").pos = [shoulders[0], 0.0, shoulders[1]]
+    ms.geom("torso").fromto = [hips[0], 0.0, hips[1], shoulders[0], 0.0, shoulders[1]]
+    legs_rest, arms_rest = rider_rest_lengths(spec, gravity)
+    for tendon in ms.tendons:
+        if tendon.name == "legs":
+            _spring(tendon, r.leg_stiffness, r.leg_damping, legs_rest)
+        elif tendon.name == "arms":
+            _spring(tendon, r.arm_stiffness, r.arm_damping, arms_rest)
+    _terrain_visual(ms, terrain)
+    model = ms.compile()
+    return Bike(model, spec, x0, z0, float(tire_radius), legs_rest, arms_rest)
+
+
+def _spring(tendon, stiffness: float, damping: float, rest: float) -> None:
+    """A linear spring-damper: mujoco 3 takes scalars, mujoco 4 polynomial coefficients (k, 0, 0)."""
+    if np.ndim(tendon.stiffness):
+        tendon.stiffness = [stiffness] + [0.0] * (len(tendon.stiffness) - 1)
+        tendon.damping = [damping] + [0.0] * (len(tendon.damping) - 1)
+    else:
+        tendon.stiffness, tendon.damping = stiffness, damping
+    tendon.springlength = [rest, rest]
+
+
+def _terrain_visual(ms, terrain) -> None:
+    x_lo, x_hi = float(terrain.x[0]) - 2.0, float(terrain.x[-1])
+    n = int(min(20000, max(64, (x_hi - x_lo) / 0.005)))
+    xs = np.linspace(x_lo, x_hi, n)
+    zs = terrain.height(xs)
+    lo, hi = float(zs.min()), float(zs.max())
+    span = max(hi - lo, 1e-3)
+    ms.add_hfield(name="terrain", size=[(x_hi - x_lo) / 2, 0.3, span, 0.05], nrow=2, ncol=n,
+                  userdata=list(np.tile((zs - lo) / span, 2)))
+    ms.worldbody.add_geom(name="terrain", type=mujoco.mjtGeom.mjGEOM_HFIELD, hfieldname="terrain",
+                          pos=[(x_lo + x_hi) / 2, 0.0, lo], contype=0, conaffinity=0, group=1, material="terrain")
+
+
+__all__ = ["Bike", "build_bike", "frame_body", "rider_rest_lengths", "JOINTS", "LOWER_INERTIA", "PEDAL_SHARE"]

@@ -1,0 +1,468 @@
+"""A whole bike on the trail: ``run_bike(bike, scenario, speed_m_per_s)``.
+
+The bike (``mtbmj.bike.spec``) is built in MuJoCo (``mtbmj.bike.model``), settled to its static
+equilibrium on the start of the terrain (the closed-form forces of ``mtbmj.bike.reference``) and
+rolled at the set speed. One control callback (``BikeCallback``) applies, each evaluation:
+
+* the fork law (``compose``'s law of the bike's fork configuration) along the fork slide;
+* the shock law (the same law library, the bike's shock configuration) in shock coordinates:
+  the rear wheel's travel w and dw/dphi are read from MuJoCo's own kinematics (the rear axle site
+  in the frame's coordinates), the stroke is s(w) = integral of dw / LR, the stroke speed
+  (dw/dphi) phi' / LR(w), and the shock's force F_s enters as the torque -F_s (dw/dphi) / LR(w) on
+  the swingarm (at the wheel: F_s / LR);
+* the radial tire (``mtbmj.rolling.tire.RadialTire``, with the rim) at each axle, each on the same
+  terrain profile (the rear meets what the front met a wheelbase later);
+* the drive: ``controllers.drive.Drive``'s speed controller (rider limits of the whole bike) as a
+  force along the rear tire's contact tangent, at most ``traction`` times the rear tire's load, none
+  in the air; or coasting.
+
+Conventions: travel and stroke compression positive, zero at full extension; pitch nose up
+positive; tire loads are each tire's total radial force (N); the rider's vertical acceleration is
+the rider body's (gravity excluded, up positive).
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from mtbmj import compose, output
+from mtbmj.bike import spec as spec_mod
+from mtbmj.bike.model import Bike, build_bike
+from mtbmj.controllers import installed
+from mtbmj.controllers.drive import Drive
+from mtbmj.errors import ConfigError, RunError
+from mtbmj.limits import check_run
+from mtbmj.readout.endtravel import end_of_travel
+from mtbmj.result import RunOutput
+from mtbmj.rolling import terrain as terrain_mod
+from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
+
+CHUNK = 10000
+# The bike steps at 0.1 ms (or finer if a law's step rule asks): the rolling front end's step, at
+# which its cross-check holds; the drop's stop-refinement rule (written for the sled's 2.3 kg wheel
+# on the hard stops) is not applied: the bike's references check the step instead.
+MAX_TIMESTEP_S = 1e-4
+DRIVE_HZ = 10.0  # the speed loop's gain: kv = 2 M (2 pi 10 Hz), as the front end's servo
+INTEGRATORS = {"rk4": mujoco.mjtIntegrator.mjINT_RK4, "euler": mujoco.mjtIntegrator.mjINT_EULER,
+               "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST, "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT}
+COLUMNS = ("time_s", "x_m", "speed_m_per_s", "front_travel_mm", "rear_travel_mm", "stroke_mm", "pitch_deg",
+           "front_tire_N", "rear_tire_N", "front_tire_mm", "rear_tire_mm", "rider_acc_z_m_per_s2", "fork_force_N",
+           "shock_force_N", "drive_force_N", "terrain_front_mm", "terrain_rear_mm")
+
+
+class BikeCallback:
+    """Fork, shock (through the leverage curve), both tires and the drive, written into ``ctrl``."""
+
+    def __init__(self, bike: Bike, fork_law, shock_law, front: RadialTire, rear: RadialTire, drive: Drive,
+                 speed: float, traction: float, refresh: float):
+        m = bike.model
+        self._model = m
+        self._address = m._address
+        self.bike, self.fork, self.shock = bike, fork_law, shock_law
+        self.tires = (front, rear)
+        self.drive, self.speed, self.traction, self.refresh = drive, float(speed), float(traction), float(refresh)
+        self.lev = bike.spec.leverage
+        self.fq, self.fv = bike.qpos_index("fork"), bike.dof_index("fork")
+        self.sv = bike.dof_index("swingarm")
+        self.xv = bike.dof_index("bike_x")
+        a = lambda name: int(m.actuator(name).id)
+        self.a_fork, self.a_shock = a("fork_force"), a("shock_torque")
+        self.a_fs, self.a_ss = a("fork_friction_state"), a("shock_friction_state")
+        self.act_f, self.act_s = int(m.actuator_actadr[self.a_fs]), int(m.actuator_actadr[self.a_ss])
+        self.a_tire = ((a("front_tire_x"), a("front_tire_z")), (a("rear_tire_x"), a("rear_tire_z")))
+        self.a_drive = (a("drive_x"), a("drive_z"))
+        self.a_probe = (a("front_deflection_probe"), a("rear_deflection_probe"))
+        self.a_shock_probe = a("shock_force_probe")
+        self.sites = (int(m.site("front_axle").id), int(m.site("rear_axle").id))
+        self.frame = int(m.body("frame").id)
+        self.pivot_x = bike.spec.pivot[0]
+        self.rear_z0 = bike.spec.rear_axle[1]
+        from mtbmj.bike.contact import StraightStretches
+
+        self.straight = StraightStretches(front.terrain, front.radius + front.margin)
+        self.valid = [None, None]  # axle x interval where the current patch is exact (a straight stretch)
+        self.patches = [[], []]
+        self.next_refresh = [-math.inf, -math.inf]
+        self.last_x = [math.inf, math.inf]
+        self.calls = 0
+        self.refreshes = 0
+        self._vel = np.zeros(6)
+
+    def reset(self) -> None:
+        self.patches, self.next_refresh, self.last_x = [[], []], [-math.inf, -math.inf], [math.inf, math.inf]
+        self.valid = [None, None]
+
+    def shock_state(self, d):
+        """(w, dw/dphi) from MuJoCo's kinematics: the rear axle in the frame's coordinates."""
+        rot = d.xmat[self.frame].reshape(3, 3)
+        rel = d.site_xpos[self.sites[1]] - d.xpos[self.frame]
+        local = rot.T @ rel
+        return local[2] - self.rear_z0, -(local[0] - self.pivot_x)
+
+    def __call__(self, m, d):
+        if m is not self._model and m._address != self._address:
+            return
+        self.calls += 1
+        qpos, qvel, act, ctrl = d.qpos, d.qvel, d.act, d.ctrl
+        t = d.time
+        x, v = qpos[self.fq], qvel[self.fv]
+        if self.fork.has_state:
+            z = act[self.act_f]
+            ctrl[self.a_fork] = -self.fork.force(x, v, z)
+            ctrl[self.a_fs] = self.fork.state_rate(v, z)
+        else:
+            ctrl[self.a_fork] = -self.fork.force(x, v)
+        w, dw = self.shock_state(d)
+        ds = dw / self.lev.ratio_at(w)
+        s, sd = self.lev.stroke(w), ds * qvel[self.sv]
+        if self.shock.has_state:
+            z = act[self.act_s]
+            fs = self.shock.force(s, sd, z)
+            ctrl[self.a_ss] = self.shock.state_rate(sd, z)
+        else:
+            fs = self.shock.force(s, sd)
+        ctrl[self.a_shock] = -fs * ds
+        ctrl[self.a_shock_probe] = fs
+        rear = (0.0, 0.0)
+        for k in (0, 1):
+            tire = self.tires[k]
+            site = self.sites[k]
+            cx, cz = d.site_xpos[site][0], d.site_xpos[site][2]
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_SITE, site, self._vel, 0)
+            vx, vz = self._vel[3], self._vel[5]
+            if t >= self.next_refresh[k] or abs(cx - self.last_x[k]) > REFRESH_DISTANCE_M:
+                valid = self.valid[k]
+                if valid is None or not valid[0] <= cx <= valid[1]:
+                    # off the straight stretch the last patch lay on: search the profile
+                    self.patches[k] = tire.patches(cx, cz, t)
+                    self.refreshes += 1
+                    seg = self.straight.segment(cx) if len(self.patches[k]) == 1 else None
+                    self.valid[k] = None if seg is None else (seg[4], seg[5])
+                self.next_refresh[k] = t + self.refresh - 1e-12
+                self.last_x[k] = cx
+            fx, fz, deflection, _, _ = tire.force(cx, cz, vx, vz, self.patches[k])
+            ctrl[self.a_tire[k][0]] = fx
+            ctrl[self.a_tire[k][1]] = fz
+            ctrl[self.a_probe[k]] = deflection
+            rear = (fx, fz)
+        fx, fz = rear
+        n = math.hypot(fx, fz)
+        if n > 0.0 and self.drive.mode != "coast":
+            f = self.drive.force(self.speed, qvel[self.xv])
+            limit = self.traction * n
+            f = min(max(f, -limit), limit)
+            ctrl[self.a_drive[0]] = f * fz / n
+            ctrl[self.a_drive[1]] = -f * fx / n
+        else:
+            ctrl[self.a_drive[0]] = ctrl[self.a_drive[1]] = 0.0
+
+
+@dataclass
+class Prepared:
+    bike: Bike
+    spec: object
+    fork_setup: compose.Setup
+    shock_setup: compose.Setup
+    fork_law: object
+    shock_law: object
+    terrain: object
+    front_tire: RadialTire
+    rear_tire: RadialTire
+    drive: Drive
+    traction: float
+    speed: float
+    gravity: float
+    timestep: float
+    callback: BikeCallback
+    data: mujoco.MjData
+    initial_qpos: np.ndarray
+    initial_qvel: np.ndarray
+    initial_act: np.ndarray
+
+
+def _check(speed, duration):
+    if not isinstance(speed, (int, float)) or isinstance(speed, bool) or not math.isfinite(speed) or speed <= 0:
+        raise ConfigError(f"speed: must be a positive number of m/s, got {speed!r}")
+    if duration is not None and not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
+        raise ConfigError(f"duration: must be positive, got {duration!r}")
+
+
+def setups(spec) -> tuple[compose.Setup, compose.Setup]:
+    """(fork, shock) setups: each configuration with the bike's overrides, composed by ``mtbmj.compose``."""
+    from mtbmj.drop.run import resolve
+
+    fork = compose.setup(resolve(spec.fork_config, spec.fork_overrides or None))
+    shock_over = dict(spec.shock_overrides)
+    shock_over.setdefault("fork.travel_mm", spec.shock_stroke * 1e3)
+    shock = compose.setup(resolve(spec.shock_config, shock_over))
+    if abs(shock.travel - spec.shock_stroke) > 1e-9:
+        raise ConfigError(f"shock.stroke_mm: {spec.shock_stroke * 1e3:g} mm, but the shock configuration's "
+                          f"fork.travel_mm is {shock.travel * 1e3:g} mm")
+    return fork, shock
+
+
+def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str = "rider",
+            start_x: float | None = None) -> Prepared:
+    """Everything a run needs, with the data at t = 0: the bike at rest on its static equilibrium
+    over the start, moving at the set speed."""
+    from mtbmj.bike.reference import Reference, static_equilibrium
+
+    _check(speed_m_per_s, None)
+    if drive not in ("rider", "coast"):
+        raise ConfigError(f"drive: {drive!r} is not one of rider, coast")
+    spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(str(bike))
+    ter = terrain_mod.make(scenario)
+    if ter.moving:
+        raise ConfigError("scenario: the drum rig holds a single wheel; a bike rolls on fixed terrain")
+    fork_setup, shock_setup = setups(spec)
+    radius = fork_setup.tire_radius
+    spec_mod.check_geometry(spec, radius)
+    timestep = min(MAX_TIMESTEP_S, fork_setup.timestep, shock_setup.timestep)
+    g = fork_setup.gravity
+    b = build_bike(spec, radius, ter, timestep, INTEGRATORS[fork_setup.integrator], g, start_x)
+    values = fork_setup.tire.values(1)  # rolling is sustained contact: the in-contact values of a switching law
+    rate, damping = values.rate, values.damping
+    front = RadialTire(ter, radius, rate, damping, rim=fork_setup.tire.rim)
+    rear = RadialTire(ter, radius, rate, damping, rim=fork_setup.tire.rim)
+    total = spec.total_mass
+    kv = 2.0 * total * 2.0 * math.pi * DRIVE_HZ
+    limits = {k: spec.drive[v] for k, v in (("push", "push_N"), ("power", "power_W"), ("brake", "brake_N"))
+              if v in spec.drive}
+    drv = Drive(drive, kv, **limits)
+    traction = spec.drive.get("traction", 1.0)
+    refresh = min(REFRESH_S, REFRESH_DISTANCE_M / float(speed_m_per_s))
+    cb = BikeCallback(b, fork_setup.fork, shock_setup.fork, front, rear, drv, speed_m_per_s, traction, refresh)
+    data = mujoco.MjData(b.model)
+    p = Prepared(b, spec, fork_setup, shock_setup, fork_setup.fork, shock_setup.fork, ter, front, rear, drv, traction,
+                 float(speed_m_per_s), g, timestep, cb, data, None, None, None)
+    q = static_equilibrium(Reference(p))
+    names = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")
+    for name, value in zip(names, q):
+        data.qpos[b.qpos_index(name)] = value
+    data.qvel[b.dof_index("bike_x")] = speed_m_per_s
+    data.qvel[b.dof_index("front_spin")] = speed_m_per_s / radius
+    data.qvel[b.dof_index("rear_spin")] = speed_m_per_s / radius
+    with installed(cb):
+        mujoco.mj_forward(b.model, data)
+    p.initial_qpos, p.initial_qvel, p.initial_act = data.qpos.copy(), data.qvel.copy(), data.act.copy()
+    return p
+
+
+def simulate(p: Prepared, duration: float, progress=None):
+    """(states (n+1, nstate), sensordata (n, nsensor)) of ``duration`` s from the prepared state."""
+    model, data = p.bike.model, p.data
+    steps = int(round(duration / p.timestep))
+    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, state, kind)
+    states = np.empty((steps + 1, state.size))
+    sensors = np.empty((steps, model.nsensordata))
+    states[0] = state
+    done = 0
+    with installed(p.callback):
+        while done < steps:
+            n = min(CHUNK, steps - done)
+            st, se = rollout.rollout(model, data, states[done][None, :], nstep=n)
+            states[done + 1: done + 1 + n] = st[0]
+            sensors[done: done + n] = se[0]
+            done += n
+            if not np.all(np.isfinite(st)):
+                raise RunError(f"bike run diverged before t = {done * p.timestep:.4f} s")
+            if progress is not None:
+                progress(done / steps)
+    return states, sensors
+
+
+def _signals(p: Prepared, states, sensors) -> dict:
+    model = p.bike.model
+    n = sensors.shape[0]
+    nq, nv = model.nq, model.nv
+    qpos = states[:n, 1:1 + nq]
+    qvel = states[:n, 1 + nq:1 + nq + nv]
+    sens = lambda name: sensors[:, model.sensor_adr[model.sensor(name).id]]
+    b = p.bike
+    rider_acc = sensors[:, model.sensor_adr[model.sensor("rider_acceleration").id] + 2]
+    # the rear wheel travel and stroke from the swingarm angle (closed form of the pivot geometry)
+    from mtbmj.bike.reference import PlanarBike
+
+    planar = PlanarBike(b.spec, b.legs_rest, b.arms_rest, p.gravity)
+    phi = qpos[:, b.qpos_index("swingarm")]
+    w = np.array([planar.wheel_travel(a)[0] for a in phi])
+    stroke = np.array([b.spec.leverage.stroke(x) for x in w])
+    front = np.hypot(sens("front_tire_x"), sens("front_tire_z"))
+    rear = np.hypot(sens("rear_tire_x"), sens("rear_tire_z"))
+    th = qpos[:, b.qpos_index("pitch")]
+    X = b.x0 + qpos[:, b.qpos_index("bike_x")]
+    Z = b.z0 + qpos[:, b.qpos_index("bike_z")]
+    fx, fz = b.spec.front_axle
+    qf = qpos[:, b.qpos_index("fork")]
+    u = (-math.cos(b.spec.head_angle), math.sin(b.spec.head_angle))
+    lx, lz = fx + qf * u[0], fz + qf * u[1]
+    front_x = X + np.cos(th) * lx - np.sin(th) * lz
+    rr = [planar.rear_axle(np.array([0, 0, t_, 0, a, 0, 0.0]), None)[0] for t_, a in zip(th, phi)]
+    rear_x = X + np.array([r[0] for r in rr])
+    drive = np.hypot(sens("drive_x"), sens("drive_z")) * np.where(sens("drive_x") >= 0.0, 1.0, -1.0)
+    return {
+        "time_s": states[:n, 0],
+        "x_m": X,
+        "speed_m_per_s": qvel[:, b.dof_index("bike_x")],
+        "front_travel_mm": qf * 1e3,
+        "rear_travel_mm": w * 1e3,
+        "stroke_mm": stroke * 1e3,
+        "pitch_deg": np.degrees(th),
+        "front_tire_N": front,
+        "rear_tire_N": rear,
+        "front_tire_mm": sens("front_deflection") * 1e3,
+        "rear_tire_mm": sens("rear_deflection") * 1e3,
+        "rider_acc_z_m_per_s2": rider_acc,
+        "fork_force_N": -sens("fork_force"),
+        "shock_force_N": sens("shock_force"),
+        "drive_force_N": drive,
+        "terrain_front_mm": p.terrain.height(front_x) * 1e3,
+        "terrain_rear_mm": p.terrain.height(rear_x) * 1e3,
+        "fork_velocity_mm_per_s": qvel[:, b.dof_index("fork")] * 1e3,
+        "stroke_velocity_mm_per_s": np.gradient(stroke, states[:n, 0]) * 1e3 if n > 1 else np.zeros(n),
+        "_z_mm": Z * 1e3,
+    }
+
+
+def _summary(p: Prepared, raw: dict) -> dict:
+    dt = p.timestep
+    t = raw["time_s"]
+    acc = raw["rider_acc_z_m_per_s2"]
+    front_end = end_of_travel(p.fork_setup, raw["front_travel_mm"], raw["fork_velocity_mm_per_s"], raw["front_tire_mm"],
+                              time_s=t)
+    rear_end = end_of_travel(p.shock_setup, raw["stroke_mm"], raw["stroke_velocity_mm_per_s"], raw["rear_tire_mm"],
+                             time_s=t)
+    loads = {}
+    for name in ("front", "rear"):
+        f = raw[f"{name}_tire_N"]
+        loads[name] = {"mean_N": float(f.mean()), "max_N": float(f.max()), "min_N": float(f.min()),
+                       "std_N": float(f.std()), "variation": float(f.std() / f.mean()) if f.mean() > 0 else None,
+                       "off_ground_s": float(np.sum(f <= 0.0) * dt)}
+    speed = raw["speed_m_per_s"]
+    return {
+        "bike": p.spec.name,
+        "scenario": p.terrain.describe(),
+        "speed_m_per_s": p.speed,
+        "duration_s": float(t[-1] + dt),
+        "timestep_s": dt,
+        "static_front_travel_mm": float(raw["front_travel_mm"][0]),
+        "static_rear_travel_mm": float(raw["rear_travel_mm"][0]),
+        "static_stroke_mm": float(raw["stroke_mm"][0]),
+        "static_front_load_N": float(raw["front_tire_N"][0]),
+        "static_rear_load_N": float(raw["rear_tire_N"][0]),
+        "max_front_travel_mm": float(raw["front_travel_mm"].max()),
+        "max_rear_travel_mm": float(raw["rear_travel_mm"].max()),
+        "max_stroke_mm": float(raw["stroke_mm"].max()),
+        "rear_wheel_travel_mm": p.spec.leverage.full_travel * 1e3,
+        "pitch_deg": {"min": float(raw["pitch_deg"].min()), "max": float(raw["pitch_deg"].max())},
+        "front": front_end,
+        "rear": rear_end,
+        "rim_strikes": {"front": front_end["rim_strikes"]["count"], "rear": rear_end["rim_strikes"]["count"]},
+        "tire_load": loads,
+        "rider_acceleration_rms_m_per_s2": float(np.sqrt(np.mean(acc * acc))),
+        "rider_acceleration_peak_m_per_s2": float(np.max(np.abs(acc))),
+        "min_speed_m_per_s": float(speed.min()),
+        "max_speed_m_per_s": float(speed.max()),
+        "drive": {"mode": p.drive.mode, "push_limit_N": p.drive.push, "power_limit_W": p.drive.power,
+                  "brake_limit_N": p.drive.brake, "traction": p.traction,
+                  "work_J": float(np.sum(raw["drive_force_N"] * speed) * dt)},
+    }
+
+
+@dataclass
+class BikeResult(RunOutput):
+    """A bike run: ``raw`` at the engine step (also ``signals``), ``summary``."""
+
+    name: str
+    scenario: str
+    signals: dict
+    raw: dict
+    summary: dict
+    wall_time_s: float
+    prepared: Prepared
+    info: dict = field(default_factory=dict)
+    COLUMNS = COLUMNS
+
+    def csv_bytes(self, raw: bool = False) -> bytes:
+        header = (f"mtbmj bike {self.name} over {self.scenario}, engine rate\n"
+                  "travel and stroke compression positive from full extension; pitch nose up positive; tire loads the "
+                  "total radial force of each tire; rider acceleration vertical, gravity excluded, up positive")
+        return output.csv_bytes({k: self.raw[k] for k in COLUMNS}, header)
+
+    def csv_chunks(self, raw: bool = False):
+        yield self.csv_bytes(raw)
+
+    def manifest(self) -> dict:
+        from mtbmj.result import versions
+
+        return {"name": self.name, "scenario": self.scenario, "engine": "mujoco", "bike_source": self.prepared.spec.source,
+                "fork_config": self.prepared.fork_setup.config.digest(),
+                "shock_config": self.prepared.shock_setup.config.digest(), "versions": versions(),
+                "wall_time_s": self.wall_time_s, "engine_info": self.info}
+
+    def files(self, stream: bool = False, figure: bool = True) -> dict:
+        files = {"timeseries.csv": self.csv_bytes(), "summary.json": output.json_bytes(self.summary),
+                 "manifest.json": output.json_bytes(self.manifest()),
+                 "fork_config.toml": self.prepared.fork_setup.config.to_toml().encode(),
+                 "shock_config.toml": self.prepared.shock_setup.config.to_toml().encode()}
+        if figure:
+            from mtbmj.bike.figure import png
+
+            files["quicklook.png"] = png(self)
+        return files
+
+    def headline(self) -> str:
+        s = self.summary
+        f, r = s["front"], s["rear"]
+        strikes = s["rim_strikes"]
+
+        def ends(rep):
+            parts = [k.replace("_", " ") for k in ("bumper", "hard_stop") if rep[k]["count"]]
+            return f" ({', '.join(parts)})" if parts else ""
+
+        return (f"bike {self.name} over {self.scenario} at {s['speed_m_per_s']:g} m/s: front travel peak "
+                f"{s['max_front_travel_mm']:.1f} of {f['travel_mm']:g} mm{ends(f)}, rear {s['max_rear_travel_mm']:.1f} of "
+                f"{s['rear_wheel_travel_mm']:g} mm (shock {s['max_stroke_mm']:.1f} of {r['travel_mm']:g} mm){ends(r)}, "
+                f"pitch {s['pitch_deg']['min']:.1f} to {s['pitch_deg']['max']:.1f} deg, rim strikes "
+                f"{strikes['front']}/{strikes['rear']}, rider {s['rider_acceleration_rms_m_per_s2']:.2f} m/s2 RMS, "
+                f"tire-load variation {100 * (s['tire_load']['front']['variation'] or 0):.0f} % front / "
+                f"{100 * (s['tire_load']['rear']['variation'] or 0):.0f} % rear")
+
+
+def default_duration(p: Prepared) -> float:
+    wheelbase = p.spec.front_axle[0] - p.spec.rear_axle[0]
+    return max(1.0, (p.terrain.length + wheelbase) / p.speed)
+
+
+def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: float | None = None,
+             drive: str = "rider", start_x: float | None = None,
+             progress: Callable[[float], None] | None = None) -> BikeResult:
+    """Roll the bike ``bike`` (a preset name, a TOML path or a ``BikeSpec``) over ``scenario`` (a
+    terrain spec of ``mtbmj roll``) at ``speed_m_per_s``; ``duration`` defaults to the time for both
+    wheels to cross the feature and settle; ``drive`` "rider" (a speed controller within a rider's
+    limits) or "coast"; ``start_x`` the front axle's start (default the terrain's)."""
+    _check(speed_m_per_s, duration)
+    p = prepare(bike, scenario, speed_m_per_s, drive, start_x)
+    duration = default_duration(p) if duration is None else duration
+    check_run(duration, p.timestep, 1.0 / p.timestep)
+    start = time.perf_counter()
+    states, sensors = simulate(p, duration, progress)
+    wall = time.perf_counter() - start
+    raw = _signals(p, states, sensors)
+    summary = _summary(p, raw)
+    info = {"steps": int(sensors.shape[0]), "timestep_s": p.timestep, "integrator": p.fork_setup.integrator,
+            "callback": "python", "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
+            "real_time_factor": duration / wall if wall > 0 else None}
+    name = p.spec.name
+    return BikeResult(name, str(scenario), raw, raw, summary, wall, p, info)
+
+
+__all__ = ["run_bike", "prepare", "simulate", "BikeResult", "BikeCallback", "Prepared", "COLUMNS", "setups"]

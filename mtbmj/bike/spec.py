@@ -1,0 +1,330 @@
+"""A bike's description: geometry, masses, rider, leverage curve, and the fork and shock laws.
+
+A bike is a TOML file of its own schema (``mtbmj/bike/presets/*.toml``, or a path), read here
+into a ``BikeSpec`` in SI units. The fork's and the shock's force laws are not described here:
+each names a configuration of the fork schema (a preset such as ``reference`` and overrides),
+which ``mtbmj.compose`` turns into the same law objects the drop and the rolling front end use.
+The shock's configuration is read in *shock* coordinates: its ``fork.travel_mm`` is the shock's
+stroke, its spring and damper act on the shock's own stroke and speed.
+
+Frame coordinates: origin at the bottom bracket, x forward, z up, the bike with both ends at full
+extension (every joint at 0). Bad input raises ``ConfigError`` naming the key (one line, exit
+status 2 on the command line).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from mtbmj.errors import ConfigError
+
+MM = 1e-3
+MAX_BASE_DEPTH = 8
+
+
+@dataclass(frozen=True)
+class Leverage:
+    """Leverage ratio LR = d(rear wheel travel) / d(shock stroke), piecewise linear in the rear
+    wheel travel ``travel`` (m, from 0, strictly increasing); constant past the table's ends.
+    The shock stroke is s(w) = integral from 0 to w of dw / LR(w), exact on each linear piece."""
+
+    travel: tuple[float, ...]
+    ratio: tuple[float, ...]
+
+    def __post_init__(self):
+        w, r = np.asarray(self.travel, float), np.asarray(self.ratio, float)
+        object.__setattr__(self, "_w", w)
+        object.__setattr__(self, "_r", r)
+        # the stroke at each table point, exact for a ratio linear in w
+        seg = np.empty(w.size - 1)
+        for i in range(w.size - 1):
+            seg[i] = _piece(r[i], r[i + 1], w[i + 1] - w[i], w[i + 1] - w[i])
+        object.__setattr__(self, "_s", np.concatenate(([0.0], np.cumsum(seg))))
+
+    def ratio_at(self, w: float) -> float:
+        """LR at rear wheel travel ``w`` (m)."""
+        return float(np.interp(w, self._w, self._r))
+
+    def stroke(self, w: float) -> float:
+        """Shock stroke (m) at rear wheel travel ``w`` (m); below 0 and past the table the ratio
+        is held at its end value."""
+        w_tab, r, s = self._w, self._r, self._s
+        if w <= 0.0:
+            return w / r[0]
+        if w >= w_tab[-1]:
+            return s[-1] + (w - w_tab[-1]) / r[-1]
+        i = int(np.searchsorted(w_tab, w, side="right")) - 1
+        h = w_tab[i + 1] - w_tab[i]
+        return s[i] + _piece(r[i], r[i + 1], h, w - w_tab[i])
+
+    @property
+    def full_travel(self) -> float:
+        return float(self._w[-1])
+
+    @property
+    def full_stroke(self) -> float:
+        return float(self._s[-1])
+
+
+def _piece(r0: float, r1: float, h: float, x: float) -> float:
+    """Integral from 0 to x of du / (r0 + (r1 - r0) u / h)."""
+    b = (r1 - r0) / h
+    if abs(b) * x < 1e-9 * r0:
+        return x / r0
+    return math.log((r0 + b * x) / r0) / b
+
+
+@dataclass(frozen=True)
+class Rider:
+    mass: float  # kg, the body on the legs and arms
+    on_bike_mass: float  # kg, feet, shanks, hands and forearms: moving with the frame
+    com: tuple[float, float]  # m, frame coordinates, standing at rest
+    pitch_inertia: float  # kg m^2 about the body's centre of mass
+    leg_x: float  # m, where the legs meet the frame (the pedals), frame x
+    arm_x: float  # m, where the arms meet the frame (the bars), frame x
+    leg_z: float  # m, frame z of the pedals
+    arm_z: float  # m, frame z of the bars
+    leg_length: float  # m, pedals to hips (vertical, at rest)
+    arm_length: float  # m, bars to shoulders (vertical, at rest)
+    leg_stiffness: float  # N/m, both legs
+    leg_damping: float  # N s/m
+    arm_stiffness: float  # N/m, both arms
+    arm_damping: float  # N s/m
+
+
+@dataclass(frozen=True)
+class BikeSpec:
+    name: str
+    head_angle: float  # rad from the horizontal
+    fork_offset: float  # m, perpendicular to the steering axis, forward
+    front_axle: tuple[float, float]  # m, frame coordinates at full extension
+    rear_axle: tuple[float, float]
+    pivot: tuple[float, float]
+    frame_mass: float
+    frame_com: tuple[float, float]
+    frame_inertia: float  # kg m^2 about its centre of mass (pitch)
+    swingarm_mass: float
+    swingarm_inertia: float  # about its centre of mass, which is midway between pivot and axle
+    fork_lower_mass: float  # lower legs, at the front axle
+    front_wheel_mass: float
+    rear_wheel_mass: float
+    wheel_inertia: float  # kg m^2 about the axle (spin; no effect on the planar motion)
+    leverage: Leverage
+    shock_stroke: float  # m
+    rider: Rider
+    fork_config: str
+    fork_overrides: dict
+    shock_config: str
+    shock_overrides: dict
+    drive: dict
+    source: str
+
+    @property
+    def swingarm_length(self) -> float:
+        return math.hypot(self.rear_axle[0] - self.pivot[0], self.rear_axle[1] - self.pivot[1])
+
+    @property
+    def swingarm_angle(self) -> float:
+        """beta0 (rad): the swingarm's angle below the horizontal at full extension (axle behind
+        the pivot; positive when the axle is below it)."""
+        return math.atan2(self.pivot[1] - self.rear_axle[1], self.pivot[0] - self.rear_axle[0])
+
+    @property
+    def total_mass(self) -> float:
+        return (self.frame_mass + self.swingarm_mass + self.fork_lower_mass + self.front_wheel_mass
+                + self.rear_wheel_mass + self.rider.mass + self.rider.on_bike_mass)
+
+
+def preset_names() -> list[str]:
+    return sorted(p.name[:-5] for p in resources.files("mtbmj.bike.presets").iterdir() if p.name.endswith(".toml"))
+
+
+def _read(ref: str, depth: int = 0) -> tuple[dict, str]:
+    import tomllib
+
+    from mtbmj.textfile import read_text
+
+    if depth > MAX_BASE_DEPTH:
+        raise ConfigError(f"{ref}: base chain longer than {MAX_BASE_DEPTH} (a cycle?)")
+    for name in preset_names():
+        if str(ref).lower() == name.lower():
+            text = (resources.files("mtbmj.bike.presets") / f"{name}.toml").read_text()
+            where = None
+            break
+    else:
+        path = Path(ref)
+        if not path.exists():
+            raise ConfigError(f"{ref}: not a bike preset (known: {', '.join(preset_names())}) and no such file")
+        text = read_text(path, ConfigError, str(path), "not a text file, so not a bike description")
+        where = path
+    try:
+        table = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{ref}: not valid TOML ({exc})") from None
+    base = table.pop("base", None)
+    if base is None:
+        return table, str(ref)
+    if not isinstance(base, str):
+        raise ConfigError(f"{ref}: base must be a bike preset name or a .toml file")
+    if where is not None and Path(base).suffix.lower() == ".toml" and not Path(base).is_absolute():
+        base = str(where.parent / base)
+    parent, _ = _read(base, depth + 1)
+    return _merge(parent, table), str(ref)
+
+
+def _merge(a: dict, b: dict) -> dict:
+    out = dict(a)
+    for k, v in b.items():
+        out[k] = _merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
+    return out
+
+
+KNOWN = {
+    "description": None, "reading": None,
+    "bike": {"head_angle_deg", "fork_offset_mm", "front_axle_mm", "rear_axle_mm", "pivot_mm", "frame_mass_kg",
+             "frame_com_mm", "frame_inertia_kg_m2", "swingarm_mass_kg", "swingarm_inertia_kg_m2",
+             "fork_lower_mass_kg", "front_wheel_mass_kg", "rear_wheel_mass_kg", "wheel_inertia_kg_m2"},
+    "leverage": {"wheel_travel_mm", "ratio"},
+    "shock": {"stroke_mm", "config", "set"},
+    "fork": {"config", "set"},
+    "rider": {"mass_kg", "on_bike_mass_kg", "com_mm", "pitch_inertia_kg_m2", "pedals_mm", "bars_mm",
+              "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
+              "arm_stiffness_N_per_mm", "arm_damping_N_s_per_m"},
+    "drive": {"push_N", "power_W", "brake_N", "traction"},
+}
+
+
+def _number(table: dict, section: str, key: str, positive: bool = False, nonneg: bool = False) -> float:
+    full = f"{section}.{key}"
+    if key not in table.get(section, {}):
+        raise ConfigError(f"{full}: missing")
+    v = table[section][key]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise ConfigError(f"{full}: must be a finite number, got {v!r}")
+    if positive and not v > 0:
+        raise ConfigError(f"{full}: must be > 0, got {v!r}")
+    if nonneg and v < 0:
+        raise ConfigError(f"{full}: must be >= 0, got {v!r}")
+    return float(v)
+
+
+def _point(table: dict, section: str, key: str) -> tuple[float, float]:
+    full = f"{section}.{key}"
+    if key not in table.get(section, {}):
+        raise ConfigError(f"{full}: missing")
+    v = table[section][key]
+    if (not isinstance(v, list) or len(v) != 2
+            or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in v)):
+        raise ConfigError(f"{full}: must be two numbers [x, z] in mm, got {v!r}")
+    return float(v[0]) * MM, float(v[1]) * MM
+
+
+def load(ref: str) -> BikeSpec:
+    """A ``BikeSpec`` from a bike preset name (``preset_names()``) or a TOML path, checked."""
+    table, source = _read(str(ref))
+    for section, value in table.items():
+        if section not in KNOWN:
+            raise ConfigError(f"{section}: unknown section or key (known: {', '.join(k for k in KNOWN)})")
+        keys = KNOWN[section]
+        if keys is None:
+            continue
+        if not isinstance(value, dict):
+            raise ConfigError(f"{section}: must be a table")
+        for key in value:
+            if key not in keys:
+                raise ConfigError(f"{section}.{key}: unknown key (known: {', '.join(sorted(keys))})")
+    head = _number(table, "bike", "head_angle_deg")
+    if not 45.0 <= head <= 90.0:
+        raise ConfigError(f"bike.head_angle_deg: must be within 45-90 degrees from the horizontal, got {head:g}")
+    masses = {}
+    for key in ("frame_mass_kg", "swingarm_mass_kg", "fork_lower_mass_kg", "front_wheel_mass_kg", "rear_wheel_mass_kg"):
+        masses[key] = _number(table, "bike", key, positive=True)
+    inertias = {k: _number(table, "bike", k, positive=True)
+                for k in ("frame_inertia_kg_m2", "swingarm_inertia_kg_m2", "wheel_inertia_kg_m2")}
+    offset = _number(table, "bike", "fork_offset_mm", nonneg=True) * MM
+    front, rear, pivot = (_point(table, "bike", k) for k in ("front_axle_mm", "rear_axle_mm", "pivot_mm"))
+    lev = table.get("leverage", {})
+    w, r = lev.get("wheel_travel_mm"), lev.get("ratio")
+    for key, arr in (("leverage.wheel_travel_mm", w), ("leverage.ratio", r)):
+        if (not isinstance(arr, list) or len(arr) < 2
+                or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in arr)):
+            raise ConfigError(f"{key}: must be a list of at least 2 numbers")
+    if len(w) != len(r):
+        raise ConfigError(f"leverage.ratio: {len(r)} values for {len(w)} wheel travels in leverage.wheel_travel_mm")
+    if w[0] != 0.0:
+        raise ConfigError(f"leverage.wheel_travel_mm: must start at 0 mm, got {w[0]:g}")
+    if any(b <= a for a, b in zip(w, w[1:])):
+        raise ConfigError("leverage.wheel_travel_mm: must increase strictly (the shock stroke must be monotonic in "
+                          "the wheel travel)")
+    if any(x <= 0.0 for x in r):
+        raise ConfigError("leverage.ratio: every leverage ratio must be > 0")
+    leverage = Leverage(tuple(x * MM for x in w), tuple(float(x) for x in r))
+    stroke = _number(table, "shock", "stroke_mm", positive=True) * MM
+    if leverage.full_stroke > stroke * (1.0 + 1e-9):
+        raise ConfigError(f"shock.stroke_mm: {stroke / MM:g} mm is shorter than the leverage curve needs over "
+                          f"{leverage.full_travel / MM:g} mm of wheel travel ({leverage.full_stroke / MM:.2f} mm)")
+    # geometry
+    ls = math.hypot(rear[0] - pivot[0], rear[1] - pivot[1])
+    rd = table.get("rider", {})
+    rider_mass = _number(table, "rider", "mass_kg", positive=True)
+    on_bike = _number(table, "rider", "on_bike_mass_kg", nonneg=True)
+    pedals = _point(table, "rider", "pedals_mm")
+    bars = _point(table, "rider", "bars_mm")
+    com = _point(table, "rider", "com_mm")
+    if not pedals[0] < com[0] < bars[0]:
+        raise ConfigError("rider.com_mm: the rider's centre of mass must lie between the pedals and the bars in x "
+                          "(the legs and arms carry it)")
+    rider = Rider(rider_mass, on_bike, com, _number(table, "rider", "pitch_inertia_kg_m2", positive=True),
+                  pedals[0], bars[0], pedals[1], bars[1],
+                  _number(table, "rider", "leg_length_mm", positive=True) * MM,
+                  _number(table, "rider", "arm_length_mm", positive=True) * MM,
+                  _number(table, "rider", "leg_stiffness_N_per_mm", positive=True) * 1e3,
+                  _number(table, "rider", "leg_damping_N_s_per_m", nonneg=True),
+                  _number(table, "rider", "arm_stiffness_N_per_mm", positive=True) * 1e3,
+                  _number(table, "rider", "arm_damping_N_s_per_m", nonneg=True))
+    for section in ("fork", "shock"):
+        cfg = table.get(section, {}).get("config", "reference")
+        if not isinstance(cfg, str):
+            raise ConfigError(f"{section}.config: must be a preset name or a TOML file")
+        if not isinstance(table.get(section, {}).get("set", {}), dict):
+            raise ConfigError(f"{section}.set: must be a table of configuration keys")
+    drive = {}
+    for key in ("push_N", "power_W", "brake_N", "traction"):
+        if key in table.get("drive", {}):
+            drive[key] = _number(table, "drive", key, nonneg=True)
+    spec = BikeSpec(
+        name=source if source in preset_names() else Path(source).stem, head_angle=math.radians(head),
+        fork_offset=offset, front_axle=front, rear_axle=rear, pivot=pivot,
+        frame_mass=masses["frame_mass_kg"], frame_com=_point(table, "bike", "frame_com_mm"),
+        frame_inertia=inertias["frame_inertia_kg_m2"], swingarm_mass=masses["swingarm_mass_kg"],
+        swingarm_inertia=inertias["swingarm_inertia_kg_m2"], fork_lower_mass=masses["fork_lower_mass_kg"],
+        front_wheel_mass=masses["front_wheel_mass_kg"], rear_wheel_mass=masses["rear_wheel_mass_kg"],
+        wheel_inertia=inertias["wheel_inertia_kg_m2"], leverage=leverage, shock_stroke=stroke, rider=rider,
+        fork_config=table.get("fork", {}).get("config", "reference"), fork_overrides=dict(table.get("fork", {}).get("set", {})),
+        shock_config=table.get("shock", {}).get("config", "reference"),
+        shock_overrides=dict(table.get("shock", {}).get("set", {})), drive=drive, source=source)
+    return spec
+
+
+def check_geometry(spec: BikeSpec, tire_radius: float) -> None:
+    """Cross-checks that need the tire: the main pivot outside the rear wheel, the swingarm able to
+    reach the full wheel travel."""
+    ls = spec.swingarm_length
+    if ls <= tire_radius:
+        raise ConfigError(f"bike.pivot_mm: the main pivot lies inside the rear wheel ({ls / MM:.0f} mm from the axle, "
+                          f"tire radius {tire_radius / MM:.0f} mm)")
+    beta = spec.swingarm_angle
+    if spec.leverage.full_travel >= ls * (1.0 + math.sin(beta)) * 0.99:
+        raise ConfigError(f"leverage.wheel_travel_mm: {spec.leverage.full_travel / MM:g} mm of wheel travel is more "
+                          f"than the swingarm ({ls / MM:.0f} mm) can give")
+    front_gap = math.hypot(spec.front_axle[0] - spec.pivot[0], spec.front_axle[1] - spec.pivot[1])
+    if front_gap <= tire_radius:
+        raise ConfigError("bike.pivot_mm: the main pivot lies inside the front wheel")
+
+
+__all__ = ["BikeSpec", "Leverage", "Rider", "load", "preset_names", "check_geometry"]

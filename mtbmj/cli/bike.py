@@ -1,0 +1,43 @@
+"""``mtbmj bike PRESET TERRAIN --speed V --out DIR``: a whole bike (fork, shock through its
+leverage curve, a rider, two tires) rolled over a terrain of ``mtbmj roll``'s library, written
+atomically. Bad bike descriptions (a leverage table that is not positive or not increasing, a pivot
+inside a wheel, a shock stroke shorter than the curve needs, negative masses, a head angle outside
+45-90 degrees) raise ConfigError: one line naming the key, exit status 2, nothing written."""
+from __future__ import annotations
+
+from mtbmj.cli.common import Progress, add_out
+
+
+def cmd_bike(args) -> int:
+    from mtbmj.bike.run import run_bike
+
+    result = Progress(f"bike {args.bike} over {args.scenario}", not args.quiet).around(
+        lambda progress: run_bike(args.bike, args.scenario, args.speed, args.duration, args.drive, args.start_m,
+                                  progress))
+    written = result.write(args.out, figure=not args.no_figure)
+    print(f"{result.headline()}; {result.info['real_time_factor']:.2f}x real time; wrote {len(written)} files to "
+          f"{args.out}")
+    return 0
+
+
+def add_parser(subparsers) -> None:
+    from mtbmj.rolling.terrain import names
+
+    p = subparsers.add_parser("bike", help="roll a whole bike (fork, shock, rider, two tires) over terrain")
+    p.add_argument("bike", help="bike preset (sst, trail) or a bike TOML file (see docs/bike.md)")
+    p.add_argument("scenario", help=f"terrain: {', '.join(n for n in names() if n != 'drum')} (optionally "
+                                    "name:key=value,...) or a CSV profile (distance_m, height_mm)")
+    p.add_argument("--speed", type=float, required=True, help="speed in m/s (> 0)")
+    p.add_argument("--drive", choices=("rider", "coast"), default="rider",
+                   help="rider (default): a speed controller at the rear wheel within a rider's push, power and "
+                        "braking and the rear tire's traction; coast: no drive")
+    p.add_argument("--duration", type=float, help="simulated time in s (default: both wheels across the feature)")
+    p.add_argument("--start-m", type=float, dest="start_m",
+                   help="where the front axle starts along the terrain, m (default the terrain's start)")
+    add_out(p, "out/bike")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.add_argument("--no-figure", action="store_true", help="do not draw quicklook.png")
+    p.set_defaults(func=cmd_bike)
+
+
+__all__ = ["add_parser", "cmd_bike"]
