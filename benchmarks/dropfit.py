@@ -20,7 +20,7 @@ import time
 
 import numpy as np
 
-from mtbmj.drop.run import resolve
+from mtbmj.drop.chain import resolve
 from mtbmj.identify.drop_synthetic import make_drop_record
 from mtbmj.identify.dropfit import fit_drop
 from _bench import write_json

@@ -28,7 +28,7 @@ from _bench import write_json
 
 import numpy as np  # noqa: E402
 
-from mtbmj.drop.run import resolve  # noqa: E402
+from mtbmj.drop.chain import resolve  # noqa: E402
 from mtbmj.identify.drop_synthetic import make_drop_record  # noqa: E402
 from mtbmj.identify.dropfit import fit_drop  # noqa: E402
 

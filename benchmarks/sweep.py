@@ -7,8 +7,9 @@ compared with the bare-scene rollout (target <= 1.2x). ``--variants`` sets the s
     /work/venv/bin/python benchmarks/sweep.py --variants 200 [--workers 2] [--duration 1.5]
         [--runner batch|single] [--threads 1]
 
-``--runner batch`` (the default: ``mtbmj.sweep.batch.run_batch_rollout``, variants of a batch stepped
-together through ``mujoco.rollout`` on the compiled laws) or ``single`` (``run_drop`` per
+``--runner batch`` (the default: ``mtbmj.sweep.batch.run_batch_rollout`` on the batched drop engine
+``mtbmj.drop.engine_batch``, variants of a batch stepped together through ``mujoco.rollout`` on the
+compiled laws) or ``single`` (``run_drop`` per
 variant); ``--threads``: rollout threads per worker process. The per-variant costs of the batched
 runner's phases (prepare, step, post-process) are measured in-process on ``--phase-variants``
 variants against the bare rollout of the same variants on one thread, and against the bare scene
@@ -59,6 +60,7 @@ def run_sweep(vs, workers: int, duration, out: Path, runner: str = "batch", thre
 def phase_costs(vs, duration) -> dict:
     """Per-variant wall time (ms) of the batched runner's phases, one process, one thread, against
     the bare-scene rollout of the same variants (best of 3 each, interleaved)."""
+    from mtbmj.drop import engine_batch
     from mtbmj.sweep import batch
 
     cfg = mtbmj.load_config("S12")
@@ -73,14 +75,14 @@ def phase_costs(vs, duration) -> dict:
 
     for _ in range(3):
         t0 = time.perf_counter()
-        runs = [batch._prepare(job, v, spec) for v in variants]
+        runs = [engine_batch.prepare(job.config, v.overrides, job.duration, i, spec) for i, v in enumerate(variants)]
         t1 = time.perf_counter()
         datas = [mujoco.MjData(runs[0].scene.model)]
         with installed(runs[0].callback):
-            batch._step_group(runs, datas, None, spec)
+            engine_batch.step_group(runs, datas, None, spec)
         t2 = time.perf_counter()
         for r in runs:
-            batch.summarize(r)
+            engine_batch.finish(r)
         t3 = time.perf_counter()
         note("prepare_ms", t1 - t0)
         note("step_ms", t2 - t1)

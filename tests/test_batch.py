@@ -1,4 +1,4 @@
-"""The batched sweep runner (``mtbmj.sweep.batch``): the same records as ``run_drop`` per variant, failing
+"""The batched sweep runner (``mtbmj.sweep.batch`` on ``mtbmj.drop.engine_batch``): the same records as ``run_drop`` per variant, failing
 variants recorded while the others go on, and the journal/resume contract kept."""
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import pandas as pd
 import pytest
 
 import mtbmj
+from mtbmj.drop import chain, engine_batch
 from mtbmj.sweep import batch
 from mtbmj import sweep
 from mtbmj.controllers import compiled
@@ -91,7 +92,7 @@ def test_variant_flagged_during_stepping_goes_to_the_single_path(monkeypatch):
     single = _by_id(sweep.run_batch(job))
     ran_alone = []
     original = batch.run_variant
-    monkeypatch.setattr(batch, "MAX_DISPLACEMENT_M", 0.125)  # only the 130 mm drop goes beyond 125 mm
+    monkeypatch.setattr(engine_batch, "MAX_DISPLACEMENT_M", 0.125)  # only the 130 mm drop goes beyond 125 mm
     monkeypatch.setattr(batch, "run_variant", lambda j, v: ran_alone.append(v.id) or original(j, v))
     batched = _by_id(batch.run_batch_rollout(job))
     assert ran_alone == [variants[1].id]
@@ -102,10 +103,12 @@ def test_variant_flagged_during_stepping_goes_to_the_single_path(monkeypatch):
 
 def test_fast_timestep_check_is_never_more_lenient():
     cfg = mtbmj.load_config("S12")
-    base = batch.compose.setup(cfg)
-    assert batch.setup_of(cfg).fork.spring == base.fork.spring
+    from mtbmj import compose
+
+    base = compose.setup(cfg)
+    assert chain.prepare(cfg)[1].fork.spring == base.fork.spring
     with pytest.raises(mtbmj.ConfigError, match="solver.timestep_s"):
-        batch.setup_of(cfg.with_overrides({"solver.timestep_s": 0.01}))
+        chain.prepare(cfg.with_overrides({"solver.timestep_s": 0.01}))
 
 
 def test_sweep_default_runner_is_batched_and_resume_works(tmp_path, monkeypatch):
@@ -146,10 +149,10 @@ def test_batch_counts_the_steps_it_makes_as_the_engine_does(name, overrides):
     variants = sweep.plan(cfg, [{}], duration=DURATION)
     job = sweep.BatchJob(cfg, "mujoco", DURATION, variants)
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    run = batch._prepare(job, variants[0], spec)
+    run = engine_batch.prepare(job.config, variants[0].overrides, job.duration, 0, spec)
     with installed(run.callback):
-        batch._step_group([run], [mujoco.MjData(run.scene.model)], None, spec)
-    ours = batch._trace(run).info
+        engine_batch.step_group([run], [mujoco.MjData(run.scene.model)], None, spec)
+    ours = engine_batch.trace_of(run).info
     engine = engine_mujoco.run(compose.setup(cfg), DURATION, callback="compiled").info
     keys = ("steps_computed", "steps_refined", "steps_discarded", "substeps", "contact_substeps")
     assert {k: ours[k] for k in keys} == {k: engine[k] for k in keys}

@@ -1,13 +1,14 @@
-"""The drop fit on the batched path (``mtbmj.sweep.batch.drop_traces``): the same engine runs as
+"""The drop fit on the batched path (``mtbmj.drop.engine_batch.drop_traces``): the same engine runs as
 ``run_drop``, so the same Jacobians and fit; multi-start."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from mtbmj.sweep.batch import drop_traces
+from mtbmj.drop.engine_batch import drop_traces
 from mtbmj.controllers import compiled
-from mtbmj.drop.run import resolve, run_drop
+from mtbmj.drop.chain import resolve
+from mtbmj.drop.run import run_drop
 from mtbmj.identify.drop_synthetic import make_drop_record
 from mtbmj.identify.dropfit import fit_drop
 

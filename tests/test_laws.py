@@ -405,10 +405,10 @@ def test_tire_law_switch_semantics():
     assert switching.values(0) is impact and switching.values(1) is contact
     assert switching.force(0.01, 0.1) == pytest.approx(800.0 + 15.0)
     assert switching.force(0.01, 0.1, phase=1) == pytest.approx(700.0 + 12.0)
-    # the event (controllers.tire.SWITCH_RULE, found by engine_mujoco.switch_index, which the MuJoCo
+    # the event (controllers.tire.SWITCH_RULE, found by stepping.switch_index, which the MuJoCo
     # engine and the batched runner use): the tire leaves the ground, or the fork turns from
     # extension into compression. A state row here is (sled, fork, fork velocity).
-    from mtbmj.drop.engine_mujoco import switch_index
+    from mtbmj.drop.stepping import switch_index
 
     def switches(d0, d1, v0, v1):
         return switch_index(np.array([d0, 0.0, v0]), np.array([[d1, 0.0, v1]]), (0, 1, 2)) == 0

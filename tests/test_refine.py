@@ -1,5 +1,5 @@
 """The drop engine steps coarsely over the working stroke and finely only where a stop, the rim or
-a steep velocity band may act (compose.fine_limit, engine_mujoco.stop_index): refined runs equal
+a steep velocity band may act (compose.fine_limit, stepping.stop_index): refined runs equal
 runs at the fine step throughout, the scan never lets a step into a stop unrefined, and the ODE
 reference resolves a fork resting on its stop at any tolerance."""
 import math
@@ -10,7 +10,7 @@ from hypothesis import given, settings, strategies as st
 
 import mtbmj
 from mtbmj import compose
-from mtbmj.drop import engine_mujoco
+from mtbmj.drop import stepping
 from mtbmj.drop.envelope import draws
 from mtbmj.drop.run import run_drop
 
@@ -56,11 +56,11 @@ def test_scan_flags_every_step_that_reaches_a_zone(x0, x1, v, tire):
     h = 5e-4
     previous = np.array([x0 + 0.01, x0, v, v])
     state = np.array([x1 + tire, x1, v, v])
-    k = engine_mujoco.stop_index(previous, state[None, :], COLUMNS, ZONES, h)
+    k = stepping.stop_index(previous, state[None, :], COLUMNS, ZONES, h)
     inside = max(x0, x1) >= ZONES[0] or tire >= ZONES[2] or tire == 0.0
     if inside:
         assert k == 0
-    margin = h * 2 * abs(v) + engine_mujoco.STOP_MARGIN_M
+    margin = h * 2 * abs(v) + stepping.STOP_MARGIN_M
     if max(x0, x1) + margin < ZONES[0] and max(0.01, tire) + margin < ZONES[2] and min(0.01, tire) - margin > 0.0:
         assert k is None
 
@@ -70,9 +70,9 @@ def test_scan_flags_the_velocity_band_and_a_reversal():
     rows = np.zeros((4, 4))
     rows[:, 0] = 0.01  # the tire well into contact
     rows[:, 3] = [0.5, 0.45, -0.3, -0.5]  # crosses zero between rows 1 and 2
-    assert engine_mujoco.stop_index(rows[0], rows[1:], COLUMNS, zones, 1e-4) == 1
+    assert stepping.stop_index(rows[0], rows[1:], COLUMNS, zones, 1e-4) == 1
     rows[:, 3] = [0.5, 0.45, 0.4, 0.35]
-    assert engine_mujoco.stop_index(rows[0], rows[1:], COLUMNS, zones, 1e-4) is None
+    assert stepping.stop_index(rows[0], rows[1:], COLUMNS, zones, 1e-4) is None
 
 
 def test_ode_resolves_a_fork_resting_on_its_stop_at_any_tolerance():
@@ -197,7 +197,7 @@ def test_the_energy_bound_never_misses_a_stop_the_run_reaches():
 def _plan(preset="S4"):
     setup = compose.setup(mtbmj.load_config(preset))
     assert setup.substeps > setup.contact_substeps > 1  # S4 can reach its stops: the two levels differ
-    return setup, engine_mujoco.Stepping(setup, COLUMNS)
+    return setup, stepping.Stepping(setup, COLUMNS)
 
 
 def _rows(x, deflection, v):
@@ -230,7 +230,7 @@ def test_a_stop_coming_within_reach_at_the_contact_level_cuts_and_goes_on_at_the
     fine = np.repeat(rows[1:], plan.substeps, axis=0)
     keep, switch, _ = plan.keep(rows[0], rows[1:], fine)
     bumper, extension = compose.refine_zones(setup)[:2]
-    margin = 2 * h * speed + engine_mujoco.STOP_MARGIN_M  # what one coarse step can cover, and the margin
+    margin = 2 * h * speed + stepping.STOP_MARGIN_M  # what one coarse step can cover, and the margin
     reaches = np.flatnonzero((x[1:] + margin > bumper) | (x[:-1] - margin < extension))
     if reaches.size and not switch:
         assert keep == reaches[0] and plan.fine and plan.substeps == plan.stop_level

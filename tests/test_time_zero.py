@@ -10,7 +10,8 @@ import sys
 import numpy as np
 import pytest
 
-from mtbmj.drop.run import resolve, run_drop
+from mtbmj.drop.chain import resolve
+from mtbmj.drop.run import run_drop
 from mtbmj.identify.drop_synthetic import drop_record_columns, make_drop_record
 from mtbmj.identify.dropfit import fit_drop
 from mtbmj.identify.records import write_csv_text
@@ -167,7 +168,7 @@ def test_fall_parabola_gives_touch_on_a_closed_form_record():
 def test_fork_topping_time_is_where_it_reaches_full_extension():
     """The fork's topping is the start of its plateau at full extension: the same under sensor
     noise (a plateau's minimum would wander along it) and shifted with the run."""
-    from mtbmj.validation.events import detect
+    from mtbmj.drop.events import detect
 
     signals = run_drop("S12", "mujoco", duration=0.8).signals
     clean = detect(signals).get("fork", "topping")

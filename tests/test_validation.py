@@ -16,8 +16,8 @@ from mtbmj.drop.run import run_drop
 from mtbmj.errors import MtbmjError
 from mtbmj.validation import sled_data
 from mtbmj.cli.validate import parse_presets
-from mtbmj.validation.events import EVENTS, SIGNALS, detect
-from mtbmj.validation.metrics import PHASES, compare
+from mtbmj.drop.events import EVENTS, SIGNALS, detect
+from mtbmj.validation.drop_errors import PHASES, compare
 from mtbmj.validation.report import run_validation
 
 EXAMPLE = sled_data.example_path()
@@ -298,24 +298,25 @@ from hypothesis import strategies as st  # noqa: E402
 def test_smoothing_is_scipys_savgol_interp(n, dt, seed):
     from scipy.signal import savgol_filter
 
-    from mtbmj.validation.events import SMOOTH_S, smooth
+    from mtbmj.drop.events import SMOOTH_S
+    from mtbmj.drop.peaks import smooth
 
     rng = np.random.default_rng(seed)
     y = np.cumsum(rng.normal(size=n)) * rng.uniform(0.01, 100)
     width = max(5, int(round(SMOOTH_S / dt)) | 1)
     expected = savgol_filter(y, width, 3, mode="interp") if n > width else y
-    assert np.allclose(smooth(y, dt), expected, rtol=0, atol=1e-10 * (np.max(np.abs(y)) + 1e-300))
+    assert np.allclose(smooth(y, dt, SMOOTH_S), expected, rtol=0, atol=1e-10 * (np.max(np.abs(y)) + 1e-300))
 
 
 @settings(max_examples=60, deadline=None)
 @given(k=st.integers(5, 40), span=st.floats(1e-4, 1.0), seed=st.integers(0, 2**31))
 def test_vertex_parabola_is_numpys_polyfit(k, span, seed):
-    from mtbmj.validation.events import _parabola
+    from mtbmj.drop.peaks import parabola
 
     rng = np.random.default_rng(seed)
     tt = np.linspace(-span, span * rng.uniform(0.2, 1.0), k)
     yy = rng.normal() - rng.uniform(1, 1e3) * tt ** 2 / span ** 2 + rng.normal(size=k) * 0.01
-    got, expected = np.array(_parabola(tt, yy)), np.polyfit(tt, yy, 2)
+    got, expected = np.array(parabola(tt, yy)), np.polyfit(tt, yy, 2)
     assert np.allclose(got, expected, rtol=1e-8, atol=1e-9 * np.max(np.abs(expected)))
 
 
@@ -327,16 +328,16 @@ def test_find_peaks_is_scipys(n, scale, jitter, prominence, seed, direct):
     little jitter; both ways of finding each peak's reach (per-peak scans, binary lifting)."""
     from scipy.signal import find_peaks as scipy_find_peaks
 
-    from mtbmj.validation import events
+    from mtbmj.drop import peaks
 
     rng = np.random.default_rng(seed)
     x = np.round(np.cumsum(rng.normal(size=n)) * scale)
     if jitter:
         x = x + rng.normal(size=n) * 1e-3
-    limit = events.DIRECT_SCAN_LIMIT
-    events.DIRECT_SCAN_LIMIT = limit if direct else 0
+    limit = peaks.DIRECT_SCAN_LIMIT
+    peaks.DIRECT_SCAN_LIMIT = limit if direct else 0
     try:
-        got = events.find_peaks(x, prominence)
+        got = peaks.find_peaks(x, prominence)
     finally:
-        events.DIRECT_SCAN_LIMIT = limit
+        peaks.DIRECT_SCAN_LIMIT = limit
     assert np.array_equal(got, scipy_find_peaks(x, prominence=prominence)[0])

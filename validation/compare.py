@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from mtbmj.drop.run import resolve, run_drop
+from mtbmj.drop.chain import resolve
+from mtbmj.drop.run import run_drop
 from mtbmj.drop.result import DISPLACEMENTS, DropResult
 
 DEFAULT_TOLERANCE_MM = 0.1

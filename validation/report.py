@@ -23,14 +23,15 @@ import numpy as np
 from mtbmj import output
 from mtbmj.controllers import native
 from mtbmj.config import Config
-from mtbmj.drop.run import ENGINES, resolve, run_drop
+from mtbmj.drop.chain import resolve
+from mtbmj.drop.run import ENGINES, run_drop
 from mtbmj.errors import ConfigError
 from mtbmj.drop.result import DropResult
 from mtbmj.workers import process_pool
 
 from mtbmj.validation import sled_data
-from mtbmj.validation.events import EVENTS, LABELS, SIGNALS, Events, detect
-from mtbmj.validation.metrics import PHASES, Metrics, compare
+from mtbmj.drop.events import EVENTS, LABELS, SIGNALS, Events, detect
+from mtbmj.validation.drop_errors import PHASES, Metrics, compare
 
 # The paper's three studies and their colours (Fig. 10): spring blue, damper red, tire green.
 GROUPS = {

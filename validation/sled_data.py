@@ -28,7 +28,8 @@ import numpy as np
 
 from mtbmj.identify.records import Record, RecordError, read_record
 from mtbmj.validation import time_zero
-from mtbmj.validation.time_zero import antialias_delay_s, noise_sigma
+from mtbmj.drop.peaks import noise_sigma
+from mtbmj.validation.time_zero import antialias_delay_s
 from mtbmj.textfile import read_bytes
 
 DISPLACEMENTS = ("sled", "fork", "tire")
@@ -272,4 +273,4 @@ def load(data, touch_s: float | None = None) -> SledRecord:
 
 
 __all__ = ["SledRecord", "SledDataError", "read_sled", "from_record", "from_arrays", "from_result", "find_touch", "load",
-           "example_path", "noise_sigma", "antialias_delay_s"]
+           "example_path", "antialias_delay_s"]

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mtbmj.drop.peaks import noise_sigma
 from mtbmj.errors import MtbmjError
 
 GRAVITY_MM_PER_S2 = 9806.65
@@ -68,17 +69,6 @@ class Touch:
         return {"touch_in_file_s": self.touch_s, "kind": self.kind, "fall_s": self.fall_s,
                 "impact_speed_m_per_s": self.impact_speed_m_per_s, "stderr_s": self.stderr_s,
                 "description": self.describe()}
-
-
-def noise_sigma(y: np.ndarray) -> float:
-    """Standard deviation of white sensor noise, from the third differences (robust: median
-    absolute deviation), which the smooth motion hardly contributes to at 1 kHz."""
-    y = np.asarray(y, float)
-    if y.size < 8:
-        return 0.0
-    d3 = np.diff(y, 3)
-    mad = float(np.median(np.abs(d3 - np.median(d3))))
-    return 1.4826 * mad / np.sqrt(20.0)  # var(d3) = 20 var(noise)
 
 
 def antialias_delay_s(antialias_Hz: float | None, order: int = 4) -> float:
@@ -190,4 +180,4 @@ def find_touch(time_s, tire_mm, name: str = "record", antialias_Hz: float | None
     return found
 
 
-__all__ = ["Touch", "TouchError", "find_touch", "noise_sigma", "antialias_delay_s", "KINDS"]
+__all__ = ["Touch", "TouchError", "find_touch", "antialias_delay_s", "KINDS"]

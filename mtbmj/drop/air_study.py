@@ -9,8 +9,8 @@ from typing import Callable, Mapping
 
 from mtbmj import compose, output
 from mtbmj.config import Config
-from mtbmj.drop.run import resolve
-from mtbmj.drop.study import _run, group_figure, png_bytes, table_markdown
+from mtbmj.drop.chain import resolve
+from mtbmj.drop.study import group_figure, png_bytes, run_job, table_markdown
 from mtbmj.validation import from_results
 from mtbmj.workers import process_pool
 
@@ -63,7 +63,7 @@ def run_air_study(config: Config | str = "air120", overrides: Mapping | None = N
     workers = min(workers or os.cpu_count() or 1, len(jobs))
     results: dict[str, dict] = {c.name: {} for c in configs}
     with process_pool(workers) as pool:
-        for done, result in enumerate(pool.map(_run, jobs), 1):
+        for done, result in enumerate(pool.map(run_job, jobs), 1):
             results[result.name][result.engine] = result
             if progress is not None:
                 progress(f"[{done}/{len(jobs)}] {result.name} {result.engine}: {result.wall_time_s:.2f} s")

@@ -63,7 +63,7 @@ def solve_sag(config: Config | str, load_kg: float, sag_percent: float,
               overrides: Mapping[str, Any] | None = None) -> SagSetting:
     """The pressure (``fork.spring.model = "air"``) or preload (coil models, with the top-out
     spring) that puts the fork at ``sag_percent`` of its travel under ``load_kg``."""
-    from mtbmj.drop.run import resolve
+    from mtbmj.drop.chain import resolve
 
     if not (isinstance(load_kg, (int, float)) and math.isfinite(load_kg) and load_kg > 0):
         raise ConfigError(f"--load-kg: must be a positive number of kg, got {load_kg}")

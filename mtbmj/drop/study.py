@@ -12,7 +12,8 @@ from mtbmj.validation.compare import mm
 from mtbmj import compose, limits, output
 from mtbmj.controllers import native
 from mtbmj.config import Config, study_presets
-from mtbmj.drop.run import resolve, run_drop
+from mtbmj.drop.chain import resolve
+from mtbmj.drop.run import run_drop
 from mtbmj.drop.result import DropResult
 from mtbmj.errors import ConfigError
 from mtbmj.workers import process_pool
@@ -24,7 +25,8 @@ GROUPS = {
 }
 
 
-def _run(job: tuple[Config, str, float | None]) -> DropResult:
+def run_job(job: tuple[Config, str, float | None]) -> DropResult:
+    """One drop of a study, ``(config, engine, duration)``, in a pool worker."""
     config, engine, duration = job
     native.expect_many()  # a study's runs repay loading the compiled laws
     return run_drop(config, engine, duration=duration)
@@ -61,7 +63,7 @@ def run_study(presets: Sequence[str] | None = None, overrides=None, duration: fl
     workers = min(workers or os.cpu_count() or 1, len(jobs))  # never more processes than jobs
     results: dict[str, dict[str, DropResult]] = {n: {} for n in names}
     with process_pool(workers) as pool:
-        for done, result in enumerate(pool.map(_run, jobs), 1):
+        for done, result in enumerate(pool.map(run_job, jobs), 1):
             results[result.name][result.engine] = result
             if progress is not None:
                 progress(f"[{done}/{len(jobs)}] {result.name} {result.engine}: {result.wall_time_s:.2f} s")

@@ -20,7 +20,8 @@ from typing import Mapping
 import numpy as np
 
 from mtbmj.drop.measure import antialias_filter
-from mtbmj.drop.run import resolve, run_drop
+from mtbmj.drop.chain import resolve
+from mtbmj.drop.run import run_drop
 
 from mtbmj.identify.records import Record, read_record, write_csv_text
 

@@ -7,7 +7,7 @@ same 400 Hz anti-aliasing view the sled logger has) interpolated onto the record
 Jacobian is a forward difference with a relative step (1e-3 by default: the drop is smooth in its
 parameters there -- steps of 1e-4 and 1e-3 agree to about 0.1 %, 1e-2 already bends), one engine
 run per column. On the MuJoCo engine its parameter points (with the base point when it is not
-known yet) run as one batch through ``mtbmj.sweep.batch.drop_traces`` (``mujoco.rollout`` on the
+known yet) run as one batch through ``mtbmj.drop.engine_batch.drop_traces`` (``mujoco.rollout`` on the
 compiled laws, ``workers`` threads, bit-identical to ``run_drop``); on the ODE engine (or without
 the compiled laws) the columns run in a pool of ``workers`` processes (2 by default). With
 ``starts=N`` the fit runs from the configuration's start values and N - 1 Latin hypercube points
@@ -62,7 +62,8 @@ from scipy.stats import qmc
 
 from mtbmj.config import SCHEMA, Config
 from mtbmj.controllers import native
-from mtbmj.drop.run import resolve, run_drop
+from mtbmj.drop.chain import resolve
+from mtbmj.drop.run import run_drop
 from mtbmj.errors import ConfigError, MtbmjError
 
 from mtbmj.identify.fitresult import (DEFAULT_BOUND_FACTOR, FitResult, bound_warnings, bounds_reached, correlated_pairs, correlation,
@@ -119,13 +120,11 @@ def _model(values: Sequence[float], keys: Sequence[str], config: Config | None =
 def _fast_signals(config: Config, overrides: Mapping, duration: float, channels: tuple) -> dict:
     """The logged channels of ``run_drop(config, "fast", overrides, duration)`` (the same numbers),
     without what a fit does not read: the other signals and the summary."""
-    from mtbmj.drop import engine_fast
-    from mtbmj.sweep.batch import logged, setup_of
+    from mtbmj.drop import chain, engine_fast
 
-    setup = setup_of(config.with_overrides(overrides))
+    _, setup = chain.prepare(config, overrides, duration, warn=False)
     trace = engine_fast.run(setup, duration)
-    raw = {"time_s": trace.time, "sled_mm": trace.sled * 1e3, "fork_mm": trace.fork * 1e3, "tire_mm": trace.tire * 1e3}
-    return logged(setup, raw, [f"{c}_mm" for c in channels])
+    return chain.finish(setup, trace, "fast", channels=channels, summary=False).logged
 
 
 def _sample(signals: Mapping, times: np.ndarray, channels: tuple) -> np.ndarray:
@@ -178,9 +177,9 @@ def default_bounds(key: str, start: float) -> tuple[float, float]:
 
 def noise_floor(aligned, channels: Sequence[str], keep: np.ndarray) -> float:
     """The record's own noise (mm, RMS over the fitted channels): each channel's white noise from
-    its third differences (``validation.time_zero.noise_sigma``, robust to the impact's few steep
+    its third differences (``drop.peaks.noise_sigma``, robust to the impact's few steep
     samples) over the fitted stretch."""
-    from mtbmj.validation.time_zero import noise_sigma
+    from mtbmj.drop.peaks import noise_sigma
 
     sigmas = [noise_sigma(getattr(aligned, f"{c}_mm")[keep]) for c in channels]
     return float(np.sqrt(np.mean(np.square(sigmas))))
@@ -305,7 +304,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
         if len(new) == 1:
             models = [_model(new[0], free, cfg, engine, duration, times, channels)]
         elif new and batched:
-            from mtbmj.sweep.batch import drop_traces
+            from mtbmj.drop.engine_batch import drop_traces
 
             out = drop_traces(cfg, [dict(zip(free, map(float, p))) for p in new], duration, threads=workers)
             models = [m if isinstance(m, str) else _sample(m, times, channels) for m in out]

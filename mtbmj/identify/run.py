@@ -249,10 +249,10 @@ def _noise_check(record: Record, quantity: str, scale: float, result: FitResult,
                  worst: str) -> dict | None:
     """A bench fit's model check (spring, tire): its residual RMS against the noise floor of the
     record's ``quantity`` (white noise from third differences along the record,
-    ``validation.time_zero.noise_sigma``; SI times ``scale`` gives ``unit``), limit 3 x noise
+    ``drop.peaks.noise_sigma``; SI times ``scale`` gives ``unit``), limit 3 x noise
     (``fitresult.model_check``). ``None`` for a record too short to tell its noise."""
     from mtbmj.identify.fitresult import model_check
-    from mtbmj.validation.time_zero import noise_sigma
+    from mtbmj.drop.peaks import noise_sigma
 
     values = record.columns.get(quantity)
     if values is None or values.size < NOISE_CHECK_MIN_POINTS:

@@ -157,7 +157,7 @@ def spring_curve(config: Config | str, overrides: Mapping | None = None, points:
                  travel_mm: np.ndarray | None = None) -> SpringCurve:
     """The spring curve of ``config`` (a preset name, TOML path or ``Config``); ``travel_mm`` a
     grid to use instead of the default one (it should stay within the top stop and full travel)."""
-    from mtbmj.drop.run import resolve
+    from mtbmj.drop.chain import resolve
 
     cfg = resolve(config, overrides)
     setup = compose.setup(cfg)  # the whole configuration is valid (one line naming the key otherwise)
@@ -422,7 +422,7 @@ def damper_curve(config: Config | str, overrides: Mapping | None = None,
                  max_velocity_mm_per_s: float | None = None) -> DamperCurve:
     """The damper curve of ``config`` up to ``max_velocity_mm_per_s`` in each direction (default:
     a lookup table's range, else 1500 mm/s)."""
-    from mtbmj.drop.run import resolve
+    from mtbmj.drop.chain import resolve
 
     cfg = resolve(config, overrides)
     compose.setup(cfg)
@@ -577,7 +577,7 @@ class Curves:
 def fork_curves(config: Config | str, overrides: Mapping | None = None,
                 max_velocity_mm_per_s: float | None = None) -> Curves:
     """The spring and damper curves of ``config`` (preset name, TOML path or ``Config``)."""
-    from mtbmj.drop.run import resolve
+    from mtbmj.drop.chain import resolve
 
     cfg = resolve(config, overrides)
     spring = spring_curve(cfg)

@@ -1,5 +1,6 @@
-"""Sweeps: plans of variants (``variants``), the single and batched runners (``single``, ``batch``),
-the journaled driver that writes one table (``runner``), and SALib sensitivity (``sensitivity``).
+"""Sweeps: plans of variants (``variants``), the runners (``single``: ``run_drop`` per variant;
+``batch``: on the batched drop engine ``mtbmj.drop.engine_batch``; ``fast``: the fast engine), the
+journaled driver that writes one table (``runner``), and SALib sensitivity (``sensitivity``).
 """
 from mtbmj._package import lazy_exports
 

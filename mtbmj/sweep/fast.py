@@ -1,7 +1,8 @@
 """The sweep runner of the fast engine: each variant of a batch integrated by
-``mtbmj.drop.engine_fast`` and post-processed with only what the summary needs (as the batched
-MuJoCo runner does), in one process without a MuJoCo scene. Same records as ``run_batch`` with
-``engine="fast"``; a variant that fails goes through ``run_variant``, which words its reason."""
+``mtbmj.drop.engine_fast`` and finished with only what the summary needs (``chain.finish`` on the
+logged displacements, as the batched MuJoCo engine does), in one process without a MuJoCo scene.
+Same records as ``run_batch`` with ``engine="fast"``; a variant that fails goes through
+``run_variant``, which words its reason."""
 from __future__ import annotations
 
 import time
@@ -18,9 +19,7 @@ def run_batch_fast(job: BatchJob) -> list[dict]:
 
     if job.engine != "fast" or job.drop is not None or not compiled.available():
         return run_batch(job)
-    from mtbmj.drop import engine_fast, events
-    from mtbmj.drop.measure import tire_forces
-    from mtbmj.sweep.batch import logged, setup_of
+    from mtbmj.drop import chain, engine_fast
 
     records = []
     for variant in job.variants:
@@ -28,14 +27,9 @@ def run_batch_fast(job: BatchJob) -> list[dict]:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("error", RuntimeWarning)  # as the command line does
-                setup = setup_of(job.config.with_overrides(variant.overrides) if variant.overrides else job.config)
+                _, setup = chain.prepare(job.config, variant.overrides, job.duration)
                 trace = engine_fast.run(setup, job.duration)
-                tire = trace.tire
-                raw = {"time_s": trace.time, "sled_mm": trace.sled * 1e3, "fork_mm": trace.fork * 1e3,
-                       "tire_mm": tire * 1e3,
-                       "tire_force_N": tire_forces(setup.tire, tire, trace.tire_velocity, trace.tire_phase)}
-                log = logged(setup, raw, [f"{s}_mm" for s in SIGNALS])
-                summary = events.summarize(setup, trace, log, raw)
+                _, log, summary = chain.finish(setup, trace, "fast", channels=SIGNALS)
         except Exception:  # noqa: BLE001 - the single path runs it again and records the reason
             records.append(run_variant(job, variant))
             continue

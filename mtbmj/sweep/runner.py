@@ -46,7 +46,7 @@ from mtbmj.config import SCHEMA, Config
 from mtbmj.errors import ConfigError, MtbmjError
 
 from mtbmj import output
-from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, MANIFEST, NUMERIC_KINDS, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TIMINGS, TRACES, Variant, _canonical, check_types, flatten_summary, from_csv, grid, parse_vary, sample, variant_id)
+from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, MANIFEST, NUMERIC_KINDS, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TIMINGS, TRACES, Variant, canonical_value, check_types, flatten_summary, from_csv, grid, parse_vary, sample, variant_id)
 from mtbmj.sweep.single import run_batch, run_variant
 
 
@@ -376,7 +376,8 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
     length against the memory available, and ``out_dir`` must be writable and not in use by
     another mtbmj run (``mtbmj.output.claim``, a lock on ``OUT/.lock``). The finished folder (journal, table, manifest,
     timings, traces) replaces the old one in one step (:mod:`mtbmj.output`)."""
-    from mtbmj.drop.run import ENGINES, resolve
+    from mtbmj.drop.chain import resolve
+    from mtbmj.drop.run import ENGINES
 
     started = time.perf_counter()
     if engine not in ENGINES:
@@ -489,7 +490,7 @@ def _sweep(planned, cfg, out, journal, known, started, *, engine, duration, base
         files[TABLE_CSV] = table.map(output.spreadsheet_text).to_csv(index=False).encode()
     manifest = {
         "config": cfg.name, "config_sha256": cfg.digest(), "config_sources": list(cfg.sources),
-        "base_overrides": {k: _canonical(k, v) for k, v in (base_overrides or {}).items()},
+        "base_overrides": {k: canonical_value(k, v) for k, v in (base_overrides or {}).items()},
         "engine": engine, "duration_s": duration, "variants": len(planned),
         "failed": int((table["status"] != "ok").sum()), "backend": backend,
         "versions": _versions(), **(manifest_extra or {}),

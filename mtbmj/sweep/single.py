@@ -2,7 +2,6 @@
 replacement), every error recorded with its reason."""
 from __future__ import annotations
 
-import sys
 import threading
 import time
 import warnings
@@ -10,12 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from mtbmj.errors import MtbmjError
-
-if sys.version_info >= (3, 11):
-    pass
-else:  # pragma: no cover
-    pass
+from mtbmj.drop import chain
 from mtbmj.sweep.variants import SIGNALS, BatchJob, Variant, flatten_summary
 
 _RUN_LOCK = threading.Lock()  # MuJoCo's control callback is process-global: one drop at a time
@@ -39,12 +33,8 @@ def run_variant(job: BatchJob, variant: Variant) -> dict:
         if job.traces:
             traces = {"time_s": np.asarray(result.signals["time_s"], dtype=float)}
             traces.update({f"{s}_mm": np.asarray(result.signals[f"{s}_mm"], dtype=float) for s in SIGNALS})
-    except MtbmjError as exc:
-        record.update(status="failed", reason=str(exc))
-    except RuntimeWarning as exc:
-        record.update(status="failed", reason=f"run diverged ({exc})")
-    except Exception as exc:  # a bug must not stop the other variants; it is recorded
-        record.update(status="failed", reason=f"internal error: {type(exc).__name__}: {exc}")
+    except Exception as exc:  # a bug must not stop the other variants either: every failure is recorded
+        record.update(status="failed", reason=chain.failure_reason(exc))
     record["wall_time_s"] = time.perf_counter() - start
     record["traces"] = traces
     return record

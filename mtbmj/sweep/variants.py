@@ -259,7 +259,9 @@ def check_types(variants: Sequence[Mapping[str, Any]]) -> None:
 # Variants, ids, jobs
 
 
-def _canonical(key: str, value: Any) -> Any:
+def canonical_value(key: str, value: Any) -> Any:
+    """``value`` as a variant id and the manifest hold it: checked and converted as the schema says,
+    or its repr when invalid."""
     try:
         value = check_value(key, value)
     except ConfigError:
@@ -272,7 +274,7 @@ def variant_id(config: Config, overrides: Mapping[str, Any], engine: str = "mujo
     """Stable id of a variant: hash of the base configuration's digest, the run settings and the
     canonical overrides (16 hex digits)."""
     payload = {"config": config.digest(), "engine": engine, "duration": duration,
-               "overrides": {k: _canonical(k, overrides[k]) for k in sorted(overrides)}}
+               "overrides": {k: canonical_value(k, overrides[k]) for k in sorted(overrides)}}
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
 

@@ -15,7 +15,7 @@ from typing import Mapping
 
 import numpy as np
 
-from mtbmj.validation.events import EVENTS, LABELS, SIGNALS, Events, detect
+from mtbmj.drop.events import EVENTS, LABELS, SIGNALS, Events, detect
 
 PHASES = ("all", "impact", "air", "settling")
 
