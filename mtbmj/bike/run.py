@@ -195,12 +195,12 @@ def _check(speed, duration):
 
 def setups(spec) -> tuple[compose.Setup, compose.Setup]:
     """(fork, shock) setups: each configuration with the bike's overrides, composed by ``mtbmj.compose``."""
-    from mtbmj.drop.run import resolve
+    from mtbmj.config import load
 
-    fork = compose.setup(resolve(spec.fork_config, spec.fork_overrides or None))
+    fork = compose.setup(load(spec.fork_config, spec.fork_overrides or None))
     shock_over = dict(spec.shock_overrides)
     shock_over.setdefault("fork.travel_mm", spec.shock_stroke * 1e3)
-    shock = compose.setup(resolve(spec.shock_config, shock_over))
+    shock = compose.setup(load(spec.shock_config, shock_over))
     if abs(shock.travel - spec.shock_stroke) > 1e-9:
         raise ConfigError(f"shock.stroke_mm: {spec.shock_stroke * 1e3:g} mm, but the shock configuration's "
                           f"fork.travel_mm is {shock.travel * 1e3:g} mm")
@@ -287,7 +287,8 @@ def _signals(p: Prepared, states, sensors) -> dict:
     qvel = states[:n, 1 + nq:1 + nq + nv]
     sens = lambda name: sensors[:, model.sensor_adr[model.sensor(name).id]]
     b = p.bike
-    rider_acc = sensors[:, model.sensor_adr[model.sensor("rider_acceleration").id] + 2]
+    # framelinacc carries MuJoCo's gravity offset (it reads +g at rest): the rider's own acceleration
+    rider_acc = sensors[:, model.sensor_adr[model.sensor("rider_acceleration").id] + 2] - p.gravity
     # the rear wheel travel and stroke from the swingarm angle (closed form of the pivot geometry)
     from mtbmj.bike.reference import PlanarBike
 
