@@ -2,7 +2,7 @@
 head angle 65 deg, dt 1e-4 s, implicitfast): simulated time / engine wall time, best of N, one core
 (one process, rollout single-threaded). Target (issue 5): >= 10x. Not a test: nothing is asserted.
 
-The default path is the compiled rolling callback (``controllers.compiled_rolling``: fork law,
+The default path is the compiled rolling callback (``mtbmj.rolling.callback_compiled``: fork law,
 radial tire and its patch search in numba); the Python ``RollCallback`` (the specification and the
 fallback without numba) is timed in the same run, and the two runs are compared (max |diff| of the
 raw fork, tire and axle signals). The compile (or load from numba's cache) happens before the
@@ -44,7 +44,7 @@ def main() -> None:
     args = parser.parse_args()
 
     start = time.perf_counter()
-    from mtbmj.controllers import compiled_rolling
+    from mtbmj.rolling import callback_compiled as compiled_rolling
 
     load_s = time.perf_counter() - start
     walls, totals, result = timed("auto", args.repeat)

@@ -9,7 +9,44 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mtbmj.controllers.guards import SmoothLaw, on_positive_side
+from mtbmj.controllers.guards import LIVE, SmoothLaw, flag, side
+
+
+# The formulas, each written once (see ``controllers.spring``: the law objects call them, the
+# compiled kernels compile the same source).
+def linear_damper_force(coefficient, v):
+    return coefficient * v
+
+
+def bilinear_damper_force(compression, rebound, v, s0=LIVE):
+    return (compression if side(v, s0) else rebound) * v
+
+
+def digressive_damper_force(compression_low, compression_high, compression_knee, rebound_low, rebound_high,
+                            rebound_knee, v, s0=LIVE, s1=LIVE, s2=LIVE):
+    if side(v, s0):
+        if side(v - compression_knee, s1):
+            return compression_low * compression_knee + compression_high * (v - compression_knee)
+        return compression_low * v
+    if side(v + rebound_knee, s2):
+        return rebound_low * v
+    return -rebound_low * rebound_knee + rebound_high * (v + rebound_knee)
+
+
+def table_segment(velocity, n, v):
+    """The segment of a table of ``n`` velocities (ascending) that v falls in, 0 to n - 2."""
+    i = 0
+    for j in range(1, n - 1):
+        if v >= velocity[j]:
+            i += 1
+        else:
+            break
+    return i
+
+
+def table_damper_force(velocity, force, slopes, i, v):
+    """Linear on segment i of the table (extrapolated with the end slopes)."""
+    return force[i] + slopes[i] * (v - velocity[i])
 
 
 @dataclass(frozen=True)
@@ -19,7 +56,7 @@ class LinearDamper(SmoothLaw):
     coefficient: float  # N s/m
 
     def force(self, v, sides=None):
-        return self.coefficient * v
+        return linear_damper_force(self.coefficient, v)
 
 
 @dataclass(frozen=True)
@@ -34,8 +71,7 @@ class BilinearDamper:
         return (v,)
 
     def force(self, v, sides=None):
-        positive = on_positive_side(v, sides, 0)
-        return (self.compression if positive else self.rebound) * v
+        return bilinear_damper_force(self.compression, self.rebound, v, flag(sides, 0))
 
 
 @dataclass(frozen=True)
@@ -56,13 +92,9 @@ class DigressiveDamper:
         return (v, v - self.compression_knee, v + self.rebound_knee)
 
     def force(self, v, sides=None):
-        if on_positive_side(v, sides, 0):
-            if on_positive_side(v - self.compression_knee, sides, 1):
-                return self.compression_low * self.compression_knee + self.compression_high * (v - self.compression_knee)
-            return self.compression_low * v
-        if on_positive_side(v + self.rebound_knee, sides, 2):
-            return self.rebound_low * v
-        return -self.rebound_low * self.rebound_knee + self.rebound_high * (v + self.rebound_knee)
+        return digressive_damper_force(self.compression_low, self.compression_high, self.compression_knee,
+                                       self.rebound_low, self.rebound_high, self.rebound_knee, v,
+                                       flag(sides, 0), flag(sides, 1), flag(sides, 2))
 
 
 class TableDamper:
@@ -79,29 +111,23 @@ class TableDamper:
             f = np.insert(f, i, 0.0)
         self.velocity = tuple(float(a) for a in v)
         self.force_table = tuple(float(a) for a in f)
-        self._slopes = tuple(float(s) for s in np.diff(f) / np.diff(v))
+        self.slopes = tuple(float(s) for s in np.diff(f) / np.diff(v))
         self.n_guards = len(v) - 2
 
     def guards(self, x, v):
         return tuple(v - b for b in self.velocity[1:-1])
 
-    def _segment(self, v, sides):
+    def segment(self, v, sides=None):
         if sides is None:
-            i = 0
-            for b in self.velocity[1:-1]:
-                if v >= b:
-                    i += 1
-                else:
-                    break
-            return i
+            return table_segment(self.velocity, len(self.velocity), v)
         return sum(1 for s in sides if s)
 
     def force(self, v, sides=None):
-        i = self._segment(v, sides)
-        return self.force_table[i] + self._slopes[i] * (v - self.velocity[i])
+        return table_damper_force(self.velocity, self.force_table, self.slopes, self.segment(v, sides), v)
 
     def __repr__(self):
         return f"TableDamper(velocity={self.velocity}, force={self.force_table})"
 
 
-__all__ = ["LinearDamper", "BilinearDamper", "DigressiveDamper", "TableDamper"]
+__all__ = ["linear_damper_force", "bilinear_damper_force", "digressive_damper_force", "table_segment",
+           "table_damper_force", "LinearDamper", "BilinearDamper", "DigressiveDamper", "TableDamper"]

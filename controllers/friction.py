@@ -12,12 +12,82 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from mtbmj.controllers.guards import SmoothLaw, on_positive_side
+from mtbmj.controllers.guards import LIVE, SmoothLaw, flag, side
+
+# LuGre's g(v) has the exponent 2 (Canudas de Wit et al. 1995). Kept as a float so that Python and
+# the compiled kernels make the same pow() call (a literal 2 may be folded into v * v).
+LUGRE_EXPONENT = 2.0
 
 
+# ----------------------------------------------------------------------------------------------
+# The formulas, each written once (see ``controllers.spring``: the law objects call them, the
+# compiled kernels compile the same source).
+# ----------------------------------------------------------------------------------------------
 def smooth_sign(v: float, band: float) -> float:
     """tanh(v / band): sgn(v) for |v| >> band, linear with slope 1/band near zero."""
     return math.tanh(v / band)
+
+
+def coulomb_force(coulomb, band, v):
+    return coulomb * smooth_sign(v, band)
+
+
+def coulomb_viscous_force(coulomb, viscous, band, v):
+    return coulomb * smooth_sign(v, band) + viscous * v
+
+
+def stiction_level(coulomb, breakaway, stiction_band, v, s0=LIVE, s1=LIVE):
+    """Karnopp's level: F_S at rest falling linearly to F_C at |v| = dv."""
+    outside = side(v - stiction_band, s0) or not side(v + stiction_band, s1)
+    level = coulomb
+    if not outside:
+        level += (breakaway - coulomb) * (1.0 - abs(v) / stiction_band)
+    return level
+
+
+def stiction_force(coulomb, breakaway, viscous, stiction_band, band, v, s0=LIVE, s1=LIVE):
+    return stiction_level(coulomb, breakaway, stiction_band, v, s0, s1) * smooth_sign(v, band) + viscous * v
+
+
+def stribeck_level(coulomb, breakaway, stribeck_velocity, exponent, v):
+    return coulomb + (breakaway - coulomb) * math.exp(-abs(v / stribeck_velocity) ** exponent)
+
+
+def stribeck_force(coulomb, breakaway, viscous, stribeck_velocity, exponent, band, v):
+    return stribeck_level(coulomb, breakaway, stribeck_velocity, exponent, v) * smooth_sign(v, band) + viscous * v
+
+
+def lugre_rate(coulomb, breakaway, stribeck_velocity, stiffness, v, z, s0=LIVE):
+    """dz/dt = v - sigma0 |v| z / g(v)."""
+    g = coulomb + (breakaway - coulomb) * math.exp(-((v / stribeck_velocity) ** LUGRE_EXPONENT))
+    speed = v if side(v, s0) else -v
+    return v - stiffness * speed * z / g
+
+
+def lugre_force(stiffness, damping, viscous, rate, v, z):
+    """sigma0 z + sigma1 dz/dt + sigma2 v, given dz/dt."""
+    return stiffness * z + damping * rate + viscous * v
+
+
+def sticking_rate(stiffness, elastic, level, v, z):
+    """The elasto-plastic bristle's dz/dt at the wrapped law's sliding ``level``."""
+    z_ss = level / stiffness
+    if (z > 0.0) != (v >= 0.0) or z == 0.0:
+        return v
+    r = abs(z) / z_ss
+    if r <= elastic:
+        return v
+    if r >= 1.0:
+        alpha = 1.0
+    else:
+        alpha = 0.5 + 0.5 * math.sin(math.pi * (r - 0.5 * (1.0 + elastic)) / (1.0 - elastic))
+    return v * (1.0 - alpha * r)
+
+
+def sticking_force(stiffness, damping, damping_velocity, viscous, rate, v, z):
+    """sigma0 z + sigma1 exp(-(v / v_d)^2) dz/dt + F_v v, given dz/dt."""
+    w = v / damping_velocity
+    return stiffness * z + damping * math.exp(-(w * w)) * rate + viscous * v
 
 
 @dataclass(frozen=True)
@@ -33,7 +103,7 @@ class Coulomb(SmoothLaw):
     coulomb: float  # N
     band: float  # m/s
     def force(self, v, z=0.0, sides=None):
-        return self.coulomb * smooth_sign(v, self.band)
+        return coulomb_force(self.coulomb, self.band, v)
 
 
 @dataclass(frozen=True)
@@ -44,7 +114,7 @@ class CoulombViscous(SmoothLaw):
     viscous: float  # N s/m
     band: float
     def force(self, v, z=0.0, sides=None):
-        return self.coulomb * smooth_sign(v, self.band) + self.viscous * v
+        return coulomb_viscous_force(self.coulomb, self.viscous, self.band, v)
 
 
 @dataclass(frozen=True)
@@ -69,13 +139,8 @@ class Stiction:
         return (v - self.stiction_band, v + self.stiction_band)
 
     def force(self, v, z=0.0, sides=None):
-        outside = on_positive_side(v - self.stiction_band, sides, 0) or not on_positive_side(
-            v + self.stiction_band, sides, 1
-        )
-        level = self.coulomb
-        if not outside:
-            level += (self.breakaway - self.coulomb) * (1.0 - abs(v) / self.stiction_band)
-        return level * smooth_sign(v, self.band) + self.viscous * v
+        return stiction_force(self.coulomb, self.breakaway, self.viscous, self.stiction_band, self.band, v,
+                              flag(sides, 0), flag(sides, 1))
 
 
 @dataclass(frozen=True)
@@ -89,10 +154,8 @@ class Stribeck(SmoothLaw):
     exponent: float
     band: float
     def force(self, v, z=0.0, sides=None):
-        level = self.coulomb + (self.breakaway - self.coulomb) * math.exp(
-            -abs(v / self.stribeck_velocity) ** self.exponent
-        )
-        return level * smooth_sign(v, self.band) + self.viscous * v
+        return stribeck_force(self.coulomb, self.breakaway, self.viscous, self.stribeck_velocity, self.exponent,
+                              self.band, v)
 
 
 @dataclass(frozen=True)
@@ -121,11 +184,10 @@ class LuGre:
         return self.coulomb + (self.breakaway - self.coulomb) * math.exp(-((v / self.stribeck_velocity) ** 2))
 
     def state_rate(self, v, z, sides=None):
-        speed = v if on_positive_side(v, sides, 0) else -v
-        return v - self.stiffness * speed * z / self.g(v)
+        return lugre_rate(self.coulomb, self.breakaway, self.stribeck_velocity, self.stiffness, v, z, flag(sides, 0))
 
     def force(self, v, z=0.0, sides=None):
-        return self.stiffness * z + self.damping * self.state_rate(v, z, sides) + self.viscous * v
+        return lugre_force(self.stiffness, self.damping, self.viscous, self.state_rate(v, z, sides), v, z)
 
 
 def sliding_level(law, v, sides=None) -> tuple[float, float]:
@@ -137,15 +199,10 @@ def sliding_level(law, v, sides=None) -> tuple[float, float]:
     if kind is CoulombViscous:
         return law.coulomb, law.viscous
     if kind is Stribeck:
-        return law.coulomb + (law.breakaway - law.coulomb) * math.exp(
-            -abs(v / law.stribeck_velocity) ** law.exponent), law.viscous
+        return stribeck_level(law.coulomb, law.breakaway, law.stribeck_velocity, law.exponent, v), law.viscous
     if kind is Stiction:
-        outside = on_positive_side(v - law.stiction_band, sides, 0) or not on_positive_side(
-            v + law.stiction_band, sides, 1)
-        level = law.coulomb
-        if not outside:
-            level += (law.breakaway - law.coulomb) * (1.0 - abs(v) / law.stiction_band)
-        return level, law.viscous
+        return stiction_level(law.coulomb, law.breakaway, law.stiction_band, v, flag(sides, 0),
+                              flag(sides, 1)), law.viscous
     raise TypeError(f"{kind.__name__} has no sliding level")
 
 
@@ -195,24 +252,15 @@ class Sticking:
         return self._rate(v, z, level)
 
     def _rate(self, v, z, level):
-        z_ss = level / self.stiffness
-        if (z > 0.0) != (v >= 0.0) or z == 0.0:
-            return v
-        r = abs(z) / z_ss
-        if r <= self.elastic:
-            return v
-        if r >= 1.0:
-            alpha = 1.0
-        else:
-            alpha = 0.5 + 0.5 * math.sin(math.pi * (r - 0.5 * (1.0 + self.elastic)) / (1.0 - self.elastic))
-        return v * (1.0 - alpha * r)
+        return sticking_rate(self.stiffness, self.elastic, level, v, z)
 
     def force(self, v, z=0.0, sides=None):
         level, viscous = sliding_level(self.inner, v, None if sides is None else sides[: self.inner.n_guards])
-        w = v / self.damping_velocity
-        damping = self.damping * math.exp(-(w * w))
-        return self.stiffness * z + damping * self._rate(v, z, level) + viscous * v
+        return sticking_force(self.stiffness, self.damping, self.damping_velocity, viscous, self._rate(v, z, level),
+                              v, z)
 
 
-__all__ = ["smooth_sign", "NoFriction", "Coulomb", "CoulombViscous", "Stiction", "Stribeck", "LuGre", "Sticking",
+__all__ = ["coulomb_force", "coulomb_viscous_force", "stiction_level", "stiction_force", "stribeck_level",
+           "stribeck_force", "lugre_rate", "lugre_force", "sticking_rate", "sticking_force", "LUGRE_EXPONENT",
+           "smooth_sign", "NoFriction", "Coulomb", "CoulombViscous", "Stiction", "Stribeck", "LuGre", "Sticking",
            "sliding_level"]

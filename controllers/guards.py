@@ -16,6 +16,26 @@ def on_positive_side(value: float, sides, index: int) -> bool:
     return sides[index]
 
 
+LIVE = -1  # a guard flag: the branch follows the state
+
+
+def flag(sides, index: int) -> int:
+    """Guard ``index``'s frozen side as the law functions take it: 1 (non-negative side), 0
+    (negative side) or ``LIVE`` (-1: decided by the guard's value)."""
+    if sides is None:
+        return LIVE
+    s = sides[index]
+    return LIVE if s is None else (1 if s else 0)
+
+
+def side(value: float, frozen: int) -> bool:
+    """``on_positive_side`` for the plain law functions (which numba compiles too): the guard's
+    own sign when ``frozen`` is ``LIVE``, else the frozen side."""
+    if frozen < 0:
+        return value >= 0.0
+    return frozen == 1
+
+
 class SmoothLaw:
     """A law with a single smooth branch: no guards."""
 

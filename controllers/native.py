@@ -89,7 +89,7 @@ def _load() -> None:
         from mtbmj.controllers import compiled
 
         if compiled.available():
-            compiled._dispatcher()
+            compiled.dispatcher()
             w = np.zeros((1, 4), complex)
             compiled.modal_filter(np.ones(4, complex), np.zeros(4, complex), np.zeros(4, complex),
                                   np.zeros(4, complex), w, np.zeros((1, 2)), np.empty((1, 2)))

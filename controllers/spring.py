@@ -4,11 +4,66 @@ compression velocity v (m/s), compression positive. Piecewise laws follow the gu
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 from mtbmj.controllers.friction import smooth_sign
-from mtbmj.controllers.guards import SmoothLaw, on_positive_side as _side
+from mtbmj.controllers.guards import LIVE, SmoothLaw, flag, side
+
+
+# ----------------------------------------------------------------------------------------------
+# The formulas, each written once. Plain arithmetic on floats: the law objects below call them,
+# and the compiled kernels (``controllers.kernels``) compile this same source with numba, reading
+# the parameters by name from the law's layout (``controllers.layout``). A trailing ``s*`` argument
+# is a guard's frozen side (``controllers.guards.flag``; LIVE: follow the state).
+# ----------------------------------------------------------------------------------------------
+def linear_spring_force(rate, x):
+    return rate * x
+
+
+def bilinear_spring_force(rate, rate_above_knee, knee, x, s0=LIVE):
+    if side(x - knee, s0):
+        return rate * knee + rate_above_knee * (x - knee)
+    return rate * x
+
+
+def progressive_spring_force(rate, cubic, x):
+    return rate * x + cubic * x * x * x
+
+
+def directional_blend(band, v, compression, rebound):
+    """The compression and rebound curves' forces blended by the smooth sign of v."""
+    w = 0.5 * (1.0 + smooth_sign(v, band))
+    return w * compression + (1.0 - w) * rebound
+
+
+def top_out_force(top_out_rate, preload, engagement, main, x, s0=LIVE):
+    """The main spring's force ``main`` with the preload and the top-out spring."""
+    force = preload + main
+    if not side(x - engagement, s0):
+        force -= top_out_rate * (engagement - x)
+    return force
+
+
+def air_chamber_force(area, absolute, volume, index, atmospheric, has_negative, positive_at_port,
+                      negative_at_port, port, x):
+    """The air force at compression x on its formula (sealed branch; no tangent, no offset)."""
+    if has_negative:
+        d = x - port
+        return area * absolute * ((positive_at_port / (positive_at_port - area * d)) ** index
+                                  - (negative_at_port / (negative_at_port + area * d)) ** index)
+    return area * (absolute * (volume / (volume - area * x)) ** index - atmospheric)
+
+
+def air_spring_force(area, absolute, volume, index, atmospheric, has_negative, positive_at_port, negative_at_port,
+                     port, limit, limit_force, limit_rate, offset, x, s0=LIVE):
+    if has_negative and not side(x - port, s0):
+        return -offset
+    if x - limit >= 0.0:
+        return limit_force + limit_rate * (x - limit) - offset
+    return air_chamber_force(area, absolute, volume, index, atmospheric, has_negative, positive_at_port,
+                             negative_at_port, port, x) - offset
 
 
 @dataclass(frozen=True)
@@ -18,7 +73,7 @@ class LinearSpring(SmoothLaw):
     rate: float  # N/m
 
     def force(self, x, v, sides=None):
-        return self.rate * x
+        return linear_spring_force(self.rate, x)
 
     def energy(self, x):
         return 0.5 * self.rate * x * x
@@ -37,9 +92,7 @@ class BilinearSpring:
         return (x - self.knee,)
 
     def force(self, x, v, sides=None):
-        if _side(x - self.knee, sides, 0):
-            return self.rate * self.knee + self.rate_above_knee * (x - self.knee)
-        return self.rate * x
+        return bilinear_spring_force(self.rate, self.rate_above_knee, self.knee, x, flag(sides, 0))
 
     def energy(self, x):
         if x < self.knee:
@@ -56,7 +109,7 @@ class ProgressiveSpring(SmoothLaw):
     cubic: float  # N/m^3
 
     def force(self, x, v, sides=None):
-        return self.rate * x + self.cubic * x * x * x
+        return progressive_spring_force(self.rate, self.cubic, x)
 
     def energy(self, x):
         return 0.5 * self.rate * x * x + 0.25 * self.cubic * x ** 4
@@ -87,8 +140,7 @@ class DirectionalSpring:
         nc = self.compression.n_guards
         sc = None if sides is None else sides[:nc]
         sr = None if sides is None else sides[nc:]
-        w = 0.5 * (1.0 + smooth_sign(v, self.band))
-        return w * self.compression.force(x, v, sc) + (1.0 - w) * self.rebound.force(x, v, sr)
+        return directional_blend(self.band, v, self.compression.force(x, v, sc), self.rebound.force(x, v, sr))
 
     def energy(self, x):
         return 0.5 * (self.compression.energy(x) + self.rebound.energy(x))
@@ -113,6 +165,7 @@ class TopOutSpring:
     main: object
     top_out_rate: float  # N/m, the top-out spring's own rate
     preload: float = 0.0  # N
+    derived = ("engagement",)
 
     @property
     def engagement(self) -> float:
@@ -128,10 +181,8 @@ class TopOutSpring:
 
     def force(self, x, v, sides=None):
         nm = self.main.n_guards
-        force = self.preload + self.main.force(x, v, None if sides is None else sides[:nm])
-        if not _side(x - self.engagement, sides, nm):
-            force -= self.top_out_rate * (self.engagement - x)
-        return force
+        main = self.main.force(x, v, None if sides is None else sides[:nm])
+        return top_out_force(self.top_out_rate, self.preload, self.engagement, main, x, flag(sides, nm))
 
     def energy(self, x):
         xe = self.engagement
@@ -193,6 +244,7 @@ class AirSpring:
     limit: float = math.inf  # m, compression beyond which the curve continues along its tangent
     offset: float = 0.0  # N, subtracted from the force (carried as a TopOutSpring preload)
     atmospheric: float = P_ATM  # Pa
+    derived = ("absolute", "has_negative", "positive_at_port", "negative_at_port", "limit_force", "limit_rate")
 
     @property
     def has_negative(self) -> bool:
@@ -225,14 +277,10 @@ class AirSpring:
     def air_force(self, x: float, below_port: bool = True) -> float:
         """The air force (N) at compression x on its formula (no tangent continuation, no offset);
         ``below_port`` picks the sealed branch of the negative-chamber model."""
-        a, n = self.area, self.index
-        if self.has_negative:
-            if not below_port:
-                return 0.0
-            d = x - self.port
-            vp, vm = self.positive_at_port, self.negative_at_port
-            return a * self.absolute * ((vp / (vp - a * d)) ** n - (vm / (vm + a * d)) ** n)
-        return a * (self.absolute * (self.volume / (self.volume - a * x)) ** n - self.atmospheric)
+        if self.has_negative and not below_port:
+            return 0.0
+        return air_chamber_force(self.area, self.absolute, self.volume, self.index, self.atmospheric,
+                                 self.has_negative, self.positive_at_port, self.negative_at_port, self.port, x)
 
     def air_rate(self, x: float) -> float:
         """dF/dx (N/m) of ``air_force`` at x (sealed branch)."""
@@ -245,20 +293,18 @@ class AirSpring:
         u = self.volume - self.area * x
         return a * a * self.absolute * n * (self.volume / u) ** n / u
 
-    @property
+    @functools.cached_property
     def limit_force(self) -> float:
         return self.air_force(self.limit) if math.isfinite(self.limit) else math.nan
 
-    @property
+    @functools.cached_property
     def limit_rate(self) -> float:
         return self.air_rate(self.limit) if math.isfinite(self.limit) else math.nan
 
     def force(self, x, v, sides=None):
-        if self.has_negative and not _side(x - self.port, sides, 0):
-            return -self.offset
-        if x - self.limit >= 0.0:
-            return self.limit_force + self.limit_rate * (x - self.limit) - self.offset
-        return self.air_force(x) - self.offset
+        return air_spring_force(self.area, self.absolute, self.volume, self.index, self.atmospheric,
+                                self.has_negative, self.positive_at_port, self.negative_at_port, self.port,
+                                self.limit, self.limit_force, self.limit_rate, self.offset, x, flag(sides, 0))
 
     def _air_energy(self, x: float) -> float:
         a, n = self.area, self.index
@@ -282,5 +328,6 @@ class AirSpring:
         return stored - self.offset * x
 
 
-__all__ = ["LinearSpring", "BilinearSpring", "ProgressiveSpring", "DirectionalSpring", "TopOutSpring",
+__all__ = ["linear_spring_force", "bilinear_spring_force", "progressive_spring_force", "directional_blend",
+           "top_out_force", "air_chamber_force", "air_spring_force", "LinearSpring", "BilinearSpring", "ProgressiveSpring", "DirectionalSpring", "TopOutSpring",
            "AirSpring", "P_ATM"]

@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from mtbmj.controllers.guards import on_positive_side as _side
+from mtbmj.controllers.guards import LIVE, flag, side
 
 STIFFENING_M = 0.6e-3  # p0 of the stops' and the rim's stiffening: 12x the linear force at 2 mm
 # the damping of a stop or the rim sets in with depth, c tanh(DAMPING_RAMP p / p0) dp/dt (76 % at
@@ -35,10 +35,41 @@ def contact_force(rate: float, damping: float, p: float, v: float) -> float:
     """The hard stops' and the rim's force law, written once: at penetration p >= 0 and rate dp/dt
     = v, k p (1 + (p / p0)^2) + c tanh(DAMPING_RAMP p / p0) v (the caller keeps it >= 0: it pushes,
     never pulls). Plain arithmetic on floats: the Python laws call it, and the compiled kernels
-    (``controllers.compiled``, ``compiled_rolling``, ``drop.engine_fast``) compile this same
+    (``controllers.compiled``, ``mtbmj.rolling.callback_compiled``, ``drop.engine_fast``) compile this same
     source with numba, so one edit here changes every engine."""
     r = p / STIFFENING_M
     return rate * p * (1.0 + r * r) + damping * math.tanh(DAMPING_RAMP * r) * v
+
+
+def pushing(rate, damping, p, v, s0=LIVE, s1=LIVE):
+    """A stop's force at penetration p (0 while p < 0, and while ``contact_force`` would pull)."""
+    if not side(p, s0):
+        return 0.0
+    f = contact_force(rate, damping, p, v)
+    return f if side(f, s1) else 0.0
+
+
+def bumper_force_at(bumper_start, bumper_length, bumper_force, x, s0=LIVE):
+    """The bottom-out bumper: rising as the square of its engagement to ``bumper_force``."""
+    s = x - bumper_start
+    if not side(s, s0):
+        return 0.0
+    r = s / bumper_length
+    return bumper_force * r * r
+
+
+def end_stops_force(travel, bumper_length, bumper_force, stop_rate, stop_damping, extension, bumper_start, main,
+                    x, v, s0=LIVE, s1=LIVE, s2=LIVE, s3=LIVE, s4=LIVE):
+    """The main spring's force ``main`` with the bumper, the compression stop and the extension stop."""
+    bumper = bumper_force_at(bumper_start, bumper_length, bumper_force, x, s0)
+    stop = pushing(stop_rate, stop_damping, x - travel, v, s1, s2)
+    top = pushing(stop_rate, stop_damping, -extension - x, -v, s3, s4)
+    return main + bumper + stop - top
+
+
+def rim_force(max_deflection, rate, damping, deflection, deflection_rate, s0=LIVE, s1=LIVE):
+    """The rim through the tire past its maximum deflection."""
+    return pushing(rate, damping, deflection - max_deflection, deflection_rate, s0, s1)
 
 
 def stop_energy(rate: float, p: float) -> float:
@@ -55,6 +86,7 @@ class EndStops:
     stop_rate: float  # N/m, hard stops
     stop_damping: float  # N s/m, hard stops
     extension: float  # m, hard top stop at x = -extension
+    derived = ("bumper_start",)
 
     @property
     def bumper_start(self) -> float:
@@ -82,29 +114,20 @@ class EndStops:
     def stop_forces(self, x, v, sides=None):
         """(bumper, compression stop, extension stop) forces in N, each >= 0 in its own direction."""
         o = self.main.n_guards
-        s = x - self.bumper_start
-        bumper = 0.0
-        if _side(s, sides, o):
-            r = s / self.bumper_length
-            bumper = self.bumper_force * r * r
-        p = x - self.travel
-        stop = 0.0
-        if _side(p, sides, o + 1):
-            f = contact_force(self.stop_rate, self.stop_damping, p, v)
-            if _side(f, sides, o + 2):
-                stop = f
-        q = -self.extension - x
-        top = 0.0
-        if _side(q, sides, o + 3):
-            f = contact_force(self.stop_rate, self.stop_damping, q, -v)
-            if _side(f, sides, o + 4):
-                top = f
-        return bumper, stop, top
+        return (bumper_force_at(self.bumper_start, self.bumper_length, self.bumper_force, x, flag(sides, o)),
+                pushing(self.stop_rate, self.stop_damping, x - self.travel, v, flag(sides, o + 1), flag(sides, o + 2)),
+                pushing(self.stop_rate, self.stop_damping, -self.extension - x, -v, flag(sides, o + 3),
+                        flag(sides, o + 4)))
 
     def force(self, x, v, sides=None):
-        main = self.main.force(x, v, None if sides is None else sides[: self.main.n_guards])
-        bumper, stop, top = self.stop_forces(x, v, sides)
-        return main + bumper + stop - top
+        o = self.main.n_guards
+        main = self.main.force(x, v, None if sides is None else sides[:o])
+        if sides is None:
+            return end_stops_force(self.travel, self.bumper_length, self.bumper_force, self.stop_rate,
+                                   self.stop_damping, self.extension, self.bumper_start, main, x, v)
+        return end_stops_force(self.travel, self.bumper_length, self.bumper_force, self.stop_rate, self.stop_damping,
+                               self.extension, self.bumper_start, main, x, v, flag(sides, o), flag(sides, o + 1),
+                               flag(sides, o + 2), flag(sides, o + 3), flag(sides, o + 4))
 
     def energy(self, x):
         """Elastic energy (J): the main spring, the bumper and the stops' springs."""
@@ -138,15 +161,13 @@ class Rim:
         return (p, contact_force(self.rate, self.damping, p, rate))
 
     def force(self, deflection, rate, sides=None):
-        p = deflection - self.max_deflection
-        if not _side(p, sides, 0):
-            return 0.0
-        f = contact_force(self.rate, self.damping, p, rate)
-        return f if _side(f, sides, 1) else 0.0
+        return rim_force(self.max_deflection, self.rate, self.damping, deflection, rate, flag(sides, 0),
+                         flag(sides, 1))
 
     def energy(self, deflection):
         p = deflection - self.max_deflection
         return stop_energy(self.rate, p) if p > 0.0 else 0.0
 
 
-__all__ = ["EndStops", "Rim", "STIFFENING_M", "DAMPING_RAMP", "contact_force", "stop_energy"]
+__all__ = ["EndStops", "Rim", "STIFFENING_M", "DAMPING_RAMP", "contact_force", "pushing", "bumper_force_at",
+           "end_stops_force", "rim_force", "stop_energy"]

@@ -14,6 +14,23 @@ SWITCH_RULE = ("impact values through the first impact; in-contact values from t
                "or, if it stays on the ground, from the end of the fork's first rebound stroke")
 
 
+def kelvin_voigt_force(rate, damping, deflection, deflection_rate):
+    """max(0, k d + b dd/dt) while d > 0, else 0 (written once; the fast engine compiles it)."""
+    if deflection <= 0.0:
+        return 0.0
+    return max(0.0, rate * deflection + damping * deflection_rate)
+
+
+def floor_correction(factor, wheel_weight, rate, damping, deflection, deflection_rate, wheel_force):
+    """``ContactFloor.correction`` (written once; the drop's compiled callback compiles it)."""
+    if deflection <= 0.0:
+        return 0.0
+    f = rate * deflection + damping * deflection_rate
+    if f <= 0.0:
+        return 0.0
+    return factor * (f + wheel_force - wheel_weight)
+
+
 @dataclass(frozen=True)
 class KelvinVoigt:
     """F = max(0, k d + b dd/dt) while d > 0, else 0: a contact can only push."""
@@ -22,9 +39,7 @@ class KelvinVoigt:
     damping: float  # N s/m
 
     def force(self, deflection, rate):
-        if deflection <= 0.0:
-            return 0.0
-        return max(0.0, self.rate * deflection + self.damping * rate)
+        return kelvin_voigt_force(self.rate, self.damping, deflection, rate)
 
 
 # The rolling tire's damping sets in with the depth of each contact patch, c tanh(DAMPING_RAMP d /
@@ -66,12 +81,7 @@ class ContactFloor:
         """C (N, upward on the wheel) at tire ``deflection`` and its ``rate``, with
         ``wheel_force`` the upward force of the fork and the rim on the wheel (the callback's
         generalized force on the fork joint); 0 while the contact does not push."""
-        if deflection <= 0.0:
-            return 0.0
-        f = self.rate * deflection + self.damping * rate
-        if f <= 0.0:
-            return 0.0
-        return self.factor * (f + wheel_force - self.wheel_weight)
+        return floor_correction(self.factor, self.wheel_weight, self.rate, self.damping, deflection, rate, wheel_force)
 
 
 @dataclass(frozen=True)
@@ -135,5 +145,5 @@ def static_rate_from_pressure(pressure: float) -> float:
     return REFERENCE_STATIC_RATE * pressure / REFERENCE_PRESSURE
 
 
-__all__ = ["KelvinVoigt", "TireLaw", "static_rate_from_pressure", "PRESSURE_RANGE", "IMPACT_OVER_STATIC",
+__all__ = ["kelvin_voigt_force", "floor_correction", "rolling_tire_force", "TIRE_DAMPING_DEPTH_M", "KelvinVoigt", "TireLaw", "static_rate_from_pressure", "PRESSURE_RANGE", "IMPACT_OVER_STATIC",
            "CONTACT_OVER_STATIC"]

@@ -208,7 +208,7 @@ def test_callback_is_a_c_function_pointer_installed_and_restored():
     setup = compose.setup(mtbmj.load_config("S12"))
     sc = scene.build(setup)
     callback = compiled.CompiledForkCallback(sc.model, setup.fork)
-    assert isinstance(callback, ctypes._CFuncPtr) and callback.address == compiled._dispatcher().address
+    assert isinstance(callback, ctypes._CFuncPtr) and callback.address == compiled.dispatcher().address
     previous = lambda m, d: None  # noqa: E731
     mujoco.set_mjcb_control(previous)
     try:
@@ -240,11 +240,11 @@ def test_a_collected_callback_frees_its_slot():
     sc = scene.build(setup)
     callback = compiled.CompiledForkCallback(sc.model, setup.fork)
     slot = callback.slot
-    assert compiled._INTS[slot, compiled.I_MODEL] == sc.model._address
+    assert compiled.REGISTRY.tables["ints"][slot, 0] == sc.model._address
     pointer = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_void_p)(callback.address)
     del callback
     gc.collect()
-    assert compiled._INTS[slot, compiled.I_MODEL] == 0
+    assert compiled.REGISTRY.tables["ints"][slot, 0] == 0
     data = mujoco.MjData(sc.model)
     data.qpos[sc.fork_qpos] = 0.05
     with installed(pointer):  # the dispatcher itself, with no live slot for this model
@@ -331,7 +331,7 @@ def test_two_models_with_two_laws_in_one_rollout():
 def test_fallback_warns_once_when_numba_is_unavailable(monkeypatch):
     setup = compose.setup(mtbmj.load_config("S1"))
     sc = scene.build(setup)
-    monkeypatch.setattr(compiled, "_numba", None)
+    monkeypatch.setattr(compiled, "numba", None)
     monkeypatch.setattr(compiled, "_WARNED", set())
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -455,9 +455,9 @@ slot = dead.slot
 cycle = [dead]
 cycle.append(cycle)  # only the cycle collector frees it
 del dead, cycle
-with compiled._REGISTRY_LOCK:  # as inside a callback's construction
+with compiled.REGISTRY.lock:  # as inside a callback's construction
     gc.collect()  # runs the dead callback's finalizer, which takes the lock
-assert not compiled._OWNED[slot]
+assert not compiled.REGISTRY.owned[slot]
 print("done")
 """
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)

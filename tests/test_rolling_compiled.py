@@ -1,4 +1,4 @@
-"""The compiled rolling callback (controllers.compiled_rolling) against RollCallback, its specification."""
+"""The compiled rolling callback (mtbmj.rolling.callback_compiled) against RollCallback, its specification."""
 import os
 import subprocess
 import sys
@@ -19,7 +19,7 @@ from mtbmj.rolling import terrain as T
 from mtbmj.controllers import installed
 
 compiled = pytest.importorskip("mtbmj.controllers.compiled")
-CR = pytest.importorskip("mtbmj.controllers.compiled_rolling")
+CR = pytest.importorskip("mtbmj.rolling.callback_compiled")
 if not CR.available():
     pytest.skip(f"compiled path unavailable: {compiled.unavailable_reason()}", allow_module_level=True)
 
@@ -205,10 +205,10 @@ def test_a_collected_callback_frees_its_slot():
 
     p = R.prepare("washboard", 5.0)
     slot = p.callback.slot
-    assert CR._OWNED[slot]
+    assert CR.REGISTRY.owned[slot]
     del p
     gc.collect()
-    assert not CR._OWNED[slot] and CR._INTS[slot, CR.R_MODEL] == 0
+    assert not CR.REGISTRY.owned[slot] and CR._INTS[slot, CR.R_MODEL] == 0
 
 
 def test_too_many_patches_reruns_on_the_python_path():
@@ -234,7 +234,7 @@ def test_too_many_patches_reruns_on_the_python_path():
 
 
 def test_fallback_without_numba(monkeypatch):
-    monkeypatch.setattr(compiled, "_numba", None)
+    monkeypatch.setattr(compiled, "numba", None)
     monkeypatch.setattr(compiled, "_WARNED", set())
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -276,7 +276,7 @@ sys.modules["numba"] = None
 warnings.simplefilter("always")
 with warnings.catch_warnings(record=True) as caught:
     from mtbmj.rolling import frontend as rolling
-    from mtbmj.controllers import compiled_rolling
+    from mtbmj.rolling import callback_compiled as compiled_rolling
     assert not compiled_rolling.available()
     r = rolling.run_roll("washboard", 5.0, duration=0.05)
 messages = [str(w.message) for w in caught if "numba" in str(w.message)]

@@ -34,7 +34,8 @@ import numpy as np
 
 from mtbmj import compose
 from mtbmj.compose import Setup
-from mtbmj.controllers import compiled as _compiled
+from mtbmj.controllers import jit as _jit
+from mtbmj.controllers.lawcodes import UnsupportedLaw, law_arrays as _law_arrays
 from mtbmj.controllers.stops import STIFFENING_M
 from mtbmj.errors import ConfigError, RunError
 from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
@@ -56,13 +57,16 @@ Q_WIDTH = 23
 # status codes
 OK, DIVERGED = 0, 1
 
-_numba = _compiled._numba
+_numba = _jit.numba
 if _numba is not None:
     # Module level, as numba's on-disk cache needs (a function built inside another is compiled
     # afresh in every process).
-    fork_force_rate = _compiled.fork_force_rate
-    borrow_f64, borrow_i64 = _compiled.borrow_f64, _compiled.borrow_i64
-    contact_force = _compiled.contact_force  # the one stop/rim law (controllers.stops)
+    from mtbmj.controllers import kernels as _kernels
+
+    fork_force_rate = _kernels.fork_force_rate
+    borrow_f64, borrow_i64 = _kernels.borrow_f64, _kernels.borrow_i64
+    contact_force = _kernels.contact_force  # the one stop/rim law (controllers.stops)
+    kelvin_voigt_force, rim_force = _kernels.kelvin_voigt_force, _kernels.rim_force  # controllers.tire, .stops
     numba = _numba
     jit = dict(cache=True, error_model="numpy", nogil=True)
 
@@ -72,16 +76,11 @@ if _numba is not None:
         if d <= 0.0:
             return 0.0
         if phase == 1:
-            f = q[Q_K1] * d + q[Q_B1] * dd
+            f = kelvin_voigt_force(q[Q_K1], q[Q_B1], d, dd)
         else:
-            f = q[Q_K0] * d + q[Q_B0] * dd
-        f = f if f > 0.0 else 0.0
+            f = kelvin_voigt_force(q[Q_K0], q[Q_B0], d, dd)
         if q[Q_RIM] != 0.0:  # Rim.force
-            p = d - q[Q_RIM_D]
-            if p >= 0.0:
-                r = contact_force(q[Q_RIM_K], q[Q_RIM_C], p, dd)
-                if r >= 0.0:
-                    f += r
+            f += rim_force(q[Q_RIM_D], q[Q_RIM_K], q[Q_RIM_C], d, dd)
         return f
 
     @numba.njit(**jit)
@@ -234,10 +233,10 @@ def kernel():
     a cold first run, compiles it, saying so through ``controllers.compiled.compiling``)."""
     global _WARM
     if _numba is None:
-        raise ConfigError(f"engine: fast needs numba ({_compiled.FALLBACK_MESSAGE.split(':')[0]}); "
+        raise ConfigError(f"engine: fast needs numba ({_jit.FALLBACK_MESSAGE.split(':')[0]}); "
                           "use engine mujoco or ode")
     if not _WARM:
-        with _compiled.compiling("the fast engine", integrate):
+        with _jit.compiling("the fast engine", integrate):
             _warm(integrate)
         _WARM = True
     return integrate
@@ -247,7 +246,7 @@ def _warm(integrate) -> None:
     """Run the kernel once on a trivial law so its compilation happens here, inside the notice."""
     from mtbmj.controllers import ForkLaw, LinearDamper, LinearSpring, NoFriction
 
-    I, P = _compiled.law_arrays(ForkLaw(LinearSpring(1e4), LinearDamper(100.0), NoFriction()))
+    I, P = _law_arrays(ForkLaw(LinearSpring(1e4), LinearDamper(100.0), NoFriction()))
     q = np.zeros(Q_WIDTH)
     q[:11] = [50.0, 2.0, 9.81, 8e4, 100.0, 8e4, 100.0, 1.0, 1e-4, 1.0, 10.0]
     q[Q_BUMPER], q[Q_TRAVEL], q[Q_TOP], q[Q_COARSE], q[Q_FAST] = 1e9, 1e9, -1e9, 1.0, 1e9
@@ -282,8 +281,8 @@ def parameters(setup: Setup, substeps: int) -> np.ndarray:
 
 def law_arrays(setup: Setup):
     try:
-        return _compiled.law_arrays(setup.fork)
-    except _compiled.UnsupportedLaw as error:
+        return _law_arrays(setup.fork)
+    except UnsupportedLaw as error:
         raise ConfigError(f"engine: fast cannot run this fork ({error}); use engine mujoco or ode") from None
 
 

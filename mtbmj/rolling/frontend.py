@@ -8,7 +8,7 @@ damper, friction, as ``compose.setup``) and the radial tire (``mtbmj.rolling.tir
 configuration's tire values) are applied by one control callback through motors, so MuJoCo's
 ``actuatorfrc`` sensors record the exact forces of every step. ``RollCallback`` (Python) is that
 callback's specification; by default runs use its compiled twin
-(``mtbmj.controllers.compiled_rolling``: the fork law, the tire and its patch search in numba,
+(``mtbmj.rolling.callback_compiled``: the fork law, the tire and its patch search in numba,
 same results), and fall back to ``RollCallback`` with a warning when numba is missing
 (``callback="python"`` forces it).
 
@@ -43,6 +43,7 @@ from mtbmj.config import Config
 from mtbmj.errors import ConfigError, FallbackWarning, RunError
 from mtbmj.limits import check_run
 from mtbmj.result import RunOutput
+from mtbmj.rolling.callback import RollCallback
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 
 DRIVE_HZ = 10.0  # bandwidth of the speed servo (critically damped)
@@ -177,101 +178,6 @@ def _add_terrain_visual(spec, terrain) -> None:
                    pos=[(x_lo + x_hi) / 2, 0.0, lo], contype=0, conaffinity=0, group=1, material="terrain")
 
 
-class RollCallback:
-    """Fork law + radial tire + speed servo reference, written into ``ctrl`` each step.
-
-    Acts only on its own model; assigns, never accumulates. The terrain geometry (contact
-    patches) is refreshed every ``refresh`` seconds of simulated time or 5 mm of axle travel.
-    ``damper_scale`` (None = passive) multiplies the fork's hydraulic damper force: the
-    semi-active command of ``mtbmj.rolling.env``."""
-
-    def __init__(self, front: FrontEnd, fork_law, tire: RadialTire, speed: float, x_ref0: float,
-                 refresh: float = REFRESH_S, drive: Drive | None = None):
-        m = front.model
-        self.drive = drive if drive is not None else Drive("servo")
-        self._model = m
-        self._address = m._address
-        self.front = front
-        self.law = fork_law
-        self.tire = tire
-        self.speed = float(speed)
-        self.x_ref0 = float(x_ref0)
-        self.refresh = float(refresh)
-        j = lambda name: (int(m.joint(name).qposadr[0]), int(m.joint(name).dofadr[0]))
-        self.xq, self.xv = j("chassis_x")
-        self.zq, self.zv = j("chassis_z")
-        self.fq, self.fv = j("fork")
-        a = lambda name: int(m.actuator(name).id)
-        self.a_state, self.a_fork = a("friction_state"), a("fork_force")
-        self.a_dp, self.a_dv, self.a_tx, self.a_tz = a("drive_position"), a("drive_velocity"), a("tire_x"), a("tire_z")
-        self.a_probe = a("tire_deflection_probe")
-        self.act_index = int(m.actuator_actadr[self.a_state])
-        self.has_state = fork_law.has_state
-        self.cos, self.sin = front.axis
-        self.patches: list = []
-        self.patch_time = 0.0
-        self.next_refresh = -math.inf
-        self.last_x = math.inf
-        self.refreshes = 0
-        self.calls = 0
-        self.damper_scale = None
-        self._data = None
-        self._arrays = None
-
-    def bind(self, data) -> None:
-        self._data = data
-        self._arrays = (data.qpos, data.qvel, data.act, data.ctrl)
-
-    def reset(self) -> None:
-        self.patches, self.next_refresh, self.last_x = [], -math.inf, math.inf
-
-    def axle_state(self, qpos, qvel):
-        return self.front.axle_state(qpos, qvel, (self.xq, self.zq, self.fq, self.xv, self.zv, self.fv))
-
-    def __call__(self, m, d):
-        if m is not self._model and m._address != self._address:
-            return
-        self.calls += 1
-        if d is self._data:
-            qpos, qvel, act, ctrl = self._arrays
-        else:
-            qpos, qvel, act, ctrl = d.qpos, d.qvel, d.act, d.ctrl
-        t = d.time
-        x = qpos[self.fq]
-        v = qvel[self.fv]
-        law = self.law
-        z = act[self.act_index] if self.has_state else 0.0
-        if self.damper_scale is None:
-            force = law.force(x, v, z) if self.has_state else law.force(x, v)
-        else:
-            force = law.spring.force(x, v) + self.damper_scale * law.damper.force(v) + law.friction.force(v, z)
-        if self.has_state:
-            ctrl[self.a_state] = law.state_rate(v, z)
-        ctrl[self.a_fork] = -force
-        cx, cz, vx, vz = self.axle_state(qpos, qvel)
-        if t >= self.next_refresh or abs(cx - self.last_x) > REFRESH_DISTANCE_M:
-            self.patches = self.tire.patches(cx, cz, t)
-            self.patch_time = t
-            self.next_refresh = t + self.refresh - 1e-12
-            self.last_x = cx
-            self.refreshes += 1
-        patches = self.patches
-        if patches and self.tire.terrain.moving:
-            dt = t - self.patch_time
-            patches = [(qx + sx * dt, qz + sz * dt, nx, nz, sx, sz) for qx, qz, nx, nz, sx, sz in patches]
-        fx, fz, deflection, _, _ = self.tire.force(cx, cz, vx, vz, patches)
-        ctrl[self.a_probe] = deflection
-        ctrl[self.a_tx] = fx
-        ctrl[self.a_tz] = fz
-        if self.drive.mode == "servo":  # the ideal PD servo on x0 + v t (its actuators' own forces)
-            ctrl[self.a_dp] = self.x_ref0 + self.speed * t
-            ctrl[self.a_dv] = self.speed
-        else:  # the rider's (or no) force, through the same actuators: position term 0, velocity term F
-            x, vx = qpos[self.xq], qvel[self.xv]
-            ctrl[self.a_dp] = x
-            ctrl[self.a_dv] = vx + self.drive.force(self.speed, vx) / self.drive.kv
-
-
 def static_sag(setup: compose.Setup, head_angle: float) -> tuple[float, float]:
     """(fork compression m, tire deflection m) at rest on flat ground: the spring carries the
     body weight's component along the fork, m_b g sin(head angle); the tire all the weight."""
@@ -315,7 +221,7 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
     ``"servo"`` (the ideal servo on x0 + v t), ``"coast"``, or a ``controllers.drive.Drive`` with
     other limits (see ``controllers/drive.py``); a drum rig always holds its axle with the servo.
 
-    ``callback``: ``"auto"`` (the compiled callback of ``controllers.compiled_rolling`` when numba
+    ``callback``: ``"auto"`` (the compiled callback of ``mtbmj.rolling.callback_compiled`` when numba
     is available, else ``RollCallback`` with a warning), ``"compiled"`` or ``"python"``."""
     from mtbmj.drop.run import resolve
 
@@ -367,7 +273,7 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
 def _make_callback(kind: str, front, law, tire, speed, x_ref0, refresh, drive=None):
     if kind == "python":
         return RollCallback(front, law, tire, speed, x_ref0, refresh, drive)
-    from mtbmj.controllers import compiled_rolling  # numba is imported on the first compiled run only
+    from mtbmj.rolling import callback_compiled as compiled_rolling  # numba is imported on the first compiled run only
 
     if kind == "compiled":
         return compiled_rolling.CompiledRollCallback(front, law, tire, speed, x_ref0, refresh, drive)

@@ -9,12 +9,13 @@ practice on static terrain).
 
 Design
 ------
-* The fork law is flattened by ``controllers.compiled.flatten`` and evaluated by its compiled
-  interpreter (``fork_force``, ``state_rate``, and the spring/damper/friction parts for a scaled
-  damper); nothing of it is repeated here.
+* The fork law is flattened by ``controllers.lawcodes.flatten`` and evaluated by its compiled
+  kernels (``controllers.kernels``: ``fork_force``, ``state_rate``, and the spring/damper/friction
+  parts for a scaled damper); the tire, the rim and the drive are their modules' own functions
+  compiled (``controllers.jit.law_function``); nothing of them is repeated here.
 * One numba ``cfunc`` serves every ``CompiledRollCallback``: it looks the ``mjModel*`` up in a
-  registry of its own (separate from the fork-only registry of ``controllers.compiled``, so neither
-  dispatcher ever acts on the other's models) and leaves every other model alone. A slot holds
+  registry of its own (a ``controllers.native_data.Registry``, as the drop's callback has, but a
+  separate one, so neither dispatcher ever acts on the other's models) and leaves every other model alone. A slot holds
   integer indices (joints, actuators, array addresses, counters) and float parameters plus the
   callback's state: the contact patches (closest point q, normal n, surface velocity) of the last
   refresh, its time, the next refresh time, the axle x at the refresh.
@@ -22,7 +23,7 @@ Design
   buffers are numpy arrays owned by the callback object; the slot holds their addresses. The patch
   search (``Terrain.polyline`` + ``RadialTire.segment_distances`` + ``RadialTire.patches``) runs
   in compiled code, streaming over the pieces without allocating.
-* ``mjData`` is read through the offsets of ``controllers.compiled.mjdata_layout`` (mujoco's own
+* ``mjData`` is read through the offsets of ``controllers.native_data.mjdata_layout`` (mujoco's own
   struct description), checked against live arrays before first use.
 * The callback state is per model, like ``RollCallback``'s: one ``mjData`` at a time per model.
 
@@ -40,18 +41,17 @@ import weakref
 
 import numpy as np
 
-from mtbmj.controllers import compiled as _c
-from mtbmj.controllers.stops import STIFFENING_M, contact_force as _stops_contact_force
-from mtbmj.controllers.drive import Drive, drive_force as _drive_force
-from mtbmj.controllers.tire import rolling_tire_force as _rolling_tire_force
-from mtbmj.controllers.compiled import FALLBACK_MESSAGE, UnsupportedLaw, flatten, mjdata_layout, unavailable_reason
-
-_numba = _c._numba
+from mtbmj.controllers import drive as _drive
+from mtbmj.controllers.compiled import unavailable_reason
+from mtbmj.controllers.drive import Drive
+from mtbmj.controllers.jit import CACHE, FALLBACK_MESSAGE, OPTIONS, law_function, numba as _numba
+from mtbmj.controllers.lawcodes import FLOAT_WIDTH as LAW_FLOAT_WIDTH, INT_WIDTH as LAW_INT_WIDTH
+from mtbmj.controllers.lawcodes import UnsupportedLaw, flatten
+from mtbmj.controllers.native_data import Registry, mjdata_layout, verify
+from mtbmj.controllers.stops import STIFFENING_M
 
 MAX_PATCHES = 64
 SLOTS = 64
-LAW_INT_WIDTH = _c.INT_WIDTH
-LAW_FLOAT_WIDTH = _c.FLOAT_WIDTH
 
 # integer row of a slot
 (R_MODEL, R_XQ, R_XV, R_ZQ, R_ZV, R_FQ, R_FV, R_A_STATE, R_A_FORK, R_A_DP, R_A_DV, R_A_TX, R_A_TZ, R_A_PROBE,
@@ -66,20 +66,14 @@ INT_WIDTH = 32
 F_PATCHES = 29  # (F_DRIVE_BRAKE = 28 is the last parameter)
 FLOAT_WIDTH = F_PATCHES + 6 * MAX_PATCHES
 
-_INTS = np.zeros((SLOTS, INT_WIDTH), dtype=np.int64)
-_FLOATS = np.zeros((SLOTS, FLOAT_WIDTH), dtype=np.float64)
-_LAW_INTS = np.zeros((SLOTS, LAW_INT_WIDTH), dtype=np.int64)
-_LAW_FLOATS = np.zeros((SLOTS, LAW_FLOAT_WIDTH), dtype=np.float64)
-M_USED, M_INTS, M_FLOATS, M_LAW_INTS, M_LAW_FLOATS, M_QPOS, M_QVEL, M_ACT, M_CTRL, M_TIME = range(10)
-META_WIDTH = 10
-_META = np.zeros(META_WIDTH, dtype=np.int64)
-_META[M_INTS], _META[M_FLOATS] = _INTS.ctypes.data, _FLOATS.ctypes.data
-_META[M_LAW_INTS], _META[M_LAW_FLOATS] = _LAW_INTS.ctypes.data, _LAW_FLOATS.ctypes.data
-REGISTRY_SYMBOL = "mtbmj_rolling_registry_v1"
-_OWNED = np.zeros(SLOTS, dtype=bool)
-# re-entrant: a callback collected by the garbage collector frees its slot (weakref.finalize)
-# wherever the collector runs, also inside a registry operation of this thread
-_REGISTRY_LOCK = threading.RLock()
+REGISTRY = Registry("mtbmj_rolling_registry_v2", SLOTS,
+                    {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
+                     "law_ints": (LAW_INT_WIDTH, np.int64), "law_floats": (LAW_FLOAT_WIDTH, np.float64)},
+                    ("qpos", "qvel", "act", "ctrl", "time"))
+M_USED, M_INTS, M_FLOATS, M_LAW_INTS, M_LAW_FLOATS, M_QPOS, M_QVEL, M_ACT, M_CTRL, M_TIME = (
+    REGISTRY.index[name] for name in ("used", "ints", "floats", "law_ints", "law_floats", "qpos", "qvel", "act",
+                                      "ctrl", "time"))
+_INTS, _FLOATS = REGISTRY.tables["ints"], REGISTRY.tables["floats"]
 
 
 class UnsupportedRolling(TypeError):
@@ -88,39 +82,21 @@ class UnsupportedRolling(TypeError):
 
 COMPILE_SECONDS: float | None = None
 if _numba is not None:
-    import llvmlite.binding as _llvm
-    from llvmlite import ir as _ir
+    from mtbmj.controllers import kernels as _kernels
+    from mtbmj.controllers import tire as _tire
+    from mtbmj.controllers.native_data import address_of as _address_of, f64_pointer as _f64_pointer
+    from mtbmj.controllers.native_data import i64_pointer as _i64_pointer, pointer_field as _pointer_field
     from numba import types as _t
-    from numba.extending import intrinsic as _intrinsic
 
     _compile_start = time.perf_counter()
-    _llvm.add_symbol(REGISTRY_SYMBOL, _META.ctypes.data)
-
-    _address_of, _f64_pointer, _i64_pointer, _pointer_field = (
-        _c._address_of, _c._f64_pointer, _c._i64_pointer, _c._pointer_field)
-    _fork_force, _state_rate = _c.fork_force, _c.state_rate
-    _spring_force, _damper_force, _friction_force = _c._spring_force, _c._damper_force, _c._friction_force
-
-    @_intrinsic
-    def _registry(typingctx, index):
-        """Entry ``index`` of this module's registry header (external symbol ``REGISTRY_SYMBOL``)."""
-        def codegen(context, builder, signature, args):
-            module = builder.module
-            table = _ir.ArrayType(_ir.IntType(64), META_WIDTH)
-            try:
-                symbol = module.get_global(REGISTRY_SYMBOL)
-            except KeyError:
-                symbol = _ir.GlobalVariable(module, table, REGISTRY_SYMBOL)
-                symbol.linkage = "external"
-            at = builder.gep(symbol, [_ir.Constant(_ir.IntType(32), 0), args[0]])
-            return builder.load(at)
-        return _t.int64(_t.intp), codegen
-
-    CACHE = _c.can_cache(lambda: None)  # this file's cache directory (see compiled.can_cache)
-    _jit = dict(cache=CACHE, error_model="numpy", nogil=True)
-    contact_force = _numba.njit(inline="always", **_jit)(_stops_contact_force)  # the one stop/rim law
-    tire_force = _numba.njit(inline="always", **_jit)(_rolling_tire_force)  # the one rolling tire law
-    drive_force = _numba.njit(inline="always", **_jit)(_drive_force)  # the rider's drive (controllers.drive)
+    _registry = REGISTRY.reader()
+    _fork_force, _state_rate = _kernels.fork_force, _kernels.state_rate
+    _spring_force, _damper_force, _friction_force = _kernels.spring_force, _kernels.damper_force, \
+        _kernels.friction_force
+    _jit = OPTIONS
+    rim_force = _kernels.rim_force  # the one rim law (controllers.stops)
+    tire_force = law_function(_tire.rolling_tire_force)  # the one rolling tire law
+    drive_force = law_function(_drive.drive_force)  # the rider's drive (controllers.drive)
 
     @_numba.njit(**_jit)
     def _clip01(value):
@@ -398,10 +374,8 @@ if _numba is not None:
                 f = tire_force(k, b, dp, rate)
                 if f < 0.0:
                     f = 0.0
-                if F[F_RIM_K] > 0.0 and dp - F[F_RIM_D] >= 0.0:  # the rim strikes (Rim.force)
-                    fr = contact_force(F[F_RIM_K], F[F_RIM_C], dp - F[F_RIM_D], rate)  # Rim.force
-                    if fr >= 0.0:
-                        f += fr
+                if F[F_RIM_K] > 0.0:  # the rim strikes (Rim.force)
+                    f += rim_force(F[F_RIM_D], F[F_RIM_K], F[F_RIM_C], dp, rate)
                 if f > 0.0:
                     fx += f * nx
                     fz += f * nz
@@ -430,17 +404,16 @@ _DISPATCHER_LOCK = threading.Lock()
 
 def _dispatcher(model):
     """The compiled rolling dispatcher, its registry header filled with the mjData offsets
-    (checked against live arrays of ``model`` by ``controllers.compiled`` on first use)."""
+    (checked against live arrays of a model once per process, ``native_data.verify``)."""
     global _DISPATCHER
     with _DISPATCHER_LOCK:
         if _DISPATCHER is None:
             if _numba is None:
                 raise RuntimeError(FALLBACK_MESSAGE)
-            _c._dispatcher(model)  # runs (once) the live layout check; raises RuntimeError on mismatch
-            layout = mjdata_layout()
-            for index, name in ((M_QPOS, "qpos"), (M_QVEL, "qvel"), (M_ACT, "act"), (M_CTRL, "ctrl"),
-                                (M_TIME, "time")):
-                _META[index] = layout[name]
+            reason = verify(model)
+            if reason is not None:
+                raise RuntimeError(reason)
+            REGISTRY.bind_layout(mjdata_layout())
             _DISPATCHER = _dispatch
         return _DISPATCHER
 
@@ -448,18 +421,6 @@ def _dispatcher(model):
 def available() -> bool:
     """True when the compiled rolling path can run here."""
     return unavailable_reason() is None
-
-
-def _release(slot: int) -> None:
-    with _REGISTRY_LOCK:
-        _INTS[slot, R_MODEL] = 0  # first: the dispatcher stops serving the slot
-        _INTS[slot] = 0
-        _FLOATS[slot] = 0.0
-        _LAW_INTS[slot] = 0
-        _LAW_FLOATS[slot] = 0.0
-        _OWNED[slot] = False
-        while _META[M_USED] > 0 and not _OWNED[_META[M_USED] - 1]:
-            _META[M_USED] -= 1
 
 
 def _float_field(index: int, doc: str):
@@ -573,23 +534,10 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         if drum:
             floats[F_DRUM_R], floats[F_OMEGA] = ter.radius, ter.omega
         floats[F_NEXT_REFRESH], floats[F_LAST_X] = -math.inf, math.inf
-        with _REGISTRY_LOCK:
-            free = np.flatnonzero(~_OWNED)
-            if not free.size:
-                raise RuntimeError(f"more than {SLOTS} compiled rolling callbacks alive at once")
-            slot = int(free[0])
-            _OWNED[slot] = True
-            _INTS[_INTS[:, R_MODEL] == m._address, R_MODEL] = 0  # retire older ones of this model
-            _LAW_INTS[slot] = 0
-            _LAW_INTS[slot, :len(law_ints)] = law_ints
-            _LAW_FLOATS[slot] = 0.0
-            _LAW_FLOATS[slot, :len(law_floats)] = law_floats
-            _FLOATS[slot] = floats
-            _INTS[slot] = ints
-            _INTS[slot, R_MODEL] = m._address  # last: the slot goes live complete
-            _META[M_USED] = max(_META[M_USED], slot + 1)
+        slot = REGISTRY.claim(m._address, {"ints": ints, "floats": floats, "law_ints": law_ints,
+                                           "law_floats": law_floats}, "compiled rolling callbacks")
         self.slot = slot
-        self._finalizer = weakref.finalize(self, _release, slot)
+        self._finalizer = weakref.finalize(self, REGISTRY.release, slot)
 
     speed = _float_field(F_SPEED, "servo speed (m/s)")
     x_ref0 = _float_field(F_XREF0, "servo reference at t = 0 (m)")
@@ -630,7 +578,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
 
     @property
     def active(self) -> bool:
-        return bool(_OWNED[self.slot]) and _INTS[self.slot, R_MODEL] == self._address and self._finalizer.alive
+        return REGISTRY.live(self.slot, self._address) and self._finalizer.alive
 
     def reset(self) -> None:
         """Forget the patches: the next step recomputes them (RollCallback.reset)."""
@@ -662,7 +610,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         return f"<CompiledRollCallback slot={getattr(self, 'slot', None)} law={getattr(self, 'law', None)!r}>"
 
 
-warn_once = _c._warn_once
+from mtbmj.controllers.compiled import warn_once  # noqa: E402  (one set of warnings for both callbacks)
 
 
 __all__ = ["CompiledRollCallback", "UnsupportedLaw", "warn_once", "available", "UnsupportedRolling", "MAX_PATCHES"]

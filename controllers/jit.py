@@ -1,0 +1,137 @@
+"""numba for the force laws: whether it is here, how the kernels are compiled, and what a user is
+told while they compile.
+
+* ``numba`` is optional: ``numba`` below is the module or None, and ``FALLBACK_MESSAGE`` says what
+  runs instead.
+* ``law_function(fn)`` compiles a plain law function (``controllers.spring`` and the other law
+  modules: the formulas the law objects call) with numba, the other plain functions it calls
+  compiled with it. The function itself stays the plain Python the law objects call: one source,
+  two ways of running it.
+* ``OPTIONS`` are the options every kernel is compiled with (cached on disk where numba can keep a
+  cache, no GIL, numpy's error model); ``compiling`` and ``cold`` log (logger ``mtbmj.compile``)
+  that a first run compiles, and why it waits.
+"""
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import threading
+import types
+
+try:  # numba is optional: without it mtbmj runs the Python laws
+    import numba
+    NUMBA_ERROR: Exception | None = None
+except ImportError as error:  # pragma: no cover - exercised in a subprocess by the tests
+    numba = None
+    NUMBA_ERROR = error
+
+FALLBACK_MESSAGE = "numba not installed: using the Python force laws"
+
+COMPILE_LOG = logging.getLogger("mtbmj.compile")
+# loading from numba's cache takes ~0.1-2 s (a loaded machine); compiling 10 s or more (MTBMJ_COMPILE_NOTICE_S sets it)
+COMPILE_NOTICE_S = float(os.environ.get("MTBMJ_COMPILE_NOTICE_S", "3.0"))
+
+
+def notice(what: str) -> threading.Timer:
+    """Log (INFO, logger ``mtbmj.compile``) that ``what`` is being compiled, if it is still going
+    after ``COMPILE_NOTICE_S``: a cold first run says why it waits; a cached load stays silent.
+    The library only logs; the command line shows the message on stderr. :func:`cold` says so at
+    once where numba's cache shows that nothing is there to load."""
+    timer = threading.Timer(COMPILE_NOTICE_S, _say_compiling, (what,))
+    timer.daemon = True
+    timer.start()
+    return timer
+
+
+def _say_compiling(what: str) -> None:
+    COMPILE_LOG.info(f"compiling {what} for this machine (first run only; numba caches it)...")
+
+
+def say_now_if_cold(timer: threading.Timer, what: str, dispatcher) -> None:
+    """With nothing in numba's cache for ``dispatcher`` (:func:`cold`), say at once that ``what``
+    compiles, instead of after ``timer``."""
+    if cold(dispatcher):
+        timer.cancel()
+        _say_compiling(what)
+
+
+def cold(dispatcher) -> bool:
+    """True when numba's on-disk cache holds no compiled code for ``dispatcher`` that it can load
+    (no index, or one written for other sources): it is about to compile. False when it can load,
+    or when that cannot be told (no disk cache; a numba without these internals): the timer of
+    :func:`_notice` then decides."""
+    try:
+        return not dispatcher._cache._cache_file._load_index()
+    except Exception:  # noqa: BLE001 - numba's internals: fall back to the timer
+        return False
+
+
+@contextlib.contextmanager
+def compiling(what: str, dispatcher=None):
+    """Around code that may compile numba functions (``dispatcher``, if given, is checked with
+    :func:`cold` to say so at once): see ``_notice``."""
+    timer = notice(what)
+    if dispatcher is not None:
+        say_now_if_cold(timer, what, dispatcher)
+    try:
+        yield
+    finally:
+        timer.cancel()
+
+
+
+
+def can_cache(probe) -> bool:
+    """Whether numba can keep compiled code on disk for the file that defines ``probe`` (any
+    function). A read-only install run by a user without a writable home (services, containers)
+    offers no cache directory: numba then raises at decoration ("no locator available"), and the
+    kernels are compiled in memory for the process instead (same code, same results)."""
+    try:
+        numba.njit(cache=True)(probe)  # lazy: nothing is compiled or written
+    except RuntimeError as error:
+        if "cannot cache" not in str(error):
+            raise
+        return False
+    return True
+
+
+CACHE: bool | None = None  # whether the kernels are cached on disk (None: numba missing)
+OPTIONS: dict = {}
+if numba is not None:
+    CACHE = can_cache(lambda: None)
+    OPTIONS = dict(cache=CACHE, error_model="numpy", nogil=True)
+
+_LAW_FUNCTIONS: dict = {}  # plain function -> its compiled twin
+_LAW_GLOBALS: list = []  # the globals of every compiled twin: each sees every other twin by name
+_LAW_LOCK = threading.Lock()
+
+
+def law_function(fn):
+    """``fn`` (a plain law function) compiled with numba, inlined into the kernels that call it.
+
+    numba resolves a function's globals when it compiles it, and a plain function's globals are its
+    module's: the twin is ``fn``'s code with a copy of those globals in which every plain function
+    already handed to ``law_function`` is its compiled twin, so a formula that calls another (the
+    stops call ``contact_force``) compiles as one. Call ``law_function`` for the callees too; the
+    order does not matter (the globals are completed when a twin is made, numba reads them when it
+    compiles, at the first call)."""
+    with _LAW_LOCK:
+        twin = _LAW_FUNCTIONS.get(fn)
+        if twin is None:
+            namespace = dict(fn.__globals__)
+            clone = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
+            clone.__qualname__ = fn.__qualname__
+            clone.__module__ = fn.__module__
+            twin = numba.njit(inline="always", **OPTIONS)(clone)
+            _LAW_FUNCTIONS[fn] = twin
+            _LAW_GLOBALS.append(namespace)
+            for other in _LAW_GLOBALS:
+                for plain, compiled in _LAW_FUNCTIONS.items():
+                    if other.get(plain.__name__) is plain:
+                        other[plain.__name__] = compiled
+        return twin
+
+
+__all__ = ["numba", "FALLBACK_MESSAGE", "CACHE", "OPTIONS", "law_function", "compiling", "cold", "can_cache",
+           "COMPILE_LOG", "notice", "say_now_if_cold"]
