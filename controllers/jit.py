@@ -133,5 +133,11 @@ def law_function(fn):
         return twin
 
 
-__all__ = ["numba", "FALLBACK_MESSAGE", "CACHE", "OPTIONS", "law_function", "compiling", "cold", "can_cache",
+def compiled_twins() -> dict:
+    """plain law function -> its compiled twin, for every function ``law_function`` compiled."""
+    with _LAW_LOCK:
+        return dict(_LAW_FUNCTIONS)
+
+
+__all__ = ["compiled_twins", "numba", "FALLBACK_MESSAGE", "CACHE", "OPTIONS", "law_function", "compiling", "cold", "can_cache",
            "COMPILE_LOG", "notice", "say_now_if_cold"]

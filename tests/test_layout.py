@@ -142,10 +142,9 @@ def test_the_stop_and_rim_formula_is_written_once():
 # --- private names stay in their module (issue 24) -------------------------------------------
 
 # Where a cross-module import of a private name is still allowed, and why; shrink to empty.
-# controllers/ is being split into kernels, MuJoCo-data plumbing and callbacks (issue 24, item 2),
-# which gives its names public ones: until then an import by a controllers module, or of a
-# controllers module's private name, is not checked.
-PRIVATE_IMPORTS_EXEMPT_PACKAGES = {"mtbmj.controllers"}
+# (controllers/ was exempt while it was split into kernels, MuJoCo-data plumbing and callbacks;
+# it is checked like the rest since.)
+PRIVATE_IMPORTS_EXEMPT_PACKAGES: set[str] = set()
 # (importer, "module:name") pairs allowed outside those packages, each with the module that still
 # has to change; a pair no longer used fails test_private_import_allowances_are_all_used.
 PRIVATE_IMPORTS_ALLOWED = {
