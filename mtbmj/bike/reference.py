@@ -284,13 +284,17 @@ class Reference:
 
 
 def static_equilibrium(reference: Reference, guess=None) -> np.ndarray:
-    """q (7,) at rest: every generalised force but the horizontal one balanced (X = 0), solved by
+    """q (7,) of the bike rolling steadily on the start at the set speed (the drive's force 0, the
+    wheels' spin free): every generalised force but the horizontal one balanced (X = 0), solved by
     Newton's method on the closed-form forces (finite-difference Jacobian)."""
     from scipy.optimize import fsolve
 
+    moving = np.zeros(NQ)
+    moving[0] = reference.speed  # rolling at the set speed: the drive's force is 0 there
+
     def residual(u):
         q = np.concatenate(([0.0], u))
-        y = np.concatenate((q, np.zeros(NQ), np.zeros(reference.nf + reference.ns)))
+        y = np.concatenate((q, moving, np.zeros(reference.nf + reference.ns)))
         return reference.forces(0.0, y)[0][1:]
 
     u0 = np.array([-0.06, 0.0, 0.03, 0.2, -0.01, 0.0]) if guess is None else np.asarray(guess, float)
