@@ -28,7 +28,7 @@ import numpy as np
 
 from mtbmj.controllers.callback import ForkCallback
 from mtbmj.controllers.fork import ForkLaw
-from mtbmj.controllers.jit import CACHE, FALLBACK_MESSAGE, compiling, numba
+from mtbmj.controllers.jit import CACHE, FALLBACK_MESSAGE, callback, compiling, numba
 from mtbmj.controllers.lawcodes import (
     FLOAT_WIDTH, I_ACT, I_CALLS, I_COUNT, I_CTRL, I_DOF, I_FLOOR, I_FLOOR_AT, I_MODEL, I_QPOS, I_RIM, I_RIM_AT,
     I_SLED_DOF, I_SLED_QPOS, I_STATE, INT_WIDTH, UnsupportedLaw, flatten, law_arrays,
@@ -87,7 +87,7 @@ if numba is not None:
     rim_force = kernels.rim_force
     _read = REGISTRY.reader()
 
-    @numba.cfunc(numba.types.void(numba.types.voidptr, numba.types.voidptr), cache=CACHE, error_model="numpy")
+    @callback(numba.types.void(numba.types.voidptr, numba.types.voidptr))
     def _dispatch(m, d):
         model = address_of(m)
         ints = numba.carray(i64_pointer(_read(M_INTS)), (SLOTS, INT_WIDTH))

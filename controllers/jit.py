@@ -14,10 +14,12 @@ told while they compile.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import logging
 import os
 import threading
 import types
+from pathlib import Path
 
 try:  # numba is optional: without it mtbmj runs the Python laws
     import numba
@@ -102,6 +104,70 @@ if numba is not None:
     CACHE = can_cache(lambda: None)
     OPTIONS = dict(cache=CACHE, error_model="numpy", nogil=True)
 
+# numba's disk cache keeps a compiled function while its own source file is unchanged; a kernel
+# also holds the law formulas it inlines from the law modules, so its cache entry is keyed on those
+# too: on the sources of every module of controllers/ (read once per process, well under 1 ms).
+# Editing a formula then recompiles every kernel that holds it instead of loading stale code.
+def _controllers_stamp() -> str:
+    digest = hashlib.sha256()
+    for path in sorted(Path(__file__).resolve().parent.glob("*.py")):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+LAW_SOURCES_STAMP = _controllers_stamp()
+_KERNEL_CACHE = None
+
+
+def _kernel_cache_class():
+    """numba's FunctionCache whose source stamp also covers ``LAW_SOURCES_STAMP`` (numba's own
+    locators, each extended; None if this numba lacks the internals, and plain caching is used)."""
+    global _KERNEL_CACHE
+    if _KERNEL_CACHE is None:
+        try:
+            from numba.core import caching
+
+            def stamped(base):
+                def get_source_stamp(self):
+                    return (base.get_source_stamp(self), LAW_SOURCES_STAMP)
+                return type(f"LawSources{base.__name__}", (base,), {"get_source_stamp": get_source_stamp})
+
+            impl = type("LawSourcesCacheImpl", (caching.CompileResultCacheImpl,),
+                        {"_locator_classes": [stamped(c) for c in caching.CompileResultCacheImpl._locator_classes]})
+            _KERNEL_CACHE = type("LawSourcesFunctionCache", (caching.FunctionCache,), {"_impl_class": impl})
+        except Exception:  # noqa: BLE001 - another numba: plain caching
+            _KERNEL_CACHE = False
+    return _KERNEL_CACHE or None
+
+
+def kernel(fn):
+    """``numba.njit(**OPTIONS)(fn)``, its disk cache keyed on the law sources too."""
+    cache = _kernel_cache_class() if CACHE else None
+    if cache is None:
+        return numba.njit(**OPTIONS)(fn)
+    dispatcher = numba.njit(**{**OPTIONS, "cache": False})(fn)
+    dispatcher._cache = cache(fn)
+    return dispatcher
+
+
+def callback(signature):
+    """``numba.cfunc(signature, cache=CACHE, error_model="numpy")``, its disk cache keyed on the
+    law sources too (as numba's decorator builds it, with that cache)."""
+    def build(fn):
+        cache = _kernel_cache_class() if CACHE else None
+        if cache is None:
+            return numba.cfunc(signature, cache=bool(CACHE), error_model="numpy")(fn)
+        from numba.core import sigutils
+        from numba.core.ccallback import CFunc
+
+        result = CFunc(fn, sigutils.normalize_signature(signature), locals={}, options={"error_model": "numpy"})
+        result._cache = cache(fn)
+        result.compile()
+        return result
+    return build
+
+
 _LAW_FUNCTIONS: dict = {}  # plain function -> its compiled twin
 _LAW_GLOBALS: list = []  # the globals of every compiled twin: each sees every other twin by name
 _LAW_LOCK = threading.Lock()
@@ -139,5 +205,5 @@ def compiled_twins() -> dict:
         return dict(_LAW_FUNCTIONS)
 
 
-__all__ = ["compiled_twins", "numba", "FALLBACK_MESSAGE", "CACHE", "OPTIONS", "law_function", "compiling", "cold", "can_cache",
+__all__ = ["kernel", "callback", "LAW_SOURCES_STAMP", "compiled_twins", "numba", "FALLBACK_MESSAGE", "CACHE", "OPTIONS", "law_function", "compiling", "cold", "can_cache",
            "COMPILE_LOG", "notice", "say_now_if_cold"]

@@ -21,7 +21,7 @@ from mtbmj.controllers import guards as _guards
 from mtbmj.controllers import spring as _spring
 from mtbmj.controllers import stops as _stops
 from mtbmj.controllers import tire as _tire
-from mtbmj.controllers.jit import OPTIONS, compiling, law_function, notice, numba, say_now_if_cold
+from mtbmj.controllers.jit import compiling, kernel, law_function, notice, numba, say_now_if_cold
 from mtbmj.controllers.layout import offsets
 from mtbmj.controllers.lawcodes import (
     DA_BILINEAR, DA_DIGRESSIVE, DA_LINEAR, FR_COULOMB, FR_COULOMB_VISCOUS, FR_LUGRE, FR_NONE, FR_STICKING,
@@ -89,17 +89,17 @@ if available:
     # call (two atomic operations per array), which cost more than the law itself: 139 against
     # 39 ns for S1's fork force. The kernels that call the laws in a loop borrow views without
     # a reference count instead, valid while the caller holds the array.
-    @numba.njit(**OPTIONS)
+    @kernel
     def borrow_f64(a):
         """A view of the contiguous 1-d float64 array ``a`` that is not reference-counted."""
         return numba.carray(f64_pointer(a.ctypes.data), a.shape)
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def borrow_i64(a):
         """A view of the contiguous 1-d int64 array ``a`` that is not reference-counted."""
         return numba.carray(i64_pointer(a.ctypes.data), a.shape)
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def spring_force(I, P, x, v):
         """The spring tree's force: its program run on a stack (a wrapper combines what it follows)."""
         stack = stack_buffer()
@@ -136,7 +136,7 @@ if available:
                     P[o + STOPS.stop_damping], P[o + STOPS.extension], P[o + STOPS.bumper_start], stack[top - 1], x, v)
         return stack[0]
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def damper_force(I, P, v):
         code = I[I_DAMPER]
         o = I[I_DAMPER_AT]
@@ -154,7 +154,7 @@ if available:
         return table_damper_force(velocity, P[o + n:o + 2 * n], P[o + 2 * n:o + 3 * n - 1],
                                   table_segment(velocity, n, v), v)
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def sliding_level(code, P, o, v):
         """controllers.friction.sliding_level's level for the static law of ``code`` at P[o:]."""
         if code == FR_STRIBECK:
@@ -166,7 +166,7 @@ if available:
             return P[o + COULOMB_VISCOUS.coulomb]
         return P[o + COULOMB.coulomb]
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def sliding_viscous(code, P, o):
         """controllers.friction.sliding_level's viscous coefficient for the static law at P[o:]."""
         if code == FR_STRIBECK:
@@ -177,25 +177,25 @@ if available:
             return P[o + COULOMB_VISCOUS.viscous]
         return 0.0
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def _sticking_rate(I, P, v, z):
         o = I[I_FRICTION_AT]
         level = sliding_level(I[I_FRICTION_INNER], P, I[I_FRICTION_INNER_AT], v)
         return sticking_rate(P[o + STICKING.stiffness], P[o + STICKING.elastic], level, v, z)
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def _sticking_force(I, P, v, z, rate):
         o = I[I_FRICTION_AT]
         viscous = sliding_viscous(I[I_FRICTION_INNER], P, I[I_FRICTION_INNER_AT])
         return sticking_force(P[o + STICKING.stiffness], P[o + STICKING.damping], P[o + STICKING.damping_velocity],
                               viscous, rate, v, z)
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def _lugre_rate(P, o, v, z):
         return lugre_rate(P[o + LUGRE.coulomb], P[o + LUGRE.breakaway], P[o + LUGRE.stribeck_velocity],
                           P[o + LUGRE.stiffness], v, z)
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def friction_force(I, P, v, z):
         code = I[I_FRICTION]
         o = I[I_FRICTION_AT]
@@ -217,12 +217,12 @@ if available:
         return lugre_force(P[o + LUGRE.stiffness], P[o + LUGRE.damping], P[o + LUGRE.viscous],
                            _lugre_rate(P, o, v, z), v, z)
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def fork_force(I, P, x, v, z):
         """ForkLaw.force(x, v, z) from a flattened law."""
         return spring_force(I, P, x, v) + damper_force(I, P, v) + friction_force(I, P, v, z)
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def state_rate(I, P, v, z):
         """ForkLaw.state_rate(v, z) from a flattened law."""
         if I[I_FRICTION] == FR_STICKING:
@@ -231,7 +231,7 @@ if available:
             return 0.0
         return _lugre_rate(P, I[I_FRICTION_AT], v, z)
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def fork_force_rate(I, P, x, v, z):
         """(fork_force, state_rate) at once: the stick state's rate is worked out once for both."""
         if I[I_FRICTION] == FR_STICKING:
@@ -240,14 +240,14 @@ if available:
             return spring_force(I, P, x, v) + damper_force(I, P, v) + friction, rate
         return fork_force(I, P, x, v, z), state_rate(I, P, v, z)
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def fork_forces(I, P, x, v, z, out):
         """``fork_force`` along a trace: out[i] = ForkLaw.force(x[i], v[i], z[i])."""
         I, P = borrow_i64(I), borrow_f64(P)
         for i in range(x.size):
             out[i] = fork_force(I, P, x[i], v[i], z[i])
 
-    @numba.njit(**OPTIONS)
+    @kernel
     def modal_filter(phi, g_in, g_new, r, w, u, out):
         """measure.logger_filter's recursion: y = 2 Re sum r (w + g_new u); w <- phi w + g_in u."""
         for s in range(u.shape[0]):

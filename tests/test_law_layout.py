@@ -126,3 +126,22 @@ def test_the_law_objects_run_their_plain_functions():
     finally:
         spring.bilinear_spring_force = original
     assert spring.BilinearSpring(1.0, 2.0, 0.1).force(0.2, 0.0) == pytest.approx(0.1 + 0.2)
+
+
+def test_a_kernel_cached_on_disk_is_keyed_on_the_law_sources():
+    """A kernel inlines formulas from the law modules, so numba's disk cache must not serve it once
+    one of them changed: its entries are stamped with the sources of all of controllers/."""
+    pytest.importorskip("numba")
+    import hashlib
+
+    from mtbmj.controllers import compiled, jit, kernels
+
+    digest = hashlib.sha256()
+    for path in sorted((ROOT / "controllers").glob("*.py")):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    assert jit.LAW_SOURCES_STAMP == digest.hexdigest()
+    if not jit.CACHE:
+        pytest.skip("numba keeps no disk cache here")
+    for cached in (kernels.fork_force, kernels.fork_forces, compiled.dispatcher()):
+        assert cached._cache._impl.locator.get_source_stamp()[1] == digest.hexdigest()

@@ -68,9 +68,8 @@ if _numba is not None:
     contact_force = _kernels.contact_force  # the one stop/rim law (controllers.stops)
     kelvin_voigt_force, rim_force = _kernels.kelvin_voigt_force, _kernels.rim_force  # controllers.tire, .stops
     numba = _numba
-    jit = dict(cache=True, error_model="numpy", nogil=True)
 
-    @numba.njit(**jit)
+    @_jit.kernel
     def tire_force(d, dd, phase, q):
         """TireLaw.force(d, dd, phase): KelvinVoigt of the phase, pushing only, plus the rim."""
         if d <= 0.0:
@@ -83,7 +82,7 @@ if _numba is not None:
             f += rim_force(q[Q_RIM_D], q[Q_RIM_K], q[Q_RIM_C], d, dd)
         return f
 
-    @numba.njit(**jit)
+    @_jit.kernel
     def rhs(I, P, q, s, x, sd, xd, z, phase):
         """(ds, dx, dsd, dxd, dz)/dt: the equations of ``engine_ode._Model.rhs``."""
         f_fork, z_rate = fork_force_rate(I, P, x, xd, z)
@@ -92,7 +91,7 @@ if _numba is not None:
         wdd = q[Q_G] + (f_fork - f_tire) / q[Q_MW]
         return sd, xd, sdd, sdd - wdd, z_rate
 
-    @numba.njit(**jit)
+    @_jit.kernel
     def guards(y, phase, q):
         """The event functions (see the module docstring): their signs change at an event."""
         d = y[0] - y[1]
@@ -111,7 +110,7 @@ if _numba is not None:
         x = y[1]
         return d > 0.0, force > 0.0, y[3] >= 0.0, rim, x >= q[Q_BUMPER], x >= q[Q_TRAVEL], x <= q[Q_TOP]
 
-    @numba.njit(**jit)
+    @_jit.kernel
     def on_event(y, phase, before, after, q):
         """The tire phase after an event (guard signs ``before`` -> ``after`` across it): the
         switch (``controllers.tire.SWITCH_RULE``) when the tire leaves the ground or the fork turns
@@ -120,7 +119,7 @@ if _numba is not None:
             return 1
         return phase
 
-    @numba.njit(**jit)
+    @_jit.kernel
     def rk4(I, P, q, y, phase, h):
         s, x, sd, xd, z = y
         a = rhs(I, P, q, s, x, sd, xd, z, phase)
@@ -134,7 +133,7 @@ if _numba is not None:
                 sd + w * (a[2] + 2.0 * b[2] + 2.0 * c[2] + d[2]), xd + w * (a[3] + 2.0 * b[3] + 2.0 * c[3] + d[3]),
                 z + w * (a[4] + 2.0 * b[4] + 2.0 * c[4] + d[4]))
 
-    @numba.njit(**jit)
+    @_jit.kernel
     def advance(I, P, q, y, phase, h, counts):
         """One Runge-Kutta step of length ``h`` from ``y``, cut at every event in it (bisection on
         the step length to ``EVENT_TIME_S``) and resumed from there: (state, phase) at its end."""
@@ -164,7 +163,7 @@ if _numba is not None:
                 break
         return y, phase
 
-    @numba.njit(**jit)
+    @_jit.kernel
     def near(y0, y1, h, q):
         """Whether a step of length ``h`` from ``y0`` to ``y1`` may have met something stiffer
         than the coarse step allows (``engine_mujoco.stop_index``'s zones): an end stop, the rim,
@@ -186,7 +185,7 @@ if _numba is not None:
             return True
         return max(abs(v0), abs(v1)) + dv > q[Q_FAST]
 
-    @numba.njit(**jit)
+    @_jit.kernel
     def integrate(I, P, q, y0, phase, first, last, out, phases, counts):
         """Step from grid index ``first`` (state ``y0``, tire ``phase``) to ``last``, writing the
         state at each grid point into ``out`` (and back into ``y0``) and the phase into

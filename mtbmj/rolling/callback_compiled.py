@@ -44,7 +44,7 @@ import numpy as np
 from mtbmj.controllers import drive as _drive
 from mtbmj.controllers.compiled import unavailable_reason
 from mtbmj.controllers.drive import Drive
-from mtbmj.controllers.jit import CACHE, FALLBACK_MESSAGE, OPTIONS, law_function, numba as _numba
+from mtbmj.controllers.jit import FALLBACK_MESSAGE, callback, kernel, law_function, numba as _numba
 from mtbmj.controllers.lawcodes import FLOAT_WIDTH as LAW_FLOAT_WIDTH, INT_WIDTH as LAW_INT_WIDTH
 from mtbmj.controllers.lawcodes import UnsupportedLaw, flatten
 from mtbmj.controllers.native_data import Registry, mjdata_layout, verify
@@ -93,12 +93,11 @@ if _numba is not None:
     _fork_force, _state_rate = _kernels.fork_force, _kernels.state_rate
     _spring_force, _damper_force, _friction_force = _kernels.spring_force, _kernels.damper_force, \
         _kernels.friction_force
-    _jit = OPTIONS
     rim_force = _kernels.rim_force  # the one rim law (controllers.stops)
     tire_force = law_function(_tire.rolling_tire_force)  # the one rolling tire law
     drive_force = law_function(_drive.drive_force)  # the rider's drive (controllers.drive)
 
-    @_numba.njit(**_jit)
+    @kernel
     def _clip01(value):
         """np.clip(value, 0.0, 1.0)"""
         if value < 0.0:
@@ -107,7 +106,7 @@ if _numba is not None:
             return 1.0
         return value
 
-    @_numba.njit(**_jit)
+    @kernel
     def static_window(X, Z, n, x_lo, x_hi, PX, PZ):
         """Terrain.polyline(x_lo, x_hi) into PX, PZ; returns the number of points."""
         lo, hi = 0, n
@@ -141,7 +140,7 @@ if _numba is not None:
             m += 1
         return m
 
-    @_numba.njit(**_jit)
+    @kernel
     def drum_window(A, RAD, n, omega, radius, t, x_lo, x_hi, PX, PZ, W, W2, J, J2):
         """DrumTerrain.polyline(x_lo, x_hi, t) into PX, PZ (W, W2, J, J2: scratch of n)."""
         wt = omega * t
@@ -202,7 +201,7 @@ if _numba is not None:
             PZ[k] = r * math.cos(a) - radius
         return m
 
-    @_numba.njit(**_jit)
+    @kernel
     def _emit(F, I, best, bx, bz, cx, cz):
         if best <= 1e-9:
             return
@@ -224,7 +223,7 @@ if _numba is not None:
             F[o + 5] = 0.0
         I[R_NPATCH] = p + 1
 
-    @_numba.njit(**_jit)
+    @kernel
     def find_patches(I, F, PX, PZ, m, cx, cz):
         """RadialTire.patches(cx, cz) over the polyline PX[:m], PZ[:m], streamed piece by piece
         (RadialTire.segment_distances), into the slot's patch rows."""
@@ -285,7 +284,7 @@ if _numba is not None:
         if in_run:
             _emit(F, I, best, bx, bz, cx, cz)
 
-    @_numba.njit(**_jit)
+    @kernel
     def refresh_patches(I, F, cx, cz, t):
         """The patch search of RollCallback at a refresh, on the slot's terrain arrays."""
         n = I[R_NPTS]
@@ -303,7 +302,7 @@ if _numba is not None:
             m = static_window(A, B, n, cx - reach, cx + reach, PX, PZ)
         find_patches(I, F, PX, PZ, m, cx, cz)
 
-    @_numba.cfunc(_t.void(_t.voidptr, _t.voidptr), cache=CACHE, error_model="numpy")
+    @callback(_t.void(_t.voidptr, _t.voidptr))
     def _dispatch(m, d):
         model = _address_of(m)
         ints = _numba.carray(_i64_pointer(_registry(M_INTS)), (SLOTS, INT_WIDTH))
