@@ -17,8 +17,21 @@ import math
 
 class StraightStretches:
     def __init__(self, terrain, reach: float):
-        self.x = [float(v) for v in terrain.x]
-        self.z = [float(v) for v in terrain.z]
+        # the profile's corners: vertices where the slope changes (collinear neighbours merged, the
+        # flat continuations before the first and after the last point included)
+        x = [float(terrain.x[0]) - 1.0] + [float(v) for v in terrain.x] + [float(terrain.x[-1]) + 1.0]
+        z = [float(terrain.z[0])] + [float(v) for v in terrain.z] + [float(terrain.z[-1])]
+        keep_x, keep_z = [x[0]], [z[0]]
+        for i in range(1, len(x) - 1):
+            ax, az = x[i] - keep_x[-1], z[i] - keep_z[-1]
+            bx, bz = x[i + 1] - x[i], z[i + 1] - z[i]
+            if ax > 0.0 and bx > 0.0 and ax * bz == bx * az:
+                continue  # on the line through its neighbours: not a corner
+            keep_x.append(x[i])
+            keep_z.append(z[i])
+        keep_x.append(x[-1])
+        keep_z.append(z[-1])
+        self.x, self.z = keep_x, keep_z
         self.reach = float(reach)
 
     def segment(self, cx: float):
@@ -27,15 +40,14 @@ class StraightStretches:
         within reach)."""
         x, z, reach = self.x, self.z, self.reach
         i = bisect.bisect_right(x, cx) - 1
-        if i < 0:
-            x0, z0, x1, z1 = x[0] - 1.0, z[0], x[0], z[0]
-            lo, hi = -math.inf, x[0]
-        elif i >= len(x) - 1:
-            x0, z0, x1, z1 = x[-1], z[-1], x[-1] + 1.0, z[-1]
-            lo, hi = x[-1], math.inf
-        else:
-            x0, z0, x1, z1 = x[i], z[i], x[i + 1], z[i + 1]
-            lo, hi = x0, x1
+        if i < 0:  # before the profile (flat): the first stretch continued
+            i = 0
+        x0, z0, x1, z1 = x[i], z[i], x[min(i + 1, len(x) - 1)], z[min(i + 1, len(x) - 1)]
+        lo = -math.inf if i == 0 else x0
+        hi = math.inf if i >= len(x) - 2 else x1
+        if i >= len(x) - 1:  # past the profile (flat): the last stretch continued
+            x0, z0, x1, z1 = x[-2], z[-2], x[-1], z[-1]
+            lo, hi = (x[-2] if len(x) > 2 else -math.inf), math.inf
         if not (cx - reach >= lo and cx + reach <= hi) or x1 <= x0:
             return None
         return x0, z0, x1, z1, lo + reach, hi - reach

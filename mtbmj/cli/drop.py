@@ -58,6 +58,8 @@ def _engines(text: str) -> list[str]:
 
 
 def cmd_crosscheck(args) -> int:
+    if args.bike:
+        return _crosscheck_bike(args)
     if args.roll is not None:
         return _crosscheck_roll(args)
     from mtbmj.errors import MtbmjError
@@ -85,6 +87,25 @@ def _crosscheck_roll(args) -> int:
                          "with the rolling reference at 0.02 mm and 1 %")
     check = crosscheck(args.roll, args.speed, args.config, args.head_angle, args.duration, overrides(args.set),
                        args.drive or "rider")
+    print(check.line())
+    return 0 if check.passed else 1
+
+
+def _crosscheck_bike(args) -> int:
+    """``crosscheck BIKE --bike --roll SCENARIO --speed V``: the bike on MuJoCo against its own ODE
+    reference; one line, exit 1 when not within 0.1 mm of travel at both ends and 1 % of the
+    tire-load peaks."""
+    from mtbmj.errors import MtbmjError
+    from mtbmj.bike.crosscheck import crosscheck
+
+    if args.roll is None or args.speed is None:
+        raise MtbmjError("--bike: give the terrain with --roll SCENARIO and the speed with --speed M_PER_S")
+    if args.engines != "mujoco" or args.tolerance_mm != 0.1 or args.head_angle is not None or args.set:
+        raise MtbmjError("--engines, --tolerance-mm, --head-angle and --set: do not apply to a bike cross-check (the "
+                         "bike's description sets its geometry and laws)")
+    if args.drive not in (None, "rider", "coast"):
+        raise MtbmjError(f"--drive: a bike is driven by its rider or coasts, not {args.drive}")
+    check = crosscheck(args.config, args.roll, args.speed, args.duration, args.drive or "rider")
     print(check.line())
     return 0 if check.passed else 1
 
@@ -123,5 +144,9 @@ def add_parser(sub) -> None:
     p.add_argument("--speed", type=float, help="--roll: speed in m/s")
     p.add_argument("--head-angle", type=float, help="--roll: head angle in degrees (default as mtbmj roll)")
     p.add_argument("--drive", choices=("rider", "servo", "coast"), help="--roll: the drive (default rider)")
+    p.add_argument("--bike", action="store_true",
+                   help="CONFIG names a bike (mtbmj bike's presets or a bike TOML): its run over --roll SCENARIO at "
+                        "--speed against the bike's own ODE reference, travel at both ends within 0.1 mm and tire-load "
+                        "peaks within 1 %%")
     add_run_options(p)
     p.set_defaults(func=cmd_crosscheck)
