@@ -27,11 +27,13 @@ _LAZY = {
     "crosscheck": "mtbmj.validation.compare",
     "run_roll": "mtbmj.rolling.frontend",
     "RollResult": "mtbmj.rolling.frontend",
+    "run_bike": "mtbmj.bike.run",
+    "BikeResult": "mtbmj.bike.run",
     "MtbmjError": "mtbmj.errors",
     "ConfigError": "mtbmj.errors",
     "RunError": "mtbmj.errors",
 }
-__all__ = ['Config', 'ConfigError', 'DropResult', 'MtbmjError', 'RollResult', 'RunError', 'crosscheck', 'load_config', 'preset_names', 'run_drop', 'run_roll', 'run_study', 'solve_sag', 'study_presets', 'write_study']
+__all__ = ['BikeResult', 'Config', 'ConfigError', 'DropResult', 'MtbmjError', 'RollResult', 'RunError', 'crosscheck', 'load_config', 'preset_names', 'run_bike', 'run_drop', 'run_roll', 'run_study', 'solve_sag', 'study_presets', 'write_study']
 
 
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

@@ -282,7 +282,7 @@ class Reference:
         n = math.hypot(fx, fz)
         dx = dz = 0.0
         if n > 0.0 and self.drive.mode != "coast":
-            f = self.drive.force(self.speed, qd[0])
+            f = self.drive.force(self.speed, float(M[0] @ qd) / M[0, 0])  # the centre of mass's speed
             limit = self.traction * n
             f = min(max(f, -limit), limit)
             dx, dz = f * fz / n, -f * fx / n

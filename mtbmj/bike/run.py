@@ -12,12 +12,12 @@ rolled at the set speed. One control callback (``BikeCallback``) applies, each e
   the swingarm (at the wheel: F_s / LR);
 * the radial tire (``mtbmj.rolling.tire.RadialTire``, with the rim) at each axle, each on the same
   terrain profile (the rear meets what the front met a wheelbase later);
-* the drive: ``controllers.drive.Drive``'s speed controller (rider limits of the whole bike) as a
-  force along the rear tire's contact tangent, at most ``traction`` times the rear tire's load, none
-  in the air; or coasting.
+* the drive: ``controllers.drive.Drive``'s speed controller (rider limits of the whole bike) on the
+  horizontal speed of the whole centre of mass (bike and rider), as a force along the rear tire's
+  contact tangent, at most ``traction`` times the rear tire's load, none in the air; or coasting.
 
 Conventions: travel and stroke compression positive, zero at full extension; pitch nose up
-positive; tire loads are each tire's total radial force (N); the rider's vertical acceleration is
+positive; speed the horizontal speed of the centre of mass of bike and rider; tire loads are each tire's total radial force (N); the rider's vertical acceleration is
 the rider body's (gravity excluded, up positive).
 """
 from __future__ import annotations
@@ -81,6 +81,7 @@ class BikeCallback:
         self.a_shock_probe = a("shock_force_probe")
         self.sites = (int(m.site("front_axle").id), int(m.site("rear_axle").id))
         self.frame = int(m.body("frame").id)
+        self.com_velocity = int(m.sensor_adr[m.sensor("com_velocity").id])  # x of the centre of mass's velocity
         self.pivot_x = bike.spec.pivot[0]
         self.rear_z0 = bike.spec.rear_axle[1]
         from mtbmj.bike.contact import StraightStretches
@@ -154,7 +155,7 @@ class BikeCallback:
         fx, fz = rear
         n = math.hypot(fx, fz)
         if n > 0.0 and self.drive.mode != "coast":
-            f = self.drive.force(self.speed, qvel[self.xv])
+            f = self.drive.force(self.speed, d.sensordata[self.com_velocity])
             limit = self.traction * n
             f = min(max(f, -limit), limit)
             ctrl[self.a_drive[0]] = f * fz / n
@@ -312,7 +313,7 @@ def _signals(p: Prepared, states, sensors) -> dict:
     return {
         "time_s": states[:n, 0],
         "x_m": X,
-        "speed_m_per_s": qvel[:, b.dof_index("bike_x")],
+        "speed_m_per_s": sensors[:, model.sensor_adr[model.sensor("com_velocity").id]],
         "front_travel_mm": qf * 1e3,
         "rear_travel_mm": w * 1e3,
         "stroke_mm": stroke * 1e3,
@@ -348,6 +349,13 @@ def _summary(p: Prepared, raw: dict) -> dict:
                        "std_N": float(f.std()), "variation": float(f.std() / f.mean()) if f.mean() > 0 else None,
                        "off_ground_s": float(np.sum(f <= 0.0) * dt)}
     speed = raw["speed_m_per_s"]
+    from mtbmj.ride import metrics
+
+    rear_velocity = np.gradient(raw["rear_travel_mm"], t) if t.size > 1 else np.zeros_like(t)
+    ride = {"front": metrics.summarize(t, raw["front_travel_mm"], p.fork_setup.travel * 1e3,
+                                       velocity_mm_per_s=raw["fork_velocity_mm_per_s"]),
+            "rear": metrics.summarize(t, raw["rear_travel_mm"], p.spec.leverage.full_travel * 1e3,
+                                      velocity_mm_per_s=rear_velocity)}
     return {
         "bike": p.spec.name,
         "scenario": p.terrain.describe(),
@@ -375,6 +383,8 @@ def _summary(p: Prepared, raw: dict) -> dict:
         "drive": {"mode": p.drive.mode, "push_limit_N": p.drive.push, "power_limit_W": p.drive.power,
                   "brake_limit_N": p.drive.brake, "traction": p.traction,
                   "work_J": float(np.sum(raw["drive_force_N"] * speed) * dt)},
+        # what riders read from telemetry (mtbmj.ride.metrics), each end in its own travel
+        "ride_metrics": ride,
     }
 
 
