@@ -71,41 +71,6 @@ class PlanarBike:
         self.arms = (np.array([r.arm_x, r.arm_z]), np.array([r.arm_x - r.com[0], r.arm_z + r.arm_length - r.com[1]]),
                      r.arm_stiffness, r.arm_damping, arms_rest)
 
-    # -- points: (mass, r (frame coords), dr/dq (2 x 7, internal columns only), r''_q bias) ------
-    def points(self, q, qd):
-        th, qf, phi, zr, thr = q[2], q[3], q[4], q[5], q[6]
-        out = []
-        z = np.zeros((2, NQ))
-        out.append((self.m_frame, self.c_frame, z.copy(), np.zeros(2)))
-        d = z.copy()
-        d[:, 3] = self.u
-        out.append((self.m_front, self.front0 + qf * self.u, d, np.zeros(2)))
-        rp = _rot(-phi)
-        for m, rho in ((self.m_arm, self.arm_rho), (self.m_rear, self.rear_rho)):
-            d = z.copy()
-            turned = rp @ rho
-            d[:, 4] = -(_J @ turned)
-            out.append((m, self.pivot + turned, d, -qd[4] ** 2 * turned))
-        d = z.copy()
-        d[:, 5] = (0.0, 1.0)
-        out.append((self.m_rider, self.c_rider + np.array([0.0, zr]), d, np.zeros(2)))
-        return out
-
-    def jacobian(self, q, r, dr):
-        """World-velocity Jacobian (2 x 7) of a frame-carried point at r with internal dr/dq."""
-        R = _rot(q[2])
-        jac = R @ dr
-        jac[:, 0] += (1.0, 0.0)
-        jac[:, 1] += (0.0, 1.0)
-        jac[:, 2] += R @ (_J @ r)
-        return jac
-
-    def rotations(self):
-        """(inertia, angular-velocity weights over q) of each body with pitch inertia."""
-        w = lambda **k: np.array([0.0, 0.0, k.get("th", 0.0), 0.0, k.get("phi", 0.0), 0.0, k.get("thr", 0.0)])
-        return [(self.i_frame, w(th=1.0)), (self.i_lower, w(th=1.0)), (self.i_arm, w(th=1.0, phi=-1.0)),
-                (self.i_rider, w(th=1.0, thr=1.0))]
-
     def mass_matrix(self, q) -> np.ndarray:
         return self.dynamics(np.asarray(q, float), np.zeros(NQ))[0]
 
@@ -186,20 +151,6 @@ class PlanarBike:
         Q[1] += fz
         Q[2] += -rz * lx + rx * lz
         Q[k] += dx * lx + dz * lz
-
-    def front_axle(self, q, qd):
-        r = self.front0 + q[3] * self.u
-        dr = np.zeros((2, NQ))
-        dr[:, 3] = self.u
-        jac = self.jacobian(q, r, dr)
-        return _rot(q[2]) @ r, jac
-
-    def rear_axle(self, q, qd):
-        turned = _rot(-q[4]) @ self.rear_rho
-        r = self.pivot + turned
-        dr = np.zeros((2, NQ))
-        dr[:, 4] = -(_J @ turned)
-        return _rot(q[2]) @ r, self.jacobian(q, r, dr)
 
     def wheel_travel(self, phi) -> tuple[float, float]:
         """(w m, dw/dphi m/rad): the rear axle's rise in frame coordinates and its rate."""

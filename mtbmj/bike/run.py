@@ -81,7 +81,11 @@ class BikeCallback:
         self.a_shock_probe = a("shock_force_probe")
         self.sites = (int(m.site("front_axle").id), int(m.site("rear_axle").id))
         self.frame = int(m.body("frame").id)
-        self.com_velocity = int(m.sensor_adr[m.sensor("com_velocity").id])  # x of the centre of mass's velocity
+        # the centre of mass's horizontal speed is the X row of M qvel over the whole mass (the
+        # horizontal momentum), computed at every evaluation: RK4's inner stages skip the sensors,
+        # so the com_velocity sensor would hold the step's start there
+        self._momentum = np.zeros(m.nv)
+        self.total_mass = float(m.body_subtreemass[self.frame])
         self.pivot_x = bike.spec.pivot[0]
         self.rear_z0 = bike.spec.rear_axle[1]
         from mtbmj.bike.contact import StraightStretches
@@ -155,7 +159,8 @@ class BikeCallback:
         fx, fz = rear
         n = math.hypot(fx, fz)
         if n > 0.0 and self.drive.mode != "coast":
-            f = self.drive.force(self.speed, d.sensordata[self.com_velocity])
+            mujoco.mj_mulM(m, d, self._momentum, qvel)
+            f = self.drive.force(self.speed, self._momentum[self.xv] / self.total_mass)
             limit = self.traction * n
             f = min(max(f, -limit), limit)
             ctrl[self.a_drive[0]] = f * fz / n
@@ -301,14 +306,15 @@ def _signals(p: Prepared, states, sensors) -> dict:
     rear = np.hypot(sens("rear_tire_x"), sens("rear_tire_z"))
     th = qpos[:, b.qpos_index("pitch")]
     X = b.x0 + qpos[:, b.qpos_index("bike_x")]
-    Z = b.z0 + qpos[:, b.qpos_index("bike_z")]
     fx, fz = b.spec.front_axle
     qf = qpos[:, b.qpos_index("fork")]
     u = (-math.cos(b.spec.head_angle), math.sin(b.spec.head_angle))
     lx, lz = fx + qf * u[0], fz + qf * u[1]
     front_x = X + np.cos(th) * lx - np.sin(th) * lz
-    rr = [planar.rear_axle(np.array([0, 0, t_, 0, a, 0, 0.0]), None)[0] for t_, a in zip(th, phi)]
-    rear_x = X + np.array([r[0] for r in rr])
+    rho = np.subtract(b.spec.rear_axle, b.spec.pivot)
+    rear_lx = b.spec.pivot[0] + np.cos(phi) * rho[0] + np.sin(phi) * rho[1]  # rear axle, frame coordinates
+    rear_lz = b.spec.pivot[1] - np.sin(phi) * rho[0] + np.cos(phi) * rho[1]
+    rear_x = X + np.cos(th) * rear_lx - np.sin(th) * rear_lz
     drive = np.hypot(sens("drive_x"), sens("drive_z")) * np.where(sens("drive_x") >= 0.0, 1.0, -1.0)
     return {
         "time_s": states[:n, 0],
@@ -330,7 +336,6 @@ def _signals(p: Prepared, states, sensors) -> dict:
         "terrain_rear_mm": p.terrain.height(rear_x) * 1e3,
         "fork_velocity_mm_per_s": qvel[:, b.dof_index("fork")] * 1e3,
         "stroke_velocity_mm_per_s": np.gradient(stroke, states[:n, 0]) * 1e3 if n > 1 else np.zeros(n),
-        "_z_mm": Z * 1e3,
     }
 
 

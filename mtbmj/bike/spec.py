@@ -17,7 +17,6 @@ import math
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any, Mapping
 
 import numpy as np
 
@@ -268,9 +267,6 @@ def load(ref: str) -> BikeSpec:
     if leverage.full_stroke > stroke * (1.0 + 1e-9):
         raise ConfigError(f"shock.stroke_mm: {stroke / MM:g} mm is shorter than the leverage curve needs over "
                           f"{leverage.full_travel / MM:g} mm of wheel travel ({leverage.full_stroke / MM:.2f} mm)")
-    # geometry
-    ls = math.hypot(rear[0] - pivot[0], rear[1] - pivot[1])
-    rd = table.get("rider", {})
     rider_mass = _number(table, "rider", "mass_kg", positive=True)
     on_bike = _number(table, "rider", "on_bike_mass_kg", nonneg=True)
     pedals = _point(table, "rider", "pedals_mm")
