@@ -127,6 +127,10 @@ def test_drop_fit_bad_free_key_and_bounds(records, tmp_path, capsys):
     assert "no --free given: fitting tire.impact_rate_N_per_mm, fork.spring.preload_N" in capsys.readouterr().out
     assert cli.main(["fit", "drop", str(sled), "--free", "fork.spring.preload_N", "--bound", "x", "--out", str(out)]) == 2
     assert "--bound" in capsys.readouterr().err
+    for empty in ("", ",", " , "):  # a list left empty by mistake is refused, not read as "the default"
+        assert cli.main(["fit", "drop", str(sled), "--free", empty, "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "--free" in err[0] and "names no key" in err[0]
     assert not out.exists()
 
 

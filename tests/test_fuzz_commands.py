@@ -134,7 +134,9 @@ BOUNDS = st.one_of(st.tuples(st.sampled_from(["tire.impact_rate_N_per_mm", "fork
 @fuzz_settings("fit_drop")
 @example(free="fork.spring.preload_N", bounds=[], starts="1", engine="fast", duration=None)
 @given(free=FREE, bounds=st.lists(BOUNDS, max_size=2), starts=st.sampled_from(["1", "0", "-1", "1001", "x", "nan"]),
-       engine=st.sampled_from(["fast", "fast", "ode", "x"]), duration=st.sampled_from([None, "0.05", "0", "abc"]))
+       # (the ODE engine's fit of the example takes 30-40 s where the fast engine's takes 6: it comes
+       # up now and then, as in the other commands' tests; the engine's own fit is tested elsewhere)
+       engine=st.sampled_from(["fast"] * 6 + ["ode", "x"]), duration=st.sampled_from([None, "0.05", "0", "abc"]))
 def test_generated_fit_drop_free_keys_and_bounds(tmp_path, capfd, free, bounds, starts, engine, duration):
     _, out = _fresh(tmp_path)
     argv = ["fit", "drop", "example", "--free", free, "--starts", starts, "--engine", engine]

@@ -45,6 +45,9 @@ def cmd_fit(args) -> int:
     if not 1 <= args.starts <= MAX_STARTS:
         raise MtbmjError(f"--starts: must be in 1..{MAX_STARTS}, got {args.starts}")
     free = [k.strip() for k in (args.free or "").split(",") if k.strip()]
+    if args.free is not None and not free:  # `--free ""` or `--free ,`: a list left empty by mistake
+        raise MtbmjError(f"--free {args.free!r}: names no key; give comma-separated configuration keys, "
+                         "or leave --free out for the default ones")
     clicks = _clicks(args.clicks) if args.clicks else None
     data = list(args.data)
     if data == ["example"] and not Path("example").exists():
