@@ -4,7 +4,7 @@ Installed as ``mtbmj.controllers``. Each law is a small immutable object; ``Fork
 spring, a damper and a friction law; ``ForkCallback`` and ``installed`` put it into MuJoCo.
 """
 from mtbmj.controllers.callback import ForkCallback, installed
-from mtbmj.controllers.damper import BilinearDamper, DigressiveDamper, LinearDamper, TableDamper
+from mtbmj.controllers.damper import BilinearDamper, DigressiveDamper, LinearDamper, OrificeDamper, TableDamper
 from mtbmj.controllers.fork import ForkLaw
 from mtbmj.controllers.friction import (Coulomb, CoulombViscous, LuGre, NoFriction, Stiction, Sticking, Stribeck,
                                        smooth_sign)
@@ -17,7 +17,7 @@ from mtbmj.controllers.tire import ContactFloor, KelvinVoigt, TireLaw
 __all__ = [
     "ForkCallback", "installed", "ForkLaw",
     "LinearSpring", "BilinearSpring", "ProgressiveSpring", "DirectionalSpring", "TopOutSpring", "AirSpring", "P_ATM",
-    "LinearDamper", "BilinearDamper", "DigressiveDamper", "TableDamper",
+    "LinearDamper", "BilinearDamper", "DigressiveDamper", "OrificeDamper", "TableDamper",
     "NoFriction", "Coulomb", "CoulombViscous", "Stiction", "Stribeck", "LuGre", "Sticking", "smooth_sign",
     "EndStops", "Rim",
     "ContactFloor", "KelvinVoigt", "TireLaw",

@@ -33,6 +33,12 @@ def digressive_damper_force(compression_low, compression_high, compression_knee,
     return -rebound_low * rebound_knee + rebound_high * (v + rebound_knee)
 
 
+def orifice_damper_force(bleed, compression, rebound, v):
+    """A bleed in parallel with an orifice: bleed v + c v |v|, c by direction."""
+    c = compression if v >= 0.0 else rebound
+    return bleed * v + c * v * abs(v)
+
+
 def table_segment(velocity, n, v):
     """The segment of a table of ``n`` velocities (ascending) that v falls in, 0 to n - 2."""
     i = 0
@@ -97,6 +103,27 @@ class DigressiveDamper:
                                        flag(sides, 0), flag(sides, 1), flag(sides, 2))
 
 
+@dataclass(frozen=True)
+class OrificeDamper(SmoothLaw):
+    """A bleed and an orifice in parallel: F = b v + c v |v|, with c_c in compression and c_r in
+    rebound.
+
+    Flow through a sharp-edged orifice drops the pressure by rho / 2 (Q / (C_d A))^2, so the force
+    of a piston pushing oil through it rises as the square of its speed (Dixon, *The Shock Absorber
+    Handbook*, 2nd ed., Wiley 2007, on orifice flow); a bleed (a laminar path) adds a force linear
+    in the speed. Without shims that open (``DigressiveDamper``) this is the classic passive
+    damper: progressive, soft at low speed. The force and its slope (b) are continuous at v = 0,
+    where only the curvature changes with the direction: no guard is needed there.
+    """
+
+    bleed: float  # N s/m
+    compression: float  # N s^2/m^2, v >= 0
+    rebound: float  # N s^2/m^2, v < 0
+
+    def force(self, v, sides=None):
+        return orifice_damper_force(self.bleed, self.compression, self.rebound, v)
+
+
 class TableDamper:
     """Lookup table F(v) from dyno peak force vs velocity, linear between points and extrapolated
     with the end slopes. The table passes through (0, 0); the offset at zero velocity is the
@@ -129,5 +156,5 @@ class TableDamper:
         return f"TableDamper(velocity={self.velocity}, force={self.force_table})"
 
 
-__all__ = ["linear_damper_force", "bilinear_damper_force", "digressive_damper_force", "table_segment",
+__all__ = ["orifice_damper_force", "OrificeDamper", "linear_damper_force", "bilinear_damper_force", "digressive_damper_force", "table_segment",
            "table_damper_force", "LinearDamper", "BilinearDamper", "DigressiveDamper", "TableDamper"]

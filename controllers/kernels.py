@@ -24,7 +24,7 @@ from mtbmj.controllers import tire as _tire
 from mtbmj.controllers.jit import compiling, kernel, law_function, notice, numba, say_now_if_cold
 from mtbmj.controllers.layout import offsets
 from mtbmj.controllers.lawcodes import (
-    DA_BILINEAR, DA_DIGRESSIVE, DA_LINEAR, FR_COULOMB, FR_COULOMB_VISCOUS, FR_LUGRE, FR_NONE, FR_STICKING,
+    DA_BILINEAR, DA_DIGRESSIVE, DA_LINEAR, DA_ORIFICE, FR_COULOMB, FR_COULOMB_VISCOUS, FR_LUGRE, FR_NONE, FR_STICKING,
     FR_STICTION, FR_STRIBECK, I_DAMPER, I_DAMPER_AT, I_DAMPER_N, I_FRICTION, I_FRICTION_AT, I_FRICTION_INNER,
     I_FRICTION_INNER_AT, I_NSPRING, I_SPRING, SP_AIR, SP_BILINEAR, SP_DIRECTIONAL, SP_LINEAR, SP_PROGRESSIVE,
     SP_TOPOUT,
@@ -41,6 +41,7 @@ DIRECTIONAL, TOPOUT, AIR = offsets(_spring.DirectionalSpring), offsets(_spring.T
 STOPS = offsets(_stops.EndStops)
 LINEAR_DAMPER, BILINEAR_DAMPER, DIGRESSIVE = offsets(_damper.LinearDamper), offsets(_damper.BilinearDamper), \
     offsets(_damper.DigressiveDamper)
+ORIFICE = offsets(_damper.OrificeDamper)
 COULOMB, COULOMB_VISCOUS = offsets(_friction.Coulomb), offsets(_friction.CoulombViscous)
 STICTION, STRIBECK, LUGRE = offsets(_friction.Stiction), offsets(_friction.Stribeck), offsets(_friction.LuGre)
 STICKING = offsets(_friction.Sticking)
@@ -69,6 +70,7 @@ if available:
     linear_damper_force = law_function(_damper.linear_damper_force)
     bilinear_damper_force = law_function(_damper.bilinear_damper_force)
     digressive_damper_force = law_function(_damper.digressive_damper_force)
+    orifice_damper_force = law_function(_damper.orifice_damper_force)
     table_segment = law_function(_damper.table_segment)
     table_damper_force = law_function(_damper.table_damper_force)
     coulomb_force = law_function(_friction.coulomb_force)
@@ -149,6 +151,8 @@ if available:
                 P[o + DIGRESSIVE.compression_low], P[o + DIGRESSIVE.compression_high],
                 P[o + DIGRESSIVE.compression_knee], P[o + DIGRESSIVE.rebound_low], P[o + DIGRESSIVE.rebound_high],
                 P[o + DIGRESSIVE.rebound_knee], v)
+        if code == DA_ORIFICE:
+            return orifice_damper_force(P[o + ORIFICE.bleed], P[o + ORIFICE.compression], P[o + ORIFICE.rebound], v)
         n = I[I_DAMPER_N]  # DA_TABLE: velocity[n], force[n], slopes[n - 1]
         velocity = P[o:o + n]
         return table_damper_force(velocity, P[o + n:o + 2 * n], P[o + 2 * n:o + 3 * n - 1],

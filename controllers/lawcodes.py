@@ -5,7 +5,7 @@ Plain Python, no numba. A law's numbers go into the float row in its layout's or
 (``controllers.layout``, derived from the dataclass), and the kernels read them back by name; the
 integer row says which law sits where: the spring tree (Linear, Bilinear, Progressive, Air,
 Directional, TopOut, EndStops, nested at will) as a short postfix program of (code, offset) pairs,
-the damper (Linear, Bilinear, Digressive, Table) and the friction law (NoFriction, Coulomb,
+the damper (Linear, Bilinear, Digressive, Orifice, Table) and the friction law (NoFriction, Coulomb,
 CoulombViscous, Stiction, Stribeck, LuGre, and Sticking around a static law) one code each.
 Registering a law: a code below, its class in the matching table, a branch in the kernel.
 """
@@ -21,7 +21,7 @@ from mtbmj.controllers.fork import ForkLaw
 from mtbmj.controllers.layout import values, width
 
 SP_LINEAR, SP_BILINEAR, SP_PROGRESSIVE, SP_DIRECTIONAL, SP_TOPOUT, SP_STOPS, SP_AIR = 1, 2, 3, 4, 5, 6, 7
-DA_LINEAR, DA_BILINEAR, DA_TABLE, DA_DIGRESSIVE = 1, 2, 3, 4
+DA_LINEAR, DA_BILINEAR, DA_TABLE, DA_DIGRESSIVE, DA_ORIFICE = 1, 2, 3, 4, 5
 FR_NONE, FR_COULOMB, FR_COULOMB_VISCOUS, FR_STICTION, FR_STRIBECK, FR_LUGRE = 0, 1, 2, 3, 4, 5
 FR_STICKING = 6  # Sticking around one of the static laws: I_FRICTION_INNER holds that law's code
 
@@ -32,7 +32,8 @@ SPRINGS = {_spring.LinearSpring: SP_LINEAR, _spring.BilinearSpring: SP_BILINEAR,
 WRAPPED = {_spring.DirectionalSpring: ("compression", "rebound"), _spring.TopOutSpring: ("main",),
            _stops.EndStops: ("main",)}  # the springs each one combines, evaluated first, in this order
 DAMPERS = {_damper.LinearDamper: DA_LINEAR, _damper.BilinearDamper: DA_BILINEAR,
-           _damper.DigressiveDamper: DA_DIGRESSIVE}  # (TableDamper: a row of its own length)
+           _damper.DigressiveDamper: DA_DIGRESSIVE, _damper.OrificeDamper: DA_ORIFICE}
+# (TableDamper: a row of its own length, flattened below)
 FRICTIONS = {_friction.NoFriction: FR_NONE, _friction.Coulomb: FR_COULOMB,
              _friction.CoulombViscous: FR_COULOMB_VISCOUS, _friction.Stiction: FR_STICTION,
              _friction.Stribeck: FR_STRIBECK, _friction.LuGre: FR_LUGRE}

@@ -73,8 +73,8 @@ MEANINGS: dict[str, str] = {
     "fork.spring.polytropic_index": "Air spring: polytropic index n, from 1 (isothermal) to 1.4 (adiabatic).",
     # damper
     "fork.damper.model": "Damper law: linear, bilinear (compression and rebound slopes), digressive (two "
-                         "stages per direction), table (velocity-force lookup) or clicks (tables per adjuster "
-                         "position).",
+                         "stages per direction), orifice (a bleed and an orifice: linear plus quadratic in speed), "
+                         "table (velocity-force lookup) or clicks (tables per adjuster position).",
     "fork.damper.coefficient_N_s_per_m": "Linear damper's coefficient (model linear).",
     "fork.damper.compression_N_s_per_m": "Bilinear damper: coefficient in compression.",
     "fork.damper.rebound_N_s_per_m": "Bilinear damper: coefficient in rebound.",
@@ -84,6 +84,10 @@ MEANINGS: dict[str, str] = {
     "fork.damper.rebound_low_N_s_per_m": "Digressive damper: rebound slope below the knee speed.",
     "fork.damper.rebound_high_N_s_per_m": "Digressive damper: rebound slope above the knee speed.",
     "fork.damper.rebound_knee_mm_per_s": "Digressive damper: rebound knee speed.",
+    "fork.damper.bleed_N_s_per_m": "Orifice damper: the bleed's coefficient, b in F = b v + c v abs(v).",
+    "fork.damper.compression_orifice_N_s2_per_m2": "Orifice damper: c in compression (force = c v^2 at speed v "
+                                                   "past the bleed).",
+    "fork.damper.rebound_orifice_N_s2_per_m2": "Orifice damper: c in rebound.",
     "fork.damper.velocity_mm_per_s": "Table and clicks dampers: velocities of the table, strictly increasing, "
                                      "negative (rebound) to positive (compression).",
     "fork.damper.force_N": "Table damper: force at each velocity (0 at 0, never falling; the friction offset "

@@ -216,6 +216,10 @@ def _damper(c: Config) -> object:
             c.require("fork.damper.compression_knee_mm_per_s", why) * MM,
             c.require("fork.damper.rebound_low_N_s_per_m", why), c.require("fork.damper.rebound_high_N_s_per_m", why),
             c.require("fork.damper.rebound_knee_mm_per_s", why) * MM)
+    if model == "orifice":
+        return law.OrificeDamper(c.require("fork.damper.bleed_N_s_per_m", why),
+                                 c.require("fork.damper.compression_orifice_N_s2_per_m2", why),
+                                 c.require("fork.damper.rebound_orifice_N_s2_per_m2", why))
     if model == "clicks":
         return _clicks_damper(c)
     v = np.asarray(c.require("fork.damper.velocity_mm_per_s", why)) * MM

@@ -37,7 +37,7 @@ from mtbmj.textfile import read_text
 # kinds: "pos" > 0, "nonneg" >= 0, "real" any finite number, "list" of finite numbers, "rows" a
 # list of such lists (a table, one row each), "bool", "text", or a tuple of allowed strings.
 SPRING_MODELS = ("linear", "compression_rebound", "bilinear", "progressive", "air")
-DAMPER_MODELS = ("linear", "bilinear", "digressive", "table", "clicks")
+DAMPER_MODELS = ("linear", "bilinear", "digressive", "orifice", "table", "clicks")
 FRICTION_MODELS = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")
 TIRE_MODELS = ("impact", "switch", "undamped", "static")
 INTEGRATORS = ("euler", "implicitfast", "implicit", "rk4")
@@ -90,6 +90,9 @@ SCHEMA: dict[str, Any] = {
     "fork.damper.rebound_low_N_s_per_m": "nonneg",
     "fork.damper.rebound_high_N_s_per_m": "nonneg",
     "fork.damper.rebound_knee_mm_per_s": "pos",
+    "fork.damper.bleed_N_s_per_m": "nonneg",
+    "fork.damper.compression_orifice_N_s2_per_m2": "nonneg",
+    "fork.damper.rebound_orifice_N_s2_per_m2": "nonneg",
     "fork.damper.velocity_mm_per_s": "list",
     "fork.damper.force_N": "list",
     "fork.damper.compression_clicks": "nonneg",
@@ -354,6 +357,10 @@ PLAUSIBLE: dict[str, tuple[float, float]] = {
     "fork.damper.rebound_high_N_s_per_m": _DAMPING,
     "fork.damper.compression_knee_mm_per_s": (5.0, 5000.0),
     "fork.damper.rebound_knee_mm_per_s": (5.0, 5000.0),
+    "fork.damper.bleed_N_s_per_m": _DAMPING,
+    # N s^2/m^2: about 1000 N at 1-3 m/s makes 100-1000
+    "fork.damper.compression_orifice_N_s2_per_m2": (10.0, 50000.0),
+    "fork.damper.rebound_orifice_N_s2_per_m2": (10.0, 50000.0),
     "fork.friction.coulomb_N": (1.0, 1000.0),
     "fork.friction.breakaway_N": (1.0, 1000.0),
     "fork.stops.bumper_length_mm": (0.5, 100.0),
