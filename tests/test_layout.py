@@ -269,3 +269,14 @@ def test_the_drop_subsystem_imports_nothing_above_it():
     for name, edges in graph.items():
         if name == "mtbmj.drop" or name.startswith("mtbmj.drop."):
             assert sorted(e for e in edges if e.startswith(above)) == [], name
+
+
+def test_the_force_laws_import_nothing_above_them():
+    """controllers/ is the bottom layer: the subsystems, the readout and the command line use it,
+    never the other way (the rolling callbacks live in mtbmj/rolling/)."""
+    graph = import_graph()
+    above = ("mtbmj.drop", "mtbmj.rolling", "mtbmj.sweep", "mtbmj.identify", "mtbmj.readout", "mtbmj.ride",
+             "mtbmj.bike", "mtbmj.cli", "mtbmj.validation")
+    for name, edges in graph.items():
+        if name.startswith("mtbmj.controllers"):
+            assert sorted(e for e in edges if e.startswith(above)) == [], name
