@@ -1,9 +1,11 @@
 """Shared helpers of the benchmark scripts (not a test module)."""
 from __future__ import annotations
 
+import datetime
 import json
 import os
 import platform
+import subprocess
 import time
 from pathlib import Path
 
@@ -22,10 +24,23 @@ def environment() -> dict:
             "load_average_1min": os.getloadavg()[0], "date": time.strftime("%Y-%m-%d %H:%M:%S")}
 
 
+def commit() -> str | None:
+    """Short hash of the checkout's HEAD, or None outside a git checkout (or without git)."""
+    try:
+        done = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=Path(__file__).resolve().parent, capture_output=True,
+                              text=True, timeout=10)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return (done.stdout.strip() or None) if done.returncode == 0 else None
+
+
 def write_json(script: str, payload: dict) -> Path:
+    """Write ``payload`` to results/<script's stem>.json with the environment, the UTC date of the
+    run (``measured_at``) and the commit it ran on (``commit``; read by benchmarks/report.py)."""
     RESULTS.mkdir(parents=True, exist_ok=True)
     path = RESULTS / f"{Path(script).stem}.json"
-    path.write_text(json.dumps({"environment": environment(), **payload}, indent=2, default=float) + "\n")
+    stamp = {"measured_at": datetime.datetime.now(datetime.timezone.utc).date().isoformat(), "commit": commit()}
+    path.write_text(json.dumps({**stamp, "environment": environment(), **payload}, indent=2, default=float) + "\n")
     return path
 
 
