@@ -1,0 +1,505 @@
+"""Write docs/measured.md from the benchmark results (benchmarks/results/*.json).
+
+Every figure on the page is read from a results file here; nothing measured is typed in this
+script. Each results file has a small function below that turns it into table rows (figure,
+target, measured, measured on, command); a file that is missing gives no rows. The targets are the
+ones the scripts' docstrings and the issues set, stated with each row (a JSON's own target is used
+where it records one).
+
+    python benchmarks/report.py            # rewrite docs/measured.md
+    python benchmarks/report.py --check    # exit 1 if docs/measured.md differs from what it would write
+
+tests/test_measured_doc.py checks that the page equals what this script writes.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from statistics import median
+
+BENCH = Path(__file__).resolve().parent
+RESULTS = BENCH / "results"
+REPO = BENCH.parent
+PAGE = REPO / "docs" / "measured.md"
+
+
+@dataclass
+class Row:
+    figure: str
+    target: str
+    measured: str
+    json_name: str
+    command: str
+
+
+# --- formatting ---------------------------------------------------------------------------------
+
+def num(x: float, digits: int = 2) -> str:
+    """``digits`` significant figures, plain notation down to 1e-4, powers of ten below."""
+    x = float(x)
+    if x == 0:
+        return "0"
+    if abs(x) < 1e-4:
+        mantissa, exponent = f"{x:.{digits - 1}e}".split("e")
+        return f"{mantissa}e{int(exponent)}"
+    text = f"{x:#.{digits}g}"
+    if "e" in text:  # a large number: no exponent, rounded to an integer
+        return f"{x:.0f}"
+    return text.rstrip(".")
+
+
+def mm(x: float, digits: int = 2) -> str:
+    return f"{num(x, digits)} mm"
+
+
+def ratio(x: float, digits: int = 3) -> str:
+    return f"{num(x, digits)}×"
+
+
+def spread(lo: float, hi: float, digits: int = 3, unit: str = "") -> str:
+    return f"{num(lo, digits)}–{num(hi, digits)}{unit}"
+
+
+def ms(seconds: float, digits: int = 3) -> str:
+    return f"{num(seconds * 1e3, digits)} ms"
+
+
+def sec(seconds: float, digits: int = 2) -> str:
+    return f"{num(seconds, digits)} s"
+
+
+def pct(fraction: float, digits: int = 3) -> str:
+    return f"{num(fraction * 100, digits)} %"
+
+
+def ratio_cell(d: dict, digits: int = 3) -> str:
+    """A ratio block of speed_scales.json: median ratio and the spread of the pairwise ratios."""
+    return f"{ratio(d['ratio_of_medians'], digits)} (pairs {spread(d['pairwise_min'], d['pairwise_max'], digits)})"
+
+
+def tgt(x: float) -> str:
+    """A target as the scripts state it (1.15, 2, 0.01)."""
+    return f"{float(x):g}"
+
+
+def plural(n: int, word: str) -> str:
+    return f"{n} {word}" if n == 1 else f"{n} {word}s"
+
+
+def py(script: str, *options: str) -> str:
+    return " ".join(["python", f"benchmarks/{script}", *options])
+
+
+def load(name: str) -> dict | None:
+    path = RESULTS / name
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
+def measured_on(name: str) -> str:
+    """The run's date and commit as the JSON records them; for a file written before
+    ``_bench.write_json`` recorded them, the date in its environment block, and failing that the
+    date of the git commit that wrote the file."""
+    data = load(name) or {}
+    env = data.get("environment", {})
+    mujoco = f", MuJoCo {env['mujoco']}" if env.get("mujoco") else ""
+    if data.get("measured_at"):
+        commit = f", {data['commit']}" if data.get("commit") else ""
+        return f"{data['measured_at']}{commit}{mujoco}"
+    if env.get("date"):
+        return f"{env['date'][:10]}{mujoco}"
+    done = subprocess.run(["git", "log", "-1", "--format=%cs", "--", str(RESULTS / name)], cwd=REPO,
+                          capture_output=True, text=True)
+    date = done.stdout.strip() or "not committed"
+    return f"{date} (date of the commit that wrote it){mujoco}"
+
+
+# --- one function per results file ---------------------------------------------------------------
+
+def accuracy_steps_rows(d: dict) -> dict[str, list[Row]]:
+    name = "accuracy_steps.json"
+    env = d["envelope"]
+    cmd = py("accuracy_steps.py", "--envelope", str(len(env["cases"])), "--seed", str(env["seed"]))
+    presets = d["presets"]
+    worst = max(presets, key=lambda p: presets[p]["max_abs_mm"])
+    steps = d["steps"]
+
+    def integrator(prefix: str) -> str:
+        keys = sorted((k for k in steps if k.startswith(prefix + "_")), key=lambda k: -float(k.split("_")[1]))
+        return "; ".join(f"{tgt(float(k.split('_')[1]) * 1e3)} ms: {mm(steps[k]['max_abs_mm'])}, "
+                         f"{ms(steps[k]['wall_s_median'])}" for k in keys)
+
+    default = steps["default"]
+    over = steps["default_over_implicitfast_1e-4"]
+    rest = d["rest"]
+    rest_vs_ode = max(abs(rest[t]["mujoco"] - rest[t]["ode"]) for t in ("3s", "6s"))
+    past = max(c["fork_past_travel_mm"] for c in env["cases"])
+    return {"accuracy": [
+        Row(f"MuJoCo vs ODE, max \\|diff\\| of sled, fork and tire, every preset S1–S{len(presets)}, default settings",
+            "≤ 0.05 mm", f"{mm(presets[worst]['max_abs_mm'])} ({worst}); S12 {mm(presets['S12']['max_abs_mm'])}",
+            name, cmd),
+        Row(f"the same on {len(env['cases'])} random plausible forks (`mtbmj.drop.envelope`, seed {env['seed']})",
+            "≤ 0.1 mm", f"worst {mm(env['worst_mm'])}, {env['beyond_0.1_mm']} beyond 0.1 mm; fast engine worst "
+            f"{mm(env['fast_worst_mm'])}; fork at most {mm(past)} past travel", name, cmd),
+        Row("S12 default step rule: error, wall time (median, spread)", "report",
+            f"{mm(default['max_abs_mm'])}, {ms(default['wall_s_median'])} "
+            f"({spread(default['wall_s_spread'][0] * 1e3, default['wall_s_spread'][1] * 1e3, unit=' ms')})",
+            name, cmd),
+        Row("S12 RK4 at a fixed step: error, median wall time", "report", integrator("rk4"), name, cmd),
+        Row("S12 implicitfast at a fixed step: error, median wall time", "report", integrator("implicitfast"),
+            name, cmd),
+        Row("S12 wall time, default / implicitfast at 0.1 ms", "≤ 0.5×",
+            f"{ratio(over['median'], 2)} (pairs {spread(*over['spread'], 2)})", name, cmd),
+        Row("S12 rest position at 3 s and at 6 s", "equal within 0.01 mm",
+            f"{num(rest['3s']['mujoco'], 6)} mm, difference {mm(rest['difference_mm'])}; "
+            f"MuJoCo vs ODE {mm(rest_vs_ode)}", name, cmd),
+    ]}
+
+
+def accuracy_envelope_rows(d: dict) -> dict[str, list[Row]]:
+    t = d["totals"]
+    cases = [c for seed in d["envelope"] for c in seed["cases"]]
+    seeds = sorted(t["seeds"])
+    cmd = py("accuracy_steps.py", "--envelope-only", "--envelope", str(t["forks"] // len(seeds)),
+             "--seed", ",".join(map(str, seeds)), "--jobs", "2")
+    fast_within = sum(c["fast_mm"] <= 0.01 for c in cases)
+    beyond = [c["sensitivity_mm"] for c in cases if c["fast_mm"] > 0.01]
+    conditioning = (f"; the reference itself moves by {spread(min(beyond), max(beyond), 2, ' mm')} on those "
+                    f"{len(beyond)} when the tire rates change by 0.01 %") if beyond else ""
+    return {"accuracy": [
+        Row(f"MuJoCo vs ODE on {t['forks']} random forks ({len(seeds)} seeds), max \\|diff\\|", "≤ 0.1 mm",
+            f"{t['within_0.05_mm']} of {t['forks']} within 0.05 mm, worst {mm(t['worst_mm'])}; "
+            f"fork at most {mm(max(c['fork_past_travel_mm'] for c in cases))} past travel, tire "
+            f"{mm(max(c['tire_past_max_mm'] for c in cases))} past its maximum", "accuracy_envelope.json", cmd),
+        Row(f"fast engine vs ODE on the same {t['forks']} forks", "≤ 0.01 mm",
+            f"{fast_within} of {t['forks']} within 0.01 mm, worst {mm(t['fast_worst_mm'])}{conditioning}",
+            "accuracy_envelope.json", cmd),
+    ]}
+
+
+def speed_scales_rows(d: dict) -> dict[str, list[Row]]:
+    name, cmd = "speed_scales.json", d["command"]
+    rows: dict[str, list[Row]] = {}
+    if "a" in d:
+        a = d["a"]
+        rows.setdefault("drop", []).append(Row(
+            "`run_drop(\"S12\")` / bare `mujoco.rollout` making as many steps, compiled callback installed",
+            f"≤ {tgt(a['target'])}×",
+            f"{ratio_cell(a['run_drop_over_bare_callback'])}: {ms(a['run_drop_s']['median'])} vs "
+            f"{ms(a['bare_with_compiled_callback_s']['median'])}; without any callback "
+            f"{ratio(a['run_drop_over_bare_no_callback']['ratio_of_medians'])}", name, cmd))
+    if "d" in d:
+        e = d["d"]
+        rows.setdefault("drop", []).append(Row(
+            "fast engine, S12 drops per second in-process", f"≥ {e['target_drops_per_s']}",
+            f"{e['fast_drops_per_s_engine']:.0f} ({ms(e['fast_engine_s']['median'])}); MuJoCo's engine "
+            f"{ratio_cell(e['mujoco_engine_over_fast_engine'])} slower; through `run_drop` "
+            f"{e['fast_drops_per_s_run_drop']:.0f} per second", name, cmd))
+        worst = max(e["max_diff_from_ode_mm"], key=e["max_diff_from_ode_mm"].get)
+        rows.setdefault("accuracy", []).append(Row(
+            "fast engine vs ODE, max \\|diff\\| over 2 s, every preset", f"≤ {tgt(e['target_mm'])} mm",
+            f"{mm(e['worst_mm'])} ({worst})", name, cmd))
+    if "b" in d:
+        b = d["b"]
+        rows.setdefault("startup", []).extend([
+            Row("whole process `mtbmj --help` / `python -c \"import numpy, mujoco\"`",
+                f"≤ {tgt(b['targets']['help'])}×", ratio_cell(b["help_over_floor"], 2), name, cmd),
+            Row("whole process `mtbmj drop S12` / the same floor", f"≤ {tgt(b['targets']['drop_mujoco'])}×",
+                f"{ratio_cell(b['drop_mujoco_over_floor'], 2)}: {sec(b['drop_mujoco']['median'])} vs "
+                f"{sec(b['floor']['median'])}", name, cmd),
+            Row("whole process `mtbmj drop S12 --engine fast` / the same floor", "report",
+                ratio_cell(b["drop_fast_over_floor"], 2), name, cmd)])
+    if "c" in d:
+        c = d["c"]
+        rows.setdefault("startup", []).append(Row(
+            "peak RSS, whole `mtbmj drop S12 --duration 150`", f"≤ {c['target_150s_MiB']} MiB",
+            f"{c['150s']['peak_rss_MiB']:.0f} MiB (15 s: {c['15s']['peak_rss_MiB']:.0f} MiB; "
+            f"{c['bytes_per_engine_step']:.0f} bytes per engine step kept)", name, cmd))
+    if "e" in d:
+        e = d["e"]
+        w = e["fast"]["wall_s"]
+        rows.setdefault("sweeps", []).append(Row(
+            "whole `mtbmj sweep S12 --engine fast`, 200 variants", f"≥ {e['target_fast_variants_per_s']} variants/s",
+            f"{e['fast']['variants_per_s']:.0f} variants/s ({sec(w['median'], 3)}, {spread(w['min'], w['max'], unit=' s')}); "
+            f"on MuJoCo {e['mujoco']['variants_per_s']:.0f} variants/s", name, cmd))
+    return rows
+
+
+def speed_rows(d: dict) -> dict[str, list[Row]]:
+    name, cmd = "speed.json", d["command"]
+    rows: dict[str, list[Row]] = {}
+    a = d.get("a_engine_vs_reference")
+    if a:
+        met = [r for r in a["rows"].values() if r["met_5x"]]
+        slowest = min(a["rows"], key=lambda p: a["rows"][p]["ratio_ode_over_mujoco"])
+        rows["drop"] = [Row("ODE reference (Radau, rtol 1e-8) time / MuJoCo time, 1.5 s drop, best of 3", "≥ 5×",
+                            f"{len(met)} of {len(a['rows'])} presets; median {ratio(a['median_ratio'], 2)}, "
+                            f"lowest {slowest} {ratio(a['min_ratio'], 2)}", name, cmd)]
+    b = d.get("b_force_law_layer")
+    if b:
+        rows.setdefault("drop", []).append(Row(
+            f"S1 with the Python force-law callback / MuJoCo's built-in joint spring and damping, best of "
+            f"{len(b['rollout']['callback_all_s'])}", "report",
+            f"{ratio(b['rollout']['ratio_callback_over_builtin'])} (`mujoco.rollout`), "
+            f"{ratio(b['mj_step_nstep']['ratio_callback_over_builtin'])} (`mj_step`)", name, cmd))
+    c = d.get("c_study")
+    if c:
+        rows["sweeps"] = [Row(f"`mtbmj study` end to end (28 runs, figures, table), best of {len(c['end_to_end_all_s'])}",
+                              f"< {tgt(c['target_s'])} s",
+                              f"{sec(c['end_to_end_s'], 3)} (all: {', '.join(sec(t, 3) for t in c['end_to_end_all_s'])}); "
+                              f"the runs alone {sec(c['runs_alone_s'], 3)}", name, cmd)]
+    return rows
+
+
+def compiled_rows(d: dict) -> dict[str, list[Row]]:
+    name, cmd = "compiled.json", py("compiled.py", "--drops", str(d["throughput"]["drops"]))
+    f, t = d["force_law_layer"], d["throughput"]
+    one, two = t["threads"]["1"], t["threads"]["2"]
+    return {"drop": [
+        Row("compiled (numba) force laws: S12 / built-in elements only, one thread, best times interleaved", f"≤ {tgt(f['target_ratio'])}×",
+            f"{ratio(f['ratio_compiled_to_builtin'])}; Python laws {ratio(f['ratio_python_to_builtin'])}", name, cmd),
+        Row(f"rollout throughput of {t['drops']} drops, compiled S12 laws / bare scene, 1 and 2 threads, best times "
+            "interleaved", f"≥ {tgt(t['target_ratio'])}×",
+            f"{ratio(one['ratio_compiled_to_bare'])} and {ratio(two['ratio_compiled_to_bare'])} "
+            f"({num(one['compiled_drops_per_s'])} and {num(two['compiled_drops_per_s'])} drops/s)", name, cmd),
+    ]}
+
+
+def native_loop_rows(d: dict) -> dict[str, list[Row]]:
+    s = d["summary"]
+    cmd = py("native_loop.py", "--repeat", str(s["repeat"]), "--calls", str(s["calls"]))
+    lo, py_ = s["loop_over_compiled"], s["python_over_compiled"]
+    return {"drop": [Row(
+        "`run_drop(\"S12\")` in a loop from a fresh process, median call from the third on / the same loop "
+        "after `native.expect_many()`", "≤ 1.3×",
+        f"{ratio(lo['median'], 2)} (rounds {spread(lo['min'], lo['max'], 2)}); without the background load "
+        f"{ratio(py_['median'], 2)} ({spread(py_['min'], py_['max'], 2)})", "native_loop.json", cmd)]}
+
+
+def sweep_rows(d: dict, name: str) -> dict[str, list[Row]]:
+    cmd = py("sweep.py", "--variants", str(d["variants"]), "--workers", str(d["workers"]),
+             "--threads", str(d["threads_per_process"]), "--name", name)
+    setting = (f"{d['variants']} variants, {plural(d['workers'], 'process')}".replace("processs", "processes")
+               + f" of {plural(d['threads_per_process'], 'thread')}, {d['steps_per_variant']} steps per variant")
+    rows = [Row(f"S12 sweep (batched runner) / bare-scene rollout of the same variants, one run each; {setting}",
+                "≤ 1.2×",
+                f"{ratio(d['ratio_sweep_over_rollout'])} ({sec(d['sweep_wall_s'], 3)} vs "
+                f"{sec(d['bare_rollout_wall_s'], 3)}; {num(d['variants_per_s'], 3)} variants/s)", name, cmd)]
+    if "throughput_ratio_sweep_to_same_steps_with_callback" in d:
+        p = d["batch_runner_phases_per_variant"]
+        rows.append(Row("the same sweep / the bare scene making as many steps as the runner, compiled callback "
+                        "installed (throughput; per variant: best of 3, interleaved)", "≥ 0.9×",
+                        f"{ratio(d['throughput_ratio_sweep_to_same_steps_with_callback'], 2)} for the whole "
+                        f"command; in one process {num(p['whole_runner_ms'], 3)} ms per variant vs "
+                        f"{num(p['bare_same_steps_with_callback_ms'], 3)} ms of that stepping", name, cmd))
+    return {"sweeps": rows}
+
+
+def dropfit_rows(d: dict, name: str) -> dict[str, list[Row]]:
+    f = d["fit"]
+    held = sum(p["ci_holds_truth"] for p in d["parameters"].values())
+    engine = "MuJoCo" if f["engine"] == "mujoco" else f"the {f['engine']} engine"
+    return {"fits": [Row(
+        f"drop fit of {len(f['free'])} S12 parameters on {engine}, {tgt(d['record']['duration_s'])} s "
+        f"{d['record']['data_engine'].upper()} record, {plural(f['workers'], 'worker')}, one run", f"< {tgt(f['target_s'])} s",
+        f"{sec(f['wall_time_s'])}, {f['engine_runs']} engine runs; largest error "
+        f"{num(f['max_abs_error_percent'])} %; 95 % intervals: {held} of {len(d['parameters'])} hold the truth",
+        name, d["command"])]}
+
+
+def interval_coverage_rows(d: dict) -> dict[str, list[Row]]:
+    name, cmd = "interval_coverage.json", py("interval_coverage.py", "--records", str(d["records"]))
+    lc = d["logger_clock_fit"]
+    err = max(abs(v) for v in lc["error_percent"].values())
+    touch = max(abs(r["touch_found_error_ms"]) for r in d["rows"])
+    return {"fits": [
+        Row(f"drop fit on a logger-clock record ({len(lc['truth'])} parameters, ODE data, MuJoCo fit)",
+            "within 2 % in ≤ 30 s", f"{num(err)} % in {sec(lc['wall_s']['median'])} "
+            f"({spread(lc['wall_s']['min'], lc['wall_s']['max'], 2, ' s')})", name, cmd),
+        Row(f"coverage of the drop fit's 95 % intervals, {d['records']} records, {d['intervals']} intervals",
+            "≥ 85 %", f"{pct(d['coverage_95'])} (white-noise intervals {pct(d['white_noise_coverage_95'])}); "
+            f"errors ≤ {num(d['max_abs_error_percent'])} %; time zero within {num(touch)} ms", name, cmd)]}
+
+
+def model_check_rows(d: dict) -> dict[str, list[Row]]:
+    rows = d["rows"]
+    right = sum(r["case"] == "right" for r in rows)
+    wrong = [c for c in d["summary"]["detection_rate"]]
+    per_wrong = sum(r["case"] == wrong[0] for r in rows)
+    cmd = py("model_check.py", "--records", str(right), "--wrong", str(per_wrong))
+    s = d["summary"]
+    detected = ", ".join(f"{c.replace('_', ' ')} {pct(v)}" for c, v in s["detection_rate"].items())
+    return {"fits": [
+        Row(f"model check on {right} right models (S1, ODE engine): false alarms", "≤ 5 %",
+            f"{pct(s['false_alarm_rate'])}; median residual {num(s['right_model_ratio_median'], 3)} × the noise floor",
+            "model_check.json", cmd),
+        Row("the same fits: coverage of the 95 % intervals", "90–99 %", pct(s["interval_coverage"]),
+            "model_check.json", cmd),
+        Row(f"model check on wrong models ({per_wrong} records each): detections", "≥ 95 %", detected,
+            "model_check.json", cmd)]}
+
+
+def rolling_rows(d: dict) -> dict[str, list[Row]]:
+    cmd = py("rolling.py", "--repeat", str(len(d["engine_wall_s_all"])),
+             "--python-repeat", str(len(d["python"]["engine_wall_s_all"])))
+    return {"rolling": [Row(
+        f"real-time factor, {tgt(d['simulated_s'])} s over the {d['scenario']} at {tgt(d['speed_m_per_s'])} m/s, "
+        f"{d['config']}, one core, best of {len(d['engine_wall_s_all'])}", f"≥ {tgt(d['target_real_time_factor'])}×",
+        f"{ratio(d['real_time_factor'])} (compiled callback); Python callback {ratio(d['python']['real_time_factor'])}",
+        "rolling.json", cmd)]}
+
+
+def rolling_refresh_rows(d: dict) -> dict[str, list[Row]]:
+    s = d["summary"]
+    cmd = py("rolling_refresh.py", "--repeat", str(s["repeat"]), "--seconds", tgt(s["seconds"]))
+    w, rtf, root = s["wall_now_over_old"], s["real_time_factor_median"], s["root_fork_difference_mm"]
+    return {"rolling": [
+        Row("wall time, contact patches refreshed every 0.05 ms / 0.25 mm (default) / every 1 ms / 5 mm, "
+            "compiled callback, one core", "report",
+            f"{ratio(w['median'], 2)} (rounds {spread(w['min'], w['max'], 2)}); real time "
+            f"{ratio(rtf['now'], 2)} against {ratio(rtf['old'], 2)}", "rolling_refresh.json", cmd),
+        Row("fork vs the rolling ODE reference on the 50 mm root at 4 m/s, the same two refresh settings",
+            "report", f"{mm(root['now'])} against {mm(root['old'])}", "rolling_refresh.json", cmd)]}
+
+
+def rolling_crosscheck_rows(d: dict) -> dict[str, list[Row]]:
+    s = d["summary"]
+    speeds = sorted({r["speed_m_per_s"] for r in d["rows"]}) if all("speed_m_per_s" in r for r in d["rows"]) else []
+    cmd = py("rolling_crosscheck.py", "--duration", tgt(s["duration_s"]),
+             *(["--speeds", ",".join(tgt(v) for v in speeds)] if speeds else []))
+    return {"rolling": [Row(
+        f"MuJoCo (`mtbmj roll`, default settings) vs the rolling ODE reference, every fixed terrain, "
+        f"{tgt(s['duration_s'])} s runs", "fork ≤ 0.02 mm, axle force peaks ≤ 1 %",
+        f"{s['passed']} of {s['runs']} runs within; worst fork {mm(s['worst_fork_mm'])}, worst peak "
+        f"{pct(s['worst_force_peak_relative'])}", "rolling_crosscheck.json", cmd)]}
+
+
+SOURCES = [
+    ("accuracy_steps.json", accuracy_steps_rows),
+    ("accuracy_envelope.json", accuracy_envelope_rows),
+    ("speed_scales.json", speed_scales_rows),
+    ("speed.json", speed_rows),
+    ("compiled.json", compiled_rows),
+    ("native_loop.json", native_loop_rows),
+    ("sweep_200.json", lambda d: sweep_rows(d, "sweep_200.json")),
+    ("sweep_1000_w2.json", lambda d: sweep_rows(d, "sweep_1000_w2.json")),
+    ("sweep_200_w1.json", lambda d: sweep_rows(d, "sweep_200_w1.json")),
+    ("sweep_200_w1t2.json", lambda d: sweep_rows(d, "sweep_200_w1t2.json")),
+    ("dropfit.json", lambda d: dropfit_rows(d, "dropfit.json")),
+    ("dropfit_fast.json", lambda d: dropfit_rows(d, "dropfit_fast.json")),
+    ("interval_coverage.json", interval_coverage_rows),
+    ("model_check.json", model_check_rows),
+    ("rolling.json", rolling_rows),
+    ("rolling_refresh.json", rolling_refresh_rows),
+    ("rolling_crosscheck.json", rolling_crosscheck_rows),
+]
+
+# --- the page's words ----------------------------------------------------------------------------
+
+INTRO = """\
+# Measured figures
+
+<!-- Generated by benchmarks/report.py from benchmarks/results/*.json: edit those, not this page. -->
+
+What the scripts in `benchmarks/` measure: how close the engines come to the ODE reference, how
+fast a drop, a sweep, a fit and a rolling run are, and what start-up and memory cost. Each script
+writes its numbers to `benchmarks/results/`, and this page is written from those files by
+`python benchmarks/report.py`.
+
+A speed figure is a ratio against a baseline that the same script runs on the same machine: 2
+cores, shared with other work. Where the script interleaves the measured runs with the baseline's
+(measured, baseline, measured, ...) so that both see the same load, the row gives the ratio of the
+medians and, in brackets, the spread (smallest to largest) of the pairwise or per-round ratios; a
+row timed as the best of N runs, or as one run, says so. A ratio is only as steady as its spread.
+"measured on" is the date of the run (with its commit, for runs that record one) and the MuJoCo
+version: a row describes the code as it was on that date. Each command runs from the repository
+root and rewrites the results file the row is read from.
+"""
+
+SECTIONS = [
+    ("accuracy", "Accuracy against the ODE reference", """\
+The difference is the largest absolute difference of sled, fork and tire displacement between the
+engine and the ODE reference (scipy Radau, rtol 1e-8) over the whole run. The default settings are
+RK4 at 1 ms, with the step refined near the stops, at touchdown and in fast sliding. The random
+forks come from `mtbmj.drop.envelope`: plausible forks, many of which bottom out."""),
+    ("drop", "Speed of a drop", """\
+The engine runs the compiled laws by default (`controllers/compiled.py`; the Python laws give the
+same results and stay as the specification and the fallback when numba is missing), with one
+exception that changes only the speed: a run shorter than 10 000 steps in a process that has not
+loaded numba yet takes the Python laws, because loading numba and the cached laws (about a second)
+costs more than that run (`controllers/native.py`). Trajectories and forces are the same bit for
+bit; the logged, filtered signals agree within 1e-9 mm. Sweeps, fits and studies load numba up
+front. A Python process that calls `run_drop` again and again (a notebook's loop) gets there on
+its own: its first drop starts a daemon thread that loads numba and the cached laws while that
+drop runs on the Python laws, and from the third drop on every drop runs on the compiled ones (a
+drop that finds the load still under way waits for it). A command (`mtbmj drop`) makes one drop
+and never starts the thread; `MTBMJ_BACKGROUND_LOAD=0` turns it off. Without numba installed every
+command still runs, and says so once on stderr."""),
+    ("startup", "Start-up and memory", """\
+Whole processes are timed against `python -c "import numpy, mujoco"`, the floor any command pays.
+`mtbmj --help` imports no engine; the drop path imports neither `scipy.signal` nor, for a run this
+short, numba; `--engine fast` needs numba."""),
+    ("sweeps", "Sweeps and the study", """\
+The bare-scene rollout is `mujoco.rollout` of the shipped scene with no fork law, from each
+variant's tire touch, for the same number of steps: the floor a sweep's stepping cannot beat.
+The batched runner steps more than that floor (refined steps at touchdown, lift-off and near the
+stops, and the fork callback), which the second ratio separates from its own bookkeeping."""),
+    ("fits", "Fits", """\
+Drop fits run on synthetic records made by a different engine or model than the one fitted, with
+logger noise, the 400 Hz filter and 16-bit quantisation; the truth is known, so the errors and the
+coverage of the 95 % intervals can be counted."""),
+    ("rolling", "Rolling", """\
+The rolling engine is checked against the rolling ODE reference by the test suite as well:
+`tests/test_rolling_reference.py` runs every fixed terrain of the library at 2 or 5 m/s, and
+`tests/test_rolling_washboard.py` the 90° washboard against a model written in the test file.
+`benchmarks/rolling_crosscheck.py` runs every fixed terrain at both speeds and writes
+`benchmarks/results/rolling_crosscheck.json`, from which this table takes a row when the file is
+there."""),
+]
+
+
+def collect() -> dict[str, list[tuple[Row, str]]]:
+    tables: dict[str, list[tuple[Row, str]]] = {key: [] for key, _, _ in SECTIONS}
+    for name, build in SOURCES:
+        data = load(name)
+        if data is None:
+            continue
+        when = measured_on(name)
+        for subject, rows in build(data).items():
+            tables[subject].extend((row, when) for row in rows)
+    return tables
+
+
+def render() -> str:
+    out = [INTRO]
+    tables = collect()
+    for key, title, note in SECTIONS:
+        rows = tables[key]
+        if not rows:
+            continue
+        out += [f"\n## {title}\n", "| figure | target | measured | measured on | command |", "|---|---|---|---|---|"]
+        for row, when in rows:
+            out.append(f"| {row.figure} | {row.target} | {row.measured} | {when} | `{row.command}` |")
+        out += ["", note]
+    return "\n".join(out) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--check", action="store_true", help="exit 1 if docs/measured.md differs from what it would write")
+    args = ap.parse_args(argv)
+    text = render()
+    if args.check:
+        same = PAGE.is_file() and PAGE.read_text() == text
+        print(f"{PAGE.relative_to(REPO)} is {'up to date' if same else 'out of date: run python benchmarks/report.py'}")
+        return 0 if same else 1
+    PAGE.write_text(text)
+    print(f"wrote {PAGE.relative_to(REPO)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,123 @@
+"""docs/measured.md is what benchmarks/report.py writes from the committed results
+(benchmarks/results/*.json), so the page cannot drift from its data; every command it shows names a
+script in benchmarks/ and parses with that script's options; a row whose results file is missing is
+left out; the page keeps its cells short and tells no history."""
+from __future__ import annotations
+
+import argparse
+import ast
+import importlib.util
+import json
+import re
+import shlex
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+BENCH = REPO / "benchmarks"
+PAGE = REPO / "docs" / "measured.md"
+
+
+@pytest.fixture(scope="module")
+def report():
+    spec = importlib.util.spec_from_file_location("mtbmj_bench_report", BENCH / "report.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # its dataclass looks its module up
+    try:
+        spec.loader.exec_module(module)
+        yield module
+    finally:
+        sys.modules.pop(spec.name, None)
+
+
+def table_rows(text: str) -> list[list[str]]:
+    """The cells of every table row of the page (header and rule lines left out)."""
+    rows = []
+    for line in text.splitlines():
+        if line.startswith("| ") and not line.startswith("| figure"):
+            rows.append([c.strip() for c in re.split(r"(?<!\\)\|", line.strip())[1:-1]])
+    return rows
+
+
+def script_parser(script: Path) -> argparse.ArgumentParser:
+    """The script's argparse options, rebuilt from its ``add_argument`` calls (the scripts build
+    their parser inside ``main``): option strings, ``action``, ``type`` and literal ``choices``."""
+    parser = argparse.ArgumentParser(prog=script.name, exit_on_error=False)
+    types = {"int": int, "float": float, "str": str, "Path": Path}
+    for node in ast.walk(ast.parse(script.read_text())):
+        if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "add_argument"):
+            continue
+        names = [ast.literal_eval(a) for a in node.args]
+        kwargs = {}
+        for kw in node.keywords:
+            if kw.arg == "action":
+                kwargs["action"] = ast.literal_eval(kw.value)
+            elif kw.arg == "type" and isinstance(kw.value, ast.Name):
+                kwargs["type"] = types[kw.value.id]
+            elif kw.arg == "choices":
+                try:
+                    kwargs["choices"] = ast.literal_eval(kw.value)
+                except ValueError:  # choices named by a module attribute: any value passes here
+                    pass
+        parser.add_argument(*names, **kwargs)
+    return parser
+
+
+def test_the_page_is_what_report_py_writes(report):
+    assert PAGE.read_text() == report.render(), (
+        "docs/measured.md differs from what benchmarks/report.py writes: run python benchmarks/report.py")
+
+
+def test_every_command_names_a_script_and_its_options():
+    commands = [cell.strip("`") for row in table_rows(PAGE.read_text()) for cell in row[-1:]]
+    assert len(commands) >= 20
+    for command in set(commands):
+        argv = shlex.split(command)
+        assert argv[0] == "python" and argv[1].startswith("benchmarks/"), command
+        script = REPO / argv[1]
+        assert script.is_file(), f"{command}: no {argv[1]}"
+        parser = script_parser(script)
+        try:
+            parser.parse_args(argv[2:])
+        except (argparse.ArgumentError, SystemExit) as exc:  # pragma: no cover - the message says which
+            pytest.fail(f"{command}: {exc}")
+
+
+def test_the_parser_check_catches_a_wrong_option():
+    with pytest.raises((argparse.ArgumentError, SystemExit)):
+        script_parser(BENCH / "sweep.py").parse_args(["--variants", "200", "--wokers", "2"])
+    with pytest.raises((argparse.ArgumentError, SystemExit)):
+        script_parser(BENCH / "dropfit.py").parse_args(["--fit-engine", "slow"])
+
+
+def test_every_results_file_named_exists_and_cells_are_short():
+    text = PAGE.read_text()
+    for row in table_rows(text):
+        assert len(row) == 5, row
+        assert all(len(cell) <= 200 for cell in row), row
+    for name in set(re.findall(r"--name (\S+\.json)", text)):
+        assert (BENCH / "results" / name).is_file(), name
+
+
+def test_the_page_tells_no_history():
+    text = PAGE.read_text().lower()
+    for phrase in ("last figures", "stops ago", "this stop", "at the last", "used to", "no longer", "was once"):
+        assert phrase not in text, phrase
+
+
+def test_a_missing_results_file_gives_no_rows(report, tmp_path, monkeypatch):
+    """Rows come only from the files that are there; a file that records its date and commit shows
+    them."""
+    data = json.loads((BENCH / "results" / "native_loop.json").read_text())
+    data.update(measured_at="2030-01-02", commit="abc1234")
+    (tmp_path / "native_loop.json").write_text(json.dumps(data))
+    shutil.copy(BENCH / "results" / "rolling.json", tmp_path / "rolling.json")
+    monkeypatch.setattr(report, "RESULTS", tmp_path)
+    rows = table_rows(report.render())
+    assert {row[-1] for row in rows} == {"`python benchmarks/native_loop.py --repeat 3 --calls 10`",
+                                         "`python benchmarks/rolling.py --repeat 5 --python-repeat 2`"}
+    assert rows[0][3].startswith("2030-01-02, abc1234")
+    assert "## Fits" not in report.render()
