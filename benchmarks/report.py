@@ -106,6 +106,8 @@ def measured_on(name: str) -> str:
     data = load(name) or {}
     env = data.get("environment", {})
     mujoco = f", MuJoCo {env['mujoco']}" if env.get("mujoco") else ""
+    if env.get("load_average_1min") is not None:
+        mujoco += f", load {num(env['load_average_1min'])}"
     if data.get("measured_at"):
         commit = f", {data['commit']}" if data.get("commit") else ""
         return f"{data['measured_at']}{commit}{mujoco}"
@@ -294,7 +296,8 @@ def sweep_rows(d: dict, name: str) -> dict[str, list[Row]]:
                         "installed (throughput; per variant: best of 3, interleaved)", "≥ 0.9×",
                         f"{ratio(d['throughput_ratio_sweep_to_same_steps_with_callback'], 2)} for the whole "
                         f"command; in one process {num(p['whole_runner_ms'], 3)} ms per variant vs "
-                        f"{num(p['bare_same_steps_with_callback_ms'], 3)} ms of that stepping", name, cmd))
+                        f"{num(p['bare_same_steps_with_callback_ms'], 3)} ms of that stepping (runner "
+                        f"{ratio(p['runner_over_bare_same_steps_with_callback'])})", name, cmd))
     return {"sweeps": rows}
 
 
@@ -414,8 +417,9 @@ cores, shared with other work. Where the script interleaves the measured runs wi
 (measured, baseline, measured, ...) so that both see the same load, the row gives the ratio of the
 medians and, in brackets, the spread (smallest to largest) of the pairwise or per-round ratios; a
 row timed as the best of N runs, or as one run, says so. A ratio is only as steady as its spread.
-"measured on" is the date of the run (with its commit, for runs that record one) and the MuJoCo
-version: a row describes the code as it was on that date. Each command runs from the repository
+"measured on" is the date of the run (with its commit, for runs that record one), the MuJoCo
+version and the machine's 1-minute load average when the script wrote its results (above 2, the
+two cores were shared): a row describes the code as it was on that date. Each command runs from the repository
 root and rewrites the results file the row is read from.
 """
 
