@@ -419,8 +419,8 @@ medians and, in brackets, the spread (smallest to largest) of the pairwise or pe
 row timed as the best of N runs, or as one run, says so. A ratio is only as steady as its spread.
 "measured on" is the date of the run (with its commit, for runs that record one), the MuJoCo
 version and the machine's 1-minute load average when the script wrote its results (above 2, the
-two cores were shared): a row describes the code as it was on that date. Each command runs from the repository
-root and rewrites the results file the row is read from.
+two cores were shared): a row describes the code as it was on that date. Each command runs from
+the repository root and rewrites the results file the row is read from.
 """
 
 SECTIONS = [
@@ -428,7 +428,8 @@ SECTIONS = [
 The difference is the largest absolute difference of sled, fork and tire displacement between the
 engine and the ODE reference (scipy Radau, rtol 1e-8) over the whole run. The default settings are
 RK4 at 1 ms, with the step refined near the stops, at touchdown and in fast sliding. The random
-forks come from `mtbmj.drop.envelope`: plausible forks, many of which bottom out."""),
+forks come from `mtbmj.drop.envelope`: plausible forks, some landing hard enough to bottom out or
+strike the rim."""),
     ("drop", "Speed of a drop", """\
 The engine runs the compiled laws by default (`controllers/compiled.py`; the Python laws give the
 same results and stay as the specification and the fallback when numba is missing), with one
