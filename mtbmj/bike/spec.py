@@ -13,12 +13,12 @@ status 2 on the command line).
 """
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
-import numpy as np
 
 from mtbmj.errors import ConfigError
 
@@ -36,18 +36,24 @@ class Leverage:
     ratio: tuple[float, ...]
 
     def __post_init__(self):
-        w, r = np.asarray(self.travel, float), np.asarray(self.ratio, float)
+        w, r = [float(x) for x in self.travel], [float(x) for x in self.ratio]
+        s = [0.0]
+        for i in range(len(w) - 1):  # the stroke at each table point, exact for a ratio linear in w
+            s.append(s[-1] + _piece(r[i], r[i + 1], w[i + 1] - w[i], w[i + 1] - w[i]))
+        # plain lists: the callback asks for one value at a time, where bisect beats numpy
         object.__setattr__(self, "_w", w)
         object.__setattr__(self, "_r", r)
-        # the stroke at each table point, exact for a ratio linear in w
-        seg = np.empty(w.size - 1)
-        for i in range(w.size - 1):
-            seg[i] = _piece(r[i], r[i + 1], w[i + 1] - w[i], w[i + 1] - w[i])
-        object.__setattr__(self, "_s", np.concatenate(([0.0], np.cumsum(seg))))
+        object.__setattr__(self, "_s", s)
 
     def ratio_at(self, w: float) -> float:
         """LR at rear wheel travel ``w`` (m)."""
-        return float(np.interp(w, self._w, self._r))
+        w_tab, r = self._w, self._r
+        if w <= w_tab[0]:
+            return r[0]
+        if w >= w_tab[-1]:
+            return r[-1]
+        i = bisect.bisect_right(w_tab, w) - 1
+        return r[i] + (r[i + 1] - r[i]) * (w - w_tab[i]) / (w_tab[i + 1] - w_tab[i])
 
     def stroke(self, w: float) -> float:
         """Shock stroke (m) at rear wheel travel ``w`` (m); below 0 and past the table the ratio
@@ -57,9 +63,8 @@ class Leverage:
             return w / r[0]
         if w >= w_tab[-1]:
             return s[-1] + (w - w_tab[-1]) / r[-1]
-        i = int(np.searchsorted(w_tab, w, side="right")) - 1
-        h = w_tab[i + 1] - w_tab[i]
-        return s[i] + _piece(r[i], r[i + 1], h, w - w_tab[i])
+        i = bisect.bisect_right(w_tab, w) - 1
+        return s[i] + _piece(r[i], r[i + 1], w_tab[i + 1] - w_tab[i], w - w_tab[i])
 
     @property
     def full_travel(self) -> float:
