@@ -219,3 +219,40 @@ def test_bad_bike_one_line_naming_the_key_exit_2_nothing_written(tmp_path, capsy
     assert len(err) == 1 and key in err[0], err
     assert not out.exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.toml"]
+
+
+def test_bike_command_writes_its_folder(tmp_path, capsys):
+    import csv
+    import json
+
+    from mtbmj.cli import main
+
+    out = tmp_path / "run"
+    assert main(["bike", "trail", "root:at_m=0.4", "--speed", "4", "--duration", "0.1", "--out", str(out),
+                 "--quiet", "--no-figure"]) == 0
+    printed = capsys.readouterr().out.strip().splitlines()
+    assert len(printed) == 1 and printed[0].startswith("bike trail over root:at_m=0.4 at 4 m/s: front travel peak")
+    assert {"timeseries.csv", "summary.json", "manifest.json", "fork_config.toml", "shock_config.toml"} <= {
+        p.name for p in out.iterdir()}
+    summary = json.loads((out / "summary.json").read_text())
+    for end, travel in (("front", 130.0), ("rear", 50.0)):  # the rear's end of travel is in shock stroke
+        assert summary[end]["travel_mm"] == pytest.approx(travel)
+        assert {"bumper", "hard_stop", "rim_strikes", "travel_used_mm", "bottomed_out"} <= set(summary[end])
+    assert set(summary["rim_strikes"]) == {"front", "rear"}
+    assert summary["rider_acceleration_rms_m_per_s2"] > 0.0
+    assert set(summary["tire_load"]["front"]) >= {"mean_N", "max_N", "min_N", "std_N", "variation"}
+    with open(out / "timeseries.csv") as f:
+        rows = [r for r in csv.reader(f) if r and not r[0].startswith("#")]
+    header = rows[0]
+    for column in ("front_travel_mm", "rear_travel_mm", "stroke_mm", "pitch_deg", "front_tire_N", "rear_tire_N",
+                   "rider_acc_z_m_per_s2", "speed_m_per_s"):
+        assert column in header
+    assert len(rows) - 1 == 1000  # 0.1 s at 0.1 ms
+
+
+def test_bike_crosscheck_needs_a_terrain_and_a_speed(capsys):
+    from mtbmj.cli import main
+
+    assert main(["crosscheck", "sst", "--bike", "--speed", "4"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--roll" in err[0]
