@@ -73,10 +73,19 @@ class Bike:
         return int(self.model.joint(name).dofadr[0])
 
 
+def crown(spec, fork_length: float) -> tuple[float, float]:
+    """The fork crown (frame coordinates): from the front axle at full extension back by the fork's
+    offset (perpendicular to the steering axis) and up the axis by the fork's length."""
+    a = spec.head_angle
+    c, s = math.cos(a), math.sin(a)
+    fx, fz = spec.front_axle
+    return fx - spec.fork_offset * s - fork_length * c, fz - spec.fork_offset * c + fork_length * s
+
+
 def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, gravity: float,
-               start_x: float | None = None) -> Bike:
+               start_x: float | None = None, fork_length: float = 0.58) -> Bike:
     """Compile the bike scene for ``spec`` on ``terrain``; the front axle starts over ``start_x``
-    (default the terrain's start)."""
+    (default the terrain's start); ``fork_length`` (axle to crown, m) places the drawn stanchions."""
     ms = mujoco.MjSpec.from_file(str(mjcf.path(SCENE)))
     ms.option.timestep = timestep
     ms.option.integrator = integrator
@@ -107,6 +116,8 @@ def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, g
     lower.inertia = [LOWER_INERTIA] * 3
     ms.joint("fork").axis = [-c, 0.0, s]
     ms.geom("lower_leg").fromto = [0.0, 0.0, 0.0, -0.3 * c, 0.0, 0.3 * s]
+    cx_, cz_ = crown(spec, fork_length)
+    ms.geom("stanchion").fromto = [cx_, 0.0, cz_, cx_ + 0.55 * fork_length * c, 0.0, cz_ - 0.55 * fork_length * s]
     for name, mass in (("front_wheel", spec.front_wheel_mass), ("rear_wheel", spec.rear_wheel_mass)):
         body = ms.body(name)
         body.mass = mass
@@ -166,4 +177,4 @@ def _terrain_visual(ms, terrain) -> None:
                           pos=[(x_lo + x_hi) / 2, 0.0, lo], contype=0, conaffinity=0, group=1, material="terrain")
 
 
-__all__ = ["Bike", "build_bike", "frame_body", "rider_rest_lengths", "JOINTS", "LOWER_INERTIA", "PEDAL_SHARE"]
+__all__ = ["Bike", "build_bike", "crown", "frame_body", "rider_rest_lengths", "JOINTS", "LOWER_INERTIA", "PEDAL_SHARE"]

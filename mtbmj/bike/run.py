@@ -231,7 +231,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     spec_mod.check_geometry(spec, radius)
     timestep = min(MAX_TIMESTEP_S, fork_setup.timestep, shock_setup.timestep)
     g = fork_setup.gravity
-    b = build_bike(spec, radius, ter, timestep, INTEGRATORS[fork_setup.integrator], g, start_x)
+    b = build_bike(spec, radius, ter, timestep, INTEGRATORS[fork_setup.integrator], g, start_x, fork_setup.fork_length)
     values = fork_setup.tire.values(1)  # rolling is sustained contact: the in-contact values of a switching law
     rate, damping = values.rate, values.damping
     front = RadialTire(ter, radius, rate, damping, rim=fork_setup.tire.rim)
