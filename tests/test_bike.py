@@ -256,3 +256,22 @@ def test_bike_crosscheck_needs_a_terrain_and_a_speed(capsys):
     assert main(["crosscheck", "sst", "--bike", "--speed", "4"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--roll" in err[0]
+
+
+def test_video_of_a_run(tmp_path, monkeypatch):
+    from mtbmj.errors import MtbmjError
+    from mtbmj.rolling.render import gl_backend
+
+    monkeypatch.delenv("MUJOCO_GL", raising=False)  # conftest disables GL for dm_control; rendering asks for it
+    try:
+        gl_backend()
+    except MtbmjError as exc:
+        pytest.skip(f"no headless OpenGL here: {exc}")
+    from PIL import Image
+
+    from mtbmj.bike.run import run_bike
+
+    r = run_bike("trail", "flat", 4.0, duration=0.1)
+    info = r.video(tmp_path / "bike.gif", fps=30.0, width=160, height=120)
+    with Image.open(tmp_path / "bike.gif") as im:
+        assert im.size == (160, 120) and im.n_frames == info["frames"] == 3  # 0, 1/30 and 2/30 s of 0.1 s

@@ -44,6 +44,7 @@ from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 
 CHUNK = 10000
+VIDEO_SAMPLE_HZ = 240.0  # the bike's pose kept for a video (qpos rows per second)
 # The bike steps at 0.1 ms (or finer if a law's step rule asks): the rolling front end's step, at
 # which its cross-check holds; the drop's stop-refinement rule (written for the sled's 2.3 kg wheel
 # on the hard stops) is not applied: the bike's references check the step instead.
@@ -405,6 +406,7 @@ class BikeResult(RunOutput):
     wall_time_s: float
     prepared: Prepared
     info: dict = field(default_factory=dict)
+    motion: tuple = ()  # (times, qpos) at VIDEO_SAMPLE_HZ, for ``video``
     COLUMNS = COLUMNS
 
     def csv_bytes(self, raw: bool = False) -> bytes:
@@ -424,7 +426,7 @@ class BikeResult(RunOutput):
                 "shock_config": self.prepared.shock_setup.config.digest(), "versions": versions(),
                 "wall_time_s": self.wall_time_s, "engine_info": self.info}
 
-    def files(self, stream: bool = False, figure: bool = True) -> dict:
+    def files(self, stream: bool = False, figure: bool = True, video: bool = False) -> dict:
         files = {"timeseries.csv": self.csv_bytes(), "summary.json": output.json_bytes(self.summary),
                  "manifest.json": output.json_bytes(self.manifest()),
                  "fork_config.toml": self.prepared.fork_setup.config.to_toml().encode(),
@@ -433,7 +435,29 @@ class BikeResult(RunOutput):
             from mtbmj.bike.figure import png
 
             files["quicklook.png"] = png(self)
+        if video:
+            import tempfile
+            from pathlib import Path
+
+            with tempfile.TemporaryDirectory() as tmp:
+                path = Path(tmp) / "bike.gif"
+                self.video(path)
+                files["bike.gif"] = path.read_bytes()
         return files
+
+    def write(self, out_dir, figure: bool = True, video: bool = False):
+        """Write the output folder whole (``figure``: quicklook.png; ``video``: bike.gif)."""
+        return output.write_atomically(out_dir, self.files(figure=figure, video=video))
+
+    def video(self, path, fps: float = 30.0, width: int = 640, height: int = 480) -> dict:
+        """Write a video (.gif, or .mp4 with the [video] extra) of the run to ``path``, side on, the
+        camera following the bike (``mtbmj.rolling.render``, headless EGL or OSMesa)."""
+        from mtbmj.rolling import render
+
+        times, qpos = self.motion
+        trajectory = render.rolling_frames(self.prepared.bike.model, times, qpos, fps,
+                                           label=f"bike {self.name} over {self.scenario}")
+        return render.render(trajectory, path, fps, width, height)
 
     def headline(self) -> str:
         s = self.summary
@@ -478,7 +502,11 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
             "callback": "python", "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
             "real_time_factor": duration / wall if wall > 0 else None}
     name = p.spec.name
-    return BikeResult(name, str(scenario), raw, raw, summary, wall, p, info)
+    result = BikeResult(name, str(scenario), raw, raw, summary, wall, p, info)
+    every = max(1, int(round(1.0 / (VIDEO_SAMPLE_HZ * p.timestep))))
+    nq = p.bike.model.nq
+    result.motion = (states[::every, 0].copy(), states[::every, 1:1 + nq].copy())
+    return result
 
 
 __all__ = ["run_bike", "prepare", "simulate", "BikeResult", "BikeCallback", "Prepared", "COLUMNS", "setups"]

@@ -11,10 +11,14 @@ from mtbmj.cli.common import Progress, add_out
 def cmd_bike(args) -> int:
     from mtbmj.bike.run import run_bike
 
+    if args.video:
+        from mtbmj.rolling.render import gl_backend
+
+        gl_backend()  # no headless OpenGL: one line before any work
     result = Progress(f"bike {args.bike} over {args.scenario}", not args.quiet).around(
         lambda progress: run_bike(args.bike, args.scenario, args.speed, args.duration, args.drive, args.start_m,
                                   progress))
-    written = result.write(args.out, figure=not args.no_figure)
+    written = result.write(args.out, figure=not args.no_figure, video=args.video)
     print(f"{result.headline()}; {result.info['real_time_factor']:.2f}x real time; wrote {len(written)} files to "
           f"{args.out}")
     return 0
@@ -37,6 +41,8 @@ def add_parser(subparsers) -> None:
     add_out(p, "out/bike")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.add_argument("--no-figure", action="store_true", help="do not draw quicklook.png")
+    p.add_argument("--video", action="store_true",
+                   help="also write bike.gif: the run side on at 30 frames/s (headless EGL or OSMesa)")
     p.set_defaults(func=cmd_bike)
 
 
