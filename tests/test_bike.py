@@ -275,3 +275,15 @@ def test_video_of_a_run(tmp_path, monkeypatch):
     info = r.video(tmp_path / "bike.gif", fps=30.0, width=160, height=120)
     with Image.open(tmp_path / "bike.gif") as im:
         assert im.size == (160, 120) and im.n_frames == info["frames"] == 3  # 0, 1/30 and 2/30 s of 0.1 s
+
+
+def test_a_start_on_an_obstacle_is_refused(tmp_path, capsys):
+    """The static equilibrium is the bike's on level ground; a wheel starting on the root would
+    balance the bike on it (the horizontal force unbalanced), so it is refused in one line."""
+    from mtbmj.cli import main
+
+    out = tmp_path / "out"
+    assert main(["bike", "sst", "root:at_m=0.1", "--speed", "4", "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "start:" in err[0] and "front wheel" in err[0]
+    assert not out.exists()

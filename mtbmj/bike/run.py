@@ -248,7 +248,10 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     data = mujoco.MjData(b.model)
     p = Prepared(b, spec, fork_setup, shock_setup, fork_setup.fork, shock_setup.fork, ter, front, rear, drv, traction,
                  float(speed_m_per_s), g, timestep, cb, data, None, None, None)
-    q = static_equilibrium(Reference(p))
+    ref = Reference(p)
+    _check_start(p, ref)
+    q = static_equilibrium(ref)
+    _check_equilibrium(ref, q)
     names = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")
     for name, value in zip(names, q):
         data.qpos[b.qpos_index(name)] = value
@@ -259,6 +262,29 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
         mujoco.mj_forward(b.model, data)
     p.initial_qpos, p.initial_qvel, p.initial_act = data.qpos.copy(), data.qvel.copy(), data.act.copy()
     return p
+
+
+def _check_start(p: Prepared, ref) -> None:
+    """Both wheels must start on level, straight ground (the static equilibrium is the bike's on
+    the flat): each tire's whole reach on one horizontal stretch of the profile."""
+    b = p.bike
+    where = {"front": b.x0 + b.spec.front_axle[0], "rear": b.x0 + b.spec.rear_axle[0]}
+    for name, x in where.items():
+        seg = ref.straight.segment(x)
+        if seg is None or seg[1] != seg[3]:
+            raise ConfigError(f"start: the {name} wheel (at x = {x:.3f} m) does not start on level ground clear of the "
+                              f"terrain's features; put the feature farther ahead (at_m) or start elsewhere (--start-m)")
+
+
+def _check_equilibrium(ref, q) -> None:
+    from mtbmj.bike.reference import NQ
+
+    y = np.concatenate((q, np.zeros(NQ), np.zeros(ref.nf + ref.ns)))
+    y[NQ] = ref.speed
+    _, out = ref.forces(0.0, y)
+    if not (out["front"][1] > 0.0 and out["rear"][1] > 0.0 and abs(q[2]) < math.radians(30.0)):
+        raise RunError("bike: no static equilibrium with both wheels on the ground (the springs cannot carry the "
+                       "bike and rider: check the fork's and the shock's rates and preloads)")
 
 
 def simulate(p: Prepared, duration: float, progress=None):
