@@ -287,3 +287,26 @@ def test_a_start_on_an_obstacle_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "start:" in err[0] and "front wheel" in err[0]
     assert not out.exists()
+
+
+def test_beside_the_real_sst_ride():
+    """Both ends' travel histograms, simulated and from the shipped SST ride of the same bike, each
+    in % of its own travel; the ride's own numbers come from its file (mtbmj.ride.telemetry)."""
+    from mtbmj.bike import ride
+    from mtbmj.bike.run import run_bike
+    from mtbmj.ride import telemetry
+
+    r = run_bike("sst", "flat", 4.0, duration=0.1)
+    c = ride.compare(r, "example")
+    real = telemetry.read_sst(telemetry.example_path())
+    for end, sim, top, rec, rec_top in (("front", r.raw["front_travel_mm"], 180.0, real.fork_mm, real.fork_max_mm),
+                                        ("rear", r.raw["rear_travel_mm"], 174.0, real.rear_mm, real.rear_max_mm)):
+        entry = c[end]
+        assert sum(entry["simulated"]["time_percent"]) == pytest.approx(100.0)
+        assert sum(entry["ride"]["time_percent"]) == pytest.approx(100.0)
+        assert entry["simulated_mean_percent"] == pytest.approx(np.mean(sim) / top * 100.0)
+        assert entry["ride_mean_percent"] == pytest.approx(np.mean(rec) / rec_top * 100.0)
+    # at rest on the flat the simulated bike sits at its sag: one 5 % band per end
+    assert max(c["front"]["simulated"]["time_percent"]) == pytest.approx(100.0)
+    fig = ride.figure(c)
+    assert [ax.get_ylabel() for ax in fig.axes] == ["front (fork)\n% of time", "rear (wheel)\n% of time"]

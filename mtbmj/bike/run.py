@@ -452,7 +452,7 @@ class BikeResult(RunOutput):
                 "shock_config": self.prepared.shock_setup.config.digest(), "versions": versions(),
                 "wall_time_s": self.wall_time_s, "engine_info": self.info}
 
-    def files(self, stream: bool = False, figure: bool = True, video: bool = False) -> dict:
+    def files(self, stream: bool = False, figure: bool = True, video: bool = False, ride: str | None = None) -> dict:
         files = {"timeseries.csv": self.csv_bytes(), "summary.json": output.json_bytes(self.summary),
                  "manifest.json": output.json_bytes(self.manifest()),
                  "fork_config.toml": self.prepared.fork_setup.config.to_toml().encode(),
@@ -461,6 +461,12 @@ class BikeResult(RunOutput):
             from mtbmj.bike.figure import png
 
             files["quicklook.png"] = png(self)
+        if ride is not None:  # beside a real ride (mtbmj.bike.ride)
+            from mtbmj.bike import ride as ride_mod
+
+            comparison = ride_mod.compare(self, ride)
+            files["ride_comparison.json"] = output.json_bytes(comparison)
+            files["ride_comparison.png"] = ride_mod.png(comparison)
         if video:
             import tempfile
             from pathlib import Path
@@ -471,9 +477,10 @@ class BikeResult(RunOutput):
                 files["bike.gif"] = path.read_bytes()
         return files
 
-    def write(self, out_dir, figure: bool = True, video: bool = False):
-        """Write the output folder whole (``figure``: quicklook.png; ``video``: bike.gif)."""
-        return output.write_atomically(out_dir, self.files(figure=figure, video=video))
+    def write(self, out_dir, figure: bool = True, video: bool = False, ride: str | None = None):
+        """Write the output folder whole (``figure``: quicklook.png; ``video``: bike.gif; ``ride``: an
+        SST file or "example", the travel histograms beside that real ride)."""
+        return output.write_atomically(out_dir, self.files(figure=figure, video=video, ride=ride))
 
     def video(self, path, fps: float = 30.0, width: int = 640, height: int = 480) -> dict:
         """Write a video (.gif, or .mp4 with the [video] extra) of the run to ``path``, side on, the

@@ -11,6 +11,10 @@ from mtbmj.cli.common import Progress, add_out
 def cmd_bike(args) -> int:
     from mtbmj.bike.run import run_bike
 
+    if args.ride is not None and args.ride != "example":
+        from mtbmj.ride.telemetry import read_sst
+
+        read_sst(args.ride)  # a bad ride file: one line before any work
     if args.video:
         from mtbmj.rolling.render import gl_backend
 
@@ -18,7 +22,7 @@ def cmd_bike(args) -> int:
     result = Progress(f"bike {args.bike} over {args.scenario}", not args.quiet).around(
         lambda progress: run_bike(args.bike, args.scenario, args.speed, args.duration, args.drive, args.start_m,
                                   progress))
-    written = result.write(args.out, figure=not args.no_figure, video=args.video)
+    written = result.write(args.out, figure=not args.no_figure, video=args.video, ride=args.ride)
     print(f"{result.headline()}; {result.info['real_time_factor']:.2f}x real time; wrote {len(written)} files to "
           f"{args.out}")
     return 0
@@ -41,6 +45,9 @@ def add_parser(subparsers) -> None:
     add_out(p, "out/bike")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.add_argument("--no-figure", action="store_true", help="do not draw quicklook.png")
+    p.add_argument("--ride", metavar="SST",
+                   help="also write ride_comparison.png/.json: both ends' travel histograms beside a real Sufni SST "
+                        "ride (a .SST file, or 'example' for the shipped ride of the SST bike)")
     p.add_argument("--video", action="store_true",
                    help="also write bike.gif: the run side on at 30 frames/s (headless EGL or OSMesa)")
     p.set_defaults(func=cmd_bike)
