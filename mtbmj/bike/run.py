@@ -438,7 +438,8 @@ class BikeResult(RunOutput):
     def csv_bytes(self, raw: bool = False) -> bytes:
         header = (f"mtbmj bike {self.name} over {self.scenario}, engine rate\n"
                   "travel and stroke compression positive from full extension; pitch nose up positive; tire loads the "
-                  "total radial force of each tire; rider acceleration vertical, gravity excluded, up positive")
+                  "total radial force of each tire; tire deflection at the deepest patch (-10 mm: no ground within 10 "
+                  "mm); rider acceleration vertical, gravity excluded, up positive; speed of the centre of mass")
         return output.csv_bytes({k: self.raw[k] for k in COLUMNS}, header)
 
     def csv_chunks(self, raw: bool = False):
