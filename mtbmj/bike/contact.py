@@ -15,6 +15,24 @@ import bisect
 import math
 
 
+def stretch(x, z, reach: float, i: int, cx: float):
+    """``StraightStretches.segment`` on the corners (x, z), i = bisect_right(x, cx) - 1: (ok, x0, z0,
+    x1, z1, lo, hi), ok False where no straight piece holds the reach (a plain function: the
+    compiled bike callback compiles it)."""
+    n = len(x)
+    if i < 0:  # before the profile (flat): the first stretch continued
+        i = 0
+    j = min(i + 1, n - 1)
+    x0, z0, x1, z1 = x[i], z[i], x[j], z[j]
+    lo = -math.inf if i == 0 else x0
+    hi = math.inf if i >= n - 2 else x1
+    if i >= n - 1:  # past the profile (flat): the last stretch continued
+        x0, z0, x1, z1 = x[n - 2], z[n - 2], x[n - 1], z[n - 1]
+        lo, hi = (x[n - 2] if n > 2 else -math.inf), math.inf
+    ok = cx - reach >= lo and cx + reach <= hi and x1 > x0
+    return ok, x0, z0, x1, z1, lo + reach, hi - reach
+
+
 class StraightStretches:
     def __init__(self, terrain, reach: float):
         # the profile's corners: vertices where the slope changes (collinear neighbours merged, the
@@ -38,19 +56,8 @@ class StraightStretches:
         """(x0, z0, x1, z1, lo, hi) of the straight piece holding [cx - reach, cx + reach], with
         the axle positions (lo, hi) for which that stays true, or None (an edge, a corner, a curve
         within reach)."""
-        x, z, reach = self.x, self.z, self.reach
-        i = bisect.bisect_right(x, cx) - 1
-        if i < 0:  # before the profile (flat): the first stretch continued
-            i = 0
-        x0, z0, x1, z1 = x[i], z[i], x[min(i + 1, len(x) - 1)], z[min(i + 1, len(x) - 1)]
-        lo = -math.inf if i == 0 else x0
-        hi = math.inf if i >= len(x) - 2 else x1
-        if i >= len(x) - 1:  # past the profile (flat): the last stretch continued
-            x0, z0, x1, z1 = x[-2], z[-2], x[-1], z[-1]
-            lo, hi = (x[-2] if len(x) > 2 else -math.inf), math.inf
-        if not (cx - reach >= lo and cx + reach <= hi) or x1 <= x0:
-            return None
-        return x0, z0, x1, z1, lo + reach, hi - reach
+        ok, x0, z0, x1, z1, lo, hi = stretch(self.x, self.z, self.reach, bisect.bisect_right(self.x, cx) - 1, cx)
+        return (x0, z0, x1, z1, lo, hi) if ok else None
 
     def patch(self, cx: float, cz: float, radius: float, margin: float):
         """The one patch (qx, qz, nx, nz, 0, 0) of an axle over a straight stretch (a list of it,
@@ -70,4 +77,4 @@ class StraightStretches:
         return [(qx, qz, (cx - qx) / dist, (cz - qz) / dist, 0.0, 0.0)]
 
 
-__all__ = ["StraightStretches"]
+__all__ = ["StraightStretches", "stretch"]

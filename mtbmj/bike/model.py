@@ -90,6 +90,9 @@ def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, g
     ms.option.timestep = timestep
     ms.option.integrator = integrator
     ms.option.gravity = [0.0, 0.0, -gravity]
+    # no MuJoCo contacts or constraints: the tires, the suspension's stops and the drive are the
+    # callback's forces; skipping the empty collision and constraint stages saves ~10 % of a step
+    ms.option.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT) | int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
     a = spec.head_angle
     c, s = math.cos(a), math.sin(a)
     fx, fz = spec.front_axle

@@ -2,7 +2,10 @@
 
 The bike (``mtbmj.bike.spec``) is built in MuJoCo (``mtbmj.bike.model``), settled to its static
 equilibrium on the start of the terrain (the closed-form forces of ``mtbmj.bike.reference``) and
-rolled at the set speed. One control callback (``BikeCallback``) applies, each evaluation:
+rolled at the set speed. One control callback applies, each evaluation (``BikeCallback`` in
+``mtbmj.bike.callback`` is its specification in Python; runs use its compiled twin
+``mtbmj.bike.callback_compiled.CompiledBikeCallback`` where numba is installed, ``callback="python"``
+forces the Python one):
 
 * the fork law (``compose``'s law of the bike's fork configuration) along the fork slide;
 * the shock law (the same law library, the bike's shock configuration) in shock coordinates:
@@ -36,14 +39,16 @@ from mtbmj.bike import spec as spec_mod
 from mtbmj.bike.model import Bike, build_bike
 from mtbmj.controllers import installed
 from mtbmj.controllers.drive import Drive
-from mtbmj.errors import ConfigError, RunError
+from mtbmj.errors import ConfigError, FallbackWarning, RunError
 from mtbmj.limits import check_run
 from mtbmj.readout.endtravel import end_of_travel
 from mtbmj.result import RunOutput
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
+from mtbmj.bike.callback import BikeCallback
 
 CHUNK = 10000
+CALLBACKS = ("auto", "compiled", "python")
 VIDEO_SAMPLE_HZ = 240.0  # the bike's pose kept for a video (qpos rows per second)
 # The bike steps at 0.1 ms (or finer if a law's step rule asks): the rolling front end's step, at
 # which its cross-check holds; the drop's stop-refinement rule (written for the sled's 2.3 kg wheel
@@ -55,119 +60,6 @@ INTEGRATORS = {"rk4": mujoco.mjtIntegrator.mjINT_RK4, "euler": mujoco.mjtIntegra
 COLUMNS = ("time_s", "x_m", "speed_m_per_s", "front_travel_mm", "rear_travel_mm", "stroke_mm", "pitch_deg",
            "front_tire_N", "rear_tire_N", "front_tire_mm", "rear_tire_mm", "rider_acc_z_m_per_s2", "fork_force_N",
            "shock_force_N", "drive_force_N", "terrain_front_mm", "terrain_rear_mm")
-
-
-class BikeCallback:
-    """Fork, shock (through the leverage curve), both tires and the drive, written into ``ctrl``."""
-
-    def __init__(self, bike: Bike, fork_law, shock_law, front: RadialTire, rear: RadialTire, drive: Drive,
-                 speed: float, traction: float, refresh: float):
-        m = bike.model
-        self._model = m
-        self._address = m._address
-        self.bike, self.fork, self.shock = bike, fork_law, shock_law
-        self.tires = (front, rear)
-        self.drive, self.speed, self.traction, self.refresh = drive, float(speed), float(traction), float(refresh)
-        self.lev = bike.spec.leverage
-        self.fq, self.fv = bike.qpos_index("fork"), bike.dof_index("fork")
-        self.sv = bike.dof_index("swingarm")
-        self.xv = bike.dof_index("bike_x")
-        a = lambda name: int(m.actuator(name).id)
-        self.a_fork, self.a_shock = a("fork_force"), a("shock_torque")
-        self.a_fs, self.a_ss = a("fork_friction_state"), a("shock_friction_state")
-        self.act_f, self.act_s = int(m.actuator_actadr[self.a_fs]), int(m.actuator_actadr[self.a_ss])
-        self.a_tire = ((a("front_tire_x"), a("front_tire_z")), (a("rear_tire_x"), a("rear_tire_z")))
-        self.a_drive = (a("drive_x"), a("drive_z"))
-        self.a_probe = (a("front_deflection_probe"), a("rear_deflection_probe"))
-        self.a_shock_probe = a("shock_force_probe")
-        self.sites = (int(m.site("front_axle").id), int(m.site("rear_axle").id))
-        self.frame = int(m.body("frame").id)
-        # the centre of mass's horizontal speed is the X row of M qvel over the whole mass (the
-        # horizontal momentum), computed at every evaluation: RK4's inner stages skip the sensors,
-        # so the com_velocity sensor would hold the step's start there
-        self._momentum = np.zeros(m.nv)
-        self.total_mass = float(m.body_subtreemass[self.frame])
-        self.pivot_x = bike.spec.pivot[0]
-        self.rear_z0 = bike.spec.rear_axle[1]
-        from mtbmj.bike.contact import StraightStretches
-
-        self.straight = StraightStretches(front.terrain, front.radius + front.margin)
-        self.valid = [None, None]  # axle x interval where the current patch is exact (a straight stretch)
-        self.patches = [[], []]
-        self.next_refresh = [-math.inf, -math.inf]
-        self.last_x = [math.inf, math.inf]
-        self.calls = 0
-        self.refreshes = 0
-        self._vel = np.zeros(6)
-
-    def reset(self) -> None:
-        self.patches, self.next_refresh, self.last_x = [[], []], [-math.inf, -math.inf], [math.inf, math.inf]
-        self.valid = [None, None]
-
-    def shock_state(self, d):
-        """(w, dw/dphi) from MuJoCo's kinematics: the rear axle in the frame's coordinates."""
-        rot = d.xmat[self.frame].reshape(3, 3)
-        rel = d.site_xpos[self.sites[1]] - d.xpos[self.frame]
-        local = rot.T @ rel
-        return local[2] - self.rear_z0, -(local[0] - self.pivot_x)
-
-    def __call__(self, m, d):
-        if m is not self._model and m._address != self._address:
-            return
-        self.calls += 1
-        qpos, qvel, act, ctrl = d.qpos, d.qvel, d.act, d.ctrl
-        t = d.time
-        x, v = qpos[self.fq], qvel[self.fv]
-        if self.fork.has_state:
-            z = act[self.act_f]
-            ctrl[self.a_fork] = -self.fork.force(x, v, z)
-            ctrl[self.a_fs] = self.fork.state_rate(v, z)
-        else:
-            ctrl[self.a_fork] = -self.fork.force(x, v)
-        w, dw = self.shock_state(d)
-        ds = dw / self.lev.ratio_at(w)
-        s, sd = self.lev.stroke(w), ds * qvel[self.sv]
-        if self.shock.has_state:
-            z = act[self.act_s]
-            fs = self.shock.force(s, sd, z)
-            ctrl[self.a_ss] = self.shock.state_rate(sd, z)
-        else:
-            fs = self.shock.force(s, sd)
-        ctrl[self.a_shock] = -fs * ds
-        ctrl[self.a_shock_probe] = fs
-        rear = (0.0, 0.0)
-        for k in (0, 1):
-            tire = self.tires[k]
-            site = self.sites[k]
-            cx, cz = d.site_xpos[site][0], d.site_xpos[site][2]
-            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_SITE, site, self._vel, 0)
-            vx, vz = self._vel[3], self._vel[5]
-            if t >= self.next_refresh[k] or abs(cx - self.last_x[k]) > REFRESH_DISTANCE_M:
-                valid = self.valid[k]
-                if valid is None or not valid[0] <= cx <= valid[1]:
-                    # off the straight stretch the last patch lay on: search the profile
-                    self.patches[k] = tire.patches(cx, cz, t)
-                    self.refreshes += 1
-                    seg = self.straight.segment(cx) if len(self.patches[k]) == 1 else None
-                    self.valid[k] = None if seg is None else (seg[4], seg[5])
-                self.next_refresh[k] = t + self.refresh - 1e-12
-                self.last_x[k] = cx
-            fx, fz, deflection, _, _ = tire.force(cx, cz, vx, vz, self.patches[k])
-            ctrl[self.a_tire[k][0]] = fx
-            ctrl[self.a_tire[k][1]] = fz
-            ctrl[self.a_probe[k]] = deflection
-            rear = (fx, fz)
-        fx, fz = rear
-        n = math.hypot(fx, fz)
-        if n > 0.0 and self.drive.mode != "coast":
-            mujoco.mj_mulM(m, d, self._momentum, qvel)
-            f = self.drive.force(self.speed, self._momentum[self.xv] / self.total_mass)
-            limit = self.traction * n
-            f = min(max(f, -limit), limit)
-            ctrl[self.a_drive[0]] = f * fz / n
-            ctrl[self.a_drive[1]] = -f * fx / n
-        else:
-            ctrl[self.a_drive[0]] = ctrl[self.a_drive[1]] = 0.0
 
 
 @dataclass
@@ -186,7 +78,7 @@ class Prepared:
     speed: float
     gravity: float
     timestep: float
-    callback: BikeCallback
+    callback: BikeCallback  # or its compiled twin (mtbmj.bike.callback_compiled.CompiledBikeCallback)
     data: mujoco.MjData
     initial_qpos: np.ndarray
     initial_qvel: np.ndarray
@@ -215,12 +107,15 @@ def setups(spec) -> tuple[compose.Setup, compose.Setup]:
 
 
 def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str = "rider",
-            start_x: float | None = None) -> Prepared:
+            start_x: float | None = None, callback: str = "auto") -> Prepared:
     """Everything a run needs, with the data at t = 0: the bike at rest on its static equilibrium
-    over the start, moving at the set speed."""
+    over the start, moving at the set speed. ``callback``: "auto" (the compiled callback where numba
+    is installed, else the Python one with a ``FallbackWarning``), "compiled" or "python"."""
     from mtbmj.bike.reference import Reference, static_equilibrium
 
     _check(speed_m_per_s, None)
+    if callback not in CALLBACKS:
+        raise ConfigError(f"callback: must be one of {', '.join(CALLBACKS)}, got {callback!r}")
     if drive not in ("rider", "coast"):
         raise ConfigError(f"drive: {drive!r} is not one of rider, coast")
     spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(str(bike))
@@ -244,7 +139,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     drv = Drive(drive, kv, **limits)
     traction = spec.drive.get("traction", 1.0)
     refresh = min(REFRESH_S, REFRESH_DISTANCE_M / float(speed_m_per_s))
-    cb = BikeCallback(b, fork_setup.fork, shock_setup.fork, front, rear, drv, speed_m_per_s, traction, refresh)
+    cb = make_callback(callback, b, fork_setup.fork, shock_setup.fork, front, rear, drv, speed_m_per_s, traction,
+                       refresh)
     data = mujoco.MjData(b.model)
     p = Prepared(b, spec, fork_setup, shock_setup, fork_setup.fork, shock_setup.fork, ter, front, rear, drv, traction,
                  float(speed_m_per_s), g, timestep, cb, data, None, None, None)
@@ -262,6 +158,41 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
         mujoco.mj_forward(b.model, data)
     p.initial_qpos, p.initial_qvel, p.initial_act = data.qpos.copy(), data.qvel.copy(), data.act.copy()
     return p
+
+
+def make_callback(kind: str, *args):
+    """The bike's callback of ``kind`` ("python", "compiled" or "auto"), ``args`` as
+    ``BikeCallback``'s. "auto": the compiled one when possible, else the Python one with a warning
+    (once per reason: numba missing, the mjData layout not verifiable, a law, tire or terrain with
+    no compiled form)."""
+    if kind == "python":
+        return BikeCallback(*args)
+    from mtbmj.bike import callback_compiled as compiled  # numba is imported on the first compiled run only
+
+    if kind == "compiled":
+        return compiled.CompiledBikeCallback(*args)
+    reason = compiled.unavailable_reason()
+    if reason is None:
+        try:
+            return compiled.CompiledBikeCallback(*args)
+        except (compiled.UnsupportedLaw, compiled.UnsupportedRolling) as error:
+            compiled.warn_once(f"{error}: using the Python bike callback")
+        except RuntimeError as error:  # the mjData layout check failed
+            compiled.warn_once(str(error))
+    else:
+        compiled.warn_once(reason)
+    return BikeCallback(*args)
+
+
+def callback_kind(callback) -> str:
+    """"python" for ``BikeCallback``, "compiled" for its compiled twin."""
+    return "python" if isinstance(callback, BikeCallback) else "compiled"
+
+
+def _python_twin(cb) -> BikeCallback:
+    """A fresh ``BikeCallback`` with the settings of the compiled ``cb`` (a rerun on the Python path)."""
+    front, rear = cb.tires
+    return BikeCallback(cb.bike, cb.fork, cb.shock, front, rear, cb.drive, cb.speed, cb.traction, cb.refresh)
 
 
 def _check_start(p: Prepared, ref) -> None:
@@ -288,7 +219,26 @@ def _check_equilibrium(ref, q) -> None:
 
 
 def simulate(p: Prepared, duration: float, progress=None):
-    """(states (n+1, nstate), sensordata (n, nsensor)) of ``duration`` s from the prepared state."""
+    """(states (n+1, nstate), sensordata (n, nsensor)) of ``duration`` s from the prepared state.
+
+    If the compiled callback met more contact patches than it holds (``overflowed``), the run is
+    redone on the Python path (``p.callback`` becomes that ``BikeCallback``), with a warning."""
+    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    start_state = np.empty(mujoco.mj_stateSize(p.bike.model, kind))
+    mujoco.mj_getState(p.bike.model, p.data, start_state, kind)
+    states, sensors = _simulate(p, duration, progress)
+    if getattr(p.callback, "overflowed", False):
+        import warnings
+
+        warnings.warn("compiled bike callback: too many contact patches, rerunning on the Python path",
+                      FallbackWarning, stacklevel=2)
+        p.callback = _python_twin(p.callback)  # its first evaluation searches the patches afresh
+        mujoco.mj_setState(p.bike.model, p.data, start_state, kind)
+        states, sensors = _simulate(p, duration, progress)
+    return states, sensors
+
+
+def _simulate(p: Prepared, duration: float, progress=None):
     model, data = p.bike.model, p.data
     steps = int(round(duration / p.timestep))
     kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -518,13 +468,14 @@ def default_duration(p: Prepared) -> float:
 
 def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: float | None = None,
              drive: str = "rider", start_x: float | None = None,
-             progress: Callable[[float], None] | None = None) -> BikeResult:
+             progress: Callable[[float], None] | None = None, callback: str = "auto") -> BikeResult:
     """Roll the bike ``bike`` (a preset name, a TOML path or a ``BikeSpec``) over ``scenario`` (a
     terrain spec of ``mtbmj roll``) at ``speed_m_per_s``; ``duration`` defaults to the time for both
     wheels to cross the feature and settle; ``drive`` "rider" (a speed controller within a rider's
-    limits) or "coast"; ``start_x`` the front axle's start (default the terrain's)."""
+    limits) or "coast"; ``start_x`` the front axle's start (default the terrain's); ``callback``
+    "auto" (compiled where numba is installed, else Python with a warning), "compiled" or "python"."""
     _check(speed_m_per_s, duration)
-    p = prepare(bike, scenario, speed_m_per_s, drive, start_x)
+    p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.timestep, 1.0 / p.timestep)
     start = time.perf_counter()
@@ -533,7 +484,7 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
     raw = _signals(p, states, sensors)
     summary = _summary(p, raw)
     info = {"steps": int(sensors.shape[0]), "timestep_s": p.timestep, "integrator": p.fork_setup.integrator,
-            "callback": "python", "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
+            "callback": callback_kind(p.callback), "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
             "real_time_factor": duration / wall if wall > 0 else None}
     name = p.spec.name
     result = BikeResult(name, str(scenario), raw, raw, summary, wall, p, info)
@@ -543,4 +494,5 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
     return result
 
 
-__all__ = ["run_bike", "prepare", "simulate", "BikeResult", "BikeCallback", "Prepared", "COLUMNS", "setups"]
+__all__ = ["run_bike", "prepare", "simulate", "BikeResult", "BikeCallback", "Prepared", "COLUMNS", "setups",
+           "CALLBACKS", "make_callback", "callback_kind"]

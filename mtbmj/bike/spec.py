@@ -39,7 +39,7 @@ class Leverage:
         w, r = [float(x) for x in self.travel], [float(x) for x in self.ratio]
         s = [0.0]
         for i in range(len(w) - 1):  # the stroke at each table point, exact for a ratio linear in w
-            s.append(s[-1] + _piece(r[i], r[i + 1], w[i + 1] - w[i], w[i + 1] - w[i]))
+            s.append(s[-1] + stroke_piece(r[i], r[i + 1], w[i + 1] - w[i], w[i + 1] - w[i]))
         # plain lists: the callback asks for one value at a time, where bisect beats numpy
         object.__setattr__(self, "_w", w)
         object.__setattr__(self, "_r", r)
@@ -47,24 +47,17 @@ class Leverage:
 
     def ratio_at(self, w: float) -> float:
         """LR at rear wheel travel ``w`` (m)."""
-        w_tab, r = self._w, self._r
-        if w <= w_tab[0]:
-            return r[0]
-        if w >= w_tab[-1]:
-            return r[-1]
-        i = bisect.bisect_right(w_tab, w) - 1
-        return r[i] + (r[i + 1] - r[i]) * (w - w_tab[i]) / (w_tab[i + 1] - w_tab[i])
+        return leverage_ratio(self._w, self._r, bisect.bisect_right(self._w, w) - 1, w)
 
     def stroke(self, w: float) -> float:
         """Shock stroke (m) at rear wheel travel ``w`` (m); below 0 and past the table the ratio
         is held at its end value."""
-        w_tab, r, s = self._w, self._r, self._s
-        if w <= 0.0:
-            return w / r[0]
-        if w >= w_tab[-1]:
-            return s[-1] + (w - w_tab[-1]) / r[-1]
-        i = bisect.bisect_right(w_tab, w) - 1
-        return s[i] + _piece(r[i], r[i + 1], w_tab[i + 1] - w_tab[i], w - w_tab[i])
+        return leverage_stroke(self._w, self._r, self._s, bisect.bisect_right(self._w, w) - 1, w)
+
+    @property
+    def table(self) -> tuple[list[float], list[float], list[float]]:
+        """(travel, ratio, stroke) at the table's points (m, -, m): the lookups' arguments."""
+        return self._w, self._r, self._s
 
     @property
     def full_travel(self) -> float:
@@ -75,12 +68,37 @@ class Leverage:
         return float(self._s[-1])
 
 
-def _piece(r0: float, r1: float, h: float, x: float) -> float:
+def stroke_piece(r0: float, r1: float, h: float, x: float) -> float:
     """Integral from 0 to x of du / (r0 + (r1 - r0) u / h)."""
     b = (r1 - r0) / h
     if abs(b) * x < 1e-9 * r0:
         return x / r0
     return math.log((r0 + b * x) / r0) / b
+
+
+# The leverage curve's lookups as plain functions of the table (travel w_tab, ratio r, stroke s at
+# each point) and the piece i = bisect_right(w_tab, w) - 1 holding w: ``Leverage`` calls them on
+# its lists, the compiled bike callback (``mtbmj.bike.callback_compiled``) compiles these same
+# functions and finds i by its own bisection.
+def leverage_ratio(w_tab, r, i, w: float) -> float:
+    """LR at rear wheel travel ``w`` (m); constant past the table's ends."""
+    n = len(w_tab)
+    if w <= w_tab[0]:
+        return r[0]
+    if w >= w_tab[n - 1]:
+        return r[n - 1]
+    return r[i] + (r[i + 1] - r[i]) * (w - w_tab[i]) / (w_tab[i + 1] - w_tab[i])
+
+
+def leverage_stroke(w_tab, r, s, i, w: float) -> float:
+    """Shock stroke (m) at rear wheel travel ``w`` (m), the ratio held at its end values outside
+    the table."""
+    n = len(w_tab)
+    if w <= 0.0:
+        return w / r[0]
+    if w >= w_tab[n - 1]:
+        return s[n - 1] + (w - w_tab[n - 1]) / r[n - 1]
+    return s[i] + stroke_piece(r[i], r[i + 1], w_tab[i + 1] - w_tab[i], w - w_tab[i])
 
 
 @dataclass(frozen=True)
@@ -328,4 +346,5 @@ def check_geometry(spec: BikeSpec, tire_radius: float) -> None:
         raise ConfigError("bike.pivot_mm: the main pivot lies inside the front wheel")
 
 
-__all__ = ["BikeSpec", "Leverage", "Rider", "load", "preset_names", "check_geometry"]
+__all__ = ["BikeSpec", "Leverage", "Rider", "load", "preset_names", "check_geometry", "leverage_ratio", "leverage_stroke",
+           "stroke_piece"]

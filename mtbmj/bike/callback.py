@@ -1,0 +1,131 @@
+"""The bike's control callback in Python (``BikeCallback``): the specification of what the
+compiled callback (``mtbmj.bike.callback_compiled.CompiledBikeCallback``) computes, and the fallback
+where numba is missing or a law, tire or terrain has no compiled form. See ``mtbmj.bike.run`` for
+what it applies and the conventions.
+"""
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from mtbmj.bike.model import Bike
+from mtbmj.controllers.drive import Drive
+from mtbmj.rolling.tire import REFRESH_DISTANCE_M, RadialTire
+
+
+class BikeCallback:
+    """Fork, shock (through the leverage curve), both tires and the drive, written into ``ctrl``."""
+
+    def __init__(self, bike: Bike, fork_law, shock_law, front: RadialTire, rear: RadialTire, drive: Drive,
+                 speed: float, traction: float, refresh: float):
+        m = bike.model
+        self._model = m
+        self._address = m._address
+        self.bike, self.fork, self.shock = bike, fork_law, shock_law
+        self.tires = (front, rear)
+        self.drive, self.speed, self.traction, self.refresh = drive, float(speed), float(traction), float(refresh)
+        self.lev = bike.spec.leverage
+        self.fq, self.fv = bike.qpos_index("fork"), bike.dof_index("fork")
+        self.sv = bike.dof_index("swingarm")
+        self.xv = bike.dof_index("bike_x")
+        a = lambda name: int(m.actuator(name).id)
+        self.a_fork, self.a_shock = a("fork_force"), a("shock_torque")
+        self.a_fs, self.a_ss = a("fork_friction_state"), a("shock_friction_state")
+        self.act_f, self.act_s = int(m.actuator_actadr[self.a_fs]), int(m.actuator_actadr[self.a_ss])
+        self.a_tire = ((a("front_tire_x"), a("front_tire_z")), (a("rear_tire_x"), a("rear_tire_z")))
+        self.a_drive = (a("drive_x"), a("drive_z"))
+        self.a_probe = (a("front_deflection_probe"), a("rear_deflection_probe"))
+        self.a_shock_probe = a("shock_force_probe")
+        self.sites = (int(m.site("front_axle").id), int(m.site("rear_axle").id))
+        self.frame = int(m.body("frame").id)
+        # the centre of mass's horizontal speed is the X row of M qvel over the whole mass (the
+        # horizontal momentum), computed at every evaluation: RK4's inner stages skip the sensors,
+        # so the com_velocity sensor would hold the step's start there
+        self._momentum = np.zeros(m.nv)
+        self.total_mass = float(m.body_subtreemass[self.frame])
+        self.pivot_x = bike.spec.pivot[0]
+        self.rear_z0 = bike.spec.rear_axle[1]
+        from mtbmj.bike.contact import StraightStretches
+
+        self.straight = StraightStretches(front.terrain, front.radius + front.margin)
+        self.valid = [None, None]  # axle x interval where the current patch is exact (a straight stretch)
+        self.patches = [[], []]
+        self.next_refresh = [-math.inf, -math.inf]
+        self.last_x = [math.inf, math.inf]
+        self.calls = 0
+        self.refreshes = 0
+        self._vel = np.zeros(6)
+
+    def reset(self) -> None:
+        self.patches, self.next_refresh, self.last_x = [[], []], [-math.inf, -math.inf], [math.inf, math.inf]
+        self.valid = [None, None]
+
+    def shock_state(self, d):
+        """(w, dw/dphi) from MuJoCo's kinematics: the rear axle in the frame's coordinates."""
+        rot = d.xmat[self.frame].reshape(3, 3)
+        rel = d.site_xpos[self.sites[1]] - d.xpos[self.frame]
+        local = rot.T @ rel
+        return local[2] - self.rear_z0, -(local[0] - self.pivot_x)
+
+    def __call__(self, m, d):
+        if m is not self._model and m._address != self._address:
+            return
+        self.calls += 1
+        qpos, qvel, act, ctrl = d.qpos, d.qvel, d.act, d.ctrl
+        t = d.time
+        x, v = qpos[self.fq], qvel[self.fv]
+        if self.fork.has_state:
+            z = act[self.act_f]
+            ctrl[self.a_fork] = -self.fork.force(x, v, z)
+            ctrl[self.a_fs] = self.fork.state_rate(v, z)
+        else:
+            ctrl[self.a_fork] = -self.fork.force(x, v)
+        w, dw = self.shock_state(d)
+        ds = dw / self.lev.ratio_at(w)
+        s, sd = self.lev.stroke(w), ds * qvel[self.sv]
+        if self.shock.has_state:
+            z = act[self.act_s]
+            fs = self.shock.force(s, sd, z)
+            ctrl[self.a_ss] = self.shock.state_rate(sd, z)
+        else:
+            fs = self.shock.force(s, sd)
+        ctrl[self.a_shock] = -fs * ds
+        ctrl[self.a_shock_probe] = fs
+        rear = (0.0, 0.0)
+        for k in (0, 1):
+            tire = self.tires[k]
+            site = self.sites[k]
+            cx, cz = d.site_xpos[site][0], d.site_xpos[site][2]
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_SITE, site, self._vel, 0)
+            vx, vz = self._vel[3], self._vel[5]
+            if t >= self.next_refresh[k] or abs(cx - self.last_x[k]) > REFRESH_DISTANCE_M:
+                valid = self.valid[k]
+                if valid is None or not valid[0] <= cx <= valid[1]:
+                    # off the straight stretch the last patch lay on: search the profile
+                    self.patches[k] = tire.patches(cx, cz, t)
+                    self.refreshes += 1
+                    seg = self.straight.segment(cx) if len(self.patches[k]) == 1 else None
+                    self.valid[k] = None if seg is None else (seg[4], seg[5])
+                self.next_refresh[k] = t + self.refresh - 1e-12
+                self.last_x[k] = cx
+            fx, fz, deflection, _, _ = tire.force(cx, cz, vx, vz, self.patches[k])
+            ctrl[self.a_tire[k][0]] = fx
+            ctrl[self.a_tire[k][1]] = fz
+            ctrl[self.a_probe[k]] = deflection
+            rear = (fx, fz)
+        fx, fz = rear
+        n = math.hypot(fx, fz)
+        if n > 0.0 and self.drive.mode != "coast":
+            mujoco.mj_mulM(m, d, self._momentum, qvel)
+            f = self.drive.force(self.speed, self._momentum[self.xv] / self.total_mass)
+            limit = self.traction * n
+            f = min(max(f, -limit), limit)
+            ctrl[self.a_drive[0]] = f * fz / n
+            ctrl[self.a_drive[1]] = -f * fx / n
+        else:
+            ctrl[self.a_drive[0]] = ctrl[self.a_drive[1]] = 0.0
+
+
+__all__ = ["BikeCallback"]

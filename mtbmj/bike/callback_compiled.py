@@ -1,0 +1,508 @@
+"""Compiled bike callback: ``mtbmj.bike.callback.BikeCallback`` (fork, shock through the leverage
+curve, both radial tires with their patch search, the rider's drive) as native code that MuJoCo
+calls every evaluation.
+
+``BikeCallback`` (Python) stays the specification and the fallback; this module evaluates the same
+arithmetic in the same order on the same schedule (each tire's contact patches searched afresh
+every ``refresh`` s of simulated time or 0.25 mm of axle travel, kept while the axle stays on the
+straight stretch its single patch lies on), so the two agree to round-off.
+
+Design (the rolling front end's, ``mtbmj.rolling.callback_compiled``):
+
+* The fork and the shock laws are flattened by ``controllers.lawcodes.flatten`` and evaluated by
+  the compiled kernels (``controllers.kernels.fork_force`` / ``state_rate``); the tire and the rim
+  by ``controllers.kernels.rolling_tire_force`` / ``rim_force``; the drive by
+  ``controllers.drive.drive_force`` compiled (``controllers.jit.law_function``); the leverage
+  curve's lookups (``mtbmj.bike.spec.leverage_ratio`` / ``leverage_stroke``) and the straight
+  stretches (``mtbmj.bike.contact.stretch``) are those plain functions compiled. Nothing of them is
+  written here.
+* The patch search is the front end's compiled one (``static_window`` + ``find_patches``), each
+  wheel with a row in the front end's slot layout (radius, margin, piece, patches).
+* One numba ``cfunc`` serves every ``CompiledBikeCallback`` through a registry of its own
+  (``controllers.native_data.Registry``) and leaves every other model alone.
+* ``mjData`` is read through byte offsets: the front end's fields from
+  ``controllers.native_data.mjdata_layout``, and the kinematics the Python callback reads from
+  MuJoCo (``xpos``, ``xmat``, ``xipos``, ``site_xpos``, ``cvel``, ``subtree_com``) at their places
+  among ``mjData``'s pointer fields (``mujoco.introspect``'s field order), each checked against the
+  live arrays of a model before first use. The axle velocities are ``mj_objectVelocity``'s
+  arithmetic on ``cvel`` (the site's linear velocity, world axes), the centre of mass's horizontal
+  momentum the bike_x row of ``mj_mulM`` written as the sum over the bodies of m (v + w x c).
+
+Limits: at most ``MAX_PATCHES`` patches per tire (beyond that the slot raises its overflow flag and
+``mtbmj.bike.run.simulate`` reruns on the Python path); a terrain or tire subclass, or a law with no
+compiled form, runs on the Python path. One ``mjData`` at a time per model, as ``BikeCallback``.
+"""
+from __future__ import annotations
+
+import ctypes
+import math
+import threading
+import time
+import weakref
+
+import numpy as np
+
+from mtbmj.controllers.compiled import unavailable_reason, warn_once
+from mtbmj.controllers.jit import FALLBACK_MESSAGE, callback, kernel, law_function, numba as _numba
+from mtbmj.controllers.lawcodes import FLOAT_WIDTH as LAW_FLOAT_WIDTH, INT_WIDTH as LAW_INT_WIDTH
+from mtbmj.controllers.lawcodes import UnsupportedLaw, flatten
+from mtbmj.controllers.native_data import Registry, mjdata_layout, verify
+from mtbmj.controllers.stops import STIFFENING_M
+from mtbmj.rolling import callback_compiled as rolling
+from mtbmj.rolling.callback_compiled import MAX_PATCHES, UnsupportedRolling
+
+SLOTS = 32
+KINEMATICS = ("xpos", "xmat", "xipos", "site_xpos", "cvel", "subtree_com")
+WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front end's slot layout
+
+# integer row of a slot
+(R_MODEL, R_FQ, R_FV, R_SV, R_A_FORK, R_A_SHOCK, R_A_FS, R_A_SS, R_ACT_F, R_ACT_S, R_A_TX0, R_A_TZ0, R_A_TX1,
+ R_A_TZ1, R_A_DX, R_A_DZ, R_A_PROBE0, R_A_PROBE1, R_A_SHOCK_PROBE, R_SITE0, R_SITE1, R_SBODY0, R_SBODY1, R_FRAME,
+ R_ROOT0, R_ROOT1, R_NBODY, R_MASS, R_FORK_STATE, R_SHOCK_STATE, R_DRIVE, R_NPTS, R_TX, R_TZ, R_SCRATCH, R_CAP,
+ R_NS, R_SX, R_SZ, R_NL, R_LW, R_LR, R_LS, R_CALLS, R_REFRESHES, R_VALID0, R_VALID1, R_BODYROOT) = range(48)
+INT_WIDTH = 48
+# float row of a slot
+(F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_REACH, F_LO0, F_HI0, F_LO1, F_HI1,
+ F_NEXT0, F_NEXT1, F_LAST0, F_LAST1, F_REFRESH_DISTANCE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER,
+ F_DRIVE_BRAKE) = range(20)
+FLOAT_WIDTH = 24
+
+REGISTRY = Registry("mtbmj_bike_registry_v1", SLOTS,
+                    {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
+                     "wheel_ints": (2 * WI, np.int64), "wheel_floats": (2 * WF, np.float64),
+                     "fork_ints": (LAW_INT_WIDTH, np.int64), "fork_floats": (LAW_FLOAT_WIDTH, np.float64),
+                     "shock_ints": (LAW_INT_WIDTH, np.int64), "shock_floats": (LAW_FLOAT_WIDTH, np.float64)},
+                    ("qpos", "qvel", "act", "ctrl", "time") + KINEMATICS)
+(M_USED, M_INTS, M_FLOATS, M_WINTS, M_WFLOATS, M_FINTS, M_FFLOATS, M_SINTS, M_SFLOATS, M_QPOS, M_QVEL, M_ACT,
+ M_CTRL, M_TIME, M_XPOS, M_XMAT, M_XIPOS, M_SITE_XPOS, M_CVEL, M_SUBTREE_COM) = (
+    REGISTRY.index[name] for name in ("used", "ints", "floats", "wheel_ints", "wheel_floats", "fork_ints",
+                                      "fork_floats", "shock_ints", "shock_floats", "qpos", "qvel", "act", "ctrl",
+                                      "time") + KINEMATICS)
+_INTS, _FLOATS = REGISTRY.tables["ints"], REGISTRY.tables["floats"]
+_WINTS, _WFLOATS = REGISTRY.tables["wheel_ints"], REGISTRY.tables["wheel_floats"]
+
+
+def kinematics_layout(model) -> dict:
+    """Byte offsets in ``mjData`` of ``KINEMATICS``: mjData's fields from ``qpos`` on are pointers,
+    8 bytes each, in ``mujoco.introspect``'s order (checked), ``qpos`` where ``mjdata_layout`` puts it;
+    each offset checked against a live ``MjData`` of ``model`` (the pointer there is the numpy
+    array's address). Raises RuntimeError when either check fails."""
+    import mujoco
+    from mujoco.introspect import ast_nodes, structs
+
+    fields = structs.STRUCTS["mjData"].fields
+    names = [getattr(f, "name", None) for f in fields]
+    first = names.index("qpos")
+    base = mjdata_layout()["qpos"]
+    data = mujoco.MjData(model)
+    out = {}
+    for name in KINEMATICS:
+        k = names.index(name)
+        if not all(isinstance(f.type, ast_nodes.PointerType) for f in fields[first:k + 1]):
+            raise RuntimeError(f"mjData layout: a field between qpos and {name} is not a pointer")
+        offset = base + 8 * (k - first)
+        array = getattr(data, name)
+        if array.size and ctypes.c_void_p.from_address(data._address + offset).value != array.ctypes.data:
+            raise RuntimeError(f"mjData layout check failed: {name!r} is not at byte {offset}")
+        out[name] = offset
+    return out
+
+
+COMPILE_SECONDS: float | None = None
+if _numba is not None:
+    from mtbmj.bike import contact as _contact
+    from mtbmj.bike import spec as _spec
+    from mtbmj.controllers import drive as _drive
+    from mtbmj.controllers import kernels as _kernels
+    from mtbmj.controllers.native_data import address_of as _address_of, f64_pointer as _f64_pointer
+    from mtbmj.controllers.native_data import i64_pointer as _i64_pointer, pointer_field as _pointer_field
+    from numba import types as _t
+
+    _compile_start = time.perf_counter()
+    _registry = REGISTRY.reader()
+    _fork_force, _state_rate = _kernels.fork_force, _kernels.state_rate
+    _tire_force, _rim_force = _kernels.rolling_tire_force, _kernels.rim_force
+    _drive_force = law_function(_drive.drive_force)
+    law_function(_spec.stroke_piece)
+    _leverage_ratio = law_function(_spec.leverage_ratio)
+    _leverage_stroke = law_function(_spec.leverage_stroke)
+    _stretch = law_function(_contact.stretch)
+    _static_window, _find_patches = rolling.static_window, rolling.find_patches
+    (_R_NPATCH, _F_RADIUS, _F_RATE, _F_DAMPING, _F_MARGIN, _F_RIM_D, _F_RIM_K, _F_RIM_C, _F_PATCHES) = (
+        rolling.R_NPATCH, rolling.F_RADIUS, rolling.F_RATE, rolling.F_DAMPING, rolling.F_MARGIN, rolling.F_RIM_D,
+        rolling.F_RIM_K, rolling.F_RIM_C, rolling.F_PATCHES)
+
+    @kernel
+    def piece_index(X, n, x):
+        """bisect.bisect_right(X[:n], x) - 1"""
+        lo, hi = 0, n
+        while lo < hi:
+            mid = (lo + hi) >> 1
+            if X[mid] <= x:
+                lo = mid + 1
+            else:
+                hi = mid
+        return lo - 1
+
+    @kernel
+    def site_velocity(cvel, subtree_com, site_xpos, body, root, site):
+        """(vx, vz) of mj_objectVelocity(site, world axes): cvel's linear part moved from the
+        root's centre of mass to the site (lin - (site - com) x w)."""
+        c = 6 * body
+        r = 3 * root
+        s = 3 * site
+        dx = site_xpos[s] - subtree_com[r]
+        dy = site_xpos[s + 1] - subtree_com[r + 1]
+        dz = site_xpos[s + 2] - subtree_com[r + 2]
+        wx, wy, wz = cvel[c], cvel[c + 1], cvel[c + 2]
+        return cvel[c + 3] - (dy * wz - dz * wy), cvel[c + 5] - (dx * wy - dy * wx)
+
+    @kernel
+    def momentum_x(cvel, subtree_com, xipos, mass, roots, nbody):
+        """The bike_x row of mj_mulM(qvel): sum over the bodies of m (v - (c - com) x w), x."""
+        p = 0.0
+        for b in range(1, nbody):
+            c = 6 * b
+            r = 3 * roots[b]
+            dy = xipos[3 * b + 1] - subtree_com[r + 1]
+            dz = xipos[3 * b + 2] - subtree_com[r + 2]
+            p += mass[b] * (cvel[c + 3] - (dy * cvel[c + 2] - dz * cvel[c + 1]))
+        return p
+
+    @kernel
+    def tire_on_patches(WI_, WF_, cx, cz, vx, vz):
+        """RadialTire.force on the wheel row's patches: (fx, fz, deepest deflection)."""
+        r = WF_[_F_RADIUS]
+        k = WF_[_F_RATE]
+        b = WF_[_F_DAMPING]
+        fx = 0.0
+        fz = 0.0
+        deepest = -math.inf
+        for p in range(WI_[_R_NPATCH]):
+            o = _F_PATCHES + 6 * p
+            qx, qz, nx, nz, sx, sz = WF_[o], WF_[o + 1], WF_[o + 2], WF_[o + 3], WF_[o + 4], WF_[o + 5]
+            d = r - ((cx - qx) * nx + (cz - qz) * nz)
+            rate = -((vx - sx) * nx + (vz - sz) * nz)
+            if d > deepest:
+                deepest = d
+            if d > 0.0:
+                f = max(0.0, _tire_force(k, b, d, rate))
+                if WF_[_F_RIM_K] > 0.0:  # the rim strikes (Rim.force)
+                    f += _rim_force(WF_[_F_RIM_D], WF_[_F_RIM_K], WF_[_F_RIM_C], d, rate)
+                if f > 0.0:
+                    fx += f * nx
+                    fz += f * nz
+        if deepest == -math.inf:
+            deepest = r - WF_[_F_RADIUS] - WF_[_F_MARGIN]
+        return fx, fz, deepest
+
+    @callback(_t.void(_t.voidptr, _t.voidptr))
+    def _dispatch(m, d):
+        model = _address_of(m)
+        ints = _numba.carray(_i64_pointer(_registry(M_INTS)), (SLOTS, INT_WIDTH))
+        slot = -1
+        for s in range(_registry(M_USED)):
+            if ints[s, R_MODEL] == model:
+                slot = s
+                break
+        if slot < 0:
+            return  # not one of ours: leave the model alone
+        I = ints[slot]
+        F = _numba.carray(_f64_pointer(_registry(M_FLOATS) + 8 * FLOAT_WIDTH * slot), (FLOAT_WIDTH,))
+        W_I = _numba.carray(_i64_pointer(_registry(M_WINTS) + 8 * 2 * WI * slot), (2 * WI,))
+        W_F = _numba.carray(_f64_pointer(_registry(M_WFLOATS) + 8 * 2 * WF * slot), (2 * WF,))
+        FI = _numba.carray(_i64_pointer(_registry(M_FINTS) + 8 * LAW_INT_WIDTH * slot), (LAW_INT_WIDTH,))
+        FP = _numba.carray(_f64_pointer(_registry(M_FFLOATS) + 8 * LAW_FLOAT_WIDTH * slot), (LAW_FLOAT_WIDTH,))
+        SI = _numba.carray(_i64_pointer(_registry(M_SINTS) + 8 * LAW_INT_WIDTH * slot), (LAW_INT_WIDTH,))
+        SP = _numba.carray(_f64_pointer(_registry(M_SFLOATS) + 8 * LAW_FLOAT_WIDTH * slot), (LAW_FLOAT_WIDTH,))
+        I[R_CALLS] += 1
+        qpos = _pointer_field(d, _registry(M_QPOS))
+        qvel = _pointer_field(d, _registry(M_QVEL))
+        act = _pointer_field(d, _registry(M_ACT))
+        ctrl = _pointer_field(d, _registry(M_CTRL))
+        xpos = _pointer_field(d, _registry(M_XPOS))
+        xmat = _pointer_field(d, _registry(M_XMAT))
+        xipos = _pointer_field(d, _registry(M_XIPOS))
+        site_xpos = _pointer_field(d, _registry(M_SITE_XPOS))
+        cvel = _pointer_field(d, _registry(M_CVEL))
+        subtree_com = _pointer_field(d, _registry(M_SUBTREE_COM))
+        t = _f64_pointer(_address_of(d) + _registry(M_TIME))[0]
+        # the fork
+        x = qpos[I[R_FQ]]
+        v = qvel[I[R_FV]]
+        if I[R_FORK_STATE]:
+            z = act[I[R_ACT_F]]
+            ctrl[I[R_A_FORK]] = -_fork_force(FI, FP, x, v, z)
+            ctrl[I[R_A_FS]] = _state_rate(FI, FP, v, z)
+        else:
+            ctrl[I[R_A_FORK]] = -_fork_force(FI, FP, x, v, 0.0)
+        # the shock: (w, dw/dphi) from the rear axle in the frame's coordinates (BikeCallback.shock_state)
+        fr = I[R_FRAME]
+        ra = 3 * I[R_SITE1]
+        r0 = site_xpos[ra] - xpos[3 * fr]
+        r1 = site_xpos[ra + 1] - xpos[3 * fr + 1]
+        r2 = site_xpos[ra + 2] - xpos[3 * fr + 2]
+        o = 9 * fr
+        local0 = xmat[o] * r0 + xmat[o + 3] * r1 + xmat[o + 6] * r2
+        local2 = xmat[o + 2] * r0 + xmat[o + 5] * r1 + xmat[o + 8] * r2
+        w = local2 - F[F_REAR_Z0]
+        dw = -(local0 - F[F_PIVOT_X])
+        nl = I[R_NL]
+        LW = _numba.carray(_f64_pointer(I[R_LW]), (nl,))
+        LR = _numba.carray(_f64_pointer(I[R_LR]), (nl,))
+        LS = _numba.carray(_f64_pointer(I[R_LS]), (nl,))
+        i = piece_index(LW, nl, w)
+        ds = dw / _leverage_ratio(LW, LR, i, w)
+        s = _leverage_stroke(LW, LR, LS, i, w)
+        sd = ds * qvel[I[R_SV]]
+        if I[R_SHOCK_STATE]:
+            z = act[I[R_ACT_S]]
+            fs = _fork_force(SI, SP, s, sd, z)
+            ctrl[I[R_A_SS]] = _state_rate(SI, SP, sd, z)
+        else:
+            fs = _fork_force(SI, SP, s, sd, 0.0)
+        ctrl[I[R_A_SHOCK]] = -fs * ds
+        ctrl[I[R_A_SHOCK_PROBE]] = fs
+        # the tires
+        n = I[R_NPTS]
+        cap = I[R_CAP]
+        TX = _numba.carray(_f64_pointer(I[R_TX]), (n,))
+        TZ = _numba.carray(_f64_pointer(I[R_TZ]), (n,))
+        scratch = _numba.carray(_f64_pointer(I[R_SCRATCH]), (2 * cap,))
+        PX, PZ = scratch[:cap], scratch[cap:]
+        ns = I[R_NS]
+        SX = _numba.carray(_f64_pointer(I[R_SX]), (ns,))
+        SZ = _numba.carray(_f64_pointer(I[R_SZ]), (ns,))
+        reach = F[F_REACH]
+        fx = 0.0
+        fz = 0.0
+        for k in range(2):
+            wi = W_I[k * WI:(k + 1) * WI]
+            wf = W_F[k * WF:(k + 1) * WF]
+            site = I[R_SITE0 + k]
+            cx = site_xpos[3 * site]
+            cz = site_xpos[3 * site + 2]
+            vx, vz = site_velocity(cvel, subtree_com, site_xpos, I[R_SBODY0 + k], I[R_ROOT0 + k], site)
+            if t >= F[F_NEXT0 + k] or abs(cx - F[F_LAST0 + k]) > F[F_REFRESH_DISTANCE]:
+                if not (I[R_VALID0 + k] != 0 and F[F_LO0 + 2 * k] <= cx <= F[F_HI0 + 2 * k]):
+                    # off the straight stretch the last patch lay on: search the profile
+                    tr = wf[_F_RADIUS] + wf[_F_MARGIN]
+                    mp = _static_window(TX, TZ, n, cx - tr, cx + tr, PX, PZ)
+                    _find_patches(wi, wf, PX, PZ, mp, cx, cz)
+                    I[R_REFRESHES] += 1
+                    I[R_VALID0 + k] = 0
+                    if wi[_R_NPATCH] == 1:
+                        ok, _, _, _, _, lo, hi = _stretch(SX, SZ, reach, piece_index(SX, ns, cx), cx)
+                        if ok:
+                            I[R_VALID0 + k] = 1
+                            F[F_LO0 + 2 * k] = lo
+                            F[F_HI0 + 2 * k] = hi
+                F[F_NEXT0 + k] = t + F[F_REFRESH] - 1e-12
+                F[F_LAST0 + k] = cx
+            fx, fz, deflection = tire_on_patches(wi, wf, cx, cz, vx, vz)
+            ctrl[I[R_A_TX0 + 2 * k]] = fx
+            ctrl[I[R_A_TZ0 + 2 * k]] = fz
+            ctrl[I[R_A_PROBE0 + k]] = deflection
+        # the drive, at the rear tire (fx, fz: its force)
+        nrm = math.hypot(fx, fz)
+        if nrm > 0.0 and I[R_DRIVE] != 0:
+            nb = I[R_NBODY]
+            mass = _numba.carray(_f64_pointer(I[R_MASS]), (nb,))
+            roots = _numba.carray(_i64_pointer(I[R_BODYROOT]), (nb,))
+            vcom = momentum_x(cvel, subtree_com, xipos, mass, roots, nb) / F[F_TOTAL_MASS]
+            f = _drive_force(F[F_SPEED], vcom, F[F_DRIVE_KV], F[F_DRIVE_PUSH], F[F_DRIVE_POWER], F[F_DRIVE_BRAKE])
+            limit = F[F_TRACTION] * nrm
+            f = min(max(f, -limit), limit)
+            ctrl[I[R_A_DX]] = f * fz / nrm
+            ctrl[I[R_A_DZ]] = -f * fx / nrm
+        else:
+            ctrl[I[R_A_DX]] = 0.0
+            ctrl[I[R_A_DZ]] = 0.0
+
+    COMPILE_SECONDS = time.perf_counter() - _compile_start
+
+_DISPATCHER = None
+_DISPATCHER_LOCK = threading.Lock()
+
+
+def _dispatcher(model):
+    """The compiled bike dispatcher, its registry header filled with the mjData offsets (checked
+    against live arrays of ``model``)."""
+    global _DISPATCHER
+    with _DISPATCHER_LOCK:
+        if _DISPATCHER is None:
+            if _numba is None:
+                raise RuntimeError(FALLBACK_MESSAGE)
+            reason = verify(model)
+            if reason is not None:
+                raise RuntimeError(reason)
+            REGISTRY.bind_layout({**mjdata_layout(), **kinematics_layout(model)})
+            _DISPATCHER = _dispatch
+        return _DISPATCHER
+
+
+def available() -> bool:
+    """True when the compiled bike path can run here."""
+    return unavailable_reason() is None
+
+
+def _int_field(index: int, doc: str):
+    def get(self):
+        return int(_INTS[self.slot, index]) if self._finalizer.alive else self._closed.get(index, 0)
+
+    return property(get, doc=doc)
+
+
+class CompiledBikeCallback(ctypes._CFuncPtr):
+    """Compiled counterpart of ``mtbmj.bike.callback.BikeCallback`` (same constructor): a C function
+    pointer for ``mujoco.set_mjcb_control`` / ``controllers.installed``. It acts only on
+    ``bike.model`` (a newer callback for the same model retires it). ``reset()`` forgets the contact
+    patches; ``calls``, ``refreshes`` and ``overflowed`` are read back from the compiled slot."""
+
+    _flags_ = ctypes._FUNCFLAG_CDECL
+    _argtypes_ = (ctypes.c_void_p, ctypes.c_void_p)
+    _restype_ = None
+
+    def __new__(cls, bike, fork_law, shock_law, front, rear, drive, speed, traction, refresh):
+        reason = unavailable_reason()
+        if reason is not None:
+            raise RuntimeError(reason)
+        return super().__new__(cls, _dispatcher(bike.model).address)
+
+    def __init__(self, bike, fork_law, shock_law, front, rear, drive, speed, traction, refresh):
+        from mtbmj.bike.contact import StraightStretches
+        from mtbmj.rolling import terrain as terrain_mod
+        from mtbmj.rolling import tire as tire_model
+
+        fork_ints, fork_floats = flatten(fork_law)  # UnsupportedLaw for a law with no compiled form
+        shock_ints, shock_floats = flatten(shock_law)
+        for tire in (front, rear):
+            if type(tire) is not tire_model.RadialTire:
+                raise UnsupportedRolling(f"tire {type(tire).__name__} has no compiled form")
+        ter = front.terrain
+        if type(ter) is not terrain_mod.Terrain or rear.terrain is not ter:
+            raise UnsupportedRolling(f"terrain {type(ter).__name__} has no compiled form")
+        if drive.mode not in ("rider", "coast"):
+            raise UnsupportedRolling(f"drive {drive.mode!r} has no compiled form on the bike")
+        m = bike.model
+        self._model = m  # keeps the mjModel (and so its address) alive while the slot is used
+        self._address = m._address
+        self.bike, self.fork, self.shock = bike, fork_law, shock_law
+        self.tires = (front, rear)
+        self.drive, self.speed, self.traction, self.refresh = drive, float(speed), float(traction), float(refresh)
+        self._closed: dict = {}
+        # arrays the slot points into (owned here, never reallocated)
+        self._tx = np.ascontiguousarray(ter.x, dtype=np.float64)
+        self._tz = np.ascontiguousarray(ter.z, dtype=np.float64)
+        n = int(self._tx.size)
+        if n < 1 or self._tz.size != n or not np.all(np.diff(self._tx) >= 0.0):
+            raise UnsupportedRolling("terrain profile is empty, ragged or not sorted")
+        cap = n + 2
+        self._scratch = np.zeros(2 * cap, dtype=np.float64)
+        straight = StraightStretches(ter, front.radius + front.margin)
+        self._sx, self._sz = np.array(straight.x, dtype=np.float64), np.array(straight.z, dtype=np.float64)
+        lev = bike.spec.leverage
+        self._lw, self._lr, self._ls = (np.array(v, dtype=np.float64) for v in lev.table)
+        self._mass = np.ascontiguousarray(m.body_mass, dtype=np.float64)
+        self._roots = np.ascontiguousarray(m.body_rootid, dtype=np.int64)
+
+        a = lambda name: int(m.actuator(name).id)  # noqa: E731
+        sites = (int(m.site("front_axle").id), int(m.site("rear_axle").id))
+        ints = np.zeros(INT_WIDTH, dtype=np.int64)
+        values = {
+            R_FQ: bike.qpos_index("fork"), R_FV: bike.dof_index("fork"), R_SV: bike.dof_index("swingarm"),
+            R_A_FORK: a("fork_force"), R_A_SHOCK: a("shock_torque"), R_A_FS: a("fork_friction_state"),
+            R_A_SS: a("shock_friction_state"), R_A_TX0: a("front_tire_x"), R_A_TZ0: a("front_tire_z"),
+            R_A_TX1: a("rear_tire_x"), R_A_TZ1: a("rear_tire_z"), R_A_DX: a("drive_x"), R_A_DZ: a("drive_z"),
+            R_A_PROBE0: a("front_deflection_probe"), R_A_PROBE1: a("rear_deflection_probe"),
+            R_A_SHOCK_PROBE: a("shock_force_probe"), R_SITE0: sites[0], R_SITE1: sites[1],
+            R_SBODY0: int(m.site_bodyid[sites[0]]), R_SBODY1: int(m.site_bodyid[sites[1]]),
+            R_FRAME: int(m.body("frame").id), R_NBODY: int(m.nbody), R_MASS: self._mass.ctypes.data,
+            R_BODYROOT: self._roots.ctypes.data,
+            R_FORK_STATE: int(bool(fork_law.has_state)), R_SHOCK_STATE: int(bool(shock_law.has_state)),
+            R_DRIVE: int(drive.mode != "coast"), R_NPTS: n, R_TX: self._tx.ctypes.data, R_TZ: self._tz.ctypes.data,
+            R_SCRATCH: self._scratch.ctypes.data, R_CAP: cap, R_NS: self._sx.size, R_SX: self._sx.ctypes.data,
+            R_SZ: self._sz.ctypes.data, R_NL: self._lw.size, R_LW: self._lw.ctypes.data,
+            R_LR: self._lr.ctypes.data, R_LS: self._ls.ctypes.data}
+        values[R_ACT_F] = int(m.actuator_actadr[values[R_A_FS]])
+        values[R_ACT_S] = int(m.actuator_actadr[values[R_A_SS]])
+        values[R_ROOT0] = int(m.body_rootid[values[R_SBODY0]])
+        values[R_ROOT1] = int(m.body_rootid[values[R_SBODY1]])
+        for index, value in values.items():
+            ints[index] = value
+        floats = np.zeros(FLOAT_WIDTH, dtype=np.float64)
+        floats[[F_SPEED, F_TRACTION, F_REFRESH]] = [self.speed, self.traction, self.refresh]
+        floats[F_TOTAL_MASS] = float(m.body_subtreemass[values[R_FRAME]])
+        floats[F_PIVOT_X], floats[F_REAR_Z0] = bike.spec.pivot[0], bike.spec.rear_axle[1]
+        floats[F_REACH] = straight.reach
+        floats[[F_NEXT0, F_NEXT1]] = -math.inf
+        floats[[F_LAST0, F_LAST1]] = math.inf
+        floats[F_REFRESH_DISTANCE] = tire_model.REFRESH_DISTANCE_M
+        floats[[F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE]] = [drive.kv, drive.push, drive.power,
+                                                                          drive.brake]
+        wheel_ints = np.zeros(2 * WI, dtype=np.int64)
+        wheel_floats = np.zeros(2 * WF, dtype=np.float64)
+        for k, tire in enumerate((front, rear)):
+            row = wheel_floats[k * WF:(k + 1) * WF]
+            row[[rolling.F_RADIUS, rolling.F_RATE, rolling.F_DAMPING, rolling.F_MARGIN]] = [
+                tire.radius, tire.rate, tire.damping, tire.margin]
+            row[rolling.F_PIECE] = tire_model.PIECE_M
+            if tire.rim is not None:
+                row[[rolling.F_RIM_D, rolling.F_RIM_K, rolling.F_RIM_C, rolling.F_RIM_P0]] = [
+                    tire.rim.max_deflection, tire.rim.rate, tire.rim.damping, STIFFENING_M]
+        slot = REGISTRY.claim(m._address, {"ints": ints, "floats": floats, "wheel_ints": wheel_ints,
+                                           "wheel_floats": wheel_floats, "fork_ints": fork_ints,
+                                           "fork_floats": fork_floats, "shock_ints": shock_ints,
+                                           "shock_floats": shock_floats}, "compiled bike callbacks")
+        self.slot = slot
+        self._finalizer = weakref.finalize(self, REGISTRY.release, slot)
+
+    calls = _int_field(R_CALLS, "calls for this callback's model")
+    refreshes = _int_field(R_REFRESHES, "geometry searches (patch refreshes off a straight stretch)")
+
+    @property
+    def overflowed(self) -> bool:
+        """True if a tire met more than MAX_PATCHES patches (the run must be redone in Python)."""
+        if not self._finalizer.alive:
+            return bool(self._closed.get("overflow", 0))
+        return bool(_WINTS[self.slot, rolling.R_OVERFLOW] or _WINTS[self.slot, WI + rolling.R_OVERFLOW])
+
+    def patches(self, k: int) -> list[tuple[float, ...]]:
+        """Wheel k's (0 front, 1 rear) contact patches: (qx, qz, nx, nz, surface vx, surface vz)."""
+        n = int(_WINTS[self.slot, k * WI + rolling.R_NPATCH])
+        o = k * WF + rolling.F_PATCHES
+        return [tuple(float(v) for v in row) for row in _WFLOATS[self.slot, o:o + 6 * n].reshape(n, 6)]
+
+    @property
+    def active(self) -> bool:
+        return REGISTRY.live(self.slot, self._address) and self._finalizer.alive
+
+    def reset(self) -> None:
+        """Forget the patches: the next evaluation searches afresh (BikeCallback.reset)."""
+        for k in (0, 1):
+            _WINTS[self.slot, k * WI + rolling.R_NPATCH] = 0
+            _INTS[self.slot, R_VALID0 + k] = 0
+        _FLOATS[self.slot, [F_NEXT0, F_NEXT1]] = -math.inf
+        _FLOATS[self.slot, [F_LAST0, F_LAST1]] = math.inf
+
+    @property
+    def address(self) -> int:
+        return ctypes.cast(self, ctypes.c_void_p).value
+
+    def __call__(self, m, d):
+        """Call the compiled function from Python (as ``BikeCallback(m, d)``)."""
+        super().__call__(m._address, d._address)
+
+    def close(self) -> None:
+        """Free the registry slot now (also done when the object is collected)."""
+        if self._finalizer.alive:
+            self._closed = {R_CALLS: int(_INTS[self.slot, R_CALLS]), R_REFRESHES: int(_INTS[self.slot, R_REFRESHES]),
+                            "overflow": int(self.overflowed)}
+            self._finalizer()
+
+    def __repr__(self):
+        return f"<CompiledBikeCallback slot={getattr(self, 'slot', None)}>"
+
+
+__all__ = ["CompiledBikeCallback", "UnsupportedLaw", "UnsupportedRolling", "available", "warn_once", "MAX_PATCHES",
+           "kinematics_layout", "REGISTRY"]
