@@ -1,13 +1,18 @@
 """Speed of the whole bike (``mtbmj bike``) on a rock garden, on one core, as real-time factors
-(simulated seconds per wall second) and as a ratio against the rolling front end (``mtbmj roll``)
-on the same profile, interleaved (bike, front end, bike, ...) so both see the same machine load.
+(simulated seconds per wall second): the bike with its compiled callback and with its Python one,
+MuJoCo alone stepping the same bike model with no callback (the floor the callback sits on), and the
+rolling front end (``mtbmj roll``, compiled callback) on the same profile; interleaved (each
+repetition runs all four) so they see the same machine load.
 
-    python benchmarks/bike_speed.py [--repeats 5] [--duration 1.0] [--speed 5]
+    python benchmarks/bike_speed.py [--repeats 5] [--duration 1.0] [--python-duration D] [--speed 5] [--max-step-ms S]
 
-Prints each repetition and the median and spread (min-max) of each real-time factor and of their
-ratio. Only the stepping is timed (``simulate``): building the model and the static equilibrium
-are not. The rock garden is seven rocks 50-110 mm high over 3 m (the profile of
-tests/test_bike_energy.py), written to a temporary CSV.
+Prints each repetition, then the median and spread (min-max) of each real-time factor and of the
+ratios compiled bike / front end and compiled / Python bike, and the load average
+(/proc/loadavg) before and after. Only the stepping is timed (``simulate``; MuJoCo alone:
+``rollout``): building the model and the static equilibrium are not. The rock garden is seven rocks
+50-110 mm high over 3 m (the profile of tests/test_bike_energy.py), written to a temporary CSV. The
+Python callback runs ``--python-duration`` s (default the same ``--duration``: a shorter run would
+time mostly the flat lead-in, where the patch search is skipped).
 """
 from __future__ import annotations
 
@@ -35,12 +40,34 @@ def rock_garden(path: Path) -> Path:
     return path
 
 
-def bike_rtf(profile: str, speed: float, duration: float) -> float:
-    from mtbmj.bike.run import prepare, simulate
+def bike_rtf(profile: str, speed: float, duration: float, callback: str = "compiled") -> float:
+    from mtbmj.bike.run import callback_kind, prepare, simulate
 
-    p = prepare("sst", profile, speed)
+    p = prepare("sst", profile, speed, callback=callback)
+    assert callback_kind(p.callback) == callback
     start = time.perf_counter()
     simulate(p, duration)
+    return duration / (time.perf_counter() - start)
+
+
+def mujoco_rtf(profile: str, speed: float, duration: float) -> float:
+    """The bike's model stepped by MuJoCo with no control callback (the same integrator and step):
+    what any callback's cost adds to."""
+    import mujoco
+    import numpy as np
+    from mujoco import rollout
+
+    from mtbmj.bike.run import prepare
+
+    p = prepare("sst", profile, speed, callback="compiled")
+    model, data = p.bike.model, p.data
+    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, state, kind)
+    steps = int(round(duration / p.timestep))
+    start = time.perf_counter()
+    for done in range(0, steps, 10000):
+        rollout.rollout(model, data, state[None, :], nstep=min(10000, steps - done))
     return duration / (time.perf_counter() - start)
 
 
@@ -53,35 +80,63 @@ def roll_rtf(profile: str, speed: float, duration: float) -> tuple[float, str]:
     return duration / (time.perf_counter() - start), frontend.callback_kind(p.callback)
 
 
+def load() -> str:
+    try:
+        return " ".join(open("/proc/loadavg").read().split()[:3])
+    except OSError:
+        return "n/a"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--duration", type=float, default=1.0, help="simulated seconds per run")
+    ap.add_argument("--python-duration", type=float, default=None,
+                    help="simulated seconds of the Python callback (default --duration)")
     ap.add_argument("--speed", type=float, default=5.0)
+    ap.add_argument("--max-step-ms", type=float, default=None,
+                    help="the bike's step cap (mtbmj.bike.run.MAX_TIMESTEP_S, default 0.1 ms); the laws' own step "
+                         "rules still bound it (the SST shock's: 0.2 ms)")
     args = ap.parse_args()
+    if args.max_step_ms is not None:
+        from mtbmj.bike import run
+
+        run.MAX_TIMESTEP_S = args.max_step_ms * 1e-3
+    if args.python_duration is None:
+        args.python_duration = args.duration
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
+    print(f"load average before: {load()}", flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         profile = str(rock_garden(Path(tmp) / "rock_garden.csv"))
-        roll_rtf(profile, args.speed, 0.05)  # warm-up: imports, numba compilation of the front end's callback
+        roll_rtf(profile, args.speed, 0.05)  # warm-up: imports, numba compilation of both compiled callbacks
         bike_rtf(profile, args.speed, 0.05)
-        bikes, rolls, ratios = [], [], []
+        rows = {"bike": [], "python": [], "mujoco": [], "roll": [], "ratio": [], "speedup": []}
         for i in range(args.repeats):
             b = bike_rtf(profile, args.speed, args.duration)
+            py = bike_rtf(profile, args.speed, args.python_duration, "python")
+            mj = mujoco_rtf(profile, args.speed, args.duration)
             r, kind = roll_rtf(profile, args.speed, args.duration)
-            bikes.append(b)
-            rolls.append(r)
-            ratios.append(b / r)
-            print(f"repeat {i + 1}: bike {b:.3f}x real time, front end ({kind} callback) {r:.2f}x, ratio {b / r:.4f}",
+            for key, value in (("bike", b), ("python", py), ("mujoco", mj), ("roll", r), ("ratio", b / r),
+                               ("speedup", b / py)):
+                rows[key].append(value)
+            print(f"repeat {i + 1}: bike compiled {b:.3f}x real time, Python {py:.4f}x, MuJoCo alone {mj:.3f}x, "
+                  f"front end ({kind} callback) {r:.2f}x; bike / front end {b / r:.3f}, compiled / Python {b / py:.1f}",
                   flush=True)
 
     def line(name, values, unit):
         return (f"{name}: median {statistics.median(values):.4g}{unit}, spread {min(values):.4g}-{max(values):.4g}"
                 f"{unit} over {len(values)} repeats")
 
-    print(line("bike (sst, rock garden)", bikes, "x real time"))
-    print(line("front end (S12, same profile)", rolls, "x real time"))
-    print(line("bike / front end", ratios, ""))
+    print(line("bike, compiled callback (sst, rock garden)", rows["bike"], "x real time"))
+    print(line("bike, Python callback", rows["python"], "x real time"))
+    print(line("bike model, MuJoCo alone (no callback)", rows["mujoco"], "x real time"))
+    print(line("front end (S12, same profile)", rows["roll"], "x real time"))
+    print(line("bike compiled / front end", rows["ratio"], ""))
+    print(line("bike compiled / Python", rows["speedup"], ""))
+    from mtbmj.bike import run
+
+    print(f"bike step: {1e3 * run.prepare('sst', 'flat', args.speed).timestep:g} ms, RK4; load average after: {load()}")
 
 
 if __name__ == "__main__":

@@ -10,7 +10,8 @@ straight stretch its single patch lies on), so the two agree to round-off.
 Design (the rolling front end's, ``mtbmj.rolling.callback_compiled``):
 
 * The fork and the shock laws are flattened by ``controllers.lawcodes.flatten`` and evaluated by
-  the compiled kernels (``controllers.kernels.fork_force`` / ``state_rate``); the tire and the rim
+  the compiled kernels (``controllers.kernels.fork_force``, or ``fork_force_rate`` with a
+  friction state); the tire and the rim
   by ``controllers.kernels.rolling_tire_force`` / ``rim_force``; the drive by
   ``controllers.drive.drive_force`` compiled (``controllers.jit.law_function``); the leverage
   curve's lookups (``mtbmj.bike.spec.leverage_ratio`` / ``leverage_stroke``) and the straight
@@ -120,7 +121,7 @@ if _numba is not None:
 
     _compile_start = time.perf_counter()
     _registry = REGISTRY.reader()
-    _fork_force, _state_rate = _kernels.fork_force, _kernels.state_rate
+    _fork_force, _fork_force_rate = _kernels.fork_force, _kernels.fork_force_rate
     _tire_force, _rim_force = _kernels.rolling_tire_force, _kernels.rim_force
     _drive_force = law_function(_drive.drive_force)
     law_function(_spec.stroke_piece)
@@ -230,10 +231,10 @@ if _numba is not None:
         # the fork
         x = qpos[I[R_FQ]]
         v = qvel[I[R_FV]]
-        if I[R_FORK_STATE]:
-            z = act[I[R_ACT_F]]
-            ctrl[I[R_A_FORK]] = -_fork_force(FI, FP, x, v, z)
-            ctrl[I[R_A_FS]] = _state_rate(FI, FP, v, z)
+        if I[R_FORK_STATE]:  # force and state rate at once (a stick state's rate worked out once)
+            force, rate = _fork_force_rate(FI, FP, x, v, act[I[R_ACT_F]])
+            ctrl[I[R_A_FORK]] = -force
+            ctrl[I[R_A_FS]] = rate
         else:
             ctrl[I[R_A_FORK]] = -_fork_force(FI, FP, x, v, 0.0)
         # the shock: (w, dw/dphi) from the rear axle in the frame's coordinates (BikeCallback.shock_state)
@@ -256,9 +257,8 @@ if _numba is not None:
         s = _leverage_stroke(LW, LR, LS, i, w)
         sd = ds * qvel[I[R_SV]]
         if I[R_SHOCK_STATE]:
-            z = act[I[R_ACT_S]]
-            fs = _fork_force(SI, SP, s, sd, z)
-            ctrl[I[R_A_SS]] = _state_rate(SI, SP, sd, z)
+            fs, rate = _fork_force_rate(SI, SP, s, sd, act[I[R_ACT_S]])
+            ctrl[I[R_A_SS]] = rate
         else:
             fs = _fork_force(SI, SP, s, sd, 0.0)
         ctrl[I[R_A_SHOCK]] = -fs * ds
