@@ -54,6 +54,10 @@ def assert_agree(runs):
     assert np.max(np.abs(ep - ec)) <= TOL_N
     assert pp.callback.calls == pc.callback.calls
     assert pp.callback.refreshes == pc.callback.refreshes
+    for k in (0, 1):  # each tire's contact patches at the end
+        assert len(pp.callback.patches[k]) == len(pc.callback.patches(k))
+        for want, got in zip(pp.callback.patches[k], pc.callback.patches(k)):
+            assert np.max(np.abs(np.subtract(want, got))) <= TOL
     return float(np.max(np.abs(sp - sc)))
 
 

@@ -52,7 +52,7 @@ from mtbmj.controllers.stops import STIFFENING_M
 from mtbmj.rolling import callback_compiled as rolling
 from mtbmj.rolling.callback_compiled import MAX_PATCHES, UnsupportedRolling
 
-SLOTS = 32
+SLOTS = 64
 KINEMATICS = ("xpos", "xmat", "xipos", "site_xpos", "cvel", "subtree_com")
 WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front end's slot layout
 
@@ -336,7 +336,12 @@ def _dispatcher(model):
             reason = verify(model)
             if reason is not None:
                 raise RuntimeError(reason)
-            REGISTRY.bind_layout({**mjdata_layout(), **kinematics_layout(model)})
+            try:
+                kinematics = kinematics_layout(model)
+            except RuntimeError as error:
+                raise RuntimeError(f"compiled bike callback unavailable ({error}): using the Python bike callback") \
+                    from error
+            REGISTRY.bind_layout({**mjdata_layout(), **kinematics})
             _DISPATCHER = _dispatch
         return _DISPATCHER
 
