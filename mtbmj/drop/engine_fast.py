@@ -166,7 +166,7 @@ if _numba is not None:
     @_jit.kernel
     def near(y0, y1, h, q):
         """Whether a step of length ``h`` from ``y0`` to ``y1`` may have met something stiffer
-        than the coarse step allows (``engine_mujoco.stop_index``'s zones): an end stop, the rim,
+        than the coarse step allows (``stepping.stop_index``'s zones): an end stop, the rim,
         the tire at the ground (located, but the step is short there as in MuJoCo), the steep
         band around rest, a stroke faster than the friction state allows."""
         x0, x1, v0, v1 = y0[1], y1[1], y0[3], y1[3]
