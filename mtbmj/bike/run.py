@@ -54,6 +54,14 @@ VIDEO_SAMPLE_HZ = 240.0  # the bike's pose kept for a video (qpos rows per secon
 # which its cross-check holds; the drop's stop-refinement rule (written for the sled's 2.3 kg wheel
 # on the hard stops) is not applied: the bike's references check the step instead.
 MAX_TIMESTEP_S = 1e-4
+# Held degrees of freedom (``lock``): each held joint gets this armature (kg or kg m^2 added to its
+# own diagonal of the mass matrix, nothing else), so it keeps its start value and zero speed: under
+# the ~1e3 N (m) the tires, springs and dampers put on it, it moves ~1e-9 m (rad) in a second, and the
+# other joints move as if it were a rigid constraint (the coupling it leaves is of order M_fc^2 /
+# armature ~ 1e-8 of theirs). Unlike MuJoCo's equality constraints (soft, solref) it adds no
+# compliance and keeps the model's constraint stage off.
+LOCK_ARMATURE = 1e12
+LOCKS = {"rear": ("swingarm",), "pitch": ("pitch",), "rider": ("rider_z", "rider_pitch")}
 DRIVE_HZ = 10.0  # the speed loop's gain: kv = 2 M (2 pi 10 Hz), as the front end's servo
 INTEGRATORS = {"rk4": mujoco.mjtIntegrator.mjINT_RK4, "euler": mujoco.mjtIntegrator.mjINT_EULER,
                "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST, "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT}
@@ -107,10 +115,18 @@ def setups(spec) -> tuple[compose.Setup, compose.Setup]:
 
 
 def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str = "rider",
-            start_x: float | None = None, callback: str = "auto") -> Prepared:
+            start_x: float | None = None, callback: str = "auto", lock=(), rear_tire: bool = True) -> Prepared:
     """Everything a run needs, with the data at t = 0: the bike at rest on its static equilibrium
     over the start, moving at the set speed. ``callback``: "auto" (the compiled callback where numba
-    is installed, else the Python one with a ``FallbackWarning``), "compiled" or "python"."""
+    is installed, else the Python one with a ``FallbackWarning``), "compiled" or "python".
+
+    ``lock``: degrees of freedom held at their static values (``LOCKS``): "rear" (the swingarm: the
+    shock locked out at its sag), "pitch" (the frame level at its static pitch), "rider" (the rider
+    rigid on the frame). ``rear_tire=False`` takes the rear tire (and its rim) off: the bike then
+    stands on its front wheel alone and needs "pitch" locked; it starts level (pitch 0) in the
+    front wheel's own static equilibrium, the swingarm at full extension and the rider at its
+    stance (their qpos 0). Locked "pitch", "rear" and "rider" with the rear tire off
+    is the rolling front end's rig (``tests/test_bike_locked.py``)."""
     from mtbmj.bike.reference import Reference, static_equilibrium
 
     _check(speed_m_per_s, None)
@@ -118,6 +134,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
         raise ConfigError(f"callback: must be one of {', '.join(CALLBACKS)}, got {callback!r}")
     if drive not in ("rider", "coast"):
         raise ConfigError(f"drive: {drive!r} is not one of rider, coast")
+    lock = _check_lock(lock, rear_tire)
     spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(str(bike))
     ter = terrain_mod.make(scenario)
     if ter.moving:
@@ -132,6 +149,9 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     rate, damping = values.rate, values.damping
     front = RadialTire(ter, radius, rate, damping, rim=fork_setup.tire.rim)
     rear = RadialTire(ter, radius, rate, damping, rim=fork_setup.tire.rim)
+    # the callback's rear tire: none (no rate, no damping, no rim) when the rear wheel is lifted;
+    # the reference below keeps the real one for the two-wheel equilibrium the locks start from
+    rear_cb = rear if rear_tire else RadialTire(ter, radius, 0.0, 0.0, rim=None)
     total = spec.total_mass
     kv = 2.0 * total * 2.0 * math.pi * DRIVE_HZ
     limits = {k: spec.drive[v] for k, v in (("push", "push_N"), ("power", "power_W"), ("brake", "brake_N"))
@@ -139,18 +159,26 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     drv = Drive(drive, kv, **limits)
     traction = spec.drive.get("traction", 1.0)
     refresh = min(REFRESH_S, REFRESH_DISTANCE_M / float(speed_m_per_s))
-    cb = make_callback(callback, b, fork_setup.fork, shock_setup.fork, front, rear, drv, speed_m_per_s, traction,
+    cb = make_callback(callback, b, fork_setup.fork, shock_setup.fork, front, rear_cb, drv, speed_m_per_s, traction,
                        refresh)
     data = mujoco.MjData(b.model)
     p = Prepared(b, spec, fork_setup, shock_setup, fork_setup.fork, shock_setup.fork, ter, front, rear, drv, traction,
                  float(speed_m_per_s), g, timestep, cb, data, None, None, None)
     ref = Reference(p)
     _check_start(p, ref)
-    q = static_equilibrium(ref)
-    _check_equilibrium(ref, q)
     names = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")
-    for name, value in zip(names, q):
+    if rear_tire:
+        q = static_equilibrium(ref)
+        _check_equilibrium(ref, q)
+        q = dict(zip(names, q))
+    else:  # on the front wheel alone: the rear at full extension, the rider at its stance (both held)
+        q = dict.fromkeys(names, 0.0)
+        q.update(_front_alone(p))
+    for name, value in q.items():
         data.qpos[b.qpos_index(name)] = value
+    for key in lock:
+        for name in LOCKS[key]:
+            b.model.dof_armature[b.dof_index(name)] = LOCK_ARMATURE
     data.qvel[b.dof_index("bike_x")] = speed_m_per_s
     data.qvel[b.dof_index("front_spin")] = speed_m_per_s / radius
     data.qvel[b.dof_index("rear_spin")] = speed_m_per_s / radius
@@ -158,6 +186,45 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
         mujoco.mj_forward(b.model, data)
     p.initial_qpos, p.initial_qvel, p.initial_act = data.qpos.copy(), data.qvel.copy(), data.act.copy()
     return p
+
+
+def _check_lock(lock, rear_tire) -> tuple[str, ...]:
+    if isinstance(lock, str):
+        lock = (lock,) if lock else ()
+    try:
+        lock = tuple(dict.fromkeys(lock))
+    except TypeError:
+        raise ConfigError(f"lock: must be a list of {', '.join(LOCKS)}, got {lock!r}") from None
+    bad = [k for k in lock if k not in LOCKS]
+    if bad:
+        raise ConfigError(f"lock: {bad[0]!r} is not one of {', '.join(LOCKS)}")
+    if not rear_tire and "pitch" not in lock:
+        raise ConfigError("rear_tire: the bike cannot stand on its front wheel alone unless its pitch is locked "
+                          "(lock 'pitch')")
+    return lock
+
+
+def _front_alone(p: Prepared) -> dict:
+    """(bike_z, pitch, fork) of the bike level on its front wheel alone, on flat ground, at rest:
+    the front tire carries the whole weight W (its deflection W / k), and the fork's spring the part
+    above the fork along the steering axis, (W - (m_lower + m_wheel) g) sin(head angle), as the
+    front-end rig's ``static_sag``."""
+    spec, g = p.spec, p.gravity
+    unsprung = spec.fork_lower_mass + spec.front_wheel_mass
+    a = spec.head_angle
+    target = (spec.total_mass - unsprung) * g * math.sin(a)
+    spring = p.fork_setup.fork.spring
+    lo, hi = -0.05, p.fork_setup.travel * 1.5
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if spring.force(mid, 0.0) < target:
+            lo = mid
+        else:
+            hi = mid
+    xf = 0.5 * (lo + hi)
+    deflection = spec.total_mass * g / p.front_tire.rate
+    # the front axle (frame level) is at z0 + bike_z + fz + xf sin(a); at qpos = 0 its tread touches
+    return {"bike_z": -deflection - xf * math.sin(a), "pitch": 0.0, "fork": xf}
 
 
 def make_callback(kind: str, *args):
@@ -468,14 +535,18 @@ def default_duration(p: Prepared) -> float:
 
 def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: float | None = None,
              drive: str = "rider", start_x: float | None = None,
-             progress: Callable[[float], None] | None = None, callback: str = "auto") -> BikeResult:
+             progress: Callable[[float], None] | None = None, callback: str = "auto", lock=(),
+             rear_tire: bool = True) -> BikeResult:
     """Roll the bike ``bike`` (a preset name, a TOML path or a ``BikeSpec``) over ``scenario`` (a
     terrain spec of ``mtbmj roll``) at ``speed_m_per_s``; ``duration`` defaults to the time for both
     wheels to cross the feature and settle; ``drive`` "rider" (a speed controller within a rider's
     limits) or "coast"; ``start_x`` the front axle's start (default the terrain's); ``callback``
-    "auto" (compiled where numba is installed, else Python with a warning), "compiled" or "python"."""
+    "auto" (compiled where numba is installed, else Python with a warning), "compiled" or "python";
+    ``lock`` degrees of freedom held at their static values ("rear": the shock locked out at its
+    sag, "pitch", "rider"), ``rear_tire=False`` the rear wheel lifted (needs "pitch" locked), see
+    ``prepare``."""
     _check(speed_m_per_s, duration)
-    p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback)
+    p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.timestep, 1.0 / p.timestep)
     start = time.perf_counter()
@@ -486,6 +557,9 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
     info = {"steps": int(sensors.shape[0]), "timestep_s": p.timestep, "integrator": p.fork_setup.integrator,
             "callback": callback_kind(p.callback), "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
             "real_time_factor": duration / wall if wall > 0 else None}
+    if lock or not rear_tire:
+        info["locked"] = list(_check_lock(lock, rear_tire))
+        info["rear_tire"] = bool(rear_tire)
     name = p.spec.name
     result = BikeResult(name, str(scenario), raw, raw, summary, wall, p, info)
     every = max(1, int(round(1.0 / (VIDEO_SAMPLE_HZ * p.timestep))))
@@ -494,5 +568,5 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
     return result
 
 
-__all__ = ["run_bike", "prepare", "simulate", "BikeResult", "BikeCallback", "Prepared", "COLUMNS", "setups",
+__all__ = ["run_bike", "prepare", "LOCKS", "LOCK_ARMATURE", "simulate", "BikeResult", "BikeCallback", "Prepared", "COLUMNS", "setups",
            "CALLBACKS", "make_callback", "callback_kind"]
