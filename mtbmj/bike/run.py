@@ -409,6 +409,7 @@ def _summary(p: Prepared, raw: dict) -> dict:
         "bike": p.spec.name,
         "scenario": p.terrain.describe(),
         "speed_m_per_s": p.speed,
+        "start_m": float(p.bike.x0 + p.spec.front_axle[0]),  # the front axle's start along the terrain
         "duration_s": float(t[-1] + dt),
         "timestep_s": dt,
         "static_front_travel_mm": float(raw["front_travel_mm"][0]),
@@ -503,12 +504,10 @@ class BikeResult(RunOutput):
     def video(self, path, fps: float = 30.0, width: int = 640, height: int = 480) -> dict:
         """Write a video (.gif, or .mp4 with the [video] extra) of the run to ``path``, side on, the
         camera following the bike (``mtbmj.rolling.render``, headless EGL or OSMesa)."""
+        from mtbmj.bike.replay import trajectory
         from mtbmj.rolling import render
 
-        times, qpos = self.motion
-        trajectory = render.rolling_frames(self.prepared.bike.model, times, qpos, fps,
-                                           label=f"bike {self.name} over {self.scenario}")
-        return render.render(trajectory, path, fps, width, height)
+        return render.render(trajectory(self, fps), path, fps, width, height)
 
     def headline(self) -> str:
         s = self.summary

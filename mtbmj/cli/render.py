@@ -1,4 +1,4 @@
-"""``mtbmj render RUN_OR_CONFIG --out video.mp4|.gif``: a headless video of a drop or rolling run.
+"""``mtbmj render RUN_OR_CONFIG --out video.mp4|.gif``: a headless video of a drop, rolling or bike run.
 """
 from __future__ import annotations
 
@@ -10,9 +10,9 @@ from mtbmj.cli.common import out_path
 def add_parser(subparsers):
     """Add the ``render`` sub-command to an argparse sub-parser collection."""
     p = subparsers.add_parser(
-        "render", help="write an MP4 or GIF of a drop or rolling run (headless, EGL or OSMesa)",
+        "render", help="write an MP4 or GIF of a drop, rolling or bike run (headless, EGL or OSMesa)",
         description="Render a run headless through mujoco.Renderer (EGL, else OSMesa; MUJOCO_GL=egl|osmesa forces "
-                    "one): a run directory written by mtbmj drop/roll is replayed, a preset or TOML file is run "
+                    "one): a run directory written by mtbmj drop/roll/bike is replayed, a preset or TOML file is run "
                     "on MuJoCo first. The format follows the extension of --out: .gif, or .mp4 (H.264; the [video] extra).")
     p.add_argument("source", metavar="RUN_OR_CONFIG", help="run directory, preset name (S1..S14) or TOML file")
     p.add_argument("--out", type=out_path, default=Path("out/render.gif"), help="video file, .gif or .mp4 (default out/render.gif)")

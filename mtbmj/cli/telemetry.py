@@ -1,8 +1,9 @@
 """``mtbmj telemetry FILE.SST [--compare RUN_DIR ...] [--out DIR]``: the rider's metrics of a real
 ride, and the same metrics of simulated runs on the same axes.
 
-Writes ``telemetry.json`` (metrics of the fork and rear of the ride and of the fork of every
-compared run) and ``telemetry.png`` (travel histogram in % of travel and velocity histogram with
+A compared run is a drop or rolling run (its fork) or a bike run (``mtbmj bike --out``: its fork
+and its rear wheel, beside the ride's fork and rear wheel). Writes ``telemetry.json`` (metrics of
+the fork and rear of the ride and of the fork of every compared run, and the rear of a bike run) and ``telemetry.png`` (travel histogram in % of travel and velocity histogram with
 the high/low-speed split, both in % of time), atomically.
 """
 from __future__ import annotations
@@ -41,10 +42,12 @@ def add_parser(subparsers):
         "telemetry", help="metrics of a real ride (SST file), optionally against simulated runs",
         description="Read a Sufni Suspension Telemetry (SST v3) file, compute the travel histogram (% of travel), "
                     "the velocity histogram (compression positive) with the high/low-speed split, bottom-outs and "
-                    "airtime for the fork and the rear wheel, and plot simulated runs' fork on the same axes.")
+                    "airtime for the fork and the rear wheel, and plot simulated runs' fork (and a bike run's rear "
+                    "wheel) on the same axes.")
     p.add_argument("sst", type=Path, metavar="FILE.SST", help="SST v3 recording, or 'example' for the shipped 00649.SST")
     p.add_argument("--compare", type=Path, nargs="+", action="extend", metavar="RUN_DIR",
-                   help="run directories (mtbmj drop/roll --out) whose timeseries.csv fork_mm is compared")
+                   help="run directories (mtbmj drop/roll --out: the fork; mtbmj bike --out: the fork and the rear wheel) "
+                        "compared with the ride")
     add_out(p, "out/telemetry")
     p.add_argument("--threshold-mm-per-s", type=float, default=100.0,
                    help="high/low-speed split of the velocity histogram (default 100)")
@@ -57,27 +60,74 @@ def add_parser(subparsers):
     return p
 
 
-def load_run(run_dir: Path) -> dict:
-    """Fork travel of a run directory: name, time_s, fork_mm, fork velocity (or None), travel max."""
+def read_columns(run_dir: Path, error=MtbmjError) -> dict:
+    """The columns (name -> values) of ``run_dir``'s timeseries.csv."""
     run_dir = Path(run_dir)
     csv_path = run_dir / "timeseries.csv"
     if not run_dir.is_dir():
-        raise MtbmjError(f"--compare {run_dir}: not a run directory")
+        raise error(f"--compare {run_dir}: not a run directory")
     if not csv_path.is_file():
-        raise MtbmjError(f"--compare {run_dir}: no timeseries.csv (write one with mtbmj drop ... --out {run_dir})")
-    text = read_text(csv_path, MtbmjError, str(csv_path), "not a text file", "record")
+        raise error(f"--compare {run_dir}: no timeseries.csv (write one with mtbmj drop, roll or bike ... --out {run_dir})")
+    text = read_text(csv_path, error, str(csv_path), "not a text file", "record")
     try:
         lines = [line for line in text.splitlines() if line.strip() and not line.startswith("#")]
         names = [n.strip() for n in lines[0].split(",")]
         table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
     except (OSError, ValueError, IndexError) as exc:
-        raise MtbmjError(f"{csv_path}: cannot read ({exc})") from None
+        raise error(f"{csv_path}: cannot read ({exc})") from None
     if table.shape[1] != len(names):
-        raise MtbmjError(f"{csv_path}: {table.shape[1]} values per row for {len(names)} columns")
-    columns = dict(zip(names, table.T))
-    for need in ("time_s", "fork_mm"):
-        if need not in columns:
-            raise MtbmjError(f"{csv_path}: no {need} column")
+        raise error(f"{csv_path}: {table.shape[1]} values per row for {len(names)} columns")
+    return dict(zip(names, table.T))
+
+
+def _run_name(run_dir: Path, name: str) -> str:
+    manifest_path = run_dir / "manifest.json"
+    if manifest_path.is_file():
+        try:
+            manifest = json.loads(read_text(manifest_path, MtbmjError, str(manifest_path), "not a text file"))
+            if isinstance(manifest, dict):
+                kind = "bike" if "bike_source" in manifest else manifest.get("engine", manifest.get("kind", "sim"))
+                name = f"{manifest.get('name', name)} ({kind})"
+        except (MtbmjError, ValueError, RecursionError):
+            pass
+    return name
+
+
+def _positive(value) -> bool:
+    return not isinstance(value, bool) and isinstance(value, (int, float)) and 0 < value < 1e6
+
+
+def _load_bike(run_dir: Path, columns: dict) -> dict:
+    """Both ends of a bike run (``mtbmj bike --out``): front (fork) travel and rear wheel travel,
+    each end's full travel from summary.json."""
+    summary_path = run_dir / "summary.json"
+    try:
+        summary = json.loads(read_text(summary_path, MtbmjError, str(summary_path), "not a text file"))
+        front_max = summary["front"]["travel_mm"]
+        rear_max = summary["rear_wheel_travel_mm"]
+    except (MtbmjError, ValueError, RecursionError, KeyError, TypeError):
+        raise MtbmjError(f"--compare {run_dir}: a bike run without a readable summary.json (front.travel_mm, "
+                         "rear_wheel_travel_mm)") from None
+    if not (_positive(front_max) and _positive(rear_max)):
+        raise MtbmjError(f"--compare {run_dir}: summary.json gives no positive front.travel_mm and rear_wheel_travel_mm")
+    return {"name": _run_name(run_dir, run_dir.name), "dir": str(run_dir), "time_s": columns["time_s"],
+            "fork_mm": columns["front_travel_mm"], "velocity_mm_per_s": None, "travel_max_mm": float(front_max),
+            "rear_mm": columns["rear_travel_mm"], "rear_travel_max_mm": float(rear_max)}
+
+
+def load_run(run_dir: Path) -> dict:
+    """Fork travel of a run directory: name, time_s, fork_mm, fork velocity (or None), travel max;
+    a bike run (``mtbmj bike --out``) also gives rear_mm (rear wheel travel) and rear_travel_max_mm."""
+    run_dir = Path(run_dir)
+    columns = read_columns(run_dir)
+    csv_path = run_dir / "timeseries.csv"
+    if "time_s" not in columns:
+        raise MtbmjError(f"{csv_path}: no time_s column")
+    if "fork_mm" not in columns:
+        if "front_travel_mm" in columns and "rear_travel_mm" in columns:
+            return _load_bike(run_dir, columns)
+        raise MtbmjError(f"--compare {run_dir}: neither a drop or roll run (no fork_mm column) nor a bike run "
+                         "(no front_travel_mm and rear_travel_mm columns) in timeseries.csv")
     travel_max = None
     config_path = run_dir / "config.toml"
     if config_path.is_file():
@@ -87,19 +137,11 @@ def load_run(run_dir: Path) -> dict:
         except (tomllib.TOMLDecodeError, RecursionError) as exc:
             raise MtbmjError(f"{config_path}: not valid TOML ({exc})") from None
         travel_max = fork.get("travel_mm") if isinstance(fork, dict) else None
-    if isinstance(travel_max, bool) or not isinstance(travel_max, (int, float)) or not 0 < travel_max < 1e6:
+    if not _positive(travel_max):
         raise MtbmjError(f"--compare {run_dir}: config.toml gives no fork.travel_mm")
-    name = run_dir.name
-    manifest_path = run_dir / "manifest.json"
-    if manifest_path.is_file():
-        try:
-            manifest = json.loads(read_text(manifest_path, MtbmjError, str(manifest_path), "not a text file"))
-            if isinstance(manifest, dict):
-                name = f"{manifest.get('name', name)} ({manifest.get('engine', manifest.get('kind', 'sim'))})"
-        except (MtbmjError, ValueError, RecursionError):
-            pass
-    return {"name": name, "dir": str(run_dir), "time_s": columns["time_s"], "fork_mm": columns["fork_mm"],
-            "velocity_mm_per_s": columns.get("fork_velocity_mm_per_s"), "travel_max_mm": float(travel_max)}
+    return {"name": _run_name(run_dir, run_dir.name), "dir": str(run_dir), "time_s": columns["time_s"],
+            "fork_mm": columns["fork_mm"], "velocity_mm_per_s": columns.get("fork_velocity_mm_per_s"),
+            "travel_max_mm": float(travel_max)}
 
 
 def compare(record: telemetry.TelemetryRecord, runs: list[dict], threshold_mm_per_s: float = 100,
@@ -107,12 +149,18 @@ def compare(record: telemetry.TelemetryRecord, runs: list[dict], threshold_mm_pe
     """Metrics of the ride and of each run's fork, with shared velocity bins; JSON-ready."""
     signals = [v for v in (record.fork_mm, record.rear_mm) if v is not None]
     velocities = [ride_metrics.velocity(record.time_s, v) for v in signals]
+    run_ends = []  # (run, end, travel, travel max, velocity) of every simulated end
     for run in runs:
         try:
-            velocities.append(run["velocity_mm_per_s"] if run["velocity_mm_per_s"] is not None
-                              else ride_metrics.velocity(run["time_s"], run["fork_mm"]))
+            run_ends.append((run, "fork", run["fork_mm"], run["travel_max_mm"],
+                             run["velocity_mm_per_s"] if run["velocity_mm_per_s"] is not None
+                             else ride_metrics.velocity(run["time_s"], run["fork_mm"])))
+            if run.get("rear_mm") is not None:  # a bike run: its rear wheel too
+                run_ends.append((run, "rear", run["rear_mm"], run["rear_travel_max_mm"],
+                                 ride_metrics.velocity(run["time_s"], run["rear_mm"])))
         except ride_metrics.MetricsError as exc:
             raise MtbmjError(f"--compare {run['dir']}: {exc}") from None
+    velocities += [e[4] for e in run_ends]
     edges = ride_metrics.velocity_bins(velocities)
     air = record.airtime()
     measured = {"file": record.name, "path": record.path, "version": record.version,
@@ -125,18 +173,22 @@ def compare(record: telemetry.TelemetryRecord, runs: list[dict], threshold_mm_pe
     if record.shock_mm is not None:
         measured["rear"]["shock_stroke_max_mm"] = float(np.max(record.shock_mm))
         measured["rear"]["shock_stroke_limit_mm"] = record.shock_max_mm
-    simulated = []
-    for run, v in zip(runs, velocities[len(signals):]):
+    simulated, entries = [], {}
+    for run, end, travel, top, v in run_ends:
         try:
-            metrics = ride_metrics.summarize(run["time_s"], run["fork_mm"], run["travel_max_mm"], velocity_mm_per_s=v,
+            metrics = ride_metrics.summarize(run["time_s"], travel, top, velocity_mm_per_s=v,
                                              threshold_mm_per_s=threshold_mm_per_s, bin_percent=bin_percent,
                                              velocity_edges=edges)
         except ride_metrics.MetricsError as exc:
             raise MtbmjError(f"--compare {run['dir']}: {exc}") from None
-        simulated.append({"name": run["name"], "dir": run["dir"], "fork": metrics})
+        if id(run) not in entries:
+            entries[id(run)] = {"name": run["name"], "dir": run["dir"]}
+            simulated.append(entries[id(run)])
+        entries[id(run)][end] = metrics
     return {"measured": measured, "simulated": simulated,
             "conventions": "travel mm from full extension and % of each run's own travel (the ride's fork "
-                           "travel for the ride, fork.travel_mm for a simulated run); velocity mm/s, "
+                           "travel for the ride, fork.travel_mm for a simulated run; a bike run's front in its "
+                           "fork travel, its rear in its rear wheel travel); velocity mm/s, "
                            "compression positive; histograms in % of time",
             "abbreviations": {k: v.replace("threshold", f"{threshold_mm_per_s:g} mm/s")
                               for k, v in ABBREVIATIONS.items()}}
@@ -174,9 +226,9 @@ def figure(summary: dict):
                  alpha=0.55, edgecolor="white", label=f"{label}, max {m['travel']['max_percent']:.0f}%")
         ax_v.bar(edges_v[:-1], vh["time_percent"], width=np.diff(edges_v), align="edge", color="tab:blue",
                  alpha=0.55, edgecolor="white", label=f"{label}: {_split_label(m)}")
-        if end == "fork":
-            for color, run in zip(colors * 4, summary["simulated"]):
-                s = run["fork"]
+        for color, run in zip(colors * 4, summary["simulated"]):
+            if end in run:  # every run's fork; a bike run's rear wheel too
+                s = run[end]
                 st, sv = s["travel_histogram"], s["velocity"]
                 ax_t.stairs(st["time_percent"], st["bin_edges_percent"], color=color, linewidth=2,
                             label=f"simulated {run['name']} (% of {s['travel_max_mm']:.0f} mm), "
@@ -190,8 +242,12 @@ def figure(summary: dict):
         ax_v.axvspan(thr, edges_v[-1], color="0.94", zorder=0)
         ax_t.set_xlim(0, 100)
         ax_t.set_xlabel(f"{end} travel [% of each run's own travel]")
+        top = float(m["travel_max_mm"])  # the same axis in mm of the ride's own travel, on top
+        mm = ax_t.secondary_xaxis("top", functions=(lambda p, top=top: p * top / 100.0,
+                                                    lambda x, top=top: x * 100.0 / top))
+        mm.set_xlabel(f"{end} travel [mm] of the ride's {top:.0f} mm", fontsize="small")
         ax_v.set_xlabel(f"{end} velocity [mm/s], compression positive")
-        shown = [vh] + ([r["fork"]["velocity"] for r in summary["simulated"]] if end == "fork" else [])
+        shown = [vh] + [r[end]["velocity"] for r in summary["simulated"] if end in r]
         limit = 3 * thr  # every bin any shown histogram uses, so no run's tails are cut off
         for h in shown:
             used = np.flatnonzero(np.asarray(h["time_percent"]) > 0)
