@@ -1,5 +1,4 @@
-"""A bike run folder (``mtbmj bike ... --out DIR``) replayed: ``mtbmj render DIR`` and
-``mtbmj telemetry FILE.SST --compare DIR`` read bike folders through here.
+"""A bike run folder (``mtbmj bike ... --out DIR``) replayed for ``mtbmj render DIR``.
 
 A bike folder is recognised by its manifest (``bike_source``) or by its timeseries' columns
 (``front_travel_mm`` and ``rear_travel_mm``). For a video the run is re-simulated,
@@ -28,15 +27,6 @@ def is_bike_dir(run_dir) -> bool:
     except (OSError, ValueError):
         return False
     return isinstance(manifest, dict) and "bike_source" in manifest
-
-
-def trajectory(result, fps: float = 30.0, duration: float | None = None, label: str | None = None):
-    """The ``mtbmj.rolling.render.Trajectory`` of a ``BikeResult`` (its pose kept at 240 Hz)."""
-    from mtbmj.rolling import render
-
-    times, qpos = result.motion
-    return render.rolling_frames(result.prepared.bike.model, times, qpos, fps, duration,
-                                 label or f"bike {result.name} over {result.scenario}")
 
 
 def _read(run_dir: Path, error) -> tuple[dict, dict]:
@@ -69,12 +59,7 @@ def rerun(run_dir, duration: float | None = None, error=MtbmjError):
         raise error(f"{run_dir}: cannot replay this bike run ({exc})") from None
     except (KeyError, TypeError, ValueError) as exc:
         raise error(f"{run_dir}: not a complete bike run ({exc.__class__.__name__}: {exc})") from None
-    from mtbmj.cli.telemetry import read_columns
-
-    columns = read_columns(run_dir, error)
-    recorded = columns.get("front_travel_mm")
-    if recorded is None:
-        raise error(f"{run_dir}: timeseries.csv has no front_travel_mm column")
+    recorded = _front_travel(run_dir, error)
     replayed = result.raw["front_travel_mm"]
     n = min(recorded.size, replayed.size)
     if n == 0 or not np.max(np.abs(recorded[:n] - replayed[:n])) <= MATCH_MM:
@@ -84,10 +69,16 @@ def rerun(run_dir, duration: float | None = None, error=MtbmjError):
     return result
 
 
-def run_dir_trajectory(run_dir, fps: float = 30.0, duration: float | None = None, error=MtbmjError):
-    """The ``Trajectory`` of a bike folder, re-simulated (``rerun``)."""
-    result = rerun(run_dir, duration, error)
-    return trajectory(result, fps, duration, f"bike {result.name} over {result.scenario} ({Path(run_dir).name})")
+def _front_travel(run_dir: Path, error) -> np.ndarray:
+    """The front_travel_mm column of the folder's timeseries.csv."""
+    path = run_dir / "timeseries.csv"
+    try:
+        lines = [line for line in path.read_text().splitlines() if line.strip() and not line.startswith("#")]
+        names = [n.strip() for n in lines[0].split(",")]
+        table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
+        return table[:, names.index("front_travel_mm")]
+    except (OSError, UnicodeDecodeError, ValueError, IndexError) as exc:
+        raise error(f"{path}: cannot read its front_travel_mm column ({exc.__class__.__name__}: {exc})") from None
 
 
-__all__ = ["is_bike_dir", "trajectory", "rerun", "run_dir_trajectory", "MATCH_MM"]
+__all__ = ["is_bike_dir", "rerun", "MATCH_MM"]

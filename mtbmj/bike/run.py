@@ -504,10 +504,18 @@ class BikeResult(RunOutput):
     def video(self, path, fps: float = 30.0, width: int = 640, height: int = 480) -> dict:
         """Write a video (.gif, or .mp4 with the [video] extra) of the run to ``path``, side on, the
         camera following the bike (``mtbmj.rolling.render``, headless EGL or OSMesa)."""
-        from mtbmj.bike.replay import trajectory
         from mtbmj.rolling import render
 
-        return render.render(trajectory(self, fps), path, fps, width, height)
+        return render.render(self.trajectory(fps), path, fps, width, height)
+
+    def trajectory(self, fps: float = 30.0, duration: float | None = None, label: str | None = None):
+        """The run as a ``mtbmj.rolling.render.Trajectory`` (its pose kept at 240 Hz): what
+        ``video`` and ``mtbmj render`` of a bike folder draw."""
+        from mtbmj.rolling import render
+
+        times, qpos = self.motion
+        return render.rolling_frames(self.prepared.bike.model, times, qpos, fps, duration,
+                                     label or f"bike {self.name} over {self.scenario}")
 
     def headline(self) -> str:
         s = self.summary

@@ -25,9 +25,19 @@ def add_parser(subparsers):
 
 
 def cmd_render(args) -> int:
-    from mtbmj.rolling.render import render
+    from mtbmj.bike.replay import is_bike_dir, rerun
+    from mtbmj.rolling.render import RenderError, check_output, gl_backend, render
 
-    done = render(args.source, args.out, fps=args.fps, width=args.width, height=args.height, duration=args.duration)
+    source = args.source
+    if is_bike_dir(source):  # mtbmj bike --out: re-simulated (mtbmj.bike.replay), drawn as bike --video draws it
+        check_output(args.out, args.width, args.height, args.fps)
+        if args.duration is not None and not (args.duration > 0):
+            raise RenderError(f"--duration: must be positive, got {args.duration}")
+        gl_backend()  # no headless OpenGL: one line before any work
+        result = rerun(source, args.duration, RenderError)
+        source = result.trajectory(args.fps, args.duration,
+                                   f"bike {result.name} over {result.scenario} ({Path(args.source).name})")
+    done = render(source, args.out, fps=args.fps, width=args.width, height=args.height, duration=args.duration)
     print(f"{done['label']}: {done['frames']} frames, {done['width']}x{done['height']} at {done['fps']:g} fps "
           f"({done['duration_s']:.2f} s, {done['backend']}); wrote {done['path']}")
     return 0

@@ -7,8 +7,6 @@ on the MuJoCo engine first. A rolling run directory (``manifest.json`` with ``"k
 or a ``"scenario"``) is re-simulated, deterministically, through
 ``mtbmj.rolling.frontend.roll_trajectory(scenario, speed, config=..., head_angle_deg=..., duration=..., fps=...)
 -> (model, times, qpos)`` when that module is present; the scene's camera "side" is used if it has one.
-A bike run directory (``mtbmj bike --out``: ``"bike_source"`` in its manifest) is re-simulated by
-``mtbmj.bike.replay``, as ``mtbmj bike --video`` draws it.
 
 GL backend: MuJoCo picks its OpenGL context class from ``MUJOCO_GL`` when ``mujoco`` is first
 imported, and PyOpenGL binds to one platform (``PYOPENGL_PLATFORM``) for the life of the
@@ -244,10 +242,6 @@ def trajectory(source: str | Path, fps: float = 30.0, duration: float | None = N
             kind = manifest_data.get("kind", "drop")
         except (OSError, ValueError) as exc:
             raise RenderError(f"{manifest}: cannot read ({exc})") from None
-        if isinstance(manifest_data, dict) and "bike_source" in manifest_data:  # mtbmj bike --out
-            from mtbmj.bike.replay import run_dir_trajectory
-
-            return run_dir_trajectory(path, fps, duration, RenderError)
         if kind == "roll" or "scenario" in manifest_data:
             return roll_trajectory(path, fps, duration)
     return drop_trajectory(source, fps, duration)
