@@ -14,7 +14,9 @@ cached laws while the drops go on with the Python laws, and each drop after the 
 takes the compiled ones; from the ``WAIT_FROM_CALL``-th drop, one that finds the load still under
 way waits for it (the Python laws beside a load run at half speed). A command that makes one drop (``mtbmj drop``) says so (``one_shot``) and
 never starts that thread: its start-up stays what it was. ``MTBMJ_BACKGROUND_LOAD=0`` in the
-environment turns the thread off. Nothing here imports numba.
+environment turns the thread off. A process forked while that load is under way (a sweep's pool,
+or the caller's own multiprocessing) first waits for it to finish: its child would otherwise wait
+for ever on the import the load holds. Nothing here imports numba.
 """
 from __future__ import annotations
 
@@ -76,7 +78,25 @@ def drop_started() -> None:
             return
         thread = threading.Thread(target=_load, name="mtbmj-load-compiled-laws", daemon=True)
         _state["thread"] = thread
+        if not _state.get("fork_hook"):
+            # A process forked while the load holds the import lock (a sweep's pool, or the
+            # caller's own multiprocessing) would wait for that lock for ever in its child: the
+            # thread that holds it is not copied. So a fork first lets the load finish. Hooks run
+            # in the reverse order of their registration, and logging's takes its module lock,
+            # which the load needs (numba logs): logging registers first, so ours runs before it.
+            import logging  # noqa: F401  (registers logging's own fork hook before ours)
+
+            os.register_at_fork(before=_finish_load_before_fork)
+            _state["fork_hook"] = True
         thread.start()
+
+
+def _finish_load_before_fork() -> None:
+    """Wait for a load under way, however long: a cold first compile holds the import of
+    ``controllers.compiled`` for tens of seconds, and a child forked meanwhile would never get it."""
+    thread = _state["thread"]
+    if thread is not None and thread.is_alive() and thread is not threading.current_thread():
+        thread.join()
 
 
 def _load() -> None:

@@ -641,7 +641,7 @@ def velocity_band(s: Setup) -> tuple[float, float]:
 
 
 # A coarse step is refined when, at either end, the fork or the tire is within this distance
-# plus what the step can cover of a stop's or the rim's reach (engine_mujoco.stop_index).
+# plus what the step can cover of a stop's or the rim's reach (drop.stepping.stop_index).
 STOP_MARGIN_M = 0.2e-3
 STICK_SLIDING_STEP = 2.0  # RK4: dt |v| / z_ss while sliding (its stability bound is 2.8)
 

@@ -147,11 +147,7 @@ def test_the_stop_and_rim_formula_is_written_once():
 PRIVATE_IMPORTS_EXEMPT_PACKAGES: set[str] = set()
 # (importer, "module:name") pairs allowed outside those packages, each with the module that still
 # has to change; a pair no longer used fails test_private_import_allowances_are_all_used.
-PRIVATE_IMPORTS_ALLOWED = {
-    # mtbmj/rolling/frontend.py: to import engine_mujoco.collected_warnings and first_warning
-    ("mtbmj.rolling.frontend", "mtbmj.drop.engine_mujoco:_collected_warnings"),
-    ("mtbmj.rolling.frontend", "mtbmj.drop.engine_mujoco:_warning"),
-}
+PRIVATE_IMPORTS_ALLOWED: set[tuple[str, str]] = set()
 
 
 def _private(name: str) -> bool:

@@ -59,3 +59,34 @@ def test_a_command_never_loads_in_the_background(tmp_path):
 def test_the_environment_turns_the_background_load_off():
     got = run(LOOP, MTBMJ_BACKGROUND_LOAD="0")
     assert got["kinds"] == ["python"] * 5 and not got["numba"]
+
+
+FORK = """
+import json, multiprocessing, sys, threading
+import mtbmj
+
+def child(queue):
+    from mtbmj.controllers import compiled  # the import the background load may be holding
+    queue.put(compiled.available())
+
+mtbmj.run_drop("S12", duration=0.05)  # starts the background load, then returns at once
+loading = any(t.name == "mtbmj-load-compiled-laws" and t.is_alive() for t in threading.enumerate())
+context = multiprocessing.get_context("fork")
+queue = context.Queue()
+process = context.Process(target=child, args=(queue,))
+process.start()
+process.join(120)
+finished = process.exitcode == 0
+if not finished:
+    process.kill()
+print(json.dumps({"loading_at_fork": loading, "child_finished": finished,
+                  "child_has_laws": queue.get(timeout=1) if finished else None}))
+"""
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="fork start method")
+def test_a_process_forked_during_the_background_load_does_not_hang():
+    """A child forked while the load held the import lock waited for ever on it (a sweep's pool
+    after a drop hung the test suite): a fork now lets the load finish first."""
+    out = run(FORK)
+    assert out["child_finished"] and out["child_has_laws"] in (True, False), out

@@ -10,7 +10,7 @@ from mtbmj.errors import MtbmjError
 
 
 def cmd_synth(args) -> int:
-    from mtbmj.drop.run import resolve
+    from mtbmj.drop.chain import resolve
     from mtbmj.identify import dyno_synthetic as synth
 
     if args.out.suffix.lower() not in (".csv", ".mat"):

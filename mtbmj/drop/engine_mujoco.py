@@ -55,7 +55,6 @@ def state_layout(model) -> tuple[int, slice, slice, slice]:
 TOUCH_DEPTH_M = 1e-12
 
 # the names ``mtbmj.rolling.frontend`` imports (it is to move to the public ones above)
-_warning, _collected_warnings = first_warning, collected_warnings
 
 
 CALLBACKS = ("auto", "compiled", "python")

@@ -7,7 +7,6 @@ from typing import Callable, Mapping
 from mtbmj.config import Config
 from mtbmj.controllers import native
 from mtbmj.drop import chain
-from mtbmj.drop.chain import resolve  # noqa: F401 - mtbmj.drop.resolve, and the command line's import
 from mtbmj.drop.result import DropResult
 from mtbmj.errors import ConfigError
 

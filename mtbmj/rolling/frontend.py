@@ -223,7 +223,7 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
 
     ``callback``: ``"auto"`` (the compiled callback of ``mtbmj.rolling.callback_compiled`` when numba
     is available, else ``RollCallback`` with a warning), ``"compiled"`` or ``"python"``."""
-    from mtbmj.drop.run import resolve
+    from mtbmj.drop.chain import resolve
 
     _check_inputs(speed_m_per_s, head_angle_deg, None)
     if callback not in CALLBACKS:
@@ -337,16 +337,16 @@ def _simulate(p: Prepared, duration: float, progress=None):
     states[0] = state
     done = 0
     messages: list[str] = []
-    from mtbmj.drop.engine_mujoco import _collected_warnings, _warning
+    from mtbmj.drop.engine_mujoco import collected_warnings, first_warning
 
-    with installed(p.callback), _collected_warnings(messages):
+    with installed(p.callback), collected_warnings(messages):
         while done < steps:
             n = min(CHUNK, steps - done)
             st, se = rollout.rollout(model, data, states[done][None, :], nstep=n)
             states[done + 1: done + 1 + n] = st[0]
             sensors[done: done + n] = se[0]
             done += n
-            warning = _warning(data)
+            warning = first_warning(data)
             if warning is not None or messages or not np.all(np.isfinite(st)):
                 raise RunError(f"rolling run diverged before t = {done * p.setup.timestep:.4f} s: "
                                f"{messages[0] if messages else warning or 'state is not finite'}")
