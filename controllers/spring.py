@@ -304,7 +304,8 @@ class AirSpring:
     def force(self, x, v, sides=None):
         return air_spring_force(self.area, self.absolute, self.volume, self.index, self.atmospheric,
                                 self.has_negative, self.positive_at_port, self.negative_at_port, self.port,
-                                self.limit, self.limit_force, self.limit_rate, self.offset, x, flag(sides, 0))
+                                self.limit, self.limit_force, self.limit_rate, self.offset, x,
+                                flag(sides, 0) if self.has_negative else LIVE)  # (the port's guard, if any)
 
     def _air_energy(self, x: float) -> float:
         a, n = self.area, self.index
