@@ -18,7 +18,7 @@ from mtbmj.controllers import friction as _friction
 from mtbmj.controllers import spring as _spring
 from mtbmj.controllers import stops as _stops
 from mtbmj.controllers.fork import ForkLaw
-from mtbmj.controllers.layout import values, width
+from mtbmj.controllers.layout import values
 
 SP_LINEAR, SP_BILINEAR, SP_PROGRESSIVE, SP_DIRECTIONAL, SP_TOPOUT, SP_STOPS, SP_AIR = 1, 2, 3, 4, 5, 6, 7
 DA_LINEAR, DA_BILINEAR, DA_TABLE, DA_DIGRESSIVE, DA_ORIFICE = 1, 2, 3, 4, 5
@@ -115,7 +115,7 @@ def flatten(law: ForkLaw) -> tuple[list[int], list[float]]:
         ints[I_FRICTION_INNER_AT] = put(f.inner)
     elif kind in FRICTIONS:
         ints[I_FRICTION] = FRICTIONS[kind]
-        ints[I_FRICTION_AT] = put(f) if width(kind) else len(floats)
+        ints[I_FRICTION_AT] = put(f)
     else:
         raise UnsupportedLaw(f"friction law {kind.__name__} has no compiled form")
     if len(floats) > FLOAT_WIDTH:

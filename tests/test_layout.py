@@ -33,6 +33,14 @@ def _lazy_table(tree: ast.Module) -> list[str]:
     return []
 
 
+def import_source(package: str, node: ast.ImportFrom) -> str:
+    """The module a ``from ... import`` in ``package`` takes its names from (relative ones resolved)."""
+    if not node.level:
+        return node.module
+    base = package.split(".")[: len(package.split(".")) - node.level + 1]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
 def import_graph() -> dict[str, set[str]]:
     """Module -> the package modules it imports, at module level or inside functions."""
     known = modules()
@@ -45,11 +53,7 @@ def import_graph() -> dict[str, set[str]]:
             if isinstance(node, ast.Import):
                 edges.update(alias.name for alias in node.names)
             elif isinstance(node, ast.ImportFrom):
-                if node.level:
-                    base = package.split(".")[: len(package.split(".")) - node.level + 1]
-                    source = ".".join(base + ([node.module] if node.module else []))
-                else:
-                    source = node.module
+                source = import_source(package, node)
                 for alias in node.names:
                     sub = f"{source}.{alias.name}"
                     edges.add(sub if sub in known else source)
@@ -175,11 +179,7 @@ def private_imports_in(name: str, tree: ast.Module, known) -> set[tuple[str, str
                     if _private(last) and not module_allowed(alias.name):
                         found.add((name, alias.name))
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")[: len(package.split(".")) - node.level + 1]
-                source = ".".join(base + ([node.module] if node.module else []))
-            else:
-                source = node.module
+            source = import_source(package, node)
             for alias in node.names:
                 sub = f"{source}.{alias.name}"
                 if sub in known:
