@@ -4,11 +4,11 @@ MuJoCo alone stepping the same bike model with no callback (the floor the callba
 rolling front end (``mtbmj roll``, compiled callback) on the same profile; interleaved (each
 repetition runs all four) so they see the same machine load.
 
-    python benchmarks/bike_speed.py [--repeats 5] [--duration 1.0] [--python-duration D] [--speed 5] [--max-step-ms S]
+    python benchmarks/bike_speed.py [--repeats 5] [--duration 1.0] [--python-duration D] [--speed 5] [--coarse-step-ms S]
 
 Prints each repetition, then the median and spread (min-max) of each real-time factor and of the
 ratios compiled bike / front end and compiled / Python bike, and the load average
-(/proc/loadavg) before and after. Only the stepping is timed (``simulate``; MuJoCo alone:
+(/proc/loadavg) before and after, and writes benchmarks/results/bike_speed.json. Only the stepping is timed (``simulate``; MuJoCo alone:
 ``rollout``): building the model and the static equilibrium are not. The rock garden is seven rocks
 50-110 mm high over 3 m (the profile of tests/test_bike_energy.py), written to a temporary CSV. The
 Python callback runs ``--python-duration`` s (default the same ``--duration``: a shorter run would
@@ -94,19 +94,20 @@ def main() -> None:
     ap.add_argument("--python-duration", type=float, default=None,
                     help="simulated seconds of the Python callback (default --duration)")
     ap.add_argument("--speed", type=float, default=5.0)
-    ap.add_argument("--max-step-ms", type=float, default=None,
-                    help="the bike's step cap (mtbmj.bike.run.MAX_TIMESTEP_S, default 0.1 ms); the laws' own step "
-                         "rules still bound it (the SST shock's: 0.2 ms)")
+    ap.add_argument("--coarse-step-ms", type=float, default=None,
+                    help="the bike's largest step (mtbmj.bike.stepping.COARSE_STEP_S, default 0.5 ms); the laws' "
+                         "step limits with the bike's masses still bound it")
     args = ap.parse_args()
-    if args.max_step_ms is not None:
-        from mtbmj.bike import run
+    if args.coarse_step_ms is not None:
+        from mtbmj.bike import stepping
 
-        run.MAX_TIMESTEP_S = args.max_step_ms * 1e-3
+        stepping.COARSE_STEP_S = args.coarse_step_ms * 1e-3
     if args.python_duration is None:
         args.python_duration = args.duration
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
-    print(f"load average before: {load()}", flush=True)
+    before = load()
+    print(f"load average before: {before}", flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         profile = str(rock_garden(Path(tmp) / "rock_garden.csv"))
         roll_rtf(profile, args.speed, 0.05)  # warm-up: imports, numba compilation of both compiled callbacks
@@ -136,7 +137,18 @@ def main() -> None:
     print(line("bike compiled / Python", rows["speedup"], ""))
     from mtbmj.bike import run
 
-    print(f"bike step: {1e3 * run.prepare('sst', 'flat', args.speed).timestep:g} ms, RK4; load average after: {load()}")
+    step = run.prepare("sst", "flat", args.speed).timestep
+    after = load()
+    print(f"bike step: {1e3 * step:g} ms, RK4; load average after: {after}")
+    from _bench import write_json
+
+    summary = {key: {"median": statistics.median(v), "min": min(v), "max": max(v), "runs": v} for key, v in rows.items()}
+    command = f"python benchmarks/bike_speed.py --repeats {args.repeats}"
+    if args.coarse_step_ms is not None:
+        command += f" --coarse-step-ms {args.coarse_step_ms:g}"
+    write_json(__file__, {"command": command, "duration_s": args.duration, "speed_m_per_s": args.speed,
+                          "timestep_s": step, "load_before": before, "load_after": after,
+                          "real_time_factors": summary})
 
 
 if __name__ == "__main__":

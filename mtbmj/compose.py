@@ -752,6 +752,13 @@ def timestep_limit(s: Setup) -> tuple[float, str]:
     return min(_limits(s)[0])
 
 
+def away_from_stops_limit(s: Setup) -> tuple[float, str]:
+    """(largest step where no end stop or rim acts, what sets it): the working stroke's limits and
+    those of the other zones (the band around rest, fast sliding), which may hold anywhere."""
+    working, _, zones, _ = _limits(s)
+    return min(working + zones)
+
+
 def fine_limit(s: Setup) -> tuple[float, str]:
     """(largest step while an end stop or the rim may be engaged, what sets it)."""
     working, stops, zones, _ = _limits(s)

@@ -247,7 +247,11 @@ def test_bike_command_writes_its_folder(tmp_path, capsys):
     for column in ("front_travel_mm", "rear_travel_mm", "stroke_mm", "pitch_deg", "front_tire_N", "rear_tire_N",
                    "rider_acc_z_m_per_s2", "speed_m_per_s"):
         assert column in header
-    assert len(rows) - 1 == 1000  # 0.1 s at 0.1 ms
+    step = json.loads((out / "manifest.json").read_text())["engine_info"]["timestep_s"]
+    assert step == pytest.approx(5e-4)  # the bike's coarse step: no stop or rim within reach on the root
+    assert len(rows) - 1 == 200  # 0.1 s at 0.5 ms
+    times = np.array([float(r[0]) for r in rows[1:]])
+    assert np.allclose(np.diff(times), step, atol=1e-9)
 
 
 def test_bike_crosscheck_needs_a_terrain_and_a_speed(capsys):

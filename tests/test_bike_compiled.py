@@ -114,7 +114,8 @@ def test_kinematics_offsets_are_mujocos():
 def test_default_is_compiled_and_the_run_says_so():
     r = B.run_bike("sst", "flat", 4.0, duration=0.05)
     assert r.info["callback"] == "compiled"
-    assert r.info["callback_calls"] == 4 * 500 + 1  # RK4, and the mj_forward of prepare
+    assert r.info["timestep_s"] == 5e-4 and r.info["refined_fraction"] == 0.0  # flat: the coarse step throughout
+    assert r.info["callback_calls"] == 4 * 100 + 1  # RK4, and the mj_forward of prepare
 
 
 def test_too_many_patches_reruns_on_the_python_path():

@@ -46,14 +46,11 @@ from mtbmj.result import RunOutput
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 from mtbmj.bike.callback import BikeCallback
+from mtbmj.bike.stepping import CHUNK_STEPS, Stepping, stepping
 
 CHUNK = 10000
 CALLBACKS = ("auto", "compiled", "python")
 VIDEO_SAMPLE_HZ = 240.0  # the bike's pose kept for a video (qpos rows per second)
-# The bike steps at 0.1 ms (or finer if a law's step rule asks): the rolling front end's step, at
-# which its cross-check holds; the drop's stop-refinement rule (written for the sled's 2.3 kg wheel
-# on the hard stops) is not applied: the bike's references check the step instead.
-MAX_TIMESTEP_S = 1e-4
 # Held degrees of freedom (``lock``): each held joint gets this armature (kg or kg m^2 added to its
 # own diagonal of the mass matrix, nothing else), so it keeps its start value and zero speed: under
 # the ~1e3 N (m) the tires, springs and dampers put on it, it moves ~1e-9 m (rad) in a second, and the
@@ -85,12 +82,15 @@ class Prepared:
     traction: float
     speed: float
     gravity: float
-    timestep: float
+    timestep: float  # the output step: the coarse step of ``stepping``
     callback: BikeCallback  # or its compiled twin (mtbmj.bike.callback_compiled.CompiledBikeCallback)
     data: mujoco.MjData
     initial_qpos: np.ndarray
     initial_qvel: np.ndarray
     initial_act: np.ndarray
+    stepping: Stepping | None = None
+    refined_chunks: int = 0  # chunks stepped again at the fine step (a stop or the rim within reach)
+    chunks: int = 0
 
 
 def _check(speed, duration):
@@ -142,7 +142,9 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     fork_setup, shock_setup = setups(spec)
     radius = fork_setup.tire_radius
     spec_mod.check_geometry(spec, radius)
-    timestep = min(MAX_TIMESTEP_S, fork_setup.timestep, shock_setup.timestep)
+    rim = fork_setup.tire.rim
+    steps = stepping(spec, fork_setup, shock_setup, (rim, rim if rear_tire else None))
+    timestep = steps.coarse
     g = fork_setup.gravity
     b = build_bike(spec, radius, ter, timestep, INTEGRATORS[fork_setup.integrator], g, start_x, fork_setup.fork_length)
     values = fork_setup.tire.values(1)  # rolling is sustained contact: the in-contact values of a switching law
@@ -163,7 +165,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
                        refresh)
     data = mujoco.MjData(b.model)
     p = Prepared(b, spec, fork_setup, shock_setup, fork_setup.fork, shock_setup.fork, ter, front, rear, drv, traction,
-                 float(speed_m_per_s), g, timestep, cb, data, None, None, None)
+                 float(speed_m_per_s), g, timestep, cb, data, None, None, None, steps)
     ref = Reference(p)
     _check_start(p, ref)
     names = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")
@@ -301,12 +303,17 @@ def simulate(p: Prepared, duration: float, progress=None):
                       FallbackWarning, stacklevel=2)
         p.callback = _python_twin(p.callback)  # its first evaluation searches the patches afresh
         mujoco.mj_setState(p.bike.model, p.data, start_state, kind)
+        p.chunks = p.refined_chunks = 0
         states, sensors = _simulate(p, duration, progress)
     return states, sensors
 
 
 def _simulate(p: Prepared, duration: float, progress=None):
+    """Step ``duration`` s in chunks of ``CHUNK_STEPS`` coarse steps; a chunk that came within reach
+    of an end stop or a rim (``Stepping.needs_fine``) is stepped again from its start at the fine
+    step, every ``substeps``-th state kept (``mtbmj.bike.stepping``)."""
     model, data = p.bike.model, p.data
+    plan = p.stepping
     steps = int(round(duration / p.timestep))
     kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state = np.empty(mujoco.mj_stateSize(model, kind))
@@ -314,17 +321,39 @@ def _simulate(p: Prepared, duration: float, progress=None):
     states = np.empty((steps + 1, state.size))
     sensors = np.empty((steps, model.nsensordata))
     states[0] = state
+    b = p.bike
+    fork_col = 1 + b.qpos_index("fork")
+    phi_col = 1 + b.qpos_index("swingarm")
+    deflection_cols = [int(model.sensor_adr[model.sensor(n).id]) for n in ("front_deflection", "rear_deflection")]
+    k = plan.substeps
+    chunk = CHUNK_STEPS if k > 1 else CHUNK
     done = 0
+    last_report = 0
     with installed(p.callback):
         while done < steps:
-            n = min(CHUNK, steps - done)
+            n = min(chunk, steps - done)
             st, se = rollout.rollout(model, data, states[done][None, :], nstep=n)
-            states[done + 1: done + 1 + n] = st[0]
-            sensors[done: done + n] = se[0]
+            st, se = st[0], se[0]
+            p.chunks += 1
+            if k > 1 and (not np.all(np.isfinite(st)) or plan.needs_fine(st[:, fork_col], st[:, phi_col],
+                                                                         [se[:, c] for c in deflection_cols])):
+                p.refined_chunks += 1
+                p.callback.reset()  # the patches of the chunk's end: the fine pass searches afresh
+                model.opt.timestep = plan.fine
+                try:
+                    st, se = rollout.rollout(model, data, states[done][None, :], nstep=n * k)
+                finally:
+                    model.opt.timestep = p.timestep
+                st, se = st[0, k - 1::k], se[0, k - 1::k]
+                st[:, 0] = states[done][0] + p.timestep * np.arange(1, n + 1)  # the coarse grid's times
+                data.time = st[-1, 0]
+            states[done + 1: done + 1 + n] = st
+            sensors[done: done + n] = se
             done += n
             if not np.all(np.isfinite(st)):
                 raise RunError(f"bike run diverged before t = {done * p.timestep:.4f} s")
-            if progress is not None:
+            if progress is not None and (done - last_report >= CHUNK or done == steps):
+                last_report = done
                 progress(done / steps)
     return states, sensors
 
@@ -561,7 +590,11 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
     wall = time.perf_counter() - start
     raw = _signals(p, states, sensors)
     summary = _summary(p, raw)
-    info = {"steps": int(sensors.shape[0]), "timestep_s": p.timestep, "integrator": p.fork_setup.integrator,
+    plan = p.stepping
+    info = {"steps": int(sensors.shape[0]), "timestep_s": p.timestep, "timestep_why": plan.coarse_why,
+            "fine_timestep_s": plan.fine, "fine_timestep_why": plan.fine_why,
+            "refined_fraction": p.refined_chunks / p.chunks if p.chunks else 0.0,
+            "integrator": p.fork_setup.integrator,
             "callback": callback_kind(p.callback), "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
             "real_time_factor": duration / wall if wall > 0 else None}
     if lock or not rear_tire:
@@ -571,7 +604,8 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
     result = BikeResult(name, str(scenario), raw, raw, summary, wall, p, info)
     every = max(1, int(round(1.0 / (VIDEO_SAMPLE_HZ * p.timestep))))
     nq = p.bike.model.nq
-    result.motion = (states[::every, 0].copy(), states[::every, 1:1 + nq].copy())
+    rows = states[:-1:every]  # the rows of the output's samples (the state after the last step is not one)
+    result.motion = (rows[:, 0].copy(), rows[:, 1:1 + nq].copy())
     return result
 
 

@@ -1,0 +1,134 @@
+"""The bike's step rule: a coarse RK4 step where no end stop or rim acts, finer steps where one may.
+
+The bike's slow motions (the frame on its tires, the rider on legs and arms, the fork and the shock
+over their working stroke) are resolved at a coarse step, 0.5 ms at most: the cross-checks against
+the bike's ODE reference hold there on every terrain of the library (``docs/bike.md``). The end
+stops (bumper, hard stop, top-out stop) and the rims are far stiffer: where one of them may act the
+run is stepped ``substeps`` times finer.
+
+Both steps come from ``mtbmj.compose``'s step limits, evaluated with the bike's own masses instead
+of the sled's: the coarse step from those that hold anywhere (steps per period of the wheel on the
+spring and tire, explicit damping, the logger's rate, the friction state at the fastest stroke: a
+LuGre fork steps at ~0.06 ms throughout), the fine step also from the stops' and the rim's:
+
+* the fork: the front unsprung mass (fork lower and wheel) as the wheel, half the sprung mass
+  (frame and rider) as the body; the lighter of the two wheels where lighter (the same tire and rim
+  law rolls at both ends);
+* the shock, in shock coordinates: the rear wheel's mass times the smallest leverage ratio squared
+  (a mass m at the wheel moves LR times as far as the shock: m LR^2 at the shock; the smallest ratio
+  gives the smallest mass, the stiffest case), the body likewise. The swingarm's own inertia is
+  left out, which only makes the steps smaller.
+
+Which stretches need the fine step is decided after the fact: ``Stepping.needs_fine`` looks at a
+chunk stepped coarse and says whether any sample came within reach of a stop or the rim (within a
+margin of 1 mm at the wheel, 0.5 mm at the shock, plus twice the largest motion of one coarse step
+in the chunk); ``mtbmj.bike.run`` then steps that chunk again from its start at the fine step and
+keeps every ``substeps``-th state, so the output stays on the coarse grid.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mtbmj import compose
+
+COARSE_STEP_S = 5e-4  # the bike's largest step (RK4): the step the cross-checks cover
+CHUNK_STEPS = 64  # coarse steps per chunk checked for a stop or the rim within reach
+FORK_MARGIN_M = 1e-3  # distance from a stop (fork travel, tire deflection) taken as within reach
+SHOCK_MARGIN_M = 5e-4  # the same at the shock (its stroke is the wheel's over a ratio of 2.4-3.2)
+
+
+def _ladder_step(limit: float) -> float:
+    """The largest COARSE_STEP_S / j (j = 1, 2, ...) not above ``limit``."""
+    return COARSE_STEP_S / max(1, math.ceil(COARSE_STEP_S / limit * (1.0 - 1e-12)))
+
+
+def _zone(spring) -> tuple[float, float]:
+    """(low, high): a stop acts at or below ``low`` (the top-out stop) and at or above ``high`` (the
+    bumper, else the hard stop at full travel); (-inf, inf) for a law without end stops."""
+    if not hasattr(spring, "stop_forces"):
+        return -math.inf, math.inf
+    has_bumper = getattr(spring, "bumper_length", 0.0) > 0.0 and getattr(spring, "bumper_force", 0.0) > 0.0
+    return -spring.extension, spring.bumper_start if has_bumper else spring.travel
+
+
+@dataclass(frozen=True)
+class Stepping:
+    """One bike's steps: ``coarse`` (s), ``substeps`` fine steps per coarse one where a stop or the
+    rim may act, what sets each, and the zones ``needs_fine`` checks."""
+
+    coarse: float
+    substeps: int
+    coarse_why: str
+    fine_why: str
+    fork_zone: tuple[float, float]
+    stroke_zone: tuple[float, float]
+    rim_deflections: tuple[float, float]  # m, each tire's rim (front, rear); inf without one
+    # the swingarm angle -> rear wheel travel (closed form) -> stroke (a dense table of the leverage curve)
+    pivot_z: float
+    rho: tuple[float, float]
+    rear_z: float
+    stroke_w: np.ndarray
+    stroke_s: np.ndarray
+
+    @property
+    def fine(self) -> float:
+        return self.coarse / self.substeps
+
+    def stroke(self, phi) -> np.ndarray:
+        """Shock stroke (m) at swingarm angles ``phi`` (rad)."""
+        phi = np.asarray(phi, float)
+        w = self.pivot_z - np.sin(phi) * self.rho[0] + np.cos(phi) * self.rho[1] - self.rear_z
+        return np.interp(w, self.stroke_w, self.stroke_s)
+
+    def needs_fine(self, fork, phi, deflections) -> bool:
+        """Whether a chunk stepped coarse came within reach of a stop or the rim: ``fork`` the fork
+        travel (m), ``phi`` the swingarm angle (rad), ``deflections`` each tire's deepest deflection
+        (m), one row per coarse step."""
+        if self.substeps == 1:
+            return False
+        for x, (low, high), margin in ((np.asarray(fork, float), self.fork_zone, FORK_MARGIN_M),
+                                       (self.stroke(phi), self.stroke_zone, SHOCK_MARGIN_M)):
+            reach = margin + (2.0 * float(np.max(np.abs(np.diff(x)))) if x.size > 1 else 0.0)
+            if np.any(x >= high - reach) or np.any(x <= low + reach):
+                return True
+        for d, rim in zip(deflections, self.rim_deflections):
+            d = np.asarray(d, float)
+            reach = FORK_MARGIN_M + (2.0 * float(np.max(np.abs(np.diff(d)))) if d.size > 1 else 0.0)
+            if np.any(d >= rim - reach):
+                return True
+        return False
+
+
+def stepping(spec, fork_setup: compose.Setup, shock_setup: compose.Setup, rims=None) -> Stepping:
+    """The steps of the bike ``spec`` with these fork and shock setups (see the module doc);
+    ``rims`` each tire's ``controllers.Rim`` or None (front, rear; default the fork setup's tire's at
+    both)."""
+    front_unsprung = spec.fork_lower_mass + spec.front_wheel_mass
+    sprung = spec.total_mass - front_unsprung - spec.rear_wheel_mass - spec.swingarm_mass
+    wheel = min(front_unsprung, spec.rear_wheel_mass)
+    fork = dataclasses.replace(fork_setup, wheel_mass=wheel, body_mass=sprung / 2.0)
+    lr2 = min(spec.leverage.ratio) ** 2
+    shock = dataclasses.replace(shock_setup, wheel_mass=spec.rear_wheel_mass * lr2, body_mass=sprung / 2.0 * lr2)
+    limit, why = min(compose.away_from_stops_limit(fork), compose.away_from_stops_limit(shock))
+    coarse = _ladder_step(limit)
+    if coarse == COARSE_STEP_S and limit > COARSE_STEP_S:
+        why = f"the bike's largest step, {COARSE_STEP_S * 1e3:g} ms (the step its cross-checks cover)"
+    fine, fine_why = min(compose.fine_limit(fork), compose.fine_limit(shock))
+    substeps = max(1, math.ceil(coarse / fine * (1.0 - 1e-12)))
+    if rims is None:
+        rims = (fork_setup.tire.rim, fork_setup.tire.rim)
+    w, _, s = spec.leverage.table
+    lo, hi = float(w[0]), float(w[-1])
+    grid = np.linspace(lo - 0.5 * (hi - lo), hi + 0.5 * (hi - lo), 4001)
+    pivot, rear = spec.pivot, spec.rear_axle
+    return Stepping(coarse, substeps, why, fine_why, _zone(fork_setup.fork.spring), _zone(shock_setup.fork.spring),
+                    tuple(r.max_deflection if r is not None else math.inf for r in rims), float(pivot[1]),
+                    (float(rear[0] - pivot[0]), float(rear[1] - pivot[1])), float(rear[1]), grid,
+                    np.array([spec.leverage.stroke(x) for x in grid]))
+
+
+__all__ = ["Stepping", "stepping", "COARSE_STEP_S", "CHUNK_STEPS"]
