@@ -1,7 +1,7 @@
 """Energy balance of the bike on a rock garden: the change of MuJoCo's own kinetic and potential
 energy (gravity and the legs' and arms' springs, ``mjENBL_ENERGY``) equals the work of every force
-the callback applies (each actuator's force times its velocity, MuJoCo's transmission) and of the
-legs' and arms' dampers, within 1 % of the energy turned over. The rock garden is a profile written
+the callback applies (the fork's force and the shock's torque times their joints' speeds, the tire
+and drive forces applied at the axles times the axles' velocities) and of the legs' and arms' dampers, within 1 % of the energy turned over. The rock garden is a profile written
 here (a CSV of seven rocks, 50-110 mm high), read through the terrain library's CSV path."""
 from __future__ import annotations
 
@@ -40,12 +40,12 @@ def test_energy_balance_on_a_rock_garden(tmp_path):
     power = np.empty(n)
     turnover = np.empty(n)
     adr = lambda name: m.sensor_adr[m.sensor(name).id]
-    force_columns = [adr(m.actuator(i).name if m.actuator(i).name not in (
-        "fork_friction_state", "shock_friction_state", "front_deflection_probe", "rear_deflection_probe",
-        "shock_force_probe") else "fork_force") for i in range(m.nu)]
-    active = [i for i in range(m.nu) if m.actuator(i).name not in (
-        "fork_friction_state", "shock_friction_state", "front_deflection_probe", "rear_deflection_probe",
-        "shock_force_probe")]
+    # the fork's force and the shock's torque: motors on their joints (force times joint speed)
+    joint_motors = [(m.actuator(name).id, adr(name)) for name in ("fork_force", "shock_torque")]
+    # the tire and drive forces: applied at the axles (world x and z, recorded by the probes),
+    # their power the force times the axle's velocity
+    axles = [(m.site("front_axle").id, ("front_tire",)), (m.site("rear_axle").id, ("rear_tire", "drive"))]
+    velocity = np.zeros(6)
     damping = {"legs": p.spec.rider.leg_damping, "arms": p.spec.rider.arm_damping}
     for i in range(n + 1):
         mujoco.mj_setState(m, d, states[i], kind)
@@ -53,7 +53,11 @@ def test_energy_balance_on_a_rock_garden(tmp_path):
         energy[i] = d.energy[0] + d.energy[1]
         if i == n:
             break
-        parts = [sensors[i, force_columns[a]] * d.actuator_velocity[a] for a in active]
+        parts = [sensors[i, column] * d.actuator_velocity[a] for a, column in joint_motors]
+        for site, forces in axles:
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_SITE, site, velocity, 0)
+            for name in forces:
+                parts.append(sensors[i, adr(f"{name}_x")] * velocity[3] + sensors[i, adr(f"{name}_z")] * velocity[5])
         parts += [-c * sensors[i, adr(f"{t}_velocity")] ** 2 for t, c in damping.items()]
         power[i] = sum(parts)
         turnover[i] = sum(abs(x) for x in parts)

@@ -40,6 +40,8 @@ class BikeCallback:
         self.a_shock_probe = a("shock_force_probe")
         self.sites = (int(m.site("front_axle").id), int(m.site("rear_axle").id))
         self.frame = int(m.body("frame").id)
+        # the tire and drive forces act at the wheels' centres (the axles): xfrc_applied on these bodies
+        self.wheels = (int(m.body("front_wheel").id), int(m.body("rear_wheel").id))
         # the centre of mass's horizontal speed is the X row of M qvel over the whole mass (the
         # horizontal momentum), computed at every evaluation: RK4's inner stages skip the sensors,
         # so the com_velocity sensor would hold the step's start there
@@ -115,17 +117,23 @@ class BikeCallback:
             ctrl[self.a_tire[k][1]] = fz
             ctrl[self.a_probe[k]] = deflection
             rear = (fx, fz)
+        xfrc = d.xfrc_applied
+        front = xfrc[self.wheels[0]]
+        front[0], front[1], front[2] = ctrl[self.a_tire[0][0]], 0.0, ctrl[self.a_tire[0][1]]
         fx, fz = rear
         n = math.hypot(fx, fz)
+        dx = dz = 0.0
         if n > 0.0 and self.drive.mode != "coast":
             mujoco.mj_mulM(m, d, self._momentum, qvel)
             f = self.drive.force(self.speed, self._momentum[self.xv] / self.total_mass)
             limit = self.traction * n
             f = min(max(f, -limit), limit)
-            ctrl[self.a_drive[0]] = f * fz / n
-            ctrl[self.a_drive[1]] = -f * fx / n
-        else:
-            ctrl[self.a_drive[0]] = ctrl[self.a_drive[1]] = 0.0
+            dx = f * fz / n
+            dz = -f * fx / n
+        ctrl[self.a_drive[0]] = dx
+        ctrl[self.a_drive[1]] = dz
+        back = xfrc[self.wheels[1]]
+        back[0], back[1], back[2] = fx + dx, 0.0, fz + dz
 
 
 __all__ = ["BikeCallback"]

@@ -23,7 +23,8 @@ Design (the rolling front end's, ``mtbmj.rolling.callback_compiled``):
   (``controllers.native_data.Registry``) and leaves every other model alone.
 * ``mjData`` is read through byte offsets: the front end's fields from
   ``controllers.native_data.mjdata_layout``, and the kinematics the Python callback reads from
-  MuJoCo (``xpos``, ``xmat``, ``xipos``, ``site_xpos``, ``cvel``, ``subtree_com``) at their places
+  MuJoCo (``xpos``, ``xmat``, ``xipos``, ``site_xpos``, ``cvel``, ``subtree_com``), and
+  ``xfrc_applied`` (where the tire and drive forces go, at the wheels' centres), at their places
   among ``mjData``'s pointer fields (``mujoco.introspect``'s field order), each checked against the
   live arrays of a model before first use. The axle velocities are ``mj_objectVelocity``'s
   arithmetic on ``cvel`` (the site's linear velocity, world axes), the centre of mass's horizontal
@@ -53,29 +54,30 @@ from mtbmj.rolling import callback_compiled as rolling
 from mtbmj.rolling.callback_compiled import MAX_PATCHES, UnsupportedRolling
 
 SLOTS = 64
-KINEMATICS = ("xpos", "xmat", "xipos", "site_xpos", "cvel", "subtree_com")
+KINEMATICS = ("xpos", "xmat", "xipos", "site_xpos", "cvel", "subtree_com", "xfrc_applied")
 WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front end's slot layout
 
 # integer row of a slot
 (R_MODEL, R_FQ, R_FV, R_SV, R_A_FORK, R_A_SHOCK, R_A_FS, R_A_SS, R_ACT_F, R_ACT_S, R_A_TX0, R_A_TZ0, R_A_TX1,
  R_A_TZ1, R_A_DX, R_A_DZ, R_A_PROBE0, R_A_PROBE1, R_A_SHOCK_PROBE, R_SITE0, R_SITE1, R_SBODY0, R_SBODY1, R_FRAME,
  R_ROOT0, R_ROOT1, R_NBODY, R_MASS, R_FORK_STATE, R_SHOCK_STATE, R_DRIVE, R_NPTS, R_TX, R_TZ, R_SCRATCH, R_CAP,
- R_NS, R_SX, R_SZ, R_NL, R_LW, R_LR, R_LS, R_CALLS, R_REFRESHES, R_VALID0, R_VALID1, R_BODYROOT) = range(48)
-INT_WIDTH = 48
+ R_NS, R_SX, R_SZ, R_NL, R_LW, R_LR, R_LS, R_CALLS, R_REFRESHES, R_VALID0, R_VALID1, R_BODYROOT, R_WHEEL0,
+ R_WHEEL1) = range(50)
+INT_WIDTH = 50
 # float row of a slot
 (F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_REACH, F_LO0, F_HI0, F_LO1, F_HI1,
  F_NEXT0, F_NEXT1, F_LAST0, F_LAST1, F_REFRESH_DISTANCE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER,
  F_DRIVE_BRAKE) = range(20)
 FLOAT_WIDTH = 24
 
-REGISTRY = Registry("mtbmj_bike_registry_v1", SLOTS,
+REGISTRY = Registry("mtbmj_bike_registry_v2", SLOTS,
                     {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
                      "wheel_ints": (2 * WI, np.int64), "wheel_floats": (2 * WF, np.float64),
                      "fork_ints": (LAW_INT_WIDTH, np.int64), "fork_floats": (LAW_FLOAT_WIDTH, np.float64),
                      "shock_ints": (LAW_INT_WIDTH, np.int64), "shock_floats": (LAW_FLOAT_WIDTH, np.float64)},
                     ("qpos", "qvel", "act", "ctrl", "time") + KINEMATICS)
 (M_USED, M_INTS, M_FLOATS, M_WINTS, M_WFLOATS, M_FINTS, M_FFLOATS, M_SINTS, M_SFLOATS, M_QPOS, M_QVEL, M_ACT,
- M_CTRL, M_TIME, M_XPOS, M_XMAT, M_XIPOS, M_SITE_XPOS, M_CVEL, M_SUBTREE_COM) = (
+ M_CTRL, M_TIME, M_XPOS, M_XMAT, M_XIPOS, M_SITE_XPOS, M_CVEL, M_SUBTREE_COM, M_XFRC) = (
     REGISTRY.index[name] for name in ("used", "ints", "floats", "wheel_ints", "wheel_floats", "fork_ints",
                                       "fork_floats", "shock_ints", "shock_floats", "qpos", "qvel", "act", "ctrl",
                                       "time") + KINEMATICS)
@@ -227,6 +229,7 @@ if _numba is not None:
         site_xpos = _pointer_field(d, _registry(M_SITE_XPOS))
         cvel = _pointer_field(d, _registry(M_CVEL))
         subtree_com = _pointer_field(d, _registry(M_SUBTREE_COM))
+        xfrc = _pointer_field(d, _registry(M_XFRC))
         t = _f64_pointer(_address_of(d) + _registry(M_TIME))[0]
         # the fork
         x = qpos[I[R_FQ]]
@@ -303,8 +306,15 @@ if _numba is not None:
             ctrl[I[R_A_TX0 + 2 * k]] = fx
             ctrl[I[R_A_TZ0 + 2 * k]] = fz
             ctrl[I[R_A_PROBE0 + k]] = deflection
+        # the front tire's force at the front wheel's centre (BikeCallback: xfrc_applied)
+        o = 6 * I[R_WHEEL0]
+        xfrc[o] = ctrl[I[R_A_TX0]]
+        xfrc[o + 1] = 0.0
+        xfrc[o + 2] = ctrl[I[R_A_TZ0]]
         # the drive, at the rear tire (fx, fz: its force)
         nrm = math.hypot(fx, fz)
+        dx = 0.0
+        dz = 0.0
         if nrm > 0.0 and I[R_DRIVE] != 0:
             nb = I[R_NBODY]
             mass = _numba.carray(_f64_pointer(I[R_MASS]), (nb,))
@@ -313,11 +323,14 @@ if _numba is not None:
             f = _drive_force(F[F_SPEED], vcom, F[F_DRIVE_KV], F[F_DRIVE_PUSH], F[F_DRIVE_POWER], F[F_DRIVE_BRAKE])
             limit = F[F_TRACTION] * nrm
             f = min(max(f, -limit), limit)
-            ctrl[I[R_A_DX]] = f * fz / nrm
-            ctrl[I[R_A_DZ]] = -f * fx / nrm
-        else:
-            ctrl[I[R_A_DX]] = 0.0
-            ctrl[I[R_A_DZ]] = 0.0
+            dx = f * fz / nrm
+            dz = -f * fx / nrm
+        ctrl[I[R_A_DX]] = dx
+        ctrl[I[R_A_DZ]] = dz
+        o = 6 * I[R_WHEEL1]
+        xfrc[o] = fx + dx
+        xfrc[o + 1] = 0.0
+        xfrc[o + 2] = fz + dz
 
     COMPILE_SECONDS = time.perf_counter() - _compile_start
 
@@ -423,7 +436,8 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
             R_A_SHOCK_PROBE: a("shock_force_probe"), R_SITE0: sites[0], R_SITE1: sites[1],
             R_SBODY0: int(m.site_bodyid[sites[0]]), R_SBODY1: int(m.site_bodyid[sites[1]]),
             R_FRAME: int(m.body("frame").id), R_NBODY: int(m.nbody), R_MASS: self._mass.ctypes.data,
-            R_BODYROOT: self._roots.ctypes.data,
+            R_BODYROOT: self._roots.ctypes.data, R_WHEEL0: int(m.body("front_wheel").id),
+            R_WHEEL1: int(m.body("rear_wheel").id),
             R_FORK_STATE: int(bool(fork_law.has_state)), R_SHOCK_STATE: int(bool(shock_law.has_state)),
             R_DRIVE: int(drive.mode != "coast"), R_NPTS: n, R_TX: self._tx.ctypes.data, R_TZ: self._tz.ctypes.data,
             R_SCRATCH: self._scratch.ctypes.data, R_CAP: cap, R_NS: self._sx.size, R_SX: self._sx.ctypes.data,
