@@ -83,9 +83,12 @@ def crown(spec, fork_length: float) -> tuple[float, float]:
 
 
 def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, gravity: float,
-               start_x: float | None = None, fork_length: float = 0.58) -> Bike:
+               start_x: float | None = None, fork_length: float = 0.58, visual: bool = True) -> Bike:
     """Compile the bike scene for ``spec`` on ``terrain``; the front axle starts over ``start_x``
-    (default the terrain's start); ``fork_length`` (axle to crown, m) places the drawn stanchions."""
+    (default the terrain's start); ``fork_length`` (axle to crown, m) places the drawn stanchions.
+    ``visual=False`` leaves out every geom (the drawn bike and the terrain): nothing in the physics
+    depends on them (the inertias are given, nothing collides), and MuJoCo then places no geoms at
+    each evaluation (~4 % of a step); the joints, bodies and their numbering are the same."""
     ms = mujoco.MjSpec.from_file(str(mjcf.path(SCENE)))
     ms.option.timestep = timestep
     ms.option.integrator = integrator
@@ -152,7 +155,11 @@ def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, g
             _spring(tendon, r.leg_stiffness, r.leg_damping, legs_rest)
         elif tendon.name == "arms":
             _spring(tendon, r.arm_stiffness, r.arm_damping, arms_rest)
-    _terrain_visual(ms, terrain)
+    if visual:
+        _terrain_visual(ms, terrain)
+    else:
+        for geom in list(ms.geoms):
+            ms.delete(geom)
     model = ms.compile()
     return Bike(model, spec, x0, z0, float(tire_radius), legs_rest, arms_rest)
 

@@ -92,6 +92,13 @@ class Prepared:
     refined_chunks: int = 0  # chunks stepped again at the fine step (a stop or the rim within reach)
     chunks: int = 0
 
+    def visual_model(self) -> mujoco.MjModel:
+        """The same bike with its drawn geoms and the terrain (``bike.model`` has none: see
+        ``build_bike(visual=...)``): the model a video draws, with the same joints."""
+        b, s = self.bike, self.fork_setup
+        return build_bike(self.spec, b.tire_radius, self.terrain, self.timestep, INTEGRATORS[s.integrator],
+                          self.gravity, b.x0 + self.spec.front_axle[0], s.fork_length).model
+
 
 def _check(speed, duration):
     if not isinstance(speed, (int, float)) or isinstance(speed, bool) or not math.isfinite(speed) or speed <= 0:
@@ -146,7 +153,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     steps = stepping(spec, fork_setup, shock_setup, (rim, rim if rear_tire else None))
     timestep = steps.coarse
     g = fork_setup.gravity
-    b = build_bike(spec, radius, ter, timestep, INTEGRATORS[fork_setup.integrator], g, start_x, fork_setup.fork_length)
+    b = build_bike(spec, radius, ter, timestep, INTEGRATORS[fork_setup.integrator], g, start_x, fork_setup.fork_length,
+                   visual=False)
     values = fork_setup.tire.values(1)  # rolling is sustained contact: the in-contact values of a switching law
     rate, damping = values.rate, values.damping
     front = RadialTire(ter, radius, rate, damping, rim=fork_setup.tire.rim)
@@ -543,7 +551,7 @@ class BikeResult(RunOutput):
         from mtbmj.rolling import render
 
         times, qpos = self.motion
-        return render.rolling_frames(self.prepared.bike.model, times, qpos, fps, duration,
+        return render.rolling_frames(self.prepared.visual_model(), times, qpos, fps, duration,
                                      label or f"bike {self.name} over {self.scenario}")
 
     def headline(self) -> str:
