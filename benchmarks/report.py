@@ -313,6 +313,31 @@ def dropfit_rows(d: dict, name: str) -> dict[str, list[Row]]:
         name, d["command"])]}
 
 
+def sweep_steady_rows(d: dict) -> dict[str, list[Row]]:
+    s, w, p = d["steady_variants_per_s"], d["steady_ms_per_variant_per_worker"], d["phases_ms"]
+    o = d["over_engine"]
+    return {"sweeps": [Row(
+        f"`mtbmj sweep S12 --engine fast` steady state: {d['variants']} less {d['small']} variants, "
+        f"{plural(d['workers'], 'worker')}, {len(d['rounds'])} interleaved rounds",
+        f"≥ {d['target_variants_per_s']} variants/s",
+        f"{s['median']:.0f} variants/s ({s['min']:.0f}–{s['max']:.0f}); a variant {num(w['median'])} ms per worker, "
+        f"{ratio(o['median'], 2)} the engine's {num(p['engine_ms']['median'])} ms (prepare "
+        f"{num(p['prepare_ms']['median'])}, finish {num(p['finish_ms']['median'])} ms)",
+        "sweep_steady.json", d["command"])]}
+
+
+def dropfit_ratio_rows(d: dict) -> dict[str, list[Row]]:
+    r, pr = d["mujoco_over_fast_per_run"], d["per_run_ms"]
+    lr, lp = d["fit_loop_mujoco_over_fast_per_run"], d["fit_loop_per_run_ms"]
+    return {"fits": [Row(
+        f"drop fit of 6 S12 parameters, MuJoCo / fast engine, wall time per engine run, {len(d['rounds'])} "
+        "interleaved rounds", f"≤ {tgt(d['target'])}×",
+        f"{ratio(r['median'], 2)} ({spread(r['min'], r['max'], 2)}): {num(pr['mujoco']['median'])} vs "
+        f"{num(pr['fast']['median'])} ms; without the closing ODE run {ratio(lr['median'], 2)} "
+        f"({spread(lr['min'], lr['max'], 2)}): {num(lp['mujoco']['median'])} vs {num(lp['fast']['median'])} ms",
+        "dropfit_ratio.json", d["command"])]}
+
+
 def interval_coverage_rows(d: dict) -> dict[str, list[Row]]:
     name, cmd = "interval_coverage.json", py("interval_coverage.py", "--records", str(d["records"]))
     lc = d["logger_clock_fit"]
@@ -391,8 +416,10 @@ SOURCES = [
     ("sweep_1000_w2.json", lambda d: sweep_rows(d, "sweep_1000_w2.json")),
     ("sweep_200_w1.json", lambda d: sweep_rows(d, "sweep_200_w1.json")),
     ("sweep_200_w1t2.json", lambda d: sweep_rows(d, "sweep_200_w1t2.json")),
+    ("sweep_steady.json", sweep_steady_rows),
     ("dropfit.json", lambda d: dropfit_rows(d, "dropfit.json")),
     ("dropfit_fast.json", lambda d: dropfit_rows(d, "dropfit_fast.json")),
+    ("dropfit_ratio.json", dropfit_ratio_rows),
     ("interval_coverage.json", interval_coverage_rows),
     ("model_check.json", model_check_rows),
     ("rolling.json", rolling_rows),

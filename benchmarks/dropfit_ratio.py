@@ -1,0 +1,102 @@
+"""The drop fit's MuJoCo form against its fast-engine form, per engine run (issue 27, item 4:
+target within 3x).
+
+The six-parameter S12 fit of ``benchmarks/dropfit.py`` (the same 1.5 s ODE record: six values
+changed by 7-15 %, logger noise, the 400 Hz filter, 16-bit quantisation), fitted on the fast
+engine (``--fast-workers``, 1 as in dropfit.py's fast row) and on MuJoCo (``--mujoco-workers``
+threads for the batched Jacobian, 2 as in its MuJoCo row), alternately in this process, ``--repeat``
+rounds (the order alternates; one warm-up fit of each first). Each fit's wall time divided by its
+engine runs is its cost per engine run; the figure is the per-round ratio MuJoCo / fast (median,
+spread), with the wall times, the runs and the load average before and after each round.
+
+Each fit ends with one run of another engine at the optimum (the engine's own error, the ODE
+reference for both), which costs about as much as the whole fast fit: the rounds also time both
+fits without it (``engine_error=False``), the fit loop alone, so the per-run cost of the engines
+themselves shows.
+
+    python benchmarks/dropfit_ratio.py [--repeat 5] [--seed 3] [--fast-workers 1] [--mujoco-workers 2]
+
+Writes benchmarks/results/dropfit_ratio.json. Not a test: nothing is asserted.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+from mtbmj.drop.chain import resolve
+from mtbmj.identify.drop_synthetic import make_drop_record
+from mtbmj.identify.dropfit import fit_drop
+from _bench import write_json
+from dropfit import FACTORS
+
+TARGET = 3.0
+
+
+def stats(values) -> dict:
+    v = np.asarray(values, float)
+    return {"median": float(np.median(v)), "min": float(v.min()), "max": float(v.max()), "n": int(v.size)}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--seed", type=int, default=3)
+    ap.add_argument("--fast-workers", type=int, default=1)
+    ap.add_argument("--mujoco-workers", type=int, default=2)
+    args = ap.parse_args()
+    cfg = resolve("S12")
+    truth = {k: round(cfg[k] * f, 4) for k, f in FACTORS.items()}
+    record = make_drop_record("S12", truth, duration=1.5, engine="ode", seed=args.seed)
+    workers = {"fast": args.fast_workers, "mujoco": args.mujoco_workers}
+
+    def fit(engine: str, engine_error: bool = True) -> dict:
+        start = time.perf_counter()
+        result = fit_drop(record, "S12", free=list(truth), engine=engine, workers=workers[engine],
+                          engine_error=engine_error)
+        wall = time.perf_counter() - start
+        runs = result.extra["engine_runs"]
+        return {"wall_s": wall, "engine_runs": runs, "per_run_ms": wall / runs * 1e3,
+                "max_abs_error_percent": max(abs(result.values[k] / truth[k] - 1.0) * 100 for k in truth)}
+
+    fit("fast"), fit("mujoco")  # warm: numba's cache, scenes, scipy
+    rounds = []
+    for k in range(args.repeat):
+        load_before = os.getloadavg()[0]
+        order = ("fast", "mujoco") if k % 2 == 0 else ("mujoco", "fast")
+        got = {engine: fit(engine) for engine in order}
+        loop = {engine: fit(engine, engine_error=False) for engine in order}
+        ratio = got["mujoco"]["per_run_ms"] / got["fast"]["per_run_ms"]
+        loop_ratio = loop["mujoco"]["per_run_ms"] / loop["fast"]["per_run_ms"]
+        rounds.append({**got, "mujoco_over_fast_per_run": ratio, "fit_loop": loop,
+                       "fit_loop_mujoco_over_fast_per_run": loop_ratio, "load_before": load_before,
+                       "load_after": os.getloadavg()[0]})
+        print(f"round {k + 1}: fast {got['fast']['wall_s']:.2f} s / {got['fast']['engine_runs']} runs "
+              f"({got['fast']['per_run_ms']:.1f} ms a run), MuJoCo {got['mujoco']['wall_s']:.2f} s / "
+              f"{got['mujoco']['engine_runs']} runs ({got['mujoco']['per_run_ms']:.1f} ms a run): {ratio:.2f}x; "
+              f"without the engine-error run fast {loop['fast']['wall_s']:.2f} s ({loop['fast']['per_run_ms']:.1f} ms "
+              f"a run), MuJoCo {loop['mujoco']['wall_s']:.2f} s ({loop['mujoco']['per_run_ms']:.1f} ms a run): "
+              f"{loop_ratio:.2f}x; load {load_before:.2f} -> {rounds[-1]['load_after']:.2f}", flush=True)
+    payload = {
+        "command": f"python benchmarks/dropfit_ratio.py --repeat {args.repeat} --seed {args.seed} "
+                   f"--fast-workers {args.fast_workers} --mujoco-workers {args.mujoco_workers}",
+        "workers": workers, "rounds": rounds, "target": TARGET,
+        "mujoco_over_fast_per_run": stats([r["mujoco_over_fast_per_run"] for r in rounds]),
+        "per_run_ms": {e: stats([r[e]["per_run_ms"] for r in rounds]) for e in ("fast", "mujoco")},
+        "wall_s": {e: stats([r[e]["wall_s"] for r in rounds]) for e in ("fast", "mujoco")},
+        "engine_runs": {e: stats([r[e]["engine_runs"] for r in rounds]) for e in ("fast", "mujoco")},
+        "fit_loop_mujoco_over_fast_per_run": stats([r["fit_loop_mujoco_over_fast_per_run"] for r in rounds]),
+        "fit_loop_per_run_ms": {e: stats([r["fit_loop"][e]["per_run_ms"] for r in rounds]) for e in ("fast", "mujoco")},
+        "fit_loop_wall_s": {e: stats([r["fit_loop"][e]["wall_s"] for r in rounds]) for e in ("fast", "mujoco")},
+        "load": stats([x for r in rounds for x in (r["load_before"], r["load_after"])]),
+    }
+    s = payload["mujoco_over_fast_per_run"]
+    print(f"MuJoCo fit / fast fit, per engine run: {s['median']:.2f}x ({s['min']:.2f}-{s['max']:.2f}); "
+          f"target <= {TARGET}x; the fit loop alone {payload['fit_loop_mujoco_over_fast_per_run']['median']:.2f}x")
+    print(f"wrote {write_json(__file__, payload)}")
+
+
+if __name__ == "__main__":
+    main()
