@@ -233,8 +233,11 @@ if _numba is not None:
         # A segment whose bounding box is farther than reach (with a margin far above round-off)
         # has no piece near the axle: skipping its pieces changes nothing but the time.
         far2 = (reach * (1.0 + 1e-9)) ** 2
+        piece2 = (piece * (1.0 - 1e-9)) ** 2  # below round-off of hypot: a segment this short is one piece
+        near2 = (reach * (1.0 - 1e-9)) ** 2  # within reach beyond round-off
         in_run = False
         best = bx = bz = 0.0
+        best2 = 0.0  # the squared distance of the run's closest point so far (it bounds the next)
         for k in range(m - 1):
             ax = PX[k]
             az = PZ[k]
@@ -249,35 +252,66 @@ if _numba is not None:
                 continue
             ex = bx1 - ax
             ez = bz1 - az
-            if ex != 0.0:
+            # clipped to the reach window in x (a segment running forward inside it is kept whole:
+            # the clip's divisions would give exactly 0 and 1; one running backward, on the drum,
+            # is turned round by them)
+            if ex != 0.0 and not (ex > 0.0 and ax >= cx - reach and bx1 <= cx + reach):
                 t0 = _clip01((cx - reach - ax) / ex)
                 t1 = _clip01((cx + reach - ax) / ex)
+                ax, az, ex, ez = ax + t0 * ex, az + t0 * ez, (t1 - t0) * ex, (t1 - t0) * ez
+            # pieces of at most ``piece``: one for a segment no longer than that (no square root)
+            if ex * ex + ez * ez <= piece2:
+                kk = 1
             else:
-                t0 = 0.0
-                t1 = 1.0
-            ax, az, ex, ez = ax + t0 * ex, az + t0 * ez, (t1 - t0) * ex, (t1 - t0) * ez
-            length = math.hypot(ex, ez)
-            kk = int(max(1.0, math.ceil(length / piece)))
+                kk = int(max(1.0, math.ceil(math.hypot(ex, ez) / piece)))
             for p in range(kk):
-                f0 = p / kk
-                f1 = f0 + 1.0 / kk
-                pax = ax + f0 * ex
-                paz = az + f0 * ez
-                pex = (f1 - f0) * ex
-                pez = (f1 - f0) * ez
+                if kk == 1:
+                    pax = ax
+                    paz = az
+                    pex = ex
+                    pez = ez
+                else:
+                    f0 = p / kk
+                    f1 = f0 + 1.0 / kk
+                    pax = ax + f0 * ex
+                    paz = az + f0 * ez
+                    pex = (f1 - f0) * ex
+                    pez = (f1 - f0) * ez
+                    # a piece whose bounding box is beyond reach is not near (as a segment's,
+                    # above): its closest point is not worked out (a long flat segment has many)
+                    gx = max(min(pax, pax + pex) - cx, cx - max(pax, pax + pex), 0.0)
+                    gz = max(min(paz, paz + pez) - cz, cz - max(paz, paz + pez), 0.0)
+                    if gx * gx + gz * gz > far2:
+                        if in_run:
+                            in_run = False
+                            _emit(F, I, best, bx, bz, cx, cz)
+                        continue
                 length2 = pex * pex + pez * pez
                 if not (length2 > 0.0):
                     length2 = 1.0
                 s = _clip01(((cx - pax) * pex + (cz - paz) * pez) / length2)
                 qx = pax + s * pex
                 qz = paz + s * pez
-                d = math.hypot(cx - qx, cz - qz)
+                dx = cx - qx
+                dz = cz - qz
+                d2 = dx * dx + dz * dz
+                # No square root where the outcome is known beyond round-off: a piece far beyond
+                # reach, or one well within reach but farther than the run's closest so far (by a
+                # relative 1e-12, far above round-off, so the decisions are those of the distances).
+                if d2 > far2:
+                    d = reach
+                elif in_run and near2 > d2 > best2 * (1.0 + 1e-12):
+                    d = best
+                else:
+                    d = math.hypot(dx, dz)
                 if d < reach:
                     if not in_run:
                         in_run = True
                         best, bx, bz = d, qx, qz
+                        best2 = d2
                     elif d < best:
                         best, bx, bz = d, qx, qz
+                        best2 = d2
                 elif in_run:
                     in_run = False
                     _emit(F, I, best, bx, bz, cx, cz)
