@@ -314,3 +314,45 @@ def test_beside_the_real_sst_ride():
     assert max(c["front"]["simulated"]["time_percent"]) == pytest.approx(100.0)
     fig = ride.figure(c)
     assert [ax.get_ylabel() for ax in fig.axes] == ["front (fork)\n% of time", "rear (wheel)\n% of time"]
+
+
+def test_bike_command_holds_parts_and_lifts_the_rear(tmp_path, capsys):
+    import csv
+    import json
+
+    from mtbmj.cli import main
+
+    out = tmp_path / "held"
+    assert main(["bike", "sst", "root:at_m=0.4", "--speed", "4", "--duration", "0.3", "--lock", "rear, pitch",
+                 "--out", str(out), "--quiet", "--no-figure"]) == 0
+    printed = capsys.readouterr().out
+    assert printed.startswith("bike sst (held: rear, pitch) over root:at_m=0.4")
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["engine_info"]["locked"] == ["rear", "pitch"]
+    summary = json.loads((out / "summary.json").read_text())
+    # held: the rear wheel stays at its sag and the frame level, while the fork works over the root
+    with open(out / "timeseries.csv") as f:
+        rows = [r for r in csv.reader(f) if r and not r[0].startswith("#")]
+    cols = {name: i for i, name in enumerate(rows[0])}
+    rear = np.array([float(r[cols["rear_travel_mm"]]) for r in rows[1:]])
+    pitch = np.array([float(r[cols["pitch_deg"]]) for r in rows[1:]])
+    assert np.ptp(rear) < 1e-6 and np.ptp(pitch) < 1e-6
+    assert summary["max_front_travel_mm"] - summary["static_front_travel_mm"] > 20.0
+
+    lifted = tmp_path / "lifted"
+    assert main(["bike", "sst", "flat", "--speed", "4", "--duration", "0.05", "--lock", "rear,pitch,rider",
+                 "--lift-rear", "--out", str(lifted), "--quiet", "--no-figure"]) == 0
+    assert "(held: rear, pitch, rider; rear tire off)" in capsys.readouterr().out
+    assert json.loads((lifted / "summary.json").read_text())["tire_load"]["rear"]["max_N"] == 0.0
+
+
+@pytest.mark.parametrize("argv,key", [(["--lock", "fork"], "lock"), (["--lift-rear"], "pitch")])
+def test_bike_command_refuses_bad_holds_in_one_line(tmp_path, capsys, argv, key):
+    from mtbmj.cli import main
+
+    out = tmp_path / "run"
+    assert main(["bike", "sst", "flat", "--speed", "4", "--duration", "0.05", *argv, "--out", str(out),
+                 "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and key in err[0] and "Traceback" not in err[0]
+    assert not out.exists()

@@ -563,7 +563,14 @@ class BikeResult(RunOutput):
             parts = [k.replace("_", " ") for k in ("bumper", "hard_stop") if rep[k]["count"]]
             return f" ({', '.join(parts)})" if parts else ""
 
-        return (f"bike {self.name} over {self.scenario} at {s['speed_m_per_s']:g} m/s: front travel peak "
+        held = self.info.get("locked")
+        if held is not None or not self.info.get("rear_tire", True):
+            parts = [f"held: {', '.join(held)}"] if held else []
+            parts += [] if self.info.get("rear_tire", True) else ["rear tire off"]
+            held = f" ({'; '.join(parts)})"
+        else:
+            held = ""
+        return (f"bike {self.name}{held} over {self.scenario} at {s['speed_m_per_s']:g} m/s: front travel peak "
                 f"{s['max_front_travel_mm']:.1f} of {f['travel_mm']:g} mm{ends(f)}, rear {s['max_rear_travel_mm']:.1f} of "
                 f"{s['rear_wheel_travel_mm']:g} mm (shock {s['max_stroke_mm']:.1f} of {r['travel_mm']:g} mm){ends(r)}, "
                 f"pitch {s['pitch_deg']['min']:.1f} to {s['pitch_deg']['max']:.1f} deg, rim strikes "

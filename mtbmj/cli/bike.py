@@ -21,7 +21,8 @@ def cmd_bike(args) -> int:
         gl_backend()  # no headless OpenGL: one line before any work
     result = Progress(f"bike {args.bike} over {args.scenario}", not args.quiet).around(
         lambda progress: run_bike(args.bike, args.scenario, args.speed, args.duration, args.drive, args.start_m,
-                                  progress))
+                                  progress, lock=tuple(k.strip() for k in args.lock.split(",")) if args.lock else (),
+                                  rear_tire=not args.lift_rear))
     written = result.write(args.out, figure=not args.no_figure, video=args.video, ride=args.ride)
     print(f"{result.headline()}; {result.info['real_time_factor']:.2f}x real time; wrote {len(written)} files to "
           f"{args.out}")
@@ -42,6 +43,13 @@ def add_parser(subparsers) -> None:
     p.add_argument("--duration", type=float, help="simulated time in s (default: both wheels across the feature)")
     p.add_argument("--start-m", type=float, dest="start_m",
                    help="where the front axle starts along the terrain, m (default the terrain's start)")
+    p.add_argument("--lock", metavar="PARTS",
+                   help="hold degrees of freedom at their static values, comma-separated: rear (the shock locked "
+                        "out at its sag), pitch (the frame level at its static pitch), rider (the rider rigid on "
+                        "the frame)")
+    p.add_argument("--lift-rear", action="store_true", dest="lift_rear",
+                   help="take the rear tire off: the bike on its front wheel alone (needs --lock pitch; with "
+                        "--lock rear,pitch,rider it is the rolling front end's rig)")
     add_out(p, "out/bike")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.add_argument("--no-figure", action="store_true", help="do not draw quicklook.png")
