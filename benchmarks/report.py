@@ -283,7 +283,8 @@ def native_loop_rows(d: dict) -> dict[str, list[Row]]:
 
 def sweep_rows(d: dict, name: str) -> dict[str, list[Row]]:
     cmd = py("sweep.py", "--variants", str(d["variants"]), "--workers", str(d["workers"]),
-             "--threads", str(d["threads_per_process"]), "--name", name)
+             "--threads", str(d["threads_per_process"]), "--name", name,
+             *(["--repeat", str(len(d["interleaved"]["rounds"]))] if "interleaved" in d else []))
     setting = (f"{d['variants']} variants, {plural(d['workers'], 'process')}".replace("processs", "processes")
                + f" of {plural(d['threads_per_process'], 'thread')}, {d['steps_per_variant']} steps per variant")
     rows = [Row(f"S12 sweep (batched runner) / bare-scene rollout of the same variants, one run each; {setting}",
@@ -298,6 +299,14 @@ def sweep_rows(d: dict, name: str) -> dict[str, list[Row]]:
                         f"command; in one process {num(p['whole_runner_ms'], 3)} ms per variant vs "
                         f"{num(p['bare_same_steps_with_callback_ms'], 3)} ms of that stepping (runner "
                         f"{ratio(p['runner_over_bare_same_steps_with_callback'])})", name, cmd))
+    if "interleaved" in d:
+        i = d["interleaved"]
+        b, c = i["throughput_builtin_over_sweep"], i["throughput_callback_over_sweep"]
+        rows.append(Row(f"the same sweep / the bare scene making as many steps with built-in elements (throughput), "
+                        f"{len(i['rounds'])} interleaved rounds", f"≥ {tgt(i['target_builtin'])}×",
+                        f"{ratio(b['ratio_of_medians'], 2)} ({spread(b['min'], b['max'], 2)}): {sec(i['sweep_s'], 3)} vs "
+                        f"{sec(i['builtin_s'], 3)}; with the compiled callback instead {ratio(c['ratio_of_medians'], 2)} "
+                        f"({spread(c['min'], c['max'], 2)})", name, cmd))
     return {"sweeps": rows}
 
 
@@ -405,6 +414,32 @@ def rolling_crosscheck_rows(d: dict) -> dict[str, list[Row]]:
         f"{pct(s['worst_force_peak_relative'])}", "rolling_crosscheck.json", cmd)]}
 
 
+def bike_crosscheck_rows(d: dict) -> dict[str, list[Row]]:
+    s = d["summary"]
+    cmd = py("bike_crosscheck.py", "--duration", tgt(s["duration_s"]), "--speeds", s["speeds"])
+    return {"bike": [Row(
+        f"the SST bike on MuJoCo (`mtbmj bike`, default settings) vs the bike's ODE reference, every fixed terrain "
+        f"at {s['speeds'].replace(',', ' and ')} m/s, {tgt(s['duration_s'])} s runs",
+        "travel and stroke ≤ 0.1 mm, tire-load peaks ≤ 1 %",
+        f"{s['passed']} of {s['runs']} runs within; worst {mm(s['worst_travel_mm'], 4)} "
+        f"({s['worst_scenario']} at {tgt(s['worst_speed_m_per_s'])} m/s), worst peak "
+        f"{pct(s['worst_tire_peak_relative'])}; {s['refined_runs']} of them stepped finer near a stop",
+        "bike_crosscheck.json", cmd)]}
+
+
+def bike_speed_rows(d: dict) -> dict[str, list[Row]]:
+    r = d["real_time_factors"]
+
+    def cell(key, digits=3):
+        return f"{ratio(r[key]['median'], digits)} ({spread(r[key]['min'], r[key]['max'], digits, '×')})"
+
+    return {"bike": [
+        Row(f"the SST bike on the rock garden at {tgt(d['speed_m_per_s'])} m/s, one core, compiled callback, "
+            f"{ms(d['timestep_s'], 3)} RK4 steps", "≥ 20× real time",
+            f"{cell('bike')} real time; MuJoCo alone on the same model {cell('mujoco')}; Python callback "
+            f"{cell('python')}", "bike_speed.json", d["command"])]}
+
+
 SOURCES = [
     ("accuracy_steps.json", accuracy_steps_rows),
     ("accuracy_envelope.json", accuracy_envelope_rows),
@@ -425,6 +460,8 @@ SOURCES = [
     ("rolling.json", rolling_rows),
     ("rolling_refresh.json", rolling_refresh_rows),
     ("rolling_crosscheck.json", rolling_crosscheck_rows),
+    ("bike_crosscheck.json", bike_crosscheck_rows),
+    ("bike_speed.json", bike_speed_rows),
 ]
 
 # --- the page's words ----------------------------------------------------------------------------
@@ -490,6 +527,14 @@ The rolling engine is checked against the rolling ODE reference by the test suit
 `benchmarks/rolling_crosscheck.py` runs every fixed terrain at both speeds and writes
 `benchmarks/results/rolling_crosscheck.json`, from which this table takes a row when the file is
 there."""),
+    ("bike", "The whole bike", """\
+The bike steps at 0.5 ms with RK4 where no end stop or rim is within reach, and stretches that come
+within reach are stepped again at the fine step of the stops (`mtbmj/bike/stepping.py`). The test
+suite runs every fixed terrain at 4 and 6 m/s against the bike's ODE reference for as long as both
+wheels need to cross the feature (`tests/test_bike_reference.py`); `benchmarks/bike_crosscheck.py`
+runs the same terrains for a fixed time with the reference at its default tolerance. The speed is
+real time on one core (simulated seconds per wall second), interleaved with MuJoCo stepping the
+same model with no callback."""),
 ]
 
 
