@@ -5,7 +5,7 @@ The issue's figure is a 10 000-variant S12 sweep (1.5 s drops, default settings)
 compared with the bare-scene rollout (target <= 1.2x). ``--variants`` sets the size:
 
     /work/venv/bin/python benchmarks/sweep.py --variants 200 [--workers 2] [--duration 1.5]
-        [--runner batch|single] [--threads 1]
+        [--runner batch|single] [--threads 1] [--repeat 1]
 
 ``--runner batch`` (the default: ``mtbmj.sweep.batch.run_batch_rollout`` on the batched drop engine
 ``mtbmj.drop.engine_batch``, variants of a batch stepped together through ``mujoco.rollout`` on the
@@ -21,12 +21,20 @@ Bare scene: ``mtbmj.drop.scene.build(compose.setup(load_config("S12")))`` with n
 that variant's impact speed, the same number of steps, ``--workers`` rollout threads, states
 recorded (as the sweep does), in chunks to bound memory.
 
+``--repeat N`` (N > 1, batched runner) adds N interleaved rounds (the order alternating) of the
+whole sweep, the bare scene making as many steps per variant as the runner with built-in elements
+(the fork as joint stiffness and damping: issue 27's baseline, target >= 0.85x of its throughput)
+and the same with the compiled fork callback installed, on ``--workers`` x ``--threads`` threads:
+ratios of medians, the spread of the per-round ratios, the load average before and after each
+round.
+
 Writes benchmarks/results/sweep.json. Not a test: nothing is asserted.
 """
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import tempfile
 import time
 from pathlib import Path
@@ -145,6 +153,41 @@ def bare_rollout(vs, threads: int, duration, chunk: int = 32, builtin: bool = Fa
     return wall, steps
 
 
+def interleaved(vs, args, steps: int) -> dict:
+    """``args.repeat`` rounds of the whole sweep and the bare scene making ``steps`` steps per
+    variant (built-in elements; compiled callback), interleaved, the order alternating."""
+    threads = args.workers * args.threads
+    runs = {
+        "sweep": lambda out: run_sweep(vs, args.workers, args.duration, out, args.runner, args.threads)[0],
+        "builtin": lambda out: bare_rollout(vs, threads, args.duration, builtin=True, steps=steps)[0],
+        "callback": lambda out: bare_rollout(vs, threads, args.duration, steps=steps, callback=True)[0],
+    }
+    rounds = []
+    for k in range(args.repeat):
+        load = os.getloadavg()[0]
+        order = list(runs) if k % 2 == 0 else list(reversed(runs))
+        walls = {}
+        with tempfile.TemporaryDirectory() as tmp:
+            for name in order:
+                walls[name] = runs[name](Path(tmp) / f"sweep{k}")
+        rounds.append({**{f"{n}_s": w for n, w in walls.items()}, "load_before": load,
+                       "load_after": os.getloadavg()[0]})
+        print(f"round {k + 1}: sweep {walls['sweep']:.2f} s, bare {steps} steps per variant built-in "
+              f"{walls['builtin']:.2f} s ({walls['builtin'] / walls['sweep']:.2f}), with the callback "
+              f"{walls['callback']:.2f} s ({walls['callback'] / walls['sweep']:.2f}); load {load:.2f}", flush=True)
+    out = {"rounds": rounds, "steps_per_variant": steps, "target_builtin": 0.85}
+    sweep_s = np.array([r["sweep_s"] for r in rounds])
+    for name in ("builtin", "callback"):
+        base = np.array([r[f"{name}_s"] for r in rounds])
+        per = base / sweep_s
+        out[f"throughput_{name}_over_sweep"] = {"ratio_of_medians": float(np.median(base) / np.median(sweep_s)),
+                                                "min": float(per.min()), "max": float(per.max())}
+        out[f"{name}_s"] = float(np.median(base))
+    out["sweep_s"] = float(np.median(sweep_s))
+    out["load"] = [float(min(r["load_before"] for r in rounds)), float(max(r["load_after"] for r in rounds))]
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--variants", type=int, default=10000)
@@ -157,6 +200,8 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=1, help="rollout threads per worker process (default 1)")
     parser.add_argument("--phase-variants", type=int, default=32, help="variants for the phase costs (0: skip)")
     parser.add_argument("--name", help="results file name (default sweep.json)")
+    parser.add_argument("--repeat", type=int, default=1,
+                        help="interleaved rounds of the whole sweep against the bare scene making as many steps")
     args = parser.parse_args()
 
     vs = variants(args.variants, args.seed)
@@ -204,6 +249,8 @@ def main() -> None:
             print(f"bare scene, {phases['runner_steps_per_variant']} steps per variant (as many as the runner "
                   f"makes, the phase variants' mean), compiled callback installed: {same:.2f} s; throughput "
                   f"ratio {same / wall:.2f}")
+    if args.repeat > 1 and args.phase_variants and args.runner == "batch" and not args.skip_rollout:
+        payload["interleaved"] = interleaved(vs, args, phases["runner_steps_per_variant"])
     estimate = 10000 / args.variants * wall
     payload["extrapolated_10000_variant_sweep_s"] = estimate
     print(f"extrapolated 10 000-variant sweep on this path: {estimate / 60:.1f} min")
