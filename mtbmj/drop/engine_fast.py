@@ -224,6 +224,255 @@ if _numba is not None:
         return phase
 
 
+# --- kernels specialised to one fork law ------------------------------------------------------
+# The kernel above reads the fork law's codes from its integer row at every evaluation (the
+# dispatch of ``controllers.kernels``). A process that runs many drops of one law's structure (a
+# sweep's worker, a fit) can compile an integrator of its own for that structure: the same
+# functions, the same law formulas called with the same parameters in the same order (so the same
+# numbers, bit for bit), the codes and parameter offsets written into its source as constants.
+# Its source is generated into a file of the user's cache folder so that numba caches it on disk
+# like the other kernels; it is compiled (3 to 10 s, depending on the law and the machine's load)
+# once a process has run SPECIALISE_AFTER drops of that structure, where the saving (S12 in a
+# sweep: a quarter of the engine's time, 0.7 to 0.9 ms a drop) starts to repay it, and loaded at
+# once, from then on, by every process that finds it in numba's cache.
+SPECIALISE_AFTER = 2000
+_SPECIAL: dict = {}  # structure (the integer row) -> the specialised integrate (compiled or loaded)
+_MODULES: dict = {}  # structure -> its generated module, imported
+_RUNS: dict = {}  # structure -> drops run with specialise=True in this process
+_LOOKED: set = set()  # structures looked up in the cache folder
+_TEXTS: dict = {}  # structure -> its module's source
+# what the integrator's functions read from this module (copied into the generated one by name)
+_INTEGRATOR = ("tire_force", "rhs", "guards", "on_event", "rk4", "advance", "near", "integrate")
+_SHARED = ("math", "borrow_f64", "borrow_i64", "contact_force", "kelvin_voigt_force", "rim_force",
+           "MAX_EVENTS_PER_STEP", "EVENT_TIME_S", "OK", "DIVERGED") + tuple(
+    name for name in dir() if name.startswith("Q_"))
+
+
+def force_source(I) -> str:
+    """The source of ``fork_force_rate(I, P, x, v, z)`` for the law structure of the integer row
+    ``I`` (``controllers.lawcodes.flatten``): ``controllers.kernels.fork_force_rate`` with its
+    dispatch resolved, each law function called with the same arguments in the same order."""
+    from mtbmj.controllers import kernels as K
+    from mtbmj.controllers import lawcodes as L
+
+    I = [int(i) for i in I]
+    lines = ["def fork_force_rate(I, P, x, v, z):"]
+
+    def at(o, offset):
+        return f"P[{o + offset}]"
+
+    top = 0
+    for k in range(I[L.I_NSPRING]):
+        op, o = I[L.I_SPRING + 2 * k], I[L.I_SPRING + 2 * k + 1]
+        if op == L.SP_LINEAR:
+            lines.append(f"    s{top} = linear_spring_force({at(o, K.LINEAR.rate)}, x)")
+            top += 1
+        elif op == L.SP_BILINEAR:
+            B = K.BILINEAR
+            lines.append(f"    s{top} = bilinear_spring_force({at(o, B.rate)}, {at(o, B.rate_above_knee)}, "
+                         f"{at(o, B.knee)}, x)")
+            top += 1
+        elif op == L.SP_PROGRESSIVE:
+            lines.append(f"    s{top} = progressive_spring_force({at(o, K.PROGRESSIVE.rate)}, "
+                         f"{at(o, K.PROGRESSIVE.cubic)}, x)")
+            top += 1
+        elif op == L.SP_AIR:
+            A = K.AIR
+            lines.append(f"    s{top} = air_spring_force({at(o, A.area)}, {at(o, A.absolute)}, {at(o, A.volume)}, "
+                         f"{at(o, A.index)}, {at(o, A.atmospheric)}, {at(o, A.has_negative)} != 0.0, "
+                         f"{at(o, A.positive_at_port)}, {at(o, A.negative_at_port)}, {at(o, A.port)}, "
+                         f"{at(o, A.limit)}, {at(o, A.limit_force)}, {at(o, A.limit_rate)}, {at(o, A.offset)}, x)")
+            top += 1
+        elif op == L.SP_DIRECTIONAL:
+            top -= 1
+            lines.append(f"    s{top - 1} = directional_blend({at(o, K.DIRECTIONAL.band)}, v, s{top - 1}, s{top})")
+        elif op == L.SP_TOPOUT:
+            T = K.TOPOUT
+            lines.append(f"    s{top - 1} = top_out_force({at(o, T.top_out_rate)}, {at(o, T.preload)}, "
+                         f"{at(o, T.engagement)}, s{top - 1}, x)")
+        elif op == L.SP_STOPS:
+            S = K.STOPS
+            lines.append(f"    s{top - 1} = end_stops_force({at(o, S.travel)}, {at(o, S.bumper_length)}, "
+                         f"{at(o, S.bumper_force)}, {at(o, S.stop_rate)}, {at(o, S.stop_damping)}, "
+                         f"{at(o, S.extension)}, {at(o, S.bumper_start)}, s{top - 1}, x, v)")
+        else:
+            raise UnsupportedLaw(f"spring code {op}")
+    lines.append("    spring = s0")
+
+    code, o = I[L.I_DAMPER], I[L.I_DAMPER_AT]
+    if code == L.DA_LINEAR:
+        damper = f"linear_damper_force({at(o, K.LINEAR_DAMPER.coefficient)}, v)"
+    elif code == L.DA_BILINEAR:
+        damper = (f"bilinear_damper_force({at(o, K.BILINEAR_DAMPER.compression)}, "
+                  f"{at(o, K.BILINEAR_DAMPER.rebound)}, v)")
+    elif code == L.DA_DIGRESSIVE:
+        D = K.DIGRESSIVE
+        damper = (f"digressive_damper_force({at(o, D.compression_low)}, {at(o, D.compression_high)}, "
+                  f"{at(o, D.compression_knee)}, {at(o, D.rebound_low)}, {at(o, D.rebound_high)}, "
+                  f"{at(o, D.rebound_knee)}, v)")
+    elif code == L.DA_ORIFICE:
+        R = K.ORIFICE
+        damper = f"orifice_damper_force({at(o, R.bleed)}, {at(o, R.compression)}, {at(o, R.rebound)}, v)"
+    elif code == L.DA_TABLE:
+        n = I[L.I_DAMPER_N]
+        lines.append(f"    velocity = P[{o}:{o + n}]")
+        damper = (f"table_damper_force(velocity, P[{o + n}:{o + 2 * n}], P[{o + 2 * n}:{o + 3 * n - 1}], "
+                  f"table_segment(velocity, {n}, v), v)")
+    else:
+        raise UnsupportedLaw(f"damper code {code}")
+    lines.append(f"    damper = {damper}")
+
+    code, o = I[L.I_FRICTION], I[L.I_FRICTION_AT]
+    if code == L.FR_STICKING:
+        inner, oi = I[L.I_FRICTION_INNER], I[L.I_FRICTION_INNER_AT]
+        if inner == L.FR_STRIBECK:
+            R = K.STRIBECK
+            level = (f"stribeck_level({at(oi, R.coulomb)}, {at(oi, R.breakaway)}, {at(oi, R.stribeck_velocity)}, "
+                     f"{at(oi, R.exponent)}, v)")
+            viscous = at(oi, R.viscous)
+        elif inner == L.FR_STICTION:
+            T = K.STICTION
+            level = f"stiction_level({at(oi, T.coulomb)}, {at(oi, T.breakaway)}, {at(oi, T.stiction_band)}, v)"
+            viscous = at(oi, T.viscous)
+        elif inner == L.FR_COULOMB_VISCOUS:
+            level, viscous = at(oi, K.COULOMB_VISCOUS.coulomb), at(oi, K.COULOMB_VISCOUS.viscous)
+        else:
+            level, viscous = at(oi, K.COULOMB.coulomb), "0.0"
+        S = K.STICKING
+        lines += [f"    level = {level}",
+                  f"    rate = sticking_rate({at(o, S.stiffness)}, {at(o, S.elastic)}, level, v, z)",
+                  f"    viscous = {viscous}",
+                  f"    friction = sticking_force({at(o, S.stiffness)}, {at(o, S.damping)}, "
+                  f"{at(o, S.damping_velocity)}, viscous, rate, v, z)",
+                  "    return spring + damper + friction, rate"]
+        return "\n".join(lines) + "\n"
+    lugre = ""
+    if code == L.FR_LUGRE:
+        G = K.LUGRE
+        lugre = (f"lugre_rate({at(o, G.coulomb)}, {at(o, G.breakaway)}, {at(o, G.stribeck_velocity)}, "
+                 f"{at(o, G.stiffness)}, v, z)")
+    if code == L.FR_NONE:
+        friction = "0.0"
+    elif code == L.FR_COULOMB:
+        friction = f"coulomb_force({at(o, K.COULOMB.coulomb)}, {at(o, K.COULOMB.band)}, v)"
+    elif code == L.FR_COULOMB_VISCOUS:
+        C = K.COULOMB_VISCOUS
+        friction = f"coulomb_viscous_force({at(o, C.coulomb)}, {at(o, C.viscous)}, {at(o, C.band)}, v)"
+    elif code == L.FR_STICTION:
+        T = K.STICTION
+        friction = (f"stiction_force({at(o, T.coulomb)}, {at(o, T.breakaway)}, {at(o, T.viscous)}, "
+                    f"{at(o, T.stiction_band)}, {at(o, T.band)}, v)")
+    elif code == L.FR_STRIBECK:
+        R = K.STRIBECK
+        friction = (f"stribeck_force({at(o, R.coulomb)}, {at(o, R.breakaway)}, {at(o, R.viscous)}, "
+                    f"{at(o, R.stribeck_velocity)}, {at(o, R.exponent)}, {at(o, R.band)}, v)")
+    elif code == L.FR_LUGRE:
+        G = K.LUGRE
+        friction = f"lugre_force({at(o, G.stiffness)}, {at(o, G.damping)}, {at(o, G.viscous)}, {lugre}, v, z)"
+    else:
+        raise UnsupportedLaw(f"friction code {code}")
+    lines.append(f"    return spring + damper + {friction}, {lugre or '0.0'}")
+    return "\n".join(lines) + "\n"
+
+
+LAW_FUNCTIONS = ("linear_spring_force", "bilinear_spring_force", "progressive_spring_force", "air_spring_force",
+                 "directional_blend", "top_out_force", "end_stops_force", "linear_damper_force",
+                 "bilinear_damper_force", "digressive_damper_force", "orifice_damper_force", "table_damper_force",
+                 "table_segment", "stribeck_level", "stiction_level", "sticking_rate", "sticking_force",
+                 "lugre_rate", "lugre_force", "coulomb_force", "coulomb_viscous_force", "stiction_force",
+                 "stribeck_force")
+
+
+def module_source(I) -> str:
+    """The source of the module holding the integrator specialised to ``I``'s structure: the law
+    functions and this module's integrator functions imported or copied by name, and the
+    specialised ``fork_force_rate`` (:func:`force_source`) they call."""
+    import inspect
+    import textwrap
+
+    parts = ['"""Generated by mtbmj.drop.engine_fast for one fork-law structure (do not edit)."""',
+             "import math", "from mtbmj.controllers import jit as _jit",
+             f"from mtbmj.controllers.kernels import {', '.join(LAW_FUNCTIONS)}",
+             f"from mtbmj.drop.engine_fast import {', '.join(n for n in _SHARED if n != 'math')}", "", "",
+             "@_jit.kernel", force_source(I)]
+    for name in _INTEGRATOR:
+        parts += ["", textwrap.dedent(inspect.getsource(globals()[name].py_func))]
+    return "\n".join(parts)
+
+
+def _cache_folder():
+    """Where the generated modules live (numba caches their code beside them)."""
+    import os
+    from pathlib import Path
+
+    root = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(root) / "mtbmj" / "fast-kernels"
+
+
+def _module(key: tuple, write: bool):
+    """The generated module of ``key``'s structure, imported from the cache folder (written there
+    first when ``write``), or None: not there (and not to be written), no cache folder that can
+    be written, or no disk cache for numba."""
+    if _MODULES.get(key) is not None:
+        return _MODULES[key]
+    if not _jit.CACHE:
+        return None
+    import hashlib
+    import importlib.util
+    import os
+    import sys
+
+    try:
+        text = _TEXTS.get(key) or _TEXTS.setdefault(key, module_source(key))
+        name = "mtbmj_fast_" + hashlib.sha256(text.encode()).hexdigest()[:20]
+        folder = _cache_folder()
+        path = folder / f"{name}.py"
+        if not path.is_file():
+            if not write:
+                return None
+            folder.mkdir(parents=True, exist_ok=True)
+            tmp = folder / f".{name}.{os.getpid()}.tmp"
+            tmp.write_text(text)
+            os.replace(tmp, path)  # two workers writing at once: either copy is whole
+        elif path.read_text() != text:
+            return None  # not ours to replace
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+    except Exception:  # noqa: BLE001 - no home, a read-only cache, a law without a form: the shared kernel runs
+        return None
+    _MODULES[key] = module
+    return module
+
+
+def specialised(I, force: bool = False):
+    """The integrator specialised to the structure of ``I``, or None (the shared kernel runs):
+    loaded when numba's cache holds it; compiled when ``force``, or once this process has run
+    ``SPECIALISE_AFTER`` drops of that structure with ``run(..., specialise=True)``. Looked for
+    once before that, so a process that never gets there pays one file lookup."""
+    key = tuple(int(i) for i in I)
+    if key in _SPECIAL:
+        return _SPECIAL[key]
+    due = force or _RUNS.get(key, 0) >= SPECIALISE_AFTER
+    if not due and key in _LOOKED:
+        return None
+    _LOOKED.add(key)
+    module = _module(key, write=due)
+    if module is None or (not due and _jit.cold(module.integrate)):
+        if due:
+            _SPECIAL[key] = None  # nothing to compile here: not asked again
+        return None
+    kernel()  # the shared functions it imports are loaded first
+    try:
+        with _jit.compiling("the fast engine for this fork", module.integrate):
+            _warm(module.integrate)
+    except Exception:  # noqa: BLE001 - the shared kernel gives the same numbers
+        module = None
+    _SPECIAL[key] = module.integrate if module is not None else None
+    return _SPECIAL[key]
+
+
 _WARM = False
 
 
@@ -285,11 +534,17 @@ def law_arrays(setup: Setup):
         raise ConfigError(f"engine: fast cannot run this fork ({error}); use engine mujoco or ode") from None
 
 
-def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
-    """Integrate the drop from tire touch (t = 0, both bodies at the impact speed)."""
+def run(setup: Setup, duration: float | None = None, progress=None, specialise: bool = False) -> RawTrace:
+    """Integrate the drop from tire touch (t = 0, both bodies at the impact speed).
+    ``specialise``: the caller runs many drops (a sweep, a fit): the integrator specialised to
+    this fork law's structure once it pays (:func:`specialised`; the same numbers)."""
     duration = setup.duration if duration is None else duration
     integrate = kernel()
     I, P = law_arrays(setup)
+    if specialise:
+        key = tuple(int(i) for i in I)
+        _RUNS[key] = _RUNS.get(key, 0) + 1
+        integrate = specialised(I) or integrate
     steps = int(round(duration / setup.timestep))
     # near a zone: sub-steps of at most MAX_STEP_S, and no longer than the MuJoCo engine's fine
     # step (the step rule's limit while a stop or the rim may act, compose.fine_limit)
@@ -323,4 +578,5 @@ def run(setup: Setup, duration: float | None = None, progress=None) -> RawTrace:
     )
 
 
-__all__ = ["run", "kernel", "parameters", "MAX_STEP_S"]
+__all__ = ["run", "kernel", "parameters", "specialised", "force_source", "module_source", "MAX_STEP_S",
+           "SPECIALISE_AFTER"]

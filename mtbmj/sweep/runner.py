@@ -351,7 +351,8 @@ class SweepResult:
 
 def plan(config: Config, overrides_list: Iterable[Mapping[str, Any]], engine: str = "mujoco",
          duration: float | None = None) -> list[Variant]:
-    return [Variant(i, variant_id(config, ov, engine, duration), dict(ov)) for i, ov in enumerate(overrides_list)]
+    digest = config.digest()  # once for the plan, not once per variant
+    return [Variant(i, variant_id(config, ov, engine, duration, digest), dict(ov)) for i, ov in enumerate(overrides_list)]
 
 
 def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_dir: str | Path, *,

@@ -270,10 +270,11 @@ def canonical_value(key: str, value: Any) -> Any:
 
 
 def variant_id(config: Config, overrides: Mapping[str, Any], engine: str = "mujoco",
-               duration: float | None = None) -> str:
+               duration: float | None = None, digest: str | None = None) -> str:
     """Stable id of a variant: hash of the base configuration's digest, the run settings and the
-    canonical overrides (16 hex digits)."""
-    payload = {"config": config.digest(), "engine": engine, "duration": duration,
+    canonical overrides (16 hex digits). ``digest``: ``config.digest()`` when the caller has it
+    already (a plan's many variants of one configuration)."""
+    payload = {"config": config.digest() if digest is None else digest, "engine": engine, "duration": duration,
                "overrides": {k: canonical_value(k, overrides[k]) for k in sorted(overrides)}}
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
 
