@@ -6,9 +6,7 @@ variants (the three ranges of ``speed_scales.py`` part e), and takes the steady 
 difference: (variants - small) / (T(variants) - T(small)), so start-up, the pool, numba's cache
 and the table libraries cancel. The baseline, timed in this script between the commands of each
 round, is the fast engine alone (``engine_fast.run``) on ``--phase-variants`` of the same variants
-in this process (as the sweep's runner runs it: ``specialise=True``, so the integrator specialised
-to S12's structure where numba's cache holds it; the shared kernel timed beside it), with the
-other phases of a variant (``chain.prepare``: overrides, ``compose.setup``
+in this process, with the other phases of a variant (``chain.prepare``: overrides, ``compose.setup``
 and its step rule; ``chain.finish``: logged signals and the summary) timed beside it: the figure is
 the steady per-variant cost of one worker (workers / rate) over the engine's own. Rounds alternate
 the order of the two commands.
@@ -75,16 +73,12 @@ def phases(n: int) -> dict:
             setups.append(chain.prepare(cfg, ov, None)[1])
     t1 = time.perf_counter()
     for s in setups:
-        traces.append(engine_fast.run(s, specialise=True))  # as the sweep's runner runs it
+        traces.append(engine_fast.run(s))
     t2 = time.perf_counter()
     for s, tr in zip(setups, traces):
         chain.finish(s, tr, "fast", channels=SIGNALS)
     t3 = time.perf_counter()
-    for s in setups:
-        engine_fast.run(s)  # the shared kernel, for comparison
-    t4 = time.perf_counter()
-    return {"prepare_ms": (t1 - t0) * 1e3 / n, "engine_ms": (t2 - t1) * 1e3 / n, "finish_ms": (t3 - t2) * 1e3 / n,
-            "shared_kernel_engine_ms": (t4 - t3) * 1e3 / n}
+    return {"prepare_ms": (t1 - t0) * 1e3 / n, "engine_ms": (t2 - t1) * 1e3 / n, "finish_ms": (t3 - t2) * 1e3 / n}
 
 
 def main() -> None:
@@ -130,8 +124,7 @@ def main() -> None:
         "steady_variants_per_s": stats([r["steady_variants_per_s"] for r in rounds]),
         "steady_ms_per_variant_per_worker": stats([r["steady_ms_per_variant_per_worker"] for r in rounds]),
         "over_engine": stats([r["over_engine"] for r in rounds]),
-        "phases_ms": {k: stats([r["phases_ms"][k] for r in rounds])
-                      for k in ("prepare_ms", "engine_ms", "finish_ms", "shared_kernel_engine_ms")},
+        "phases_ms": {k: stats([r["phases_ms"][k] for r in rounds]) for k in ("prepare_ms", "engine_ms", "finish_ms")},
         "load": stats([x for r in rounds for x in (r["load_before"], r["load_after"])]),
         "target_variants_per_s": TARGET_VARIANTS_PER_S,
     }

@@ -123,7 +123,7 @@ def _fast_signals(config: Config, overrides: Mapping, duration: float, channels:
     from mtbmj.drop import chain, engine_fast
 
     _, setup = chain.prepare(config, overrides, duration, warn=False)
-    trace = engine_fast.run(setup, duration, specialise=True)  # a fit's many runs (the same numbers)
+    trace = engine_fast.run(setup, duration)
     return chain.finish(setup, trace, "fast", channels=channels, summary=False).logged
 
 

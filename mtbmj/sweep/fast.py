@@ -1,8 +1,7 @@
 """The sweep runner of the fast engine: each variant of a batch integrated by
 ``mtbmj.drop.engine_fast`` and finished with only what the summary needs (``chain.finish`` on the
 logged displacements, as the batched MuJoCo engine does), in one process without a MuJoCo scene.
-A worker that has run many drops of one fork law's structure runs the integrator specialised to it
-(``engine_fast.specialised``: the same numbers). Same records as ``run_batch`` with ``engine="fast"``; a variant that fails goes through
+Same records as ``run_batch`` with ``engine="fast"``; a variant that fails goes through
 ``run_variant``, which words its reason."""
 from __future__ import annotations
 
@@ -29,7 +28,7 @@ def run_batch_fast(job: BatchJob) -> list[dict]:
             with warnings.catch_warnings():
                 warnings.simplefilter("error", RuntimeWarning)  # as the command line does
                 _, setup = chain.prepare(job.config, variant.overrides, job.duration)
-                trace = engine_fast.run(setup, job.duration, specialise=True)  # many drops: see specialised
+                trace = engine_fast.run(setup, job.duration)
                 _, log, summary = chain.finish(setup, trace, "fast", channels=SIGNALS)
         except Exception:  # noqa: BLE001 - the single path runs it again and records the reason
             records.append(run_variant(job, variant))
