@@ -46,7 +46,7 @@ from mtbmj.result import RunOutput
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 from mtbmj.bike.callback import BikeCallback
-from mtbmj.bike.stepping import CHUNK_STEPS, Stepping, stepping
+from mtbmj.bike.stepping import CHUNK_STEPS, FINE_MIN_STEPS, Stepping, stepping
 
 CHUNK = 10000
 CALLBACKS = ("auto", "compiled", "python")
@@ -89,8 +89,9 @@ class Prepared:
     initial_qvel: np.ndarray
     initial_act: np.ndarray
     stepping: Stepping | None = None
-    refined_chunks: int = 0  # chunks stepped again at the fine step (a stop or the rim within reach)
+    refined_steps: int = 0  # coarse steps stepped again at the fine step (a stop or the rim within reach)
     chunks: int = 0
+    stepped: int = 0  # coarse steps made
 
     def visual_model(self) -> mujoco.MjModel:
         """The same bike with its drawn geoms and the terrain (``bike.model`` has none: see
@@ -311,15 +312,18 @@ def simulate(p: Prepared, duration: float, progress=None):
                       FallbackWarning, stacklevel=2)
         p.callback = _python_twin(p.callback)  # its first evaluation searches the patches afresh
         mujoco.mj_setState(p.bike.model, p.data, start_state, kind)
-        p.chunks = p.refined_chunks = 0
+        p.chunks = p.refined_steps = p.stepped = 0
         states, sensors = _simulate(p, duration, progress)
     return states, sensors
 
 
 def _simulate(p: Prepared, duration: float, progress=None):
-    """Step ``duration`` s in chunks of ``CHUNK_STEPS`` coarse steps; a chunk that came within reach
-    of an end stop or a rim (``Stepping.needs_fine``) is stepped again from its start at the fine
-    step, every ``substeps``-th state kept (``mtbmj.bike.stepping``)."""
+    """Step ``duration`` s in chunks of ``CHUNK_STEPS`` coarse steps; where a chunk came within
+    reach of an end stop or a rim (``Stepping.within_reach``), its steps from the sample before the
+    first such to one past the last are stepped again at the fine step, every ``substeps``-th state
+    kept, and the next chunk starts after them (``mtbmj.bike.stepping``). After a fine stretch the
+    chunks start short and double while no stop comes within reach: a coarse pass cut short by one
+    has made steps that are not kept."""
     model, data = p.bike.model, p.data
     plan = p.stepping
     steps = int(round(duration / p.timestep))
@@ -343,18 +347,30 @@ def _simulate(p: Prepared, duration: float, progress=None):
             st, se = rollout.rollout(model, data, states[done][None, :], nstep=n)
             st, se = st[0], se[0]
             p.chunks += 1
-            if k > 1 and (not np.all(np.isfinite(st)) or plan.needs_fine(st[:, fork_col], st[:, phi_col],
-                                                                         [se[:, c] for c in deflection_cols])):
-                p.refined_chunks += 1
-                p.callback.reset()  # the patches of the chunk's end: the fine pass searches afresh
-                model.opt.timestep = plan.fine
-                try:
-                    st, se = rollout.rollout(model, data, states[done][None, :], nstep=n * k)
-                finally:
-                    model.opt.timestep = p.timestep
-                st, se = st[0, k - 1::k], se[0, k - 1::k]
-                st[:, 0] = states[done][0] + p.timestep * np.arange(1, n + 1)  # the coarse grid's times
-                data.time = st[-1, 0]
+            if k > 1:
+                if np.all(np.isfinite(st)):
+                    span = plan.within_reach(st[:, fork_col], st[:, phi_col], [se[:, c] for c in deflection_cols])
+                else:
+                    span = (0, n - 1)  # diverged at the coarse step: the whole chunk at the fine one
+                if span is not None:
+                    keep = max(span[0] - 1, 0)  # coarse rows kept: those before the sample before the first
+                    n = min(n, max(span[1] + 2, keep + FINE_MIN_STEPS))  # fine to one past the last; the rest anew
+                    start = states[done] if keep == 0 else st[keep - 1]
+                    p.callback.reset()  # the patches of the chunk's end: the fine pass searches afresh
+                    model.opt.timestep = plan.fine
+                    try:
+                        fs, fe = rollout.rollout(model, data, start[None, :], nstep=(n - keep) * k)
+                    finally:
+                        model.opt.timestep = p.timestep
+                    st, se = st[:n], se[:n]
+                    st[keep:], se[keep:] = fs[0, k - 1::k], fe[0, k - 1::k]
+                    st[:, 0] = states[done][0] + p.timestep * np.arange(1, n + 1)  # the coarse grid's times
+                    data.time = st[-1, 0]
+                    p.refined_steps += n - keep
+                    chunk = FINE_MIN_STEPS  # near a stop: short coarse chunks, doubling while clear
+                else:
+                    chunk = min(2 * chunk, CHUNK_STEPS)
+            p.stepped += n
             states[done + 1: done + 1 + n] = st
             sensors[done: done + n] = se
             done += n
@@ -608,7 +624,7 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
     plan = p.stepping
     info = {"steps": int(sensors.shape[0]), "timestep_s": p.timestep, "timestep_why": plan.coarse_why,
             "fine_timestep_s": plan.fine, "fine_timestep_why": plan.fine_why,
-            "refined_fraction": p.refined_chunks / p.chunks if p.chunks else 0.0,
+            "refined_fraction": p.refined_steps / p.stepped if p.stepped else 0.0,
             "integrator": p.fork_setup.integrator,
             "callback": callback_kind(p.callback), "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
             "real_time_factor": duration / wall if wall > 0 else None}

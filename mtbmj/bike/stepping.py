@@ -19,11 +19,13 @@ LuGre fork steps at ~0.06 ms throughout), the fine step also from the stops' and
   gives the smallest mass, the stiffest case), the body likewise. The swingarm's own inertia is
   left out, which only makes the steps smaller.
 
-Which stretches need the fine step is decided after the fact: ``Stepping.needs_fine`` looks at a
-chunk stepped coarse and says whether any sample came within reach of a stop or the rim (within a
-margin of 1 mm at the wheel, 0.5 mm at the shock, plus twice the largest motion of one coarse step
-in the chunk); ``mtbmj.bike.run`` then steps that chunk again from its start at the fine step and
-keeps every ``substeps``-th state, so the output stays on the coarse grid.
+Which stretches need the fine step is decided after the fact: ``Stepping.within_reach`` looks at
+a chunk stepped coarse and finds the first and the last sample within reach of a stop or the rim
+(within a margin of 1 mm at the wheel, 0.5 mm at the shock, plus twice the largest motion of one
+coarse step in the chunk); ``mtbmj.bike.run`` keeps the chunk's coarse steps before the first,
+steps again from the sample before it at the fine step to one sample past the last (at least
+``FINE_MIN_STEPS`` coarse steps), keeping every ``substeps``-th state so the output stays on the
+coarse grid, and goes on from there with the next chunk, coarse.
 """
 from __future__ import annotations
 
@@ -36,7 +38,8 @@ import numpy as np
 from mtbmj import compose
 
 COARSE_STEP_S = 5e-4  # the bike's largest step (RK4): the step the cross-checks cover
-CHUNK_STEPS = 64  # coarse steps per chunk checked for a stop or the rim within reach
+CHUNK_STEPS = 1024  # coarse steps per chunk checked for a stop or the rim within reach
+FINE_MIN_STEPS = 32  # a stretch stepped fine covers at least this many coarse steps
 FORK_MARGIN_M = 1e-3  # distance from a stop (fork travel, tire deflection) taken as within reach
 SHOCK_MARGIN_M = 5e-4  # the same at the shock (its stroke is the wheel's over a ratio of 2.4-3.2)
 
@@ -84,23 +87,31 @@ class Stepping:
         w = self.pivot_z - np.sin(phi) * self.rho[0] + np.cos(phi) * self.rho[1] - self.rear_z
         return np.interp(w, self.stroke_w, self.stroke_s)
 
-    def needs_fine(self, fork, phi, deflections) -> bool:
-        """Whether a chunk stepped coarse came within reach of a stop or the rim: ``fork`` the fork
-        travel (m), ``phi`` the swingarm angle (rad), ``deflections`` each tire's deepest deflection
-        (m), one row per coarse step."""
+    def within_reach(self, fork, phi, deflections) -> tuple[int, int] | None:
+        """The first and the last row of a chunk stepped coarse at which a stop or the rim was
+        within reach, or None: ``fork`` the fork travel (m), ``phi`` the swingarm angle (rad), ``deflections`` each
+        tire's deepest deflection (m), one row per coarse step. Within reach: within the margin
+        (FORK_MARGIN_M at the wheel, SHOCK_MARGIN_M at the shock) plus twice the largest motion of
+        one coarse step in the chunk, so a stop met between two rows is met within reach of both."""
         if self.substeps == 1:
-            return False
-        for x, (low, high), margin in ((np.asarray(fork, float), self.fork_zone, FORK_MARGIN_M),
-                                       (self.stroke(phi), self.stroke_zone, SHOCK_MARGIN_M)):
+            return None
+        first = last = None
+        signals = [(np.asarray(fork, float), self.fork_zone, FORK_MARGIN_M),
+                   (self.stroke(phi), self.stroke_zone, SHOCK_MARGIN_M)]
+        signals += [(np.asarray(d, float), (-math.inf, rim), FORK_MARGIN_M)
+                    for d, rim in zip(deflections, self.rim_deflections)]
+        for x, (low, high), margin in signals:
             reach = margin + (2.0 * float(np.max(np.abs(np.diff(x)))) if x.size > 1 else 0.0)
-            if np.any(x >= high - reach) or np.any(x <= low + reach):
-                return True
-        for d, rim in zip(deflections, self.rim_deflections):
-            d = np.asarray(d, float)
-            reach = FORK_MARGIN_M + (2.0 * float(np.max(np.abs(np.diff(d)))) if d.size > 1 else 0.0)
-            if np.any(d >= rim - reach):
-                return True
-        return False
+            hit = np.flatnonzero((x >= high - reach) | (x <= low + reach))
+            if hit.size:
+                first = int(hit[0]) if first is None else min(first, int(hit[0]))
+                last = int(hit[-1]) if last is None else max(last, int(hit[-1]))
+        return None if first is None else (first, last)
+
+    def needs_fine(self, fork, phi, deflections) -> bool:
+        """Whether a chunk stepped coarse came within reach of a stop or the rim (see
+        ``within_reach``)."""
+        return self.within_reach(fork, phi, deflections) is not None
 
 
 def stepping(spec, fork_setup: compose.Setup, shock_setup: compose.Setup, rims=None) -> Stepping:
@@ -131,4 +142,4 @@ def stepping(spec, fork_setup: compose.Setup, shock_setup: compose.Setup, rims=N
                     np.array([spec.leverage.stroke(x) for x in grid]))
 
 
-__all__ = ["Stepping", "stepping", "COARSE_STEP_S", "CHUNK_STEPS"]
+__all__ = ["Stepping", "stepping", "COARSE_STEP_S", "CHUNK_STEPS", "FINE_MIN_STEPS"]
