@@ -7,7 +7,9 @@ repetition runs all four) so they see the same machine load.
     python benchmarks/bike_speed.py [--repeats 5] [--duration 1.0] [--python-duration D] [--speed 5] [--coarse-step-ms S]
 
 Prints each repetition, then the median and spread (min-max) of each real-time factor and of the
-ratios compiled bike / front end and compiled / Python bike, and the load average
+ratios compiled bike / front end and compiled / Python bike, the compiled bike's and MuJoCo's
+simulated seconds per second of this process's CPU time (``time.process_time``: on a machine shared
+with other work, the wall time also counts the time the core spent elsewhere), and the load average
 (/proc/loadavg) before and after, and writes benchmarks/results/bike_speed.json. Only the stepping is timed (``simulate``; MuJoCo alone:
 ``rollout``): building the model and the static equilibrium are not. The rock garden is seven rocks
 50-110 mm high over 3 m (the profile of tests/test_bike_energy.py), written to a temporary CSV. The
@@ -45,9 +47,9 @@ def bike_rtf(profile: str, speed: float, duration: float, callback: str = "compi
 
     p = prepare("sst", profile, speed, callback=callback)
     assert callback_kind(p.callback) == callback
-    start = time.perf_counter()
+    cpu, start = time.process_time(), time.perf_counter()
     simulate(p, duration)
-    return duration / (time.perf_counter() - start)
+    return duration / (time.perf_counter() - start), duration / (time.process_time() - cpu)
 
 
 def mujoco_rtf(profile: str, speed: float, duration: float) -> float:
@@ -65,10 +67,10 @@ def mujoco_rtf(profile: str, speed: float, duration: float) -> float:
     state = np.empty(mujoco.mj_stateSize(model, kind))
     mujoco.mj_getState(model, data, state, kind)
     steps = int(round(duration / p.timestep))
-    start = time.perf_counter()
+    cpu, start = time.process_time(), time.perf_counter()
     for done in range(0, steps, 10000):
         rollout.rollout(model, data, state[None, :], nstep=min(10000, steps - done))
-    return duration / (time.perf_counter() - start)
+    return duration / (time.perf_counter() - start), duration / (time.process_time() - cpu)
 
 
 def roll_rtf(profile: str, speed: float, duration: float) -> tuple[float, str]:
@@ -112,16 +114,19 @@ def main() -> None:
         profile = str(rock_garden(Path(tmp) / "rock_garden.csv"))
         roll_rtf(profile, args.speed, 0.05)  # warm-up: imports, numba compilation of both compiled callbacks
         bike_rtf(profile, args.speed, 0.05)
-        rows = {"bike": [], "python": [], "mujoco": [], "roll": [], "ratio": [], "speedup": []}
+        rows = {"bike": [], "python": [], "mujoco": [], "roll": [], "ratio": [], "speedup": [], "bike_cpu": [],
+                "mujoco_cpu": [], "over_mujoco": []}
         for i in range(args.repeats):
-            b = bike_rtf(profile, args.speed, args.duration)
-            py = bike_rtf(profile, args.speed, args.python_duration, "python")
-            mj = mujoco_rtf(profile, args.speed, args.duration)
+            b, b_cpu = bike_rtf(profile, args.speed, args.duration)
+            py, _ = bike_rtf(profile, args.speed, args.python_duration, "python")
+            mj, mj_cpu = mujoco_rtf(profile, args.speed, args.duration)
             r, kind = roll_rtf(profile, args.speed, args.duration)
             for key, value in (("bike", b), ("python", py), ("mujoco", mj), ("roll", r), ("ratio", b / r),
-                               ("speedup", b / py)):
+                               ("speedup", b / py), ("bike_cpu", b_cpu), ("mujoco_cpu", mj_cpu),
+                               ("over_mujoco", b / mj)):
                 rows[key].append(value)
-            print(f"repeat {i + 1}: bike compiled {b:.3f}x real time, Python {py:.4f}x, MuJoCo alone {mj:.3f}x, "
+            print(f"repeat {i + 1}: bike compiled {b:.3f}x real time ({b_cpu:.3f}x per CPU second), Python {py:.4f}x, "
+                  f"MuJoCo alone {mj:.3f}x ({mj_cpu:.3f}x), "
                   f"front end ({kind} callback) {r:.2f}x; bike / front end {b / r:.3f}, compiled / Python {b / py:.1f}",
                   flush=True)
 
@@ -130,10 +135,13 @@ def main() -> None:
                 f"{unit} over {len(values)} repeats")
 
     print(line("bike, compiled callback (sst, rock garden)", rows["bike"], "x real time"))
+    print(line("the same per CPU second of this process", rows["bike_cpu"], "x"))
+    print(line("MuJoCo alone per CPU second", rows["mujoco_cpu"], "x"))
     print(line("bike, Python callback", rows["python"], "x real time"))
     print(line("bike model, MuJoCo alone (no callback)", rows["mujoco"], "x real time"))
     print(line("front end (S12, same profile)", rows["roll"], "x real time"))
     print(line("bike compiled / front end", rows["ratio"], ""))
+    print(line("bike compiled / MuJoCo alone (pairs)", rows["over_mujoco"], ""))
     print(line("bike compiled / Python", rows["speedup"], ""))
     from mtbmj.bike import run
 
