@@ -152,6 +152,8 @@ def main() -> None:
 
     summary = {key: {"median": statistics.median(v), "min": min(v), "max": max(v), "runs": v} for key, v in rows.items()}
     command = f"python benchmarks/bike_speed.py --repeats {args.repeats}"
+    if args.python_duration != args.duration:
+        command += f" --python-duration {args.python_duration:g}"
     if args.coarse_step_ms is not None:
         command += f" --coarse-step-ms {args.coarse_step_ms:g}"
     write_json(__file__, {"command": command, "duration_s": args.duration, "speed_m_per_s": args.speed,
