@@ -40,7 +40,7 @@ def test_the_stroke_it_watches_is_the_geometry_s():
     planar = PlanarBike(spec, 0.85, 0.45, 9.81)  # the rider's springs play no part in the wheel's path
     phi = np.linspace(-0.15, 0.45, 301)
     want = np.array([spec.leverage.stroke(planar.wheel_travel(a)[0]) for a in phi])
-    assert np.max(np.abs(plan.stroke(phi) - want)) < 1e-9  # m
+    assert np.max(np.abs(plan.stroke(phi) - want)) < 1e-15  # m
 
 
 def test_within_reach_finds_the_first_and_last_samples_near_a_stop():
@@ -87,3 +87,11 @@ def test_the_adaptive_run_equals_the_fine_step_throughout(monkeypatch):
         a = adaptive.raw[column]
         b = uniform.raw[column][::every][:a.size]  # the same instants
         assert np.max(np.abs(a - b)) < 0.05, column  # mm: RK4 at 0.5 ms away from the stops
+
+
+def test_the_leverage_curve_in_numpy_is_its_lookup():
+    for name in ("sst", "trail"):
+        lev = spec_mod.load(name).leverage
+        w = np.concatenate([np.linspace(-0.03, lev.full_travel + 0.03, 2001), lev.table[0]])
+        want = np.array([lev.stroke(x) for x in w])
+        assert np.max(np.abs(lev.strokes(w) - want)) < 1e-15  # m: the same pieces, round-off apart

@@ -392,13 +392,7 @@ def _signals(p: Prepared, states, sensors) -> dict:
     b = p.bike
     # framelinacc carries MuJoCo's gravity offset (it reads +g at rest): the rider's own acceleration
     rider_acc = sensors[:, model.sensor_adr[model.sensor("rider_acceleration").id] + 2] - p.gravity
-    # the rear wheel travel and stroke from the swingarm angle (closed form of the pivot geometry)
-    from mtbmj.bike.reference import PlanarBike
-
-    planar = PlanarBike(b.spec, b.legs_rest, b.arms_rest, p.gravity)
     phi = qpos[:, b.qpos_index("swingarm")]
-    w = np.array([planar.wheel_travel(a)[0] for a in phi])
-    stroke = np.array([b.spec.leverage.stroke(x) for x in w])
     front = np.hypot(sens("front_tire_x"), sens("front_tire_z"))
     rear = np.hypot(sens("rear_tire_x"), sens("rear_tire_z"))
     th = qpos[:, b.qpos_index("pitch")]
@@ -411,6 +405,10 @@ def _signals(p: Prepared, states, sensors) -> dict:
     rho = np.subtract(b.spec.rear_axle, b.spec.pivot)
     rear_lx = b.spec.pivot[0] + np.cos(phi) * rho[0] + np.sin(phi) * rho[1]  # rear axle, frame coordinates
     rear_lz = b.spec.pivot[1] - np.sin(phi) * rho[0] + np.cos(phi) * rho[1]
+    # the rear wheel's travel (its axle's rise in the frame, the pivot geometry's closed form) and
+    # the shock's stroke through the leverage curve
+    w = rear_lz - b.spec.rear_axle[1]
+    stroke = b.spec.leverage.strokes(w)
     rear_x = X + np.cos(th) * rear_lx - np.sin(th) * rear_lz
     drive = np.hypot(sens("drive_x"), sens("drive_z")) * np.where(sens("drive_x") >= 0.0, 1.0, -1.0)
     return {

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
+import numpy as np
+
 
 from mtbmj.errors import ConfigError
 
@@ -53,6 +55,21 @@ class Leverage:
         """Shock stroke (m) at rear wheel travel ``w`` (m); below 0 and past the table the ratio
         is held at its end value."""
         return leverage_stroke(self._w, self._r, self._s, bisect.bisect_right(self._w, w) - 1, w)
+
+    def strokes(self, w) -> np.ndarray:
+        """``stroke`` over an array of rear wheel travels (m): the same pieces, in numpy."""
+        w = np.asarray(w, dtype=float)
+        w_tab, r, s = (np.asarray(v, dtype=float) for v in (self._w, self._r, self._s))
+        n = w_tab.size
+        i = np.clip(np.searchsorted(w_tab, w, side="right") - 1, 0, n - 2)
+        r0, r1, h, x = r[i], r[i + 1], w_tab[i + 1] - w_tab[i], w - w_tab[i]
+        b = (r1 - r0) / h
+        linear = np.abs(b) * x < 1e-9 * r0
+        with np.errstate(divide="ignore", invalid="ignore"):  # the linear pieces' log is not used
+            piece = np.where(linear, x / r0, np.log((r0 + b * x) / r0) / np.where(linear, 1.0, b))
+        out = s[i] + piece
+        out = np.where(w <= 0.0, w / r[0], out)
+        return np.where(w >= w_tab[n - 1], s[n - 1] + (w - w_tab[n - 1]) / r[n - 1], out)
 
     @property
     def table(self) -> tuple[list[float], list[float], list[float]]:

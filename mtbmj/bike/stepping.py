@@ -70,12 +70,11 @@ class Stepping:
     fork_zone: tuple[float, float]
     stroke_zone: tuple[float, float]
     rim_deflections: tuple[float, float]  # m, each tire's rim (front, rear); inf without one
-    # the swingarm angle -> rear wheel travel (closed form) -> stroke (a dense table of the leverage curve)
+    # the swingarm angle -> rear wheel travel (closed form) -> stroke (the leverage curve)
     pivot_z: float
     rho: tuple[float, float]
     rear_z: float
-    stroke_w: np.ndarray
-    stroke_s: np.ndarray
+    leverage: object  # mtbmj.bike.spec.Leverage
 
     @property
     def fine(self) -> float:
@@ -85,7 +84,7 @@ class Stepping:
         """Shock stroke (m) at swingarm angles ``phi`` (rad)."""
         phi = np.asarray(phi, float)
         w = self.pivot_z - np.sin(phi) * self.rho[0] + np.cos(phi) * self.rho[1] - self.rear_z
-        return np.interp(w, self.stroke_w, self.stroke_s)
+        return self.leverage.strokes(w)
 
     def within_reach(self, fork, phi, deflections) -> tuple[int, int] | None:
         """The first and the last row of a chunk stepped coarse at which a stop or the rim was
@@ -132,14 +131,10 @@ def stepping(spec, fork_setup: compose.Setup, shock_setup: compose.Setup, rims=N
     substeps = max(1, math.ceil(coarse / fine * (1.0 - 1e-12)))
     if rims is None:
         rims = (fork_setup.tire.rim, fork_setup.tire.rim)
-    w, _, s = spec.leverage.table
-    lo, hi = float(w[0]), float(w[-1])
-    grid = np.linspace(lo - 0.5 * (hi - lo), hi + 0.5 * (hi - lo), 4001)
     pivot, rear = spec.pivot, spec.rear_axle
     return Stepping(coarse, substeps, why, fine_why, _zone(fork_setup.fork.spring), _zone(shock_setup.fork.spring),
                     tuple(r.max_deflection if r is not None else math.inf for r in rims), float(pivot[1]),
-                    (float(rear[0] - pivot[0]), float(rear[1] - pivot[1])), float(rear[1]), grid,
-                    np.array([spec.leverage.stroke(x) for x in grid]))
+                    (float(rear[0] - pivot[0]), float(rear[1] - pivot[1])), float(rear[1]), spec.leverage)
 
 
 __all__ = ["Stepping", "stepping", "COARSE_STEP_S", "CHUNK_STEPS", "FINE_MIN_STEPS"]
