@@ -1,9 +1,9 @@
 """The bike's step rule (``mtbmj.bike.stepping``): the coarse step where no stop or rim is near, the
 fine step where one is, and which stretches get which.
 
-* The shock stroke the rule watches, from the swingarm angle through a table of the leverage
-  curve, equals the stroke of the exact geometry (``PlanarBike.wheel_travel`` and the curve's own
-  ``stroke``).
+* The shock stroke the rule watches, from the swingarm angle (in numpy: ``Leverage.strokes``),
+  equals the stroke of the exact geometry (``PlanarBike.wheel_travel`` and the curve's own
+  ``stroke``, point by point).
 * The first and last samples within reach of a stop, on signals written here.
 * A friction state that stiffens with the stroke speed (LuGre) makes the coarse step itself fine.
 * The adaptive run (0.5 ms, fine near the stops) over a ledge drop that takes the fork into its
