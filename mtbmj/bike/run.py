@@ -89,8 +89,9 @@ class Prepared:
     initial_qvel: np.ndarray
     initial_act: np.ndarray
     stepping: Stepping | None = None
+    lock: tuple = ()  # the held degrees of freedom (LOCKS' keys), as checked
+    rear_tire_on: bool = True  # False: the rear tire taken off (``prepare(rear_tire=False)``)
     refined_steps: int = 0  # coarse steps stepped again at the fine step (a stop or the rim within reach)
-    chunks: int = 0
     stepped: int = 0  # coarse steps made
 
     def visual_model(self) -> mujoco.MjModel:
@@ -174,7 +175,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
                        refresh)
     data = mujoco.MjData(b.model)
     p = Prepared(b, spec, fork_setup, shock_setup, fork_setup.fork, shock_setup.fork, ter, front, rear, drv, traction,
-                 float(speed_m_per_s), g, timestep, cb, data, None, None, None, steps)
+                 float(speed_m_per_s), g, timestep, cb, data, None, None, None, steps, lock, bool(rear_tire))
     ref = Reference(p)
     _check_start(p, ref)
     names = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")
@@ -220,19 +221,12 @@ def _front_alone(p: Prepared) -> dict:
     the front tire carries the whole weight W (its deflection W / k), and the fork's spring the part
     above the fork along the steering axis, (W - (m_lower + m_wheel) g) sin(head angle), as the
     front-end rig's ``static_sag``."""
+    from mtbmj.rolling.frontend import spring_compression
+
     spec, g = p.spec, p.gravity
     unsprung = spec.fork_lower_mass + spec.front_wheel_mass
     a = spec.head_angle
-    target = (spec.total_mass - unsprung) * g * math.sin(a)
-    spring = p.fork_setup.fork.spring
-    lo, hi = -0.05, p.fork_setup.travel * 1.5
-    for _ in range(100):
-        mid = 0.5 * (lo + hi)
-        if spring.force(mid, 0.0) < target:
-            lo = mid
-        else:
-            hi = mid
-    xf = 0.5 * (lo + hi)
+    xf = spring_compression(p.fork_setup, (spec.total_mass - unsprung) * g * math.sin(a))
     deflection = spec.total_mass * g / p.front_tire.rate
     # the front axle (frame level) is at z0 + bike_z + fz + xf sin(a); at qpos = 0 its tread touches
     return {"bike_z": -deflection - xf * math.sin(a), "pitch": 0.0, "fork": xf}
@@ -312,7 +306,7 @@ def simulate(p: Prepared, duration: float, progress=None):
                       FallbackWarning, stacklevel=2)
         p.callback = _python_twin(p.callback)  # its first evaluation searches the patches afresh
         mujoco.mj_setState(p.bike.model, p.data, start_state, kind)
-        p.chunks = p.refined_steps = p.stepped = 0
+        p.refined_steps = p.stepped = 0
         states, sensors = _simulate(p, duration, progress)
     return states, sensors
 
@@ -346,7 +340,6 @@ def _simulate(p: Prepared, duration: float, progress=None):
             n = min(chunk, steps - done)
             st, se = rollout.rollout(model, data, states[done][None, :], nstep=n)
             st, se = st[0], se[0]
-            p.chunks += 1
             if k > 1:
                 if np.all(np.isfinite(st)):
                     span = plan.within_reach(st[:, fork_col], st[:, phi_col], [se[:, c] for c in deflection_cols])
@@ -402,12 +395,8 @@ def _signals(p: Prepared, states, sensors) -> dict:
     u = (-math.cos(b.spec.head_angle), math.sin(b.spec.head_angle))
     lx, lz = fx + qf * u[0], fz + qf * u[1]
     front_x = X + np.cos(th) * lx - np.sin(th) * lz
-    rho = np.subtract(b.spec.rear_axle, b.spec.pivot)
-    rear_lx = b.spec.pivot[0] + np.cos(phi) * rho[0] + np.sin(phi) * rho[1]  # rear axle, frame coordinates
-    rear_lz = b.spec.pivot[1] - np.sin(phi) * rho[0] + np.cos(phi) * rho[1]
-    # the rear wheel's travel (its axle's rise in the frame, the pivot geometry's closed form) and
-    # the shock's stroke through the leverage curve
-    w = rear_lz - b.spec.rear_axle[1]
+    rear_lx, rear_lz = spec_mod.rear_axle_in_frame(b.spec, phi)
+    w = rear_lz - b.spec.rear_axle[1]  # the rear wheel's travel; the shock's stroke through the leverage curve
     stroke = b.spec.leverage.strokes(w)
     rear_x = X + np.cos(th) * rear_lx - np.sin(th) * rear_lz
     drive = np.hypot(sens("drive_x"), sens("drive_z")) * np.where(sens("drive_x") >= 0.0, 1.0, -1.0)
@@ -626,9 +615,9 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
             "integrator": p.fork_setup.integrator,
             "callback": callback_kind(p.callback), "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
             "real_time_factor": duration / wall if wall > 0 else None}
-    if lock or not rear_tire:
-        info["locked"] = list(_check_lock(lock, rear_tire))
-        info["rear_tire"] = bool(rear_tire)
+    if p.lock or not p.rear_tire_on:
+        info["locked"] = list(p.lock)
+        info["rear_tire"] = p.rear_tire_on
     name = p.spec.name
     result = BikeResult(name, str(scenario), raw, raw, summary, wall, p, info)
     every = max(1, int(round(1.0 / (VIDEO_SAMPLE_HZ * p.timestep))))

@@ -363,5 +363,16 @@ def check_geometry(spec: BikeSpec, tire_radius: float) -> None:
         raise ConfigError("bike.pivot_mm: the main pivot lies inside the front wheel")
 
 
+def rear_axle_in_frame(spec: BikeSpec, phi) -> tuple[np.ndarray, np.ndarray]:
+    """(x, z) of the rear axle in the frame's coordinates (m) at swingarm angles ``phi`` (rad, rear
+    wheel up positive): the axle turned about the main pivot. Its rise, z less the axle's z at
+    ``phi`` = 0, is the rear wheel's travel."""
+    phi = np.asarray(phi, dtype=float)
+    (px, pz), (rx, rz) = spec.pivot, spec.rear_axle
+    rho = (rx - px, rz - pz)
+    return (px + np.cos(phi) * rho[0] + np.sin(phi) * rho[1],
+            pz - np.sin(phi) * rho[0] + np.cos(phi) * rho[1])
+
+
 __all__ = ["BikeSpec", "Leverage", "Rider", "load", "preset_names", "check_geometry", "leverage_ratio", "leverage_stroke",
-           "stroke_piece"]
+           "stroke_piece", "rear_axle_in_frame"]

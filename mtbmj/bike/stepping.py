@@ -36,6 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mtbmj import compose
+from mtbmj.bike.spec import rear_axle_in_frame
+from mtbmj.readout.endtravel import bumper_engages
 
 COARSE_STEP_S = 5e-4  # the bike's largest step (RK4): the step the cross-checks cover
 CHUNK_STEPS = 1024  # coarse steps per chunk checked for a stop or the rim within reach
@@ -54,14 +56,13 @@ def _zone(spring) -> tuple[float, float]:
     bumper, else the hard stop at full travel); (-inf, inf) for a law without end stops."""
     if not hasattr(spring, "stop_forces"):
         return -math.inf, math.inf
-    has_bumper = getattr(spring, "bumper_length", 0.0) > 0.0 and getattr(spring, "bumper_force", 0.0) > 0.0
-    return -spring.extension, spring.bumper_start if has_bumper else spring.travel
+    return -spring.extension, spring.bumper_start if bumper_engages(spring) else spring.travel
 
 
 @dataclass(frozen=True)
 class Stepping:
     """One bike's steps: ``coarse`` (s), ``substeps`` fine steps per coarse one where a stop or the
-    rim may act, what sets each, and the zones ``needs_fine`` checks."""
+    rim may act, what sets each, and the zones ``within_reach`` checks."""
 
     coarse: float
     substeps: int
@@ -70,11 +71,7 @@ class Stepping:
     fork_zone: tuple[float, float]
     stroke_zone: tuple[float, float]
     rim_deflections: tuple[float, float]  # m, each tire's rim (front, rear); inf without one
-    # the swingarm angle -> rear wheel travel (closed form) -> stroke (the leverage curve)
-    pivot_z: float
-    rho: tuple[float, float]
-    rear_z: float
-    leverage: object  # mtbmj.bike.spec.Leverage
+    spec: object  # the BikeSpec: the swingarm angle -> rear wheel travel -> stroke
 
     @property
     def fine(self) -> float:
@@ -82,9 +79,8 @@ class Stepping:
 
     def stroke(self, phi) -> np.ndarray:
         """Shock stroke (m) at swingarm angles ``phi`` (rad)."""
-        phi = np.asarray(phi, float)
-        w = self.pivot_z - np.sin(phi) * self.rho[0] + np.cos(phi) * self.rho[1] - self.rear_z
-        return self.leverage.strokes(w)
+        _, z = rear_axle_in_frame(self.spec, phi)
+        return self.spec.leverage.strokes(z - self.spec.rear_axle[1])
 
     def within_reach(self, fork, phi, deflections) -> tuple[int, int] | None:
         """The first and the last row of a chunk stepped coarse at which a stop or the rim was
@@ -107,11 +103,6 @@ class Stepping:
                 last = int(hit[-1]) if last is None else max(last, int(hit[-1]))
         return None if first is None else (first, last)
 
-    def needs_fine(self, fork, phi, deflections) -> bool:
-        """Whether a chunk stepped coarse came within reach of a stop or the rim (see
-        ``within_reach``)."""
-        return self.within_reach(fork, phi, deflections) is not None
-
 
 def stepping(spec, fork_setup: compose.Setup, shock_setup: compose.Setup, rims=None) -> Stepping:
     """The steps of the bike ``spec`` with these fork and shock setups (see the module doc);
@@ -131,10 +122,8 @@ def stepping(spec, fork_setup: compose.Setup, shock_setup: compose.Setup, rims=N
     substeps = max(1, math.ceil(coarse / fine * (1.0 - 1e-12)))
     if rims is None:
         rims = (fork_setup.tire.rim, fork_setup.tire.rim)
-    pivot, rear = spec.pivot, spec.rear_axle
     return Stepping(coarse, substeps, why, fine_why, _zone(fork_setup.fork.spring), _zone(shock_setup.fork.spring),
-                    tuple(r.max_deflection if r is not None else math.inf for r in rims), float(pivot[1]),
-                    (float(rear[0] - pivot[0]), float(rear[1] - pivot[1])), float(rear[1]), spec.leverage)
+                    tuple(r.max_deflection if r is not None else math.inf for r in rims), spec)
 
 
 __all__ = ["Stepping", "stepping", "COARSE_STEP_S", "CHUNK_STEPS", "FINE_MIN_STEPS"]

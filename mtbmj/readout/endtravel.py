@@ -66,6 +66,12 @@ def _element(signal_mm: np.ndarray, threshold_mm: float | None, force) -> dict:
             "peak_force_N": float(max(force(int(i)) for i in idx))}
 
 
+def bumper_engages(spring) -> bool:
+    """Whether ``spring`` has end stops with a bumper that pushes (a length and a force)."""
+    return (hasattr(spring, "stop_forces") and getattr(spring, "bumper_length", 0.0) > 0.0
+            and getattr(spring, "bumper_force", 0.0) > 0.0)
+
+
 def end_of_travel(setup, fork_mm, fork_velocity_mm_per_s, tire_mm, tire_velocity_mm_per_s=None,
                   time_s=None) -> dict:
     """The end-of-travel report of one run (see the module doc) from its engine-rate signals:
@@ -81,7 +87,7 @@ def end_of_travel(setup, fork_mm, fork_velocity_mm_per_s, tire_mm, tire_velocity
     travel_mm = setup.travel * 1e3
     spring = setup.fork.spring
     stops = hasattr(spring, "stop_forces")
-    has_bumper = stops and getattr(spring, "bumper_length", 0.0) > 0.0 and getattr(spring, "bumper_force", 0.0) > 0.0
+    has_bumper = bumper_engages(spring)
     bumper = _element(fork, spring.bumper_start * 1e3 if has_bumper else None,
                       lambda i: spring.stop_forces(fork[i] * 1e-3, fork_v[i])[0])
     hard = _element(fork, travel_mm if stops else None, lambda i: spring.stop_forces(fork[i] * 1e-3, fork_v[i])[1])
@@ -129,4 +135,4 @@ def table_row(report: dict) -> dict:
     return row
 
 
-__all__ = ["end_of_travel", "episodes", "line", "table_row", "TABLE_COLUMNS", "ELEMENTS", "RELEASE_MM"]
+__all__ = ["end_of_travel", "bumper_engages", "episodes", "line", "table_row", "TABLE_COLUMNS", "ELEMENTS", "RELEASE_MM"]

@@ -178,20 +178,26 @@ def _add_terrain_visual(spec, terrain) -> None:
                    pos=[(x_lo + x_hi) / 2, 0.0, lo], contype=0, conaffinity=0, group=1, material="terrain")
 
 
-def static_sag(setup: compose.Setup, head_angle: float) -> tuple[float, float]:
-    """(fork compression m, tire deflection m) at rest on flat ground: the spring carries the
-    body weight's component along the fork, m_b g sin(head angle); the tire all the weight."""
-    target = setup.body_mass * setup.gravity * math.sin(head_angle)
+def spring_compression(setup: compose.Setup, load_N: float) -> float:
+    """The fork compression (m) at which ``setup``'s spring at rest carries ``load_N``: bisected
+    from 50 mm past full extension (a top-out spring balances there) to 1.5 times the travel."""
     lo, hi = -0.05, setup.travel * 1.5
     spring = setup.fork.spring
     for _ in range(100):
         mid = 0.5 * (lo + hi)
-        if spring.force(mid, 0.0) < target:
+        if spring.force(mid, 0.0) < load_N:
             lo = mid
         else:
             hi = mid
+    return 0.5 * (lo + hi)
+
+
+def static_sag(setup: compose.Setup, head_angle: float) -> tuple[float, float]:
+    """(fork compression m, tire deflection m) at rest on flat ground: the spring carries the
+    body weight's component along the fork, m_b g sin(head angle); the tire all the weight."""
+    x = spring_compression(setup, setup.body_mass * setup.gravity * math.sin(head_angle))
     rate = tire_values(setup)[0]
-    return 0.5 * (lo + hi), (setup.body_mass + setup.wheel_mass) * setup.gravity / rate
+    return x, (setup.body_mass + setup.wheel_mass) * setup.gravity / rate
 
 
 def tire_values(setup: compose.Setup) -> tuple[float, float]:
@@ -606,4 +612,4 @@ def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12"
 
 
 __all__ = ["run_roll", "roll_trajectory", "RollResult", "RollCallback", "FrontEnd", "build_front_end", "prepare",
-           "simulate", "static_sag", "tire_values", "callback_kind", "COLUMNS", "CALLBACKS", "DEFAULT_HEAD_ANGLE_DEG"]
+           "simulate", "static_sag", "spring_compression", "tire_values", "callback_kind", "COLUMNS", "CALLBACKS", "DEFAULT_HEAD_ANGLE_DEG"]
