@@ -9,6 +9,8 @@ import subprocess
 import time
 from pathlib import Path
 
+import numpy as np
+
 RESULTS = Path(__file__).resolve().parent / "results"
 
 
@@ -42,6 +44,12 @@ def write_json(script: str, payload: dict) -> Path:
     stamp = {"measured_at": datetime.datetime.now(datetime.timezone.utc).date().isoformat(), "commit": commit()}
     path.write_text(json.dumps({**stamp, "environment": environment(), **payload}, indent=2, default=float) + "\n")
     return path
+
+
+def stats(values) -> dict:
+    """Median, smallest, largest and count of ``values`` (one figure's repetitions)."""
+    v = np.asarray(values, float)
+    return {"median": float(np.median(v)), "min": float(v.min()), "max": float(v.max()), "n": int(v.size)}
 
 
 def best_of(fn, repeat: int = 3):

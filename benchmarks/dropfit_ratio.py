@@ -24,20 +24,13 @@ import argparse
 import os
 import time
 
-import numpy as np
-
 from mtbmj.drop.chain import resolve
 from mtbmj.identify.drop_synthetic import make_drop_record
 from mtbmj.identify.dropfit import fit_drop
-from _bench import write_json
+from _bench import stats, write_json
 from dropfit import FACTORS
 
 TARGET = 3.0
-
-
-def stats(values) -> dict:
-    v = np.asarray(values, float)
-    return {"median": float(np.median(v)), "min": float(v.min()), "max": float(v.max()), "n": int(v.size)}
 
 
 def main() -> None:

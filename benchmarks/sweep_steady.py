@@ -27,18 +27,11 @@ import time
 import warnings
 from pathlib import Path
 
-import numpy as np
-
-from _bench import write_json
+from _bench import stats, write_json
 
 BIN = Path(sys.executable).with_name("mtbmj")
 RANGES = ["fork.spring.preload_N=150:300", "tire.impact_rate_N_per_mm=75:95", "sled.drop_height_mm=60:130"]
 TARGET_VARIANTS_PER_S = 1000
-
-
-def stats(values) -> dict:
-    v = np.asarray(values, float)
-    return {"median": float(np.median(v)), "min": float(v.min()), "max": float(v.max()), "n": int(v.size)}
 
 
 def command(n: int, workers: int, out: Path) -> list[str]:
