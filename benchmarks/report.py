@@ -342,7 +342,7 @@ def dropfit_ratio_rows(d: dict) -> dict[str, list[Row]]:
         f"drop fit of 6 S12 parameters, MuJoCo / fast engine, wall time per engine run, {len(d['rounds'])} "
         "interleaved rounds", f"≤ {tgt(d['target'])}×",
         f"{ratio(r['median'], 2)} ({spread(r['min'], r['max'], 2)}): {num(pr['mujoco']['median'])} vs "
-        f"{num(pr['fast']['median'])} ms; without the closing ODE run {ratio(lr['median'], 2)} "
+        f"{num(pr['fast']['median'])} ms; without the closing engine-error run {ratio(lr['median'], 2)} "
         f"({spread(lr['min'], lr['max'], 2)}): {num(lp['mujoco']['median'])} vs {num(lp['fast']['median'])} ms",
         "dropfit_ratio.json", d["command"])]}
 

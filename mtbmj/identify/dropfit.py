@@ -23,7 +23,8 @@ filter colours the noise; sled, fork and tire share the pots; the engine has its
 the covariance is the Newey-West sandwich of the scores over time (``fitresult.hac_covariance``,
 Bartlett bandwidth by Andrews' rule, channels pooled per time stamp), plus the squares of two
 biases carried to the parameters through the Jacobian: the engine's own error (the other engine
-run once at the optimum, ``engine_error``) and one standard error of the touch time. The Student t
+run once at the optimum, ``engine_error``; for the fast engine, which integrates the reference's
+equations, the same equations stepped finer: ``OTHER_ENGINE``) and one standard error of the touch time. The Student t
 quantile uses the effective number of independent samples (time samples / bandwidth).
 ``extra["stderr_white"]`` keeps the white-in-time channel sandwich, ``extra["stderr_iid"]`` the
 plain ``covariance_stderr``. ``benchmarks/interval_coverage.py`` measures the coverage. The intervals
@@ -74,9 +75,17 @@ from mtbmj.workers import process_pool
 
 CHANNELS = ("sled", "fork", "tire")
 FIT_FROM_S = 0.005  # fitted from 5 ms after touch: before, a logger's filter still carries the free fall
-# the engine whose run at the optimum measures the fitting engine's own error (the fast engine
-# integrates the reference's equations: it is checked against the reference)
-OTHER_ENGINE = {"mujoco": "ode", "ode": "mujoco", "fast": "ode"}
+# the run at the optimum that measures the fitting engine's own error: MuJoCo's against the
+# reference's equations (scipy), the reference's against MuJoCo's. The fast engine integrates the
+# reference's equations themselves, so its own error is its discretisation: measured by the same
+# equations stepped REFINE_FAST times finer everywhere ("fast_refined"), the difference scaled by
+# k / (k - 1), the whole error where it falls as the step (near a kink of the friction law; twice it
+# where it falls as the step's fourth power). At S12's fitted optimum the fast run is 0.70 um of sled
+# and 0.79 um of fork from the ODE reference's run, and this estimate says 1.4 and 1.6 um, in a
+# tenth of the reference run's time (tests/test_dropfit_engine_error.py)
+OTHER_ENGINE = {"mujoco": "ode", "ode": "mujoco", "fast": "fast_refined"}
+REFINE_FAST = 2
+ERROR_SCALE = {"fast": REFINE_FAST / (REFINE_FAST - 1)}
 # keys that take whole numbers (spacers, adjuster clicks): a least-squares step cannot move them
 WHOLE_NUMBER_KEYS = ("fork.spring.tokens",)
 # the relative accuracy a drop record can fix a parameter to, whatever its noise: the model's own
@@ -108,8 +117,9 @@ def _model(values: Sequence[float], keys: Sequence[str], config: Config | None =
     channels = channels or w["channels"]
     overrides = dict(zip(keys, map(float, values)))
     try:
-        if engine == "fast":
-            return _sample(_fast_signals(config, overrides, duration, channels), times, channels)
+        if engine in ("fast", "fast_refined"):
+            refine = REFINE_FAST if engine == "fast_refined" else 1
+            return _sample(_fast_signals(config, overrides, duration, channels, refine), times, channels)
         native.expect_many()  # a fit's runs repay loading the compiled laws
         result = run_drop(config, engine, overrides=overrides, duration=duration)
     except MtbmjError as exc:
@@ -117,13 +127,14 @@ def _model(values: Sequence[float], keys: Sequence[str], config: Config | None =
     return _sample(result.signals, times, channels)
 
 
-def _fast_signals(config: Config, overrides: Mapping, duration: float, channels: tuple) -> dict:
+def _fast_signals(config: Config, overrides: Mapping, duration: float, channels: tuple, refine: int = 1) -> dict:
     """The logged channels of ``run_drop(config, "fast", overrides, duration)`` (the same numbers),
-    without what a fit does not read: the other signals and the summary."""
+    without what a fit does not read: the other signals and the summary; ``refine`` > 1 steps the
+    same equations finer (``engine_fast.run``)."""
     from mtbmj.drop import chain, engine_fast
 
     _, setup = chain.prepare(config, overrides, duration, warn=False)
-    trace = engine_fast.run(setup, duration)
+    trace = engine_fast.run(setup, duration, refine=refine)
     return chain.finish(setup, trace, "fast", channels=channels, summary=False).logged
 
 
@@ -371,7 +382,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
         # parameters through the same Jacobian (a bias, added to the covariance as its square)
         other = _model(sol.x, free, cfg, OTHER_ENGINE[engine], duration, times, channels)
         if not isinstance(other, str):
-            engine_shift = np.linalg.pinv(final_jac) @ (other - model)
+            engine_shift = np.linalg.pinv(final_jac) @ ((other - model) * ERROR_SCALE.get(engine, 1.0))
             cov = cov + np.outer(engine_shift, engine_shift)
     touch_shift = np.zeros(n)
     touch_err = aligned.touch.stderr_s if aligned.touch else 0.0
