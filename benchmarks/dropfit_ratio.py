@@ -9,9 +9,8 @@ rounds (the order alternates; one warm-up fit of each first). Each fit's wall ti
 engine runs is its cost per engine run; the figure is the per-round ratio MuJoCo / fast (median,
 spread), with the wall times, the runs and the load average before and after each round.
 
-Each fit ends with one run at the optimum that measures the engine's own error: the ODE reference
-for the MuJoCo fit (about 2 s), the fast engine stepped finer for the fast fit (about 0.15 s). The
-rounds also time both fits without it (``engine_error=False``), the fit loop alone, so the per-run
+Each fit ends with one run at the optimum that measures the engine's own error (the fast engine
+stepped finer, about 0.15 s, for both). The rounds also time both fits without it (``engine_error=False``), the fit loop alone, so the per-run
 cost of the engines themselves shows.
 
     python benchmarks/dropfit_ratio.py [--repeat 5] [--seed 3] [--fast-workers 1] [--mujoco-workers 2]

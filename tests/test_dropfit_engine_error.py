@@ -77,3 +77,43 @@ def test_fast_fit_intervals_as_with_the_reference_run(record, monkeypatch):
     assert big.any()
     ratio = shift[big] / shift_ode[big]
     assert np.all((ratio >= 0.8) & (ratio <= 3.0)), ratio
+
+
+def test_mujoco_fit_intervals_as_with_the_reference_run(record, monkeypatch):
+    """The MuJoCo fit's own error measured against the refined fast run gives the intervals it
+    gives measured against the ODE reference's run, within 1 %; and without numba, the fit
+    measures it against the reference's run."""
+    truth, rec = record
+    fit = dropfit.fit_drop(rec, "S12", free=list(truth), engine="mujoco", workers=1)
+    monkeypatch.setitem(dropfit.OTHER_ENGINE, "mujoco", "ode")
+    with_ode = dropfit.fit_drop(rec, "S12", free=list(truth), engine="mujoco", workers=1)
+    for key in truth:
+        assert fit.values[key] == with_ode.values[key]
+        lo, hi = fit.extra["ci95"][key]
+        lo_ode, hi_ode = with_ode.extra["ci95"][key]
+        assert hi - lo == pytest.approx(hi_ode - lo_ode, rel=0.01), key
+    shift = np.array([fit.extra["engine_error_shift"][k] for k in truth])
+    shift_ode = np.array([with_ode.extra["engine_error_shift"][k] for k in truth])
+    scale = np.abs(np.array(list(truth.values())))
+    big = np.abs(shift_ode) / scale >= 0.1 * np.max(np.abs(shift_ode) / scale)
+    ratio = shift[big] / shift_ode[big]
+    assert np.all((ratio >= 0.5) & (ratio <= 1.5)), ratio
+
+
+def test_without_numba_the_reference_measures_the_error(monkeypatch):
+    """No numba: the fast refined run is not there, and the fit asks the ODE reference."""
+    asked = []
+    real = dropfit._model
+
+    def spy(values, keys, config=None, engine=None, *args, **kwargs):
+        asked.append(engine)
+        return real(values, keys, config, engine, *args, **kwargs)
+
+    monkeypatch.setattr(dropfit._jit, "numba", None)
+    monkeypatch.setattr(dropfit, "_model", spy)
+    cfg = resolve("S12")
+    truth = {"fork.spring.preload_N": cfg["fork.spring.preload_N"] * 1.1}
+    rec = make_drop_record("S12", truth, duration=0.3, engine="ode", seed=2)
+    dropfit.fit_drop(rec, "S12", free=list(truth), engine="mujoco", workers=1)
+    assert asked[-1] == "ode"
+    assert "fast_refined" not in asked
