@@ -16,7 +16,9 @@ from mtbmj.rolling.tire import REFRESH_DISTANCE_M, RadialTire
 
 
 class BikeCallback:
-    """Fork, shock (through the leverage curve), both tires and the drive, written into ``ctrl``."""
+    """Fork, shock (through the leverage curve), both tires and the drive, written into ``ctrl``
+    (the tire and drive forces also into ``xfrc_applied``); the rider's legs and arms into
+    ``qfrc_applied`` (``limb_forces``)."""
 
     def __init__(self, bike: Bike, fork_law, shock_law, front: RadialTire, rear: RadialTire, drive: Drive,
                  speed: float, traction: float, refresh: float):
@@ -40,6 +42,11 @@ class BikeCallback:
         self.a_shock_probe = a("shock_force_probe")
         self.sites = (int(m.site("front_axle").id), int(m.site("rear_axle").id))
         self.frame = int(m.body("frame").id)
+        # the legs and arms: (frame site, rider site, k, c, rest), on the rider's two joints
+        self.limbs = tuple((int(m.site(lb.frame_site).id), int(m.site(lb.rider_site).id), lb.stiffness, lb.damping,
+                            lb.rest) for lb in bike.limbs)
+        self.rider_joints = (int(m.joint("rider_z").id), int(m.joint("rider_pitch").id))
+        self.rider_dofs = (bike.dof_index("rider_z"), bike.dof_index("rider_pitch"))
         # the tire and drive forces act at the wheels' centres (the axles): xfrc_applied on these bodies
         self.wheels = (int(m.body("front_wheel").id), int(m.body("rear_wheel").id))
         # the centre of mass's horizontal speed is the X row of M qvel over the whole mass (the
@@ -71,10 +78,37 @@ class BikeCallback:
         local = rot.T @ rel
         return local[2] - self.rear_z0, -(local[0] - self.pivot_x)
 
+    def limb_forces(self, d) -> tuple[float, float]:
+        """The legs' and arms' generalized forces on rider_z and rider_pitch (N, N m): for each, the
+        length L between its sites, dL/dq of the slide (the unit vector along the limb on the
+        slide's axis) and of the hinge (on the axis crossed with the rider site's arm from the
+        hinge), dL/dt from those and the joints' speeds, f = -k (L - rest) - c dL/dt."""
+        jz, jp = self.rider_joints
+        ax, az = d.xaxis[jz], d.xaxis[jp]
+        anchor = d.xanchor[jp]
+        vz, vp = d.qvel[self.rider_dofs[0]], d.qvel[self.rider_dofs[1]]
+        qz = qp = 0.0
+        for fs, rs, k, c, rest in self.limbs:
+            p, q = d.site_xpos[rs], d.site_xpos[fs]
+            dx, dy, dz = p[0] - q[0], p[1] - q[1], p[2] - q[2]
+            length = math.sqrt(dx * dx + dy * dy + dz * dz)
+            ux, uy, uz = dx / length, dy / length, dz / length
+            rx, ry, rz = p[0] - anchor[0], p[1] - anchor[1], p[2] - anchor[2]
+            d_slide = ux * ax[0] + uy * ax[1] + uz * ax[2]
+            d_hinge = (ux * (az[1] * rz - az[2] * ry) + uy * (az[2] * rx - az[0] * rz)
+                       + uz * (az[0] * ry - az[1] * rx))
+            f = -k * (length - rest) - c * (d_slide * vz + d_hinge * vp)
+            qz += f * d_slide
+            qp += f * d_hinge
+        return qz, qp
+
     def __call__(self, m, d):
         if m is not self._model and m._address != self._address:
             return
         self.calls += 1
+        qz, qp = self.limb_forces(d)
+        d.qfrc_applied[self.rider_dofs[0]] = qz
+        d.qfrc_applied[self.rider_dofs[1]] = qp
         qpos, qvel, act, ctrl = d.qpos, d.qvel, d.act, d.ctrl
         t = d.time
         x, v = qpos[self.fq], qvel[self.fv]

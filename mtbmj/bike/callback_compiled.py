@@ -1,6 +1,6 @@
 """Compiled bike callback: ``mtbmj.bike.callback.BikeCallback`` (fork, shock through the leverage
-curve, both radial tires with their patch search, the rider's drive) as native code that MuJoCo
-calls every evaluation.
+curve, both radial tires with their patch search, the rider's drive, its legs and arms) as native
+code that MuJoCo calls every evaluation.
 
 ``BikeCallback`` (Python) stays the specification and the fallback; this module evaluates the same
 arithmetic in the same order on the same schedule (each tire's contact patches searched afresh
@@ -24,7 +24,8 @@ Design (the rolling front end's, ``mtbmj.rolling.callback_compiled``):
 * ``mjData`` is read through byte offsets: the front end's fields from
   ``controllers.native_data.mjdata_layout``, and the kinematics the Python callback reads from
   MuJoCo (``xpos``, ``xmat``, ``xipos``, ``site_xpos``, ``cvel``, ``subtree_com``), and
-  ``xfrc_applied`` (where the tire and drive forces go, at the wheels' centres), at their places
+  ``xfrc_applied`` (where the tire and drive forces go, at the wheels' centres), ``xanchor``,
+  ``xaxis`` and ``qfrc_applied`` (the rider's legs and arms on its joints), at their places
   among ``mjData``'s pointer fields (``mujoco.introspect``'s field order), each checked against the
   live arrays of a model before first use. The axle velocities are ``mj_objectVelocity``'s
   arithmetic on ``cvel`` (the site's linear velocity, world axes), the centre of mass's horizontal
@@ -54,7 +55,8 @@ from mtbmj.rolling import callback_compiled as rolling
 from mtbmj.rolling.callback_compiled import MAX_PATCHES, UnsupportedRolling
 
 SLOTS = 64
-KINEMATICS = ("xpos", "xmat", "xipos", "site_xpos", "cvel", "subtree_com", "xfrc_applied")
+KINEMATICS = ("xpos", "xmat", "xipos", "site_xpos", "cvel", "subtree_com", "xfrc_applied", "xanchor", "xaxis",
+              "qfrc_applied")
 WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front end's slot layout
 
 # integer row of a slot
@@ -62,22 +64,23 @@ WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front en
  R_A_TZ1, R_A_DX, R_A_DZ, R_A_PROBE0, R_A_PROBE1, R_A_SHOCK_PROBE, R_SITE0, R_SITE1, R_SBODY0, R_SBODY1, R_FRAME,
  R_ROOT0, R_ROOT1, R_NBODY, R_MASS, R_FORK_STATE, R_SHOCK_STATE, R_DRIVE, R_NPTS, R_TX, R_TZ, R_SCRATCH, R_CAP,
  R_NS, R_SX, R_SZ, R_NL, R_LW, R_LR, R_LS, R_CALLS, R_REFRESHES, R_VALID0, R_VALID1, R_BODYROOT, R_WHEEL0,
- R_WHEEL1) = range(50)
-INT_WIDTH = 50
+ R_WHEEL1, R_LIMB_F0, R_LIMB_R0, R_LIMB_F1, R_LIMB_R1, R_JZ, R_JP, R_VZ, R_VP) = range(58)
+INT_WIDTH = 58
 # float row of a slot
 (F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_REACH, F_LO0, F_HI0, F_LO1, F_HI1,
  F_NEXT0, F_NEXT1, F_LAST0, F_LAST1, F_REFRESH_DISTANCE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER,
- F_DRIVE_BRAKE) = range(20)
-FLOAT_WIDTH = 24
+ F_DRIVE_BRAKE, F_LIMB_K0, F_LIMB_C0, F_LIMB_REST0, F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1) = range(26)
+FLOAT_WIDTH = 28
 
-REGISTRY = Registry("mtbmj_bike_registry_v2", SLOTS,
+REGISTRY = Registry("mtbmj_bike_registry_v3", SLOTS,
                     {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
                      "wheel_ints": (2 * WI, np.int64), "wheel_floats": (2 * WF, np.float64),
                      "fork_ints": (LAW_INT_WIDTH, np.int64), "fork_floats": (LAW_FLOAT_WIDTH, np.float64),
                      "shock_ints": (LAW_INT_WIDTH, np.int64), "shock_floats": (LAW_FLOAT_WIDTH, np.float64)},
                     ("qpos", "qvel", "act", "ctrl", "time") + KINEMATICS)
 (M_USED, M_INTS, M_FLOATS, M_WINTS, M_WFLOATS, M_FINTS, M_FFLOATS, M_SINTS, M_SFLOATS, M_QPOS, M_QVEL, M_ACT,
- M_CTRL, M_TIME, M_XPOS, M_XMAT, M_XIPOS, M_SITE_XPOS, M_CVEL, M_SUBTREE_COM, M_XFRC) = (
+ M_CTRL, M_TIME, M_XPOS, M_XMAT, M_XIPOS, M_SITE_XPOS, M_CVEL, M_SUBTREE_COM, M_XFRC, M_XANCHOR, M_XAXIS,
+ M_QFRC) = (
     REGISTRY.index[name] for name in ("used", "ints", "floats", "wheel_ints", "wheel_floats", "fork_ints",
                                       "fork_floats", "shock_ints", "shock_floats", "qpos", "qvel", "act", "ctrl",
                                       "time") + KINEMATICS)
@@ -173,6 +176,30 @@ if _numba is not None:
         return p
 
     @kernel
+    def limb(site_xpos, xaxis, xanchor, I, F, k, vz, vp):
+        """(f dL/dz, f dL/dth) of limb k on the rider's joints: BikeCallback.limb_forces."""
+        p = 3 * I[R_LIMB_R0 + 2 * k]
+        q = 3 * I[R_LIMB_F0 + 2 * k]
+        dx = site_xpos[p] - site_xpos[q]
+        dy = site_xpos[p + 1] - site_xpos[q + 1]
+        dz = site_xpos[p + 2] - site_xpos[q + 2]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        ux = dx / length
+        uy = dy / length
+        uz = dz / length
+        a = 3 * I[R_JZ]
+        h = 3 * I[R_JP]
+        rx = site_xpos[p] - xanchor[h]
+        ry = site_xpos[p + 1] - xanchor[h + 1]
+        rz = site_xpos[p + 2] - xanchor[h + 2]
+        d_slide = ux * xaxis[a] + uy * xaxis[a + 1] + uz * xaxis[a + 2]
+        d_hinge = (ux * (xaxis[h + 1] * rz - xaxis[h + 2] * ry) + uy * (xaxis[h + 2] * rx - xaxis[h] * rz)
+                   + uz * (xaxis[h] * ry - xaxis[h + 1] * rx))
+        o = 3 * k
+        f = -F[F_LIMB_K0 + o] * (length - F[F_LIMB_REST0 + o]) - F[F_LIMB_C0 + o] * (d_slide * vz + d_hinge * vp)
+        return f * d_slide, f * d_hinge
+
+    @kernel
     def tire_on_patches(WI_, WF_, cx, cz, vx, vz):
         """RadialTire.force on the wheel row's patches: (fx, fz, deepest deflection)."""
         r = WF_[_F_RADIUS]
@@ -231,6 +258,16 @@ if _numba is not None:
         subtree_com = _pointer_field(d, _registry(M_SUBTREE_COM))
         xfrc = _pointer_field(d, _registry(M_XFRC))
         t = _f64_pointer(_address_of(d) + _registry(M_TIME))[0]
+        # the rider's legs and arms, on its two joints (BikeCallback.limb_forces)
+        xanchor = _pointer_field(d, _registry(M_XANCHOR))
+        xaxis = _pointer_field(d, _registry(M_XAXIS))
+        qfrc = _pointer_field(d, _registry(M_QFRC))
+        vz = qvel[I[R_VZ]]
+        vp = qvel[I[R_VP]]
+        qz0, qp0 = limb(site_xpos, xaxis, xanchor, I, F, 0, vz, vp)
+        qz1, qp1 = limb(site_xpos, xaxis, xanchor, I, F, 1, vz, vp)
+        qfrc[I[R_VZ]] = 0.0 + qz0 + qz1
+        qfrc[I[R_VP]] = 0.0 + qp0 + qp1
         # the fork
         x = qpos[I[R_FQ]]
         v = qvel[I[R_FV]]
@@ -443,6 +480,11 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
             R_SCRATCH: self._scratch.ctypes.data, R_CAP: cap, R_NS: self._sx.size, R_SX: self._sx.ctypes.data,
             R_SZ: self._sz.ctypes.data, R_NL: self._lw.size, R_LW: self._lw.ctypes.data,
             R_LR: self._lr.ctypes.data, R_LS: self._ls.ctypes.data}
+        legs, arms = bike.limbs
+        values.update({R_LIMB_F0: int(m.site(legs.frame_site).id), R_LIMB_R0: int(m.site(legs.rider_site).id),
+                       R_LIMB_F1: int(m.site(arms.frame_site).id), R_LIMB_R1: int(m.site(arms.rider_site).id),
+                       R_JZ: int(m.joint("rider_z").id), R_JP: int(m.joint("rider_pitch").id),
+                       R_VZ: bike.dof_index("rider_z"), R_VP: bike.dof_index("rider_pitch")})
         values[R_ACT_F] = int(m.actuator_actadr[values[R_A_FS]])
         values[R_ACT_S] = int(m.actuator_actadr[values[R_A_SS]])
         values[R_ROOT0] = int(m.body_rootid[values[R_SBODY0]])
@@ -457,6 +499,8 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
         floats[[F_NEXT0, F_NEXT1]] = -math.inf
         floats[[F_LAST0, F_LAST1]] = math.inf
         floats[F_REFRESH_DISTANCE] = tire_model.REFRESH_DISTANCE_M
+        floats[[F_LIMB_K0, F_LIMB_C0, F_LIMB_REST0]] = [legs.stiffness, legs.damping, legs.rest]
+        floats[[F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1]] = [arms.stiffness, arms.damping, arms.rest]
         floats[[F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE]] = [drive.kv, drive.push, drive.power,
                                                                           drive.brake]
         wheel_ints = np.zeros(2 * WI, dtype=np.int64)

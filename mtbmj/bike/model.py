@@ -1,8 +1,9 @@
 """The planar bike in MuJoCo: ``mjcf/bike_scene.xml`` rewritten for a bike description.
 
 ``build_bike(spec, tire_radius, terrain, setup)`` loads the scene with ``mujoco.MjSpec`` (as the
-rolling front end does), sets every position, mass, inertia, axis and the rider's springs from the
-``BikeSpec``, adds the terrain as a visual heightfield and compiles. The bike is placed with its
+rolling front end does), sets every position, mass, inertia and axis from the ``BikeSpec``, adds
+the terrain as a visual heightfield and compiles. The rider's legs and arms (``Limb``) are the
+control callback's forces; the scene draws them as tendons. The bike is placed with its
 front axle over ``start_x`` and its front tire just touching the ground at qpos = 0 (both ends at
 full extension, frame level); ``mtbmj.bike.run`` then settles it to its static equilibrium.
 
@@ -72,6 +73,30 @@ class Bike:
     def dof_index(self, name: str) -> int:
         return int(self.model.joint(name).dofadr[0])
 
+    @property
+    def limbs(self) -> tuple[Limb, Limb]:
+        """The legs and the arms (``Limb``): the rider's springs, which the control callback applies."""
+        r = self.spec.rider
+        return (Limb("legs", "pedals", "hips", r.leg_stiffness, r.leg_damping, self.legs_rest),
+                Limb("arms", "bars", "shoulders", r.arm_stiffness, r.arm_damping, self.arms_rest))
+
+
+@dataclass(frozen=True)
+class Limb:
+    """The rider's legs or arms: a linear spring-damper along the straight line from a site on the
+    frame to a site on the rider (SI). Both sites are fixed in their bodies and the rider hangs on
+    the frame by its own two joints (``rider_z``, ``rider_pitch``), so the length depends on those
+    joints alone, and the force acts on them alone: Q_j = f dL/dq_j with f = -k (L - rest) - c dL/dt
+    (what a MuJoCo spatial tendon with this stiffness and damping gives, ``tests/test_bike_limbs.py``).
+    The callback applies it as ``qfrc_applied``: a tendon's own computation took 15 % of a step."""
+
+    name: str
+    frame_site: str
+    rider_site: str
+    stiffness: float
+    damping: float
+    rest: float
+
 
 def crown(spec, fork_length: float) -> tuple[float, float]:
     """The fork crown (frame coordinates): from the front axle at full extension back by the fork's
@@ -86,9 +111,11 @@ def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, g
                start_x: float | None = None, fork_length: float = 0.58, visual: bool = True) -> Bike:
     """Compile the bike scene for ``spec`` on ``terrain``; the front axle starts over ``start_x``
     (default the terrain's start); ``fork_length`` (axle to crown, m) places the drawn stanchions.
-    ``visual=False`` leaves out every geom (the drawn bike and the terrain): nothing in the physics
-    depends on them (the inertias are given, nothing collides), and MuJoCo then places no geoms at
-    each evaluation (~4 % of a step); the joints, bodies and their numbering are the same."""
+    ``visual=False`` leaves out every geom (the drawn bike and the terrain) and the drawn legs and
+    arms (tendons): nothing in the physics depends on them (the inertias are given, nothing
+    collides, the callback applies the limbs' forces), and MuJoCo then places no geoms and computes
+    no tendon at each evaluation (~4 % and ~15 % of a step); the joints, bodies and their numbering
+    are the same."""
     ms = mujoco.MjSpec.from_file(str(mjcf.path(SCENE)))
     ms.option.timestep = timestep
     ms.option.integrator = integrator
@@ -150,28 +177,13 @@ def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, g
     ms.site("shoulders").pos = [shoulders[0], 0.0, shoulders[1]]
     ms.geom("torso").fromto = [hips[0], 0.0, hips[1], shoulders[0], 0.0, shoulders[1]]
     legs_rest, arms_rest = rider_rest_lengths(spec, gravity)
-    for tendon in ms.tendons:
-        if tendon.name == "legs":
-            _spring(tendon, r.leg_stiffness, r.leg_damping, legs_rest)
-        elif tendon.name == "arms":
-            _spring(tendon, r.arm_stiffness, r.arm_damping, arms_rest)
     if visual:
         _terrain_visual(ms, terrain)
     else:
-        for geom in list(ms.geoms):
-            ms.delete(geom)
+        for item in list(ms.geoms) + list(ms.tendons):
+            ms.delete(item)
     model = ms.compile()
     return Bike(model, spec, x0, z0, float(tire_radius), legs_rest, arms_rest)
-
-
-def _spring(tendon, stiffness: float, damping: float, rest: float) -> None:
-    """A linear spring-damper: mujoco 3 takes scalars, mujoco 4 polynomial coefficients (k, 0, 0)."""
-    if np.ndim(tendon.stiffness):
-        tendon.stiffness = [stiffness] + [0.0] * (len(tendon.stiffness) - 1)
-        tendon.damping = [damping] + [0.0] * (len(tendon.damping) - 1)
-    else:
-        tendon.stiffness, tendon.damping = stiffness, damping
-    tendon.springlength = [rest, rest]
 
 
 def _terrain_visual(ms, terrain) -> None:
@@ -187,4 +199,4 @@ def _terrain_visual(ms, terrain) -> None:
                           pos=[(x_lo + x_hi) / 2, 0.0, lo], contype=0, conaffinity=0, group=1, material="terrain")
 
 
-__all__ = ["Bike", "build_bike", "crown", "frame_body", "rider_rest_lengths", "JOINTS", "LOWER_INERTIA", "PEDAL_SHARE"]
+__all__ = ["Bike", "Limb", "build_bike", "crown", "frame_body", "rider_rest_lengths", "JOINTS", "LOWER_INERTIA", "PEDAL_SHARE"]
