@@ -59,3 +59,30 @@ def test_multi_start_recovers_the_truth(record):
         # about one time in seven, so this checks the 3-sigma interval (the intervals' coverage is
         # measured on 20 records by benchmarks/interval_coverage.py).
         assert abs(res.values[key] - true) <= 3.0 * res.stderr[key], key
+
+
+def test_fine_steps_of_several_drops_stepped_together_equal_run_drop(monkeypatch):
+    """With threads, drops at their fine steps go through one rollout call together
+    (``engine_batch._fine_together``), each for its own plan's steps at its own fine step, some
+    padded to the longest: every drop still equals its ``run_drop``."""
+    from mtbmj.drop import engine_batch
+
+    calls = []
+    real = engine_batch._fine_together
+
+    def spy(runs, datas, pool):
+        calls.append([(r.plan.size(r.steps - r.done), r.plan.substeps) for r in runs])
+        return real(runs, datas, pool)
+
+    monkeypatch.setattr(engine_batch, "_fine_together", spy)
+    cfg = resolve("S12")
+    sets = [{}, {"sled.drop_height_mm": 70.0}, {"sled.drop_height_mm": 130.0, "fork.friction.coulomb_N": 20.0},
+            {"fork.spring.preload_N": 150.0, "tire.impact_rate_N_per_mm": 95.0}]
+    traces = drop_traces(cfg, sets, 0.5, threads=2)
+    assert calls, "no two drops were at their fine steps together"
+    assert any(len({n * k for n, k in c}) > 1 for c in calls), "no call padded a shorter drop"
+    for over, tr in zip(sets, traces):
+        signals = run_drop(cfg, "mujoco", overrides=over, duration=0.5).signals
+        assert np.array_equal(tr["time_s"], signals["time_s"])
+        for name in ("sled_mm", "fork_mm", "tire_mm"):
+            assert np.max(np.abs(tr[name] - signals[name])) <= 1e-9, (over, name)

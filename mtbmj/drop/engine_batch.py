@@ -147,8 +147,11 @@ def step_group(runs: list[_Run], datas, pool, spec) -> None:
                 else:
                     pool.rollout(models, datas, start, nstep=n, state=out)
                 made += [(r, states, None) for r, states in zip(coarse, out)]
-            for r in active:
-                if r.plan.fine:
+            fine = [r for r in active if r.plan.fine]
+            if pool is not None and len(fine) > 1:
+                made += _fine_together(fine, datas, pool)
+            else:
+                for r in fine:
                     n = r.plan.size(r.steps - r.done)
                     states, fine_states = engine_mujoco.fine_rollout(r.scene.model, datas[0], r.record[r.done][None, :],
                                                                      n, r.plan.substeps)
@@ -192,6 +195,31 @@ def step_group(runs: list[_Run], datas, pool, spec) -> None:
                     d.warning.number[:] = 0
                 messages.clear()
             active = still
+
+
+def _fine_together(runs: list[_Run], datas, pool) -> list[tuple]:
+    """The runs at their fine steps in one rollout call on the pool's threads: each its own plan's
+    output steps (``plan.size``) at its own fine step (its model's step over ``plan.substeps``), as
+    ``engine_mujoco.fine_rollout`` steps it alone; the call makes as many fine steps as the longest
+    needs, and a run's steps past its own are dropped (its decisions are its plan's, unchanged).
+    (run, output states, fine states) per run."""
+    sizes = [(r.plan.size(r.steps - r.done), r.plan.substeps) for r in runs]
+    nstep = max(n * k for n, k in sizes)
+    models = [r.scene.model for r in runs]
+    steps = [m.opt.timestep for m in models]
+    start = np.array([r.record[r.done] for r in runs])
+    try:
+        for m, h, (_, k) in zip(models, steps, sizes):
+            m.opt.timestep = h / k
+        out = pool.rollout(models, datas, start, nstep=nstep)[0]
+    finally:
+        for m, h in zip(models, steps):
+            m.opt.timestep = h
+    made = []
+    for r, states, (n, k) in zip(runs, out, sizes):
+        fine_states = states[: n * k]
+        made.append((r, fine_states[k - 1:: k], fine_states))
+    return made
 
 
 def trace_of(run: _Run) -> RawTrace:
