@@ -12,8 +12,9 @@ How a batch runs
   compiled once per distinct geometry/mass/solver set and copied (the compiled model depends on
   nothing else; the tire's solref is set per drop).
 * **Step** in rounds: every round advances the drops at their coarse step by the same number
-  of steps in one rollout call (``threads`` MjData, i.e. threads, per process), and each drop
-  at its fine step (near a stop, the rim, touchdown, fast sliding) in a call of its own; the
+  of steps in one rollout call (``threads`` MjData, i.e. threads, per process), and the drops
+  at their fine steps (near a stop, the rim, touchdown, fast sliding) in one call of their own
+  on those threads (``_fine_together``; on one thread, a call each); the
   decisions are the engine's own (``stepping.Stepping``): where a drop's chunk is cut (a
   zone ahead, the tire-law switch), it keeps its states up to that step, its model gets the new
   tire solref if the law switched, and it goes on from there in the next round (steps past the
