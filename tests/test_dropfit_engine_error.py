@@ -56,6 +56,8 @@ def test_fast_fit_intervals_as_with_the_reference_run(record, monkeypatch):
     and never narrower, and engine shifts of the reference's sign and size."""
     truth, rec = record
     fit = dropfit.fit_drop(rec, "S12", free=list(truth), engine="fast", workers=1)
+    assert fit.extra["engine_error_run"] == "fast_refined"
+    assert dropfit.error_note(fit.extra) == "against the fast engine stepped twice as finely at the optimum, its difference doubled"
     monkeypatch.setitem(dropfit.OTHER_ENGINE, "fast", "ode")
     monkeypatch.setitem(dropfit.ERROR_SCALE, "fast", 1.0)
     with_ode = dropfit.fit_drop(rec, "S12", free=list(truth), engine="fast", workers=1)
@@ -85,8 +87,10 @@ def test_mujoco_fit_intervals_as_with_the_reference_run(record, monkeypatch):
     measures it against the reference's run."""
     truth, rec = record
     fit = dropfit.fit_drop(rec, "S12", free=list(truth), engine="mujoco", workers=1)
+    assert dropfit.error_note(fit.extra) == "against the fast engine stepped twice as finely at the optimum"
     monkeypatch.setitem(dropfit.OTHER_ENGINE, "mujoco", "ode")
     with_ode = dropfit.fit_drop(rec, "S12", free=list(truth), engine="mujoco", workers=1)
+    assert dropfit.error_note(with_ode.extra) == "against the ODE reference at the optimum"
     for key in truth:
         assert fit.values[key] == with_ode.values[key]
         lo, hi = fit.extra["ci95"][key]
@@ -114,6 +118,10 @@ def test_without_numba_the_reference_measures_the_error(monkeypatch):
     cfg = resolve("S12")
     truth = {"fork.spring.preload_N": cfg["fork.spring.preload_N"] * 1.1}
     rec = make_drop_record("S12", truth, duration=0.3, engine="ode", seed=2)
-    dropfit.fit_drop(rec, "S12", free=list(truth), engine="mujoco", workers=1)
-    assert asked[-1] == "ode"
+    fit = dropfit.fit_drop(rec, "S12", free=list(truth), engine="mujoco", workers=1)
+    assert asked[-1] == "ode" and fit.extra["engine_error_run"] == "ode"
     assert "fast_refined" not in asked
+
+
+def test_an_unmeasured_engine_error_is_said():
+    assert dropfit.error_note({"engine": "fast", "engine_error_run": None}).startswith("not measured")

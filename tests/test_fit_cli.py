@@ -153,7 +153,9 @@ def test_drop_fit_on_the_fast_engine_end_to_end(tmp_path, capsys):
     for key, value in truth.items():
         low, high = fit["ci95"][key]
         assert low <= value <= high and high - low < 0.01 * value, (key, low, high)
-    capsys.readouterr()
+    # the report says what measured the engine's own error
+    said = capsys.readouterr().out + (out / "fit.json").read_text()
+    assert "engine's own error (against the fast engine stepped twice as finely at the optimum, its difference doubled)" in said
     assert cli.main(["drop", str(out / "fit.toml"), "--quiet", "--out", str(tmp_path / "run")]) == 0
 
 

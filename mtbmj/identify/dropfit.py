@@ -23,8 +23,9 @@ filter colours the noise; sled, fork and tire share the pots; the engine has its
 the covariance is the Newey-West sandwich of the scores over time (``fitresult.hac_covariance``,
 Bartlett bandwidth by Andrews' rule, channels pooled per time stamp), plus the squares of two
 biases carried to the parameters through the Jacobian: the engine's own error (the other engine
-run once at the optimum, ``engine_error``; for the fast engine, which integrates the reference's
-equations, the same equations stepped finer: ``OTHER_ENGINE``) and one standard error of the touch time. The Student t
+run once at the optimum, ``engine_error``: for the MuJoCo and the fast engines the reference's
+equations stepped finely by the fast engine, for the ODE reference MuJoCo; ``OTHER_ENGINE``) and one
+standard error of the touch time. The Student t
 quantile uses the effective number of independent samples (time samples / bandwidth).
 ``extra["stderr_white"]`` keeps the white-in-time channel sandwich, ``extra["stderr_iid"]`` the
 plain ``covariance_stderr``. ``benchmarks/interval_coverage.py`` measures the coverage. The intervals
@@ -87,6 +88,8 @@ FIT_FROM_S = 0.005  # fitted from 5 ms after touch: before, a logger's filter st
 OTHER_ENGINE = {"mujoco": "fast_refined", "ode": "mujoco", "fast": "fast_refined"}
 REFINE_FAST = 2
 ERROR_SCALE = {"fast": REFINE_FAST / (REFINE_FAST - 1)}
+ERROR_RUNS = {"fast_refined": "the fast engine stepped twice as finely", "ode": "the ODE reference",
+              "mujoco": "MuJoCo"}  # how a fit's report names the run that measured its engine's error
 # keys that take whole numbers (spacers, adjuster clicks): a least-squares step cannot move them
 WHOLE_NUMBER_KEYS = ("fork.spring.tokens",)
 # the relative accuracy a drop record can fix a parameter to, whatever its noise: the model's own
@@ -97,6 +100,15 @@ MODEL_CHECK_ALLOWANCE_MM = 0.1  # the crosscheck tolerance: what the engines may
 IMPACT_SPEED_TOLERANCE = 0.05  # the record's impact speed vs the drop height's: beyond 5 %, they disagree
 MODEL_KEYS = ("fork.spring.model", "fork.spring.top_out", "fork.spring.preload", "fork.damper.model",
               "fork.friction.model", "tire.model")
+
+def error_note(extra: Mapping) -> str:
+    """How a fit's report says what measured its engine's own error (``extra`` of ``fit_drop``)."""
+    run = extra.get("engine_error_run")
+    if run is None:
+        return "not measured: the run at the optimum failed or was not asked for"
+    doubled = ", its difference doubled" if run == "fast_refined" and extra.get("engine") == "fast" else ""
+    return f"against {ERROR_RUNS[run]} at the optimum{doubled}"
+
 
 # --- the model run (module level so worker processes can call it) ------------------------------
 
@@ -378,6 +390,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
     model = cache[sol.x.tobytes()] if sol.x.tobytes() in cache else _model(sol.x, free, cfg, engine, duration,
                                                                             times, channels)
     engine_shift = np.zeros(n)
+    error_run = None  # what measured the engine's own error (ERROR_RUNS' keys), None: not measured
     if engine_error and not isinstance(model, str):
         # the engine's own error: the other engine at the optimum, its difference carried to the
         # parameters through the same Jacobian (a bias, added to the covariance as its square)
@@ -386,6 +399,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
             other_engine = "ode"
         other = _model(sol.x, free, cfg, other_engine, duration, times, channels)
         if not isinstance(other, str):
+            error_run = other_engine
             engine_shift = np.linalg.pinv(final_jac) @ ((other - model) * ERROR_SCALE.get(engine, 1.0))
             cov = cov + np.outer(engine_shift, engine_shift)
     touch_shift = np.zeros(n)
@@ -436,6 +450,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
             "stderr_iid": {k: float(e) for k, e in zip(free, std_iid)},
             "stderr_white": {k: float(e) for k, e in zip(free, std_white)},
             "engine_error_shift": {k: float(e) for k, e in zip(free, engine_shift)},
+            "engine_error_run": error_run,
             "touch_error_shift": {k: float(e) for k, e in zip(free, touch_shift)},
             "hac_bandwidth_s": float(hac["bandwidth_samples"] * np.median(np.diff(times))),
             "effective_dof": float(dof), "time_zero": aligned.touch.to_dict() if aligned.touch else None,

@@ -367,6 +367,7 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
                 _attach_check(results["static"], check)
         return Identification("tire", records, results, order, lambda: tire.plot_tire(drops[0], results))
     from mtbmj.identify import dropfit
+    from mtbmj.identify.dropfit import error_note
 
     notes = []
     if not free:
@@ -378,7 +379,7 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
     if x.get("time_zero"):
         notes.append(x["time_zero"]["description"])
     notes.append(f"95 % intervals: Newey-West over residuals correlated for {x['hac_bandwidth_s'] * 1e3:.1f} ms, "
-                 f"plus the engine's own error (another engine, or for the fast engine a finer step, at the optimum) and the touch's uncertainty; "
+                 f"plus the engine's own error ({error_note(x)}) and the touch's uncertainty; "
                  f"Student t on {x['effective_dof']:.0f} effective samples")
     notes += x.get("notes", [])
     notes.append("bounds: " + "; ".join(f"{k} {a:g} to {b:g}" for k, (a, b) in x["bounds"].items())
