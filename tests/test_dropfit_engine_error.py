@@ -86,6 +86,7 @@ def test_mujoco_fit_intervals_as_with_the_reference_run(record, monkeypatch):
     gives measured against the ODE reference's run, within 1 %; and without numba, the fit
     measures it against the reference's run."""
     truth, rec = record
+    engine_fast.kernel()  # loaded in this process: the refined run is taken whatever numba's disk cache holds
     fit = dropfit.fit_drop(rec, "S12", free=list(truth), engine="mujoco", workers=1)
     assert dropfit.error_note(fit.extra) == "against the fast engine stepped twice as finely at the optimum"
     monkeypatch.setitem(dropfit.OTHER_ENGINE, "mujoco", "ode")
@@ -125,3 +126,21 @@ def test_without_numba_the_reference_measures_the_error(monkeypatch):
 
 def test_an_unmeasured_engine_error_is_said():
     assert dropfit.error_note({"engine": "fast", "engine_error_run": None}).startswith("not measured")
+
+
+def test_a_mujoco_fit_does_not_compile_the_fast_engine_to_measure_its_error(monkeypatch):
+    """Where the fast engine's compiled code is neither loaded nor cached, a MuJoCo fit measures its
+    error against the ODE reference (a compile would cost more); where it is, against the refined run."""
+    from mtbmj.controllers import jit
+    from mtbmj.drop import engine_fast
+
+    monkeypatch.setattr(engine_fast, "_WARM", False)
+    monkeypatch.setattr(jit, "cold", lambda dispatcher: True)
+    assert dropfit.error_engine("mujoco") == "ode"
+    assert dropfit.error_engine("fast") == "fast_refined"  # its own kernel is what the fit ran
+    monkeypatch.setattr(jit, "CACHE", False)  # no disk cache: every process would compile
+    monkeypatch.setattr(jit, "cold", lambda dispatcher: False)
+    assert dropfit.error_engine("mujoco") == "ode"
+    monkeypatch.setattr(engine_fast, "_WARM", True)  # loaded in this process
+    assert dropfit.error_engine("mujoco") == "fast_refined"
+    assert dropfit.error_engine("ode") == "mujoco"

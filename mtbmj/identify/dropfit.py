@@ -83,8 +83,9 @@ FIT_FROM_S = 0.005  # fitted from 5 ms after touch: before, a logger's filter st
 # it where it falls as the step's fourth power. That refined run is also what MuJoCo's error is
 # measured against: at S12 away from its defaults it is 0.3 um from the ODE reference's own run
 # (whose tolerance shows there), MuJoCo 1.2 um from the reference and 0.9 um from it; it costs a
-# tenth of the reference's run. Without numba, the reference's run. The ODE fit is measured against
-# MuJoCo. tests/test_dropfit_engine_error.py
+# tenth of the reference's run. Without numba, or (for MuJoCo) where the fast engine would have to be
+# compiled first, the reference's run (error_engine). The ODE fit is measured against MuJoCo.
+# tests/test_dropfit_engine_error.py
 OTHER_ENGINE = {"mujoco": "fast_refined", "ode": "mujoco", "fast": "fast_refined"}
 REFINE_FAST = 2
 ERROR_SCALE = {"fast": REFINE_FAST / (REFINE_FAST - 1)}
@@ -100,6 +101,22 @@ MODEL_CHECK_ALLOWANCE_MM = 0.1  # the crosscheck tolerance: what the engines may
 IMPACT_SPEED_TOLERANCE = 0.05  # the record's impact speed vs the drop height's: beyond 5 %, they disagree
 MODEL_KEYS = ("fork.spring.model", "fork.spring.top_out", "fork.spring.preload", "fork.damper.model",
               "fork.friction.model", "tire.model")
+
+def error_engine(engine: str) -> str:
+    """The run that measures ``engine``'s own error (``OTHER_ENGINE``). For a fit on another engine
+    than the fast one, its refined run only where the fast engine's compiled code is loaded or in
+    numba's disk cache: compiling it (about 10 s, and in every process of an install without a
+    cache directory) would cost more than the ODE reference's run, which is taken instead."""
+    other = OTHER_ENGINE[engine]
+    if other != "fast_refined" or engine == "fast":
+        return other
+    if _jit.numba is None:
+        return "ode"
+    from mtbmj.drop import engine_fast
+
+    ready = engine_fast._WARM or (bool(_jit.CACHE) and not _jit.cold(engine_fast.integrate))
+    return other if ready else "ode"
+
 
 def error_note(extra: Mapping) -> str:
     """How a fit's report says what measured its engine's own error (``extra`` of ``fit_drop``)."""
@@ -394,9 +411,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
     if engine_error and not isinstance(model, str):
         # the engine's own error: the other engine at the optimum, its difference carried to the
         # parameters through the same Jacobian (a bias, added to the covariance as its square)
-        other_engine = OTHER_ENGINE[engine]
-        if other_engine == "fast_refined" and _jit.numba is None:
-            other_engine = "ode"
+        other_engine = error_engine(engine)
         other = _model(sol.x, free, cfg, other_engine, duration, times, channels)
         if not isinstance(other, str):
             error_run = other_engine
