@@ -241,6 +241,14 @@ def kernel():
     return integrate
 
 
+def ready() -> bool:
+    """Whether the compiled integrator runs here without compiling first: loaded in this process, or
+    in numba's disk cache for these sources (``controllers.jit.cold``)."""
+    if _numba is None:
+        return False
+    return _WARM or (bool(_jit.CACHE) and not _jit.cold(integrate))
+
+
 def _warm(integrate) -> None:
     """Run the kernel once on a trivial law so its compilation happens here, inside the notice."""
     from mtbmj.controllers import ForkLaw, LinearDamper, LinearSpring, NoFriction
@@ -328,4 +336,4 @@ def run(setup: Setup, duration: float | None = None, progress=None, refine: int 
     )
 
 
-__all__ = ["run", "kernel", "parameters", "MAX_STEP_S"]
+__all__ = ["run", "kernel", "ready", "parameters", "MAX_STEP_S"]

@@ -114,8 +114,7 @@ def error_engine(engine: str) -> str:
         return "ode"
     from mtbmj.drop import engine_fast
 
-    ready = engine_fast._WARM or (bool(_jit.CACHE) and not _jit.cold(engine_fast.integrate))
-    return other if ready else "ode"
+    return other if engine_fast.ready() else "ode"
 
 
 def error_note(extra: Mapping) -> str:
