@@ -207,15 +207,9 @@ def _fine_together(runs: list[_Run], datas, pool) -> list[tuple]:
     sizes = [(r.plan.size(r.steps - r.done), r.plan.substeps) for r in runs]
     nstep = max(n * k for n, k in sizes)
     models = [r.scene.model for r in runs]
-    steps = [m.opt.timestep for m in models]
     start = np.array([r.record[r.done] for r in runs])
-    try:
-        for m, h, (_, k) in zip(models, steps, sizes):
-            m.opt.timestep = h / k
+    with engine_mujoco.stepping_finer(models, [k for _, k in sizes]):
         out = pool.rollout(models, datas, start, nstep=nstep)[0]
-    finally:
-        for m, h in zip(models, steps):
-            m.opt.timestep = h
     made = []
     for r, states, (n, k) in zip(runs, out, sizes):
         fine_states = states[: n * k]

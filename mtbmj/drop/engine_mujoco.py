@@ -79,16 +79,25 @@ def fork_callback(model, law, kind="auto", rim=None, floor=None):
     raise ValueError(f"callback: expected one of {', '.join(CALLBACKS)} or a factory, got {kind!r}")
 
 
+@contextmanager
+def stepping_finer(models, substeps):
+    """Each of ``models`` at its step over its ``substeps`` (the steps restored after)."""
+    steps = [m.opt.timestep for m in models]
+    try:
+        for m, h, k in zip(models, steps, substeps):
+            m.opt.timestep = h / k
+        yield
+    finally:
+        for m, h in zip(models, steps):
+            m.opt.timestep = h
+
+
 def fine_rollout(model, data, start, n: int, substeps: int, nstep: int | None = None):
     """``mujoco.rollout`` of ``n`` output steps (or ``nstep`` fine steps) from one state at
     ``model.opt.timestep / substeps`` (the model's step is restored after): (the states of
     every ``substeps``-th step, all the states)."""
-    h = model.opt.timestep
-    model.opt.timestep = h / substeps
-    try:
+    with stepping_finer([model], [substeps]):
         states, _ = rollout.rollout(model, data, start, nstep=n * substeps if nstep is None else nstep)
-    finally:
-        model.opt.timestep = h
     return states[0, substeps - 1:: substeps], states[0]
 
 

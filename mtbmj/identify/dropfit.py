@@ -122,8 +122,9 @@ def error_note(extra: Mapping) -> str:
     run = extra.get("engine_error_run")
     if run is None:
         return "not measured: the run at the optimum failed or was not asked for"
-    doubled = ", its difference doubled" if run == "fast_refined" and extra.get("engine") == "fast" else ""
-    return f"against {ERROR_RUNS[run]} at the optimum{doubled}"
+    scale = ERROR_SCALE.get(extra.get("engine"), 1.0)  # as fit_drop scaled the difference
+    scaled = "" if scale == 1.0 else ", its difference doubled" if scale == 2.0 else f", its difference times {scale:g}"
+    return f"against {ERROR_RUNS[run]} at the optimum{scaled}"
 
 
 # --- the model run (module level so worker processes can call it) ------------------------------
