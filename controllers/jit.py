@@ -141,12 +141,19 @@ def _kernel_cache_class():
     return _KERNEL_CACHE or None
 
 
-def kernel(fn):
-    """``numba.njit(**OPTIONS)(fn)``, its disk cache keyed on the law sources too."""
+def kernel(fn=None, *, inline: bool = False):
+    """``numba.njit(**OPTIONS)(fn)``, its disk cache keyed on the law sources too.
+
+    ``inline=True``: compiled into every kernel that calls it, at numba's level, as the law
+    functions are (``law_function``): the same code and numbers without a call per evaluation
+    (``controllers.kernels.inlined``)."""
+    if fn is None:
+        return lambda f: kernel(f, inline=inline)
+    options = {**OPTIONS, "inline": "always"} if inline else OPTIONS
     cache = _kernel_cache_class() if CACHE else None
     if cache is None:
-        return numba.njit(**OPTIONS)(fn)
-    dispatcher = numba.njit(**{**OPTIONS, "cache": False})(fn)
+        return numba.njit(**options)(fn)
+    dispatcher = numba.njit(**{**options, "cache": False})(fn)
     dispatcher._cache = cache(fn)
     return dispatcher
 

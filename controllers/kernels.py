@@ -14,6 +14,7 @@ numba, ``available`` is False and nothing below it is defined.
 from __future__ import annotations
 
 import time
+import types
 
 from mtbmj.controllers import damper as _damper
 from mtbmj.controllers import friction as _friction
@@ -201,10 +202,15 @@ if available:
 
     @kernel
     def friction_force(I, P, v, z):
+        if I[I_FRICTION] == FR_STICKING:
+            return _sticking_force(I, P, v, z, _sticking_rate(I, P, v, z))
+        return _friction_force(I, P, v, z)
+
+    @kernel
+    def _friction_force(I, P, v, z):
+        """``friction_force`` for every law but Sticking."""
         code = I[I_FRICTION]
         o = I[I_FRICTION_AT]
-        if code == FR_STICKING:
-            return _sticking_force(I, P, v, z, _sticking_rate(I, P, v, z))
         if code == FR_NONE:
             return 0.0
         if code == FR_COULOMB:
@@ -241,15 +247,46 @@ if available:
         if I[I_FRICTION] == FR_STICKING:
             rate = _sticking_rate(I, P, v, z)
             friction = _sticking_force(I, P, v, z, rate)
-            return spring_force(I, P, x, v) + damper_force(I, P, v) + friction, rate
-        return fork_force(I, P, x, v, z), state_rate(I, P, v, z)
+        elif I[I_FRICTION] == FR_LUGRE:
+            friction, rate = _friction_force(I, P, v, z), _lugre_rate(P, I[I_FRICTION_AT], v, z)
+        else:
+            friction, rate = _friction_force(I, P, v, z), 0.0
+        # each law written once (fork_force's sum, in its order): inlined, the kernel stays small
+        return spring_force(I, P, x, v) + damper_force(I, P, v) + friction, rate
 
-    @kernel
-    def fork_forces(I, P, x, v, z, out):
+    # The dispatch above compiled into its callers (numba's inline="always"), for the loops that
+    # evaluate the law thousands of times per run: the fast engine's Runge-Kutta steps and
+    # ``fork_forces``, which scans the stroke for the step rule of every drop. Called as separately
+    # compiled functions, one evaluation of S12's fork at random points cost 2.0 times as much as
+    # inlined, of its main spring alone 5.1 times (benchmarks/law_kernels.py). The MuJoCo callbacks
+    # keep the calls: inlined there, their first compile took 45 s instead of 2 s, for a law
+    # evaluation that is a small part of a MuJoCo step.
+    def _inlined(dispatchers):
+        """Twins of ``dispatchers`` compiled into every kernel that calls them: the same code, each
+        seeing the others' twins by name (a namespace of their own, as ``jit.law_function``)."""
+        namespace = dict(globals())
+        twins = {}
+        for dispatcher in dispatchers:
+            fn = dispatcher.py_func
+            clone = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
+            clone.__qualname__, clone.__module__ = fn.__qualname__, fn.__module__
+            twins[fn.__name__] = kernel(clone, inline=True)
+        namespace.update(twins)
+        return types.SimpleNamespace(**twins), namespace
+
+    inlined, _inlined_namespace = _inlined((
+        spring_force, damper_force, sliding_level, sliding_viscous, _sticking_rate, _sticking_force, _lugre_rate,
+        _friction_force, friction_force, fork_force, state_rate, fork_force_rate))
+
+    def _fork_forces(I, P, x, v, z, out):
         """``fork_force`` along a trace: out[i] = ForkLaw.force(x[i], v[i], z[i])."""
         I, P = borrow_i64(I), borrow_f64(P)
         for i in range(x.size):
             out[i] = fork_force(I, P, x[i], v[i], z[i])
+
+    _fork_forces = types.FunctionType(_fork_forces.__code__, _inlined_namespace, "fork_forces")
+    _fork_forces.__qualname__ = _fork_forces.__name__  # numba's disk cache names its file by it
+    fork_forces = kernel(_fork_forces)
 
     @kernel
     def modal_filter(phi, g_in, g_new, r, w, u, out):

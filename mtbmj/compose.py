@@ -514,13 +514,31 @@ def _stroke(s: Setup, points: int) -> np.ndarray:
     return np.linspace(-getattr(s.fork.spring, "extension", 0.02), s.travel, points)
 
 
-def _spring_along(s: Setup, xs, v: float) -> np.ndarray:
+def _spring_along(s: Setup, xs, v) -> np.ndarray:
     """The main spring's force (N; end stops left out) along compressions ``xs`` at stroke
-    velocity ``v``."""
+    velocity ``v``; with several velocities (a sequence), one row per velocity, all of them from
+    one pass through the kernel (the step rule's scans of the stroke, for every variant of a
+    sweep)."""
     spring = s.fork.spring
     main = getattr(spring, "main", spring)
     free = law.ForkLaw(main, law.LinearDamper(0.0), law.NoFriction())
-    return _along(free, xs, np.full_like(xs, v), lambda x, vv: main.force(x, vv))
+    if np.ndim(v) == 0:
+        return _along(free, xs, np.full_like(xs, v), lambda x, vv: main.force(x, vv))
+    rows = len(v)
+    forces = _along(free, np.tile(xs, rows), np.repeat(np.asarray(v, dtype=float), xs.size),
+                    lambda x, vv: main.force(x, vv))
+    return forces.reshape(rows, xs.size)
+
+
+STROKE_POINTS = 2001  # the step rule's samples of the stroke
+SCAN_VELOCITIES = (-1.0, 0.0, 1.0)  # m/s: the spring's lower curve, of compression, rest and rebound
+
+
+def _spring_scan(s: Setup) -> tuple[np.ndarray, np.ndarray]:
+    """(compressions along the stroke, the main spring's force there at each of
+    ``SCAN_VELOCITIES``, one row each): what :func:`reachable` and :func:`stiffest_rates` read."""
+    xs = _stroke(s, STROKE_POINTS)
+    return xs, _spring_along(s, xs, SCAN_VELOCITIES)
 
 
 # The stops' and the rim's stiffening is met at this penetration when the step is chosen: the
@@ -529,16 +547,16 @@ def _spring_along(s: Setup, xs, v: float) -> np.ndarray:
 STOP_DEPTH_M = 2.0e-3
 
 
-def reachable(s: Setup) -> dict[str, bool]:
+def reachable(s: Setup, scan: tuple[np.ndarray, np.ndarray] | None = None) -> dict[str, bool]:
     """Which of the bumper, the compression stop, the extension stop and the rim the run can
     reach at all, by an energy bound: the fall's kinetic energy plus the work of gravity as the
     sled and wheel go down can at most fill the spring (its lower curve, of compression and
     rebound, friction and damping left out) and the softest tire. What cannot be reached does
-    not set the fine step."""
+    not set the fine step. ``scan``: :func:`_spring_scan`'s samples, if already taken."""
     spring = s.fork.spring
     g, mb, mw = s.gravity, s.body_mass, s.wheel_mass
-    xs = _stroke(s, 2001)
-    low = np.minimum.reduce([_spring_along(s, xs, v) for v in (-1.0, 0.0, 1.0)])
+    xs, forces = _spring_scan(s) if scan is None else scan
+    low = np.minimum.reduce(list(forces))
     energy = np.concatenate(([0.0], np.cumsum(0.5 * (low[1:] + low[:-1]) * np.diff(xs))))
     energy -= np.interp(0.0, xs, energy)  # from full extension
     k_tire = min(t.rate for t in [s.tire.impact] + ([s.tire.in_contact] if s.tire.in_contact else []))
@@ -557,24 +575,26 @@ def reachable(s: Setup) -> dict[str, bool]:
     return out
 
 
-def stiffest_rates(s: Setup, reach: dict[str, bool] | None = None) -> dict[str, float]:
+def stiffest_rates(s: Setup, reach: dict[str, bool] | None = None,
+                   scan: tuple[np.ndarray, np.ndarray] | None = None) -> dict[str, float]:
     """Stiffness (N/m) and damping-like slopes (N s/m) the wheel meets: ``working`` (the spring's
     steepest slope over the whole stroke, top-out included, sampled finely, plus the stiffer tire
     rate), ``stops`` (that plus the bumper at full travel, a hard stop and the rim at their
     tangent rate ``STOP_DEPTH_M`` deep, engaged together in the worst case; only those the run
     can reach, see :func:`reachable`) and ``damping`` (fork damping slope over the velocity
     range, stops, tire and rim); ``stops_out_of_reach`` and ``stop_damping_out_of_reach``: the
-    same for this fork with every stop and the rim out of reach."""
+    same for this fork with every stop and the rim out of reach. ``scan``: :func:`_spring_scan`'s
+    samples, if already taken."""
     spring = s.fork.spring
-    xs = _stroke(s, 2001)
-    force = _spring_along(s, xs, 0.0)
+    xs, forces = _spring_scan(s) if scan is None else scan
+    force = forces[SCAN_VELOCITIES.index(0.0)]
     k_spring = float(np.max(np.abs(np.diff(force)) / np.diff(xs)))
     k_bumper = 2.0 * spring.bumper_force / spring.bumper_length if hasattr(spring, "bumper_force") else 0.0
     tires = [s.tire.impact] + ([s.tire.in_contact] if s.tire.in_contact else [])
     k_tire = max(t.rate for t in tires)
     c_tire = max(t.damping for t in tires)
     rim = s.tire.rim
-    reach = reachable(s) if reach is None else reach
+    reach = reachable(s, (xs, forces)) if reach is None else reach
     stiffening = 1.0 + 3.0 * (STOP_DEPTH_M / STIFFENING_M) ** 2
     # the extension stop is within the bound for nearly every fork (the bound leaves damping out,
     # and a rebound past full extension is cheap): it counts at its linear rate, the compression
@@ -634,7 +654,8 @@ def velocity_band(s: Setup) -> tuple[float, float]:
         return 0.0, 0.0
     dv = 1e-3 * min(bands)
     xs = _stroke(s, 101)
-    slope = float(np.max(np.abs(_spring_along(s, xs, dv) - _spring_along(s, xs, -dv)))) / (2.0 * dv)
+    up, down = _spring_along(s, xs, (dv, -dv))
+    slope = float(np.max(np.abs(up - down))) / (2.0 * dv)
     if not friction.has_state:
         slope += abs(friction.force(dv) - friction.force(-dv)) / (2.0 * dv)
     return BAND_WIDTHS * max(bands), slope
@@ -708,8 +729,9 @@ def _limits(s: Setup) -> tuple[list, list, list, list]:
     can reach its compression stop or the rim lands hard: the tire's damping force jumps by B v
     at touchdown; one random S10 fork was 0.049 mm off the reference at 12 steps per period,
     0.006 mm at 24)."""
-    reach = reachable(s)
-    rates = stiffest_rates(s, reach)
+    scan = _spring_scan(s)
+    reach = reachable(s, scan)
+    rates = stiffest_rates(s, reach, scan)
     hard = reach["compression_stop"] or reach["rim"]
     wheel = s.wheel_mass
     reduced = s.wheel_mass * s.body_mass / (s.wheel_mass + s.body_mass)

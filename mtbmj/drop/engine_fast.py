@@ -63,7 +63,7 @@ if _numba is not None:
     # afresh in every process).
     from mtbmj.controllers import kernels as _kernels
 
-    fork_force_rate = _kernels.fork_force_rate
+    fork_force_rate = _kernels.inlined.fork_force_rate  # compiled into rhs: no call per evaluation
     borrow_f64, borrow_i64 = _kernels.borrow_f64, _kernels.borrow_i64
     contact_force = _kernels.contact_force  # the one stop/rim law (controllers.stops)
     kelvin_voigt_force, rim_force = _kernels.kelvin_voigt_force, _kernels.rim_force  # controllers.tire, .stops
