@@ -59,7 +59,9 @@ def fork_forces_along(law: ForkLaw, x, v, z) -> np.ndarray | None:
         return None
     from mtbmj.controllers import kernels
 
-    x, v, z = (np.asarray(a, dtype=np.float64) for a in (x, v, z))  # strided views stay views
+    # contiguous copies of strided views (a trace's columns): one compiled signature of the kernel,
+    # whose inlined law takes seconds to compile, for a copy that takes microseconds
+    x, v, z = (np.ascontiguousarray(a, dtype=np.float64) for a in (x, v, z))
     out = np.empty(x.size)
     kernels.fork_forces(I, P, x, v, z, out)
     return out
