@@ -29,12 +29,15 @@ A missing event is None and listed in ``flags``: never forced into the pattern.
 """
 from __future__ import annotations
 
+import math
+from bisect import bisect_right
 from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
 
-from mtbmj.drop.peaks import find_peaks, noise_sigma, parabola, smooth
+from mtbmj.drop.peaks import (median_in_place, parabola_rows, noise_sigmas, parabola, peaks_and_valleys, smooth_into,
+                               smooth_width)
 from mtbmj.errors import MtbmjError
 
 
@@ -98,26 +101,112 @@ class Events:
         }
 
 
-def _refine(t: np.ndarray, y: np.ndarray, i: int, raw: np.ndarray | None = None, sigma: float = 0.0) -> Event:
-    """The extreme near sample ``i`` of the smoothed ``y``, refined by a least-squares parabola
-    through the raw samples around it that lie within a noise-scaled height of the extreme
-    (vertex time and value: sub-sample and insensitive to noise on a flat peak)."""
-    data = y if raw is None else raw
-    height = max(0.2, 10.0 * sigma)
-    lo = hi = i
-    while lo > 0 and abs(y[lo - 1] - y[i]) <= height:
+NEAR = 48  # samples each side of an extreme walked at once (in Python or vectorised); on from there in slices
+_OFFSETS = np.arange(-NEAR, NEAR + 1)
+
+
+def _reach(y: np.ndarray, yi: float, height: float, near: int, step: int, stop: int) -> int:
+    """The last sample reached walking on from ``near`` one ``step`` (-1 or +1) at a time while
+    the next one lies within ``height`` of ``yi``, at most to ``stop`` (0 or ``y.size - 1``):
+    searched in growing slices rather than sample by sample."""
+    span = 4 * NEAR
+    while near != stop:
+        far = max(stop, near - span) if step < 0 else min(stop, near + span)
+        seg = y[far:near] if step < 0 else y[near + 1:far + 1]
+        out = np.abs(seg - yi) <= height
+        np.logical_not(out, out=out)  # not within (NaN is not within, as in the walk)
+        if step < 0:
+            k = int(out[::-1].argmax())
+            if out[seg.size - 1 - k]:
+                return near - k
+        else:
+            k = int(out.argmax())
+            if out[k]:
+                return near + k
+        near = far
+        span *= 4
+    return near
+
+
+def _run(y: np.ndarray, i: int, height: float) -> tuple[int, int]:
+    """The first and last of the samples around ``i`` that lie within ``height`` of ``y[i]``
+    without a break (the walk of ``_refine``): walked in Python over the ``NEAR`` samples each
+    side (the same double arithmetic as numpy's), searched on in slices past them."""
+    last = y.size - 1
+    first, end = max(0, i - NEAR), min(last, i + NEAR)
+    near = y[first:end + 1].tolist()
+    yi = near[i - first]
+    lo = hi = i - first
+    while lo > 0 and abs(near[lo - 1] - yi) <= height:
         lo -= 1
-    while hi < y.size - 1 and abs(y[hi + 1] - y[i]) <= height:
+    while hi < end - first and abs(near[hi + 1] - yi) <= height:
         hi += 1
-    lo, hi = max(0, min(lo, i - 2)), min(y.size - 1, max(hi, i + 2))
+    lo, hi = lo + first, hi + first
+    if lo == first and lo > 0:
+        lo = _reach(y, yi, height, lo, -1, 0)
+    if hi == end and hi < last:
+        hi = _reach(y, yi, height, hi, 1, last)
+    return lo, hi
+
+
+def _runs(ys: np.ndarray, row: list[int], index: list[int], height: list[float]) -> tuple[list[int], list[int]]:
+    """``_run`` for several extremes at once: sample ``index[j]`` of the row ``row[j]`` of ``ys``
+    with ``height[j]``; the ``NEAR`` samples each side of all of them in one vectorised pass."""
+    n = ys.shape[1]
+    i = np.array(index)
+    pos = i[:, None] + _OFFSETS
+    inside = (pos >= 0) & (pos < n)  # the record's ends stop a walk
+    near = ys[np.array(row)[:, None], np.clip(pos, 0, n - 1)]
+    within = np.abs(near - near[:, NEAR, None]) <= np.array(height)[:, None]
+    within &= inside
+    back, on = within[:, NEAR - 1::-1], within[:, NEAR + 1:]  # the samples before (nearest first) and after
+    lo = (i - np.where(back.all(axis=1), NEAR, back.argmin(axis=1))).tolist()
+    hi = (i + np.where(on.all(axis=1), NEAR, on.argmin(axis=1))).tolist()
+    for j, k in enumerate(index):  # runs past NEAR samples: on in slices
+        if lo[j] == k - NEAR and lo[j] > 0:
+            lo[j] = _reach(ys[row[j]], ys[row[j], k], height[j], lo[j], -1, 0)
+        if hi[j] == k + NEAR and hi[j] < n - 1:
+            hi[j] = _reach(ys[row[j]], ys[row[j], k], height[j], hi[j], 1, n - 1)
+    return lo, hi
+
+
+def _vertex(t: np.ndarray, y: np.ndarray, data: np.ndarray, i: int, lo: int, hi: int, fit=parabola) -> Event:
+    """The extreme at sample ``i`` of ``y`` from the parabola through ``data`` over the run of
+    samples ``lo``..``hi`` around it (widened to two samples each side); ``fit`` is ``parabola``
+    or, for contiguous float rows, its core without the checks."""
+    last = y.size - 1
+    lo, hi = max(0, min(lo, i - 2)), min(last, max(hi, i + 2))
     if hi - lo >= 4:
         tt = t[lo:hi + 1] - t[i]
-        a, b, c = parabola(tt, data[lo:hi + 1])
+        a, b, c = fit(tt, data[lo:hi + 1])
         if a != 0:
             vertex = -b / (2 * a)
             if tt[0] <= vertex <= tt[-1]:
                 return Event(float(t[i] + vertex), float(c - b * b / (4 * a)))
     return Event(float(t[i]), float(y[i]))
+
+
+def _refine(t: np.ndarray, y: np.ndarray, i: int, raw: np.ndarray | None = None, sigma: float = 0.0) -> Event:
+    """The extreme near sample ``i`` of the smoothed ``y``, refined by a least-squares parabola
+    through the raw samples around it that lie within a noise-scaled height of the extreme
+    (vertex time and value: sub-sample and insensitive to noise on a flat peak)."""
+    lo, hi = _run(y, i, max(0.2, 10.0 * sigma))
+    return _vertex(t, y, y if raw is None else raw, i, lo, hi)
+
+
+def _refine_all(t: np.ndarray, ys: np.ndarray, raw: np.ndarray, sigma: list[float],
+                jobs: list[tuple[int, int]]) -> list[Event]:
+    """``_refine`` of each (row, sample) of ``jobs``: the extreme at that sample of the smoothed
+    signal ``ys[row]``, from the raw ``raw[row]`` with noise ``sigma[row]``; the runs found
+    together, and rows of contiguous floats (``detect``'s) fitted by the parabola's core."""
+    if not jobs:
+        return []
+    row = [r for r, _ in jobs]
+    index = [i for _, i in jobs]
+    lo, hi = _runs(ys, row, index, [max(0.2, 10.0 * sigma[r]) for r in row])
+    if t.dtype != np.float64 or raw.dtype != np.float64 or raw.strides[1] != raw.itemsize:
+        return [_vertex(t, ys[r], raw[r], i, a, b) for r, i, a, b in zip(row, index, lo, hi)]
+    return [_vertex(t, ys[r], raw[r], i, a, b, parabola_rows) for r, i, a, b in zip(row, index, lo, hi)]
 
 
 def _crossing(t, y, i, j) -> float:
@@ -140,67 +229,102 @@ def _contact(t, tire_s, sigma, start) -> tuple[int | None, float | None, int | N
     dt = t[1] - t[0]
     air = tire_s < -level
     air[:start] = False
-    need = max(1, int(np.ceil(MIN_AIRTIME_S / dt)))
+    need = max(1, math.ceil(MIN_AIRTIME_S / dt))
     i = start
     n = t.size
-    while i < n:
-        run = np.flatnonzero(air[i:])
-        if not run.size:
+    while i < n:  # runs of air from i on (argmax of a mask: its first True, found without a full scan)
+        a = i + int(air[i:].argmax())
+        if not air[a]:
             return None, None, None, None
-        a = i + int(run[0])
-        back = np.flatnonzero(~air[a:])
-        b = a + int(back[0]) if back.size else n
+        b = a + int(air[a:].argmin())
+        if air[b]:
+            b = n
         if b - a >= need or b == n and b - a >= min(need, 2):
-            k = a
-            while k > start and tire_s[k - 1] < 0:
-                k -= 1
+            k = a  # back to the first of the negative samples before the run (from start on)
+            while k > start:
+                lo = max(start, k - 64)
+                dry = (~(tire_s[lo:k] < 0)).nonzero()[0]
+                if dry.size:
+                    k = lo + int(dry[-1]) + 1
+                    break
+                k = lo
             lift_t = _crossing(t, tire_s, k - 1, k) if k > 0 else float(t[k])
-            up = np.flatnonzero(tire_s[b:] >= 0) if b < n else np.array([], int)
-            if not up.size:
+            if b == n:
                 return k, lift_t, None, None
-            m = b + int(up[0])
+            up = tire_s[b:] >= 0
+            m = int(up.argmax())
+            if not up[m]:
+                return k, lift_t, None, None
+            m += b
             return k, lift_t, m, _crossing(t, tire_s, m - 1, m)
         i = b
     return None, None, None, None
 
 
-def _window_extreme(t, y, lo, hi, kind, raw=None, sigma=0.0) -> Event | None:
+def _window_index(y, lo, hi, kind) -> int | None:
+    """The sample of the extreme (``kind`` "max" or "min") of ``y`` in the window ``lo``..``hi``,
+    None when it is at the window's edge (monotone there: no extreme of this signal in it)."""
     lo, hi = max(int(lo), 0), min(int(hi), y.size - 1)
     if hi - lo < 2:
         return None
     seg = y[lo:hi + 1]
-    k = int(np.argmax(seg) if kind == "max" else np.argmin(seg))
+    k = int(seg.argmax() if kind == "max" else seg.argmin())
     if (k == 0 and lo > 0) or k == seg.size - 1:
-        return None  # monotone here: no extreme of this signal in the window
-    return _refine(t, y, lo + k, raw, sigma)
+        return None
+    return lo + k
+
+
+def _window_extreme(t, y, lo, hi, kind, raw=None, sigma=0.0) -> Event | None:
+    """The extreme of ``y`` in the window (``_window_index``), refined (``_refine``)."""
+    k = _window_index(y, lo, hi, kind)
+    return None if k is None else _refine(t, y, k, raw, sigma)
 
 
 def detect(signals: Mapping[str, np.ndarray], start_s: float = 0.0) -> Events:
     """Events of one run or record: ``signals`` has ``time_s``, ``sled_mm``, ``fork_mm``,
     ``tire_mm`` on a uniform grid, t = 0 at tire touch. Only t >= ``start_s`` is used."""
     t_all = np.asarray(signals["time_s"], float)
-    keep = t_all >= start_s - 1e-12
-    t = t_all[keep]
+    steps = t_all[1:] - t_all[:-1] if t_all.ndim == 1 else np.zeros(0)
+    # time that never goes back (the usual record): t >= start_s is a slice, as is the last REST_WINDOW_S
+    ordered = bool(steps.size and steps.min() >= 0.0)
+    if ordered:
+        first = int(t_all.searchsorted(start_s - 1e-12))
+        keep = slice(first, None)
+        t, steps = t_all[first:], steps[first:]
+    else:
+        keep = t_all >= start_s - 1e-12
+        t = t_all[keep]
+        steps = t[1:] - t[:-1]
     if t.size < 20:
         raise EventsError(f"{t.size} samples after touch, too few to find the events (at least 20; "
                           f"a longer --duration)")
-    dt = float(np.median(np.diff(t)))
-    raw = {s: np.asarray(signals[f"{s}_mm"], float)[keep] for s in SIGNALS}
-    noise = {s: noise_sigma(raw[s]) for s in SIGNALS}
-    sm = {s: smooth(raw[s], dt, SMOOTH_S) for s in SIGNALS}
+    # np.median(np.diff(t)) (reordering steps); with NaN among them, as np.median takes it
+    dt = float(median_in_place(steps) if ordered else np.median(steps))
+    # the signals as the rows of one array (raw), smoothed as the rows of another (sm)
+    rows = np.empty((len(SIGNALS), t.size))
+    for j, s in enumerate(SIGNALS):
+        values = np.asarray(signals[f"{s}_mm"], float)
+        # (the boolean mask says when the lengths differ)
+        rows[j] = values[keep if values.shape == t_all.shape else t_all >= start_s - 1e-12]
+    raw = dict(zip(SIGNALS, rows))
+    noise = dict(zip(SIGNALS, noise_sigmas(rows)))
+    width = smooth_width(dt, SMOOTH_S)
+    smoothed = np.empty_like(rows)
+    for j in range(len(SIGNALS)):
+        smooth_into(rows[j], width, smoothed[j])
+    sm = dict(zip(SIGNALS, smoothed))
     flags: list[str] = []
     none = {e: None for e in EVENTS}
     out = {s: dict(none) for s in SIGNALS}
 
     lift_i, lift_t, land_i, land_t = _contact(t, sm["tire"], noise["tire"], 0)
     sled = sm["sled"]
-    prominence = max(0.5, 6.0 * noise["sled"], PROMINENCE_FRACTION * float(np.ptp(sled)))
-    peaks = find_peaks(sled, prominence)
-    valleys = find_peaks(-sled, prominence)
+    prominence = max(0.5, 6.0 * noise["sled"], PROMINENCE_FRACTION * float(sled.max() - sled.min()))
+    peaks, valleys = (found.tolist() for found in peaks_and_valleys(sled, prominence))
 
     def first_after(indices, i):
-        later = indices[indices > i]
-        return int(later[0]) if later.size else None
+        k = bisect_right(indices, i)  # indices ascending
+        return indices[k] if k < len(indices) else None
 
     # sled pattern (indices)
     idx: dict[str, int | None] = dict.fromkeys(("peak1", "topping", "peak2", "valley1", "peak3"))
@@ -228,9 +352,11 @@ def detect(signals: Mapping[str, np.ndarray], start_s: float = 0.0) -> Events:
         idx["peak3"] = first_after(peaks, idx["valley1"])
     next_valley = first_after(valleys, idx["peak3"]) if idx["peak3"] is not None else None
 
+    # the extremes to refine (all together, at the end): (signal, event) -> (row, sample)
+    jobs: dict[tuple[str, str], tuple[int, int]] = {}
     for name in ("peak1", "topping", "peak2", "valley1", "peak3"):
         if idx[name] is not None:
-            out["sled"][name] = _refine(t, sled, idx[name], raw["sled"], noise["sled"])
+            jobs["sled", name] = (SIGNALS.index("sled"), idx[name])
 
     def mid(a, b):
         return None if a is None or b is None else (a + b) // 2
@@ -252,30 +378,38 @@ def detect(signals: Mapping[str, np.ndarray], start_s: float = 0.0) -> Events:
     for name, window in windows.items():
         lo, hi, kind = window
         for s in ("fork", "tire"):
+            row = SIGNALS.index(s)
             if name == "topping" and s == "fork":  # the moment it reaches full extension
                 start = idx["peak1"] if idx["peak1"] is not None else lo
                 seg = sm[s][start:hi + 1]
-                lowest = float(np.min(seg))
-                k = start + int(np.argmax(seg <= lowest + max(TOP_BAND_MM, 5.0 * noise[s])))
-                out[s][name] = Event(_entry_time(t, sm[s], k, lowest + max(TOP_BAND_MM, 5.0 * noise[s])), lowest)
+                lowest = float(seg.min())
+                level = lowest + max(TOP_BAND_MM, 5.0 * noise[s])
+                k = start + int((seg <= level).argmax())
+                out[s][name] = Event(_entry_time(t, sm[s], k, level), lowest)
             elif name == "topping":  # the lowest point in the air
-                seg = sm[s][lo:hi + 1]
-                k = lo + int(np.argmin(seg))
-                out[s][name] = _refine(t, sm[s], k, raw[s], noise[s])
+                jobs[s, name] = (row, lo + int(sm[s][lo:hi + 1].argmin()))
             else:
-                out[s][name] = _window_extreme(t, sm[s], lo, hi, kind, raw[s], noise[s])
+                k = _window_index(sm[s], lo, hi, kind)
+                if k is not None:
+                    jobs[s, name] = (row, k)
+    refined = _refine_all(t, smoothed, rows, [noise[s] for s in SIGNALS], list(jobs.values()))
+    for (s, name), event in zip(jobs, refined):
+        out[s][name] = event
 
     # rest
-    window = t >= t[-1] - REST_WINDOW_S
-    motion = {s: float(np.ptp(sm[s][window])) for s in SIGNALS}
+    window = slice(int(t.searchsorted(t[-1] - REST_WINDOW_S)), None) if ordered else t >= t[-1] - REST_WINDOW_S
+    last_sm = smoothed[:, window]
+    motion = dict(zip(SIGNALS, (last_sm.max(axis=1) - last_sm.min(axis=1)).tolist()))  # np.ptp of each
     # the sled decides (as in mtbmj.drop.summary): friction lets the fork creep by a fraction of a mm
     at_rest = bool(t[-1] >= REST_WINDOW_S and motion["sled"] <= REST_TOLERANCE_MM + 4.0 * noise["sled"])
     if at_rest:
-        for s in SIGNALS:
-            value = float(np.mean(raw[s][window]))
-            band = SETTLE_BAND_MM + 4.0 * noise[s]
-            outside = np.flatnonzero(np.abs(sm[s] - value) > band)
-            settle = float(t[min(int(outside[-1]) + 1, last)]) if outside.size else float(t[0])
+        # np.mean of each (signal by signal: the sums of a 2-d array's rows may be taken in another order)
+        values = np.array([np.add.reduce(row) / row.size for row in (raw[s][window] for s in SIGNALS)])
+        bands = np.array([SETTLE_BAND_MM + 4.0 * noise[s] for s in SIGNALS])
+        outside = np.abs(smoothed - values[:, None]) > bands[:, None]
+        back = outside[:, ::-1].argmax(axis=1).tolist()  # the last sample outside the band, counted from the end
+        for j, (s, value, k) in enumerate(zip(SIGNALS, values.tolist(), back)):
+            settle = float(t[min(last - k + 1, last)]) if outside[j, last - k] else float(t[0])
             out[s]["rest"] = Event(settle, value)
     else:
         flags.append(f"never comes to rest (sled still moves {motion['sled']:.1f} mm in the last "
