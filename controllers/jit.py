@@ -175,6 +175,15 @@ def callback(signature):
     return build
 
 
+def rebound(fn, namespace: dict):
+    """``fn`` with ``namespace`` for its globals (same code, name, defaults and closure): numba
+    resolves the names a function calls in its globals when it compiles it, so a copy bound to
+    other globals compiles against other functions of the same names."""
+    clone = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
+    clone.__qualname__, clone.__module__ = fn.__qualname__, fn.__module__
+    return clone
+
+
 _LAW_FUNCTIONS: dict = {}  # plain function -> its compiled twin
 _LAW_GLOBALS: list = []  # the globals of every compiled twin: each sees every other twin by name
 _LAW_LOCK = threading.Lock()
@@ -193,10 +202,7 @@ def law_function(fn):
         twin = _LAW_FUNCTIONS.get(fn)
         if twin is None:
             namespace = dict(fn.__globals__)
-            clone = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
-            clone.__qualname__ = fn.__qualname__
-            clone.__module__ = fn.__module__
-            twin = numba.njit(inline="always", **OPTIONS)(clone)
+            twin = numba.njit(inline="always", **OPTIONS)(rebound(fn, namespace))
             _LAW_FUNCTIONS[fn] = twin
             _LAW_GLOBALS.append(namespace)
             for other in _LAW_GLOBALS:
@@ -212,5 +218,5 @@ def compiled_twins() -> dict:
         return dict(_LAW_FUNCTIONS)
 
 
-__all__ = ["kernel", "callback", "LAW_SOURCES_STAMP", "compiled_twins", "numba", "FALLBACK_MESSAGE", "CACHE", "OPTIONS", "law_function", "compiling", "cold", "can_cache",
+__all__ = ["kernel", "rebound", "callback", "LAW_SOURCES_STAMP", "compiled_twins", "numba", "FALLBACK_MESSAGE", "CACHE", "OPTIONS", "law_function", "compiling", "cold", "can_cache",
            "COMPILE_LOG", "notice", "say_now_if_cold"]

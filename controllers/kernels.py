@@ -22,7 +22,7 @@ from mtbmj.controllers import guards as _guards
 from mtbmj.controllers import spring as _spring
 from mtbmj.controllers import stops as _stops
 from mtbmj.controllers import tire as _tire
-from mtbmj.controllers.jit import compiling, kernel, law_function, notice, numba, say_now_if_cold
+from mtbmj.controllers.jit import compiling, kernel, law_function, notice, numba, rebound, say_now_if_cold
 from mtbmj.controllers.layout import offsets
 from mtbmj.controllers.lawcodes import (
     DA_BILINEAR, DA_DIGRESSIVE, DA_LINEAR, DA_ORIFICE, FR_COULOMB, FR_COULOMB_VISCOUS, FR_LUGRE, FR_NONE, FR_STICKING,
@@ -267,10 +267,7 @@ if available:
         namespace = dict(globals())
         twins = {}
         for dispatcher in dispatchers:
-            fn = dispatcher.py_func
-            clone = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
-            clone.__qualname__, clone.__module__ = fn.__qualname__, fn.__module__
-            twins[fn.__name__] = kernel(clone, inline=True)
+            twins[dispatcher.__name__] = kernel(rebound(dispatcher.py_func, namespace), inline=True)
         namespace.update(twins)
         return types.SimpleNamespace(**twins), namespace
 
@@ -278,15 +275,13 @@ if available:
         spring_force, damper_force, sliding_level, sliding_viscous, _sticking_rate, _sticking_force, _lugre_rate,
         _friction_force, friction_force, fork_force, state_rate, fork_force_rate))
 
-    def _fork_forces(I, P, x, v, z, out):
+    def fork_forces(I, P, x, v, z, out):
         """``fork_force`` along a trace: out[i] = ForkLaw.force(x[i], v[i], z[i])."""
         I, P = borrow_i64(I), borrow_f64(P)
         for i in range(x.size):
             out[i] = fork_force(I, P, x[i], v[i], z[i])
 
-    _fork_forces = types.FunctionType(_fork_forces.__code__, _inlined_namespace, "fork_forces")
-    _fork_forces.__qualname__ = _fork_forces.__name__  # numba's disk cache names its file by it
-    fork_forces = kernel(_fork_forces)
+    fork_forces = kernel(rebound(fork_forces, _inlined_namespace))  # calls the inlined fork_force
 
     @kernel
     def modal_filter(phi, g_in, g_new, r, w, u, out):

@@ -515,15 +515,12 @@ def _stroke(s: Setup, points: int) -> np.ndarray:
 
 
 def _spring_along(s: Setup, xs, v) -> np.ndarray:
-    """The main spring's force (N; end stops left out) along compressions ``xs`` at stroke
-    velocity ``v``; with several velocities (a sequence), one row per velocity, all of them from
-    one pass through the kernel (the step rule's scans of the stroke, for every variant of a
-    sweep)."""
+    """The main spring's force (N; end stops left out) along compressions ``xs`` at each of the
+    stroke velocities ``v`` (a sequence), one row per velocity, all from one pass through the
+    kernel (the step rule's scans of the stroke, for every variant of a sweep)."""
     spring = s.fork.spring
     main = getattr(spring, "main", spring)
     free = law.ForkLaw(main, law.LinearDamper(0.0), law.NoFriction())
-    if np.ndim(v) == 0:
-        return _along(free, xs, np.full_like(xs, v), lambda x, vv: main.force(x, vv))
     rows = len(v)
     forces = _along(free, np.tile(xs, rows), np.repeat(np.asarray(v, dtype=float), xs.size),
                     lambda x, vv: main.force(x, vv))
