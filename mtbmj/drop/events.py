@@ -128,30 +128,10 @@ def _reach(y: np.ndarray, yi: float, height: float, near: int, step: int, stop: 
     return near
 
 
-def _run(y: np.ndarray, i: int, height: float) -> tuple[int, int]:
-    """The first and last of the samples around ``i`` that lie within ``height`` of ``y[i]``
-    without a break (the walk of ``_refine``): walked in Python over the ``NEAR`` samples each
-    side (the same double arithmetic as numpy's), searched on in slices past them."""
-    last = y.size - 1
-    first, end = max(0, i - NEAR), min(last, i + NEAR)
-    near = y[first:end + 1].tolist()
-    yi = near[i - first]
-    lo = hi = i - first
-    while lo > 0 and abs(near[lo - 1] - yi) <= height:
-        lo -= 1
-    while hi < end - first and abs(near[hi + 1] - yi) <= height:
-        hi += 1
-    lo, hi = lo + first, hi + first
-    if lo == first and lo > 0:
-        lo = _reach(y, yi, height, lo, -1, 0)
-    if hi == end and hi < last:
-        hi = _reach(y, yi, height, hi, 1, last)
-    return lo, hi
-
-
 def _runs(ys: np.ndarray, row: list[int], index: list[int], height: list[float]) -> tuple[list[int], list[int]]:
-    """``_run`` for several extremes at once: sample ``index[j]`` of the row ``row[j]`` of ``ys``
-    with ``height[j]``; the ``NEAR`` samples each side of all of them in one vectorised pass."""
+    """The first and last of the samples around sample ``index[j]`` of the row ``row[j]`` of ``ys``
+    that lie within ``height[j]`` of it without a break, for each ``j``: the ``NEAR`` samples each
+    side of all of them in one vectorised pass, searched on in slices past them."""
     n = ys.shape[1]
     i = np.array(index)
     pos = i[:, None] + _OFFSETS
@@ -186,19 +166,13 @@ def _vertex(t: np.ndarray, y: np.ndarray, data: np.ndarray, i: int, lo: int, hi:
     return Event(float(t[i]), float(y[i]))
 
 
-def _refine(t: np.ndarray, y: np.ndarray, i: int, raw: np.ndarray | None = None, sigma: float = 0.0) -> Event:
-    """The extreme near sample ``i`` of the smoothed ``y``, refined by a least-squares parabola
-    through the raw samples around it that lie within a noise-scaled height of the extreme
-    (vertex time and value: sub-sample and insensitive to noise on a flat peak)."""
-    lo, hi = _run(y, i, max(0.2, 10.0 * sigma))
-    return _vertex(t, y, y if raw is None else raw, i, lo, hi)
-
-
 def _refine_all(t: np.ndarray, ys: np.ndarray, raw: np.ndarray, sigma: list[float],
                 jobs: list[tuple[int, int]]) -> list[Event]:
-    """``_refine`` of each (row, sample) of ``jobs``: the extreme at that sample of the smoothed
-    signal ``ys[row]``, from the raw ``raw[row]`` with noise ``sigma[row]``; the runs found
-    together, and rows of contiguous floats (``detect``'s) fitted by the parabola's core."""
+    """The extreme near each (row, sample) of ``jobs``, refined: a least-squares parabola through
+    the raw ``raw[row]`` over the samples around it where the smoothed ``ys[row]`` stays within a
+    height scaled by the noise ``sigma[row]`` (vertex time and value: sub-sample and insensitive
+    to noise on a flat peak). The runs are found together, and rows of contiguous floats
+    (``detect``'s) fitted by the parabola's core."""
     if not jobs:
         return []
     row = [r for r, _ in jobs]
@@ -272,12 +246,6 @@ def _window_index(y, lo, hi, kind) -> int | None:
     if (k == 0 and lo > 0) or k == seg.size - 1:
         return None
     return lo + k
-
-
-def _window_extreme(t, y, lo, hi, kind, raw=None, sigma=0.0) -> Event | None:
-    """The extreme of ``y`` in the window (``_window_index``), refined (``_refine``)."""
-    k = _window_index(y, lo, hi, kind)
-    return None if k is None else _refine(t, y, k, raw, sigma)
 
 
 def detect(signals: Mapping[str, np.ndarray], start_s: float = 0.0) -> Events:
