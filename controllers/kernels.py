@@ -247,10 +247,9 @@ if available:
         if I[I_FRICTION] == FR_STICKING:
             rate = _sticking_rate(I, P, v, z)
             friction = _sticking_force(I, P, v, z, rate)
-        elif I[I_FRICTION] == FR_LUGRE:
-            friction, rate = _friction_force(I, P, v, z), _lugre_rate(P, I[I_FRICTION_AT], v, z)
-        else:
-            friction, rate = _friction_force(I, P, v, z), 0.0
+        else:  # _friction_force written once: inlined, each call is another copy of it to compile
+            friction = _friction_force(I, P, v, z)
+            rate = _lugre_rate(P, I[I_FRICTION_AT], v, z) if I[I_FRICTION] == FR_LUGRE else 0.0
         # each law written once (fork_force's sum, in its order): inlined, the kernel stays small
         return spring_force(I, P, x, v) + damper_force(I, P, v) + friction, rate
 
