@@ -18,6 +18,7 @@ rolling callback (``mtbmj.rolling.callback_compiled``).
 from __future__ import annotations
 
 import ctypes
+import os
 import threading
 
 import mujoco
@@ -149,6 +150,12 @@ class Registry:
         # re-entrant: a callback collected by the garbage collector frees its slot (weakref.finalize)
         # wherever the collector runs, also inside a registry operation of this thread
         self.lock = threading.RLock()
+        # A process forked while another of its threads holds the lock (a finalizer the collector
+        # ran in that thread: a sweep's table-library import, the test runner's I/O thread) gave a
+        # child whose first claim waited for ever: the thread that held it is not copied. So a fork
+        # waits for the registry to be free and forks with it held, released on both sides.
+        os.register_at_fork(before=self.lock.acquire, after_in_parent=self.lock.release,
+                            after_in_child=self.lock.release)
         self._reader = None
         if numba is not None:
             import llvmlite.binding as llvm
