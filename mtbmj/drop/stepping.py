@@ -47,6 +47,16 @@ def stop_index(previous, states, columns, zones, step: float, stops_only: bool =
     acted in, or in which the tire may have touched down or lifted off (see ``STOP_MARGIN_M``),
     or None; with ``stops_only``, of a stop or the rim only. ``columns`` are the sled and fork
     position and velocity columns of a state row; ``zones`` as ``compose.refine_zones``."""
+    compiled = _compiled()
+    if (compiled is not None and previous.dtype == np.float64 and states.dtype == np.float64 and states.ndim == 2
+            and previous.flags.c_contiguous and states.flags.c_contiguous):
+        k = compiled(previous, states, *columns, *zones, step, STOP_MARGIN_M, stops_only)
+        return None if k < 0 else int(k)
+    return stop_index_numpy(previous, states, columns, zones, step, stops_only)
+
+
+def stop_index_numpy(previous, states, columns, zones, step: float, stops_only: bool = False) -> int | None:
+    """``stop_index``'s definition in numpy (what runs where numba is not loaded)."""
     sled, fork, sled_v, fork_v = columns
     compress, extend, rim, band, fast = zones
     rows = np.concatenate((previous[None, :], states))
@@ -75,6 +85,29 @@ def stop_index(previous, states, columns, zones, step: float, stops_only: bool =
         near |= np.maximum(a, b) + np.abs(v[1:] - v[:-1]) > fast
     found = np.flatnonzero(near)
     return int(found[0]) if found.size else None
+
+
+_COMPILED: list = []  # the compiled stop_index, once numba is in the process
+
+
+def _compiled():
+    """``stepping_compiled.first_near`` where numba is already loaded (``controllers.native``),
+    else None: the numpy definition below answers, with the same numbers (a short drop that
+    never loads numba does not load it for this)."""
+    if _COMPILED:
+        return _COMPILED[0]
+    from mtbmj.controllers import native
+
+    if not native.loaded():
+        return None
+    from mtbmj.controllers import jit
+    from mtbmj.drop import stepping_compiled
+
+    with jit.compiling("the step rule", stepping_compiled.first_near):
+        stepping_compiled.first_near(np.zeros(4), np.zeros((1, 4)), 0, 1, 2, 3, 1.0, -1.0, 1.0, 0.0, math.inf,
+                                     1e-3, STOP_MARGIN_M, False)
+    _COMPILED.append(stepping_compiled.first_near)
+    return _COMPILED[0]
 
 
 class Stepping:
