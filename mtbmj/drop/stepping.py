@@ -92,8 +92,8 @@ _COMPILED: list = []  # the compiled stop_index, once numba is in the process
 
 def _compiled():
     """``stepping_compiled.first_near`` where numba is already loaded (``controllers.native``),
-    else None: the numpy definition below answers, with the same numbers (a short drop that
-    never loads numba does not load it for this)."""
+    else None: ``stop_index_numpy`` answers, with the same numbers (a short drop that never
+    loads numba does not load it for this)."""
     if _COMPILED:
         return _COMPILED[0]
     from mtbmj.controllers import native
