@@ -19,7 +19,6 @@ import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from statistics import median
 
 BENCH = Path(__file__).resolve().parent
 RESULTS = BENCH / "results"
@@ -307,6 +306,13 @@ def sweep_rows(d: dict, name: str) -> dict[str, list[Row]]:
                         f"{ratio(b['ratio_of_medians'], 2)} ({spread(b['min'], b['max'], 2)}): {sec(i['sweep_s'], 3)} vs "
                         f"{sec(i['builtin_s'], 3)}; with the compiled callback instead {ratio(c['ratio_of_medians'], 2)} "
                         f"({spread(c['min'], c['max'], 2)})", name, cmd))
+        if "throughput_builtin_over_warm_sweep" in i:
+            w, u = i["throughput_builtin_over_warm_sweep"], i["start_up_s"]
+            rows.append(Row("the same, the sweep in workers started and warmed (a short drop each) before the "
+                            "timing", "report",
+                            f"{ratio(w['ratio_of_medians'], 2)} ({spread(w['min'], w['max'], 2)}): "
+                            f"{sec(i['warm_s'], 3)}; the whole sweep less the warmed one, per round: median "
+                            f"{u['median']:+.2f} s ({u['min']:+.2f} to {u['max']:+.2f} s)", name, cmd))
     return {"sweeps": rows}
 
 
@@ -344,7 +350,13 @@ def dropfit_ratio_rows(d: dict) -> dict[str, list[Row]]:
         f"{ratio(r['median'], 2)} ({spread(r['min'], r['max'], 2)}): {num(pr['mujoco']['median'])} vs "
         f"{num(pr['fast']['median'])} ms; without the closing engine-error run {ratio(lr['median'], 2)} "
         f"({spread(lr['min'], lr['max'], 2)}): {num(lp['mujoco']['median'])} vs {num(lp['fast']['median'])} ms",
-        "dropfit_ratio.json", d["command"])]}
+        "dropfit_ratio.json", d["command"])]
+        + ([Row(f"the floor of any MuJoCo fit: {d['mujoco_floor_steps']} MuJoCo steps a run (the engine's, at the "
+                "truth), bare scene with the compiled callback, one thread, shared perfectly over the fit's "
+                f"{d['workers']['mujoco']} threads / the fast fit's whole cost per run", "report",
+                f"{ratio(d['floor_over_fast_per_run']['median'], 2)} ({spread(d['floor_over_fast_per_run']['min'], d['floor_over_fast_per_run']['max'], 2)}): "
+                f"{num(d['mujoco_floor_per_run_ms']['median'])} vs {num(pr['fast']['median'])} ms",
+                "dropfit_ratio.json", d["command"])] if "floor_over_fast_per_run" in d else [])}
 
 
 def interval_coverage_rows(d: dict) -> dict[str, list[Row]]:
@@ -516,11 +528,26 @@ short, numba; `--engine fast` needs numba."""),
 The bare-scene rollout is `mujoco.rollout` of the shipped scene with no fork law, from each
 variant's tire touch, for the same number of steps: the floor a sweep's stepping cannot beat.
 The batched runner steps more than that floor (refined steps at touchdown, lift-off and near the
-stops, and the fork callback), which the second ratio separates from its own bookkeeping."""),
+stops, and the fork callback), which the second ratio separates from its own bookkeeping.
+
+`benchmarks/sweep.py` calls `run_sweep` in its own process after its phase costs have loaded numba
+and the compiled callback there, so the workers it forks start with them loaded. A fresh `mtbmj
+sweep` pays that load in each worker instead, in parallel: about 0.8 s, most of it numba's import
+and its CPU target (which imports `scipy.linalg`), then the cached callback. The warmed row starts
+the workers, and has each make a short drop, before the timing; it comes out the same as the whole
+sweep within the rounds' spread, so the whole-sweep rows hold no start-up of that kind. Rounds of the
+same code spread by about 20 % either way on this machine, whose speed changes from minute to
+minute: compare medians, and look at the spread before reading a difference."""),
     ("fits", "Fits", """\
 Drop fits run on synthetic records made by a different engine or model than the one fitted, with
 logger noise, the 400 Hz filter and 16-bit quantisation; the truth is known, so the errors and the
-coverage of the 95 % intervals can be counted."""),
+coverage of the 95 % intervals can be counted.
+
+The floor row bounds the fit's MuJoCo form from below: the MuJoCo steps of one run alone, with the
+compiled fork callback and no step rule, fit or record around them, shared perfectly over the
+fit's threads. No MuJoCo fit can cost less per run than that. While that floor is more than 3
+times the fast fit's whole cost per run, the MuJoCo fit cannot come within 3 times the fast fit,
+whatever its own code does."""),
     ("rolling", "Rolling", """\
 The rolling engine is checked against the rolling ODE reference by the test suite as well:
 `tests/test_rolling_reference.py` runs every fixed terrain of the library at 2 or 5 m/s, and

@@ -153,12 +153,43 @@ def bare_rollout(vs, threads: int, duration, chunk: int = 32, builtin: bool = Fa
     return wall, steps
 
 
+def _warm_worker() -> int:
+    """A warm-up task: a 50 ms S12 drop on the batched engine (numba, the cached callback, the
+    scene), then a pause so that the other worker takes the next task; returns the worker's pid."""
+    from mtbmj.drop import engine_batch
+
+    list(engine_batch.run(mtbmj.load_config("S12"), [{}], 0.05, 1))
+    time.sleep(0.3)
+    return os.getpid()
+
+
+def warm_sweep(vs, workers: int, duration, out: Path, runner: str = "batch", threads: int = 1) -> float:
+    """Wall time of the same sweep in workers started, and their compiled code loaded
+    (``start_pool``'s warm-up task), before the timing: the sweep without its fixed start-up cost
+    (the pool, numba and the cached callback in each worker), which the built-in scene never pays."""
+    from mtbmj.sweep.runner import start_pool
+
+    pool = start_pool(workers, "mujoco")
+    try:
+        for _ in range(10):  # until every worker has made a short drop of its own
+            if len({f.result() for f in [pool.submit(_warm_worker) for _ in range(workers)]}) == workers:
+                break
+        start = time.perf_counter()
+        sweep.run_sweep("S12", vs, out, duration=duration, workers=workers, progress=True, runner=runner,
+                        threads=threads, pool=pool)
+        return time.perf_counter() - start
+    finally:
+        pool.shutdown(wait=True)
+
+
 def interleaved(vs, args, steps: int) -> dict:
-    """``args.repeat`` rounds of the whole sweep and the bare scene making ``steps`` steps per
-    variant (built-in elements; compiled callback), interleaved, the order alternating."""
+    """``args.repeat`` rounds of the whole sweep, the same sweep in warmed workers and the bare
+    scene making ``steps`` steps per variant (built-in elements; compiled callback), interleaved,
+    the order alternating."""
     threads = args.workers * args.threads
     runs = {
         "sweep": lambda out: run_sweep(vs, args.workers, args.duration, out, args.runner, args.threads)[0],
+        "warm": lambda out: warm_sweep(vs, args.workers, args.duration, out, args.runner, args.threads),
         "builtin": lambda out: bare_rollout(vs, threads, args.duration, builtin=True, steps=steps)[0],
         "callback": lambda out: bare_rollout(vs, threads, args.duration, steps=steps, callback=True)[0],
     }
@@ -169,20 +200,30 @@ def interleaved(vs, args, steps: int) -> dict:
         walls = {}
         with tempfile.TemporaryDirectory() as tmp:
             for name in order:
-                walls[name] = runs[name](Path(tmp) / f"sweep{k}")
+                walls[name] = runs[name](Path(tmp) / f"{name}{k}")
         rounds.append({**{f"{n}_s": w for n, w in walls.items()}, "load_before": load,
                        "load_after": os.getloadavg()[0]})
         print(f"round {k + 1}: sweep {walls['sweep']:.2f} s, bare {steps} steps per variant built-in "
               f"{walls['builtin']:.2f} s ({walls['builtin'] / walls['sweep']:.2f}), with the callback "
-              f"{walls['callback']:.2f} s ({walls['callback'] / walls['sweep']:.2f}); load {load:.2f}", flush=True)
+              f"{walls['callback']:.2f} s ({walls['callback'] / walls['sweep']:.2f}); in warmed workers "
+              f"{walls['warm']:.2f} s (built-in {walls['builtin'] / walls['warm']:.2f}); load {load:.2f}", flush=True)
     out = {"rounds": rounds, "steps_per_variant": steps, "target_builtin": 0.85}
     sweep_s = np.array([r["sweep_s"] for r in rounds])
+    warm_s = np.array([r["warm_s"] for r in rounds])
     for name in ("builtin", "callback"):
         base = np.array([r[f"{name}_s"] for r in rounds])
         per = base / sweep_s
         out[f"throughput_{name}_over_sweep"] = {"ratio_of_medians": float(np.median(base) / np.median(sweep_s)),
                                                 "min": float(per.min()), "max": float(per.max())}
         out[f"{name}_s"] = float(np.median(base))
+    builtin_s = np.array([r["builtin_s"] for r in rounds])
+    out["throughput_builtin_over_warm_sweep"] = {
+        "ratio_of_medians": float(np.median(builtin_s) / np.median(warm_s)),
+        "min": float((builtin_s / warm_s).min()), "max": float((builtin_s / warm_s).max())}
+    start_up = sweep_s - warm_s  # per round: what the whole sweep pays that the warmed one does not
+    out["start_up_s"] = {"median": float(np.median(start_up)), "min": float(start_up.min()),
+                         "max": float(start_up.max())}
+    out["warm_s"] = float(np.median(warm_s))
     out["sweep_s"] = float(np.median(sweep_s))
     out["load"] = [float(min(r["load_before"] for r in rounds)), float(max(r["load_after"] for r in rounds))]
     return out
