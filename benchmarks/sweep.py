@@ -22,11 +22,12 @@ that variant's impact speed, the same number of steps, ``--workers`` rollout thr
 recorded (as the sweep does), in chunks to bound memory.
 
 ``--repeat N`` (N > 1, batched runner) adds N interleaved rounds (the order alternating) of the
-whole sweep, the bare scene making as many steps per variant as the runner with built-in elements
-(the fork as joint stiffness and damping: issue 27's baseline, target >= 0.85x of its throughput)
-and the same with the compiled fork callback installed, on ``--workers`` x ``--threads`` threads:
-ratios of medians, the spread of the per-round ratios, the load average before and after each
-round.
+whole sweep (``run_sweep`` in this process), the same sweep in workers warmed before the timing,
+the whole ``mtbmj sweep`` command in a process of its own, the bare scene making as many steps
+per variant as the runner with built-in elements (the fork as joint stiffness and damping: issue
+27's baseline, target >= 0.85x of its throughput) and the same with the compiled fork callback
+installed, on ``--workers`` x ``--threads`` threads: ratios of medians, the spread of the
+per-round ratios, the load average before and after each round.
 
 Writes benchmarks/results/sweep.json. Not a test: nothing is asserted.
 """
@@ -182,6 +183,29 @@ def warm_sweep(vs, workers: int, duration, out: Path, runner: str = "batch", thr
         pool.shutdown(wait=True)
 
 
+def command_sweep(vs, args, out: Path) -> float:
+    """Wall time of the whole ``mtbmj sweep`` command for the same variants (its own process: Python,
+    the imports, the pool and the compiled laws' load in each worker included); checks that the
+    command sampled the variants ``vs`` holds."""
+    import subprocess
+    import sys
+
+    vary = [a for r in RANGES for a in ("--vary", r)]
+    cmd = [str(Path(sys.executable).with_name("mtbmj")), "sweep", "S12", "--samples", str(len(vs)), "--seed",
+           str(args.seed), *vary, "--workers", str(args.workers), "--threads", str(args.threads), "--runner",
+           args.runner, "--quiet", "--no-figure", "--out", str(out)]
+    if args.duration:
+        cmd += ["--duration", str(args.duration)]
+    start = time.perf_counter()
+    subprocess.run(cmd, stdout=subprocess.DEVNULL, check=True)
+    wall = time.perf_counter() - start
+    table = sweep.read_table(out)
+    for key in vs[0]:
+        if not np.array_equal(table[key].to_numpy(), np.array([v[key] for v in vs])):
+            raise SystemExit(f"the command sampled other variants than this script ({key})")
+    return wall
+
+
 def interleaved(vs, args, steps: int) -> dict:
     """``args.repeat`` rounds of the whole sweep, the same sweep in warmed workers and the bare
     scene making ``steps`` steps per variant (built-in elements; compiled callback), interleaved,
@@ -190,6 +214,7 @@ def interleaved(vs, args, steps: int) -> dict:
     runs = {
         "sweep": lambda out: run_sweep(vs, args.workers, args.duration, out, args.runner, args.threads)[0],
         "warm": lambda out: warm_sweep(vs, args.workers, args.duration, out, args.runner, args.threads),
+        "command": lambda out: command_sweep(vs, args, out),
         "builtin": lambda out: bare_rollout(vs, threads, args.duration, builtin=True, steps=steps)[0],
         "callback": lambda out: bare_rollout(vs, threads, args.duration, steps=steps, callback=True)[0],
     }
@@ -206,7 +231,9 @@ def interleaved(vs, args, steps: int) -> dict:
         print(f"round {k + 1}: sweep {walls['sweep']:.2f} s, bare {steps} steps per variant built-in "
               f"{walls['builtin']:.2f} s ({walls['builtin'] / walls['sweep']:.2f}), with the callback "
               f"{walls['callback']:.2f} s ({walls['callback'] / walls['sweep']:.2f}); in warmed workers "
-              f"{walls['warm']:.2f} s (built-in {walls['builtin'] / walls['warm']:.2f}); load {load:.2f}", flush=True)
+              f"{walls['warm']:.2f} s (built-in {walls['builtin'] / walls['warm']:.2f}); the command "
+              f"{walls['command']:.2f} s (built-in {walls['builtin'] / walls['command']:.2f}); load {load:.2f}",
+              flush=True)
     out = {"rounds": rounds, "steps_per_variant": steps, "target_builtin": 0.85}
     sweep_s = np.array([r["sweep_s"] for r in rounds])
     warm_s = np.array([r["warm_s"] for r in rounds])
@@ -220,6 +247,11 @@ def interleaved(vs, args, steps: int) -> dict:
     out["throughput_builtin_over_warm_sweep"] = {
         "ratio_of_medians": float(np.median(builtin_s) / np.median(warm_s)),
         "min": float((builtin_s / warm_s).min()), "max": float((builtin_s / warm_s).max())}
+    command_s = np.array([r["command_s"] for r in rounds])
+    out["throughput_builtin_over_command"] = {
+        "ratio_of_medians": float(np.median(builtin_s) / np.median(command_s)),
+        "min": float((builtin_s / command_s).min()), "max": float((builtin_s / command_s).max())}
+    out["command_s"] = float(np.median(command_s))
     start_up = sweep_s - warm_s  # per round: what the whole sweep pays that the warmed one does not
     out["start_up_s"] = {"median": float(np.median(start_up)), "min": float(start_up.min()),
                          "max": float(start_up.max())}
