@@ -315,8 +315,8 @@ def sweep_rows(d: dict, name: str) -> dict[str, list[Row]]:
                             f"{u['median']:+.2f} s ({u['min']:+.2f} to {u['max']:+.2f} s)", name, cmd))
         if "throughput_builtin_over_command" in i:
             m = i["throughput_builtin_over_command"]
-            rows.append(Row("the same, the whole `mtbmj sweep` command in a process of its own (Python, imports, "
-                            "the pool, the compiled laws' load in each worker)", f"≥ {tgt(i['target_builtin'])}×",
+            rows.append(Row("the same, the whole `mtbmj sweep` command in a process of its own (imports, pool, "
+                            "the compiled laws' load in each worker)", f"≥ {tgt(i['target_builtin'])}×",
                             f"{ratio(m['ratio_of_medians'], 2)} ({spread(m['min'], m['max'], 2)}): "
                             f"{sec(i['command_s'], 3)}", name, cmd))
     return {"sweeps": rows}
@@ -357,9 +357,9 @@ def dropfit_ratio_rows(d: dict) -> dict[str, list[Row]]:
         f"{num(pr['fast']['median'])} ms; without the closing engine-error run {ratio(lr['median'], 2)} "
         f"({spread(lr['min'], lr['max'], 2)}): {num(lp['mujoco']['median'])} vs {num(lp['fast']['median'])} ms",
         "dropfit_ratio.json", d["command"])]
-        + ([Row(f"the floor of any MuJoCo fit: {d['mujoco_floor_steps']} MuJoCo steps a run (the engine's, at the "
-                "truth), bare scene with the compiled callback, one thread, shared perfectly over the fit's "
-                f"{d['workers']['mujoco']} threads / the fast fit's whole cost per run", "report",
+        + ([Row(f"floor of any MuJoCo fit (its {d['mujoco_floor_steps']} steps a run, bare with the compiled "
+                f"callback, shared perfectly over {d['workers']['mujoco']} threads) / the fast fit's whole cost "
+                "per run", "report",
                 f"{ratio(d['floor_over_fast_per_run']['median'], 2)} ({spread(d['floor_over_fast_per_run']['min'], d['floor_over_fast_per_run']['max'], 2)}): "
                 f"{num(d['mujoco_floor_per_run_ms']['median'])} vs {num(pr['fast']['median'])} ms",
                 "dropfit_ratio.json", d["command"])] if "floor_over_fast_per_run" in d else [])}
