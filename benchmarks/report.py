@@ -344,7 +344,12 @@ def sweep_steady_rows(d: dict) -> dict[str, list[Row]]:
         f"{s['median']:.0f} variants/s ({s['min']:.0f}–{s['max']:.0f}); a variant {num(w['median'])} ms per worker, "
         f"{ratio(o['median'], 2)} the engine's {num(p['engine_ms']['median'])} ms (prepare "
         f"{num(p['prepare_ms']['median'])}, finish {num(p['finish_ms']['median'])} ms)",
-        "sweep_steady.json", d["command"])]}
+        "sweep_steady.json", d["command"])]
+        + ([Row("the same, CPU time per variant, every process of the command (perf stat task-clock)",
+                f"≤ {num(d['cpu_ms_per_variant_at_target'])} ms (the target's rate on {d['environment']['cpus']} cores)",
+                f"{num(d['steady_cpu_ms_per_variant']['median'])} ms ({num(d['steady_cpu_ms_per_variant']['min'])}–"
+                f"{num(d['steady_cpu_ms_per_variant']['max'])} ms)", "sweep_steady.json", d["command"])]
+           if "steady_cpu_ms_per_variant" in d else [])}
 
 
 def dropfit_ratio_rows(d: dict) -> dict[str, list[Row]]:

@@ -9,7 +9,9 @@ round, is the fast engine alone (``engine_fast.run``) on ``--phase-variants`` of
 in this process, with the other phases of a variant (``chain.prepare``: overrides, ``compose.setup``
 and its step rule; ``chain.finish``: logged signals and the summary) timed beside it: the figure is
 the steady per-variant cost of one worker (workers / rate) over the engine's own. Rounds alternate
-the order of the two commands.
+the order of the two commands. Where ``perf stat`` counts task-clock, each command runs under it,
+and the same difference gives the CPU time a variant costs, every process of the command
+together: the target's rate allows at most cores / rate of it (2 ms on 2 cores).
 
     python benchmarks/sweep_steady.py [--variants 20000] [--small 2000] [--repeat 3] [--workers 2]
 
@@ -20,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -40,13 +43,42 @@ def command(n: int, workers: int, out: Path) -> list[str]:
             "--workers", str(workers), "--quiet", "--no-figure", "--out", str(out)]
 
 
-def timed_command(n: int, workers: int, tmp: Path, tag: str) -> float:
+def _perf() -> str | None:
+    """``perf`` where it counts a command's CPU time (task-clock, the command and every process it
+    starts), else None."""
+    perf = shutil.which("perf")
+    if perf is None:
+        return None
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "probe"
+        done = subprocess.run([perf, "stat", "-x,", "-e", "task-clock", "-o", str(out), "true"],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        return perf if done.returncode == 0 and _task_clock_s(out) is not None else None
+
+
+def _task_clock_s(path: Path) -> float | None:
+    for line in path.read_text().splitlines():
+        fields = line.split(",")
+        if len(fields) > 2 and fields[2].startswith("task-clock"):
+            try:
+                return float(fields[0]) / 1e3
+            except ValueError:
+                return None
+    return None
+
+
+def timed_command(n: int, workers: int, tmp: Path, tag: str, perf: str | None = None) -> tuple[float, float | None]:
+    """(wall time, CPU time of the command and its workers, or None without ``perf``) in s."""
     out = tmp / tag
+    stat = tmp / f"{tag}.perf"
+    cmd = command(n, workers, out)
+    if perf is not None:
+        cmd = [perf, "stat", "-x,", "-e", "task-clock", "-o", str(stat), *cmd]
     start = time.perf_counter()
-    subprocess.run(command(n, workers, out), stdout=subprocess.DEVNULL, check=True)
+    subprocess.run(cmd, stdout=subprocess.DEVNULL, check=True)
     wall = time.perf_counter() - start
     subprocess.run(["rm", "-rf", str(out)], check=True)
-    return wall
+    return wall, (_task_clock_s(stat) if perf is not None else None)
 
 
 def phases(n: int) -> dict:
@@ -88,27 +120,34 @@ def main() -> None:
     phases(20)  # warm: numba's cache, scipy's sampler
     with tempfile.TemporaryDirectory(prefix="mtbmj_steady_") as tmp:
         tmp = Path(tmp)
+        perf = _perf()
         timed_command(200, args.workers, tmp, "warm")  # the page cache, numba's cache files
         rounds = []
         for k in range(args.repeat):
             load_before = os.getloadavg()[0]
             order = ("small", "large") if k % 2 == 0 else ("large", "small")
-            walls = {}
+            walls, cpus = {}, {}
             for which in order:
                 n = args.small if which == "small" else args.variants
-                walls[which] = timed_command(n, args.workers, tmp, f"{which}{k}")
+                walls[which], cpus[which] = timed_command(n, args.workers, tmp, f"{which}{k}", perf)
                 if which == order[0]:
                     p = phases(args.phase_variants)
             rate = (args.variants - args.small) / (walls["large"] - walls["small"])
             per_worker_ms = args.workers / rate * 1e3
+            cpu_ms = (None if perf is None else
+                      (cpus["large"] - cpus["small"]) / (args.variants - args.small) * 1e3)
             rounds.append({"small_s": walls["small"], "large_s": walls["large"], "steady_variants_per_s": rate,
                            "steady_ms_per_variant_per_worker": per_worker_ms, "phases_ms": p,
+                           "cpu_small_s": cpus["small"], "cpu_large_s": cpus["large"],
+                           "steady_cpu_ms_per_variant": cpu_ms,
                            "over_engine": per_worker_ms / p["engine_ms"],
                            "load_before": load_before, "load_after": os.getloadavg()[0]})
             print(f"round {k + 1}: {args.small} variants {walls['small']:.1f} s, {args.variants} variants "
                   f"{walls['large']:.1f} s: steady {rate:.0f} variants/s ({per_worker_ms:.2f} ms per variant per "
                   f"worker); in-process prepare {p['prepare_ms']:.2f} ms, engine {p['engine_ms']:.2f} ms, finish "
-                  f"{p['finish_ms']:.2f} ms; load {load_before:.2f} -> {rounds[-1]['load_after']:.2f}", flush=True)
+                  f"{p['finish_ms']:.2f} ms; CPU per variant "
+                  f"{'n/a' if cpu_ms is None else format(cpu_ms, '.2f') + ' ms'}; load {load_before:.2f} -> "
+                  f"{rounds[-1]['load_after']:.2f}", flush=True)
     payload = {
         "command": f"python benchmarks/sweep_steady.py --variants {args.variants} --small {args.small} "
                    f"--repeat {args.repeat} --workers {args.workers}",
@@ -120,7 +159,11 @@ def main() -> None:
         "phases_ms": {k: stats([r["phases_ms"][k] for r in rounds]) for k in ("prepare_ms", "engine_ms", "finish_ms")},
         "load": stats([x for r in rounds for x in (r["load_before"], r["load_after"])]),
         "target_variants_per_s": TARGET_VARIANTS_PER_S,
+        # the CPU time a variant may take, all processes together, for the target on this machine's cores
+        "cpu_ms_per_variant_at_target": (os.cpu_count() or 1) / TARGET_VARIANTS_PER_S * 1e3,
     }
+    if perf is not None:
+        payload["steady_cpu_ms_per_variant"] = stats([r["steady_cpu_ms_per_variant"] for r in rounds])
     s = payload["steady_variants_per_s"]
     print(f"steady state {s['median']:.0f} variants/s ({s['min']:.0f}-{s['max']:.0f}) on {args.workers} workers; "
           f"target {TARGET_VARIANTS_PER_S}")
