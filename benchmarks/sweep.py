@@ -175,6 +175,8 @@ def warm_sweep(vs, workers: int, duration, out: Path, runner: str = "batch", thr
         for _ in range(10):  # until every worker has made a short drop of its own
             if len({f.result() for f in [pool.submit(_warm_worker) for _ in range(workers)]}) == workers:
                 break
+        else:
+            raise SystemExit(f"could not warm each of the {workers} workers in 10 tries")
         start = time.perf_counter()
         sweep.run_sweep("S12", vs, out, duration=duration, workers=workers, progress=True, runner=runner,
                         threads=threads, pool=pool)
@@ -207,9 +209,9 @@ def command_sweep(vs, args, out: Path) -> float:
 
 
 def interleaved(vs, args, steps: int) -> dict:
-    """``args.repeat`` rounds of the whole sweep, the same sweep in warmed workers and the bare
-    scene making ``steps`` steps per variant (built-in elements; compiled callback), interleaved,
-    the order alternating."""
+    """``args.repeat`` rounds of the whole sweep, the same sweep in warmed workers, the whole
+    command and the bare scene making ``steps`` steps per variant (built-in elements; compiled
+    callback), interleaved, the order alternating."""
     threads = args.workers * args.threads
     runs = {
         "sweep": lambda out: run_sweep(vs, args.workers, args.duration, out, args.runner, args.threads)[0],
