@@ -295,7 +295,7 @@ def sweep_rows(d: dict, name: str) -> dict[str, list[Row]]:
         rows.append(Row("the same sweep / the bare scene making as many steps as the runner, compiled callback "
                         "installed (throughput; per variant: best of 3, interleaved)", "≥ 0.9×",
                         f"{ratio(d['throughput_ratio_sweep_to_same_steps_with_callback'], 2)} for the whole "
-                        f"command; in one process {num(p['whole_runner_ms'], 3)} ms per variant vs "
+                        f"sweep (`run_sweep`); in one process {num(p['whole_runner_ms'], 3)} ms per variant vs "
                         f"{num(p['bare_same_steps_with_callback_ms'], 3)} ms of that stepping (runner "
                         f"{ratio(p['runner_over_bare_same_steps_with_callback'])})", name, cmd))
     if "interleaved" in d:
