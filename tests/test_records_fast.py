@@ -123,3 +123,24 @@ def test_a_long_dyno_record_reads_bitwise_as_line_by_line(tmp_path):
         spoiled = tmp_path / "spoiled.csv"
         spoiled.write_text("\n".join(lines[:-3] + [spoil] + lines[-2:]) + "\n")
         assert not same_reading(spoiled)
+
+
+def test_a_warning_from_numpys_reader_leaves_the_record_to_the_line_by_line_reader(tmp_path, monkeypatch):
+    """The fast path turns warnings into errors to catch numpy's empty-input warning; a warning of
+    another kind (a deprecation in some numpy) must not escape as an exception: the line-by-line
+    reader reads the record, to the same values."""
+    path = tmp_path / "record.csv"
+    path.write_text("time_s,force_N\n0.0,1.5\n0.001,-2.25\n")
+    expected = read_csv(path)
+    loadtxt = np.loadtxt
+
+    def warning_loadtxt(*args, **kwargs):
+        import warnings
+        warnings.warn("some future numpy deprecates an argument", DeprecationWarning)
+        return loadtxt(*args, **kwargs)
+
+    monkeypatch.setattr(records.np, "loadtxt", warning_loadtxt)
+    got = read_csv(path)
+    assert list(got.columns) == list(expected.columns) == ["time", "force"]
+    for name in expected.columns:
+        assert np.array_equal(got.columns[name], expected.columns[name])

@@ -148,7 +148,7 @@ def _numbers(lines: list[tuple[int, str]], delimiter: str, width: int) -> np.nda
             warnings.simplefilter("error")  # numpy warns on an empty input instead of raising
             table = np.loadtxt(io.StringIO("\n".join(line for _, line in lines)), dtype=float,
                                delimiter=delimiter, comments=None, ndmin=2, quotechar=None)
-    except (ValueError, UserWarning):
+    except (ValueError, Warning):  # any warning made an error above: the line-by-line reader decides
         return None
     if table.shape != (len(lines), width) or not np.isfinite(table).all():
         return None
