@@ -237,28 +237,22 @@ def interleaved(vs, args, steps: int) -> dict:
               f"{walls['command']:.2f} s (built-in {walls['builtin'] / walls['command']:.2f}); load {load:.2f}",
               flush=True)
     out = {"rounds": rounds, "steps_per_variant": steps, "target_builtin": 0.85}
-    sweep_s = np.array([r["sweep_s"] for r in rounds])
-    warm_s = np.array([r["warm_s"] for r in rounds])
-    for name in ("builtin", "callback"):
-        base = np.array([r[f"{name}_s"] for r in rounds])
-        per = base / sweep_s
-        out[f"throughput_{name}_over_sweep"] = {"ratio_of_medians": float(np.median(base) / np.median(sweep_s)),
-                                                "min": float(per.min()), "max": float(per.max())}
-        out[f"{name}_s"] = float(np.median(base))
-    builtin_s = np.array([r["builtin_s"] for r in rounds])
-    out["throughput_builtin_over_warm_sweep"] = {
-        "ratio_of_medians": float(np.median(builtin_s) / np.median(warm_s)),
-        "min": float((builtin_s / warm_s).min()), "max": float((builtin_s / warm_s).max())}
-    command_s = np.array([r["command_s"] for r in rounds])
-    out["throughput_builtin_over_command"] = {
-        "ratio_of_medians": float(np.median(builtin_s) / np.median(command_s)),
-        "min": float((builtin_s / command_s).min()), "max": float((builtin_s / command_s).max())}
-    out["command_s"] = float(np.median(command_s))
-    start_up = sweep_s - warm_s  # per round: what the whole sweep pays that the warmed one does not
+    wall = {name: np.array([r[f"{name}_s"] for r in rounds]) for name in runs}
+
+    def throughput(base: str, timed: str) -> dict:
+        """``base``'s wall time over ``timed``'s: the ratio of the medians, the per-round spread."""
+        per = wall[base] / wall[timed]
+        return {"ratio_of_medians": float(np.median(wall[base]) / np.median(wall[timed])),
+                "min": float(per.min()), "max": float(per.max())}
+
+    out["throughput_builtin_over_sweep"] = throughput("builtin", "sweep")
+    out["throughput_callback_over_sweep"] = throughput("callback", "sweep")
+    out["throughput_builtin_over_warm_sweep"] = throughput("builtin", "warm")
+    out["throughput_builtin_over_command"] = throughput("builtin", "command")
+    start_up = wall["sweep"] - wall["warm"]  # per round: what the whole sweep pays that the warmed one does not
     out["start_up_s"] = {"median": float(np.median(start_up)), "min": float(start_up.min()),
                          "max": float(start_up.max())}
-    out["warm_s"] = float(np.median(warm_s))
-    out["sweep_s"] = float(np.median(sweep_s))
+    out.update({f"{name}_s": float(np.median(w)) for name, w in wall.items()})
     out["load"] = [float(min(r["load_before"] for r in rounds)), float(max(r["load_after"] for r in rounds))]
     return out
 
