@@ -85,7 +85,9 @@ def test_gif_and_mp4_decode(backend, tmp_path):
     decoded = [np.frombuffer(f, np.uint8).reshape(SIZE[1], SIZE[0], 3) for f in reader]
     assert tuple(meta["size"]) == SIZE and len(decoded) == mp4["frames"]
     assert decoded[0].std() > 10
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["drop.gif", "drop.mp4"]  # no temporary files left
+    # no temporary files left; beside each video, the record that it is mtbmj's
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".drop.gif.mtbmj-file.json", ".drop.mp4.mtbmj-file.json",
+                                                          "drop.gif", "drop.mp4"]
 
 
 def test_run_directory_is_replayed(backend, tmp_path, capsys, monkeypatch):

@@ -24,7 +24,6 @@ import math
 import os
 import subprocess
 import sys
-import tempfile
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from mtbmj.errors import MtbmjError
+from mtbmj.output import check_file_target, staged_file
 
 FORMATS = (".mp4", ".gif")
 BACKENDS = ("egl", "osmesa")
@@ -352,7 +352,20 @@ def check_output(out: str | Path, width: int, height: int, fps: float) -> str:
         require("video", "MP4 video", otherwise="write a .gif")
     if not (math.isfinite(fps) and 1 <= fps <= 240):
         raise RenderError(f"--fps: must be in 1..240, got {fps:g}")
+    _check_target(out)
     return ext
+
+
+def _check_target(out: str | Path) -> None:
+    """Refuse an output that mtbmj did not write (see :func:`mtbmj.output.check_file_target`)."""
+    from mtbmj.errors import MtbmjError
+
+    try:
+        check_file_target(out)
+    except RenderError:
+        raise
+    except MtbmjError as exc:
+        raise RenderError(str(exc)) from None
 
 
 def render(source: "str | Path | Trajectory", out: str | Path, fps: float = 30.0, width: int = 640, height: int = 480,
@@ -366,23 +379,9 @@ def render(source: "str | Path | Trajectory", out: str | Path, fps: float = 30.0
     gl_backend()  # fail before any simulation when there is no GL backend
     traj = source if isinstance(source, Trajectory) else trajectory(source, fps, duration)
     out = Path(out)
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=ext, dir=out.parent)
-        os.close(fd)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # as a plain open() would, not mkstemp's 0600
-    except OSError as exc:
-        raise RenderError(f"{out}: cannot write ({exc.strerror})") from None
-    try:
+    with staged_file(out, command="render") as tmp:
         images = frames(traj, width, height)
-        count = _write_gif(tmp, images, fps) if ext == ".gif" else _write_mp4(tmp, images, fps, width, height)
-        os.replace(tmp, out)
-    except OSError as exc:
-        raise RenderError(f"{out}: cannot write ({exc.strerror or exc})") from None
-    finally:
-        Path(tmp).unlink(missing_ok=True)
+        count = _write_gif(str(tmp), images, fps) if ext == ".gif" else _write_mp4(str(tmp), images, fps, width, height)
     return {"path": str(out), "frames": count, "fps": fps, "width": width, "height": height,
             "duration_s": count / fps, "backend": gl_backend(), "label": traj.label}
 
