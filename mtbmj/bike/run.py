@@ -32,14 +32,13 @@ from typing import Callable
 
 import mujoco
 import numpy as np
-from mujoco import rollout
 
 from mtbmj import compose, output
 from mtbmj.bike import spec as spec_mod
 from mtbmj.bike.model import Bike, build_bike
 from mtbmj.controllers import installed
 from mtbmj.controllers.drive import Drive
-from mtbmj.errors import ConfigError, FallbackWarning, RunError
+from mtbmj.errors import ConfigError, RunError
 from mtbmj.limits import check_run
 from mtbmj.readout.endtravel import end_of_travel
 from mtbmj.result import RunOutput
@@ -47,6 +46,7 @@ from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 from mtbmj.bike.callback import BikeCallback
 from mtbmj.bike.stepping import CHUNK_STEPS, FINE_MIN_STEPS, Stepping, stepping
+from mtbmj.runpath import callbacks, guard, loop
 
 CHUNK = 10000
 CALLBACKS = ("auto", "compiled", "python")
@@ -234,26 +234,15 @@ def _front_alone(p: Prepared) -> dict:
 
 def make_callback(kind: str, *args):
     """The bike's callback of ``kind`` ("python", "compiled" or "auto"), ``args`` as
-    ``BikeCallback``'s. "auto": the compiled one when possible, else the Python one with a warning
-    (once per reason: numba missing, the mjData layout not verifiable, a law, tire or terrain with
-    no compiled form)."""
-    if kind == "python":
-        return BikeCallback(*args)
-    from mtbmj.bike import callback_compiled as compiled  # numba is imported on the first compiled run only
+    ``BikeCallback``'s; "auto": the compiled one when possible, else the Python one with a warning
+    (``mtbmj.runpath.callbacks.choose``)."""
+    def load():
+        from mtbmj.bike import callback_compiled  # numba is imported on the first compiled run only
 
-    if kind == "compiled":
-        return compiled.CompiledBikeCallback(*args)
-    reason = compiled.unavailable_reason()
-    if reason is None:
-        try:
-            return compiled.CompiledBikeCallback(*args)
-        except (compiled.UnsupportedLaw, compiled.UnsupportedRolling) as error:
-            compiled.warn_once(f"{error}: using the Python bike callback")
-        except RuntimeError as error:  # the mjData layout check failed
-            compiled.warn_once(str(error))
-    else:
-        compiled.warn_once(reason)
-    return BikeCallback(*args)
+        return callback_compiled
+
+    return callbacks.choose(kind, lambda: BikeCallback(*args), load,
+                            lambda module: module.CompiledBikeCallback(*args), "bike")
 
 
 def callback_kind(callback) -> str:
@@ -291,88 +280,66 @@ def _check_equilibrium(ref, q) -> None:
 
 
 def simulate(p: Prepared, duration: float, progress=None):
-    """(states (n+1, nstate), sensordata (n, nsensor)) of ``duration`` s from the prepared state.
+    """(states (n+1, nstate), sensordata (n, nsensor)) of ``duration`` s from the prepared state:
+    row i of the sensors describes row i of the states (``mtbmj.runpath.loop``).
 
     If the compiled callback met more contact patches than it holds (``overflowed``), the run is
     redone on the Python path (``p.callback`` becomes that ``BikeCallback``), with a warning."""
     kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
     start_state = np.empty(mujoco.mj_stateSize(p.bike.model, kind))
     mujoco.mj_getState(p.bike.model, p.data, start_state, kind)
-    states, sensors = _simulate(p, duration, progress)
-    if getattr(p.callback, "overflowed", False):
-        import warnings
 
-        warnings.warn("compiled bike callback: too many contact patches, rerunning on the Python path",
-                      FallbackWarning, stacklevel=2)
+    def to_python():
         p.callback = _python_twin(p.callback)  # its first evaluation searches the patches afresh
         mujoco.mj_setState(p.bike.model, p.data, start_state, kind)
         p.refined_steps = p.stepped = 0
-        states, sensors = _simulate(p, duration, progress)
-    return states, sensors
+
+    return callbacks.rerun_on_python(lambda: _simulate(p, duration, progress),
+                                     lambda: getattr(p.callback, "overflowed", False), to_python, "bike")
+
+
+@dataclass
+class _Refine:
+    """The bike's refinement plan (``mtbmj.runpath.loop.Refinement``): a chunk stepped coarse is
+    looked at after the fact (``Stepping.within_reach``) and its stretch near a stop or a rim redone
+    at the fine step (``mtbmj.bike.stepping``)."""
+
+    p: Prepared
+    fork_col: int
+    phi_col: int
+    deflection_cols: list
+    min_steps: int = FINE_MIN_STEPS
+    max_chunk: int = CHUNK_STEPS
+
+    @property
+    def substeps(self) -> int:
+        return self.p.stepping.substeps
+
+    def span(self, states, sensors):
+        return self.p.stepping.within_reach(states[:, self.fork_col], states[:, self.phi_col],
+                                            [sensors[:, c] for c in self.deflection_cols])
+
+    def before_fine(self) -> None:
+        self.p.callback.reset()  # the patches of the chunk's end: the fine pass searches afresh
 
 
 def _simulate(p: Prepared, duration: float, progress=None):
-    """Step ``duration`` s in chunks of ``CHUNK_STEPS`` coarse steps; where a chunk came within
-    reach of an end stop or a rim (``Stepping.within_reach``), its steps from the sample before the
-    first such to one past the last are stepped again at the fine step, every ``substeps``-th state
-    kept, and the next chunk starts after them (``mtbmj.bike.stepping``). After a fine stretch the
-    chunks start short and double while no stop comes within reach: a coarse pass cut short by one
-    has made steps that are not kept."""
-    model, data = p.bike.model, p.data
-    plan = p.stepping
+    """Step ``duration`` s on the shared run path (``mtbmj.runpath.loop.chunked``) with the bike's
+    refinement plan: where a chunk came within reach of an end stop or a rim, its steps from the
+    sample before the first such to one past the last are stepped again at the fine step."""
+    model = p.bike.model
     steps = int(round(duration / p.timestep))
-    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    state = np.empty(mujoco.mj_stateSize(model, kind))
-    mujoco.mj_getState(model, data, state, kind)
-    states = np.empty((steps + 1, state.size))
-    sensors = np.empty((steps, model.nsensordata))
-    states[0] = state
     b = p.bike
-    fork_col = 1 + b.qpos_index("fork")
-    phi_col = 1 + b.qpos_index("swingarm")
-    deflection_cols = [int(model.sensor_adr[model.sensor(n).id]) for n in ("front_deflection", "rear_deflection")]
-    k = plan.substeps
-    chunk = CHUNK_STEPS if k > 1 else CHUNK
-    done = 0
-    last_report = 0
-    with installed(p.callback):
-        while done < steps:
-            n = min(chunk, steps - done)
-            st, se = rollout.rollout(model, data, states[done][None, :], nstep=n)
-            st, se = st[0], se[0]
-            if k > 1:
-                if np.all(np.isfinite(st)):
-                    span = plan.within_reach(st[:, fork_col], st[:, phi_col], [se[:, c] for c in deflection_cols])
-                else:
-                    span = (0, n - 1)  # diverged at the coarse step: the whole chunk at the fine one
-                if span is not None:
-                    keep = max(span[0] - 1, 0)  # coarse rows kept: those before the sample before the first
-                    n = min(n, max(span[1] + 2, keep + FINE_MIN_STEPS))  # fine to one past the last; the rest anew
-                    start = states[done] if keep == 0 else st[keep - 1]
-                    p.callback.reset()  # the patches of the chunk's end: the fine pass searches afresh
-                    model.opt.timestep = plan.fine
-                    try:
-                        fs, fe = rollout.rollout(model, data, start[None, :], nstep=(n - keep) * k)
-                    finally:
-                        model.opt.timestep = p.timestep
-                    st, se = st[:n], se[:n]
-                    st[keep:], se[keep:] = fs[0, k - 1::k], fe[0, k - 1::k]
-                    st[:, 0] = states[done][0] + p.timestep * np.arange(1, n + 1)  # the coarse grid's times
-                    data.time = st[-1, 0]
-                    p.refined_steps += n - keep
-                    chunk = FINE_MIN_STEPS  # near a stop: short coarse chunks, doubling while clear
-                else:
-                    chunk = min(2 * chunk, CHUNK_STEPS)
-            p.stepped += n
-            states[done + 1: done + 1 + n] = st
-            sensors[done: done + n] = se
-            done += n
-            if not np.all(np.isfinite(st)):
-                raise RunError(f"bike run diverged before t = {done * p.timestep:.4f} s")
-            if progress is not None and (done - last_report >= CHUNK or done == steps):
-                last_report = done
-                progress(done / steps)
-    return states, sensors
+    plan = _Refine(p, 1 + b.qpos_index("fork"), 1 + b.qpos_index("swingarm"),
+                   [int(model.sensor_adr[model.sensor(n).id]) for n in ("front_deflection", "rear_deflection")])
+    counts = loop.Counts()
+    try:
+        with installed(p.callback):
+            return loop.chunked(model, p.data, steps, p.timestep, "bike", plan if plan.substeps > 1 else None,
+                                progress, counts, chunk=CHUNK, report_every=CHUNK)
+    finally:
+        p.stepped += counts.stepped
+        p.refined_steps += counts.refined
 
 
 def _signals(p: Prepared, states, sensors) -> dict:
@@ -600,7 +567,8 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
     sag, "pitch", "rider"), ``rear_tire=False`` the rear wheel lifted (needs "pitch" locked), see
     ``prepare``."""
     _check(speed_m_per_s, duration)
-    p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire)
+    p = guard.prepared("bike", lambda: prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire),
+                       model_of=lambda p: p.bike.model)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.timestep, 1.0 / p.timestep)
     start = time.perf_counter()

@@ -44,6 +44,7 @@ from mtbmj.controllers import installed, native
 from mtbmj.drop import chain, engine_mujoco
 from mtbmj.drop import scene as scene_mod
 from mtbmj.drop.stepping import Stepping
+from mtbmj.runpath import guard
 from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
 
 CHANNELS = ("sled", "fork", "tire")  # the logged displacements a batched drop returns
@@ -133,7 +134,7 @@ def step_group(runs: list[_Run], datas, pool, spec) -> None:
     active = [r for r in runs if r.steps > 0]
     size = min(ROUND_BUFFER_VALUES, len(active) * min(MAX_ROUND, max((r.steps for r in active), default=1)) * nstate)
     buffer = np.empty(max(size, nstate))  # one state buffer for all rounds (views of it, C-contiguous)
-    with engine_mujoco.collected_warnings(messages):
+    with guard.collected_warnings(messages):
         while active:
             made = []
             coarse = [r for r in active if not r.plan.fine]
@@ -167,7 +168,7 @@ def step_group(runs: list[_Run], datas, pool, spec) -> None:
                 keep, switch, partial = r.plan.keep(start, states, fine_states)
                 kept = states[:keep]
                 if (not np.all(np.isfinite(kept)) or (keep and np.max(np.abs(kept[:, 1:3])) > MAX_DISPLACEMENT_M)
-                        or (warned and not engine_mujoco.steps_clean(start, kept))):
+                        or (warned and not guard.steps_clean(start, kept))):
                     r.failed = True  # the single path says where and why
                     continue
                 r.discarded += len(states) - keep

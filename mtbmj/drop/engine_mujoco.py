@@ -13,31 +13,12 @@ from mtbmj.drop import scene as scene_mod
 from mtbmj.compose import Setup
 from mtbmj.drop.stepping import Stepping
 from mtbmj.errors import RunError
+from mtbmj.runpath import guard
+from mtbmj.runpath.guard import collected_warnings, first_warning, steps_clean
 from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
 
 
-def first_warning(data) -> str | None:
-    raised = np.flatnonzero(data.warning.number)  # one array read (iterating the structs costs 0.1 ms)
-    return mujoco.mjtWarning(int(raised[0])).name.removeprefix("mjWARN_") if raised.size else None
-
-
-def steps_clean(start, states) -> bool:
-    """True if no step of ``states`` (recorded from ``start``) was reset by MuJoCo after an
-    instability: their times (the first column) rise steadily from the start's."""
-    times = np.concatenate(([start[0]], states[:, 0]))
-    return bool(np.all(np.isfinite(states)) and np.all(np.diff(times) > 0.0))
-
-
-@contextmanager
-def collected_warnings(messages: list):
-    """Route MuJoCo's warning text into ``messages`` for the run (by default MuJoCo prints it
-    and appends it to MUJOCO_LOG.TXT in the working directory); restore the handler after."""
-    previous = mujoco.get_mju_user_warning()
-    mujoco.set_mju_user_warning(messages.append)
-    try:
-        yield messages
-    finally:
-        mujoco.set_mju_user_warning(previous)
+# MuJoCo's warnings and the divergence checks are the shared run path's (``mtbmj.runpath.guard``)
 
 
 def state_layout(model) -> tuple[int, slice, slice, slice]:
@@ -199,14 +180,14 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
 
 
 def _check(data, states, done: int, setup: Setup, messages=()) -> None:
-    """Stop on a MuJoCo warning or a non-finite or runaway state, naming the time."""
+    """Stop on a MuJoCo warning or a non-finite or runaway state, naming the time (one line)."""
     t = done * setup.timestep
     warning = first_warning(data)
     if warning is not None or messages:
-        text = messages[0] if messages else warning
-        raise RunError(f"run diverged before t = {t:.4f} s: MuJoCo warning {warning}: {text}")
+        raise guard.diverged("drop", t, guard.likely_cause(warning, messages[0] if messages else None))
     if not np.all(np.isfinite(states)):
         bad = int(np.flatnonzero(~np.all(np.isfinite(states), axis=1))[0])
-        raise RunError(f"run diverged at t = {(done - len(states) + bad + 1) * setup.timestep:.4f} s: state is not finite")
+        raise RunError(f"drop run diverged at t = {(done - len(states) + bad + 1) * setup.timestep:.4f} s: "
+                       f"the state is not finite")
     if np.max(np.abs(states[:, 1:3])) > MAX_DISPLACEMENT_M:
-        raise RunError(f"run diverged before t = {t:.4f} s: displacement beyond 10 m")
+        raise guard.diverged("drop", t, "a displacement beyond 10 m")

@@ -29,7 +29,6 @@ from typing import Callable, Mapping
 
 import mujoco
 import numpy as np
-from mujoco import rollout
 
 from mtbmj import mjcf
 from mtbmj.controllers import installed
@@ -40,11 +39,12 @@ from mtbmj.readout.endtravel import end_of_travel
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.terrain import DEFAULT_HEAD_ANGLE_DEG
 from mtbmj.config import Config
-from mtbmj.errors import ConfigError, FallbackWarning, RunError
+from mtbmj.errors import ConfigError
 from mtbmj.limits import check_run
 from mtbmj.result import RunOutput
 from mtbmj.rolling.callback import RollCallback
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
+from mtbmj.runpath import callbacks, guard, loop
 
 DRIVE_HZ = 10.0  # bandwidth of the speed servo (critically damped)
 CHUNK = 10000
@@ -277,25 +277,14 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
 
 
 def _make_callback(kind: str, front, law, tire, speed, x_ref0, refresh, drive=None):
-    if kind == "python":
-        return RollCallback(front, law, tire, speed, x_ref0, refresh, drive)
-    from mtbmj.rolling import callback_compiled as compiled_rolling  # numba is imported on the first compiled run only
+    """The rolling callback of ``kind`` (``mtbmj.runpath.callbacks.choose``)."""
+    def load():
+        from mtbmj.rolling import callback_compiled  # numba is imported on the first compiled run only
 
-    if kind == "compiled":
-        return compiled_rolling.CompiledRollCallback(front, law, tire, speed, x_ref0, refresh, drive)
-    # "auto": the compiled callback when possible, else this one with a warning (once per reason:
-    # numba missing, layout not verifiable, a law/tire/terrain with no compiled form)
-    reason = compiled_rolling.unavailable_reason()
-    if reason is None:
-        try:
-            return compiled_rolling.CompiledRollCallback(front, law, tire, speed, x_ref0, refresh, drive)
-        except (compiled_rolling.UnsupportedLaw, compiled_rolling.UnsupportedRolling) as error:  # noqa: E501
-            compiled_rolling.warn_once(f"{error}: using the Python rolling callback")
-        except RuntimeError as error:  # the mjData layout check failed
-            compiled_rolling.warn_once(str(error))
-    else:
-        compiled_rolling.warn_once(reason)
-    return RollCallback(front, law, tire, speed, x_ref0, refresh, drive)
+        return callback_compiled
+
+    return callbacks.choose(kind, lambda: RollCallback(front, law, tire, speed, x_ref0, refresh, drive), load,
+                            lambda m: m.CompiledRollCallback(front, law, tire, speed, x_ref0, refresh, drive), "rolling")
 
 
 def callback_kind(callback) -> str:
@@ -315,50 +304,30 @@ def default_duration(p: Prepared) -> float:
 
 
 def simulate(p: Prepared, duration: float, progress=None):
-    """(states (n+1, nstate) incl. t = 0, sensordata (n, nsensor) of each step's start state).
+    """(states (n+1, nstate) incl. t = 0, sensordata (n, nsensor) of each step's start state), on
+    the shared run path (``mtbmj.runpath.loop.chunked``; the front end steps at its fine step
+    throughout, no refinement).
 
     If the compiled callback met more contact patches than it holds (``overflowed``), the run is
     redone on the Python path (``p.callback`` becomes that ``RollCallback``), with a warning."""
-    states, sensors = _simulate(p, duration, progress)
-    if getattr(p.callback, "overflowed", False):
-        import warnings
+    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    start_state = np.empty(mujoco.mj_stateSize(p.front.model, kind))
+    mujoco.mj_getState(p.front.model, p.data, start_state, kind)
 
-        warnings.warn("compiled rolling callback: too many contact patches, rerunning on the Python path",
-                      FallbackWarning, stacklevel=2)
+    def to_python():
         p.callback = _python_twin(p.callback)
         p.callback.bind(p.data)
-        mujoco.mj_setState(p.front.model, p.data, states[0], mujoco.mjtState.mjSTATE_FULLPHYSICS)
-        states, sensors = _simulate(p, duration, progress)
-    return states, sensors
+        mujoco.mj_setState(p.front.model, p.data, start_state, kind)
+
+    return callbacks.rerun_on_python(lambda: _simulate(p, duration, progress),
+                                     lambda: getattr(p.callback, "overflowed", False), to_python, "rolling")
 
 
 def _simulate(p: Prepared, duration: float, progress=None):
-    model, data = p.front.model, p.data
     steps = int(round(duration / p.setup.timestep))
-    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    state = np.empty(mujoco.mj_stateSize(model, spec))
-    mujoco.mj_getState(model, data, state, spec)
-    states = np.empty((steps + 1, state.size))
-    sensors = np.empty((steps, model.nsensordata))
-    states[0] = state
-    done = 0
-    messages: list[str] = []
-    from mtbmj.drop.engine_mujoco import collected_warnings, first_warning
-
-    with installed(p.callback), collected_warnings(messages):
-        while done < steps:
-            n = min(CHUNK, steps - done)
-            st, se = rollout.rollout(model, data, states[done][None, :], nstep=n)
-            states[done + 1: done + 1 + n] = st[0]
-            sensors[done: done + n] = se[0]
-            done += n
-            warning = first_warning(data)
-            if warning is not None or messages or not np.all(np.isfinite(st)):
-                raise RunError(f"rolling run diverged before t = {done * p.setup.timestep:.4f} s: "
-                               f"{messages[0] if messages else warning or 'state is not finite'}")
-            if progress is not None:
-                progress(done / steps)
-    return states, sensors
+    with installed(p.callback):
+        return loop.chunked(p.front.model, p.data, steps, p.setup.timestep, "rolling", None, progress,
+                            chunk=CHUNK, report_every=1)
 
 
 def _signals(p: Prepared, states, sensors) -> dict[str, np.ndarray]:
@@ -578,7 +547,8 @@ def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
     when numba is available), ``"compiled"`` or ``"python"`` (the specification; same results);
     ``drive``: see ``prepare`` (default ``"rider"``: within a rider's force, power and braking)."""
     _check_inputs(speed_m_per_s, head_angle_deg, duration)
-    p = prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, callback=callback, drive=drive)
+    p = guard.prepared("rolling", lambda: prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides,
+                                                  callback=callback, drive=drive), model_of=lambda p: p.front.model)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.setup.timestep, p.setup.sample_rate)
     start = time.perf_counter()
@@ -600,7 +570,8 @@ def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12"
     """(model, times, qpos) of a rolling run sampled at ``fps`` for rendering; the model has the
     terrain as a visual heightfield (group 1) or the drum with its cleat. ``drive`` as ``prepare``."""
     _check_inputs(speed_m_per_s, head_angle_deg, duration)
-    p = prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, drive=drive)
+    p = guard.prepared("rolling", lambda: prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, drive=drive),
+                       model_of=lambda p: p.front.model)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.setup.timestep, p.setup.sample_rate)
     states, _ = simulate(p, duration)

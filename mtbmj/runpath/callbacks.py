@@ -1,0 +1,54 @@
+"""The choice of a rig's control callback and the rerun on its Python twin.
+
+Every rig has a Python callback (the laws as plain Python, the reference behaviour) and a compiled
+twin (the same functions compiled by numba). ``"auto"`` takes the compiled one when it can be made,
+else the Python one with one warning per reason (numba missing, the mjData layout not verifiable,
+a law, tire or terrain with no compiled form).
+"""
+from __future__ import annotations
+
+import warnings
+from typing import Callable
+
+from mtbmj.errors import FallbackWarning
+
+KINDS = ("auto", "compiled", "python")
+
+
+def choose(kind: str, python: Callable, load: Callable, compiled: Callable, what: str):
+    """The callback of ``kind``: ``python()`` makes the Python one; ``load()`` imports the module of
+    the compiled one (numba is imported on the first compiled run only: it has
+    ``unavailable_reason``, ``warn_once`` and the ``Unsupported*`` errors its constructor raises)
+    and ``compiled(module)`` makes it; ``what`` names the rig in the fallback warning."""
+    if kind == "python":
+        return python()
+    if kind not in KINDS:
+        raise ValueError(f"callback: expected one of {', '.join(KINDS)}, got {kind!r}")
+    module = load()
+    if kind == "compiled":
+        return compiled(module)
+    reason = module.unavailable_reason()
+    if reason is None:
+        unsupported = tuple(getattr(module, n) for n in ("UnsupportedLaw", "UnsupportedRolling") if hasattr(module, n))
+        try:
+            return compiled(module)
+        except unsupported as error:
+            module.warn_once(f"{error}: using the Python {what} callback")
+        except RuntimeError as error:  # the mjData layout check failed
+            module.warn_once(str(error))
+    else:
+        module.warn_once(reason)
+    return python()
+
+
+def rerun_on_python(run: Callable, overflowed: Callable[[], bool], to_python: Callable[[], None], what: str):
+    """``run()``; if the compiled callback met more contact patches than it holds (``overflowed()``),
+    ``to_python()`` (the Python twin installed, the start state restored) and ``run()`` again, with
+    one warning."""
+    out = run()
+    if overflowed():
+        warnings.warn(f"compiled {what} callback: too many contact patches, rerunning on the Python path",
+                      FallbackWarning, stacklevel=3)
+        to_python()
+        out = run()
+    return out
