@@ -117,28 +117,114 @@ def _controllers_stamp() -> str:
 
 
 LAW_SOURCES_STAMP = _controllers_stamp()
-_KERNEL_CACHE = None
+_FILE_DIGESTS: dict = {}
+_DIGEST_LOCK = threading.Lock()
 
 
-def _kernel_cache_class():
-    """numba's FunctionCache whose source stamp also covers ``LAW_SOURCES_STAMP`` (numba's own
-    locators, each extended; None if this numba lacks the internals, and plain caching is used)."""
-    global _KERNEL_CACHE
-    if _KERNEL_CACHE is None:
+def _file_digest(path: str) -> str:
+    with _DIGEST_LOCK:
+        digest = _FILE_DIGESTS.get(path)
+        if digest is None:
+            try:
+                digest = hashlib.sha256(Path(path).read_bytes()).hexdigest()
+            except OSError:
+                digest = "missing"
+            _FILE_DIGESTS[path] = digest
+        return digest
+
+
+def _python_function(value):
+    """The plain Python function of ``value``: itself, a numba dispatcher's ``py_func`` or a
+    cfunc's ``_pyfunc``; None for anything else."""
+    if isinstance(value, types.FunctionType):
+        return value
+    for name in ("py_func", "_pyfunc"):
+        inner = getattr(value, name, None) if not isinstance(value, types.ModuleType) else None
+        if isinstance(inner, types.FunctionType):
+            return inner
+    return None
+
+
+def _function_like(value) -> bool:
+    return _python_function(value) is not None
+
+
+def compiled_sources(fn) -> list[str]:
+    """The source files of ``fn`` and of every function it reaches (by a global name, a module's
+    attribute, a closure cell or a numba dispatcher's ``py_func``, transitively): the sources
+    numba compiles into ``fn``'s machine code. Derived from the code, not listed by hand."""
+    files: set[str] = set()
+    seen: set[int] = set()
+    stack = [fn]
+    while stack:
+        f = _python_function(stack.pop())
+        if f is None or id(f) in seen:
+            continue
+        seen.add(id(f))
+        files.add(f.__code__.co_filename)
+        names: set[str] = set()
+        codes = [f.__code__]
+        while codes:
+            code = codes.pop()
+            names.update(code.co_names)
+            codes.extend(c for c in code.co_consts if isinstance(c, types.CodeType))
+        values = [f.__globals__[n] for n in names if n in f.__globals__]
+        for cell in f.__closure__ or ():
+            try:
+                values.append(cell.cell_contents)
+            except ValueError:  # an empty cell
+                pass
+        for value in values:
+            if isinstance(value, types.ModuleType):
+                members = vars(value)  # (not getattr: a module's __getattr__ may warn or import)
+                stack.extend(a for a in (members.get(n) for n in names) if _function_like(a))
+            elif _function_like(value):
+                stack.append(value)
+    return sorted(path for path in files if Path(path).is_file())
+
+
+def sources_stamp(fn) -> str:
+    """``LAW_SOURCES_STAMP`` (all of controllers/) and the contents of every file of
+    :func:`compiled_sources`: what a compiled artifact of ``fn`` is keyed on."""
+    digest = hashlib.sha256(LAW_SOURCES_STAMP.encode())
+    for path in compiled_sources(fn):
+        digest.update(Path(path).name.encode())
+        digest.update(_file_digest(path).encode())
+    return digest.hexdigest()
+
+
+_CACHE_INTERNALS = None  # numba's caching module where it has the internals the stamp needs; False: not
+
+
+def _kernel_cache_class(fn):
+    """numba's FunctionCache for ``fn`` whose source stamp also covers :func:`sources_stamp` (numba's
+    own locators, each extended; None if this numba lacks the internals: the caller then compiles in
+    memory, never trusting the plain disk cache, which is keyed on ``fn``'s own file alone)."""
+    global _CACHE_INTERNALS
+    if _CACHE_INTERNALS is None:
         try:
             from numba.core import caching
 
-            def stamped(base):
-                def get_source_stamp(self):
-                    return (base.get_source_stamp(self), LAW_SOURCES_STAMP)
-                return type(f"LawSources{base.__name__}", (base,), {"get_source_stamp": get_source_stamp})
+            caching.CompileResultCacheImpl._locator_classes  # noqa: B018 - the internals used below
+            caching.FunctionCache  # noqa: B018
+            _CACHE_INTERNALS = caching
+        except Exception:  # noqa: BLE001 - another numba
+            _CACHE_INTERNALS = False
+    caching = _CACHE_INTERNALS
+    if not caching:
+        return None
+    stamp: list = []
 
-            impl = type("LawSourcesCacheImpl", (caching.CompileResultCacheImpl,),
-                        {"_locator_classes": [stamped(c) for c in caching.CompileResultCacheImpl._locator_classes]})
-            _KERNEL_CACHE = type("LawSourcesFunctionCache", (caching.FunctionCache,), {"_impl_class": impl})
-        except Exception:  # noqa: BLE001 - another numba: plain caching
-            _KERNEL_CACHE = False
-    return _KERNEL_CACHE or None
+    def stamped(base):
+        def get_source_stamp(self):
+            if not stamp:
+                stamp.append(sources_stamp(fn))  # at the first load or save: every callee is defined by then
+            return (base.get_source_stamp(self), stamp[0])
+        return type(f"Sources{base.__name__}", (base,), {"get_source_stamp": get_source_stamp})
+
+    impl = type("SourcesCacheImpl", (caching.CompileResultCacheImpl,),
+                {"_locator_classes": [stamped(c) for c in caching.CompileResultCacheImpl._locator_classes]})
+    return type("SourcesFunctionCache", (caching.FunctionCache,), {"_impl_class": impl})
 
 
 def kernel(fn=None, *, inline: bool = False):
@@ -150,11 +236,10 @@ def kernel(fn=None, *, inline: bool = False):
     if fn is None:
         return lambda f: kernel(f, inline=inline)
     options = {**OPTIONS, "inline": "always"} if inline else OPTIONS
-    cache = _kernel_cache_class() if CACHE else None
-    if cache is None:
-        return numba.njit(**options)(fn)
-    dispatcher = numba.njit(**{**options, "cache": False})(fn)
-    dispatcher._cache = cache(fn)
+    cache = _kernel_cache_class(fn) if CACHE else None
+    dispatcher = numba.njit(**{**options, "cache": False})(fn)  # in memory unless stamped below
+    if cache is not None:
+        dispatcher._cache = cache(fn)
     return dispatcher
 
 
@@ -162,9 +247,9 @@ def callback(signature):
     """``numba.cfunc(signature, cache=CACHE, error_model="numpy")``, its disk cache keyed on the
     law sources too (as numba's decorator builds it, with that cache)."""
     def build(fn):
-        cache = _kernel_cache_class() if CACHE else None
-        if cache is None:
-            return numba.cfunc(signature, cache=bool(CACHE), error_model="numpy")(fn)
+        cache = _kernel_cache_class(fn) if CACHE else None
+        if cache is None:  # in memory: the plain disk cache would be keyed on fn's own file alone
+            return numba.cfunc(signature, cache=False, error_model="numpy")(fn)
         from numba.core import sigutils
         from numba.core.ccallback import CFunc
 
@@ -202,7 +287,11 @@ def law_function(fn):
         twin = _LAW_FUNCTIONS.get(fn)
         if twin is None:
             namespace = dict(fn.__globals__)
-            twin = numba.njit(inline="always", **OPTIONS)(rebound(fn, namespace))
+            clone = rebound(fn, namespace)
+            twin = numba.njit(inline="always", **{**OPTIONS, "cache": False})(clone)
+            cache = _kernel_cache_class(clone) if CACHE else None
+            if cache is not None:  # keyed on every source it reaches, as the kernels are
+                twin._cache = cache(clone)
             _LAW_FUNCTIONS[fn] = twin
             _LAW_GLOBALS.append(namespace)
             for other in _LAW_GLOBALS:

@@ -130,7 +130,8 @@ def test_the_law_objects_run_their_plain_functions():
 
 def test_a_kernel_cached_on_disk_is_keyed_on_the_law_sources():
     """A kernel inlines formulas from the law modules, so numba's disk cache must not serve it once
-    one of them changed: its entries are stamped with the sources of all of controllers/."""
+    one of them changed: its entries are stamped with the sources of all of controllers/ and of every
+    file whose functions it reaches."""
     pytest.importorskip("numba")
     import hashlib
 
@@ -144,4 +145,11 @@ def test_a_kernel_cached_on_disk_is_keyed_on_the_law_sources():
     if not jit.CACHE:
         pytest.skip("numba keeps no disk cache here")
     for cached in (kernels.fork_force, kernels.fork_forces, compiled.dispatcher()):
-        assert cached._cache._impl.locator.get_source_stamp()[1] == digest.hexdigest()
+        # controllers/ and every other source the function reaches (tests/test_compiled_sources.py)
+        fn = getattr(cached, "py_func", None) or cached._pyfunc
+        assert cached._cache._impl.locator.get_source_stamp()[1] == jit.sources_stamp(fn)
+        expected = hashlib.sha256(digest.hexdigest().encode())
+        for path in jit.compiled_sources(fn):
+            expected.update(Path(path).name.encode())
+            expected.update(hashlib.sha256(Path(path).read_bytes()).hexdigest().encode())
+        assert jit.sources_stamp(fn) == expected.hexdigest()
