@@ -336,7 +336,8 @@ def _subplots(rows: int, cols: int, figsize, **kwargs):
 
 def _png(fig) -> bytes:
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=100)
+    from mtbmj.readout.quicklook import plain_text
+    plain_text(fig).savefig(buffer, format="png", dpi=100)
     return buffer.getvalue()
 
 

@@ -48,7 +48,8 @@ def png(result) -> bytes:
     import io
 
     buffer = io.BytesIO()
-    figure(result).savefig(buffer, format="png", dpi=90)
+    from mtbmj.readout.quicklook import plain_text
+    plain_text(figure(result)).savefig(buffer, format="png", dpi=90)
     return buffer.getvalue()
 
 

@@ -68,7 +68,8 @@ def png(comparison: dict) -> bytes:
     import io
 
     buffer = io.BytesIO()
-    figure(comparison).savefig(buffer, format="png", dpi=90)
+    from mtbmj.readout.quicklook import plain_text
+    plain_text(figure(comparison)).savefig(buffer, format="png", dpi=90)
     return buffer.getvalue()
 
 

@@ -2,6 +2,7 @@
 S1-S14 study on both engines, and the engines against each other."""
 from __future__ import annotations
 
+import math
 import sys
 import time
 from pathlib import Path
@@ -68,6 +69,8 @@ def cmd_crosscheck(args) -> int:
     if args.speed is not None or args.drive is not None or args.head_angle is not None:
         raise MtbmjError("--speed, --drive and --head-angle: apply to a rolling cross-check (--roll SCENARIO)")
 
+    if not (math.isfinite(args.tolerance_mm) and args.tolerance_mm > 0):
+        raise MtbmjError(f"--tolerance-mm: must be a positive number of mm, got {args.tolerance_mm:g}")
     engines = [e for e in _engines(args.engines) if e != "ode"] or ["mujoco"]
     checks = crosscheck_all(args.config, engines, args.tolerance_mm, overrides(args.set), args.duration)
     for check in checks:

@@ -202,7 +202,8 @@ def _split_label(metrics: dict) -> str:
 def figure_png(summary: dict) -> bytes:
     """``figure`` as PNG bytes."""
     buffer = io.BytesIO()
-    figure(summary).savefig(buffer, format="png", dpi=100)
+    from mtbmj.readout.quicklook import plain_text
+    plain_text(figure(summary)).savefig(buffer, format="png", dpi=100)
     return buffer.getvalue()
 
 

@@ -95,7 +95,8 @@ def group_figure(results, title: str, names: Sequence[str]):
 
 def png_bytes(fig) -> bytes:
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
+    from mtbmj.readout.quicklook import plain_text
+    plain_text(fig).savefig(buffer, format="png", dpi=110)
     return buffer.getvalue()
 
 

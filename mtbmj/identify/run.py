@@ -120,7 +120,8 @@ class Identification:
     def files(self) -> dict[str, bytes]:
         fig = self.plot()
         png = io.BytesIO()
-        fig.savefig(png, format="png", dpi=110)
+        from mtbmj.readout.quicklook import plain_text
+        plain_text(fig).savefig(png, format="png", dpi=110)
         return {"fit.toml": self.toml().encode(), "fit.json": output.json_bytes(self.summary()),
                 "fit.png": png.getvalue()}
 

@@ -103,12 +103,23 @@ def figure(time_s: np.ndarray, fork_mm: np.ndarray, tire_mm: np.ndarray, forces:
     return fig
 
 
+def plain_text(fig):
+    """``fig`` with every text in it drawn as written: a configuration, bike, terrain or folder
+    name with ``$...$`` in it would otherwise be parsed as mathtext (a traceback after the whole run
+    for an unbalanced one, a formula for a balanced one). No figure of mtbmj uses mathtext."""
+    from matplotlib.text import Text
+
+    for text in fig.findobj(Text):
+        text.set_parse_math(False)
+    return fig
+
+
 def png(fig, dpi: int = 90) -> bytes:
     import io
 
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=dpi)
+    plain_text(fig).savefig(buffer, format="png", dpi=dpi)
     return buffer.getvalue()
 
 
-__all__ = ["figure", "png"]
+__all__ = ["figure", "png", "plain_text"]

@@ -197,7 +197,8 @@ def _plot(method, prob, outputs, indices, runs) -> bytes:
     title = "Sobol indices, 95 % CI" if method == "sobol" else "Morris elementary effects, 95 % CI of mu*"
     fig.suptitle(f"{title} ({runs} runs)")
     buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
+    from mtbmj.readout.quicklook import plain_text
+    plain_text(fig).savefig(buffer, format="png", dpi=110)
     return buffer.getvalue()
 
 
