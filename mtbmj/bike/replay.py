@@ -20,19 +20,30 @@ from mtbmj.errors import MtbmjError
 MATCH_MM = 1e-3
 
 
+def _text(path: Path, error, kind: str) -> str:
+    """A run folder's file: a regular file of at most its kind's size (``mtbmj.textfile``)."""
+    from mtbmj import textfile
+
+    return textfile.read_text(Path(path), error, str(path), "not a text file", kind)
+
+
 def is_bike_dir(run_dir) -> bool:
-    """True for a folder written by ``mtbmj bike`` / ``BikeResult.write``."""
+    """True for a folder written by ``mtbmj bike`` / ``BikeResult.write``; a manifest that is not a
+    regular file (a FIFO, a device) is refused in one line, not waited on."""
+    path = Path(run_dir) / "manifest.json"
+    if not path.exists():
+        return False
     try:
-        manifest = json.loads((Path(run_dir) / "manifest.json").read_text())
-    except (OSError, ValueError):
+        manifest = json.loads(_text(path, MtbmjError, "config"))
+    except ValueError:
         return False
     return isinstance(manifest, dict) and "bike_source" in manifest
 
 
 def _read(run_dir: Path, error) -> tuple[dict, dict]:
     try:
-        manifest = json.loads((run_dir / "manifest.json").read_text())
-        summary = json.loads((run_dir / "summary.json").read_text())
+        manifest = json.loads(_text(run_dir / "manifest.json", error, "config"))
+        summary = json.loads(_text(run_dir / "summary.json", error, "config"))
         if not isinstance(manifest, dict) or not isinstance(summary, dict):
             raise ValueError("not a JSON object")
         return manifest, summary
@@ -53,32 +64,41 @@ def rerun(run_dir, duration: float | None = None, error=MtbmjError):
                   "callback": "auto", "lock": tuple(info.get("locked", ())),
                   "rear_tire": bool(info.get("rear_tire", True))}
         whole = float(summary["duration_s"])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise error(f"{run_dir}: not a complete bike run ({exc.__class__.__name__}: {exc})") from None
+    times, recorded = _columns(run_dir, error)
+    step = float(np.median(np.diff(times))) if times.size > 1 else 0.0
+    held = times[-1] + step if times.size else 0.0
+    if not (times.size > 1 and step > 0 and abs(held - whole) <= 2.0 * step + 1e-9):
+        raise error(f"{run_dir}: summary.json says {whole:g} s but timeseries.csv holds {held:.4g} s "
+                    f"({times.size} samples): the folder was changed since mtbmj wrote it; not replayed")
+    try:
         result = run_bike(manifest["bike_source"], manifest["scenario"], float(summary["speed_m_per_s"]),
                           whole if duration is None else min(whole, float(duration)), **kwargs)
     except MtbmjError as exc:
         raise error(f"{run_dir}: cannot replay this bike run ({exc})") from None
     except (KeyError, TypeError, ValueError) as exc:
         raise error(f"{run_dir}: not a complete bike run ({exc.__class__.__name__}: {exc})") from None
-    recorded = _front_travel(run_dir, error)
     replayed = result.raw["front_travel_mm"]
-    n = min(recorded.size, replayed.size)
-    if n == 0 or not np.max(np.abs(recorded[:n] - replayed[:n])) <= MATCH_MM:
+    n = replayed.size  # every sample replayed is compared: the whole run, or its first --duration s
+    if n == 0 or n > recorded.size or (duration is None and n != recorded.size) \
+            or not np.max(np.abs(recorded[:n] - replayed)) <= MATCH_MM:
         raise error(f"{run_dir}: the bike {manifest['bike_source']!r} replayed does not reproduce this folder's "
                     "timeseries.csv (a bike changed in Python or a bike file changed since); render it from Python "
                     "with BikeResult.video")
     return result
 
 
-def _front_travel(run_dir: Path, error) -> np.ndarray:
-    """The front_travel_mm column of the folder's timeseries.csv."""
+def _columns(run_dir: Path, error) -> tuple[np.ndarray, np.ndarray]:
+    """The time_s and front_travel_mm columns of the folder's timeseries.csv."""
     path = run_dir / "timeseries.csv"
     try:
-        lines = [line for line in path.read_text().splitlines() if line.strip() and not line.startswith("#")]
+        lines = [line for line in _text(path, error, "record").splitlines() if line.strip() and not line.startswith("#")]
         names = [n.strip() for n in lines[0].split(",")]
         table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
-        return table[:, names.index("front_travel_mm")]
+        return table[:, names.index("time_s")], table[:, names.index("front_travel_mm")]
     except (OSError, UnicodeDecodeError, ValueError, IndexError) as exc:
-        raise error(f"{path}: cannot read its front_travel_mm column ({exc.__class__.__name__}: {exc})") from None
+        raise error(f"{path}: cannot read its time_s and front_travel_mm columns ({exc.__class__.__name__}: {exc})") from None
 
 
 __all__ = ["is_bike_dir", "rerun", "MATCH_MM"]

@@ -124,9 +124,17 @@ class Trajectory:
     touch_s: float = 0.0  # the time the caption counts from
 
 
+def _text(path: Path, kind: str) -> str:
+    """A run folder's file: only a regular file of at most its kind's size is read (a FIFO or
+    ``/dev/zero`` in its place is refused at once, ``mtbmj.textfile``)."""
+    from mtbmj import textfile
+
+    return textfile.read_text(Path(path), RenderError, str(path), "not a text file", kind)
+
+
 def _read_columns(path: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
     try:
-        lines = [line for line in path.read_text().splitlines() if line.strip() and not line.startswith("#")]
+        lines = [line for line in _text(path, "record").splitlines() if line.strip() and not line.startswith("#")]
         header = [n.strip() for n in lines[0].split(",")]
         table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
     except (OSError, ValueError, IndexError) as exc:
@@ -139,7 +147,7 @@ def _read_columns(path: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
 
 def _run_name(run_dir: Path) -> str | None:
     try:
-        return str(json.loads((run_dir / "manifest.json").read_text())["name"])
+        return str(json.loads(_text(run_dir / "manifest.json", "config"))["name"])
     except (OSError, ValueError, KeyError, TypeError):
         return None
 
@@ -197,8 +205,8 @@ def roll_trajectory(run_dir: Path, fps: float = 30.0, duration: float | None = N
     except (ImportError, AttributeError):
         raise RenderError(f"{run_dir}: a rolling run, but this mtbmj has no mtbmj.rolling.frontend.roll_trajectory") from None
     try:
-        manifest = json.loads((run_dir / "manifest.json").read_text())
-        summary = json.loads((run_dir / "summary.json").read_text())
+        manifest = json.loads(_text(run_dir / "manifest.json", "config"))
+        summary = json.loads(_text(run_dir / "summary.json", "config"))
         scenario, speed = manifest["scenario"], float(summary["speed_m_per_s"])
         head = summary.get("head_angle_deg")
         end = float(summary.get("duration_s", 0)) or None
@@ -236,9 +244,9 @@ def trajectory(source: str | Path, fps: float = 30.0, duration: float | None = N
     """Drop or rolling run by the run directory's manifest; a preset/TOML file is a drop."""
     path = Path(source)
     manifest = path / "manifest.json"
-    if path.is_dir() and manifest.is_file():
+    if path.is_dir() and manifest.exists():
         try:
-            manifest_data = json.loads(manifest.read_text())
+            manifest_data = json.loads(_text(manifest, "config"))
             kind = manifest_data.get("kind", "drop")
         except (OSError, ValueError) as exc:
             raise RenderError(f"{manifest}: cannot read ({exc})") from None
