@@ -161,63 +161,64 @@ def _file_is_ours(path: Path) -> bool:
         return False
 
 
-def check_file_target(path: str | Path, what: str = "--out") -> Path:
-    """Refuse, before any work, a single output file that cannot be written or that mtbmj did not
-    write: a directory or link in its place, a special file, or a regular file with no record of
-    ours beside it (or changed since). Also removes what killed runs left beside it."""
+def check_file_target(path: str | Path, what: str = "--out", error: type[MtbmjError] = MtbmjError) -> Path:
+    """Refuse (``error``, one line), before any work, a single output file that cannot be written or
+    that mtbmj did not write: a directory or link in its place, a special file, or a regular file
+    with no record of ours beside it (or changed since). Also removes what killed runs left beside it."""
     path = Path(path)
     if path.is_symlink():
-        raise MtbmjError(f"{what} {path}: is a symbolic link; not replacing it: choose another name")
+        raise error(f"{what} {path}: is a symbolic link; not replacing it: choose another name")
     if path.is_dir():
-        raise MtbmjError(f"{what} {path}: is a directory, not a file")
+        raise error(f"{what} {path}: is a directory, not a file")
     if path.exists():
         if not path.is_file():
-            raise MtbmjError(f"{what} {path}: exists and is not a regular file; not replacing it")
+            raise error(f"{what} {path}: exists and is not a regular file; not replacing it")
         if not _file_is_ours(path):
-            raise MtbmjError(f"{what} {path}: exists and was not written by mtbmj (or was changed since); "
+            raise error(f"{what} {path}: exists and was not written by mtbmj (or was changed since); "
                              f"not replacing it: choose another name or remove it")
     parent = _existing_ancestor(path.parent)
     if not parent.is_dir():
-        raise MtbmjError(f"{what} {path}: {parent} is not a directory")
+        raise error(f"{what} {path}: {parent} is not a directory")
     if not os.access(parent, os.W_OK | os.X_OK):
-        raise MtbmjError(f"{what} {path}: cannot write in {parent} (permission denied)")
+        raise error(f"{what} {path}: cannot write in {parent} (permission denied)")
     if path.parent.is_dir():
         _clear_stale(path)
     return path
 
 
 @contextlib.contextmanager
-def staged_file(path: str | Path, command: str = "python", what: str = "--out") -> Iterator[Path]:
+def staged_file(path: str | Path, command: str = "python", what: str = "--out",
+                error: type[MtbmjError] = MtbmjError) -> Iterator[Path]:
     """Write one output file: yields a fresh hidden path beside ``path``
     (``.NAME.new-PID-XXXX.EXT``) for the caller to fill; on a clean exit the file is put in
     place (a new name by a link that never replaces anything; an older file of ours by an atomic
     rename, after checking again that it is still ours) and its record written beside it. On any
     exception, and on Ctrl-C, the staged file is removed; a run killed outright leaves it, and the
     next write to the same path removes it (its process is gone)."""
-    path = check_file_target(path, what)
+    path = check_file_target(path, what, error)
     created = _missing_ancestors(path.parent)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise MtbmjError(f"{what} {path}: cannot write ({exc.strerror})") from None
+        raise error(f"{what} {path}: cannot write ({exc.strerror})") from None
     stage = path.parent / f".{path.name}.new-{os.getpid()}-{uuid.uuid4().hex[:8]}{path.suffix}"
     try:
         try:
             yield stage
             check_interrupt()
             if not stage.is_file():
-                raise MtbmjError(f"{what} {path}: nothing was written")
+                raise error(f"{what} {path}: nothing was written")
             record = {"format": FILE_RECORD_FORMAT, "command": command, "name": path.name,
                       "size_bytes": stage.stat().st_size, "sha256": _sha256(stage)}
             if path.exists() or path.is_symlink():
-                check_file_target(path, what)  # still ours now that the work is done?
+                check_file_target(path, what, error)  # still ours now that the work is done?
                 os.replace(stage, path)
             else:
                 try:
                     os.link(stage, path)  # never replaces a file that appeared meanwhile
                 except FileExistsError:
-                    raise MtbmjError(f"{what} {path}: a file appeared there while mtbmj worked; "
-                                     f"not replacing it") from None
+                    raise error(f"{what} {path}: a file appeared there while mtbmj worked; "
+                                f"not replacing it") from None
                 except OSError:  # (a file system without hard links)
                     if path.exists():
                         raise
@@ -225,14 +226,14 @@ def staged_file(path: str | Path, command: str = "python", what: str = "--out") 
             write_file_atomically(file_record_path(path), json_bytes(record))
             fsync_dir(path.parent)
         except OSError as exc:
-            raise MtbmjError(f"{what} {path}: cannot write ({exc.strerror or exc})") from None
+            raise error(f"{what} {path}: cannot write ({exc.strerror or exc})") from None
     except BaseException:
-        stage.unlink(missing_ok=True)
+        stage.unlink(missing_ok=True)  # before the folders it made are removed
         if not path.exists():
             _remove_empty(created)
         raise
     finally:
-        stage.unlink(missing_ok=True)
+        stage.unlink(missing_ok=True)  # (after a link the staged name is still there)
 
 
 def check_target(out_dir: str | Path, inputs: Iterable[str | Path] = ()) -> Path:

@@ -70,3 +70,9 @@ def read_text(path: Path, error: type[Exception], label: str, not_text: str, kin
     if "\x00" in text:
         raise error(f"{label}: {not_text}")
     return text.replace("\r\n", "\n").replace("\r", "\n")  # universal newlines, as open() reads
+
+
+def run_file_text(path: Path, error: type[Exception], kind: str) -> str:
+    """A file of a run folder that mtbmj wrote (manifest, summary, time series), read as
+    :func:`read_text` reads a user's file: a FIFO or device in its place is refused, not waited on."""
+    return read_text(Path(path), error, str(path), "not a text file", kind)

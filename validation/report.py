@@ -335,10 +335,9 @@ def _subplots(rows: int, cols: int, figsize, **kwargs):
 
 
 def _png(fig) -> bytes:
-    buffer = io.BytesIO()
-    from mtbmj.readout.quicklook import plain_text
-    plain_text(fig).savefig(buffer, format="png", dpi=100)
-    return buffer.getvalue()
+    from mtbmj.readout.quicklook import png
+
+    return png(fig, dpi=100)
 
 
 def _plot(axes, signals, label, **kw):

@@ -45,12 +45,9 @@ def figure(result):
 
 
 def png(result) -> bytes:
-    import io
+    from mtbmj.readout import quicklook
 
-    buffer = io.BytesIO()
-    from mtbmj.readout.quicklook import plain_text
-    plain_text(figure(result)).savefig(buffer, format="png", dpi=90)
-    return buffer.getvalue()
+    return quicklook.png(figure(result), dpi=90)
 
 
 __all__ = ["figure", "png"]

@@ -16,15 +16,9 @@ from pathlib import Path
 import numpy as np
 
 from mtbmj.errors import MtbmjError
+from mtbmj.textfile import run_file_text
 
 MATCH_MM = 1e-3
-
-
-def _text(path: Path, error, kind: str) -> str:
-    """A run folder's file: a regular file of at most its kind's size (``mtbmj.textfile``)."""
-    from mtbmj import textfile
-
-    return textfile.read_text(Path(path), error, str(path), "not a text file", kind)
 
 
 def is_bike_dir(run_dir) -> bool:
@@ -34,7 +28,7 @@ def is_bike_dir(run_dir) -> bool:
     if not path.exists():
         return False
     try:
-        manifest = json.loads(_text(path, MtbmjError, "config"))
+        manifest = json.loads(run_file_text(path, MtbmjError, "config"))
     except ValueError:
         return False
     return isinstance(manifest, dict) and "bike_source" in manifest
@@ -42,8 +36,8 @@ def is_bike_dir(run_dir) -> bool:
 
 def _read(run_dir: Path, error) -> tuple[dict, dict]:
     try:
-        manifest = json.loads(_text(run_dir / "manifest.json", error, "config"))
-        summary = json.loads(_text(run_dir / "summary.json", error, "config"))
+        manifest = json.loads(run_file_text(run_dir / "manifest.json", error, "config"))
+        summary = json.loads(run_file_text(run_dir / "summary.json", error, "config"))
         if not isinstance(manifest, dict) or not isinstance(summary, dict):
             raise ValueError("not a JSON object")
         return manifest, summary
@@ -93,7 +87,7 @@ def _columns(run_dir: Path, error) -> tuple[np.ndarray, np.ndarray]:
     """The time_s and front_travel_mm columns of the folder's timeseries.csv."""
     path = run_dir / "timeseries.csv"
     try:
-        lines = [line for line in _text(path, error, "record").splitlines() if line.strip() and not line.startswith("#")]
+        lines = [line for line in run_file_text(path, error, "record").splitlines() if line.strip() and not line.startswith("#")]
         names = [n.strip() for n in lines[0].split(",")]
         table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
         return table[:, names.index("time_s")], table[:, names.index("front_travel_mm")]

@@ -65,12 +65,9 @@ def figure(comparison: dict):
 
 
 def png(comparison: dict) -> bytes:
-    import io
+    from mtbmj.readout import quicklook
 
-    buffer = io.BytesIO()
-    from mtbmj.readout.quicklook import plain_text
-    plain_text(figure(comparison)).savefig(buffer, format="png", dpi=90)
-    return buffer.getvalue()
+    return quicklook.png(figure(comparison), dpi=90)
 
 
 __all__ = ["compare", "figure", "png"]

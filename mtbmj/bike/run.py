@@ -285,16 +285,11 @@ def simulate(p: Prepared, duration: float, progress=None):
 
     If the compiled callback met more contact patches than it holds (``overflowed``), the run is
     redone on the Python path (``p.callback`` becomes that ``BikeCallback``), with a warning."""
-    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    start_state = np.empty(mujoco.mj_stateSize(p.bike.model, kind))
-    mujoco.mj_getState(p.bike.model, p.data, start_state, kind)
-
     def to_python():
         p.callback = _python_twin(p.callback)  # its first evaluation searches the patches afresh
-        mujoco.mj_setState(p.bike.model, p.data, start_state, kind)
         p.refined_steps = p.stepped = 0
 
-    return callbacks.rerun_on_python(lambda: _simulate(p, duration, progress),
+    return callbacks.rerun_on_python(p.bike.model, p.data, lambda: _simulate(p, duration, progress),
                                      lambda: getattr(p.callback, "overflowed", False), to_python, "bike")
 
 

@@ -8,7 +8,6 @@ the high/low-speed split, both in % of time), atomically.
 """
 from __future__ import annotations
 
-import io
 import json
 from pathlib import Path
 
@@ -201,10 +200,9 @@ def _split_label(metrics: dict) -> str:
 
 def figure_png(summary: dict) -> bytes:
     """``figure`` as PNG bytes."""
-    buffer = io.BytesIO()
-    from mtbmj.readout.quicklook import plain_text
-    plain_text(figure(summary)).savefig(buffer, format="png", dpi=100)
-    return buffer.getvalue()
+    from mtbmj.readout.quicklook import png
+
+    return png(figure(summary), dpi=100)
 
 
 def figure(summary: dict):

@@ -94,10 +94,9 @@ def group_figure(results, title: str, names: Sequence[str]):
 
 
 def png_bytes(fig) -> bytes:
-    buffer = io.BytesIO()
-    from mtbmj.readout.quicklook import plain_text
-    plain_text(fig).savefig(buffer, format="png", dpi=110)
-    return buffer.getvalue()
+    from mtbmj.readout.quicklook import png
+
+    return png(fig, dpi=110)
 
 
 def table_markdown(checks: Sequence[Crosscheck]) -> str:

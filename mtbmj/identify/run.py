@@ -2,7 +2,6 @@
 parameter set (TOML), the figure (PNG) and the numbers (JSON) for ``mtbmj fit``."""
 from __future__ import annotations
 
-import io
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Mapping, Sequence
@@ -119,11 +118,10 @@ class Identification:
 
     def files(self) -> dict[str, bytes]:
         fig = self.plot()
-        png = io.BytesIO()
-        from mtbmj.readout.quicklook import plain_text
-        plain_text(fig).savefig(png, format="png", dpi=110)
+        from mtbmj.readout.quicklook import png
+
         return {"fit.toml": self.toml().encode(), "fit.json": output.json_bytes(self.summary()),
-                "fit.png": png.getvalue()}
+                "fit.png": png(fig, dpi=110)}
 
     def write(self, out_dir) -> list[Path]:
         return output.write_atomically(out_dir, self.files())

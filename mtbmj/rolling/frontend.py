@@ -310,16 +310,11 @@ def simulate(p: Prepared, duration: float, progress=None):
 
     If the compiled callback met more contact patches than it holds (``overflowed``), the run is
     redone on the Python path (``p.callback`` becomes that ``RollCallback``), with a warning."""
-    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    start_state = np.empty(mujoco.mj_stateSize(p.front.model, kind))
-    mujoco.mj_getState(p.front.model, p.data, start_state, kind)
-
     def to_python():
         p.callback = _python_twin(p.callback)
         p.callback.bind(p.data)
-        mujoco.mj_setState(p.front.model, p.data, start_state, kind)
 
-    return callbacks.rerun_on_python(lambda: _simulate(p, duration, progress),
+    return callbacks.rerun_on_python(p.front.model, p.data, lambda: _simulate(p, duration, progress),
                                      lambda: getattr(p.callback, "overflowed", False), to_python, "rolling")
 
 

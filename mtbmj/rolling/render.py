@@ -32,6 +32,7 @@ import numpy as np
 
 from mtbmj.errors import MtbmjError
 from mtbmj.output import check_file_target, staged_file
+from mtbmj.textfile import run_file_text
 
 FORMATS = (".mp4", ".gif")
 BACKENDS = ("egl", "osmesa")
@@ -124,17 +125,9 @@ class Trajectory:
     touch_s: float = 0.0  # the time the caption counts from
 
 
-def _text(path: Path, kind: str) -> str:
-    """A run folder's file: only a regular file of at most its kind's size is read (a FIFO or
-    ``/dev/zero`` in its place is refused at once, ``mtbmj.textfile``)."""
-    from mtbmj import textfile
-
-    return textfile.read_text(Path(path), RenderError, str(path), "not a text file", kind)
-
-
 def _read_columns(path: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
     try:
-        lines = [line for line in _text(path, "record").splitlines() if line.strip() and not line.startswith("#")]
+        lines = [line for line in run_file_text(path, RenderError, "record").splitlines() if line.strip() and not line.startswith("#")]
         header = [n.strip() for n in lines[0].split(",")]
         table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
     except (OSError, ValueError, IndexError) as exc:
@@ -147,7 +140,7 @@ def _read_columns(path: Path, names: tuple[str, ...]) -> dict[str, np.ndarray]:
 
 def _run_name(run_dir: Path) -> str | None:
     try:
-        return str(json.loads(_text(run_dir / "manifest.json", "config"))["name"])
+        return str(json.loads(run_file_text(run_dir / "manifest.json", RenderError, "config"))["name"])
     except (OSError, ValueError, KeyError, TypeError):
         return None
 
@@ -205,8 +198,8 @@ def roll_trajectory(run_dir: Path, fps: float = 30.0, duration: float | None = N
     except (ImportError, AttributeError):
         raise RenderError(f"{run_dir}: a rolling run, but this mtbmj has no mtbmj.rolling.frontend.roll_trajectory") from None
     try:
-        manifest = json.loads(_text(run_dir / "manifest.json", "config"))
-        summary = json.loads(_text(run_dir / "summary.json", "config"))
+        manifest = json.loads(run_file_text(run_dir / "manifest.json", RenderError, "config"))
+        summary = json.loads(run_file_text(run_dir / "summary.json", RenderError, "config"))
         scenario, speed = manifest["scenario"], float(summary["speed_m_per_s"])
         head = summary.get("head_angle_deg")
         end = float(summary.get("duration_s", 0)) or None
@@ -246,7 +239,7 @@ def trajectory(source: str | Path, fps: float = 30.0, duration: float | None = N
     manifest = path / "manifest.json"
     if path.is_dir() and manifest.exists():
         try:
-            manifest_data = json.loads(_text(manifest, "config"))
+            manifest_data = json.loads(run_file_text(manifest, RenderError, "config"))
             kind = manifest_data.get("kind", "drop")
         except (OSError, ValueError) as exc:
             raise RenderError(f"{manifest}: cannot read ({exc})") from None
@@ -360,20 +353,8 @@ def check_output(out: str | Path, width: int, height: int, fps: float) -> str:
         require("video", "MP4 video", otherwise="write a .gif")
     if not (math.isfinite(fps) and 1 <= fps <= 240):
         raise RenderError(f"--fps: must be in 1..240, got {fps:g}")
-    _check_target(out)
+    check_file_target(out, error=RenderError)  # a file that is not mtbmj's: refused before any work
     return ext
-
-
-def _check_target(out: str | Path) -> None:
-    """Refuse an output that mtbmj did not write (see :func:`mtbmj.output.check_file_target`)."""
-    from mtbmj.errors import MtbmjError
-
-    try:
-        check_file_target(out)
-    except RenderError:
-        raise
-    except MtbmjError as exc:
-        raise RenderError(str(exc)) from None
 
 
 def render(source: "str | Path | Trajectory", out: str | Path, fps: float = 30.0, width: int = 640, height: int = 480,
@@ -387,7 +368,7 @@ def render(source: "str | Path | Trajectory", out: str | Path, fps: float = 30.0
     gl_backend()  # fail before any simulation when there is no GL backend
     traj = source if isinstance(source, Trajectory) else trajectory(source, fps, duration)
     out = Path(out)
-    with staged_file(out, command="render") as tmp:
+    with staged_file(out, command="render", error=RenderError) as tmp:
         images = frames(traj, width, height)
         count = _write_gif(str(tmp), images, fps) if ext == ".gif" else _write_mp4(str(tmp), images, fps, width, height)
     return {"path": str(out), "frames": count, "fps": fps, "width": width, "height": height,

@@ -10,6 +10,8 @@ from __future__ import annotations
 import warnings
 from typing import Callable
 
+import numpy as np
+
 from mtbmj.errors import FallbackWarning
 
 KINDS = ("auto", "compiled", "python")
@@ -41,14 +43,21 @@ def choose(kind: str, python: Callable, load: Callable, compiled: Callable, what
     return python()
 
 
-def rerun_on_python(run: Callable, overflowed: Callable[[], bool], to_python: Callable[[], None], what: str):
-    """``run()``; if the compiled callback met more contact patches than it holds (``overflowed()``),
-    ``to_python()`` (the Python twin installed, the start state restored) and ``run()`` again, with
-    one warning."""
+def rerun_on_python(model, data, run: Callable, overflowed: Callable[[], bool], to_python: Callable[[], None],
+                    what: str):
+    """``run()`` from ``data``'s current state; if the compiled callback met more contact patches
+    than it holds (``overflowed()``), that state is restored, ``to_python()`` installs the Python
+    twin, and ``run()`` runs again, with one warning."""
+    import mujoco
+
+    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    start = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, start, kind)
     out = run()
     if overflowed():
         warnings.warn(f"compiled {what} callback: too many contact patches, rerunning on the Python path",
                       FallbackWarning, stacklevel=3)
+        mujoco.mj_setState(model, data, start, kind)
         to_python()
         out = run()
     return out

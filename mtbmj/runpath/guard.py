@@ -87,10 +87,9 @@ def diverged(rig: str, t: float, cause: str) -> RunError:
     return RunError(f"{rig} run diverged before t = {t:.4f} s: {cause}")
 
 
-def check(rig: str, data, messages: list, start, states, t: float, max_abs=None, columns=None, model=None) -> None:
+def check(rig: str, data, messages: list, start, states, t: float, model=None) -> None:
     """Raise one ``RunError`` line if the chunk ``states`` stepped from ``start`` (ending at ``t`` s)
-    raised a MuJoCo warning, holds a non-finite value, was reset by MuJoCo, or (``max_abs``) moved
-    the ``columns`` beyond ``max_abs``."""
+    raised a MuJoCo warning, holds a non-finite value, or was reset by MuJoCo."""
     warning = first_warning(data)
     if warning is not None or messages:
         raise diverged(rig, t, likely_cause(warning, messages[0] if messages else None, model))
@@ -98,8 +97,6 @@ def check(rig: str, data, messages: list, start, states, t: float, max_abs=None,
         raise diverged(rig, t, "the state is not finite")
     if not steps_clean(start, states):
         raise diverged(rig, t, "MuJoCo reset the state after an instability")
-    if max_abs is not None and states.size and np.max(np.abs(states[:, columns])) > max_abs:
-        raise diverged(rig, t, f"a displacement beyond {max_abs:g} m")
 
 
 def prepared(rig: str, make, data_of=lambda p: p.data, model_of=None):

@@ -18,7 +18,7 @@ grid. After a fine stretch chunks start at ``min_steps`` and double while no sto
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Callable, Protocol
 
 import mujoco
@@ -48,7 +48,6 @@ class Counts:
 
     stepped: int = 0
     refined: int = 0
-    warnings_cleared: list = field(default_factory=list)  # warnings of coarse steps thrown away
 
 
 def chunked(model, data, steps: int, timestep: float, rig: str, refine: Refinement | None = None,
@@ -81,14 +80,12 @@ def chunked(model, data, steps: int, timestep: float, rig: str, refine: Refineme
                 span = refine.span(st, se) if clean else (0, n - 1)  # diverged coarse: the whole chunk fine
                 if span is not None:
                     keep = max(span[0] - 1, 0)  # coarse rows kept: those before the row ahead of the first
-                    n = min(n, max(span[1] + 2, keep + refine.min_steps))  # fine to one past the last; the rest anew
                     if guard.first_warning(data) is not None or messages:
                         # a warning of the coarse pass: which step raised it is not known, so no coarse
                         # row is kept and the whole stretch is stepped again fine (a warning there ends the run)
-                        counts.warnings_cleared.extend(messages or [guard.first_warning(data)])
                         guard.clear_warnings(data, messages)
                         keep = 0
-                        n = min(n, max(span[1] + 2, refine.min_steps))
+                    n = min(n, max(span[1] + 2, keep + refine.min_steps))  # fine to one past the last; the rest anew
                     origin = start if keep == 0 else st[keep - 1]
                     refine.before_fine()
                     model.opt.timestep = timestep / k

@@ -6,7 +6,6 @@ intervals) or Morris elementary effects (mu*, sigma, with the CI of mu*), comput
 and can run on the Dask backend)."""
 from __future__ import annotations
 
-import io
 import json
 import math
 import warnings
@@ -196,10 +195,9 @@ def _plot(method, prob, outputs, indices, runs) -> bytes:
         ax.legend(fontsize="small")
     title = "Sobol indices, 95 % CI" if method == "sobol" else "Morris elementary effects, 95 % CI of mu*"
     fig.suptitle(f"{title} ({runs} runs)")
-    buffer = io.BytesIO()
-    from mtbmj.readout.quicklook import plain_text
-    plain_text(fig).savefig(buffer, format="png", dpi=110)
-    return buffer.getvalue()
+    from mtbmj.readout.quicklook import png
+
+    return png(fig, dpi=110)
 
 
 __all__ = ["SensitivityResult", "run_sensitivity", "problem", "samples", "analyze", "check_outputs", "METHODS"]
