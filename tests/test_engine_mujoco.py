@@ -26,7 +26,7 @@ def test_callback_is_removed_when_the_run_fails(monkeypatch):
     def explode(*args, **kwargs):
         raise RunError("boom")
 
-    monkeypatch.setattr(engine_mujoco, "_check", explode)
+    monkeypatch.setattr(engine_mujoco.loop.guard, "check", explode)
     with pytest.raises(RunError):
         mtbmj.run_drop("S1", duration=0.05)
     assert mujoco.get_mjcb_control() is None

@@ -44,7 +44,7 @@ from mtbmj.controllers import installed, native
 from mtbmj.drop import chain, engine_mujoco
 from mtbmj.drop import scene as scene_mod
 from mtbmj.drop.stepping import Stepping
-from mtbmj.runpath import guard
+from mtbmj.runpath import guard, loop
 from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
 
 CHANNELS = ("sled", "fork", "tire")  # the logged displacements a batched drop returns
@@ -155,8 +155,7 @@ def step_group(runs: list[_Run], datas, pool, spec) -> None:
             else:
                 for r in fine:
                     n = r.plan.size(r.steps - r.done)
-                    states, fine_states = engine_mujoco.fine_rollout(r.scene.model, datas[0], r.record[r.done][None, :],
-                                                                     n, r.plan.substeps)
+                    states, _, fine_states = loop.roll(r.scene.model, datas[0], r.record[r.done], n, r.plan.substeps)
                     made.append((r, states, fine_states))
             # A warning is not traced to its drop: a run whose kept steps show no reset (MuJoCo
             # restarts a run that goes unstable) is sound; the others go to the single path.
@@ -180,8 +179,7 @@ def step_group(runs: list[_Run], datas, pool, spec) -> None:
                     r.scene.set_tire(values.rate, values.damping, r.callback)
                 if partial is not None:  # as engine_mujoco.run: finish the output step under the new law
                     at, left = partial
-                    _, rest = engine_mujoco.fine_rollout(r.scene.model, datas[0], fine_states[at][None, :], 0,
-                                                         level, nstep=left)
+                    _, _, rest = loop.roll(r.scene.model, datas[0], fine_states[at], 0, level, nstep=left)
                     r.plan.computed += left
                     if not np.all(np.isfinite(rest)):
                         r.failed = True
@@ -202,7 +200,7 @@ def step_group(runs: list[_Run], datas, pool, spec) -> None:
 def _fine_together(runs: list[_Run], datas, pool) -> list[tuple]:
     """The runs at their fine steps in one rollout call on the pool's threads: each its own plan's
     output steps (``plan.size``) at its own fine step (its model's step over ``plan.substeps``), as
-    ``engine_mujoco.fine_rollout`` steps it alone; the call makes as many fine steps as the longest
+    ``mtbmj.runpath.loop.roll`` steps it alone; the call makes as many fine steps as the longest
     needs, and a run's steps past its own are dropped (its decisions are its plan's, unchanged).
     (run, output states, fine states) per run."""
     sizes = [(r.plan.size(r.steps - r.done), r.plan.substeps) for r in runs]

@@ -6,19 +6,12 @@ from contextlib import contextmanager
 
 import mujoco
 import numpy as np
-from mujoco import rollout
-
 from mtbmj.controllers import ForkCallback, installed, native
 from mtbmj.drop import scene as scene_mod
 from mtbmj.compose import Setup
 from mtbmj.drop.stepping import Stepping
-from mtbmj.errors import RunError
-from mtbmj.runpath import guard
-from mtbmj.runpath.guard import collected_warnings, first_warning, steps_clean
+from mtbmj.runpath import loop
 from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
-
-
-# MuJoCo's warnings and the divergence checks are the shared run path's (``mtbmj.runpath.guard``)
 
 
 def state_layout(model) -> tuple[int, slice, slice, slice]:
@@ -62,7 +55,8 @@ def fork_callback(model, law, kind="auto", rim=None, floor=None):
 
 @contextmanager
 def stepping_finer(models, substeps):
-    """Each of ``models`` at its step over its ``substeps`` (the steps restored after)."""
+    """Each of ``models`` at its step over its ``substeps`` (the steps restored after): the batched
+    engine's fine rollouts on the pool's threads."""
     steps = [m.opt.timestep for m in models]
     try:
         for m, h, k in zip(models, steps, substeps):
@@ -73,13 +67,33 @@ def stepping_finer(models, substeps):
             m.opt.timestep = h
 
 
-def fine_rollout(model, data, start, n: int, substeps: int, nstep: int | None = None):
-    """``mujoco.rollout`` of ``n`` output steps (or ``nstep`` fine steps) from one state at
-    ``model.opt.timestep / substeps`` (the model's step is restored after): (the states of
-    every ``substeps``-th step, all the states)."""
-    with stepping_finer([model], [substeps]):
-        states, _ = rollout.rollout(model, data, start, nstep=n * substeps if nstep is None else nstep)
-    return states[0, substeps - 1:: substeps], states[0]
+class _Plan(Stepping):
+    """The drop's :class:`~mtbmj.drop.stepping.Stepping` as the run path's plan
+    (``mtbmj.runpath.loop.Plan``): it counts the output steps thrown away, keeps the tire phase
+    each recorded row was stepped in, and makes the tire-law switch on the scene."""
+
+    def __init__(self, setup: Setup, columns, scene, callback):
+        super().__init__(setup, columns)
+        self.scene, self.callback = scene, callback
+        self.discarded = 0  # output steps computed past a tire-law switch or into a zone, and recomputed
+        self.row_phase = self.phase
+
+    def size(self, remaining: int) -> int:
+        self.row_phase = self.phase
+        return super().size(remaining)
+
+    def keep(self, previous, states, fine_states=None, sensors=None, warned=False):
+        keep, switch, partial = super().keep(previous, states, fine_states)
+        self.discarded += len(states) - keep
+        if partial is not None:
+            self.computed += partial[1]  # the fine steps that finish the output step under the new law
+            self.discarded -= 1  # that output step is made, not thrown away
+        return keep, switch, partial
+
+    def switched(self) -> None:
+        values = self.setup.tire.values(1)
+        self.scene.set_tire(values.rate, values.damping, self.callback)
+        self.row_phase = self.phase
 
 
 def run(setup: Setup, duration: float | None = None, progress=None, callback="auto") -> RawTrace:
@@ -123,45 +137,16 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
     record = np.zeros((steps + 1, 5))
     record[0, : len(columns)] = state[columns]
     phase = np.zeros(steps + 1, dtype=np.int8)
-    plan = Stepping(setup, columns[:4])
-    done = 0
-    discarded = 0  # output steps computed past a tire-law switch or into a zone, and recomputed
-    messages: list[str] = []
-    with installed(callback), collected_warnings(messages):
-        while done < steps:
-            n = plan.size(steps - done)
-            current_phase, fine, level = plan.phase, plan.fine, plan.substeps
-            if fine:
-                states, fine_states = fine_rollout(model, data, state[None, :], n, level)
-            else:
-                states, fine_states = rollout.rollout(model, data, state[None, :], nstep=n)[0][0], None
-            keep, switch, partial = plan.keep(state, states, fine_states)
-            discarded += n - keep
-            if keep < n and (messages or first_warning(data) is not None) and steps_clean(state, states[:keep]):
-                # the warning came from steps past the cut, which are thrown away
-                data.warning.number[:] = 0
-                messages.clear()
-            if keep:
-                record[done + 1: done + 1 + keep, : len(columns)] = states[:keep, columns]
-                phase[done + 1: done + 1 + keep] = current_phase
-                _check(data, states[:keep], done + keep, setup, messages)
-                state = states[keep - 1].copy()
-                done += keep
-            if switch:
-                values = setup.tire.values(1)
-                sc.set_tire(values.rate, values.damping, callback)
-            if partial is not None:  # the switch fell inside an output step: finish it under the new law
-                at, left = partial
-                _, rest = fine_rollout(model, data, fine_states[at][None, :], 0, level, nstep=left)
-                plan.computed += left
-                discarded -= 1  # that output step is made, not thrown away
-                record[done + 1, : len(columns)] = rest[-1, columns]
-                phase[done + 1] = plan.phase
-                _check(data, rest, done + 1, setup, messages)
-                state = rest[-1].copy()
-                done += 1
-            if progress is not None:
-                progress(done / steps)
+    plan = _Plan(setup, columns[:4], sc, callback)
+
+    def sink(first, rows, _sensors):
+        record[first + 1: first + 1 + len(rows), : len(columns)] = rows[:, columns]
+        phase[first + 1: first + 1 + len(rows)] = plan.row_phase
+
+    with installed(callback):
+        loop.stepped(model, data, steps, setup.timestep, "drop", plan, sink, progress,
+                     limit=(slice(1, 3), MAX_DISPLACEMENT_M, "a displacement beyond 10 m"))
+    discarded = plan.discarded
     return RawTrace(
         engine="mujoco",
         time=np.arange(steps + 1, dtype=float) * setup.timestep,
@@ -178,16 +163,3 @@ def run(setup: Setup, duration: float | None = None, progress=None, callback="au
               "timestep_s": setup.timestep, "contact_inverse_inertia_per_kg": sc.inverse_inertia},
     )
 
-
-def _check(data, states, done: int, setup: Setup, messages=()) -> None:
-    """Stop on a MuJoCo warning or a non-finite or runaway state, naming the time (one line)."""
-    t = done * setup.timestep
-    warning = first_warning(data)
-    if warning is not None or messages:
-        raise guard.diverged("drop", t, guard.likely_cause(warning, messages[0] if messages else None))
-    if not np.all(np.isfinite(states)):
-        bad = int(np.flatnonzero(~np.all(np.isfinite(states), axis=1))[0])
-        raise RunError(f"drop run diverged at t = {(done - len(states) + bad + 1) * setup.timestep:.4f} s: "
-                       f"the state is not finite")
-    if np.max(np.abs(states[:, 1:3])) > MAX_DISPLACEMENT_M:
-        raise guard.diverged("drop", t, "a displacement beyond 10 m")

@@ -8,7 +8,9 @@ refinement plan, its reference and its signals; ``mtbmj.runpath`` steps it.
 
 * ``guard``: MuJoCo's warning text routed away from the terminal and MUJOCO_LOG.TXT, the first
   raised warning read, and :func:`guard.check` (one ``RunError`` line per divergence).
-* ``loop``: :func:`loop.chunked`, the chunked rollout that keeps every sensor row with the state it
-  describes, and :class:`loop.Refinement`, the "redo near a stop at the fine step" plan.
+* ``loop``: :func:`loop.stepped`, the chunked rollout under a :class:`loop.Plan` (the drop's "cut
+  before a stop", the bike's "redo after the fact" over a :class:`loop.Refinement`, or
+  :class:`loop.Coarse`), which keeps every sensor row with the state it describes, and
+  :func:`loop.chunked`, the same returning whole state and sensor arrays.
 * ``callbacks``: :func:`callbacks.choose` and :func:`callbacks.rerun_on_python`.
 """

@@ -1,20 +1,30 @@
 """The chunked rollout every rig steps MuJoCo with.
 
-:func:`chunked` steps a model from its current state in chunks through ``mujoco.rollout`` (the loop
-and the recording stay in C++; the rig's control callback supplies its forces), reads MuJoCo's
-warnings and checks the states after every chunk (``mtbmj.runpath.guard``), and reports progress.
-It returns the states, one row more than steps (row 0 the start), and the sensors, one row per
-step: **row i of the sensors describes row i of the states**, the state at the start of step i
-(MuJoCo evaluates the sensors in the forward pass of a step, before it integrates; with RK4 the
-intermediate stages skip the sensors).
+:func:`stepped` steps a model from its current state in chunks through ``mujoco.rollout`` (the
+loop and the recording stay in C++; the rig's control callback supplies its forces), reads
+MuJoCo's warnings and checks the states after every chunk (``mtbmj.runpath.guard``), reports
+progress and hands each stretch of output rows to the rig's ``sink``. **Row i of the sensors
+describes row i of the states**, the state at the start of output step i (MuJoCo evaluates the
+sensors in the forward pass of a step, before it integrates; with RK4 the intermediate stages
+skip the sensors); state row i + 1 is the state at the end of that step.
 
-A rig that needs a finer step where an end stop or a rim may act gives a :class:`Refinement`: after
-each chunk stepped at the coarse step it names the first and the last row within reach of a stop;
-the coarse rows before the row ahead of the first are kept, the stretch from there to one row
-past the last (at least ``min_steps`` rows) is stepped again ``substeps`` times finer, and of those
-fine steps every ``substeps``-th state is kept with the sensors of the fine step that starts at the
-same instant (the state of the coarse grid's own time stamp), so the output stays on the coarse
-grid. After a fine stretch chunks start at ``min_steps`` and double while no stop is within reach.
+Where a rig needs a finer step (an end stop, a rim, a tire-law switch) a :class:`Plan` decides,
+chunk by chunk, how many output steps the next rollout makes and at how many substeps each
+(``size``, ``fine``, ``substeps``), and from what it returned how many rows to keep (``keep``):
+the rest is stepped again from the last row kept. Two plans ride on this one interface:
+
+- **cut before a stop** (the drop, ``mtbmj.drop.stepping.Stepping``): a coarse chunk is cut
+  before the first step that may reach a stop, and stepping goes on finely until clear; a
+  tire-law switch is made between two fine steps (``Plan.switched``), and an output step the
+  switch fell inside is finished under the new law (``keep``'s third value);
+- **redo after the fact** (the bike; :class:`AfterTheFact` over a :class:`Refinement`): a chunk
+  stepped coarse is looked at after the fact, its rows before the one ahead of the first row
+  within reach of a stop are kept, and the stretch from there to one row past the last (at least
+  ``min_steps`` rows) is stepped again ``substeps`` times finer; after a fine stretch chunks start
+  at ``min_steps`` and double while no stop is within reach.
+
+Of a fine rollout every ``substeps``-th state is kept with the sensors of the fine step that starts
+at the same instant, so the output stays on the coarse grid.
 """
 from __future__ import annotations
 
@@ -28,6 +38,23 @@ from mujoco import rollout
 from mtbmj.runpath import guard
 
 CHUNK = 10000  # steps per chunk where no refinement is planned
+
+
+class Plan(Protocol):
+    fine: bool  # the next rollout is made at ``substeps`` fine steps per output step
+    substeps: int  # fine steps per output step of the next fine rollout
+
+    def size(self, remaining: int) -> int:
+        """Output steps of the next rollout (at most ``remaining``)."""
+
+    def keep(self, previous, states, fine_states=None, sensors=None, warned: bool = False
+             ) -> tuple[int, bool, tuple[int, int] | None]:
+        """(rows of ``states`` (stepped from ``previous``) to keep; whether to call ``switched``
+        after them; None, or (i, m): finish the next output step with ``m`` fine steps from
+        ``fine_states[i]``). ``warned``: MuJoCo warned during the rollout."""
+
+    def switched(self) -> None:
+        """Re-parameterise the model between two steps (the drop's tire law)."""
 
 
 class Refinement(Protocol):
@@ -50,66 +77,153 @@ class Counts:
     refined: int = 0
 
 
+class Coarse:
+    """The plan of a rig that steps at one step throughout: chunks of ``chunk`` steps, all kept."""
+
+    fine = False
+    substeps = 1
+
+    def __init__(self, chunk: int = CHUNK):
+        self.chunk = chunk
+
+    def size(self, remaining: int) -> int:
+        return min(self.chunk, remaining)
+
+    def keep(self, previous, states, fine_states=None, sensors=None, warned=False):
+        return len(states), False, None
+
+    def switched(self) -> None:
+        pass
+
+
+class AfterTheFact:
+    """The "redo after the fact" plan over a rig's :class:`Refinement` (see the module doc): a
+    coarse chunk is looked at after it is stepped; a fine stretch's states carry the coarse grid's
+    time stamps (``timestep`` apart from the stretch's origin)."""
+
+    def __init__(self, refine: Refinement, timestep: float, data, counts: Counts):
+        self.refine, self.timestep, self.data, self.counts = refine, timestep, data, counts
+        self.substeps = refine.substeps
+        self.fine = False
+        self.next = refine.max_chunk
+        self.stretch = 0
+
+    def size(self, remaining: int) -> int:
+        if self.fine:
+            self.refine.before_fine()
+            return min(self.stretch, remaining)
+        return min(self.next, remaining)
+
+    def keep(self, previous, states, fine_states=None, sensors=None, warned=False):
+        n = len(states)
+        r = self.refine
+        if self.fine:
+            self.fine = False
+            self.next = r.min_steps  # near a stop: short coarse chunks, doubling while clear
+            self.counts.refined += n
+            if guard.steps_clean(previous, fine_states):
+                states[:, 0] = previous[0] + self.timestep * np.arange(1, n + 1)  # the coarse grid's times
+                self.data.time = states[-1, 0]
+            return n, False, None
+        clean = guard.steps_clean(previous, states)
+        span = r.span(states, sensors) if clean else (0, n - 1)  # diverged coarse: the whole chunk fine
+        if span is None:
+            self.next = min(2 * self.next, r.max_chunk)
+            return n, False, None
+        # coarse rows kept: those before the row ahead of the first; after a warning of the coarse
+        # pass (which step raised it is not known) none, and the whole stretch is stepped again fine
+        keep = 0 if warned else max(span[0] - 1, 0)
+        end = min(n, max(span[1] + 2, keep + r.min_steps))  # fine to one past the last; the rest anew
+        self.fine, self.stretch = True, end - keep
+        return keep, False, None
+
+    def switched(self) -> None:
+        pass
+
+
+def roll(model, data, start, n: int, level: int, nstep: int | None = None, fine: bool = True):
+    """(every ``level``-th state, the sensors of the fine steps starting on the output grid, all
+    the states, or None where not ``fine``) of ``n`` output steps (or ``nstep`` fine steps) from
+    ``start`` (one state) at ``level`` fine steps each (the model's step is restored after)."""
+    if not fine:
+        st, se = rollout.rollout(model, data, start[None, :], nstep=n)
+        return st[0], se[0], None
+    step = model.opt.timestep
+    model.opt.timestep = step / level
+    try:
+        fs, fe = rollout.rollout(model, data, start[None, :], nstep=n * level if nstep is None else nstep)
+    finally:
+        model.opt.timestep = step
+    return fs[0, level - 1::level], fe[0, ::level], fs[0]
+
+
+def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
+            sink: Callable[[int, np.ndarray, np.ndarray], None],
+            progress: Callable[[float], None] | None = None, report_every: int = 0,
+            limit: tuple[slice, float, str] | None = None) -> None:
+    """Step ``steps`` output steps of ``timestep`` from ``data``'s current state under ``plan``,
+    handing each stretch of kept rows to ``sink(first_step, states, sensors)`` (states row j: the
+    state at the end of output step first_step + j; sensors row j: at its start). Ends the run with
+    one ``RunError`` line (``rig`` named) on a MuJoCo warning, a non-finite state, a state MuJoCo
+    reset, or a state whose ``limit`` columns (columns, bound, what) pass the bound; MuJoCo's
+    warning text never reaches the terminal or MUJOCO_LOG.TXT. ``progress(fraction)`` is called
+    when ``report_every`` more steps are done (0: after every chunk) and at the end."""
+    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, state, kind)
+    t0 = state[0]
+    done = last_report = 0
+    messages: list[str] = []
+
+    def accept(start, rows, sensor_rows):
+        guard.check(rig, data, messages, start, rows, t0 + (done + len(rows)) * timestep, model=model)
+        if limit is not None and np.max(np.abs(rows[:, limit[0]])) > limit[1]:
+            raise guard.diverged(rig, t0 + (done + len(rows)) * timestep, limit[2])
+        sink(done, rows, sensor_rows)
+
+    with guard.collected_warnings(messages):
+        while done < steps:
+            n = plan.size(steps - done)
+            level = plan.substeps if plan.fine else 1
+            states, sensors, fine_states = roll(model, data, state, n, level, fine=plan.fine)
+            warned = bool(messages) or guard.first_warning(data) is not None
+            keep, switch, partial = plan.keep(state, states, fine_states, sensors, warned)
+            if keep < n and warned and guard.steps_clean(state, states[:keep]):
+                guard.clear_warnings(data, messages)  # the warning came from steps past the cut, thrown away
+            if keep:
+                accept(state, states[:keep], sensors[:keep])
+                state = states[keep - 1].copy()
+                done += keep
+            if switch:
+                plan.switched()
+            if partial is not None:  # the switch fell inside an output step: finish it under the new law
+                at, left = partial
+                _, _, rest = roll(model, data, fine_states[at], 0, level, nstep=left)
+                accept(fine_states[at], rest[-1:], sensors[keep: keep + 1])
+                state = rest[-1].copy()
+                done += 1
+            if progress is not None and (done - last_report >= report_every or done == steps):
+                last_report = done
+                progress(done / steps)
+
+
 def chunked(model, data, steps: int, timestep: float, rig: str, refine: Refinement | None = None,
             progress: Callable[[float], None] | None = None, counts: Counts | None = None,
             chunk: int = CHUNK, report_every: int = CHUNK):
     """(states (steps + 1, nstate), sensors (steps, nsensordata)) of ``steps`` steps of ``timestep``
-    from ``data``'s current state (see the module doc). Ends the run with one ``RunError`` line
-    (``rig`` named) on a MuJoCo warning, a non-finite state or a state MuJoCo reset; MuJoCo's warning
-    text never reaches the terminal or MUJOCO_LOG.TXT."""
+    from ``data``'s current state, row 0 of the states the start (see the module doc), on
+    :func:`stepped` with the :class:`Coarse` plan, or :class:`AfterTheFact` over ``refine``."""
     counts = Counts() if counts is None else counts
     kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    state = np.empty(mujoco.mj_stateSize(model, kind))
-    mujoco.mj_getState(model, data, state, kind)
-    states = np.empty((steps + 1, state.size))
+    states = np.empty((steps + 1, mujoco.mj_stateSize(model, kind)))
+    mujoco.mj_getState(model, data, states[0], kind)
     sensors = np.empty((steps, model.nsensordata))
-    states[0] = state
-    k = 1 if refine is None else refine.substeps
-    size = chunk if k == 1 else refine.max_chunk
-    done = 0
-    last_report = 0
-    messages: list[str] = []
-    with guard.collected_warnings(messages):
-        while done < steps:
-            n = min(size, steps - done)
-            start = states[done]
-            st, se = rollout.rollout(model, data, start[None, :], nstep=n)
-            st, se = st[0], se[0]
-            if k > 1:
-                clean = guard.steps_clean(start, st)
-                span = refine.span(st, se) if clean else (0, n - 1)  # diverged coarse: the whole chunk fine
-                if span is not None:
-                    keep = max(span[0] - 1, 0)  # coarse rows kept: those before the row ahead of the first
-                    if guard.first_warning(data) is not None or messages:
-                        # a warning of the coarse pass: which step raised it is not known, so no coarse
-                        # row is kept and the whole stretch is stepped again fine (a warning there ends the run)
-                        guard.clear_warnings(data, messages)
-                        keep = 0
-                    n = min(n, max(span[1] + 2, keep + refine.min_steps))  # fine to one past the last; the rest anew
-                    origin = start if keep == 0 else st[keep - 1]
-                    refine.before_fine()
-                    model.opt.timestep = timestep / k
-                    try:
-                        fs, fe = rollout.rollout(model, data, origin[None, :], nstep=(n - keep) * k)
-                    finally:
-                        model.opt.timestep = timestep
-                    st, se = st[:n], se[:n]
-                    fine_ok = guard.steps_clean(origin, fs[0])
-                    st[keep:] = fs[0, k - 1::k]  # the state at the end of each coarse step ...
-                    se[keep:] = fe[0, ::k]  # ... and the sensors of the state at its start (row i with state i)
-                    if fine_ok:
-                        st[:, 0] = start[0] + timestep * np.arange(1, n + 1)  # the coarse grid's times
-                        data.time = st[-1, 0]
-                    counts.refined += n - keep
-                    size = refine.min_steps  # near a stop: short coarse chunks, doubling while clear
-                else:
-                    size = min(2 * size, refine.max_chunk)
-            guard.check(rig, data, messages, start, st, start[0] + n * timestep, model=model)
-            counts.stepped += n
-            states[done + 1: done + 1 + n] = st
-            sensors[done: done + n] = se
-            done += n
-            if progress is not None and (done - last_report >= report_every or done == steps):
-                last_report = done
-                progress(done / steps)
+    plan = Coarse(chunk) if refine is None or refine.substeps == 1 else AfterTheFact(refine, timestep, data, counts)
+
+    def sink(first, rows, sensor_rows):
+        states[first + 1: first + 1 + len(rows)] = rows
+        sensors[first: first + len(rows)] = sensor_rows
+        counts.stepped += len(rows)
+
+    stepped(model, data, steps, timestep, rig, plan, sink, progress, report_every)
     return states, sensors
