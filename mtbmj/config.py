@@ -595,8 +595,8 @@ def parse_assignment(text: str) -> tuple[str, Any]:
     return key, value
 
 
-def _read_toml(path: Path) -> dict[str, Any]:
-    text = read_text(path, ConfigError, str(path), "not a text file, so not a TOML configuration")
+def _read_toml(path: Path, what: str = "a TOML configuration") -> dict[str, Any]:
+    text = read_text(path, ConfigError, str(path), f"not a text file, so not {what}")
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -646,47 +646,60 @@ def _base_path(base: str, including: Path, roots: tuple[Path, ...]) -> str:
 MAX_BASE_DEPTH = 8
 
 
-def load(ref: str | Path, overrides: Mapping[str, Any] | None = None, _depth: int = 0,
-         _roots: tuple[Path, ...] | None = None) -> Config:
-    """Load a preset name or a TOML file, following ``base`` links (see :func:`_base_path` for
-    where a base may be), then apply overrides."""
+def read_chain(ref: str, locate=None, is_preset=None, what: str = "a TOML configuration", _depth: int = 0,
+               _roots: tuple[Path, ...] | None = None) -> list[tuple[str, Path | Any, dict]]:
+    """The files of ``ref``'s ``base`` chain, the last base first: (name, location, table without
+    ``base``) each. ``locate(ref)`` gives a name and a location (a packaged resource for a preset, a
+    ``Path`` for a file; the configurations' presets by default, the bikes' for a bike);
+    ``is_preset(name)`` tells a preset name from a path. A file's base follows the rule of
+    :func:`_base_path`; a chain longer than ``MAX_BASE_DEPTH`` is refused. The one reader of base
+    chains, for the drop's configurations and the bike files alike."""
+    locate = _locate if locate is None else locate
+    is_preset = _is_preset if is_preset is None else is_preset
     if _depth > MAX_BASE_DEPTH:
         raise ConfigError(f"{ref}: base chain longer than {MAX_BASE_DEPTH} (a cycle?)")
-    name, location = _locate(str(ref))
+    name, location = locate(str(ref))
     if isinstance(location, Path):
-        table = _read_toml(location)
+        table = _read_toml(location, what)
         if _roots is None:
             _roots = (Path.cwd().resolve(), location.resolve().parent)
     else:
         table = tomllib.loads(location.read_text())
-    values: dict[str, Any] = {}
-    notes: dict[str, str] = {}
-    sources: tuple[str, ...] = ()
     base = table.pop("base", None)
-    try:
-        flat = _flatten(table)
-    except ConfigError as exc:
-        raise ConfigError(f"{location}: {exc}") from None
+    chain: list[tuple[str, Path | Any, dict]] = []
     if base is not None:
         if not isinstance(base, str):
             raise ConfigError(f"{location}: base must be a preset name or a path")
-        if isinstance(location, Path) and not _is_preset(base):
+        if isinstance(location, Path) and not is_preset(base):
             base = _base_path(base, location, _roots or ())
-        parent_config = load(base, _depth=_depth + 1, _roots=_roots)
-        values.update(parent_config.values)
-        notes.update(parent_config.notes)
-        sources = parent_config.sources
-        values.pop("description", None)
-        values.pop("reading", None)
-    try:
-        _apply(values, notes, flat)
-    except ConfigError as exc:
-        raise ConfigError(f"{location}: {exc}") from None
-    config = Config(name, values, sources + (str(location),), notes)
+        chain = read_chain(base, locate, is_preset, what, _depth + 1, _roots)
+    return chain + [(name, location, table)]
+
+
+def load(ref: str | Path, overrides: Mapping[str, Any] | None = None) -> Config:
+    """Load a preset name or a TOML file, following ``base`` links (:func:`read_chain`; see
+    :func:`_base_path` for where a base may be), then apply overrides."""
+    values: dict[str, Any] = {}
+    notes: dict[str, str] = {}
+    sources: tuple[str, ...] = ()
+    chain = read_chain(str(ref))
+    for i, (_, location, table) in enumerate(chain):
+        try:
+            flat = _flatten(table)
+        except ConfigError as exc:
+            raise ConfigError(f"{location}: {exc}") from None
+        if i:  # a base's description is not the file's
+            values.pop("description", None)
+            values.pop("reading", None)
+        try:
+            _apply(values, notes, flat)
+        except ConfigError as exc:
+            raise ConfigError(f"{location}: {exc}") from None
+        sources += (str(location),)
+    config = Config(chain[-1][0], values, sources, notes)
     if overrides:
         config = config.with_overrides(overrides)
-    if _depth == 0:
-        warn(config.warnings)
+    warn(config.warnings)
     return config
 
 

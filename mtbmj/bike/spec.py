@@ -25,7 +25,6 @@ import numpy as np
 from mtbmj.errors import ConfigError
 
 MM = 1e-3
-MAX_BASE_DEPTH = 8
 
 
 @dataclass(frozen=True)
@@ -183,37 +182,29 @@ def preset_names() -> list[str]:
     return sorted(p.name[:-5] for p in resources.files("mtbmj.bike.presets").iterdir() if p.name.endswith(".toml"))
 
 
-def _read(ref: str, depth: int = 0) -> tuple[dict, str]:
-    import tomllib
-
-    from mtbmj.textfile import read_text
-
-    if depth > MAX_BASE_DEPTH:
-        raise ConfigError(f"{ref}: base chain longer than {MAX_BASE_DEPTH} (a cycle?)")
+def _locate(ref: str):
     for name in preset_names():
-        if str(ref).lower() == name.lower():
-            text = (resources.files("mtbmj.bike.presets") / f"{name}.toml").read_text()
-            where = None
-            break
-    else:
-        path = Path(ref)
-        if not path.exists():
-            raise ConfigError(f"{ref}: not a bike preset (known: {', '.join(preset_names())}) and no such file")
-        text = read_text(path, ConfigError, str(path), "not a text file, so not a bike description")
-        where = path
-    try:
-        table = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{ref}: not valid TOML ({exc})") from None
-    base = table.pop("base", None)
-    if base is None:
-        return table, str(ref)
-    if not isinstance(base, str):
-        raise ConfigError(f"{ref}: base must be a bike preset name or a .toml file")
-    if where is not None and Path(base).suffix.lower() == ".toml" and not Path(base).is_absolute():
-        base = str(where.parent / base)
-    parent, _ = _read(base, depth + 1)
-    return _merge(parent, table), str(ref)
+        if ref.lower() == name.lower():
+            return name, resources.files("mtbmj.bike.presets") / f"{name}.toml"
+    path = Path(ref)
+    if not path.exists():
+        raise ConfigError(f"{ref}: not a bike preset (known: {', '.join(preset_names())}) and no such file")
+    return path.stem, path
+
+
+def _is_preset(name: str) -> bool:
+    return any(name.lower() == n.lower() for n in preset_names())
+
+
+def _read(ref: str) -> tuple[dict, str]:
+    """A bike file's table with its ``base`` chain merged in (read by ``mtbmj.config.read_chain``,
+    the drop configurations' reader: the same base rules)."""
+    from mtbmj.config import read_chain
+
+    table: dict = {}
+    for _, _, part in read_chain(ref, _locate, _is_preset, "a bike description"):
+        table = _merge(table, part)
+    return table, str(ref)
 
 
 def _merge(a: dict, b: dict) -> dict:

@@ -1,0 +1,58 @@
+"""A bike file's ``base`` chain is read by the same code as a drop configuration's
+(``mtbmj.config.read_chain``): the same rules, the same refusals (issue 38 item 4)."""
+from __future__ import annotations
+
+import pytest
+
+import mtbmj
+from mtbmj.bike import spec
+from mtbmj.config import ConfigError
+
+
+def _bike(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_a_bike_chain_of_files_merges_from_the_last_base(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    _bike(tmp_path, "sub/heavy.toml", 'base = "trail"\n[rider]\nmass_kg = 90.0\n')
+    top = _bike(tmp_path, "mine.toml", 'base = "sub/heavy.toml"\n[bike]\nfork_offset_mm = 51.0\n')
+    # a relative base is relative to the folder of the file naming it
+    _bike(tmp_path, "sub/again.toml", 'base = "heavy.toml"\n')
+    assert spec.load(str(top)) != spec.load("trail")  # the merged file builds a bike
+    table, _ = spec._read(str(top))
+    assert table["rider"]["mass_kg"] == 90.0 and table["bike"]["fork_offset_mm"] == 51.0
+    assert table["bike"]["head_angle_deg"] == spec._read("trail")[0]["bike"]["head_angle_deg"]  # the rest from the preset
+    assert spec._read(str(tmp_path / "sub/again.toml"))[0]["rider"]["mass_kg"] == 90.0
+
+
+@pytest.mark.parametrize("kind", ["drop", "bike"])
+def test_both_readers_refuse_the_same_chains(tmp_path, monkeypatch, kind):
+    monkeypatch.chdir(tmp_path)
+    base = "S12" if kind == "drop" else "trail"
+    load = mtbmj.load_config if kind == "drop" else spec.load
+    _bike(tmp_path, "a.toml", 'base = "b.toml"\n')
+    _bike(tmp_path, "b.toml", 'base = "a.toml"\n')
+    with pytest.raises(ConfigError, match="base chain longer than"):
+        load(str(tmp_path / "a.toml"))
+    _bike(tmp_path, "notoml.toml", 'base = "elsewhere.txt"\n')
+    with pytest.raises(ConfigError, match="must be a preset name or a .toml file"):
+        load(str(tmp_path / "notoml.toml"))
+    _bike(tmp_path, "number.toml", "base = 3\n")
+    with pytest.raises(ConfigError, match="base must be a preset name or a path"):
+        load(str(tmp_path / "number.toml"))
+    # a base outside the current directory and the named file's folder is not read
+    outside = tmp_path.parent / f"outside-{kind}-{tmp_path.name}.toml"
+    outside.write_text(f'base = "{base}"\n')
+    try:
+        _bike(tmp_path, "far.toml", f'base = "{outside}"\n')
+        with pytest.raises(ConfigError, match="lies outside the current directory"):
+            load(str(tmp_path / "far.toml"))
+    finally:
+        outside.unlink()
+    _bike(tmp_path, "missing.toml", 'base = "nowhere.toml"\n')
+    with pytest.raises(ConfigError):
+        load(str(tmp_path / "missing.toml"))
