@@ -11,3 +11,28 @@ def test_crosscheck_tolerance_must_be_positive(value, capsys):
     assert cli.main(["crosscheck", "S1", f"--tolerance-mm={value}"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--tolerance-mm" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("argv", [
+    ["roll", "washboard:length_m=1e9", "--speed", "4"],
+    ["bike", "trail", "washboard:length_m=1e9", "--speed", "4"],
+    ["roll", "flat:length_m=5000", "--speed", "4"],
+    ["bike", "trail", "iso8608:sample_mm=0.001", "--speed", "4"],
+    ["roll", "rock:at_m=1e12", "--speed", "4"],
+])
+def test_huge_terrains_are_refused_before_anything_is_allocated(argv, capsys, tmp_path, monkeypatch):
+    """``roll`` or ``bike`` over ``washboard:length_m=1e9`` tried to allocate 1.46 TiB (a MemoryError
+    traceback); a terrain's size is checked before its profile is made (issue 37 item 3)."""
+    import tracemalloc
+
+    monkeypatch.chdir(tmp_path)
+    tracemalloc.start()
+    try:
+        assert cli.main(argv) == 2
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "terrain" in err and "Traceback" not in err
+    assert peak < 200e6  # nothing of the profile's size was made
+    assert list(tmp_path.iterdir()) == []

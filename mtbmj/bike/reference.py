@@ -183,7 +183,7 @@ class Reference:
         self.drive, self.speed, self.traction = p.drive, p.speed, p.traction
         self.lev = b.spec.leverage
         self.x0, self.z0 = b.x0, b.z0
-        from mtbmj.bike.contact import StraightStretches
+        from mtbmj.rolling.tire import StraightStretches
 
         self.straight = StraightStretches(p.terrain, self.front_tire.radius + self.front_tire.margin)
         self.nf = 1 if self.fork.has_state else 0
@@ -310,7 +310,7 @@ def static_equilibrium(reference: Reference, guess=None) -> np.ndarray:
     u0 = np.array([-0.06, 0.0, 0.03, 0.2, -0.01, 0.0]) if guess is None else np.asarray(guess, float)
     u, info, ok, msg = fsolve(residual, u0, full_output=True, xtol=1e-13)
     if ok != 1 or np.max(np.abs(residual(u))) > 1e-6:
-        raise RunError(f"bike: no static equilibrium found on the start ({msg.strip()})")
+        raise RunError(f"bike: no static equilibrium found on the start ({' '.join(str(msg).split())})")
     return np.concatenate(([0.0], u))
 
 

@@ -351,7 +351,26 @@ def make(spec, **params) -> Terrain:
         if key not in kinds:
             raise TerrainError(f"terrain {name}: unknown parameter {key!r} (known: {', '.join(kinds)})")
         kwargs[ARGUMENT.get(key, key)] = _value(name, key, kinds[key], value)
+    _check_size(name, given, kwargs)
     return builder(**kwargs)
+
+
+# A terrain longer than this, or sampled at more points, is refused before anything is allocated
+# (a run of 2 km is 400 s at 5 m/s; ``washboard:length_m=1e9`` asked for 1.46 TiB).
+MAX_LENGTH_M = 2000.0
+MAX_POINTS = 1_000_000
+
+def _check_size(name: str, given: dict, kwargs: dict) -> None:
+    for key in ("length_m", "at_m"):
+        if key in given and kwargs[ARGUMENT.get(key, key)] > MAX_LENGTH_M:
+            raise TerrainError(f"terrain {name}: {key} = {kwargs[ARGUMENT.get(key, key)]:g} m is longer than the "
+                               f"{MAX_LENGTH_M:g} m a terrain may be")
+    if name == "iso8608":
+        length = kwargs.get("length_m", 100.0)
+        sample = kwargs.get("sample_mm", 10.0) * MM
+        if length / sample + 1 > MAX_POINTS:
+            raise TerrainError(f"terrain {name}: length_m / sample_mm gives {length / sample + 1:.3g} profile points, "
+                               f"more than the {MAX_POINTS:,} a terrain may have (a larger sample_mm or a shorter length_m)")
 
 
 def names() -> list[str]:
