@@ -57,12 +57,13 @@ def closed_form_sag(bike_name="sst"):
     # masses (kg) at frame-coordinate points; the rider's on-bike segments in de Leva's proportions
     # (feet + shanks 2 x (1.37 + 4.33) %, hands + forearms 2 x (0.61 + 1.62) %) at pedals and bars
     share = (1.37 + 4.33) / (1.37 + 4.33 + 0.61 + 1.62)
-    on_bike = rider["on_bike_mass_kg"]
+    # rider.mass_kg is the whole rider; de Leva's male segments (the ones above, both sides) ride on the bike
+    on_bike = rider["mass_kg"] * 2 * (1.37 + 4.33 + 0.61 + 1.62) / 100
     fixed = [(geo["frame_mass_kg"], np.array(geo["frame_com_mm"]) * MM),
              (on_bike * share, np.array(rider["pedals_mm"]) * MM),
              (on_bike * (1 - share), np.array(rider["bars_mm"]) * MM)]
     m_front = geo["fork_lower_mass_kg"] + geo["front_wheel_mass_kg"]
-    m_arm, m_rear, m_rider = geo["swingarm_mass_kg"], geo["rear_wheel_mass_kg"], rider["mass_kg"]
+    m_arm, m_rear, m_rider = geo["swingarm_mass_kg"], geo["rear_wheel_mass_kg"], rider["mass_kg"] - on_bike
     com = np.array(rider["com_mm"]) * MM
     weight = (sum(m for m, _ in fixed) + m_front + m_arm + m_rear + m_rider) * G
     u = np.array([-math.cos(alpha), math.sin(alpha)])
@@ -231,7 +232,9 @@ def test_bike_command_writes_its_folder(tmp_path, capsys):
     assert main(["bike", "trail", "root:at_m=0.4", "--speed", "4", "--duration", "0.1", "--out", str(out),
                  "--quiet", "--no-figure"]) == 0
     printed = capsys.readouterr().out.strip().splitlines()
-    assert len(printed) == 1 and printed[0].startswith("bike trail over root:at_m=0.4 at 4 m/s: front travel peak")
+    assert len(printed) == 1 and printed[0].startswith("bike trail (rider 85.0 kg, bike 14.8 kg) over root:at_m=0.4 at 4 m/s "
+                                                       "set (")
+    assert "m/s): front travel peak" in printed[0]
     assert {"timeseries.csv", "summary.json", "manifest.json", "fork_config.toml", "shock_config.toml"} <= {
         p.name for p in out.iterdir()}
     summary = json.loads((out / "summary.json").read_text())
@@ -326,7 +329,7 @@ def test_bike_command_holds_parts_and_lifts_the_rear(tmp_path, capsys):
     assert main(["bike", "sst", "root:at_m=0.4", "--speed", "4", "--duration", "0.3", "--lock", "rear, pitch",
                  "--out", str(out), "--quiet", "--no-figure"]) == 0
     printed = capsys.readouterr().out
-    assert printed.startswith("bike sst (held: rear, pitch) over root:at_m=0.4")
+    assert printed.startswith("bike sst (held: rear, pitch) (rider 85.0 kg, bike 16.2 kg) over root:at_m=0.4")
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["engine_info"]["locked"] == ["rear", "pitch"]
     summary = json.loads((out / "summary.json").read_text())

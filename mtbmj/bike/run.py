@@ -410,6 +410,10 @@ def _summary(p: Prepared, raw: dict) -> dict:
     return {
         "bike": p.spec.name,
         "scenario": p.terrain.describe(),
+        # the rider's mass is the whole rider (rider.mass_kg); the bike's all the rest
+        "mass_kg": {"rider": p.spec.rider.mass + p.spec.rider.on_bike_mass,
+                    "bike": p.spec.total_mass - p.spec.rider.mass - p.spec.rider.on_bike_mass,
+                    "total": p.spec.total_mass},
         "speed_m_per_s": p.speed,
         "start_m": float(p.bike.x0 + p.spec.front_axle[0]),  # the front axle's start along the terrain
         "duration_s": float(t[-1] + dt),
@@ -535,7 +539,10 @@ class BikeResult(RunOutput):
             held = f" ({'; '.join(parts)})"
         else:
             held = ""
-        return (f"bike {self.name}{held} over {self.scenario} at {s['speed_m_per_s']:g} m/s: front travel peak "
+        m = s["mass_kg"]
+        return (f"bike {self.name}{held} (rider {m['rider']:.1f} kg, bike {m['bike']:.1f} kg) over {self.scenario} at "
+                f"{s['speed_m_per_s']:g} m/s set ({s['min_speed_m_per_s']:.2f}-{s['max_speed_m_per_s']:.2f} m/s): "
+                f"front travel peak "
                 f"{s['max_front_travel_mm']:.1f} of {f['travel_mm']:g} mm{ends(f)}, rear {s['max_rear_travel_mm']:.1f} of "
                 f"{s['rear_wheel_travel_mm']:g} mm (shock {s['max_stroke_mm']:.1f} of {r['travel_mm']:g} mm){ends(r)}, "
                 f"pitch {s['pitch_deg']['min']:.1f} to {s['pitch_deg']['max']:.1f} deg, rim strikes "
@@ -581,6 +588,12 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
     if p.lock or not p.rear_tire_on:
         info["locked"] = list(p.lock)
         info["rear_tire"] = p.rear_tire_on
+    past = summary["max_rear_travel_mm"] - summary["rear_wheel_travel_mm"]
+    if past > 0.05:
+        from mtbmj.config import warn
+
+        warn([f"bike: the rear wheel reached {summary['max_rear_travel_mm']:.1f} mm, {past:.1f} mm past the end of "
+              f"the leverage table ({summary['rear_wheel_travel_mm']:g} mm): its last ratio was carried on there"])
     name = p.spec.name
     result = BikeResult(name, str(scenario), raw, raw, summary, wall, p, info)
     every = max(1, int(round(1.0 / (VIDEO_SAMPLE_HZ * p.timestep))))

@@ -119,7 +119,7 @@ def leverage_stroke(w_tab, r, s, i, w: float) -> float:
 
 @dataclass(frozen=True)
 class Rider:
-    mass: float  # kg, the body on the legs and arms
+    mass: float  # kg, the body on the legs and arms (the whole rider less ``on_bike_mass``)
     on_bike_mass: float  # kg, feet, shanks, hands and forearms: moving with the frame
     com: tuple[float, float]  # m, frame coordinates, standing at rest
     pitch_inertia: float  # kg m^2 about the body's centre of mass
@@ -222,7 +222,7 @@ KNOWN = {
     "leverage": {"wheel_travel_mm", "ratio"},
     "shock": {"stroke_mm", "config", "set"},
     "fork": {"config", "set"},
-    "rider": {"mass_kg", "on_bike_mass_kg", "com_mm", "pitch_inertia_kg_m2", "pedals_mm", "bars_mm",
+    "rider": {"mass_kg", "limbs_share_percent", "com_mm", "pitch_inertia_kg_m2", "pedals_mm", "bars_mm",
               "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
               "arm_stiffness_N_per_mm", "arm_damping_N_s_per_m"},
     "drive": {"push_N", "power_W", "brake_N", "traction"},
@@ -254,6 +254,32 @@ def _point(table: dict, section: str, key: str) -> tuple[float, float]:
     return float(v[0]) * MM, float(v[1]) * MM
 
 
+# A shock stroke longer than the leverage table needs by more than this is warned of: the wheel
+# can travel past the table's end, where the curve is extrapolated (both presets are within 0.6 mm).
+STROKE_GAP_M = 1e-3
+
+# The share of a rider's mass in the segments that move with the bike: feet, shanks, hands and
+# forearms, both sides; sourced: de Leva 1996 (J. Biomech. 29(9):1223), male segment masses in % of
+# body mass: foot 1.37, shank 4.33, hand 0.61, forearm 1.62.
+LIMBS_SHARE_PERCENT = 2 * (1.37 + 4.33 + 0.61 + 1.62)
+RETIRED = {"rider.on_bike_mass_kg": "rider.mass_kg is the whole rider; the share of it that moves with the bike "
+                                    "is rider.limbs_share_percent (de Leva's 15.86 % by default)"}
+
+
+# The keys of the fork's and the shock's configurations the bike reads: the fork's laws, tire,
+# gravity and integrator; the shock's laws (the fork schema read in shock coordinates; its length,
+# tire, sled and solver keys have no part in the bike). A key set in [fork.set] or [shock.set]
+# outside these changed nothing and is refused.
+USED = {"fork": ("fork.*", "tire.*", "sled.gravity_m_per_s2", "solver.integrator"),
+        "shock": ("fork.* but fork.length_mm",)}
+
+
+def _used(section: str, key: str) -> bool:
+    if section == "fork":
+        return key.startswith(("fork.", "tire.")) or key in ("sled.gravity_m_per_s2", "solver.integrator")
+    return key.startswith("fork.") and key != "fork.length_mm"
+
+
 def load(ref: str) -> BikeSpec:
     """A ``BikeSpec`` from a bike preset name (``preset_names()``) or a TOML path, checked."""
     table, source = _read(str(ref))
@@ -266,6 +292,8 @@ def load(ref: str) -> BikeSpec:
         if not isinstance(value, dict):
             raise ConfigError(f"{section}: must be a table")
         for key in value:
+            if f"{section}.{key}" in RETIRED:
+                raise ConfigError(f"{section}.{key}: no longer read: {RETIRED[f'{section}.{key}']}")
             if key not in keys:
                 raise ConfigError(f"{section}.{key}: unknown key (known: {', '.join(sorted(keys))})")
     head = _number(table, "bike", "head_angle_deg")
@@ -298,8 +326,18 @@ def load(ref: str) -> BikeSpec:
     if leverage.full_stroke > stroke * (1.0 + 1e-9):
         raise ConfigError(f"shock.stroke_mm: {stroke / MM:g} mm is shorter than the leverage curve needs over "
                           f"{leverage.full_travel / MM:g} mm of wheel travel ({leverage.full_stroke / MM:.2f} mm)")
-    rider_mass = _number(table, "rider", "mass_kg", positive=True)
-    on_bike = _number(table, "rider", "on_bike_mass_kg", nonneg=True)
+    if stroke - leverage.full_stroke > STROKE_GAP_M:
+        from mtbmj.config import warn
+
+        warn([f"leverage: the table covers {leverage.full_stroke / MM:.2f} mm of the shock's {stroke / MM:g} mm stroke "
+              f"(shock.stroke_mm); past its end ({leverage.full_travel / MM:g} mm of wheel travel) the last ratio is "
+              f"carried on, and a run that goes there says so"])
+    whole = _number(table, "rider", "mass_kg", positive=True)  # the whole rider
+    share = table.get("rider", {}).get("limbs_share_percent", LIMBS_SHARE_PERCENT)
+    if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0.0 <= share < 50.0:
+        raise ConfigError(f"rider.limbs_share_percent: must be a number within 0-50 %, got {share!r}")
+    on_bike = whole * share / 100.0
+    rider_mass = whole - on_bike
     pedals = _point(table, "rider", "pedals_mm")
     bars = _point(table, "rider", "bars_mm")
     com = _point(table, "rider", "com_mm")
@@ -318,8 +356,13 @@ def load(ref: str) -> BikeSpec:
         cfg = table.get(section, {}).get("config", "reference")
         if not isinstance(cfg, str):
             raise ConfigError(f"{section}.config: must be a preset name or a TOML file")
-        if not isinstance(table.get(section, {}).get("set", {}), dict):
+        given = table.get(section, {}).get("set", {})
+        if not isinstance(given, dict):
             raise ConfigError(f"{section}.set: must be a table of configuration keys")
+        for key in given:
+            if not _used(section, str(key)):
+                raise ConfigError(f"{section}.set: {key!r} is not used by the bike (of the {section}'s configuration "
+                                  f"it reads {', '.join(USED[section])})")
     drive = {}
     for key in ("push_N", "power_W", "brake_N", "traction"):
         if key in table.get("drive", {}):

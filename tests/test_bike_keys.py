@@ -1,0 +1,96 @@
+"""Bike keys that mean what they say (issue 39 item 3): the rider's mass is the whole rider, a key
+of [fork.set] / [shock.set] the bike does not read is refused, a leverage table shorter than the
+shock's stroke is warned of, and a run past the table's end says so."""
+from __future__ import annotations
+
+import tomllib
+import warnings
+
+import pytest
+
+from mtbmj.bike import spec
+from mtbmj.cli import main
+from mtbmj.config import ConfigError
+
+G = 9.81
+
+
+def _file(tmp_path, text, name="mine.toml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return str(path)
+
+
+def _bike_mass(preset: str) -> float:
+    """The bike's own masses, summed from the preset files (trail over sst)."""
+    from importlib import resources
+
+    table = {}
+    for name in ("sst", preset):
+        table.update(tomllib.loads((resources.files("mtbmj.bike.presets") / f"{name}.toml").read_text())["bike"])
+    return sum(table[k] for k in ("frame_mass_kg", "swingarm_mass_kg", "fork_lower_mass_kg", "front_wheel_mass_kg",
+                                  "rear_wheel_mass_kg"))
+
+
+def test_a_78_kg_rider_loads_the_tyres_with_78_kg_plus_the_bike(tmp_path, monkeypatch):
+    """``rider.mass_kg = 78`` made a 91.5 kg rider (the key was the rider less 13.5 kg of limbs)."""
+    from mtbmj import run_bike
+
+    monkeypatch.chdir(tmp_path)
+    path = _file(tmp_path, 'base = "trail"\n[rider]\nmass_kg = 78.0\n')
+    r = run_bike(path, "flat", speed_m_per_s=4.0, duration=0.05)
+    s = r.summary
+    bike = _bike_mass("trail")
+    assert s["mass_kg"]["rider"] == pytest.approx(78.0, abs=1e-12)
+    assert s["mass_kg"]["bike"] == pytest.approx(bike, abs=1e-12)
+    assert s["mass_kg"]["total"] == pytest.approx(78.0 + bike, abs=1e-12)
+    # on flat ground at rest the two tyres carry the whole weight (the tyre loads are radial, vertical here)
+    assert s["static_front_load_N"] + s["static_rear_load_N"] == pytest.approx((78.0 + bike) * G, rel=1e-4)
+    assert "(rider 78.0 kg, bike " in r.headline()
+
+
+def test_the_limbs_share_is_de_levas_by_default_and_can_be_set(tmp_path):
+    default = spec.load(_file(tmp_path, 'base = "trail"\n[rider]\nmass_kg = 100.0\n'))
+    assert default.rider.on_bike_mass == pytest.approx(100.0 * 2 * (1.37 + 4.33 + 0.61 + 1.62) / 100)
+    assert default.rider.mass + default.rider.on_bike_mass == pytest.approx(100.0)
+    set_ = spec.load(_file(tmp_path, 'base = "trail"\n[rider]\nmass_kg = 100.0\nlimbs_share_percent = 20\n', "b.toml"))
+    assert set_.rider.on_bike_mass == pytest.approx(20.0) and set_.rider.mass == pytest.approx(80.0)
+    with pytest.raises(ConfigError, match="rider.limbs_share_percent"):
+        spec.load(_file(tmp_path, 'base = "trail"\n[rider]\nlimbs_share_percent = 70\n', "c.toml"))
+
+
+@pytest.mark.parametrize("section,key,value", [
+    ("shock.set", "tire.pressure_psi", "10"),
+    ("fork.set", "sled.body_mass_kg", "10.0"),
+    ("fork.set", "solver.timestep_s", "0.001"),
+    ("shock.set", "fork.length_mm", "300.0"),
+])
+def test_keys_the_bike_does_not_read_are_refused_naming_them(tmp_path, monkeypatch, capsys, section, key, value):
+    """They changed nothing (the run was bit-identical) yet printed a warning as if used."""
+    monkeypatch.chdir(tmp_path)
+    path = _file(tmp_path, f'base = "trail"\n[{section}]\n"{key}" = {value}\n')
+    assert main(["bike", path, "flat", "--speed", "4", "--out", "run"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and section in err and repr(key) in err and "Traceback" not in err
+    assert not (tmp_path / "run").exists()
+
+
+def test_the_retired_limbs_key_is_refused_with_its_replacement(tmp_path):
+    with pytest.raises(ConfigError, match="rider.mass_kg is the whole rider.*limbs_share_percent"):
+        spec.load(_file(tmp_path, 'base = "trail"\n[rider]\non_bike_mass_kg = 13.5\n'))
+
+
+def test_a_table_short_of_the_stroke_is_warned_of_with_both_numbers(tmp_path):
+    text = ('base = "trail"\n[leverage]\nwheel_travel_mm = [0.0, 150.0]\nratio = [2.9, 2.78]\n'
+            '[shock]\nstroke_mm = 60.0\n[shock.set]\n"fork.travel_mm" = 60.0\n')
+    # the stroke the table needs, by its own rule (linear ratio in w): integral of dw / LR(w)
+    import math
+
+    needed = 150.0 * math.log(2.9 / 2.78) / (2.9 - 2.78)
+    with pytest.warns(UserWarning) as caught:
+        spec.load(_file(tmp_path, text))
+    text_ = " ".join(str(w.message) for w in caught)
+    assert f"{needed:.2f} mm of the shock's 60 mm stroke" in text_
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        spec.load("sst"), spec.load("trail")  # the presets' tables cover their strokes (within 1 mm)
