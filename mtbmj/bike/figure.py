@@ -34,7 +34,11 @@ def figure(result):
     ax.plot(t, r["speed_m_per_s"], color="tab:green")
     ax.set_ylabel("speed [m/s]")
     ax.set_xlabel("time [s]")
+    crash = s.get("crash")
     for ax in axes:
+        if crash:  # the run ends here
+            ax.axvline(crash["time_s"], color="tab:red", lw=1.5, ls="--",
+                       label=f"crash ({crash['kind']})" if ax is axes[2] else None)
         ax.grid(True, alpha=0.3)
         if ax.get_legend_handles_labels()[0]:
             ax.legend(loc="upper right", fontsize=8)

@@ -34,6 +34,7 @@ import mujoco
 import numpy as np
 
 from mtbmj import compose, output
+from mtbmj.bike import crash
 from mtbmj.bike import spec as spec_mod
 from mtbmj.bike.model import Bike, build_bike
 from mtbmj.controllers import installed
@@ -93,6 +94,7 @@ class Prepared:
     rear_tire_on: bool = True  # False: the rear tire taken off (``prepare(rear_tire=False)``)
     refined_steps: int = 0  # coarse steps stepped again at the fine step (a stop or the rim within reach)
     stepped: int = 0  # coarse steps made
+    watch: crash.Watch | None = None  # the run's crash check (``mtbmj.bike.crash``)
 
     def visual_model(self) -> mujoco.MjModel:
         """The same bike with its drawn geoms and the terrain (``bike.model`` has none: see
@@ -197,6 +199,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     with installed(cb):
         mujoco.mj_forward(b.model, data)
     p.initial_qpos, p.initial_qvel, p.initial_act = data.qpos.copy(), data.qvel.copy(), data.act.copy()
+    p.watch = crash.Watch(b.model, ter, b.qpos_index("pitch"), pitch_locked="pitch" in lock)
     return p
 
 
@@ -288,6 +291,8 @@ def simulate(p: Prepared, duration: float, progress=None):
     def to_python():
         p.callback = _python_twin(p.callback)  # its first evaluation searches the patches afresh
         p.refined_steps = p.stepped = 0
+        if p.watch is not None:
+            p.watch.reset()
 
     return callbacks.rerun_on_python(p.bike.model, p.data, lambda: _simulate(p, duration, progress),
                                      lambda: getattr(p.callback, "overflowed", False), to_python, "bike")
@@ -331,7 +336,7 @@ def _simulate(p: Prepared, duration: float, progress=None):
     try:
         with installed(p.callback):
             return loop.chunked(model, p.data, steps, p.timestep, "bike", plan if plan.substeps > 1 else None,
-                                progress, counts, chunk=CHUNK, report_every=CHUNK)
+                                progress, counts, chunk=CHUNK, report_every=CHUNK, stop=p.watch)
     finally:
         p.stepped += counts.stepped
         p.refined_steps += counts.refined
@@ -441,6 +446,9 @@ def _summary(p: Prepared, raw: dict) -> dict:
                   "work_J": float(np.sum(raw["drive_force_N"] * speed) * dt)},
         # what riders read from telemetry (mtbmj.ride.metrics), each end in its own travel
         "ride_metrics": ride,
+        # the run ended here (mtbmj.bike.crash): a part other than a tyre on the ground, or the pitch
+        # past what a rider recovers from; the time series stop at it
+        "crash": p.watch.crash.to_dict() if p.watch is not None and p.watch.crash is not None else None,
     }
 
 
@@ -540,7 +548,8 @@ class BikeResult(RunOutput):
         else:
             held = ""
         m = s["mass_kg"]
-        return (f"bike {self.name}{held} (rider {m['rider']:.1f} kg, bike {m['bike']:.1f} kg) over {self.scenario} at "
+        crashed = f"{s['crash']['line']}: " if s.get("crash") else ""
+        return (f"{crashed}bike {self.name}{held} (rider {m['rider']:.1f} kg, bike {m['bike']:.1f} kg) over {self.scenario} at "
                 f"{s['speed_m_per_s']:g} m/s set ({s['min_speed_m_per_s']:.2f}-{s['max_speed_m_per_s']:.2f} m/s): "
                 f"front travel peak "
                 f"{s['max_front_travel_mm']:.1f} of {f['travel_mm']:g} mm{ends(f)}, rear {s['max_rear_travel_mm']:.1f} of "

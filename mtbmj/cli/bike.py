@@ -2,10 +2,15 @@
 leverage curve, a rider, two tires) rolled over a terrain of ``mtbmj roll``'s library, written
 atomically. Bad bike descriptions (a leverage table that is not positive or not increasing, a pivot
 inside a wheel, a shock stroke shorter than the curve needs, negative masses, a head angle outside
-45-90 degrees) raise ConfigError: one line naming the key, exit status 2, nothing written."""
+45-90 degrees) raise ConfigError: one line naming the key, exit status 2, nothing written. A run
+that ends in a crash (a part other than a tyre on the ground, or the pitch past what a rider
+recovers from) is written up to the crash, its headline starting "crashed: ...", exit status 3."""
 from __future__ import annotations
 
 from mtbmj.cli.common import Progress, add_out
+
+# A run that ended in a crash (``mtbmj.bike.crash``): its folder is written, up to the crash
+EXIT_CRASHED = 3
 
 
 def cmd_bike(args) -> int:
@@ -26,7 +31,7 @@ def cmd_bike(args) -> int:
     written = result.write(args.out, figure=not args.no_figure, video=args.video, ride=args.ride)
     print(f"{result.headline()}; {result.info['real_time_factor']:.2f}x real time; wrote {len(written)} files to "
           f"{args.out}")
-    return 0
+    return EXIT_CRASHED if result.summary.get("crash") else 0
 
 
 def add_parser(subparsers) -> None:

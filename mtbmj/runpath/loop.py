@@ -157,17 +157,27 @@ def roll(model, data, start, n: int, level: int, nstep: int | None = None, fine:
     return fs[0, level - 1::level], fe[0, ::level], fs[0]
 
 
+class Stopped(Exception):
+    """Raised inside :func:`stepped` when the rig's ``stop`` ended the run early."""
+
+
 def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
             sink: Callable[[int, np.ndarray, np.ndarray], None],
             progress: Callable[[float], None] | None = None, report_every: int = 0,
-            limit: tuple[slice, float, str] | None = None) -> None:
+            limit: tuple[slice, float, str] | None = None,
+            stop: Callable[[int, np.ndarray, np.ndarray], int | None] | None = None) -> int:
     """Step ``steps`` output steps of ``timestep`` from ``data``'s current state under ``plan``,
     handing each stretch of kept rows to ``sink(first_step, states, sensors)`` (states row j: the
     state at the end of output step first_step + j; sensors row j: at its start). Ends the run with
     one ``RunError`` line (``rig`` named) on a MuJoCo warning, a non-finite state, a state MuJoCo
     reset, or a state whose ``limit`` columns (columns, bound, what) pass the bound; MuJoCo's
     warning text never reaches the terminal or MUJOCO_LOG.TXT. ``progress(fraction)`` is called
-    when ``report_every`` more steps are done (0: after every chunk) and at the end."""
+    when ``report_every`` more steps are done (0: after every chunk) and at the end.
+
+    ``stop(first_step, states, sensors)`` (the rig's end of the run, e.g. the bike's crash) sees each
+    stretch's finite rows before they are checked; where it names a row j, the rows up to j are
+    kept and the run ends there: what MuJoCo did after that row (a warning, a divergence) is past
+    the end and not judged. Returns the output steps made."""
     kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state = np.empty(mujoco.mj_stateSize(model, kind))
     mujoco.mj_getState(model, data, state, kind)
@@ -176,43 +186,60 @@ def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
     messages: list[str] = []
 
     def accept(start, rows, sensor_rows):
-        guard.check(rig, data, messages, start, rows, t0 + (done + len(rows)) * timestep, model=model)
+        at = t0 + (done + len(rows)) * timestep
+        if stop is not None:
+            bad = np.flatnonzero(~np.all(np.isfinite(rows), axis=1))
+            end = stop(done, rows[:int(bad[0]) if bad.size else len(rows)],
+                       sensor_rows[:int(bad[0]) if bad.size else len(rows)])
+            if end is not None:
+                rows, sensor_rows = rows[:end + 1], sensor_rows[:end + 1]
+                guard.clear_warnings(data, messages)  # what MuJoCo met after the end is not judged
+                if not guard.steps_clean(start, rows):
+                    raise guard.diverged(rig, at, "MuJoCo reset the state after an instability")
+                sink(done, rows, sensor_rows)
+                raise Stopped(done + len(rows))
+        guard.check(rig, data, messages, start, rows, at, model=model)
         if limit is not None and np.max(np.abs(rows[:, limit[0]])) > limit[1]:
-            raise guard.diverged(rig, t0 + (done + len(rows)) * timestep, limit[2])
+            raise guard.diverged(rig, at, limit[2])
         sink(done, rows, sensor_rows)
 
     with guard.collected_warnings(messages):
-        while done < steps:
-            n = plan.size(steps - done)
-            level = plan.substeps if plan.fine else 1
-            states, sensors, fine_states = roll(model, data, state, n, level, fine=plan.fine)
-            warned = bool(messages) or guard.first_warning(data) is not None
-            keep, switch, partial = plan.keep(state, states, fine_states, sensors, warned)
-            if keep < n and warned and guard.steps_clean(state, states[:keep]):
-                guard.clear_warnings(data, messages)  # the warning came from steps past the cut, thrown away
-            if keep:
-                accept(state, states[:keep], sensors[:keep])
-                state = states[keep - 1].copy()
-                done += keep
-            if switch:
-                plan.switched()
-            if partial is not None:  # the switch fell inside an output step: finish it under the new law
-                at, left = partial
-                _, _, rest = roll(model, data, fine_states[at], 0, level, nstep=left)
-                accept(fine_states[at], rest[-1:], sensors[keep: keep + 1])
-                state = rest[-1].copy()
-                done += 1
-            if progress is not None and (done - last_report >= report_every or done == steps):
-                last_report = done
-                progress(done / steps)
+        try:
+            while done < steps:
+                n = plan.size(steps - done)
+                level = plan.substeps if plan.fine else 1
+                states, sensors, fine_states = roll(model, data, state, n, level, fine=plan.fine)
+                warned = bool(messages) or guard.first_warning(data) is not None
+                keep, switch, partial = plan.keep(state, states, fine_states, sensors, warned)
+                if keep < n and warned and guard.steps_clean(state, states[:keep]):
+                    guard.clear_warnings(data, messages)  # the warning came from steps past the cut, thrown away
+                if keep:
+                    accept(state, states[:keep], sensors[:keep])
+                    state = states[keep - 1].copy()
+                    done += keep
+                if switch:
+                    plan.switched()
+                if partial is not None:  # the switch fell inside an output step: finish it under the new law
+                    at, left = partial
+                    _, _, rest = roll(model, data, fine_states[at], 0, level, nstep=left)
+                    accept(fine_states[at], rest[-1:], sensors[keep: keep + 1])
+                    state = rest[-1].copy()
+                    done += 1
+                if progress is not None and (done - last_report >= report_every or done == steps):
+                    last_report = done
+                    progress(done / steps)
+        except Stopped as end:
+            return end.args[0]
+    return done
 
 
 def chunked(model, data, steps: int, timestep: float, rig: str, refine: Refinement | None = None,
             progress: Callable[[float], None] | None = None, counts: Counts | None = None,
-            chunk: int = CHUNK, report_every: int = CHUNK):
+            chunk: int = CHUNK, report_every: int = CHUNK, stop=None):
     """(states (steps + 1, nstate), sensors (steps, nsensordata)) of ``steps`` steps of ``timestep``
     from ``data``'s current state, row 0 of the states the start (see the module doc), on
-    :func:`stepped` with the :class:`Coarse` plan, or :class:`AfterTheFact` over ``refine``."""
+    :func:`stepped` with the :class:`Coarse` plan, or :class:`AfterTheFact` over ``refine``; where
+    ``stop`` (see :func:`stepped`) ended the run early, the rows up to its end."""
     counts = Counts() if counts is None else counts
     kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
     states = np.empty((steps + 1, mujoco.mj_stateSize(model, kind)))
@@ -225,5 +252,5 @@ def chunked(model, data, steps: int, timestep: float, rig: str, refine: Refineme
         sensors[first: first + len(rows)] = sensor_rows
         counts.stepped += len(rows)
 
-    stepped(model, data, steps, timestep, rig, plan, sink, progress, report_every)
-    return states, sensors
+    made = stepped(model, data, steps, timestep, rig, plan, sink, progress, report_every, stop=stop)
+    return states[:made + 1], sensors[:made]
