@@ -378,7 +378,9 @@ def _signals(p: Prepared, states, sensors) -> dict:
         "front_tire_N": front,
         "rear_tire_N": rear,
         "front_tire_mm": sens("front_deflection") * 1e3,
-        "rear_tire_mm": sens("rear_deflection") * 1e3,
+        # no rear tire (``rear_tire=False``): no deflection, so no rim strike (the CSV's marker for
+        # no ground within 10 mm); the probe measured the rim's depth into the ground instead
+        "rear_tire_mm": sens("rear_deflection") * 1e3 if p.rear_tire_on else np.full(n, -10.0),
         "rider_acc_z_m_per_s2": rider_acc,
         "fork_force_N": -sens("fork_force"),
         "shock_force_N": sens("shock_force"),
