@@ -292,14 +292,23 @@ class Reference:
         return sig
 
 
-def static_equilibrium(reference: Reference, guess=None) -> np.ndarray:
+def static_equilibrium(reference: Reference, guess=None, acceptable=None) -> np.ndarray:
     """q (7,) of the bike rolling steadily on the start at the set speed (the drive's force 0, the
     wheels' spin free): every generalised force but the horizontal one balanced (X = 0), solved by
-    Newton's method on the closed-form forces (finite-difference Jacobian)."""
+    Newton's method on the closed-form forces (finite-difference Jacobian).
+
+    ``acceptable(q)`` (default: any root) tells a bike's equilibrium from a spurious root (a wheel off
+    the ground, the frame on end). Where Newton's method from the usual start fails or lands on a
+    spurious root, the equilibrium is followed by continuation from a lighter load (gravity scaled
+    from a quarter of its value up to all of it, each solution the next start), then tried from
+    starts spread over the travel; only when none finds it is the bike refused, saying why."""
     from scipy.optimize import fsolve
 
     moving = np.zeros(NQ)
     moving[0] = reference.speed  # rolling at the set speed: the drive's force is 0 there
+    planar = reference.planar
+    g = planar.g
+    acceptable = (lambda q: True) if acceptable is None else acceptable
 
     def residual(u):
         q = np.concatenate(([0.0], u))
@@ -307,11 +316,38 @@ def static_equilibrium(reference: Reference, guess=None) -> np.ndarray:
         Q, out = reference.forces(0.0, y)
         return (Q + out["static"])[1:]
 
+    def solve(u0):
+        u, _, ok, msg = fsolve(residual, u0, full_output=True, xtol=1e-13)
+        good = ok == 1 and bool(np.all(np.isfinite(u))) and np.max(np.abs(residual(u))) <= 1e-6
+        return (u if good else None), " ".join(str(msg).split())
+
     u0 = np.array([-0.06, 0.0, 0.03, 0.2, -0.01, 0.0]) if guess is None else np.asarray(guess, float)
-    u, info, ok, msg = fsolve(residual, u0, full_output=True, xtol=1e-13)
-    if ok != 1 or np.max(np.abs(residual(u))) > 1e-6:
-        raise RunError(f"bike: no static equilibrium found on the start ({' '.join(str(msg).split())})")
-    return np.concatenate(([0.0], u))
+    u, why = solve(u0)
+    if u is not None and acceptable(np.concatenate(([0.0], u))):
+        return np.concatenate(([0.0], u))
+    found = None
+    try:  # continuation in the load: a light bike sits near full extension, where the usual start is
+        start = np.array([-0.06, 0.0, 0.03, 0.05, -0.005, 0.0])
+        for scale in np.linspace(0.25, 1.0, 16):
+            planar.g = g * scale
+            start, why = solve(start)
+            if start is None:
+                break
+        else:
+            found = start
+    finally:
+        planar.g = g
+    if found is not None and acceptable(np.concatenate(([0.0], found))):
+        return np.concatenate(([0.0], found))
+    for fork in np.linspace(0.0, 0.15, 7):  # starts spread over the fork's and the swingarm's travel
+        for arm in (-0.005, 0.0, 0.05, 0.15):
+            u, msg = solve(np.array([-0.06, 0.0, 0.03, fork, arm, 0.0]))
+            if u is not None and acceptable(np.concatenate(([0.0], u))):
+                return np.concatenate(([0.0], u))
+            why = msg if u is None else why
+    raise RunError("bike: no static equilibrium with both wheels on the ground found on the start from 31 starts "
+                   f"and a continuation in the load (the springs may not carry the bike and rider: check the fork's "
+                   f"and the shock's rates and preloads; last solver message: {why})")
 
 
 __all__ = ["PlanarBike", "Reference", "static_equilibrium", "NQ"]

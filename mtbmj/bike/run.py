@@ -182,7 +182,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     _check_start(p, ref)
     names = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")
     if rear_tire:
-        q = static_equilibrium(ref)
+        q = static_equilibrium(ref, acceptable=lambda q: _is_equilibrium(ref, q))
         _check_equilibrium(ref, q)
         q = dict(zip(names, q))
     else:  # on the front wheel alone: the rear at full extension, the rider at its stance (both held)
@@ -271,13 +271,18 @@ def _check_start(p: Prepared, ref) -> None:
                               f"terrain's features; put the feature farther ahead (at_m) or start elsewhere (--start-m)")
 
 
-def _check_equilibrium(ref, q) -> None:
+def _is_equilibrium(ref, q) -> bool:
+    """Both wheels on the ground and the frame within 30 deg of level: a bike's equilibrium."""
     from mtbmj.bike.reference import NQ
 
     y = np.concatenate((q, np.zeros(NQ), np.zeros(ref.nf + ref.ns)))
     y[NQ] = ref.speed
     _, out = ref.forces(0.0, y)
-    if not (out["front"][1] > 0.0 and out["rear"][1] > 0.0 and abs(q[2]) < math.radians(30.0)):
+    return bool(out["front"][1] > 0.0 and out["rear"][1] > 0.0 and abs(q[2]) < math.radians(30.0))
+
+
+def _check_equilibrium(ref, q) -> None:
+    if not _is_equilibrium(ref, q):
         raise RunError("bike: no static equilibrium with both wheels on the ground (the springs cannot carry the "
                        "bike and rider: check the fork's and the shock's rates and preloads)")
 
