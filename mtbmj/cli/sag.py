@@ -1,8 +1,7 @@
 """``mtbmj sag``: the air pressure or coil preload for a sag in percent of travel under a load,
-written as a configuration that ``mtbmj drop`` runs as is."""
+written as a configuration that ``mtbmj drop`` runs as is, and where the fork's friction lets it
+rest around that sag."""
 from __future__ import annotations
-
-from pathlib import Path
 
 from mtbmj.cli.common import add_out, overrides
 
@@ -12,14 +11,17 @@ def cmd_sag(args) -> int:
 
     setting = solve_sag(args.config, args.load_kg, args.sag_percent, overrides(args.set))
     written = setting.write(args.out)
-    print(f"{setting.line()}; wrote {written[0]}; run it with: mtbmj drop {written[0]}")
+    print(f"{setting.line()}; wrote {written[0]}; run it with: {setting.drop_command(written[0])}")
     return 0
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser("sag", help="air pressure (air spring) or preload (coil) for a static sag; writes config.toml")
     p.add_argument("config", help="preset name (air120, S12, ...) or a TOML file")
-    p.add_argument("--load-kg", type=float, required=True, help="mass the fork carries (on the sled: the body mass)")
+    p.add_argument("--load-kg", type=float,
+                   help="mass the fork carries (on the sled: the body mass); or give the rider inputs instead: "
+                        "--set sled.rider_mass_kg=... --set sled.bike_mass_kg=... --set sled.front_share_percent=... "
+                        "(not both)")
     p.add_argument("--sag-percent", type=float, required=True, help="static sag in percent of the travel")
     add_out(p, "out/sag")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
