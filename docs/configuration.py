@@ -355,7 +355,58 @@ def markdown() -> str:
         if key == list(cfg.SCHEMA)[-1] or (list(cfg.SCHEMA)[list(cfg.SCHEMA).index(key) + 1].rpartition(".")[0]
                                             or "top level") != section:
             lines.append("")
+    lines += bike_section()
     return "\n".join(lines).rstrip("\n") + "\n"
+
+
+def _plain(value) -> str:
+    if isinstance(value, list):
+        return f"{len(value)} values" if len(value) > 2 else "[" + ", ".join(f"{x:g}" for x in value) + "]"
+    if isinstance(value, dict):
+        return f"{len(value)} keys"
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def bike_section() -> list[str]:
+    """The bike file's keys (``mtbmj.bike.keys.KEYS``), their defaults from the SST preset."""
+    from mtbmj.bike import keys, spec
+
+    table, _ = spec._read("sst")
+    known = {f"{s}.{k}" for s, ks in spec.KNOWN.items() if ks for k in ks} | {k for k, v in spec.KNOWN.items() if v is None}
+    missing = sorted(known - set(keys.KEYS))
+    if missing:
+        raise SystemExit(f"docs/configuration.py: mtbmj.bike.keys.KEYS has no entry for {missing}")
+    lines = [
+        "## Bike files",
+        "",
+        "`mtbmj bike BIKE ...` reads a bike file (its own TOML schema; presets `sst` and `trail`, see",
+        "[docs/bike.md](bike.md)): geometry in frame coordinates (origin the bottom bracket, x forward, z",
+        "up, both ends at full extension), masses, the leverage table, the shock's and the fork's laws as",
+        "configurations of the schema above, the rider and the drive. A file may name a `base` (a bike",
+        "preset or another bike file). *default*: the SST preset's value (`mtbmj/bike/presets/sst.toml`),",
+        "or *none* where the key has one only in the code. *plausible*: outside it, a warning; a point's",
+        "range is given for x and for z. Geometry given in metres (every axle and pivot coordinate below 3)",
+        "is refused naming the keys; a point more than 5 m from the bottom bracket is refused.",
+        "",
+        "| key | default | valid | plausible | meaning |",
+        "|---|---|---|---|---|",
+    ]
+    for key, (meaning, valid_, rng) in keys.KEYS.items():
+        section, _, name = key.partition(".")
+        value = table.get(section, {}).get(name) if name else table.get(section)
+        if rng is None:
+            shown = ""
+        elif isinstance(rng[0], tuple):
+            shown = f"x {rng[0][0]:g} to {rng[0][1]:g}, z {rng[1][0]:g} to {rng[1][1]:g}"
+        else:
+            shown = f"{rng[0]:g}-{rng[1]:g}"
+        if key in ("description", "reading"):
+            value = "(text)"
+        if key == "rider.limbs_share_percent" and value is None:
+            value = round(spec.LIMBS_SHARE_PERCENT, 2)
+        lines.append("| " + " | ".join(_cell(c) for c in (
+            f"`{key}`", "none" if value is None else _plain(value), valid_, shown, meaning)) + " |")
+    return lines + [""]
 
 
 def main() -> int:

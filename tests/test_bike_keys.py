@@ -94,3 +94,47 @@ def test_a_table_short_of_the_stroke_is_warned_of_with_both_numbers(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         spec.load("sst"), spec.load("trail")  # the presets' tables cover their strokes (within 1 mm)
+
+
+@pytest.mark.parametrize("text,key", [
+    ('[rider]\nmass_kg = 500.0\n', "rider.mass_kg = 500 kg"),
+    ('[rider]\nmass_kg = 5.0\n', "rider.mass_kg = 5 kg"),
+    ('[bike]\nfork_offset_mm = 44000.0\n', "bike.fork_offset_mm = 44000 mm"),
+    ('[bike]\nhead_angle_deg = 88.0\n', "bike.head_angle_deg = 88 deg"),
+    ('[leverage]\nwheel_travel_mm = [0.0, 150.0]\nratio = [9.0, 8.0]\n', "leverage.ratio = 9 (of the list)"),
+])
+def test_implausible_bike_values_are_warned_of_naming_the_key(tmp_path, text, key):
+    """A 500 kg rider rested on both bumpers with exit 0 and no warning; a 5 kg rider and a 44 m
+    fork offset passed silently (issue 39 item 4)."""
+    with pytest.warns(UserWarning) as caught:
+        try:
+            spec.load(_file(tmp_path, 'base = "trail"\n' + text))
+        except ConfigError:
+            pass  # a table the shock cannot follow is refused after its warning
+    assert any(key in str(w.message) for w in caught), [str(w.message) for w in caught]
+
+
+def test_presets_are_plausible_throughout():
+    from mtbmj.bike import keys
+
+    for name in spec.preset_names():
+        assert keys.warnings(spec._read(name)[0]) == []
+
+
+def test_geometry_in_metres_is_refused_naming_the_mistake(tmp_path, monkeypatch, capsys):
+    """Axles typed in metres were refused as 'the main pivot lies inside the rear wheel'."""
+    monkeypatch.chdir(tmp_path)
+    path = _file(tmp_path, 'base = "trail"\n[bike]\nfront_axle_mm = [0.79, 0.01]\nrear_axle_mm = [-0.435, 0.02]\n'
+                           'pivot_mm = [-0.02, 0.07]\n')
+    assert main(["bike", path, "flat", "--speed", "4", "--out", "run"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "look like metres" in err and "bike.front_axle_mm" in err
+
+
+def test_a_point_far_beyond_any_bike_is_one_line(tmp_path, monkeypatch, capsys):
+    """frame_com_mm = [1e31, 0] gave two lines (a MuJoCo note and a solver refusal)."""
+    monkeypatch.chdir(tmp_path)
+    path = _file(tmp_path, 'base = "trail"\n[bike]\nframe_com_mm = [1e31, 0]\n')
+    assert main(["bike", path, "flat", "--speed", "4", "--out", "run"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bike.frame_com_mm" in err and "Traceback" not in err

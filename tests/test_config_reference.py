@@ -28,7 +28,7 @@ SUFFIXES = [("_N_s_per_m", "N s/m"), ("_N_per_mm3", "N/mm3"), ("_N_per_mm", "N/m
 def _rows() -> dict[str, list[str]]:
     """The table rows of the page's key tables: key -> cells (unit, default, valid, plausible, meaning)."""
     rows: dict[str, list[str]] = {}
-    every_key = DOC.read_text().split("\n## 5. Every key\n", 1)[1]
+    every_key = DOC.read_text().split("\n## 5. Every key\n", 1)[1].split("\n## Bike files\n", 1)[0]
     for line in every_key.splitlines():
         match = re.match(r"^\| `([\w.]+)` \| (.*) \|$", line)
         if match:
@@ -165,3 +165,17 @@ def test_presets_lists_the_presets_as_before(capsys):
     assert main(["presets"]) == 0
     names = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
     assert names[:2] == ["S1", "S2"] and "air120" in names and "reference" in names
+
+
+def test_every_bike_key_is_on_the_page_with_its_range():
+    """A bike file's keys (mtbmj.bike.spec.KNOWN) each have a row in the page's bike section, with
+    the plausible range the warnings use (issue 40: the bike's keys were documented nowhere)."""
+    from mtbmj.bike import keys, spec
+
+    section = DOC.read_text().split("\n## Bike files\n", 1)[1]
+    rows = {m.group(1): m.group(2) for m in re.finditer(r"^\| `([\w.]+)` \| (.*) \|$", section, re.M)}
+    known = {f"{s}.{k}" for s, ks in spec.KNOWN.items() if ks for k in ks}
+    assert known <= set(rows)
+    for key, (_, _, rng) in keys.KEYS.items():
+        if rng is not None and not isinstance(rng[0], tuple):
+            assert f"{rng[0]:g}-{rng[1]:g}" in rows[key], key

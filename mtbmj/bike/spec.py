@@ -251,7 +251,14 @@ def _point(table: dict, section: str, key: str) -> tuple[float, float]:
     if (not isinstance(v, list) or len(v) != 2
             or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in v)):
         raise ConfigError(f"{full}: must be two numbers [x, z] in mm, got {v!r}")
+    far = [x for x in v if abs(x) > MAX_COORDINATE_MM]
+    if far:
+        raise ConfigError(f"{full}: {far[0]:g} mm is more than {MAX_COORDINATE_MM / 1000:g} m from the bottom "
+                          f"bracket; no part of a bike or rider is")
     return float(v[0]) * MM, float(v[1]) * MM
+
+
+MAX_COORDINATE_MM = 5000.0  # no point of a bike or its rider lies farther from the bottom bracket
 
 
 # A shock stroke longer than the leverage table needs by more than this is warned of: the wheel
@@ -296,6 +303,12 @@ def load(ref: str) -> BikeSpec:
                 raise ConfigError(f"{section}.{key}: no longer read: {RETIRED[f'{section}.{key}']}")
             if key not in keys:
                 raise ConfigError(f"{section}.{key}: unknown key (known: {', '.join(sorted(keys))})")
+    from mtbmj.bike import keys as keys_mod
+    from mtbmj.config import warn
+
+    metres = keys_mod.metres_for_millimetres(table)
+    if metres is not None:
+        raise ConfigError(metres)
     head = _number(table, "bike", "head_angle_deg")
     if not 45.0 <= head <= 90.0:
         raise ConfigError(f"bike.head_angle_deg: must be within 45-90 degrees from the horizontal, got {head:g}")
@@ -367,6 +380,7 @@ def load(ref: str) -> BikeSpec:
     for key in ("push_N", "power_W", "brake_N", "traction"):
         if key in table.get("drive", {}):
             drive[key] = _number(table, "drive", key, nonneg=True)
+    warn(keys_mod.warnings(table))
     spec = BikeSpec(
         name=source if source in preset_names() else Path(source).stem, head_angle=math.radians(head),
         fork_offset=offset, front_axle=front, rear_axle=rear, pivot=pivot,

@@ -1,0 +1,125 @@
+"""Every key of a bike file: its meaning, what is valid and what is plausible.
+
+``KEYS`` maps a dotted key to (meaning, valid, plausible): ``plausible`` is a (low, high) range of
+the number (for a point [x, z], ``((x_low, x_high), (z_low, z_high))``; for a list, the range of
+its values), or None. A value outside its plausible range is most likely a unit mistake (metres
+for millimetres) or outside what any bike has: :func:`warnings` gives one line for each,
+``mtbmj.bike.spec.load`` issues them as warnings (the run proceeds). Geometry given in metres
+where millimetres are meant is refused outright (:func:`metres_for_millimetres`): the geometry
+checks would otherwise refuse it for a reason that does not name the mistake.
+
+The ranges are *assumed*: what trail, enduro and downhill bikes and adult riders span, with room
+(a 5 kg or a 500 kg rider, a 44 m fork offset fall outside). ``docs/configuration.md`` prints them
+(``docs/configuration.py`` reads this table).
+"""
+from __future__ import annotations
+
+import math
+
+POINT_MM = "two numbers [x, z], mm"
+KEYS: dict[str, tuple[str, str, object]] = {
+    "description": ("One line saying what the bike is.", "text", None),
+    "reading": ("Where the numbers come from; informational.", "text", None),
+    "base": ("A bike preset (sst, trail) or another bike file whose keys this file overrides.", "text", None),
+    "bike.head_angle_deg": ("Head angle from the horizontal, the frame at full extension.", "45-90", (58.0, 76.0)),
+    "bike.fork_offset_mm": ("Fork offset (rake): the axle ahead of the steering axis, perpendicular to it.",
+                            ">= 0", (20.0, 70.0)),
+    "bike.front_axle_mm": ("Front axle in frame coordinates (origin the bottom bracket, x forward, z up) at full "
+                           "extension.", POINT_MM, ((450.0, 1100.0), (-150.0, 250.0))),
+    "bike.rear_axle_mm": ("Rear axle in frame coordinates at full extension.", POINT_MM,
+                          ((-560.0, -380.0), (-150.0, 250.0))),
+    "bike.pivot_mm": ("Main pivot in frame coordinates: the swingarm turns about it.", POINT_MM,
+                      ((-250.0, 250.0), (-50.0, 400.0))),
+    "bike.frame_mass_kg": ("Frame with shock, stanchions, crown, bars and drivetrain (all that moves with the "
+                           "frame but the rider).", "> 0", (3.0, 25.0)),
+    "bike.frame_com_mm": ("The frame's centre of mass in frame coordinates.", POINT_MM,
+                          ((-300.0, 700.0), (-100.0, 800.0))),
+    "bike.frame_inertia_kg_m2": ("The frame's pitch inertia about its centre of mass.", "> 0", (0.1, 10.0)),
+    "bike.swingarm_mass_kg": ("Rear triangle, brake and cassette.", "> 0", (0.5, 8.0)),
+    "bike.swingarm_inertia_kg_m2": ("The swingarm's inertia about its centre of mass (midway between pivot and "
+                                    "axle).", "> 0", (0.005, 2.0)),
+    "bike.fork_lower_mass_kg": ("Fork lower legs, caliper and axle (unsprung, at the front axle).", "> 0",
+                                (0.3, 5.0)),
+    "bike.front_wheel_mass_kg": ("Front wheel with tyre and rotor.", "> 0", (0.8, 5.0)),
+    "bike.rear_wheel_mass_kg": ("Rear wheel with tyre, rotor and cassette.", "> 0", (0.8, 6.0)),
+    "bike.wheel_inertia_kg_m2": ("A wheel's spin inertia (no effect on the planar motion).", "> 0", (0.02, 0.6)),
+    "leverage.wheel_travel_mm": ("Rear wheel travel of the leverage table, from 0, strictly increasing.",
+                                 "list of numbers", (0.0, 260.0)),
+    "leverage.ratio": ("Leverage ratio (wheel travel per shock stroke) at each wheel travel of the table.",
+                       "list of numbers > 0", (1.5, 4.5)),
+    "shock.stroke_mm": ("The shock's stroke; the leverage table must not need more.", "> 0", (25.0, 90.0)),
+    "shock.config": ("The shock's laws: a configuration of the fork schema (preset or file), read in shock "
+                     "coordinates.", "text", None),
+    "shock.set": ("Keys of the shock's configuration changed for this bike: fork.* but fork.length_mm.",
+                  "table", None),
+    "fork.config": ("The fork's laws, tyre and integrator: a configuration of the fork schema (preset or file).",
+                    "text", None),
+    "fork.set": ("Keys of the fork's configuration changed for this bike: fork.*, tire.*, sled.gravity_m_per_s2, "
+                 "solver.integrator.", "table", None),
+    "rider.mass_kg": ("The whole rider, kit included.", "> 0", (30.0, 150.0)),
+    "rider.limbs_share_percent": ("The share of the rider's mass in feet, shanks, hands and forearms, which move "
+                                  "with the bike (default de Leva's 15.86 %).", "0-50", (10.0, 25.0)),
+    "rider.com_mm": ("The rider's centre of mass standing at rest, frame coordinates; between pedals and bars in x.",
+                     POINT_MM, ((-250.0, 450.0), (500.0, 1400.0))),
+    "rider.pitch_inertia_kg_m2": ("The rider's body's pitch inertia about its centre of mass.", "> 0", (1.0, 25.0)),
+    "rider.pedals_mm": ("Where the legs meet the frame (the feet), frame coordinates.", POINT_MM,
+                        ((-150.0, 150.0), (-100.0, 150.0))),
+    "rider.bars_mm": ("Where the arms meet the frame (the grips), frame coordinates.", POINT_MM,
+                      ((250.0, 700.0), (400.0, 900.0))),
+    "rider.leg_length_mm": ("Pedals to hips, vertical, at rest.", "> 0", (500.0, 1200.0)),
+    "rider.arm_length_mm": ("Bars to shoulders, vertical, at rest.", "> 0", (200.0, 800.0)),
+    "rider.leg_stiffness_N_per_mm": ("Both legs' stiffness.", "> 0", (2.0, 150.0)),
+    "rider.leg_damping_N_s_per_m": ("Both legs' damping.", ">= 0", (20.0, 5000.0)),
+    "rider.arm_stiffness_N_per_mm": ("Both arms' stiffness.", "> 0", (0.5, 80.0)),
+    "rider.arm_damping_N_s_per_m": ("Both arms' damping.", ">= 0", (5.0, 3000.0)),
+    "drive.push_N": ("The rider drive's largest forward force at the rear tyre.", ">= 0", (100.0, 2500.0)),
+    "drive.power_W": ("The rider drive's largest power.", ">= 0", (100.0, 2500.0)),
+    "drive.brake_N": ("The rider drive's largest braking force.", ">= 0", (100.0, 2500.0)),
+    "drive.traction": ("The drive's force at most this times the rear tyre's load.", ">= 0", (0.3, 1.5)),
+}
+
+GEOMETRY_POINTS = ("bike.front_axle_mm", "bike.rear_axle_mm", "bike.pivot_mm")
+
+
+def _number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def metres_for_millimetres(table: dict) -> str | None:
+    """The one-line refusal when the frame's points are given in metres (every coordinate of the
+    axles and the pivot within 3 in size, where millimetres make them hundreds), else None."""
+    points = [table.get("bike", {}).get(k.split(".")[1]) for k in GEOMETRY_POINTS]
+    values = [x for p in points if isinstance(p, list) for x in p if _number(x)]
+    if len(values) == 6 and max(abs(x) for x in values) < 3.0:
+        return (f"bike.front_axle_mm, bike.rear_axle_mm, bike.pivot_mm: {points[0]}, {points[1]}, {points[2]} "
+                f"look like metres; these keys are in millimetres (e.g. {[round(x * 1000) for x in points[0]]})")
+    return None
+
+
+def warnings(table: dict) -> list[str]:
+    """One line per value of ``table`` (a bike file, its base merged in) outside its plausible
+    range, naming the key, the value and the range."""
+    out = []
+    for key, (_, _, rng) in KEYS.items():
+        if rng is None or "." not in key:
+            continue
+        section, name = key.split(".", 1)
+        value = table.get(section, {}).get(name) if isinstance(table.get(section), dict) else None
+        if value is None:
+            continue
+        unit = key.rsplit("_", 1)[1] if "_" in name else ""
+        if isinstance(rng[0], tuple):  # a point
+            if isinstance(value, list) and len(value) == 2 and all(_number(x) for x in value):
+                for axis, x, (lo, hi) in zip("xz", value, rng):
+                    if not lo <= x <= hi:
+                        out.append(f"{key} = {value}: {axis} = {x:g} mm is outside {lo:g}-{hi:g} mm, what bikes "
+                                   f"have (a unit mistake?)")
+            continue
+        values = value if isinstance(value, list) else [value]
+        lo, hi = rng
+        odd = [x for x in values if _number(x) and not lo <= x <= hi]
+        if odd:
+            shown = f"{odd[0]:g}" if not isinstance(value, list) else f"{odd[0]:g} (of the list)"
+            out.append(f"{key} = {shown} {unit} is outside {lo:g}-{hi:g} {unit}, what bikes and riders have "
+                       f"(a unit mistake?)".replace("  ", " "))
+    return out
