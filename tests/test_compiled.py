@@ -15,6 +15,7 @@ import mtbmj
 from mtbmj.errors import FallbackWarning
 from mtbmj import compose
 from mtbmj.drop import engine_mujoco, scene
+from mtbmj.runpath import steprule
 from mtbmj import controllers as law
 from mtbmj.controllers import ForkCallback, installed, native
 
@@ -291,7 +292,7 @@ def _batch(setup, n=6):
 
 @pytest.mark.parametrize("overrides", [{}, LUGRE], ids=["S12", "S12_lugre"])
 def test_rollout_on_two_threads_is_identical_to_serial_and_to_python(overrides):
-    setup = compose.at_fine_step(compose.setup(mtbmj.load_config("S12", overrides)))  # a raw rollout
+    setup = steprule.at_fine_step(compose.setup(mtbmj.load_config("S12", overrides)))  # a raw rollout
     sc, states = _batch(setup)
     model, nstep = sc.model, 3000
     callback = compiled.CompiledForkCallback(model, setup.fork)
@@ -311,8 +312,8 @@ def test_rollout_on_two_threads_is_identical_to_serial_and_to_python(overrides):
 
 def test_two_models_with_two_laws_in_one_rollout():
     """One rollout over two models, each with its own law: each follows its own Python run."""
-    a = compose.at_fine_step(compose.setup(mtbmj.load_config("S12")))  # raw rollouts
-    b = compose.at_fine_step(compose.setup(mtbmj.load_config("S12", LUGRE)))
+    a = steprule.at_fine_step(compose.setup(mtbmj.load_config("S12")))  # raw rollouts
+    b = steprule.at_fine_step(compose.setup(mtbmj.load_config("S12", LUGRE)))
     sa, xa = _batch(a, 2)
     sb, xb = _batch(b, 2)
     ca = compiled.CompiledForkCallback(sa.model, a.fork)

@@ -1,5 +1,5 @@
 """The drop engine steps coarsely over the working stroke and finely only where a stop, the rim or
-a steep velocity band may act (compose.fine_limit, stepping.stop_index): refined runs equal
+a steep velocity band may act (steprule.fine_limit, stepping.stop_index): refined runs equal
 runs at the fine step throughout, the scan never lets a step into a stop unrefined, and the ODE
 reference resolves a fork resting on its stop at any tolerance."""
 import math
@@ -13,13 +13,14 @@ from mtbmj import compose
 from mtbmj.drop import stepping
 from mtbmj.drop.envelope import draws
 from mtbmj.drop.run import run_drop
+from mtbmj.runpath import steprule
 
 
 def test_coarse_step_and_substeps_follow_the_rule():
     for preset in ("S1", "S4", "S9", "S12"):
         s = compose.setup(mtbmj.load_config(preset))
-        assert s.timestep <= compose.timestep_limit(s)[0]
-        assert s.fine_timestep <= compose.fine_limit(s)[0]
+        assert s.timestep <= steprule.timestep_limit(s)[0]
+        assert s.fine_timestep <= steprule.fine_limit(s)[0]
         assert s.substeps == round(s.timestep / s.fine_timestep) >= 1
 
 
@@ -144,7 +145,7 @@ def test_the_chosen_step_logs_at_the_rate_asked_for(rate):
                                                  "solver.antialias_Hz": 0.4 * rate}))
     ratio = 1.0 / (rate * s.timestep)
     assert abs(ratio - round(ratio)) <= 1e-6 * ratio and round(ratio) >= 1
-    assert s.timestep <= compose.timestep_limit(s)[0]
+    assert s.timestep <= steprule.timestep_limit(s)[0]
 
 
 def test_an_odd_logger_rate_is_logged_at_that_rate_and_a_step_that_does_not_divide_is_refused():
@@ -170,18 +171,18 @@ def test_the_tire_switch_lands_within_a_fine_step_of_the_reference():
 
 
 def test_the_energy_bound_never_misses_a_stop_the_run_reaches():
-    """compose.reachable is an upper bound: on random forks, a run that reaches the bumper, the
+    """steprule.reachable is an upper bound: on random forks, a run that reaches the bumper, the
     compression stop or the rim was told it could; the paper's S12 drop cannot bottom, and a
     110 kg rider dropped 300 mm on S1 can."""
-    assert not compose.reachable(compose.setup(mtbmj.load_config("S12")))["compression_stop"]
-    assert compose.reachable(compose.setup(mtbmj.load_config(
+    assert not steprule.reachable(compose.setup(mtbmj.load_config("S12")))["compression_stop"]
+    assert steprule.reachable(compose.setup(mtbmj.load_config(
         "S1", {"sled.drop_height_mm": 300.0, "sled.body_mass_kg": 110.0})))["compression_stop"]
     table = list(mtbmj.load_config("reference").require("fork.damper.force_N"))
     reached = 0
     for preset, overrides in draws(10, 5, table):
         cfg = mtbmj.load_config(preset, overrides)
         setup = compose.setup(cfg)
-        bound = compose.reachable(setup)
+        bound = steprule.reachable(setup)
         run = run_drop(cfg, duration=0.4)
         if run.raw["fork_mm"].max() >= setup.fork.spring.bumper_start * 1e3:
             assert bound["bumper"], (preset, overrides)
@@ -229,7 +230,7 @@ def test_a_stop_coming_within_reach_at_the_contact_level_cuts_and_goes_on_at_the
     rows = _rows(x, 0.01, speed)  # tire well in contact, clear of the rim
     fine = np.repeat(rows[1:], plan.substeps, axis=0)
     keep, switch, _ = plan.keep(rows[0], rows[1:], fine)
-    bumper, extension = compose.refine_zones(setup)[:2]
+    bumper, extension = steprule.refine_zones(setup)[:2]
     margin = 2 * h * speed + stepping.STOP_MARGIN_M  # what one coarse step can cover, and the margin
     reaches = np.flatnonzero((x[1:] + margin > bumper) | (x[:-1] - margin < extension))
     if reaches.size and not switch:

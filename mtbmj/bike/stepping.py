@@ -1,4 +1,5 @@
-"""The bike's step rule: a coarse RK4 step where no end stop or rim acts, finer steps where one may.
+"""How the bike follows the step rule: a coarse RK4 step where no end stop or rim acts, finer steps
+where one may.
 
 The bike's slow motions (the frame on its tires, the rider on legs and arms, the fork and the shock
 over their working stroke) are resolved at a coarse step, 0.5 ms at most: the cross-checks against
@@ -6,10 +7,12 @@ the bike's ODE reference hold there on every terrain of the library (``docs/bike
 stops (bumper, hard stop, top-out stop) and the rims are far stiffer: where one of them may act the
 run is stepped ``substeps`` times finer.
 
-Both steps come from ``mtbmj.compose``'s step limits, evaluated with the bike's own masses instead
-of the sled's: the coarse step from those that hold anywhere (steps per period of the wheel on the
-spring and tire, explicit damping, the logger's rate, the friction state at the fastest stroke: a
-LuGre fork steps at ~0.06 ms throughout), the fine step also from the stops' and the rim's:
+Both steps come from the step rule (``mtbmj.runpath.steprule``, the drop's and the front end's),
+its limits evaluated with the bike's own masses instead of the sled's: the coarse step is the
+largest whole fraction of ``COARSE_STEP_S`` within those that hold anywhere (steps per period of
+the wheel on the spring and tire, explicit damping, the logger's rate, the friction state at the
+fastest stroke: a LuGre fork steps at ~0.06 ms throughout; ``steprule.fraction_within``), cut
+evenly (``steprule.cuts_within``) to stay within the stops' and the rim's as well:
 
 * the fork: the front unsprung mass (fork lower and wheel) as the wheel, half the sprung mass
   (frame and rider) as the body; the lighter of the two wheels where lighter (the same tire and rim
@@ -20,12 +23,13 @@ LuGre fork steps at ~0.06 ms throughout), the fine step also from the stops' and
   left out, which only makes the steps smaller.
 
 Which stretches need the fine step is decided after the fact: ``Stepping.within_reach`` looks at
-a chunk stepped coarse and finds the first and the last sample within reach of a stop or the rim
-(within a margin of 1 mm at the wheel, 0.5 mm at the shock, plus twice the largest motion of one
-coarse step in the chunk); ``mtbmj.bike.run`` keeps the chunk's coarse steps before the first,
-steps again from the sample before it at the fine step to one sample past the last (at least
-``FINE_MIN_STEPS`` coarse steps), keeping every ``substeps``-th state so the output stays on the
-coarse grid, and goes on from there with the next chunk, coarse.
+a chunk stepped coarse and finds the first and the last sample within reach of a stop (where the
+drop refines too: ``steprule.stop_zone``) or the rim (within a margin of 1 mm at the wheel, 0.5 mm
+at the shock, plus twice the largest motion of one coarse step in the chunk); ``mtbmj.bike.run``
+keeps the chunk's coarse steps before the first, steps again from the sample before it at the fine
+step to one sample past the last (at least ``FINE_MIN_STEPS`` coarse steps), keeping every
+``substeps``-th state so the output stays on the coarse grid, and goes on from there with the next
+chunk, coarse.
 """
 from __future__ import annotations
 
@@ -37,26 +41,13 @@ import numpy as np
 
 from mtbmj import compose
 from mtbmj.bike.spec import rear_axle_in_frame
-from mtbmj.readout.endtravel import bumper_engages
+from mtbmj.runpath import steprule
 
 COARSE_STEP_S = 5e-4  # the bike's largest step (RK4): the step the cross-checks cover
 CHUNK_STEPS = 1024  # coarse steps per chunk checked for a stop or the rim within reach
 FINE_MIN_STEPS = 32  # a stretch stepped fine covers at least this many coarse steps
 FORK_MARGIN_M = 1e-3  # distance from a stop (fork travel, tire deflection) taken as within reach
 SHOCK_MARGIN_M = 5e-4  # the same at the shock (its stroke is the wheel's over a ratio of 2.4-3.2)
-
-
-def _ladder_step(limit: float) -> float:
-    """The largest COARSE_STEP_S / j (j = 1, 2, ...) not above ``limit``."""
-    return COARSE_STEP_S / max(1, math.ceil(COARSE_STEP_S / limit * (1.0 - 1e-12)))
-
-
-def _zone(spring) -> tuple[float, float]:
-    """(low, high): a stop acts at or below ``low`` (the top-out stop) and at or above ``high`` (the
-    bumper, else the hard stop at full travel); (-inf, inf) for a law without end stops."""
-    if not hasattr(spring, "stop_forces"):
-        return -math.inf, math.inf
-    return -spring.extension, spring.bumper_start if bumper_engages(spring) else spring.travel
 
 
 @dataclass(frozen=True)
@@ -114,15 +105,17 @@ def stepping(spec, fork_setup: compose.Setup, shock_setup: compose.Setup, rims=N
     fork = dataclasses.replace(fork_setup, wheel_mass=wheel, body_mass=sprung / 2.0)
     lr2 = min(spec.leverage.ratio) ** 2
     shock = dataclasses.replace(shock_setup, wheel_mass=spec.rear_wheel_mass * lr2, body_mass=sprung / 2.0 * lr2)
-    limit, why = min(compose.away_from_stops_limit(fork), compose.away_from_stops_limit(shock))
-    coarse = _ladder_step(limit)
+    at_fork, at_shock = steprule.limits(fork), steprule.limits(shock)
+    limit, why = min(at_fork.away_from_stops, at_shock.away_from_stops)
+    coarse = steprule.fraction_within(COARSE_STEP_S, limit)
     if coarse == COARSE_STEP_S and limit > COARSE_STEP_S:
         why = f"the bike's largest step, {COARSE_STEP_S * 1e3:g} ms (the step its cross-checks cover)"
-    fine, fine_why = min(compose.fine_limit(fork), compose.fine_limit(shock))
-    substeps = max(1, math.ceil(coarse / fine * (1.0 - 1e-12)))
+    fine, fine_why = min(at_fork.fine, at_shock.fine)
+    substeps = steprule.cuts_within(coarse, fine)
     if rims is None:
         rims = (fork_setup.tire.rim, fork_setup.tire.rim)
-    return Stepping(coarse, substeps, why, fine_why, _zone(fork_setup.fork.spring), _zone(shock_setup.fork.spring),
+    return Stepping(coarse, substeps, why, fine_why, steprule.stop_zone(fork_setup.fork.spring),
+                    steprule.stop_zone(shock_setup.fork.spring),
                     tuple(r.max_deflection if r is not None else math.inf for r in rims), spec)
 
 

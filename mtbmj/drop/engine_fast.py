@@ -32,8 +32,8 @@ import math
 
 import numpy as np
 
-from mtbmj import compose
 from mtbmj.compose import Setup
+from mtbmj.runpath import steprule
 from mtbmj.controllers import jit as _jit
 from mtbmj.controllers.lawcodes import UnsupportedLaw, law_arrays as _law_arrays
 from mtbmj.controllers.stops import STIFFENING_M
@@ -280,8 +280,8 @@ def parameters(setup: Setup, substeps: int) -> np.ndarray:
     # the grid step is taken whole where the step rule allows it (away from the zones the MuJoCo
     # engine refines in), else in sub-steps of at most MAX_STEP_S
     q[Q_COARSE] = 1.0 if setup.substeps > 1 else 0.0
-    q[Q_MARGIN] = compose.STOP_MARGIN_M
-    _, _, _, q[Q_BAND], speed = compose.refine_zones(setup)
+    q[Q_MARGIN] = steprule.STOP_MARGIN_M
+    _, _, _, q[Q_BAND], speed = steprule.refine_zones(setup)
     q[Q_FAST] = speed if math.isfinite(speed) else 1e30
     return q
 
@@ -303,7 +303,7 @@ def run(setup: Setup, duration: float | None = None, progress=None, refine: int 
     I, P = law_arrays(setup)
     steps = int(round(duration / setup.timestep))
     # near a zone: sub-steps of at most MAX_STEP_S, and no longer than the MuJoCo engine's fine
-    # step (the step rule's limit while a stop or the rim may act, compose.fine_limit)
+    # step (the step rule's limit while a stop or the rim may act, steprule.fine_limit)
     substeps = max(1, math.ceil(setup.timestep / MAX_STEP_S - 1e-9), setup.substeps)
     q = parameters(setup, substeps * max(1, int(refine)))
     if refine > 1:

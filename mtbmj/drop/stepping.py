@@ -1,14 +1,14 @@
-"""The step rule of a MuJoCo drop: where a run may take the coarse step and where it steps finely,
-and how long each ``mujoco.rollout`` chunk is. ``Stepping`` holds one run's decisions; the
-single-run engine (``engine_mujoco.run``) and the batched engine (``engine_batch``) both follow it,
-so a batched variant is stepped exactly as a single run.
+"""How a MuJoCo drop follows the step rule (``mtbmj.runpath.steprule``): where a run may take the
+coarse step and where it steps finely, and how long each ``mujoco.rollout`` chunk is. ``Stepping``
+holds one run's decisions; the single-run engine (``engine_mujoco.run``) and the batched engine
+(``engine_batch``) both follow it, so a batched variant is stepped exactly as a single run.
 
-The coarse step is ``Setup.timestep`` (``compose.timestep_limit`` over the working stroke); finer
+The coarse step is ``Setup.timestep`` (``steprule.timestep_limit`` over the working stroke); finer
 steps per output step only where ``stop_index`` finds an end stop, the rim, the tire at the
 ground, the steep band around rest or a stroke faster than the friction state allows within
-reach: ``Setup.substeps`` (the limits of ``compose.fine_limit``) near a stop or the rim,
-``Setup.contact_substeps`` in the other zones. Chunks are cut before such a step, where a stop
-comes within reach of a stretch at the second level, and at the tire-law switch
+reach (``steprule.refine_zones``): ``Setup.substeps`` (the limits of ``steprule.fine_limit``) near
+a stop or the rim, ``Setup.contact_substeps`` in the other zones. Chunks are cut before such a
+step, where a stop comes within reach of a stretch at the second level, and at the tire-law switch
 (``switch_index``, the rule of ``controllers.tire.SWITCH_RULE``).
 """
 from __future__ import annotations
@@ -17,8 +17,8 @@ import math
 
 import numpy as np
 
-from mtbmj import compose
 from mtbmj.compose import Setup
+from mtbmj.runpath import steprule
 
 SWITCH_CHUNK_S = 0.1  # simulated time per rollout while a tire-law switch is pending (the most recomputed)
 CHUNK_S = 2.0  # simulated time per rollout otherwise (each call costs setup time; progress per chunk)
@@ -37,7 +37,7 @@ def switch_index(previous, states, columns) -> int | None:
     return int(found[0]) if found.size else None
 
 
-STOP_MARGIN_M = compose.STOP_MARGIN_M  # see stop_index
+STOP_MARGIN_M = steprule.STOP_MARGIN_M  # see stop_index
 REFINED_CHUNK_S = 0.01  # simulated time per rollout at the fine step
 AFTER_REFINED_CHUNK_S = 0.01  # the first coarse rollout after one: doubled while none is cut
 
@@ -46,7 +46,7 @@ def stop_index(previous, states, columns, zones, step: float, stops_only: bool =
     """The index of the first step of a chunk of recorded states that a stop or the rim may have
     acted in, or in which the tire may have touched down or lifted off (see ``STOP_MARGIN_M``),
     or None; with ``stops_only``, of a stop or the rim only. ``columns`` are the sled and fork
-    position and velocity columns of a state row; ``zones`` as ``compose.refine_zones``."""
+    position and velocity columns of a state row; ``zones`` as ``steprule.refine_zones``."""
     compiled = _compiled()
     if (compiled is not None and previous.dtype == np.float64 and states.dtype == np.float64 and states.ndim == 2
             and previous.flags.c_contiguous and states.flags.c_contiguous):
@@ -133,7 +133,7 @@ class Stepping:
         self.stop_columns = tuple(columns)
         sled, fork, _, fork_v = self.stop_columns
         self.switch_columns = (sled, fork, fork_v)
-        self.zones = compose.refine_zones(setup)
+        self.zones = steprule.refine_zones(setup)
         self.chunk = max(1, int(round(CHUNK_S / h)))
         self.switch_chunk = max(1, int(round(SWITCH_CHUNK_S / h)))
         self.refined_chunk = max(1, int(round(REFINED_CHUNK_S / h)))

@@ -44,7 +44,7 @@ from mtbmj.limits import check_run
 from mtbmj.result import RunOutput
 from mtbmj.rolling.callback import RollCallback
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
-from mtbmj.runpath import callbacks, guard, loop
+from mtbmj.runpath import callbacks, guard, loop, steprule
 
 DRIVE_HZ = 10.0  # bandwidth of the speed servo (critically damped)
 CHUNK = 10000
@@ -237,8 +237,8 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
     ter = terrain_mod.make(scenario)
     cfg = resolve(config, overrides)
     setup = compose.setup(cfg)
-    # the front end does not refine near a stop or the rim: it steps at the fine step throughout
-    setup = compose.at_fine_step(setup)
+    # the front end does not refine near a stop or the rim: it steps at the drop's fine step throughout
+    setup = steprule.at_fine_step(setup)
     drum = isinstance(ter, terrain_mod.DrumTerrain)
     if drum:
         ter = ter.with_speed(float(speed_m_per_s))

@@ -13,4 +13,11 @@ refinement plan, its reference and its signals; ``mtbmj.runpath`` steps it.
   :class:`loop.Coarse`), which keeps every sensor row with the state it describes, and
   :func:`loop.chunked`, the same returning whole state and sensor arrays.
 * ``callbacks``: :func:`callbacks.choose` and :func:`callbacks.rerun_on_python`.
+* ``steprule``: the step rule, one for a fork law whichever rig runs it: the step limits of a
+  setup's laws and masses (:func:`steprule.limits`), the drop's steps (:func:`steprule.choose_timestep`,
+  which ``compose.setup`` calls), the front end's (:func:`steprule.at_fine_step`), the whole
+  fractions and even cuts the bike takes, and the stop zones every rig refines in.
+* ``crosscheck``: :class:`crosscheck.CrosscheckResult`, the one result of every rig's cross-check
+  against its ODE reference (per signal the largest difference over the series, its unit, the
+  peaks in both runs, the tolerance and the verdict; both wall times; one line, one dict).
 """
