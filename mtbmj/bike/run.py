@@ -65,7 +65,9 @@ INTEGRATORS = {"rk4": mujoco.mjtIntegrator.mjINT_RK4, "euler": mujoco.mjtIntegra
                "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST, "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT}
 COLUMNS = ("time_s", "x_m", "speed_m_per_s", "front_travel_mm", "rear_travel_mm", "stroke_mm", "pitch_deg",
            "front_tire_N", "rear_tire_N", "front_tire_mm", "rear_tire_mm", "rider_acc_z_m_per_s2", "fork_force_N",
-           "shock_force_N", "drive_force_N", "terrain_front_mm", "terrain_rear_mm")
+           "shock_force_N", "drive_force_N", "terrain_front_mm", "terrain_rear_mm", "bb_height_mm")
+# The feature window's end: this long after the rear tyre has left the feature (the ride settles)
+SETTLE_S = 0.5
 
 
 @dataclass
@@ -392,9 +394,54 @@ def _signals(p: Prepared, states, sensors) -> dict:
         "drive_force_N": drive,
         "terrain_front_mm": p.terrain.height(front_x) * 1e3,
         "terrain_rear_mm": p.terrain.height(rear_x) * 1e3,
+        # the bottom bracket's height above the ground under it (the at_bb framepos sensor)
+        "bb_height_mm": (sensors[:, model.sensor_adr[model.sensor("at_bb").id] + 2]
+                         - p.terrain.height(sensors[:, model.sensor_adr[model.sensor("at_bb").id]])) * 1e3,
+        "front_axle_x_m": front_x,
+        "rear_axle_x_m": rear_x,
         "fork_velocity_mm_per_s": qvel[:, b.dof_index("fork")] * 1e3,
         "stroke_velocity_mm_per_s": np.gradient(stroke, states[:n, 0]) * 1e3 if n > 1 else np.zeros(n),
     }
+
+
+def _variation(f) -> float | None:
+    return float(f.std() / f.mean()) if f.size and f.mean() > 0 else None
+
+
+def feature_span(terrain) -> tuple[float, float] | None:
+    """(start, end) x (m) of the terrain's feature: where its profile leaves the lead-in's height
+    and where it last differs from the run-out's; None on a flat profile."""
+    x, z = np.asarray(terrain.x, float), np.asarray(terrain.z, float)
+    off_in = np.flatnonzero(np.abs(z - z[0]) > 1e-9)
+    off_out = np.flatnonzero(np.abs(z - z[-1]) > 1e-9)
+    if not off_in.size:
+        return None
+    return float(x[max(off_in[0] - 1, 0)]), float(x[min(off_out[-1] + 1, x.size - 1)]) if off_out.size else float(x[-1])
+
+
+def _feature_window(p: Prepared, raw: dict, dt: float) -> dict:
+    """Comfort and grip over the feature: from the front tyre reaching the feature (its axle a
+    tyre radius before its start) to ``SETTLE_S`` after the rear tyre has left it (its axle a
+    radius past its end), within the run; ``closed`` false where the run ended before that."""
+    t = raw["time_s"]
+    span = feature_span(p.terrain)
+    r = p.front_tire.radius
+    if span is None or not t.size:
+        i0, i1, closed = 0, t.size, True
+    else:
+        i0 = int(np.searchsorted(raw["front_axle_x_m"] >= span[0] - r, True)) if np.any(
+            raw["front_axle_x_m"] >= span[0] - r) else t.size
+        past = np.flatnonzero(raw["rear_axle_x_m"] >= span[1] + r)
+        closed = bool(past.size and t[past[0]] + SETTLE_S <= t[-1] + 0.5 * dt)
+        i1 = int(np.searchsorted(t, t[past[0]] + SETTLE_S - 0.5 * dt)) + 1 if past.size else t.size
+        i1 = min(i1, t.size)
+    if i0 >= i1:
+        return {"window_s": None, "closed": False, "rider_acceleration_rms_m_per_s2": None,
+                "tire_load_variation": {"front": None, "rear": None}}
+    acc = raw["rider_acc_z_m_per_s2"][i0:i1]
+    return {"window_s": [float(t[i0]), float(t[i1 - 1] + dt)], "closed": closed,
+            "rider_acceleration_rms_m_per_s2": float(np.sqrt(np.mean(acc * acc))),
+            "tire_load_variation": {end: _variation(raw[f"{end}_tire_N"][i0:i1]) for end in ("front", "rear")}}
 
 
 def _summary(p: Prepared, raw: dict) -> dict:
@@ -412,6 +459,7 @@ def _summary(p: Prepared, raw: dict) -> dict:
                        "std_N": float(f.std()), "variation": float(f.std() / f.mean()) if f.mean() > 0 else None,
                        "off_ground_s": float(np.sum(f <= 0.0) * dt)}
     speed = raw["speed_m_per_s"]
+    feature = _feature_window(p, raw, dt)
     from mtbmj.ride import metrics
 
     rear_velocity = np.gradient(raw["rear_travel_mm"], t) if t.size > 1 else np.zeros_like(t)
@@ -444,6 +492,9 @@ def _summary(p: Prepared, raw: dict) -> dict:
         "rear": rear_end,
         "rim_strikes": {"front": front_end["rim_strikes"]["count"], "rear": rear_end["rim_strikes"]["count"]},
         "tire_load": loads,
+        # comfort and grip over the terrain's feature (independent of how long the run goes on);
+        # the whole run's beside them
+        "feature": feature,
         "rider_acceleration_rms_m_per_s2": float(np.sqrt(np.mean(acc * acc))),
         "rider_acceleration_peak_m_per_s2": float(np.max(np.abs(acc))),
         "min_speed_m_per_s": float(speed.min()),
@@ -562,9 +613,70 @@ class BikeResult(RunOutput):
                 f"{s['max_front_travel_mm']:.1f} of {f['travel_mm']:g} mm{ends(f)}, rear {s['max_rear_travel_mm']:.1f} of "
                 f"{s['rear_wheel_travel_mm']:g} mm (shock {s['max_stroke_mm']:.1f} of {r['travel_mm']:g} mm){ends(r)}, "
                 f"pitch {s['pitch_deg']['min']:.1f} to {s['pitch_deg']['max']:.1f} deg, rim strikes "
-                f"{strikes['front']}/{strikes['rear']}, rider {s['rider_acceleration_rms_m_per_s2']:.2f} m/s2 RMS, "
-                f"tire-load variation {100 * (s['tire_load']['front']['variation'] or 0):.0f} % front / "
-                f"{100 * (s['tire_load']['rear']['variation'] or 0):.0f} % rear")
+                f"{strikes['front']}/{strikes['rear']}, {self._comfort()}")
+
+    def _comfort(self) -> str:
+        """Comfort and grip over the feature's window (the whole run's where it has none)."""
+        s = self.summary
+        f = s.get("feature") or {}
+        if f.get("window_s"):
+            rms, var = f["rider_acceleration_rms_m_per_s2"], f["tire_load_variation"]
+            where = f" over the feature ({f['window_s'][0]:.2f}-{f['window_s'][1]:.2f} s" + (
+                ")" if f["closed"] else ", the run ended before it settled)")
+        else:
+            rms = s["rider_acceleration_rms_m_per_s2"]
+            var = {end: s["tire_load"][end]["variation"] for end in ("front", "rear")}
+            where = " over the run"
+        return (f"rider {rms:.2f} m/s2 RMS, tire-load variation {100 * (var['front'] or 0):.0f} % front / "
+                f"{100 * (var['rear'] or 0):.0f} % rear{where}")
+
+    def quicklook(self):
+        """The quick-look figure (``mtbmj.bike.figure``): terrain, travel, pitch, tyre loads, the
+        rider's acceleration and the speed against time."""
+        from mtbmj.bike.figure import figure
+
+        return figure(self)
+
+    def plot(self, axes=None, label: str | None = None, **line_kwargs):
+        """Front travel, rear wheel travel and pitch against time on three stacked axes (given, or
+        a new figure's): several runs drawn on the same axes compare them. Returns the figure."""
+        if axes is None:
+            from matplotlib.figure import Figure
+
+            fig = Figure(figsize=(7, 7), layout="constrained")
+            axes = fig.subplots(3, 1, sharex=True)
+        else:
+            fig = axes[0].figure
+        label = label or f"{self.name} over {self.scenario}"
+        for ax, (column, text) in zip(axes, (("front_travel_mm", "front travel [mm]"),
+                                             ("rear_travel_mm", "rear wheel travel [mm]"),
+                                             ("pitch_deg", "pitch, nose up [deg]"))):
+            ax.plot(self.time, self.raw[column], label=label, **line_kwargs)
+            ax.set_ylabel(text)
+            ax.grid(True, alpha=0.3)
+        axes[-1].set_xlabel("time [s]")
+        axes[0].legend(loc="best", fontsize=8)
+        return fig
+
+    def to_csv(self, path):
+        """The time series (``timeseries.csv``'s content) written to ``path`` whole, or not at all."""
+        from pathlib import Path
+
+        return output.write_file_atomically(Path(path), self.csv_chunks())
+
+    def difference(self, other: "BikeResult") -> dict[str, dict[str, float]]:
+        """Largest |self - other| per signal (travel and stroke in mm, pitch in deg, tyre loads in N)
+        and when, over the samples both runs share (the same step: else ValueError)."""
+        a, b = self.raw, other.raw
+        n = min(len(a["time_s"]), len(b["time_s"]))
+        if not np.allclose(a["time_s"][:n], b["time_s"][:n], atol=1e-9):
+            raise ValueError("results are not on the same time grid")
+        out = {}
+        for column in ("front_travel_mm", "rear_travel_mm", "stroke_mm", "pitch_deg", "front_tire_N", "rear_tire_N"):
+            diff = np.abs(a[column][:n] - b[column][:n])
+            i = int(np.argmax(diff)) if n else 0
+            out[column] = {"max_abs": float(diff[i]) if n else 0.0, "at_time_s": float(a["time_s"][i]) if n else 0.0}
+        return out
 
 
 def default_duration(p: Prepared) -> float:
