@@ -8,16 +8,22 @@ where it records one).
 
     python benchmarks/report.py            # rewrite docs/measured.md
     python benchmarks/report.py --check    # exit 1 if docs/measured.md differs from what it would write
+    python benchmarks/report.py --out PATH # write the page to PATH instead
 
-tests/test_measured_doc.py checks that the page equals what this script writes.
+This script measures nothing and runs no benchmark: the page it writes follows from the results
+files alone, so its default is the page itself. Each row's command is the one that refreshes the
+row's results file (``--out benchmarks/results/<file>``: the benchmarks write to a scratch file
+outside the repository by default). tests/test_measured_doc.py checks that the page equals what
+this script writes.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import re
 import subprocess
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 BENCH = Path(__file__).resolve().parent
@@ -91,6 +97,13 @@ def plural(n: int, word: str) -> str:
 
 def py(script: str, *options: str) -> str:
     return " ".join(["python", f"benchmarks/{script}", *options])
+
+
+def refreshing(command: str, name: str) -> str:
+    """``command`` as it refreshes the results file ``name``: any ``--out`` it carries replaced by
+    ``--out benchmarks/results/<name>`` (with no ``--out`` a benchmark writes to a scratch file)."""
+    kept = re.sub(r"\s--out(?:=|\s+)\S+", "", command)
+    return f"{kept} --out benchmarks/results/{name}"
 
 
 def load(name: str) -> dict | None:
@@ -282,7 +295,7 @@ def native_loop_rows(d: dict) -> dict[str, list[Row]]:
 
 def sweep_rows(d: dict, name: str) -> dict[str, list[Row]]:
     cmd = py("sweep.py", "--variants", str(d["variants"]), "--workers", str(d["workers"]),
-             "--threads", str(d["threads_per_process"]), "--name", name,
+             "--threads", str(d["threads_per_process"]),
              *(["--repeat", str(len(d["interleaved"]["rounds"]))] if "interleaved" in d else []))
     setting = (f"{d['variants']} variants, {plural(d['workers'], 'process')}".replace("processs", "processes")
                + f" of {plural(d['threads_per_process'], 'thread')}, {d['steps_per_variant']} steps per variant")
@@ -427,7 +440,10 @@ def rolling_refresh_rows(d: dict) -> dict[str, list[Row]]:
 
 def rolling_crosscheck_rows(d: dict) -> dict[str, list[Row]]:
     s = d["summary"]
-    speeds = sorted({r["speed_m_per_s"] for r in d["rows"]}) if all("speed_m_per_s" in r for r in d["rows"]) else []
+    if "speeds" in s:  # the summary names them (rows are the cross-check's to_dict)
+        speeds = [float(v) for v in s["speeds"].split(",")]
+    else:  # results written before: each row had its speed
+        speeds = sorted({r["speed_m_per_s"] for r in d["rows"]}) if all("speed_m_per_s" in r for r in d["rows"]) else []
     cmd = py("rolling_crosscheck.py", "--duration", tgt(s["duration_s"]),
              *(["--speeds", ",".join(tgt(v) for v in speeds)] if speeds else []))
     return {"rolling": [Row(
@@ -446,7 +462,9 @@ def bike_crosscheck_rows(d: dict) -> dict[str, list[Row]]:
         "travel and stroke ≤ 0.1 mm, tire-load peaks ≤ 1 %",
         f"{s['passed']} of {s['runs']} runs within; worst {mm(s['worst_travel_mm'], 4)} "
         f"({s['worst_scenario']} at {tgt(s['worst_speed_m_per_s'])} m/s), worst peak "
-        f"{pct(s['worst_tire_peak_relative'])}; {s['refined_runs']} of them stepped finer near a stop",
+        f"{pct(s['worst_tire_peak_relative'])}"
+        + (f", worst series {pct(s['worst_tire_series_relative'])} of the peak" if "worst_tire_series_relative" in s
+           else "") + f"; {s['refined_runs']} of them stepped finer near a stop",
         "bike_crosscheck.json", cmd)]}
 
 
@@ -497,8 +515,9 @@ INTRO = """\
 
 What the scripts in `benchmarks/` measure: how close the engines come to the ODE reference, how
 fast a drop, a sweep, a fit and a rolling run are, and what start-up and memory cost. Each script
-writes its numbers to `benchmarks/results/`, and this page is written from those files by
-`python benchmarks/report.py`.
+writes its numbers where its `--out` says, by default to a scratch file outside the repository
+(`mtbmj-benchmarks/` in the system's temporary folder; the script prints the path). This page is
+written from the files in `benchmarks/results/` by `python benchmarks/report.py`.
 
 A speed figure is a ratio against a baseline that the same script runs on the same machine: 2
 cores, shared with other work. Where the script interleaves the measured runs with the baseline's
@@ -508,7 +527,7 @@ row timed as the best of N runs, or as one run, says so. A ratio is only as stea
 "measured on" is the date of the run (with its commit, for runs that record one), the MuJoCo
 version and the machine's 1-minute load average when the script wrote its results (above 2, the
 two cores were shared): a row describes the code as it was on that date. Each command runs from
-the repository root and rewrites the results file the row is read from.
+the repository root and, through its `--out`, rewrites the results file the row is read from.
 """
 
 SECTIONS = [
@@ -565,9 +584,8 @@ whatever its own code does."""),
 The rolling engine is checked against the rolling ODE reference by the test suite as well:
 `tests/test_rolling_reference.py` runs every fixed terrain of the library at 2 or 5 m/s, and
 `tests/test_rolling_washboard.py` the 90° washboard against a model written in the test file.
-`benchmarks/rolling_crosscheck.py` runs every fixed terrain at both speeds and writes
-`benchmarks/results/rolling_crosscheck.json`, from which this table takes a row when the file is
-there."""),
+`benchmarks/rolling_crosscheck.py` runs every fixed terrain at both speeds; its results file
+`benchmarks/results/rolling_crosscheck.json` gives this table a row when the file is there."""),
     ("bike", "The whole bike", """\
 The bike steps at 0.5 ms with RK4 where no end stop or rim is within reach, and stretches that come
 within reach are stepped again at the fine step of the stops (`mtbmj/bike/stepping.py`). The test
@@ -587,7 +605,8 @@ def collect() -> dict[str, list[tuple[Row, str]]]:
             continue
         when = measured_on(name)
         for subject, rows in build(data).items():
-            tables[subject].extend((row, when) for row in rows)
+            tables[subject].extend((replace(row, command=refreshing(row.command, row.json_name)), when)
+                                   for row in rows)
     return tables
 
 
@@ -607,15 +626,21 @@ def render() -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--check", action="store_true", help="exit 1 if docs/measured.md differs from what it would write")
+    ap.add_argument("--check", action="store_true", help="exit 1 if the page differs from what it would write")
+    ap.add_argument("--out", type=Path, default=PAGE, metavar="PATH",
+                    help="the page to write (or, with --check, to compare); default docs/measured.md: the page "
+                         "follows from benchmarks/results/*.json alone, nothing is measured")
     args = ap.parse_args(argv)
     text = render()
+    page = args.out.resolve()
+    shown = page.relative_to(REPO) if page.is_relative_to(REPO) else page
     if args.check:
-        same = PAGE.is_file() and PAGE.read_text() == text
-        print(f"{PAGE.relative_to(REPO)} is {'up to date' if same else 'out of date: run python benchmarks/report.py'}")
+        same = page.is_file() and page.read_text() == text
+        print(f"{shown} is {'up to date' if same else 'out of date: run python benchmarks/report.py'}")
         return 0 if same else 1
-    PAGE.write_text(text)
-    print(f"wrote {PAGE.relative_to(REPO)}")
+    page.parent.mkdir(parents=True, exist_ok=True)
+    page.write_text(text)
+    print(f"wrote {shown}")
     return 0
 
 

@@ -5,9 +5,10 @@ callback, one core. Reported: each setting's real-time factor (simulated time / 
 engine) per round, their ratio (median and spread) and each setting's fork difference from the
 rolling reference on the 50 mm root at 4 m/s (0.5 s).
 
-    python benchmarks/rolling_refresh.py [--repeat 5] [--seconds 5]
+    python benchmarks/rolling_refresh.py [--repeat 5] [--seconds 5] [--out PATH]
 
-Writes benchmarks/results/rolling_refresh.json. Not a test: nothing is asserted.
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/rolling_refresh.json``,
+outside the repository; ``--out benchmarks/results/rolling_refresh.json`` refreshes the committed file). Not a test: nothing is asserted.
 """
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ import numpy as np
 
 import mtbmj.rolling.frontend as frontend
 import mtbmj.rolling.tire as tire
-from _bench import write_json
+from _bench import add_out_option, write_json
 
 SETTINGS = {"now": (tire.REFRESH_S, tire.REFRESH_DISTANCE_M), "old": (1e-3, 5e-3)}
 
@@ -33,6 +34,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--seconds", type=float, default=5.0)
+    add_out_option(ap, __file__)
     args = ap.parse_args()
     frontend.run_roll("washboard", 5.0, duration=0.2)  # load the compiled callback first
     rounds = []
@@ -51,7 +53,7 @@ def main() -> None:
     accuracy = {}
     for name in SETTINGS:
         use(name)
-        accuracy[name] = crosscheck("root", 4.0, duration=0.5).differences["fork_mm"]["max_abs_mm"]
+        accuracy[name] = crosscheck("root", 4.0, duration=0.5)["fork"].max_abs
     ratios = [x["now_over_old_wall"] for x in rounds]
     summary = {"seconds": args.seconds, "repeat": args.repeat,
                "real_time_factor_median": {k: float(np.median([x["real_time_factor"][k] for x in rounds]))
@@ -60,7 +62,7 @@ def main() -> None:
                                      "max": float(max(ratios))},
                "root_fork_difference_mm": accuracy}
     print(summary)
-    print(f"wrote {write_json(__file__, {'summary': summary, 'rounds': rounds})}")
+    print(f"wrote {write_json(__file__, {'summary': summary, 'rounds': rounds}, args.out)}")
 
 
 if __name__ == "__main__":

@@ -34,13 +34,13 @@ def test_mujoco_matches_the_bike_reference(name, speed):
     reach = (0.4 + wheelbase) / speed  # the rear axle over the feature's start
     duration = reach + 0.35 if name == "drop" else reach + 0.35 / speed
     check = crosscheck(bike, TERRAINS[name], speed, duration=duration, reference_rtol=1e-6)
-    d, p = check.differences, check.peaks
-    assert d["front_travel_mm"]["max_abs_mm"] <= TOLERANCE_MM
-    assert d["rear_travel_mm"]["max_abs_mm"] <= TOLERANCE_MM
-    assert d["stroke_mm"]["max_abs_mm"] <= TOLERANCE_MM
-    assert p["front_tire"]["relative"] <= FORCE_TOLERANCE and p["rear_tire"]["relative"] <= FORCE_TOLERANCE
-    assert check.passed
-    front, rear = p["front_tire"]["engine_N"], p["rear_tire"]["engine_N"]
+    assert check["front_travel"].max_abs <= TOLERANCE_MM
+    assert check["rear_travel"].max_abs <= TOLERANCE_MM
+    assert check["shock_stroke"].max_abs <= TOLERANCE_MM
+    for tire in ("front_tire_load", "rear_tire_load"):  # the peak and the series, relative to the reference's peak
+        assert check[tire].peak_difference <= FORCE_TOLERANCE and check[tire].series_difference <= FORCE_TOLERANCE
+    assert check.passed, check.line()
+    front, rear = check["front_tire_load"].engine_peak, check["rear_tire_load"].engine_peak
     if name == "flat":  # nothing to meet: each tire holds its static load
         assert front == pytest.approx(STATIC_N["front"], rel=0.01) and rear == pytest.approx(STATIC_N["rear"], rel=0.01)
     elif name == "iso8608":  # class D at 4-6 m/s: a rough road, not a hit
@@ -50,4 +50,4 @@ def test_mujoco_matches_the_bike_reference(name, speed):
     else:  # the feature met at both ends: each tire's load rose well above its static value
         assert front > 1.5 * STATIC_N["front"] and rear > 1.5 * STATIC_N["rear"]
     if name == "drop" and speed == 4.0:  # the fork into its bumper: the fine step was used and checked
-        assert check.refined_fraction > 0.0
+        assert check.context["refined_fraction"] > 0.0

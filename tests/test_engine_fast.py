@@ -149,15 +149,15 @@ def test_study_and_crosscheck_compare_three_engines(tmp_path):
 
     results, checks = run_study(["S1"], duration=0.4, workers=1, engines=("mujoco", "ode", "fast"))
     assert set(results["S1"]) == {"mujoco", "ode", "fast"}
-    assert [(c.name, c.engine) for c in checks] == [("S1", "mujoco"), ("S1", "fast")]
+    assert [(c.case, c.engine) for c in checks] == [("S1", "mujoco"), ("S1", "fast")]
     table = table_markdown(checks)
     assert "| S1 | mujoco |" in table and "| S1 | fast |" in table
     fast_check = checks[1]
     # both within their targets against the reference (since MuJoCo's contact floor is cancelled
     # the two are of one size here, 4e-5 and 7e-5 mm)
-    assert 0.0 < fast_check.worst[1] < 0.01 and 0.0 < checks[0].worst[1] < 0.05
+    assert 0.0 < fast_check.worst.max_abs < 0.01 and 0.0 < checks[0].worst.max_abs < 0.05
     lines = [c.line() for c in crosscheck_all("S1", ("mujoco", "fast"), duration=0.4)]
-    assert "MuJoCo-ODE" in lines[0] and "fast-engine-ODE" in lines[1]
+    assert "MuJoCo vs the ODE reference" in lines[0] and "fast engine vs the ODE reference" in lines[1]
     bad = subprocess.run([sys.executable, "-m", "mtbmj.cli", "crosscheck", "S1", "--engines", "mujoco,warp"],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--engines" in bad.stderr

@@ -54,8 +54,9 @@ def test_mujoco_agrees_with_the_rolling_reference(scenario, speed, head_angle):
     check = crosscheck(scenario, speed, head_angle_deg=head_angle, duration=0.5)
     assert check.passed, check.line()
     # the body, the axle and the tire in contact are as close as the fork
-    assert all(d["max_abs_mm"] <= TOLERANCE_MM for d in check.differences.values()), check.line()
-    assert all(p["relative"] <= FORCE_TOLERANCE for p in check.peaks.values())
+    assert all(check[name].max_abs <= TOLERANCE_MM for name in ("fork", "body_height", "axle_height", "tire")), \
+        check.line()
+    assert all(check[name].peak_difference <= FORCE_TOLERANCE for name in ("axle_force_up", "axle_force_back"))
 
 
 def test_the_old_geometry_refresh_fails_the_crosscheck(monkeypatch):
@@ -68,13 +69,14 @@ def test_the_old_geometry_refresh_fails_the_crosscheck(monkeypatch):
         monkeypatch.setattr(module, "REFRESH_S", 1e-3)
         monkeypatch.setattr(module, "REFRESH_DISTANCE_M", 5e-3)
     check = crosscheck("root:at_m=0.4", 4.0, duration=0.3, drive="servo")
-    assert not check.passed and check.differences["fork_mm"]["max_abs_mm"] > 0.05
+    assert not check.passed and check["fork"].max_abs > 0.05
 
 
 def test_the_crosscheck_command(capsys):
     assert cli.main(["crosscheck", "S12", "--roll", "square_edge:at_m=0.3", "--speed", "2", "--duration", "0.4"]) == 0
     out = capsys.readouterr().out
-    assert "MuJoCo vs the rolling reference" in out and "fork within 0.02 mm and peaks 1 %" in out
+    assert "MuJoCo vs the rolling ODE reference" in out and "within the tolerances" in out
+    assert "fork " in out and "(tol. 0.02 mm)" in out and "axle force up peak" in out and "(tol. 1 %)" in out
     assert cli.main(["crosscheck", "S12", "--roll", "root"]) == 2
     assert "--speed" in capsys.readouterr().err
     assert cli.main(["crosscheck", "S12", "--roll", "drum", "--speed", "3", "--duration", "0.2"]) == 2

@@ -180,6 +180,8 @@ def test_bike_crosscheck_off_a_1m_ledge_compares_the_tyre_load_series():
 
     check = crosscheck("trail", "drop:height_mm=1000,at_m=0.4", 5.0, duration=1.2)
     assert check.passed, check.line()
-    assert set(check.series) == {"front_tire", "rear_tire"}
-    assert all(q["relative_to_peak"] <= FORCE_TOLERANCE for q in check.series.values())
-    assert "series front" in check.line() and check.to_dict()["tire_load_series"] == check.series
+    tires = [check[name] for name in ("front_tire_load", "rear_tire_load")]
+    assert all(s.judged == ("peak", "series") and s.series_difference <= FORCE_TOLERANCE for s in tires)
+    signals = check.to_dict()["signals"]
+    assert all(signals[s.name]["series_difference"] == s.series_difference for s in tires)
+    assert "front tire load peak" in check.line() and "series" in check.line()

@@ -22,7 +22,7 @@ def cmd_drop(args) -> int:
 
 def cmd_study(args) -> int:
     from mtbmj.drop.study import run_study, write_study
-    from mtbmj.validation.compare import mm
+    from mtbmj.runpath.crosscheck import number
 
     start = time.perf_counter()
     log = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
@@ -34,8 +34,9 @@ def cmd_study(args) -> int:
     for engine in engines:
         mine = [c for c in checks if c.engine == engine]
         if mine:
-            worst = max(mine, key=lambda c: c.worst[1])
-            largest.append(f"largest {engine}-ODE difference {mm(worst.worst[1])} mm ({worst.name}, {worst.worst[0]})")
+            worst = max(mine, key=lambda c: c.worst.max_abs)
+            largest.append(f"largest {engine}-ODE difference {number(worst.worst.max_abs)} mm ({worst.case}, "
+                           f"{worst.worst.name})")
     from mtbmj.readout.endtravel import line
 
     envelope = [f"{name} ({engine}) {line(r.summary)[2:]}" for name, per in results.items()
@@ -97,7 +98,7 @@ def _crosscheck_roll(args) -> int:
 def _crosscheck_bike(args) -> int:
     """``crosscheck BIKE --bike --roll SCENARIO --speed V``: the bike on MuJoCo against its own ODE
     reference; one line, exit 1 when not within 0.1 mm of travel at both ends and 1 % of the
-    tire-load peaks."""
+    tire-load peaks and series."""
     from mtbmj.errors import MtbmjError
     from mtbmj.bike.crosscheck import crosscheck
 
@@ -143,13 +144,14 @@ def add_parser(sub) -> None:
                    help="comma-separated engines to compare with the ODE reference (default mujoco; e.g. mujoco,fast)")
     p.add_argument("--roll", metavar="SCENARIO",
                    help="cross-check a rolling run instead (mtbmj roll SCENARIO) against the rolling ODE reference: "
-                        "fork, body and axle within 0.02 mm, axle force peaks within 1 %%; needs --speed")
+                        "fork within 0.02 mm, axle force peaks within 1 %% (body, axle and tire reported); needs "
+                        "--speed")
     p.add_argument("--speed", type=float, help="--roll: speed in m/s")
     p.add_argument("--head-angle", type=float, help="--roll: head angle in degrees (default as mtbmj roll)")
     p.add_argument("--drive", choices=("rider", "servo", "coast"), help="--roll: the drive (default rider)")
     p.add_argument("--bike", action="store_true",
                    help="CONFIG names a bike (mtbmj bike's presets or a bike TOML): its run over --roll SCENARIO at "
-                        "--speed against the bike's own ODE reference, travel at both ends within 0.1 mm and tire-load "
-                        "peaks within 1 %%")
+                        "--speed against the bike's own ODE reference, travel at both ends within 0.1 mm and each "
+                        "tire's load within 1 %% of the reference's peak, at its peak and at every sample")
     add_run_options(p)
     p.set_defaults(func=cmd_crosscheck)

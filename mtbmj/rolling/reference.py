@@ -33,6 +33,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from mtbmj.errors import ConfigError
+from mtbmj.runpath.crosscheck import CrosscheckResult, compare_series
 
 
 def mass_matrix(body_mass: float, unsprung_mass: float, head_angle: float) -> np.ndarray:
@@ -119,70 +120,38 @@ class Reference:
                 "wall_time_s": time.perf_counter() - start, "nfev": int(sol.nfev)}
 
 
-DISPLACEMENTS = ("fork_mm", "body_z_mm", "axle_z_mm")
+DISPLACEMENTS = {"fork_mm": "fork", "body_z_mm": "body_height", "axle_z_mm": "axle_height"}  # column -> signal
 TOLERANCE_MM = 0.02  # fork travel: the rolling cross-check's tolerance
 FORCE_TOLERANCE = 0.01  # the axle force peaks (up and back), relative
 MAX_STEP_S = 1e-3  # the reference's longest step (it converges to 2.5e-6 mm at 2 ms on the root)
 
 
 def crosscheck(scenario, speed_m_per_s: float, config="S12", head_angle_deg: float | None = None,
-               duration: float | None = None, overrides=None, drive: str = "rider") -> "RollCheck":
+               duration: float | None = None, overrides=None, drive: str = "rider") -> CrosscheckResult:
     """``mtbmj roll``'s run of ``scenario`` at ``speed_m_per_s`` against this reference from the
-    same initial state: the largest differences of fork travel, body and axle height, tire
-    deflection in contact (mm), and of the axle force peaks (relative)."""
+    same initial state, sample by sample: fork travel (judged, ``TOLERANCE_MM``), body and axle
+    height and the tire's deflection in contact (mm, reported), and the axle force up and back
+    (N; their peaks judged relative to the reference's, ``FORCE_TOLERANCE``; the series reported)."""
     from mtbmj.rolling.frontend import DEFAULT_HEAD_ANGLE_DEG, prepare, run_roll
 
     head = DEFAULT_HEAD_ANGLE_DEG if head_angle_deg is None else head_angle_deg
     engine = run_roll(scenario, speed_m_per_s, config, head, duration, overrides, drive=drive)
     reference = Reference(prepare(scenario, speed_m_per_s, config, head, overrides, callback="python", drive=drive))
-    ref = reference.run(engine.raw["time_s"], max_step=MAX_STEP_S)
     raw = engine.raw
-    differences = {}
-    for column in DISPLACEMENTS:
-        gap = np.abs(raw[column] - ref[column])
-        i = int(np.argmax(gap))
-        differences[column] = {"max_abs_mm": float(gap[i]), "at_time_s": float(raw["time_s"][i])}
-    contact = np.abs(np.maximum(raw["tire_mm"], 0.0) - np.maximum(ref["tire_mm"], 0.0))
-    i = int(np.argmax(contact))
-    differences["tire_mm"] = {"max_abs_mm": float(contact[i]), "at_time_s": float(raw["time_s"][i])}
-    peaks = {}
+    times = raw["time_s"]
+    ref = reference.run(times, max_step=MAX_STEP_S)
+    signals = [compare_series(name, "mm", times, raw[column], ref[column],
+                              TOLERANCE_MM if column == "fork_mm" else None)
+               for column, name in DISPLACEMENTS.items()]
+    signals.append(compare_series("tire", "mm", times, np.maximum(raw["tire_mm"], 0.0),
+                                  np.maximum(ref["tire_mm"], 0.0)))  # the deflection in contact
     for name, column, sign in (("axle_force_up", "axle_force_z_N", 1.0), ("axle_force_back", "axle_force_x_N", -1.0)):
-        e, r = float(np.max(sign * raw[column])), float(np.max(sign * ref[column]))
-        peaks[name] = {"engine_N": e, "reference_N": r,
-                       "relative": abs(e - r) / abs(r) if r != 0.0 else (0.0 if e == 0.0 else float("inf"))}
-    return RollCheck(str(scenario), float(speed_m_per_s), engine.name, drive, differences, peaks,
-                     engine.wall_time_s, ref["wall_time_s"])
+        signals.append(compare_series(name, "N", times, sign * raw[column], sign * ref[column], FORCE_TOLERANCE,
+                                      relative=True, judged=("peak",)))
+    return CrosscheckResult("roll", f"{scenario} at {float(speed_m_per_s):g} m/s ({engine.name}, drive {drive})",
+                            "mujoco", "rolling ODE reference", signals, engine.wall_time_s, ref["wall_time_s"],
+                            {"scenario": str(scenario), "speed_m_per_s": float(speed_m_per_s), "config": engine.name,
+                             "drive": drive, "head_angle_deg": float(head)})
 
 
-class RollCheck:
-    """The result of ``crosscheck``: differences per signal, force peaks, and whether both are
-    within ``TOLERANCE_MM`` and ``FORCE_TOLERANCE``."""
-
-    def __init__(self, scenario, speed, name, drive, differences, peaks, engine_wall_s, reference_wall_s):
-        self.scenario, self.speed, self.name, self.drive = scenario, speed, name, drive
-        self.differences, self.peaks = differences, peaks
-        self.engine_wall_s, self.reference_wall_s = engine_wall_s, reference_wall_s
-
-    @property
-    def passed(self) -> bool:
-        """Fork travel within ``TOLERANCE_MM`` and the axle force peaks within ``FORCE_TOLERANCE``
-        (the body's and the axle's heights and the tire are reported beside them)."""
-        return (self.differences["fork_mm"]["max_abs_mm"] <= TOLERANCE_MM
-                and all(p["relative"] <= FORCE_TOLERANCE for p in self.peaks.values()))
-
-    def line(self) -> str:
-        d, p = self.differences, self.peaks
-        return (f"roll {self.scenario} at {self.speed:g} m/s ({self.name}, drive {self.drive}): MuJoCo vs the rolling "
-                f"reference, max |diff| fork {d['fork_mm']['max_abs_mm']:.4f} mm, body {d['body_z_mm']['max_abs_mm']:.4f} "
-                f"mm, axle {d['axle_z_mm']['max_abs_mm']:.4f} mm, tire {d['tire_mm']['max_abs_mm']:.4f} mm; axle force "
-                f"peaks up {100 * p['axle_force_up']['relative']:.2f} %, back {100 * p['axle_force_back']['relative']:.2f} "
-                f"%; fork {'within' if self.passed else 'NOT within'} {TOLERANCE_MM:g} mm and peaks {100 * FORCE_TOLERANCE:g} % "
-                f"(engine {self.engine_wall_s:.1f} s, reference {self.reference_wall_s:.1f} s)")
-
-    def to_dict(self) -> dict:
-        return {"scenario": self.scenario, "speed_m_per_s": self.speed, "config": self.name, "drive": self.drive,
-                "differences": self.differences, "force_peaks": self.peaks, "passed": self.passed,
-                "tolerance_mm": TOLERANCE_MM, "force_tolerance": FORCE_TOLERANCE}
-
-
-__all__ = ["Reference", "mass_matrix", "crosscheck", "RollCheck", "TOLERANCE_MM", "FORCE_TOLERANCE"]
+__all__ = ["Reference", "mass_matrix", "crosscheck", "TOLERANCE_MM", "FORCE_TOLERANCE"]
