@@ -1,17 +1,54 @@
-"""Shared helpers of the benchmark scripts (not a test module)."""
+"""Shared helpers of the benchmark scripts (not a test module).
+
+A benchmark writes its results where its ``--out`` says (``add_out_option``), and with no
+``--out`` to a scratch file outside the repository (``scratch_path``: ``<tempdir>/mtbmj-benchmarks/
+<name>``), never over a committed file by default. Refreshing a committed result is explicit:
+``--out benchmarks/results/<stem>.json``.
+"""
 from __future__ import annotations
 
+import argparse
 import datetime
 import json
 import os
 import platform
 import subprocess
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-RESULTS = Path(__file__).resolve().parent / "results"
+RESULTS = Path(__file__).resolve().parent / "results"  # the committed results (benchmarks/report.py reads them)
+SCRATCH = "mtbmj-benchmarks"  # the folder under the system's temporary directory that takes results by default
+
+
+def scratch_path(name: str) -> Path:
+    """Where a results file called ``name`` goes when no ``--out`` is given: ``<tempdir>/
+    mtbmj-benchmarks/<name>``, outside the repository (the temporary directory is looked up at
+    each call)."""
+    return Path(tempfile.gettempdir()) / SCRATCH / name
+
+
+def _out_file(text: str) -> Path:
+    """``--out``'s type: a file's path (not an existing folder)."""
+    path = Path(text)
+    if path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} is a folder: name the results file (e.g. {Path(text) / 'results.json'})")
+    return path
+
+
+def add_out_option(parser: argparse.ArgumentParser, script: str, *, name: str | None = None,
+                   what: str = "the results (JSON)", committed: str | None = None, note: str = "") -> None:
+    """Add ``--out PATH`` to ``parser``: where ``script`` writes ``what``; by default the scratch file
+    ``scratch_path(name)`` (``name``: the script's stem + .json unless given). ``committed`` is the
+    repository's copy that ``--out`` refreshes (default ``benchmarks/results/<name>``); ``note`` ends
+    the default's words (e.g. another name under an option)."""
+    name = name or f"{Path(script).stem}.json"
+    committed = committed or f"benchmarks/results/{name}"
+    text = (f"write {what} to PATH (default: {scratch_path(name)}, outside the repository{note}; "
+            f"--out {committed} refreshes the committed file)")
+    parser.add_argument("--out", type=_out_file, default=None, metavar="PATH", help=text.replace("%", "%%"))
 
 
 def environment() -> dict:
@@ -36,11 +73,13 @@ def commit() -> str | None:
     return (done.stdout.strip() or None) if done.returncode == 0 else None
 
 
-def write_json(script: str, payload: dict) -> Path:
-    """Write ``payload`` to results/<script's stem>.json with the environment, the UTC date of the
-    run (``measured_at``) and the commit it ran on (``commit``; read by benchmarks/report.py)."""
-    RESULTS.mkdir(parents=True, exist_ok=True)
-    path = RESULTS / f"{Path(script).stem}.json"
+def write_json(script: str, payload: dict, out: str | os.PathLike | None = None) -> Path:
+    """Write ``payload`` to ``out`` (a file's path, its folder made if missing), or with no ``out``
+    to the scratch file ``scratch_path(<script's stem>.json)``, outside the repository; with the
+    environment, the UTC date of the run (``measured_at``) and the commit it ran on (``commit``;
+    read by benchmarks/report.py). Returns the path written: the script prints it."""
+    path = Path(out) if out is not None else scratch_path(f"{Path(script).stem}.json")
+    path.parent.mkdir(parents=True, exist_ok=True)
     stamp = {"measured_at": datetime.datetime.now(datetime.timezone.utc).date().isoformat(), "commit": commit()}
     path.write_text(json.dumps({**stamp, "environment": environment(), **payload}, indent=2, default=float) + "\n")
     return path

@@ -9,9 +9,12 @@ worst preset: the ODE's own tolerance error, the MuJoCo step-size convergence, a
 touchdown at t = 0 (MuJoCo creates the contact at distance 0 but gives it no constraint row, so
 the tire damping force B*v_i is missing from the first step / first RK4 stage).
 
-    /work/venv/bin/python benchmarks/accuracy.py [--no-diagnose] [--workers N]
+    python benchmarks/accuracy.py [--no-diagnose] [--workers N] [--out PATH]
 
-Writes benchmarks/results/accuracy.json. Not a test: nothing is asserted.
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/accuracy.json``,
+outside the repository; ``--out benchmarks/results/accuracy.json`` refreshes the committed file).
+With ``--no-diagnose`` the last diagnosis is kept (from ``--out``'s file if it exists, else the
+committed one). Not a test: nothing is asserted.
 """
 from __future__ import annotations
 
@@ -26,7 +29,7 @@ import mtbmj
 from mtbmj import compose
 from mtbmj.drop import engine_mujoco
 from mtbmj.drop import scene
-from _bench import write_json
+from _bench import add_out_option, write_json
 
 DEFAULT = {}
 RK4 = {"solver.integrator": "rk4", "solver.timestep_s": 1e-4}
@@ -112,6 +115,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--no-diagnose", action="store_true")
+    add_out_option(ap, __file__)
     args = ap.parse_args()
     names = list(mtbmj.study_presets())
     rows = {n: {} for n in names}
@@ -165,14 +169,15 @@ def main() -> None:
     if diagnosis is None:  # keep the last diagnosis, marked as such
         import json
         from _bench import RESULTS
+        last = args.out if args.out is not None and args.out.is_file() else RESULTS / "accuracy.json"
         try:
-            old = json.loads((RESULTS / "accuracy.json").read_text())
+            old = json.loads(last.read_text())
             if old.get("diagnosis"):
                 diagnosis = {**old["diagnosis"], "from_previous_run": old["environment"]["date"]}
         except (OSError, ValueError, KeyError):
             pass
     path = write_json(__file__, {"command": "python benchmarks/accuracy.py", "targets_mm": TARGETS,
-                                 "rows": rows, "summary": summary, "diagnosis": diagnosis})
+                                 "rows": rows, "summary": summary, "diagnosis": diagnosis}, args.out)
     print(f"\nwrote {path}")
 
 

@@ -11,14 +11,16 @@ run length.
     beyond their limits                                              target <= 0.1 mm, 0 overtravel
 (d) S12's rest position at 3 s and 6 s                               target equal within 0.01 mm
 
-    python benchmarks/accuracy_steps.py [--repeat 5] [--envelope 24] [--seed 7]
+    python benchmarks/accuracy_steps.py [--repeat 5] [--envelope 24] [--seed 7] [--out PATH]
     python benchmarks/accuracy_steps.py --envelope-only --envelope 24 --seed 1,2,3,7,20261123 --jobs 2
 
 (c) also gives each fork's conditioning: how far the ODE reference itself moves when the tire's
 rates change by 1e-4 (the relative floor of MuJoCo's soft-contact impedance). A fork rattling
 between its stops can move by more than 0.1 mm for that; no engine can be compared more finely.
 
-Writes benchmarks/results/accuracy_steps.json. Not a test: nothing is asserted.
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/accuracy_steps.json``, with
+``--envelope-only`` ``accuracy_envelope.json`` there, outside the repository; ``--out
+benchmarks/results/accuracy_steps.json`` or ``accuracy_envelope.json`` refreshes the committed file). Not a test: nothing is asserted.
 """
 from __future__ import annotations
 
@@ -30,7 +32,7 @@ from dataclasses import replace
 import numpy as np
 
 import mtbmj
-from _bench import write_json
+from _bench import add_out_option, write_json
 from mtbmj import compose
 from mtbmj.drop import engine_mujoco, engine_ode
 from mtbmj.drop.envelope import draws
@@ -121,8 +123,9 @@ def main() -> None:
     ap.add_argument("--envelope", type=int, default=24)
     ap.add_argument("--seed", default="7", help="envelope seed(s), comma-separated")
     ap.add_argument("--envelope-only", action="store_true",
-                    help="only (c), written to results/accuracy_envelope.json")
+                    help="only (c), written as accuracy_envelope.json (see --out)")
     ap.add_argument("--jobs", type=int, default=1, help="seeds run in this many processes at once")
+    add_out_option(ap, __file__, note=", accuracy_envelope.json there with --envelope-only")
     args = ap.parse_args()
     seeds = [int(s) for s in args.seed.split(",")]
     if args.jobs > 1:
@@ -140,11 +143,13 @@ def main() -> None:
               "fast_worst_mm": max(r["fast_mm"] for r in cases)}
     print(f"(c) all seeds: {totals}", flush=True)
     if args.envelope_only:
-        print(write_json(__file__.replace("accuracy_steps", "accuracy_envelope"), {"envelope": envelopes, "totals": totals}))
+        path = write_json(__file__.replace("accuracy_steps", "accuracy_envelope"), {"envelope": envelopes, "totals": totals},
+                          args.out)
+        print(f"wrote {path}")
         return
     payload = {"presets": presets(), "steps": steps(args.repeat), "envelope": envelopes[0] if len(seeds) == 1 else envelopes,
                "envelope_totals": totals, "rest": rest()}
-    print(write_json(__file__, payload))
+    print(f"wrote {write_json(__file__, payload, args.out)}")
 
 
 if __name__ == "__main__":

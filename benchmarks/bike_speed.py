@@ -5,12 +5,15 @@ rolling front end (``mtbmj roll``, compiled callback) on the same profile; inter
 repetition runs all four) so they see the same machine load.
 
     python benchmarks/bike_speed.py [--repeats 5] [--duration 1.0] [--python-duration D] [--speed 5] [--coarse-step-ms S]
+        [--out PATH]
 
 Prints each repetition, then the median and spread (min-max) of each real-time factor and of the
 ratios compiled bike / front end and compiled / Python bike, the compiled bike's and MuJoCo's
 simulated seconds per second of this process's CPU time (``time.process_time``: on a machine shared
 with other work, the wall time also counts the time the core spent elsewhere), and the load average
-(/proc/loadavg) before and after, and writes benchmarks/results/bike_speed.json. Only the stepping is timed (``simulate``; MuJoCo alone:
+(/proc/loadavg) before and after, and writes them where ``--out`` says (default
+``<tempdir>/mtbmj-benchmarks/bike_speed.json``, outside the repository; ``--out
+benchmarks/results/bike_speed.json`` refreshes the committed file). Only the stepping is timed (``simulate``; MuJoCo alone:
 ``rollout``): building the model and the static equilibrium are not. The rock garden is seven rocks
 50-110 mm high over 3 m (the profile of tests/test_bike_energy.py), written to a temporary CSV. The
 Python callback runs ``--python-duration`` s (default the same ``--duration``: a shorter run would
@@ -90,6 +93,8 @@ def load() -> str:
 
 
 def main() -> None:
+    from _bench import add_out_option, write_json
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--duration", type=float, default=1.0, help="simulated seconds per run")
@@ -99,6 +104,7 @@ def main() -> None:
     ap.add_argument("--coarse-step-ms", type=float, default=None,
                     help="the bike's largest step (mtbmj.bike.stepping.COARSE_STEP_S, default 0.5 ms); the laws' "
                          "step limits with the bike's masses still bound it")
+    add_out_option(ap, __file__)
     args = ap.parse_args()
     if args.coarse_step_ms is not None:
         from mtbmj.bike import stepping
@@ -148,17 +154,16 @@ def main() -> None:
     step = run.prepare("sst", "flat", args.speed).timestep
     after = load()
     print(f"bike step: {1e3 * step:g} ms, RK4; load average after: {after}")
-    from _bench import write_json
-
     summary = {key: {"median": statistics.median(v), "min": min(v), "max": max(v), "runs": v} for key, v in rows.items()}
     command = f"python benchmarks/bike_speed.py --repeats {args.repeats}"
     if args.python_duration != args.duration:
         command += f" --python-duration {args.python_duration:g}"
     if args.coarse_step_ms is not None:
         command += f" --coarse-step-ms {args.coarse_step_ms:g}"
-    write_json(__file__, {"command": command, "duration_s": args.duration, "speed_m_per_s": args.speed,
-                          "timestep_s": step, "load_before": before, "load_after": after,
-                          "real_time_factors": summary})
+    path = write_json(__file__, {"command": command, "duration_s": args.duration, "speed_m_per_s": args.speed,
+                                 "timestep_s": step, "load_before": before, "load_after": after,
+                                 "real_time_factors": summary}, args.out)
+    print(f"wrote {path}")
 
 
 if __name__ == "__main__":

@@ -12,9 +12,11 @@
    force-displacement loop (true spring +/- Coulomb friction, 0-96 mm) and of the damper table.
 3. S1-S14 are run with the result and their outcome figures printed.
 
-Run: /work/venv/bin/python benchmarks/calibrate.py [--write] [--quick]
-  --write  rewrite the numeric values in mtbmj/presets/reference.toml (comments kept)
+Run: python benchmarks/calibrate.py [--quick] [--out PATH | --write]
   --quick  skip the optimisation; start from the stored calibrated point (for checking the fits)
+  --out    write reference.toml with the calibrated values there (comments kept); default
+           <tempdir>/mtbmj-benchmarks/reference.toml, outside the repository
+  --write  the same over the shipped mtbmj/presets/reference.toml (= --out mtbmj/presets/reference.toml)
 """
 from __future__ import annotations
 
@@ -29,6 +31,7 @@ import numpy as np
 from scipy.optimize import brentq, least_squares
 from scipy.signal import butter, filtfilt
 
+from _bench import add_out_option, scratch_path
 from mtbmj import compose, config
 from mtbmj.drop import engine_mujoco
 from mtbmj.controllers import ProgressiveSpring, TopOutSpring
@@ -348,7 +351,9 @@ def liftoff_lower_bound(k_tire_max=TIRE_RATE_RANGE[1]) -> float:
 
 
 # ---------------------------------------------------------------- write reference.toml
-def write_reference(values: dict) -> None:
+def write_reference(values: dict, path: Path = REFERENCE) -> Path:
+    """Write reference.toml (the shipped one as the template: its comments and layout kept) with
+    ``values`` put in, to ``path``; returns ``path``."""
     text = REFERENCE.read_text()
     for key, value in values.items():
         table, name = key.rsplit(".", 1)
@@ -370,7 +375,10 @@ def write_reference(values: dict) -> None:
         if n != 1:
             raise KeyError(key)
         text = text[:m.end()] + block + text[stop:]
-    REFERENCE.write_text(text)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text)
+    return path
 
 
 def report(overrides) -> None:
@@ -432,10 +440,17 @@ def findings(res) -> None:
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--write", action="store_true", help="rewrite the values in reference.toml")
+    ap.add_argument("--write", action="store_true",
+                    help="write over the shipped mtbmj/presets/reference.toml "
+                         "(the same as --out mtbmj/presets/reference.toml)")
     ap.add_argument("--quick", action="store_true", help="skip the optimisation (use the stored result)")
     ap.add_argument("--max-nfev", type=int, default=40)
+    add_out_option(ap, __file__, name=REFERENCE.name, what="reference.toml with the calibrated values",
+                   committed="mtbmj/presets/reference.toml")
     args = ap.parse_args(argv)
+    if args.write and args.out is not None:
+        ap.error("--write and --out both name where reference.toml goes: give one")
+    out = REFERENCE if args.write else args.out if args.out is not None else scratch_path(REFERENCE.name)
     t0 = time.time()
     print(f"Lift-off lower bound for fork peak {STROKE:.0f} mm, tire peak {TIRE_PEAK:.1f} mm, "
           f"k_t <= {TIRE_RATE_RANGE[1]:.0f} N/mm: {liftoff_lower_bound():.3f} s (target {LIFTOFF} s)")
@@ -462,9 +477,7 @@ def main(argv=None):
     ov = all_overrides(p, fits)
     res = report(ov)
     findings(res)
-    if args.write:
-        write_reference(ov)
-        print(f"\nwrote {REFERENCE}")
+    print(f"\nwrote {write_reference(ov, out)}")
     print(f"\ntotal {time.time() - t0:.0f} s")
     return 0
 

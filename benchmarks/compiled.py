@@ -8,7 +8,10 @@
    (bare) scene, on 1 and 2 threads: drops per second and 1 -> 2 thread scaling (the Python
    callback is shown for context). Rollouts step a fixed tire law (no switch).
 
-Writes benchmarks/results/compiled.json. Run: python benchmarks/compiled.py [--drops N]
+Run: python benchmarks/compiled.py [--drops N] [--repeat 5] [--out PATH]
+
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/compiled.json``,
+outside the repository; ``--out benchmarks/results/compiled.json`` refreshes the committed file).
 """
 from __future__ import annotations
 
@@ -22,7 +25,7 @@ import numpy as np
 from mujoco import rollout
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench import environment, write_json  # noqa: E402
+from _bench import add_out_option, environment, write_json  # noqa: E402
 
 import mtbmj  # noqa: E402
 from mtbmj import compose  # noqa: E402
@@ -92,6 +95,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--drops", type=int, default=16, help="drops per rollout batch")
     parser.add_argument("--repeat", type=int, default=5)
+    add_out_option(parser, __file__)
     args = parser.parse_args(argv)
 
     setup = compose.setup(mtbmj.load_config("S12"))
@@ -162,7 +166,7 @@ def main(argv=None):
         "force_law_layer": layer,
         "throughput": throughput,
     }
-    path = write_json(__file__, payload)
+    path = write_json(__file__, payload, args.out)
     print(f"force-law layer: compiled {t_comp:.3f} s vs built-in {t_bare:.3f} s = {t_comp / t_bare:.2f}x "
           f"(python {t_py / t_bare:.2f}x); engine run compiled {t_engine_c:.3f} s, python {t_engine_p:.3f} s")
     for k, r in rows.items():

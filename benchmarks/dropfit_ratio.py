@@ -21,8 +21,10 @@ stepped finer, about 0.15 s, for both). The rounds also time both fits without i
 cost of the engines themselves shows.
 
     python benchmarks/dropfit_ratio.py [--repeat 5] [--seed 3] [--fast-workers 1] [--mujoco-workers 2]
+        [--out PATH]
 
-Writes benchmarks/results/dropfit_ratio.json. Not a test: nothing is asserted.
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/dropfit_ratio.json``,
+outside the repository; ``--out benchmarks/results/dropfit_ratio.json`` refreshes the committed file). Not a test: nothing is asserted.
 """
 from __future__ import annotations
 
@@ -33,7 +35,7 @@ import time
 from mtbmj.drop.chain import resolve
 from mtbmj.identify.drop_synthetic import make_drop_record
 from mtbmj.identify.dropfit import fit_drop
-from _bench import stats, write_json
+from _bench import add_out_option, stats, write_json
 from dropfit import FACTORS
 from sweep import bare_rollout
 
@@ -61,6 +63,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=3)
     ap.add_argument("--fast-workers", type=int, default=1)
     ap.add_argument("--mujoco-workers", type=int, default=2)
+    add_out_option(ap, __file__)
     args = ap.parse_args()
     cfg = resolve("S12")
     truth = {k: round(cfg[k] * f, 4) for k, f in FACTORS.items()}
@@ -126,7 +129,7 @@ def main() -> None:
           f"target <= {TARGET}x; the fit loop alone {payload['fit_loop_mujoco_over_fast_per_run']['median']:.2f}x; "
           f"MuJoCo's floor ({steps} steps a run, bare with the callback, over {workers['mujoco']} threads) "
           f"{payload['floor_over_fast_per_run']['median']:.2f}x the fast fit's cost per run")
-    print(f"wrote {write_json(__file__, payload)}")
+    print(f"wrote {write_json(__file__, payload, args.out)}")
 
 
 if __name__ == "__main__":

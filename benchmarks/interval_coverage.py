@@ -14,16 +14,17 @@ Reported: the coverage of the reported intervals (Newey-West + engine error + to
 and, for comparison, of the white-noise intervals they replace (channel sandwich, normal
 quantile); the largest error in %; the wall time per fit (median, spread).
 
-    python benchmarks/interval_coverage.py [--records 20] [--seed 1]
+    python benchmarks/interval_coverage.py [--records 20] [--seed 1] [--out PATH]
 
-Writes benchmarks/results/interval_coverage.json. Not a test: nothing is asserted.
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/interval_coverage.json``,
+outside the repository; ``--out benchmarks/results/interval_coverage.json`` refreshes the committed file). Not a test: nothing is asserted.
 """
 from __future__ import annotations
 
 import argparse
 import time
 
-from _bench import write_json
+from _bench import add_out_option, write_json
 
 
 import numpy as np  # noqa: E402
@@ -40,6 +41,7 @@ def main() -> None:
     ap.add_argument("--records", type=int, default=20)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--duration", type=float, default=0.6)
+    add_out_option(ap, __file__)
     args = ap.parse_args()
     cfg = resolve("S12")
     rng = np.random.default_rng(args.seed)
@@ -90,7 +92,7 @@ def main() -> None:
             "engine_runs": logger.extra["engine_runs"]},
         "rows": rows,
     }
-    path = write_json(__file__, payload)
+    path = write_json(__file__, payload, args.out)
     print(f"coverage of the 95 % intervals: {coverage * 100:.1f} % of {len(rows)} (white-noise intervals: "
           f"{white * 100:.1f} %); logger-clock fit {np.median(times):.1f} s, errors "
           + ", ".join(f"{k} {v:+.3f} %" for k, v in payload["logger_clock_fit"]["error_percent"].items())

@@ -9,9 +9,10 @@ times one pass over ``--points`` points of each variant, alternating their order
 the called dispatch's time over the inlined one's, per round (median and spread), and the
 nanoseconds per evaluation of each.
 
-    python benchmarks/law_kernels.py [--points 200000] [--repeat 9]
+    python benchmarks/law_kernels.py [--points 200000] [--repeat 9] [--out PATH]
 
-Writes benchmarks/results/law_kernels.json. Not a test: nothing is asserted. Both loops must give
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/law_kernels.json``,
+outside the repository; ``--out benchmarks/results/law_kernels.json`` refreshes the committed file). Not a test: nothing is asserted. Both loops must give
 the same forces, bit for bit; the script stops if they do not.
 """
 from __future__ import annotations
@@ -21,13 +22,14 @@ import time
 
 import numpy as np
 
-from _bench import stats, write_json
+from _bench import add_out_option, stats, write_json
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--points", type=int, default=200_000)
     ap.add_argument("--repeat", type=int, default=9)
+    add_out_option(ap, __file__)
     args = ap.parse_args()
 
     from mtbmj import compose
@@ -80,7 +82,7 @@ def main() -> None:
               f"({r['called_over_inlined']['min']:.2f}-{r['called_over_inlined']['max']:.2f})", flush=True)
     payload = {"command": f"python benchmarks/law_kernels.py --points {n} --repeat {args.repeat}",
                "points": n, "repeat": args.repeat, "laws": results}
-    print(f"wrote {write_json(__file__, payload)}")
+    print(f"wrote {write_json(__file__, payload, args.out)}")
 
 
 if __name__ == "__main__":

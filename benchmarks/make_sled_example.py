@@ -14,7 +14,9 @@ of S1-S14 and then seen through the sled's instruments:
   unloaded full extension; the logger's clock starts before the release, so time zero (touch)
   must be found from the data (true touch at ``TOUCH_S`` on the file's clock).
 
-Run: ``python benchmarks/make_sled_example.py [--out PATH]`` (about 3 s; deterministic seed).
+Run: ``python benchmarks/make_sled_example.py [--out PATH]`` (about 3 s; deterministic seed). With no
+``--out`` the record goes to ``<tempdir>/mtbmj-benchmarks/sled_example.csv``, outside the repository;
+``--out mtbmj/data/sled_example.csv`` refreshes the shipped one.
 """
 from __future__ import annotations
 
@@ -24,6 +26,7 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
+from _bench import add_out_option, scratch_path
 from mtbmj.drop.run import run_drop
 
 OVERRIDES = {
@@ -40,7 +43,7 @@ RANGE_MM = {"sled": 275.0, "fork": 150.0}  # Penny & Giles potentiometer ranges
 ZERO_AT_MM = {"sled": 120.0, "fork": 10.0}  # where on the pot's range the zero lies
 BITS = 16
 SEED = 20231018
-OUT = Path(__file__).resolve().parent.parent / "mtbmj" / "data" / "sled_example.csv"
+SHIPPED = "mtbmj/data/sled_example.csv"  # the committed record (refreshed by --out SHIPPED, from the repository root)
 
 
 def make() -> tuple[dict[str, np.ndarray], list[str]]:
@@ -87,14 +90,15 @@ def make() -> tuple[dict[str, np.ndarray], list[str]]:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", type=Path, default=OUT)
+    add_out_option(parser, __file__, name=Path(SHIPPED).name, what="the record (CSV)", committed=SHIPPED)
     args = parser.parse_args(argv)
+    out = args.out if args.out is not None else scratch_path(Path(SHIPPED).name)
     columns, header = make()
     lines = [f"# {h}" for h in header] + ["time_s,sled_mm,fork_mm"]
     lines += [f"{t:.3f},{s:.5f},{f:.5f}" for t, s, f in zip(columns["time_s"], columns["sled_mm"], columns["fork_mm"])]
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text("\n".join(lines) + "\n")
-    print(f"wrote {args.out} ({len(columns['time_s'])} rows)")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text("\n".join(lines) + "\n")
+    print(f"wrote {out} ({len(columns['time_s'])} rows)")
     return 0
 
 

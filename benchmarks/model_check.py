@@ -14,9 +14,10 @@ and run on the ODE engine.
 - record cut short: the logger stalls 60-120 ms after touch and repeats its last reading;
   each should be detected (target: at least 95 %).
 
-    python benchmarks/model_check.py [--records 40] [--wrong 20] [--seed 1]
+    python benchmarks/model_check.py [--records 40] [--wrong 20] [--seed 1] [--out PATH]
 
-Writes benchmarks/results/model_check.json. Not a test: nothing is asserted.
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/model_check.json``,
+outside the repository; ``--out benchmarks/results/model_check.json`` refreshes the committed file). Not a test: nothing is asserted.
 """
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from _bench import write_json
+from _bench import add_out_option, write_json
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
@@ -44,6 +45,7 @@ def main() -> None:
     ap.add_argument("--records", type=int, default=40)
     ap.add_argument("--wrong", type=int, default=20, help="records per wrong-model case")
     ap.add_argument("--seed", type=int, default=1)
+    add_out_option(ap, __file__)
     args = ap.parse_args()
     s1 = load("S1")
     rng = np.random.default_rng(args.seed)
@@ -83,7 +85,7 @@ def main() -> None:
         "wall_time_s": time.perf_counter() - started,
     }
     print(summary)
-    print(f"wrote {write_json(__file__, {'summary': summary, 'rows': rows})}")
+    print(f"wrote {write_json(__file__, {'summary': summary, 'rows': rows}, args.out)}")
 
 
 if __name__ == "__main__":

@@ -13,9 +13,10 @@ Reported per round: the median call time from the third call on, for each; the r
 compiled (target at most 1.3) and python / compiled; and the time to the end of the whole loop.
 Medians and the spread over ``--repeat`` rounds.
 
-    python benchmarks/native_loop.py [--repeat 5] [--calls 12]
+    python benchmarks/native_loop.py [--repeat 5] [--calls 12] [--out PATH]
 
-Writes benchmarks/results/native_loop.json. Not a test: nothing is asserted.
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/native_loop.json``,
+outside the repository; ``--out benchmarks/results/native_loop.json`` refreshes the committed file). Not a test: nothing is asserted.
 """
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ import sys
 
 import numpy as np
 
-from _bench import write_json
+from _bench import add_out_option, write_json
 
 LOOP = """
 import json, sys, time
@@ -59,6 +60,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--calls", type=int, default=12)
+    add_out_option(ap, __file__)
     args = ap.parse_args()
     rounds = []
     for r in range(args.repeat):
@@ -81,7 +83,7 @@ def main() -> None:
                "python_over_compiled": spread("python_over_compiled"),
                "total_s": {k: float(np.median([x["total_s"][k] for x in rounds])) for k in ("loop", "compiled", "python")}}
     print(json.dumps(summary, indent=1))
-    print(f"wrote {write_json(__file__, {'summary': summary, 'rounds': rounds})}")
+    print(f"wrote {write_json(__file__, {'summary': summary, 'rounds': rounds}, args.out)}")
 
 
 if __name__ == "__main__":

@@ -8,9 +8,10 @@ fallback without numba) is timed in the same run, and the two runs are compared 
 raw fork, tire and axle signals). The compile (or load from numba's cache) happens before the
 timed engine loop and is reported separately.
 
-    /work/venv/bin/python benchmarks/rolling.py [--repeat N] [--python-repeat M]
+    python benchmarks/rolling.py [--repeat N] [--python-repeat M] [--out PATH]
 
-Writes benchmarks/results/rolling.json.
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/rolling.json``,
+outside the repository; ``--out benchmarks/results/rolling.json`` refreshes the committed file).
 """
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ import time
 import numpy as np
 
 from mtbmj.rolling.frontend import run_roll
-from _bench import write_json
+from _bench import add_out_option, write_json
 
 SIMULATED_S = 10.0
 SPEED = 5.0
@@ -41,6 +42,7 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeat", type=int, default=5, help="runs on the default (compiled) path")
     parser.add_argument("--python-repeat", type=int, default=1, help="runs on the Python path (0: skip)")
+    add_out_option(parser, __file__)
     args = parser.parse_args()
 
     start = time.perf_counter()
@@ -72,7 +74,7 @@ def main() -> None:
                              "engine_info": py_result.info}
         payload["speed_up"] = rtf / py_rtf
         payload["max_abs_difference_compiled_vs_python"] = diff
-    path = write_json(__file__, payload)
+    path = write_json(__file__, payload, args.out)
     print(f"wrote {path}")
     del compiled_rolling
 

@@ -10,9 +10,10 @@ and the end-to-end study.
 (c) ``mtbmj study --out <tmpdir>`` end to end as a subprocess (target < 20 s on 2 cores), and the
     28 runs alone (``mtbmj.drop.study.run_study()`` in-process: process pool, no figures, no files).
 
-    /work/venv/bin/python benchmarks/speed.py [--repeat N] [--study-repeat N] [--skip-study]
+    python benchmarks/speed.py [--repeat N] [--study-repeat N] [--skip-study] [--out PATH]
 
-Writes benchmarks/results/speed.json. Not a test: nothing is asserted. Timings depend on the
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/speed.json``,
+outside the repository; ``--out benchmarks/results/speed.json`` refreshes the committed file). Not a test: nothing is asserted. Timings depend on the
 machine load, which is recorded (load average) in the JSON.
 """
 from __future__ import annotations
@@ -33,7 +34,7 @@ import mtbmj
 from mtbmj import compose
 from mtbmj.drop import scene
 from mtbmj.controllers import ForkCallback, installed
-from _bench import best_of, write_json
+from _bench import add_out_option, best_of, write_json
 
 MTBMJ = str(Path(sys.executable).with_name("mtbmj"))
 
@@ -213,6 +214,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3, help="best of N for (a) and (b) (default 3)")
     ap.add_argument("--study-repeat", type=int, default=3, help="best of N for (c) (default 3)")
     ap.add_argument("--skip-study", action="store_true")
+    add_out_option(ap, __file__)
     args = ap.parse_args()
     load = os.getloadavg()[0]
     print(f"{os.cpu_count()} CPUs, load average {load:.2f} at start")
@@ -221,7 +223,7 @@ def main() -> None:
     if not args.skip_study:
         out["c_study"] = part_c(args.study_repeat)
     out["load_average_at_end"] = os.getloadavg()[0]
-    print(f"\nwrote {write_json(__file__, out)}")
+    print(f"\nwrote {write_json(__file__, out, args.out)}")
 
 
 if __name__ == "__main__":

@@ -17,9 +17,10 @@ the ODE reference and MuJoCo. Every ratio is between timings taken interleaved i
 
 Measured at the step rule's default (RK4 at 1 ms, refined near stops, touchdown and fast sliding).
 
-    python benchmarks/speed_scales.py [--repeat 7] [--skip a,b,c,d,e]
+    python benchmarks/speed_scales.py [--repeat 7] [--skip a,b,c,d,e] [--out PATH]
 
-Writes benchmarks/results/speed_scales.json. Not a test: nothing is asserted.
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/speed_scales.json``,
+outside the repository; ``--out benchmarks/results/speed_scales.json`` refreshes the committed file). Not a test: nothing is asserted.
 """
 from __future__ import annotations
 
@@ -33,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from _bench import write_json
+from _bench import add_out_option, write_json
 
 BIN = Path(sys.executable).with_name("mtbmj")
 RSS = ("import resource, subprocess, sys; subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, check=True); "
@@ -210,6 +211,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--skip", default="", help="comma-separated parts to skip, e.g. c,e")
+    add_out_option(ap, __file__)
     args = ap.parse_args()
     skip = set(args.skip.split(","))
     payload = {"command": f"python benchmarks/speed_scales.py --repeat {args.repeat}"
@@ -219,7 +221,7 @@ def main() -> None:
     for key, fn in parts.items():
         if key not in skip:
             payload[key] = fn()
-    print(f"wrote {write_json(__file__, payload)}")
+    print(f"wrote {write_json(__file__, payload, args.out)}")
 
 
 if __name__ == "__main__":

@@ -4,8 +4,8 @@ table written) against ``mujoco.rollout`` of the bare scene for the same variant
 The issue's figure is a 10 000-variant S12 sweep (1.5 s drops, default settings) on 2 cores,
 compared with the bare-scene rollout (target <= 1.2x). ``--variants`` sets the size:
 
-    /work/venv/bin/python benchmarks/sweep.py --variants 200 [--workers 2] [--duration 1.5]
-        [--runner batch|single] [--threads 1] [--repeat 1]
+    python benchmarks/sweep.py --variants 200 [--workers 2] [--duration 1.5]
+        [--runner batch|single] [--threads 1] [--repeat 1] [--sweep-dir DIR] [--out PATH]
 
 ``--runner batch`` (the default: ``mtbmj.sweep.batch.run_batch_rollout`` on the batched drop engine
 ``mtbmj.drop.engine_batch``, variants of a batch stepped together through ``mujoco.rollout`` on the
@@ -29,7 +29,11 @@ per variant as the runner with built-in elements (the fork as joint stiffness an
 installed, on ``--workers`` x ``--threads`` threads: ratios of medians, the spread of the
 per-round ratios, the load average before and after each round.
 
-Writes benchmarks/results/sweep.json. Not a test: nothing is asserted.
+``--sweep-dir`` keeps the sweep's own folder (journal, table; default a temporary one).
+
+Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/sweep.json``, outside
+the repository; ``--out benchmarks/results/sweep_200.json``, for instance, refreshes that committed
+file). Not a test: nothing is asserted.
 """
 from __future__ import annotations
 
@@ -49,7 +53,7 @@ from mtbmj import compose
 from mtbmj.drop import scene
 from mtbmj import sweep
 from mtbmj.controllers import installed
-from _bench import write_json
+from _bench import add_out_option, write_json
 
 RANGES = ["fork.spring.preload_N=150:300", "fork.spring.progressive_rate_N_per_mm=9:14",
           "tire.impact_rate_N_per_mm=75:95", "sled.drop_height_mm=60:130"]
@@ -263,19 +267,19 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2, help="sweep processes and rollout threads (default 2)")
     parser.add_argument("--duration", type=float, help="simulated time per drop in s (default S12's 1.5 s)")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", type=Path, help="sweep output directory (default: a temporary one)")
+    parser.add_argument("--sweep-dir", type=Path, help="the sweep's output folder (default: a temporary one)")
     parser.add_argument("--skip-rollout", action="store_true")
     parser.add_argument("--runner", choices=sweep.RUNNERS, default="batch")
     parser.add_argument("--threads", type=int, default=1, help="rollout threads per worker process (default 1)")
     parser.add_argument("--phase-variants", type=int, default=32, help="variants for the phase costs (0: skip)")
-    parser.add_argument("--name", help="results file name (default sweep.json)")
     parser.add_argument("--repeat", type=int, default=1,
                         help="interleaved rounds of the whole sweep against the bare scene making as many steps")
+    add_out_option(parser, __file__)
     args = parser.parse_args()
 
     vs = variants(args.variants, args.seed)
     with tempfile.TemporaryDirectory() as tmp:
-        out = args.out or Path(tmp) / "sweep"
+        out = args.sweep_dir or Path(tmp) / "sweep"
         wall, result = run_sweep(vs, args.workers, args.duration, out, args.runner, args.threads)
         table_bytes = (out / sweep.TABLE).stat().st_size
         # each variant's wall time is in timings.csv (variant,variant_id,wall_time_s), not the table
@@ -323,7 +327,7 @@ def main() -> None:
     estimate = 10000 / args.variants * wall
     payload["extrapolated_10000_variant_sweep_s"] = estimate
     print(f"extrapolated 10 000-variant sweep on this path: {estimate / 60:.1f} min")
-    path = write_json(args.name or __file__, payload)
+    path = write_json(__file__, payload, args.out)
     print(f"wrote {path}")
 
 

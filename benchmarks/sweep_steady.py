@@ -13,10 +13,11 @@ the order of the two commands. Where ``perf stat`` counts task-clock, each comma
 and the same difference gives the CPU time a variant costs, every process of the command
 together: the target's rate allows at most cores / rate of it (2 ms on 2 cores).
 
-    python benchmarks/sweep_steady.py [--variants 20000] [--small 2000] [--repeat 3] [--workers 2]
+    python benchmarks/sweep_steady.py [--variants 20000] [--small 2000] [--repeat 3] [--workers 2] [--out PATH]
 
-Writes benchmarks/results/sweep_steady.json (medians, spreads, the load average before and after
-each round). Not a test: nothing is asserted.
+Writes its results (medians, spreads, the load average before and after each round) where ``--out``
+says (default ``<tempdir>/mtbmj-benchmarks/sweep_steady.json``, outside the repository; ``--out
+benchmarks/results/sweep_steady.json`` refreshes the committed file). Not a test: nothing is asserted.
 """
 from __future__ import annotations
 
@@ -30,7 +31,7 @@ import time
 import warnings
 from pathlib import Path
 
-from _bench import stats, write_json
+from _bench import add_out_option, stats, write_json
 
 BIN = Path(sys.executable).with_name("mtbmj")
 RANGES = ["fork.spring.preload_N=150:300", "tire.impact_rate_N_per_mm=75:95", "sled.drop_height_mm=60:130"]
@@ -113,6 +114,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--phase-variants", type=int, default=300)
+    add_out_option(ap, __file__)
     args = ap.parse_args()
     from mtbmj.drop import engine_fast
 
@@ -167,7 +169,7 @@ def main() -> None:
     s = payload["steady_variants_per_s"]
     print(f"steady state {s['median']:.0f} variants/s ({s['min']:.0f}-{s['max']:.0f}) on {args.workers} workers; "
           f"target {TARGET_VARIANTS_PER_S}")
-    print(f"wrote {write_json(__file__, payload)}")
+    print(f"wrote {write_json(__file__, payload, args.out)}")
 
 
 if __name__ == "__main__":

@@ -44,10 +44,14 @@ def table_rows(text: str) -> list[list[str]]:
 
 def script_parser(script: Path) -> argparse.ArgumentParser:
     """The script's argparse options, rebuilt from its ``add_argument`` calls (the scripts build
-    their parser inside ``main``): option strings, ``action``, ``type`` and literal ``choices``."""
+    their parser inside ``main``): option strings, ``action``, ``type`` and literal ``choices``; a
+    call of ``_bench.add_out_option`` adds ``--out PATH``."""
     parser = argparse.ArgumentParser(prog=script.name, exit_on_error=False)
     types = {"int": int, "float": float, "str": str, "Path": Path}
     for node in ast.walk(ast.parse(script.read_text())):
+        if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == "add_out_option":
+            parser.add_argument("--out", type=Path)
+            continue
         if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "add_argument"):
             continue
         names = [ast.literal_eval(a) for a in node.args]
@@ -98,7 +102,7 @@ def test_every_results_file_named_exists_and_cells_are_short():
     for row in table_rows(text):
         assert len(row) == 5, row
         assert all(len(cell) <= 200 for cell in row), row
-    for name in set(re.findall(r"--name (\S+\.json)", text)):
+    for name in set(re.findall(r"--out benchmarks/results/(\S+\.json)", text)):
         assert (BENCH / "results" / name).is_file(), name
 
 
