@@ -30,7 +30,7 @@ from mtbmj.controllers.callback import ForkCallback
 from mtbmj.controllers.fork import ForkLaw
 from mtbmj.controllers.jit import CACHE, FALLBACK_MESSAGE, callback, compiling, numba
 from mtbmj.controllers.lawcodes import (
-    FLOAT_WIDTH, I_ACT, I_CALLS, I_COUNT, I_CTRL, I_DOF, I_FLOOR, I_FLOOR_AT, I_MODEL, I_QPOS, I_RIM, I_RIM_AT,
+    FLOAT_WIDTH, I_ACT, I_CALLS, I_COUNT, I_CTRL, I_DOF, I_FLOOR, I_FLOOR_AT, I_QPOS, I_RIM, I_RIM_AT,
     I_SLED_DOF, I_SLED_QPOS, I_STATE, INT_WIDTH, UnsupportedLaw, flatten, law_arrays,
 )
 from mtbmj.controllers.layout import offsets, values
@@ -82,7 +82,8 @@ if numba is not None:
     import time
 
     from mtbmj.controllers import kernels
-    from mtbmj.controllers.native_data import address_of, atomic_increment, f64_pointer, i64_pointer, pointer_field
+    from mtbmj.controllers.native_data import (address_of, atomic_increment, f64_pointer, find_slot, i64_pointer,
+                                               pointer_field)
 
     _start = time.perf_counter()
     fork_force, fork_force_rate, state_rate = kernels.fork_force, kernels.fork_force_rate, kernels.state_rate
@@ -91,16 +92,10 @@ if numba is not None:
 
     @callback(numba.types.void(numba.types.voidptr, numba.types.voidptr))
     def _dispatch(m, d):
-        model = address_of(m)
-        ints = numba.carray(i64_pointer(_read(M_INTS)), (SLOTS, INT_WIDTH))
-        slot = -1
-        for s in range(_read(M_USED)):
-            if ints[s, I_MODEL] == model:
-                slot = s
-                break
+        slot = find_slot(_read(M_INTS), _read(M_USED), INT_WIDTH, address_of(m))
         if slot < 0:
             return  # not one of ours: leave the model alone
-        I = ints[slot]
+        I = numba.carray(i64_pointer(_read(M_INTS) + 8 * INT_WIDTH * slot), (INT_WIDTH,))
         P = numba.carray(f64_pointer(_read(M_FLOATS) + 8 * FLOAT_WIDTH * slot), (FLOAT_WIDTH,))
         if I[I_COUNT]:
             atomic_increment(i64_pointer(_read(M_INTS) + 8 * (INT_WIDTH * slot + I_CALLS)))

@@ -1,6 +1,6 @@
 """MuJoCo's data as compiled code reaches it, and the registries through which one compiled
-callback serves many models. Shared by the drop's callback (``controllers.compiled``) and the
-rolling callback (``mtbmj.rolling.callback_compiled``).
+callback serves many models. Shared by the drop's callback (``controllers.compiled``), the
+rolling callback (``mtbmj.rolling.callback_compiled``) and the bike's (``mtbmj.bike.callback_compiled``).
 
 * ``mjdata_layout``: the byte offsets of the ``mjData`` pointer fields a callback reads and
   writes, from mujoco's own struct description (``mujoco.introspect``, generated from its headers)
@@ -8,11 +8,13 @@ rolling callback (``mtbmj.rolling.callback_compiled``).
   values equal to the numpy arrays' addresses, and a sentinel written through the pointer read back
   through numpy), once per process (``verify``).
 * The numba intrinsics the callbacks need: an address from a pointer and back, a pointer field of a
-  struct, an atomic counter, a small buffer on the native stack.
+  struct, an atomic counter, a small buffer on the native stack; and ``find_slot``, the registry
+  lookup every compiled dispatcher makes.
 * ``Registry``: slots of per-model rows (numpy arrays that are never reallocated) and a header a
   compiled dispatcher reads through an external symbol, so no address is baked into its code and it
   is cached on disk like the kernels. A dispatcher looks the ``mjModel*`` it is called with up in
-  its registry and leaves every other model alone; a slot is freed when its callback object is
+  its registry (``find_slot``, the one lookup of every compiled callback) and leaves every other
+  model alone; a slot is freed when its callback object is
   collected (the callback keeps its model alive, so the address cannot be reused meanwhile).
 """
 from __future__ import annotations
@@ -24,7 +26,7 @@ import threading
 import mujoco
 import numpy as np
 
-from mtbmj.controllers.jit import numba
+from mtbmj.controllers.jit import kernel, numba
 from mtbmj.controllers.lawcodes import STACK_DEPTH
 
 MJDATA_FIELDS = ("qpos", "qvel", "act", "ctrl", "qfrc_applied")
@@ -258,6 +260,18 @@ if numba is not None:
         def codegen(context, builder, signature, args):
             return cgutils.alloca_once(builder, ir.DoubleType(), size=STACK_DEPTH)
         return t.CPointer(t.float64)(), codegen
+
+    @kernel
+    def find_slot(table, used, width, model):
+        """The slot of a registry whose row holds ``model`` (an ``mjModel*`` address) in column 0 of
+        its first table (int64, ``width`` wide, at address ``table``), among the first ``used``; -1
+        when none does (a model that is not one of the registry's). Every compiled dispatcher looks
+        its model up here (``Registry``)."""
+        rows = i64_pointer(table)
+        for slot in range(used):
+            if rows[slot * width] == model:
+                return slot
+        return -1
 
 
     def registry_reader(symbol: str, width: int):

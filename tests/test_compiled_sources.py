@@ -1,6 +1,6 @@
 """A compiled artifact is keyed on every source compiled into it: numba's disk cache must not serve
 machine code of a function that has since been edited, in controllers/ or outside it (the bike's
-compiled callback compiles plain functions of mtbmj/bike/spec.py and mtbmj/bike/contact.py).
+compiled callback compiles plain functions of mtbmj/bike/spec.py and mtbmj/rolling/tire.py).
 
 The slow test installs a scratch copy of the package (the installed layout: controllers/ as
 mtbmj/controllers), runs a bike with the compiled callback, edits one compiled function, runs again
@@ -28,8 +28,11 @@ def test_the_stamp_reaches_every_compiled_source():
     bike_cc = pytest.importorskip("mtbmj.bike.callback_compiled")
     if getattr(bike_cc, "_dispatch", None) is None:
         pytest.skip("the compiled bike callback is not defined here")
-    names = {Path(p).name for p in jit.compiled_sources(bike_cc._dispatch)}
-    assert {"spec.py", "contact.py", "callback_compiled.py", "drive.py"} <= names, names
+    sources = jit.compiled_sources(bike_cc._dispatch)
+    names = {Path(p).name for p in sources}
+    assert {"spec.py", "callback_compiled.py", "drive.py", "native_data.py"} <= names, names
+    # the straight stretches of the shared patch search (mtbmj/rolling/tire.py, not controllers/tire.py)
+    assert any(Path(p).parts[-2:] == ("rolling", "tire.py") for p in sources), sources
     fork = {Path(p).name for p in jit.compiled_sources(kernels.fork_force)}
     assert {"kernels.py", "spring.py", "damper.py"} <= fork, fork
     # the stamp changes with any of those files' contents (and only through them and controllers/)

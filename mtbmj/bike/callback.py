@@ -12,7 +12,7 @@ import numpy as np
 
 from mtbmj.bike.model import Bike
 from mtbmj.controllers.drive import Drive
-from mtbmj.rolling.tire import REFRESH_DISTANCE_M, RadialTire
+from mtbmj.rolling.tire import REFRESH_DISTANCE_M, PatchSearch, RadialTire
 
 
 class BikeCallback:
@@ -56,20 +56,23 @@ class BikeCallback:
         self.total_mass = float(m.body_subtreemass[self.frame])
         self.pivot_x = bike.spec.pivot[0]
         self.rear_z0 = bike.spec.rear_axle[1]
-        from mtbmj.bike.contact import StraightStretches
-
-        self.straight = StraightStretches(front.terrain, front.radius + front.margin)
-        self.valid = [None, None]  # axle x interval where the current patch is exact (a straight stretch)
-        self.patches = [[], []]
+        # each wheel's patches: the front end's search (kept while the axle stays over a straight stretch)
+        self.search = (PatchSearch(front), PatchSearch(rear))
         self.next_refresh = [-math.inf, -math.inf]
         self.last_x = [math.inf, math.inf]
         self.calls = 0
         self.refreshes = 0
         self._vel = np.zeros(6)
 
+    @property
+    def patches(self) -> list:
+        """Each wheel's (front, rear) contact patches of its last refresh."""
+        return [search.patches for search in self.search]
+
     def reset(self) -> None:
-        self.patches, self.next_refresh, self.last_x = [[], []], [-math.inf, -math.inf], [math.inf, math.inf]
-        self.valid = [None, None]
+        for search in self.search:
+            search.reset()
+        self.next_refresh, self.last_x = [-math.inf, -math.inf], [math.inf, math.inf]
 
     def shock_state(self, d):
         """(w, dw/dphi) from MuJoCo's kinematics: the rear axle in the frame's coordinates."""
@@ -136,17 +139,13 @@ class BikeCallback:
             cx, cz = d.site_xpos[site][0], d.site_xpos[site][2]
             mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_SITE, site, self._vel, 0)
             vx, vz = self._vel[3], self._vel[5]
+            search = self.search[k]
             if t >= self.next_refresh[k] or abs(cx - self.last_x[k]) > REFRESH_DISTANCE_M:
-                valid = self.valid[k]
-                if valid is None or not valid[0] <= cx <= valid[1]:
-                    # off the straight stretch the last patch lay on: search the profile
-                    self.patches[k] = tire.patches(cx, cz, t)
+                if search.refresh(cx, cz, t):  # False: kept, the axle still over its straight stretch
                     self.refreshes += 1
-                    seg = self.straight.segment(cx) if len(self.patches[k]) == 1 else None
-                    self.valid[k] = None if seg is None else (seg[4], seg[5])
                 self.next_refresh[k] = t + self.refresh - 1e-12
                 self.last_x[k] = cx
-            fx, fz, deflection, _, _ = tire.force(cx, cz, vx, vz, self.patches[k])
+            fx, fz, deflection, _, _ = tire.force(cx, cz, vx, vz, search.patches)
             ctrl[self.a_tire[k][0]] = fx
             ctrl[self.a_tire[k][1]] = fz
             ctrl[self.a_probe[k]] = deflection

@@ -14,11 +14,11 @@ Design (the rolling front end's, ``mtbmj.rolling.callback_compiled``):
   friction state); the tire and the rim
   by ``controllers.kernels.rolling_tire_force`` / ``rim_force``; the drive by
   ``controllers.drive.drive_force`` compiled (``controllers.jit.law_function``); the leverage
-  curve's lookups (``mtbmj.bike.spec.leverage_ratio`` / ``leverage_stroke``) and the straight
-  stretches (``mtbmj.bike.contact.stretch``) are those plain functions compiled. Nothing of them is
-  written here.
-* The patch search is the front end's compiled one (``static_window`` + ``find_patches``), each
-  wheel with a row in the front end's slot layout (radius, margin, piece, patches).
+  curve's lookups (``mtbmj.bike.spec.leverage_ratio`` / ``leverage_stroke``) are those plain
+  functions compiled. Nothing of them is written here.
+* The patch search is the front end's compiled one (``update_patches``: ``PatchSearch``, with its
+  straight stretches), each wheel with a row in the front end's slot layout (terrain, stretches,
+  radius, margin, piece, patches).
 * One numba ``cfunc`` serves every ``CompiledBikeCallback`` through a registry of its own
   (``controllers.native_data.Registry``) and leaves every other model alone.
 * ``mjData`` is read through byte offsets: the front end's fields from
@@ -62,15 +62,15 @@ WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front en
 # integer row of a slot
 (R_MODEL, R_FQ, R_FV, R_SV, R_A_FORK, R_A_SHOCK, R_A_FS, R_A_SS, R_ACT_F, R_ACT_S, R_A_TX0, R_A_TZ0, R_A_TX1,
  R_A_TZ1, R_A_DX, R_A_DZ, R_A_PROBE0, R_A_PROBE1, R_A_SHOCK_PROBE, R_SITE0, R_SITE1, R_SBODY0, R_SBODY1, R_FRAME,
- R_ROOT0, R_ROOT1, R_NBODY, R_MASS, R_FORK_STATE, R_SHOCK_STATE, R_DRIVE, R_NPTS, R_TX, R_TZ, R_SCRATCH, R_CAP,
- R_NS, R_SX, R_SZ, R_NL, R_LW, R_LR, R_LS, R_CALLS, R_REFRESHES, R_VALID0, R_VALID1, R_BODYROOT, R_WHEEL0,
- R_WHEEL1, R_LIMB_F0, R_LIMB_R0, R_LIMB_F1, R_LIMB_R1, R_JZ, R_JP, R_VZ, R_VP) = range(58)
-INT_WIDTH = 58
+ R_ROOT0, R_ROOT1, R_NBODY, R_MASS, R_FORK_STATE, R_SHOCK_STATE, R_DRIVE, R_NL, R_LW, R_LR, R_LS, R_CALLS,
+ R_REFRESHES, R_BODYROOT, R_WHEEL0, R_WHEEL1, R_LIMB_F0, R_LIMB_R0, R_LIMB_F1, R_LIMB_R1, R_JZ, R_JP, R_VZ,
+ R_VP) = range(48)
+INT_WIDTH = 48
 # float row of a slot
-(F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_REACH, F_LO0, F_HI0, F_LO1, F_HI1,
- F_NEXT0, F_NEXT1, F_LAST0, F_LAST1, F_REFRESH_DISTANCE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER,
- F_DRIVE_BRAKE, F_LIMB_K0, F_LIMB_C0, F_LIMB_REST0, F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1) = range(26)
-FLOAT_WIDTH = 28
+(F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_NEXT0, F_NEXT1, F_LAST0, F_LAST1,
+ F_REFRESH_DISTANCE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE, F_LIMB_K0, F_LIMB_C0, F_LIMB_REST0,
+ F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1) = range(21)
+FLOAT_WIDTH = 24
 
 REGISTRY = Registry("mtbmj_bike_registry_v3", SLOTS,
                     {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
@@ -116,11 +116,11 @@ def kinematics_layout(model) -> dict:
 
 COMPILE_SECONDS: float | None = None
 if _numba is not None:
-    from mtbmj.bike import contact as _contact
     from mtbmj.bike import spec as _spec
     from mtbmj.controllers import drive as _drive
     from mtbmj.controllers import kernels as _kernels
     from mtbmj.controllers.native_data import address_of as _address_of, f64_pointer as _f64_pointer
+    from mtbmj.controllers.native_data import find_slot as _find_slot
     from mtbmj.controllers.native_data import i64_pointer as _i64_pointer, pointer_field as _pointer_field
     from numba import types as _t
 
@@ -132,23 +132,10 @@ if _numba is not None:
     law_function(_spec.stroke_piece)
     _leverage_ratio = law_function(_spec.leverage_ratio)
     _leverage_stroke = law_function(_spec.leverage_stroke)
-    _stretch = law_function(_contact.stretch)
-    _static_window, _find_patches = rolling.static_window, rolling.find_patches
+    _update_patches, piece_index = rolling.update_patches, rolling.piece_index
     (_R_NPATCH, _F_RADIUS, _F_RATE, _F_DAMPING, _F_MARGIN, _F_RIM_D, _F_RIM_K, _F_RIM_C, _F_PATCHES) = (
         rolling.R_NPATCH, rolling.F_RADIUS, rolling.F_RATE, rolling.F_DAMPING, rolling.F_MARGIN, rolling.F_RIM_D,
         rolling.F_RIM_K, rolling.F_RIM_C, rolling.F_PATCHES)
-
-    @kernel
-    def piece_index(X, n, x):
-        """bisect.bisect_right(X[:n], x) - 1"""
-        lo, hi = 0, n
-        while lo < hi:
-            mid = (lo + hi) >> 1
-            if X[mid] <= x:
-                lo = mid + 1
-            else:
-                hi = mid
-        return lo - 1
 
     @kernel
     def site_velocity(cvel, subtree_com, site_xpos, body, root, site):
@@ -228,16 +215,10 @@ if _numba is not None:
 
     @callback(_t.void(_t.voidptr, _t.voidptr))
     def _dispatch(m, d):
-        model = _address_of(m)
-        ints = _numba.carray(_i64_pointer(_registry(M_INTS)), (SLOTS, INT_WIDTH))
-        slot = -1
-        for s in range(_registry(M_USED)):
-            if ints[s, R_MODEL] == model:
-                slot = s
-                break
+        slot = _find_slot(_registry(M_INTS), _registry(M_USED), INT_WIDTH, _address_of(m))
         if slot < 0:
             return  # not one of ours: leave the model alone
-        I = ints[slot]
+        I = _numba.carray(_i64_pointer(_registry(M_INTS) + 8 * INT_WIDTH * slot), (INT_WIDTH,))
         F = _numba.carray(_f64_pointer(_registry(M_FLOATS) + 8 * FLOAT_WIDTH * slot), (FLOAT_WIDTH,))
         W_I = _numba.carray(_i64_pointer(_registry(M_WINTS) + 8 * 2 * WI * slot), (2 * WI,))
         W_F = _numba.carray(_f64_pointer(_registry(M_WFLOATS) + 8 * 2 * WF * slot), (2 * WF,))
@@ -304,16 +285,6 @@ if _numba is not None:
         ctrl[I[R_A_SHOCK]] = -fs * ds
         ctrl[I[R_A_SHOCK_PROBE]] = fs
         # the tires
-        n = I[R_NPTS]
-        cap = I[R_CAP]
-        TX = _numba.carray(_f64_pointer(I[R_TX]), (n,))
-        TZ = _numba.carray(_f64_pointer(I[R_TZ]), (n,))
-        scratch = _numba.carray(_f64_pointer(I[R_SCRATCH]), (2 * cap,))
-        PX, PZ = scratch[:cap], scratch[cap:]
-        ns = I[R_NS]
-        SX = _numba.carray(_f64_pointer(I[R_SX]), (ns,))
-        SZ = _numba.carray(_f64_pointer(I[R_SZ]), (ns,))
-        reach = F[F_REACH]
         fx = 0.0
         fz = 0.0
         for k in range(2):
@@ -324,19 +295,9 @@ if _numba is not None:
             cz = site_xpos[3 * site + 2]
             vx, vz = site_velocity(cvel, subtree_com, site_xpos, I[R_SBODY0 + k], I[R_ROOT0 + k], site)
             if t >= F[F_NEXT0 + k] or abs(cx - F[F_LAST0 + k]) > F[F_REFRESH_DISTANCE]:
-                if not (I[R_VALID0 + k] != 0 and F[F_LO0 + 2 * k] <= cx <= F[F_HI0 + 2 * k]):
-                    # off the straight stretch the last patch lay on: search the profile
-                    tr = wf[_F_RADIUS] + wf[_F_MARGIN]
-                    mp = _static_window(TX, TZ, n, cx - tr, cx + tr, PX, PZ)
-                    _find_patches(wi, wf, PX, PZ, mp, cx, cz)
+                # the front end's search (PatchSearch): kept while the axle stays over a straight stretch
+                if _update_patches(wi, wf, cx, cz, t):
                     I[R_REFRESHES] += 1
-                    I[R_VALID0 + k] = 0
-                    if wi[_R_NPATCH] == 1:
-                        ok, _, _, _, _, lo, hi = _stretch(SX, SZ, reach, piece_index(SX, ns, cx), cx)
-                        if ok:
-                            I[R_VALID0 + k] = 1
-                            F[F_LO0 + 2 * k] = lo
-                            F[F_HI0 + 2 * k] = hi
                 F[F_NEXT0 + k] = t + F[F_REFRESH] - 1e-12
                 F[F_LAST0 + k] = cx
             fx, fz, deflection = tire_on_patches(wi, wf, cx, cz, vx, vz)
@@ -425,7 +386,6 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
         return super().__new__(cls, _dispatcher(bike.model).address)
 
     def __init__(self, bike, fork_law, shock_law, front, rear, drive, speed, traction, refresh):
-        from mtbmj.bike.contact import StraightStretches
         from mtbmj.rolling import terrain as terrain_mod
         from mtbmj.rolling import tire as tire_model
 
@@ -453,9 +413,8 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
         if n < 1 or self._tz.size != n or not np.all(np.diff(self._tx) >= 0.0):
             raise UnsupportedRolling("terrain profile is empty, ragged or not sorted")
         cap = n + 2
-        self._scratch = np.zeros(2 * cap, dtype=np.float64)
-        straight = StraightStretches(ter, front.radius + front.margin)
-        self._sx, self._sz = np.array(straight.x, dtype=np.float64), np.array(straight.z, dtype=np.float64)
+        self._scratch = np.zeros(2 * cap, dtype=np.float64)  # the search's, one wheel after the other
+        self._sx, self._sz = rolling.stretch_arrays(front)  # the corners of the terrain's straight stretches
         lev = bike.spec.leverage
         self._lw, self._lr, self._ls = (np.array(v, dtype=np.float64) for v in lev.table)
         self._mass = np.ascontiguousarray(m.body_mass, dtype=np.float64)
@@ -476,9 +435,7 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
             R_BODYROOT: self._roots.ctypes.data, R_WHEEL0: int(m.body("front_wheel").id),
             R_WHEEL1: int(m.body("rear_wheel").id),
             R_FORK_STATE: int(bool(fork_law.has_state)), R_SHOCK_STATE: int(bool(shock_law.has_state)),
-            R_DRIVE: int(drive.mode != "coast"), R_NPTS: n, R_TX: self._tx.ctypes.data, R_TZ: self._tz.ctypes.data,
-            R_SCRATCH: self._scratch.ctypes.data, R_CAP: cap, R_NS: self._sx.size, R_SX: self._sx.ctypes.data,
-            R_SZ: self._sz.ctypes.data, R_NL: self._lw.size, R_LW: self._lw.ctypes.data,
+            R_DRIVE: int(drive.mode != "coast"), R_NL: self._lw.size, R_LW: self._lw.ctypes.data,
             R_LR: self._lr.ctypes.data, R_LS: self._ls.ctypes.data}
         legs, arms = bike.limbs
         values.update({R_LIMB_F0: int(m.site(legs.frame_site).id), R_LIMB_R0: int(m.site(legs.rider_site).id),
@@ -495,7 +452,6 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
         floats[[F_SPEED, F_TRACTION, F_REFRESH]] = [self.speed, self.traction, self.refresh]
         floats[F_TOTAL_MASS] = float(m.body_subtreemass[values[R_FRAME]])
         floats[F_PIVOT_X], floats[F_REAR_Z0] = bike.spec.pivot[0], bike.spec.rear_axle[1]
-        floats[F_REACH] = straight.reach
         floats[[F_NEXT0, F_NEXT1]] = -math.inf
         floats[[F_LAST0, F_LAST1]] = math.inf
         floats[F_REFRESH_DISTANCE] = tire_model.REFRESH_DISTANCE_M
@@ -506,6 +462,12 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
         wheel_ints = np.zeros(2 * WI, dtype=np.int64)
         wheel_floats = np.zeros(2 * WF, dtype=np.float64)
         for k, tire in enumerate((front, rear)):
+            # the front end's slot layout: the terrain, the straight stretches and the scratch of the search
+            wheel = wheel_ints[k * WI:(k + 1) * WI]
+            wheel[[rolling.R_NPTS, rolling.R_CAP, rolling.R_TX, rolling.R_TZ, rolling.R_SCRATCH]] = [
+                n, cap, self._tx.ctypes.data, self._tz.ctypes.data, self._scratch.ctypes.data]
+            wheel[[rolling.R_NS, rolling.R_SX, rolling.R_SZ]] = [self._sx.size, self._sx.ctypes.data,
+                                                                 self._sz.ctypes.data]
             row = wheel_floats[k * WF:(k + 1) * WF]
             row[[rolling.F_RADIUS, rolling.F_RATE, rolling.F_DAMPING, rolling.F_MARGIN]] = [
                 tire.radius, tire.rate, tire.damping, tire.margin]
@@ -544,7 +506,7 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
         """Forget the patches: the next evaluation searches afresh (BikeCallback.reset)."""
         for k in (0, 1):
             _WINTS[self.slot, k * WI + rolling.R_NPATCH] = 0
-            _INTS[self.slot, R_VALID0 + k] = 0
+            _WINTS[self.slot, k * WI + rolling.R_VALID] = 0
         _FLOATS[self.slot, [F_NEXT0, F_NEXT1]] = -math.inf
         _FLOATS[self.slot, [F_LAST0, F_LAST1]] = math.inf
 

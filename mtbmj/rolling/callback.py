@@ -10,14 +10,16 @@ from __future__ import annotations
 import math
 
 from mtbmj.controllers.drive import Drive
-from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
+from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, PatchSearch, RadialTire
 
 
 class RollCallback:
     """Fork law + radial tire + speed servo reference, written into ``ctrl`` each step.
 
     Acts only on its own model; assigns, never accumulates. The terrain geometry (contact
-    patches) is refreshed every ``refresh`` seconds of simulated time or 5 mm of axle travel.
+    patches) is refreshed every ``refresh`` seconds of simulated time or 0.25 mm of axle travel, by
+    the patch search the bike's wheels use too (``mtbmj.rolling.tire.PatchSearch``: kept while the
+    axle stays over the straight stretch its one patch lies on); ``refreshes`` counts the searches.
     ``damper_scale`` (None = passive) multiplies the fork's hydraulic damper force: the
     semi-active command of ``mtbmj.rolling.env``."""
 
@@ -44,7 +46,7 @@ class RollCallback:
         self.act_index = int(m.actuator_actadr[self.a_state])
         self.has_state = fork_law.has_state
         self.cos, self.sin = front.axis
-        self.patches: list = []
+        self.search = PatchSearch(tire)
         self.patch_time = 0.0
         self.next_refresh = -math.inf
         self.last_x = math.inf
@@ -58,8 +60,14 @@ class RollCallback:
         self._data = data
         self._arrays = (data.qpos, data.qvel, data.act, data.ctrl)
 
+    @property
+    def patches(self) -> list:
+        """The contact patches of the last refresh: (qx, qz, nx, nz, surface vx, surface vz)."""
+        return self.search.patches
+
     def reset(self) -> None:
-        self.patches, self.next_refresh, self.last_x = [], -math.inf, math.inf
+        self.search.reset()
+        self.next_refresh, self.last_x = -math.inf, math.inf
 
     def axle_state(self, qpos, qvel):
         return self.front.axle_state(qpos, qvel, (self.xq, self.zq, self.fq, self.xv, self.zv, self.fv))
@@ -86,12 +94,12 @@ class RollCallback:
         ctrl[self.a_fork] = -force
         cx, cz, vx, vz = self.axle_state(qpos, qvel)
         if t >= self.next_refresh or abs(cx - self.last_x) > REFRESH_DISTANCE_M:
-            self.patches = self.tire.patches(cx, cz, t)
+            if self.search.refresh(cx, cz, t):
+                self.refreshes += 1
             self.patch_time = t
             self.next_refresh = t + self.refresh - 1e-12
             self.last_x = cx
-            self.refreshes += 1
-        patches = self.patches
+        patches = self.search.patches
         if patches and self.tire.terrain.moving:
             dt = t - self.patch_time
             patches = [(qx + sx * dt, qz + sz * dt, nx, nz, sx, sz) for qx, qz, nx, nz, sx, sz in patches]

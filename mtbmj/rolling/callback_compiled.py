@@ -3,9 +3,9 @@
 
 ``RollCallback`` (Python) stays the specification and the fallback; this module evaluates the same
 arithmetic in the same order, including the terrain geometry (``RadialTire.patches`` on the
-terrain polyline, refreshed on the same schedule: every ``refresh`` s of simulated time or 5 mm of
-axle travel), so the results agree with the Python path to round-off (~1e-12 m; bit-identical in
-practice on static terrain).
+terrain polyline, refreshed on the same schedule, every ``refresh`` s of simulated time or 0.25 mm
+of axle travel, and kept over the same straight stretches: ``PatchSearch``), so the results agree
+with the Python path to round-off (~1e-12 m; bit-identical in practice on static terrain).
 
 Design
 ------
@@ -19,10 +19,14 @@ Design
   integer indices (joints, actuators, array addresses, counters) and float parameters plus the
   callback's state: the contact patches (closest point q, normal n, surface velocity) of the last
   refresh, its time, the next refresh time, the axle x at the refresh.
-* The terrain polyline (static profile x, z; or the drum's polar cleat profile) and scratch
-  buffers are numpy arrays owned by the callback object; the slot holds their addresses. The patch
-  search (``Terrain.polyline`` + ``RadialTire.segment_distances`` + ``RadialTire.patches``) runs
-  in compiled code, streaming over the pieces without allocating.
+* The terrain polyline (static profile x, z; or the drum's polar cleat profile), the corners of
+  its straight stretches and scratch buffers are numpy arrays owned by the callback object; the
+  slot holds their addresses. The patch search (``Terrain.polyline`` +
+  ``RadialTire.segment_distances`` + ``RadialTire.patches``: ``refresh_patches``) runs in compiled
+  code, streaming over the pieces without allocating; ``update_patches`` refreshes as
+  ``mtbmj.rolling.tire.PatchSearch`` does (the patch kept while the axle stays over the straight
+  stretch it lies on, on static terrain). It is the one search of the front end and of both wheels
+  of the bike (``mtbmj.bike.callback_compiled``, each wheel a row in this slot layout).
 * ``mjData`` is read through the offsets of ``controllers.native_data.mjdata_layout`` (mujoco's own
   struct description), checked against live arrays before first use.
 * The callback state is per model, like ``RollCallback``'s: one ``mjData`` at a time per model.
@@ -56,14 +60,16 @@ SLOTS = 64
 # integer row of a slot
 (R_MODEL, R_XQ, R_XV, R_ZQ, R_ZV, R_FQ, R_FV, R_A_STATE, R_A_FORK, R_A_DP, R_A_DV, R_A_TX, R_A_TZ, R_A_PROBE,
  R_ACT, R_HAS_STATE, R_DRUM, R_MOVING, R_NPTS, R_TX, R_TZ, R_SCRATCH, R_ISCRATCH, R_CAP, R_CALLS, R_REFRESHES,
- R_NPATCH, R_OVERFLOW, R_SCALED) = range(29)
-INT_WIDTH = 32
+ R_NPATCH, R_OVERFLOW, R_SCALED,
+ R_NS, R_SX, R_SZ, R_VALID) = range(33)  # the straight stretches (PatchSearch): corners, and whether kept
+INT_WIDTH = 36
 # float row of a slot: parameters, state, then MAX_PATCHES x (qx, qz, nx, nz, sx, sz)
 (F_X0, F_Z0, F_L, F_COS, F_SIN, F_RADIUS, F_RATE, F_DAMPING, F_MARGIN, F_SPEED, F_XREF0, F_REFRESH, F_DRUM_R,
  F_OMEGA, F_PATCH_TIME, F_NEXT_REFRESH, F_LAST_X, F_REFRESH_DISTANCE, F_PIECE, F_DAMPER_SCALE,
  F_RIM_D, F_RIM_K, F_RIM_C, F_RIM_P0,  # the rim: max deflection, rate (0: no rim), damping
- F_DRIVE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE) = range(29)  # controllers.drive
-F_PATCHES = 29  # (F_DRIVE_BRAKE = 28 is the last parameter)
+ F_DRIVE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE,  # controllers.drive
+ F_LO, F_HI) = range(31)  # the axle x interval over which the kept patch holds (PatchSearch.valid)
+F_PATCHES = 31  # (F_HI = 30 is the last of the state)
 FLOAT_WIDTH = F_PATCHES + 6 * MAX_PATCHES
 
 REGISTRY = Registry("mtbmj_rolling_registry_v2", SLOTS,
@@ -84,7 +90,9 @@ COMPILE_SECONDS: float | None = None
 if _numba is not None:
     from mtbmj.controllers import kernels as _kernels
     from mtbmj.controllers import tire as _tire
+    from mtbmj.rolling import tire as _tire_model
     from mtbmj.controllers.native_data import address_of as _address_of, f64_pointer as _f64_pointer
+    from mtbmj.controllers.native_data import find_slot as _find_slot
     from mtbmj.controllers.native_data import i64_pointer as _i64_pointer, pointer_field as _pointer_field
     from numba import types as _t
 
@@ -95,6 +103,7 @@ if _numba is not None:
         _kernels.friction_force
     rim_force = _kernels.rim_force  # the one rim law (controllers.stops)
     tire_force = law_function(_tire.rolling_tire_force)  # the one rolling tire law
+    _stretch = law_function(_tire_model.stretch)  # the straight stretches (mtbmj.rolling.tire)
     drive_force = law_function(_drive.drive_force)  # the rider's drive (controllers.drive)
 
     @kernel
@@ -320,34 +329,64 @@ if _numba is not None:
 
     @kernel
     def refresh_patches(I, F, cx, cz, t):
-        """The patch search of RollCallback at a refresh, on the slot's terrain arrays."""
+        """RadialTire.patches: the patch search on the slot's terrain arrays (scratch: 2 x (n + 2)
+        doubles on static terrain, 4 x on the drum, with 2 x integers)."""
         n = I[R_NPTS]
         cap = I[R_CAP]
         reach = F[F_RADIUS] + F[F_MARGIN]
-        S = _numba.carray(_f64_pointer(I[R_SCRATCH]), (4 * cap,))
-        PX, PZ = S[:cap], S[cap:2 * cap]
         A = _numba.carray(_f64_pointer(I[R_TX]), (n,))
         B = _numba.carray(_f64_pointer(I[R_TZ]), (n,))
         if I[R_DRUM]:
+            S = _numba.carray(_f64_pointer(I[R_SCRATCH]), (4 * cap,))
+            PX, PZ = S[:cap], S[cap:2 * cap]
             J = _numba.carray(_i64_pointer(I[R_ISCRATCH]), (2 * cap,))
             m = drum_window(A, B, n, F[F_OMEGA], F[F_DRUM_R], t, cx - reach, cx + reach, PX, PZ,
                             S[2 * cap:3 * cap], S[3 * cap:], J[:cap], J[cap:])
         else:
+            S = _numba.carray(_f64_pointer(I[R_SCRATCH]), (2 * cap,))
+            PX, PZ = S[:cap], S[cap:]
             m = static_window(A, B, n, cx - reach, cx + reach, PX, PZ)
         find_patches(I, F, PX, PZ, m, cx, cz)
 
+    @kernel
+    def piece_index(X, n, x):
+        """bisect.bisect_right(X[:n], x) - 1"""
+        lo, hi = 0, n
+        while lo < hi:
+            mid = (lo + hi) >> 1
+            if X[mid] <= x:
+                lo = mid + 1
+            else:
+                hi = mid
+        return lo - 1
+
+    @kernel
+    def update_patches(I, F, cx, cz, t):
+        """PatchSearch.refresh on a slot's row (the front end's, or a wheel's of the bike): keep the
+        patch while the axle stays within [F_LO, F_HI] (the straight stretch its one patch lies on),
+        else search (refresh_patches) and, for one patch on a straight stretch, note the stretch.
+        True when it searched."""
+        if I[R_VALID] != 0 and F[F_LO] <= cx <= F[F_HI]:
+            return False
+        refresh_patches(I, F, cx, cz, t)
+        I[R_VALID] = 0
+        ns = I[R_NS]
+        if I[R_NPATCH] == 1 and ns > 0:
+            SX = _numba.carray(_f64_pointer(I[R_SX]), (ns,))
+            SZ = _numba.carray(_f64_pointer(I[R_SZ]), (ns,))
+            ok, _, _, _, _, lo, hi = _stretch(SX, SZ, F[F_RADIUS] + F[F_MARGIN], piece_index(SX, ns, cx), cx)
+            if ok:
+                I[R_VALID] = 1
+                F[F_LO] = lo
+                F[F_HI] = hi
+        return True
+
     @callback(_t.void(_t.voidptr, _t.voidptr))
     def _dispatch(m, d):
-        model = _address_of(m)
-        ints = _numba.carray(_i64_pointer(_registry(M_INTS)), (SLOTS, INT_WIDTH))
-        slot = -1
-        for s in range(_registry(M_USED)):
-            if ints[s, R_MODEL] == model:
-                slot = s
-                break
+        slot = _find_slot(_registry(M_INTS), _registry(M_USED), INT_WIDTH, _address_of(m))
         if slot < 0:
             return  # not one of ours: leave the model alone
-        I = ints[slot]
+        I = _numba.carray(_i64_pointer(_registry(M_INTS) + 8 * INT_WIDTH * slot), (INT_WIDTH,))
         F = _numba.carray(_f64_pointer(_registry(M_FLOATS) + 8 * FLOAT_WIDTH * slot), (FLOAT_WIDTH,))
         LI = _numba.carray(_i64_pointer(_registry(M_LAW_INTS) + 8 * LAW_INT_WIDTH * slot), (LAW_INT_WIDTH,))
         LP = _numba.carray(_f64_pointer(_registry(M_LAW_FLOATS) + 8 * LAW_FLOAT_WIDTH * slot), (LAW_FLOAT_WIDTH,))
@@ -378,11 +417,11 @@ if _numba is not None:
         vx = qvel[I[R_XV]] - vf * c
         vz = qvel[I[R_ZV]] + vf * sn
         if t >= F[F_NEXT_REFRESH] or abs(cx - F[F_LAST_X]) > F[F_REFRESH_DISTANCE]:
-            refresh_patches(I, F, cx, cz, t)
+            if update_patches(I, F, cx, cz, t):
+                I[R_REFRESHES] += 1
             F[F_PATCH_TIME] = t
             F[F_NEXT_REFRESH] = t + F[F_REFRESH] - 1e-12
             F[F_LAST_X] = cx
-            I[R_REFRESHES] += 1
         # the tire (RadialTire.force), patches moved with a moving surface since the refresh
         r = F[F_RADIUS]
         k = F[F_RATE]
@@ -454,6 +493,17 @@ def _dispatcher(model):
 def available() -> bool:
     """True when the compiled rolling path can run here."""
     return unavailable_reason() is None
+
+
+def stretch_arrays(tire) -> tuple[np.ndarray, np.ndarray]:
+    """The corners of ``tire``'s straight stretches (``mtbmj.rolling.tire.straight_stretches``) as the
+    arrays a slot's R_SX, R_SZ point to; empty (no shortcut: R_NS 0) where it has none."""
+    from mtbmj.rolling.tire import straight_stretches
+
+    straight = straight_stretches(tire)
+    if straight is None:
+        return np.zeros(0), np.zeros(0)
+    return np.array(straight.x, dtype=np.float64), np.array(straight.z, dtype=np.float64)
 
 
 def _float_field(index: int, doc: str):
@@ -539,6 +589,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         self._scratch = np.zeros(4 * cap, dtype=np.float64)
         self._iscratch = np.zeros(2 * cap, dtype=np.int64)
         self._closed: dict = {}
+        self._sx, self._sz = stretch_arrays(tire)
 
         ints = np.zeros(INT_WIDTH, dtype=np.int64)
         ints[[R_XQ, R_XV, R_ZQ, R_ZV, R_FQ, R_FV]] = [self.xq, self.xv, self.zq, self.zv, self.fq, self.fv]
@@ -549,6 +600,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         ints[R_NPTS], ints[R_CAP] = n, cap
         ints[R_TX], ints[R_TZ] = self._ta.ctypes.data, self._tb.ctypes.data
         ints[R_SCRATCH], ints[R_ISCRATCH] = self._scratch.ctypes.data, self._iscratch.ctypes.data
+        ints[R_NS], ints[R_SX], ints[R_SZ] = self._sx.size, self._sx.ctypes.data, self._sz.ctypes.data
         floats = np.zeros(FLOAT_WIDTH, dtype=np.float64)
         floats[[F_X0, F_Z0, F_L, F_COS, F_SIN]] = [front.chassis_x0, front.chassis_z0, front.fork_length,
                                                     self.cos, self.sin]
@@ -616,6 +668,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
     def reset(self) -> None:
         """Forget the patches: the next step recomputes them (RollCallback.reset)."""
         _INTS[self.slot, R_NPATCH] = 0
+        _INTS[self.slot, R_VALID] = 0
         _FLOATS[self.slot, F_NEXT_REFRESH] = -math.inf
         _FLOATS[self.slot, F_LAST_X] = math.inf
 
@@ -646,4 +699,5 @@ class CompiledRollCallback(ctypes._CFuncPtr):
 from mtbmj.controllers.compiled import warn_once  # noqa: E402  (one set of warnings for both callbacks)
 
 
-__all__ = ["CompiledRollCallback", "UnsupportedLaw", "warn_once", "available", "UnsupportedRolling", "MAX_PATCHES"]
+__all__ = ["CompiledRollCallback", "UnsupportedLaw", "warn_once", "available", "UnsupportedRolling", "MAX_PATCHES",
+           "stretch_arrays"]

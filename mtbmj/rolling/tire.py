@@ -26,9 +26,17 @@ accuracy against the rolling reference, see ``REFRESH_S``) by the control callba
 refreshes each patch is its tangent line at q, which is exact on straight segments and off by
 s^2 / (2 rho) on a curved one (s the travel since the refresh, rho the radius of curvature). ``margin`` (10 mm) sees a patch coming before it
 touches, so the force starts at d = 0 at the step where it should.
+
+3. The refresh (``PatchSearch``, one per tire: the front end's and each of the bike's wheels; its
+   compiled twin ``mtbmj.rolling.callback_compiled.update_patches``): the search above, except while
+   the axle stays over the straight stretch of the profile (``StraightStretches``) that its single
+   patch lies on. There the tire's whole reach is one straight line, the search would return that
+   line's patch again, and the patch of the last search is kept: exact (the tangent line is the
+   line) and free, on the flats and ramps where a run spends most of its time.
 """
 from __future__ import annotations
 
+import bisect
 import math
 
 import numpy as np
@@ -133,4 +141,112 @@ class RadialTire:
         return fx, fz, deepest, deepest_rate, active
 
 
-__all__ = ["RadialTire", "MARGIN_M", "REFRESH_S", "REFRESH_DISTANCE_M"]
+def stretch(x, z, reach: float, i: int, cx: float):
+    """``StraightStretches.segment`` on the corners (x, z), i = bisect_right(x, cx) - 1: (ok, x0, z0,
+    x1, z1, lo, hi), ok False where no straight piece holds the reach (a plain function: the
+    compiled callbacks compile it)."""
+    n = len(x)
+    if i < 0:  # before the profile (flat): the first stretch continued
+        i = 0
+    j = min(i + 1, n - 1)
+    x0, z0, x1, z1 = x[i], z[i], x[j], z[j]
+    lo = -math.inf if i == 0 else x0
+    hi = math.inf if i >= n - 2 else x1
+    if i >= n - 1:  # past the profile (flat): the last stretch continued
+        x0, z0, x1, z1 = x[n - 2], z[n - 2], x[n - 1], z[n - 1]
+        lo, hi = (x[n - 2] if n > 2 else -math.inf), math.inf
+    ok = cx - reach >= lo and cx + reach <= hi and x1 > x0
+    return ok, x0, z0, x1, z1, lo + reach, hi - reach
+
+
+class StraightStretches:
+    """Straight stretches of a static profile: where the whole reach of a tire (``reach``: radius +
+    margin either side of the axle) lies on one straight segment, its contact patch is one straight
+    line, known in closed form: the foot of the perpendicular from the axle, with the line's normal."""
+
+    def __init__(self, terrain, reach: float):
+        # the profile's corners: vertices where the slope changes (collinear neighbours merged, the
+        # flat continuations before the first and after the last point included)
+        x = [float(terrain.x[0]) - 1.0] + [float(v) for v in terrain.x] + [float(terrain.x[-1]) + 1.0]
+        z = [float(terrain.z[0])] + [float(v) for v in terrain.z] + [float(terrain.z[-1])]
+        keep_x, keep_z = [x[0]], [z[0]]
+        for i in range(1, len(x) - 1):
+            ax, az = x[i] - keep_x[-1], z[i] - keep_z[-1]
+            bx, bz = x[i + 1] - x[i], z[i + 1] - z[i]
+            if ax > 0.0 and bx > 0.0 and ax * bz == bx * az:
+                continue  # on the line through its neighbours: not a corner
+            keep_x.append(x[i])
+            keep_z.append(z[i])
+        keep_x.append(x[-1])
+        keep_z.append(z[-1])
+        self.x, self.z = keep_x, keep_z
+        self.reach = float(reach)
+
+    def segment(self, cx: float):
+        """(x0, z0, x1, z1, lo, hi) of the straight piece holding [cx - reach, cx + reach], with
+        the axle positions (lo, hi) for which that stays true, or None (an edge, a corner, a curve
+        within reach)."""
+        ok, x0, z0, x1, z1, lo, hi = stretch(self.x, self.z, self.reach, bisect.bisect_right(self.x, cx) - 1, cx)
+        return (x0, z0, x1, z1, lo, hi) if ok else None
+
+    def patch(self, cx: float, cz: float, radius: float, margin: float):
+        """The one patch (qx, qz, nx, nz, 0, 0) of an axle over a straight stretch (a list of it,
+        empty when the line is farther than radius + margin), or None off a straight stretch."""
+        seg = self.segment(cx)
+        if seg is None:
+            return None
+        x0, z0, x1, z1, _, _ = seg
+        ex, ez = x1 - x0, z1 - z0
+        length = math.hypot(ex, ez)
+        ex, ez = ex / length, ez / length
+        s = (cx - x0) * ex + (cz - z0) * ez
+        qx, qz = x0 + s * ex, z0 + s * ez
+        dist = math.hypot(cx - qx, cz - qz)
+        if dist >= radius + margin or dist <= 1e-9:
+            return []
+        return [(qx, qz, (cx - qx) / dist, (cz - qz) / dist, 0.0, 0.0)]
+
+
+def straight_stretches(tire: RadialTire) -> StraightStretches | None:
+    """The straight stretches of ``tire``'s terrain at its reach, or None where the shortcut does not
+    hold: a moving surface (the drum), or a terrain or tire whose geometry is not the stock search on
+    the profile's points (a subclass overriding ``polyline`` or ``patches``)."""
+    from mtbmj.rolling.terrain import Terrain
+
+    ter = tire.terrain
+    if ter.moving or type(ter).polyline is not Terrain.polyline or type(tire).patches is not RadialTire.patches:
+        return None
+    return StraightStretches(ter, tire.radius + tire.margin)
+
+
+class PatchSearch:
+    """The contact patches of one tire, refreshed by its control callback: searched afresh
+    (``RadialTire.patches``), except while the axle stays over the straight stretch its one patch
+    lies on (``valid``, the axle x interval; None: search at the next refresh), where the patch of
+    the last search is kept. The front end's callback has one, the bike's one per wheel; the compiled
+    callbacks do the same in ``mtbmj.rolling.callback_compiled.update_patches``."""
+
+    def __init__(self, tire: RadialTire):
+        self.tire = tire
+        self.straight = straight_stretches(tire)
+        self.patches: list = []
+        self.valid: tuple[float, float] | None = None
+
+    def reset(self) -> None:
+        """Forget the patches: the next refresh searches."""
+        self.patches, self.valid = [], None
+
+    def refresh(self, cx: float, cz: float, t: float = 0.0) -> bool:
+        """The patches for the axle at (cx, cz) at time t; True when it searched, False when it kept
+        the last patch (the axle still over its straight stretch)."""
+        valid = self.valid
+        if valid is not None and valid[0] <= cx <= valid[1]:
+            return False
+        self.patches = self.tire.patches(cx, cz, t)
+        seg = self.straight.segment(cx) if self.straight is not None and len(self.patches) == 1 else None
+        self.valid = None if seg is None else (seg[4], seg[5])
+        return True
+
+
+__all__ = ["RadialTire", "PatchSearch", "StraightStretches", "stretch", "straight_stretches", "MARGIN_M",
+           "REFRESH_S", "REFRESH_DISTANCE_M"]
