@@ -49,6 +49,59 @@ def drive_force(v_ref: float, v: float, kv: float, push: float, power: float, br
     return f
 
 
+def _at_patch(f: float, fx: float, fz: float, deflection: float, radius: float):
+    """(dx, dz, torque): a tangential ground force ``f`` (forward positive) on a tyre whose radial
+    force is (fx, fz), as a force at the axle, along the tyre's contact tangent, and the couple
+    about the axle (world y, right-handed) of that force acting at the contact patch, which lies
+    radius - deflection from the axle against the radial force."""
+    n = (fx * fx + fz * fz) ** 0.5
+    if n <= 0.0 or f == 0.0:
+        return 0.0, 0.0, 0.0
+    dx = f * fz / n
+    dz = -f * fx / n
+    rho = radius - (deflection if deflection > 0.0 else 0.0)
+    rx = -rho * fx / n
+    rz = -rho * fz / n
+    return dx, dz, rz * dx - rx * dz
+
+
+def wheel_forces(f: float, fxf: float, fzf: float, df: float, fxr: float, fzr: float, dr: float,
+                 traction: float, radius: float):
+    """The whole bike's drive ``f`` (N, forward positive; ``drive_force``) as the ground's forces
+    on the two tyres: (dxf, dzf, torque_f, dxr, dzr, torque_r). Each tyre's ground force acts at
+    its contact patch: returned as a force at its axle and the couple (world y) the part that makes
+    the force reacts (the hub drive's and the rear caliper's swingarm, the front caliper's fork
+    lower). A push drives the rear tyre alone, at most ``traction`` times its radial load; a brake
+    is shared as a rider brakes, in proportion to the tyres' loads, each at most ``traction`` times
+    its load, what one tyre cannot hold going to the other within its grip. (fx, fz) is each tyre's
+    radial force, ``d`` its deflection, ``radius`` the tyres' radius."""
+    nf = (fxf * fxf + fzf * fzf) ** 0.5
+    nr = (fxr * fxr + fzr * fzr) ** 0.5
+    front = 0.0
+    rear = 0.0
+    if f > 0.0:
+        rear = f if f < traction * nr else traction * nr
+    elif f < 0.0 and nf + nr > 0.0:
+        brake = -f
+        capf = traction * nf
+        capr = traction * nr
+        bf = brake * nf / (nf + nr)
+        br = brake - bf
+        if bf > capf:
+            br += bf - capf
+            bf = capf
+        if br > capr:
+            bf += br - capr
+            br = capr
+        if bf > capf:
+            bf = capf
+        front = -bf
+        rear = -br
+    dxf, dzf, tf = _at_patch(front, fxf, fzf, df, radius)
+    dxr, dzr, tr = _at_patch(rear, fxr, fzr, dr, radius)
+    return dxf, dzf, tf, dxr, dzr, tr
+
+
 @dataclass(frozen=True)
 class Drive:
     """A drive mode and its limits (see the module doc); ``kv`` (N s/m) is the velocity
@@ -71,4 +124,4 @@ class Drive:
         return drive_force(v_ref, v, self.kv, self.push, self.power, self.brake)
 
 
-__all__ = ["Drive", "drive_force", "MODES", "RIDER_PUSH_N", "RIDER_POWER_W", "RIDER_BRAKE_N"]
+__all__ = ["Drive", "drive_force", "wheel_forces", "MODES", "RIDER_PUSH_N", "RIDER_POWER_W", "RIDER_BRAKE_N"]

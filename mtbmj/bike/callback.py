@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 
 from mtbmj.bike.model import Bike
-from mtbmj.controllers.drive import Drive
+from mtbmj.controllers.drive import Drive, wheel_forces
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, PatchSearch, RadialTire
 
 
@@ -49,6 +49,9 @@ class BikeCallback:
         self.rider_dofs = (bike.dof_index("rider_z"), bike.dof_index("rider_pitch"))
         # the tire and drive forces act at the wheels' centres (the axles): xfrc_applied on these bodies
         self.wheels = (int(m.body("front_wheel").id), int(m.body("rear_wheel").id))
+        # the parts that react each tyre's ground-force couple: the front caliper's fork lower, the
+        # hub drive's and the rear caliper's swingarm (controllers.drive.wheel_forces)
+        self.reacting = (int(m.body("fork_lower").id), int(m.body("swingarm").id))
         # the centre of mass's horizontal speed is the X row of M qvel over the whole mass (the
         # horizontal momentum), computed at every evaluation: RK4's inner stages skip the sensors,
         # so the com_velocity sensor would hold the step's start there
@@ -132,7 +135,7 @@ class BikeCallback:
             fs = self.shock.force(s, sd)
         ctrl[self.a_shock] = -fs * ds
         ctrl[self.a_shock_probe] = fs
-        rear = (0.0, 0.0)
+        radial = [(0.0, 0.0, 0.0), (0.0, 0.0, 0.0)]
         for k in (0, 1):
             tire = self.tires[k]
             site = self.sites[k]
@@ -149,24 +152,23 @@ class BikeCallback:
             ctrl[self.a_tire[k][0]] = fx
             ctrl[self.a_tire[k][1]] = fz
             ctrl[self.a_probe[k]] = deflection
-            rear = (fx, fz)
-        xfrc = d.xfrc_applied
-        front = xfrc[self.wheels[0]]
-        front[0], front[1], front[2] = ctrl[self.a_tire[0][0]], 0.0, ctrl[self.a_tire[0][1]]
-        fx, fz = rear
-        n = math.hypot(fx, fz)
-        dx = dz = 0.0
-        if n > 0.0 and self.drive.mode != "coast":
+            radial[k] = (fx, fz, deflection)
+        # the drive and the brakes: the ground's forces at the contact patches, each a force at its
+        # axle and a couple on the part that reacts it (controllers.drive.wheel_forces)
+        (fxf, fzf, df), (fxr, fzr, dr) = radial
+        ground = (0.0,) * 6
+        if self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:
             mujoco.mj_mulM(m, d, self._momentum, qvel)
             f = self.drive.force(self.speed, self._momentum[self.xv] / self.total_mass)
-            limit = self.traction * n
-            f = min(max(f, -limit), limit)
-            dx = f * fz / n
-            dz = -f * fx / n
-        ctrl[self.a_drive[0]] = dx
-        ctrl[self.a_drive[1]] = dz
-        back = xfrc[self.wheels[1]]
-        back[0], back[1], back[2] = fx + dx, 0.0, fz + dz
+            ground = wheel_forces(f, fxf, fzf, df, fxr, fzr, dr, self.traction, self.tires[1].radius)
+        ctrl[self.a_drive[0]] = ground[0] + ground[3]  # the drive's and brakes' force on the bike, both tyres
+        ctrl[self.a_drive[1]] = ground[1] + ground[4]
+        xfrc = d.xfrc_applied
+        for k, (fx, fz, _) in enumerate(radial):
+            wheel = xfrc[self.wheels[k]]
+            wheel[0], wheel[1], wheel[2] = fx + ground[3 * k], 0.0, fz + ground[3 * k + 1]
+            part = xfrc[self.reacting[k]]
+            part[3], part[4], part[5] = 0.0, ground[3 * k + 2], 0.0
 
 
 __all__ = ["BikeCallback"]

@@ -64,15 +64,15 @@ WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front en
  R_A_TZ1, R_A_DX, R_A_DZ, R_A_PROBE0, R_A_PROBE1, R_A_SHOCK_PROBE, R_SITE0, R_SITE1, R_SBODY0, R_SBODY1, R_FRAME,
  R_ROOT0, R_ROOT1, R_NBODY, R_MASS, R_FORK_STATE, R_SHOCK_STATE, R_DRIVE, R_NL, R_LW, R_LR, R_LS, R_CALLS,
  R_REFRESHES, R_BODYROOT, R_WHEEL0, R_WHEEL1, R_LIMB_F0, R_LIMB_R0, R_LIMB_F1, R_LIMB_R1, R_JZ, R_JP, R_VZ,
- R_VP) = range(48)
-INT_WIDTH = 48
+ R_VP, R_REACT0, R_REACT1) = range(50)
+INT_WIDTH = 50
 # float row of a slot
 (F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_NEXT0, F_NEXT1, F_LAST0, F_LAST1,
  F_REFRESH_DISTANCE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE, F_LIMB_K0, F_LIMB_C0, F_LIMB_REST0,
- F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1) = range(21)
+ F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1, F_RADIUS) = range(22)
 FLOAT_WIDTH = 24
 
-REGISTRY = Registry("mtbmj_bike_registry_v3", SLOTS,
+REGISTRY = Registry("mtbmj_bike_registry_v4", SLOTS,
                     {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
                      "wheel_ints": (2 * WI, np.int64), "wheel_floats": (2 * WF, np.float64),
                      "fork_ints": (LAW_INT_WIDTH, np.int64), "fork_floats": (LAW_FLOAT_WIDTH, np.float64),
@@ -129,6 +129,8 @@ if _numba is not None:
     _fork_force, _fork_force_rate = _kernels.fork_force, _kernels.fork_force_rate
     _tire_force, _rim_force = _kernels.rolling_tire_force, _kernels.rim_force
     _drive_force = law_function(_drive.drive_force)
+    law_function(_drive._at_patch)
+    _wheel_forces = law_function(_drive.wheel_forces)
     law_function(_spec.stroke_piece)
     _leverage_ratio = law_function(_spec.leverage_ratio)
     _leverage_stroke = law_function(_spec.leverage_stroke)
@@ -287,6 +289,10 @@ if _numba is not None:
         # the tires
         fx = 0.0
         fz = 0.0
+        fxf = 0.0
+        fzf = 0.0
+        df = 0.0
+        deflection = 0.0
         for k in range(2):
             wi = W_I[k * WI:(k + 1) * WI]
             wf = W_F[k * WF:(k + 1) * WF]
@@ -304,31 +310,44 @@ if _numba is not None:
             ctrl[I[R_A_TX0 + 2 * k]] = fx
             ctrl[I[R_A_TZ0 + 2 * k]] = fz
             ctrl[I[R_A_PROBE0 + k]] = deflection
-        # the front tire's force at the front wheel's centre (BikeCallback: xfrc_applied)
-        o = 6 * I[R_WHEEL0]
-        xfrc[o] = ctrl[I[R_A_TX0]]
-        xfrc[o + 1] = 0.0
-        xfrc[o + 2] = ctrl[I[R_A_TZ0]]
-        # the drive, at the rear tire (fx, fz: its force)
-        nrm = math.hypot(fx, fz)
-        dx = 0.0
-        dz = 0.0
-        if nrm > 0.0 and I[R_DRIVE] != 0:
+            if k == 0:
+                fxf = fx
+                fzf = fz
+                df = deflection
+        # the drive and the brakes: the ground's forces at the contact patches, each a force at its
+        # axle and a couple on the part reacting it (BikeCallback; controllers.drive.wheel_forces)
+        dxf = 0.0
+        dzf = 0.0
+        tf = 0.0
+        dxr = 0.0
+        dzr = 0.0
+        tr = 0.0
+        if I[R_DRIVE] != 0 and math.hypot(fxf, fzf) + math.hypot(fx, fz) > 0.0:
             nb = I[R_NBODY]
             mass = _numba.carray(_f64_pointer(I[R_MASS]), (nb,))
             roots = _numba.carray(_i64_pointer(I[R_BODYROOT]), (nb,))
             vcom = momentum_x(cvel, subtree_com, xipos, mass, roots, nb) / F[F_TOTAL_MASS]
             f = _drive_force(F[F_SPEED], vcom, F[F_DRIVE_KV], F[F_DRIVE_PUSH], F[F_DRIVE_POWER], F[F_DRIVE_BRAKE])
-            limit = F[F_TRACTION] * nrm
-            f = min(max(f, -limit), limit)
-            dx = f * fz / nrm
-            dz = -f * fx / nrm
-        ctrl[I[R_A_DX]] = dx
-        ctrl[I[R_A_DZ]] = dz
-        o = 6 * I[R_WHEEL1]
-        xfrc[o] = fx + dx
+            dxf, dzf, tf, dxr, dzr, tr = _wheel_forces(f, fxf, fzf, df, fx, fz, deflection, F[F_TRACTION],
+                                                       F[F_RADIUS])
+        ctrl[I[R_A_DX]] = dxf + dxr
+        ctrl[I[R_A_DZ]] = dzf + dzr
+        o = 6 * I[R_WHEEL0]
+        xfrc[o] = fxf + dxf
         xfrc[o + 1] = 0.0
-        xfrc[o + 2] = fz + dz
+        xfrc[o + 2] = fzf + dzf
+        o = 6 * I[R_WHEEL1]
+        xfrc[o] = fx + dxr
+        xfrc[o + 1] = 0.0
+        xfrc[o + 2] = fz + dzr
+        o = 6 * I[R_REACT0]
+        xfrc[o + 3] = 0.0
+        xfrc[o + 4] = tf
+        xfrc[o + 5] = 0.0
+        o = 6 * I[R_REACT1]
+        xfrc[o + 3] = 0.0
+        xfrc[o + 4] = tr
+        xfrc[o + 5] = 0.0
 
     COMPILE_SECONDS = time.perf_counter() - _compile_start
 
@@ -433,7 +452,8 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
             R_SBODY0: int(m.site_bodyid[sites[0]]), R_SBODY1: int(m.site_bodyid[sites[1]]),
             R_FRAME: int(m.body("frame").id), R_NBODY: int(m.nbody), R_MASS: self._mass.ctypes.data,
             R_BODYROOT: self._roots.ctypes.data, R_WHEEL0: int(m.body("front_wheel").id),
-            R_WHEEL1: int(m.body("rear_wheel").id),
+            R_WHEEL1: int(m.body("rear_wheel").id), R_REACT0: int(m.body("fork_lower").id),
+            R_REACT1: int(m.body("swingarm").id),
             R_FORK_STATE: int(bool(fork_law.has_state)), R_SHOCK_STATE: int(bool(shock_law.has_state)),
             R_DRIVE: int(drive.mode != "coast"), R_NL: self._lw.size, R_LW: self._lw.ctypes.data,
             R_LR: self._lr.ctypes.data, R_LS: self._ls.ctypes.data}
@@ -459,6 +479,7 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
         floats[[F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1]] = [arms.stiffness, arms.damping, arms.rest]
         floats[[F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE]] = [drive.kv, drive.push, drive.power,
                                                                           drive.brake]
+        floats[F_RADIUS] = rear.radius
         wheel_ints = np.zeros(2 * WI, dtype=np.int64)
         wheel_floats = np.zeros(2 * WF, dtype=np.float64)
         for k, tire in enumerate((front, rear)):

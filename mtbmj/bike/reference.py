@@ -20,7 +20,10 @@ Generalised forces: gravity; the fork law F on qf (-F); the shock law F_s in sho
 phi (-F_s ds/dphi, ds/dphi = (dw/dphi) / LR(w), w the rear wheel's vertical travel in the frame);
 the legs' and arms' spring-dampers along their lines; each tire's radial force at its axle (the
 terrain's contact patches found afresh at every evaluation from the exact closest points); the
-drive's force at the rear axle along the tangent of the rear tire's contact, within its traction.
+drive's and the brakes' forces at the contact patches (``controllers.drive.wheel_forces``): each a
+force at its axle and its couple about the axle on the fork lower (the pitch) or the swingarm (the
+pitch and phi). This shares the callback's choice of where the forces act; the moment balance of
+tests/test_bike_drive_moment.py checks that choice against physics.
 """
 from __future__ import annotations
 
@@ -31,6 +34,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from mtbmj.bike.model import LOWER_INERTIA, frame_body
+from mtbmj.controllers.drive import wheel_forces
 from mtbmj.errors import RunError
 
 NQ = 7
@@ -229,16 +233,19 @@ class Reference:
             fx, fz, deepest, _, _ = tire.force(cx, cz, vx, vz, patches)
             pl.apply(Q, q, axle, fx, fz)
             out[name] = (fx, fz, deepest)
-        fx, fz, _ = out["rear"]
-        n = math.hypot(fx, fz)
-        dx = dz = 0.0
-        if n > 0.0 and self.drive.mode != "coast":
+        # the drive and the brakes: the ground's forces at the contact patches (wheel_forces), each a
+        # force at its axle and a couple (world y) on the part reacting it: the fork lower turns with
+        # the frame (pitch, axis -y), the swingarm with the frame and on its hinge (axis +y)
+        (fxf, fzf, df), (fxr, fzr, dr) = out["front"], out["rear"]
+        ground = (0.0,) * 6
+        if self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:
             f = self.drive.force(self.speed, float(M[0] @ qd) / M[0, 0])  # the centre of mass's speed
-            limit = self.traction * n
-            f = min(max(f, -limit), limit)
-            dx, dz = f * fz / n, -f * fx / n
-            pl.apply(Q, q, axles[1], dx, dz)
-        out["drive"] = (dx, dz)
+            ground = wheel_forces(f, fxf, fzf, df, fxr, fzr, dr, self.traction, self.rear_tire.radius)
+            pl.apply(Q, q, axles[0], ground[0], ground[1])
+            pl.apply(Q, q, axles[1], ground[3], ground[4])
+            Q[2] -= ground[2] + ground[5]
+            Q[4] += ground[5]
+        out["drive"] = (ground[0] + ground[3], ground[1] + ground[4])
         out["static"] = h  # gravity less the velocity terms
         return Q, out
 
