@@ -444,6 +444,30 @@ def _feature_window(p: Prepared, raw: dict, dt: float) -> dict:
             "tire_load_variation": {end: _variation(raw[f"{end}_tire_N"][i0:i1]) for end in ("front", "rear")}}
 
 
+def _trail(radius: float, head_angle: float, offset: float) -> float:
+    """A front wheel's trail (m) on flat ground: from its contact patch forward to where the steering
+    axis meets the ground, for a loaded radius, a head angle from the horizontal and the fork offset."""
+    return (radius * math.cos(head_angle) - offset) / math.sin(head_angle)
+
+
+def geometry(p: Prepared, raw: dict) -> dict:
+    """The geometry a chart gives (both wheels on flat ground at full extension, unloaded tyres)
+    and the same at sag (the run's first sample: the bike at rest under its rider)."""
+    spec, radius = p.spec, p.front_tire.radius
+    beta = spec_mod.level_pitch(spec.front_axle, spec.rear_axle)
+    (fx, fz), (rx, rz) = spec.front_axle, spec.rear_axle
+    chart_head = spec.head_angle - beta
+    chart = {"head_angle_deg": math.degrees(chart_head), "wheelbase_mm": math.hypot(fx - rx, fz - rz) * 1e3,
+             "bb_height_mm": (radius - (rx * math.sin(beta) + rz * math.cos(beta))) * 1e3,
+             "trail_mm": _trail(radius, chart_head, spec.fork_offset) * 1e3}
+    head = spec.head_angle - math.radians(raw["pitch_deg"][0])
+    loaded = radius - max(raw["front_tire_mm"][0], 0.0) * 1e-3
+    sag = {"head_angle_deg": math.degrees(head),
+           "wheelbase_mm": (raw["front_axle_x_m"][0] - raw["rear_axle_x_m"][0]) * 1e3,
+           "bb_height_mm": float(raw["bb_height_mm"][0]), "trail_mm": _trail(loaded, head, spec.fork_offset) * 1e3}
+    return {"chart": chart, "at_sag": sag}
+
+
 def _summary(p: Prepared, raw: dict) -> dict:
     dt = p.timestep
     t = raw["time_s"]
@@ -478,6 +502,7 @@ def _summary(p: Prepared, raw: dict) -> dict:
         "start_m": float(p.bike.x0 + p.spec.front_axle[0]),  # the front axle's start along the terrain
         "duration_s": float(t[-1] + dt),
         "timestep_s": dt,
+        "geometry": geometry(p, raw),
         "static_front_travel_mm": float(raw["front_travel_mm"][0]),
         "static_rear_travel_mm": float(raw["rear_travel_mm"][0]),
         "static_stroke_mm": float(raw["stroke_mm"][0]),

@@ -138,7 +138,7 @@ class Rider:
 @dataclass(frozen=True)
 class BikeSpec:
     name: str
-    head_angle: float  # rad from the horizontal
+    head_angle: float  # rad from the frame's x axis (frame coordinates): the chart's plus the frame's pitch on flat ground
     fork_offset: float  # m, perpendicular to the steering axis, forward
     front_axle: tuple[float, float]  # m, frame coordinates at full extension
     rear_axle: tuple[float, float]
@@ -382,7 +382,8 @@ def load(ref: str) -> BikeSpec:
             drive[key] = _number(table, "drive", key, nonneg=True)
     warn(keys_mod.warnings(table))
     spec = BikeSpec(
-        name=source if source in preset_names() else Path(source).stem, head_angle=math.radians(head),
+        name=source if source in preset_names() else Path(source).stem,
+        head_angle=math.radians(head) + level_pitch(front, rear),
         fork_offset=offset, front_axle=front, rear_axle=rear, pivot=pivot,
         frame_mass=masses["frame_mass_kg"], frame_com=_point(table, "bike", "frame_com_mm"),
         frame_inertia=inertias["frame_inertia_kg_m2"], swingarm_mass=masses["swingarm_mass_kg"],
@@ -393,6 +394,15 @@ def load(ref: str) -> BikeSpec:
         shock_config=table.get("shock", {}).get("config", "reference"),
         shock_overrides=dict(table.get("shock", {}).get("set", {})), drive=drive, source=source)
     return spec
+
+
+def level_pitch(front_axle, rear_axle) -> float:
+    """How far (rad, nose up) the frame's x axis is turned from the horizontal when both wheels (of
+    one size) stand on flat ground at full extension: the axles level. ``bike.head_angle_deg`` is a
+    geometry chart's head angle, measured so; in frame coordinates the steering axis lies this much
+    steeper (the SST preset's axles, 20 mm apart in height over a 1255 mm wheelbase: 0.91 deg)."""
+    (fx, fz), (rx, rz) = front_axle, rear_axle
+    return math.atan2(rz - fz, fx - rx)
 
 
 def check_geometry(spec: BikeSpec, tire_radius: float) -> None:
@@ -422,5 +432,5 @@ def rear_axle_in_frame(spec: BikeSpec, phi) -> tuple[np.ndarray, np.ndarray]:
             pz - np.sin(phi) * rho[0] + np.cos(phi) * rho[1])
 
 
-__all__ = ["BikeSpec", "Leverage", "Rider", "load", "preset_names", "check_geometry", "leverage_ratio", "leverage_stroke",
+__all__ = ["BikeSpec", "Leverage", "Rider", "load", "preset_names", "check_geometry", "level_pitch", "leverage_ratio", "leverage_stroke",
            "stroke_piece", "rear_axle_in_frame"]
