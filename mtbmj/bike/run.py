@@ -128,7 +128,8 @@ def setups(spec) -> tuple[compose.Setup, compose.Setup]:
 
 
 def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str = "rider",
-            start_x: float | None = None, callback: str = "auto", lock=(), rear_tire: bool = True) -> Prepared:
+            start_x: float | None = None, callback: str = "auto", lock=(), rear_tire: bool = True,
+            overrides=None) -> Prepared:
     """Everything a run needs, with the data at t = 0: the bike at rest on its static equilibrium
     over the start, moving at the set speed. ``callback``: "auto" (the compiled callback where numba
     is installed, else the Python one with a ``FallbackWarning``), "compiled" or "python".
@@ -148,7 +149,9 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     if drive not in ("rider", "coast"):
         raise ConfigError(f"drive: {drive!r} is not one of rider, coast")
     lock = _check_lock(lock, rear_tire)
-    spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(str(bike))
+    if isinstance(bike, spec_mod.BikeSpec) and overrides:
+        raise ConfigError("overrides: give them with a bike name or file, not a ready-made BikeSpec")
+    spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(str(bike), overrides)
     ter = terrain_mod.make(scenario)
     if ter.moving:
         raise ConfigError("scenario: the drum rig holds a single wheel; a bike rolls on fixed terrain")
@@ -564,6 +567,7 @@ class BikeResult(RunOutput):
         from mtbmj.result import versions
 
         return {"name": self.name, "scenario": self.scenario, "engine": "mujoco", "bike_source": self.prepared.spec.source,
+                "bike_overrides": self.prepared.spec.overrides,
                 "fork_config": self.prepared.fork_setup.config.digest(),
                 "shock_config": self.prepared.shock_setup.config.digest(), "versions": versions(),
                 "wall_time_s": self.wall_time_s, "engine_info": self.info}
@@ -712,7 +716,7 @@ def default_duration(p: Prepared) -> float:
 def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: float | None = None,
              drive: str = "rider", start_x: float | None = None,
              progress: Callable[[float], None] | None = None, callback: str = "auto", lock=(),
-             rear_tire: bool = True) -> BikeResult:
+             rear_tire: bool = True, overrides=None) -> BikeResult:
     """Roll the bike ``bike`` (a preset name, a TOML path or a ``BikeSpec``) over ``scenario`` (a
     terrain spec of ``mtbmj roll``) at ``speed_m_per_s``; ``duration`` defaults to the time for both
     wheels to cross the feature and settle; ``drive`` "rider" (a speed controller within a rider's
@@ -720,9 +724,12 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
     "auto" (compiled where numba is installed, else Python with a warning), "compiled" or "python";
     ``lock`` degrees of freedom held at their static values ("rear": the shock locked out at its
     sag, "pitch", "rider"), ``rear_tire=False`` the rear wheel lifted (needs "pitch" locked), see
-    ``prepare``."""
+    ``prepare``; ``overrides`` change bike keys (``{"rider.mass_kg": 78}``) and the fork's or the
+    shock's configuration keys (``{"fork.set": {"fork.spring.air_pressure_psi": 60}}``), see
+    ``mtbmj.bike.spec.overridden``."""
     _check(speed_m_per_s, duration)
-    p = guard.prepared("bike", lambda: prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire),
+    p = guard.prepared("bike", lambda: prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire,
+                                               overrides),
                        model_of=lambda p: p.bike.model)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.timestep, 1.0 / p.timestep)

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import bisect
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
@@ -161,6 +161,7 @@ class BikeSpec:
     shock_overrides: dict
     drive: dict
     source: str
+    overrides: dict = field(default_factory=dict)  # what ``load``'s overrides changed (for the manifest)
 
     @property
     def swingarm_length(self) -> float:
@@ -287,9 +288,39 @@ def _used(section: str, key: str) -> bool:
     return key.startswith("fork.") and key != "fork.length_mm"
 
 
-def load(ref: str) -> BikeSpec:
-    """A ``BikeSpec`` from a bike preset name (``preset_names()``) or a TOML path, checked."""
+def overridden(table: dict, overrides) -> dict:
+    """``table`` with ``overrides`` applied: ``"section.key": value`` for a bike key (``rider.mass_kg``),
+    ``"fork.set": {KEY: value}`` / ``"shock.set": {KEY: value}`` for keys of the fork's and the
+    shock's configurations (merged into the file's). Unknown keys are refused by ``load``."""
+    out = _merge(table, {})
+    for key, value in (overrides or {}).items():
+        if key in ("fork.set", "shock.set"):
+            if not isinstance(value, dict):
+                raise ConfigError(f"{key}: overrides must be a table of configuration keys")
+            section = out.setdefault(key.split(".")[0], {})
+            if not isinstance(section, dict):
+                raise ConfigError(f"{key.split('.')[0]}: must be a table")
+            section["set"] = {**section.get("set", {}), **value}
+            continue
+        section, dot, name = str(key).partition(".")
+        if not dot or not name:
+            raise ConfigError(f"--set {key}: a bike key is SECTION.KEY (e.g. rider.mass_kg; known sections: "
+                              f"{', '.join(k for k, v in KNOWN.items() if v)})")
+        if section not in KNOWN or not KNOWN[section]:
+            raise ConfigError(f"--set {key}: unknown section {section!r} (known: "
+                              f"{', '.join(k for k, v in KNOWN.items() if v)})")
+        if name not in KNOWN[section] or name == "set":
+            raise ConfigError(f"--set {key}: unknown key (known in [{section}]: "
+                              f"{', '.join(sorted(k for k in KNOWN[section] if k != 'set'))})")
+        out.setdefault(section, {})[name] = value
+    return out
+
+
+def load(ref: str, overrides=None) -> BikeSpec:
+    """A ``BikeSpec`` from a bike preset name (``preset_names()``) or a TOML path, checked, with
+    ``overrides`` applied (:func:`overridden`)."""
     table, source = _read(str(ref))
+    table = overridden(table, overrides)
     for section, value in table.items():
         if section not in KNOWN:
             raise ConfigError(f"{section}: unknown section or key (known: {', '.join(k for k in KNOWN)})")
@@ -340,8 +371,6 @@ def load(ref: str) -> BikeSpec:
         raise ConfigError(f"shock.stroke_mm: {stroke / MM:g} mm is shorter than the leverage curve needs over "
                           f"{leverage.full_travel / MM:g} mm of wheel travel ({leverage.full_stroke / MM:.2f} mm)")
     if stroke - leverage.full_stroke > STROKE_GAP_M:
-        from mtbmj.config import warn
-
         warn([f"leverage: the table covers {leverage.full_stroke / MM:.2f} mm of the shock's {stroke / MM:g} mm stroke "
               f"(shock.stroke_mm); past its end ({leverage.full_travel / MM:g} mm of wheel travel) the last ratio is "
               f"carried on, and a run that goes there says so"])
@@ -392,7 +421,8 @@ def load(ref: str) -> BikeSpec:
         wheel_inertia=inertias["wheel_inertia_kg_m2"], leverage=leverage, shock_stroke=stroke, rider=rider,
         fork_config=table.get("fork", {}).get("config", "reference"), fork_overrides=dict(table.get("fork", {}).get("set", {})),
         shock_config=table.get("shock", {}).get("config", "reference"),
-        shock_overrides=dict(table.get("shock", {}).get("set", {})), drive=drive, source=source)
+        shock_overrides=dict(table.get("shock", {}).get("set", {})), drive=drive, source=source,
+        overrides=dict(overrides or {}))
     return spec
 
 

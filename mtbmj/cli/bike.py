@@ -24,14 +24,41 @@ def cmd_bike(args) -> int:
         from mtbmj.rolling.render import gl_backend
 
         gl_backend()  # no headless OpenGL: one line before any work
+    overrides = bike_overrides(args)
     result = Progress(f"bike {args.bike} over {args.scenario}", not args.quiet).around(
         lambda progress: run_bike(args.bike, args.scenario, args.speed, args.duration, args.drive, args.start_m,
                                   progress, lock=tuple(k.strip() for k in args.lock.split(",")) if args.lock else (),
-                                  rear_tire=not args.lift_rear))
+                                  rear_tire=not args.lift_rear, overrides=overrides))
     written = result.write(args.out, figure=not args.no_figure, video=args.video, ride=args.ride)
     print(f"{result.headline()}; {result.info['real_time_factor']:.2f}x real time; wrote {len(written)} files to "
           f"{args.out}")
     return EXIT_CRASHED if result.summary.get("crash") else 0
+
+
+def bike_overrides(args) -> dict:
+    """The bike's overrides from ``--set`` (bike keys), ``--fork-set`` and ``--shock-set`` (keys of
+    the fork's and the shock's configurations)."""
+    from mtbmj.config import parse_assignment
+
+    out: dict = {}
+    for text in args.set or ():
+        key, value = parse_assignment(text)
+        out[key] = value
+    for option, section in (("fork_set", "fork.set"), ("shock_set", "shock.set")):
+        for text in getattr(args, option) or ():
+            key, value = parse_assignment(text)
+            out.setdefault(section, {})[key] = value
+    return out
+
+
+def add_bike_sets(p) -> None:
+    p.add_argument("--set", action="append", metavar="SECTION.KEY=VALUE",
+                   help="change a key of the bike file (repeatable), e.g. rider.mass_kg=78 (docs/configuration.md, "
+                        "'Bike files')")
+    p.add_argument("--fork-set", action="append", metavar="KEY=VALUE", dest="fork_set",
+                   help="change a key of the fork's configuration (repeatable), e.g. fork.spring.air_pressure_psi=60")
+    p.add_argument("--shock-set", action="append", metavar="KEY=VALUE", dest="shock_set",
+                   help="change a key of the shock's configuration (repeatable), e.g. fork.spring.rate_N_per_mm=90")
 
 
 def add_parser(subparsers) -> None:
@@ -55,6 +82,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--lift-rear", action="store_true", dest="lift_rear",
                    help="take the rear tire off: the bike on its front wheel alone (needs --lock pitch; with "
                         "--lock rear,pitch,rider it is the rolling front end's rig)")
+    add_bike_sets(p)
     add_out(p, "out/bike")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.add_argument("--no-figure", action="store_true", help="do not draw quicklook.png")

@@ -5,26 +5,77 @@ from __future__ import annotations
 from mtbmj.config import preset_names
 
 
+def _bike_lines(ref: str) -> list[str]:
+    """Every key of a bike preset or file, resolved through its base: 'section.key = value'."""
+    import json
+
+    from mtbmj.bike import spec
+
+    _toml_value = json.dumps  # numbers, lists, strings and booleans are written alike in TOML
+    table, _ = spec._read(ref)
+    spec.load(ref)  # checked as a run would check it
+    lines = []
+    for section, values in table.items():
+        if not isinstance(values, dict):
+            lines.append(f"{section} = {_toml_value(values)}")
+            continue
+        for key, value in values.items():
+            if isinstance(value, dict):  # [fork.set], [shock.set]: the configurations' keys
+                lines += [f"{section}.{key}.{k} = {_toml_value(v)}" for k, v in value.items()]
+            else:
+                lines.append(f"{section}.{key} = {_toml_value(value)}")
+    return lines
+
+
+def _is_bike(ref: str) -> bool:
+    from pathlib import Path
+
+    from mtbmj.bike import spec
+
+    if any(ref.lower() == n.lower() for n in spec.preset_names()):
+        return True
+    path = Path(ref)
+    if path.suffix.lower() == ".toml" and path.is_file():
+        import tomllib
+
+        try:
+            table = tomllib.loads(path.read_text())
+        except (tomllib.TOMLDecodeError, OSError, UnicodeDecodeError):
+            return False
+        return any(k in table for k in ("bike", "leverage", "rider", "shock"))
+    return False
+
+
 def cmd_presets(args) -> int:
+    from mtbmj.bike import spec
     from mtbmj.config import load
 
     if args.show is not None:
         if not args.show.strip():
             from mtbmj.errors import MtbmjError
 
-            raise MtbmjError("--show: no preset named (known: " + ", ".join(preset_names()) + ")")
+            raise MtbmjError("--show: no preset named (known: " + ", ".join(preset_names() + spec.preset_names()) + ")")
+        if _is_bike(args.show):
+            for line in _bike_lines(args.show):
+                print(line)
+            return 0
         for key, value in load(args.show).lines():
             print(f"{key} = {value}")
         return 0
+    print("configurations (mtbmj drop, roll, sweep, fit; the fork schema):")
     for name in preset_names():
-        print(f"{name:10s} {load(name).get('description', '')}")
+        print(f"  {name:10s} {load(name).get('description', '')}")
+    print("bikes (mtbmj bike, crosscheck --bike; docs/bike.md):")
+    for name in spec.preset_names():
+        print(f"  {name:10s} {spec._read(name)[0].get('description', '')}")
     return 0
 
 
 def add_parser(sub) -> None:
     p = sub.add_parser("presets", help="list the bundled presets, or show one's values (--show NAME)",
-                       description="List the bundled presets with their descriptions; with --show NAME, print every "
-                                   "value of the preset NAME (or of a TOML configuration file), resolved through its "
-                                   "base, one 'key = value' line each in the units of the key names.")
+                       description="List the bundled presets (configurations and bikes) with their descriptions; with "
+                                   "--show NAME, print every value of the preset NAME (or of a TOML configuration or "
+                                   "bike file), resolved through its base, one 'key = value' line each in the units of "
+                                   "the key names.")
     p.add_argument("--show", metavar="NAME", help="print every key of the preset NAME (or a TOML file) with its value")
     p.set_defaults(func=cmd_presets)

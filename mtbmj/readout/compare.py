@@ -1,7 +1,9 @@
-"""Runs side by side: two or more result folders of ``mtbmj drop`` (or ``mtbmj roll``) overlaid on
-shared axes (fork travel, tire deflection, fork force and tire force against time; one colour per
-run, the legend naming each run by its folder) and a difference table, one row per summary figure,
-one column per run and one per run's difference from the first.
+"""Runs side by side: two or more result folders of ``mtbmj drop`` (or ``mtbmj roll``, or ``mtbmj
+bike``) overlaid on shared axes (fork travel, tire deflection, fork force and tire force against
+time; a bike's front and rear wheel travel, pitch and tyre loads; one colour per run, the legend
+naming each run by its folder) and a difference table, one row per summary figure, one column per
+run and one per run's difference from the first. A bike folder is one whose manifest names its
+``bike_source``.
 
 A run folder is what ``DropResult.write`` / ``RollResult.write`` (or the commands) wrote:
 ``manifest.json`` naming mtbmj in its versions, ``summary.json`` and ``timeseries.csv`` with
@@ -28,6 +30,11 @@ from mtbmj.textfile import read_text
 
 SIGNALS = (("fork_mm", "fork travel (mm)"), ("tire_mm", "tire deflection (mm)"),
            ("fork_force_N", "fork force (N)"), ("tire_force_N", "tire force (N)"))
+# a bike's folder: both ends' travel, the pitch and both tyres' loads
+BIKE_SIGNALS = (("front_travel_mm", "front travel (mm)"), ("rear_travel_mm", "rear wheel travel (mm)"),
+                ("pitch_deg", "pitch, nose up (deg)"), ("front_tire_N", "front tyre load (N)"),
+                ("rear_tire_N", "rear tyre load (N)"))
+SIGNALS_OF = {"drop": SIGNALS, "roll": SIGNALS, "bike": BIKE_SIGNALS}
 NEEDED = ("time_s",) + tuple(name for name, _ in SIGNALS)
 
 
@@ -37,7 +44,7 @@ class Run:
 
     path: Path
     label: str
-    kind: str  # "drop" or "roll"
+    kind: str  # "drop", "roll" or "bike"
     manifest: dict
     summary: dict
     signals: dict[str, np.ndarray]
@@ -46,6 +53,15 @@ class Run:
     @property
     def description(self) -> str:
         what = self.manifest.get("name", "?")
+        if self.kind == "bike":
+            speed = self.summary.get("speed_m_per_s")
+            changed = self.manifest.get("bike_overrides") or {}
+            sets = [f"{k}={v}" for k, v in changed.items() if not isinstance(v, dict)]
+            sets += [f"{k.split('.')[0]} {kk}={vv}" for k, v in changed.items() if isinstance(v, dict)
+                     for kk, vv in v.items()]
+            return f"bike {what} over {self.manifest.get('scenario')}" + (
+                f" at {speed:g} m/s" if isinstance(speed, (int, float)) else "") + (
+                f", {', '.join(sets)}" if sets else "")
         if self.kind == "roll":
             scenario = self.manifest.get("scenario")
             speed = self.summary.get("speed_m_per_s")
@@ -67,7 +83,7 @@ def _json(path: Path, run: Path) -> dict:
     return data
 
 
-def _timeseries(path: Path, run: Path) -> dict[str, np.ndarray]:
+def _timeseries(path: Path, run: Path, needed=NEEDED) -> dict[str, np.ndarray]:
     label = str(path)
     if not path.is_file():
         raise MtbmjError(f"{run}: not an mtbmj drop or roll result (no timeseries.csv)")
@@ -76,9 +92,9 @@ def _timeseries(path: Path, run: Path) -> dict[str, np.ndarray]:
     if not lines:
         raise MtbmjError(f"{label}: empty")
     names = [n.strip() for n in lines[0].split(",")]
-    missing = [n for n in NEEDED if n not in names]
+    missing = [n for n in needed if n not in names]
     if missing:
-        raise MtbmjError(f"{label}: no {missing[0]} column: not a timeseries of mtbmj drop or roll")
+        raise MtbmjError(f"{label}: no {missing[0]} column: not a timeseries of mtbmj drop, roll or bike")
     try:
         table = np.loadtxt(lines[1:], delimiter=",", ndmin=2) if len(lines) > 1 else np.empty((0, len(names)))
     except ValueError as exc:
@@ -90,7 +106,7 @@ def _timeseries(path: Path, run: Path) -> dict[str, np.ndarray]:
     columns = dict(zip(names, table.T))
     if not np.all(np.isfinite(columns["time_s"])) or np.any(np.diff(columns["time_s"]) <= 0):
         raise MtbmjError(f"{label}: time_s must be finite and increasing")
-    return {name: columns[name] for name in NEEDED}
+    return {name: columns[name] for name in needed}
 
 
 def _travel(run: Path) -> float | None:
@@ -122,9 +138,13 @@ def load_run(path: str | Path, label: str | None = None) -> Run:
         raise MtbmjError(f"{run}: not an mtbmj drop or roll result (its manifest names neither an engine nor a "
                          "scenario)")
     summary = _json(run / "summary.json", run)
-    signals = _timeseries(run / "timeseries.csv", run)
-    kind = "roll" if "scenario" in manifest else "drop"
-    return Run(run, label or run.name or str(run), kind, manifest, summary, signals, _travel(run))
+    kind = "bike" if "bike_source" in manifest else "roll" if "scenario" in manifest else "drop"
+    signals = _timeseries(run / "timeseries.csv", run, ("time_s",) + tuple(n for n, _ in SIGNALS_OF[kind]))
+    travel = _travel(run) if kind != "bike" else None
+    if kind == "bike" and isinstance(summary.get("front"), dict):
+        value = summary["front"].get("travel_mm")
+        travel = float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else None
+    return Run(run, label or run.name or str(run), kind, manifest, summary, signals, travel)
 
 
 def _labels(paths: Sequence[Path]) -> list[str]:
@@ -147,11 +167,11 @@ def load_runs(paths: Sequence[str | Path]) -> list[Run]:
     runs = [load_run(p, label) for p, label in zip(paths, _labels(paths))]
     kinds = {r.kind for r in runs}
     if len(kinds) > 1:
-        drop = next(r for r in runs if r.kind == "drop")
-        roll = next(r for r in runs if r.kind == "roll")
-        raise MtbmjError(f"{roll.path}: is a roll and {drop.path} a drop: they are not compared (a drop's time zero "
-                         "is the tire's touch, a roll's the start over the terrain, and their summaries share few "
-                         "figures); compare drops with drops and rolls with rolls")
+        first = runs[0]
+        other = next(r for r in runs if r.kind != first.kind)
+        raise MtbmjError(f"{other.path}: is a {other.kind} and {first.path} a {first.kind}: they are not compared "
+                         "(a drop's time zero is the tire's touch, a roll's and a bike's the start over the terrain, "
+                         "and their signals and summaries differ); compare runs of one kind")
     return runs
 
 
@@ -234,19 +254,20 @@ def figure(runs: Sequence[Run]):
     the full travel dotted where the runs' configurations give it."""
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(9, 10), layout="constrained")
-    axes = fig.subplots(len(SIGNALS), 1, sharex=True)
+    signals = SIGNALS_OF[runs[0].kind]
+    fig = Figure(figsize=(9, 2.5 * len(signals)), layout="constrained")
+    axes = fig.subplots(len(signals), 1, sharex=True)
     styles = ("-", "--", "-.", ":")  # runs that coincide stay visible under one another
     for i, (run, colour) in enumerate(zip(runs, _colours(len(runs)))):
         t = run.signals["time_s"]
-        for ax, (name, _) in zip(axes, SIGNALS):
+        for ax, (name, _) in zip(axes, signals):
             ax.plot(t, run.signals[name], color=colour, lw=1.3, ls=styles[i % len(styles)],
                     label=f"{run.label} ({run.description})")
     for travel in sorted({r.travel_mm for r in runs if r.travel_mm is not None}):
         axes[0].axhline(travel, color="0.4", ls=":", lw=1.0)
         axes[0].annotate(f"full travel {travel:g} mm", xy=(0.005, travel), xycoords=("axes fraction", "data"),
                          ha="left", va="top", fontsize=7, color="0.4")
-    for ax, (_, label) in zip(axes, SIGNALS):
+    for ax, (_, label) in zip(axes, signals):
         ax.set_ylabel(label)
         ax.axhline(0.0, color="0.75", lw=0.6)
         ax.grid(alpha=0.3)
@@ -280,9 +301,10 @@ class Comparison:
         return output.write_atomically(out_dir, self.files())
 
     def line(self) -> str:
-        peaks = " / ".join(f"{float(np.max(r.signals['fork_mm'])):.1f}" for r in self.runs)
+        name, what = SIGNALS_OF[self.runs[0].kind][0]
+        peaks = " / ".join(f"{float(np.max(r.signals[name])):.1f}" for r in self.runs)
         return (f"compared {len(self.runs)} {self.runs[0].kind} runs ({', '.join(r.label for r in self.runs)}): "
-                f"fork peak {peaks} mm")
+                f"{what.split(' (')[0].replace('fork travel', 'fork')} peak {peaks} mm")
 
 
 def compare_runs(paths: Sequence[str | Path]) -> Comparison:

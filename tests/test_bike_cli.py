@@ -1,0 +1,74 @@
+"""Your own bike from the command line (issue 40's findings): bike keys changed with --set, the
+fork's and the shock's with --fork-set / --shock-set; the bike presets listed and shown; two bike
+folders compared."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import mtbmj
+from mtbmj.bike import replay
+from mtbmj.cli import main
+
+
+def test_set_changes_the_bike_as_a_file_would(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["bike", "trail", "root", "--speed", "5", "--duration", "0.6", "--set", "rider.mass_kg=78",
+                 "--shock-set", "fork.spring.rate_N_per_mm=90", "--out", "set", "--quiet", "--no-figure"]) == 0
+    (tmp_path / "mine.toml").write_text('base = "trail"\n[rider]\nmass_kg = 78.0\n[shock.set]\n'
+                                        '"fork.spring.rate_N_per_mm" = 90.0\n')
+    assert main(["bike", "mine.toml", "root", "--speed", "5", "--duration", "0.6", "--out", "file", "--quiet",
+                 "--no-figure"]) == 0
+    a = np.genfromtxt(tmp_path / "set" / "timeseries.csv", delimiter=",", names=True, skip_header=2)
+    b = np.genfromtxt(tmp_path / "file" / "timeseries.csv", delimiter=",", names=True, skip_header=2)
+    assert np.array_equal(a["front_travel_mm"], b["front_travel_mm"]) and np.array_equal(a["stroke_mm"], b["stroke_mm"])
+    manifest = json.loads((tmp_path / "set" / "manifest.json").read_text())
+    assert manifest["bike_overrides"] == {"rider.mass_kg": 78, "shock.set": {"fork.spring.rate_N_per_mm": 90}}
+    # the folder replays with its overrides (what render draws)
+    again = replay.rerun(tmp_path / "set")
+    assert np.max(np.abs(again.raw["front_travel_mm"] - a["front_travel_mm"])) < 1e-6  # the CSV keeps 9 digits
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize("argv,words", [
+    (["--set", "rider.weight=78"], "unknown key"),
+    (["--set", "mass_kg=78"], "SECTION.KEY"),
+    (["--set", "wheels.size=29"], "unknown section"),
+    (["--fork-set", "sled.body_mass_kg=10"], "not used by the bike"),
+])
+def test_bad_overrides_are_one_line(tmp_path, monkeypatch, capsys, argv, words):
+    monkeypatch.chdir(tmp_path)
+    assert main(["bike", "trail", "flat", "--speed", "4", "--out", "run", *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and words in err and not (tmp_path / "run").exists()
+
+
+def test_presets_lists_and_shows_the_bikes(capsys):
+    assert main(["presets"]) == 0
+    out = capsys.readouterr().out
+    assert "bikes (" in out and "\n  sst " in out and "\n  trail " in out
+    assert main(["presets", "--show", "trail"]) == 0
+    shown = dict(line.split(" = ", 1) for line in capsys.readouterr().out.splitlines())
+    assert shown["bike.head_angle_deg"] == "65.5" and shown["rider.mass_kg"] == "85.0"  # from its base, sst
+    assert shown["shock.set.fork.spring.rate_N_per_mm"] == "80.0"
+
+
+def test_two_bike_folders_compare(tmp_path, monkeypatch, capsys):
+    """`mtbmj compare` of two bike folders answered 'no fork_mm column'."""
+    monkeypatch.chdir(tmp_path)
+    for name, mass in (("light", 70), ("heavy", 100)):
+        r = mtbmj.run_bike("trail", "root", speed_m_per_s=5.0, duration=0.8, overrides={"rider.mass_kg": mass})
+        r.write(tmp_path / name, figure=False)
+    assert main(["compare", "light", "heavy", "--out", "cmp"]) == 0
+    line = capsys.readouterr().out
+    light = json.loads((tmp_path / "light" / "summary.json").read_text())["max_front_travel_mm"]
+    assert line.startswith("compared 2 bike runs (light, heavy): front travel peak ") and f"{light:.1f} / " in line
+    from mtbmj.readout import compare
+
+    fig = compare.figure(compare.load_runs([tmp_path / "light", tmp_path / "heavy"]))
+    assert [ax.get_ylabel() for ax in fig.axes] == [label for _, label in compare.BIKE_SIGNALS]
+    assert all(len([ln for ln in ax.lines if ln.get_label().startswith(("light", "heavy"))]) == 2 for ax in fig.axes)
+    rows = (tmp_path / "cmp" / "differences.csv").read_text().splitlines()
+    assert any(r.startswith("mass_kg.rider,70,100,30") for r in rows)
