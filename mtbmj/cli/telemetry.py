@@ -205,14 +205,53 @@ def figure_png(summary: dict) -> bytes:
     return png(figure(summary), dpi=100)
 
 
+VELOCITY_SHOWN = 99.9  # % of each run's time the velocity axis shows, with VELOCITY_MARGIN
+VELOCITY_MARGIN = 1.2
+
+
+def velocity_span(histogram: dict, percent: float = VELOCITY_SHOWN) -> float:
+    """The smallest bin edge L (mm/s) with ``percent`` of the histogram's time within +-L."""
+    edges = np.asarray(histogram["bin_edges_mm_per_s"], float)
+    time = np.asarray(histogram["time_percent"], float)
+    total = float(time.sum())
+    if total <= 0.0:
+        return 0.0
+    for limit in np.unique(np.abs(edges)):
+        inside = float(time[(edges[:-1] >= -limit) & (edges[1:] <= limit)].sum())
+        if inside >= percent / 100.0 * total * (1.0 - 1e-12):
+            return float(limit)
+    return float(np.max(np.abs(edges)))
+
+
+def beyond(histogram: dict, limit: float) -> float:
+    """% of time in the bins outside +-``limit``."""
+    edges = np.asarray(histogram["bin_edges_mm_per_s"], float)
+    time = np.asarray(histogram["time_percent"], float)
+    return float(time[(edges[1:] > limit) | (edges[:-1] < -limit)].sum())
+
+
+def _legend_below(ax, title: str | None = None) -> None:
+    """The legend under the axis label, off the bars (inside, it covered the velocity peak)."""
+    from matplotlib.transforms import ScaledTranslation
+
+    below = ax.transAxes + ScaledTranslation(0.0, -0.5, ax.figure.dpi_scale_trans)  # under the tick labels and label
+    handles, labels = ax.get_legend_handles_labels()
+    order = sorted(range(len(labels)), key=lambda k: labels[k].startswith("beyond"))  # the note last
+    ax.legend([handles[k] for k in order], [labels[k] for k in order], fontsize="x-small", title_fontsize="x-small",
+              loc="upper left", bbox_to_anchor=(0.0, 0.0), bbox_transform=below, title=title, alignment="left",
+              frameon=False, borderaxespad=0.0)
+
+
 def figure(summary: dict):
     """Travel and velocity histograms, measured bars and simulated steps on the same axes (each
-    run's travel in % of its own travel; the velocity axis wide enough for every run's tails)."""
+    run's travel in % of its own travel). The velocity axis shows ``VELOCITY_SHOWN`` % of every
+    run's time with a margin, and names the time beyond it and the fastest strokes; legends sit
+    under the axes, off the bars."""
     from matplotlib.figure import Figure
 
     measured = summary["measured"]
     ends = [e for e in ("fork", "rear") if e in measured]
-    fig = Figure(figsize=(12, 3.8 * len(ends)), constrained_layout=True)
+    fig = Figure(figsize=(12, 4.8 * len(ends)), constrained_layout=True)
     axes = fig.subplots(len(ends), 2, squeeze=False)
     colors = ["tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink"]
     for row, end in zip(axes, ends):
@@ -246,20 +285,23 @@ def figure(summary: dict):
                                                     lambda x, top=top: x * 100.0 / top))
         mm.set_xlabel(f"{end} travel [mm] of the ride's {top:.0f} mm", fontsize="small")
         ax_v.set_xlabel(f"{end} velocity [mm/s], compression positive")
-        shown = [vh] + [r[end]["velocity"] for r in summary["simulated"] if end in r]
-        limit = 3 * thr  # every bin any shown histogram uses, so no run's tails are cut off
-        for h in shown:
-            used = np.flatnonzero(np.asarray(h["time_percent"]) > 0)
-            if used.size:
-                e = np.asarray(h["bin_edges_mm_per_s"])
-                limit = max(limit, float(np.max(np.abs(e[[used[0], used[-1] + 1]]))))
+        shown = [("measured", vh)] + [(f"simulated {r['name']}", r[end]["velocity"])
+                                      for r in summary["simulated"] if end in r]
+        # VELOCITY_SHOWN % of every run's time with a margin (a few strokes at 2-3 m/s spread
+        # the bulk within +-500 mm/s over a few pixels), at least 3 x the threshold, at most the bins
+        span = max(velocity_span(h) for _, h in shown)
+        limit = min(max(3 * thr, VELOCITY_MARGIN * span), float(np.max(np.abs(edges_v))))
         ax_v.set_xlim(-limit, limit)
+        cut = [f"{name} {beyond(h, limit):.2g} % (fastest {h['compression']['max_mm_per_s']:+.0f} / "
+               f"{h['rebound']['max_mm_per_s']:+.0f} mm/s)" for name, h in shown if beyond(h, limit) > 0.0]
+        if cut:
+            ax_v.plot([], [], ls="none", label=f"beyond ±{limit:.0f} mm/s, not drawn: " + "; ".join(cut))
         split_title = (f"high speed: |v| > {thr:g} mm/s (shaded); HSC/LSC high/low-speed compression, "
                        "LSR/HSR low/high-speed rebound")
         for ax, title in ((ax_t, None), (ax_v, split_title)):
             ax.set_ylabel("time [%]")
             ax.grid(True, alpha=0.3)
-            ax.legend(fontsize="x-small", title_fontsize="x-small", loc="upper left", title=title)
+            _legend_below(ax, title)
     bottoms = measured.get("fork", measured.get("rear"))
     fig.suptitle(f"{measured['file']}: {measured['duration_s']:.1f} s, airtime {bottoms['airtime']['count']} "
                  f"({bottoms['airtime']['total_s']:.2f} s), bottom-outs fork {measured.get('fork', {}).get('bottom_outs', {}).get('count', '-')}"

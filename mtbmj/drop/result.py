@@ -81,15 +81,14 @@ class DropResult(RunOutput):
                 f"{'at rest' if s['at_rest'] else 'still moving'} at the end{line(s)}")
 
     def quicklook(self):
-        """The quick-look figure (``mtbmj.readout.quicklook``) on the engine-rate signals."""
-        import textwrap
-
+        """The quick-look figure (``mtbmj.readout.quicklook``) on the engine-rate signals, titled
+        by the run's headline and, for a configuration file, what the file is."""
         from mtbmj.readout import quicklook
 
         r = self.raw
         return quicklook.figure(r["time_s"], r["fork_mm"], r["tire_mm"],
                                 {"fork_force_N": r["fork_force_N"], "tire_force_N": r["tire_force_N"]},
-                                self.summary, textwrap.fill(self.headline(), 110))
+                                self.summary, quicklook.run_title(self.config, self.headline()))
 
     def plot(self, axes=None, label: str | None = None, **line_kwargs):
         """Sled, fork and tire displacement histories on three stacked axes; returns the figure."""

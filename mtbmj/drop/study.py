@@ -18,10 +18,12 @@ from mtbmj.errors import ConfigError
 from mtbmj.runpath.crosscheck import CrosscheckResult, number
 from mtbmj.workers import process_pool
 
+# "{presets}" in a title: the presets drawn (``group_figure``), so a study of S1 and S12 is not
+# titled "S1-S7" over one preset
 GROUPS = {
-    "spring": ("Fork spring study S1-S7", [f"S{i}" for i in range(1, 8)]),
-    "damper": ("Fork damping study S8-S10", ["S8", "S9", "S10"]),
-    "tire": ("Tire study S11-S14", ["S11", "S12", "S13", "S14"]),
+    "spring": ("Fork spring study {presets}", [f"S{i}" for i in range(1, 8)]),
+    "damper": ("Fork damping study {presets}", ["S8", "S9", "S10"]),
+    "tire": ("Tire study {presets}", ["S11", "S12", "S13", "S14"]),
 }
 
 
@@ -74,23 +76,78 @@ def run_study(presets: Sequence[str] | None = None, overrides=None, duration: fl
 
 
 STYLES = {"mujoco": ("MuJoCo", 1.4, "-"), "ode": ("ODE", 0.9, "--"), "fast": ("fast", 0.9, ":")}
+STYLE_WORDS = {"-": "solid", "--": "dashed", ":": "dotted"}
+
+
+def span(names: Sequence[str]) -> str:
+    """``names`` in short: "S1-S7" for a run of consecutive presets, else "S1, S12"."""
+    import re
+
+    numbers = [re.fullmatch(r"S(\d+)", n) for n in names]
+    if len(names) > 2 and all(numbers):
+        k = [int(m.group(1)) for m in numbers]
+        if k == list(range(k[0], k[0] + len(k))):
+            return f"{names[0]}-{names[-1]}"
+    return ", ".join(names)
+
+
+def group_title(title: str, names: Sequence[str], drawn: Sequence[str]) -> str:
+    """``title`` naming what is drawn: its "{presets}" becomes the presets drawn, with the group's
+    others named as not run ("S1 only (of S1-S7)"); a title without it is kept and, when some
+    are missing, followed by what is drawn."""
+    shown = span(drawn) if drawn else "nothing"
+    partial = len(drawn) < len(names)
+    if partial:
+        shown = f"{shown} only (of {span(names)})"
+    if "{presets}" in title:
+        return title.replace("{presets}", shown)
+    return f"{title}: {shown}" if partial else title
+
+
+def engines_line(results, names: Sequence[str]) -> str:
+    """How the engines are drawn and how far each is from MuJoCo at most: a reference a few
+    thousandths of a millimetre away lies under the MuJoCo line, one line to the eye."""
+    drawn = [e for e in STYLES if any(e in results[n] for n in names)]
+    parts = []
+    for engine in drawn:
+        label, _, style = STYLES[engine]
+        text = f"{label} {STYLE_WORDS[style]}"
+        if engine != "mujoco":
+            gaps = []
+            for n in names:
+                if engine in results[n] and "mujoco" in results[n]:
+                    try:
+                        diff = results[n][engine].difference(results[n]["mujoco"])
+                    except ValueError:  # not on the same time grid
+                        continue
+                    gaps.append(max(d["max_abs_mm"] for d in diff.values()))
+            if gaps:
+                text += f" (at most {max(gaps):.2g} mm from MuJoCo)"
+        parts.append(text)
+    return ", ".join(parts)
 
 
 def group_figure(results, title: str, names: Sequence[str]):
     """Sled, fork and tire histories of one group: MuJoCo solid, ODE reference dashed, the fast
-    engine dotted."""
+    engine dotted. Titled by the presets drawn (``group_title``) and, under it, the engines'
+    line styles and how far each is from MuJoCo."""
     import matplotlib
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(8, 8), layout="constrained")
     axes = fig.subplots(3, 1, sharex=True)
     colours = matplotlib.rcParams["axes.prop_cycle"].by_key()["color"]
-    for k, name in enumerate(n for n in names if n in results):
+    drawn = [n for n in names if n in results]
+    for k, name in enumerate(drawn):
         colour = colours[k % len(colours)]
         for engine, (label, width, style) in STYLES.items():
             if engine in results[name]:
                 results[name][engine].plot(axes, label=f"{name} {label}", color=colour, lw=width, ls=style)
-    fig.suptitle(title)
+    if drawn:
+        from mtbmj.readout.quicklook import legend_above
+
+        legend_above(axes[0], fontsize=8)  # above the panels: 7 presets x 2 engines inside covered the peaks
+    fig.suptitle(f"{group_title(title, names, drawn)}\n{engines_line(results, drawn)}", fontsize=10)
     return fig
 
 

@@ -507,15 +507,14 @@ class RollResult(RunOutput):
 
     def quicklook(self):
         """The quick-look figure (``mtbmj.readout.quicklook``): terrain, fork, tire (its clearance in the
-        air), axle and fork forces, on the engine-rate signals."""
-        import textwrap
-
+        air), axle and fork forces, on the engine-rate signals; titled by the run's headline and,
+        for a configuration file, what the file is."""
         from mtbmj.readout import quicklook
 
         r = self.raw
         return quicklook.figure(r["time_s"], r["fork_mm"], r["tire_mm"],
                                 {k: r[k] for k in ("axle_force_z_N", "axle_force_x_N", "fork_force_N")},
-                                self.summary, textwrap.fill(self.headline(), 110),
+                                self.summary, quicklook.run_title(self.config, self.headline()),
                                 extra=[("terrain under the axle", r["terrain_mm"], "mm")])
 
     def plot(self):
