@@ -13,8 +13,9 @@ argument, at the offsets ``controllers.native_data`` takes from mujoco's own str
 what ``mujoco.set_mjcb_control`` accepts for a C callback; ``installed(callback)`` works with it
 unchanged. Its ``calls`` counts the calls for its model (atomically, across threads).
 
-If numba is missing (or the struct layout cannot be verified) ``make_callback`` returns the Python
-``ForkCallback`` and warns once.
+If numba is missing (or the struct layout cannot be verified) the run path's chooser
+(``mtbmj.runpath.callbacks.choose``, through ``mtbmj.drop.engine_mujoco.fork_callback``) takes the
+Python ``ForkCallback`` and warns once (``unavailable_reason``, ``warn_once``).
 """
 from __future__ import annotations
 
@@ -26,7 +27,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from mtbmj.controllers.callback import ForkCallback
 from mtbmj.controllers.fork import ForkLaw
 from mtbmj.controllers.jit import CACHE, FALLBACK_MESSAGE, callback, compiling, numba
 from mtbmj.controllers.lawcodes import (
@@ -283,25 +283,7 @@ def warn_once(message: str) -> None:
         warnings.warn(message, FallbackWarning, stacklevel=3)
 
 
-def make_callback(model, law, prefer_compiled: bool = True, **kwargs):  # kwargs: rim=..., count_calls=...
-    """``CompiledForkCallback`` when possible, else the Python ``ForkCallback`` (with a warning,
-    once per reason: numba missing, layout not verifiable, or a law with no compiled form)."""
-    if prefer_compiled:
-        reason = unavailable_reason()
-        if reason is None:
-            try:
-                return CompiledForkCallback(model, law, **kwargs)
-            except UnsupportedLaw as error:
-                warn_once(f"{error}: using the Python force laws")
-            except RuntimeError as error:  # the mjData layout check failed
-                warn_once(str(error))
-        else:
-            warn_once(reason)
-    kwargs.pop("count_calls", None)
-    return ForkCallback(model, law, **kwargs)
-
-
-__all__ = ["CompiledForkCallback", "make_callback", "available", "unavailable_reason", "dispatcher", "REGISTRY",
+__all__ = ["CompiledForkCallback", "available", "unavailable_reason", "dispatcher", "REGISTRY",
            "fork_forces_along", "modal_filter", "warn_once", "compiling", "CACHE", "COMPILE_SECONDS",
            # the rooms below, for the callers that reached them here
            "flatten", "law_arrays", "mjdata_layout", "check_layout", "UnsupportedLaw", "FALLBACK_MESSAGE"]

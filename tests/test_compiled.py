@@ -126,7 +126,7 @@ def test_unsupported_laws_are_refused_and_fall_back():
     sc = scene.build(setup)
     compiled._WARNED.clear()
     with pytest.warns(FallbackWarning, match="MySpring has no compiled form"):
-        callback = compiled.make_callback(sc.model, fork_law)
+        callback = engine_mujoco.fork_callback(sc.model, fork_law)
     assert isinstance(callback, ForkCallback)
 
 
@@ -336,12 +336,12 @@ def test_fallback_warns_once_when_numba_is_unavailable(monkeypatch):
     monkeypatch.setattr(compiled, "_WARNED", set())
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        first = compiled.make_callback(sc.model, setup.fork)
-        second = compiled.make_callback(sc.model, setup.fork)
+        first = engine_mujoco.fork_callback(sc.model, setup.fork)
+        second = engine_mujoco.fork_callback(sc.model, setup.fork)
     assert isinstance(first, ForkCallback) and isinstance(second, ForkCallback)
     assert [str(w.message) for w in caught] == [compiled.FALLBACK_MESSAGE]
     assert not compiled.available()
-    assert isinstance(compiled.make_callback(sc.model, setup.fork, prefer_compiled=False), ForkCallback)
+    assert isinstance(engine_mujoco.fork_callback(sc.model, setup.fork, "python"), ForkCallback)
 
 
 def test_without_numba_installed_mtbmj_runs_on_the_python_path():
@@ -358,7 +358,7 @@ with warnings.catch_warnings(record=True) as caught:
     setup = compose.setup(mtbmj.load_config("S1"))
     model = scene.build(setup).model
     assert not compiled.available()
-    assert all(isinstance(compiled.make_callback(model, setup.fork), ForkCallback) for _ in range(3))
+    assert all(isinstance(engine_mujoco.fork_callback(model, setup.fork), ForkCallback) for _ in range(3))
     trace = engine_mujoco.run(setup, callback="auto", duration=0.05)
     assert trace.fork.size == round(0.05 / setup.timestep) + 1
 messages = [str(w.message) for w in caught if "numba" in str(w.message)]

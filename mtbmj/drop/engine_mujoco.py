@@ -10,7 +10,7 @@ from mtbmj.controllers import ForkCallback, installed, native
 from mtbmj.drop import scene as scene_mod
 from mtbmj.compose import Setup
 from mtbmj.drop.stepping import Stepping
-from mtbmj.runpath import loop
+from mtbmj.runpath import callbacks, loop
 from mtbmj.trace import MAX_DISPLACEMENT_M, RawTrace
 
 
@@ -35,22 +35,24 @@ CALLBACKS = ("auto", "compiled", "python")
 
 
 def fork_callback(model, law, kind="auto", rim=None, floor=None):
-    """The fork callback for ``model``: ``"auto"`` (the compiled laws when possible, else the Python
-    laws with a one-time warning; ``run`` takes the Python laws for a short run in a process
-    without numba, see ``controllers.native``), ``"compiled"``, ``"python"``, or a factory ``f(model, law)``.
-    ``rim`` (a ``controllers.Rim``) adds the rim strike on the tire deflection, ``floor`` (a
+    """The fork callback for ``model``, chosen as every rig's is (``mtbmj.runpath.callbacks.choose``):
+    ``"auto"`` (the compiled laws when possible, else the Python laws with a one-time warning;
+    ``run`` takes the Python laws for a short run in a process without numba, see
+    ``controllers.native``), ``"compiled"``, ``"python"``, or a factory ``f(model, law)``. ``rim``
+    (a ``controllers.Rim``) adds the rim strike on the tire deflection, ``floor`` (a
     ``controllers.ContactFloor``) the soft contact's correction."""
     if callable(kind):
         return kind(model, law)
-    if kind == "python":
-        return ForkCallback(model, law, rim=rim, floor=floor)
-    from mtbmj.controllers import compiled  # numba is imported on the first run only
+    if kind not in CALLBACKS:
+        raise ValueError(f"callback: expected one of {', '.join(CALLBACKS)} or a factory, got {kind!r}")
 
-    if kind == "compiled":
-        return compiled.CompiledForkCallback(model, law, rim=rim, floor=floor)
-    if kind == "auto":
-        return compiled.make_callback(model, law, rim=rim, floor=floor)
-    raise ValueError(f"callback: expected one of {', '.join(CALLBACKS)} or a factory, got {kind!r}")
+    def load():
+        from mtbmj.controllers import compiled  # numba is imported on the first run only
+
+        return compiled
+
+    return callbacks.choose(kind, lambda: ForkCallback(model, law, rim=rim, floor=floor), load,
+                            lambda compiled: compiled.CompiledForkCallback(model, law, rim=rim, floor=floor), "fork")
 
 
 @contextmanager
