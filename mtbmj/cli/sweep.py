@@ -45,9 +45,44 @@ def check_shared_options(args) -> None:
         raise ConfigError("--scheduler: only with --backend dask")
 
 
+def _bike_sweep(args) -> int:
+    from mtbmj.bike import sweep as bike_sweep
+    from mtbmj.cli.bike import bike_overrides
+    from mtbmj.cli.common import Progress
+
+    if args.roll is None or args.speed is None:
+        raise ConfigError(f"sweep {args.config}: a bike sweep needs --roll TERRAIN and --speed V")
+    if args.from_csv is not None or args.samples is not None:
+        raise ConfigError("sweep: a bike sweep takes a grid (--vary KEY=LO:HI:N)")
+    from mtbmj import sweep
+
+    if not args.vary:
+        raise ConfigError("sweep: give --vary KEY=LO:HI:N (a bike key, or fork:KEY / shock:KEY)")
+    variants = sweep.grid([sweep.parse_vary(v, count=True, check_key=False) for v in args.vary])
+    base = bike_overrides(args)
+    table = Progress(f"sweep bike {args.config} ({len(variants)} variants)", not args.quiet).around(
+        lambda progress: bike_sweep.run(args.config, args.roll, args.speed, variants, args.duration, base, progress))
+    keys = list(variants[0])
+    written = bike_sweep.write(table, args.out, args.config, args.roll, args.speed, keys)
+    ok = table[table["status"] == "ok"]
+    crashes = int(ok["crashes_count"].sum()) if len(ok) else 0
+    print(f"sweep bike {args.config} over {args.roll} at {args.speed:g} m/s: {len(ok)} of {len(table)} variants ran"
+          f"{f', {crashes} crashed' if crashes else ''}; front travel peak {ok['max_front_travel_mm'].min():.1f}-"
+          f"{ok['max_front_travel_mm'].max():.1f} mm; wrote {len(written)} files to {args.out}"
+          if len(ok) else f"sweep bike {args.config}: every variant failed (see sweep.csv); wrote {len(written)} "
+                          f"files to {args.out}")
+    return 0
+
+
 def cmd_sweep(args) -> int:
     from mtbmj.sweep.runner import SweepProgress, run_sweep, start_pool
+    from mtbmj.cli.presets import _is_bike
 
+    if _is_bike(args.config):
+        return _bike_sweep(args)
+    if args.roll is not None or args.speed is not None or args.fork_set or args.shock_set:
+        raise ConfigError("--roll, --speed, --fork-set, --shock-set: only for a bike sweep (CONFIG a bike preset "
+                          "or bike file)")
     check_shared_options(args)
     positive("--batch-size", args.batch_size)
     positive("--threads", args.threads)
@@ -126,4 +161,10 @@ def add_parser(subparsers) -> None:
                    help="batch: variants stepped together in mujoco.rollout on the compiled laws (default for "
                         "--engine mujoco); single: one run_drop per variant")
     p.add_argument("--threads", type=int, default=1, help="rollout threads per process with --runner batch (default 1)")
+    p.add_argument("--roll", metavar="TERRAIN", help="a bike sweep (CONFIG a bike preset or file): the terrain")
+    p.add_argument("--speed", type=float, help="a bike sweep: the speed in m/s")
+    p.add_argument("--fork-set", action="append", metavar="KEY=VALUE", dest="fork_set",
+                   help="a bike sweep: a key of the fork's configuration for every variant (repeatable)")
+    p.add_argument("--shock-set", action="append", metavar="KEY=VALUE", dest="shock_set",
+                   help="a bike sweep: a key of the shock's configuration for every variant (repeatable)")
     p.set_defaults(func=cmd_sweep)

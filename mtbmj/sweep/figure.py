@@ -25,8 +25,9 @@ MAX_TICKED = 12  # values on an axis that each get a tick label (more: every k-t
 MAX_WRITTEN = 100  # heat-map cells that get their value written in them
 
 
-def sweep_figure(table, keys: Sequence[str], title: str = ""):
-    """The figure for a sweep whose varied keys are ``keys`` (one or two), or None."""
+def sweep_figure(table, keys: Sequence[str], title: str = "", main_outputs=MAIN_OUTPUTS):
+    """The figure for a sweep whose varied keys are ``keys`` (one or two), or None; ``main_outputs``
+    the (column, label) drawn (a bike sweep draws its own; a column ending in ``_count`` is a count)."""
     if not 1 <= len(keys) <= 2:
         return None
     from matplotlib.ticker import MaxNLocator
@@ -37,7 +38,7 @@ def sweep_figure(table, keys: Sequence[str], title: str = ""):
 
     ok = table[table["status"] == "ok"]
     failed = int(len(table) - len(ok))
-    outputs = [(c, label) for c, label in MAIN_OUTPUTS if c in ok.columns]
+    outputs = [(c, label) for c, label in main_outputs if c in ok.columns]
     if ok.empty or not outputs:
         return None
     cols = 3 if len(keys) == 2 else 2

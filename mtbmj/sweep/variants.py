@@ -84,15 +84,16 @@ def numeric_key(key: str, flag: str = "--vary") -> str:
     return key
 
 
-def parse_vary(text: str, count: bool | None = None) -> Range:
+def parse_vary(text: str, count: bool | None = None, check_key: bool = True) -> Range:
     """Parse ``key=lo:hi:n`` (a grid) or ``key=lo:hi`` (a sampling range).
 
-    ``count`` True requires ``n``, False forbids it, None accepts both."""
+    ``count`` True requires ``n``, False forbids it, None accepts both; ``check_key`` False leaves
+    the key to its reader (a bike sweep's keys are the bike's, ``mtbmj.bike.sweep``)."""
     key, eq, span = (part.strip() for part in text.partition("="))
     parts = [p.strip() for p in span.split(":")]
     if not eq or not key or len(parts) not in (2, 3) or not all(re.fullmatch(_NUMBER, p) for p in parts[:2]):
         raise ConfigError(f"--vary {text}: expected key=lo:hi:n (a grid) or key=lo:hi (with --samples)")
-    key = numeric_key(key)
+    key = numeric_key(key) if check_key else key
     lo, hi = float(parts[0]), float(parts[1])
     if not lo < hi:
         raise ConfigError(f"--vary {text}: lo must be below hi, got {lo:g} >= {hi:g}")
