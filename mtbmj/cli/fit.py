@@ -280,3 +280,6 @@ def add_parser(sub) -> None:
     p.set_defaults(func=cmd_fit)
     intermixed(p)
     _remember_arguments(p)
+    from mtbmj.cli.bounce import add_bounce_parser
+
+    add_bounce_parser(p)  # mtbmj fit bounce: a rider's own seat slams (mtbmj.identify.bounce)

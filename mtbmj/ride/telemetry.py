@@ -15,6 +15,15 @@ maxima for another bike):
   a0 = acos((arm1^2 + arm2^2 - max^2) / (2 arm1 arm2)); counts above 2048 wrap -> 0;
 - rear wheel travel from the stroke through the leverage curve (wheel travel, leverage ratio):
   stroke(w) = integral of dw / ratio(w), inverted by interpolation.
+
+SST version 2 (the older recordings, e.g. the rebound-click seat slams): a 6-byte header (magic
+``SST``, version uint8 = 2, sample rate uint16 in Hz; no timestamp), then the same 4-byte records.
+Both ends were decoded then through an isosceles triangle at pi/4096 rad per count
+(``HalfTurnIsosceles``: travel = max - 2 arm cos(pi s / 4096 + a0), a0 = acos(max / (2 arm))),
+with that time's defaults: fork arm 120 mm, max 218 mm; shock arm 88 mm, max 138 mm. The recording
+project called those values placeholders: a version-2 record's timing is exact, its amplitudes
+are approximate (the record's ``notes`` say so), so an analysis of it should rest on periods and
+ratios, not on millimetres.
 """
 from __future__ import annotations
 
@@ -32,7 +41,12 @@ from mtbmj.textfile import read_bytes
 
 MAGIC = b"SST"
 VERSION = 3
+VERSIONS = (2, 3)
 HEADER = struct.Struct("<3sBHHq")  # magic, version, sample rate (Hz), padding, Unix time (s)
+HEADER_V2 = struct.Struct("<3sBH")  # magic, version, sample rate (Hz)
+V2_AMPLITUDE_NOTE = ("SST version 2: travel decoded with the recording project's placeholder calibration of that "
+                     "time (fork arm 120 mm, max 218 mm; shock arm 88 mm, max 138 mm); timing is exact, amplitudes "
+                     "are approximate")
 RECORD_BYTES = 4
 ABSENT = 0xFFFF
 COUNTS = 4096
@@ -74,6 +88,37 @@ class Triangle:
         a, b = self.arm1_mm, self.arm2_mm
         start = math.acos((a * a + b * b - self.max_mm ** 2) / (2.0 * a * b))
         return self.max_mm - np.sqrt(a * a + b * b - 2.0 * a * b * np.cos(start - 2.0 * np.pi / COUNTS * s))
+
+
+@dataclass(frozen=True)
+class HalfTurnIsosceles:
+    """SST version 2 sensor: two equal arms joined at the encoder, pi/4096 rad per count (the
+    version-2 decoding; defaults: the fork's placeholder values of that time)."""
+
+    arm_mm: float = 120.0
+    max_mm: float = 218.0
+
+    @property
+    def start_rad(self) -> float:
+        return math.acos(self.max_mm / (2.0 * self.arm_mm))
+
+    @property
+    def counts_max(self) -> float:
+        """The count at which the arms lie straight (travel = max): beyond it, no geometry."""
+        return (math.pi / 2.0 - self.start_rad) * COUNTS / math.pi
+
+    def travel_mm(self, counts: np.ndarray) -> np.ndarray:
+        s = np.asarray(counts, dtype=float)
+        return self.max_mm - 2.0 * self.arm_mm * np.cos(math.pi / COUNTS * s + self.start_rad)
+
+    def counts(self, travel_mm: np.ndarray) -> np.ndarray:
+        """The inverse: the (real-valued) count that decodes to ``travel_mm``."""
+        x = np.asarray(travel_mm, dtype=float)
+        return (np.arccos((self.max_mm - x) / (2.0 * self.arm_mm)) - self.start_rad) * COUNTS / math.pi
+
+
+V2_FORK = HalfTurnIsosceles(120.0, 218.0)
+V2_SHOCK = HalfTurnIsosceles(88.0, 138.0)
 
 
 # Clash 2022 leverage ratio against rear wheel travel (mm), 1 mm steps, from data/sst/notes.txt. The row
@@ -142,6 +187,7 @@ class TelemetryRecord:
     shock_max_mm: float = SHOCK_STROKE_MAX_MM
     rear_max_mm: float = field(default=float("nan"))
     counts: np.ndarray | None = field(default=None, repr=False)  # raw (n, 2) uint16
+    notes: tuple = ()  # what a reader of the record should know (a version-2 file: approximate amplitudes)
 
     @property
     def duration_s(self) -> float:
@@ -178,44 +224,64 @@ class TelemetryRecord:
 
 def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_max_mm: float = SHOCK_STROKE_MAX_MM,
              front: IsoscelesTriangle = IsoscelesTriangle(), rear: Triangle = Triangle(),
-             leverage: LeverageCurve = LeverageCurve()) -> TelemetryRecord:
-    """Read an SST v3 file into travel time series; every problem is one ``TelemetryError`` line."""
+             leverage: LeverageCurve = LeverageCurve(), front_v2: HalfTurnIsosceles = V2_FORK,
+             rear_v2: HalfTurnIsosceles = V2_SHOCK) -> TelemetryRecord:
+    """Read an SST v3 or v2 file into travel time series; every problem is one ``TelemetryError``
+    line. A v2 file (no timestamp: 0) is decoded with ``front_v2``/``rear_v2`` and its ``notes``
+    say that its amplitudes are approximate."""
     path = Path(path)
     name = str(path)
     blob = read_bytes(path, TelemetryError, name, "telemetry")
     if len(blob) >= 3 and blob[:3] != MAGIC:
         raise TelemetryError(f"{name}: not an SST file (starts with {blob[:3]!r}, expected {MAGIC!r})")
-    if len(blob) < HEADER.size:
-        raise TelemetryError(f"{name}: truncated header ({len(blob)} of {HEADER.size} bytes)")
-    magic, version, rate, _, timestamp = HEADER.unpack_from(blob)
-    if version != VERSION:
-        raise TelemetryError(f"{name}: unknown SST version {version} (this reader knows version {VERSION})")
+    if len(blob) < 4:
+        raise TelemetryError(f"{name}: truncated header ({len(blob)} of at least {HEADER_V2.size} bytes)")
+    version = blob[3]
+    if version not in VERSIONS:
+        raise TelemetryError(f"{name}: unknown SST version {version} (this reader knows versions "
+                             f"{', '.join(map(str, VERSIONS))})")
+    header = HEADER if version == 3 else HEADER_V2
+    if len(blob) < header.size:
+        raise TelemetryError(f"{name}: truncated header ({len(blob)} of {header.size} bytes)")
+    if version == 3:
+        _, _, rate, _, timestamp = HEADER.unpack_from(blob)
+    else:
+        _, _, rate = HEADER_V2.unpack_from(blob)
+        timestamp = 0
     if rate == 0:
         raise TelemetryError(f"{name}: sample rate is 0 Hz in the header")
     for label, value in (("fork_max_mm", fork_max_mm), ("shock_max_mm", shock_max_mm)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise TelemetryError(f"{name}: {label} must be a positive number of mm, got {value!r}")
-    n = (len(blob) - HEADER.size) // RECORD_BYTES
+    n = (len(blob) - header.size) // RECORD_BYTES
     if n < 2:
         raise TelemetryError(f"{name}: truncated: {n} sample{'s' if n != 1 else ''} after the header")
-    counts = np.frombuffer(blob, dtype="<u2", count=2 * n, offset=HEADER.size).reshape(n, 2)
+    counts = np.frombuffer(blob, dtype="<u2", count=2 * n, offset=header.size).reshape(n, 2)
     present = counts[0] != ABSENT
     if not present.any():
         raise TelemetryError(f"{name}: both sensors are marked absent (0xFFFF in the first record)")
+    limits = (COUNTS - 1, COUNTS - 1) if version == 3 else \
+        (math.floor(front_v2.counts_max), math.floor(rear_v2.counts_max))
     for column, label in ((0, "fork"), (1, "shock")):
         if present[column]:
-            bad = np.flatnonzero(counts[:, column] >= COUNTS)
+            bad = np.flatnonzero(counts[:, column] > limits[column])
             if bad.size:
                 raise TelemetryError(f"{name}: {label} count {int(counts[bad[0], column])} at sample {int(bad[0])} "
-                                     f"is outside 0..{COUNTS - 1}")
-    fork = front.travel_mm(counts[:, 0]) if present[0] else None
-    shock = rear.stroke_mm(counts[:, 1]) if present[1] else None
+                                     f"is outside 0..{limits[column]}")
+    if version == 3:
+        fork = front.travel_mm(counts[:, 0]) if present[0] else None
+        shock = rear.stroke_mm(counts[:, 1]) if present[1] else None
+        notes = ()
+    else:
+        fork = front_v2.travel_mm(counts[:, 0]) if present[0] else None
+        shock = rear_v2.travel_mm(counts[:, 1]) if present[1] else None
+        notes = (V2_AMPLITUDE_NOTE,)
     wheel = leverage.wheel_travel_mm(shock) if shock is not None else None
     return TelemetryRecord(
         path=name, version=int(version), sample_rate_Hz=float(rate), timestamp=int(timestamp),
         time_s=np.arange(n) / float(rate), fork_mm=fork, shock_mm=shock, rear_mm=wheel,
         fork_max_mm=float(fork_max_mm), shock_max_mm=float(shock_max_mm),
-        rear_max_mm=float(leverage.wheel_travel_mm(shock_max_mm)), counts=counts.copy(),
+        rear_max_mm=float(leverage.wheel_travel_mm(shock_max_mm)), counts=counts.copy(), notes=notes,
     )
 
 

@@ -1,0 +1,253 @@
+"""``mtbmj fit bounce REC... --clicks 0,8,17 [--predict-clicks 4,12] --out DIR``: damping ratio and
+natural frequency of each end from a rider's own seat slams (SST recordings), the damping per
+rebound click as a law, and the ring-down it predicts at other clicks (``mtbmj.identify.bounce``).
+
+Writes fit.json, fit.png and, per predicted click, ringdown_<K>_clicks.csv, atomically. The ``fit``
+command's parser takes it with ``add_bounce_parser(p)`` (``p``: the ``fit`` parser): the kind
+``bounce`` is then parsed by this module's own parser.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+
+from mtbmj.cli.common import add_out
+from mtbmj.errors import MtbmjError
+
+DESCRIPTION = ("Fit each end's ring-down after a seat slam in SST recordings (v2 or v3): the damping ratio and the "
+               "damped natural frequency with 95 % intervals, from a damped sinusoid fitted about the rest level "
+               "(independent of the amplitude calibration). With records at two or more rebound clicks, the damping "
+               "ratio as a law linear in clicks, and with --predict-clicks the damping ratio, frequency and ring-down "
+               "it predicts at other clicks. Writes fit.json, fit.png and ringdown_<K>_clicks.csv per predicted click.")
+
+
+def _numbers(text: str, option: str) -> list[float]:
+    items = [s.strip() for s in str(text).split(",")]
+    try:
+        values = [float(s) for s in items]
+    except ValueError:
+        raise MtbmjError(f"{option} {text}: expected comma-separated numbers of clicks") from None
+    if not values or not all(math.isfinite(v) and v >= 0 for v in values):
+        raise MtbmjError(f"{option} {text}: clicks must be finite and not negative")
+    return values
+
+
+def bounce_parser(prog: str = "mtbmj fit bounce"):
+    from mtbmj.cli.common import Parser
+
+    p = Parser(prog=prog, description=DESCRIPTION)
+    p.add_argument("records", nargs="+", type=Path, metavar="REC", help="SST recordings, one seat slam each")
+    p.add_argument("--clicks", required=True, metavar="K1,K2,...",
+                   help="rebound clicks of each record, in the order of the records, e.g. 0,8,17")
+    p.add_argument("--predict-clicks", metavar="K1,K2,...",
+                   help="clicks to predict the damping ratio, frequency and ring-down at, from the law")
+    add_out(p, "out/fit")
+    p.set_defaults(func=cmd_fit_bounce, command="fit", kind="bounce")
+    return p
+
+
+def add_bounce_parser(fit_parser) -> None:
+    """Let the ``fit`` parser take ``fit bounce ...``: its kind choices gain ``bounce`` (for its help)
+    and a command line whose first word is ``bounce`` is parsed by :func:`bounce_parser`."""
+    for action in fit_parser._actions:
+        if action.dest == "kind" and action.choices is not None and "bounce" not in action.choices:
+            action.choices = tuple(action.choices) + ("bounce",)
+    own = bounce_parser()
+    parse = fit_parser.parse_known_args
+
+    def parse_known_args(args=None, namespace=None):
+        words = list(args or [])
+        if words and words[0] == "bounce":
+            return own.parse_known_args(words[1:], namespace)
+        return parse(args, namespace)
+
+    fit_parser.parse_known_args = parse_known_args
+
+
+def _records(paths, clicks):
+    from mtbmj.ride.telemetry import read_sst
+
+    return [read_sst(p) for p in paths]
+
+
+def analyse(paths, clicks, predict=()) -> dict:
+    """Everything ``fit bounce`` writes, as Python objects: {"json", "figure data", "csv" {name: columns}}."""
+    from mtbmj.identify import bounce
+
+    paths = [Path(p) for p in paths]
+    if len(clicks) != len(paths):
+        raise MtbmjError(f"--clicks: {len(clicks)} value(s) for {len(paths)} record(s); give one number of clicks "
+                         f"per record, in their order")
+    records = _records(paths, clicks)
+    fits = [bounce.fit_record(r) for r in records]
+    for r, f in zip(records, fits):
+        if "shock" not in f and "fork" not in f:
+            raise MtbmjError(f"{r.path}: no sensor present")
+    notes = sorted({n for r in records for n in r.notes})
+    laws = {}
+    for end in bounce.ENDS:
+        usable = [(k, f[end]) for k, f in zip(clicks, fits) if end in f and f[end].fitted]
+        if len({k for k, _ in usable}) >= 2:
+            laws[end] = bounce.click_law(end, [k for k, _ in usable], [rd for _, rd in usable])
+        elif any(end in f for f in fits) and len(paths) > 1:
+            notes.append(f"{end}: no law in clicks (fitted ring-downs at {len({k for k, _ in usable})} distinct "
+                         f"click setting(s); two are needed)")
+    if predict and not laws:
+        raise MtbmjError("--predict-clicks: no law in clicks to predict from (it needs fitted ring-downs at two or "
+                         "more different --clicks)")
+    out = {"method": bounce.METHOD, "units": {"time": "s", "travel": "mm", "frequency": "Hz"},
+           "intervals": "95 %", "notes": notes, "records": [], "law": {}, "predicted": []}
+    for r, k, f in zip(records, clicks, fits):
+        out["records"].append({"file": r.name, "path": r.path, "sst_version": r.version,
+                               "sample_rate_Hz": r.sample_rate_Hz, "clicks": k,
+                               **{end: rd.summary() for end, rd in f.items()}})
+    for end, law in laws.items():
+        out["law"][end] = law.summary()
+    csvs = {}
+    base_i = int(np.argmin(clicks))
+    base_rec, base_fit = records[base_i], fits[base_i]
+    for k in predict:
+        entry = {"clicks": k}
+        columns = {}
+        for end, law in laws.items():
+            z, zsd = law.zeta(k)
+            fd, fsd = law.frequency(k)
+            entry[end] = {"damping_ratio": z, "damping_ratio_ci95": bounce._ci(z, zsd), "frequency_hz": fd,
+                          "frequency_hz_ci95": bounce._ci(fd, fsd) if math.isfinite(fd) else None,
+                          "undamped_frequency_hz": law.fn_Hz,
+                          "undamped_frequency_hz_ci95": bounce._ci(law.fn_Hz, law.fn_sd)}
+            if not 0.0 <= z < 1.0:
+                entry[end]["note"] = "the law gives no oscillation here (damping ratio outside 0 to 1); no ring-down"
+                continue
+            src = base_fit.get(end)
+            if src is None or not src.fitted:
+                entry[end]["note"] = f"no ring-down: the {clicks[base_i]:g}-click record has no fitted {end} start"
+                continue
+            t, x = bounce.predicted_ring_down(src, base_rec.time_s, z, fd)
+            columns[end] = (t, x)
+        if columns:
+            name = f"ringdown_{k:g}_clicks.csv"
+            t0 = max(t[0] for t, _ in columns.values())
+            t1 = min(t[-1] for t, _ in columns.values())
+            grid = base_rec.time_s[(base_rec.time_s >= t0 - 1e-12) & (base_rec.time_s <= t1 + 1e-12)]
+            cols = {"time_s": grid}
+            for end in ("shock", "fork"):
+                if end in columns:
+                    t, x = columns[end]
+                    cols[f"{end}_mm"] = np.interp(grid, t, x)
+            csvs[name] = cols
+            entry["ringdown_csv"] = name
+            entry["ringdown_from"] = (f"{base_rec.name} ({clicks[base_i]:g} clicks): its rest level and free start "
+                                      f"(displacement and velocity) at t0, with the predicted parameters; "
+                                      f"{', '.join(c for c in cols if c != 'time_s')}; compression positive")
+            missing = [e for e in ("shock", "fork") if e not in columns]
+            if missing:
+                entry["ringdown_note"] = f"{', '.join(missing)}: no predicted ring-down (no law or no fitted start)"
+        out["predicted"].append(entry)
+    return {"json": out, "records": records, "fits": fits, "laws": laws, "clicks": list(clicks), "csv": csvs}
+
+
+def figure_png(result: dict) -> bytes:
+    from matplotlib.figure import Figure
+
+    from mtbmj.readout.quicklook import png
+
+    records, fits, laws, clicks = result["records"], result["fits"], result["laws"], result["clicks"]
+    n = len(records)
+    fig = Figure(figsize=(11, 2.6 * (n + 1)))
+    axes = fig.subplots(n + 1, 2, squeeze=False)
+    for i, (r, f, k) in enumerate(zip(records, fits, clicks)):
+        for j, end in enumerate(("shock", "fork")):
+            ax = axes[i, j]
+            rd = f.get(end)
+            if rd is None:
+                ax.set_axis_off()
+                continue
+            x = r.shock_mm if end == "shock" else r.fork_mm
+            lo, hi = rd.slam_s - 0.5, max(rd.t_end_s, rd.t0_s + 1.0) + 0.5
+            m = (r.time_s >= lo) & (r.time_s <= hi)
+            ax.plot(r.time_s[m], x[m], color="0.55", lw=0.8, label="record")
+            ax.axvline(rd.t0_s, color="0.3", ls=":", lw=0.8)
+            if rd.fitted:
+                mm = (r.time_s >= rd.t0_s) & (r.time_s <= rd.t_end_s)
+                ci = rd.summary()["damping_ratio_ci95"]
+                ax.plot(r.time_s[mm], rd.curve(r.time_s[mm]), color="C3", lw=1.4,
+                        label=f"fit: zeta {rd.zeta:.3f} [{ci[0]:.3f}, {ci[1]:.3f}], {rd.fd_Hz:.2f} Hz")
+            else:
+                ax.text(0.02, 0.04, "no fit: too few cycles" if "too few" in rd.note else "no fit",
+                        transform=ax.transAxes, ha="left", va="bottom", fontsize=8)
+            ax.set_title(f"{r.name}, {k:g} clicks: {end}", fontsize=9)
+            ax.set_ylabel("travel (mm, approx.)" if r.version == 2 else "travel (mm)")
+            ax.legend(fontsize=7, loc="upper right")
+            ax.set_xlabel("time (s)")
+    ax = axes[n, 0]
+    for end, color in (("shock", "C0"), ("fork", "C1")):
+        pts = [(k, f[end]) for k, f in zip(clicks, fits) if end in f and f[end].fitted]
+        if pts:
+            ax.errorbar([k for k, _ in pts], [rd.zeta for _, rd in pts],
+                        yerr=[1.959963984540054 * rd.zeta_sd for _, rd in pts], fmt="o", color=color,
+                        capsize=3, label=f"{end}: measured (95 %)")
+        if end in laws:
+            law = laws[end]
+            kk = np.linspace(0, max(list(clicks) + [p["clicks"] for p in result["json"]["predicted"]]), 100)
+            zz = np.array([law.zeta(v) for v in kk])
+            ax.plot(kk, zz[:, 0], color=color, lw=1, label=f"{end} law: {law.zeta0:.3f} + {law.slope:.4f} k")
+            ax.fill_between(kk, zz[:, 0] - 1.96 * zz[:, 1], zz[:, 0] + 1.96 * zz[:, 1], color=color, alpha=0.15)
+            pk = [p["clicks"] for p in result["json"]["predicted"] if end in p]
+            if pk:
+                ax.plot(pk, [law.zeta(v)[0] for v in pk], "x", color=color, ms=8, label=f"{end}: predicted")
+    ax.set_xlabel("rebound clicks")
+    ax.set_ylabel("damping ratio")
+    ax.set_title("damping ratio against clicks", fontsize=9)
+    ax.legend(fontsize=7)
+    axes[n, 1].set_axis_off()
+    axes[n, 1].text(0, 0.5, "fit window: from the dotted line (free start)\nmethod: damped sinusoid, least squares\n"
+                    "version-2 records: amplitudes approximate", fontsize=8, va="center")
+    fig.tight_layout()
+    return png(fig, dpi=80)
+
+
+def cmd_fit_bounce(args) -> int:
+    from mtbmj import output
+
+    clicks = _numbers(args.clicks, "--clicks")
+    predict = _numbers(args.predict_clicks, "--predict-clicks") if args.predict_clicks else []
+    result = analyse(args.records, clicks, predict)
+    files = {"fit.json": output.json_bytes(result["json"]), "fit.png": figure_png(result)}
+    for name, cols in result["csv"].items():
+        files[name] = output.csv_bytes(cols)
+    written = output.write_atomically(args.out, files)
+    for rec in result["json"]["records"]:
+        parts = []
+        for end in ("shock", "fork"):
+            e = rec.get(end)
+            if e is None:
+                continue
+            if e["damping_ratio"] is None:
+                parts.append(f"{end}: {e.get('note', 'no fit')}")
+            else:
+                lo, hi = e["damping_ratio_ci95"]
+                flo, fhi = e["frequency_hz_ci95"]
+                parts.append(f"{end} zeta {e['damping_ratio']:.3f} [{lo:.3f}, {hi:.3f}], "
+                             f"{e['frequency_hz']:.2f} Hz [{flo:.2f}, {fhi:.2f}]")
+        print(f"{rec['file']} at {rec['clicks']:g} clicks: {'; '.join(parts)}")
+    for end, law in result["json"]["law"].items():
+        print(f"{end} law: zeta = {law['zeta0']:.3f} + {law['slope_per_click']:.4f} x clicks "
+              f"(slope 95 % [{law['slope_per_click_ci95'][0]:.4f}, {law['slope_per_click_ci95'][1]:.4f}]), "
+              f"undamped {law['undamped_frequency_hz']:.2f} Hz")
+    for p in result["json"]["predicted"]:
+        for end in ("shock", "fork"):
+            if end in p:
+                e = p[end]
+                print(f"predicted at {p['clicks']:g} clicks: {end} zeta {e['damping_ratio']:.3f} "
+                      f"[{e['damping_ratio_ci95'][0]:.3f}, {e['damping_ratio_ci95'][1]:.3f}], {e['frequency_hz']:.2f} Hz")
+    for note in result["json"]["notes"]:
+        print(f"note: {note}")
+    print(f"wrote {', '.join(p.name for p in written)} to {args.out}")
+    return 0
+
+
+__all__ = ["add_bounce_parser", "analyse", "bounce_parser", "cmd_fit_bounce"]

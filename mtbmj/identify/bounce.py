@@ -1,0 +1,360 @@
+"""Field identification from a rider's own seat slams: the ring-down of each end after the slam.
+
+A rider slams onto the seat and lets the bike oscillate. On each end's travel (fork, shock) the
+slam is the largest compression (found on the shock, the fork's own peak within 0.25 s of it);
+the free ring-down starts at the first rebound trough after it, or, where the end topped out
+there (a trough at full extension is clipped, not free), where it leaves full extension. It ends
+when the alternating turning points stop decaying (a swing larger than the one before, or a gap
+of more than twice the half period, is another event), half a period after the last one.
+
+Method: a least-squares fit of a damped sinusoid about a free rest level,
+
+    x(t) = rest + exp(-a (t - t0)) (B cos(wd (t - t0)) + C sin(wd (t - t0))),
+
+with zeta = a / sqrt(a^2 + wd^2), the damped natural frequency f_d = wd / (2 pi) and the undamped
+f_n = sqrt(a^2 + wd^2) / (2 pi). Scaling the travel (another amplitude calibration) scales rest, B
+and C and leaves zeta and f_d unchanged. The 95 % intervals come from the fit's covariance with
+the residual variance, inflated by the residual's lag-1 autocorrelation rho (effective sample
+size n (1 - rho) / (1 + rho)): the residual of a real slam is model error, smooth in time, not
+independent noise.
+
+Across records at several rebound clicks the damping ratio follows a law linear in clicks,
+zeta(k) = zeta0 + slope k, fitted by weighted least squares (weights 1 / sd^2 of each record's
+zeta; with more than two records the covariance is scaled by the reduced chi-square when it
+exceeds 1). The spring and the sprung mass do not change with the clicks, so the undamped
+frequency is the weighted mean of the records'; a predicted click's damped frequency is
+f_n sqrt(1 - zeta^2). A predicted ring-down replays the lowest-click record's free start
+(displacement and velocity from rest at t0) with the predicted zeta and frequency.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mtbmj.errors import MtbmjError
+
+ENDS = ("shock", "fork")
+Z95 = 1.959963984540054  # two-sided 95 % of the normal distribution
+SLAM_WINDOW_S = 0.25  # the fork's slam peak is sought this close to the shock's
+SMOOTH_S = 0.010  # moving average before turning points are sought
+SWING_FRACTION = 0.01  # a turning point needs a swing of this share of the slam's drop (and 5 x noise)
+MIN_TURNS = 2  # turning points after the start: at least one whole cycle
+METHOD = ("least-squares fit of a damped sinusoid x(t) = rest + exp(-zeta wn (t - t0)) (B cos(wd (t - t0)) + "
+          "C sin(wd (t - t0))) to each end's free ring-down after the slam (from the first rebound trough, or "
+          "where the end leaves full extension after topping out); zeta = a / sqrt(a^2 + wd^2), frequency_hz = "
+          "wd / 2 pi (damped), undamped_frequency_hz = sqrt(a^2 + wd^2) / 2 pi; independent of the amplitude "
+          "calibration; 95 % intervals from the fit covariance inflated for the residual's lag-1 autocorrelation "
+          "(effective sample size n (1 - rho) / (1 + rho))")
+LAW_FORM = "damping_ratio = zeta0 + slope_per_click * clicks (weighted least squares); undamped frequency constant"
+
+
+class BounceError(MtbmjError):
+    """A seat-slam record cannot be read as a ring-down: names the record and the cause."""
+
+
+@dataclass
+class RingDown:
+    """One end's free ring-down after the slam and its fitted damped sinusoid (SI inside: s, and
+    travel in mm as the record gives it)."""
+
+    end: str
+    slam_s: float
+    t0_s: float
+    t_end_s: float
+    turns: int  # turning points after t0
+    topped_out: bool
+    note: str = ""
+    zeta: float = float("nan")
+    zeta_sd: float = float("nan")
+    fd_Hz: float = float("nan")
+    fd_sd: float = float("nan")
+    fn_Hz: float = float("nan")
+    fn_sd: float = float("nan")
+    rest_mm: float = float("nan")
+    x0_mm: float = float("nan")  # displacement from rest at t0
+    v0_mm_per_s: float = float("nan")  # velocity at t0
+    rms_mm: float = float("nan")
+    rho: float = float("nan")
+    params: tuple = field(default=(), repr=False)  # (a, wd, rest, B, C)
+
+    @property
+    def fitted(self) -> bool:
+        return bool(self.params)
+
+    def curve(self, t: np.ndarray) -> np.ndarray:
+        a, wd, rest, b, c = self.params
+        tau = np.asarray(t, float) - self.t0_s
+        return rest + np.exp(-a * tau) * (b * np.cos(wd * tau) + c * np.sin(wd * tau))
+
+    def summary(self) -> dict:
+        out = {"damping_ratio": None, "damping_ratio_ci95": None, "frequency_hz": None, "frequency_hz_ci95": None,
+               "undamped_frequency_hz": None, "undamped_frequency_hz_ci95": None}
+        if self.fitted:
+            out.update({
+                "damping_ratio": self.zeta, "damping_ratio_ci95": _ci(self.zeta, self.zeta_sd),
+                "frequency_hz": self.fd_Hz, "frequency_hz_ci95": _ci(self.fd_Hz, self.fd_sd),
+                "undamped_frequency_hz": self.fn_Hz, "undamped_frequency_hz_ci95": _ci(self.fn_Hz, self.fn_sd),
+                "rest_mm": self.rest_mm, "start_excursion_mm": self.x0_mm, "residual_rms_mm": self.rms_mm,
+                "residual_lag1_autocorrelation": self.rho})
+        out.update({"slam_s": self.slam_s, "fit_start_s": self.t0_s, "fit_end_s": self.t_end_s,
+                    "cycles": self.turns / 2.0, "topped_out_after_slam": self.topped_out})
+        if self.note:
+            out["note"] = self.note
+        return out
+
+
+def _ci(value: float, sd: float) -> list:
+    return [value - Z95 * sd, value + Z95 * sd]
+
+
+def _smooth(x: np.ndarray, n: int) -> np.ndarray:
+    if n <= 1:
+        return x.copy()
+    kernel = np.ones(n) / n
+    padded = np.concatenate((np.full(n // 2, x[0]), x, np.full(n - 1 - n // 2, x[-1])))
+    return np.convolve(padded, kernel, mode="valid")
+
+
+def noise_mm(x: np.ndarray) -> float:
+    """The record's sample-to-sample noise (robust: median absolute first difference / sqrt 2)."""
+    d = np.diff(np.asarray(x, float))
+    mad = 1.4826 * np.median(np.abs(d - np.median(d)))
+    step = np.min(np.abs(d[d != 0])) if np.any(d != 0) else 0.0  # one count of the sensor
+    return float(max(mad / math.sqrt(2.0), step))
+
+
+def turning_points(x: np.ndarray, start: int, swing: float, falling: bool) -> list[int]:
+    """Alternating extrema of ``x`` from ``start`` with hysteresis ``swing`` (first a trough when
+    ``falling``): each index is where the running extreme stood when the signal turned by more
+    than ``swing``."""
+    points, best, i_best = [], x[start], start
+    for i in range(start + 1, x.size):
+        v = x[i]
+        if falling:
+            if v < best:
+                best, i_best = v, i
+            elif v > best + swing:
+                points.append(i_best)
+                falling, best, i_best = False, v, i
+        else:
+            if v > best:
+                best, i_best = v, i
+            elif v < best - swing:
+                points.append(i_best)
+                falling, best, i_best = True, v, i
+    return points
+
+
+def ring_down(time_s: np.ndarray, x_mm: np.ndarray, end: str, slam_index: int | None = None) -> RingDown:
+    """The free ring-down of one end's travel after the slam, fitted (or with a note saying why not)."""
+    t = np.asarray(time_s, float)
+    x = np.asarray(x_mm, float)
+    dt = float(t[1] - t[0])
+    xs = _smooth(x, max(1, int(round(SMOOTH_S / dt))))
+    if slam_index is None:
+        peak = int(np.argmax(xs))
+    else:
+        w = int(round(SLAM_WINDOW_S / dt))
+        lo, hi = max(0, slam_index - w), min(x.size, slam_index + w + 1)
+        peak = lo + int(np.argmax(xs[lo:hi]))
+    floor = 0.0  # full extension: travel 0 is count 0 whatever the amplitude calibration
+    drop = xs[peak] - float(np.min(xs[peak:]))
+    swing = max(SWING_FRACTION * drop, 5.0 * noise_mm(x))
+    base = RingDown(end=end, slam_s=float(t[peak]), t0_s=float(t[peak]), t_end_s=float(t[peak]), turns=0,
+                    topped_out=False)
+    turns = turning_points(xs, peak, swing, falling=True)
+    if not turns:
+        base.note = "no rebound after the slam"
+        return base
+    trough = turns[0]
+    topped = xs[trough] <= floor + swing
+    start = trough
+    if topped:  # clipped at full extension: the free motion starts where the end leaves it
+        start = trough + int(np.argmax(xs[trough:] > floor + swing))
+    chain = [i for i in turns[1:] if i > start]
+    # the ring-down: turning points while the swings decay and come at the oscillation's pace
+    kept: list[int] = []
+    prev_i, prev_x, prev_swing = start, xs[start], math.inf
+    for i in chain:
+        half = _half_period(t, start, kept, topped)
+        if abs(xs[i] - prev_x) > prev_swing or (half is not None and t[i] - t[prev_i] > 2.0 * half):
+            break
+        kept.append(i)
+        prev_i, prev_x, prev_swing = i, xs[i], abs(xs[i] - prev_x)
+    base.t0_s, base.topped_out, base.turns = float(t[start]), bool(topped), len(kept)
+    if len(kept) < MIN_TURNS:
+        base.t_end_s = float(t[kept[-1]]) if kept else float(t[start])
+        base.note = (f"too few cycles: {len(kept)} turning point(s) after the free start "
+                     f"(at least {MIN_TURNS}, one whole cycle, are needed); no fit")
+        return base
+    half = _half_period(t, start, kept, topped)
+    stop = min(x.size - 1, int(np.searchsorted(t, t[kept[-1]] + half)))
+    nxt = [i for i in turns if i > kept[-1]]
+    if nxt and len(chain) > len(kept):  # the next event's turning point: stop before it moves away
+        stop = min(stop, nxt[0])
+    base.t_end_s = float(t[stop])
+    return _fit(base, t[start:stop + 1], x[start:stop + 1], half)
+
+
+def _half_period(t: np.ndarray, start: int, kept: list[int], topped: bool) -> float | None:
+    """Half the period as the turning points so far show it (from a clipped start, the stretch to
+    the first one is not half a period)."""
+    if len(kept) >= 2:
+        return float(np.median(np.diff(t[kept])))
+    if len(kept) == 1:
+        return float(t[kept[0]] - t[start]) * (2.0 if topped else 1.0)
+    return None
+
+
+def _fit(rd: RingDown, t: np.ndarray, x: np.ndarray, half_s: float) -> RingDown:
+    from scipy.optimize import least_squares
+
+    tau = t - t[0]
+    wd0 = math.pi / half_s
+    rest0 = float(np.median(x[-max(3, x.size // 10):]))
+
+    def linear(a, wd):
+        e = np.exp(-a * tau)
+        m = np.column_stack((np.ones_like(tau), e * np.cos(wd * tau), e * np.sin(wd * tau)))
+        coef, *_ = np.linalg.lstsq(m, x, rcond=None)
+        return coef, m
+
+    def resid_nl(p):
+        coef, m = linear(*p)
+        return m @ coef - x
+
+    best = None
+    for zeta0 in (0.05, 0.15, 0.3, 0.5):  # a few starts: the variable-projection problem is small
+        a0 = zeta0 * wd0 / math.sqrt(1.0 - zeta0 ** 2)
+        sol = least_squares(resid_nl, [a0, wd0], bounds=([0.0, 0.2 * wd0], [20.0 * wd0, 5.0 * wd0]), x_scale="jac")
+        if best is None or sol.cost < best.cost:
+            best = sol
+    a, wd = best.x
+    (rest, b, c), _ = linear(a, wd)
+    p = np.array([a, wd, rest, b, c])
+
+    def model(q):
+        e = np.exp(-q[0] * tau)
+        return q[2] + e * (q[3] * np.cos(q[1] * tau) + q[4] * np.sin(q[1] * tau))
+
+    r = model(p) - x
+    n = x.size
+    jac = np.empty((n, 5))
+    for k in range(5):  # central differences on the full model
+        h = 1e-6 * max(abs(p[k]), 1e-3)
+        up, dn = p.copy(), p.copy()
+        up[k] += h
+        dn[k] -= h
+        jac[:, k] = (model(up) - model(dn)) / (2 * h)
+    s2 = float(r @ r) / max(1, n - 5)
+    rc = r - r.mean()
+    rho = float(np.clip((rc[1:] @ rc[:-1]) / max(rc @ rc, 1e-300), 0.0, 0.999999)) if n > 2 else 0.0
+    inflate = (1.0 + rho) / (1.0 - rho)
+    try:
+        cov = np.linalg.inv(jac.T @ jac) * s2 * inflate
+    except np.linalg.LinAlgError:
+        rd.note = "the ring-down does not determine a damped sinusoid (singular fit); no fit"
+        return rd
+    w2 = a * a + wd * wd
+    g_zeta = np.array([wd * wd, -a * wd]) / w2 ** 1.5
+    g_fn = np.array([a, wd]) / math.sqrt(w2) / (2 * math.pi)
+    c2 = cov[:2, :2]
+    rd.params = tuple(float(v) for v in p)
+    rd.zeta, rd.zeta_sd = float(a / math.sqrt(w2)), float(math.sqrt(max(g_zeta @ c2 @ g_zeta, 0.0)))
+    rd.fd_Hz, rd.fd_sd = float(wd / (2 * math.pi)), float(math.sqrt(max(c2[1, 1], 0.0)) / (2 * math.pi))
+    rd.fn_Hz, rd.fn_sd = float(math.sqrt(w2) / (2 * math.pi)), float(math.sqrt(max(g_fn @ c2 @ g_fn, 0.0)))
+    rd.rest_mm, rd.x0_mm, rd.v0_mm_per_s = float(rest), float(b), float(-a * b + wd * c)
+    rd.rms_mm, rd.rho = float(math.sqrt(float(r @ r) / n)), rho
+    return rd
+
+
+def fit_record(record) -> dict:
+    """Each end's ring-down of one ``TelemetryRecord`` (end -> RingDown; an absent sensor is left out)."""
+    series = {"shock": record.shock_mm, "fork": record.fork_mm}
+    lead = series["shock"] if series["shock"] is not None else series["fork"]
+    slam = int(np.argmax(_smooth(np.asarray(lead, float), max(1, int(round(SMOOTH_S * record.sample_rate_Hz))))))
+    out = {}
+    for end in ENDS:
+        if series[end] is not None:
+            out[end] = ring_down(record.time_s, series[end], end, slam_index=slam)
+    return out
+
+
+@dataclass
+class ClickLaw:
+    """zeta(k) = zeta0 + slope k, and the constant undamped frequency, of one end."""
+
+    end: str
+    clicks: tuple
+    zeta0: float
+    slope: float
+    cov: np.ndarray
+    fn_Hz: float
+    fn_sd: float
+    chi2_reduced: float | None
+
+    def zeta(self, clicks: float) -> tuple[float, float]:
+        g = np.array([1.0, float(clicks)])
+        return float(self.zeta0 + self.slope * clicks), float(math.sqrt(max(g @ self.cov @ g, 0.0)))
+
+    def frequency(self, clicks: float) -> tuple[float, float]:
+        """Damped natural frequency (Hz) at ``clicks`` and its sd (from f_n's and zeta's)."""
+        z, zsd = self.zeta(clicks)
+        if not 0.0 <= z < 1.0:
+            return float("nan"), float("nan")
+        root = math.sqrt(1.0 - z * z)
+        sd = math.hypot(root * self.fn_sd, self.fn_Hz * z / root * zsd)
+        return self.fn_Hz * root, sd
+
+    def summary(self) -> dict:
+        sd0, sds = math.sqrt(self.cov[0, 0]), math.sqrt(self.cov[1, 1])
+        return {"form": LAW_FORM, "fitted_on_clicks": list(self.clicks),
+                "zeta0": self.zeta0, "zeta0_ci95": _ci(self.zeta0, sd0),
+                "slope_per_click": self.slope, "slope_per_click_ci95": _ci(self.slope, sds),
+                "covariance": self.cov.tolist(),
+                "undamped_frequency_hz": self.fn_Hz, "undamped_frequency_hz_ci95": _ci(self.fn_Hz, self.fn_sd),
+                "chi2_reduced": self.chi2_reduced}
+
+
+def click_law(end: str, clicks, fits) -> ClickLaw:
+    """The law of one end from fitted ring-downs at ``clicks`` (at least two distinct clicks)."""
+    k = np.asarray(clicks, float)
+    z = np.array([f.zeta for f in fits])
+    sd = np.array([f.zeta_sd for f in fits])
+    if np.unique(k).size < 2:
+        raise BounceError(f"{end}: a law in clicks needs fitted ring-downs at two or more different clicks")
+    w = 1.0 / np.maximum(sd, 1e-12) ** 2
+    X = np.column_stack((np.ones_like(k), k))
+    cov = np.linalg.inv(X.T @ (w[:, None] * X))
+    beta = cov @ X.T @ (w * z)
+    chi2 = None
+    if k.size > 2:
+        chi2 = float(np.sum(w * (z - X @ beta) ** 2) / (k.size - 2))
+        cov = cov * max(1.0, chi2)
+    fn = np.array([f.fn_Hz for f in fits])
+    wf = 1.0 / np.maximum(np.array([f.fn_sd for f in fits]), 1e-12) ** 2
+    fn_mean = float(np.sum(wf * fn) / np.sum(wf))
+    fn_sd = float(math.sqrt(1.0 / np.sum(wf)))
+    if fn.size > 1:  # the records' own spread, when larger than their stated intervals
+        fn_sd = max(fn_sd, float(np.std(fn, ddof=1) / math.sqrt(fn.size)))
+    return ClickLaw(end, tuple(float(c) for c in k), float(beta[0]), float(beta[1]), cov, fn_mean, fn_sd, chi2)
+
+
+def predicted_ring_down(source: RingDown, time_s: np.ndarray, zeta: float, fd_Hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """The free response from ``source``'s start (its rest, displacement and velocity at t0) with
+    damping ratio ``zeta`` and damped frequency ``fd_Hz``, on ``time_s`` from t0 to the source's fit end."""
+    t = np.asarray(time_s, float)
+    keep = (t >= source.t0_s - 1e-12) & (t <= source.t_end_s + 1e-12)
+    tt = t[keep]
+    tau = tt - source.t0_s
+    wd = 2.0 * math.pi * fd_Hz
+    a = zeta * wd / math.sqrt(1.0 - zeta * zeta)
+    x0, v0 = source.x0_mm, source.v0_mm_per_s
+    x = source.rest_mm + np.exp(-a * tau) * (x0 * np.cos(wd * tau) + (v0 + a * x0) / wd * np.sin(wd * tau))
+    return tt, x
+
+
+__all__ = ["BounceError", "ClickLaw", "RingDown", "click_law", "fit_record", "predicted_ring_down", "ring_down",
+           "METHOD", "LAW_FORM"]
