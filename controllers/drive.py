@@ -49,7 +49,7 @@ def drive_force(v_ref: float, v: float, kv: float, push: float, power: float, br
     return f
 
 
-def _at_patch(f: float, fx: float, fz: float, deflection: float, radius: float):
+def at_patch(f: float, fx: float, fz: float, deflection: float, radius: float):
     """(dx, dz, torque): a tangential ground force ``f`` (forward positive) on a tyre whose radial
     force is (fx, fz), as a force at the axle, along the tyre's contact tangent, and the couple
     about the axle (world y, right-handed) of that force acting at the contact patch, which lies
@@ -97,8 +97,8 @@ def wheel_forces(f: float, fxf: float, fzf: float, df: float, fxr: float, fzr: f
             bf = capf
         front = -bf
         rear = -br
-    dxf, dzf, tf = _at_patch(front, fxf, fzf, df, radius)
-    dxr, dzr, tr = _at_patch(rear, fxr, fzr, dr, radius)
+    dxf, dzf, tf = at_patch(front, fxf, fzf, df, radius)
+    dxr, dzr, tr = at_patch(rear, fxr, fzr, dr, radius)
     return dxf, dzf, tf, dxr, dzr, tr
 
 

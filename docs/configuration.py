@@ -371,7 +371,7 @@ def bike_section() -> list[str]:
     """The bike file's keys (``mtbmj.bike.keys.KEYS``), their defaults from the SST preset."""
     from mtbmj.bike import keys, spec
 
-    table, _ = spec._read("sst")
+    table, _ = spec.read_table("sst")
     known = {f"{s}.{k}" for s, ks in spec.KNOWN.items() if ks for k in ks} | {k for k, v in spec.KNOWN.items() if v is None}
     missing = sorted(known - set(keys.KEYS))
     if missing:

@@ -23,10 +23,10 @@ def test_a_bike_chain_of_files_merges_from_the_last_base(tmp_path, monkeypatch):
     # a relative base is relative to the folder of the file naming it
     _bike(tmp_path, "sub/again.toml", 'base = "heavy.toml"\n')
     assert spec.load(str(top)) != spec.load("trail")  # the merged file builds a bike
-    table, _ = spec._read(str(top))
+    table, _ = spec.read_table(str(top))
     assert table["rider"]["mass_kg"] == 90.0 and table["bike"]["fork_offset_mm"] == 51.0
-    assert table["bike"]["head_angle_deg"] == spec._read("trail")[0]["bike"]["head_angle_deg"]  # the rest from the preset
-    assert spec._read(str(tmp_path / "sub/again.toml"))[0]["rider"]["mass_kg"] == 90.0
+    assert table["bike"]["head_angle_deg"] == spec.read_table("trail")[0]["bike"]["head_angle_deg"]  # the rest from the preset
+    assert spec.read_table(str(tmp_path / "sub/again.toml"))[0]["rider"]["mass_kg"] == 90.0
 
 
 @pytest.mark.parametrize("kind", ["drop", "bike"])

@@ -37,7 +37,10 @@ def closed_form_sag(bike_name="sst"):
     b = _toml("mtbmj.bike.presets", bike_name)
     ref = _toml("mtbmj.presets", "reference")
     geo, rider, lev = b["bike"], b["rider"], b["leverage"]
-    alpha = math.radians(geo["head_angle_deg"])
+    # bike.head_angle_deg is the chart's (both wheels on flat ground at full extension): in frame
+    # coordinates the steering axis is steeper by the frame's nose-up turn when the axles are level
+    level = math.atan2(geo["rear_axle_mm"][1] - geo["front_axle_mm"][1], geo["front_axle_mm"][0] - geo["rear_axle_mm"][0])
+    alpha = math.radians(geo["head_angle_deg"]) + level
     front0 = np.array(geo["front_axle_mm"]) * MM
     rear0 = np.array(geo["rear_axle_mm"]) * MM
     pivot = np.array(geo["pivot_mm"]) * MM

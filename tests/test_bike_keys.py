@@ -118,7 +118,7 @@ def test_presets_are_plausible_throughout():
     from mtbmj.bike import keys
 
     for name in spec.preset_names():
-        assert keys.warnings(spec._read(name)[0]) == []
+        assert keys.warnings(spec.read_table(name)[0]) == []
 
 
 def test_geometry_in_metres_is_refused_naming_the_mistake(tmp_path, monkeypatch, capsys):

@@ -164,7 +164,8 @@ def test_presets_show_of_an_unknown_name_is_one_line(capsys, name):
 def test_presets_lists_the_presets_as_before(capsys):
     assert main(["presets"]) == 0
     names = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
-    assert names[:2] == ["S1", "S2"] and "air120" in names and "reference" in names
+    assert names[:3] == ["configurations", "S1", "S2"] and "air120" in names and "reference" in names
+    assert names[names.index("bikes"):] == ["bikes", "sst", "trail"]  # the bikes after the configurations
 
 
 def test_every_bike_key_is_on_the_page_with_its_range():

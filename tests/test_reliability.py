@@ -269,7 +269,7 @@ def test_presets_into_a_closed_pipe_is_quiet(tmp_path):
     code = "import sys; from mtbmj.cli import main; sys.exit(main(['presets']))"
     proc = subprocess.run(f"{sys.executable} -c \"{code}\" | head -1", shell=True, capture_output=True, text=True,
                           timeout=120)
-    assert proc.stdout.startswith("S1 ") and proc.stderr == "", proc.stderr
+    assert proc.stdout.startswith("configurations (") and proc.stderr == "", proc.stderr
 
 
 # --- 3, 12: output folders ------------------------------------------------------------------------

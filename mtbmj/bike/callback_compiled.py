@@ -129,7 +129,7 @@ if _numba is not None:
     _fork_force, _fork_force_rate = _kernels.fork_force, _kernels.fork_force_rate
     _tire_force, _rim_force = _kernels.rolling_tire_force, _kernels.rim_force
     _drive_force = law_function(_drive.drive_force)
-    law_function(_drive._at_patch)
+    law_function(_drive.at_patch)
     _wheel_forces = law_function(_drive.wheel_forces)
     law_function(_spec.stroke_piece)
     _leverage_ratio = law_function(_spec.leverage_ratio)

@@ -197,7 +197,7 @@ def _is_preset(name: str) -> bool:
     return any(name.lower() == n.lower() for n in preset_names())
 
 
-def _read(ref: str) -> tuple[dict, str]:
+def read_table(ref: str) -> tuple[dict, str]:
     """A bike file's table with its ``base`` chain merged in (read by ``mtbmj.config.read_chain``,
     the drop configurations' reader: the same base rules)."""
     from mtbmj.config import read_chain
@@ -319,7 +319,7 @@ def overridden(table: dict, overrides) -> dict:
 def load(ref: str, overrides=None) -> BikeSpec:
     """A ``BikeSpec`` from a bike preset name (``preset_names()``) or a TOML path, checked, with
     ``overrides`` applied (:func:`overridden`)."""
-    table, source = _read(str(ref))
+    table, source = read_table(str(ref))
     table = overridden(table, overrides)
     for section, value in table.items():
         if section not in KNOWN:

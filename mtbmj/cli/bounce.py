@@ -8,7 +8,6 @@ command's parser takes it with ``add_bounce_parser(p)`` (``p``: the ``fit`` pars
 """
 from __future__ import annotations
 
-import argparse
 import math
 from pathlib import Path
 
@@ -115,10 +114,10 @@ def analyse(paths, clicks, predict=()) -> dict:
         for end, law in laws.items():
             z, zsd = law.zeta(k)
             fd, fsd = law.frequency(k)
-            entry[end] = {"damping_ratio": z, "damping_ratio_ci95": bounce._ci(z, zsd), "frequency_hz": fd,
-                          "frequency_hz_ci95": bounce._ci(fd, fsd) if math.isfinite(fd) else None,
+            entry[end] = {"damping_ratio": z, "damping_ratio_ci95": bounce.interval95(z, zsd), "frequency_hz": fd,
+                          "frequency_hz_ci95": bounce.interval95(fd, fsd) if math.isfinite(fd) else None,
                           "undamped_frequency_hz": law.fn_Hz,
-                          "undamped_frequency_hz_ci95": bounce._ci(law.fn_Hz, law.fn_sd)}
+                          "undamped_frequency_hz_ci95": bounce.interval95(law.fn_Hz, law.fn_sd)}
             if not 0.0 <= z < 1.0:
                 entry[end]["note"] = "the law gives no oscillation here (damping ratio outside 0 to 1); no ring-down"
                 continue

@@ -12,7 +12,7 @@ def _bike_lines(ref: str) -> list[str]:
     from mtbmj.bike import spec
 
     _toml_value = json.dumps  # numbers, lists, strings and booleans are written alike in TOML
-    table, _ = spec._read(ref)
+    table, _ = spec.read_table(ref)
     spec.load(ref)  # checked as a run would check it
     lines = []
     for section, values in table.items():
@@ -27,7 +27,7 @@ def _bike_lines(ref: str) -> list[str]:
     return lines
 
 
-def _is_bike(ref: str) -> bool:
+def is_bike(ref: str) -> bool:
     from pathlib import Path
 
     from mtbmj.bike import spec
@@ -55,7 +55,7 @@ def cmd_presets(args) -> int:
             from mtbmj.errors import MtbmjError
 
             raise MtbmjError("--show: no preset named (known: " + ", ".join(preset_names() + spec.preset_names()) + ")")
-        if _is_bike(args.show):
+        if is_bike(args.show):
             for line in _bike_lines(args.show):
                 print(line)
             return 0
@@ -67,7 +67,7 @@ def cmd_presets(args) -> int:
         print(f"  {name:10s} {load(name).get('description', '')}")
     print("bikes (mtbmj bike, crosscheck --bike; docs/bike.md):")
     for name in spec.preset_names():
-        print(f"  {name:10s} {spec._read(name)[0].get('description', '')}")
+        print(f"  {name:10s} {spec.read_table(name)[0].get('description', '')}")
     return 0
 
 

@@ -76,9 +76,9 @@ def _bike_sweep(args) -> int:
 
 def cmd_sweep(args) -> int:
     from mtbmj.sweep.runner import SweepProgress, run_sweep, start_pool
-    from mtbmj.cli.presets import _is_bike
+    from mtbmj.cli.presets import is_bike
 
-    if _is_bike(args.config):
+    if is_bike(args.config):
         return _bike_sweep(args)
     if args.roll is not None or args.speed is not None or args.fork_set or args.shock_set:
         raise ConfigError("--roll, --speed, --fork-set, --shock-set: only for a bike sweep (CONFIG a bike preset "

@@ -93,9 +93,9 @@ class RingDown:
                "undamped_frequency_hz": None, "undamped_frequency_hz_ci95": None}
         if self.fitted:
             out.update({
-                "damping_ratio": self.zeta, "damping_ratio_ci95": _ci(self.zeta, self.zeta_sd),
-                "frequency_hz": self.fd_Hz, "frequency_hz_ci95": _ci(self.fd_Hz, self.fd_sd),
-                "undamped_frequency_hz": self.fn_Hz, "undamped_frequency_hz_ci95": _ci(self.fn_Hz, self.fn_sd),
+                "damping_ratio": self.zeta, "damping_ratio_ci95": interval95(self.zeta, self.zeta_sd),
+                "frequency_hz": self.fd_Hz, "frequency_hz_ci95": interval95(self.fd_Hz, self.fd_sd),
+                "undamped_frequency_hz": self.fn_Hz, "undamped_frequency_hz_ci95": interval95(self.fn_Hz, self.fn_sd),
                 "rest_mm": self.rest_mm, "start_excursion_mm": self.x0_mm, "residual_rms_mm": self.rms_mm,
                 "residual_lag1_autocorrelation": self.rho})
         out.update({"slam_s": self.slam_s, "fit_start_s": self.t0_s, "fit_end_s": self.t_end_s,
@@ -105,7 +105,7 @@ class RingDown:
         return out
 
 
-def _ci(value: float, sd: float) -> list:
+def interval95(value: float, sd: float) -> list:
     return [value - Z95 * sd, value + Z95 * sd]
 
 
@@ -213,7 +213,6 @@ def _fit(rd: RingDown, t: np.ndarray, x: np.ndarray, half_s: float) -> RingDown:
 
     tau = t - t[0]
     wd0 = math.pi / half_s
-    rest0 = float(np.median(x[-max(3, x.size // 10):]))
 
     def linear(a, wd):
         e = np.exp(-a * tau)
@@ -311,10 +310,10 @@ class ClickLaw:
     def summary(self) -> dict:
         sd0, sds = math.sqrt(self.cov[0, 0]), math.sqrt(self.cov[1, 1])
         return {"form": LAW_FORM, "fitted_on_clicks": list(self.clicks),
-                "zeta0": self.zeta0, "zeta0_ci95": _ci(self.zeta0, sd0),
-                "slope_per_click": self.slope, "slope_per_click_ci95": _ci(self.slope, sds),
+                "zeta0": self.zeta0, "zeta0_ci95": interval95(self.zeta0, sd0),
+                "slope_per_click": self.slope, "slope_per_click_ci95": interval95(self.slope, sds),
                 "covariance": self.cov.tolist(),
-                "undamped_frequency_hz": self.fn_Hz, "undamped_frequency_hz_ci95": _ci(self.fn_Hz, self.fn_sd),
+                "undamped_frequency_hz": self.fn_Hz, "undamped_frequency_hz_ci95": interval95(self.fn_Hz, self.fn_sd),
                 "chi2_reduced": self.chi2_reduced}
 
 
