@@ -91,16 +91,9 @@ def test_every_fit_kind_runs_on_its_shipped_example(tmp_path, kind):
     done = run_cli("fit", kind, "example", "--out", out)
     summary = json.loads((out / "fit.json").read_text())
     assert summary["synthetic_data"] is True
-    if kind != "drop":
-        assert done.returncode == 0, done.stderr
-        return
-    assert "time zero: tire touch found at the end of the free fall" in done.stdout
-    # the example is a fork none of the presets describe (LuGre friction, other contact rates):
-    # S12 fits it to 0.41 mm against a 0.06 mm noise floor, and the fit says so
-    assert done.returncode == 3, done.stderr
-    assert "model check FAILED" in done.stdout and summary["model_check_passed"] is False
-    assert (out / "fit.toml").read_text().startswith('description = "NOT A CLEAN RESULT: model check FAILED')
-    assert summary["models"]["drop"]["ci95"] == {"tire.impact_rate_N_per_mm": None, "fork.spring.preload_N": None}
+    # every example passes its own check (tests/test_shipped_examples.py checks what each finds)
+    assert done.returncode == 0, done.stderr
+    assert summary["model_check_passed"] is True
 
 
 def test_shipped_examples_are_what_the_documented_call_writes(tmp_path):

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, add_out, intermixed, overrides  # noqa: F401
+from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, Progress, add_out, intermixed, overrides  # noqa: F401
 from mtbmj.errors import MtbmjError
 
 
@@ -54,9 +54,14 @@ def cmd_fit(args) -> int:
         from mtbmj.identify.examples import example_paths
 
         data = example_paths(args.kind)
-    ident = identify(args.kind, data, model=args.model, friction=args.friction, mass_kg=args.mass_kg,
-                     config=args.config, free=free, bounds=bounds or None, engine=args.engine,
-                     starts=args.starts, touch_s=args.touch_s, clicks=clicks, overrides=overrides(args.set))
+    def fit(progress=None):
+        return identify(args.kind, data, model=args.model, friction=args.friction, mass_kg=args.mass_kg,
+                        config=args.config, free=free, bounds=bounds or None, engine=args.engine,
+                        starts=args.starts, touch_s=args.touch_s, clicks=clicks, overrides=overrides(args.set),
+                        progress=progress)
+
+    # a damper fit's laws, one by one (a bar on a terminal only; a record of samples takes a while)
+    ident = Progress(f"fit {args.kind}").around(fit) if args.kind == "damper" and not clicks else fit()
     written = ident.write(args.out)
     for name in ident.chosen:
         print(ident.results[name].line())

@@ -16,7 +16,8 @@ default band of 5 mm/s) and solved by ``scipy.optimize.least_squares``:
   (at least the 4 slowest at or above 20 mm/s) of each side (quadratic through the origin per side + a shared offset), then the hydraulic part at each test
   speed = mean of (force - offset), with (0, 0) added and force made non-decreasing: the rules of
   ``fork.damper.velocity_mm_per_s`` / ``force_N`` (>= 4 points, strictly increasing velocity);
-* friction models, each with the bilinear hydraulic part: ``none``, ``coulomb``,
+* friction models, each with a hydraulic law (``fit_damper``: the bilinear one; ``mtbmj fit``:
+  the one it writes, ``refit_friction``, so the law written is one fit): ``none``, ``coulomb``,
   ``coulomb_viscous`` (the viscous term is the slope common to both sides: min(c_c, c_r); the
   damper keeps the excess), ``stiction`` (Karnopp band), ``stribeck`` (exponent 2) and ``lugre``
   (its steady state, identical to Stribeck with exponent 2; the bristle stiffness and damping need
@@ -24,11 +25,15 @@ default band of 5 mm/s) and solved by ``scipy.optimize.least_squares``:
 
 ``select(results)`` picks the lowest BIC, so the friction model is chosen by the residual and the
 number of parameters, not by default. Breakaway and Stribeck/stiction velocity are reported as
-supported only when the record has test speeds low enough to show them.
+supported only when the record has test speeds low enough to show them. Every law is evaluated on
+the whole record at once (``law_forces``: the law's own formula run on arrays), not by a Python
+call per point.
 """
 from __future__ import annotations
 
 import math
+import types
+from dataclasses import replace
 from typing import Iterable, Mapping
 
 import numpy as np
@@ -66,6 +71,85 @@ def peaks(record: Record) -> Record:
     return record
 
 
+# --- the library's laws on arrays of velocities -----------------------------------------------------
+# A fit evaluates its law at every point of the record at every step of the solver. Point by point
+# through the law objects that is a few Python calls per point: minutes for a record of samples
+# (a dyno time series of 29 000 rows without time_s, fitted as points). The law's own source runs on
+# the whole array instead: its functions bound to numpy's for ``math``'s, and a piecewise law
+# evaluated once per side of its guards (``controllers.guards``: the sides frozen, so no branch
+# looks at an array), on the points that lie there. Same formulas, same branch rule (a guard >= 0
+# is on its positive side), the numbers of the point-by-point call to the last bits of tanh/exp.
+
+
+class _ArrayMath:
+    """``math``'s functions by name, numpy's (which take arrays)."""
+
+    def __getattr__(self, name):
+        return getattr(np, {"pow": "power"}.get(name, name))
+
+
+_ARRAY_MATH = _ArrayMath()
+_ARRAY_TWINS: dict = {}
+
+
+def _names(code) -> set[str]:
+    names = set(code.co_names)
+    for const in code.co_consts:
+        if isinstance(const, types.CodeType):
+            names |= _names(const)
+    return names
+
+
+def _array_twin(fn):
+    """``fn`` (a law's method or formula) with the same code, its ``math`` numpy's and every law
+    formula it calls the formula's own twin."""
+    twin = _ARRAY_TWINS.get(fn)
+    if twin is None:
+        namespace = dict(fn.__globals__)
+        twin = types.FunctionType(fn.__code__, namespace, fn.__name__, fn.__defaults__, fn.__closure__)
+        _ARRAY_TWINS[fn] = twin
+        if "math" in namespace:
+            namespace["math"] = _ARRAY_MATH
+        for name in _names(fn.__code__):
+            value = namespace.get(name)
+            if isinstance(value, types.FunctionType) and value.__module__.startswith(law.__name__ + "."):
+                namespace[name] = _array_twin(value)
+    return twin
+
+
+def law_forces(obj, v) -> np.ndarray:
+    """``obj.force`` (a damper or a stateless friction law of ``controllers``) at every velocity of
+    ``v`` (m/s), as one array: each side of its guards evaluated once, on its points."""
+    v = np.asarray(v, float)
+    force = _array_twin(type(obj).force)
+    if not getattr(obj, "n_guards", 0):
+        return np.broadcast_to(np.asarray(force(obj, v), float), v.shape).copy()
+    sides = np.array([np.broadcast_to(g, v.shape) >= 0.0 for g in obj.guards(0.0, v)]).reshape(obj.n_guards, -1)
+    flat, out = v.ravel(), np.empty(v.size)
+    for at, combo in _branches(sides):
+        out[at] = force(obj, flat[at], sides=combo)
+    return out.reshape(v.shape)
+
+
+def _branches(sides: np.ndarray):
+    """(the points, the sides) of every combination of guard sides that ``sides`` (guards x
+    points, True: the guard >= 0) holds."""
+    n = sides.shape[0]
+    if n <= 16:  # each point's sides as one number, the ones present counted in one pass
+        codes = np.zeros(sides.shape[1], np.int64)
+        for i in range(n):
+            codes |= sides[i].astype(np.int64) << i
+        for code in np.flatnonzero(np.bincount(codes, minlength=1)):
+            yield codes == code, tuple(bool(code >> i & 1) for i in range(n))
+        return
+    packed = np.ascontiguousarray(np.packbits(sides, axis=0).T)  # a table's many guards: one key a point
+    keys = packed.view(np.dtype((np.void, packed.shape[1]))).ravel()
+    _, first, which = np.unique(keys, return_index=True, return_inverse=True)
+    which = which.ravel()
+    for j, i in enumerate(first):
+        yield which == j, tuple(bool(s) for s in sides[:, i])
+
+
 # --- friction laws as vectorised functions of the parameters -------------------------------------
 
 def _friction_law(name: str, q: np.ndarray):
@@ -86,8 +170,7 @@ def _friction_force(name: str, q: np.ndarray, v: np.ndarray) -> np.ndarray:
     if name == "lugre":  # steady state: g(v) sgn(v) (+ sigma2 v, here in the damper)
         g = q[0] + (q[1] - q[0]) * np.exp(-((v / q[2]) ** 2))
         return g * np.sign(v)
-    friction = _friction_law(name, q)
-    return np.array([friction.force(float(vi)) for vi in v])
+    return law_forces(_friction_law(name, q), v)
 
 
 _FRICTION_PARAMS = {
@@ -102,8 +185,7 @@ def _hydraulic(name: str, p: np.ndarray, v: np.ndarray) -> np.ndarray:
     if name == "linear":
         return p[0] * v
     if name == "digressive":
-        damper = law.DigressiveDamper(*map(float, p[:6]))
-        return np.array([damper.force(float(vi)) for vi in v])
+        return law_forces(law.DigressiveDamper(*map(float, p[:6])), v)
     if name == "smooth_knee":  # the same two rates with a smooth knee: only for the friction check
         speed = np.abs(v)
         comp = p[1] * speed + (p[0] - p[1]) * p[2] * np.tanh(speed / p[2])
@@ -256,6 +338,7 @@ def _parametric(rec: Record, hydraulic: str, friction: str, name: str) -> FitRes
     curve_f = _hydraulic(hydraulic, p[:nh], grid) + _friction_force(fric, p[nh:], grid)
     result = FitResult("damper", name, values, stderr, float(np.sqrt(np.mean(r ** 2))), "N", len(v), len(p),
                      {"model_keys": {D + "model": hydraulic, R + "model": friction}, "hydraulic": hydraulic,
+                      "law": f"{hydraulic} hydraulic law with {friction} friction",
                       "residual": -r,  # data - model
                       "friction": friction, "curve": (grid * 1e3, curve_f), "correlation": corr,
                       "supported": supported, "notes": notes, "friction_identified": identified,
@@ -387,10 +470,10 @@ def _table(rec: Record) -> FitResult:
         raise DamperFitError(f"{rec.path}: a lookup table needs at least 4 distinct test speeds (found {len(tv)} "
                              "velocities including 0)")
     damper = law.TableDamper(tv, tf)
-    pred = np.array([damper.force(float(vi)) for vi in v]) + fc * np.tanh(v / BAND)
+    pred = law_forces(damper, v) + fc * np.tanh(v / BAND)
     r = pred - f
     grid = np.linspace(min(v.min(), 0.0), max(v.max(), 0.0), 400)
-    curve_f = np.array([damper.force(float(g)) for g in grid]) + fc * np.tanh(grid / BAND)
+    curve_f = law_forces(damper, grid) + fc * np.tanh(grid / BAND)
     values = {D + "velocity_mm_per_s": tuple(float(x) for x in np.round(tv * 1e3, 3)),
               D + "force_N": tuple(float(x) for x in np.round(tf, 3)),
               R + "coulomb_N": fc}
@@ -398,6 +481,7 @@ def _table(rec: Record) -> FitResult:
     result = FitResult("damper", "table", values, stderr, float(np.sqrt(np.mean(r ** 2))), "N", len(v),
                        len(tv) - 1 + 1,
                      {"model_keys": {D + "model": "table", R + "model": "coulomb"}, "hydraulic": "table",
+                      "law": "table hydraulic law with coulomb friction",
                       "residual": -r,  # data - model
                       "friction": "coulomb", "curve": (grid * 1e3, curve_f), "force_stderr_N": tse.tolist(),
                       "supported": True,
@@ -425,20 +509,25 @@ def fit_damper(record: Record, model: str = "bilinear", *, friction: str | None 
     return _parametric(rec, "bilinear", model, model)
 
 
-def fit_damper_all(record: Record) -> dict[str, FitResult]:
-    """Every hydraulic model (with Coulomb friction) and every friction model (with the bilinear
-    hydraulic part), keyed by model name. Each result with a Coulomb level carries
-    ``extra["friction_check"]`` (:func:`friction_check`)."""
+def fit_damper_all(record: Record, friction: bool = True, step=None) -> dict[str, FitResult]:
+    """Every hydraulic model (with Coulomb friction) and, with ``friction``, every friction model
+    (with the bilinear hydraulic part), keyed by model name. Each result with a Coulomb level
+    carries ``extra["friction_check"]`` (:func:`friction_check`). ``friction=False``: the
+    hydraulic models only (``mtbmj fit`` fits the friction models with the hydraulic law it
+    chooses, ``refit_friction``). ``step()``, if given, is called after each fit (a progress
+    bar: ``len(HYDRAULIC) + len(CHECK_SHAPES)`` calls, ``+ len(FRICTION)`` with ``friction``)."""
     rec = peaks(record)
     out = {}
-    for name in MODELS:
+    for name in MODELS if friction else HYDRAULIC:
         try:
             out[name] = fit_damper(rec, name)
         except DamperFitError:
             if name != "table":
                 raise
+        if step is not None:
+            step()
     if "digressive" in out:
-        out["digressive"].extra["friction_check"] = friction_check(rec, out["digressive"])
+        out["digressive"].extra["friction_check"] = friction_check(rec, out["digressive"], step)
         _carry_friction_check(out)
     return out
 
@@ -457,19 +546,40 @@ def _carry_friction_check(results: dict[str, FitResult]) -> None:
                 result.extra["friction_identified"] = False
 
 
-def refit_friction(record: Record, results: dict[str, FitResult], hydraulic: str) -> None:
-    """Fit every friction model again with the ``hydraulic`` law the fit writes (``linear`` or
-    ``digressive``) instead of the bilinear one, so the friction models are compared, and the
-    friction written, on the law that carries them (on digressive data a bilinear law bends the
-    friction to make up its shape)."""
+def refit_friction(record: Record, results: dict[str, FitResult], hydraulic: str, step=None) -> None:
+    """Fit every friction model (again) with the ``hydraulic`` law the fit writes (``linear``,
+    ``bilinear`` or ``digressive``), so the friction models are compared, and the friction
+    written, on the law that carries them, fitted together with it (on digressive data a bilinear
+    law bends the friction to make up its shape). ``step()``: called after each fit."""
     rec = peaks(record)
     for name in FRICTION:
-        results[name] = _parametric(rec, hydraulic, name, name)
+        done = results.get(hydraulic)
+        if name == "coulomb" and done is not None and done.extra.get("friction") == "coulomb":
+            results[name] = replace(done, model=name, extra=dict(done.extra))  # the same fit: not run twice
+        else:
+            results[name] = _parametric(rec, hydraulic, name, name)
+        if step is not None:
+            step()
     if "digressive" in results:
         _carry_friction_check(results)
 
 
-def friction_check(rec: Record, digressive: FitResult) -> dict:
+def sign_band_floor(rec: Record, results: Mapping[str, FitResult]) -> float:
+    """The residual RMS below which a damper fit counts as exact: the library's friction laws
+    turn with tanh(v / ``BAND``), not with an exact step, so a record made with an exact friction
+    step (a closed form, a dyno with a sharp turn) differs from every one of them by
+    F (1 - tanh(|v| / band)) at each test speed, F the largest friction level fitted: at most
+    7e-4 F at the speeds of ``MIN_WIDTH`` (4 bands) and up, the ones counted (slower, the band
+    shapes the force itself). Residuals below that are no evidence between the laws
+    (``run._choose``'s floor)."""
+    speed = np.abs(np.asarray(rec["velocity"], float))
+    level = max((float(r.values.get(R + k, 0.0)) for r in results.values() for k in ("coulomb_N", "breakaway_N")),
+                default=0.0)
+    short = np.where(speed >= MIN_WIDTH, 1.0 - np.tanh(speed / BAND), 0.0)
+    return float(level * np.sqrt(np.mean(short ** 2)))
+
+
+def friction_check(rec: Record, digressive: FitResult, step=None) -> dict:
     """Can the record tell the friction from the hydraulic law? A peak-force record shows the
     friction only as what is left at zero speed, extrapolated from its slowest test speeds by the
     hydraulic law. The digressive fit (a sharp knee) is refitted with other shapes of the force
@@ -483,6 +593,9 @@ def friction_check(rec: Record, digressive: FitResult) -> dict:
             fits[shape.replace("_", " ")] = _parametric(rec, shape, "coulomb", shape)
         except RecordError:
             continue
+        finally:
+            if step is not None:
+                step()
     best = min(f.bic for f in fits.values())
     # a shape the record rejects (BIC worse by REJECTED_BIC or more) is no alternative to weigh
     plausible = {name: f.values[R + "coulomb_N"] for name, f in fits.items() if f.bic - best < REJECTED_BIC}
@@ -596,7 +709,7 @@ def fit_settings(records: list[Record], settings: list[Mapping[str, float]], mod
     if model == "table":
         rows = np.array([np.interp(grid, g, f.values[D + "force_N"]) for g, f in zip(grids, fits)])
     else:  # the law's hydraulic force (no friction) at the common velocities
-        rows = np.array([[_digressive_law(f).force(float(x) * 1e-3) for x in grid] for f in fits])
+        rows = np.array([law_forces(_digressive_law(f), grid * 1e-3) for f in fits])
     values: dict[str, Any] = {D + "velocity_mm_per_s": tuple(float(x) for x in grid)}
     described = []
     for stroke, side in (("compression", grid > 0), ("rebound", grid < 0)):

@@ -62,7 +62,7 @@ import numpy as np
 from scipy import optimize, stats
 from scipy.stats import qmc
 
-from mtbmj.config import SCHEMA, Config
+from mtbmj.config import ALTERNATIVES, CANONICAL, SCHEMA, Config
 from mtbmj.controllers import jit as _jit, native
 from mtbmj.drop.chain import resolve
 from mtbmj.drop.run import run_drop
@@ -216,6 +216,31 @@ def default_bounds(key: str, start: float) -> tuple[float, float]:
     return start - DEFAULT_BOUND_FACTOR * abs(start), start + DEFAULT_BOUND_FACTOR * abs(start)
 
 
+def start_value(cfg: Config, key: str) -> float:
+    """The start of free key ``key``: its value in ``cfg``, in the key's own unit. A key in a
+    rider's unit (``fork.spring.rate_lb_per_in``, ``config.ALTERNATIVES``) is read from the
+    canonical key a configuration stores it under (a file that sets ``rate_lb_per_in`` holds
+    ``rate_N_per_mm`` once loaded), so either key of the pair can be freed on either."""
+    canonical, per = ALTERNATIVES.get(key, (key, 1.0))
+    if canonical in cfg.values:
+        return float(cfg.values[canonical]) / per
+    other = CANONICAL.get(key) or (canonical if canonical != key else None)
+    given = f"{key} or {other}" if other else key
+    raise ConfigError(f"{key}: missing (a free parameter needs a start value: set {given} in the configuration, "
+                      f"or --set {key}=VALUE)")
+
+
+def same_quantity(free: Sequence[str]) -> None:
+    """Refuse two free keys that are one value in two units (``rate_N_per_mm`` and
+    ``rate_lb_per_in``): the fit could not move them apart."""
+    seen: dict[str, str] = {}
+    for key in free:
+        canonical = ALTERNATIVES.get(key, (key, 1.0))[0]
+        if canonical in seen:
+            raise ConfigError(f"{seen[canonical]} and {key}: the same value in two units; free one of them")
+        seen[canonical] = key
+
+
 def noise_floor(aligned, channels: Sequence[str], keep: np.ndarray) -> float:
     """The record's own noise (mm, RMS over the fitted channels): each channel's white noise from
     its third differences (``drop.peaks.noise_sigma``, robust to the impact's few steep
@@ -281,6 +306,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
         raise ConfigError("fit_drop: no free parameters given")
     if len(set(free)) != len(free):
         raise ConfigError("fit_drop: a free parameter is listed twice")
+    same_quantity(free)
     for key in bounds or {}:
         if key not in free:
             raise ConfigError(f"--bound {key}: not a free parameter (free: {', '.join(free)}); add it to --free "
@@ -294,7 +320,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
         if key in WHOLE_NUMBER_KEYS or key.endswith("_clicks"):
             raise ConfigError(f"{key}: takes whole numbers, which a least-squares fit cannot step through; run each "
                               f"setting instead (mtbmj sweep CONFIG --vary {key}=LOW:HIGH:N) and compare")
-        value = float(cfg.require(key, "a free parameter needs a start value"))
+        value = start_value(cfg, key)
         low, high = default_bounds(key, value) if not (bounds and key in bounds) else map(float, bounds[key])
         if not (np.isfinite(low) and np.isfinite(high)):
             raise ConfigError(f"{key}: bounds ({low:g}, {high:g}) must be finite numbers")

@@ -11,8 +11,8 @@ the call that makes them again.
 - tire: ``tire_drop_example.csv`` (a mass dropped on the tire; the mass is in its header) and
   ``tire_ramp_example.csv`` (a static press) from ``tire_synthetic``;
 - drop: ``sled_example.csv``, a sled record on a logger clock that starts before the release
-  (made by ``benchmarks/make_sled_example.py``: an S12 variant with LuGre friction on the ODE
-  reference).
+  (made by ``benchmarks/make_sled_example.py``: S12 with another impact tire rate and preload, the
+  keys a drop fit frees by default, on the ODE reference).
 
 Make the first three again with ``python -c "from mtbmj.identify.examples import write_examples;
 write_examples('DIR')"`` (deterministic: the shipped files are what it writes).

@@ -93,7 +93,8 @@ class FitResult:
                 unc = ""
             span = f" [bounds {_bound_text(bounds[key][0])} to {_bound_text(bounds[key][1])}]" if key in bounds else ""
             parts.append(f"{name} = {value:.6g}{unc}{span}")
-        return f"{self.kind} {self.model}: " + ", ".join(parts) + f"; residual RMS {self.rms:.4g} {self.residual_unit}"
+        label = self.extra.get("law", self.model)  # a damper fit: its hydraulic and friction laws
+        return f"{self.kind} {label}: " + ", ".join(parts) + f"; residual RMS {self.rms:.4g} {self.residual_unit}"
 
 
 def _bound_text(value: float) -> str:

@@ -74,17 +74,18 @@ class Identification:
 
     def parameter_set(self) -> dict:
         fitted = {key: self.results[name].overrides()[key] for key, name in self._sources().items()}
-        return {**self.overrides, **fitted}
+        return {**_without_counterparts(self.overrides, fitted), **fitted}
 
     def toml(self) -> str:
         comments = {}
         for key, name in self._sources().items():
             result = self.results[name]
             interval = result.interval95(key)
+            fit = f"{self.kind} fit '{name}'" + (f" ({result.extra['law']})" if "law" in result.extra else "")
             if interval is not None:
-                comments[key] = f"95 % interval {interval[0]:.6g} to {interval[1]:.6g}, {self.kind} fit '{name}'"
+                comments[key] = f"95 % interval {interval[0]:.6g} to {interval[1]:.6g}, {fit}"
             elif result.stderr.get(key) is not None:
-                comments[key] = f"NO meaningful interval (see the header), {self.kind} fit '{name}'"
+                comments[key] = f"NO meaningful interval (see the header), {fit}"
         for key in self.overrides:
             comments.setdefault(key, "set for the fit (--set)")
         sources = ", ".join(Path(r.path).name for r in self.records)
@@ -96,7 +97,7 @@ class Identification:
             # a configuration file: its values go into fit.toml, which then stands alone (a base
             # outside the fit's folder would not be read back: mtbmj.config's base rule)
             own = {k: v for k, v in load_config(base).values.items() if k not in ("description", "reading")}
-            values, base = {**own, **values}, "reference"
+            values, base = {**_without_counterparts(own, values), **values}, "reference"
         return parameter_set_toml(values, base, f"{warning}mtbmj fit {self.kind} from {sources}{synthetic}", comments)
 
     def summary(self) -> dict:
@@ -125,6 +126,17 @@ class Identification:
 
     def write(self, out_dir) -> list[Path]:
         return output.write_atomically(out_dir, self.files())
+
+
+def _without_counterparts(values: Mapping, winners: Mapping) -> dict:
+    """``values`` less the keys that give a key of ``winners`` in another unit
+    (``fork.spring.rate_N_per_mm`` when ``rate_lb_per_in`` wins, ``config.ALTERNATIVES``): one
+    file may not give a value in two units, and the fitted (or later) one is meant."""
+    from mtbmj.config import ALTERNATIVES, CANONICAL
+
+    others = {ALTERNATIVES[k][0] for k in winners if k in ALTERNATIVES} | {CANONICAL[k] for k in winners
+                                                                          if k in CANONICAL}
+    return {k: v for k, v in values.items() if k not in others}
 
 
 def _result_json(r: FitResult) -> dict:
@@ -262,39 +274,115 @@ def _noise_check(record: Record, quantity: str, scale: float, result: FitResult,
     return model_check(result.rms, noise, 0.0, unit, worst, residual=result.extra.get("residual"))
 
 
-def _damper(records, results, model, friction, module) -> Identification:
-    floor = _floor(records, "force")
-    hydraulic = _choose(results, HYDRAULIC_MODELS, model, "model", floor)
-    if hydraulic in ("linear", "digressive"):  # the friction laws compared on the hydraulic law written
-        module.refit_friction(records[0], results, hydraulic)
-    chosen_friction = _choose(results, FRICTION_MODELS, friction, "friction", floor)
-    notes = (_comparison(results, HYDRAULIC_MODELS, hydraulic, floor, "hydraulic models")
-             + _comparison(results, FRICTION_MODELS, chosen_friction, floor, "friction models"))
+def _steps(progress: Callable[[float], None] | None, total: int) -> Callable[[], None] | None:
+    """A ``step()`` that reports one more of ``total`` steps done to ``progress``."""
+    if progress is None:
+        return None
+    done = [0]
+    progress(0.0)
+
+    def step() -> None:
+        done[0] += 1
+        progress(min(done[0] / total, 1.0))
+
+    return step
+
+
+MANY_ROWS = 1000  # a damper record this long without time_s is samples, not one point per half-cycle
+
+
+def _damper(records, results, model, friction, module, step=None) -> Identification:
+    """The damper law written: the hydraulic law (``model``, or the lowest BIC) and the friction
+    law fitted together with it (``friction``, or the lowest BIC among the friction laws each
+    fitted with that hydraulic law). One fit supplies every value written, so what the fit prints,
+    what fit.json records and what fit.toml writes are that one law, and the model check judges
+    it. A table carries its own Coulomb offset (it takes up any other friction shape)."""
     rec = module.peaks(records[0])
-    ident = Identification("damper", records, results, [hydraulic], lambda: module.plot_damper(records[0], results),
+    floor = max(_floor(records, "force"), module.sign_band_floor(rec, results))
+    hydraulic = _choose(results, HYDRAULIC_MODELS, model, "model", floor)
+    notes = _comparison(results, HYDRAULIC_MODELS, hydraulic, floor, "hydraulic models")
+    if hydraulic == "table":
+        if friction not in ("auto", "coulomb"):
+            raise MtbmjError(f"--friction {friction}: the table is fitted with its Coulomb offset alone (the table takes "
+                             "up any other friction shape); leave --friction out, or name another --model")
+        chosen_friction, written = "coulomb", "table"
+        notes.append("friction: the table's own Coulomb offset (a table takes up any other friction shape, so no other "
+                     "friction law is fitted with it)")
+    else:  # every friction law fitted with the hydraulic law written, the one written chosen among them
+        module.refit_friction(rec, results, hydraulic, step)
+        chosen_friction = _choose(results, FRICTION_MODELS, friction, "friction", floor)
+        written = hydraulic if chosen_friction == "coulomb" else chosen_friction  # (the same fit for coulomb)
+        notes += _comparison(results, FRICTION_MODELS, chosen_friction, floor, f"friction models (each with the "
+                             f"{hydraulic} law)")
+        notes += _friction_said(results, hydraulic, chosen_friction, written, floor, friction != "auto")
+    notes.append(f"written: the {results[written].extra['law']}, its values fitted together (fit.json: "
+                 f"models.{written})")
+    raw = records[0]
+    if "time" not in raw.columns and ("displacement" in raw.columns or len(raw) > MANY_ROWS):
+        notes.append(f"no time_s: the {len(raw)} rows are fitted as (velocity, force) points as they stand, not reduced "
+                     "to the dyno's peak points (one per half-cycle) as a time series with time_s is")
+    ident = Identification("damper", records, results, [written], lambda: module.plot_damper(records[0], results),
                            notes=notes, friction=chosen_friction)
-    for name in set(ident._sources().values()):  # the fits whose values are written
-        check = module.damper_model_check(rec, results[name])
-        if check is not None:
-            _attach_check(results[name], check)
-    if "model_check" not in results[hydraulic].extra:
+    check = module.damper_model_check(rec, results[written])  # the law written, as written
+    if check is not None:
+        _attach_check(results[written], check)
+    else:
         notes.append(f"no model check: the record has fewer than {module.MIN_NOISE_DOF} repeated points at its test "
                      "speeds, so it cannot tell its own noise (record several cycles per speed)")
     return ident
+
+
+def _friction_said(results: dict[str, FitResult], hydraulic: str, friction: str, written: str,
+                   floor: float, asked: bool) -> list[str]:
+    """Notes on what the record tells of the friction written: where the hydraulic law with no
+    friction, or with Coulomb friction, fits as well as the one written (BIC within
+    ``INDISTINGUISHABLE_BIC``, or both within ``floor``: exact), the record cannot tell the
+    friction from the hydraulic law's shape; the note says so, what the other would write and why
+    this one is written (``asked``: named by --friction). The two-stage law's friction check
+    (``damper.friction_check``) becomes a warning on the written fit when it says the friction is
+    not told."""
+    notes = []
+    other = "coulomb" if friction != "coulomb" else "none"
+    mine, theirs = results[written], results.get(hydraulic if other == "coulomb" else other)
+    if theirs is not None:
+        exact = max(mine.rms, theirs.rms) <= floor
+        a, b = mine.bic_with_floor(floor), theirs.bic_with_floor(floor)
+        if exact or abs(a - b) < INDISTINGUISHABLE_BIC:
+            without = mine if other == "coulomb" else theirs
+            at = without.extra.get("at_bound", {})
+            knees = [f"{key.split('.')[-1].split('_')[0]} {value:.4g}" for key, value in without.values.items()
+                     if key.endswith("knee_mm_per_s") and at.get(key) == "lower"]
+            shape = (f"; {'without friction' if other == 'coulomb' else 'then'} its knees sit at the slowest test speeds "
+                     f"({' and '.join(knees)} mm/s), where a steep low-speed stage gives the forces a friction step "
+                     "gives" if knees else "")
+            alternative = (f"with {theirs.values.get('fork.friction.coulomb_N', 0.0):.4g} N of Coulomb friction"
+                           if other == "coulomb" else "without friction")
+            why = "as --friction asks" if asked else "the fewer parameters" if exact or a >= b else "the lower BIC"
+            notes.append(f"the record cannot tell the friction from the {hydraulic} law's shape: {alternative} the "
+                         f"{hydraulic} law fits {'exactly too' if exact else 'as well'} (BIC {b:.1f} against {a:.1f})"
+                         f"{shape}; written: {friction} friction, {why} (--friction {other} writes the other; test "
+                         "speeds below the slowest tell them apart)")
+    check = mine.extra.get("friction_check") or results.get("digressive", mine).extra.get("friction_check")
+    if check is not None and not check["told"]:
+        warnings = mine.extra.setdefault("warnings", [])
+        if check["line"] not in warnings:
+            warnings.append(check["line"])
+    return notes
 
 
 def identify(kind: str, data: Sequence[str | Path], model: str = "auto", friction: str = "auto",
              mass_kg: float | None = None, config: str = "S12", free: Sequence[str] = (),
              bounds: dict | None = None, engine: str = "mujoco", starts: int = 1,
              touch_s: float | None = None, clicks: Sequence[float | Mapping[str, float]] | None = None,
-             overrides: Mapping | None = None) -> Identification:
+             overrides: Mapping | None = None, progress: Callable[[float], None] | None = None) -> Identification:
     """Fit ``kind`` ("spring", "damper", "tire", "drop") to the record(s) in ``data``; ``starts``:
     drop fits from that many start points (the best wins); ``free``: the drop fit's free keys
     (default ``DEFAULT_DROP_FREE``); ``touch_s``: the drop record's time zero on its clock
     (default: found by ``validation.time_zero``); ``clicks``: damper fits from several dyno files,
     the adjuster position (clicks from closed) of each, or a mapping per file of its adjusters'
     positions by label (``damper.ADJUSTERS``: lsc, hsc, lsr, hsr, c, r), giving a ``clicks`` damper;
-    ``overrides``: drop fits run on ``config`` with these keys set (written into fit.toml too)."""
+    ``overrides``: drop fits run on ``config`` with these keys set (written into fit.toml too);
+    ``progress(fraction)``: called as a damper fit's laws are fitted (a progress bar)."""
     if kind not in KINDS:
         raise MtbmjError(f"fit: unknown kind {kind!r} (one of {', '.join(KINDS)})")
     if overrides and kind != "drop":
@@ -341,8 +429,9 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
                                   notes=result.extra["notes"])
         if len(records) > 1:
             raise MtbmjError("fit damper: several dyno files need --clicks (the adjuster position of each)")
-        results = damper.fit_damper_all(records[0])
-        return _damper(records, results, model, friction, damper)
+        step = _steps(progress, len(damper.HYDRAULIC) + len(damper.CHECK_SHAPES) + len(damper.FRICTION))
+        results = damper.fit_damper_all(records[0], friction=False, step=step)  # friction: with the law chosen
+        return _damper(records, results, model, friction, damper, step)
     if kind == "tire":
         from mtbmj.identify import tire
 
