@@ -46,7 +46,12 @@ def test_energy_balance_on_a_rock_garden(tmp_path):
     joint_motors = [(m.actuator(name).id, adr(name)) for name in ("fork_force", "shock_torque")]
     # the tire and drive forces: applied at the axles (world x and z, recorded by the probes),
     # their power the force times the axle's velocity
-    axles = [(m.site("front_axle").id, ("front_tire",)), (m.site("rear_axle").id, ("rear_tire", "drive"))]
+    axles = [(m.site("front_axle").id, ("front_tire", "front_ground")), (m.site("rear_axle").id, ("rear_tire", "drive"))]
+    # the couples of the ground's tangential forces about the axles (they act at the contact patches),
+    # on the fork lower and the swingarm: their power is the couple times the body's angular velocity
+    # about world y (virtual work: what the couple does, not what the code meant it to do)
+    couples = [(m.body("fork_lower").id, adr("front_couple")), (m.body("swingarm").id, adr("rear_couple"))]
+    spin = np.zeros(6)
     velocity = np.zeros(6)
     r = p.spec.rider
     # the legs and arms: (frame site, rider site, stiffness, damping, rest length)
@@ -72,6 +77,9 @@ def test_energy_balance_on_a_rock_garden(tmp_path):
             mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_SITE, site, velocity, 0)
             for name in forces:
                 parts.append(sensors[i, adr(f"{name}_x")] * velocity[3] + sensors[i, adr(f"{name}_z")] * velocity[5])
+        for body, column in couples:
+            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, body, spin, 0)
+            parts.append(sensors[i, column] * spin[1])
         parts += [-c * rate ** 2 for c, rate in rates]
         power[i] = sum(parts)
         turnover[i] = sum(abs(x) for x in parts)

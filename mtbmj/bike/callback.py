@@ -38,6 +38,7 @@ class BikeCallback:
         self.act_f, self.act_s = int(m.actuator_actadr[self.a_fs]), int(m.actuator_actadr[self.a_ss])
         self.a_tire = ((a("front_tire_x"), a("front_tire_z")), (a("rear_tire_x"), a("rear_tire_z")))
         self.a_drive = (a("drive_x"), a("drive_z"))
+        self.a_ground = (a("front_ground_x"), a("front_ground_z"), a("front_couple"), a("rear_couple"))
         self.a_probe = (a("front_deflection_probe"), a("rear_deflection_probe"))
         self.a_shock_probe = a("shock_force_probe")
         self.sites = (int(m.site("front_axle").id), int(m.site("rear_axle").id))
@@ -161,8 +162,12 @@ class BikeCallback:
             mujoco.mj_mulM(m, d, self._momentum, qvel)
             f = self.drive.force(self.speed, self._momentum[self.xv] / self.total_mass)
             ground = wheel_forces(f, fxf, fzf, df, fxr, fzr, dr, self.traction, self.tires[1].radius)
-        ctrl[self.a_drive[0]] = ground[0] + ground[3]  # the drive's and brakes' force on the bike, both tyres
-        ctrl[self.a_drive[1]] = ground[1] + ground[4]
+        ctrl[self.a_drive[0]] = ground[3]  # the rear tyre's ground force (drive or brake), at its axle
+        ctrl[self.a_drive[1]] = ground[4]
+        ctrl[self.a_ground[0]] = ground[0]  # the front tyre's (its brake)
+        ctrl[self.a_ground[1]] = ground[1]
+        ctrl[self.a_ground[2]] = ground[2]  # the couples the fork lower and the swingarm react
+        ctrl[self.a_ground[3]] = ground[5]
         xfrc = d.xfrc_applied
         for k, (fx, fz, _) in enumerate(radial):
             wheel = xfrc[self.wheels[k]]

@@ -64,15 +64,15 @@ WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front en
  R_A_TZ1, R_A_DX, R_A_DZ, R_A_PROBE0, R_A_PROBE1, R_A_SHOCK_PROBE, R_SITE0, R_SITE1, R_SBODY0, R_SBODY1, R_FRAME,
  R_ROOT0, R_ROOT1, R_NBODY, R_MASS, R_FORK_STATE, R_SHOCK_STATE, R_DRIVE, R_NL, R_LW, R_LR, R_LS, R_CALLS,
  R_REFRESHES, R_BODYROOT, R_WHEEL0, R_WHEEL1, R_LIMB_F0, R_LIMB_R0, R_LIMB_F1, R_LIMB_R1, R_JZ, R_JP, R_VZ,
- R_VP, R_REACT0, R_REACT1) = range(50)
-INT_WIDTH = 50
+ R_VP, R_REACT0, R_REACT1, R_A_GFX, R_A_GFZ, R_A_CF, R_A_CR) = range(54)
+INT_WIDTH = 54
 # float row of a slot
 (F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_NEXT0, F_NEXT1, F_LAST0, F_LAST1,
  F_REFRESH_DISTANCE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE, F_LIMB_K0, F_LIMB_C0, F_LIMB_REST0,
  F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1, F_RADIUS) = range(22)
 FLOAT_WIDTH = 24
 
-REGISTRY = Registry("mtbmj_bike_registry_v4", SLOTS,
+REGISTRY = Registry("mtbmj_bike_registry_v5", SLOTS,
                     {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
                      "wheel_ints": (2 * WI, np.int64), "wheel_floats": (2 * WF, np.float64),
                      "fork_ints": (LAW_INT_WIDTH, np.int64), "fork_floats": (LAW_FLOAT_WIDTH, np.float64),
@@ -330,8 +330,12 @@ if _numba is not None:
             f = _drive_force(F[F_SPEED], vcom, F[F_DRIVE_KV], F[F_DRIVE_PUSH], F[F_DRIVE_POWER], F[F_DRIVE_BRAKE])
             dxf, dzf, tf, dxr, dzr, tr = _wheel_forces(f, fxf, fzf, df, fx, fz, deflection, F[F_TRACTION],
                                                        F[F_RADIUS])
-        ctrl[I[R_A_DX]] = dxf + dxr
-        ctrl[I[R_A_DZ]] = dzf + dzr
+        ctrl[I[R_A_DX]] = dxr  # the rear tyre's ground force; the front's and the couples recorded beside
+        ctrl[I[R_A_DZ]] = dzr
+        ctrl[I[R_A_GFX]] = dxf
+        ctrl[I[R_A_GFZ]] = dzf
+        ctrl[I[R_A_CF]] = tf
+        ctrl[I[R_A_CR]] = tr
         o = 6 * I[R_WHEEL0]
         xfrc[o] = fxf + dxf
         xfrc[o + 1] = 0.0
@@ -454,6 +458,8 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
             R_BODYROOT: self._roots.ctypes.data, R_WHEEL0: int(m.body("front_wheel").id),
             R_WHEEL1: int(m.body("rear_wheel").id), R_REACT0: int(m.body("fork_lower").id),
             R_REACT1: int(m.body("swingarm").id),
+            R_A_GFX: a("front_ground_x"), R_A_GFZ: a("front_ground_z"), R_A_CF: a("front_couple"),
+            R_A_CR: a("rear_couple"),
             R_FORK_STATE: int(bool(fork_law.has_state)), R_SHOCK_STATE: int(bool(shock_law.has_state)),
             R_DRIVE: int(drive.mode != "coast"), R_NL: self._lw.size, R_LW: self._lw.ctypes.data,
             R_LR: self._lr.ctypes.data, R_LS: self._ls.ctypes.data}

@@ -376,7 +376,9 @@ def _signals(p: Prepared, states, sensors) -> dict:
     w = rear_lz - b.spec.rear_axle[1]  # the rear wheel's travel; the shock's stroke through the leverage curve
     stroke = b.spec.leverage.strokes(w)
     rear_x = X + np.cos(th) * rear_lx - np.sin(th) * rear_lz
-    drive = np.hypot(sens("drive_x"), sens("drive_z")) * np.where(sens("drive_x") >= 0.0, 1.0, -1.0)
+    # the ground's tangential forces on both tyres (the drive at the rear, the brakes at both), forward positive
+    drive = (np.hypot(sens("drive_x"), sens("drive_z")) * np.where(sens("drive_x") >= 0.0, 1.0, -1.0)
+             + np.hypot(sens("front_ground_x"), sens("front_ground_z")) * np.where(sens("front_ground_x") >= 0.0, 1.0, -1.0))
     return {
         "time_s": states[:n, 0],
         "x_m": X,

@@ -240,9 +240,11 @@ def trajectory(source: str | Path, fps: float = 30.0, duration: float | None = N
     if path.is_dir() and manifest.exists():
         try:
             manifest_data = json.loads(run_file_text(manifest, RenderError, "config"))
-            kind = manifest_data.get("kind", "drop")
-        except (OSError, ValueError) as exc:
+        except (OSError, ValueError, RecursionError) as exc:
             raise RenderError(f"{manifest}: cannot read ({exc})") from None
+        if not isinstance(manifest_data, dict):
+            raise RenderError(f"{manifest}: not the manifest of an mtbmj run (a JSON object is expected)")
+        kind = manifest_data.get("kind", "drop")
         if kind == "roll" or "scenario" in manifest_data:
             return roll_trajectory(path, fps, duration)
     return drop_trajectory(source, fps, duration)
