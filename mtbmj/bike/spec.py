@@ -203,9 +203,78 @@ def read_table(ref: str) -> tuple[dict, str]:
     from mtbmj.config import read_chain
 
     table: dict = {}
-    for _, _, part in read_chain(ref, _locate, _is_preset, "a bike description"):
+    for _, location, part in read_chain(ref, _locate, _is_preset, "a bike description"):
+        if isinstance(part.get("geometry"), dict):  # a chart replaces the geometry its bases gave
+            given = [k for k in CHART_SETS if k in (part.get("bike") or {})]
+            if given:
+                raise ConfigError(f"{location}: bike.{given[0]} and [geometry] give the frame's geometry two ways; "
+                                  f"give one")
+            if isinstance(table.get("bike"), dict):
+                table["bike"] = {k: v for k, v in table["bike"].items() if k not in CHART_SETS}
+            table.pop("geometry", None)
         table = _merge(table, part)
     return table, str(ref)
+
+
+# What a geometry chart sets in [bike] (``from_chart``)
+CHART_SETS = ("head_angle_deg", "fork_offset_mm", "front_axle_mm", "rear_axle_mm")
+CHART_REQUIRED = ("head_angle_deg", "wheelbase_mm", "chainstay_mm", "bb_drop_mm", "fork_offset_mm")
+CHART_CHECK = ("reach_mm", "stack_mm", "head_tube_mm", "fork_length_mm")
+CHART_TOLERANCE_MM = 5.0  # the front axle from reach and stack against the one from the wheelbase
+
+
+def from_chart(chart: dict) -> dict:
+    """The [bike] geometry keys of a geometry chart (``[geometry]``): frame coordinates with the
+    origin at the bottom bracket and x along the ground, both wheels on flat ground at full
+    extension (so the axles are level and the chart's head angle is the frame's). The rear axle
+    lies ``bb_drop_mm`` above the bottom bracket, ``chainstay_mm`` from it; the front axle at the
+    same height, ``wheelbase_mm`` ahead of the rear one. Given reach, stack, head tube and the
+    fork's axle-to-crown too, the front axle is found a second way (down the steering axis from
+    the head tube's top, then the offset forward) and the two must agree within
+    ``CHART_TOLERANCE_MM``, else the chart is refused naming its values."""
+    def number(key, low=None, high=None):
+        v = chart.get(key)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise ConfigError(f"geometry.{key}: {'missing' if v is None else f'must be a number, got {v!r}'}")
+        if (low is not None and v < low) or (high is not None and v > high):
+            raise ConfigError(f"geometry.{key}: {v:g} is outside {low:g}-{high:g}")
+        return float(v)
+
+    unknown = sorted(set(chart) - set(CHART_REQUIRED) - set(CHART_CHECK))
+    if unknown:
+        raise ConfigError(f"geometry.{unknown[0]}: unknown key (known: {', '.join(CHART_REQUIRED + CHART_CHECK)})")
+    head = number("head_angle_deg", 45.0, 90.0)
+    wheelbase, chainstay = number("wheelbase_mm", 500.0, 2000.0), number("chainstay_mm", 300.0, 600.0)
+    drop, offset = number("bb_drop_mm", -150.0, 150.0), number("fork_offset_mm", 0.0, 150.0)
+    if abs(drop) >= chainstay:
+        raise ConfigError(f"geometry.bb_drop_mm: {drop:g} mm is not less than the chainstay, {chainstay:g} mm")
+    rear = (-math.sqrt(chainstay ** 2 - drop ** 2), drop)
+    front = (wheelbase + rear[0], drop)
+    if front[0] <= 0.0:
+        raise ConfigError(f"geometry.wheelbase_mm: {wheelbase:g} mm leaves the front axle behind the bottom bracket "
+                          f"(chainstay {chainstay:g} mm)")
+    given = [k for k in CHART_CHECK if k in chart]
+    if given and len(given) < len(CHART_CHECK):
+        missing = [k for k in CHART_CHECK if k not in chart]
+        raise ConfigError(f"geometry.{missing[0]}: needed with {', '.join('geometry.' + k for k in given)} (the front "
+                          f"axle found from reach and stack takes all of {', '.join(CHART_CHECK)})")
+    if given:
+        reach, stack = number("reach_mm", 300.0, 600.0), number("stack_mm", 500.0, 750.0)
+        tube, crown = number("head_tube_mm", 50.0, 250.0), number("fork_length_mm", 400.0, 700.0)
+        a = math.radians(head)
+        down = (math.cos(a), -math.sin(a))  # along the steering axis, down and forward
+        ahead = (math.sin(a), math.cos(a))  # across it, forward: the offset's direction
+        along = tube + crown
+        axle = (reach + along * down[0] + offset * ahead[0], stack + along * down[1] + offset * ahead[1])
+        miss = math.hypot(axle[0] - front[0], axle[1] - front[1])
+        if miss > CHART_TOLERANCE_MM:
+            raise ConfigError(
+                f"geometry: reach {reach:g}, stack {stack:g}, head tube {tube:g}, axle-to-crown {crown:g}, offset "
+                f"{offset:g} and head angle {head:g} put the front axle at ({axle[0]:.0f}, {axle[1]:.0f}) mm, "
+                f"{miss:.0f} mm from where wheelbase {wheelbase:g}, chainstay {chainstay:g} and BB drop {drop:g} put "
+                f"it ({front[0]:.0f}, {front[1]:.0f}); more than {CHART_TOLERANCE_MM:g} mm: a value is wrong")
+    return {"head_angle_deg": head, "fork_offset_mm": offset, "front_axle_mm": [front[0], front[1]],
+            "rear_axle_mm": [rear[0], rear[1]]}
 
 
 def _merge(a: dict, b: dict) -> dict:
@@ -227,6 +296,8 @@ KNOWN = {
               "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
               "arm_stiffness_N_per_mm", "arm_damping_N_s_per_m"},
     "drive": {"push_N", "power_W", "brake_N", "traction"},
+    "geometry": {"head_angle_deg", "wheelbase_mm", "chainstay_mm", "bb_drop_mm", "fork_offset_mm", "reach_mm",
+                 "stack_mm", "head_tube_mm", "fork_length_mm"},
 }
 
 
@@ -321,6 +392,11 @@ def load(ref: str, overrides=None) -> BikeSpec:
     ``overrides`` applied (:func:`overridden`)."""
     table, source = read_table(str(ref))
     table = overridden(table, overrides)
+    if isinstance(table.get("geometry"), dict):  # a geometry chart: the frame's geometry derived from it
+        for key in table["geometry"]:
+            if key not in KNOWN["geometry"]:
+                raise ConfigError(f"geometry.{key}: unknown key (known: {', '.join(sorted(KNOWN['geometry']))})")
+        table = _merge(table, {"bike": from_chart(table["geometry"])})
     for section, value in table.items():
         if section not in KNOWN:
             raise ConfigError(f"{section}: unknown section or key (known: {', '.join(k for k in KNOWN)})")
