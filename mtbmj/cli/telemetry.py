@@ -51,10 +51,14 @@ def add_parser(subparsers):
     p.add_argument("--threshold-mm-per-s", type=float, default=100.0,
                    help="high/low-speed split of the velocity histogram (default 100)")
     p.add_argument("--bin-percent", type=float, default=5.0, help="travel histogram bin width in %% of travel (default 5)")
-    p.add_argument("--fork-max-mm", type=float, default=telemetry.FORK_TRAVEL_MAX_MM,
-                   help=f"fork travel of the recorded bike (default {telemetry.FORK_TRAVEL_MAX_MM:g})")
-    p.add_argument("--shock-max-mm", type=float, default=telemetry.SHOCK_STROKE_MAX_MM,
-                   help=f"rear shock stroke of the recorded bike (default {telemetry.SHOCK_STROKE_MAX_MM:g})")
+    p.add_argument("--bike", metavar="BIKE",
+                   help="the recorded bike (a bike preset or file): its fork travel, shock stroke and leverage curve "
+                        "decode the ride (default: the SST example's bike, the Commencal Clash 2022)")
+    p.add_argument("--fork-max-mm", type=float,
+                   help=f"fork travel of the recorded bike (default the --bike's, else {telemetry.FORK_TRAVEL_MAX_MM:g})")
+    p.add_argument("--shock-max-mm", type=float,
+                   help=f"rear shock stroke of the recorded bike (default the --bike's, else "
+                        f"{telemetry.SHOCK_STROKE_MAX_MM:g})")
     p.set_defaults(func=cmd_telemetry)
     return p
 
@@ -309,9 +313,29 @@ def figure(summary: dict):
     return fig
 
 
+def _decoding(args) -> dict:
+    """read_sst's fork_max_mm, shock_max_mm and leverage: the --bike's, with --fork-max-mm and
+    --shock-max-mm over them; the SST example's bike without --bike."""
+    fork_max, shock_max = telemetry.FORK_TRAVEL_MAX_MM, telemetry.SHOCK_STROKE_MAX_MM
+    leverage = telemetry.LeverageCurve()
+    if args.bike is not None:
+        from mtbmj.bike import run as bike_run
+        from mtbmj.bike import spec
+
+        bike = spec.load(args.bike)
+        fork_setup, _ = bike_run.setups(bike)
+        fork_max, shock_max = fork_setup.travel * 1e3, bike.shock_stroke * 1e3
+        leverage = telemetry.LeverageCurve(tuple(w * 1e3 for w in bike.leverage.travel), tuple(bike.leverage.ratio))
+    return {"fork_max_mm": fork_max if args.fork_max_mm is None else args.fork_max_mm,
+            "shock_max_mm": shock_max if args.shock_max_mm is None else args.shock_max_mm, "leverage": leverage}
+
+
 def cmd_telemetry(args) -> int:
     path = telemetry.example_path() if str(args.sst) == "example" else args.sst
-    record = telemetry.read_sst(path, fork_max_mm=args.fork_max_mm, shock_max_mm=args.shock_max_mm)
+    record = telemetry.read_sst(path, **_decoding(args))
+    from mtbmj.config import warn
+
+    warn(telemetry.quality(record))
     runs = [load_run(d) for d in args.compare or []]
     summary = compare(record, runs, args.threshold_mm_per_s, args.bin_percent)
     written = output.write_atomically(args.out, {"telemetry.json": output.json_bytes(summary),
@@ -321,9 +345,11 @@ def cmd_telemetry(args) -> int:
     for end in ("fork", "rear"):
         if end in m:
             e = m[end]
-            lo, hi = e["travel_histogram"]["peak_bin_percent"]
-            parts.append(f"{end} peak {lo:.0f}-{hi:.0f} % of {e['travel_max_mm']:.0f} mm, "
-                         f"{e['velocity']['high_speed_percent']:.1f} % high-speed, {e['bottom_outs']['count']} bottom-outs")
+            # what a rider tunes by: the deepest travel, the bottom-outs and the dynamic sag (the mean
+            # travel while on the ground); the histogram's mode stays in the figure and the JSON
+            parts.append(f"{end} max {e['travel']['max_percent']:.0f} % ({e['travel']['max_mm']:.1f} of "
+                         f"{e['travel_max_mm']:.0f} mm), {e['bottom_outs']['count']} bottom-outs, dynamic sag "
+                         f"{e['travel']['mean_percent']:.0f} %, {e['velocity']['high_speed_percent']:.1f} % high-speed")
     air = m.get("fork", m.get("rear"))["airtime"]
     print(f"{m['file']}: {m['duration_s']:.1f} s at {m['sample_rate_Hz']:g} Hz; {'; '.join(parts)}; "
           f"airtime {air['count']} ({air['total_s']:.2f} s); compared {len(runs)} run(s); "

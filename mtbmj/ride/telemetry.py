@@ -285,6 +285,35 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
     )
 
 
+SHORT_RIDE_S = 30.0  # a ride shorter than this has histograms that have not settled
+SATURATED_FRACTION = 0.005  # samples at an encoder's end beyond this share: the sensor saturated
+
+
+def quality(record: TelemetryRecord) -> list[str]:
+    """One line for each thing about the ride a reader of its metrics should know: too short, a
+    sensor missing or stuck, a sensor at its end of range for more than 0.5 % of the ride."""
+    out = [f"{record.name}: {note}" for note in record.notes]
+    if record.duration_s < SHORT_RIDE_S:
+        out.append(f"{record.name}: the ride is {record.duration_s:.1f} s, shorter than {SHORT_RIDE_S:g} s: its "
+                   f"histograms and percentiles rest on few compressions")
+    for column, label, travel in ((0, "fork", record.fork_mm), (1, "shock", record.shock_mm)):
+        if travel is None:
+            out.append(f"{record.name}: no {label} sensor in this file: its end is left out")
+            continue
+        counts = record.counts[:, column] if record.counts is not None else None
+        if counts is not None and int(counts.max()) == int(counts.min()):
+            out.append(f"{record.name}: the {label} sensor never moved: missing or stuck; its end's metrics say nothing")
+            continue
+        if counts is not None and record.version == 3:
+            # count 0 is full extension (topped out, a normal place to be); the encoder's last count
+            # is where a sensor that runs out of range stays
+            at_end = float(np.mean(counts >= COUNTS - 1))
+            if at_end > SATURATED_FRACTION:
+                out.append(f"{record.name}: the {label} sensor sits at the end of its range for {100 * at_end:.1f} % "
+                           f"of the ride: saturated (its calibration or mounting?)")
+    return out
+
+
 def example_path() -> Path:
     """The shipped ride recording (00649.SST, MIT, from the Sufni Suspension Telemetry project)."""
     return Path(str(resources.files("mtbmj") / "data" / "sst" / "00649.SST"))
