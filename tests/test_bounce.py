@@ -53,22 +53,6 @@ def write_v2(path, shock_mm, fork_mm=None):
     return path
 
 
-def run_cli(argv):
-    original = cli.build_parser
-
-    def build():
-        p = original()
-        fit = next(a for a in p._actions if a.__class__.__name__ == "_SubParsersAction").choices["fit"]
-        cli_bounce.add_bounce_parser(fit)
-        return p
-
-    cli.build_parser = build
-    try:
-        return cli.main(argv)
-    finally:
-        cli.build_parser = original
-
-
 # --- the v2 reader ---------------------------------------------------------------------------
 
 def test_v2_reader_decodes_the_readme_calibration(tmp_path):
@@ -120,7 +104,7 @@ def test_law_and_predicted_ring_down(tmp_path):
     for k, z, seed in ((0, 0.15, 2), (10, 0.25, 3)):
         paths.append(write_v2(tmp_path / f"{k}.SST", slam_mm(z, seed=seed)[1]))
     out = tmp_path / "out"
-    assert run_cli(["fit", "bounce", *map(str, paths), "--clicks", "0,10", "--predict-clicks", "5",
+    assert cli.main(["fit", "bounce", *map(str, paths), "--clicks", "0,10", "--predict-clicks", "5",
                     "--out", str(out)]) == 0
     fit = json.loads((out / "fit.json").read_text())
     law = fit["law"]["shock"]
@@ -183,7 +167,7 @@ def _bad_cases(tmp_path):
 def test_bad_input_is_one_line_exit_2_nothing_written(tmp_path, capsys):
     for argv, cause in _bad_cases(tmp_path):
         out = tmp_path / "out"
-        assert run_cli(["fit", "bounce", *argv, "--out", str(out)]) == 2, cause
+        assert cli.main(["fit", "bounce", *argv, "--out", str(out)]) == 2, cause
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and cause in err and "Traceback" not in err, (cause, err)
         assert not out.exists(), cause

@@ -52,7 +52,7 @@ class Watch:
         self.pitch_col = 1 + pitch_qpos
         self.pitch_locked = pitch_locked
         adr = [int(model.sensor_adr[model.sensor(f"at_{name}").id]) for name in PARTS]
-        self.x_cols, self.z_cols = [a for a in adr], [a + 2 for a in adr]
+        self.x_cols, self.z_cols = adr, [a + 2 for a in adr]
         self.names = list(PARTS.values())
         self.crash: Crash | None = None
 

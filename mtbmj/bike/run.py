@@ -39,7 +39,7 @@ from mtbmj.bike import spec as spec_mod
 from mtbmj.bike.model import Bike, build_bike
 from mtbmj.controllers import installed
 from mtbmj.controllers.drive import Drive
-from mtbmj.errors import ConfigError, RunError
+from mtbmj.errors import ConfigError
 from mtbmj.limits import check_run
 from mtbmj.readout.endtravel import end_of_travel
 from mtbmj.result import RunOutput
@@ -187,8 +187,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     _check_start(p, ref)
     names = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")
     if rear_tire:
-        q = static_equilibrium(ref, acceptable=lambda q: _is_equilibrium(ref, q))
-        _check_equilibrium(ref, q)
+        q = static_equilibrium(ref, acceptable=lambda q: _is_equilibrium(ref, q))  # refuses when none is one
         q = dict(zip(names, q))
     else:  # on the front wheel alone: the rear at full extension, the rider at its stance (both held)
         q = dict.fromkeys(names, 0.0)
@@ -284,12 +283,6 @@ def _is_equilibrium(ref, q) -> bool:
     y[NQ] = ref.speed
     _, out = ref.forces(0.0, y)
     return bool(out["front"][1] > 0.0 and out["rear"][1] > 0.0 and abs(q[2]) < math.radians(30.0))
-
-
-def _check_equilibrium(ref, q) -> None:
-    if not _is_equilibrium(ref, q):
-        raise RunError("bike: no static equilibrium with both wheels on the ground (the springs cannot carry the "
-                       "bike and rider: check the fork's and the shock's rates and preloads)")
 
 
 def simulate(p: Prepared, duration: float, progress=None):
@@ -434,8 +427,8 @@ def _feature_window(p: Prepared, raw: dict, dt: float) -> dict:
     if span is None or not t.size:
         i0, i1, closed = 0, t.size, True
     else:
-        i0 = int(np.searchsorted(raw["front_axle_x_m"] >= span[0] - r, True)) if np.any(
-            raw["front_axle_x_m"] >= span[0] - r) else t.size
+        reached = np.flatnonzero(raw["front_axle_x_m"] >= span[0] - r)
+        i0 = int(reached[0]) if reached.size else t.size
         past = np.flatnonzero(raw["rear_axle_x_m"] >= span[1] + r)
         closed = bool(past.size and t[past[0]] + SETTLE_S <= t[-1] + 0.5 * dt)
         i1 = int(np.searchsorted(t, t[past[0]] + SETTLE_S - 0.5 * dt)) + 1 if past.size else t.size
