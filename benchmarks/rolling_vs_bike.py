@@ -1,8 +1,8 @@
 """The rolling front end (``mtbmj roll``) against the whole bike (``mtbmj bike``) over the same terrain,
 on one core, as real-time factors (simulated seconds per wall second), interleaved: each repetition
 runs both (in alternating order), so they see the same machine load. Both use their default (compiled)
-callbacks and settings: the front end at its fine step throughout (its 0.02 mm agreement with the
-rolling reference), the bike with its coarse steps and their refinement. Also timed in each repetition:
+callbacks and settings: both with their coarse steps and their refinement (the front end's also
+for the tire's damping ramp, which its 0.02 mm agreement with the rolling reference needs). Also timed in each repetition:
 each model stepped by MuJoCo alone with no control callback (the floor a callback sits on).
 
     python benchmarks/rolling_vs_bike.py [--terrain rock_garden] [--speed 5] [--duration 1.0] [--repeats 5]

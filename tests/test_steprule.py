@@ -104,12 +104,33 @@ def test_whole_fractions_and_even_cuts():
 
 
 @pytest.mark.parametrize("preset", ["S1", "S12"])
-def test_the_front_end_steps_at_the_drop_s_fine_step(preset):
+def test_the_front_end_steps_coarse_and_at_the_drop_s_fine_step_near_a_stop(preset):
+    """The front end's coarse step is the rolling rigs' 0.5 ms (within the limits away from the
+    stops: 0.74 ms for S12's friction state, the 1 kHz logger for S1) and its fine step the drop's."""
     drop = compose.setup(mtbmj.load_config(preset))
     p = frontend.prepare("flat", 5.0, config=preset, callback="python")
-    assert p.setup.timestep == drop.fine_timestep
-    assert p.front.model.opt.timestep == drop.fine_timestep
-    assert p.setup.substeps == 1
+    assert p.setup.timestep == 5e-4
+    assert p.front.model.opt.timestep == 5e-4
+    assert steprule.limits(drop).away_from_stops[0] >= 5e-4
+    assert p.setup.substeps == 5 and p.setup.fine_timestep == pytest.approx(drop.fine_timestep, rel=1e-12)
+
+
+def test_reach_span_finds_the_first_run_of_rows_within_reach():
+    """Written out by hand: a stop at 10 (values within 1 of it, plus twice the step into or out of a
+    row) and a band from 0 to 1."""
+    x = np.array([0.0, 2.0, 4.0, 6.0, 6.5, 7.0, 7.0, 7.0, 5.0, 5.0, 5.0, 5.0])
+    # the larger step into or out of each row: 2 2 2 2 .5 .5 0 2 2 0 0 0
+    # a stop at 10, margin 1: row 3 (6 >= 10 - 1 - 4) alone; rows 4-6 fall short; 7-8 a second run
+    assert steprule.reach_span([(x, (-np.inf, 10.0), 1.0)]) == (3, 3)
+    # a stop at 7.5, no margin: rows 2 (4 >= 7.5 - 4) to 5 (7 >= 7.5 - 1); row 6 (7 < 7.5) ends it
+    assert steprule.reach_span([(x, (-np.inf, 7.5), 0.0)]) == (2, 5)
+    assert steprule.reach_span([(x, (-np.inf, 100.0), 1.0)]) is None
+    # a band from -1 to 1: row 0 inside, rows 1-2 within their reach of it (2 <= 1 + 4, 4 <= 1 + 4)
+    assert steprule.reach_span([(x, (-1.0, 1.0), 0.0, "inside")]) == (0, 2)
+    # a band at 4.9-5.1: row 1 (2 >= 4.9 - 4) to row 3 (6 <= 5.1 + 4); row 4 (6.5 > 5.1 + 1) ends it
+    assert steprule.reach_span([(x, (4.9, 5.1), 0.0, "inside")]) == (1, 3)
+    # two signals: the earlier run wins
+    assert steprule.reach_span([(x, (4.9, 5.1), 0.0, "inside"), (x, (-1.0, 1.0), 0.0, "inside")]) == (0, 3)
 
 
 def test_the_bike_s_fork_meets_the_drop_s_rule():

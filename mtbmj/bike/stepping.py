@@ -41,12 +41,12 @@ import numpy as np
 
 from mtbmj import compose
 from mtbmj.bike.spec import rear_axle_in_frame
-from mtbmj.runpath import steprule
+from mtbmj.runpath import loop, steprule
 
-COARSE_STEP_S = 5e-4  # the bike's largest step (RK4): the step the cross-checks cover
-CHUNK_STEPS = 1024  # coarse steps per chunk checked for a stop or the rim within reach
-FINE_MIN_STEPS = 32  # a stretch stepped fine covers at least this many coarse steps
-FORK_MARGIN_M = 1e-3  # distance from a stop (fork travel, tire deflection) taken as within reach
+COARSE_STEP_S = steprule.ROLLING_STEP_S  # the bike's largest step (RK4): the step the cross-checks cover
+CHUNK_STEPS = loop.REFINE_CHUNK  # coarse steps per chunk checked for a stop or the rim within reach
+FINE_MIN_STEPS = loop.FINE_MIN_STEPS  # a stretch stepped fine covers at least this many coarse steps
+FORK_MARGIN_M = steprule.REACH_MARGIN_M  # distance from a stop (fork travel, tire deflection) taken as within reach
 SHOCK_MARGIN_M = 5e-4  # the same at the shock (its stroke is the wheel's over a ratio of 2.4-3.2)
 
 
@@ -81,18 +81,9 @@ class Stepping:
         one coarse step in the chunk, so a stop met between two rows is met within reach of both."""
         if self.substeps == 1:
             return None
-        first = last = None
-        signals = [(np.asarray(fork, float), self.fork_zone, FORK_MARGIN_M),
-                   (self.stroke(phi), self.stroke_zone, SHOCK_MARGIN_M)]
-        signals += [(np.asarray(d, float), (-math.inf, rim), FORK_MARGIN_M)
-                    for d, rim in zip(deflections, self.rim_deflections)]
-        for x, (low, high), margin in signals:
-            reach = margin + (2.0 * float(np.max(np.abs(np.diff(x)))) if x.size > 1 else 0.0)
-            hit = np.flatnonzero((x >= high - reach) | (x <= low + reach))
-            if hit.size:
-                first = int(hit[0]) if first is None else min(first, int(hit[0]))
-                last = int(hit[-1]) if last is None else max(last, int(hit[-1]))
-        return None if first is None else (first, last)
+        signals = [(fork, self.fork_zone, FORK_MARGIN_M), (self.stroke(phi), self.stroke_zone, SHOCK_MARGIN_M)]
+        signals += [(d, (-math.inf, rim), FORK_MARGIN_M) for d, rim in zip(deflections, self.rim_deflections)]
+        return steprule.reach_span(signals)
 
 
 def stepping(spec, fork_setup: compose.Setup, shock_setup: compose.Setup, rims=None) -> Stepping:

@@ -156,7 +156,7 @@ def load(scenario="washboard", speed_m_per_s: float = 5.0, config="S12",
          head_angle_deg: float = rolling.DEFAULT_HEAD_ANGLE_DEG, duration: float | None = None,
          control_timestep: float = CONTROL_TIMESTEP_S, overrides=None, random=None) -> RollingEnvironment:
     """A ready environment: terrain spec, speed, configuration, head angle, episode length (s)."""
-    p = rolling.prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides)
+    p = rolling.prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, fine_throughout=True)
     physics = dm_mujoco.Physics.from_model(dm_mujoco.wrapper.MjModel(p.front.model))
     # The callback must see the Physics' own model and data (from_model may copy the model). It
     # drives with the ideal servo (RollCallback's default): the task is a rig held at speed.

@@ -33,6 +33,7 @@ import numpy as np
 from mtbmj import mjcf
 from mtbmj.controllers import installed
 from mtbmj.controllers.drive import MODES as DRIVE_MODES, Drive
+from mtbmj.controllers.tire import TIRE_DAMPING_DEPTH_M
 from mtbmj import compose, output
 from mtbmj.drop import measure
 from mtbmj.readout.endtravel import end_of_travel
@@ -220,7 +221,7 @@ class Prepared:
 
 def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG,
             overrides: Mapping | None = None, fork_law=None, settled: bool = True, callback: str = "auto",
-            drive: str | Drive = "rider") -> Prepared:
+            drive: str | Drive = "rider", fine_throughout: bool = False) -> Prepared:
     """Everything a rolling run needs, with the data at t = 0 (at rest on the start, at speed).
 
     ``drive``: ``"rider"`` (a speed controller within a rider's force, power and braking limits),
@@ -228,7 +229,10 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
     other limits (see ``controllers/drive.py``); a drum rig always holds its axle with the servo.
 
     ``callback``: ``"auto"`` (the compiled callback of ``mtbmj.rolling.callback_compiled`` when numba
-    is available, else ``RollCallback`` with a warning), ``"compiled"`` or ``"python"``."""
+    is available, else ``RollCallback`` with a warning), ``"compiled"`` or ``"python"``.
+
+    ``fine_throughout``: the model's step is the drop's fine step (for a caller that steps it
+    directly, without the run path's refinement: the dm_control environment)."""
     from mtbmj.drop.chain import resolve
 
     _check_inputs(speed_m_per_s, head_angle_deg, None)
@@ -237,8 +241,8 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
     ter = terrain_mod.make(scenario)
     cfg = resolve(config, overrides)
     setup = compose.setup(cfg)
-    # the front end does not refine near a stop or the rim: it steps at the drop's fine step throughout
-    setup = steprule.at_fine_step(setup)
+    # a coarse step (the bike's) where no stop or rim acts, the drop's fine step where one may
+    setup = steprule.at_fine_step(setup) if fine_throughout else steprule.rolling(setup)
     drum = isinstance(ter, terrain_mod.DrumTerrain)
     if drum:
         ter = ter.with_speed(float(speed_m_per_s))
@@ -305,8 +309,8 @@ def default_duration(p: Prepared) -> float:
 
 def simulate(p: Prepared, duration: float, progress=None):
     """(states (n+1, nstate) incl. t = 0, sensordata (n, nsensor) of each step's start state), on
-    the shared run path (``mtbmj.runpath.loop.chunked``; the front end steps at its fine step
-    throughout, no refinement).
+    the shared run path (``mtbmj.runpath.loop.chunked``) at the coarse step, stepped again at the
+    fine step where :class:`_Refine` finds a stop, the rim or the tire's ramp within reach.
 
     If the compiled callback met more contact patches than it holds (``overflowed``), the run is
     redone on the Python path (``p.callback`` becomes that ``RollCallback``), with a warning."""
@@ -318,11 +322,46 @@ def simulate(p: Prepared, duration: float, progress=None):
                                      lambda: getattr(p.callback, "overflowed", False), to_python, "rolling")
 
 
+@dataclass
+class _Refine:
+    """The front end's refinement plan (``mtbmj.runpath.loop.Refinement``, as the bike's): a chunk
+    stepped coarse is looked at after the fact and its stretch within reach of a fork stop, the rim
+    or the tire's touchdown, lift-off and damping ramp (its first ``TIRE_DAMPING_DEPTH_M``, where
+    the force's slope changes fastest) (``steprule.reach_span``) stepped again at the fine step: on
+    a 20 mm washboard at 5 m/s the tire lightens to 0.7 mm, where the coarse step alone leaves the
+    fork 0.06 mm from the fine step's travel."""
+
+    p: Prepared
+    fork_col: int
+    deflection_col: int
+    min_steps: int = loop.FINE_MIN_STEPS
+    max_chunk: int = loop.REFINE_CHUNK
+
+    @property
+    def substeps(self) -> int:
+        return self.p.setup.substeps
+
+    def span(self, states, sensors):
+        s = self.p.setup
+        rim = s.tire.rim.max_deflection if s.tire.rim is not None else math.inf
+        deflection = sensors[:, self.deflection_col]
+        return steprule.reach_span([(states[:, self.fork_col], steprule.stop_zone(s.fork.spring),
+                                     steprule.REACH_MARGIN_M),
+                                    (deflection, (-math.inf, rim), steprule.REACH_MARGIN_M),
+                                    (deflection, (0.0, TIRE_DAMPING_DEPTH_M), steprule.REACH_MARGIN_M, "inside")])
+
+    def before_fine(self) -> None:
+        self.p.callback.reset()  # the patches of the chunk's end: the fine pass searches afresh
+
+
 def _simulate(p: Prepared, duration: float, progress=None):
     steps = int(round(duration / p.setup.timestep))
+    model = p.front.model
+    plan = _Refine(p, 1 + int(model.joint("fork").qposadr[0]),
+                   int(model.sensor_adr[model.sensor("tire_deflection").id]))
     with installed(p.callback):
-        return loop.chunked(p.front.model, p.data, steps, p.setup.timestep, "rolling", None, progress,
-                            chunk=CHUNK, report_every=1)
+        return loop.chunked(model, p.data, steps, p.setup.timestep, "rolling", plan, progress,
+                            chunk=CHUNK, report_every=loop.REFINE_CHUNK)
 
 
 def _signals(p: Prepared, states, sensors) -> dict[str, np.ndarray]:

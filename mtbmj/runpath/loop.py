@@ -17,7 +17,7 @@ the rest is stepped again from the last row kept. Two plans ride on this one int
   before the first step that may reach a stop, and stepping goes on finely until clear; a
   tire-law switch is made between two fine steps (``Plan.switched``), and an output step the
   switch fell inside is finished under the new law (``keep``'s third value);
-- **redo after the fact** (the bike; :class:`AfterTheFact` over a :class:`Refinement`): a chunk
+- **redo after the fact** (the rolling front end and the bike; :class:`AfterTheFact` over a :class:`Refinement`): a chunk
   stepped coarse is looked at after the fact, its rows before the one ahead of the first row
   within reach of a stop are kept, and the stretch from there to one row past the last (at least
   ``min_steps`` rows) is stepped again ``substeps`` times finer; after a fine stretch chunks start
@@ -38,6 +38,8 @@ from mujoco import rollout
 from mtbmj.runpath import guard
 
 CHUNK = 10000  # steps per chunk where no refinement is planned
+REFINE_CHUNK = 1024  # coarse steps per chunk an after-the-fact plan looks at
+FINE_MIN_STEPS = 32  # a stretch stepped fine covers at least this many coarse steps
 
 
 class Plan(Protocol):

@@ -10,10 +10,12 @@ the fastest stroke) and those limits into steps:
   within the working stroke's limit, ``substeps`` finer steps near a stop or the rim and
   ``contact_substeps`` in the other zones (:func:`refine_zones`, which ``mtbmj.drop.stepping``
   watches);
-* the rolling front end (:func:`at_fine_step`): the drop's fine step throughout;
-* the whole bike (``mtbmj.bike.stepping``): the same limits with the bike's masses, the coarse step
-  a whole fraction of its largest step (:func:`fraction_within`), cut evenly (:func:`cuts_within`)
-  where a stop or the rim may act (:func:`stop_zone`).
+* the rolling rigs, the front end (:func:`rolling`) and the whole bike (``mtbmj.bike.stepping``,
+  the same limits with the bike's masses): a coarse step, a whole fraction of ``ROLLING_STEP_S``
+  (:func:`fraction_within`) within the limits away from the stops, cut evenly (:func:`cuts_within`)
+  where a stop or the rim may act (:func:`stop_zone`), which stretches are decided after the fact
+  (:func:`reach_span`, ``mtbmj.runpath.loop.AfterTheFact``); a raw rollout steps at the drop's
+  fine step throughout (:func:`at_fine_step`).
 
 ``compose`` imports this module to choose a setup's step, so the setup is not imported here: the
 functions take any ``Setup`` and read the fields of :class:`StepSetup`.
@@ -461,7 +463,50 @@ def _cuts(step: float, fine: float) -> int:
     return whole[0] if whole else cuts_within(step, fine)
 
 
+ROLLING_STEP_S = 5e-4  # the rolling rigs' largest step (RK4): the step their cross-checks cover
+REACH_MARGIN_M = 1e-3  # distance from a stop (fork travel, tire deflection) taken as within reach
+
+
+def rolling(s: StepSetup) -> StepSetup:
+    """``s`` stepped as a rolling rig steps it: ``timestep`` the largest whole fraction of
+    ``ROLLING_STEP_S`` within the limits away from the stops (:attr:`Limits.away_from_stops`),
+    ``substeps`` finer steps, each within the drop's fine step (the step the drop's cross-checks
+    cover at its stops and rim), where the rig finds that one may act (``contact_substeps`` 1)."""
+    coarse = fraction_within(ROLLING_STEP_S, limits(s).away_from_stops[0])
+    substeps = cuts_within(coarse, s.fine_timestep)
+    return replace(s, timestep=coarse, substeps=substeps, contact_substeps=1)
+
+
+def reach_span(signals) -> tuple[int, int] | None:
+    """The first row of a chunk stepped coarse at which a stop, the rim or a band of fast-changing
+    force was within reach, and the last row of the run of rows within reach that it starts; or
+    None. ``signals``: (values, (low, high), margin) per signal, one value per coarse step, a stop at
+    or below ``low`` and at or above ``high``; or (values, (low, high), margin, "inside"): a band
+    from ``low`` to ``high``. Within reach of row i: within ``margin`` plus twice the larger change
+    of the coarse steps into and out of it, so a stop or band met between two rows is within reach
+    of both. (Rows after the run are stepped again anyway: the plan keeps what lies before it.)"""
+    hit = None
+    for x, (low, high), margin, *kind in signals:
+        x = np.asarray(x, float)
+        step = np.abs(np.diff(x))
+        move = np.zeros_like(x)
+        if x.size > 1:
+            move[:-1] = step
+            move[1:] = np.maximum(move[1:], step)
+        reach = margin + 2.0 * move
+        if kind == ["inside"]:
+            near = (x >= low - reach) & (x <= high + reach)
+        else:
+            near = (x >= high - reach) | (x <= low + reach)
+        hit = near if hit is None else hit | near
+    if hit is None or not hit.any():
+        return None
+    first = int(np.argmax(hit))
+    after = np.flatnonzero(~hit[first:])
+    return first, first + (int(after[0]) - 1 if after.size else len(hit) - 1 - first)
+
+
 def at_fine_step(s: StepSetup) -> StepSetup:
     """``s`` stepped at its fine step throughout (``substeps`` 1): for a model stepped directly,
-    without the drop engine's refinement near stops (the rolling front end, raw rollouts)."""
+    without refinement near stops (raw rollouts, a test that looks at every fine step)."""
     return replace(s, timestep=s.fine_timestep, substeps=1, contact_substeps=1)
