@@ -22,6 +22,7 @@ import mujoco
 import numpy as np
 
 from mtbmj import mjcf
+from mtbmj.runpath import loop
 
 SCENE = "bike_scene.xml"
 LOWER_INERTIA = 0.02  # kg m^2, the fork lower's pitch inertia about the axle (assumed)
@@ -183,6 +184,7 @@ def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, g
         for item in list(ms.geoms) + list(ms.tendons):
             ms.delete(item)
     model = ms.compile()
+    loop.skip_collision(model)
     return Bike(model, spec, x0, z0, float(tire_radius), legs_rest, arms_rest)
 
 

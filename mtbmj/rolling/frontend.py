@@ -144,6 +144,7 @@ def build_front_end(setup: compose.Setup, terrain, head_angle_deg: float = DEFAU
     _add_terrain_visual(spec, terrain)
     with installed(None):
         model = spec.compile()
+    loop.skip_collision(model)
     drum_dof = int(model.joint("drum").dofadr[0]) if isinstance(terrain, terrain_mod.DrumTerrain) else None
     return FrontEnd(model, a, L, x0, z0, drum_dof)
 
