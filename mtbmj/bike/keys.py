@@ -85,6 +85,36 @@ KEYS: dict[str, tuple[str, str, object]] = {
     "geometry.stack_mm": ("The chart's stack.", "500-750", (560.0, 680.0)),
     "geometry.head_tube_mm": ("The chart's head tube length (top to the crown).", "50-250", (80.0, 170.0)),
     "geometry.fork_length_mm": ("The fork's axle-to-crown along the steering axis.", "400-700", (480.0, 620.0)),
+    "linkage.kind": ("The rear end's layout from hardpoints: single_pivot, linkage_driven_single_pivot, horst_link "
+                     "or short_link (docs/bike.md, 'The rear end from hardpoints'); its points set bike.pivot_mm, "
+                     "bike.rear_axle_mm and the leverage table, so a file giving [leverage] or bike.pivot_mm beside "
+                     "it is refused.", "one of the four", None),
+    **{f"linkage.{name}_mm": (meaning, POINT_MM, ((-700.0, 700.0), (-200.0, 800.0))) for name, meaning in (
+        ("main_pivot", "single pivot, linkage-driven single pivot, Horst link: where the swingarm or chainstay "
+                       "turns on the frame."),
+        ("rear_axle", "Every layout: the rear axle at full extension (with bike.rear_axle_mm or a chart: within "
+                      "1 mm of it)."),
+        ("shock_frame", "Every layout: the shock's eye on the front triangle."),
+        ("shock_swingarm", "single pivot: the shock's eye on the swingarm."),
+        ("swingarm_link", "linkage-driven single pivot: where the link meets the swingarm."),
+        ("rocker_pivot", "linkage-driven single pivot, Horst link: where the rocker turns on the frame."),
+        ("rocker_link", "linkage-driven single pivot: where the link meets the rocker."),
+        ("shock_rocker", "linkage-driven single pivot, Horst link: the shock's eye on the rocker."),
+        ("horst_pivot", "Horst link: the chainstay-seatstay pivot ahead of the axle."),
+        ("seatstay_rocker", "Horst link: where the seatstay meets the rocker."),
+        ("lower_pivot", "short link: where the lower link turns on the frame."),
+        ("lower_link", "short link: where the lower link meets the rear triangle."),
+        ("upper_pivot", "short link: where the upper link turns on the frame."),
+        ("upper_link", "short link: where the upper link meets the rear triangle."),
+        ("shock_upper_link", "short link: the shock's eye on the upper link."))},
+    "linkage.chainring_teeth": ("Chainring teeth for anti-squat and pedal kickback (default 32).", "9-60",
+                                (26.0, 40.0)),
+    "linkage.cog_teeth": ("Cog teeth for anti-squat and pedal kickback (default 24, a middle cog; assumed).",
+                          "9-60", (9.0, 52.0)),
+    "linkage.brake_on": ("The link carrying the rear caliper, for anti-rise: swingarm (single pivots), seatstay "
+                         "(default) or chainstay (Horst link), rear_triangle (short link).", "text", None),
+    "linkage.com_height_mm": ("The centre of mass over the ground for anti-squat and anti-rise (default: the bike's "
+                              "and rider's at full extension, frame level).", "300-2000", (700.0, 1400.0)),
     "drive.push_N": ("The rider drive's largest forward force at the rear tyre.", ">= 0", (100.0, 2500.0)),
     "drive.power_W": ("The rider drive's largest power.", ">= 0", (100.0, 2500.0)),
     "drive.brake_N": ("The rider drive's largest braking force.", ">= 0", (100.0, 2500.0)),

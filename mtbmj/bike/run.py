@@ -635,7 +635,7 @@ class BikeResult(RunOutput):
                 f"{s['speed_m_per_s']:g} m/s set ({s['min_speed_m_per_s']:.2f}-{s['max_speed_m_per_s']:.2f} m/s): "
                 f"front travel peak "
                 f"{s['max_front_travel_mm']:.1f} of {f['travel_mm']:g} mm{ends(f)}, rear {s['max_rear_travel_mm']:.1f} of "
-                f"{s['rear_wheel_travel_mm']:g} mm (shock {s['max_stroke_mm']:.1f} of {r['travel_mm']:g} mm){ends(r)}, "
+                f"{s['rear_wheel_travel_mm']:.4g} mm (shock {s['max_stroke_mm']:.1f} of {r['travel_mm']:g} mm){ends(r)}, "
                 f"pitch {s['pitch_deg']['min']:.1f} to {s['pitch_deg']['max']:.1f} deg, rim strikes "
                 f"{strikes['front']}/{strikes['rear']}, {self._comfort()}")
 

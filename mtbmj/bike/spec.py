@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 
+from mtbmj.bike import linkage as _linkage
 from mtbmj.errors import ConfigError
 
 MM = 1e-3
@@ -162,6 +163,8 @@ class BikeSpec:
     drive: dict
     source: str
     overrides: dict = field(default_factory=dict)  # what ``load``'s overrides changed (for the manifest)
+    # the pivot is a four-bar's instant centre at top-out (``[linkage]``), not a bearing on the frame
+    virtual_pivot: bool = False
 
     @property
     def swingarm_length(self) -> float:
@@ -212,8 +215,58 @@ def read_table(ref: str) -> tuple[dict, str]:
             if isinstance(table.get("bike"), dict):
                 table["bike"] = {k: v for k, v in table["bike"].items() if k not in CHART_SETS}
             table.pop("geometry", None)
+        if isinstance(part.get("linkage"), dict):  # hardpoints replace the rear end its bases gave
+            if "leverage" in part or "pivot_mm" in (part.get("bike") or {}):
+                raise ConfigError(f"{location}: [linkage] and {'[leverage]' if 'leverage' in part else 'bike.pivot_mm'} "
+                                  f"give the rear end two ways; give one (the linkage's pivot and leverage ratio "
+                                  f"follow from its points)")
+            table.pop("leverage", None)
+            table.pop("linkage", None)
+            if isinstance(table.get("bike"), dict):
+                table["bike"] = {k: v for k, v in table["bike"].items() if k not in ("pivot_mm", "rear_axle_mm")}
+        elif "leverage" in part or "pivot_mm" in (part.get("bike") or {}):
+            table.pop("linkage", None)  # a table or a pivot replaces the hardpoints its bases gave
         table = _merge(table, part)
     return table, str(ref)
+
+
+LINKAGE_AXLE_TOLERANCE_MM = 1.0  # the linkage's rear axle against the frame's (bike.rear_axle_mm or the chart's)
+
+
+def _with_linkage(table: dict) -> dict:
+    """``table`` with ``bike.pivot_mm`` and ``[leverage]`` from its ``[linkage]`` (``mtbmj.bike.linkage``):
+    the pivot the rear axle turns about (a four-bar's instant centre at full extension, with a
+    warning giving how far its circle leaves the linkage's axle path) and the leverage ratio every
+    millimetre of wheel travel up to the shock's stroke."""
+    from mtbmj.bike import linkage as lk
+    from mtbmj.config import warn
+
+    link = lk.from_table(table["linkage"])
+    stroke = _number(table, "shock", "stroke_mm", positive=True) * MM
+    c = lk.curves(link, stroke)
+    bike = dict(table.get("bike") or {})
+    axle = link.p0["rear_axle"] / MM
+    if "rear_axle_mm" in bike:
+        given = np.asarray(bike["rear_axle_mm"], float)
+        if given.shape != (2,) or float(np.hypot(*(given - axle))) > LINKAGE_AXLE_TOLERANCE_MM:
+            raise ConfigError(f"linkage.rear_axle_mm: {axle.round(1).tolist()} lies more than "
+                              f"{LINKAGE_AXLE_TOLERANCE_MM:g} mm from bike.rear_axle_mm (or the chart's) "
+                              f"{bike['rear_axle_mm']!r}")
+    bike["rear_axle_mm"] = axle.tolist()
+    pivot = (link.p0["main_pivot"] if link.four_bar is None or link.kind == "linkage_driven_single_pivot"
+             else link.pose(0.0).axle_centre)
+    if pivot is None:
+        raise ConfigError("linkage: the four-bar's frame links are parallel at full extension (no instant centre)")
+    bike["pivot_mm"] = (pivot / MM).tolist()
+    if link.kind in ("horst_link", "short_link"):
+        off = lk.path_departure(link, c, pivot)
+        warn([f"linkage.kind = {link.kind}: the bike turns its rear axle about the instant centre at full "
+              f"extension ({pivot[0] / MM:.1f}, {pivot[1] / MM:.1f} mm), {off / MM:.1f} mm at most from the "
+              f"linkage's axle path over the travel; the leverage ratio is the linkage's (mtbmj linkage draws both)"])
+    lev = {"wheel_travel_mm": (c.travel / MM).tolist(), "ratio": c.leverage_ratio.tolist()}
+    out = {k: v for k, v in table.items() if k != "linkage"}
+    out.update({"bike": bike, "leverage": lev})
+    return out
 
 
 # What a geometry chart sets in [bike] (``from_chart``)
@@ -290,6 +343,7 @@ KNOWN = {
              "frame_com_mm", "frame_inertia_kg_m2", "swingarm_mass_kg", "swingarm_inertia_kg_m2",
              "fork_lower_mass_kg", "front_wheel_mass_kg", "rear_wheel_mass_kg", "wheel_inertia_kg_m2"},
     "leverage": {"wheel_travel_mm", "ratio"},
+    "linkage": _linkage.known_keys(),
     "shock": {"stroke_mm", "config", "set"},
     "fork": {"config", "set"},
     "rider": {"mass_kg", "limbs_share_percent", "com_mm", "pitch_inertia_kg_m2", "pedals_mm", "bars_mm",
@@ -397,6 +451,10 @@ def load(ref: str, overrides=None) -> BikeSpec:
             if key not in KNOWN["geometry"]:
                 raise ConfigError(f"geometry.{key}: unknown key (known: {', '.join(sorted(KNOWN['geometry']))})")
         table = _merge(table, {"bike": from_chart(table["geometry"])})
+    derived, hardpoints = (), table.get("linkage")
+    if "linkage" in table:  # a rear end from hardpoints: its pivot and leverage table derived from it
+        table = _with_linkage(table)
+        derived = ("pivot_mm",)  # a four-bar's instant centre may lie anywhere: not a key the user typed
     for section, value in table.items():
         if section not in KNOWN:
             raise ConfigError(f"{section}: unknown section or key (known: {', '.join(k for k in KNOWN)})")
@@ -485,7 +543,8 @@ def load(ref: str, overrides=None) -> BikeSpec:
     for key in ("push_N", "power_W", "brake_N", "traction"):
         if key in table.get("drive", {}):
             drive[key] = _number(table, "drive", key, nonneg=True)
-    warn(keys_mod.warnings(table))
+    warn(keys_mod.warnings({**table, "bike": {k: v for k, v in table["bike"].items() if k not in derived},
+                            **({"linkage": hardpoints} if isinstance(hardpoints, dict) else {})}))
     spec = BikeSpec(
         name=source if source in preset_names() else Path(source).stem,
         head_angle=math.radians(head) + level_pitch(front, rear),
@@ -498,7 +557,8 @@ def load(ref: str, overrides=None) -> BikeSpec:
         fork_config=table.get("fork", {}).get("config", "reference"), fork_overrides=dict(table.get("fork", {}).get("set", {})),
         shock_config=table.get("shock", {}).get("config", "reference"),
         shock_overrides=dict(table.get("shock", {}).get("set", {})), drive=drive, source=source,
-        overrides=dict(overrides or {}))
+        overrides=dict(overrides or {}),
+        virtual_pivot=isinstance(hardpoints, dict) and hardpoints.get("kind") in ("horst_link", "short_link"))
     return spec
 
 
@@ -523,7 +583,7 @@ def check_geometry(spec: BikeSpec, tire_radius: float) -> None:
         raise ConfigError(f"leverage.wheel_travel_mm: {spec.leverage.full_travel / MM:g} mm of wheel travel is more "
                           f"than the swingarm ({ls / MM:.0f} mm) can give")
     front_gap = math.hypot(spec.front_axle[0] - spec.pivot[0], spec.front_axle[1] - spec.pivot[1])
-    if front_gap <= tire_radius:
+    if front_gap <= tire_radius and not spec.virtual_pivot:  # an instant centre may lie anywhere
         raise ConfigError("bike.pivot_mm: the main pivot lies inside the front wheel")
 
 

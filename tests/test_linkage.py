@@ -1,0 +1,358 @@
+"""The rear end from hardpoints (mtbmj/bike/linkage.py) against mechanisms solved here another way:
+a single pivot in closed form, the four-bars by scipy's root finder on the loop-closure equations
+(angles as unknowns, where the package intersects circles), the chain's upper run as the line whose
+distance from each sprocket's centre is its radius (found by a root finder), the anti-squat and
+anti-rise lines and the pedal kickback from the chain's length written out; the bike run from
+hardpoints against the same bike given a leverage table computed here; the CLI and its refusals."""
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq, fsolve
+
+from mtbmj.bike import linkage as lk
+from mtbmj.errors import ConfigError
+
+MM = 1e-3
+P = lambda x, z: np.array([x, z], float) * MM  # noqa: E731
+
+HORST = dict(main_pivot=P(-40, 70), horst_pivot=P(-420, 10), rear_axle=P(-440, 25), rocker_pivot=P(-50, 380),
+             seatstay_rocker=P(-120, 400), shock_rocker=P(-20, 430), shock_frame=P(160, 190))
+DRIVEN = dict(main_pivot=P(-30, 75), rear_axle=P(-440, 25), swingarm_link=P(-120, 120), rocker_pivot=P(-20, 330),
+              rocker_link=P(-110, 330), shock_rocker=P(80, 420), shock_frame=P(220, 180))
+SINGLE = dict(main_pivot=P(-30, 75), rear_axle=P(-440, 25), shock_swingarm=P(-150, 150), shock_frame=P(120, 300))
+SHORT = dict(lower_pivot=P(20, 60), lower_link=P(-40, 40), upper_pivot=P(-60, 260), upper_link=P(-140, 280),
+             rear_axle=P(-440, 25), shock_upper_link=P(-120, 360), shock_frame=P(200, 150))
+
+
+def rot(v, a):
+    return np.array([math.cos(a) * v[0] - math.sin(a) * v[1], math.sin(a) * v[0] + math.cos(a) * v[1]])
+
+
+def ang(v):
+    return math.atan2(v[1], v[0])
+
+
+class FourBar:
+    """The loop A + l1 e(t1) + l2 e(t2) = D + l3 e(t3) solved for (t2, t3) by fsolve, continued
+    from the previous solution; points ride on their links by the links' turns."""
+
+    def __init__(self, pts, a, b, c, d):
+        self.p, self.names = pts, (a, b, c, d)
+        A, B, C, D = (pts[n] for n in self.names)
+        self.l1, self.l2, self.l3 = (float(np.hypot(*v)) for v in (B - A, C - B, C - D))
+        self.t1, self.t2, self.t3 = ang(B - A), ang(C - B), ang(C - D)
+        self.guess = (self.t2, self.t3)
+
+    def solve(self, turn):
+        A, D = self.p[self.names[0]], self.p[self.names[3]]
+        e = lambda t: np.array([math.cos(t), math.sin(t)])  # noqa: E731
+        t1 = self.t1 + turn
+
+        def loop(u):
+            return A + self.l1 * e(t1) + self.l2 * e(u[0]) - D - self.l3 * e(u[1])
+
+        sol = fsolve(loop, self.guess, xtol=1e-13)
+        assert np.max(np.abs(loop(sol))) < 1e-12
+        self.guess = tuple(sol)
+        return t1 - self.t1, sol[0] - self.t2, sol[1] - self.t3  # each link's turn
+
+    def point(self, name, on, turn):
+        """``name`` carried by link ``on`` ("input", "coupler", "output") at input turn ``turn``."""
+        turns = self.solve(turn)
+        A, B, D = (self.p[self.names[i]] for i in (0, 1, 3))
+        B_now = A + rot(B - A, turns[0])
+        if on == "input":
+            return A + rot(self.p[name] - A, turns[0])
+        if on == "coupler":
+            return B_now + rot(self.p[name] - B, turns[1])
+        return D + rot(self.p[name] - D, turns[2])
+
+
+def find(w, target, sign, step=2e-3):
+    """The turn (sign times a positive angle) at which w reaches ``target``, marching out from 0 in
+    small steps (the four-bar's root finder continues from its last solution) and then bisecting."""
+    if target <= 0.0:
+        return 0.0
+    t = 0.0
+    while w(sign * (t + step)) < target:
+        t += step
+        assert t < 2.0
+    return sign * brentq(lambda u: w(sign * u) - target, t, t + step, xtol=1e-14)
+
+
+def independent(kind, pts):
+    """(w(turn), s(turn), axle(turn)) of the mechanism solved here."""
+    if kind == "single_pivot":
+        A = pts["main_pivot"]
+        axle = lambda t: A + rot(pts["rear_axle"] - A, t)  # noqa: E731
+        end = lambda t: A + rot(pts["shock_swingarm"] - A, t)  # noqa: E731
+    else:
+        names, axle_on, shock, shock_on = {
+            "horst_link": (("main_pivot", "horst_pivot", "seatstay_rocker", "rocker_pivot"), "coupler", "shock_rocker",
+                           "output"),
+            "linkage_driven_single_pivot": (("main_pivot", "swingarm_link", "rocker_link", "rocker_pivot"), "input",
+                                            "shock_rocker", "output"),
+            "short_link": (("lower_pivot", "lower_link", "upper_link", "upper_pivot"), "coupler", "shock_upper_link",
+                           "output")}[kind]
+        fb = FourBar(pts, *names)
+        axle = lambda t: fb.point("rear_axle", axle_on, t)  # noqa: E731
+        end = lambda t: fb.point(shock, shock_on, t)  # noqa: E731
+    L0 = float(np.hypot(*(pts[shock if kind != "single_pivot" else "shock_swingarm"] - pts["shock_frame"])))
+    w = lambda t: axle(t)[1] - pts["rear_axle"][1]  # noqa: E731
+    s = lambda t: L0 - float(np.hypot(*(end(t) - pts["shock_frame"])))  # noqa: E731
+    return w, s, axle
+
+
+@pytest.mark.parametrize("kind,pts,stroke", [("single_pivot", SINGLE, 0.065), ("horst_link", HORST, 0.050),
+                                             ("linkage_driven_single_pivot", DRIVEN, 0.050),
+                                             ("short_link", SHORT, 0.050)])
+def test_axle_path_and_leverage_ratio_match_a_mechanism_solved_here(kind, pts, stroke):
+    link = lk.Linkage(kind, pts)
+    c = lk.curves(link, stroke)
+    w, s, axle = independent(kind, pts)
+    sign = 1.0 if w(1e-3) > 0 else -1.0
+    assert c.stroke[-1] == pytest.approx(stroke, abs=1e-9)
+    turn = 0.0
+    for i in range(0, c.travel.size, 7):
+        target = c.travel[i]
+        turn = find(w, target, sign)
+        here = axle(turn)
+        assert math.hypot(here[0] - c.axle_x[i], here[1] - c.axle_z[i]) < 1e-4  # 0.1 mm
+        h = sign * 1e-6
+        lo = turn - h if target > 0 else turn
+        ratio = (w(turn + h) - w(lo)) / (s(turn + h) - s(lo))
+        assert c.leverage_ratio[i] == pytest.approx(ratio, rel=5e-3)  # 0.5 %
+        assert c.stroke[i] == pytest.approx(s(turn), abs=1e-7)
+
+
+def test_single_pivot_in_closed_form():
+    """The axle on a circle about the main pivot; LR = (dw/dphi) / (ds/dphi) differentiated by hand."""
+    link = lk.Linkage("single_pivot", SINGLE)
+    c = lk.curves(link, 0.065)
+    A, S, F, R = SINGLE["main_pivot"], SINGLE["shock_swingarm"], SINGLE["shock_frame"], SINGLE["rear_axle"]
+    a, b = R - A, S - A
+    for i in range(0, c.travel.size, 11):
+        # the axle's rise: A_z + sin(phi) a_x + cos(phi) a_z - R_z = w (phi the counter-clockwise turn)
+        phi = brentq(lambda t: math.sin(t) * a[0] + math.cos(t) * a[1] - a[1] - c.travel[i], -1.0, 0.0)
+        dw = math.cos(phi) * a[0] - math.sin(phi) * a[1]
+        end = A + rot(b, phi)
+        d_end = rot(np.array([-b[1], b[0]]), phi)
+        length = float(np.hypot(*(end - F)))
+        ds = -float(np.dot(end - F, d_end)) / length
+        assert c.leverage_ratio[i] == pytest.approx(dw / ds, rel=1e-6)
+        assert c.centre_x[i] == pytest.approx(A[0]) and c.centre_z[i] == pytest.approx(A[1])
+
+
+def chain_line(ring_c, ring_r, cog_c, cog_r):
+    """The upper run as z = m x + q: the line at signed distance r above each centre, by fsolve."""
+    def eqs(u):
+        m, q = u
+        k = math.sqrt(1 + m * m)
+        return [(q + m * ring_c[0] - ring_c[1]) / k - ring_r, (q + m * cog_c[0] - cog_c[1]) / k - cog_r]
+    m, q = fsolve(eqs, [0.0, max(ring_r, cog_r)], xtol=1e-14)
+    return m, q
+
+
+def test_anti_squat_and_anti_rise_follow_the_construction():
+    link = lk.Linkage("horst_link", HORST, chainring=32, cog=51, brake_on="seatstay")
+    radius, front_x, h = 0.37, 0.815, 1.1
+    c = lk.curves(link, 0.05, radius, front_x, h)
+    w, s, axle = independent("horst_link", HORST)
+    fb = FourBar(HORST, "main_pivot", "horst_pivot", "seatstay_rocker", "rocker_pivot")
+    ring_r, cog_r = 12.7e-3 / (2 * math.sin(math.pi / 32)), 12.7e-3 / (2 * math.sin(math.pi / 51))
+    for i in (0, 30, 60, c.travel.size - 1):
+        t = find(w, c.travel[i], -1.0)
+        A, D = HORST["main_pivot"], HORST["rocker_pivot"]
+        B = fb.point("horst_pivot", "input", t)
+        C = fb.point("seatstay_rocker", "output", t)
+        ax_ = axle(t)
+        # instant centre: where the lines A-B and D-C meet
+        M = np.array([B - A, -(C - D)]).T
+        k = np.linalg.solve(M, D - A)
+        ic = A + k[0] * (B - A)
+        m, q = chain_line(np.zeros(2), ring_r, ax_, cog_r)
+        # the instant force centre: the chain line meets the line axle -> instant centre
+        d = ic - ax_
+        u = (m * ax_[0] + q - ax_[1]) / (d[1] - m * d[0])
+        ifc = ax_ + u * d
+        ground = ax_[1] - radius
+        slope = (ifc[1] - ground) / (ifc[0] - ax_[0])
+        assert c.anti_squat[i] == pytest.approx(100 * slope * (front_x - ax_[0]) / h, rel=1e-6)
+        slope = (ic[1] - ground) / (ic[0] - ax_[0])
+        assert c.anti_rise[i] == pytest.approx(100 * slope * (front_x - ax_[0]) / h, rel=1e-6)
+
+
+def test_pedal_kickback_keeps_the_chain_s_length():
+    """The taut upper chain from a link fixed on the cog (held) to one on the chainring: its length
+    (wrap on the cog + span + wrap on the ring, the tangent points from the line found here) stays
+    the same when the crank turns back by the kickback."""
+    link = lk.Linkage("single_pivot", SINGLE, chainring=30, cog=42)
+    c = lk.curves(link, 0.065)
+    ring_r, cog_r = 12.7e-3 / (2 * math.sin(math.pi / 30)), 12.7e-3 / (2 * math.sin(math.pi / 42))
+
+    def length(axle, crank):
+        m, q = chain_line(np.zeros(2), ring_r, axle, cog_r)
+        n = np.array([-m, 1.0]) / math.sqrt(1 + m * m)  # the line's upward normal
+        t_ring, t_cog = ring_r * n, axle + cog_r * n
+        theta = ang(n)
+        # the chain wraps the cog from a fixed link at -90 deg (below, held) clockwise to the tangent
+        # point, and the ring from the tangent point clockwise to a link at -90 deg + crank
+        return cog_r * (-math.pi / 2 - theta + 2 * math.pi) + float(np.hypot(*(t_cog - t_ring))) + \
+            ring_r * (theta - (-math.pi / 2 + crank))
+
+    L0 = length(SINGLE["rear_axle"], 0.0)
+    for i in (25, 80, c.travel.size - 1):
+        axle = np.array([c.axle_x[i], c.axle_z[i]])
+        assert length(axle, math.radians(c.kickback_deg[i])) == pytest.approx(L0, abs=1e-9)
+    assert c.kickback_deg[-1] > 0.0  # backwards: the chain grows
+
+
+def test_the_bike_from_hardpoints_runs_as_the_same_bike_from_a_leverage_table(tmp_path):
+    """A linkage-driven single pivot (the Clash's layout): the bike from its hardpoints against the
+    same bike given the leverage ratio every millimetre from the mechanism solved here."""
+    from mtbmj.bike import run
+
+    w, s, _ = independent("linkage_driven_single_pivot", DRIVEN)
+    stroke = 0.050
+    t_end = find(s, stroke, -1.0)
+    travel = np.arange(0.0, w(t_end), 1e-3)
+    ratios = []
+    for x in travel:
+        t = find(w, x, -1.0)
+        h = -1e-6
+        lo = t - h if x > 0 else t
+        ratios.append((w(t + h) - w(lo)) / (s(t + h) - s(lo)))
+    points = "\n".join(f"{k}_mm = [{v[0] / MM:.6f}, {v[1] / MM:.6f}]" for k, v in DRIVEN.items())
+    common = 'base = "trail"\n[shock]\nstroke_mm = 50.0\n'
+    (tmp_path / "hard.toml").write_text(common + '[linkage]\nkind = "linkage_driven_single_pivot"\n' + points + "\n")
+    (tmp_path / "table.toml").write_text(
+        common.replace('[shock]', '[bike]\npivot_mm = [-30.0, 75.0]\nrear_axle_mm = [-440.0, 25.0]\n[shock]')
+        + f"[leverage]\nwheel_travel_mm = {[float(round(x / MM, 9)) for x in travel]}\nratio = {[float(r) for r in ratios]}\n")
+    runs = [run.run_bike(str(tmp_path / f), "root:at_m=0.4", 5.0, duration=0.6) for f in ("hard.toml", "table.toml")]
+    a, b = (r.raw for r in runs)
+    assert np.max(np.abs(a["rear_travel_mm"] - b["rear_travel_mm"])) < 1e-6
+    assert np.max(np.abs(a["stroke_mm"] - b["stroke_mm"])) < 1e-6
+    assert np.ptp(a["rear_travel_mm"]) > 5.0  # the root moved the rear end
+
+
+def test_virtual_work_of_the_bike_s_shock_through_the_linkage():
+    """The bike's shock acts on the swingarm as F ds/dphi (``bike.spec`` leverage from the hardpoints):
+    at every millimetre, ds/dphi equals the mechanism's here, so F ds = (F / LR) dw: the shock's
+    power equals the wheel's."""
+    from mtbmj.bike.spec import rear_axle_in_frame
+
+    link = lk.Linkage("linkage_driven_single_pivot", DRIVEN)
+    c = lk.curves(link, 0.050)
+    from mtbmj.bike.spec import Leverage
+
+    lev = Leverage(tuple(c.travel), tuple(c.leverage_ratio))
+    _, s, _ = independent("linkage_driven_single_pivot", DRIVEN)
+
+    class Spec:
+        pivot, rear_axle = tuple(DRIVEN["main_pivot"]), tuple(DRIVEN["rear_axle"])
+
+    for phi in np.linspace(0.0, 0.3, 13):
+        _, z = rear_axle_in_frame(Spec, phi)
+        w = float(z) - DRIVEN["rear_axle"][1]
+        if w > c.travel[-1]:
+            break
+        h = 1e-6
+        _, z2 = rear_axle_in_frame(Spec, phi + h)
+        bike = (lev.stroke(float(z2) - DRIVEN["rear_axle"][1]) - lev.stroke(w)) / h  # ds/dphi the bike uses
+        here = (s(-(phi + h)) - s(-phi)) / h
+        assert bike == pytest.approx(here, rel=5e-3)
+
+
+def test_refusals_name_the_key():
+    with pytest.raises(ConfigError, match="linkage.kind: must be one of"):
+        lk.from_table({"kind": "dw_link"})
+    with pytest.raises(ConfigError, match="linkage.horst_pivot_mm: missing"):
+        lk.from_table({"kind": "horst_link", **{k + "_mm": list(v / MM) for k, v in HORST.items() if k != "horst_pivot"}})
+    with pytest.raises(ConfigError, match="linkage.upper_pivot_mm: not a point of a single_pivot"):
+        lk.from_table({"kind": "single_pivot", "upper_pivot_mm": [0, 0]})
+    with pytest.raises(ConfigError, match=r"linkage.rear_axle_mm: must be \[x, z\]"):
+        lk.from_table({"kind": "single_pivot", **{k + "_mm": list(v / MM) for k, v in SINGLE.items()},
+                       "rear_axle_mm": [1, "a"]})
+    with pytest.raises(ConfigError, match="linkage.cog_teeth"):
+        lk.from_table({"kind": "single_pivot", **{k + "_mm": list(v / MM) for k, v in SINGLE.items()}, "cog_teeth": 5})
+    with pytest.raises(ConfigError, match="never reaches|locks"):
+        lk.curves(lk.Linkage("single_pivot", SINGLE), 0.5)
+
+
+def _write(tmp_path, text):
+    f = tmp_path / "bike.toml"
+    f.write_text(text)
+    return f
+
+
+def test_cli_writes_curves_and_figure_and_refuses_two_rear_ends(tmp_path):
+    points = "\n".join(f"{k}_mm = [{v[0] / MM:g}, {v[1] / MM:g}]" for k, v in HORST.items())
+    bike = _write(tmp_path, 'base = "trail"\n[linkage]\nkind = "horst_link"\nbrake_on = "chainstay"\n' + points + "\n")
+    out = tmp_path / "out"
+    r = subprocess.run([sys.executable, "-m", "mtbmj.cli", "linkage", str(bike), "--cog", "51", "--out", str(out)],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "horst_link" in r.stdout and "32x51 T" in r.stdout
+    assert "7.0 mm at most from the linkage's axle path" in r.stderr  # the bike's approximation, said
+    lines = (out / "linkage.csv").read_text().splitlines()
+    header = [ln for ln in lines if ln.startswith("wheel_travel_mm")][0].split(",")
+    for col in ("wheel_travel_mm", "leverage_ratio", "axle_x_mm", "axle_z_mm", "anti_squat_percent",
+                "anti_rise_percent", "pedal_kickback_deg"):
+        assert col in header
+    import json
+
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["brake_on"] == "chainstay" and summary["cog_teeth"] == 51
+    # the chainstay's instant centre is the main pivot
+    rows = [ln.split(",") for ln in lines if ln[:1].isdigit()]
+    assert len(rows) > 80
+    fig = lk.for_bike(str(bike)).figure()
+    titles = [a.get_title() for a in fig.axes]
+    assert titles == ["Leverage ratio",
+                      "Rear axle path\n(dashed: as the bike runs it, about\nthe instant centre at top-out)",
+                      "Anti-squat and anti-rise (centre of mass 1076 mm)", "Pedal kickback (rear wheel held)"]
+    for a in (fig.axes[0], fig.axes[2], fig.axes[3]):
+        assert a.get_xlim() == pytest.approx((0.0, float(rows[-1][0])), abs=1e-6)
+    assert [ln.get_label() for ln in fig.axes[1].get_lines()] == ["linkage", "the bike's pivot"]
+    assert fig.axes[1].get_lines()[1].get_linestyle() == "--"
+    # both ways in one file: one line, exit 2, nothing written
+    both = _write(tmp_path, 'base = "trail"\n[leverage]\nwheel_travel_mm = [0, 100]\nratio = [2.5, 2.4]\n'
+                  '[linkage]\nkind = "horst_link"\n' + points + "\n")
+    out2 = tmp_path / "out2"
+    r = subprocess.run([sys.executable, "-m", "mtbmj.cli", "linkage", str(both), "--out", str(out2)],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert "[linkage] and [leverage] give the rear end two ways" in r.stderr
+    assert not out2.exists()
+    r = subprocess.run([sys.executable, "-m", "mtbmj.cli", "linkage", "sst", "--out", str(out2)],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2 and "sst: has no [linkage]" in r.stderr
+
+
+def test_the_documented_horst_example_runs_and_says_how_it_is_run():
+    """docs/bikes/horst_link.toml (docs/bike.md): its instant centre lies inside the front wheel's
+    reach, which a bearing could not; the bike runs about it and says how far its path leaves the
+    linkage's."""
+    import warnings
+    from pathlib import Path
+
+    from mtbmj.bike import run, spec
+
+    path = Path(__file__).resolve().parents[1] / "docs" / "bikes" / "horst_link.toml"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        s = spec.load(str(path))
+    assert s.virtual_pivot
+    said = [str(w.message) for w in caught]
+    assert any("7.0 mm at most from the linkage's axle path" in m for m in said), said
+    assert not any("bike.pivot_mm" in m for m in said)  # a derived centre is not a typed key
+    b = lk.for_bike(str(path))
+    assert s.pivot == pytest.approx(tuple(b.pivot))
+    assert s.leverage.full_stroke == pytest.approx(0.050, abs=1e-6)
+    r = run.run_bike(str(path), "root:at_m=0.4", 5.0, duration=0.5)
+    assert np.ptp(r.raw["rear_travel_mm"]) > 5.0
