@@ -43,7 +43,9 @@ def add_parser(subparsers):
                     "the velocity histogram (compression positive) with the high/low-speed split, bottom-outs and "
                     "airtime for the fork and the rear wheel, and plot simulated runs' fork (and a bike run's rear "
                     "wheel) on the same axes.")
-    p.add_argument("sst", type=Path, metavar="FILE.SST", help="SST v3 recording, or 'example' for the shipped 00649.SST")
+    p.add_argument("sst", type=Path, metavar="FILE.SST",
+                   help="SST v3 or v2 recording, a travel CSV (time_s with fork_mm, shock_mm and/or rear_mm; "
+                        "docs/rolling.md), or 'example' for the shipped 00649.SST")
     p.add_argument("--compare", type=Path, nargs="+", action="extend", metavar="RUN_DIR",
                    help="run directories (mtbmj drop/roll --out: the fork; mtbmj bike --out: the fork and the rear wheel) "
                         "compared with the ride")
@@ -332,7 +334,7 @@ def _decoding(args) -> dict:
 
 def cmd_telemetry(args) -> int:
     path = telemetry.example_path() if str(args.sst) == "example" else args.sst
-    record = telemetry.read_sst(path, **_decoding(args))
+    record = telemetry.read_ride(path, **_decoding(args))
     from mtbmj.config import warn
 
     warn(telemetry.quality(record))

@@ -152,22 +152,41 @@ class LeverageCurve:
         if w.ndim != 1 or w.shape != r.shape or w.size < 2 or np.any(np.diff(w) <= 0) or np.any(r <= 0):
             raise TelemetryError("leverage curve: needs increasing wheel travel and positive ratios of equal length")
 
-    def _stroke_table(self) -> tuple[np.ndarray, np.ndarray]:
+    # The ratio is linear in the wheel travel on each piece, as the bike reads its table
+    # (``mtbmj.bike.spec.Leverage``): ds = dw / r(w), so on a piece from (w0, r0) with slope b the
+    # stroke is s0 + ln(1 + b x / r0) / b (x / r0 where b = 0), and the inverse
+    # x = r0 (exp(b (s - s0)) - 1) / b: exact, both ways.
+    def _stroke_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         w, r = np.asarray(self.wheel_mm, float), np.asarray(self.ratio, float)
-        stroke = np.concatenate(([0.0], np.cumsum(np.diff(w) * 0.5 * (1.0 / r[1:] + 1.0 / r[:-1]))))
-        return w - w[0], stroke
+        w = w - w[0]
+        h = np.diff(w)
+        b = np.diff(r) / h
+        flat = np.abs(b) * h < 1e-9 * r[:-1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            piece = np.where(flat, h / r[:-1], np.log(r[1:] / r[:-1]) / np.where(flat, 1.0, b))
+        return w, np.concatenate(([0.0], np.cumsum(piece))), np.where(flat, 0.0, b)
 
     def stroke_mm(self, wheel_travel_mm) -> np.ndarray:
-        w, s = self._stroke_table()
+        w, s, b = self._stroke_table()
+        r = np.asarray(self.ratio, float)
         x = np.asarray(wheel_travel_mm, dtype=float)
-        beyond = s[-1] + (x - w[-1]) / self.ratio[-1]  # past the table: the last ratio holds
-        return np.where(x > w[-1], beyond, np.interp(x, w, s))
+        i = np.clip(np.searchsorted(w, x, side="right") - 1, 0, w.size - 2)
+        dx = np.clip(x - w[i], 0.0, None)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inside = s[i] + np.where(b[i] == 0.0, dx / r[i], np.log1p(b[i] * dx / r[i]) / np.where(b[i] == 0.0, 1.0, b[i]))
+        beyond = s[-1] + (x - w[-1]) / r[-1]  # past the table: the last ratio holds
+        return np.where(x > w[-1], beyond, np.where(x < 0.0, x / r[0], inside))
 
     def wheel_travel_mm(self, stroke_mm) -> np.ndarray:
-        w, s = self._stroke_table()
+        w, s, b = self._stroke_table()
+        r = np.asarray(self.ratio, float)
         x = np.asarray(stroke_mm, dtype=float)
-        beyond = w[-1] + (x - s[-1]) * self.ratio[-1]
-        return np.where(x > s[-1], beyond, np.interp(x, s, w))
+        i = np.clip(np.searchsorted(s, x, side="right") - 1, 0, s.size - 2)
+        ds = np.clip(x - s[i], 0.0, None)
+        with np.errstate(over="ignore", invalid="ignore"):
+            inside = w[i] + np.where(b[i] == 0.0, ds * r[i], r[i] * np.expm1(b[i] * ds) / np.where(b[i] == 0.0, 1.0, b[i]))
+        beyond = w[-1] + (x - s[-1]) * r[-1]
+        return np.where(x > s[-1], beyond, np.where(x < 0.0, x * r[0], inside))
 
 
 @dataclass(frozen=True)
@@ -283,6 +302,87 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
         fork_max_mm=float(fork_max_mm), shock_max_mm=float(shock_max_mm),
         rear_max_mm=float(leverage.wheel_travel_mm(shock_max_mm)), counts=counts.copy(), notes=notes,
     )
+
+
+CSV_COLUMNS = ("time_s", "fork_mm", "shock_mm", "rear_mm")
+CSV_JITTER = 0.01  # a time step may differ from the median step by at most this share
+
+
+def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
+                    shock_max_mm: float = SHOCK_STROKE_MAX_MM, leverage: LeverageCurve = LeverageCurve()
+                    ) -> TelemetryRecord:
+    """A ride given as a CSV of travel (any logger's export): a header naming ``time_s`` and one or
+    more of ``fork_mm`` (fork travel), ``shock_mm`` (shock stroke) and ``rear_mm`` (rear wheel
+    travel), mm from full extension, compression positive, one row per sample on a uniform time
+    grid (each step within 1 % of the median; the sample rate is its inverse). Rear wheel travel
+    comes from the shock's stroke through ``leverage`` when only ``shock_mm`` is given, and the
+    shock's stroke from the wheel's when only ``rear_mm`` is. Lines starting with ``#`` are comments.
+    Every problem is one ``TelemetryError`` line naming the file and the line."""
+    import csv
+
+    from mtbmj.textfile import read_text
+
+    name = str(path)
+    text = read_text(Path(path), TelemetryError, name, "not a text file, so not a travel CSV", kind="telemetry")
+    rows = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip() and not line.lstrip().startswith("#")]
+    if not rows:
+        raise TelemetryError(f"{name}: no header (expected time_s and one or more of fork_mm, shock_mm, rear_mm)")
+    header_line, header = rows[0][0], [h.strip() for h in next(csv.reader([rows[0][1]]))]
+    unknown = [h for h in header if h not in CSV_COLUMNS]
+    if unknown:
+        raise TelemetryError(f"{name}: line {header_line}: unknown column {unknown[0]!r} (known: {', '.join(CSV_COLUMNS)})")
+    if len(set(header)) != len(header):
+        raise TelemetryError(f"{name}: line {header_line}: a column is named twice")
+    if "time_s" not in header or len(header) < 2:
+        raise TelemetryError(f"{name}: line {header_line}: needs time_s and one or more of fork_mm, shock_mm, rear_mm")
+    values = np.empty((len(rows) - 1, len(header)))
+    for k, (line_no, line) in enumerate(rows[1:]):
+        cells = next(csv.reader([line]))
+        if len(cells) != len(header):
+            raise TelemetryError(f"{name}: line {line_no}: {len(cells)} values for {len(header)} columns")
+        for j, cell in enumerate(cells):
+            try:
+                x = float(cell)
+            except ValueError:
+                raise TelemetryError(f"{name}: line {line_no}: {header[j]} is not a number: {cell.strip()!r}") from None
+            if not math.isfinite(x):
+                raise TelemetryError(f"{name}: line {line_no}: {header[j]} is not finite: {cell.strip()!r}")
+            values[k, j] = x
+    if values.shape[0] < 2:
+        raise TelemetryError(f"{name}: fewer than 2 samples")
+    t = values[:, header.index("time_s")]
+    dt = np.diff(t)
+    step = float(np.median(dt))
+    if not step > 0.0:
+        raise TelemetryError(f"{name}: time_s does not increase")
+    off = np.flatnonzero(np.abs(dt - step) > CSV_JITTER * step)
+    if off.size:
+        i = int(off[0])
+        raise TelemetryError(f"{name}: line {rows[i + 2][0]}: time_s steps {dt[i]:g} s where the record steps "
+                             f"{step:g} s (a uniform time grid is needed)")
+    for label, value in (("fork_max_mm", fork_max_mm), ("shock_max_mm", shock_max_mm)):
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise TelemetryError(f"{name}: {label} must be a positive number of mm, got {value!r}")
+    column = {h: values[:, j] for j, h in enumerate(header)}
+    fork, shock, rear = column.get("fork_mm"), column.get("shock_mm"), column.get("rear_mm")
+    if rear is None and shock is not None:
+        rear = leverage.wheel_travel_mm(shock)
+    elif shock is None and rear is not None:
+        shock = leverage.stroke_mm(rear)
+    rate = 1.0 / step
+    return TelemetryRecord(
+        path=name, version=0, sample_rate_Hz=rate, timestamp=0, time_s=np.arange(t.size) / rate, fork_mm=fork,
+        shock_mm=shock, rear_mm=rear, fork_max_mm=float(fork_max_mm), shock_max_mm=float(shock_max_mm),
+        rear_max_mm=float(leverage.wheel_travel_mm(shock_max_mm)), notes=("a travel CSV (version 0): the logger's own "
+                                                                            "calibration",))
+
+
+def read_ride(path: str | Path, **decoding) -> TelemetryRecord:
+    """An SST file (versions 2 and 3) or a travel CSV (by its ``.csv`` suffix)."""
+    if Path(path).suffix.lower() == ".csv":
+        keep = {k: v for k, v in decoding.items() if k in ("fork_max_mm", "shock_max_mm", "leverage")}
+        return read_travel_csv(path, **keep)
+    return read_sst(path, **decoding)
 
 
 SHORT_RIDE_S = 30.0  # a ride shorter than this has histograms that have not settled

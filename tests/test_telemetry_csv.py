@@ -1,0 +1,67 @@
+"""A ride as a CSV of travel (issue 41 item 1): the headline's numbers are the series' own (sines
+written here, their maximum and mean known), the rear from the shock's stroke through the recorded
+bike's leverage curve (integrated here), and bad files refused in one line naming the line."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mtbmj.cli import main
+
+RATE = 500.0
+
+
+def _csv(path, columns: dict, rate=RATE, seconds=40.0, comment=True):
+    t = np.arange(int(seconds * rate)) / rate
+    data = {"time_s": t, **{k: f(t) for k, f in columns.items()}}
+    lines = (["# exported by a logger"] if comment else []) + [",".join(data)]
+    lines += [",".join(f"{data[k][i]:.6f}" for k in data) for i in range(t.size)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_a_travel_csv_gives_the_headline_of_its_own_series(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    _csv(tmp_path / "ride.csv", {"fork_mm": lambda t: 50.0 + 40.0 * np.sin(2 * np.pi * 1.3 * t),
+                                 "rear_mm": lambda t: 60.0 + 30.0 * np.sin(2 * np.pi * 1.1 * t)})
+    assert main(["telemetry", "ride.csv", "--out", "tel"]) == 0
+    out = capsys.readouterr().out
+    assert "ride.csv: 40.0 s at 500 Hz" in out
+    assert "fork max 50 % (90.0 of 180 mm), 0 bottom-outs, dynamic sag 28 %" in out  # 90 of 180; mean 50 of 180
+
+
+def test_the_shock_column_goes_through_the_bikes_leverage_curve(tmp_path, monkeypatch, capsys):
+    from mtbmj.bike import spec
+
+    monkeypatch.chdir(tmp_path)
+    _csv(tmp_path / "ride.csv", {"shock_mm": lambda t: 20.0 + 15.0 * np.sin(2 * np.pi * 1.1 * t)})
+    assert main(["telemetry", "ride.csv", "--bike", "trail", "--out", "tel"]) == 0
+    out = capsys.readouterr().out
+    lev = spec.load("trail").leverage
+    # the wheel travel at 35 mm of stroke: integrate dw = LR(w) ds here, on a fine grid
+    def wheel(stroke, ds=1e-3):
+        w, s = 0.0, 0.0
+        while s < stroke - 1e-12:
+            w += lev.ratio_at((w + 0.5 * lev.ratio_at(w * 1e-3) * ds) * 1e-3) * ds  # midpoint rule
+            s += ds
+        return w
+
+    w, full = wheel(35.0), wheel(spec.load("trail").shock_stroke * 1e3)  # full: the shock's whole stroke
+    assert f"rear max {100 * w / full:.0f} % ({w:.1f} of {full:.0f} mm)" in out
+
+
+@pytest.mark.parametrize("text,said", [
+    ("time_s,fork_mm\n0,1\n0.002,x\n", "line 3: fork_mm is not a number: 'x'"),
+    ("time_s,fork\n0,1\n", "line 1: unknown column 'fork'"),
+    ("time_s,fork_mm\n0,1\n0.002,2\n0.004,3\n0.010,4\n", "line 5: time_s steps 0.006 s"),
+    ("time_s,fork_mm\n0,1\n0.002\n", "line 3: 1 values for 2 columns"),
+    ("time_s\n0\n1\n", "needs time_s and one or more"),
+    ("time_s,fork_mm\n0,nan\n", "line 2: fork_mm is not finite"),
+])
+def test_a_bad_csv_is_one_line_naming_the_line(tmp_path, monkeypatch, capsys, text, said):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "ride.csv").write_text(text)
+    assert main(["telemetry", "ride.csv", "--out", "tel"]) == 2
+    err = capsys.readouterr().err
+    assert said in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "tel").exists()
