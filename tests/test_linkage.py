@@ -15,6 +15,7 @@ import pytest
 from scipy.optimize import brentq, fsolve
 
 from mtbmj.bike import linkage as lk
+from mtbmj.bike import rear_end
 from mtbmj.errors import ConfigError
 
 MM = 1e-3
@@ -311,7 +312,7 @@ def test_cli_writes_curves_and_figure_and_refuses_two_rear_ends(tmp_path):
     # the chainstay's instant centre is the main pivot
     rows = [ln.split(",") for ln in lines if ln[:1].isdigit()]
     assert len(rows) > 80
-    fig = lk.for_bike(str(bike)).figure()
+    fig = rear_end.for_bike(str(bike)).figure()
     titles = [a.get_title() for a in fig.axes]
     assert titles == ["Leverage ratio",
                       "Rear axle path\n(dashed: as the bike runs it, about\nthe instant centre at top-out)",
@@ -351,7 +352,7 @@ def test_the_documented_horst_example_runs_and_says_how_it_is_run():
     said = [str(w.message) for w in caught]
     assert any("7.0 mm at most from the linkage's axle path" in m for m in said), said
     assert not any("bike.pivot_mm" in m for m in said)  # a derived centre is not a typed key
-    b = lk.for_bike(str(path))
+    b = rear_end.for_bike(str(path))
     assert s.pivot == pytest.approx(tuple(b.pivot))
     assert s.leverage.full_stroke == pytest.approx(0.050, abs=1e-6)
     r = run.run_bike(str(path), "root:at_m=0.4", 5.0, duration=0.5)

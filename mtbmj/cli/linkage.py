@@ -6,7 +6,7 @@ from mtbmj.cli.common import add_out, overrides
 
 
 def cmd_linkage(args) -> int:
-    from mtbmj.bike import linkage
+    from mtbmj.bike import rear_end as linkage
 
     result = linkage.for_bike(args.bike, overrides(args.set), args.chainring, args.cog, args.com_height_mm)
     written = result.write(args.out)

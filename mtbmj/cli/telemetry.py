@@ -315,7 +315,7 @@ def figure(summary: dict):
     return fig
 
 
-def _decoding(args) -> dict:
+def decoding(args) -> dict:
     """read_sst's fork_max_mm, shock_max_mm and leverage: the --bike's, with --fork-max-mm and
     --shock-max-mm over them; the SST example's bike without --bike."""
     fork_max, shock_max = telemetry.FORK_TRAVEL_MAX_MM, telemetry.SHOCK_STROKE_MAX_MM
@@ -334,7 +334,7 @@ def _decoding(args) -> dict:
 
 def cmd_telemetry(args) -> int:
     path = telemetry.example_path() if str(args.sst) == "example" else args.sst
-    record = telemetry.read_ride(path, **_decoding(args))
+    record = telemetry.read_ride(path, **decoding(args))
     from mtbmj.config import warn
 
     warn(telemetry.quality(record))

@@ -1,0 +1,448 @@
+"""A ride reconstructed through the bike's own laws: the speed from the lag between the two ends, the
+terrain under the front wheel from the fork's record, and the rear's record predicted from that
+terrain and compared with the measured one (``mtbmj reconstruct``).
+
+**Speed.** The rear wheel meets what the front met a wheelbase later: the lag that best aligns the
+grounds each end's own inverse (below) finds under it (high-passed at 1 Hz; each end's suspension
+delays its travel behind its ground by a phase of its own, which the grounds do not carry), or where
+those do not align, the two ends' travel velocities (high-passed at 5 Hz: the terrain's part, not
+the rider's slow weight shifts) (normalised cross-correlation, the peak refined by a parabola)
+gives v = wheelbase / lag per window of ``WINDOW_S`` seconds; a window whose correlation peak is below
+``MIN_CORRELATION`` gives none. The speed between windows is interpolated (the distance along the
+ride and the rear's lag follow it); the ride's speed is the windows' median.
+
+**Terrain** (an inverse of the front's quarter car, closed form, no fitting). Each end is a quarter
+car: the sprung mass the end carries at rest (the bike's and rider's weight shared between the axles
+by statics, less the unsprung mass), the unsprung mass (fork lower and wheel; rear wheel and half the
+swingarm), the fork or shock law of the bike file (a friction state integrated along the measured
+stroke), the tyre's rate. The fork compresses along the steering axis, so the wheel rises x sin(a)
+for a stroke x and the law's force F acts on the wheel as F / sin(a) vertically (virtual work). With
+the stroke x(t) measured (its rate by a Savitzky-Golay filter), the force's part below 0.3 Hz beyond
+the static load is the rider's slow load shift (braking, weight fore and aft: no terrain holds a fork
+down for seconds); the rest accelerates the sprung mass, (F / sin(a) - shift) / M - g, integrated
+twice (its slow drift removed by a 0.3 Hz high-pass filter, forward and backward) to the body's
+height; the wheel's is that plus x sin(a), the tyre's force m (z_u'' + g) + F / sin(a), its
+deflection that over the tyre rate, and the ground the wheel's height less the tyre's loaded radius.
+What is left is the terrain's bumpiness: its slow rise and fall (a descent, a climb) is not in the
+suspension's record. Where the tyre's force is not positive the wheel is off the ground and the
+terrain there is unknown: those stretches are named (a jump) and left out of the checks.
+
+**Checks, with every reconstruction.** The front quarter car run forward over the terrain found
+(classical RK4 at the record's step, the load shift on its body) reproduces the front record (its
+RMS difference); the rear quarter car, its shock through the leverage curve, run over the same
+terrain a wheelbase later (at the speed of the moment) with the opposite load shift on its body
+(what the front gained the rear lost) predicts the rear record: the RMS difference in % of the rear
+travel the ride used, and the distance between the two travel histograms (the sum of the absolute
+differences of their time shares, 0 to 200 %).
+
+Assumed and shared with nothing else: vertical-only quarter cars (no pitch coupling between the
+ends, no horizontal motion of the front axle), the load shift's split (all of it between the ends),
+no tyre damping in the inverse. On the shipped ride (`mtbmj reconstruct example --bike sst`) the
+front is reproduced within 3.0 mm RMS and the rear predicted within 21.5 mm RMS, 21 % of the travel
+it used, over the 31 % of the ride whose windows gave a speed: the quarter cars leave the bike's
+pitch out, which couples the ends.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mtbmj.errors import MtbmjError
+
+WINDOW_S = 5.0  # seconds per window of the speed estimate
+MIN_CORRELATION = 0.3  # a window whose best normalised correlation is below this gives no speed
+LAG_HIGHPASS_HZ = 5.0  # travel records high-passed before the lag is sought (the rider's slow motions out)
+GROUND_HIGHPASS_HZ = 1.0  # the two ends' grounds high-passed before the lag is sought
+SPEED_RANGE = (1.0, 15.0)  # m/s the lag is searched for
+HIGHPASS_HZ = 0.3  # the body height's drift removed below this
+G = 9.81
+
+
+class ReconstructError(MtbmjError):
+    """A ride that cannot be reconstructed: one line naming why."""
+
+
+@dataclass(frozen=True)
+class QuarterCar:
+    """One end: sprung and unsprung mass (kg), its law (force along the stroke for (stroke, rate,
+    state)), the stroke per wheel travel, the tyre's rate (N/m) and radius (m), the gravity."""
+
+    sprung: float
+    unsprung: float
+    law: object
+    tyre_rate: float
+    radius: float
+    gravity: float
+
+
+def _law_force(law, x, v, z):
+    return law.force(x, v, z) if law.has_state else law.force(x, v)
+
+
+def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S, highpass_hz: float = LAG_HIGHPASS_HZ
+                   ) -> dict:
+    """{"speed_m_per_s": the median of the windows' speeds, "lag_s", "windows": [(start_s, speed or
+    None, correlation)], "speed_at": a function of time (the windows' speeds at their centres,
+    held past the first and last)}: see the module doc. ``front`` and ``rear`` are travel series
+    (any units) on ``t``; both are high-passed at ``LAG_HIGHPASS_HZ`` first (what the terrain does,
+    not the rider's slow weight shifts, which reach both ends at once)."""
+    dt = float(t[1] - t[0])
+    from scipy.signal import butter, sosfiltfilt
+
+    sos = butter(2, highpass_hz, btype="highpass", fs=1.0 / dt, output="sos")
+    vf = np.gradient(sosfiltfilt(sos, np.asarray(front, float)), dt)
+    vr = np.gradient(sosfiltfilt(sos, np.asarray(rear, float)), dt)
+    lo, hi = wheelbase / SPEED_RANGE[1], wheelbase / SPEED_RANGE[0]
+    k_lo, k_hi = max(1, int(math.floor(lo / dt))), int(math.ceil(hi / dt))
+
+    def best(a, b):
+        n = a.size - k_hi
+        if n < 10:
+            return None, 0.0
+        a0 = a[:n] - a[:n].mean()
+        scores = []
+        for k in range(k_lo, k_hi + 1):
+            b0 = b[k:k + n] - b[k:k + n].mean()
+            den = math.sqrt(float(a0 @ a0) * float(b0 @ b0))
+            scores.append(float(a0 @ b0) / den if den > 0 else 0.0)
+        s = np.asarray(scores)
+        i = int(np.argmax(s))
+        shift = 0.0
+        if 0 < i < s.size - 1:
+            den = s[i - 1] - 2 * s[i] + s[i + 1]
+            shift = 0.5 * (s[i - 1] - s[i + 1]) / den if den < 0 else 0.0
+        return (k_lo + i + shift) * dt, float(s[i])
+
+    windows = []
+    step = int(round(window_s / dt))
+    for start in range(0, max(vf.size - k_hi - step // 2, 1), step):
+        wl, wc = best(vf[start:start + step + k_hi], vr[start:start + step + k_hi])
+        windows.append((start * dt, None if wl is None or wc < MIN_CORRELATION else wheelbase / wl, wc))
+    good = [(a + 0.5 * window_s, v) for a, v, _ in windows if v is not None]
+    if not good:
+        top = max((c for _, _, c in windows), default=0.0)
+        raise ReconstructError(f"the two ends' records do not align at any lag for {SPEED_RANGE[0]:g}-"
+                               f"{SPEED_RANGE[1]:g} m/s in any {window_s:g} s window (best correlation {top:.2f} < "
+                               f"{MIN_CORRELATION}): no speed from this ride")
+    centres, speeds = np.array([c for c, _ in good]), np.array([v for _, v in good])
+    speed = float(np.median(speeds))
+    return {"speed_m_per_s": speed, "lag_s": wheelbase / speed, "windows": windows,
+            "speed_at": lambda time: np.interp(time, centres, speeds)}
+
+
+def _derivatives(x, dt):
+    from scipy.signal import savgol_filter
+
+    n = max(5, int(round(0.01 / dt)) | 1)  # a 10 ms window, odd
+    return (savgol_filter(x, n, 3, deriv=1, delta=dt, mode="interp"),
+            savgol_filter(x, n, 3, deriv=2, delta=dt, mode="interp"))
+
+
+def _lowpass(x, dt):
+    from scipy.signal import butter, sosfiltfilt
+
+    sos = butter(2, HIGHPASS_HZ, btype="lowpass", fs=1.0 / dt, output="sos")
+    return sosfiltfilt(sos, x)
+
+
+def _highpass(x, dt):
+    from scipy.signal import butter, sosfiltfilt
+
+    sos = butter(2, HIGHPASS_HZ, btype="highpass", fs=1.0 / dt, output="sos")
+    return sosfiltfilt(sos, x)
+
+
+def _states(law, x, v, dt):
+    """The law's friction state along the measured stroke (explicit midpoint), or zeros."""
+    z = np.zeros_like(x)
+    if not law.has_state:
+        return z
+    for i in range(1, x.size):
+        half = z[i - 1] + 0.5 * dt * law.state_rate(v[i - 1], z[i - 1])
+        z[i] = z[i - 1] + dt * law.state_rate(0.5 * (v[i - 1] + v[i]), half)
+    return z
+
+
+def ground_under(t, rise, stroke, car: QuarterCar, ratio):
+    """(ground height m, tyre force N, airborne mask) under a quarter car whose wheel rose ``rise``
+    (m) in the frame while its law's stroke was ``stroke`` (m), both on ``t``: the law's force acts
+    on the wheel divided by ``ratio(rise)`` (wheel travel per stroke; virtual work)."""
+    dt = float(t[1] - t[0])
+    w, x = np.asarray(rise, float), np.asarray(stroke, float)
+    v, _ = _derivatives(x, dt)
+    z = _states(car.law, x, v, dt)
+    f = np.array([_law_force(car.law, xi, vi, zi) for xi, vi, zi in zip(x, v, z)]) / ratio(w)
+    extra = _lowpass(f - car.sprung * car.gravity, dt)  # the rider's slow load shifts (braking, weight)
+    acc = (f - extra) / car.sprung - car.gravity
+    vel = np.cumsum(acc) * dt
+    vel = _highpass(vel - vel.mean(), dt)
+    body = np.cumsum(vel) * dt
+    body = _highpass(body - body.mean(), dt)
+    wheel = body + w
+    _, wheel_acc = _derivatives(wheel, dt)
+    tyre = car.unsprung * (wheel_acc + car.gravity) + f
+    deflection = np.maximum(tyre, 0.0) / car.tyre_rate
+    ground = wheel - car.radius + deflection
+    return ground - ground[0], tyre, tyre <= 0.0, extra
+
+
+def forward(t, ground, car: QuarterCar, stroke_of, ratio, w0: float, extra=None):
+    """The wheel's rise (m) of the quarter car run over ``ground`` (m, on ``t``) from rest at rise
+    ``w0``, its body pressed by ``extra`` (N, on ``t``; the rider's load shifts) where given: the
+    law's stroke is ``stroke_of(w)``, its rate the wheel's over ``ratio(w)``; classical RK4 at the
+    record's step, the ground and the load linear between samples."""
+    dt = float(t[1] - t[0])
+    gr = np.asarray(ground, float)
+    load = np.zeros_like(gr) if extra is None else np.asarray(extra, float)
+    k = car.tyre_rate
+    stateful = bool(car.law.has_state)
+
+    def rhs(y, g, push):
+        zb, zw, vb, vw, zs = y
+        w = zw - zb
+        r = float(ratio(w))
+        x, xd = float(stroke_of(w)), (vw - vb) / r
+        f = _law_force(car.law, x, xd, zs) / r
+        tyre = max(0.0, k * (g - (zw - car.radius)))
+        return np.array([vb, vw, (f - push) / car.sprung - car.gravity, (tyre - f) / car.unsprung - car.gravity,
+                         car.law.state_rate(xd, zs) if stateful else 0.0])
+
+    f0 = _law_force(car.law, float(stroke_of(w0)), 0.0, 0.0) / float(ratio(w0))
+    zw0 = car.radius - (car.unsprung * car.gravity + f0) / k + gr[0]
+    y = np.array([zw0 - w0, zw0, 0.0, 0.0, 0.0])
+    out = np.empty(gr.size)
+    out[0] = w0
+    for i in range(gr.size - 1):
+        g0, g1, p0, p1 = gr[i], gr[i + 1], load[i], load[i + 1]
+        gm, pm = 0.5 * (g0 + g1), 0.5 * (p0 + p1)
+        k1 = rhs(y, g0, p0)
+        k2 = rhs(y + 0.5 * dt * k1, gm, pm)
+        k3 = rhs(y + 0.5 * dt * k2, gm, pm)
+        k4 = rhs(y + dt * k3, g1, p1)
+        y = y + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        if not np.all(np.isfinite(y)):
+            raise ReconstructError(f"the forward quarter car diverged at {t[i + 1]:.3f} s")
+        out[i + 1] = y[1] - y[0]
+    return out
+
+
+def histogram_distance(a, b, top: float, bins: int = 20) -> float:
+    """Sum of |time share differences| (%) of two travel histograms over 0..top in ``bins`` bins."""
+    edges = np.linspace(0.0, top, bins + 1)
+    ha = np.histogram(np.clip(a, 0, top), edges)[0] / max(a.size, 1)
+    hb = np.histogram(np.clip(b, 0, top), edges)[0] / max(b.size, 1)
+    return float(100.0 * np.sum(np.abs(ha - hb)))
+
+
+
+
+LEFT_OUT_S = 0.2  # around an airborne stretch, this much either side is left out of the checks
+
+
+def _statics(spec):
+    """(front, rear) wheel loads' share of the weight at rest, level (moments about the rear axle)."""
+    from mtbmj.bike.model import frame_body
+
+    m_frame, c_frame, _ = frame_body(spec)
+    r = spec.rider
+    bodies = [(m_frame, c_frame[0]), (r.mass, r.com[0]), (spec.fork_lower_mass + spec.front_wheel_mass, spec.front_axle[0]),
+              (spec.rear_wheel_mass, spec.rear_axle[0]), (spec.swingarm_mass, 0.5 * (spec.pivot[0] + spec.rear_axle[0]))]
+    total = sum(m for m, _ in bodies)
+    x = sum(m * p for m, p in bodies) / total
+    front = (x - spec.rear_axle[0]) / (spec.front_axle[0] - spec.rear_axle[0])
+    return total, front
+
+
+@dataclass
+class Reconstruction:
+    """A ride through a bike's laws (``reconstruct``); SI units inside, see the module doc."""
+
+    name: str
+    bike: str
+    t: np.ndarray
+    speed: dict
+    distance: np.ndarray  # m along the ride at each sample
+    ground: np.ndarray  # m, under the front wheel
+    valid: np.ndarray  # samples the checks count (the front on the ground, and a wheelbase later the rear)
+    front: np.ndarray  # fork travel measured (mm)
+    front_again: np.ndarray  # fork travel of the front quarter car over the terrain found (mm)
+    rear: np.ndarray  # rear wheel travel measured (mm)
+    rear_predicted: np.ndarray  # rear wheel travel predicted (mm)
+    rear_top: float  # the rear wheel's full travel (mm)
+    jumps: list  # (start s, end s) the front wheel was off the ground
+    unaligned: list = None  # (start s, end s) windows with no speed (standing, or the ends do not align)
+
+    def checks(self) -> dict:  # noqa: D401 (the checks reported with every reconstruction)
+        v = self.valid
+        used = float(np.ptp(self.rear[v])) if v.any() else float("nan")
+        rms_front = float(np.sqrt(np.mean((self.front_again[v] - self.front[v]) ** 2)))
+        rms_rear = float(np.sqrt(np.mean((self.rear_predicted[v] - self.rear[v]) ** 2)))
+        return {"front_reproduced_rms_mm": rms_front, "rear_predicted_rms_mm": rms_rear,
+                "rear_travel_used_mm": used, "rear_predicted_rms_percent_of_used": 100.0 * rms_rear / used,
+                "rear_histogram_distance_percent": histogram_distance(self.rear[v], self.rear_predicted[v],
+                                                                        self.rear_top),
+                "samples_checked_percent": 100.0 * float(np.mean(v))}
+
+    def summary(self) -> dict:
+        speeds = [s for _, s, _ in self.speed["windows"] if s is not None]
+        return {"ride": self.name, "bike": self.bike, "duration_s": float(self.t[-1] - self.t[0]),
+                "speed_m_per_s": self.speed["speed_m_per_s"], "lag_s": self.speed["lag_s"],
+                "speed_from": self.speed.get("from"),
+                "window_speeds_m_per_s": [None if s is None else float(s) for _, s, _ in self.speed["windows"]],
+                "window_speed_range_m_per_s": [min(speeds), max(speeds)] if speeds else None,
+                "terrain_length_m": float(self.distance[-1]),
+                "left_out": [{"start_s": float(a), "end_s": float(b), "why": "the front wheel off the ground (a jump)"}
+                             for a, b in self.jumps]
+                + [{"start_s": a, "end_s": b, "why": "no speed: standing, or the two ends do not align here"}
+                   for a, b in (self.unaligned or [])],
+                "checks": self.checks(),
+                "assumed": "vertical quarter cars at each end, the speed constant over the ride, no tyre damping "
+                           "in the inverse (mtbmj/ride/reconstruct.py)"}
+
+    def line(self) -> str:
+        c = self.checks()
+        s = self.summary()
+        rng = s["window_speed_range_m_per_s"]
+        spread = f" (windows {rng[0]:.2f}-{rng[1]:.2f})" if rng else ""
+        return (f"{self.name} through {self.bike}: speed {s['speed_m_per_s']:.2f} m/s from a {1e3 * s['lag_s']:.0f} ms "
+                f"lag{spread}, terrain {s['terrain_length_m']:.0f} m; check: front reproduced within "
+                f"{c['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted {c['rear_predicted_rms_mm']:.1f} mm RMS "
+                f"({c['rear_predicted_rms_percent_of_used']:.0f} % of the {c['rear_travel_used_mm']:.0f} mm used), "
+                f"histograms {c['rear_histogram_distance_percent']:.0f} % apart; {len(self.jumps)} jump(s) and "
+                f"{len(self.unaligned or [])} window(s) without a speed left out ({c['samples_checked_percent']:.0f} % "
+                f"of the ride checked)")
+
+    def terrain_csv(self) -> bytes:
+        """The terrain as ``mtbmj roll`` and ``mtbmj bike`` read a profile (distance_m, height_mm)."""
+        from mtbmj import output
+
+        keep = np.concatenate(([True], np.diff(self.distance) > 1e-9))
+        return output.csv_bytes({"distance_m": self.distance[keep], "height_mm": self.ground[keep] * 1e3})
+
+    def figure(self):
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(11, 8), layout="constrained")
+        ax = fig.subplots(3, 1, sharex=False)
+        ax[0].plot(self.distance, self.ground * 1e3, color="0.3")
+        ax[0].set(xlabel="distance (m)", ylabel="height (mm)",
+                  title=f"Terrain under the front wheel (median speed {self.speed['speed_m_per_s']:.2f} m/s)")
+        for a, b in self.jumps:
+            ax[0].axvspan(float(np.interp(a, self.t, self.distance)), float(np.interp(b, self.t, self.distance)),
+                          color="C3", alpha=0.2)
+        ax[1].plot(self.t, self.front, color="C0", label="fork, measured")
+        ax[1].plot(self.t, self.front_again, color="C1", linestyle="--", label="fork, over the terrain found")
+        ax[1].set(xlabel="time (s)", ylabel="fork travel (mm)", title="Front: the record reproduced (the check)")
+        ax[2].plot(self.t, self.rear, color="C0", label="rear wheel, measured")
+        ax[2].plot(self.t, self.rear_predicted, color="C2", linestyle="--", label="rear wheel, predicted")
+        ax[2].set(xlabel="time (s)", ylabel="rear wheel travel (mm)", title="Rear: predicted from the front's terrain")
+        for a in ax[1:]:
+            a.legend(loc="upper right")
+            a.set_xlim(float(self.t[0]), float(self.t[-1]))
+            for s0, s1 in self.jumps:
+                a.axvspan(s0, s1, color="C3", alpha=0.2)
+            for s0, s1 in self.unaligned or []:
+                a.axvspan(s0, s1, color="0.6", alpha=0.2)
+        for a in ax:
+            a.grid(alpha=0.3)
+        fig.suptitle(f"{self.name} through {self.bike}; left out of the checks: red, the front wheel off the "
+                     f"ground; grey, no speed (standing, or the ends do not align)")
+        return fig
+
+    def write(self, out_dir) -> list:
+        import io
+        import json
+
+        from mtbmj import output
+
+        buf = io.BytesIO()
+        self.figure().savefig(buf, format="png", dpi=100)
+        series = output.csv_bytes({"time_s": self.t, "fork_mm": self.front, "fork_again_mm": self.front_again,
+                                   "rear_mm": self.rear, "rear_predicted_mm": self.rear_predicted,
+                                   "checked": self.valid.astype(int)})
+        return output.write_atomically(out_dir, {"terrain.csv": self.terrain_csv(), "series.csv": series,
+                                                 "reconstruction.png": buf.getvalue(),
+                                                 "reconstruction.json": (json.dumps(self.summary(), indent=2) + "\n").encode()})
+
+
+def _runs(mask):
+    """(start, end) index pairs of the True runs of ``mask``."""
+    m = np.concatenate(([False], mask, [False]))
+    d = np.diff(m.astype(int))
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
+
+
+def reconstruct(record, bike, overrides=None) -> Reconstruction:
+    """``record`` (a ``mtbmj.ride.telemetry.TelemetryRecord`` with both ends) through the bike
+    ``bike`` (preset or file; ``overrides`` its keys): see the module doc."""
+    from mtbmj.bike import run as bike_run
+    from mtbmj.bike import spec as spec_mod
+
+    if record.fork_mm is None or record.rear_mm is None:
+        raise ReconstructError(f"{record.name}: needs both ends' records (the rear meets what the front met)")
+    spec = spec_mod.load(str(bike), overrides)
+    fork_setup, shock_setup = bike_run.setups(spec)
+    g = fork_setup.gravity
+    total, share = _statics(spec)
+    m_front = spec.fork_lower_mass + spec.front_wheel_mass
+    m_rear = spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
+    rate = fork_setup.tire.values(1).rate
+    radius = fork_setup.tire_radius
+    front_car = QuarterCar(total * share - m_front, m_front, fork_setup.fork, rate, radius, g)
+    rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g)
+    t = np.asarray(record.time_s, float)
+    sin_a = math.sin(spec.head_angle)
+    wheelbase = spec.front_axle[0] - spec.rear_axle[0]
+    fork = np.asarray(record.fork_mm, float) * 1e-3
+    ground, tyre, air, extra = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
+    lev = spec.leverage
+    rear = np.asarray(record.rear_mm, float) * 1e-3
+    shock = np.asarray(record.shock_mm, float) * 1e-3 if record.shock_mm is not None else lev.strokes(rear)
+    ratios = np.vectorize(lev.ratio_at)
+    # the speed from the lag between the grounds each end's own inverse finds (each end's suspension
+    # delays its travel behind its ground by its own phase; the grounds carry none)
+    ground_back, *_ = ground_under(t, rear, shock, rear_car, ratios)
+    try:
+        speed = speed_from_lag(t, ground, ground_back, wheelbase, highpass_hz=GROUND_HIGHPASS_HZ)
+        speed["from"] = "the two ends' grounds"
+    except ReconstructError:  # where the rear's inverse is too rough to align: the travels themselves
+        speed = speed_from_lag(t, record.fork_mm, record.rear_mm, wheelbase)
+        speed["from"] = "the two ends' travel (their grounds did not align)"
+    dt = float(t[1] - t[0])
+    pad = int(round(LEFT_OUT_S / dt))
+    lag = int(round(speed["lag_s"] / dt))
+    bad = np.zeros(t.size, bool)
+    jumps = []
+    for a, b in _runs(air):
+        jumps.append((float(t[a]), float(t[min(b, t.size - 1)])))
+        bad[max(0, a - pad): b + pad] = True
+        bad[max(0, a - pad + lag): b + pad + lag] = True  # the rear meets the same stretch a wheelbase later
+    lags = wheelbase / speed["speed_at"](t)
+    bad[:int(round(float(np.max(lags)) / dt)) + pad] = True  # the rear's first wheelbase has no terrain from the front
+    bad[:int(round(2.0 / (HIGHPASS_HZ * 2 * math.pi) / dt))] = True  # the filters' start
+    step = int(round(WINDOW_S / dt))
+    unaligned = []
+    for start, v_window, _ in speed["windows"]:
+        if v_window is None:  # standing, or the ends do not align there: no terrain the rear can be checked on
+            a = int(round(start / dt))
+            bad[a: a + step] = True
+            unaligned.append((float(t[min(a, t.size - 1)]), float(t[min(a + step, t.size - 1)])))
+    if speed["windows"]:  # past the last window
+        last = int(round(speed["windows"][-1][0] / dt)) + step
+        if last < t.size:
+            bad[last:] = True
+    front_again = forward(t, ground, front_car, lambda w: w / sin_a, lambda w: sin_a, float(fork[0] * sin_a),
+                          extra) / sin_a
+    ground_rear = np.interp(t - lags, t, ground)
+    # a slow load shift moves weight between the ends: what the front gained the rear lost
+    rear_predicted = forward(t, ground_rear, rear_car, lev.stroke, lev.ratio_at, float(rear[0]), -extra)
+    v = speed["speed_at"](t)
+    distance = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)))
+    return Reconstruction(record.name, spec.name, t, speed, distance, ground, ~bad, fork * 1e3, front_again * 1e3,
+                          rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps, unaligned)
+
+
+__all__ = ["speed_from_lag", "ground_under", "forward", "histogram_distance", "reconstruct", "Reconstruction",
+           "QuarterCar", "ReconstructError"]
