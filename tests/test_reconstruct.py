@@ -161,6 +161,9 @@ def test_the_figure_marks_what_was_left_out(made, tmp_path):
     assert titles[2] == "Rear: predicted from the front's terrain"
     assert fig.axes[2].get_xlim() == pytest.approx((0.0, SECONDS - 1.0 / RATE))
     assert [ln.get_label() for ln in fig.axes[2].get_lines()] == ["rear wheel, measured", "rear wheel, predicted"]
+    assert "red, the front wheel off the ground; grey, no speed" in fig.get_suptitle()
+    shaded = [p for p in fig.axes[2].patches]
+    assert len(shaded) == len(rec.jumps) + len(rec.unaligned)  # each stretch left out is drawn
 
 
 def test_one_end_alone_or_no_alignment_is_refused_in_one_line(made, tmp_path, capsys):

@@ -347,7 +347,7 @@ class Reconstruction:
                 a.axvspan(s0, s1, color="0.6", alpha=0.2)
         for a in ax:
             a.grid(alpha=0.3)
-        fig.suptitle(f"{self.name} through {self.bike}; left out of the checks: red, the front wheel off the "
+        fig.suptitle(f"{self.name} through {self.bike}\nleft out of the checks: red, the front wheel off the "
                      f"ground; grey, no speed (standing, or the ends do not align)")
         return fig
 
