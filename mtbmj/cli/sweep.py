@@ -60,10 +60,14 @@ def _bike_sweep(args) -> int:
         raise ConfigError("sweep: give --vary KEY=LO:HI:N (a bike key, or fork:KEY / shock:KEY)")
     variants = sweep.grid([sweep.parse_vary(v, count=True, check_key=False) for v in args.vary])
     base = bike_overrides(args)
-    table = Progress(f"sweep bike {args.config} ({len(variants)} variants)", not args.quiet).around(
-        lambda progress: bike_sweep.run(args.config, args.roll, args.speed, variants, args.duration, base, progress))
-    keys = list(variants[0])
-    written = bike_sweep.write(table, args.out, args.config, args.roll, args.speed, keys)
+    from mtbmj import output
+
+    with output.claim(args.out, "sweep", folders=("journal",)):  # the journal is mtbmj's from the start
+        table = Progress(f"sweep bike {args.config} ({len(variants)} variants)", not args.quiet).around(
+            lambda progress: bike_sweep.run(args.config, args.roll, args.speed, variants, args.duration, base,
+                                            progress, out_dir=args.out, resume=args.resume))
+        keys = list(variants[0])
+        written = bike_sweep.write(table, args.out, args.config, args.roll, args.speed, keys)
     ok = table[table["status"] == "ok"]
     crashes = int(ok["crashes_count"].sum()) if len(ok) else 0
     print(f"sweep bike {args.config} over {args.roll} at {args.speed:g} m/s: {len(ok)} of {len(table)} variants ran"
