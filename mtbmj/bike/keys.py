@@ -115,6 +115,15 @@ KEYS: dict[str, tuple[str, str, object]] = {
                          "(default) or chainstay (Horst link), rear_triangle (short link).", "text", None),
     "linkage.com_height_mm": ("The centre of mass over the ground for anti-squat and anti-rise (default: the bike's "
                               "and rider's at full extension, frame level).", "300-2000", (700.0, 1400.0)),
+    "sensors.fork_arm_mm": ("The fork sensor's arm (two equal arms, the fork's stroke as the base): the telemetry "
+                            "recorder's calibration, read by mtbmj telemetry and reconstruct with --bike.", "> 0",
+                            (30.0, 400.0)),
+    "sensors.fork_max_mm": ("The fork sensor's base at full extension.", "> 0, < 2 x fork_arm_mm", (30.0, 700.0)),
+    "sensors.shock_arm1_mm": ("The shock sensor's first arm (with the second, a triangle whose third side is the "
+                              "shock's eye-to-eye).", "> 0", (20.0, 400.0)),
+    "sensors.shock_arm2_mm": ("The shock sensor's second arm.", "> 0", (20.0, 400.0)),
+    "sensors.shock_max_mm": ("The shock's eye-to-eye at full extension, as the sensor measures it.",
+                             "> 0, a closing triangle", (100.0, 400.0)),
     "drive.push_N": ("The rider drive's largest forward force at the rear tyre.", ">= 0", (100.0, 2500.0)),
     "drive.power_W": ("The rider drive's largest power.", ">= 0", (100.0, 2500.0)),
     "drive.brake_N": ("The rider drive's largest braking force.", ">= 0", (100.0, 2500.0)),

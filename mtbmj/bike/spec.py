@@ -165,6 +165,7 @@ class BikeSpec:
     overrides: dict = field(default_factory=dict)  # what ``load``'s overrides changed (for the manifest)
     # the pivot is a four-bar's instant centre at top-out (``[linkage]``), not a bearing on the frame
     virtual_pivot: bool = False
+    sensors: dict = field(default_factory=dict)  # the telemetry sensors' calibration, mm (``[sensors]``)
 
     @property
     def swingarm_length(self) -> float:
@@ -228,6 +229,40 @@ def read_table(ref: str) -> tuple[dict, str]:
             table.pop("linkage", None)  # a table or a pivot replaces the hardpoints its bases gave
         table = _merge(table, part)
     return table, str(ref)
+
+
+# A telemetry recorder's sensors on this bike (Sufni's AS5600 angle sensors): the fork's isosceles
+# triangle (two equal arms, the stroke as its base) and the shock's triangle (two arms, the shock's
+# eye-to-eye as the third side), in mm, as its setup record gives them (``mtbmj telemetry --bike``)
+SENSOR_KEYS = ("fork_arm_mm", "fork_max_mm", "shock_arm1_mm", "shock_arm2_mm", "shock_max_mm")
+
+
+def _sensors(table: dict) -> dict:
+    """The ``[sensors]`` calibration (mm), checked: each a positive number, and each triangle one
+    that closes (the fork's base at most twice its arm; the shock's sides a triangle)."""
+    got = table.get("sensors") or {}
+    out = {}
+    for key in SENSOR_KEYS:
+        if key in got:
+            value = got[key]
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+                raise ConfigError(f"sensors.{key}: must be a positive number of mm, got {value!r}")
+            out[key] = float(value)
+    fork = [k for k in ("fork_arm_mm", "fork_max_mm") if k in out]
+    if len(fork) == 1:
+        raise ConfigError(f"sensors.{fork[0]}: give fork_arm_mm and fork_max_mm together")
+    if fork and out["fork_max_mm"] >= 2.0 * out["fork_arm_mm"]:
+        raise ConfigError(f"sensors.fork_max_mm: {out['fork_max_mm']:g} mm is not shorter than the two arms "
+                          f"({2 * out['fork_arm_mm']:g} mm): that triangle does not close")
+    shock = [k for k in ("shock_arm1_mm", "shock_arm2_mm", "shock_max_mm") if k in out]
+    if 0 < len(shock) < 3:
+        missing = [k for k in ("shock_arm1_mm", "shock_arm2_mm", "shock_max_mm") if k not in out]
+        raise ConfigError(f"sensors.{missing[0]}: give shock_arm1_mm, shock_arm2_mm and shock_max_mm together")
+    if shock:
+        a, b, c = out["shock_arm1_mm"], out["shock_arm2_mm"], out["shock_max_mm"]
+        if not (abs(a - b) < c < a + b):
+            raise ConfigError(f"sensors.shock_max_mm: {c:g} mm with arms {a:g} and {b:g} mm: that triangle does not close")
+    return out
 
 
 LINKAGE_AXLE_TOLERANCE_MM = 1.0  # the linkage's rear axle against the frame's (bike.rear_axle_mm or the chart's)
@@ -350,6 +385,7 @@ KNOWN = {
               "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
               "arm_stiffness_N_per_mm", "arm_damping_N_s_per_m"},
     "drive": {"push_N", "power_W", "brake_N", "traction"},
+    "sensors": set(SENSOR_KEYS),
     "geometry": {"head_angle_deg", "wheelbase_mm", "chainstay_mm", "bb_drop_mm", "fork_offset_mm", "reach_mm",
                  "stack_mm", "head_tube_mm", "fork_length_mm"},
 }
@@ -558,7 +594,8 @@ def load(ref: str, overrides=None) -> BikeSpec:
         shock_config=table.get("shock", {}).get("config", "reference"),
         shock_overrides=dict(table.get("shock", {}).get("set", {})), drive=drive, source=source,
         overrides=dict(overrides or {}),
-        virtual_pivot=isinstance(hardpoints, dict) and hardpoints.get("kind") in ("horst_link", "short_link"))
+        virtual_pivot=isinstance(hardpoints, dict) and hardpoints.get("kind") in ("horst_link", "short_link"),
+        sensors=_sensors(table))
     return spec
 
 

@@ -320,6 +320,7 @@ def decoding(args) -> dict:
     --shock-max-mm over them; the SST example's bike without --bike."""
     fork_max, shock_max = telemetry.FORK_TRAVEL_MAX_MM, telemetry.SHOCK_STROKE_MAX_MM
     leverage = telemetry.LeverageCurve()
+    extra: dict = {}
     if args.bike is not None:
         from mtbmj.bike import run as bike_run
         from mtbmj.bike import spec
@@ -328,8 +329,14 @@ def decoding(args) -> dict:
         fork_setup, _ = bike_run.setups(bike)
         fork_max, shock_max = fork_setup.travel * 1e3, bike.shock_stroke * 1e3
         leverage = telemetry.LeverageCurve(tuple(w * 1e3 for w in bike.leverage.travel), tuple(bike.leverage.ratio))
+        sensors = bike.sensors  # the recorder's calibration on this bike ([sensors]), else the SST example's
+        if "fork_arm_mm" in sensors:
+            extra["front"] = telemetry.IsoscelesTriangle(sensors["fork_arm_mm"], sensors["fork_max_mm"])
+        if "shock_arm1_mm" in sensors:
+            extra["rear"] = telemetry.Triangle(sensors["shock_arm1_mm"], sensors["shock_arm2_mm"], sensors["shock_max_mm"])
     return {"fork_max_mm": fork_max if args.fork_max_mm is None else args.fork_max_mm,
-            "shock_max_mm": shock_max if args.shock_max_mm is None else args.shock_max_mm, "leverage": leverage}
+            "shock_max_mm": shock_max if args.shock_max_mm is None else args.shock_max_mm, "leverage": leverage,
+            **extra}
 
 
 def cmd_telemetry(args) -> int:
