@@ -65,6 +65,9 @@ LAYOUTS = {
     "short_link": ("lower_pivot", "lower_link", "upper_pivot", "upper_link", "rear_axle", "shock_upper_link",
                    "shock_frame"),
 }
+# the shock's eye on the rear end, per layout (the other is shock_frame)
+SHOCK_END = {"single_pivot": "shock_swingarm", "linkage_driven_single_pivot": "shock_rocker",
+             "horst_link": "shock_rocker", "short_link": "shock_upper_link"}
 # the links a caliper can sit on, per layout (the first is the default)
 BRAKE_LINKS = {
     "single_pivot": ("swingarm",),
@@ -144,8 +147,7 @@ class Linkage:
         self.length0 = float(np.hypot(*(self._shock_end(self.p0) - self.p0["shock_frame"])))
 
     def _shock_end(self, points) -> np.ndarray:
-        return points[{"single_pivot": "shock_swingarm", "linkage_driven_single_pivot": "shock_rocker",
-                       "horst_link": "shock_rocker", "short_link": "shock_upper_link"}[self.kind]]
+        return points[SHOCK_END[self.kind]]
 
     def pose(self, angle: float) -> Pose | None:
         """Every point with the input link turned by ``angle`` (rad, the sense that raises the

@@ -44,6 +44,19 @@ def frame_body(spec) -> tuple[float, tuple[float, float], float]:
     return m, (cx, cz), inertia
 
 
+def centre_of_mass(spec) -> tuple[float, tuple[float, float]]:
+    """(mass kg, centre of mass m in frame coordinates) of the bike and rider at full extension:
+    the frame body (:func:`frame_body`), the rider at its stance, the fork lower and front wheel at
+    the front axle, the rear wheel at the rear axle, the swingarm midway between pivot and axle."""
+    m_frame, c_frame, _ = frame_body(spec)
+    swingarm = tuple(0.5 * (p + a) for p, a in zip(spec.pivot, spec.rear_axle))
+    bodies = [(m_frame, c_frame), (spec.rider.mass, spec.rider.com),
+              (spec.fork_lower_mass + spec.front_wheel_mass, spec.front_axle),
+              (spec.rear_wheel_mass, spec.rear_axle), (spec.swingarm_mass, swingarm)]
+    total = sum(m for m, _ in bodies)
+    return total, tuple(sum(m * float(p[i]) for m, p in bodies) / total for i in (0, 1))
+
+
 def rider_rest_lengths(spec, gravity: float) -> tuple[float, float]:
     """Spring lengths (m) of the legs and arms that hold the rider at rest at its stance on a level
     frame: each carries its share of the rider's weight by the lever rule about the centre of mass,

@@ -15,17 +15,11 @@ from mtbmj.errors import ConfigError
 def com_height_of(spec, tyre_radius: float) -> float:
     """The bike's and rider's centre of mass over the ground (m) at full extension with the frame
     level: every body at its frame position (the rider at its stance, the wheels at their axles,
-    the swingarm halfway along it), the ground a tyre radius below the rear axle."""
-    from mtbmj.bike.model import frame_body
+    the swingarm halfway along it; ``mtbmj.bike.model.centre_of_mass``), the ground a tyre radius
+    below the rear axle."""
+    from mtbmj.bike.model import centre_of_mass
 
-    r = spec.rider
-    m_frame, c_frame, _ = frame_body(spec)  # the frame with the limbs that move with it
-    bodies = [(m_frame, c_frame), (r.mass, r.com),
-              (spec.fork_lower_mass + spec.front_wheel_mass, spec.front_axle),
-              (spec.rear_wheel_mass, spec.rear_axle),
-              (spec.swingarm_mass, tuple((np.asarray(spec.pivot) + np.asarray(spec.rear_axle)) / 2.0))]
-    total = sum(m for m, _ in bodies)
-    z = sum(m * float(p[1]) for m, p in bodies) / total
+    _, (_, z) = centre_of_mass(spec)
     return z - (float(spec.rear_axle[1]) - tyre_radius)
 
 

@@ -242,17 +242,11 @@ LEFT_OUT_S = 0.2  # around an airborne stretch, this much either side is left ou
 
 
 def _statics(spec):
-    """(front, rear) wheel loads' share of the weight at rest, level (moments about the rear axle)."""
-    from mtbmj.bike.model import frame_body
+    """(total mass kg, the front wheel's share of the weight) at rest, level (moments about the rear axle)."""
+    from mtbmj.bike.model import centre_of_mass
 
-    m_frame, c_frame, _ = frame_body(spec)
-    r = spec.rider
-    bodies = [(m_frame, c_frame[0]), (r.mass, r.com[0]), (spec.fork_lower_mass + spec.front_wheel_mass, spec.front_axle[0]),
-              (spec.rear_wheel_mass, spec.rear_axle[0]), (spec.swingarm_mass, 0.5 * (spec.pivot[0] + spec.rear_axle[0]))]
-    total = sum(m for m, _ in bodies)
-    x = sum(m * p for m, p in bodies) / total
-    front = (x - spec.rear_axle[0]) / (spec.front_axle[0] - spec.rear_axle[0])
-    return total, front
+    total, (x, _) = centre_of_mass(spec)
+    return total, (x - spec.rear_axle[0]) / (spec.front_axle[0] - spec.rear_axle[0])
 
 
 @dataclass
@@ -302,8 +296,8 @@ class Reconstruction:
                            "in the inverse (mtbmj/ride/reconstruct.py)"}
 
     def line(self) -> str:
-        c = self.checks()
         s = self.summary()
+        c = s["checks"]
         rng = s["window_speed_range_m_per_s"]
         spread = f" (windows {rng[0]:.2f}-{rng[1]:.2f})" if rng else ""
         return (f"{self.name} through {self.bike}: speed {s['speed_m_per_s']:.2f} m/s from a {1e3 * s['lag_s']:.0f} ms "
