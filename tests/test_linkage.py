@@ -357,3 +357,14 @@ def test_the_documented_horst_example_runs_and_says_how_it_is_run():
     assert s.leverage.full_stroke == pytest.approx(0.050, abs=1e-6)
     r = run.run_bike(str(path), "root:at_m=0.4", 5.0, duration=0.5)
     assert np.ptp(r.raw["rear_travel_mm"]) > 5.0
+
+
+def test_hardpoints_in_metres_are_refused_naming_the_mistake(tmp_path):
+    """A careless user's metres: named as such, before the mechanism is solved in the wrong unit
+    (it said "the shock's stroke never reaches 50 mm")."""
+    from mtbmj.bike import spec
+
+    points = "\n".join(f"{k}_mm = [{v[0]:g}, {v[1]:g}]" for k, v in SINGLE.items())  # metres
+    path = _write(tmp_path, 'base = "trail"\n[linkage]\nkind = "single_pivot"\n' + points + "\n")
+    with pytest.raises(ConfigError, match=r"linkage.main_pivot_mm, .*look like metres.*\[-30, 75\]"):
+        spec.load(str(path))

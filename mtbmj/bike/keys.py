@@ -139,12 +139,20 @@ def _number(v) -> bool:
 
 def metres_for_millimetres(table: dict) -> str | None:
     """The one-line refusal when the frame's points are given in metres (every coordinate of the
-    axles and the pivot within 3 in size, where millimetres make them hundreds), else None."""
+    axles and the pivot within 3 in size, where millimetres make them hundreds; likewise every
+    point of a ``[linkage]``), else None."""
     points = [table.get("bike", {}).get(k.split(".")[1]) for k in GEOMETRY_POINTS]
     values = [x for p in points if isinstance(p, list) for x in p if _number(x)]
     if len(values) == 6 and max(abs(x) for x in values) < 3.0:
         return (f"bike.front_axle_mm, bike.rear_axle_mm, bike.pivot_mm: {points[0]}, {points[1]}, {points[2]} "
                 f"look like metres; these keys are in millimetres (e.g. {[round(x * 1000) for x in points[0]]})")
+    link = table.get("linkage")
+    hard = {k: v for k, v in link.items() if k.endswith("_mm") and isinstance(v, list)} if isinstance(link, dict) else {}
+    values = [x for v in hard.values() for x in v if _number(x)]
+    if values and max(abs(x) for x in values) < 3.0:
+        name, value = next(iter(hard.items()))
+        return (f"{', '.join('linkage.' + k for k in hard)}: look like metres; these keys are in millimetres "
+                f"(e.g. linkage.{name} = {[round(x * 1000) for x in value if _number(x)]})")
     return None
 
 

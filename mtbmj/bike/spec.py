@@ -487,6 +487,12 @@ def load(ref: str, overrides=None) -> BikeSpec:
             if key not in KNOWN["geometry"]:
                 raise ConfigError(f"geometry.{key}: unknown key (known: {', '.join(sorted(KNOWN['geometry']))})")
         table = _merge(table, {"bike": from_chart(table["geometry"])})
+    from mtbmj.bike import keys as keys_mod
+    from mtbmj.config import warn
+
+    metres = keys_mod.metres_for_millimetres(table)  # before the hardpoints are solved in the wrong unit
+    if metres is not None:
+        raise ConfigError(metres)
     derived, hardpoints = (), table.get("linkage")
     if "linkage" in table:  # a rear end from hardpoints: its pivot and leverage table derived from it
         table = _with_linkage(table)
@@ -504,12 +510,6 @@ def load(ref: str, overrides=None) -> BikeSpec:
                 raise ConfigError(f"{section}.{key}: no longer read: {RETIRED[f'{section}.{key}']}")
             if key not in keys:
                 raise ConfigError(f"{section}.{key}: unknown key (known: {', '.join(sorted(keys))})")
-    from mtbmj.bike import keys as keys_mod
-    from mtbmj.config import warn
-
-    metres = keys_mod.metres_for_millimetres(table)
-    if metres is not None:
-        raise ConfigError(metres)
     head = _number(table, "bike", "head_angle_deg")
     if not 45.0 <= head <= 90.0:
         raise ConfigError(f"bike.head_angle_deg: must be within 45-90 degrees from the horizontal, got {head:g}")
