@@ -180,3 +180,17 @@ def test_one_end_alone_or_no_alignment_is_refused_in_one_line(made, tmp_path, ca
     err = capsys.readouterr().err
     assert "do not align at any lag" in err and "Traceback" not in err
     assert not (tmp_path / "o").exists()
+
+
+def test_a_ride_shorter_than_a_window_or_periodic_gives_no_speed(tmp_path):
+    """Too short for one window: refused naming the length. A pure sine at both ends (no
+    quantisation to break the tie) aligns at every period: no window gives a speed."""
+    from mtbmj.ride import reconstruct
+
+    t = np.arange(2000) / RATE
+    with pytest.raises(reconstruct.ReconstructError, match="the ride is 2.0 s: a speed needs at least one 5 s window"):
+        reconstruct.speed_from_lag(t, np.sin(9 * t), np.sin(9 * t - 1), 1.255)
+    t = np.arange(20000) / RATE
+    wave = lambda x: np.sin(2 * np.pi * 6.0 * x) + 0.5 * np.sin(2 * np.pi * 12.0 * x)  # noqa: E731 (period 1/6 s)
+    with pytest.raises(reconstruct.ReconstructError, match="do not align at any lag"):
+        reconstruct.speed_from_lag(t, wave(t), wave(t - 0.2), 1.255)

@@ -8,7 +8,8 @@ delays its travel behind its ground by a phase of its own, which the grounds do 
 those do not align, the two ends' travel velocities (high-passed at 5 Hz: the terrain's part, not
 the rider's slow weight shifts) (normalised cross-correlation, the peak refined by a parabola)
 gives v = wheelbase / lag per window of ``WINDOW_S`` seconds; a window whose correlation peak is below
-``MIN_CORRELATION`` gives none. The speed between windows is interpolated (the distance along the
+``MIN_CORRELATION``, or has a second peak within ``AMBIGUOUS`` of it (a periodic record, where
+several lags align), gives none; a ride shorter than one window is refused. The speed between windows is interpolated (the distance along the
 ride and the rear's lag follow it); the ride's speed is the windows' median.
 
 **Terrain** (an inverse of the front's quarter car, closed form, no fitting). Each end is a quarter
@@ -54,6 +55,7 @@ from mtbmj.errors import MtbmjError
 WINDOW_S = 5.0  # seconds per window of the speed estimate
 MIN_CORRELATION = 0.3  # a window whose best normalised correlation is below this gives no speed
 LAG_HIGHPASS_HZ = 5.0  # travel records high-passed before the lag is sought (the rider's slow motions out)
+AMBIGUOUS = 0.9  # a second correlation peak this close to the best leaves the lag undecided
 GROUND_HIGHPASS_HZ = 1.0  # the two ends' grounds high-passed before the lag is sought
 SPEED_RANGE = (1.0, 15.0)  # m/s the lag is searched for
 HIGHPASS_HZ = 0.3  # the body height's drift removed below this
@@ -109,6 +111,11 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
             scores.append(float(a0 @ b0) / den if den > 0 else 0.0)
         s = np.asarray(scores)
         i = int(np.argmax(s))
+        low = np.flatnonzero(s <= 0.5 * s[i])  # the best peak's lobe: down to half its height each side
+        left, right = (low[low < i].max() if np.any(low < i) else -1), (low[low > i].min() if np.any(low > i) else s.size)
+        peaks = np.flatnonzero((s[1:-1] > s[:-2]) & (s[1:-1] >= s[2:])) + 1
+        if np.any(((peaks < left) | (peaks > right)) & (s[peaks] >= AMBIGUOUS * s[i])):
+            return None, float(s[i])  # another lag aligns about as well (a periodic record): no speed
         shift = 0.0
         if 0 < i < s.size - 1:
             den = s[i - 1] - 2 * s[i] + s[i + 1]
@@ -117,6 +124,9 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
 
     windows = []
     step = int(round(window_s / dt))
+    if vf.size < step + k_hi:
+        raise ReconstructError(f"the ride is {vf.size * dt:.1f} s: a speed needs at least one {window_s:g} s window "
+                               f"and the slowest lag searched ({hi:.2f} s)")
     for start in range(0, max(vf.size - k_hi - step // 2, 1), step):
         wl, wc = best(vf[start:start + step + k_hi], vr[start:start + step + k_hi])
         windows.append((start * dt, None if wl is None or wc < MIN_CORRELATION else wheelbase / wl, wc))
@@ -124,8 +134,9 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
     if not good:
         top = max((c for _, _, c in windows), default=0.0)
         raise ReconstructError(f"the two ends' records do not align at any lag for {SPEED_RANGE[0]:g}-"
-                               f"{SPEED_RANGE[1]:g} m/s in any {window_s:g} s window (best correlation {top:.2f} < "
-                               f"{MIN_CORRELATION}): no speed from this ride")
+                               f"{SPEED_RANGE[1]:g} m/s in any {window_s:g} s window (best correlation {top:.2f}; "
+                               f"below {MIN_CORRELATION}, or another lag within {AMBIGUOUS:g} of it): no speed "
+                               f"from this ride")
     centres, speeds = np.array([c for c, _ in good]), np.array([v for _, v in good])
     speed = float(np.median(speeds))
     return {"speed_m_per_s": speed, "lag_s": wheelbase / speed, "windows": windows,
