@@ -61,6 +61,9 @@ KEYS: dict[str, tuple[str, str, object]] = {
                                   "with the bike (default de Leva's 15.86 %).", "0-50", (10.0, 25.0)),
     "rider.com_mm": ("The rider's centre of mass standing at rest, frame coordinates; between pedals and bars in x.",
                      POINT_MM, ((-250.0, 450.0), (500.0, 1400.0))),
+    "rider.seated_com_mm": ("The rider's centre of mass seated on the saddle, frame coordinates (optional): the "
+                            "seated rider of `fit bounce --bike` (a seat slam), held rigid on the frame.",
+                            POINT_MM, ((-450.0, 300.0), (500.0, 1400.0))),
     "rider.pitch_inertia_kg_m2": ("The rider's body's pitch inertia about its centre of mass.", "> 0", (1.0, 25.0)),
     "rider.pedals_mm": ("Where the legs meet the frame (the feet), frame coordinates.", POINT_MM,
                         ((-150.0, 150.0), (-100.0, 150.0))),

@@ -134,6 +134,7 @@ class Rider:
     leg_damping: float  # N s/m
     arm_stiffness: float  # N/m, both arms
     arm_damping: float  # N s/m
+    seated_com: tuple[float, float] | None = None  # m, frame coordinates, seated on the saddle (None: not given)
 
 
 @dataclass(frozen=True)
@@ -382,7 +383,7 @@ KNOWN = {
     "shock": {"stroke_mm", "config", "set"},
     "fork": {"config", "set"},
     "rider": {"mass_kg", "limbs_share_percent", "com_mm", "pitch_inertia_kg_m2", "pedals_mm", "bars_mm",
-              "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
+              "seated_com_mm", "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
               "arm_stiffness_N_per_mm", "arm_damping_N_s_per_m"},
     "drive": {"push_N", "power_W", "brake_N", "traction"},
     "sensors": set(SENSOR_KEYS),
@@ -563,7 +564,8 @@ def load(ref: str, overrides=None) -> BikeSpec:
                   _number(table, "rider", "leg_stiffness_N_per_mm", positive=True) * 1e3,
                   _number(table, "rider", "leg_damping_N_s_per_m", nonneg=True),
                   _number(table, "rider", "arm_stiffness_N_per_mm", positive=True) * 1e3,
-                  _number(table, "rider", "arm_damping_N_s_per_m", nonneg=True))
+                  _number(table, "rider", "arm_damping_N_s_per_m", nonneg=True),
+                  _point(table, "rider", "seated_com_mm") if "seated_com_mm" in table.get("rider", {}) else None)
     for section in ("fork", "shock"):
         cfg = table.get(section, {}).get("config", "reference")
         if not isinstance(cfg, str):

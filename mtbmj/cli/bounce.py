@@ -43,6 +43,9 @@ def bounce_parser(prog: str = "mtbmj fit bounce"):
                    help="rebound clicks of each record, in the order of the records, e.g. 0,8,17")
     p.add_argument("--predict-clicks", metavar="K1,K2,...",
                    help="clicks to predict the damping ratio, frequency and ring-down at, from the law")
+    p.add_argument("--bike", metavar="BIKE",
+                   help="read each ring-down through this bike (a preset or a bike file with rider.seated_com_mm): "
+                        "the spring rate and the damper's coefficient of the end that rang, at the end and at the wheel")
     add_out(p, "out/fit")
     p.set_defaults(func=cmd_fit_bounce, command="fit", kind="bounce")
     return p
@@ -72,14 +75,53 @@ def _records(paths, clicks):
     return [read_sst(p) for p in paths]
 
 
-def analyse(paths, clicks, predict=()) -> dict:
-    """Everything ``fit bounce`` writes, as Python objects: {"json", "figure data", "csv" {name: columns}}."""
+RATE_AGREES = 1.25  # a ring-down's spring rate within this factor of the bike file's says nothing
+
+
+def _through_bike(seated, end: str, zeta: float, zeta_sd: float, fd: float, fd_sd: float) -> dict:
+    try:
+        return seated.identify(end, zeta, zeta_sd, fd, fd_sd)
+    except MtbmjError as e:
+        return {"note": str(e)}
+
+
+def _damper_law(points) -> dict | None:
+    """damper = c0 + slope x clicks by weighted least squares over the records' (clicks, c, sd)."""
+    pts = [(k, c, sd) for k, c, sd in points if math.isfinite(sd) and sd > 0]
+    if len({k for k, _, _ in pts}) < 2:
+        return None
+    k = np.array([p[0] for p in pts], float)
+    c = np.array([p[1] for p in pts])
+    w = 1.0 / np.array([p[2] for p in pts]) ** 2
+    X = np.column_stack((np.ones_like(k), k))
+    cov = np.linalg.inv(X.T @ (w[:, None] * X))
+    beta = cov @ X.T @ (w * c)
+    if k.size > 2:
+        cov = cov * max(1.0, float(np.sum(w * (c - X @ beta) ** 2) / (k.size - 2)))
+    z = 1.959963984540054
+    sd0, sd1 = math.sqrt(cov[0, 0]), math.sqrt(cov[1, 1])
+    return {"form": "damper_N_s_per_m = damper0 + slope_per_click * clicks (weighted least squares on the records' "
+                    "coefficients)", "damper0_N_s_per_m": float(beta[0]),
+            "damper0_N_s_per_m_ci95": [float(beta[0] - z * sd0), float(beta[0] + z * sd0)],
+            "slope_N_s_per_m_per_click": float(beta[1]),
+            "slope_N_s_per_m_per_click_ci95": [float(beta[1] - z * sd1), float(beta[1] + z * sd1)]}
+
+
+def analyse(paths, clicks, predict=(), bike=None) -> dict:
+    """Everything ``fit bounce`` writes, as Python objects: {"json", "figure data", "csv" {name: columns}}.
+    ``bike`` (a preset, a file or a ``BikeSpec``): each ring-down also read through that bike's
+    seated model (``mtbmj.identify.bounce_bike``)."""
     from mtbmj.identify import bounce
 
     paths = [Path(p) for p in paths]
     if len(clicks) != len(paths):
         raise MtbmjError(f"--clicks: {len(clicks)} value(s) for {len(paths)} record(s); give one number of clicks "
                          f"per record, in their order")
+    seated = None
+    if bike is not None:
+        from mtbmj.identify.bounce_bike import SeatedBike
+
+        seated = SeatedBike(bike)
     records = _records(paths, clicks)
     fits = [bounce.fit_record(r) for r in records]
     for r, f in zip(records, fits):
@@ -103,8 +145,34 @@ def analyse(paths, clicks, predict=()) -> dict:
         out["records"].append({"file": r.name, "path": r.path, "sst_version": r.version,
                                "sample_rate_Hz": r.sample_rate_Hz, "clicks": k,
                                **{end: rd.summary() for end, rd in f.items()}})
+        if seated is not None:
+            for end, rd in f.items():
+                if rd.fitted:
+                    b = _through_bike(seated, end, rd.zeta, rd.zeta_sd, rd.fd_Hz, rd.fd_sd)
+                    out["records"][-1][end]["bike"] = b
+                    scale = b.get("spring_rate_over_bike_file")
+                    if scale is not None and not 1 / RATE_AGREES <= scale <= RATE_AGREES:
+                        notes.append(f"{r.name}: the {end}'s ring-down implies {scale:.2f} x the spring rate of "
+                                     f"{seated.spec.name} ({b['spring_rate_N_per_mm']:.1f} of "
+                                     f"{b['bike_file_spring_rate_N_per_mm']:.1f} N/mm): the bike file's spring, or its "
+                                     f"seated masses (rider.seated_com_mm, rider.mass_kg), is not this bike's")
     for end, law in laws.items():
         out["law"][end] = law.summary()
+        if seated is not None:
+            pts = []
+            for rec in out["records"]:
+                e = rec.get(end, {}).get("bike", {})
+                if "damper_N_s_per_m" in e:
+                    lo, hi = e["damper_N_s_per_m_ci95"]
+                    pts.append((rec["clicks"], e["damper_N_s_per_m"], (hi - lo) / (2 * 1.959963984540054)))
+            dl = _damper_law(pts)
+            if dl is not None:
+                out["law"][end]["bike"] = dl
+    if seated is not None:
+        from mtbmj.identify.bounce_bike import METHOD as BIKE_METHOD
+
+        out["bike"] = {"name": seated.spec.name, "method": BIKE_METHOD,
+                       "seated_com_mm": [v * 1e3 for v in seated.spec.rider.seated_com]}
     csvs = {}
     base_i = int(np.argmin(clicks))
     base_rec, base_fit = records[base_i], fits[base_i]
@@ -121,6 +189,8 @@ def analyse(paths, clicks, predict=()) -> dict:
             if not 0.0 <= z < 1.0:
                 entry[end]["note"] = "the law gives no oscillation here (damping ratio outside 0 to 1); no ring-down"
                 continue
+            if seated is not None:
+                entry[end]["bike"] = _through_bike(seated, end, z, zsd, fd, fsd)
             src = base_fit.get(end)
             if src is None or not src.fitted:
                 entry[end]["note"] = f"no ring-down: the {clicks[base_i]:g}-click record has no fitted {end} start"
@@ -209,12 +279,24 @@ def figure_png(result: dict) -> bytes:
     return png(fig, dpi=80)
 
 
+def _bike_text(b: dict | None) -> str:
+    if not b:
+        return ""
+    if "note" in b:
+        return f"; through the bike: {b['note']}"
+    lo, hi = b["damper_N_s_per_m_ci95"]
+    klo, khi = b["spring_rate_N_per_mm_ci95"]
+    return (f"; through the bike: spring {b['spring_rate_N_per_mm']:.1f} N/mm [{klo:.1f}, {khi:.1f}] "
+            f"({b['spring_rate_over_bike_file']:.2f} x the bike file's), wheel rate {b['wheel_rate_N_per_mm']:.2f} N/mm, "
+            f"damper {b['damper_N_s_per_m']:.0f} N s/m [{lo:.0f}, {hi:.0f}]")
+
+
 def cmd_fit_bounce(args) -> int:
     from mtbmj import output
 
     clicks = _numbers(args.clicks, "--clicks")
     predict = _numbers(args.predict_clicks, "--predict-clicks") if args.predict_clicks else []
-    result = analyse(args.records, clicks, predict)
+    result = analyse(args.records, clicks, predict, bike=args.bike)
     files = {"fit.json": output.json_bytes(result["json"]), "fit.png": figure_png(result)}
     for name, cols in result["csv"].items():
         files[name] = output.csv_bytes(cols)
@@ -231,18 +313,24 @@ def cmd_fit_bounce(args) -> int:
                 lo, hi = e["damping_ratio_ci95"]
                 flo, fhi = e["frequency_hz_ci95"]
                 parts.append(f"{end} zeta {e['damping_ratio']:.3f} [{lo:.3f}, {hi:.3f}], "
-                             f"{e['frequency_hz']:.2f} Hz [{flo:.2f}, {fhi:.2f}]")
+                             f"{e['frequency_hz']:.2f} Hz [{flo:.2f}, {fhi:.2f}]" + _bike_text(e.get("bike")))
         print(f"{rec['file']} at {rec['clicks']:g} clicks: {'; '.join(parts)}")
     for end, law in result["json"]["law"].items():
         print(f"{end} law: zeta = {law['zeta0']:.3f} + {law['slope_per_click']:.4f} x clicks "
               f"(slope 95 % [{law['slope_per_click_ci95'][0]:.4f}, {law['slope_per_click_ci95'][1]:.4f}]), "
               f"undamped {law['undamped_frequency_hz']:.2f} Hz")
+        if "bike" in law:
+            b = law["bike"]
+            print(f"{end} damper law: {b['damper0_N_s_per_m']:.0f} + {b['slope_N_s_per_m_per_click']:.1f} x clicks N s/m "
+                  f"(slope 95 % [{b['slope_N_s_per_m_per_click_ci95'][0]:.1f}, "
+                  f"{b['slope_N_s_per_m_per_click_ci95'][1]:.1f}])")
     for p in result["json"]["predicted"]:
         for end in ("shock", "fork"):
             if end in p:
                 e = p[end]
                 print(f"predicted at {p['clicks']:g} clicks: {end} zeta {e['damping_ratio']:.3f} "
-                      f"[{e['damping_ratio_ci95'][0]:.3f}, {e['damping_ratio_ci95'][1]:.3f}], {e['frequency_hz']:.2f} Hz")
+                      f"[{e['damping_ratio_ci95'][0]:.3f}, {e['damping_ratio_ci95'][1]:.3f}], {e['frequency_hz']:.2f} Hz"
+                      + _bike_text(e.get("bike")))
     for note in result["json"]["notes"]:
         print(f"note: {note}")
     print(f"wrote {', '.join(p.name for p in written)} to {args.out}")
