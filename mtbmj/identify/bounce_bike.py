@@ -10,7 +10,10 @@ limbs' share moves with the bike as when standing.
 Method. The bike's planar equations (``mtbmj.bike.reference``: the same equations the MuJoCo bike
 and the bike's cross-check use) with the rider's two coordinates held, coasting on flat ground, are
 linearised about their seated static equilibrium by central differences: M q'' + C q' + K q = 0
-over (x, z, pitch, fork, swingarm). Coulomb friction is left out (it is an amplitude-dependent loss
+over (x, z, pitch, fork, swingarm); the swingarm's stiffness is the secant over +-3 mm of wheel
+travel, as a ring-down's swing sees a leverage table whose rounded ratios make its slope jump from
+one millimetre to the next (the tangent at one point made the rear mode 0.6 % stiffer than the
+MuJoCo bike's ring-down of the same model). Coulomb friction is left out (it is an amplitude-dependent loss
 that an exponential envelope cannot carry; the bike file's friction is set to 0 here). Of the
 two lowest oscillatory modes (the sprung bounce and pitch; the wheel-hop modes lie far above),
 the one whose wheel travel is most at the end that rang is that end's mode. The end's spring is
@@ -43,6 +46,7 @@ HELD = 2  # the rider's coordinates (rider_z, rider_pitch), the last two of the 
 N = NQ - HELD  # x, z, pitch, fork, swingarm
 COORD = {"fork": 3, "shock": 4}
 COAST_M_PER_S = 2.0  # the slam is ridden coasting; on flat ground the speed does not enter the linear modes
+SECANT_TRAVEL_M = 3e-3  # the swingarm's stiffness: the secant over +-3 mm of wheel travel (six steps of the SST table)
 MIN_RAD_PER_S = 0.1  # below this an eigenvalue's imaginary part is no oscillation (a bike's sprung modes: 1-3 Hz)
 NO_FRICTION = {"fork.friction.coulomb_N": 0.0}
 METHOD = ("the bike's planar equations with the seated rider held rigid on the frame (rider.seated_com_mm), "
@@ -116,7 +120,10 @@ class SeatedBike:
         K = np.zeros((N, N))
         C = np.zeros((N, N))
         for j in range(N):
-            h = 1e-7  # m or rad
+            # the swingarm's column as the secant over +-SECANT_TRAVEL_M of wheel travel: a leverage
+            # table's slope, its ratios rounded per step, jumps from one step to the next, and a
+            # ring-down's swing spans several steps (the other columns' laws are smooth: 1e-7)
+            h = SECANT_TRAVEL_M / abs(self.ref.planar.wheel_travel(q0[4])[1]) if j == 4 else 1e-7
             e = np.zeros(N)
             e[j] = h
             K[:, j] = -(self._full(q0 + e, qd0) - self._full(q0 - e, qd0)) / (2 * h)
