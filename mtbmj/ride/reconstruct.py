@@ -26,7 +26,12 @@ height; the wheel's is that plus x sin(a), the tyre's force m (z_u'' + g) + F / 
 deflection that over the tyre rate, and the ground the wheel's height less the tyre's loaded radius.
 What is left is the terrain's bumpiness: its slow rise and fall (a descent, a climb) is not in the
 suspension's record. Where the tyre's force is not positive the wheel is off the ground and the
-terrain there is unknown: those stretches are named (a jump) and left out of the checks.
+terrain there is unknown: those stretches (merged across gaps shorter than ``JUMP_GAP_S``) are
+named (a jump) and left out of the checks. The hard stops' force cannot be read from a travel
+record (a tenth of a millimetre past full travel is kilonewtons there): the law's force is taken at
+the stroke within 0..travel, and across each bottom-out the body's speed changes by what keeps its
+height level over the next ``BOTTOM_OUT_WINDOW_S`` (least squares; the stop's impulse is not in the
+record).
 
 **Checks, with every reconstruction.** The front quarter car run forward over the terrain found
 (classical RK4 at the record's step, the load shift on its body) reproduces the front record (its
@@ -59,6 +64,9 @@ AMBIGUOUS = 0.9  # a second correlation peak this close to the best leaves the l
 GROUND_HIGHPASS_HZ = 1.0  # the two ends' grounds high-passed before the lag is sought
 SPEED_RANGE = (1.0, 15.0)  # m/s the lag is searched for
 HIGHPASS_HZ = 0.3  # the body height's drift removed below this
+JUMP_GAP_S = 0.05  # the tyre's force found back above 0 for less than this within a jump (its noise): one jump
+BOTTOM_OUT_MARGIN_M = 0.5e-3  # a stroke this close to full travel is a bottom-out (the hard stop's force unseen)
+BOTTOM_OUT_WINDOW_S = 1.0  # after a bottom-out the body's speed is set so its height stays level over this
 G = 9.81
 
 
@@ -77,6 +85,7 @@ class QuarterCar:
     tyre_rate: float
     radius: float
     gravity: float
+    travel: float = math.inf  # m, the law's full stroke: the inverse reads its force within 0..travel
 
 
 def _law_force(law, x, v, z):
@@ -184,10 +193,24 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio):
     w, x = np.asarray(rise, float), np.asarray(stroke, float)
     v, _ = _derivatives(x, dt)
     z = _states(car.law, x, v, dt)
-    f = np.array([_law_force(car.law, xi, vi, zi) for xi, vi, zi in zip(x, v, z)]) / ratio(w)
+    # the hard stops' force cannot be read from a travel record (a tenth of a millimetre past full
+    # travel is kilonewtons there): the law's force at a stroke within 0..travel
+    xf = np.clip(x, 0.0, car.travel)
+    f = np.array([_law_force(car.law, xi, vi, zi) for xi, vi, zi in zip(xf, v, z)]) / ratio(w)
     extra = _lowpass(f - car.sprung * car.gravity, dt)  # the rider's slow load shifts (braking, weight)
     acc = (f - extra) / car.sprung - car.gravity
     vel = np.cumsum(acc) * dt
+    # each bottom-out's impulse (the hard stop's) is not in the record: the body's speed changes
+    # across it by what keeps the body's height level, by least squares, over the next
+    # BOTTOM_OUT_WINDOW_S (a bike on its wheels does not rise or sink for seconds after a hit)
+    for _, end in _runs(x >= car.travel - BOTTOM_OUT_MARGIN_M):
+        k = min(int(end), x.size - 1)
+        n = min(int(BOTTOM_OUT_WINDOW_S / dt), x.size - k)
+        if n < 3:
+            continue
+        tau = np.arange(n) * dt
+        body = np.cumsum(vel[k:k + n]) * dt
+        vel[k:] -= float(body @ tau / (tau @ tau))
     vel = _highpass(vel - vel.mean(), dt)
     body = np.cumsum(vel) * dt
     body = _highpass(body - body.mean(), dt)
@@ -203,7 +226,8 @@ def forward(t, ground, car: QuarterCar, stroke_of, ratio, w0: float, extra=None)
     """The wheel's rise (m) of the quarter car run over ``ground`` (m, on ``t``) from rest at rise
     ``w0``, its body pressed by ``extra`` (N, on ``t``; the rider's load shifts) where given: the
     law's stroke is ``stroke_of(w)``, its rate the wheel's over ``ratio(w)``; classical RK4 at the
-    record's step, the ground and the load linear between samples."""
+    record's step (a step that diverges, on a hard stop stiffer than that step resolves, redone in
+    10, 100 or 1000 substeps), the ground and the load linear between samples."""
     dt = float(t[1] - t[0])
     gr = np.asarray(ground, float)
     load = np.zeros_like(gr) if extra is None else np.asarray(extra, float)
@@ -225,14 +249,31 @@ def forward(t, ground, car: QuarterCar, stroke_of, ratio, w0: float, extra=None)
     y = np.array([zw0 - w0, zw0, 0.0, 0.0, 0.0])
     out = np.empty(gr.size)
     out[0] = w0
+    def step(y, g0, g1, p0, p1, n):
+        h = dt / n
+        for j in range(n):
+            a, b = j / n, (j + 1) / n
+            ga, gb, gm = g0 + a * (g1 - g0), g0 + b * (g1 - g0), g0 + 0.5 * (a + b) * (g1 - g0)
+            pa, pb, pm = p0 + a * (p1 - p0), p0 + b * (p1 - p0), p0 + 0.5 * (a + b) * (p1 - p0)
+            k1 = rhs(y, ga, pa)
+            k2 = rhs(y + 0.5 * h * k1, gm, pm)
+            k3 = rhs(y + 0.5 * h * k2, gm, pm)
+            k4 = rhs(y + h * k3, gb, pb)
+            y = y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        return y
+
     for i in range(gr.size - 1):
         g0, g1, p0, p1 = gr[i], gr[i + 1], load[i], load[i + 1]
-        gm, pm = 0.5 * (g0 + g1), 0.5 * (p0 + p1)
-        k1 = rhs(y, g0, p0)
-        k2 = rhs(y + 0.5 * dt * k1, gm, pm)
-        k3 = rhs(y + 0.5 * dt * k2, gm, pm)
-        k4 = rhs(y + dt * k3, g1, p1)
-        y = y + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+        # a step that leaves the finite numbers (a hard stop far stiffer than the record's step
+        # resolves) is redone in 10, 100, 1000 substeps
+        n, nxt = 1, None
+        while n <= 1000:
+            with np.errstate(all="ignore"):
+                nxt = step(y, g0, g1, p0, p1, n)
+            if np.all(np.isfinite(nxt)) and np.all(np.abs(nxt[:4] - y[:4]) < 1.0):
+                break
+            n *= 10
+        y = nxt
         if not np.all(np.isfinite(y)):
             raise ReconstructError(f"the forward quarter car diverged at {t[i + 1]:.3f} s")
         out[i + 1] = y[1] - y[0]
@@ -395,8 +436,8 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     m_rear = spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
     rate = fork_setup.tire.values(1).rate
     radius = fork_setup.tire_radius
-    front_car = QuarterCar(total * share - m_front, m_front, fork_setup.fork, rate, radius, g)
-    rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g)
+    front_car = QuarterCar(total * share - m_front, m_front, fork_setup.fork, rate, radius, g, fork_setup.travel)
+    rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g, shock_setup.travel)
     t = np.asarray(record.time_s, float)
     sin_a = math.sin(spec.head_angle)
     wheelbase = spec.front_axle[0] - spec.rear_axle[0]
@@ -420,7 +461,13 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     lag = int(round(speed["lag_s"] / dt))
     bad = np.zeros(t.size, bool)
     jumps = []
-    for a, b in _runs(air):
+    runs = []
+    for a, b in _runs(air):  # off the ground with gaps shorter than JUMP_GAP_S between: one jump
+        if runs and (a - runs[-1][1]) * float(t[1] - t[0]) < JUMP_GAP_S:
+            runs[-1] = (runs[-1][0], b)
+        else:
+            runs.append((a, b))
+    for a, b in runs:
         jumps.append((float(t[a]), float(t[min(b, t.size - 1)])))
         bad[max(0, a - pad): b + pad] = True
         bad[max(0, a - pad + lag): b + pad + lag] = True  # the rear meets the same stretch a wheelbase later

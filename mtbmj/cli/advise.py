@@ -1,0 +1,50 @@
+"""``mtbmj advise RIDE --bike BIKE``: candidate settings simulated over the ride's reconstructed
+terrain, scored on what riders read, and the change recommended (``mtbmj.ride.advise``)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from mtbmj.cli.common import add_out
+
+
+def cmd_advise(args) -> int:
+    from mtbmj.cli.bike import bike_overrides
+    from mtbmj.cli.common import Progress
+    from mtbmj.cli.telemetry import decoding
+    from mtbmj.config import warn
+    from mtbmj.ride import advise, telemetry
+
+    path = telemetry.example_path() if str(args.ride) == "example" else args.ride
+    over = bike_overrides(args)
+    if args.rider_kg is not None:
+        over["rider.mass_kg"] = args.rider_kg
+    record = telemetry.read_ride(path, **decoding(args))
+    warn(telemetry.quality(record))
+    result = Progress("advise").around(
+        lambda progress: advise.advise(record, args.bike, over or None, args.duration, progress))
+    written = result.write(args.out)
+    checks = result.reconstruction["checks"]
+    print(f"reconstruction: speed {result.reconstruction['speed_m_per_s']:.2f} m/s; check: front reproduced within "
+          f"{checks['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted within "
+          f"{checks['rear_predicted_rms_percent_of_used']:.0f} % of the travel used")
+    print(f"{result.line()}; {len(result.candidates)} candidates simulated in {result.wall_s:.0f} s; "
+          f"wrote {', '.join(p.name for p in written)} to {args.out}")
+    return 0
+
+
+def add_parser(sub) -> None:
+    from mtbmj.cli.bike import add_bike_sets
+
+    p = sub.add_parser("advise", help="setup advice: candidate settings simulated over the ride's reconstructed "
+                                      "terrain, and the change recommended")
+    p.add_argument("ride", type=Path, metavar="RIDE",
+                   help="SST v3 or v2 recording or a travel CSV with both ends, or 'example' (the shipped 00649.SST)")
+    p.add_argument("--bike", required=True, metavar="BIKE",
+                   help="the recorded bike with the settings it was ridden with (preset or bike file)")
+    p.add_argument("--rider-kg", type=float, metavar="KG", help="the whole rider's mass (rider.mass_kg)")
+    add_bike_sets(p)  # the settings as ridden, where they differ from the bike file
+    p.add_argument("--duration", type=float, metavar="S", help="advise on the ride's first S seconds only")
+    p.add_argument("--fork-max-mm", type=float, help="fork travel the recording's sensor spans (default: the bike's)")
+    p.add_argument("--shock-max-mm", type=float, help="shock stroke the sensor spans (default: the bike's)")
+    add_out(p, "out/advise")
+    p.set_defaults(func=cmd_advise)

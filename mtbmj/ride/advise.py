@@ -1,0 +1,572 @@
+"""Setup advice from a ride: candidate settings simulated over the ride's own terrain (``mtbmj advise``).
+
+**What is simulated.** The ride is reconstructed through the bike (``mtbmj.ride.reconstruct``: its
+speed from the lag between the ends, the terrain under the front wheel). The whole bike
+(``mtbmj.bike.run``: MuJoCo, both ends, the pitch that couples them, the standing rider) then rides
+that terrain at the ride's median speed, held by the rider's drive, once with the recorded settings
+(the bike file's) and once for each candidate: every adjuster the bike's parts have, one step each
+way (:func:`adjusters`), within what the part allows (an adjuster's clicks within its measured
+range, a value within what any part has: ``mtbmj.config.PLAUSIBLE``).
+
+**What is scored** (:func:`ride_metrics`, each end in % of its own travel): static sag (standing,
+the model's statics); dynamic sag (the mean travel); maximum travel and bottom-outs (within 3 mm
+of full travel, as telemetry tools count them); the share of time deeper than 80 %; the time at low
+and high speed (100 mm/s) and the 95th percentiles of compression and rebound speed; packing (the
+95th percentile of rebound speed over that of compression: a rebound too slow to recover between
+hits keeps it low); the balance of the ends (dynamic sag front less rear); the tyre-load variation
+(std/mean, grip) and the rider's vertical acceleration (RMS, comfort).
+
+**Rules** (:data:`RULES`, each a penalty that is 0 inside its window; sources as the makers' manuals
+state them, secondhand through ../shared/REFERENCE.md section 7, marked *assumed* where no source
+gives the number):
+
+- static sag: front 20-25 % (Fox: "start at 25 %"; RockShox 10-30 %), rear 27-30 % (common on trail
+  bikes); a point outside costs 1/5;
+- bottom-outs: occasional is right ("an occasional bottom-out is a good thing", RockShox): more than
+  ``BOTTOM_OUTS_PER_MINUTE`` per minute of ride costs (assumed), none with the maximum below 85 % of
+  travel costs too (travel left unused: assumed);
+- packing: rebound p95 below ``PACKING_RATIO`` of compression p95 (assumed);
+- balance: the ends' dynamic sags within ``BALANCE_POINTS`` points ("front and rear should move about
+  the same", Motion Instruments; the number assumed);
+- grip and comfort: a small weight on the relative change of tyre-load variation and rider
+  acceleration (tie-breakers, assumed).
+
+A candidate is recommended when it lowers the total penalty by at least ``MIN_GAIN``; the predicted
+change of every metric is the candidate's simulated value less the recorded setting's, and the
+value expected on the rider's own ride is the recorded value plus that change (``expected``; the
+simulated ``to`` beside it). Its
+uncertainty is the model's own error on that metric for this ride: the recorded setting's
+simulated value against the record's (what the model gets wrong on this terrain with known
+settings bounds what it gets wrong about a change, which shares the terrain and the model).
+A count's uncertainty is at least its counting spread (the square root of the count). An
+adjuster whose predicted changes all stay within that uncertainty does little here (the
+makers' "an adjuster that moves less than about 15 % of the force does little"): a recommendation
+whose improved rules' metrics all move less than it is marked so (``confident`` false: try it and
+record again).
+
+**When a ride cannot support advice** (:class:`AdviseError`): shorter than ``MIN_SECONDS``, or its
+reconstruction's own check failed (the rear predicted worse than ``MAX_REAR_MISS_PERCENT`` % of the
+travel it used, or fewer than ``MIN_CHECKED_PERCENT`` % of the samples checked).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mtbmj.errors import MtbmjError
+
+SAG_WINDOW = {"front": (20.0, 25.0), "rear": (27.0, 30.0)}  # % of travel, static (sources above)
+SAG_POINTS = 5.0  # % points outside the window per unit of penalty
+BOTTOM_OUTS_PER_MINUTE = 2.0  # assumed: more than this is too many
+UNUSED_BELOW_PERCENT = 85.0  # assumed: no bottom-out and less travel than this leaves travel unused
+DEEP_PERCENT = 80.0  # the deep-travel share counts time beyond this % of travel
+PACKING_RATIO = 0.6  # assumed: rebound p95 speed below this share of compression p95 is packing
+BALANCE_POINTS = 10.0  # assumed: the ends' dynamic sags this close move "about the same"
+GRIP_COMFORT_WEIGHT = 1.0  # penalty per relative change of tyre-load variation and rider acceleration
+MIN_GAIN = 0.1  # a recommendation lowers the penalty by at least this
+MIN_SECONDS = 15.0  # a ride shorter than this cannot support advice (three of the speed's 5 s windows)
+MAX_REAR_MISS_PERCENT = 60.0  # the reconstruction's check: rear predicted within this % of the travel used
+MIN_CHECKED_PERCENT = 10.0  # ... over at least this share of the ride
+LEAD_IN_M = 3.5  # flat ground before the ride's terrain: the bike starts at rest on it
+SPEED_SPLIT_MM_PER_S = 100.0  # low/high-speed threshold (as ``mtbmj telemetry``)
+RULES = {
+    "static_sag": "front 20-25 %, rear 27-30 % of travel (Fox, RockShox; rear common on trail bikes; secondhand)",
+    "bottom_outs": f"occasional (RockShox): more than {BOTTOM_OUTS_PER_MINUTE:g} per minute too many, the excess over "
+                   f"that rate one unit of penalty per {BOTTOM_OUTS_PER_MINUTE:g} (assumed)",
+    "travel_unused": f"no bottom-out and a maximum below {UNUSED_BELOW_PERCENT:g} % of travel: travel left unused, "
+                     f"one unit of penalty per 10 points (assumed)",
+    "packing": f"rebound p95 speed at least {PACKING_RATIO:g} of compression p95 (assumed)",
+    "balance": f"front and rear dynamic sag within {BALANCE_POINTS:g} points (Motion Instruments; number assumed)",
+    "grip_comfort": "lower tyre-load variation and rider acceleration, as tie-breakers (assumed weight)",
+    "authority": "a recommendation whose improved rules' metrics move less than the model's error on this ride is "
+                 "marked as within that error: try it and record again",
+}
+
+
+class AdviseError(MtbmjError):
+    """A ride that cannot support advice: names the ride and why."""
+
+
+@dataclass(frozen=True)
+class Adjuster:
+    """One setting of one part: ``section`` "fork.set" or "shock.set", its configuration ``key``,
+    the recorded ``value`` and the two candidates (``down``, ``up``), each within the part's range."""
+
+    end: str  # "front" / "rear" / "both"
+    section: str
+    key: str
+    value: float
+    down: float | None
+    up: float | None
+    label: str
+
+    @property
+    def name(self) -> str:
+        return f"{self.section.split('.')[0]}:{self.key}"
+
+    def overrides(self, value) -> dict:
+        return {self.section: {self.key: value}}
+
+
+def _bounded(key: str, value: float, low: float = 0.0, high: float = math.inf):
+    from mtbmj.config import PLAUSIBLE
+
+    lo, hi = PLAUSIBLE.get(key, (low, high))
+    lo, hi = max(lo, low), min(hi, high)
+    return value if lo <= value <= hi else None
+
+
+def adjusters(spec) -> list[Adjuster]:
+    """The adjusters of the bike's fork, shock and tyres (from their configurations in effect),
+    each with one step down and up: a spring or pressure 10 %, a damper coefficient 25 %, two clicks,
+    a volume token, a tyre 2 psi; a step the part does not allow is None."""
+    from mtbmj.config import load
+
+    out = []
+    for end, section, cfg, over in (("front", "fork.set", spec.fork_config, spec.fork_overrides),
+                                    ("rear", "shock.set", spec.shock_config, spec.shock_overrides)):
+        v = load(cfg, over).values
+        part = "fork" if end == "front" else "shock"
+
+        def add(key, label, down, up, value):
+            out.append(Adjuster(end, section, key, value, _bounded(key, down) if down is not None else None,
+                                _bounded(key, up) if up is not None else None, f"{part} {label}"))
+
+        spring = v.get("fork.spring.model")
+        for model, key, label in (("linear", "fork.spring.rate_N_per_mm", "spring rate"),
+                                  ("progressive", "fork.spring.progressive_rate_N_per_mm", "spring rate"),
+                                  ("air", "fork.spring.air_pressure_psi", "air pressure")):
+            if spring == model and key in v:
+                x = float(v[key])
+                add(key, label, round(x * 0.9, 3), round(x * 1.1, 3), x)
+        if spring == "air" and "fork.spring.tokens" in v:
+            n = float(v["fork.spring.tokens"])
+            add("fork.spring.tokens", "volume spacers", n - 1 if n >= 1 else None, n + 1, n)
+        damper = v.get("fork.damper.model")
+        keys = {"linear": [("fork.damper.coefficient_N_s_per_m", "damping")],
+                "bilinear": [("fork.damper.compression_N_s_per_m", "compression damping"),
+                             ("fork.damper.rebound_N_s_per_m", "rebound damping")],
+                "digressive": [("fork.damper.compression_low_N_s_per_m", "low-speed compression damping"),
+                               ("fork.damper.rebound_low_N_s_per_m", "low-speed rebound damping"),
+                               ("fork.damper.compression_high_N_s_per_m", "high-speed compression damping"),
+                               ("fork.damper.rebound_high_N_s_per_m", "high-speed rebound damping")]}.get(damper, [])
+        for key, label in keys:
+            x = float(v[key])
+            add(key, label, round(x * 0.8, 3), round(x * 1.25, 3), x)
+        for kind in ("compression", "rebound", "low_speed_compression", "high_speed_compression",
+                     "low_speed_rebound", "high_speed_rebound"):
+            key, measured = f"fork.damper.{kind}_clicks", f"fork.damper.{kind}_clicks_measured"
+            if damper == "clicks" and key in v and measured in v:
+                n, top = float(v[key]), float(max(v[measured]))
+                add(key, f"{kind.replace('_', ' ')} clicks", n - 2 if n - 2 >= 0 else (0.0 if n > 0 else None),
+                    n + 2 if n + 2 <= top else (top if n < top else None), n)
+        if end == "front" and "tire.pressure_psi" in v:
+            x = float(v["tire.pressure_psi"])
+            out.append(Adjuster("both", "fork.set", "tire.pressure_psi", x, _bounded("tire.pressure_psi", x - 2),
+                                _bounded("tire.pressure_psi", x + 2), "tyre pressure"))
+    return out
+
+
+def ride_metrics(t, front_mm, rear_mm, front_top: float, rear_top: float, static=None, loads=None,
+                 rider_acc=None) -> dict:
+    """The metrics riders read (see the module doc) of one ride, measured or simulated: ``front_mm``
+    fork travel, ``rear_mm`` rear wheel travel (compression positive); ``static`` (front, rear)
+    static travel mm when known; ``loads`` (front, rear) tyre loads N and ``rider_acc`` m/s2 when
+    simulated."""
+    from mtbmj.ride import metrics as m
+
+    t = np.asarray(t, float)
+    out = {}
+    minutes = max(float(t[-1] - t[0]), 1e-9) / 60.0
+    for end, x, top, k in (("front", front_mm, front_top, 0), ("rear", rear_mm, rear_top, 1)):
+        x = np.asarray(x, float)
+        v = m.velocity(t, x)
+        comp, reb = v[v > 0], -v[v < 0]
+        p95c = float(np.percentile(comp, 95)) if comp.size else 0.0
+        p95r = float(np.percentile(reb, 95)) if reb.size else 0.0
+        e = {"travel_mm": top, "dynamic_sag_percent": float(x.mean() / top * 100),
+             "max_travel_percent": float(x.max() / top * 100),
+             "bottom_outs": int(m.bottom_outs(x, top)),
+             "bottom_outs_per_minute": float(m.bottom_outs(x, top) / minutes),
+             "deep_travel_percent": float(np.mean(x > DEEP_PERCENT / 100 * top) * 100),
+             "high_speed_percent": float(np.mean(np.abs(v) > SPEED_SPLIT_MM_PER_S) * 100),
+             "p95_compression_mm_per_s": p95c, "p95_rebound_mm_per_s": p95r,
+             "rebound_over_compression": p95r / p95c if p95c > 0 else None}
+        e["low_speed_percent"] = 100.0 - e["high_speed_percent"]
+        if static is not None:
+            e["static_sag_percent"] = float(static[k] / top * 100)
+        if loads is not None:
+            f = np.asarray(loads[k], float)
+            e["tyre_load_variation"] = float(f.std() / f.mean()) if f.mean() > 0 else None
+        out[end] = e
+    out["balance_points"] = out["front"]["dynamic_sag_percent"] - out["rear"]["dynamic_sag_percent"]
+    out["duration_s"] = float(t[-1] - t[0])
+    if rider_acc is not None:
+        out["rider_acceleration_rms_m_per_s2"] = float(np.sqrt(np.mean(np.square(rider_acc))))
+    return out
+
+
+def penalties(mt: dict) -> dict:
+    """Each rule's penalty (0 inside its window) of a metrics dict (:func:`ride_metrics`)."""
+    p = {}
+    for end in ("front", "rear"):
+        e = mt[end]
+        lo, hi = SAG_WINDOW[end]
+        s = e.get("static_sag_percent")
+        p[f"{end}_static_sag"] = 0.0 if s is None else max(lo - s, s - hi, 0.0) / SAG_POINTS
+        over = e["bottom_outs_per_minute"] - BOTTOM_OUTS_PER_MINUTE
+        unused = (UNUSED_BELOW_PERCENT - e["max_travel_percent"]) / 10.0 if e["bottom_outs"] == 0 else 0.0
+        p[f"{end}_bottom_outs"] = max(over / BOTTOM_OUTS_PER_MINUTE, 0.0)
+        p[f"{end}_travel_unused"] = max(unused, 0.0)
+        r = e["rebound_over_compression"]
+        p[f"{end}_packing"] = 0.0 if r is None else max(PACKING_RATIO - r, 0.0) / 0.2
+    p["balance"] = max(abs(mt["balance_points"]) - BALANCE_POINTS, 0.0) / BALANCE_POINTS
+    return p
+
+
+def _grip_comfort(base: dict, cand: dict) -> float:
+    """The relative change of tyre-load variation (both ends) and rider acceleration, weighted."""
+    terms = []
+    for end in ("front", "rear"):
+        a, b = base[end].get("tyre_load_variation"), cand[end].get("tyre_load_variation")
+        if a and b is not None:
+            terms.append((b - a) / a)
+    a, b = base.get("rider_acceleration_rms_m_per_s2"), cand.get("rider_acceleration_rms_m_per_s2")
+    if a and b is not None:
+        terms.append((b - a) / a)
+    return GRIP_COMFORT_WEIGHT * float(np.mean(terms)) if terms else 0.0
+
+
+def _flat(d: dict, prefix: str = "") -> dict:
+    out = {}
+    for k, v in d.items():
+        if isinstance(v, dict):
+            out.update(_flat(v, f"{prefix}{k}."))
+        elif isinstance(v, (int, float)) and not isinstance(v, bool) and v is not None:
+            out[f"{prefix}{k}"] = float(v)
+    return out
+
+
+@dataclass
+class Run:
+    """One simulated setting over the ride: its overrides, metrics, penalties and travel series."""
+
+    label: str
+    overrides: dict
+    metrics: dict
+    penalty: dict
+    front_mm: np.ndarray = field(repr=False, default=None)
+    rear_mm: np.ndarray = field(repr=False, default=None)
+    crash: str | None = None
+
+    @property
+    def total(self) -> float:
+        return float(sum(self.penalty.values()))
+
+
+def terrain_of(rec):
+    """The reconstruction's terrain with a flat lead-in (the bike starts at rest on level ground);
+    where the front wheel was off the ground (a jump) the ground is unknown, and its found height
+    is the wheel's flight: the straight line from take-off to landing stands in for it."""
+    from mtbmj.rolling.terrain import Terrain
+
+    ground = np.array(rec.ground, float)
+    for a, b in rec.jumps:
+        i, j = int(np.searchsorted(rec.t, a)), int(np.searchsorted(rec.t, b))
+        i, j = max(i - 1, 0), min(j, ground.size - 1)
+        if j > i + 1:
+            ground[i:j + 1] = np.interp(rec.distance[i:j + 1], [rec.distance[i], rec.distance[j]], [ground[i], ground[j]])
+    keep = np.concatenate(([True], np.diff(rec.distance) > 1e-9))
+    x, z = rec.distance[keep], ground[keep]
+    x = np.concatenate(([x[0] - LEAD_IN_M - 50.0, x[0] - 0.01], x, [x[-1] + 50.0]))
+    z = np.concatenate(([z[0], z[0]], z, [z[-1]]))
+    start = float(rec.distance[0] - 1.0)  # the front axle 1 m before the ride's first metre
+    return Terrain(f"{rec.name} (reconstructed)", x, z, start, float(rec.distance[-1] - start), {"ride": rec.name})
+
+
+def simulate(bike, overrides: dict, terrain, speed: float, duration: float, label: str, lead_s: float) -> Run:
+    """The bike with ``overrides`` over ``terrain`` at ``speed``: its metrics from ``lead_s`` on."""
+    from mtbmj.bike import run as bike_run
+
+    r = bike_run.run_bike(bike, terrain, speed, duration=duration, drive="rider", overrides=overrides or None)
+    raw = r.raw
+    s = r.summary
+    keep = raw["time_s"] >= lead_s
+    if keep.sum() < 10:
+        keep[:] = True
+    front_top = s["ride_metrics"]["front"]["travel_max_mm"]
+    rear_top = s["rear_wheel_travel_mm"]
+    mt = ride_metrics(raw["time_s"][keep], raw["front_travel_mm"][keep], raw["rear_travel_mm"][keep], front_top,
+                      rear_top, static=(s["static_front_travel_mm"], s["static_rear_travel_mm"]),
+                      loads=(raw["front_tire_N"][keep], raw["rear_tire_N"][keep]),
+                      rider_acc=raw["rider_acc_z_m_per_s2"][keep])
+    crash = s["crash"]["line"] if s.get("crash") else None
+    return Run(label, overrides, mt, penalties(mt), raw["front_travel_mm"][keep], raw["rear_travel_mm"][keep], crash)
+
+
+@dataclass
+class Advice:
+    ride: str
+    bike: str
+    reconstruction: dict
+    measured: dict
+    base: Run
+    candidates: list  # (Adjuster, direction, value, Run)
+    recommendation: dict | None
+    record_front: np.ndarray = field(repr=False, default=None)
+    record_rear: np.ndarray = field(repr=False, default=None)
+    wall_s: float = 0.0
+
+    def uncertainty(self) -> dict:
+        """Per metric: the model's error on this ride (simulated recorded setting against the record);
+        a count's at least its counting spread (the square root of the count, at least 1)."""
+        a, b = _flat(self.base.metrics), _flat(self.measured)
+        out = {k: abs(a[k] - b[k]) for k in a if k in b}
+        minutes = self.base.metrics["duration_s"] / 60.0
+        for end in ("front", "rear"):
+            n = math.sqrt(max(self.base.metrics[end]["bottom_outs"], 1))
+            out[f"{end}.bottom_outs"] = max(out.get(f"{end}.bottom_outs", 0.0), n)
+            out[f"{end}.bottom_outs_per_minute"] = max(out.get(f"{end}.bottom_outs_per_minute", 0.0), n / minutes)
+        return out
+
+    def change(self, run: Run) -> dict:
+        a, b, u = _flat(self.base.metrics), _flat(run.metrics), self.uncertainty()
+        return {k: {"from": a[k], "to": b[k], "change": b[k] - a[k], "uncertainty": u.get(k)} for k in a if k in b}
+
+    def to_dict(self) -> dict:
+        cands = []
+        for adj, direction, value, run in self.candidates:
+            cands.append({"key": adj.name, "label": adj.label, "direction": direction, "from": adj.value, "to": value,
+                          "penalty": run.total, "penalty_change": run.total - self.base.total,
+                          "grip_comfort": _grip_comfort(self.base.metrics, run.metrics), "crash": run.crash})
+        return {"ride": self.ride, "bike": self.bike, "method": __doc__.split("\n\n")[1].replace("\n", " "),
+                "rules": RULES, "reconstruction": self.reconstruction,
+                "recorded_setting": {"measured": self.measured, "simulated": self.base.metrics,
+                                     "penalties": self.base.penalty, "penalty": self.base.total},
+                "uncertainty": self.uncertainty(), "candidates": cands,
+                "recommendation": self.recommendation, "wall_time_s": self.wall_s}
+
+    def line(self) -> str:
+        rec = self.recommendation
+        if rec is None:
+            return (f"{self.ride} on {self.bike}: keep your settings: no candidate of {len(self.candidates)} lowers "
+                    f"the penalty by {MIN_GAIN:g} or more beyond the model's error on this ride")
+        return (f"{self.ride} on {self.bike}: {rec['why']}")
+
+    def figure(self):
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(11, 4.8), layout="constrained")
+        axes = fig.subplots(1, 2)
+        best = self.recommendation
+        run = None
+        if best is not None:
+            run = next(r for a, d, v, r in self.candidates if a.name == best["key"] and d == best["direction"])
+        for ax, end, rec, top in ((axes[0], "front", self.record_front, self.base.metrics["front"]["travel_mm"]),
+                                  (axes[1], "rear", self.record_rear, self.base.metrics["rear"]["travel_mm"])):
+            edges = np.linspace(0, 100, 21)
+            series = [("recorded ride", 100 * np.asarray(rec) / top, "0.5"),
+                      ("simulated, recorded setting", 100 * self.base.front_mm / top if end == "front"
+                       else 100 * self.base.rear_mm / top, "C0")]
+            if run is not None:
+                series.append((f"simulated, {best['label']} {best['from']:g} -> {best['to']:g}",
+                               100 * (run.front_mm if end == "front" else run.rear_mm) / top, "C3"))
+            for label, x, color in series:
+                h, _ = np.histogram(np.clip(x, 0, 100), bins=edges)
+                ax.stairs(100 * h / max(h.sum(), 1), edges, label=label, color=color, linewidth=1.6)
+            ax.set(xlim=(0, 100), xlabel=f"{'fork' if end == 'front' else 'rear wheel'} travel (% of {top:.0f} mm)",
+                   ylabel="time (%)", title=f"{end}: travel histogram")
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=8, loc="upper right")
+        fig.suptitle(f"{self.ride} on {self.bike}: " + ("keep the settings" if best is None else
+                                                       f"recommended: {best['label']} {best['from']:g} -> {best['to']:g}"))
+        return fig
+
+    def png(self) -> bytes:
+        import io
+
+        buf = io.BytesIO()
+        self.figure().savefig(buf, format="png", dpi=90)
+        return buf.getvalue()
+
+    def html(self, png: bytes) -> str:
+        import base64
+        import html as esc
+
+        d = self.to_dict()
+        rec = d["recommendation"]
+        rows = []
+        if rec is not None:
+            for k, c in sorted(rec["changes"].items()):
+                if c["change"] == 0:
+                    continue
+                u = "" if c["uncertainty"] is None else f"{c['uncertainty']:.3g}"
+                r = "" if c["recorded"] is None else f"{c['recorded']:.3g}"
+                rows.append(f"<tr><td>{esc.escape(k)}</td><td>{r}</td><td>{c['from']:.3g}</td><td>{c['to']:.3g}</td>"
+                            f"<td>{c['change']:+.3g}</td><td>{u}</td><td>{c['expected']:.3g}</td></tr>")
+        cand = "".join(f"<tr><td>{esc.escape(c['label'])}</td><td>{c['from']:g}</td><td>{c['to']:g}</td>"
+                       f"<td>{c['penalty_change']:+.2f}</td><td>{esc.escape(c['crash'] or '')}</td></tr>"
+                       for c in d["candidates"])
+        rc = d["reconstruction"]["checks"]
+        img = base64.b64encode(png).decode()
+        return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>mtbmj advice: {esc.escape(self.ride)}</title>
+<style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}table{{border-collapse:collapse}}
+td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{text-align:left}}</style></head>
+<body><h1>Setup advice: {esc.escape(self.ride)} on {esc.escape(self.bike)}</h1>
+<p id="line">{esc.escape(self.line())}</p>
+<p>Reconstruction check: front reproduced within {rc['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted
+{rc['rear_predicted_rms_mm']:.1f} mm RMS ({rc['rear_predicted_rms_percent_of_used']:.0f} % of the travel used),
+{rc['samples_checked_percent']:.0f} % of the ride checked; speed {d['reconstruction']['speed_m_per_s']:.2f} m/s.</p>
+<img id="histograms" src="data:image/png;base64,{img}" alt="travel histograms before and after">
+<h2>Predicted change of every metric</h2>
+<table id="changes"><tr><th>metric</th><th>recorded</th><th>simulated now</th><th>simulated after</th><th>change</th>
+<th>uncertainty</th><th>expected on your ride</th></tr>
+{''.join(rows) or '<tr><td>no change recommended</td><td></td><td></td><td></td><td></td><td></td><td></td></tr>'}</table>
+<h2>Every candidate</h2>
+<table id="candidates"><tr><th>setting</th><th>from</th><th>to</th><th>penalty change</th><th>crash</th></tr>{cand}</table>
+<h2>Rules</h2><ul>{''.join(f'<li>{esc.escape(k)}: {esc.escape(v)}</li>' for k, v in RULES.items())}</ul>
+</body></html>
+"""
+
+    def write(self, out_dir) -> list:
+        import json
+
+        from mtbmj import output
+
+        png = self.png()
+        return output.write_atomically(out_dir, {
+            "advice.json": (json.dumps(self.to_dict(), indent=2, default=_json) + "\n").encode(),
+            "advice.png": png, "advice.html": self.html(png).encode()})
+
+
+def _json(o):
+    if isinstance(o, np.generic):
+        return o.item()
+    raise TypeError(type(o).__name__)
+
+
+RULE_METRICS = {"static_sag": "static_sag_percent", "bottom_outs": "bottom_outs_per_minute",
+                "travel_unused": "max_travel_percent", "packing": "rebound_over_compression"}
+
+
+def _rule_metric(rule: str) -> str:
+    """The metric (``_flat`` name) a penalty ``rule`` (``front_static_sag``, ``balance``) reads."""
+    if rule == "balance":
+        return "balance_points"
+    end, _, name = rule.partition("_")
+    return f"{end}.{RULE_METRICS[name]}"
+
+
+def _recommend(base: Run, candidates, uncertainty: dict, measured: dict) -> dict | None:
+    """The candidate that lowers the penalty most (grip and comfort breaking ties), by at least
+    ``MIN_GAIN``; None when none does. ``confident``: the metrics of the rules it improves move by
+    more than the model's error on this ride (static sag, from statics, always does)."""
+    best = None
+    for adj, direction, value, run in candidates:
+        if run.crash:
+            continue
+        gain = base.total - run.total
+        score = gain - _grip_comfort(base.metrics, run.metrics)
+        if gain >= MIN_GAIN and (best is None or score > best[0]):
+            best = (score, adj, direction, value, run)
+    if best is None:
+        return None
+    _, adj, direction, value, run = best
+    a, b = _flat(base.metrics), _flat(run.metrics)
+    improved = [k for k in base.penalty if run.penalty[k] < base.penalty[k] - 1e-9]
+    moved = [m for m in (_rule_metric(k) for k in improved)
+             if m in a and abs(b[m] - a[m]) > (uncertainty.get(m) or 0.0)]
+    confident = bool(moved)
+    why = (f"{'raise' if direction == 'up' else 'lower'} the {adj.label} from {adj.value:g} to {value:g} "
+           f"({adj.section} {adj.key}): the penalty falls {base.total:.2f} -> {run.total:.2f} "
+           f"({', '.join(k.replace('_', ' ') for k in improved) or 'grip and comfort'})"
+           + ("" if confident else "; the change is within the model's error on this ride: try it and record again"))
+    rode = _flat(measured)
+    changes = {k: {"from": v0, "to": b[k], "change": b[k] - v0, "uncertainty": uncertainty.get(k),
+                   "recorded": rode.get(k), "expected": (rode[k] + b[k] - v0) if k in rode else b[k]}
+               for k, v0 in a.items() if k in b}
+    return {"key": adj.name, "section": adj.section, "config_key": adj.key, "label": adj.label,
+            "direction": direction, "from": adj.value, "to": value, "penalty_from": base.total,
+            "penalty_to": run.total, "improves": improved, "confident": confident, "why": why, "changes": changes}
+
+
+def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2) -> Advice:
+    """Advice for ``record`` (a two-ended ``TelemetryRecord``) on ``bike`` (preset or file, its keys
+    ``overrides``); ``duration`` limits the simulated ride to its first seconds; the runs spread
+    over ``workers`` processes."""
+    import time
+
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.ride import reconstruct as rc
+
+    start = time.perf_counter()
+    length = float(record.time_s[-1] - record.time_s[0])
+    if length < MIN_SECONDS:
+        raise AdviseError(f"{record.name}: {length:.1f} s of ride cannot support advice (at least {MIN_SECONDS:g} s)")
+    rec = rc.reconstruct(record, bike, overrides)
+    checks = rec.checks()
+    if (checks["samples_checked_percent"] < MIN_CHECKED_PERCENT
+            or not checks["rear_predicted_rms_percent_of_used"] <= MAX_REAR_MISS_PERCENT):
+        raise AdviseError(f"{record.name}: its reconstruction fails its own check (rear predicted within "
+                          f"{checks['rear_predicted_rms_percent_of_used']:.0f} % of the travel used, "
+                          f"{checks['samples_checked_percent']:.0f} % of the ride checked; advice needs within "
+                          f"{MAX_REAR_MISS_PERCENT:g} % over {MIN_CHECKED_PERCENT:g} %): the model does not describe "
+                          f"this ride well enough to predict a change")
+    spec = spec_mod.load(str(bike), overrides)
+    speed = float(rec.speed["speed_m_per_s"])
+    ride_s = length if duration is None else min(length, float(duration))
+    lead_s = 1.0 / speed  # the front axle reaches the ride's first metre
+    sim_s = ride_s + lead_s
+    terrain = terrain_of(rec)
+    adj = adjusters(spec)
+    todo = [(a, d, v) for a in adj for d, v in (("down", a.down), ("up", a.up)) if v is not None and v != a.value]
+    n = len(todo) + 1
+    done = [0]
+
+    def step():
+        done[0] += 1
+        if progress is not None:
+            progress(done[0] / n)
+
+    base_over = dict(overrides or {})
+
+    def merged(extra):
+        out = dict(base_over)
+        for k, v in extra.items():
+            out[k] = {**out.get(k, {}), **v}
+        return out
+
+    jobs = [(str(bike), base_over, terrain, speed, sim_s, "recorded setting", lead_s)]
+    jobs += [(str(bike), merged(a.overrides(v)), terrain, speed, sim_s, f"{a.label} {v:g}", lead_s) for a, d, v in todo]
+    runs = [None] * len(jobs)
+    if workers > 1 and len(jobs) > 1:
+        from concurrent.futures import as_completed
+
+        from mtbmj.workers import process_pool
+
+        with process_pool(min(workers, len(jobs))) as pool:
+            futures = {pool.submit(simulate, *job): i for i, job in enumerate(jobs)}
+            for future in as_completed(futures):
+                runs[futures[future]] = future.result()
+                step()
+    else:
+        for i, job in enumerate(jobs):
+            runs[i] = simulate(*job)
+            step()
+    base = runs[0]
+    cands = [(a, d, v, run) for (a, d, v), run in zip(todo, runs[1:])]
+    t = rec.t
+    keep = t - t[0] <= ride_s
+    measured = ride_metrics(t[keep], rec.front[keep], rec.rear[keep], base.metrics["front"]["travel_mm"],
+                            base.metrics["rear"]["travel_mm"])
+    advice = Advice(rec.name, spec.name, rec.summary(), measured, base, cands, None, rec.front[keep], rec.rear[keep])
+    advice.recommendation = _recommend(base, cands, advice.uncertainty(), measured)
+    advice.wall_s = time.perf_counter() - start
+    return advice
+
+
+__all__ = ["Adjuster", "Advice", "AdviseError", "RULES", "adjusters", "advise", "penalties", "ride_metrics",
+           "simulate", "terrain_of"]
