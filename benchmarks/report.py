@@ -482,6 +482,16 @@ def bike_speed_rows(d: dict) -> dict[str, list[Row]]:
             "bike_speed.json", d["command"])]}
 
 
+def advise_speed_rows(d: dict) -> dict[str, list[Row]]:
+    a, r, c = d["advise_s"], d["ratio"], d["reconstruct_s"]
+    return {"bike": [
+        Row(f"`mtbmj advise` on the shipped ride ({num(d['ride_seconds'], 3)} s, {d['repeats'][0]['candidates']} candidates, "
+            f"{d['workers']} processes), wall time per 100 s of ride", f"≤ {tgt(d['target_s_per_100_s'])} s",
+            f"{num(d['advise_s_per_100_s_of_ride'], 3)} s per 100 s; {sec(a['median'])} ({spread(a['min'], a['max'], 3, ' s')}) "
+            f"in all, of which the reconstruction {sec(c['median'])}; advise / one bike run over the same terrain "
+            f"{num(r['median'], 3)} ({spread(r['min'], r['max'], 3)})", "advise_speed.json", d["command"])]}
+
+
 SOURCES = [
     ("accuracy_steps.json", accuracy_steps_rows),
     ("accuracy_envelope.json", accuracy_envelope_rows),
@@ -504,6 +514,7 @@ SOURCES = [
     ("rolling_crosscheck.json", rolling_crosscheck_rows),
     ("bike_crosscheck.json", bike_crosscheck_rows),
     ("bike_speed.json", bike_speed_rows),
+    ("advise_speed.json", advise_speed_rows),
 ]
 
 # --- the page's words ----------------------------------------------------------------------------

@@ -42,7 +42,7 @@ def is_bike(ref: str) -> bool:
             table = tomllib.loads(path.read_text())
         except (tomllib.TOMLDecodeError, OSError, UnicodeDecodeError):
             return False
-        return any(k in table for k in ("bike", "leverage", "rider", "shock"))
+        return any(k in table for k in ("bike", "leverage", "rider", "shock", "geometry", "linkage"))
     return False
 
 

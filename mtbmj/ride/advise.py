@@ -16,9 +16,9 @@ and high speed (100 mm/s) and the 95th percentiles of compression and rebound sp
 hits keeps it low); the balance of the ends (dynamic sag front less rear); the tyre-load variation
 (std/mean, grip) and the rider's vertical acceleration (RMS, comfort).
 
-**Rules** (:data:`RULES`, each a penalty that is 0 inside its window; sources as the makers' manuals
-state them, secondhand through ../shared/REFERENCE.md section 7, marked *assumed* where no source
-gives the number):
+**Rules** (:data:`RULES`, each a penalty that is 0 inside its window; sources as the makers' setup
+guides state them (Fox, RockShox, Motion Instruments; read secondhand, not checked against the
+guides' current editions), marked *assumed* where no source gives the number):
 
 - static sag: front 20-25 % (Fox: "start at 25 %"; RockShox 10-30 %), rear 27-30 % (common on trail
   bikes); a point outside costs 1/5;

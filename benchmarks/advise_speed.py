@@ -1,0 +1,82 @@
+"""``mtbmj advise`` on a whole ride, timed against one bike run over the same terrain, interleaved.
+
+    python benchmarks/advise_speed.py [--ride example] [--bike sst] [--repeats 3] [--workers 2] [--out PATH]
+
+Each repetition times, in this process: the reconstruction alone (``mtbmj.ride.reconstruct``); one
+bike run over the reconstructed terrain at the ride's speed for the ride's length (the baseline:
+one core, what every candidate costs); and the whole advice (reconstruction, the recorded setting
+and every candidate, on ``--workers`` processes). Prints each repetition, then the medians and
+spreads (min-max) of the wall times, of the ratio advice / one run, and the advice's wall time per
+100 s of ride. Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
+advise_speed.json``, outside the repository). Not a test: nothing is asserted.
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _bench import add_out_option, write_json  # noqa: E402
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--ride", default="example", help="an SST recording or a travel CSV, or 'example' (00649.SST)")
+    ap.add_argument("--bike", default="sst", help="the recorded bike (preset or file)")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--workers", type=int, default=2)
+    add_out_option(ap, __file__)
+    args = ap.parse_args(argv)
+
+    from types import SimpleNamespace
+
+    from mtbmj.bike import run as bike_run
+    from mtbmj.cli.telemetry import decoding
+    from mtbmj.ride import advise, reconstruct, telemetry
+
+    path = telemetry.example_path() if args.ride == "example" else Path(args.ride)
+    record = telemetry.read_ride(path, **decoding(SimpleNamespace(bike=args.bike, fork_max_mm=None,
+                                                                  shock_max_mm=None)))
+    seconds = float(record.time_s[-1] - record.time_s[0])
+    rows = []
+    for i in range(args.repeats):
+        t0 = time.perf_counter()
+        rec = reconstruct.reconstruct(record, args.bike)
+        t_rec = time.perf_counter() - t0
+        terrain = advise.terrain_of(rec)
+        speed = float(rec.speed["speed_m_per_s"])
+        t0 = time.perf_counter()
+        bike_run.run_bike(args.bike, terrain, speed, duration=seconds + 1.0 / speed, drive="rider")
+        t_one = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        result = advise.advise(record, args.bike, workers=args.workers)
+        t_all = time.perf_counter() - t0
+        row = {"reconstruct_s": t_rec, "one_run_s": t_one, "advise_s": t_all, "ratio": t_all / t_one,
+               "candidates": len(result.candidates)}
+        rows.append(row)
+        print(f"repeat {i + 1}: reconstruct {t_rec:.1f} s, one bike run {t_one:.1f} s, advise {t_all:.1f} s "
+              f"({row['candidates']} candidates; advise / one run {row['ratio']:.2f})", flush=True)
+
+    def stats(key):
+        xs = [r[key] for r in rows]
+        return {"median": statistics.median(xs), "min": min(xs), "max": max(xs)}
+
+    out = {"command": f"python benchmarks/advise_speed.py --repeats {args.repeats} --workers {args.workers}"
+                      + (f" --ride {args.ride}" if args.ride != "example" else "")
+                      + (f" --bike {args.bike}" if args.bike != "sst" else "") + " --out benchmarks/results/advise_speed.json",
+           "ride": path.name, "ride_seconds": seconds, "workers": args.workers, "repeats": rows,
+           "reconstruct_s": stats("reconstruct_s"), "one_run_s": stats("one_run_s"), "advise_s": stats("advise_s"),
+           "ratio": stats("ratio"), "advise_s_per_100_s_of_ride": stats("advise_s")["median"] * 100.0 / seconds,
+           "target_s_per_100_s": 120.0}
+    print(f"advise {out['advise_s']['median']:.1f} s ({out['advise_s']['min']:.1f}-{out['advise_s']['max']:.1f}) on "
+          f"{seconds:.0f} s of ride: {out['advise_s_per_100_s_of_ride']:.0f} s per 100 s; reconstruct "
+          f"{out['reconstruct_s']['median']:.1f} s; advise / one run {out['ratio']['median']:.2f}")
+    print(f"wrote {write_json(__file__, out, args.out)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
