@@ -47,6 +47,9 @@ KEYS: dict[str, tuple[str, str, object]] = {
                                  "list of numbers", (0.0, 260.0)),
     "leverage.ratio": ("Leverage ratio (wheel travel per shock stroke) at each wheel travel of the table.",
                        "list of numbers > 0", (1.5, 4.5)),
+    "leverage.csv": ("The leverage curve as a CSV instead of the two lists: wheel travel (mm) and leverage ratio, "
+                     "two numbers a row (comma, semicolon or tab; header lines skipped), as linkage tools and "
+                     "telemetry apps export it; a path relative to the bike file.", "text", None),
     "shock.stroke_mm": ("The shock's stroke; the leverage table must not need more.", "> 0", (25.0, 90.0)),
     "shock.config": ("The shock's laws: a configuration of the fork schema (preset or file), read in shock "
                      "coordinates.", "text", None),

@@ -202,6 +202,38 @@ def _is_preset(name: str) -> bool:
     return any(name.lower() == n.lower() for n in preset_names())
 
 
+def read_leverage_csv(path) -> tuple[list[float], list[float]]:
+    """(wheel travel mm, leverage ratio) of a leverage-ratio CSV as linkage tools and telemetry apps
+    export it: two numbers a row, wheel travel first, separated by a comma, a semicolon or a tab
+    (Sufni's "0.0,3.18"; Linkage's "0;3.18"); header lines before the first number row are skipped."""
+    import re
+
+    if not isinstance(path, str):
+        raise ConfigError(f"leverage.csv: must be a file's path, got {path!r}")
+    try:
+        text = Path(path).read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"leverage.csv: cannot read {path} ({exc.strerror or exc.__class__.__name__})") from None
+    w, r = [], []
+    for number, line in enumerate(text.splitlines(), 1):
+        cells = [c.strip() for c in re.split(r"[,;\t]", line) if c.strip()]
+        if not cells:
+            continue
+        try:
+            values = [float(c) for c in cells]
+        except ValueError:
+            if not w:
+                continue  # a header
+            raise ConfigError(f"{path}, line {number}: not two numbers ({line.strip()!r})") from None
+        if len(values) != 2 or not all(math.isfinite(v) for v in values):
+            raise ConfigError(f"{path}, line {number}: expected wheel travel and leverage ratio, got {line.strip()!r}")
+        w.append(values[0])
+        r.append(values[1])
+    if len(w) < 2:
+        raise ConfigError(f"leverage.csv: {path} holds {len(w)} row(s) of wheel travel and leverage ratio (at least 2)")
+    return w, r
+
+
 def read_table(ref: str) -> tuple[dict, str]:
     """A bike file's table with its ``base`` chain merged in (read by ``mtbmj.config.read_chain``,
     the drop configurations' reader: the same base rules)."""
@@ -209,6 +241,14 @@ def read_table(ref: str) -> tuple[dict, str]:
 
     table: dict = {}
     for _, location, part in read_chain(ref, _locate, _is_preset, "a bike description"):
+        lev = part.get("leverage")
+        if isinstance(lev, dict):
+            if isinstance(lev.get("csv"), str) and isinstance(location, Path):
+                lev["csv"] = str((location.resolve().parent / lev["csv"]))  # relative to the file that names it
+            # a curve replaces its bases' curve, given as a CSV or as the two lists
+            if isinstance(table.get("leverage"), dict):
+                drop = ("wheel_travel_mm", "ratio") if "csv" in lev else ("csv",) if lev.keys() & {"wheel_travel_mm", "ratio"} else ()
+                table["leverage"] = {k: v for k, v in table["leverage"].items() if k not in drop}
         if isinstance(part.get("geometry"), dict):  # a chart replaces the geometry its bases gave
             given = [k for k in CHART_SETS if k in (part.get("bike") or {})]
             if given:
@@ -378,7 +418,7 @@ KNOWN = {
     "bike": {"head_angle_deg", "fork_offset_mm", "front_axle_mm", "rear_axle_mm", "pivot_mm", "frame_mass_kg",
              "frame_com_mm", "frame_inertia_kg_m2", "swingarm_mass_kg", "swingarm_inertia_kg_m2",
              "fork_lower_mass_kg", "front_wheel_mass_kg", "rear_wheel_mass_kg", "wheel_inertia_kg_m2"},
-    "leverage": {"wheel_travel_mm", "ratio"},
+    "leverage": {"wheel_travel_mm", "ratio", "csv"},
     "linkage": _linkage.known_keys(),
     "shock": {"stroke_mm", "config", "set"},
     "fork": {"config", "set"},
@@ -522,6 +562,10 @@ def load(ref: str, overrides=None) -> BikeSpec:
     offset = _number(table, "bike", "fork_offset_mm", nonneg=True) * MM
     front, rear, pivot = (_point(table, "bike", k) for k in ("front_axle_mm", "rear_axle_mm", "pivot_mm"))
     lev = table.get("leverage", {})
+    if "csv" in lev:
+        if "wheel_travel_mm" in lev or "ratio" in lev:
+            raise ConfigError("leverage.csv: give the curve as a CSV or as wheel_travel_mm and ratio, not both")
+        lev = dict(zip(("wheel_travel_mm", "ratio"), read_leverage_csv(lev["csv"])))
     w, r = lev.get("wheel_travel_mm"), lev.get("ratio")
     for key, arr in (("leverage.wheel_travel_mm", w), ("leverage.ratio", r)):
         if (not isinstance(arr, list) or len(arr) < 2
