@@ -194,3 +194,36 @@ def test_a_ride_shorter_than_a_window_or_periodic_gives_no_speed(tmp_path):
     wave = lambda x: np.sin(2 * np.pi * 6.0 * x) + 0.5 * np.sin(2 * np.pi * 12.0 * x)  # noqa: E731 (period 1/6 s)
     with pytest.raises(reconstruct.ReconstructError, match="do not align at any lag"):
         reconstruct.speed_from_lag(t, wave(t), wave(t - 0.2), 1.255)
+
+
+def first_seconds(record, seconds):
+    """``record`` cut to its first ``seconds`` (every per-sample array)."""
+    import dataclasses
+
+    n = int(np.searchsorted(record.time_s, record.time_s[0] + seconds))
+    cut = {f.name: getattr(record, f.name)[:n] for f in dataclasses.fields(record)
+           if isinstance(getattr(record, f.name), np.ndarray) and getattr(record, f.name).shape[:1] == record.time_s.shape}
+    return dataclasses.replace(record, **cut)
+
+
+@pytest.mark.slow
+def test_the_compiled_forward_quarter_cars_are_the_python_ones(made, monkeypatch):
+    """The checks' forward quarter cars compiled (mtbmj/ride/quartercar_compiled.py) give the Python
+    loop's numbers within 1e-9 mm (the law's sum in another order): on the ride made here (a linear
+    law, a constant leverage ratio) and on the shipped ride (a friction state, the SST leverage curve)."""
+    from types import SimpleNamespace
+
+    from mtbmj.cli.telemetry import decoding
+    from mtbmj.ride import quartercar_compiled, reconstruct, telemetry
+
+    bike, csv, *_ = made
+    rides = [(telemetry.read_ride(csv, **decoding(SimpleNamespace(bike=str(bike), fork_max_mm=None, shock_max_mm=None))),
+              str(bike)),
+             (first_seconds(telemetry.read_ride(telemetry.example_path(), **decoding(SimpleNamespace(
+                 bike="sst", fork_max_mm=None, shock_max_mm=None))), 25.0), "sst")]
+    compiled = [reconstruct.reconstruct(r, b) for r, b in rides]
+    monkeypatch.setattr(quartercar_compiled, "run", lambda *a, **k: None)
+    python = [reconstruct.reconstruct(r, b) for r, b in rides]
+    for c, p in zip(compiled, python):
+        assert np.max(np.abs(c.front_again - p.front_again)) < 1e-9
+        assert np.max(np.abs(c.rear_predicted - p.rear_predicted)) < 1e-9

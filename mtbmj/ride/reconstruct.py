@@ -196,7 +196,12 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio):
     # the hard stops' force cannot be read from a travel record (a tenth of a millimetre past full
     # travel is kilonewtons there): the law's force at a stroke within 0..travel
     xf = np.clip(x, 0.0, car.travel)
-    f = np.array([_law_force(car.law, xi, vi, zi) for xi, vi, zi in zip(xf, v, z)]) / ratio(w)
+    from mtbmj.controllers.compiled import fork_forces_along
+
+    f = fork_forces_along(car.law, xf, v, z)  # the compiled kernel (None where it cannot run)
+    if f is None:
+        f = np.array([_law_force(car.law, xi, vi, zi) for xi, vi, zi in zip(xf, v, z)])
+    f = f / ratio(w)
     extra = _lowpass(f - car.sprung * car.gravity, dt)  # the rider's slow load shifts (braking, weight)
     acc = (f - extra) / car.sprung - car.gravity
     vel = np.cumsum(acc) * dt
@@ -222,12 +227,14 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio):
     return ground - ground[0], tyre, tyre <= 0.0, extra
 
 
-def forward(t, ground, car: QuarterCar, stroke_of, ratio, w0: float, extra=None):
+def forward(t, ground, car: QuarterCar, stroke_of, ratio, w0: float, extra=None, native=None):
     """The wheel's rise (m) of the quarter car run over ``ground`` (m, on ``t``) from rest at rise
     ``w0``, its body pressed by ``extra`` (N, on ``t``; the rider's load shifts) where given: the
     law's stroke is ``stroke_of(w)``, its rate the wheel's over ``ratio(w)``; classical RK4 at the
     record's step (a step that diverges, on a hard stop stiffer than that step resolves, redone in
-    10, 100 or 1000 substeps), the ground and the load linear between samples."""
+    10, 100 or 1000 substeps), the ground and the load linear between samples. ``native`` (mode,
+    sin a, leverage) runs the same steps compiled (``mtbmj.ride.quartercar_compiled``) where it
+    can; without it, or where it cannot, in Python."""
     dt = float(t[1] - t[0])
     gr = np.asarray(ground, float)
     load = np.zeros_like(gr) if extra is None else np.asarray(extra, float)
@@ -247,6 +254,16 @@ def forward(t, ground, car: QuarterCar, stroke_of, ratio, w0: float, extra=None)
     f0 = _law_force(car.law, float(stroke_of(w0)), 0.0, 0.0) / float(ratio(w0))
     zw0 = car.radius - (car.unsprung * car.gravity + f0) / k + gr[0]
     y = np.array([zw0 - w0, zw0, 0.0, 0.0, 0.0])
+    if native is not None:  # (mode, sin_a, leverage): the same steps compiled (mtbmj.ride.quartercar_compiled)
+        from mtbmj.ride import quartercar_compiled
+
+        done = quartercar_compiled.run(car.law, stateful, (car.sprung, car.unsprung, k, car.radius, car.gravity),
+                                       native[0], native[1], native[2], gr, load, dt, y)
+        if done is not None:
+            out, bad = done
+            if bad >= 0:
+                raise ReconstructError(f"the forward quarter car diverged at {t[bad]:.3f} s")
+            return out
     out = np.empty(gr.size)
     out[0] = w0
     def step(y, g0, g1, p0, p1, n):
@@ -485,11 +502,14 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
         last = int(round(speed["windows"][-1][0] / dt)) + step
         if last < t.size:
             bad[last:] = True
+    from mtbmj.ride.quartercar_compiled import FORK, LEVERAGE
+
     front_again = forward(t, ground, front_car, lambda w: w / sin_a, lambda w: sin_a, float(fork[0] * sin_a),
-                          extra) / sin_a
+                          extra, native=(FORK, sin_a, None)) / sin_a
     ground_rear = np.interp(t - lags, t, ground)
     # a slow load shift moves weight between the ends: what the front gained the rear lost
-    rear_predicted = forward(t, ground_rear, rear_car, lev.stroke, lev.ratio_at, float(rear[0]), -extra)
+    rear_predicted = forward(t, ground_rear, rear_car, lev.stroke, lev.ratio_at, float(rear[0]), -extra,
+                             native=(LEVERAGE, 0.0, lev))
     v = speed["speed_at"](t)
     distance = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)))
     return Reconstruction(record.name, spec.name, t, speed, distance, ground, ~bad, fork * 1e3, front_again * 1e3,
