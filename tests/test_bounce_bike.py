@@ -80,9 +80,9 @@ def ring_down_by_mujoco(rate_N_per_mm, damper_N_s_per_m, preload_N, seconds=4.0)
     shock = {**base.shock_overrides, "fork.friction.coulomb_N": 0.0, "fork.spring.rate_N_per_mm": rate_N_per_mm,
              "fork.spring.preload_N": preload_N, "fork.damper.compression_N_s_per_m": damper_N_s_per_m,
              "fork.damper.rebound_N_s_per_m": damper_N_s_per_m}
-    gen = dataclasses.replace(base, rider=dataclasses.replace(base.rider, com=base.rider.seated_com),
-                              shock_overrides=shock, fork_overrides={**base.fork_overrides, "fork.friction.coulomb_N": 0.0})
-    p = bike_run.prepare(gen, "flat", 2.0, drive="coast", lock=("rider",))
+    gen = dataclasses.replace(base, shock_overrides=shock,
+                              fork_overrides={**base.fork_overrides, "fork.friction.coulomb_N": 0.0})
+    p = bike_run.prepare(gen, "flat", 2.0, drive="coast", seated=True)
     b = p.bike
     for dof, speed in (("pitch", 0.3), ("bike_z", -0.2), ("swingarm", 0.3)):  # rad/s, m/s, rad/s
         p.data.qvel[b.dof_index(dof)] = speed

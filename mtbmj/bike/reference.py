@@ -299,7 +299,7 @@ class Reference:
         return sig
 
 
-def static_equilibrium(reference: Reference, guess=None, acceptable=None) -> np.ndarray:
+def static_equilibrium(reference: Reference, guess=None, acceptable=None, held=()) -> np.ndarray:
     """q (7,) of the bike rolling steadily on the start at the set speed (the drive's force 0, the
     wheels' spin free): every generalised force but the horizontal one balanced (X = 0), solved by
     Newton's method on the closed-form forces (finite-difference Jacobian).
@@ -308,8 +308,12 @@ def static_equilibrium(reference: Reference, guess=None, acceptable=None) -> np.
     the ground, the frame on end). Where Newton's method from the usual start fails or lands on a
     spurious root, the equilibrium is followed by continuation from a lighter load (gravity scaled
     from a quarter of its value up to all of it, each solution the next start), then tried from
-    starts spread over the travel; only when none finds it is the bike refused, saying why."""
+    starts spread over the travel; only when none finds it is the bike refused, saying why.
+    ``held``: coordinates (indices into q) held at 0 and left out of the balance (a seated rider's
+    two, held rigid on the frame)."""
     from scipy.optimize import fsolve
+
+    free = np.array([i for i in range(1, NQ) if i not in held])
 
     moving = np.zeros(NQ)
     moving[0] = reference.speed  # rolling at the set speed: the drive's force is 0 there
@@ -317,16 +321,21 @@ def static_equilibrium(reference: Reference, guess=None, acceptable=None) -> np.
     g = planar.g
     acceptable = (lambda q: True) if acceptable is None else acceptable
 
-    def residual(u):
-        q = np.concatenate(([0.0], u))
+    def full(v):
+        u = np.zeros(NQ - 1)
+        u[free - 1] = v
+        return u
+
+    def residual(v):
+        q = np.concatenate(([0.0], full(v)))
         y = np.concatenate((q, moving, np.zeros(reference.nf + reference.ns)))
         Q, out = reference.forces(0.0, y)
-        return (Q + out["static"])[1:]
+        return (Q + out["static"])[free]
 
-    def solve(u0):
-        u, _, ok, msg = fsolve(residual, u0, full_output=True, xtol=1e-13)
-        good = ok == 1 and bool(np.all(np.isfinite(u))) and np.max(np.abs(residual(u))) <= 1e-6
-        return (u if good else None), " ".join(str(msg).split())
+    def solve(u0):  # u0 and the answer over q[1:], the held coordinates 0
+        v, _, ok, msg = fsolve(residual, np.asarray(u0, float)[free - 1], full_output=True, xtol=1e-13)
+        good = ok == 1 and bool(np.all(np.isfinite(v))) and np.max(np.abs(residual(v))) <= 1e-6
+        return (full(v) if good else None), " ".join(str(msg).split())
 
     u0 = np.array([-0.06, 0.0, 0.03, 0.2, -0.01, 0.0]) if guess is None else np.asarray(guess, float)
     u, why = solve(u0)

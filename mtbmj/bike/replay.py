@@ -56,7 +56,8 @@ def rerun(run_dir, duration: float | None = None, error=MtbmjError):
         info = manifest.get("engine_info") or {}
         kwargs = {"drive": summary["drive"]["mode"], "start_x": summary.get("start_m"),
                   "callback": "auto", "lock": tuple(info.get("locked", ())),
-                  "rear_tire": bool(info.get("rear_tire", True)), "overrides": manifest.get("bike_overrides") or None}
+                  "rear_tire": bool(info.get("rear_tire", True)), "overrides": manifest.get("bike_overrides") or None,
+                  "seated": bool(info.get("seated", False))}
         whole = float(summary["duration_s"])
     except (KeyError, TypeError, ValueError) as exc:
         raise error(f"{run_dir}: not a complete bike run ({exc.__class__.__name__}: {exc})") from None

@@ -25,6 +25,8 @@ the rider body's (gravity excluded, up positive).
 """
 from __future__ import annotations
 
+import dataclasses
+
 import math
 import time
 from dataclasses import dataclass, field
@@ -129,7 +131,7 @@ def setups(spec) -> tuple[compose.Setup, compose.Setup]:
 
 def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str = "rider",
             start_x: float | None = None, callback: str = "auto", lock=(), rear_tire: bool = True,
-            overrides=None) -> Prepared:
+            overrides=None, seated: bool = False) -> Prepared:
     """Everything a run needs, with the data at t = 0: the bike at rest on its static equilibrium
     over the start, moving at the set speed. ``callback``: "auto" (the compiled callback where numba
     is installed, else the Python one with a ``FallbackWarning``), "compiled" or "python".
@@ -140,7 +142,10 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     stands on its front wheel alone and needs "pitch" locked; it starts level (pitch 0) in the
     front wheel's own static equilibrium, the swingarm at full extension and the rider at its
     stance (their qpos 0). Locked "pitch", "rear" and "rider" with the rear tire off
-    is the rolling front end's rig (``tests/test_bike_locked.py``)."""
+    is the rolling front end's rig (``tests/test_bike_locked.py``). ``seated``: the rider sits on
+    the saddle, the body's centre of mass at ``rider.seated_com_mm`` held rigid on the frame (its
+    two degrees of freedom locked at the seated position: a seated body's vertical resonance, 4-6
+    Hz, lies above a bike's sprung modes; ``mtbmj.identify.bounce_bike``)."""
     from mtbmj.bike.reference import Reference, static_equilibrium
 
     _check(speed_m_per_s, None)
@@ -152,6 +157,14 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     if isinstance(bike, spec_mod.BikeSpec) and overrides:
         raise ConfigError("overrides: give them with a bike name or file, not a ready-made BikeSpec")
     spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(str(bike), overrides)
+    if seated:
+        if spec.rider.seated_com is None:
+            raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider (the rider's centre of mass "
+                              f"seated on the saddle, e.g. rider.seated_com_mm = [-90, 920])")
+        if not rear_tire:
+            raise ConfigError("seated: a seated rider rides on both wheels (not with the rear tire off)")
+        spec = dataclasses.replace(spec, rider=dataclasses.replace(spec.rider, com=spec.rider.seated_com))
+        lock = tuple(dict.fromkeys(tuple(lock) + ("rider",)))
     ter = terrain_mod.make(scenario)
     if ter.moving:
         raise ConfigError("scenario: the drum rig holds a single wheel; a bike rolls on fixed terrain")
@@ -187,7 +200,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     _check_start(p, ref)
     names = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")
     if rear_tire:
-        q = static_equilibrium(ref, acceptable=lambda q: _is_equilibrium(ref, q))  # refuses when none is one
+        q = static_equilibrium(ref, acceptable=lambda q: _is_equilibrium(ref, q),  # refuses when none is one
+                               held=(5, 6) if seated else ())
         q = dict(zip(names, q))
     else:  # on the front wheel alone: the rear at full extension, the rider at its stance (both held)
         q = dict.fromkeys(names, 0.0)
@@ -623,8 +637,11 @@ class BikeResult(RunOutput):
             return f" ({', '.join(parts)})" if parts else ""
 
         held = self.info.get("locked")
+        seated = bool(self.info.get("seated"))
+        if seated and held is not None:  # the seated rider's hold is the seat's, said as "seated"
+            held = [k for k in held if k != "rider"]
         if held is not None or not self.info.get("rear_tire", True):
-            parts = [f"held: {', '.join(held)}"] if held else []
+            parts = (["seated"] if seated else []) + ([f"held: {', '.join(held)}"] if held else [])
             parts += [] if self.info.get("rear_tire", True) else ["rear tire off"]
             held = f" ({'; '.join(parts)})"
         else:
@@ -711,7 +728,7 @@ def default_duration(p: Prepared) -> float:
 def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: float | None = None,
              drive: str = "rider", start_x: float | None = None,
              progress: Callable[[float], None] | None = None, callback: str = "auto", lock=(),
-             rear_tire: bool = True, overrides=None) -> BikeResult:
+             rear_tire: bool = True, overrides=None, seated: bool = False) -> BikeResult:
     """Roll the bike ``bike`` (a preset name, a TOML path or a ``BikeSpec``) over ``scenario`` (a
     terrain spec of ``mtbmj roll``) at ``speed_m_per_s``; ``duration`` defaults to the time for both
     wheels to cross the feature and settle; ``drive`` "rider" (a speed controller within a rider's
@@ -721,10 +738,10 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
     sag, "pitch", "rider"), ``rear_tire=False`` the rear wheel lifted (needs "pitch" locked), see
     ``prepare``; ``overrides`` change bike keys (``{"rider.mass_kg": 78}``) and the fork's or the
     shock's configuration keys (``{"fork.set": {"fork.spring.air_pressure_psi": 60}}``), see
-    ``mtbmj.bike.spec.overridden``."""
+    ``mtbmj.bike.spec.overridden``; ``seated`` the rider seated, held rigid on the frame (``prepare``)."""
     _check(speed_m_per_s, duration)
     p = guard.prepared("bike", lambda: prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire,
-                                               overrides),
+                                               overrides, seated),
                        model_of=lambda p: p.bike.model)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.timestep, 1.0 / p.timestep)
@@ -740,6 +757,8 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
             "integrator": p.fork_setup.integrator,
             "callback": callback_kind(p.callback), "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
             "real_time_factor": duration / wall if wall > 0 else None}
+    if seated:
+        info["seated"] = True
     if p.lock or not p.rear_tire_on:
         info["locked"] = list(p.lock)
         info["rear_tire"] = p.rear_tire_on

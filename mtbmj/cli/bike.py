@@ -28,7 +28,7 @@ def cmd_bike(args) -> int:
     result = Progress(f"bike {args.bike} over {args.scenario}", not args.quiet).around(
         lambda progress: run_bike(args.bike, args.scenario, args.speed, args.duration, args.drive, args.start_m,
                                   progress, lock=tuple(k.strip() for k in args.lock.split(",")) if args.lock else (),
-                                  rear_tire=not args.lift_rear, overrides=overrides))
+                                  rear_tire=not args.lift_rear, overrides=overrides, seated=args.seated))
     written = result.write(args.out, figure=not args.no_figure, video=args.video, ride=args.ride)
     print(f"{result.headline()}; {result.info['real_time_factor']:.2f}x real time; wrote {len(written)} files to "
           f"{args.out}")
@@ -82,6 +82,8 @@ def add_parser(subparsers) -> None:
     p.add_argument("--lift-rear", action="store_true", dest="lift_rear",
                    help="take the rear tire off: the bike on its front wheel alone (needs --lock pitch; with "
                         "--lock rear,pitch,rider it is the rolling front end's rig)")
+    p.add_argument("--seated", action="store_true",
+                   help="the rider seated on the saddle, held rigid on the frame (rider.seated_com_mm)")
     add_bike_sets(p)
     add_out(p, "out/bike")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")

@@ -65,13 +65,16 @@ class SeatedBike:
             raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider; a seat slam is read through "
                               f"the bike with the rider's centre of mass on the saddle (e.g. rider.seated_com_mm = "
                               f"[-90, 920])")
-        seated = dataclasses.replace(
-            spec, rider=dataclasses.replace(spec.rider, com=spec.rider.seated_com),
-            fork_overrides={**spec.fork_overrides, **NO_FRICTION}, shock_overrides={**spec.shock_overrides, **NO_FRICTION})
+        frictionless = dataclasses.replace(spec, fork_overrides={**spec.fork_overrides, **NO_FRICTION},
+                                           shock_overrides={**spec.shock_overrides, **NO_FRICTION})
         self.spec = spec
-        self.prepared = bike_run.prepare(seated, "flat", COAST_M_PER_S, drive="coast", callback="python")
+        # the seated static equilibrium, the rider's two coordinates held at the seat (bike.run.prepare)
+        self.prepared = bike_run.prepare(frictionless, "flat", COAST_M_PER_S, drive="coast", callback="python",
+                                         seated=True)
         self.ref = Reference(self.prepared)
-        self.q = self._equilibrium()
+        b = self.prepared.bike
+        self.q = np.array([self.prepared.initial_qpos[b.qpos_index(n)]
+                           for n in ("bike_x", "bike_z", "pitch", "fork", "swingarm")])
         self.M, self.K, self.C = self._linear()
         pl = self.ref.planar
         w, dw = pl.wheel_travel(self.q[4])
@@ -95,23 +98,6 @@ class SeatedBike:
         y = np.concatenate((q, qd, np.zeros(self.ref.nf + self.ref.ns)))
         Q, out = self.ref.forces(0.0, y)
         return (Q + out["static"])[:N]
-
-    def _equilibrium(self) -> np.ndarray:
-        from scipy.optimize import fsolve
-
-        b = self.prepared.bike
-        start = np.array([self.prepared.initial_qpos[b.qpos_index(n)] for n in ("bike_z", "pitch", "fork", "swingarm")])
-        moving = np.zeros(N)
-        moving[0] = COAST_M_PER_S
-
-        def residual(u):
-            return self._full(np.concatenate(([0.0], u)), moving)[1:]
-
-        u = fsolve(residual, start, full_output=True, xtol=1e-13)[0]
-        if not np.all(np.isfinite(u)) or np.max(np.abs(residual(u))) > 1e-6:
-            raise MtbmjError(f"{self.spec.name}: no seated static equilibrium (the springs cannot carry the seated "
-                             f"rider at rider.seated_com_mm)")
-        return np.concatenate(([0.0], u))
 
     def _linear(self):
         q0 = self.q
