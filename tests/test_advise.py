@@ -279,3 +279,37 @@ def test_a_ride_too_short_is_refused_in_one_line(tmp_path, capsys):
     assert [line for line in err if line.startswith("mtbmj: error")] == [
         "mtbmj: error: short.SST: 10.0 s of ride cannot support advice (at least 15 s)"]
     assert not out.exists()
+
+
+def test_no_candidate_leaves_what_the_part_allows(tmp_path):
+    """Candidates stay within the part: clicks within the measured range (none past the last), a
+    value within what any part has (``mtbmj.config.PLAUSIBLE``), no negative volume spacer."""
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.config import PLAUSIBLE
+
+    bike = tmp_path / "edge.toml"
+    bike.write_text('''base = "trail"
+[fork]
+[fork.set]
+"fork.spring.model" = "air"
+"fork.spring.air_pressure_psi" = 390.0
+"fork.spring.tokens" = 0
+[shock]
+[shock.set]
+"fork.damper.model" = "clicks"
+"fork.damper.velocity_mm_per_s" = [0.0, 100.0, 500.0]
+"fork.damper.compression_clicks_measured" = [0, 10]
+"fork.damper.compression_force_N" = [[0.0, 300.0, 900.0], [0.0, 600.0, 1500.0]]
+"fork.damper.rebound_clicks_measured" = [0, 10]
+"fork.damper.rebound_force_N" = [[0.0, 300.0, 900.0], [0.0, 600.0, 1500.0]]
+"fork.damper.compression_clicks" = 10
+"fork.damper.rebound_clicks" = 1
+''')
+    found = {a.key: a for a in advise.adjusters(spec_mod.load(str(bike)))}
+    pressure = found["fork.spring.air_pressure_psi"]
+    assert pressure.up is None and pressure.down == pytest.approx(351.0)  # 429 psi is past 400, what forks hold
+    assert PLAUSIBLE["fork.spring.air_pressure_psi"][1] == 400.0
+    assert found["fork.spring.tokens"].down is None and found["fork.spring.tokens"].up == 1.0
+    comp, reb = found["fork.damper.compression_clicks"], found["fork.damper.rebound_clicks"]
+    assert comp.up is None and comp.down == 8.0  # at the last measured click: no more
+    assert reb.down == 0.0 and reb.up == 3.0  # one click from the end: to the end, not past it
