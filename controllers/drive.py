@@ -102,6 +102,40 @@ def wheel_forces(f: float, fxf: float, fzf: float, df: float, fxr: float, fzr: f
     return dxf, dzf, tf, dxr, dzr, tr
 
 
+def chain_pull(torque: float, ax: float, az: float, ring: float, cog: float):
+    """(fx, fz, px, pz) in the frame's coordinates (origin the bottom bracket): the chain's pull
+    (fx, fz) on the rear axle at (ax, az), and the point (px, pz) on the chainring where its
+    reaction -(fx, fz) acts on the frame, when the rear tyre's ground couple about its axle
+    ``torque`` (world y; negative when the ground pushes the bike forward: a drive) is made through
+    the chain. The chain's upper run is the outer tangent of the cog (radius ``cog`` about the
+    axle) and the chainring (radius ``ring`` about the bottom bracket) above their centres; its
+    tension T = -torque / cog balances the ground's couple on the wheel, so the swingarm gets the
+    pull at the axle and no couple; the chainring's torque is reacted by the frame (the crank held
+    by the rider's legs on it). Zero for a braking couple (torque >= 0: the caliper reacts it) or
+    without a chain (cog <= 0)."""
+    if torque >= 0.0 or cog <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    dx = -ax  # from the cog's centre to the chainring's
+    dz = -az
+    length = (dx * dx + dz * dz) ** 0.5
+    ux = dx / length
+    uz = dz / length
+    c = (cog - ring) / length  # the tangent points' normal n: n . d = cog - ring, n above the centres
+    sq = (1.0 - c * c) ** 0.5
+    px = -uz
+    pz = ux
+    if pz < 0.0:
+        px = -px
+        pz = -pz
+    nx = c * ux + sq * px
+    nz = c * uz + sq * pz
+    tx = dx + (ring - cog) * nx  # the run from the cog's tangent point to the chainring's
+    tz = dz + (ring - cog) * nz
+    tl = (tx * tx + tz * tz) ** 0.5
+    tension = -torque / cog
+    return tension * tx / tl, tension * tz / tl, ring * nx, ring * nz
+
+
 @dataclass(frozen=True)
 class Drive:
     """A drive mode and its limits (see the module doc); ``kv`` (N s/m) is the velocity
@@ -124,4 +158,4 @@ class Drive:
         return drive_force(v_ref, v, self.kv, self.push, self.power, self.brake)
 
 
-__all__ = ["Drive", "drive_force", "wheel_forces", "MODES", "RIDER_PUSH_N", "RIDER_POWER_W", "RIDER_BRAKE_N"]
+__all__ = ["Drive", "chain_pull", "drive_force", "wheel_forces", "MODES", "RIDER_PUSH_N", "RIDER_POWER_W", "RIDER_BRAKE_N"]

@@ -11,8 +11,13 @@ import mujoco
 import numpy as np
 
 from mtbmj.bike.model import Bike
-from mtbmj.controllers.drive import Drive, wheel_forces
+from mtbmj.controllers.drive import Drive, chain_pull, wheel_forces
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, PatchSearch, RadialTire
+
+
+def rot_apply(xmat, x: float, z: float) -> np.ndarray:
+    """The frame-coordinate point (x, 0, z) turned into world axes by the body's ``xmat`` (9,)."""
+    return np.array([xmat[0] * x + xmat[2] * z, xmat[3] * x + xmat[5] * z, xmat[6] * x + xmat[8] * z])
 
 
 class BikeCallback:
@@ -43,6 +48,8 @@ class BikeCallback:
         self.a_shock_probe = a("shock_force_probe")
         self.sites = (int(m.site("front_axle").id), int(m.site("rear_axle").id))
         self.frame = int(m.body("frame").id)
+        # the drive through the chain (chainring, cog pitch radii, m), or a hub drive (None)
+        self.chain = bike.spec.drive.get("chain_m")
         # the legs and arms: (frame site, rider site, k, c, rest), on the rider's two joints
         self.limbs = tuple((int(m.site(lb.frame_site).id), int(m.site(lb.rider_site).id), lb.stiffness, lb.damping,
                             lb.rest) for lb in bike.limbs)
@@ -78,11 +85,14 @@ class BikeCallback:
             search.reset()
         self.next_refresh, self.last_x = [-math.inf, -math.inf], [math.inf, math.inf]
 
+    def rear_axle(self, d):
+        """The rear axle in the frame's coordinates (x, y, z; origin the bottom bracket)."""
+        rot = d.xmat[self.frame].reshape(3, 3)
+        return rot.T @ (d.site_xpos[self.sites[1]] - d.xpos[self.frame])
+
     def shock_state(self, d):
         """(w, dw/dphi) from MuJoCo's kinematics: the rear axle in the frame's coordinates."""
-        rot = d.xmat[self.frame].reshape(3, 3)
-        rel = d.site_xpos[self.sites[1]] - d.xpos[self.frame]
-        local = rot.T @ rel
+        local = self.rear_axle(d)
         return local[2] - self.rear_z0, -(local[0] - self.pivot_x)
 
     def limb_forces(self, d) -> tuple[float, float]:
@@ -169,9 +179,26 @@ class BikeCallback:
         ctrl[self.a_ground[2]] = ground[2]  # the couples the fork lower and the swingarm react
         ctrl[self.a_ground[3]] = ground[5]
         xfrc = d.xfrc_applied
+        pull = (0.0, 0.0)
+        if self.chain is not None:  # the chain makes the rear couple: its pull on the axle, its reaction on the frame
+            local = self.rear_axle(d)
+            cx, cz, px, pz = chain_pull(ground[5], local[0], local[2], self.chain[0], self.chain[1])
+            if cx != 0.0 or cz != 0.0:
+                rot = d.xmat[self.frame].reshape(3, 3)
+                pull = (rot[0, 0] * cx + rot[0, 2] * cz, rot[2, 0] * cx + rot[2, 2] * cz)
+                ground = ground[:5] + (0.0,)
+                ctrl[self.a_ground[3]] = 0.0
+            # on the frame at the chainring's tangent point: -pull, and its moment about the frame's centre of mass
+            at = d.xpos[self.frame] + rot_apply(d.xmat[self.frame], px, pz) - d.xipos[self.frame]
+            frame = xfrc[self.frame]
+            frame[0], frame[1], frame[2] = -pull[0], 0.0, -pull[1]
+            frame[3], frame[4], frame[5] = 0.0, at[2] * -pull[0] - at[0] * -pull[1], 0.0
         for k, (fx, fz, _) in enumerate(radial):
             wheel = xfrc[self.wheels[k]]
             wheel[0], wheel[1], wheel[2] = fx + ground[3 * k], 0.0, fz + ground[3 * k + 1]
+            if k == 1:
+                wheel[0] += pull[0]
+                wheel[2] += pull[1]
             part = xfrc[self.reacting[k]]
             part[3], part[4], part[5] = 0.0, ground[3 * k + 2], 0.0
 

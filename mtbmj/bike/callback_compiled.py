@@ -69,7 +69,7 @@ INT_WIDTH = 54
 # float row of a slot
 (F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_NEXT0, F_NEXT1, F_LAST0, F_LAST1,
  F_REFRESH_DISTANCE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE, F_LIMB_K0, F_LIMB_C0, F_LIMB_REST0,
- F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1, F_RADIUS) = range(22)
+ F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1, F_RADIUS, F_CHAIN_RING, F_CHAIN_COG) = range(24)
 FLOAT_WIDTH = 24
 
 REGISTRY = Registry("mtbmj_bike_registry_v5", SLOTS,
@@ -131,6 +131,7 @@ if _numba is not None:
     _drive_force = law_function(_drive.drive_force)
     law_function(_drive.at_patch)
     _wheel_forces = law_function(_drive.wheel_forces)
+    _chain_pull = law_function(_drive.chain_pull)
     law_function(_spec.stroke_piece)
     _leverage_ratio = law_function(_spec.leverage_ratio)
     _leverage_stroke = law_function(_spec.leverage_stroke)
@@ -348,6 +349,35 @@ if _numba is not None:
         xfrc[o + 3] = 0.0
         xfrc[o + 4] = tf
         xfrc[o + 5] = 0.0
+        if F[F_CHAIN_COG] > 0.0:  # the chain makes the rear couple (BikeCallback; controllers.drive.chain_pull)
+            fr = I[R_FRAME]
+            m9 = 9 * fr
+            r0 = site_xpos[3 * I[R_SITE1]] - xpos[3 * fr]
+            r1 = site_xpos[3 * I[R_SITE1] + 1] - xpos[3 * fr + 1]
+            r2 = site_xpos[3 * I[R_SITE1] + 2] - xpos[3 * fr + 2]
+            ax = xmat[m9] * r0 + xmat[m9 + 3] * r1 + xmat[m9 + 6] * r2
+            az = xmat[m9 + 2] * r0 + xmat[m9 + 5] * r1 + xmat[m9 + 8] * r2
+            cx, cz, px, pz = _chain_pull(tr, ax, az, F[F_CHAIN_RING], F[F_CHAIN_COG])
+            pull_x = 0.0
+            pull_z = 0.0
+            if cx != 0.0 or cz != 0.0:
+                pull_x = xmat[m9] * cx + xmat[m9 + 2] * cz
+                pull_z = xmat[m9 + 6] * cx + xmat[m9 + 8] * cz
+                tr = 0.0
+                ctrl[I[R_A_CR]] = 0.0
+                o = 6 * I[R_WHEEL1]
+                xfrc[o] += pull_x
+                xfrc[o + 2] += pull_z
+            # on the frame at the chainring's tangent point: -pull and its moment about the frame's centre of mass
+            at_x = xpos[3 * fr] + xmat[m9] * px + xmat[m9 + 2] * pz - xipos[3 * fr]
+            at_z = xpos[3 * fr + 2] + xmat[m9 + 6] * px + xmat[m9 + 8] * pz - xipos[3 * fr + 2]
+            o = 6 * fr
+            xfrc[o] = -pull_x
+            xfrc[o + 1] = 0.0
+            xfrc[o + 2] = -pull_z
+            xfrc[o + 3] = 0.0
+            xfrc[o + 4] = at_z * -pull_x - at_x * -pull_z
+            xfrc[o + 5] = 0.0
         o = 6 * I[R_REACT1]
         xfrc[o + 3] = 0.0
         xfrc[o + 4] = tr
@@ -486,6 +516,9 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
         floats[[F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE]] = [drive.kv, drive.push, drive.power,
                                                                           drive.brake]
         floats[F_RADIUS] = rear.radius
+        chain = bike.spec.drive.get("chain_m")  # (chainring, cog) pitch radii, m; 0: a hub drive
+        if chain is not None:
+            floats[[F_CHAIN_RING, F_CHAIN_COG]] = chain
         wheel_ints = np.zeros(2 * WI, dtype=np.int64)
         wheel_floats = np.zeros(2 * WF, dtype=np.float64)
         for k, tire in enumerate((front, rear)):

@@ -133,6 +133,11 @@ KEYS: dict[str, tuple[str, str, object]] = {
     "drive.push_N": ("The rider drive's largest forward force at the rear tyre.", ">= 0", (100.0, 2500.0)),
     "drive.power_W": ("The rider drive's largest power.", ">= 0", (100.0, 2500.0)),
     "drive.brake_N": ("The rider drive's largest braking force.", ">= 0", (100.0, 2500.0)),
+    "drive.chainring_teeth": ("The chainring's teeth: with drive.cog_teeth, the drive goes through the chain (its "
+                              "pull on the rear axle along the upper run, its reaction on the frame at the "
+                              "chainring), so anti-squat acts; without them, a hub drive reacted by the swingarm.",
+                              "20-60", (22.0, 52.0)),
+    "drive.cog_teeth": ("The cog's teeth (with drive.chainring_teeth).", "9-60", (9.0, 52.0)),
     "drive.traction": ("The drive's force at most this times the rear tyre's load.", ">= 0", (0.3, 1.5)),
 }
 

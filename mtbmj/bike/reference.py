@@ -22,8 +22,11 @@ the legs' and arms' spring-dampers along their lines; each tire's radial force a
 terrain's contact patches found afresh at every evaluation from the exact closest points); the
 drive's and the brakes' forces at the contact patches (``controllers.drive.wheel_forces``): each a
 force at its axle and its couple about the axle on the fork lower (the pitch) or the swingarm (the
-pitch and phi). This shares the callback's choice of where the forces act; the moment balance of
-tests/test_bike_drive_moment.py checks that choice against physics.
+pitch and phi); with a chain (``drive.chainring_teeth``, ``drive.cog_teeth``) the drive's couple is
+the chain's instead: its pull on the rear axle along the upper run and its reaction on the frame at
+the chainring (``controllers.drive.chain_pull``). This shares the callback's choice of where the
+forces act; the moment balance of tests/test_bike_drive_moment.py and the virtual work of
+tests/test_bike_chain.py check that choice against physics.
 """
 from __future__ import annotations
 
@@ -34,7 +37,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from mtbmj.bike.model import LOWER_INERTIA, frame_body
-from mtbmj.controllers.drive import wheel_forces
+from mtbmj.controllers.drive import chain_pull, wheel_forces
 from mtbmj.errors import RunError
 
 NQ = 7
@@ -190,6 +193,7 @@ class Reference:
         from mtbmj.rolling.tire import StraightStretches
 
         self.straight = StraightStretches(p.terrain, self.front_tire.radius + self.front_tire.margin)
+        self.chain = b.spec.drive.get("chain_m")  # (chainring, cog) pitch radii, m; None: a hub drive
         self.nf = 1 if self.fork.has_state else 0
         self.ns = 1 if self.shock.has_state else 0
 
@@ -243,8 +247,17 @@ class Reference:
             ground = wheel_forces(f, fxf, fzf, df, fxr, fzr, dr, self.traction, self.rear_tire.radius)
             pl.apply(Q, q, axles[0], ground[0], ground[1])
             pl.apply(Q, q, axles[1], ground[3], ground[4])
-            Q[2] -= ground[2] + ground[5]
-            Q[4] += ground[5]
+            couple = ground[5]
+            if self.chain is not None:  # the chain makes the rear couple (controllers.drive.chain_pull)
+                cx, cz, px, pz = chain_pull(couple, axles[1][0], axles[1][1], self.chain[0], self.chain[1])
+                if cx != 0.0 or cz != 0.0:
+                    c, sn = math.cos(q[2]), math.sin(q[2])
+                    wx, wz = c * cx - sn * cz, sn * cx + c * cz
+                    pl.apply(Q, q, axles[1], wx, wz)  # the pull on the rear axle
+                    pl.apply(Q, q, (px, pz, 0, 0.0, 0.0), -wx, -wz)  # its reaction on the frame at the chainring
+                    couple = 0.0
+            Q[2] -= ground[2] + couple
+            Q[4] += couple
         out["drive"] = (ground[0] + ground[3], ground[1] + ground[4])
         out["static"] = h  # gravity less the velocity terms
         return Q, out

@@ -425,7 +425,7 @@ KNOWN = {
     "rider": {"mass_kg", "limbs_share_percent", "com_mm", "pitch_inertia_kg_m2", "pedals_mm", "bars_mm",
               "seated_com_mm", "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
               "arm_stiffness_N_per_mm", "arm_damping_N_s_per_m"},
-    "drive": {"push_N", "power_W", "brake_N", "traction"},
+    "drive": {"push_N", "power_W", "brake_N", "traction", "chainring_teeth", "cog_teeth"},
     "sensors": set(SENSOR_KEYS),
     "geometry": {"head_angle_deg", "wheelbase_mm", "chainstay_mm", "bb_drop_mm", "fork_offset_mm", "reach_mm",
                  "stack_mm", "head_tube_mm", "fork_length_mm"},
@@ -625,6 +625,18 @@ def load(ref: str, overrides=None) -> BikeSpec:
     for key in ("push_N", "power_W", "brake_N", "traction"):
         if key in table.get("drive", {}):
             drive[key] = _number(table, "drive", key, nonneg=True)
+    teeth = [k for k in ("chainring_teeth", "cog_teeth") if k in table.get("drive", {})]
+    if teeth:  # the drive through the chain (controllers.drive.chain_pull)
+        if len(teeth) == 1:
+            other = "cog_teeth" if teeth[0] == "chainring_teeth" else "chainring_teeth"
+            raise ConfigError(f"drive.{other}: needed with drive.{teeth[0]} (the chain runs from the chainring to the "
+                              f"cog)")
+        for key, (low, high) in (("chainring_teeth", (20, 60)), ("cog_teeth", (9, 60))):
+            n = table["drive"][key]
+            if isinstance(n, bool) or not isinstance(n, int) or not low <= n <= high:
+                raise ConfigError(f"drive.{key}: must be a whole number of teeth within {low}-{high}, got {n!r}")
+        drive["chain_m"] = (_linkage.sprocket_radius(table["drive"]["chainring_teeth"]),
+                            _linkage.sprocket_radius(table["drive"]["cog_teeth"]))
     warn(keys_mod.warnings({**table, "bike": {k: v for k, v in table["bike"].items() if k not in derived},
                             **({"linkage": hardpoints} if isinstance(hardpoints, dict) else {})}))
     spec = BikeSpec(
