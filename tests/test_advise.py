@@ -313,3 +313,23 @@ def test_no_candidate_leaves_what_the_part_allows(tmp_path):
     comp, reb = found["fork.damper.compression_clicks"], found["fork.damper.rebound_clicks"]
     assert comp.up is None and comp.down == 8.0  # at the last measured click: no more
     assert reb.down == 0.0 and reb.up == 3.0  # one click from the end: to the end, not past it
+
+
+def test_a_recorded_setting_that_crashes_on_the_terrain_is_refused(tmp_path, monkeypatch, capsys):
+    """The rider came home; a model that crashes their own setting on the terrain it found cannot
+    predict a change: one line, exit 2, nothing written."""
+    real = advise.simulate
+
+    def crashing(bike, overrides, terrain, speed, duration, label, lead_s):
+        run = real(bike, overrides, terrain, speed, min(duration, 0.3), label, lead_s)
+        run.crash = "crashed: over the bars at 0.250 s (pitch -45.1 deg)"
+        return run
+
+    monkeypatch.setattr(advise, "simulate", crashing)
+    bike, fork_mm, rear_mm, t = ride(tmp_path, fork_reb=2500.0)  # the packing ride, whose reconstruction checks
+    sst = write_sst(tmp_path / "ride.SST", fork_mm, rear_mm)
+    out = tmp_path / "advice"
+    assert main(["advise", str(sst), "--bike", str(bike), "--workers", "1", "--out", str(out)]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("mtbmj: error")]
+    assert len(err) == 1 and "the recorded setting crashed: over the bars at 0.250 s" in err[0], err
+    assert not out.exists()

@@ -21,7 +21,7 @@ def cmd_advise(args) -> int:
     record = telemetry.read_ride(path, **decoding(args))
     warn(telemetry.quality(record))
     result = Progress("advise").around(
-        lambda progress: advise.advise(record, args.bike, over or None, args.duration, progress))
+        lambda progress: advise.advise(record, args.bike, over or None, args.duration, progress, args.workers))
     written = result.write(args.out)
     checks = result.reconstruction["checks"]
     print(f"reconstruction: speed {result.reconstruction['speed_m_per_s']:.2f} m/s; check: front reproduced within "
@@ -30,6 +30,18 @@ def cmd_advise(args) -> int:
     print(f"{result.line()}; {len(result.candidates)} candidates simulated in {result.wall_s:.0f} s; "
           f"wrote {', '.join(p.name for p in written)} to {args.out}")
     return 0
+
+
+def _workers(text: str) -> int:
+    import argparse
+
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number of processes, at least 1, got {text!r}")
+    return n
 
 
 def add_parser(sub) -> None:
@@ -44,6 +56,8 @@ def add_parser(sub) -> None:
     p.add_argument("--rider-kg", type=float, metavar="KG", help="the whole rider's mass (rider.mass_kg)")
     add_bike_sets(p)  # the settings as ridden, where they differ from the bike file
     p.add_argument("--duration", type=float, metavar="S", help="advise on the ride's first S seconds only")
+    p.add_argument("--workers", type=_workers, default=2, metavar="N",
+                   help="processes the candidate runs spread over (default 2)")
     p.add_argument("--fork-max-mm", type=float, help="fork travel the recording's sensor spans (default: the bike's)")
     p.add_argument("--shock-max-mm", type=float, help="shock stroke the sensor spans (default: the bike's)")
     add_out(p, "out/advise")

@@ -44,8 +44,9 @@ makers' "an adjuster that moves less than about 15 % of the force does little"):
 whose improved rules' metrics all move less than it is marked so (``confident`` false: try it and
 record again).
 
-**When a ride cannot support advice** (:class:`AdviseError`): shorter than ``MIN_SECONDS``, or its
-reconstruction's own check failed (the rear predicted worse than ``MAX_REAR_MISS_PERCENT`` % of the
+**When a ride cannot support advice** (:class:`AdviseError`): shorter than ``MIN_SECONDS``, its
+recorded setting crashing on the reconstructed terrain (a crash the rider did not have: the terrain
+or the model is wrong there), or its reconstruction's own check failed (the rear predicted worse than ``MAX_REAR_MISS_PERCENT`` % of the
 travel it used, or fewer than ``MIN_CHECKED_PERCENT`` % of the samples checked).
 """
 from __future__ import annotations
@@ -557,6 +558,9 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
             runs[i] = simulate(*job)
             step()
     base = runs[0]
+    if base.crash:
+        raise AdviseError(f"{record.name}: the recorded setting {base.crash} on the ride's reconstructed terrain: the "
+                          f"model cannot ride this ride as reconstructed, so it cannot predict a change")
     cands = [(a, d, v, run) for (a, d, v), run in zip(todo, runs[1:])]
     t = rec.t
     keep = t - t[0] <= ride_s
