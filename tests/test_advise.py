@@ -1,14 +1,14 @@
 """``mtbmj advise``: setup advice from a ride (mtbmj/ride/advise.py), against rides made here.
 
-The rides are made by a bike integrated in this file (scipy's DOP853, its own equations): each end
-a sprung and an unsprung mass, the fork's spring, bumper, hard stop and two-rate damper acting
-along the steering axis, the shock's through a constant leverage ratio, point-contact tyres that
-leave the ground; a hidden profile of rocks ridden at a known speed; both ends' travel written as
-an SST version-3 file in integer counts through the [sensors] calibration of the bike file
-(the law of cosines inverted here). One ride is made with the fork far too soft (it bottoms
-several times), one with the fork's rebound far too slow (it packs down). The advice must move
-the right setting the right way, and what it predicts at the new setting must agree with this
-file's bike ridden again at that setting.
+The rides are made by a bike integrated in this file (scipy's DOP853, its own equations): each end a
+sprung and an unsprung mass, the fork's spring, bumper, hard stop and two-rate damper acting along
+the steering axis, the shock's through a constant leverage ratio, point-contact tyres that leave the
+ground; a hidden profile of rocks ridden at a known speed; both ends' travel written as an SST
+version-3 file in integer counts through the [sensors] calibration of the bike file (the law of
+cosines inverted in tests/test_telemetry_sensors.py, not by the reader). One ride is made with the
+fork far too soft (it bottoms several times), one with the fork's rebound far too slow (it packs
+down). The advice must move the right setting the right way, and what it predicts at the new setting
+must agree with this file's bike ridden again at that setting.
 
 Shared with the package, and so not tested here: the laws' forms and values (read from the same
 bike file: inputs, not results), the metrics' definitions (``advise.ride_metrics``: written out in
@@ -19,10 +19,6 @@ from __future__ import annotations
 
 import json
 import math
-import re
-import shutil
-import struct
-import subprocess
 
 import numpy as np
 import pytest
@@ -36,7 +32,6 @@ SPEED = 6.0
 RATE = 1000
 SECONDS = 20.0
 RATIO = 2.5
-COUNTS = 4096
 FORK_ARM, FORK_MAX = 150.0, 260.0
 ARM1, ARM2, SHOCK_MAX = 90.0, 190.0, 215.0
 
@@ -108,22 +103,15 @@ def law(k, travel, comp, reb, bumper_len=0.008, bumper_force=3000.0, stop=2e7):
 def ride(path, fork_rate=12.0, fork_comp=500.0, fork_reb=700.0, seconds=SECONDS):
     """(fork travel mm, rear wheel travel mm, time s) of this file's bike over the hidden profile."""
     from mtbmj.bike import run, spec as spec_mod
-    from mtbmj.bike.model import frame_body
+    from test_reconstruct import quarter_car_masses
 
     bike = path / "bike.toml"
     bike.write_text(bike_text(fork_rate, fork_comp, fork_reb))
     spec = spec_mod.load(str(bike))
     fork_setup, _ = run.setups(spec)
     tyre_k, radius, g = fork_setup.tire.values(1).rate, fork_setup.tire_radius, fork_setup.gravity
-    m_frame, c_frame, _ = frame_body(spec)
-    r = spec.rider
-    bodies = [(m_frame, c_frame[0]), (r.mass, r.com[0]), (spec.fork_lower_mass + spec.front_wheel_mass, spec.front_axle[0]),
-              (spec.rear_wheel_mass, spec.rear_axle[0]), (spec.swingarm_mass, 0.5 * (spec.pivot[0] + spec.rear_axle[0]))]
-    total = sum(m for m, _ in bodies)
-    share = (sum(m * x for m, x in bodies) / total - spec.rear_axle[0]) / (spec.front_axle[0] - spec.rear_axle[0])
     wb = spec.front_axle[0] - spec.rear_axle[0]
-    mf, mr = spec.fork_lower_mass + spec.front_wheel_mass, spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
-    Mf, Mr = total * share - mf, total * (1 - share) - mr
+    Mf, mf, Mr, mr = quarter_car_masses(spec)  # the same statics as the reconstruction's made ride
     sa = math.sin(spec.head_angle)
     h = hidden_profile()
     t = np.arange(int(seconds * RATE)) / RATE
@@ -149,16 +137,13 @@ def ride(path, fork_rate=12.0, fork_comp=500.0, fork_reb=700.0, seconds=SECONDS)
 
 
 def write_sst(path, fork_mm, rear_mm):
-    """SST version 3 (16-byte header, then fork and shock uint16 counts) through the bike file's
-    sensors: the fork's isosceles triangle and the shock's general one, inverted here."""
-    start = math.acos(FORK_MAX / (2 * FORK_ARM))
-    fork = (np.arccos((FORK_MAX - np.clip(fork_mm, 0, None)) / (2 * FORK_ARM)) - start) * COUNTS / (2 * np.pi)
-    g0 = math.acos((ARM1 ** 2 + ARM2 ** 2 - SHOCK_MAX ** 2) / (2 * ARM1 * ARM2))
-    c = SHOCK_MAX - np.clip(rear_mm, 0, None) / RATIO
-    shock = (g0 - np.arccos((ARM1 ** 2 + ARM2 ** 2 - c * c) / (2 * ARM1 * ARM2))) * COUNTS / (2 * np.pi)
-    counts = np.column_stack((np.rint(fork), np.rint(shock))).astype("<u2")
-    path.write_bytes(struct.pack("<3sBHHq", b"SST", 3, RATE, 0, 1_700_000_000) + counts.tobytes())
-    return path
+    """SST version 3 through the bike file's sensors (test_telemetry_sensors.write_v3: the law of
+    cosines inverted), the shock's stroke the rear's travel over the constant leverage ratio."""
+    from test_telemetry_sensors import write_v3
+
+    sensors = {"fork_arm_mm": FORK_ARM, "fork_max_mm": FORK_MAX, "shock_arm1_mm": ARM1, "shock_arm2_mm": ARM2,
+               "shock_max_mm": SHOCK_MAX}
+    return write_v3(path, np.clip(fork_mm, 0, None), np.clip(rear_mm, 0, None) / RATIO, sensors, RATE)
 
 
 def generated_metrics(bike, fork_mm, rear_mm, t):
@@ -223,30 +208,18 @@ def test_a_rebound_far_too_slow_gets_less_rebound_damping(tmp_path):
 
 @pytest.mark.slow
 def test_the_report_opens_in_headless_chromium(soft, tmp_path):
-    from test_report_browser import CHROMIUM, PROBE
+    from test_report_browser import CHROMIUM, rendered
 
     if not CHROMIUM.exists():
         pytest.skip("headless Chromium not installed (/usr/bin/chromium)")
     _, advice, _, out = soft
-    probe = tmp_path / "probe.html"
-    probe.write_text((out / "advice.html").read_text().replace("</body>", PROBE + "</body>"))
-    profile = tmp_path / "profile"
-    command = [str(CHROMIUM), "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-               "--disable-component-update", "--disable-sync", "--no-first-run", f"--user-data-dir={profile}",
-               "--host-resolver-rules=MAP * ~NOTFOUND", "--virtual-time-budget=5000", "--dump-dom", probe.as_uri()]
-    try:
-        done = subprocess.run(command, capture_output=True, text=True, timeout=60)
-    finally:
-        shutil.rmtree(profile, ignore_errors=True)
-    match = re.search(r'<pre id="render-check">(.*?)</pre>', done.stdout, re.S)
-    assert match, f"no probe output (exit {done.returncode}): {done.stderr[-500:]}"
-    result = json.loads(match.group(1).replace("&quot;", '"').replace("&amp;", "&"))
+    result, dom = rendered(out / "advice.html", tmp_path)
     (image,) = result["imgs"]
     assert image["id"] == "histograms" and image["inline"] and image["width"] > 500 and image["height"] > 200
     assert result["resources"] == []
     assert result["tables"]["candidates"]["rows"] == 1 + len(advice["candidates"])
     assert result["tables"]["changes"]["visible"] and result["tables"]["changes"]["rows"] > 5
-    assert "raise the fork spring rate from 5 to 5.5" in done.stdout
+    assert "raise the fork spring rate from 5 to 5.5" in dom
 
 
 def test_the_figure_shows_both_ends_before_and_after():

@@ -60,26 +60,33 @@ def hidden_profile(seed=3):
     return lambda s: np.interp(s, grid, table)  # on a 1 mm grid: the bumps' chords sag < 0.01 mm
 
 
-def ride(tmp_path):
-    from mtbmj.bike import run, spec as spec_mod
+def quarter_car_masses(spec):
+    """(front sprung, front unsprung, rear sprung, rear unsprung) kg of a bike file's masses: the
+    weight shared between the axles by moments, the unsprung the fork lower and front wheel, the
+    rear wheel and half the swingarm."""
     from mtbmj.bike.model import frame_body
 
-    path = tmp_path / "bike.toml"
-    path.write_text(BIKE)
-    spec = spec_mod.load(str(path))
-    fork_setup, _ = run.setups(spec)
-    tyre_k, radius, g = fork_setup.tire.values(1).rate, fork_setup.tire_radius, fork_setup.gravity
-    # the weight shared between the axles by moments (the masses are the bike file's)
     m_frame, c_frame, _ = frame_body(spec)
     r = spec.rider
     bodies = [(m_frame, c_frame[0]), (r.mass, r.com[0]), (spec.fork_lower_mass + spec.front_wheel_mass, spec.front_axle[0]),
               (spec.rear_wheel_mass, spec.rear_axle[0]), (spec.swingarm_mass, 0.5 * (spec.pivot[0] + spec.rear_axle[0]))]
     total = sum(m for m, _ in bodies)
     xc = sum(m * x for m, x in bodies) / total
-    wb = spec.front_axle[0] - spec.rear_axle[0]
-    share = (xc - spec.rear_axle[0]) / wb
+    share = (xc - spec.rear_axle[0]) / (spec.front_axle[0] - spec.rear_axle[0])
     mf, mr = spec.fork_lower_mass + spec.front_wheel_mass, spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
-    Mf, Mr = total * share - mf, total * (1 - share) - mr
+    return total * share - mf, mf, total * (1 - share) - mr, mr
+
+
+def ride(tmp_path):
+    from mtbmj.bike import run, spec as spec_mod
+
+    path = tmp_path / "bike.toml"
+    path.write_text(BIKE)
+    spec = spec_mod.load(str(path))
+    fork_setup, _ = run.setups(spec)
+    tyre_k, radius, g = fork_setup.tire.values(1).rate, fork_setup.tire_radius, fork_setup.gravity
+    wb = spec.front_axle[0] - spec.rear_axle[0]
+    Mf, mf, Mr, mr = quarter_car_masses(spec)
     sa = math.sin(spec.head_angle)
     kf, cf, ks, cs = 9000.0, 600.0, 90000.0, 2500.0
     h = hidden_profile()
@@ -230,27 +237,18 @@ def test_the_compiled_forward_quarter_cars_are_the_python_ones(made, monkeypatch
 
 
 def test_the_same_ride_as_sst_counts_comes_back(made, tmp_path):
-    """The made ride written as a recorder writes it: SST version 3, integer AS5600 counts through
-    the bike file's [sensors] calibration (the fork's isosceles triangle, the shock's general one,
-    inverted here by the law of cosines): the speed within 3 % and the rear within 10 % of its
-    travel used, as from the travel CSV."""
+    """The made ride written as a recorder writes it: SST version 3, integer AS5600 counts through the bike
+    file's [sensors] calibration (the fork's isosceles triangle, the shock's general one, inverted
+    by the law of cosines in tests/test_telemetry_sensors.py, not by the reader): the speed within 3
+    % and the rear within 10 % of its travel used, as from the travel CSV."""
     import json
-    import struct
 
     from mtbmj.bike import spec as spec_mod
+    from test_telemetry_sensors import write_v3
 
     bike, csv, t, fork_mm, rear_mm, h, wb = made
-    s = spec_mod.load(str(bike)).sensors
-    counts = 4096 / (2 * np.pi)
-    start = math.acos(s["fork_max_mm"] / (2 * s["fork_arm_mm"]))
-    fork = (np.arccos((s["fork_max_mm"] - np.clip(fork_mm, 0, None)) / (2 * s["fork_arm_mm"])) - start) * counts
-    a, b = s["shock_arm1_mm"], s["shock_arm2_mm"]
-    g0 = math.acos((a * a + b * b - s["shock_max_mm"] ** 2) / (2 * a * b))
-    c = s["shock_max_mm"] - np.clip(rear_mm, 0, None) / RATIO
-    shock = (g0 - np.arccos((a * a + b * b - c * c) / (2 * a * b))) * counts
-    sst = tmp_path / "ride.SST"
-    sst.write_bytes(struct.pack("<3sBHHq", b"SST", 3, int(RATE), 0, 1_700_000_000)
-                    + np.column_stack((np.rint(fork), np.rint(shock))).astype("<u2").tobytes())
+    sst = write_v3(tmp_path / "ride.SST", np.clip(fork_mm, 0, None), np.clip(rear_mm, 0, None) / RATIO,
+                   spec_mod.load(str(bike)).sensors, RATE)
     out = tmp_path / "rec"
     assert main(["reconstruct", str(sst), "--bike", str(bike), "--out", str(out)]) == 0
     summary = json.loads((out / "reconstruction.json").read_text())

@@ -33,13 +33,9 @@ window.addEventListener('load', function () {
 </script>"""
 
 
-@pytest.mark.skipif(not CHROMIUM.exists(), reason="headless Chromium not installed (/usr/bin/chromium; "
-                                                  "apt-get install -y chromium)")
-def test_report_renders_in_headless_chromium(tmp_path):
-    validation = run_validation(example_path(), ["S11", "S12"], duration=1.0)
-    written = validation.write(tmp_path / "report")
-    page = tmp_path / "report" / "validation_report.html"
-    pngs = sorted(p.name for p in written if p.suffix == ".png")
+def rendered(page, tmp_path) -> tuple[dict, str]:
+    """(what the probe recorded, the DOM Chromium dumped) of ``page`` opened headless with no
+    network, from a copy with the probe added (``tmp_path`` holds the copy and the profile)."""
     probe = tmp_path / "probe.html"
     probe.write_text(page.read_text().replace("</body>", PROBE + "</body>"))
     profile = tmp_path / "profile"
@@ -53,7 +49,17 @@ def test_report_renders_in_headless_chromium(tmp_path):
         shutil.rmtree(profile, ignore_errors=True)
     match = re.search(r'<pre id="render-check">(.*?)</pre>', done.stdout, re.S)
     assert match, f"no probe output (exit {done.returncode}): {done.stderr[-500:]}"
-    result = json.loads(match.group(1).replace("&quot;", '"').replace("&amp;", "&"))
+    return json.loads(match.group(1).replace("&quot;", '"').replace("&amp;", "&")), done.stdout
+
+
+@pytest.mark.skipif(not CHROMIUM.exists(), reason="headless Chromium not installed (/usr/bin/chromium; "
+                                                  "apt-get install -y chromium)")
+def test_report_renders_in_headless_chromium(tmp_path):
+    validation = run_validation(example_path(), ["S11", "S12"], duration=1.0)
+    written = validation.write(tmp_path / "report")
+    page = tmp_path / "report" / "validation_report.html"
+    pngs = sorted(p.name for p in written if p.suffix == ".png")
+    result, _ = rendered(page, tmp_path)
     assert sorted(i["id"] for i in result["imgs"]) == pngs
     for image in result["imgs"]:
         assert image["inline"] and image["complete"] and image["width"] > 0 and image["height"] > 0, image

@@ -10,16 +10,15 @@ from mtbmj.cli.common import add_out
 def cmd_advise(args) -> int:
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.cli.common import Progress
-    from mtbmj.cli.telemetry import decoding
-    from mtbmj.config import warn
-    from mtbmj.ride import advise, telemetry
+    from mtbmj.cli.sweep import positive
+    from mtbmj.cli.telemetry import ride_record
+    from mtbmj.ride import advise
 
-    path = telemetry.example_path() if str(args.ride) == "example" else args.ride
+    positive("--workers", args.workers)
     over = bike_overrides(args)
     if args.rider_kg is not None:
         over["rider.mass_kg"] = args.rider_kg
-    record = telemetry.read_ride(path, **decoding(args))
-    warn(telemetry.quality(record))
+    record = ride_record(args.ride, args)
     result = Progress("advise").around(
         lambda progress: advise.advise(record, args.bike, over or None, args.duration, progress, args.workers))
     written = result.write(args.out)
@@ -30,18 +29,6 @@ def cmd_advise(args) -> int:
     print(f"{result.line()}; {len(result.candidates)} candidates simulated in {result.wall_s:.0f} s; "
           f"wrote {', '.join(p.name for p in written)} to {args.out}")
     return 0
-
-
-def _workers(text: str) -> int:
-    import argparse
-
-    try:
-        n = int(text)
-    except ValueError:
-        n = 0
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"must be a whole number of processes, at least 1, got {text!r}")
-    return n
 
 
 def add_parser(sub) -> None:
@@ -56,7 +43,7 @@ def add_parser(sub) -> None:
     p.add_argument("--rider-kg", type=float, metavar="KG", help="the whole rider's mass (rider.mass_kg)")
     add_bike_sets(p)  # the settings as ridden, where they differ from the bike file
     p.add_argument("--duration", type=float, metavar="S", help="advise on the ride's first S seconds only")
-    p.add_argument("--workers", type=_workers, default=2, metavar="N",
+    p.add_argument("--workers", type=int, default=2, metavar="N",
                    help="processes the candidate runs spread over (default 2)")
     p.add_argument("--fork-max-mm", type=float, help="fork travel the recording's sensor spans (default: the bike's)")
     p.add_argument("--shock-max-mm", type=float, help="shock stroke the sensor spans (default: the bike's)")

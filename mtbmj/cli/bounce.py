@@ -90,21 +90,14 @@ def _damper_law(points) -> dict | None:
     pts = [(k, c, sd) for k, c, sd in points if math.isfinite(sd) and sd > 0]
     if len({k for k, _, _ in pts}) < 2:
         return None
-    k = np.array([p[0] for p in pts], float)
-    c = np.array([p[1] for p in pts])
-    w = 1.0 / np.array([p[2] for p in pts]) ** 2
-    X = np.column_stack((np.ones_like(k), k))
-    cov = np.linalg.inv(X.T @ (w[:, None] * X))
-    beta = cov @ X.T @ (w * c)
-    if k.size > 2:
-        cov = cov * max(1.0, float(np.sum(w * (c - X @ beta) ** 2) / (k.size - 2)))
-    z = 1.959963984540054
-    sd0, sd1 = math.sqrt(cov[0, 0]), math.sqrt(cov[1, 1])
+    from mtbmj.identify.bounce import interval95, weighted_line
+
+    beta, cov, _ = weighted_line([p[0] for p in pts], [p[1] for p in pts], [p[2] for p in pts])
     return {"form": "damper_N_s_per_m = damper0 + slope_per_click * clicks (weighted least squares on the records' "
                     "coefficients)", "damper0_N_s_per_m": float(beta[0]),
-            "damper0_N_s_per_m_ci95": [float(beta[0] - z * sd0), float(beta[0] + z * sd0)],
+            "damper0_N_s_per_m_ci95": interval95(float(beta[0]), math.sqrt(cov[0, 0])),
             "slope_N_s_per_m_per_click": float(beta[1]),
-            "slope_N_s_per_m_per_click_ci95": [float(beta[1] - z * sd1), float(beta[1] + z * sd1)]}
+            "slope_N_s_per_m_per_click_ci95": interval95(float(beta[1]), math.sqrt(cov[1, 1]))}
 
 
 def analyse(paths, clicks, predict=(), bike=None) -> dict:
@@ -164,7 +157,7 @@ def analyse(paths, clicks, predict=(), bike=None) -> dict:
                 e = rec.get(end, {}).get("bike", {})
                 if "damper_N_s_per_m" in e:
                     lo, hi = e["damper_N_s_per_m_ci95"]
-                    pts.append((rec["clicks"], e["damper_N_s_per_m"], (hi - lo) / (2 * 1.959963984540054)))
+                    pts.append((rec["clicks"], e["damper_N_s_per_m"], (hi - lo) / (2 * bounce.Z95)))
             dl = _damper_law(pts)
             if dl is not None:
                 out["law"][end]["bike"] = dl

@@ -9,14 +9,10 @@ from mtbmj.cli.common import add_out
 
 
 def cmd_reconstruct(args) -> int:
-    from mtbmj.cli.telemetry import decoding
-    from mtbmj.config import warn
-    from mtbmj.ride import reconstruct, telemetry
+    from mtbmj.cli.telemetry import ride_record
+    from mtbmj.ride import reconstruct
 
-    path = telemetry.example_path() if str(args.ride) == "example" else args.ride
-    record = telemetry.read_ride(path, **decoding(args))
-    warn(telemetry.quality(record))
-    result = reconstruct.reconstruct(record, args.bike)
+    result = reconstruct.reconstruct(ride_record(args.ride, args), args.bike)
     written = result.write(args.out)
     print(f"{result.line()}; wrote {len(written)} files to {args.out}")
     return 0

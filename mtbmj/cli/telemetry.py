@@ -339,12 +339,19 @@ def decoding(args) -> dict:
             **extra}
 
 
-def cmd_telemetry(args) -> int:
-    path = telemetry.example_path() if str(args.sst) == "example" else args.sst
-    record = telemetry.read_ride(path, **decoding(args))
+def ride_record(ride, args):
+    """The ride a command names (a recording or travel CSV, or "example": the shipped SST ride)
+    decoded through ``decoding(args)``, its quality warnings issued."""
     from mtbmj.config import warn
 
+    path = telemetry.example_path() if str(ride) == "example" else ride
+    record = telemetry.read_ride(path, **decoding(args))
     warn(telemetry.quality(record))
+    return record
+
+
+def cmd_telemetry(args) -> int:
+    record = ride_record(args.sst, args)
     runs = [load_run(d) for d in args.compare or []]
     summary = compare(record, runs, args.threshold_mm_per_s, args.bin_percent)
     written = output.write_atomically(args.out, {"telemetry.json": output.json_bytes(summary),

@@ -317,6 +317,22 @@ class ClickLaw:
                 "chi2_reduced": self.chi2_reduced}
 
 
+def weighted_line(x, y, sd) -> tuple[np.ndarray, np.ndarray, float | None]:
+    """(intercept and slope, their covariance, reduced chi-square or None) of y against x by
+    weighted least squares (weights 1 / sd^2); with more than two points the covariance is scaled
+    by the reduced chi-square when it exceeds 1."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    w = 1.0 / np.maximum(np.asarray(sd, float), 1e-12) ** 2
+    X = np.column_stack((np.ones_like(x), x))
+    cov = np.linalg.inv(X.T @ (w[:, None] * X))
+    beta = cov @ X.T @ (w * y)
+    chi2 = None
+    if x.size > 2:
+        chi2 = float(np.sum(w * (y - X @ beta) ** 2) / (x.size - 2))
+        cov = cov * max(1.0, chi2)
+    return beta, cov, chi2
+
+
 def click_law(end: str, clicks, fits) -> ClickLaw:
     """The law of one end from fitted ring-downs at ``clicks`` (at least two distinct clicks)."""
     k = np.asarray(clicks, float)
@@ -324,14 +340,7 @@ def click_law(end: str, clicks, fits) -> ClickLaw:
     sd = np.array([f.zeta_sd for f in fits])
     if np.unique(k).size < 2:
         raise BounceError(f"{end}: a law in clicks needs fitted ring-downs at two or more different clicks")
-    w = 1.0 / np.maximum(sd, 1e-12) ** 2
-    X = np.column_stack((np.ones_like(k), k))
-    cov = np.linalg.inv(X.T @ (w[:, None] * X))
-    beta = cov @ X.T @ (w * z)
-    chi2 = None
-    if k.size > 2:
-        chi2 = float(np.sum(w * (z - X @ beta) ** 2) / (k.size - 2))
-        cov = cov * max(1.0, chi2)
+    beta, cov, chi2 = weighted_line(k, z, sd)
     fn = np.array([f.fn_Hz for f in fits])
     wf = 1.0 / np.maximum(np.array([f.fn_sd for f in fits]), 1e-12) ** 2
     fn_mean = float(np.sum(wf * fn) / np.sum(wf))
@@ -356,4 +365,5 @@ def predicted_ring_down(source: RingDown, time_s: np.ndarray, zeta: float, fd_Hz
 
 
 __all__ = ["BounceError", "ClickLaw", "RingDown", "click_law", "fit_record", "predicted_ring_down", "ring_down",
+           "weighted_line",
            "METHOD", "LAW_FORM"]

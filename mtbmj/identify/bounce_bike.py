@@ -40,8 +40,8 @@ from mtbmj.bike import run as bike_run
 from mtbmj.bike import spec as spec_mod
 from mtbmj.bike.reference import NQ, Reference
 from mtbmj.errors import ConfigError, MtbmjError
+from mtbmj.identify.bounce import interval95
 
-Z95 = 1.959963984540054
 HELD = 2  # the rider's coordinates (rider_z, rider_pitch), the last two of the reference's q
 N = NQ - HELD  # x, z, pitch, fork, swingarm
 COORD = {"fork": 3, "shock": 4}
@@ -197,13 +197,14 @@ class SeatedBike:
         wheel = self.leverage_ratio ** 2 if end == "shock" else 1.0
         own = self.mode_of(end)
         return {
-            "spring_rate_N_per_mm": a * rate / 1e3, "spring_rate_N_per_mm_ci95": _ci(a * rate / 1e3, sd[0] * rate / 1e3),
+            "spring_rate_N_per_mm": a * rate / 1e3,
+            "spring_rate_N_per_mm_ci95": interval95(a * rate / 1e3, sd[0] * rate / 1e3),
             "bike_file_spring_rate_N_per_mm": rate / 1e3, "spring_rate_over_bike_file": a,
             "wheel_rate_N_per_mm": a * rate / wheel / 1e3,
-            "wheel_rate_N_per_mm_ci95": _ci(a * rate / wheel / 1e3, sd[0] * rate / wheel / 1e3),
-            "damper_N_s_per_m": c, "damper_N_s_per_m_ci95": _ci(c, sd[1]),
+            "wheel_rate_N_per_mm_ci95": interval95(a * rate / wheel / 1e3, sd[0] * rate / wheel / 1e3),
+            "damper_N_s_per_m": c, "damper_N_s_per_m_ci95": interval95(c, sd[1]),
             "bike_file_damper_N_s_per_m": self.damping[end],
-            "wheel_damping_N_s_per_m": c / wheel, "wheel_damping_N_s_per_m_ci95": _ci(c / wheel, sd[1] / wheel),
+            "wheel_damping_N_s_per_m": c / wheel, "wheel_damping_N_s_per_m_ci95": interval95(c / wheel, sd[1] / wheel),
             "leverage_ratio_at_sag": self.leverage_ratio if end == "shock" else None,
             "seated_sag_mm": self.rear_travel * 1e3 if end == "shock" else float(self.q[3]) * 1e3,
             "bike_file_mode": {"frequency_hz": own["frequency_hz"], "damping_ratio": own["damping_ratio"]},
@@ -212,10 +213,6 @@ class SeatedBike:
 
 def _force(law, x: float, v: float) -> float:
     return float(law.force(x, v, 0.0) if law.has_state else law.force(x, v))
-
-
-def _ci(value: float, sd: float) -> list:
-    return [value - Z95 * sd, value + Z95 * sd]
 
 
 __all__ = ["METHOD", "SeatedBike"]

@@ -332,10 +332,6 @@ class Advice:
             out[f"{end}.bottom_outs_per_minute"] = max(out.get(f"{end}.bottom_outs_per_minute", 0.0), n / minutes)
         return out
 
-    def change(self, run: Run) -> dict:
-        a, b, u = _flat(self.base.metrics), _flat(run.metrics), self.uncertainty()
-        return {k: {"from": a[k], "to": b[k], "change": b[k] - a[k], "uncertainty": u.get(k)} for k in a if k in b}
-
     def to_dict(self) -> dict:
         cands = []
         for adj, direction, value, run in self.candidates:

@@ -17,6 +17,7 @@ _numba = _jit.numba
 if _numba is not None:
     from mtbmj.bike import spec as _spec
     from mtbmj.controllers import kernels as _kernels
+    from mtbmj.rolling.callback_compiled import piece_index as _piece_index
 
     _fork_force_rate = _kernels.fork_force_rate
     _jit.law_function(_spec.stroke_piece)
@@ -25,18 +26,12 @@ if _numba is not None:
 
     @_jit.kernel
     def _geometry(mode, sin_a, LW, LR, LS, w):
-        """(stroke, wheel travel per stroke) at wheel rise ``w``."""
+        """(stroke, wheel travel per stroke) at wheel rise ``w``: the piece holding w found as the
+        bike's compiled callback finds it (the lookups handle w outside the table first)."""
         if mode == 0:
             return w / sin_a, sin_a
-        n = LW.size
-        lo, hi = 0, n - 1  # bisect_right(LW, w) - 1, within 0..n-2
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if LW[mid] <= w:
-                lo = mid
-            else:
-                hi = mid
-        return _stroke(LW, LR, LS, lo, w), _ratio(LW, LR, lo, w)
+        i = _piece_index(LW, LW.size, w)
+        return _stroke(LW, LR, LS, i, w), _ratio(LW, LR, i, w)
 
     @_jit.kernel
     def _rhs(I, P, stateful, q, mode, sin_a, LW, LR, LS, zb, zw, vb, vw, zs, g, push):
