@@ -56,7 +56,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mtbmj.errors import MtbmjError
+from mtbmj.errors import MtbmjError, RunError
 
 SAG_WINDOW = {"front": (20.0, 25.0), "rear": (27.0, 30.0)}  # % of travel, static (sources above)
 SAG_POINTS = 5.0  # % points outside the window per unit of penalty
@@ -88,6 +88,12 @@ RULES = {
 
 class AdviseError(MtbmjError):
     """A ride that cannot support advice: names the ride and why."""
+
+
+class RideNotDescribed(AdviseError, RunError):
+    """The model cannot describe or ride this ride (its reconstruction fails its check, or the
+    recorded setting crashes on it): a run error, so the refusal line carries every plausibility
+    warning of the command (an implausible key is a likely cause)."""
 
 
 @dataclass(frozen=True)
@@ -507,11 +513,11 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     checks = rec.checks()
     if (checks["samples_checked_percent"] < MIN_CHECKED_PERCENT
             or not checks["rear_predicted_rms_percent_of_used"] <= MAX_REAR_MISS_PERCENT):
-        raise AdviseError(f"{record.name}: its reconstruction fails its own check (rear predicted within "
-                          f"{checks['rear_predicted_rms_percent_of_used']:.0f} % of the travel used, "
-                          f"{checks['samples_checked_percent']:.0f} % of the ride checked; advice needs within "
-                          f"{MAX_REAR_MISS_PERCENT:g} % over {MIN_CHECKED_PERCENT:g} %): the model does not describe "
-                          f"this ride well enough to predict a change")
+        raise RideNotDescribed(f"{record.name}: its reconstruction fails its own check (rear predicted within "
+                               f"{checks['rear_predicted_rms_percent_of_used']:.0f} % of the travel used, "
+                               f"{checks['samples_checked_percent']:.0f} % of the ride checked; advice needs within "
+                               f"{MAX_REAR_MISS_PERCENT:g} % over {MIN_CHECKED_PERCENT:g} %): the model does not "
+                               f"describe this ride well enough to predict a change")
     spec = spec_mod.load(str(bike), overrides)
     speed = float(rec.speed["speed_m_per_s"])
     ride_s = length if duration is None else min(length, float(duration))
@@ -555,8 +561,8 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
             step()
     base = runs[0]
     if base.crash:
-        raise AdviseError(f"{record.name}: the recorded setting {base.crash} on the ride's reconstructed terrain: the "
-                          f"model cannot ride this ride as reconstructed, so it cannot predict a change")
+        raise RideNotDescribed(f"{record.name}: the recorded setting {base.crash} on the ride's reconstructed terrain: "
+                               f"the model cannot ride this ride as reconstructed, so it cannot predict a change")
     cands = [(a, d, v, run) for (a, d, v), run in zip(todo, runs[1:])]
     t = rec.t
     keep = t - t[0] <= ride_s
@@ -568,5 +574,5 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     return advice
 
 
-__all__ = ["Adjuster", "Advice", "AdviseError", "RULES", "adjusters", "advise", "penalties", "ride_metrics",
-           "simulate", "terrain_of"]
+__all__ = ["Adjuster", "Advice", "AdviseError", "RideNotDescribed", "RULES", "adjusters", "advise", "penalties",
+           "ride_metrics", "simulate", "terrain_of"]
