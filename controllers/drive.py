@@ -25,10 +25,18 @@ rolling callback compiles its source.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 MODES = ("rider", "servo", "coast")
 SERVO, RIDER, COAST = 0, 1, 2  # codes the compiled callback reads
+# Pedalling (the whole bike's ``pedal`` mode, ``pedal_forces``): the crank's length and what a
+# rider's legs can do. 170 mm is the commonest crank on trail bikes (assumed); cadence and power
+# bound what any rider turns and keeps up for a few seconds (assumed round values: sprint peaks of
+# trained riders stay under about 1500 W, cadences within 30-130 rpm).
+CRANK_LENGTH_M = 0.170
+PEDAL_RPM = (30.0, 130.0)
+PEDAL_POWER_W = (0.0, 1500.0)
 FRONT_SHARE = 0.58
 RIDER_PUSH_N = round(FRONT_SHARE * 720.0)  # 418 N
 RIDER_POWER_W = round(FRONT_SHARE * 1000.0)  # 580 W
@@ -136,6 +144,35 @@ def chain_pull(torque: float, ax: float, az: float, ring: float, cog: float):
     return tension * tx / tl, tension * tz / tl, ring * nx, ring * nz
 
 
+def pedal_forces(theta: float, peak: float, crank: float):
+    """(torque, fx, fz, px, pz) of a pedalling rider at crank angle ``theta`` (rad: the right
+    crank's angle from top dead centre, turning forward): the crank torque (N m, forward positive),
+    the driving foot's force (fx, fz) on its pedal and that pedal's place (px, pz) from the bottom
+    bracket, in the frame's coordinates (x forward, z up). Each leg drives on its downstroke with
+    ``peak`` sin(phi), phi its own crank's angle from the top (0 to pi), and pushes its pedal along
+    the crank circle's tangent (the effective force: the radial part, which makes no torque, is left
+    out); the legs are half a turn apart, so one drives at a time and the torque is
+    ``peak`` |sin theta|, its mean over a turn 2 ``peak`` / pi, twice a turn from zero at the dead
+    centres to ``peak`` with the crank level (the common idealisation of a pedal stroke; assumed)."""
+    s = math.sin(theta)
+    c = math.cos(theta)
+    if s < 0.0:  # the left crank drives: it is half a turn on
+        s = -s
+        c = -c
+    torque = peak * s
+    f = torque / crank
+    return torque, f * c, -f * s, crank * s, crank * c
+
+
+def pedal_peak(power: float, cadence: float) -> float:
+    """The peak crank torque (N m) of ``pedal_forces`` whose mean over a turn at ``cadence``
+    (rad/s) is ``power`` (W): pi P / (2 omega). A rider holds the power as the crank speeds up or
+    slows (so a climb settles at the speed where the power lifts the bike); below the slowest
+    cadence (``PEDAL_RPM``) the torque is that cadence's: legs push no harder."""
+    slowest = PEDAL_RPM[0] * math.pi / 30.0
+    return math.pi * power / (2.0 * (cadence if cadence > slowest else slowest))
+
+
 @dataclass(frozen=True)
 class Drive:
     """A drive mode and its limits (see the module doc); ``kv`` (N s/m) is the velocity
@@ -146,16 +183,17 @@ class Drive:
     push: float = RIDER_PUSH_N
     power: float = RIDER_POWER_W
     brake: float = RIDER_BRAKE_N
+    cadence: float = 0.0  # pedal: the crank's speed at the start (rad/s); the torque follows the crank's speed
 
     @property
     def code(self) -> int:
-        return {"servo": SERVO, "rider": RIDER, "coast": COAST}[self.mode]
+        return {"servo": SERVO, "rider": RIDER, "coast": COAST}[self.mode]  # pedal: the bike's Python callback
 
     def force(self, v_ref: float, v: float) -> float:
         """The force of the rider or coasting modes (the servo's comes from its actuators)."""
-        if self.mode == "coast":
+        if self.mode in ("coast", "pedal"):  # pedal: the crank's torque, through the chain (pedal_forces)
             return 0.0
         return drive_force(v_ref, v, self.kv, self.push, self.power, self.brake)
 
 
-__all__ = ["Drive", "chain_pull", "drive_force", "wheel_forces", "MODES", "RIDER_PUSH_N", "RIDER_POWER_W", "RIDER_BRAKE_N"]
+__all__ = ["Drive", "chain_pull", "drive_force", "pedal_forces", "pedal_peak", "CRANK_LENGTH_M", "wheel_forces", "MODES", "RIDER_PUSH_N", "RIDER_POWER_W", "RIDER_BRAKE_N"]

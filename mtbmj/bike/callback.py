@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 
 from mtbmj.bike.model import Bike
-from mtbmj.controllers.drive import Drive, chain_pull, wheel_forces
+from mtbmj.controllers.drive import CRANK_LENGTH_M, Drive, chain_pull, pedal_forces, pedal_peak, wheel_forces
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, PatchSearch, RadialTire
 
 
@@ -50,6 +50,10 @@ class BikeCallback:
         self.frame = int(m.body("frame").id)
         # the drive through the chain (chainring, cog pitch radii, m), or a hub drive (None)
         self.chain = bike.spec.drive.get("chain_m")
+        # pedalling (drive mode "pedal"): the crank turns with the distance rolled, through the chain
+        self.xq = bike.qpos_index("bike_x")
+        self.rider = int(m.body("rider").id)
+        self.foot = (0.0, 0.0, 0.0, 0.0)  # the last evaluation's driving foot's force on its pedal and the pedal (frame coordinates)
         # the legs and arms: (frame site, rider site, k, c, rest), on the rider's two joints
         self.limbs = tuple((int(m.site(lb.frame_site).id), int(m.site(lb.rider_site).id), lb.stiffness, lb.damping,
                             lb.rest) for lb in bike.limbs)
@@ -119,6 +123,26 @@ class BikeCallback:
             qp += f * d_hinge
         return qz, qp
 
+    def pedalling(self, qpos, qvel, radial):
+        """(ground, foot): the ground's forces (``wheel_forces``) when the rider's crank torque at the
+        crank's angle (the distance rolled through the gear: theta = x cog / (ring r)), at the rider's
+        power at the crank's speed (``pedal_peak``), pulls the chain,
+        and the driving foot's force on its pedal and the pedal's place (frame coordinates), scaled
+        down as the rear tyre's traction caps the drive (a wheel in the air takes no torque)."""
+        (fxf, fzf, df), (fxr, fzr, dr) = radial
+        ring, cog = self.chain
+        radius = self.tires[1].radius
+        gear = cog / (ring * radius)  # crank radians per metre rolled
+        peak = pedal_peak(self.drive.power, qvel[self.xv] * gear)
+        torque, fx, fz, px, pz = pedal_forces(qpos[self.xq] * gear, peak, CRANK_LENGTH_M)
+        rho = radius - (dr if dr > 0.0 else 0.0)
+        want = torque * cog / (ring * rho)  # the ground's push whose couple at the patch is the chain's
+        if want <= 0.0 or math.hypot(fxr, fzr) <= 0.0:
+            return (0.0,) * 6, (0.0, 0.0, 0.0, 0.0)
+        ground = wheel_forces(want, fxf, fzf, df, fxr, fzr, dr, self.traction, radius)
+        share = math.hypot(ground[3], ground[4]) / want
+        return ground, (share * fx, share * fz, px, pz)
+
     def __call__(self, m, d):
         if m is not self._model and m._address != self._address:
             return
@@ -168,10 +192,14 @@ class BikeCallback:
         # axle and a couple on the part that reacts it (controllers.drive.wheel_forces)
         (fxf, fzf, df), (fxr, fzr, dr) = radial
         ground = (0.0,) * 6
-        if self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:
+        foot = (0.0, 0.0, 0.0, 0.0)
+        if self.drive.mode == "pedal":  # the crank's torque makes the chain's tension (controllers.drive.pedal_forces)
+            ground, foot = self.pedalling(qpos, qvel, radial)
+        elif self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:
             mujoco.mj_mulM(m, d, self._momentum, qvel)
             f = self.drive.force(self.speed, self._momentum[self.xv] / self.total_mass)
             ground = wheel_forces(f, fxf, fzf, df, fxr, fzr, dr, self.traction, self.tires[1].radius)
+        self.foot = foot
         ctrl[self.a_drive[0]] = ground[3]  # the rear tyre's ground force (drive or brake), at its axle
         ctrl[self.a_drive[1]] = ground[4]
         ctrl[self.a_ground[0]] = ground[0]  # the front tyre's (its brake)
@@ -193,6 +221,19 @@ class BikeCallback:
             frame = xfrc[self.frame]
             frame[0], frame[1], frame[2] = -pull[0], 0.0, -pull[1]
             frame[3], frame[4], frame[5] = 0.0, at[2] * -pull[0] - at[0] * -pull[1], 0.0
+            if self.drive.mode == "pedal":  # the foot on its pedal (the frame's, through the crank), its
+                # reaction on the rider at the same point (the rider's body braced on the leg)
+                rot = d.xmat[self.frame].reshape(3, 3)
+                fx, fz = rot[0, 0] * foot[0] + rot[0, 2] * foot[1], rot[2, 0] * foot[0] + rot[2, 2] * foot[1]
+                at = d.xpos[self.frame] + rot_apply(d.xmat[self.frame], foot[2], foot[3])
+                arm = at - d.xipos[self.frame]
+                frame[0] += fx
+                frame[2] += fz
+                frame[4] += arm[2] * fx - arm[0] * fz
+                arm = at - d.xipos[self.rider]
+                body = xfrc[self.rider]
+                body[0], body[1], body[2] = -fx, 0.0, -fz
+                body[3], body[4], body[5] = 0.0, -(arm[2] * fx - arm[0] * fz), 0.0
         for k, (fx, fz, _) in enumerate(radial):
             wheel = xfrc[self.wheels[k]]
             wheel[0], wheel[1], wheel[2] = fx + ground[3 * k], 0.0, fz + ground[3 * k + 1]

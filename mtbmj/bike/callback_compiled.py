@@ -64,15 +64,16 @@ WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front en
  R_A_TZ1, R_A_DX, R_A_DZ, R_A_PROBE0, R_A_PROBE1, R_A_SHOCK_PROBE, R_SITE0, R_SITE1, R_SBODY0, R_SBODY1, R_FRAME,
  R_ROOT0, R_ROOT1, R_NBODY, R_MASS, R_FORK_STATE, R_SHOCK_STATE, R_DRIVE, R_NL, R_LW, R_LR, R_LS, R_CALLS,
  R_REFRESHES, R_BODYROOT, R_WHEEL0, R_WHEEL1, R_LIMB_F0, R_LIMB_R0, R_LIMB_F1, R_LIMB_R1, R_JZ, R_JP, R_VZ,
- R_VP, R_REACT0, R_REACT1, R_A_GFX, R_A_GFZ, R_A_CF, R_A_CR) = range(54)
-INT_WIDTH = 54
+ R_VP, R_REACT0, R_REACT1, R_A_GFX, R_A_GFZ, R_A_CF, R_A_CR, R_XQ, R_XV, R_RIDER) = range(57)
+INT_WIDTH = 57
+DRIVE_PEDAL = 2  # R_DRIVE: 0 coasting, 1 the rider's speed controller, 2 pedalling (controllers.drive.pedal_forces)
 # float row of a slot
 (F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_NEXT0, F_NEXT1, F_LAST0, F_LAST1,
  F_REFRESH_DISTANCE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE, F_LIMB_K0, F_LIMB_C0, F_LIMB_REST0,
  F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1, F_RADIUS, F_CHAIN_RING, F_CHAIN_COG) = range(24)
 FLOAT_WIDTH = 24
 
-REGISTRY = Registry("mtbmj_bike_registry_v5", SLOTS,
+REGISTRY = Registry("mtbmj_bike_registry_v6", SLOTS,
                     {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
                      "wheel_ints": (2 * WI, np.int64), "wheel_floats": (2 * WF, np.float64),
                      "fork_ints": (LAW_INT_WIDTH, np.int64), "fork_floats": (LAW_FLOAT_WIDTH, np.float64),
@@ -132,6 +133,9 @@ if _numba is not None:
     law_function(_drive.at_patch)
     _wheel_forces = law_function(_drive.wheel_forces)
     _chain_pull = law_function(_drive.chain_pull)
+    _pedal_forces = law_function(_drive.pedal_forces)
+    _pedal_peak = law_function(_drive.pedal_peak)
+    _CRANK = _drive.CRANK_LENGTH_M
     law_function(_spec.stroke_piece)
     _leverage_ratio = law_function(_spec.leverage_ratio)
     _leverage_stroke = law_function(_spec.leverage_stroke)
@@ -323,7 +327,27 @@ if _numba is not None:
         dxr = 0.0
         dzr = 0.0
         tr = 0.0
-        if I[R_DRIVE] != 0 and math.hypot(fxf, fzf) + math.hypot(fx, fz) > 0.0:
+        foot_x = 0.0
+        foot_z = 0.0
+        foot_px = 0.0
+        foot_pz = 0.0
+        if I[R_DRIVE] == DRIVE_PEDAL:  # the crank's torque pulls the chain (BikeCallback.pedalling)
+            ring = F[F_CHAIN_RING]
+            cog = F[F_CHAIN_COG]
+            gear = cog / (ring * F[F_RADIUS])
+            peak = _pedal_peak(F[F_DRIVE_POWER], qvel[I[R_XV]] * gear)
+            torque, pfx, pfz, ppx, ppz = _pedal_forces(qpos[I[R_XQ]] * gear, peak, _CRANK)
+            rho = F[F_RADIUS] - (deflection if deflection > 0.0 else 0.0)
+            want = torque * cog / (ring * rho)
+            if want > 0.0 and math.hypot(fx, fz) > 0.0:
+                dxf, dzf, tf, dxr, dzr, tr = _wheel_forces(want, fxf, fzf, df, fx, fz, deflection, F[F_TRACTION],
+                                                           F[F_RADIUS])
+                share = math.hypot(dxr, dzr) / want
+                foot_x = share * pfx
+                foot_z = share * pfz
+                foot_px = ppx
+                foot_pz = ppz
+        elif I[R_DRIVE] != 0 and math.hypot(fxf, fzf) + math.hypot(fx, fz) > 0.0:
             nb = I[R_NBODY]
             mass = _numba.carray(_f64_pointer(I[R_MASS]), (nb,))
             roots = _numba.carray(_i64_pointer(I[R_BODYROOT]), (nb,))
@@ -378,6 +402,26 @@ if _numba is not None:
             xfrc[o + 3] = 0.0
             xfrc[o + 4] = at_z * -pull_x - at_x * -pull_z
             xfrc[o + 5] = 0.0
+            if I[R_DRIVE] == DRIVE_PEDAL:  # the foot on its pedal (the frame's), its reaction on the rider there
+                wfx = xmat[m9] * foot_x + xmat[m9 + 2] * foot_z
+                wfz = xmat[m9 + 6] * foot_x + xmat[m9 + 8] * foot_z
+                px_w = xpos[3 * fr] + xmat[m9] * foot_px + xmat[m9 + 2] * foot_pz
+                pz_w = xpos[3 * fr + 2] + xmat[m9 + 6] * foot_px + xmat[m9 + 8] * foot_pz
+                arm_x = px_w - xipos[3 * fr]
+                arm_z = pz_w - xipos[3 * fr + 2]
+                xfrc[o] += wfx
+                xfrc[o + 2] += wfz
+                xfrc[o + 4] += arm_z * wfx - arm_x * wfz
+                rb = I[R_RIDER]
+                arm_x = px_w - xipos[3 * rb]
+                arm_z = pz_w - xipos[3 * rb + 2]
+                o = 6 * rb
+                xfrc[o] = -wfx
+                xfrc[o + 1] = 0.0
+                xfrc[o + 2] = -wfz
+                xfrc[o + 3] = 0.0
+                xfrc[o + 4] = -(arm_z * wfx - arm_x * wfz)
+                xfrc[o + 5] = 0.0
         o = 6 * I[R_REACT1]
         xfrc[o + 3] = 0.0
         xfrc[o + 4] = tr
@@ -450,7 +494,7 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
         ter = front.terrain
         if type(ter) is not terrain_mod.Terrain or rear.terrain is not ter:
             raise UnsupportedRolling(f"terrain {type(ter).__name__} has no compiled form")
-        if drive.mode not in ("rider", "coast"):
+        if drive.mode not in ("rider", "coast", "pedal"):
             raise UnsupportedRolling(f"drive {drive.mode!r} has no compiled form on the bike")
         m = bike.model
         self._model = m  # keeps the mjModel (and so its address) alive while the slot is used
@@ -491,13 +535,15 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
             R_A_GFX: a("front_ground_x"), R_A_GFZ: a("front_ground_z"), R_A_CF: a("front_couple"),
             R_A_CR: a("rear_couple"),
             R_FORK_STATE: int(bool(fork_law.has_state)), R_SHOCK_STATE: int(bool(shock_law.has_state)),
-            R_DRIVE: int(drive.mode != "coast"), R_NL: self._lw.size, R_LW: self._lw.ctypes.data,
+            R_DRIVE: {"coast": 0, "rider": 1, "pedal": DRIVE_PEDAL}[drive.mode], R_NL: self._lw.size, R_LW: self._lw.ctypes.data,
             R_LR: self._lr.ctypes.data, R_LS: self._ls.ctypes.data}
         legs, arms = bike.limbs
         values.update({R_LIMB_F0: int(m.site(legs.frame_site).id), R_LIMB_R0: int(m.site(legs.rider_site).id),
                        R_LIMB_F1: int(m.site(arms.frame_site).id), R_LIMB_R1: int(m.site(arms.rider_site).id),
                        R_JZ: int(m.joint("rider_z").id), R_JP: int(m.joint("rider_pitch").id),
-                       R_VZ: bike.dof_index("rider_z"), R_VP: bike.dof_index("rider_pitch")})
+                       R_VZ: bike.dof_index("rider_z"), R_VP: bike.dof_index("rider_pitch"),
+                       R_XQ: bike.qpos_index("bike_x"), R_XV: bike.dof_index("bike_x"),
+                       R_RIDER: int(m.body("rider").id)})
         values[R_ACT_F] = int(m.actuator_actadr[values[R_A_FS]])
         values[R_ACT_S] = int(m.actuator_actadr[values[R_A_SS]])
         values[R_ROOT0] = int(m.body_rootid[values[R_SBODY0]])

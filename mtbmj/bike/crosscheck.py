@@ -19,13 +19,19 @@ FORCE_TOLERANCE = 0.01
 MAX_STEP_S = 1e-3
 
 
-def crosscheck(bike, scenario, speed_m_per_s: float, duration: float | None = None, drive: str = "rider",
-               start_x: float | None = None, reference_rtol: float = 1e-8) -> CrosscheckResult:
+def crosscheck(bike, scenario, speed_m_per_s: float | None, duration: float | None = None, drive: str = "rider",
+               start_x: float | None = None, reference_rtol: float = 1e-8, pedal=None, overrides=None,
+               seated: bool = False) -> CrosscheckResult:
     """``mtbmj bike``'s run against this reference from the same state: front and rear wheel
     travel (judged), shock stroke (mm) and pitch (deg), and both tire loads (N; peak and series
     judged relative to the reference's peak). ``reference_rtol``: the reference's relative
-    tolerance (scipy's RK45)."""
-    engine = run_bike(bike, scenario, speed_m_per_s, duration=duration, drive=drive, start_x=start_x)
+    tolerance (scipy's RK45). ``pedal`` (cadence_rpm, power_W), ``overrides`` and ``seated`` as
+    ``run_bike``'s."""
+    engine = run_bike(bike, scenario, speed_m_per_s, duration=duration, drive=drive, start_x=start_x, pedal=pedal,
+                      overrides=overrides, seated=seated)
+    speed_m_per_s = engine.prepared.speed
+    if pedal is not None:
+        drive = f"pedal {pedal[0]:g} rpm {pedal[1]:g} W" + (" seated" if seated else "")
     ref = Reference(engine.prepared)
     raw = engine.raw
     times = raw["time_s"]

@@ -28,6 +28,8 @@ SCENE = "bike_scene.xml"
 LOWER_INERTIA = 0.02  # kg m^2, the fork lower's pitch inertia about the axle (assumed)
 PEDAL_SHARE = 5.70 / (5.70 + 2.23)  # de Leva 1996, male: (foot + shank) / (foot + shank + hand + forearm)
 JOINTS = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")
+# what a run can hold at its static values (``mtbmj.bike.run.prepare(lock=...)``): key -> joints
+LOCKS = {"rear": ("swingarm",), "pitch": ("pitch",), "rider": ("rider_z", "rider_pitch")}
 
 
 def frame_body(spec) -> tuple[float, tuple[float, float], float]:
@@ -214,4 +216,4 @@ def _terrain_visual(ms, terrain) -> None:
                           pos=[(x_lo + x_hi) / 2, 0.0, lo], contype=0, conaffinity=0, group=1, material="terrain")
 
 
-__all__ = ["Bike", "Limb", "build_bike", "crown", "frame_body", "rider_rest_lengths", "JOINTS", "LOWER_INERTIA", "PEDAL_SHARE"]
+__all__ = ["Bike", "Limb", "build_bike", "crown", "frame_body", "rider_rest_lengths", "JOINTS", "LOCKS", "LOWER_INERTIA", "PEDAL_SHARE"]

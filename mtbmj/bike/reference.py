@@ -36,8 +36,8 @@ import time
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from mtbmj.bike.model import LOWER_INERTIA, frame_body
-from mtbmj.controllers.drive import chain_pull, wheel_forces
+from mtbmj.bike.model import JOINTS, LOCKS, LOWER_INERTIA, frame_body
+from mtbmj.controllers.drive import CRANK_LENGTH_M, chain_pull, pedal_forces, pedal_peak, wheel_forces
 from mtbmj.errors import RunError
 
 NQ = 7
@@ -159,6 +159,19 @@ class PlanarBike:
         Q[2] += -rz * lx + rx * lz
         Q[k] += dx * lx + dz * lz
 
+    def apply_rider(self, Q, q, px, pz, fx, fz):
+        """Add a world force (fx, fz) on the rider's body at the frame-coordinate point (px, pz) (the
+        body's point there now) to Q: the frame's three coordinates, the rider's slide and its pitch
+        about its centre of mass."""
+        c, s = math.cos(q[2]), math.sin(q[2])
+        lx, lz = c * fx + s * fz, -s * fx + c * fz  # R^T F
+        hx, hz = px - self.c_rider[0], pz - (self.c_rider[1] + q[5])  # from the rider's centre of mass
+        Q[0] += fx
+        Q[1] += fz
+        Q[2] += -pz * lx + px * lz
+        Q[5] += lz
+        Q[6] += -hz * lx + hx * lz
+
     def wheel_travel(self, phi) -> tuple[float, float]:
         """(w m, dw/dphi m/rad): the rear axle's rise in frame coordinates and its rate."""
         turned = _rot(-phi) @ self.rear_rho
@@ -194,6 +207,9 @@ class Reference:
 
         self.straight = StraightStretches(p.terrain, self.front_tire.radius + self.front_tire.margin)
         self.chain = b.spec.drive.get("chain_m")  # (chainring, cog) pitch radii, m; None: a hub drive
+        # the held coordinates (the run's ``lock``: ``mtbmj.bike.model.LOCKS``' joints) and the free ones
+        self.held = sorted({JOINTS.index(j) for key in p.lock for j in LOCKS[key]})
+        self.free = [i for i in range(NQ) if i not in self.held]
         self.nf = 1 if self.fork.has_state else 0
         self.ns = 1 if self.shock.has_state else 0
 
@@ -242,9 +258,22 @@ class Reference:
         # the frame (pitch, axis -y), the swingarm with the frame and on its hinge (axis +y)
         (fxf, fzf, df), (fxr, fzr, dr) = out["front"], out["rear"]
         ground = (0.0,) * 6
-        if self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:
+        foot = None
+        if self.drive.mode == "pedal":  # the crank's torque pulls the chain (controllers.drive.pedal_forces)
+            ring, cog = self.chain
+            radius = self.rear_tire.radius
+            gear = cog / (ring * radius)
+            torque, fpx, fpz, ppx, ppz = pedal_forces(q[0] * gear, pedal_peak(self.drive.power, qd[0] * gear),
+                                                      CRANK_LENGTH_M)
+            want = torque * cog / (ring * (radius - max(dr, 0.0)))
+            if want > 0.0 and math.hypot(fxr, fzr) > 0.0:
+                ground = wheel_forces(want, fxf, fzf, df, fxr, fzr, dr, self.traction, radius)
+                share = math.hypot(ground[3], ground[4]) / want
+                foot = (share * fpx, share * fpz, ppx, ppz)
+        elif self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:
             f = self.drive.force(self.speed, float(M[0] @ qd) / M[0, 0])  # the centre of mass's speed
             ground = wheel_forces(f, fxf, fzf, df, fxr, fzr, dr, self.traction, self.rear_tire.radius)
+        if any(ground):
             pl.apply(Q, q, axles[0], ground[0], ground[1])
             pl.apply(Q, q, axles[1], ground[3], ground[4])
             couple = ground[5]
@@ -258,15 +287,27 @@ class Reference:
                     couple = 0.0
             Q[2] -= ground[2] + couple
             Q[4] += couple
+        if foot is not None:  # the foot on its pedal (the frame's) and on the rider at the same point
+            c, sn = math.cos(q[2]), math.sin(q[2])
+            wx, wz = c * foot[0] - sn * foot[1], sn * foot[0] + c * foot[1]
+            pl.apply(Q, q, (foot[2], foot[3], 0, 0.0, 0.0), wx, wz)
+            pl.apply_rider(Q, q, foot[2], foot[3], -wx, -wz)
         out["drive"] = (ground[0] + ground[3], ground[1] + ground[4])
         out["static"] = h  # gravity less the velocity terms
         return Q, out
 
     def accelerations(self, t, y):
+        """q'' of the free coordinates from M q'' = Q + h over them; a held coordinate (the run's
+        ``lock``, a seated rider's two) rigidly at rest (MuJoCo's run holds it by a huge armature)."""
         q, qd = y[:NQ], y[NQ:2 * NQ]
         dyn = self.planar.dynamics(q, qd)
         Q, out = self.forces(t, y, dyn)
-        return np.linalg.solve(dyn[0], Q + dyn[1]), out
+        if not self.held:
+            return np.linalg.solve(dyn[0], Q + dyn[1]), out
+        free = self.free
+        qdd = np.zeros(NQ)
+        qdd[free] = np.linalg.solve(dyn[0][np.ix_(free, free)], (Q + dyn[1])[free])
+        return qdd, out
 
     def rhs(self, t, y):
         qdd, out = self.accelerations(t, y)

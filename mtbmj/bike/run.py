@@ -38,9 +38,9 @@ import numpy as np
 from mtbmj import compose, output
 from mtbmj.bike import crash
 from mtbmj.bike import spec as spec_mod
-from mtbmj.bike.model import Bike, build_bike
+from mtbmj.bike.model import LOCKS, Bike, build_bike
 from mtbmj.controllers import installed
-from mtbmj.controllers.drive import Drive
+from mtbmj.controllers.drive import CRANK_LENGTH_M, Drive
 from mtbmj.errors import ConfigError
 from mtbmj.limits import check_run
 from mtbmj.readout.endtravel import end_of_travel
@@ -61,7 +61,6 @@ VIDEO_SAMPLE_HZ = 240.0  # the bike's pose kept for a video (qpos rows per secon
 # armature ~ 1e-8 of theirs). Unlike MuJoCo's equality constraints (soft, solref) it adds no
 # compliance and keeps the model's constraint stage off.
 LOCK_ARMATURE = 1e12
-LOCKS = {"rear": ("swingarm",), "pitch": ("pitch",), "rider": ("rider_z", "rider_pitch")}
 DRIVE_HZ = 10.0  # the speed loop's gain: kv = 2 M (2 pi 10 Hz), as the front end's servo
 INTEGRATORS = {"rk4": mujoco.mjtIntegrator.mjINT_RK4, "euler": mujoco.mjtIntegrator.mjINT_EULER,
                "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST, "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT}
@@ -129,9 +128,9 @@ def setups(spec) -> tuple[compose.Setup, compose.Setup]:
     return fork, shock
 
 
-def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str = "rider",
+def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, drive: str = "rider",
             start_x: float | None = None, callback: str = "auto", lock=(), rear_tire: bool = True,
-            overrides=None, seated: bool = False) -> Prepared:
+            overrides=None, seated: bool = False, pedal=None) -> Prepared:
     """Everything a run needs, with the data at t = 0: the bike at rest on its static equilibrium
     over the start, moving at the set speed. ``callback``: "auto" (the compiled callback where numba
     is installed, else the Python one with a ``FallbackWarning``), "compiled" or "python".
@@ -145,13 +144,27 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     is the rolling front end's rig (``tests/test_bike_locked.py``). ``seated``: the rider sits on
     the saddle, the body's centre of mass at ``rider.seated_com_mm`` held rigid on the frame (its
     two degrees of freedom locked at the seated position: a seated body's vertical resonance, 4-6
-    Hz, lies above a bike's sprung modes; ``mtbmj.identify.bounce_bike``)."""
+    Hz, lies above a bike's sprung modes; ``mtbmj.identify.bounce_bike``).
+
+    ``pedal``: (cadence_rpm, power_W): the rider pedals instead of holding a speed. The crank
+    torque (``controllers.drive.pedal_forces``: each leg on its downstroke, mean ``power_W`` at
+    ``cadence_rpm``) pulls the chain (the bike needs ``drive.chainring_teeth`` and ``cog_teeth``),
+    and the driving foot pushes its pedal, its reaction on the rider (standing: the body on its legs
+    and arms moves; seated: held, the pair cancels). The crank turns with the distance rolled
+    through the gear; the speed is what the forces make of it, from ``speed_m_per_s`` at the start
+    (default: the gear's speed at ``cadence_rpm``)."""
     from mtbmj.bike.reference import Reference, static_equilibrium
 
-    _check(speed_m_per_s, None)
+    if pedal is not None:
+        if drive != "rider":
+            raise ConfigError(f"pedal: a pedalling rider is the drive; drive {drive!r} cannot be given with it")
+        cadence_rpm, power = _check_pedal(pedal)
+        drive = "pedal"
+    if not (pedal is not None and speed_m_per_s is None):
+        _check(speed_m_per_s, None)
     if callback not in CALLBACKS:
         raise ConfigError(f"callback: must be one of {', '.join(CALLBACKS)}, got {callback!r}")
-    if drive not in ("rider", "coast"):
+    if drive not in ("rider", "coast", "pedal"):
         raise ConfigError(f"drive: {drive!r} is not one of rider, coast")
     lock = _check_lock(lock, rear_tire)
     if isinstance(bike, spec_mod.BikeSpec) and overrides:
@@ -165,12 +178,21 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
             raise ConfigError("seated: a seated rider rides on both wheels (not with the rear tire off)")
         spec = dataclasses.replace(spec, rider=dataclasses.replace(spec.rider, com=spec.rider.seated_com))
         lock = tuple(dict.fromkeys(tuple(lock) + ("rider",)))
+    if pedal is not None:
+        if spec.drive.get("chain_m") is None:
+            raise ConfigError(f"pedal: {spec.name} has no chain to pedal through: give drive.chainring_teeth and "
+                              f"drive.cog_teeth (e.g. --set drive.chainring_teeth=32 --set drive.cog_teeth=42)")
+        if not rear_tire:
+            raise ConfigError("pedal: a pedalling rider drives the rear wheel (not with the rear tire off)")
     ter = terrain_mod.make(scenario)
     if ter.moving:
         raise ConfigError("scenario: the drum rig holds a single wheel; a bike rolls on fixed terrain")
     fork_setup, shock_setup = setups(spec)
     radius = fork_setup.tire_radius
     spec_mod.check_geometry(spec, radius)
+    if pedal is not None and speed_m_per_s is None:  # the gear's speed at the cadence
+        ring, cog = spec.drive["chain_m"]
+        speed_m_per_s = cadence_rpm * 2.0 * math.pi / 60.0 * ring / cog * radius
     rim = fork_setup.tire.rim
     steps = stepping(spec, fork_setup, shock_setup, (rim, rim if rear_tire else None))
     timestep = steps.coarse
@@ -188,7 +210,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     kv = 2.0 * total * 2.0 * math.pi * DRIVE_HZ
     limits = {k: spec.drive[v] for k, v in (("push", "push_N"), ("power", "power_W"), ("brake", "brake_N"))
               if v in spec.drive}
-    drv = Drive(drive, kv, **limits)
+    drv = Drive(drive, kv, **limits) if pedal is None else \
+        Drive("pedal", kv, power=power, cadence=cadence_rpm * 2.0 * math.pi / 60.0)
     traction = spec.drive.get("traction", 1.0)
     refresh = min(REFRESH_S, REFRESH_DISTANCE_M / float(speed_m_per_s))
     cb = make_callback(callback, b, fork_setup.fork, shock_setup.fork, front, rear_cb, drv, speed_m_per_s, traction,
@@ -219,6 +242,23 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float = 4.0, drive: str 
     p.initial_qpos, p.initial_qvel, p.initial_act = data.qpos.copy(), data.qvel.copy(), data.act.copy()
     p.watch = crash.Watch(b.model, ter, b.qpos_index("pitch"), pitch_locked="pitch" in lock)
     return p
+
+
+def _check_pedal(pedal) -> tuple[float, float]:
+    """(cadence_rpm, power_W) of a pedalling rider, each within what riders do
+    (``controllers.drive.PEDAL_RPM``, ``PEDAL_POWER_W``), else one ConfigError line."""
+    from mtbmj.controllers.drive import PEDAL_POWER_W, PEDAL_RPM
+
+    try:
+        cadence, power = pedal
+    except (TypeError, ValueError):
+        raise ConfigError(f"pedal: must be (cadence_rpm, power_W), got {pedal!r}") from None
+    for name, value, (low, high), unit in (("cadence", cadence, PEDAL_RPM, "rpm"),
+                                            ("power", power, PEDAL_POWER_W, "W")):
+        if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) \
+                or not low <= value <= high or (name == "power" and value <= 0.0):
+            raise ConfigError(f"pedal: {name} {value!r} {unit} is outside what a rider turns ({low:g}-{high:g} {unit})")
+    return float(cadence), float(power)
 
 
 def _check_lock(lock, rear_tire) -> tuple[str, ...]:
@@ -480,6 +520,39 @@ def geometry(p: Prepared, raw: dict) -> dict:
     return {"chart": chart, "at_sag": sag}
 
 
+def _drive_summary(p: Prepared, raw: dict) -> dict:
+    """The drive's limits and work; for a pedalling rider also the cadence, the power asked and the
+    mean power at the rear contact over the whole crank turns after the first second, and both
+    ends' bob after the start's 2 s (``mtbmj.ride.bob``) when the run is long enough to read one."""
+    dt = p.timestep
+    speed = raw["speed_m_per_s"]
+    out = {"mode": p.drive.mode, "push_limit_N": p.drive.push, "power_limit_W": p.drive.power,
+           "brake_limit_N": p.drive.brake, "traction": p.traction,
+           "work_J": float(np.sum(raw["drive_force_N"] * speed) * dt)}
+    if p.drive.mode != "pedal":
+        return out
+    from mtbmj.ride import bob
+
+    ring, cog = p.spec.drive["chain_m"]
+    t = raw["time_s"]
+    turns = (raw["x_m"] - raw["x_m"][0]) * cog / (ring * p.rear_tire.radius) / (2.0 * math.pi)
+    pedal = {"cadence_rpm": p.drive.cadence * 60.0 / (2.0 * math.pi), "power_W": p.drive.power,
+             "crank_length_mm": CRANK_LENGTH_M * 1e3,
+             "gear": "{}x{}".format(*p.spec.drive["teeth"]),
+             "mean_cadence_rpm": float(turns[-1] / (t[-1] + dt) * 60.0) if t[-1] > 0 else None}
+    first, last = math.floor(float(np.interp(1.0, t, turns))) + 1, math.floor(float(turns[-1]))
+    if last > first:  # whole turns from the first second on
+        sel = (turns >= first) & (turns < last)
+        pedal["rear_power_W"] = float(np.mean(raw["drive_force_N"][sel] * speed[sel]))
+    for end in ("front", "rear"):
+        try:
+            pedal[f"{end}_bob"] = bob.bob(t, raw[f"{end}_travel_mm"], bob.TRIM_S, float(t[-1])).to_dict()
+        except bob.BobError as error:
+            pedal[f"{end}_bob"] = {"unread": str(error)}
+    out["pedal"] = pedal
+    return out
+
+
 def _summary(p: Prepared, raw: dict) -> dict:
     dt = p.timestep
     t = raw["time_s"]
@@ -536,9 +609,7 @@ def _summary(p: Prepared, raw: dict) -> dict:
         "rider_acceleration_peak_m_per_s2": float(np.max(np.abs(acc))),
         "min_speed_m_per_s": float(speed.min()),
         "max_speed_m_per_s": float(speed.max()),
-        "drive": {"mode": p.drive.mode, "push_limit_N": p.drive.push, "power_limit_W": p.drive.power,
-                  "brake_limit_N": p.drive.brake, "traction": p.traction,
-                  "work_J": float(np.sum(raw["drive_force_N"] * speed) * dt)},
+        "drive": _drive_summary(p, raw),
         # what riders read from telemetry (mtbmj.ride.metrics), each end in its own travel
         "ride_metrics": ride,
         # the run ended here (mtbmj.bike.crash): a part other than a tyre on the ground, or the pitch
@@ -596,6 +667,13 @@ class BikeResult(RunOutput):
             comparison = ride_mod.compare(self, ride)
             files["ride_comparison.json"] = output.json_bytes(comparison)
             files["ride_comparison.png"] = ride_mod.png(comparison)
+            if self.info.get("pedal"):  # a pedalling run: its bob beside the ride's (mtbmj.ride.bob)
+                from mtbmj.ride import bob
+
+                path = ride if ride != "example" else None
+                bobs = bob.compare(self, path if path is not None else _example_path())
+                files["bob.json"] = output.json_bytes(bob.json_ready(bobs))
+                files["bob.png"] = bob.png(bobs)
         if video:
             import tempfile
             from pathlib import Path
@@ -725,10 +803,16 @@ def default_duration(p: Prepared) -> float:
     return max(1.0, (p.terrain.length + wheelbase) / p.speed)
 
 
-def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: float | None = None,
+def _example_path():
+    from mtbmj.ride import telemetry
+
+    return telemetry.example_path()
+
+
+def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, duration: float | None = None,
              drive: str = "rider", start_x: float | None = None,
              progress: Callable[[float], None] | None = None, callback: str = "auto", lock=(),
-             rear_tire: bool = True, overrides=None, seated: bool = False) -> BikeResult:
+             rear_tire: bool = True, overrides=None, seated: bool = False, pedal=None) -> BikeResult:
     """Roll the bike ``bike`` (a preset name, a TOML path or a ``BikeSpec``) over ``scenario`` (a
     terrain spec of ``mtbmj roll``) at ``speed_m_per_s``; ``duration`` defaults to the time for both
     wheels to cross the feature and settle; ``drive`` "rider" (a speed controller within a rider's
@@ -738,10 +822,15 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
     sag, "pitch", "rider"), ``rear_tire=False`` the rear wheel lifted (needs "pitch" locked), see
     ``prepare``; ``overrides`` change bike keys (``{"rider.mass_kg": 78}``) and the fork's or the
     shock's configuration keys (``{"fork.set": {"fork.spring.air_pressure_psi": 60}}``), see
-    ``mtbmj.bike.spec.overridden``; ``seated`` the rider seated, held rigid on the frame (``prepare``)."""
-    _check(speed_m_per_s, duration)
+    ``mtbmj.bike.spec.overridden``; ``seated`` the rider seated, held rigid on the frame (``prepare``);
+    ``pedal`` (cadence_rpm, power_W) the rider pedalling through the chain instead of holding a speed
+    (``prepare``; ``speed_m_per_s`` None: the gear's speed at the cadence)."""
+    if pedal is None or speed_m_per_s is not None:
+        _check(speed_m_per_s, duration)
+    else:
+        _check(1.0, duration)
     p = guard.prepared("bike", lambda: prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire,
-                                               overrides, seated),
+                                               overrides, seated, pedal),
                        model_of=lambda p: p.bike.model)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.timestep, 1.0 / p.timestep)
@@ -759,6 +848,8 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float = 4.0, duration: 
             "real_time_factor": duration / wall if wall > 0 else None}
     if seated:
         info["seated"] = True
+    if pedal is not None:
+        info["pedal"] = summary["drive"]["pedal"]
     if p.lock or not p.rear_tire_on:
         info["locked"] = list(p.lock)
         info["rear_tire"] = p.rear_tire_on

@@ -635,6 +635,7 @@ def load(ref: str, overrides=None) -> BikeSpec:
             n = table["drive"][key]
             if isinstance(n, bool) or not isinstance(n, int) or not low <= n <= high:
                 raise ConfigError(f"drive.{key}: must be a whole number of teeth within {low}-{high}, got {n!r}")
+        drive["teeth"] = (int(table["drive"]["chainring_teeth"]), int(table["drive"]["cog_teeth"]))
         drive["chain_m"] = (_linkage.sprocket_radius(table["drive"]["chainring_teeth"]),
                             _linkage.sprocket_radius(table["drive"]["cog_teeth"]))
     warn(keys_mod.warnings({**table, "bike": {k: v for k, v in table["bike"].items() if k not in derived},

@@ -138,6 +138,24 @@ def flat(length_m: float = 10.0) -> Terrain:
     return _profile("flat", [_flat(-LEAD_IN_M, length_m)], length=length_m, params={"length_m": length_m})
 
 
+def climb(grade_percent: float = 10.0, length_m: float = 40.0, at_m: float = LEAD_IN_M,
+          transition_m: float = 3.0) -> Terrain:
+    """A steady climb (or descent, a negative grade): flat to ``at_m``, then rising at
+    ``grade_percent`` (100 x rise / run) for ``length_m`` along the ground's x, entered over a
+    parabolic transition ``transition_m`` long (the grade grows linearly along it, so no kink jolts
+    the wheels), sampled every 50 mm (chord sag below 0.01 mm)."""
+    if not -40.0 <= grade_percent <= 40.0:
+        raise TerrainError(f"climb: grade_percent {grade_percent:g} is outside -40 to 40 % (steeper than any trail "
+                           f"a bike is ridden up or down seated on its wheels)")
+    g, lt = grade_percent / 100.0, min(transition_m, length_m)
+    s = np.linspace(0.0, length_m, max(2, int(round(length_m / 0.05)) + 1))
+    z = np.where(s < lt, 0.5 * g * s * s / lt, g * (s - 0.5 * lt))
+    return _profile("climb", [_flat(-LEAD_IN_M, at_m), (at_m + s[1:], z[1:]),
+                              _flat(at_m + length_m, at_m + length_m + RUN_OUT_M, z[-1])],
+                    length=at_m + length_m,
+                    params={"grade_percent": grade_percent, "length_m": length_m, "at_m": at_m})
+
+
 def step_up(height_mm: float = 50.0, at_m: float = LEAD_IN_M) -> Terrain:
     h = height_mm * MM
     return _profile("step_up", [_flat(-LEAD_IN_M, at_m), _flat(at_m, at_m + RUN_OUT_M, h)],
@@ -283,6 +301,7 @@ def from_csv(path: str | Path) -> Terrain:
 # name -> (builder, {parameter: kind}); kinds: "height" (>= 0, mm), "pos" (> 0), "nonneg", "int", "text"
 LIBRARY = {
     "flat": (flat, {"length_m": "pos"}),
+    "climb": (climb, {"grade_percent": "any", "length_m": "pos", "at_m": "nonneg"}),
     "step_up": (step_up, {"height_mm": "height", "at_m": "nonneg"}),
     "step_down": (step_down, {"height_mm": "height", "at_m": "nonneg"}),
     "square_edge": (square_edge, {"height_mm": "height", "width_mm": "pos", "at_m": "nonneg"}),
@@ -377,5 +396,5 @@ def names() -> list[str]:
     return list(LIBRARY)
 
 
-__all__ = ["Terrain", "DrumTerrain", "TerrainError", "LIBRARY", "make", "parse", "names", "flat", "step_up",
+__all__ = ["Terrain", "DrumTerrain", "TerrainError", "LIBRARY", "make", "parse", "names", "flat", "climb", "step_up",
            "step_down", "square_edge", "root", "rock", "drop", "washboard", "iso8608", "drum", "from_csv"]

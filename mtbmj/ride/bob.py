@@ -1,0 +1,204 @@
+"""Pedal bob: how often and how far a pedalling bike's suspension moves with the pedal strokes, read
+the same way from a recorded ride and from a simulated one (``mtbmj bike ... --pedal RPM --ride
+SST`` writes both side by side).
+
+A rider's legs push twice a crank turn, so pedalling moves the suspension at twice the cadence.
+``bob`` takes one end's travel over the pedalling stretch:
+
+* the stretch: ``start_s``-``end_s`` when given; else from 2 s after the end first carries the rider
+  (travel above 2 mm: sag) to 2 s before it last does, which leaves out getting on and off;
+* the slow part (the rider's weight shifts, the gradient) is taken out by a zero-phase high-pass
+  (Butterworth, 2nd order, 0.7 Hz, run forward and back);
+* the frequency is the peak of its power spectrum (Welch, 4 s segments, padded to 0.01 Hz) within
+  1-5 Hz (cadences of 30-150 rpm), refined by a parabola through the peak's three bins;
+* the amplitude is the median over the stretch's cycles of each cycle's peak to peak (travel's
+  maximum less its minimum between successive upward crossings of zero by the travel band-passed
+  at 0.6-1.6 times that frequency), in mm: what a rider sees as the bob of each stroke.
+
+Recorded amplitudes carry the record's own calibration (a version-2 SST file's are approximate; its
+frequencies are exact). The figure (``figure``) shows each end's bob beside the record's.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from mtbmj.errors import MtbmjError
+
+BAND_HZ = (1.0, 5.0)
+HIGH_PASS_HZ = 0.7
+ON_BIKE_MM = 2.0
+TRIM_S = 2.0
+MIN_STRETCH_S = 4.0
+
+
+class BobError(MtbmjError):
+    """A travel record that holds no pedalling stretch long enough to read a bob from."""
+
+
+@dataclass(frozen=True)
+class Bob:
+    frequency_Hz: float
+    amplitude_mm: float  # median peak to peak per cycle
+    amplitude_iqr_mm: tuple  # its interquartile range over the cycles
+    cycles: int
+    mean_mm: float  # the travel's mean over the stretch (sag while pedalling)
+    window_s: tuple
+
+    @property
+    def cadence_rpm(self) -> float:
+        """The cadence the bob implies: two strokes a turn."""
+        return self.frequency_Hz / 2.0 * 60.0
+
+    def to_dict(self) -> dict:
+        out = asdict(self)
+        out["amplitude_iqr_mm"] = list(self.amplitude_iqr_mm)
+        out["window_s"] = list(self.window_s)
+        out["cadence_rpm"] = self.cadence_rpm
+        return out
+
+
+def stretch(time_s, travel_mm) -> tuple[float, float]:
+    """The pedalling stretch of a record: 2 s after the end first carries the rider (travel above
+    2 mm) to 2 s before it last does."""
+    t = np.asarray(time_s, float)
+    on = np.flatnonzero(np.asarray(travel_mm, float) > ON_BIKE_MM)
+    if on.size == 0:
+        raise BobError("bob: the travel never rises above 2 mm: nobody rode it")
+    return float(t[on[0]] + TRIM_S), float(t[on[-1]] - TRIM_S)
+
+
+def bob(time_s, travel_mm, start_s: float | None = None, end_s: float | None = None) -> Bob:
+    """The pedal bob of one end's travel (see the module doc)."""
+    from scipy import signal
+
+    t = np.asarray(time_s, float)
+    x = np.asarray(travel_mm, float)
+    if t.size < 2 or t.size != x.size:
+        raise BobError("bob: time and travel must be two series of the same length")
+    auto = stretch(t, x) if start_s is None or end_s is None else (start_s, end_s)
+    start = auto[0] if start_s is None else float(start_s)
+    end = auto[1] if end_s is None else float(end_s)
+    if end - start < MIN_STRETCH_S:
+        raise BobError(f"bob: the pedalling stretch {start:.1f}-{end:.1f} s is shorter than {MIN_STRETCH_S:g} s")
+    keep = (t >= start) & (t <= end)
+    t, x = t[keep], x[keep]
+    fs = 1.0 / float(np.median(np.diff(t)))
+    sos = signal.butter(2, HIGH_PASS_HZ, btype="highpass", fs=fs, output="sos")
+    y = signal.sosfiltfilt(sos, x - x.mean())
+    seg = min(y.size, int(round(4.0 * fs)))
+    nfft = max(seg, int(2 ** np.ceil(np.log2(fs / 0.01))))
+    f, p = signal.welch(y, fs=fs, nperseg=seg, nfft=nfft)
+    band = np.flatnonzero((f >= BAND_HZ[0]) & (f <= BAND_HZ[1]))
+    i = int(band[np.argmax(p[band])])
+    peak = float(f[i])
+    if 0 < i < f.size - 1:
+        a, b, c = np.log(p[i - 1:i + 2] + 1e-300)
+        den = a - 2 * b + c
+        if den < 0:
+            peak += 0.5 * (a - c) / den * (f[1] - f[0])
+    sos = signal.butter(2, [0.6 * peak, min(1.6 * peak, 0.45 * fs)], btype="bandpass", fs=fs, output="sos")
+    z = signal.sosfiltfilt(sos, y)
+    up = np.flatnonzero((z[:-1] < 0.0) & (z[1:] >= 0.0))
+    swings = np.array([np.ptp(y[a:b + 1]) for a, b in zip(up[:-1], up[1:])])
+    if swings.size < 3:
+        raise BobError(f"bob: fewer than 3 pedal strokes in {start:.1f}-{end:.1f} s")
+    q1, med, q3 = np.percentile(swings, [25, 50, 75])
+    return Bob(peak, float(med), (float(q1), float(q3)), int(swings.size), float(x.mean()), (start, end))
+
+
+def spectrum(time_s, travel_mm, window_s) -> tuple[np.ndarray, np.ndarray]:
+    """(frequency Hz, amplitude spectral density mm/sqrt(Hz)) of the high-passed travel over the
+    stretch, as ``bob`` reads it."""
+    from scipy import signal
+
+    t = np.asarray(time_s, float)
+    keep = (t >= window_s[0]) & (t <= window_s[1])
+    x = np.asarray(travel_mm, float)[keep]
+    fs = 1.0 / float(np.median(np.diff(t)))
+    y = signal.sosfiltfilt(signal.butter(2, HIGH_PASS_HZ, btype="highpass", fs=fs, output="sos"), x - x.mean())
+    seg = min(y.size, int(round(4.0 * fs)))
+    f, p = signal.welch(y, fs=fs, nperseg=seg, nfft=max(seg, int(2 ** np.ceil(np.log2(fs / 0.01)))))
+    return f, np.sqrt(p)
+
+
+def compare(result, sst: str) -> dict:
+    """The pedal bob of a pedalling bike run (a ``BikeResult``) and of a recorded ride ``sst``, both
+    ends, JSON-ready; the run's stretch leaves out its first 2 s (the start)."""
+    from mtbmj.ride import telemetry
+
+    ride = telemetry.read_sst(sst)
+    raw = result.raw
+    t = raw["time_s"]
+    window = (TRIM_S, float(t[-1]))
+    pedal = result.info.get("pedal", {})
+    out = {"ride": ride.name, "ride_notes": list(ride.notes),
+           "simulation": f"bike {result.name} over {result.scenario}, pedalling {pedal.get('cadence_rpm', 0):g} rpm "
+                         f"at {pedal.get('power_W', 0):g} W{' seated' if result.info.get('seated') else ' standing'}"}
+    for end, sim, real in (("front", raw["front_travel_mm"], ride.fork_mm), ("rear", raw["rear_travel_mm"], ride.rear_mm)):
+        entry = {"simulated": bob(t, sim, *window).to_dict()}
+        if real is not None:
+            try:
+                entry["ride"] = bob(ride.time_s, real).to_dict()
+            except BobError as error:
+                entry["ride_unread"] = str(error)
+        out[end] = entry
+    out["series"] = {"simulated": (t, raw["front_travel_mm"], raw["rear_travel_mm"]),
+                     "ride": (ride.time_s, ride.fork_mm, ride.rear_mm)}
+    return out
+
+
+def figure(comparison: dict):
+    """Each end's bob: four seconds of the high-passed travel, simulated and ridden, and both
+    spectra with the bob frequency marked."""
+    from matplotlib.figure import Figure
+    from scipy import signal
+
+    fig = Figure(figsize=(11, 7), layout="constrained")
+    ax = fig.subplots(2, 2)
+    series = comparison["series"]
+    for row, (end, index, title) in enumerate((("rear", 2, "rear wheel"), ("front", 1, "fork"))):
+        entry = comparison[end]
+        for key, label, color in (("simulated", "simulated", "C0"), ("ride", f"ride {comparison['ride']}", "C1")):
+            if key not in entry:
+                continue
+            b = entry[key]
+            t = np.asarray(series[key][0], float)
+            x = np.asarray(series[key][index], float)
+            fs = 1.0 / float(np.median(np.diff(t)))
+            keep = (t >= b["window_s"][0]) & (t <= b["window_s"][1])
+            y = signal.sosfiltfilt(signal.butter(2, HIGH_PASS_HZ, btype="highpass", fs=fs, output="sos"),
+                                   x[keep] - x[keep].mean())
+            tt = t[keep] - t[keep][0]
+            show = tt <= 4.0
+            ax[row, 0].plot(tt[show], y[show], color=color,
+                            label=f"{label}: {b['frequency_Hz']:.2f} Hz, {b['amplitude_mm']:.1f} mm peak to peak")
+            f, a = spectrum(t, x, b["window_s"])
+            sel = f <= 6.0
+            ax[row, 1].plot(f[sel], a[sel], color=color, label=label)
+            ax[row, 1].axvline(b["frequency_Hz"], color=color, linestyle="--", linewidth=0.8)
+        ax[row, 0].set(xlabel="time in the pedalling stretch (s)", ylabel=f"{title} travel, high-passed (mm)",
+                       title=f"{title}: bob", xlim=(0.0, 4.0))
+        ax[row, 0].legend(fontsize=8, loc="upper right")
+        ax[row, 1].set(xlabel="frequency (Hz)", ylabel="amplitude density (mm/sqrt(Hz))",
+                       title=f"{title}: spectrum (dashed: the bob frequency)", xlim=(0.0, 6.0))
+        ax[row, 1].legend(fontsize=8)
+        for a in ax[row]:
+            a.grid(alpha=0.3)
+    fig.suptitle(f"pedal bob: {comparison['simulation']} beside ride {comparison['ride']}", fontsize=9)
+    return fig
+
+
+def png(comparison: dict) -> bytes:
+    from mtbmj.readout import quicklook
+
+    return quicklook.png(figure(comparison), dpi=90)
+
+
+def json_ready(comparison: dict) -> dict:
+    """The comparison without its time series."""
+    return {k: v for k, v in comparison.items() if k != "series"}
+
+
+__all__ = ["Bob", "BobError", "bob", "stretch", "spectrum", "compare", "figure", "png", "json_ready"]
