@@ -123,18 +123,19 @@ class BikeCallback:
             qp += f * d_hinge
         return qz, qp
 
-    def pedalling(self, qpos, qvel, radial):
+    def pedalling(self, x, speed, radial):
         """(ground, foot): the ground's forces (``wheel_forces``) when the rider's crank torque at the
         crank's angle (the distance rolled through the gear: theta = x cog / (ring r)), at the rider's
-        power at the crank's speed (``pedal_peak``), pulls the chain,
+        power at the crank's speed (``pedal_peak``; the speed of the centre of mass through the gear,
+        as the rider's speed loop reads it), pulls the chain,
         and the driving foot's force on its pedal and the pedal's place (frame coordinates), scaled
         down as the rear tyre's traction caps the drive (a wheel in the air takes no torque)."""
         (fxf, fzf, df), (fxr, fzr, dr) = radial
         ring, cog = self.chain
         radius = self.tires[1].radius
         gear = cog / (ring * radius)  # crank radians per metre rolled
-        peak = pedal_peak(self.drive.power, qvel[self.xv] * gear)
-        torque, fx, fz, px, pz = pedal_forces(qpos[self.xq] * gear, peak, CRANK_LENGTH_M)
+        peak = pedal_peak(self.drive.power, speed * gear)
+        torque, fx, fz, px, pz = pedal_forces(x * gear, peak, CRANK_LENGTH_M)
         rho = radius - (dr if dr > 0.0 else 0.0)
         want = torque * cog / (ring * rho)  # the ground's push whose couple at the patch is the chain's
         if want <= 0.0 or math.hypot(fxr, fzr) <= 0.0:
@@ -194,7 +195,8 @@ class BikeCallback:
         ground = (0.0,) * 6
         foot = (0.0, 0.0, 0.0, 0.0)
         if self.drive.mode == "pedal":  # the crank's torque makes the chain's tension (controllers.drive.pedal_forces)
-            ground, foot = self.pedalling(qpos, qvel, radial)
+            mujoco.mj_mulM(m, d, self._momentum, qvel)
+            ground, foot = self.pedalling(qpos[self.xq], self._momentum[self.xv] / self.total_mass, radial)
         elif self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:
             mujoco.mj_mulM(m, d, self._momentum, qvel)
             f = self.drive.force(self.speed, self._momentum[self.xv] / self.total_mass)

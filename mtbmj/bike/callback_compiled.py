@@ -64,8 +64,8 @@ WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front en
  R_A_TZ1, R_A_DX, R_A_DZ, R_A_PROBE0, R_A_PROBE1, R_A_SHOCK_PROBE, R_SITE0, R_SITE1, R_SBODY0, R_SBODY1, R_FRAME,
  R_ROOT0, R_ROOT1, R_NBODY, R_MASS, R_FORK_STATE, R_SHOCK_STATE, R_DRIVE, R_NL, R_LW, R_LR, R_LS, R_CALLS,
  R_REFRESHES, R_BODYROOT, R_WHEEL0, R_WHEEL1, R_LIMB_F0, R_LIMB_R0, R_LIMB_F1, R_LIMB_R1, R_JZ, R_JP, R_VZ,
- R_VP, R_REACT0, R_REACT1, R_A_GFX, R_A_GFZ, R_A_CF, R_A_CR, R_XQ, R_XV, R_RIDER) = range(57)
-INT_WIDTH = 57
+ R_VP, R_REACT0, R_REACT1, R_A_GFX, R_A_GFZ, R_A_CF, R_A_CR, R_XQ, R_RIDER) = range(56)
+INT_WIDTH = 56
 DRIVE_PEDAL = 2  # R_DRIVE: 0 coasting, 1 the rider's speed controller, 2 pedalling (controllers.drive.pedal_forces)
 # float row of a slot
 (F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_NEXT0, F_NEXT1, F_LAST0, F_LAST1,
@@ -335,7 +335,11 @@ if _numba is not None:
             ring = F[F_CHAIN_RING]
             cog = F[F_CHAIN_COG]
             gear = cog / (ring * F[F_RADIUS])
-            peak = _pedal_peak(F[F_DRIVE_POWER], qvel[I[R_XV]] * gear)
+            nb = I[R_NBODY]
+            mass = _numba.carray(_f64_pointer(I[R_MASS]), (nb,))
+            roots = _numba.carray(_i64_pointer(I[R_BODYROOT]), (nb,))
+            vcom = momentum_x(cvel, subtree_com, xipos, mass, roots, nb) / F[F_TOTAL_MASS]
+            peak = _pedal_peak(F[F_DRIVE_POWER], vcom * gear)
             torque, pfx, pfz, ppx, ppz = _pedal_forces(qpos[I[R_XQ]] * gear, peak, _CRANK)
             rho = F[F_RADIUS] - (deflection if deflection > 0.0 else 0.0)
             want = torque * cog / (ring * rho)
@@ -542,7 +546,7 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
                        R_LIMB_F1: int(m.site(arms.frame_site).id), R_LIMB_R1: int(m.site(arms.rider_site).id),
                        R_JZ: int(m.joint("rider_z").id), R_JP: int(m.joint("rider_pitch").id),
                        R_VZ: bike.dof_index("rider_z"), R_VP: bike.dof_index("rider_pitch"),
-                       R_XQ: bike.qpos_index("bike_x"), R_XV: bike.dof_index("bike_x"),
+                       R_XQ: bike.qpos_index("bike_x"),
                        R_RIDER: int(m.body("rider").id)})
         values[R_ACT_F] = int(m.actuator_actadr[values[R_A_FS]])
         values[R_ACT_S] = int(m.actuator_actadr[values[R_A_SS]])

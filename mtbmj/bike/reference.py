@@ -263,7 +263,7 @@ class Reference:
             ring, cog = self.chain
             radius = self.rear_tire.radius
             gear = cog / (ring * radius)
-            torque, fpx, fpz, ppx, ppz = pedal_forces(q[0] * gear, pedal_peak(self.drive.power, qd[0] * gear),
+            torque, fpx, fpz, ppx, ppz = pedal_forces(q[0] * gear, pedal_peak(self.drive.power, float(M[0] @ qd) / M[0, 0] * gear),
                                                       CRANK_LENGTH_M)
             want = torque * cog / (ring * (radius - max(dr, 0.0)))
             if want > 0.0 and math.hypot(fxr, fzr) > 0.0:

@@ -9,7 +9,7 @@ from mtbmj._package import __version__
 # Nothing heavy at import: ``python -m mtbmj.cli`` and the ``mtbmj`` script import this package
 # before their entry (``_entry``) installs its Ctrl-C handler, so the shared parts load after it.
 
-COMMANDS = ("drop", "airstudy", "sag", "curve", "compare", "fit", "synth", "validate", "sweep", "sensitivity", "roll", "bike", "telemetry", "render", "presets", "linkage", "reconstruct", "advise")
+COMMANDS = ("drop", "airstudy", "sag", "curve", "compare", "fit", "synth", "validate", "sweep", "sensitivity", "roll", "bike", "telemetry", "render", "presets", "linkage", "reconstruct", "advise", "bob")
 
 
 def build_parser():

@@ -25,14 +25,46 @@ def cmd_bike(args) -> int:
 
         gl_backend()  # no headless OpenGL: one line before any work
     overrides = bike_overrides(args)
+    pedal = pedal_option(args)
     result = Progress(f"bike {args.bike} over {args.scenario}", not args.quiet).around(
         lambda progress: run_bike(args.bike, args.scenario, args.speed, args.duration, args.drive, args.start_m,
                                   progress, lock=tuple(k.strip() for k in args.lock.split(",")) if args.lock else (),
-                                  rear_tire=not args.lift_rear, overrides=overrides, seated=args.seated))
+                                  rear_tire=not args.lift_rear, overrides=overrides, seated=args.seated,
+                                  pedal=pedal))
     written = result.write(args.out, figure=not args.no_figure, video=args.video, ride=args.ride)
     print(f"{result.headline()}; {result.info['real_time_factor']:.2f}x real time; wrote {len(written)} files to "
           f"{args.out}")
     return EXIT_CRASHED if result.summary.get("crash") else 0
+
+
+def pedal_option(args):
+    """(cadence_rpm, power_W) from ``--pedal`` and ``--power``, or None; ``--speed`` is needed
+    without ``--pedal`` (with it, it is the start speed, by default the gear's at the cadence)."""
+    from mtbmj.errors import ConfigError
+
+    if args.pedal is None:
+        if args.power is not None:
+            raise ConfigError("--power: is the pedalling rider's power; give the cadence with --pedal RPM")
+        if args.speed is None:
+            raise ConfigError("--speed: give the speed in m/s (or --pedal RPM: the rider pedals, at the gear's speed)")
+        return None
+    if args.drive != "rider":
+        raise ConfigError(f"--pedal: the pedalling rider is the drive; --drive {args.drive} cannot go with it")
+    return (args.pedal, PEDAL_POWER_DEFAULT_W if args.power is None else args.power)
+
+
+# a trail rider's steady climbing power (assumed: a round value for a fit amateur over minutes)
+PEDAL_POWER_DEFAULT_W = 250.0
+
+
+def add_pedal(p) -> None:
+    p.add_argument("--pedal", type=float, metavar="RPM",
+                   help="the rider pedals at this cadence instead of holding a speed: the crank's torque (each leg "
+                        "on its downstroke) pulls the chain (needs drive.chainring_teeth and drive.cog_teeth) and "
+                        "the feet push the pedals; the start speed is the gear's at RPM unless --speed gives it")
+    p.add_argument("--power", type=float, metavar="W",
+                   help=f"--pedal: the rider's power in W (default {PEDAL_POWER_DEFAULT_W:g}), held as the crank "
+                        f"speeds up or slows")
 
 
 def bike_overrides(args) -> dict:
@@ -68,7 +100,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("bike", help="bike preset (sst, trail) or a bike TOML file (see docs/bike.md)")
     p.add_argument("scenario", help=f"terrain: {', '.join(n for n in names() if n != 'drum')} (optionally "
                                     "name:key=value,...) or a CSV profile (distance_m, height_mm)")
-    p.add_argument("--speed", type=float, required=True, help="speed in m/s (> 0)")
+    p.add_argument("--speed", type=float, help="speed in m/s (> 0); with --pedal the start speed")
     p.add_argument("--drive", choices=("rider", "coast"), default="rider",
                    help="rider (default): a speed controller at the rear wheel within a rider's push, power and "
                         "braking and the rear tire's traction; coast: no drive")
@@ -84,16 +116,18 @@ def add_parser(subparsers) -> None:
                         "--lock rear,pitch,rider it is the rolling front end's rig)")
     p.add_argument("--seated", action="store_true",
                    help="the rider seated on the saddle, held rigid on the frame (rider.seated_com_mm)")
+    add_pedal(p)
     add_bike_sets(p)
     add_out(p, "out/bike")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.add_argument("--no-figure", action="store_true", help="do not draw quicklook.png")
     p.add_argument("--ride", metavar="SST",
                    help="also write ride_comparison.png/.json: both ends' travel histograms beside a real Sufni SST "
-                        "ride (a .SST file, or 'example' for the shipped ride of the SST bike)")
+                        "ride (a .SST file, or 'example' for the shipped ride of the SST bike); with --pedal also "
+                        "bob.png/.json: both ends' pedal bob (frequency, peak to peak) beside the ride's")
     p.add_argument("--video", action="store_true",
                    help="also write bike.gif: the run side on at 30 frames/s (headless EGL or OSMesa)")
     p.set_defaults(func=cmd_bike)
 
 
-__all__ = ["add_parser", "cmd_bike"]
+__all__ = ["add_parser", "add_pedal", "cmd_bike", "pedal_option"]

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 import sys
 import time
-from pathlib import Path
 
 from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, Progress, add_out, add_run_options, overrides
 
@@ -69,6 +68,8 @@ def cmd_crosscheck(args) -> int:
 
     if args.speed is not None or args.drive is not None or args.head_angle is not None:
         raise MtbmjError("--speed, --drive and --head-angle: apply to a rolling cross-check (--roll SCENARIO)")
+    if args.pedal is not None or args.power is not None or args.seated:
+        raise MtbmjError("--pedal, --power and --seated: apply to a bike cross-check (--bike)")
 
     if not (math.isfinite(args.tolerance_mm) and args.tolerance_mm > 0):
         raise MtbmjError(f"--tolerance-mm: must be a positive number of mm, got {args.tolerance_mm:g}")
@@ -86,6 +87,8 @@ def _crosscheck_roll(args) -> int:
 
     if args.speed is None:
         raise MtbmjError("--roll: give the speed with --speed M_PER_S")
+    if args.pedal is not None or args.power is not None or args.seated:
+        raise MtbmjError("--pedal, --power and --seated: apply to a bike cross-check (--bike)")
     if args.engines != "mujoco" or args.tolerance_mm != 0.1:
         raise MtbmjError("--engines and --tolerance-mm: apply to a drop cross-check; a rolling one compares MuJoCo "
                          "with the rolling reference at 0.02 mm and 1 %")
@@ -102,14 +105,20 @@ def _crosscheck_bike(args) -> int:
     from mtbmj.errors import MtbmjError
     from mtbmj.bike.crosscheck import crosscheck
 
-    if args.roll is None or args.speed is None:
-        raise MtbmjError("--bike: give the terrain with --roll SCENARIO and the speed with --speed M_PER_S")
+    if args.roll is None or (args.speed is None and args.pedal is None):
+        raise MtbmjError("--bike: give the terrain with --roll SCENARIO and the speed with --speed M_PER_S (or --pedal "
+                         "RPM)")
     if args.engines != "mujoco" or args.tolerance_mm != 0.1 or args.head_angle is not None or args.set:
         raise MtbmjError("--engines, --tolerance-mm, --head-angle and --set: do not apply to a bike cross-check (the "
                          "bike's description sets its geometry and laws)")
     if args.drive not in (None, "rider", "coast"):
         raise MtbmjError(f"--drive: a bike is driven by its rider or coasts, not {args.drive}")
-    check = crosscheck(args.config, args.roll, args.speed, args.duration, args.drive or "rider")
+    from mtbmj.cli.bike import pedal_option
+
+    args.drive = args.drive or "rider"
+    pedal = pedal_option(args)
+    check = crosscheck(args.config, args.roll, args.speed, args.duration, args.drive, pedal=pedal,
+                       seated=args.seated)
     print(check.line())
     return 0 if check.passed else 1
 
@@ -153,5 +162,9 @@ def add_parser(sub) -> None:
                    help="CONFIG names a bike (mtbmj bike's presets or a bike TOML): its run over --roll SCENARIO at "
                         "--speed against the bike's own ODE reference, travel at both ends within 0.1 mm and each "
                         "tire's load within 1 %% of the reference's peak, at its peak and at every sample")
+    from mtbmj.cli.bike import add_pedal
+
+    add_pedal(p)
+    p.add_argument("--seated", action="store_true", help="--bike: the rider seated, held rigid on the frame")
     add_run_options(p)
     p.set_defaults(func=cmd_crosscheck)

@@ -1,0 +1,47 @@
+"""``mtbmj bob RECORD... --bike BIKE --out DIR``: recorded pedalling rides (Sufni SST files) and the
+bike pedalled as each was, their pedal bob side by side (``mtbmj.ride.bob.against``): bob.json and
+bob.png, one line per record."""
+from __future__ import annotations
+
+from mtbmj.cli.common import add_out
+
+
+def cmd_bob(args) -> int:
+    from mtbmj.cli.bike import bike_overrides
+    from mtbmj.errors import ConfigError
+    from mtbmj.ride import bob
+    from mtbmj.ride.telemetry import read_sst
+
+    for path in args.records:
+        read_sst(path)  # a bad record: one line before any work
+    stances = [s.strip() for s in args.stance.split(",")] if args.stance else None
+    if args.power is not None and not 0.0 < args.power <= 1500.0:
+        raise ConfigError(f"--power: {args.power:g} W is outside what a rider keeps up (0-1500 W)")
+    if args.duration is not None and not args.duration >= 8.0:
+        raise ConfigError(f"--duration: {args.duration:g} s is too short to read a bob over its second half (8 s "
+                          f"at least)")
+    result = bob.against(args.records, args.bike, stances, args.power or 250.0, bike_overrides(args) or None,
+                         args.duration or bob.RUN_S)
+    result.write(args.out)
+    for line in result.lines():
+        print(line)
+    print(f"wrote bob.json and bob.png to {args.out}")
+    return 0
+
+
+def add_parser(sub) -> None:
+    from mtbmj.cli.bike import add_bike_sets
+
+    p = sub.add_parser("bob", help="pedal bob of recorded pedalling rides beside the bike pedalled as each was")
+    p.add_argument("records", nargs="+", metavar="RECORD", help="Sufni SST recordings of pedalling")
+    p.add_argument("--bike", default="sst", help="bike preset or bike TOML file (default sst)")
+    p.add_argument("--stance", help="standing or seated, one per record, comma-separated (default all standing)")
+    p.add_argument("--power", type=float, help="the rider's power in W (default 250)")
+    p.add_argument("--duration", type=float, help="simulated seconds per record (default 14; the bob is read over "
+                                                  "the second half)")
+    add_bike_sets(p)
+    add_out(p, "out/bob")
+    p.set_defaults(func=cmd_bob)
+
+
+__all__ = ["add_parser", "cmd_bob"]
