@@ -523,7 +523,8 @@ def geometry(p: Prepared, raw: dict) -> dict:
 def _drive_summary(p: Prepared, raw: dict) -> dict:
     """The drive's limits and work; for a pedalling rider also the cadence, the power asked and the
     mean power at the rear contact over the whole crank turns after the first second, and both
-    ends' bob after the start's 2 s (``mtbmj.ride.bob``) when the run is long enough to read one."""
+    ends' bob over the run's second half (``mtbmj.ride.bob.run_stretch``) when the run is long
+    enough to read one."""
     dt = p.timestep
     speed = raw["speed_m_per_s"]
     out = {"mode": p.drive.mode, "push_limit_N": p.drive.push, "power_limit_W": p.drive.power,
@@ -546,7 +547,7 @@ def _drive_summary(p: Prepared, raw: dict) -> dict:
         pedal["rear_power_W"] = float(np.mean(raw["drive_force_N"][sel] * speed[sel]))
     for end in ("front", "rear"):
         try:
-            pedal[f"{end}_bob"] = bob.bob(t, raw[f"{end}_travel_mm"], bob.TRIM_S, float(t[-1])).to_dict()
+            pedal[f"{end}_bob"] = bob.bob(t, raw[f"{end}_travel_mm"], *bob.run_stretch(t)).to_dict()
         except bob.BobError as error:
             pedal[f"{end}_bob"] = {"unread": str(error)}
     out["pedal"] = pedal

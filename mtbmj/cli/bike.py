@@ -50,6 +50,9 @@ def pedal_option(args):
         return None
     if args.drive != "rider":
         raise ConfigError(f"--pedal: the pedalling rider is the drive; --drive {args.drive} cannot go with it")
+    if getattr(args, "ride", None) is not None and args.duration is not None and args.duration < 8.0:
+        raise ConfigError(f"--duration: {args.duration:g} s is too short to read the pedal bob beside --ride (8 s at "
+                          f"least: the bob is read over the run's second half)")
     return (args.pedal, PEDAL_POWER_DEFAULT_W if args.power is None else args.power)
 
 

@@ -11,7 +11,8 @@ A rider's legs push twice a crank turn, so pedalling moves the suspension at twi
   (Butterworth, 2nd order, 0.7 Hz, run forward and back);
 * the frequency is the peak of its power spectrum (Welch, 4 s segments, padded to 0.01 Hz) within
   1-5 Hz (cadences of 30-150 rpm), refined by a parabola through the peak's three bins;
-* the amplitude is the median over the stretch's cycles of each cycle's peak to peak (travel's
+* the amplitude is the median over the stretch's cycles of each cycle's peak to peak (the
+  high-passed travel, low-passed at four times that frequency to leave the sensor's noise out, its
   maximum less its minimum between successive upward crossings of zero by the travel band-passed
   at 0.6-1.6 times that frequency), in mm: what a rider sees as the bob of each stroke.
 
@@ -80,7 +81,7 @@ def bob(time_s, travel_mm, start_s: float | None = None, end_s: float | None = N
     auto = stretch(t, x) if start_s is None or end_s is None else (start_s, end_s)
     start = auto[0] if start_s is None else float(start_s)
     end = auto[1] if end_s is None else float(end_s)
-    if end - start < MIN_STRETCH_S:
+    if end - start < MIN_STRETCH_S - 0.01:  # (a run's last sample lies a step before its end)
         raise BobError(f"bob: the pedalling stretch {start:.1f}-{end:.1f} s is shorter than {MIN_STRETCH_S:g} s")
     keep = (t >= start) & (t <= end)
     t, x = t[keep], x[keep]
@@ -101,6 +102,8 @@ def bob(time_s, travel_mm, start_s: float | None = None, end_s: float | None = N
     sos = signal.butter(2, [0.6 * peak, min(1.6 * peak, 0.45 * fs)], btype="bandpass", fs=fs, output="sos")
     z = signal.sosfiltfilt(sos, y)
     up = np.flatnonzero((z[:-1] < 0.0) & (z[1:] >= 0.0))
+    if 4.0 * peak < 0.45 * fs:  # the sensor's noise out, the stroke's shape (its first harmonics) kept
+        y = signal.sosfiltfilt(signal.butter(2, 4.0 * peak, btype="lowpass", fs=fs, output="sos"), y)
     swings = np.array([np.ptp(y[a:b + 1]) for a, b in zip(up[:-1], up[1:])])
     if swings.size < 3:
         raise BobError(f"bob: fewer than 3 pedal strokes in {start:.1f}-{end:.1f} s")
