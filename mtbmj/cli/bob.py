@@ -1,5 +1,5 @@
 """``mtbmj bob RECORD... --bike BIKE --out DIR``: recorded pedalling rides (Sufni SST files) and the
-bike pedalled as each was, their pedal bob side by side (``mtbmj.ride.bob.against``): bob.json and
+bike pedalled as each was, their pedal bob side by side (``mtbmj.bike.pedalling.against``): bob.json and
 bob.png, one line per record."""
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from mtbmj.cli.common import add_out
 def cmd_bob(args) -> int:
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.errors import ConfigError
-    from mtbmj.ride import bob
+    from mtbmj.bike import pedalling
     from mtbmj.ride.telemetry import read_sst
 
     for path in args.records:
@@ -20,8 +20,8 @@ def cmd_bob(args) -> int:
     if args.duration is not None and not args.duration >= 8.0:
         raise ConfigError(f"--duration: {args.duration:g} s is too short to read a bob over its second half (8 s "
                           f"at least)")
-    result = bob.against(args.records, args.bike, stances, args.power or 250.0, bike_overrides(args) or None,
-                         args.duration or bob.RUN_S)
+    result = pedalling.against(args.records, args.bike, stances, args.power or 250.0, bike_overrides(args) or None,
+                         args.duration or pedalling.RUN_S)
     result.write(args.out)
     for line in result.lines():
         print(line)
