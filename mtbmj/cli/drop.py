@@ -108,9 +108,12 @@ def _crosscheck_bike(args) -> int:
     if args.roll is None or (args.speed is None and args.pedal is None):
         raise MtbmjError("--bike: give the terrain with --roll SCENARIO and the speed with --speed M_PER_S (or --pedal "
                          "RPM)")
-    if args.engines != "mujoco" or args.tolerance_mm != 0.1 or args.head_angle is not None or args.set:
-        raise MtbmjError("--engines, --tolerance-mm, --head-angle and --set: do not apply to a bike cross-check (the "
+    if args.engines != "mujoco" or args.tolerance_mm != 0.1 or args.head_angle is not None:
+        raise MtbmjError("--engines, --tolerance-mm and --head-angle: do not apply to a bike cross-check (the "
                          "bike's description sets its geometry and laws)")
+    from mtbmj.config import parse_assignment
+
+    bike_set = dict(parse_assignment(text) for text in args.set or ())  # bike keys (mtbmj bike --set)
     if args.drive not in (None, "rider", "coast"):
         raise MtbmjError(f"--drive: a bike is driven by its rider or coasts, not {args.drive}")
     from mtbmj.cli.bike import pedal_option
@@ -118,7 +121,7 @@ def _crosscheck_bike(args) -> int:
     args.drive = args.drive or "rider"
     pedal = pedal_option(args)
     check = crosscheck(args.config, args.roll, args.speed, args.duration, args.drive, pedal=pedal,
-                       seated=args.seated)
+                       seated=args.seated, overrides=bike_set or None)
     print(check.line())
     return 0 if check.passed else 1
 
@@ -161,7 +164,8 @@ def add_parser(sub) -> None:
     p.add_argument("--bike", action="store_true",
                    help="CONFIG names a bike (mtbmj bike's presets or a bike TOML): its run over --roll SCENARIO at "
                         "--speed against the bike's own ODE reference, travel at both ends within 0.1 mm and each "
-                        "tire's load within 1 %% of the reference's peak, at its peak and at every sample")
+                        "tire's load within 1 %% of the reference's peak, at its peak and at every sample; --set "
+                        "SECTION.KEY=VALUE then changes a key of the bike file")
     from mtbmj.cli.bike import add_pedal
 
     add_pedal(p)
