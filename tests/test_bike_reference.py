@@ -18,7 +18,7 @@ from mtbmj.rolling.terrain import LIBRARY
 TERRAINS = {"flat": "flat", "step_up": "step_up:at_m=0.4", "step_down": "step_down:at_m=0.4",
             "square_edge": "square_edge:at_m=0.4", "root": "root:at_m=0.4", "rock": "rock:at_m=0.4",
             "drop": "drop:at_m=0.4", "washboard": "washboard:at_m=0.4,length_m=1.5",
-            "iso8608": "iso8608:at_m=0.4,class=D,length_m=10"}
+            "iso8608": "iso8608:at_m=0.4,class=D,length_m=10", "climb": "climb:at_m=0.4,grade_percent=15,length_m=3"}
 STATIC_N = {"front": 425.0, "rear": 567.0}  # the SST bike's static tire loads (tests/test_bike.py's closed form)
 
 
@@ -45,6 +45,8 @@ def test_mujoco_matches_the_bike_reference(name, speed):
         assert front == pytest.approx(STATIC_N["front"], rel=0.01) and rear == pytest.approx(STATIC_N["rear"], rel=0.01)
     elif name == "iso8608":  # class D at 4-6 m/s: a rough road, not a hit
         assert front > 1.1 * STATIC_N["front"] and rear > 1.04 * STATIC_N["rear"]
+    elif name == "climb":  # the grade's concave entry (0.05 1/m) at v: v^2 / 20 m/s^2 more on each wheel
+        assert front > (1.0 + 0.8 * speed**2 * 0.05 / 9.81) * STATIC_N["front"] and rear > 1.1 * STATIC_N["rear"]
     elif name in ("drop", "step_down"):  # the rear follows down: it may land softer than it stood
         assert front > 1.5 * STATIC_N["front"] and rear > STATIC_N["rear"]
     else:  # the feature met at both ends: each tire's load rose well above its static value
