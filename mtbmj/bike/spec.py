@@ -23,6 +23,7 @@ import numpy as np
 
 
 from mtbmj.bike import linkage as _linkage
+from mtbmj.bike import shock as _shock
 from mtbmj.errors import ConfigError
 
 MM = 1e-3
@@ -269,6 +270,10 @@ def read_table(ref: str) -> tuple[dict, str]:
         elif "leverage" in part or "pivot_mm" in (part.get("bike") or {}):
             table.pop("linkage", None)  # a table or a pivot replaces the hardpoints its bases gave
         table = _merge(table, part)
+        mine = part.get("shock")
+        if isinstance(mine, dict) and mine.keys() & set(_shock.KEYS):  # a shock as sold: its keys set this
+            # file's [shock.set] over its bases' (mtbmj.bike.shock), so a later file's [shock.set] wins
+            table["shock"]["set"] = _shock.schema_keys(mine, table["shock"].get("set", {}), table["shock"].get("spring"))
     return table, str(ref)
 
 
@@ -420,7 +425,7 @@ KNOWN = {
              "fork_lower_mass_kg", "front_wheel_mass_kg", "rear_wheel_mass_kg", "wheel_inertia_kg_m2"},
     "leverage": {"wheel_travel_mm", "ratio", "csv"},
     "linkage": _linkage.known_keys(),
-    "shock": {"stroke_mm", "config", "set"},
+    "shock": {"stroke_mm", "config", "set", *_shock.KEYS},
     "fork": {"config", "set"},
     "rider": {"mass_kg", "limbs_share_percent", "com_mm", "pitch_inertia_kg_m2", "pedals_mm", "bars_mm",
               "seated_com_mm", "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
@@ -515,6 +520,9 @@ def overridden(table: dict, overrides) -> dict:
             raise ConfigError(f"--set {key}: unknown key (known in [{section}]: "
                               f"{', '.join(sorted(k for k in KNOWN[section] if k != 'set'))})")
         out.setdefault(section, {})[name] = value
+        if section == "shock" and name in _shock.KEYS:  # a shock's key as sold sets its [shock.set] now
+            sh = out["shock"]
+            sh["set"] = _shock.schema_keys({name: value}, sh.get("set", {}), sh.get("spring"))
     return out
 
 
