@@ -339,6 +339,29 @@ def circle_path(link: Linkage, c: Curves, pivot) -> tuple[np.ndarray, np.ndarray
     return pivot[0] + x, pivot[1] + z
 
 
+def fitted_pivot(link: Linkage, c: Curves) -> np.ndarray:
+    """The centre (m) of the circle through the rear axle at full extension that best fits (least
+    squares, ``scipy.optimize.least_squares``) the linkage's axle path over its travel: where the
+    bike's single pivot turns the axle of a four-bar whose axle rides on its coupler (a Horst link's
+    seatstay, a short link's rear triangle). The instant centre at full extension gives the path's
+    direction there but not its curvature (the coupler point's centre of curvature lies elsewhere:
+    Euler-Savary), so its circle leaves the path by millimetres; this circle follows it."""
+    from scipy.optimize import least_squares
+
+    a0 = link.p0["rear_axle"]
+
+    def residual(centre):
+        return np.hypot(c.axle_x - centre[0], c.axle_z - centre[1]) - np.hypot(*(a0 - centre))
+
+    start = link.pose(0.0).axle_centre
+    guess = [link.p0["main_pivot"] if "main_pivot" in link.p0 else a0 + np.array([0.4, 0.05])]
+    if start is not None:
+        guess.insert(0, start)
+    best = min((least_squares(residual, g, x_scale=0.1, xtol=1e-14, ftol=1e-14) for g in guess),
+               key=lambda r: float(np.max(np.abs(r.fun))))
+    return np.asarray(best.x, float)
+
+
 def path_departure(link: Linkage, c: Curves, pivot) -> float:
     """The largest distance (m) between the linkage's axle path and the circle about ``pivot``, at equal travel."""
     x, z = circle_path(link, c, pivot)

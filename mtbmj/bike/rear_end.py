@@ -32,7 +32,7 @@ class BikeLinkage:
     name: str
     link: Linkage
     curves: Curves
-    pivot: np.ndarray  # where the bike's single pivot turns the axle (the main pivot or the instant centre at top-out)
+    pivot: np.ndarray  # where the bike's single pivot turns the axle (the main pivot, or the centre of the circle fitting a four-bar's axle path)
     tyre_radius: float
     stroke: float
 
@@ -88,8 +88,11 @@ class BikeLinkage:
         ax[0, 1].plot(c.axle_x / MM, c.axle_z / MM, color="C0", label="linkage")
         title = "Rear axle path"
         if self.link.kind in ("horst_link", "short_link"):
-            ax[0, 1].plot(x / MM, z / MM, color="C3", linestyle="--", label="the bike's pivot")
-            title += "\n(dashed: as the bike runs it, about\nthe instant centre at top-out)"
+            off = path_departure(self.link, c, self.pivot) / MM
+            ax[0, 1].plot(x / MM, z / MM, color="C3", linestyle="--",
+                          label=f"the bike's circle ({off:.3f} mm at most from it)")
+            ax[0, 1].legend(loc="best", fontsize=8)
+            title += "\n(dashed: as the bike runs it, on the circle\nthat best fits the linkage's path)"
         ax[0, 1].set(xlabel="axle x in the frame (mm)", ylabel="axle z in the frame (mm)", title=title)
         ax[0, 1].set_aspect("equal", adjustable="datalim")
         ax[1, 0].plot(w, c.anti_squat, color="C2", label=f"anti-squat ({self.link.chainring}x{self.link.cog} T)")

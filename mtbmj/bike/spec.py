@@ -312,13 +312,15 @@ def _sensors(table: dict) -> dict:
 
 
 LINKAGE_AXLE_TOLERANCE_MM = 1.0  # the linkage's rear axle against the frame's (bike.rear_axle_mm or the chart's)
+PATH_TOLERANCE_MM = 0.1  # a four-bar's axle path and the bike's circle: farther apart than this, a warning says so
 
 
 def _with_linkage(table: dict) -> dict:
     """``table`` with ``bike.pivot_mm`` and ``[leverage]`` from its ``[linkage]`` (``mtbmj.bike.linkage``):
-    the pivot the rear axle turns about (a four-bar's instant centre at full extension, with a
-    warning giving how far its circle leaves the linkage's axle path) and the leverage ratio every
-    millimetre of wheel travel up to the shock's stroke."""
+    the pivot the rear axle turns about (for a four-bar whose axle rides on its coupler, the centre of
+    the circle that best fits the linkage's axle path, ``linkage.fitted_pivot``, with a warning when
+    it leaves the path by more than 0.1 mm) and the leverage ratio every millimetre of wheel travel
+    up to the shock's stroke."""
     from mtbmj.bike import linkage as lk
     from mtbmj.config import warn
 
@@ -334,16 +336,20 @@ def _with_linkage(table: dict) -> dict:
                               f"{LINKAGE_AXLE_TOLERANCE_MM:g} mm from bike.rear_axle_mm (or the chart's) "
                               f"{bike['rear_axle_mm']!r}")
     bike["rear_axle_mm"] = axle.tolist()
-    pivot = (link.p0["main_pivot"] if link.four_bar is None or link.kind == "linkage_driven_single_pivot"
-             else link.pose(0.0).axle_centre)
-    if pivot is None:
-        raise ConfigError("linkage: the four-bar's frame links are parallel at full extension (no instant centre)")
+    if link.four_bar is None or link.kind == "linkage_driven_single_pivot":
+        pivot = link.p0["main_pivot"]
+    else:  # the axle rides on the coupler: the circle that fits its path (lk.fitted_pivot)
+        if link.pose(0.0).axle_centre is None:
+            raise ConfigError("linkage: the four-bar's frame links are parallel at full extension (no instant centre)")
+        pivot = lk.fitted_pivot(link, c)
     bike["pivot_mm"] = (pivot / MM).tolist()
     if link.kind in ("horst_link", "short_link"):
         off = lk.path_departure(link, c, pivot)
-        warn([f"linkage.kind = {link.kind}: the bike turns its rear axle about the instant centre at full "
-              f"extension ({pivot[0] / MM:.1f}, {pivot[1] / MM:.1f} mm), {off / MM:.1f} mm at most from the "
-              f"linkage's axle path over the travel; the leverage ratio is the linkage's (mtbmj linkage draws both)"])
+        if off > PATH_TOLERANCE_MM * MM:
+            warn([f"linkage.kind = {link.kind}: the bike turns its rear axle on the circle that best fits the "
+                  f"linkage's axle path (centre {pivot[0] / MM:.1f}, {pivot[1] / MM:.1f} mm), {off / MM:.2f} mm at "
+                  f"most from that path over the travel; the leverage ratio is the linkage's (mtbmj linkage draws "
+                  f"both)"])
     lev = {"wheel_travel_mm": (c.travel / MM).tolist(), "ratio": c.leverage_ratio.tolist()}
     out = {k: v for k, v in table.items() if k != "linkage"}
     out.update({"bike": bike, "leverage": lev})
@@ -679,7 +685,7 @@ def check_geometry(spec: BikeSpec, tire_radius: float) -> None:
     """Cross-checks that need the tire: the main pivot outside the rear wheel, the swingarm able to
     reach the full wheel travel."""
     ls = spec.swingarm_length
-    if ls <= tire_radius:
+    if ls <= tire_radius and not spec.virtual_pivot:  # a four-bar's circle may have a short radius
         raise ConfigError(f"bike.pivot_mm: the main pivot lies inside the rear wheel ({ls / MM:.0f} mm from the axle, "
                           f"tire radius {tire_radius / MM:.0f} mm)")
     beta = spec.swingarm_angle
