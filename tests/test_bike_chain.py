@@ -53,7 +53,7 @@ def climb(tmp_path_factory):
     bike.write_text(CHAIN)
     path = _slope(folder, 0.2, "climb")
     return {cb: mtbmj.run_bike(str(bike), path, 4.0, duration=6.0, callback=cb) for cb in ("compiled", "python")}, \
-        mtbmj.run_bike("sst", path, 4.0, duration=6.0)
+        mtbmj.run_bike("sst", path, 4.0, duration=6.0, overrides={"drive.chain": False})  # a hub drive
 
 
 def test_the_swingarm_balances_by_virtual_work_with_the_chain(climb):
@@ -106,8 +106,14 @@ def test_the_compiled_callback_is_the_python_one_with_a_chain(climb):
 
 
 def test_a_chain_needs_both_sprockets(tmp_path):
+    from pathlib import Path
+
+    # the SST preset without its sprockets, as a bike file of its own
+    preset = (Path(spec_mod.__file__).parent / "presets" / "sst.toml").read_text().splitlines()
+    (tmp_path / "bare.toml").write_text("\n".join(line for line in preset
+                                                 if not line.startswith(("chainring_teeth", "cog_teeth"))) + "\n")
     bike = tmp_path / "half.toml"
-    bike.write_text('base = "sst"\n[drive]\nchainring_teeth = 32\n')
+    bike.write_text('base = "bare.toml"\n[drive]\nchainring_teeth = 32\n')
     with pytest.raises(spec_mod.ConfigError, match="drive.cog_teeth: needed with drive.chainring_teeth"):
         spec_mod.load(str(bike))
     bike.write_text('base = "sst"\n[drive]\nchainring_teeth = 32\ncog_teeth = 8\n')

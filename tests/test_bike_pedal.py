@@ -185,7 +185,7 @@ def test_bike_pedal_cli_writes_bob_beside_a_ride(tmp_path):
 
 
 @pytest.mark.parametrize("args, says", [
-    (("--pedal", "60"), "no chain to pedal through"),
+    (("--pedal", "60", "--set", "drive.chain=false"), "no chain to pedal through"),
     (("--pedal", "200", "--set", "drive.chainring_teeth=32", "--set", "drive.cog_teeth=42"), "outside what a rider"),
     (("--pedal", "60", "--power", "5000", "--set", "drive.chainring_teeth=32", "--set", "drive.cog_teeth=42"),
      "power 5000"),

@@ -137,7 +137,7 @@ def test_refusals(tmp_path, shock, says):
     assert not (tmp_path / "run").exists()
 
 
-def test_air_shock_sag_and_run(tmp_path):
+def test_air_shock_sag_and_run(tmp_path, monkeypatch):
     """mtbmj sag --bike on the air shock given as sold: the written bike puts the rear at 28 % of its
     travel (the bike's statics, read back here), and the bike runs off a drop."""
     from mtbmj.bike import run, sag
@@ -146,9 +146,10 @@ def test_air_shock_sag_and_run(tmp_path):
     got = sag.solve(path, 20.0, 28.0)
     assert got.shock_key == "fork.spring.air_pressure_psi"
     got.write(tmp_path / "set")
-    p = run.prepare(str(tmp_path / "set" / "bike.toml"), "flat", 4.0, callback="python")
+    monkeypatch.chdir(tmp_path)  # set/bike.toml's base, ../air.toml, lies in the current directory
+    p = run.prepare("set/bike.toml", "flat", 4.0, callback="python")
     w = p.bike.spec.leverage.full_travel
     rear = float(p.callback.shock_state(p.data)[0])
     assert rear / w == pytest.approx(0.28, abs=0.01)
-    r = run.run_bike(str(tmp_path / "set" / "bike.toml"), "drop:height_mm=300,at_m=0.4", 5.0, duration=1.0)
+    r = run.run_bike("set/bike.toml", "drop:height_mm=300,at_m=0.4", 5.0, duration=1.0)
     assert r.summary["crash"] is None and r.summary["max_rear_travel_mm"] > rear * 1e3 + 20.0

@@ -157,6 +157,9 @@ KEYS: dict[str, tuple[str, str, object]] = {
                               "chainring), so anti-squat acts; without them, a hub drive reacted by the swingarm.",
                               "20-60", (22.0, 52.0)),
     "drive.cog_teeth": ("The cog's teeth (with drive.chainring_teeth).", "9-60", (9.0, 52.0)),
+    "drive.chain": ("false: the drive's couple on the swingarm (a hub drive, as a hub motor's) although the "
+                    "sprockets are given (the presets drive through a 32 x 24 chain); true (the default): through "
+                    "the chain.", "true, false", None),
     "drive.traction": ("The drive's force at most this times the rear tyre's load.", ">= 0", (0.3, 1.5)),
 }
 

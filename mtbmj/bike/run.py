@@ -180,8 +180,9 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
         lock = tuple(dict.fromkeys(tuple(lock) + ("rider",)))
     if pedal is not None:
         if spec.drive.get("chain_m") is None:
-            raise ConfigError(f"pedal: {spec.name} has no chain to pedal through: give drive.chainring_teeth and "
-                              f"drive.cog_teeth (e.g. --set drive.chainring_teeth=32 --set drive.cog_teeth=42)")
+            raise ConfigError(f"pedal: {spec.name} has no chain to pedal through (a hub drive: drive.chain = false, or "
+                              f"no sprockets): give drive.chainring_teeth and drive.cog_teeth (e.g. --set "
+                              f"drive.chainring_teeth=32 --set drive.cog_teeth=42)")
         if not rear_tire:
             raise ConfigError("pedal: a pedalling rider drives the rear wheel (not with the rear tire off)")
     ter = terrain_mod.make(scenario)

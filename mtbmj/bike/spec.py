@@ -436,7 +436,7 @@ KNOWN = {
     "rider": {"mass_kg", "limbs_share_percent", "com_mm", "pitch_inertia_kg_m2", "pedals_mm", "bars_mm",
               "seated_com_mm", "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
               "arm_stiffness_N_per_mm", "arm_damping_N_s_per_m"},
-    "drive": {"push_N", "power_W", "brake_N", "traction", "chainring_teeth", "cog_teeth"},
+    "drive": {"push_N", "power_W", "brake_N", "traction", "chainring_teeth", "cog_teeth", "chain"},
     "sensors": set(SENSOR_KEYS),
     "geometry": {"head_angle_deg", "wheelbase_mm", "chainstay_mm", "bb_drop_mm", "fork_offset_mm", "reach_mm",
                  "stack_mm", "head_tube_mm", "fork_length_mm"},
@@ -639,7 +639,11 @@ def load(ref: str, overrides=None) -> BikeSpec:
     for key in ("push_N", "power_W", "brake_N", "traction"):
         if key in table.get("drive", {}):
             drive[key] = _number(table, "drive", key, nonneg=True)
-    teeth = [k for k in ("chainring_teeth", "cog_teeth") if k in table.get("drive", {})]
+    through = table.get("drive", {}).get("chain", True)
+    if not isinstance(through, bool):
+        raise ConfigError(f"drive.chain: must be true (the drive pulls the chain) or false (a hub drive), got "
+                          f"{through!r}")
+    teeth = [k for k in ("chainring_teeth", "cog_teeth") if k in table.get("drive", {})] if through else []
     if teeth:  # the drive through the chain (controllers.drive.chain_pull)
         if len(teeth) == 1:
             other = "cog_teeth" if teeth[0] == "chainring_teeth" else "chainring_teeth"
