@@ -5,12 +5,14 @@ what it applies and the conventions.
 """
 from __future__ import annotations
 
+import bisect
 import math
 
 import mujoco
 import numpy as np
 
 from mtbmj.bike.model import Bike
+from mtbmj.bike.spec import leverage_ratio
 from mtbmj.controllers.drive import CRANK_LENGTH_M, Drive, chain_pull, pedal_forces, pedal_peak, wheel_forces
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, PatchSearch, RadialTire
 
@@ -34,6 +36,9 @@ class BikeCallback:
         self.tires = (front, rear)
         self.drive, self.speed, self.traction, self.refresh = drive, float(speed), float(traction), float(refresh)
         self.lev = bike.spec.leverage
+        # a four-bar's rear caliper on a link that turns otherwise than the arm (spec.caliper_ratio)
+        self.caliper = bike.spec.caliper_ratio
+        self.arm_joint = int(m.joint("swingarm").id)
         self.fq, self.fv = bike.qpos_index("fork"), bike.dof_index("fork")
         self.sv = bike.dof_index("swingarm")
         self.xv = bike.dof_index("bike_x")
@@ -244,6 +249,12 @@ class BikeCallback:
                 wheel[2] += pull[1]
             part = xfrc[self.reacting[k]]
             part[3], part[4], part[5] = 0.0, ground[3 * k + 2], 0.0
+        if self.caliper is not None:  # the brake's couple turns the caliper's link, not the arm: the
+            # arm's hinge gets couple x (d link turn / d arm turn) in all, the xfrc gave it couple x 1
+            tau = ground[5] if ground[5] > 0.0 else 0.0
+            w_tab, _, _ = self.lev.table
+            ratio = leverage_ratio(w_tab, self.caliper, bisect.bisect_right(w_tab, w) - 1, w)
+            d.qfrc_applied[self.sv] = (ratio - 1.0) * tau * d.xaxis[self.arm_joint][1]
 
 
 __all__ = ["BikeCallback"]

@@ -64,8 +64,8 @@ WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front en
  R_A_TZ1, R_A_DX, R_A_DZ, R_A_PROBE0, R_A_PROBE1, R_A_SHOCK_PROBE, R_SITE0, R_SITE1, R_SBODY0, R_SBODY1, R_FRAME,
  R_ROOT0, R_ROOT1, R_NBODY, R_MASS, R_FORK_STATE, R_SHOCK_STATE, R_DRIVE, R_NL, R_LW, R_LR, R_LS, R_CALLS,
  R_REFRESHES, R_BODYROOT, R_WHEEL0, R_WHEEL1, R_LIMB_F0, R_LIMB_R0, R_LIMB_F1, R_LIMB_R1, R_JZ, R_JP, R_VZ,
- R_VP, R_REACT0, R_REACT1, R_A_GFX, R_A_GFZ, R_A_CF, R_A_CR, R_XQ, R_RIDER) = range(56)
-INT_WIDTH = 56
+ R_VP, R_REACT0, R_REACT1, R_A_GFX, R_A_GFZ, R_A_CF, R_A_CR, R_XQ, R_RIDER, R_CALIPER, R_ARM_JOINT) = range(58)
+INT_WIDTH = 58
 DRIVE_PEDAL = 2  # R_DRIVE: 0 coasting, 1 the rider's speed controller, 2 pedalling (controllers.drive.pedal_forces)
 # float row of a slot
 (F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_NEXT0, F_NEXT1, F_LAST0, F_LAST1,
@@ -73,7 +73,7 @@ DRIVE_PEDAL = 2  # R_DRIVE: 0 coasting, 1 the rider's speed controller, 2 pedall
  F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1, F_RADIUS, F_CHAIN_RING, F_CHAIN_COG) = range(24)
 FLOAT_WIDTH = 24
 
-REGISTRY = Registry("mtbmj_bike_registry_v6", SLOTS,
+REGISTRY = Registry("mtbmj_bike_registry_v7", SLOTS,
                     {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
                      "wheel_ints": (2 * WI, np.int64), "wheel_floats": (2 * WF, np.float64),
                      "fork_ints": (LAW_INT_WIDTH, np.int64), "fork_floats": (LAW_FLOAT_WIDTH, np.float64),
@@ -430,6 +430,10 @@ if _numba is not None:
         xfrc[o + 3] = 0.0
         xfrc[o + 4] = tr
         xfrc[o + 5] = 0.0
+        if I[R_CALIPER] != 0:  # a four-bar's caliper link turns otherwise than the arm (BikeCallback)
+            CAL = _numba.carray(_f64_pointer(I[R_CALIPER]), (nl,))
+            tau = tr if tr > 0.0 else 0.0
+            qfrc[I[R_SV]] = (_leverage_ratio(LW, CAL, i, w) - 1.0) * tau * xaxis[3 * I[R_ARM_JOINT] + 1]
 
     COMPILE_SECONDS = time.perf_counter() - _compile_start
 
@@ -518,6 +522,8 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
         self._sx, self._sz = rolling.stretch_arrays(front)  # the corners of the terrain's straight stretches
         lev = bike.spec.leverage
         self._lw, self._lr, self._ls = (np.array(v, dtype=np.float64) for v in lev.table)
+        caliper = bike.spec.caliper_ratio  # a four-bar's rear caliper's turn per the arm's, on the same table
+        self._cal = None if caliper is None else np.ascontiguousarray(caliper, dtype=np.float64)
         self._mass = np.ascontiguousarray(m.body_mass, dtype=np.float64)
         self._roots = np.ascontiguousarray(m.body_rootid, dtype=np.int64)
 
@@ -540,13 +546,14 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
             R_A_CR: a("rear_couple"),
             R_FORK_STATE: int(bool(fork_law.has_state)), R_SHOCK_STATE: int(bool(shock_law.has_state)),
             R_DRIVE: {"coast": 0, "rider": 1, "pedal": DRIVE_PEDAL}[drive.mode], R_NL: self._lw.size, R_LW: self._lw.ctypes.data,
-            R_LR: self._lr.ctypes.data, R_LS: self._ls.ctypes.data}
+            R_LR: self._lr.ctypes.data, R_LS: self._ls.ctypes.data,
+            R_CALIPER: 0 if self._cal is None else self._cal.ctypes.data}
         legs, arms = bike.limbs
         values.update({R_LIMB_F0: int(m.site(legs.frame_site).id), R_LIMB_R0: int(m.site(legs.rider_site).id),
                        R_LIMB_F1: int(m.site(arms.frame_site).id), R_LIMB_R1: int(m.site(arms.rider_site).id),
                        R_JZ: int(m.joint("rider_z").id), R_JP: int(m.joint("rider_pitch").id),
                        R_VZ: bike.dof_index("rider_z"), R_VP: bike.dof_index("rider_pitch"),
-                       R_XQ: bike.qpos_index("bike_x"),
+                       R_XQ: bike.qpos_index("bike_x"), R_ARM_JOINT: int(m.joint("swingarm").id),
                        R_RIDER: int(m.body("rider").id)})
         values[R_ACT_F] = int(m.actuator_actadr[values[R_A_FS]])
         values[R_ACT_S] = int(m.actuator_actadr[values[R_A_SS]])

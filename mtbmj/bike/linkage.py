@@ -110,6 +110,7 @@ class Pose:
     points: dict
     axle_centre: np.ndarray | None
     brake_centre: np.ndarray | None
+    caliper_turn: float = 0.0  # rad: the turn from full extension of the link carrying the caliper
 
 
 class Linkage:
@@ -156,7 +157,7 @@ class Linkage:
         for n in self.input_points:
             p[n] = self.A + _rotate(self.p0[n] - self.A, angle)
         if self.four_bar is None:
-            return Pose(p, self.A.copy(), self.A.copy())
+            return Pose(p, self.A.copy(), self.A.copy(), angle)
         a_name, b_name, c_name, d_name = self.four_bar
         b0, c0 = self.p0[b_name], self.p0[c_name]
         b = self.A + _rotate(b0 - self.A, angle)
@@ -182,8 +183,9 @@ class Linkage:
         centre = _meet(self.A, b - self.A, self.D, c - self.D)
         axle_on_coupler = self.kind in ("horst_link", "short_link")
         axle_centre = centre if axle_on_coupler else self.A.copy()
-        brake_centre = self.A.copy() if self.brake_on in ("swingarm", "chainstay") else centre
-        return Pose(p, axle_centre, brake_centre)
+        on_input = self.brake_on in ("swingarm", "chainstay")
+        brake_centre = self.A.copy() if on_input else centre
+        return Pose(p, axle_centre, brake_centre, angle if on_input else turn_c)
 
     def travel(self, angle: float) -> float:
         """The rear axle's rise (m) in frame coordinates at ``angle``."""
@@ -218,6 +220,7 @@ class Curves:
     kickback_deg: np.ndarray
     com_height: float
     stroke_limit: float
+    caliper_turn: np.ndarray | None = None  # rad: the caliper's link's turn from full extension
 
     def rows(self) -> list[dict]:
         return [{"wheel_travel_mm": self.travel[i] / MM, "shock_stroke_mm": self.stroke[i] / MM,
@@ -290,7 +293,7 @@ def curves(link: Linkage, stroke_limit: float, tyre_radius: float | None = None,
         angles.append(brentq(lambda a: link.travel(sign * a) - w, angles[-1], a_end + 1e-9, xtol=1e-14))
     ring_r, cog_r = sprocket_radius(link.chainring), sprocket_radius(link.cog)
     bb = np.zeros(2)
-    out = {k: [] for k in ("s", "lr", "ax", "az", "cx", "cz", "as", "ar", "kb")}
+    out = {k: [] for k in ("s", "lr", "ax", "az", "cx", "cz", "as", "ar", "kb", "ct")}
     n0, span0 = _chain_normal(bb, ring_r, link.p0["rear_axle"], cog_r)
     theta0 = math.atan2(n0[1], n0[0])
     for a in angles:
@@ -304,6 +307,7 @@ def curves(link: Linkage, stroke_limit: float, tyre_radius: float | None = None,
         out["lr"].append(dw / ds)
         out["ax"].append(axle[0])
         out["az"].append(axle[1])
+        out["ct"].append(pose.caliper_turn)
         centre = pose.axle_centre
         out["cx"].append(np.nan if centre is None else centre[0])
         out["cz"].append(np.nan if centre is None else centre[1])
@@ -326,7 +330,7 @@ def curves(link: Linkage, stroke_limit: float, tyre_radius: float | None = None,
         out["kb"].append(math.degrees(turn))
     arr = {k: np.asarray(v, float) for k, v in out.items()}
     return Curves(grid, arr["s"], arr["lr"], arr["ax"], arr["az"], arr["cx"], arr["cz"], arr["as"], arr["ar"],
-                  arr["kb"], math.nan if com_height is None else com_height, stroke_limit)
+                  arr["kb"], math.nan if com_height is None else com_height, stroke_limit, arr["ct"])
 
 
 def circle_path(link: Linkage, c: Curves, pivot) -> tuple[np.ndarray, np.ndarray]:
@@ -360,6 +364,15 @@ def fitted_pivot(link: Linkage, c: Curves) -> np.ndarray:
     best = min((least_squares(residual, g, x_scale=0.1, xtol=1e-14, ftol=1e-14) for g in guess),
                key=lambda r: float(np.max(np.abs(r.fun))))
     return np.asarray(best.x, float)
+
+
+def caliper_ratio(c: Curves, pivot) -> np.ndarray:
+    """At each travel of ``c``, how fast the link carrying the rear caliper turns against the bike's
+    arm turning the axle about ``pivot`` (d caliper turn / d arm turn, both relative to the frame):
+    the factor on the brake couple's generalised force on the arm's hinge (its virtual work is the
+    couple times the caliper link's turn). 1 where the caliper rides on the arm itself."""
+    arm = np.unwrap(np.arctan2(c.axle_z - pivot[1], c.axle_x - pivot[0]))
+    return np.gradient(c.caliper_turn, arm, edge_order=2)
 
 
 def path_departure(link: Linkage, c: Curves, pivot) -> float:

@@ -30,6 +30,7 @@ tests/test_bike_chain.py check that choice against physics.
 """
 from __future__ import annotations
 
+import bisect
 import math
 import time
 
@@ -37,6 +38,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from mtbmj.bike.model import JOINTS, LOCKS, LOWER_INERTIA, frame_body
+from mtbmj.bike.spec import leverage_ratio
 from mtbmj.controllers.drive import CRANK_LENGTH_M, chain_pull, pedal_forces, pedal_peak, wheel_forces
 from mtbmj.errors import RunError
 
@@ -202,6 +204,7 @@ class Reference:
         self.front_tire, self.rear_tire = p.front_tire, p.rear_tire
         self.drive, self.speed, self.traction = p.drive, p.speed, p.traction
         self.lev = b.spec.leverage
+        self.caliper = b.spec.caliper_ratio  # a four-bar's rear caliper: its link's turn per the arm's
         self.x0, self.z0 = b.x0, b.z0
         from mtbmj.rolling.tire import StraightStretches
 
@@ -287,6 +290,9 @@ class Reference:
                     couple = 0.0
             Q[2] -= ground[2] + couple
             Q[4] += couple
+            if self.caliper is not None and couple > 0.0:  # a brake on a four-bar link that turns otherwise
+                i = bisect.bisect_right(self.lev.table[0], w) - 1
+                Q[4] += couple * (leverage_ratio(self.lev.table[0], self.caliper, i, w) - 1.0)
         if foot is not None:  # the foot on its pedal (the frame's) and on the rider at the same point
             c, sn = math.cos(q[2]), math.sin(q[2])
             wx, wz = c * foot[0] - sn * foot[1], sn * foot[0] + c * foot[1]

@@ -168,6 +168,9 @@ class BikeSpec:
     # the pivot is a four-bar's instant centre at top-out (``[linkage]``), not a bearing on the frame
     virtual_pivot: bool = False
     sensors: dict = field(default_factory=dict)  # the telemetry sensors' calibration, mm (``[sensors]``)
+    # a four-bar's rear caliper on a link that turns otherwise than the bike's arm: d(its turn) /
+    # d(the arm's turn) at each point of the leverage table (``linkage.caliper_ratio``); None: 1
+    caliper_ratio: tuple | None = None
 
     @property
     def swingarm_length(self) -> float:
@@ -315,8 +318,10 @@ LINKAGE_AXLE_TOLERANCE_MM = 1.0  # the linkage's rear axle against the frame's (
 PATH_TOLERANCE_MM = 0.1  # a four-bar's axle path and the bike's circle: farther apart than this, a warning says so
 
 
-def _with_linkage(table: dict) -> dict:
-    """``table`` with ``bike.pivot_mm`` and ``[leverage]`` from its ``[linkage]`` (``mtbmj.bike.linkage``):
+def _with_linkage(table: dict) -> tuple[dict, tuple | None]:
+    """``table`` with ``bike.pivot_mm`` and ``[leverage]`` from its ``[linkage]`` (``mtbmj.bike.linkage``),
+    and the rear caliper's link's turn against the arm's at each point of that table (None where
+    the caliper rides on the arm):
     the pivot the rear axle turns about (for a four-bar whose axle rides on its coupler, the centre of
     the circle that best fits the linkage's axle path, ``linkage.fitted_pivot``, with a warning when
     it leaves the path by more than 0.1 mm) and the leverage ratio every millimetre of wheel travel
@@ -353,7 +358,8 @@ def _with_linkage(table: dict) -> dict:
     lev = {"wheel_travel_mm": (c.travel / MM).tolist(), "ratio": c.leverage_ratio.tolist()}
     out = {k: v for k, v in table.items() if k != "linkage"}
     out.update({"bike": bike, "leverage": lev})
-    return out
+    ratio = lk.caliper_ratio(c, pivot)
+    return out, (tuple(float(x) for x in ratio) if np.max(np.abs(ratio - 1.0)) > 1e-9 else None)
 
 
 # What a geometry chart sets in [bike] (``from_chart``)
@@ -548,9 +554,9 @@ def load(ref: str, overrides=None) -> BikeSpec:
     metres = keys_mod.metres_for_millimetres(table)  # before the hardpoints are solved in the wrong unit
     if metres is not None:
         raise ConfigError(metres)
-    derived, hardpoints = (), table.get("linkage")
+    derived, hardpoints, caliper = (), table.get("linkage"), None
     if "linkage" in table:  # a rear end from hardpoints: its pivot and leverage table derived from it
-        table = _with_linkage(table)
+        table, caliper = _with_linkage(table)
         derived = ("pivot_mm",)  # a four-bar's instant centre may lie anywhere: not a key the user typed
     for section, value in table.items():
         if section not in KNOWN:
@@ -672,6 +678,7 @@ def load(ref: str, overrides=None) -> BikeSpec:
         shock_overrides=dict(table.get("shock", {}).get("set", {})), drive=drive, source=source,
         overrides=dict(overrides or {}),
         virtual_pivot=isinstance(hardpoints, dict) and hardpoints.get("kind") in ("horst_link", "short_link"),
+        caliper_ratio=caliper,
         sensors=_sensors(table))
     return spec
 
