@@ -227,7 +227,25 @@ def test_bob_command_against_records(tmp_path):
     for row in rows:
         assert row["cadence_rpm"] == pytest.approx(row["ride"]["rear"]["frequency_Hz"] * 30.0, rel=1e-6)
         assert row["simulated"]["rear"]["cycles"] >= 6
+    # the seated record's cadence held by the climb set again: the run's bob at twice it
+    seated = rows[1]
+    assert seated["simulated_cadence_rpm"] == pytest.approx(seated["cadence_rpm"], rel=0.02)
+    assert seated["simulated"]["rear"]["frequency_Hz"] == pytest.approx(seated["ride"]["rear"]["frequency_Hz"],
+                                                                         rel=0.03)
     assert (tmp_path / "bob" / "bob.png").stat().st_size > 10000
     assert "00088.SST (standing): rear bob ridden" in p.stdout
     bad = run_cli("bob", str(SHARED / "00088.SST"), "--stance", "lying", "--out", "bad", cwd=tmp_path)
     assert bad.returncode == 2 and "lying" in bad.stderr and not (tmp_path / "bad").exists()
+
+
+def test_a_stalled_rider_is_said():
+    """100 W seated up a 25 % climb in 32x42: the bike slows to a stop (the weight's pull along the
+    slope, 101 kg x 9.81 x sin(atan 0.25) = 241 N, against the chain's mean push at 60 rpm,
+    100 W / 6.28 rad/s x 42/32 / 0.37 m = 56 N), and the run says so."""
+    from mtbmj.bike.run import run_bike
+    from mtbmj.config import ConfigWarning
+
+    with pytest.warns(ConfigWarning, match="the rider stalled"):
+        r = run_bike("sst", "climb:grade_percent=25,length_m=20,at_m=0.5", None, 4.0, pedal=(60, 100),
+                     overrides=CHAIN, seated=True)
+    assert r.summary["min_speed_m_per_s"] < 0.5

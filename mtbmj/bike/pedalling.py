@@ -31,7 +31,8 @@ class Against:
             rec, sim = r["ride"]["rear"], r["simulated"]["rear"]
             out.append(f"{r['record']} ({r['stance']}): rear bob ridden {rec['frequency_Hz']:.2f} Hz "
                        f"{rec['amplitude_mm']:.1f} mm, simulated {sim['frequency_Hz']:.2f} Hz {sim['amplitude_mm']:.1f} mm "
-                       f"({r['cadence_rpm']:.0f} rpm, {r['power_W']:g} W, {r['grade_percent']:.1f} % climb)")
+                       f"({r['simulated_cadence_rpm']:.0f} rpm for the record's {r['cadence_rpm']:.0f}, "
+                       f"{r['power_W']:g} W, {r['grade_percent']:.1f} % climb)")
         return out
 
     def figure(self):
@@ -92,12 +93,31 @@ class Against:
                                                  "bob.png": buf.getvalue()})
 
 
+CADENCE_TOLERANCE = 0.02  # the run's cadence over its stretch within 2 % of the record's, or the climb is set again
+ATTEMPTS = 4  # at most this many runs per record (the closest kept)
+
+
+def run_cadence(run, window) -> float:
+    """A pedalling run's mean cadence (rpm) over ``window`` (s): the crank's turns (the distance
+    rolled through the gear) over the time."""
+    import math
+
+    ring, cog = run.prepared.spec.drive["chain_m"]
+    t, x = run.raw["time_s"], run.raw["x_m"]
+    keep = (t >= window[0]) & (t <= window[1])
+    turns = (x[keep][-1] - x[keep][0]) * cog / (ring * run.prepared.rear_tire.radius) / (2.0 * math.pi)
+    return float(turns / (t[keep][-1] - t[keep][0]) * 60.0)
+
+
 def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, overrides=None,
             duration_s: float = RUN_S) -> Against:
     """Each record's bob (``bob``), and the bike pedalled as it was: at the cadence its rear bob
     implies (half its frequency), standing or seated (``stances``, one per record; default
     standing), through ``GEAR`` at ``power_W``, up the climb whose grade that power holds at the
-    gear's speed (sin a = P / (m g v)), for ``duration_s``, its bob read over its second half."""
+    gear's speed (sin a = P / (m g v)), for ``duration_s``, its bob read over its second half. Where
+    the run's own cadence over that half misses the record's by more than 2 % (the stroke's uneven
+    torque and the bob change the power the climb takes), the climb is set again: a first step of
+    its sine by the miss (at most 5 %), then secant steps, at most four runs, the closest kept."""
     import math
 
     from mtbmj.bike import spec as spec_mod
@@ -133,15 +153,29 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
         if sine >= 0.4:
             raise ConfigError(f"{path}: {power_W:g} W at {cadence:.0f} rpm in {'{}x{}'.format(*GEAR)} needs a climb "
                               f"steeper than 40 %: give less power")
-        grade = 100.0 * math.tan(math.asin(sine))
-        run = run_bike(spec, f"climb:grade_percent={grade:.3f},length_m={v * duration_s + 10:.1f},at_m=0.5", None,
-                       duration_s, pedal=(cadence, power_W), seated=stance == "seated")
+        tried = []  # (sine, cadence the run had, run): the climb set again while its cadence misses
+        for attempt in range(ATTEMPTS):
+            grade = 100.0 * math.tan(math.asin(sine))
+            run = run_bike(spec, f"climb:grade_percent={grade:.3f},length_m={v * duration_s * 1.5 + 10:.1f},at_m=0.5",
+                           None, duration_s, pedal=(cadence, power_W), seated=stance == "seated")
+            had = run_cadence(run, run_stretch(run.raw["time_s"]))
+            tried.append((sine, had, run, grade))
+            if abs(had / cadence - 1.0) <= CADENCE_TOLERANCE:
+                break
+            if len(tried) == 1:  # the speed the power holds goes as 1 / sin a; a step of at most 5 %
+                sine *= min(max(had / cadence, 0.95), 1.05)
+            else:  # the secant through the last two, within 10 % of the last
+                (s0, c0, _, _), (s1, c1, _, _) = tried[-2], tried[-1]
+                step = (cadence - c1) * (s1 - s0) / (c1 - c0) if c1 != c0 else 0.0
+                sine = s1 + min(max(step, -0.1 * s1), 0.1 * s1)
+            sine = min(sine, 0.4)
+        sine, had, run, grade = min(tried, key=lambda r: abs(r[1] - cadence))
         t = run.raw["time_s"]
         window = run_stretch(t)
         sim = {"rear": bob(t, run.raw["rear_travel_mm"], *window).to_dict(),
                "front": bob(t, run.raw["front_travel_mm"], *window).to_dict()}
         rows.append({"record": ride.name, "stance": stance, "notes": list(ride.notes), "cadence_rpm": cadence,
-                     "power_W": power_W, "grade_percent": grade, "speed_m_per_s": v,
+                     "simulated_cadence_rpm": had, "power_W": power_W, "grade_percent": grade, "speed_m_per_s": v,
                      "ride": {"rear": rear.to_dict(), "front": front.to_dict() if front else None},
                      "simulated": sim, "crash": run.summary.get("crash")})
         series.append(((ride.time_s, ride.fork_mm, ride.rear_mm), (t, run.raw["front_travel_mm"],
@@ -149,4 +183,4 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
     return Against(str(bike), rows, series)
 
 
-__all__ = ["Against", "against", "GEAR", "RUN_S"]
+__all__ = ["Against", "against", "run_cadence", "GEAR", "RUN_S", "CADENCE_TOLERANCE"]

@@ -67,6 +67,8 @@ INTEGRATORS = {"rk4": mujoco.mjtIntegrator.mjINT_RK4, "euler": mujoco.mjtIntegra
 COLUMNS = ("time_s", "x_m", "speed_m_per_s", "front_travel_mm", "rear_travel_mm", "stroke_mm", "pitch_deg",
            "front_tire_N", "rear_tire_N", "front_tire_mm", "rear_tire_mm", "rider_acc_z_m_per_s2", "fork_force_N",
            "shock_force_N", "drive_force_N", "terrain_front_mm", "terrain_rear_mm", "bb_height_mm")
+# A pedalling run whose speed falls below this has stalled (walking pace: the power does not hold the grade)
+STALL_M_PER_S = 0.5
 # The feature window's end: this long after the rear tyre has left the feature (the ride settles)
 SETTLE_S = 0.5
 
@@ -852,6 +854,11 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
         info["seated"] = True
     if pedal is not None:
         info["pedal"] = summary["drive"]["pedal"]
+        if summary["min_speed_m_per_s"] < STALL_M_PER_S:
+            from mtbmj.config import warn
+
+            warn([f"pedal: the rider stalled (the speed fell to {summary['min_speed_m_per_s']:.2f} m/s): "
+                  f"{pedal[1]:g} W does not carry the bike up this terrain in this gear"])
     if p.lock or not p.rear_tire_on:
         info["locked"] = list(p.lock)
         info["rear_tire"] = p.rear_tire_on
