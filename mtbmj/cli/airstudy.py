@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import sys
 import time
-from pathlib import Path
 
 from mtbmj.cli.common import add_out, add_run_options, overrides
 

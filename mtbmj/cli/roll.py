@@ -3,7 +3,6 @@ atomically. Bad terrain specs, a speed <= 0 and a head angle outside (45, 90] ra
 (one line, exit status 2 from ``mtbmj.cli.main``)."""
 from __future__ import annotations
 
-from pathlib import Path
 
 from mtbmj.cli.common import Progress, add_out, overrides
 

@@ -1,7 +1,6 @@
 """``mtbmj sensitivity``: Sobol or Morris indices of drop outputs (SALib), run through the sweep."""
 from __future__ import annotations
 
-from pathlib import Path
 
 from mtbmj.cli.common import add_out, overrides
 from mtbmj.cli.sweep import add_shared_options, check_shared_options

@@ -3,7 +3,6 @@ laws (marked synthetic in its first comment line), to try ``mtbmj fit`` on a kno
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 from mtbmj.cli.common import out_path, overrides
 from mtbmj.errors import MtbmjError

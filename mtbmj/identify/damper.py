@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 import types
 from dataclasses import replace
-from typing import Iterable, Mapping
+from typing import Any, Iterable, Mapping
 
 import numpy as np
 from scipy.optimize import least_squares
