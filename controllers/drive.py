@@ -173,6 +173,29 @@ def pedal_peak(power: float, cadence: float) -> float:
     return math.pi * power / (2.0 * (cadence if cadence > slowest else slowest))
 
 
+def pedal_drive(x: float, speed: float, power: float, ring: float, cog: float, radius: float, fxf: float,
+                fzf: float, df: float, fxr: float, fzr: float, dr: float, traction: float):
+    """A pedalling rider's forces on the whole bike: (dxf, dzf, tf, dxr, dzr, tr) of
+    ``wheel_forces`` and (foot_x, foot_z, pedal_x, pedal_z), the driving foot's force on its pedal
+    and the pedal's place (frame coordinates). The crank's angle is the distance ``x`` (m) rolled
+    through the gear (theta = x cog / (ring radius)); its torque (``pedal_forces``) holds ``power``
+    at ``speed`` (the centre of mass's, m/s) through the gear (``pedal_peak``); the ground's push
+    at the rear contact is the one whose couple there is the chain's (torque / ring x cog, over
+    the loaded radius); the foot's force is scaled down as the rear tyre's ``traction`` caps that
+    push, and nothing acts with the rear tyre unloaded. ``ring``, ``cog``: the sprockets' pitch
+    radii (m); (fx, fz) each tyre's radial force, d its deflection. Written once: the bike's Python
+    callback and its ODE reference call it, the compiled callback compiles it."""
+    gear = cog / (ring * radius)  # crank radians per metre rolled
+    torque, fx, fz, px, pz = pedal_forces(x * gear, pedal_peak(power, speed * gear), CRANK_LENGTH_M)
+    rho = radius - (dr if dr > 0.0 else 0.0)
+    want = torque * cog / (ring * rho)
+    if want <= 0.0 or math.hypot(fxr, fzr) <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    dxf, dzf, tf, dxr, dzr, tr = wheel_forces(want, fxf, fzf, df, fxr, fzr, dr, traction, radius)
+    share = math.hypot(dxr, dzr) / want
+    return dxf, dzf, tf, dxr, dzr, tr, share * fx, share * fz, px, pz
+
+
 @dataclass(frozen=True)
 class Drive:
     """A drive mode and its limits (see the module doc); ``kv`` (N s/m) is the velocity
@@ -187,7 +210,7 @@ class Drive:
 
     @property
     def code(self) -> int:
-        return {"servo": SERVO, "rider": RIDER, "coast": COAST}[self.mode]  # pedal: the bike's Python callback
+        return {"servo": SERVO, "rider": RIDER, "coast": COAST}[self.mode]  # the front end's modes (pedal is the bike's)
 
     def force(self, v_ref: float, v: float) -> float:
         """The force of the rider or coasting modes (the servo's comes from its actuators)."""
@@ -196,4 +219,4 @@ class Drive:
         return drive_force(v_ref, v, self.kv, self.push, self.power, self.brake)
 
 
-__all__ = ["Drive", "chain_pull", "drive_force", "pedal_forces", "pedal_peak", "CRANK_LENGTH_M", "wheel_forces", "MODES", "RIDER_PUSH_N", "RIDER_POWER_W", "RIDER_BRAKE_N"]
+__all__ = ["Drive", "chain_pull", "drive_force", "pedal_drive", "pedal_forces", "pedal_peak", "CRANK_LENGTH_M", "wheel_forces", "MODES", "RIDER_PUSH_N", "RIDER_POWER_W", "RIDER_BRAKE_N"]

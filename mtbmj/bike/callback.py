@@ -13,7 +13,7 @@ import numpy as np
 
 from mtbmj.bike.model import Bike
 from mtbmj.bike.spec import leverage_ratio
-from mtbmj.controllers.drive import CRANK_LENGTH_M, Drive, chain_pull, pedal_forces, pedal_peak, wheel_forces
+from mtbmj.controllers.drive import Drive, chain_pull, pedal_drive, wheel_forces
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, PatchSearch, RadialTire
 
 
@@ -58,7 +58,6 @@ class BikeCallback:
         # pedalling (drive mode "pedal"): the crank turns with the distance rolled, through the chain
         self.xq = bike.qpos_index("bike_x")
         self.rider = int(m.body("rider").id)
-        self.foot = (0.0, 0.0, 0.0, 0.0)  # the last evaluation's driving foot's force on its pedal and the pedal (frame coordinates)
         # the legs and arms: (frame site, rider site, k, c, rest), on the rider's two joints
         self.limbs = tuple((int(m.site(lb.frame_site).id), int(m.site(lb.rider_site).id), lb.stiffness, lb.damping,
                             lb.rest) for lb in bike.limbs)
@@ -128,27 +127,6 @@ class BikeCallback:
             qp += f * d_hinge
         return qz, qp
 
-    def pedalling(self, x, speed, radial):
-        """(ground, foot): the ground's forces (``wheel_forces``) when the rider's crank torque at the
-        crank's angle (the distance rolled through the gear: theta = x cog / (ring r)), at the rider's
-        power at the crank's speed (``pedal_peak``; the speed of the centre of mass through the gear,
-        as the rider's speed loop reads it), pulls the chain,
-        and the driving foot's force on its pedal and the pedal's place (frame coordinates), scaled
-        down as the rear tyre's traction caps the drive (a wheel in the air takes no torque)."""
-        (fxf, fzf, df), (fxr, fzr, dr) = radial
-        ring, cog = self.chain
-        radius = self.tires[1].radius
-        gear = cog / (ring * radius)  # crank radians per metre rolled
-        peak = pedal_peak(self.drive.power, speed * gear)
-        torque, fx, fz, px, pz = pedal_forces(x * gear, peak, CRANK_LENGTH_M)
-        rho = radius - (dr if dr > 0.0 else 0.0)
-        want = torque * cog / (ring * rho)  # the ground's push whose couple at the patch is the chain's
-        if want <= 0.0 or math.hypot(fxr, fzr) <= 0.0:
-            return (0.0,) * 6, (0.0, 0.0, 0.0, 0.0)
-        ground = wheel_forces(want, fxf, fzf, df, fxr, fzr, dr, self.traction, radius)
-        share = math.hypot(ground[3], ground[4]) / want
-        return ground, (share * fx, share * fz, px, pz)
-
     def __call__(self, m, d):
         if m is not self._model and m._address != self._address:
             return
@@ -199,14 +177,16 @@ class BikeCallback:
         (fxf, fzf, df), (fxr, fzr, dr) = radial
         ground = (0.0,) * 6
         foot = (0.0, 0.0, 0.0, 0.0)
-        if self.drive.mode == "pedal":  # the crank's torque makes the chain's tension (controllers.drive.pedal_forces)
+        if self.drive.mode == "pedal":  # the crank's torque makes the chain's tension (controllers.drive.pedal_drive)
             mujoco.mj_mulM(m, d, self._momentum, qvel)
-            ground, foot = self.pedalling(qpos[self.xq], self._momentum[self.xv] / self.total_mass, radial)
+            ring, cog = self.chain
+            out = pedal_drive(qpos[self.xq], self._momentum[self.xv] / self.total_mass, self.drive.power, ring, cog,
+                              self.tires[1].radius, fxf, fzf, df, fxr, fzr, dr, self.traction)
+            ground, foot = out[:6], out[6:]
         elif self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:
             mujoco.mj_mulM(m, d, self._momentum, qvel)
             f = self.drive.force(self.speed, self._momentum[self.xv] / self.total_mass)
             ground = wheel_forces(f, fxf, fzf, df, fxr, fzr, dr, self.traction, self.tires[1].radius)
-        self.foot = foot
         ctrl[self.a_drive[0]] = ground[3]  # the rear tyre's ground force (drive or brake), at its axle
         ctrl[self.a_drive[1]] = ground[4]
         ctrl[self.a_ground[0]] = ground[0]  # the front tyre's (its brake)

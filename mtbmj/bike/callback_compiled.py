@@ -133,9 +133,9 @@ if _numba is not None:
     law_function(_drive.at_patch)
     _wheel_forces = law_function(_drive.wheel_forces)
     _chain_pull = law_function(_drive.chain_pull)
-    _pedal_forces = law_function(_drive.pedal_forces)
-    _pedal_peak = law_function(_drive.pedal_peak)
-    _CRANK = _drive.CRANK_LENGTH_M
+    law_function(_drive.pedal_forces)
+    law_function(_drive.pedal_peak)
+    _pedal_drive = law_function(_drive.pedal_drive)
     law_function(_spec.stroke_piece)
     _leverage_ratio = law_function(_spec.leverage_ratio)
     _leverage_stroke = law_function(_spec.leverage_stroke)
@@ -331,31 +331,17 @@ if _numba is not None:
         foot_z = 0.0
         foot_px = 0.0
         foot_pz = 0.0
-        if I[R_DRIVE] == DRIVE_PEDAL:  # the crank's torque pulls the chain (BikeCallback.pedalling)
-            ring = F[F_CHAIN_RING]
-            cog = F[F_CHAIN_COG]
-            gear = cog / (ring * F[F_RADIUS])
+        vcom = 0.0
+        if I[R_DRIVE] != 0:  # the centre of mass's speed, as the rider's speed loop and its pedalling read it
             nb = I[R_NBODY]
             mass = _numba.carray(_f64_pointer(I[R_MASS]), (nb,))
             roots = _numba.carray(_i64_pointer(I[R_BODYROOT]), (nb,))
             vcom = momentum_x(cvel, subtree_com, xipos, mass, roots, nb) / F[F_TOTAL_MASS]
-            peak = _pedal_peak(F[F_DRIVE_POWER], vcom * gear)
-            torque, pfx, pfz, ppx, ppz = _pedal_forces(qpos[I[R_XQ]] * gear, peak, _CRANK)
-            rho = F[F_RADIUS] - (deflection if deflection > 0.0 else 0.0)
-            want = torque * cog / (ring * rho)
-            if want > 0.0 and math.hypot(fx, fz) > 0.0:
-                dxf, dzf, tf, dxr, dzr, tr = _wheel_forces(want, fxf, fzf, df, fx, fz, deflection, F[F_TRACTION],
-                                                           F[F_RADIUS])
-                share = math.hypot(dxr, dzr) / want
-                foot_x = share * pfx
-                foot_z = share * pfz
-                foot_px = ppx
-                foot_pz = ppz
+        if I[R_DRIVE] == DRIVE_PEDAL:  # the crank's torque pulls the chain (controllers.drive.pedal_drive)
+            dxf, dzf, tf, dxr, dzr, tr, foot_x, foot_z, foot_px, foot_pz = _pedal_drive(
+                qpos[I[R_XQ]], vcom, F[F_DRIVE_POWER], F[F_CHAIN_RING], F[F_CHAIN_COG], F[F_RADIUS], fxf, fzf, df,
+                fx, fz, deflection, F[F_TRACTION])
         elif I[R_DRIVE] != 0 and math.hypot(fxf, fzf) + math.hypot(fx, fz) > 0.0:
-            nb = I[R_NBODY]
-            mass = _numba.carray(_f64_pointer(I[R_MASS]), (nb,))
-            roots = _numba.carray(_i64_pointer(I[R_BODYROOT]), (nb,))
-            vcom = momentum_x(cvel, subtree_com, xipos, mass, roots, nb) / F[F_TOTAL_MASS]
             f = _drive_force(F[F_SPEED], vcom, F[F_DRIVE_KV], F[F_DRIVE_PUSH], F[F_DRIVE_POWER], F[F_DRIVE_BRAKE])
             dxf, dzf, tf, dxr, dzr, tr = _wheel_forces(f, fxf, fzf, df, fx, fz, deflection, F[F_TRACTION],
                                                        F[F_RADIUS])

@@ -39,7 +39,7 @@ from scipy.integrate import solve_ivp
 
 from mtbmj.bike.model import JOINTS, LOCKS, LOWER_INERTIA, frame_body
 from mtbmj.bike.spec import leverage_ratio
-from mtbmj.controllers.drive import CRANK_LENGTH_M, chain_pull, pedal_forces, pedal_peak, wheel_forces
+from mtbmj.controllers.drive import chain_pull, pedal_drive, wheel_forces
 from mtbmj.errors import RunError
 
 NQ = 7
@@ -262,17 +262,10 @@ class Reference:
         (fxf, fzf, df), (fxr, fzr, dr) = out["front"], out["rear"]
         ground = (0.0,) * 6
         foot = None
-        if self.drive.mode == "pedal":  # the crank's torque pulls the chain (controllers.drive.pedal_forces)
-            ring, cog = self.chain
-            radius = self.rear_tire.radius
-            gear = cog / (ring * radius)
-            torque, fpx, fpz, ppx, ppz = pedal_forces(q[0] * gear, pedal_peak(self.drive.power, float(M[0] @ qd) / M[0, 0] * gear),
-                                                      CRANK_LENGTH_M)
-            want = torque * cog / (ring * (radius - max(dr, 0.0)))
-            if want > 0.0 and math.hypot(fxr, fzr) > 0.0:
-                ground = wheel_forces(want, fxf, fzf, df, fxr, fzr, dr, self.traction, radius)
-                share = math.hypot(ground[3], ground[4]) / want
-                foot = (share * fpx, share * fpz, ppx, ppz)
+        if self.drive.mode == "pedal":  # the crank's torque pulls the chain (controllers.drive.pedal_drive)
+            out_p = pedal_drive(q[0], float(M[0] @ qd) / M[0, 0], self.drive.power, *self.chain,
+                                self.rear_tire.radius, fxf, fzf, df, fxr, fzr, dr, self.traction)
+            ground, foot = out_p[:6], out_p[6:]
         elif self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:
             f = self.drive.force(self.speed, float(M[0] @ qd) / M[0, 0])  # the centre of mass's speed
             ground = wheel_forces(f, fxf, fzf, df, fxr, fzr, dr, self.traction, self.rear_tire.radius)
