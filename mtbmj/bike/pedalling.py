@@ -100,13 +100,12 @@ ATTEMPTS = 4  # at most this many runs per record (the closest kept)
 def run_cadence(run, window) -> float:
     """A pedalling run's mean cadence (rpm) over ``window`` (s): the crank's turns (the distance
     rolled through the gear) over the time."""
-    import math
+    from mtbmj.bike.run import crank_turns
 
-    ring, cog = run.prepared.spec.drive["chain_m"]
-    t, x = run.raw["time_s"], run.raw["x_m"]
+    t = run.raw["time_s"]
     keep = (t >= window[0]) & (t <= window[1])
-    turns = (x[keep][-1] - x[keep][0]) * cog / (ring * run.prepared.rear_tire.radius) / (2.0 * math.pi)
-    return float(turns / (t[keep][-1] - t[keep][0]) * 60.0)
+    turns = crank_turns(run.prepared, run.raw["x_m"][keep])
+    return float(turns[-1] / (t[keep][-1] - t[keep][0]) * 60.0)
 
 
 def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, overrides=None,

@@ -109,7 +109,11 @@ class Prepared:
                           self.gravity, b.x0 + self.spec.front_axle[0], s.fork_length).model
 
 
-def _check(speed, duration):
+def _check(speed, duration, pedal=None):
+    """The speed (None with ``pedal``: the gear's speed at its cadence) and the duration, each one
+    ConfigError line when it is not a positive number."""
+    if speed is None and pedal is not None:
+        speed = 1.0
     if not isinstance(speed, (int, float)) or isinstance(speed, bool) or not math.isfinite(speed) or speed <= 0:
         raise ConfigError(f"speed: must be a positive number of m/s, got {speed!r}")
     if duration is not None and not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
@@ -162,8 +166,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
             raise ConfigError(f"pedal: a pedalling rider is the drive; drive {drive!r} cannot be given with it")
         cadence_rpm, power = _check_pedal(pedal)
         drive = "pedal"
-    if not (pedal is not None and speed_m_per_s is None):
-        _check(speed_m_per_s, None)
+    _check(speed_m_per_s, None, pedal)
     if callback not in CALLBACKS:
         raise ConfigError(f"callback: must be one of {', '.join(CALLBACKS)}, got {callback!r}")
     if drive not in ("rider", "coast", "pedal"):
@@ -523,6 +526,14 @@ def geometry(p: Prepared, raw: dict) -> dict:
     return {"chart": chart, "at_sag": sag}
 
 
+def crank_turns(p: Prepared, x) -> np.ndarray:
+    """A pedalling run's crank turns at the frame's positions ``x`` (m) from the first: the distance
+    rolled through the gear, as ``controllers.drive.pedal_drive`` turns the crank."""
+    ring, cog = p.spec.drive["chain_m"]
+    x = np.asarray(x, float)
+    return (x - x[0]) * cog / (ring * p.rear_tire.radius) / (2.0 * math.pi)
+
+
 def _drive_summary(p: Prepared, raw: dict) -> dict:
     """The drive's limits and work; for a pedalling rider also the cadence, the power asked and the
     mean power at the rear contact over the whole crank turns after the first second, and both
@@ -537,9 +548,8 @@ def _drive_summary(p: Prepared, raw: dict) -> dict:
         return out
     from mtbmj.ride import bob
 
-    ring, cog = p.spec.drive["chain_m"]
     t = raw["time_s"]
-    turns = (raw["x_m"] - raw["x_m"][0]) * cog / (ring * p.rear_tire.radius) / (2.0 * math.pi)
+    turns = crank_turns(p, raw["x_m"])
     pedal = {"cadence_rpm": p.drive.cadence * 60.0 / (2.0 * math.pi), "power_W": p.drive.power,
              "crank_length_mm": CRANK_LENGTH_M * 1e3,
              "gear": "{}x{}".format(*p.spec.drive["teeth"]),
@@ -671,11 +681,10 @@ class BikeResult(RunOutput):
             comparison = ride_mod.compare(self, ride)
             files["ride_comparison.json"] = output.json_bytes(comparison)
             files["ride_comparison.png"] = ride_mod.png(comparison)
-            if self.info.get("pedal"):  # a pedalling run: its bob beside the ride's (mtbmj.ride.bob)
+            if "pedal" in self.summary["drive"]:  # a pedalling run: its bob beside the ride's (mtbmj.ride.bob)
                 from mtbmj.ride import bob
 
-                path = ride if ride != "example" else None
-                bobs = bob.compare(self, path if path is not None else _example_path())
+                bobs = bob.compare(self, ride)
                 files["bob.json"] = output.json_bytes(bob.json_ready(bobs))
                 files["bob.png"] = bob.png(bobs)
         if video:
@@ -807,12 +816,6 @@ def default_duration(p: Prepared) -> float:
     return max(1.0, (p.terrain.length + wheelbase) / p.speed)
 
 
-def _example_path():
-    from mtbmj.ride import telemetry
-
-    return telemetry.example_path()
-
-
 def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, duration: float | None = None,
              drive: str = "rider", start_x: float | None = None,
              progress: Callable[[float], None] | None = None, callback: str = "auto", lock=(),
@@ -829,10 +832,7 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
     ``mtbmj.bike.spec.overridden``; ``seated`` the rider seated, held rigid on the frame (``prepare``);
     ``pedal`` (cadence_rpm, power_W) the rider pedalling through the chain instead of holding a speed
     (``prepare``; ``speed_m_per_s`` None: the gear's speed at the cadence)."""
-    if pedal is None or speed_m_per_s is not None:
-        _check(speed_m_per_s, duration)
-    else:
-        _check(1.0, duration)
+    _check(speed_m_per_s, duration, pedal)
     p = guard.prepared("bike", lambda: prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire,
                                                overrides, seated, pedal),
                        model_of=lambda p: p.bike.model)
@@ -853,7 +853,6 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
     if seated:
         info["seated"] = True
     if pedal is not None:
-        info["pedal"] = summary["drive"]["pedal"]
         if summary["min_speed_m_per_s"] < STALL_M_PER_S:
             from mtbmj.config import warn
 
@@ -877,5 +876,5 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
     return result
 
 
-__all__ = ["run_bike", "prepare", "LOCKS", "LOCK_ARMATURE", "simulate", "BikeResult", "BikeCallback", "Prepared", "COLUMNS", "setups",
+__all__ = ["run_bike", "prepare", "crank_turns", "LOCKS", "LOCK_ARMATURE", "simulate", "BikeResult", "BikeCallback", "Prepared", "COLUMNS", "setups",
            "CALLBACKS", "make_callback", "callback_kind"]

@@ -134,18 +134,19 @@ def run_stretch(time_s) -> tuple[float, float]:
 
 
 def compare(result, sst: str) -> dict:
-    """The pedal bob of a pedalling bike run (a ``BikeResult``) and of a recorded ride ``sst``, both
-    ends, JSON-ready; the run's stretch is its second half (``run_stretch``)."""
+    """The pedal bob of a pedalling bike run (a ``BikeResult``) and of a recorded ride ``sst`` (a
+    path, or "example" for the shipped ride), both ends, JSON-ready; the run's stretch is its
+    second half (``run_stretch``)."""
     from mtbmj.ride import telemetry
 
-    ride = telemetry.read_sst(sst)
+    ride = telemetry.read_sst(telemetry.example_path() if sst == "example" else sst)
     raw = result.raw
     t = raw["time_s"]
     window = run_stretch(t)
-    pedal = result.info.get("pedal", {})
+    pedal = result.summary["drive"]["pedal"]
     out = {"ride": ride.name, "ride_notes": list(ride.notes),
-           "simulation": f"bike {result.name} over {result.scenario}, pedalling {pedal.get('cadence_rpm', 0):g} rpm "
-                         f"at {pedal.get('power_W', 0):g} W{' seated' if result.info.get('seated') else ' standing'}"}
+           "simulation": f"bike {result.name} over {result.scenario}, pedalling {pedal['cadence_rpm']:g} rpm "
+                         f"at {pedal['power_W']:g} W{' seated' if result.info.get('seated') else ' standing'}"}
     for end, sim, real in (("front", raw["front_travel_mm"], ride.fork_mm), ("rear", raw["rear_travel_mm"], ride.rear_mm)):
         entry = {"simulated": bob(t, sim, *window).to_dict()}
         if real is not None:
