@@ -163,6 +163,10 @@ def run_cli(*args, cwd):
 
 
 def test_bike_pedal_cli_writes_bob_beside_a_ride(tmp_path):
+    from mtbmj.bike.run import run_bike
+    from mtbmj.errors import ConfigError
+    from mtbmj.ride import bob
+
     ride = SHARED / "00090.SST"
     p = run_cli("bike", "sst", CLIMB, "--pedal", "60", "--seated", "--duration", "8", "--set",
                 "drive.chainring_teeth=32", "--set", "drive.cog_teeth=42", "--ride", str(ride), "--out", "run",
@@ -173,8 +177,13 @@ def test_bike_pedal_cli_writes_bob_beside_a_ride(tmp_path):
     assert bobs["ride"] == "00090.SST"
     assert 1.5 < bobs["rear"]["ride"]["frequency_Hz"] < 3.0
     assert bobs["rear"]["simulated"]["window_s"][0] == pytest.approx(4.0, abs=0.01)  # the second half
-    from mtbmj.ride import bob
-    from mtbmj.bike.run import run_bike
+    # the folder replays (mtbmj render): the pedalling rider again, not the speed controller
+    from mtbmj.bike import replay
+
+    again = replay.rerun(out, duration=2.0)
+    assert again.summary["drive"]["mode"] == "pedal"
+    with pytest.raises(ConfigError, match="pedal=\\(cadence_rpm"):
+        run_bike("sst", CLIMB, 2.0, 1.0, drive="pedal")
 
     fig = bob.figure(bob.compare(run_bike("sst", CLIMB, None, 8.0, pedal=(60, 250), overrides=CHAIN, seated=True),
                                  str(ride)))

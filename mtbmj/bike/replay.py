@@ -3,7 +3,8 @@
 A bike folder is recognised by its manifest (``bike_source``) or by its timeseries' columns
 (``front_travel_mm`` and ``rear_travel_mm``). For a video the run is re-simulated,
 deterministically, from the manifest (the bike: a preset name or the bike file's path, the
-scenario, the locks) and the summary (speed, start, drive, duration), as ``mtbmj render`` does for
+scenario, the locks) and the summary (speed, start, drive and a pedalling rider's cadence and power,
+duration), as ``mtbmj render`` does for
 a rolling run; the replay's front travel must equal the folder's timeseries (within 1e-3 mm, the
 CSV's rounding), else the folder is refused (e.g. a bike changed in Python, whose preset name
 no longer describes it, or a bike file changed since).
@@ -54,10 +55,12 @@ def rerun(run_dir, duration: float | None = None, error=MtbmjError):
     manifest, summary = _read(run_dir, error)
     try:
         info = manifest.get("engine_info") or {}
-        kwargs = {"drive": summary["drive"]["mode"], "start_x": summary.get("start_m"),
+        pedal = summary["drive"].get("pedal")  # a pedalling rider: its cadence and power again
+        kwargs = {"drive": "rider" if pedal else summary["drive"]["mode"], "start_x": summary.get("start_m"),
                   "callback": "auto", "lock": tuple(info.get("locked", ())),
                   "rear_tire": bool(info.get("rear_tire", True)), "overrides": manifest.get("bike_overrides") or None,
-                  "seated": bool(info.get("seated", False))}
+                  "seated": bool(info.get("seated", False)),
+                  "pedal": (float(pedal["cadence_rpm"]), float(pedal["power_W"])) if pedal else None}
         whole = float(summary["duration_s"])
     except (KeyError, TypeError, ValueError) as exc:
         raise error(f"{run_dir}: not a complete bike run ({exc.__class__.__name__}: {exc})") from None

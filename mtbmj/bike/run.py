@@ -169,8 +169,9 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     _check(speed_m_per_s, None, pedal)
     if callback not in CALLBACKS:
         raise ConfigError(f"callback: must be one of {', '.join(CALLBACKS)}, got {callback!r}")
-    if drive not in ("rider", "coast", "pedal"):
-        raise ConfigError(f"drive: {drive!r} is not one of rider, coast")
+    if drive not in ("rider", "coast") and pedal is None:  # a pedalling rider comes with pedal=(rpm, W)
+        raise ConfigError(f"drive: {drive!r} is not one of rider, coast (a pedalling rider: pedal=(cadence_rpm, "
+                          f"power_W))")
     lock = _check_lock(lock, rear_tire)
     if isinstance(bike, spec_mod.BikeSpec) and overrides:
         raise ConfigError("overrides: give them with a bike name or file, not a ready-made BikeSpec")
