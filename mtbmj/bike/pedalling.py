@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mtbmj.ride.bob import HIGH_PASS_HZ, BobError, bob, run_stretch
+from mtbmj.ride.bob import BobError, bob, high_passed, run_stretch
 
 GEAR = (32, 42)  # assumed: a 1x climbing gear (the records do not say theirs)
 RUN_S = 14.0
@@ -40,7 +40,6 @@ class Against:
         bars span each amplitude's interquartile range over the strokes), and the first record's
         four seconds of bob."""
         from matplotlib.figure import Figure
-        from scipy import signal
 
         fig = Figure(figsize=(12, 8), layout="constrained")
         ax = fig.subplots(2, 2)
@@ -65,13 +64,9 @@ class Against:
             for (t, x), window, color, label in (((tr, xr), self.rows[i]["ride"]["rear"]["window_s"], "C1", "ridden"),
                                                  ((ts, xs), self.rows[i]["simulated"]["rear"]["window_s"], "C0",
                                                   "simulated")):
-                t = np.asarray(t, float)
-                keep = (t >= window[0]) & (t <= window[0] + 4.0)
-                fs = 1.0 / float(np.median(np.diff(t)))
-                y = signal.sosfiltfilt(signal.butter(2, HIGH_PASS_HZ, btype="highpass", fs=fs, output="sos"),
-                                       np.asarray(x, float)[(t >= window[0]) & (t <= window[1])])
-                y = y[:int(keep.sum())]
-                ax[1, col].plot(t[keep][:y.size] - window[0], y, color=color, label=label)
+                tt, y = high_passed(t, x, window)
+                show = tt <= 4.0
+                ax[1, col].plot(tt[show], y[show], color=color, label=label)
             ax[1, col].set(xlabel="time in the pedalling stretch (s)", ylabel="rear travel, high-passed (mm)",
                            title=f"{self.rows[i]['record']} ({self.rows[i]['stance']}): four seconds", xlim=(0, 4))
             ax[1, col].legend(fontsize=8)

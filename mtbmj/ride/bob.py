@@ -83,14 +83,8 @@ def bob(time_s, travel_mm, start_s: float | None = None, end_s: float | None = N
     end = auto[1] if end_s is None else float(end_s)
     if end - start < MIN_STRETCH_S - 0.01:  # (a run's last sample lies a step before its end)
         raise BobError(f"bob: the pedalling stretch {start:.1f}-{end:.1f} s is shorter than {MIN_STRETCH_S:g} s")
-    keep = (t >= start) & (t <= end)
-    t, x = t[keep], x[keep]
-    fs = 1.0 / float(np.median(np.diff(t)))
-    sos = signal.butter(2, HIGH_PASS_HZ, btype="highpass", fs=fs, output="sos")
-    y = signal.sosfiltfilt(sos, x - x.mean())
-    seg = min(y.size, int(round(4.0 * fs)))
-    nfft = max(seg, int(2 ** np.ceil(np.log2(fs / 0.01))))
-    f, p = signal.welch(y, fs=fs, nperseg=seg, nfft=nfft)
+    t, x, y, fs = _high_passed(t, x, (start, end))
+    f, p = _power_spectrum(y, fs)
     band = np.flatnonzero((f >= BAND_HZ[0]) & (f <= BAND_HZ[1]))
     i = int(band[np.argmax(p[band])])
     peak = float(f[i])
@@ -111,18 +105,38 @@ def bob(time_s, travel_mm, start_s: float | None = None, end_s: float | None = N
     return Bob(peak, float(med), (float(q1), float(q3)), int(swings.size), float(x.mean()), (start, end))
 
 
+def _high_passed(t, x, window_s):
+    """(t, x, y, fs) over the stretch ``window_s``: its times and travel, the travel less its mean
+    high-passed (zero phase, ``HIGH_PASS_HZ``), the sample rate."""
+    from scipy import signal
+
+    keep = (t >= window_s[0]) & (t <= window_s[1])
+    t, x = t[keep], x[keep]
+    fs = 1.0 / float(np.median(np.diff(t)))
+    y = signal.sosfiltfilt(signal.butter(2, HIGH_PASS_HZ, btype="highpass", fs=fs, output="sos"), x - x.mean())
+    return t, x, y, fs
+
+
+def _power_spectrum(y, fs):
+    """(frequency Hz, power density) of ``y``: Welch, 4 s segments, padded to 0.01 Hz."""
+    from scipy import signal
+
+    seg = min(y.size, int(round(4.0 * fs)))
+    return signal.welch(y, fs=fs, nperseg=seg, nfft=max(seg, int(2 ** np.ceil(np.log2(fs / 0.01)))))
+
+
+def high_passed(time_s, travel_mm, window_s) -> tuple[np.ndarray, np.ndarray]:
+    """(time from the stretch's start s, travel high-passed mm) over ``window_s``, as ``bob`` reads
+    it: what the figures draw."""
+    t, _, y, _ = _high_passed(np.asarray(time_s, float), np.asarray(travel_mm, float), window_s)
+    return t - t[0], y
+
+
 def spectrum(time_s, travel_mm, window_s) -> tuple[np.ndarray, np.ndarray]:
     """(frequency Hz, amplitude spectral density mm/sqrt(Hz)) of the high-passed travel over the
     stretch, as ``bob`` reads it."""
-    from scipy import signal
-
-    t = np.asarray(time_s, float)
-    keep = (t >= window_s[0]) & (t <= window_s[1])
-    x = np.asarray(travel_mm, float)[keep]
-    fs = 1.0 / float(np.median(np.diff(t)))
-    y = signal.sosfiltfilt(signal.butter(2, HIGH_PASS_HZ, btype="highpass", fs=fs, output="sos"), x - x.mean())
-    seg = min(y.size, int(round(4.0 * fs)))
-    f, p = signal.welch(y, fs=fs, nperseg=seg, nfft=max(seg, int(2 ** np.ceil(np.log2(fs / 0.01)))))
+    _, _, y, fs = _high_passed(np.asarray(time_s, float), np.asarray(travel_mm, float), window_s)
+    f, p = _power_spectrum(y, fs)
     return f, np.sqrt(p)
 
 
@@ -164,7 +178,6 @@ def figure(comparison: dict):
     """Each end's bob: four seconds of the high-passed travel, simulated and ridden, and both
     spectra with the bob frequency marked."""
     from matplotlib.figure import Figure
-    from scipy import signal
 
     fig = Figure(figsize=(11, 7), layout="constrained")
     ax = fig.subplots(2, 2)
@@ -175,13 +188,8 @@ def figure(comparison: dict):
             if key not in entry:
                 continue
             b = entry[key]
-            t = np.asarray(series[key][0], float)
-            x = np.asarray(series[key][index], float)
-            fs = 1.0 / float(np.median(np.diff(t)))
-            keep = (t >= b["window_s"][0]) & (t <= b["window_s"][1])
-            y = signal.sosfiltfilt(signal.butter(2, HIGH_PASS_HZ, btype="highpass", fs=fs, output="sos"),
-                                   x[keep] - x[keep].mean())
-            tt = t[keep] - t[keep][0]
+            t, x = series[key][0], series[key][index]
+            tt, y = high_passed(t, x, b["window_s"])
             show = tt <= 4.0
             ax[row, 0].plot(tt[show], y[show], color=color,
                             label=f"{label}: {b['frequency_Hz']:.2f} Hz, {b['amplitude_mm']:.1f} mm peak to peak")
@@ -212,4 +220,4 @@ def json_ready(comparison: dict) -> dict:
     return {k: v for k, v in comparison.items() if k != "series"}
 
 
-__all__ = ["Bob", "BobError", "bob", "stretch", "run_stretch", "spectrum", "compare", "figure", "png", "json_ready"]
+__all__ = ["Bob", "BobError", "bob", "stretch", "run_stretch", "high_passed", "spectrum", "compare", "figure", "png", "json_ready"]
