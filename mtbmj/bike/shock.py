@@ -38,6 +38,9 @@ KEYS = ("spring",) + COIL + AIR + DAMPER
 # the spring keys of each kind in the fork schema (dropped from [shock.set] when the other kind is chosen)
 _COIL_SCHEMA = ("fork.spring.rate_N_per_mm", "fork.spring.rate_lb_per_in", "fork.spring.preload_N",
                 "fork.spring.preload", "fork.spring.progressive_rate_N_per_mm", "fork.spring.progressive_cubic_N_per_mm3")
+# an air can's keys it cannot do without, and the shock configuration's keys they set
+_AIR_NEEDED = (("pressure_psi", "fork.spring.air_pressure_psi"), ("piston_diameter_mm", "fork.spring.piston_diameter_mm"),
+               ("positive_volume_cm3", "fork.spring.air_volume_cm3"))
 _AIR_SCHEMA = ("fork.spring.air_pressure_psi", "fork.spring.air_pressure_bar", "fork.spring.piston_diameter_mm",
                "fork.spring.air_volume_cm3", "fork.spring.tokens", "fork.spring.token_volume_cm3",
                "fork.spring.negative_volume_cm3", "fork.spring.transfer_port_mm", "fork.spring.polytropic_index")
@@ -96,9 +99,7 @@ def schema_keys(part: dict, given: dict, kind: str | None = None) -> dict:
         if coil:
             raise ConfigError(f"shock.{coil[0]}: a coil's key, but the shock is an air shock"
                               f"{'' if 'spring' in mine else ' (its base says so)'}: set shock.spring = \"coil\"")
-        for key, schema in (("pressure_psi", "fork.spring.air_pressure_psi"),
-                            ("piston_diameter_mm", "fork.spring.piston_diameter_mm"),
-                            ("positive_volume_cm3", "fork.spring.air_volume_cm3")):
+        for key, schema in _AIR_NEEDED:
             if key not in mine and schema not in given:
                 raise ConfigError(f"shock.{key}: an air shock needs it (with shock.pressure_psi, "
                                   f"shock.piston_diameter_mm and shock.positive_volume_cm3)")
@@ -107,9 +108,7 @@ def schema_keys(part: dict, given: dict, kind: str | None = None) -> dict:
         out["fork.spring.model"] = "air"
         out["fork.spring.preload"] = False  # the air's own pressure is its preload
         out.setdefault("fork.spring.polytropic_index", POLYTROPIC_INDEX)
-        for key, schema in (("pressure_psi", "fork.spring.air_pressure_psi"),
-                            ("piston_diameter_mm", "fork.spring.piston_diameter_mm"),
-                            ("positive_volume_cm3", "fork.spring.air_volume_cm3")):
+        for key, schema in _AIR_NEEDED:
             if key in mine:
                 out[schema] = _value(mine, key)
         if "negative_volume_cm3" in mine:
