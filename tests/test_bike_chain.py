@@ -13,14 +13,13 @@ from __future__ import annotations
 
 import math
 
-import mujoco
 import numpy as np
 import pytest
 from scipy.optimize import fsolve
 
 import mtbmj
 from mtbmj.bike import spec as spec_mod
-from test_bike_drive_moment import _slope
+from test_bike_drive_moment import _slope, last_pose
 
 CHAIN = 'base = "sst"\n[drive]\nchainring_teeth = 32\ncog_teeth = 24\n'
 PITCH = 0.0127  # a 1/2 in chain
@@ -60,11 +59,7 @@ def test_the_swingarm_balances_by_virtual_work_with_the_chain(climb):
     runs, hub = climb
     r = runs["compiled"]
     p = r.prepared
-    model = p.bike.model
-    data = mujoco.MjData(model)
-    data.qpos[:] = r.motion[1][-1]
-    mujoco.mj_kinematics(model, data)
-    mujoco.mj_comPos(model, data)
+    model, data = last_pose(r)
     xz = lambda v: np.asarray(v)[[0, 2]]  # noqa: E731
     frame = model.body("frame").id
     bb, axle, pivot = xz(data.xpos[frame]), xz(data.site_xpos[model.site("rear_axle").id]), \

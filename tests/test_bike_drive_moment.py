@@ -31,14 +31,20 @@ def _slope(tmp_path, grade: float, name: str) -> str:
     return str(path)
 
 
-def _balance(result, grade: float) -> tuple[float, float]:
-    """(the front tyre's normal force by the moment balance, the weight) at the run's last sample."""
-    p = result.prepared
-    model = p.bike.model
+def last_pose(result):
+    """(model, data): a run's bike at its last kept pose, its kinematics and centres of mass computed."""
+    model = result.prepared.bike.model
     data = mujoco.MjData(model)
     data.qpos[:] = result.motion[1][-1]
     mujoco.mj_kinematics(model, data)
     mujoco.mj_comPos(model, data)
+    return model, data
+
+
+def _balance(result, grade: float) -> tuple[float, float]:
+    """(the front tyre's normal force by the moment balance, the weight) at the run's last sample."""
+    p = result.prepared
+    model, data = last_pose(result)
     frame = model.body("frame").id
     com = data.subtree_com[frame][[0, 2]]
     mass = float(model.body_subtreemass[frame])
