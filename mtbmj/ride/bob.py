@@ -149,20 +149,22 @@ def run_stretch(time_s) -> tuple[float, float]:
 
 def compare(result, sst: str) -> dict:
     """The pedal bob of a pedalling bike run (a ``BikeResult``) and of a recorded ride ``sst`` (a
-    path, or "example" for the shipped ride), both ends, JSON-ready; the run's stretch is its
-    second half (``run_stretch``)."""
+    path, or "example" for the shipped ride), both ends, JSON-ready; the run's bob is its summary's,
+    read over its second half (``run_stretch``)."""
     from mtbmj.ride import telemetry
 
     ride = telemetry.read_sst(telemetry.example_path() if sst == "example" else sst)
     raw = result.raw
     t = raw["time_s"]
-    window = run_stretch(t)
     pedal = result.summary["drive"]["pedal"]
     out = {"ride": ride.name, "ride_notes": list(ride.notes),
            "simulation": f"bike {result.name} over {result.scenario}, pedalling {pedal['cadence_rpm']:g} rpm "
                          f"at {pedal['power_W']:g} W{' seated' if result.info.get('seated') else ' standing'}"}
-    for end, sim, real in (("front", raw["front_travel_mm"], ride.fork_mm), ("rear", raw["rear_travel_mm"], ride.rear_mm)):
-        entry = {"simulated": bob(t, sim, *window).to_dict()}
+    for end, real in (("front", ride.fork_mm), ("rear", ride.rear_mm)):
+        simulated = pedal[f"{end}_bob"]  # read over the same stretch when the run was summarised
+        if "unread" in simulated:
+            raise BobError(simulated["unread"])
+        entry = {"simulated": simulated}
         if real is not None:
             try:
                 entry["ride"] = bob(ride.time_s, real).to_dict()
