@@ -36,11 +36,12 @@ def closed_form_sag(bike_name="sst"):
     ground, from the preset's numbers only."""
     b = _toml("mtbmj.bike.presets", bike_name)
     ref = _toml("mtbmj.presets", "reference")
-    geo, rider, lev = b["bike"], b["rider"], b["leverage"]
-    # bike.head_angle_deg is the chart's (both wheels on flat ground at full extension): in frame
-    # coordinates the steering axis is steeper by the frame's nose-up turn when the axles are level
-    level = math.atan2(geo["rear_axle_mm"][1] - geo["front_axle_mm"][1], geo["front_axle_mm"][0] - geo["rear_axle_mm"][0])
-    alpha = math.radians(geo["head_angle_deg"]) + level
+    geo, rider, lev = dict(b["bike"]), b["rider"], b["leverage"]
+    chart = b["geometry"]  # the preset's geometry chart: both axles level at the BB's drop above it
+    drop = chart["bb_drop_mm"]
+    geo["rear_axle_mm"] = [-math.sqrt(chart["chainstay_mm"] ** 2 - drop ** 2), drop]
+    geo["front_axle_mm"] = [chart["wheelbase_mm"] + geo["rear_axle_mm"][0], drop]
+    alpha = math.radians(chart["head_angle_deg"])
     front0 = np.array(geo["front_axle_mm"]) * MM
     rear0 = np.array(geo["rear_axle_mm"]) * MM
     pivot = np.array(geo["pivot_mm"]) * MM
@@ -155,7 +156,8 @@ def test_mass_matrix_and_accelerations_match_mujoco_at_random_states():
     spin = [b.dof_index("front_spin"), b.dof_index("rear_spin")]
     rng = np.random.default_rng(7)
     d = mujoco.MjData(m)
-    for _ in range(6):
+    checked = 0
+    while checked < 6:
         q = np.array([rng.uniform(0.0, 0.6), rng.uniform(-0.08, 0.0), rng.uniform(-0.2, 0.2), rng.uniform(0.0, 0.17),
                       rng.uniform(0.0, 0.4), rng.uniform(-0.05, 0.05), rng.uniform(-0.2, 0.2)])
         v = rng.normal(0.0, 1.0, NQ)
@@ -170,6 +172,9 @@ def test_mass_matrix_and_accelerations_match_mujoco_at_random_states():
         p.callback.reset()
         with installed(p.callback):
             mujoco.mj_forward(m, d)
+        if np.max(np.abs(d.ctrl)) > 1e6:  # a tyre driven far through its rim: no state a run reaches
+            continue  # (MuJoCo refuses a control past 1e10 N and the accelerations are not comparable)
+        checked += 1
         S = _schur(m, d, keep, spin)
         M = ref.planar.mass_matrix(q)
         assert np.max(np.abs(S - M)) <= 1e-10 * np.max(np.abs(M))

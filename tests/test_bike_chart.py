@@ -27,9 +27,9 @@ def _reach_stack(head_tube=110.0, crown=560.0):
     return (front[0] - along * math.cos(a) - off * math.sin(a), front[1] + along * math.sin(a) - off * math.cos(a))
 
 
-def _file(tmp_path, chart: dict, extra: str = "") -> str:
+def _file(tmp_path, chart: dict, extra: str = "", name: str = "chart.toml") -> str:
     lines = ['base = "trail"', extra, "[geometry]"] + [f"{k} = {v!r}" for k, v in chart.items()]
-    path = tmp_path / "chart.toml"
+    path = tmp_path / name
     path.write_text("\n".join(lines) + "\n")
     return str(path)
 
@@ -60,3 +60,134 @@ def test_reach_and_stack_that_agree_are_taken_and_ones_that_do_not_are_refused(t
 def test_a_chart_and_axles_in_one_file_are_refused(tmp_path):
     with pytest.raises(ConfigError, match="two ways"):
         mtbmj.bike.spec.load(_file(tmp_path, CHART, "[bike]\nfront_axle_mm = [800.0, 10.0]"))
+
+
+# --- the rest of a chart (issue 40 item 1): the bottom bracket as a height, the wheels' size, the
+# travels, the seat angle and saddle; and the presets written as charts
+
+
+def _fork(path, overrides=None):
+    return bike_run.setups(mtbmj.bike.spec.load(path, overrides))[0]
+
+
+def test_a_bb_height_on_wheels_of_a_size_gives_the_drop_and_the_tyres(tmp_path):
+    chart = {k: v for k, v in CHART.items() if k != "bb_drop_mm"}
+    path = _file(tmp_path, {**chart, "bb_height_mm": 345.0, "wheel_diameter_mm": 760.0})
+    spec = mtbmj.bike.spec.load(path)
+    assert spec.rear_axle[1] * 1e3 == pytest.approx(380.0 - 345.0) == pytest.approx(spec.front_axle[1] * 1e3)
+    assert _fork(path).tire_radius == pytest.approx(0.380)
+    g = mtbmj.run_bike(path, "flat", speed_m_per_s=4.0, duration=0.02).summary["geometry"]["chart"]
+    assert g["bb_height_mm"] == pytest.approx(345.0)
+    # both given and agreeing (within 2 mm) are taken; apart, refused naming both
+    mtbmj.bike.spec.load(_file(tmp_path, {**CHART, "bb_height_mm": 351.0, "wheel_diameter_mm": 760.0}))
+    with pytest.raises(ConfigError, match=r"bb_height_mm 340 on wheels of 760 mm puts the bottom bracket 40 mm below "
+                                          r"the axles, but bb_drop_mm is 30"):
+        mtbmj.bike.spec.load(_file(tmp_path, {**CHART, "bb_height_mm": 340.0, "wheel_diameter_mm": 760.0}))
+    with pytest.raises(ConfigError, match="geometry.bb_height_mm: needs geometry.wheel_diameter_mm"):
+        mtbmj.bike.spec.load(_file(tmp_path, {**chart, "bb_height_mm": 345.0}))
+    with pytest.raises(ConfigError, match="geometry.bb_drop_mm: missing"):
+        mtbmj.bike.spec.load(_file(tmp_path, chart))
+
+
+def test_the_chart_sets_the_forks_travel_and_length_as_the_file_would(tmp_path):
+    path = _file(tmp_path, {**CHART, "fork_travel_mm": 150.0, "fork_length_mm": 555.0})
+    fork = _fork(path)
+    assert (fork.travel, fork.fork_length) == (pytest.approx(0.150), pytest.approx(0.555))
+    with pytest.raises(ConfigError, match=r"geometry.fork_travel_mm and \[fork.set\] 'fork.travel_mm' give it two ways"):
+        mtbmj.bike.spec.load(_file(tmp_path, {**CHART, "fork_travel_mm": 150.0},
+                                   '[fork.set]\n"fork.travel_mm" = 160.0', name="twice.toml"))
+    # a file on it changes the fork again; --set geometry.fork_travel_mm is one more file
+    later = tmp_path / "later.toml"
+    later.write_text(f'base = "{path}"\n[fork.set]\n"fork.travel_mm" = 140.0\n')
+    assert _fork(str(later)).travel == pytest.approx(0.140)
+    assert _fork(path, {"geometry.fork_travel_mm": 160}).travel == pytest.approx(0.160)
+
+
+def _travel_at_stroke_closed_form(r0, r1, w1, stroke):
+    """A two-point leverage table, LR = r0 + (r1 - r0) w / w1: ds = dw / LR integrates to
+    s = (w1 / (r1 - r0)) ln(LR(w) / r0), so w = r0 (exp(s (r1 - r0) / w1) - 1) w1 / (r1 - r0);
+    past w1 the last ratio r1 carries on."""
+    b = (r1 - r0) / w1
+    s1 = math.log(r1 / r0) / b
+    if stroke <= s1:
+        return r0 * math.expm1(b * stroke) / b
+    return w1 + (stroke - s1) * r1
+
+
+@pytest.mark.filterwarnings("ignore:leverage. the table covers")  # the 56 mm stroke past the table's end, as meant
+def test_the_rear_travel_is_checked_against_the_strokes_travel(tmp_path):
+    lev = "[leverage]\nwheel_travel_mm = [0.0, 150.0]\nratio = [3.0, 2.5]\n[shock]\nstroke_mm = {}\n"
+    for stroke in (54.7, 56.0):  # inside the table (54.69 mm covers it) and 1.3 mm past its end
+        has = _travel_at_stroke_closed_form(3.0, 2.5, 150.0, stroke)
+        mtbmj.bike.spec.load(_file(tmp_path, {**CHART, "rear_travel_mm": round(has)}, lev.format(stroke)))
+        with pytest.raises(ConfigError, match=rf"geometry.rear_travel_mm: {round(has) - 8} mm, but the shock's "
+                                              rf"{stroke:g} mm stroke .* gives {has:.1f} mm of wheel travel"):
+            mtbmj.bike.spec.load(_file(tmp_path, {**CHART, "rear_travel_mm": round(has) - 8}, lev.format(stroke)))
+    # the preset's table, inverted here by a root finder
+    from scipy.optimize import brentq
+    leverage = mtbmj.bike.spec.load("sst").leverage
+    for s in (0.01, 0.0333, 0.0647):
+        w = brentq(lambda w: leverage.stroke(w) - s, 0.0, 0.3, xtol=1e-12)
+        assert leverage.travel_at_stroke(s) == pytest.approx(w, abs=1e-9)
+
+
+def test_a_seat_angle_and_saddle_height_seat_the_rider(tmp_path):
+    seat = {"seat_tube_angle_deg": 76.0, "saddle_height_mm": 750.0}
+    path = _file(tmp_path, {**CHART, **seat}, "[rider]\nseated_com_from_saddle_mm = [70.0, 190.0]")
+    a = math.radians(76.0)
+    want = (-750.0 * math.cos(a) + 70.0, 750.0 * math.sin(a) + 190.0)
+    assert [v * 1e3 for v in mtbmj.bike.spec.load(path).rider.seated_com] == pytest.approx(want, abs=1e-9)
+    p = bike_run.prepare(path, "flat", 4.0, seated=True)
+    assert [v * 1e3 for v in p.spec.rider.com] == pytest.approx(want, abs=1e-9)
+    # the seated rider given twice in one file; a later file's own seated rider; --set
+    with pytest.raises(ConfigError, match="give the seated rider two ways"):
+        mtbmj.bike.spec.load(_file(tmp_path, {**CHART, **seat}, "[rider]\nseated_com_mm = [-90.0, 900.0]",
+                                   name="twice.toml"))
+    later = tmp_path / "later.toml"
+    later.write_text(f'base = "{path}"\n[rider]\nseated_com_mm = [-80.0, 910.0]\n')
+    assert mtbmj.bike.spec.load(str(later)).rider.seated_com == pytest.approx((-0.080, 0.910))
+    assert mtbmj.bike.spec.load(path, {"rider.seated_com_mm": [-85, 905]}).rider.seated_com == pytest.approx(
+        (-0.085, 0.905))
+    # a chart of its own without a saddle keeps where the base's saddle seated the rider
+    later.write_text(f'base = "{path}"\n[geometry]\n' + "\n".join(f"{k} = {v!r}" for k, v in CHART.items()) + "\n")
+    assert [v * 1e3 for v in mtbmj.bike.spec.load(str(later)).rider.seated_com] == pytest.approx(want, abs=1e-9)
+    with pytest.raises(ConfigError, match="geometry.saddle_height_mm: needed with geometry.seat_tube_angle_deg"):
+        mtbmj.bike.spec.load(_file(tmp_path, {**CHART, "seat_tube_angle_deg": 76.0}))
+
+
+def test_a_chart_bike_refuses_a_set_of_its_axles_and_takes_one_of_its_chart(tmp_path):
+    with pytest.raises(ConfigError, match=r"--set bike.head_angle_deg: this bike's frame is given by its geometry chart"):
+        mtbmj.bike.spec.load("sst", {"bike.head_angle_deg": 65.0})
+    p = bike_run.prepare("sst", "flat", 4.0, overrides={"geometry.head_angle_deg": 65.0})
+    assert _level_head_angle(p) == pytest.approx(65.0, abs=1e-9)
+
+
+# The presets before they were written as charts (frame coordinates with their axles at different
+# heights): the charts must describe the same bikes, every point turned level about the bottom
+# bracket, to the 0.1 mm the preset files are rounded to
+OLD = {"sst": {"front": (815.0, 5.0), "rear": (-440.0, 25.0), "pivot": (-30.0, 75.0), "frame_com": (300.0, 300.0),
+               "com": (80.0, 950.0), "seated": (-90.0, 920.0), "bars": (460.0, 660.0), "head": 63.5},
+       "trail": {"front": (790.0, 10.0), "rear": (-435.0, 20.0), "pivot": (-20.0, 70.0), "frame_com": (300.0, 300.0),
+                 "com": (80.0, 950.0), "seated": (-90.0, 920.0), "bars": (460.0, 660.0), "head": 65.5}}
+
+
+@pytest.mark.parametrize("name", ["sst", "trail"])
+def test_the_presets_are_charts_of_the_bikes_they_were(name):
+    table, _ = mtbmj.bike.spec.read_table(name)
+    assert set(table["geometry"]) >= {"head_angle_deg", "wheelbase_mm", "chainstay_mm", "reach_mm", "stack_mm",
+                                      "seat_tube_angle_deg", "fork_travel_mm", "rear_travel_mm"}
+    old = OLD[name]
+    (fx, fz), (rx, rz) = old["front"], old["rear"]
+    turn = math.atan2(rz - fz, fx - rx)  # the old frame's nose-up pitch standing on flat ground
+
+    def level(p):
+        return (p[0] * math.cos(turn) - p[1] * math.sin(turn), p[0] * math.sin(turn) + p[1] * math.cos(turn))
+
+    spec = mtbmj.bike.spec.load(name)
+    mm = lambda p: [v * 1e3 for v in p]  # noqa: E731
+    for now, before, tol in ((spec.front_axle, old["front"], 0.15), (spec.rear_axle, old["rear"], 0.15),
+                             (spec.pivot, old["pivot"], 0.06), (spec.frame_com, old["frame_com"], 0.06),
+                             (spec.rider.com, old["com"], 0.06), (spec.rider.seated_com, old["seated"], 0.06),
+                             ((spec.rider.arm_x, spec.rider.arm_z), old["bars"], 0.06)):
+        assert mm(now) == pytest.approx(level(before), abs=tol)
+    assert math.degrees(spec.head_angle) == pytest.approx(old["head"])  # the chart's, the frame now level

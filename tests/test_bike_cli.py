@@ -51,7 +51,7 @@ def test_presets_lists_and_shows_the_bikes(capsys):
     assert "bikes (" in out and "\n  sst " in out and "\n  trail " in out
     assert main(["presets", "--show", "trail"]) == 0
     shown = dict(line.split(" = ", 1) for line in capsys.readouterr().out.splitlines())
-    assert shown["bike.head_angle_deg"] == "65.5" and shown["rider.mass_kg"] == "85.0"  # from its base, sst
+    assert shown["geometry.head_angle_deg"] == "65.5" and shown["rider.mass_kg"] == "85.0"  # from its base, sst
     assert shown["shock.set.fork.spring.rate_N_per_mm"] == "80.0"
 
 

@@ -138,3 +138,16 @@ def test_a_point_far_beyond_any_bike_is_one_line(tmp_path, monkeypatch, capsys):
     assert main(["bike", path, "flat", "--speed", "4", "--out", "run"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "bike.frame_com_mm" in err and "Traceback" not in err
+
+
+def test_a_warning_names_the_keys_own_unit():
+    """The unit in a plausibility warning is the one the key's name states, not its last word
+    (a stiffness of 3000 N/mm once read '3000 mm is outside 2-150 mm')."""
+    from mtbmj.bike import keys
+    lines = keys.warnings({"rider": {"leg_stiffness_N_per_mm": 3000.0, "leg_damping_N_s_per_m": 1e5,
+                                     "pitch_inertia_kg_m2": 100.0}})
+    assert lines == [
+        "rider.pitch_inertia_kg_m2 = 100 kg m2 is outside 1-25 kg m2, what bikes and riders have (a unit mistake?)",
+        "rider.leg_stiffness_N_per_mm = 3000 N/mm is outside 2-150 N/mm, what bikes and riders have (a unit mistake?)",
+        "rider.leg_damping_N_s_per_m = 100000 N s/m is outside 20-5000 N s/m, what bikes and riders have "
+        "(a unit mistake?)"]

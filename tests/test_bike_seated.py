@@ -63,7 +63,7 @@ def test_the_seated_rider_loads_the_tyres_by_its_own_centre_of_mass(tmp_path, ca
 
 def test_a_bike_without_a_seated_rider_is_refused(tmp_path, capsys):
     bike = tmp_path / "standing.toml"
-    bike.write_text("\n".join(line for line in PRESET.read_text().splitlines() if not line.startswith("seated_com_mm")))
+    bike.write_text("\n".join(line for line in PRESET.read_text().splitlines() if not line.startswith(("seated_com", "seat_tube_angle_deg", "saddle_height_mm"))))
     out = tmp_path / "out"
     assert main(["bike", str(bike), "flat", "--speed", "3", "--seated", "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()

@@ -132,7 +132,7 @@ def test_shared_slams_through_the_bike(tmp_path, capsys):
 
 
 def test_bike_without_a_seated_rider_is_refused(tmp_path, capsys):
-    text = "\n".join(line for line in PRESET.read_text().splitlines() if not line.startswith("seated_com_mm"))
+    text = "\n".join(line for line in PRESET.read_text().splitlines() if not line.startswith(("seated_com", "seat_tube_angle_deg", "saddle_height_mm")))
     bike = tmp_path / "standing.toml"
     bike.write_text(text)
     out = tmp_path / "out"

@@ -16,17 +16,21 @@ from __future__ import annotations
 
 import math
 
+from mtbmj.config import unit_of
+
 POINT_MM = "two numbers [x, z], mm"
 KEYS: dict[str, tuple[str, str, object]] = {
     "description": ("One line saying what the bike is.", "text", None),
     "reading": ("Where the numbers come from; informational.", "text", None),
     "base": ("A bike preset (sst, trail) or another bike file whose keys this file overrides.", "text", None),
-    "bike.head_angle_deg": ("Head angle from the horizontal, the frame at full extension.", "45-90", (58.0, 76.0)),
-    "bike.fork_offset_mm": ("Fork offset (rake): the axle ahead of the steering axis, perpendicular to it.",
-                            ">= 0", (20.0, 70.0)),
+    "bike.head_angle_deg": ("Head angle from the horizontal, the frame at full extension; a [geometry] chart "
+                            "sets it (the presets give one).", "45-90", (58.0, 76.0)),
+    "bike.fork_offset_mm": ("Fork offset (rake): the axle ahead of the steering axis, perpendicular to it; a "
+                            "[geometry] chart sets it.", ">= 0", (20.0, 70.0)),
     "bike.front_axle_mm": ("Front axle in frame coordinates (origin the bottom bracket, x forward, z up) at full "
-                           "extension.", POINT_MM, ((450.0, 1100.0), (-150.0, 250.0))),
-    "bike.rear_axle_mm": ("Rear axle in frame coordinates at full extension.", POINT_MM,
+                           "extension; a [geometry] chart sets it (the presets give one).", POINT_MM,
+                           ((450.0, 1100.0), (-150.0, 250.0))),
+    "bike.rear_axle_mm": ("Rear axle in frame coordinates at full extension; a [geometry] chart sets it.", POINT_MM,
                           ((-560.0, -380.0), (-150.0, 250.0))),
     "bike.pivot_mm": ("Main pivot in frame coordinates: the swingarm turns about it.", POINT_MM,
                       ((-250.0, 250.0), (-50.0, 400.0))),
@@ -86,6 +90,10 @@ KEYS: dict[str, tuple[str, str, object]] = {
     "rider.seated_com_mm": ("The rider's centre of mass seated on the saddle, frame coordinates (optional): the "
                             "seated rider of `fit bounce --bike` (a seat slam), held rigid on the frame.",
                             POINT_MM, ((-450.0, 300.0), (500.0, 1400.0))),
+    "rider.seated_com_from_saddle_mm": ("With a chart's saddle (geometry.seat_tube_angle_deg): where the seated "
+                                        "rider's centre of mass lies from the saddle; it sets rider.seated_com_mm "
+                                        "(a file giving both is refused).", POINT_MM,
+                                        ((-150.0, 250.0), (50.0, 400.0))),
     "rider.pitch_inertia_kg_m2": ("The rider's body's pitch inertia about its centre of mass.", "> 0", (1.0, 25.0)),
     "rider.pedals_mm": ("Where the legs meet the frame (the feet), frame coordinates.", POINT_MM,
                         ((-150.0, 150.0), (-100.0, 150.0))),
@@ -98,18 +106,35 @@ KEYS: dict[str, tuple[str, str, object]] = {
     "rider.arm_stiffness_N_per_mm": ("Both arms' stiffness.", "> 0", (0.5, 80.0)),
     "rider.arm_damping_N_s_per_m": ("Both arms' damping.", ">= 0", (5.0, 3000.0)),
     "geometry.head_angle_deg": ("A geometry chart's head angle (both wheels on flat ground at full extension); "
-                                "with [geometry] the frame's axles and head angle come from the chart.", "45-90",
-                                (58.0, 76.0)),
+                                "with [geometry] the frame's axles and head angle come from the chart "
+                                "(mtbmj/bike/chart.py).", "45-90", (58.0, 76.0)),
     "geometry.wheelbase_mm": ("The chart's wheelbase: axle to axle.", "500-2000", (1000.0, 1400.0)),
     "geometry.chainstay_mm": ("The chart's chainstay: bottom bracket to rear axle, straight.", "300-600",
                               (400.0, 480.0)),
-    "geometry.bb_drop_mm": ("The chart's bottom-bracket drop below the axles.", "-150-150", (-10.0, 60.0)),
+    "geometry.bb_drop_mm": ("The chart's bottom-bracket drop below the axles (or give bb_height_mm).", "-150-150",
+                            (-10.0, 60.0)),
+    "geometry.bb_height_mm": ("The chart's bottom-bracket height above the ground, unloaded, with "
+                              "wheel_diameter_mm (the drop is their radius less it; with bb_drop_mm too, within "
+                              "2 mm of it).", "150-500", (300.0, 380.0)),
     "geometry.fork_offset_mm": ("The fork's offset.", "0-150", (20.0, 70.0)),
     "geometry.reach_mm": ("The chart's reach (with stack, head tube and axle-to-crown: the front axle a second "
-                          "way, checked within 5 mm).", "300-600", (380.0, 560.0)),
+                          "way, checked within 5 mm; a --set of a key that places the frame drops this check).",
+                          "300-600", (380.0, 560.0)),
     "geometry.stack_mm": ("The chart's stack.", "500-750", (560.0, 680.0)),
     "geometry.head_tube_mm": ("The chart's head tube length (top to the crown).", "50-250", (80.0, 170.0)),
-    "geometry.fork_length_mm": ("The fork's axle-to-crown along the steering axis.", "400-700", (480.0, 620.0)),
+    "geometry.fork_length_mm": ("The fork's axle-to-crown along the steering axis; sets the fork's fork.length_mm "
+                                "(a file giving both is refused).", "400-700", (480.0, 620.0)),
+    "geometry.wheel_diameter_mm": ("The tyres' outer diameter (both wheels; 29 x 2.4 in: about 750 mm); sets the "
+                                   "fork configuration's tire.radius_mm to half of it.", "300-1000", (600.0, 790.0)),
+    "geometry.fork_travel_mm": ("The fork's travel; sets the fork's fork.travel_mm (a file giving both is "
+                                "refused).", "20-250", (80.0, 220.0)),
+    "geometry.rear_travel_mm": ("The rear wheel's travel; checked against the travel the shock's stroke gives "
+                                "through the leverage curve or the linkage, within 5 mm.", "20-250", (80.0, 220.0)),
+    "geometry.seat_tube_angle_deg": ("The effective seat-tube angle from the horizontal, at saddle_height_mm: with it "
+                                     "the saddle, and the seated rider's centre of mass "
+                                     "rider.seated_com_from_saddle_mm from it.", "60-90", (70.0, 82.0)),
+    "geometry.saddle_height_mm": ("Bottom bracket to the saddle's top along the effective seat angle.", "400-1100",
+                                  (600.0, 900.0)),
     "linkage.kind": ("The rear end's layout from hardpoints: single_pivot, linkage_driven_single_pivot, horst_link "
                      "or short_link (docs/bike.md, 'The rear end from hardpoints'); its points set bike.pivot_mm, "
                      "bike.rear_axle_mm and the leverage table, so a file giving [leverage] or bike.pivot_mm beside "
@@ -200,7 +225,8 @@ def warnings(table: dict) -> list[str]:
         value = table.get(section, {}).get(name) if isinstance(table.get(section), dict) else None
         if value is None:
             continue
-        unit = key.rsplit("_", 1)[1] if "_" in name else ""
+        # the unit the name states (N/mm, N s/m, kg, ...), else its last part (deg, W, teeth)
+        unit = unit_of(key) or ("kg m2" if key.endswith("_kg_m2") else key.rsplit("_", 1)[1] if "_" in name else "")
         if isinstance(rng[0], tuple):  # a point
             if isinstance(value, list) and len(value) == 2 and all(_number(x) for x in value):
                 for axis, x, (lo, hi) in zip("xz", value, rng):

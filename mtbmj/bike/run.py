@@ -179,7 +179,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     if seated:
         if spec.rider.seated_com is None:
             raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider (the rider's centre of mass "
-                              f"seated on the saddle, e.g. rider.seated_com_mm = [-90, 920])")
+                              f"seated on the saddle, e.g. rider.seated_com_mm = [-90, 920], or the chart's saddle: "
+                              f"geometry.seat_tube_angle_deg and saddle_height_mm)")
         if not rear_tire:
             raise ConfigError("seated: a seated rider rides on both wheels (not with the rear tire off)")
         spec = dataclasses.replace(spec, rider=dataclasses.replace(spec.rider, com=spec.rider.seated_com))

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 
+from mtbmj.bike import chart as _chart
 from mtbmj.bike import linkage as _linkage
 from mtbmj.bike import shock as _shock
 from mtbmj.errors import ConfigError
@@ -76,6 +77,18 @@ class Leverage:
     def table(self) -> tuple[list[float], list[float], list[float]]:
         """(travel, ratio, stroke) at the table's points (m, -, m): the lookups' arguments."""
         return self._w, self._r, self._s
+
+    def travel_at_stroke(self, stroke: float) -> float:
+        """The rear wheel travel (m) at shock ``stroke`` (m): ``stroke``'s inverse, the ratio held at
+        the table's ends beyond them."""
+        w, r, s = self._w, self._r, self._s
+        if stroke <= 0.0:
+            return stroke * r[0]
+        if stroke >= s[-1]:
+            return w[-1] + (stroke - s[-1]) * r[-1]
+        i = bisect.bisect_right(s, stroke) - 1
+        b, ds = (r[i + 1] - r[i]) / (w[i + 1] - w[i]), stroke - s[i]
+        return w[i] + (ds * r[i] if abs(b) * ds < 1e-12 else r[i] * math.expm1(b * ds) / b)
 
     @property
     def full_travel(self) -> float:
@@ -238,6 +251,57 @@ def read_leverage_csv(path) -> tuple[list[float], list[float]]:
     return w, r
 
 
+def _chart_over_bases(table: dict, part: dict, location) -> tuple[dict, dict]:
+    """One file's geometry chart over its bases' ``table`` (``read_table``): the chart replaces
+    the axles and head angle its bases gave (and their chart), its fork keys are set in the file's
+    ``[fork.set]`` as if written there, and its saddle replaces their seated rider. A file whose own
+    ``rider.seated_com_mm`` follows a chart with a saddle replaces that saddle; a chart without a
+    saddle after one with a saddle keeps the seated rider the old saddle gave."""
+    geo, bike, rider = part.get("geometry"), part.get("bike") or {}, part.get("rider") or {}
+    old = table.get("geometry") if isinstance(table.get("geometry"), dict) else {}
+    part = dict(part)
+    if isinstance(geo, dict):
+        _chart.check_keys(geo)
+        given = [k for k in _chart.SETS if k in bike]
+        if given:
+            raise ConfigError(f"{location}: bike.{given[0]} and [geometry] give the frame's geometry two ways; give one")
+        fork = _chart.fork_keys(geo)
+        mine = part.get("fork", {}).get("set", {}) if isinstance(part.get("fork"), dict) else {}
+        both = [k for k in fork if isinstance(mine, dict) and k in mine]
+        if both:
+            chart_key = next(k for k, v in _chart.FORK.items() if v == both[0])
+            raise ConfigError(f"{location}: geometry.{chart_key} and [fork.set] {both[0]!r} give it two ways; give one")
+        if fork:
+            part["fork"] = {**(part.get("fork") or {}), "set": {**(mine if isinstance(mine, dict) else {}), **fork}}
+        if _chart.saddle(geo) is not None and "seated_com_mm" in rider:
+            raise ConfigError(f"{location}: rider.seated_com_mm and the chart's saddle (geometry.seat_tube_angle_deg) "
+                              f"give the seated rider two ways; give one")
+        if isinstance(table.get("bike"), dict):
+            table["bike"] = {k: v for k, v in table["bike"].items() if k not in _chart.SETS}
+        if _chart.saddle(old) is not None and _chart.saddle(geo) is None and "seated_com_mm" not in rider:
+            # the bases' saddle placed the seated rider: it stays where that saddle put it
+            from_saddle = {**(table.get("rider") or {}), **rider}.get("seated_com_from_saddle_mm")
+            table.setdefault("rider", {})["seated_com_mm"] = _chart.seated_com(old, from_saddle)
+        if _chart.saddle(geo) is not None and isinstance(table.get("rider"), dict):
+            table["rider"] = {k: v for k, v in table["rider"].items() if k != "seated_com_mm"}
+        table.pop("geometry", None)
+    elif old and ("linkage" in part or [k for k in _chart.SETS if k in bike]):
+        # axles or hardpoints over a base's chart: the chart becomes the axles it gave, then these replace them
+        table = _merge(table, {"bike": _chart.frame_keys(old)})
+        seated = _chart.seated_com(old, {**(table.get("rider") or {}), **rider}.get("seated_com_from_saddle_mm"))
+        if seated is not None and "seated_com_mm" not in rider:
+            table.setdefault("rider", {})["seated_com_mm"] = seated
+        table.pop("geometry")
+    else:
+        if _chart.saddle(old) is not None and "seated_com_mm" in rider:  # the file's own seated rider wins
+            table["geometry"] = old = {k: v for k, v in old.items() if k not in _chart.SEAT}
+        shock = part.get("shock") if isinstance(part.get("shock"), dict) else {}
+        if "rear_travel_mm" in old and ("leverage" in part or "stroke_mm" in shock):
+            # the base chart's rear travel described the base's rear end, not this one
+            table["geometry"] = {k: v for k, v in old.items() if k != "rear_travel_mm"}
+    return table, part
+
+
 def read_table(ref: str) -> tuple[dict, str]:
     """A bike file's table with its ``base`` chain merged in (read by ``mtbmj.config.read_chain``,
     the drop configurations' reader: the same base rules)."""
@@ -253,14 +317,7 @@ def read_table(ref: str) -> tuple[dict, str]:
             if isinstance(table.get("leverage"), dict):
                 drop = ("wheel_travel_mm", "ratio") if "csv" in lev else ("csv",) if lev.keys() & {"wheel_travel_mm", "ratio"} else ()
                 table["leverage"] = {k: v for k, v in table["leverage"].items() if k not in drop}
-        if isinstance(part.get("geometry"), dict):  # a chart replaces the geometry its bases gave
-            given = [k for k in CHART_SETS if k in (part.get("bike") or {})]
-            if given:
-                raise ConfigError(f"{location}: bike.{given[0]} and [geometry] give the frame's geometry two ways; "
-                                  f"give one")
-            if isinstance(table.get("bike"), dict):
-                table["bike"] = {k: v for k, v in table["bike"].items() if k not in CHART_SETS}
-            table.pop("geometry", None)
+        table, part = _chart_over_bases(table, part, location)
         if isinstance(part.get("linkage"), dict):  # hardpoints replace the rear end its bases gave
             if "leverage" in part or "pivot_mm" in (part.get("bike") or {}):
                 raise ConfigError(f"{location}: [linkage] and {'[leverage]' if 'leverage' in part else 'bike.pivot_mm'} "
@@ -362,67 +419,6 @@ def _with_linkage(table: dict) -> tuple[dict, tuple | None]:
     return out, (tuple(float(x) for x in ratio) if np.max(np.abs(ratio - 1.0)) > 1e-9 else None)
 
 
-# What a geometry chart sets in [bike] (``from_chart``)
-CHART_SETS = ("head_angle_deg", "fork_offset_mm", "front_axle_mm", "rear_axle_mm")
-CHART_REQUIRED = ("head_angle_deg", "wheelbase_mm", "chainstay_mm", "bb_drop_mm", "fork_offset_mm")
-CHART_CHECK = ("reach_mm", "stack_mm", "head_tube_mm", "fork_length_mm")
-CHART_TOLERANCE_MM = 5.0  # the front axle from reach and stack against the one from the wheelbase
-
-
-def from_chart(chart: dict) -> dict:
-    """The [bike] geometry keys of a geometry chart (``[geometry]``): frame coordinates with the
-    origin at the bottom bracket and x along the ground, both wheels on flat ground at full
-    extension (so the axles are level and the chart's head angle is the frame's). The rear axle
-    lies ``bb_drop_mm`` above the bottom bracket, ``chainstay_mm`` from it; the front axle at the
-    same height, ``wheelbase_mm`` ahead of the rear one. Given reach, stack, head tube and the
-    fork's axle-to-crown too, the front axle is found a second way (down the steering axis from
-    the head tube's top, then the offset forward) and the two must agree within
-    ``CHART_TOLERANCE_MM``, else the chart is refused naming its values."""
-    def number(key, low=None, high=None):
-        v = chart.get(key)
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            raise ConfigError(f"geometry.{key}: {'missing' if v is None else f'must be a number, got {v!r}'}")
-        if (low is not None and v < low) or (high is not None and v > high):
-            raise ConfigError(f"geometry.{key}: {v:g} is outside {low:g}-{high:g}")
-        return float(v)
-
-    unknown = sorted(set(chart) - set(CHART_REQUIRED) - set(CHART_CHECK))
-    if unknown:
-        raise ConfigError(f"geometry.{unknown[0]}: unknown key (known: {', '.join(CHART_REQUIRED + CHART_CHECK)})")
-    head = number("head_angle_deg", 45.0, 90.0)
-    wheelbase, chainstay = number("wheelbase_mm", 500.0, 2000.0), number("chainstay_mm", 300.0, 600.0)
-    drop, offset = number("bb_drop_mm", -150.0, 150.0), number("fork_offset_mm", 0.0, 150.0)
-    if abs(drop) >= chainstay:
-        raise ConfigError(f"geometry.bb_drop_mm: {drop:g} mm is not less than the chainstay, {chainstay:g} mm")
-    rear = (-math.sqrt(chainstay ** 2 - drop ** 2), drop)
-    front = (wheelbase + rear[0], drop)
-    if front[0] <= 0.0:
-        raise ConfigError(f"geometry.wheelbase_mm: {wheelbase:g} mm leaves the front axle behind the bottom bracket "
-                          f"(chainstay {chainstay:g} mm)")
-    given = [k for k in CHART_CHECK if k in chart]
-    if given and len(given) < len(CHART_CHECK):
-        missing = [k for k in CHART_CHECK if k not in chart]
-        raise ConfigError(f"geometry.{missing[0]}: needed with {', '.join('geometry.' + k for k in given)} (the front "
-                          f"axle found from reach and stack takes all of {', '.join(CHART_CHECK)})")
-    if given:
-        reach, stack = number("reach_mm", 300.0, 600.0), number("stack_mm", 500.0, 750.0)
-        tube, crown = number("head_tube_mm", 50.0, 250.0), number("fork_length_mm", 400.0, 700.0)
-        a = math.radians(head)
-        down = (math.cos(a), -math.sin(a))  # along the steering axis, down and forward
-        ahead = (math.sin(a), math.cos(a))  # across it, forward: the offset's direction
-        along = tube + crown
-        axle = (reach + along * down[0] + offset * ahead[0], stack + along * down[1] + offset * ahead[1])
-        miss = math.hypot(axle[0] - front[0], axle[1] - front[1])
-        if miss > CHART_TOLERANCE_MM:
-            raise ConfigError(
-                f"geometry: reach {reach:g}, stack {stack:g}, head tube {tube:g}, axle-to-crown {crown:g}, offset "
-                f"{offset:g} and head angle {head:g} put the front axle at ({axle[0]:.0f}, {axle[1]:.0f}) mm, "
-                f"{miss:.0f} mm from where wheelbase {wheelbase:g}, chainstay {chainstay:g} and BB drop {drop:g} put "
-                f"it ({front[0]:.0f}, {front[1]:.0f}); more than {CHART_TOLERANCE_MM:g} mm: a value is wrong")
-    return {"head_angle_deg": head, "fork_offset_mm": offset, "front_axle_mm": [front[0], front[1]],
-            "rear_axle_mm": [rear[0], rear[1]]}
-
-
 def _merge(a: dict, b: dict) -> dict:
     out = dict(a)
     for k, v in b.items():
@@ -440,12 +436,11 @@ KNOWN = {
     "shock": {"stroke_mm", "config", "set", *_shock.KEYS},
     "fork": {"config", "set"},
     "rider": {"mass_kg", "limbs_share_percent", "com_mm", "pitch_inertia_kg_m2", "pedals_mm", "bars_mm",
-              "seated_com_mm", "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
+              "seated_com_mm", "seated_com_from_saddle_mm", "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
               "arm_stiffness_N_per_mm", "arm_damping_N_s_per_m"},
     "drive": {"push_N", "power_W", "brake_N", "traction", "chainring_teeth", "cog_teeth", "chain"},
     "sensors": set(SENSOR_KEYS),
-    "geometry": {"head_angle_deg", "wheelbase_mm", "chainstay_mm", "bb_drop_mm", "fork_offset_mm", "reach_mm",
-                 "stack_mm", "head_tube_mm", "fork_length_mm"},
+    "geometry": set(_chart.KEYS),
 }
 
 
@@ -531,7 +526,20 @@ def overridden(table: dict, overrides) -> dict:
         if name not in KNOWN[section] or name == "set":
             raise ConfigError(f"--set {key}: unknown key (known in [{section}]: "
                               f"{', '.join(sorted(k for k in KNOWN[section] if k != 'set'))})")
+        if section == "bike" and name in _chart.SETS and isinstance(out.get("geometry"), dict):
+            raise ConfigError(f"--set {key}: this bike's frame is given by its geometry chart; set the chart's keys "
+                              f"(geometry.{'head_angle_deg' if name == 'head_angle_deg' else 'wheelbase_mm'}, ...)")
         out.setdefault(section, {})[name] = value
+        if (section == "geometry" and name in _chart.FRAME
+                and not any(str(k).partition(".")[2] in _chart.CHECK for k in overrides)):
+            # the chart's reach and stack checked the chart as published: a changed frame drops them
+            out["geometry"] = {k: v for k, v in out["geometry"].items() if k not in _chart.CHECK}
+        if section == "geometry" and name in _chart.FORK:  # a chart's fork key sets the fork's, as in a file
+            out.setdefault("fork", {}).setdefault("set", {}).update(_chart.fork_keys({name: value}))
+        if section == "geometry" and name in _chart.SEAT and isinstance(out.get("rider"), dict):
+            out["rider"] = {k: v for k, v in out["rider"].items() if k != "seated_com_mm"}  # the saddle places it
+        if (section, name) == ("rider", "seated_com_mm") and isinstance(out.get("geometry"), dict):
+            out["geometry"] = {k: v for k, v in out["geometry"].items() if k not in _chart.SEAT}
         if section == "shock" and name in _shock.KEYS:  # a shock's key as sold sets its [shock.set] now
             sh = out["shock"]
             sh["set"] = _shock.schema_keys({name: value}, sh.get("set", {}), sh.get("spring"))
@@ -547,7 +555,10 @@ def load(ref: str, overrides=None) -> BikeSpec:
         for key in table["geometry"]:
             if key not in KNOWN["geometry"]:
                 raise ConfigError(f"geometry.{key}: unknown key (known: {', '.join(sorted(KNOWN['geometry']))})")
-        table = _merge(table, {"bike": from_chart(table["geometry"])})
+        table = _merge(table, {"bike": _chart.frame_keys(table["geometry"])})
+        seated = _chart.seated_com(table["geometry"], table.get("rider", {}).get("seated_com_from_saddle_mm"))
+        if seated is not None:
+            table = _merge(table, {"rider": {"seated_com_mm": seated}})
     from mtbmj.bike import keys as keys_mod
     from mtbmj.config import warn
 
@@ -602,6 +613,8 @@ def load(ref: str, overrides=None) -> BikeSpec:
         raise ConfigError("leverage.ratio: every leverage ratio must be > 0")
     leverage = Leverage(tuple(x * MM for x in w), tuple(float(x) for x in r))
     stroke = _number(table, "shock", "stroke_mm", positive=True) * MM
+    if isinstance(table.get("geometry"), dict):
+        _chart.check_rear_travel(table["geometry"], leverage, stroke)
     if leverage.full_stroke > stroke * (1.0 + 1e-9):
         raise ConfigError(f"shock.stroke_mm: {stroke / MM:g} mm is shorter than the leverage curve needs over "
                           f"{leverage.full_travel / MM:g} mm of wheel travel ({leverage.full_stroke / MM:.2f} mm)")
@@ -687,7 +700,7 @@ def level_pitch(front_axle, rear_axle) -> float:
     """How far (rad, nose up) the frame's x axis is turned from the horizontal when both wheels (of
     one size) stand on flat ground at full extension: the axles level. ``bike.head_angle_deg`` is a
     geometry chart's head angle, measured so; in frame coordinates the steering axis lies this much
-    steeper (the SST preset's axles, 20 mm apart in height over a 1255 mm wheelbase: 0.91 deg)."""
+    steeper (axles 20 mm apart in height over a 1255 mm wheelbase: 0.91 deg; a chart gives level axles)."""
     (fx, fz), (rx, rz) = front_axle, rear_axle
     return math.atan2(rz - fz, fx - rx)
 

@@ -64,7 +64,7 @@ class SeatedBike:
         if spec.rider.seated_com is None:
             raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider; a seat slam is read through "
                               f"the bike with the rider's centre of mass on the saddle (e.g. rider.seated_com_mm = "
-                              f"[-90, 920])")
+                              f"[-90, 920], or the chart's saddle: geometry.seat_tube_angle_deg and saddle_height_mm)")
         frictionless = dataclasses.replace(spec, fork_overrides={**spec.fork_overrides, **NO_FRICTION},
                                            shock_overrides={**spec.shock_overrides, **NO_FRICTION})
         self.spec = spec
