@@ -25,7 +25,8 @@ def test_a_bike_chain_of_files_merges_from_the_last_base(tmp_path, monkeypatch):
     assert spec.load(str(top)) != spec.load("trail")  # the merged file builds a bike
     table, _ = spec.read_table(str(top))
     assert table["rider"]["mass_kg"] == 90.0 and table["bike"]["fork_offset_mm"] == 51.0
-    assert table["bike"]["head_angle_deg"] == spec.read_table("trail")[0]["bike"]["head_angle_deg"]  # the rest from the preset
+    # the rest from the preset: its chart's head angle, the chart turned into the axles it gives
+    assert table["bike"]["head_angle_deg"] == spec.read_table("trail")[0]["geometry"]["head_angle_deg"]
     assert spec.read_table(str(tmp_path / "sub/again.toml"))[0]["rider"]["mass_kg"] == 90.0
 
 

@@ -191,3 +191,21 @@ def test_the_presets_are_charts_of_the_bikes_they_were(name):
                              ((spec.rider.arm_x, spec.rider.arm_z), old["bars"], 0.06)):
         assert mm(now) == pytest.approx(level(before), abs=tol)
     assert math.degrees(spec.head_angle) == pytest.approx(old["head"])  # the chart's, the frame now level
+
+
+def test_axles_hardpoints_or_a_rear_end_on_a_chart_preset_take_its_frame(tmp_path):
+    """A file on a chart preset that gives an axle keeps the chart's other axle and head angle; one
+    that gives its own leverage curve is not held to the base chart's rear travel; one that gives
+    hardpoints takes the chart's front axle (the linkage's own rear axle)."""
+    sst = mtbmj.bike.spec.load("sst")
+    axle = tmp_path / "axle.toml"
+    axle.write_text('base = "sst"\n[bike]\nfront_axle_mm = [820.0, 18.0]\n')
+    spec = mtbmj.bike.spec.load(str(axle))
+    assert spec.front_axle == pytest.approx((0.820, 0.018)) and spec.rear_axle == pytest.approx(sst.rear_axle)
+    assert spec.head_angle == pytest.approx(sst.head_angle) and spec.rider.seated_com == pytest.approx(sst.rider.seated_com)
+    curve = tmp_path / "curve.toml"  # 150 mm of wheel travel where the trail chart says 120
+    curve.write_text('base = "trail"\n[leverage]\nwheel_travel_mm = [0.0, 150.0]\nratio = [3.0, 3.0]\n')
+    assert mtbmj.bike.spec.load(str(curve)).leverage.full_travel == pytest.approx(0.150)
+    horst = mtbmj.bike.spec.load("docs/bikes/horst_link.toml")
+    assert horst.front_axle == pytest.approx(mtbmj.bike.spec.load("trail").front_axle)
+    assert horst.rear_axle == pytest.approx((-0.440, 0.025))
