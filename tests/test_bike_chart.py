@@ -209,3 +209,20 @@ def test_axles_hardpoints_or_a_rear_end_on_a_chart_preset_take_its_frame(tmp_pat
     horst = mtbmj.bike.spec.load("docs/bikes/horst_link.toml")
     assert horst.front_axle == pytest.approx(mtbmj.bike.spec.load("trail").front_axle)
     assert horst.rear_axle == pytest.approx((-0.440, 0.025))
+
+
+def test_a_set_of_a_charts_key_on_a_bike_given_by_its_axles(tmp_path):
+    """A bike file of axles has no chart to change: --set geometry.fork_travel_mm still sets the
+    fork's travel (what the key sets on a chart), a key that places a chart's frame is refused
+    naming the axles' keys, on the command line in one line with exit status 2."""
+    from mtbmj.cli import main
+
+    axles = tmp_path / "axles.toml"
+    axles.write_text('base = "sst"\n[bike]\nfront_axle_mm = [815.0, 18.0]\nrear_axle_mm = [-440.3, 18.0]\n'
+                     'head_angle_deg = 63.5\nfork_offset_mm = 44.0\n')
+    assert _fork(str(axles), {"geometry.fork_travel_mm": 160}).travel == pytest.approx(0.160)
+    with pytest.raises(ConfigError, match=r"--set geometry.head_angle_deg: this bike's frame is given by its axles"):
+        mtbmj.bike.spec.load(str(axles), {"geometry.head_angle_deg": 65})
+    assert main(["bike", str(axles), "flat", "--speed", "3", "--set", "geometry.wheelbase_mm=1200",
+                 "--out", str(tmp_path / "out")]) == 2
+    assert not (tmp_path / "out").exists()

@@ -529,6 +529,12 @@ def overridden(table: dict, overrides) -> dict:
         if section == "bike" and name in _chart.SETS and isinstance(out.get("geometry"), dict):
             raise ConfigError(f"--set {key}: this bike's frame is given by its geometry chart; set the chart's keys "
                               f"(geometry.{'head_angle_deg' if name == 'head_angle_deg' else 'wheelbase_mm'}, ...)")
+        if section == "geometry" and not isinstance(out.get("geometry"), dict):  # a bike given by its axles
+            if name not in _chart.FORK:
+                raise ConfigError(f"--set {key}: this bike's frame is given by its axles (bike.front_axle_mm, "
+                                  f"bike.rear_axle_mm, bike.head_angle_deg), not a geometry chart; set those")
+            out.setdefault("fork", {}).setdefault("set", {}).update(_chart.fork_keys({name: value}))
+            continue
         out.setdefault(section, {})[name] = value
         if (section == "geometry" and name in _chart.FRAME
                 and not any(str(k).partition(".")[2] in _chart.CHECK for k in overrides)):
