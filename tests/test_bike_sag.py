@@ -17,12 +17,13 @@ def test_the_written_bike_sags_as_asked_and_its_fork_carries_the_front_load(tmp_
     assert main(["sag", "trail", "--bike", "--front-sag-percent", "20", "--rear-sag-percent", "30",
                  "--set", "rider.mass_kg=78", "--out", "set"]) == 0
     out = capsys.readouterr().out
-    assert out.count("\n") == 1 and "run it with: mtbmj bike set/bike.toml" in out
-    written = tomllib.loads((tmp_path / "set" / "bike.toml").read_text())
+    assert out.count("\n") == 1 and "run it with: mtbmj bike set/trail_sag.toml" in out
+    written = tomllib.loads((tmp_path / "set" / "trail_sag.toml").read_text())
     assert written["base"] == "trail" and written["rider"]["mass_kg"] == 78
     k = written["fork"]["set"]["fork.spring.progressive_rate_N_per_mm"]
-    r = mtbmj.run_bike(str(tmp_path / "set" / "bike.toml"), "flat", speed_m_per_s=4.0, duration=0.05)
+    r = mtbmj.run_bike(str(tmp_path / "set" / "trail_sag.toml"), "flat", speed_m_per_s=4.0, duration=0.05)
     s = r.summary
+    assert r.headline().startswith("bike trail_sag ")  # named after the bike it set, not "bike"
     assert abs(s["static_front_travel_mm"] / 130.0 - 0.20) < 2e-4
     assert abs(s["static_rear_travel_mm"] / 120.0 - 0.30) < 2e-4
     # the fork's spring at that sag (the trail preset's law: preload 100 N + k x + c x^3, c = 1e-4 N/mm^3)

@@ -146,10 +146,10 @@ def test_air_shock_sag_and_run(tmp_path, monkeypatch):
     got = sag.solve(path, 20.0, 28.0)
     assert got.shock_key == "fork.spring.air_pressure_psi"
     got.write(tmp_path / "set")
-    monkeypatch.chdir(tmp_path)  # set/bike.toml's base, ../air.toml, lies in the current directory
-    p = run.prepare("set/bike.toml", "flat", 4.0, callback="python")
+    monkeypatch.chdir(tmp_path)  # set/air_sag.toml's base, ../air.toml, lies in the current directory
+    p = run.prepare("set/air_sag.toml", "flat", 4.0, callback="python")
     w = p.bike.spec.leverage.full_travel
     rear = float(p.callback.shock_state(p.data)[0])
     assert rear / w == pytest.approx(0.28, abs=0.01)
-    r = run.run_bike("set/bike.toml", "drop:height_mm=300,at_m=0.4", 5.0, duration=1.0)
+    r = run.run_bike("set/air_sag.toml", "drop:height_mm=300,at_m=0.4", 5.0, duration=1.0)
     assert r.summary["crash"] is None and r.summary["max_rear_travel_mm"] > rear * 1e3 + 20.0

@@ -76,7 +76,12 @@ class BikeSag:
         base = self.base
         if Path(base).suffix.lower() == ".toml":  # a file: named from the folder the new file is in
             base = os.path.relpath(Path(base).resolve(), out.resolve())
-        return output.write_atomically(out, {"bike.toml": self.toml(base).encode()})
+        # named after the bike it sets (out/my_sag/my_enduro_sag.toml): its runs are named so too
+        return output.write_atomically(out, {self.file_name: self.toml(base).encode()})
+
+    @property
+    def file_name(self) -> str:
+        return f"{self.bike}_sag.toml"
 
 
 def _static(bike: str, overrides: dict) -> tuple[float, float, float, float]:

@@ -51,7 +51,7 @@ def add_parser(sub) -> None:
     p.add_argument("--sag-percent", type=float, help="static sag in percent of the travel")
     p.add_argument("--bike", action="store_true",
                    help="CONFIG is a bike (preset sst, trail, or a bike file): solve the fork's and the shock's "
-                        "springs together for --front-sag-percent and --rear-sag-percent; writes bike.toml")
+                        "springs together for --front-sag-percent and --rear-sag-percent; writes BIKE_sag.toml")
     p.add_argument("--front-sag-percent", type=float, dest="front_sag_percent",
                    help="with --bike: the fork's static sag in percent of its travel")
     p.add_argument("--rear-sag-percent", type=float, dest="rear_sag_percent",
