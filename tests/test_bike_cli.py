@@ -4,6 +4,7 @@ folders compared."""
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -50,9 +51,15 @@ def test_presets_lists_and_shows_the_bikes(capsys):
     out = capsys.readouterr().out
     assert "bikes (" in out and "\n  sst " in out and "\n  trail " in out
     assert main(["presets", "--show", "trail"]) == 0
-    shown = dict(line.split(" = ", 1) for line in capsys.readouterr().out.splitlines())
+    shown = dict(line.split(" = ", 1) for line in capsys.readouterr().out.splitlines() if " = " in line)
     assert shown["geometry.head_angle_deg"] == "65.5" and shown["rider.mass_kg"] == "85.0"  # from its base, sst
     assert shown["shock.set.fork.spring.rate_N_per_mm"] == "80.0"
+    # the axles the chart gives, as comments: the rear axle the drop above the BB and a chainstay from
+    # it, the front axle level with it a wheelbase ahead (trail: 1225, 435.5, 16.4 mm)
+    rear_x = -math.sqrt(435.5 ** 2 - 16.4 ** 2)
+    assert shown["#   bike.rear_axle_mm"] == f"[{rear_x:.1f}, 16.4]"
+    assert shown["#   bike.front_axle_mm"] == f"[{1225.0 + rear_x:.1f}, 16.4]"
+    assert shown["#   bike.head_angle_deg"] == "65.50"
 
 
 def test_two_bike_folders_compare(tmp_path, monkeypatch, capsys):

@@ -8,12 +8,13 @@ from mtbmj.config import preset_names
 def _bike_lines(ref: str) -> list[str]:
     """Every key of a bike preset or file, resolved through its base: 'section.key = value'."""
     import json
+    import math
 
     from mtbmj.bike import spec
 
     _toml_value = json.dumps  # numbers, lists, strings and booleans are written alike in TOML
     table, _ = spec.read_table(ref)
-    spec.load(ref)  # checked as a run would check it
+    bike = spec.load(ref)  # checked as a run would check it
     lines = []
     for section, values in table.items():
         if not isinstance(values, dict):
@@ -24,6 +25,13 @@ def _bike_lines(ref: str) -> list[str]:
                 lines += [f"{section}.{key}.{k} = {_toml_value(v)}" for k, v in value.items()]
             else:
                 lines.append(f"{section}.{key} = {_toml_value(value)}")
+    if isinstance(table.get("geometry"), dict):  # what the chart gives, as comments (the output stays TOML)
+        mm = lambda p: f"[{p[0] * 1e3:.1f}, {p[1] * 1e3:.1f}]"  # noqa: E731
+        lines.append("# derived from [geometry] (frame coordinates, mm: origin the bottom bracket, level):")
+        lines += [f"#   bike.front_axle_mm = {mm(bike.front_axle)}", f"#   bike.rear_axle_mm = {mm(bike.rear_axle)}",
+                  f"#   bike.head_angle_deg = {math.degrees(bike.head_angle):.2f}"]
+        if bike.rider.seated_com is not None and "seated_com_mm" not in table.get("rider", {}):
+            lines.append(f"#   rider.seated_com_mm = {mm(bike.rider.seated_com)}")
     return lines
 
 
