@@ -482,6 +482,22 @@ def bike_speed_rows(d: dict) -> dict[str, list[Row]]:
             "bike_speed.json", d["command"])]}
 
 
+def bike_pedal_speed_rows(d: dict) -> dict[str, list[Row]]:
+    r, s = d["real_time_factors"], d["settings"]
+    cmd = py("bike_pedal_speed.py", "--repeats", str(s["repeats"]), "--duration", tgt(s["duration_s"]),
+             "--python-duration", tgt(s["python_duration_s"]))
+
+    def cell(key, digits=3, unit="×"):
+        return f"{num(r[key]['median'], digits)}{unit} ({spread(r[key]['min'], r[key]['max'], digits, unit)})"
+
+    return {"bike": [
+        Row(f"the SST bike pedalling ({tgt(s['cadence_rpm'])} rpm, {tgt(s['power_W'])} W, {s['gear']}) up a 14 % "
+            f"climb, one core, compiled callback, against the rider's drive at the gear's speed", "report",
+            f"standing {cell('standing')}, seated {cell('seated')} real time; rider drive {cell('drive')}; "
+            f"standing / drive {cell('standing_over_drive', 3, '')}; the Python callback standing "
+            f"{cell('python_standing')}", "bike_pedal_speed.json", cmd)]}
+
+
 def advise_speed_rows(d: dict) -> dict[str, list[Row]]:
     a, r, c = d["advise_s"], d["ratio"], d["reconstruct_s"]
     return {"bike": [
@@ -514,6 +530,7 @@ SOURCES = [
     ("rolling_crosscheck.json", rolling_crosscheck_rows),
     ("bike_crosscheck.json", bike_crosscheck_rows),
     ("bike_speed.json", bike_speed_rows),
+    ("bike_pedal_speed.json", bike_pedal_speed_rows),
     ("advise_speed.json", advise_speed_rows),
 ]
 
