@@ -57,6 +57,13 @@ def test_reach_and_stack_that_agree_are_taken_and_ones_that_do_not_are_refused(t
         mtbmj.bike.spec.load(_file(tmp_path, {**CHART, "reach_mm": 470.0}))
 
 
+def test_a_misspelt_chart_key_is_refused_naming_it(tmp_path):
+    with pytest.raises(ConfigError, match=r"geometry.wheel_base_mm: unknown key \(known: head_angle_deg, wheelbase_mm"):
+        mtbmj.bike.spec.load(_file(tmp_path, {**CHART, "wheel_base_mm": 1240.0}))
+    with pytest.raises(ConfigError, match=r"geometry.wheel_base_mm: unknown key"):
+        mtbmj.bike.spec.load("trail", {"geometry.wheel_base_mm": 1240.0})
+
+
 def test_a_chart_and_axles_in_one_file_are_refused(tmp_path):
     with pytest.raises(ConfigError, match="two ways"):
         mtbmj.bike.spec.load(_file(tmp_path, CHART, "[bike]\nfront_axle_mm = [800.0, 10.0]"))

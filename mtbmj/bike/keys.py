@@ -16,9 +16,18 @@ from __future__ import annotations
 
 import math
 
+from mtbmj.bike.chart import RANGES as _CHART_RANGES
 from mtbmj.config import unit_of
 
 POINT_MM = "two numbers [x, z], mm"
+
+
+def _chart_range(name: str) -> str:
+    """A chart key's valid range as the configuration reference prints it (mtbmj.bike.chart.RANGES)."""
+    low, high = _CHART_RANGES[name]
+    return f"{low:g}-{high:g}"
+
+
 KEYS: dict[str, tuple[str, str, object]] = {
     "description": ("One line saying what the bike is.", "text", None),
     "reading": ("Where the numbers come from; informational.", "text", None),
@@ -107,34 +116,38 @@ KEYS: dict[str, tuple[str, str, object]] = {
     "rider.arm_damping_N_s_per_m": ("Both arms' damping.", ">= 0", (5.0, 3000.0)),
     "geometry.head_angle_deg": ("A geometry chart's head angle (both wheels on flat ground at full extension); "
                                 "with [geometry] the frame's axles and head angle come from the chart "
-                                "(mtbmj/bike/chart.py).", "45-90", (58.0, 76.0)),
-    "geometry.wheelbase_mm": ("The chart's wheelbase: axle to axle.", "500-2000", (1000.0, 1400.0)),
-    "geometry.chainstay_mm": ("The chart's chainstay: bottom bracket to rear axle, straight.", "300-600",
-                              (400.0, 480.0)),
-    "geometry.bb_drop_mm": ("The chart's bottom-bracket drop below the axles (or give bb_height_mm).", "-150-150",
-                            (-10.0, 60.0)),
+                                "(mtbmj/bike/chart.py).", _chart_range("head_angle_deg"), (58.0, 76.0)),
+    "geometry.wheelbase_mm": ("The chart's wheelbase: axle to axle.", _chart_range("wheelbase_mm"), (1000.0, 1400.0)),
+    "geometry.chainstay_mm": ("The chart's chainstay: bottom bracket to rear axle, straight.",
+                              _chart_range("chainstay_mm"), (400.0, 480.0)),
+    "geometry.bb_drop_mm": ("The chart's bottom-bracket drop below the axles (or give bb_height_mm).",
+                            _chart_range("bb_drop_mm"), (-10.0, 60.0)),
     "geometry.bb_height_mm": ("The chart's bottom-bracket height above the ground, unloaded, with "
                               "wheel_diameter_mm (the drop is their radius less it; with bb_drop_mm too, within "
-                              "2 mm of it).", "150-500", (300.0, 380.0)),
-    "geometry.fork_offset_mm": ("The fork's offset.", "0-150", (20.0, 70.0)),
+                              "2 mm of it).", _chart_range("bb_height_mm"), (300.0, 380.0)),
+    "geometry.fork_offset_mm": ("The fork's offset.", _chart_range("fork_offset_mm"), (20.0, 70.0)),
     "geometry.reach_mm": ("The chart's reach (with stack, head tube and axle-to-crown: the front axle a second "
                           "way, checked within 5 mm; a --set of a key that places the frame drops this check).",
-                          "300-600", (380.0, 560.0)),
-    "geometry.stack_mm": ("The chart's stack.", "500-750", (560.0, 680.0)),
-    "geometry.head_tube_mm": ("The chart's head tube length (top to the crown).", "50-250", (80.0, 170.0)),
+                          _chart_range("reach_mm"), (380.0, 560.0)),
+    "geometry.stack_mm": ("The chart's stack.", _chart_range("stack_mm"), (560.0, 680.0)),
+    "geometry.head_tube_mm": ("The chart's head tube length (top to the crown).",
+                              _chart_range("head_tube_mm"), (80.0, 170.0)),
     "geometry.fork_length_mm": ("The fork's axle-to-crown along the steering axis; sets the fork's fork.length_mm "
-                                "(a file giving both is refused).", "400-700", (480.0, 620.0)),
+                                "(a file giving both is refused).", _chart_range("fork_length_mm"), (480.0, 620.0)),
     "geometry.wheel_diameter_mm": ("The tyres' outer diameter (both wheels; 29 x 2.4 in: about 750 mm); sets the "
-                                   "fork configuration's tire.radius_mm to half of it.", "300-1000", (600.0, 790.0)),
+                                   "fork configuration's tire.radius_mm to half of it.",
+                                   _chart_range("wheel_diameter_mm"), (600.0, 790.0)),
     "geometry.fork_travel_mm": ("The fork's travel; sets the fork's fork.travel_mm (a file giving both is "
-                                "refused).", "20-250", (80.0, 220.0)),
+                                "refused).", _chart_range("fork_travel_mm"), (80.0, 220.0)),
     "geometry.rear_travel_mm": ("The rear wheel's travel; checked against the travel the shock's stroke gives "
-                                "through the leverage curve or the linkage, within 5 mm.", "20-250", (80.0, 220.0)),
+                                "through the leverage curve or the linkage, within 5 mm.",
+                                _chart_range("rear_travel_mm"), (80.0, 220.0)),
     "geometry.seat_tube_angle_deg": ("The effective seat-tube angle from the horizontal, at saddle_height_mm: with it "
                                      "the saddle, and the seated rider's centre of mass "
-                                     "rider.seated_com_from_saddle_mm from it.", "60-90", (70.0, 82.0)),
-    "geometry.saddle_height_mm": ("Bottom bracket to the saddle's top along the effective seat angle.", "400-1100",
-                                  (600.0, 900.0)),
+                                     "rider.seated_com_from_saddle_mm from it.",
+                                     _chart_range("seat_tube_angle_deg"), (70.0, 82.0)),
+    "geometry.saddle_height_mm": ("Bottom bracket to the saddle's top along the effective seat angle.",
+                                  _chart_range("saddle_height_mm"), (600.0, 900.0)),
     "linkage.kind": ("The rear end's layout from hardpoints: single_pivot, linkage_driven_single_pivot, horst_link "
                      "or short_link (docs/bike.md, 'The rear end from hardpoints'); its points set bike.pivot_mm, "
                      "bike.rear_axle_mm and the leverage table, so a file giving [leverage] or bike.pivot_mm beside "

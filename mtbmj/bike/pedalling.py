@@ -115,7 +115,7 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
     import math
 
     from mtbmj.bike import spec as spec_mod
-    from mtbmj.bike.run import run_bike, setups
+    from mtbmj.bike.run import gear_speed, run_bike, setups
     from mtbmj.errors import ConfigError
     from mtbmj.ride import telemetry
 
@@ -129,7 +129,6 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
     over.setdefault("drive.chainring_teeth", GEAR[0])
     over.setdefault("drive.cog_teeth", GEAR[1])
     spec = spec_mod.load(str(bike), over)
-    ring, cog = spec.drive["chain_m"]
     radius = setups(spec)[0].tire_radius
     rows, series = [], []
     for path, stance in zip(records, stances):
@@ -142,7 +141,7 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
         except BobError:
             front = None
         cadence = min(max(rear.cadence_rpm, 30.0), 130.0)
-        v = cadence * math.pi / 30.0 * ring / cog * radius
+        v = gear_speed(spec, cadence, radius)
         sine = power_W / (spec.total_mass * 9.81 * v)
         if sine >= 0.4:
             raise ConfigError(f"{path}: {power_W:g} W at {cadence:.0f} rpm in {'{}x{}'.format(*GEAR)} needs a climb "

@@ -198,9 +198,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     fork_setup, shock_setup = setups(spec)
     radius = fork_setup.tire_radius
     spec_mod.check_geometry(spec, radius)
-    if pedal is not None and speed_m_per_s is None:  # the gear's speed at the cadence
-        ring, cog = spec.drive["chain_m"]
-        speed_m_per_s = cadence_rpm * 2.0 * math.pi / 60.0 * ring / cog * radius
+    if pedal is not None and speed_m_per_s is None:
+        speed_m_per_s = gear_speed(spec, cadence_rpm, radius)
     rim = fork_setup.tire.rim
     steps = stepping(spec, fork_setup, shock_setup, (rim, rim if rear_tire else None))
     timestep = steps.coarse
@@ -526,6 +525,12 @@ def geometry(p: Prepared, raw: dict) -> dict:
            "wheelbase_mm": (raw["front_axle_x_m"][0] - raw["rear_axle_x_m"][0]) * 1e3,
            "bb_height_mm": float(raw["bb_height_mm"][0]), "trail_mm": _trail(loaded, head, spec.fork_offset) * 1e3}
     return {"chart": chart, "at_sag": sag}
+
+
+def gear_speed(spec, cadence_rpm: float, radius: float) -> float:
+    """The speed (m/s) the bike's chain gear gives at ``cadence_rpm`` on wheels of ``radius`` (m)."""
+    ring, cog = spec.drive["chain_m"]
+    return cadence_rpm * 2.0 * math.pi / 60.0 * ring / cog * radius
 
 
 def crank_turns(p: Prepared, x) -> np.ndarray:

@@ -259,7 +259,14 @@ def _chart_over_bases(table: dict, part: dict, location) -> tuple[dict, dict]:
     saddle after one with a saddle keeps the seated rider the old saddle gave."""
     geo, bike, rider = part.get("geometry"), part.get("bike") or {}, part.get("rider") or {}
     old = table.get("geometry") if isinstance(table.get("geometry"), dict) else {}
+    old_saddle = _chart.saddle(old)
     part = dict(part)
+
+    def keep_old_seat(table: dict) -> None:  # the bases' saddle placed the seated rider: it stays there
+        if old_saddle is not None and "seated_com_mm" not in rider:
+            from_saddle = {**(table.get("rider") or {}), **rider}.get("seated_com_from_saddle_mm")
+            table.setdefault("rider", {})["seated_com_mm"] = _chart.seated_com(old, from_saddle)
+
     if isinstance(geo, dict):
         _chart.check_keys(geo)
         given = [k for k in _chart.SETS if k in bike]
@@ -267,33 +274,31 @@ def _chart_over_bases(table: dict, part: dict, location) -> tuple[dict, dict]:
             raise ConfigError(f"{location}: bike.{given[0]} and [geometry] give the frame's geometry two ways; give one")
         fork = _chart.fork_keys(geo)
         mine = part.get("fork", {}).get("set", {}) if isinstance(part.get("fork"), dict) else {}
-        both = [k for k in fork if isinstance(mine, dict) and k in mine]
+        mine = mine if isinstance(mine, dict) else {}
+        both = [k for k in fork if k in mine]
         if both:
             chart_key = next(k for k, v in _chart.FORK.items() if v == both[0])
             raise ConfigError(f"{location}: geometry.{chart_key} and [fork.set] {both[0]!r} give it two ways; give one")
         if fork:
-            part["fork"] = {**(part.get("fork") or {}), "set": {**(mine if isinstance(mine, dict) else {}), **fork}}
-        if _chart.saddle(geo) is not None and "seated_com_mm" in rider:
+            part["fork"] = {**(part.get("fork") or {}), "set": {**mine, **fork}}
+        new_saddle = _chart.saddle(geo)
+        if new_saddle is not None and "seated_com_mm" in rider:
             raise ConfigError(f"{location}: rider.seated_com_mm and the chart's saddle (geometry.seat_tube_angle_deg) "
                               f"give the seated rider two ways; give one")
         if isinstance(table.get("bike"), dict):
             table["bike"] = {k: v for k, v in table["bike"].items() if k not in _chart.SETS}
-        if _chart.saddle(old) is not None and _chart.saddle(geo) is None and "seated_com_mm" not in rider:
-            # the bases' saddle placed the seated rider: it stays where that saddle put it
-            from_saddle = {**(table.get("rider") or {}), **rider}.get("seated_com_from_saddle_mm")
-            table.setdefault("rider", {})["seated_com_mm"] = _chart.seated_com(old, from_saddle)
-        if _chart.saddle(geo) is not None and isinstance(table.get("rider"), dict):
+        if new_saddle is None:
+            keep_old_seat(table)
+        elif isinstance(table.get("rider"), dict):  # this chart's saddle places the seated rider
             table["rider"] = {k: v for k, v in table["rider"].items() if k != "seated_com_mm"}
         table.pop("geometry", None)
     elif old and ("linkage" in part or [k for k in _chart.SETS if k in bike]):
         # axles or hardpoints over a base's chart: the chart becomes the axles it gave, then these replace them
         table = _merge(table, {"bike": _chart.frame_keys(old)})
-        seated = _chart.seated_com(old, {**(table.get("rider") or {}), **rider}.get("seated_com_from_saddle_mm"))
-        if seated is not None and "seated_com_mm" not in rider:
-            table.setdefault("rider", {})["seated_com_mm"] = seated
+        keep_old_seat(table)
         table.pop("geometry")
     else:
-        if _chart.saddle(old) is not None and "seated_com_mm" in rider:  # the file's own seated rider wins
+        if old_saddle is not None and "seated_com_mm" in rider:  # the file's own seated rider wins
             table["geometry"] = old = {k: v for k, v in old.items() if k not in _chart.SEAT}
         shock = part.get("shock") if isinstance(part.get("shock"), dict) else {}
         if "rear_travel_mm" in old and ("leverage" in part or "stroke_mm" in shock):
@@ -558,9 +563,6 @@ def load(ref: str, overrides=None) -> BikeSpec:
     table, source = read_table(str(ref))
     table = overridden(table, overrides)
     if isinstance(table.get("geometry"), dict):  # a geometry chart: the frame's geometry derived from it
-        for key in table["geometry"]:
-            if key not in KNOWN["geometry"]:
-                raise ConfigError(f"geometry.{key}: unknown key (known: {', '.join(sorted(KNOWN['geometry']))})")
         table = _merge(table, {"bike": _chart.frame_keys(table["geometry"])})
         seated = _chart.seated_com(table["geometry"], table.get("rider", {}).get("seated_com_from_saddle_mm"))
         if seated is not None:
