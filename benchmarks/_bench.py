@@ -63,6 +63,20 @@ def environment() -> dict:
             "load_average_1min": os.getloadavg()[0], "date": time.strftime("%Y-%m-%d %H:%M:%S")}
 
 
+def load_average() -> str:
+    """The 1, 5 and 15 minute load averages (/proc/loadavg), or "n/a"."""
+    try:
+        return " ".join(open("/proc/loadavg").read().split()[:3])
+    except OSError:
+        return "n/a"
+
+
+def pin_one_core() -> None:
+    """Run this process on one core (the first it may use), where the system allows it."""
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+
+
 def commit() -> str | None:
     """Short hash of the checkout's HEAD, or None outside a git checkout (or without git)."""
     try:

@@ -16,7 +16,6 @@ the stepping is timed (``simulate``): building the model and the static equilibr
 from __future__ import annotations
 
 import argparse
-import os
 import statistics
 import time
 
@@ -42,25 +41,15 @@ def rtf(duration: float, mode: str, callback: str = "compiled") -> float:
 
 
 def _gear_speed() -> float:
-    import math
-
     from mtbmj.bike import spec as spec_mod
-    from mtbmj.bike.run import setups
+    from mtbmj.bike.run import gear_speed, setups
 
     spec = spec_mod.load("sst", GEAR)
-    ring, cog = spec.drive["chain_m"]
-    return CADENCE_RPM * 2.0 * math.pi / 60.0 * ring / cog * setups(spec)[0].tire_radius
-
-
-def load() -> str:
-    try:
-        return " ".join(open("/proc/loadavg").read().split()[:3])
-    except OSError:
-        return "n/a"
+    return gear_speed(spec, CADENCE_RPM, setups(spec)[0].tire_radius)
 
 
 def main() -> None:
-    from _bench import add_out_option, stats, write_json
+    from _bench import add_out_option, load_average, pin_one_core, stats, write_json
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
@@ -68,9 +57,8 @@ def main() -> None:
     ap.add_argument("--python-duration", type=float, default=0.5, help="simulated seconds of the Python run")
     add_out_option(ap, __file__)
     args = ap.parse_args()
-    if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
-    before = load()
+    pin_one_core()
+    before = load_average()
     print(f"load average before: {before}", flush=True)
     for mode in ("drive", "standing"):  # warm-up: imports, numba compilation of the compiled callback
         rtf(0.05, mode)
@@ -86,7 +74,7 @@ def main() -> None:
             rows[key].append(value)
         print(f"repeat {i + 1}: rider drive {d:.2f}x real time, pedalling standing {st:.2f}x, seated {se:.2f}x, "
               f"Python standing {py:.3f}x; standing / drive {st / d:.3f}, seated / drive {se / d:.3f}", flush=True)
-    after = load()
+    after = load_average()
     for key, values in rows.items():
         print(f"{key}: median {statistics.median(values):.4g}, spread {min(values):.4g}-{max(values):.4g}")
     print(f"load average after: {after}")

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import statistics
 import tempfile
 import time
@@ -85,15 +84,8 @@ def roll_rtf(profile: str, speed: float, duration: float) -> tuple[float, str]:
     return duration / (time.perf_counter() - start), frontend.callback_kind(p.callback)
 
 
-def load() -> str:
-    try:
-        return " ".join(open("/proc/loadavg").read().split()[:3])
-    except OSError:
-        return "n/a"
-
-
 def main() -> None:
-    from _bench import add_out_option, write_json
+    from _bench import add_out_option, load_average, pin_one_core, write_json
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=5)
@@ -112,9 +104,8 @@ def main() -> None:
         stepping.COARSE_STEP_S = args.coarse_step_ms * 1e-3
     if args.python_duration is None:
         args.python_duration = args.duration
-    if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
-    before = load()
+    pin_one_core()
+    before = load_average()
     print(f"load average before: {before}", flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         profile = str(rock_garden(Path(tmp) / "rock_garden.csv"))
@@ -152,7 +143,7 @@ def main() -> None:
     from mtbmj.bike import run
 
     step = run.prepare("sst", "flat", args.speed).timestep
-    after = load()
+    after = load_average()
     print(f"bike step: {1e3 * step:g} ms, RK4; load average after: {after}")
     summary = {key: {"median": statistics.median(v), "min": min(v), "max": max(v), "runs": v} for key, v in rows.items()}
     command = f"python benchmarks/bike_speed.py --repeats {args.repeats}"

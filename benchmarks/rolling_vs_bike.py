@@ -21,7 +21,6 @@ MuJoCo alone: ``rollout``), not building the models. Writes its results where ``
 from __future__ import annotations
 
 import argparse
-import os
 import statistics
 import sys
 import tempfile
@@ -29,8 +28,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench import add_out_option, write_json  # noqa: E402
-from bike_speed import load, rock_garden  # noqa: E402  (the same rock garden, the same load reading)
+from _bench import add_out_option, load_average, pin_one_core, write_json  # noqa: E402
+from bike_speed import rock_garden  # noqa: E402  (the same rock garden)
 
 
 def _timed(fn, duration: float) -> tuple[float, float]:
@@ -95,9 +94,8 @@ def main() -> None:
     ap.add_argument("--no-floor", action="store_true", help="skip MuJoCo alone (no callback)")
     add_out_option(ap, __file__)
     args = ap.parse_args()
-    if hasattr(os, "sched_setaffinity"):
-        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
-    before = load()
+    pin_one_core()
+    before = load_average()
     print(f"load average before: {before}", flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         profile = str(rock_garden(Path(tmp) / "rock_garden.csv")) if args.terrain == "rock_garden" else args.terrain
@@ -149,7 +147,7 @@ def main() -> None:
         i = info[name]
         print(f"{'front end' if name == 'roll' else 'bike'}: step {1e3 * i['timestep_s']:g} ms, {i['calls']} callback "
               f"calls, {i['searches']} patch searches in the last run")
-    after = load()
+    after = load_average()
     print(f"load average after: {after}")
     summary = {key: {"median": statistics.median(v), "min": min(v), "max": max(v), "runs": v}
                for key, v in rows.items() if v}
