@@ -28,3 +28,18 @@ def no_mujoco_log_written():
     if not before and os.path.exists(log):
         os.remove(log)
         pytest.fail("MuJoCo wrote MUJOCO_LOG.TXT into the working directory during this test")
+
+
+# The shared telemetry (``../shared/data``) sits beside a clone, not in it: a test that reads it is
+# marked ``@pytest.mark.shared_data("sst_v2", "00083.SST", ...)`` and is skipped, with the reason,
+# where the folder or one of the files named is absent (a fresh clone alone).
+SHARED_DATA = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), os.pardir, "shared", "data")
+
+
+def pytest_runtest_setup(item):
+    for mark in item.iter_markers("shared_data"):
+        folder, *files = mark.args
+        where = os.path.normpath(os.path.join(SHARED_DATA, folder))
+        missing = [f for f in files or [""] if not os.path.exists(os.path.join(where, f))]
+        if missing:
+            pytest.skip(f"needs the shared data {where}{os.sep}{missing[0]}, which is not beside this clone")

@@ -162,6 +162,7 @@ def run_cli(*args, cwd):
     return subprocess.run([sys.executable, "-m", "mtbmj.cli", *args], cwd=cwd, capture_output=True, text=True)
 
 
+@pytest.mark.shared_data("sst_v2", "00090.SST")
 def test_bike_pedal_cli_writes_bob_beside_a_ride(tmp_path):
     from mtbmj.bike.run import run_bike
     from mtbmj.errors import ConfigError
@@ -210,6 +211,7 @@ def test_pedal_refusals(tmp_path, args, says):
     assert not (tmp_path / "run").exists()
 
 
+@pytest.mark.shared_data("sst_v2", "00088.SST", "00090.SST")
 def test_bob_command_against_records(tmp_path):
     """The standing record's bob frequency, read here by counting its strokes (the peaks of its rear
     travel smoothed over 50 ms, each at least 0.4 of the bob high and 0.2 s apart; the seated

@@ -109,6 +109,7 @@ def test_mujoco_ring_down_gives_back_its_spring_and_damper(seated, rate, damper)
     assert lo < got["damper_N_s_per_m"] < hi
 
 
+@pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
 @pytest.mark.slow
 def test_shared_slams_through_the_bike(tmp_path, capsys):
     """The three shared slams through the SST bike: the damper's coefficient rises with clicks, and
@@ -131,6 +132,7 @@ def test_shared_slams_through_the_bike(tmp_path, capsys):
     assert lo < at8 < hi
 
 
+@pytest.mark.shared_data("sst_v2", "00083.SST")
 def test_bike_without_a_seated_rider_is_refused(tmp_path, capsys):
     text = "\n".join(line for line in PRESET.read_text().splitlines() if not line.startswith(("seated_com", "seat_tube_angle_deg", "saddle_height_mm")))
     bike = tmp_path / "standing.toml"
