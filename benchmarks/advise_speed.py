@@ -35,7 +35,8 @@ def main(argv=None) -> int:
 
     from mtbmj.bike import run as bike_run
     from mtbmj.cli.telemetry import decoding
-    from mtbmj.ride import advise, reconstruct, telemetry
+    from mtbmj.ride import advise, reconstruct
+    from mtbmj.measured import telemetry
 
     path = telemetry.example_path() if args.ride == "example" else Path(args.ride)
     record = telemetry.read_ride(path, **decoding(SimpleNamespace(bike=args.bike, fork_max_mm=None,

@@ -24,7 +24,7 @@ _LAZY = {
     "run_study": "mtbmj.drop.study",
     "write_study": "mtbmj.drop.study",
     "solve_sag": "mtbmj.drop.sag",
-    "crosscheck": "mtbmj.validation.compare",
+    "crosscheck": "mtbmj.drop.crosscheck",
     "run_roll": "mtbmj.rolling.frontend",
     "RollResult": "mtbmj.rolling.frontend",
     "run_bike": "mtbmj.bike.run",

@@ -25,3 +25,24 @@ def lazy_exports(package: str, table: dict[str, str], namespace: dict):
         return sorted(set(namespace) | set(table))
 
     return __getattr__, __dir__
+
+
+def moved(old: str, new: str, names: dict[str, str] | None = None):
+    """The ``__getattr__`` (PEP 562) of a module that moved from ``old`` to ``new``: a name asked of
+    the old place is taken from the new one, with a ``DeprecationWarning`` that names both. A moved
+    module stays importable from its old place for one release; the shim holds nothing else
+    (``tests/test_layout.py`` checks it). ``names``: a name that went elsewhere, to
+    ``"module:name there"``."""
+
+    def __getattr__(name):
+        if name.startswith("__") and name.endswith("__"):
+            raise AttributeError(f"module {old!r} has no attribute {name!r}")
+        module, _, there = (names or {}).get(name, new).partition(":")
+        value = getattr(importlib.import_module(module), there or name)
+        import warnings
+
+        warnings.warn(f"{old} moved to {module}: import {there or name} from there ({old} goes in the next release)",
+                      DeprecationWarning, stacklevel=2)
+        return value
+
+    return __getattr__

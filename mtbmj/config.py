@@ -703,5 +703,18 @@ def load(ref: str | Path, overrides: Mapping[str, Any] | None = None) -> Config:
     return config
 
 
+def resolve(config: Config | str, overrides: Mapping | None = None) -> Config:
+    """A ``Config`` from a preset name, a TOML path or a ``Config``, with overrides applied; the
+    overrides' plausibility warnings are issued (``ConfigWarning``) as ``load`` issues
+    a file's."""
+    if isinstance(config, Config):
+        if not overrides:
+            return config
+        changed = config.with_overrides(overrides)
+        warn([w for w in changed.warnings if w not in config.warnings])
+        return changed
+    return load(config, overrides)
+
+
 __all__ = ["Config", "ConfigError", "ConfigWarning", "load", "parse_assignment", "preset_names", "study_presets",
-           "sprung_front_mass", "SCHEMA"]
+           "sprung_front_mass", "resolve", "SCHEMA"]

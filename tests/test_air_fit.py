@@ -7,7 +7,7 @@ import pytest
 import mtbmj
 from mtbmj import cli
 from mtbmj.config import load
-from mtbmj.identify.records import read_record
+from mtbmj.measured.records import read_record
 from mtbmj.identify.run import identify
 
 

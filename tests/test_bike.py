@@ -308,10 +308,10 @@ def test_a_start_on_an_obstacle_is_refused(tmp_path, capsys):
 
 def test_beside_the_real_sst_ride():
     """Both ends' travel histograms, simulated and from the shipped SST ride of the same bike, each
-    in % of its own travel; the ride's own numbers come from its file (mtbmj.ride.telemetry)."""
-    from mtbmj.bike import ride
+    in % of its own travel; the ride's own numbers come from its file (mtbmj.measured.telemetry)."""
+    from mtbmj.ride import beside as ride
     from mtbmj.bike.run import run_bike
-    from mtbmj.ride import telemetry
+    from mtbmj.measured import telemetry
 
     r = run_bike("sst", "flat", 4.0, duration=0.1)
     c = ride.compare(r, "example")

@@ -11,7 +11,7 @@ import pytest
 from mtbmj import cli
 from mtbmj.bike.run import run_bike
 from mtbmj.cli import telemetry as cli_telemetry
-from mtbmj.ride import telemetry
+from mtbmj.measured import telemetry
 from mtbmj.rolling import render
 
 

@@ -53,7 +53,7 @@ def made_bob(freq=2.2, p2p=8.0, seconds=20.0, rate=500.0, seed=1):
 
 
 def test_bob_reads_a_signal_made_here():
-    from mtbmj.ride.bob import bob
+    from mtbmj.measured.bob import bob
 
     for freq, p2p in ((1.7, 30.0), (2.4, 8.0), (3.3, 3.0)):
         t, x = made_bob(freq, p2p)
@@ -65,7 +65,7 @@ def test_bob_reads_a_signal_made_here():
 
 
 def test_bob_refuses_what_it_cannot_read():
-    from mtbmj.ride.bob import BobError, bob
+    from mtbmj.measured.bob import BobError, bob
 
     t, x = made_bob()
     with pytest.raises(BobError, match="shorter than"):
@@ -166,7 +166,7 @@ def run_cli(*args, cwd):
 def test_bike_pedal_cli_writes_bob_beside_a_ride(tmp_path):
     from mtbmj.bike.run import run_bike
     from mtbmj.errors import ConfigError
-    from mtbmj.ride import bob
+    from mtbmj.ride import beside
 
     ride = SHARED / "00090.SST"
     p = run_cli("bike", "sst", CLIMB, "--pedal", "60", "--seated", "--duration", "8", "--set",
@@ -186,7 +186,7 @@ def test_bike_pedal_cli_writes_bob_beside_a_ride(tmp_path):
     with pytest.raises(ConfigError, match="pedal=\\(cadence_rpm"):
         run_bike("sst", CLIMB, 2.0, 1.0, drive="pedal")
 
-    fig = bob.figure(bob.compare(run_bike("sst", CLIMB, None, 8.0, pedal=(60, 250), overrides=CHAIN, seated=True),
+    fig = beside.bob_figure(beside.bob_compare(run_bike("sst", CLIMB, None, 8.0, pedal=(60, 250), overrides=CHAIN, seated=True),
                                  str(ride)))
     axes = fig.axes
     assert axes[0].get_xlim() == (0.0, 4.0) and "rear" in axes[0].get_ylabel()
@@ -218,7 +218,7 @@ def test_bob_command_against_records(tmp_path):
     record's strokes are too irregular to count so), and the command's table and figure."""
     from scipy.signal import find_peaks
 
-    from mtbmj.ride.telemetry import read_sst
+    from mtbmj.measured.telemetry import read_sst
 
     p = run_cli("bob", str(SHARED / "00088.SST"), str(SHARED / "00090.SST"), "--stance", "standing,seated",
                 "--duration", "8", "--out", "bob", cwd=tmp_path)

@@ -33,7 +33,7 @@ def test_a_bike_grid_runs_each_variant_as_the_bike_command_would(tmp_path, monke
 
 
 def test_the_heat_map_is_ticked_at_the_values_run(tmp_path):
-    from mtbmj.bike import sweep
+    from mtbmj.sweep import bike as sweep
     from mtbmj.sweep.figure import sweep_figure
 
     table = sweep.run("trail", "root:at_m=0.4", 5.0, [{"rider.mass_kg": m, "fork:fork.spring.preload_N": p}

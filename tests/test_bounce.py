@@ -13,7 +13,7 @@ import pytest
 from mtbmj import cli
 from mtbmj.cli import bounce as cli_bounce
 from mtbmj.identify import bounce
-from mtbmj.ride import telemetry
+from mtbmj.measured import telemetry
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "sst_v2"
 RATE = 5000

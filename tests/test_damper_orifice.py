@@ -10,7 +10,7 @@ import pytest
 import mtbmj
 from mtbmj import cli, compose
 from mtbmj.controllers import ForkLaw, NoFriction, LinearSpring, OrificeDamper
-from mtbmj.validation.compare import crosscheck_all
+from mtbmj.drop.crosscheck import crosscheck_all
 
 KEYS = {"fork.damper.model": "orifice", "fork.damper.bleed_N_s_per_m": 300.0,
         "fork.damper.compression_orifice_N_s2_per_m2": 400.0, "fork.damper.rebound_orifice_N_s2_per_m2": 900.0}

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from mtbmj.drop import events, peaks
+from mtbmj.drop import events
+from mtbmj.measured import peaks
 from mtbmj.drop.events import MIN_AIRTIME_S, Event, detect
 
 

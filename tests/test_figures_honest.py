@@ -181,7 +181,7 @@ def test_a_sweep_heat_map_is_ticked_at_the_values_run_and_counts_are_whole():
 
 def test_telemetry_velocity_panels_are_sized_to_the_data():
     from mtbmj.cli import telemetry as tcli
-    from mtbmj.ride import telemetry
+    from mtbmj.measured import telemetry
 
     summary = tcli.compare(telemetry.read_sst(telemetry.example_path()), [])
     fig = drawn(tcli.figure(summary))

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from mtbmj.identify.fitresult import FitResult, hac_covariance, covariance_stderr
-from mtbmj.identify.records import write_csv_text
+from mtbmj.measured.records import write_csv_text
 from mtbmj.identify.run import identify
 
 

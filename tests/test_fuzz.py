@@ -233,7 +233,7 @@ def well_formed() -> dict[str, str]:
         from importlib import resources
 
         from mtbmj.identify import dyno_synthetic as dyno, tire_synthetic as tires
-        from mtbmj.identify.records import write_csv_text
+        from mtbmj.measured.records import write_csv_text
 
         def text(record):
             return write_csv_text(dyno._unit_columns(record), record.comments)

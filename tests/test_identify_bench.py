@@ -13,7 +13,7 @@ from mtbmj.errors import MtbmjError
 from mtbmj.identify import damper as dfit
 from mtbmj.identify import dyno_synthetic as syn
 from mtbmj.identify import spring as sfit
-from mtbmj.identify.records import Record, read_record
+from mtbmj.measured.records import Record, read_record
 
 S, D, R = "fork.spring.", "fork.damper.", "fork.friction."
 

@@ -10,7 +10,7 @@ import pytest
 from mtbmj.errors import MtbmjError
 from mtbmj.identify.drop_synthetic import make_drop_record
 from mtbmj.identify.dropfit import fit_drop, plot_drop
-from mtbmj.identify.records import read_record
+from mtbmj.measured.records import read_record
 from mtbmj.identify.tire import (cor_values, fit_impact, fit_tire, invert_bounce, kelvin_voigt_bounce, plot_tire,
                                  tire_overrides)
 from mtbmj.identify.tire_synthetic import TireTruth, tire_drop_record, tire_ramp_record

@@ -276,3 +276,118 @@ def test_the_force_laws_import_nothing_above_them():
     for name, edges in graph.items():
         if name.startswith("mtbmj.controllers"):
             assert sorted(e for e in edges if e.startswith(above)) == [], name
+
+
+# --- floors by role (issue 50) ------------------------------------------------------------------
+
+# The house's floors, from the ground up: a module may import only from its own floor or a lower
+# one (module-level or inside a function, the lazy export tables included). A module is on the
+# floor of the longest prefix listed for it. ``docs/architecture.md`` is drawn from this table.
+FLOORS: list[tuple[str, tuple[str, ...]]] = [
+    ("ground", ("mtbmj._package", "mtbmj.errors", "mtbmj.textfile", "mtbmj.output", "mtbmj.workers",
+                "mtbmj.limits", "mtbmj.extras", "mtbmj.trace")),
+    ("laws", ("mtbmj.controllers", "mtbmj.config", "mtbmj.mjcf", "mtbmj.presets")),
+    # compose chooses a setup's step by the step rule: it stands with the run path
+    ("run path", ("mtbmj.runpath", "mtbmj.compose")),
+    ("measured data", ("mtbmj.measured",)),
+    # a run's result (mtbmj/result.py: columns, files, manifest) is what a user reads from it
+    ("readout", ("mtbmj.readout", "mtbmj.result")),
+    ("rigs", ("mtbmj.drop", "mtbmj.rolling", "mtbmj.bike")),
+    ("applications", ("mtbmj.sweep", "mtbmj.identify", "mtbmj.validation", "mtbmj.ride")),
+    ("commands", ("mtbmj.cli",)),
+    ("the package's face", ("mtbmj",)),  # mtbmj/__init__.py: lazy exports of the public names
+]
+
+
+def floor_of(module: str, floors=None) -> int:
+    best, level = "", None
+    for i, (_, prefixes) in enumerate(floors or FLOORS):
+        for p in prefixes:
+            if (module == p or module.startswith(p + ".")) and len(p) > len(best):
+                best, level = p, i
+    if level is None:
+        raise AssertionError(f"{module} stands on no floor of FLOORS: add its folder to the table")
+    return level
+
+
+def moved_shims() -> dict[str, str]:
+    """Modules that moved and stay importable from their old place for one release: old -> new.
+    A shim holds its docstring, the import of ``moved`` and ``__getattr__ = moved(...)``, nothing
+    else; it names its new place as a string, so it draws no arrow."""
+    found = {}
+    for name, path in modules().items():
+        tree = ast.parse(path.read_text())
+        calls = [n for n in ast.walk(tree) if isinstance(n, ast.Call) and getattr(n.func, "id", None) == "moved"]
+        if calls:
+            body = [n for n in tree.body if not (isinstance(n, ast.Expr) and isinstance(n.value, ast.Constant))]
+            assert len(body) == 2 and isinstance(body[0], ast.ImportFrom) and body[0].module == "mtbmj._package", \
+                f"{name}: a moved module's shim holds nothing but the forwarding"
+            old, new = (a.value for a in calls[0].args[:2])
+            assert old == name, f"{name}: its shim names {old}"
+            found[old] = new
+    return found
+
+
+def upward_imports(graph, floors=None) -> list[str]:
+    return sorted(f"{a} (floor {floor_of(a, floors)}) -> {b} (floor {floor_of(b, floors)})"
+                  for a, edges in graph.items() for b in edges if floor_of(b, floors) > floor_of(a, floors))
+
+
+def test_every_import_points_to_its_own_floor_or_a_lower_one():
+    assert upward_imports(import_graph()) == []
+
+
+def test_the_floor_check_fails_on_a_planted_upward_import(tmp_path):
+    """A scratch copy of a measured-data module with an import of the bike planted inside a
+    function: the check finds it (an import inside a function is an import)."""
+    import shutil
+
+    scratch = tmp_path / "mtbmj"
+    shutil.copytree(ROOT / "mtbmj" / "measured", scratch / "measured")
+    (scratch / "bike").mkdir()
+    (scratch / "bike" / "run.py").write_text("X = 1\n")
+    planted = scratch / "measured" / "metrics.py"
+    planted.write_text(planted.read_text() + "\n\ndef planted():\n    from mtbmj.bike.run import X\n    return X\n")
+    known = {f"mtbmj.measured.{p.stem}": p for p in (scratch / "measured").glob("*.py") if p.stem != "__init__"}
+    known["mtbmj.bike.run"] = scratch / "bike" / "run.py"
+    graph = {}
+    for name, path in known.items():
+        tree = ast.parse(path.read_text())
+        graph[name] = {f"{n.module}" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)
+                       and n.module in known and n.module != name}
+    assert upward_imports(graph) == ["mtbmj.measured.metrics (floor 3) -> mtbmj.bike.run (floor 5)"]
+
+
+def test_no_two_folders_import_each_other():
+    """Between two subpackages the arrows run one way only (a two-way tie is two floors' worth of
+    coupling on one)."""
+    def folder(m):
+        parts = m.split(".")
+        return ".".join(parts[:2]) if len(parts) > 2 or (len(parts) == 2 and modules()[m].name == "__init__.py") else m
+
+    graph = import_graph()
+    ties = {(folder(a), folder(b)) for a, edges in graph.items() for b in edges if folder(a) != folder(b)}
+    assert sorted((a, b) for a, b in ties if (b, a) in ties and a < b) == []
+
+
+def test_moved_modules_point_to_a_module_that_is_there():
+    shims = moved_shims()
+    assert "mtbmj.ride.telemetry" in shims  # the check sees the shims
+    known = modules()
+    for old, new in shims.items():
+        assert new in known and new not in shims, (old, new)
+
+
+def test_a_moved_name_is_importable_from_its_old_place_with_a_warning():
+    import importlib
+    import warnings
+
+    old = importlib.import_module("mtbmj.ride.telemetry")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        read_sst = old.read_sst
+    from mtbmj.measured.telemetry import read_sst as new
+
+    assert read_sst is new
+    assert [str(w.message).split(":")[0] for w in caught] == ["mtbmj.ride.telemetry moved to mtbmj.measured.telemetry"]
+    assert caught[0].category is DeprecationWarning

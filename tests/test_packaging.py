@@ -36,7 +36,7 @@ def test_wheel_installs_under_mtbmj_only(tmp_path):
     top = {n.split("/")[0] for n in names}
     assert top <= {"mtbmj", f"{wheel.name.split('-')[0]}-{wheel.name.split('-')[1]}.dist-info"}, top
     for expected in ("mtbmj/mjcf/drop_scene.xml", "mtbmj/mjcf/drop.xml", "mtbmj/presets/S12.toml",
-                     "mtbmj/controllers/spring.py", "mtbmj/validation/compare.py"):
+                     "mtbmj/controllers/spring.py", "mtbmj/validation/report.py"):
         assert expected in names
 
     # A fresh venv whose dependencies come from this environment's site-packages through a

@@ -147,7 +147,8 @@ def test_the_ground_under_the_front_is_the_hidden_one(made):
     RMS within 3 mm where the bumps are 5-25 mm, over the samples the checks count."""
     from scipy.signal import butter, sosfiltfilt
 
-    from mtbmj.ride import reconstruct, telemetry
+    from mtbmj.ride import reconstruct
+    from mtbmj.measured import telemetry
 
     bike, csv, t, fork_mm, rear_mm, h, wb = made
     rec = reconstruct.reconstruct(telemetry.read_travel_csv(csv), str(bike))
@@ -160,7 +161,8 @@ def test_the_ground_under_the_front_is_the_hidden_one(made):
 
 
 def test_the_figure_marks_what_was_left_out(made, tmp_path):
-    from mtbmj.ride import reconstruct, telemetry
+    from mtbmj.ride import reconstruct
+    from mtbmj.measured import telemetry
 
     bike, csv, *_ = made
     rec = reconstruct.reconstruct(telemetry.read_travel_csv(csv), str(bike))
@@ -223,7 +225,8 @@ def test_the_compiled_forward_quarter_cars_are_the_python_ones(made, monkeypatch
     from types import SimpleNamespace
 
     from mtbmj.cli.telemetry import decoding
-    from mtbmj.ride import quartercar_compiled, reconstruct, telemetry
+    from mtbmj.ride import quartercar_compiled, reconstruct
+    from mtbmj.measured import telemetry
 
     bike, csv, *_ = made
     rides = [(telemetry.read_ride(csv, **decoding(SimpleNamespace(bike=str(bike), fork_max_mm=None, shock_max_mm=None))),

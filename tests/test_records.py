@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from scipy.io import savemat
 
-from mtbmj.identify.records import RecordError, read_record, split_unit, write_csv_text
+from mtbmj.measured.records import RecordError, read_record, split_unit, write_csv_text
 
 
 def test_units_are_parsed_from_column_names():

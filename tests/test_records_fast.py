@@ -10,9 +10,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mtbmj.identify import records
-from mtbmj.identify.records import RecordError, read_csv
-from mtbmj.identify.records import _convert as convert
+from mtbmj.measured import records
+from mtbmj.measured.records import RecordError, read_csv
+from mtbmj.measured.records import _convert as convert
 
 FAST = {"read": 0, "refused": 0}  # how often the fuzz below took numpy's path, and how often not
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from mtbmj.validation.report import run_validation
-from mtbmj.validation.sled_data import example_path
+from mtbmj.measured.sled import example_path
 
 CHROMIUM = Path("/usr/bin/chromium")
 PROBE = """<script>

@@ -84,7 +84,7 @@ def test_validate_example_exits_0_with_every_event_found(tmp_path, capsys):
 
 
 def test_telemetry_example_exits_0_and_reads_the_whole_file(tmp_path, capsys):
-    from mtbmj.ride import telemetry
+    from mtbmj.measured import telemetry
 
     out = tmp_path / "telemetry"
     status, printed = run(capsys, ["telemetry", "example", "--out", out])

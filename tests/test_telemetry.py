@@ -10,8 +10,8 @@ import pytest
 
 from mtbmj import cli
 from mtbmj.cli import telemetry as cli_telemetry
-from mtbmj.ride import metrics as ride_metrics
-from mtbmj.ride import telemetry
+from mtbmj.measured import metrics as ride_metrics
+from mtbmj.measured import telemetry
 from mtbmj.errors import MtbmjError
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "sst"

@@ -1,4 +1,4 @@
-"""One time-zero rule for sled records (validation/time_zero.py), used by validate, fit drop and
+"""One time-zero rule for sled records (mtbmj/measured/time_zero.py), used by validate, fit drop and
 the API: records made by the package's generators and by `mtbmj drop`, cut at random lengths,
 with and without free fall and clock offset, find their touch, validate against their own
 configuration within the noise and fit back to their parameters."""
@@ -14,8 +14,8 @@ from mtbmj.drop.chain import resolve
 from mtbmj.drop.run import run_drop
 from mtbmj.identify.drop_synthetic import drop_record_columns, make_drop_record
 from mtbmj.identify.dropfit import fit_drop
-from mtbmj.identify.records import write_csv_text
-from mtbmj.validation import sled_data, time_zero
+from mtbmj.measured.records import write_csv_text
+from mtbmj.measured import sled as sled_data, time_zero
 from mtbmj.validation.report import run_validation
 
 

@@ -14,7 +14,7 @@ import pytest
 from mtbmj import output
 from mtbmj.drop.run import run_drop
 from mtbmj.errors import MtbmjError
-from mtbmj.validation import sled_data
+from mtbmj.measured import sled as sled_data
 from mtbmj.cli.validate import parse_presets
 from mtbmj.drop.events import EVENTS, SIGNALS, detect
 from mtbmj.validation.drop_errors import PHASES, compare
@@ -299,7 +299,7 @@ def test_smoothing_is_scipys_savgol_interp(n, dt, seed):
     from scipy.signal import savgol_filter
 
     from mtbmj.drop.events import SMOOTH_S
-    from mtbmj.drop.peaks import smooth
+    from mtbmj.measured.peaks import smooth
 
     rng = np.random.default_rng(seed)
     y = np.cumsum(rng.normal(size=n)) * rng.uniform(0.01, 100)
@@ -311,7 +311,7 @@ def test_smoothing_is_scipys_savgol_interp(n, dt, seed):
 @settings(max_examples=60, deadline=None)
 @given(k=st.integers(5, 40), span=st.floats(1e-4, 1.0), seed=st.integers(0, 2**31))
 def test_vertex_parabola_is_numpys_polyfit(k, span, seed):
-    from mtbmj.drop.peaks import parabola
+    from mtbmj.measured.peaks import parabola
 
     rng = np.random.default_rng(seed)
     tt = np.linspace(-span, span * rng.uniform(0.2, 1.0), k)
@@ -328,7 +328,7 @@ def test_find_peaks_is_scipys(n, scale, jitter, prominence, seed, direct):
     little jitter; both ways of finding each peak's reach (per-peak scans, binary lifting)."""
     from scipy.signal import find_peaks as scipy_find_peaks
 
-    from mtbmj.drop import peaks
+    from mtbmj.measured import peaks
 
     rng = np.random.default_rng(seed)
     x = np.round(np.cumsum(rng.normal(size=n)) * scale)

@@ -29,7 +29,7 @@ from mtbmj.errors import ConfigError
 from mtbmj.drop.result import DropResult
 from mtbmj.workers import process_pool
 
-from mtbmj.validation import sled_data
+from mtbmj.measured import sled as sled_data
 from mtbmj.drop.events import EVENTS, LABELS, SIGNALS, Events, detect
 from mtbmj.validation.drop_errors import PHASES, Metrics, compare
 
@@ -252,7 +252,7 @@ def run_validation(data, configs: Sequence, reference_engine: str | None = None,
     ``reference_engine="ode"``, the ODE run of the same configuration (``data`` may then be None;
     given, it only sets the default duration). ``duration``: simulated time after touch (default:
     the record's length after touch, or the configuration's own). ``touch_s``: time zero on the
-    record's clock (default: found by ``validation.time_zero``). Runs go to a process pool."""
+    record's clock (default: found by ``mtbmj.measured.time_zero``). Runs go to a process pool."""
     if engine not in ENGINES:
         raise ConfigError(f"engine: {engine!r} is not one of {', '.join(ENGINES)}")
     if reference_engine is not None:

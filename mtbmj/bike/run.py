@@ -544,7 +544,7 @@ def crank_turns(p: Prepared, x) -> np.ndarray:
 def _drive_summary(p: Prepared, raw: dict) -> dict:
     """The drive's limits and work; for a pedalling rider also the cadence, the power asked and the
     mean power at the rear contact over the whole crank turns after the first second, and both
-    ends' bob over the run's second half (``mtbmj.ride.bob.run_stretch``) when the run is long
+    ends' bob over the run's second half (``mtbmj.measured.bob.run_stretch``) when the run is long
     enough to read one."""
     dt = p.timestep
     speed = raw["speed_m_per_s"]
@@ -553,7 +553,7 @@ def _drive_summary(p: Prepared, raw: dict) -> dict:
            "work_J": float(np.sum(raw["drive_force_N"] * speed) * dt)}
     if p.drive.mode != "pedal":
         return out
-    from mtbmj.ride import bob
+    from mtbmj.measured import bob
 
     t = raw["time_s"]
     turns = crank_turns(p, raw["x_m"])
@@ -590,7 +590,7 @@ def _summary(p: Prepared, raw: dict) -> dict:
                        "off_ground_s": float(np.sum(f <= 0.0) * dt)}
     speed = raw["speed_m_per_s"]
     feature = _feature_window(p, raw, dt)
-    from mtbmj.ride import metrics
+    from mtbmj.measured import metrics
 
     rear_velocity = np.gradient(raw["rear_travel_mm"], t) if t.size > 1 else np.zeros_like(t)
     ride = {"front": metrics.summarize(t, raw["front_travel_mm"], p.fork_setup.travel * 1e3,
@@ -631,7 +631,7 @@ def _summary(p: Prepared, raw: dict) -> dict:
         "min_speed_m_per_s": float(speed.min()),
         "max_speed_m_per_s": float(speed.max()),
         "drive": _drive_summary(p, raw),
-        # what riders read from telemetry (mtbmj.ride.metrics), each end in its own travel
+        # what riders read from telemetry (mtbmj.measured.metrics), each end in its own travel
         "ride_metrics": ride,
         # the run ended here (mtbmj.bike.crash): a part other than a tyre on the ground, or the pitch
         # past what a rider recovers from; the time series stop at it
@@ -673,7 +673,7 @@ class BikeResult(RunOutput):
                 "shock_config": self.prepared.shock_setup.config.digest(), "versions": versions(),
                 "wall_time_s": self.wall_time_s, "engine_info": self.info}
 
-    def files(self, stream: bool = False, figure: bool = True, video: bool = False, ride: str | None = None) -> dict:
+    def files(self, stream: bool = False, figure: bool = True, video: bool = False, extra: dict | None = None) -> dict:
         files = {"timeseries.csv": self.csv_bytes(), "summary.json": output.json_bytes(self.summary),
                  "manifest.json": output.json_bytes(self.manifest()),
                  "fork_config.toml": self.prepared.fork_setup.config.to_toml().encode(),
@@ -682,18 +682,7 @@ class BikeResult(RunOutput):
             from mtbmj.bike.figure import png
 
             files["quicklook.png"] = png(self)
-        if ride is not None:  # beside a real ride (mtbmj.bike.ride)
-            from mtbmj.bike import ride as ride_mod
-
-            comparison = ride_mod.compare(self, ride)
-            files["ride_comparison.json"] = output.json_bytes(comparison)
-            files["ride_comparison.png"] = ride_mod.png(comparison)
-            if "pedal" in self.summary["drive"]:  # a pedalling run: its bob beside the ride's (mtbmj.ride.bob)
-                from mtbmj.ride import bob
-
-                bobs = bob.compare(self, ride)
-                files["bob.json"] = output.json_bytes(bob.json_ready(bobs))
-                files["bob.png"] = bob.png(bobs)
+        files.update(extra or {})  # e.g. the files beside a real ride (mtbmj.ride.beside.files)
         if video:
             import tempfile
             from pathlib import Path
@@ -704,10 +693,11 @@ class BikeResult(RunOutput):
                 files["bike.gif"] = path.read_bytes()
         return files
 
-    def write(self, out_dir, figure: bool = True, video: bool = False, ride: str | None = None):
-        """Write the output folder whole (``figure``: quicklook.png; ``video``: bike.gif; ``ride``: an
-        SST file or "example", the travel histograms beside that real ride)."""
-        return output.write_atomically(out_dir, self.files(figure=figure, video=video, ride=ride))
+    def write(self, out_dir, figure: bool = True, video: bool = False, extra: dict | None = None):
+        """Write the output folder whole (``figure``: quicklook.png; ``video``: bike.gif; ``extra``:
+        more files by name, e.g. ``mtbmj.ride.beside.files(result, "example")``, the run beside a
+        real ride)."""
+        return output.write_atomically(out_dir, self.files(figure=figure, video=video, extra=extra))
 
     def video(self, path, fps: float = 30.0, width: int = 640, height: int = 480) -> dict:
         """Write a video (.gif, or .mp4 with the [video] extra) of the run to ``path``, side on, the

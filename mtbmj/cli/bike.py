@@ -17,7 +17,7 @@ def cmd_bike(args) -> int:
     from mtbmj.bike.run import run_bike
 
     if args.ride is not None and args.ride != "example":
-        from mtbmj.ride.telemetry import read_sst
+        from mtbmj.measured.telemetry import read_sst
 
         read_sst(args.ride)  # a bad ride file: one line before any work
     if args.video:
@@ -31,7 +31,12 @@ def cmd_bike(args) -> int:
                                   progress, lock=tuple(k.strip() for k in args.lock.split(",")) if args.lock else (),
                                   rear_tire=not args.lift_rear, overrides=overrides, seated=args.seated,
                                   pedal=pedal))
-    written = result.write(args.out, figure=not args.no_figure, video=args.video, ride=args.ride)
+    extra = None
+    if args.ride is not None:  # beside a real ride
+        from mtbmj.ride import beside
+
+        extra = beside.files(result, args.ride)
+    written = result.write(args.out, figure=not args.no_figure, video=args.video, extra=extra)
     print(f"{result.headline()}; {result.info['real_time_factor']:.2f}x real time; wrote {len(written)} files to "
           f"{args.out}")
     return EXIT_CRASHED if result.summary.get("crash") else 0

@@ -1,5 +1,5 @@
 """``mtbmj bob RECORD... --bike BIKE --out DIR``: recorded pedalling rides (Sufni SST files) and the
-bike pedalled as each was, their pedal bob side by side (``mtbmj.bike.pedalling.against``): bob.json and
+bike pedalled as each was, their pedal bob side by side (``mtbmj.ride.pedalling.against``): bob.json and
 bob.png, one line per record."""
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ from mtbmj.cli.common import add_out
 def cmd_bob(args) -> int:
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.errors import ConfigError
-    from mtbmj.bike import pedalling
-    from mtbmj.ride.telemetry import read_sst
+    from mtbmj.ride import pedalling
+    from mtbmj.measured.telemetry import read_sst
 
     for path in args.records:
         read_sst(path)  # a bad record: one line before any work

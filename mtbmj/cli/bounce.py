@@ -70,7 +70,7 @@ def add_bounce_parser(fit_parser) -> None:
 
 
 def _records(paths, clicks):
-    from mtbmj.ride.telemetry import read_sst
+    from mtbmj.measured.telemetry import read_sst
 
     return [read_sst(p) for p in paths]
 

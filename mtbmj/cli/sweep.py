@@ -46,7 +46,7 @@ def check_shared_options(args) -> None:
 
 
 def _bike_sweep(args) -> int:
-    from mtbmj.bike import sweep as bike_sweep
+    from mtbmj.sweep import bike as bike_sweep
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.cli.common import Progress
 

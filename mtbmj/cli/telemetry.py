@@ -15,8 +15,8 @@ import numpy as np
 
 from mtbmj import output
 from mtbmj.cli.common import add_out
-from mtbmj.ride import metrics as ride_metrics
-from mtbmj.ride import telemetry
+from mtbmj.measured import metrics as ride_metrics
+from mtbmj.measured import telemetry
 from mtbmj.errors import MtbmjError
 from mtbmj.textfile import read_text
 

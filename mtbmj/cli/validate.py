@@ -69,7 +69,7 @@ def add_parser(subparsers):
 
 def cmd_validate(args) -> int:
     from mtbmj.validation.report import run_validation
-    from mtbmj.validation.sled_data import example_path
+    from mtbmj.measured.sled import example_path
 
     start = time.perf_counter()
     configs = (parse_presets(args.presets) if args.presets else []) + list(args.configs or [])

@@ -11,7 +11,7 @@ from mtbmj import compose, output
 from mtbmj.config import Config
 from mtbmj.drop.chain import resolve
 from mtbmj.drop.study import group_figure, png_bytes, run_job, table_markdown
-from mtbmj.validation import from_results
+from mtbmj.drop.crosscheck import from_results
 from mtbmj.workers import process_pool
 
 SPACERS = (0, 1, 2, 3)

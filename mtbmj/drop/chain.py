@@ -16,7 +16,7 @@ import numpy as np
 
 from mtbmj import compose, config as config_mod, limits
 from mtbmj.compose import Setup
-from mtbmj.config import Config
+from mtbmj.config import Config, resolve  # noqa: F401  (resolve: drop.chain's name for it, kept)
 from mtbmj.drop import measure
 from mtbmj.drop import summary as summary_mod
 from mtbmj.errors import ConfigError, MtbmjError, RunError
@@ -24,19 +24,6 @@ from mtbmj.trace import RawTrace
 
 # the state the engines integrate: a run whose trace holds anything else diverged
 INTEGRATED = ("sled", "fork", "sled_velocity", "fork_velocity", "friction_state")
-
-
-def resolve(config: Config | str, overrides: Mapping | None = None) -> Config:
-    """A ``Config`` from a preset name, a TOML path or a ``Config``, with overrides applied; the
-    overrides' plausibility warnings are issued (``config_mod.ConfigWarning``) as ``load`` issues
-    a file's."""
-    if isinstance(config, Config):
-        if not overrides:
-            return config
-        changed = config.with_overrides(overrides)
-        config_mod.warn([w for w in changed.warnings if w not in config.warnings])
-        return changed
-    return config_mod.load(config, overrides)
 
 
 def prepare(config: Config | str, overrides: Mapping | None = None, duration: float | None = None,

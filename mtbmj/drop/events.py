@@ -36,7 +36,7 @@ from typing import Mapping
 
 import numpy as np
 
-from mtbmj.drop.peaks import (median_in_place, parabola_rows, noise_sigmas, parabola, peaks_and_valleys, smooth_into,
+from mtbmj.measured.peaks import (median_in_place, parabola_rows, noise_sigmas, parabola, peaks_and_valleys, smooth_into,
                                smooth_width)
 from mtbmj.errors import MtbmjError
 

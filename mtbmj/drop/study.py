@@ -7,7 +7,7 @@ import os
 from pathlib import Path
 from typing import Callable, Sequence
 
-from mtbmj.validation import from_results
+from mtbmj.drop.crosscheck import from_results
 from mtbmj import compose, limits, output
 from mtbmj.controllers import native
 from mtbmj.config import Config, study_presets

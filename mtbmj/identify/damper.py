@@ -43,7 +43,7 @@ from mtbmj import controllers as law
 from mtbmj.errors import MtbmjError
 from mtbmj.identify.dyno_synthetic import peak_points
 from mtbmj.identify.fitresult import FitResult, covariance_stderr, declare_bounds
-from mtbmj.identify.records import Record, RecordError
+from mtbmj.measured.records import Record, RecordError
 
 HYDRAULIC = ("linear", "bilinear", "digressive", "table")
 FRICTION = ("none", "coulomb", "coulomb_viscous", "stiction", "stribeck", "lugre")

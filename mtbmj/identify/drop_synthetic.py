@@ -23,7 +23,7 @@ from mtbmj.drop.measure import antialias_filter
 from mtbmj.drop.chain import resolve
 from mtbmj.drop.run import run_drop
 
-from mtbmj.identify.records import Record, read_record, write_csv_text
+from mtbmj.measured.records import Record, read_record, write_csv_text
 
 
 def drop_record_columns(config="S12", overrides: Mapping | None = None, noise_mm: float = 0.05,

@@ -13,7 +13,7 @@ the compiled laws) the columns run in a pool of ``workers`` processes (2 by defa
 ``starts=N`` the fit runs from the configuration's start values and N - 1 Latin hypercube points
 within the bounds (their first evaluations batched together); the lowest final cost wins.
 
-Time zero comes from ``validation.time_zero`` (the rule ``mtbmj validate`` uses): a record with a
+Time zero comes from ``mtbmj.measured.time_zero`` (the rule ``mtbmj validate`` uses): a record with a
 free fall on any clock, or one that starts at impact, or ``touch_s`` given. The fit starts
 ``FIT_FROM_S`` after touch: before, a real logger's filter still carries the free fall, which the
 model's logger (started at touch) does not see.
@@ -70,8 +70,8 @@ from mtbmj.errors import ConfigError, MtbmjError
 
 from mtbmj.identify.fitresult import (DEFAULT_BOUND_FACTOR, FitResult, bound_warnings, bounds_reached, correlated_pairs, correlation,
                                       covariance_stderr, hac_covariance, model_check)
-from mtbmj.identify.records import Record, read_record
-from mtbmj.validation import sled_data
+from mtbmj.measured.records import Record, read_record
+from mtbmj.measured import sled as sled_data
 from mtbmj.workers import process_pool
 
 CHANNELS = ("sled", "fork", "tire")
@@ -243,9 +243,9 @@ def same_quantity(free: Sequence[str]) -> None:
 
 def noise_floor(aligned, channels: Sequence[str], keep: np.ndarray) -> float:
     """The record's own noise (mm, RMS over the fitted channels): each channel's white noise from
-    its third differences (``drop.peaks.noise_sigma``, robust to the impact's few steep
+    its third differences (``mtbmj.measured.peaks.noise_sigma``, robust to the impact's few steep
     samples) over the fitted stretch."""
-    from mtbmj.drop.peaks import noise_sigma
+    from mtbmj.measured.peaks import noise_sigma
 
     sigmas = [noise_sigma(getattr(aligned, f"{c}_mm")[keep]) for c in channels]
     return float(np.sqrt(np.mean(np.square(sigmas))))
@@ -298,7 +298,7 @@ def fit_drop(record: Record | str | os.PathLike, config: Config | str = "S12", f
     """
     start_time = time.perf_counter()
     rec = _as_record(record)
-    aligned = sled_data.from_record(rec, touch_s=touch_s)  # the one time-zero rule (validation.time_zero)
+    aligned = sled_data.from_record(rec, touch_s=touch_s)  # the one time-zero rule (mtbmj.measured.time_zero)
     channels = ("sled", "fork") + (() if aligned.tire_computed else ("tire",))
     cfg = resolve(config, overrides)
     free = list(free)

@@ -29,7 +29,7 @@ from scipy.signal import savgol_filter
 from mtbmj.config import Config, load as load_config
 from mtbmj.errors import MtbmjError
 from mtbmj import compose
-from mtbmj.identify.records import UNITS, Record, RecordError, write_csv_text
+from mtbmj.measured.records import UNITS, Record, RecordError, write_csv_text
 
 # --- true parameter sets (configuration keys and units) ------------------------------------------
 

@@ -12,7 +12,7 @@ from mtbmj import output
 from mtbmj.config import load as load_config, parameter_set_toml, preset_names
 from mtbmj.errors import MtbmjError
 from mtbmj.identify.fitresult import FitResult
-from mtbmj.identify.records import Record, read_record
+from mtbmj.measured.records import Record, read_record
 
 KINDS = ("spring", "damper", "tire", "drop")
 DEFAULT_DROP_FREE = ("tire.impact_rate_N_per_mm", "fork.spring.preload_N")  # fit drop without --free
@@ -173,7 +173,7 @@ def _floor(records: Sequence[Record], quantity: str) -> float:
     if values is None or values.size == 0:
         return 0.0
     unit = records[0].units[quantity]
-    from mtbmj.identify.records import UNITS
+    from mtbmj.measured.records import UNITS
 
     return RESOLUTION * float(np.sqrt(np.mean(values**2))) / UNITS[unit]
 
@@ -260,10 +260,10 @@ def _noise_check(record: Record, quantity: str, scale: float, result: FitResult,
                  worst: str) -> dict | None:
     """A bench fit's model check (spring, tire): its residual RMS against the noise floor of the
     record's ``quantity`` (white noise from third differences along the record,
-    ``drop.peaks.noise_sigma``; SI times ``scale`` gives ``unit``), limit 3 x noise
+    ``mtbmj.measured.peaks.noise_sigma``; SI times ``scale`` gives ``unit``), limit 3 x noise
     (``fitresult.model_check``). ``None`` for a record too short to tell its noise."""
     from mtbmj.identify.fitresult import model_check
-    from mtbmj.drop.peaks import noise_sigma
+    from mtbmj.measured.peaks import noise_sigma
 
     values = record.columns.get(quantity)
     if values is None or values.size < NOISE_CHECK_MIN_POINTS:
@@ -378,7 +378,7 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
     """Fit ``kind`` ("spring", "damper", "tire", "drop") to the record(s) in ``data``; ``starts``:
     drop fits from that many start points (the best wins); ``free``: the drop fit's free keys
     (default ``DEFAULT_DROP_FREE``); ``touch_s``: the drop record's time zero on its clock
-    (default: found by ``validation.time_zero``); ``clicks``: damper fits from several dyno files,
+    (default: found by ``mtbmj.measured.time_zero``); ``clicks``: damper fits from several dyno files,
     the adjuster position (clicks from closed) of each, or a mapping per file of its adjusters'
     positions by label (``damper.ADJUSTERS``: lsc, hsc, lsr, hsr, c, r), giving a ``clicks`` damper;
     ``overrides``: drop fits run on ``config`` with these keys set (written into fit.toml too);

@@ -39,7 +39,7 @@ from scipy.signal import savgol_filter
 
 from mtbmj.errors import MtbmjError
 from mtbmj.identify.fitresult import DEFAULT_BOUND_FACTOR, FitResult, covariance_stderr, declare_bounds
-from mtbmj.identify.records import Record, RecordError
+from mtbmj.measured.records import Record, RecordError
 
 MODELS = ("linear", "compression_rebound", "bilinear", "progressive", "top_out", "preload")
 MAIN_MODELS = MODELS[:4]

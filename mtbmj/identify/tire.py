@@ -35,7 +35,7 @@ from scipy import optimize
 from mtbmj.errors import MtbmjError
 
 from mtbmj.identify.fitresult import FitResult, covariance_stderr, declare_bounds
-from mtbmj.identify.records import Record
+from mtbmj.measured.records import Record
 
 G = 9.81
 

@@ -23,7 +23,7 @@ import numpy as np
 from scipy import signal
 from scipy.integrate import solve_ivp
 
-from mtbmj.identify.records import write_csv_text
+from mtbmj.measured.records import write_csv_text
 
 G = 9.81
 

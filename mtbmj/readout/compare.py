@@ -289,12 +289,12 @@ class Comparison:
     runs: list[Run]
 
     def files(self) -> dict[str, bytes]:
-        from mtbmj.drop.study import png_bytes
+        from mtbmj.readout.quicklook import png
 
         listing = [{"label": r.label, "folder": str(r.path), "kind": r.kind, "name": r.manifest.get("name"),
                     "engine": r.manifest.get("engine"), "scenario": r.manifest.get("scenario"),
                     "config_sha256": r.manifest.get("config_sha256")} for r in self.runs]
-        return {"compare.png": png_bytes(figure(self.runs)), "differences.csv": difference_csv(self.runs),
+        return {"compare.png": png(figure(self.runs), dpi=110), "differences.csv": difference_csv(self.runs),
                 "compare.json": output.json_bytes({"kind": self.runs[0].kind, "runs": listing})}
 
     def write(self, out_dir: str | Path) -> list[Path]:

@@ -157,7 +157,7 @@ def spring_curve(config: Config | str, overrides: Mapping | None = None, points:
                  travel_mm: np.ndarray | None = None) -> SpringCurve:
     """The spring curve of ``config`` (a preset name, TOML path or ``Config``); ``travel_mm`` a
     grid to use instead of the default one (it should stay within the top stop and full travel)."""
-    from mtbmj.drop.chain import resolve
+    from mtbmj.config import resolve
 
     cfg = resolve(config, overrides)
     setup = compose.setup(cfg)  # the whole configuration is valid (one line naming the key otherwise)
@@ -422,7 +422,7 @@ def damper_curve(config: Config | str, overrides: Mapping | None = None,
                  max_velocity_mm_per_s: float | None = None) -> DamperCurve:
     """The damper curve of ``config`` up to ``max_velocity_mm_per_s`` in each direction (default:
     a lookup table's range, else 1500 mm/s)."""
-    from mtbmj.drop.chain import resolve
+    from mtbmj.config import resolve
 
     cfg = resolve(config, overrides)
     compose.setup(cfg)
@@ -550,16 +550,16 @@ class Curves:
                 f"{clicks}")
 
     def files(self) -> dict[str, bytes]:
-        from mtbmj.drop.study import png_bytes
+        from mtbmj.readout.quicklook import png
 
         spring_cols = self.spring.columns()
         for label, curve in self.progression.items():
             spring_cols[f"spring_{label.split()[0]}_spacers_N"] = curve.spring_N
         files = {
-            "spring_curve.png": png_bytes(spring_figure(self.spring, self.progression)),
+            "spring_curve.png": png(spring_figure(self.spring, self.progression), dpi=110),
             "spring_curve.csv": output.csv_bytes(spring_cols, f"mtbmj curve {self.spring.name}: fork spring at rest "
                                                  "(v = 0), compression positive; hard stops outside the range"),
-            "damper_curve.png": png_bytes(damper_figure(self.damper)),
+            "damper_curve.png": png(damper_figure(self.damper), dpi=110),
             "damper_curve.csv": output.csv_bytes(self.damper.columns(), f"mtbmj curve {self.damper.name}: fork damper "
                                                  "at its settings, compression positive; friction while sliding"),
             "curve.json": output.json_bytes({**self.spring.summary(), **self.damper.summary()}),
@@ -577,7 +577,7 @@ class Curves:
 def fork_curves(config: Config | str, overrides: Mapping | None = None,
                 max_velocity_mm_per_s: float | None = None) -> Curves:
     """The spring and damper curves of ``config`` (preset name, TOML path or ``Config``)."""
-    from mtbmj.drop.chain import resolve
+    from mtbmj.config import resolve
 
     cfg = resolve(config, overrides)
     spring = spring_curve(cfg)

@@ -4,8 +4,8 @@ velocity histograms, bottom-outs, airtime), computed the same way for simulated 
 from mtbmj._package import lazy_exports
 
 _LAZY = {
-    "read_sst": "mtbmj.ride.telemetry",
-    "summarize": "mtbmj.ride.metrics",
+    "read_sst": "mtbmj.measured.telemetry",
+    "summarize": "mtbmj.measured.metrics",
 }
 __all__ = ['read_sst', 'summarize']
 

@@ -182,7 +182,7 @@ def ride_metrics(t, front_mm, rear_mm, front_top: float, rear_top: float, static
     fork travel, ``rear_mm`` rear wheel travel (compression positive); ``static`` (front, rear)
     static travel mm when known; ``loads`` (front, rear) tyre loads N and ``rider_acc`` m/s2 when
     simulated."""
-    from mtbmj.ride import metrics as m
+    from mtbmj.measured import metrics as m
 
     t = np.asarray(t, float)
     out = {}

@@ -443,7 +443,7 @@ def _runs(mask):
 
 
 def reconstruct(record, bike, overrides=None) -> Reconstruction:
-    """``record`` (a ``mtbmj.ride.telemetry.TelemetryRecord`` with both ends) through the bike
+    """``record`` (a ``mtbmj.measured.telemetry.TelemetryRecord`` with both ends) through the bike
     ``bike`` (preset or file; ``overrides`` its keys): see the module doc."""
     from mtbmj.bike import run as bike_run
     from mtbmj.bike import spec as spec_mod

@@ -492,7 +492,7 @@ def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
         "drive": _drive_summary(p, raw),
     }
     try:
-        from mtbmj.ride import metrics as ride_metrics
+        from mtbmj.measured import metrics as ride_metrics
     except ImportError:  # written by a parallel piece of work; the summary stands without it
         out["ride_metrics"] = None
     else:

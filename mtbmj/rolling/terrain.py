@@ -279,9 +279,9 @@ def drum(radius_mm: float = 500.0, cleat_height_mm: float = 20.0, cleat_width_mm
 
 def from_csv(path: str | Path) -> Terrain:
     """A profile from a CSV record: columns ``distance_m`` (non-decreasing) and ``height_mm``;
-    read by ``mtbmj.identify.records.read_record`` (units converted to SI there). The wheel starts
+    read by ``mtbmj.measured.records.read_record`` (units converted to SI there). The wheel starts
     at the first distance on a flat lead-in at the first height."""
-    from mtbmj.identify.records import read_record
+    from mtbmj.measured.records import read_record
 
     rec = read_record(path)
     if set(rec.units) != {"distance", "height"} or rec.units.get("distance") != "m" or rec.units.get("height") != "mm":

@@ -1,6 +1,6 @@
 """The one result of a cross-check, for every rig: an engine's run (MuJoCo, or the drop's fast
 engine) against the rig's ODE reference from the same initial state (``mtbmj crosscheck``; the
-drop in ``mtbmj.validation.compare``, the rolling front end in ``mtbmj.rolling.reference``, the
+drop in ``mtbmj.drop.crosscheck``, the rolling front end in ``mtbmj.rolling.reference``, the
 bike in ``mtbmj.bike.crosscheck``).
 
 Each rig names the signals it compares. A signal is compared over its whole series, sample by

@@ -88,7 +88,7 @@ def parse_vary(text: str, count: bool | None = None, check_key: bool = True) -> 
     """Parse ``key=lo:hi:n`` (a grid) or ``key=lo:hi`` (a sampling range).
 
     ``count`` True requires ``n``, False forbids it, None accepts both; ``check_key`` False leaves
-    the key to its reader (a bike sweep's keys are the bike's, ``mtbmj.bike.sweep``)."""
+    the key to its reader (a bike sweep's keys are the bike's, ``mtbmj.sweep.bike``)."""
     key, eq, span = (part.strip() for part in text.partition("="))
     parts = [p.strip() for p in span.split(":")]
     if not eq or not key or len(parts) not in (2, 3) or not all(re.fullmatch(_NUMBER, p) for p in parts[:2]):

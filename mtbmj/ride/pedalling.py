@@ -1,0 +1,179 @@
+"""The bike pedalled as recorded rides were (``mtbmj bob RECORD... --bike BIKE``): each record's
+pedal bob (``mtbmj.measured.bob``) beside a run of the bike at that record's cadence, standing or
+seated, through a climbing gear, up the climb the rider's power holds at the gear's speed; the
+table (bob.json), the figure (bob.png) and a line per record."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mtbmj.measured.bob import BobError, bob, high_passed, run_stretch
+
+GEAR = (32, 42)  # assumed: a 1x climbing gear (the records do not say theirs)
+RUN_S = 14.0
+
+
+@dataclass
+class Against:
+    """Recorded pedalling rides and the bike pedalled as each was (``against``)."""
+
+    bike: str
+    rows: list  # one dict per record
+    series: list  # per record: (record time, fork, rear), (run time, front, rear)
+
+    def to_dict(self) -> dict:
+        return {"bike": self.bike, "gear": "{}x{}".format(*GEAR), "records": self.rows}
+
+    def lines(self) -> list[str]:
+        out = []
+        for r in self.rows:
+            rec, sim = r["ride"]["rear"], r["simulated"]["rear"]
+            out.append(f"{r['record']} ({r['stance']}): rear bob ridden {rec['frequency_Hz']:.2f} Hz "
+                       f"{rec['amplitude_mm']:.1f} mm, simulated {sim['frequency_Hz']:.2f} Hz {sim['amplitude_mm']:.1f} mm "
+                       f"({r['simulated_cadence_rpm']:.0f} rpm for the record's {r['cadence_rpm']:.0f}, "
+                       f"{r['power_W']:g} W, {r['grade_percent']:.1f} % climb)")
+        return out
+
+    def figure(self):
+        """Per record, the rear wheel's bob frequency and peak to peak, ridden and simulated (the
+        bars span each amplitude's interquartile range over the strokes), and the first record's
+        four seconds of bob."""
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(12, 8), layout="constrained")
+        ax = fig.subplots(2, 2)
+        names = [f"{r['record']}\n{r['stance']}" for r in self.rows]
+        k = np.arange(len(self.rows))
+        for key, shift, color, label in (("ride", -0.18, "C1", "ridden"), ("simulated", 0.18, "C0", "simulated")):
+            freq = [r[key]["rear"]["frequency_Hz"] for r in self.rows]
+            amp = np.array([r[key]["rear"]["amplitude_mm"] for r in self.rows])
+            iqr = np.array([r[key]["rear"]["amplitude_iqr_mm"] for r in self.rows])
+            ax[0, 0].bar(k + shift, freq, width=0.34, color=color, label=label)
+            ax[0, 1].bar(k + shift, amp, width=0.34, color=color, label=label,
+                         yerr=np.abs(iqr.T - amp), capsize=3)
+        ax[0, 0].set(xticks=k, xticklabels=names, ylabel="rear bob frequency (Hz)",
+                     title="Rear bob frequency (twice the cadence)")
+        ax[0, 1].set(xticks=k, xticklabels=names, ylabel="rear bob, peak to peak (mm)",
+                     title="Rear bob amplitude (median stroke; bars: quartiles)")
+        for a in ax[0]:
+            a.legend(fontsize=8)
+            a.grid(alpha=0.3, axis="y")
+        for col, i in enumerate((0, len(self.rows) - 1)):
+            (tr, _, xr), (ts, _, xs) = self.series[i]
+            for (t, x), window, color, label in (((tr, xr), self.rows[i]["ride"]["rear"]["window_s"], "C1", "ridden"),
+                                                 ((ts, xs), self.rows[i]["simulated"]["rear"]["window_s"], "C0",
+                                                  "simulated")):
+                tt, y = high_passed(t, x, window)
+                show = tt <= 4.0
+                ax[1, col].plot(tt[show], y[show], color=color, label=label)
+            ax[1, col].set(xlabel="time in the pedalling stretch (s)", ylabel="rear travel, high-passed (mm)",
+                           title=f"{self.rows[i]['record']} ({self.rows[i]['stance']}): four seconds", xlim=(0, 4))
+            ax[1, col].legend(fontsize=8)
+            ax[1, col].grid(alpha=0.3)
+        fig.suptitle(f"Pedal bob: bike {self.bike} pedalled at each record's cadence ({'{}x{}'.format(*GEAR)}, "
+                     f"the climb its power holds) beside the records (their amplitudes carry the records' "
+                     f"calibration)", fontsize=9)
+        return fig
+
+    def write(self, out_dir) -> list:
+        import io
+        import json
+
+        from mtbmj import output
+
+        buf = io.BytesIO()
+        self.figure().savefig(buf, format="png", dpi=100)
+        return output.write_atomically(out_dir, {"bob.json": (json.dumps(self.to_dict(), indent=2) + "\n").encode(),
+                                                 "bob.png": buf.getvalue()})
+
+
+CADENCE_TOLERANCE = 0.02  # the run's cadence over its stretch within 2 % of the record's, or the climb is set again
+ATTEMPTS = 4  # at most this many runs per record (the closest kept)
+
+
+def run_cadence(run, window) -> float:
+    """A pedalling run's mean cadence (rpm) over ``window`` (s): the crank's turns (the distance
+    rolled through the gear) over the time."""
+    from mtbmj.bike.run import crank_turns
+
+    t = run.raw["time_s"]
+    keep = (t >= window[0]) & (t <= window[1])
+    turns = crank_turns(run.prepared, run.raw["x_m"][keep])
+    return float(turns[-1] / (t[keep][-1] - t[keep][0]) * 60.0)
+
+
+def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, overrides=None,
+            duration_s: float = RUN_S) -> Against:
+    """Each record's bob (``bob``), and the bike pedalled as it was: at the cadence its rear bob
+    implies (half its frequency), standing or seated (``stances``, one per record; default
+    standing), through ``GEAR`` at ``power_W``, up the climb whose grade that power holds at the
+    gear's speed (sin a = P / (m g v)), for ``duration_s``, its bob read over its second half. Where
+    the run's own cadence over that half misses the record's by more than 2 % (the stroke's uneven
+    torque and the bob change the power the climb takes), the climb is set again: a first step of
+    its sine by the miss (at most 5 %), then secant steps, at most four runs, the closest kept."""
+    import math
+
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.bike.run import gear_speed, run_bike, setups
+    from mtbmj.errors import ConfigError
+    from mtbmj.measured import telemetry
+
+    stances = list(stances or ["standing"] * len(records))
+    if len(stances) != len(records):
+        raise ConfigError(f"stance: one per record ({len(records)}), got {len(stances)}")
+    bad = [s for s in stances if s not in ("standing", "seated")]
+    if bad:
+        raise ConfigError(f"stance: {bad[0]!r} is not standing or seated")
+    over = dict(overrides or {})
+    over.setdefault("drive.chainring_teeth", GEAR[0])
+    over.setdefault("drive.cog_teeth", GEAR[1])
+    spec = spec_mod.load(str(bike), over)
+    radius = setups(spec)[0].tire_radius
+    rows, series = [], []
+    for path, stance in zip(records, stances):
+        ride = telemetry.read_sst(path)
+        if ride.rear_mm is None:
+            raise BobError(f"{path}: has no shock sensor: no rear bob to compare")
+        rear = bob(ride.time_s, ride.rear_mm)
+        try:
+            front = bob(ride.time_s, ride.fork_mm) if ride.fork_mm is not None else None
+        except BobError:
+            front = None
+        cadence = min(max(rear.cadence_rpm, 30.0), 130.0)
+        v = gear_speed(spec, cadence, radius)
+        sine = power_W / (spec.total_mass * 9.81 * v)
+        if sine >= 0.4:
+            raise ConfigError(f"{path}: {power_W:g} W at {cadence:.0f} rpm in {'{}x{}'.format(*GEAR)} needs a climb "
+                              f"steeper than 40 %: give less power")
+        tried = []  # (sine, cadence the run had, run): the climb set again while its cadence misses
+        for attempt in range(ATTEMPTS):
+            grade = 100.0 * math.tan(math.asin(sine))
+            run = run_bike(spec, f"climb:grade_percent={grade:.3f},length_m={v * duration_s * 1.5 + 10:.1f},at_m=0.5",
+                           None, duration_s, pedal=(cadence, power_W), seated=stance == "seated")
+            had = run_cadence(run, run_stretch(run.raw["time_s"]))
+            tried.append((sine, had, run, grade))
+            if abs(had / cadence - 1.0) <= CADENCE_TOLERANCE:
+                break
+            if len(tried) == 1:  # the speed the power holds goes as 1 / sin a; a step of at most 5 %
+                sine *= min(max(had / cadence, 0.95), 1.05)
+            else:  # the secant through the last two, within 10 % of the last
+                (s0, c0, _, _), (s1, c1, _, _) = tried[-2], tried[-1]
+                step = (cadence - c1) * (s1 - s0) / (c1 - c0) if c1 != c0 else 0.0
+                sine = s1 + min(max(step, -0.1 * s1), 0.1 * s1)
+            sine = min(sine, 0.4)
+        sine, had, run, grade = min(tried, key=lambda r: abs(r[1] - cadence))
+        t = run.raw["time_s"]
+        window = run_stretch(t)
+        sim = {"rear": bob(t, run.raw["rear_travel_mm"], *window).to_dict(),
+               "front": bob(t, run.raw["front_travel_mm"], *window).to_dict()}
+        rows.append({"record": ride.name, "stance": stance, "notes": list(ride.notes), "cadence_rpm": cadence,
+                     "simulated_cadence_rpm": had, "power_W": power_W, "grade_percent": grade, "speed_m_per_s": v,
+                     "ride": {"rear": rear.to_dict(), "front": front.to_dict() if front else None},
+                     "simulated": sim, "crash": run.summary.get("crash")})
+        series.append(((ride.time_s, ride.fork_mm, ride.rear_mm), (t, run.raw["front_travel_mm"],
+                                                                   run.raw["rear_travel_mm"])))
+    return Against(str(bike), rows, series)
+
+
+__all__ = ["Against", "against", "run_cadence", "GEAR", "RUN_S", "CADENCE_TOLERANCE"]
