@@ -8,8 +8,8 @@ reference, reproducing the drop-sled study S1-S14 of Schoeneck, Sadauckas & Nagu
     True
 
 The names below are imported on first use, so ``import mtbmj`` stays cheap. Subsystems:
-``mtbmj.drop`` (the drop test), ``mtbmj.rolling`` (front end on terrain), ``mtbmj.ride``
-(telemetry), ``mtbmj.sweep`` (sweeps and sensitivity), ``mtbmj.identify`` (fits),
+``mtbmj.measured`` (records and telemetry read in), ``mtbmj.drop`` (the drop test), ``mtbmj.rolling``
+(front end on terrain), ``mtbmj.bike`` (the whole bike), ``mtbmj.ride`` (a ride through the bike, advice), ``mtbmj.sweep`` (sweeps and sensitivity), ``mtbmj.identify`` (fits),
 ``mtbmj.validation`` (engine cross-check, sled records), ``mtbmj.cli`` (the command line).
 """
 from mtbmj._package import __version__, lazy_exports  # noqa: F401

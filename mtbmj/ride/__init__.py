@@ -1,5 +1,6 @@
-"""Ride telemetry: SST files from a real ride and the metrics riders read from them (travel and
-velocity histograms, bottom-outs, airtime), computed the same way for simulated runs.
+"""The rider's ride through the bike: a ride reconstructed (speed, terrain, the rear predicted),
+setup advice, a bike run beside a ride, the bike pedalled as recorded rides were. The readers of
+the ride's records are ``mtbmj.measured``'s (``read_sst`` and ``summarize`` are still named here).
 """
 from mtbmj._package import lazy_exports
 
