@@ -13,7 +13,6 @@ the two solved keys), which ``mtbmj bike`` runs as is.
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,11 +25,14 @@ KEYS = {"air": ("fork.spring.air_pressure_psi", 5.0, 500.0),
 SAG_TOLERANCE = 1e-4  # of the travel: 0.01 %
 
 
+VERIFY_TOLERANCE = 0.01  # of the travel: the written file's sag against the one printed
+
+
 @dataclass
 class BikeSag:
     bike: str
     base: str
-    overrides: dict
+    overrides: dict  # what the solved bike is: the --set changes with the two solved keys
     fork_key: str
     fork_value: float
     shock_key: str
@@ -47,41 +49,177 @@ class BikeSag:
                 f"{100 * self.rear_mm / self.rear_travel_mm:.1f} % rear ({self.rear_mm:.1f} of {self.rear_travel_mm:g} mm "
                 f"of wheel travel), friction left out")
 
-    def toml(self, base: str) -> str:
-        import json
+    def table(self) -> dict:
+        """The bike as one self-contained table: :func:`written_table` of the bike and the overrides
+        it was solved with."""
+        return written_table(self.base, self.overrides)
 
-        lines = [f'description = "{self.bike} set to {100 * self.front_mm / self.front_travel_mm:.1f} % front and '
-                 f'{100 * self.rear_mm / self.rear_travel_mm:.1f} % rear sag by mtbmj sag --bike"',
-                 f"base = {json.dumps(base)}"]
-        tables: dict[str, dict] = {}
-        for key, value in self.overrides.items():
-            if key in ("fork.set", "shock.set"):
-                tables.setdefault(key, {}).update(value)
-            else:
-                section, _, name = key.partition(".")
-                tables.setdefault(section, {})[name] = value
-        tables.setdefault("fork.set", {})[self.fork_key] = round(self.fork_value, 6)
-        tables.setdefault("shock.set", {})[self.shock_key] = round(self.shock_value, 6)
-        for section, values in tables.items():
-            lines.append(f"\n[{section}]")
-            for name, value in values.items():
-                key = json.dumps(name) if "." in name else name
-                lines.append(f"{key} = {json.dumps(value)}")
-        return "\n".join(lines) + "\n"
+    def toml(self) -> str:
+        description = (f"{self.bike} set to {100 * self.front_mm / self.front_travel_mm:.1f} % front and "
+                       f"{100 * self.rear_mm / self.rear_travel_mm:.1f} % rear sag by mtbmj sag --bike "
+                       f"({self.fork_key} = {self.fork_value:.6g}, shock {self.shock_key} = {self.shock_value:.6g}); "
+                       f"every key of {self.base.encode('utf-8', 'replace').decode()} with its --set changes, its "
+                       f"bases and leverage CSV written in")
+        return toml_text({"description": description, **self.table()})
+
+    def verify(self, text: str) -> None:
+        """Load ``text`` as a bike file from a folder of its own and solve its static sag with the code
+        every run starts from: the same bike as solved, sagging within ``VERIFY_TOLERANCE`` of each
+        travel of the sag printed, or a ``ConfigError`` (one line) and nothing written."""
+        import tempfile
+        import warnings
+
+        from mtbmj.errors import MtbmjError
+
+        with tempfile.TemporaryDirectory(prefix="mtbmj-sag-") as folder, warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # its plausibility notes were given when the bike was read
+            path = Path(folder) / self.file_name
+            path.write_text(text)
+            try:
+                differs = _difference(str(path), self.base, self.overrides)
+                got = None if differs else _static(str(path), {})
+            except MtbmjError as exc:
+                raise ConfigError(f"sag: the bike file it would write does not run ({exc}); nothing written") from None
+        if differs:
+            raise ConfigError(f"sag: the bike file it would write is not the bike it solved ({differs} differs); "
+                              f"nothing written")
+        front, rear = got[0] * 1e3, got[2] * 1e3
+        for end, printed, written, travel in (("front", self.front_mm, front, self.front_travel_mm),
+                                              ("rear", self.rear_mm, rear, self.rear_travel_mm)):
+            if not abs(written - printed) <= VERIFY_TOLERANCE * travel:
+                raise ConfigError(f"sag: the bike file it would write sags {100 * written / travel:.1f} % at the {end}, "
+                                  f"not the {100 * printed / travel:.1f} % solved; nothing written")
 
     def write(self, out_dir) -> list[Path]:
+        """``OUT/BIKE_sag.toml``, checked by :meth:`verify` first: a bike file that runs as is from
+        any folder (no ``base`` and no relative path in it)."""
         from mtbmj import output
 
-        out = Path(out_dir)
-        base = self.base
-        if Path(base).suffix.lower() == ".toml":  # a file: named from the folder the new file is in
-            base = os.path.relpath(Path(base).resolve(), out.resolve())
+        text = self.toml()
+        self.verify(text)
         # named after the bike it sets (out/my_sag/my_enduro_sag.toml): its runs are named so too
-        return output.write_atomically(out, {self.file_name: self.toml(base).encode()})
+        return output.write_atomically(Path(out_dir), {self.file_name: text.encode()})
 
     @property
     def file_name(self) -> str:
         return f"{self.bike}_sag.toml"
+
+
+def _ordered(overrides: dict) -> dict:
+    """``overrides`` with ``fork.set`` and ``shock.set`` last: a ``--set shock.KEY`` of a shock as sold
+    (which sets ``[shock.set]`` keys) never overwrites a ``[shock.set]`` key given with them."""
+    out = {k: v for k, v in overrides.items() if k not in ("fork.set", "shock.set")}
+    for key in ("fork.set", "shock.set"):
+        if key in overrides:
+            out[key] = overrides[key]
+    return out
+
+
+def written_table(bike: str, overrides: dict) -> dict:
+    """The bike ``bike`` with ``overrides`` as one bike file's table that loads to the same bike from
+    any folder: its ``base`` chain merged and the overrides applied (``mtbmj.bike.spec.read_table``
+    and ``overridden``, as every run reads them), then
+
+    - a leverage CSV written in as its two lists;
+    - a fork or shock configuration file named by its absolute path;
+    - a shock's keys as sold (``[shock] spring_rate_lb_per_in``, ...) left out: they are in its
+      ``[shock.set]`` already, where a key as sold would overwrite a solved one;
+    - a geometry chart's fork keys (wheel diameter, fork travel and length) left out of ``[fork.set]``,
+      where the chart sets them (a ``--fork-set`` that gives one otherwise is refused naming both)."""
+    from mtbmj.bike import chart as chart_mod
+    from mtbmj.bike import shock as shock_mod
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.config import preset_names
+
+    table = spec_mod.overridden(spec_mod.read_table(str(bike))[0], _ordered(overrides))
+    table = {k: (dict(v) if isinstance(v, dict) else v) for k, v in table.items() if k not in ("description", "reading")}
+    lev = table.get("leverage")
+    if isinstance(lev, dict) and "csv" in lev:
+        w, r = spec_mod.read_leverage_csv(lev["csv"])
+        table["leverage"] = {**{k: v for k, v in lev.items() if k != "csv"}, "wheel_travel_mm": w, "ratio": r}
+    for section in ("fork", "shock"):
+        part = table.get(section)
+        if not isinstance(part, dict):
+            continue
+        config = part.get("config")
+        if isinstance(config, str) and not any(config.lower() == n.lower() for n in preset_names()):
+            part["config"] = str(Path(config).resolve())
+        if isinstance(part.get("set"), dict):
+            part["set"] = dict(part["set"])
+    shock = table.get("shock")
+    if isinstance(shock, dict):
+        table["shock"] = {k: v for k, v in shock.items() if k not in shock_mod.KEYS}
+    geo, fork = table.get("geometry"), table.get("fork")
+    if isinstance(geo, dict) and isinstance(fork, dict) and isinstance(fork.get("set"), dict):
+        from_chart = chart_mod.fork_keys(geo)
+        for key, value in from_chart.items():
+            if key in fork["set"] and fork["set"][key] != value:
+                chart_key = next(k for k, v in chart_mod.FORK.items() if v == key)
+                raise ConfigError(f"--fork-set {key}: this bike's geometry chart gives it (geometry.{chart_key}); "
+                                  f"set geometry.{chart_key} instead")
+        fork["set"] = {k: v for k, v in fork["set"].items() if k not in from_chart}
+    return table
+
+
+def toml_text(table: dict) -> str:
+    """``table`` (scalars, lists of scalars, nested tables) as TOML text that ``tomllib`` reads back to it."""
+    import json
+
+    def key(name) -> str:
+        name = str(name)
+        return name if name.replace("_", "").replace("-", "").isalnum() and name.isascii() else json.dumps(name)
+
+    def value(v) -> str:
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, int):
+            return str(v)
+        if isinstance(v, float):
+            if not math.isfinite(v):
+                raise ConfigError(f"sag: a value of the bike is not finite ({v!r})")
+            return repr(v)
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        raise ConfigError(f"sag: cannot write {v!r} in a bike file")
+
+    lines: list[str] = []
+
+    def emit(path: list[str], part: dict) -> None:
+        scalars = {k: v for k, v in part.items() if not isinstance(v, dict)}
+        tables = {k: v for k, v in part.items() if isinstance(v, dict)}
+        if path:
+            lines.append("")
+            lines.append("[" + ".".join(key(p) for p in path) + "]")
+        for name, v in scalars.items():
+            lines.append(f"{key(name)} = {value(v)}")
+        for name, v in tables.items():
+            emit(path + [name], v)
+
+    emit([], table)
+    return "\n".join(lines) + "\n"
+
+
+def _difference(written: str, bike: str, overrides: dict) -> str | None:
+    """The first part in which the bike file ``written`` differs from ``bike`` with ``overrides``
+    (None: the same bike, configurations compared by their values)."""
+    import dataclasses
+
+    from mtbmj.bike import run as bike_run
+    from mtbmj.bike import spec as spec_mod
+
+    specs = [spec_mod.load(written), spec_mod.load(str(bike), _ordered(overrides))]
+    setups = [bike_run.setups(s) for s in specs]
+    for name, (a, b) in (("the fork's configuration", (setups[0][0], setups[1][0])),
+                         ("the shock's configuration", (setups[0][1], setups[1][1]))):
+        if a.config.digest() != b.config.digest():
+            return name
+    skip = {"name", "source", "overrides", "fork_config", "shock_config"}
+    for f in dataclasses.fields(specs[0]):
+        if f.name not in skip and getattr(specs[0], f.name) != getattr(specs[1], f.name):
+            return f.name
+    return None
 
 
 def _static(bike: str, overrides: dict) -> tuple[float, float, float, float]:
@@ -108,7 +246,7 @@ def solve(bike: str, front_percent: float, rear_percent: float, overrides: dict 
         if not (isinstance(value, (int, float)) and math.isfinite(value) and 0.0 < value < 100.0):
             raise ConfigError(f"{name}: must be within 0-100 %, got {value!r}")
     overrides = dict(overrides or {})
-    spec = spec_mod.load(str(bike), overrides)
+    spec = spec_mod.load(str(bike), _ordered(overrides))
     fork_setup, shock_setup = bike_run.setups(spec)
     keys = []
     for end, setup in (("fork", fork_setup), ("shock", shock_setup)):
@@ -120,13 +258,17 @@ def solve(bike: str, front_percent: float, rear_percent: float, overrides: dict 
     (sk, slo, shi), s0 = keys[1]
     target = (front_percent / 100.0, rear_percent / 100.0)
 
+    def solved(fv, sv) -> dict:  # the overrides with the two settings, applied after every other key
+        ov = _ordered(overrides)
+        ov["fork.set"] = {**ov.get("fork.set", {}), fk: fv}
+        ov["shock.set"] = {**ov.get("shock.set", {}), sk: sv}
+        return ov
+
     def trial(u):
         fv, sv = f0 * math.exp(u[0]), s0 * math.exp(u[1])  # positive, and scaled alike
         if not (flo <= fv <= fhi and slo <= sv <= shi):
             return None, (fv, sv)
-        ov = dict(overrides)
-        ov["fork.set"] = {**ov.get("fork.set", {}), fk: fv}
-        ov["shock.set"] = {**ov.get("shock.set", {}), sk: sv}
+        ov = solved(fv, sv)
         import warnings
 
         with warnings.catch_warnings():
@@ -149,5 +291,5 @@ def solve(bike: str, front_percent: float, rear_percent: float, overrides: dict 
     if got is None or max(abs(r) for r in residual(sol.x)) > SAG_TOLERANCE:
         raise ConfigError(f"sag: no setting of {fk} within {flo:g}-{fhi:g} and {sk} within {slo:g}-{shi:g} gives "
                           f"{front_percent:g} % front and {rear_percent:g} % rear sag")
-    return BikeSag(spec.name, str(bike), overrides, fk, fv, sk, sv, got[0] * 1e3, got[1] * 1e3, got[2] * 1e3,
+    return BikeSag(spec.name, str(bike), solved(fv, sv), fk, fv, sk, sv, got[0] * 1e3, got[1] * 1e3, got[2] * 1e3,
                    got[3] * 1e3)

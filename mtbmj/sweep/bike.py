@@ -11,12 +11,15 @@ the tyre-load variation over the feature, the crash) and the status.
 
 Given an output folder, each variant's row is journaled as it finishes (``OUT/journal/``, the drop
 sweeps' ``mtbmj.sweep.runner.Journal``), keyed by a digest of everything that makes it (the bike
-file's table, terrain, speed, duration, the common overrides and the variant); ``resume`` takes the
+file's table, terrain, speed, duration, the common overrides, the variant, and the content of every
+file these name: the bike file and its bases, a leverage CSV, the fork's and shock's configuration
+files, a terrain CSV; :func:`journal_recipe`); ``resume`` takes the
 rows the journal holds and runs the rest, so a run killed at any point and resumed writes the table
 an uninterrupted run writes, byte for byte.
 """
 from __future__ import annotations
 
+import copy
 import json
 from pathlib import Path
 
@@ -79,6 +82,50 @@ def variant_id(recipe: dict, variant: dict) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
+def journal_recipe(bike: str, scenario: str, speed: float, duration: float | None = None,
+                   base: dict | None = None) -> dict:
+    """What every variant of a sweep is made of, the part of its journal key (:func:`variant_id`) the
+    variants share: the bike file's table with its ``base`` chain merged in (``read_table``), the
+    terrain, speed, duration and common overrides, and the content (SHA-256) of every file these
+    name (``mtbmj.sweep.variants.files_digest``): the bike file and its bases, a leverage CSV, the
+    fork's and the shock's configuration files with their bases, a terrain CSV. A file edited
+    between two ``--resume`` runs gives its variants new keys, so they are computed again."""
+    from mtbmj.bike.spec import read_table
+    from mtbmj.sweep.variants import files_digest
+
+    table = read_table(str(bike))[0]
+    base = base or {}
+    return {"bike": table, "scenario": scenario, "speed": speed, "duration": duration, "base": base,
+            "files": files_digest([str(bike), table, scenario, base])}
+
+
+def check(bike: str, scenario: str, variants: list[dict], base: dict | None = None) -> None:
+    """Before any variant runs, what every variant shares, refused in one line naming its cause: the
+    terrain (built as each run builds it), the bike with the common overrides (its fork's and shock's
+    configurations read), the first variant's keys placed on it (a key the bike does not have, a frame
+    key of a bike given by its chart), and each varied key a number where this bike holds it. A value a
+    single variant cannot take (a negative mass) is that variant's failure, recorded with its reason."""
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.bike.run import setups
+    from mtbmj.rolling import terrain
+
+    terrain.make(scenario)
+    fork, shock = setups(spec_mod.load(str(bike), base))
+    table = spec_mod.read_table(str(bike))[0]
+    spec_mod.overridden(copy.deepcopy(table), overrides_of(variants[0], base))  # where its keys go
+    table = spec_mod.overridden(table, base)
+    for key in variants[0]:
+        if key.startswith(("fork:", "shock:")):
+            end, _, name = key.partition(":")
+            held = (fork if end == "fork" else shock).config.values.get(name)
+        else:
+            section, _, name = key.partition(".")
+            part = table.get(section)
+            held = part.get(name) if isinstance(part, dict) else None
+        if held is not None and (isinstance(held, bool) or not isinstance(held, (int, float))):
+            raise ConfigError(f"--vary {key}: not a number on this bike (it is {held!r}); a sweep varies a number")
+
+
 def run(bike: str, scenario: str, speed: float, variants: list[dict], duration: float | None = None,
         base: dict | None = None, progress=None, out_dir=None, resume: bool = False):
     """The sweep's table (a ``pandas.DataFrame``, one row per variant, in order); with ``out_dir``
@@ -88,7 +135,6 @@ def run(bike: str, scenario: str, speed: float, variants: list[dict], duration: 
     import pandas as pd
 
     from mtbmj.bike.run import run_bike
-    from mtbmj.bike.spec import read_table
     from mtbmj.sweep.runner import Journal
 
     if not variants:
@@ -96,13 +142,13 @@ def run(bike: str, scenario: str, speed: float, variants: list[dict], duration: 
     for key in variants[0]:
         if not (key.startswith(("fork:", "shock:")) or "." in key):
             raise ConfigError(f"--vary {key}: a bike sweep varies a bike key (rider.mass_kg) or fork:KEY / shock:KEY")
+    check(bike, scenario, variants, base)
     journal = Journal(Path(out_dir)) if out_dir is not None else None
     known = {} if journal is None else journal.records()
     if known and not resume:
         raise MtbmjError(f"{out_dir}: holds the journal of a sweep ({len(known)} variants); pass --resume to "
                          f"continue it, or choose another --out")
-    recipe = {"bike": read_table(str(bike))[0], "scenario": scenario, "speed": speed, "duration": duration,
-              "base": base or {}}
+    recipe = journal_recipe(bike, scenario, speed, duration, base)
     rows = []
     for i, variant in enumerate(variants):
         vid = variant_id(recipe, variant)

@@ -18,7 +18,7 @@ import numpy as np
 
 from mtbmj.config import SCHEMA, Config, check_value
 from mtbmj.readout.endtravel import TABLE_COLUMNS as END_OF_TRAVEL_COLUMNS
-from mtbmj.errors import ConfigError
+from mtbmj.errors import ConfigError, MtbmjError
 from mtbmj.textfile import read_text
 
 if sys.version_info >= (3, 11):
@@ -130,7 +130,7 @@ def grid(ranges: Sequence[Range]) -> list[dict[str, float]]:
     if not ranges:
         raise ConfigError("--vary: no ranges given")
     _unique_keys(ranges)
-    count = math.prod(len(r.values()) for r in ranges)
+    count = math.prod(r.n or 2 for r in ranges)  # counted before any value is made (n = 1e11 is refused, not allocated)
     if count > MAX_VARIANTS:
         raise ConfigError(f"--vary: the grid has {count:.3g} variants, more than the {MAX_VARIANTS} a sweep may plan")
     keys = [r.key for r in ranges]
@@ -278,6 +278,59 @@ def variant_id(config: Config, overrides: Mapping[str, Any], engine: str = "mujo
     payload = {"config": config.digest() if digest is None else digest, "engine": engine, "duration": duration,
                "overrides": {k: canonical_value(k, overrides[k]) for k in sorted(overrides)}}
     return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def named_files(values: Any) -> list[Path]:
+    """The regular files a string anywhere in ``values`` (nested dicts, lists and tuples) names, as
+    their resolved paths, sorted, each once; a TOML configuration's ``base`` chain with it (read by
+    :func:`mtbmj.config.read_chain`). A string naming no file (a preset, a terrain spec, a word) is
+    no file; a FIFO or device is none either (the run refuses it, the key does not wait on it)."""
+    from mtbmj.config import read_chain
+
+    found: dict[Path, None] = {}
+
+    def add(path: Path) -> None:
+        try:
+            if not path.is_file():
+                return
+            real = path.resolve()
+        except (OSError, ValueError, RuntimeError):  # a NUL byte, a name too long, a link loop
+            return
+        if real in found:
+            return
+        found[real] = None
+        if real.suffix.lower() == ".toml":  # a configuration (fork.config, shock.config): its bases too
+            try:
+                chain = read_chain(str(real))
+            except (MtbmjError, OSError, ValueError, RecursionError):
+                return  # the run refuses it with its own line; the key holds the file itself
+            for _, location, _ in chain:
+                if isinstance(location, Path):
+                    add(location)
+
+    def walk(value: Any) -> None:
+        if isinstance(value, str):
+            if value and len(value) < 4096:
+                add(Path(value))
+        elif isinstance(value, Mapping):
+            for item in value.values():
+                walk(item)
+        elif isinstance(value, (list, tuple)):
+            for item in value:
+                walk(item)
+
+    walk(values)
+    return sorted(found)
+
+
+def files_digest(values: Any) -> dict[str, str]:
+    """``{path: SHA-256 of its bytes}`` of every file :func:`named_files` finds in ``values``: what a
+    journal key holds so that a variant is computed again when a file it reads was edited (a bike
+    sweep's terrain CSV, leverage CSV, fork or shock configuration), however its name stayed."""
+    from mtbmj.textfile import read_bytes
+
+    return {str(path): hashlib.sha256(read_bytes(path, ConfigError, str(path), "record")).hexdigest()
+            for path in named_files(values)}
 
 
 @dataclass(frozen=True)
