@@ -339,14 +339,32 @@ def decoding(args) -> dict:
             **extra}
 
 
+def travel_keys(args) -> tuple[str, str]:
+    """What the fork travel and the shock stroke a ride is read with were set by (``decoding``), as
+    a refusal names them: --fork-max-mm, the --bike's key, or the default (the SST example's bike)."""
+    keys = []
+    for option, attr, bike_key, default in (
+            ("--fork-max-mm", "fork_max_mm", "geometry.fork_travel_mm", telemetry.FORK_TRAVEL_MAX_MM),
+            ("--shock-max-mm", "shock_max_mm", "shock.stroke_mm", telemetry.SHOCK_STROKE_MAX_MM)):
+        if getattr(args, attr, None) is not None:
+            keys.append(option)
+        elif getattr(args, "bike", None) is not None:
+            keys.append(f"{bike_key} of --bike {args.bike}")
+        else:
+            keys.append(f"{option} default {default:g}, the SST example's bike; give --bike")
+    return keys[0], keys[1]
+
+
 def ride_record(ride, args):
     """The ride a command names (a recording or travel CSV, or "example": the shipped SST ride)
-    decoded through ``decoding(args)``, its quality warnings issued."""
+    decoded through ``decoding(args)``; refused when it travels past the travel it is read with
+    (``telemetry.beyond_travel``), else its quality warnings issued."""
     from mtbmj.config import warn
 
     path = telemetry.example_path() if str(ride) == "example" else ride
     record = telemetry.read_ride(path, **decoding(args))
-    warn(telemetry.quality(record))
+    beyond = telemetry.beyond_travel(record, *travel_keys(args))
+    warn(telemetry.quality(record) + beyond)
     return record
 
 

@@ -32,6 +32,9 @@ HIGH_PASS_HZ = 0.7
 ON_BIKE_MM = 2.0
 TRIM_S = 2.0
 MIN_STRETCH_S = 4.0
+# The band-pass reaches 1.6 times the bob's frequency, up to 5 Hz: 8 Hz, which a record must
+# sample at more than twice (its Nyquist frequency) with room for the filter: 20 Hz at least.
+MIN_RATE_HZ = 20.0
 
 
 class BobError(MtbmjError):
@@ -112,7 +115,12 @@ def _high_passed(t, x, window_s):
 
     keep = (t >= window_s[0]) & (t <= window_s[1])
     t, x = t[keep], x[keep]
+    if t.size < 2:
+        raise BobError(f"bob: no samples in the stretch {window_s[0]:.1f}-{window_s[1]:.1f} s")
     fs = 1.0 / float(np.median(np.diff(t)))
+    if not (np.isfinite(fs) and fs >= MIN_RATE_HZ):
+        raise BobError(f"bob: a sample rate of {fs:g} Hz is too slow to read a bob of up to {BAND_HZ[1]:g} Hz "
+                       f"({MIN_RATE_HZ:g} Hz at least)")
     y = signal.sosfiltfilt(signal.butter(2, HIGH_PASS_HZ, btype="highpass", fs=fs, output="sos"), x - x.mean())
     return t, x, y, fs
 

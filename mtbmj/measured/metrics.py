@@ -84,6 +84,11 @@ def velocity(time_s, travel_mm, window_s: float = VELOCITY_WINDOW_S, polyorder: 
     if len(np.asarray(time_s).ravel()) != x.size:
         raise MetricsError("time_s and travel_mm differ in length")
     window = int(round(_positive(window_s, "window_s") / dt)) | 1  # odd
+    if window <= polyorder:  # the sampling, not the record's length, is short of samples
+        need = polyorder + 2 if (polyorder + 2) % 2 else polyorder + 1
+        raise MetricsError(f"time_s: a sample every {dt:g} s ({1.0 / dt:g} Hz) puts {window} in the velocity's "
+                           f"{1e3 * window_s:g} ms window, fewer than the {need} a polynomial of order {polyorder} "
+                           f"needs ({need / window_s:.0f} Hz or more)")
     window = min(window, x.size if x.size % 2 else x.size - 1)
     if window <= polyorder:
         raise MetricsError(f"travel_mm: {x.size} samples are too few for a polynomial of order {polyorder}")

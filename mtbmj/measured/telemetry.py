@@ -60,6 +60,23 @@ class TelemetryError(MtbmjError):
     """A telemetry file cannot be read: names the file and the cause."""
 
 
+# What a suspension logger records at: Sufni's v3 files at 1000 Hz, its v2 files at 5000 Hz. Below
+# 100 Hz the velocity's 51 ms Savitzky-Golay window (``ride.metrics``) holds fewer than the 5
+# samples its cubic needs and a 1-5 Hz pedal bob is a few samples a stroke; above 20 kHz (four
+# times the fastest recording known) a rate is a damaged header or a time column in other units.
+SAMPLE_RATE_HZ = (100.0, 20000.0)
+
+
+def check_sample_rate(rate: float, where: str) -> float:
+    """``rate`` (Hz) if a suspension logger records at it (``SAMPLE_RATE_HZ``), else one
+    ``TelemetryError`` line naming ``where`` it came from."""
+    low, high = SAMPLE_RATE_HZ
+    if not (math.isfinite(rate) and low <= rate <= high):
+        raise TelemetryError(f"{where} gives a sample rate of {rate:g} Hz, outside what a suspension logger records "
+                             f"({low:g}-{high:g} Hz)")
+    return float(rate)
+
+
 @dataclass(frozen=True)
 class IsoscelesTriangle:
     """Front sensor "as5600-isosceles-triangle": two equal arms, the fork stroke as the base."""
@@ -207,6 +224,7 @@ class TelemetryRecord:
     rear_max_mm: float = field(default=float("nan"))
     counts: np.ndarray | None = field(default=None, repr=False)  # raw (n, 2) uint16
     notes: tuple = ()  # what a reader of the record should know (a version-2 file: approximate amplitudes)
+    columns: tuple = ()  # a travel CSV's travel columns as its header names them (fork_mm, shock_mm, rear_mm)
 
     @property
     def duration_s(self) -> float:
@@ -269,6 +287,7 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
         timestamp = 0
     if rate == 0:
         raise TelemetryError(f"{name}: sample rate is 0 Hz in the header")
+    check_sample_rate(rate, f"{name}: the header")
     for label, value in (("fork_max_mm", fork_max_mm), ("shock_max_mm", shock_max_mm)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise TelemetryError(f"{name}: {label} must be a positive number of mm, got {value!r}")
@@ -287,6 +306,10 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
             if bad.size:
                 raise TelemetryError(f"{name}: {label} count {int(counts[bad[0], column])} at sample {int(bad[0])} "
                                      f"is outside 0..{limits[column]}")
+    moving = [int(np.ptp(counts[:, k])) > 0 for k in (0, 1) if present[k]]
+    if not any(moving):
+        held = ", ".join(f"{label} count {int(counts[0, k])}" for k, label in ((0, "fork"), (1, "shock")) if present[k])
+        raise TelemetryError(f"{name}: no sensor moved ({held} over all {n} samples): missing or stuck, nothing to read")
     if version == 3:
         fork = front.travel_mm(counts[:, 0]) if present[0] else None
         shock = rear.stroke_mm(counts[:, 1]) if present[1] else None
@@ -360,10 +383,20 @@ def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
         i = int(off[0])
         raise TelemetryError(f"{name}: line {rows[i + 2][0]}: time_s steps {dt[i]:g} s where the record steps "
                              f"{step:g} s (a uniform time grid is needed)")
+    _check_csv_time(name, step)
     for label, value in (("fork_max_mm", fork_max_mm), ("shock_max_mm", shock_max_mm)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
             raise TelemetryError(f"{name}: {label} must be a positive number of mm, got {value!r}")
     column = {h: values[:, j] for j, h in enumerate(header)}
+    travel_max = {"fork_mm": float(fork_max_mm), "shock_mm": float(shock_max_mm),
+                  "rear_mm": float(leverage.wheel_travel_mm(shock_max_mm))}
+    travel_columns = tuple(h for h in header if h != "time_s")
+    for h in travel_columns:
+        _check_csv_travel(name, h, column[h], travel_max[h])
+    if all(np.ptp(column[h]) == 0.0 for h in travel_columns):
+        held = ", ".join(f"{h} {column[h][0]:g}" for h in travel_columns)
+        raise TelemetryError(f"{name}: no column moved ({held} mm over all {t.size} samples): a missing or stuck "
+                             f"sensor, nothing to read")
     fork, shock, rear = column.get("fork_mm"), column.get("shock_mm"), column.get("rear_mm")
     if rear is None and shock is not None:
         rear = leverage.wheel_travel_mm(shock)
@@ -374,7 +407,48 @@ def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
         path=name, version=0, sample_rate_Hz=rate, timestamp=0, time_s=np.arange(t.size) / rate, fork_mm=fork,
         shock_mm=shock, rear_mm=rear, fork_max_mm=float(fork_max_mm), shock_max_mm=float(shock_max_mm),
         rear_max_mm=float(leverage.wheel_travel_mm(shock_max_mm)), notes=("a travel CSV (version 0): the logger's own "
-                                                                            "calibration",))
+                                                                            "calibration",),
+        columns=travel_columns)
+
+
+MILLI = 1000.0
+
+
+def _check_csv_time(name: str, step: float) -> None:
+    """A travel CSV's time step as a suspension logger's (``SAMPLE_RATE_HZ``), or one line naming
+    time_s, its step, and the unit it most likely is in (milliseconds where seconds are read)."""
+    rate = 1.0 / step
+    low, high = SAMPLE_RATE_HZ
+    if low <= rate <= high:
+        return
+    hint = ""
+    if low <= rate * MILLI <= high:
+        hint = f": time in milliseconds? (time_s is in seconds: {rate * MILLI:g} Hz if so)"
+    elif low <= rate / MILLI <= high:
+        hint = f": time in kiloseconds? ({rate / MILLI:g} Hz if so)"
+    raise TelemetryError(f"{name}: time_s steps {step:g} s, a sample rate of {rate:g} Hz, outside what a suspension "
+                         f"logger records ({low:g}-{high:g} Hz){hint}")
+
+
+METRES_MM = 1.0  # a travel column all within +-1 mm: no ride moves a suspension so little; metres, read as mm
+FLIPPED_PERCENT = 5.0  # below -5 % of the travel: not a sensor's offset at full extension, but rebound read as compression
+
+
+def _check_csv_travel(name: str, column: str, values: np.ndarray, travel_max_mm: float) -> None:
+    """One ``TelemetryError`` line naming the column and the evidence for a travel column in metres
+    (moving, but never beyond +-1 mm) or sign-flipped (more than half of it below -5 % of its
+    travel). A constant column (a stuck sensor) is said by ``quality``."""
+    span = float(np.ptp(values))
+    largest = float(np.max(np.abs(values)))
+    if 0.0 < span and largest <= METRES_MM:
+        raise TelemetryError(f"{name}: {column} never leaves +-{METRES_MM:g} (largest {largest:.4g}, over "
+                             f"{values.size} samples): metres? (the column is mm of travel)")
+    floor = -FLIPPED_PERCENT / 100.0 * travel_max_mm
+    below = float(np.mean(values < floor))
+    if below > 0.5:
+        raise TelemetryError(f"{name}: {column} is below {floor:.1f} mm for {100 * below:.0f} % of the samples "
+                             f"(down to {float(np.min(values)):.1f} mm): sign-flipped? (travel is mm from full "
+                             f"extension, compression positive)")
 
 
 def read_ride(path: str | Path, **decoding) -> TelemetryRecord:
@@ -404,6 +478,14 @@ def quality(record: TelemetryRecord) -> list[str]:
         if counts is not None and int(counts.max()) == int(counts.min()):
             out.append(f"{record.name}: the {label} sensor never moved: missing or stuck; its end's metrics say nothing")
             continue
+        # a travel CSV: the column its end was given as (the rear as rear_mm or shock_mm)
+        given = [c for c in record.columns if c == f"{label}_mm" or (label == "shock" and c == "rear_mm")]
+        held = [c for c in given if np.ptp(getattr(record, c)) == 0.0]
+        if held:
+            c = held[0]
+            out.append(f"{record.name}: {c} is constant at {float(getattr(record, c)[0]):g} mm over all "
+                       f"{record.time_s.size} samples: a missing or stuck sensor; its end's metrics say nothing")
+            continue
         if counts is not None and record.version == 3:
             # count 0 is full extension (topped out, a normal place to be); the encoder's last count
             # is where a sensor that runs out of range stays
@@ -411,6 +493,42 @@ def quality(record: TelemetryRecord) -> list[str]:
             if at_end > SATURATED_FRACTION:
                 out.append(f"{record.name}: the {label} sensor sits at the end of its range for {100 * at_end:.1f} % "
                            f"of the ride: saturated (its calibration or mounting?)")
+    return out
+
+
+TRAVEL_MARGIN_PERCENT = 5.0  # a calibrated record (v3, a CSV) may read this far past the bike's travel
+# A version-2 record's amplitudes rest on the recording project's placeholder calibration: the
+# shipped 00100.SST reads its own bike's 180 mm fork to 191 mm (6 % beyond); up to this far past,
+# the record is read with a warning, beyond it refused like any other.
+V2_TRAVEL_MARGIN_PERCENT = 15.0
+
+
+def beyond_travel(record: TelemetryRecord, fork_key: str = "fork_max_mm", shock_key: str = "shock_max_mm") -> list[str]:
+    """The record against the travel it is read with (``fork_max_mm``, ``shock_max_mm``, named in
+    messages as ``fork_key``/``shock_key``: the key the user set): a fork or shock that travels
+    further than ``TRAVEL_MARGIN_PERCENT`` past it is another bike's ride (or another calibration),
+    and every percentage of travel, bottom-out count and reconstruction from it would be false, so
+    it is one ``TelemetryError`` line. A version-2 record within ``V2_TRAVEL_MARGIN_PERCENT`` gets a
+    warning (returned) instead: its amplitudes are known approximate."""
+    out = []
+    for label, travel, limit, key in (("fork", record.fork_mm, record.fork_max_mm, fork_key),
+                                      ("shock", record.shock_mm, record.shock_max_mm, shock_key)):
+        if travel is None:
+            continue
+        deepest = float(np.max(travel))
+        over = 100.0 * (deepest / limit - 1.0)
+        if over <= TRAVEL_MARGIN_PERCENT:
+            continue
+        wheel = f" (rear wheel {float(np.max(record.rear_mm)):.1f} mm)" if label == "shock" and \
+            record.rear_mm is not None else ""
+        what = (f"{record.name}: the {label} {'travels' if label == 'fork' else 'strokes'} {deepest:.1f} mm{wheel}, "
+                f"{over:.1f} % beyond {limit:g} mm ({key})")
+        if record.version == 2 and over <= V2_TRAVEL_MARGIN_PERCENT:
+            out.append(f"{what}: within the version-2 calibration's uncertainty; its percentages of travel are "
+                       f"approximate")
+            continue
+        raise TelemetryError(f"{what}: a ride of another bike or another calibration; read it with the recorded "
+                             f"bike's travel")
     return out
 
 

@@ -391,7 +391,9 @@ class Advice:
         import io
 
         buf = io.BytesIO()
-        self.figure().savefig(buf, format="png", dpi=90)
+        from mtbmj.readout.quicklook import plain_text  # a file or bike name with "$" drawn as written
+
+        plain_text(self.figure()).savefig(buf, format="png", dpi=90)
         return buf.getvalue()
 
     def html(self, png: bytes) -> str:

@@ -83,7 +83,9 @@ class Against:
         from mtbmj import output
 
         buf = io.BytesIO()
-        self.figure().savefig(buf, format="png", dpi=100)
+        from mtbmj.readout.quicklook import plain_text  # a file or bike name with "$" drawn as written
+
+        plain_text(self.figure()).savefig(buf, format="png", dpi=100)
         return output.write_atomically(out_dir, {"bob.json": (json.dumps(self.to_dict(), indent=2) + "\n").encode(),
                                                  "bob.png": buf.getvalue()})
 

@@ -426,7 +426,9 @@ class Reconstruction:
         from mtbmj import output
 
         buf = io.BytesIO()
-        self.figure().savefig(buf, format="png", dpi=100)
+        from mtbmj.readout.quicklook import plain_text  # a file or bike name with "$" drawn as written
+
+        plain_text(self.figure()).savefig(buf, format="png", dpi=100)
         series = output.csv_bytes({"time_s": self.t, "fork_mm": self.front, "fork_again_mm": self.front_again,
                                    "rear_mm": self.rear, "rear_predicted_mm": self.rear_predicted,
                                    "checked": self.valid.astype(int)})
