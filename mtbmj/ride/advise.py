@@ -388,13 +388,9 @@ class Advice:
         return fig
 
     def png(self) -> bytes:
-        import io
+        from mtbmj.readout import quicklook  # the one figure writer: a "$" in a name drawn as written
 
-        buf = io.BytesIO()
-        from mtbmj.readout.quicklook import plain_text  # a file or bike name with "$" drawn as written
-
-        plain_text(self.figure()).savefig(buf, format="png", dpi=90)
-        return buf.getvalue()
+        return quicklook.png(self.figure(), dpi=90)
 
     def html(self, png: bytes) -> str:
         import base64

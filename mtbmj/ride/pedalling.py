@@ -77,17 +77,13 @@ class Against:
         return fig
 
     def write(self, out_dir) -> list:
-        import io
         import json
 
         from mtbmj import output
+        from mtbmj.readout import quicklook  # the one figure writer: a "$" in a name drawn as written
 
-        buf = io.BytesIO()
-        from mtbmj.readout.quicklook import plain_text  # a file or bike name with "$" drawn as written
-
-        plain_text(self.figure()).savefig(buf, format="png", dpi=100)
         return output.write_atomically(out_dir, {"bob.json": (json.dumps(self.to_dict(), indent=2) + "\n").encode(),
-                                                 "bob.png": buf.getvalue()})
+                                                 "bob.png": quicklook.png(self.figure(), dpi=100)})
 
 
 CADENCE_TOLERANCE = 0.02  # the run's cadence over its stretch within 2 % of the record's, or the climb is set again

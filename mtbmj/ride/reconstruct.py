@@ -420,20 +420,17 @@ class Reconstruction:
         return fig
 
     def write(self, out_dir) -> list:
-        import io
         import json
 
         from mtbmj import output
+        from mtbmj.readout import quicklook  # the one figure writer: a "$" in a name drawn as written
 
-        buf = io.BytesIO()
-        from mtbmj.readout.quicklook import plain_text  # a file or bike name with "$" drawn as written
-
-        plain_text(self.figure()).savefig(buf, format="png", dpi=100)
+        png = quicklook.png(self.figure(), dpi=100)
         series = output.csv_bytes({"time_s": self.t, "fork_mm": self.front, "fork_again_mm": self.front_again,
                                    "rear_mm": self.rear, "rear_predicted_mm": self.rear_predicted,
                                    "checked": self.valid.astype(int)})
         return output.write_atomically(out_dir, {"terrain.csv": self.terrain_csv(), "series.csv": series,
-                                                 "reconstruction.png": buf.getvalue(),
+                                                 "reconstruction.png": png,
                                                  "reconstruction.json": (json.dumps(self.summary(), indent=2) + "\n").encode()})
 
 
