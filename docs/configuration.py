@@ -341,6 +341,9 @@ def markdown() -> str:
         "builds; a preset may choose otherwise, see `mtbmj presets --show NAME`), or *none*; the meaning",
         "names a default the code takes when a key is left out. *valid*: what is refused otherwise (a",
         "model may refuse more, such as a knee outside the travel). *plausible*: outside it, a warning.",
+        "Every number, of this schema and of a bike file alike, passes one gate first (`mtbmj/limits.py`):",
+        "NaN, infinity, an integer too large for a float (1 followed by 400 zeros) and a value beyond 1e30",
+        "in its unit are refused in one line naming the key, before any value is used.",
         "",
     ]
     section = None
@@ -388,7 +391,9 @@ def bike_section() -> list[str]:
         "head angle and offset come from its `[geometry]` chart, its seated rider from the chart's saddle).",
         "*plausible*: outside it, a warning; a point's",
         "range is given for x and for z. Geometry given in metres (every axle and pivot coordinate below 3)",
-        "is refused naming the keys; a point more than 5 m from the bottom bracket is refused.",
+        "is refused naming the keys; a point more than 5 m from the bottom bracket is refused. Every number",
+        "of the file, its bases and `--set` passes the gate of section 5 before any is used (NaN, infinity,",
+        "a huge integer and a value beyond 1e30 refused in one line naming the key and the file).",
         "",
         "| key | default | valid | plausible | meaning |",
         "|---|---|---|---|---|",

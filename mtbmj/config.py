@@ -18,7 +18,6 @@ from __future__ import annotations
 import difflib
 import hashlib
 import json
-import math
 import sys
 import warnings as _warnings
 from dataclasses import dataclass, field
@@ -31,7 +30,8 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-from mtbmj.errors import ConfigError
+from mtbmj import limits
+from mtbmj.errors import ConfigError, ConfigWarning  # ConfigWarning: a value far outside what any bike has
 from mtbmj.textfile import read_text
 
 # kinds: "pos" > 0, "nonneg" >= 0, "real" any finite number, "list" of finite numbers, "rows" a
@@ -231,26 +231,16 @@ def check_value(key: str, value: Any) -> Any:
         if not isinstance(value, (list, tuple)) or not value or not all(
                 isinstance(row, (list, tuple)) and all(_is_number(v) for v in row) for row in value):
             raise ConfigError(f"{key}: must be a list of lists of numbers (one list per row)")
-        if not all(math.isfinite(v) for row in value for v in row):
-            raise ConfigError(f"{key}: contains NaN or infinity")
-        return tuple(tuple(float(v) for v in row) for row in value)
+        return tuple(tuple(limits.number(key, v) for v in row) for row in value)
     if kind == "list":
         if not isinstance(value, (list, tuple)) or not all(_is_number(v) for v in value):
             raise ConfigError(f"{key}: must be a list of numbers")
         if len(value) > MAX_LIST:
             raise ConfigError(f"{key}: more than {MAX_LIST} values")
-        if not all(_is_finite(v) for v in value):
-            raise ConfigError(f"{key}: contains NaN, infinity or a number too large")
-        return tuple(float(v) for v in value)
+        return tuple(limits.number(key, v) for v in value)
     if isinstance(value, str):
         raise ConfigError(f"{key}: must be a plain number (the unit is in the key name), got {value!r}")
-    if not _is_number(value):
-        raise ConfigError(f"{key}: must be a number, got {value!r}")
-    if not _is_finite(value):
-        raise ConfigError(f"{key}: must be finite, got {value if isinstance(value, float) else 'a number too large'}")
-    value = float(value)
-    if abs(value) > MAX_MAGNITUDE:
-        raise ConfigError(f"{key}: {value:g} is beyond any physical fork or sled (at most {MAX_MAGNITUDE:g} in its unit)")
+    value = limits.number(key, value)  # the numeric-input gate: finite, fits a float, within MAX_MAGNITUDE
     if kind == "pos" and value <= 0.0:
         raise ConfigError(f"{key}: must be positive, got {value:g}")
     if kind == "nonneg" and value < 0.0:
@@ -264,17 +254,10 @@ def _is_number(value: Any) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
-def _is_finite(value: int | float) -> bool:
-    try:
-        return math.isfinite(float(value))
-    except OverflowError:  # an integer beyond the float range
-        return False
-
-
 MAX_LIST = 10_000  # values in a list key (a damper table)
 # No key's value is anywhere near this in its unit (N/mm, kg, mm, s); beyond it MuJoCo's model
 # becomes singular (a 1e200 kg wheel) and it prints its own warnings before failing.
-MAX_MAGNITUDE = 1e30
+MAX_MAGNITUDE = limits.MAX_MAGNITUDE
 
 
 # --- keys a rider gives in other terms -----------------------------------------------------------
@@ -398,12 +381,6 @@ MISTAKES: dict[str, tuple[tuple[str, float], ...]] = {
 # The tire's pressure-to-rate relation rests on measurements from 15 to 25 psi (Dressel & Sadauckas
 # 2020, secondhand; mtbmj.controllers.tire.PRESSURE_RANGE): outside it the rates are extrapolated.
 TIRE_PRESSURE_MEASURED_PSI = (15.0, 25.0)
-
-
-class ConfigWarning(UserWarning):
-    """A configuration value far outside what any bike or sled has (most likely a unit mistake),
-    or outside the range a model rests on. The run proceeds; ``Config.warnings`` holds the same
-    text, and the command line prints each as one ``mtbmj: warning:`` line."""
 
 
 def plausibility(key: str, value: Any) -> str | None:

@@ -35,6 +35,36 @@ class RunError(MtbmjError):
     """A run diverged (NaN, a MuJoCo warning) or could not be completed."""
 
 
+class ConfigWarning(UserWarning):
+    """A value far outside what any bike or sled has (most likely a unit mistake), or outside the
+    range a model rests on: a configuration or bike key, or a command's numeric argument. The run
+    proceeds; the command line prints each as one ``mtbmj: warning:`` line (``mtbmj.config``
+    re-exports it)."""
+
+
+@contextlib.contextmanager
+def diverging(rig: str, until=None):
+    """The block steps a run of ``rig``: a floating-point overflow, division by zero or invalid
+    operation in numpy there means the run left the model's envelope, and ends it as one
+    ``RunError`` line ("drop run diverged (overflow encountered in multiply)"; with ``until``, a
+    function giving the time in s the stretch being stepped ends at, "drop run diverged before
+    t = 0.1234 s: a numerical overflow or invalid value (overflow encountered in multiply)"). Only the
+    stepping of a run is so guarded, never a fit or a reader, where a library may meet and
+    handle such a value itself. numpy's error state is per thread (and context), so a guarded
+    run leaves other threads alone; a ``RuntimeWarning`` a caller's own filter made an error in
+    the block is reported the same way."""
+    import numpy as np
+
+    try:
+        with np.errstate(over="raise", divide="raise", invalid="raise"):
+            yield
+    except (FloatingPointError, RuntimeWarning) as exc:
+        if until is None:
+            raise RunError(f"{rig} run diverged ({exc})") from None
+        raise RunError(f"{rig} run diverged before t = {until():.4f} s: a numerical overflow or invalid value "
+                       f"({exc})") from None
+
+
 _interrupt = {"interrupted": False, "active": False}
 
 

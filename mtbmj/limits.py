@@ -66,3 +66,174 @@ def check_run(duration: float, timestep: float, sample_rate_Hz: float, label: st
                           f"{f' x {runs} runs' if runs > 1 else ''}, needing about {size_text(need)} of memory; "
                           f"{size_text(have)} is available (shorten the duration or lengthen solver.timestep_s)")
     return int(round(steps))
+
+
+# --- the numeric-input gate -------------------------------------------------------------------------
+# Every number a user gives passes here before any work: a key's value (a configuration, a bike
+# file, ``--set``) through :func:`number`, a command's numeric argument through :func:`argument`
+# (``mtbmj.cli.common.numeric`` is the argparse type over it). A value that is not a number, is
+# NaN or infinite, is an integer too large for a float (TOML reads 1 followed by 400 zeros as one)
+# or lies beyond ``MAX_MAGNITUDE`` is refused in one line naming the key; a value outside the
+# plausible range its key or argument states is warned about (``ConfigWarning``), and the run
+# proceeds.
+
+# No key's value is anywhere near this in its unit (N/mm, kg, mm, s); beyond it the models'
+# arithmetic leaves the float range (a 1e300 N/mm leg: no static equilibrium can be computed).
+MAX_MAGNITUDE = 1e30
+
+
+def _shown(value) -> str:
+    """A value as a refusal shows it: an integer of hundreds of digits by its size."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10 ** 20:
+        return f"an integer of {len(str(abs(value))) if value.bit_length() < 10000 else 'thousands of'} digits"
+    return repr(value)
+
+
+def number(key: str, value, what: str = "a number") -> float:
+    """``value`` (a key's, as read from TOML or ``--set``) as a float, or ``ConfigError`` naming
+    ``key``: refused when it is not a number (a bool, a string), is NaN or infinite, or is an
+    integer or float beyond ``MAX_MAGNITUDE`` (an integer that does not fit a float among them)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConfigError(f"{key}: must be {what}, got {value!r}")
+    try:
+        x = float(value)
+    except OverflowError:  # an integer beyond the float range
+        raise ConfigError(f"{key}: {_shown(value)} is too large for any number the model holds "
+                          f"(at most {MAX_MAGNITUDE:g} in its unit)") from None
+    if not math.isfinite(x):
+        raise ConfigError(f"{key}: must be finite (not NaN or infinity), got {x}")
+    if abs(x) > MAX_MAGNITUDE:
+        raise ConfigError(f"{key}: {x:g} is beyond anything the model holds (at most {MAX_MAGNITUDE:g} in its unit)")
+    return x
+
+
+def numbers_in(key: str, value):
+    """``value`` with every number in it (a list, a point, a table's rows) passed through
+    :func:`number` (integers that fit stay integers: teeth, clicks, spacers), or ``ConfigError``
+    naming ``key``; anything else is returned as it is, for its key's own check."""
+    if isinstance(value, bool) or isinstance(value, str):
+        return value
+    if isinstance(value, (int, float)):
+        x = number(key, value)
+        return value if isinstance(value, int) else x
+    if isinstance(value, list):
+        return [numbers_in(key, v) for v in value]
+    if isinstance(value, tuple):
+        return tuple(numbers_in(key, v) for v in value)
+    if isinstance(value, dict):
+        return {k: numbers_in(f"{key}.{k}", v) for k, v in value.items()}
+    return value
+
+
+class Argument:
+    """A command's numeric argument: its unit, whether it is a whole number, the values the
+    model allows (``low`` / ``high``, inclusive unless ``open_low``) and the plausible range
+    outside which it is warned about."""
+
+    def __init__(self, unit: str = "", low: float | None = None, high: float | None = None,
+                 plausible: tuple[float, float] | None = None, integer: bool = False, open_low: bool = False,
+                 beyond: str = ""):
+        self.unit, self.low, self.high, self.plausible = unit, low, high, plausible
+        self.integer, self.open_low, self.beyond = integer, open_low, beyond
+
+    def allowed(self) -> str:
+        unit = f" {self.unit}" if self.unit else ""
+        if self.low is not None and self.high is not None:
+            return f"{'above' if self.open_low else 'at least'} {self.low:g} and at most {self.high:g}{unit}"
+        if self.low is not None:
+            return f"{'above' if self.open_low else 'at least'} {self.low:g}{unit}"
+        return f"at most {self.high:g}{unit}"
+
+
+_POSITIVE = dict(low=0.0, open_low=True)
+_SECONDS = Argument("s", plausible=None, **_POSITIVE)  # how long a run may be: the memory check (check_run)
+_WORKERS = Argument("", low=1, high=1024, plausible=(1, 256), integer=True)
+_SAMPLES = Argument("", low=0, high=10 ** 7, integer=True)
+_SEED = Argument("", low=0, high=2 ** 63 - 1, integer=True)
+_TRAVEL_MM = Argument("mm", high=1000.0, plausible=(20.0, 400.0), **_POSITIVE)
+_FORCE_N = Argument("N", low=0.0, high=1e6, plausible=(0.0, 2500.0))
+_OFFSET_MM = Argument("mm", low=-1000.0, high=1000.0, plausible=(-50.0, 50.0))
+_SAG_PERCENT = Argument("%", high=100.0, plausible=(5.0, 50.0), **_POSITIVE)
+
+# Every numeric argument of every command, by its option (the same option means the same
+# quantity in every command that has it). ``plausible``: what bikes, riders and records have,
+# wide; ``low`` / ``high``: beyond them the model does not hold (refused).
+ARGUMENTS: dict[str, Argument] = {
+    # a bike above 30 m/s (108 km/h) is beyond anything ridden; above 100 m/s beyond the model (its
+    # tyres, its step rule and its terrain's features are made for ridden speeds)
+    "--speed": Argument("m/s", high=100.0, plausible=(0.3, 30.0), beyond="no bike is ridden", **_POSITIVE),
+    "--duration": _SECONDS,
+    "--touch-s": Argument("s", low=0.0),
+    "--start-m": Argument("m", low=-1e4, high=1e4, plausible=(-100.0, 100.0)),
+    "--threshold-mm-per-s": Argument("mm/s", high=1e6, plausible=(1.0, 5000.0), **_POSITIVE),
+    "--bin-percent": Argument("%", high=100.0, plausible=(0.5, 50.0), **_POSITIVE),
+    "--fork-max-mm": _TRAVEL_MM,
+    "--shock-max-mm": Argument("mm", high=1000.0, plausible=(15.0, 150.0), **_POSITIVE),
+    "--rider-kg": Argument("kg", high=1e4, plausible=(30.0, 150.0), **_POSITIVE),
+    "--load-kg": Argument("kg", high=1e4, plausible=(5.0, 300.0), **_POSITIVE),
+    "--mass-kg": Argument("kg", high=1e4, plausible=(1.0, 300.0), **_POSITIVE),
+    "--pedal": Argument("rpm", high=1000.0, plausible=(20.0, 150.0), **_POSITIVE),
+    "--power": Argument("W", low=0.0, high=1e5, plausible=(0.0, 2500.0)),
+    "--drive-push-N": _FORCE_N,
+    "--drive-power-W": Argument("W", low=0.0, high=1e5, plausible=(0.0, 2500.0)),
+    "--drive-brake-N": _FORCE_N,
+    "--head-angle": Argument("deg", high=90.0, plausible=(55.0, 80.0), **_POSITIVE),
+    "--com-height-mm": Argument("mm", high=1e4, plausible=(300.0, 2000.0), **_POSITIVE),
+    "--chainring": Argument("teeth", low=1, high=1000, plausible=(20, 60), integer=True),
+    "--cog": Argument("teeth", low=1, high=1000, plausible=(9, 60), integer=True),
+    "--sag-percent": _SAG_PERCENT,
+    "--front-sag-percent": _SAG_PERCENT,
+    "--rear-sag-percent": _SAG_PERCENT,
+    "--max-velocity-mm-per-s": Argument("mm/s", high=1e6, plausible=(100.0, 20000.0), **_POSITIVE),
+    "--tolerance-mm": Argument("mm", high=1000.0, plausible=(1e-4, 10.0), **_POSITIVE),
+    "--sled-offset-mm": _OFFSET_MM,
+    "--fork-offset-mm": _OFFSET_MM,
+    "--fps": Argument("frames/s", high=10000.0, plausible=(1.0, 1000.0), **_POSITIVE),
+    "--width": Argument("pixels", low=1, high=16384, plausible=(16, 8192), integer=True),
+    "--height": Argument("pixels", low=1, high=16384, plausible=(16, 8192), integer=True),
+    "--workers": _WORKERS,
+    "--threads": Argument("", low=1, high=1024, plausible=(1, 256), integer=True),
+    "--batch-size": Argument("", low=1, high=10 ** 6, integer=True),
+    "--samples": _SAMPLES,
+    "--levels": Argument("", low=0, high=1000, integer=True),
+    "--starts": Argument("", low=0, high=10 ** 5, integer=True),
+    "--seed": _SEED,
+}
+
+
+def argument(option: str, text: str, integer: bool = False):
+    """The value of ``option`` (a key of ``ARGUMENTS``) typed as ``text``: a float (an int for a
+    whole-number option), or ``ValueError`` with the one-line reason; ``ConfigWarning`` when
+    outside its plausible range. An option the table lacks is a finite number (``integer``: a
+    whole number) within ``MAX_MAGNITUDE``."""
+    import warnings
+
+    from mtbmj.errors import ConfigWarning
+
+    spec = ARGUMENTS.get(option) or Argument(low=-MAX_MAGNITUDE, high=MAX_MAGNITUDE, integer=integer)
+    raw = text.strip()
+    typed = repr(text) if len(text) <= 30 else f"{text[:12]!r}... ({len(text)} characters)"
+    if spec.integer:
+        try:
+            value = int(raw)
+        except ValueError:
+            raise ValueError(f"{typed} is not a whole number") from None
+    else:
+        try:
+            value = float(raw)
+        except ValueError:
+            raise ValueError(f"{typed} is not a number") from None
+        if not math.isfinite(value):
+            raise ValueError(f"must be a finite number, got {typed}")
+    unit = f" {spec.unit}" if spec.unit else ""
+    low_bad = spec.low is not None and (value <= spec.low if spec.open_low else value < spec.low)
+    if low_bad or (spec.high is not None and value > spec.high):
+        beyond = f" ({spec.beyond} faster than {spec.plausible[1]:g}{unit})" if spec.beyond and not low_bad else ""
+        shown = _shown(value) if spec.integer else f"{value:g}"
+        raise ValueError(f"{shown}{unit if not spec.integer or abs(value) < 10 ** 20 else ''} is outside the range "
+                         f"allowed: {spec.allowed()}{beyond}")
+    if spec.plausible is not None and not spec.plausible[0] <= value <= spec.plausible[1]:
+        lo, hi = spec.plausible
+        warnings.warn(f"{option} = {value:g}{unit} is outside {lo:g}-{hi:g}{unit}, what bikes, riders and records "
+                      f"have (a unit mistake?)", ConfigWarning, stacklevel=2)
+    return value

@@ -70,6 +70,20 @@ def test_coil_in_lb_per_in_with_its_preload(tmp_path):
         assert law.force(s_mm * 1e-3, 0.3) == pytest.approx(same.force(s_mm * 1e-3, 0.3), rel=1e-12)
 
 
+@pytest.mark.parametrize("rate_key, rate, k", [("spring_rate_lb_per_in", 400, 400 * LB_IN),
+                                                ("spring_rate_N_per_mm", 70.0, 70.0)])
+def test_a_coil_without_its_collar_key_has_no_preload(tmp_path, rate_key, rate, k):
+    """``preload_mm`` left out means 0 (the documented default), never the preload of the shock
+    configuration's base (the reference fork's 211.1 N): the spring is k s from the top of the
+    stroke (issue 49, found by the sag check)."""
+    text = f'base = "trail"\n[shock]\nspring = "coil"\n{rate_key} = {rate}\n'
+    law = shock_law(write(tmp_path, "coil0.toml", text))
+    for s_mm in (5.0, 20.0, 40.0):
+        assert law.spring.force(s_mm * 1e-3, 0.0) == pytest.approx(k * s_mm, rel=1e-12)
+    with_collar = shock_law(write(tmp_path, "coil2.toml", text + "preload_mm = 2\n"))
+    assert with_collar.spring.force(0.02, 0.0) == pytest.approx(k * 22.0, rel=1e-12)
+
+
 @pytest.mark.parametrize("negative", [0, 60])
 def test_air_can_against_its_chambers(tmp_path, negative):
     """Positive chamber 120 cm3 less two 8 cm3 spacers, 40 mm bore, 180 psi, index 1.3 (the default):

@@ -59,3 +59,77 @@ def test_a_csv_beside_the_lists_is_refused(tmp_path):
     (tmp_path / "lr.csv").write_text("0,3\n100,2.5\n")
     with pytest.raises(spec_mod.ConfigError, match="not both"):
         spec_mod.load(str(bike(tmp_path, 'csv = "lr.csv"\nwheel_travel_mm = [0, 100]\nratio = [3, 2.5]')))
+
+
+def _refusal(tmp_path, csv_path):
+    """``mtbmj bike`` on a bike whose [leverage] csv is ``csv_path``, in a child process with a
+    timeout (a FIFO used to hang the reader): (exit status, stderr lines, whether out/ exists)."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "bike.toml"
+    path.write_text(f'base = "sst"\n[leverage]\ncsv = "{csv_path}"\n')
+    out = tmp_path / "out"
+    r = subprocess.run([sys.executable, "-m", "mtbmj.cli", "bike", str(path), "flat", "--speed", "4", "--out",
+                        str(out)], capture_output=True, text=True, timeout=120)
+    return r.returncode, r.stderr.strip().splitlines(), out.exists()
+
+
+@pytest.mark.parametrize("make, said", [
+    ("fifo", "not a regular file (a pipe, device or socket is not read)"),
+    ("/dev/zero", "not a regular file (a pipe, device or socket is not read)"),
+    ("dir", "is a directory, not a file"),
+    ("binary", "not a text file"),
+])
+def test_a_special_or_binary_file_as_the_csv_is_refused_in_one_line(tmp_path, make, said):
+    """The CSV goes through the one reader of a user's files (mtbmj/textfile.py): a FIFO hung the
+    run, /dev/zero ended in a MemoryError traceback."""
+    import os
+
+    if make == "fifo":
+        target = tmp_path / "lr.csv"
+        os.mkfifo(target)
+    elif make == "dir":
+        target = tmp_path / "lr.csv"
+        target.mkdir()
+    elif make == "binary":
+        target = tmp_path / "lr.csv"
+        target.write_bytes(b"0,3.1\n\xff\xfe\x00\x01\n")
+    else:
+        target = make
+    code, err, wrote = _refusal(tmp_path, target)
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"mtbmj: error: leverage.csv: {target}") and said in err[0], err
+    assert not wrote
+
+
+def test_an_implausible_csv_curve_is_warned_of_as_the_same_curve_typed_in(tmp_path):
+    """Ratios 1.2-1.0 (a wheel travel per stroke no bike has): the typed lists were warned of, the
+    same curve as a CSV passed silently. One check for both, the CSV's naming the file."""
+    import warnings
+
+    w, r = [0.0, 30.0, 60.0], [1.2, 1.1, 1.0]  # needs 52.6 mm of stroke: the SST's 65 mm shock
+    (tmp_path / "lr.csv").write_text("".join(f"{a},{b}\n" for a, b in zip(w, r)))
+
+    def said(leverage):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            spec_mod.load(str(bike(tmp_path, leverage, f"b{len(leverage)}.toml")))
+        return [str(x.message) for x in caught if "leverage" in str(x.message) and "1.2" in str(x.message)]
+
+    typed = said(f"wheel_travel_mm = {w}\nratio = {r}")
+    from_csv = said('csv = "lr.csv"')
+    assert len(typed) == 1 and "leverage.ratio = 1.2 (of the list) is outside 1.5-4.5" in typed[0], typed
+    assert len(from_csv) == 1, from_csv
+    assert from_csv[0].startswith(f"leverage.csv ({tmp_path / 'lr.csv'}): ratio 1.2 (a row of the CSV) is outside "
+                                  f"1.5-4.5"), from_csv
+
+
+def test_a_csv_curve_not_from_zero_is_refused_naming_the_csv(tmp_path, capsys):
+    (tmp_path / "lr.csv").write_text("5,3.1\n100,2.6\n")
+    path = bike(tmp_path, 'csv = "lr.csv"')
+    assert main(["bike", str(path), "flat", "--speed", "4", "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"mtbmj: error: leverage.csv ({tmp_path / 'lr.csv'}): wheel_travel_mm: must start at 0 mm, "
+                   f"got 5"], err
+    assert not (tmp_path / "out").exists()

@@ -281,8 +281,18 @@ def test_refusals_name_the_key():
                        "rear_axle_mm": [1, "a"]})
     with pytest.raises(ConfigError, match="linkage.cog_teeth"):
         lk.from_table({"kind": "single_pivot", **{k + "_mm": list(v / MM) for k, v in SINGLE.items()}, "cog_teeth": 5})
-    with pytest.raises(ConfigError, match="never reaches|locks"):
+    # past its longest stroke (the eye on the line from the frame end through the main pivot, in
+    # closed form) the single pivot's shock lengthens again, short of a 500 mm stroke: said so, where
+    A, S, F = SINGLE["main_pivot"], SINGLE["shock_swingarm"], SINGLE["shock_frame"]
+    longest = float(np.hypot(*(S - F)) - (np.hypot(*(F - A)) - np.hypot(*(S - A))))
+    with pytest.raises(ConfigError, match=r"the shock lengthens again past .* before its stroke reaches 500 mm "
+                                          r"\(shock.stroke_mm\): check linkage.shock_frame_mm and "
+                                          r"linkage.shock_swingarm_mm") as said:
         lk.curves(lk.Linkage("single_pivot", SINGLE), 0.5)
+    import re
+
+    past = float(re.search(r"past ([0-9.]+) mm of stroke", str(said.value)).group(1)) * MM
+    assert abs(past - longest) < 0.5 * MM  # the last step before it turns back (0.005 rad of the swingarm)
 
 
 def _write(tmp_path, text):
@@ -405,3 +415,176 @@ def test_the_bike_runs_the_axle_on_the_linkage_s_path(tmp_path, kind, pts, withi
         worst = max(worst, abs(local[0] - expected[0]))
     assert deepest > 0.03  # the root pushed the rear well into its travel
     assert worst < within, worst
+
+
+def test_the_test_s_single_pivot_runs_on_the_trail_bike_s_own_stroke(tmp_path, capsys):
+    """The single pivot above on the trail bike's 50 mm shock: the leverage table solved from it at
+    that very stroke integrates (linear ratios between its millimetres) to 50.000006 mm, which the
+    stroke check refused by its 1e-9 ("50 mm is shorter than the leverage curve needs ... (50.00 mm)");
+    it runs, and its table is the closed form's (the test above) at its stroke. A table that does
+    need more stroke than the shock has is still refused."""
+    from mtbmj.bike import spec
+    from mtbmj.cli import main
+
+    points = "\n".join(f"{k}_mm = [{v[0] / MM:g}, {v[1] / MM:g}]" for k, v in SINGLE.items())
+    bike = _write(tmp_path, 'base = "trail"\n[linkage]\nkind = "single_pivot"\n' + points + "\n")
+    out = tmp_path / "out"
+    assert main(["linkage", str(bike), "--out", str(out)]) == 0, capsys.readouterr().err
+    assert (out / "linkage.csv").exists()
+    s = spec.load(str(bike))
+    assert s.shock_stroke == 0.050
+    assert s.leverage.full_stroke == pytest.approx(0.050, rel=1e-6)
+    # the wheel's rise at 50 mm of stroke in closed form: the swingarm's turn where the shock is 50 mm shorter
+    A, S, F, R = SINGLE["main_pivot"], SINGLE["shock_swingarm"], SINGLE["shock_frame"], SINGLE["rear_axle"]
+    L0 = float(np.hypot(*(S - F)))
+    phi = brentq(lambda t: L0 - float(np.hypot(*(A + rot(S - A, t) - F))) - 0.050, -1.0, 0.0)
+    assert s.leverage.full_travel == pytest.approx(float((A + rot(R - A, phi))[1] - R[1]), abs=1e-9)
+    # a table needing 51.06 mm (a constant ratio of 2.35 over the chart's 120 mm) on the 50 mm shock:
+    # refused, one line; one needing 50.01 mm (2.3995), a hundredth of a millimetre more, is not
+    short = _write(tmp_path, 'base = "trail"\n[leverage]\nwheel_travel_mm = [0, 120]\nratio = [2.35, 2.35]\n')
+    assert main(["bike", str(short), "flat", "--speed", "4", "--out", str(tmp_path / "o2")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["mtbmj: error: shock.stroke_mm: 50 mm is shorter than the leverage curve needs over 120 mm of "
+                   "wheel travel (51.06 mm)"], err
+    near = _write(tmp_path, 'base = "trail"\n[leverage]\nwheel_travel_mm = [0, 120]\nratio = [2.3995, 2.3995]\n')
+    assert spec.load(str(near)).leverage.full_stroke == pytest.approx(0.120 / 2.3995, rel=1e-12)
+    assert not (tmp_path / "o2").exists()
+
+
+class FromOutput:
+    """The four-bar solved from its output link's turn t3: the loop A + l1 e(t1) + l2 e(t2) = D + l3 e(t3)
+    for (t1, t2) by fsolve, continued from the previous solution (the test's FourBar turns the input)."""
+
+    def __init__(self, pts, a, b, c, d):
+        self.p, self.names = pts, (a, b, c, d)
+        A, B, C, D = (pts[n] for n in self.names)
+        self.l1, self.l2, self.l3 = (float(np.hypot(*v)) for v in (B - A, C - B, C - D))
+        self.t0 = (ang(B - A), ang(C - B), ang(C - D))
+        self.guess = self.t0[:2]
+
+    def solve(self, turn):
+        A, D = self.p[self.names[0]], self.p[self.names[3]]
+        e = lambda t: np.array([math.cos(t), math.sin(t)])  # noqa: E731
+        t3 = self.t0[2] + turn
+
+        def loop(u):
+            return A + self.l1 * e(u[0]) + self.l2 * e(u[1]) - D - self.l3 * e(t3)
+
+        sol = fsolve(loop, self.guess, xtol=1e-13)
+        assert np.max(np.abs(loop(sol))) < 1e-12
+        self.guess = tuple(sol)
+        return sol[0] - self.t0[0], sol[1] - self.t0[1], turn
+
+
+# A short link whose lower link turns back inside the travel (found by a search of random short links):
+# driven from the lower link the loop cannot pass that point (the package said "the mechanism locks");
+# the upper link turns one way all along.
+REVERSING = dict(lower_pivot=P(-8, 37), lower_link=P(-45, 24), upper_pivot=P(-51, 243), upper_link=P(-107, 317),
+                 rear_axle=P(-458, 16), shock_upper_link=P(-104, 377), shock_frame=P(110, 128))
+
+
+def test_a_short_link_whose_lower_link_turns_back_is_solved_from_its_upper_link():
+    pts = REVERSING
+    fb = FromOutput(pts, "lower_pivot", "lower_link", "upper_link", "upper_pivot")
+    A, B, D = pts["lower_pivot"], pts["lower_link"], pts["upper_pivot"]
+    L0 = float(np.hypot(*(pts["shock_upper_link"] - pts["shock_frame"])))
+
+    def state(turn):
+        t1, t2, t3 = fb.solve(turn)
+        b = A + rot(B - A, t1)
+        axle = b + rot(pts["rear_axle"] - B, t2)
+        eye = D + rot(pts["shock_upper_link"] - D, t3)
+        return t1, axle, L0 - float(np.hypot(*(eye - pts["shock_frame"])))
+
+    sign = 1.0 if state(1e-3)[1][1] > pts["rear_axle"][1] else -1.0
+    fb.guess = fb.t0[:2]
+    turns, lower, axles, strokes = [], [], [], []
+    t = 0.0
+    while True:  # the upper link turned in small steps until the shock has stroked 50 mm
+        t1, axle, s = state(sign * t)
+        turns.append(t), lower.append(t1), axles.append(axle), strokes.append(s)
+        if s >= 0.050:
+            break
+        t += 2e-3
+        assert t < 2.0
+    lower = np.array(lower)
+    assert np.any(np.diff(lower) > 0) and np.any(np.diff(lower) < 0)  # the lower link turns back
+    c = lk.curves(lk.Linkage("short_link", pts), 0.050)
+    assert c.driver == "upper link"
+    assert c.stroke[-1] == pytest.approx(0.050, abs=1e-9)
+    # the axle path and the leverage ratio against the mechanism solved here (the travel from the
+    # stroke by interpolation on the fine steps; the ratio by a finite difference of the path)
+    axles, strokes = np.array(axles), np.array(strokes)
+    travel = axles[:, 1] - pts["rear_axle"][1]
+    assert np.all(np.diff(travel) > 0)
+    assert c.travel[-1] == pytest.approx(np.interp(0.050, strokes, travel), abs=2e-5)
+    for i in range(0, c.travel.size, 5):
+        x = np.interp(c.travel[i], travel, axles[:, 0])
+        assert abs(x - c.axle_x[i]) < 1e-4  # 0.1 mm, as the other layouts
+        assert c.stroke[i] == pytest.approx(np.interp(c.travel[i], travel, strokes), abs=2e-5)
+    mid = (travel[1:] + travel[:-1]) / 2
+    ratio = np.diff(travel) / np.diff(strokes)
+    inside = (c.travel > mid[0]) & (c.travel < mid[-1])
+    assert np.allclose(c.leverage_ratio[inside], np.interp(c.travel[inside], mid, ratio), rtol=5e-3)
+
+
+def _points(pts):
+    return "\n".join(f"{k}_mm = [{v[0] / MM:g}, {v[1] / MM:g}]" for k, v in pts.items())
+
+
+def _moved(pts, **where):
+    return {**pts, **{k: P(*v) for k, v in where.items()}}
+
+
+SP_LINE = SINGLE["main_pivot"] + 1.7 * (SINGLE["main_pivot"] - SINGLE["shock_swingarm"])  # on the shock's line
+
+
+@pytest.mark.parametrize("kind,pts,said", [
+    ("single_pivot", _moved(SINGLE, rear_axle=(-30, 75)),
+     "linkage.main_pivot_mm and linkage.rear_axle_mm: 0 mm apart: the swingarm has no length"),
+    ("short_link", _moved(SHORT, lower_link=(-60, 260)),
+     "linkage.lower_link_mm and linkage.upper_pivot_mm: 0 mm apart"),
+    ("single_pivot", _moved(SINGLE, shock_frame=(-150, 150.5)),
+     "linkage.shock_swingarm_mm and linkage.shock_frame_mm: 0.5 mm apart: the shock has no length"),
+    ("horst_link", _moved(HORST, horst_pivot=(-40, 70)),
+     "linkage.main_pivot_mm and linkage.horst_pivot_mm: 0 mm apart: the chainstay has no length"),
+    ("horst_link", _moved(HORST, seatstay_rocker=(-50, 380)),
+     "linkage.rocker_pivot_mm and linkage.seatstay_rocker_mm: 0 mm apart: the rocker has no length"),
+    ("short_link", _moved(SHORT, lower_pivot=(0, 0), lower_link=(-20, 20), upper_link=(-80, 80),
+                          upper_pivot=(-200, 200)),
+     "linkage.lower_pivot_mm, linkage.lower_link_mm, linkage.upper_link_mm, linkage.upper_pivot_mm: on one line"),
+    ("single_pivot", {**SINGLE, "shock_frame": SP_LINE},
+     "linkage.shock_frame_mm, linkage.shock_swingarm_mm and linkage.main_pivot_mm: on one line"),
+    ("single_pivot", _moved(SINGLE, rear_axle=(-30, -300)),
+     "linkage.rear_axle_mm: straight above or below linkage.main_pivot_mm"),
+    ("linkage_driven_single_pivot", _moved(DRIVEN, shock_rocker=(-20, 330)),
+     "linkage.rocker_pivot_mm and linkage.shock_rocker_mm: 0 mm apart: the shock's eye on the pivot"),
+    ("horst_link", _moved(HORST, seatstay_rocker=(-50 - 380 * 0.2, 380 - 60 * 0.2)),
+     "linkage.main_pivot_mm to linkage.horst_pivot_mm and linkage.rocker_pivot_mm to linkage.seatstay_rocker_mm: "
+     "parallel at full extension"),
+])
+def test_degenerate_points_are_refused_in_one_line_naming_the_keys(tmp_path, capsys, kind, pts, said):
+    """Coincident points, zero-length members, collinear links (each was a 35-40 line traceback or a
+    false reason): one line naming the keys, exit 2, nothing written, by ``mtbmj linkage`` and ``mtbmj bike``."""
+    from mtbmj.cli import main
+
+    bike = _write(tmp_path, f'base = "trail"\n[shock]\nstroke_mm = 50.0\n[linkage]\nkind = "{kind}"\n{_points(pts)}\n')
+    for argv in (["linkage", str(bike)], ["bike", str(bike), "flat", "--speed", "4", "--duration", "0.1"]):
+        out = tmp_path / "out"
+        assert main(argv + ["--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("mtbmj: error: ") and said in err[0], err
+        assert not out.exists()
+
+
+def test_a_travel_under_a_millimetre_keeps_the_caliper_s_ratio():
+    """A 0.1 mm stroke gives 0.3 mm of travel: two rows, where the caliper's ratio (a second-order
+    gradient needing three) ended in a traceback; it is the ratio at full extension of the same
+    Horst link solved over its whole travel."""
+    c = lk.curves(lk.Linkage("horst_link", HORST, brake_on="seatstay"), 1e-4)
+    assert c.travel.size == 2
+    pivot = lk.fitted_pivot(lk.Linkage("horst_link", HORST), lk.curves(lk.Linkage("horst_link", HORST), 0.05))
+    whole = lk.caliper_ratio(lk.curves(lk.Linkage("horst_link", HORST, brake_on="seatstay"), 0.05), pivot)
+    tiny = lk.caliper_ratio(c, pivot)
+    assert np.all(np.isfinite(tiny))
+    assert tiny[0] == pytest.approx(whole[0], rel=2e-3)

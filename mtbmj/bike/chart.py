@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 
+from mtbmj import limits
 from mtbmj.errors import ConfigError
 
 # what a chart sets in [bike]
@@ -52,8 +53,9 @@ RANGES = {"head_angle_deg": (45.0, 90.0), "wheelbase_mm": (500.0, 2000.0), "chai
 def number(chart: dict, key: str) -> float:
     """``geometry.KEY``, a finite number within its range (``RANGES``)."""
     v = chart.get(key)
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-        raise ConfigError(f"geometry.{key}: {'missing' if v is None else f'must be a number, got {v!r}'}")
+    if v is None:
+        raise ConfigError(f"geometry.{key}: missing")
+    v = limits.number(f"geometry.{key}", v)  # the numeric-input gate: finite, fits a float
     low, high = RANGES[key]
     if not low <= v <= high:
         raise ConfigError(f"geometry.{key}: {v:g} is outside {low:g}-{high:g}")

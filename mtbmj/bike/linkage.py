@@ -102,6 +102,87 @@ def _meet(p, u, q, v):
     return p + t * u
 
 
+# The names of each four-bar's loop (A, B, C, D: the frame pivot of the input link, the input link's
+# joint with the coupler, the coupler's joint with the output link, the output link's frame pivot)
+# and of its three moving links.
+FOUR_BARS = {"linkage_driven_single_pivot": ("main_pivot", "swingarm_link", "rocker_link", "rocker_pivot"),
+             "horst_link": ("main_pivot", "horst_pivot", "seatstay_rocker", "rocker_pivot"),
+             "short_link": ("lower_pivot", "lower_link", "upper_link", "upper_pivot")}
+LINK_NAMES = {"linkage_driven_single_pivot": ("swingarm", "link", "rocker"),
+              "horst_link": ("chainstay", "seatstay", "rocker"),
+              "short_link": ("lower link", "rear triangle", "upper link")}
+# the pivot the shock's rear-end eye turns about, per layout
+SHOCK_PIVOT = {"single_pivot": "main_pivot", "linkage_driven_single_pivot": "rocker_pivot",
+               "horst_link": "rocker_pivot", "short_link": "upper_pivot"}
+# Two points of a member closer than this make it no member (a link, the shock, a lever arm): the
+# coordinates are typed in whole or tenths of millimetres, and no bike has a link, a shock or a lever
+# arm of 1 mm.
+MIN_SPAN = 1e-3
+
+
+def _key(name: str) -> str:
+    return f"linkage.{name}_mm"
+
+
+def _line_distance(p, a, b) -> float:
+    """The distance of ``p`` from the line through ``a`` and ``b``."""
+    return abs(_cross(b - a, p - a)) / float(np.hypot(*(b - a)))
+
+
+def check_points(kind: str, p: dict) -> None:
+    """Refuse, in one line naming the keys, points that leave the mechanism without a defined motion:
+    coincident points of one member (a link, the shock, the axle's or the shock's lever arm), a
+    four-bar whose four loop points meet or lie on one line, a shock whose line passes through the
+    pivot its eye turns about, a rear axle straight above or below the pivot of the arm carrying it."""
+    pairs = []  # (name, name, what it leaves)
+    end, pivot = SHOCK_END[kind], SHOCK_PIVOT[kind]
+    if kind == "single_pivot" or kind == "linkage_driven_single_pivot":
+        pairs.append(("main_pivot", "rear_axle", "the swingarm has no length (the rear axle on the main pivot)"))
+    if kind in FOUR_BARS:
+        a, b, c, d = FOUR_BARS[kind]
+        first, coupler, output = LINK_NAMES[kind]
+        pairs += [(a, b, f"the {first} has no length"), (b, c, f"the {coupler} has no length"),
+                  (d, c, f"the {output} has no length"), (a, d, "the four-bar's two frame pivots are one point"),
+                  (a, c, "a four-bar's joint on the other link's frame pivot leaves its motion undefined"),
+                  (b, d, "a four-bar's joint on the other link's frame pivot leaves its motion undefined")]
+    pairs += [(pivot, end, "the shock's eye on the pivot its link turns about: the shock would not stroke"),
+              (end, "shock_frame", "the shock has no length"),
+              (pivot, "shock_frame", "the shock's frame end on the pivot of the link it is driven by: its length "
+                                     "would not change")]
+    for one, two, what in pairs:
+        gap = float(np.hypot(*(p[one] - p[two])))
+        if gap < MIN_SPAN:
+            raise ConfigError(f"{_key(one)} and {_key(two)}: {gap / MM:.2g} mm apart: {what}")
+    if kind in FOUR_BARS:
+        loop = [p[n] for n in FOUR_BARS[kind]]
+        far = max(((i, j) for i in range(4) for j in range(i + 1, 4)),
+                  key=lambda ij: float(np.hypot(*(loop[ij[0]] - loop[ij[1]]))))
+        if all(_line_distance(q, loop[far[0]], loop[far[1]]) < MIN_SPAN for q in loop):
+            raise ConfigError(f"{', '.join(_key(n) for n in FOUR_BARS[kind])}: on one line (within 1 mm): the "
+                              f"four-bar's motion is not defined there")
+    if _line_distance(p[pivot], p[end], p["shock_frame"]) < MIN_SPAN:
+        raise ConfigError(f"{_key('shock_frame')}, {_key(end)} and {_key(pivot)}: on one line (within 1 mm): the "
+                          f"shock's line passes through the pivot its eye turns about, so at full extension the "
+                          f"shock does not stroke as the wheel rises")
+    if kind in ("single_pivot", "linkage_driven_single_pivot") and \
+            abs(float(p["rear_axle"][0] - p["main_pivot"][0])) < MIN_SPAN:
+        raise ConfigError(f"{_key('rear_axle')}: straight above or below {_key('main_pivot')} (within 1 mm): the "
+                          f"swingarm would move the axle fore and aft, not up")
+
+
+def _circles(p, rp: float, q, rq: float, side: float):
+    """The point ``rp`` from ``p`` and ``rq`` from ``q`` on the ``side`` of the line p -> q (+1: to
+    its left); None where the circles do not meet."""
+    pq = q - p
+    dist = float(np.hypot(*pq))
+    if dist < 1e-12 or dist > rp + rq or dist < abs(rp - rq):
+        return None
+    along = (rp * rp - rq * rq + dist * dist) / (2.0 * dist)
+    h = math.sqrt(max(rp * rp - along * along, 0.0))
+    e = pq / dist
+    return p + along * e + side * h * np.array([-e[1], e[0]])
+
+
 @dataclass(frozen=True)
 class Pose:
     """Every named point (m, frame coordinates) at one input angle, and the instant centres of the
@@ -114,31 +195,36 @@ class Pose:
 
 
 class Linkage:
-    """A solved rear end: ``kind``, ``points`` (name -> (x, z) m at full extension)."""
+    """A solved rear end: ``kind``, ``points`` (name -> (x, z) m at full extension).
+
+    A four-bar is driven from one of its frame links (``driver``): "input" (A-B) turned by the angle
+    and the joint C found on the circles about B and D, or "output" (D-C) turned by the angle and B
+    found on the circles about C and A. Each solve fails where its own link reverses (its dead point:
+    B, C and D on one line for the input, A, B and C for the output), so :func:`curves` drives the
+    loop from whichever link turns one way over the travel."""
 
     def __init__(self, kind: str, points: dict, chainring: int = DEFAULT_CHAINRING, cog: int = DEFAULT_COG,
-                 brake_on: str | None = None):
+                 brake_on: str | None = None, driver: str = "input"):
         self.kind, self.chainring, self.cog = kind, int(chainring), int(cog)
         self.p0 = {k: np.asarray(v, float) for k, v in points.items()}
         self.brake_on = brake_on or BRAKE_LINKS[kind][0]
+        check_points(kind, self.p0)
+        self.driver = driver
         if kind == "single_pivot":
             self.four_bar = None
             self.A = self.p0["main_pivot"]
             self.input_points = ("rear_axle", "shock_swingarm")
+            self.driver = "input"
         else:
-            names = {"linkage_driven_single_pivot": ("main_pivot", "swingarm_link", "rocker_link", "rocker_pivot"),
-                     "horst_link": ("main_pivot", "horst_pivot", "seatstay_rocker", "rocker_pivot"),
-                     "short_link": ("lower_pivot", "lower_link", "upper_link", "upper_pivot")}[kind]
+            names = FOUR_BARS[kind]
             self.four_bar = names
             a, b, c, d = (self.p0[n] for n in names)
             self.A, self.D = a, d
+            self.input_length = float(np.hypot(*(b - a)))
             self.coupler = float(np.hypot(*(c - b)))
             self.output = float(np.hypot(*(c - d)))
-            for what, length in (("coupler", self.coupler), ("output link", self.output),
-                                 ("input link", float(np.hypot(*(b - a))))):
-                if length < 1e-3:
-                    raise ConfigError(f"linkage: the {what} is shorter than 1 mm ({', '.join(names)})")
             self.branch = 1.0 if _cross(c - b, d - b) >= 0.0 else -1.0  # which side of B-D the point C lies
+            self.branch_b = 1.0 if _cross(a - c, b - c) > 0.0 else -1.0  # which side of C-A the point B lies
             self.input_points = {"linkage_driven_single_pivot": ("rear_axle", "swingarm_link"),
                                  "horst_link": ("horst_pivot",), "short_link": ("lower_link",)}[kind]
         self.coupler_points = {"horst_link": ("rear_axle",), "short_link": ("rear_axle",)}.get(kind, ())
@@ -147,32 +233,47 @@ class Linkage:
                               "short_link": ("shock_upper_link", "upper_link")}.get(kind, ())
         self.length0 = float(np.hypot(*(self._shock_end(self.p0) - self.p0["shock_frame"])))
 
+    def driven_by(self, driver: str) -> "Linkage":
+        """The same rear end driven from its input ("input") or output ("output") link."""
+        if driver == self.driver:
+            return self
+        return Linkage(self.kind, self.p0, self.chainring, self.cog, self.brake_on, driver)
+
+    @property
+    def driver_name(self) -> str:
+        """The link the loop is solved from (its frame pivot and its joint's keys)."""
+        if self.four_bar is None:
+            return "swingarm"
+        return LINK_NAMES[self.kind][0 if self.driver == "input" else 2]
+
     def _shock_end(self, points) -> np.ndarray:
         return points[SHOCK_END[self.kind]]
 
     def pose(self, angle: float) -> Pose | None:
-        """Every point with the input link turned by ``angle`` (rad, the sense that raises the
+        """Every point with the driving link turned by ``angle`` (rad, the sense that raises the
         axle counted by the caller); None where the four-bar cannot close."""
         p = dict(self.p0)
-        for n in self.input_points:
-            p[n] = self.A + _rotate(self.p0[n] - self.A, angle)
         if self.four_bar is None:
+            for n in self.input_points:
+                p[n] = self.A + _rotate(self.p0[n] - self.A, angle)
             return Pose(p, self.A.copy(), self.A.copy(), angle)
         a_name, b_name, c_name, d_name = self.four_bar
         b0, c0 = self.p0[b_name], self.p0[c_name]
-        b = self.A + _rotate(b0 - self.A, angle)
-        p[b_name] = b
-        bd = self.D - b
-        dist = float(np.hypot(*bd))
-        r1, r2 = self.coupler, self.output
-        if dist > r1 + r2 or dist < abs(r1 - r2) or dist < 1e-12:
-            return None
-        along = (r1 * r1 - r2 * r2 + dist * dist) / (2.0 * dist)
-        h = math.sqrt(max(r1 * r1 - along * along, 0.0))
-        e = bd / dist
-        n = np.array([-e[1], e[0]])
-        c = b + along * e - self.branch * h * n  # the branch the mechanism starts on
-        p[c_name] = c
+        if self.driver == "input":
+            turn_in = angle
+            b = self.A + _rotate(b0 - self.A, angle)
+            c = _circles(b, self.coupler, self.D, self.output, -self.branch)  # the branch the mechanism starts on
+            if c is None:
+                return None
+        else:
+            c = self.D + _rotate(c0 - self.D, angle)
+            b = _circles(c, self.coupler, self.A, self.input_length, self.branch_b)
+            if b is None:
+                return None
+            turn_in = math.atan2(*(_rot_args(b0 - self.A, b - self.A)))
+        for n in self.input_points:
+            p[n] = self.A + _rotate(self.p0[n] - self.A, turn_in)
+        p[b_name], p[c_name] = b, c
         turn_out = math.atan2(*(_rot_args(c0 - self.D, c - self.D)))
         for name in self.output_points:
             if name != c_name:
@@ -185,7 +286,7 @@ class Linkage:
         axle_centre = centre if axle_on_coupler else self.A.copy()
         on_input = self.brake_on in ("swingarm", "chainstay")
         brake_centre = self.A.copy() if on_input else centre
-        return Pose(p, axle_centre, brake_centre, angle if on_input else turn_c)
+        return Pose(p, axle_centre, brake_centre, turn_in if on_input else turn_c)
 
     def travel(self, angle: float) -> float:
         """The rear axle's rise (m) in frame coordinates at ``angle``."""
@@ -221,6 +322,7 @@ class Curves:
     com_height: float
     stroke_limit: float
     caliper_turn: np.ndarray | None = None  # rad: the caliper's link's turn from full extension
+    driver: str = "swingarm"  # the link the loop was solved from (a four-bar's input or output link)
 
     def rows(self) -> list[dict]:
         return [{"wheel_travel_mm": self.travel[i] / MM, "shock_stroke_mm": self.stroke[i] / MM,
@@ -229,13 +331,6 @@ class Curves:
                  "instant_centre_z_mm": self.centre_z[i] / MM, "anti_squat_percent": self.anti_squat[i],
                  "anti_rise_percent": self.anti_rise[i], "pedal_kickback_deg": self.kickback_deg[i]}
                 for i in range(self.travel.size)]
-
-
-def _direction(link: Linkage) -> float:
-    """+1 or -1: the sense of the input angle that raises the rear axle."""
-    small = 1e-4
-    up = link.travel(small)
-    return 1.0 if up > 0.0 else -1.0
 
 
 def _chain_normal(ring_centre, ring_r, cog_centre, cog_r):
@@ -257,40 +352,111 @@ def _line_height(contact, through, x_front) -> float:
     return (through[1] - contact[1]) / dx * (x_front - contact[0])
 
 
+class _Unsolved(Exception):
+    """The loop cannot be driven from this link over the travel; the message says why."""
+
+
+MARCH = 0.005  # rad: the driving link's step searching for the stroke's end (2 mm of a 400 mm swingarm's arc)
+
+
+def _drive(link: Linkage, stroke_limit: float) -> tuple[float, float]:
+    """(sign, angle): the sense of ``link``'s driving angle that raises the rear axle, and the angle at
+    which the shock's stroke reaches ``stroke_limit`` (m), marching out from full extension in steps
+    of :data:`MARCH` (the edge where the loop stops closing found by bisection). Over the way the
+    rear axle must rise and the shock shorten at every step; ``_Unsolved`` where the driving link
+    cannot take the mechanism there (it locks, or the axle stops rising as it turns: the driving link
+    itself reverses), ``ConfigError`` where no driver can (the shock lengthens as the wheel rises)."""
+    name = link.driver_name
+    ups = [(sg, link.travel(sg * 1e-4)) for sg in (1.0, -1.0)]
+    ups = [(sg, w) for sg, w in ups if math.isfinite(w) and w > 0.0]
+    if not ups:
+        raise _Unsolved(f"turning the {name} either way does not raise the rear axle")
+    sign = max(ups, key=lambda u: u[1])[0]
+
+    def at(a):
+        pose = link.pose(sign * a)
+        if pose is None:
+            return None
+        return (float(pose.points["rear_axle"][1] - link.p0["rear_axle"][1]),
+                link.length0 - float(np.hypot(*(link._shock_end(pose.points) - pose.points["shock_frame"]))))
+
+    end, limit = SHOCK_END[link.kind], f"{stroke_limit / MM:g} mm (shock.stroke_mm)"
+    a_prev, w_prev, s_prev = 0.0, 0.0, 0.0
+    while True:
+        a = a_prev + MARCH
+        if a > math.pi:
+            raise _Unsolved(f"turned half a turn, the {name} strokes the shock {s_prev / MM:.1f} mm")
+        here = at(a)
+        if here is None:  # the loop stops closing within this step: its edge
+            lo, hi = a_prev, a
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                lo, hi = (mid, hi) if at(mid) is not None else (lo, mid)
+            a, here = lo, at(lo)
+            if here is None or here[1] < stroke_limit or here[0] <= w_prev:
+                stroke = s_prev if here is None else max(here[1], s_prev)
+                raise _Unsolved(f"driven by the {name}, the mechanism locks at {stroke / MM:.1f} mm of stroke")
+        w, s = here
+        if w <= w_prev:
+            raise _Unsolved(f"driven by the {name}, the rear axle stops rising at {w_prev / MM:.1f} mm of wheel "
+                            f"travel")
+        if s <= s_prev:
+            if s_prev == 0.0:
+                raise ConfigError(f"linkage: the shock lengthens as the wheel rises: check {_key('shock_frame')} "
+                                  f"and {_key(end)}")
+            raise ConfigError(f"linkage: the shock lengthens again past {s_prev / MM:.1f} mm of stroke ("
+                              f"{w_prev / MM:.1f} mm of wheel travel), before its stroke reaches {limit}: check "
+                              f"{_key('shock_frame')} and {_key(end)}")
+        if s >= stroke_limit:
+            break
+        a_prev, w_prev, s_prev = a, w, s
+    if a_prev == 0.0 and at(1e-4)[1] <= 0.0:
+        raise ConfigError(f"linkage: the shock lengthens as the wheel rises: check {_key('shock_frame')} and "
+                          f"{_key(end)}")
+    return sign, brentq(lambda u: at(u)[1] - stroke_limit, a_prev, a, xtol=1e-13)
+
+
+def _drivers(link: Linkage) -> list[str]:
+    """The links to drive a four-bar from, the one farther from its dead point at full extension
+    first (the input's: B, C and D on one line; the output's: A, B and C)."""
+    if link.four_bar is None:
+        return ["input"]
+    a, b, c, d = (link.p0[n] for n in link.four_bar)
+    sine = lambda u, v: abs(_cross(u, v)) / float(np.hypot(*u) * np.hypot(*v))  # noqa: E731
+    return ["input", "output"] if sine(c - b, d - c) >= sine(b - c, a - b) else ["output", "input"]
+
+
 def curves(link: Linkage, stroke_limit: float, tyre_radius: float | None = None, front_axle_x: float | None = None,
            com_height: float | None = None, step: float = 1e-3) -> Curves:
     """The curves every ``step`` of rear wheel travel from full extension to where the shock's
     stroke reaches ``stroke_limit`` (m); ``tyre_radius`` and ``front_axle_x`` (frame x of the front
     axle) place the contacts, ``com_height`` (m over the ground) the centre of mass (without them
-    anti-squat and anti-rise are NaN)."""
+    anti-squat and anti-rise are NaN). A four-bar is solved from whichever of its frame links turns
+    one way over the travel (:func:`_drive`; the other one may reverse); one line where neither can."""
     forces = tyre_radius is not None and front_axle_x is not None and com_height is not None
-    sign = _direction(link)
+    reasons = []
+    for driver in _drivers(link):
+        try:
+            driven = link.driven_by(driver)
+            sign, a_end = _drive(driven, stroke_limit)
+            break
+        except _Unsolved as exc:
+            reasons.append(str(exc))
+    else:
+        keys = ", ".join(_key(n) for n in (link.four_bar or LAYOUTS[link.kind]))
+        raise ConfigError(f"linkage: the shock's stroke never reaches {stroke_limit / MM:g} mm (shock.stroke_mm): "
+                          f"{'; '.join(reasons)}: check {keys}")
+    link = driven
 
     def stroke_at(a):
         return link.stroke(sign * a)
 
-    # the input angle at which the stroke reaches the limit: bracket it outward
-    hi = 0.05
-    while True:
-        s = stroke_at(hi)
-        if not math.isfinite(s) or link.pose(sign * hi) is None:
-            raise ConfigError(f"linkage: the mechanism locks before the shock's stroke reaches "
-                              f"{stroke_limit / MM:g} mm (shock.stroke_mm)")
-        if s >= stroke_limit:
-            break
-        hi *= 1.5
-        if hi > math.pi:
-            raise ConfigError(f"linkage: the shock's stroke never reaches {stroke_limit / MM:g} mm (shock.stroke_mm): "
-                              f"check the shock's points")
-    if stroke_at(1e-4) <= 0.0:
-        raise ConfigError("linkage: the shock lengthens as the wheel rises: check shock_frame and the shock's other point")
-    a_end = brentq(lambda a: stroke_at(a) - stroke_limit, 0.0, hi, xtol=1e-13)
     w_end = link.travel(sign * a_end)
     grid = np.arange(0.0, w_end, step)
     grid = np.append(grid, w_end) if w_end - grid[-1] > 1e-9 else grid
     angles = [0.0]
     for w in grid[1:]:
-        angles.append(brentq(lambda a: link.travel(sign * a) - w, angles[-1], a_end + 1e-9, xtol=1e-14))
+        angles.append(brentq(lambda a: link.travel(sign * a) - w, angles[-1], a_end, xtol=1e-14))
     ring_r, cog_r = sprocket_radius(link.chainring), sprocket_radius(link.cog)
     bb = np.zeros(2)
     out = {k: [] for k in ("s", "lr", "ax", "az", "cx", "cz", "as", "ar", "kb", "ct")}
@@ -299,6 +465,8 @@ def curves(link: Linkage, stroke_limit: float, tyre_radius: float | None = None,
     for a in angles:
         h = 1e-7
         lo_a, hi_a = max(a - h, 0.0), a + h
+        if link.pose(sign * hi_a) is None:  # at the edge where the loop stops closing: a one-sided difference
+            hi_a = a
         dw = link.travel(sign * hi_a) - link.travel(sign * lo_a)
         ds = stroke_at(hi_a) - stroke_at(lo_a)
         pose = link.pose(sign * a)
@@ -329,8 +497,14 @@ def curves(link: Linkage, stroke_limit: float, tyre_radius: float | None = None,
         turn = ((span - span0) + (ring_r - cog_r) * (theta - theta0)) / ring_r
         out["kb"].append(math.degrees(turn))
     arr = {k: np.asarray(v, float) for k, v in out.items()}
+    bad = np.flatnonzero(~(np.isfinite(arr["lr"]) & (arr["lr"] > 0.0)))
+    if bad.size:  # a reversal finer than the march's step
+        raise ConfigError(f"linkage: the leverage ratio is {arr['lr'][bad[0]]:.3g} at {grid[bad[0]] / MM:.1f} mm of "
+                          f"wheel travel (the rear axle or the shock turns back there): check the points of "
+                          f"[linkage]")
     return Curves(grid, arr["s"], arr["lr"], arr["ax"], arr["az"], arr["cx"], arr["cz"], arr["as"], arr["ar"],
-                  arr["kb"], math.nan if com_height is None else com_height, stroke_limit, arr["ct"])
+                  arr["kb"], math.nan if com_height is None else com_height, stroke_limit, arr["ct"],
+                  link.driver_name)
 
 
 def circle_path(link: Linkage, c: Curves, pivot) -> tuple[np.ndarray, np.ndarray]:
@@ -372,7 +546,7 @@ def caliper_ratio(c: Curves, pivot) -> np.ndarray:
     the factor on the brake couple's generalised force on the arm's hinge (its virtual work is the
     couple times the caliper link's turn). 1 where the caliper rides on the arm itself."""
     arm = np.unwrap(np.arctan2(c.axle_z - pivot[1], c.axle_x - pivot[0]))
-    return np.gradient(c.caliper_turn, arm, edge_order=2)
+    return np.gradient(c.caliper_turn, arm, edge_order=2 if arm.size > 2 else 1)  # (a travel under 1 mm: 2 points)
 
 
 def path_departure(link: Linkage, c: Curves, pivot) -> float:

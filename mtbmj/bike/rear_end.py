@@ -112,14 +112,13 @@ class BikeLinkage:
         return fig
 
     def write(self, out_dir) -> list:
-        import io
         import json
 
         from mtbmj import output
+        from mtbmj.readout import quicklook  # the one figure writer: a "$" in a name drawn as written
 
-        buf = io.BytesIO()
-        self.figure().savefig(buf, format="png", dpi=110)
-        return output.write_atomically(out_dir, {"linkage.csv": self.csv_bytes(), "linkage.png": buf.getvalue(),
+        return output.write_atomically(out_dir, {"linkage.csv": self.csv_bytes(),
+                                                 "linkage.png": quicklook.png(self.figure(), dpi=110),
                                                  "summary.json": (json.dumps(self.summary(), indent=2) + "\n").encode()})
 
 

@@ -92,8 +92,9 @@ def schema_keys(part: dict, given: dict, kind: str | None = None) -> dict:
             out["fork.spring.rate_N_per_mm"] = _value(mine, rates[0]) * (
                 N_PER_MM_PER_LB_PER_IN if rates[0].endswith("lb_per_in") else 1.0)
         preload = _value(mine, "preload_mm", strict=False) if "preload_mm" in mine else 0.0
+        # the collar's preload, 0 without: never the preload of the configuration's base (a fork's)
+        out["fork.spring.preload_N"] = float(out["fork.spring.rate_N_per_mm"]) * preload
         if preload > 0.0:
-            out["fork.spring.preload_N"] = float(out["fork.spring.rate_N_per_mm"]) * preload
             out["fork.spring.top_out"] = True
     elif kind == "air":
         if coil:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from mtbmj.config import ConfigWarning, parse_assignment
 from mtbmj.errors import MtbmjError, RunError, check_interrupt, interrupt_handling, interrupted
-from mtbmj.limits import check_duration
+from mtbmj.limits import argument, check_duration
 
 EXIT_BAD_INPUT = 2
 # The drop engines (``mtbmj.drop.run.ENGINES``), named here so the parser needs no engine imported.
@@ -22,8 +22,19 @@ ENGINE_HELP = "mujoco (default), ode (the scipy reference) or fast (the same ODE
 
 
 class Parser(argparse.ArgumentParser):
+    """The parser of every command: bad input is one line (``error``), and every numeric argument
+    passes the one numeric-input gate: an argument added with ``type=float`` or ``type=int`` is
+    parsed by :func:`numeric` (its range from ``mtbmj.limits.ARGUMENTS``), so a command cannot
+    take a number that is NaN, infinite, a huge integer or outside what the model allows."""
+
     def error(self, message):  # one line, not usage + message
         raise MtbmjError(message)
+
+    def add_argument(self, *args, **kwargs):
+        if kwargs.get("type") in (float, int):
+            option = next((a for a in args if a.startswith("--")), args[0] if args else "")
+            kwargs["type"] = numeric(option, integer=kwargs["type"] is int)
+        return super().add_argument(*args, **kwargs)
 
 
 def intermixed(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -82,6 +93,22 @@ class Progress:
         return result
 
 
+def numeric(option: str, integer: bool = False):
+    """The argparse type of the numeric argument ``option`` (``"--speed"``): the one gate every
+    command's numbers pass (``mtbmj.limits.argument`` and its table ``ARGUMENTS``): a value that is
+    not a number, not finite, a huge integer or outside what the model allows is refused in one
+    line naming the option; one outside the plausible range is warned about. An option the table
+    lacks (``integer``: a whole number) is held to a finite number within ``limits.MAX_MAGNITUDE``."""
+    def parse(text: str):
+        try:
+            return argument(option, text, integer)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    parse.__name__ = "number"
+    return parse
+
+
 def overrides(pairs) -> dict:
     return dict(parse_assignment(p) for p in pairs or [])
 
@@ -90,7 +117,7 @@ def add_run_options(p) -> None:
     """``--set KEY=VALUE`` (repeatable) and ``--duration`` for a command that runs a configuration."""
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a configuration key, e.g. fork.spring.preload_N=300 (repeatable)")
-    p.add_argument("--duration", type=float, help="simulated time in s (default: solver.duration_s)")
+    p.add_argument("--duration", type=numeric("--duration"), help="simulated time in s (default: solver.duration_s)")
 
 
 class _Stderr(logging.Handler):
@@ -230,12 +257,15 @@ def _report_line(line: str) -> None:
 def _run_parsed(parser: argparse.ArgumentParser, argv=None) -> int:
     config_warnings = _ConfigWarnings()
     try:
-        args = parser.parse_args(argv)
-        check_duration("--duration", getattr(args, "duration", None))
         with warnings.catch_warnings():
-            warnings.simplefilter("error", RuntimeWarning)
+            # numpy's RuntimeWarnings (overflow, invalid value) are errors only where a run steps
+            # (``mtbmj.errors.diverging``, around every rig's stepping); elsewhere (a fit, a reader,
+            # a library that meets such a value and handles it) they are not the user's concern
+            warnings.simplefilter("ignore", RuntimeWarning)
             warnings.simplefilter("always", ConfigWarning)  # each kept once by config_warnings
             warnings.showwarning = config_warnings.showwarning  # restored with the filters when the command ends
+            args = parser.parse_args(argv)  # the numeric arguments' plausibility warnings come from here
+            check_duration("--duration", getattr(args, "duration", None))
             status = _run_claimed(args)
         config_warnings.print()
         return status
@@ -245,8 +275,8 @@ def _run_parsed(parser: argparse.ArgumentParser, argv=None) -> int:
     except MtbmjError as exc:
         _report(f"{exc}{config_warnings.suffix(str(exc))}")
         return EXIT_BAD_INPUT
-    except RuntimeWarning as exc:
-        _report(f"run diverged ({exc}){config_warnings.suffix()}")
+    except (RuntimeWarning, FloatingPointError) as exc:  # a numerical failure no guard named (none is known)
+        _report(f"numerical failure ({exc}){config_warnings.suffix()}")
         return EXIT_BAD_INPUT
     except BrokenPipeError:  # the reader went away (``mtbmj presets | head -1``): stop quietly
         _silence_stdout()

@@ -101,7 +101,7 @@ def failure_reason(exc: BaseException) -> str:
     own line, a numpy warning as a divergence, anything else as an internal error."""
     if isinstance(exc, MtbmjError):
         return str(exc)
-    if isinstance(exc, RuntimeWarning):
+    if isinstance(exc, (RuntimeWarning, FloatingPointError)):  # a caller's own filter or error state
         return f"run diverged ({exc})"
     return f"internal error: {type(exc).__name__}: {exc}"
 

@@ -8,7 +8,7 @@ from mtbmj.config import Config
 from mtbmj.controllers import native
 from mtbmj.drop import chain
 from mtbmj.drop.result import DropResult
-from mtbmj.errors import ConfigError
+from mtbmj.errors import ConfigError, diverging
 
 
 # Each engine is imported when it first runs: MuJoCo's, scipy's integrators and numba cost
@@ -44,7 +44,8 @@ def run_drop(config: Config | str, engine: str = "mujoco", overrides: Mapping | 
     cfg, setup = chain.prepare(config, overrides, duration)
     native.drop_started()  # a process that drops again and again reaches the compiled laws on its own
     start = time.perf_counter()
-    trace = ENGINES[engine](setup, duration, progress)
+    with diverging(f"drop ({engine})"):  # numpy's overflow or invalid value while stepping: divergence
+        trace = ENGINES[engine](setup, duration, progress)
     wall = time.perf_counter() - start
     raw, logged, summary = chain.finish(setup, trace, engine)
     return DropResult(name=cfg.name, engine=engine, config=cfg, signals=logged, raw=raw, trace=trace,

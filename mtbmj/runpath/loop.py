@@ -35,6 +35,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
+from mtbmj import errors
 from mtbmj.runpath import guard
 
 CHUNK = 10000  # steps per chunk where no refinement is planned
@@ -180,7 +181,9 @@ def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
     handing each stretch of kept rows to ``sink(first_step, states, sensors)`` (states row j: the
     state at the end of output step first_step + j; sensors row j: at its start). Ends the run with
     one ``RunError`` line (``rig`` named) on a MuJoCo warning, a non-finite state, a state MuJoCo
-    reset, or a state whose ``limit`` columns (columns, bound, what) pass the bound; MuJoCo's
+    reset, a numpy overflow or invalid value while stepping (``mtbmj.errors.diverging``: the only
+    place a MuJoCo rig's run turns such a value into an error), or a state whose ``limit`` columns
+    (columns, bound, what) pass the bound; MuJoCo's
     warning text never reaches the terminal or MUJOCO_LOG.TXT. ``progress(fraction)`` is called
     when ``report_every`` more steps are done (0: after every chunk) and at the end.
 
@@ -213,7 +216,10 @@ def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
             raise guard.diverged(rig, at, limit[2])
         sink(done, rows, sensor_rows)
 
-    with guard.collected_warnings(messages):
+    n = 0
+    # numpy's overflow, division by zero and invalid value are divergence while the run steps (a
+    # callback's force law, a plan's look at the states): one line naming the rig and the stretch
+    with guard.collected_warnings(messages), errors.diverging(rig, lambda: t0 + (done + max(n, 1)) * timestep):
         try:
             while done < steps:
                 n = plan.size(steps - done)
