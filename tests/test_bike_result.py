@@ -8,6 +8,7 @@ import pytest
 
 import mtbmj
 from mtbmj.bike import run as bike_run
+from mtbmj.bike import summary as bike_summary
 from mtbmj.rolling import terrain as terrain_mod
 
 
@@ -32,12 +33,12 @@ def test_the_window_spans_the_feature_from_front_tyre_to_rear_tyre(roots):
     the front axle is a tyre radius before it and shuts 0.5 s after the rear axle is a radius past it."""
     r = roots[3.0]
     ter = terrain_mod.make("root")
-    start, end = bike_run.feature_span(ter)
+    start, end = bike_summary.feature_span(ter)
     assert (start, end) == pytest.approx((1.5, 1.6), abs=1e-9)
     radius = r.prepared.front_tire.radius
     t, fx, rx = r.raw["time_s"], r.raw["front_axle_x_m"], r.raw["rear_axle_x_m"]
     t0 = t[np.argmax(fx >= start - radius)]
-    t1 = t[np.argmax(rx >= end + radius)] + bike_run.SETTLE_S
+    t1 = t[np.argmax(rx >= end + radius)] + bike_summary.SETTLE_S
     w = r.summary["feature"]["window_s"]
     assert w[0] == pytest.approx(t0, abs=1e-9) and w[1] == pytest.approx(t1, abs=2 * r.prepared.timestep)
 

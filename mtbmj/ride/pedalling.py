@@ -93,7 +93,7 @@ ATTEMPTS = 4  # at most this many runs per record (the closest kept)
 def run_cadence(run, window) -> float:
     """A pedalling run's mean cadence (rpm) over ``window`` (s): the crank's turns (the distance
     rolled through the gear) over the time."""
-    from mtbmj.bike.run import crank_turns
+    from mtbmj.bike.summary import crank_turns
 
     t = run.raw["time_s"]
     keep = (t >= window[0]) & (t <= window[1])
@@ -113,7 +113,8 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
     import math
 
     from mtbmj.bike import spec as spec_mod
-    from mtbmj.bike.run import gear_speed, run_bike, setups
+    from mtbmj.bike.run import run_bike, setups
+    from mtbmj.bike.summary import gear_speed
     from mtbmj.errors import ConfigError
     from mtbmj.measured import telemetry
 
