@@ -8,7 +8,9 @@ removed, so at any moment the target holds the old result or the new one, never 
 failed or killed run leaves the old one untouched. Files and folders are created with modes
 0666/0777 less the user's umask, like any other program's output. A folder left behind by a
 killed run (``.NAME.new-PID-*`` or ``.NAME.old-PID-*`` whose process is gone) is removed by the
-next write to the same target.
+next write to the same target; SIGTERM and SIGHUP remove what is staged before the process ends.
+A single file (:func:`staged_file`) is staged in a private folder of the temporary folder, so a run
+killed outright leaves nothing beside it.
 
 An output folder is mtbmj's when it says so: every folder written here holds a record,
 ``.mtbmj-output.json``, of the command that wrote it and every file it wrote. A folder is replaced
@@ -186,22 +188,146 @@ def check_file_target(path: str | Path, what: str = "--out", error: type[MtbmjEr
     return path
 
 
+# Where single files are staged while they are written: a private folder in the system's temporary
+# folder (``mtbmj-stage-PID-XXXX``), never beside the target, so that a run killed outright (SIGKILL)
+# leaves nothing beside the user's file; the next staging removes such folders of runs that are gone.
+STAGE_PREFIX = "mtbmj-stage-"
+TERMINATING = ("SIGTERM", "SIGHUP")  # signals whose default ends the process: staging is removed first
+_STAGED: dict[Path, bool] = {}  # what this process has staged now -> whether it is a folder
+_STAGED_LOCK = threading.Lock()
+_PREVIOUS_HANDLERS: dict = {}
+_STAGE_OWNER = {"pid": None}  # the process that staged (a worker forked meanwhile inherits the handler, not the stages)
+
+
+def _remove_staged(path: Path) -> None:
+    try:
+        if path.is_dir() and not path.is_symlink():
+            shutil.rmtree(path, ignore_errors=True)
+        else:
+            path.unlink(missing_ok=True)
+    except OSError:
+        pass
+
+
+def _on_terminate(signum, frame) -> None:
+    """SIGTERM or SIGHUP while something is staged: remove it, then end as the signal would have."""
+    import signal
+
+    if os.getpid() == _STAGE_OWNER["pid"]:
+        for path in list(_STAGED):
+            _remove_staged(path)
+    _STAGED.clear()
+    signal.signal(signum, signal.SIG_DFL)
+    os.kill(os.getpid(), signum)
+
+
+def _register_stage(path: Path, folder: bool) -> None:
+    """Remember ``path`` as staged; the first one installs the terminating signals' handler (in the
+    main thread, where the signal's action is still the default: never over a caller's own)."""
+    import signal
+
+    with _STAGED_LOCK:
+        first = not _STAGED
+        _STAGED[path] = folder
+        _STAGE_OWNER["pid"] = os.getpid()
+        if first and threading.current_thread() is threading.main_thread():
+            for name in TERMINATING:
+                number = getattr(signal, name, None)
+                if number is not None and signal.getsignal(number) == signal.SIG_DFL:
+                    _PREVIOUS_HANDLERS[number] = signal.signal(number, _on_terminate)
+
+
+def _unregister_stage(path: Path) -> None:
+    import signal
+
+    with _STAGED_LOCK:
+        _STAGED.pop(path, None)
+        if not _STAGED and threading.current_thread() is threading.main_thread():
+            for number, previous in list(_PREVIOUS_HANDLERS.items()):
+                if signal.getsignal(number) is _on_terminate:
+                    signal.signal(number, previous)
+                del _PREVIOUS_HANDLERS[number]
+
+
+def _clear_stale_stages() -> None:
+    """Remove private staging folders (``STAGE_PREFIX``PID-*) of this user's runs that are gone."""
+    import tempfile
+
+    root = Path(tempfile.gettempdir())
+    try:
+        candidates = list(root.glob(f"{_glob_escape(STAGE_PREFIX)}*"))
+    except OSError:
+        return
+    for path in candidates:
+        pid = path.name[len(STAGE_PREFIX):].split("-", 1)[0]
+        try:
+            mine = path.is_dir() and not path.is_symlink() and path.stat().st_uid == os.getuid()
+        except OSError:
+            continue
+        if mine and pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
+            shutil.rmtree(path, ignore_errors=True)
+
+
+def _place_copy(stage: Path, path: Path, replace: bool) -> None:
+    """Put ``stage`` (in the private staging folder) at ``path``: by a link or rename where both are on
+    one file system, else by a copy beside ``path`` (``.NAME.new-PID-XXXX.EXT``, there only for the
+    moment of the copy) that is then linked or renamed into place."""
+    try:
+        if replace:
+            os.replace(stage, path)
+        else:
+            os.link(stage, path)  # never replaces a file that appeared meanwhile
+        return
+    except OSError as exc:
+        if exc.errno not in (errno.EXDEV, errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EMLINK):
+            raise
+    beside = path.parent / f".{path.name}.new-{os.getpid()}-{uuid.uuid4().hex[:8]}{path.suffix}"
+    _register_stage(beside, False)
+    try:
+        shutil.copyfile(stage, beside)
+        with open(beside, "rb") as handle:
+            os.fsync(handle.fileno())
+        if replace:
+            os.replace(beside, path)
+        else:
+            try:
+                os.link(beside, path)
+            except OSError as exc:
+                if isinstance(exc, FileExistsError) or path.exists():
+                    raise
+                os.replace(beside, path)  # (a file system without hard links)
+    finally:
+        beside.unlink(missing_ok=True)
+        _unregister_stage(beside)
+
+
 @contextlib.contextmanager
 def staged_file(path: str | Path, command: str = "python", what: str = "--out",
                 error: type[MtbmjError] = MtbmjError) -> Iterator[Path]:
-    """Write one output file: yields a fresh hidden path beside ``path``
-    (``.NAME.new-PID-XXXX.EXT``) for the caller to fill; on a clean exit the file is put in
+    """Write one output file: yields a fresh path named like ``path`` in a private staging folder
+    (``TMPDIR/mtbmj-stage-PID-XXXX/``) for the caller to fill; on a clean exit the file is put in
     place (a new name by a link that never replaces anything; an older file of ours by an atomic
     rename, after checking again that it is still ours) and its record written beside it. On any
-    exception, and on Ctrl-C, the staged file is removed; a run killed outright leaves it, and the
-    next write to the same path removes it (its process is gone)."""
+    exception, on Ctrl-C and on SIGTERM or SIGHUP, the staged file is removed; a run killed outright
+    (SIGKILL) leaves nothing beside the target (its staging folder is removed by the next staging,
+    its process being gone)."""
+    import tempfile
+
     path = check_file_target(path, what, error)
     created = _missing_ancestors(path.parent)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise error(f"{what} {path}: cannot write ({exc.strerror})") from None
-    stage = path.parent / f".{path.name}.new-{os.getpid()}-{uuid.uuid4().hex[:8]}{path.suffix}"
+    _clear_stale_stages()
+    try:
+        folder = Path(tempfile.mkdtemp(prefix=f"{STAGE_PREFIX}{os.getpid()}-"))
+    except OSError as exc:
+        if not path.exists():
+            _remove_empty(created)
+        raise error(f"{what} {path}: cannot stage the file in the temporary folder ({exc.strerror})") from None
+    _register_stage(folder, True)
+    stage = folder / path.name
     try:
         try:
             yield stage
@@ -212,28 +338,25 @@ def staged_file(path: str | Path, command: str = "python", what: str = "--out",
                       "size_bytes": stage.stat().st_size, "sha256": _sha256(stage)}
             if path.exists() or path.is_symlink():
                 check_file_target(path, what, error)  # still ours now that the work is done?
-                os.replace(stage, path)
+                _place_copy(stage, path, replace=True)
             else:
                 try:
-                    os.link(stage, path)  # never replaces a file that appeared meanwhile
+                    _place_copy(stage, path, replace=False)
                 except FileExistsError:
                     raise error(f"{what} {path}: a file appeared there while mtbmj worked; "
                                 f"not replacing it") from None
-                except OSError:  # (a file system without hard links)
-                    if path.exists():
-                        raise
-                    os.replace(stage, path)
             write_file_atomically(file_record_path(path), json_bytes(record))
             fsync_dir(path.parent)
         except OSError as exc:
             raise error(f"{what} {path}: cannot write ({exc.strerror or exc})") from None
     except BaseException:
-        stage.unlink(missing_ok=True)  # before the folders it made are removed
+        shutil.rmtree(folder, ignore_errors=True)  # before the folders it made are removed
         if not path.exists():
             _remove_empty(created)
         raise
     finally:
-        stage.unlink(missing_ok=True)  # (after a link the staged name is still there)
+        shutil.rmtree(folder, ignore_errors=True)  # (after a link the staged name is still there)
+        _unregister_stage(folder)
 
 
 def check_target(out_dir: str | Path, inputs: Iterable[str | Path] = ()) -> Path:
@@ -526,6 +649,7 @@ def staged_folder(out_dir: str | Path, keep: Iterable[str] = ()) -> Iterator[Pat
             os.mkdir(stage, 0o777)
         except OSError as exc:
             raise MtbmjError(f"{out}: cannot write results ({exc.strerror})") from None
+        _register_stage(stage, True)  # removed on SIGTERM or SIGHUP too
         try:
             for name in keep:
                 if (out / name).exists():
@@ -544,6 +668,8 @@ def staged_folder(out_dir: str | Path, keep: Iterable[str] = ()) -> Iterator[Pat
         except BaseException:
             shutil.rmtree(stage, ignore_errors=True)
             raise
+        finally:
+            _unregister_stage(stage)
 
 
 def write_atomically(out_dir: str | Path, files: Mapping[str, bytes], keep: Iterable[str] = ()) -> list[Path]:

@@ -171,3 +171,30 @@ def test_bad_input_is_one_line_exit_2_nothing_written(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and cause in err and "Traceback" not in err, (cause, err)
         assert not out.exists(), cause
+
+
+# --- (4) records without a seat slam (issue 49) ---------------------------------------------------
+
+@pytest.mark.skipif(not (SHARED / "00101.SST").exists(), reason="../shared/data/sst_v2 not present")
+@pytest.mark.parametrize("name", ["00088", "00089", "00090", "00091", "00092", "00093", "00094", "00095", "00096",
+                                  "00097", "00098", "00099", "00100", "00101"])
+def test_shared_rides_and_pedalling_are_not_seat_slams(tmp_path, capsys, name):
+    """The shared pedalling runs (00088-00091) and trail sections (00092-00101) hold no seat slam:
+    before this check 00090 (seated pedalling) gave zeta 0.220 [0.192, 0.248] at 3.24 Hz and 00096
+    (a trail section) 0.250 [0.192, 0.308] at 1.40 Hz. Their largest compressions rise at most 1.9 x
+    the movement of the second before them; the three slams rise 27-243 x."""
+    out = tmp_path / "out"
+    assert cli.main(["fit", "bounce", str(SHARED / f"{name}.SST"), "--clicks", "0", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{name}.SST" in err and "no seat slam" in err and "Traceback" not in err
+    assert not out.exists()
+
+
+@pytest.mark.skipif(not (SHARED / "00087.SST").exists(), reason="../shared/data/sst_v2 not present")
+def test_shared_slams_predict_only_inside_their_clicks(tmp_path, capsys):
+    files = [str(SHARED / f"{n}.SST") for n in ("00083", "00085", "00087")]
+    out = tmp_path / "out"
+    assert cli.main(["fit", "bounce", *files, "--clicks", "0,8,17", "--predict-clicks", "200", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--predict-clicks 200: outside the clicks the shock law was fitted on (0 to 17)" in err
+    assert not out.exists()

@@ -144,3 +144,54 @@ def test_rolling_run_directory(backend, tmp_path):
         img.seek(img.n_frames - 1)
         last = np.asarray(img.convert("RGB")).astype(int)
     assert first.std() > 10 and np.abs(first - last).max() > 30  # visible and moving
+
+
+@pytest.mark.parametrize("sig", ["SIGTERM", "SIGKILL"])
+def test_a_killed_render_leaves_nothing_beside_its_target(backend, tmp_path, sig):
+    """``mtbmj render`` killed while it writes its MP4: no file, hidden or not, beside the target.
+    SIGTERM removes the staged video before the process ends; after SIGKILL the staged video lies in
+    the private staging folder of the temporary folder, which the next staging removes."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import tempfile
+    import time
+
+    from mtbmj import output
+
+    pytest.importorskip("imageio_ffmpeg", reason="MP4 needs imageio-ffmpeg")
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    folder = tmp_path / "videos"
+    folder.mkdir()
+    env = {k: v for k, v in os.environ.items() if k != "MUJOCO_GL"}
+    env.update(TMPDIR=str(temporary), MUJOCO_GL=backend)
+    command = "import sys; from mtbmj.cli import main; sys.exit(main(sys.argv[1:]))"
+    proc = subprocess.Popen([sys.executable, "-c", command, "render", "S12", "--out", str(folder / "v.mp4"),
+                             "--width", "320", "--height", "240", "--fps", "240"],
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        deadline = time.monotonic() + 120
+        staged = []
+        while time.monotonic() < deadline and proc.poll() is None:  # mid-way: frames are being written
+            staged = [p for d in temporary.glob(output.STAGE_PREFIX + "*") for p in d.glob("v.mp4")]
+            if staged and staged[0].stat().st_size > 0:
+                break
+            time.sleep(0.05)
+        assert proc.poll() is None and staged, "render ended before it was caught writing"
+        proc.send_signal(getattr(signal, sig))
+        proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == -getattr(signal, sig)
+    assert list(folder.iterdir()) == []  # nothing beside the target, not even a hidden file
+    if sig == "SIGTERM":
+        assert list(temporary.iterdir()) == []
+    else:
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setattr(tempfile, "tempdir", str(temporary))
+            output._clear_stale_stages()  # what the next staging does first
+        assert list(temporary.iterdir()) == []

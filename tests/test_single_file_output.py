@@ -98,8 +98,14 @@ def test_a_failed_or_interrupted_write_leaves_nothing(tmp_path):
         assert list(tmp_path.iterdir()) == []  # not even the folders it made
 
 
-def test_a_killed_write_is_cleaned_by_the_next_one(tmp_path):
+def test_a_killed_write_is_cleaned_by_the_next_one(tmp_path, monkeypatch):
+    """SIGKILL mid-write: nothing is left beside the target (the file is staged in a private folder
+    of the temporary folder), and the next write removes that folder (its process is gone)."""
+    import tempfile
+
     video = tmp_path / "v.gif"
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
     child = textwrap.dedent(f"""
         import os, signal
         from mtbmj import output
@@ -107,14 +113,39 @@ def test_a_killed_write_is_cleaned_by_the_next_one(tmp_path):
             stage.write_bytes(b"half")
             os.kill(os.getpid(), signal.SIGKILL)
     """)
-    proc = subprocess.run([sys.executable, "-c", child], capture_output=True)
+    proc = subprocess.run([sys.executable, "-c", child], capture_output=True,
+                          env={**os.environ, "TMPDIR": str(temporary)})
     assert proc.returncode == -signal.SIGKILL
-    left = [p.name for p in tmp_path.iterdir()]
-    assert len(left) == 1 and left[0].startswith(".v.gif.new-")  # what a killed run leaves ...
-    # ... a hidden file of the user's with a similar name is not touched
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["tmp"]  # nothing beside the target ...
+    left = [p.name for p in temporary.iterdir()]
+    assert len(left) == 1 and left[0].startswith(output.STAGE_PREFIX)  # ... its staging, in the temporary folder
+    # a hidden file of the user's with a similar name is not touched
     (tmp_path / ".v.gif.notes").write_bytes(b"mine")
-    _write(video, b"whole")  # ... and the next write to the same name removes
-    assert sorted(p.name for p in tmp_path.iterdir()) == [".v.gif.mtbmj-file.json", ".v.gif.notes", "v.gif"]
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
+    _write(video, b"whole")  # ... and the next write removes the killed run's staging
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".v.gif.mtbmj-file.json", ".v.gif.notes", "tmp", "v.gif"]
+    assert list(temporary.iterdir()) == []
+
+
+def test_a_terminated_write_leaves_nothing(tmp_path):
+    """SIGTERM (and SIGHUP) mid-write: the staged file is removed and the process ends by the signal."""
+    video = tmp_path / "v.gif"
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        child = textwrap.dedent(f"""
+            import os, signal, time
+            from mtbmj import output
+            with output.staged_file({str(video)!r}, command="test") as stage:
+                stage.write_bytes(b"half")
+                os.kill(os.getpid(), {int(sig)})
+                time.sleep(5)
+                print("survived")
+        """)
+        proc = subprocess.run([sys.executable, "-c", child], capture_output=True,
+                              env={**os.environ, "TMPDIR": str(temporary)})
+        assert proc.returncode == -sig and b"survived" not in proc.stdout
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["tmp"] and list(temporary.iterdir()) == []
 
 
 def test_render_command_refuses_a_users_gif(tmp_path, monkeypatch, capsys):

@@ -132,6 +132,13 @@ def analyse(paths, clicks, predict=(), bike=None) -> dict:
     if predict and not laws:
         raise MtbmjError("--predict-clicks: no law in clicks to predict from (it needs fitted ring-downs at two or "
                          "more different --clicks)")
+    for k in predict:  # a law linear in clicks is read between its records, never extrapolated beyond them
+        for end, law in laws.items():
+            lo, hi = min(law.clicks), max(law.clicks)
+            if not lo <= k <= hi:
+                raise MtbmjError(f"--predict-clicks {k:g}: outside the clicks the {end} law was fitted on ({lo:g} to "
+                                 f"{hi:g}); a law linear in clicks is not extrapolated beyond its records: record a "
+                                 f"slam at {k:g} clicks instead")
     out = {"method": bounce.METHOD, "units": {"time": "s", "travel": "mm", "frequency": "Hz"},
            "intervals": "95 %", "notes": notes, "records": [], "law": {}, "predicted": []}
     for r, k, f in zip(records, clicks, fits):
@@ -175,7 +182,8 @@ def analyse(paths, clicks, predict=(), bike=None) -> dict:
         for end, law in laws.items():
             z, zsd = law.zeta(k)
             fd, fsd = law.frequency(k)
-            entry[end] = {"damping_ratio": z, "damping_ratio_ci95": bounce.interval95(z, zsd), "frequency_hz": fd,
+            entry[end] = {"damping_ratio": z, "damping_ratio_ci95": bounce.interval95(z, zsd),
+                          "frequency_hz": fd if math.isfinite(fd) else None,
                           "frequency_hz_ci95": bounce.interval95(fd, fsd) if math.isfinite(fd) else None,
                           "undamped_frequency_hz": law.fn_Hz,
                           "undamped_frequency_hz_ci95": bounce.interval95(law.fn_Hz, law.fn_sd)}
@@ -284,13 +292,41 @@ def _bike_text(b: dict | None) -> str:
             f"damper {b['damper_N_s_per_m']:.0f} N s/m [{lo:.0f}, {hi:.0f}]")
 
 
+def _not_finite(value, where: str = "") -> str | None:
+    """The key path of the first value in ``value`` (dicts, lists, numbers) that is not a finite number."""
+    if isinstance(value, dict):
+        for k, v in value.items():
+            found = _not_finite(v, f"{where}.{k}" if where else str(k))
+            if found is not None:
+                return found
+    elif isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            found = _not_finite(v, f"{where}[{i}]")
+            if found is not None:
+                return found
+    elif isinstance(value, float) and not math.isfinite(value):
+        return f"{where} = {value}"
+    return None
+
+
+def json_bytes(data) -> bytes:
+    """fit.json's bytes: strict JSON. A value that is not a finite number is refused in one line naming
+    its key (``json.dumps(allow_nan=False)`` writes no NaN or Infinity, which JSON does not have)."""
+    import json
+
+    bad = _not_finite(data)
+    if bad is not None:
+        raise MtbmjError(f"fit.json: {bad} is not a number; nothing written")
+    return (json.dumps(data, indent=2, allow_nan=False) + "\n").encode()
+
+
 def cmd_fit_bounce(args) -> int:
     from mtbmj import output
 
     clicks = _numbers(args.clicks, "--clicks")
     predict = _numbers(args.predict_clicks, "--predict-clicks") if args.predict_clicks else []
     result = analyse(args.records, clicks, predict, bike=args.bike)
-    files = {"fit.json": output.json_bytes(result["json"]), "fit.png": figure_png(result)}
+    files = {"fit.json": json_bytes(result["json"]), "fit.png": figure_png(result)}
     for name, cols in result["csv"].items():
         files[name] = output.csv_bytes(cols)
     written = output.write_atomically(args.out, files)
@@ -321,8 +357,10 @@ def cmd_fit_bounce(args) -> int:
         for end in ("shock", "fork"):
             if end in p:
                 e = p[end]
+                freq = (f"{e['frequency_hz']:.2f} Hz" if e["frequency_hz"] is not None else
+                        e.get("note", "no oscillation"))
                 print(f"predicted at {p['clicks']:g} clicks: {end} zeta {e['damping_ratio']:.3f} "
-                      f"[{e['damping_ratio_ci95'][0]:.3f}, {e['damping_ratio_ci95'][1]:.3f}], {e['frequency_hz']:.2f} Hz"
+                      f"[{e['damping_ratio_ci95'][0]:.3f}, {e['damping_ratio_ci95'][1]:.3f}], {freq}"
                       + _bike_text(e.get("bike")))
     for note in result["json"]["notes"]:
         print(f"note: {note}")

@@ -40,7 +40,18 @@ Z95 = 1.959963984540054  # two-sided 95 % of the normal distribution
 SLAM_WINDOW_S = 0.25  # the fork's slam peak is sought this close to the shock's
 SMOOTH_S = 0.010  # moving average before turning points are sought
 SWING_FRACTION = 0.01  # a turning point needs a swing of this share of the slam's drop (and 5 x noise)
-MIN_TURNS = 2  # turning points after the start: at least one whole cycle
+MIN_TURNS = 2  # turning points after the start: at least two half cycles (one whole cycle)
+# A seat slam, told from the physics of what it is: an isolated large compression, then the
+# suspension's free, decaying oscillation on its spring.
+QUIET_BEFORE_S = (1.5, 0.5)  # the window before the slam's peak (s) in which the rider sits still
+ISOLATION = 4.0  # the slam's compression above that window's level, against the window's spread (2.5-97.5 %)
+MIN_SLAM_NOISE = 20.0  # the slam's compression against the record's noise
+MIN_START_NOISE = 10.0  # the ring-down's first excursion from rest against the record's noise
+# a sprung mass on a spring rings at sqrt(g / static deflection) / 2 pi: 6 Hz at 7 mm, 0.5 Hz at 1 m,
+# a band that holds any bike's sag (and a progressive spring's stiffer tangent); wheel hop (10-20 Hz)
+# and a rider's pedalling are outside it or fail the other tests
+FREQUENCY_BAND_HZ = (0.5, 6.0)
+MIN_EXPLAINED = 0.9  # the damped sinusoid explains at least this share of the ring-down's variance
 METHOD = ("least-squares fit of a damped sinusoid x(t) = rest + exp(-zeta wn (t - t0)) (B cos(wd (t - t0)) + "
           "C sin(wd (t - t0))) to each end's free ring-down after the slam (from the first rebound trough, or "
           "where the end leaves full extension after topping out); zeta = a / sqrt(a^2 + wd^2), frequency_hz = "
@@ -195,7 +206,42 @@ def ring_down(time_s: np.ndarray, x_mm: np.ndarray, end: str, slam_index: int | 
     if nxt and len(chain) > len(kept):  # the next event's turning point: stop before it moves away
         stop = min(stop, nxt[0])
     base.t_end_s = float(t[stop])
-    return _fit(base, t[start:stop + 1], x[start:stop + 1], half)
+    return _judge(_fit(base, t[start:stop + 1], x[start:stop + 1], half), x[start:stop + 1], noise_mm(x))
+
+
+def _judge(rd: RingDown, x: np.ndarray, noise: float) -> RingDown:
+    """Keep a fitted ring-down only when it is the suspension's free oscillation: its frequency in
+    ``FREQUENCY_BAND_HZ``, its damping ratio's 95 % interval inside 0 to 1 (the swings decay, and
+    they oscillate), the fit explaining at least ``MIN_EXPLAINED`` of the motion, its first excursion
+    ``MIN_START_NOISE`` times the noise, and its free start within one period of the slam. Otherwise
+    the fit is withdrawn and the note says why."""
+    if not rd.fitted:
+        return rd
+    lo, hi = interval95(rd.zeta, rd.zeta_sd)
+    explained = 1.0 - rd.rms_mm ** 2 / max(float(np.var(x)), 1e-300)
+    amplitude = math.hypot(rd.params[3], rd.params[4])
+    f_lo, f_hi = FREQUENCY_BAND_HZ
+    why = None
+    if not f_lo <= rd.fd_Hz <= f_hi:
+        why = (f"its frequency {rd.fd_Hz:.2f} Hz is outside {f_lo:g}-{f_hi:g} Hz, where a suspension rings on its "
+               f"spring")
+    elif not (0.0 < lo and hi < 1.0):
+        why = (f"its damping ratio {rd.zeta:.3f} [{lo:.3f}, {hi:.3f}] (95 %) does not lie inside 0 to 1: the swings "
+               f"do not decay measurably, or do not oscillate")
+    elif explained < MIN_EXPLAINED:
+        why = (f"a damped sinusoid explains {100 * max(explained, 0.0):.0f} % of its motion "
+               f"(at least {100 * MIN_EXPLAINED:.0f} % for a free ring-down)")
+    elif amplitude < MIN_START_NOISE * noise:
+        why = (f"its first excursion ({amplitude:.2g} mm) is less than {MIN_START_NOISE:g} x the record's noise "
+               f"({noise:.2g} mm)")
+    elif rd.t0_s - rd.slam_s > 1.0 / rd.fd_Hz:
+        why = (f"its free start comes {(rd.t0_s - rd.slam_s) * rd.fd_Hz:.1f} periods after the slam (at most one): "
+               f"another event")
+    if why is None:
+        return rd
+    note = f"no free ring-down: {why}; no fit"
+    return RingDown(end=rd.end, slam_s=rd.slam_s, t0_s=rd.t0_s, t_end_s=rd.t_end_s, turns=rd.turns,
+                    topped_out=rd.topped_out, note=note)
 
 
 def _half_period(t: np.ndarray, start: int, kept: list[int], topped: bool) -> float | None:
@@ -269,15 +315,57 @@ def _fit(rd: RingDown, t: np.ndarray, x: np.ndarray, half_s: float) -> RingDown:
     return rd
 
 
+def find_slam(time_s: np.ndarray, x_mm: np.ndarray, name: str) -> int:
+    """The index of the seat slam on ``x_mm`` (the lead end's travel): the largest compression, which
+    must be isolated. The rider sits still before slamming: over ``QUIET_BEFORE_S`` before the peak
+    the travel keeps its level, and the slam rises above that level by at least ``ISOLATION`` times
+    the window's spread (its 2.5-97.5 % range) and ``MIN_SLAM_NOISE`` times the record's noise.
+    A ride's largest hit (one of many), a pedalling stroke or noise is no seat slam: raises
+    ``BounceError`` naming ``name``."""
+    t = np.asarray(time_s, float)
+    x = np.asarray(x_mm, float)
+    if t.size < 3 or not np.all(np.isfinite(x)):
+        raise BounceError(f"{name}: no seat slam: the travel is not a finite series of 3 or more samples")
+    dt = float(t[1] - t[0])
+    xs = _smooth(x, max(1, int(round(SMOOTH_S / dt))))
+    peak = int(np.argmax(xs))
+    early, late = QUIET_BEFORE_S
+    if t[peak] - t[0] < early:
+        raise BounceError(f"{name}: no seat slam told: the largest compression ({xs[peak]:.1f} mm at {t[peak]:.2f} s) "
+                          f"comes {t[peak] - t[0]:.2f} s after the record starts; a seat slam is told by the rider "
+                          f"sitting still before it ({early:g} s of record before the slam are needed)")
+    window = xs[(t >= t[peak] - early) & (t <= t[peak] - late)]
+    level = float(np.median(window))
+    spread = float(np.percentile(window, 97.5) - np.percentile(window, 2.5))
+    rise = float(xs[peak]) - level
+    noise = noise_mm(x)
+    need = max(ISOLATION * spread, MIN_SLAM_NOISE * noise)
+    if not rise > need:
+        raise BounceError(
+            f"{name}: no seat slam: the largest compression ({xs[peak]:.1f} mm at {t[peak]:.2f} s) rises {rise:.1f} mm "
+            f"above the travel {late:g}-{early:g} s before it, which moves by {spread:.1f} mm (noise {noise:.2g} mm); "
+            f"a seat slam is an isolated compression of at least {ISOLATION:g} x that movement and "
+            f"{MIN_SLAM_NOISE:g} x the noise ({need:.1f} mm)")
+    return peak
+
+
 def fit_record(record) -> dict:
-    """Each end's ring-down of one ``TelemetryRecord`` (end -> RingDown; an absent sensor is left out)."""
+    """Each end's ring-down of one ``TelemetryRecord`` (end -> RingDown; an absent sensor is left out).
+    Raises ``BounceError`` (naming the file) when the record holds no seat slam (:func:`find_slam`)
+    or no end rings down freely after it."""
     series = {"shock": record.shock_mm, "fork": record.fork_mm}
-    lead = series["shock"] if series["shock"] is not None else series["fork"]
-    slam = int(np.argmax(_smooth(np.asarray(lead, float), max(1, int(round(SMOOTH_S * record.sample_rate_Hz))))))
+    lead_end = "shock" if series["shock"] is not None else "fork"
+    name = getattr(record, "name", None) or str(getattr(record, "path", "record"))
+    if series[lead_end] is None:
+        raise BounceError(f"{name}: no sensor present")
+    slam = find_slam(record.time_s, series[lead_end], f"{name} ({lead_end})")
     out = {}
     for end in ENDS:
         if series[end] is not None:
             out[end] = ring_down(record.time_s, series[end], end, slam_index=slam)
+    if not any(rd.fitted for rd in out.values()):
+        raise BounceError(f"{name}: no ring-down after the slam at {record.time_s[slam]:.2f} s: "
+                          + "; ".join(f"{end}: {rd.note}" for end, rd in out.items()))
     return out
 
 
@@ -364,6 +452,7 @@ def predicted_ring_down(source: RingDown, time_s: np.ndarray, zeta: float, fd_Hz
     return tt, x
 
 
-__all__ = ["BounceError", "ClickLaw", "RingDown", "click_law", "fit_record", "predicted_ring_down", "ring_down",
+__all__ = ["BounceError", "ClickLaw", "RingDown", "click_law", "find_slam", "fit_record", "predicted_ring_down",
+           "ring_down",
            "weighted_line",
            "METHOD", "LAW_FORM"]

@@ -197,6 +197,7 @@ def _hydraulic(name: str, p: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.where(v > 0, p[0] * v, p[1] * v)
 
 
+POLISH_NFEV = 2000  # evaluations per parameter a fit that ran out of them may take to finish from its best
 N_HYDRAULIC = {"linear": 1, "bilinear": 2, "digressive": 6, "smooth_knee": 6, "power": 4}
 CHECK_SHAPES = ("smooth_knee", "power")  # other shapes of the hydraulic force near zero speed, for the friction check
 FRICTION_AGREEMENT = 0.2  # the friction under two shapes of the hydraulic knee: more than 20 % apart, it is not told
@@ -276,6 +277,11 @@ def _parametric(rec: Record, hydraulic: str, friction: str, name: str) -> FitRes
         sol = least_squares(resid, np.clip(z0, lower, upper) / scale, bounds=(lower / scale, upper / scale),
                             method="trf", x_scale="jac")
         if best is None or sol.cost < best.cost:
+            best = sol
+    if best.status == 0 and np.all(np.isfinite(best.x)):  # out of evaluations on its way: let it finish
+        sol = least_squares(resid, best.x, bounds=(lower / scale, upper / scale), method="trf", x_scale="jac",
+                            max_nfev=POLISH_NFEV * best.x.size)
+        if sol.cost <= best.cost:
             best = sol
     if best.status <= 0 or not np.all(np.isfinite(best.x)):
         raise RecordError(f"{rec.path}: the {name} damper fit did not converge ({best.message})")
@@ -550,14 +556,22 @@ def refit_friction(record: Record, results: dict[str, FitResult], hydraulic: str
     """Fit every friction model (again) with the ``hydraulic`` law the fit writes (``linear``,
     ``bilinear`` or ``digressive``), so the friction models are compared, and the friction
     written, on the law that carries them, fitted together with it (on digressive data a bilinear
-    law bends the friction to make up its shape). ``step()``: called after each fit."""
+    law bends the friction to make up its shape). A friction law that cannot be fitted with it
+    (``RecordError``: the solver did not converge) is left out, with a note on the hydraulic fit,
+    rather than ending the fit. ``step()``: called after each fit."""
     rec = peaks(record)
     for name in FRICTION:
         done = results.get(hydraulic)
         if name == "coulomb" and done is not None and done.extra.get("friction") == "coulomb":
             results[name] = replace(done, model=name, extra=dict(done.extra))  # the same fit: not run twice
         else:
-            results[name] = _parametric(rec, hydraulic, name, name)
+            try:
+                results[name] = _parametric(rec, hydraulic, name, name)
+            except RecordError as exc:  # one friction law that cannot be fitted here is left out, not fatal
+                results.pop(name, None)
+                if done is not None:
+                    done.extra.setdefault("notes", []).append(f"{name} friction: not fitted with this law, left out "
+                                                              f"of the comparison ({exc})")
         if step is not None:
             step()
     if "digressive" in results:
