@@ -83,9 +83,34 @@ class RunOutput:
         data = self.raw if raw else self.signals
         return pd.DataFrame({k: data[k] for k in self.COLUMNS}).set_index("time_s")
 
+    # the columns ``difference`` compares, and the key its largest |a - b| is given under
+    COMPARED: tuple[str, ...] = ()
+    DIFFERENCE_KEY = "max_abs"
+
     def csv_chunks(self, raw: bool = False):
         """The CSV as bytes chunks (``csv_bytes`` in one chunk unless a subclass streams it)."""
         yield self.csv_bytes(raw)
+
+    def to_csv(self, path: str | Path, raw: bool = False) -> Path:
+        """The time series (``timeseries.csv``'s content, or ``raw``: the engine-rate one where a rig
+        keeps both) written to ``path`` whole, or not at all."""
+        return output.write_file_atomically(Path(path), self.csv_chunks(raw))
+
+    def difference(self, other: "RunOutput", raw: bool = True) -> dict[str, dict[str, float]]:
+        """Largest |self - other| per compared column (``COMPARED``, in the column's unit) and when,
+        over the samples both runs share at the engine rate (``raw``) or the logged one; runs on
+        different grids raise ValueError."""
+        a, b = (self.raw, other.raw) if raw else (self.signals, other.signals)
+        n = min(len(a["time_s"]), len(b["time_s"]))
+        if not np.allclose(a["time_s"][:n], b["time_s"][:n], atol=1e-9):
+            raise ValueError("results are not on the same time grid")
+        out = {}
+        for column in self.COMPARED:
+            diff = np.abs(np.asarray(a[column][:n]) - np.asarray(b[column][:n]))
+            i = int(np.argmax(diff)) if n else 0
+            out[column] = {self.DIFFERENCE_KEY: float(diff[i]) if n else 0.0,
+                           "at_time_s": float(a["time_s"][i]) if n else 0.0}
+        return out
 
     def files(self, stream: bool = False, figure: bool = True) -> dict:
         """Everything ``write`` puts in an output directory (name -> bytes; with ``stream`` the

@@ -418,6 +418,8 @@ class BikeResult(RunOutput):
     info: dict = field(default_factory=dict)
     motion: tuple = ()  # (times, qpos) at VIDEO_SAMPLE_HZ, for ``video``
     COLUMNS = COLUMNS
+    # difference(): travel and stroke in mm, pitch in deg, tyre loads in N
+    COMPARED = ("front_travel_mm", "rear_travel_mm", "stroke_mm", "pitch_deg", "front_tire_N", "rear_tire_N")
 
     def csv_bytes(self, raw: bool = False) -> bytes:
         header = (f"mtbmj bike {self.name} over {self.scenario}, engine rate\n"
@@ -551,26 +553,6 @@ class BikeResult(RunOutput):
         axes[-1].set_xlabel("time [s]")
         axes[0].legend(loc="best", fontsize=8)
         return fig
-
-    def to_csv(self, path):
-        """The time series (``timeseries.csv``'s content) written to ``path`` whole, or not at all."""
-        from pathlib import Path
-
-        return output.write_file_atomically(Path(path), self.csv_chunks())
-
-    def difference(self, other: "BikeResult") -> dict[str, dict[str, float]]:
-        """Largest |self - other| per signal (travel and stroke in mm, pitch in deg, tyre loads in N)
-        and when, over the samples both runs share (the same step: else ValueError)."""
-        a, b = self.raw, other.raw
-        n = min(len(a["time_s"]), len(b["time_s"]))
-        if not np.allclose(a["time_s"][:n], b["time_s"][:n], atol=1e-9):
-            raise ValueError("results are not on the same time grid")
-        out = {}
-        for column in ("front_travel_mm", "rear_travel_mm", "stroke_mm", "pitch_deg", "front_tire_N", "rear_tire_N"):
-            diff = np.abs(a[column][:n] - b[column][:n])
-            i = int(np.argmax(diff)) if n else 0
-            out[column] = {"max_abs": float(diff[i]) if n else 0.0, "at_time_s": float(a["time_s"][i]) if n else 0.0}
-        return out
 
 
 def default_duration(p: Prepared) -> float:

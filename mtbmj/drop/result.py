@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -21,6 +20,8 @@ class DropResult(RunOutput):
     ``measure.COLUMNS``), ``raw`` at the engine rate, ``summary`` (events, rest, energy)."""
 
     COLUMNS = COLUMNS  # not a field: the columns written and exported
+    COMPARED = DISPLACEMENTS  # difference(): sled, fork and tire, in mm
+    DIFFERENCE_KEY = "max_abs_mm"
 
     name: str
     engine: str
@@ -42,10 +43,6 @@ class DropResult(RunOutput):
     def csv_bytes(self, raw: bool = False) -> bytes:
         return b"".join(self.csv_chunks(raw))
 
-    def to_csv(self, path: str | Path, raw: bool = False) -> Path:
-        path = Path(path)
-        return output.write_file_atomically(path, self.csv_chunks(raw))
-
     def manifest(self) -> dict:
         return {
             "name": self.name,
@@ -56,19 +53,6 @@ class DropResult(RunOutput):
             "wall_time_s": self.wall_time_s,
             "engine_info": {k: v for k, v in self.trace.info.items() if k != "events"},
         }
-
-    def difference(self, other: "DropResult", raw: bool = True) -> dict[str, dict[str, float]]:
-        """Largest |self - other| per displacement (mm) and where it occurs (s), on the shared grid."""
-        a, b = (self.raw, other.raw) if raw else (self.signals, other.signals)
-        n = min(len(a["time_s"]), len(b["time_s"]))
-        if not np.allclose(a["time_s"][:n], b["time_s"][:n], atol=1e-9):
-            raise ValueError("results are not on the same time grid")
-        out = {}
-        for column in DISPLACEMENTS:
-            diff = np.abs(a[column][:n] - b[column][:n])
-            i = int(np.argmax(diff))
-            out[column] = {"max_abs_mm": float(diff[i]), "at_time_s": float(a["time_s"][i])}
-        return out
 
     def headline(self) -> str:
         """The run in one line: peaks, lift-off, rest and any bottom-out or rim strike."""

@@ -519,6 +519,8 @@ class RollResult(RunOutput):
     wall_time_s: float
     info: dict = field(default_factory=dict)
     COLUMNS = COLUMNS
+    # difference(): the body's and the axle's heights, fork travel and tyre deflection in mm, the tyre's force in N
+    COMPARED = ("body_z_mm", "axle_z_mm", "fork_mm", "tire_mm", "tire_force_N")
 
     def csv_bytes(self, raw: bool = False) -> bytes:
         data = self.raw if raw else self.signals
