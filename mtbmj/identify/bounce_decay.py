@@ -70,6 +70,7 @@ MODELS = ("viscous", "friction", "both")
 PACE = 1.6  # successive free extrema at most this many half periods apart
 HOLD_FACTOR = 2.0  # an extremum held this many times a free extremum's dwell (plus HOLD_PAD_S) is held
 HOLD_PAD_S = 0.020
+STUCK_SPREAD = 0.15  # at rest: the smoothed travel's sd within this share of the hysteresis
 IC = "BIC = n ln(RSS / n) + (p + 1) ln n over the half-cycle relations (lowest wins)"
 LAW_FORM = ("x_{n+1} = c_n - r (x_n - c_n), c_n = x_eq + sigma_n d (sigma_n +1 after a peak, -1 after a trough), "
             "r = exp(-pi zeta / sqrt(1 - zeta^2)), d = F_c / k: viscous damping zeta and Coulomb friction band d "
@@ -158,6 +159,11 @@ def extrema(time_s, x_mm, end: str, slam_index: int | None = None) -> Extrema:
     gaps = np.diff(t[idx[: min(len(idx), 4)]])
     half = float(np.median(gaps))  # first estimate of the half period (refined on the free sequence)
 
+    def flat(seg: np.ndarray) -> bool:
+        """At rest: the travel's spread (smoothed) within STUCK_SPREAD of the hysteresis (a ring-down
+        still moving below the hysteresis is not stuck)."""
+        return seg.size > 0 and float(np.std(seg)) <= STUCK_SPREAD * swing
+
     def kind(j: int) -> tuple[str, float]:
         """("free" | "stop" | "stuck", level): a stop is the top-out or a short hold, stuck a hold
         longer than a half period (or to the record's end)."""
@@ -165,8 +171,9 @@ def extrema(time_s, x_mm, end: str, slam_index: int | None = None) -> Extrema:
         lo, hi = _dwell(xs, i, swing)
         level = float(np.median(xs[lo:hi + 1]))
         dwell = (hi - lo) * dt
-        if dwell > half or hi == xs.size - 1:
-            return "stuck", level
+        settled = xs[min(hi, lo + int(0.5 * half / dt)):hi + 1]
+        if (dwell > half or hi == xs.size - 1) and flat(settled):
+            return "stuck", float(np.median(settled))  # where it rests (its noise averaged out)
         if xs[i] <= swing:  # full extension: the top-out stop (travel 0 whatever the calibration's scale)
             return "stop", level
         nb = [abs(xs[idx[k]] - xs[i]) for k in (j - 1, j + 1) if 0 <= k < len(idx)]
@@ -174,7 +181,18 @@ def extrema(time_s, x_mm, end: str, slam_index: int | None = None) -> Extrema:
         free = half if amp <= swing else 2.0 * half / math.pi * math.acos(1.0 - swing / amp)
         if dwell > HOLD_FACTOR * free + HOLD_PAD_S:
             return "stop", level
-        return "free", float(xs[i])
+        return "free", vertex(i)
+
+    def vertex(i: int) -> float:
+        """The extremum's level: the vertex of a parabola fitted to the raw travel within a fifth of a
+        half period either side (the running extreme of a noisy signal is biased by its noise)."""
+        w = max(2, int(0.2 * half / dt))
+        a, b = max(0, i - w), min(x.size, i + w + 1)
+        tau = t[a:b] - t[i]
+        c2, c1, c0 = np.polyfit(tau, x[a:b], 2)
+        if c2 == 0.0 or abs(c1 / (2 * c2)) > tau.max():
+            return float(xs[i])
+        return float(c0 - c1 * c1 / (4 * c2))
 
     out.excluded.append(f"the slam's peak at {t[peak]:.3f} s (forced by the rider, not free)")
     start = 1
@@ -215,6 +233,17 @@ def extrema(time_s, x_mm, end: str, slam_index: int | None = None) -> Extrema:
         times.append(float(t[idx[nxt]]) if what == "free" else float("nan"))
         stuck = what == "stuck"
         k = nxt
+    if not stuck and k == len(idx) - 1:
+        # the last extremum before the motion sticks for good is no turning point (nothing turns after it)
+        i = idx[k]
+        m = i + (int(np.argmax(xs[i:])) if k % 2 == 1 else int(np.argmin(xs[i:])))  # idx[0] is the slam's peak
+        lo, hi = _dwell(xs, m, swing)
+        prev = abs(levels[-1] - levels[-2]) if len(levels) >= 2 else math.inf
+        if abs(xs[m] - xs[i]) > swing and abs(xs[m] - xs[i]) <= prev + swing and (
+                hi == xs.size - 1 or (hi - lo) * dt > half) and flat(xs[min(hi, lo + int(0.5 * half / dt)):hi + 1]):
+            levels.append(float(np.median(xs[min(hi, lo + int(0.5 * half / dt)):hi + 1])))
+            times.append(float("nan"))
+            stuck = True
     if stuck and k + 1 < len(idx):
         out.excluded.append(f"the motion after it stuck (from {t[idx[k + 1]]:.3f} s on: another event or a creep)")
     out.levels_mm, out.times_s, out.stuck = np.array(levels), np.array(times), stuck
