@@ -32,8 +32,10 @@ free sequence starts at the first extremum after the slam that is neither held n
 one: **the half cycles that touch the top-out stop (or sit held) are excluded**, the one into the
 stop and the one out of it (the end leaves the stop moving, not from rest, so that half cycle is not
 free). It continues while the extrema come at the oscillation's pace (within 1.6 half periods) and
-the swings decay; a held extremum ends it: that is where the motion stuck, and its level (the
-median of the held stretch) is the sequence's last value. Another stop ends it the same way.
+the swings decay (each level the vertex of a parabola fitted to the raw travel within a fifth of a
+half period: the running extreme of a noisy signal is biased); a held extremum ends it: that is where the motion stuck, and its level (the
+median of the held stretch, after its first half of a half period, when its spread is under 0.15 x
+the hysteresis: at rest) is the sequence's last value; a stretch that still moves is not at rest. Another stop ends it the same way.
 
 **The fit.** Each relation x_n -> x_{n+1} is one residual; (zeta, d, x_eq) are fitted by least
 squares on the whole sequence, three models: viscous only (d = 0), friction only (zeta = 0), both.
