@@ -173,6 +173,7 @@ def analyse(paths, clicks, predict=(), bike=None) -> dict:
 
         out["bike"] = {"name": seated.spec.name, "method": BIKE_METHOD,
                        "seated_com_mm": [v * 1e3 for v in seated.spec.rider.seated_com]}
+    decay_fits, decay_laws = _decay(records, clicks, out, notes)
     csvs = {}
     base_i = int(np.argmin(clicks))
     base_rec, base_fit = records[base_i], fits[base_i]
@@ -187,6 +188,8 @@ def analyse(paths, clicks, predict=(), bike=None) -> dict:
                           "frequency_hz_ci95": bounce.interval95(fd, fsd) if math.isfinite(fd) else None,
                           "undamped_frequency_hz": law.fn_Hz,
                           "undamped_frequency_hz_ci95": bounce.interval95(law.fn_Hz, law.fn_sd)}
+            if end in decay_laws:
+                entry[end]["decay"] = _decay_prediction(decay_laws[end], decay_fits, clicks, end, k)
             if not 0.0 <= z < 1.0:
                 entry[end]["note"] = "the law gives no oscillation here (damping ratio outside 0 to 1); no ring-down"
                 continue
@@ -218,6 +221,77 @@ def analyse(paths, clicks, predict=(), bike=None) -> dict:
                 entry["ringdown_note"] = f"{', '.join(missing)}: no predicted ring-down (no law or no fitted start)"
         out["predicted"].append(entry)
     return {"json": out, "records": records, "fits": fits, "laws": laws, "clicks": list(clicks), "csv": csvs}
+
+
+def _decay(records, clicks, out, notes):
+    """Each record's ends read as a decay law with friction (``mtbmj.identify.bounce_decay``): under
+    the end's ``"decay"`` in each record, and, with two or more click settings, ``decay_law`` with the
+    friction band common to the records."""
+    from mtbmj.identify import bounce_decay as bd
+
+    fits = [bd.fit_record(r) for r in records]
+    for rec, f in zip(out["records"], fits):
+        for end, ed in f.items():
+            if end in rec:
+                rec[end]["decay"] = ed.summary()
+    out["decay_law"] = {}
+    laws = {}
+    for end in ("shock", "fork"):
+        pts = [(k, f[end].seq) for k, f in zip(clicks, fits) if end in f and f[end].seq.levels_mm.size >= 2
+               and not f[end].refusal.startswith("no decay law: the first")]
+        if len({k for k, _ in pts}) < 2:
+            continue
+        ks, seqs = [k for k, _ in pts], [s for _, s in pts]
+        per = {m: bd.fit_common(seqs, ks, m, law=False) for m in bd.MODELS}
+        law = {m: bd.fit_common(seqs, ks, m, law=True) for m in bd.MODELS}
+        chosen = bd.choose(per)
+        if chosen is None:
+            notes.append(f"{end}: no decay law across clicks (the records' free half cycles leave no degree of "
+                         f"freedom)")
+            continue
+        f = per[chosen]
+        entry = {"assumption": bd.COMMON_FRICTION, "law": bd.LAW_FORM, "information_criterion": bd.IC,
+                 "model": chosen, "bic": {m: (None if v is None else v.bic) for m, v in per.items()},
+                 "fitted_on_clicks": ks, "dof": f.dof, "residual_scale_mm": f.scale_mm,
+                 "friction_band_mm": f.value("friction_band_mm")[0] if "friction_band_mm" in f.names else 0.0,
+                 "friction_band_mm_ci95": (f.interval("friction_band_mm") if "friction_band_mm" in f.names
+                                           else [0.0, 0.0]), "per_click": []}
+        for i, k in enumerate(ks):
+            z = f.value(f"zeta[{i}]")[0] if f"zeta[{i}]" in f.names else 0.0
+            ci = f.interval(f"zeta[{i}]") if f"zeta[{i}]" in f.names else [0.0, 0.0]
+            entry["per_click"].append({"clicks": k, "damping_ratio": z, "damping_ratio_ci95": ci})
+        lf = law.get(chosen)
+        if lf is not None and "zeta0" in lf.names:
+            entry.update({"zeta0": lf.value("zeta0")[0], "zeta0_ci95": lf.interval("zeta0"),
+                          "slope_per_click": lf.value("slope_per_click")[0],
+                          "slope_per_click_ci95": lf.interval("slope_per_click")})
+        if lf is not None:
+            laws[end] = lf
+        out["decay_law"][end] = entry
+    return fits, laws
+
+
+def _decay_prediction(fit, fits, clicks, end, k) -> dict:
+    """zeta, the friction band and the first free half cycle's decay at ``k`` clicks (at the
+    lowest-click record's own first free swing)."""
+    from mtbmj.identify import bounce_decay as bd
+
+    order = sorted(range(len(clicks)), key=lambda i: clicks[i])
+    src = next((i for i in order if end in fits[i] and fits[i][end].seq.swings.size >= 1), None)
+    if src is None:
+        return {"note": "no record with a free swing to start from"}
+    s0 = float(fits[src][end].seq.swings[0])
+    p = bd.law_prediction(fit, k, s0)
+    return {"damping_ratio": p["zeta"], "damping_ratio_ci95": interval(p["zeta"], p["zeta_sd"]),
+            "friction_band_mm": p["friction_band_mm"],
+            "first_half_cycle_decay": p["decay"], "first_half_cycle_decay_ci95": interval(p["decay"], p["decay_sd_total"]),
+            "first_swing_mm": s0, "first_swing_from_clicks": clicks[src]}
+
+
+def interval(v, sd):
+    from mtbmj.identify.bounce import interval95
+
+    return interval95(v, sd)
 
 
 def figure_png(result: dict) -> bytes:
@@ -344,6 +418,25 @@ def cmd_fit_bounce(args) -> int:
                 parts.append(f"{end} zeta {e['damping_ratio']:.3f} [{lo:.3f}, {hi:.3f}], "
                              f"{e['frequency_hz']:.2f} Hz [{flo:.2f}, {fhi:.2f}]" + _bike_text(e.get("bike")))
         print(f"{rec['file']} at {rec['clicks']:g} clicks: {'; '.join(parts)}")
+    for rec in result["json"]["records"]:
+        for end in ("shock", "fork"):
+            dec = rec.get(end, {}).get("decay")
+            if dec is None:
+                continue
+            if dec["model"] is None:
+                print(f"{rec['file']} {end} decay: {dec['note']}")
+                continue
+            zl, zh = dec["damping_ratio_ci95"]
+            dl, dh = dec["friction_band_mm_ci95"]
+            print(f"{rec['file']} {end} decay ({dec['model']}, BIC): zeta {dec['damping_ratio']:.3f} [{zl:.3f}, {zh:.3f}], "
+                  f"friction band {dec['friction_band_mm']:.2f} mm [{dl:.2f}, {dh:.2f}], first half cycle's decay "
+                  f"{dec['measured_first_half_cycle_decay']:.2f} (law {dec['law_first_half_cycle_decay']:.2f})")
+    for end, dl in result["json"].get("decay_law", {}).items():
+        per = ", ".join(f"{p['clicks']:g}: {p['damping_ratio']:.3f} [{p['damping_ratio_ci95'][0]:.3f}, "
+                        f"{p['damping_ratio_ci95'][1]:.3f}]" for p in dl["per_click"])
+        lo, hi = dl["friction_band_mm_ci95"]
+        print(f"{end} decay law ({dl['model']}, BIC; friction common to the clicks): friction band "
+              f"{dl['friction_band_mm']:.2f} mm [{lo:.2f}, {hi:.2f}]; zeta per click {per}")
     for end, law in result["json"]["law"].items():
         print(f"{end} law: zeta = {law['zeta0']:.3f} + {law['slope_per_click']:.4f} x clicks "
               f"(slope 95 % [{law['slope_per_click_ci95'][0]:.4f}, {law['slope_per_click_ci95'][1]:.4f}]), "
