@@ -160,7 +160,7 @@ pytestmark_shared = pytest.mark.skipif(not (SHARED / "00087.SST").exists(), reas
 
 @pytest.fixture(scope="module")
 def shared():
-    from mtbmj.ride.telemetry import read_sst
+    from mtbmj.measured.telemetry import read_sst
 
     recs = [read_sst(SHARED / f"{n}.SST") for n in ("00083", "00085", "00087")]
     return [bd.extrema(r.time_s, r.shock_mm, "shock", bd.slam_index(r)) for r in recs]
@@ -196,7 +196,7 @@ def test_shared_slams_held_out_first_half_cycle_decay(shared):
 
 @pytestmark_shared
 def test_shared_forks_refused_as_friction_dominated():
-    from mtbmj.ride.telemetry import read_sst
+    from mtbmj.measured.telemetry import read_sst
 
     for n in ("00083", "00085", "00087"):
         ed = bd.fit_record(read_sst(SHARED / f"{n}.SST"))["fork"]
