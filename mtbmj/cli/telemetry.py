@@ -167,17 +167,7 @@ def compare(record: telemetry.TelemetryRecord, runs: list[dict], threshold_mm_pe
             raise MtbmjError(f"--compare {run['dir']}: {exc}") from None
     velocities += [e[4] for e in run_ends]
     edges = ride_metrics.velocity_bins(velocities)
-    air = record.airtime()
-    measured = {"file": record.name, "path": record.path, "version": record.version,
-                "sample_rate_Hz": record.sample_rate_Hz, "timestamp": record.timestamp,
-                "duration_s": record.duration_s, "samples": int(record.time_s.size)}
-    for end, travel, top in (("fork", record.fork_mm, record.fork_max_mm), ("rear", record.rear_mm, record.rear_max_mm)):
-        if travel is not None:
-            measured[end] = ride_metrics.summarize(record.time_s, travel, top, threshold_mm_per_s=threshold_mm_per_s,
-                                                   bin_percent=bin_percent, velocity_edges=edges, airborne=air)
-    if record.shock_mm is not None:
-        measured["rear"]["shock_stroke_max_mm"] = float(np.max(record.shock_mm))
-        measured["rear"]["shock_stroke_limit_mm"] = record.shock_max_mm
+    measured = record.metrics(threshold_mm_per_s, bin_percent, velocity_edges=edges, balance=False)
     simulated, entries = [], {}
     for run, end, travel, top, v in run_ends:
         try:

@@ -241,19 +241,23 @@ class TelemetryRecord:
                                         self.rear_mm, self.rear_max_mm if self.rear_mm is not None else None, **rule)
         return ride_metrics.airtime(self.rear_mm, self.rear_max_mm, self.time_s, **rule)
 
-    def metrics(self, threshold_mm_per_s: float = 100, bin_percent: float = 5, margin_mm: float = 3.0) -> dict:
-        """Fork and rear metrics (``ride_metrics.summarize``) with shared airtime; JSON-ready."""
+    def metrics(self, threshold_mm_per_s: float = 100, bin_percent: float = 5, margin_mm: float = 3.0,
+                velocity_edges=None, balance: bool = True) -> dict:
+        """Fork and rear metrics (``ride_metrics.summarize``) with shared airtime; JSON-ready.
+        ``velocity_edges``: the velocity histogram's bins (shared with simulated runs beside the
+        ride); ``balance``: the ends' mean travel side by side."""
         air = self.airtime()
-        out = {"file": self.name, "version": self.version, "sample_rate_Hz": self.sample_rate_Hz,
+        out = {"file": self.name, "path": self.path, "version": self.version, "sample_rate_Hz": self.sample_rate_Hz,
                "timestamp": self.timestamp, "duration_s": self.duration_s, "samples": int(self.time_s.size)}
         for end, travel, top in (("fork", self.fork_mm, self.fork_max_mm), ("rear", self.rear_mm, self.rear_max_mm)):
             if travel is not None:
                 out[end] = ride_metrics.summarize(self.time_s, travel, top, threshold_mm_per_s=threshold_mm_per_s,
-                                                  bin_percent=bin_percent, margin_mm=margin_mm, airborne=air)
+                                                  bin_percent=bin_percent, velocity_edges=velocity_edges,
+                                                  margin_mm=margin_mm, airborne=air)
         if self.shock_mm is not None:
             out["rear"]["shock_stroke_max_mm"] = float(np.max(self.shock_mm))
             out["rear"]["shock_stroke_limit_mm"] = self.shock_max_mm
-        if self.fork_mm is not None and self.rear_mm is not None:
+        if balance and self.fork_mm is not None and self.rear_mm is not None:
             out["balance"] = {"fork_mean_percent": out["fork"]["travel"]["mean_percent"],
                               "rear_mean_percent": out["rear"]["travel"]["mean_percent"]}
         return out
