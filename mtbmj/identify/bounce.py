@@ -158,18 +158,23 @@ def turning_points(x: np.ndarray, start: int, swing: float, falling: bool) -> li
     return points
 
 
+def slam_peak(smoothed: np.ndarray, dt: float, slam_index: int | None = None) -> int:
+    """The index of an end's deepest (smoothed) travel at the slam: within ``SLAM_WINDOW_S`` of the
+    slam told (``slam_index``, found on the other end or on both), else the record's deepest."""
+    if slam_index is None:
+        return int(np.argmax(smoothed))
+    w = int(round(SLAM_WINDOW_S / dt))
+    lo, hi = max(0, slam_index - w), min(smoothed.size, slam_index + w + 1)
+    return lo + int(np.argmax(smoothed[lo:hi]))
+
+
 def ring_down(time_s: np.ndarray, x_mm: np.ndarray, end: str, slam_index: int | None = None) -> RingDown:
     """The free ring-down of one end's travel after the slam, fitted (or with a note saying why not)."""
     t = np.asarray(time_s, float)
     x = np.asarray(x_mm, float)
     dt = float(t[1] - t[0])
     xs = _smooth(x, max(1, int(round(SMOOTH_S / dt))))
-    if slam_index is None:
-        peak = int(np.argmax(xs))
-    else:
-        w = int(round(SLAM_WINDOW_S / dt))
-        lo, hi = max(0, slam_index - w), min(x.size, slam_index + w + 1)
-        peak = lo + int(np.argmax(xs[lo:hi]))
+    peak = slam_peak(xs, dt, slam_index)
     floor = 0.0  # full extension: travel 0 is count 0 whatever the amplitude calibration
     drop = xs[peak] - float(np.min(xs[peak:]))
     swing = max(SWING_FRACTION * drop, 5.0 * noise_mm(x))

@@ -66,7 +66,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mtbmj.identify.bounce import SLAM_WINDOW_S, SMOOTH_S, SWING_FRACTION, interval95, noise_mm, turning_points
+from mtbmj.identify.bounce import SMOOTH_S, SWING_FRACTION, interval95, noise_mm, slam_peak, turning_points
 
 MODELS = ("viscous", "friction", "both")
 PACE = 1.6  # successive free extrema at most this many half periods apart
@@ -143,12 +143,7 @@ def extrema(time_s, x_mm, end: str, slam_index: int | None = None) -> Extrema:
     dt = float(t[1] - t[0])
     n_smooth = max(1, int(round(SMOOTH_S / dt)))
     xs = _moving_average(x, n_smooth)
-    if slam_index is None:
-        peak = int(np.argmax(xs))
-    else:
-        w = int(round(SLAM_WINDOW_S / dt))
-        lo, hi = max(0, slam_index - w), min(x.size, slam_index + w + 1)
-        peak = lo + int(np.argmax(xs[lo:hi]))
+    peak = slam_peak(xs, dt, slam_index)
     noise = noise_mm(x)
     drop = xs[peak] - float(np.min(xs[peak:]))
     swing = max(SWING_FRACTION * drop, 5.0 * noise)
