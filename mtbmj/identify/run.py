@@ -380,7 +380,7 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
     (default ``DEFAULT_DROP_FREE``); ``touch_s``: the drop record's time zero on its clock
     (default: found by ``mtbmj.measured.time_zero``); ``clicks``: damper fits from several dyno files,
     the adjuster position (clicks from closed) of each, or a mapping per file of its adjusters'
-    positions by label (``damper.ADJUSTERS``: lsc, hsc, lsr, hsr, c, r), giving a ``clicks`` damper;
+    positions by label (``damper_clicks.ADJUSTERS``: lsc, hsc, lsr, hsr, c, r), giving a ``clicks`` damper;
     ``overrides``: drop fits run on ``config`` with these keys set (written into fit.toml too);
     ``progress(fraction)``: called as a damper fit's laws are fitted (a progress bar)."""
     if kind not in KINDS:
@@ -417,15 +417,17 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
         from mtbmj.identify import damper
 
         if clicks:
+            from mtbmj.identify import damper_clicks
+
             labelled = any(isinstance(c, Mapping) for c in clicks)
             law = "table" if model == "auto" else model  # the law each file is read through
-            result = (damper.fit_settings(records, [dict(c) if isinstance(c, Mapping) else {"c": c, "r": c}
+            result = (damper_clicks.fit_settings(records, [dict(c) if isinstance(c, Mapping) else {"c": c, "r": c}
                                                     for c in clicks], law)
-                      if labelled else damper.fit_clicks(records, list(clicks), law))
+                      if labelled else damper_clicks.fit_clicks(records, list(clicks), law))
             if "model_check" in result.extra:
                 _attach_check(result, result.extra["model_check"])
             return Identification("damper", records, {"clicks": result}, ["clicks"],
-                                  lambda: damper.plot_clicks(records, result),
+                                  lambda: damper_clicks.plot_clicks(records, result),
                                   notes=result.extra["notes"])
         if len(records) > 1:
             raise MtbmjError("fit damper: several dyno files need --clicks (the adjuster position of each)")
