@@ -316,3 +316,156 @@ def test_a_rider_no_bike_carries_is_refused_naming_the_key(tmp_path, capsys):
     err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("mtbmj: error")]
     assert len(err) == 1 and "fails its own check" in err[0] and "rider.mass_kg = 500 kg is outside 30-150 kg" in err[0]
     assert not out.exists()
+
+
+def test_a_stretch_too_short_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    """A 16 s ride is long enough, but --duration 14.9 asks for advice on 14.9 s of it: the minimum
+    holds for the stretch analysed (one line naming --duration, exit 2, nothing written, nothing
+    reconstructed); --duration 15 is let through to the reconstruction."""
+    from test_reconstruct import BIKE, bumps_csv
+
+    from mtbmj.ride import reconstruct
+
+    reached = []
+
+    def reconstruction(*a, **k):
+        reached.append(True)
+        raise reconstruct.ReconstructError("reached the reconstruction")
+
+    monkeypatch.setattr(reconstruct, "reconstruct", reconstruction)
+    csv, *_ = bumps_csv(tmp_path / "ride.csv", 16.0)
+    bike = tmp_path / "bike.toml"
+    bike.write_text(BIKE)
+    out = tmp_path / "advice"
+    for duration in ("14.9", "0.5"):
+        assert main(["advise", str(csv), "--bike", str(bike), "--duration", duration, "--out", str(out)]) == 2
+        err = [ln for ln in capsys.readouterr().err.splitlines() if not ln.startswith("mtbmj: warning")]
+        assert err == [f"mtbmj: error: --duration: {duration} s of ride.csv cannot support advice (at least 15 s; "
+                       f"the ride is 16.0 s)"], err
+        assert not out.exists() and not reached
+    assert main(["advise", str(csv), "--bike", str(bike), "--duration", "15", "--out", str(out)]) == 2
+    assert reached and "reached the reconstruction" in capsys.readouterr().err
+
+
+def test_an_expected_value_keeps_the_metric_s_bounds():
+    """What the advice expects on the ride: the model's change mapped through (bound, bound) and
+    (simulated now, recorded). Closed forms: the trail bike's case (the model's 5 bottom-outs become
+    4 where the ride had none: 0, not -1; its deep-travel share 1.62 -> 1.13 % where the ride had
+    0.63 %: scaled, 0.44 %, not -0.49 + 0.63 ...); a share rising towards 100 % scaled by the room
+    left; a count rising added; the balance (either sign) added."""
+    e = advise.expected
+    assert e("front.bottom_outs", 0.0, 5.0, 4.0) == 0.0
+    assert e("front.bottom_outs_per_minute", 2.0, 4.0, 1.0) == pytest.approx(0.5)
+    assert e("front.deep_travel_percent", 0.63, 1.62, 1.13) == pytest.approx(0.63 * 1.13 / 1.62)
+    assert e("rear.high_speed_percent", 99.0, 98.0, 99.5) == pytest.approx(100.0 - 1.0 * 0.5 / 2.0)
+    assert e("rear.low_speed_percent", 1.0, 2.0, 0.5) == pytest.approx(0.25)  # the same share, seen from below
+    assert e("rear.bottom_outs", 2.0, 1.0, 3.0) == pytest.approx(4.0)
+    assert e("balance_points", 3.0, 1.0, -4.0) == pytest.approx(-2.0)
+    assert e("front.max_travel_percent", 70.0, 80.0, 80.0) == 70.0
+    rng = np.random.default_rng(11)
+    for metric, (lo, hi) in (("front.bottom_outs", (0.0, 30.0)), ("rear.deep_travel_percent", (0.0, 100.0)),
+                             ("front.p95_rebound_mm_per_s", (0.0, 3000.0)), ("rear.rebound_over_compression", (0, 2))):
+        for _ in range(300):
+            rec, a, b = rng.uniform(lo, hi, 3) * rng.choice([0.0, 1.0], 3, p=[0.2, 0.8])
+            x = e(metric, rec, a, b)
+            assert 0.0 <= x and (hi != 100.0 or x <= 100.0), (metric, rec, a, b, x)
+            assert e(metric, rec, a, a) == rec
+            assert (x - rec) * (b - a) >= 0.0  # it moves the way the model's value moves
+            assert e(metric, rec, a, b + abs(b - a) + 1.0) >= x  # more in the model, no less expected
+
+
+def test_clicks_step_within_the_measured_range_from_its_own_first_position(tmp_path):
+    """Clicks measured at 4-20 and set at 5: two clicks down is 3, outside; the candidate is 4 (the
+    range's own end, not 0); set at 4, none down."""
+    from mtbmj.bike import spec as spec_mod
+
+    bike = tmp_path / "clicks.toml"
+    for setting, down in ((5, 4.0), (4, None), (12, 10.0)):
+        bike.write_text(clicks_bike(setting))
+        found = {a.key: a for a in advise.adjusters(spec_mod.load(str(bike)))}
+        comp = found["fork.damper.compression_clicks"]
+        assert comp.down == down and comp.up == setting + 2.0, (setting, comp)
+        ok, skipped = advise.allowed(str(bike), [(comp, "down", comp.down)] if down is not None else [], lambda x: x)
+        assert not skipped  # the candidate the part allows, composed without a refusal
+
+
+def clicks_bike(setting, measured=(4, 12, 20)):
+    """This file's bike, its shock a clicks damper measured at ``measured`` whose rows are the
+    generator's law (2500 / 3500 N s/m at the shaft) at ``setting`` and 10 % more per click."""
+    v = [-3000.0, -1000.0, -100.0, 0.0, 100.0, 1000.0, 3000.0]
+    comp = [[round(2500.0 * x / 1e3 * (1 + 0.1 * (c - setting)), 3) for x in v if x > 0] for c in measured]
+    reb = [[round(3500.0 * x / 1e3 * (1 + 0.1 * (c - setting)), 3) for x in v if x < 0] for c in measured]
+    text = bike_text().replace('"fork.damper.model" = "bilinear"\n"fork.damper.compression_N_s_per_m" = 2500.0\n'
+                               '"fork.damper.rebound_N_s_per_m" = 3500.0\n', "")
+    assert text != bike_text()
+    return text.replace("[sensors]", f'''"fork.damper.model" = "clicks"
+"fork.damper.velocity_mm_per_s" = {v}
+"fork.damper.compression_clicks_measured" = {list(measured)}
+"fork.damper.compression_force_N" = {comp}
+"fork.damper.rebound_clicks_measured" = {list(measured)}
+"fork.damper.rebound_force_N" = {reb}
+"fork.damper.compression_clicks" = {setting}
+"fork.damper.rebound_clicks" = {setting}
+[sensors]''')
+
+
+def air_shock_bike(spacers, positive_cm3=150.0, spacer_cm3=15.0):
+    """This file's bike with an air shock of ``spacers`` volume spacers (a 40 mm piston sweeps
+    62.8 cm3 over the 50 mm stroke: 150 cm3 less 6 spacers of 15 is 60 cm3, too little)."""
+    return bike_text().replace('"fork.spring.rate_N_per_mm" = 90.0\n', "").replace("[shock]\n", f'''[shock]
+spring = "air"
+pressure_psi = 220.0
+piston_diameter_mm = 40.0
+positive_volume_cm3 = {positive_cm3}
+volume_spacers = {spacers}
+spacer_volume_cm3 = {spacer_cm3}
+''')
+
+
+def test_a_candidate_the_part_does_not_allow_is_skipped_naming_why(tmp_path):
+    """An air shock with 5 spacers where a sixth leaves less air than the stroke sweeps: the sixth
+    spacer is skipped (naming the chamber), the fourth kept; nothing else skipped."""
+    from mtbmj.bike import spec as spec_mod
+
+    bike = tmp_path / "air.toml"
+    bike.write_text(air_shock_bike(5))
+    spec = spec_mod.load(str(bike))
+    cands = [(a, d, v) for a in advise.adjusters(spec) for d, v in (("down", a.down), ("up", a.up)) if v is not None]
+    tokens = [(a, d, v) for a, d, v in cands if a.key == "fork.spring.tokens" and a.section == "shock.set"]
+    assert sorted(v for _, _, v in tokens) == [4.0, 6.0]
+    ok, skipped = advise.allowed(str(bike), cands, lambda extra: extra)
+    assert [(s["key"], s["to"]) for s in skipped] == [("shock:fork.spring.tokens", 6.0)], skipped
+    assert "air chamber" in skipped[0]["why"] and skipped[0]["why"].startswith("fork.spring.air_volume_cm3")
+    assert len(ok) == len(cands) - 1
+
+
+@pytest.mark.slow
+def test_a_candidate_refused_only_when_run_is_skipped_and_reported(tmp_path, monkeypatch, capsys):
+    """A candidate whose run the part refuses (a ConfigError from the worker) is skipped, not fatal:
+    the advice is written, its report names the candidate and why (advice.json 'skipped', the
+    line, the HTML), and no expected count or share is negative."""
+    real = advise.simulate
+
+    def refusing(bike, overrides, terrain, speed, duration, label, lead_s):
+        if label.startswith("shock rebound damping"):
+            from mtbmj.errors import ConfigError
+
+            raise ConfigError("fork.damper.rebound_N_s_per_m: refused here (the test's part)")
+        return real(bike, overrides, terrain, speed, min(duration, 0.3), label, lead_s)
+
+    monkeypatch.setattr(advise, "simulate", refusing)
+    bike, fork_mm, rear_mm, t = ride(tmp_path, fork_reb=2500.0)  # the packing ride, whose reconstruction checks
+    sst = write_sst(tmp_path / "ride.SST", fork_mm, rear_mm)
+    out = tmp_path / "advice"
+    assert main(["advise", str(sst), "--bike", str(bike), "--workers", "1", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    advice = json.loads((out / "advice.json").read_text())
+    assert sorted((s["label"], s["direction"]) for s in advice["skipped"]) == [
+        ("shock rebound damping", "down"), ("shock rebound damping", "up")]
+    assert all("refused here" in s["why"] for s in advice["skipped"])
+    assert "skipped, not allowed by the part: shock rebound damping 3500 -> 2800" in printed
+    assert 'id="skipped"' in (out / "advice.html").read_text()
+    assert not any(c["label"] == "shock rebound damping" for c in advice["candidates"])
+    rec = advice["recommendation"]
+    for k, c in (rec or {}).get("changes", {}).items():
+        assert k == "balance_points" or c["expected"] >= 0.0, (k, c)

@@ -259,3 +259,133 @@ def test_the_same_ride_as_sst_counts_comes_back(made, tmp_path):
     summary = json.loads((out / "reconstruction.json").read_text())
     assert summary["speed_m_per_s"] == pytest.approx(SPEED, rel=0.03)
     assert summary["checks"]["rear_predicted_rms_percent_of_used"] < 10.0
+
+
+def bumps_csv(path, seconds, lag_s=0.2, rate=1000, scale=1.0, seed=5):
+    """A two-ended travel CSV made here: random smooth bumps at the fork and the same bumps ``lag_s``
+    later at the rear (no physics: for what the speed search and the refusals read), ``scale`` mm per
+    unit, rounded to 0.1 mm; (path, t, fork_mm, rear_mm)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(round(seconds * rate))) / rate
+    grid = np.arange(-2.0, seconds + 2.0, 1.0 / rate)
+    kicks = np.zeros_like(grid)
+    kicks[rng.integers(0, grid.size, max(int(3 * seconds), 1))] = rng.uniform(5, 30, max(int(3 * seconds), 1))
+    kernel = np.hanning(int(0.15 * rate))
+    shape = np.convolve(kicks, kernel / kernel.max(), mode="same")
+    drift = np.linspace(0.0, 2.0, t.size)  # every column moves, however short the record
+    fork = np.round(scale * (20.0 + drift + np.interp(t, grid, shape)), 1)
+    rear = np.round(scale * (25.0 + drift + np.interp(t - lag_s, grid, shape)), 1)
+    path.write_text("time_s,fork_mm,rear_mm\n" + "\n".join(f"{a:.4f},{b:.1f},{c:.1f}" for a, b, c in zip(t, fork, rear)))
+    return path, t, fork, rear
+
+
+def one_error_line(err):
+    lines = [line for line in err.splitlines() if not line.startswith("mtbmj: warning")]
+    assert len(lines) == 1 and lines[0].startswith("mtbmj: error: ") and "Traceback" not in err, err
+    return lines[0]
+
+
+@pytest.mark.parametrize("seconds", [0.005, 3.0, 6.0])
+def test_a_record_too_short_for_a_speed_is_refused_before_any_work(tmp_path, capsys, seconds):
+    """Five samples (a traceback from the derivative filter before), 3 s and 6 s (under one 5 s window
+    and the slowest lag searched, 1.26 s on this bike): one line naming the file, 'no speed
+    estimate', nothing written."""
+    csv, *_ = bumps_csv(tmp_path / "short.csv", seconds)
+    bike = tmp_path / "bike.toml"
+    bike.write_text(BIKE)
+    out = tmp_path / "o"
+    assert main(["reconstruct", str(csv), "--bike", str(bike), "--out", str(out)]) == 2
+    line = one_error_line(capsys.readouterr().err)
+    assert line.startswith("mtbmj: error: short.csv: the ride is ") and line.endswith("no speed estimate"), line
+    assert not out.exists()
+
+
+def test_a_lag_at_the_end_of_the_search_gives_no_speed():
+    """The rear the front's copy 50 ms later: 25 m/s on a 1.255 m wheelbase, outside the 1-15 m/s
+    searched. The best lag searched is the shortest, at the search's end, not a peak: no speed (it
+    gave 15.0 m/s, the search's edge, before)."""
+    from mtbmj.ride import reconstruct
+
+    t = np.arange(20000) / RATE
+    rng = np.random.default_rng(1)
+    x = np.convolve(rng.normal(size=t.size + 100), np.hanning(30), mode="same")
+    front = x[100:]
+    rear = np.interp(t - 0.05, t, front)
+    with pytest.raises(reconstruct.ReconstructError, match="do not align at any lag"):
+        reconstruct.speed_from_lag(t, front, rear, 1.255)
+    # the same record 0.2 s apart (6.3 m/s): found, so the refusal above is the edge's, not the record's
+    rear = np.interp(t - 0.2, t, front)
+    assert reconstruct.speed_from_lag(t, front, rear, 1.255)["speed_m_per_s"] == pytest.approx(1.255 / 0.2, rel=0.01)
+
+
+def test_a_standing_window_gives_no_speed():
+    """Both ends moving less than 1 mm (a bike standing; their filtered series hold the filters'
+    tails) align perfectly at 0.2 s, but that is not the terrain: with the travel given, no speed;
+    the same window scaled to 10 mm gives one."""
+    from mtbmj.ride import reconstruct
+
+    t = np.arange(12000) / RATE
+    rng = np.random.default_rng(2)
+    x = np.convolve(rng.normal(size=t.size), np.hanning(40), mode="same")
+    x = 0.4 * x / np.ptp(x)  # 0.4 mm of motion
+    front, rear = x, np.interp(t - 0.2, t, x)
+    assert reconstruct.speed_from_lag(t, front, rear, 1.255)["speed_m_per_s"] == pytest.approx(6.275, rel=0.01)
+    with pytest.raises(reconstruct.ReconstructError, match="2 of 2 standing, an end moving less than 1 mm"):
+        reconstruct.speed_from_lag(t, front, rear, 1.255, travel=(front, rear))
+    big = reconstruct.speed_from_lag(t, 25 * front, 25 * rear, 1.255, travel=(25 * front, 25 * rear))
+    assert big["speed_m_per_s"] == pytest.approx(6.275, rel=0.01)
+
+
+def test_a_v2_trail_ride_without_a_speed_is_refused_in_one_line(tmp_path, capsys):
+    """/work/shared/data/sst_v2/00094.SST (a trail section, v2): stretches where the bike stood, and
+    no window whose two ends align. It ended in 'run diverged (Mean of empty slice)': one line now,
+    'no speed', nothing written."""
+    from mtbmj.measured import telemetry
+
+    sst = telemetry.example_path().parent.parent / "sst_v2" / "00094.SST"
+    if not sst.exists():
+        from pathlib import Path
+
+        sst = Path("/work/shared/data/sst_v2/00094.SST")
+    if not sst.exists():
+        pytest.skip("the shared v2 recordings are not here")
+    out = tmp_path / "o"
+    assert main(["reconstruct", str(sst), "--bike", "sst", "--out", str(out)]) == 2
+    line = one_error_line(capsys.readouterr().err)
+    assert line.startswith("mtbmj: error: 00094.SST: ") and "no speed" in line and "empty" not in line, line
+    assert not out.exists()
+
+
+def test_speed_windows_that_leave_nothing_to_check_are_refused(tmp_path, capsys, monkeypatch):
+    """A speed search whose windows leave no sample to check (here one that returns a speed but
+    marks every window as without one, so every stretch is left out): no speed estimate that can be
+    checked, one line, nothing written, and no mean taken of no samples (numpy's warnings are errors
+    here; it ended as 'run diverged (Mean of empty slice)')."""
+    import warnings
+
+    from mtbmj.ride import reconstruct
+
+    csv, t, *_ = bumps_csv(tmp_path / "ride.csv", 12.0)
+    bike = tmp_path / "bike.toml"
+    bike.write_text(BIKE)
+
+    def nothing_checkable(t, front, rear, wheelbase, **kw):
+        windows = [(0.0, None, 0.1), (5.0, None, 0.1), (10.0, None, 0.1)]
+        return {"speed_m_per_s": 6.0, "lag_s": wheelbase / 6.0, "windows": windows,
+                "speed_at": lambda time: np.full(np.shape(time), 6.0)}
+
+    monkeypatch.setattr(reconstruct, "speed_from_lag", nothing_checkable)
+    out = tmp_path / "o"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        code = main(["reconstruct", str(csv), "--bike", str(bike), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    line = one_error_line(err)
+    assert "ride.csv: no speed estimate that can be checked" in line, line
+    assert not out.exists()
+    # and a Reconstruction with no sample checked reports its checks without a mean of nothing
+    rec = reconstruct.Reconstruction("r", "b", t, {}, t, t, np.zeros(t.size, bool), t, t, t, t, 125.0, [])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        assert rec.checks()["samples_checked_percent"] == 0.0

@@ -6,7 +6,10 @@ speed from the lag between the ends, the terrain under the front wheel). The who
 that terrain at the ride's median speed, held by the rider's drive, once with the recorded settings
 (the bike file's) and once for each candidate: every adjuster the bike's parts have, one step each
 way (:func:`adjusters`), within what the part allows (an adjuster's clicks within its measured
-range, a value within what any part has: ``mtbmj.config.PLAUSIBLE``).
+range, a value within what any part has: ``mtbmj.config.PLAUSIBLE``). A candidate its part still
+refuses (a volume spacer that would fill the air chamber, two adjusters whose summed effects leave
+the measured forces) is skipped, not fatal: :func:`allowed` composes each candidate's fork and
+shock before anything is simulated, and the report names every one skipped and why (``skipped``).
 
 **What is scored** (:func:`ride_metrics`, each end in % of its own travel): static sag (standing,
 the model's statics); dynamic sag (the mean travel); maximum travel and bottom-outs (within 3 mm
@@ -33,8 +36,11 @@ guides' current editions), marked *assumed* where no source gives the number):
 
 A candidate is recommended when it lowers the total penalty by at least ``MIN_GAIN``; the predicted
 change of every metric is the candidate's simulated value less the recorded setting's, and the
-value expected on the rider's own ride is the recorded value plus that change (``expected``; the
-simulated ``to`` beside it). Its
+value expected on the rider's own ride (``expected``; the simulated ``to`` beside it) is the
+recorded value moved by that change within the metric's bounds (:func:`expected`: a change towards
+a bound scaled by the room the ride has on that side, so the model's five bottom-outs becoming four
+take a ride's none to none, not to -1; a count or share is never expected below 0, a share of time
+never above 100 %). Its
 uncertainty is the model's own error on that metric for this ride: the recorded setting's
 simulated value against the record's (what the model gets wrong on this terrain with known
 settings bounds what it gets wrong about a change, which shares the terrain and the model).
@@ -44,7 +50,8 @@ makers' "an adjuster that moves less than about 15 % of the force does little"):
 whose improved rules' metrics all move less than it is marked so (``confident`` false: try it and
 record again).
 
-**When a ride cannot support advice** (:class:`AdviseError`): shorter than ``MIN_SECONDS``, its
+**When a ride cannot support advice** (:class:`AdviseError`): shorter than ``MIN_SECONDS``, or a
+stretch of it shorter than that asked for (``duration``: the minimum holds for what is analysed), its
 recorded setting crashing on the reconstructed terrain (a crash the rider did not have: the terrain
 or the model is wrong there), or its reconstruction's own check failed (the rear predicted worse than ``MAX_REAR_MISS_PERCENT`` % of the
 travel it used, or fewer than ``MIN_CHECKED_PERCENT`` % of the samples checked).
@@ -56,7 +63,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mtbmj.errors import MtbmjError, RunError
+from mtbmj.errors import ConfigError, MtbmjError, RunError
 
 SAG_WINDOW = {"front": (20.0, 25.0), "rear": (27.0, 30.0)}  # % of travel, static (sources above)
 SAG_POINTS = 5.0  # % points outside the window per unit of penalty
@@ -166,8 +173,9 @@ def adjusters(spec) -> list[Adjuster]:
                      "low_speed_rebound", "high_speed_rebound"):
             key, measured = f"fork.damper.{kind}_clicks", f"fork.damper.{kind}_clicks_measured"
             if damper == "clicks" and key in v and measured in v:
-                n, top = float(v[key]), float(max(v[measured]))
-                add(key, f"{kind.replace('_', ' ')} clicks", n - 2 if n - 2 >= 0 else (0.0 if n > 0 else None),
+                # two clicks each way within the measured range (its own ends, not 0)
+                n, low, top = float(v[key]), float(min(v[measured])), float(max(v[measured]))
+                add(key, f"{kind.replace('_', ' ')} clicks", n - 2 if n - 2 >= low else (low if n > low else None),
                     n + 2 if n + 2 <= top else (top if n < top else None), n)
         if end == "front" and "tire.pressure_psi" in v:
             x = float(v["tire.pressure_psi"])
@@ -244,6 +252,41 @@ def _grip_comfort(base: dict, cand: dict) -> float:
     if a and b is not None:
         terms.append((b - a) / a)
     return GRIP_COMFORT_WEIGHT * float(np.mean(terms)) if terms else 0.0
+
+
+SHARES = ("deep_travel_percent", "high_speed_percent", "low_speed_percent")  # shares of time: 0-100 %
+SIGNED = ("balance_points",)  # may take either sign; every other metric is a count, share, speed or ratio >= 0
+
+
+def bounds(metric: str) -> tuple[float, float]:
+    """The range a metric (``_flat`` name) can take: a share of time 0-100 %, the balance any
+    value, every other (counts, travel, speeds, ratios) 0 and up."""
+    leaf = metric.rpartition(".")[2]
+    if leaf in SHARES:
+        return 0.0, 100.0
+    return (-math.inf, math.inf) if leaf in SIGNED else (0.0, math.inf)
+
+
+def expected(metric: str, recorded: float, sim_from: float, sim_to: float) -> float:
+    """The value ``metric`` is expected to take on the rider's ride when the model's takes it from
+    ``sim_from`` to ``sim_to`` and the ride recorded ``recorded``: the model's range mapped onto the
+    ride's by the straight lines through (bound, bound) and (``sim_from``, ``recorded``) (its
+    :func:`bounds`): a change towards a bound scaled by the room left on that side (the model
+    halving its bottom-outs halves the ride's; the model losing all loses all), a change with no
+    bound on its side added as it is. An expected value stays within the metric's bounds (never a
+    negative count or share): what stays outside them (a model value past its own bound) is
+    clipped to them."""
+    lo, hi = bounds(metric)
+    change = sim_to - sim_from
+    if change == 0.0:
+        value = recorded
+    elif change < 0.0 and math.isfinite(lo) and sim_from > lo:
+        value = lo + (recorded - lo) * (sim_to - lo) / (sim_from - lo)
+    elif change > 0.0 and math.isfinite(hi) and sim_from < hi:
+        value = hi - (hi - recorded) * (hi - sim_to) / (hi - sim_from)
+    else:
+        value = recorded + change
+    return float(min(max(value, lo), hi))
 
 
 def _flat(d: dict, prefix: str = "") -> dict:
@@ -325,6 +368,7 @@ class Advice:
     record_front: np.ndarray = field(repr=False, default=None)
     record_rear: np.ndarray = field(repr=False, default=None)
     wall_s: float = 0.0
+    skipped: list = field(default_factory=list)  # candidates the part does not allow: {key, label, ..., why}
 
     def uncertainty(self) -> dict:
         """Per metric: the model's error on this ride (simulated recorded setting against the record);
@@ -348,15 +392,21 @@ class Advice:
                 "rules": RULES, "reconstruction": self.reconstruction,
                 "recorded_setting": {"measured": self.measured, "simulated": self.base.metrics,
                                      "penalties": self.base.penalty, "penalty": self.base.total},
-                "uncertainty": self.uncertainty(), "candidates": cands,
+                "uncertainty": self.uncertainty(), "candidates": cands, "skipped": list(self.skipped),
                 "recommendation": self.recommendation, "wall_time_s": self.wall_s}
 
     def line(self) -> str:
         rec = self.recommendation
         if rec is None:
             return (f"{self.ride} on {self.bike}: keep your settings: no candidate of {len(self.candidates)} lowers "
-                    f"the penalty by {MIN_GAIN:g} or more beyond the model's error on this ride")
-        return (f"{self.ride} on {self.bike}: {rec['why']}")
+                    f"the penalty by {MIN_GAIN:g} or more beyond the model's error on this ride{self._skipped()}")
+        return (f"{self.ride} on {self.bike}: {rec['why']}{self._skipped()}")
+
+    def _skipped(self) -> str:
+        if not self.skipped:
+            return ""
+        return "; skipped, not allowed by the part: " + ", ".join(
+            f"{c['label']} {c['from']:g} -> {c['to']:g} ({c['why']})" for c in self.skipped)
 
     def figure(self):
         from matplotlib.figure import Figure
@@ -410,6 +460,10 @@ class Advice:
         cand = "".join(f"<tr><td>{esc.escape(c['label'])}</td><td>{c['from']:g}</td><td>{c['to']:g}</td>"
                        f"<td>{c['penalty_change']:+.2f}</td><td>{esc.escape(c['crash'] or '')}</td></tr>"
                        for c in d["candidates"])
+        skip = "".join(f"<li>{esc.escape(c['label'])} {c['from']:g} -&gt; {c['to']:g}: {esc.escape(c['why'])}</li>"
+                       for c in d["skipped"])
+        if skip:
+            skip = f'<h2>Skipped: not allowed by the part</h2><ul id="skipped">{skip}</ul>'
         rc = d["reconstruction"]["checks"]
         img = base64.b64encode(png).decode()
         return f"""<!DOCTYPE html>
@@ -428,6 +482,7 @@ td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{t
 {''.join(rows) or '<tr><td>no change recommended</td><td></td><td></td><td></td><td></td><td></td><td></td></tr>'}</table>
 <h2>Every candidate</h2>
 <table id="candidates"><tr><th>setting</th><th>from</th><th>to</th><th>penalty change</th><th>crash</th></tr>{cand}</table>
+{skip}
 <h2>Rules</h2><ul>{''.join(f'<li>{esc.escape(k)}: {esc.escape(v)}</li>' for k, v in RULES.items())}</ul>
 </body></html>
 """
@@ -487,11 +542,41 @@ def _recommend(base: Run, candidates, uncertainty: dict, measured: dict) -> dict
            + ("" if confident else "; the change is within the model's error on this ride: try it and record again"))
     rode = _flat(measured)
     changes = {k: {"from": v0, "to": b[k], "change": b[k] - v0, "uncertainty": uncertainty.get(k),
-                   "recorded": rode.get(k), "expected": (rode[k] + b[k] - v0) if k in rode else b[k]}
+                   "recorded": rode.get(k), "expected": expected(k, rode[k], v0, b[k]) if k in rode else b[k]}
                for k, v0 in a.items() if k in b}
     return {"key": adj.name, "section": adj.section, "config_key": adj.key, "label": adj.label,
             "direction": direction, "from": adj.value, "to": value, "penalty_from": base.total,
             "penalty_to": run.total, "improves": improved, "confident": confident, "why": why, "changes": changes}
+
+
+def _skip(adj: Adjuster, direction: str, value, exc) -> dict:
+    return {"key": adj.name, "label": adj.label, "direction": direction, "from": adj.value, "to": value,
+            "why": str(exc)}
+
+
+def allowed(bike, candidates, merged) -> tuple[list, list]:
+    """(the candidates ``(adjuster, direction, value)`` the part allows, the others as dicts naming
+    why): each candidate's bike (``merged(adjuster.overrides(value))``, the recorded overrides with
+    the candidate's over them) loaded and its fork and shock composed, as its run would; one the
+    part refuses (a click outside the measured range, a volume spacer that fills the air chamber,
+    two adjusters whose summed effects leave the measured forces) is skipped, not fatal. Nothing is
+    simulated here."""
+    import warnings
+
+    from mtbmj.bike import run as bike_run
+    from mtbmj.bike import spec as spec_mod
+
+    ok, skipped = [], []
+    for a, d, v in candidates:
+        try:
+            with warnings.catch_warnings():  # the recorded setting's warnings were issued once already
+                warnings.simplefilter("ignore")
+                bike_run.setups(spec_mod.load(str(bike), merged(a.overrides(v))))
+        except ConfigError as exc:
+            skipped.append(_skip(a, d, v, exc))
+        else:
+            ok.append((a, d, v))
+    return ok, skipped
 
 
 def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2) -> Advice:
@@ -507,6 +592,14 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     length = float(record.time_s[-1] - record.time_s[0])
     if length < MIN_SECONDS:
         raise AdviseError(f"{record.name}: {length:.1f} s of ride cannot support advice (at least {MIN_SECONDS:g} s)")
+    # the minimum holds for the stretch analysed, not only for the file it is cut from
+    if duration is not None:
+        duration = float(duration)
+        if not (math.isfinite(duration) and duration > 0.0):
+            raise AdviseError(f"--duration: must be a positive number of seconds, got {duration:g}")
+        if duration < MIN_SECONDS:
+            raise AdviseError(f"--duration: {duration:g} s of {record.name} cannot support advice (at least "
+                              f"{MIN_SECONDS:g} s; the ride is {length:.1f} s)")
     rec = rc.reconstruct(record, bike, overrides)
     checks = rec.checks()
     if (checks["samples_checked_percent"] < MIN_CHECKED_PERCENT
@@ -523,15 +616,6 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     sim_s = ride_s + lead_s
     terrain = terrain_of(rec)
     adj = adjusters(spec)
-    todo = [(a, d, v) for a in adj for d, v in (("down", a.down), ("up", a.up)) if v is not None and v != a.value]
-    n = len(todo) + 1
-    done = [0]
-
-    def step():
-        done[0] += 1
-        if progress is not None:
-            progress(done[0] / n)
-
     base_over = dict(overrides or {})
 
     def merged(extra):
@@ -539,6 +623,16 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
         for k, v in extra.items():
             out[k] = {**out.get(k, {}), **v}
         return out
+
+    todo, skipped = allowed(bike, [(a, d, v) for a in adj for d, v in (("down", a.down), ("up", a.up))
+                                   if v is not None and v != a.value], merged)
+    n = len(todo) + 1
+    done = [0]
+
+    def step():
+        done[0] += 1
+        if progress is not None:
+            progress(done[0] / n)
 
     jobs = [(str(bike), base_over, terrain, speed, sim_s, "recorded setting", lead_s)]
     jobs += [(str(bike), merged(a.overrides(v)), terrain, speed, sim_s, f"{a.label} {v:g}", lead_s) for a, d, v in todo]
@@ -551,26 +645,43 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
         with process_pool(min(workers, len(jobs))) as pool:
             futures = {pool.submit(simulate, *job): i for i, job in enumerate(jobs)}
             for future in as_completed(futures):
-                runs[futures[future]] = future.result()
+                i = futures[future]
+                try:
+                    runs[i] = future.result()
+                except ConfigError as exc:  # a candidate its part refuses only when run: skipped (the recorded
+                    if i == 0:              # setting's own refusal stays the user's error)
+                        raise
+                    runs[i] = exc
                 step()
     else:
         for i, job in enumerate(jobs):
-            runs[i] = simulate(*job)
+            try:
+                runs[i] = simulate(*job)
+            except ConfigError as exc:
+                if i == 0:
+                    raise
+                runs[i] = exc
             step()
     base = runs[0]
     if base.crash:
         raise RideNotDescribed(f"{record.name}: the recorded setting {base.crash} on the ride's reconstructed terrain: "
                                f"the model cannot ride this ride as reconstructed, so it cannot predict a change")
-    cands = [(a, d, v, run) for (a, d, v), run in zip(todo, runs[1:])]
+    cands = []
+    for (a, d, v), run in zip(todo, runs[1:]):
+        if isinstance(run, ConfigError):
+            skipped.append(_skip(a, d, v, run))
+        else:
+            cands.append((a, d, v, run))
     t = rec.t
     keep = t - t[0] <= ride_s
     measured = ride_metrics(t[keep], rec.front[keep], rec.rear[keep], base.metrics["front"]["travel_mm"],
                             base.metrics["rear"]["travel_mm"])
-    advice = Advice(rec.name, spec.name, rec.summary(), measured, base, cands, None, rec.front[keep], rec.rear[keep])
+    advice = Advice(rec.name, spec.name, rec.summary(), measured, base, cands, None, rec.front[keep], rec.rear[keep],
+                    skipped=skipped)
     advice.recommendation = _recommend(base, cands, advice.uncertainty(), measured)
     advice.wall_s = time.perf_counter() - start
     return advice
 
 
-__all__ = ["Adjuster", "Advice", "AdviseError", "RideNotDescribed", "RULES", "adjusters", "advise", "penalties",
-           "ride_metrics", "simulate", "terrain_of"]
+__all__ = ["Adjuster", "Advice", "AdviseError", "RideNotDescribed", "RULES", "adjusters", "advise", "allowed", "bounds",
+           "expected", "penalties", "ride_metrics", "simulate", "terrain_of"]

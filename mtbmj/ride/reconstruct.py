@@ -9,8 +9,13 @@ those do not align, the two ends' travel velocities (high-passed at 5 Hz: the te
 the rider's slow weight shifts) (normalised cross-correlation, the peak refined by a parabola)
 gives v = wheelbase / lag per window of ``WINDOW_S`` seconds; a window whose correlation peak is below
 ``MIN_CORRELATION``, or has a second peak within ``AMBIGUOUS`` of it (a periodic record, where
-several lags align), gives none; a ride shorter than one window is refused. The speed between windows is interpolated (the distance along the
-ride and the rear's lag follow it); the ride's speed is the windows' median.
+several lags align), or lies at either end of the lags searched (the peak outside the search), or
+where either end's travel spans less than ``STILL_MM`` (standing: the filtered series hold only the
+filters' tails there, which align at any lag), gives none; a ride shorter than one window and the
+slowest lag searched (:func:`min_seconds`) is refused before any work. The speed between windows is interpolated (the distance along the
+ride and the rear's lag follow it); the ride's speed is the windows' median. A ride with no window
+that gives a speed, or whose windows with one lie wholly where nothing can be checked (jumps, the
+first wheelbase, the filters' start), is refused: no speed estimate, one line, nothing written.
 
 **Terrain** (an inverse of the front's quarter car, closed form, no fitting). Each end is a quarter
 car: the sprung mass the end carries at rest (the bike's and rider's weight shared between the axles
@@ -63,6 +68,7 @@ LAG_HIGHPASS_HZ = 5.0  # travel records high-passed before the lag is sought (th
 AMBIGUOUS = 0.9  # a second correlation peak this close to the best leaves the lag undecided
 GROUND_HIGHPASS_HZ = 1.0  # the two ends' grounds high-passed before the lag is sought
 SPEED_RANGE = (1.0, 15.0)  # m/s the lag is searched for
+STILL_MM = 1.0  # a window where either end's travel spans less than this is standing: it gives no speed
 DERIVATIVE_WINDOW_S = 0.02  # the Savitzky-Golay window of the records' derivatives (_derivatives)
 HIGHPASS_HZ = 0.3  # the body height's drift removed below this
 JUMP_GAP_S = 0.05  # the tyre's force found back above 0 for less than this within a jump (its noise): one jump
@@ -93,13 +99,35 @@ def _law_force(law, x, v, z):
     return law.force(x, v, z) if law.has_state else law.force(x, v)
 
 
-def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S, highpass_hz: float = LAG_HIGHPASS_HZ
-                   ) -> dict:
+def min_seconds(wheelbase: float, window_s: float = WINDOW_S) -> float:
+    """The shortest ride a speed can be sought in: one window and the slowest lag searched."""
+    return window_s + wheelbase / SPEED_RANGE[0]
+
+
+def _check_length(t, wheelbase: float, window_s: float, name: str = "") -> None:
+    """Refuse (one line) a record too short for one speed window and the slowest lag searched."""
+    dt = float(t[1] - t[0]) if len(t) > 1 else math.nan
+    need = min_seconds(wheelbase, window_s)
+    if not len(t) > 1 or not (math.isfinite(dt) and dt > 0) or \
+            len(t) < int(round(window_s / dt)) + int(math.ceil(wheelbase / SPEED_RANGE[0] / dt)):
+        length = len(t) * dt if math.isfinite(dt) else 0.0
+        raise ReconstructError(f"{name + ': ' if name else ''}the ride is {length:.1f} s: a speed needs at least one "
+                               f"{window_s:g} s window and the slowest lag searched "
+                               f"({wheelbase / SPEED_RANGE[0]:.2f} s), {need:.2f} s: no speed estimate")
+
+
+def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S, highpass_hz: float = LAG_HIGHPASS_HZ,
+                   travel=None) -> dict:
     """{"speed_m_per_s": the median of the windows' speeds, "lag_s", "windows": [(start_s, speed or
     None, correlation)], "speed_at": a function of time (the windows' speeds at their centres,
     held past the first and last)}: see the module doc. ``front`` and ``rear`` are travel series
     (any units) on ``t``; both are high-passed at ``LAG_HIGHPASS_HZ`` first (what the terrain does,
-    not the rider's slow weight shifts, which reach both ends at once)."""
+    not the rider's slow weight shifts, which reach both ends at once). ``travel`` (front mm, rear
+    mm on ``t``), where given: a window where either end spans less than ``STILL_MM`` is standing
+    and gives no speed (what its filtered series hold there is the filters' tails, which align at
+    any lag). A window whose best lag is at either end of the lags searched gives none (the peak
+    is outside the search)."""
+    _check_length(t, wheelbase, window_s)
     dt = float(t[1] - t[0])
     from scipy.signal import butter, sosfiltfilt
 
@@ -121,6 +149,8 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
             scores.append(float(a0 @ b0) / den if den > 0 else 0.0)
         s = np.asarray(scores)
         i = int(np.argmax(s))
+        if i == 0 or i == s.size - 1:  # the best lag at the end of the search: the peak lies outside it
+            return None, float(s[i])
         low = np.flatnonzero(s <= 0.5 * s[i])  # the best peak's lobe: down to half its height each side
         left, right = (low[low < i].max() if np.any(low < i) else -1), (low[low > i].min() if np.any(low > i) else s.size)
         peaks = np.flatnonzero((s[1:-1] > s[:-2]) & (s[1:-1] >= s[2:])) + 1
@@ -134,10 +164,17 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
 
     windows = []
     step = int(round(window_s / dt))
-    if vf.size < step + k_hi:
-        raise ReconstructError(f"the ride is {vf.size * dt:.1f} s: a speed needs at least one {window_s:g} s window "
-                               f"and the slowest lag searched ({hi:.2f} s)")
+    moving = None
+    if travel is not None:
+        tf, tr = (np.asarray(x, float) for x in travel)
+        moving = lambda a: (np.ptp(tf[a:a + step]) >= STILL_MM  # noqa: E731
+                            and np.ptp(tr[a:a + step + k_hi]) >= STILL_MM)
+    standing = 0
     for start in range(0, max(vf.size - k_hi - step // 2, 1), step):
+        if moving is not None and not moving(start):
+            windows.append((start * dt, None, 0.0))  # standing: nothing the terrain did to align
+            standing += 1
+            continue
         wl, wc = best(vf[start:start + step + k_hi], vr[start:start + step + k_hi])
         windows.append((start * dt, None if wl is None or wc < MIN_CORRELATION else wheelbase / wl, wc))
     good = [(a + 0.5 * window_s, v) for a, v, _ in windows if v is not None]
@@ -145,8 +182,9 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
         top = max((c for _, _, c in windows), default=0.0)
         raise ReconstructError(f"the two ends' records do not align at any lag for {SPEED_RANGE[0]:g}-"
                                f"{SPEED_RANGE[1]:g} m/s in any {window_s:g} s window (best correlation {top:.2f}; "
-                               f"below {MIN_CORRELATION}, or another lag within {AMBIGUOUS:g} of it): no speed "
-                               f"from this ride")
+                               f"below {MIN_CORRELATION}, or another lag within {AMBIGUOUS:g} of it"
+                               + (f"; {standing} of {len(windows)} standing, an end moving less than {STILL_MM:g} mm"
+                                  if standing else "") + "): no speed from this ride")
     centres, speeds = np.array([c for c, _ in good]), np.array([v for _, v in good])
     speed = float(np.median(speeds))
     return {"speed_m_per_s": speed, "lag_s": wheelbase / speed, "windows": windows,
@@ -344,7 +382,12 @@ class Reconstruction:
 
     def checks(self) -> dict:  # noqa: D401 (the checks reported with every reconstruction)
         v = self.valid
-        used = float(np.ptp(self.rear[v])) if v.any() else float("nan")
+        if not v.any():  # ``reconstruct`` refuses such a ride; no mean of nothing is taken here either
+            nan = float("nan")
+            return {"front_reproduced_rms_mm": nan, "rear_predicted_rms_mm": nan, "rear_travel_used_mm": nan,
+                    "rear_predicted_rms_percent_of_used": nan, "rear_histogram_distance_percent": nan,
+                    "samples_checked_percent": 0.0}
+        used = float(np.ptp(self.rear[v]))
         rms_front = float(np.sqrt(np.mean((self.front_again[v] - self.front[v]) ** 2)))
         rms_rear = float(np.sqrt(np.mean((self.rear_predicted[v] - self.rear[v]) ** 2)))
         return {"front_reproduced_rms_mm": rms_front, "rear_predicted_rms_mm": rms_rear,
@@ -450,6 +493,9 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     if record.fork_mm is None or record.rear_mm is None:
         raise ReconstructError(f"{record.name}: needs both ends' records (the rear meets what the front met)")
     spec = spec_mod.load(str(bike), overrides)
+    wheelbase = spec.front_axle[0] - spec.rear_axle[0]
+    t = np.asarray(record.time_s, float)
+    _check_length(t, wheelbase, WINDOW_S, record.name)  # before any work: too short for a speed
     fork_setup, shock_setup = bike_run.setups(spec)
     g = fork_setup.gravity
     total, share = _statics(spec)
@@ -459,9 +505,7 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     radius = fork_setup.tire_radius
     front_car = QuarterCar(total * share - m_front, m_front, fork_setup.fork, rate, radius, g, fork_setup.travel)
     rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g, shock_setup.travel)
-    t = np.asarray(record.time_s, float)
     sin_a = math.sin(spec.head_angle)
-    wheelbase = spec.front_axle[0] - spec.rear_axle[0]
     fork = np.asarray(record.fork_mm, float) * 1e-3
     ground, tyre, air, extra = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
     lev = spec.leverage
@@ -471,11 +515,15 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     # the speed from the lag between the grounds each end's own inverse finds (each end's suspension
     # delays its travel behind its ground by its own phase; the grounds carry none)
     ground_back, *_ = ground_under(t, rear, shock, rear_car, ratios)
+    travel = (record.fork_mm, record.rear_mm)  # a window where either end stands still gives no speed
     try:
-        speed = speed_from_lag(t, ground, ground_back, wheelbase, highpass_hz=GROUND_HIGHPASS_HZ)
+        speed = speed_from_lag(t, ground, ground_back, wheelbase, highpass_hz=GROUND_HIGHPASS_HZ, travel=travel)
         speed["from"] = "the two ends' grounds"
     except ReconstructError:  # where the rear's inverse is too rough to align: the travels themselves
-        speed = speed_from_lag(t, record.fork_mm, record.rear_mm, wheelbase)
+        try:
+            speed = speed_from_lag(t, record.fork_mm, record.rear_mm, wheelbase, travel=travel)
+        except ReconstructError as exc:
+            raise ReconstructError(f"{record.name}: {exc}") from None
         speed["from"] = "the two ends' travel (their grounds did not align)"
     dt = float(t[1] - t[0])
     pad = int(round(LEFT_OUT_S / dt))
@@ -506,6 +554,13 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
         last = int(round(speed["windows"][-1][0] / dt)) + step
         if last < t.size:
             bad[last:] = True
+    if bad.all() or not np.ptp(rear[~bad]) > 0.0:
+        # the windows that gave a speed lie wholly in jumps, the first wheelbase or the filters' start
+        n = sum(1 for _, s, _ in speed["windows"] if s is not None)
+        raise ReconstructError(f"{record.name}: no speed estimate that can be checked: the {n} window(s) of "
+                               f"{len(speed['windows'])} whose two ends aligned lie wholly where the front wheel was "
+                               f"off the ground, or in the ride's first wheelbase or its filters' start (or the rear "
+                               f"does not move there): no sample of the ride can be checked")
     from mtbmj.ride.quartercar_compiled import FORK, LEVERAGE
 
     front_again = forward(t, ground, front_car, lambda w: w / sin_a, lambda w: sin_a, float(fork[0] * sin_a),
@@ -520,5 +575,5 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
                           rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps, unaligned)
 
 
-__all__ = ["speed_from_lag", "ground_under", "forward", "histogram_distance", "reconstruct", "Reconstruction",
+__all__ = ["min_seconds", "speed_from_lag", "ground_under", "forward", "histogram_distance", "reconstruct", "Reconstruction",
            "QuarterCar", "ReconstructError"]
