@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 import struct
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
@@ -229,6 +229,25 @@ class TelemetryRecord:
     @property
     def duration_s(self) -> float:
         return self.time_s.size / self.sample_rate_Hz
+
+    def decimated(self, max_rate_Hz: float) -> "TelemetryRecord":
+        """This ride at no more than ``max_rate_Hz``: each travel low-passed (a 4th-order Butterworth
+        run forward and back, at 0.8 of the new Nyquist frequency, so nothing aliases and nothing
+        is delayed) and every k-th sample kept; the record itself where its rate is that or less.
+        A version-2 record's 5 kHz carries the sensor's count steps as noise that two derivatives
+        amplify; what a suspension does lies well below 100 Hz."""
+        k = math.ceil(self.sample_rate_Hz / max_rate_Hz - 1e-9)
+        if k <= 1:
+            return self
+        from scipy.signal import butter, sosfiltfilt
+
+        rate = self.sample_rate_Hz / k
+        sos = butter(4, 0.8 * (rate / 2.0), fs=self.sample_rate_Hz, output="sos")
+        keep = lambda x: None if x is None else np.ascontiguousarray(sosfiltfilt(sos, np.asarray(x, float))[::k])
+        return replace(self, sample_rate_Hz=rate, time_s=np.ascontiguousarray(self.time_s[::k]),
+                       fork_mm=keep(self.fork_mm), shock_mm=keep(self.shock_mm), rear_mm=keep(self.rear_mm),
+                       counts=None, notes=self.notes + (f"read at {rate:g} Hz (low-passed and every {k}th sample "
+                                                        f"of its {self.sample_rate_Hz:g} Hz)",))
 
     @property
     def name(self) -> str:

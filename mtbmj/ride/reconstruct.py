@@ -95,6 +95,11 @@ class QuarterCar:
     travel: float = math.inf  # m, the law's full stroke: the inverse reads its force within 0..travel
 
 
+# The rate a ride is read at (the version-3 recorder's): a faster record is low-passed and decimated
+# to it (``TelemetryRecord.decimated``), so two derivatives do not amplify its count steps and a
+# 100 s ride at 5 kHz costs what it costs at 1 kHz
+RATE_HZ = 1000.0
+
 def _law_force(law, x, v, z):
     return law.force(x, v, z) if law.has_state else law.force(x, v)
 
@@ -492,6 +497,7 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
 
     if record.fork_mm is None or record.rear_mm is None:
         raise ReconstructError(f"{record.name}: needs both ends' records (the rear meets what the front met)")
+    record = record.decimated(RATE_HZ)  # a 5 kHz version-2 record read at 1 kHz, low-passed first
     spec = spec_mod.load(str(bike), overrides)
     wheelbase = spec.front_axle[0] - spec.rear_axle[0]
     t = np.asarray(record.time_s, float)
