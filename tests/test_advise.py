@@ -1,14 +1,14 @@
 """``mtbmj advise``: setup advice from a ride (mtbmj/ride/advise.py), against rides made here.
 
-The rides are made by a bike integrated in this file (scipy's DOP853, its own equations): each end a
+The rides are made by a bike integrated in tests/helpers.py (``ride``; scipy's DOP853, its own equations): each end a
 sprung and an unsprung mass, the fork's spring, bumper, hard stop and two-rate damper acting along
 the steering axis, the shock's through a constant leverage ratio, point-contact tyres that leave the
 ground; a hidden profile of rocks ridden at a known speed; both ends' travel written as an SST
 version-3 file in integer counts through the [sensors] calibration of the bike file (the law of
-cosines inverted in tests/test_telemetry_sensors.py, not by the reader). One ride is made with the
+cosines inverted in tests/helpers.py, not by the reader). One ride is made with the
 fork far too soft (it bottoms several times), one with the fork's rebound far too slow (it packs
 down). The advice must move the right setting the right way, and what it predicts at the new setting
-must agree with this file's bike ridden again at that setting.
+must agree with that bike ridden again at that setting.
 
 Shared with the package, and so not tested here: the laws' forms and values (read from the same
 bike file: inputs, not results), the metrics' definitions (``advise.ride_metrics``: written out in
@@ -18,132 +18,14 @@ and the advice's uncertainty carries that difference)."""
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
 from mtbmj.cli import main
 from mtbmj.ride import advise
 
-SPEED = 6.0
-RATE = 1000
-SECONDS = 20.0
-RATIO = 2.5
-FORK_ARM, FORK_MAX = 150.0, 260.0
-ARM1, ARM2, SHOCK_MAX = 90.0, 190.0, 215.0
-
-
-def bike_text(fork_rate=12.0, fork_comp=500.0, fork_reb=700.0):
-    return f"""base = "trail"
-[leverage]
-wheel_travel_mm = [0.0, 125.0]
-ratio = [{RATIO}, {RATIO}]
-[fork]
-config = "S1"
-[fork.set]
-"fork.travel_mm" = 130.0
-"fork.length_mm" = 530.0
-"fork.spring.rate_N_per_mm" = {fork_rate}
-"fork.damper.model" = "bilinear"
-"fork.damper.compression_N_s_per_m" = {fork_comp}
-"fork.damper.rebound_N_s_per_m" = {fork_reb}
-[shock]
-stroke_mm = 50.0
-config = "S1"
-[shock.set]
-"fork.travel_mm" = 50.0
-"fork.spring.rate_N_per_mm" = 90.0
-"fork.damper.model" = "bilinear"
-"fork.damper.compression_N_s_per_m" = 2500.0
-"fork.damper.rebound_N_s_per_m" = 3500.0
-[sensors]
-fork_arm_mm = {FORK_ARM}
-fork_max_mm = {FORK_MAX}
-shock_arm1_mm = {ARM1}
-shock_arm2_mm = {ARM2}
-shock_max_mm = {SHOCK_MAX}
-"""
-
-
-def hidden_profile(seed=7):
-    """Rocks 20-90 mm high, 0.5-1.5 m long, about one per 2.5 m, on flat ground: h(s) m."""
-    rng = np.random.default_rng(seed)
-    n = int(SPEED * SECONDS / 2.5)
-    centres = np.sort(rng.uniform(6.0, SPEED * SECONDS - 2.0, n))
-    heights = rng.uniform(0.02, 0.09, n)
-    lengths = rng.uniform(0.5, 1.5, n)
-    grid = np.arange(-2.0, SPEED * SECONDS + 1.0, 1e-3)
-    table = np.zeros_like(grid)
-    for c, a, L in zip(centres, heights, lengths):
-        u = np.clip((grid - c) / L + 0.5, 0.0, 1.0)
-        table += a * np.sin(np.pi * u) ** 2
-    return lambda s: np.interp(s, grid, table)
-
-
-def law(k, travel, comp, reb, bumper_len=0.008, bumper_force=3000.0, stop=2e7):
-    """The end's force along its own stroke x (m), rate v (m/s): linear spring, the bumper rising
-    as the square of its engagement over its last 8 mm to 3000 N, a stiff stop past full travel,
-    a damper of one rate in compression and another in rebound (S1's stops, this file's values)."""
-    def force(x, v):
-        f = k * x + (comp if v > 0 else reb) * v
-        s = x - (travel - bumper_len)
-        if s > 0:
-            f += bumper_force * (s / bumper_len) ** 2
-        if x > travel:
-            f += stop * (x - travel)
-        if x < 0:
-            f += stop * x
-        return f
-    return force
-
-
-def ride(path, fork_rate=12.0, fork_comp=500.0, fork_reb=700.0, seconds=SECONDS):
-    """(fork travel mm, rear wheel travel mm, time s) of this file's bike over the hidden profile."""
-    from mtbmj.bike import run, spec as spec_mod
-    from test_reconstruct import quarter_car_masses
-
-    bike = path / "bike.toml"
-    bike.write_text(bike_text(fork_rate, fork_comp, fork_reb))
-    spec = spec_mod.load(str(bike))
-    fork_setup, _ = run.setups(spec)
-    tyre_k, radius, g = fork_setup.tire.values(1).rate, fork_setup.tire_radius, fork_setup.gravity
-    wb = spec.front_axle[0] - spec.rear_axle[0]
-    Mf, mf, Mr, mr = quarter_car_masses(spec)  # the same statics as the reconstruction's made ride
-    sa = math.sin(spec.head_angle)
-    h = hidden_profile()
-    t = np.arange(int(seconds * RATE)) / RATE
-
-    def end(M, m, force, per_wheel, lag):
-        """per_wheel: the end's stroke per unit of wheel travel (1 / sin a; 1 / LR)."""
-        def rhs(tt, y):
-            zb, zw, vb, vw = y
-            f = force((zw - zb) * per_wheel, (vw - vb) * per_wheel) * per_wheel  # virtual work
-            tyre = max(0.0, tyre_k * (float(h(SPEED * tt - lag)) - (zw - radius)))
-            return [vb, vw, f / M - g, (tyre - f) / m - g]
-        # at rest on flat ground: the law's force at the wheel carries the sprung weight
-        w0 = brentq(lambda w: force(w * per_wheel, 0.0) * per_wheel - M * g, 0.0, 0.3)
-        zw0 = radius - (M + m) * g / tyre_k
-        sol = solve_ivp(rhs, (0.0, t[-1]), [zw0 - w0, zw0, 0.0, 0.0], t_eval=t, method="DOP853", rtol=1e-6,
-                        atol=1e-9, max_step=5e-3)
-        assert sol.success
-        return sol.y[1] - sol.y[0]
-
-    wf = end(Mf, mf, law(fork_rate * 1e3, 0.130, fork_comp, fork_reb), 1.0 / sa, 0.0)
-    wr = end(Mr, mr, law(90e3, 0.050, 2500.0, 3500.0), 1.0 / RATIO, wb)
-    return bike, wf / sa * 1e3, wr * 1e3, t
-
-
-def write_sst(path, fork_mm, rear_mm):
-    """SST version 3 through the bike file's sensors (test_telemetry_sensors.write_v3: the law of
-    cosines inverted), the shock's stroke the rear's travel over the constant leverage ratio."""
-    from test_telemetry_sensors import write_v3
-
-    sensors = {"fork_arm_mm": FORK_ARM, "fork_max_mm": FORK_MAX, "shock_arm1_mm": ARM1, "shock_arm2_mm": ARM2,
-               "shock_max_mm": SHOCK_MAX}
-    return write_v3(path, np.clip(fork_mm, 0, None), np.clip(rear_mm, 0, None) / RATIO, sensors, RATE)
+from helpers import air_shock_bike, clicks_bike, ride, write_sst
 
 
 def generated_metrics(bike, fork_mm, rear_mm, t):
@@ -208,7 +90,7 @@ def test_a_rebound_far_too_slow_gets_less_rebound_damping(tmp_path):
 
 @pytest.mark.slow
 def test_the_report_opens_in_headless_chromium(soft, tmp_path):
-    from test_report_browser import CHROMIUM, rendered
+    from helpers import CHROMIUM, rendered
 
     if not CHROMIUM.exists():
         pytest.skip("headless Chromium not installed (/usr/bin/chromium)")
@@ -322,7 +204,7 @@ def test_a_stretch_too_short_is_refused_before_any_work(tmp_path, capsys, monkey
     """A 16 s ride is long enough, but --duration 14.9 asks for advice on 14.9 s of it: the minimum
     holds for the stretch analysed (one line naming --duration, exit 2, nothing written, nothing
     reconstructed); --duration 15 is let through to the reconstruction."""
-    from test_reconstruct import BIKE, bumps_csv
+    from helpers import BIKE, bumps_csv
 
     from mtbmj.ride import reconstruct
 
@@ -387,39 +269,6 @@ def test_clicks_step_within_the_measured_range_from_its_own_first_position(tmp_p
         assert comp.down == down and comp.up == setting + 2.0, (setting, comp)
         ok, skipped = advise.allowed(str(bike), [(comp, "down", comp.down)] if down is not None else [], lambda x: x)
         assert not skipped  # the candidate the part allows, composed without a refusal
-
-
-def clicks_bike(setting, measured=(4, 12, 20)):
-    """This file's bike, its shock a clicks damper measured at ``measured`` whose rows are the
-    generator's law (2500 / 3500 N s/m at the shaft) at ``setting`` and 10 % more per click."""
-    v = [-3000.0, -1000.0, -100.0, 0.0, 100.0, 1000.0, 3000.0]
-    comp = [[round(2500.0 * x / 1e3 * (1 + 0.1 * (c - setting)), 3) for x in v if x > 0] for c in measured]
-    reb = [[round(3500.0 * x / 1e3 * (1 + 0.1 * (c - setting)), 3) for x in v if x < 0] for c in measured]
-    text = bike_text().replace('"fork.damper.model" = "bilinear"\n"fork.damper.compression_N_s_per_m" = 2500.0\n'
-                               '"fork.damper.rebound_N_s_per_m" = 3500.0\n', "")
-    assert text != bike_text()
-    return text.replace("[sensors]", f'''"fork.damper.model" = "clicks"
-"fork.damper.velocity_mm_per_s" = {v}
-"fork.damper.compression_clicks_measured" = {list(measured)}
-"fork.damper.compression_force_N" = {comp}
-"fork.damper.rebound_clicks_measured" = {list(measured)}
-"fork.damper.rebound_force_N" = {reb}
-"fork.damper.compression_clicks" = {setting}
-"fork.damper.rebound_clicks" = {setting}
-[sensors]''')
-
-
-def air_shock_bike(spacers, positive_cm3=150.0, spacer_cm3=15.0):
-    """This file's bike with an air shock of ``spacers`` volume spacers (a 40 mm piston sweeps
-    62.8 cm3 over the 50 mm stroke: 150 cm3 less 6 spacers of 15 is 60 cm3, too little)."""
-    return bike_text().replace('"fork.spring.rate_N_per_mm" = 90.0\n', "").replace("[shock]\n", f'''[shock]
-spring = "air"
-pressure_psi = 220.0
-piston_diameter_mm = 40.0
-positive_volume_cm3 = {positive_cm3}
-volume_spacers = {spacers}
-spacer_volume_cm3 = {spacer_cm3}
-''')
 
 
 def test_a_candidate_the_part_does_not_allow_is_skipped_naming_why(tmp_path):

@@ -150,7 +150,7 @@ def shown_benchmark_commands() -> list[tuple[str, list[str]]]:
     """(page, argv) of every ``python benchmarks/X.py ...`` command the README and docs pages show:
     in fenced shell blocks (read as test_docs_commands reads them) and in inline code, where a
     command may wrap over a line break."""
-    from test_docs_commands import PAGES, shell_commands
+    from helpers import PAGES, shell_commands
 
     found = []
     for page in PAGES:
@@ -165,7 +165,7 @@ def test_every_benchmark_command_shown_parses_and_says_where_it_writes():
     """Each command shown takes the script's options as written; each names its results file with
     ``--out``, but report.py (it writes docs/measured.md, from the results alone) and calibrate.py
     (shown for the table it prints; the text says where its reference.toml goes)."""
-    from test_measured_doc import script_parser
+    from helpers import script_parser
 
     shown = shown_benchmark_commands()
     assert {page for page, _ in shown} >= {"bike.md", "measured.md", "fitting.md", "identification.md"}

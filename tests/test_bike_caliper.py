@@ -12,8 +12,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from tests.test_bike_drive_moment import _slope
-from tests.test_linkage import HORST, MM, FourBar, find, independent
+from helpers import HORST, MM, FourBar, find, independent, slope_profile
 
 
 def bike_file(tmp_path, brake_on):
@@ -67,7 +66,7 @@ def descents(tmp_path_factory):
     from mtbmj.bike.run import run_bike
 
     folder = tmp_path_factory.mktemp("caliper")
-    slope = _slope(folder, -0.4, "descent")
+    slope = slope_profile(folder, -0.4, "descent")
     return {brake: {"compiled": run_bike(bike_file(folder, brake), slope, 4.0, duration=4.0)}
             for brake in ("seatstay", "chainstay")}
 
@@ -75,7 +74,7 @@ def descents(tmp_path_factory):
 def test_compiled_is_python_braking(tmp_path):
     from mtbmj.bike.run import run_bike
 
-    slope = _slope(tmp_path, -0.4, "descent")
+    slope = slope_profile(tmp_path, -0.4, "descent")
     a, b = (run_bike(bike_file(tmp_path, "seatstay"), slope, 4.0, duration=1.5, callback=cb).raw
             for cb in ("compiled", "python"))
     assert np.min(a["drive_force_N"]) < -100.0  # braked
@@ -99,5 +98,5 @@ def test_the_caliper_s_link_sets_how_the_rear_sits_braking(descents, tmp_path):
 def test_braking_horst_against_the_reference(tmp_path):
     from mtbmj.bike.crosscheck import crosscheck
 
-    check = crosscheck(bike_file(tmp_path, "seatstay"), _slope(tmp_path, -0.4, "descent"), 4.0, duration=1.5)
+    check = crosscheck(bike_file(tmp_path, "seatstay"), slope_profile(tmp_path, -0.4, "descent"), 4.0, duration=1.5)
     assert check.passed, check.line()

@@ -19,7 +19,7 @@ from scipy.optimize import fsolve
 
 import mtbmj
 from mtbmj.bike import spec as spec_mod
-from test_bike_drive_moment import _slope, last_pose
+from helpers import last_pose, slope_profile
 
 CHAIN = 'base = "sst"\n[drive]\nchainring_teeth = 32\ncog_teeth = 24\n'
 PITCH = 0.0127  # a 1/2 in chain
@@ -50,7 +50,7 @@ def climb(tmp_path_factory):
     folder = tmp_path_factory.mktemp("chain")
     bike = folder / "chain.toml"
     bike.write_text(CHAIN)
-    path = _slope(folder, 0.2, "climb")
+    path = slope_profile(folder, 0.2, "climb")
     return {cb: mtbmj.run_bike(str(bike), path, 4.0, duration=6.0, callback=cb) for cb in ("compiled", "python")}, \
         mtbmj.run_bike("sst", path, 4.0, duration=6.0, overrides={"drive.chain": False})  # a hub drive
 

@@ -11,7 +11,7 @@ import pytest
 import mtbmj
 from mtbmj.bike import run as bike_run
 from mtbmj.config import ConfigError
-from tests.test_bike_geometry import _level_head_angle
+from helpers import level_head_angle
 
 CHART = {"head_angle_deg": 64.5, "wheelbase_mm": 1240.0, "chainstay_mm": 440.0, "bb_drop_mm": 30.0,
          "fork_offset_mm": 44.0}
@@ -37,7 +37,7 @@ def _file(tmp_path, chart: dict, extra: str = "", name: str = "chart.toml") -> s
 def test_a_chart_builds_the_bike_it_describes(tmp_path):
     path = _file(tmp_path, CHART)
     p = bike_run.prepare(path, "flat", 4.0)
-    assert _level_head_angle(p) == pytest.approx(64.5, abs=1e-9)
+    assert level_head_angle(p) == pytest.approx(64.5, abs=1e-9)
     (fx, fz), (rx, rz) = p.spec.front_axle, p.spec.rear_axle
     assert math.hypot(fx - rx, fz - rz) * 1e3 == pytest.approx(1240.0, abs=1e-9)
     assert math.hypot(rx, rz) * 1e3 == pytest.approx(440.0, abs=1e-9) and rz * 1e3 == pytest.approx(30.0)
@@ -166,7 +166,7 @@ def test_a_chart_bike_refuses_a_set_of_its_axles_and_takes_one_of_its_chart(tmp_
     with pytest.raises(ConfigError, match=r"--set bike.head_angle_deg: this bike's frame is given by its geometry chart"):
         mtbmj.bike.spec.load("sst", {"bike.head_angle_deg": 65.0})
     p = bike_run.prepare("sst", "flat", 4.0, overrides={"geometry.head_angle_deg": 65.0})
-    assert _level_head_angle(p) == pytest.approx(65.0, abs=1e-9)
+    assert level_head_angle(p) == pytest.approx(65.0, abs=1e-9)
 
 
 # The presets before they were written as charts (frame coordinates with their axles at different

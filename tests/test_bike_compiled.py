@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import sys
 import warnings
 
 os.environ.setdefault("MUJOCO_GL", "disable")
@@ -19,6 +18,8 @@ from mtbmj.bike import spec as S
 from mtbmj.errors import FallbackWarning
 from mtbmj.rolling import terrain as T
 
+from helpers import rock_garden
+
 compiled = pytest.importorskip("mtbmj.controllers.compiled")
 CB = pytest.importorskip("mtbmj.bike.callback_compiled")
 if not CB.available():
@@ -29,12 +30,7 @@ TOL_N = 1e-6  # each sensor (forces N, deflections m, accelerations m/s2)
 
 
 def _rock_garden(tmp_path):
-    sys.path.insert(0, os.path.dirname(__file__))
-    try:
-        from test_bike_energy import _rock_garden as write
-    finally:
-        sys.path.remove(os.path.dirname(__file__))
-    return str(write(tmp_path / "rocks.csv"))
+    return str(rock_garden(tmp_path / "rocks.csv"))
 
 
 def both(bike, scenario, speed, duration, **kwargs):

@@ -10,35 +10,14 @@ from __future__ import annotations
 
 import math
 
-import mujoco
 import numpy as np
 import pytest
 
 import mtbmj
 
+from helpers import last_pose, slope_profile
+
 G = 9.81
-
-
-def _slope(tmp_path, grade: float, name: str) -> str:
-    """A profile flat for 3 m, easing into ``grade`` (rise over run) over 6 m (the slope growing
-    linearly: a crest the bike rolls over, not an edge it flies off), then at ``grade`` to 90 m."""
-    x = np.linspace(0.0, 90.0, 1801)
-    ease = 6.0
-    s = np.clip(x - 3.0, 0.0, None)
-    z = np.where(s < ease, grade * s * s / (2 * ease), grade * (s - ease / 2)) * 1000.0
-    path = tmp_path / f"{name}.csv"
-    np.savetxt(path, np.c_[x, z], delimiter=",", header="distance_m,height_mm", comments="")
-    return str(path)
-
-
-def last_pose(result):
-    """(model, data): a run's bike at its last kept pose, its kinematics and centres of mass computed."""
-    model = result.prepared.bike.model
-    data = mujoco.MjData(model)
-    data.qpos[:] = result.motion[1][-1]
-    mujoco.mj_kinematics(model, data)
-    mujoco.mj_comPos(model, data)
-    return model, data
 
 
 def _balance(result, grade: float) -> tuple[float, float]:
@@ -64,7 +43,7 @@ def _balance(result, grade: float) -> tuple[float, float]:
 
 @pytest.mark.parametrize("grade,what", [(0.2, "climb"), (-0.4, "descent")])
 def test_steady_tyre_loads_match_the_moment_balance(tmp_path, grade, what):
-    r = mtbmj.run_bike("trail", _slope(tmp_path, grade, what), speed_m_per_s=4.0, duration=10.0)
+    r = mtbmj.run_bike("trail", slope_profile(tmp_path, grade, what), speed_m_per_s=4.0, duration=10.0)
     raw = r.raw
     assert r.summary["crash"] is None
     assert abs(raw["speed_m_per_s"][-1] - 4.0) < 0.05  # held at the set speed: steady

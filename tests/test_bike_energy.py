@@ -4,28 +4,13 @@ distance between their sites) equals the work of every force the callback applie
 and the shock's torque times their joints' speeds, the tire and drive forces applied at the axles
 times the axles' velocities) and of the legs' and arms' dampers (their rate of extension from the
 sites' velocities), within 1 % of the energy turned over. The rock garden is a profile written
-here (a CSV of seven rocks, 50-110 mm high), read through the terrain library's CSV path."""
+in tests/helpers.py (a CSV of seven rocks, 50-110 mm high), read through the terrain library's CSV path."""
 from __future__ import annotations
-
-import math
 
 import mujoco
 import numpy as np
 
-
-def _rock_garden(path):
-    rows = [(-1.5, 0.0), (0.45, 0.0)]
-    rocks = [(0.45, 0.25, 80), (0.85, 0.30, 110), (1.3, 0.2, 60), (1.65, 0.35, 100), (2.15, 0.25, 70),
-             (2.55, 0.3, 90), (3.0, 0.2, 50)]
-    for start, length, height in rocks:
-        for k in range(1, 40):
-            a = math.pi * (1 - k / 40)
-            rows.append((start + length / 2 * (1 + math.cos(a)), height * math.sin(a)))
-        rows.append((start + length, 0.0))
-        rows.append((start + length + 0.1, 0.0))
-    rows.append((8.0, 0.0))
-    path.write_text("distance_m,height_mm\n" + "\n".join(f"{x:.6f},{z:.4f}" for x, z in rows) + "\n")
-    return path
+from helpers import rock_garden
 
 
 def test_energy_balance_on_a_rock_garden(tmp_path):
@@ -33,7 +18,7 @@ def test_energy_balance_on_a_rock_garden(tmp_path):
 
     # the hub drive: its couple on the swingarm is recorded (rear_couple) and its work counted here;
     # the chain's pull (the presets' drive) is checked by virtual work in tests/test_bike_chain.py
-    p = prepare("sst", str(_rock_garden(tmp_path / "rocks.csv")), 5.0, overrides={"drive.chain": False})
+    p = prepare("sst", str(rock_garden(tmp_path / "rocks.csv")), 5.0, overrides={"drive.chain": False})
     states, sensors = simulate(p, 0.5)
     m = p.bike.model
     m.opt.enableflags |= mujoco.mjtEnableBit.mjENBL_ENERGY

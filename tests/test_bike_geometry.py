@@ -5,38 +5,18 @@ from __future__ import annotations
 
 import math
 
-import mujoco
 import pytest
-from scipy.optimize import brentq
 
 import mtbmj
 from mtbmj.bike import run as bike_run
 
-
-def _level_head_angle(p) -> float:
-    """The steering axis's angle from the horizontal in MuJoCo's own kinematics, the frame turned
-    until the two axles are level (the fork and swingarm at full extension)."""
-    model = p.bike.model
-    data = mujoco.MjData(model)
-    pitch = p.bike.qpos_index("pitch")
-    front, rear = model.site("front_axle").id, model.site("rear_axle").id
-
-    def height_gap(theta):
-        data.qpos[:] = 0.0
-        data.qpos[pitch] = theta
-        mujoco.mj_kinematics(model, data)
-        return data.site_xpos[front][2] - data.site_xpos[rear][2]
-
-    theta = brentq(height_gap, -0.3, 0.3, xtol=1e-14)
-    height_gap(theta)
-    axis = data.xaxis[model.joint("fork").id]  # the fork's slide: up and back along the steering axis
-    return math.degrees(math.atan2(axis[2], -axis[0]))
+from helpers import level_head_angle
 
 
 @pytest.mark.parametrize("bike,chart", [("sst", 63.5), ("trail", 65.5)])
 def test_the_head_angle_is_the_charts(bike, chart):
     p = bike_run.prepare(bike, "flat", 4.0)
-    assert _level_head_angle(p) == pytest.approx(chart, abs=1e-9)
+    assert level_head_angle(p) == pytest.approx(chart, abs=1e-9)
     r = mtbmj.run_bike(bike, "flat", speed_m_per_s=4.0, duration=0.05)
     g = r.summary["geometry"]
     assert g["chart"]["head_angle_deg"] == pytest.approx(chart, abs=1e-9)

@@ -1,7 +1,8 @@
 """``mtbmj fit bounce``: damping ratio and frequency from seat-slam ring-downs (SST v2), the law in
 rebound clicks and its predictions. Synthetic slams are generated here from the closed form of a
 damped oscillator and written as SST v2 files through the inverse of the format's own calibration
-(README of the recordings: stroke = max - 2 arm cos(pi s / 4096 + acos(max / (2 arm))))."""
+(tests/helpers.py's counts_of; README of the recordings: stroke = max - 2 arm cos(pi s / 4096 +
+acos(max / (2 arm))))."""
 import json
 import math
 import struct
@@ -15,17 +16,10 @@ from mtbmj.cli import bounce as cli_bounce
 from mtbmj.identify import bounce
 from mtbmj.measured import telemetry
 
+from helpers import FORK, RATE, SHOCK, counts_of
+
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "sst_v2"
-RATE = 5000
 FN_HZ = 1.5  # undamped natural frequency of the synthetic rider on the shock
-SHOCK = (88.0, 138.0)  # arm, max distance (mm): the v2 defaults of the README
-FORK = (120.0, 218.0)
-
-
-def counts_of(travel_mm, arm, top):
-    """The README's calibration inverted here: stroke -> AS5600 count (real-valued)."""
-    start = math.acos(top / (2 * arm))
-    return (np.arccos((top - np.asarray(travel_mm)) / (2 * arm)) - start) * 4096 / math.pi
 
 
 def slam_mm(zeta, fn_hz=FN_HZ, rest=25.0, peak=50.0, t_slam=3.0, seconds=9.0, noise=0.3, seed=1):

@@ -12,7 +12,7 @@ import pytest
 from mtbmj import output
 from mtbmj.cli import main
 from mtbmj.readout.compare import compare_runs, figure
-from test_reliability import one_line
+from helpers import one_line
 
 
 @pytest.fixture(scope="module")

@@ -13,7 +13,7 @@ from mtbmj import cli, compose
 from mtbmj.config import ConfigWarning, load
 from mtbmj.errors import ConfigError
 
-from test_reliability import one_line
+from helpers import one_line
 
 # the conversions from the definitions: 1 lbf = 4.4482216152605 N, 1 in = 25.4 mm (both exact);
 # 1 psi = 1 lbf / in2 = 6894.757293168 Pa, 1 bar = 1e5 Pa

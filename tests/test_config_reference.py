@@ -13,7 +13,7 @@ import pytest
 from mtbmj.cli import main
 from mtbmj.config import PLAUSIBLE, SCHEMA
 
-from test_reliability import one_line
+from helpers import one_line
 
 REPO = Path(__file__).resolve().parents[1]
 DOC = REPO / "docs" / "configuration.md"

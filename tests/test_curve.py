@@ -13,7 +13,7 @@ from mtbmj.cli import main
 from mtbmj.config import load
 from mtbmj.readout.curves import damper_curve, damper_figure, fork_curves, spring_curve, spring_figure
 from mtbmj.identify.dyno_synthetic import DAMPER_TABLE
-from test_reliability import one_line
+from helpers import one_line
 
 G = 9.81
 PSI = 6894.757293168

@@ -93,7 +93,7 @@ def test_a_fitted_digressive_damper_runs_on_both_engines_alike(tmp_path, capsys)
 
 
 def test_a_digressive_configuration_names_its_missing_keys(tmp_path, capsys):
-    from test_reliability import one_line
+    from helpers import one_line
 
     one_line(capsys, ["drop", "S12", "--set", "fork.damper.model=digressive", "--out", tmp_path / "o"],
              "fork.damper.compression_low_N_s_per_m", "digressive")

@@ -6,49 +6,13 @@ on their own (docs/figures.md in tests/test_curve.py, docs/configuration.md in
 tests/test_config_reference.py, the dm_control example of docs/rolling.md in tests/test_rl.py)."""
 from __future__ import annotations
 
-import re
-import shlex
 from pathlib import Path
 
 import pytest
 
 from mtbmj.cli import build_parser
 
-REPO = Path(__file__).resolve().parents[1]
-PAGES = [REPO / "README.md"] + sorted((REPO / "docs").glob("*.md"))
-
-
-def shell_commands(page: Path) -> list[tuple[int, list[str]]]:
-    """(line, argv) of every simple command in the page's fenced shell blocks (``bash``, ``sh``,
-    ``console``; a block without a language is a diagram or output), continuation lines joined, comments dropped, chains split at ``&&``, ``|``, ``;``."""
-    out = []
-    inside, language, start, pending = False, "", 0, ""
-    for number, line in enumerate(page.read_text().splitlines(), 1):
-        fence = re.match(r"^\s*```(\w*)", line)
-        if fence:
-            inside, language = (not inside), fence.group(1)
-            continue
-        if not inside or language not in ("bash", "sh", "console"):
-            continue
-        if not pending:
-            start = number
-        if line.rstrip().endswith("\\"):
-            pending += line.rstrip()[:-1] + " "
-            continue
-        text, pending = pending + line, ""
-        try:
-            words = shlex.split(text, comments=True)
-        except ValueError:  # an unbalanced quote: a shell construct this scan does not follow
-            continue
-        command: list[str] = []
-        for word in words + [";"]:
-            if word in ("&&", "||", "|", ";"):
-                if command:
-                    out.append((start, command))
-                command = []
-            else:
-                command.append(word)
-    return out
+from helpers import PAGES, shell_commands
 
 
 CASES = [(page, line, argv) for page in PAGES for line, argv in shell_commands(page)]

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from mtbmj.cli import main
-from test_docs_commands import shell_commands
+from helpers import shell_commands
 
 REPO = Path(__file__).resolve().parents[1]
 PAGE = REPO / "docs" / "own_bike.md"

@@ -14,7 +14,7 @@ import pytest
 
 from mtbmj import cli
 from mtbmj.identify.fitresult import STRUCTURE_Z, bounds_reached, runs_test
-from test_reliability import one_line
+from helpers import one_line
 
 SPEEDS_MM_S = np.array([25, 50, 100, 200, 400, 700, 1000, 1500, 2000.0])
 FRICTION_N = 30.0
@@ -257,7 +257,7 @@ def tire_ramp(path, law, noise_N=3.0, seed=0):
 
 
 def test_a_linear_tire_ramp_passes_and_a_stiffening_one_fails(tmp_path, capsys):
-    from test_fit_honest import tire_drop  # a drop record to go with the ramp (the fit needs one)
+    from helpers import tire_drop  # a drop record to go with the ramp (the fit needs one)
 
     drop = tire_drop(tmp_path / "drop.csv")
     status, printed, _, summary, _ = fit(tmp_path, capsys, "tire", drop,

@@ -1,88 +1,24 @@
 """A drop fit that says when it does not know (issue 22), on records the fitting code did not make.
 
-The records come from a generator written here: S1's quarter car (a linear fork spring and damper
-on a Kelvin-Voigt tire; no stop is reached in the first 0.18 s) solved in closed form with the
-matrix exponential, after a free fall computed from the drop height; the logger is the 400 Hz
-4th-order Butterworth as an analog filter (``scipy.signal.lsim`` on a fine grid, from the sled
-hanging still), sampled at 1 kHz on an offset clock, with white noise and 16-bit quantisation.
-Nothing of ``mtbmj``'s engines, laws, filter or record generator is used."""
+The records come from a generator written in tests/helpers.py (``s1_record``): S1's quarter car (a
+linear fork spring and damper on a Kelvin-Voigt tire; no stop is reached in the first 0.18 s) solved
+in closed form with the matrix exponential, after a free fall computed from the drop height; the
+logger is the 400 Hz 4th-order Butterworth as an analog filter (``scipy.signal.lsim`` on a fine
+grid, from the sled hanging still), sampled at 1 kHz on an offset clock, with white noise and 16-bit
+quantisation. Nothing of ``mtbmj``'s engines, laws, filter or record generator is used."""
 from __future__ import annotations
 
 import json
 
 import numpy as np
 import pytest
-from scipy import linalg, signal
 
 from mtbmj import cli
-from mtbmj.config import load
 from mtbmj.identify.dropfit import default_bounds, fit_drop
-from test_reliability import one_line
 
-S1 = load("S1")
+from helpers import S1, one_line, s1_record, tire_drop
+
 FREE = ["tire.impact_rate_N_per_mm", "fork.spring.rate_N_per_mm"]
-
-
-def s1_record(path, rate_N_per_mm=None, tire_N_per_mm=None, drop_mm=None, after_s=0.18, fall_s=0.06,
-              noise_mm=0.02, clock_s=3.2, seed=0, friction_N=0.0, stalled_after_s=None):
-    """A sled record (CSV) of S1 with the given rates and drop height: closed form (or, with
-    ``friction_N`` of Coulomb friction in the fork, ``solve_ivp``'s LSODA), analog logger.
-    ``stalled_after_s``: the logger stops updating then and repeats its last reading."""
-    m1, m2 = S1["sled.body_mass_kg"], S1["sled.wheel_mass_kg"]
-    k = (rate_N_per_mm or S1["fork.spring.rate_N_per_mm"]) * 1e3
-    c = S1["fork.damper.coefficient_N_s_per_m"]
-    kt = (tire_N_per_mm or S1["tire.impact_rate_N_per_mm"]) * 1e3
-    bt = S1["tire.impact_damping_N_s_per_m"]
-    g = S1["sled.gravity_m_per_s2"]
-    h = (drop_mm or S1["sled.drop_height_mm"]) * 1e-3
-    v0 = np.sqrt(2 * g * h)
-    # state: sled down, wheel down (from touch), their speeds, and 1 (for gravity)
-    a = np.array([[0, 0, 1, 0, 0],
-                  [0, 0, 0, 1, 0],
-                  [-k / m1, k / m1, -c / m1, c / m1, g],
-                  [k / m2, -(k + kt) / m2, c / m2, -(c + bt) / m2, g],
-                  [0, 0, 0, 0, 0]], float)
-    fine = 2e-5
-    release = -v0 / g
-    time = np.arange(-int(np.ceil((0.05 - release) / fine)), int(np.ceil((after_s + 0.02) / fine))) * fine
-    before, after = time[time < 0], time[time >= 0]
-    states = np.empty((after.size, 5))
-    states[0] = [0.0, 0.0, v0, v0, 1.0]
-    if friction_N > 0.0:  # Coulomb friction (a 5 mm/s tanh band) against the fork's stroke: no closed form
-        from scipy.integrate import solve_ivp
-
-        def rhs(t, y):
-            f = friction_N * np.tanh((y[2] - y[3]) / 5e-3)
-            return a @ y + np.array([0.0, 0.0, -f / m1, f / m2, 0.0])
-
-        sol = solve_ivp(rhs, (0.0, after[-1]), states[0], method="LSODA", t_eval=after, rtol=1e-10, atol=1e-12)
-        states = sol.y.T
-    else:
-        step = linalg.expm(a * fine)
-        for i in range(1, after.size):
-            states[i] = step @ states[i - 1]
-    fall = np.where(before < release, -h, v0 * before + 0.5 * g * before**2)
-    sled = np.concatenate([fall, states[:, 0]]) * 1e3
-    fork = np.concatenate([np.zeros(before.size), states[:, 0] - states[:, 1]]) * 1e3
-    b, den = signal.butter(4, 2 * np.pi * 400.0, analog=True)
-    system = signal.StateSpace(*signal.tf2ss(b, den))
-    rng = np.random.default_rng(seed)
-    samples = np.arange(-fall_s, after_s, 1e-3)
-    columns = {"time_s": samples + clock_s}
-    for name, x in (("sled", sled), ("fork", fork)):
-        x0 = -np.linalg.solve(system.A, system.B[:, 0]) * x[0]  # the filter at rest on the first value
-        _, y, _ = signal.lsim(system, x, time - time[0], X0=x0)
-        logged = np.interp(samples, time, y) + rng.normal(0.0, noise_mm, samples.size)
-        q = (275.0 if name == "sled" else 150.0) / 2**16
-        logged = np.round(logged / q) * q
-        if stalled_after_s is not None:
-            stalled = samples > stalled_after_s
-            logged[stalled] = logged[~stalled][-1]
-        columns[f"{name}_mm"] = logged
-    text = "# a test's own S1 record (closed form)\ntime_s,sled_mm,fork_mm\n" + "\n".join(
-        f"{t:.6f},{s:.5f},{f:.5f}" for t, s, f in zip(columns["time_s"], columns["sled_mm"], columns["fork_mm"]))
-    path.write_text(text + "\n")
-    return path
 
 
 @pytest.fixture(scope="module")
@@ -254,26 +190,6 @@ def test_a_spring_no_law_of_the_library_follows_fails_its_check(tmp_path, capsys
 
 
 # --- the tire fit's model check: a drop of a mass on a tire, integrated here -----------------------
-
-def tire_drop(path, k_N_per_mm=85.0, b_N_s_per_m=150.0, mass_kg=25.0, drop_mm=50.0, leak_mm=0.0, seed=0):
-    """A mass dropped on a Kelvin-Voigt tire (pushes only) from rest at ``drop_mm``, integrated by
-    LSODA on 0.1 ms steps, logged at 1 kHz with 0.05 mm of noise; ``leak_mm``: the tire loses that
-    much height over the record (a slow leak), which no tire law of the library has."""
-    from scipy.integrate import solve_ivp
-
-    g, k = 9.81, k_N_per_mm * 1e3
-
-    def rhs(t, y):
-        force = k * y[0] + b_N_s_per_m * y[1] if y[0] > 0.0 else 0.0
-        return [y[1], g - max(force, 0.0) / mass_kg]
-
-    t = np.arange(0.0, 2.0, 1e-3)
-    sol = solve_ivp(rhs, (0.0, t[-1]), [-drop_mm * 1e-3, 0.0], method="LSODA", t_eval=t, max_step=1e-4,
-                    rtol=1e-9, atol=1e-12)
-    deflection = sol.y[0] * 1e3 + leak_mm * t / t[-1] + np.random.default_rng(seed).normal(0.0, 0.05, t.size)
-    path.write_text(f"# a test's own tire drop record\n# mass_kg = {mass_kg:g}\ntime_s,deflection_mm\n"
-                    + "\n".join(f"{a:.3f},{d:.4f}" for a, d in zip(t, deflection)) + "\n")
-    return path
 
 
 def test_a_tire_the_library_can_describe_passes_its_check(tmp_path, capsys):

@@ -172,7 +172,7 @@ def test_a_noise_free_record_fitted_with_the_two_stage_law_writes_the_law_it_fit
 
 
 def test_a_table_takes_no_other_friction(tmp_path, capsys):
-    from test_reliability import one_line
+    from helpers import one_line
 
     record = dyno(tmp_path / "damper.csv", 133.2, 269.4, 34.2, SPEEDS, repeats=4, noise_N=5.0, seed=3)
     one_line(capsys, ["fit", "damper", record, "--model", "table", "--friction", "none", "--out", tmp_path / "o"],
@@ -222,7 +222,7 @@ def test_a_free_key_in_pounds_per_inch_on_a_file_that_sets_it(tmp_path, capsys):
     """The issue: ``--free fork.spring.rate_lb_per_in`` on a file that sets it was refused as
     'missing (a free parameter needs a start value)': the file's value is held under
     rate_N_per_mm once read. Now it starts from it, fits in lb/in and writes that key alone."""
-    from test_fit_honest import s1_record
+    from helpers import s1_record
 
     record = s1_record(tmp_path / "s1.csv", rate_N_per_mm=18.5, tire_N_per_mm=78.0, seed=1)
     config = tmp_path / "mine.toml"
@@ -263,7 +263,7 @@ def test_the_start_of_a_key_in_another_unit_is_read_from_either_key(tmp_path):
     ("sled.rider_mass_kg", ("sled.rider_mass_kg: missing", "--set sled.rider_mass_kg=VALUE")),
 ])
 def test_free_keys_that_cannot_be_fitted_are_refused_in_one_line(tmp_path, capsys, free, needles):
-    from test_reliability import one_line
+    from helpers import one_line
 
     one_line(capsys, ["fit", "drop", "example", "--config", "S1", "--free", free, "--out", tmp_path / "o"], *needles)
     assert not (tmp_path / "o").exists()

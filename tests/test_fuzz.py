@@ -12,7 +12,6 @@ runs are derandomized (the same cases on every CI run) and keep no example datab
 from __future__ import annotations
 
 import io
-import itertools
 import json
 import math
 import struct
@@ -23,11 +22,10 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from mtbmj.cli import main
 from mtbmj.config import DAMPER_MODELS, FRICTION_MODELS, SCHEMA, SPRING_MODELS, TIRE_MODELS
 
-CASES: dict[str, int] = {}  # generated cases run per test, checked by test_enough_cases_per_run
-OUTCOMES: dict[str, dict[int, int]] = {}  # test -> exit status -> count (printed by the last test)
+from helpers import CASES, FLOATS, NUMBERS, OUTCOMES, check, fresh
+
 EXAMPLES = {"configs": 330, "records": 260, "sst": 180, "options": 300}
 
 
@@ -36,43 +34,8 @@ def fuzz_settings(name: str):
                     suppress_health_check=list(HealthCheck))
 
 
-_counter = itertools.count()
-
-
-def _fresh(tmp_path):
-    """A new folder for one generated case: inputs in ``in/``, the output asked for at ``out``."""
-    case = tmp_path / f"case{next(_counter)}"
-    (case / "in").mkdir(parents=True)
-    return case / "in", case / "out"
-
-
-def check(argv, out, capfd, name: str, results=(0,)) -> int:
-    """Run ``mtbmj argv`` and check the invariant; returns the exit status. ``results``: the
-    statuses that are answers, not refusals (crosscheck exits 1 when the engines differ)."""
-    CASES[name] = CASES.get(name, 0) + 1
-    capfd.readouterr()
-    status = main([str(a) for a in argv])
-    err = capfd.readouterr().err
-    counts = OUTCOMES.setdefault(name, {})
-    counts[status] = counts.get(status, 0) + 1
-    assert "Traceback" not in err, err
-    if status in results:
-        return status
-    assert status == 2, f"exit status {status} for {argv}: {err}"
-    lines = err.splitlines()
-    assert len(lines) == 1 and err.endswith("\n") and lines[0].startswith("mtbmj: error: "), \
-        f"not one line for {argv}:\n{err}"
-    assert not out.exists(), f"{out} written although {argv} was refused: {lines[0]}"
-    stray = [p.name for p in out.parent.iterdir() if p.name.startswith(f".{out.name}.")]
-    assert not stray, f"left {stray} beside {out} for {argv}"
-    return status
-
-
 # --- values -------------------------------------------------------------------------------------
 
-FLOATS = st.one_of(st.floats(allow_nan=True, allow_infinity=True),
-                   st.floats(min_value=-1e4, max_value=1e4),
-                   st.sampled_from([0.0, -0.0, 1e-300, 1e300, 1e30, 1e31, 5e-324, 2.0 ** 63]))
 INTS = st.one_of(st.integers(-10, 10 ** 4), st.integers(-(10 ** 400), 10 ** 400))
 WORDS = st.one_of(st.sampled_from(SPRING_MODELS + DAMPER_MODELS + FRICTION_MODELS + TIRE_MODELS),
                   st.text(max_size=12))
@@ -150,7 +113,7 @@ def config_texts(draw):
 @fuzz_settings("configs")
 @given(text=config_texts(), binary=st.one_of(st.none(), st.binary(max_size=64)))
 def test_generated_configurations(tmp_path, capfd, text, binary):
-    inputs, out = _fresh(tmp_path)
+    inputs, out = fresh(tmp_path)
     (inputs / "other.toml").write_text('base = "S12"\n')
     (inputs / "sub").mkdir()
     (inputs / "sub" / "other.toml").write_text('base = "../other.toml"\n')
@@ -284,7 +247,7 @@ def derived_records(draw, kind: str):
 @fuzz_settings("records")
 @given(data=st.data(), kind=st.sampled_from(sorted(COMMANDS)), derived=st.booleans())
 def test_generated_records(tmp_path, capfd, data, kind, derived):
-    inputs, out = _fresh(tmp_path)
+    inputs, out = fresh(tmp_path)
     name, content = data.draw(derived_records(kind) if derived else record_files())
     path = inputs / name
     path.write_bytes(content)
@@ -338,7 +301,7 @@ SHIPPED_SST = (Path(__file__).resolve().parents[1] / "mtbmj" / "data" / "sst" / 
     ["--fork-max-mm", "160"], ["--fork-max-mm", "0"], ["--shock-max-mm", "nan"], ["--bin-percent", "5"],
     ["--bin-percent", "-1"], ["--bin-percent", "1e-9"], ["--threshold-mm-per-s", "inf"]]), max_size=2))
 def test_generated_sst_files(tmp_path, capfd, blob, options):
-    inputs, out = _fresh(tmp_path)
+    inputs, out = fresh(tmp_path)
     path = inputs / "ride.SST"
     path.write_bytes(blob)
     check(["telemetry", path, *[a for o in options for a in o], "--out", out], out, capfd, "sst")
@@ -346,9 +309,6 @@ def test_generated_sst_files(tmp_path, capfd, blob, options):
 
 # --- option values ------------------------------------------------------------------------------
 
-NUMBERS = st.one_of(st.sampled_from(["0", "-1", "1", "3", "0.002", "0.01", "1e9", "1e-9", "inf", "-inf", "nan",
-                                     "1e309", "", "abc", "0x10", "2", "90", "45", "5", "1e-320", "65"]),
-                    FLOATS.map(repr))
 # Durations: the bad ones, and valid ones short enough to keep a successful run quick (a long
 # valid duration is not a different kind of input, only a slower one).
 DURATIONS = st.one_of(st.sampled_from(["0.002", "0.001", "0.005", "0", "-1", "1e9", "1e-9", "inf", "-inf", "nan",
@@ -401,7 +361,7 @@ def option_argvs(draw):
 @fuzz_settings("options")
 @given(argv=option_argvs())
 def test_generated_option_values(tmp_path, capfd, argv):
-    inputs, out = _fresh(tmp_path)
+    inputs, out = fresh(tmp_path)
     record = inputs / "drop.csv"
     record.write_text("time_s,sled_mm\n0,0\n0.001,0.1\n")
     argv = [str(record) if a == "RECORD" else a for a in argv]

@@ -1,5 +1,5 @@
 """Fuzzing the arguments of ``mtbmj reconstruct`` and ``mtbmj advise`` (issue 49): every case is
-generated here (records made in this file or by tests/test_advise.py's bike, argument combinations
+generated here (records made in this file or by tests/helpers.py's bike, argument combinations
 drawn from a seeded generator). Each run must end in one of two ways: exit 2 with one ``mtbmj:
 error:`` line and nothing written, or exit 0 with a report that holds what it claims (strict JSON, a
 speed inside the range searched, samples checked; advice with no negative count or share and no
@@ -76,7 +76,7 @@ RECORD_CASES = [(kind, seconds, int(seed), None) for (kind, lengths), seed in zi
 
 @pytest.mark.parametrize("kind,seconds,seed,speed", RECORD_CASES)
 def test_reconstruct_on_made_records(tmp_path, capsys, kind, seconds, seed, speed):
-    from test_reconstruct import BIKE
+    from helpers import BIKE
 
     rng = np.random.default_rng(seed)
     bike = tmp_path / "bike.toml"
@@ -106,7 +106,7 @@ def test_advise_arguments_are_refused_before_any_work(tmp_path, capsys, monkeypa
     """Drawn combinations of bad and good arguments on a 16 s record made here: a bad one is
     refused in one line before the ride is reconstructed; good ones reach the reconstruction
     (stood in for here by a refusal of its own)."""
-    from test_reconstruct import BIKE, bumps_csv
+    from helpers import BIKE, bumps_csv
 
     from mtbmj.ride import reconstruct
 
@@ -142,7 +142,7 @@ def advise_cases():
     """(name, bike text) of tests/test_advise.py's bike with parts whose ranges are tight: clicks
     measured over a short range around the setting or with it at an end, an air shock whose next
     spacer fills its chamber."""
-    from test_advise import air_shock_bike, clicks_bike
+    from helpers import air_shock_bike, clicks_bike
 
     rng = np.random.default_rng(7)
     setting = int(rng.integers(5, 10))
@@ -153,7 +153,7 @@ def advise_cases():
 
 @pytest.fixture(scope="module")
 def made_ride(tmp_path_factory):
-    from test_advise import ride, write_sst
+    from helpers import ride, write_sst
 
     # tests/test_advise.py's packing ride, 16 s (its reconstruction checks); the bike files here are
     # its bike with other shocks: what is fuzzed is the advice's handling of their parts

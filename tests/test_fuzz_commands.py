@@ -2,7 +2,7 @@
 air-study, sag, synth, the damper fit's ``--clicks``, the tire's pressure and the drop fit's free
 keys and bounds, each with at least as many generated cases as the older fuzz tests run (180).
 
-The invariant is the older tests' (``tests/test_fuzz.check``): exit 0, or exit 2 with exactly one
+The invariant is the older tests' (``tests/helpers.check``): exit 0, or exit 2 with exactly one
 line on stderr and no traceback, nothing written at ``--out``, nothing left beside it. Cases are
 derandomized and keep no database. The generators lean towards bad input (a valid case runs the
 whole command, which is the slow part), but every test reaches both answers (checked at the end).
@@ -13,7 +13,7 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
-from test_fuzz import CASES, FLOATS, NUMBERS, OUTCOMES, _fresh, check
+from helpers import CASES, FLOATS, NUMBERS, OUTCOMES, check, fresh
 
 PER_COMMAND = 180  # the fewest cases any older fuzz test runs (the SST files)
 NEW = ("air_study", "sag", "synth", "clicks", "tire_pressure", "fit_drop")
@@ -44,7 +44,7 @@ def _sets(pairs):
 @given(config=st.sampled_from(["air120", "air120", "S12", "nope", ""]), duration=SHORT, sets=SETS,
        workers=st.sampled_from(["1", "1", "0", "-1", "abc", "1.5", ""]))
 def test_generated_air_study(tmp_path, capfd, config, duration, sets, workers):
-    _, out = _fresh(tmp_path)
+    _, out = fresh(tmp_path)
     argv = ["air-study", config, "--duration", duration, "--workers", workers, "--quiet", *_sets(sets)]
     check(argv + ["--out", out], out, capfd, "air_study")
 
@@ -53,7 +53,7 @@ def test_generated_air_study(tmp_path, capfd, config, duration, sets, workers):
 @example(config="air120", load="60", sag="25", sets=[])
 @given(config=st.sampled_from(["air120", "S12", "S1", "reference", "x"]), load=NUMBERS, sag=NUMBERS, sets=SETS)
 def test_generated_sag(tmp_path, capfd, config, load, sag, sets):
-    _, out = _fresh(tmp_path)
+    _, out = fresh(tmp_path)
     argv = ["sag", config, "--load-kg", load, "--sag-percent", sag, *_sets(sets)]
     status = check(argv + ["--out", out], out, capfd, "sag")
     if status == 0:
@@ -66,7 +66,7 @@ def test_generated_sag(tmp_path, capfd, config, load, sag, sets):
        seed=st.sampled_from(["0", "1", "-1", "2**64", "18446744073709551616", "abc", "", "1.5", "7"]),
        suffix=st.sampled_from([".csv", ".mat", ".txt", "", ".CSV"]), sets=SETS)
 def test_generated_synth(tmp_path, capfd, kind, config, seed, suffix, sets):
-    _, out = _fresh(tmp_path)
+    _, out = fresh(tmp_path)
     target = out.parent / f"record{suffix}"
     argv = ["synth", kind, config, "--seed", seed, "--out", target, *_sets(sets)]
     capfd.readouterr()
@@ -100,7 +100,7 @@ CLICK_ITEMS = st.one_of(NUMBERS, st.sampled_from(["0", "6", "12", "3"]),
                                                  min_size=1, max_size=3),
        valid=st.sampled_from([False] * 9 + [True]))
 def test_generated_clicks(tmp_path, capfd, dyno_files, files, clicks, valid):
-    _, out = _fresh(tmp_path)
+    _, out = fresh(tmp_path)
     if valid:  # now and then a setting a user gets right, so the fit runs to its end
         files, clicks = 3, ["0,6,12"]
     argv = ["fit", "damper", *dyno_files[:files]]
@@ -116,7 +116,7 @@ def test_generated_clicks(tmp_path, capfd, dyno_files, files, clicks, valid):
        other=st.lists(st.tuples(st.sampled_from(["tire.impact_rate_N_per_mm", "tire.model", "tire.damping_Ns_per_m",
                                                  "tire.pressure_psi"]), VALUES).map("=".join), max_size=1))
 def test_generated_tire_pressure(tmp_path, capfd, psi, duration, engine, other):
-    _, out = _fresh(tmp_path)
+    _, out = fresh(tmp_path)
     argv = ["drop", "S12", "--engine", engine, "--duration", duration, "--quiet", "--set", f"tire.pressure_psi={psi}",
             *_sets(other)]
     check(argv + ["--out", out], out, capfd, "tire_pressure")
@@ -138,7 +138,7 @@ BOUNDS = st.one_of(st.tuples(st.sampled_from(["tire.impact_rate_N_per_mm", "fork
        # up now and then, as in the other commands' tests; the engine's own fit is tested elsewhere)
        engine=st.sampled_from(["fast"] * 6 + ["ode", "x"]), duration=st.sampled_from([None, "0.05", "0", "abc"]))
 def test_generated_fit_drop_free_keys_and_bounds(tmp_path, capfd, free, bounds, starts, engine, duration):
-    _, out = _fresh(tmp_path)
+    _, out = fresh(tmp_path)
     argv = ["fit", "drop", "example", "--free", free, "--starts", starts, "--engine", engine]
     for b in bounds:
         argv += ["--bound", b]

@@ -17,7 +17,7 @@ import pytest
 
 from mtbmj import output
 from mtbmj.cli.common import Parser, run
-from test_reliability import _gone  # waits for processes to end, kills what outlives the wait
+from helpers import gone  # waits for processes to end, kills what outlives the wait
 
 CLI = [sys.executable, "-m", "mtbmj.cli"]
 
@@ -133,7 +133,7 @@ def test_air_study_killed_or_interrupted_leaves_no_orphan_and_the_old_result(tmp
     else:
         os.killpg(proc.pid, signal.SIGINT)  # the terminal's Ctrl-C reaches the whole group
     stdout, stderr = proc.communicate(timeout=60)
-    assert _gone(children), f"workers outlived air-study ({how})"
+    assert gone(children), f"workers outlived air-study ({how})"
     if how == "SIGINT":
         assert proc.returncode == 130 and stderr == "mtbmj: interrupted\n", (proc.returncode, stderr)
     else:
@@ -177,7 +177,7 @@ def ctrl_c_trials(tmp_path, trials: int, seed: int, argv) -> list[tuple[float, i
             continue
         os.killpg(proc.pid, signal.SIGINT)
         _, stderr = proc.communicate(timeout=120)
-        assert _gone(children), f"trial {trial}: workers outlived the interrupt"
+        assert gone(children), f"trial {trial}: workers outlived the interrupt"
         results.append((moment, proc.returncode, stderr))
         if out.exists():  # nothing half-written: no result, or the whole one (interrupted after its swap)
             assert output.foreign_entry(out) is None
@@ -219,7 +219,7 @@ def test_terminating_a_pool_mid_map_ends_its_workers_and_raises_nothing_in_its_t
         workers = list(pool._processes)
         mapped.close()  # cancels what the map had not started
         pool.terminate()
-        assert _gone(workers, timeout=5.0)
+        assert gone(workers, timeout=5.0)
         time.sleep(0.2)
         assert all(f.done() for f in futures)
     assert errors == []

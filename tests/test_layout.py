@@ -391,3 +391,44 @@ def test_a_moved_name_is_importable_from_its_old_place_with_a_warning():
     assert read_sst is new
     assert [str(w.message).split(":")[0] for w in caught] == ["mtbmj.ride.telemetry moved to mtbmj.measured.telemetry"]
     assert caught[0].category is DeprecationWarning
+
+
+# --- the test suite: shared helpers in tests/helpers.py, no test module imports another --------------
+
+def imports_of_test_modules(folder: Path) -> list[str]:
+    """``file:line module`` of every import (lazy ones inside functions included) in ``folder``'s
+    test modules, conftest.py and helpers.py that takes a test module: ``test_x``, ``tests.test_x``
+    or the ``tests`` package itself."""
+    found = []
+    for path in sorted([*folder.glob("test_*.py"), folder / "conftest.py", folder / "helpers.py"]):
+        if not path.exists():
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and not node.level:
+                names = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            else:
+                continue
+            for name in names:
+                parts = name.split(".")
+                if parts[0] == "tests" or parts[0].startswith("test_"):
+                    found.append(f"{path.name}:{node.lineno} {name}")
+                    break
+    return found
+
+
+def test_no_test_module_imports_another_test_module():
+    """What several test modules use lives in tests/helpers.py (``from helpers import ...``), a
+    fixture in tests/conftest.py: a test module taken as a library runs its tests twice or not at
+    all depending on where pytest starts, and a ``tests.`` path collects only from the repository root."""
+    assert imports_of_test_modules(ROOT / "tests") == []
+
+
+def test_the_test_import_finder_finds_planted_imports(tmp_path):
+    (tmp_path / "test_a.py").write_text("import os\nfrom helpers import one_line\n\n\ndef test_a():\n    pass\n")
+    (tmp_path / "test_b.py").write_text("from test_a import thing\n\n\ndef f():\n    import test_a as A\n")
+    (tmp_path / "test_c.py").write_text("from tests.test_a import thing\nfrom tests import test_a\n")
+    (tmp_path / "helpers.py").write_text("from test_c import x\n")
+    assert imports_of_test_modules(tmp_path) == ["helpers.py:1 test_c", "test_b.py:1 test_a", "test_b.py:5 test_a",
+                                             "test_c.py:1 tests.test_a", "test_c.py:2 tests"]

@@ -1,9 +1,10 @@
 """The rear end from hardpoints (mtbmj/bike/linkage.py) against mechanisms solved here another way:
-a single pivot in closed form, the four-bars by scipy's root finder on the loop-closure equations
-(angles as unknowns, where the package intersects circles), the chain's upper run as the line whose
-distance from each sprocket's centre is its radius (found by a root finder), the anti-squat and
-anti-rise lines and the pedal kickback from the chain's length written out; the bike run from
-hardpoints against the same bike given a leverage table computed here; the CLI and its refusals."""
+a single pivot in closed form, the four-bars (tests/helpers.py's FourBar) by scipy's root finder on
+the loop-closure equations (angles as unknowns, where the package intersects circles), the chain's
+upper run as the line whose distance from each sprocket's centre is its radius (found by a root
+finder), the anti-squat and anti-rise lines and the pedal kickback from the chain's length written
+out; the bike run from hardpoints against the same bike given a leverage table computed here; the
+CLI and its refusals."""
 from __future__ import annotations
 
 import math
@@ -18,95 +19,14 @@ from mtbmj.bike import linkage as lk
 from mtbmj.bike import rear_end
 from mtbmj.errors import ConfigError
 
-MM = 1e-3
-P = lambda x, z: np.array([x, z], float) * MM  # noqa: E731
+from helpers import HORST, MM, P, FourBar, ang, find, independent, rot
 
-HORST = dict(main_pivot=P(-40, 70), horst_pivot=P(-420, 10), rear_axle=P(-440, 25), rocker_pivot=P(-50, 380),
-             seatstay_rocker=P(-120, 400), shock_rocker=P(-20, 430), shock_frame=P(160, 190))
+
 DRIVEN = dict(main_pivot=P(-30, 75), rear_axle=P(-440, 25), swingarm_link=P(-120, 120), rocker_pivot=P(-20, 330),
               rocker_link=P(-110, 330), shock_rocker=P(80, 420), shock_frame=P(220, 180))
 SINGLE = dict(main_pivot=P(-30, 75), rear_axle=P(-440, 25), shock_swingarm=P(-150, 150), shock_frame=P(120, 300))
 SHORT = dict(lower_pivot=P(20, 60), lower_link=P(-40, 40), upper_pivot=P(-60, 260), upper_link=P(-140, 280),
              rear_axle=P(-440, 25), shock_upper_link=P(-120, 360), shock_frame=P(200, 150))
-
-
-def rot(v, a):
-    return np.array([math.cos(a) * v[0] - math.sin(a) * v[1], math.sin(a) * v[0] + math.cos(a) * v[1]])
-
-
-def ang(v):
-    return math.atan2(v[1], v[0])
-
-
-class FourBar:
-    """The loop A + l1 e(t1) + l2 e(t2) = D + l3 e(t3) solved for (t2, t3) by fsolve, continued
-    from the previous solution; points ride on their links by the links' turns."""
-
-    def __init__(self, pts, a, b, c, d):
-        self.p, self.names = pts, (a, b, c, d)
-        A, B, C, D = (pts[n] for n in self.names)
-        self.l1, self.l2, self.l3 = (float(np.hypot(*v)) for v in (B - A, C - B, C - D))
-        self.t1, self.t2, self.t3 = ang(B - A), ang(C - B), ang(C - D)
-        self.guess = (self.t2, self.t3)
-
-    def solve(self, turn):
-        A, D = self.p[self.names[0]], self.p[self.names[3]]
-        e = lambda t: np.array([math.cos(t), math.sin(t)])  # noqa: E731
-        t1 = self.t1 + turn
-
-        def loop(u):
-            return A + self.l1 * e(t1) + self.l2 * e(u[0]) - D - self.l3 * e(u[1])
-
-        sol = fsolve(loop, self.guess, xtol=1e-13)
-        assert np.max(np.abs(loop(sol))) < 1e-12
-        self.guess = tuple(sol)
-        return t1 - self.t1, sol[0] - self.t2, sol[1] - self.t3  # each link's turn
-
-    def point(self, name, on, turn):
-        """``name`` carried by link ``on`` ("input", "coupler", "output") at input turn ``turn``."""
-        turns = self.solve(turn)
-        A, B, D = (self.p[self.names[i]] for i in (0, 1, 3))
-        B_now = A + rot(B - A, turns[0])
-        if on == "input":
-            return A + rot(self.p[name] - A, turns[0])
-        if on == "coupler":
-            return B_now + rot(self.p[name] - B, turns[1])
-        return D + rot(self.p[name] - D, turns[2])
-
-
-def find(w, target, sign, step=2e-3):
-    """The turn (sign times a positive angle) at which w reaches ``target``, marching out from 0 in
-    small steps (the four-bar's root finder continues from its last solution) and then bisecting."""
-    if target <= 0.0:
-        return 0.0
-    t = 0.0
-    while w(sign * (t + step)) < target:
-        t += step
-        assert t < 2.0
-    return sign * brentq(lambda u: w(sign * u) - target, t, t + step, xtol=1e-14)
-
-
-def independent(kind, pts):
-    """(w(turn), s(turn), axle(turn)) of the mechanism solved here."""
-    if kind == "single_pivot":
-        A = pts["main_pivot"]
-        axle = lambda t: A + rot(pts["rear_axle"] - A, t)  # noqa: E731
-        end = lambda t: A + rot(pts["shock_swingarm"] - A, t)  # noqa: E731
-    else:
-        names, axle_on, shock, shock_on = {
-            "horst_link": (("main_pivot", "horst_pivot", "seatstay_rocker", "rocker_pivot"), "coupler", "shock_rocker",
-                           "output"),
-            "linkage_driven_single_pivot": (("main_pivot", "swingarm_link", "rocker_link", "rocker_pivot"), "input",
-                                            "shock_rocker", "output"),
-            "short_link": (("lower_pivot", "lower_link", "upper_link", "upper_pivot"), "coupler", "shock_upper_link",
-                           "output")}[kind]
-        fb = FourBar(pts, *names)
-        axle = lambda t: fb.point("rear_axle", axle_on, t)  # noqa: E731
-        end = lambda t: fb.point(shock, shock_on, t)  # noqa: E731
-    L0 = float(np.hypot(*(pts[shock if kind != "single_pivot" else "shock_swingarm"] - pts["shock_frame"])))
-    w = lambda t: axle(t)[1] - pts["rear_axle"][1]  # noqa: E731
-    s = lambda t: L0 - float(np.hypot(*(end(t) - pts["shock_frame"])))  # noqa: E731
-    return w, s, axle
 
 
 @pytest.mark.parametrize("kind,pts,stroke", [("single_pivot", SINGLE, 0.065), ("horst_link", HORST, 0.050),

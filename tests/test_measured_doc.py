@@ -5,7 +5,6 @@ left out; the page keeps its cells short and tells no history."""
 from __future__ import annotations
 
 import argparse
-import ast
 import importlib.util
 import json
 import re
@@ -15,6 +14,8 @@ import sys
 from pathlib import Path
 
 import pytest
+
+from helpers import script_parser
 
 REPO = Path(__file__).resolve().parents[1]
 BENCH = REPO / "benchmarks"
@@ -40,34 +41,6 @@ def table_rows(text: str) -> list[list[str]]:
         if line.startswith("| ") and not line.startswith("| figure"):
             rows.append([c.strip() for c in re.split(r"(?<!\\)\|", line.strip())[1:-1]])
     return rows
-
-
-def script_parser(script: Path) -> argparse.ArgumentParser:
-    """The script's argparse options, rebuilt from its ``add_argument`` calls (the scripts build
-    their parser inside ``main``): option strings, ``action``, ``type`` and literal ``choices``; a
-    call of ``_bench.add_out_option`` adds ``--out PATH``."""
-    parser = argparse.ArgumentParser(prog=script.name, exit_on_error=False)
-    types = {"int": int, "float": float, "str": str, "Path": Path}
-    for node in ast.walk(ast.parse(script.read_text())):
-        if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == "add_out_option":
-            parser.add_argument("--out", type=Path)
-            continue
-        if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "add_argument"):
-            continue
-        names = [ast.literal_eval(a) for a in node.args]
-        kwargs = {}
-        for kw in node.keywords:
-            if kw.arg == "action":
-                kwargs["action"] = ast.literal_eval(kw.value)
-            elif kw.arg == "type" and isinstance(kw.value, ast.Name):
-                kwargs["type"] = types[kw.value.id]
-            elif kw.arg == "choices":
-                try:
-                    kwargs["choices"] = ast.literal_eval(kw.value)
-                except ValueError:  # choices named by a module attribute: any value passes here
-                    pass
-        parser.add_argument(*names, **kwargs)
-    return parser
 
 
 def test_the_page_is_what_report_py_writes(report):

@@ -21,7 +21,7 @@ import pytest
 from mtbmj import output
 from mtbmj.cli import main
 from mtbmj.errors import MtbmjError
-from test_reliability import one_line as refused  # exit 2, one line naming every needle
+from helpers import one_line as refused  # exit 2, one line naming every needle
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -19,30 +19,11 @@ from scipy.integrate import solve_ivp
 
 from mtbmj.cli import main
 
+from helpers import BIKE, RATIO, bumps_csv, quarter_car_masses
+
 SPEED = 6.0
 RATE = 1000.0
 SECONDS = 16.0
-RATIO = 2.5  # the rear's constant leverage ratio
-
-BIKE = f"""base = "trail"
-[leverage]
-wheel_travel_mm = [0.0, 125.0]
-ratio = [{RATIO}, {RATIO}]
-[fork]
-config = "S1"
-[fork.set]
-"fork.travel_mm" = 130.0
-"fork.length_mm" = 530.0
-"fork.spring.rate_N_per_mm" = 9.0
-"fork.damper.coefficient_N_s_per_m" = 600.0
-[shock]
-stroke_mm = 50.0
-config = "S1"
-[shock.set]
-"fork.travel_mm" = 50.0
-"fork.spring.rate_N_per_mm" = 90.0
-"fork.damper.coefficient_N_s_per_m" = 2500.0
-"""
 
 
 def hidden_profile(seed=3):
@@ -58,23 +39,6 @@ def hidden_profile(seed=3):
         u = np.clip((grid - c) / L + 0.5, 0.0, 1.0)
         table += a * np.sin(np.pi * u) ** 2
     return lambda s: np.interp(s, grid, table)  # on a 1 mm grid: the bumps' chords sag < 0.01 mm
-
-
-def quarter_car_masses(spec):
-    """(front sprung, front unsprung, rear sprung, rear unsprung) kg of a bike file's masses: the
-    weight shared between the axles by moments, the unsprung the fork lower and front wheel, the
-    rear wheel and half the swingarm."""
-    from mtbmj.bike.model import frame_body
-
-    m_frame, c_frame, _ = frame_body(spec)
-    r = spec.rider
-    bodies = [(m_frame, c_frame[0]), (r.mass, r.com[0]), (spec.fork_lower_mass + spec.front_wheel_mass, spec.front_axle[0]),
-              (spec.rear_wheel_mass, spec.rear_axle[0]), (spec.swingarm_mass, 0.5 * (spec.pivot[0] + spec.rear_axle[0]))]
-    total = sum(m for m, _ in bodies)
-    xc = sum(m * x for m, x in bodies) / total
-    share = (xc - spec.rear_axle[0]) / (spec.front_axle[0] - spec.rear_axle[0])
-    mf, mr = spec.fork_lower_mass + spec.front_wheel_mass, spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
-    return total * share - mf, mf, total * (1 - share) - mr, mr
 
 
 def ride(tmp_path):
@@ -249,7 +213,7 @@ def test_the_same_ride_as_sst_counts_comes_back(made, tmp_path):
     import json
 
     from mtbmj.bike import spec as spec_mod
-    from test_telemetry_sensors import write_v3
+    from helpers import write_v3
 
     bike, csv, t, fork_mm, rear_mm, h, wb = made
     sst = write_v3(tmp_path / "ride.SST", np.clip(fork_mm, 0, None), np.clip(rear_mm, 0, None) / RATIO,
@@ -259,24 +223,6 @@ def test_the_same_ride_as_sst_counts_comes_back(made, tmp_path):
     summary = json.loads((out / "reconstruction.json").read_text())
     assert summary["speed_m_per_s"] == pytest.approx(SPEED, rel=0.03)
     assert summary["checks"]["rear_predicted_rms_percent_of_used"] < 10.0
-
-
-def bumps_csv(path, seconds, lag_s=0.2, rate=1000, scale=1.0, seed=5):
-    """A two-ended travel CSV made here: random smooth bumps at the fork and the same bumps ``lag_s``
-    later at the rear (no physics: for what the speed search and the refusals read), ``scale`` mm per
-    unit, rounded to 0.1 mm; (path, t, fork_mm, rear_mm)."""
-    rng = np.random.default_rng(seed)
-    t = np.arange(int(round(seconds * rate))) / rate
-    grid = np.arange(-2.0, seconds + 2.0, 1.0 / rate)
-    kicks = np.zeros_like(grid)
-    kicks[rng.integers(0, grid.size, max(int(3 * seconds), 1))] = rng.uniform(5, 30, max(int(3 * seconds), 1))
-    kernel = np.hanning(int(0.15 * rate))
-    shape = np.convolve(kicks, kernel / kernel.max(), mode="same")
-    drift = np.linspace(0.0, 2.0, t.size)  # every column moves, however short the record
-    fork = np.round(scale * (20.0 + drift + np.interp(t, grid, shape)), 1)
-    rear = np.round(scale * (25.0 + drift + np.interp(t - lag_s, grid, shape)), 1)
-    path.write_text("time_s,fork_mm,rear_mm\n" + "\n".join(f"{a:.4f},{b:.1f},{c:.1f}" for a, b, c in zip(t, fork, rear)))
-    return path, t, fork, rear
 
 
 def one_error_line(err):

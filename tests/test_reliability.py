@@ -20,19 +20,9 @@ from mtbmj import output
 from mtbmj.cli import main
 from mtbmj.errors import MtbmjError
 
+from helpers import gone, one_line
+
 PRESET_RATE = "fork.spring.preload_N"
-
-
-def one_line(capsys, argv, *needles) -> str:
-    """``mtbmj argv`` refuses with exit 2 and one stderr line naming every needle."""
-    capsys.readouterr()
-    status = main([str(a) for a in argv])
-    err = capsys.readouterr().err
-    assert status == 2, err
-    assert err.count("\n") == 1 and err.startswith("mtbmj: error: ") and "Traceback" not in err, err
-    for needle in needles:
-        assert needle in err, err
-    return err
 
 
 # --- 1, 11, 14: sweeps ------------------------------------------------------------------------
@@ -379,7 +369,6 @@ def test_sigkill_mid_write_leaves_the_old_folder_or_the_new_one(tmp_path):
     assert len(seen) > 1
 
 
-
 @pytest.mark.parametrize("kind", ["new", "old", "probe"])
 def test_leftovers_of_a_dead_writer_are_removed_and_a_live_ones_kept(tmp_path, kind):
     """A writer killed between making and removing its staging, old-version or probe folder
@@ -425,28 +414,6 @@ POOL = textwrap.dedent("""
 """)
 
 
-def _gone(pids, timeout=10.0) -> bool:
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        alive = []
-        for pid in pids:
-            try:
-                with open(f"/proc/{pid}/stat") as handle:
-                    if handle.read().split(")")[-1].split()[0] != "Z":
-                        alive.append(pid)
-            except FileNotFoundError:
-                pass
-        if not alive:
-            return True
-        time.sleep(0.1)
-    for pid in alive:  # the test failed: do not leave its orphans computing
-        try:
-            os.kill(pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-    return False
-
-
 def test_pool_workers_die_when_the_parent_is_killed(tmp_path):
     script = tmp_path / "pool.py"
     script.write_text(POOL)
@@ -456,7 +423,7 @@ def test_pool_workers_die_when_the_parent_is_killed(tmp_path):
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     proc.stdout.close()
-    assert _gone(pids), f"workers {pids} outlived their parent"
+    assert gone(pids), f"workers {pids} outlived their parent"
 
 
 @pytest.mark.parametrize("command", [
@@ -480,7 +447,7 @@ def test_workers_die_with_a_killed_command(tmp_path, command):
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     assert len(children) >= 2, f"{command[0]} did not start its workers"
-    assert _gone(children), f"workers {children} outlived {command[0]}"
+    assert gone(children), f"workers {children} outlived {command[0]}"
     proc.stdout.read()  # returns: no orphan holds the pipe open
     proc.stdout.close()
     proc.stderr.close()

@@ -1,5 +1,4 @@
 """Rolling front end: terrain library, the radial tire's stiffness on any terrain, runs, CLI, env."""
-import dataclasses
 import json
 import math
 import os
@@ -14,50 +13,15 @@ from mtbmj.rolling import terrain as T
 from mtbmj.errors import MtbmjError
 from mtbmj.rolling.tire import RadialTire
 
+from helpers import SETTLE_CASES, settle
+
 
 # --- the tire's stiffness on any terrain -------------------------------------------------------
 
-def settle(ter: T.Terrain, x_axle: float, duration: float = 1.0):
-    """Put the loaded wheel at rest over ``x_axle`` (speed 0) and let it settle; return the
-    exact geometric deflection, the force from equilibrium W / n_z and the force MuJoCo applied."""
-    p = R.prepare(dataclasses.replace(ter, start_x=x_axle), 1.0, "S12")
-    cb, model, data = p.callback, p.front.model, p.data
-    cb.speed = 0.0
-    data.qvel[:] = 0.0
-    s = p.setup
-    weight = (s.body_mass + s.wheel_mass) * s.gravity
-    cx, cz, _, _ = cb.axle_state(data.qpos, data.qvel)
-    # start near statics along the contact normal (the test is what the physics then holds)
-    qx, qz, nx, nz, _, _ = min(p.tire.patches(cx, cz), key=lambda q: math.hypot(cx - q[0], cz - q[1]))
-    target = (qx + nx * (p.tire.radius - weight / nz / p.tire.rate), qz + nz * (p.tire.radius - weight / nz / p.tire.rate))
-    data.qpos[cb.xq] += target[0] - cx
-    data.qpos[cb.zq] += target[1] - cz
-    cb.x_ref0 = float(data.qpos[cb.xq])
-    cb.reset()
-    states, sensors = R.simulate(p, duration)
-    tail = slice(int(0.6 * len(sensors)), None)
-    nq = model.nq
-    qpos, qvel = states[:-1, 1:1 + nq][tail], states[:-1, 1 + nq:1 + nq + model.nv][tail]
-    axle = np.array([cb.axle_state(a, b)[:2] for a, b in zip(qpos[::50], qvel[::50])])
-    deflection = np.mean([p.tire.radius - p.tire.distance(x, z) for x, z in axle])
-    sens = lambda name: sensors[tail, model.sensor_adr[model.sensor(name).id]]
-    fx, fz = sens("tire_force_x").mean(), sens("tire_force_z").mean()
-    applied = math.hypot(fx, fz)
-    from_equilibrium = weight / (fz / applied)
-    return deflection, from_equilibrium, applied, p.tire.rate
 
-
-CASES = {
-    "flat": (T.flat(), 0.5),
-    "bump_top": (T.rock(height_mm=100, length_mm=300, at_m=1.0), 1.15),  # top of the rock
-    "edge": (T.step_down(height_mm=100, at_m=1.0), 1.1),  # resting on the corner, 0.1 m past it
-    "heightfield": (T.iso8608("D", seed=1, length_m=30, sample_mm=10), 12.0),  # sampled random road
-}
-
-
-@pytest.mark.parametrize("case", list(CASES))
+@pytest.mark.parametrize("case", list(SETTLE_CASES))
 def test_static_deflection_equals_force_over_rate(case):
-    ter, x = CASES[case]
+    ter, x = SETTLE_CASES[case]
     deflection, force, applied, rate = settle(ter, x)
     assert abs(deflection - force / rate) / (force / rate) < 0.02, (case, deflection, force / rate)
     assert abs(applied - force) / force < 0.02

@@ -18,6 +18,8 @@ from mtbmj.rolling import frontend as R
 from mtbmj.rolling import terrain as T
 from mtbmj.controllers import installed
 
+from helpers import SETTLE_CASES, settle
+
 compiled = pytest.importorskip("mtbmj.controllers.compiled")
 CR = pytest.importorskip("mtbmj.rolling.callback_compiled")
 if not CR.available():
@@ -111,12 +113,8 @@ def test_patch_search_matches_radial_tire():
 
 
 def test_static_deflection_on_the_compiled_path(monkeypatch):
-    """tests/test_rolling.py's settle(): static deflection = F / K within 2 %, on the compiled path."""
-    sys.path.insert(0, os.path.dirname(__file__))
-    try:
-        import test_rolling as TR
-    finally:
-        sys.path.remove(os.path.dirname(__file__))
+    """settle() (tests/helpers.py, as tests/test_rolling.py runs it): static deflection = F / K within
+    2 %, on the compiled path."""
     original = R.prepare
     kinds = []
 
@@ -126,11 +124,11 @@ def test_static_deflection_on_the_compiled_path(monkeypatch):
         return p
 
     monkeypatch.setattr(R, "prepare", prepare)
-    for case, (ter, x) in TR.CASES.items():
-        deflection, force, applied, rate = TR.settle(ter, x)
+    for case, (ter, x) in SETTLE_CASES.items():
+        deflection, force, applied, rate = settle(ter, x)
         assert abs(deflection - force / rate) / (force / rate) < 0.02, (case, deflection, force / rate)
         assert abs(applied - force) / force < 0.02, case
-    assert kinds == ["compiled"] * len(TR.CASES)
+    assert kinds == ["compiled"] * len(SETTLE_CASES)
 
 
 def test_default_path_is_compiled_and_settable_fields_reach_the_slot():

@@ -10,7 +10,7 @@ import pytest
 from mtbmj import cli
 from mtbmj.controllers.drive import RIDER_BRAKE_N, RIDER_POWER_W, RIDER_PUSH_N, Drive, drive_force
 from mtbmj.rolling.frontend import run_roll
-from test_reliability import one_line
+from helpers import one_line
 
 ROCK = "rock:height_mm=250"  # a rock big enough to strike the rim and stop the wheel at 3 m/s
 

@@ -11,7 +11,7 @@ import struct
 import numpy as np
 
 from mtbmj.cli import main
-from tests.test_bounce import FORK, RATE, SHOCK, counts_of
+from helpers import FORK, RATE, SHOCK, counts_of
 
 SECONDS = 40.0
 

@@ -1,48 +1,15 @@
 """The telemetry sensors' calibration from a bike file (issue 41 item 1): a ride recorded with other
 sensor arms than the SST example's decodes to its own travel when the bike file gives them
 ([sensors]), and to something else without; a triangle that cannot close is refused naming the key.
-The counts are written here by inverting the sensors' geometry (law of cosines), not by the reader."""
+The counts are written in tests/helpers.py by inverting the sensors' geometry (law of cosines), not by the reader."""
 from __future__ import annotations
-
-import math
-import struct
 
 import numpy as np
 import pytest
 
 from mtbmj.cli import main
 
-COUNTS = 4096
-FORK_ARM, FORK_MAX = 150.0, 260.0
-ARM1, ARM2, SHOCK_MAX = 90.0, 190.0, 215.0
-
-
-SENSORS = {"fork_arm_mm": FORK_ARM, "fork_max_mm": FORK_MAX, "shock_arm1_mm": ARM1, "shock_arm2_mm": ARM2,
-           "shock_max_mm": SHOCK_MAX}
-
-
-def fork_counts(travel, arm=FORK_ARM, top=FORK_MAX):
-    # base b = max - travel = 2 arm cos(angle): angle = acos(b / 2 arm), counts from the start angle
-    start = math.acos(top / (2 * arm))
-    return (np.arccos((top - travel) / (2 * arm)) - start) * COUNTS / (2 * np.pi)
-
-
-def shock_counts(stroke, a=ARM1, b=ARM2, top=SHOCK_MAX):
-    # third side c = max - stroke; c^2 = a^2 + b^2 - 2 a b cos(g): counts = (g0 - g) COUNTS / 2 pi
-    g0 = math.acos((a * a + b * b - top ** 2) / (2 * a * b))
-    c = top - stroke
-    return (g0 - np.arccos((a * a + b * b - c * c) / (2 * a * b))) * COUNTS / (2 * np.pi)
-
-
-def write_v3(path, fork_mm, shock_mm, sensors=SENSORS, rate=1000):
-    """An SST version-3 file (16-byte header, then fork and shock uint16 counts) of the travels
-    through a bike file's [sensors] (its keys), in integer counts: the geometry inverted here."""
-    s = sensors
-    counts = np.column_stack((np.rint(fork_counts(fork_mm, s["fork_arm_mm"], s["fork_max_mm"])),
-                              np.rint(shock_counts(shock_mm, s["shock_arm1_mm"], s["shock_arm2_mm"],
-                                                   s["shock_max_mm"])))).astype("<u2")
-    path.write_bytes(struct.pack("<3sBHHq", b"SST", 3, int(rate), 0, 1_700_000_000) + counts.tobytes())
-    return path
+from helpers import ARM1, ARM2, FORK_ARM, FORK_MAX, SHOCK_MAX, write_v3
 
 
 def _ride(path, seconds=40.0, rate=1000):

@@ -1,0 +1,763 @@
+"""What more than one test module uses: made here once and imported from here (``from helpers import
+one_line``; pytest puts tests/ on ``sys.path``). A plain module, no tests in it: no test module
+imports another test module (tests/test_layout.py checks that). Fixtures shared across files live in
+tests/conftest.py."""
+from __future__ import annotations
+
+import argparse
+import ast
+import dataclasses
+import itertools
+import json
+import math
+import os
+import re
+import shlex
+import shutil
+import struct
+import subprocess
+import time
+from pathlib import Path
+from signal import SIGKILL
+
+import mujoco
+import numpy as np
+from hypothesis import strategies as st
+from scipy import linalg, signal
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq, fsolve
+
+from mtbmj.cli import main
+from mtbmj.config import load
+from mtbmj.rolling import frontend as R
+from mtbmj.rolling import terrain as T
+
+
+# --- refusals and processes -----------------------------------------------------------------------
+
+
+def one_line(capsys, argv, *needles) -> str:
+    """``mtbmj argv`` refuses with exit 2 and one stderr line naming every needle."""
+    capsys.readouterr()
+    status = main([str(a) for a in argv])
+    err = capsys.readouterr().err
+    assert status == 2, err
+    assert err.count("\n") == 1 and err.startswith("mtbmj: error: ") and "Traceback" not in err, err
+    for needle in needles:
+        assert needle in err, err
+    return err
+
+
+def gone(pids, timeout=10.0) -> bool:
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        alive = []
+        for pid in pids:
+            try:
+                with open(f"/proc/{pid}/stat") as handle:
+                    if handle.read().split(")")[-1].split()[0] != "Z":
+                        alive.append(pid)
+            except FileNotFoundError:
+                pass
+        if not alive:
+            return True
+        time.sleep(0.1)
+    for pid in alive:  # the test failed: do not leave its orphans computing
+        try:
+            os.kill(pid, SIGKILL)
+        except ProcessLookupError:
+            pass
+    return False
+
+
+# --- the fuzz tests' invariant, counters and values -----------------------------------------------
+
+CASES: dict[str, int] = {}  # generated cases run per test, checked by test_enough_cases_per_run
+OUTCOMES: dict[str, dict[int, int]] = {}  # test -> exit status -> count (printed by the last test)
+_counter = itertools.count()
+
+
+def fresh(tmp_path):
+    """A new folder for one generated case: inputs in ``in/``, the output asked for at ``out``."""
+    case = tmp_path / f"case{next(_counter)}"
+    (case / "in").mkdir(parents=True)
+    return case / "in", case / "out"
+
+
+def check(argv, out, capfd, name: str, results=(0,)) -> int:
+    """Run ``mtbmj argv`` and check the invariant; returns the exit status. ``results``: the
+    statuses that are answers, not refusals (crosscheck exits 1 when the engines differ)."""
+    CASES[name] = CASES.get(name, 0) + 1
+    capfd.readouterr()
+    status = main([str(a) for a in argv])
+    err = capfd.readouterr().err
+    counts = OUTCOMES.setdefault(name, {})
+    counts[status] = counts.get(status, 0) + 1
+    assert "Traceback" not in err, err
+    if status in results:
+        return status
+    assert status == 2, f"exit status {status} for {argv}: {err}"
+    lines = err.splitlines()
+    assert len(lines) == 1 and err.endswith("\n") and lines[0].startswith("mtbmj: error: "), \
+        f"not one line for {argv}:\n{err}"
+    assert not out.exists(), f"{out} written although {argv} was refused: {lines[0]}"
+    stray = [p.name for p in out.parent.iterdir() if p.name.startswith(f".{out.name}.")]
+    assert not stray, f"left {stray} beside {out} for {argv}"
+    return status
+
+
+FLOATS = st.one_of(st.floats(allow_nan=True, allow_infinity=True),
+                   st.floats(min_value=-1e4, max_value=1e4),
+                   st.sampled_from([0.0, -0.0, 1e-300, 1e300, 1e30, 1e31, 5e-324, 2.0 ** 63]))
+
+
+NUMBERS = st.one_of(st.sampled_from(["0", "-1", "1", "3", "0.002", "0.01", "1e9", "1e-9", "inf", "-inf", "nan",
+                                     "1e309", "", "abc", "0x10", "2", "90", "45", "5", "1e-320", "65"]),
+                    FLOATS.map(repr))
+
+
+# --- the docs pages' shell commands ---------------------------------------------------------------
+
+REPO = Path(__file__).resolve().parents[1]
+PAGES = [REPO / "README.md"] + sorted((REPO / "docs").glob("*.md"))
+
+
+def shell_commands(page: Path) -> list[tuple[int, list[str]]]:
+    """(line, argv) of every simple command in the page's fenced shell blocks (``bash``, ``sh``,
+    ``console``; a block without a language is a diagram or output), continuation lines joined, comments dropped, chains split at ``&&``, ``|``, ``;``."""
+    out = []
+    inside, language, start, pending = False, "", 0, ""
+    for number, line in enumerate(page.read_text().splitlines(), 1):
+        fence = re.match(r"^\s*```(\w*)", line)
+        if fence:
+            inside, language = (not inside), fence.group(1)
+            continue
+        if not inside or language not in ("bash", "sh", "console"):
+            continue
+        if not pending:
+            start = number
+        if line.rstrip().endswith("\\"):
+            pending += line.rstrip()[:-1] + " "
+            continue
+        text, pending = pending + line, ""
+        try:
+            words = shlex.split(text, comments=True)
+        except ValueError:  # an unbalanced quote: a shell construct this scan does not follow
+            continue
+        command: list[str] = []
+        for word in words + [";"]:
+            if word in ("&&", "||", "|", ";"):
+                if command:
+                    out.append((start, command))
+                command = []
+            else:
+                command.append(word)
+    return out
+
+
+# --- a benchmark script's options -----------------------------------------------------------------
+
+
+def script_parser(script: Path) -> argparse.ArgumentParser:
+    """The script's argparse options, rebuilt from its ``add_argument`` calls (the scripts build
+    their parser inside ``main``): option strings, ``action``, ``type`` and literal ``choices``; a
+    call of ``_bench.add_out_option`` adds ``--out PATH``."""
+    parser = argparse.ArgumentParser(prog=script.name, exit_on_error=False)
+    types = {"int": int, "float": float, "str": str, "Path": Path}
+    for node in ast.walk(ast.parse(script.read_text())):
+        if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == "add_out_option":
+            parser.add_argument("--out", type=Path)
+            continue
+        if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "add_argument"):
+            continue
+        names = [ast.literal_eval(a) for a in node.args]
+        kwargs = {}
+        for kw in node.keywords:
+            if kw.arg == "action":
+                kwargs["action"] = ast.literal_eval(kw.value)
+            elif kw.arg == "type" and isinstance(kw.value, ast.Name):
+                kwargs["type"] = types[kw.value.id]
+            elif kw.arg == "choices":
+                try:
+                    kwargs["choices"] = ast.literal_eval(kw.value)
+                except ValueError:  # choices named by a module attribute: any value passes here
+                    pass
+        parser.add_argument(*names, **kwargs)
+    return parser
+
+
+# --- a page opened in headless Chromium -----------------------------------------------------------
+
+CHROMIUM = Path("/usr/bin/chromium")
+PROBE = """<script>
+window.addEventListener('load', function () {
+  var imgs = Array.prototype.map.call(document.images, function (i) {
+    return {id: i.id, complete: i.complete, width: i.naturalWidth, height: i.naturalHeight,
+            inline: i.src.indexOf('data:image/png;base64,') === 0};
+  });
+  var tables = {};
+  Array.prototype.forEach.call(document.querySelectorAll('table'), function (t) {
+    tables[t.id] = {rows: t.rows.length, cells: t.querySelectorAll('td').length,
+                    visible: t.getBoundingClientRect().height > 0};
+  });
+  var resources = performance.getEntriesByType('resource').map(function (r) { return r.name; });
+  var out = document.createElement('pre');
+  out.id = 'render-check';
+  out.textContent = JSON.stringify({imgs: imgs, tables: tables, resources: resources});
+  document.body.appendChild(out);
+});
+</script>"""
+
+
+def rendered(page, tmp_path) -> tuple[dict, str]:
+    """(what the probe recorded, the DOM Chromium dumped) of ``page`` opened headless with no
+    network, from a copy with the probe added (``tmp_path`` holds the copy and the profile)."""
+    probe = tmp_path / "probe.html"
+    probe.write_text(page.read_text().replace("</body>", PROBE + "</body>"))
+    profile = tmp_path / "profile"
+    command = [str(CHROMIUM), "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+               "--disable-component-update", "--disable-sync", "--no-first-run", f"--user-data-dir={profile}",
+               "--host-resolver-rules=MAP * ~NOTFOUND",  # no network at all
+               "--virtual-time-budget=5000", "--dump-dom", probe.as_uri()]
+    try:
+        done = subprocess.run(command, capture_output=True, text=True, timeout=60)
+    finally:
+        shutil.rmtree(profile, ignore_errors=True)
+    match = re.search(r'<pre id="render-check">(.*?)</pre>', done.stdout, re.S)
+    assert match, f"no probe output (exit {done.returncode}): {done.stderr[-500:]}"
+    return json.loads(match.group(1).replace("&quot;", '"').replace("&amp;", "&")), done.stdout
+
+
+# --- sled and tire drop records made here ---------------------------------------------------------
+
+S1 = load("S1")
+
+
+def s1_record(path, rate_N_per_mm=None, tire_N_per_mm=None, drop_mm=None, after_s=0.18, fall_s=0.06,
+              noise_mm=0.02, clock_s=3.2, seed=0, friction_N=0.0, stalled_after_s=None):
+    """A sled record (CSV) of S1 with the given rates and drop height: closed form (or, with
+    ``friction_N`` of Coulomb friction in the fork, ``solve_ivp``'s LSODA), analog logger.
+    ``stalled_after_s``: the logger stops updating then and repeats its last reading."""
+    m1, m2 = S1["sled.body_mass_kg"], S1["sled.wheel_mass_kg"]
+    k = (rate_N_per_mm or S1["fork.spring.rate_N_per_mm"]) * 1e3
+    c = S1["fork.damper.coefficient_N_s_per_m"]
+    kt = (tire_N_per_mm or S1["tire.impact_rate_N_per_mm"]) * 1e3
+    bt = S1["tire.impact_damping_N_s_per_m"]
+    g = S1["sled.gravity_m_per_s2"]
+    h = (drop_mm or S1["sled.drop_height_mm"]) * 1e-3
+    v0 = np.sqrt(2 * g * h)
+    # state: sled down, wheel down (from touch), their speeds, and 1 (for gravity)
+    a = np.array([[0, 0, 1, 0, 0],
+                  [0, 0, 0, 1, 0],
+                  [-k / m1, k / m1, -c / m1, c / m1, g],
+                  [k / m2, -(k + kt) / m2, c / m2, -(c + bt) / m2, g],
+                  [0, 0, 0, 0, 0]], float)
+    fine = 2e-5
+    release = -v0 / g
+    time = np.arange(-int(np.ceil((0.05 - release) / fine)), int(np.ceil((after_s + 0.02) / fine))) * fine
+    before, after = time[time < 0], time[time >= 0]
+    states = np.empty((after.size, 5))
+    states[0] = [0.0, 0.0, v0, v0, 1.0]
+    if friction_N > 0.0:  # Coulomb friction (a 5 mm/s tanh band) against the fork's stroke: no closed form
+        from scipy.integrate import solve_ivp
+
+        def rhs(t, y):
+            f = friction_N * np.tanh((y[2] - y[3]) / 5e-3)
+            return a @ y + np.array([0.0, 0.0, -f / m1, f / m2, 0.0])
+
+        sol = solve_ivp(rhs, (0.0, after[-1]), states[0], method="LSODA", t_eval=after, rtol=1e-10, atol=1e-12)
+        states = sol.y.T
+    else:
+        step = linalg.expm(a * fine)
+        for i in range(1, after.size):
+            states[i] = step @ states[i - 1]
+    fall = np.where(before < release, -h, v0 * before + 0.5 * g * before**2)
+    sled = np.concatenate([fall, states[:, 0]]) * 1e3
+    fork = np.concatenate([np.zeros(before.size), states[:, 0] - states[:, 1]]) * 1e3
+    b, den = signal.butter(4, 2 * np.pi * 400.0, analog=True)
+    system = signal.StateSpace(*signal.tf2ss(b, den))
+    rng = np.random.default_rng(seed)
+    samples = np.arange(-fall_s, after_s, 1e-3)
+    columns = {"time_s": samples + clock_s}
+    for name, x in (("sled", sled), ("fork", fork)):
+        x0 = -np.linalg.solve(system.A, system.B[:, 0]) * x[0]  # the filter at rest on the first value
+        _, y, _ = signal.lsim(system, x, time - time[0], X0=x0)
+        logged = np.interp(samples, time, y) + rng.normal(0.0, noise_mm, samples.size)
+        q = (275.0 if name == "sled" else 150.0) / 2**16
+        logged = np.round(logged / q) * q
+        if stalled_after_s is not None:
+            stalled = samples > stalled_after_s
+            logged[stalled] = logged[~stalled][-1]
+        columns[f"{name}_mm"] = logged
+    text = "# a test's own S1 record (closed form)\ntime_s,sled_mm,fork_mm\n" + "\n".join(
+        f"{t:.6f},{s:.5f},{f:.5f}" for t, s, f in zip(columns["time_s"], columns["sled_mm"], columns["fork_mm"]))
+    path.write_text(text + "\n")
+    return path
+
+
+def tire_drop(path, k_N_per_mm=85.0, b_N_s_per_m=150.0, mass_kg=25.0, drop_mm=50.0, leak_mm=0.0, seed=0):
+    """A mass dropped on a Kelvin-Voigt tire (pushes only) from rest at ``drop_mm``, integrated by
+    LSODA on 0.1 ms steps, logged at 1 kHz with 0.05 mm of noise; ``leak_mm``: the tire loses that
+    much height over the record (a slow leak), which no tire law of the library has."""
+    from scipy.integrate import solve_ivp
+
+    g, k = 9.81, k_N_per_mm * 1e3
+
+    def rhs(t, y):
+        force = k * y[0] + b_N_s_per_m * y[1] if y[0] > 0.0 else 0.0
+        return [y[1], g - max(force, 0.0) / mass_kg]
+
+    t = np.arange(0.0, 2.0, 1e-3)
+    sol = solve_ivp(rhs, (0.0, t[-1]), [-drop_mm * 1e-3, 0.0], method="LSODA", t_eval=t, max_step=1e-4,
+                    rtol=1e-9, atol=1e-12)
+    deflection = sol.y[0] * 1e3 + leak_mm * t / t[-1] + np.random.default_rng(seed).normal(0.0, 0.05, t.size)
+    path.write_text(f"# a test's own tire drop record\n# mass_kg = {mass_kg:g}\ntime_s,deflection_mm\n"
+                    + "\n".join(f"{a:.3f},{d:.4f}" for a, d in zip(t, deflection)) + "\n")
+    return path
+
+
+# --- SST v2 counts --------------------------------------------------------------------------------
+
+RATE = 5000
+SHOCK = (88.0, 138.0)  # arm, max distance (mm): the v2 defaults of the README
+FORK = (120.0, 218.0)
+
+
+def counts_of(travel_mm, arm, top):
+    """The README's calibration inverted here: stroke -> AS5600 count (real-valued)."""
+    start = math.acos(top / (2 * arm))
+    return (np.arccos((top - np.asarray(travel_mm)) / (2 * arm)) - start) * 4096 / math.pi
+
+
+# --- SST v3 files through a bike file's sensors ---------------------------------------------------
+
+COUNTS = 4096
+FORK_ARM, FORK_MAX = 150.0, 260.0
+ARM1, ARM2, SHOCK_MAX = 90.0, 190.0, 215.0
+SENSORS = {"fork_arm_mm": FORK_ARM, "fork_max_mm": FORK_MAX, "shock_arm1_mm": ARM1, "shock_arm2_mm": ARM2,
+           "shock_max_mm": SHOCK_MAX}
+
+
+def fork_counts(travel, arm=FORK_ARM, top=FORK_MAX):
+    # base b = max - travel = 2 arm cos(angle): angle = acos(b / 2 arm), counts from the start angle
+    start = math.acos(top / (2 * arm))
+    return (np.arccos((top - travel) / (2 * arm)) - start) * COUNTS / (2 * np.pi)
+
+
+def shock_counts(stroke, a=ARM1, b=ARM2, top=SHOCK_MAX):
+    # third side c = max - stroke; c^2 = a^2 + b^2 - 2 a b cos(g): counts = (g0 - g) COUNTS / 2 pi
+    g0 = math.acos((a * a + b * b - top ** 2) / (2 * a * b))
+    c = top - stroke
+    return (g0 - np.arccos((a * a + b * b - c * c) / (2 * a * b))) * COUNTS / (2 * np.pi)
+
+
+def write_v3(path, fork_mm, shock_mm, sensors=SENSORS, rate=1000):
+    """An SST version-3 file (16-byte header, then fork and shock uint16 counts) of the travels
+    through a bike file's [sensors] (its keys), in integer counts: the geometry inverted here."""
+    s = sensors
+    counts = np.column_stack((np.rint(fork_counts(fork_mm, s["fork_arm_mm"], s["fork_max_mm"])),
+                              np.rint(shock_counts(shock_mm, s["shock_arm1_mm"], s["shock_arm2_mm"],
+                                                   s["shock_max_mm"])))).astype("<u2")
+    path.write_bytes(struct.pack("<3sBHHq", b"SST", 3, int(rate), 0, 1_700_000_000) + counts.tobytes())
+    return path
+
+
+# --- a bike file's quarter cars -------------------------------------------------------------------
+
+
+def quarter_car_masses(spec):
+    """(front sprung, front unsprung, rear sprung, rear unsprung) kg of a bike file's masses: the
+    weight shared between the axles by moments, the unsprung the fork lower and front wheel, the
+    rear wheel and half the swingarm."""
+    from mtbmj.bike.model import frame_body
+
+    m_frame, c_frame, _ = frame_body(spec)
+    r = spec.rider
+    bodies = [(m_frame, c_frame[0]), (r.mass, r.com[0]), (spec.fork_lower_mass + spec.front_wheel_mass, spec.front_axle[0]),
+              (spec.rear_wheel_mass, spec.rear_axle[0]), (spec.swingarm_mass, 0.5 * (spec.pivot[0] + spec.rear_axle[0]))]
+    total = sum(m for m, _ in bodies)
+    xc = sum(m * x for m, x in bodies) / total
+    share = (xc - spec.rear_axle[0]) / (spec.front_axle[0] - spec.rear_axle[0])
+    mf, mr = spec.fork_lower_mass + spec.front_wheel_mass, spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
+    return total * share - mf, mf, total * (1 - share) - mr, mr
+
+
+# --- rear ends solved here ------------------------------------------------------------------------
+
+MM = 1e-3
+P = lambda x, z: np.array([x, z], float) * MM  # noqa: E731
+HORST = dict(main_pivot=P(-40, 70), horst_pivot=P(-420, 10), rear_axle=P(-440, 25), rocker_pivot=P(-50, 380),
+             seatstay_rocker=P(-120, 400), shock_rocker=P(-20, 430), shock_frame=P(160, 190))
+
+
+def rot(v, a):
+    return np.array([math.cos(a) * v[0] - math.sin(a) * v[1], math.sin(a) * v[0] + math.cos(a) * v[1]])
+
+
+def ang(v):
+    return math.atan2(v[1], v[0])
+
+
+class FourBar:
+    """The loop A + l1 e(t1) + l2 e(t2) = D + l3 e(t3) solved for (t2, t3) by fsolve, continued
+    from the previous solution; points ride on their links by the links' turns."""
+
+    def __init__(self, pts, a, b, c, d):
+        self.p, self.names = pts, (a, b, c, d)
+        A, B, C, D = (pts[n] for n in self.names)
+        self.l1, self.l2, self.l3 = (float(np.hypot(*v)) for v in (B - A, C - B, C - D))
+        self.t1, self.t2, self.t3 = ang(B - A), ang(C - B), ang(C - D)
+        self.guess = (self.t2, self.t3)
+
+    def solve(self, turn):
+        A, D = self.p[self.names[0]], self.p[self.names[3]]
+        e = lambda t: np.array([math.cos(t), math.sin(t)])  # noqa: E731
+        t1 = self.t1 + turn
+
+        def loop(u):
+            return A + self.l1 * e(t1) + self.l2 * e(u[0]) - D - self.l3 * e(u[1])
+
+        sol = fsolve(loop, self.guess, xtol=1e-13)
+        assert np.max(np.abs(loop(sol))) < 1e-12
+        self.guess = tuple(sol)
+        return t1 - self.t1, sol[0] - self.t2, sol[1] - self.t3  # each link's turn
+
+    def point(self, name, on, turn):
+        """``name`` carried by link ``on`` ("input", "coupler", "output") at input turn ``turn``."""
+        turns = self.solve(turn)
+        A, B, D = (self.p[self.names[i]] for i in (0, 1, 3))
+        B_now = A + rot(B - A, turns[0])
+        if on == "input":
+            return A + rot(self.p[name] - A, turns[0])
+        if on == "coupler":
+            return B_now + rot(self.p[name] - B, turns[1])
+        return D + rot(self.p[name] - D, turns[2])
+
+
+def find(w, target, sign, step=2e-3):
+    """The turn (sign times a positive angle) at which w reaches ``target``, marching out from 0 in
+    small steps (the four-bar's root finder continues from its last solution) and then bisecting."""
+    if target <= 0.0:
+        return 0.0
+    t = 0.0
+    while w(sign * (t + step)) < target:
+        t += step
+        assert t < 2.0
+    return sign * brentq(lambda u: w(sign * u) - target, t, t + step, xtol=1e-14)
+
+
+def independent(kind, pts):
+    """(w(turn), s(turn), axle(turn)) of the mechanism solved here."""
+    if kind == "single_pivot":
+        A = pts["main_pivot"]
+        axle = lambda t: A + rot(pts["rear_axle"] - A, t)  # noqa: E731
+        end = lambda t: A + rot(pts["shock_swingarm"] - A, t)  # noqa: E731
+    else:
+        names, axle_on, shock, shock_on = {
+            "horst_link": (("main_pivot", "horst_pivot", "seatstay_rocker", "rocker_pivot"), "coupler", "shock_rocker",
+                           "output"),
+            "linkage_driven_single_pivot": (("main_pivot", "swingarm_link", "rocker_link", "rocker_pivot"), "input",
+                                            "shock_rocker", "output"),
+            "short_link": (("lower_pivot", "lower_link", "upper_link", "upper_pivot"), "coupler", "shock_upper_link",
+                           "output")}[kind]
+        fb = FourBar(pts, *names)
+        axle = lambda t: fb.point("rear_axle", axle_on, t)  # noqa: E731
+        end = lambda t: fb.point(shock, shock_on, t)  # noqa: E731
+    L0 = float(np.hypot(*(pts[shock if kind != "single_pivot" else "shock_swingarm"] - pts["shock_frame"])))
+    w = lambda t: axle(t)[1] - pts["rear_axle"][1]  # noqa: E731
+    s = lambda t: L0 - float(np.hypot(*(end(t) - pts["shock_frame"])))  # noqa: E731
+    return w, s, axle
+
+
+# --- bike runs on a slope -------------------------------------------------------------------------
+
+
+def slope_profile(tmp_path, grade: float, name: str) -> str:
+    """A profile flat for 3 m, easing into ``grade`` (rise over run) over 6 m (the slope growing
+    linearly: a crest the bike rolls over, not an edge it flies off), then at ``grade`` to 90 m."""
+    x = np.linspace(0.0, 90.0, 1801)
+    ease = 6.0
+    s = np.clip(x - 3.0, 0.0, None)
+    z = np.where(s < ease, grade * s * s / (2 * ease), grade * (s - ease / 2)) * 1000.0
+    path = tmp_path / f"{name}.csv"
+    np.savetxt(path, np.c_[x, z], delimiter=",", header="distance_m,height_mm", comments="")
+    return str(path)
+
+
+def last_pose(result):
+    """(model, data): a run's bike at its last kept pose, its kinematics and centres of mass computed."""
+    model = result.prepared.bike.model
+    data = mujoco.MjData(model)
+    data.qpos[:] = result.motion[1][-1]
+    mujoco.mj_kinematics(model, data)
+    mujoco.mj_comPos(model, data)
+    return model, data
+
+
+# --- the head angle -------------------------------------------------------------------------------
+
+
+def level_head_angle(p) -> float:
+    """The steering axis's angle from the horizontal in MuJoCo's own kinematics, the frame turned
+    until the two axles are level (the fork and swingarm at full extension)."""
+    model = p.bike.model
+    data = mujoco.MjData(model)
+    pitch = p.bike.qpos_index("pitch")
+    front, rear = model.site("front_axle").id, model.site("rear_axle").id
+
+    def height_gap(theta):
+        data.qpos[:] = 0.0
+        data.qpos[pitch] = theta
+        mujoco.mj_kinematics(model, data)
+        return data.site_xpos[front][2] - data.site_xpos[rear][2]
+
+    theta = brentq(height_gap, -0.3, 0.3, xtol=1e-14)
+    height_gap(theta)
+    axis = data.xaxis[model.joint("fork").id]  # the fork's slide: up and back along the steering axis
+    return math.degrees(math.atan2(axis[2], -axis[0]))
+
+
+# --- a rock garden profile ------------------------------------------------------------------------
+
+
+def rock_garden(path):
+    rows = [(-1.5, 0.0), (0.45, 0.0)]
+    rocks = [(0.45, 0.25, 80), (0.85, 0.30, 110), (1.3, 0.2, 60), (1.65, 0.35, 100), (2.15, 0.25, 70),
+             (2.55, 0.3, 90), (3.0, 0.2, 50)]
+    for start, length, height in rocks:
+        for k in range(1, 40):
+            a = math.pi * (1 - k / 40)
+            rows.append((start + length / 2 * (1 + math.cos(a)), height * math.sin(a)))
+        rows.append((start + length, 0.0))
+        rows.append((start + length + 0.1, 0.0))
+    rows.append((8.0, 0.0))
+    path.write_text("distance_m,height_mm\n" + "\n".join(f"{x:.6f},{z:.4f}" for x, z in rows) + "\n")
+    return path
+
+
+# --- the rolling wheel settled --------------------------------------------------------------------
+
+
+def settle(ter: T.Terrain, x_axle: float, duration: float = 1.0):
+    """Put the loaded wheel at rest over ``x_axle`` (speed 0) and let it settle; return the
+    exact geometric deflection, the force from equilibrium W / n_z and the force MuJoCo applied."""
+    p = R.prepare(dataclasses.replace(ter, start_x=x_axle), 1.0, "S12")
+    cb, model, data = p.callback, p.front.model, p.data
+    cb.speed = 0.0
+    data.qvel[:] = 0.0
+    s = p.setup
+    weight = (s.body_mass + s.wheel_mass) * s.gravity
+    cx, cz, _, _ = cb.axle_state(data.qpos, data.qvel)
+    # start near statics along the contact normal (the test is what the physics then holds)
+    qx, qz, nx, nz, _, _ = min(p.tire.patches(cx, cz), key=lambda q: math.hypot(cx - q[0], cz - q[1]))
+    target = (qx + nx * (p.tire.radius - weight / nz / p.tire.rate), qz + nz * (p.tire.radius - weight / nz / p.tire.rate))
+    data.qpos[cb.xq] += target[0] - cx
+    data.qpos[cb.zq] += target[1] - cz
+    cb.x_ref0 = float(data.qpos[cb.xq])
+    cb.reset()
+    states, sensors = R.simulate(p, duration)
+    tail = slice(int(0.6 * len(sensors)), None)
+    nq = model.nq
+    qpos, qvel = states[:-1, 1:1 + nq][tail], states[:-1, 1 + nq:1 + nq + model.nv][tail]
+    axle = np.array([cb.axle_state(a, b)[:2] for a, b in zip(qpos[::50], qvel[::50])])
+    deflection = np.mean([p.tire.radius - p.tire.distance(x, z) for x, z in axle])
+    sens = lambda name: sensors[tail, model.sensor_adr[model.sensor(name).id]]
+    fx, fz = sens("tire_force_x").mean(), sens("tire_force_z").mean()
+    applied = math.hypot(fx, fz)
+    from_equilibrium = weight / (fz / applied)
+    return deflection, from_equilibrium, applied, p.tire.rate
+
+
+SETTLE_CASES = {
+    "flat": (T.flat(), 0.5),
+    "bump_top": (T.rock(height_mm=100, length_mm=300, at_m=1.0), 1.15),  # top of the rock
+    "edge": (T.step_down(height_mm=100, at_m=1.0), 1.1),  # resting on the corner, 0.1 m past it
+    "heightfield": (T.iso8608("D", seed=1, length_m=30, sample_mm=10), 12.0),  # sampled random road
+}
+
+
+# --- a two-ended ride made here, and the bikes that ride it ---------------------------------------
+
+RIDE_SPEED = 6.0
+RIDE_RATE = 1000
+RIDE_SECONDS = 20.0
+RATIO = 2.5  # the rear's constant leverage ratio
+
+# a bike of two decoupled ends (tests/test_reconstruct.py's generator)
+BIKE = f"""base = "trail"
+[leverage]
+wheel_travel_mm = [0.0, 125.0]
+ratio = [{RATIO}, {RATIO}]
+[fork]
+config = "S1"
+[fork.set]
+"fork.travel_mm" = 130.0
+"fork.length_mm" = 530.0
+"fork.spring.rate_N_per_mm" = 9.0
+"fork.damper.coefficient_N_s_per_m" = 600.0
+[shock]
+stroke_mm = 50.0
+config = "S1"
+[shock.set]
+"fork.travel_mm" = 50.0
+"fork.spring.rate_N_per_mm" = 90.0
+"fork.damper.coefficient_N_s_per_m" = 2500.0
+"""
+
+
+def bike_text(fork_rate=12.0, fork_comp=500.0, fork_reb=700.0):
+    return f"""base = "trail"
+[leverage]
+wheel_travel_mm = [0.0, 125.0]
+ratio = [{RATIO}, {RATIO}]
+[fork]
+config = "S1"
+[fork.set]
+"fork.travel_mm" = 130.0
+"fork.length_mm" = 530.0
+"fork.spring.rate_N_per_mm" = {fork_rate}
+"fork.damper.model" = "bilinear"
+"fork.damper.compression_N_s_per_m" = {fork_comp}
+"fork.damper.rebound_N_s_per_m" = {fork_reb}
+[shock]
+stroke_mm = 50.0
+config = "S1"
+[shock.set]
+"fork.travel_mm" = 50.0
+"fork.spring.rate_N_per_mm" = 90.0
+"fork.damper.model" = "bilinear"
+"fork.damper.compression_N_s_per_m" = 2500.0
+"fork.damper.rebound_N_s_per_m" = 3500.0
+[sensors]
+fork_arm_mm = {FORK_ARM}
+fork_max_mm = {FORK_MAX}
+shock_arm1_mm = {ARM1}
+shock_arm2_mm = {ARM2}
+shock_max_mm = {SHOCK_MAX}
+"""
+
+
+def hidden_profile(seed=7):
+    """Rocks 20-90 mm high, 0.5-1.5 m long, about one per 2.5 m, on flat ground: h(s) m."""
+    rng = np.random.default_rng(seed)
+    n = int(RIDE_SPEED * RIDE_SECONDS / 2.5)
+    centres = np.sort(rng.uniform(6.0, RIDE_SPEED * RIDE_SECONDS - 2.0, n))
+    heights = rng.uniform(0.02, 0.09, n)
+    lengths = rng.uniform(0.5, 1.5, n)
+    grid = np.arange(-2.0, RIDE_SPEED * RIDE_SECONDS + 1.0, 1e-3)
+    table = np.zeros_like(grid)
+    for c, a, L in zip(centres, heights, lengths):
+        u = np.clip((grid - c) / L + 0.5, 0.0, 1.0)
+        table += a * np.sin(np.pi * u) ** 2
+    return lambda s: np.interp(s, grid, table)
+
+
+def law(k, travel, comp, reb, bumper_len=0.008, bumper_force=3000.0, stop=2e7):
+    """The end's force along its own stroke x (m), rate v (m/s): linear spring, the bumper rising
+    as the square of its engagement over its last 8 mm to 3000 N, a stiff stop past full travel,
+    a damper of one rate in compression and another in rebound (S1's stops, this file's values)."""
+    def force(x, v):
+        f = k * x + (comp if v > 0 else reb) * v
+        s = x - (travel - bumper_len)
+        if s > 0:
+            f += bumper_force * (s / bumper_len) ** 2
+        if x > travel:
+            f += stop * (x - travel)
+        if x < 0:
+            f += stop * x
+        return f
+    return force
+
+
+def ride(path, fork_rate=12.0, fork_comp=500.0, fork_reb=700.0, seconds=RIDE_SECONDS):
+    """(fork travel mm, rear wheel travel mm, time s) of this file's bike over the hidden profile."""
+    from mtbmj.bike import run, spec as spec_mod
+
+    bike = path / "bike.toml"
+    bike.write_text(bike_text(fork_rate, fork_comp, fork_reb))
+    spec = spec_mod.load(str(bike))
+    fork_setup, _ = run.setups(spec)
+    tyre_k, radius, g = fork_setup.tire.values(1).rate, fork_setup.tire_radius, fork_setup.gravity
+    wb = spec.front_axle[0] - spec.rear_axle[0]
+    Mf, mf, Mr, mr = quarter_car_masses(spec)  # the same statics as the reconstruction's made ride
+    sa = math.sin(spec.head_angle)
+    h = hidden_profile()
+    t = np.arange(int(seconds * RIDE_RATE)) / RIDE_RATE
+
+    def end(M, m, force, per_wheel, lag):
+        """per_wheel: the end's stroke per unit of wheel travel (1 / sin a; 1 / LR)."""
+        def rhs(tt, y):
+            zb, zw, vb, vw = y
+            f = force((zw - zb) * per_wheel, (vw - vb) * per_wheel) * per_wheel  # virtual work
+            tyre = max(0.0, tyre_k * (float(h(RIDE_SPEED * tt - lag)) - (zw - radius)))
+            return [vb, vw, f / M - g, (tyre - f) / m - g]
+        # at rest on flat ground: the law's force at the wheel carries the sprung weight
+        w0 = brentq(lambda w: force(w * per_wheel, 0.0) * per_wheel - M * g, 0.0, 0.3)
+        zw0 = radius - (M + m) * g / tyre_k
+        sol = solve_ivp(rhs, (0.0, t[-1]), [zw0 - w0, zw0, 0.0, 0.0], t_eval=t, method="DOP853", rtol=1e-6,
+                        atol=1e-9, max_step=5e-3)
+        assert sol.success
+        return sol.y[1] - sol.y[0]
+
+    wf = end(Mf, mf, law(fork_rate * 1e3, 0.130, fork_comp, fork_reb), 1.0 / sa, 0.0)
+    wr = end(Mr, mr, law(90e3, 0.050, 2500.0, 3500.0), 1.0 / RATIO, wb)
+    return bike, wf / sa * 1e3, wr * 1e3, t
+
+
+def write_sst(path, fork_mm, rear_mm):
+    """SST version 3 through the bike file's sensors (write_v3 above: the law of
+    cosines inverted), the shock's stroke the rear's travel over the constant leverage ratio."""
+    sensors = {"fork_arm_mm": FORK_ARM, "fork_max_mm": FORK_MAX, "shock_arm1_mm": ARM1, "shock_arm2_mm": ARM2,
+               "shock_max_mm": SHOCK_MAX}
+    return write_v3(path, np.clip(fork_mm, 0, None), np.clip(rear_mm, 0, None) / RATIO, sensors, RIDE_RATE)
+
+
+def clicks_bike(setting, measured=(4, 12, 20)):
+    """This file's bike, its shock a clicks damper measured at ``measured`` whose rows are the
+    generator's law (2500 / 3500 N s/m at the shaft) at ``setting`` and 10 % more per click."""
+    v = [-3000.0, -1000.0, -100.0, 0.0, 100.0, 1000.0, 3000.0]
+    comp = [[round(2500.0 * x / 1e3 * (1 + 0.1 * (c - setting)), 3) for x in v if x > 0] for c in measured]
+    reb = [[round(3500.0 * x / 1e3 * (1 + 0.1 * (c - setting)), 3) for x in v if x < 0] for c in measured]
+    text = bike_text().replace('"fork.damper.model" = "bilinear"\n"fork.damper.compression_N_s_per_m" = 2500.0\n'
+                               '"fork.damper.rebound_N_s_per_m" = 3500.0\n', "")
+    assert text != bike_text()
+    return text.replace("[sensors]", f'''"fork.damper.model" = "clicks"
+"fork.damper.velocity_mm_per_s" = {v}
+"fork.damper.compression_clicks_measured" = {list(measured)}
+"fork.damper.compression_force_N" = {comp}
+"fork.damper.rebound_clicks_measured" = {list(measured)}
+"fork.damper.rebound_force_N" = {reb}
+"fork.damper.compression_clicks" = {setting}
+"fork.damper.rebound_clicks" = {setting}
+[sensors]''')
+
+
+def air_shock_bike(spacers, positive_cm3=150.0, spacer_cm3=15.0):
+    """This file's bike with an air shock of ``spacers`` volume spacers (a 40 mm piston sweeps
+    62.8 cm3 over the 50 mm stroke: 150 cm3 less 6 spacers of 15 is 60 cm3, too little)."""
+    return bike_text().replace('"fork.spring.rate_N_per_mm" = 90.0\n', "").replace("[shock]\n", f'''[shock]
+spring = "air"
+pressure_psi = 220.0
+piston_diameter_mm = 40.0
+positive_volume_cm3 = {positive_cm3}
+volume_spacers = {spacers}
+spacer_volume_cm3 = {spacer_cm3}
+''')
+
+
+def bumps_csv(path, seconds, lag_s=0.2, rate=1000, scale=1.0, seed=5):
+    """A two-ended travel CSV made here: random smooth bumps at the fork and the same bumps ``lag_s``
+    later at the rear (no physics: for what the speed search and the refusals read), ``scale`` mm per
+    unit, rounded to 0.1 mm; (path, t, fork_mm, rear_mm)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(int(round(seconds * rate))) / rate
+    grid = np.arange(-2.0, seconds + 2.0, 1.0 / rate)
+    kicks = np.zeros_like(grid)
+    kicks[rng.integers(0, grid.size, max(int(3 * seconds), 1))] = rng.uniform(5, 30, max(int(3 * seconds), 1))
+    kernel = np.hanning(int(0.15 * rate))
+    shape = np.convolve(kicks, kernel / kernel.max(), mode="same")
+    drift = np.linspace(0.0, 2.0, t.size)  # every column moves, however short the record
+    fork = np.round(scale * (20.0 + drift + np.interp(t, grid, shape)), 1)
+    rear = np.round(scale * (25.0 + drift + np.interp(t - lag_s, grid, shape)), 1)
+    path.write_text("time_s,fork_mm,rear_mm\n" + "\n".join(f"{a:.4f},{b:.1f},{c:.1f}" for a, b, c in zip(t, fork, rear)))
+    return path, t, fork, rear
