@@ -74,6 +74,6 @@ def test_the_command_line_names_the_drive_and_refuses_bad_limits(tmp_path, capsy
     one_line(capsys, ["roll", "rock", "--speed", "3", "--drive", "coast", "--drive-power-W", "100",
                       "--out", tmp_path / "x"], "--drive-power-W", "--drive rider")
     one_line(capsys, ["roll", "rock", "--speed", "3", "--drive-brake-N", "-5", "--out", tmp_path / "x"],
-             "--drive-brake-N", ">= 0")
+             "--drive-brake-N", "at least 0")
     one_line(capsys, ["roll", "rock", "--speed", "3", "--drive", "jet", "--out", tmp_path / "x"], "--drive")
     assert not (tmp_path / "x").exists()
