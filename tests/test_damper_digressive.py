@@ -120,6 +120,7 @@ def digressive_force(v_m_s, values, coulomb_N):
     return np.where(v_m_s > 0, comp, -reb) + coulomb_N * np.sign(v_m_s)
 
 
+@pytest.mark.slow
 def test_a_digressive_record_is_reproduced_within_its_noise(tmp_path, capsys):
     """Records of a two-stage damper with 30 N of Coulomb friction and 5 N of noise, 11 speeds per
     direction from 25 to 2000 mm/s and 4 repeats each, on 5 seeds: the law `fit damper --model
@@ -149,6 +150,7 @@ def test_a_digressive_record_is_reproduced_within_its_noise(tmp_path, capsys):
     assert misses <= 5, misses
 
 
+@pytest.mark.slow
 def test_a_friction_law_that_cannot_be_fitted_is_left_out_not_fatal(tmp_path, capsys):
     """Five speeds per direction, one point each (a closed form and the noise draws written out): the
     stiction law, which the fit tries with the two-stage law among the others, ran out of solver
