@@ -79,6 +79,19 @@ MAX_REAR_MISS_PERCENT = 60.0  # the reconstruction's check: rear predicted withi
 MIN_CHECKED_PERCENT = 10.0  # ... over at least this share of the ride
 LEAD_IN_M = 3.5  # flat ground before the ride's terrain: the bike starts at rest on it
 SPEED_SPLIT_MM_PER_S = 100.0  # low/high-speed threshold (as ``mtbmj telemetry``)
+SEGMENT_S = 5.0  # the ride is split into segments about this long (3 to 20 of them) for its uncertainty
+MIN_SEGMENTS, MAX_SEGMENTS = 3, 20
+BOOTSTRAP = 2000  # resamples of the segments (seeded: the same ride gives the same answer)
+UNCERTAINTY_METHOD = (
+    f"the analysed ride split into equal segments of about {SEGMENT_S:g} s ({MIN_SEGMENTS}-{MAX_SEGMENTS}); every "
+    f"metric measured on each segment, recorded and simulated; {BOOTSTRAP} bootstrap resamples of the segments "
+    f"(seeded). The model's error on a metric: the 90th percentile of |the mean over a resample of (simulated at "
+    f"the recorded setting - recorded)| (its bias and the ride's segment-to-segment spread of it). A change's "
+    f"uncertainty: that error and half the 5-95 % bootstrap interval of the mean over segments of (simulated at the "
+    f"setting - simulated at the recorded setting), added in quadrature; a count's at least its counting spread "
+    f"(the square root of the count, at least 1); static sag (not in a ride) takes dynamic sag's error")
+HEADLINE = ("front.dynamic_sag_percent", "rear.dynamic_sag_percent", "front.max_travel_percent",
+            "rear.max_travel_percent", "front.bottom_outs_per_minute", "rear.bottom_outs_per_minute")  # printed
 RULES = {
     "static_sag": "front 20-25 %, rear 27-30 % of travel (Fox, RockShox; rear common on trail bikes; secondhand)",
     "bottom_outs": f"occasional (RockShox): more than {BOTTOM_OUTS_PER_MINUTE:g} per minute too many, the excess over "
@@ -310,6 +323,7 @@ class Run:
     front_mm: np.ndarray = field(repr=False, default=None)
     rear_mm: np.ndarray = field(repr=False, default=None)
     crash: str | None = None
+    time_s: np.ndarray = field(repr=False, default=None)  # ride time of the series (0 where the ride starts)
 
     @property
     def total(self) -> float:
@@ -353,7 +367,8 @@ def simulate(bike, overrides: dict, terrain, speed: float, duration: float, labe
                       loads=(raw["front_tire_N"][keep], raw["rear_tire_N"][keep]),
                       rider_acc=raw["rider_acc_z_m_per_s2"][keep])
     crash = s["crash"]["line"] if s.get("crash") else None
-    return Run(label, overrides, mt, penalties(mt), raw["front_travel_mm"][keep], raw["rear_travel_mm"][keep], crash)
+    return Run(label, overrides, mt, penalties(mt), raw["front_travel_mm"][keep], raw["rear_travel_mm"][keep], crash,
+               raw["time_s"][keep] - lead_s)
 
 
 @dataclass
@@ -369,17 +384,88 @@ class Advice:
     record_rear: np.ndarray = field(repr=False, default=None)
     wall_s: float = 0.0
     skipped: list = field(default_factory=list)  # candidates the part does not allow: {key, label, ..., why}
+    tries: list = field(default_factory=list)  # (Trial, Run): the settings tried on the ride
+    record_t: np.ndarray = field(repr=False, default=None)  # ride time of record_front / record_rear (0 at its start)
+    verdict: dict = field(default_factory=dict)  # {"answer": "change" / "inconclusive" / "keep", "why": ...}
+
+    def tried(self) -> list:
+        """Each tried setting: its label, bike file, settings as asked, penalty (and its change), crash,
+        and every metric's predicted change (as a recommendation's ``changes``)."""
+        return [{"label": tr.label, "bike": tr.bike, "settings": dict(tr.settings), "penalty": run.total,
+                 "penalty_change": run.total - self.base.total, "crash": run.crash,
+                 "changes": _changes(self.base, run, self.change_uncertainty(run), self.measured)}
+                for tr, run in self.tries]
+
+    def segments(self) -> np.ndarray:
+        """The edges (s of ride time) of the segments the uncertainty resamples."""
+        length = self.base.metrics["duration_s"]
+        n = int(min(max(length // SEGMENT_S, MIN_SEGMENTS), MAX_SEGMENTS))
+        return np.linspace(0.0, length, n + 1)
+
+    def _per_segment(self, t, front, rear) -> list:
+        ftop, rtop = self.base.metrics["front"]["travel_mm"], self.base.metrics["rear"]["travel_mm"]
+        t, front, rear = np.asarray(t, float), np.asarray(front, float), np.asarray(rear, float)
+        out = []
+        edges = self.segments()
+        for a, b in zip(edges[:-1], edges[1:]):
+            k = (t >= a) & (t <= b)
+            out.append(_flat(ride_metrics(t[k], front[k], rear[k], ftop, rtop)) if k.sum() >= 10 else {})
+        return out
+
+    def _segment_diffs(self, run: Run, against) -> dict:
+        """Per metric: the array over segments of ``run``'s value less ``against``'s (a list of per-segment
+        flat metrics), segments where either has none left out."""
+        mine = self._per_segment(run.time_s, run.front_mm, run.rear_mm)
+        out = {}
+        for k in (mine[0] if mine else {}):
+            d = [m[k] - o[k] for m, o in zip(mine, against) if k in m and k in o]
+            if len(d) >= MIN_SEGMENTS - 1:
+                out[k] = np.asarray(d, float)
+        return out
+
+    def _boot(self, n: int) -> np.ndarray:
+        return np.random.default_rng(0).integers(0, n, size=(BOOTSTRAP, n))
 
     def uncertainty(self) -> dict:
-        """Per metric: the model's error on this ride (simulated recorded setting against the record);
-        a count's at least its counting spread (the square root of the count, at least 1)."""
-        a, b = _flat(self.base.metrics), _flat(self.measured)
-        out = {k: abs(a[k] - b[k]) for k in a if k in b}
+        """Per metric: the model's error on this ride from its segments (``UNCERTAINTY_METHOD``); a
+        count's at least its counting spread (the square root of the count, at least 1)."""
+        if getattr(self, "_model_error", None) is not None:
+            return dict(self._model_error)
+        out = {}
+        if self.record_t is not None and self.base.time_s is not None:
+            rec = self._per_segment(self.record_t, self.record_front, self.record_rear)
+            for k, d in self._segment_diffs(self.base, rec).items():
+                out[k] = float(np.percentile(np.abs(d[self._boot(d.size)].mean(axis=1)), 90))
+        else:  # no series to split (an Advice made by hand): the whole ride's one sample
+            a, b = _flat(self.base.metrics), _flat(self.measured)
+            out = {k: abs(a[k] - b[k]) for k in a if k in b}
+        for end in ("front", "rear"):
+            if f"{end}.dynamic_sag_percent" in out:
+                out[f"{end}.static_sag_percent"] = out[f"{end}.dynamic_sag_percent"]
+        self._floor_counts(out, self.base)
+        self._model_error = dict(out)
+        return out
+
+    def _floor_counts(self, out: dict, run: Run) -> None:
         minutes = self.base.metrics["duration_s"] / 60.0
         for end in ("front", "rear"):
-            n = math.sqrt(max(self.base.metrics[end]["bottom_outs"], 1))
+            n = math.sqrt(max(self.base.metrics[end]["bottom_outs"], run.metrics[end]["bottom_outs"], 1))
             out[f"{end}.bottom_outs"] = max(out.get(f"{end}.bottom_outs", 0.0), n)
             out[f"{end}.bottom_outs_per_minute"] = max(out.get(f"{end}.bottom_outs_per_minute", 0.0), n / minutes)
+
+    def change_uncertainty(self, run: Run) -> dict:
+        """Per metric: the uncertainty of ``run``'s change from the recorded setting (``UNCERTAINTY_METHOD``)."""
+        model = self.uncertainty()
+        out = dict(model)
+        if run.time_s is not None and self.base.time_s is not None:
+            base = self._per_segment(self.base.time_s, self.base.front_mm, self.base.rear_mm)
+            for k, d in self._segment_diffs(run, base).items():
+                lo, hi = np.percentile(d[self._boot(d.size)].mean(axis=1), [5, 95])
+                out[k] = float(math.hypot(model.get(k, 0.0), (hi - lo) / 2))
+            for end in ("front", "rear"):
+                if f"{end}.dynamic_sag_percent" in out:
+                    out[f"{end}.static_sag_percent"] = out[f"{end}.dynamic_sag_percent"]
+        self._floor_counts(out, run)
         return out
 
     def to_dict(self) -> dict:
@@ -392,15 +478,15 @@ class Advice:
                 "rules": RULES, "reconstruction": self.reconstruction,
                 "recorded_setting": {"measured": self.measured, "simulated": self.base.metrics,
                                      "penalties": self.base.penalty, "penalty": self.base.total},
-                "uncertainty": self.uncertainty(), "candidates": cands, "skipped": list(self.skipped),
-                "recommendation": self.recommendation, "wall_time_s": self.wall_s}
+                "uncertainty": self.uncertainty(), "uncertainty_method": UNCERTAINTY_METHOD,
+                "verdict": self.verdict, "candidates": cands, "skipped": list(self.skipped),
+                "recommendation": self.recommendation, "tried": self.tried(), "wall_time_s": self.wall_s}
 
     def line(self) -> str:
-        rec = self.recommendation
-        if rec is None:
-            return (f"{self.ride} on {self.bike}: keep your settings: no candidate of {len(self.candidates)} lowers "
-                    f"the penalty by {MIN_GAIN:g} or more beyond the model's error on this ride{self._skipped()}")
-        return (f"{self.ride} on {self.bike}: {rec['why']}{self._skipped()}")
+        rec, v = self.recommendation, self.verdict or {}
+        if rec is not None and v.get("answer", "change") == "change":
+            return f"{self.ride} on {self.bike}: {rec['why']}{self._skipped()}"
+        return f"{self.ride} on {self.bike}: {v.get('answer', 'inconclusive')}: {v.get('why', '')}{self._skipped()}"
 
     def _skipped(self) -> str:
         if not self.skipped:
@@ -464,6 +550,17 @@ class Advice:
                        for c in d["skipped"])
         if skip:
             skip = f'<h2>Skipped: not allowed by the part</h2><ul id="skipped">{skip}</ul>'
+        tried = ""
+        for tr in d["tried"]:
+            trows = "".join(
+                f"<tr><td>{esc.escape(k)}</td><td>{_num(c['recorded'])}</td><td>{c['from']:.3g}</td>"
+                f"<td>{c['to']:.3g}</td><td>{c['change']:+.3g}</td><td>{_num(c['uncertainty'])}</td>"
+                f"<td>{c['expected']:.3g}</td></tr>" for k, c in sorted(tr["changes"].items()))
+            crash = f" ({esc.escape(tr['crash'])})" if tr["crash"] else ""
+            tried += (f"<h2>Tried: {esc.escape(tr['label'])}</h2><p>penalty {d['recorded_setting']['penalty']:.2f} -&gt; "
+                      f"{tr['penalty']:.2f}{crash}</p><table class=\"tried\"><tr><th>metric</th><th>recorded</th>"
+                      f"<th>simulated now</th><th>simulated tried</th><th>change</th><th>uncertainty</th>"
+                      f"<th>expected on your ride</th></tr>{trows}</table>")
         rc = d["reconstruction"]["checks"]
         img = base64.b64encode(png).decode()
         return f"""<!DOCTYPE html>
@@ -483,6 +580,7 @@ td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{t
 <h2>Every candidate</h2>
 <table id="candidates"><tr><th>setting</th><th>from</th><th>to</th><th>penalty change</th><th>crash</th></tr>{cand}</table>
 {skip}
+{tried}
 <h2>Rules</h2><ul>{''.join(f'<li>{esc.escape(k)}: {esc.escape(v)}</li>' for k, v in RULES.items())}</ul>
 </body></html>
 """
@@ -496,6 +594,10 @@ td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{t
         return output.write_atomically(out_dir, {
             "advice.json": (json.dumps(self.to_dict(), indent=2, default=_json) + "\n").encode(),
             "advice.png": png, "advice.html": self.html(png).encode()})
+
+
+def _num(x, spec: str = ".3g") -> str:
+    return "" if x is None else format(x, spec)
 
 
 def _json(o):
@@ -516,42 +618,182 @@ def _rule_metric(rule: str) -> str:
     return f"{end}.{RULE_METRICS[name]}"
 
 
-def _recommend(base: Run, candidates, uncertainty: dict, measured: dict) -> dict | None:
-    """The candidate that lowers the penalty most (grip and comfort breaking ties), by at least
-    ``MIN_GAIN``; None when none does. ``confident``: the metrics of the rules it improves move by
-    more than the model's error on this ride (static sag, from statics, always does)."""
-    best = None
-    for adj, direction, value, run in candidates:
+def _beyond(rules, a: dict, b: dict, u: dict) -> list:
+    """The metrics of ``rules`` (penalty names) that move from ``a`` to ``b`` by more than their
+    uncertainty ``u`` (a metric without one never does)."""
+    return [m for m in dict.fromkeys(_rule_metric(k) for k in rules)
+            if m in a and m in b and abs(b[m] - a[m]) > u.get(m, math.inf)]
+
+
+def _judge(advice) -> tuple[dict | None, dict]:
+    """(the recommendation or None, the verdict ``{"answer", "why"}``): a change is advised only where
+    it lowers the penalty by ``MIN_GAIN`` or more and a metric of a rule it improves moves by more
+    than that change's uncertainty (the best such candidate, grip and comfort breaking ties);
+    "keep" only where every candidate is predicted worse beyond its uncertainty (a crash is worse);
+    otherwise "inconclusive", naming why."""
+    base, measured = advice.base, advice.measured
+    a = _flat(base.metrics)
+    good, worse, near = [], 0, None
+    for adj, direction, value, run in advice.candidates:
         if run.crash:
+            worse += 1
             continue
+        u = advice.change_uncertainty(run)
+        b = _flat(run.metrics)
         gain = base.total - run.total
+        improved = [k for k in base.penalty if run.penalty[k] < base.penalty[k] - 1e-9]
+        worsened = [k for k in base.penalty if run.penalty[k] > base.penalty[k] + 1e-9]
         score = gain - _grip_comfort(base.metrics, run.metrics)
-        if gain >= MIN_GAIN and (best is None or score > best[0]):
-            best = (score, adj, direction, value, run)
-    if best is None:
-        return None
-    _, adj, direction, value, run = best
-    a, b = _flat(base.metrics), _flat(run.metrics)
-    improved = [k for k in base.penalty if run.penalty[k] < base.penalty[k] - 1e-9]
-    moved = [m for m in (_rule_metric(k) for k in improved)
-             if m in a and abs(b[m] - a[m]) > (uncertainty.get(m) or 0.0)]
-    confident = bool(moved)
-    why = (f"{'raise' if direction == 'up' else 'lower'} the {adj.label} from {adj.value:g} to {value:g} "
-           f"({adj.section} {adj.key}): the penalty falls {base.total:.2f} -> {run.total:.2f} "
-           f"({', '.join(k.replace('_', ' ') for k in improved) or 'grip and comfort'})"
-           + ("" if confident else "; the change is within the model's error on this ride: try it and record again"))
-    rode = _flat(measured)
-    changes = {k: {"from": v0, "to": b[k], "change": b[k] - v0, "uncertainty": uncertainty.get(k),
-                   "recorded": rode.get(k), "expected": expected(k, rode[k], v0, b[k]) if k in rode else b[k]}
-               for k, v0 in a.items() if k in b}
-    return {"key": adj.name, "section": adj.section, "config_key": adj.key, "label": adj.label,
-            "direction": direction, "from": adj.value, "to": value, "penalty_from": base.total,
-            "penalty_to": run.total, "improves": improved, "confident": confident, "why": why, "changes": changes}
+        if gain >= MIN_GAIN and _beyond(improved, a, b, u):
+            good.append((score, adj, direction, value, run, improved, u))
+        elif gain <= -MIN_GAIN and _beyond(worsened, a, b, u):
+            worse += 1
+        elif gain >= MIN_GAIN and (near is None or score > near[0]):
+            near = (score, adj, direction, value, run, improved, u)
+    n = len(advice.candidates)
+    if good:
+        _, adj, direction, value, run, improved, u = max(good, key=lambda g: g[0])
+        moved = _beyond(improved, a, _flat(run.metrics), u)
+        why = (f"{'raise' if direction == 'up' else 'lower'} the {adj.label} from {adj.value:g} to {value:g} "
+               f"({adj.section} {adj.key}): the penalty falls {base.total:.2f} -> {run.total:.2f} "
+               f"({', '.join(k.replace('_', ' ') for k in improved)}; "
+               + ", ".join(f"{m} {a[m]:.3g} -> {_flat(run.metrics)[m]:.3g} +- {u[m]:.2g}" for m in moved) + ")")
+        rec = {"key": adj.name, "section": adj.section, "config_key": adj.key, "label": adj.label,
+               "direction": direction, "from": adj.value, "to": value, "penalty_from": base.total,
+               "penalty_to": run.total, "improves": improved, "confident": True, "why": why,
+               "changes": _changes(base, run, u, measured)}
+        return rec, {"answer": "change", "why": why}
+    if n and worse == n:
+        return None, {"answer": "keep", "why": f"every one of the {n} candidates is predicted worse beyond its "
+                                               f"uncertainty (or crashes)"}
+    if not n:
+        return None, {"answer": "inconclusive", "why": "no candidate was simulated"}
+    if near is not None:
+        _, adj, direction, value, run, improved, u = near
+        b = _flat(run.metrics)
+        ms = list(dict.fromkeys(_rule_metric(k) for k in improved))
+        return None, {"answer": "inconclusive",
+                      "why": f"the best candidate, the {adj.label} {adj.value:g} -> {value:g}, lowers the penalty "
+                             f"{base.total:.2f} -> {run.total:.2f}, but what it improves moves less than its "
+                             f"uncertainty ("
+                             + ", ".join(f"{m} {a[m]:.3g} -> {b[m]:.3g} +- {u.get(m, math.inf):.2g}" for m in ms if m in b)
+                             + "): try it and record again",
+                      "best_candidate": {"key": adj.name, "label": adj.label, "direction": direction,
+                                         "from": adj.value, "to": value, "changes": _changes(base, run, u, measured)}}
+    return None, {"answer": "inconclusive",
+                  "why": f"no candidate of {n} lowers the penalty by {MIN_GAIN:g} or more beyond its uncertainty, "
+                         f"and {n - worse} of them are not predicted worse beyond it either: the ride cannot tell "
+                         f"these settings apart"}
+
+
+def _changes(base: Run, run: Run, uncertainty: dict, measured: dict) -> dict:
+    """Per metric (``_flat`` name): the simulated value at the recorded setting (``from``) and at
+    ``run``'s (``to``), the change, its uncertainty, the recorded value and the one expected on the
+    rider's ride (:func:`expected`)."""
+    a, b, rode = _flat(base.metrics), _flat(run.metrics), _flat(measured)
+    return {k: {"from": v0, "to": b[k], "change": b[k] - v0, "uncertainty": uncertainty.get(k),
+                "recorded": rode.get(k), "expected": expected(k, rode[k], v0, b[k]) if k in rode else b[k]}
+            for k, v0 in a.items() if k in b}
 
 
 def _skip(adj: Adjuster, direction: str, value, exc) -> dict:
     return {"key": adj.name, "label": adj.label, "direction": direction, "from": adj.value, "to": value,
             "why": str(exc)}
+
+
+@dataclass(frozen=True)
+class Trial:
+    """A setting tried on the ride (``mtbmj advise --try FILE --try-set KEY=VALUE``): the bike file
+    ``bike`` with ``overrides`` (the keys of :func:`mtbmj.bike.spec.load`), its ``label`` and the
+    ``settings`` as asked (``KEY: value``)."""
+
+    label: str
+    bike: str
+    overrides: dict
+    settings: dict
+
+
+def _compose(bike, overrides) -> list[str]:
+    """Load and compose ``bike`` with ``overrides`` as a run would; the plausibility warnings it gives."""
+    import warnings
+
+    from mtbmj.bike import run as bike_run
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.errors import ConfigWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        bike_run.setups(spec_mod.load(str(bike), overrides or None))
+    return [str(w.message) for w in caught if issubclass(w.category, ConfigWarning)]
+
+
+def trial(bike, overrides=None, other=None, sets=()) -> Trial:
+    """A setting to try on the ride, checked before any work: ``other`` (a bike file or preset: the
+    bike as that file sets it, the recorded ``overrides`` not carried) or else the recorded
+    ``bike`` with its ``overrides``, and over it ``sets``, ``(KEY, value)`` pairs: ``fork:KEY`` /
+    ``shock:KEY`` a key of the fork's / shock's configuration in effect (``fork:fork.spring.rate_N_per_mm``,
+    ``shock:fork.damper.rebound_clicks``: the names of :attr:`Adjuster.name`), or a bike key
+    ``SECTION.KEY`` (``rider.mass_kg``, ``shock.spring_rate_lb_per_in``, ``shock.pressure_psi``).
+    Refused (``ConfigError``, naming ``--try``/``--try-set`` and the key): a file that does not
+    load, a key the bike's part has not, a value the part refuses, or a value far outside what any
+    part has (a plausibility warning the recorded bike does not already give: the advice's
+    candidates stay within that range, and so does what it predicts)."""
+    from pathlib import Path
+
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.config import ALTERNATIVES, load
+
+    if other is not None:
+        ref, over, what = str(other), {}, f"--try {other}"
+        if not Path(ref).exists() and ref not in spec_mod.preset_names():
+            raise ConfigError(f"--try {other}: no such bike file (nor a preset: {', '.join(spec_mod.preset_names())})")
+    else:
+        ref, over, what = str(bike), dict(overrides or {}), "--try-set"
+    try:
+        spec = spec_mod.load(ref, over or None)
+    except ConfigError as exc:
+        raise ConfigError(f"{what}: {exc}") from None
+    settings = {}
+    over = {k: (dict(v) if isinstance(v, dict) else v) for k, v in over.items()}
+    for key, value in sets:
+        key = str(key)
+        settings[key] = value
+        part, colon, name = key.partition(":")
+        if colon:
+            if part not in ("fork", "shock") or not name:
+                raise ConfigError(f"--try-set {key}: a part's key is fork:KEY or shock:KEY (e.g. "
+                                  f"fork:fork.spring.rate_N_per_mm), a bike key SECTION.KEY (e.g. rider.mass_kg)")
+            cfg, cover = ((spec.fork_config, spec.fork_overrides) if part == "fork"
+                          else (spec.shock_config, spec.shock_overrides))
+            have = load(cfg, cover).values
+            canonical = ALTERNATIVES.get(name, (name, 1.0))[0]
+            if canonical not in have:
+                raise ConfigError(f"--try-set {key}: the bike's {part} has no {name} (its adjusters: "
+                                  f"{', '.join(a.name for a in adjusters(spec) if a.section == part + '.set') or 'none'})")
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ConfigError(f"--try-set {key}: must be a number, got {value!r}")
+            over.setdefault(f"{part}.set", {})[name] = value
+        else:
+            over[key] = value
+    if not sets and other is None:
+        raise ConfigError("--try-set: nothing to try (give --try FILE or --try-set KEY=VALUE)")
+    try:
+        base_notes = set(_compose(ref, {k: v for k, v in (overrides or {}).items()} if other is None else None))
+    except ConfigError as exc:
+        raise ConfigError(f"{what}: {exc}") from None
+    try:
+        notes = _compose(ref, over)
+    except ConfigError as exc:
+        raise ConfigError(f"{what}{' ' + ', '.join(f'{k}={v}' for k, v in settings.items()) if settings else ''}: "
+                          f"{exc}") from None
+    new = [n for n in notes if n not in base_notes]
+    if new and settings:
+        raise ConfigError(f"--try-set {', '.join(f'{k}={v}' for k, v in settings.items())}: {new[0]} (advise "
+                          f"predicts only within what parts have)")
+    label = (Path(ref).name if other is not None else "recorded setting") + (
+        (" with " if other is not None else ": ") + ", ".join(f"{k} = {v}" for k, v in settings.items())
+        if settings else "")
+    return Trial(label, ref, over, settings)
 
 
 def allowed(bike, candidates, merged) -> tuple[list, list]:
@@ -579,10 +821,13 @@ def allowed(bike, candidates, merged) -> tuple[list, list]:
     return ok, skipped
 
 
-def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2) -> Advice:
+def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
+           tries=(), candidates: bool = True) -> Advice:
     """Advice for ``record`` (a two-ended ``TelemetryRecord``) on ``bike`` (preset or file, its keys
     ``overrides``); ``duration`` limits the simulated ride to its first seconds; the runs spread
-    over ``workers`` processes."""
+    over ``workers`` processes. ``tries``: settings to try (:class:`Trial`, from :func:`trial`),
+    simulated over the same terrain beside the recorded setting and predicted as the candidates are
+    (``Advice.tries``); ``candidates`` False simulates the tried settings only (:func:`predict`)."""
     import time
 
     from mtbmj.bike import spec as spec_mod
@@ -624,9 +869,10 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
             out[k] = {**out.get(k, {}), **v}
         return out
 
+    tries = list(tries or ())
     todo, skipped = allowed(bike, [(a, d, v) for a in adj for d, v in (("down", a.down), ("up", a.up))
-                                   if v is not None and v != a.value], merged)
-    n = len(todo) + 1
+                                   if v is not None and v != a.value] if candidates else [], merged)
+    n = len(todo) + len(tries) + 1
     done = [0]
 
     def step():
@@ -636,6 +882,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
 
     jobs = [(str(bike), base_over, terrain, speed, sim_s, "recorded setting", lead_s)]
     jobs += [(str(bike), merged(a.overrides(v)), terrain, speed, sim_s, f"{a.label} {v:g}", lead_s) for a, d, v in todo]
+    jobs += [(tr.bike, tr.overrides, terrain, speed, sim_s, tr.label, lead_s) for tr in tries]
     runs = [None] * len(jobs)
     if workers > 1 and len(jobs) > 1:
         from concurrent.futures import as_completed
@@ -649,7 +896,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
                 try:
                     runs[i] = future.result()
                 except ConfigError as exc:  # a candidate its part refuses only when run: skipped (the recorded
-                    if i == 0:              # setting's own refusal stays the user's error)
+                    if i == 0 or i > len(todo):  # setting's own refusal and a tried one's stay the user's error)
                         raise
                     runs[i] = exc
                 step()
@@ -658,7 +905,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
             try:
                 runs[i] = simulate(*job)
             except ConfigError as exc:
-                if i == 0:
+                if i == 0 or i > len(todo):
                     raise
                 runs[i] = exc
             step()
@@ -667,7 +914,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
         raise RideNotDescribed(f"{record.name}: the recorded setting {base.crash} on the ride's reconstructed terrain: "
                                f"the model cannot ride this ride as reconstructed, so it cannot predict a change")
     cands = []
-    for (a, d, v), run in zip(todo, runs[1:]):
+    for (a, d, v), run in zip(todo, runs[1:1 + len(todo)]):
         if isinstance(run, ConfigError):
             skipped.append(_skip(a, d, v, run))
         else:
@@ -677,11 +924,18 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     measured = ride_metrics(t[keep], rec.front[keep], rec.rear[keep], base.metrics["front"]["travel_mm"],
                             base.metrics["rear"]["travel_mm"])
     advice = Advice(rec.name, spec.name, rec.summary(), measured, base, cands, None, rec.front[keep], rec.rear[keep],
-                    skipped=skipped)
-    advice.recommendation = _recommend(base, cands, advice.uncertainty(), measured)
+                    skipped=skipped, tries=list(zip(tries, runs[1 + len(todo):])), record_t=t[keep] - t[0])
+    advice.recommendation, advice.verdict = _judge(advice)
     advice.wall_s = time.perf_counter() - start
     return advice
 
 
-__all__ = ["Adjuster", "Advice", "AdviseError", "RideNotDescribed", "RULES", "adjusters", "advise", "allowed", "bounds",
-           "expected", "penalties", "ride_metrics", "simulate", "terrain_of"]
+def predict(record, bike, tries, overrides=None, duration: float | None = None, progress=None,
+            workers: int = 2) -> Advice:
+    """The ride's metrics at each tried setting (:func:`trial`) beside the recorded setting's, with
+    the advice's reconstruction and uncertainty, no candidate simulated: ``Advice.tried()``."""
+    return advise(record, bike, overrides, duration, progress, workers, tries=tries, candidates=False)
+
+
+__all__ = ["Adjuster", "Advice", "AdviseError", "RideNotDescribed", "RULES", "Trial", "adjusters", "advise", "allowed",
+           "bounds", "expected", "penalties", "predict", "ride_metrics", "simulate", "terrain_of", "trial"]
