@@ -37,6 +37,7 @@ def cmd_advise(args) -> int:
                                                      f"{c['expected']:.3g} +- {c['uncertainty'] or 0:.2g})"
                                                      for k, c in tr["changes"].items() if k in advise.HEADLINE)
               + (f"; {tr['crash']}" if tr["crash"] else ""))
+    print(result.headline())
     print(f"{result.line()}; {len(result.candidates)} candidates simulated in {result.wall_s:.0f} s; "
           f"wrote {', '.join(p.name for p in written)} to {args.out}")
     return 0

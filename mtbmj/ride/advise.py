@@ -128,13 +128,37 @@ class Adjuster:
     down: float | None
     up: float | None
     label: str
+    rider_key: str = ""  # the key a rider sets, in the unit the part is sold in (shock.spring_rate_lb_per_in)
+    unit: str = ""  # that unit: "lb/in", "psi", "clicks", "N s/m", "spacers", "N/mm"
+    per_unit: float = 1.0  # the configuration's value per unit of the rider's
 
     @property
     def name(self) -> str:
         return f"{self.section.split('.')[0]}:{self.key}"
 
+    def setting(self, value) -> dict:
+        """The change to ``value`` in the rider's words: the part, the adjuster, the key a rider sets
+        (a bike key for the shock as sold, else the part's configuration key under its end's name:
+        ``fork:KEY``, ``shock:KEY``; both taken by ``--try-set``), its unit, from and to in it."""
+        return {"part": self.label.split(" ")[0], "adjuster": self.label.partition(" ")[2],
+                "key": self.rider_key or self.name, "unit": self.unit,
+                "from": _round(self.value / self.per_unit), "to": _round(value / self.per_unit)}
+
     def overrides(self, value) -> dict:
         return {self.section: {self.key: value}}
+
+
+def _round(x: float) -> float:
+    return float(f"{x:.6g}")
+
+
+SOLD_LB_PER_IN = 25.0  # coil springs are sold in steps of this (lb/in)
+UNITS = {"rate_N_per_mm": "N/mm", "rate_lb_per_in": "lb/in", "_psi": "psi", "_N_s_per_m": "N s/m", "_clicks": "clicks",
+         "tokens": "spacers"}
+
+
+def _unit(key: str) -> str:
+    return next((u for end, u in UNITS.items() if key.endswith(end)), "")
 
 
 def _bounded(key: str, value: float, low: float = 0.0, high: float = math.inf):
@@ -149,7 +173,7 @@ def adjusters(spec) -> list[Adjuster]:
     """The adjusters of the bike's fork, shock and tyres (from their configurations in effect),
     each with one step down and up: a spring or pressure 10 %, a damper coefficient 25 %, two clicks,
     a volume token, a tyre 2 psi; a step the part does not allow is None."""
-    from mtbmj.config import load
+    from mtbmj.config import N_PER_MM_PER_LB_PER_IN, load
 
     out = []
     for end, section, cfg, over in (("front", "fork.set", spec.fork_config, spec.fork_overrides),
@@ -157,20 +181,34 @@ def adjusters(spec) -> list[Adjuster]:
         v = load(cfg, over).values
         part = "fork" if end == "front" else "shock"
 
-        def add(key, label, down, up, value):
+        def add(key, label, down, up, value, rider_key="", unit="", per_unit=1.0):
             out.append(Adjuster(end, section, key, value, _bounded(key, down) if down is not None else None,
-                                _bounded(key, up) if up is not None else None, f"{part} {label}"))
+                                _bounded(key, up) if up is not None else None, f"{part} {label}",
+                                rider_key, unit or _unit(key), per_unit))
 
         spring = v.get("fork.spring.model")
+        lb = N_PER_MM_PER_LB_PER_IN
         for model, key, label in (("linear", "fork.spring.rate_N_per_mm", "spring rate"),
                                   ("progressive", "fork.spring.progressive_rate_N_per_mm", "spring rate"),
                                   ("air", "fork.spring.air_pressure_psi", "air pressure")):
             if spring == model and key in v:
                 x = float(v[key])
-                add(key, label, round(x * 0.9, 3), round(x * 1.1, 3), x)
+                if model == "linear" and (part == "shock" or "fork.spring.rate_lb_per_in" in over):
+                    # a coil as sold: in lb/in, the candidates the rates sold next to 10 % either way
+                    rider = "shock.spring_rate_lb_per_in" if part == "shock" else ""
+                    given = x / lb
+                    down = round(given * 0.9 / SOLD_LB_PER_IN) * SOLD_LB_PER_IN
+                    up = round(given * 1.1 / SOLD_LB_PER_IN) * SOLD_LB_PER_IN
+                    add(key, label, down * lb if down > 0 and abs(down - given) > 1e-6 else None,
+                        up * lb if abs(up - given) > 1e-6 else None, x,
+                        rider or "fork:fork.spring.rate_lb_per_in", "lb/in", lb)
+                else:
+                    add(key, label, round(x * 0.9, 3), round(x * 1.1, 3), x,
+                        "shock.pressure_psi" if part == "shock" and model == "air" else "")
         if spring == "air" and "fork.spring.tokens" in v:
             n = float(v["fork.spring.tokens"])
-            add("fork.spring.tokens", "volume spacers", n - 1 if n >= 1 else None, n + 1, n)
+            add("fork.spring.tokens", "volume spacers", n - 1 if n >= 1 else None, n + 1, n,
+                "shock.volume_spacers" if part == "shock" else "")
         damper = v.get("fork.damper.model")
         keys = {"linear": [("fork.damper.coefficient_N_s_per_m", "damping")],
                 "bilinear": [("fork.damper.compression_N_s_per_m", "compression damping"),
@@ -181,7 +219,8 @@ def adjusters(spec) -> list[Adjuster]:
                                ("fork.damper.rebound_high_N_s_per_m", "high-speed rebound damping")]}.get(damper, [])
         for key, label in keys:
             x = float(v[key])
-            add(key, label, round(x * 0.8, 3), round(x * 1.25, 3), x)
+            rider = (f"shock.{key.rpartition('.')[2]}" if part == "shock" and damper == "bilinear" else "")
+            add(key, label, round(x * 0.8, 3), round(x * 1.25, 3), x, rider)
         for kind in ("compression", "rebound", "low_speed_compression", "high_speed_compression",
                      "low_speed_rebound", "high_speed_rebound"):
             key, measured = f"fork.damper.{kind}_clicks", f"fork.damper.{kind}_clicks_measured"
@@ -193,7 +232,7 @@ def adjusters(spec) -> list[Adjuster]:
         if end == "front" and "tire.pressure_psi" in v:
             x = float(v["tire.pressure_psi"])
             out.append(Adjuster("both", "fork.set", "tire.pressure_psi", x, _bounded("tire.pressure_psi", x - 2),
-                                _bounded("tire.pressure_psi", x + 2), "tyre pressure"))
+                                _bounded("tire.pressure_psi", x + 2), "tyre pressure", "fork:tire.pressure_psi", "psi"))
     return out
 
 
@@ -472,6 +511,7 @@ class Advice:
         cands = []
         for adj, direction, value, run in self.candidates:
             cands.append({"key": adj.name, "label": adj.label, "direction": direction, "from": adj.value, "to": value,
+                          "setting": adj.setting(value),
                           "penalty": run.total, "penalty_change": run.total - self.base.total,
                           "grip_comfort": _grip_comfort(self.base.metrics, run.metrics), "crash": run.crash})
         return {"ride": self.ride, "bike": self.bike, "method": __doc__.split("\n\n")[1].replace("\n", " "),
@@ -510,7 +550,8 @@ class Advice:
                       ("simulated, recorded setting", 100 * self.base.front_mm / top if end == "front"
                        else 100 * self.base.rear_mm / top, "C0")]
             if run is not None:
-                series.append((f"simulated, {best['label']} {best['from']:g} -> {best['to']:g}",
+                st = best.get("setting", {"from": best["from"], "to": best["to"], "unit": ""})
+            series.append((f"simulated, {best['label']} {st['from']:g} -> {st['to']:g}{' ' + st['unit'] if st['unit'] else ''}",
                                100 * (run.front_mm if end == "front" else run.rear_mm) / top, "C3"))
             for label, x, color in series:
                 h, _ = np.histogram(np.clip(x, 0, 100), bins=edges)
@@ -519,8 +560,12 @@ class Advice:
                    ylabel="time (%)", title=f"{end}: travel histogram")
             ax.grid(alpha=0.3)
             ax.legend(fontsize=8, loc="upper right")
-        fig.suptitle(f"{self.ride} on {self.bike}: " + ("keep the settings" if best is None else
-                                                       f"recommended: {best['label']} {best['from']:g} -> {best['to']:g}"))
+        if best is None:
+            title = (self.verdict or {}).get("answer", "inconclusive") + ": no change advised"
+        else:
+            st = best.get("setting", {"from": best["from"], "to": best["to"], "unit": ""})
+            title = f"recommended: {best['label']} {st['from']:g} -> {st['to']:g}{' ' + st['unit'] if st['unit'] else ''}"
+        fig.suptitle(f"{self.ride} on {self.bike}: " + title)
         return fig
 
     def png(self) -> bytes:
@@ -528,39 +573,67 @@ class Advice:
 
         return quicklook.png(self.figure(), dpi=90)
 
+    def headline(self) -> str:
+        """The one recommended change first, in the rider's words (or the verdict and why)."""
+        v, rec = self.verdict or {}, self.recommendation
+        if rec is not None and v.get("answer", "change") == "change":
+            st = rec["setting"]
+            return (f"Recommended: {'raise' if st['to'] > st['from'] else 'lower'} the {st['part']} {st['adjuster']} "
+                    f"from {st['from']:g} to {st['to']:g} {st['unit']} ({st['key']})")
+        return f"{v.get('answer', 'inconclusive').capitalize()}: {v.get('why', '')}"
+
     def html(self, png: bytes) -> str:
         import base64
         import html as esc
 
         d = self.to_dict()
         rec = d["recommendation"]
-        rows = []
-        if rec is not None:
-            for k, c in sorted(rec["changes"].items()):
-                if c["change"] == 0:
+        v = d["verdict"] or {}
+        shown = rec if rec is not None else v.get("best_candidate")
+
+        def metric_rows(changes, skip_still=True):
+            out = []
+            for k, c in sorted(changes.items()):
+                if skip_still and c["change"] == 0:
                     continue
-                u = "" if c["uncertainty"] is None else f"{c['uncertainty']:.3g}"
-                r = "" if c["recorded"] is None else f"{c['recorded']:.3g}"
-                rows.append(f"<tr><td>{esc.escape(k)}</td><td>{r}</td><td>{c['from']:.3g}</td><td>{c['to']:.3g}</td>"
-                            f"<td>{c['change']:+.3g}</td><td>{u}</td><td>{c['expected']:.3g}</td></tr>")
-        cand = "".join(f"<tr><td>{esc.escape(c['label'])}</td><td>{c['from']:g}</td><td>{c['to']:g}</td>"
-                       f"<td>{c['penalty_change']:+.2f}</td><td>{esc.escape(c['crash'] or '')}</td></tr>"
-                       for c in d["candidates"])
-        skip = "".join(f"<li>{esc.escape(c['label'])} {c['from']:g} -&gt; {c['to']:g}: {esc.escape(c['why'])}</li>"
-                       for c in d["skipped"])
+                out.append(f"<tr><td>{esc.escape(k)}</td><td>{esc.escape(metric_unit(k))}</td><td>{_num(c['recorded'])}"
+                           f"</td><td>{c['from']:.3g}</td><td>{c['to']:.3g}</td><td>{c['change']:+.3g}</td>"
+                           f"<td>{_num(c['uncertainty'])}</td><td>{c['expected']:.3g}</td></tr>")
+            return out
+
+        head = ("<tr><th>metric</th><th>unit</th><th>recorded</th><th>simulated now</th><th>simulated {}</th>"
+                "<th>change</th><th>uncertainty (same unit)</th><th>expected on your ride</th></tr>")
+        blank = "<td></td>" * 7
+        if shown is not None:
+            rows = metric_rows(shown["changes"])
+            caption = ("the recommended change" if rec is not None else
+                       "the best candidate, not advised: what it improves moves less than its uncertainty")
+            rows = rows or [f"<tr><td>no metric moves at {esc.escape(shown['label'])} {shown['to']:g}</td>{blank}</tr>"]
+        else:
+            caption = "no change: " + v.get("answer", "")
+            rows = [f"<tr><td>no candidate to show: {esc.escape(v.get('why', 'no candidate'))}</td>{blank}</tr>"]
+
+        def cand_row(c):
+            st = c["setting"]
+            return (f"<tr><td>{esc.escape(c['label'])} ({esc.escape(st['key'])})</td><td>{esc.escape(st['unit'])}</td>"
+                    f"<td>{st['from']:g}</td><td>{st['to']:g}</td><td>{c['penalty_change']:+.2f}</td>"
+                    f"<td>{esc.escape(c['crash'] or '')}</td></tr>")
+
+        cand = "".join(cand_row(c) for c in d["candidates"])
+        skip = "".join(f"<li>{esc.escape(c['label'])} {c['setting']['from']:g} -&gt; {c['setting']['to']:g} "
+                       f"{esc.escape(c['setting']['unit'])}: {esc.escape(c['why'])}</li>" for c in d["skipped"])
         if skip:
             skip = f'<h2>Skipped: not allowed by the part</h2><ul id="skipped">{skip}</ul>'
         tried = ""
         for tr in d["tried"]:
-            trows = "".join(
-                f"<tr><td>{esc.escape(k)}</td><td>{_num(c['recorded'])}</td><td>{c['from']:.3g}</td>"
-                f"<td>{c['to']:.3g}</td><td>{c['change']:+.3g}</td><td>{_num(c['uncertainty'])}</td>"
-                f"<td>{c['expected']:.3g}</td></tr>" for k, c in sorted(tr["changes"].items()))
             crash = f" ({esc.escape(tr['crash'])})" if tr["crash"] else ""
-            tried += (f"<h2>Tried: {esc.escape(tr['label'])}</h2><p>penalty {d['recorded_setting']['penalty']:.2f} -&gt; "
-                      f"{tr['penalty']:.2f}{crash}</p><table class=\"tried\"><tr><th>metric</th><th>recorded</th>"
-                      f"<th>simulated now</th><th>simulated tried</th><th>change</th><th>uncertainty</th>"
-                      f"<th>expected on your ride</th></tr>{trows}</table>")
+            tried += (f"<h2>Tried: {esc.escape(tr['label'])}</h2><p>rule penalty (no unit) "
+                      f"{d['recorded_setting']['penalty']:.2f} -&gt; {tr['penalty']:.2f}{crash}</p><table class=\"tried\">"
+                      f"{head.format('tried')}{''.join(metric_rows(tr['changes'], False))}</table>")
+        sim, meas, u = _flat(self.base.metrics), _flat(self.measured), d["uncertainty"]
+        match = "".join(f"<tr><td>{esc.escape(k)}</td><td>{esc.escape(metric_unit(k))}</td><td>{meas[k]:.3g}</td>"
+                        f"<td>{sim[k]:.3g}</td><td>{sim[k] - meas[k]:+.3g}</td><td>{_num(u.get(k))}</td></tr>"
+                        for k in sorted(meas) if k in sim and k not in ("duration_s",) and not k.endswith("travel_mm"))
         rc = d["reconstruction"]["checks"]
         img = base64.b64encode(png).decode()
         return f"""<!DOCTYPE html>
@@ -568,17 +641,22 @@ class Advice:
 <style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}table{{border-collapse:collapse}}
 td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{text-align:left}}</style></head>
 <body><h1>Setup advice: {esc.escape(self.ride)} on {esc.escape(self.bike)}</h1>
+<p id="recommended"><b>{esc.escape(self.headline())}</b></p>
 <p id="line">{esc.escape(self.line())}</p>
 <p>Reconstruction check: front reproduced within {rc['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted
 {rc['rear_predicted_rms_mm']:.1f} mm RMS ({rc['rear_predicted_rms_percent_of_used']:.0f} % of the travel used),
 {rc['samples_checked_percent']:.0f} % of the ride checked; speed {d['reconstruction']['speed_m_per_s']:.2f} m/s.</p>
 <img id="histograms" src="data:image/png;base64,{img}" alt="travel histograms before and after">
-<h2>Predicted change of every metric</h2>
-<table id="changes"><tr><th>metric</th><th>recorded</th><th>simulated now</th><th>simulated after</th><th>change</th>
-<th>uncertainty</th><th>expected on your ride</th></tr>
-{''.join(rows) or '<tr><td>no change recommended</td><td></td><td></td><td></td><td></td><td></td><td></td></tr>'}</table>
+<h2>Predicted change of every metric: {esc.escape(caption)}</h2>
+<table id="changes">{head.format('after')}
+{''.join(rows)}</table>
+<h2>How well the model matched the ride (recorded setting)</h2>
+<p>Uncertainty: {esc.escape(d['uncertainty_method'])}.</p>
+<table id="match"><tr><th>metric</th><th>unit</th><th>recorded</th><th>simulated</th><th>simulated - recorded</th>
+<th>model's error (same unit)</th></tr>{match}</table>
 <h2>Every candidate</h2>
-<table id="candidates"><tr><th>setting</th><th>from</th><th>to</th><th>penalty change</th><th>crash</th></tr>{cand}</table>
+<table id="candidates"><tr><th>setting (key)</th><th>unit</th><th>from</th><th>to</th><th>rule penalty change (no unit)</th>
+<th>crash</th></tr>{cand}</table>
 {skip}
 {tried}
 <h2>Rules</h2><ul>{''.join(f'<li>{esc.escape(k)}: {esc.escape(v)}</li>' for k, v in RULES.items())}</ul>
@@ -594,6 +672,19 @@ td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{t
         return output.write_atomically(out_dir, {
             "advice.json": (json.dumps(self.to_dict(), indent=2, default=_json) + "\n").encode(),
             "advice.png": png, "advice.html": self.html(png).encode()})
+
+
+def metric_unit(metric: str) -> str:
+    """The unit of a metric (``_flat`` name), as the report's tables show it."""
+    leaf = metric.rpartition(".")[2]
+    if leaf in SHARES:
+        return "% of time"
+    for end, unit in (("_percent", "% of travel"), ("_per_minute", "per minute"), ("_mm_per_s", "mm/s"),
+                      ("_m_per_s2", "m/s2"), ("_mm", "mm"), ("_s", "s")):
+        if leaf.endswith(end):
+            return unit
+    return {"bottom_outs": "count", "rebound_over_compression": "ratio", "tyre_load_variation": "std/mean",
+            "balance_points": "points of travel %"}.get(leaf, "")
 
 
 def _num(x, spec: str = ".3g") -> str:
@@ -654,11 +745,13 @@ def _judge(advice) -> tuple[dict | None, dict]:
     if good:
         _, adj, direction, value, run, improved, u = max(good, key=lambda g: g[0])
         moved = _beyond(improved, a, _flat(run.metrics), u)
-        why = (f"{'raise' if direction == 'up' else 'lower'} the {adj.label} from {adj.value:g} to {value:g} "
-               f"({adj.section} {adj.key}): the penalty falls {base.total:.2f} -> {run.total:.2f} "
+        st = adj.setting(value)
+        why = (f"{'raise' if direction == 'up' else 'lower'} the {adj.label} from {st['from']:g} to {st['to']:g} "
+               f"{st['unit']} ({st['key']}): the penalty falls {base.total:.2f} -> {run.total:.2f} "
                f"({', '.join(k.replace('_', ' ') for k in improved)}; "
                + ", ".join(f"{m} {a[m]:.3g} -> {_flat(run.metrics)[m]:.3g} +- {u[m]:.2g}" for m in moved) + ")")
-        rec = {"key": adj.name, "section": adj.section, "config_key": adj.key, "label": adj.label,
+        rec = {"setting": adj.setting(value), "key": adj.name, "section": adj.section, "config_key": adj.key,
+               "label": adj.label,
                "direction": direction, "from": adj.value, "to": value, "penalty_from": base.total,
                "penalty_to": run.total, "improves": improved, "confident": True, "why": why,
                "changes": _changes(base, run, u, measured)}
@@ -673,12 +766,14 @@ def _judge(advice) -> tuple[dict | None, dict]:
         b = _flat(run.metrics)
         ms = list(dict.fromkeys(_rule_metric(k) for k in improved))
         return None, {"answer": "inconclusive",
-                      "why": f"the best candidate, the {adj.label} {adj.value:g} -> {value:g}, lowers the penalty "
+                      "why": f"the best candidate, the {adj.label} {adj.setting(value)['from']:g} -> "
+                             f"{adj.setting(value)['to']:g} {adj.unit}, lowers the penalty "
                              f"{base.total:.2f} -> {run.total:.2f}, but what it improves moves less than its "
                              f"uncertainty ("
                              + ", ".join(f"{m} {a[m]:.3g} -> {b[m]:.3g} +- {u.get(m, math.inf):.2g}" for m in ms if m in b)
                              + "): try it and record again",
-                      "best_candidate": {"key": adj.name, "label": adj.label, "direction": direction,
+                      "best_candidate": {"setting": adj.setting(value), "key": adj.name, "label": adj.label,
+                                         "direction": direction,
                                          "from": adj.value, "to": value, "changes": _changes(base, run, u, measured)}}
     return None, {"answer": "inconclusive",
                   "why": f"no candidate of {n} lowers the penalty by {MIN_GAIN:g} or more beyond its uncertainty, "
@@ -698,7 +793,7 @@ def _changes(base: Run, run: Run, uncertainty: dict, measured: dict) -> dict:
 
 def _skip(adj: Adjuster, direction: str, value, exc) -> dict:
     return {"key": adj.name, "label": adj.label, "direction": direction, "from": adj.value, "to": value,
-            "why": str(exc)}
+            "setting": adj.setting(value), "why": str(exc)}
 
 
 @dataclass(frozen=True)
