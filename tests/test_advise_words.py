@@ -39,13 +39,19 @@ def test_a_coil_shock_in_lb_per_in_steps_through_the_rates_sold(tmp_path):
                   "from": 450.0, "to": 500.0}
     f = adj["fork:fork.spring.rate_N_per_mm"].setting(13.2)
     assert (f["key"], f["unit"], f["from"], f["to"]) == ("fork:fork.spring.rate_N_per_mm", "N/mm", 12.0, 13.2)
-    # the key the advice names is one --try-set takes, and it sets the same spring
-    tr = advise.trial(bike, sets=[(st["key"], st["to"])])
-    assert tr.overrides == {"shock.spring_rate_lb_per_in": 500.0}
+    # the key the advice names is one --try-set takes, and it sets the spring as the candidate did
+    # (the rate alone: not through [shock] as sold, which would also reset the collar's preload)
     from mtbmj.bike import spec as spec_mod
 
+    tr = advise.trial(bike, sets=[(st["key"], st["to"])])
+    assert tr.overrides == {"shock.set": {"fork.spring.rate_N_per_mm": pytest.approx(a.up)}}
     s = spec_mod.load(str(bike), tr.overrides)
     assert s.shock_overrides["fork.spring.rate_N_per_mm"] == pytest.approx(a.up)
+    sst = {a.rider_key: a for a in advise.adjusters(spec_mod.load("sst"))}["shock.spring_rate_lb_per_in"]
+    tr = advise.trial("sst", sets=[("shock.spring_rate_lb_per_in", 500)])
+    kept = spec_mod.load("sst", tr.overrides).shock_overrides
+    assert kept["fork.spring.preload_N"] == 250.0 and kept["fork.spring.rate_N_per_mm"] == pytest.approx(500 * LB)
+    assert sst.setting(sst.value)["from"] == 456.8  # the preset's 80 N/mm, as a rider reads it
 
 
 def test_damping_in_clicks_where_there_is_a_click_map_and_air_in_psi(tmp_path):

@@ -34,21 +34,20 @@ guides' current editions), marked *assumed* where no source gives the number):
 - grip and comfort: a small weight on the relative change of tyre-load variation and rider
   acceleration (tie-breakers, assumed).
 
-A candidate is recommended when it lowers the total penalty by at least ``MIN_GAIN``; the predicted
-change of every metric is the candidate's simulated value less the recorded setting's, and the
-value expected on the rider's own ride (``expected``; the simulated ``to`` beside it) is the
-recorded value moved by that change within the metric's bounds (:func:`expected`: a change towards
-a bound scaled by the room the ride has on that side, so the model's five bottom-outs becoming four
-take a ride's none to none, not to -1; a count or share is never expected below 0, a share of time
-never above 100 %). Its
-uncertainty is the model's own error on that metric for this ride: the recorded setting's
-simulated value against the record's (what the model gets wrong on this terrain with known
-settings bounds what it gets wrong about a change, which shares the terrain and the model).
-A count's uncertainty is at least its counting spread (the square root of the count). An
-adjuster whose predicted changes all stay within that uncertainty does little here (the
-makers' "an adjuster that moves less than about 15 % of the force does little"): a recommendation
-whose improved rules' metrics all move less than it is marked so (``confident`` false: try it and
-record again).
+The predicted change of every metric is the candidate's simulated value less the recorded
+setting's, and the value expected on the rider's own ride (``expected``; the simulated ``to``
+beside it) is the recorded value moved by that change within the metric's bounds (:func:`expected`:
+a change towards a bound scaled by the room the ride has on that side, so the model's five
+bottom-outs becoming four take a ride's none to none, not to -1; a count or share is never
+expected below 0, a share of time never above 100 %). Its uncertainty comes from the ride itself
+(``UNCERTAINTY_METHOD``: the ride's segments resampled, the model's error at the recorded setting
+and the change's spread over the segments). The verdict (:func:`_judge`): a change is advised only
+where it lowers the total penalty by at least ``MIN_GAIN`` and a metric of a rule it improves moves
+by more than its uncertainty; "keep" only where every candidate is predicted worse beyond its
+uncertainty; otherwise "inconclusive", naming why (never "keep" by default). Every setting is also
+given in the rider's words (:meth:`Adjuster.setting`: lb/in at the rates sold for a coil shock,
+psi, clicks where a click map exists). Any other setting can be tried on the ride beside the
+recorded one (:func:`trial`, :func:`predict`; ``--try``, ``--try-set``).
 
 **When a ride cannot support advice** (:class:`AdviseError`): shorter than ``MIN_SECONDS``, or a
 stretch of it shorter than that asked for (``duration``: the minimum holds for what is analysed), its
@@ -101,8 +100,8 @@ RULES = {
     "packing": f"rebound p95 speed at least {PACKING_RATIO:g} of compression p95 (assumed)",
     "balance": f"front and rear dynamic sag within {BALANCE_POINTS:g} points (Motion Instruments; number assumed)",
     "grip_comfort": "lower tyre-load variation and rider acceleration, as tie-breakers (assumed weight)",
-    "authority": "a recommendation whose improved rules' metrics move less than the model's error on this ride is "
-                 "marked as within that error: try it and record again",
+    "authority": "a change is advised only where a metric of a rule it improves moves by more than its uncertainty "
+                 "(from the ride's segments); else the answer is inconclusive: try it and record again",
 }
 
 
@@ -149,7 +148,7 @@ class Adjuster:
 
 
 def _round(x: float) -> float:
-    return float(f"{x:.6g}")
+    return float(f"{x:.4g}")
 
 
 SOLD_LB_PER_IN = 25.0  # coil springs are sold in steps of this (lb/in)
@@ -540,9 +539,10 @@ class Advice:
         fig = Figure(figsize=(11, 4.8), layout="constrained")
         axes = fig.subplots(1, 2)
         best = self.recommendation
+        shown = best if best is not None else (self.verdict or {}).get("best_candidate")
         run = None
-        if best is not None:
-            run = next(r for a, d, v, r in self.candidates if a.name == best["key"] and d == best["direction"])
+        if shown is not None:
+            run = next((r for a, d, v, r in self.candidates if a.name == shown["key"] and d == shown["direction"]), None)
         for ax, end, rec, top in ((axes[0], "front", self.record_front, self.base.metrics["front"]["travel_mm"]),
                                   (axes[1], "rear", self.record_rear, self.base.metrics["rear"]["travel_mm"])):
             edges = np.linspace(0, 100, 21)
@@ -550,8 +550,9 @@ class Advice:
                       ("simulated, recorded setting", 100 * self.base.front_mm / top if end == "front"
                        else 100 * self.base.rear_mm / top, "C0")]
             if run is not None:
-                st = best.get("setting", {"from": best["from"], "to": best["to"], "unit": ""})
-            series.append((f"simulated, {best['label']} {st['from']:g} -> {st['to']:g}{' ' + st['unit'] if st['unit'] else ''}",
+                st = shown.get("setting", {"from": shown["from"], "to": shown["to"], "unit": ""})
+                series.append((f"simulated, {shown['label']} {st['from']:g} -> {st['to']:g}"
+                               f"{' ' + st['unit'] if st['unit'] else ''}{'' if best is not None else ' (not advised)'}",
                                100 * (run.front_mm if end == "front" else run.rear_mm) / top, "C3"))
             for label, x, color in series:
                 h, _ = np.histogram(np.clip(x, 0, 100), bins=edges)
@@ -854,7 +855,12 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
         key = str(key)
         settings[key] = value
         part, colon, name = key.partition(":")
-        if colon:
+        named = next((a for a in adjusters(spec) if a.rider_key == key), None)
+        if named is not None and not colon:  # a key the advice names: set as its candidates are (a coil's
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ConfigError(f"--try-set {key}: must be a number, got {value!r}")
+            over.setdefault(named.section, {})[named.key] = value * named.per_unit  # rate, its preload kept)
+        elif colon:
             if part not in ("fork", "shock") or not name:
                 raise ConfigError(f"--try-set {key}: a part's key is fork:KEY or shock:KEY (e.g. "
                                   f"fork:fork.spring.rate_N_per_mm), a bike key SECTION.KEY (e.g. rider.mass_kg)")
