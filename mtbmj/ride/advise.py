@@ -773,8 +773,8 @@ def _judge(advice) -> tuple[dict | None, dict]:
                              f"uncertainty ("
                              + ", ".join(f"{m} {a[m]:.3g} -> {b[m]:.3g} +- {u.get(m, math.inf):.2g}" for m in ms if m in b)
                              + "): try it and record again",
-                      "best_candidate": {"setting": adj.setting(value), "key": adj.name, "label": adj.label,
-                                         "direction": direction,
+                      "best_candidate": {"setting": adj.setting(value), "key": adj.name, "section": adj.section,
+                                         "config_key": adj.key, "label": adj.label, "direction": direction,
                                          "from": adj.value, "to": value, "changes": _changes(base, run, u, measured)}}
     return None, {"answer": "inconclusive",
                   "why": f"no candidate of {n} lowers the penalty by {MIN_GAIN:g} or more beyond its uncertainty, "
