@@ -12,20 +12,32 @@ def cmd_advise(args) -> int:
     from mtbmj.cli.common import Progress
     from mtbmj.cli.sweep import positive
     from mtbmj.cli.telemetry import ride_record
+    from mtbmj.config import parse_assignment
     from mtbmj.ride import advise
 
     positive("--workers", args.workers)
     over = bike_overrides(args)
     if args.rider_kg is not None:
         over["rider.mass_kg"] = args.rider_kg
+    sets = [parse_assignment(text) for text in args.try_set or ()]
+    tries = []  # checked before any work: a bad file, key or value is one line and nothing written
+    if args.try_file or sets:
+        tries = [advise.trial(args.bike, over or None, other, sets) for other in (args.try_file or [None])]
     record = ride_record(args.ride, args)
     result = Progress("advise").around(
-        lambda progress: advise.advise(record, args.bike, over or None, args.duration, progress, args.workers))
+        lambda progress: advise.advise(record, args.bike, over or None, args.duration, progress, args.workers,
+                                       tries=tries))
     written = result.write(args.out)
     checks = result.reconstruction["checks"]
     print(f"reconstruction: speed {result.reconstruction['speed_m_per_s']:.2f} m/s; check: front reproduced within "
           f"{checks['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted within "
           f"{checks['rear_predicted_rms_percent_of_used']:.0f} % of the travel used")
+    for tr in result.tried():
+        print(f"tried {tr['label']}: " + "; ".join(f"{k} {c['from']:.3g} -> {c['to']:.3g} (expected on the ride "
+                                                     f"{c['expected']:.3g} +- {c['uncertainty'] or 0:.2g})"
+                                                     for k, c in tr["changes"].items() if k in advise.HEADLINE)
+              + (f"; {tr['crash']}" if tr["crash"] else ""))
+    print(result.headline())
     print(f"{result.line()}; {len(result.candidates)} candidates simulated in {result.wall_s:.0f} s; "
           f"wrote {', '.join(p.name for p in written)} to {args.out}")
     return 0
@@ -43,6 +55,12 @@ def add_parser(sub) -> None:
     p.add_argument("--rider-kg", type=float, metavar="KG", help="the whole rider's mass (rider.mass_kg)")
     add_bike_sets(p)  # the settings as ridden, where they differ from the bike file
     p.add_argument("--duration", type=float, metavar="S", help="advise on the ride's first S seconds only")
+    p.add_argument("--try", action="append", dest="try_file", metavar="BIKE_FILE",
+                   help="predict the ride's metrics at this bike file's settings beside the recorded ones (repeatable)")
+    p.add_argument("--try-set", action="append", dest="try_set", metavar="KEY=VALUE",
+                   help="a setting to try (repeatable, all in one try): fork:KEY or shock:KEY of the part's "
+                        "configuration (e.g. fork:fork.spring.rate_N_per_mm=7, shock:fork.damper.rebound_clicks=8) "
+                        "or a bike key (shock.spring_rate_lb_per_in=500, rider.mass_kg=80); over --try's file")
     p.add_argument("--workers", type=int, default=2, metavar="N",
                    help="processes the candidate runs spread over (default 2)")
     p.add_argument("--fork-max-mm", type=float, help="fork travel the recording's sensor spans (default: the bike's)")

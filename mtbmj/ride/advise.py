@@ -34,21 +34,20 @@ guides' current editions), marked *assumed* where no source gives the number):
 - grip and comfort: a small weight on the relative change of tyre-load variation and rider
   acceleration (tie-breakers, assumed).
 
-A candidate is recommended when it lowers the total penalty by at least ``MIN_GAIN``; the predicted
-change of every metric is the candidate's simulated value less the recorded setting's, and the
-value expected on the rider's own ride (``expected``; the simulated ``to`` beside it) is the
-recorded value moved by that change within the metric's bounds (:func:`expected`: a change towards
-a bound scaled by the room the ride has on that side, so the model's five bottom-outs becoming four
-take a ride's none to none, not to -1; a count or share is never expected below 0, a share of time
-never above 100 %). Its
-uncertainty is the model's own error on that metric for this ride: the recorded setting's
-simulated value against the record's (what the model gets wrong on this terrain with known
-settings bounds what it gets wrong about a change, which shares the terrain and the model).
-A count's uncertainty is at least its counting spread (the square root of the count). An
-adjuster whose predicted changes all stay within that uncertainty does little here (the
-makers' "an adjuster that moves less than about 15 % of the force does little"): a recommendation
-whose improved rules' metrics all move less than it is marked so (``confident`` false: try it and
-record again).
+The predicted change of every metric is the candidate's simulated value less the recorded
+setting's, and the value expected on the rider's own ride (``expected``; the simulated ``to``
+beside it) is the recorded value moved by that change within the metric's bounds (:func:`expected`:
+a change towards a bound scaled by the room the ride has on that side, so the model's five
+bottom-outs becoming four take a ride's none to none, not to -1; a count or share is never
+expected below 0, a share of time never above 100 %). Its uncertainty comes from the ride itself
+(``UNCERTAINTY_METHOD``: the ride's segments resampled, the model's error at the recorded setting
+and the change's spread over the segments). The verdict (:func:`_judge`): a change is advised only
+where it lowers the total penalty by at least ``MIN_GAIN`` and a metric of a rule it improves moves
+by more than its uncertainty; "keep" only where every candidate is predicted worse beyond its
+uncertainty; otherwise "inconclusive", naming why (never "keep" by default). Every setting is also
+given in the rider's words (:meth:`Adjuster.setting`: lb/in at the rates sold for a coil shock,
+psi, clicks where a click map exists). Any other setting can be tried on the ride beside the
+recorded one (:func:`trial`, :func:`predict`; ``--try``, ``--try-set``).
 
 **When a ride cannot support advice** (:class:`AdviseError`): shorter than ``MIN_SECONDS``, or a
 stretch of it shorter than that asked for (``duration``: the minimum holds for what is analysed), its
@@ -79,6 +78,19 @@ MAX_REAR_MISS_PERCENT = 60.0  # the reconstruction's check: rear predicted withi
 MIN_CHECKED_PERCENT = 10.0  # ... over at least this share of the ride
 LEAD_IN_M = 3.5  # flat ground before the ride's terrain: the bike starts at rest on it
 SPEED_SPLIT_MM_PER_S = 100.0  # low/high-speed threshold (as ``mtbmj telemetry``)
+SEGMENT_S = 5.0  # the ride is split into segments about this long (3 to 20 of them) for its uncertainty
+MIN_SEGMENTS, MAX_SEGMENTS = 3, 20
+BOOTSTRAP = 2000  # resamples of the segments (seeded: the same ride gives the same answer)
+UNCERTAINTY_METHOD = (
+    f"the analysed ride split into equal segments of about {SEGMENT_S:g} s ({MIN_SEGMENTS}-{MAX_SEGMENTS}); every "
+    f"metric measured on each segment, recorded and simulated; {BOOTSTRAP} bootstrap resamples of the segments "
+    f"(seeded). The model's error on a metric: the 90th percentile of |the mean over a resample of (simulated at "
+    f"the recorded setting - recorded)| (its bias and the ride's segment-to-segment spread of it). A change's "
+    f"uncertainty: that error and half the 5-95 % bootstrap interval of the mean over segments of (simulated at the "
+    f"setting - simulated at the recorded setting), added in quadrature; a count's at least its counting spread "
+    f"(the square root of the count, at least 1); static sag (not in a ride) takes dynamic sag's error")
+HEADLINE = ("front.dynamic_sag_percent", "rear.dynamic_sag_percent", "front.max_travel_percent",
+            "rear.max_travel_percent", "front.bottom_outs_per_minute", "rear.bottom_outs_per_minute")  # printed
 RULES = {
     "static_sag": "front 20-25 %, rear 27-30 % of travel (Fox, RockShox; rear common on trail bikes; secondhand)",
     "bottom_outs": f"occasional (RockShox): more than {BOTTOM_OUTS_PER_MINUTE:g} per minute too many, the excess over "
@@ -88,8 +100,8 @@ RULES = {
     "packing": f"rebound p95 speed at least {PACKING_RATIO:g} of compression p95 (assumed)",
     "balance": f"front and rear dynamic sag within {BALANCE_POINTS:g} points (Motion Instruments; number assumed)",
     "grip_comfort": "lower tyre-load variation and rider acceleration, as tie-breakers (assumed weight)",
-    "authority": "a recommendation whose improved rules' metrics move less than the model's error on this ride is "
-                 "marked as within that error: try it and record again",
+    "authority": "a change is advised only where a metric of a rule it improves moves by more than its uncertainty "
+                 "(from the ride's segments); else the answer is inconclusive: try it and record again",
 }
 
 
@@ -115,13 +127,37 @@ class Adjuster:
     down: float | None
     up: float | None
     label: str
+    rider_key: str = ""  # the key a rider sets, in the unit the part is sold in (shock.spring_rate_lb_per_in)
+    unit: str = ""  # that unit: "lb/in", "psi", "clicks", "N s/m", "spacers", "N/mm"
+    per_unit: float = 1.0  # the configuration's value per unit of the rider's
 
     @property
     def name(self) -> str:
         return f"{self.section.split('.')[0]}:{self.key}"
 
+    def setting(self, value) -> dict:
+        """The change to ``value`` in the rider's words: the part, the adjuster, the key a rider sets
+        (a bike key for the shock as sold, else the part's configuration key under its end's name:
+        ``fork:KEY``, ``shock:KEY``; both taken by ``--try-set``), its unit, from and to in it."""
+        return {"part": self.label.split(" ")[0], "adjuster": self.label.partition(" ")[2],
+                "key": self.rider_key or self.name, "unit": self.unit,
+                "from": _round(self.value / self.per_unit), "to": _round(value / self.per_unit)}
+
     def overrides(self, value) -> dict:
         return {self.section: {self.key: value}}
+
+
+def _round(x: float) -> float:
+    return float(f"{x:.4g}")
+
+
+SOLD_LB_PER_IN = 25.0  # coil springs are sold in steps of this (lb/in)
+UNITS = {"rate_N_per_mm": "N/mm", "rate_lb_per_in": "lb/in", "_psi": "psi", "_N_s_per_m": "N s/m", "_clicks": "clicks",
+         "tokens": "spacers"}
+
+
+def _unit(key: str) -> str:
+    return next((u for end, u in UNITS.items() if key.endswith(end)), "")
 
 
 def _bounded(key: str, value: float, low: float = 0.0, high: float = math.inf):
@@ -136,7 +172,7 @@ def adjusters(spec) -> list[Adjuster]:
     """The adjusters of the bike's fork, shock and tyres (from their configurations in effect),
     each with one step down and up: a spring or pressure 10 %, a damper coefficient 25 %, two clicks,
     a volume token, a tyre 2 psi; a step the part does not allow is None."""
-    from mtbmj.config import load
+    from mtbmj.config import N_PER_MM_PER_LB_PER_IN, load
 
     out = []
     for end, section, cfg, over in (("front", "fork.set", spec.fork_config, spec.fork_overrides),
@@ -144,20 +180,34 @@ def adjusters(spec) -> list[Adjuster]:
         v = load(cfg, over).values
         part = "fork" if end == "front" else "shock"
 
-        def add(key, label, down, up, value):
+        def add(key, label, down, up, value, rider_key="", unit="", per_unit=1.0):
             out.append(Adjuster(end, section, key, value, _bounded(key, down) if down is not None else None,
-                                _bounded(key, up) if up is not None else None, f"{part} {label}"))
+                                _bounded(key, up) if up is not None else None, f"{part} {label}",
+                                rider_key, unit or _unit(key), per_unit))
 
         spring = v.get("fork.spring.model")
+        lb = N_PER_MM_PER_LB_PER_IN
         for model, key, label in (("linear", "fork.spring.rate_N_per_mm", "spring rate"),
                                   ("progressive", "fork.spring.progressive_rate_N_per_mm", "spring rate"),
                                   ("air", "fork.spring.air_pressure_psi", "air pressure")):
             if spring == model and key in v:
                 x = float(v[key])
-                add(key, label, round(x * 0.9, 3), round(x * 1.1, 3), x)
+                if model == "linear" and (part == "shock" or "fork.spring.rate_lb_per_in" in over):
+                    # a coil as sold: in lb/in, the candidates the rates sold next to 10 % either way
+                    rider = "shock.spring_rate_lb_per_in" if part == "shock" else ""
+                    given = x / lb
+                    down = round(given * 0.9 / SOLD_LB_PER_IN) * SOLD_LB_PER_IN
+                    up = round(given * 1.1 / SOLD_LB_PER_IN) * SOLD_LB_PER_IN
+                    add(key, label, down * lb if down > 0 and abs(down - given) > 1e-6 else None,
+                        up * lb if abs(up - given) > 1e-6 else None, x,
+                        rider or "fork:fork.spring.rate_lb_per_in", "lb/in", lb)
+                else:
+                    add(key, label, round(x * 0.9, 3), round(x * 1.1, 3), x,
+                        "shock.pressure_psi" if part == "shock" and model == "air" else "")
         if spring == "air" and "fork.spring.tokens" in v:
             n = float(v["fork.spring.tokens"])
-            add("fork.spring.tokens", "volume spacers", n - 1 if n >= 1 else None, n + 1, n)
+            add("fork.spring.tokens", "volume spacers", n - 1 if n >= 1 else None, n + 1, n,
+                "shock.volume_spacers" if part == "shock" else "")
         damper = v.get("fork.damper.model")
         keys = {"linear": [("fork.damper.coefficient_N_s_per_m", "damping")],
                 "bilinear": [("fork.damper.compression_N_s_per_m", "compression damping"),
@@ -168,7 +218,8 @@ def adjusters(spec) -> list[Adjuster]:
                                ("fork.damper.rebound_high_N_s_per_m", "high-speed rebound damping")]}.get(damper, [])
         for key, label in keys:
             x = float(v[key])
-            add(key, label, round(x * 0.8, 3), round(x * 1.25, 3), x)
+            rider = (f"shock.{key.rpartition('.')[2]}" if part == "shock" and damper == "bilinear" else "")
+            add(key, label, round(x * 0.8, 3), round(x * 1.25, 3), x, rider)
         for kind in ("compression", "rebound", "low_speed_compression", "high_speed_compression",
                      "low_speed_rebound", "high_speed_rebound"):
             key, measured = f"fork.damper.{kind}_clicks", f"fork.damper.{kind}_clicks_measured"
@@ -180,7 +231,7 @@ def adjusters(spec) -> list[Adjuster]:
         if end == "front" and "tire.pressure_psi" in v:
             x = float(v["tire.pressure_psi"])
             out.append(Adjuster("both", "fork.set", "tire.pressure_psi", x, _bounded("tire.pressure_psi", x - 2),
-                                _bounded("tire.pressure_psi", x + 2), "tyre pressure"))
+                                _bounded("tire.pressure_psi", x + 2), "tyre pressure", "fork:tire.pressure_psi", "psi"))
     return out
 
 
@@ -310,6 +361,7 @@ class Run:
     front_mm: np.ndarray = field(repr=False, default=None)
     rear_mm: np.ndarray = field(repr=False, default=None)
     crash: str | None = None
+    time_s: np.ndarray = field(repr=False, default=None)  # ride time of the series (0 where the ride starts)
 
     @property
     def total(self) -> float:
@@ -353,7 +405,8 @@ def simulate(bike, overrides: dict, terrain, speed: float, duration: float, labe
                       loads=(raw["front_tire_N"][keep], raw["rear_tire_N"][keep]),
                       rider_acc=raw["rider_acc_z_m_per_s2"][keep])
     crash = s["crash"]["line"] if s.get("crash") else None
-    return Run(label, overrides, mt, penalties(mt), raw["front_travel_mm"][keep], raw["rear_travel_mm"][keep], crash)
+    return Run(label, overrides, mt, penalties(mt), raw["front_travel_mm"][keep], raw["rear_travel_mm"][keep], crash,
+               raw["time_s"][keep] - lead_s)
 
 
 @dataclass
@@ -369,38 +422,110 @@ class Advice:
     record_rear: np.ndarray = field(repr=False, default=None)
     wall_s: float = 0.0
     skipped: list = field(default_factory=list)  # candidates the part does not allow: {key, label, ..., why}
+    tries: list = field(default_factory=list)  # (Trial, Run): the settings tried on the ride
+    record_t: np.ndarray = field(repr=False, default=None)  # ride time of record_front / record_rear (0 at its start)
+    verdict: dict = field(default_factory=dict)  # {"answer": "change" / "inconclusive" / "keep", "why": ...}
+
+    def tried(self) -> list:
+        """Each tried setting: its label, bike file, settings as asked, penalty (and its change), crash,
+        and every metric's predicted change (as a recommendation's ``changes``)."""
+        return [{"label": tr.label, "bike": tr.bike, "settings": dict(tr.settings), "penalty": run.total,
+                 "penalty_change": run.total - self.base.total, "crash": run.crash,
+                 "changes": _changes(self.base, run, self.change_uncertainty(run), self.measured)}
+                for tr, run in self.tries]
+
+    def segments(self) -> np.ndarray:
+        """The edges (s of ride time) of the segments the uncertainty resamples."""
+        length = self.base.metrics["duration_s"]
+        n = int(min(max(length // SEGMENT_S, MIN_SEGMENTS), MAX_SEGMENTS))
+        return np.linspace(0.0, length, n + 1)
+
+    def _per_segment(self, t, front, rear) -> list:
+        ftop, rtop = self.base.metrics["front"]["travel_mm"], self.base.metrics["rear"]["travel_mm"]
+        t, front, rear = np.asarray(t, float), np.asarray(front, float), np.asarray(rear, float)
+        out = []
+        edges = self.segments()
+        for a, b in zip(edges[:-1], edges[1:]):
+            k = (t >= a) & (t <= b)
+            out.append(_flat(ride_metrics(t[k], front[k], rear[k], ftop, rtop)) if k.sum() >= 10 else {})
+        return out
+
+    def _segment_diffs(self, run: Run, against) -> dict:
+        """Per metric: the array over segments of ``run``'s value less ``against``'s (a list of per-segment
+        flat metrics), segments where either has none left out."""
+        mine = self._per_segment(run.time_s, run.front_mm, run.rear_mm)
+        out = {}
+        for k in (mine[0] if mine else {}):
+            d = [m[k] - o[k] for m, o in zip(mine, against) if k in m and k in o]
+            if len(d) >= MIN_SEGMENTS - 1:
+                out[k] = np.asarray(d, float)
+        return out
+
+    def _boot(self, n: int) -> np.ndarray:
+        return np.random.default_rng(0).integers(0, n, size=(BOOTSTRAP, n))
 
     def uncertainty(self) -> dict:
-        """Per metric: the model's error on this ride (simulated recorded setting against the record);
-        a count's at least its counting spread (the square root of the count, at least 1)."""
-        a, b = _flat(self.base.metrics), _flat(self.measured)
-        out = {k: abs(a[k] - b[k]) for k in a if k in b}
+        """Per metric: the model's error on this ride from its segments (``UNCERTAINTY_METHOD``); a
+        count's at least its counting spread (the square root of the count, at least 1)."""
+        if getattr(self, "_model_error", None) is not None:
+            return dict(self._model_error)
+        out = {}
+        if self.record_t is not None and self.base.time_s is not None:
+            rec = self._per_segment(self.record_t, self.record_front, self.record_rear)
+            for k, d in self._segment_diffs(self.base, rec).items():
+                out[k] = float(np.percentile(np.abs(d[self._boot(d.size)].mean(axis=1)), 90))
+        else:  # no series to split (an Advice made by hand): the whole ride's one sample
+            a, b = _flat(self.base.metrics), _flat(self.measured)
+            out = {k: abs(a[k] - b[k]) for k in a if k in b}
+        for end in ("front", "rear"):
+            if f"{end}.dynamic_sag_percent" in out:
+                out[f"{end}.static_sag_percent"] = out[f"{end}.dynamic_sag_percent"]
+        self._floor_counts(out, self.base)
+        self._model_error = dict(out)
+        return out
+
+    def _floor_counts(self, out: dict, run: Run) -> None:
         minutes = self.base.metrics["duration_s"] / 60.0
         for end in ("front", "rear"):
-            n = math.sqrt(max(self.base.metrics[end]["bottom_outs"], 1))
+            n = math.sqrt(max(self.base.metrics[end]["bottom_outs"], run.metrics[end]["bottom_outs"], 1))
             out[f"{end}.bottom_outs"] = max(out.get(f"{end}.bottom_outs", 0.0), n)
             out[f"{end}.bottom_outs_per_minute"] = max(out.get(f"{end}.bottom_outs_per_minute", 0.0), n / minutes)
+
+    def change_uncertainty(self, run: Run) -> dict:
+        """Per metric: the uncertainty of ``run``'s change from the recorded setting (``UNCERTAINTY_METHOD``)."""
+        model = self.uncertainty()
+        out = dict(model)
+        if run.time_s is not None and self.base.time_s is not None:
+            base = self._per_segment(self.base.time_s, self.base.front_mm, self.base.rear_mm)
+            for k, d in self._segment_diffs(run, base).items():
+                lo, hi = np.percentile(d[self._boot(d.size)].mean(axis=1), [5, 95])
+                out[k] = float(math.hypot(model.get(k, 0.0), (hi - lo) / 2))
+            for end in ("front", "rear"):
+                if f"{end}.dynamic_sag_percent" in out:
+                    out[f"{end}.static_sag_percent"] = out[f"{end}.dynamic_sag_percent"]
+        self._floor_counts(out, run)
         return out
 
     def to_dict(self) -> dict:
         cands = []
         for adj, direction, value, run in self.candidates:
             cands.append({"key": adj.name, "label": adj.label, "direction": direction, "from": adj.value, "to": value,
+                          "setting": adj.setting(value),
                           "penalty": run.total, "penalty_change": run.total - self.base.total,
                           "grip_comfort": _grip_comfort(self.base.metrics, run.metrics), "crash": run.crash})
         return {"ride": self.ride, "bike": self.bike, "method": __doc__.split("\n\n")[1].replace("\n", " "),
                 "rules": RULES, "reconstruction": self.reconstruction,
                 "recorded_setting": {"measured": self.measured, "simulated": self.base.metrics,
                                      "penalties": self.base.penalty, "penalty": self.base.total},
-                "uncertainty": self.uncertainty(), "candidates": cands, "skipped": list(self.skipped),
-                "recommendation": self.recommendation, "wall_time_s": self.wall_s}
+                "uncertainty": self.uncertainty(), "uncertainty_method": UNCERTAINTY_METHOD,
+                "verdict": self.verdict, "candidates": cands, "skipped": list(self.skipped),
+                "recommendation": self.recommendation, "tried": self.tried(), "wall_time_s": self.wall_s}
 
     def line(self) -> str:
-        rec = self.recommendation
-        if rec is None:
-            return (f"{self.ride} on {self.bike}: keep your settings: no candidate of {len(self.candidates)} lowers "
-                    f"the penalty by {MIN_GAIN:g} or more beyond the model's error on this ride{self._skipped()}")
-        return (f"{self.ride} on {self.bike}: {rec['why']}{self._skipped()}")
+        rec, v = self.recommendation, self.verdict or {}
+        if rec is not None and v.get("answer", "change") == "change":
+            return f"{self.ride} on {self.bike}: {rec['why']}{self._skipped()}"
+        return f"{self.ride} on {self.bike}: {v.get('answer', 'inconclusive')}: {v.get('why', '')}{self._skipped()}"
 
     def _skipped(self) -> str:
         if not self.skipped:
@@ -414,9 +539,10 @@ class Advice:
         fig = Figure(figsize=(11, 4.8), layout="constrained")
         axes = fig.subplots(1, 2)
         best = self.recommendation
+        shown = best if best is not None else (self.verdict or {}).get("best_candidate")
         run = None
-        if best is not None:
-            run = next(r for a, d, v, r in self.candidates if a.name == best["key"] and d == best["direction"])
+        if shown is not None:
+            run = next((r for a, d, v, r in self.candidates if a.name == shown["key"] and d == shown["direction"]), None)
         for ax, end, rec, top in ((axes[0], "front", self.record_front, self.base.metrics["front"]["travel_mm"]),
                                   (axes[1], "rear", self.record_rear, self.base.metrics["rear"]["travel_mm"])):
             edges = np.linspace(0, 100, 21)
@@ -424,7 +550,9 @@ class Advice:
                       ("simulated, recorded setting", 100 * self.base.front_mm / top if end == "front"
                        else 100 * self.base.rear_mm / top, "C0")]
             if run is not None:
-                series.append((f"simulated, {best['label']} {best['from']:g} -> {best['to']:g}",
+                st = shown.get("setting", {"from": shown["from"], "to": shown["to"], "unit": ""})
+                series.append((f"simulated, {shown['label']} {st['from']:g} -> {st['to']:g}"
+                               f"{' ' + st['unit'] if st['unit'] else ''}{'' if best is not None else ' (not advised)'}",
                                100 * (run.front_mm if end == "front" else run.rear_mm) / top, "C3"))
             for label, x, color in series:
                 h, _ = np.histogram(np.clip(x, 0, 100), bins=edges)
@@ -433,8 +561,12 @@ class Advice:
                    ylabel="time (%)", title=f"{end}: travel histogram")
             ax.grid(alpha=0.3)
             ax.legend(fontsize=8, loc="upper right")
-        fig.suptitle(f"{self.ride} on {self.bike}: " + ("keep the settings" if best is None else
-                                                       f"recommended: {best['label']} {best['from']:g} -> {best['to']:g}"))
+        if best is None:
+            title = (self.verdict or {}).get("answer", "inconclusive") + ": no change advised"
+        else:
+            st = best.get("setting", {"from": best["from"], "to": best["to"], "unit": ""})
+            title = f"recommended: {best['label']} {st['from']:g} -> {st['to']:g}{' ' + st['unit'] if st['unit'] else ''}"
+        fig.suptitle(f"{self.ride} on {self.bike}: " + title)
         return fig
 
     def png(self) -> bytes:
@@ -442,28 +574,67 @@ class Advice:
 
         return quicklook.png(self.figure(), dpi=90)
 
+    def headline(self) -> str:
+        """The one recommended change first, in the rider's words (or the verdict and why)."""
+        v, rec = self.verdict or {}, self.recommendation
+        if rec is not None and v.get("answer", "change") == "change":
+            st = rec["setting"]
+            return (f"Recommended: {'raise' if st['to'] > st['from'] else 'lower'} the {st['part']} {st['adjuster']} "
+                    f"from {st['from']:g} to {st['to']:g} {st['unit']} ({st['key']})")
+        return f"{v.get('answer', 'inconclusive').capitalize()}: {v.get('why', '')}"
+
     def html(self, png: bytes) -> str:
         import base64
         import html as esc
 
         d = self.to_dict()
         rec = d["recommendation"]
-        rows = []
-        if rec is not None:
-            for k, c in sorted(rec["changes"].items()):
-                if c["change"] == 0:
+        v = d["verdict"] or {}
+        shown = rec if rec is not None else v.get("best_candidate")
+
+        def metric_rows(changes, skip_still=True):
+            out = []
+            for k, c in sorted(changes.items()):
+                if skip_still and c["change"] == 0:
                     continue
-                u = "" if c["uncertainty"] is None else f"{c['uncertainty']:.3g}"
-                r = "" if c["recorded"] is None else f"{c['recorded']:.3g}"
-                rows.append(f"<tr><td>{esc.escape(k)}</td><td>{r}</td><td>{c['from']:.3g}</td><td>{c['to']:.3g}</td>"
-                            f"<td>{c['change']:+.3g}</td><td>{u}</td><td>{c['expected']:.3g}</td></tr>")
-        cand = "".join(f"<tr><td>{esc.escape(c['label'])}</td><td>{c['from']:g}</td><td>{c['to']:g}</td>"
-                       f"<td>{c['penalty_change']:+.2f}</td><td>{esc.escape(c['crash'] or '')}</td></tr>"
-                       for c in d["candidates"])
-        skip = "".join(f"<li>{esc.escape(c['label'])} {c['from']:g} -&gt; {c['to']:g}: {esc.escape(c['why'])}</li>"
-                       for c in d["skipped"])
+                out.append(f"<tr><td>{esc.escape(k)}</td><td>{esc.escape(metric_unit(k))}</td><td>{_num(c['recorded'])}"
+                           f"</td><td>{c['from']:.3g}</td><td>{c['to']:.3g}</td><td>{c['change']:+.3g}</td>"
+                           f"<td>{_num(c['uncertainty'])}</td><td>{c['expected']:.3g}</td></tr>")
+            return out
+
+        head = ("<tr><th>metric</th><th>unit</th><th>recorded</th><th>simulated now</th><th>simulated {}</th>"
+                "<th>change</th><th>uncertainty (same unit)</th><th>expected on your ride</th></tr>")
+        blank = "<td></td>" * 7
+        if shown is not None:
+            rows = metric_rows(shown["changes"])
+            caption = ("the recommended change" if rec is not None else
+                       "the best candidate, not advised: what it improves moves less than its uncertainty")
+            rows = rows or [f"<tr><td>no metric moves at {esc.escape(shown['label'])} {shown['to']:g}</td>{blank}</tr>"]
+        else:
+            caption = "no change: " + v.get("answer", "")
+            rows = [f"<tr><td>no candidate to show: {esc.escape(v.get('why', 'no candidate'))}</td>{blank}</tr>"]
+
+        def cand_row(c):
+            st = c["setting"]
+            return (f"<tr><td>{esc.escape(c['label'])} ({esc.escape(st['key'])})</td><td>{esc.escape(st['unit'])}</td>"
+                    f"<td>{st['from']:g}</td><td>{st['to']:g}</td><td>{c['penalty_change']:+.2f}</td>"
+                    f"<td>{esc.escape(c['crash'] or '')}</td></tr>")
+
+        cand = "".join(cand_row(c) for c in d["candidates"])
+        skip = "".join(f"<li>{esc.escape(c['label'])} {c['setting']['from']:g} -&gt; {c['setting']['to']:g} "
+                       f"{esc.escape(c['setting']['unit'])}: {esc.escape(c['why'])}</li>" for c in d["skipped"])
         if skip:
             skip = f'<h2>Skipped: not allowed by the part</h2><ul id="skipped">{skip}</ul>'
+        tried = ""
+        for tr in d["tried"]:
+            crash = f" ({esc.escape(tr['crash'])})" if tr["crash"] else ""
+            tried += (f"<h2>Tried: {esc.escape(tr['label'])}</h2><p>rule penalty (no unit) "
+                      f"{d['recorded_setting']['penalty']:.2f} -&gt; {tr['penalty']:.2f}{crash}</p><table class=\"tried\">"
+                      f"{head.format('tried')}{''.join(metric_rows(tr['changes'], False))}</table>")
+        sim, meas, u = _flat(self.base.metrics), _flat(self.measured), d["uncertainty"]
+        match = "".join(f"<tr><td>{esc.escape(k)}</td><td>{esc.escape(metric_unit(k))}</td><td>{meas[k]:.3g}</td>"
+                        f"<td>{sim[k]:.3g}</td><td>{sim[k] - meas[k]:+.3g}</td><td>{_num(u.get(k))}</td></tr>"
+                        for k in sorted(meas) if k in sim and k not in ("duration_s",) and not k.endswith("travel_mm"))
         rc = d["reconstruction"]["checks"]
         img = base64.b64encode(png).decode()
         return f"""<!DOCTYPE html>
@@ -471,18 +642,24 @@ class Advice:
 <style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}table{{border-collapse:collapse}}
 td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{text-align:left}}</style></head>
 <body><h1>Setup advice: {esc.escape(self.ride)} on {esc.escape(self.bike)}</h1>
+<p id="recommended"><b>{esc.escape(self.headline())}</b></p>
 <p id="line">{esc.escape(self.line())}</p>
 <p>Reconstruction check: front reproduced within {rc['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted
 {rc['rear_predicted_rms_mm']:.1f} mm RMS ({rc['rear_predicted_rms_percent_of_used']:.0f} % of the travel used),
 {rc['samples_checked_percent']:.0f} % of the ride checked; speed {d['reconstruction']['speed_m_per_s']:.2f} m/s.</p>
 <img id="histograms" src="data:image/png;base64,{img}" alt="travel histograms before and after">
-<h2>Predicted change of every metric</h2>
-<table id="changes"><tr><th>metric</th><th>recorded</th><th>simulated now</th><th>simulated after</th><th>change</th>
-<th>uncertainty</th><th>expected on your ride</th></tr>
-{''.join(rows) or '<tr><td>no change recommended</td><td></td><td></td><td></td><td></td><td></td><td></td></tr>'}</table>
+<h2>Predicted change of every metric: {esc.escape(caption)}</h2>
+<table id="changes">{head.format('after')}
+{''.join(rows)}</table>
+<h2>How well the model matched the ride (recorded setting)</h2>
+<p>Uncertainty: {esc.escape(d['uncertainty_method'])}.</p>
+<table id="match"><tr><th>metric</th><th>unit</th><th>recorded</th><th>simulated</th><th>simulated - recorded</th>
+<th>model's error (same unit)</th></tr>{match}</table>
 <h2>Every candidate</h2>
-<table id="candidates"><tr><th>setting</th><th>from</th><th>to</th><th>penalty change</th><th>crash</th></tr>{cand}</table>
+<table id="candidates"><tr><th>setting (key)</th><th>unit</th><th>from</th><th>to</th><th>rule penalty change (no unit)</th>
+<th>crash</th></tr>{cand}</table>
 {skip}
+{tried}
 <h2>Rules</h2><ul>{''.join(f'<li>{esc.escape(k)}: {esc.escape(v)}</li>' for k, v in RULES.items())}</ul>
 </body></html>
 """
@@ -496,6 +673,23 @@ td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{t
         return output.write_atomically(out_dir, {
             "advice.json": (json.dumps(self.to_dict(), indent=2, default=_json) + "\n").encode(),
             "advice.png": png, "advice.html": self.html(png).encode()})
+
+
+def metric_unit(metric: str) -> str:
+    """The unit of a metric (``_flat`` name), as the report's tables show it."""
+    leaf = metric.rpartition(".")[2]
+    if leaf in SHARES:
+        return "% of time"
+    for end, unit in (("_percent", "% of travel"), ("_per_minute", "per minute"), ("_mm_per_s", "mm/s"),
+                      ("_m_per_s2", "m/s2"), ("_mm", "mm"), ("_s", "s")):
+        if leaf.endswith(end):
+            return unit
+    return {"bottom_outs": "count", "rebound_over_compression": "ratio", "tyre_load_variation": "std/mean",
+            "balance_points": "points of travel %"}.get(leaf, "")
+
+
+def _num(x, spec: str = ".3g") -> str:
+    return "" if x is None else format(x, spec)
 
 
 def _json(o):
@@ -516,42 +710,191 @@ def _rule_metric(rule: str) -> str:
     return f"{end}.{RULE_METRICS[name]}"
 
 
-def _recommend(base: Run, candidates, uncertainty: dict, measured: dict) -> dict | None:
-    """The candidate that lowers the penalty most (grip and comfort breaking ties), by at least
-    ``MIN_GAIN``; None when none does. ``confident``: the metrics of the rules it improves move by
-    more than the model's error on this ride (static sag, from statics, always does)."""
-    best = None
-    for adj, direction, value, run in candidates:
+def _beyond(rules, a: dict, b: dict, u: dict) -> list:
+    """The metrics of ``rules`` (penalty names) that move from ``a`` to ``b`` by more than their
+    uncertainty ``u`` (a metric without one never does)."""
+    return [m for m in dict.fromkeys(_rule_metric(k) for k in rules)
+            if m in a and m in b and abs(b[m] - a[m]) > u.get(m, math.inf)]
+
+
+def _judge(advice) -> tuple[dict | None, dict]:
+    """(the recommendation or None, the verdict ``{"answer", "why"}``): a change is advised only where
+    it lowers the penalty by ``MIN_GAIN`` or more and a metric of a rule it improves moves by more
+    than that change's uncertainty (the best such candidate, grip and comfort breaking ties);
+    "keep" only where every candidate is predicted worse beyond its uncertainty (a crash is worse);
+    otherwise "inconclusive", naming why."""
+    base, measured = advice.base, advice.measured
+    a = _flat(base.metrics)
+    good, worse, near = [], 0, None
+    for adj, direction, value, run in advice.candidates:
         if run.crash:
+            worse += 1
             continue
+        u = advice.change_uncertainty(run)
+        b = _flat(run.metrics)
         gain = base.total - run.total
+        improved = [k for k in base.penalty if run.penalty[k] < base.penalty[k] - 1e-9]
+        worsened = [k for k in base.penalty if run.penalty[k] > base.penalty[k] + 1e-9]
         score = gain - _grip_comfort(base.metrics, run.metrics)
-        if gain >= MIN_GAIN and (best is None or score > best[0]):
-            best = (score, adj, direction, value, run)
-    if best is None:
-        return None
-    _, adj, direction, value, run = best
-    a, b = _flat(base.metrics), _flat(run.metrics)
-    improved = [k for k in base.penalty if run.penalty[k] < base.penalty[k] - 1e-9]
-    moved = [m for m in (_rule_metric(k) for k in improved)
-             if m in a and abs(b[m] - a[m]) > (uncertainty.get(m) or 0.0)]
-    confident = bool(moved)
-    why = (f"{'raise' if direction == 'up' else 'lower'} the {adj.label} from {adj.value:g} to {value:g} "
-           f"({adj.section} {adj.key}): the penalty falls {base.total:.2f} -> {run.total:.2f} "
-           f"({', '.join(k.replace('_', ' ') for k in improved) or 'grip and comfort'})"
-           + ("" if confident else "; the change is within the model's error on this ride: try it and record again"))
-    rode = _flat(measured)
-    changes = {k: {"from": v0, "to": b[k], "change": b[k] - v0, "uncertainty": uncertainty.get(k),
-                   "recorded": rode.get(k), "expected": expected(k, rode[k], v0, b[k]) if k in rode else b[k]}
-               for k, v0 in a.items() if k in b}
-    return {"key": adj.name, "section": adj.section, "config_key": adj.key, "label": adj.label,
-            "direction": direction, "from": adj.value, "to": value, "penalty_from": base.total,
-            "penalty_to": run.total, "improves": improved, "confident": confident, "why": why, "changes": changes}
+        if gain >= MIN_GAIN and _beyond(improved, a, b, u):
+            good.append((score, adj, direction, value, run, improved, u))
+        elif gain <= -MIN_GAIN and _beyond(worsened, a, b, u):
+            worse += 1
+        elif gain >= MIN_GAIN and (near is None or score > near[0]):
+            near = (score, adj, direction, value, run, improved, u)
+    n = len(advice.candidates)
+    if good:
+        _, adj, direction, value, run, improved, u = max(good, key=lambda g: g[0])
+        moved = _beyond(improved, a, _flat(run.metrics), u)
+        st = adj.setting(value)
+        why = (f"{'raise' if direction == 'up' else 'lower'} the {adj.label} from {st['from']:g} to {st['to']:g} "
+               f"{st['unit']} ({st['key']}): the penalty falls {base.total:.2f} -> {run.total:.2f} "
+               f"({', '.join(k.replace('_', ' ') for k in improved)}; "
+               + ", ".join(f"{m} {a[m]:.3g} -> {_flat(run.metrics)[m]:.3g} +- {u[m]:.2g}" for m in moved) + ")")
+        rec = {"setting": adj.setting(value), "key": adj.name, "section": adj.section, "config_key": adj.key,
+               "label": adj.label,
+               "direction": direction, "from": adj.value, "to": value, "penalty_from": base.total,
+               "penalty_to": run.total, "improves": improved, "confident": True, "why": why,
+               "changes": _changes(base, run, u, measured)}
+        return rec, {"answer": "change", "why": why}
+    if n and worse == n:
+        return None, {"answer": "keep", "why": f"every one of the {n} candidates is predicted worse beyond its "
+                                               f"uncertainty (or crashes)"}
+    if not n:
+        return None, {"answer": "inconclusive", "why": "no candidate was simulated"}
+    if near is not None:
+        _, adj, direction, value, run, improved, u = near
+        b = _flat(run.metrics)
+        ms = list(dict.fromkeys(_rule_metric(k) for k in improved))
+        return None, {"answer": "inconclusive",
+                      "why": f"the best candidate, the {adj.label} {adj.setting(value)['from']:g} -> "
+                             f"{adj.setting(value)['to']:g} {adj.unit}, lowers the penalty "
+                             f"{base.total:.2f} -> {run.total:.2f}, but what it improves moves less than its "
+                             f"uncertainty ("
+                             + ", ".join(f"{m} {a[m]:.3g} -> {b[m]:.3g} +- {u.get(m, math.inf):.2g}" for m in ms if m in b)
+                             + "): try it and record again",
+                      "best_candidate": {"setting": adj.setting(value), "key": adj.name, "section": adj.section,
+                                         "config_key": adj.key, "label": adj.label, "direction": direction,
+                                         "from": adj.value, "to": value, "changes": _changes(base, run, u, measured)}}
+    return None, {"answer": "inconclusive",
+                  "why": f"no candidate of {n} lowers the penalty by {MIN_GAIN:g} or more beyond its uncertainty, "
+                         f"and {n - worse} of them are not predicted worse beyond it either: the ride cannot tell "
+                         f"these settings apart"}
+
+
+def _changes(base: Run, run: Run, uncertainty: dict, measured: dict) -> dict:
+    """Per metric (``_flat`` name): the simulated value at the recorded setting (``from``) and at
+    ``run``'s (``to``), the change, its uncertainty, the recorded value and the one expected on the
+    rider's ride (:func:`expected`)."""
+    a, b, rode = _flat(base.metrics), _flat(run.metrics), _flat(measured)
+    return {k: {"from": v0, "to": b[k], "change": b[k] - v0, "uncertainty": uncertainty.get(k),
+                "recorded": rode.get(k), "expected": expected(k, rode[k], v0, b[k]) if k in rode else b[k]}
+            for k, v0 in a.items() if k in b}
 
 
 def _skip(adj: Adjuster, direction: str, value, exc) -> dict:
     return {"key": adj.name, "label": adj.label, "direction": direction, "from": adj.value, "to": value,
-            "why": str(exc)}
+            "setting": adj.setting(value), "why": str(exc)}
+
+
+@dataclass(frozen=True)
+class Trial:
+    """A setting tried on the ride (``mtbmj advise --try FILE --try-set KEY=VALUE``): the bike file
+    ``bike`` with ``overrides`` (the keys of :func:`mtbmj.bike.spec.load`), its ``label`` and the
+    ``settings`` as asked (``KEY: value``)."""
+
+    label: str
+    bike: str
+    overrides: dict
+    settings: dict
+
+
+def _compose(bike, overrides) -> list[str]:
+    """Load and compose ``bike`` with ``overrides`` as a run would; the plausibility warnings it gives."""
+    import warnings
+
+    from mtbmj.bike import run as bike_run
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.errors import ConfigWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        bike_run.setups(spec_mod.load(str(bike), overrides or None))
+    return [str(w.message) for w in caught if issubclass(w.category, ConfigWarning)]
+
+
+def trial(bike, overrides=None, other=None, sets=()) -> Trial:
+    """A setting to try on the ride, checked before any work: ``other`` (a bike file or preset: the
+    bike as that file sets it, the recorded ``overrides`` not carried) or else the recorded
+    ``bike`` with its ``overrides``, and over it ``sets``, ``(KEY, value)`` pairs: ``fork:KEY`` /
+    ``shock:KEY`` a key of the fork's / shock's configuration in effect (``fork:fork.spring.rate_N_per_mm``,
+    ``shock:fork.damper.rebound_clicks``: the names of :attr:`Adjuster.name`), or a bike key
+    ``SECTION.KEY`` (``rider.mass_kg``, ``shock.spring_rate_lb_per_in``, ``shock.pressure_psi``).
+    Refused (``ConfigError``, naming ``--try``/``--try-set`` and the key): a file that does not
+    load, a key the bike's part has not, a value the part refuses, or a value far outside what any
+    part has (a plausibility warning the recorded bike does not already give: the advice's
+    candidates stay within that range, and so does what it predicts)."""
+    from pathlib import Path
+
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.config import ALTERNATIVES, load
+
+    if other is not None:
+        ref, over, what = str(other), {}, f"--try {other}"
+        if not Path(ref).exists() and ref not in spec_mod.preset_names():
+            raise ConfigError(f"--try {other}: no such bike file (nor a preset: {', '.join(spec_mod.preset_names())})")
+    else:
+        ref, over, what = str(bike), dict(overrides or {}), "--try-set"
+    try:
+        spec = spec_mod.load(ref, over or None)
+    except ConfigError as exc:
+        raise ConfigError(f"{what}: {exc}") from None
+    settings = {}
+    over = {k: (dict(v) if isinstance(v, dict) else v) for k, v in over.items()}
+    for key, value in sets:
+        key = str(key)
+        settings[key] = value
+        part, colon, name = key.partition(":")
+        named = next((a for a in adjusters(spec) if a.rider_key == key), None)
+        if named is not None and not colon:  # a key the advice names: set as its candidates are (a coil's
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ConfigError(f"--try-set {key}: must be a number, got {value!r}")
+            over.setdefault(named.section, {})[named.key] = value * named.per_unit  # rate, its preload kept)
+        elif colon:
+            if part not in ("fork", "shock") or not name:
+                raise ConfigError(f"--try-set {key}: a part's key is fork:KEY or shock:KEY (e.g. "
+                                  f"fork:fork.spring.rate_N_per_mm), a bike key SECTION.KEY (e.g. rider.mass_kg)")
+            cfg, cover = ((spec.fork_config, spec.fork_overrides) if part == "fork"
+                          else (spec.shock_config, spec.shock_overrides))
+            have = load(cfg, cover).values
+            canonical = ALTERNATIVES.get(name, (name, 1.0))[0]
+            if canonical not in have:
+                raise ConfigError(f"--try-set {key}: the bike's {part} has no {name} (its adjusters: "
+                                  f"{', '.join(a.name for a in adjusters(spec) if a.section == part + '.set') or 'none'})")
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ConfigError(f"--try-set {key}: must be a number, got {value!r}")
+            over.setdefault(f"{part}.set", {})[name] = value
+        else:
+            over[key] = value
+    if not sets and other is None:
+        raise ConfigError("--try-set: nothing to try (give --try FILE or --try-set KEY=VALUE)")
+    try:
+        base_notes = set(_compose(ref, {k: v for k, v in (overrides or {}).items()} if other is None else None))
+    except ConfigError as exc:
+        raise ConfigError(f"{what}: {exc}") from None
+    try:
+        notes = _compose(ref, over)
+    except ConfigError as exc:
+        raise ConfigError(f"{what}{' ' + ', '.join(f'{k}={v}' for k, v in settings.items()) if settings else ''}: "
+                          f"{exc}") from None
+    new = [n for n in notes if n not in base_notes]
+    if new and settings:
+        raise ConfigError(f"--try-set {', '.join(f'{k}={v}' for k, v in settings.items())}: {new[0]} (advise "
+                          f"predicts only within what parts have)")
+    label = (Path(ref).name if other is not None else "recorded setting") + (
+        (" with " if other is not None else ": ") + ", ".join(f"{k} = {v}" for k, v in settings.items())
+        if settings else "")
+    return Trial(label, ref, over, settings)
 
 
 def allowed(bike, candidates, merged) -> tuple[list, list]:
@@ -579,10 +922,13 @@ def allowed(bike, candidates, merged) -> tuple[list, list]:
     return ok, skipped
 
 
-def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2) -> Advice:
+def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
+           tries=(), candidates: bool = True) -> Advice:
     """Advice for ``record`` (a two-ended ``TelemetryRecord``) on ``bike`` (preset or file, its keys
     ``overrides``); ``duration`` limits the simulated ride to its first seconds; the runs spread
-    over ``workers`` processes."""
+    over ``workers`` processes. ``tries``: settings to try (:class:`Trial`, from :func:`trial`),
+    simulated over the same terrain beside the recorded setting and predicted as the candidates are
+    (``Advice.tries``); ``candidates`` False simulates the tried settings only (:func:`predict`)."""
     import time
 
     from mtbmj.bike import spec as spec_mod
@@ -624,9 +970,10 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
             out[k] = {**out.get(k, {}), **v}
         return out
 
+    tries = list(tries or ())
     todo, skipped = allowed(bike, [(a, d, v) for a in adj for d, v in (("down", a.down), ("up", a.up))
-                                   if v is not None and v != a.value], merged)
-    n = len(todo) + 1
+                                   if v is not None and v != a.value] if candidates else [], merged)
+    n = len(todo) + len(tries) + 1
     done = [0]
 
     def step():
@@ -636,6 +983,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
 
     jobs = [(str(bike), base_over, terrain, speed, sim_s, "recorded setting", lead_s)]
     jobs += [(str(bike), merged(a.overrides(v)), terrain, speed, sim_s, f"{a.label} {v:g}", lead_s) for a, d, v in todo]
+    jobs += [(tr.bike, tr.overrides, terrain, speed, sim_s, tr.label, lead_s) for tr in tries]
     runs = [None] * len(jobs)
     if workers > 1 and len(jobs) > 1:
         from concurrent.futures import as_completed
@@ -649,7 +997,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
                 try:
                     runs[i] = future.result()
                 except ConfigError as exc:  # a candidate its part refuses only when run: skipped (the recorded
-                    if i == 0:              # setting's own refusal stays the user's error)
+                    if i == 0 or i > len(todo):  # setting's own refusal and a tried one's stay the user's error)
                         raise
                     runs[i] = exc
                 step()
@@ -658,7 +1006,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
             try:
                 runs[i] = simulate(*job)
             except ConfigError as exc:
-                if i == 0:
+                if i == 0 or i > len(todo):
                     raise
                 runs[i] = exc
             step()
@@ -667,7 +1015,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
         raise RideNotDescribed(f"{record.name}: the recorded setting {base.crash} on the ride's reconstructed terrain: "
                                f"the model cannot ride this ride as reconstructed, so it cannot predict a change")
     cands = []
-    for (a, d, v), run in zip(todo, runs[1:]):
+    for (a, d, v), run in zip(todo, runs[1:1 + len(todo)]):
         if isinstance(run, ConfigError):
             skipped.append(_skip(a, d, v, run))
         else:
@@ -677,11 +1025,18 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     measured = ride_metrics(t[keep], rec.front[keep], rec.rear[keep], base.metrics["front"]["travel_mm"],
                             base.metrics["rear"]["travel_mm"])
     advice = Advice(rec.name, spec.name, rec.summary(), measured, base, cands, None, rec.front[keep], rec.rear[keep],
-                    skipped=skipped)
-    advice.recommendation = _recommend(base, cands, advice.uncertainty(), measured)
+                    skipped=skipped, tries=list(zip(tries, runs[1 + len(todo):])), record_t=t[keep] - t[0])
+    advice.recommendation, advice.verdict = _judge(advice)
     advice.wall_s = time.perf_counter() - start
     return advice
 
 
-__all__ = ["Adjuster", "Advice", "AdviseError", "RideNotDescribed", "RULES", "adjusters", "advise", "allowed", "bounds",
-           "expected", "penalties", "ride_metrics", "simulate", "terrain_of"]
+def predict(record, bike, tries, overrides=None, duration: float | None = None, progress=None,
+            workers: int = 2) -> Advice:
+    """The ride's metrics at each tried setting (:func:`trial`) beside the recorded setting's, with
+    the advice's reconstruction and uncertainty, no candidate simulated: ``Advice.tried()``."""
+    return advise(record, bike, overrides, duration, progress, workers, tries=tries, candidates=False)
+
+
+__all__ = ["Adjuster", "Advice", "AdviseError", "RideNotDescribed", "RULES", "Trial", "adjusters", "advise", "allowed",
+           "bounds", "expected", "penalties", "predict", "ride_metrics", "simulate", "terrain_of", "trial"]
