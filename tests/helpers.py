@@ -761,3 +761,13 @@ def bumps_csv(path, seconds, lag_s=0.2, rate=1000, scale=1.0, seed=5):
     rear = np.round(scale * (25.0 + drift + np.interp(t - lag_s, grid, shape)), 1)
     path.write_text("time_s,fork_mm,rear_mm\n" + "\n".join(f"{a:.4f},{b:.1f},{c:.1f}" for a, b, c in zip(t, fork, rear)))
     return path, t, fork, rear
+
+
+def generated_metrics(bike, fork_mm, rear_mm, t):
+    """The rider metrics advise reads, of a ride made here (fork and rear travel on ``t``) on ``bike``."""
+    from mtbmj.ride import advise
+    from mtbmj.bike import run, spec as spec_mod
+
+    spec = spec_mod.load(str(bike))
+    fork_setup, _ = run.setups(spec)
+    return advise.ride_metrics(t, fork_mm, rear_mm, fork_setup.travel * 1e3, spec.leverage.full_travel * 1e3)

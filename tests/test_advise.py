@@ -25,15 +25,7 @@ import pytest
 from mtbmj.cli import main
 from mtbmj.ride import advise
 
-from helpers import air_shock_bike, clicks_bike, ride, write_sst
-
-
-def generated_metrics(bike, fork_mm, rear_mm, t):
-    from mtbmj.bike import run, spec as spec_mod
-
-    spec = spec_mod.load(str(bike))
-    fork_setup, _ = run.setups(spec)
-    return advise.ride_metrics(t, fork_mm, rear_mm, fork_setup.travel * 1e3, spec.leverage.full_travel * 1e3)
+from helpers import air_shock_bike, clicks_bike, generated_metrics, ride, write_sst
 
 
 def advice_of(folder, **settings):
@@ -78,15 +70,14 @@ def test_a_rebound_far_too_slow_gets_less_rebound_damping(tmp_path):
     bike, advice, (fork_mm, rear_mm, t), out = advice_of(tmp_path / "slow", fork_reb=2500.0)
     made = generated_metrics(bike, fork_mm, rear_mm, t)
     assert made["front"]["rebound_over_compression"] < advise.PACKING_RATIO  # the ride made here packs
-    # the right adjuster the right way: advised, or (issue 52 item 3) the best candidate of an
-    # inconclusive answer whose reason names the packing metric and its uncertainty from the ride's
-    # segments (the model's packing ratio off the ride's by more than the step moves it)
-    rec = advice["recommendation"] or advice["verdict"].get("best_candidate")
-    assert rec is not None, advice["candidates"]
+    # What holds today, said exactly: the model's packing ratio on this ride is off the ride's by
+    # more than the step moves it (0.43 against 0.25), so the answer is inconclusive (issue 52 item 3),
+    # its best candidate the right adjuster the right way, its reason the packing metric. The
+    # issue's target, a change advised (30-90 % less rebound), needs the calibration of item 1 first.
+    assert advice["recommendation"] is None and advice["verdict"]["answer"] == "inconclusive", advice["verdict"]
+    assert "front.rebound_over_compression" in advice["verdict"]["why"]
+    rec = advice["verdict"]["best_candidate"]
     assert rec["config_key"] == "fork.damper.rebound_N_s_per_m" and rec["direction"] == "down"
-    if advice["recommendation"] is None:
-        assert advice["verdict"]["answer"] == "inconclusive", advice["verdict"]
-        assert "front.rebound_over_compression" in advice["verdict"]["why"]
     again = ride(tmp_path, fork_reb=rec["to"])
     made2 = generated_metrics(*again)
     c = rec["changes"]["front.rebound_over_compression"]

@@ -15,7 +15,7 @@ import pytest
 
 from mtbmj.cli import main
 from mtbmj.ride import advise
-from test_advise import bike_text, generated_metrics, ride, write_sst
+from helpers import bike_text, generated_metrics, ride, write_sst
 
 SECONDS = 16.0
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from mtbmj.ride import advise
-from test_advise import air_shock_bike, bike_text, clicks_bike
+from helpers import air_shock_bike, bike_text, clicks_bike
 
 LB = 0.45359237 * 9.80665 / 25.4  # N/mm per lb/in, written out
 
