@@ -200,3 +200,22 @@ def test_a_wrong_bike_fails_the_checks_and_says_why(made, tmp_path, capsys, wron
     assert c["passes"] is False, c
     assert c["rear_predicted_rms_mm"] > 0.9 * min(c["baseline_delayed_fork_rms_mm"], c["baseline_rear_mean_rms_mm"])
     assert "the model does not describe this ride: it does not beat " in line
+
+
+def test_terrain_csv_is_taken_by_bike_and_roll_at_their_default_start(made, rebuilt, tmp_path):
+    """terrain.csv starts on its own level lead-in (it started on the ride's first sample, where `mtbmj
+    bike` refused it: "the front wheel ... does not start on level ground"): the whole bike and the
+    front end ride it at their default start, onto the ride's terrain (1.2 s at 5 m/s: 3 m of lead-in
+    and 3 m of the ride)."""
+    rows = np.loadtxt(rebuilt / "terrain.csv", delimiter=",", skiprows=1)
+    s = json.loads((rebuilt / "reconstruction.json").read_text())
+    lead = s["terrain_csv_lead_in_m"]
+    flat = rows[rows[:, 0] <= lead]
+    assert lead >= 2.0 and np.ptp(flat[:, 1]) == 0.0 and flat[0, 0] == 0.0
+    assert rows[-1, 0] == pytest.approx(lead + s["terrain_length_m"], abs=1e-6)
+    assert np.ptp(rows[(rows[:, 0] > lead) & (rows[:, 0] < lead + 3.0), 1]) > 2.0  # the ride's bumps follow
+    out_bike, out_roll = tmp_path / "bike", tmp_path / "roll"
+    assert main(["bike", str(made["bike"]), str(rebuilt / "terrain.csv"), "--speed", "5", "--duration", "1.2",
+                 "--no-figure", "--quiet", "--out", str(out_bike)]) == 0
+    assert main(["roll", str(rebuilt / "terrain.csv"), "--speed", "5", "--duration", "1.2", "--out", str(out_roll)]) == 0
+    assert any(out_bike.iterdir()) and any(out_roll.iterdir())

@@ -428,6 +428,7 @@ def histogram_distance(a, b, top: float, bins: int = 20) -> float:
 
 
 BEAT_MARGIN = 0.10  # the rear predicted must be this much (10 %) lower in RMS than the better naive baseline
+TERRAIN_LEAD_IN_M = 3.0  # terrain.csv starts on this much level ground before the ride's first metre
 LEFT_OUT_S = 0.2  # around an airborne stretch, this much either side is left out of the checks
 
 
@@ -530,6 +531,7 @@ class Reconstruction:
                 "window_speeds_m_per_s": [None if s is None else float(s) for _, s, _ in self.speed["windows"]],
                 "window_speed_range_m_per_s": [min(speeds), max(speeds)] if speeds else None,
                 "terrain_length_m": float(self.distance[-1]),
+                "terrain_csv_lead_in_m": TERRAIN_LEAD_IN_M,
                 "left_out": [{"start_s": float(a), "end_s": float(b), "why": "the front wheel off the ground (a jump)"}
                              for a, b in self.jumps]
                 + [{"start_s": a, "end_s": b, "why": "no speed: standing, or the two ends do not align here"}
@@ -557,11 +559,15 @@ class Reconstruction:
                 f"of the ride checked)")
 
     def terrain_csv(self) -> bytes:
-        """The terrain as ``mtbmj roll`` and ``mtbmj bike`` read a profile (distance_m, height_mm)."""
+        """The terrain as ``mtbmj roll`` and ``mtbmj bike`` read a profile (distance_m, height_mm): a
+        level lead-in of ``TERRAIN_LEAD_IN_M`` at the ride's first height, then the ride's terrain
+        (its distance along the ride plus the lead-in), so both take it at their default start (the
+        front wheel at 0 m, both wheels on level ground)."""
         from mtbmj import output
 
         keep = np.concatenate(([True], np.diff(self.distance) > 1e-9))
-        return output.csv_bytes({"distance_m": self.distance[keep], "height_mm": self.ground[keep] * 1e3})
+        x, z = self.distance[keep] + TERRAIN_LEAD_IN_M, self.ground[keep] * 1e3
+        return output.csv_bytes({"distance_m": np.concatenate(([0.0], x)), "height_mm": np.concatenate(([z[0]], z))})
 
     def figure(self):
         from matplotlib.figure import Figure
