@@ -299,7 +299,13 @@ def test_a_recorded_setting_that_crashes_on_the_terrain_is_refused(tmp_path, mon
         return run
 
     monkeypatch.setattr(advise, "simulate", crashing)
-    bike, fork_mm, rear_mm, t = ride(tmp_path, fork_reb=2500.0)  # the packing ride, whose reconstruction checks
+    # the crash path alone: this packing ride's rear predicted does not beat the naive baselines (issue 51:
+    # 23.8 mm RMS against the delayed fork's 7.3), which advise refuses first; that refusal is passed here
+    from mtbmj.ride import reconstruct as rc
+
+    checks = rc.Reconstruction.checks
+    monkeypatch.setattr(rc.Reconstruction, "checks", lambda self: {**checks(self), "passes": True})
+    bike, fork_mm, rear_mm, t = ride(tmp_path, fork_reb=2500.0)  # the packing ride
     sst = write_sst(tmp_path / "ride.SST", fork_mm, rear_mm)
     out = tmp_path / "advice"
     assert main(["advise", str(sst), "--bike", str(bike), "--workers", "1", "--out", str(out)]) == 2

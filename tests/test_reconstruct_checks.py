@@ -219,3 +219,15 @@ def test_terrain_csv_is_taken_by_bike_and_roll_at_their_default_start(made, rebu
                  "--no-figure", "--quiet", "--out", str(out_bike)]) == 0
     assert main(["roll", str(rebuilt / "terrain.csv"), "--speed", "5", "--duration", "1.2", "--out", str(out_roll)]) == 0
     assert any(out_bike.iterdir()) and any(out_roll.iterdir())
+
+
+def test_advise_refuses_a_ride_the_model_does_not_describe(made, tmp_path, capsys):
+    """The made ride read through the fork spring 1.5 times the made one: its reconstruction fails
+    the baselines, so `mtbmj advise` refuses it in one line naming that, exit 2, nothing written."""
+    bike = tmp_path / "wrong.toml"
+    bike.write_text(BIKE.format(fork_rate=13.5))
+    out = tmp_path / "advice"
+    assert main(["advise", str(made["csv"]), "--bike", str(bike), "--out", str(out)]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("mtbmj: error")]
+    assert len(err) == 1 and "fails its own check: the model does not describe this ride: it does not beat" in err[0]
+    assert not out.exists()
