@@ -516,7 +516,7 @@ def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
         target = f"rear ≥ {num(margin, 2)} % below the better baseline"
         if "refused" in r:
             why = r["refused"].split(": ", 1)[-1]
-            short = "no speed: no window aligns" if "do not align at any lag" in why else why[:150]
+            short = "no speed: no window gives one" if "do not align at any lag" in why else why[:150]
             rows.append(Row(name, target, f"refused: {short}", "reconstruct_rides.json", d["command"]))
             continue
         p, c = r["speed_profile"], r["checks"]
@@ -651,15 +651,16 @@ same model with no callback."""),
     ("reconstruct", "Rides reconstructed (issue 51)", """\
 Per ride: the speed's median and range over the accepted windows, accepted / all windows and the
 median of their standard errors (m/s); the rear predicted's RMS error and the two baselines' (mm);
-the share of the ride checked; the verdict. "no window aligns": every window's best correlation
-below 0.3 or rejected otherwise (the reasons per window are in the results file).
+the share of the ride checked; the verdict. "no window gives one": every window rejected by the
+rules below (the command's line counts the reasons; the results file holds it whole).
 `mtbmj reconstruct RIDE --bike sst` on every shared ride (`/work/shared/data/sst`, version 3, and
 `/work/shared/data/sst_v2`, version 2 at 5 kHz with placeholder amplitudes; 00083-00087 are seat
 slams, 00088-00091 pedalling, 00092-00101 trail sections). The speed is found per 5 s window from
 the lag between the two ends' grounds (or travels); a window gives none at the search's edge, with
 a second peak within 0.9 of the best, a best correlation below 0.3, a peak whose lobe reaches the
-search's edge, a speed uncertain by more than 10 % (the lag found again in four parts of the
-window), or where an end stands still. The rear predicted from the front's terrain is compared with
+search's edge, more than one of its four parts finding its own best lag outside the window's best
+peak, a speed uncertain by more than 10 % (the standard error of those parts' lags), or where an end
+stands still. The rear predicted from the front's terrain is compared with
 two naive baselines on the same samples: the fork's record delayed by wheelbase / speed(t) with a
 least-squares scale and offset (fitted on those very samples), and the rear's mean; it passes only
 10 % below the better. `mtbmj advise` refuses a ride that fails."""),

@@ -11,8 +11,9 @@ gives v = wheelbase / lag per window of ``WINDOW_S`` seconds, the wheelbase at t
 (:func:`wheelbase_at` the median travel of each end); a window whose correlation peak is below
 ``MIN_CORRELATION``, or has a second peak within ``AMBIGUOUS`` of it (a periodic record, where
 several lags align), or lies at either end of the lags searched or has its lobe reach an end (the
-peak outside the search), or whose speed's standard error (the lag found again in ``SUB_WINDOWS``
-parts of the window) exceeds ``MAX_SPEED_SD`` of it, or where either end's travel spans less than
+peak outside the search), or whose ``SUB_WINDOWS`` parts do not find their lags within the best
+peak (more than one outside it) or whose speed's standard error (from those parts' lags) exceeds
+``MAX_SPEED_SD`` of it, or where either end's travel spans less than
 ``STILL_MM`` (standing: the filtered series hold only the filters' tails there, which align at any
 lag), gives none, and says why; a ride shorter than one window and the slowest lag searched
 (:func:`min_seconds`) is refused before any work. The speed between the accepted windows' centres
@@ -58,8 +59,8 @@ histograms (the sum of the absolute differences of their time shares, 0 to 200 %
 Assumed and shared with nothing else: vertical-only quarter cars (no pitch coupling between the
 ends, no horizontal motion of the front axle), the load shift's split (all of it between the ends),
 no tyre damping in the inverse. On the shipped ride (`mtbmj reconstruct example --bike sst`) the
-front is reproduced within 3.0 mm RMS and the rear predicted within 22.9 mm RMS, where the delayed
-fork gives 14.8 mm and the rear's mean 14.8: the model does not describe that ride.
+front is reproduced within 3.3 mm RMS and the rear predicted within 21.3 mm RMS, where the delayed
+fork gives 14.6 mm and the rear's mean 14.6: the model does not describe that ride.
 """
 from __future__ import annotations
 
@@ -171,8 +172,8 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
     (outside the best one's lobe, down to half its height) at least ``AMBIGUOUS`` times as high,
     or a best correlation below ``MIN_CORRELATION``. A window's standard error: the lag found again
     in each of its ``SUB_WINDOWS`` parts within the best peak's lobe, their spread over the root of
-    their number (the parts whose own peak is at the lobe's edge left out; fewer than two left: the
-    half-width of the lobe at 90 % of its height)."""
+    their number; a window where more than one part finds its own best lag (over the whole search)
+    outside that lobe (the window holds more than one lag) gives no speed."""
     _check_length(t, wheelbase, window_s)
     dt = float(t[1] - t[0])
     from scipy.signal import butter, sosfiltfilt
@@ -206,16 +207,15 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
         a_lo, a_hi = k_lo + max(left, 0), k_lo + min(right, s.size - 1)
         part = n // SUB_WINDOWS
         lags = []
-        for j in range(SUB_WINDOWS):
-            sub = _scores(a[j * part:(j + 1) * part + a_hi], b[j * part:], a_lo, a_hi, part)
+        for j in range(SUB_WINDOWS):  # each part's own best lag over the whole search, kept if within the lobe
+            sub = _scores(a[j * part:], b[j * part:], k_lo, k_hi, part)
             m = int(np.argmax(sub))
-            if 0 < m < sub.size - 1:
-                lags.append((a_lo + m + _vertex(sub, m)) * dt)
-        if len(lags) >= 2:
-            sd = float(np.std(lags, ddof=1)) / math.sqrt(len(lags))
-        else:
-            high = np.flatnonzero(s >= 0.9 * s[i])
-            sd = 0.5 * float(high.max() - high.min() + 1) * dt
+            if a_lo < k_lo + m < a_hi:
+                lags.append((k_lo + m + _vertex(sub, m)) * dt)
+        if len(lags) < SUB_WINDOWS - 1:  # the parts do not find the window's lag: it is not one lag
+            return None, float(s[i]), (f"its parts disagree ({SUB_WINDOWS - len(lags)} of {SUB_WINDOWS} find their "
+                                       f"own best lag outside the window's best peak)"), None
+        sd = float(np.std(lags, ddof=1)) / math.sqrt(len(lags))
         return lag, float(s[i]), None, max(sd, dt / math.sqrt(12.0))  # no finer than the sample step's
 
     windows, sds, whys = [], [], []
@@ -236,7 +236,7 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
         wl, wc, why, sd = best(vf[start:start + step + k_hi], vr[start:start + step + k_hi])
         v = None if wl is None else wheelbase / wl
         if v is not None and sd / wl > MAX_SPEED_SD:  # its parts disagree: no speed to take from it
-            v, why = None, f"its parts' lags scatter: the speed uncertain by {100 * sd / wl:.0f} % (over " \
+            v, why = None, f"its parts' lags scatter (the speed uncertain by {100 * sd / wl:.0f} %, over " \
                            f"{100 * MAX_SPEED_SD:g} %)"
         windows.append((start * dt, v, wc))
         sds.append(None if v is None else v * sd / wl)
@@ -244,11 +244,14 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
     good = [(a + 0.5 * window_s, v) for a, v, _ in windows if v is not None]
     if not good:
         top = max((c for _, _, c in windows), default=0.0)
+        from collections import Counter
+
+        counts = Counter((w or "").split(" (")[0] for w in whys)
+        counts.pop("", None)
+        reasons = "; ".join(f"{n} {why}" for why, n in counts.most_common())
         raise ReconstructError(f"the two ends' records do not align at any lag for {SPEED_RANGE[0]:g}-"
                                f"{SPEED_RANGE[1]:g} m/s in any {window_s:g} s window (best correlation {top:.2f}; "
-                               f"below {MIN_CORRELATION}, or another lag within {AMBIGUOUS:g} of it"
-                               + (f"; {standing} of {len(windows)} standing, an end moving less than {STILL_MM:g} mm"
-                                  if standing else "") + "): no speed from this ride")
+                               f"of {len(windows)} windows: {reasons}): no speed from this ride")
     centres, speeds = np.array([c for c, _ in good]), np.array([v for _, v in good])
     speed = float(np.median(speeds))
     return {"speed_m_per_s": speed, "lag_s": wheelbase / speed, "windows": windows, "sd": sds, "why": whys,
