@@ -508,6 +508,31 @@ def advise_speed_rows(d: dict) -> dict[str, list[Row]]:
             f"{num(r['median'], 3)} ({spread(r['min'], r['max'], 3)})", "advise_speed.json", d["command"])]}
 
 
+def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
+    rows = []
+    margin = d["beat_margin_percent"]
+    for r in d["rides"]:
+        name = f"{r['folder']}/{r['ride']}" + (f" (v{r['version']}, {num(r['seconds'], 3)} s)" if "version" in r else "")
+        target = f"rear ≥ {num(margin, 2)} % below the better baseline"
+        if "refused" in r:
+            why = r["refused"].split(": ", 1)[-1]
+            short = "no speed: no window gives one" if "do not align at any lag" in why else why[:150]
+            rows.append(Row(name, target, f"refused: {short}", "reconstruct_rides.json", d["command"]))
+            continue
+        p, c = r["speed_profile"], r["checks"]
+        sd = r["speed_sd_median_m_per_s"]
+        better = "delayed fork" if c["baseline_delayed_fork_rms_mm"] <= c["baseline_rear_mean_rms_mm"] else "mean"
+        rows.append(Row(name, target, f"{num(p['median_m_per_s'], 3)} m/s ({num(p['min_m_per_s'], 3)}–"
+                        f"{num(p['max_m_per_s'], 3)}), {p['windows_accepted']}/{p['windows_accepted'] + p['windows_rejected']} "
+                        f"windows" + (f", sd {num(sd, 2)}" if sd is not None else "")
+                        + f"; rear {mm(c['rear_predicted_rms_mm'], 3)}, delayed fork "
+                        f"{num(c['baseline_delayed_fork_rms_mm'], 3)}, mean {num(c['baseline_rear_mean_rms_mm'], 3)}; "
+                        f"{num(c['samples_checked_percent'], 2)} % checked; "
+                        + ("**passes**" if c["passes"] else f"**fails** (not below the {better})"),
+                        "reconstruct_rides.json", d["command"]))
+    return {"reconstruct": rows}
+
+
 SOURCES = [
     ("accuracy_steps.json", accuracy_steps_rows),
     ("accuracy_envelope.json", accuracy_envelope_rows),
@@ -532,6 +557,7 @@ SOURCES = [
     ("bike_speed.json", bike_speed_rows),
     ("bike_pedal_speed.json", bike_pedal_speed_rows),
     ("advise_speed.json", advise_speed_rows),
+    ("reconstruct_rides.json", reconstruct_rides_rows),
 ]
 
 # --- the page's words ----------------------------------------------------------------------------
@@ -622,6 +648,22 @@ wheels need to cross the feature (`tests/test_bike_reference.py`); `benchmarks/b
 runs the same terrains for a fixed time with the reference at its default tolerance. The speed is
 real time on one core (simulated seconds per wall second), interleaved with MuJoCo stepping the
 same model with no callback."""),
+    ("reconstruct", "Rides reconstructed (issue 51)", """\
+Per ride: the speed's median and range over the accepted windows, accepted / all windows and the
+median of their standard errors (m/s); the rear predicted's RMS error and the two baselines' (mm);
+the share of the ride checked; the verdict. "no window gives one": every window rejected by the
+rules below (the command's line counts the reasons; the results file holds it whole).
+`mtbmj reconstruct RIDE --bike sst` on every shared ride (the shared telemetry beside the clone: `data/sst`, version 3, and
+`data/sst_v2`, version 2 at 5 kHz with placeholder amplitudes; 00083-00087 are seat
+slams, 00088-00091 pedalling, 00092-00101 trail sections). The speed is found per 5 s window from
+the lag between the two ends' grounds (or travels); a window gives none at the search's edge, with
+a second peak within 0.9 of the best, a best correlation below 0.3, a peak whose lobe reaches the
+search's edge, more than one of its four parts finding its own best lag outside the window's best
+peak, a speed uncertain by more than 10 % (the standard error of those parts' lags), or where an end
+stands still. The rear predicted from the front's terrain is compared with
+two naive baselines on the same samples: the fork's record delayed by wheelbase / speed(t) with a
+least-squares scale and offset (fitted on those very samples), and the rear's mean; it passes only
+10 % below the better. `mtbmj advise` refuses a ride that fails."""),
 ]
 
 

@@ -25,7 +25,7 @@ import pytest
 from mtbmj.cli import main
 from mtbmj.ride import advise
 
-from helpers import air_shock_bike, clicks_bike, generated_metrics, ride, write_sst
+from helpers import air_shock_bike, clicks_bike, generated_metrics, reconstruction_passing, ride, write_sst
 
 
 def advice_of(folder, **settings):
@@ -35,7 +35,8 @@ def advice_of(folder, **settings):
     bike, fork_mm, rear_mm, t = ride(folder, **settings)
     sst = write_sst(folder / "ride.SST", fork_mm, rear_mm)
     out = folder / "advice"
-    assert main(["advise", str(sst), "--bike", str(bike), "--out", str(out)]) == 0
+    with reconstruction_passing():  # refused otherwise: the model does not describe the made ride (issue 51)
+        assert main(["advise", str(sst), "--bike", str(bike), "--out", str(out)]) == 0
     return bike, json.loads((out / "advice.json").read_text()), (fork_mm, rear_mm, t), out
 
 
@@ -178,7 +179,13 @@ def test_a_recorded_setting_that_crashes_on_the_terrain_is_refused(tmp_path, mon
         return run
 
     monkeypatch.setattr(advise, "simulate", crashing)
-    bike, fork_mm, rear_mm, t = ride(tmp_path, fork_reb=2500.0)  # the packing ride, whose reconstruction checks
+    # the crash path alone: this packing ride's rear predicted does not beat the naive baselines (issue 51:
+    # 23.8 mm RMS against the delayed fork's 7.3), which advise refuses first; that refusal is passed here
+    from mtbmj.ride import reconstruct as rc
+
+    checks = rc.Reconstruction.checks
+    monkeypatch.setattr(rc.Reconstruction, "checks", lambda self: {**checks(self), "passes": True})
+    bike, fork_mm, rear_mm, t = ride(tmp_path, fork_reb=2500.0)  # the packing ride
     sst = write_sst(tmp_path / "ride.SST", fork_mm, rear_mm)
     out = tmp_path / "advice"
     assert main(["advise", str(sst), "--bike", str(bike), "--workers", "1", "--out", str(out)]) == 2
@@ -303,7 +310,8 @@ def test_a_candidate_refused_only_when_run_is_skipped_and_reported(tmp_path, mon
     bike, fork_mm, rear_mm, t = ride(tmp_path, fork_reb=2500.0)  # the packing ride, whose reconstruction checks
     sst = write_sst(tmp_path / "ride.SST", fork_mm, rear_mm)
     out = tmp_path / "advice"
-    assert main(["advise", str(sst), "--bike", str(bike), "--workers", "1", "--out", str(out)]) == 0
+    with reconstruction_passing():  # refused otherwise: the model does not describe the made ride (issue 51)
+        assert main(["advise", str(sst), "--bike", str(bike), "--workers", "1", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     advice = json.loads((out / "advice.json").read_text())
     assert sorted((s["label"], s["direction"]) for s in advice["skipped"]) == [

@@ -15,7 +15,7 @@ import pytest
 
 from mtbmj.cli import main
 from mtbmj.ride import advise
-from helpers import bike_text, generated_metrics, ride, write_sst
+from helpers import bike_text, generated_metrics, reconstruction_passing, ride, write_sst
 
 SECONDS = 16.0
 
@@ -35,8 +35,9 @@ def test_a_setting_tried_on_a_ride_predicts_the_ride_made_at_it(tmp_path):
     bike_a, sst_a, made_a = _made(tmp_path / "a", fork_rate=7.0)
     bike_b, sst_b, made_b = _made(tmp_path / "b", fork_rate=11.0)
     out = tmp_path / "advice"
-    assert main(["advise", str(sst_a), "--bike", str(bike_a), "--try", str(bike_b), "--workers", "2",
-                 "--out", str(out)]) == 0
+    with reconstruction_passing():  # refused otherwise: the model does not describe the made ride (issue 51)
+        assert main(["advise", str(sst_a), "--bike", str(bike_a), "--try", str(bike_b), "--workers", "2",
+                     "--out", str(out)]) == 0
     d = json.loads((out / "advice.json").read_text())
     (tried,) = d["tried"]
     assert tried["label"].startswith("bike.toml") and tried["crash"] is None
@@ -53,7 +54,8 @@ def test_a_setting_tried_on_a_ride_predicts_the_ride_made_at_it(tmp_path):
 
     record = ride_record(sst_a, Namespace(bike=str(bike_a), fork_max_mm=None, shock_max_mm=None))
     tr = advise.trial(bike_a, sets=[("fork:fork.spring.rate_N_per_mm", 11.0)])
-    res = advise.predict(record, bike_a, [tr], workers=1)
+    with reconstruction_passing():
+        res = advise.predict(record, bike_a, [tr], workers=1)
     (again,) = res.tried()
     assert not res.candidates
     assert again["changes"]["front.dynamic_sag_percent"]["to"] == pytest.approx(got["to"], abs=0.5)

@@ -22,7 +22,7 @@ import pytest
 from mtbmj.cli import main
 
 COUNTS = 4096
-# version 3 (/work/shared/data/sst/README.md): fork arm and max, shock arms and max
+# version 3 (the shared data/sst/README.md): fork arm and max, shock arms and max
 V3_FORK = (134.9375, 234.15625)
 V3_SHOCK = (98.9, 202.8, 230.0)
 # version 2: both ends an isosceles pair at pi/4096 rad per count; fork arm 120, max 218

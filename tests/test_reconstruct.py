@@ -278,7 +278,7 @@ def test_a_standing_window_gives_no_speed():
     x = 0.4 * x / np.ptp(x)  # 0.4 mm of motion
     front, rear = x, np.interp(t - 0.2, t, x)
     assert reconstruct.speed_from_lag(t, front, rear, 1.255)["speed_m_per_s"] == pytest.approx(6.275, rel=0.01)
-    with pytest.raises(reconstruct.ReconstructError, match="2 of 2 standing, an end moving less than 1 mm"):
+    with pytest.raises(reconstruct.ReconstructError, match="of 2 windows: 2 standing"):
         reconstruct.speed_from_lag(t, front, rear, 1.255, travel=(front, rear))
     big = reconstruct.speed_from_lag(t, 25 * front, 25 * rear, 1.255, travel=(25 * front, 25 * rear))
     assert big["speed_m_per_s"] == pytest.approx(6.275, rel=0.01)
@@ -300,20 +300,25 @@ def test_a_v2_trail_ride_without_a_speed_is_refused_in_one_line(tmp_path, capsys
 
 
 @pytest.mark.shared_data("sst_v2", "00094.SST")
-def test_the_v2_ride_that_ended_in_an_empty_mean_ends_in_one_line_or_an_answer(tmp_path, capsys):
-    """00094.SST (120 s at 5 kHz, stretches standing) ended in 'run diverged (Mean of empty slice)'
-    after minutes; read at 1 kHz it takes seconds and ends in an answer or one line."""
+def test_a_v2_trail_ride_with_standing_stretches_is_read_and_judged(tmp_path, capsys):
+    """00094.SST of the shared version-2 rides (a trail section, 5 kHz): stretches where the bike
+    stood. It ended in 'run diverged (Mean of empty slice)' after minutes, then in 'no speed' (no
+    window aligned while its coarse 5 kHz steps were differentiated raw). Low-passed first (issue
+    51), a few windows align; the standing ones are named so, and the checks say in words that the
+    model does not describe this ride (its rear predicted worse than a naive baseline)."""
+    import json
+
     from conftest import SHARED_DATA
 
+    sst = Path(SHARED_DATA) / "sst_v2" / "00094.SST"
     out = tmp_path / "o"
-    status = main(["reconstruct", str(Path(SHARED_DATA) / "sst_v2" / "00094.SST"), "--bike", "sst", "--out", str(out)])
-    err = capsys.readouterr().err
-    assert "Traceback" not in err and "empty" not in err and "diverged" not in err, err
-    if status == 2:
-        one_error_line(err)
-        assert not out.exists()
-    else:
-        assert status == 0 and (out / "reconstruction.json").exists()
+    assert main(["reconstruct", str(sst), "--bike", "sst", "--out", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert "the model does not describe this ride" in captured.out and "empty" not in captured.err + captured.out
+    summary = json.loads((out / "reconstruction.json").read_text())
+    assert summary["checks"]["passes"] is False
+    whys = [w["rejected"] or "" for w in summary["windows"]]
+    assert sum(w.startswith("standing") for w in whys) >= 3  # the bike stood for 15 s and more
 
 
 def test_speed_windows_that_leave_nothing_to_check_are_refused(tmp_path, capsys, monkeypatch):

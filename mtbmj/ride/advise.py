@@ -955,6 +955,9 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
                                f"{checks['samples_checked_percent']:.0f} % of the ride checked; advice needs within "
                                f"{MAX_REAR_MISS_PERCENT:g} % over {MIN_CHECKED_PERCENT:g} %): the model does not "
                                f"describe this ride well enough to predict a change")
+    if not checks.get("passes", True):  # the rear predicted no better than a naive baseline (issue 51)
+        raise RideNotDescribed(f"{record.name}: its reconstruction fails its own check: {checks['verdict']}; advice "
+                               f"needs a model that beats both naive baselines, so it cannot predict a change")
     spec = spec_mod.load(str(bike), overrides)
     speed = float(rec.speed["speed_m_per_s"])
     ride_s = length if duration is None else min(length, float(duration))

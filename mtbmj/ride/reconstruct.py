@@ -7,15 +7,21 @@ grounds each end's own inverse (below) finds under it (high-passed at 1 Hz; each
 delays its travel behind its ground by a phase of its own, which the grounds do not carry), or where
 those do not align, the two ends' travel velocities (high-passed at 5 Hz: the terrain's part, not
 the rider's slow weight shifts) (normalised cross-correlation, the peak refined by a parabola)
-gives v = wheelbase / lag per window of ``WINDOW_S`` seconds; a window whose correlation peak is below
+gives v = wheelbase / lag per window of ``WINDOW_S`` seconds, the wheelbase at the ride's sag
+(:func:`wheelbase_at` the median travel of each end); a window whose correlation peak is below
 ``MIN_CORRELATION``, or has a second peak within ``AMBIGUOUS`` of it (a periodic record, where
-several lags align), or lies at either end of the lags searched (the peak outside the search), or
-where either end's travel spans less than ``STILL_MM`` (standing: the filtered series hold only the
-filters' tails there, which align at any lag), gives none; a ride shorter than one window and the
-slowest lag searched (:func:`min_seconds`) is refused before any work. The speed between windows is interpolated (the distance along the
-ride and the rear's lag follow it); the ride's speed is the windows' median. A ride with no window
-that gives a speed, or whose windows with one lie wholly where nothing can be checked (jumps, the
-first wheelbase, the filters' start), is refused: no speed estimate, one line, nothing written.
+several lags align), or lies at either end of the lags searched or has its lobe reach an end (the
+peak outside the search), or whose ``SUB_WINDOWS`` parts do not find their lags within the best
+peak (more than one outside it) or whose speed's standard error (from those parts' lags) exceeds
+``MAX_SPEED_SD`` of it, or where either end's travel spans less than
+``STILL_MM`` (standing: the filtered series hold only the filters' tails there, which align at any
+lag), gives none, and says why; a ride shorter than one window and the slowest lag searched
+(:func:`min_seconds`) is refused before any work. The speed between the accepted windows' centres
+is linear (the distance along the ride is its integral, and the rear's lag wheelbase / v(t)); the
+ride's speed is the windows' median. A version-2 record (5 kHz of coarse encoder steps) is
+low-passed at ``V2_LOWPASS_HZ`` before anything is differentiated. A ride with no window that gives
+a speed, or whose windows with one lie wholly where nothing can be checked (jumps, the first
+wheelbase, the filters' start), is refused: no speed estimate, one line, nothing written.
 
 **Terrain** (an inverse of the front's quarter car, closed form, no fitting). Each end is a quarter
 car: the sprung mass the end carries at rest (the bike's and rider's weight shared between the axles
@@ -40,18 +46,21 @@ record).
 
 **Checks, with every reconstruction.** The front quarter car run forward over the terrain found
 (classical RK4 at the record's step, the load shift on its body) reproduces the front record (its
-RMS difference); the rear quarter car, its shock through the leverage curve, run over the same
-terrain a wheelbase later (at the speed of the moment) with the opposite load shift on its body
-(what the front gained the rear lost) predicts the rear record: the RMS difference in % of the rear
-travel the ride used, and the distance between the two travel histograms (the sum of the absolute
-differences of their time shares, 0 to 200 %).
+RMS difference: a check that cannot fail, the inverse reproduces the fork whatever the bike); the
+rear quarter car, its shock through the leverage curve, run over the same terrain a wheelbase later
+(at the speed of the moment) with the opposite load shift on its body (what the front gained the
+rear lost) predicts the rear record, never used to make the terrain. Its RMS difference is reported
+beside two naive baselines on the same samples: the fork's record delayed by wheelbase / v(t) with a
+least-squares scale and offset, and the rear's mean; the reconstruction passes only if it is
+``BEAT_MARGIN`` (10 %) below the better, and its line says in words whether the model describes the
+ride. Also the RMS in % of the rear travel the ride used, and the distance between the two travel
+histograms (the sum of the absolute differences of their time shares, 0 to 200 %).
 
 Assumed and shared with nothing else: vertical-only quarter cars (no pitch coupling between the
 ends, no horizontal motion of the front axle), the load shift's split (all of it between the ends),
 no tyre damping in the inverse. On the shipped ride (`mtbmj reconstruct example --bike sst`) the
-front is reproduced within 3.0 mm RMS and the rear predicted within 21.5 mm RMS, 21 % of the travel
-it used, over the 31 % of the ride whose windows gave a speed: the quarter cars leave the bike's
-pitch out, which couples the ends.
+front is reproduced within 3.3 mm RMS and the rear predicted within 21.3 mm RMS, where the delayed
+fork gives 14.6 mm and the rear's mean 14.6: the model does not describe that ride.
 """
 from __future__ import annotations
 
@@ -68,12 +77,15 @@ LAG_HIGHPASS_HZ = 5.0  # travel records high-passed before the lag is sought (th
 AMBIGUOUS = 0.9  # a second correlation peak this close to the best leaves the lag undecided
 GROUND_HIGHPASS_HZ = 1.0  # the two ends' grounds high-passed before the lag is sought
 SPEED_RANGE = (1.0, 15.0)  # m/s the lag is searched for
+SUB_WINDOWS = 4  # a window's lag found again in this many parts of it: their spread is its uncertainty
+MAX_SPEED_SD = 0.10  # a window whose speed's standard error exceeds this share of it gives no speed
 STILL_MM = 1.0  # a window where either end's travel spans less than this is standing: it gives no speed
 DERIVATIVE_WINDOW_S = 0.02  # the Savitzky-Golay window of the records' derivatives (_derivatives)
 HIGHPASS_HZ = 0.3  # the body height's drift removed below this
 JUMP_GAP_S = 0.05  # the tyre's force found back above 0 for less than this within a jump (its noise): one jump
 BOTTOM_OUT_MARGIN_M = 0.5e-3  # a stroke this close to full travel is a bottom-out (the hard stop's force unseen)
 BOTTOM_OUT_WINDOW_S = 1.0  # after a bottom-out the body's speed is set so its height stays level over this
+V2_LOWPASS_HZ = 100.0  # a version-2 record (5 kHz, coarse steps) is low-passed here before anything is differentiated
 G = 9.81
 
 
@@ -121,17 +133,52 @@ def _check_length(t, wheelbase: float, window_s: float, name: str = "") -> None:
                                f"({wheelbase / SPEED_RANGE[0]:.2f} s), {need:.2f} s: no speed estimate")
 
 
+def _scores(a, b, k_lo: int, k_hi: int, n: int):
+    """Normalised correlation of ``a[:n]`` with ``b[k:k + n]`` for k in k_lo..k_hi (each mean
+    removed): the products by FFT, each shifted stretch's spread from running sums."""
+    from scipy.signal import correlate
+
+    a0 = a[:n] - a[:n].mean()
+    aa = float(a0 @ a0)
+    seg = np.asarray(b[k_lo:k_hi + n], float)
+    seg = seg - seg.mean()  # the sums below lose nothing to a large mean
+    num = correlate(seg, a0, mode="valid", method="fft")
+    c1 = np.concatenate(([0.0], np.cumsum(seg)))
+    c2 = np.concatenate(([0.0], np.cumsum(seg * seg)))
+    s1, s2 = c1[n:] - c1[:-n], c2[n:] - c2[:-n]
+    bb = np.maximum(s2 - s1 * s1 / n, 0.0)
+    den = np.sqrt(aa * bb)
+    ok = den > 1e-12 * max(aa, 1e-300) * n
+    out = np.zeros(num.size)
+    out[ok] = num[ok] / den[ok]
+    return out[:k_hi - k_lo + 1]
+
+
+def _vertex(s, i: int) -> float:
+    """The parabola's vertex through s[i-1], s[i], s[i+1], as a shift from i (0 at an edge)."""
+    if 0 < i < s.size - 1:
+        den = s[i - 1] - 2 * s[i] + s[i + 1]
+        return 0.5 * (s[i - 1] - s[i + 1]) / den if den < 0 else 0.0
+    return 0.0
+
+
 def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S, highpass_hz: float = LAG_HIGHPASS_HZ,
                    travel=None) -> dict:
     """{"speed_m_per_s": the median of the windows' speeds, "lag_s", "windows": [(start_s, speed or
-    None, correlation)], "speed_at": a function of time (the windows' speeds at their centres,
-    held past the first and last)}: see the module doc. ``front`` and ``rear`` are travel series
-    (any units) on ``t``; both are high-passed at ``LAG_HIGHPASS_HZ`` first (what the terrain does,
-    not the rider's slow weight shifts, which reach both ends at once). ``travel`` (front mm, rear
-    mm on ``t``), where given: a window where either end spans less than ``STILL_MM`` is standing
-    and gives no speed (what its filtered series hold there is the filters' tails, which align at
-    any lag). A window whose best lag is at either end of the lags searched gives none (the peak
-    is outside the search)."""
+    None, correlation)], "sd": each window's speed's standard error (m/s, or None), "why": why each
+    window gave no speed (None where it gave one), "speed_at": a function of time (the windows'
+    speeds at their centres, linear between, held past the first and last)}: see the module doc.
+    ``front`` and ``rear`` are series (any units) on ``t``; both are high-passed at ``highpass_hz``
+    first (what the terrain does, not the rider's slow weight shifts, which reach both ends at
+    once). ``travel`` (front mm, rear mm on ``t``), where given: a window where either end spans
+    less than ``STILL_MM`` is standing and gives no speed (what its filtered series hold there is
+    the filters' tails, which align at any lag). A window whose best lag is at either end of the
+    lags searched gives none (the peak is outside the search); so does one with a second peak
+    (outside the best one's lobe, down to half its height) at least ``AMBIGUOUS`` times as high,
+    or a best correlation below ``MIN_CORRELATION``. A window's standard error: the lag found again
+    in each of its ``SUB_WINDOWS`` parts within the best peak's lobe, their spread over the root of
+    their number; a window where more than one part finds its own best lag (over the whole search)
+    outside that lobe (the window holds more than one lag) gives no speed."""
     _check_length(t, wheelbase, window_s)
     dt = float(t[1] - t[0])
     from scipy.signal import butter, sosfiltfilt
@@ -143,31 +190,40 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
     k_lo, k_hi = max(1, int(math.floor(lo / dt))), int(math.ceil(hi / dt))
 
     def best(a, b):
+        """(lag s or None, correlation, why none, the lag's standard error s)."""
         n = a.size - k_hi
         if n < 10:
-            return None, 0.0
-        a0 = a[:n] - a[:n].mean()
-        scores = []
-        for k in range(k_lo, k_hi + 1):
-            b0 = b[k:k + n] - b[k:k + n].mean()
-            den = math.sqrt(float(a0 @ a0) * float(b0 @ b0))
-            scores.append(float(a0 @ b0) / den if den > 0 else 0.0)
-        s = np.asarray(scores)
+            return None, 0.0, "too short", None
+        s = _scores(a, b, k_lo, k_hi, n)
         i = int(np.argmax(s))
         if i == 0 or i == s.size - 1:  # the best lag at the end of the search: the peak lies outside it
-            return None, float(s[i])
+            return None, float(s[i]), "the best lag at the edge of the search", None
+        if s[i] < MIN_CORRELATION:
+            return None, float(s[i]), f"best correlation below {MIN_CORRELATION:g}", None
         low = np.flatnonzero(s <= 0.5 * s[i])  # the best peak's lobe: down to half its height each side
         left, right = (low[low < i].max() if np.any(low < i) else -1), (low[low > i].min() if np.any(low > i) else s.size)
+        if left < 0 or right >= s.size:  # the peak's lobe runs into the end of the search: it may lie beyond
+            return None, float(s[i]), "the best peak's lobe reaches the edge of the search", None
         peaks = np.flatnonzero((s[1:-1] > s[:-2]) & (s[1:-1] >= s[2:])) + 1
         if np.any(((peaks < left) | (peaks > right)) & (s[peaks] >= AMBIGUOUS * s[i])):
-            return None, float(s[i])  # another lag aligns about as well (a periodic record): no speed
-        shift = 0.0
-        if 0 < i < s.size - 1:
-            den = s[i - 1] - 2 * s[i] + s[i + 1]
-            shift = 0.5 * (s[i - 1] - s[i + 1]) / den if den < 0 else 0.0
-        return (k_lo + i + shift) * dt, float(s[i])
+            return None, float(s[i]), f"a second peak within {AMBIGUOUS:g} of the best", None  # periodic: no speed
+        lag = (k_lo + i + _vertex(s, i)) * dt
+        # the lag's standard error: found again in each part of the window, within the best lobe
+        a_lo, a_hi = k_lo + max(left, 0), k_lo + min(right, s.size - 1)
+        part = n // SUB_WINDOWS
+        lags = []
+        for j in range(SUB_WINDOWS):  # each part's own best lag over the whole search, kept if within the lobe
+            sub = _scores(a[j * part:], b[j * part:], k_lo, k_hi, part)
+            m = int(np.argmax(sub))
+            if a_lo < k_lo + m < a_hi:
+                lags.append((k_lo + m + _vertex(sub, m)) * dt)
+        if len(lags) < SUB_WINDOWS - 1:  # the parts do not find the window's lag: it is not one lag
+            return None, float(s[i]), (f"its parts disagree ({SUB_WINDOWS - len(lags)} of {SUB_WINDOWS} find their "
+                                       f"own best lag outside the window's best peak)"), None
+        sd = float(np.std(lags, ddof=1)) / math.sqrt(len(lags))
+        return lag, float(s[i]), None, max(sd, dt / math.sqrt(12.0))  # no finer than the sample step's
 
-    windows = []
+    windows, sds, whys = [], [], []
     step = int(round(window_s / dt))
     moving = None
     if travel is not None:
@@ -178,21 +234,33 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
     for start in range(0, max(vf.size - k_hi - step // 2, 1), step):
         if moving is not None and not moving(start):
             windows.append((start * dt, None, 0.0))  # standing: nothing the terrain did to align
+            sds.append(None)
+            whys.append(f"standing (an end moving less than {STILL_MM:g} mm)")
             standing += 1
             continue
-        wl, wc = best(vf[start:start + step + k_hi], vr[start:start + step + k_hi])
-        windows.append((start * dt, None if wl is None or wc < MIN_CORRELATION else wheelbase / wl, wc))
+        wl, wc, why, sd = best(vf[start:start + step + k_hi], vr[start:start + step + k_hi])
+        v = None if wl is None else wheelbase / wl
+        if v is not None and sd / wl > MAX_SPEED_SD:  # its parts disagree: no speed to take from it
+            v, why = None, f"its parts' lags scatter (the speed uncertain by {100 * sd / wl:.0f} %, over " \
+                           f"{100 * MAX_SPEED_SD:g} %)"
+        windows.append((start * dt, v, wc))
+        sds.append(None if v is None else v * sd / wl)
+        whys.append(why)
     good = [(a + 0.5 * window_s, v) for a, v, _ in windows if v is not None]
     if not good:
         top = max((c for _, _, c in windows), default=0.0)
+        from collections import Counter
+
+        counts = Counter((w or "").split(" (")[0] for w in whys)
+        counts.pop("", None)
+        reasons = "; ".join(f"{n} {why}" for why, n in counts.most_common())
         raise ReconstructError(f"the two ends' records do not align at any lag for {SPEED_RANGE[0]:g}-"
                                f"{SPEED_RANGE[1]:g} m/s in any {window_s:g} s window (best correlation {top:.2f}; "
-                               f"below {MIN_CORRELATION}, or another lag within {AMBIGUOUS:g} of it"
-                               + (f"; {standing} of {len(windows)} standing, an end moving less than {STILL_MM:g} mm"
-                                  if standing else "") + "): no speed from this ride")
+                               f"of {len(windows)} windows: {reasons}): no speed from this ride")
     centres, speeds = np.array([c for c, _ in good]), np.array([v for _, v in good])
     speed = float(np.median(speeds))
-    return {"speed_m_per_s": speed, "lag_s": wheelbase / speed, "windows": windows,
+    return {"speed_m_per_s": speed, "lag_s": wheelbase / speed, "windows": windows, "sd": sds, "why": whys,
+            "wheelbase_m": wheelbase, "window_s": window_s,
             "speed_at": lambda time: np.interp(time, centres, speeds)}
 
 
@@ -213,6 +281,26 @@ def _lowpass(x, dt):
 
     sos = butter(2, HIGHPASS_HZ, btype="lowpass", fs=1.0 / dt, output="sos")
     return sosfiltfilt(sos, x)
+
+
+def _lowpass_at(x, dt, hz):
+    from scipy.signal import butter, sosfiltfilt
+
+    return sosfiltfilt(butter(2, hz, btype="lowpass", fs=1.0 / dt, output="sos"), x)
+
+
+def wheelbase_at(spec, fork: float, rear: float) -> float:
+    """The wheelbase (m) with the fork ``fork`` (m of stroke) and the rear wheel ``rear`` (m of
+    travel) in: the front axle moves back along the steering axis by fork cos(a), the rear axle on
+    its arc about the main pivot (the frame's pitch left out)."""
+    from mtbmj.bike.spec import rear_axle_in_frame
+
+    phi = np.linspace(-0.3, 0.9, 2401)
+    x, z = rear_axle_in_frame(spec, phi)
+    rise = z - spec.rear_axle[1]
+    up = np.concatenate(([True], np.diff(rise) > 0))  # the arc's rising part (rear wheel up)
+    rear_x = float(np.interp(rear, rise[up], x[up]))
+    return float(spec.front_axle[0] - fork * math.cos(spec.head_angle) - rear_x)
 
 
 def _highpass(x, dt):
@@ -355,6 +443,8 @@ def histogram_distance(a, b, top: float, bins: int = 20) -> float:
 
 
 
+BEAT_MARGIN = 0.10  # the rear predicted must be this much (10 %) lower in RMS than the better naive baseline
+TERRAIN_LEAD_IN_M = 3.0  # terrain.csv starts on this much level ground before the ride's first metre
 LEFT_OUT_S = 0.2  # around an airborne stretch, this much either side is left out of the checks
 
 
@@ -384,18 +474,52 @@ class Reconstruction:
     rear_top: float  # the rear wheel's full travel (mm)
     jumps: list  # (start s, end s) the front wheel was off the ground
     unaligned: list = None  # (start s, end s) windows with no speed (standing, or the ends do not align)
+    fork_delayed: np.ndarray = None  # fork travel measured (mm) delayed by wheelbase / speed(t): a baseline's input
+    wheelbase: float = math.nan  # m, at the ride's sag
+
+    def baselines(self) -> dict:
+        """The two naive predictions of the rear the model must beat, on the samples checked: (a) the
+        fork's record delayed by wheelbase / speed(t) with a least-squares scale and offset (fitted
+        on those very samples), (b) the rear's mean. {"delayed_fork_mm": series, "delayed_fork_scale",
+        "delayed_fork_offset_mm", "mean_mm"}."""
+        v = self.valid
+        fd = self.fork_delayed if self.fork_delayed is not None else self.front
+        A = np.column_stack((fd[v], np.ones(int(v.sum()))))
+        (a, b), *_ = np.linalg.lstsq(A, self.rear[v], rcond=None)
+        return {"delayed_fork_mm": a * fd + b, "delayed_fork_scale": float(a), "delayed_fork_offset_mm": float(b),
+                "mean_mm": float(np.mean(self.rear[v]))}
 
     def checks(self) -> dict:  # noqa: D401 (the checks reported with every reconstruction)
         v = self.valid
         if not v.any():  # ``reconstruct`` refuses such a ride; no mean of nothing is taken here either
             nan = float("nan")
             return {"front_reproduced_rms_mm": nan, "rear_predicted_rms_mm": nan, "rear_travel_used_mm": nan,
+                    "baseline_delayed_fork_rms_mm": nan, "baseline_rear_mean_rms_mm": nan, "passes": False,
+                    "verdict": "the model does not describe this ride: no sample of it can be checked",
                     "rear_predicted_rms_percent_of_used": nan, "rear_histogram_distance_percent": nan,
                     "samples_checked_percent": 0.0}
         used = float(np.ptp(self.rear[v]))
         rms_front = float(np.sqrt(np.mean((self.front_again[v] - self.front[v]) ** 2)))
         rms_rear = float(np.sqrt(np.mean((self.rear_predicted[v] - self.rear[v]) ** 2)))
+        base = self.baselines()
+        rms_fork = float(np.sqrt(np.mean((base["delayed_fork_mm"][v] - self.rear[v]) ** 2)))
+        rms_mean = float(np.sqrt(np.mean((base["mean_mm"] - self.rear[v]) ** 2)))
+        need = (1.0 - BEAT_MARGIN) * min(rms_fork, rms_mean)
+        passes = bool(rms_rear <= need)
+        if passes:
+            verdict = (f"the model describes this ride: the rear predicted within {rms_rear:.1f} mm RMS, "
+                       f"{100.0 * (1.0 - rms_rear / min(rms_fork, rms_mean)):.0f} % below the better naive baseline")
+        else:
+            which = ("a delayed copy of the fork" if rms_fork <= rms_mean else "the rear's mean travel")
+            verdict = (f"the model does not describe this ride: it does not beat {which} by "
+                       f"{100 * BEAT_MARGIN:.0f} %: the rear predicted "
+                       f"{rms_rear:.1f} mm RMS against {min(rms_fork, rms_mean):.1f} mm (the delayed fork "
+                       f"{rms_fork:.1f}, the mean {rms_mean:.1f}; a pass needs {100 * BEAT_MARGIN:.0f} % below "
+                       f"the better, {need:.1f} mm)")
         return {"front_reproduced_rms_mm": rms_front, "rear_predicted_rms_mm": rms_rear,
+                "baseline_delayed_fork_rms_mm": rms_fork, "baseline_rear_mean_rms_mm": rms_mean,
+                "baseline_delayed_fork_scale": base["delayed_fork_scale"],
+                "beat_margin_percent": 100.0 * BEAT_MARGIN, "passes": passes, "verdict": verdict,
                 "rear_travel_used_mm": used, "rear_predicted_rms_percent_of_used": 100.0 * rms_rear / used,
                 "rear_histogram_distance_percent": histogram_distance(self.rear[v], self.rear_predicted[v],
                                                                         self.rear_top),
@@ -403,39 +527,64 @@ class Reconstruction:
 
     def summary(self) -> dict:
         speeds = [s for _, s, _ in self.speed["windows"] if s is not None]
+        sds = self.speed.get("sd") or [None] * len(self.speed["windows"])
+        whys = self.speed.get("why") or [None] * len(self.speed["windows"])
+        width = self.speed.get("window_s", WINDOW_S)
+        windows = [{"start_s": float(a), "end_s": float(a + width), "speed_m_per_s": None if v is None else float(v),
+                    "speed_sd_m_per_s": None if sd is None else float(sd), "correlation": float(c),
+                    "rejected": None if v is not None else (why or "no speed")}
+                   for (a, v, c), sd, why in zip(self.speed["windows"], sds, whys)]
         return {"ride": self.name, "bike": self.bike, "duration_s": float(self.t[-1] - self.t[0]),
                 "speed_m_per_s": self.speed["speed_m_per_s"], "lag_s": self.speed["lag_s"],
-                "speed_from": self.speed.get("from"),
+                "speed_from": self.speed.get("from"), "wheelbase_at_sag_m": float(self.wheelbase),
+                "speed_profile": {"median_m_per_s": self.speed["speed_m_per_s"],
+                                  "min_m_per_s": min(speeds) if speeds else None,
+                                  "max_m_per_s": max(speeds) if speeds else None,
+                                  "windows_accepted": len(speeds),
+                                  "windows_rejected": len(windows) - len(speeds),
+                                  "between_windows": "linear between the accepted windows' centres, held past the "
+                                                     "first and last; the distance integrated from it"},
+                "windows": windows,
                 "window_speeds_m_per_s": [None if s is None else float(s) for _, s, _ in self.speed["windows"]],
                 "window_speed_range_m_per_s": [min(speeds), max(speeds)] if speeds else None,
                 "terrain_length_m": float(self.distance[-1]),
+                "terrain_csv_lead_in_m": TERRAIN_LEAD_IN_M,
                 "left_out": [{"start_s": float(a), "end_s": float(b), "why": "the front wheel off the ground (a jump)"}
                              for a, b in self.jumps]
                 + [{"start_s": a, "end_s": b, "why": "no speed: standing, or the two ends do not align here"}
                    for a, b in (self.unaligned or [])],
                 "checks": self.checks(),
-                "assumed": "vertical quarter cars at each end, the speed constant over the ride, no tyre damping "
-                           "in the inverse (mtbmj/ride/reconstruct.py)"}
+                "assumed": "vertical quarter cars at each end, the speed linear between the windows that gave one, "
+                           "no tyre damping in the inverse (mtbmj/ride/reconstruct.py)"}
 
     def line(self) -> str:
         s = self.summary()
         c = s["checks"]
         rng = s["window_speed_range_m_per_s"]
         spread = f" (windows {rng[0]:.2f}-{rng[1]:.2f})" if rng else ""
-        return (f"{self.name} through {self.bike}: speed {s['speed_m_per_s']:.2f} m/s from a {1e3 * s['lag_s']:.0f} ms "
-                f"lag{spread}, terrain {s['terrain_length_m']:.0f} m; check: front reproduced within "
+        p = s["speed_profile"]
+        return (f"{self.name} through {self.bike}: {c['verdict']}; speed {s['speed_m_per_s']:.2f} m/s median "
+                f"from a {1e3 * s['lag_s']:.0f} ms lag{spread}, {p['windows_accepted']} of "
+                f"{p['windows_accepted'] + p['windows_rejected']} windows, terrain {s['terrain_length_m']:.0f} m; "
+                f"check: front reproduced within "
                 f"{c['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted {c['rear_predicted_rms_mm']:.1f} mm RMS "
-                f"({c['rear_predicted_rms_percent_of_used']:.0f} % of the {c['rear_travel_used_mm']:.0f} mm used), "
+                f"({c['rear_predicted_rms_percent_of_used']:.0f} % of the {c['rear_travel_used_mm']:.0f} mm used; "
+                f"baselines: delayed fork {c['baseline_delayed_fork_rms_mm']:.1f}, rear's mean "
+                f"{c['baseline_rear_mean_rms_mm']:.1f} mm), "
                 f"histograms {c['rear_histogram_distance_percent']:.0f} % apart; {len(self.jumps)} jump(s) and "
                 f"{len(self.unaligned or [])} window(s) without a speed left out ({c['samples_checked_percent']:.0f} % "
                 f"of the ride checked)")
 
     def terrain_csv(self) -> bytes:
-        """The terrain as ``mtbmj roll`` and ``mtbmj bike`` read a profile (distance_m, height_mm)."""
+        """The terrain as ``mtbmj roll`` and ``mtbmj bike`` read a profile (distance_m, height_mm): a
+        level lead-in of ``TERRAIN_LEAD_IN_M`` at the ride's first height, then the ride's terrain
+        (its distance along the ride plus the lead-in), so both take it at their default start (the
+        front wheel at 0 m, both wheels on level ground)."""
         from mtbmj import output
 
         keep = np.concatenate(([True], np.diff(self.distance) > 1e-9))
-        return output.csv_bytes({"distance_m": self.distance[keep], "height_mm": self.ground[keep] * 1e3})
+        x, z = self.distance[keep] + TERRAIN_LEAD_IN_M, self.ground[keep] * 1e3
+        return output.csv_bytes({"distance_m": np.concatenate(([0.0], x)), "height_mm": np.concatenate(([z[0]], z))})
 
     def figure(self):
         from matplotlib.figure import Figure
@@ -476,6 +625,8 @@ class Reconstruction:
         png = quicklook.png(self.figure(), dpi=100)
         series = output.csv_bytes({"time_s": self.t, "fork_mm": self.front, "fork_again_mm": self.front_again,
                                    "rear_mm": self.rear, "rear_predicted_mm": self.rear_predicted,
+                                   "rear_baseline_delayed_fork_mm": self.baselines()["delayed_fork_mm"],
+                                   "speed_m_per_s": self.speed["speed_at"](self.t),
                                    "checked": self.valid.astype(int)})
         return output.write_atomically(out_dir, {"terrain.csv": self.terrain_csv(), "series.csv": series,
                                                  "reconstruction.png": png,
@@ -499,9 +650,17 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
         raise ReconstructError(f"{record.name}: needs both ends' records (the rear meets what the front met)")
     record = record.decimated(RATE_HZ)  # a 5 kHz version-2 record read at 1 kHz, low-passed first
     spec = spec_mod.load(str(bike), overrides)
-    wheelbase = spec.front_axle[0] - spec.rear_axle[0]
     t = np.asarray(record.time_s, float)
-    _check_length(t, wheelbase, WINDOW_S, record.name)  # before any work: too short for a speed
+    _check_length(t, spec.front_axle[0] - spec.rear_axle[0], WINDOW_S, record.name)  # before any work
+    dt = float(t[1] - t[0])
+    fork_mm, rear_mm = np.asarray(record.fork_mm, float), np.asarray(record.rear_mm, float)
+    shock_mm = np.asarray(record.shock_mm, float) if record.shock_mm is not None else None
+    if getattr(record, "version", 0) == 2:  # 5 kHz of coarse encoder steps: low-passed before any derivative
+        fork_mm, rear_mm = _lowpass_at(fork_mm, dt, V2_LOWPASS_HZ), _lowpass_at(rear_mm, dt, V2_LOWPASS_HZ)
+        shock_mm = None if shock_mm is None else _lowpass_at(shock_mm, dt, V2_LOWPASS_HZ)
+    # the wheelbase at the ride's sag (the median travel of each end): the fork shortens it along the
+    # steering axis, the rear axle moves on its arc about the pivot
+    wheelbase = wheelbase_at(spec, float(np.median(fork_mm)) * 1e-3, float(np.median(rear_mm)) * 1e-3)
     fork_setup, shock_setup = bike_run.setups(spec)
     g = fork_setup.gravity
     total, share = _statics(spec)
@@ -512,28 +671,27 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     front_car = QuarterCar(total * share - m_front, m_front, fork_setup.fork, rate, radius, g, fork_setup.travel)
     rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g, shock_setup.travel)
     sin_a = math.sin(spec.head_angle)
-    fork = np.asarray(record.fork_mm, float) * 1e-3
+    fork = fork_mm * 1e-3
     ground, tyre, air, extra = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
     lev = spec.leverage
-    rear = np.asarray(record.rear_mm, float) * 1e-3
-    shock = np.asarray(record.shock_mm, float) * 1e-3 if record.shock_mm is not None else lev.strokes(rear)
+    rear = rear_mm * 1e-3
+    shock = shock_mm * 1e-3 if shock_mm is not None else lev.strokes(rear)
     ratios = np.vectorize(lev.ratio_at)
     # the speed from the lag between the grounds each end's own inverse finds (each end's suspension
     # delays its travel behind its ground by its own phase; the grounds carry none)
     ground_back, *_ = ground_under(t, rear, shock, rear_car, ratios)
-    travel = (record.fork_mm, record.rear_mm)  # a window where either end stands still gives no speed
+    travel = (fork_mm, rear_mm)  # a window where either end stands still gives no speed
     try:
         speed = speed_from_lag(t, ground, ground_back, wheelbase, highpass_hz=GROUND_HIGHPASS_HZ, travel=travel)
         speed["from"] = "the two ends' grounds"
     except ReconstructError:  # where the rear's inverse is too rough to align: the travels themselves
         try:
-            speed = speed_from_lag(t, record.fork_mm, record.rear_mm, wheelbase, travel=travel)
+            speed = speed_from_lag(t, fork_mm, rear_mm, wheelbase, travel=travel)
         except ReconstructError as exc:
             raise ReconstructError(f"{record.name}: {exc}") from None
         speed["from"] = "the two ends' travel (their grounds did not align)"
-    dt = float(t[1] - t[0])
     pad = int(round(LEFT_OUT_S / dt))
-    lag = int(round(speed["lag_s"] / dt))
+    lags = wheelbase / speed["speed_at"](t)  # s, the rear's lag behind the front at each moment
     bad = np.zeros(t.size, bool)
     jumps = []
     runs = []
@@ -545,8 +703,8 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     for a, b in runs:
         jumps.append((float(t[a]), float(t[min(b, t.size - 1)])))
         bad[max(0, a - pad): b + pad] = True
-        bad[max(0, a - pad + lag): b + pad + lag] = True  # the rear meets the same stretch a wheelbase later
-    lags = wheelbase / speed["speed_at"](t)
+        la, lb = int(round(lags[a] / dt)), int(round(lags[min(b, t.size - 1)] / dt))
+        bad[max(0, a - pad + la): b + pad + lb] = True  # the rear meets the same stretch a wheelbase later
     bad[:int(round(float(np.max(lags)) / dt)) + pad] = True  # the rear's first wheelbase has no terrain from the front
     bad[:int(round(2.0 / (HIGHPASS_HZ * 2 * math.pi) / dt))] = True  # the filters' start
     step = int(round(WINDOW_S / dt))
@@ -578,7 +736,8 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     v = speed["speed_at"](t)
     distance = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)))
     return Reconstruction(record.name, spec.name, t, speed, distance, ground, ~bad, fork * 1e3, front_again * 1e3,
-                          rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps, unaligned)
+                          rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps, unaligned,
+                          np.interp(t - lags, t, fork * 1e3), wheelbase)
 
 
 __all__ = ["min_seconds", "speed_from_lag", "ground_under", "forward", "histogram_distance", "reconstruct", "Reconstruction",
