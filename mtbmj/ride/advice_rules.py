@@ -1,0 +1,299 @@
+"""What advice measures and judges a ride by, and what it may change: the rider metrics of a ride
+or a run (:func:`ride_metrics`), the rules' windows and their penalties (:data:`RULES`,
+:func:`penalties`; sources in ``mtbmj.ride.advise``'s module text), each metric's bounds and the
+value expected on the ride at another setting (:func:`bounds`, :func:`expected`), and the bike's
+adjusters in the rider's words (:class:`Adjuster`, :func:`adjusters`). The search, the verdict and
+the report are ``mtbmj.ride.advise``'s."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mtbmj.errors import MtbmjError, RunError
+
+SAG_WINDOW = {"front": (20.0, 25.0), "rear": (27.0, 30.0)}  # % of travel, static (sources above)
+SAG_POINTS = 5.0  # % points outside the window per unit of penalty
+BOTTOM_OUTS_PER_MINUTE = 2.0  # assumed: more than this is too many
+UNUSED_BELOW_PERCENT = 85.0  # assumed: no bottom-out and less travel than this leaves travel unused
+DEEP_PERCENT = 80.0  # the deep-travel share counts time beyond this % of travel
+PACKING_RATIO = 0.6  # assumed: rebound p95 speed below this share of compression p95 is packing
+BALANCE_POINTS = 10.0  # assumed: the ends' dynamic sags this close move "about the same"
+GRIP_COMFORT_WEIGHT = 1.0  # penalty per relative change of tyre-load variation and rider acceleration
+MIN_GAIN = 0.1  # a recommendation lowers the penalty by at least this
+MIN_SECONDS = 15.0  # a ride shorter than this cannot support advice (three of the speed's 5 s windows)
+MAX_REAR_MISS_PERCENT = 60.0  # the reconstruction's check: rear predicted within this % of the travel used
+MIN_CHECKED_PERCENT = 10.0  # ... over at least this share of the ride
+LEAD_IN_M = 3.5  # flat ground before the ride's terrain: the bike starts at rest on it
+SPEED_SPLIT_MM_PER_S = 100.0  # low/high-speed threshold (as ``mtbmj telemetry``)
+SEGMENT_S = 5.0  # the ride is split into segments about this long (3 to 20 of them) for its uncertainty
+MIN_SEGMENTS, MAX_SEGMENTS = 3, 20
+BOOTSTRAP = 2000  # resamples of the segments (seeded: the same ride gives the same answer)
+UNCERTAINTY_METHOD = (
+    f"the analysed ride split into equal segments of about {SEGMENT_S:g} s ({MIN_SEGMENTS}-{MAX_SEGMENTS}); every "
+    f"metric measured on each segment, recorded and simulated; {BOOTSTRAP} bootstrap resamples of the segments "
+    f"(seeded). The model's error on a metric: the 90th percentile of |the mean over a resample of (simulated at "
+    f"the recorded setting - recorded)| (its bias and the ride's segment-to-segment spread of it). A change's "
+    f"uncertainty: that error and half the 5-95 % bootstrap interval of the mean over segments of (simulated at the "
+    f"setting - simulated at the recorded setting), added in quadrature; a count's at least its counting spread "
+    f"(the square root of the count, at least 1); static sag (not in a ride) takes dynamic sag's error")
+HEADLINE = ("front.dynamic_sag_percent", "rear.dynamic_sag_percent", "front.max_travel_percent",
+            "rear.max_travel_percent", "front.bottom_outs_per_minute", "rear.bottom_outs_per_minute")  # printed
+RULES = {
+    "static_sag": "front 20-25 %, rear 27-30 % of travel (Fox, RockShox; rear common on trail bikes; secondhand)",
+    "bottom_outs": f"occasional (RockShox): more than {BOTTOM_OUTS_PER_MINUTE:g} per minute too many, the excess over "
+                   f"that rate one unit of penalty per {BOTTOM_OUTS_PER_MINUTE:g} (assumed)",
+    "travel_unused": f"no bottom-out and a maximum below {UNUSED_BELOW_PERCENT:g} % of travel: travel left unused, "
+                     f"one unit of penalty per 10 points (assumed)",
+    "packing": f"rebound p95 speed at least {PACKING_RATIO:g} of compression p95 (assumed)",
+    "balance": f"front and rear dynamic sag within {BALANCE_POINTS:g} points (Motion Instruments; number assumed)",
+    "grip_comfort": "lower tyre-load variation and rider acceleration, as tie-breakers (assumed weight)",
+    "authority": "a change is advised only where a metric of a rule it improves moves by more than its uncertainty "
+                 "(from the ride's segments); else the answer is inconclusive: try it and record again",
+}
+
+
+class AdviseError(MtbmjError):
+    """A ride that cannot support advice: names the ride and why."""
+
+
+class RideNotDescribed(AdviseError, RunError):
+    """The model cannot describe or ride this ride (its reconstruction fails its check, or the
+    recorded setting crashes on it): a run error, so the refusal line carries every plausibility
+    warning of the command (an implausible key is a likely cause)."""
+
+
+@dataclass(frozen=True)
+class Adjuster:
+    """One setting of one part: ``section`` "fork.set" or "shock.set", its configuration ``key``,
+    the recorded ``value`` and the two candidates (``down``, ``up``), each within the part's range."""
+
+    end: str  # "front" / "rear" / "both"
+    section: str
+    key: str
+    value: float
+    down: float | None
+    up: float | None
+    label: str
+    rider_key: str = ""  # the key a rider sets, in the unit the part is sold in (shock.spring_rate_lb_per_in)
+    unit: str = ""  # that unit: "lb/in", "psi", "clicks", "N s/m", "spacers", "N/mm"
+    per_unit: float = 1.0  # the configuration's value per unit of the rider's
+
+    @property
+    def name(self) -> str:
+        return f"{self.section.split('.')[0]}:{self.key}"
+
+    def setting(self, value) -> dict:
+        """The change to ``value`` in the rider's words: the part, the adjuster, the key a rider sets
+        (a bike key for the shock as sold, else the part's configuration key under its end's name:
+        ``fork:KEY``, ``shock:KEY``; both taken by ``--try-set``), its unit, from and to in it."""
+        return {"part": self.label.split(" ")[0], "adjuster": self.label.partition(" ")[2],
+                "key": self.rider_key or self.name, "unit": self.unit,
+                "from": round_setting(self.value / self.per_unit), "to": round_setting(value / self.per_unit)}
+
+    def overrides(self, value) -> dict:
+        return {self.section: {self.key: value}}
+
+
+def round_setting(x: float) -> float:
+    return float(f"{x:.4g}")
+
+
+SOLD_LB_PER_IN = 25.0  # coil springs are sold in steps of this (lb/in)
+UNITS = {"rate_N_per_mm": "N/mm", "rate_lb_per_in": "lb/in", "_psi": "psi", "_N_s_per_m": "N s/m", "_clicks": "clicks",
+         "tokens": "spacers"}
+
+
+def unit_of(key: str) -> str:
+    return next((u for end, u in UNITS.items() if key.endswith(end)), "")
+
+
+def bounded_value(key: str, value: float, low: float = 0.0, high: float = math.inf):
+    from mtbmj.config import PLAUSIBLE
+
+    lo, hi = PLAUSIBLE.get(key, (low, high))
+    lo, hi = max(lo, low), min(hi, high)
+    return value if lo <= value <= hi else None
+
+
+def adjusters(spec) -> list[Adjuster]:
+    """The adjusters of the bike's fork, shock and tyres (from their configurations in effect),
+    each with one step down and up: a spring or pressure 10 %, a damper coefficient 25 %, two clicks,
+    a volume token, a tyre 2 psi; a step the part does not allow is None."""
+    from mtbmj.config import N_PER_MM_PER_LB_PER_IN, load
+
+    out = []
+    for end, section, cfg, over in (("front", "fork.set", spec.fork_config, spec.fork_overrides),
+                                    ("rear", "shock.set", spec.shock_config, spec.shock_overrides)):
+        v = load(cfg, over).values
+        part = "fork" if end == "front" else "shock"
+
+        def add(key, label, down, up, value, rider_key="", unit="", per_unit=1.0):
+            out.append(Adjuster(end, section, key, value, bounded_value(key, down) if down is not None else None,
+                                bounded_value(key, up) if up is not None else None, f"{part} {label}",
+                                rider_key, unit or unit_of(key), per_unit))
+
+        spring = v.get("fork.spring.model")
+        lb = N_PER_MM_PER_LB_PER_IN
+        for model, key, label in (("linear", "fork.spring.rate_N_per_mm", "spring rate"),
+                                  ("progressive", "fork.spring.progressive_rate_N_per_mm", "spring rate"),
+                                  ("air", "fork.spring.air_pressure_psi", "air pressure")):
+            if spring == model and key in v:
+                x = float(v[key])
+                if model == "linear" and (part == "shock" or "fork.spring.rate_lb_per_in" in over):
+                    # a coil as sold: in lb/in, the candidates the rates sold next to 10 % either way
+                    rider = "shock.spring_rate_lb_per_in" if part == "shock" else ""
+                    given = x / lb
+                    down = round(given * 0.9 / SOLD_LB_PER_IN) * SOLD_LB_PER_IN
+                    up = round(given * 1.1 / SOLD_LB_PER_IN) * SOLD_LB_PER_IN
+                    add(key, label, down * lb if down > 0 and abs(down - given) > 1e-6 else None,
+                        up * lb if abs(up - given) > 1e-6 else None, x,
+                        rider or "fork:fork.spring.rate_lb_per_in", "lb/in", lb)
+                else:
+                    add(key, label, round(x * 0.9, 3), round(x * 1.1, 3), x,
+                        "shock.pressure_psi" if part == "shock" and model == "air" else "")
+        if spring == "air" and "fork.spring.tokens" in v:
+            n = float(v["fork.spring.tokens"])
+            add("fork.spring.tokens", "volume spacers", n - 1 if n >= 1 else None, n + 1, n,
+                "shock.volume_spacers" if part == "shock" else "")
+        damper = v.get("fork.damper.model")
+        keys = {"linear": [("fork.damper.coefficient_N_s_per_m", "damping")],
+                "bilinear": [("fork.damper.compression_N_s_per_m", "compression damping"),
+                             ("fork.damper.rebound_N_s_per_m", "rebound damping")],
+                "digressive": [("fork.damper.compression_low_N_s_per_m", "low-speed compression damping"),
+                               ("fork.damper.rebound_low_N_s_per_m", "low-speed rebound damping"),
+                               ("fork.damper.compression_high_N_s_per_m", "high-speed compression damping"),
+                               ("fork.damper.rebound_high_N_s_per_m", "high-speed rebound damping")]}.get(damper, [])
+        for key, label in keys:
+            x = float(v[key])
+            rider = (f"shock.{key.rpartition('.')[2]}" if part == "shock" and damper == "bilinear" else "")
+            add(key, label, round(x * 0.8, 3), round(x * 1.25, 3), x, rider)
+        for kind in ("compression", "rebound", "low_speed_compression", "high_speed_compression",
+                     "low_speed_rebound", "high_speed_rebound"):
+            key, measured = f"fork.damper.{kind}_clicks", f"fork.damper.{kind}_clicks_measured"
+            if damper == "clicks" and key in v and measured in v:
+                # two clicks each way within the measured range (its own ends, not 0)
+                n, low, top = float(v[key]), float(min(v[measured])), float(max(v[measured]))
+                add(key, f"{kind.replace('_', ' ')} clicks", n - 2 if n - 2 >= low else (low if n > low else None),
+                    n + 2 if n + 2 <= top else (top if n < top else None), n)
+        if end == "front" and "tire.pressure_psi" in v:
+            x = float(v["tire.pressure_psi"])
+            out.append(Adjuster("both", "fork.set", "tire.pressure_psi", x, bounded_value("tire.pressure_psi", x - 2),
+                                bounded_value("tire.pressure_psi", x + 2), "tyre pressure", "fork:tire.pressure_psi", "psi"))
+    return out
+
+
+def ride_metrics(t, front_mm, rear_mm, front_top: float, rear_top: float, static=None, loads=None,
+                 rider_acc=None) -> dict:
+    """The metrics riders read (see the module doc) of one ride, measured or simulated: ``front_mm``
+    fork travel, ``rear_mm`` rear wheel travel (compression positive); ``static`` (front, rear)
+    static travel mm when known; ``loads`` (front, rear) tyre loads N and ``rider_acc`` m/s2 when
+    simulated."""
+    from mtbmj.measured import metrics as m
+
+    t = np.asarray(t, float)
+    out = {}
+    minutes = max(float(t[-1] - t[0]), 1e-9) / 60.0
+    for end, x, top, k in (("front", front_mm, front_top, 0), ("rear", rear_mm, rear_top, 1)):
+        x = np.asarray(x, float)
+        v = m.velocity(t, x)
+        comp, reb = v[v > 0], -v[v < 0]
+        p95c = float(np.percentile(comp, 95)) if comp.size else 0.0
+        p95r = float(np.percentile(reb, 95)) if reb.size else 0.0
+        e = {"travel_mm": top, "dynamic_sag_percent": float(x.mean() / top * 100),
+             "max_travel_percent": float(x.max() / top * 100),
+             "bottom_outs": int(m.bottom_outs(x, top)),
+             "bottom_outs_per_minute": float(m.bottom_outs(x, top) / minutes),
+             "deep_travel_percent": float(np.mean(x > DEEP_PERCENT / 100 * top) * 100),
+             "high_speed_percent": float(np.mean(np.abs(v) > SPEED_SPLIT_MM_PER_S) * 100),
+             "p95_compression_mm_per_s": p95c, "p95_rebound_mm_per_s": p95r,
+             "rebound_over_compression": p95r / p95c if p95c > 0 else None}
+        e["low_speed_percent"] = 100.0 - e["high_speed_percent"]
+        if static is not None:
+            e["static_sag_percent"] = float(static[k] / top * 100)
+        if loads is not None:
+            f = np.asarray(loads[k], float)
+            e["tyre_load_variation"] = float(f.std() / f.mean()) if f.mean() > 0 else None
+        out[end] = e
+    out["balance_points"] = out["front"]["dynamic_sag_percent"] - out["rear"]["dynamic_sag_percent"]
+    out["duration_s"] = float(t[-1] - t[0])
+    if rider_acc is not None:
+        out["rider_acceleration_rms_m_per_s2"] = float(np.sqrt(np.mean(np.square(rider_acc))))
+    return out
+
+
+def penalties(mt: dict) -> dict:
+    """Each rule's penalty (0 inside its window) of a metrics dict (:func:`ride_metrics`)."""
+    p = {}
+    for end in ("front", "rear"):
+        e = mt[end]
+        lo, hi = SAG_WINDOW[end]
+        s = e.get("static_sag_percent")
+        p[f"{end}_static_sag"] = 0.0 if s is None else max(lo - s, s - hi, 0.0) / SAG_POINTS
+        over = e["bottom_outs_per_minute"] - BOTTOM_OUTS_PER_MINUTE
+        unused = (UNUSED_BELOW_PERCENT - e["max_travel_percent"]) / 10.0 if e["bottom_outs"] == 0 else 0.0
+        p[f"{end}_bottom_outs"] = max(over / BOTTOM_OUTS_PER_MINUTE, 0.0)
+        p[f"{end}_travel_unused"] = max(unused, 0.0)
+        r = e["rebound_over_compression"]
+        p[f"{end}_packing"] = 0.0 if r is None else max(PACKING_RATIO - r, 0.0) / 0.2
+    p["balance"] = max(abs(mt["balance_points"]) - BALANCE_POINTS, 0.0) / BALANCE_POINTS
+    return p
+
+
+def grip_comfort(base: dict, cand: dict) -> float:
+    """The relative change of tyre-load variation (both ends) and rider acceleration, weighted."""
+    terms = []
+    for end in ("front", "rear"):
+        a, b = base[end].get("tyre_load_variation"), cand[end].get("tyre_load_variation")
+        if a and b is not None:
+            terms.append((b - a) / a)
+    a, b = base.get("rider_acceleration_rms_m_per_s2"), cand.get("rider_acceleration_rms_m_per_s2")
+    if a and b is not None:
+        terms.append((b - a) / a)
+    return GRIP_COMFORT_WEIGHT * float(np.mean(terms)) if terms else 0.0
+
+
+SHARES = ("deep_travel_percent", "high_speed_percent", "low_speed_percent")  # shares of time: 0-100 %
+SIGNED = ("balance_points",)  # may take either sign; every other metric is a count, share, speed or ratio >= 0
+
+
+def bounds(metric: str) -> tuple[float, float]:
+    """The range a metric (``flat_metrics`` name) can take: a share of time 0-100 %, the balance any
+    value, every other (counts, travel, speeds, ratios) 0 and up."""
+    leaf = metric.rpartition(".")[2]
+    if leaf in SHARES:
+        return 0.0, 100.0
+    return (-math.inf, math.inf) if leaf in SIGNED else (0.0, math.inf)
+
+
+def expected(metric: str, recorded: float, sim_from: float, sim_to: float) -> float:
+    """The value ``metric`` is expected to take on the rider's ride when the model's takes it from
+    ``sim_from`` to ``sim_to`` and the ride recorded ``recorded``: the model's range mapped onto the
+    ride's by the straight lines through (bound, bound) and (``sim_from``, ``recorded``) (its
+    :func:`bounds`): a change towards a bound scaled by the room left on that side (the model
+    halving its bottom-outs halves the ride's; the model losing all loses all), a change with no
+    bound on its side added as it is. An expected value stays within the metric's bounds (never a
+    negative count or share): what stays outside them (a model value past its own bound) is
+    clipped to them."""
+    lo, hi = bounds(metric)
+    change = sim_to - sim_from
+    if change == 0.0:
+        value = recorded
+    elif change < 0.0 and math.isfinite(lo) and sim_from > lo:
+        value = lo + (recorded - lo) * (sim_to - lo) / (sim_from - lo)
+    elif change > 0.0 and math.isfinite(hi) and sim_from < hi:
+        value = hi - (hi - recorded) * (hi - sim_to) / (hi - sim_from)
+    else:
+        value = recorded + change
+    return float(min(max(value, lo), hi))
+
+
+def flat_metrics(d: dict, prefix: str = "") -> dict:
+    out = {}
+    for k, v in d.items():
+        if isinstance(v, dict):
+            out.update(flat_metrics(v, f"{prefix}{k}."))
+        elif isinstance(v, (int, float)) and not isinstance(v, bool) and v is not None:
+            out[f"{prefix}{k}"] = float(v)
+    return out
