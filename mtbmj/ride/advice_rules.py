@@ -2,7 +2,8 @@
 or a run (:func:`ride_metrics`), the rules' windows and their penalties (:data:`RULES`,
 :func:`penalties`; sources in ``mtbmj.ride.advise``'s module text), each metric's bounds and the
 value expected on the ride at another setting (:func:`bounds`, :func:`expected`), and the bike's
-adjusters in the rider's words (:class:`Adjuster`, :func:`adjusters`). The search, the verdict and
+adjusters in the rider's words (:class:`Adjuster`, :func:`adjusters`) and a setting tried on a ride
+(:func:`trial`). The search, the verdict and
 the report are ``mtbmj.ride.advise``'s."""
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mtbmj.errors import MtbmjError, RunError
+from mtbmj.errors import ConfigError, MtbmjError, RunError
 
 SAG_WINDOW = {"front": (20.0, 25.0), "rear": (27.0, 30.0)}  # % of travel, static (sources above)
 SAG_POINTS = 5.0  # % points outside the window per unit of penalty
@@ -297,3 +298,103 @@ def flat_metrics(d: dict, prefix: str = "") -> dict:
         elif isinstance(v, (int, float)) and not isinstance(v, bool) and v is not None:
             out[f"{prefix}{k}"] = float(v)
     return out
+
+
+@dataclass(frozen=True)
+class Trial:
+    """A setting tried on the ride (``mtbmj advise --try FILE --try-set KEY=VALUE``): the bike file
+    ``bike`` with ``overrides`` (the keys of :func:`mtbmj.bike.spec.load`), its ``label`` and the
+    ``settings`` as asked (``KEY: value``)."""
+
+    label: str
+    bike: str
+    overrides: dict
+    settings: dict
+
+
+def compose_setting(bike, overrides) -> list[str]:
+    """Load and compose ``bike`` with ``overrides`` as a run would; the plausibility warnings it gives."""
+    import warnings
+
+    from mtbmj.bike import run as bike_run
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.errors import ConfigWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        bike_run.setups(spec_mod.load(str(bike), overrides or None))
+    return [str(w.message) for w in caught if issubclass(w.category, ConfigWarning)]
+
+
+def trial(bike, overrides=None, other=None, sets=()) -> Trial:
+    """A setting to try on the ride, checked before any work: ``other`` (a bike file or preset: the
+    bike as that file sets it, the recorded ``overrides`` not carried) or else the recorded
+    ``bike`` with its ``overrides``, and over it ``sets``, ``(KEY, value)`` pairs: ``fork:KEY`` /
+    ``shock:KEY`` a key of the fork's / shock's configuration in effect (``fork:fork.spring.rate_N_per_mm``,
+    ``shock:fork.damper.rebound_clicks``: the names of :attr:`Adjuster.name`), or a bike key
+    ``SECTION.KEY`` (``rider.mass_kg``, ``shock.spring_rate_lb_per_in``, ``shock.pressure_psi``).
+    Refused (``ConfigError``, naming ``--try``/``--try-set`` and the key): a file that does not
+    load, a key the bike's part has not, a value the part refuses, or a value far outside what any
+    part has (a plausibility warning the recorded bike does not already give: the advice's
+    candidates stay within that range, and so does what it predicts)."""
+    from pathlib import Path
+
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.config import ALTERNATIVES, load
+
+    if other is not None:
+        ref, over, what = str(other), {}, f"--try {other}"
+        if not Path(ref).exists() and ref not in spec_mod.preset_names():
+            raise ConfigError(f"--try {other}: no such bike file (nor a preset: {', '.join(spec_mod.preset_names())})")
+    else:
+        ref, over, what = str(bike), dict(overrides or {}), "--try-set"
+    try:
+        spec = spec_mod.load(ref, over or None)
+    except ConfigError as exc:
+        raise ConfigError(f"{what}: {exc}") from None
+    settings = {}
+    over = {k: (dict(v) if isinstance(v, dict) else v) for k, v in over.items()}
+    for key, value in sets:
+        key = str(key)
+        settings[key] = value
+        part, colon, name = key.partition(":")
+        named = next((a for a in adjusters(spec) if a.rider_key == key), None)
+        if named is not None and not colon:  # a key the advice names: set as its candidates are (a coil's
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ConfigError(f"--try-set {key}: must be a number, got {value!r}")
+            over.setdefault(named.section, {})[named.key] = value * named.per_unit  # rate, its preload kept)
+        elif colon:
+            if part not in ("fork", "shock") or not name:
+                raise ConfigError(f"--try-set {key}: a part's key is fork:KEY or shock:KEY (e.g. "
+                                  f"fork:fork.spring.rate_N_per_mm), a bike key SECTION.KEY (e.g. rider.mass_kg)")
+            cfg, cover = ((spec.fork_config, spec.fork_overrides) if part == "fork"
+                          else (spec.shock_config, spec.shock_overrides))
+            have = load(cfg, cover).values
+            canonical = ALTERNATIVES.get(name, (name, 1.0))[0]
+            if canonical not in have:
+                raise ConfigError(f"--try-set {key}: the bike's {part} has no {name} (its adjusters: "
+                                  f"{', '.join(a.name for a in adjusters(spec) if a.section == part + '.set') or 'none'})")
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ConfigError(f"--try-set {key}: must be a number, got {value!r}")
+            over.setdefault(f"{part}.set", {})[name] = value
+        else:
+            over[key] = value
+    if not sets and other is None:
+        raise ConfigError("--try-set: nothing to try (give --try FILE or --try-set KEY=VALUE)")
+    try:
+        base_notes = set(compose_setting(ref, {k: v for k, v in (overrides or {}).items()} if other is None else None))
+    except ConfigError as exc:
+        raise ConfigError(f"{what}: {exc}") from None
+    try:
+        notes = compose_setting(ref, over)
+    except ConfigError as exc:
+        raise ConfigError(f"{what}{' ' + ', '.join(f'{k}={v}' for k, v in settings.items()) if settings else ''}: "
+                          f"{exc}") from None
+    new = [n for n in notes if n not in base_notes]
+    if new and settings:
+        raise ConfigError(f"--try-set {', '.join(f'{k}={v}' for k, v in settings.items())}: {new[0]} (advise "
+                          f"predicts only within what parts have)")
+    label = (Path(ref).name if other is not None else "recorded setting") + (
+        (" with " if other is not None else ": ") + ", ".join(f"{k} = {v}" for k, v in settings.items())
+        if settings else "")
+    return Trial(label, ref, over, settings)
