@@ -533,6 +533,18 @@ def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
     return {"reconstruct": rows}
 
 
+def suite_time_rows(d: dict) -> dict[str, list[Row]]:
+    rows = []
+    for name, what, target in (("suite", "the test suite (`-m \"not slow\"`), two processes", f"≤ {tgt(d['target_suite_minutes'])} min"),
+                               ("slow", "the long physics checks (`-m slow`), two processes", "report")):
+        r = d["runs"].get(name)
+        if r is None:
+            continue
+        rows.append(Row(f"wall time of {what}", target, f"{num(r['wall_s'] / 60.0, 2)} min, exit {r['exit']}: "
+                        f"{r['summary'].replace('|', '/')}", "suite_time.json", d["command"]))
+    return {"suite": rows}
+
+
 SOURCES = [
     ("accuracy_steps.json", accuracy_steps_rows),
     ("accuracy_envelope.json", accuracy_envelope_rows),
@@ -558,6 +570,7 @@ SOURCES = [
     ("bike_pedal_speed.json", bike_pedal_speed_rows),
     ("advise_speed.json", advise_speed_rows),
     ("reconstruct_rides.json", reconstruct_rides_rows),
+    ("suite_time.json", suite_time_rows),
 ]
 
 # --- the page's words ----------------------------------------------------------------------------
@@ -648,6 +661,10 @@ wheels need to cross the feature (`tests/test_bike_reference.py`); `benchmarks/b
 runs the same terrains for a fixed time with the reference at its default tolerance. The speed is
 real time on one core (simulated seconds per wall second), interleaved with MuJoCo stepping the
 same model with no callback."""),
+    ("suite", "The test suite", """\
+The README's two test commands, one after the other, from the repository root: the suite and the
+long physics checks that CI also runs (`tests/` marks them `slow`). A wall time on two cores shared
+with other work (the load average is in the results file) is longer than on a quiet machine."""),
     ("reconstruct", "Rides reconstructed (issue 51)", """\
 Per ride: the speed's median and range over the accepted windows, accepted / all windows and the
 median of their standard errors (m/s); the rear predicted's RMS error and the two baselines' (mm);
