@@ -121,6 +121,9 @@ def test_the_figure_shows_both_ends_before_and_after():
         labels = [t.get_text() for t in ax.get_legend().get_texts()]
         assert labels == ["recorded ride", "simulated, recorded setting", "simulated, fork spring rate 5 -> 5.5"]
     assert "recommended: fork spring rate 5 -> 5.5" in fig._suptitle.get_text()
+    for ax in (front, rear):  # the legend (upper right, three lines) sits above the tallest bar
+        tallest = max(float(np.max(p.get_data().values)) for p in ax.patches)
+        assert ax.get_ylim()[1] == pytest.approx(advise.LEGEND_ROOM * tallest) and advise.LEGEND_ROOM >= 1.4
 
 
 def test_a_ride_too_short_is_refused_in_one_line(tmp_path, capsys):

@@ -135,9 +135,19 @@ def test_the_figure_marks_what_was_left_out(made, tmp_path):
     fig = rec.figure()
     titles = [a.get_title() for a in fig.axes]
     assert titles[1] == "Front: the record reproduced (the check)"
-    assert titles[2] == "Rear: predicted from the front's terrain"
+    assert titles[2].startswith("Rear: predicted from the front's terrain, beside the naive baseline")
     assert fig.axes[2].get_xlim() == pytest.approx((0.0, SECONDS - 1.0 / RATE))
-    assert [ln.get_label() for ln in fig.axes[2].get_lines()] == ["rear wheel, measured", "rear wheel, predicted"]
+    c = rec.checks()
+    assert [ln.get_label() for ln in fig.axes[2].get_lines()] == [
+        "rear wheel, measured", f"rear wheel, predicted ({c['rear_predicted_rms_mm']:.1f} mm RMS)",
+        f"baseline: the fork delayed, scaled ({c['baseline_delayed_fork_rms_mm']:.1f} mm RMS)"]
+    # the baseline drawn is the one checked against: its RMS over the checked samples, by hand here
+    drawn = fig.axes[2].get_lines()[2].get_ydata()
+    v = rec.valid
+    assert np.sqrt(np.mean((drawn[v] - rec.rear[v]) ** 2)) == pytest.approx(c["baseline_delayed_fork_rms_mm"])
+    # the verdict in the title, in the checks' own words
+    assert fig.get_suptitle().splitlines()[0].endswith(
+        "the model describes this ride" if c["passes"] else "the model does not describe this ride")
     assert "red, the front wheel off the ground; grey, no speed" in fig.get_suptitle()
     shaded = [p for p in fig.axes[2].patches]
     assert len(shaded) == len(rec.jumps) + len(rec.unaligned)  # each stretch left out is drawn

@@ -72,6 +72,9 @@ from mtbmj.ride.advice_rules import (  # noqa: F401 (advise's names for them)
     flat_metrics, grip_comfort, penalties, ride_metrics, round_setting, unit_of, Trial, compose_setting, trial)
 
 
+LEGEND_ROOM = 1.45  # the histograms' height over their tallest bar: the legend sits above the bars
+
+
 @dataclass
 class Run:
     """One simulated setting over the ride: its overrides, metrics, penalties and travel series."""
@@ -276,9 +279,14 @@ class Advice:
                 series.append((f"simulated, {shown['label']} {st['from']:g} -> {st['to']:g}"
                                f"{' ' + st['unit'] if st['unit'] else ''}{'' if best is not None else ' (not advised)'}",
                                100 * (run.front_mm if end == "front" else run.rear_mm) / top, "C3"))
+            tallest = 0.0
             for label, x, color in series:
                 h, _ = np.histogram(np.clip(x, 0, 100), bins=edges)
-                ax.stairs(100 * h / max(h.sum(), 1), edges, label=label, color=color, linewidth=1.6)
+                share = 100 * h / max(h.sum(), 1)
+                tallest = max(tallest, float(share.max()))
+                ax.stairs(share, edges, label=label, color=color, linewidth=1.6)
+            # room above the tallest bar for the legend, so no bar is hidden behind it
+            ax.set_ylim(0.0, LEGEND_ROOM * max(tallest, 1.0))
             ax.set(xlim=(0, 100), xlabel=f"{'fork' if end == 'front' else 'rear wheel'} travel (% of {top:.0f} mm)",
                    ylabel="time (%)", title=f"{end}: travel histogram")
             ax.grid(alpha=0.3)

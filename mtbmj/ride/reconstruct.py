@@ -600,9 +600,14 @@ class Reconstruction:
         ax[1].plot(self.t, self.front, color="C0", label="fork, measured")
         ax[1].plot(self.t, self.front_again, color="C1", linestyle="--", label="fork, over the terrain found")
         ax[1].set(xlabel="time (s)", ylabel="fork travel (mm)", title="Front: the record reproduced (the check)")
+        c = self.checks()
         ax[2].plot(self.t, self.rear, color="C0", label="rear wheel, measured")
-        ax[2].plot(self.t, self.rear_predicted, color="C2", linestyle="--", label="rear wheel, predicted")
-        ax[2].set(xlabel="time (s)", ylabel="rear wheel travel (mm)", title="Rear: predicted from the front's terrain")
+        ax[2].plot(self.t, self.rear_predicted, color="C2", linestyle="--",
+                   label=f"rear wheel, predicted ({c['rear_predicted_rms_mm']:.1f} mm RMS)")
+        ax[2].plot(self.t, self.baselines()["delayed_fork_mm"], color="0.45", linestyle=":",
+                   label=f"baseline: the fork delayed, scaled ({c['baseline_delayed_fork_rms_mm']:.1f} mm RMS)")
+        ax[2].set(xlabel="time (s)", ylabel="rear wheel travel (mm)",
+                  title="Rear: predicted from the front's terrain, beside the naive baseline (RMS over the checked samples)")
         for a in ax[1:]:
             a.legend(loc="upper right")
             a.set_xlim(float(self.t[0]), float(self.t[-1]))
@@ -612,8 +617,9 @@ class Reconstruction:
                 a.axvspan(s0, s1, color="0.6", alpha=0.2)
         for a in ax:
             a.grid(alpha=0.3)
-        fig.suptitle(f"{self.name} through {self.bike}\nleft out of the checks: red, the front wheel off the "
-                     f"ground; grey, no speed (standing, or the ends do not align)")
+        verdict = c["verdict"].split(":", 1)[0]  # "the model (does not) describe(s) this ride"
+        fig.suptitle(f"{self.name} through {self.bike}: {verdict}\nleft out of the checks: red, the front wheel off "
+                     f"the ground; grey, no speed (standing, or the ends do not align)")
         return fig
 
     def write(self, out_dir) -> list:
