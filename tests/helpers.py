@@ -585,7 +585,9 @@ RIDE_SECONDS = 20.0
 RATIO = 2.5  # the rear's constant leverage ratio
 
 # a bike of two decoupled ends (tests/test_reconstruct.py's generator)
-BIKE = f"""base = "trail"
+def two_ends_bike(fork_rate=9.0):
+    """A bike of two decoupled ends at ``fork_rate`` N/mm (tests/test_reconstruct.py's generator's)."""
+    return f"""base = "trail"
 [leverage]
 wheel_travel_mm = [0.0, 125.0]
 ratio = [{RATIO}, {RATIO}]
@@ -594,7 +596,7 @@ config = "S1"
 [fork.set]
 "fork.travel_mm" = 130.0
 "fork.length_mm" = 530.0
-"fork.spring.rate_N_per_mm" = 9.0
+"fork.spring.rate_N_per_mm" = {fork_rate}
 "fork.damper.coefficient_N_s_per_m" = 600.0
 [shock]
 stroke_mm = 50.0
@@ -604,6 +606,9 @@ config = "S1"
 "fork.spring.rate_N_per_mm" = 90.0
 "fork.damper.coefficient_N_s_per_m" = 2500.0
 """
+
+
+BIKE = two_ends_bike()
 
 
 def bike_text(fork_rate=12.0, fork_comp=500.0, fork_reb=700.0):
@@ -788,3 +793,19 @@ def reconstruction_passing():
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(rc.Reconstruction, "checks", lambda self: {**checks(self), "passes": True})
         yield
+
+
+def reconstruction_stand_in(monkeypatch) -> list:
+    """``mtbmj.ride.reconstruct.reconstruct`` replaced by a refusal of its own ("reached the
+    reconstruction"): the list returned grows by one each time a command reached it, so a test tells
+    an input refused before any work from one let through."""
+    from mtbmj.ride import reconstruct
+
+    reached = []
+
+    def stand_in(*a, **k):
+        reached.append(True)
+        raise reconstruct.ReconstructError("reached the reconstruction")
+
+    monkeypatch.setattr(reconstruct, "reconstruct", stand_in)
+    return reached

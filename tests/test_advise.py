@@ -211,17 +211,9 @@ def test_a_stretch_too_short_is_refused_before_any_work(tmp_path, capsys, monkey
     """A 16 s ride is long enough, but --duration 14.9 asks for advice on 14.9 s of it: the minimum
     holds for the stretch analysed (one line naming --duration, exit 2, nothing written, nothing
     reconstructed); --duration 15 is let through to the reconstruction."""
-    from helpers import BIKE, bumps_csv
+    from helpers import BIKE, bumps_csv, reconstruction_stand_in
 
-    from mtbmj.ride import reconstruct
-
-    reached = []
-
-    def reconstruction(*a, **k):
-        reached.append(True)
-        raise reconstruct.ReconstructError("reached the reconstruction")
-
-    monkeypatch.setattr(reconstruct, "reconstruct", reconstruction)
+    reached = reconstruction_stand_in(monkeypatch)
     csv, *_ = bumps_csv(tmp_path / "ride.csv", 16.0)
     bike = tmp_path / "bike.toml"
     bike.write_text(BIKE)

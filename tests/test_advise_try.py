@@ -15,7 +15,7 @@ import pytest
 
 from mtbmj.cli import main
 from mtbmj.ride import advise
-from helpers import bike_text, generated_metrics, reconstruction_passing, ride, write_sst
+from helpers import bike_text, generated_metrics, reconstruction_passing, reconstruction_stand_in, ride, write_sst
 
 SECONDS = 16.0
 
@@ -65,15 +65,7 @@ def test_a_bad_try_is_one_line_before_any_work(tmp_path, capsys, monkeypatch):
     """A missing file, a key the bike's part has not, a value the part refuses and one far outside
     what any part has: one line naming it, exit 2, nothing written, the ride never reconstructed; a
     good --try-set reaches the reconstruction (the refusals are told apart from a good try)."""
-    from mtbmj.ride import reconstruct
-
-    reached = []
-
-    def reconstruction(*a, **k):
-        reached.append(True)
-        raise reconstruct.ReconstructError("reached the reconstruction")
-
-    monkeypatch.setattr(reconstruct, "reconstruct", reconstruction)
+    reached = reconstruction_stand_in(monkeypatch)
     bike = tmp_path / "bike.toml"
     bike.write_text(bike_text())
     wave = np.sin(np.arange(16000) / 1000 * 2 * np.pi)

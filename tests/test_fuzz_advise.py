@@ -106,17 +106,9 @@ def test_advise_arguments_are_refused_before_any_work(tmp_path, capsys, monkeypa
     """Drawn combinations of bad and good arguments on a 16 s record made here: a bad one is
     refused in one line before the ride is reconstructed; good ones reach the reconstruction
     (stood in for here by a refusal of its own)."""
-    from helpers import BIKE, bumps_csv
+    from helpers import BIKE, bumps_csv, reconstruction_stand_in
 
-    from mtbmj.ride import reconstruct
-
-    reached = []
-
-    def stand_in(*a, **k):
-        reached.append(True)
-        raise reconstruct.ReconstructError("reached the reconstruction")
-
-    monkeypatch.setattr(reconstruct, "reconstruct", stand_in)
+    reached = reconstruction_stand_in(monkeypatch)
     csv, *_ = bumps_csv(tmp_path / "ride.csv", 16.0)
     bike = tmp_path / "bike.toml"
     bike.write_text(BIKE)

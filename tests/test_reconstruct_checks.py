@@ -22,31 +22,11 @@ from scipy.integrate import solve_ivp
 
 from mtbmj.cli import main
 
+from helpers import RATIO, quarter_car_masses, two_ends_bike
+
 RATE = 1000.0
 SECONDS = 30.0
 V0, DV, PERIOD = 5.0, 0.8, 30.0  # m/s: the speed V0 + DV sin(2 pi t / PERIOD)
-RATIO = 2.5
-
-BIKE = """base = "trail"
-[leverage]
-wheel_travel_mm = [0.0, 125.0]
-ratio = [2.5, 2.5]
-[fork]
-config = "S1"
-[fork.set]
-"fork.travel_mm" = 130.0
-"fork.length_mm" = 530.0
-"fork.spring.rate_N_per_mm" = {fork_rate}
-"fork.damper.coefficient_N_s_per_m" = 600.0
-[shock]
-stroke_mm = 50.0
-config = "S1"
-[shock.set]
-"fork.travel_mm" = 50.0
-"fork.spring.rate_N_per_mm" = 90.0
-"fork.damper.coefficient_N_s_per_m" = 2500.0
-"""
-
 
 def speed(t):
     return V0 + DV * np.sin(2 * np.pi * t / PERIOD)
@@ -70,31 +50,15 @@ def hidden_profile(length, seed=11):
     return lambda s: np.interp(s, grid, table)
 
 
-def masses(spec):
-    """(front sprung, front unsprung, rear sprung, rear unsprung) kg: the weight shared between the
-    axles by moments about the rear axle, the unsprung the fork lower and front wheel, the rear
-    wheel and half the swingarm."""
-    from mtbmj.bike.model import frame_body
-
-    m_frame, c_frame, _ = frame_body(spec)
-    r = spec.rider
-    bodies = [(m_frame, c_frame[0]), (r.mass, r.com[0]), (spec.fork_lower_mass + spec.front_wheel_mass, spec.front_axle[0]),
-              (spec.rear_wheel_mass, spec.rear_axle[0]), (spec.swingarm_mass, 0.5 * (spec.pivot[0] + spec.rear_axle[0]))]
-    total = sum(m for m, _ in bodies)
-    share = (sum(m * x for m, x in bodies) / total - spec.rear_axle[0]) / (spec.front_axle[0] - spec.rear_axle[0])
-    mf, mr = spec.fork_lower_mass + spec.front_wheel_mass, spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
-    return total * share - mf, mf, total * (1 - share) - mr, mr
-
-
 def make_ride(tmp_path, seconds=SECONDS):
     from mtbmj.bike import run, spec as spec_mod
 
     path = tmp_path / "bike.toml"
-    path.write_text(BIKE.format(fork_rate=9.0))
+    path.write_text(two_ends_bike(fork_rate=9.0))
     spec = spec_mod.load(str(path))
     fork_setup, _ = run.setups(spec)
     tyre_k, radius, g = fork_setup.tire.values(1).rate, fork_setup.tire_radius, fork_setup.gravity
-    Mf, mf, Mr, mr = masses(spec)
+    Mf, mf, Mr, mr = quarter_car_masses(spec)
     sa = math.sin(spec.head_angle)
     kf, cf, ks, cs = 9000.0, 600.0, 90000.0, 2500.0
     # the wheelbase at the static sag, from the geometry: the fork's stroke along the steering axis,
@@ -187,7 +151,7 @@ def test_a_wrong_bike_fails_the_checks_and_says_why(made, tmp_path, capsys, wron
     the made one, or its rider 25 kg heavier. The front's inverse reproduces the fork whatever the
     bike (that check cannot fail); the rear predicted from the front's terrain must lose to a naive
     baseline by the stated margin, and the line says so in words."""
-    text = BIKE.format(fork_rate=13.5 if wrong == "fork_spring_x1.5" else 9.0)
+    text = two_ends_bike(fork_rate=13.5 if wrong == "fork_spring_x1.5" else 9.0)
     bike = tmp_path / "wrong.toml"
     bike.write_text(text)
     if wrong == "rider_25kg_heavier":
@@ -225,7 +189,7 @@ def test_advise_refuses_a_ride_the_model_does_not_describe(made, tmp_path, capsy
     """The made ride read through the fork spring 1.5 times the made one: its reconstruction fails
     the baselines, so `mtbmj advise` refuses it in one line naming that, exit 2, nothing written."""
     bike = tmp_path / "wrong.toml"
-    bike.write_text(BIKE.format(fork_rate=13.5))
+    bike.write_text(two_ends_bike(fork_rate=13.5))
     out = tmp_path / "advice"
     assert main(["advise", str(made["csv"]), "--bike", str(bike), "--out", str(out)]) == 2
     err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("mtbmj: error")]
