@@ -337,6 +337,7 @@ FORK_ARM, FORK_MAX = 150.0, 260.0
 ARM1, ARM2, SHOCK_MAX = 90.0, 190.0, 215.0
 SENSORS = {"fork_arm_mm": FORK_ARM, "fork_max_mm": FORK_MAX, "shock_arm1_mm": ARM1, "shock_arm2_mm": ARM2,
            "shock_max_mm": SHOCK_MAX}
+SENSORS_TOML = "[sensors]\n" + "".join(f"{key} = {value}\n" for key, value in SENSORS.items())  # as a bike file gives it
 
 
 def fork_counts(travel, arm=FORK_ARM, top=FORK_MAX):
@@ -634,13 +635,7 @@ config = "S1"
 "fork.damper.model" = "bilinear"
 "fork.damper.compression_N_s_per_m" = 2500.0
 "fork.damper.rebound_N_s_per_m" = 3500.0
-[sensors]
-fork_arm_mm = {FORK_ARM}
-fork_max_mm = {FORK_MAX}
-shock_arm1_mm = {ARM1}
-shock_arm2_mm = {ARM2}
-shock_max_mm = {SHOCK_MAX}
-"""
+{SENSORS_TOML}"""
 
 
 def hidden_profile(seed=7):

@@ -9,7 +9,7 @@ import pytest
 
 from mtbmj.cli import main
 
-from helpers import ARM1, ARM2, FORK_ARM, FORK_MAX, SHOCK_MAX, write_v3
+from helpers import SENSORS_TOML, write_v3
 
 
 def _ride(path, seconds=40.0, rate=1000):
@@ -20,13 +20,7 @@ def _ride(path, seconds=40.0, rate=1000):
 
 
 BIKE = f"""base = "sst"
-[sensors]
-fork_arm_mm = {FORK_ARM}
-fork_max_mm = {FORK_MAX}
-shock_arm1_mm = {ARM1}
-shock_arm2_mm = {ARM2}
-shock_max_mm = {SHOCK_MAX}
-"""
+{SENSORS_TOML}"""
 
 
 def test_the_bike_files_sensors_decode_the_ride(tmp_path, monkeypatch, capsys):
