@@ -276,14 +276,9 @@ def _derivatives(x, dt):
             savgol_filter(x, n, 3, deriv=2, delta=dt, mode="interp"))
 
 
-def _lowpass(x, dt):
-    from scipy.signal import butter, sosfiltfilt
-
-    sos = butter(2, HIGHPASS_HZ, btype="lowpass", fs=1.0 / dt, output="sos")
-    return sosfiltfilt(sos, x)
-
-
-def _lowpass_at(x, dt, hz):
+def _lowpass(x, dt, hz=HIGHPASS_HZ):
+    """``x`` low-passed at ``hz`` (2nd-order Butterworth, forward and back: no delay); by default at
+    the high-pass's corner, the slow part the high-pass takes out."""
     from scipy.signal import butter, sosfiltfilt
 
     return sosfiltfilt(butter(2, hz, btype="lowpass", fs=1.0 / dt, output="sos"), x)
@@ -662,8 +657,8 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     fork_mm, rear_mm = np.asarray(record.fork_mm, float), np.asarray(record.rear_mm, float)
     shock_mm = np.asarray(record.shock_mm, float) if record.shock_mm is not None else None
     if getattr(record, "version", 0) == 2:  # 5 kHz of coarse encoder steps: low-passed before any derivative
-        fork_mm, rear_mm = _lowpass_at(fork_mm, dt, V2_LOWPASS_HZ), _lowpass_at(rear_mm, dt, V2_LOWPASS_HZ)
-        shock_mm = None if shock_mm is None else _lowpass_at(shock_mm, dt, V2_LOWPASS_HZ)
+        fork_mm, rear_mm = _lowpass(fork_mm, dt, V2_LOWPASS_HZ), _lowpass(rear_mm, dt, V2_LOWPASS_HZ)
+        shock_mm = None if shock_mm is None else _lowpass(shock_mm, dt, V2_LOWPASS_HZ)
     # the wheelbase at the ride's sag (the median travel of each end): the fork shortens it along the
     # steering axis, the rear axle moves on its arc about the pivot
     wheelbase = wheelbase_at(spec, float(np.median(fork_mm)) * 1e-3, float(np.median(rear_mm)) * 1e-3)
