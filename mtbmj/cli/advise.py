@@ -10,12 +10,10 @@ from mtbmj.cli.common import add_out
 def cmd_advise(args) -> int:
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.cli.common import Progress
-    from mtbmj.cli.sweep import positive
     from mtbmj.cli.telemetry import ride_record
     from mtbmj.config import parse_assignment
     from mtbmj.ride import advise
 
-    positive("--workers", args.workers)
     over = bike_overrides(args)
     if args.rider_kg is not None:
         over["rider.mass_kg"] = args.rider_kg

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from mtbmj.config import ConfigWarning, parse_assignment
 from mtbmj.errors import MtbmjError, RunError, check_interrupt, interrupt_handling, interrupted
-from mtbmj.limits import argument, check_duration
+from mtbmj.limits import argument
 
 EXIT_BAD_INPUT = 2
 # The drop engines (``mtbmj.drop.run.ENGINES``), named here so the parser needs no engine imported.
@@ -265,7 +265,6 @@ def _run_parsed(parser: argparse.ArgumentParser, argv=None) -> int:
             warnings.simplefilter("always", ConfigWarning)  # each kept once by config_warnings
             warnings.showwarning = config_warnings.showwarning  # restored with the filters when the command ends
             args = parser.parse_args(argv)  # the numeric arguments' plausibility warnings come from here
-            check_duration("--duration", getattr(args, "duration", None))
             status = _run_claimed(args)
         config_warnings.print()
         return status

@@ -9,6 +9,8 @@ from mtbmj.errors import ConfigError
 
 
 def positive(flag: str, value, minimum: int = 1):
+    """``flag``'s whole number at least ``minimum`` (the numeric gate, ``limits.ARGUMENTS``, lets a
+    sample count of 0 through)."""
     if value is not None and value < minimum:
         raise ConfigError(f"{flag}: must be at least {minimum}, got {value}")
 
@@ -38,7 +40,6 @@ def variants_from_args(args) -> tuple[list[dict], dict]:
 
 
 def check_shared_options(args) -> None:
-    positive("--workers", args.workers)
     if args.backend == "dask" and not args.scheduler:
         raise ConfigError("--backend dask needs --scheduler ADDRESS (e.g. tcp://10.0.0.5:8786)")
     if args.scheduler and args.backend != "dask":
@@ -88,8 +89,6 @@ def cmd_sweep(args) -> int:
         raise ConfigError("--roll, --speed, --fork-set, --shock-set: only for a bike sweep (CONFIG a bike preset "
                           "or bike file)")
     check_shared_options(args)
-    positive("--batch-size", args.batch_size)
-    positive("--threads", args.threads)
     # the workers start now and load the compiled engine while the variants are drawn
     pool = start_pool(args.workers, args.engine) if args.backend == "local" else None
     try:
