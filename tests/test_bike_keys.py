@@ -151,3 +151,18 @@ def test_a_warning_names_the_keys_own_unit():
         "rider.leg_stiffness_N_per_mm = 3000 N/mm is outside 2-150 N/mm, what bikes and riders have (a unit mistake?)",
         "rider.leg_damping_N_s_per_m = 100000 N s/m is outside 20-5000 N s/m, what bikes and riders have "
         "(a unit mistake?)"]
+
+
+def test_overrides_leave_the_table_they_are_applied_to_as_it_was():
+    """``spec.overridden`` returns a new table; the one given (its nested tables too: the fork's and
+    the shock's ``set``, a chart's fork keys) is left as it was, so one table read once can take
+    several variants' overrides (a bike sweep's check does so)."""
+    import copy
+
+    table, _ = spec.read_table("trail")
+    before = copy.deepcopy(table)
+    out = spec.overridden(table, {"rider.mass_kg": 61.0, "fork.set": {"fork.spring.rate_N_per_mm": 7.0},
+                                  "shock.set": {"fork.damper.rebound_N_s_per_m": 4000.0}, "geometry.fork_travel_mm": 140.0})
+    assert table == before
+    assert out["rider"]["mass_kg"] == 61.0 and out["fork"]["set"]["fork.spring.rate_N_per_mm"] == 7.0
+    assert out != before

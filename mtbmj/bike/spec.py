@@ -14,6 +14,7 @@ status 2 on the command line).
 from __future__ import annotations
 
 import bisect
+import copy
 import math
 from dataclasses import dataclass, field
 from importlib import resources
@@ -535,8 +536,9 @@ def gated(table: dict, location=None) -> dict:
 def overridden(table: dict, overrides) -> dict:
     """``table`` with ``overrides`` applied: ``"section.key": value`` for a bike key (``rider.mass_kg``),
     ``"fork.set": {KEY: value}`` / ``"shock.set": {KEY: value}`` for keys of the fork's and the
-    shock's configurations (merged into the file's). Unknown keys are refused by ``load``."""
-    out = _merge(table, {})
+    shock's configurations (merged into the file's). Unknown keys are refused by ``load``. ``table``
+    itself is left as it was (its nested tables too)."""
+    out = copy.deepcopy(table)
     for key, value in gated(dict(overrides or {})).items():
         if key in ("fork.set", "shock.set"):
             if not isinstance(value, dict):
