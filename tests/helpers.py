@@ -23,7 +23,6 @@ from signal import SIGKILL
 
 import mujoco
 import numpy as np
-from hypothesis import strategies as st
 from scipy import linalg, signal
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq, fsolve
@@ -107,14 +106,20 @@ def check(argv, out, capfd, name: str, results=(0,)) -> int:
     return status
 
 
-FLOATS = st.one_of(st.floats(allow_nan=True, allow_infinity=True),
-                   st.floats(min_value=-1e4, max_value=1e4),
-                   st.sampled_from([0.0, -0.0, 1e-300, 1e300, 1e30, 1e31, 5e-324, 2.0 ** 63]))
-
-
-NUMBERS = st.one_of(st.sampled_from(["0", "-1", "1", "3", "0.002", "0.01", "1e9", "1e-9", "inf", "-inf", "nan",
-                                     "1e309", "", "abc", "0x10", "2", "90", "45", "5", "1e-320", "65"]),
-                    FLOATS.map(repr))
+def __getattr__(name):
+    """FLOATS and NUMBERS (hypothesis strategies for the fuzz tests), made when first asked for: the
+    [rl] extra's CI run collects test modules that import helpers without hypothesis installed."""
+    if name not in ("FLOATS", "NUMBERS"):
+        raise AttributeError(name)
+    from hypothesis import strategies as st
+    floats = st.one_of(st.floats(allow_nan=True, allow_infinity=True),
+                       st.floats(min_value=-1e4, max_value=1e4),
+                       st.sampled_from([0.0, -0.0, 1e-300, 1e300, 1e30, 1e31, 5e-324, 2.0 ** 63]))
+    numbers = st.one_of(st.sampled_from(["0", "-1", "1", "3", "0.002", "0.01", "1e9", "1e-9", "inf", "-inf", "nan",
+                                         "1e309", "", "abc", "0x10", "2", "90", "45", "5", "1e-320", "65"]),
+                        floats.map(repr))
+    globals().update(FLOATS=floats, NUMBERS=numbers)
+    return globals()[name]
 
 
 # --- the docs pages' shell commands ---------------------------------------------------------------

@@ -432,3 +432,23 @@ def test_the_test_import_finder_finds_planted_imports(tmp_path):
     (tmp_path / "helpers.py").write_text("from test_c import x\n")
     assert imports_of_test_modules(tmp_path) == ["helpers.py:1 test_c", "test_b.py:1 test_a", "test_b.py:5 test_a",
                                              "test_c.py:1 tests.test_a", "test_c.py:2 tests"]
+
+
+def test_the_rl_tests_collect_without_the_test_extras():
+    """CI's [rl] run installs dm-control and pytest only, then collects every test file holding an
+    ``rl`` test; those import tests/helpers.py, so helpers and conftest must import without the
+    test extras (hypothesis, pandas, pyarrow, h5py, SALib, dask, xdist). The stop that failed on
+    hypothesis is the case this catches."""
+    import subprocess
+    import sys
+    extras = ["hypothesis", "pandas", "pyarrow", "h5py", "SALib", "dask", "xdist", "imageio_ffmpeg"]
+    script = ("import sys\n"
+              f"for name in {extras!r}:\n    sys.modules[name] = None\n"
+              f"sys.path.insert(0, {str(ROOT / 'tests')!r})\n"
+              "import conftest, helpers\n"
+              "for name in ('test_engine_mujoco', 'test_rl', 'test_rolling'):\n"
+              "    try:\n        __import__(name)\n"
+              "    except BaseException as skip:  # a module-level importorskip where dm_control is absent\n"
+              "        if type(skip).__name__ != 'Skipped':\n            raise\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=ROOT)
+    assert done.returncode == 0, done.stderr[-2000:]
