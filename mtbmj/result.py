@@ -98,9 +98,16 @@ class RunOutput:
 
     def difference(self, other: "RunOutput", raw: bool = True) -> dict[str, dict[str, float]]:
         """Largest |self - other| per compared column (``COMPARED``, in the column's unit) and when,
-        over the samples both runs share at the engine rate (``raw``) or the logged one; runs on
+        over the samples both runs share at the engine rate (``raw``: the rows on the coarse grid
+        where a run keeps finer rows in its fine stretches, ``grid_rows``) or the logged one; runs on
         different grids raise ValueError."""
-        a, b = (self.raw, other.raw) if raw else (self.signals, other.signals)
+        def on_grid(result):
+            rows = getattr(result, "grid_rows", None)
+            if rows is None:
+                return result.raw
+            return {k: np.asarray(v)[rows] for k, v in result.raw.items()}
+
+        a, b = (on_grid(self), on_grid(other)) if raw else (self.signals, other.signals)
         n = min(len(a["time_s"]), len(b["time_s"]))
         if not np.allclose(a["time_s"][:n], b["time_s"][:n], atol=1e-9):
             raise ValueError("results are not on the same time grid")

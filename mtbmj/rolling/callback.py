@@ -43,6 +43,7 @@ class RollCallback:
         self.a_state, self.a_fork = a("friction_state"), a("fork_force")
         self.a_dp, self.a_dv, self.a_tx, self.a_tz = a("drive_position"), a("drive_velocity"), a("tire_x"), a("tire_z")
         self.a_probe = a("tire_deflection_probe")
+        self.a_touch = a("tire_touch_probe")
         self.act_index = int(m.actuator_actadr[self.a_state])
         self.has_state = fork_law.has_state
         self.cos, self.sin = front.axis
@@ -105,6 +106,7 @@ class RollCallback:
             patches = [(qx + sx * dt, qz + sz * dt, nx, nz, sx, sz) for qx, qz, nx, nz, sx, sz in patches]
         fx, fz, deflection, _, _ = self.tire.force(cx, cz, vx, vz, patches)
         ctrl[self.a_probe] = deflection
+        ctrl[self.a_touch] = self.tire.shallowest(cx, cz, patches, deflection)
         ctrl[self.a_tx] = fx
         ctrl[self.a_tz] = fz
         if self.drive.mode == "servo":  # the ideal PD servo on x0 + v t (its actuators' own forces)

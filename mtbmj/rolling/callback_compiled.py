@@ -61,7 +61,7 @@ SLOTS = 64
 (R_MODEL, R_XQ, R_XV, R_ZQ, R_ZV, R_FQ, R_FV, R_A_STATE, R_A_FORK, R_A_DP, R_A_DV, R_A_TX, R_A_TZ, R_A_PROBE,
  R_ACT, R_HAS_STATE, R_DRUM, R_MOVING, R_NPTS, R_TX, R_TZ, R_SCRATCH, R_ISCRATCH, R_CAP, R_CALLS, R_REFRESHES,
  R_NPATCH, R_OVERFLOW, R_SCALED,
- R_NS, R_SX, R_SZ, R_VALID) = range(33)  # the straight stretches (PatchSearch): corners, and whether kept
+ R_NS, R_SX, R_SZ, R_VALID, R_A_TOUCH) = range(34)  # the straight stretches (PatchSearch): corners, and whether kept
 INT_WIDTH = 36
 # float row of a slot: parameters, state, then MAX_PATCHES x (qx, qz, nx, nz, sx, sz)
 (F_X0, F_Z0, F_L, F_COS, F_SIN, F_RADIUS, F_RATE, F_DAMPING, F_MARGIN, F_SPEED, F_XREF0, F_REFRESH, F_DRUM_R,
@@ -432,6 +432,7 @@ if _numba is not None:
         fx = 0.0
         fz = 0.0
         deepest = -math.inf
+        shallowest = math.inf
         for p in range(npatch):
             o = F_PATCHES + 6 * p
             qx, qz, nx, nz, sx, sz = F[o], F[o + 1], F[o + 2], F[o + 3], F[o + 4], F[o + 5]
@@ -442,6 +443,8 @@ if _numba is not None:
             rate = -((vx - sx) * nx + (vz - sz) * nz)
             if dp > deepest:
                 deepest = dp
+            if dp < shallowest:
+                shallowest = dp
             if dp > 0.0:
                 f = tire_force(k, b, dp, rate)
                 if f < 0.0:
@@ -454,6 +457,7 @@ if _numba is not None:
         if deepest == -math.inf:
             deepest = r - F[F_RADIUS] - F[F_MARGIN]
         ctrl[I[R_A_PROBE]] = deepest
+        ctrl[I[R_A_TOUCH]] = deepest if shallowest == math.inf else shallowest
         ctrl[I[R_A_TX]] = fx
         ctrl[I[R_A_TZ]] = fz
         if F[F_DRIVE] == 0.0:  # controllers.drive: the ideal servo on x0 + v t
@@ -571,6 +575,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         self.a_state, self.a_fork = a("friction_state"), a("fork_force")
         self.a_dp, self.a_dv, self.a_tx, self.a_tz = a("drive_position"), a("drive_velocity"), a("tire_x"), a("tire_z")
         self.a_probe = a("tire_deflection_probe")
+        self.a_touch = a("tire_touch_probe")
         self.act_index = int(m.actuator_actadr[self.a_state])
         self.has_state = fork_law.has_state
         self.cos, self.sin = front.axis
@@ -595,6 +600,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         ints[[R_XQ, R_XV, R_ZQ, R_ZV, R_FQ, R_FV]] = [self.xq, self.xv, self.zq, self.zv, self.fq, self.fv]
         ints[[R_A_STATE, R_A_FORK, R_A_DP, R_A_DV, R_A_TX, R_A_TZ, R_A_PROBE, R_ACT]] = [
             self.a_state, self.a_fork, self.a_dp, self.a_dv, self.a_tx, self.a_tz, self.a_probe, self.act_index]
+        ints[R_A_TOUCH] = self.a_touch
         ints[R_HAS_STATE] = int(bool(self.has_state))
         ints[R_DRUM], ints[R_MOVING] = int(drum), int(bool(ter.moving))
         ints[R_NPTS], ints[R_CAP] = n, cap
