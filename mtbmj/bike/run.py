@@ -173,7 +173,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     lock = _check_lock(lock, rear_tire)
     if isinstance(bike, spec_mod.BikeSpec) and overrides:
         raise ConfigError("overrides: give them with a bike name or file, not a ready-made BikeSpec")
-    spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(str(bike), overrides)
+    spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(bike, overrides)  # a ResolvedBike is not read again
     if seated:
         if spec.rider.seated_com is None:
             raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider (the rider's centre of mass "

@@ -8,6 +8,7 @@ from mtbmj.cli.common import add_out
 
 
 def cmd_advise(args) -> int:
+    from mtbmj.bike import spec
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.cli.common import Progress
     from mtbmj.cli.telemetry import ride_record
@@ -18,12 +19,13 @@ def cmd_advise(args) -> int:
     if args.rider_kg is not None:
         over["rider.mass_kg"] = args.rider_kg
     sets = [parse_assignment(text) for text in args.try_set or ()]
+    bike = spec.resolve(args.bike)  # the bike file read once: the decoding, the tries and the advice take it
     tries = []  # checked before any work: a bad file, key or value is one line and nothing written
     if args.try_file or sets:
-        tries = [advise.trial(args.bike, over or None, other, sets) for other in (args.try_file or [None])]
-    record = ride_record(args.ride, args)
+        tries = [advise.trial(bike, over or None, other, sets) for other in (args.try_file or [None])]
+    record = ride_record(args.ride, args, bike)
     result = Progress("advise").around(
-        lambda progress: advise.advise(record, args.bike, over or None, args.duration, progress, args.workers,
+        lambda progress: advise.advise(record, bike, over or None, args.duration, progress, args.workers,
                                        tries=tries))
     written = result.write(args.out)
     checks = result.reconstruction["checks"]

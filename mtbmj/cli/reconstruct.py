@@ -9,10 +9,12 @@ from mtbmj.cli.common import add_out
 
 
 def cmd_reconstruct(args) -> int:
+    from mtbmj.bike import spec
     from mtbmj.cli.telemetry import ride_record
     from mtbmj.ride import reconstruct
 
-    result = reconstruct.reconstruct(ride_record(args.ride, args), args.bike)
+    bike = spec.resolve(args.bike)  # read once for the decoding (the reconstruction reads its source)
+    result = reconstruct.reconstruct(ride_record(args.ride, args, bike), bike.source)
     written = result.write(args.out)
     print(f"{result.line()}; wrote {len(written)} files to {args.out}")
     return 0

@@ -305,9 +305,10 @@ def figure(summary: dict):
     return fig
 
 
-def decoding(args) -> dict:
-    """read_sst's fork_max_mm, shock_max_mm and leverage: the --bike's, with --fork-max-mm and
-    --shock-max-mm over them; the SST example's bike without --bike."""
+def decoding(args, bike=None) -> dict:
+    """read_sst's fork_max_mm, shock_max_mm and leverage: the --bike's (``bike``: that file
+    resolved already, ``mtbmj.bike.spec.resolve``), with --fork-max-mm and --shock-max-mm over
+    them; the SST example's bike without --bike."""
     fork_max, shock_max = telemetry.FORK_TRAVEL_MAX_MM, telemetry.SHOCK_STROKE_MAX_MM
     leverage = telemetry.LeverageCurve()
     extra: dict = {}
@@ -315,7 +316,7 @@ def decoding(args) -> dict:
         from mtbmj.bike import run as bike_run
         from mtbmj.bike import spec
 
-        bike = spec.load(args.bike)
+        bike = spec.load(args.bike if bike is None else bike)
         fork_setup, _ = bike_run.setups(bike)
         fork_max, shock_max = fork_setup.travel * 1e3, bike.shock_stroke * 1e3
         leverage = telemetry.LeverageCurve(tuple(w * 1e3 for w in bike.leverage.travel), tuple(bike.leverage.ratio))
@@ -345,14 +346,14 @@ def travel_keys(args) -> tuple[str, str]:
     return keys[0], keys[1]
 
 
-def ride_record(ride, args):
+def ride_record(ride, args, bike=None):
     """The ride a command names (a recording or travel CSV, or "example": the shipped SST ride)
-    decoded through ``decoding(args)``; refused when it travels past the travel it is read with
+    decoded through ``decoding(args, bike)``; refused when it travels past the travel it is read with
     (``telemetry.beyond_travel``), else its quality warnings issued."""
     from mtbmj.config import warn
 
     path = telemetry.example_path() if str(ride) == "example" else ride
-    record = telemetry.read_ride(path, **decoding(args))
+    record = telemetry.read_ride(path, **decoding(args, bike))
     beyond = telemetry.beyond_travel(record, *travel_keys(args))
     warn(telemetry.quality(record) + beyond)
     return record
