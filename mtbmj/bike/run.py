@@ -536,23 +536,10 @@ class BikeResult(RunOutput):
     def plot(self, axes=None, label: str | None = None, **line_kwargs):
         """Front travel, rear wheel travel and pitch against time on three stacked axes (given, or
         a new figure's): several runs drawn on the same axes compare them. Returns the figure."""
-        if axes is None:
-            from matplotlib.figure import Figure
-
-            fig = Figure(figsize=(7, 7), layout="constrained")
-            axes = fig.subplots(3, 1, sharex=True)
-        else:
-            fig = axes[0].figure
-        label = label or f"{self.name} over {self.scenario}"
-        for ax, (column, text) in zip(axes, (("front_travel_mm", "front travel [mm]"),
-                                             ("rear_travel_mm", "rear wheel travel [mm]"),
-                                             ("pitch_deg", "pitch, nose up [deg]"))):
-            ax.plot(self.time, self.raw[column], label=label, **line_kwargs)
-            ax.set_ylabel(text)
-            ax.grid(True, alpha=0.3)
-        axes[-1].set_xlabel("time [s]")
-        axes[0].legend(loc="best", fontsize=8)
-        return fig
+        return self.plot_stacked((("front_travel_mm", "front travel [mm]"), ("rear_travel_mm", "rear wheel travel [mm]"),
+                                  ("pitch_deg", "pitch, nose up [deg]")), self.raw, axes,
+                                 label or f"{self.name} over {self.scenario}", {"loc": "best", "fontsize": 8},
+                                 **line_kwargs)
 
 
 def default_duration(p: Prepared) -> float:

@@ -45,6 +45,19 @@ def add_parser(subparsers):
     return p
 
 
+def add_ride(p, bike_help: str) -> None:
+    """The recorded ride (a positional RIDE) and its --bike, as :func:`ride_record` reads them."""
+    p.add_argument("ride", type=Path, metavar="RIDE",
+                   help="SST v3 or v2 recording or a travel CSV with both ends, or 'example' (the shipped 00649.SST)")
+    p.add_argument("--bike", required=True, metavar="BIKE", help=bike_help)
+
+
+def add_sensor_spans(p) -> None:
+    """--fork-max-mm and --shock-max-mm, the travels the recorder's sensors span (:func:`decoding`)."""
+    p.add_argument("--fork-max-mm", type=float, help="fork travel the recording's sensor spans (default: the bike's)")
+    p.add_argument("--shock-max-mm", type=float, help="shock stroke the sensor spans (default: the bike's)")
+
+
 def decoding(args, bike=None) -> dict:
     """read_sst's fork_max_mm, shock_max_mm and leverage: the --bike's (``bike``: that file
     resolved already, ``mtbmj.bike.spec.resolve``), with --fork-max-mm and --shock-max-mm over
