@@ -13,7 +13,6 @@ status 2 on the command line).
 """
 from __future__ import annotations
 
-import bisect
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,110 +26,9 @@ from mtbmj.bike import linkage as _linkage
 from mtbmj.bike.bikefile import (KNOWN, SENSOR_KEYS, gated, merge, overridden, preset_names,  # noqa: F401
                                   read_leverage_csv, read_table)
 from mtbmj.errors import ConfigError
+from mtbmj.measured.leverage import Leverage, leverage_ratio, leverage_stroke, stroke_piece  # noqa: F401
 
 MM = 1e-3
-
-
-@dataclass(frozen=True)
-class Leverage:
-    """Leverage ratio LR = d(rear wheel travel) / d(shock stroke), piecewise linear in the rear
-    wheel travel ``travel`` (m, from 0, strictly increasing); constant past the table's ends.
-    The shock stroke is s(w) = integral from 0 to w of dw / LR(w), exact on each linear piece."""
-
-    travel: tuple[float, ...]
-    ratio: tuple[float, ...]
-
-    def __post_init__(self):
-        w, r = [float(x) for x in self.travel], [float(x) for x in self.ratio]
-        s = [0.0]
-        for i in range(len(w) - 1):  # the stroke at each table point, exact for a ratio linear in w
-            s.append(s[-1] + stroke_piece(r[i], r[i + 1], w[i + 1] - w[i], w[i + 1] - w[i]))
-        # plain lists: the callback asks for one value at a time, where bisect beats numpy
-        object.__setattr__(self, "_w", w)
-        object.__setattr__(self, "_r", r)
-        object.__setattr__(self, "_s", s)
-
-    def ratio_at(self, w: float) -> float:
-        """LR at rear wheel travel ``w`` (m)."""
-        return leverage_ratio(self._w, self._r, bisect.bisect_right(self._w, w) - 1, w)
-
-    def stroke(self, w: float) -> float:
-        """Shock stroke (m) at rear wheel travel ``w`` (m); below 0 and past the table the ratio
-        is held at its end value."""
-        return leverage_stroke(self._w, self._r, self._s, bisect.bisect_right(self._w, w) - 1, w)
-
-    def strokes(self, w) -> np.ndarray:
-        """``stroke`` over an array of rear wheel travels (m): the same pieces, in numpy."""
-        w = np.asarray(w, dtype=float)
-        w_tab, r, s = (np.asarray(v, dtype=float) for v in (self._w, self._r, self._s))
-        n = w_tab.size
-        i = np.clip(np.searchsorted(w_tab, w, side="right") - 1, 0, n - 2)
-        r0, r1, h, x = r[i], r[i + 1], w_tab[i + 1] - w_tab[i], w - w_tab[i]
-        b = (r1 - r0) / h
-        linear = np.abs(b) * x < 1e-9 * r0
-        with np.errstate(divide="ignore", invalid="ignore"):  # the linear pieces' log is not used
-            piece = np.where(linear, x / r0, np.log((r0 + b * x) / r0) / np.where(linear, 1.0, b))
-        out = s[i] + piece
-        out = np.where(w <= 0.0, w / r[0], out)
-        return np.where(w >= w_tab[n - 1], s[n - 1] + (w - w_tab[n - 1]) / r[n - 1], out)
-
-    @property
-    def table(self) -> tuple[list[float], list[float], list[float]]:
-        """(travel, ratio, stroke) at the table's points (m, -, m): the lookups' arguments."""
-        return self._w, self._r, self._s
-
-    def travel_at_stroke(self, stroke: float) -> float:
-        """The rear wheel travel (m) at shock ``stroke`` (m): ``stroke``'s inverse, the ratio held at
-        the table's ends beyond them."""
-        w, r, s = self._w, self._r, self._s
-        if stroke <= 0.0:
-            return stroke * r[0]
-        if stroke >= s[-1]:
-            return w[-1] + (stroke - s[-1]) * r[-1]
-        i = bisect.bisect_right(s, stroke) - 1
-        b, ds = (r[i + 1] - r[i]) / (w[i + 1] - w[i]), stroke - s[i]
-        return w[i] + (ds * r[i] if abs(b) * ds < 1e-12 else r[i] * math.expm1(b * ds) / b)
-
-    @property
-    def full_travel(self) -> float:
-        return float(self._w[-1])
-
-    @property
-    def full_stroke(self) -> float:
-        return float(self._s[-1])
-
-
-def stroke_piece(r0: float, r1: float, h: float, x: float) -> float:
-    """Integral from 0 to x of du / (r0 + (r1 - r0) u / h)."""
-    b = (r1 - r0) / h
-    if abs(b) * x < 1e-9 * r0:
-        return x / r0
-    return math.log((r0 + b * x) / r0) / b
-
-
-# The leverage curve's lookups as plain functions of the table (travel w_tab, ratio r, stroke s at
-# each point) and the piece i = bisect_right(w_tab, w) - 1 holding w: ``Leverage`` calls them on
-# its lists, the compiled bike callback (``mtbmj.bike.callback_compiled``) compiles these same
-# functions and finds i by its own bisection.
-def leverage_ratio(w_tab, r, i, w: float) -> float:
-    """LR at rear wheel travel ``w`` (m); constant past the table's ends."""
-    n = len(w_tab)
-    if w <= w_tab[0]:
-        return r[0]
-    if w >= w_tab[n - 1]:
-        return r[n - 1]
-    return r[i] + (r[i + 1] - r[i]) * (w - w_tab[i]) / (w_tab[i + 1] - w_tab[i])
-
-
-def leverage_stroke(w_tab, r, s, i, w: float) -> float:
-    """Shock stroke (m) at rear wheel travel ``w`` (m), the ratio held at its end values outside
-    the table."""
-    n = len(w_tab)
-    if w <= 0.0:
-        return w / r[0]
-    if w >= w_tab[n - 1]:
-        return s[n - 1] + (w - w_tab[n - 1]) / r[n - 1]
-    return s[i] + stroke_piece(r[i], r[i + 1], w_tab[i + 1] - w_tab[i], w - w_tab[i])
 
 
 @dataclass(frozen=True)

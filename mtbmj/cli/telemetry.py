@@ -72,7 +72,7 @@ def decoding(args, bike=None) -> dict:
         bike = spec.load(args.bike if bike is None else bike)
         fork_setup, _ = bike_run.setups(bike)
         fork_max, shock_max = fork_setup.travel * 1e3, bike.shock_stroke * 1e3
-        leverage = telemetry.LeverageCurve(tuple(w * 1e3 for w in bike.leverage.travel), tuple(bike.leverage.ratio))
+        leverage = bike.leverage  # the one leverage class: the bike's curve decodes the ride as it is
         sensors = bike.sensors  # the recorder's calibration on this bike ([sensors]), else the SST example's
         if "fork_arm_mm" in sensors:
             extra["front"] = telemetry.IsoscelesTriangle(sensors["fork_arm_mm"], sensors["fork_max_mm"])
