@@ -266,8 +266,7 @@ MAX_MAGNITUDE = limits.MAX_MAGNITUDE
 # not both. A later source (a file over its base, overrides over the file) replaces the value
 # whichever key it uses.
 
-# The package's one table of the units riders type: every conversion of lb/in and psi is one of these
-# (``mtbmj.compose`` reads PA_PER_PSI, ``mtbmj.bike.shock`` N_PER_MM_PER_LB_PER_IN).
+# The one table of lb/in and psi (compose reads PA_PER_PSI, bike.shock N_PER_MM_PER_LB_PER_IN).
 # 1 lb/in = 1 lbf / 1 in = (0.45359237 kg x 9.80665 m/s2) / 25.4 mm = 0.175126835 N/mm (the pound
 # and the inch are exact by definition, standard gravity too)
 N_PER_MM_PER_LB_PER_IN = 0.45359237 * 9.80665 / 25.4
