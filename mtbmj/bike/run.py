@@ -551,7 +551,8 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
              drive: str = "rider", start_x: float | None = None,
              progress: Callable[[float], None] | None = None, callback: str = "auto", lock=(),
              rear_tire: bool = True, overrides=None, seated: bool = False, pedal=None) -> BikeResult:
-    """Roll the bike ``bike`` (a preset name, a TOML path or a ``BikeSpec``) over ``scenario`` (a
+    """Roll the bike ``bike`` (a preset name, a TOML path, a ``mtbmj.bike.spec.ResolvedBike``, which
+    ``overrides`` derive again without reading its file, or a ``BikeSpec``) over ``scenario`` (a
     terrain spec of ``mtbmj roll``) at ``speed_m_per_s``; ``duration`` defaults to the time for both
     wheels to cross the feature and settle; ``drive`` "rider" (a speed controller within a rider's
     limits) or "coast"; ``start_x`` the front axle's start (default the terrain's); ``callback``
