@@ -119,6 +119,28 @@ class RunOutput:
                            "at_time_s": float(a["time_s"][i]) if n else 0.0}
         return out
 
+    def plot_stacked(self, panels, data: dict, axes=None, label: str = "", legend: dict | None = None,
+                     **line_kwargs):
+        """``panels`` ((column, y label) each) of ``data`` against time on stacked axes (given, or a
+        new figure's, three panels 7 x 7 in): several runs drawn on the same axes compare them. The
+        first axis holds the legend (``legend``: its keywords). Returns the figure; every rig's
+        ``plot`` draws through it."""
+        if axes is None:
+            from matplotlib.figure import Figure
+
+            fig = Figure(figsize=(7, 7), layout="constrained")
+            axes = fig.subplots(len(panels), 1, sharex=True)
+        else:
+            fig = axes[0].figure
+        for ax, (column, text) in zip(axes, panels):
+            ax.plot(self.time, data[column], label=label, **line_kwargs)
+            ax.set_ylabel(text)
+            ax.grid(True, alpha=0.3)
+        axes[-1].set_xlabel("time [s]")
+        if legend is not None:
+            axes[0].legend(**legend)
+        return fig
+
     def files(self, stream: bool = False, figure: bool = True) -> dict:
         """Everything ``write`` puts in an output directory (name -> bytes; with ``stream`` the
         engine-rate CSV is an iterable of chunks, so a long run is never all text in memory);

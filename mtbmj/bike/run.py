@@ -173,7 +173,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     lock = _check_lock(lock, rear_tire)
     if isinstance(bike, spec_mod.BikeSpec) and overrides:
         raise ConfigError("overrides: give them with a bike name or file, not a ready-made BikeSpec")
-    spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(str(bike), overrides)
+    spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(bike, overrides)  # a ResolvedBike is not read again
     if seated:
         if spec.rider.seated_com is None:
             raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider (the rider's centre of mass "
@@ -536,23 +536,10 @@ class BikeResult(RunOutput):
     def plot(self, axes=None, label: str | None = None, **line_kwargs):
         """Front travel, rear wheel travel and pitch against time on three stacked axes (given, or
         a new figure's): several runs drawn on the same axes compare them. Returns the figure."""
-        if axes is None:
-            from matplotlib.figure import Figure
-
-            fig = Figure(figsize=(7, 7), layout="constrained")
-            axes = fig.subplots(3, 1, sharex=True)
-        else:
-            fig = axes[0].figure
-        label = label or f"{self.name} over {self.scenario}"
-        for ax, (column, text) in zip(axes, (("front_travel_mm", "front travel [mm]"),
-                                             ("rear_travel_mm", "rear wheel travel [mm]"),
-                                             ("pitch_deg", "pitch, nose up [deg]"))):
-            ax.plot(self.time, self.raw[column], label=label, **line_kwargs)
-            ax.set_ylabel(text)
-            ax.grid(True, alpha=0.3)
-        axes[-1].set_xlabel("time [s]")
-        axes[0].legend(loc="best", fontsize=8)
-        return fig
+        return self.plot_stacked((("front_travel_mm", "front travel [mm]"), ("rear_travel_mm", "rear wheel travel [mm]"),
+                                  ("pitch_deg", "pitch, nose up [deg]")), self.raw, axes,
+                                 label or f"{self.name} over {self.scenario}", {"loc": "best", "fontsize": 8},
+                                 **line_kwargs)
 
 
 def default_duration(p: Prepared) -> float:
@@ -564,7 +551,8 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
              drive: str = "rider", start_x: float | None = None,
              progress: Callable[[float], None] | None = None, callback: str = "auto", lock=(),
              rear_tire: bool = True, overrides=None, seated: bool = False, pedal=None) -> BikeResult:
-    """Roll the bike ``bike`` (a preset name, a TOML path or a ``BikeSpec``) over ``scenario`` (a
+    """Roll the bike ``bike`` (a preset name, a TOML path, a ``mtbmj.bike.spec.ResolvedBike``, which
+    ``overrides`` derive again without reading its file, or a ``BikeSpec``) over ``scenario`` (a
     terrain spec of ``mtbmj roll``) at ``speed_m_per_s``; ``duration`` defaults to the time for both
     wheels to cross the feature and settle; ``drive`` "rider" (a speed controller within a rider's
     limits) or "coast"; ``start_x`` the front axle's start (default the terrain's); ``callback``

@@ -53,6 +53,7 @@ from mtbmj.controllers.lawcodes import FLOAT_WIDTH as LAW_FLOAT_WIDTH, INT_WIDTH
 from mtbmj.controllers.lawcodes import UnsupportedLaw, flatten
 from mtbmj.controllers.native_data import Registry, mjdata_layout, verify
 from mtbmj.controllers.stops import STIFFENING_M
+from mtbmj.runpath.callbacks import CompiledShell
 
 MAX_PATCHES = 64
 SLOTS = 64
@@ -530,7 +531,7 @@ def _int_field(index: int, doc: str):
     return property(get, set, doc=doc)
 
 
-class CompiledRollCallback(ctypes._CFuncPtr):
+class CompiledRollCallback(CompiledShell, ctypes._CFuncPtr):
     """Compiled counterpart of ``mtbmj.rolling.frontend.RollCallback`` (same constructor, same attributes):
     a C function pointer for ``mujoco.set_mjcb_control`` / ``controllers.installed`` that writes
     the fork force, the LuGre state rate, the tire force and deflection probe and the speed
@@ -545,6 +546,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
     _flags_ = ctypes._FUNCFLAG_CDECL
     _argtypes_ = (ctypes.c_void_p, ctypes.c_void_p)
     _restype_ = None
+    registry = REGISTRY
 
     def __new__(cls, front, fork_law, tire, speed, x_ref0, refresh=None, drive=None):
         reason = unavailable_reason()
@@ -555,6 +557,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
     def __init__(self, front, fork_law, tire, speed, x_ref0, refresh=None, drive=None):
         from mtbmj.rolling import terrain as terrain_mod
         from mtbmj.rolling import tire as tire_model
+        from mtbmj.rolling.callback import find_indices
 
         law_ints, law_floats = flatten(fork_law)  # UnsupportedLaw for a law with no compiled form
         if type(tire) is not tire_model.RadialTire:
@@ -567,18 +570,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         self._model = m  # keeps the mjModel (and so its address) alive while the slot is used
         self._address = m._address
         self.front, self.law, self.tire = front, fork_law, tire
-        j = lambda name: (int(m.joint(name).qposadr[0]), int(m.joint(name).dofadr[0]))  # noqa: E731
-        self.xq, self.xv = j("chassis_x")
-        self.zq, self.zv = j("chassis_z")
-        self.fq, self.fv = j("fork")
-        a = lambda name: int(m.actuator(name).id)  # noqa: E731
-        self.a_state, self.a_fork = a("friction_state"), a("fork_force")
-        self.a_dp, self.a_dv, self.a_tx, self.a_tz = a("drive_position"), a("drive_velocity"), a("tire_x"), a("tire_z")
-        self.a_probe = a("tire_deflection_probe")
-        self.a_touch = a("tire_touch_probe")
-        self.act_index = int(m.actuator_actadr[self.a_state])
-        self.has_state = fork_law.has_state
-        self.cos, self.sin = front.axis
+        find_indices(self, front, fork_law)  # what it reads of the model, as RollCallback
         if drum:
             self._ta = np.ascontiguousarray(ter.polar[:, 0], dtype=np.float64)
             self._tb = np.ascontiguousarray(ter.polar[:, 1], dtype=np.float64)
@@ -667,10 +659,6 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         rows = _FLOATS[self.slot, F_PATCHES:F_PATCHES + 6 * n].reshape(n, 6)
         return [tuple(float(v) for v in row) for row in rows]
 
-    @property
-    def active(self) -> bool:
-        return REGISTRY.live(self.slot, self._address) and self._finalizer.alive
-
     def reset(self) -> None:
         """Forget the patches: the next step recomputes them (RollCallback.reset)."""
         _INTS[self.slot, R_NPATCH] = 0
@@ -684,19 +672,9 @@ class CompiledRollCallback(ctypes._CFuncPtr):
     def axle_state(self, qpos, qvel):
         return self.front.axle_state(qpos, qvel, (self.xq, self.zq, self.fq, self.xv, self.zv, self.fv))
 
-    @property
-    def address(self) -> int:
-        return ctypes.cast(self, ctypes.c_void_p).value
-
-    def __call__(self, m, d):
-        """Call the compiled function from Python (as ``RollCallback(m, d)``)."""
-        super().__call__(m._address, d._address)
-
-    def close(self) -> None:
-        """Free the registry slot now (also done when the object is collected)."""
-        if self._finalizer.alive:
-            self._closed = {i: int(_INTS[self.slot, i]) for i in (R_CALLS, R_REFRESHES, R_OVERFLOW)}
-            self._finalizer()
+    def counters(self) -> dict:
+        """The slot's counters (kept by ``close``)."""
+        return {i: int(_INTS[self.slot, i]) for i in (R_CALLS, R_REFRESHES, R_OVERFLOW)}
 
     def __repr__(self):
         return f"<CompiledRollCallback slot={getattr(self, 'slot', None)} law={getattr(self, 'law', None)!r}>"
