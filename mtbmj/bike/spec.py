@@ -151,6 +151,7 @@ class Rider:
     arm_stiffness: float  # N/m, both arms
     arm_damping: float  # N s/m
     seated_com: tuple[float, float] | None = None  # m, frame coordinates, seated on the saddle (None: not given)
+    height: float = 1.78  # m, the whole rider's stature (the active rider's segments: mtbmj.bike.rider_body)
 
 
 @dataclass(frozen=True)
@@ -448,7 +449,7 @@ KNOWN = {
     "shock": {"stroke_mm", "config", "set", *_shock.KEYS},
     "fork": {"config", "set"},
     "rider": {"mass_kg", "limbs_share_percent", "com_mm", "pitch_inertia_kg_m2", "pedals_mm", "bars_mm",
-              "seated_com_mm", "seated_com_from_saddle_mm", "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
+              "seated_com_mm", "seated_com_from_saddle_mm", "height_m", "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
               "arm_stiffness_N_per_mm", "arm_damping_N_s_per_m"},
     "drive": {"push_N", "power_W", "brake_N", "traction", "chainring_teeth", "cog_teeth", "chain"},
     "sensors": set(SENSOR_KEYS),
@@ -686,7 +687,9 @@ def load(ref: str, overrides=None) -> BikeSpec:
                   _number(table, "rider", "leg_damping_N_s_per_m", nonneg=True),
                   _number(table, "rider", "arm_stiffness_N_per_mm", positive=True) * 1e3,
                   _number(table, "rider", "arm_damping_N_s_per_m", nonneg=True),
-                  _point(table, "rider", "seated_com_mm") if "seated_com_mm" in table.get("rider", {}) else None)
+                  _point(table, "rider", "seated_com_mm") if "seated_com_mm" in table.get("rider", {}) else None,
+                  _number(table, "rider", "height_m", positive=True) if "height_m" in table.get("rider", {}) else 1.78)
+    limits.within("rider.height_m", rider.height, limits.RIDER_HEIGHT_M, "m")
     for section in ("fork", "shock"):
         cfg = table.get(section, {}).get("config", "reference")
         if not isinstance(cfg, str):
