@@ -326,15 +326,16 @@ def stance(spec, body: rb.Body, seated: bool = False) -> tuple[tuple, float]:
     return hip, rb.trunk_for_reach(body, hip, grip, reach)
 
 
-def activate(p, seated: bool = False, settle_s: float = 1.0):
+def activate(p, make_inner, integrator, hold: float, seated: bool = False, settle_s: float = 1.0):
     """The prepared run ``p`` (``mtbmj.bike.run.prepare``, the rigid rider) with the articulated
     rider instead: the same bike, terrain, tires, laws and drive; the bike's joints where the rigid
     rider's static equilibrium put them, the body in its stance, then ``settle_s`` of settling in
-    place (the bike held fore and aft, coasting) before it is set rolling at the run's speed."""
+    place (the bike held fore and aft by an armature ``hold``, coasting) before it is set rolling at
+    the run's speed. ``make_inner(bike)``: the bike's callback of the run's kind for the new model
+    (``mtbmj.bike.run.make_callback``); ``integrator``: the model's (``mjtIntegrator``)."""
     from mtbmj.bike import crash
     from mtbmj.bike.callback import BikeCallback
     from mtbmj.bike.model import build_bike
-    from mtbmj.bike.run import INTEGRATORS, LOCK_ARMATURE, callback_kind, make_callback
     from mtbmj.controllers import installed
     from mtbmj.controllers.drive import Drive
 
@@ -354,7 +355,7 @@ def activate(p, seated: bool = False, settle_s: float = 1.0):
     limp = dataclasses.replace(spec, rider=dataclasses.replace(r, leg_stiffness=0.0, leg_damping=0.0,
                                                                 arm_stiffness=0.0, arm_damping=0.0))
     old, s = p.bike, p.fork_setup
-    b = build_bike(spec, old.tire_radius, p.terrain, p.timestep, INTEGRATORS[s.integrator], p.gravity,
+    b = build_bike(spec, old.tire_radius, p.terrain, p.timestep, integrator, p.gravity,
                    old.x0 + spec.front_axle[0], s.fork_length, visual=False, articulated=(body, pose0))
     b = dataclasses.replace(b, spec=limp)  # the rigid rider's legs and arms: nothing on the trunk
     rear = p.rear_tire
@@ -362,8 +363,7 @@ def activate(p, seated: bool = False, settle_s: float = 1.0):
     ctl = Controller(body, pedal, grip, hip, trunk, edges(p.terrain), p.speed, wheelbase, seated,
                      saddle_point(spec), old.x0 + spec.front_axle[0])
     refresh = p.callback.refresh
-    inner = make_callback(callback_kind(p.callback), b, p.fork_law, p.shock_law, p.front_tire, rear, p.drive,
-                          p.speed, p.traction, refresh)
+    inner = make_inner(b)
     rc = RiderCallback(b.model, inner, body, pose0, ctl)
     data = mujoco.MjData(b.model)
     names = ("bike_x", "bike_z", "pitch", "fork", "swingarm")
@@ -376,7 +376,7 @@ def activate(p, seated: bool = False, settle_s: float = 1.0):
     settle = RiderCallback(b.model, coast, body, pose0, dataclasses.replace(ctl, edges=[]))  # the stance
     xdof = b.dof_index("bike_x")
     keep = float(b.model.dof_armature[xdof])
-    b.model.dof_armature[xdof] = LOCK_ARMATURE
+    b.model.dof_armature[xdof] = hold
     with installed(settle):
         for _ in range(int(round(settle_s / p.timestep))):
             mujoco.mj_step(b.model, data)

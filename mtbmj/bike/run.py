@@ -174,7 +174,12 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
         if lock or not rear_tire:
             raise ConfigError("rider: the active rider rides the whole bike (no lock, no lifted rear)")
         p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire, overrides, False, pedal)
-        return rider_control.activate(p, seated)
+        kind = callback_kind(p.callback)
+        rear = p.rear_tire
+        return rider_control.activate(
+            p, lambda b: make_callback(kind, b, p.fork_law, p.shock_law, p.front_tire, rear, p.drive, p.speed,
+                                       p.traction, p.callback.refresh),
+            INTEGRATORS[p.fork_setup.integrator], LOCK_ARMATURE, seated)
 
     if pedal is not None:
         if drive != "rider":
