@@ -185,7 +185,7 @@ KNOWN = {
     "shock": {"stroke_mm", "config", "set", *_shock.KEYS},
     "fork": {"config", "set"},
     "rider": {"mass_kg", "limbs_share_percent", "com_mm", "pitch_inertia_kg_m2", "pedals_mm", "bars_mm",
-              "seated_com_mm", "seated_com_from_saddle_mm", "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
+              "seated_com_mm", "seated_com_from_saddle_mm", "height_m", "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
               "arm_stiffness_N_per_mm", "arm_damping_N_s_per_m"},
     "drive": {"push_N", "power_W", "brake_N", "traction", "chainring_teeth", "cog_teeth", "chain"},
     "sensors": set(SENSOR_KEYS),

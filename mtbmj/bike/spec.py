@@ -48,6 +48,7 @@ class Rider:
     arm_stiffness: float  # N/m, both arms
     arm_damping: float  # N s/m
     seated_com: tuple[float, float] | None = None  # m, frame coordinates, seated on the saddle (None: not given)
+    height: float = 1.78  # m, the whole rider's stature (the active rider's segments: mtbmj.bike.rider_body)
 
 
 @dataclass(frozen=True)
@@ -393,7 +394,9 @@ def derive(source: str, read: dict, overrides=None, csv: dict | None = None) -> 
                   _number(table, "rider", "leg_damping_N_s_per_m", nonneg=True),
                   _number(table, "rider", "arm_stiffness_N_per_mm", positive=True) * 1e3,
                   _number(table, "rider", "arm_damping_N_s_per_m", nonneg=True),
-                  _point(table, "rider", "seated_com_mm") if "seated_com_mm" in table.get("rider", {}) else None)
+                  _point(table, "rider", "seated_com_mm") if "seated_com_mm" in table.get("rider", {}) else None,
+                  _number(table, "rider", "height_m", positive=True) if "height_m" in table.get("rider", {}) else 1.78)
+    limits.within("rider.height_m", rider.height, limits.RIDER_HEIGHT_M, "m")
     for section in ("fork", "shock"):
         cfg = table.get(section, {}).get("config", "reference")
         if not isinstance(cfg, str):
