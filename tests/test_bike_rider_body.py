@@ -160,6 +160,18 @@ def test_active_riders_torques_stay_within_their_limits(drop_1m):
     assert r["peak_power_W"] <= rc.POWER_W + 1e-6
 
 
+def test_an_active_riders_folder_replays_with_the_active_rider(drop_1m, tmp_path):
+    """``render`` re-simulates a bike folder: an active rider's run is replayed with the active rider
+    (it was replayed passive, which crashed, and the folder was refused as not reproduced)."""
+    from mtbmj.bike import replay
+
+    folder = tmp_path / "act"
+    drop_1m.write(folder, figure=False)
+    again = replay.rerun(folder)
+    assert again.summary["rider"]["kind"] == "active" and again.summary["crash"] is None
+    assert np.max(np.abs(again.raw["front_travel_mm"] - drop_1m.raw["front_travel_mm"])) < 1e-6
+
+
 def test_passive_rider_still_goes_over_the_bars():
     res = run_bike("sst", "drop:height_mm=1000", 5.0)
     assert res.summary["crash"]["kind"] == "over the bars"
