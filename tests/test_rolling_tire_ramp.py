@@ -73,6 +73,17 @@ def test_without_fine_rows_the_edge_rises_in_one_coarse_row(monkeypatch):
     assert np.abs(np.diff(force)).max() > 0.10 * force.max()
 
 
+def test_the_render_frames_lie_on_the_coarse_grid():
+    """``roll_trajectory`` (what ``render`` draws) samples the coarse grid's states evenly, whatever
+    fine rows the run kept over the edge (it picked states a fine step late, unevenly spaced)."""
+    from mtbmj.rolling.frontend import roll_trajectory
+
+    _, times, _ = roll_trajectory("square_edge", 4.0, drive="servo")
+    steps = times / 5e-4
+    assert np.max(np.abs(steps - np.round(steps))) < 1e-6
+    assert np.ptp(np.diff(times)) < 1e-9
+
+
 def test_the_default_run_agrees_with_the_reference_on_the_square_edge():
     """The fine rows keep the cross-check's 0.02 mm: the ODE reference solved at every row's time."""
     from mtbmj.rolling.reference import crosscheck

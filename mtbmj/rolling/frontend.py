@@ -638,7 +638,8 @@ def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12"
     states, _ = simulate(p, duration, grid=grid)
     dt = p.setup.timestep
     every = max(1, int(round(1.0 / (fps * dt))))
-    rows = states[np.concatenate(([0], 1 + np.flatnonzero(grid[0])))][::every]  # the coarse grid's states
+    # the coarse grid's states: the start state of every row on the grid, and the last state
+    rows = states[np.append(np.flatnonzero(grid[0]), grid[0].size)][::every]
     nq = p.front.model.nq
     return p.front.model, rows[:, 0].copy(), rows[:, 1:1 + nq].copy()
 
