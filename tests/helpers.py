@@ -590,9 +590,9 @@ RIDE_RATE = 1000
 RIDE_SECONDS = 20.0
 RATIO = 2.5  # the rear's constant leverage ratio
 
-# a bike of two decoupled ends (tests/test_reconstruct.py's generator)
-def two_ends_bike(fork_rate=9.0):
-    """A bike of two decoupled ends at ``fork_rate`` N/mm (tests/test_reconstruct.py's generator's)."""
+def _two_ends_toml(fork_rate, fork_damper: str, shock_damper: str, tail: str = "") -> str:
+    """A bike file of two decoupled ends: the trail base, a constant leverage ``RATIO``, an S1 fork
+    at ``fork_rate`` N/mm and an S1 shock at 90 N/mm, each with its damper's lines as given."""
     return f"""base = "trail"
 [leverage]
 wheel_travel_mm = [0.0, 125.0]
@@ -603,44 +603,31 @@ config = "S1"
 "fork.travel_mm" = 130.0
 "fork.length_mm" = 530.0
 "fork.spring.rate_N_per_mm" = {fork_rate}
-"fork.damper.coefficient_N_s_per_m" = 600.0
+{fork_damper}
 [shock]
 stroke_mm = 50.0
 config = "S1"
 [shock.set]
 "fork.travel_mm" = 50.0
 "fork.spring.rate_N_per_mm" = 90.0
-"fork.damper.coefficient_N_s_per_m" = 2500.0
-"""
+{shock_damper}
+{tail}"""
+
+
+# a bike of two decoupled ends (tests/test_reconstruct.py's generator)
+def two_ends_bike(fork_rate=9.0):
+    """A bike of two decoupled ends at ``fork_rate`` N/mm (tests/test_reconstruct.py's generator's)."""
+    return _two_ends_toml(fork_rate, '"fork.damper.coefficient_N_s_per_m" = 600.0',
+                          '"fork.damper.coefficient_N_s_per_m" = 2500.0')
 
 
 BIKE = two_ends_bike()
 
 
 def bike_text(fork_rate=12.0, fork_comp=500.0, fork_reb=700.0):
-    return f"""base = "trail"
-[leverage]
-wheel_travel_mm = [0.0, 125.0]
-ratio = [{RATIO}, {RATIO}]
-[fork]
-config = "S1"
-[fork.set]
-"fork.travel_mm" = 130.0
-"fork.length_mm" = 530.0
-"fork.spring.rate_N_per_mm" = {fork_rate}
-"fork.damper.model" = "bilinear"
-"fork.damper.compression_N_s_per_m" = {fork_comp}
-"fork.damper.rebound_N_s_per_m" = {fork_reb}
-[shock]
-stroke_mm = 50.0
-config = "S1"
-[shock.set]
-"fork.travel_mm" = 50.0
-"fork.spring.rate_N_per_mm" = 90.0
-"fork.damper.model" = "bilinear"
-"fork.damper.compression_N_s_per_m" = 2500.0
-"fork.damper.rebound_N_s_per_m" = 3500.0
-{SENSORS_TOML}"""
+    bilinear = '"fork.damper.model" = "bilinear"\n"fork.damper.compression_N_s_per_m" = {}\n"fork.damper.rebound_N_s_per_m" = {}'
+    return _two_ends_toml(fork_rate, bilinear.format(fork_comp, fork_reb), bilinear.format(2500.0, 3500.0),
+                          SENSORS_TOML)
 
 
 def hidden_profile(seed=7):

@@ -326,7 +326,7 @@ def _chunked_rows(model, data, steps, timestep, rig, plan, progress, counts, rep
         on_grid.append(mask)
         counts.stepped += int(mask.sum())
 
-    made = stepped(model, data, steps, timestep, rig, plan, sink, progress, report_every, stop=stop)
+    stepped(model, data, steps, timestep, rig, plan, sink, progress, report_every, stop=stop)
     sensors = np.concatenate(sensor_blocks) if sensor_blocks else np.empty((0, model.nsensordata))
     mask = np.concatenate(on_grid) if on_grid else np.empty(0, dtype=bool)
     if grid is not None:
