@@ -65,9 +65,12 @@ def test_the_default_run_meets_a_square_edge_step_by_step(edge_run):
 def test_without_fine_rows_the_edge_rises_in_one_coarse_row(monkeypatch):
     """The check above can fail: the same run keeping only the coarse grid's rows of its fine
     stretches (as before) shows the edge's rise as one jump of more than 10 % of the peak."""
+    import dataclasses
+
     from mtbmj.rolling import frontend
 
-    monkeypatch.setattr(frontend._Refine, "fine_rows", False)
+    kept = frontend.refinement
+    monkeypatch.setattr(frontend, "refinement", lambda p: dataclasses.replace(kept(p), fine_rows=False))
     run = run_roll("square_edge", 4.0, drive="servo")
     force = run.raw["tire_force_N"]
     assert np.abs(np.diff(force)).max() > 0.10 * force.max()

@@ -48,7 +48,7 @@ from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 from mtbmj.bike.callback import BikeCallback
 from mtbmj.bike.summary import gear_speed, signals, summary
-from mtbmj.bike.stepping import CHUNK_STEPS, FINE_MIN_STEPS, Stepping, stepping
+from mtbmj.bike.stepping import Stepping, stepping
 from mtbmj.runpath import callbacks, guard, loop
 
 CHUNK = 10000
@@ -382,31 +382,6 @@ def simulate(p: Prepared, duration: float, progress=None):
                                      lambda: getattr(p.callback, "overflowed", False), to_python, "bike")
 
 
-@dataclass
-class _Refine:
-    """The bike's refinement plan (``mtbmj.runpath.loop.Refinement``): a chunk stepped coarse is
-    looked at after the fact (``Stepping.within_reach``) and its stretch near a stop or a rim redone
-    at the fine step (``mtbmj.bike.stepping``)."""
-
-    p: Prepared
-    fork_col: int
-    phi_col: int
-    deflection_cols: list
-    min_steps: int = FINE_MIN_STEPS
-    max_chunk: int = CHUNK_STEPS
-
-    @property
-    def substeps(self) -> int:
-        return self.p.stepping.substeps
-
-    def span(self, states, sensors):
-        return self.p.stepping.within_reach(states[:, self.fork_col], states[:, self.phi_col],
-                                            [sensors[:, c] for c in self.deflection_cols])
-
-    def before_fine(self) -> None:
-        self.p.callback.reset()  # the patches of the chunk's end: the fine pass searches afresh
-
-
 def _simulate(p: Prepared, duration: float, progress=None):
     """Step ``duration`` s on the shared run path (``mtbmj.runpath.loop.chunked``) with the bike's
     refinement plan: where a chunk came within reach of an end stop or a rim, its steps from the
@@ -414,8 +389,9 @@ def _simulate(p: Prepared, duration: float, progress=None):
     model = p.bike.model
     steps = int(round(duration / p.timestep))
     b = p.bike
-    plan = _Refine(p, 1 + b.qpos_index("fork"), 1 + b.qpos_index("swingarm"),
-                   [int(model.sensor_adr[model.sensor(n).id]) for n in ("front_deflection", "rear_deflection")])
+    sensors = [int(model.sensor_adr[model.sensor(n).id]) for n in ("front_deflection", "rear_deflection")]
+    plan = p.stepping.refinement(1 + b.qpos_index("fork"), 1 + b.qpos_index("swingarm"), sensors,
+                                 lambda: p.callback.reset())  # the patches of the chunk's end: searched afresh
     counts = loop.Counts()
     try:
         with installed(p.callback):

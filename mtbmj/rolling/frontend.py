@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Callable, ClassVar, Mapping
+from typing import Callable, Mapping
 
 import mujoco
 import numpy as np
@@ -311,7 +311,7 @@ def default_duration(p: Prepared) -> float:
 def simulate(p: Prepared, duration: float, progress=None, grid: list | None = None):
     """(states (n+1, nstate) incl. t = 0, sensordata (n, nsensor) of each step's start state), on
     the shared run path (``mtbmj.runpath.loop.chunked``) at the coarse step, stepped again at the
-    fine step where :class:`_Refine` finds a stop, the rim or the tire's ramp within reach; a fine
+    fine step where :func:`refinement` finds a stop, the rim or the tire's ramp within reach; a fine
     stretch's rows are at the fine step (``grid``, a list, receives the mask of the rows on the
     coarse grid).
 
@@ -330,51 +330,32 @@ def simulate(p: Prepared, duration: float, progress=None, grid: list | None = No
                                      lambda: getattr(p.callback, "overflowed", False), to_python, "rolling")
 
 
-@dataclass
-class _Refine:
-    """The front end's refinement plan (``mtbmj.runpath.loop.Refinement``, as the bike's): a chunk
+def refinement(p: Prepared) -> loop.Refinement:
+    """The front end's refinement (``mtbmj.runpath.loop.Refinement``, the bike's kind): a chunk
     stepped coarse is looked at after the fact and its stretch within reach of a fork stop, the rim
     or the tire's touchdown, lift-off and damping ramp (its first ``TIRE_DAMPING_DEPTH_M``, where
     the force's slope changes fastest) at its deepest patch or at its shallowest (``tire_touch``: a
     square edge's corner touching down while the tread is deep on the flat) (``steprule.reach_span``)
     stepped again at the fine step, whose rows are kept (``fine_rows``): on
     a 20 mm washboard at 5 m/s the tire lightens to 0.7 mm, where the coarse step alone leaves the
-    fork 0.06 mm from the fine step's travel."""
-
-    p: Prepared
-    fork_col: int
-    deflection_col: int
-    touch_col: int
-    min_steps: int = loop.FINE_MIN_STEPS
-    max_chunk: int = loop.REFINE_CHUNK
-    fine_rows: ClassVar[bool] = True  # a fine stretch's rows at the fine step: a square edge's rise seen step by step
-
-    @property
-    def substeps(self) -> int:
-        return self.p.setup.substeps
-
-    def span(self, states, sensors):
-        s = self.p.setup
-        rim = s.tire.rim.max_deflection if s.tire.rim is not None else math.inf
-        deflection = sensors[:, self.deflection_col]
-        return steprule.reach_span([(states[:, self.fork_col], steprule.stop_zone(s.fork.spring),
-                                     steprule.REACH_MARGIN_M),
-                                    (deflection, (-math.inf, rim), steprule.REACH_MARGIN_M),
-                                    (deflection, (0.0, TIRE_DAMPING_DEPTH_M), steprule.REACH_MARGIN_M, "inside"),
-                                    (sensors[:, self.touch_col], (0.0, TIRE_DAMPING_DEPTH_M), steprule.REACH_MARGIN_M,
-                                     "inside")])
-
-    def before_fine(self) -> None:
-        self.p.callback.reset()  # the patches of the chunk's end: the fine pass searches afresh
+    fork 0.06 mm from the fine step's travel. Before a fine stretch the callback searches its
+    patches afresh (they are the chunk's end's)."""
+    s, model = p.setup, p.front.model
+    sensor = lambda name: int(model.sensor_adr[model.sensor(name).id])  # noqa: E731
+    rim = s.tire.rim.max_deflection if s.tire.rim is not None else math.inf
+    margin, ramp = steprule.REACH_MARGIN_M, (0.0, TIRE_DAMPING_DEPTH_M)
+    watches = (loop.Watch("state", 1 + int(model.joint("fork").qposadr[0]), steprule.stop_zone(s.fork.spring), margin),
+               loop.Watch("sensor", sensor("tire_deflection"), (-math.inf, rim), margin),
+               loop.Watch("sensor", sensor("tire_deflection"), ramp, margin, inside=True),
+               loop.Watch("sensor", sensor("tire_touch"), ramp, margin, inside=True))
+    return loop.Refinement(s.substeps, watches, lambda: p.callback.reset(), fine_rows=True)
 
 
 def _simulate(p: Prepared, duration: float, progress=None, grid: list | None = None):
     steps = int(round(duration / p.setup.timestep))
     model = p.front.model
-    sensor = lambda name: int(model.sensor_adr[model.sensor(name).id])  # noqa: E731
-    plan = _Refine(p, 1 + int(model.joint("fork").qposadr[0]), sensor("tire_deflection"), sensor("tire_touch"))
     with installed(p.callback):
-        return loop.chunked(model, p.data, steps, p.setup.timestep, "rolling", plan, progress,
+        return loop.chunked(model, p.data, steps, p.setup.timestep, "rolling", refinement(p), progress,
                             chunk=CHUNK, report_every=loop.REFINE_CHUNK, grid=grid)
 
 

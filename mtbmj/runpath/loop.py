@@ -40,7 +40,7 @@ import numpy as np
 from mujoco import rollout
 
 from mtbmj import errors
-from mtbmj.runpath import guard
+from mtbmj.runpath import guard, steprule
 
 CHUNK = 10000  # steps per chunk where no refinement is planned
 REFINE_CHUNK = 1024  # coarse steps per chunk an after-the-fact plan looks at
@@ -72,19 +72,52 @@ class Plan(Protocol):
         """Re-parameterise the model between two steps (the drop's tire law)."""
 
 
-class Refinement(Protocol):
-    substeps: int  # fine steps per coarse step where a stop may act (1: never)
-    min_steps: int  # a fine stretch covers at least this many coarse steps
-    max_chunk: int  # coarse steps per chunk
+@dataclass(frozen=True)
+class Watch:
+    """One signal a :class:`Refinement` watches, one value per coarse row: column ``column`` of the
+    states (``source`` "state": time, qpos, qvel, ...) or of the sensors ("sensor"), mapped by ``of``
+    where the signal is not the column itself (the bike's shock stroke from its swingarm angle);
+    ``zone`` (low, high) with stops at or below ``low`` and at or above ``high``, or with ``inside``
+    a band from ``low`` to ``high`` (a tire's fast-changing force); ``margin`` the reach added
+    (``steprule.reach_span``)."""
+
+    source: str
+    column: int
+    zone: tuple[float, float]
+    margin: float
+    inside: bool = False
+    of: Callable | None = None
+
+    def signal(self, states: np.ndarray, sensors: np.ndarray):
+        x = (states if self.source == "state" else sensors)[:, self.column]
+        x = x if self.of is None else self.of(x)
+        return (x, self.zone, self.margin, "inside") if self.inside else (x, self.zone, self.margin)
+
+
+@dataclass
+class Refinement:
+    """A rig's refinement for the "redo after the fact" plan, the one object the rolling front end
+    and the bike both hand :func:`chunked`: the signals it watches (:class:`Watch`), the fine steps
+    per coarse step where one is within reach (``substeps``; 1: never), what to do before a fine
+    stretch (``before``: the callbacks' contact search made afresh), a fine stretch's minimum
+    length and the coarse chunk looked at (``min_steps``, ``max_chunk``), and whether every fine
+    state of a fine stretch is an output row (``fine_rows``: the front end's square-edge rise seen
+    step by step)."""
+
+    substeps: int
+    watches: tuple[Watch, ...]
+    before: Callable[[], None] = lambda: None
+    min_steps: int = FINE_MIN_STEPS
+    max_chunk: int = REFINE_CHUNK
+    fine_rows: bool = False
 
     def span(self, states: np.ndarray, sensors: np.ndarray) -> tuple[int, int] | None:
-        """The first and the last row of a coarse chunk within reach of a stop, or None."""
+        """The first and the last row of a coarse chunk within reach of a watched stop or band
+        (``steprule.reach_span``), or None."""
+        return steprule.reach_span([w.signal(states, sensors) for w in self.watches])
 
     def before_fine(self) -> None:
-        """Called before a fine stretch (e.g. the callback's contact search made afresh)."""
-
-    # optional: ``fine_rows = True`` keeps every fine state of a fine stretch as an output row
-
+        self.before()
 
 
 @dataclass
@@ -125,7 +158,7 @@ class AfterTheFact:
         self.fine = False
         self.next = refine.max_chunk
         self.stretch = 0
-        self.fine_rows = bool(getattr(refine, "fine_rows", False))
+        self.fine_rows = refine.fine_rows
 
     def size(self, remaining: int) -> int:
         if self.fine:
