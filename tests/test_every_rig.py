@@ -10,29 +10,18 @@ import numpy as np
 import pytest
 
 import mtbmj
-from mtbmj.bike import spec as bike_spec
 from mtbmj.errors import RunError
+from mtbmj.rigs import RIGS
 
-DROPS = [("drop", name) for name in mtbmj.preset_names()]
-ROLLS = [("roll", name) for name in ("S12", "reference", "air120")]
-BIKES = [("bike", name) for name in bike_spec.preset_names()]
-CASES = DROPS + ROLLS + BIKES
+CASES = [(rig.name, preset) for rig in RIGS for preset in rig.presets()]
 
 
 def _run(rig: str, name: str):
-    """(the run's signals, its cross-check as a callable): short runs over a feature."""
-    if rig == "drop":
-        r = mtbmj.run_drop(name, duration=0.3)
-        return r.raw, lambda: mtbmj.crosscheck(name, duration=0.3)
-    if rig == "roll":
-        from mtbmj.rolling import reference
-
-        r = mtbmj.run_roll("square_edge:at_m=0.3", 3.0, config=name, duration=0.4)
-        return r.raw, lambda: reference.crosscheck("square_edge:at_m=0.3", 3.0, config=name, duration=0.4)
-    from mtbmj.bike import crosscheck
-
-    r = mtbmj.run_bike(name, "root:at_m=0.4", speed_m_per_s=4.0, duration=0.6)
-    return r.raw, lambda: crosscheck.crosscheck(name, "root:at_m=0.4", 4.0, duration=0.6)
+    """(the run's signals, its cross-check as a callable): the rig's short example over a feature,
+    through the registry's one face (no branch per rig)."""
+    face = RIGS[rig]
+    r = face.run(name, **face.example)
+    return r.raw, lambda: face.crosscheck(name, **face.example)
 
 
 def _columns(raw: dict) -> dict:
@@ -88,3 +77,34 @@ def test_a_diverging_run_of_every_rig_is_refused_the_same_way(rig, words, tmp_pa
     captured = capfd.readouterr()
     assert "WARNING" not in captured.out + captured.err
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+
+
+def test_the_registry_lists_every_rig_package_once_with_its_face():
+    """Every package on the rigs' floor (tests/test_layout.py's FLOORS, read from its text so no
+    test module is imported) has its ``rig.RIG`` in the registry, in the floor's order; each face
+    names its command, its presets and a short example its ``prepare`` takes as written."""
+    import importlib
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parent / "test_layout.py").read_text()
+    floor = re.search(r'\("rigs", \(([^)]*)\)\)', text).group(1)
+    packages = re.findall(r'"(mtbmj\.\w+)"', floor)
+    assert packages == ["mtbmj.drop", "mtbmj.rolling", "mtbmj.bike"]
+    assert [importlib.import_module(p + ".rig").RIG for p in packages] == list(RIGS)
+    assert [rig.command for rig in RIGS] == ["drop", "roll", "bike"]
+    for rig in RIGS:
+        assert len(rig.presets()) >= 2 and "auto" in rig.callbacks
+        assert rig.prepare(rig.presets()[0], **rig.example) is not None
+
+
+def test_the_registry_refuses_a_second_rig_of_one_name_and_names_the_known_ones():
+    from mtbmj.runpath.rig import Registry
+
+    registry = Registry()
+    registry.register(RIGS["bike"])
+    with pytest.raises(ValueError, match="registered already"):
+        registry.register(RIGS["bike"])
+    with pytest.raises(KeyError, match="known: bike"):
+        registry["tricycle"]
+    assert registry.names() == ["bike"] and len(registry) == 1

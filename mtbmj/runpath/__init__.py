@@ -17,6 +17,9 @@ refinement plan, its reference and its signals; ``mtbmj.runpath`` steps it.
   setup's laws and masses (:func:`steprule.limits`), the drop's steps (:func:`steprule.choose_timestep`,
   which ``compose.setup`` calls), the front end's (:func:`steprule.at_fine_step`), the whole
   fractions and even cuts the bike takes, and the stop zones every rig refines in.
+* ``rig``: :class:`rig.Rig`, the one face every rig shows (presets, ``prepare``, ``run``,
+  ``crosscheck`` with one signature, a short example case), and :class:`rig.Registry`
+  (``mtbmj.rigs.RIGS`` lists the rigs).
 * ``crosscheck``: :class:`crosscheck.CrosscheckResult`, the one result of every rig's cross-check
   against its ODE reference (per signal the largest difference over the series, its unit, the
   peaks in both runs, the tolerance and the verdict; both wall times; one line, one dict).
