@@ -97,3 +97,31 @@ def test_an_edit_of_a_compiled_function_reaches_the_compiled_run(tmp_path):
     coasting = _run(scratch, "compiled")
     assert coasting != edited
     assert coasting["rear_mm"] == pytest.approx(_run(scratch, "python")["rear_mm"], abs=0.02)
+
+
+@pytest.mark.parametrize("module,prefix,width", [
+    ("mtbmj.rolling.callback_compiled", "R_", "INT_WIDTH"),
+    ("mtbmj.rolling.callback_compiled", "F_", "F_PATCHES"),
+    ("mtbmj.bike.callback_compiled", "R_", "INT_WIDTH"),
+    ("mtbmj.bike.callback_compiled", "F_", "FLOAT_WIDTH"),
+    ("mtbmj.drop.engine_fast", "Q_", "Q_WIDTH"),
+])
+def test_a_compiled_slot_s_rows_are_its_list_of_names_and_its_width_follows(module, prefix, width):
+    """Each compiled slot's rows (the module's ``R_``/``F_``/``Q_`` names, read from its source)
+    are 0, 1, ... in the order the names are listed, each once, and the width (where the next part
+    of the row starts) is one past the last: no row numbered by hand, none left spare or shared."""
+    import ast
+    import importlib
+
+    mod = importlib.import_module(module)
+    tree = ast.parse(Path(mod.__file__).read_text())
+    listed = []
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and isinstance(node.targets[0], ast.Tuple) \
+                and isinstance(node.value, ast.Call) and getattr(node.value.func, "id", "") == "range":
+            names = [e.id for e in node.targets[0].elts]
+            if all(n.startswith(prefix) for n in names):
+                listed += names
+    assert listed, f"{module}: no {prefix} row list"
+    assert [getattr(mod, n) for n in listed] == list(range(len(listed)))
+    assert getattr(mod, width) == len(listed), f"{module}.{width} is not one past the last {prefix} row"

@@ -66,15 +66,15 @@ WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front en
  R_ROOT0, R_ROOT1, R_NBODY, R_MASS, R_FORK_STATE, R_SHOCK_STATE, R_DRIVE, R_NL, R_LW, R_LR, R_LS, R_CALLS,
  R_REFRESHES, R_BODYROOT, R_WHEEL0, R_WHEEL1, R_LIMB_F0, R_LIMB_R0, R_LIMB_F1, R_LIMB_R1, R_JZ, R_JP, R_VZ,
  R_VP, R_REACT0, R_REACT1, R_A_GFX, R_A_GFZ, R_A_CF, R_A_CR, R_XQ, R_RIDER, R_CALIPER, R_ARM_JOINT) = range(58)
-INT_WIDTH = 58
+INT_WIDTH = R_ARM_JOINT + 1  # one row per name above: the width follows the list
 DRIVE_PEDAL = 2  # R_DRIVE: 0 coasting, 1 the rider's speed controller, 2 pedalling (controllers.drive.pedal_forces)
 # float row of a slot
 (F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_NEXT0, F_NEXT1, F_LAST0, F_LAST1,
  F_REFRESH_DISTANCE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE, F_LIMB_K0, F_LIMB_C0, F_LIMB_REST0,
  F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1, F_RADIUS, F_CHAIN_RING, F_CHAIN_COG) = range(24)
-FLOAT_WIDTH = 24
+FLOAT_WIDTH = F_CHAIN_COG + 1
 
-REGISTRY = Registry("mtbmj_bike_registry_v7", SLOTS,
+REGISTRY = Registry("mtbmj_bike_registry_v8", SLOTS,
                     {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
                      "wheel_ints": (2 * WI, np.int64), "wheel_floats": (2 * WF, np.float64),
                      "fork_ints": (LAW_INT_WIDTH, np.int64), "fork_floats": (LAW_FLOAT_WIDTH, np.float64),

@@ -52,7 +52,7 @@ EVENT_TIME_S = 1e-12
 (Q_MB, Q_MW, Q_G, Q_K0, Q_B0, Q_K1, Q_B1, Q_SWITCHES, Q_H, Q_SUB, Q_LIMIT,
  Q_RIM, Q_RIM_D, Q_RIM_K, Q_RIM_C, Q_RIM_P0, Q_BUMPER, Q_TRAVEL, Q_TOP,
  Q_COARSE, Q_MARGIN, Q_BAND, Q_FAST) = range(23)
-Q_WIDTH = 23
+Q_WIDTH = Q_FAST + 1  # one row per name above
 
 # status codes
 OK, DIVERGED = 0, 1

@@ -63,17 +63,17 @@ SLOTS = 64
  R_ACT, R_HAS_STATE, R_DRUM, R_MOVING, R_NPTS, R_TX, R_TZ, R_SCRATCH, R_ISCRATCH, R_CAP, R_CALLS, R_REFRESHES,
  R_NPATCH, R_OVERFLOW, R_SCALED,
  R_NS, R_SX, R_SZ, R_VALID, R_A_TOUCH) = range(34)  # the straight stretches (PatchSearch): corners, and whether kept
-INT_WIDTH = 36
+INT_WIDTH = R_A_TOUCH + 1  # one row per name above: the width follows the list
 # float row of a slot: parameters, state, then MAX_PATCHES x (qx, qz, nx, nz, sx, sz)
 (F_X0, F_Z0, F_L, F_COS, F_SIN, F_RADIUS, F_RATE, F_DAMPING, F_MARGIN, F_SPEED, F_XREF0, F_REFRESH, F_DRUM_R,
  F_OMEGA, F_PATCH_TIME, F_NEXT_REFRESH, F_LAST_X, F_REFRESH_DISTANCE, F_PIECE, F_DAMPER_SCALE,
  F_RIM_D, F_RIM_K, F_RIM_C, F_RIM_P0,  # the rim: max deflection, rate (0: no rim), damping
  F_DRIVE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE,  # controllers.drive
  F_LO, F_HI) = range(31)  # the axle x interval over which the kept patch holds (PatchSearch.valid)
-F_PATCHES = 31  # (F_HI = 30 is the last of the state)
+F_PATCHES = F_HI + 1  # the patches follow the state's last row
 FLOAT_WIDTH = F_PATCHES + 6 * MAX_PATCHES
 
-REGISTRY = Registry("mtbmj_rolling_registry_v2", SLOTS,
+REGISTRY = Registry("mtbmj_rolling_registry_v3", SLOTS,
                     {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
                      "law_ints": (LAW_INT_WIDTH, np.int64), "law_floats": (LAW_FLOAT_WIDTH, np.float64)},
                     ("qpos", "qvel", "act", "ctrl", "time"))
