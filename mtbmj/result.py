@@ -122,13 +122,13 @@ class RunOutput:
     def plot_stacked(self, panels, data: dict, axes=None, label: str = "", legend: dict | None = None,
                      **line_kwargs):
         """``panels`` ((column, y label) each) of ``data`` against time on stacked axes (given, or a
-        new figure's, three panels 7 x 7 in): several runs drawn on the same axes compare them. The
+        new figure's, 7 in wide and 7 in high for up to three panels, 2.2 in per panel beyond): several runs drawn on the same axes compare them. The
         first axis holds the legend (``legend``: its keywords). Returns the figure; every rig's
         ``plot`` draws through it."""
         if axes is None:
             from matplotlib.figure import Figure
 
-            fig = Figure(figsize=(7, 7), layout="constrained")
+            fig = Figure(figsize=(7, max(7.0, 2.2 * len(panels))), layout="constrained")
             axes = fig.subplots(len(panels), 1, sharex=True)
         else:
             fig = axes[0].figure

@@ -51,3 +51,21 @@ def test_runs_on_different_grids_are_not_differenced():
     b = mtbmj.run_drop("S1", duration=0.2, overrides={"solver.timestep_s": 5e-5})
     with pytest.raises(ValueError, match="same time grid"):
         a.difference(b)
+
+
+@pytest.mark.parametrize("rig", ["drop", "rolling", "bike"])
+def test_every_rig_s_plot_draws_two_runs_on_the_same_axes_with_units(rig):
+    """``plot(axes=, label=)`` as every rig's: a second run drawn on the first's axes adds one line
+    per panel under its own label; every panel's y label carries its unit."""
+    from mtbmj.rigs import RIGS
+
+    face = RIGS[rig]
+    a, b = (face.run(preset, **face.example) for preset in face.presets()[:2])
+    fig = a.plot(label="first")
+    axes = fig.axes
+    assert b.plot(axes=axes, label="second") is fig
+    assert len(axes) >= 3
+    for ax in axes:
+        assert [line.get_label() for line in ax.get_lines()] == ["first", "second"]
+        assert "[" in ax.get_ylabel() and ax.get_ylabel().endswith("]"), ax.get_ylabel()
+    assert axes[-1].get_xlabel() == "time [s]"

@@ -560,18 +560,15 @@ class RollResult(RunOutput):
                                 self.summary, quicklook.run_title(self.config, self.headline()),
                                 extra=[("terrain under the axle", r["terrain_mm"], "mm")])
 
-    def plot(self):
-        from matplotlib.figure import Figure
-
-        names = ("terrain_mm", "fork_mm", "tire_mm", "axle_force_z_N", "axle_force_x_N")
-        fig = Figure(figsize=(7, 9), layout="constrained")
-        axes = fig.subplots(len(names), 1, sharex=True)
-        for ax, name in zip(axes, names):
-            ax.plot(self.time, self.signals[name])
-            ax.set_ylabel(name)
-            ax.grid(True, alpha=0.3)
-        axes[-1].set_xlabel("time [s]")
-        return fig
+    def plot(self, axes=None, label: str | None = None, **line_kwargs):
+        """Terrain under the axle, fork travel, tire deflection and the axle's force up and back
+        against time on five stacked axes (given, or a new figure's): several runs drawn on the same
+        axes compare them, as every rig's ``plot``. Returns the figure."""
+        return self.plot_stacked((("terrain_mm", "terrain [mm]"), ("fork_mm", "fork travel [mm]"),
+                                  ("tire_mm", "tire deflection [mm]"), ("axle_force_z_N", "axle force up [N]"),
+                                  ("axle_force_x_N", "axle force, forward [N]")), self.signals, axes,
+                                 label or f"{self.name} over {self.scenario}", {"loc": "best", "fontsize": 8},
+                                 **line_kwargs)
 
 
 def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
