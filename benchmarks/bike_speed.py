@@ -14,34 +14,16 @@ with other work, the wall time also counts the time the core spent elsewhere), a
 (/proc/loadavg) before and after, and writes them where ``--out`` says (default
 ``<tempdir>/mtbmj-benchmarks/bike_speed.json``, outside the repository; ``--out
 benchmarks/results/bike_speed.json`` refreshes the committed file). Only the stepping is timed (``simulate``; MuJoCo alone:
-``rollout``): building the model and the static equilibrium are not. The rock garden is seven rocks
-50-110 mm high over 3 m (the profile of tests/test_bike_energy.py), written to a temporary CSV. The
+``rollout``): building the model and the static equilibrium are not. The rock garden is the terrain
+library's ``rock_garden`` (seven rocks 50-110 mm high over 2.75 m, ``mtbmj.rolling.terrain``). The
 Python callback runs ``--python-duration`` s (default the same ``--duration``: a shorter run would
 time mostly the flat lead-in, where the patch search is skipped).
 """
 from __future__ import annotations
 
 import argparse
-import math
 import statistics
-import tempfile
 import time
-from pathlib import Path
-
-
-def rock_garden(path: Path) -> Path:
-    rows = [(-1.5, 0.0), (0.45, 0.0)]
-    rocks = [(0.45, 0.25, 80), (0.85, 0.30, 110), (1.3, 0.2, 60), (1.65, 0.35, 100), (2.15, 0.25, 70),
-             (2.55, 0.3, 90), (3.0, 0.2, 50)]
-    for start, length, height in rocks:
-        for k in range(1, 40):
-            a = math.pi * (1 - k / 40)
-            rows.append((start + length / 2 * (1 + math.cos(a)), height * math.sin(a)))
-        rows.append((start + length, 0.0))
-        rows.append((start + length + 0.1, 0.0))
-    rows.append((8.0, 0.0))
-    path.write_text("distance_m,height_mm\n" + "\n".join(f"{x:.6f},{z:.4f}" for x, z in rows) + "\n")
-    return path
 
 
 def bike_rtf(profile: str, speed: float, duration: float, callback: str = "compiled") -> float:
@@ -107,25 +89,24 @@ def main() -> None:
     pin_one_core()
     before = load_average()
     print(f"load average before: {before}", flush=True)
-    with tempfile.TemporaryDirectory() as tmp:
-        profile = str(rock_garden(Path(tmp) / "rock_garden.csv"))
-        roll_rtf(profile, args.speed, 0.05)  # warm-up: imports, numba compilation of both compiled callbacks
-        bike_rtf(profile, args.speed, 0.05)
-        rows = {"bike": [], "python": [], "mujoco": [], "roll": [], "ratio": [], "speedup": [], "bike_cpu": [],
-                "mujoco_cpu": [], "over_mujoco": []}
-        for i in range(args.repeats):
-            b, b_cpu = bike_rtf(profile, args.speed, args.duration)
-            py, _ = bike_rtf(profile, args.speed, args.python_duration, "python")
-            mj, mj_cpu = mujoco_rtf(profile, args.speed, args.duration)
-            r, kind = roll_rtf(profile, args.speed, args.duration)
-            for key, value in (("bike", b), ("python", py), ("mujoco", mj), ("roll", r), ("ratio", b / r),
-                               ("speedup", b / py), ("bike_cpu", b_cpu), ("mujoco_cpu", mj_cpu),
-                               ("over_mujoco", b / mj)):
-                rows[key].append(value)
-            print(f"repeat {i + 1}: bike compiled {b:.3f}x real time ({b_cpu:.3f}x per CPU second), Python {py:.4f}x, "
-                  f"MuJoCo alone {mj:.3f}x ({mj_cpu:.3f}x), "
-                  f"front end ({kind} callback) {r:.2f}x; bike / front end {b / r:.3f}, compiled / Python {b / py:.1f}",
-                  flush=True)
+    profile = "rock_garden"
+    roll_rtf(profile, args.speed, 0.05)  # warm-up: imports, numba compilation of both compiled callbacks
+    bike_rtf(profile, args.speed, 0.05)
+    rows = {"bike": [], "python": [], "mujoco": [], "roll": [], "ratio": [], "speedup": [], "bike_cpu": [],
+            "mujoco_cpu": [], "over_mujoco": []}
+    for i in range(args.repeats):
+        b, b_cpu = bike_rtf(profile, args.speed, args.duration)
+        py, _ = bike_rtf(profile, args.speed, args.python_duration, "python")
+        mj, mj_cpu = mujoco_rtf(profile, args.speed, args.duration)
+        r, kind = roll_rtf(profile, args.speed, args.duration)
+        for key, value in (("bike", b), ("python", py), ("mujoco", mj), ("roll", r), ("ratio", b / r),
+                           ("speedup", b / py), ("bike_cpu", b_cpu), ("mujoco_cpu", mj_cpu),
+                           ("over_mujoco", b / mj)):
+            rows[key].append(value)
+        print(f"repeat {i + 1}: bike compiled {b:.3f}x real time ({b_cpu:.3f}x per CPU second), Python {py:.4f}x, "
+              f"MuJoCo alone {mj:.3f}x ({mj_cpu:.3f}x), "
+              f"front end ({kind} callback) {r:.2f}x; bike / front end {b / r:.3f}, compiled / Python {b / py:.1f}",
+              flush=True)
 
     def line(name, values, unit):
         return (f"{name}: median {statistics.median(values):.4g}{unit}, spread {min(values):.4g}-{max(values):.4g}"

@@ -8,8 +8,8 @@ each model stepped by MuJoCo alone with no control callback (the floor a callbac
     python benchmarks/rolling_vs_bike.py [--terrain rock_garden] [--speed 5] [--duration 1.0] [--repeats 5]
                                          [--out PATH]
 
-``--terrain``: ``rock_garden`` (the profile of benchmarks/bike_speed.py: seven rocks 50-110 mm over 3 m,
-written to a temporary CSV) or any scenario both commands take (``root``, ``rock``, a CSV path...).
+``--terrain``: any scenario both commands take (default ``rock_garden``, the terrain library's: seven
+rocks 50-110 mm over 2.75 m; ``root``, ``rock``, a CSV path...).
 
 Prints each repetition, then the median and spread (min-max) of each real-time factor, of the same per
 CPU second of this process (``time.process_time``: on a shared machine the wall time also counts time
@@ -23,13 +23,11 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import tempfile
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _bench import add_out_option, load_average, pin_one_core, write_json  # noqa: E402
-from bike_speed import rock_garden  # noqa: E402  (the same rock garden)
 
 
 def _timed(fn, duration: float) -> tuple[float, float]:
@@ -97,35 +95,34 @@ def main() -> None:
     pin_one_core()
     before = load_average()
     print(f"load average before: {before}", flush=True)
-    with tempfile.TemporaryDirectory() as tmp:
-        profile = str(rock_garden(Path(tmp) / "rock_garden.csv")) if args.terrain == "rock_garden" else args.terrain
-        roll(profile, args.speed, 0.05)  # warm-up: imports, numba compilation or cache load of both callbacks
-        bike(profile, args.speed, 0.05)
-        rows: dict = {key: [] for key in ("roll", "bike", "roll_cpu", "bike_cpu", "ratio", "ratio_cpu",
-                                          "roll_alone", "bike_alone", "roll_alone_cpu", "bike_alone_cpu")}
-        info: dict = {}
-        for i in range(args.repeats):
-            order = (("roll", roll), ("bike", bike)) if i % 2 == 0 else (("bike", bike), ("roll", roll))
-            got = {name: fn(profile, args.speed, args.duration) for name, fn in order}
-            r, b = got["roll"], got["bike"]
-            rows["roll"].append(r["rtf"])
-            rows["bike"].append(b["rtf"])
-            rows["roll_cpu"].append(r["cpu"])
-            rows["bike_cpu"].append(b["cpu"])
-            rows["ratio"].append(r["rtf"] / b["rtf"])
-            rows["ratio_cpu"].append(r["cpu"] / b["cpu"])
-            info = {name: {k: v for k, v in g.items() if k not in ("rtf", "cpu")} for name, g in got.items()}
-            text = ""
-            if not args.no_floor:
-                (ra, ra_cpu), (ba, ba_cpu) = floors(profile, args.speed, args.duration)
-                rows["roll_alone"].append(ra)
-                rows["bike_alone"].append(ba)
-                rows["roll_alone_cpu"].append(ra_cpu)
-                rows["bike_alone_cpu"].append(ba_cpu)
-                text = f"; MuJoCo alone: front end {ra:.2f}x ({ra_cpu:.2f}x), bike {ba:.2f}x ({ba_cpu:.2f}x)"
-            print(f"repeat {i + 1}: front end ({r['callback']}) {r['rtf']:.2f}x real time ({r['cpu']:.2f}x per CPU "
-                  f"second), bike ({b['callback']}) {b['rtf']:.2f}x ({b['cpu']:.2f}x); front end / bike "
-                  f"{r['rtf'] / b['rtf']:.3f}{text}", flush=True)
+    profile = args.terrain
+    roll(profile, args.speed, 0.05)  # warm-up: imports, numba compilation or cache load of both callbacks
+    bike(profile, args.speed, 0.05)
+    rows: dict = {key: [] for key in ("roll", "bike", "roll_cpu", "bike_cpu", "ratio", "ratio_cpu",
+                                      "roll_alone", "bike_alone", "roll_alone_cpu", "bike_alone_cpu")}
+    info: dict = {}
+    for i in range(args.repeats):
+        order = (("roll", roll), ("bike", bike)) if i % 2 == 0 else (("bike", bike), ("roll", roll))
+        got = {name: fn(profile, args.speed, args.duration) for name, fn in order}
+        r, b = got["roll"], got["bike"]
+        rows["roll"].append(r["rtf"])
+        rows["bike"].append(b["rtf"])
+        rows["roll_cpu"].append(r["cpu"])
+        rows["bike_cpu"].append(b["cpu"])
+        rows["ratio"].append(r["rtf"] / b["rtf"])
+        rows["ratio_cpu"].append(r["cpu"] / b["cpu"])
+        info = {name: {k: v for k, v in g.items() if k not in ("rtf", "cpu")} for name, g in got.items()}
+        text = ""
+        if not args.no_floor:
+            (ra, ra_cpu), (ba, ba_cpu) = floors(profile, args.speed, args.duration)
+            rows["roll_alone"].append(ra)
+            rows["bike_alone"].append(ba)
+            rows["roll_alone_cpu"].append(ra_cpu)
+            rows["bike_alone_cpu"].append(ba_cpu)
+            text = f"; MuJoCo alone: front end {ra:.2f}x ({ra_cpu:.2f}x), bike {ba:.2f}x ({ba_cpu:.2f}x)"
+        print(f"repeat {i + 1}: front end ({r['callback']}) {r['rtf']:.2f}x real time ({r['cpu']:.2f}x per CPU "
+              f"second), bike ({b['callback']}) {b['rtf']:.2f}x ({b['cpu']:.2f}x); front end / bike "
+              f"{r['rtf'] / b['rtf']:.3f}{text}", flush=True)
 
     def line(name, values, unit=""):
         return (f"{name}: median {statistics.median(values):.4g}{unit}, spread {min(values):.4g}-{max(values):.4g}"

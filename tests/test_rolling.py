@@ -255,3 +255,25 @@ def test_env_episode_with_skyhook():
     assert np.all(np.isfinite(rewards)) and 0.0 < min(rewards) <= max(rewards) <= 1.0
     assert 0.0 <= min(commands) and max(commands) <= 1.0 and max(commands) > min(commands)
     assert mujoco.get_mjcb_control() is None  # installed only while stepping
+
+
+def test_the_rock_garden_has_seven_rocks_where_and_as_high_as_it_says():
+    """``rock_garden``: flat to ``at_m``, then seven half-ellipse rocks whose tops are the listed
+    heights times ``height_scale`` (read off the profile here, not from the builder's table), flat
+    between them and after; a height scale that is not positive is refused in one line."""
+    from mtbmj.rolling import terrain as T
+
+    heights_mm = [80, 110, 60, 100, 70, 90, 50]
+    for scale, at in ((1.0, T.LEAD_IN_M), (1.5, 2.0)):
+        t = T.make(f"rock_garden:height_scale={scale:g},at_m={at:g}")
+        x = np.linspace(-1.0, t.length, 200001)
+        z = t.height(x)
+        assert np.all(z[x < at] == 0.0) and np.all(z >= 0.0)
+        on = z > 1e-9
+        starts, ends = np.flatnonzero(np.diff(on.astype(int)) == 1), np.flatnonzero(np.diff(on.astype(int)) == -1)
+        assert len(starts) == len(ends) == 7
+        tops = [z[a:b + 1].max() * 1e3 for a, b in zip(starts, ends)]
+        assert tops == pytest.approx([h * scale for h in heights_mm], rel=2e-3)
+        assert x[starts[0]] == pytest.approx(at, abs=1e-4) and x[ends[-1]] < at + 2.76
+    with pytest.raises(T.TerrainError, match="height_scale"):
+        T.make("rock_garden:height_scale=-1")

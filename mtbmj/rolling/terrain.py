@@ -199,6 +199,22 @@ def rock(height_mm: float = 100.0, length_mm: float = 300.0, at_m: float = LEAD_
                     length=at_m + L + 2.0, params={"height_mm": height_mm, "length_mm": length_mm, "at_m": at_m})
 
 
+ROCK_GARDEN = ((0.0, 0.25, 80.0), (0.40, 0.30, 110.0), (0.85, 0.20, 60.0), (1.20, 0.35, 100.0), (1.70, 0.25, 70.0),
+               (2.10, 0.30, 90.0), (2.55, 0.20, 50.0))  # (start from at_m m, length m, height mm) of each rock
+
+
+def rock_garden(height_scale: float = 1.0, at_m: float = LEAD_IN_M) -> Terrain:
+    """A rock garden: seven rocks 50-110 mm high (times ``height_scale``) and 0.2-0.35 m long, each a
+    half-ellipse sampled at 40 points, 0.1-0.15 m of flat between them, over 2.75 m from ``at_m``."""
+    pieces = [_flat(-LEAD_IN_M, at_m)]
+    for start, length, height in ROCK_GARDEN:
+        ax, az = _arc(at_m + start + length / 2, length / 2, height * MM * height_scale, 41)
+        pieces += [(ax[1:-1], az[1:-1]), _flat(at_m + start + length, at_m + start + length + 0.1)]
+    end = at_m + ROCK_GARDEN[-1][0] + ROCK_GARDEN[-1][1] + 0.1
+    pieces.append(([end + RUN_OUT_M], [0.0]))
+    return _profile("rock_garden", pieces, length=end + 2.0, params={"height_scale": height_scale, "at_m": at_m})
+
+
 def drop(height_mm: float = 300.0, at_m: float = LEAD_IN_M) -> Terrain:
     """Drop to flat: a ledge ``height_mm`` high, then flat ground (a step down taken at speed)."""
     t = step_down(height_mm, at_m)
@@ -307,6 +323,7 @@ LIBRARY = {
     "square_edge": (square_edge, {"height_mm": "height", "width_mm": "pos", "at_m": "nonneg"}),
     "root": (root, {"radius_mm": "pos", "at_m": "nonneg"}),
     "rock": (rock, {"height_mm": "pos", "length_mm": "pos", "at_m": "nonneg"}),
+    "rock_garden": (rock_garden, {"height_scale": "pos", "at_m": "nonneg"}),
     "drop": (drop, {"height_mm": "height", "at_m": "nonneg"}),
     "washboard": (washboard, {"height_mm": "height", "wavelength_mm": "pos", "length_m": "pos", "at_m": "nonneg"}),
     "iso8608": (iso8608, {"class": "text", "seed": "int", "length_m": "pos", "sample_mm": "pos", "at_m": "nonneg"}),
