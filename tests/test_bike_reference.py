@@ -18,7 +18,9 @@ from mtbmj.rolling.terrain import LIBRARY
 TERRAINS = {"flat": "flat", "step_up": "step_up:at_m=0.4", "step_down": "step_down:at_m=0.4",
             "square_edge": "square_edge:at_m=0.4", "root": "root:at_m=0.4", "rock": "rock:at_m=0.4",
             "drop": "drop:at_m=0.4", "washboard": "washboard:at_m=0.4,length_m=1.5",
-            "iso8608": "iso8608:at_m=0.4,class=D,length_m=10", "climb": "climb:at_m=0.4,grade_percent=15,length_m=3"}
+            "iso8608": "iso8608:at_m=0.4,class=D,length_m=10", "climb": "climb:at_m=0.4,grade_percent=15,length_m=3",
+            "rock_garden": "rock_garden:at_m=0.4"}
+ACROSS_M = {"rock_garden": 2.75}  # a feature longer than 0.35 m: the rear crosses all of it
 STATIC_N = {"front": 425.0, "rear": 567.0}  # the SST bike's static tire loads (tests/test_bike.py's closed form)
 
 
@@ -32,7 +34,7 @@ def test_mujoco_matches_the_bike_reference(name, speed):
     bike = spec_mod.load("sst")
     wheelbase = bike.front_axle[0] - bike.rear_axle[0]
     reach = (0.4 + wheelbase) / speed  # the rear axle over the feature's start
-    duration = reach + 0.35 if name == "drop" else reach + 0.35 / speed
+    duration = reach + 0.35 if name == "drop" else reach + ACROSS_M.get(name, 0.35) / speed
     check = crosscheck(bike, TERRAINS[name], speed, duration=duration, reference_rtol=1e-6)
     assert check["front_travel"].max_abs <= TOLERANCE_MM
     assert check["rear_travel"].max_abs <= TOLERANCE_MM

@@ -66,3 +66,17 @@ def test_the_bottom_bracket_height_is_its_height_above_the_ground(roots):
     assert 250.0 < h[0] < 400.0  # a trail bike's BB at sag (about 330 mm: geometry charts)
     # over the root the ground rises under the BB: the height above it dips while the BB itself does not fall
     assert "bb_height_mm" in bike_run.COLUMNS
+
+
+@pytest.mark.parametrize("scenario", ["rock", "drop", "rock_garden"])
+def test_a_run_of_the_default_length_closes_its_feature_window(scenario):
+    """At 5 m/s the default duration covers the rear tyre leaving the feature and ``SETTLE_S`` more
+    (found here from the run's own axle positions, not from ``default_duration``): the summary's
+    window closes and the headline does not say the run ended before it settled (it did on every
+    fixed feature before)."""
+    r = mtbmj.run_bike("sst", scenario, 5.0)
+    span = bike_summary.feature_span(terrain_mod.make(scenario))
+    radius = r.prepared.front_tire.radius
+    past = np.flatnonzero(r.raw["rear_axle_x_m"] >= span[1] + radius)
+    assert past.size and r.raw["time_s"][past[0]] + bike_summary.SETTLE_S <= r.raw["time_s"][-1] + 1e-9
+    assert r.summary["feature"]["closed"] and "before it settled" not in r.headline()

@@ -46,7 +46,8 @@ def test_the_reference_converges_with_its_step():
 # in turn (benchmarks/rolling_crosscheck.py runs each at both speeds)
 LIBRARY = [("step_up:at_m=0.4", 2.0, None), ("step_down:at_m=0.4", 5.0, None), ("square_edge:at_m=0.4", 2.0, None),
            ("root:at_m=0.4", 5.0, None), ("rock:at_m=0.4", 2.0, None), ("drop:at_m=0.4", 5.0, None),
-           ("washboard:at_m=0.4", 2.0, 90.0), ("iso8608:at_m=0.4,length_m=1", 5.0, None)]
+           ("washboard:at_m=0.4", 2.0, 90.0), ("iso8608:at_m=0.4,length_m=1", 5.0, None),
+           ("rock_garden:at_m=0.4", 5.0, None)]
 
 
 @pytest.mark.parametrize("scenario, speed, head_angle", LIBRARY)

@@ -551,8 +551,13 @@ class BikeResult(RunOutput):
 
 
 def default_duration(p: Prepared) -> float:
+    """Both wheels across the terrain's length and ``summary.SETTLE_S`` more, so the summary's window
+    over the feature (to ``SETTLE_S`` after the rear tyre left it) closes within the run (it ended
+    before it at 5 m/s over every fixed feature when the settling was left out); at least 1 s."""
+    from mtbmj.bike.summary import SETTLE_S
+
     wheelbase = p.spec.front_axle[0] - p.spec.rear_axle[0]
-    return max(1.0, (p.terrain.length + wheelbase) / p.speed)
+    return max(1.0, (p.terrain.length + wheelbase) / p.speed + SETTLE_S)
 
 
 def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, duration: float | None = None,
