@@ -112,7 +112,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--drive", choices=("rider", "coast"), default="rider",
                    help="rider (default): a speed controller at the rear wheel within a rider's push, power and "
                         "braking and the rear tire's traction; coast: no drive")
-    p.add_argument("--duration", type=float, help="simulated time in s (default: both wheels across the feature)")
+    p.add_argument("--duration", type=float, help="simulated time in s (default: both wheels across the terrain and 0.5 s to settle)")
     p.add_argument("--start-m", type=float, dest="start_m",
                    help="where the front axle starts along the terrain, m (default the terrain's start)")
     p.add_argument("--lock", metavar="PARTS",
