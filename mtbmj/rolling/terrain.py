@@ -414,4 +414,4 @@ def names() -> list[str]:
 
 
 __all__ = ["Terrain", "DrumTerrain", "TerrainError", "LIBRARY", "make", "parse", "names", "flat", "climb", "step_up",
-           "step_down", "square_edge", "root", "rock", "drop", "washboard", "iso8608", "drum", "from_csv"]
+           "step_down", "square_edge", "root", "rock", "rock_garden", "drop", "washboard", "iso8608", "drum", "from_csv"]
