@@ -336,3 +336,106 @@ def test_shared_predicted_traces_stay_in_the_stroke(shared):
             # the record itself up to the slam's peak: the compression stroke the rider made
             head = p.time_s <= p.slam_s
             assert np.array_equal(p.travel_mm[head], np.clip(xs[i][: head.sum()], 0, r.shock_max_mm))
+
+
+# --- the answer in clicks (mtbmj.identify.bounce_clicks) ---------------------------------------------
+
+from mtbmj.identify import bounce_clicks as bc  # noqa: E402
+
+
+def true_window(hit):
+    """The generator's own window of clicks meeting one overshoot: its modal zeta at each click (its
+    damper linear in clicks) and its friction band F_c / k."""
+    return bc.window(lambda k: modal_zeta(c_of(0.08 + 0.015 * k)), 1e3 * F_C / K, hit, 0.0, 17.0)
+
+
+def count_overshoots(zeta, d, hit):
+    """Overshoots counted on this file's one-mass integrator: extrema beyond the band after the hit."""
+    t, x = one_mass(20.0 + hit, 20.0, d, zeta, 1.5, 200.0, 8.0)
+    v = np.diff(x)
+    turns = np.flatnonzero(np.sign(v[1:]) * np.sign(v[:-1]) < 0) + 1
+    return int(sum(1 for i in turns if abs(x[i] - 20.0) > d + 1e-6))
+
+
+@pytest.mark.parametrize("zeta,d,hit", [(0.1, 0.5, 10.0), (0.3, 0.5, 10.0), (0.2, 0.3, 4.0), (0.05, 1.0, 12.0)])
+def test_overshoots_counted_as_an_integrator_counts_them(zeta, d, hit):
+    assert bc.overshoots(zeta, d, hit) == count_overshoots(zeta, d, hit)
+
+
+@pytest.fixture(scope="module")
+def law5(five):
+    recs, xs, seqs = five
+    return bp.decay_law("shock", seqs, [k for k, _ in FIVE], recs, xs)
+
+
+@pytest.mark.parametrize("hit", [3.0, 5.0, 8.0])
+def test_answer_meets_the_generators_own_window(law5, hit):
+    """Measured: windows 0-14.6, 6.2-17, 12.9-17 clicks against the generator's 0-14.85, 6.25-17,
+    13.0-17; set 7, 12, 15 clicks; 95 % ranges 6-9, 10-13, 14-16."""
+    lo, hi, where = true_window(hit)
+    ans = bc.answer(law5, hit)
+    assert ans.clicks is not None and where == "inside"
+    assert abs(ans.window[0] - lo) <= 0.5 and abs(ans.window[1] - hi) <= 0.5
+    assert lo <= ans.clicks <= hi
+    assert ans.range95[0] <= 0.5 * (lo + hi) <= ans.range95[1]
+    assert f"set {ans.clicks} clicks" in ans.line()
+
+
+def test_answer_refused_beyond_the_records(law5):
+    assert true_window(20.0)[2] == "above"  # the generator too needs more than 17 clicks for a 20 mm hit
+    ans = bc.answer(law5, 20.0)
+    assert ans.clicks is None and "more than 17 clicks" in ans.note and "record a slam" in ans.note
+
+
+def test_fit_bounce_answers_in_clicks_on_the_cli_and_in_the_figure(five, tmp_path, capsys):
+    import json
+    import struct
+
+    from helpers import FORK, SHOCK, counts_of
+    from mtbmj import cli
+    from mtbmj.identify.bounce_fit import figure, fit_bounce
+
+    recs, xs, _ = five
+    paths = []
+    four = FIVE[:4]  # 17 clicks: the linear ring-down fit finds one turning point there and refuses the run
+    for (k, _), x in zip(four, xs):
+        shock = np.clip(np.rint(counts_of(x, *SHOCK)), 0, None).astype("<u2")
+        fork = np.full_like(shock, 300)
+        p = tmp_path / f"{k}.SST"
+        p.write_bytes(struct.pack("<3sBH", b"SST", 2, RATE) + np.column_stack((fork, shock)).astype("<u2").tobytes())
+        paths.append(str(p))
+    out = tmp_path / "out"
+    clicks = ",".join(str(k) for k, _ in four)
+    assert cli.main(["fit", "bounce", *paths, "--clicks", clicks, "--predict-clicks", "6",
+                     "--hit-mm", "5", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    fit = json.loads((out / "fit.json").read_text())
+    ans = fit["answer"]["shock"]
+    lo, hi, _ = true_window(5.0)
+    assert lo <= ans["set_clicks"] <= hi and ans["hit_mm"] == 5.0 and "whafi.com" in ans["source"]
+    assert f"shock answer (one overshoot after a 5.0 mm hit): set {ans['set_clicks']} clicks" in printed
+    pred = fit["predicted"][0]["shock"]["decay"]
+    assert pred["inside_stroke"] and pred["first_half_cycle_decay_ci95"][0] < pred["first_half_cycle_decay"]
+    assert len(fit["decay_law"]["shock"]["held_out"]) == 4
+    table = np.genfromtxt(out / "ringdown_6_clicks.csv", delimiter=",", names=True)
+    assert table["shock_mm"].min() >= 0.0
+    # the figure: the answer's panel says it and shades the window of clicks that meet the target
+    result = fit_bounce(paths, [float(k) for k, _ in four], [6.0], hit_mm=5.0)
+    fig = figure(result)
+    panel = next(ax for ax in fig.axes if f"set {ans['set_clicks']} clicks" in ax.get_title())
+    spans = [p.get_x() for p in panel.patches]
+    assert any(abs(x - ans["window_clicks"][0]) < 1e-9 for x in spans)
+    assert any(abs(ln.get_xdata()[0] - ans["set_clicks"]) < 1e-9 for ln in panel.lines)
+    trace_panel = next(ax for ax in fig.axes if ax.get_title().startswith("predicted ring-downs"))
+    assert any("at 6 clicks" in t.get_text() for t in trace_panel.get_legend().get_texts())
+
+
+@pytest.mark.parametrize("bad", ["0", "-3", "nan"])
+def test_a_bad_hit_is_refused_in_one_line(tmp_path, capsys, bad):
+    from mtbmj import cli
+
+    rc = cli.main(["fit", "bounce", str(tmp_path / "a.SST"), "--clicks", "0", "--hit-mm", bad, "--out",
+                   str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "--hit-mm" in err[0]
+    assert not (tmp_path / "o").exists()

@@ -47,9 +47,6 @@ class Estimate:
     low: float
     high: float
 
-    def as_dict(self) -> dict:
-        return {"value": self.value, "ci95": [self.low, self.high]}
-
     def contains(self, v: float) -> bool:
         return self.low <= v <= self.high
 
@@ -196,15 +193,17 @@ class Prediction:
         return bool(np.all(self.travel_mm >= 0.0) and np.all(self.travel_mm <= self.stroke_mm))
 
     def summary(self) -> dict:
-        return {"clicks": self.clicks, "from_record": self.source, "from_clicks": self.source_clicks,
-                "damping_ratio": self.zeta.as_dict(), "friction_band_mm": self.friction_band_mm.as_dict(),
-                "frequency_hz": self.frequency_hz.as_dict(),
-                "first_half_cycle_decay": self.first_half_cycle_decay.as_dict(),
-                "rebound_speed_mm_per_s": self.rebound_speed_mm_per_s.as_dict(),
-                "x_eq_mm": self.x_eq_mm, "stroke_mm": self.stroke_mm, "slam_s": self.slam_s,
-                "trace": (f"the record up to the slam's peak at {self.slam_s:.3f} s, then the law's motion from rest "
-                          f"there (plastic stops at 0 and {self.stroke_mm:g} mm, stuck within d of x_eq)"),
-                "inside_stroke": self.inside_stroke()}
+        out = {"clicks": self.clicks, "from_record": self.source, "from_clicks": self.source_clicks}
+        for key, est in (("damping_ratio", self.zeta), ("friction_band_mm", self.friction_band_mm),
+                         ("frequency_hz", self.frequency_hz), ("first_half_cycle_decay", self.first_half_cycle_decay),
+                         ("rebound_speed_mm_per_s", self.rebound_speed_mm_per_s)):
+            out[key], out[f"{key}_ci95"] = est.value, [est.low, est.high]
+        out.update({"x_eq_mm": self.x_eq_mm, "stroke_mm": self.stroke_mm, "slam_s": self.slam_s,
+                    "trace": (f"{self.source}'s own travel up to its slam's peak at {self.slam_s:.3f} s, then the "
+                              f"law's motion from rest there (plastic stops at 0 and {self.stroke_mm:g} mm, stuck "
+                              f"within d of x_eq)"),
+                    "inside_stroke": self.inside_stroke()})
+        return out
 
 
 @dataclass
@@ -269,7 +268,8 @@ class DecayLaw:
         t = np.asarray(record.time_s, float)
         dt = float(t[1] - t[0])
         peak = int(np.argmin(np.abs(t - seq.slam_s)))
-        x0 = float(np.clip(x_mm[peak], 0.0, stroke_mm))
+        w = max(1, int(round(0.005 / dt)))  # the peak's level: the travel averaged over 10 ms (not one noisy sample)
+        x0 = float(np.clip(np.mean(x_mm[max(0, peak - w):peak + w + 1]), 0.0, stroke_mm))
         fd, fsd = self.frequency(clicks)
         tt, xx = free_motion(x0, x_eq, d, z, self.fn_hz, stroke_mm, after_s, dt)
         rng = np.random.default_rng(0)
