@@ -193,6 +193,16 @@ def test_held_out_trace_within_the_noise_where_the_stop_is_not_reached(five, i):
     assert rms <= TRACE_RMS
 
 
+@pytest.mark.parametrize("i", range(5))
+def test_a_trace_that_reaches_the_stop_says_it_leaves_the_envelope(five, i):
+    """The law reaches the top-out stop after the slam at 0 and 4 clicks (the generator's records reach
+    0.0 mm there, 0.4 mm at 8 clicks), not at 8, 12 and 17; where it does, the summary says so."""
+    p, _, _ = _held(five, i)
+    reached = p.stop_reached_s() is not None
+    assert reached == (i <= 1)
+    assert ("outside the law's envelope" in p.summary().get("note", "")) == reached
+
+
 @pytest.mark.xfail(strict=True, reason="0 and 4 clicks reach the top-out bumper after the slam: the rider's body "
                                          "holds the bike on it and drives it out (1.68 and 1.07 mm RMS); the law's "
                                          "plastic stop restarts from rest, and a restitution read from the records "
