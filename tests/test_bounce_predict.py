@@ -449,3 +449,37 @@ def test_a_bad_hit_is_refused_in_one_line(tmp_path, capsys, bad):
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and "--hit-mm" in err[0]
     assert not (tmp_path / "o").exists()
+
+
+def test_the_fork_gets_its_law_prediction_and_answer_where_it_rings(five, tmp_path):
+    """Item 5: the fork's clicks where it rings at two or more settings (the shared forks do not):
+    both ends made by the three-mass model, the fork's damper 0.8 x the shock's, friction alike."""
+    import json
+    import struct
+
+    from helpers import FORK, SHOCK, counts_of
+    from mtbmj import cli
+
+    _, xs, _ = five
+    four = FIVE[:4]
+    paths = []
+    for j, ((k, z), x) in enumerate(zip(four, xs)):
+        _, xf = ring_down(c_of(0.8 * z), seed=100 + k)
+        shock = np.clip(np.rint(counts_of(x, *SHOCK)), 0, None).astype("<u2")
+        fork = np.clip(np.rint(counts_of(xf, *FORK)), 0, None).astype("<u2")
+        p = tmp_path / f"{k}.SST"
+        p.write_bytes(struct.pack("<3sBH", b"SST", 2, RATE) + np.column_stack((fork, shock)).astype("<u2").tobytes())
+        paths.append(str(p))
+    out = tmp_path / "out"
+    assert cli.main(["fit", "bounce", *paths, "--clicks", "0,4,8,12", "--predict-clicks", "6", "--hit-mm", "5",
+                     "--out", str(out)]) == 0
+    fit = json.loads((out / "fit.json").read_text())
+    assert fit["decay_law"]["fork"]["friction_band_mm"] == pytest.approx(1e3 * F_C / K, rel=0.05)
+    assert fit["predicted"][0]["fork"]["decay"]["inside_stroke"]
+    ans = fit["answer"]["fork"]
+    lo, hi, _ = bc.window(lambda k: modal_zeta(c_of(0.8 * (0.08 + 0.015 * k))), 1e3 * F_C / K, 5.0, 0.0, 12.0)
+    assert ans["set_clicks"] is not None and lo <= ans["set_clicks"] <= hi
+    table = np.genfromtxt(out / "ringdown_6_clicks.csv", delimiter=",", names=True)
+    assert table.dtype.names == ("time_s", "shock_mm", "fork_mm")  # one grid: the source record's (the ends'
+    assert np.allclose(np.diff(table["time_s"]), 1 / RATE) and table["time_s"][0] == 0.0  # slam peaks differ)
+    assert table["fork_mm"].min() >= 0.0 and table["shock_mm"].min() >= 0.0

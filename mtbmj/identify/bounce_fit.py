@@ -255,10 +255,11 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None) -> BounceFit:
         if columns:
             name = f"ringdown_{k:g}_clicks.csv"
             first = next(iter(columns.values()))
-            cols = {"time_s": first.time_s}
+            n = min(p.time_s.size for p in columns.values())  # each end's trace on the record's own time grid from
+            cols = {"time_s": first.time_s[:n]}  # 0, as long as its slam's peak plus the law's span: the shortest
             for end in ("shock", "fork"):
                 if end in columns:
-                    cols[f"{end}_mm"] = columns[end].travel_mm
+                    cols[f"{end}_mm"] = columns[end].travel_mm[:n]
             csvs[name] = cols
             entry["ringdown_csv"] = name
             entry["ringdown_from"] = (f"{first.source} ({first.source_clicks:g} clicks, the record nearest in clicks): "
