@@ -52,6 +52,9 @@ def bounce_parser(prog: str = "mtbmj fit bounce"):
     p.add_argument("--hit-mm", type=float, metavar="MM",
                    help="the hit the answer in clicks is for: its compression above the static position (mm; "
                         "default: the records' own, the median of their first free excursions)")
+    p.add_argument("--rider-hz", type=float, metavar="HZ",
+                   help="with --bike: the seated rider compliant on the saddle, ringing at HZ with the frame held "
+                        "(a seated body: 4-6 Hz; default: held rigid), and the rider's share of each mode stated")
     add_out(p, "out/fit")
     p.set_defaults(func=cmd_fit_bounce, command="fit", kind="bounce")
     return p
@@ -82,7 +85,7 @@ def cmd_fit_bounce(args) -> int:
     predict = _numbers(args.predict_clicks, "--predict-clicks") if args.predict_clicks else []
     if args.hit_mm is not None and not (math.isfinite(args.hit_mm) and args.hit_mm > 0):
         raise MtbmjError(f"--hit-mm {args.hit_mm:g}: the hit must be a positive number of millimetres")
-    result = fit_bounce(args.records, clicks, predict, bike=args.bike, hit_mm=args.hit_mm)
+    result = fit_bounce(args.records, clicks, predict, bike=args.bike, hit_mm=args.hit_mm, rider_hz=args.rider_hz)
     written = result.write(args.out)
     for line in result.lines():
         print(line)

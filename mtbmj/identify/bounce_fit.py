@@ -127,6 +127,20 @@ def _records(paths, clicks):
 RATE_AGREES = 1.25  # a ring-down's spring rate within this factor of the bike file's says nothing
 
 
+def _check_rider_hz(hz) -> None:
+    """A resonance (Hz) that is a positive number; outside a seated body's 4-6 Hz one warning line."""
+    import warnings
+
+    from mtbmj.errors import ConfigWarning
+    from mtbmj.identify.bounce_bike import RIDER_HZ
+
+    if not (isinstance(hz, (int, float)) and math.isfinite(hz) and hz > 0):
+        raise MtbmjError(f"--rider-hz {hz}: the seated rider's resonance must be a positive number of Hz")
+    if not RIDER_HZ[0] <= hz <= RIDER_HZ[1]:
+        warnings.warn(f"--rider-hz {hz:g}: a seated body's vertical resonance lies at {RIDER_HZ[0]:g}-{RIDER_HZ[1]:g} Hz "
+                      f"(Griffin; ISO 2631-1); read as given", ConfigWarning, stacklevel=3)
+
+
 def _through_bike(seated, end: str, zeta: float, zeta_sd: float, fd: float, fd_sd: float) -> dict:
     try:
         return seated.identify(end, zeta, zeta_sd, fd, fd_sd)
@@ -149,12 +163,14 @@ def _damper_law(points) -> dict | None:
             "slope_N_s_per_m_per_click_ci95": interval95(float(beta[1]), math.sqrt(cov[1, 1]))}
 
 
-def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None) -> BounceFit:
+def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None) -> BounceFit:
     """The seat slams in the SST records ``paths`` (one number of rebound ``clicks`` each) fitted:
     everything ``mtbmj fit bounce`` writes and prints, as a :class:`BounceFit`; ``predict``: clicks to
     predict the ring-down at. ``bike`` (a preset, a file or a ``BikeSpec``): each ring-down also read
     through that bike's seated model (``mtbmj.identify.bounce_bike``). ``hit_mm``: the hit the answer in
-    clicks is for (mm above the static position; default the records' own, ``bounce_clicks.default_hit``)."""
+    clicks is for (mm above the static position; default the records' own, ``bounce_clicks.default_hit``).
+    ``rider_hz``: with ``bike``, the seated rider compliant on the saddle at that resonance (Hz) instead
+    of rigid (``bounce_bike.SeatedBike``), and each reading gives the rider's share of the mode."""
     from mtbmj.identify import bounce
 
     paths = [Path(p) for p in paths]
@@ -162,10 +178,14 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None) -> BounceFit:
         raise MtbmjError(f"--clicks: {len(clicks)} value(s) for {len(paths)} record(s); give one number of clicks "
                          f"per record, in their order")
     seated = None
+    if rider_hz is not None and bike is None:
+        raise MtbmjError("--rider-hz: the rider's resonance is read through a bike; give --bike too")
     if bike is not None:
         from mtbmj.identify.bounce_bike import SeatedBike
 
-        seated = SeatedBike(bike)
+        if rider_hz is not None:
+            _check_rider_hz(rider_hz)
+        seated = SeatedBike(bike, rider_hz=rider_hz)
     records = _records(paths, clicks)
     fits = [bounce.fit_record(r) for r in records]
     for r, f in zip(records, fits):
@@ -203,10 +223,13 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None) -> BounceFit:
                     out["records"][-1][end]["bike"] = b
                     scale = b.get("spring_rate_over_bike_file")
                     if scale is not None and not 1 / RATE_AGREES <= scale <= RATE_AGREES:
+                        rider = ("the rider rigid" if seated.saddle is None else
+                                 f"the rider compliant at {seated.rider_hz:g} Hz")
                         notes.append(f"{r.name}: the {end}'s ring-down implies {scale:.2f} x the spring rate of "
                                      f"{seated.spec.name} ({b['spring_rate_N_per_mm']:.1f} of "
-                                     f"{b['bike_file_spring_rate_N_per_mm']:.1f} N/mm): the bike file's spring, or its "
-                                     f"seated masses (rider.seated_com_mm, rider.mass_kg), is not this bike's")
+                                     f"{b['bike_file_spring_rate_N_per_mm']:.1f} N/mm, {rider}): the bike file's "
+                                     f"spring, or its seated masses (rider.seated_com_mm, rider.mass_kg), is not this "
+                                     f"bike's")
     for end, law in laws.items():
         out["law"][end] = law.summary()
         if seated is not None:
@@ -223,7 +246,9 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None) -> BounceFit:
         from mtbmj.identify.bounce_bike import METHOD as BIKE_METHOD
 
         out["bike"] = {"name": seated.spec.name, "method": BIKE_METHOD,
-                       "seated_com_mm": [v * 1e3 for v in seated.spec.rider.seated_com]}
+                       "seated_com_mm": [v * 1e3 for v in seated.spec.rider.seated_com],
+                       "rider": "rigid on the frame" if seated.saddle is None else
+                       f"compliant on the saddle at {seated.rider_hz:g} Hz (damping ratio {seated.saddle['damping_ratio']:g})"}
     decay_fits, _ = _decay(records, clicks, out, notes)
     plaws = _prediction_laws(records, clicks, decay_fits, out)
     csvs, predictions = {}, []
@@ -523,9 +548,14 @@ def _bike_text(b: dict | None) -> str:
         return f"; through the bike: {b['note']}"
     lo, hi = b["damper_N_s_per_m_ci95"]
     klo, khi = b["spring_rate_N_per_mm_ci95"]
+    rider = ""
+    if "rider" in b:
+        sh = b["rider"]["mode_strain_energy_share"]
+        rider = (f"; the mode's strain energy {100 * sh['spring']:.0f} % in the spring, {100 * sh['rider']:.0f} % in the "
+                 f"rider's body (on the saddle at {b['rider']['resonance_hz']:g} Hz)")
     return (f"; through the bike: spring {b['spring_rate_N_per_mm']:.1f} N/mm [{klo:.1f}, {khi:.1f}] "
             f"({b['spring_rate_over_bike_file']:.2f} x the bike file's), wheel rate {b['wheel_rate_N_per_mm']:.2f} N/mm, "
-            f"damper {b['damper_N_s_per_m']:.0f} N s/m [{lo:.0f}, {hi:.0f}]")
+            f"damper {b['damper_N_s_per_m']:.0f} N s/m [{lo:.0f}, {hi:.0f}]" + rider)
 
 
 def _not_finite(value, where: str = "") -> str | None:
