@@ -60,8 +60,8 @@ def vertex_time(t: np.ndarray, x: np.ndarray, ti: float, half_s: float) -> tuple
     w = max(3, int(PARABOLA_SHARE * half_s / dt))
     a, b = max(0, i - w), min(x.size, i + w + 1)
     tau = t[a:b] - t[i]
-    (c2, c1, _), cov = np.polyfit(tau, x[a:b], 2, cov="unscaled")
-    res = x[a:b] - np.polyval([c2, c1, _], tau)
+    (c2, c1, c0), cov = np.polyfit(tau, x[a:b], 2, cov="unscaled")
+    res = x[a:b] - np.polyval([c2, c1, c0], tau)
     s2 = max(float(res @ res) / max(1, tau.size - 3), 1e-12)
     g = np.array([c1 / (2 * c2 * c2), -1.0 / (2 * c2), 0.0])  # d(-c1 / 2 c2) / d(c2, c1, c0)
     sd = math.sqrt(max(float(g @ (cov * s2) @ g), 0.0))
