@@ -92,8 +92,10 @@ def test_amplitude_scale_changes_neither(tmp_path):
 
 
 def test_law_and_predicted_ring_down(tmp_path):
-    """zeta 0.15 at 0 clicks, 0.25 at 10: the law predicts 0.20 at 5, and the ring-down from the
-    0-click record's free start (its trough, at rest velocity) is the closed form with zeta 0.20."""
+    """zeta 0.15 at 0 clicks, 0.25 at 10: the law predicts 0.20 at 5, and the ring-down is the 0-click
+    record's own travel up to its slam's peak, then the motion from rest at the peak (50 mm) with
+    zeta 0.20 about 25 mm: the closed form (it used to start at the record's first trough, from a
+    fitted sinusoid's start that could lie past full extension)."""
     paths = []
     for k, z, seed in ((0, 0.15, 2), (10, 0.25, 3)):
         paths.append(write_v2(tmp_path / f"{k}.SST", slam_mm(z, seed=seed)[1]))
@@ -109,16 +111,18 @@ def test_law_and_predicted_ring_down(tmp_path):
     table = np.genfromtxt(out / "ringdown_5_clicks.csv", delimiter=",", names=True)
     assert table.dtype.names == ("time_s", "shock_mm")
     assert np.allclose(np.diff(table["time_s"]), 1 / RATE)
-    # closed form: the 0-click motion reaches its trough at tau = pi / wd (rest velocity there)
+    assert table["shock_mm"].min() >= 0.0 and table["shock_mm"].max() <= telemetry.SHOCK_STROKE_MAX_MM
+    peak_s = pred["decay"]["slam_s"]
+    head = table["time_s"] <= peak_s
+    rec = telemetry.read_sst(paths[0])
+    assert np.allclose(table["shock_mm"][head], rec.shock_mm[: head.sum()], atol=1e-6)  # the record itself (CSV digits)
     wn = 2 * np.pi * FN_HZ
-    a0, wd0 = 0.15 * wn, wn * math.sqrt(1 - 0.15 ** 2)
-    t_trough = 3.0 + np.pi / wd0
-    x0 = -(50.0 - 25.0) * math.exp(-a0 * np.pi / wd0)
     a1, wd1 = 0.20 * wn, wn * math.sqrt(1 - 0.20 ** 2)
-    tau = table["time_s"] - t_trough
-    expected = 25.0 + x0 * np.exp(-a1 * tau) * (np.cos(wd1 * tau) + a1 / wd1 * np.sin(wd1 * tau))
-    # the law's zeta within 0.004 and frequency within 0.01 Hz move a 14 mm excursion by < 0.5 mm
-    assert np.max(np.abs(table["shock_mm"] - expected)) < 0.5
+    tau = table["time_s"][~head] - 3.0
+    expected = 25.0 + 25.0 * np.exp(-a1 * tau) * (np.cos(wd1 * tau) + a1 / wd1 * np.sin(wd1 * tau))
+    # the decay law's zeta at 5 clicks (0.192 [0.175, 0.209]), its 0.1 mm friction band and the
+    # peak's 0.3 mm noise move a 25 mm excursion by < 0.5 mm (measured 0.47 mm at most)
+    assert np.max(np.abs(table["shock_mm"][~head] - expected)) < 0.5
     assert (out / "fit.png").stat().st_size > 10_000
 
 

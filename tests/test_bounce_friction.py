@@ -181,17 +181,14 @@ def test_shared_slams_friction_common_zeta_per_click(shared):
 @pytestmark_shared
 def test_shared_slams_held_out_first_half_cycle_decay(shared):
     """Fitted on two (friction common, zeta linear in clicks), the third's first free half cycle's
-    decay predicted. MEASURED, NOT MET: the 17-click slam has one free half cycle (7.6 -> 25.4 mm)
-    before its trough creeps (not at rest: its spread exceeds the stuck criterion), so it has no
-    measured first decay, and fitted with either other record it leaves the law (5 parameters) no
-    degree of freedom: 0 and 8 clicks cannot be held out. Held out, 17 clicks is predicted at
-    0.30 [0.07, 0.54] (95 %, law and residual scale) with no measured value to compare. The
-    measured first decays are 0.58 (0 clicks) and 0.43 (8 clicks)."""
+    decay predicted. The 17-click slam comes to rest after two free half cycles (7.6 -> 25.4 -> 17.3
+    mm: first decay 0.45), so each record can be held out: measured 0.58 / 0.43 / 0.45 at 0 / 8 / 17
+    clicks, predicted 0.41 / 0.53 / 0.30 (misses by 10.2 / 1.3 / 1.2 sd; the 0-click one is an
+    extrapolation from 8 and 17; tests/test_bounce_predict.py holds what holds and what does not)."""
     res = [bd.held_out(shared, [0, 8, 17], i) for i in range(3)]
-    assert res[0]["note"] == res[1]["note"] == "no degree of freedom left"
-    assert math.isnan(res[2]["measured"])
-    assert res[2]["decay"] == pytest.approx(0.304, abs=0.01)
-    assert [round(s.first_decay(), 2) for s in shared[:2]] == [0.58, 0.43]
+    assert [round(r["measured"], 2) for r in res] == [0.58, 0.43, 0.45]
+    assert [round(r["decay"], 2) for r in res] == [0.41, 0.53, 0.30]
+    assert res[1]["misses_by_sd_total"] < 2 and res[2]["misses_by_sd_total"] < 2 < res[0]["misses_by_sd_total"]
 
 
 @pytestmark_shared

@@ -20,7 +20,10 @@ DESCRIPTION = ("Fit each end's ring-down after a seat slam in SST recordings (v2
                "damped natural frequency with 95 % intervals, from a damped sinusoid fitted about the rest level "
                "(independent of the amplitude calibration). With records at two or more rebound clicks, the damping "
                "ratio as a law linear in clicks, and with --predict-clicks the damping ratio, frequency and ring-down "
-               "it predicts at other clicks. Writes fit.json, fit.png and ringdown_<K>_clicks.csv per predicted click.")
+               "it predicts at other clicks. With a decay law across clicks (friction common), each predicted click's ring-down from "
+               "the nearest record's own state, with its first half cycle's decay, frequency and rebound speed, and an "
+               "answer in clicks: the setting for one overshoot after a hit (--hit-mm). Writes fit.json, fit.png and "
+               "ringdown_<K>_clicks.csv per predicted click.")
 
 
 def _numbers(text: str, option: str) -> list[float]:
@@ -46,6 +49,12 @@ def bounce_parser(prog: str = "mtbmj fit bounce"):
     p.add_argument("--bike", metavar="BIKE",
                    help="read each ring-down through this bike (a preset or a bike file with rider.seated_com_mm): "
                         "the spring rate and the damper's coefficient of the end that rang, at the end and at the wheel")
+    p.add_argument("--hit-mm", type=float, metavar="MM",
+                   help="the hit the answer in clicks is for: its compression above the static position (mm; "
+                        "default: the records' own, the median of their first free excursions)")
+    p.add_argument("--rider-hz", type=float, metavar="HZ",
+                   help="with --bike: the seated rider compliant on the saddle, ringing at HZ with the frame held "
+                        "(a seated body: 4-6 Hz; default: held rigid), and the rider's share of each mode stated")
     add_out(p, "out/fit")
     p.set_defaults(func=cmd_fit_bounce, command="fit", kind="bounce")
     return p
@@ -74,7 +83,9 @@ def cmd_fit_bounce(args) -> int:
 
     clicks = _numbers(args.clicks, "--clicks")
     predict = _numbers(args.predict_clicks, "--predict-clicks") if args.predict_clicks else []
-    result = fit_bounce(args.records, clicks, predict, bike=args.bike)
+    if args.hit_mm is not None and not (math.isfinite(args.hit_mm) and args.hit_mm > 0):
+        raise MtbmjError(f"--hit-mm {args.hit_mm:g}: the hit must be a positive number of millimetres")
+    result = fit_bounce(args.records, clicks, predict, bike=args.bike, hit_mm=args.hit_mm, rider_hz=args.rider_hz)
     written = result.write(args.out)
     for line in result.lines():
         print(line)

@@ -23,8 +23,8 @@ zeta(k) = zeta0 + slope k, fitted by weighted least squares (weights 1 / sd^2 of
 zeta; with more than two records the covariance is scaled by the reduced chi-square when it
 exceeds 1). The spring and the sprung mass do not change with the clicks, so the undamped
 frequency is the weighted mean of the records'; a predicted click's damped frequency is
-f_n sqrt(1 - zeta^2). A predicted ring-down replays the lowest-click record's free start
-(displacement and velocity from rest at t0) with the predicted zeta and frequency.
+f_n sqrt(1 - zeta^2). The predicted ring-down itself comes from the decay law with friction
+(``mtbmj.identify.bounce_predict``: from the record's own state, inside the stroke).
 """
 from __future__ import annotations
 
@@ -443,21 +443,7 @@ def click_law(end: str, clicks, fits) -> ClickLaw:
     return ClickLaw(end, tuple(float(c) for c in k), float(beta[0]), float(beta[1]), cov, fn_mean, fn_sd, chi2)
 
 
-def predicted_ring_down(source: RingDown, time_s: np.ndarray, zeta: float, fd_Hz: float) -> tuple[np.ndarray, np.ndarray]:
-    """The free response from ``source``'s start (its rest, displacement and velocity at t0) with
-    damping ratio ``zeta`` and damped frequency ``fd_Hz``, on ``time_s`` from t0 to the source's fit end."""
-    t = np.asarray(time_s, float)
-    keep = (t >= source.t0_s - 1e-12) & (t <= source.t_end_s + 1e-12)
-    tt = t[keep]
-    tau = tt - source.t0_s
-    wd = 2.0 * math.pi * fd_Hz
-    a = zeta * wd / math.sqrt(1.0 - zeta * zeta)
-    x0, v0 = source.x0_mm, source.v0_mm_per_s
-    x = source.rest_mm + np.exp(-a * tau) * (x0 * np.cos(wd * tau) + (v0 + a * x0) / wd * np.sin(wd * tau))
-    return tt, x
-
-
-__all__ = ["BounceError", "ClickLaw", "RingDown", "click_law", "find_slam", "fit_record", "predicted_ring_down",
+__all__ = ["BounceError", "ClickLaw", "RingDown", "click_law", "find_slam", "fit_record",
            "ring_down",
            "weighted_line",
            "METHOD", "LAW_FORM"]

@@ -25,6 +25,12 @@ wheel rate is the spring rate over the leverage ratio squared at sag (the fork: 
 steering axis), the wheel's damping likewise. The 95 % intervals carry the ring-down fit's
 intervals of zeta and f_d (taken as independent) through the solution's Jacobian.
 
+With ``rider_hz`` the rider is compliant instead (``fit bounce --rider-hz``): the rider's two
+coordinates are free, on the bike file's legs (pedals) and arms (bars) and a saddle spring and
+damper added on each so that, the frame held, each alone rings at ``rider_hz`` with a damping ratio
+of 0.475 (``RIDER_SOURCE``); each reading then states the rider's share of the mode's strain energy
+beside the spring's (``energy_shares``).
+
 Shared with the MuJoCo bike: the masses, the geometry, the laws, the rigid seated rider. Not
 shared: the linearisation, the modes and the inverse (``tests/test_bounce_bike.py`` checks them on
 ring-downs the MuJoCo bike makes, and the modes on a closed form).
@@ -49,6 +55,12 @@ COAST_M_PER_S = 2.0  # the slam is ridden coasting; on flat ground the speed doe
 SECANT_TRAVEL_M = 3e-3  # the swingarm's stiffness: the secant over +-3 mm of wheel travel (six steps of the SST table)
 MIN_RAD_PER_S = 0.1  # below this an eigenvalue's imaginary part is no oscillation (a bike's sprung modes: 1-3 Hz)
 NO_FRICTION = {"fork.friction.coulomb_N": 0.0}
+RIDER_ZETA = 0.475  # the seated body's damping ratio at its 5 Hz resonance (RIDER_SOURCE)
+RIDER_SOURCE = ("Fairley and Griffin, 'The apparent mass of the seated human body: vertical vibration', J. Biomech. "
+                "22 (1989): a one-degree-of-freedom model of 60 subjects' apparent mass at 5 Hz with a damping ratio of "
+                "0.475 (as quoted in the Biomedical Engineering and Design Handbook, vol. 1, ch. 11); 4-6 Hz: Griffin, "
+                "Handbook of Human Vibration (1990), ISO 2631-1")
+RIDER_HZ = (4.0, 6.0)  # a seated body's vertical resonance
 METHOD = ("the bike's planar equations with the seated rider held rigid on the frame (rider.seated_com_mm), "
           "coasting on flat ground, linearised about the seated static equilibrium (Coulomb friction left out); "
           "of the two lowest oscillatory modes, the one whose wheel travel is most at the end that rang; the end's "
@@ -59,7 +71,7 @@ METHOD = ("the bike's planar equations with the seated rider held rigid on the f
 class SeatedBike:
     """The linearised seated bike of ``bike`` (a preset, a file or a ``BikeSpec``)."""
 
-    def __init__(self, bike, overrides=None):
+    def __init__(self, bike, overrides=None, rider_hz: float | None = None):
         spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(str(bike), overrides)
         if spec.rider.seated_com is None:
             raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider; a seat slam is read through "
@@ -75,7 +87,14 @@ class SeatedBike:
         b = self.prepared.bike
         self.q = np.array([self.prepared.initial_qpos[b.qpos_index(n)]
                            for n in ("bike_x", "bike_z", "pitch", "fork", "swingarm")])
+        self.rider_hz = rider_hz
+        self.n = N if rider_hz is None else NQ  # a compliant rider: its two coordinates free
+        if rider_hz is not None:
+            self.q = np.concatenate((self.q, np.zeros(HELD)))  # the seated position (held at 0 by the seat)
         self.M, self.K, self.C = self._linear()
+        self.saddle = None
+        if rider_hz is not None:
+            self.saddle = self._compliant(float(rider_hz))
         pl = self.ref.planar
         w, dw = pl.wheel_travel(self.q[4])
         self.rear_travel = w
@@ -93,31 +112,73 @@ class SeatedBike:
             self.damping[end] = (_force(law, x, 1e-5) - _force(law, x, -1e-5)) / 2e-5
 
     def _full(self, qa, qda):
-        q = np.concatenate((qa, np.zeros(HELD)))
-        qd = np.concatenate((qda, np.zeros(HELD)))
+        pad = np.zeros(NQ - qa.size)
+        q = np.concatenate((qa, pad))
+        qd = np.concatenate((qda, pad))
         y = np.concatenate((q, qd, np.zeros(self.ref.nf + self.ref.ns)))
         Q, out = self.ref.forces(0.0, y)
-        return (Q + out["static"])[:N]
+        return (Q + out["static"])[:qa.size]
 
     def _linear(self):
         q0 = self.q
-        qd0 = np.zeros(N)
+        n = q0.size
+        qd0 = np.zeros(n)
         qd0[0] = COAST_M_PER_S
-        K = np.zeros((N, N))
-        C = np.zeros((N, N))
-        for j in range(N):
+        K = np.zeros((n, n))
+        C = np.zeros((n, n))
+        for j in range(n):
             # the swingarm's column as the secant over +-SECANT_TRAVEL_M of wheel travel: a leverage
             # table's slope, its ratios rounded per step, jumps from one step to the next, and a
             # ring-down's swing spans several steps (the other columns' laws are smooth: 1e-7)
             h = SECANT_TRAVEL_M / abs(self.ref.planar.wheel_travel(q0[4])[1]) if j == 4 else 1e-7
-            e = np.zeros(N)
+            e = np.zeros(n)
             e[j] = h
             K[:, j] = -(self._full(q0 + e, qd0) - self._full(q0 - e, qd0)) / (2 * h)
-            ev = np.zeros(N)
+            ev = np.zeros(n)
             ev[j] = 1e-5
             C[:, j] = -(self._full(q0, qd0 + ev) - self._full(q0, qd0 - ev)) / 2e-5
-        M = self.ref.planar.mass_matrix(np.concatenate((q0, np.zeros(HELD))))[:N, :N]
+        M = self.ref.planar.mass_matrix(np.concatenate((q0, np.zeros(NQ - n))))[:n, :n]
         return M, K, C
+
+    def _compliant(self, hz: float) -> dict:
+        """The seated body made compliant: the saddle's spring and damper on the rider's two
+        coordinates (beside the legs on the pedals and the arms on the bars the reference already
+        has) so that each coordinate alone, the frame held, rings at ``hz`` with the damping ratio
+        RIDER_ZETA (the seated body's apparent mass: 5 Hz and 0.475, Fairley and Griffin 1989); the
+        legs and arms couple the two, so the frame-held rider's two modes straddle ``hz`` (4.4 and 5.6
+        Hz at 5 Hz on the sst preset), given as ``frame_held_rider_hz``. The saddle's preload, which
+        makes the seated position an equilibrium, is left out of the stiffness (its turning with the
+        rider's pitch). Returns the saddle's rates and dampings and the frame-held rider's modes."""
+        out = {"resonance_hz": hz, "damping_ratio": RIDER_ZETA, "source": RIDER_SOURCE}
+        w2 = (2 * math.pi * hz) ** 2
+        r = slice(N, N + HELD)
+        for i, name in ((N, "vertical"), (N + 1, "pitch")):  # each coordinate's own diagonal at hz
+            add_k = max(self.M[i, i] * w2 - self.K[i, i], 0.0)
+            self.K[i, i] += add_k
+            add_c = max(2 * RIDER_ZETA * math.sqrt(self.K[i, i] * self.M[i, i]) - self.C[i, i], 0.0)
+            self.C[i, i] += add_c
+            out[f"saddle_{name}_rate"] = float(add_k)
+            out[f"saddle_{name}_damping"] = float(add_c)
+        lam = np.linalg.eigvals(np.linalg.solve(self.M[r, r], self.K[r, r]))
+        out["frame_held_rider_hz"] = sorted(float(math.sqrt(max(v.real, 0.0)) / (2 * math.pi)) for v in lam)
+        return out
+
+    def energy_shares(self, end: str, scale: float, coefficient: float) -> dict:
+        """The end's undamped mode: the shares of its strain energy in the end's spring, in the rider's
+        body (the saddle, legs and arms on the rider's coordinates) and elsewhere (the other end, the
+        tires), from the symmetric part of K."""
+        M, _, K = self.matrices(end, scale, coefficient)
+        Ks = 0.5 * (K + K.T)
+        lam, vec = np.linalg.eig(np.linalg.solve(M, Ks))
+        i, d = COORD[end], self.d_end[end]
+        want = self.mode_of(end, scale, coefficient)["frequency_hz"]
+        k = int(np.argmin([abs(math.sqrt(max(v.real, 0.0)) / (2 * math.pi) - want) for v in lam]))
+        v = vec[:, k].real
+        total = float(v @ Ks @ v)
+        spring = scale * self.rate[end] * d * d * v[i] ** 2
+        rider = float(v[N:] @ Ks[N:, N:] @ v[N:]) if self.n > N else 0.0
+        return {"spring": float(spring / total), "rider": float(rider / total),
+                "other": float(1.0 - (spring + rider) / total)}
 
     def matrices(self, end: str, scale: float = 1.0, coefficient: float | None = None):
         """(M, C, K) with ``end``'s spring rate scaled by ``scale`` and its damper a linear one of
@@ -135,14 +196,15 @@ class SeatedBike:
         share of the wheel travel in the mode (``front_share``, ``rear_share``)."""
         M, C, K = self.matrices(end, scale, coefficient)
         Minv = np.linalg.inv(M)
-        A = np.block([[np.zeros((N, N)), np.eye(N)], [-Minv @ K, -Minv @ C]])
+        n = self.n
+        A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ C]])
         lam, vec = np.linalg.eig(A)
         sin_head = math.sin(self.spec.head_angle)
         out = []
         for k in np.argsort(lam.imag):
             if lam[k].imag <= MIN_RAD_PER_S:  # a rigid-body mode (the bike's roll along the ground) or overdamped
                 continue
-            v = vec[:N, k]
+            v = vec[:n, k]
             front = abs(v[3]) * sin_head  # the front wheel's travel (vertical)
             rear = abs(v[4] * self.dw_dphi)
             mag = abs(lam[k])
@@ -208,6 +270,8 @@ class SeatedBike:
             "leverage_ratio_at_sag": self.leverage_ratio if end == "shock" else None,
             "seated_sag_mm": self.rear_travel * 1e3 if end == "shock" else float(self.q[3]) * 1e3,
             "bike_file_mode": {"frequency_hz": own["frequency_hz"], "damping_ratio": own["damping_ratio"]},
+            **({"rider": {**self.saddle, "mode_strain_energy_share": self.energy_shares(end, a, c)}}
+               if self.saddle is not None else {}),
         }
 
 

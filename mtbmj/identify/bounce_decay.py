@@ -35,7 +35,11 @@ free). It continues while the extrema come at the oscillation's pace (within 1.6
 the swings decay (each level the vertex of a parabola fitted to the raw travel within a fifth of a
 half period: the running extreme of a noisy signal is biased); a held extremum ends it: that is where the motion stuck, and its level (the
 median of the held stretch, after its first half of a half period, when its spread is under 0.15 x
-the hysteresis: at rest) is the sequence's last value; a stretch that still moves is not at rest. Another stop ends it the same way.
+the hysteresis: at rest) is the sequence's last value; a stretch that still moves is not at rest.
+So is an extremum from which the smoothed travel stays within 4 measurement floors for at least half a
+half period (a free extremum stays that close a small share of it): at rest, whatever follows (a rider
+shifting on the saddle steps the travel later; the step is not part of the rest). Another stop ends it
+the same way.
 
 **The fit.** Each relation x_n -> x_{n+1} is one residual; (zeta, d, x_eq) are fitted by least
 squares on the whole sequence, three models: viscous only (d = 0), friction only (zeta = 0), both.
@@ -73,6 +77,8 @@ PACE = 1.6  # successive free extrema at most this many half periods apart
 HOLD_FACTOR = 2.0  # an extremum held this many times a free extremum's dwell (plus HOLD_PAD_S) is held
 HOLD_PAD_S = 0.020
 STUCK_SPREAD = 0.15  # at rest: the smoothed travel's sd within this share of the hysteresis
+REST_BAND = 4.0  # at rest also: from its turn on, the smoothed travel within this many measurement floors
+REST_HALF = 0.5  # ... for at least this share of a half period (a free extremum stays there a small share)
 IC = "BIC = n ln(RSS / n) + (p + 1) ln n over the half-cycle relations (lowest wins)"
 LAW_FORM = ("x_{n+1} = c_n - r (x_n - c_n), c_n = x_eq + sigma_n d (sigma_n +1 after a peak, -1 after a trough), "
             "r = exp(-pi zeta / sqrt(1 - zeta^2)), d = F_c / k: viscous damping zeta and Coulomb friction band d "
@@ -125,6 +131,12 @@ class Extrema:
         return float(sw[1] / sw[0]) if sw.size >= 2 and sw[0] > 0 else float("nan")
 
 
+def _rest_run(xs: np.ndarray, i: int, band: float) -> np.ndarray:
+    """The smoothed travel from ``i`` on while it stays within ``band`` of xs[i] (a rest, when long)."""
+    off = np.flatnonzero(np.abs(xs[i:] - xs[i]) > band)
+    return xs[i:i + (int(off[0]) if off.size else xs.size - i)]
+
+
 def _dwell(xs: np.ndarray, i: int, tol: float) -> tuple[int, int]:
     """The contiguous stretch around ``i`` within ``tol`` of xs[i]."""
     lo = i
@@ -173,6 +185,9 @@ def extrema(time_s, x_mm, end: str, slam_index: int | None = None) -> Extrema:
             return "stuck", float(np.median(settled))  # where it rests (its noise averaged out)
         if xs[i] <= swing:  # full extension: the top-out stop (travel 0 whatever the calibration's scale)
             return "stop", level
+        rest = _rest_run(xs, i, REST_BAND * floor_mm)
+        if rest.size * dt >= REST_HALF * half:  # dead still from the turn on: at rest, whatever follows
+            return "stuck", float(np.median(rest))
         nb = [abs(xs[idx[k]] - xs[i]) for k in (j - 1, j + 1) if 0 <= k < len(idx)]
         amp = 0.5 * float(np.mean(nb)) if nb else 0.0
         free = half if amp <= swing else 2.0 * half / math.pi * math.acos(1.0 - swing / amp)

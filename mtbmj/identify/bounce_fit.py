@@ -6,7 +6,8 @@ each ring-down through a bike's seated model (``mtbmj.identify.bounce_bike``): o
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import textwrap
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,9 @@ from mtbmj.errors import MtbmjError
 class BounceFit:
     """What a bounce fit found: ``summary`` (fit.json's content), the ``records`` read, each
     record's ring-down ``fits`` by end, the click ``laws`` by end, the records' ``clicks`` and the
-    predicted ring-downs' ``csv`` columns by file name."""
+    predicted ring-downs' ``csv`` columns by file name; ``predictions`` (each end's ring-down at each
+    predicted click from the decay law, :class:`mtbmj.identify.bounce_predict.Prediction`) and
+    ``answers`` (the clicks to set per end, :class:`mtbmj.identify.bounce_clicks.ClickAnswer`)."""
 
     summary: dict
     records: list
@@ -26,6 +29,8 @@ class BounceFit:
     laws: dict
     clicks: list
     csv: dict
+    predictions: list = field(default_factory=list)  # bounce_predict.Prediction per predicted click and end
+    answers: dict = field(default_factory=dict)  # end -> bounce_clicks.ClickAnswer
 
     def files(self) -> dict[str, bytes]:
         """fit.json, fit.png and ringdown_<K>_clicks.csv per predicted click, as bytes."""
@@ -96,9 +101,21 @@ class BounceFit:
                     out.append(f"predicted at {p['clicks']:g} clicks: {end} zeta {e['damping_ratio']:.3f} "
                                f"[{e['damping_ratio_ci95'][0]:.3f}, {e['damping_ratio_ci95'][1]:.3f}], {freq}"
                                + _bike_text(e.get("bike")))
+        for p in self.predictions:
+            out.append(f"predicted at {p.clicks:g} clicks from {p.source} (decay law): {p.end} first half cycle's decay "
+                       f"{_est(p.first_half_cycle_decay, 2)}, {_est(p.frequency_hz, 2)} Hz, rebound speed "
+                       f"{_est(p.rebound_speed_mm_per_s, 0)} mm/s, inside the stroke: {'yes' if p.inside_stroke() else 'NO'}"
+                       + (f" (reaches the stroke's end at {p.stop_reached_s():.3f} s: outside the law's envelope from "
+                          f"there)" if p.stop_reached_s() is not None else ""))
+        for end, ans in self.answers.items():
+            out.append(ans.line())
         for note in self.summary["notes"]:
             out.append(f"note: {note}")
         return out
+
+
+def _est(e, digits: int) -> str:
+    return f"{e.value:.{digits}f} [{e.low:.{digits}f}, {e.high:.{digits}f}]"
 
 
 def _records(paths, clicks):
@@ -108,6 +125,20 @@ def _records(paths, clicks):
 
 
 RATE_AGREES = 1.25  # a ring-down's spring rate within this factor of the bike file's says nothing
+
+
+def _check_rider_hz(hz) -> None:
+    """A resonance (Hz) that is a positive number; outside a seated body's 4-6 Hz one warning line."""
+    import warnings
+
+    from mtbmj.errors import ConfigWarning
+    from mtbmj.identify.bounce_bike import RIDER_HZ
+
+    if not (isinstance(hz, (int, float)) and math.isfinite(hz) and hz > 0):
+        raise MtbmjError(f"--rider-hz {hz}: the seated rider's resonance must be a positive number of Hz")
+    if not RIDER_HZ[0] <= hz <= RIDER_HZ[1]:
+        warnings.warn(f"--rider-hz {hz:g}: a seated body's vertical resonance lies at {RIDER_HZ[0]:g}-{RIDER_HZ[1]:g} Hz "
+                      f"(Griffin; ISO 2631-1); read as given", ConfigWarning, stacklevel=3)
 
 
 def _through_bike(seated, end: str, zeta: float, zeta_sd: float, fd: float, fd_sd: float) -> dict:
@@ -132,11 +163,14 @@ def _damper_law(points) -> dict | None:
             "slope_N_s_per_m_per_click_ci95": interval95(float(beta[1]), math.sqrt(cov[1, 1]))}
 
 
-def fit_bounce(paths, clicks, predict=(), bike=None) -> BounceFit:
+def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None) -> BounceFit:
     """The seat slams in the SST records ``paths`` (one number of rebound ``clicks`` each) fitted:
     everything ``mtbmj fit bounce`` writes and prints, as a :class:`BounceFit`; ``predict``: clicks to
     predict the ring-down at. ``bike`` (a preset, a file or a ``BikeSpec``): each ring-down also read
-    through that bike's seated model (``mtbmj.identify.bounce_bike``)."""
+    through that bike's seated model (``mtbmj.identify.bounce_bike``). ``hit_mm``: the hit the answer in
+    clicks is for (mm above the static position; default the records' own, ``bounce_clicks.default_hit``).
+    ``rider_hz``: with ``bike``, the seated rider compliant on the saddle at that resonance (Hz) instead
+    of rigid (``bounce_bike.SeatedBike``), and each reading gives the rider's share of the mode."""
     from mtbmj.identify import bounce
 
     paths = [Path(p) for p in paths]
@@ -144,10 +178,14 @@ def fit_bounce(paths, clicks, predict=(), bike=None) -> BounceFit:
         raise MtbmjError(f"--clicks: {len(clicks)} value(s) for {len(paths)} record(s); give one number of clicks "
                          f"per record, in their order")
     seated = None
+    if rider_hz is not None and bike is None:
+        raise MtbmjError("--rider-hz: the rider's resonance is read through a bike; give --bike too")
     if bike is not None:
         from mtbmj.identify.bounce_bike import SeatedBike
 
-        seated = SeatedBike(bike)
+        if rider_hz is not None:
+            _check_rider_hz(rider_hz)
+        seated = SeatedBike(bike, rider_hz=rider_hz)
     records = _records(paths, clicks)
     fits = [bounce.fit_record(r) for r in records]
     for r, f in zip(records, fits):
@@ -185,10 +223,13 @@ def fit_bounce(paths, clicks, predict=(), bike=None) -> BounceFit:
                     out["records"][-1][end]["bike"] = b
                     scale = b.get("spring_rate_over_bike_file")
                     if scale is not None and not 1 / RATE_AGREES <= scale <= RATE_AGREES:
+                        rider = ("the rider rigid" if seated.saddle is None else
+                                 f"the rider compliant at {seated.rider_hz:g} Hz")
                         notes.append(f"{r.name}: the {end}'s ring-down implies {scale:.2f} x the spring rate of "
                                      f"{seated.spec.name} ({b['spring_rate_N_per_mm']:.1f} of "
-                                     f"{b['bike_file_spring_rate_N_per_mm']:.1f} N/mm): the bike file's spring, or its "
-                                     f"seated masses (rider.seated_com_mm, rider.mass_kg), is not this bike's")
+                                     f"{b['bike_file_spring_rate_N_per_mm']:.1f} N/mm, {rider}): the bike file's "
+                                     f"spring, or its seated masses (rider.seated_com_mm, rider.mass_kg), is not this "
+                                     f"bike's")
     for end, law in laws.items():
         out["law"][end] = law.summary()
         if seated is not None:
@@ -205,14 +246,14 @@ def fit_bounce(paths, clicks, predict=(), bike=None) -> BounceFit:
         from mtbmj.identify.bounce_bike import METHOD as BIKE_METHOD
 
         out["bike"] = {"name": seated.spec.name, "method": BIKE_METHOD,
-                       "seated_com_mm": [v * 1e3 for v in seated.spec.rider.seated_com]}
-    decay_fits, decay_laws = _decay(records, clicks, out, notes)
-    csvs = {}
-    base_i = int(np.argmin(clicks))
-    base_rec, base_fit = records[base_i], fits[base_i]
+                       "seated_com_mm": [v * 1e3 for v in seated.spec.rider.seated_com],
+                       "rider": "rigid on the frame" if seated.saddle is None else
+                       f"compliant on the saddle at {seated.rider_hz:g} Hz (damping ratio {seated.saddle['damping_ratio']:g})"}
+    decay_fits, _ = _decay(records, clicks, out, notes)
+    plaws = _prediction_laws(records, clicks, decay_fits, out)
+    csvs, predictions = {}, []
     for k in predict:
         entry = {"clicks": k}
-        columns = {}
         for end, law in laws.items():
             z, zsd = law.zeta(k)
             fd, fsd = law.frequency(k)
@@ -221,39 +262,50 @@ def fit_bounce(paths, clicks, predict=(), bike=None) -> BounceFit:
                           "frequency_hz_ci95": bounce.interval95(fd, fsd) if math.isfinite(fd) else None,
                           "undamped_frequency_hz": law.fn_Hz,
                           "undamped_frequency_hz_ci95": bounce.interval95(law.fn_Hz, law.fn_sd)}
-            if end in decay_laws:
-                entry[end]["decay"] = _decay_prediction(decay_laws[end], decay_fits, clicks, end, k)
             if not 0.0 <= z < 1.0:
                 entry[end]["note"] = "the law gives no oscillation here (damping ratio outside 0 to 1); no ring-down"
-                continue
-            if seated is not None:
+            elif seated is not None:
                 entry[end]["bike"] = _through_bike(seated, end, z, zsd, fd, fsd)
-            src = base_fit.get(end)
-            if src is None or not src.fitted:
-                entry[end]["note"] = f"no ring-down: the {clicks[base_i]:g}-click record has no fitted {end} start"
+        columns, source = {}, None
+        for end, (plaw, rows) in plaws.items():
+            p = _predict_end(plaw, rows, records, clicks, k)
+            if isinstance(p, str):
+                entry.setdefault(end, {})["decay"] = {"note": p}
                 continue
-            t, x = bounce.predicted_ring_down(src, base_rec.time_s, z, fd)
-            columns[end] = (t, x)
+            entry.setdefault(end, {})["decay"] = p.summary()
+            predictions.append(p)
+            if source is None or p.source == source:
+                source = p.source
+                columns[end] = p
         if columns:
             name = f"ringdown_{k:g}_clicks.csv"
-            t0 = max(t[0] for t, _ in columns.values())
-            t1 = min(t[-1] for t, _ in columns.values())
-            grid = base_rec.time_s[(base_rec.time_s >= t0 - 1e-12) & (base_rec.time_s <= t1 + 1e-12)]
-            cols = {"time_s": grid}
+            first = next(iter(columns.values()))
+            n = min(p.time_s.size for p in columns.values())  # each end's trace on the record's own time grid from
+            cols = {"time_s": first.time_s[:n]}  # 0, as long as its slam's peak plus the law's span: the shortest
             for end in ("shock", "fork"):
                 if end in columns:
-                    t, x = columns[end]
-                    cols[f"{end}_mm"] = np.interp(grid, t, x)
+                    cols[f"{end}_mm"] = columns[end].travel_mm[:n]
             csvs[name] = cols
             entry["ringdown_csv"] = name
-            entry["ringdown_from"] = (f"{base_rec.name} ({clicks[base_i]:g} clicks): its rest level and free start "
-                                      f"(displacement and velocity) at t0, with the predicted parameters; "
-                                      f"{', '.join(c for c in cols if c != 'time_s')}; compression positive")
-            missing = [e for e in ("shock", "fork") if e not in columns]
-            if missing:
-                entry["ringdown_note"] = f"{', '.join(missing)}: no predicted ring-down (no law or no fitted start)"
+            entry["ringdown_from"] = (f"{first.source} ({first.source_clicks:g} clicks, the record nearest in clicks): "
+                                      f"its own travel up to its slam's peak, then the decay law's motion at {k:g} "
+                                      f"clicks from rest there; {', '.join(c for c in cols if c != 'time_s')}; "
+                                      f"compression positive, inside the stroke")
+        missing = [e for e in ("shock", "fork") if any(e in f for f in fits) and e not in columns]
+        if missing:
+            entry["ringdown_note"] = (f"{', '.join(missing)}: no predicted ring-down (no decay law across clicks, or "
+                                      f"its source is another record)")
         out["predicted"].append(entry)
-    return BounceFit(out, records, fits, laws, list(clicks), csvs)
+    answers = {}
+    if plaws:
+        from mtbmj.identify import bounce_clicks as bc
+
+        out["answer"] = {}
+        for end, (plaw, _) in plaws.items():
+            hit = float(hit_mm) if hit_mm is not None else bc.default_hit(plaw)
+            answers[end] = bc.answer(plaw, hit)
+            out["answer"][end] = answers[end].summary()
+    return BounceFit(out, records, fits, laws, list(clicks), csvs, predictions, answers)
 
 
 def _decay(records, clicks, out, notes):
@@ -304,21 +356,46 @@ def _decay(records, clicks, out, notes):
     return fits, laws
 
 
-def _decay_prediction(fit, fits, clicks, end, k) -> dict:
-    """zeta, the friction band and the first free half cycle's decay at ``k`` clicks (at the
-    lowest-click record's own first free swing)."""
-    from mtbmj.identify import bounce_decay as bd
+def _prediction_laws(records, clicks, decay_fits, out) -> dict:
+    """end -> (DecayLaw, record indices) for each end whose decay law across clicks was fitted, with the
+    records' held-out checks under ``decay_law[end]["held_out"]`` (three or more click settings)."""
+    from mtbmj.identify import bounce_predict as bp
 
-    order = sorted(range(len(clicks)), key=lambda i: clicks[i])
-    src = next((i for i in order if end in fits[i] and fits[i][end].seq.swings.size >= 1), None)
-    if src is None:
-        return {"note": "no record with a free swing to start from"}
-    s0 = float(fits[src][end].seq.swings[0])
-    p = bd.law_prediction(fit, k, s0)
-    return {"damping_ratio": p["zeta"], "damping_ratio_ci95": interval(p["zeta"], p["zeta_sd"]),
-            "friction_band_mm": p["friction_band_mm"],
-            "first_half_cycle_decay": p["decay"], "first_half_cycle_decay_ci95": interval(p["decay"], p["decay_sd_total"]),
-            "first_swing_mm": s0, "first_swing_from_clicks": clicks[src]}
+    plaws = {}
+    for end, entry in out.get("decay_law", {}).items():
+        rows = [i for i, f in enumerate(decay_fits) if end in f and f[end].seq.levels_mm.size >= 2
+                and not f[end].refusal.startswith("no decay law: the first")]
+        seqs = [decay_fits[i][end].seq for i in rows]
+        ks = [clicks[i] for i in rows]
+        series = [getattr(records[i], f"{end}_mm") for i in rows]
+        law = bp.decay_law(end, seqs, ks, [records[i] for i in rows], series, entry["model"])
+        if law is None:
+            continue
+        plaws[end] = (law, rows)
+        entry["undamped_frequency_hz"] = law.fn_hz
+        entry["undamped_frequency_hz_ci95"] = interval(law.fn_hz, law.fn_sd)
+        if len(set(ks)) >= 3:
+            entry["held_out"] = [_finite_or_none(bp.held_out(seqs, ks, [records[i] for i in rows], series, j,
+                                                             entry["model"])) for j in range(len(rows))]
+    return plaws
+
+
+def _finite_or_none(d: dict) -> dict:
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in d.items()}
+
+
+def _predict_end(law, rows, records, clicks, k):
+    """The end's Prediction at ``k`` clicks from the record nearest in clicks (the lower on a tie), or
+    the reason there is none."""
+    i = min(rows, key=lambda j: (abs(clicks[j] - k), clicks[j]))
+    seq = law.seqs[rows.index(i)]
+    rec = records[i]
+    x = getattr(rec, f"{law.end}_mm")
+    stroke = getattr(rec, f"{law.end}_max_mm")
+    try:
+        return law.predict(k, rec, seq, law.x_eq_of(seq, clicks[i]), clicks[i], x, stroke)
+    except MtbmjError as e:
+        return str(e)
 
 
 def interval(v, sd):
@@ -328,15 +405,22 @@ def interval(v, sd):
 
 
 def figure_png(result: BounceFit) -> bytes:
-    """fit.png: each record's ends with their fits, and the damping ratio against clicks."""
-    from matplotlib.figure import Figure
-
+    """fit.png (:func:`figure`)."""
     from mtbmj.readout.quicklook import png
+
+    return png(figure(result), dpi=80)
+
+
+def figure(result: BounceFit):
+    """fit.png's figure: each record's ends with their fits, the damping ratio against clicks, and,
+    with a decay law across clicks, the predicted ring-downs and the answer in clicks."""
+    from matplotlib.figure import Figure
 
     records, fits, laws, clicks = result.records, result.fits, result.laws, result.clicks
     n = len(records)
-    fig = Figure(figsize=(11, 2.6 * (n + 1)))
-    axes = fig.subplots(n + 1, 2, squeeze=False)
+    extra = 1 if (result.predictions or result.answers) else 0
+    fig = Figure(figsize=(11, 2.6 * (n + 1 + extra)))
+    axes = fig.subplots(n + 1 + extra, 2, squeeze=False)
     for i, (r, f, k) in enumerate(zip(records, fits, clicks)):
         for j, end in enumerate(("shock", "fork")):
             ax = axes[i, j]
@@ -384,8 +468,77 @@ def figure_png(result: BounceFit) -> bytes:
     axes[n, 1].set_axis_off()
     axes[n, 1].text(0, 0.5, "fit window: from the dotted line (free start)\nmethod: damped sinusoid, least squares\n"
                     "version-2 records: amplitudes approximate", fontsize=8, va="center")
+    if extra:
+        _prediction_panel(axes[n + 1, 0], result)
+        _answer_panel(axes[n + 1, 1], result)
     fig.tight_layout()
-    return png(fig, dpi=80)
+    return fig
+
+
+def _prediction_panel(ax, result: BounceFit) -> None:
+    """Each predicted ring-down (decay law) beside the record it starts from, in time from that
+    record's slam peak, with the stroke's ends."""
+    shown = set()
+    for j, p in enumerate(result.predictions):
+        m = (p.time_s >= p.slam_s - 0.5) & (p.time_s <= p.slam_s + 3.0)
+        if p.source not in shown:
+            rec = next(r for r in result.records if r.name == p.source)
+            x = getattr(rec, f"{p.end}_mm")
+            mr = (rec.time_s >= p.slam_s - 0.5) & (rec.time_s <= p.slam_s + 3.0)
+            ax.plot(rec.time_s[mr] - p.slam_s, x[mr], color="0.6", lw=0.8, ls=":" if shown else "-",
+                    label=f"record {p.source} ({p.source_clicks:g} clicks)")
+            shown.add(p.source)
+        ax.plot(p.time_s[m] - p.slam_s, p.travel_mm[m], color=f"C{j % 10}", lw=1.2,
+                label=f"{p.end} at {p.clicks:g} clicks from {p.source}: first decay "
+                      f"{p.first_half_cycle_decay.value:.2f}, {p.frequency_hz.value:.2f} Hz")
+        ax.axhline(p.stroke_mm, color="0.3", lw=0.6, ls="--")
+    ax.axhline(0.0, color="0.3", lw=0.6, ls="--")
+    ax.set_title("predicted ring-downs (decay law, from the record's own state; stroke's ends dashed)", fontsize=9)
+    ax.set_xlabel("time from the record's slam peak (s)")
+    ax.set_ylabel("travel (mm)")
+    if result.predictions:
+        ax.legend(fontsize=6, loc="upper right")
+    else:
+        ax.text(0.5, 0.5, "no --predict-clicks", transform=ax.transAxes, ha="center", fontsize=8)
+
+
+def _answer_panel(ax, result: BounceFit) -> None:
+    """The decay law's zeta against clicks, the window of clicks meeting the target shaded, the answer
+    marked, the title saying it."""
+    from mtbmj.identify import bounce_clicks as bc
+
+    titles = []
+    for c, (end, ans) in enumerate(result.answers.items()):
+        lo, hi = ans.searched
+        kk = np.linspace(lo, hi, 60)
+        fit = result.summary["decay_law"][end]
+        if "zeta0" in fit:
+            zz = fit["zeta0"] + fit["slope_per_click"] * kk
+            ax.plot(kk, zz, color=f"C{c}", lw=1.2, label=f"{end}: decay law's zeta (friction common)")
+            pc = fit["per_click"]
+            ax.errorbar([q["clicks"] for q in pc], [q["damping_ratio"] for q in pc],
+                        yerr=np.array([[q["damping_ratio"] - q["damping_ratio_ci95"][0],
+                                        q["damping_ratio_ci95"][1] - q["damping_ratio"]] for q in pc]).T,
+                        fmt="o", color=f"C{c}", capsize=3, label=f"{end}: zeta per record (95 %)")
+        if ans.window is not None:
+            ax.axvspan(ans.window[0], ans.window[1], color="C2", alpha=0.2, label=f"{end}: {bc.TARGET}")
+        if ans.range95 is not None:
+            ax.axvspan(ans.range95[0], ans.range95[1], facecolor="none", hatch="//", edgecolor="C2", lw=0.5,
+                       label=f"{end}: clicks within the uncertainty (95 %)")
+        if ans.clicks is not None:
+            ax.axvline(ans.clicks, color="k", lw=1.2)
+            titles.append(f"{end}: set {ans.clicks} clicks")
+        else:
+            titles.append(f"{end}: no answer within {lo:g}-{hi:g} clicks")
+            ax.text(0.02, 0.04 + 0.2 * c, "\n".join(textwrap.wrap(ans.note, 60)), transform=ax.transAxes,
+                    fontsize=7, va="bottom")
+    hits = ", ".join(f"{a.hit_mm:.1f} mm" for a in result.answers.values())
+    ax.set_title("; ".join(titles) + f" ({bc.TARGET} after a {hits} hit)" if titles else "answer in clicks",
+                 fontsize=9)
+    ax.set_xlabel("rebound clicks")
+    ax.set_ylabel("damping ratio (decay law)")
+    if titles:
+        ax.legend(fontsize=7, loc="upper left")
 
 
 def _bike_text(b: dict | None) -> str:
@@ -395,9 +548,14 @@ def _bike_text(b: dict | None) -> str:
         return f"; through the bike: {b['note']}"
     lo, hi = b["damper_N_s_per_m_ci95"]
     klo, khi = b["spring_rate_N_per_mm_ci95"]
+    rider = ""
+    if "rider" in b:
+        sh = b["rider"]["mode_strain_energy_share"]
+        rider = (f"; the mode's strain energy {100 * sh['spring']:.0f} % in the spring, {100 * sh['rider']:.0f} % in the "
+                 f"rider's body (on the saddle at {b['rider']['resonance_hz']:g} Hz)")
     return (f"; through the bike: spring {b['spring_rate_N_per_mm']:.1f} N/mm [{klo:.1f}, {khi:.1f}] "
             f"({b['spring_rate_over_bike_file']:.2f} x the bike file's), wheel rate {b['wheel_rate_N_per_mm']:.2f} N/mm, "
-            f"damper {b['damper_N_s_per_m']:.0f} N s/m [{lo:.0f}, {hi:.0f}]")
+            f"damper {b['damper_N_s_per_m']:.0f} N s/m [{lo:.0f}, {hi:.0f}]" + rider)
 
 
 def _not_finite(value, where: str = "") -> str | None:
@@ -428,4 +586,4 @@ def json_bytes(data) -> bytes:
     return (json.dumps(data, indent=2, allow_nan=False) + "\n").encode()
 
 
-__all__ = ["BounceFit", "RATE_AGREES", "figure_png", "fit_bounce", "interval", "json_bytes"]
+__all__ = ["BounceFit", "RATE_AGREES", "figure", "figure_png", "fit_bounce", "interval", "json_bytes"]

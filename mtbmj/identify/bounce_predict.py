@@ -1,0 +1,365 @@
+"""A seat slam predicted at another rebound click setting, from the decay law with friction.
+
+The law (:mod:`mtbmj.identify.bounce_decay`, fitted with the friction band d common to the records
+and ``zeta = zeta0 + slope x clicks``) gives zeta and d at any click between the records'. The
+frequency does not come from the half-cycle relations: each record's free extrema are timed (the
+vertex of a parabola fitted to the raw travel, with its standard error), their spacing is half a
+damped period ``pi / w_d``, and ``f_n = f_d / sqrt(1 - zeta^2)`` with the record's zeta is taken as
+common to the records (the spring and the sprung mass do not change with the clicks): its mean over
+the records, its sd the larger of the records' scatter over sqrt(n) and the timing's.
+
+**The predicted trace** starts from a record's own state: the record itself up to the slam's peak
+(the compression stroke the rider made, which a rebound adjuster does not act on: an assumption),
+then from rest at the peak the law's own motion, ``m x'' + c x' + F_c sign(x') + k (x - x_eq) = 0``
+with the record's x_eq, integrated in closed form half cycle by half cycle (from rest at x_n the
+motion is a damped oscillation about ``c_n = x_eq - s d``, s the direction it moves, until the
+velocity is nil again). The stroke's ends are stops: a half cycle that reaches full extension (0 mm)
+or full travel is cut there and the motion restarts from rest at the stop (a plastic stop); a rest
+within d of x_eq is where it sticks. So the trace never leaves the stroke (a test checks it on every
+trace written).
+
+**Intervals** (95 %): zeta and d from the law's covariance (delta method); the first half cycle's
+decay as :func:`mtbmj.identify.bounce_decay.law_prediction` gives it (with the residual scale of one
+record's extrema); the frequency from zeta's and f_n's sd; the rebound speed (the largest extension
+speed after the slam's peak) as the 2.5 and 97.5 percentiles over 400 draws of (zeta, d, f_n) from
+their normal distribution (seeded: the same numbers every run).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mtbmj.errors import MtbmjError
+from mtbmj.identify import bounce_decay as bd
+from mtbmj.identify.bounce import Z95, interval95
+
+DRAWS = 400
+STOP_NEAR_MM = 0.05  # a stroke's end is reached when the law's motion comes this close to it
+PARABOLA_SHARE = 0.2  # an extremum's time: parabola over this share of a half period either side
+
+
+@dataclass
+class Estimate:
+    """A value with its 95 % interval."""
+
+    value: float
+    low: float
+    high: float
+
+    def contains(self, v: float) -> bool:
+        return self.low <= v <= self.high
+
+
+def vertex_time(t: np.ndarray, x: np.ndarray, ti: float, half_s: float) -> tuple[float, float]:
+    """The time of the extremum near ``ti``: the vertex of a parabola fitted to the raw travel within
+    PARABOLA_SHARE of a half period either side, and its standard error (from the fit's covariance)."""
+    dt = float(t[1] - t[0])
+    i = int(round((ti - t[0]) / dt))
+    w = max(3, int(PARABOLA_SHARE * half_s / dt))
+    a, b = max(0, i - w), min(x.size, i + w + 1)
+    tau = t[a:b] - t[i]
+    (c2, c1, c0), cov = np.polyfit(tau, x[a:b], 2, cov="unscaled")
+    res = x[a:b] - np.polyval([c2, c1, c0], tau)
+    s2 = max(float(res @ res) / max(1, tau.size - 3), 1e-12)
+    g = np.array([c1 / (2 * c2 * c2), -1.0 / (2 * c2), 0.0])  # d(-c1 / 2 c2) / d(c2, c1, c0)
+    sd = math.sqrt(max(float(g @ (cov * s2) @ g), 0.0))
+    return float(t[i] - c1 / (2 * c2)), sd
+
+
+@dataclass
+class Timing:
+    """One record's damped frequency from its free extrema's times."""
+
+    frequency_hz: float
+    sd: float
+    n_times: int
+
+
+def timing(seq: bd.Extrema, t: np.ndarray, x: np.ndarray) -> Timing | None:
+    """f_d of one record from its free extrema's times (a line through the times against their index,
+    weighted by their standard errors); None with fewer than two timed extrema."""
+    times = seq.times_s[np.isfinite(seq.times_s)]
+    if times.size < 2:
+        return None
+    half0 = float(np.median(np.diff(times)))
+    tv = np.array([vertex_time(t, x, ti, half0) for ti in times])
+    n = np.arange(times.size, dtype=float)
+    w = 1.0 / np.maximum(tv[:, 1], 1e-6) ** 2
+    X = np.column_stack((np.ones_like(n), n))
+    cov = np.linalg.inv(X.T @ (w[:, None] * X))
+    beta = cov @ X.T @ (w * tv[:, 0])
+    if times.size > 2:
+        chi2 = float(np.sum(w * (tv[:, 0] - X @ beta) ** 2) / (times.size - 2))
+        cov = cov * max(1.0, chi2)
+    half, hsd = float(beta[1]), float(math.sqrt(cov[1, 1]))
+    return Timing(0.5 / half, 0.5 * hsd / half ** 2, int(times.size))
+
+
+def common_fn(timings, zetas) -> tuple[float, float]:
+    """f_n common to the records: f_d / sqrt(1 - zeta^2) per record, their mean, and its sd (the
+    larger of the records' scatter over sqrt(n) and the mean of their own sds over sqrt(n))."""
+    fn = np.array([tm.frequency_hz / math.sqrt(1.0 - min(z, 0.99) ** 2) for tm, z in zip(timings, zetas)])
+    sds = np.array([tm.sd for tm in timings])
+    m = fn.size
+    sd = float(np.sqrt(np.sum(sds ** 2)) / m)
+    if m > 1:
+        sd = max(sd, float(np.std(fn, ddof=1) / math.sqrt(m)))
+    return float(np.mean(fn)), sd
+
+
+def free_motion(x0: float, x_eq: float, d: float, zeta: float, fn_hz: float, stroke_mm: float,
+                duration_s: float, dt: float, restitution: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """The law's motion from rest at ``x0`` (mm) for ``duration_s``, sampled every ``dt`` from 0: closed
+    form between velocity reversals, the stroke's ends as stops that return ``restitution`` of the
+    speed that reached them (0: plastic), stuck at a rest within d of x_eq."""
+    wn = 2 * math.pi * fn_hz
+    zeta = min(max(zeta, 0.0), 0.999)
+    wd = wn * math.sqrt(1 - zeta * zeta)
+    a = zeta * wn
+    tt = np.arange(int(duration_s / dt) + 1) * dt
+    xx = np.empty_like(tt)
+    t_seg, x_n, v_n = 0.0, float(x0), 0.0
+    tau_fine = np.linspace(0.0, 2 * math.pi / wd, 4001)
+    i = 0
+    while i < tt.size:
+        if v_n == 0.0 and abs(x_n - x_eq) <= d:  # at rest within the friction band: stuck for good
+            xx[i:] = x_n
+            break
+        s = math.copysign(1.0, v_n) if v_n != 0.0 else (1.0 if x_eq > x_n else -1.0)  # its direction
+        c = x_eq - s * d
+        A = x_n - c
+        B = (v_n + a * A) / wd
+
+        def path(tau, A=A, B=B, c=c):
+            e = np.exp(-a * tau)
+            return (c + e * (A * np.cos(wd * tau) + B * np.sin(wd * tau)),
+                    e * ((B * wd - a * A) * np.cos(wd * tau) - (A * wd + a * B) * np.sin(wd * tau)))
+
+        xf, vf = path(tau_fine)
+        rev = np.flatnonzero(s * vf[1:] <= 0.0)
+        k_rev = int(rev[0]) + 1 if rev.size else tau_fine.size - 1
+        out = np.flatnonzero((xf[:k_rev + 1] < 0.0) | (xf[:k_rev + 1] > stroke_mm))
+        if out.size and out[0] > 0:  # a stop reached before the reversal: cut there (interpolated)
+            k = int(out[0])
+            bound = 0.0 if xf[k] < 0.0 else stroke_mm
+            f = (bound - xf[k - 1]) / (xf[k] - xf[k - 1])
+            seg_len = float(tau_fine[k - 1] + f * (tau_fine[k] - tau_fine[k - 1]))
+            x_end = bound
+            v_end = -restitution * float(path(seg_len)[1])
+            if abs(v_end) * dt < 1e-6:
+                v_end = 0.0
+        else:
+            k = k_rev
+            f = vf[k - 1] / (vf[k - 1] - vf[k]) if vf[k - 1] != vf[k] else 1.0
+            seg_len = float(tau_fine[k - 1] + f * (tau_fine[k] - tau_fine[k - 1]))
+            x_end, v_end = float(path(seg_len)[0]), 0.0
+        j = i
+        while j < tt.size and tt[j] <= t_seg + seg_len:
+            j += 1
+        xx[i:j] = np.clip(path(tt[i:j] - t_seg)[0], 0.0, stroke_mm)
+        i, t_seg, x_n, v_n = j, t_seg + seg_len, float(np.clip(x_end, 0.0, stroke_mm)), v_end
+    return tt, xx
+
+
+def rebound_speed(x_mm: np.ndarray, dt: float) -> float:
+    """The largest extension speed (mm/s) of a trace from rest at its peak: on the first half cycle."""
+    v = np.diff(x_mm) / dt
+    k = np.flatnonzero(v > 0)  # the first compression ends the first rebound
+    stop = int(k[0]) if k.size else v.size
+    return float(max(0.0, -float(np.min(v[:max(stop, 1)]))))
+
+
+@dataclass
+class Prediction:
+    """One end's ring-down predicted at ``clicks``, from ``source``'s own state."""
+
+    end: str
+    clicks: float
+    source: str
+    source_clicks: float
+    zeta: Estimate
+    friction_band_mm: Estimate
+    frequency_hz: Estimate
+    first_half_cycle_decay: Estimate
+    rebound_speed_mm_per_s: Estimate
+    x_eq_mm: float
+    stroke_mm: float
+    slam_s: float
+    time_s: np.ndarray = field(repr=False)
+    travel_mm: np.ndarray = field(repr=False)
+
+    def inside_stroke(self) -> bool:
+        return bool(np.all(self.travel_mm >= 0.0) and np.all(self.travel_mm <= self.stroke_mm))
+
+    def stop_reached_s(self) -> float | None:
+        """When the law's motion after the slam's peak first reaches a stroke's end (None: never)."""
+        after = self.time_s > self.slam_s
+        near = STOP_NEAR_MM  # the closed form's samples straddle the instant it reaches the stop
+        hit = np.flatnonzero(after & ((self.travel_mm <= near) | (self.travel_mm >= self.stroke_mm - near)))
+        return float(self.time_s[hit[0]]) if hit.size else None
+
+    def envelope_note(self) -> str:
+        """One line when the trace leaves what the law was checked on: a stroke's end reached."""
+        t = self.stop_reached_s()
+        if t is None:
+            return ""
+        return (f"the predicted motion reaches the end of the stroke at {t:.3f} s: after it the trace is outside the "
+                f"law's envelope (a plastic stop; a seated rider's body holds the end on its stop and drives it out, "
+                f"which the law does not model: 1.1-1.7 mm RMS off in tests/test_bounce_predict.py)")
+
+    def summary(self) -> dict:
+        out = {"clicks": self.clicks, "from_record": self.source, "from_clicks": self.source_clicks}
+        for key, est in (("damping_ratio", self.zeta), ("friction_band_mm", self.friction_band_mm),
+                         ("frequency_hz", self.frequency_hz), ("first_half_cycle_decay", self.first_half_cycle_decay),
+                         ("rebound_speed_mm_per_s", self.rebound_speed_mm_per_s)):
+            out[key], out[f"{key}_ci95"] = est.value, [est.low, est.high]
+        out.update({"x_eq_mm": self.x_eq_mm, "stroke_mm": self.stroke_mm, "slam_s": self.slam_s,
+                    "trace": (f"{self.source}'s own travel up to its slam's peak at {self.slam_s:.3f} s, then the "
+                              f"law's motion from rest there (plastic stops at 0 and {self.stroke_mm:g} mm, stuck "
+                              f"within d of x_eq)"),
+                    "inside_stroke": self.inside_stroke(), "stop_reached_s": self.stop_reached_s()})
+        if self.envelope_note():
+            out["note"] = self.envelope_note()
+        return out
+
+
+@dataclass
+class DecayLaw:
+    """One end's law across clicks, ready to predict: the fit (friction common, zeta linear in clicks),
+    the records' sequences, clicks and timings, and the common undamped frequency."""
+
+    end: str
+    fit: bd.DecayFit
+    seqs: list
+    clicks: list
+    timings: list
+    fn_hz: float
+    fn_sd: float
+
+    def zeta_d(self, clicks: float) -> tuple[float, float, np.ndarray]:
+        """zeta and d at ``clicks`` and their 2 x 2 covariance."""
+        names, th = self.fit.names, self.fit.theta
+        g = np.zeros((2, len(names)))
+        z = d = 0.0
+        if "zeta0" in names:
+            i0 = names.index("zeta0")
+            z = float(th[i0] + th[i0 + 1] * clicks)
+            g[0, i0], g[0, i0 + 1] = 1.0, float(clicks)
+        if "friction_band_mm" in names:
+            j = names.index("friction_band_mm")
+            d = float(th[j])
+            g[1, j] = 1.0
+        return z, d, g @ self.fit.cov @ g.T
+
+    def x_eq_of(self, seq: bd.Extrema, clicks: float) -> float:
+        """A record's static position x_eq (mm) with the law's zeta and d at its ``clicks`` held: the
+        least squares of its half-cycle relations in x_eq alone (linear: closed form); its last
+        extremum when it has one relation or none."""
+        z, d, _ = self.zeta_d(clicks)
+        lv = seq.levels_mm
+        if lv.size < 2:
+            return float(lv[-1]) if lv.size else float("nan")
+        r = bd.ratio(z)
+        # x_{n+1} = (1 + r)(x_eq + sigma_n d) - r x_n: residual linear in x_eq
+        target = lv[1:] + r * lv[:-1] - (1 + r) * seq.sigma[:-1] * d
+        return float(np.mean(target) / (1 + r))
+
+    def frequency(self, clicks: float) -> tuple[float, float]:
+        z, _, cov = self.zeta_d(clicks)
+        z = min(max(z, 0.0), 0.99)
+        root = math.sqrt(1 - z * z)
+        return self.fn_hz * root, math.hypot(root * self.fn_sd, self.fn_hz * z / root * math.sqrt(cov[0, 0]))
+
+    def first_decay(self, clicks: float, s0: float) -> tuple[float, float]:
+        p = bd.law_prediction(self.fit, clicks, s0)
+        return p["decay"], p["decay_sd_total"]
+
+    def predict(self, clicks: float, record, seq: bd.Extrema, x_eq: float, source_clicks: float,
+                x_mm: np.ndarray, stroke_mm: float, after_s: float = 4.0) -> Prediction:
+        """The ring-down at ``clicks`` from ``record``'s own state (its travel ``x_mm`` up to the slam's
+        peak, its x_eq), ``after_s`` after the peak."""
+        z, d, cov = self.zeta_d(clicks)
+        if not 0.0 <= z < 1.0:
+            raise MtbmjError(f"{self.end}: the decay law gives zeta {z:.3f} at {clicks:g} clicks (outside 0 to 1): no "
+                             f"ring-down to predict there")
+        t = np.asarray(record.time_s, float)
+        dt = float(t[1] - t[0])
+        peak = int(np.argmin(np.abs(t - seq.slam_s)))
+        w = max(1, int(round(0.005 / dt)))  # the peak's level: the travel averaged over 10 ms (not one noisy sample)
+        x0 = float(np.clip(np.mean(x_mm[max(0, peak - w):peak + w + 1]), 0.0, stroke_mm))
+        fd, fsd = self.frequency(clicks)
+        tt, xx = free_motion(x0, x_eq, d, z, self.fn_hz, stroke_mm, after_s, dt)
+        rng = np.random.default_rng(0)
+        draws = rng.multivariate_normal([z, d], cov, size=DRAWS)
+        fns = rng.normal(self.fn_hz, self.fn_sd, size=DRAWS)
+        speeds = []
+        for (zz, dd), fn in zip(draws, fns):
+            _, xd = free_motion(x0, x_eq, max(dd, 0.0), min(max(zz, 0.0), 0.99), max(fn, 0.05), stroke_mm,
+                                min(after_s, 1.0 / max(fn, 0.05)), dt)
+            speeds.append(rebound_speed(xd, dt))
+        s0 = float(seq.swings[0]) if seq.swings.size else float("nan")
+        dec, dsd = self.first_decay(clicks, s0) if math.isfinite(s0) else (float("nan"), float("nan"))
+        v = rebound_speed(xx[: int(1.0 / self.fn_hz / dt) + 2], dt)
+        zsd, dsd_ = math.sqrt(max(cov[0, 0], 0.0)), math.sqrt(max(cov[1, 1], 0.0))
+        lo, hi = np.percentile(speeds, [2.5, 97.5])
+        head = x_mm[: peak + 1]
+        time = np.concatenate((t[: peak + 1], t[peak] + tt[1:]))
+        travel = np.concatenate((np.clip(head, 0.0, stroke_mm), xx[1:]))
+        return Prediction(self.end, float(clicks), getattr(record, "name", ""), float(source_clicks),
+                          Estimate(z, *interval95(z, zsd)), Estimate(d, max(0.0, d - Z95 * dsd_), d + Z95 * dsd_),
+                          Estimate(fd, *interval95(fd, fsd)), Estimate(dec, *interval95(dec, dsd)),
+                          Estimate(v, float(lo), float(hi)), float(x_eq), float(stroke_mm), float(t[peak]), time, travel)
+
+
+def decay_law(end: str, seqs, clicks, records, ends_mm, model: str = "both") -> DecayLaw | None:
+    """The law of one end across ``clicks`` (``model`` with the friction band common, zeta linear in
+    clicks) and its common undamped frequency; None when the law has no degree of freedom or fewer
+    than two records are timed."""
+    fit = bd.fit_common(seqs, clicks, model, law=True)
+    if fit is None:
+        return None
+    per = bd.fit_common(seqs, clicks, model, law=False)
+    tms, zs = [], []
+    for i, (s, r, x) in enumerate(zip(seqs, records, ends_mm)):
+        tm = timing(s, np.asarray(r.time_s, float), np.asarray(x, float))
+        if tm is None:
+            continue
+        zname = f"zeta[{i}]"
+        z = per.value(zname)[0] if per is not None and zname in per.names else (
+            fit.theta[0] + fit.theta[1] * clicks[i] if "zeta0" in fit.names else 0.0)
+        tms.append(tm)
+        zs.append(z)
+    if not tms:
+        return None
+    fn, fsd = common_fn(tms, zs)
+    return DecayLaw(end, fit, list(seqs), list(clicks), tms, fn, fsd)
+
+
+def held_out(seqs, clicks, records, ends_mm, i: int, model: str = "both") -> dict:
+    """Record ``i`` held out: the law fitted on the others predicts its first free half cycle's decay
+    (at its own first swing) and its frequency; each compared with the record's own measurement
+    (combined sd: the prediction's and the measurement's)."""
+    keep = [j for j in range(len(seqs)) if j != i]
+    law = decay_law("held-out", [seqs[j] for j in keep], [clicks[j] for j in keep], [records[j] for j in keep],
+                    [ends_mm[j] for j in keep], model)
+    out = {"clicks": clicks[i], "fitted_on_clicks": [clicks[j] for j in keep]}
+    if law is None:
+        out["note"] = "no degree of freedom left"
+        return out
+    s = seqs[i]
+    dec, dsd = law.first_decay(clicks[i], float(s.swings[0]))
+    out.update({"decay": dec, "decay_sd": dsd, "decay_measured": s.first_decay()})
+    out["decay_misses_by_sd"] = abs(out["decay_measured"] - dec) / dsd
+    fd, fsd = law.frequency(clicks[i])
+    tm = timing(s, np.asarray(records[i].time_s, float), np.asarray(ends_mm[i], float))
+    out.update({"frequency_hz": fd, "frequency_sd": fsd})
+    if tm is not None:
+        out.update({"frequency_measured": tm.frequency_hz, "frequency_measured_sd": tm.sd,
+                    "frequency_misses_by_sd": abs(tm.frequency_hz - fd) / math.hypot(fsd, tm.sd)})
+    return out
+
+
+__all__ = ["DecayLaw", "Estimate", "Prediction", "Timing", "common_fn", "decay_law", "free_motion", "held_out",
+           "rebound_speed", "timing", "vertex_time"]

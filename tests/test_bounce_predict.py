@@ -1,0 +1,485 @@
+"""Ring-downs with a compliant seated rider, and predictions at other clicks
+(``mtbmj.identify.bounce_decay``, ``mtbmj.identify.bounce_predict``).
+
+The ring-downs here come from a model written in this file, with its own integrator (solve_ivp,
+events): three masses on one vertical line, the bike's sprung share on the suspension (a spring,
+viscous damping that the clicks set, Coulomb friction with a stick condition: at a velocity reversal
+the bike stays stuck while the other forces on it do not exceed the friction), the rider's torso on
+the saddle (5 Hz, damping ratio 0.35) and legs on the pedals (6 Hz, 0.40) (a seated body's vertical
+resonance is 4-6 Hz: Griffin, Handbook of Human Vibration, 1990; ISO 2631-1; the damping ratios are
+this test's assumption), and a stiff, damped top-out bumper (elastic: 200 x the suspension's
+rate, 0.9 of critical on the bike's mass). The slam is a half-sine push of 260 N on the torso over
+0.25 s. Noise of 0.15 mm, 5 kHz, rounding to 0.02 mm and clipping at 0 mm (the sensor reads no
+travel past full extension). The package's law is one mass with a plastic stop: nothing here
+replays it.
+
+With a compliant rider the suspension's mode is not the rigid rider's: its damping ratio is the
+low mode's (undamped mode shape phi with phi_bike = 1: zeta = phi' C phi / 2 sqrt(phi' K phi phi' M
+phi)), computed here from the three-mass matrices; the friction band where the bike sticks is
+F_c / k (at rest the rider's springs carry only the rider's weight, already in x_eq)."""
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from mtbmj.identify import bounce_decay as bd
+from mtbmj.identify import bounce_predict as bp
+
+from conftest import SHARED_DATA
+
+RATE = 5000
+NOISE = 0.15
+M_BIKE, M_TORSO, M_LEGS = 12.0, 50.0, 15.0  # kg: the frame's share, torso on the saddle, legs on the pedals
+F_TORSO, Z_TORSO = 5.0, 0.35
+F_LEGS, Z_LEGS = 6.0, 0.40
+M_ALL = M_BIKE + M_TORSO + M_LEGS
+K = M_ALL * (2 * math.pi * 1.5) ** 2  # 1.5 Hz with the rider rigid
+K_T = M_TORSO * (2 * math.pi * F_TORSO) ** 2
+K_L = M_LEGS * (2 * math.pi * F_LEGS) ** 2
+C_T = 2 * Z_TORSO * math.sqrt(K_T * M_TORSO)
+C_L = 2 * Z_LEGS * math.sqrt(K_L * M_LEGS)
+K_STOP = 200 * K
+X_EQ = 0.020  # m
+T_PUSH, PUSH_S, PUSH_N = 3.0, 0.25, 260.0
+F_C = 0.5e-3 * K  # Coulomb friction: a 0.5 mm friction band
+FIVE = [(0, 0.08), (4, 0.14), (8, 0.20), (12, 0.26), (17, 0.33)]  # clicks, the rigid rider's damping ratio
+
+
+def c_of(zeta_rigid):
+    return 2 * zeta_rigid * math.sqrt(K * M_ALL)
+
+
+def matrices(c):
+    M = np.diag([M_BIKE, M_TORSO, M_LEGS])
+    Km = np.array([[K + K_T + K_L, -K_T, -K_L], [-K_T, K_T, 0.0], [-K_L, 0.0, K_L]])
+    C = np.array([[c + C_T + C_L, -C_T, -C_L], [-C_T, C_T, 0.0], [-C_L, 0.0, C_L]])
+    return M, Km, C
+
+
+def modal_zeta(c):
+    M, Km, C = matrices(c)
+    w2, v = np.linalg.eig(np.linalg.solve(M, Km))
+    i = int(np.argmin(w2.real))
+    phi = v[:, i].real / v[0, i].real
+    return float(phi @ C @ phi / (2 * math.sqrt((phi @ Km @ phi) * (phi @ M @ phi))))
+
+
+def ring_down(c, fc=F_C, seconds=9.0, seed=0):
+    """Travel (mm, compression positive) at RATE of the three-mass model: seated at rest, the push,
+    the free motion with stick-slip friction and the bumper."""
+    from scipy.integrate import solve_ivp
+
+    M, Km, C = matrices(c)
+    Minv = np.linalg.inv(M)
+    c_stop = 2 * 0.9 * math.sqrt(K_STOP * M_BIKE)
+
+    def forces(t, q):  # every force but the friction's (displacements down from static equilibrium)
+        f = -Km @ q[:3] - C @ q[3:]
+        if T_PUSH <= t <= T_PUSH + PUSH_S:
+            f[1] += PUSH_N * math.sin(math.pi * (t - T_PUSH) / PUSH_S)
+        pen = -(X_EQ + q[0])
+        if pen > 0:
+            f[0] += K_STOP * pen - (c_stop * q[3] if q[3] < 0 else 0.0)
+        return f
+
+    t = np.arange(int(seconds * RATE)) / RATE
+    y, t0, mode = np.zeros(6), 0.0, 0  # mode 0: the bike stuck; +1 / -1: slipping that way
+    ts, xs = [], []
+    while t0 < seconds - 1e-9:
+        if mode == 0:
+            def rhs(tt, q):
+                a = Minv @ forces(tt, q)
+                a[0] = 0.0
+                return np.concatenate(([0.0], q[4:], a))
+
+            def event(tt, q):
+                return abs(forces(tt, q)[0]) - fc
+            event.direction = 1
+        else:
+            def rhs(tt, q, s=mode):
+                f = forces(tt, q)
+                f[0] -= fc * s
+                return np.concatenate((q[3:], Minv @ f))
+
+            def event(tt, q):
+                return q[3]
+            event.direction = -mode
+        event.terminal = True
+        sol = solve_ivp(rhs, (t0, seconds), y, events=(event,), max_step=2e-3, rtol=1e-9, atol=1e-12,
+                        dense_output=True)
+        grid = t[(t >= t0) & (t < sol.t[-1])]
+        if grid.size:
+            ts.extend(grid)
+            xs.extend(sol.sol(grid)[0])
+        t0, y = sol.t[-1], sol.y[:, -1].copy()
+        if sol.status != 1:
+            break
+        f0 = forces(t0, y)[0]
+        if mode == 0:
+            mode = 1 if f0 > 0 else -1
+        else:
+            y[3] = 0.0
+            mode = 0 if abs(f0) <= fc else (1 if f0 > 0 else -1)
+    travel = 1e3 * (X_EQ + np.interp(t, ts, xs)) + np.random.default_rng(seed).normal(0, NOISE, t.size)
+    return t, np.round(np.clip(travel, 0, None) / 0.02) * 0.02
+
+
+@pytest.fixture(scope="module")
+def five():
+    recs, xs, seqs = [], [], []
+    for k, z in FIVE:
+        t, x = ring_down(c_of(z), seed=k + 1)
+        recs.append(SimpleNamespace(time_s=t, name=f"{k} clicks"))
+        xs.append(x)
+        seqs.append(bd.extrema(t, x, "shock", int(np.argmax(x))))
+    return recs, xs, seqs
+
+
+def test_the_generator_sticks_within_the_band_and_rings_at_its_low_mode():
+    t, x = ring_down(c_of(0.14), seed=3)
+    assert abs(np.median(x[t > 8.0]) - 1e3 * X_EQ) <= 1e3 * F_C / K + 3 * NOISE / math.sqrt(5000)
+    M, Km, _ = matrices(0.0)
+    f_low = math.sqrt(float(np.min(np.linalg.eigvals(np.linalg.solve(M, Km)).real))) / (2 * math.pi)
+    assert 1.40 < f_low < 1.47  # the compliant rider lowers the rigid rider's 1.5 Hz
+    assert x[(t > 3.3) & (t < 3.8)].min() == 0.0  # the bumper is reached (the sensor reads 0 there)
+
+
+def test_compliant_rider_five_clicks_friction_and_damping_within_5_percent(five):
+    """Measured: friction band 0.502 mm (F_c / k = 0.5); zeta 0.0769, 0.1337, 0.1843, 0.2376, 0.3129
+    against the modal 0.0789, 0.1329, 0.1869, 0.2410, 0.3040 (within 3 %); the rigid rider's
+    0.08 ... 0.33 would be missed by up to 8.6 %: the rider's compliance is what the fit reads."""
+    _, _, seqs = five
+    ks = [k for k, _ in FIVE]
+    fits = {m: bd.fit_common(seqs, ks, m, law=False) for m in bd.MODELS}
+    assert bd.choose(fits) == "both"
+    f = fits["both"]
+    assert f.value("friction_band_mm")[0] == pytest.approx(1e3 * F_C / K, rel=0.05)
+    misses_rigid = []
+    for i, (_, z) in enumerate(FIVE):
+        assert f.value(f"zeta[{i}]")[0] == pytest.approx(modal_zeta(c_of(z)), rel=0.05)
+        misses_rigid.append(abs(f.value(f"zeta[{i}]")[0] / z - 1))
+    assert max(misses_rigid) > 0.05  # the rigid rider's zeta is not what a compliant rider's slam shows
+
+
+def test_top_out_is_excluded_with_a_compliant_rider(five):
+    _, _, seqs = five
+    assert any("top-out stop" in e for e in seqs[0].excluded)
+    assert seqs[0].levels_mm.min() > 1.0
+
+
+def _held(five, i):
+    recs, xs, seqs = five
+    ks = [k for k, _ in FIVE]
+    keep = [j for j in range(5) if j != i]
+    law = bp.decay_law("shock", [seqs[j] for j in keep], [ks[j] for j in keep], [recs[j] for j in keep],
+                       [xs[j] for j in keep])
+    p = law.predict(ks[i], recs[i], seqs[i], law.x_eq_of(seqs[i], ks[i]), ks[i], xs[i], 80.0)
+    rec = np.interp(p.time_s, recs[i].time_s, xs[i])
+    w = (p.time_s > p.slam_s) & (p.time_s < p.slam_s + 3.0)
+    return p, float(np.sqrt(np.mean((rec[w] - p.travel_mm[w]) ** 2))), bp.held_out(seqs, ks, recs, xs, i)
+
+
+# measured (held out in turn, fitted on the other four): trace RMS 1.68, 1.07, 0.17, 0.34, 0.26 mm;
+# first half cycle's decay misses by 0.09, 0.17, 0.25, 0.63, 0.53 sd; frequency by 0.08, 1.02, 2.08,
+# 0.48, 1.44 sd
+TRACE_RMS = 2.5 * NOISE
+
+
+@pytest.mark.parametrize("i", [2, 3, 4])
+def test_held_out_trace_within_the_noise_where_the_stop_is_not_reached(five, i):
+    p, rms, _ = _held(five, i)
+    assert p.inside_stroke()
+    assert rms <= TRACE_RMS
+
+
+@pytest.mark.parametrize("i", range(5))
+def test_a_trace_that_reaches_the_stop_says_it_leaves_the_envelope(five, i):
+    """The law reaches the top-out stop after the slam at 0 and 4 clicks (the generator's records reach
+    0.0 mm there, 0.4 mm at 8 clicks), not at 8, 12 and 17; where it does, the summary says so."""
+    p, _, _ = _held(five, i)
+    reached = p.stop_reached_s() is not None
+    assert reached == (i <= 1)
+    assert ("outside the law's envelope" in p.summary().get("note", "")) == reached
+
+
+@pytest.mark.xfail(strict=True, reason="0 and 4 clicks reach the top-out bumper after the slam: the rider's body "
+                                         "holds the bike on it and drives it out (1.68 and 1.07 mm RMS); the law's "
+                                         "plastic stop restarts from rest, and a restitution read from the records "
+                                         "made it worse (7.4 and 3.8 mm)")
+@pytest.mark.parametrize("i", [0, 1])
+def test_held_out_trace_within_the_noise_where_the_stop_is_reached(five, i):
+    p, rms, _ = _held(five, i)
+    assert p.inside_stroke()
+    assert rms <= TRACE_RMS
+
+
+@pytest.mark.parametrize("i", range(5))
+def test_held_out_first_half_cycle_decay_within_2_sd(five, i):
+    ho = bp.held_out(five[2], [k for k, _ in FIVE], five[0], five[1], i)
+    assert ho["decay_misses_by_sd"] <= 2.0
+
+
+@pytest.mark.parametrize("i", [0, 1, 3, 4])
+def test_held_out_frequency_within_2_sd(five, i):
+    ho = bp.held_out(five[2], [k for k, _ in FIVE], five[0], five[1], i)
+    assert ho["frequency_misses_by_sd"] <= 2.0
+
+
+@pytest.mark.xfail(strict=True, reason="8 clicks: 1.423 Hz predicted, 1.417 measured, 2.08 combined sd (0.4 %): "
+                                         "the timings' sds (1-3 mHz) are finer than the one-mass law's fidelity "
+                                         "to a three-mass ring-down")
+def test_held_out_frequency_within_2_sd_at_8_clicks(five):
+    ho = bp.held_out(five[2], [k for k, _ in FIVE], five[0], five[1], 2)
+    assert ho["frequency_misses_by_sd"] <= 2.0
+
+
+# --- the law's motion against an integrator of its own ---------------------------------------------
+
+def one_mass(x0, x_eq, d, zeta, fn, stroke, seconds, e=0.0):
+    """solve_ivp of x'' = -2 zeta wn x' - wn^2 (x - x_eq) - wn^2 d sign(x'), stops at 0 and ``stroke``
+    returning ``e`` of the speed, stuck at a rest within d of x_eq."""
+    from scipy.integrate import solve_ivp
+
+    wn = 2 * math.pi * fn
+    dt = 1.0 / RATE
+    t = np.arange(int(seconds * RATE) + 1) * dt
+    y, t0, ts, xs = np.array([x0, 0.0]), 0.0, [], []
+    while t0 < seconds:
+        if y[1] == 0.0 and abs(y[0] - x_eq) <= d:
+            break
+        s = math.copysign(1.0, y[1]) if y[1] else (1.0 if x_eq > y[0] else -1.0)
+
+        def rhs(_, q, s=s):
+            return [q[1], -2 * zeta * wn * q[1] - wn ** 2 * (q[0] - x_eq) - wn ** 2 * d * s]
+
+        def rev(_, q):
+            return q[1]
+        rev.terminal, rev.direction = True, -s
+
+        def low(_, q):
+            return q[0]
+        low.terminal, low.direction = True, -1
+
+        def high(_, q):
+            return q[0] - stroke
+        high.terminal, high.direction = True, 1
+        sol = solve_ivp(rhs, (t0, seconds), y, events=(rev, low, high), rtol=1e-11, atol=1e-11, dense_output=True)
+        grid = t[(t >= t0) & (t < sol.t[-1])]
+        ts.extend(grid)
+        xs.extend(sol.sol(grid)[0])
+        t0, y = sol.t[-1], sol.y[:, -1].copy()
+        if sol.status != 1:
+            break
+        y[1] = 0.0 if sol.t_events[0].size else -e * y[1]
+    x = np.interp(t, ts, xs, right=xs[-1])
+    return t, x
+
+
+@pytest.mark.parametrize("zeta,d,e", [(0.1, 0.7, 0.0), (0.25, 0.0, 0.0), (0.05, 0.3, 0.5), (0.0, 2.0, 0.0)])
+def test_free_motion_matches_an_integrator_and_stays_in_the_stroke(zeta, d, e):
+    t, x = one_mass(60.0, 18.0, d, zeta, 1.6, 65.0, 4.0, e)
+    tt, xx = bp.free_motion(60.0, 18.0, d, zeta, 1.6, 65.0, 4.0, 1.0 / RATE, restitution=e)
+    assert tt.size == t.size
+    assert np.max(np.abs(xx - x)) < 0.02
+    assert xx.min() >= 0.0 and xx.max() <= 65.0
+
+
+# --- the shared seat slams ---------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def shared():
+    from mtbmj.measured.telemetry import read_sst
+
+    recs = [read_sst(f"{SHARED_DATA}/sst_v2/{n}.SST") for n in ("00083", "00085", "00087")]
+    return recs, [r.shock_mm for r in recs], [bd.extrema(r.time_s, r.shock_mm, "shock", bd.slam_index(r)) for r in recs]
+
+
+SLAMS = ("00083.SST", "00085.SST", "00087.SST")
+
+
+@pytest.mark.shared_data("sst_v2", *SLAMS)
+def test_shared_17_clicks_comes_to_rest_after_two_free_half_cycles(shared):
+    """00087's shock stops dead at 17.3 mm for 0.22 s (smoothed travel within 0.005 mm), then steps
+    to 18.7 mm: at rest, whatever follows (its hold used to be refused as not flat, because its
+    spread took in the step)."""
+    s = shared[2][2]
+    assert s.stuck and s.levels_mm.size == 3
+    assert s.levels_mm[-1] == pytest.approx(17.32, abs=0.05)
+    assert s.first_decay() == pytest.approx(0.454, abs=0.005)
+
+
+@pytest.mark.shared_data("sst_v2", *SLAMS)
+@pytest.mark.parametrize("i,what", [(1, "decay"), (2, "decay"), (0, "frequency"), (1, "frequency")])
+def test_shared_held_out_within_2_sd(shared, i, what):
+    """Measured: decay held out at 0 / 8 / 17 clicks misses by 10.19 / 1.27 / 1.25 sd; frequency by
+    1.24 / 0.69 / 7.03 sd (fitted on the other two; combined sd of prediction and measurement)."""
+    recs, xs, seqs = shared
+    ho = bp.held_out(seqs, [0, 8, 17], recs, xs, i)
+    assert ho[f"{what}_misses_by_sd"] <= 2.0
+
+
+@pytest.mark.shared_data("sst_v2", *SLAMS)
+@pytest.mark.xfail(strict=True, reason="0 clicks held out (an extrapolation from 8 and 17): first decay 0.41 "
+                                         "+- 0.016 predicted, 0.58 measured (10.2 sd); 17 clicks held out: 1.49 "
+                                         "+- 0.04 Hz predicted, 1.79 +- 0.002 measured (7.0 sd): the 17-click "
+                                         "slam rings faster than the 0- and 8-click ones, which no common "
+                                         "spring and mass gives")
+@pytest.mark.parametrize("i,what", [(0, "decay"), (2, "frequency")])
+def test_shared_held_out_misses(shared, i, what):
+    recs, xs, seqs = shared
+    ho = bp.held_out(seqs, [0, 8, 17], recs, xs, i)
+    assert ho[f"{what}_misses_by_sd"] <= 2.0
+
+
+@pytest.mark.shared_data("sst_v2", *SLAMS)
+def test_shared_predicted_traces_stay_in_the_stroke(shared):
+    recs, xs, seqs = shared
+    law = bp.decay_law("shock", seqs, [0, 8, 17], recs, xs)
+    per = bd.fit_common(seqs, [0, 8, 17], "both", law=False)
+    for k in (0, 2, 4, 8, 12, 17):
+        for i, r in enumerate(recs):
+            p = law.predict(k, r, seqs[i], per.value(f"x_eq_mm[{i}]")[0], [0, 8, 17][i], xs[i], r.shock_max_mm)
+            assert p.inside_stroke() and p.travel_mm.min() >= 0.0 and p.travel_mm.max() <= r.shock_max_mm
+            assert p.frequency_hz.low < p.frequency_hz.value < p.frequency_hz.high
+            assert p.rebound_speed_mm_per_s.low <= p.rebound_speed_mm_per_s.value <= p.rebound_speed_mm_per_s.high
+            # the record itself up to the slam's peak: the compression stroke the rider made
+            head = p.time_s <= p.slam_s
+            assert np.array_equal(p.travel_mm[head], np.clip(xs[i][: head.sum()], 0, r.shock_max_mm))
+
+
+# --- the answer in clicks (mtbmj.identify.bounce_clicks) ---------------------------------------------
+
+from mtbmj.identify import bounce_clicks as bc  # noqa: E402
+
+
+def true_window(hit):
+    """The generator's own window of clicks meeting one overshoot: its modal zeta at each click (its
+    damper linear in clicks) and its friction band F_c / k."""
+    return bc.window(lambda k: modal_zeta(c_of(0.08 + 0.015 * k)), 1e3 * F_C / K, hit, 0.0, 17.0)
+
+
+def count_overshoots(zeta, d, hit):
+    """Overshoots counted on this file's one-mass integrator: extrema beyond the band after the hit."""
+    t, x = one_mass(20.0 + hit, 20.0, d, zeta, 1.5, 200.0, 8.0)
+    v = np.diff(x)
+    turns = np.flatnonzero(np.sign(v[1:]) * np.sign(v[:-1]) < 0) + 1
+    return int(sum(1 for i in turns if abs(x[i] - 20.0) > d + 1e-6))
+
+
+@pytest.mark.parametrize("zeta,d,hit", [(0.1, 0.5, 10.0), (0.3, 0.5, 10.0), (0.2, 0.3, 4.0), (0.05, 1.0, 12.0)])
+def test_overshoots_counted_as_an_integrator_counts_them(zeta, d, hit):
+    assert bc.overshoots(zeta, d, hit) == count_overshoots(zeta, d, hit)
+
+
+@pytest.fixture(scope="module")
+def law5(five):
+    recs, xs, seqs = five
+    return bp.decay_law("shock", seqs, [k for k, _ in FIVE], recs, xs)
+
+
+@pytest.mark.parametrize("hit", [3.0, 5.0, 8.0])
+def test_answer_meets_the_generators_own_window(law5, hit):
+    """Measured: windows 0-14.6, 6.2-17, 12.9-17 clicks against the generator's 0-14.85, 6.25-17,
+    13.0-17; set 7, 12, 15 clicks; 95 % ranges 6-9, 10-13, 14-16."""
+    lo, hi, where = true_window(hit)
+    ans = bc.answer(law5, hit)
+    assert ans.clicks is not None and where == "inside"
+    assert abs(ans.window[0] - lo) <= 0.5 and abs(ans.window[1] - hi) <= 0.5
+    assert lo <= ans.clicks <= hi
+    assert ans.range95[0] <= 0.5 * (lo + hi) <= ans.range95[1]
+    assert f"set {ans.clicks} clicks" in ans.line()
+
+
+def test_answer_refused_beyond_the_records(law5):
+    assert true_window(20.0)[2] == "above"  # the generator too needs more than 17 clicks for a 20 mm hit
+    ans = bc.answer(law5, 20.0)
+    assert ans.clicks is None and "more than 17 clicks" in ans.note and "record a slam" in ans.note
+
+
+def test_fit_bounce_answers_in_clicks_on_the_cli_and_in_the_figure(five, tmp_path, capsys):
+    import json
+    import struct
+
+    from helpers import FORK, SHOCK, counts_of
+    from mtbmj import cli
+    from mtbmj.identify.bounce_fit import figure, fit_bounce
+
+    recs, xs, _ = five
+    paths = []
+    four = FIVE[:4]  # 17 clicks: the linear ring-down fit finds one turning point there and refuses the run
+    for (k, _), x in zip(four, xs):
+        shock = np.clip(np.rint(counts_of(x, *SHOCK)), 0, None).astype("<u2")
+        fork = np.full_like(shock, 300)
+        p = tmp_path / f"{k}.SST"
+        p.write_bytes(struct.pack("<3sBH", b"SST", 2, RATE) + np.column_stack((fork, shock)).astype("<u2").tobytes())
+        paths.append(str(p))
+    out = tmp_path / "out"
+    clicks = ",".join(str(k) for k, _ in four)
+    assert cli.main(["fit", "bounce", *paths, "--clicks", clicks, "--predict-clicks", "6",
+                     "--hit-mm", "5", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    fit = json.loads((out / "fit.json").read_text())
+    ans = fit["answer"]["shock"]
+    lo, hi, _ = true_window(5.0)
+    assert lo <= ans["set_clicks"] <= hi and ans["hit_mm"] == 5.0 and "whafi.com" in ans["source"]
+    assert f"shock answer (one overshoot after a 5.0 mm hit): set {ans['set_clicks']} clicks" in printed
+    pred = fit["predicted"][0]["shock"]["decay"]
+    assert pred["inside_stroke"] and pred["first_half_cycle_decay_ci95"][0] < pred["first_half_cycle_decay"]
+    assert len(fit["decay_law"]["shock"]["held_out"]) == 4
+    table = np.genfromtxt(out / "ringdown_6_clicks.csv", delimiter=",", names=True)
+    assert table["shock_mm"].min() >= 0.0
+    # the figure: the answer's panel says it and shades the window of clicks that meet the target
+    result = fit_bounce(paths, [float(k) for k, _ in four], [6.0], hit_mm=5.0)
+    fig = figure(result)
+    panel = next(ax for ax in fig.axes if f"set {ans['set_clicks']} clicks" in ax.get_title())
+    spans = [p.get_x() for p in panel.patches]
+    assert any(abs(x - ans["window_clicks"][0]) < 1e-9 for x in spans)
+    assert any(abs(ln.get_xdata()[0] - ans["set_clicks"]) < 1e-9 for ln in panel.lines)
+    trace_panel = next(ax for ax in fig.axes if ax.get_title().startswith("predicted ring-downs"))
+    assert any("at 6 clicks" in t.get_text() for t in trace_panel.get_legend().get_texts())
+
+
+@pytest.mark.parametrize("bad", ["0", "-3", "nan"])
+def test_a_bad_hit_is_refused_in_one_line(tmp_path, capsys, bad):
+    from mtbmj import cli
+
+    rc = cli.main(["fit", "bounce", str(tmp_path / "a.SST"), "--clicks", "0", "--hit-mm", bad, "--out",
+                   str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "--hit-mm" in err[0]
+    assert not (tmp_path / "o").exists()
+
+
+def test_the_fork_gets_its_law_prediction_and_answer_where_it_rings(five, tmp_path):
+    """Item 5: the fork's clicks where it rings at two or more settings (the shared forks do not):
+    both ends made by the three-mass model, the fork's damper 0.8 x the shock's, friction alike."""
+    import json
+    import struct
+
+    from helpers import FORK, SHOCK, counts_of
+    from mtbmj import cli
+
+    _, xs, _ = five
+    four = FIVE[:4]
+    paths = []
+    for j, ((k, z), x) in enumerate(zip(four, xs)):
+        _, xf = ring_down(c_of(0.8 * z), seed=100 + k)
+        shock = np.clip(np.rint(counts_of(x, *SHOCK)), 0, None).astype("<u2")
+        fork = np.clip(np.rint(counts_of(xf, *FORK)), 0, None).astype("<u2")
+        p = tmp_path / f"{k}.SST"
+        p.write_bytes(struct.pack("<3sBH", b"SST", 2, RATE) + np.column_stack((fork, shock)).astype("<u2").tobytes())
+        paths.append(str(p))
+    out = tmp_path / "out"
+    assert cli.main(["fit", "bounce", *paths, "--clicks", "0,4,8,12", "--predict-clicks", "6", "--hit-mm", "5",
+                     "--out", str(out)]) == 0
+    fit = json.loads((out / "fit.json").read_text())
+    assert fit["decay_law"]["fork"]["friction_band_mm"] == pytest.approx(1e3 * F_C / K, rel=0.05)
+    assert fit["predicted"][0]["fork"]["decay"]["inside_stroke"]
+    ans = fit["answer"]["fork"]
+    lo, hi, _ = bc.window(lambda k: modal_zeta(c_of(0.8 * (0.08 + 0.015 * k))), 1e3 * F_C / K, 5.0, 0.0, 12.0)
+    assert ans["set_clicks"] is not None and lo <= ans["set_clicks"] <= hi
+    table = np.genfromtxt(out / "ringdown_6_clicks.csv", delimiter=",", names=True)
+    assert table.dtype.names == ("time_s", "shock_mm", "fork_mm")  # one grid: the source record's (the ends'
+    assert np.allclose(np.diff(table["time_s"]), 1 / RATE) and table["time_s"][0] == 0.0  # slam peaks differ)
+    assert table["fork_mm"].min() >= 0.0 and table["shock_mm"].min() >= 0.0
