@@ -344,12 +344,12 @@ def test_speed_windows_that_leave_nothing_to_check_are_refused(tmp_path, capsys,
     bike = tmp_path / "bike.toml"
     bike.write_text(BIKE)
 
-    def nothing_checkable(t, front, rear, wheelbase, **kw):
+    def nothing_checkable(t, first, second, wheelbase, **kw):
         windows = [(0.0, None, 0.1), (5.0, None, 0.1), (10.0, None, 0.1)]
-        return {"speed_m_per_s": 6.0, "lag_s": wheelbase / 6.0, "windows": windows,
+        return {"speed_m_per_s": 6.0, "lag_s": wheelbase / 6.0, "windows": windows, "sources": [None] * 3,
                 "speed_at": lambda time: np.full(np.shape(time), 6.0)}
 
-    monkeypatch.setattr(reconstruct, "speed_from_lag", nothing_checkable)
+    monkeypatch.setattr(reconstruct, "speed_from_either", nothing_checkable)
     out = tmp_path / "o"
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)
