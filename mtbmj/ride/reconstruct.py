@@ -122,6 +122,8 @@ class Reconstruction:
     unaligned: list = None  # (start s, end s) windows with no speed (standing, or the ends do not align)
     fork_delayed: np.ndarray = None  # fork travel measured (mm) delayed by wheelbase / speed(t): a baseline's input
     wheelbase: float = math.nan  # m, at the ride's sag
+    passes: int = 0  # the whole bike's passes over the terrain (reconstruct_bike.terrain_and_rear)
+    settled_m: float = math.nan  # the rear predicted's RMS change in the last pass
 
     def baselines(self) -> dict:
         """The two naive predictions of the rear the model must beat, on the samples checked: (a) the
@@ -318,7 +320,7 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g, shock_setup.travel)
     sin_a = math.sin(spec.head_angle)
     fork = fork_mm * 1e-3
-    ground, tyre, air, extra = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
+    ground, tyre, air, extra, body = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
     lev = spec.leverage
     rear = rear_mm * 1e-3
     shock = shock_mm * 1e-3 if shock_mm is not None else lev.strokes(rear)
@@ -336,9 +338,6 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     pad = int(round(LEFT_OUT_S / dt))
     lags = wheelbase / speed["speed_at"](t)  # s, the rear's lag behind the front at each moment
     bad = np.zeros(t.size, bool)
-    jumps = []
-    for a, b in runs(air):  # the front's flights (ground_under merged them and bridged the ground under them)
-        jumps.append((float(t[a]), float(t[min(b, t.size - 1)])))
     bad[:int(round(float(np.max(lags)) / dt)) + pad] = True  # the rear's first wheelbase has no terrain from the front
     bad[:int(round(2.0 / (HIGHPASS_HZ * 2 * math.pi) / dt))] = True  # the filters' start
     step = int(round(WINDOW_S / dt))
@@ -359,19 +358,22 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
                                f"{len(speed['windows'])} whose two ends aligned lie wholly where the front wheel was "
                                f"off the ground, or in the ride's first wheelbase or its filters' start (or the rear "
                                f"does not move there): no sample of the ride can be checked")
-    from mtbmj.ride.quartercar_compiled import FORK, LEVERAGE
+    # the terrain and the rear from the fork's record through the whole bike (the rear's record unused)
+    from mtbmj.ride import reconstruct_bike
 
-    front_again = forward(t, ground, front_car, lambda w: w / sin_a, lambda w: sin_a, float(fork[0] * sin_a),
-                          extra, native=(FORK, sin_a, None)) / sin_a
-    ground_rear = np.interp(t - lags, t, ground)
-    # a slow load shift moves weight between the ends: what the front gained the rear lost
-    rear_predicted = forward(t, ground_rear, rear_car, lev.stroke, lev.ratio_at, float(rear[0]), None,
-                             native=(LEVERAGE, 0.0, lev))
+    whole = reconstruct_bike.whole_bike(spec, fork_setup, shock_setup)
+    found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel)
+    ground, rear_predicted = found["ground"], found["rear_rise"]
+    jumps = [(float(t[a]), float(t[min(b, t.size - 1)])) for a, b in runs(found["airborne"])]
+    # the check: the whole bike free over the terrain found, the rider's slow load on its front
+    again = reconstruct_bike.ride(t, whole, np.interp(t - lags, t, ground), front_ground=ground,
+                                  push=found["rider_slow_load"])
+    front_again = again["front_rise"] / sin_a
     v = speed["speed_at"](t)
     distance = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)))
     return Reconstruction(record.name, spec.name, t, speed, distance, ground, ~bad, fork * 1e3, front_again * 1e3,
                           rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps, unaligned,
-                          np.interp(t - lags, t, fork * 1e3), wheelbase)
+                          np.interp(t - lags, t, fork * 1e3), wheelbase, found["passes"], found["settled_m"])
 
 
 __all__ = ["min_seconds", "speed_from_lag", "ground_under", "forward", "histogram_distance", "reconstruct", "Reconstruction",

@@ -15,6 +15,7 @@ DERIVATIVE_WINDOW_S = 0.02  # the Savitzky-Golay window of the records' derivati
 HIGHPASS_HZ = 0.3  # the body height's drift removed below this
 JUMP_GAP_S = 0.05  # the tyre's force found back above 0 for less than this within a jump (its noise): one jump
 TOP_OUT_MARGIN_M = 0.5e-3  # a stroke this close to full extension hangs on the top-out stop (its force unseen)
+MAX_FLIGHT_S = 1.5  # a fork fully out longer than this is not flying (a bike standing unweighted): the law's force at 0
 BOTTOM_OUT_MARGIN_M = 0.5e-3  # a stroke this close to full travel is a bottom-out (the hard stop's force unseen)
 BOTTOM_OUT_WINDOW_S = 1.0  # after a bottom-out the body's speed is set so its height stays level over this
 V2_LOWPASS_HZ = 100.0  # a version-2 record (5 kHz, coarse steps) is low-passed here before anything is differentiated
@@ -93,8 +94,57 @@ def _states(law, x, v, dt):
     return z
 
 
+def law_along(law, stroke, dt: float, travel: float) -> np.ndarray:
+    """The law's force (N, along its stroke) along a recorded ``stroke`` (m, step ``dt``): its rate by
+    a Savitzky-Golay filter, its friction state integrated along it; the hard stops' force cannot be
+    read from a travel record (a tenth of a millimetre past full travel is kilonewtons there), so the
+    force is the law's at the stroke within 0..``travel``."""
+    x = np.asarray(stroke, float)
+    v, _ = _derivatives(x, dt)
+    z = _states(law, x, v, dt)
+    xf = np.clip(x, 0.0, travel)
+    from mtbmj.controllers.compiled import fork_forces_along
+
+    f = fork_forces_along(law, xf, v, z)  # the compiled kernel (None where it cannot run)
+    if f is None:
+        f = np.array([_law_force(law, xi, vi, zi) for xi, vi, zi in zip(xf, v, z)])
+    return f
+
+
+def hanging(stroke, dt: float) -> np.ndarray:
+    """Where an end hangs on its top-out stop in the air: its stroke within ``TOP_OUT_MARGIN_M`` of
+    full extension, for no longer than ``MAX_FLIGHT_S`` (longer, the bike stands unweighted on the
+    wheel: the stop's force unseen there too, the law's at full extension read instead)."""
+    top = np.asarray(stroke, float) <= TOP_OUT_MARGIN_M
+    for a, b in runs(top):
+        if (b - a) * dt > MAX_FLIGHT_S:
+            top[a:b] = False
+    return top
+
+
+def derivatives(x, dt: float):
+    """(rate, acceleration) of a record ``x`` on step ``dt``: a cubic Savitzky-Golay filter over
+    ``DERIVATIVE_WINDOW_S``."""
+    return _derivatives(np.asarray(x, float), dt)
+
+
+def bridge(ground, off, dt: float):
+    """(the ground with each flight bridged, the airborne mask): the stretches of ``off`` (the tyre
+    carrying nothing) closer than ``JUMP_GAP_S`` merged into one flight, the ground under it the chord
+    from take-off to landing, kept below the wheel's path."""
+    ground = np.array(ground, float)
+    air = np.zeros(ground.size, bool)
+    for a, b in flights(off, dt):
+        air[a:b] = True
+        a0, b0 = max(a - 1, 0), min(b, ground.size - 1)  # the last sample on the ground, the first back on it
+        chord = np.linspace(ground[a0], ground[b0], b0 - a0 + 1)
+        ground[a0:b0 + 1] = np.minimum(ground[a0:b0 + 1], chord)
+    return ground, air
+
+
 def ground_under(t, rise, stroke, car: QuarterCar, ratio):
-    """(ground height m, tyre force N, airborne mask, the rider's slow load N) under a quarter car whose
+    """(ground height m, tyre force N, airborne mask, the rider's slow load N, the body's height m, its
+    drift removed) under a quarter car whose
     wheel rose ``rise`` (m) in the frame while its law's stroke was ``stroke`` (m), both on ``t``: the
     law's force acts on the wheel divided by ``ratio(rise)`` (wheel travel per stroke; virtual work).
 
@@ -106,18 +156,8 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio):
     wheel: it is bridged by the chord from take-off to landing, kept below the wheel's path."""
     dt = float(t[1] - t[0])
     w, x = np.asarray(rise, float), np.asarray(stroke, float)
-    v, _ = _derivatives(x, dt)
-    z = _states(car.law, x, v, dt)
-    # the hard stops' force cannot be read from a travel record (a tenth of a millimetre past full
-    # travel is kilonewtons there): the law's force at a stroke within 0..travel
-    xf = np.clip(x, 0.0, car.travel)
-    from mtbmj.controllers.compiled import fork_forces_along
-
-    f = fork_forces_along(car.law, xf, v, z)  # the compiled kernel (None where it cannot run)
-    if f is None:
-        f = np.array([_law_force(car.law, xi, vi, zi) for xi, vi, zi in zip(xf, v, z)])
-    f = f / ratio(w)
-    top = x <= TOP_OUT_MARGIN_M  # hanging on the top-out stop: its force unseen, the end in the air
+    f = law_along(car.law, x, dt, car.travel) / ratio(w)
+    top = hanging(x, dt)  # hanging on the top-out stop: its force unseen, the end in the air
     weight = car.sprung * car.gravity
     extra = lowpass(np.where(top, weight, f) - weight, dt)  # the rider's slow load shifts (braking, weight)
     _, w_acc = _derivatives(w, dt)
@@ -143,13 +183,8 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio):
     tyre = np.where(top, 0.0, car.unsprung * (wheel_acc + car.gravity) + f)
     deflection = np.maximum(tyre, 0.0) / car.tyre_rate
     ground = wheel - car.radius + deflection
-    air = np.zeros(x.size, bool)
-    for a, b in flights(tyre <= 0.0, dt):
-        air[a:b] = True
-        a0, b0 = max(a - 1, 0), min(b, x.size - 1)  # the last sample on the ground, the first back on it
-        chord = np.linspace(ground[a0], ground[b0], b0 - a0 + 1)
-        ground[a0:b0 + 1] = np.minimum(ground[a0:b0 + 1], chord)
-    return ground - ground[0], tyre, air, extra
+    ground, air = bridge(ground, tyre <= 0.0, dt)
+    return ground - ground[0], tyre, air, extra, body
 
 
 def flights(off, dt: float):
@@ -243,4 +278,4 @@ def runs(mask):
 
 
 
-__all__ = ["QuarterCar", "ground_under", "flights", "forward", "wheelbase_at", "lowpass", "runs"]
+__all__ = ["QuarterCar", "ground_under", "flights", "bridge", "law_along", "derivatives", "hanging", "forward", "wheelbase_at", "lowpass", "runs"]
