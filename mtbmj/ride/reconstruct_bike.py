@@ -20,8 +20,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mtbmj.ride.reconstruct_speed import ReconstructError
-
 SLOW_HZ = 0.3  # the rider's slow load: the loop that keeps the frame's front on its slow reference closes here
 SLOW_BOUND = 0.5  # ... bounded by this share of the rider's weight (what a rider can push or pull)
 MAX_PASSES = 8  # the terrain found again over the rear's ground of the pass before, at most this often
@@ -114,7 +112,8 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
 
     Free (``front_ground`` given, ``push`` the load on the frame's front, N, or None): both wheels on
     their grounds; returns {"front_rise", "rear_rise"}. Rises are the wheels' in the frame (m, 0 at
-    full extension). A step that leaves the finite numbers in 1000 substeps: ReconstructError."""
+    full extension). A step that leaves the finite numbers in 1000 substeps ends the run: "diverged_s"
+    its time (None where it ran to the end), every series not a number from there."""
     dt = float(t[1] - t[0])
     n = t.size
     gR = np.asarray(rear_ground, float)
@@ -213,6 +212,7 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
         return y
 
     record(0, y)
+    diverged = None
     for i in range(n - 1):
         m = 1
         while True:
@@ -225,12 +225,18 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
                 break
             m *= 10  # a hard stop stiffer than the record's step resolves: substeps
             if m > 1000:
-                raise ReconstructError(f"the whole bike diverged at {t[i + 1]:.3f} s")
+                break
+        if m > 1000:  # diverged: the run ends here, the rest not a number
+            diverged = float(t[i + 1])
+            for a in (rear_rise, out_front, tyre_front, slow):
+                a[i + 1:] = math.nan
+            break
         y = nxt
         record(i + 1, y)
     if free:
-        return {"front_rise": out_front, "rear_rise": rear_rise}
-    return {"front_ground": out_front, "front_tyre": tyre_front, "rear_rise": rear_rise, "slow_load": slow}
+        return {"front_rise": out_front, "rear_rise": rear_rise, "diverged_s": diverged}
+    return {"front_ground": out_front, "front_tyre": tyre_front, "rear_rise": rear_rise, "slow_load": slow,
+            "diverged_s": diverged}
 
 
 def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference, fork_travel: float) -> dict:
@@ -244,7 +250,8 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     load of :func:`ride`. Flights: where the tyre's force is not positive or the fork hangs on its
     top-out stop, merged and bridged (``reconstruct_inverse.bridge``). Returns {"ground", "airborne",
     "tyre", "rear_rise", "slow_load" (N on the frame's front: the rider's and the loop's),
-    "rider_slow_load" (the rider's alone), "passes", "settled_m"}."""
+    "rider_slow_load" (the rider's alone), "passes", "settled_m", "diverged_s" (where a pass diverged:
+    the passes end there, the rear not a number past it)}."""
     from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, bridge, derivatives, hanging, law_along, lowpass
 
     dt = float(t[1] - t[0])
@@ -259,15 +266,23 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     while passes < MAX_PASSES:
         out = ride(t, b, np.interp(t - lag, t, ground), front=front, reference=reference)
         passes += 1
-        found, air = bridge(out["front_ground"], (out["front_tyre"] <= 0.0) | top, dt)
+        ok = np.isfinite(out["front_ground"])
+        found, air = bridge(np.where(ok, out["front_ground"], ground[-1] if not ok.all() else 0.0),
+                            ((out["front_tyre"] <= 0.0) | top) & ok, dt)
+        if not ok.all():  # diverged: past it the ground of the pass before, level past that
+            last = int(np.argmin(ok))
+            found[last:] = found[last - 1] if last else 0.0
         ground = found - found[0]
+        if out["diverged_s"] is not None:
+            break
         if before is not None:
             change = float(np.sqrt(np.mean((out["rear_rise"] - before) ** 2)))
             if change < SETTLED_M:
                 break
         before = out["rear_rise"]
     return {"ground": ground, "airborne": air, "tyre": out["front_tyre"], "rear_rise": out["rear_rise"],
-            "slow_load": out["slow_load"] - slow, "rider_slow_load": -slow, "passes": passes, "settled_m": change}
+            "slow_load": out["slow_load"] - slow, "rider_slow_load": -slow, "passes": passes, "settled_m": change,
+            "diverged_s": out["diverged_s"]}
 
 
 __all__ = ["SLOW_HZ", "SLOW_BOUND", "MAX_PASSES", "WholeBike", "whole_bike", "ride", "terrain_and_rear"]
