@@ -677,10 +677,12 @@ the lag between the two ends' grounds (or travels); a window gives none at the s
 a second peak within 0.9 of the best, a best correlation below 0.3, a peak whose lobe reaches the
 search's edge, more than one of its four parts finding its own best lag outside the window's best
 peak, a speed uncertain by more than 10 % (the standard error of those parts' lags), or where an end
-stands still. The rear predicted from the front's terrain is compared with
+stands still (each window from the grounds, else from the travels). The rear predicted from the
+fork's record through the bike file's whole bike (frame pitch, the rider on his limbs) is compared with
 two naive baselines on the same samples: the fork's record delayed by wheelbase / speed(t) with a
 least-squares scale and offset (fitted on those very samples), and the rear's mean; it passes only
-10 % below the better. `mtbmj advise` refuses a ride that fails."""),
+40 % below the better. A ride whose whole bike diverges fails, its line saying where (past it nothing
+is checked). `mtbmj advise` refuses a ride that fails."""),
 ]
 
 

@@ -163,8 +163,7 @@ def test_the_figure_marks_what_was_left_out(made, tmp_path):
     # the verdict in the title, in the checks' own words
     assert fig.get_suptitle().splitlines()[0].endswith(
         "the model describes this ride" if c["passes"] else "the model does not describe this ride")
-    assert "red, the front wheel off the ground (the ground under it bridged; checked); grey, no speed" in \
-        fig.get_suptitle()
+    assert "red, the front wheel off the ground (bridged, checked); grey, no speed (left out)" in fig.get_suptitle()
     shaded = [p for p in fig.axes[2].patches]
     assert len(shaded) == len(rec.jumps) + len(rec.unaligned)  # each stretch left out is drawn
 

@@ -256,8 +256,8 @@ class Reconstruction:
         for a in ax:
             a.grid(alpha=0.3)
         verdict = c["verdict"].split(":", 1)[0]  # "the model (does not) describe(s) this ride"
-        fig.suptitle(f"{self.name} through {self.bike}: {verdict}\nred, the front wheel off the ground (the ground "
-                     f"under it bridged; checked); grey, no speed (standing, or the ends do not align: left out)")
+        fig.suptitle(f"{self.name} through {self.bike}: {verdict}\nred, the front wheel off the ground (bridged, "
+                     f"checked); grey, no speed (left out)")
         return fig
 
     def write(self, out_dir) -> list:
