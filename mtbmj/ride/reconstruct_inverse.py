@@ -113,11 +113,12 @@ def law_along(law, stroke, dt: float, travel: float) -> np.ndarray:
 
 def hanging(stroke, dt: float) -> np.ndarray:
     """Where an end hangs on its top-out stop in the air: its stroke within ``TOP_OUT_MARGIN_M`` of
-    full extension, for no longer than ``MAX_FLIGHT_S`` (longer, the bike stands unweighted on the
-    wheel: the stop's force unseen there too, the law's at full extension read instead)."""
+    full extension, for no longer than ``MAX_FLIGHT_S`` and not where the record starts or ends
+    (there the bike stands unweighted on the wheel, a rider getting on or off: the stop's force unseen
+    there too, the law's at full extension read instead)."""
     top = np.asarray(stroke, float) <= TOP_OUT_MARGIN_M
     for a, b in runs(top):
-        if (b - a) * dt > MAX_FLIGHT_S:
+        if (b - a) * dt > MAX_FLIGHT_S or a == 0 or b == top.size:  # too long, or where the record starts or ends
             top[a:b] = False
     return top
 
