@@ -306,11 +306,12 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     m_rear = spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
     rate = fork_setup.tire.values(1).rate
     radius = fork_setup.tire_radius
-    front_car = QuarterCar(total * share - m_front, m_front, fork_setup.fork, rate, radius, g, fork_setup.travel)
-    rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g, shock_setup.travel)
+    rim = fork_setup.tire.rim.max_deflection if fork_setup.tire.rim is not None else math.inf
+    front_car = QuarterCar(total * share - m_front, m_front, fork_setup.fork, rate, radius, g, fork_setup.travel, rim)
+    rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g, shock_setup.travel, rim)
     sin_a = math.sin(spec.head_angle)
     fork = fork_mm * 1e-3
-    ground, tyre, air, extra, body = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
+    ground, tyre, air, extra, body, stops = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
     lev = spec.leverage
     rear = rear_mm * 1e-3
     shock = shock_mm * 1e-3 if shock_mm is not None else lev.strokes(rear)
@@ -352,7 +353,7 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     from mtbmj.ride import reconstruct_bike
 
     whole = reconstruct_bike.whole_bike(spec, fork_setup, shock_setup)
-    found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel)
+    found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel, stops)
     ground, rear_predicted = found["ground"], found["rear_rise"]
     jumps = [(float(t[a]), float(t[min(b, t.size - 1)])) for a, b in runs(found["airborne"])]
     # the check: the whole bike free over the terrain found, the rider's slow load on its front

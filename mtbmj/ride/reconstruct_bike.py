@@ -60,6 +60,7 @@ class WholeBike:
     tyre: float  # N/m
     radius: float
     g: float
+    max_deflection: float  # m, the tyre's deflection where the rim strikes (inf: no rim)
     fF0: float  # N, the fork's vertical force at rest
     fR0: float
     wF0: float  # m, each wheel's rise in the frame at rest
@@ -95,7 +96,8 @@ def whole_bike(spec, fork_setup, shock_setup) -> WholeBike:
                      r.arm_stiffness, r.arm_damping, P_leg, P_arm, xF, xR,
                      spec.fork_lower_mass + spec.front_wheel_mass, spec.rear_wheel_mass + 0.5 * spec.swingarm_mass,
                      sa, fork, shock, lev, fork_setup.travel, fork_setup.tire.values(1).rate, fork_setup.tire_radius,
-                     g, fF0, fR0, wF0, wR0)
+                     g, fork_setup.tire.rim.max_deflection if fork_setup.tire.rim is not None else math.inf,
+                     fF0, fR0, wF0, wR0)
 
 
 def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=None, push=None) -> dict:
@@ -197,7 +199,7 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
         tyre = 0.0 if top[i] else fm * (last[0] + aF[i] + g) + fTyre[i]
         tyre_front[i] = tyre
         slow[i] = u
-        out_front[i] = zF_pt0 + ptF + wF[i] - R + max(tyre, 0.0) / k
+        out_front[i] = zF_pt0 + ptF + wF[i] - R + min(max(tyre, 0.0) / k, b.max_deflection)  # the rim stops it
 
     def rk4(y, i, m):
         h = dt / m
@@ -239,7 +241,8 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
             "diverged_s": diverged}
 
 
-def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference, fork_travel: float) -> dict:
+def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference, fork_travel: float,
+                     stops=None) -> dict:
     """The terrain under the front wheel and the rear's travel predicted, from the fork's record alone
     (``fork_stroke`` m on ``t``): the whole bike rides with its fork's stroke prescribed, its rear
     wheel over the ground found under the front ``lag`` (s, on ``t``) earlier; the ground of one pass
@@ -247,7 +250,8 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     settles (``SETTLED_M``) or ``MAX_PASSES``. The fork's slow load (below the quarter car's high-pass)
     is the rider's, taken off the frame as the quarter car takes it (the tyre carries it); the frame's
     front is held near ``reference`` (the quarter car's body, its drift removed) by the bounded slow
-    load of :func:`ride`. Flights: where the tyre's force is not positive or the fork hangs on its
+    load of :func:`ride`. ``stops`` (N at the wheel, or None): the fork's hard-stop force across each
+    bottom-out (not in the record; the quarter car's, keeping its body level after it). Flights: where the tyre's force is not positive or the fork hangs on its
     top-out stop, merged and bridged (``reconstruct_inverse.bridge``). Returns {"ground", "airborne",
     "tyre", "rear_rise", "slow_load" (N on the frame's front: the rider's and the loop's),
     "rider_slow_load" (the rider's alone), "passes", "settled_m", "diverged_s" (where a pass diverged:
@@ -259,6 +263,8 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     _, acc = derivatives(x, dt)
     force = law_along(b.fork, x, dt, fork_travel) / b.sin_a
     slow = lowpass(force - b.fF0, dt, HIGHPASS_HZ)  # the rider's slow load at the front
+    if stops is not None:  # the fork's hard stop across each bottom-out, as the quarter car found it
+        force = force + np.asarray(stops, float)
     top = hanging(x, dt)
     front = (x * b.sin_a, acc * b.sin_a, force - slow, force, top)
     ground = np.asarray(first_ground, float)

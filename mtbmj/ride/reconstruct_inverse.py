@@ -34,6 +34,7 @@ class QuarterCar:
     radius: float
     gravity: float
     travel: float = math.inf  # m, the law's full stroke: the inverse reads its force within 0..travel
+    max_deflection: float = math.inf  # m, the tyre's deflection where the rim strikes: the ground no deeper
 
 
 
@@ -145,7 +146,8 @@ def bridge(ground, off, dt: float):
 
 def ground_under(t, rise, stroke, car: QuarterCar, ratio):
     """(ground height m, tyre force N, airborne mask, the rider's slow load N, the body's height m, its
-    drift removed) under a quarter car whose
+    drift removed, the hard stop's force N at the wheel found across each bottom-out) under a quarter
+    car whose
     wheel rose ``rise`` (m) in the frame while its law's stroke was ``stroke`` (m), both on ``t``: the
     law's force acts on the wheel divided by ``ratio(rise)`` (wheel travel per stroke; virtual work).
 
@@ -168,24 +170,27 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio):
     # each bottom-out's impulse (the hard stop's) is not in the record: the body's speed changes
     # across it by what keeps the body's height level, by least squares, over the next
     # BOTTOM_OUT_WINDOW_S (a bike on its wheels does not rise or sink for seconds after a hit)
-    for _, end in runs(x >= car.travel - BOTTOM_OUT_MARGIN_M):
+    stops = np.zeros(x.size)  # N at the wheel: the hard stop's force so found, spread over each bottom-out
+    for start, end in runs(x >= car.travel - BOTTOM_OUT_MARGIN_M):
         k = min(int(end), x.size - 1)
         n = min(int(BOTTOM_OUT_WINDOW_S / dt), x.size - k)
         if n < 3:
             continue
         tau = np.arange(n) * dt
         body = np.cumsum(vel[k:k + n]) * dt
-        vel[k:] -= float(body @ tau / (tau @ tau))
+        kick = float(body @ tau / (tau @ tau))
+        vel[k:] -= kick
+        stops[start:k + 1] -= kick * car.sprung / ((k + 1 - start) * dt)
     vel = _highpass(vel - vel.mean(), dt)
     body = np.cumsum(vel) * dt
     body = _highpass(body - body.mean(), dt)
     wheel = body + w
     _, wheel_acc = _derivatives(wheel, dt)
     tyre = np.where(top, 0.0, car.unsprung * (wheel_acc + car.gravity) + f)
-    deflection = np.maximum(tyre, 0.0) / car.tyre_rate
+    deflection = np.minimum(np.maximum(tyre, 0.0) / car.tyre_rate, car.max_deflection)  # the rim stops it
     ground = wheel - car.radius + deflection
     ground, air = bridge(ground, tyre <= 0.0, dt)
-    return ground - ground[0], tyre, air, extra, body
+    return ground - ground[0], tyre, air, extra, body, stops
 
 
 def flights(off, dt: float):
