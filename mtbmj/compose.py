@@ -11,13 +11,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from mtbmj import controllers as law
-from mtbmj.config import Config
+from mtbmj.config import PA_PER_PSI, Config
 from mtbmj.errors import ConfigError
 from mtbmj.runpath import steprule
 
 MM = 1e-3
 N_PER_MM = 1e3
-PSI = 6894.757293168  # Pa per psi (1 lbf/in^2, exact by the definitions of the pound and the inch)
+PSI = PA_PER_PSI  # Pa per psi (mtbmj.config's table of units)
 CM3 = 1e-6  # m^3 per cm^3
 
 

@@ -266,11 +266,13 @@ MAX_MAGNITUDE = limits.MAX_MAGNITUDE
 # not both. A later source (a file over its base, overrides over the file) replaces the value
 # whichever key it uses.
 
+# The one table of lb/in and psi (compose reads PA_PER_PSI, bike.shock N_PER_MM_PER_LB_PER_IN).
 # 1 lb/in = 1 lbf / 1 in = (0.45359237 kg x 9.80665 m/s2) / 25.4 mm = 0.175126835 N/mm (the pound
 # and the inch are exact by definition, standard gravity too)
 N_PER_MM_PER_LB_PER_IN = 0.45359237 * 9.80665 / 25.4
 # 1 bar = 1e5 Pa; 1 psi = 1 lbf/in2 = 6894.757293168 Pa: 1 bar = 14.5037738 psi
 PSI_PER_BAR = 1e5 / (0.45359237 * 9.80665 / 0.0254 ** 2)
+PA_PER_PSI = 6894.757293168  # Pa per psi (1 lbf/in^2, exact by the definitions of the pound and the inch)
 
 ALTERNATIVES: dict[str, tuple[str, float]] = {
     # key: (canonical key, its value per unit of the key)

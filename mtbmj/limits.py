@@ -107,6 +107,19 @@ def number(key: str, value, what: str = "a number") -> float:
     return x
 
 
+# A rider's stature (m): beyond these no adult rides (a unit mistake, 178 for 1.78); refused. The
+# plausible range, warned about, is mtbmj.bike.keys.KEYS'.
+RIDER_HEIGHT_M = (1.2, 2.3)
+
+
+def within(key: str, value: float, bounds: tuple[float, float], unit: str) -> float:
+    """``value`` when within ``bounds`` (inclusive), else ``ConfigError`` naming ``key``."""
+    low, high = bounds
+    if not low <= value <= high:
+        raise ConfigError(f"{key}: must be within {low:g}-{high:g} {unit}, got {value:g}")
+    return value
+
+
 def numbers_in(key: str, value):
     """``value`` with every number in it (a list, a point, a table's rows) passed through
     :func:`number` (integers that fit stay integers: teeth, clicks, spacers), or ``ConfigError``

@@ -98,9 +98,16 @@ class RunOutput:
 
     def difference(self, other: "RunOutput", raw: bool = True) -> dict[str, dict[str, float]]:
         """Largest |self - other| per compared column (``COMPARED``, in the column's unit) and when,
-        over the samples both runs share at the engine rate (``raw``) or the logged one; runs on
+        over the samples both runs share at the engine rate (``raw``: the rows on the coarse grid
+        where a run keeps finer rows in its fine stretches, ``grid_rows``) or the logged one; runs on
         different grids raise ValueError."""
-        a, b = (self.raw, other.raw) if raw else (self.signals, other.signals)
+        def on_grid(result):
+            rows = getattr(result, "grid_rows", None)
+            if rows is None:
+                return result.raw
+            return {k: np.asarray(v)[rows] for k, v in result.raw.items()}
+
+        a, b = (on_grid(self), on_grid(other)) if raw else (self.signals, other.signals)
         n = min(len(a["time_s"]), len(b["time_s"]))
         if not np.allclose(a["time_s"][:n], b["time_s"][:n], atol=1e-9):
             raise ValueError("results are not on the same time grid")
@@ -111,6 +118,28 @@ class RunOutput:
             out[column] = {self.DIFFERENCE_KEY: float(diff[i]) if n else 0.0,
                            "at_time_s": float(a["time_s"][i]) if n else 0.0}
         return out
+
+    def plot_stacked(self, panels, data: dict, axes=None, label: str = "", legend: dict | None = None,
+                     **line_kwargs):
+        """``panels`` ((column, y label) each) of ``data`` against time on stacked axes (given, or a
+        new figure's, three panels 7 x 7 in): several runs drawn on the same axes compare them. The
+        first axis holds the legend (``legend``: its keywords). Returns the figure; every rig's
+        ``plot`` draws through it."""
+        if axes is None:
+            from matplotlib.figure import Figure
+
+            fig = Figure(figsize=(7, 7), layout="constrained")
+            axes = fig.subplots(len(panels), 1, sharex=True)
+        else:
+            fig = axes[0].figure
+        for ax, (column, text) in zip(axes, panels):
+            ax.plot(self.time, data[column], label=label, **line_kwargs)
+            ax.set_ylabel(text)
+            ax.grid(True, alpha=0.3)
+        axes[-1].set_xlabel("time [s]")
+        if legend is not None:
+            axes[0].legend(**legend)
+        return fig
 
     def files(self, stream: bool = False, figure: bool = True) -> dict:
         """Everything ``write`` puts in an output directory (name -> bytes; with ``stream`` the

@@ -10,7 +10,7 @@ import pytest
 
 from mtbmj import cli
 from mtbmj.bike.run import run_bike
-from mtbmj.cli import telemetry as cli_telemetry
+from mtbmj.ride import comparison
 from mtbmj.measured import telemetry
 from mtbmj.rolling import render
 
@@ -34,7 +34,7 @@ def test_telemetry_compares_both_ends_of_a_bike_run(bike_dir, tmp_path, capsys):
     assert sum(run["rear"]["travel_histogram"]["time_percent"]) == pytest.approx(100.0, abs=0.01)
     # the figure: fork and rear rows, each travel axis in % with the ride's mm on top, ride and run on it
     record = telemetry.read_sst(telemetry.example_path())
-    fig = cli_telemetry.figure(summary)
+    fig = comparison.figure(summary)
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     FigureCanvasAgg(fig).draw()  # lays out the secondary (mm) axes

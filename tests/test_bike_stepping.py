@@ -43,6 +43,13 @@ def test_the_stroke_it_watches_is_the_geometry_s():
     assert np.max(np.abs(plan.stroke(phi) - want)) < 1e-15  # m
 
 
+def _within_reach(plan, fork_travel, phi, deflections):
+    """The bike's refinement's span over rows made here: states (time, fork, swingarm angle),
+    sensors (the two tires' deflections)."""
+    states = np.column_stack([np.zeros_like(fork_travel), fork_travel, phi])
+    return plan.refinement(1, 2, [0, 1]).span(states, np.column_stack(deflections))
+
+
 def test_within_reach_finds_the_first_and_last_samples_near_a_stop():
     _, fork, _, plan = _plan()
     bumper = fork.fork.spring.bumper_start
@@ -55,13 +62,13 @@ def test_within_reach_finds_the_first_and_last_samples_near_a_stop():
     step = np.max(np.abs(np.diff(x)))
     reach = stepping_mod.FORK_MARGIN_M + 2.0 * step
     near = np.flatnonzero(x >= bumper - reach)
-    assert plan.within_reach(x, phi, clear) == (near[0], near[-1])
-    assert plan.within_reach(np.full(n, 0.04), phi, clear) is None
+    assert _within_reach(plan, x, phi, clear) == (near[0], near[-1])
+    assert _within_reach(plan, np.full(n, 0.04), phi, clear) is None
     rim = list(clear)
     rim[1] = np.linspace(0.01, plan.rim_deflections[1] - 0.5e-3, n)  # the rear tire pressed towards its rim
     reach = stepping_mod.FORK_MARGIN_M + 2.0 * np.max(np.diff(rim[1]))
     near = np.flatnonzero(rim[1] >= plan.rim_deflections[1] - reach)
-    assert plan.within_reach(np.full(n, 0.04), phi, rim) == (near[0], n - 1)
+    assert _within_reach(plan, np.full(n, 0.04), phi, rim) == (near[0], n - 1)
 
 
 def test_a_lugre_friction_state_makes_the_coarse_step_fine():

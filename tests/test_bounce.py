@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from mtbmj import cli
-from mtbmj.cli import bounce as cli_bounce
 from mtbmj.identify import bounce
+from mtbmj.identify.bounce_fit import BounceFit, fit_bounce
 from mtbmj.measured import telemetry
 
 from helpers import FORK, RATE, SHOCK, counts_of
@@ -122,19 +122,38 @@ def test_law_and_predicted_ring_down(tmp_path):
     assert (out / "fit.png").stat().st_size > 10_000
 
 
+def test_the_python_api_gives_what_the_command_writes_and_prints(tmp_path, capsys):
+    """``mtbmj.identify.bounce_fit.fit_bounce`` is the command's analysis: its result object holds
+    the summary, writes the same files (byte for byte) and gives the lines the command prints."""
+    paths = [write_v2(tmp_path / f"{k}.SST", slam_mm(z, seed=seed)[1]) for k, z, seed in ((0, 0.15, 2), (10, 0.25, 3))]
+    out = tmp_path / "cli"
+    assert cli.main(["fit", "bounce", *map(str, paths), "--clicks", "0,10", "--predict-clicks", "5",
+                    "--out", str(out)]) == 0
+    printed = capsys.readouterr().out.splitlines()
+    result = fit_bounce(paths, [0.0, 10.0], [5.0])  # the clicks as the command parses them
+    assert isinstance(result, BounceFit)
+    written = result.write(tmp_path / "api")
+    assert sorted(p.name for p in written) == ["fit.json", "fit.png", "ringdown_5_clicks.csv"]
+    for name in ("fit.json", "ringdown_5_clicks.csv"):
+        assert (tmp_path / "api" / name).read_bytes() == (out / name).read_bytes(), name
+    assert printed[:-1] == result.lines() and printed[-1].startswith("wrote fit.json")
+    assert result.summary["law"]["shock"]["slope_per_click"] == pytest.approx(0.01, abs=0.001)  # made: 0.15 -> 0.25
+    assert any(line.startswith("predicted at 5 clicks: shock zeta 0.2") for line in result.lines())
+
+
 # --- (2) the shared seat slams ----------------------------------------------------------------
 
 @pytest.mark.skipif(not (SHARED / "00087.SST").exists(), reason="../shared/data/sst_v2 not present")
 def test_shared_slams_damping_rises_and_law_predicts_8_clicks():
     files = [SHARED / f"{n}.SST" for n in ("00083", "00085", "00087")]
-    res = cli_bounce.analyse(files, [0, 8, 17])
-    z = [rec["shock"]["damping_ratio"] for rec in res["json"]["records"]]
+    res = fit_bounce(files, [0, 8, 17])
+    z = [rec["shock"]["damping_ratio"] for rec in res.summary["records"]]
     assert z[0] < z[1] < z[2]
-    held = cli_bounce.analyse([files[0], files[2]], [0, 17], predict=[8])
-    predicted = held["json"]["predicted"][0]["shock"]["damping_ratio"]
-    lo, hi = res["json"]["records"][1]["shock"]["damping_ratio_ci95"]
+    held = fit_bounce([files[0], files[2]], [0, 17], predict=[8])
+    predicted = held.summary["predicted"][0]["shock"]["damping_ratio"]
+    lo, hi = res.summary["records"][1]["shock"]["damping_ratio_ci95"]
     assert lo <= predicted <= hi
-    for rec in res["json"]["records"]:
+    for rec in res.summary["records"]:
         assert "too few cycles" in rec["fork"]["note"]  # the seated fork barely rings: said, not fitted
 
 

@@ -1,6 +1,6 @@
 """A compiled artifact is keyed on every source compiled into it: numba's disk cache must not serve
 machine code of a function that has since been edited, in controllers/ or outside it (the bike's
-compiled callback compiles plain functions of mtbmj/bike/spec.py and mtbmj/rolling/tire.py).
+compiled callback compiles plain functions of mtbmj/measured/leverage.py and mtbmj/rolling/tire.py).
 
 The slow test installs a scratch copy of the package (the installed layout: controllers/ as
 mtbmj/controllers), runs a bike with the compiled callback, edits one compiled function, runs again
@@ -30,7 +30,7 @@ def test_the_stamp_reaches_every_compiled_source():
         pytest.skip("the compiled bike callback is not defined here")
     sources = jit.compiled_sources(bike_cc._dispatch)
     names = {Path(p).name for p in sources}
-    assert {"spec.py", "callback_compiled.py", "drive.py", "native_data.py"} <= names, names
+    assert {"leverage.py", "callback_compiled.py", "drive.py", "native_data.py"} <= names, names
     # the straight stretches of the shared patch search (mtbmj/rolling/tire.py, not controllers/tire.py)
     assert any(Path(p).parts[-2:] == ("rolling", "tire.py") for p in sources), sources
     fork = {Path(p).name for p in jit.compiled_sources(kernels.fork_force)}
@@ -84,7 +84,7 @@ def test_an_edit_of_a_compiled_function_reaches_the_compiled_run(tmp_path):
     before = _run(scratch, "compiled")  # compiles and caches
     assert _run(scratch, "compiled") == before  # served from the cache, the same
     # outside controllers/: the leverage curve's ratio, read by the compiled callback for the shock
-    _edit(scratch / "mtbmj" / "bike" / "spec.py",
+    _edit(scratch / "mtbmj" / "measured" / "leverage.py",
           "    return r[i] + (r[i + 1] - r[i]) * (w - w_tab[i]) / (w_tab[i + 1] - w_tab[i])",
           "    return 1.25 * (r[i] + (r[i + 1] - r[i]) * (w - w_tab[i]) / (w_tab[i + 1] - w_tab[i]))")
     edited = _run(scratch, "compiled")

@@ -180,11 +180,12 @@ def test_a_sweep_heat_map_is_ticked_at_the_values_run_and_counts_are_whole():
 # --- telemetry velocity panels ---------------------------------------------------------------------
 
 def test_telemetry_velocity_panels_are_sized_to_the_data():
-    from mtbmj.cli import telemetry as tcli
     from mtbmj.measured import telemetry
+    from mtbmj.ride import comparison
 
-    summary = tcli.compare(telemetry.read_sst(telemetry.example_path()), [])
-    fig = drawn(tcli.figure(summary))
+    result = comparison.compare(telemetry.read_sst(telemetry.example_path()), [])
+    summary = result.summary
+    fig = drawn(result.figure())
     panels = [ax for ax in fig.axes if "velocity" in ax.get_xlabel()]
     assert len(panels) == 2
     for ax, end in zip(panels, ("fork", "rear")):

@@ -166,7 +166,7 @@ def test_fit_json_is_strict_and_predictions_stay_inside_the_records(tmp_path, ca
 
 
 def test_the_json_writer_refuses_a_value_that_is_not_a_number():
-    from mtbmj.cli.bounce import json_bytes
+    from mtbmj.identify.bounce_fit import json_bytes
     from mtbmj.errors import MtbmjError
 
     assert json.loads(json_bytes({"a": [1.0, {"b": 2}]})) == {"a": [1.0, {"b": 2}]}

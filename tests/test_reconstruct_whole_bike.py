@@ -1,13 +1,13 @@
-"""A ride reconstructed (mtbmj/ride/reconstruct.py, issue 51 item 5) against a ride made here by a whole
-bike integrated in this file (scipy's solve_ivp, its own equations, not the package's engines or laws'
-code): a frame that heaves and pitches, a rider on legs and arms (vertical springs and dampers at the
-pedals and the bars) who heaves and pitches on it and shifts a slow load fore and aft (a force pair
-at the bars and pedals, 80 N, 7 s period), the fork's lower and wheel sliding along the steering axis,
-the rear wheel on a constant leverage ratio, point-contact tyres that leave the ground, at a speed
-that varies along the ride (6.5 +- 1 m/s over 25 s), over terrain made here: ISO 8608 class C
-roughness (sum of sines, 0.05-8 cycles/m), a rock garden, a G-out, drops of 0.3 and 0.5 m and a
-tabletop jump of 0.4 m, written as SST version 3 integer counts through the bike file's [sensors]
-(tests/helpers.write_v3: the law of cosines inverted).
+"""A ride reconstructed (mtbmj/ride/reconstruct.py, issue 51 item 5) against a ride made by a whole
+bike integrated in tests/helpers.py (``whole_bike_ride``: scipy's solve_ivp, its own equations, not the
+package's engines or laws' code): a frame that heaves and pitches, a rider on legs and arms (vertical
+springs and dampers at the pedals and the bars) who heaves and pitches on it and shifts a slow load
+fore and aft (a force pair at the bars and pedals, 80 N, 7 s period), the fork's lower and wheel
+sliding along the steering axis, the rear wheel on a constant leverage ratio, point-contact tyres
+that leave the ground, at a speed that varies along the ride (6.5 +- 1 m/s over 25 s), over terrain
+made there: ISO 8608 class C roughness (sum of sines, 0.05-8 cycles/m), a rock garden, a G-out,
+drops of 0.3 and 0.5 m and a tabletop jump of 0.4 m, written as SST version 3 integer counts through
+the bike file's [sensors] (tests/helpers.write_v3: the law of cosines inverted).
 
 Shared with the package, and so not tested here: the laws' form and values (helpers.law: a linear
 spring, a bumper, stiff stops and a damper of one rate each way, the values the bike file gives),
@@ -22,156 +22,24 @@ on-bike mass (half at the pedals, half at the bars here).
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
-from scipy.optimize import fsolve
 from scipy.signal import butter, sosfiltfilt
 
 from mtbmj.cli import main
 
-from helpers import RATIO, bike_text, law, write_v3
+from helpers import WHOLE_RATE as RATE, SpeedProfile, bike_text, whole_bike_ride
 
-RATE = 1000.0
-RESIDUAL = []  # the rest state's largest acceleration (m/s2), per ride made
 SECONDS = 40.0
-V0, DV, PERIOD = 6.5, 1.0, 25.0  # m/s: the speed V0 + DV sin(2 pi t / PERIOD)
-SLOW_LOAD_N, SLOW_PERIOD_S = 80.0, 7.0  # the rider's fore-aft load shift
-
-
-def speed(t):
-    return V0 + DV * np.sin(2 * np.pi * t / PERIOD)
-
-
-def along(t):
-    return V0 * t - DV * PERIOD / (2 * np.pi) * (np.cos(2 * np.pi * t / PERIOD) - 1.0)
-
-
-def smoothstep(u):
-    u = np.clip(u, 0.0, 1.0)
-    return u * u * (3.0 - 2.0 * u)
-
-
-def terrain(length, seed=21):
-    """h(s) m on a 5 mm grid: ISO 8608 class C roughness (G_d(n0) = 256e-6 m^3 at n0 = 0.1 cycles/m,
-    w = 2) as a sum of sines of random phase, a rock garden, a G-out, two drops, a tabletop; and
-    the places of the features (m)."""
-    rng = np.random.default_rng(seed)
-    s = np.arange(-5.0, length + 5.0, 0.005)
-    n = np.linspace(0.05, 8.0, 800)  # cycles/m
-    dn = n[1] - n[0]
-    amp = np.sqrt(2.0 * 256e-6 * (n / 0.1) ** -2.0 * dn)
-    h = (amp[:, None] * np.sin(2 * np.pi * n[:, None] * s[None, :] + rng.uniform(0, 2 * np.pi, n.size)[:, None])).sum(0)
-    h *= smoothstep((s - 3.0) / 5.0)  # the first metres level: the bike starts at rest
-    features = {"rocks": 45.0, "g_out": 95.0, "drop_0.3": 130.0, "jump": 165.0, "drop_0.5": 215.0}
-    for c in rng.uniform(45.0, 60.0, 12):  # rocks 20-60 mm, 0.4-1 m long
-        a, L = rng.uniform(0.02, 0.06), rng.uniform(0.4, 1.0)
-        h += a * np.sin(np.pi * np.clip((s - c) / L + 0.5, 0.0, 1.0)) ** 2
-    g = features["g_out"]
-    h -= 0.25 * np.sin(np.pi * np.clip((s - g) / 8.0, 0.0, 1.0)) ** 2  # a dip 0.25 m deep, 8 m long
-    h -= 0.3 * smoothstep((s - features["drop_0.3"]) / 0.05)
-    j = features["jump"]  # up 0.4 m over 2.5 m, a 2 m table, down over 3 m
-    h += 0.4 * (smoothstep((s - j) / 2.5) - smoothstep((s - j - 4.5) / 3.0))
-    h -= 0.5 * smoothstep((s - features["drop_0.5"]) / 0.05)
-    return (lambda x: np.interp(x, s, h)), features
-
-
-def make_ride(tmp_path, fork_rate=12.0, seconds=SECONDS):
-    """The bike file (helpers.bike_text), the SST v3 file, and the truth: t, the ground under each
-    wheel, the fork and rear travel (mm), the wheelbase, the terrain."""
-    from mtbmj.bike import run, spec as spec_mod
-
-    path = tmp_path / "bike.toml"
-    path.write_text(bike_text(fork_rate))
-    spec = spec_mod.load(str(path))  # the bike file's numbers (inputs)
-    fork_setup, _ = run.setups(spec)
-    tyre_k, radius, g = fork_setup.tire.values(1).rate, fork_setup.tire_radius, 9.81
-    sa = math.sin(spec.head_angle)
-    r = spec.rider
-    # the frame body: the frame and the rider's on-bike segments, half at the pedals, half at the bars
-    parts = [(spec.frame_mass, spec.frame_com, spec.frame_inertia), (0.5 * r.on_bike_mass, (r.leg_x, r.leg_z), 0.0),
-             (0.5 * r.on_bike_mass, (r.arm_x, r.arm_z), 0.0)]
-    M = sum(p[0] for p in parts)
-    cx, cz = (sum(p[0] * p[1][i] for p in parts) / M for i in (0, 1))
-    I = sum(p[2] + p[0] * ((p[1][0] - cx) ** 2 + (p[1][1] - cz) ** 2) for p in parts)
-    mr_, Ir, rx = r.mass, r.pitch_inertia, r.com[0]
-    mF = spec.fork_lower_mass + spec.front_wheel_mass
-    mR = spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
-    xF, xR = spec.front_axle[0], spec.rear_axle[0]
-    # the wheelbase at sag, fixed (the generator's rear contact this far behind the front's)
-    wb = xF - xR
-    fork_law = law(fork_rate * 1e3, 0.130, 500.0, 700.0)
-    shock_law = law(90e3, 0.050, 2500.0, 3500.0)
-    span = r.arm_x - r.leg_x
-    P_leg, P_arm = mr_ * g * (r.arm_x - rx) / span, mr_ * g * (rx - r.leg_x) / span  # the limbs' preloads
-
-    h, features = terrain(along(seconds) + 10.0)
-    shift = lambda t: SLOW_LOAD_N * math.sin(2 * math.pi * t / SLOW_PERIOD_S)  # noqa: E731 (+: onto the bars)
-
-    def forces(t, y):
-        zf, th, zr, tr, zw, zq, vf, om, vr, orr, vw, vq = y
-        front_pt, rear_pt = zf + (xF - cx) * th, zf + (xR - cx) * th  # the frame at each axle (its height change)
-        wF, wR = zw - front_pt, zq - rear_pt  # each wheel's rise in the frame (from the static heights below)
-        dF = vw - (vf + (xF - cx) * om)
-        dR = vq - (vf + (xR - cx) * om)
-        fF = fork_law((wF + base[0]) / sa, dF / sa) / sa  # vertical at the wheel (virtual work)
-        fR = shock_law((wR + base[1]) / RATIO, dR / RATIO) / RATIO
-        legs, arms = [], []
-        for x, k, c, P, out in ((r.leg_x, r.leg_stiffness, r.leg_damping, P_leg, legs),
-                                (r.arm_x, r.arm_stiffness, r.arm_damping, P_arm, arms)):
-            e = (zf + (x - cx) * th) - (zr + (x - rx) * tr)  # frame point up relative to the rider's: compresses
-            ed = (vf + (x - cx) * om) - (vr + (x - rx) * orr)
-            out.append(P + k * e + c * ed)
-        u = shift(t)
-        leg, arm = legs[0] - u, arms[0] + u  # the rider's slow load: onto the bars, off the pedals
-        s = along(t)
-        tF = max(0.0, tyre_k * (float(h(s)) - (zw + base[2] - radius)))
-        tR = max(0.0, tyre_k * (float(h(s - wb)) - (zq + base[3] - radius)))
-        return fF, fR, leg, arm, tF, tR
-
-    def rhs(t, y):
-        zf, th, zr, tr, zw, zq, vf, om, vr, orr, vw, vq = y
-        fF, fR, leg, arm, tF, tR = forces(t, y)
-        Fz = fF + fR - leg - arm - M * g
-        Mo = (xF - cx) * fF + (xR - cx) * fR - (r.leg_x - cx) * leg - (r.arm_x - cx) * arm
-        Rz = leg + arm - mr_ * g
-        Ro = (r.leg_x - rx) * leg + (r.arm_x - rx) * arm
-        return [vf, om, vr, orr, vw, vq, Fz / M, Mo / I, Rz / mr_, Ro / Ir, (tF - fF) / mF - g, (tR - fR) / mR - g]
-
-    # the static heights: each wheel's rise at sag (its law carrying the static share), the tyres' deflection
-    share = ((M * cx + mr_ * rx + mF * xF + mR * xR) / (M + mr_ + mF + mR) - xR) / wb
-    total = M + mr_ + mF + mR
-    from scipy.optimize import brentq
-
-    wF0 = brentq(lambda w: fork_law(w / sa, 0.0) / sa - (total * share - mF) * g, 0.0, 0.12)
-    wR0 = brentq(lambda w: shock_law(w / RATIO, 0.0) / RATIO - (total * (1 - share) - mR) * g, 0.0, 0.12)
-    base = [wF0, wR0, radius - total * share * g / tyre_k, radius - total * (1 - share) * g / tyre_k]
-    # the rest state solved (the share above is the rigid statics; the limbs settle it a little)
-    y0 = np.zeros(12)
-    rest, info, ok, msg = fsolve(lambda q: rhs(0.0, np.concatenate((q, np.zeros(6))))[6:], np.zeros(6), xtol=1e-10,
-                                 full_output=True)
-    RESIDUAL.append(float(np.max(np.abs(info["fvec"]))))
-    y0[:6] = rest
-    t = np.arange(int(seconds * RATE)) / RATE
-    sol = solve_ivp(rhs, (0.0, t[-1]), y0, t_eval=t, method="RK45", rtol=1e-5, atol=1e-7, max_step=1e-3)
-    assert sol.success, sol.message
-    y = sol.y
-    wF = y[4] - (y[0] + (xF - cx) * y[1]) + base[0]
-    wR = y[5] - (y[0] + (xR - cx) * y[1]) + base[1]
-    fork_mm, rear_mm = wF / sa * 1e3, wR * 1e3
-    sst = write_v3(tmp_path / "ride.SST", np.clip(fork_mm, 0, None), np.clip(rear_mm, 0, None) / RATIO,
-                   spec.sensors, int(RATE))
-    tyres = np.array([forces(ti, yi)[4:] for ti, yi in zip(t[::10], y.T[::10])])
-    return {"bike": path, "sst": sst, "t": t, "h": h, "features": features, "wb": wb, "fork_mm": fork_mm,
-            "rear_mm": rear_mm, "airborne_front": float(np.mean(tyres[:, 0] <= 0.0)),
-            "dynamic_index": I / (M * (xF - cx) * (cx - xR))}
+PROFILE = SpeedProfile(6.5, 1.0, 25.0)  # m/s: the speed V0 + DV sin(2 pi t / PERIOD)
+V0 = PROFILE.v0
+speed, along = PROFILE.at, PROFILE.along
 
 
 @pytest.fixture(scope="module")
 def made(tmp_path_factory):
-    return make_ride(tmp_path_factory.mktemp("whole_bike"))
+    return whole_bike_ride(tmp_path_factory.mktemp("whole_bike"), seconds=SECONDS, profile=PROFILE)
 
 
 @pytest.fixture(scope="module")

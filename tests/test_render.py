@@ -193,5 +193,5 @@ def test_a_killed_render_leaves_nothing_beside_its_target(backend, tmp_path, sig
     else:
         with pytest.MonkeyPatch.context() as mp:
             mp.setattr(tempfile, "tempdir", str(temporary))
-            output._clear_stale_stages()  # what the next staging does first
+            output.clear_stale_stages()  # what the next staging does first
         assert list(temporary.iterdir()) == []

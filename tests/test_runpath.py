@@ -35,7 +35,7 @@ SPRING = """
 class _EveryOtherChunk:
     """A refinement plan that redoes rows 10-30 of every chunk at a step four times finer."""
 
-    substeps, min_steps, max_chunk = 4, 8, 64
+    substeps, min_steps, max_chunk, fine_rows = 4, 8, 64, False  # duck-typed as loop.Refinement
 
     def __init__(self):
         self.fine_stretches = 0

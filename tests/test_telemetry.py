@@ -261,7 +261,7 @@ def test_comparison_figure_labels_each_travel_and_shows_every_tail(record):
     """A simulated run faster than the ride (a 120 mm fork, random amplitude) against the shipped
     ride (a 180 mm fork): each histogram is in % of its own travel and says so, the velocity axis
     reaches the simulated tails, and the split's abbreviations are defined."""
-    from mtbmj.cli import telemetry as tcli
+    from mtbmj.ride import comparison
 
     rng = np.random.default_rng(12)
     amplitude, freq = rng.uniform(30, 50), rng.uniform(5, 8)
@@ -270,10 +270,10 @@ def test_comparison_figure_labels_each_travel_and_shows_every_tail(record):
     peak_v = 2 * np.pi * freq * amplitude
     run = {"name": "fast", "dir": "fast", "time_s": t, "fork_mm": fork,
            "velocity_mm_per_s": np.gradient(fork, t), "travel_max_mm": 120.0}
-    summary = tcli.compare(record, [run])
+    summary = comparison.compare(record, [run]).summary
     assert summary["simulated"][0]["fork"]["travel_max_mm"] == 120.0
     assert set(summary["abbreviations"]) == {"HSC", "LSC", "LSR", "HSR"}
-    fig = tcli.figure(summary)
+    fig = comparison.figure(summary)
     ax_t, ax_v = fig.axes[0], fig.axes[1]
     labels = [text.get_text() for text in ax_t.get_legend().get_texts()]
     assert any("% of 120 mm" in s for s in labels)
@@ -307,3 +307,21 @@ def test_defaults_match_the_shipped_setup_notes():
         except ValueError:  # the one garbled row: digits around the inserted file name
             assert ratio.startswith("3.") and ratio.endswith("008") and ours_ratio == 3.008
     assert (SHIPPED.parent / "LICENSE").read_text().startswith("MIT License")
+
+
+def test_the_comparison_is_the_python_api_s_as_the_command_s(tmp_path, capsys):
+    """``mtbmj.ride.comparison.compare`` is what ``mtbmj telemetry`` runs: its result writes the same
+    telemetry.json byte for byte and gives the line the command prints (the shipped ride, read with
+    the example bike's defaults as the command reads it without --bike)."""
+    from mtbmj.cli import main
+    from mtbmj.ride import comparison
+
+    assert main(["telemetry", "example", "--out", str(tmp_path / "cli")]) == 0
+    printed = capsys.readouterr().out.strip()
+    result = comparison.compare(telemetry.read_sst(telemetry.example_path()), [])
+    assert isinstance(result, comparison.RideComparison) and result.runs == 0
+    written = result.write(tmp_path / "api")
+    assert sorted(p.name for p in written) == ["telemetry.json", "telemetry.png"]
+    assert (tmp_path / "api" / "telemetry.json").read_bytes() == (tmp_path / "cli" / "telemetry.json").read_bytes()
+    assert printed == f"{result.line()}; wrote telemetry.json, telemetry.png to {tmp_path / 'cli'}"
+    assert "compared 0 run(s)" in result.line() and result.summary["simulated"] == []

@@ -9,8 +9,10 @@ _LAZY = {
     "BikeResult": "mtbmj.bike.run",
     "load": "mtbmj.bike.spec",
     "preset_names": "mtbmj.bike.spec",
+    "resolve": "mtbmj.bike.spec",
+    "ResolvedBike": "mtbmj.bike.spec",
 }
-__all__ = ["BikeResult", "load", "preset_names", "run_bike"]
+__all__ = ["BikeResult", "ResolvedBike", "load", "preset_names", "resolve", "run_bike"]
 
 
 __getattr__, __dir__ = lazy_exports(__name__, _LAZY, globals())

@@ -53,6 +53,7 @@ from mtbmj.controllers.native_data import Registry, mjdata_layout, verify
 from mtbmj.controllers.stops import STIFFENING_M
 from mtbmj.rolling import callback_compiled as rolling
 from mtbmj.rolling.callback_compiled import MAX_PATCHES, UnsupportedRolling
+from mtbmj.runpath.callbacks import CompiledShell
 
 SLOTS = 64
 KINEMATICS = ("xpos", "xmat", "xipos", "site_xpos", "cvel", "subtree_com", "xfrc_applied", "xanchor", "xaxis",
@@ -460,7 +461,7 @@ def _int_field(index: int, doc: str):
     return property(get, doc=doc)
 
 
-class CompiledBikeCallback(ctypes._CFuncPtr):
+class CompiledBikeCallback(CompiledShell, ctypes._CFuncPtr):
     """Compiled counterpart of ``mtbmj.bike.callback.BikeCallback`` (same constructor): a C function
     pointer for ``mujoco.set_mjcb_control`` / ``controllers.installed``. It acts only on
     ``bike.model`` (a newer callback for the same model retires it). ``reset()`` forgets the contact
@@ -469,6 +470,7 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
     _flags_ = ctypes._FUNCFLAG_CDECL
     _argtypes_ = (ctypes.c_void_p, ctypes.c_void_p)
     _restype_ = None
+    registry = REGISTRY
 
     def __new__(cls, bike, fork_law, shock_law, front, rear, drive, speed, traction, refresh):
         reason = unavailable_reason()
@@ -601,10 +603,6 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
         o = k * WF + rolling.F_PATCHES
         return [tuple(float(v) for v in row) for row in _WFLOATS[self.slot, o:o + 6 * n].reshape(n, 6)]
 
-    @property
-    def active(self) -> bool:
-        return REGISTRY.live(self.slot, self._address) and self._finalizer.alive
-
     def reset(self) -> None:
         """Forget the patches: the next evaluation searches afresh (BikeCallback.reset)."""
         for k in (0, 1):
@@ -613,20 +611,10 @@ class CompiledBikeCallback(ctypes._CFuncPtr):
         _FLOATS[self.slot, [F_NEXT0, F_NEXT1]] = -math.inf
         _FLOATS[self.slot, [F_LAST0, F_LAST1]] = math.inf
 
-    @property
-    def address(self) -> int:
-        return ctypes.cast(self, ctypes.c_void_p).value
-
-    def __call__(self, m, d):
-        """Call the compiled function from Python (as ``BikeCallback(m, d)``)."""
-        super().__call__(m._address, d._address)
-
-    def close(self) -> None:
-        """Free the registry slot now (also done when the object is collected)."""
-        if self._finalizer.alive:
-            self._closed = {R_CALLS: int(_INTS[self.slot, R_CALLS]), R_REFRESHES: int(_INTS[self.slot, R_REFRESHES]),
-                            "overflow": int(self.overflowed)}
-            self._finalizer()
+    def counters(self) -> dict:
+        """The slot's counters (kept by ``close``)."""
+        return {R_CALLS: int(_INTS[self.slot, R_CALLS]), R_REFRESHES: int(_INTS[self.slot, R_REFRESHES]),
+                "overflow": int(self.overflowed)}
 
     def __repr__(self):
         return f"<CompiledBikeCallback slot={getattr(self, 'slot', None)}>"

@@ -124,14 +124,16 @@ def crown(spec, fork_length: float) -> tuple[float, float]:
 
 
 def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, gravity: float,
-               start_x: float | None = None, fork_length: float = 0.58, visual: bool = True) -> Bike:
+               start_x: float | None = None, fork_length: float = 0.58, visual: bool = True,
+               articulated=None) -> Bike:
     """Compile the bike scene for ``spec`` on ``terrain``; the front axle starts over ``start_x``
     (default the terrain's start); ``fork_length`` (axle to crown, m) places the drawn stanchions.
     ``visual=False`` leaves out every geom (the drawn bike and the terrain) and the drawn legs and
     arms (tendons): nothing in the physics depends on them (the inertias are given, nothing
     collides, the callback applies the limbs' forces), and MuJoCo then places no geoms and computes
     no tendon at each evaluation (~4 % and ~15 % of a step); the joints, bodies and their numbering
-    are the same."""
+    are the same. ``articulated``: (``rider_body.Body``, ``rider_body.Pose``), the articulated
+    rider in place of the rigid one (``rider_body.attach``; ``--rider active``)."""
     ms = mujoco.MjSpec.from_file(str(mjcf.path(SCENE)))
     ms.option.timestep = timestep
     ms.option.integrator = integrator
@@ -193,6 +195,10 @@ def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, g
     ms.site("shoulders").pos = [shoulders[0], 0.0, shoulders[1]]
     ms.geom("torso").fromto = [hips[0], 0.0, hips[1], shoulders[0], 0.0, shoulders[1]]
     legs_rest, arms_rest = rider_rest_lengths(spec, gravity)
+    if articulated is not None:
+        from mtbmj.bike import rider_body
+
+        rider_body.attach(ms, spec, *articulated, (r.leg_x, r.leg_z), visual)
     if visual:
         _terrain_visual(ms, terrain)
     else:

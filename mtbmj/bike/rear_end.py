@@ -124,13 +124,14 @@ class BikeLinkage:
 
 def for_bike(ref: str, overrides=None, chainring: int | None = None, cog: int | None = None,
              com_height_mm: float | None = None) -> BikeLinkage:
-    """The rear end of the bike ``ref`` (preset or file) from its ``[linkage]``, solved over its
-    travel, with the bike's tyre radius, front axle and centre of mass for anti-squat and anti-rise."""
+    """The rear end of the bike ``ref`` (preset, file or ``mtbmj.bike.spec.ResolvedBike``: a file is
+    read once) from its ``[linkage]``, solved over its travel, with the bike's tyre radius, front
+    axle and centre of mass for anti-squat and anti-rise."""
     from mtbmj.bike import run as bike_run
     from mtbmj.bike import spec as spec_mod
 
-    table, _ = spec_mod.read_table(str(ref))
-    table = spec_mod.overridden(table, overrides)
+    read, source = (ref.read, ref.source) if isinstance(ref, spec_mod.ResolvedBike) else spec_mod.read_table(str(ref))
+    table = spec_mod.overridden(read, overrides)
     if "linkage" not in table:
         raise ConfigError(f"{ref}: has no [linkage] (the rear end's hardpoints); see docs/configuration.md")
     part = dict(table["linkage"])
@@ -138,7 +139,7 @@ def for_bike(ref: str, overrides=None, chainring: int | None = None, cog: int | 
         if value is not None:
             part[key] = value
     link = from_table(part)
-    spec = spec_mod.load(str(ref), overrides)
+    spec = spec_mod.derive(source, read, overrides).spec  # the file read once (mtbmj.bike.spec.resolve's steps)
     tyre = bike_run.setups(spec)[0].tire_radius
     height = part.get("com_height_mm")
     if height is not None:
@@ -148,7 +149,7 @@ def for_bike(ref: str, overrides=None, chainring: int | None = None, cog: int | 
     else:
         com = com_height_of(spec, tyre)
     c = curves(link, spec.shock_stroke, tyre, float(spec.front_axle[0]), com)
-    return BikeLinkage(str(ref), link, c, np.asarray(spec.pivot, float), tyre, spec.shock_stroke)
+    return BikeLinkage(source, link, c, np.asarray(spec.pivot, float), tyre, spec.shock_stroke)
 
 
 __all__ = ["BikeLinkage", "for_bike", "com_height_of"]

@@ -60,6 +60,7 @@ def rerun(run_dir, duration: float | None = None, error=MtbmjError):
                   "callback": "auto", "lock": tuple(info.get("locked", ())),
                   "rear_tire": bool(info.get("rear_tire", True)), "overrides": manifest.get("bike_overrides") or None,
                   "seated": bool(info.get("seated", False)),
+                  "rider": str((summary.get("rider") or {}).get("kind", "passive")),  # the active rider again
                   "pedal": (float(pedal["cadence_rpm"]), float(pedal["power_W"])) if pedal else None}
         whole = float(summary["duration_s"])
     except (KeyError, TypeError, ValueError) as exc:

@@ -48,11 +48,12 @@ from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 from mtbmj.bike.callback import BikeCallback
 from mtbmj.bike.summary import gear_speed, signals, summary
-from mtbmj.bike.stepping import CHUNK_STEPS, FINE_MIN_STEPS, Stepping, stepping
+from mtbmj.bike.stepping import Stepping, stepping
 from mtbmj.runpath import callbacks, guard, loop
 
 CHUNK = 10000
 CALLBACKS = ("auto", "compiled", "python")
+RIDERS = ("passive", "active")
 VIDEO_SAMPLE_HZ = 240.0  # the bike's pose kept for a video (qpos rows per second)
 # Held degrees of freedom (``lock``): each held joint gets this armature (kg or kg m^2 added to its
 # own diagonal of the mass matrix, nothing else), so it keeps its start value and zero speed: under
@@ -98,13 +99,15 @@ class Prepared:
     refined_steps: int = 0  # coarse steps stepped again at the fine step (a stop or the rim within reach)
     stepped: int = 0  # coarse steps made
     watch: crash.Watch | None = None  # the run's crash check (``mtbmj.bike.crash``)
+    articulated: tuple | None = None  # the active rider's (body, pose) (``mtbmj.bike.rider_control``), None: rigid
 
     def visual_model(self) -> mujoco.MjModel:
         """The same bike with its drawn geoms and the terrain (``bike.model`` has none: see
         ``build_bike(visual=...)``): the model a video draws, with the same joints."""
         b, s = self.bike, self.fork_setup
         return build_bike(self.spec, b.tire_radius, self.terrain, self.timestep, INTEGRATORS[s.integrator],
-                          self.gravity, b.x0 + self.spec.front_axle[0], s.fork_length).model
+                          self.gravity, b.x0 + self.spec.front_axle[0], s.fork_length,
+                          articulated=self.articulated).model
 
 
 def _check(speed, duration, pedal=None):
@@ -134,7 +137,7 @@ def setups(spec) -> tuple[compose.Setup, compose.Setup]:
 
 def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, drive: str = "rider",
             start_x: float | None = None, callback: str = "auto", lock=(), rear_tire: bool = True,
-            overrides=None, seated: bool = False, pedal=None) -> Prepared:
+            overrides=None, seated: bool = False, pedal=None, rider: str = "passive") -> Prepared:
     """Everything a run needs, with the data at t = 0: the bike at rest on its static equilibrium
     over the start, moving at the set speed. ``callback``: "auto" (the compiled callback where numba
     is installed, else the Python one with a ``FallbackWarning``), "compiled" or "python".
@@ -156,8 +159,27 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     and the driving foot pushes its pedal, its reaction on the rider (standing: the body on its legs
     and arms moves; seated: held, the pair cancels). The crank turns with the distance rolled
     through the gear; the speed is what the forces make of it, from ``speed_m_per_s`` at the start
-    (default: the gear's speed at ``cadence_rpm``)."""
+    (default: the gear's speed at ``cadence_rpm``).
+
+    ``rider``: "passive" (the rigid body on spring-damper legs and arms) or "active" (the
+    articulated rider with its muscles and riding controller, ``mtbmj.bike.rider_control``; seated,
+    on the saddle's contact instead of held)."""
     from mtbmj.bike.reference import Reference, static_equilibrium
+
+    if rider not in RIDERS:
+        raise ConfigError(f"rider: must be one of {', '.join(RIDERS)}, got {rider!r}")
+    if rider == "active":
+        from mtbmj.bike import rider_control
+
+        if lock or not rear_tire:
+            raise ConfigError("rider: the active rider rides the whole bike (no lock, no lifted rear)")
+        p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire, overrides, False, pedal)
+        kind = callback_kind(p.callback)
+        rear = p.rear_tire
+        return rider_control.activate(
+            p, lambda b: make_callback(kind, b, p.fork_law, p.shock_law, p.front_tire, rear, p.drive, p.speed,
+                                       p.traction, p.callback.refresh),
+            INTEGRATORS[p.fork_setup.integrator], LOCK_ARMATURE, seated)
 
     if pedal is not None:
         if drive != "rider":
@@ -173,7 +195,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     lock = _check_lock(lock, rear_tire)
     if isinstance(bike, spec_mod.BikeSpec) and overrides:
         raise ConfigError("overrides: give them with a bike name or file, not a ready-made BikeSpec")
-    spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(str(bike), overrides)
+    spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(bike, overrides)  # a ResolvedBike is not read again
     if seated:
         if spec.rider.seated_com is None:
             raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider (the rider's centre of mass "
@@ -360,31 +382,6 @@ def simulate(p: Prepared, duration: float, progress=None):
                                      lambda: getattr(p.callback, "overflowed", False), to_python, "bike")
 
 
-@dataclass
-class _Refine:
-    """The bike's refinement plan (``mtbmj.runpath.loop.Refinement``): a chunk stepped coarse is
-    looked at after the fact (``Stepping.within_reach``) and its stretch near a stop or a rim redone
-    at the fine step (``mtbmj.bike.stepping``)."""
-
-    p: Prepared
-    fork_col: int
-    phi_col: int
-    deflection_cols: list
-    min_steps: int = FINE_MIN_STEPS
-    max_chunk: int = CHUNK_STEPS
-
-    @property
-    def substeps(self) -> int:
-        return self.p.stepping.substeps
-
-    def span(self, states, sensors):
-        return self.p.stepping.within_reach(states[:, self.fork_col], states[:, self.phi_col],
-                                            [sensors[:, c] for c in self.deflection_cols])
-
-    def before_fine(self) -> None:
-        self.p.callback.reset()  # the patches of the chunk's end: the fine pass searches afresh
-
-
 def _simulate(p: Prepared, duration: float, progress=None):
     """Step ``duration`` s on the shared run path (``mtbmj.runpath.loop.chunked``) with the bike's
     refinement plan: where a chunk came within reach of an end stop or a rim, its steps from the
@@ -392,8 +389,9 @@ def _simulate(p: Prepared, duration: float, progress=None):
     model = p.bike.model
     steps = int(round(duration / p.timestep))
     b = p.bike
-    plan = _Refine(p, 1 + b.qpos_index("fork"), 1 + b.qpos_index("swingarm"),
-                   [int(model.sensor_adr[model.sensor(n).id]) for n in ("front_deflection", "rear_deflection")])
+    sensors = [int(model.sensor_adr[model.sensor(n).id]) for n in ("front_deflection", "rear_deflection")]
+    plan = p.stepping.refinement(1 + b.qpos_index("fork"), 1 + b.qpos_index("swingarm"), sensors,
+                                 lambda: p.callback.reset())  # the patches of the chunk's end: searched afresh
     counts = loop.Counts()
     try:
         with installed(p.callback):
@@ -509,7 +507,17 @@ class BikeResult(RunOutput):
                 f"{s['max_front_travel_mm']:.1f} of {f['travel_mm']:g} mm{ends(f)}, rear {s['max_rear_travel_mm']:.1f} of "
                 f"{s['rear_wheel_travel_mm']:.4g} mm (shock {s['max_stroke_mm']:.1f} of {r['travel_mm']:g} mm){ends(r)}, "
                 f"pitch {s['pitch_deg']['min']:.1f} to {s['pitch_deg']['max']:.1f} deg, rim strikes "
-                f"{strikes['front']}/{strikes['rear']}, {self._comfort()}")
+                f"{strikes['front']}/{strikes['rear']}, {self._comfort()}{self._rider()}")
+
+    def _rider(self) -> str:
+        """The active rider's joint torques against their limits (nothing for the passive rider)."""
+        r = self.summary.get("rider") or {}
+        if r.get("kind") != "active":
+            return ""
+        worst = max(r["joints"], key=lambda k: r["joints"][k]["peak_of_limit"])
+        return (f"; active rider: joint torques {'within' if r['within_limits'] else 'PAST'} their limits (largest "
+                f"{100 * r['joints'][worst]['peak_of_limit']:.0f} % of the {worst}'s), peak power "
+                f"{r['peak_power_W']:.0f} of {r['power_limit_W']:.0f} W")
 
     def _comfort(self) -> str:
         """Comfort and grip over the feature's window (the whole run's where it has none)."""
@@ -536,23 +544,10 @@ class BikeResult(RunOutput):
     def plot(self, axes=None, label: str | None = None, **line_kwargs):
         """Front travel, rear wheel travel and pitch against time on three stacked axes (given, or
         a new figure's): several runs drawn on the same axes compare them. Returns the figure."""
-        if axes is None:
-            from matplotlib.figure import Figure
-
-            fig = Figure(figsize=(7, 7), layout="constrained")
-            axes = fig.subplots(3, 1, sharex=True)
-        else:
-            fig = axes[0].figure
-        label = label or f"{self.name} over {self.scenario}"
-        for ax, (column, text) in zip(axes, (("front_travel_mm", "front travel [mm]"),
-                                             ("rear_travel_mm", "rear wheel travel [mm]"),
-                                             ("pitch_deg", "pitch, nose up [deg]"))):
-            ax.plot(self.time, self.raw[column], label=label, **line_kwargs)
-            ax.set_ylabel(text)
-            ax.grid(True, alpha=0.3)
-        axes[-1].set_xlabel("time [s]")
-        axes[0].legend(loc="best", fontsize=8)
-        return fig
+        return self.plot_stacked((("front_travel_mm", "front travel [mm]"), ("rear_travel_mm", "rear wheel travel [mm]"),
+                                  ("pitch_deg", "pitch, nose up [deg]")), self.raw, axes,
+                                 label or f"{self.name} over {self.scenario}", {"loc": "best", "fontsize": 8},
+                                 **line_kwargs)
 
 
 def default_duration(p: Prepared) -> float:
@@ -563,8 +558,10 @@ def default_duration(p: Prepared) -> float:
 def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, duration: float | None = None,
              drive: str = "rider", start_x: float | None = None,
              progress: Callable[[float], None] | None = None, callback: str = "auto", lock=(),
-             rear_tire: bool = True, overrides=None, seated: bool = False, pedal=None) -> BikeResult:
-    """Roll the bike ``bike`` (a preset name, a TOML path or a ``BikeSpec``) over ``scenario`` (a
+             rear_tire: bool = True, overrides=None, seated: bool = False, pedal=None,
+             rider: str = "passive") -> BikeResult:
+    """Roll the bike ``bike`` (a preset name, a TOML path, a ``mtbmj.bike.spec.ResolvedBike``, which
+    ``overrides`` derive again without reading its file, or a ``BikeSpec``) over ``scenario`` (a
     terrain spec of ``mtbmj roll``) at ``speed_m_per_s``; ``duration`` defaults to the time for both
     wheels to cross the feature and settle; ``drive`` "rider" (a speed controller within a rider's
     limits) or "coast"; ``start_x`` the front axle's start (default the terrain's); ``callback``
@@ -575,10 +572,13 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
     shock's configuration keys (``{"fork.set": {"fork.spring.air_pressure_psi": 60}}``), see
     ``mtbmj.bike.spec.overridden``; ``seated`` the rider seated, held rigid on the frame (``prepare``);
     ``pedal`` (cadence_rpm, power_W) the rider pedalling through the chain instead of holding a speed
-    (``prepare``; ``speed_m_per_s`` None: the gear's speed at the cadence)."""
+    (``prepare``; ``speed_m_per_s`` None: the gear's speed at the cadence); ``rider`` "passive" (the
+    rigid rider on spring-damper limbs) or "active" (the articulated rider with muscles and a
+    riding controller, ``mtbmj.bike.rider_control``; the summary's ``rider`` then reports each
+    joint's largest torque against its limit)."""
     _check(speed_m_per_s, duration, pedal)
     p = guard.prepared("bike", lambda: prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire,
-                                               overrides, seated, pedal),
+                                               overrides, seated, pedal, rider),
                        model_of=lambda p: p.bike.model)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.timestep, 1.0 / p.timestep)
@@ -592,8 +592,11 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
             "fine_timestep_s": plan.fine, "fine_timestep_why": plan.fine_why,
             "refined_fraction": p.refined_steps / p.stepped if p.stepped else 0.0,
             "integrator": p.fork_setup.integrator,
-            "callback": callback_kind(p.callback), "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
+            "callback": callback_kind(getattr(p.callback, "inner", p.callback)), "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
             "real_time_factor": duration / wall if wall > 0 else None}
+    summary_["rider"] = p.callback.report() if p.articulated is not None else {"kind": "passive"}
+    if p.articulated is not None:
+        info["rider"] = "active"
     if seated:
         info["seated"] = True
     if pedal is not None:

@@ -26,9 +26,9 @@ from __future__ import annotations
 
 import math
 
+from mtbmj.config import N_PER_MM_PER_LB_PER_IN  # the units' one table
 from mtbmj.errors import ConfigError
 
-N_PER_MM_PER_LB_PER_IN = 0.45359237 * 9.80665 / 25.4
 POLYTROPIC_INDEX = 1.3  # assumed, as the air fork preset: between isothermal (1.0) and adiabatic (1.4) for a 0.1-0.3 s stroke
 COIL = ("spring_rate_lb_per_in", "spring_rate_N_per_mm", "preload_mm")
 AIR = ("pressure_psi", "piston_diameter_mm", "positive_volume_cm3", "negative_volume_cm3", "volume_spacers",

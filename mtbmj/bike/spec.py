@@ -13,11 +13,8 @@ status 2 on the command line).
 """
 from __future__ import annotations
 
-import bisect
-import copy
 import math
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
@@ -26,112 +23,12 @@ import numpy as np
 from mtbmj import limits
 from mtbmj.bike import chart as _chart
 from mtbmj.bike import linkage as _linkage
-from mtbmj.bike import shock as _shock
+from mtbmj.bike.bikefile import (KNOWN, SENSOR_KEYS, gated, merge, overridden, preset_names,  # noqa: F401
+                                  read_leverage_csv, read_table)
 from mtbmj.errors import ConfigError
+from mtbmj.measured.leverage import Leverage, leverage_ratio, leverage_stroke, stroke_piece  # noqa: F401
 
 MM = 1e-3
-
-
-@dataclass(frozen=True)
-class Leverage:
-    """Leverage ratio LR = d(rear wheel travel) / d(shock stroke), piecewise linear in the rear
-    wheel travel ``travel`` (m, from 0, strictly increasing); constant past the table's ends.
-    The shock stroke is s(w) = integral from 0 to w of dw / LR(w), exact on each linear piece."""
-
-    travel: tuple[float, ...]
-    ratio: tuple[float, ...]
-
-    def __post_init__(self):
-        w, r = [float(x) for x in self.travel], [float(x) for x in self.ratio]
-        s = [0.0]
-        for i in range(len(w) - 1):  # the stroke at each table point, exact for a ratio linear in w
-            s.append(s[-1] + stroke_piece(r[i], r[i + 1], w[i + 1] - w[i], w[i + 1] - w[i]))
-        # plain lists: the callback asks for one value at a time, where bisect beats numpy
-        object.__setattr__(self, "_w", w)
-        object.__setattr__(self, "_r", r)
-        object.__setattr__(self, "_s", s)
-
-    def ratio_at(self, w: float) -> float:
-        """LR at rear wheel travel ``w`` (m)."""
-        return leverage_ratio(self._w, self._r, bisect.bisect_right(self._w, w) - 1, w)
-
-    def stroke(self, w: float) -> float:
-        """Shock stroke (m) at rear wheel travel ``w`` (m); below 0 and past the table the ratio
-        is held at its end value."""
-        return leverage_stroke(self._w, self._r, self._s, bisect.bisect_right(self._w, w) - 1, w)
-
-    def strokes(self, w) -> np.ndarray:
-        """``stroke`` over an array of rear wheel travels (m): the same pieces, in numpy."""
-        w = np.asarray(w, dtype=float)
-        w_tab, r, s = (np.asarray(v, dtype=float) for v in (self._w, self._r, self._s))
-        n = w_tab.size
-        i = np.clip(np.searchsorted(w_tab, w, side="right") - 1, 0, n - 2)
-        r0, r1, h, x = r[i], r[i + 1], w_tab[i + 1] - w_tab[i], w - w_tab[i]
-        b = (r1 - r0) / h
-        linear = np.abs(b) * x < 1e-9 * r0
-        with np.errstate(divide="ignore", invalid="ignore"):  # the linear pieces' log is not used
-            piece = np.where(linear, x / r0, np.log((r0 + b * x) / r0) / np.where(linear, 1.0, b))
-        out = s[i] + piece
-        out = np.where(w <= 0.0, w / r[0], out)
-        return np.where(w >= w_tab[n - 1], s[n - 1] + (w - w_tab[n - 1]) / r[n - 1], out)
-
-    @property
-    def table(self) -> tuple[list[float], list[float], list[float]]:
-        """(travel, ratio, stroke) at the table's points (m, -, m): the lookups' arguments."""
-        return self._w, self._r, self._s
-
-    def travel_at_stroke(self, stroke: float) -> float:
-        """The rear wheel travel (m) at shock ``stroke`` (m): ``stroke``'s inverse, the ratio held at
-        the table's ends beyond them."""
-        w, r, s = self._w, self._r, self._s
-        if stroke <= 0.0:
-            return stroke * r[0]
-        if stroke >= s[-1]:
-            return w[-1] + (stroke - s[-1]) * r[-1]
-        i = bisect.bisect_right(s, stroke) - 1
-        b, ds = (r[i + 1] - r[i]) / (w[i + 1] - w[i]), stroke - s[i]
-        return w[i] + (ds * r[i] if abs(b) * ds < 1e-12 else r[i] * math.expm1(b * ds) / b)
-
-    @property
-    def full_travel(self) -> float:
-        return float(self._w[-1])
-
-    @property
-    def full_stroke(self) -> float:
-        return float(self._s[-1])
-
-
-def stroke_piece(r0: float, r1: float, h: float, x: float) -> float:
-    """Integral from 0 to x of du / (r0 + (r1 - r0) u / h)."""
-    b = (r1 - r0) / h
-    if abs(b) * x < 1e-9 * r0:
-        return x / r0
-    return math.log((r0 + b * x) / r0) / b
-
-
-# The leverage curve's lookups as plain functions of the table (travel w_tab, ratio r, stroke s at
-# each point) and the piece i = bisect_right(w_tab, w) - 1 holding w: ``Leverage`` calls them on
-# its lists, the compiled bike callback (``mtbmj.bike.callback_compiled``) compiles these same
-# functions and finds i by its own bisection.
-def leverage_ratio(w_tab, r, i, w: float) -> float:
-    """LR at rear wheel travel ``w`` (m); constant past the table's ends."""
-    n = len(w_tab)
-    if w <= w_tab[0]:
-        return r[0]
-    if w >= w_tab[n - 1]:
-        return r[n - 1]
-    return r[i] + (r[i + 1] - r[i]) * (w - w_tab[i]) / (w_tab[i + 1] - w_tab[i])
-
-
-def leverage_stroke(w_tab, r, s, i, w: float) -> float:
-    """Shock stroke (m) at rear wheel travel ``w`` (m), the ratio held at its end values outside
-    the table."""
-    n = len(w_tab)
-    if w <= 0.0:
-        return w / r[0]
-    if w >= w_tab[n - 1]:
-        return s[n - 1] + (w - w_tab[n - 1]) / r[n - 1]
-    return s[i] + stroke_piece(r[i], r[i + 1], w_tab[i + 1] - w_tab[i], w - w_tab[i])
 
 
 @dataclass(frozen=True)
@@ -151,6 +48,7 @@ class Rider:
     arm_stiffness: float  # N/m, both arms
     arm_damping: float  # N s/m
     seated_com: tuple[float, float] | None = None  # m, frame coordinates, seated on the saddle (None: not given)
+    height: float = 1.78  # m, the whole rider's stature (the active rider's segments: mtbmj.bike.rider_body)
 
 
 @dataclass(frozen=True)
@@ -203,156 +101,6 @@ class BikeSpec:
                 + self.rear_wheel_mass + self.rider.mass + self.rider.on_bike_mass)
 
 
-def preset_names() -> list[str]:
-    return sorted(p.name[:-5] for p in resources.files("mtbmj.bike.presets").iterdir() if p.name.endswith(".toml"))
-
-
-def _locate(ref: str):
-    for name in preset_names():
-        if ref.lower() == name.lower():
-            return name, resources.files("mtbmj.bike.presets") / f"{name}.toml"
-    path = Path(ref)
-    if not path.exists():
-        raise ConfigError(f"{ref}: not a bike preset (known: {', '.join(preset_names())}) and no such file")
-    return path.stem, path
-
-
-def _is_preset(name: str) -> bool:
-    return any(name.lower() == n.lower() for n in preset_names())
-
-
-def read_leverage_csv(path) -> tuple[list[float], list[float]]:
-    """(wheel travel mm, leverage ratio) of a leverage-ratio CSV as linkage tools and telemetry apps
-    export it: two numbers a row, wheel travel first, separated by a comma, a semicolon or a tab
-    (Sufni's "0.0,3.18"; Linkage's "0;3.18"); header lines before the first number row are skipped."""
-    import re
-
-    from mtbmj.textfile import read_text
-
-    if not isinstance(path, str):
-        raise ConfigError(f"leverage.csv: must be a file's path, got {path!r}")
-    # the one reader of a user's files: a FIFO, a device or a directory refused without waiting, a
-    # file over 1 MiB (60 000 rows; a tool's export every 0.1 mm of 260 mm is 2 600) before it is read
-    text = read_text(Path(path), ConfigError, f"leverage.csv: {path}", "not a text file (wheel travel and leverage "
-                     "ratio, two numbers a row)", "config")
-    w, r = [], []
-    for number, line in enumerate(text.splitlines(), 1):
-        cells = [c.strip() for c in re.split(r"[,;\t]", line) if c.strip()]
-        if not cells:
-            continue
-        try:
-            values = [float(c) for c in cells]
-        except ValueError:
-            if not w:
-                continue  # a header
-            raise ConfigError(f"{path}, line {number}: not two numbers ({line.strip()!r})") from None
-        if len(values) != 2 or not all(math.isfinite(v) for v in values):
-            raise ConfigError(f"{path}, line {number}: expected wheel travel and leverage ratio, got {line.strip()!r}")
-        w.append(values[0])
-        r.append(values[1])
-    if len(w) < 2:
-        raise ConfigError(f"leverage.csv: {path} holds {len(w)} row(s) of wheel travel and leverage ratio (at least 2)")
-    return w, r
-
-
-def _chart_over_bases(table: dict, part: dict, location) -> tuple[dict, dict]:
-    """One file's geometry chart over its bases' ``table`` (``read_table``): the chart replaces
-    the axles and head angle its bases gave (and their chart), its fork keys are set in the file's
-    ``[fork.set]`` as if written there, and its saddle replaces their seated rider. A file whose own
-    ``rider.seated_com_mm`` follows a chart with a saddle replaces that saddle; a chart without a
-    saddle after one with a saddle keeps the seated rider the old saddle gave."""
-    geo, bike, rider = part.get("geometry"), part.get("bike") or {}, part.get("rider") or {}
-    old = table.get("geometry") if isinstance(table.get("geometry"), dict) else {}
-    old_saddle = _chart.saddle(old)
-    part = dict(part)
-
-    def keep_old_seat(table: dict) -> None:  # the bases' saddle placed the seated rider: it stays there
-        if old_saddle is not None and "seated_com_mm" not in rider:
-            from_saddle = {**(table.get("rider") or {}), **rider}.get("seated_com_from_saddle_mm")
-            table.setdefault("rider", {})["seated_com_mm"] = _chart.seated_com(old, from_saddle)
-
-    if isinstance(geo, dict):
-        _chart.check_keys(geo)
-        given = [k for k in _chart.SETS if k in bike]
-        if given:
-            raise ConfigError(f"{location}: bike.{given[0]} and [geometry] give the frame's geometry two ways; give one")
-        fork = _chart.fork_keys(geo)
-        mine = part.get("fork", {}).get("set", {}) if isinstance(part.get("fork"), dict) else {}
-        mine = mine if isinstance(mine, dict) else {}
-        both = [k for k in fork if k in mine]
-        if both:
-            chart_key = next(k for k, v in _chart.FORK.items() if v == both[0])
-            raise ConfigError(f"{location}: geometry.{chart_key} and [fork.set] {both[0]!r} give it two ways; give one")
-        if fork:
-            part["fork"] = {**(part.get("fork") or {}), "set": {**mine, **fork}}
-        new_saddle = _chart.saddle(geo)
-        if new_saddle is not None and "seated_com_mm" in rider:
-            raise ConfigError(f"{location}: rider.seated_com_mm and the chart's saddle (geometry.seat_tube_angle_deg) "
-                              f"give the seated rider two ways; give one")
-        if isinstance(table.get("bike"), dict):
-            table["bike"] = {k: v for k, v in table["bike"].items() if k not in _chart.SETS}
-        if new_saddle is None:
-            keep_old_seat(table)
-        elif isinstance(table.get("rider"), dict):  # this chart's saddle places the seated rider
-            table["rider"] = {k: v for k, v in table["rider"].items() if k != "seated_com_mm"}
-        table.pop("geometry", None)
-    elif old and ("linkage" in part or [k for k in _chart.SETS if k in bike]):
-        # axles or hardpoints over a base's chart: the chart becomes the axles it gave, then these replace them
-        table = _merge(table, {"bike": _chart.frame_keys(old)})
-        keep_old_seat(table)
-        table.pop("geometry")
-    else:
-        if old_saddle is not None and "seated_com_mm" in rider:  # the file's own seated rider wins
-            table["geometry"] = old = {k: v for k, v in old.items() if k not in _chart.SEAT}
-        shock = part.get("shock") if isinstance(part.get("shock"), dict) else {}
-        if "rear_travel_mm" in old and ("leverage" in part or "stroke_mm" in shock):
-            # the base chart's rear travel described the base's rear end, not this one
-            table["geometry"] = {k: v for k, v in old.items() if k != "rear_travel_mm"}
-    return table, part
-
-
-def read_table(ref: str) -> tuple[dict, str]:
-    """A bike file's table with its ``base`` chain merged in (read by ``mtbmj.config.read_chain``,
-    the drop configurations' reader: the same base rules)."""
-    from mtbmj.config import read_chain
-
-    table: dict = {}
-    for _, location, part in read_chain(ref, _locate, _is_preset, "a bike description"):
-        part = gated(part, location)  # every number through the numeric-input gate before any is used
-        lev = part.get("leverage")
-        if isinstance(lev, dict):
-            if isinstance(lev.get("csv"), str) and isinstance(location, Path):
-                lev["csv"] = str((location.resolve().parent / lev["csv"]))  # relative to the file that names it
-            # a curve replaces its bases' curve, given as a CSV or as the two lists
-            if isinstance(table.get("leverage"), dict):
-                drop = ("wheel_travel_mm", "ratio") if "csv" in lev else ("csv",) if lev.keys() & {"wheel_travel_mm", "ratio"} else ()
-                table["leverage"] = {k: v for k, v in table["leverage"].items() if k not in drop}
-        table, part = _chart_over_bases(table, part, location)
-        if isinstance(part.get("linkage"), dict):  # hardpoints replace the rear end its bases gave
-            if "leverage" in part or "pivot_mm" in (part.get("bike") or {}):
-                raise ConfigError(f"{location}: [linkage] and {'[leverage]' if 'leverage' in part else 'bike.pivot_mm'} "
-                                  f"give the rear end two ways; give one (the linkage's pivot and leverage ratio "
-                                  f"follow from its points)")
-            table.pop("leverage", None)
-            table.pop("linkage", None)
-            if isinstance(table.get("bike"), dict):
-                table["bike"] = {k: v for k, v in table["bike"].items() if k not in ("pivot_mm", "rear_axle_mm")}
-        elif "leverage" in part or "pivot_mm" in (part.get("bike") or {}):
-            table.pop("linkage", None)  # a table or a pivot replaces the hardpoints its bases gave
-        table = _merge(table, part)
-        mine = part.get("shock")
-        if isinstance(mine, dict) and mine.keys() & set(_shock.KEYS):  # a shock as sold: its keys set this
-            # file's [shock.set] over its bases' (mtbmj.bike.shock), so a later file's [shock.set] wins
-            table["shock"]["set"] = _shock.schema_keys(mine, table["shock"].get("set", {}), table["shock"].get("spring"))
-    return table, str(ref)
-
-
-# A telemetry recorder's sensors on this bike (Sufni's AS5600 angle sensors): the fork's isosceles
-# triangle (two equal arms, the stroke as its base) and the shock's triangle (two arms, the shock's
-# eye-to-eye as the third side), in mm, as its setup record gives them (``mtbmj telemetry --bike``)
-SENSOR_KEYS = ("fork_arm_mm", "fork_max_mm", "shock_arm1_mm", "shock_arm2_mm", "shock_max_mm")
-
-
 def _sensors(table: dict) -> dict:
     """The ``[sensors]`` calibration (mm), checked: each a positive number, and each triangle one
     that closes (the fork's base at most twice its arm; the shock's sides a triangle)."""
@@ -385,14 +133,14 @@ LINKAGE_AXLE_TOLERANCE_MM = 1.0  # the linkage's rear axle against the frame's (
 PATH_TOLERANCE_MM = 0.1  # a four-bar's axle path and the bike's circle: farther apart than this, a warning says so
 
 
-def _with_linkage(table: dict) -> tuple[dict, tuple | None]:
+def _with_linkage(table: dict) -> tuple[dict, tuple | None, object, object]:
     """``table`` with ``bike.pivot_mm`` and ``[leverage]`` from its ``[linkage]`` (``mtbmj.bike.linkage``),
     and the rear caliper's link's turn against the arm's at each point of that table (None where
     the caliper rides on the arm):
     the pivot the rear axle turns about (for a four-bar whose axle rides on its coupler, the centre of
     the circle that best fits the linkage's axle path, ``linkage.fitted_pivot``, with a warning when
     it leaves the path by more than 0.1 mm) and the leverage ratio every millimetre of wheel travel
-    up to the shock's stroke."""
+    up to the shock's stroke; then the linkage and its curves over that stroke (solved here once)."""
     from mtbmj.bike import linkage as lk
     from mtbmj.config import warn
 
@@ -428,32 +176,7 @@ def _with_linkage(table: dict) -> tuple[dict, tuple | None]:
     out = {k: v for k, v in table.items() if k != "linkage"}
     out.update({"bike": bike, "leverage": lev})
     ratio = lk.caliper_ratio(c, pivot)
-    return out, (tuple(float(x) for x in ratio) if np.max(np.abs(ratio - 1.0)) > 1e-9 else None)
-
-
-def _merge(a: dict, b: dict) -> dict:
-    out = dict(a)
-    for k, v in b.items():
-        out[k] = _merge(out[k], v) if isinstance(v, dict) and isinstance(out.get(k), dict) else v
-    return out
-
-
-KNOWN = {
-    "description": None, "reading": None,
-    "bike": {"head_angle_deg", "fork_offset_mm", "front_axle_mm", "rear_axle_mm", "pivot_mm", "frame_mass_kg",
-             "frame_com_mm", "frame_inertia_kg_m2", "swingarm_mass_kg", "swingarm_inertia_kg_m2",
-             "fork_lower_mass_kg", "front_wheel_mass_kg", "rear_wheel_mass_kg", "wheel_inertia_kg_m2"},
-    "leverage": {"wheel_travel_mm", "ratio", "csv"},
-    "linkage": _linkage.known_keys(),
-    "shock": {"stroke_mm", "config", "set", *_shock.KEYS},
-    "fork": {"config", "set"},
-    "rider": {"mass_kg", "limbs_share_percent", "com_mm", "pitch_inertia_kg_m2", "pedals_mm", "bars_mm",
-              "seated_com_mm", "seated_com_from_saddle_mm", "leg_length_mm", "arm_length_mm", "leg_stiffness_N_per_mm", "leg_damping_N_s_per_m",
-              "arm_stiffness_N_per_mm", "arm_damping_N_s_per_m"},
-    "drive": {"push_N", "power_W", "brake_N", "traction", "chainring_teeth", "cog_teeth", "chain"},
-    "sensors": set(SENSOR_KEYS),
-    "geometry": set(_chart.KEYS),
-}
+    return out, (tuple(float(x) for x in ratio) if np.max(np.abs(ratio - 1.0)) > 1e-9 else None), link, c
 
 
 def _number(table: dict, section: str, key: str, positive: bool = False, nonneg: bool = False) -> float:
@@ -521,88 +244,71 @@ def _used(section: str, key: str) -> bool:
     return key.startswith("fork.") and key != "fork.length_mm"
 
 
-def gated(table: dict, location=None) -> dict:
-    """``table`` (a bike file's, or overrides by key) with every number in it passed through the
-    numeric-input gate (``mtbmj.limits.numbers_in``): a value that is NaN, infinite, an integer too
-    large for a float or beyond ``limits.MAX_MAGNITUDE`` is refused in one line naming its key
-    (and the file), before any key is converted or used. The plausible ranges are warned about
-    when the bike is loaded (``mtbmj.bike.keys.warnings``)."""
-    try:
-        return {key: limits.numbers_in(str(key), value) for key, value in table.items()}
-    except ConfigError as exc:
-        raise ConfigError(f"{location}: {exc}" if isinstance(location, Path) else str(exc)) from None
+@dataclass(frozen=True)
+class ResolvedBike:
+    """A bike file resolved once (:func:`resolve`): the file's table as read (``read``: its bases,
+    chart, shock as sold and leverage CSV's path merged, no overrides), the ``overrides`` over it,
+    the resolved ``table`` the bike was built from (the chart's frame and the linkage's pivot and
+    leverage derived), the checked ``spec``, and for a rear end given by hardpoints its ``linkage``
+    and their ``curves`` over the shock's stroke (``mtbmj.bike.linkage.curves``; None for a table).
+    Every command and run that takes a bike takes this; :meth:`with_overrides` gives the same file
+    at other settings without reading it again."""
+
+    source: str
+    read: dict = field(repr=False)
+    overrides: dict
+    table: dict = field(repr=False)
+    spec: BikeSpec
+    linkage: object | None = field(default=None, repr=False)
+    curves: object | None = field(default=None, repr=False)
+    csv: dict = field(default_factory=dict, repr=False)  # the leverage CSVs read: path -> (travel mm, ratio)
+
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    def with_overrides(self, overrides) -> "ResolvedBike":
+        """The same file with ``overrides`` (every override over the file: these replace this
+        bike's own, they do not add to them), derived and checked again, not read again."""
+        return derive(self.source, self.read, overrides, self.csv)
 
 
-def overridden(table: dict, overrides) -> dict:
-    """``table`` with ``overrides`` applied: ``"section.key": value`` for a bike key (``rider.mass_kg``),
-    ``"fork.set": {KEY: value}`` / ``"shock.set": {KEY: value}`` for keys of the fork's and the
-    shock's configurations (merged into the file's). Unknown keys are refused by ``load``. ``table``
-    itself is left as it was (its nested tables too)."""
-    out = copy.deepcopy(table)
-    for key, value in gated(dict(overrides or {})).items():
-        if key in ("fork.set", "shock.set"):
-            if not isinstance(value, dict):
-                raise ConfigError(f"{key}: overrides must be a table of configuration keys")
-            section = out.setdefault(key.split(".")[0], {})
-            if not isinstance(section, dict):
-                raise ConfigError(f"{key.split('.')[0]}: must be a table")
-            section["set"] = {**section.get("set", {}), **value}
-            continue
-        section, dot, name = str(key).partition(".")
-        if not dot or not name:
-            raise ConfigError(f"--set {key}: a bike key is SECTION.KEY (e.g. rider.mass_kg; known sections: "
-                              f"{', '.join(k for k, v in KNOWN.items() if v)})")
-        if section not in KNOWN or not KNOWN[section]:
-            raise ConfigError(f"--set {key}: unknown section {section!r} (known: "
-                              f"{', '.join(k for k, v in KNOWN.items() if v)})")
-        if name not in KNOWN[section] or name == "set":
-            raise ConfigError(f"--set {key}: unknown key (known in [{section}]: "
-                              f"{', '.join(sorted(k for k in KNOWN[section] if k != 'set'))})")
-        if section == "bike" and name in _chart.SETS and isinstance(out.get("geometry"), dict):
-            raise ConfigError(f"--set {key}: this bike's frame is given by its geometry chart; set the chart's keys "
-                              f"(geometry.{'head_angle_deg' if name == 'head_angle_deg' else 'wheelbase_mm'}, ...)")
-        if section == "geometry" and not isinstance(out.get("geometry"), dict):  # a bike given by its axles
-            if name not in _chart.FORK:
-                raise ConfigError(f"--set {key}: this bike's frame is given by its axles (bike.front_axle_mm, "
-                                  f"bike.rear_axle_mm, bike.head_angle_deg), not a geometry chart; set those")
-            out.setdefault("fork", {}).setdefault("set", {}).update(_chart.fork_keys({name: value}))
-            continue
-        out.setdefault(section, {})[name] = value
-        if (section == "geometry" and name in _chart.FRAME
-                and not any(str(k).partition(".")[2] in _chart.CHECK for k in overrides)):
-            # the chart's reach and stack checked the chart as published: a changed frame drops them
-            out["geometry"] = {k: v for k, v in out["geometry"].items() if k not in _chart.CHECK}
-        if section == "geometry" and name in _chart.FORK:  # a chart's fork key sets the fork's, as in a file
-            out.setdefault("fork", {}).setdefault("set", {}).update(_chart.fork_keys({name: value}))
-        if section == "geometry" and name in _chart.SEAT and isinstance(out.get("rider"), dict):
-            out["rider"] = {k: v for k, v in out["rider"].items() if k != "seated_com_mm"}  # the saddle places it
-        if (section, name) == ("rider", "seated_com_mm") and isinstance(out.get("geometry"), dict):
-            out["geometry"] = {k: v for k, v in out["geometry"].items() if k not in _chart.SEAT}
-        if section == "shock" and name in _shock.KEYS:  # a shock's key as sold sets its [shock.set] now
-            sh = out["shock"]
-            sh["set"] = _shock.schema_keys({name: value}, sh.get("set", {}), sh.get("spring"))
-    return out
-
-
-def load(ref: str, overrides=None) -> BikeSpec:
-    """A ``BikeSpec`` from a bike preset name (``preset_names()``) or a TOML path, checked, with
-    ``overrides`` applied (:func:`overridden`)."""
+def resolve(ref, overrides=None) -> ResolvedBike:
+    """A bike preset name (``preset_names()``) or a TOML path read (``mtbmj.bike.bikefile.read_table``),
+    ``overrides`` applied (:func:`overridden`), derived and checked: the one resolution of a bike
+    file. A :class:`ResolvedBike` is taken as it is (with ``overrides``: those over its file)."""
+    if isinstance(ref, ResolvedBike):
+        return ref if overrides is None else ref.with_overrides(overrides)
     table, source = read_table(str(ref))
-    table = overridden(table, overrides)
+    return derive(source, table, overrides, {})
+
+
+def load(ref, overrides=None) -> BikeSpec:
+    """A ``BikeSpec`` from a bike preset name (``preset_names()``), a TOML path or a
+    :class:`ResolvedBike`, checked, with ``overrides`` applied (:func:`overridden`): ``resolve(ref, overrides).spec``."""
+    return resolve(ref, overrides).spec
+
+
+def derive(source: str, read: dict, overrides=None, csv: dict | None = None) -> ResolvedBike:
+    """The bike of a file's table as read (``read``: ``read_table``'s, left as it was) with
+    ``overrides``: derived and checked, nothing read but a leverage CSV not in ``csv`` (the CSVs
+    read so far, path -> rows: read once, kept there)."""
+    csv = {} if csv is None else csv
+    table = overridden(read, overrides)
     if isinstance(table.get("geometry"), dict):  # a geometry chart: the frame's geometry derived from it
-        table = _merge(table, {"bike": _chart.frame_keys(table["geometry"])})
+        table = merge(table, {"bike": _chart.frame_keys(table["geometry"])})
         seated = _chart.seated_com(table["geometry"], table.get("rider", {}).get("seated_com_from_saddle_mm"))
         if seated is not None:
-            table = _merge(table, {"rider": {"seated_com_mm": seated}})
+            table = merge(table, {"rider": {"seated_com_mm": seated}})
     from mtbmj.bike import keys as keys_mod
     from mtbmj.config import warn
 
     metres = keys_mod.metres_for_millimetres(table)  # before the hardpoints are solved in the wrong unit
     if metres is not None:
         raise ConfigError(metres)
-    derived, hardpoints, caliper = (), table.get("linkage"), None
+    derived, hardpoints, caliper, link, curves = (), table.get("linkage"), None, None, None
     if "linkage" in table:  # a rear end from hardpoints: its pivot and leverage table derived from it
-        table, caliper = _with_linkage(table)
+        table, caliper, link, curves = _with_linkage(table)
         derived = ("pivot_mm",)  # a four-bar's instant centre may lie anywhere: not a key the user typed
     for section, value in table.items():
         if section not in KNOWN:
@@ -632,7 +338,9 @@ def load(ref: str, overrides=None) -> BikeSpec:
         if "wheel_travel_mm" in lev or "ratio" in lev:
             raise ConfigError("leverage.csv: give the curve as a CSV or as wheel_travel_mm and ratio, not both")
         named = f"leverage.csv ({lev['csv']})"
-        lev = dict(zip(("wheel_travel_mm", "ratio"), read_leverage_csv(lev["csv"])))
+        if not (isinstance(lev["csv"], str) and lev["csv"] in csv):  # a CSV is read once (a path: else refused)
+            csv[lev["csv"]] = read_leverage_csv(lev["csv"])
+        lev = dict(zip(("wheel_travel_mm", "ratio"), (list(v) for v in csv[lev["csv"]])))
 
     def label(key: str) -> str:  # a leverage key, or the CSV's column that stands for it
         return f"{named}: {key.split('.', 1)[1]}" if named else key
@@ -686,7 +394,9 @@ def load(ref: str, overrides=None) -> BikeSpec:
                   _number(table, "rider", "leg_damping_N_s_per_m", nonneg=True),
                   _number(table, "rider", "arm_stiffness_N_per_mm", positive=True) * 1e3,
                   _number(table, "rider", "arm_damping_N_s_per_m", nonneg=True),
-                  _point(table, "rider", "seated_com_mm") if "seated_com_mm" in table.get("rider", {}) else None)
+                  _point(table, "rider", "seated_com_mm") if "seated_com_mm" in table.get("rider", {}) else None,
+                  _number(table, "rider", "height_m", positive=True) if "height_m" in table.get("rider", {}) else 1.78)
+    limits.within("rider.height_m", rider.height, limits.RIDER_HEIGHT_M, "m")
     for section in ("fork", "shock"):
         cfg = table.get(section, {}).get("config", "reference")
         if not isinstance(cfg, str):
@@ -737,7 +447,7 @@ def load(ref: str, overrides=None) -> BikeSpec:
         virtual_pivot=isinstance(hardpoints, dict) and hardpoints.get("kind") in ("horst_link", "short_link"),
         caliper_ratio=caliper,
         sensors=_sensors(table))
-    return spec
+    return ResolvedBike(source, read, dict(overrides or {}), table, spec, link, curves, csv)
 
 
 def level_pitch(front_axle, rear_axle) -> float:
@@ -776,5 +486,5 @@ def rear_axle_in_frame(spec: BikeSpec, phi) -> tuple[np.ndarray, np.ndarray]:
             pz - np.sin(phi) * rho[0] + np.cos(phi) * rho[1])
 
 
-__all__ = ["BikeSpec", "Leverage", "Rider", "load", "preset_names", "check_geometry", "level_pitch", "leverage_ratio", "leverage_stroke",
+__all__ = ["BikeSpec", "Leverage", "ResolvedBike", "Rider", "derive", "load", "resolve", "preset_names", "check_geometry", "level_pitch", "leverage_ratio", "leverage_stroke",
            "stroke_piece", "rear_axle_in_frame"]

@@ -22,7 +22,7 @@ evenly (``steprule.cuts_within``) to stay within the stops' and the rim's as wel
   gives the smallest mass, the stiffest case), the body likewise. The swingarm's own inertia is
   left out, which only makes the steps smaller.
 
-Which stretches need the fine step is decided after the fact: ``Stepping.within_reach`` looks at
+Which stretches need the fine step is decided after the fact: ``Stepping.refinement`` looks at
 a chunk stepped coarse and finds the first and the last sample within reach of a stop (where the
 drop refines too: ``steprule.stop_zone``) or the rim (within a margin of 1 mm at the wheel, 0.5 mm
 at the shock, plus twice the largest motion of one coarse step in the chunk); ``mtbmj.bike.run``
@@ -53,7 +53,7 @@ SHOCK_MARGIN_M = 5e-4  # the same at the shock (its stroke is the wheel's over a
 @dataclass(frozen=True)
 class Stepping:
     """One bike's steps: ``coarse`` (s), ``substeps`` fine steps per coarse one where a stop or the
-    rim may act, what sets each, and the zones ``within_reach`` checks."""
+    rim may act, what sets each, and the zones ``refinement`` watches."""
 
     coarse: float
     substeps: int
@@ -73,18 +73,19 @@ class Stepping:
         _, z = rear_axle_in_frame(self.spec, phi)
         return self.spec.leverage.strokes(z - self.spec.rear_axle[1])
 
-    def within_reach(self, fork, phi, deflections) -> tuple[int, int] | None:
-        """The first and the last row of a chunk stepped coarse at which a stop or the rim was
-        within reach, or None: ``fork`` the fork travel (m), ``phi`` the swingarm angle (rad), ``deflections`` each
-        tire's deepest deflection (m), one row per coarse step. Within reach: within the margin
-        (FORK_MARGIN_M at the wheel, SHOCK_MARGIN_M at the shock) plus twice the largest motion of
-        one coarse step in the chunk, so a stop met between two rows is met within reach of both."""
-        if self.substeps == 1:
-            return None
-        signals = [(fork, self.fork_zone, FORK_MARGIN_M), (self.stroke(phi), self.stroke_zone, SHOCK_MARGIN_M)]
-        signals += [(d, (-math.inf, rim), FORK_MARGIN_M) for d, rim in zip(deflections, self.rim_deflections)]
-        return steprule.reach_span(signals)
-
+    def refinement(self, fork_col: int, phi_col: int, deflection_cols, before=lambda: None) -> loop.Refinement:
+        """The bike's refinement (``mtbmj.runpath.loop.Refinement``, the front end's kind): the fork
+        travel (state column ``fork_col``, m), the shock stroke (from the swingarm angle in state
+        column ``phi_col``, rad) and each tire's deepest deflection (sensor columns
+        ``deflection_cols``, front then rear, m) watched. Within reach: within the margin
+        (FORK_MARGIN_M at the wheel and the rims, SHOCK_MARGIN_M at the shock) plus twice the largest
+        motion of one coarse step in the chunk, so a stop met between two rows is met within reach
+        of both; ``before`` is called before a fine stretch."""
+        watches = [loop.Watch("state", fork_col, self.fork_zone, FORK_MARGIN_M),
+                   loop.Watch("state", phi_col, self.stroke_zone, SHOCK_MARGIN_M, of=self.stroke)]
+        watches += [loop.Watch("sensor", c, (-math.inf, rim), FORK_MARGIN_M)
+                    for c, rim in zip(deflection_cols, self.rim_deflections)]
+        return loop.Refinement(self.substeps, tuple(watches), before, FINE_MIN_STEPS, CHUNK_STEPS)
 
 def stepping(spec, fork_setup: compose.Setup, shock_setup: compose.Setup, rims=None) -> Stepping:
     """The steps of the bike ``spec`` with these fork and shock setups (see the module doc);

@@ -2,12 +2,11 @@
 terrain, scored on what riders read, and the change recommended (``mtbmj.ride.advise``)."""
 from __future__ import annotations
 
-from pathlib import Path
-
 from mtbmj.cli.common import add_out
 
 
 def cmd_advise(args) -> int:
+    from mtbmj.bike import spec
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.cli.common import Progress
     from mtbmj.cli.telemetry import ride_record
@@ -18,12 +17,13 @@ def cmd_advise(args) -> int:
     if args.rider_kg is not None:
         over["rider.mass_kg"] = args.rider_kg
     sets = [parse_assignment(text) for text in args.try_set or ()]
+    bike = spec.resolve(args.bike)  # the bike file read once: the decoding, the tries and the advice take it
     tries = []  # checked before any work: a bad file, key or value is one line and nothing written
     if args.try_file or sets:
-        tries = [advise.trial(args.bike, over or None, other, sets) for other in (args.try_file or [None])]
-    record = ride_record(args.ride, args)
+        tries = [advise.trial(bike, over or None, other, sets) for other in (args.try_file or [None])]
+    record = ride_record(args.ride, args, bike)
     result = Progress("advise").around(
-        lambda progress: advise.advise(record, args.bike, over or None, args.duration, progress, args.workers,
+        lambda progress: advise.advise(record, bike, over or None, args.duration, progress, args.workers,
                                        tries=tries))
     written = result.write(args.out)
     checks = result.reconstruction["checks"]
@@ -43,13 +43,11 @@ def cmd_advise(args) -> int:
 
 def add_parser(sub) -> None:
     from mtbmj.cli.bike import add_bike_sets
+    from mtbmj.cli.telemetry import add_ride, add_sensor_spans
 
     p = sub.add_parser("advise", help="setup advice: candidate settings simulated over the ride's reconstructed "
                                       "terrain, and the change recommended")
-    p.add_argument("ride", type=Path, metavar="RIDE",
-                   help="SST v3 or v2 recording or a travel CSV with both ends, or 'example' (the shipped 00649.SST)")
-    p.add_argument("--bike", required=True, metavar="BIKE",
-                   help="the recorded bike with the settings it was ridden with (preset or bike file)")
+    add_ride(p, "the recorded bike with the settings it was ridden with (preset or bike file)")
     p.add_argument("--rider-kg", type=float, metavar="KG", help="the whole rider's mass (rider.mass_kg)")
     add_bike_sets(p)  # the settings as ridden, where they differ from the bike file
     p.add_argument("--duration", type=float, metavar="S", help="advise on the ride's first S seconds only")
@@ -61,7 +59,6 @@ def add_parser(sub) -> None:
                         "or a bike key (shock.spring_rate_lb_per_in=500, rider.mass_kg=80); over --try's file")
     p.add_argument("--workers", type=int, default=2, metavar="N",
                    help="processes the candidate runs spread over (default 2)")
-    p.add_argument("--fork-max-mm", type=float, help="fork travel the recording's sensor spans (default: the bike's)")
-    p.add_argument("--shock-max-mm", type=float, help="shock stroke the sensor spans (default: the bike's)")
+    add_sensor_spans(p)
     add_out(p, "out/advise")
     p.set_defaults(func=cmd_advise)

@@ -29,7 +29,7 @@ def cmd_bike(args) -> int:
     result = Progress(f"bike {args.bike} over {args.scenario}", not args.quiet).around(
         lambda progress: run_bike(args.bike, args.scenario, args.speed, args.duration, args.drive, args.start_m,
                                   progress, lock=tuple(k.strip() for k in args.lock.split(",")) if args.lock else (),
-                                  rear_tire=not args.lift_rear, overrides=overrides, seated=args.seated,
+                                  rear_tire=not args.lift_rear, overrides=overrides, seated=args.seated, rider=args.rider,
                                   pedal=pedal))
     extra = None
     if args.ride is not None:  # beside a real ride
@@ -122,6 +122,11 @@ def add_parser(subparsers) -> None:
     p.add_argument("--lift-rear", action="store_true", dest="lift_rear",
                    help="take the rear tire off: the bike on its front wheel alone (needs --lock pitch; with "
                         "--lock rear,pitch,rider it is the rolling front end's rig)")
+    p.add_argument("--rider", choices=("passive", "active"), default="passive",
+                   help="passive (default): the rider a rigid body on spring-damper legs and arms; active: an "
+                        "articulated rider (de Leva's segments, hip, knee, ankle, shoulder and elbow torques within "
+                        "human strength) that rides: attack position, hips back ahead of a drop, legs and arms "
+                        "taking the landing (docs/bike.md)")
     p.add_argument("--seated", action="store_true",
                    help="the rider seated on the saddle, held rigid on the frame (rider.seated_com_mm)")
     add_pedal(p)

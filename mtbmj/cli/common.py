@@ -180,6 +180,14 @@ def add_out(p, default: str, what: str = "output directory") -> None:
     p.set_defaults(out_folder=True)
 
 
+def write_and_say(result, out) -> int:
+    """Write ``result`` (a result object with ``write(out)`` and ``line()``) to ``out`` and print its
+    line with what was written: what every command that writes one result ends with; exit status 0."""
+    written = result.write(out)
+    print(f"{result.line()}; wrote {len(written)} files to {out}")
+    return 0
+
+
 def out_path(text: str) -> Path:
     """An ``--out`` name: refused when it holds a line break or another control character,
     which would break every line that names it."""

@@ -2,16 +2,14 @@
 ``mtbmj bike``) overlaid on shared axes, and a table of their summaries' differences."""
 from __future__ import annotations
 
-from mtbmj.cli.common import add_out
+from mtbmj.cli.common import add_out, write_and_say
 
 
 def cmd_compare(args) -> int:
     from mtbmj.readout.compare import compare_runs
 
     comparison = compare_runs(args.runs)
-    written = comparison.write(args.out)
-    print(f"{comparison.line()}; wrote {len(written)} files to {args.out}")
-    return 0
+    return write_and_say(comparison, args.out)
 
 
 def add_parser(sub) -> None:

@@ -3,16 +3,14 @@ preload, top-out spring, bumper, an air fork's spacer progression, the static sa
 curve (force against velocity, friction, one line per click), as PNG and CSV."""
 from __future__ import annotations
 
-from mtbmj.cli.common import add_out, overrides
+from mtbmj.cli.common import add_out, overrides, write_and_say
 
 
 def cmd_curve(args) -> int:
     from mtbmj.readout.curves import fork_curves
 
     curves = fork_curves(args.config, overrides(args.set), args.max_velocity_mm_per_s)
-    written = curves.write(args.out)
-    print(f"{curves.line()}; wrote {len(written)} files to {args.out}")
-    return 0
+    return write_and_say(curves, args.out)
 
 
 def add_parser(sub) -> None:

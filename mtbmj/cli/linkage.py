@@ -2,16 +2,14 @@
 anti-rise and pedal kickback over the wheel travel (``mtbmj.bike.linkage``)."""
 from __future__ import annotations
 
-from mtbmj.cli.common import add_out, overrides
+from mtbmj.cli.common import add_out, overrides, write_and_say
 
 
 def cmd_linkage(args) -> int:
     from mtbmj.bike import rear_end as linkage
 
     result = linkage.for_bike(args.bike, overrides(args.set), args.chainring, args.cog, args.com_height_mm)
-    written = result.write(args.out)
-    print(f"{result.line()}; wrote {len(written)} files to {args.out}")
-    return 0
+    return write_and_say(result, args.out)
 
 
 def add_parser(sub) -> None:

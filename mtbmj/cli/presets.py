@@ -13,8 +13,8 @@ def _bike_lines(ref: str) -> list[str]:
     from mtbmj.bike import spec
 
     _toml_value = json.dumps  # numbers, lists, strings and booleans are written alike in TOML
-    table, _ = spec.read_table(ref)
-    bike = spec.load(ref)  # checked as a run would check it
+    resolved = spec.resolve(ref)  # read once, checked as a run would check it
+    table, bike = resolved.read, resolved.spec
     lines = []
     for section, values in table.items():
         if not isinstance(values, dict):

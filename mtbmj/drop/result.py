@@ -76,18 +76,6 @@ class DropResult(RunOutput):
 
     def plot(self, axes=None, label: str | None = None, **line_kwargs):
         """Sled, fork and tire displacement histories on three stacked axes; returns the figure."""
-        if axes is None:
-            from matplotlib.figure import Figure
-
-            fig = Figure(figsize=(7, 7), layout="constrained")
-            axes = fig.subplots(3, 1, sharex=True)
-        else:
-            fig = axes[0].figure
-        label = label or f"{self.name} ({self.engine})"
-        for ax, column in zip(axes, DISPLACEMENTS):
-            ax.plot(self.time, self.signals[column], label=label, **line_kwargs)
-            ax.set_ylabel(column.replace("_mm", " [mm]"))
-            ax.grid(True, alpha=0.3)
-        axes[-1].set_xlabel("time [s]")
-        axes[0].legend(fontsize="small", ncol=2)
-        return fig
+        return self.plot_stacked([(c, c.replace("_mm", " [mm]")) for c in DISPLACEMENTS], self.signals, axes,
+                                 label or f"{self.name} ({self.engine})", {"fontsize": "small", "ncol": 2},
+                                 **line_kwargs)

@@ -6,8 +6,9 @@ SST version 3, little-endian (format in ``mtbmj/data/sst/README.md``): a 16-byte
 record marks an absent sensor; a trailing partial record is ignored.
 
 Counts become travel through the sensor linkages of the recorded bike ("Clash 2022", the
-defaults here; pass your own ``IsoscelesTriangle``/``Triangle``/``LeverageCurve`` and travel
-maxima for another bike):
+defaults here; pass your own ``IsoscelesTriangle``/``Triangle``/leverage curve (``LeverageCurve``
+gives one: the one leverage class, ``mtbmj.measured.leverage.Leverage``) and travel maxima for
+another bike):
 
 - fork ("as5600-isosceles-triangle"): travel = max - 2 arm cos(2 pi s / 4096 + a0),
   a0 = acos(max / (2 arm)); counts above 1024 are the sensor wrapping just below zero -> 0;
@@ -36,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from mtbmj.measured import metrics as ride_metrics
+from mtbmj.measured.leverage import Leverage
 from mtbmj.errors import MtbmjError
 from mtbmj.textfile import read_bytes
 
@@ -157,53 +159,15 @@ CLASH_2022_LEVERAGE_RATIO = (
 )
 
 
-@dataclass(frozen=True)
-class LeverageCurve:
-    """Leverage ratio (wheel travel per shock stroke) against rear wheel travel."""
-
-    wheel_mm: tuple = tuple(float(i) for i in range(len(CLASH_2022_LEVERAGE_RATIO)))
-    ratio: tuple = CLASH_2022_LEVERAGE_RATIO
-
-    def __post_init__(self):
-        w, r = np.asarray(self.wheel_mm, float), np.asarray(self.ratio, float)
-        if w.ndim != 1 or w.shape != r.shape or w.size < 2 or np.any(np.diff(w) <= 0) or np.any(r <= 0):
-            raise TelemetryError("leverage curve: needs increasing wheel travel and positive ratios of equal length")
-
-    # The ratio is linear in the wheel travel on each piece, as the bike reads its table
-    # (``mtbmj.bike.spec.Leverage``): ds = dw / r(w), so on a piece from (w0, r0) with slope b the
-    # stroke is s0 + ln(1 + b x / r0) / b (x / r0 where b = 0), and the inverse
-    # x = r0 (exp(b (s - s0)) - 1) / b: exact, both ways.
-    def _stroke_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        w, r = np.asarray(self.wheel_mm, float), np.asarray(self.ratio, float)
-        w = w - w[0]
-        h = np.diff(w)
-        b = np.diff(r) / h
-        flat = np.abs(b) * h < 1e-9 * r[:-1]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            piece = np.where(flat, h / r[:-1], np.log(r[1:] / r[:-1]) / np.where(flat, 1.0, b))
-        return w, np.concatenate(([0.0], np.cumsum(piece))), np.where(flat, 0.0, b)
-
-    def stroke_mm(self, wheel_travel_mm) -> np.ndarray:
-        w, s, b = self._stroke_table()
-        r = np.asarray(self.ratio, float)
-        x = np.asarray(wheel_travel_mm, dtype=float)
-        i = np.clip(np.searchsorted(w, x, side="right") - 1, 0, w.size - 2)
-        dx = np.clip(x - w[i], 0.0, None)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            inside = s[i] + np.where(b[i] == 0.0, dx / r[i], np.log1p(b[i] * dx / r[i]) / np.where(b[i] == 0.0, 1.0, b[i]))
-        beyond = s[-1] + (x - w[-1]) / r[-1]  # past the table: the last ratio holds
-        return np.where(x > w[-1], beyond, np.where(x < 0.0, x / r[0], inside))
-
-    def wheel_travel_mm(self, stroke_mm) -> np.ndarray:
-        w, s, b = self._stroke_table()
-        r = np.asarray(self.ratio, float)
-        x = np.asarray(stroke_mm, dtype=float)
-        i = np.clip(np.searchsorted(s, x, side="right") - 1, 0, s.size - 2)
-        ds = np.clip(x - s[i], 0.0, None)
-        with np.errstate(over="ignore", invalid="ignore"):
-            inside = w[i] + np.where(b[i] == 0.0, ds * r[i], r[i] * np.expm1(b[i] * ds) / np.where(b[i] == 0.0, 1.0, b[i]))
-        beyond = w[-1] + (x - s[-1]) * r[-1]
-        return np.where(x > s[-1], beyond, np.where(x < 0.0, x * r[0], inside))
+def LeverageCurve(wheel_mm=tuple(float(i) for i in range(len(CLASH_2022_LEVERAGE_RATIO))),
+                  ratio=CLASH_2022_LEVERAGE_RATIO) -> Leverage:
+    """The recorded bike's leverage ratio against rear wheel travel (mm; the Clash 2022's by default)
+    as the one leverage class, ``mtbmj.measured.leverage.Leverage`` (SI; ``stroke_mm`` and
+    ``wheel_travel_mm`` read it in mm); a curve that is not increasing and positive is refused."""
+    w, r = np.asarray(wheel_mm, float), np.asarray(ratio, float)
+    if w.ndim != 1 or w.shape != r.shape or w.size < 2 or np.any(np.diff(w) <= 0) or np.any(r <= 0):
+        raise TelemetryError("leverage curve: needs increasing wheel travel and positive ratios of equal length")
+    return Leverage(tuple(float(x) / 1e3 for x in w), tuple(float(x) for x in r))
 
 
 @dataclass(frozen=True)
@@ -284,7 +248,7 @@ class TelemetryRecord:
 
 def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_max_mm: float = SHOCK_STROKE_MAX_MM,
              front: IsoscelesTriangle = IsoscelesTriangle(), rear: Triangle = Triangle(),
-             leverage: LeverageCurve = LeverageCurve(), front_v2: HalfTurnIsosceles = V2_FORK,
+             leverage: Leverage = LeverageCurve(), front_v2: HalfTurnIsosceles = V2_FORK,
              rear_v2: HalfTurnIsosceles = V2_SHOCK) -> TelemetryRecord:
     """Read an SST v3 or v2 file into travel time series; every problem is one ``TelemetryError``
     line. A v2 file (no timestamp: 0) is decoded with ``front_v2``/``rear_v2`` and its ``notes``
@@ -355,7 +319,7 @@ CSV_JITTER = 0.01  # a time step may differ from the median step by at most this
 
 
 def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
-                    shock_max_mm: float = SHOCK_STROKE_MAX_MM, leverage: LeverageCurve = LeverageCurve()
+                    shock_max_mm: float = SHOCK_STROKE_MAX_MM, leverage: Leverage = LeverageCurve()
                     ) -> TelemetryRecord:
     """A ride given as a CSV of travel (any logger's export): a header naming ``time_s`` and one or
     more of ``fork_mm`` (fork travel), ``shock_mm`` (shock stroke) and ``rear_mm`` (rear wheel

@@ -8,7 +8,7 @@ the report are ``mtbmj.ride.advise``'s."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -304,12 +304,14 @@ def flat_metrics(d: dict, prefix: str = "") -> dict:
 class Trial:
     """A setting tried on the ride (``mtbmj advise --try FILE --try-set KEY=VALUE``): the bike file
     ``bike`` with ``overrides`` (the keys of :func:`mtbmj.bike.spec.load`), its ``label`` and the
-    ``settings`` as asked (``KEY: value``)."""
+    ``settings`` as asked (``KEY: value``); ``resolved``: that file resolved once
+    (:class:`mtbmj.bike.spec.ResolvedBike`), what its run takes."""
 
     label: str
     bike: str
     overrides: dict
     settings: dict
+    resolved: object = field(default=None, repr=False, compare=False)  # the file resolved (mtbmj.bike.spec.ResolvedBike)
 
 
 def compose_setting(bike, overrides) -> list[str]:
@@ -322,7 +324,7 @@ def compose_setting(bike, overrides) -> list[str]:
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        bike_run.setups(spec_mod.load(str(bike), overrides or None))
+        bike_run.setups(spec_mod.load(bike, overrides or None))
     return [str(w.message) for w in caught if issubclass(w.category, ConfigWarning)]
 
 
@@ -346,10 +348,12 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
         ref, over, what = str(other), {}, f"--try {other}"
         if not Path(ref).exists() and ref not in spec_mod.preset_names():
             raise ConfigError(f"--try {other}: no such bike file (nor a preset: {', '.join(spec_mod.preset_names())})")
-    else:
-        ref, over, what = str(bike), dict(overrides or {}), "--try-set"
+    else:  # the recorded bike: a ResolvedBike is not read again
+        ref, over, what = getattr(bike, "source", None) or str(bike), dict(overrides or {}), "--try-set"
     try:
-        spec = spec_mod.load(ref, over or None)
+        file = spec_mod.resolve(ref if other is not None else bike)  # the file as read, each setting over it
+        file = file.with_overrides(None) if file.overrides else file
+        spec = spec_mod.load(file, over)
     except ConfigError as exc:
         raise ConfigError(f"{what}: {exc}") from None
     settings = {}
@@ -382,11 +386,11 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
     if not sets and other is None:
         raise ConfigError("--try-set: nothing to try (give --try FILE or --try-set KEY=VALUE)")
     try:
-        base_notes = set(compose_setting(ref, {k: v for k, v in (overrides or {}).items()} if other is None else None))
+        base_notes = set(compose_setting(file, {k: v for k, v in (overrides or {}).items()} if other is None else {}))
     except ConfigError as exc:
         raise ConfigError(f"{what}: {exc}") from None
     try:
-        notes = compose_setting(ref, over)
+        notes = compose_setting(file, over)
     except ConfigError as exc:
         raise ConfigError(f"{what}{' ' + ', '.join(f'{k}={v}' for k, v in settings.items()) if settings else ''}: "
                           f"{exc}") from None
@@ -397,4 +401,4 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
     label = (Path(ref).name if other is not None else "recorded setting") + (
         (" with " if other is not None else ": ") + ", ".join(f"{k} = {v}" for k, v in settings.items())
         if settings else "")
-    return Trial(label, ref, over, settings)
+    return Trial(label, ref, over, settings, file)

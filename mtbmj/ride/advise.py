@@ -530,7 +530,8 @@ def _skip(adj: Adjuster, direction: str, value, exc) -> dict:
 def allowed(bike, candidates, merged) -> tuple[list, list]:
     """(the candidates ``(adjuster, direction, value)`` the part allows, the others as dicts naming
     why): each candidate's bike (``merged(adjuster.overrides(value))``, the recorded overrides with
-    the candidate's over them) loaded and its fork and shock composed, as its run would; one the
+    the candidate's over them; ``bike`` a file, a preset or a ``ResolvedBike``, which is not read
+    again) derived and its fork and shock composed, as its run would; one the
     part refuses (a click outside the measured range, a volume spacer that fills the air chamber,
     two adjusters whose summed effects leave the measured forces) is skipped, not fatal. Nothing is
     simulated here."""
@@ -544,7 +545,7 @@ def allowed(bike, candidates, merged) -> tuple[list, list]:
         try:
             with warnings.catch_warnings():  # the recorded setting's warnings were issued once already
                 warnings.simplefilter("ignore")
-                bike_run.setups(spec_mod.load(str(bike), merged(a.overrides(v))))
+                bike_run.setups(spec_mod.load(bike, merged(a.overrides(v))))  # a ResolvedBike: not read again
         except ConfigError as exc:
             skipped.append(_skip(a, d, v, exc))
         else:
@@ -554,8 +555,9 @@ def allowed(bike, candidates, merged) -> tuple[list, list]:
 
 def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
            tries=(), candidates: bool = True) -> Advice:
-    """Advice for ``record`` (a two-ended ``TelemetryRecord``) on ``bike`` (preset or file, its keys
-    ``overrides``); ``duration`` limits the simulated ride to its first seconds; the runs spread
+    """Advice for ``record`` (a two-ended ``TelemetryRecord``) on ``bike`` (preset, file or
+    ``mtbmj.bike.spec.ResolvedBike``: read once, here or before), its keys ``overrides``;
+    ``duration`` limits the simulated ride to its first seconds; the runs spread
     over ``workers`` processes. ``tries``: settings to try (:class:`Trial`, from :func:`trial`),
     simulated over the same terrain beside the recorded setting and predicted as the candidates are
     (``Advice.tries``); ``candidates`` False simulates the tried settings only (:func:`predict`)."""
@@ -576,6 +578,8 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
         if duration < MIN_SECONDS:
             raise AdviseError(f"--duration: {duration:g} s of {record.name} cannot support advice (at least "
                               f"{MIN_SECONDS:g} s; the ride is {length:.1f} s)")
+    bike = spec_mod.resolve(bike)  # the bike file read once: every run below derives its setting from it
+    bike = bike.with_overrides(None) if bike.overrides else bike
     rec = rc.reconstruct(record, bike, overrides)
     checks = rec.checks()
     if (checks["samples_checked_percent"] < MIN_CHECKED_PERCENT
@@ -588,7 +592,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     if not checks.get("passes", True):  # the rear predicted no better than a naive baseline (issue 51)
         raise RideNotDescribed(f"{record.name}: its reconstruction fails its own check: {checks['verdict']}; advice "
                                f"needs a model that beats both naive baselines, so it cannot predict a change")
-    spec = spec_mod.load(str(bike), overrides)
+    spec = spec_mod.load(bike, overrides)
     speed = float(rec.speed["speed_m_per_s"])
     ride_s = length if duration is None else min(length, float(duration))
     lead_s = 1.0 / speed  # the front axle reaches the ride's first metre
@@ -614,9 +618,10 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
         if progress is not None:
             progress(done[0] / n)
 
-    jobs = [(str(bike), base_over, terrain, speed, sim_s, "recorded setting", lead_s)]
-    jobs += [(str(bike), merged(a.overrides(v)), terrain, speed, sim_s, f"{a.label} {v:g}", lead_s) for a, d, v in todo]
-    jobs += [(tr.bike, tr.overrides, terrain, speed, sim_s, tr.label, lead_s) for tr in tries]
+    jobs = [(bike, base_over, terrain, speed, sim_s, "recorded setting", lead_s)]
+    jobs += [(bike, merged(a.overrides(v)), terrain, speed, sim_s, f"{a.label} {v:g}", lead_s) for a, d, v in todo]
+    jobs += [(tr.bike if tr.resolved is None else tr.resolved, tr.overrides, terrain, speed, sim_s, tr.label, lead_s)
+             for tr in tries]
     runs = [None] * len(jobs)
     if workers > 1 and len(jobs) > 1:
         from concurrent.futures import as_completed

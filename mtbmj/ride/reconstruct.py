@@ -280,14 +280,15 @@ class Reconstruction:
 
 def reconstruct(record, bike, overrides=None) -> Reconstruction:
     """``record`` (a ``mtbmj.measured.telemetry.TelemetryRecord`` with both ends) through the bike
-    ``bike`` (preset or file; ``overrides`` its keys): see the module doc."""
+    ``bike`` (preset, file or ``mtbmj.bike.spec.ResolvedBike``, which is not read again; ``overrides``
+    its keys): see the module doc."""
     from mtbmj.bike import run as bike_run
     from mtbmj.bike import spec as spec_mod
 
     if record.fork_mm is None or record.rear_mm is None:
         raise ReconstructError(f"{record.name}: needs both ends' records (the rear meets what the front met)")
     record = record.decimated(RATE_HZ)  # a 5 kHz version-2 record read at 1 kHz, low-passed first
-    spec = spec_mod.load(str(bike), overrides)
+    spec = spec_mod.load(bike, overrides)  # a ResolvedBike is derived again, not read
     t = np.asarray(record.time_s, float)
     check_length(t, spec.front_axle[0] - spec.rear_axle[0], WINDOW_S, record.name)  # before any work
     dt = float(t[1] - t[0])

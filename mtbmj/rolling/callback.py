@@ -13,6 +13,26 @@ from mtbmj.controllers.drive import Drive
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, PatchSearch, RadialTire
 
 
+def find_indices(cb, front, fork_law) -> None:
+    """Set on the callback ``cb`` (this module's or its compiled twin) what it reads of the front
+    end's model: the chassis' and fork's qpos and qvel indices (``xq``/``xv``, ``zq``/``zv``,
+    ``fq``/``fv``), its actuators' ids (the probes: deflection and touch) and the friction state's activation index, whether the law
+    has that state, and the steering axis' cosine and sine."""
+    m = front.model
+    j = lambda name: (int(m.joint(name).qposadr[0]), int(m.joint(name).dofadr[0]))  # noqa: E731
+    cb.xq, cb.xv = j("chassis_x")
+    cb.zq, cb.zv = j("chassis_z")
+    cb.fq, cb.fv = j("fork")
+    a = lambda name: int(m.actuator(name).id)  # noqa: E731
+    cb.a_state, cb.a_fork = a("friction_state"), a("fork_force")
+    cb.a_dp, cb.a_dv, cb.a_tx, cb.a_tz = a("drive_position"), a("drive_velocity"), a("tire_x"), a("tire_z")
+    cb.a_probe = a("tire_deflection_probe")
+    cb.a_touch = a("tire_touch_probe")
+    cb.act_index = int(m.actuator_actadr[cb.a_state])
+    cb.has_state = fork_law.has_state
+    cb.cos, cb.sin = front.axis
+
+
 class RollCallback:
     """Fork law + radial tire + speed servo reference, written into ``ctrl`` each step.
 
@@ -35,17 +55,7 @@ class RollCallback:
         self.speed = float(speed)
         self.x_ref0 = float(x_ref0)
         self.refresh = float(refresh)
-        j = lambda name: (int(m.joint(name).qposadr[0]), int(m.joint(name).dofadr[0]))
-        self.xq, self.xv = j("chassis_x")
-        self.zq, self.zv = j("chassis_z")
-        self.fq, self.fv = j("fork")
-        a = lambda name: int(m.actuator(name).id)
-        self.a_state, self.a_fork = a("friction_state"), a("fork_force")
-        self.a_dp, self.a_dv, self.a_tx, self.a_tz = a("drive_position"), a("drive_velocity"), a("tire_x"), a("tire_z")
-        self.a_probe = a("tire_deflection_probe")
-        self.act_index = int(m.actuator_actadr[self.a_state])
-        self.has_state = fork_law.has_state
-        self.cos, self.sin = front.axis
+        find_indices(self, front, fork_law)
         self.search = PatchSearch(tire)
         self.patch_time = 0.0
         self.next_refresh = -math.inf
@@ -105,6 +115,7 @@ class RollCallback:
             patches = [(qx + sx * dt, qz + sz * dt, nx, nz, sx, sz) for qx, qz, nx, nz, sx, sz in patches]
         fx, fz, deflection, _, _ = self.tire.force(cx, cz, vx, vz, patches)
         ctrl[self.a_probe] = deflection
+        ctrl[self.a_touch] = self.tire.shallowest(cx, cz, patches, deflection)
         ctrl[self.a_tx] = fx
         ctrl[self.a_tz] = fz
         if self.drive.mode == "servo":  # the ideal PD servo on x0 + v t (its actuators' own forces)
@@ -116,4 +127,4 @@ class RollCallback:
             ctrl[self.a_dv] = vx + self.drive.force(self.speed, vx) / self.drive.kv
 
 
-__all__ = ["RollCallback"]
+__all__ = ["RollCallback", "find_indices"]

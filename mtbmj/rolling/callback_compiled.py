@@ -53,6 +53,7 @@ from mtbmj.controllers.lawcodes import FLOAT_WIDTH as LAW_FLOAT_WIDTH, INT_WIDTH
 from mtbmj.controllers.lawcodes import UnsupportedLaw, flatten
 from mtbmj.controllers.native_data import Registry, mjdata_layout, verify
 from mtbmj.controllers.stops import STIFFENING_M
+from mtbmj.runpath.callbacks import CompiledShell
 
 MAX_PATCHES = 64
 SLOTS = 64
@@ -61,7 +62,7 @@ SLOTS = 64
 (R_MODEL, R_XQ, R_XV, R_ZQ, R_ZV, R_FQ, R_FV, R_A_STATE, R_A_FORK, R_A_DP, R_A_DV, R_A_TX, R_A_TZ, R_A_PROBE,
  R_ACT, R_HAS_STATE, R_DRUM, R_MOVING, R_NPTS, R_TX, R_TZ, R_SCRATCH, R_ISCRATCH, R_CAP, R_CALLS, R_REFRESHES,
  R_NPATCH, R_OVERFLOW, R_SCALED,
- R_NS, R_SX, R_SZ, R_VALID) = range(33)  # the straight stretches (PatchSearch): corners, and whether kept
+ R_NS, R_SX, R_SZ, R_VALID, R_A_TOUCH) = range(34)  # the straight stretches (PatchSearch): corners, and whether kept
 INT_WIDTH = 36
 # float row of a slot: parameters, state, then MAX_PATCHES x (qx, qz, nx, nz, sx, sz)
 (F_X0, F_Z0, F_L, F_COS, F_SIN, F_RADIUS, F_RATE, F_DAMPING, F_MARGIN, F_SPEED, F_XREF0, F_REFRESH, F_DRUM_R,
@@ -432,6 +433,7 @@ if _numba is not None:
         fx = 0.0
         fz = 0.0
         deepest = -math.inf
+        shallowest = math.inf
         for p in range(npatch):
             o = F_PATCHES + 6 * p
             qx, qz, nx, nz, sx, sz = F[o], F[o + 1], F[o + 2], F[o + 3], F[o + 4], F[o + 5]
@@ -442,6 +444,8 @@ if _numba is not None:
             rate = -((vx - sx) * nx + (vz - sz) * nz)
             if dp > deepest:
                 deepest = dp
+            if dp < shallowest:
+                shallowest = dp
             if dp > 0.0:
                 f = tire_force(k, b, dp, rate)
                 if f < 0.0:
@@ -454,6 +458,7 @@ if _numba is not None:
         if deepest == -math.inf:
             deepest = r - F[F_RADIUS] - F[F_MARGIN]
         ctrl[I[R_A_PROBE]] = deepest
+        ctrl[I[R_A_TOUCH]] = deepest if shallowest == math.inf else shallowest
         ctrl[I[R_A_TX]] = fx
         ctrl[I[R_A_TZ]] = fz
         if F[F_DRIVE] == 0.0:  # controllers.drive: the ideal servo on x0 + v t
@@ -526,7 +531,7 @@ def _int_field(index: int, doc: str):
     return property(get, set, doc=doc)
 
 
-class CompiledRollCallback(ctypes._CFuncPtr):
+class CompiledRollCallback(CompiledShell, ctypes._CFuncPtr):
     """Compiled counterpart of ``mtbmj.rolling.frontend.RollCallback`` (same constructor, same attributes):
     a C function pointer for ``mujoco.set_mjcb_control`` / ``controllers.installed`` that writes
     the fork force, the LuGre state rate, the tire force and deflection probe and the speed
@@ -541,6 +546,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
     _flags_ = ctypes._FUNCFLAG_CDECL
     _argtypes_ = (ctypes.c_void_p, ctypes.c_void_p)
     _restype_ = None
+    registry = REGISTRY
 
     def __new__(cls, front, fork_law, tire, speed, x_ref0, refresh=None, drive=None):
         reason = unavailable_reason()
@@ -551,6 +557,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
     def __init__(self, front, fork_law, tire, speed, x_ref0, refresh=None, drive=None):
         from mtbmj.rolling import terrain as terrain_mod
         from mtbmj.rolling import tire as tire_model
+        from mtbmj.rolling.callback import find_indices
 
         law_ints, law_floats = flatten(fork_law)  # UnsupportedLaw for a law with no compiled form
         if type(tire) is not tire_model.RadialTire:
@@ -563,17 +570,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         self._model = m  # keeps the mjModel (and so its address) alive while the slot is used
         self._address = m._address
         self.front, self.law, self.tire = front, fork_law, tire
-        j = lambda name: (int(m.joint(name).qposadr[0]), int(m.joint(name).dofadr[0]))  # noqa: E731
-        self.xq, self.xv = j("chassis_x")
-        self.zq, self.zv = j("chassis_z")
-        self.fq, self.fv = j("fork")
-        a = lambda name: int(m.actuator(name).id)  # noqa: E731
-        self.a_state, self.a_fork = a("friction_state"), a("fork_force")
-        self.a_dp, self.a_dv, self.a_tx, self.a_tz = a("drive_position"), a("drive_velocity"), a("tire_x"), a("tire_z")
-        self.a_probe = a("tire_deflection_probe")
-        self.act_index = int(m.actuator_actadr[self.a_state])
-        self.has_state = fork_law.has_state
-        self.cos, self.sin = front.axis
+        find_indices(self, front, fork_law)  # what it reads of the model, as RollCallback
         if drum:
             self._ta = np.ascontiguousarray(ter.polar[:, 0], dtype=np.float64)
             self._tb = np.ascontiguousarray(ter.polar[:, 1], dtype=np.float64)
@@ -595,6 +592,7 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         ints[[R_XQ, R_XV, R_ZQ, R_ZV, R_FQ, R_FV]] = [self.xq, self.xv, self.zq, self.zv, self.fq, self.fv]
         ints[[R_A_STATE, R_A_FORK, R_A_DP, R_A_DV, R_A_TX, R_A_TZ, R_A_PROBE, R_ACT]] = [
             self.a_state, self.a_fork, self.a_dp, self.a_dv, self.a_tx, self.a_tz, self.a_probe, self.act_index]
+        ints[R_A_TOUCH] = self.a_touch
         ints[R_HAS_STATE] = int(bool(self.has_state))
         ints[R_DRUM], ints[R_MOVING] = int(drum), int(bool(ter.moving))
         ints[R_NPTS], ints[R_CAP] = n, cap
@@ -661,10 +659,6 @@ class CompiledRollCallback(ctypes._CFuncPtr):
         rows = _FLOATS[self.slot, F_PATCHES:F_PATCHES + 6 * n].reshape(n, 6)
         return [tuple(float(v) for v in row) for row in rows]
 
-    @property
-    def active(self) -> bool:
-        return REGISTRY.live(self.slot, self._address) and self._finalizer.alive
-
     def reset(self) -> None:
         """Forget the patches: the next step recomputes them (RollCallback.reset)."""
         _INTS[self.slot, R_NPATCH] = 0
@@ -678,19 +672,9 @@ class CompiledRollCallback(ctypes._CFuncPtr):
     def axle_state(self, qpos, qvel):
         return self.front.axle_state(qpos, qvel, (self.xq, self.zq, self.fq, self.xv, self.zv, self.fv))
 
-    @property
-    def address(self) -> int:
-        return ctypes.cast(self, ctypes.c_void_p).value
-
-    def __call__(self, m, d):
-        """Call the compiled function from Python (as ``RollCallback(m, d)``)."""
-        super().__call__(m._address, d._address)
-
-    def close(self) -> None:
-        """Free the registry slot now (also done when the object is collected)."""
-        if self._finalizer.alive:
-            self._closed = {i: int(_INTS[self.slot, i]) for i in (R_CALLS, R_REFRESHES, R_OVERFLOW)}
-            self._finalizer()
+    def counters(self) -> dict:
+        """The slot's counters (kept by ``close``)."""
+        return {i: int(_INTS[self.slot, i]) for i in (R_CALLS, R_REFRESHES, R_OVERFLOW)}
 
     def __repr__(self):
         return f"<CompiledRollCallback slot={getattr(self, 'slot', None)} law={getattr(self, 'law', None)!r}>"

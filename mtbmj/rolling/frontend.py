@@ -308,10 +308,12 @@ def default_duration(p: Prepared) -> float:
     return max(1.0, p.terrain.length / p.speed)
 
 
-def simulate(p: Prepared, duration: float, progress=None):
+def simulate(p: Prepared, duration: float, progress=None, grid: list | None = None):
     """(states (n+1, nstate) incl. t = 0, sensordata (n, nsensor) of each step's start state), on
     the shared run path (``mtbmj.runpath.loop.chunked``) at the coarse step, stepped again at the
-    fine step where :class:`_Refine` finds a stop, the rim or the tire's ramp within reach.
+    fine step where :func:`refinement` finds a stop, the rim or the tire's ramp within reach; a fine
+    stretch's rows are at the fine step (``grid``, a list, receives the mask of the rows on the
+    coarse grid).
 
     If the compiled callback met more contact patches than it holds (``overflowed``), the run is
     redone on the Python path (``p.callback`` becomes that ``RollCallback``), with a warning."""
@@ -319,50 +321,42 @@ def simulate(p: Prepared, duration: float, progress=None):
         p.callback = _python_twin(p.callback)
         p.callback.bind(p.data)
 
-    return callbacks.rerun_on_python(p.front.model, p.data, lambda: _simulate(p, duration, progress),
+    def run():
+        if grid is not None:
+            grid.clear()  # a rerun on the Python path replaces the first run's mask
+        return _simulate(p, duration, progress, grid)
+
+    return callbacks.rerun_on_python(p.front.model, p.data, run,
                                      lambda: getattr(p.callback, "overflowed", False), to_python, "rolling")
 
 
-@dataclass
-class _Refine:
-    """The front end's refinement plan (``mtbmj.runpath.loop.Refinement``, as the bike's): a chunk
+def refinement(p: Prepared) -> loop.Refinement:
+    """The front end's refinement (``mtbmj.runpath.loop.Refinement``, the bike's kind): a chunk
     stepped coarse is looked at after the fact and its stretch within reach of a fork stop, the rim
     or the tire's touchdown, lift-off and damping ramp (its first ``TIRE_DAMPING_DEPTH_M``, where
-    the force's slope changes fastest) (``steprule.reach_span``) stepped again at the fine step: on
+    the force's slope changes fastest) at its deepest patch or at its shallowest (``tire_touch``: a
+    square edge's corner touching down while the tread is deep on the flat) (``steprule.reach_span``)
+    stepped again at the fine step, whose rows are kept (``fine_rows``): on
     a 20 mm washboard at 5 m/s the tire lightens to 0.7 mm, where the coarse step alone leaves the
-    fork 0.06 mm from the fine step's travel."""
-
-    p: Prepared
-    fork_col: int
-    deflection_col: int
-    min_steps: int = loop.FINE_MIN_STEPS
-    max_chunk: int = loop.REFINE_CHUNK
-
-    @property
-    def substeps(self) -> int:
-        return self.p.setup.substeps
-
-    def span(self, states, sensors):
-        s = self.p.setup
-        rim = s.tire.rim.max_deflection if s.tire.rim is not None else math.inf
-        deflection = sensors[:, self.deflection_col]
-        return steprule.reach_span([(states[:, self.fork_col], steprule.stop_zone(s.fork.spring),
-                                     steprule.REACH_MARGIN_M),
-                                    (deflection, (-math.inf, rim), steprule.REACH_MARGIN_M),
-                                    (deflection, (0.0, TIRE_DAMPING_DEPTH_M), steprule.REACH_MARGIN_M, "inside")])
-
-    def before_fine(self) -> None:
-        self.p.callback.reset()  # the patches of the chunk's end: the fine pass searches afresh
+    fork 0.06 mm from the fine step's travel. Before a fine stretch the callback searches its
+    patches afresh (they are the chunk's end's)."""
+    s, model = p.setup, p.front.model
+    sensor = lambda name: int(model.sensor_adr[model.sensor(name).id])  # noqa: E731
+    rim = s.tire.rim.max_deflection if s.tire.rim is not None else math.inf
+    margin, ramp = steprule.REACH_MARGIN_M, (0.0, TIRE_DAMPING_DEPTH_M)
+    watches = (loop.Watch("state", 1 + int(model.joint("fork").qposadr[0]), steprule.stop_zone(s.fork.spring), margin),
+               loop.Watch("sensor", sensor("tire_deflection"), (-math.inf, rim), margin),
+               loop.Watch("sensor", sensor("tire_deflection"), ramp, margin, inside=True),
+               loop.Watch("sensor", sensor("tire_touch"), ramp, margin, inside=True))
+    return loop.Refinement(s.substeps, watches, lambda: p.callback.reset(), fine_rows=True)
 
 
-def _simulate(p: Prepared, duration: float, progress=None):
+def _simulate(p: Prepared, duration: float, progress=None, grid: list | None = None):
     steps = int(round(duration / p.setup.timestep))
     model = p.front.model
-    plan = _Refine(p, 1 + int(model.joint("fork").qposadr[0]),
-                   int(model.sensor_adr[model.sensor("tire_deflection").id]))
     with installed(p.callback):
-        return loop.chunked(model, p.data, steps, p.setup.timestep, "rolling", plan, progress,
-                            chunk=CHUNK, report_every=loop.REFINE_CHUNK)
+        return loop.chunked(model, p.data, steps, p.setup.timestep, "rolling", refinement(p), progress,
+                            chunk=CHUNK, report_every=loop.REFINE_CHUNK, grid=grid)
 
 
 def _signals(p: Prepared, states, sensors) -> dict[str, np.ndarray]:
@@ -449,21 +443,27 @@ def _drive_line(d: dict) -> str:
     return text
 
 
+def row_spans(times: np.ndarray, timestep: float) -> np.ndarray:
+    """Each row's span of time (s): to the next row's time, the last row ``timestep`` (a run's rows
+    are the coarse step apart, the fine step inside a fine stretch)."""
+    return np.append(np.diff(times), timestep) if times.size else np.empty(0)
+
+
 def _drive_summary(p: Prepared, raw: dict) -> dict:
     """What the drive did: its mode and limits, the speed it kept (set, lowest, highest), the work
     it put in (J, the integral of force x speed) and its peak forces, and the time its limit bound."""
     drive = p.callback.drive
     force, speed = raw["drive_force_N"], raw["speed_m_per_s"]
-    dt = p.setup.timestep
+    dt = row_spans(raw["time_s"], p.setup.timestep)  # each row's span: the fine step in a fine stretch
     out = {"mode": drive.mode, "set_speed_m_per_s": p.speed,
            "min_speed_m_per_s": float(speed.min()), "max_speed_m_per_s": float(speed.max()),
-           "work_J": float(np.sum(force * speed) * dt),
+           "work_J": float(np.sum(force * speed * dt)),
            "max_push_N": float(max(0.0, force.max())), "max_brake_N": float(max(0.0, -force.min())) + 0.0}
     if drive.mode == "rider":
         push = np.minimum(drive.push, np.where(speed > 0.0, drive.power / np.maximum(speed, 1e-12), np.inf))
         bound = (force >= push * (1.0 - 1e-9)) | (force <= -drive.brake * (1.0 - 1e-9))
         out.update(push_limit_N=drive.push, power_limit_W=drive.power, brake_limit_N=drive.brake,
-                   limit_bound_s=float(np.sum(bound) * dt))
+                   limit_bound_s=float(np.sum(bound * dt)))
     return out
 
 
@@ -483,7 +483,7 @@ def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
         "min_fork_mm": float(fork.min()),
         **end_of_travel(p.setup, fork, raw["fork_velocity_mm_per_s"], raw["tire_mm"], time_s=raw["time_s"]),
         "max_tire_mm": float(raw["tire_mm"].max()),
-        "tire_off_ground_s": float(np.sum(raw["tire_force_N"] <= 0.0) * p.setup.timestep),
+        "tire_off_ground_s": float(np.sum((raw["tire_force_N"] <= 0.0) * row_spans(raw["time_s"], p.setup.timestep))),
         "max_axle_force_x_N": float(raw["axle_force_x_N"].max()),
         "min_axle_force_x_N": float(raw["axle_force_x_N"].min()),
         "max_axle_force_z_N": float(raw["axle_force_z_N"].max()),
@@ -518,6 +518,7 @@ class RollResult(RunOutput):
     summary: dict
     wall_time_s: float
     info: dict = field(default_factory=dict)
+    grid_rows: np.ndarray | None = None  # the rows of ``raw`` on the coarse grid (None: all)
     COLUMNS = COLUMNS
     # difference(): the body's and the axle's heights, fork travel and tyre deflection in mm, the tyre's force in N
     COMPARED = ("body_z_mm", "axle_z_mm", "fork_mm", "tire_mm", "tire_force_N")
@@ -588,16 +589,20 @@ def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.setup.timestep, p.setup.sample_rate)
     start = time.perf_counter()
-    states, sensors = simulate(p, duration, progress)
+    grid: list = []
+    states, sensors = simulate(p, duration, progress, grid)
     wall = time.perf_counter() - start
     raw = _signals(p, states, sensors)
-    logged = measure.logged(p.setup, raw)
+    on_grid = grid[0]
+    logged = measure.logged(p.setup, {k: v[on_grid] for k, v in raw.items()})  # the logger reads the coarse grid
     summary = _summary(p, logged, raw)
-    info = {"steps": int(sensors.shape[0]), "timestep_s": p.setup.timestep, "integrator": p.setup.integrator,
+    info = {"steps": int(on_grid.sum()), "rows": int(sensors.shape[0]), "timestep_s": p.setup.timestep,
+            "fine_timestep_s": p.setup.timestep / p.setup.substeps, "integrator": p.setup.integrator,
             "callback": callback_kind(p.callback),
             "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
             "real_time_factor": duration / wall if wall > 0 else None}
-    return RollResult(p.setup.config.name, str(scenario), p.setup.config, logged, raw, summary, wall, info)
+    return RollResult(p.setup.config.name, str(scenario), p.setup.config, logged, raw, summary, wall, info,
+                      grid_rows=np.flatnonzero(on_grid))
 
 
 def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12",
@@ -610,10 +615,12 @@ def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12"
                        model_of=lambda p: p.front.model)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.setup.timestep, p.setup.sample_rate)
-    states, _ = simulate(p, duration)
+    grid: list = []
+    states, _ = simulate(p, duration, grid=grid)
     dt = p.setup.timestep
     every = max(1, int(round(1.0 / (fps * dt))))
-    rows = states[::every]
+    # the coarse grid's states: the start state of every row on the grid, and the last state
+    rows = states[np.append(np.flatnonzero(grid[0]), grid[0].size)][::every]
     nq = p.front.model.nq
     return p.front.model, rows[:, 0].copy(), rows[:, 1:1 + nq].copy()
 

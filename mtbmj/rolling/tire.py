@@ -116,6 +116,12 @@ class RadialTire:
             out.append((x, z, (cx - x) / dist, (cz - z) / dist, vx, vz))
         return out
 
+    def shallowest(self, cx, cz, patches, deepest):
+        """The radial depth (m) of the shallowest patch in ``patches`` (negative: its clearance),
+        ``deepest`` where there is none: where a new patch touches down beside a deep one."""
+        r = self.radius
+        return min((r - ((cx - qx) * nx + (cz - qz) * nz) for qx, qz, nx, nz, _, _ in patches), default=deepest)
+
     def force(self, cx, cz, vx, vz, patches):
         """(Fx, Fz, deepest deflection m, its rate m/s, active patches) on the axle."""
         r, k, b = self.radius, self.rate, self.damping

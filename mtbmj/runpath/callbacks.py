@@ -17,6 +17,36 @@ from mtbmj.errors import FallbackWarning
 KINDS = ("auto", "compiled", "python")
 
 
+class CompiledShell:
+    """The ctypes shell every compiled control callback shares, mixed in before ``ctypes._CFuncPtr``
+    (whose subclass names ``_flags_``, ``_argtypes_`` and ``_restype_`` itself, as ctypes requires):
+    its address, a call from Python as the Python twin's ``(m, d)``, whether it still holds its
+    ``registry`` slot (``controllers.native_data.Registry``) and its model, and ``close``, which
+    keeps ``counters()`` readable after the slot is freed."""
+
+    registry = None  # the rig's registry of compiled slots
+
+    @property
+    def active(self) -> bool:
+        return self.registry.live(self.slot, self._address) and self._finalizer.alive
+
+    @property
+    def address(self) -> int:
+        import ctypes
+
+        return ctypes.cast(self, ctypes.c_void_p).value
+
+    def __call__(self, m, d):
+        """Call the compiled function from Python (as the Python callback's ``(m, d)``)."""
+        super().__call__(m._address, d._address)
+
+    def close(self) -> None:
+        """Free the registry slot now (also done when the object is collected)."""
+        if self._finalizer.alive:
+            self._closed = self.counters()
+            self._finalizer()
+
+
 def choose(kind: str, python: Callable, load: Callable, compiled: Callable, what: str):
     """The callback of ``kind``: ``python()`` makes the Python one; ``load()`` imports the module of
     the compiled one (numba is imported on the first compiled run only: it has

@@ -24,7 +24,11 @@ the rest is stepped again from the last row kept. Two plans ride on this one int
   at ``min_steps`` and double while no stop is within reach.
 
 Of a fine rollout every ``substeps``-th state is kept with the sensors of the fine step that starts
-at the same instant, so the output stays on the coarse grid.
+at the same instant, so the output stays on the coarse grid; a :class:`Refinement` with
+``fine_rows`` (the rolling front end) keeps every fine state instead, so a fine stretch's output
+is at the fine step (a square edge's force rise is seen step by step, not in one coarse row):
+the rows' times are then not evenly spaced, and :func:`chunked` says which rows lie on the
+coarse grid (its ``grid`` mask), the rows every coarse-grid consumer (the logger) reads.
 """
 from __future__ import annotations
 
@@ -36,7 +40,7 @@ import numpy as np
 from mujoco import rollout
 
 from mtbmj import errors
-from mtbmj.runpath import guard
+from mtbmj.runpath import guard, steprule
 
 CHUNK = 10000  # steps per chunk where no refinement is planned
 REFINE_CHUNK = 1024  # coarse steps per chunk an after-the-fact plan looks at
@@ -68,16 +72,52 @@ class Plan(Protocol):
         """Re-parameterise the model between two steps (the drop's tire law)."""
 
 
-class Refinement(Protocol):
-    substeps: int  # fine steps per coarse step where a stop may act (1: never)
-    min_steps: int  # a fine stretch covers at least this many coarse steps
-    max_chunk: int  # coarse steps per chunk
+@dataclass(frozen=True)
+class Watch:
+    """One signal a :class:`Refinement` watches, one value per coarse row: column ``column`` of the
+    states (``source`` "state": time, qpos, qvel, ...) or of the sensors ("sensor"), mapped by ``of``
+    where the signal is not the column itself (the bike's shock stroke from its swingarm angle);
+    ``zone`` (low, high) with stops at or below ``low`` and at or above ``high``, or with ``inside``
+    a band from ``low`` to ``high`` (a tire's fast-changing force); ``margin`` the reach added
+    (``steprule.reach_span``)."""
+
+    source: str
+    column: int
+    zone: tuple[float, float]
+    margin: float
+    inside: bool = False
+    of: Callable | None = None
+
+    def signal(self, states: np.ndarray, sensors: np.ndarray):
+        x = (states if self.source == "state" else sensors)[:, self.column]
+        x = x if self.of is None else self.of(x)
+        return (x, self.zone, self.margin, "inside") if self.inside else (x, self.zone, self.margin)
+
+
+@dataclass
+class Refinement:
+    """A rig's refinement for the "redo after the fact" plan, the one object the rolling front end
+    and the bike both hand :func:`chunked`: the signals it watches (:class:`Watch`), the fine steps
+    per coarse step where one is within reach (``substeps``; 1: never), what to do before a fine
+    stretch (``before``: the callbacks' contact search made afresh), a fine stretch's minimum
+    length and the coarse chunk looked at (``min_steps``, ``max_chunk``), and whether every fine
+    state of a fine stretch is an output row (``fine_rows``: the front end's square-edge rise seen
+    step by step)."""
+
+    substeps: int
+    watches: tuple[Watch, ...]
+    before: Callable[[], None] = lambda: None
+    min_steps: int = FINE_MIN_STEPS
+    max_chunk: int = REFINE_CHUNK
+    fine_rows: bool = False
 
     def span(self, states: np.ndarray, sensors: np.ndarray) -> tuple[int, int] | None:
-        """The first and the last row of a coarse chunk within reach of a stop, or None."""
+        """The first and the last row of a coarse chunk within reach of a watched stop or band
+        (``steprule.reach_span``), or None."""
+        return steprule.reach_span([w.signal(states, sensors) for w in self.watches])
 
     def before_fine(self) -> None:
-        """Called before a fine stretch (e.g. the callback's contact search made afresh)."""
+        self.before()
 
 
 @dataclass
@@ -118,6 +158,7 @@ class AfterTheFact:
         self.fine = False
         self.next = refine.max_chunk
         self.stretch = 0
+        self.fine_rows = refine.fine_rows
 
     def size(self, remaining: int) -> int:
         if self.fine:
@@ -134,6 +175,8 @@ class AfterTheFact:
             self.counts.refined += n
             if guard.steps_clean(previous, fine_states):
                 states[:, 0] = previous[0] + self.timestep * np.arange(1, n + 1)  # the coarse grid's times
+                if self.fine_rows:  # the same times where a fine row is on the coarse grid
+                    fine_states[:, 0] = previous[0] + self.timestep * (np.arange(1, len(fine_states) + 1) / self.substeps)
                 self.data.time = states[-1, 0]
             return n, False, None
         clean = guard.steps_clean(previous, states)
@@ -152,19 +195,23 @@ class AfterTheFact:
         pass
 
 
-def roll(model, data, start, n: int, level: int, nstep: int | None = None, fine: bool = True):
+def roll(model, data, start, n: int, level: int, nstep: int | None = None, fine: bool = True,
+         all_sensors: bool = False):
     """(every ``level``-th state, the sensors of the fine steps starting on the output grid, all
     the states, or None where not ``fine``) of ``n`` output steps (or ``nstep`` fine steps) from
-    ``start`` (one state) at ``level`` fine steps each (the model's step is restored after)."""
+    ``start`` (one state) at ``level`` fine steps each (the model's step is restored after); with
+    ``all_sensors`` a fourth item, the sensors of every fine step."""
     if not fine:
         st, se = rollout.rollout(model, data, start[None, :], nstep=n)
-        return st[0], se[0], None
+        return (st[0], se[0], None, None) if all_sensors else (st[0], se[0], None)
     step = model.opt.timestep
     model.opt.timestep = step / level
     try:
         fs, fe = rollout.rollout(model, data, start[None, :], nstep=n * level if nstep is None else nstep)
     finally:
         model.opt.timestep = step
+    if all_sensors:
+        return fs[0, level - 1::level], fe[0, ::level], fs[0], fe[0]
     return fs[0, level - 1::level], fe[0, ::level], fs[0]
 
 
@@ -173,7 +220,7 @@ class Stopped(Exception):
 
 
 def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
-            sink: Callable[[int, np.ndarray, np.ndarray], None],
+            sink: Callable[..., None],
             progress: Callable[[float], None] | None = None, report_every: int = 0,
             limit: tuple[slice, float, str] | None = None,
             stop: Callable[[int, np.ndarray, np.ndarray], int | None] | None = None) -> int:
@@ -190,7 +237,10 @@ def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
     ``stop(first_step, states, sensors)`` (the rig's end of the run, e.g. the bike's crash) sees each
     stretch's finite rows before they are checked; where it names a row j, the rows up to j are
     kept and the run ends there: what MuJoCo did after that row (a warning, a divergence) is past
-    the end and not judged. Returns the output steps made."""
+    the end and not judged. Returns the output steps made.
+
+    Under a plan with ``fine_rows``, a fine stretch hands every fine row to
+    ``sink(first_step, states, sensors, fine=True)`` (``first_step`` still counts output steps)."""
     kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state = np.empty(mujoco.mj_stateSize(model, kind))
     mujoco.mj_getState(model, data, state, kind)
@@ -198,9 +248,11 @@ def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
     done = last_report = 0
     messages: list[str] = []
 
-    def accept(start, rows, sensor_rows):
-        at = t0 + (done + len(rows)) * timestep
+    def accept(start, rows, sensor_rows, fine=False):
+        at = t0 + (done + len(rows)) * timestep if not fine else rows[-1, 0]
         if stop is not None:
+            if fine:
+                raise ValueError("a plan with fine_rows cannot be stopped by a rig's stop")
             bad = np.flatnonzero(~np.all(np.isfinite(rows), axis=1))
             end = stop(done, rows[:int(bad[0]) if bad.size else len(rows)],
                        sensor_rows[:int(bad[0]) if bad.size else len(rows)])
@@ -214,7 +266,10 @@ def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
         guard.check(rig, data, messages, start, rows, at, model=model)
         if limit is not None and np.max(np.abs(rows[:, limit[0]])) > limit[1]:
             raise guard.diverged(rig, at, limit[2])
-        sink(done, rows, sensor_rows)
+        if fine:
+            sink(done, rows, sensor_rows, fine=True)
+        else:
+            sink(done, rows, sensor_rows)
 
     n = 0
     # numpy's overflow, division by zero and invalid value are divergence while the run steps (a
@@ -224,12 +279,18 @@ def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
             while done < steps:
                 n = plan.size(steps - done)
                 level = plan.substeps if plan.fine else 1
-                states, sensors, fine_states = roll(model, data, state, n, level, fine=plan.fine)
+                every_row = plan.fine and getattr(plan, "fine_rows", False)
+                states, sensors, fine_states, *fine_sensors = roll(model, data, state, n, level, fine=plan.fine,
+                                                                   all_sensors=every_row)
                 warned = bool(messages) or guard.first_warning(data) is not None
                 keep, switch, partial = plan.keep(state, states, fine_states, sensors, warned)
                 if keep < n and warned and guard.steps_clean(state, states[:keep]):
                     guard.clear_warnings(data, messages)  # the warning came from steps past the cut, thrown away
-                if keep:
+                if keep and every_row and keep == n and partial is None:
+                    accept(state, fine_states, fine_sensors[0], fine=True)
+                    state = states[keep - 1].copy()
+                    done += keep
+                elif keep:
                     accept(state, states[:keep], sensors[:keep])
                     state = states[keep - 1].copy()
                     done += keep
@@ -251,17 +312,23 @@ def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
 
 def chunked(model, data, steps: int, timestep: float, rig: str, refine: Refinement | None = None,
             progress: Callable[[float], None] | None = None, counts: Counts | None = None,
-            chunk: int = CHUNK, report_every: int = CHUNK, stop=None):
+            chunk: int = CHUNK, report_every: int = CHUNK, stop=None, grid: list | None = None):
     """(states (steps + 1, nstate), sensors (steps, nsensordata)) of ``steps`` steps of ``timestep``
     from ``data``'s current state, row 0 of the states the start (see the module doc), on
     :func:`stepped` with the :class:`Coarse` plan, or :class:`AfterTheFact` over ``refine``; where
-    ``stop`` (see :func:`stepped`) ended the run early, the rows up to its end."""
+    ``stop`` (see :func:`stepped`) ended the run early, the rows up to its end.
+
+    Where ``refine`` has ``fine_rows``, a fine stretch's every fine step is a row (more rows than
+    ``steps``); ``grid`` (a list) then receives the boolean mask of the sensor rows that lie on the
+    coarse grid (``steps`` of them: the rows the run would have without ``fine_rows``)."""
     counts = Counts() if counts is None else counts
     kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    plan = Coarse(chunk) if refine is None or refine.substeps == 1 else AfterTheFact(refine, timestep, data, counts)
+    if getattr(plan, "fine_rows", False):
+        return _chunked_rows(model, data, steps, timestep, rig, plan, progress, counts, report_every, stop, grid)
     states = np.empty((steps + 1, mujoco.mj_stateSize(model, kind)))
     mujoco.mj_getState(model, data, states[0], kind)
     sensors = np.empty((steps, model.nsensordata))
-    plan = Coarse(chunk) if refine is None or refine.substeps == 1 else AfterTheFact(refine, timestep, data, counts)
 
     def sink(first, rows, sensor_rows):
         states[first + 1: first + 1 + len(rows)] = rows
@@ -269,4 +336,32 @@ def chunked(model, data, steps: int, timestep: float, rig: str, refine: Refineme
         counts.stepped += len(rows)
 
     made = stepped(model, data, steps, timestep, rig, plan, sink, progress, report_every, stop=stop)
+    if grid is not None:
+        grid.append(np.ones(made, dtype=bool))
     return states[:made + 1], sensors[:made]
+
+
+def _chunked_rows(model, data, steps, timestep, rig, plan, progress, counts, report_every, stop, grid):
+    """:func:`chunked` where a fine stretch keeps its every fine row: the stretches gathered as they
+    come (their number is not known ahead), with each sensor row's place on the coarse grid."""
+    kind = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    start = np.empty(mujoco.mj_stateSize(model, kind))
+    mujoco.mj_getState(model, data, start, kind)
+    state_blocks, sensor_blocks, on_grid = [start[None, :]], [], []
+
+    def sink(first, rows, sensor_rows, fine=False):
+        state_blocks.append(rows.copy())
+        sensor_blocks.append(sensor_rows.copy())
+        mask = np.ones(len(rows), dtype=bool)
+        if fine:  # sensor row k starts fine step k: on the coarse grid every substeps-th from the first
+            mask[:] = False
+            mask[::plan.substeps] = True
+        on_grid.append(mask)
+        counts.stepped += int(mask.sum())
+
+    stepped(model, data, steps, timestep, rig, plan, sink, progress, report_every, stop=stop)
+    sensors = np.concatenate(sensor_blocks) if sensor_blocks else np.empty((0, model.nsensordata))
+    mask = np.concatenate(on_grid) if on_grid else np.empty(0, dtype=bool)
+    if grid is not None:
+        grid.append(mask)
+    return np.concatenate(state_blocks), sensors

@@ -22,7 +22,6 @@ runs never write into one folder at once.
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import errno
 import io
 import json
@@ -36,6 +35,9 @@ from typing import Iterable, Iterator, Mapping
 import numpy as np
 
 from mtbmj.errors import MtbmjError, check_interrupt
+from mtbmj.output.filesystem import (STAGE_PREFIX, TERMINATING, alive, clear_stale_stages,  # noqa: F401
+                                     exchange, existing_ancestor, fsync_dir, glob_escape, link_tree,
+                                     missing_ancestors, place_copy, register_stage, remove_empty, unregister_stage)
 
 # The record of what mtbmj wrote into a folder, and the folder's lock file: an existing folder is
 # replaced only when it is empty or every entry in it is named in its record (never by file names).
@@ -45,8 +47,6 @@ LOCK = ".lock"
 BOOKKEEPING = (LOCK, RECORD)  # what every output folder holds besides the result itself
 
 CSV_CHUNK_ROWS = 20000  # rows formatted at a time when a CSV is streamed to its file
-_RENAME_EXCHANGE = 2
-_AT_FDCWD = -100
 
 
 def csv_chunks(columns: Mapping[str, np.ndarray], header: str = "", rows: int = CSV_CHUNK_ROWS):
@@ -178,7 +178,7 @@ def check_file_target(path: str | Path, what: str = "--out", error: type[MtbmjEr
         if not _file_is_ours(path):
             raise error(f"{what} {path}: exists and was not written by mtbmj (or was changed since); "
                              f"not replacing it: choose another name or remove it")
-    parent = _existing_ancestor(path.parent)
+    parent = existing_ancestor(path.parent)
     if not parent.is_dir():
         raise error(f"{what} {path}: {parent} is not a directory")
     if not os.access(parent, os.W_OK | os.X_OK):
@@ -186,119 +186,6 @@ def check_file_target(path: str | Path, what: str = "--out", error: type[MtbmjEr
     if path.parent.is_dir():
         _clear_stale(path)
     return path
-
-
-# Where single files are staged while they are written: a private folder in the system's temporary
-# folder (``mtbmj-stage-PID-XXXX``), never beside the target, so that a run killed outright (SIGKILL)
-# leaves nothing beside the user's file; the next staging removes such folders of runs that are gone.
-STAGE_PREFIX = "mtbmj-stage-"
-TERMINATING = ("SIGTERM", "SIGHUP")  # signals whose default ends the process: staging is removed first
-_STAGED: dict[Path, bool] = {}  # what this process has staged now -> whether it is a folder
-_STAGED_LOCK = threading.Lock()
-_PREVIOUS_HANDLERS: dict = {}
-_STAGE_OWNER = {"pid": None}  # the process that staged (a worker forked meanwhile inherits the handler, not the stages)
-
-
-def _remove_staged(path: Path) -> None:
-    try:
-        if path.is_dir() and not path.is_symlink():
-            shutil.rmtree(path, ignore_errors=True)
-        else:
-            path.unlink(missing_ok=True)
-    except OSError:
-        pass
-
-
-def _on_terminate(signum, frame) -> None:
-    """SIGTERM or SIGHUP while something is staged: remove it, then end as the signal would have."""
-    import signal
-
-    if os.getpid() == _STAGE_OWNER["pid"]:
-        for path in list(_STAGED):
-            _remove_staged(path)
-    _STAGED.clear()
-    signal.signal(signum, signal.SIG_DFL)
-    os.kill(os.getpid(), signum)
-
-
-def _register_stage(path: Path, folder: bool) -> None:
-    """Remember ``path`` as staged; the first one installs the terminating signals' handler (in the
-    main thread, where the signal's action is still the default: never over a caller's own)."""
-    import signal
-
-    with _STAGED_LOCK:
-        first = not _STAGED
-        _STAGED[path] = folder
-        _STAGE_OWNER["pid"] = os.getpid()
-        if first and threading.current_thread() is threading.main_thread():
-            for name in TERMINATING:
-                number = getattr(signal, name, None)
-                if number is not None and signal.getsignal(number) == signal.SIG_DFL:
-                    _PREVIOUS_HANDLERS[number] = signal.signal(number, _on_terminate)
-
-
-def _unregister_stage(path: Path) -> None:
-    import signal
-
-    with _STAGED_LOCK:
-        _STAGED.pop(path, None)
-        if not _STAGED and threading.current_thread() is threading.main_thread():
-            for number, previous in list(_PREVIOUS_HANDLERS.items()):
-                if signal.getsignal(number) is _on_terminate:
-                    signal.signal(number, previous)
-                del _PREVIOUS_HANDLERS[number]
-
-
-def _clear_stale_stages() -> None:
-    """Remove private staging folders (``STAGE_PREFIX``PID-*) of this user's runs that are gone."""
-    import tempfile
-
-    root = Path(tempfile.gettempdir())
-    try:
-        candidates = list(root.glob(f"{_glob_escape(STAGE_PREFIX)}*"))
-    except OSError:
-        return
-    for path in candidates:
-        pid = path.name[len(STAGE_PREFIX):].split("-", 1)[0]
-        try:
-            mine = path.is_dir() and not path.is_symlink() and path.stat().st_uid == os.getuid()
-        except OSError:
-            continue
-        if mine and pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
-            shutil.rmtree(path, ignore_errors=True)
-
-
-def _place_copy(stage: Path, path: Path, replace: bool) -> None:
-    """Put ``stage`` (in the private staging folder) at ``path``: by a link or rename where both are on
-    one file system, else by a copy beside ``path`` (``.NAME.new-PID-XXXX.EXT``, there only for the
-    moment of the copy) that is then linked or renamed into place."""
-    try:
-        if replace:
-            os.replace(stage, path)
-        else:
-            os.link(stage, path)  # never replaces a file that appeared meanwhile
-        return
-    except OSError as exc:
-        if exc.errno not in (errno.EXDEV, errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EMLINK):
-            raise
-    beside = path.parent / f".{path.name}.new-{os.getpid()}-{uuid.uuid4().hex[:8]}{path.suffix}"
-    _register_stage(beside, False)
-    try:
-        shutil.copyfile(stage, beside)
-        with open(beside, "rb") as handle:
-            os.fsync(handle.fileno())
-        if replace:
-            os.replace(beside, path)
-        else:
-            try:
-                os.link(beside, path)
-            except OSError as exc:
-                if isinstance(exc, FileExistsError) or path.exists():
-                    raise
-                os.replace(beside, path)  # (a file system without hard links)
-    finally:
-        beside.unlink(missing_ok=True)
-        _unregister_stage(beside)
 
 
 @contextlib.contextmanager
@@ -314,19 +201,19 @@ def staged_file(path: str | Path, command: str = "python", what: str = "--out",
     import tempfile
 
     path = check_file_target(path, what, error)
-    created = _missing_ancestors(path.parent)
+    created = missing_ancestors(path.parent)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise error(f"{what} {path}: cannot write ({exc.strerror})") from None
-    _clear_stale_stages()
+    clear_stale_stages()
     try:
         folder = Path(tempfile.mkdtemp(prefix=f"{STAGE_PREFIX}{os.getpid()}-"))
     except OSError as exc:
         if not path.exists():
-            _remove_empty(created)
+            remove_empty(created)
         raise error(f"{what} {path}: cannot stage the file in the temporary folder ({exc.strerror})") from None
-    _register_stage(folder, True)
+    register_stage(folder, True)
     stage = folder / path.name
     try:
         try:
@@ -338,10 +225,10 @@ def staged_file(path: str | Path, command: str = "python", what: str = "--out",
                       "size_bytes": stage.stat().st_size, "sha256": _sha256(stage)}
             if path.exists() or path.is_symlink():
                 check_file_target(path, what, error)  # still ours now that the work is done?
-                _place_copy(stage, path, replace=True)
+                place_copy(stage, path, replace=True)
             else:
                 try:
-                    _place_copy(stage, path, replace=False)
+                    place_copy(stage, path, replace=False)
                 except FileExistsError:
                     raise error(f"{what} {path}: a file appeared there while mtbmj worked; "
                                 f"not replacing it") from None
@@ -352,11 +239,11 @@ def staged_file(path: str | Path, command: str = "python", what: str = "--out",
     except BaseException:
         shutil.rmtree(folder, ignore_errors=True)  # before the folders it made are removed
         if not path.exists():
-            _remove_empty(created)
+            remove_empty(created)
         raise
     finally:
         shutil.rmtree(folder, ignore_errors=True)  # (after a link the staged name is still there)
-        _unregister_stage(folder)
+        unregister_stage(folder)
 
 
 def check_target(out_dir: str | Path, inputs: Iterable[str | Path] = ()) -> Path:
@@ -375,7 +262,7 @@ def check_target(out_dir: str | Path, inputs: Iterable[str | Path] = ()) -> Path
     _check_inputs(out, inputs)
     if out.is_dir():
         _refuse_foreign(out)
-    parent = _existing_ancestor(out.parent)
+    parent = existing_ancestor(out.parent)
     if not parent.is_dir():
         raise MtbmjError(f"{parent}: is not a directory, so {out} cannot be made")
     probe = parent / f".{out.name}.probe-{os.getpid()}-{uuid.uuid4().hex[:8]}"
@@ -517,7 +404,7 @@ def claim(out_dir: str | Path, command: str = "python", folders: Iterable[str] =
         _refuse_if_locked(out)
     check_target(out, inputs)
     held = Claim(out, command)
-    created = _missing_ancestors(out)
+    created = missing_ancestors(out)
     try:
         held.made = not out.exists()
         out.mkdir(parents=True, exist_ok=True)
@@ -584,7 +471,7 @@ def _release(held: Claim, created: list[Path]) -> None:
     try:
         if held.made and not held.written and _only_bookkeeping(out, held.folders):
             shutil.rmtree(out, ignore_errors=True)
-            _remove_empty(created[1:])  # (made: the first missing folder was ``out`` itself)
+            remove_empty(created[1:])  # (made: the first missing folder was ``out`` itself)
     finally:
         if held.fd is not None:
             os.close(held.fd)  # releases the lock
@@ -649,11 +536,11 @@ def staged_folder(out_dir: str | Path, keep: Iterable[str] = ()) -> Iterator[Pat
             os.mkdir(stage, 0o777)
         except OSError as exc:
             raise MtbmjError(f"{out}: cannot write results ({exc.strerror})") from None
-        _register_stage(stage, True)  # removed on SIGTERM or SIGHUP too
+        register_stage(stage, True)  # removed on SIGTERM or SIGHUP too
         try:
             for name in keep:
                 if (out / name).exists():
-                    _link_tree(out / name, stage / name)
+                    link_tree(out / name, stage / name)
             yield stage
             kept_folders = {name for name in keep if (stage / name).is_dir()}
             write_file(stage / RECORD, _record_bytes(held.command, _stage_files(stage), kept_folders))
@@ -669,7 +556,7 @@ def staged_folder(out_dir: str | Path, keep: Iterable[str] = ()) -> Iterator[Pat
             shutil.rmtree(stage, ignore_errors=True)
             raise
         finally:
-            _unregister_stage(stage)
+            unregister_stage(stage)
 
 
 def write_atomically(out_dir: str | Path, files: Mapping[str, bytes], keep: Iterable[str] = ()) -> list[Path]:
@@ -694,7 +581,7 @@ def _swap_into_place(stage: Path, out: Path) -> None:
             raise
     if out.is_symlink() or not out.is_dir():
         raise MtbmjError(f"{out}: exists and is not a directory; choose another --out")
-    if _exchange(stage, out):
+    if exchange(stage, out):
         shutil.rmtree(stage, ignore_errors=True)  # the old result, now at the staging name
     else:  # no atomic exchange here: two renames, the old folder kept until the new one is in place
         old = out.parent / f".{out.name}.old-{os.getpid()}-{uuid.uuid4().hex[:8]}"
@@ -704,94 +591,16 @@ def _swap_into_place(stage: Path, out: Path) -> None:
     fsync_dir(out.parent)
 
 
-def _exchange(a: Path, b: Path) -> bool:
-    """Swap two paths atomically (Linux renameat2); False where that is not available."""
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        renameat2 = libc.renameat2
-    except (OSError, AttributeError):
-        return False
-    renameat2.argtypes = (ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint)
-    if renameat2(_AT_FDCWD, os.fsencode(a), _AT_FDCWD, os.fsencode(b), _RENAME_EXCHANGE) == 0:
-        return True
-    err = ctypes.get_errno()
-    if err in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP):
-        return False
-    raise OSError(err, os.strerror(err), str(b))
-
-
-def _link_tree(src: Path, dst: Path) -> None:
-    if src.is_dir() and not src.is_symlink():
-        os.mkdir(dst, 0o777)
-        for child in src.iterdir():
-            _link_tree(child, dst / child.name)
-        return
-    try:
-        os.link(src, dst, follow_symlinks=False)
-    except OSError:
-        shutil.copy2(src, dst, follow_symlinks=False)
-
-
 def _clear_stale(out: Path) -> None:
     """Remove staging and probe folders of ``out`` left by runs that were killed (their process
     is gone)."""
     for prefix in (f".{out.name}.new-", f".{out.name}.old-", f".{out.name}.probe-"):
-        for path in out.parent.glob(f"{_glob_escape(prefix)}*"):
+        for path in out.parent.glob(f"{glob_escape(prefix)}*"):
             pid = path.name[len(prefix):].split("-", 1)[0]
-            if pid.isdigit() and int(pid) != os.getpid() and not _alive(int(pid)):
+            if pid.isdigit() and int(pid) != os.getpid() and not alive(int(pid)):
                 if path.is_dir() and not path.is_symlink():
                     shutil.rmtree(path, ignore_errors=True)
                 else:
                     path.unlink(missing_ok=True)
 
 
-def _glob_escape(text: str) -> str:
-    return "".join(f"[{c}]" if c in "*?[]" else c for c in text)
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:
-        return True
-    return True
-
-
-def _existing_ancestor(path: Path) -> Path:
-    path = Path(os.path.abspath(path))
-    while not path.exists() and path != path.parent:
-        path = path.parent
-    return path
-
-
-def _missing_ancestors(path: Path) -> list[Path]:
-    missing = []
-    path = Path(os.path.abspath(path))
-    while not path.exists() and path != path.parent:
-        missing.append(path)
-        path = path.parent
-    return missing  # deepest first
-
-
-def _remove_empty(paths: list[Path]) -> None:
-    for path in paths:
-        try:
-            path.rmdir()
-        except OSError:
-            return
-
-
-def fsync_dir(path: Path) -> None:
-    """Flush a folder's entries (a rename into it) to disk; best effort."""
-    try:
-        fd = os.open(path, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)

@@ -1,0 +1,403 @@
+"""The articulated rider's muscles and its riding controller (``--rider active``).
+
+The body is ``mtbmj.bike.rider_body``'s. ``RiderCallback`` wraps the bike's control callback (the
+compiled one or its Python specification, unchanged: the rigid rider's legs and arms are given no
+stiffness, so they put nothing on the trunk) and adds, every evaluation, into ``qfrc_applied``:
+
+* the two loops closed: the shank's lower end pinned to the ankle's point on the frame and the
+  forearm's end to the grip, each by a stiff spring-damper (``PIN_N_PER_M``, ``PIN_N_S_PER_M``:
+  the shoe on its pedal, the hand round the grip; a pin, no moment);
+* the muscles: a torque at each of hip, knee, ankle, shoulder and elbow that drives the joint's
+  anatomical angle to its target (stiffness and damping ``GAINS``), limited by the joint's
+  isometric strength in each direction (``STRENGTH_N_M``, both sides together) and, all joints
+  together, by the power a rider's muscles give (``POWER_W``): where the joints' positive work
+  would exceed it, the torques doing positive work are scaled down to it;
+* the passive tissue: a little damping at each joint and, past the joint's range of motion
+  (``mtbmj.bike.rider_body.RANGES_DEG``), a stiff end stop (not a muscle: not in the limits);
+* seated: the saddle, a one-sided spring-damper under the ischial point (``SADDLE_*``).
+
+The controller (``Controller.targets``) sets where the hips are and how the trunk leans, in the
+frame's coordinates, and the joints' targets follow by the pose's inverse kinematics
+(``rider_body.pose``). Standing, the default is the attack position: the hips over the pedals
+where the bike file puts the rider's (``rider.pedals_mm``, ``rider.leg_length_mm``), knees and
+elbows bent. Ahead of a drop or a lip, known from the terrain's profile (the ground ahead falling
+by more than ``EDGE_M`` within ``EDGE_RUN_M``), the hips go back and down over ``LEAD_S`` of
+riding before the edge (``HIPS_BACK_M``, ``HIPS_DOWN_M``), the arms extending with them, and the
+hips' fore-aft place follows the frame's pitch (``PITCH_GAIN_M_PER_RAD``, ``RATE_GAIN_M_S``)
+until the bike has landed: what riders are taught and do off a drop (weight back, arms
+extending, the legs and arms taking the landing; e.g. L. Brink and B. Lopes, "Mastering Mountain
+Bike Skills", 3rd ed., 2017, ch. on drops; *the gains are assumed*, tuned on the shipped bikes).
+On landing the legs and arms take the energy within their torque limits. The controller reads the
+state only (no memory of its own), so a stretch stepped again at the fine step (``mtbmj.runpath``)
+is stepped again alike.
+
+Strength sources (one side; *rounded, check at the source*): F. C. Anderson, D. C. Madigan and M.
+A. Nussbaum, "Maximum voluntary joint torque as a function of joint angle and angular velocity",
+J. Biomech. 40:3105-3113 (2007) (hip, knee, ankle of young men: peak isometric torques of the
+order given here); T. Harbo, J. Brincks and H. Andersen, "Maximal isokinetic and isometric muscle
+strength of major muscle groups related to age, body mass, height, and sex in 178 healthy
+subjects", Eur. J. Appl. Physiol. 112:267-275 (2012) (shoulder, elbow, hip, knee and ankle of
+men). Power: a sprint cyclist's peak, 1300-1700 W (J. C. Martin et al., Eur. J. Appl. Physiol.
+75:283 (1997); S. Dorel et al., Int. J. Sports Med. 26:739 (2005)): 1500 W, *assumed*.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import mujoco
+import numpy as np
+
+from mtbmj.bike import rider_body as rb
+from mtbmj.errors import ConfigError
+
+JOINTS = ("hip", "knee", "ankle", "shoulder", "elbow")
+# one side's isometric strength (N m): (flexion, extension); the ankle's (dorsiflexion, plantar flexion)
+STRENGTH_ONE_SIDE_N_M = {"hip": (160.0, 250.0), "knee": (130.0, 250.0), "ankle": (45.0, 150.0),
+                         "shoulder": (80.0, 95.0), "elbow": (75.0, 60.0)}
+STRENGTH_N_M = {k: (2.0 * a, 2.0 * b) for k, (a, b) in STRENGTH_ONE_SIDE_N_M.items()}  # both sides
+POWER_W = 1500.0
+# the muscles' stiffness (N m/rad) and damping (N m s/rad) about the target, both sides (assumed:
+# the legs' vertical stiffness about 25 N/mm at the attack position, the arms' a quarter of it)
+GAINS = {"hip": (1500.0, 60.0), "knee": (1500.0, 60.0), "ankle": (800.0, 30.0), "shoulder": (400.0, 16.0),
+         "elbow": (300.0, 12.0)}
+TISSUE_DAMPING = 2.0  # N m s/rad at every joint (assumed)
+STOP_N_M_PER_RAD, STOP_N_M_S_PER_RAD = 600.0, 20.0  # past the range of motion (assumed)
+PIN_N_PER_M, PIN_N_S_PER_M = 4e5, 1500.0  # the feet and hands pinned (assumed: shoe, pedal, grip)
+SADDLE_N_PER_M, SADDLE_N_S_PER_M = 6e4, 1200.0  # assumed: the seated body's 4-6 Hz vertical resonance
+ISCHIAL_BELOW_HIP_M = 0.08  # assumed: the sitting bones this far below the hip joints
+SIT_DEPTH_M = 0.03  # seated: the hips aimed this far into the saddle (the body sits down on it; assumed)
+SEATED_FROM_SADDLE_M = (0.0618, 0.1974)  # the SST chart's seated centre of mass from the saddle
+ATTACK_ANKLE_DEG, ATTACK_KNEE_DEG = 15.0, 45.0  # the attack position's ankle dorsiflexion, knee flexion (assumed)
+ARM_REACH = 0.88  # the attack position: shoulder to grip this share of the arm's length
+EDGE_M, EDGE_RUN_M = 0.15, 0.3  # a drop: the ground falling this much within this run
+LEAD_S = 0.8  # s of riding before the edge over which the hips go back
+HIPS_BACK_M, HIPS_DOWN_M = 0.3, 0.0
+PITCH_GAIN_M_PER_RAD, RATE_GAIN_M_S = -1.0, -0.2  # nose down: the hips further back
+TRUNK_GAIN, TRUNK_RATE_S = 1.0, 0.2  # the trunk's lean (rad) per rad of the frame's pitch, per rad/s
+HOLD_AFTER_M = 1.5  # the drop's pose is held this far past where the rear wheel leaves the edge
+LOADED_N = 50.0
+
+
+def edges(terrain, step: float = 0.01) -> list[float]:
+    """Where the ground falls away (m along the terrain): each x where the height ``EDGE_RUN_M``
+    ahead is more than ``EDGE_M`` below it, the first of each run of such x."""
+    x = np.arange(float(terrain.x[0]), float(terrain.x[-1]) - EDGE_RUN_M, step)
+    if x.size == 0:
+        return []
+    fall = terrain.height(x) - terrain.height(x + EDGE_RUN_M) > EDGE_M
+    starts = np.flatnonzero(fall & ~np.concatenate(([False], fall[:-1])))
+    # the edge itself: the last x of the run still at the upper height
+    out = []
+    for i in starts:
+        j = i
+        while j + 1 < x.size and fall[j + 1]:
+            j += 1
+        out.append(float(x[j]) + EDGE_RUN_M)
+    return out
+
+
+def _smooth(u: float) -> float:
+    u = min(max(u, 0.0), 1.0)
+    return u * u * (3.0 - 2.0 * u)
+
+
+@dataclasses.dataclass
+class Controller:
+    """The targets of the hips (m, frame coordinates) and the trunk (rad) from the state."""
+
+    body: rb.Body
+    pedal: tuple
+    grip: tuple
+    hip: tuple  # the attack position's hips
+    trunk: float
+    edges: list
+    speed: float
+    wheelbase: float
+    seated: bool = False
+    saddle: tuple | None = None
+    x_start: float = -math.inf  # the front axle's start (m): a ramp begun before it begins there
+
+
+    def drop_share(self, x_front: float) -> float:
+        """How far into a drop's pose (0-1) the rider is with the front axle at ``x_front``."""
+        lead = max(self.speed * LEAD_S, 0.5)
+        share = 0.0
+        for e in self.edges:
+            begin = max(e - lead, self.x_start)
+            up = _smooth((x_front - begin) / max(e - 0.4 * lead - begin, 0.05))
+            down = 1.0 - _smooth((x_front - (e + self.wheelbase + HOLD_AFTER_M)) / 0.5)
+            share = max(share, min(up, down))
+        return share
+
+    def targets(self, x_front: float, pitch: float, rate: float) -> tuple[tuple, float]:
+        if self.seated:
+            return self.hip, self.trunk
+        s = self.drop_share(x_front)
+        back = HIPS_BACK_M + PITCH_GAIN_M_PER_RAD * pitch + RATE_GAIN_M_S * rate
+        back = min(max(back, 0.0), 0.45)
+        hip = (self.hip[0] - s * back, self.hip[1] - s * HIPS_DOWN_M)
+        reach = ARM_REACH * (self.body.upper_arm.length + self.body.forearm.length)
+        lean = s * (TRUNK_GAIN * pitch + TRUNK_RATE_S * rate)
+        return hip, rb.trunk_for_reach(self.body, hip, self.grip, reach) + lean
+
+
+class RiderCallback:
+    """The bike's callback (``inner``) and the articulated rider's forces (module doc)."""
+
+    def __init__(self, model, inner, body: rb.Body, pose0: rb.Pose, controller: Controller):
+        self.inner, self.body, self.pose0, self.controller = inner, body, pose0, controller
+        self._model = model
+        j = lambda name: int(model.joint(name).dofadr[0])
+        qa = lambda name: int(model.joint(name).qposadr[0])
+        self.dof = {k: j(k) for k in ("hip", "knee", "shoulder", "elbow", "rider_pitch", "pitch")}
+        self.qadr = {k: qa(k) for k in ("hip", "knee", "shoulder", "elbow", "rider_pitch", "pitch")}
+        self.a0 = dict(pose0.angles)
+        self.b_shank, self.b_forearm = int(model.body("shank").id), int(model.body("forearm").id)
+        self.b_frame, self.b_rider = int(model.body("frame").id), int(model.body("rider").id)
+        self.s_pins = ((int(model.site("ankle_end").id), int(model.site("ankle_anchor").id), self.b_shank),
+                       (int(model.site("grip_end").id), int(model.site("bars").id), self.b_forearm))
+        self.s_front = int(model.site("front_axle").id)
+        self.s_hips = int(model.site("hips").id)
+        self.a_tz = (int(model.actuator("front_tire_z").id), int(model.actuator("rear_tire_z").id))
+        nv = model.nv
+        self._j1, self._j2 = np.zeros((3, nv)), np.zeros((3, nv))
+        self._q = np.zeros(nv)
+        self.ranges = {k: tuple(math.radians(v) for v in rb.RANGES_DEG[k]) for k in JOINTS}
+        self.peak_torque = dict.fromkeys(JOINTS, 0.0)  # |muscle torque| N m, the run's largest
+        self.peak_ratio = dict.fromkeys(JOINTS, 0.0)  # of the limit in the torque's direction
+        self.peak_power = 0.0
+        self.saddle_peak = 0.0
+        self.last = {}
+
+    # the bike callback's face (mtbmj.bike.run reads these)
+    @property
+    def calls(self) -> int:
+        return self.inner.calls
+
+    @property
+    def refreshes(self) -> int:
+        return self.inner.refreshes
+
+    @property
+    def overflowed(self) -> bool:
+        return False  # the rider's run is not redone on the Python path (mtbmj.bike.run.simulate)
+
+    def reset(self) -> None:
+        self.inner.reset()
+
+    def angles(self, q) -> dict:
+        """The anatomical angles (rad) at qpos ``q``: the pose's plus each joint's turn (``attach``'s
+        signs: hip, shoulder and elbow flexion turn with their joints, knee flexion against it, the
+        ankle's dorsiflexion against the shank's turn on the frame)."""
+        a, qa = self.a0, self.qadr
+        return {"hip": a["hip"] + q[qa["hip"]], "knee": a["knee"] - q[qa["knee"]],
+                "ankle": a["ankle"] - (q[qa["rider_pitch"]] + q[qa["hip"]] + q[qa["knee"]]),
+                "shoulder": a["shoulder"] + q[qa["shoulder"]], "elbow": a["elbow"] + q[qa["elbow"]]}
+
+    def rates(self, v) -> dict:
+        d = self.dof
+        return {"hip": v[d["hip"]], "knee": -v[d["knee"]], "ankle": -(v[d["rider_pitch"]] + v[d["hip"]] + v[d["knee"]]),
+                "shoulder": v[d["shoulder"]], "elbow": v[d["elbow"]]}
+
+    def add_torque(self, Q, name: str, tau: float) -> None:
+        """An anatomical torque (positive: flexion, dorsiflexion) on the joints' coordinates."""
+        d = self.dof
+        if name == "knee":
+            Q[d["knee"]] -= tau
+        elif name == "ankle":
+            Q[d["rider_pitch"]] -= tau
+            Q[d["hip"]] -= tau
+            Q[d["knee"]] -= tau
+        else:
+            Q[d[name]] += tau
+
+    def __call__(self, m, d):
+        if m is not self._model and m._address != self._model._address:
+            return
+        d.qfrc_applied[:] = 0.0
+        self.inner(m, d)
+        Q = self._q
+        Q[:] = 0.0
+        qvel = d.qvel
+        # the pins: feet at the ankle's point, hands at the grip
+        for end, anchor, body in self.s_pins:
+            pe, pa = d.site_xpos[end], d.site_xpos[anchor]
+            mujoco.mj_jac(m, d, self._j1, None, pe, body)
+            mujoco.mj_jac(m, d, self._j2, None, pa, self.b_frame)
+            rel = self._j1 @ qvel - self._j2 @ qvel
+            f = -PIN_N_PER_M * (pe - pa) - PIN_N_S_PER_M * rel
+            f[1] = 0.0
+            Q += self._j1.T @ f - self._j2.T @ f
+        # the muscles
+        ctl = self.controller
+        pitch = d.qpos[self.qadr["pitch"]]
+        hip, trunk = ctl.targets(d.site_xpos[self.s_front][0], pitch, qvel[self.dof["pitch"]])
+        want = rb.pose(self.body, ctl.pedal, ctl.grip, hip, trunk).angles
+        now, speed = self.angles(d.qpos), self.rates(qvel)
+        taus = {}
+        for k in JOINTS:
+            kp, kd = GAINS[k]
+            flex, ext = STRENGTH_N_M[k]
+            taus[k] = min(max(kp * (want[k] - now[k]) - kd * speed[k], -ext), flex)
+        power = sum(max(taus[k] * speed[k], 0.0) for k in JOINTS)
+        if power > POWER_W:
+            scale = POWER_W / power
+            for k in JOINTS:
+                if taus[k] * speed[k] > 0.0:
+                    taus[k] *= scale
+            power = POWER_W
+        applied = {}
+        for k in JOINTS:
+            tau = taus[k]
+            flex, ext = STRENGTH_N_M[k]
+            ratio = tau / flex if tau > 0 else -tau / ext
+            if abs(tau) > self.peak_torque[k]:
+                self.peak_torque[k] = abs(tau)
+            if ratio > self.peak_ratio[k]:
+                self.peak_ratio[k] = ratio
+            lo, hi = self.ranges[k]
+            a = now[k]
+            stop = 0.0
+            if a > hi:
+                stop = -STOP_N_M_PER_RAD * (a - hi) - STOP_N_M_S_PER_RAD * speed[k]
+            elif a < lo:
+                stop = -STOP_N_M_PER_RAD * (a - lo) - STOP_N_M_S_PER_RAD * speed[k]
+            applied[k] = tau + stop - TISSUE_DAMPING * speed[k]
+            self.add_torque(Q, k, applied[k])
+        if power > self.peak_power:
+            self.peak_power = power
+        if ctl.seated and ctl.saddle is not None:
+            self._saddle(m, d, Q)
+        d.qfrc_applied[:] += Q
+        self.last = {"taus": taus, "want": want, "now": now, "applied": applied}
+
+    def _saddle(self, m, d, Q) -> None:
+        """The saddle's push on the sitting bones (one-sided), and its reaction on the frame."""
+        rot = d.xmat[self.b_frame].reshape(3, 3)
+        hips = d.site_xpos[self.s_hips]
+        seat = d.xpos[self.b_frame] + rot @ np.array([self.controller.saddle[0], 0.0, self.controller.saddle[1]])
+        bone = hips - ISCHIAL_BELOW_HIP_M * rot[:, 2]
+        depth = float((seat - bone) @ rot[:, 2])  # how far the sitting bones are below the saddle's top
+        if depth <= 0.0:
+            return
+        mujoco.mj_jac(m, d, self._j1, None, bone, self.b_rider)
+        mujoco.mj_jac(m, d, self._j2, None, bone, self.b_frame)
+        closing = float(rot[:, 2] @ (self._j2 @ d.qvel - self._j1 @ d.qvel))
+        push = max(SADDLE_N_PER_M * depth + SADDLE_N_S_PER_M * closing, 0.0)
+        f = push * rot[:, 2]
+        Q += self._j1.T @ f - self._j2.T @ f
+        self.saddle_peak = max(self.saddle_peak, push)
+
+    def report(self) -> dict:
+        """What the summary says of the rider: each joint's largest muscle torque against its limit."""
+        joints = {k: {"peak_N_m": round(self.peak_torque[k], 3), "limit_flexion_N_m": STRENGTH_N_M[k][0],
+                      "limit_extension_N_m": STRENGTH_N_M[k][1], "peak_of_limit": round(self.peak_ratio[k], 4)}
+                  for k in JOINTS}
+        return {"kind": "active", "height_m": self.body.height, "joints": joints,
+                "within_limits": all(v["peak_of_limit"] <= 1.0 + 1e-9 for v in joints.values()),
+                "peak_power_W": round(self.peak_power, 1), "power_limit_W": POWER_W,
+                "drops_seen_m": [round(e, 3) for e in self.controller.edges]}
+
+
+def saddle_point(spec) -> tuple[float, float] | None:
+    """The saddle's top (m, frame coordinates): the seated centre of mass less the chart's offset
+    from the saddle (``SEATED_FROM_SADDLE_M``), or None when the bike gives no seated rider."""
+    c = spec.rider.seated_com
+    return None if c is None else (c[0] - SEATED_FROM_SADDLE_M[0], c[1] - SEATED_FROM_SADDLE_M[1])
+
+
+def stance(spec, body: rb.Body, seated: bool = False) -> tuple[tuple, float]:
+    """(hips m, trunk rad) of the standing attack position (ankles ``ATTACK_ANKLE_DEG`` dorsiflexed,
+    knees ``ATTACK_KNEE_DEG`` bent: the hips behind the pedals) or seated (the sitting bones on the saddle), the shoulder
+    ``ARM_REACH`` of the arm's length from the grip."""
+    r = spec.rider
+    grip = (r.arm_x, r.arm_z)
+    if seated:
+        s = saddle_point(spec)
+        hip = (s[0], s[1] + ISCHIAL_BELOW_HIP_M - SIT_DEPTH_M)  # sat down into the saddle
+    else:  # from the feet up: the shank leaning ATTACK_ANKLE_DEG forward, the knee bent ATTACK_KNEE_DEG
+        ankle = (r.leg_x + body.ankle_from_pedal[0], r.leg_z + body.ankle_from_pedal[1])
+        lean, bend = math.radians(ATTACK_ANKLE_DEG), math.radians(ATTACK_KNEE_DEG)
+        knee = (ankle[0] + body.shank.length * math.sin(lean), ankle[1] + body.shank.length * math.cos(lean))
+        thigh = -math.pi / 2.0 - lean + bend  # the thigh's direction, hip to knee
+        hip = (knee[0] - body.thigh.length * math.cos(thigh), knee[1] - body.thigh.length * math.sin(thigh))
+    reach = ARM_REACH * (body.upper_arm.length + body.forearm.length)
+    return hip, rb.trunk_for_reach(body, hip, grip, reach)
+
+
+def activate(p, make_inner, integrator, hold: float, seated: bool = False, settle_s: float = 1.0):
+    """The prepared run ``p`` (``mtbmj.bike.run.prepare``, the rigid rider) with the articulated
+    rider instead: the same bike, terrain, tires, laws and drive; the bike's joints where the rigid
+    rider's static equilibrium put them, the body in its stance, then ``settle_s`` of settling in
+    place (the bike held fore and aft by an armature ``hold``, coasting) before it is set rolling at
+    the run's speed. ``make_inner(bike)``: the bike's callback of the run's kind for the new model
+    (``mtbmj.bike.run.make_callback``); ``integrator``: the model's (``mjtIntegrator``)."""
+    from mtbmj.bike import crash
+    from mtbmj.bike.callback import BikeCallback
+    from mtbmj.bike.model import build_bike
+    from mtbmj.controllers import installed
+    from mtbmj.controllers.drive import Drive
+
+    if p.lock or not p.rear_tire_on:
+        raise ConfigError("rider: the active rider rides the whole bike (no --lock, no --lift-rear)")
+    if p.drive.mode == "pedal":
+        raise ConfigError("rider: the active rider does not pedal yet (pedalling through the legs is not built): "
+                          "use --rider passive with --pedal")
+    spec = p.spec
+    if seated and saddle_point(spec) is None:
+        raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider (the saddle the active rider sits on)")
+    r = spec.rider
+    body = rb.body(r.mass + r.on_bike_mass, r.height)
+    pedal, grip = (r.leg_x, r.leg_z), (r.arm_x, r.arm_z)
+    hip, trunk = stance(spec, body, seated)
+    pose0 = rb.pose(body, pedal, grip, hip, trunk)
+    limp = dataclasses.replace(spec, rider=dataclasses.replace(r, leg_stiffness=0.0, leg_damping=0.0,
+                                                                arm_stiffness=0.0, arm_damping=0.0))
+    old, s = p.bike, p.fork_setup
+    b = build_bike(spec, old.tire_radius, p.terrain, p.timestep, integrator, p.gravity,
+                   old.x0 + spec.front_axle[0], s.fork_length, visual=False, articulated=(body, pose0))
+    b = dataclasses.replace(b, spec=limp)  # the rigid rider's legs and arms: nothing on the trunk
+    rear = p.rear_tire
+    wheelbase = spec.front_axle[0] - spec.rear_axle[0]
+    ctl = Controller(body, pedal, grip, hip, trunk, edges(p.terrain), p.speed, wheelbase, seated,
+                     saddle_point(spec), old.x0 + spec.front_axle[0])
+    refresh = p.callback.refresh
+    inner = make_inner(b)
+    rc = RiderCallback(b.model, inner, body, pose0, ctl)
+    data = mujoco.MjData(b.model)
+    names = ("bike_x", "bike_z", "pitch", "fork", "swingarm")
+    for name in names:
+        data.qpos[b.qpos_index(name)] = p.initial_qpos[old.qpos_index(name)]
+    data.act[:] = p.initial_act
+    # settle in place: held fore and aft, coasting, the Python callback (a second is 2000 steps)
+    coast = BikeCallback(b, p.fork_law, p.shock_law, p.front_tire, rear, Drive("coast", 0.0), p.speed, p.traction,
+                         refresh)
+    settle = RiderCallback(b.model, coast, body, pose0, dataclasses.replace(ctl, edges=[]))  # the stance
+    xdof = b.dof_index("bike_x")
+    keep = float(b.model.dof_armature[xdof])
+    b.model.dof_armature[xdof] = hold
+    with installed(settle):
+        for _ in range(int(round(settle_s / p.timestep))):
+            mujoco.mj_step(b.model, data)
+    b.model.dof_armature[xdof] = keep
+    data.time = 0.0
+    data.qvel[:] = 0.0
+    data.qvel[xdof] = p.speed
+    data.qvel[b.dof_index("front_spin")] = p.speed / old.tire_radius
+    data.qvel[b.dof_index("rear_spin")] = p.speed / old.tire_radius
+    inner.reset()
+    with installed(rc):
+        mujoco.mj_forward(b.model, data)
+    rc.peak_torque = dict.fromkeys(JOINTS, 0.0)
+    rc.peak_ratio = dict.fromkeys(JOINTS, 0.0)
+    rc.peak_power = rc.saddle_peak = 0.0
+    p.bike, p.callback, p.data = b, rc, data
+    p.initial_qpos, p.initial_qvel, p.initial_act = data.qpos.copy(), data.qvel.copy(), data.act.copy()
+    p.watch = crash.Watch(b.model, p.terrain, b.qpos_index("pitch"))
+    p.articulated = (body, pose0)
+    return p
+
+
+__all__ = ["RiderCallback", "Controller", "activate", "edges", "stance", "saddle_point", "STRENGTH_N_M",
+           "STRENGTH_ONE_SIDE_N_M", "POWER_W", "GAINS", "JOINTS"]
