@@ -8,8 +8,9 @@ Each ride (an SST recording or a travel CSV; 'example' for the shipped 00649.SST
 command refuses is kept with its one-line reason. Per ride: its length, the windows' speeds (median,
 range, accepted and rejected windows, the median of the accepted windows' standard errors), the rear
 predicted's RMS error, the two baselines' (the fork's record delayed by wheelbase / speed(t) with a
-least-squares scale and offset; the rear's mean), the share of the ride checked, the verdict and the
-wall time. Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
+least-squares scale and offset; the rear's mean), the rear predicted's correlation with the record,
+the whole bike's passes and where it diverged (if it did), the share of the ride checked, the verdict
+and the wall time. Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
 reconstruct_rides.json``, outside the repository). Not a test: nothing is asserted.
 """
 from __future__ import annotations
@@ -43,6 +44,7 @@ def main(argv=None) -> int:
     from mtbmj.measured import telemetry
     from mtbmj.ride import reconstruct
 
+    named = list(args.rides or [])  # as given (the command recorded names no machine's path for --shared)
     if args.shared:
         data = Path(__file__).resolve().parents[2] / "shared" / "data"
         args.rides = (args.rides or []) + [str(data / "sst"), str(data / "sst_v2")]
@@ -67,13 +69,19 @@ def main(argv=None) -> int:
             continue
         s = rec.summary()
         sds = [w["speed_sd_m_per_s"] for w in s["windows"] if w["speed_sd_m_per_s"] is not None]
-        row.update(wall_s=time.perf_counter() - t0, speed_profile=s["speed_profile"],
+        import numpy as np
+
+        v = rec.valid & np.isfinite(rec.rear_predicted)
+        corr = float(np.corrcoef(rec.rear_predicted[v], rec.rear[v])[0, 1]) if v.sum() > 2 else None
+        row.update(wall_s=time.perf_counter() - t0, speed_profile=s["speed_profile"], whole_bike=s["whole_bike"],
+                   rear_correlation=corr,
                    speed_sd_median_m_per_s=statistics.median(sds) if sds else None,
                    rejected=sorted({w["rejected"].split(" (")[0].split(":")[0] for w in s["windows"] if w["rejected"]}),
                    checks=s["checks"], wheelbase_at_sag_m=s["wheelbase_at_sag_m"])
         rows.append(row)
         print(f"{path.name}: {s['checks']['verdict']} ({row['wall_s']:.1f} s)", flush=True)
-    out = {"command": "python benchmarks/reconstruct_rides.py" + "".join(f" --rides {r}" for r in args.rides)
+    out = {"command": "python benchmarks/reconstruct_rides.py" + "".join(f" --rides {r}" for r in named)
+                      + (" --shared" if args.shared else "")
                       + (f" --bike {args.bike}" if args.bike != "sst" else "")
                       + " --out benchmarks/results/reconstruct_rides.json",
            "bike": args.bike, "beat_margin_percent": 100.0 * reconstruct.BEAT_MARGIN, "rides": rows}

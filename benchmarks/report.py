@@ -525,10 +525,15 @@ def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
         rows.append(Row(name, target, f"{num(p['median_m_per_s'], 3)} m/s ({num(p['min_m_per_s'], 3)}–"
                         f"{num(p['max_m_per_s'], 3)}), {p['windows_accepted']}/{p['windows_accepted'] + p['windows_rejected']} "
                         f"windows" + (f", sd {num(sd, 2)}" if sd is not None else "")
-                        + f"; rear {mm(c['rear_predicted_rms_mm'], 3)}, delayed fork "
+                        + f"; rear {mm(c['rear_predicted_rms_mm'], 3)}"
+                        + (f" (corr {num(r['rear_correlation'], 2)})" if r.get("rear_correlation") is not None else "")
+                        + ", delayed fork "
                         f"{num(c['baseline_delayed_fork_rms_mm'], 3)}, mean {num(c['baseline_rear_mean_rms_mm'], 3)}; "
                         f"{num(c['samples_checked_percent'], 2)} % checked; "
-                        + ("**passes**" if c["passes"] else f"**fails** (not below the {better})"),
+                        + ("**passes**" if c["passes"] else (
+                            f"**fails** (the whole bike diverged at {num(r['whole_bike']['diverged_s'], 3)} s)"
+                            if (r.get("whole_bike") or {}).get("diverged_s") is not None
+                            else f"**fails** (not below the {better})")),
                         "reconstruct_rides.json", d["command"]))
     return {"reconstruct": rows}
 
@@ -677,10 +682,12 @@ the lag between the two ends' grounds (or travels); a window gives none at the s
 a second peak within 0.9 of the best, a best correlation below 0.3, a peak whose lobe reaches the
 search's edge, more than one of its four parts finding its own best lag outside the window's best
 peak, a speed uncertain by more than 10 % (the standard error of those parts' lags), or where an end
-stands still. The rear predicted from the front's terrain is compared with
+stands still (each window from the grounds, else from the travels). The rear predicted from the
+fork's record through the bike file's whole bike (frame pitch, the rider on his limbs) is compared with
 two naive baselines on the same samples: the fork's record delayed by wheelbase / speed(t) with a
 least-squares scale and offset (fitted on those very samples), and the rear's mean; it passes only
-10 % below the better. `mtbmj advise` refuses a ride that fails."""),
+40 % below the better. A ride whose whole bike diverges fails, its line saying where (past it nothing
+is checked). `mtbmj advise` refuses a ride that fails."""),
 ]
 
 

@@ -624,9 +624,12 @@ def two_ends_bike(fork_rate=9.0):
 BIKE = two_ends_bike()
 
 
-def bike_text(fork_rate=12.0, fork_comp=500.0, fork_reb=700.0):
+SHOCK_COMP, SHOCK_REB = 2500.0, 3500.0  # N s/m at the shock's shaft: this file's bike's shock damper
+
+
+def bike_text(fork_rate=12.0, fork_comp=500.0, fork_reb=700.0, shock_reb=SHOCK_REB):
     bilinear = '"fork.damper.model" = "bilinear"\n"fork.damper.compression_N_s_per_m" = {}\n"fork.damper.rebound_N_s_per_m" = {}'
-    return _two_ends_toml(fork_rate, bilinear.format(fork_comp, fork_reb), bilinear.format(2500.0, 3500.0),
+    return _two_ends_toml(fork_rate, bilinear.format(fork_comp, fork_reb), bilinear.format(SHOCK_COMP, shock_reb),
                           SENSORS_TOML)
 
 
@@ -796,3 +799,190 @@ def reconstruction_stand_in(monkeypatch) -> list:
 
     monkeypatch.setattr(reconstruct, "reconstruct", stand_in)
     return reached
+
+
+# --- a ride made by an independent whole bike -----------------------------------------------------
+# scipy's solve_ivp on its own equations, not the package's engines or laws' code: a frame that heaves
+# and pitches, a rider on legs and arms (vertical springs and dampers at the pedals and the bars) who
+# heaves and pitches on it and shifts a slow load fore and aft (a force pair at the bars and pedals),
+# the fork's lower and wheel sliding along the steering axis, the rear wheel on the constant leverage
+# ratio RATIO, point-contact tyres that leave the ground, at a speed that varies along the ride, over
+# terrain made here. Shared with the package (inputs read from the same bike file): the laws' form
+# and values (``law``), the masses and geometry, the tyres' rate. Not shared: the pitch coupling, the
+# rider on his limbs and his slow load, the split of the rider's on-bike mass (half at the pedals,
+# half at the bars).
+
+WHOLE_RATE = 1000.0  # Hz, the made record's rate
+# the features along the terrain: (kind, where m, size m): a rock garden (12 rocks a third of the
+# size to the size high, 0.4-1 m long, over 15 m), a G-out (a dip this deep, 8 m long), a drop (this high), a tabletop
+# (up this high over 2.5 m, a 2 m table, down over 3 m)
+WHOLE_FEATURES = (("rocks", 45.0, 0.06), ("g_out", 95.0, 0.25), ("drop", 130.0, 0.3), ("jump", 165.0, 0.4),
+                  ("drop", 215.0, 0.5))
+
+
+@dataclasses.dataclass(frozen=True)
+class SpeedProfile:
+    """The made ride's speed v0 + dv sin(2 pi t / period) (m/s) and the distance it covers."""
+
+    v0: float = 6.5
+    dv: float = 1.0
+    period: float = 25.0
+
+    def at(self, t):
+        return self.v0 + self.dv * np.sin(2 * np.pi * np.asarray(t, float) / self.period)
+
+    def along(self, t):
+        t = np.asarray(t, float)
+        return self.v0 * t - self.dv * self.period / (2 * np.pi) * (np.cos(2 * np.pi * t / self.period) - 1.0)
+
+
+def smoothstep(u):
+    u = np.clip(u, 0.0, 1.0)
+    return u * u * (3.0 - 2.0 * u)
+
+
+def whole_bike_terrain(length, seed=21, features=WHOLE_FEATURES):
+    """h(s) m on a 5 mm grid over ``length`` m: ISO 8608 class C roughness (G_d(n0) = 256e-6 m^3 at
+    n0 = 0.1 cycles/m, w = 2) as a sum of sines of random phase, the first metres level (the bike
+    starts at rest), and the ``features`` (see ``WHOLE_FEATURES``) that lie within the length; and
+    the places of those features (m) by name (``drop_0.3``: the drop of 0.3 m; a second of a name
+    numbered ``drop_0.5#2``)."""
+    rng = np.random.default_rng(seed)
+    s = np.arange(-5.0, length + 5.0, 0.005)
+    n = np.linspace(0.05, 8.0, 800)  # cycles/m
+    dn = n[1] - n[0]
+    amp = np.sqrt(2.0 * 256e-6 * (n / 0.1) ** -2.0 * dn)
+    h = (amp[:, None] * np.sin(2 * np.pi * n[:, None] * s[None, :] + rng.uniform(0, 2 * np.pi, n.size)[:, None])).sum(0)
+    h *= smoothstep((s - 3.0) / 5.0)
+    placed = {}
+    for kind, at, size in features:
+        if kind == "rocks":  # drawn whether or not within the length: the draws after it stay the same
+            low = 0.02 if size == 0.06 else size / 3.0  # the rocks size / 3 to size high
+            rocks = [(c, *rng.uniform((low, 0.4), (size, 1.0))) for c in rng.uniform(at, at + 15.0, 12)]
+        if at >= length:
+            continue
+        name = kind if kind in ("rocks", "g_out", "jump") else f"{kind}_{size:g}"
+        name = name if name not in placed else f"{name}#{sum(k.split('#')[0] == name for k in placed) + 1}"
+        placed[name] = at
+        if kind == "rocks":
+            for c, a, L in rocks:
+                h += a * np.sin(np.pi * np.clip((s - c) / L + 0.5, 0.0, 1.0)) ** 2
+        elif kind == "g_out":
+            h -= size * np.sin(np.pi * np.clip((s - at) / 8.0, 0.0, 1.0)) ** 2
+        elif kind == "drop":
+            h -= size * smoothstep((s - at) / 0.05)
+        elif kind == "jump":
+            h += size * (smoothstep((s - at) / 2.5) - smoothstep((s - at - 4.5) / 3.0))
+        else:
+            raise ValueError(f"no feature {kind!r}")
+    return (lambda x: np.interp(x, s, h)), placed
+
+
+def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=40.0, profile=SpeedProfile(),
+                    features=WHOLE_FEATURES, fork_reb=700.0, slow_load_N=80.0, slow_period_s=7.0):
+    """This file's bike (``bike_text``: the fork at ``fork_rate`` N/mm and ``fork_reb`` N s/m of
+    rebound, the shock's rebound ``shock_reb_scale`` times SHOCK_REB) ridden for ``seconds`` by the
+    independent whole bike above at ``profile``'s speed over ``whole_bike_terrain(seed, features)``,
+    the rider's slow load ``slow_load_N`` (onto the bars, period ``slow_period_s``). Written as
+    ``path``/bike.toml (the recorded setting) and ``path``/ride.SST (SST v3 integer counts through its
+    [sensors]); returns the truth: bike, sst, t, fork_mm and rear_mm (wheel travel), h (the terrain),
+    features, wb (the fixed wheelbase), profile, airborne_front (share of the ride the front tyre is
+    off the ground), dynamic_index, residual (the rest state's largest acceleration, m/s2)."""
+    from mtbmj.bike import run, spec as spec_mod
+
+    path.mkdir(parents=True, exist_ok=True)
+    bike = path / "bike.toml"
+    bike.write_text(bike_text(fork_rate, fork_reb=fork_reb, shock_reb=SHOCK_REB * shock_reb_scale))
+    spec = spec_mod.load(str(bike))  # the bike file's numbers (inputs)
+    fork_setup, _ = run.setups(spec)
+    tyre_k, radius, g = fork_setup.tire.values(1).rate, fork_setup.tire_radius, 9.81
+    sa = math.sin(spec.head_angle)
+    r = spec.rider
+    # the frame body: the frame and the rider's on-bike segments, half at the pedals, half at the bars
+    parts = [(spec.frame_mass, spec.frame_com, spec.frame_inertia), (0.5 * r.on_bike_mass, (r.leg_x, r.leg_z), 0.0),
+             (0.5 * r.on_bike_mass, (r.arm_x, r.arm_z), 0.0)]
+    M = sum(p[0] for p in parts)
+    cx, cz = (sum(p[0] * p[1][i] for p in parts) / M for i in (0, 1))
+    I = sum(p[2] + p[0] * ((p[1][0] - cx) ** 2 + (p[1][1] - cz) ** 2) for p in parts)
+    mr_, Ir, rx = r.mass, r.pitch_inertia, r.com[0]
+    mF = spec.fork_lower_mass + spec.front_wheel_mass
+    mR = spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
+    xF, xR = spec.front_axle[0], spec.rear_axle[0]
+    wb = xF - xR  # the wheelbase at sag, fixed: the rear contact this far behind the front's
+    fork_law = law(fork_rate * 1e3, 0.130, 500.0, fork_reb)
+    shock_law = law(90e3, 0.050, SHOCK_COMP, SHOCK_REB * shock_reb_scale)
+    span = r.arm_x - r.leg_x
+    P_leg, P_arm = mr_ * g * (r.arm_x - rx) / span, mr_ * g * (rx - r.leg_x) / span  # the limbs' preloads
+    h, placed = whole_bike_terrain(float(profile.along(seconds)) + 10.0, seed, features)
+    along = profile.along
+
+    def forces(t, y):
+        zf, th, zr, tr, zw, zq, vf, om, vr, orr, vw, vq = y
+        front_pt, rear_pt = zf + (xF - cx) * th, zf + (xR - cx) * th  # the frame at each axle (its height change)
+        wF, wR = zw - front_pt, zq - rear_pt  # each wheel's rise in the frame (from the static heights below)
+        dF = vw - (vf + (xF - cx) * om)
+        dR = vq - (vf + (xR - cx) * om)
+        fF = fork_law((wF + base[0]) / sa, dF / sa) / sa  # vertical at the wheel (virtual work)
+        fR = shock_law((wR + base[1]) / RATIO, dR / RATIO) / RATIO
+        limbs = []
+        for x, k, c, P in ((r.leg_x, r.leg_stiffness, r.leg_damping, P_leg),
+                           (r.arm_x, r.arm_stiffness, r.arm_damping, P_arm)):
+            e = (zf + (x - cx) * th) - (zr + (x - rx) * tr)  # frame point up relative to the rider's: compresses
+            ed = (vf + (x - cx) * om) - (vr + (x - rx) * orr)
+            limbs.append(P + k * e + c * ed)
+        u = slow_load_N * math.sin(2 * math.pi * t / slow_period_s)  # +: onto the bars, off the pedals
+        leg, arm = limbs[0] - u, limbs[1] + u
+        s = float(along(t))
+        tF = max(0.0, tyre_k * (float(h(s)) - (zw + base[2] - radius)))
+        tR = max(0.0, tyre_k * (float(h(s - wb)) - (zq + base[3] - radius)))
+        return fF, fR, leg, arm, tF, tR
+
+    def rhs(t, y):
+        zf, th, zr, tr, zw, zq, vf, om, vr, orr, vw, vq = y
+        fF, fR, leg, arm, tF, tR = forces(t, y)
+        Fz = fF + fR - leg - arm - M * g
+        Mo = (xF - cx) * fF + (xR - cx) * fR - (r.leg_x - cx) * leg - (r.arm_x - cx) * arm
+        Rz = leg + arm - mr_ * g
+        Ro = (r.leg_x - rx) * leg + (r.arm_x - rx) * arm
+        return [vf, om, vr, orr, vw, vq, Fz / M, Mo / I, Rz / mr_, Ro / Ir, (tF - fF) / mF - g, (tR - fR) / mR - g]
+
+    # the static heights: each wheel's rise at sag (its law carrying the static share), the tyres' deflection
+    total = M + mr_ + mF + mR
+    share = ((M * cx + mr_ * rx + mF * xF + mR * xR) / total - xR) / wb
+    wF0 = brentq(lambda w: fork_law(w / sa, 0.0) / sa - (total * share - mF) * g, 0.0, 0.12)
+    wR0 = brentq(lambda w: shock_law(w / RATIO, 0.0) / RATIO - (total * (1 - share) - mR) * g, 0.0, 0.12)
+    base = [wF0, wR0, radius - total * share * g / tyre_k, radius - total * (1 - share) * g / tyre_k]
+    # the rest state solved (the share above is the rigid statics; the limbs settle it a little)
+    y0 = np.zeros(12)
+    rest, info, _, _ = fsolve(lambda q: rhs(0.0, np.concatenate((q, np.zeros(6))))[6:], np.zeros(6), xtol=1e-10,
+                              full_output=True)
+    y0[:6] = rest
+    t = np.arange(int(seconds * WHOLE_RATE)) / WHOLE_RATE
+    sol = solve_ivp(rhs, (0.0, t[-1]), y0, t_eval=t, method="RK45", rtol=1e-5, atol=1e-7, max_step=1e-3)
+    assert sol.success, sol.message
+    y = sol.y
+    wF = y[4] - (y[0] + (xF - cx) * y[1]) + base[0]
+    wR = y[5] - (y[0] + (xR - cx) * y[1]) + base[1]
+    fork_mm, rear_mm = wF / sa * 1e3, wR * 1e3
+    sst = write_v3(path / "ride.SST", np.clip(fork_mm, 0, None), np.clip(rear_mm, 0, None) / RATIO,
+                   spec.sensors, int(WHOLE_RATE))
+    tyres = np.array([forces(ti, yi)[4:] for ti, yi in zip(t[::10], y.T[::10])])
+    return {"bike": bike, "sst": sst, "t": t, "h": h, "features": placed, "wb": wb, "fork_mm": fork_mm,
+            "rear_mm": rear_mm, "profile": profile, "airborne_front": float(np.mean(tyres[:, 0] <= 0.0)),
+            "dynamic_index": I / (M * (xF - cx) * (cx - xR)), "residual": float(np.max(np.abs(info["fvec"])))}
+
+
+# the advice's rides: 30 s at 6.5 +- 0.5 m/s over a hard course (rock gardens of rocks up to 0.1 m,
+# drops of 0.5 and 0.6 m, a G-out, a tabletop), where a fork too soft bottoms several times
+ADVISE_SECONDS = 30.0
+ADVISE_PROFILE = SpeedProfile(6.5, 0.5, 25.0)
+ADVISE_FEATURES = (("rocks", 10.0, 0.1), ("drop", 30.0, 0.5), ("rocks", 40.0, 0.1), ("g_out", 60.0, 0.3),
+                   ("drop", 75.0, 0.5), ("rocks", 85.0, 0.1), ("jump", 105.0, 0.4), ("drop", 125.0, 0.6),
+                   ("rocks", 135.0, 0.1), ("drop", 160.0, 0.6), ("rocks", 170.0, 0.1))
+
+
+def advise_ride(path, seconds=ADVISE_SECONDS, **settings):
+    """``whole_bike_ride`` over the advice's course (``settings``: its bike's, e.g. fork_rate,
+    fork_reb, shock_reb_scale): (bike file, SST file, fork mm, rear wheel mm, t)."""
+    made = whole_bike_ride(path, seconds=seconds, profile=ADVISE_PROFILE, features=ADVISE_FEATURES, **settings)
+    return made["bike"], made["sst"], made["fork_mm"], made["rear_mm"], made["t"]

@@ -1,20 +1,23 @@
 """``mtbmj advise``: setup advice from a ride (mtbmj/ride/advise.py), against rides made here.
 
-The rides are made by a bike integrated in tests/helpers.py (``ride``; scipy's DOP853, its own equations): each end a
-sprung and an unsprung mass, the fork's spring, bumper, hard stop and two-rate damper acting along
-the steering axis, the shock's through a constant leverage ratio, point-contact tyres that leave the
-ground; a hidden profile of rocks ridden at a known speed; both ends' travel written as an SST
-version-3 file in integer counts through the [sensors] calibration of the bike file (the law of
-cosines inverted in tests/helpers.py, not by the reader). One ride is made with the
-fork far too soft (it bottoms several times), one with the fork's rebound far too slow (it packs
-down). The advice must move the right setting the right way, and what it predicts at the new setting
-must agree with that bike ridden again at that setting.
+The rides the advice is judged on are made by an independent whole bike integrated in
+tests/helpers.py (``advise_ride``: ``whole_bike_ride`` over a hard course; scipy's solve_ivp, its own
+equations, not the package's engines or laws' code): a frame that heaves and pitches, a rider on legs
+and arms who shifts a slow load fore and aft, the fork's spring, bumper, hard stop and two-rate damper
+acting along the steering axis, the shock's through a constant leverage ratio, point-contact tyres
+that leave the ground, at a speed that varies along the ride, over rock gardens, drops, a G-out and a
+tabletop; both ends' travel written as an SST version-3 file in integer counts through the
+[sensors] calibration of the bike file (the law of cosines inverted in tests/helpers.py, not by the
+reader). One ride is made with the fork far too soft (5 N/mm: it bottoms several times), one with
+the fork's rebound four times too slow (it packs down). The advice must move the right setting the
+right way, and what it predicts at the new setting must agree with that bike ridden again at that
+setting.
 
 Shared with the package, and so not tested here: the laws' forms and values (read from the same
-bike file: inputs, not results), the metrics' definitions (``advise.ride_metrics``: written out in
-its module doc), and the decoupled ends of the generator (dynamic index 1: the case the
-reconstruction's quarter cars describe; the package's whole bike couples them through its pitch,
-and the advice's uncertainty carries that difference)."""
+bike file: inputs, not results), the masses and geometry, the metrics' definitions
+(``advise.ride_metrics``: written out in its module doc). The quarter-car rides of
+``helpers.ride`` (two decoupled ends) remain for what does not simulate the ride to its end (the
+refusals, a crash or a refused candidate stood in)."""
 from __future__ import annotations
 
 import json
@@ -25,17 +28,19 @@ import pytest
 from mtbmj.cli import main
 from mtbmj.ride import advise
 
-from helpers import air_shock_bike, clicks_bike, generated_metrics, reconstruction_passing, ride, write_sst
+from helpers import (advise_ride, air_shock_bike, clicks_bike, generated_metrics, reconstruction_passing, ride,
+                     write_sst)
 
 
 def advice_of(folder, **settings):
-    """This file's bike ridden with ``settings``, its ride written as SST v3, and ``mtbmj advise``
-    run on it through the command line: (bike, advice.json, (fork, rear, t), out folder)."""
-    folder.mkdir(parents=True, exist_ok=True)
-    bike, fork_mm, rear_mm, t = ride(folder, **settings)
-    sst = write_sst(folder / "ride.SST", fork_mm, rear_mm)
+    """The independent whole bike ridden with ``settings`` (``helpers.advise_ride``), its ride written
+    as SST v3, and ``mtbmj advise`` run on it through the command line: (bike, advice.json, (fork,
+    rear, t), out folder)."""
+    bike, sst, fork_mm, rear_mm, t = advise_ride(folder, **settings)
     out = folder / "advice"
-    with reconstruction_passing():  # refused otherwise: the model does not describe the made ride (issue 51)
+    # the verdict set to pass: on these hard courses the rear predicted misses the 40 % margin by a
+    # hair (the soft fork's: 11.4 mm RMS where 11.1 passes); the advice's logic is tested here
+    with reconstruction_passing():
         assert main(["advise", str(sst), "--bike", str(bike), "--out", str(out)]) == 0
     return bike, json.loads((out / "advice.json").read_text()), (fork_mm, rear_mm, t), out
 
@@ -55,8 +60,8 @@ def test_a_fork_far_too_soft_gets_a_stiffer_spring(soft, tmp_path):
     assert rec["config_key"] == "fork.spring.rate_N_per_mm" and rec["section"] == "fork.set"
     assert rec["direction"] == "up" and rec["to"] > rec["from"] == 5.0
     # this file's bike at the recommended rate: what the advice expects agrees within its uncertainty
-    again = ride(tmp_path, fork_rate=rec["to"])
-    made2 = generated_metrics(*again)
+    bike2, _, *again = advise_ride(tmp_path, fork_rate=rec["to"])
+    made2 = generated_metrics(bike2, *again)
     for metric in ("front.bottom_outs_per_minute", "front.max_travel_percent", "front.dynamic_sag_percent"):
         c = rec["changes"][metric]
         end, key = metric.split(".")
@@ -68,19 +73,20 @@ def test_a_fork_far_too_soft_gets_a_stiffer_spring(soft, tmp_path):
 
 @pytest.mark.slow
 def test_a_rebound_far_too_slow_gets_less_rebound_damping(tmp_path):
-    bike, advice, (fork_mm, rear_mm, t), out = advice_of(tmp_path / "slow", fork_reb=2500.0)
+    """The fork's rebound four times too slow (2800 N s/m, the bike's own 700): the made ride packs
+    down, and the advice is a change, the fork's rebound damping lowered, its reason the packing
+    metric; the bike ridden again at the advised damping packs less, as the advice expects, within
+    its uncertainty."""
+    bike, advice, (fork_mm, rear_mm, t), out = advice_of(tmp_path / "slow", fork_reb=2800.0)
     made = generated_metrics(bike, fork_mm, rear_mm, t)
     assert made["front"]["rebound_over_compression"] < advise.PACKING_RATIO  # the ride made here packs
-    # What holds today, said exactly: the model's packing ratio on this ride is off the ride's by
-    # more than the step moves it (0.43 against 0.25), so the answer is inconclusive (issue 52 item 3),
-    # its best candidate the right adjuster the right way, its reason the packing metric. The
-    # issue's target, a change advised (30-90 % less rebound), needs the calibration of item 1 first.
-    assert advice["recommendation"] is None and advice["verdict"]["answer"] == "inconclusive", advice["verdict"]
-    assert "front.rebound_over_compression" in advice["verdict"]["why"]
-    rec = advice["verdict"]["best_candidate"]
-    assert rec["config_key"] == "fork.damper.rebound_N_s_per_m" and rec["direction"] == "down"
-    again = ride(tmp_path, fork_reb=rec["to"])
-    made2 = generated_metrics(*again)
+    assert advice["verdict"]["answer"] == "change", advice["verdict"]
+    rec = advice["recommendation"]
+    assert rec is not None and "front.rebound_over_compression" in advice["verdict"]["why"]
+    assert rec["config_key"] == "fork.damper.rebound_N_s_per_m" and rec["section"] == "fork.set"
+    assert rec["direction"] == "down" and rec["to"] < rec["from"] == 2800.0
+    _, _, *again = advise_ride(tmp_path / "again", fork_reb=rec["to"])
+    made2 = generated_metrics(bike, *again)
     c = rec["changes"]["front.rebound_over_compression"]
     assert c["change"] > 0 and made2["front"]["rebound_over_compression"] > made["front"]["rebound_over_compression"]
     assert abs(c["expected"] - made2["front"]["rebound_over_compression"]) <= c["uncertainty"] + 0.05

@@ -1,10 +1,10 @@
 """``mtbmj advise --try FILE`` / ``--try-set KEY=VALUE`` (issue 52 item 5): a setting tried on a ride,
 predicted with the advice's reconstruction and uncertainty, against rides made here.
 
-The rides are made by tests/test_advise.py's bike (scipy's DOP853 over a hidden profile of rocks,
-its own equations, written as SST v3 through the bike file's sensors), short (16 s, just above
-advise's 15 s minimum) to keep the runs few and small: two rides of one bike differing in the
-fork's spring only. From the first ride, the second's setting is tried; what is expected on the ride
+The rides are made by the independent whole bike of tests/helpers.py (``advise_ride``: scipy's
+solve_ivp on its own equations over the advice's course, written as SST v3 through the bike file's
+sensors), short (16 s, just above advise's 15 s minimum) to keep the runs few and small: two rides
+of one bike differing in the fork's spring only. From the first ride, the second's setting is tried; what is expected on the ride
 must land nearer the second ride's measured metrics than the first's (within half the true change)."""
 from __future__ import annotations
 
@@ -15,21 +15,19 @@ import pytest
 
 from mtbmj.cli import main
 from mtbmj.ride import advise
-from helpers import bike_text, generated_metrics, reconstruction_passing, reconstruction_stand_in, ride, write_sst
+from helpers import advise_ride, bike_text, generated_metrics, reconstruction_passing, reconstruction_stand_in, write_sst
 
 SECONDS = 16.0
 
 
 def _made(folder, **settings):
-    folder.mkdir(parents=True, exist_ok=True)
-    bike, fork_mm, rear_mm, t = ride(folder, seconds=SECONDS, **settings)
-    sst = write_sst(folder / "ride.SST", fork_mm, rear_mm)
+    bike, sst, fork_mm, rear_mm, t = advise_ride(folder, seconds=SECONDS, **settings)
     return bike, sst, generated_metrics(bike, fork_mm, rear_mm, t)
 
 
 @pytest.mark.slow
 def test_a_setting_tried_on_a_ride_predicts_the_ride_made_at_it(tmp_path):
-    """A ride at 7 N/mm, another at 11 N/mm (the generator's, the same rocks); from the first, the
+    """A ride at 7 N/mm, another at 11 N/mm (the whole bike's, the same course); from the first, the
     second's bike file tried (--try) and the same rate as a setting (--try-set): both land within
     half the true change of the second ride's dynamic sag, and agree with each other."""
     bike_a, sst_a, made_a = _made(tmp_path / "a", fork_rate=7.0)

@@ -14,7 +14,7 @@ from mtbmj import config
 from mtbmj.bike import spec as spec_mod
 from mtbmj.cli import main
 
-from helpers import HORST, MM, reconstruction_passing, ride, write_sst
+from helpers import HORST, MM, advise_ride, reconstruction_passing
 
 
 @pytest.fixture
@@ -105,8 +105,7 @@ def test_a_run_takes_the_resolved_bike_as_it_takes_the_file(tmp_path, reads):
 
 @pytest.mark.slow
 def test_advise_reads_its_bike_file_at_most_three_times(tmp_path, reads):
-    bike, fork_mm, rear_mm, _ = ride(tmp_path, fork_rate=5.0, seconds=16.0)
-    sst = write_sst(tmp_path / "ride.SST", fork_mm, rear_mm)
+    bike, sst, *_ = advise_ride(tmp_path, fork_rate=5.0, seconds=16.0)  # the maker reads the bike file once, counted
     with reconstruction_passing():
         assert main(["advise", str(sst), "--bike", str(bike), "--workers", "1", "--try-set",
                      "fork:fork.spring.rate_N_per_mm=6", "--out", str(tmp_path / "out")]) == 0

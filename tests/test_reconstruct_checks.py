@@ -6,8 +6,11 @@ and damper, the fork's along the steering axis, a constant leverage ratio at the
 tyres that may leave the ground), the rear wheel meeting the ground a wheelbase behind the front, both
 ends' travel written as a travel CSV at 1 kHz rounded to 0.1 mm.
 
-Shared with the package, and so not tested here: the ends move independently (no pitch coupling: the
-case the package's quarter cars describe), the laws and masses read from the same bike file (inputs),
+Shared with the package, and so not tested here: the laws and masses read from the same bike file
+(inputs). Not shared: the ends here move independently with rigid masses (two quarter cars), where the
+package reconstructs through the bike file's whole bike (frame pitch, the rider on legs and arms), so
+the checks must tell this ride apart from the bike's (the whole bike's own made ride, which it
+describes, is tests/test_reconstruct_whole_bike.py); also shared:
 the wheelbase at sag taken as the frame's wheelbase less the static fork stroke along the steering axis
 and the rear axle's move on its arc about the pivot at its static travel (computed here from the
 geometry, without the package's code), the frame's pitch left out of it."""
@@ -137,12 +140,17 @@ def test_the_speed_along_the_ride_comes_back(made, rebuilt):
     assert d[j] - d[i] == pytest.approx(along(t[j]) - along(t[i]), rel=0.01)
 
 
-def test_the_right_bike_passes_its_checks(rebuilt):
+def test_two_quarter_cars_are_told_apart_from_the_whole_bike(rebuilt):
+    """The ride made here by two independent quarter cars (rigid masses, no pitch coupling) read
+    through the bike file, whose whole bike has a frame that pitches and a rider on his limbs: the
+    rear predicted does not beat the naive baselines by the stated margin (a delayed copy of the fork
+    is nearly exact on two like quarter cars), and the line says so."""
     s = json.loads((rebuilt / "reconstruction.json").read_text())
     c = s["checks"]
-    assert c["passes"] is True
-    assert c["rear_predicted_rms_mm"] <= 0.9 * min(c["baseline_delayed_fork_rms_mm"], c["baseline_rear_mean_rms_mm"])
-    assert c["verdict"].startswith("the model describes this ride")
+    assert c["passes"] is False
+    assert c["rear_predicted_rms_mm"] > (1.0 - c["beat_margin_percent"] / 100.0) * min(
+        c["baseline_delayed_fork_rms_mm"], c["baseline_rear_mean_rms_mm"])
+    assert c["verdict"].startswith("the model does not describe this ride")
 
 
 @pytest.mark.parametrize("wrong", ["fork_spring_x1.5", "rider_25kg_heavier"])

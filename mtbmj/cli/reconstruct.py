@@ -11,8 +11,8 @@ def cmd_reconstruct(args) -> int:
     from mtbmj.cli.telemetry import ride_record
     from mtbmj.ride import reconstruct
 
-    bike = spec.resolve(args.bike)  # read once for the decoding (the reconstruction reads its source)
-    result = reconstruct.reconstruct(ride_record(args.ride, args, bike), bike.source)
+    bike = spec.resolve(args.bike)  # read once: the decoding and the reconstruction take it
+    result = reconstruct.reconstruct(ride_record(args.ride, args, bike), bike)
     return write_and_say(result, args.out)
 
 

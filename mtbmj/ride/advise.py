@@ -580,7 +580,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
                               f"{MIN_SECONDS:g} s; the ride is {length:.1f} s)")
     bike = spec_mod.resolve(bike)  # the bike file read once: every run below derives its setting from it
     bike = bike.with_overrides(None) if bike.overrides else bike
-    rec = rc.reconstruct(record, bike.source, overrides)
+    rec = rc.reconstruct(record, bike, overrides)
     checks = rec.checks()
     if (checks["samples_checked_percent"] < MIN_CHECKED_PERCENT
             or not checks["rear_predicted_rms_percent_of_used"] <= MAX_REAR_MISS_PERCENT):

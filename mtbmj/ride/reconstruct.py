@@ -1,66 +1,44 @@
-"""A ride reconstructed through the bike's own laws: the speed from the lag between the two ends, the
-terrain under the front wheel from the fork's record, and the rear's record predicted from that
-terrain and compared with the measured one (``mtbmj reconstruct``).
+"""A ride reconstructed through the bike (``mtbmj reconstruct``): the speed along the ride from the lag
+between the two ends, the terrain under the front wheel from the fork's record through the bike
+file's whole bike, and the rear's record predicted from that terrain and compared with the measured
+one, beside two naive baselines.
 
-**Speed.** The rear wheel meets what the front met a wheelbase later: the lag that best aligns the
-grounds each end's own inverse (below) finds under it (high-passed at 1 Hz; each end's suspension
-delays its travel behind its ground by a phase of its own, which the grounds do not carry), or where
-those do not align, the two ends' travel velocities (high-passed at 5 Hz: the terrain's part, not
-the rider's slow weight shifts) (normalised cross-correlation, the peak refined by a parabola)
-gives v = wheelbase / lag per window of ``WINDOW_S`` seconds, the wheelbase at the ride's sag
-(:func:`wheelbase_at` the median travel of each end); a window whose correlation peak is below
-``MIN_CORRELATION``, or has a second peak within ``AMBIGUOUS`` of it (a periodic record, where
-several lags align), or lies at either end of the lags searched or has its lobe reach an end (the
-peak outside the search), or whose ``SUB_WINDOWS`` parts do not find their lags within the best
-peak (more than one outside it) or whose speed's standard error (from those parts' lags) exceeds
-``MAX_SPEED_SD`` of it, or where either end's travel spans less than
-``STILL_MM`` (standing: the filtered series hold only the filters' tails there, which align at any
-lag), gives none, and says why; a ride shorter than one window and the slowest lag searched
-(:func:`min_seconds`) is refused before any work. The speed between the accepted windows' centres
-is linear (the distance along the ride is its integral, and the rear's lag wheelbase / v(t)); the
-ride's speed is the windows' median. A version-2 record (5 kHz of coarse encoder steps) is
-low-passed at ``V2_LOWPASS_HZ`` before anything is differentiated. A ride with no window that gives
-a speed, or whose windows with one lie wholly where nothing can be checked (jumps, the first
-wheelbase, the filters' start), is refused: no speed estimate, one line, nothing written.
+**Speed** (:mod:`mtbmj.ride.reconstruct_speed`). The rear wheel meets what the front met a wheelbase
+later: per window of ``WINDOW_S`` seconds, the lag that best aligns the grounds each end's own
+quarter-car inverse finds (high-passed at 1 Hz: each end's suspension delays its travel by a phase of
+its own, the grounds carry none), or where those give no speed in that window, the ends' travel
+velocities (high-passed at 5 Hz), gives v = wheelbase / lag, the wheelbase at the ride's sag
+(:func:`wheelbase_at`, the median travel of each end). A window's rejections and standard error are
+that module's; the speed between the accepted windows' centres is linear (held past the first and
+last), the distance along the ride its integral, the rear's lag wheelbase / v(t). A version-2
+record (5 kHz of coarse encoder steps) is low-passed at ``V2_LOWPASS_HZ`` and read at ``RATE_HZ``. A
+ride with no window that gives a speed, or whose windows with one lie wholly where nothing can be
+checked, is refused: no speed estimate, one line, nothing written.
 
-**Terrain** (an inverse of the front's quarter car, closed form, no fitting). Each end is a quarter
-car: the sprung mass the end carries at rest (the bike's and rider's weight shared between the axles
-by statics, less the unsprung mass), the unsprung mass (fork lower and wheel; rear wheel and half the
-swingarm), the fork or shock law of the bike file (a friction state integrated along the measured
-stroke), the tyre's rate. The fork compresses along the steering axis, so the wheel rises x sin(a)
-for a stroke x and the law's force F acts on the wheel as F / sin(a) vertically (virtual work). With
-the stroke x(t) measured (its rate by a Savitzky-Golay filter), the force's part below 0.3 Hz beyond
-the static load is the rider's slow load shift (braking, weight fore and aft: no terrain holds a fork
-down for seconds); the rest accelerates the sprung mass, (F / sin(a) - shift) / M - g, integrated
-twice (its slow drift removed by a 0.3 Hz high-pass filter, forward and backward) to the body's
-height; the wheel's is that plus x sin(a), the tyre's force m (z_u'' + g) + F / sin(a), its
-deflection that over the tyre rate, and the ground the wheel's height less the tyre's loaded radius.
-What is left is the terrain's bumpiness: its slow rise and fall (a descent, a climb) is not in the
-suspension's record. Where the tyre's force is not positive the wheel is off the ground and the
-terrain there is unknown: those stretches (merged across gaps shorter than ``JUMP_GAP_S``) are
-named (a jump) and left out of the checks. The hard stops' force cannot be read from a travel
-record (a tenth of a millimetre past full travel is kilonewtons there): the law's force is taken at
-the stroke within 0..travel, and across each bottom-out the body's speed changes by what keeps its
-height level over the next ``BOTTOM_OUT_WINDOW_S`` (least squares; the stop's impulse is not in the
-record).
+**Terrain** (:mod:`mtbmj.ride.reconstruct_bike`, from the fork's record alone: the rear's record is
+never used to make it). A first guess from the front's quarter car (:mod:`mtbmj.ride.
+reconstruct_inverse`: closed form, the body's drift removed below 0.3 Hz, a fork hanging on its
+top-out stop flying with its wheel, flights merged and bridged by the chord from take-off to
+landing); then the whole bike (the frame pitching, the rider on his legs and arms, both wheels, the
+fork's and shock's laws, the tyres) rides with its fork's stroke prescribed by the record, the ground
+under the front wheel found at every sample, its rear wheel over the ground of the pass before a
+wheelbase later, until the rear predicted settles. The fork's slow load (below 0.3 Hz) is the
+rider's; the frame's front is held near the quarter car's slow height by a load bounded by half the
+rider's weight (the rider's slow load, estimated). Take-offs: where the tyre's force falls to zero or
+the fork hangs on its top-out stop; the flight bridged, the landing where the force returns.
 
-**Checks, with every reconstruction.** The front quarter car run forward over the terrain found
-(classical RK4 at the record's step, the load shift on its body) reproduces the front record (its
-RMS difference: a check that cannot fail, the inverse reproduces the fork whatever the bike); the
-rear quarter car, its shock through the leverage curve, run over the same terrain a wheelbase later
-(at the speed of the moment) with the opposite load shift on its body (what the front gained the
-rear lost) predicts the rear record, never used to make the terrain. Its RMS difference is reported
-beside two naive baselines on the same samples: the fork's record delayed by wheelbase / v(t) with a
-least-squares scale and offset, and the rear's mean; the reconstruction passes only if it is
-``BEAT_MARGIN`` (10 %) below the better, and its line says in words whether the model describes the
-ride. Also the RMS in % of the rear travel the ride used, and the distance between the two travel
-histograms (the sum of the absolute differences of their time shares, 0 to 200 %).
+**Checks.** The whole bike free over the terrain found (the rider's slow load on its front)
+reproduces the front record (its RMS difference); the rear predicted (the whole bike's rear in the
+last pass) is compared with the rear record beside two naive baselines on the same samples: the
+fork's record delayed by wheelbase / v(t) with a least-squares scale and offset, and the rear's mean.
+The reconstruction passes only if its rear's RMS error is ``BEAT_MARGIN`` (40 %) below the better, and
+its line says in words whether the model describes the ride. Where the whole bike diverges (finding
+the terrain or riding it) the line says where, and the ride is not described. Also the RMS in % of
+the rear travel the ride used and the distance between the two travel histograms.
 
-Assumed and shared with nothing else: vertical-only quarter cars (no pitch coupling between the
-ends, no horizontal motion of the front axle), the load shift's split (all of it between the ends),
-no tyre damping in the inverse. On the shipped ride (`mtbmj reconstruct example --bike sst`) the
-front is reproduced within 3.3 mm RMS and the rear predicted within 21.3 mm RMS, where the delayed
-fork gives 14.6 mm and the rear's mean 14.6: the model does not describe that ride.
+Assumed: the whole bike in the plane with small pitch angles and vertical motion only (the wheelbase
+at sag), point-contact tyres without damping, the fork's slow load the rider's (the rear given
+none), the ground under a flight the chord. Measured numbers: docs/rolling.md and docs/measured.md.
 """
 from __future__ import annotations
 
@@ -69,363 +47,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mtbmj.errors import MtbmjError
-
-WINDOW_S = 5.0  # seconds per window of the speed estimate
-MIN_CORRELATION = 0.3  # a window whose best normalised correlation is below this gives no speed
-LAG_HIGHPASS_HZ = 5.0  # travel records high-passed before the lag is sought (the rider's slow motions out)
-AMBIGUOUS = 0.9  # a second correlation peak this close to the best leaves the lag undecided
-GROUND_HIGHPASS_HZ = 1.0  # the two ends' grounds high-passed before the lag is sought
-SPEED_RANGE = (1.0, 15.0)  # m/s the lag is searched for
-SUB_WINDOWS = 4  # a window's lag found again in this many parts of it: their spread is its uncertainty
-MAX_SPEED_SD = 0.10  # a window whose speed's standard error exceeds this share of it gives no speed
-STILL_MM = 1.0  # a window where either end's travel spans less than this is standing: it gives no speed
-DERIVATIVE_WINDOW_S = 0.02  # the Savitzky-Golay window of the records' derivatives (_derivatives)
-HIGHPASS_HZ = 0.3  # the body height's drift removed below this
-JUMP_GAP_S = 0.05  # the tyre's force found back above 0 for less than this within a jump (its noise): one jump
-BOTTOM_OUT_MARGIN_M = 0.5e-3  # a stroke this close to full travel is a bottom-out (the hard stop's force unseen)
-BOTTOM_OUT_WINDOW_S = 1.0  # after a bottom-out the body's speed is set so its height stays level over this
-V2_LOWPASS_HZ = 100.0  # a version-2 record (5 kHz, coarse steps) is low-passed here before anything is differentiated
-G = 9.81
-
-
-class ReconstructError(MtbmjError):
-    """A ride that cannot be reconstructed: one line naming why."""
-
-
-@dataclass(frozen=True)
-class QuarterCar:
-    """One end: sprung and unsprung mass (kg), its law (force along the stroke for (stroke, rate,
-    state)), the stroke per wheel travel, the tyre's rate (N/m) and radius (m), the gravity."""
-
-    sprung: float
-    unsprung: float
-    law: object
-    tyre_rate: float
-    radius: float
-    gravity: float
-    travel: float = math.inf  # m, the law's full stroke: the inverse reads its force within 0..travel
-
-
+from mtbmj.ride.reconstruct_inverse import QuarterCar, forward, ground_under, lowpass, runs, wheelbase_at
+from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ
+from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
+                                          check_length, min_seconds, speed_from_either, speed_from_lag)
 # The rate a ride is read at (the version-3 recorder's): a faster record is low-passed and decimated
 # to it (``TelemetryRecord.decimated``), so two derivatives do not amplify its count steps and a
 # 100 s ride at 5 kHz costs what it costs at 1 kHz
 RATE_HZ = 1000.0
-
-def _law_force(law, x, v, z):
-    return law.force(x, v, z) if law.has_state else law.force(x, v)
-
-
-def min_seconds(wheelbase: float, window_s: float = WINDOW_S) -> float:
-    """The shortest ride a speed can be sought in: one window and the slowest lag searched."""
-    return window_s + wheelbase / SPEED_RANGE[0]
-
-
-def _check_length(t, wheelbase: float, window_s: float, name: str = "") -> None:
-    """Refuse (one line) a record too short for one speed window and the slowest lag searched."""
-    dt = float(t[1] - t[0]) if len(t) > 1 else math.nan
-    need = min_seconds(wheelbase, window_s)
-    if not len(t) > 1 or not (math.isfinite(dt) and dt > 0) or \
-            len(t) < int(round(window_s / dt)) + int(math.ceil(wheelbase / SPEED_RANGE[0] / dt)):
-        length = len(t) * dt if math.isfinite(dt) else 0.0
-        raise ReconstructError(f"{name + ': ' if name else ''}the ride is {length:.1f} s: a speed needs at least one "
-                               f"{window_s:g} s window and the slowest lag searched "
-                               f"({wheelbase / SPEED_RANGE[0]:.2f} s), {need:.2f} s: no speed estimate")
-
-
-def _scores(a, b, k_lo: int, k_hi: int, n: int):
-    """Normalised correlation of ``a[:n]`` with ``b[k:k + n]`` for k in k_lo..k_hi (each mean
-    removed): the products by FFT, each shifted stretch's spread from running sums."""
-    from scipy.signal import correlate
-
-    a0 = a[:n] - a[:n].mean()
-    aa = float(a0 @ a0)
-    seg = np.asarray(b[k_lo:k_hi + n], float)
-    seg = seg - seg.mean()  # the sums below lose nothing to a large mean
-    num = correlate(seg, a0, mode="valid", method="fft")
-    c1 = np.concatenate(([0.0], np.cumsum(seg)))
-    c2 = np.concatenate(([0.0], np.cumsum(seg * seg)))
-    s1, s2 = c1[n:] - c1[:-n], c2[n:] - c2[:-n]
-    bb = np.maximum(s2 - s1 * s1 / n, 0.0)
-    den = np.sqrt(aa * bb)
-    ok = den > 1e-12 * max(aa, 1e-300) * n
-    out = np.zeros(num.size)
-    out[ok] = num[ok] / den[ok]
-    return out[:k_hi - k_lo + 1]
-
-
-def _vertex(s, i: int) -> float:
-    """The parabola's vertex through s[i-1], s[i], s[i+1], as a shift from i (0 at an edge)."""
-    if 0 < i < s.size - 1:
-        den = s[i - 1] - 2 * s[i] + s[i + 1]
-        return 0.5 * (s[i - 1] - s[i + 1]) / den if den < 0 else 0.0
-    return 0.0
-
-
-def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S, highpass_hz: float = LAG_HIGHPASS_HZ,
-                   travel=None) -> dict:
-    """{"speed_m_per_s": the median of the windows' speeds, "lag_s", "windows": [(start_s, speed or
-    None, correlation)], "sd": each window's speed's standard error (m/s, or None), "why": why each
-    window gave no speed (None where it gave one), "speed_at": a function of time (the windows'
-    speeds at their centres, linear between, held past the first and last)}: see the module doc.
-    ``front`` and ``rear`` are series (any units) on ``t``; both are high-passed at ``highpass_hz``
-    first (what the terrain does, not the rider's slow weight shifts, which reach both ends at
-    once). ``travel`` (front mm, rear mm on ``t``), where given: a window where either end spans
-    less than ``STILL_MM`` is standing and gives no speed (what its filtered series hold there is
-    the filters' tails, which align at any lag). A window whose best lag is at either end of the
-    lags searched gives none (the peak is outside the search); so does one with a second peak
-    (outside the best one's lobe, down to half its height) at least ``AMBIGUOUS`` times as high,
-    or a best correlation below ``MIN_CORRELATION``. A window's standard error: the lag found again
-    in each of its ``SUB_WINDOWS`` parts within the best peak's lobe, their spread over the root of
-    their number; a window where more than one part finds its own best lag (over the whole search)
-    outside that lobe (the window holds more than one lag) gives no speed."""
-    _check_length(t, wheelbase, window_s)
-    dt = float(t[1] - t[0])
-    from scipy.signal import butter, sosfiltfilt
-
-    sos = butter(2, highpass_hz, btype="highpass", fs=1.0 / dt, output="sos")
-    vf = np.gradient(sosfiltfilt(sos, np.asarray(front, float)), dt)
-    vr = np.gradient(sosfiltfilt(sos, np.asarray(rear, float)), dt)
-    lo, hi = wheelbase / SPEED_RANGE[1], wheelbase / SPEED_RANGE[0]
-    k_lo, k_hi = max(1, int(math.floor(lo / dt))), int(math.ceil(hi / dt))
-
-    def best(a, b):
-        """(lag s or None, correlation, why none, the lag's standard error s)."""
-        n = a.size - k_hi
-        if n < 10:
-            return None, 0.0, "too short", None
-        s = _scores(a, b, k_lo, k_hi, n)
-        i = int(np.argmax(s))
-        if i == 0 or i == s.size - 1:  # the best lag at the end of the search: the peak lies outside it
-            return None, float(s[i]), "the best lag at the edge of the search", None
-        if s[i] < MIN_CORRELATION:
-            return None, float(s[i]), f"best correlation below {MIN_CORRELATION:g}", None
-        low = np.flatnonzero(s <= 0.5 * s[i])  # the best peak's lobe: down to half its height each side
-        left, right = (low[low < i].max() if np.any(low < i) else -1), (low[low > i].min() if np.any(low > i) else s.size)
-        if left < 0 or right >= s.size:  # the peak's lobe runs into the end of the search: it may lie beyond
-            return None, float(s[i]), "the best peak's lobe reaches the edge of the search", None
-        peaks = np.flatnonzero((s[1:-1] > s[:-2]) & (s[1:-1] >= s[2:])) + 1
-        if np.any(((peaks < left) | (peaks > right)) & (s[peaks] >= AMBIGUOUS * s[i])):
-            return None, float(s[i]), f"a second peak within {AMBIGUOUS:g} of the best", None  # periodic: no speed
-        lag = (k_lo + i + _vertex(s, i)) * dt
-        # the lag's standard error: found again in each part of the window, within the best lobe
-        a_lo, a_hi = k_lo + max(left, 0), k_lo + min(right, s.size - 1)
-        part = n // SUB_WINDOWS
-        lags = []
-        for j in range(SUB_WINDOWS):  # each part's own best lag over the whole search, kept if within the lobe
-            sub = _scores(a[j * part:], b[j * part:], k_lo, k_hi, part)
-            m = int(np.argmax(sub))
-            if a_lo < k_lo + m < a_hi:
-                lags.append((k_lo + m + _vertex(sub, m)) * dt)
-        if len(lags) < SUB_WINDOWS - 1:  # the parts do not find the window's lag: it is not one lag
-            return None, float(s[i]), (f"its parts disagree ({SUB_WINDOWS - len(lags)} of {SUB_WINDOWS} find their "
-                                       f"own best lag outside the window's best peak)"), None
-        sd = float(np.std(lags, ddof=1)) / math.sqrt(len(lags))
-        return lag, float(s[i]), None, max(sd, dt / math.sqrt(12.0))  # no finer than the sample step's
-
-    windows, sds, whys = [], [], []
-    step = int(round(window_s / dt))
-    moving = None
-    if travel is not None:
-        tf, tr = (np.asarray(x, float) for x in travel)
-        moving = lambda a: (np.ptp(tf[a:a + step]) >= STILL_MM  # noqa: E731
-                            and np.ptp(tr[a:a + step + k_hi]) >= STILL_MM)
-    standing = 0
-    for start in range(0, max(vf.size - k_hi - step // 2, 1), step):
-        if moving is not None and not moving(start):
-            windows.append((start * dt, None, 0.0))  # standing: nothing the terrain did to align
-            sds.append(None)
-            whys.append(f"standing (an end moving less than {STILL_MM:g} mm)")
-            standing += 1
-            continue
-        wl, wc, why, sd = best(vf[start:start + step + k_hi], vr[start:start + step + k_hi])
-        v = None if wl is None else wheelbase / wl
-        if v is not None and sd / wl > MAX_SPEED_SD:  # its parts disagree: no speed to take from it
-            v, why = None, f"its parts' lags scatter (the speed uncertain by {100 * sd / wl:.0f} %, over " \
-                           f"{100 * MAX_SPEED_SD:g} %)"
-        windows.append((start * dt, v, wc))
-        sds.append(None if v is None else v * sd / wl)
-        whys.append(why)
-    good = [(a + 0.5 * window_s, v) for a, v, _ in windows if v is not None]
-    if not good:
-        top = max((c for _, _, c in windows), default=0.0)
-        from collections import Counter
-
-        counts = Counter((w or "").split(" (")[0] for w in whys)
-        counts.pop("", None)
-        reasons = "; ".join(f"{n} {why}" for why, n in counts.most_common())
-        raise ReconstructError(f"the two ends' records do not align at any lag for {SPEED_RANGE[0]:g}-"
-                               f"{SPEED_RANGE[1]:g} m/s in any {window_s:g} s window (best correlation {top:.2f}; "
-                               f"of {len(windows)} windows: {reasons}): no speed from this ride")
-    centres, speeds = np.array([c for c, _ in good]), np.array([v for _, v in good])
-    speed = float(np.median(speeds))
-    return {"speed_m_per_s": speed, "lag_s": wheelbase / speed, "windows": windows, "sd": sds, "why": whys,
-            "wheelbase_m": wheelbase, "window_s": window_s,
-            "speed_at": lambda time: np.interp(time, centres, speeds)}
-
-
-def _derivatives(x, dt):
-    from scipy.signal import savgol_filter
-
-    # a 20 ms window, odd: a recorder's counts step the travel by 0.1-0.4 mm, and over 10 ms the
-    # second derivative of those steps buried the ground's (a ride written as SST counts aligned its
-    # two ends' grounds at a correlation of 0.3 where its travel CSV gave 0.8; over 20 ms 0.7 and
-    # 0.95); a cubic over 20 ms still passes the tyre's hop (15-20 Hz) whole
-    n = max(5, int(round(DERIVATIVE_WINDOW_S / dt)) | 1)
-    return (savgol_filter(x, n, 3, deriv=1, delta=dt, mode="interp"),
-            savgol_filter(x, n, 3, deriv=2, delta=dt, mode="interp"))
-
-
-def _lowpass(x, dt, hz=HIGHPASS_HZ):
-    """``x`` low-passed at ``hz`` (2nd-order Butterworth, forward and back: no delay); by default at
-    the high-pass's corner, the slow part the high-pass takes out."""
-    from scipy.signal import butter, sosfiltfilt
-
-    return sosfiltfilt(butter(2, hz, btype="lowpass", fs=1.0 / dt, output="sos"), x)
-
-
-def wheelbase_at(spec, fork: float, rear: float) -> float:
-    """The wheelbase (m) with the fork ``fork`` (m of stroke) and the rear wheel ``rear`` (m of
-    travel) in: the front axle moves back along the steering axis by fork cos(a), the rear axle on
-    its arc about the main pivot (the frame's pitch left out)."""
-    from mtbmj.bike.spec import rear_axle_in_frame
-
-    phi = np.linspace(-0.3, 0.9, 2401)
-    x, z = rear_axle_in_frame(spec, phi)
-    rise = z - spec.rear_axle[1]
-    up = np.concatenate(([True], np.diff(rise) > 0))  # the arc's rising part (rear wheel up)
-    rear_x = float(np.interp(rear, rise[up], x[up]))
-    return float(spec.front_axle[0] - fork * math.cos(spec.head_angle) - rear_x)
-
-
-def _highpass(x, dt):
-    from scipy.signal import butter, sosfiltfilt
-
-    sos = butter(2, HIGHPASS_HZ, btype="highpass", fs=1.0 / dt, output="sos")
-    return sosfiltfilt(sos, x)
-
-
-def _states(law, x, v, dt):
-    """The law's friction state along the measured stroke (explicit midpoint), or zeros."""
-    z = np.zeros_like(x)
-    if not law.has_state:
-        return z
-    for i in range(1, x.size):
-        half = z[i - 1] + 0.5 * dt * law.state_rate(v[i - 1], z[i - 1])
-        z[i] = z[i - 1] + dt * law.state_rate(0.5 * (v[i - 1] + v[i]), half)
-    return z
-
-
-def ground_under(t, rise, stroke, car: QuarterCar, ratio):
-    """(ground height m, tyre force N, airborne mask) under a quarter car whose wheel rose ``rise``
-    (m) in the frame while its law's stroke was ``stroke`` (m), both on ``t``: the law's force acts
-    on the wheel divided by ``ratio(rise)`` (wheel travel per stroke; virtual work)."""
-    dt = float(t[1] - t[0])
-    w, x = np.asarray(rise, float), np.asarray(stroke, float)
-    v, _ = _derivatives(x, dt)
-    z = _states(car.law, x, v, dt)
-    # the hard stops' force cannot be read from a travel record (a tenth of a millimetre past full
-    # travel is kilonewtons there): the law's force at a stroke within 0..travel
-    xf = np.clip(x, 0.0, car.travel)
-    from mtbmj.controllers.compiled import fork_forces_along
-
-    f = fork_forces_along(car.law, xf, v, z)  # the compiled kernel (None where it cannot run)
-    if f is None:
-        f = np.array([_law_force(car.law, xi, vi, zi) for xi, vi, zi in zip(xf, v, z)])
-    f = f / ratio(w)
-    extra = _lowpass(f - car.sprung * car.gravity, dt)  # the rider's slow load shifts (braking, weight)
-    acc = (f - extra) / car.sprung - car.gravity
-    vel = np.cumsum(acc) * dt
-    # each bottom-out's impulse (the hard stop's) is not in the record: the body's speed changes
-    # across it by what keeps the body's height level, by least squares, over the next
-    # BOTTOM_OUT_WINDOW_S (a bike on its wheels does not rise or sink for seconds after a hit)
-    for _, end in _runs(x >= car.travel - BOTTOM_OUT_MARGIN_M):
-        k = min(int(end), x.size - 1)
-        n = min(int(BOTTOM_OUT_WINDOW_S / dt), x.size - k)
-        if n < 3:
-            continue
-        tau = np.arange(n) * dt
-        body = np.cumsum(vel[k:k + n]) * dt
-        vel[k:] -= float(body @ tau / (tau @ tau))
-    vel = _highpass(vel - vel.mean(), dt)
-    body = np.cumsum(vel) * dt
-    body = _highpass(body - body.mean(), dt)
-    wheel = body + w
-    _, wheel_acc = _derivatives(wheel, dt)
-    tyre = car.unsprung * (wheel_acc + car.gravity) + f
-    deflection = np.maximum(tyre, 0.0) / car.tyre_rate
-    ground = wheel - car.radius + deflection
-    return ground - ground[0], tyre, tyre <= 0.0, extra
-
-
-def forward(t, ground, car: QuarterCar, stroke_of, ratio, w0: float, extra=None, native=None):
-    """The wheel's rise (m) of the quarter car run over ``ground`` (m, on ``t``) from rest at rise
-    ``w0``, its body pressed by ``extra`` (N, on ``t``; the rider's load shifts) where given: the
-    law's stroke is ``stroke_of(w)``, its rate the wheel's over ``ratio(w)``; classical RK4 at the
-    record's step (a step that diverges, on a hard stop stiffer than that step resolves, redone in
-    10, 100 or 1000 substeps), the ground and the load linear between samples. ``native`` (mode,
-    sin a, leverage) runs the same steps compiled (``mtbmj.ride.quartercar_compiled``) where it
-    can; without it, or where it cannot, in Python."""
-    dt = float(t[1] - t[0])
-    gr = np.asarray(ground, float)
-    load = np.zeros_like(gr) if extra is None else np.asarray(extra, float)
-    k = car.tyre_rate
-    stateful = bool(car.law.has_state)
-
-    def rhs(y, g, push):
-        zb, zw, vb, vw, zs = y
-        w = zw - zb
-        r = float(ratio(w))
-        x, xd = float(stroke_of(w)), (vw - vb) / r
-        f = _law_force(car.law, x, xd, zs) / r
-        tyre = max(0.0, k * (g - (zw - car.radius)))
-        return np.array([vb, vw, (f - push) / car.sprung - car.gravity, (tyre - f) / car.unsprung - car.gravity,
-                         car.law.state_rate(xd, zs) if stateful else 0.0])
-
-    f0 = _law_force(car.law, float(stroke_of(w0)), 0.0, 0.0) / float(ratio(w0))
-    zw0 = car.radius - (car.unsprung * car.gravity + f0) / k + gr[0]
-    y = np.array([zw0 - w0, zw0, 0.0, 0.0, 0.0])
-    if native is not None:  # (mode, sin_a, leverage): the same steps compiled (mtbmj.ride.quartercar_compiled)
-        from mtbmj.ride import quartercar_compiled
-
-        done = quartercar_compiled.run(car.law, stateful, (car.sprung, car.unsprung, k, car.radius, car.gravity),
-                                       native[0], native[1], native[2], gr, load, dt, y)
-        if done is not None:
-            out, bad = done
-            if bad >= 0:
-                raise ReconstructError(f"the forward quarter car diverged at {t[bad]:.3f} s")
-            return out
-    out = np.empty(gr.size)
-    out[0] = w0
-    def step(y, g0, g1, p0, p1, n):
-        h = dt / n
-        for j in range(n):
-            a, b = j / n, (j + 1) / n
-            ga, gb, gm = g0 + a * (g1 - g0), g0 + b * (g1 - g0), g0 + 0.5 * (a + b) * (g1 - g0)
-            pa, pb, pm = p0 + a * (p1 - p0), p0 + b * (p1 - p0), p0 + 0.5 * (a + b) * (p1 - p0)
-            k1 = rhs(y, ga, pa)
-            k2 = rhs(y + 0.5 * h * k1, gm, pm)
-            k3 = rhs(y + 0.5 * h * k2, gm, pm)
-            k4 = rhs(y + h * k3, gb, pb)
-            y = y + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-        return y
-
-    for i in range(gr.size - 1):
-        g0, g1, p0, p1 = gr[i], gr[i + 1], load[i], load[i + 1]
-        # a step that leaves the finite numbers (a hard stop far stiffer than the record's step
-        # resolves) is redone in 10, 100, 1000 substeps
-        n, nxt = 1, None
-        while n <= 1000:
-            with np.errstate(all="ignore"):
-                nxt = step(y, g0, g1, p0, p1, n)
-            if np.all(np.isfinite(nxt)) and np.all(np.abs(nxt[:4] - y[:4]) < 1.0):
-                break
-            n *= 10
-        y = nxt
-        if not np.all(np.isfinite(y)):
-            raise ReconstructError(f"the forward quarter car diverged at {t[i + 1]:.3f} s")
-        out[i + 1] = y[1] - y[0]
-    return out
 
 
 def histogram_distance(a, b, top: float, bins: int = 20) -> float:
@@ -438,7 +67,7 @@ def histogram_distance(a, b, top: float, bins: int = 20) -> float:
 
 
 
-BEAT_MARGIN = 0.10  # the rear predicted must be this much (10 %) lower in RMS than the better naive baseline
+BEAT_MARGIN = 0.40  # the rear predicted must be this much (40 %) lower in RMS than the better naive baseline
 TERRAIN_LEAD_IN_M = 3.0  # terrain.csv starts on this much level ground before the ride's first metre
 LEFT_OUT_S = 0.2  # around an airborne stretch, this much either side is left out of the checks
 
@@ -471,6 +100,9 @@ class Reconstruction:
     unaligned: list = None  # (start s, end s) windows with no speed (standing, or the ends do not align)
     fork_delayed: np.ndarray = None  # fork travel measured (mm) delayed by wheelbase / speed(t): a baseline's input
     wheelbase: float = math.nan  # m, at the ride's sag
+    passes: int = 0  # the whole bike's passes over the terrain (reconstruct_bike.terrain_and_rear)
+    settled_m: float = math.nan  # the rear predicted's RMS change in the last pass
+    diverged_s: float | None = None  # where the whole bike diverged (finding the terrain or riding it), or None
 
     def baselines(self) -> dict:
         """The two naive predictions of the rear the model must beat, on the samples checked: (a) the
@@ -490,7 +122,9 @@ class Reconstruction:
             nan = float("nan")
             return {"front_reproduced_rms_mm": nan, "rear_predicted_rms_mm": nan, "rear_travel_used_mm": nan,
                     "baseline_delayed_fork_rms_mm": nan, "baseline_rear_mean_rms_mm": nan, "passes": False,
-                    "verdict": "the model does not describe this ride: no sample of it can be checked",
+                    "verdict": "the model does not describe this ride: " + (
+                        f"the whole bike diverged at {self.diverged_s:.2f} s (finding the terrain or riding it): "
+                        if self.diverged_s is not None else "") + "no sample of it can be checked",
                     "rear_predicted_rms_percent_of_used": nan, "rear_histogram_distance_percent": nan,
                     "samples_checked_percent": 0.0}
         used = float(np.ptp(self.rear[v]))
@@ -500,8 +134,12 @@ class Reconstruction:
         rms_fork = float(np.sqrt(np.mean((base["delayed_fork_mm"][v] - self.rear[v]) ** 2)))
         rms_mean = float(np.sqrt(np.mean((base["mean_mm"] - self.rear[v]) ** 2)))
         need = (1.0 - BEAT_MARGIN) * min(rms_fork, rms_mean)
-        passes = bool(rms_rear <= need)
-        if passes:
+        passes = bool(rms_rear <= need) and self.diverged_s is None
+        if self.diverged_s is not None:
+            verdict = (f"the model does not describe this ride: the whole bike diverged at {self.diverged_s:.2f} s "
+                       f"(finding the terrain or riding it); before it the rear predicted {rms_rear:.1f} mm RMS "
+                       f"against {min(rms_fork, rms_mean):.1f} mm of the better naive baseline")
+        elif passes:
             verdict = (f"the model describes this ride: the rear predicted within {rms_rear:.1f} mm RMS, "
                        f"{100.0 * (1.0 - rms_rear / min(rms_fork, rms_mean)):.0f} % below the better naive baseline")
         else:
@@ -544,13 +182,18 @@ class Reconstruction:
                 "window_speed_range_m_per_s": [min(speeds), max(speeds)] if speeds else None,
                 "terrain_length_m": float(self.distance[-1]),
                 "terrain_csv_lead_in_m": TERRAIN_LEAD_IN_M,
-                "left_out": [{"start_s": float(a), "end_s": float(b), "why": "the front wheel off the ground (a jump)"}
-                             for a, b in self.jumps]
-                + [{"start_s": a, "end_s": b, "why": "no speed: standing, or the two ends do not align here"}
-                   for a, b in (self.unaligned or [])],
+                "flights": [{"start_s": float(a), "end_s": float(b)} for a, b in self.jumps],
+                "left_out": [{"start_s": a, "end_s": b, "why": "no speed: standing, or the two ends do not align here"}
+                             for a, b in (self.unaligned or [])],
+                "whole_bike": {"passes": int(self.passes),
+                               "settled_mm": 1e3 * float(self.settled_m) if math.isfinite(self.settled_m) else None,
+                               "diverged_s": self.diverged_s},
                 "checks": self.checks(),
-                "assumed": "vertical quarter cars at each end, the speed linear between the windows that gave one, "
-                           "no tyre damping in the inverse (mtbmj/ride/reconstruct.py)"}
+                "assumed": "the whole bike of the bike file in the plane (frame pitch, the rider on vertical legs and "
+                           "arms), vertical motion only, the wheelbase at sag, point-contact tyres without damping, "
+                           "the fork's slow load the rider's (the rear given none), the ground under a flight the "
+                           "chord from take-off to landing, the speed linear between the windows that gave one "
+                           "(mtbmj/ride/reconstruct.py)"}
 
     def line(self) -> str:
         s = self.summary()
@@ -566,7 +209,7 @@ class Reconstruction:
                 f"({c['rear_predicted_rms_percent_of_used']:.0f} % of the {c['rear_travel_used_mm']:.0f} mm used; "
                 f"baselines: delayed fork {c['baseline_delayed_fork_rms_mm']:.1f}, rear's mean "
                 f"{c['baseline_rear_mean_rms_mm']:.1f} mm), "
-                f"histograms {c['rear_histogram_distance_percent']:.0f} % apart; {len(self.jumps)} jump(s) and "
+                f"histograms {c['rear_histogram_distance_percent']:.0f} % apart; {len(self.jumps)} flight(s) bridged, "
                 f"{len(self.unaligned or [])} window(s) without a speed left out ({c['samples_checked_percent']:.0f} % "
                 f"of the ride checked)")
 
@@ -613,8 +256,8 @@ class Reconstruction:
         for a in ax:
             a.grid(alpha=0.3)
         verdict = c["verdict"].split(":", 1)[0]  # "the model (does not) describe(s) this ride"
-        fig.suptitle(f"{self.name} through {self.bike}: {verdict}\nleft out of the checks: red, the front wheel off "
-                     f"the ground; grey, no speed (standing, or the ends do not align)")
+        fig.suptitle(f"{self.name} through {self.bike}: {verdict}\nred, the front wheel off the ground (bridged, "
+                     f"checked); grey, no speed (left out)")
         return fig
 
     def write(self, out_dir) -> list:
@@ -634,31 +277,26 @@ class Reconstruction:
                                                  "reconstruction.json": (json.dumps(self.summary(), indent=2) + "\n").encode()})
 
 
-def _runs(mask):
-    """(start, end) index pairs of the True runs of ``mask``."""
-    m = np.concatenate(([False], mask, [False]))
-    d = np.diff(m.astype(int))
-    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
-
 
 def reconstruct(record, bike, overrides=None) -> Reconstruction:
     """``record`` (a ``mtbmj.measured.telemetry.TelemetryRecord`` with both ends) through the bike
-    ``bike`` (preset or file; ``overrides`` its keys): see the module doc."""
+    ``bike`` (preset, file or ``mtbmj.bike.spec.ResolvedBike``, which is not read again; ``overrides``
+    its keys): see the module doc."""
     from mtbmj.bike import run as bike_run
     from mtbmj.bike import spec as spec_mod
 
     if record.fork_mm is None or record.rear_mm is None:
         raise ReconstructError(f"{record.name}: needs both ends' records (the rear meets what the front met)")
     record = record.decimated(RATE_HZ)  # a 5 kHz version-2 record read at 1 kHz, low-passed first
-    spec = spec_mod.load(str(bike), overrides)
+    spec = spec_mod.load(bike, overrides)  # a ResolvedBike is derived again, not read
     t = np.asarray(record.time_s, float)
-    _check_length(t, spec.front_axle[0] - spec.rear_axle[0], WINDOW_S, record.name)  # before any work
+    check_length(t, spec.front_axle[0] - spec.rear_axle[0], WINDOW_S, record.name)  # before any work
     dt = float(t[1] - t[0])
     fork_mm, rear_mm = np.asarray(record.fork_mm, float), np.asarray(record.rear_mm, float)
     shock_mm = np.asarray(record.shock_mm, float) if record.shock_mm is not None else None
     if getattr(record, "version", 0) == 2:  # 5 kHz of coarse encoder steps: low-passed before any derivative
-        fork_mm, rear_mm = _lowpass(fork_mm, dt, V2_LOWPASS_HZ), _lowpass(rear_mm, dt, V2_LOWPASS_HZ)
-        shock_mm = None if shock_mm is None else _lowpass(shock_mm, dt, V2_LOWPASS_HZ)
+        fork_mm, rear_mm = lowpass(fork_mm, dt, V2_LOWPASS_HZ), lowpass(rear_mm, dt, V2_LOWPASS_HZ)
+        shock_mm = None if shock_mm is None else lowpass(shock_mm, dt, V2_LOWPASS_HZ)
     # the wheelbase at the ride's sag (the median travel of each end): the fork shortens it along the
     # steering axis, the rear axle moves on its arc about the pivot
     wheelbase = wheelbase_at(spec, float(np.median(fork_mm)) * 1e-3, float(np.median(rear_mm)) * 1e-3)
@@ -669,11 +307,12 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     m_rear = spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
     rate = fork_setup.tire.values(1).rate
     radius = fork_setup.tire_radius
-    front_car = QuarterCar(total * share - m_front, m_front, fork_setup.fork, rate, radius, g, fork_setup.travel)
-    rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g, shock_setup.travel)
+    rim = fork_setup.tire.rim.max_deflection if fork_setup.tire.rim is not None else math.inf
+    front_car = QuarterCar(total * share - m_front, m_front, fork_setup.fork, rate, radius, g, fork_setup.travel, rim)
+    rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g, shock_setup.travel, rim)
     sin_a = math.sin(spec.head_angle)
     fork = fork_mm * 1e-3
-    ground, tyre, air, extra = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
+    ground, tyre, air, extra, body, stops = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
     lev = spec.leverage
     rear = rear_mm * 1e-3
     shock = shock_mm * 1e-3 if shock_mm is not None else lev.strokes(rear)
@@ -682,30 +321,15 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     # delays its travel behind its ground by its own phase; the grounds carry none)
     ground_back, *_ = ground_under(t, rear, shock, rear_car, ratios)
     travel = (fork_mm, rear_mm)  # a window where either end stands still gives no speed
-    try:
-        speed = speed_from_lag(t, ground, ground_back, wheelbase, highpass_hz=GROUND_HIGHPASS_HZ, travel=travel)
-        speed["from"] = "the two ends' grounds"
-    except ReconstructError:  # where the rear's inverse is too rough to align: the travels themselves
-        try:
-            speed = speed_from_lag(t, fork_mm, rear_mm, wheelbase, travel=travel)
-        except ReconstructError as exc:
-            raise ReconstructError(f"{record.name}: {exc}") from None
-        speed["from"] = "the two ends' travel (their grounds did not align)"
+    try:  # per window: the grounds' lag where they align, else the travels' (high-passed at 5 Hz)
+        speed = speed_from_either(t, (ground, ground_back, GROUND_HIGHPASS_HZ), (fork_mm, rear_mm, LAG_HIGHPASS_HZ),
+                                  wheelbase, names=("the two ends' grounds", "the two ends' travel"), travel=travel)
+    except ReconstructError as exc:
+        raise ReconstructError(f"{record.name}: {exc}") from None
+    speed["from"] = ", ".join(sorted({s for s in speed["sources"] if s})) or None
     pad = int(round(LEFT_OUT_S / dt))
     lags = wheelbase / speed["speed_at"](t)  # s, the rear's lag behind the front at each moment
     bad = np.zeros(t.size, bool)
-    jumps = []
-    runs = []
-    for a, b in _runs(air):  # off the ground with gaps shorter than JUMP_GAP_S between: one jump
-        if runs and (a - runs[-1][1]) * float(t[1] - t[0]) < JUMP_GAP_S:
-            runs[-1] = (runs[-1][0], b)
-        else:
-            runs.append((a, b))
-    for a, b in runs:
-        jumps.append((float(t[a]), float(t[min(b, t.size - 1)])))
-        bad[max(0, a - pad): b + pad] = True
-        la, lb = int(round(lags[a] / dt)), int(round(lags[min(b, t.size - 1)] / dt))
-        bad[max(0, a - pad + la): b + pad + lb] = True  # the rear meets the same stretch a wheelbase later
     bad[:int(round(float(np.max(lags)) / dt)) + pad] = True  # the rear's first wheelbase has no terrain from the front
     bad[:int(round(2.0 / (HIGHPASS_HZ * 2 * math.pi) / dt))] = True  # the filters' start
     step = int(round(WINDOW_S / dt))
@@ -726,19 +350,25 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
                                f"{len(speed['windows'])} whose two ends aligned lie wholly where the front wheel was "
                                f"off the ground, or in the ride's first wheelbase or its filters' start (or the rear "
                                f"does not move there): no sample of the ride can be checked")
-    from mtbmj.ride.quartercar_compiled import FORK, LEVERAGE
+    # the terrain and the rear from the fork's record through the whole bike (the rear's record unused)
+    from mtbmj.ride import reconstruct_bike
 
-    front_again = forward(t, ground, front_car, lambda w: w / sin_a, lambda w: sin_a, float(fork[0] * sin_a),
-                          extra, native=(FORK, sin_a, None)) / sin_a
-    ground_rear = np.interp(t - lags, t, ground)
-    # a slow load shift moves weight between the ends: what the front gained the rear lost
-    rear_predicted = forward(t, ground_rear, rear_car, lev.stroke, lev.ratio_at, float(rear[0]), -extra,
-                             native=(LEVERAGE, 0.0, lev))
+    whole = reconstruct_bike.whole_bike(spec, fork_setup, shock_setup)
+    found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel, stops)
+    ground, rear_predicted = found["ground"], found["rear_rise"]
+    jumps = [(float(t[a]), float(t[min(b, t.size - 1)])) for a, b in runs(found["airborne"])]
+    # the check: the whole bike free over the terrain found, the rider's slow load on its front
+    again = reconstruct_bike.ride(t, whole, np.interp(t - lags, t, ground), front_ground=ground,
+                                  push=found["rider_slow_load"])
+    front_again = again["front_rise"] / sin_a
+    bad |= ~(np.isfinite(rear_predicted) & np.isfinite(front_again))  # past a divergence nothing is checked
+    diverged = [d for d in (found["diverged_s"], again["diverged_s"]) if d is not None]
     v = speed["speed_at"](t)
     distance = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)))
     return Reconstruction(record.name, spec.name, t, speed, distance, ground, ~bad, fork * 1e3, front_again * 1e3,
                           rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps, unaligned,
-                          np.interp(t - lags, t, fork * 1e3), wheelbase)
+                          np.interp(t - lags, t, fork * 1e3), wheelbase, found["passes"], found["settled_m"],
+                          min(diverged) if diverged else None)
 
 
 __all__ = ["min_seconds", "speed_from_lag", "ground_under", "forward", "histogram_distance", "reconstruct", "Reconstruction",

@@ -1,0 +1,221 @@
+"""The speed along a ride from the lag between its two ends (``mtbmj reconstruct``'s first step;
+mtbmj/ride/reconstruct.py's module doc says how it is used).
+
+The rear wheel meets what the front met a wheelbase later: the lag that best aligns two series of the
+ends (normalised cross-correlation, the peak refined by a parabola) gives v = wheelbase / lag per
+window of ``WINDOW_S`` seconds. A window gives no speed, and says why, where its correlation peak is
+below ``MIN_CORRELATION``, has a second peak within ``AMBIGUOUS`` of it, lies at either end of the lags
+searched or has its lobe reach an end, where its ``SUB_WINDOWS`` parts do not find their lags within
+the best peak or its speed's standard error (from those parts' lags) exceeds ``MAX_SPEED_SD`` of it,
+or where either end's travel spans less than ``STILL_MM`` (standing). A ride shorter than one window
+and the slowest lag searched (:func:`min_seconds`) is refused before any work.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mtbmj.errors import MtbmjError
+
+WINDOW_S = 5.0  # seconds per window of the speed estimate
+MIN_CORRELATION = 0.3  # a window whose best normalised correlation is below this gives no speed
+LAG_HIGHPASS_HZ = 5.0  # travel records high-passed before the lag is sought (the rider's slow motions out)
+AMBIGUOUS = 0.9  # a second correlation peak this close to the best leaves the lag undecided
+GROUND_HIGHPASS_HZ = 1.0  # the two ends' grounds high-passed before the lag is sought
+SPEED_RANGE = (1.0, 15.0)  # m/s the lag is searched for
+SUB_WINDOWS = 4  # a window's lag found again in this many parts of it: their spread is its uncertainty
+MAX_SPEED_SD = 0.10  # a window whose speed's standard error exceeds this share of it gives no speed
+STILL_MM = 1.0  # a window where either end's travel spans less than this is standing: it gives no speed
+
+
+class ReconstructError(MtbmjError):
+    """A ride that cannot be reconstructed: one line naming why."""
+
+
+
+def min_seconds(wheelbase: float, window_s: float = WINDOW_S) -> float:
+    """The shortest ride a speed can be sought in: one window and the slowest lag searched."""
+    return window_s + wheelbase / SPEED_RANGE[0]
+
+
+def check_length(t, wheelbase: float, window_s: float, name: str = "") -> None:
+    """Refuse (one line) a record too short for one speed window and the slowest lag searched."""
+    dt = float(t[1] - t[0]) if len(t) > 1 else math.nan
+    need = min_seconds(wheelbase, window_s)
+    if not len(t) > 1 or not (math.isfinite(dt) and dt > 0) or \
+            len(t) < int(round(window_s / dt)) + int(math.ceil(wheelbase / SPEED_RANGE[0] / dt)):
+        length = len(t) * dt if math.isfinite(dt) else 0.0
+        raise ReconstructError(f"{name + ': ' if name else ''}the ride is {length:.1f} s: a speed needs at least one "
+                               f"{window_s:g} s window and the slowest lag searched "
+                               f"({wheelbase / SPEED_RANGE[0]:.2f} s), {need:.2f} s: no speed estimate")
+
+
+def _scores(a, b, k_lo: int, k_hi: int, n: int):
+    """Normalised correlation of ``a[:n]`` with ``b[k:k + n]`` for k in k_lo..k_hi (each mean
+    removed): the products by FFT, each shifted stretch's spread from running sums."""
+    from scipy.signal import correlate
+
+    a0 = a[:n] - a[:n].mean()
+    aa = float(a0 @ a0)
+    seg = np.asarray(b[k_lo:k_hi + n], float)
+    seg = seg - seg.mean()  # the sums below lose nothing to a large mean
+    num = correlate(seg, a0, mode="valid", method="fft")
+    c1 = np.concatenate(([0.0], np.cumsum(seg)))
+    c2 = np.concatenate(([0.0], np.cumsum(seg * seg)))
+    s1, s2 = c1[n:] - c1[:-n], c2[n:] - c2[:-n]
+    bb = np.maximum(s2 - s1 * s1 / n, 0.0)
+    den = np.sqrt(aa * bb)
+    ok = den > 1e-12 * max(aa, 1e-300) * n
+    out = np.zeros(num.size)
+    out[ok] = num[ok] / den[ok]
+    return out[:k_hi - k_lo + 1]
+
+
+def _vertex(s, i: int) -> float:
+    """The parabola's vertex through s[i-1], s[i], s[i+1], as a shift from i (0 at an edge)."""
+    if 0 < i < s.size - 1:
+        den = s[i - 1] - 2 * s[i] + s[i + 1]
+        return 0.5 * (s[i - 1] - s[i + 1]) / den if den < 0 else 0.0
+    return 0.0
+
+
+def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S, highpass_hz: float = LAG_HIGHPASS_HZ,
+                   travel=None) -> dict:
+    """{"speed_m_per_s": the median of the windows' speeds, "lag_s", "windows": [(start_s, speed or
+    None, correlation)], "sd": each window's speed's standard error (m/s, or None), "why": why each
+    window gave no speed (None where it gave one), "speed_at": a function of time (the windows'
+    speeds at their centres, linear between, held past the first and last)}: see the module doc.
+    ``front`` and ``rear`` are series (any units) on ``t``; both are high-passed at ``highpass_hz``
+    first (what the terrain does, not the rider's slow weight shifts, which reach both ends at
+    once). ``travel`` (front mm, rear mm on ``t``), where given: a window where either end spans
+    less than ``STILL_MM`` is standing and gives no speed (what its filtered series hold there is
+    the filters' tails, which align at any lag). A window whose best lag is at either end of the
+    lags searched gives none (the peak is outside the search); so does one with a second peak
+    (outside the best one's lobe, down to half its height) at least ``AMBIGUOUS`` times as high,
+    or a best correlation below ``MIN_CORRELATION``. A window's standard error: the lag found again
+    in each of its ``SUB_WINDOWS`` parts within the best peak's lobe, their spread over the root of
+    their number; a window where more than one part finds its own best lag (over the whole search)
+    outside that lobe (the window holds more than one lag) gives no speed."""
+    check_length(t, wheelbase, window_s)
+    dt = float(t[1] - t[0])
+    from scipy.signal import butter, sosfiltfilt
+
+    sos = butter(2, highpass_hz, btype="highpass", fs=1.0 / dt, output="sos")
+    vf = np.gradient(sosfiltfilt(sos, np.asarray(front, float)), dt)
+    vr = np.gradient(sosfiltfilt(sos, np.asarray(rear, float)), dt)
+    lo, hi = wheelbase / SPEED_RANGE[1], wheelbase / SPEED_RANGE[0]
+    k_lo, k_hi = max(1, int(math.floor(lo / dt))), int(math.ceil(hi / dt))
+
+    def best(a, b):
+        """(lag s or None, correlation, why none, the lag's standard error s)."""
+        n = a.size - k_hi
+        if n < 10:
+            return None, 0.0, "too short", None
+        s = _scores(a, b, k_lo, k_hi, n)
+        i = int(np.argmax(s))
+        if i == 0 or i == s.size - 1:  # the best lag at the end of the search: the peak lies outside it
+            return None, float(s[i]), "the best lag at the edge of the search", None
+        if s[i] < MIN_CORRELATION:
+            return None, float(s[i]), f"best correlation below {MIN_CORRELATION:g}", None
+        low = np.flatnonzero(s <= 0.5 * s[i])  # the best peak's lobe: down to half its height each side
+        left, right = (low[low < i].max() if np.any(low < i) else -1), (low[low > i].min() if np.any(low > i) else s.size)
+        if left < 0 or right >= s.size:  # the peak's lobe runs into the end of the search: it may lie beyond
+            return None, float(s[i]), "the best peak's lobe reaches the edge of the search", None
+        peaks = np.flatnonzero((s[1:-1] > s[:-2]) & (s[1:-1] >= s[2:])) + 1
+        if np.any(((peaks < left) | (peaks > right)) & (s[peaks] >= AMBIGUOUS * s[i])):
+            return None, float(s[i]), f"a second peak within {AMBIGUOUS:g} of the best", None  # periodic: no speed
+        lag = (k_lo + i + _vertex(s, i)) * dt
+        # the lag's standard error: found again in each part of the window, within the best lobe
+        a_lo, a_hi = k_lo + max(left, 0), k_lo + min(right, s.size - 1)
+        part = n // SUB_WINDOWS
+        lags = []
+        for j in range(SUB_WINDOWS):  # each part's own best lag over the whole search, kept if within the lobe
+            sub = _scores(a[j * part:], b[j * part:], k_lo, k_hi, part)
+            m = int(np.argmax(sub))
+            if a_lo < k_lo + m < a_hi:
+                lags.append((k_lo + m + _vertex(sub, m)) * dt)
+        if len(lags) < SUB_WINDOWS - 1:  # the parts do not find the window's lag: it is not one lag
+            return None, float(s[i]), (f"its parts disagree ({SUB_WINDOWS - len(lags)} of {SUB_WINDOWS} find their "
+                                       f"own best lag outside the window's best peak)"), None
+        sd = float(np.std(lags, ddof=1)) / math.sqrt(len(lags))
+        return lag, float(s[i]), None, max(sd, dt / math.sqrt(12.0))  # no finer than the sample step's
+
+    windows, sds, whys = [], [], []
+    step = int(round(window_s / dt))
+    moving = None
+    if travel is not None:
+        tf, tr = (np.asarray(x, float) for x in travel)
+        moving = lambda a: (np.ptp(tf[a:a + step]) >= STILL_MM  # noqa: E731
+                            and np.ptp(tr[a:a + step + k_hi]) >= STILL_MM)
+    standing = 0
+    for start in range(0, max(vf.size - k_hi - step // 2, 1), step):
+        if moving is not None and not moving(start):
+            windows.append((start * dt, None, 0.0))  # standing: nothing the terrain did to align
+            sds.append(None)
+            whys.append(f"standing (an end moving less than {STILL_MM:g} mm)")
+            standing += 1
+            continue
+        wl, wc, why, sd = best(vf[start:start + step + k_hi], vr[start:start + step + k_hi])
+        v = None if wl is None else wheelbase / wl
+        if v is not None and sd / wl > MAX_SPEED_SD:  # its parts disagree: no speed to take from it
+            v, why = None, f"its parts' lags scatter (the speed uncertain by {100 * sd / wl:.0f} %, over " \
+                           f"{100 * MAX_SPEED_SD:g} %)"
+        windows.append((start * dt, v, wc))
+        sds.append(None if v is None else v * sd / wl)
+        whys.append(why)
+    return _profile(windows, sds, whys, wheelbase, window_s)
+
+
+def _profile(windows, sds, whys, wheelbase: float, window_s: float, sources=None) -> dict:
+    """speed_from_lag's answer from its windows: refused in one line where no window gave a speed."""
+    good = [(a + 0.5 * window_s, v) for a, v, _ in windows if v is not None]
+    if not good:
+        top = max((c for _, _, c in windows), default=0.0)
+        from collections import Counter
+
+        counts = Counter((w or "").split(" (")[0] for w in whys)
+        counts.pop("", None)
+        reasons = "; ".join(f"{n} {why}" for why, n in counts.most_common())
+        raise ReconstructError(f"the two ends' records do not align at any lag for {SPEED_RANGE[0]:g}-"
+                               f"{SPEED_RANGE[1]:g} m/s in any {window_s:g} s window (best correlation {top:.2f}; "
+                               f"of {len(windows)} windows: {reasons}): no speed from this ride")
+    centres, speeds = np.array([c for c, _ in good]), np.array([v for _, v in good])
+    speed = float(np.median(speeds))
+    return {"speed_m_per_s": speed, "lag_s": wheelbase / speed, "windows": windows, "sd": sds, "why": whys,
+            "wheelbase_m": wheelbase, "window_s": window_s, "sources": sources,
+            "speed_at": lambda time: np.interp(time, centres, speeds)}
+
+
+def speed_from_either(t, first, second, wheelbase: float, names=("first", "second"), travel=None) -> dict:
+    """The speed per window from ``first`` = (front, rear, high-pass Hz) where that window gives one,
+    else from ``second`` (the same windows): two estimates of one lag, the second asked only where the
+    first gives none. Each window's source named in "sources" (None where neither gave one; its
+    reason then the first's and the second's)."""
+    answers = []
+    for front, rear, hz in (first, second):
+        try:
+            answers.append(speed_from_lag(t, front, rear, wheelbase, highpass_hz=hz, travel=travel))
+        except ReconstructError as exc:
+            answers.append(exc)
+    if all(isinstance(a, ReconstructError) for a in answers):
+        raise answers[1]
+    ok = [a for a in answers if not isinstance(a, ReconstructError)]
+    base = ok[0]
+    windows, sds, whys, sources = [], [], [], []
+    for i in range(len(base["windows"])):
+        for name, a in zip(names, answers):
+            if not isinstance(a, ReconstructError) and a["windows"][i][1] is not None:
+                windows.append(a["windows"][i]), sds.append(a["sd"][i]), whys.append(None), sources.append(name)
+                break
+        else:
+            reasons = [(name, a["why"][i]) for name, a in zip(names, answers) if not isinstance(a, ReconstructError)]
+            if len({why for _, why in reasons}) == 1:  # both say the same (standing): said once
+                whys.append(reasons[0][1] or "no speed")
+            else:
+                whys.append("; ".join(f"{name}: {why}" for name, why in reasons) or "no speed")
+            windows.append(base["windows"][i]), sds.append(None), sources.append(None)
+    return _profile(windows, sds, whys, wheelbase, base["window_s"], sources)
+
+
+__all__ = ["WINDOW_S", "SPEED_RANGE", "ReconstructError", "min_seconds", "check_length", "speed_from_lag", "speed_from_either"]

@@ -1,0 +1,166 @@
+"""A ride reconstructed (mtbmj/ride/reconstruct.py, issue 51 item 5) against a ride made by a whole
+bike integrated in tests/helpers.py (``whole_bike_ride``: scipy's solve_ivp, its own equations, not the
+package's engines or laws' code): a frame that heaves and pitches, a rider on legs and arms (vertical
+springs and dampers at the pedals and the bars) who heaves and pitches on it and shifts a slow load
+fore and aft (a force pair at the bars and pedals, 80 N, 7 s period), the fork's lower and wheel
+sliding along the steering axis, the rear wheel on a constant leverage ratio, point-contact tyres
+that leave the ground, at a speed that varies along the ride (6.5 +- 1 m/s over 25 s), over terrain
+made there: ISO 8608 class C roughness (sum of sines, 0.05-8 cycles/m), a rock garden, a G-out,
+drops of 0.3 and 0.5 m and a tabletop jump of 0.4 m, written as SST version 3 integer counts through
+the bike file's [sensors] (tests/helpers.write_v3: the law of cosines inverted).
+
+Shared with the package, and so not tested here: the laws' form and values (helpers.law: a linear
+spring, a bumper, stiff stops and a damper of one rate each way, the values the bike file gives),
+the masses and geometry read from the same bike file (inputs), point-contact tyres of the bike file's
+rate without damping, vertical-only motion (no horizontal motion of the axles: the wheelbase fixed at
+its sag), the rear unsprung mass lumped at the axle (the wheel and half the swingarm). Not shared:
+the pitch coupling between the ends, the rider on his limbs (the package's inverse takes each end's
+sprung mass as rigid, its static share of bike and rider), the rider's slow load (the inverse takes
+the slow part of the fork's force as the rider's and gives the rear none), the split of the rider's
+on-bike mass (half at the pedals, half at the bars here).
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from scipy.signal import butter, sosfiltfilt
+
+from mtbmj.cli import main
+
+from helpers import WHOLE_RATE as RATE, SpeedProfile, bike_text, whole_bike_ride
+
+SECONDS = 40.0
+PROFILE = SpeedProfile(6.5, 1.0, 25.0)  # m/s: the speed V0 + DV sin(2 pi t / PERIOD)
+V0 = PROFILE.v0
+speed, along = PROFILE.at, PROFILE.along
+
+
+@pytest.fixture(scope="module")
+def made(tmp_path_factory):
+    return whole_bike_ride(tmp_path_factory.mktemp("whole_bike"), seconds=SECONDS, profile=PROFILE)
+
+
+@pytest.fixture(scope="module")
+def rebuilt(made, tmp_path_factory):
+    out = tmp_path_factory.mktemp("rebuilt") / "rec"
+    assert main(["reconstruct", str(made["sst"]), "--bike", str(made["bike"]), "--out", str(out)]) == 0
+    return out
+
+
+def test_the_made_ride_has_what_it_must(made):
+    """The ride made here leaves the ground (the jump, the drops) and uses the travel."""
+    assert made["airborne_front"] > 0.005
+    assert np.ptp(made["fork_mm"]) > 60.0 and np.ptp(made["rear_mm"]) > 50.0
+
+
+def test_the_speed_along_the_ride_comes_back(made, rebuilt):
+    """Every window's speed within 5 % of the made speed at its centre (within 3 % is issue 51's
+    target, below: one window of 7 is 3.2 % off); the profile (linear between the windows' centres)
+    within 3 % RMS over the samples checked."""
+    import csv as csv_mod
+
+    s = json.loads((rebuilt / "reconstruction.json").read_text())
+    accepted = [w for w in s["windows"] if w["speed_m_per_s"] is not None]
+    assert len(accepted) >= 0.6 * len(s["windows"])
+    for w in accepted:
+        assert w["speed_m_per_s"] == pytest.approx(float(speed(0.5 * (w["start_s"] + w["end_s"]))), rel=0.05), w
+    with open(rebuilt / "series.csv") as f:
+        rows = list(csv_mod.DictReader(f))
+    t = np.array([float(r["time_s"]) for r in rows])
+    v = np.array([float(r["speed_m_per_s"]) for r in rows])
+    checked = np.array([r["checked"] == "1" for r in rows])
+    assert np.sqrt(np.mean((v[checked] / speed(t[checked]) - 1.0) ** 2)) < 0.03
+
+
+def terrain_error_mm(made, rec) -> float:
+    """The terrain found under the front wheel against the made one, both high-passed at 5 m (at the
+    mean speed: V0 / 5 Hz in time), RMS over the samples the checks count (mm)."""
+    sos = butter(2, V0 / 5.0, btype="highpass", fs=RATE, output="sos")
+    truth = made["h"](along(made["t"]))
+    e = sosfiltfilt(sos, rec.ground) - sosfiltfilt(sos, truth)
+    return 1e3 * float(np.sqrt(np.mean(e[rec.valid] ** 2)))
+
+
+@pytest.fixture(scope="module")
+def reconstruction(made):
+    from types import SimpleNamespace
+
+    from mtbmj.cli.telemetry import decoding
+    from mtbmj.measured import telemetry
+    from mtbmj.ride import reconstruct
+
+    record = telemetry.read_ride(made["sst"], **decoding(SimpleNamespace(bike=str(made["bike"]), fork_max_mm=None,
+                                                                         shock_max_mm=None)))
+    return reconstruct.reconstruct(record, str(made["bike"]))
+
+
+def test_the_right_bike_describes_the_ride(rebuilt, reconstruction):
+    """The rear predicted from the fork's record alone beats both naive baselines by the stated margin
+    (40 %: the checks' pass), at a correlation above 0.8, and the headline says so in words."""
+    c = json.loads((rebuilt / "reconstruction.json").read_text())["checks"]
+    assert c["passes"] is True, c
+    assert c["beat_margin_percent"] == 40.0
+    assert c["rear_predicted_rms_mm"] <= 0.6 * min(c["baseline_delayed_fork_rms_mm"], c["baseline_rear_mean_rms_mm"])
+    assert c["verdict"].startswith("the model describes this ride")
+    v = reconstruction.valid
+    assert np.corrcoef(reconstruction.rear_predicted[v], reconstruction.rear[v])[0, 1] > 0.8
+
+
+@pytest.mark.xfail(strict=True, reason="issue 51's targets, not reached: on this ride the terrain is found within "
+                                       "about 21 mm RMS after a 5 m high-pass (target 15), the rear within about "
+                                       "0.51 of the delayed fork's RMS (target 0.5) at a correlation of about 0.88 "
+                                       "(target 0.9), one window's speed 3.2 % off (target 3 %)")
+def test_issue_51_targets(made, reconstruction):
+    c = reconstruction.checks()
+    v = reconstruction.valid
+    for (start, found, _) in reconstruction.speed["windows"]:
+        assert found is None or found == pytest.approx(float(speed(start + 2.5)), rel=0.03)
+    assert terrain_error_mm(made, reconstruction) < 15.0
+    assert c["rear_predicted_rms_mm"] <= 0.5 * c["baseline_delayed_fork_rms_mm"]
+    assert np.corrcoef(reconstruction.rear_predicted[v], reconstruction.rear[v])[0, 1] >= 0.9
+
+
+def test_the_terrain_is_found_under_the_jumps_and_drops(made, reconstruction):
+    """The terrain within 25 mm RMS after a 5 m high-pass (the made one spans 1.2 m: drops of 0.3 and
+    0.5 m, a 0.4 m tabletop, a 0.25 m G-out), the flights found: one starts within the first 0.5 m past
+    each drop's edge and one over the tabletop (its 7.5 m), and none is longer than 0.5 s (no flight
+    runs on past a landing)."""
+    assert terrain_error_mm(made, reconstruction) < 25.0
+    rec = reconstruction
+    where = lambda m: float(np.interp(m, along(made["t"]), made["t"]))  # noqa: E731 (s at m along the ride)
+    for name, span in (("jump", 7.5), ("drop_0.3", 0.5), ("drop_0.5", 0.5)):
+        a, b = where(made["features"][name]), where(made["features"][name] + span)
+        assert any(a <= start <= b for start, _ in rec.jumps), (name, a, b, rec.jumps)
+    assert max(end - start for start, end in rec.jumps) < 0.5
+
+
+@pytest.mark.parametrize("wrong", ["fork_spring_x1.5", "rider_25kg_heavier"])
+def test_a_wrong_bike_fails_the_checks_and_says_why(made, tmp_path, capsys, wrong):
+    """The same ride read through a bike that did not make it: its fork spring 1.5 times the made one,
+    or its rider 25 kg heavier. The rear predicted from the fork's record must lose to a naive
+    baseline by the stated margin, and the line says so in words."""
+    text = bike_text(18.0 if wrong == "fork_spring_x1.5" else 12.0)
+    if wrong == "rider_25kg_heavier":
+        from mtbmj.bike import spec as spec_mod
+
+        text += f"[rider]\nmass_kg = {spec_mod.load(str(made['bike'])).rider.mass + 25.0:g}\n"
+    bike = tmp_path / "wrong.toml"
+    bike.write_text(text)
+    assert main(["reconstruct", str(made["sst"]), "--bike", str(bike), "--out", str(tmp_path / "rec")]) == 0
+    line = capsys.readouterr().out
+    c = json.loads((tmp_path / "rec" / "reconstruction.json").read_text())["checks"]
+    assert c["passes"] is False, c
+    assert "the model does not describe this ride: it does not beat " in line
+
+
+def test_the_whole_bike_rides_its_reconstruction(made, rebuilt, tmp_path, capsys):
+    """`mtbmj bike` at the recorded setting rides the reconstructed terrain.csv as written, from its
+    level lead-in over the G-out, the drops and the tabletop, without a crash (exit 0, no 'crashed')."""
+    s = json.loads((rebuilt / "reconstruction.json").read_text())
+    length = s["terrain_length_m"] + s["terrain_csv_lead_in_m"]
+    code = main(["bike", str(made["bike"]), str(rebuilt / "terrain.csv"), "--speed", f"{V0:g}",
+                 "--duration", f"{0.9 * length / V0:.1f}", "--no-figure", "--quiet", "--out", str(tmp_path / "bike")])
+    out = capsys.readouterr()
+    assert code == 0 and "crashed" not in out.out + out.err, out
