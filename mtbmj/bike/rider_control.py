@@ -75,7 +75,13 @@ LEAD_S = 0.8  # s of riding before the edge over which the hips go back
 HIPS_BACK_M, HIPS_DOWN_M = 0.3, 0.0
 PITCH_GAIN_M_PER_RAD, RATE_GAIN_M_S = -1.0, -0.2  # nose down: the hips further back
 TRUNK_GAIN, TRUNK_RATE_S = 1.0, 0.2  # the trunk's lean (rad) per rad of the frame's pitch, per rad/s
-HOLD_AFTER_M = 1.5  # the drop's pose is held this far past where the rear wheel leaves the edge
+KNEE_BENT_DEG = (25.0, 110.0)  # the hips' targets within the leg's reach at these knee flexions (assumed)
+FOLLOW_RAMP_M = 0.2  # the pitch's following comes in over this much past the edge
+HOLD_AFTER_M = 0.0  # the drop's pose is held this far past where the rear wheel leaves the edge
+RELEASE_M = 1.0  # and let go over this much riding after it
+BACK_RANGE_M = (-0.15, 0.6)  # the hips' place behind the attack position's, least and most
+LEAN_MAX_RAD = 0.35  # the trunk's lean that follows the pitch, at most
+AIM_INSIDE_DEG = 10.0  # every joint's target kept this far inside its range of motion
 LOADED_N = 50.0
 
 
@@ -116,17 +122,24 @@ class Controller:
     wheelbase: float
     seated: bool = False
     saddle: tuple | None = None
-    x_start: float = -math.inf  # the front axle's start (m): a ramp begun before it begins there
-
+    x_start: float = -math.inf  # the front axle's start (m)
+    hold_x: float | None = None  # the targets as at this front axle's place, wherever it is (the settling)
 
     def drop_share(self, x_front: float) -> float:
-        """How far into a drop's pose (0-1) the rider is with the front axle at ``x_front``."""
+        """How far into a drop's pose (0-1) the rider is with the front axle at ``x_front``. The
+        ramp is the same however far before the edge the run starts: a run started within it
+        starts (settles) in the pose the ramp has there (``hold_x``), where it used to squeeze
+        the whole ramp into the run-up left (1.8 m, 0.36 s at 5 m/s to the 1 m drop): the body
+        thrown back that fast hopped the bike off the ledge and landed it into the rear bumper
+        before the take-off."""
+        if self.hold_x is not None:
+            x_front = self.hold_x
         lead = max(self.speed * LEAD_S, 0.5)
         share = 0.0
         for e in self.edges:
-            begin = max(e - lead, self.x_start)
+            begin = e - lead
             up = _smooth((x_front - begin) / max(e - 0.4 * lead - begin, 0.05))
-            down = 1.0 - _smooth((x_front - (e + self.wheelbase + HOLD_AFTER_M)) / 0.5)
+            down = 1.0 - _smooth((x_front - (e + self.wheelbase + HOLD_AFTER_M)) / RELEASE_M)
             share = max(share, min(up, down))
         return share
 
@@ -134,12 +147,41 @@ class Controller:
         if self.seated:
             return self.hip, self.trunk
         s = self.drop_share(x_front)
-        back = HIPS_BACK_M + PITCH_GAIN_M_PER_RAD * pitch + RATE_GAIN_M_S * rate
-        back = min(max(back, 0.0), 0.45)
-        hip = (self.hip[0] - s * back, self.hip[1] - s * HIPS_DOWN_M)
+        f = s * self.past_edge(x_front)  # the pitch followed once the front wheel is over the edge
+        back = HIPS_BACK_M + f * (PITCH_GAIN_M_PER_RAD * pitch + RATE_GAIN_M_S * rate)
+        back = min(max(back, BACK_RANGE_M[0]), BACK_RANGE_M[1])
+        hip = self.reachable((self.hip[0] - s * back, self.hip[1] - s * HIPS_DOWN_M))
         reach = ARM_REACH * (self.body.upper_arm.length + self.body.forearm.length)
-        lean = s * (TRUNK_GAIN * pitch + TRUNK_RATE_S * rate)
+        lean = f * min(max(TRUNK_GAIN * pitch + TRUNK_RATE_S * rate, -LEAN_MAX_RAD), LEAN_MAX_RAD)
         return hip, rb.trunk_for_reach(self.body, hip, self.grip, reach) + lean
+
+
+    def past_edge(self, x_front: float) -> float:
+        """0 on the ledge, rising to 1 over ``FOLLOW_RAMP_M`` once the front axle is past an edge
+        (``hold_x`` as ``drop_share``'s). On the ledge the pose is held, not steered by the frame's
+        pitch: the body's own motion pitches the frame, and a pitch fed back on the ground is a
+        loop that threw the settling body about (both wheels off the flat before the edge)."""
+        if self.hold_x is not None:
+            x_front = self.hold_x
+        return max((_smooth((x_front - e) / FOLLOW_RAMP_M) for e in self.edges), default=0.0)
+
+    def reachable(self, hip) -> tuple:
+        """``hip`` (m, frame coordinates) held where the leg reaches it with the knee bent between
+        ``KNEE_BENT_DEG``: past the far bound the hips go down (at the same fore-aft place) onto
+        it, short of the near bound up. A target out of the leg's reach asked the knee to lock
+        straight and every muscle for its whole strength (module doc)."""
+        b = self.body
+        ankle = (self.pedal[0] + b.ankle_from_pedal[0], self.pedal[1] + b.ankle_from_pedal[1])
+        l1, l2 = b.thigh.length, b.shank.length
+        far, near = (math.sqrt(l1 * l1 + l2 * l2 + 2.0 * l1 * l2 * math.cos(math.radians(k))) for k in KNEE_BENT_DEG)
+        dx, dz = hip[0] - ankle[0], hip[1] - ankle[1]
+        d = math.hypot(dx, dz)
+        if near <= d <= far:
+            return tuple(hip)
+        r = far if d > far else near
+        if abs(dx) < r:
+            return (hip[0], ankle[1] + math.sqrt(r * r - dx * dx))
+        return (ankle[0] + r * dx / d, ankle[1] + r * dz / d)
 
 
 class RiderCallback:
@@ -164,11 +206,20 @@ class RiderCallback:
         self._j1, self._j2 = np.zeros((3, nv)), np.zeros((3, nv))
         self._q = np.zeros(nv)
         self.ranges = {k: tuple(math.radians(v) for v in rb.RANGES_DEG[k]) for k in JOINTS}
-        self.peak_torque = dict.fromkeys(JOINTS, 0.0)  # |muscle torque| N m, the run's largest
-        self.peak_ratio = dict.fromkeys(JOINTS, 0.0)  # of the limit in the torque's direction
-        self.peak_power = 0.0
+        margin = math.radians(AIM_INSIDE_DEG)
+        self.aim = {k: (lo + margin, hi - margin) for k, (lo, hi) in self.ranges.items()}
         self.saddle_peak = 0.0
         self.last = {}
+        self.clear_peaks()
+
+    def clear_peaks(self) -> None:
+        """Forget the peaks and the time at the limits (the run starts: the settling is not counted)."""
+        self.peak_torque = dict.fromkeys(JOINTS, 0.0)
+        self.peak_ratio = dict.fromkeys(JOINTS, 0.0)
+        self.peak_demand = dict.fromkeys(JOINTS, 0.0)  # the unlimited torque asked, of the limit
+        self.at_limit_s = dict.fromkeys(JOINTS, 0.0)  # s with the torque held at the limit
+        self.peak_power = self.saddle_peak = 0.0
+        self._t_seen = -math.inf
 
     # the bike callback's face (mtbmj.bike.run reads these)
     @property
@@ -233,13 +284,18 @@ class RiderCallback:
         ctl = self.controller
         pitch = d.qpos[self.qadr["pitch"]]
         hip, trunk = ctl.targets(d.site_xpos[self.s_front][0], pitch, qvel[self.dof["pitch"]])
-        want = rb.pose(self.body, ctl.pedal, ctl.grip, hip, trunk).angles
+        want = {k: min(max(a, self.aim[k][0]), self.aim[k][1])  # a target the joint reaches
+                for k, a in rb.pose(self.body, ctl.pedal, ctl.grip, hip, trunk).angles.items()}
         now, speed = self.angles(d.qpos), self.rates(qvel)
-        taus = {}
+        taus, clamped = {}, {}
         for k in JOINTS:
             kp, kd = GAINS[k]
             flex, ext = STRENGTH_N_M[k]
-            taus[k] = min(max(kp * (want[k] - now[k]) - kd * speed[k], -ext), flex)
+            ask = kp * (want[k] - now[k]) - kd * speed[k]
+            taus[k] = min(max(ask, -ext), flex)
+            demand = ask / flex if ask > 0 else -ask / ext
+            self.peak_demand[k] = max(self.peak_demand[k], float(demand))
+            clamped[k] = demand >= 1.0
         power = sum(max(taus[k] * speed[k], 0.0) for k in JOINTS)
         if power > POWER_W:
             scale = POWER_W / power
@@ -267,6 +323,12 @@ class RiderCallback:
             self.add_torque(Q, k, applied[k])
         if power > self.peak_power:
             self.peak_power = power
+        if d.time > self._t_seen:  # each stretch of time counted once (a stretch stepped again is not)
+            if self._t_seen > -math.inf:
+                for k in JOINTS:
+                    if clamped[k]:
+                        self.at_limit_s[k] += d.time - self._t_seen
+            self._t_seen = d.time
         if ctl.seated and ctl.saddle is not None:
             self._saddle(m, d, Q)
         d.qfrc_applied[:] += Q
@@ -292,7 +354,8 @@ class RiderCallback:
     def report(self) -> dict:
         """What the summary says of the rider: each joint's largest muscle torque against its limit."""
         joints = {k: {"peak_N_m": round(self.peak_torque[k], 3), "limit_flexion_N_m": STRENGTH_N_M[k][0],
-                      "limit_extension_N_m": STRENGTH_N_M[k][1], "peak_of_limit": round(self.peak_ratio[k], 4)}
+                      "limit_extension_N_m": STRENGTH_N_M[k][1], "peak_of_limit": round(self.peak_ratio[k], 4),
+                      "asked_peak_of_limit": round(self.peak_demand[k], 3), "at_limit_s": round(self.at_limit_s[k], 4)}
                   for k in JOINTS}
         return {"kind": "active", "height_m": self.body.height, "joints": joints,
                 "within_limits": all(v["peak_of_limit"] <= 1.0 + 1e-9 for v in joints.values()),
@@ -373,7 +436,8 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     # settle in place: held fore and aft, coasting, the Python callback (a second is 2000 steps)
     coast = BikeCallback(b, p.fork_law, p.shock_law, p.front_tire, rear, Drive("coast", 0.0), p.speed, p.traction,
                          refresh)
-    settle = RiderCallback(b.model, coast, body, pose0, dataclasses.replace(ctl, edges=[]))  # the stance
+    # the pose the controller asks for at the start (the stance, or a drop's pose begun before it)
+    settle = RiderCallback(b.model, coast, body, pose0, dataclasses.replace(ctl, hold_x=ctl.x_start))
     xdof = b.dof_index("bike_x")
     keep = float(b.model.dof_armature[xdof])
     b.model.dof_armature[xdof] = hold
@@ -389,9 +453,7 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     inner.reset()
     with installed(rc):
         mujoco.mj_forward(b.model, data)
-    rc.peak_torque = dict.fromkeys(JOINTS, 0.0)
-    rc.peak_ratio = dict.fromkeys(JOINTS, 0.0)
-    rc.peak_power = rc.saddle_peak = 0.0
+    rc.clear_peaks()
     p.bike, p.callback, p.data = b, rc, data
     p.initial_qpos, p.initial_qvel, p.initial_act = data.qpos.copy(), data.qvel.copy(), data.act.copy()
     p.watch = crash.Watch(b.model, p.terrain, b.qpos_index("pitch"))
