@@ -1,0 +1,131 @@
+"""The active rider's mended defects (issue 54): the ledge before a drop (no hop, no rear bottomed),
+the shoulder's branch cut (no 100 Hz chatter), the targets within reach and range, and the time
+each joint spends at its strength limit, reported (mtbmj/bike/rider_body.py, rider_control.py)."""
+import math
+
+import numpy as np
+import pytest
+
+from mtbmj.bike import rider_body as rb
+from mtbmj.bike import rider_control as rc
+from mtbmj.bike import spec as spec_mod
+from mtbmj.bike.run import run_bike
+
+EDGE_SHARE = 0.85  # the rear's travel on the ledge at most this share of the wheel's travel
+
+
+@pytest.fixture(scope="module", params=["sst", "trail"])
+def drop(request):
+    return run_bike(request.param, "drop:height_mm=1000", 5.0, rider="active")
+
+
+def _on_ledge(res):
+    """Samples with the rear axle still before the drop's edge, and those with the front's too."""
+    edge = res.summary["rider"]["drops_seen_m"][0]
+    raw = res.raw
+    return raw["rear_axle_x_m"] < edge, raw["front_axle_x_m"] < edge
+
+
+def test_the_rear_is_not_bottomed_on_the_ledge(drop):
+    """A rider unweights before a drop; the controller threw its body back over the 1.8 m of
+    run-up, hopped the bike and landed it into the rear bumper (169 of 174 mm) before the take-off."""
+    rear_ledge, _ = _on_ledge(drop)
+    travel = drop.raw["rear_travel_mm"][rear_ledge]
+    full = drop.summary["rear_wheel_travel_mm"]
+    assert travel.size > 100
+    assert travel.max() < EDGE_SHARE * full
+    # and the rear wheel stays on the ledge until the front is over the edge (no hop on the flat)
+    _, front_ledge = _on_ledge(drop)
+    assert np.all(drop.raw["rear_tire_N"][front_ledge][20:] > 0.0)
+
+
+def test_no_chatter_on_the_ledge(drop):
+    """The rider's vertical acceleration on the ledge: its jerk (RMS, by differences written here)
+    and the share of its power above 50 Hz (a 100 Hz chatter of a few m/s2 ran 0.1-0.18 s)."""
+    _, front_ledge = _on_ledge(drop)
+    t = drop.raw["time_s"][front_ledge]
+    a = drop.raw["rider_acc_z_m_per_s2"][front_ledge]
+    keep = t >= 0.02  # the first samples: the roll-off from the settled stance
+    t, a = t[keep], a[keep]
+    dt = t[1] - t[0]
+    jerk = np.diff(a) / dt
+    assert np.sqrt(np.mean(jerk ** 2)) < 300.0  # m/s3 (it was 7700 between 0.1 and 0.18 s)
+    x = a - a.mean()
+    power = np.abs(np.fft.rfft(x * np.hanning(x.size))) ** 2
+    f = np.fft.rfftfreq(x.size, dt)
+    assert power[f > 50.0].sum() <= 0.05 * power.sum() + 1e-12
+
+
+def test_the_shoulder_has_no_cut_where_the_arm_goes():
+    """Arm straight along the trunk's line is 180 deg of shoulder flexion, inside its range: grips
+    a hair above and below that line give flexions a hair apart (they were +180 and -180 deg)."""
+    body = rb.body(85.0, 1.78)
+    trunk = math.radians(20.0)
+    hip = (0.0, 0.0)
+    arm = body.upper_arm.length + body.forearm.length
+    far = body.trunk.length + 0.98 * arm  # the elbow nearly straight
+    angles = []
+    for tilt in (-1e-3, 1e-3):
+        grip = (far * math.cos(trunk + tilt), far * math.sin(trunk + tilt))
+        angles.append(rb.pose(body, (0.3, -0.5), grip, hip, trunk).angles["shoulder"])
+    assert abs(angles[0] - angles[1]) < 0.05
+    lo, hi = (math.radians(v) for v in rb.RANGES_DEG["shoulder"])
+    for a in angles:
+        assert lo - 0.5 <= a <= hi + 0.5  # on the joint's own turn: near 180 deg (within the elbow's bend)
+    # every joint's angle lies within half a turn of the middle of its range
+    for name, (lo_d, hi_d) in rb.RANGES_DEG.items():
+        mid = math.radians(0.5 * (lo_d + hi_d))
+        for a in (mid + 3.0, mid - 3.0, mid + 10.0):
+            w = rb.wrap_joint(name, a)
+            assert abs(w - mid) <= math.pi + 1e-12
+            assert math.isclose(math.cos(w), math.cos(a), abs_tol=1e-12)
+
+
+def _controller(bike="sst"):
+    spec = spec_mod.load(bike, {})
+    r = spec.rider
+    body = rb.body(r.mass + r.on_bike_mass, r.height)
+    hip, trunk = rc.stance(spec, body)
+    return rc.Controller(body, (r.leg_x, r.leg_z), (r.arm_x, r.arm_z), hip, trunk, [5.0], 5.0, 1.2), body
+
+
+def test_the_hips_target_stays_within_the_legs_reach():
+    ctl, body = _controller()
+    ankle = (ctl.pedal[0] + body.ankle_from_pedal[0], ctl.pedal[1] + body.ankle_from_pedal[1])
+    l1, l2 = body.thigh.length, body.shank.length
+    # 0.6 m behind the stance at its height: out of the leg's reach (it is 0.88 m, the hips 0.81 m away)
+    far = (ctl.hip[0] - 0.6, ctl.hip[1])
+    assert math.dist(far, ankle) > l1 + l2
+    got = ctl.reachable(far)
+    assert got[0] == pytest.approx(far[0]) and got[1] < far[1]  # down, not forward
+    d = math.dist(got, ankle)
+    knee = math.pi - math.acos((l1 * l1 + l2 * l2 - d * d) / (2.0 * l1 * l2))  # law of cosines
+    assert math.degrees(knee) == pytest.approx(rc.KNEE_BENT_DEG[0], abs=1e-6)
+    # the stance itself is reachable and left where it is
+    assert ctl.reachable(ctl.hip) == pytest.approx(ctl.hip)
+
+
+def test_the_ramp_does_not_squeeze_into_a_short_run_up():
+    """The drop's pose is taken over the same distance however short the run-up: started 1.8 m
+    before the edge at 5 m/s the rider starts (settles) in the pose the ramp has there."""
+    ctl, _ = _controller()
+    edge = ctl.edges[0]
+    short = rc.Controller(**{**ctl.__dict__, "x_start": edge - 1.8})
+    assert short.drop_share(edge - 1.8) == pytest.approx(ctl.drop_share(edge - 1.8))
+    assert ctl.drop_share(edge - 1.8) > 0.9  # 1.8 m before the edge at 5 m/s: nearly in the pose
+    settled = rc.Controller(**{**ctl.__dict__, "hold_x": edge - 1.8})
+    assert settled.drop_share(edge + 0.5) == pytest.approx(ctl.drop_share(edge - 1.8))
+    # on the ledge the frame's pitch does not steer the hips; past the edge it does
+    assert ctl.targets(edge - 0.5, -0.2, -1.0) == ctl.targets(edge - 0.5, 0.0, 0.0)
+    assert ctl.targets(edge + 0.5, -0.2, -1.0)[0][0] < ctl.targets(edge + 0.5, 0.0, 0.0)[0][0]
+
+
+def test_time_at_the_limits_is_reported(drop):
+    r = drop.summary["rider"]
+    duration = float(drop.raw["time_s"][-1])
+    for name, joint in r["joints"].items():
+        assert 0.0 <= joint["at_limit_s"] <= duration
+        assert joint["asked_peak_of_limit"] >= joint["peak_of_limit"] - 1e-9
+        if joint["at_limit_s"] > 0.0:
+            assert joint["asked_peak_of_limit"] >= 1.0
+    assert "held at its limit longest" in drop.headline() or "none held at its limit" in drop.headline()
