@@ -31,14 +31,41 @@ On landing the legs and arms take the energy within their torque limits. The con
 state only (no memory of its own), so a stretch stepped again at the fine step (``mtbmj.runpath``)
 is stepped again alike.
 
-Strength sources (one side; *rounded, check at the source*): F. C. Anderson, D. C. Madigan and M.
-A. Nussbaum, "Maximum voluntary joint torque as a function of joint angle and angular velocity",
-J. Biomech. 40:3105-3113 (2007) (hip, knee, ankle of young men: peak isometric torques of the
-order given here); T. Harbo, J. Brincks and H. Andersen, "Maximal isokinetic and isometric muscle
-strength of major muscle groups related to age, body mass, height, and sex in 178 healthy
-subjects", Eur. J. Appl. Physiol. 112:267-275 (2012) (shoulder, elbow, hip, knee and ankle of
-men). Power: a sprint cyclist's peak, 1300-1700 W (J. C. Martin et al., Eur. J. Appl. Physiol.
-75:283 (1997); S. Dorel et al., Int. J. Sports Med. 26:739 (2005)): 1500 W, *assumed*.
+Strength (one side, isometric, N m; checked at the sources for issue 54 where a number was found):
+
+* knee 250 extension / 130 flexion: within a meta-analysis's pooled 95 % intervals for adult men
+  at mid-range knee angles, 2.92-3.45 N m/kg extension and 1.15-1.62 N m/kg flexion (a
+  meta-analysis of isometric knee strength, 411 studies and 13 893 participants, PubMed Central
+  PMC8554160; authors and journal not recorded here): 248-293 and 98-138 N m at 85 kg;
+* shoulder 80 flexion: men's static flexion 89.9 N m with the arm at the side and 68.6 N m at
+  45 deg of flexion (26 men and 25 women, KIN-COM; "Dynamic shoulder flexion strength for use in
+  occupational risk analysis and clinical assessment", its abstract; journal not recorded here);
+  95 extension is *not checked* (no source found in the time);
+* elbow 75 flexion / 60 extension: concentric peak torques of 199 young men, 0.78 and 0.67 N m
+  per kg of body mass (L. Lategan and P. E. Kruger, Afr. J. Phys. Health Educ. Recreat. Dance,
+  2003 special edition:165-172): 66 and 57 N m at 85 kg concentric, the isometric a little more;
+* hip 160 flexion / 250 extension, ankle 45 dorsiflexion / 150 plantar flexion: of the order of
+  D. E. Anderson, M. L. Madigan and M. A. Nussbaum, "Maximum voluntary joint torque as a function
+  of joint angle and angular velocity: model development and application to the lower limb",
+  J. Biomech. 40(14):3105-3113 (2007) (the model's parameters by sex and age; its tables were not
+  read for this round: *not checked*), and T. Harbo, J. Brincks and H. Andersen, Eur. J. Appl.
+  Physiol. 112:267-275 (2012) (regressions on age, height and mass; *not read*).
+
+The module's first version named the 2007 paper's authors wrongly (F. C. Anderson, D. C.
+Madigan); it is Dennis E. Anderson, Michael L. Madigan and Maury A. Nussbaum. Power: a sprint
+cyclist's peak, 1300-1700 W (J. C. Martin et al., Eur. J. Appl. Physiol. 75:283 (1997); S. Dorel
+et al., Int. J. Sports Med. 26:739 (2005)): 1500 W, *assumed*.
+
+The controller's mends (issue 54): joint angles are read on a turn centred on each range
+(``rider_body.wrap_joint``: the shoulder's 180 deg target had flipped to -180 deg, a 100 Hz
+chatter); the hips' target is kept within the leg's reach (``Controller.reachable``) and every
+joint's target ``AIM_INSIDE_DEG`` inside its range (targets outside had every muscle at its limit
+and the knee locked straight); a run started within a drop's ramp starts in its pose instead of
+squeezing the ramp into the run-up (the hop that landed the rear in its bumper on the ledge); the
+frame's pitch steers the hips only past the edge; the drop's pose is let go over ``RELEASE_M``
+once the rear wheel has left the edge (held 1.5 m longer, the hips far back looped the bike out
+after landing). The summary reports, per joint, the torque asked of it (``asked_peak_of_limit``,
+above 1 where the limit cut it) and the time spent at the limit (``at_limit_s``).
 """
 from __future__ import annotations
 
