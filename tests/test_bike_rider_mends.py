@@ -2,6 +2,7 @@
 the shoulder's branch cut (no 100 Hz chatter), the targets within reach and range, and the time
 each joint spends at its strength limit, reported (mtbmj/bike/rider_body.py, rider_control.py)."""
 import math
+import os
 
 import numpy as np
 import pytest
@@ -129,3 +130,73 @@ def test_time_at_the_limits_is_reported(drop):
         if joint["at_limit_s"] > 0.0:
             assert joint["asked_peak_of_limit"] >= 1.0
     assert "held at its limit longest" in drop.headline() or "none held at its limit" in drop.headline()
+
+
+# pedalling through the legs (issue 54, item 4)
+
+def test_the_foots_reaction_goes_through_the_leg():
+    """Pedalling, the bike's callback puts the driving foot's reaction on the ``rider`` body; the
+    active rider moves that wrench onto the shank on the same line of action: the force the same,
+    its moment about one point the same (written here: tau_O = tau_c + c x F), the trunk freed."""
+    import mujoco
+
+    from mtbmj.bike import run
+
+    p = run.prepare("sst", "climb:grade_percent=10,length_m=20,at_m=0.5", None, pedal=(70.0, 300.0),
+                    rider="active")
+    m, d, cb = p.bike.model, p.data, p.callback
+    rider, shank = m.body("rider").id, m.body("shank").id
+    found = 0
+    for x in np.linspace(0.05, 0.4, 8):  # crank angles along the stroke: where a foot drives
+        d.qpos[p.bike.qpos_index("bike_x")] = p.initial_qpos[p.bike.qpos_index("bike_x")] + x
+        mujoco.mj_forward(m, d)
+        d.xfrc_applied[:] = 0.0
+        cb.inner(m, d)  # the bike's own forces: the foot's reaction on the rider body
+        w = d.xfrc_applied[rider].copy()
+        if not w[:3].any():
+            continue
+        found += 1
+        about_origin = w[3:] + np.cross(d.xipos[rider], w[:3])
+        d.xfrc_applied[:] = 0.0
+        cb(m, d)
+        got = d.xfrc_applied[shank]
+        assert not d.xfrc_applied[rider].any()
+        assert got[:3] == pytest.approx(w[:3], rel=1e-12)
+        assert got[3:] + np.cross(d.xipos[shank], got[:3]) == pytest.approx(about_origin, rel=1e-9, abs=1e-9)
+    assert found >= 4
+
+
+@pytest.mark.shared_data("sst_v2", "00089.SST", "00090.SST")
+def test_standing_over_seated_bob_against_the_records():
+    """Records 00089 (standing) and 00090 (seated) were pedalled at about 69 rpm. The active rider
+    pedals the SST bike at 69 rpm up a 13 % climb standing and seated: its bob comes at twice the
+    run's cadence (within 5 %), and standing over seated is within 2x of the records' ratio (which
+    does not depend on their calibration); the passive rider's ratio was 70-104."""
+    from conftest import SHARED_DATA
+
+    from mtbmj.bike.run import run_bike
+    from mtbmj.measured.bob import bob, run_stretch
+    from mtbmj.measured.telemetry import read_sst
+
+    ridden = {}
+    for name in ("00089.SST", "00090.SST"):
+        rec = read_sst(os.path.join(SHARED_DATA, "sst_v2", name))
+        ridden[name] = bob(rec.time_s, rec.rear_mm).amplitude_mm
+    ratio_ridden = ridden["00089.SST"] / ridden["00090.SST"]
+    amp = {}
+    for seated in (False, True):
+        r = run_bike("sst", "climb:grade_percent=13,length_m=60,at_m=0.5", None, 8.0, pedal=(69.0, 250.0),
+                     seated=seated, rider="active", overrides={"drive.chainring_teeth": 32, "drive.cog_teeth": 42})
+        assert r.summary["crash"] is None
+        t = r.raw["time_s"]
+        b = bob(t, r.raw["rear_travel_mm"], *run_stretch(t))
+        # the run's own cadence: the crank's turns over the stretch (the distance through the gear)
+        a, e = run_stretch(t)
+        keep = (t >= a) & (t <= e)
+        x = r.raw["x_m"][keep]
+        turns = (x[-1] - x[0]) * 42 / (32 * r.prepared.rear_tire.radius) / (2 * np.pi)
+        cadence = turns / (t[keep][-1] - t[keep][0]) * 60.0
+        assert b.frequency_Hz == pytest.approx(2.0 * cadence / 60.0, rel=0.05)
+        amp[seated] = b.amplitude_mm
+    ratio = amp[False] / amp[True]
+    assert ratio_ridden / 2.0 <= ratio <= 2.0 * ratio_ridden

@@ -295,6 +295,7 @@ class RiderCallback:
             return
         d.qfrc_applied[:] = 0.0
         self.inner(m, d)
+        self._foot_through_leg(d)
         Q = self._q
         Q[:] = 0.0
         qvel = d.qvel
@@ -360,6 +361,21 @@ class RiderCallback:
             self._saddle(m, d, Q)
         d.qfrc_applied[:] += Q
         self.last = {"taus": taus, "want": want, "now": now, "applied": applied}
+
+    def _foot_through_leg(self, d) -> None:
+        """Pedalling: the driving foot's push on its pedal has its reaction on the rider (the bike's
+        callback puts it on the ``rider`` body, the rigid rider's whole body). Here the same wrench,
+        on the same line of action, acts on the shank instead (the foot rigid on it): the leg's
+        muscles carry it to the hips, so the pedal stroke moves the body through the legs."""
+        shank = d.xfrc_applied[self.b_shank]
+        shank[:] = 0.0  # nothing else acts there
+        w = d.xfrc_applied[self.b_rider]
+        if not w.any():
+            return
+        f = w[:3].copy()
+        shank[:3] = f
+        shank[3:] = w[3:] + np.cross(d.xipos[self.b_rider] - d.xipos[self.b_shank], f)  # the same line of action
+        w[:] = 0.0
 
     def _saddle(self, m, d, Q) -> None:
         """The saddle's push on the sitting bones (one-sided), and its reaction on the frame."""
@@ -431,9 +447,6 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
 
     if p.lock or not p.rear_tire_on:
         raise ConfigError("rider: the active rider rides the whole bike (no --lock, no --lift-rear)")
-    if p.drive.mode == "pedal":
-        raise ConfigError("rider: the active rider does not pedal yet (pedalling through the legs is not built): "
-                          "use --rider passive with --pedal")
     spec = p.spec
     if seated and saddle_point(spec) is None:
         raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider (the saddle the active rider sits on)")
