@@ -71,7 +71,8 @@ class Against:
                            title=f"{self.rows[i]['record']} ({self.rows[i]['stance']}): four seconds", xlim=(0, 4))
             ax[1, col].legend(fontsize=8)
             ax[1, col].grid(alpha=0.3)
-        fig.suptitle(f"Pedal bob: bike {self.bike} pedalled at each record's cadence ({'{}x{}'.format(*GEAR)}, "
+        rider = self.rows[0].get("rider", "passive") if self.rows else "passive"
+        fig.suptitle(f"Pedal bob: bike {self.bike}, the {rider} rider, pedalled at each record's cadence ({'{}x{}'.format(*GEAR)}, "
                      f"the climb its power holds) beside the records (their amplitudes carry the records' "
                      f"calibration)", fontsize=9)
         return fig
