@@ -40,6 +40,40 @@ def test_the_rear_is_not_bottomed_on_the_ledge(drop):
     assert np.all(drop.raw["rear_tire_N"][front_ledge][20:] > 0.0)
 
 
+def test_the_bike_starts_and_rolls_on_both_wheels(drop):
+    """Settled in the drop's pose the bike stands on both wheels: level at the start, the front
+    tyre loaded over most of the ledge (a pose 0.3 m back, which the muscles did not hold, had the
+    front wheel 12 deg up before the run began)."""
+    raw = drop.raw
+    _, front_ledge = _on_ledge(drop)
+    assert abs(raw["pitch_deg"][0]) < 3.0
+    assert np.mean(raw["front_tire_N"][front_ledge] > 0.0) > 0.8
+
+
+def test_on_the_ledge_the_body_stays_over_the_pedals():
+    """The ledge's pose: the whole body's centre of mass (de Leva's segments, summed here) no more
+    than ``COM_BEHIND_PEDAL_M`` behind the pedals, and the hips as far back as that allows."""
+    ctl, body = _controller()
+    back = ctl.ledge_back
+    assert 0.0 < back < rc.HIPS_BACK_M
+    reach = rc.ARM_REACH * (body.upper_arm.length + body.forearm.length)
+
+    def com_x(b):
+        hip = ctl.reachable((ctl.hip[0] - b, ctl.hip[1]))
+        pose = rb.pose(body, ctl.pedal, ctl.grip, hip, rb.trunk_for_reach(body, hip, ctl.grip, reach))
+        parts = [(body.feet_mass, ctl.pedal[0] + body.feet_from_pedal[0]),
+                 (body.shank.mass, pose.knee[0] + body.shank.com / body.shank.length * (pose.ankle[0] - pose.knee[0])),
+                 (body.thigh.mass, pose.hip[0] + body.thigh.com / body.thigh.length * (pose.knee[0] - pose.hip[0])),
+                 (body.trunk.mass, pose.hip[0] + body.trunk.com / body.trunk.length * (pose.shoulder[0] - pose.hip[0])),
+                 (body.upper_arm.mass,
+                  pose.shoulder[0] + body.upper_arm.com / body.upper_arm.length * (pose.elbow[0] - pose.shoulder[0])),
+                 (body.forearm.mass, pose.elbow[0] + body.forearm.com / body.forearm.length * (pose.grip[0] - pose.elbow[0]))]
+        return sum(m * x for m, x in parts) / sum(m for m, _ in parts)
+
+    assert com_x(back) == pytest.approx(ctl.pedal[0] - rc.COM_BEHIND_PEDAL_M, abs=1e-6)
+    assert com_x(rc.HIPS_BACK_M) < ctl.pedal[0] - rc.COM_BEHIND_PEDAL_M - 0.05  # the old pose: far behind
+
+
 def test_no_chatter_on_the_ledge(drop):
     """The rider's vertical acceleration on the ledge: its jerk (RMS, by differences written here)
     and the share of its power above 50 Hz (a 100 Hz chatter of a few m/s2 ran 0.1-0.18 s)."""

@@ -70,6 +70,7 @@ above 1 where the limit cut it) and the time spent at the limit (``at_limit_s``)
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import mujoco
@@ -84,6 +85,9 @@ STRENGTH_ONE_SIDE_N_M = {"hip": (160.0, 250.0), "knee": (130.0, 250.0), "ankle":
                          "shoulder": (80.0, 95.0), "elbow": (75.0, 60.0)}
 STRENGTH_N_M = {k: (2.0 * a, 2.0 * b) for k, (a, b) in STRENGTH_ONE_SIDE_N_M.items()}  # both sides
 POWER_W = 1500.0
+REFERENCE_MASS_KG = 85.0  # the gains and strengths above are an 85 kg rider's
+MASS_SCALING = 0  # 1: gains in proportion to the mass, strengths to mass ** STRENGTH_MASS_EXPONENT
+STRENGTH_MASS_EXPONENT = 2.0 / 3.0
 # the muscles' stiffness (N m/rad) and damping (N m s/rad) about the target, both sides (assumed:
 # the legs' vertical stiffness about 25 N/mm at the attack position, the arms' a quarter of it)
 GAINS = {"hip": (1500.0, 60.0), "knee": (1500.0, 60.0), "ankle": (800.0, 30.0), "shoulder": (400.0, 16.0),
@@ -103,6 +107,7 @@ HIPS_BACK_M, HIPS_DOWN_M = 0.3, 0.0
 PITCH_GAIN_M_PER_RAD, RATE_GAIN_M_S = -1.0, -0.2  # nose down: the hips further back
 TRUNK_GAIN, TRUNK_RATE_S = 1.0, 0.2  # the trunk's lean (rad) per rad of the frame's pitch, per rad/s
 KNEE_BENT_DEG = (25.0, 110.0)  # the hips' targets within the leg's reach at these knee flexions (assumed)
+COM_BEHIND_PEDAL_M = 0.05  # on the ledge the body's centre of mass at most this far behind the pedals (assumed)
 FOLLOW_RAMP_M = 0.2  # the pitch's following comes in over this much past the edge
 HOLD_AFTER_M = 0.0  # the drop's pose is held this far past where the rear wheel leaves the edge
 RELEASE_M = 1.0  # and let go over this much riding after it
@@ -110,6 +115,15 @@ BACK_RANGE_M = (-0.15, 0.6)  # the hips' place behind the attack position's, lea
 LEAN_MAX_RAD = 0.35  # the trunk's lean that follows the pitch, at most
 AIM_INSIDE_DEG = 10.0  # every joint's target kept this far inside its range of motion
 LOADED_N = 50.0
+
+
+def scales(mass_kg: float) -> tuple[float, float]:
+    """(gains' factor, strengths' factor) for a rider of ``mass_kg`` against ``REFERENCE_MASS_KG``
+    (``MASS_SCALING``: both 1 when off)."""
+    if not MASS_SCALING:
+        return 1.0, 1.0
+    r = mass_kg / REFERENCE_MASS_KG
+    return r, r ** STRENGTH_MASS_EXPONENT
 
 
 def edges(terrain, step: float = 0.01) -> list[float]:
@@ -174,14 +188,41 @@ class Controller:
         if self.seated:
             return self.hip, self.trunk
         s = self.drop_share(x_front)
-        f = s * self.past_edge(x_front)  # the pitch followed once the front wheel is over the edge
-        back = HIPS_BACK_M + f * (PITCH_GAIN_M_PER_RAD * pitch + RATE_GAIN_M_S * rate)
-        back = min(max(back, BACK_RANGE_M[0]), BACK_RANGE_M[1])
+        past = self.past_edge(x_front)
+        f = s * past  # the pitch followed once the front wheel is over the edge
+        full = HIPS_BACK_M + PITCH_GAIN_M_PER_RAD * pitch + RATE_GAIN_M_S * rate
+        full = min(max(full, BACK_RANGE_M[0]), BACK_RANGE_M[1])
+        ledge = min(HIPS_BACK_M, self.ledge_back)
+        back = ledge + past * (full - ledge)
         hip = self.reachable((self.hip[0] - s * back, self.hip[1] - s * HIPS_DOWN_M))
         reach = ARM_REACH * (self.body.upper_arm.length + self.body.forearm.length)
         lean = f * min(max(TRUNK_GAIN * pitch + TRUNK_RATE_S * rate, -LEAN_MAX_RAD), LEAN_MAX_RAD)
         return hip, rb.trunk_for_reach(self.body, hip, self.grip, reach) + lean
 
+
+    @functools.cached_property
+    def ledge_back(self) -> float:
+        """How far back (m) the hips go on the ledge: at most as far as keeps the body's centre of
+        mass ``COM_BEHIND_PEDAL_M`` behind the pedals (bisection on the static pose). Further back
+        the body hangs on the bars, which its muscles did not hold: settled in a pose 0.3 m back
+        the body sagged backwards and pulled the front wheel up 12 deg before the run began."""
+        reach = ARM_REACH * (self.body.upper_arm.length + self.body.forearm.length)
+
+        def com_x(back):
+            hip = self.reachable((self.hip[0] - back, self.hip[1] - HIPS_DOWN_M))
+            trunk = rb.trunk_for_reach(self.body, hip, self.grip, reach)
+            return rb.centre_of_mass(self.body, rb.pose(self.body, self.pedal, self.grip, hip, trunk), self.pedal)[0]
+
+        want = self.pedal[0] - COM_BEHIND_PEDAL_M
+        lo, hi = 0.0, max(HIPS_BACK_M, 0.0)
+        if com_x(hi) >= want:
+            return hi
+        if com_x(lo) < want:
+            return lo
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if com_x(mid) >= want else (lo, mid)
+        return lo
 
     def past_edge(self, x_front: float) -> float:
         """0 on the ledge, rising to 1 over ``FOLLOW_RAMP_M`` once the front axle is past an edge
@@ -237,6 +278,9 @@ class RiderCallback:
         self.aim = {k: (lo + margin, hi - margin) for k, (lo, hi) in self.ranges.items()}
         self.saddle_peak = 0.0
         self.last = {}
+        g, f = scales(body.mass)
+        self.gains = {k: (kp * g, kd * g) for k, (kp, kd) in GAINS.items()}
+        self.strength = {k: (a * f, b * f) for k, (a, b) in STRENGTH_N_M.items()}
         self.clear_peaks()
 
     def clear_peaks(self) -> None:
@@ -317,8 +361,8 @@ class RiderCallback:
         now, speed = self.angles(d.qpos), self.rates(qvel)
         taus, clamped = {}, {}
         for k in JOINTS:
-            kp, kd = GAINS[k]
-            flex, ext = STRENGTH_N_M[k]
+            kp, kd = self.gains[k]
+            flex, ext = self.strength[k]
             ask = kp * (want[k] - now[k]) - kd * speed[k]
             taus[k] = min(max(ask, -ext), flex)
             demand = ask / flex if ask > 0 else -ask / ext
@@ -334,7 +378,7 @@ class RiderCallback:
         applied = {}
         for k in JOINTS:
             tau = taus[k]
-            flex, ext = STRENGTH_N_M[k]
+            flex, ext = self.strength[k]
             ratio = tau / flex if tau > 0 else -tau / ext
             if abs(tau) > self.peak_torque[k]:
                 self.peak_torque[k] = abs(tau)
@@ -396,8 +440,8 @@ class RiderCallback:
 
     def report(self) -> dict:
         """What the summary says of the rider: each joint's largest muscle torque against its limit."""
-        joints = {k: {"peak_N_m": round(self.peak_torque[k], 3), "limit_flexion_N_m": STRENGTH_N_M[k][0],
-                      "limit_extension_N_m": STRENGTH_N_M[k][1], "peak_of_limit": round(self.peak_ratio[k], 4),
+        joints = {k: {"peak_N_m": round(self.peak_torque[k], 3), "limit_flexion_N_m": round(self.strength[k][0], 3),
+                      "limit_extension_N_m": round(self.strength[k][1], 3), "peak_of_limit": round(self.peak_ratio[k], 4),
                       "asked_peak_of_limit": round(self.peak_demand[k], 3), "at_limit_s": round(self.at_limit_s[k], 4)}
                   for k in JOINTS}
         return {"kind": "active", "height_m": self.body.height, "joints": joints,
