@@ -85,9 +85,6 @@ STRENGTH_ONE_SIDE_N_M = {"hip": (160.0, 250.0), "knee": (130.0, 250.0), "ankle":
                          "shoulder": (80.0, 95.0), "elbow": (75.0, 60.0)}
 STRENGTH_N_M = {k: (2.0 * a, 2.0 * b) for k, (a, b) in STRENGTH_ONE_SIDE_N_M.items()}  # both sides
 POWER_W = 1500.0
-REFERENCE_MASS_KG = 85.0  # the gains and strengths above are an 85 kg rider's
-MASS_SCALING = 0  # 1: gains in proportion to the mass, strengths to mass ** STRENGTH_MASS_EXPONENT
-STRENGTH_MASS_EXPONENT = 2.0 / 3.0
 # the muscles' stiffness (N m/rad) and damping (N m s/rad) about the target, both sides (assumed:
 # the legs' vertical stiffness about 25 N/mm at the attack position, the arms' a quarter of it)
 GAINS = {"hip": (1500.0, 60.0), "knee": (1500.0, 60.0), "ankle": (800.0, 30.0), "shoulder": (400.0, 16.0),
@@ -115,15 +112,6 @@ BACK_RANGE_M = (-0.15, 0.6)  # the hips' place behind the attack position's, lea
 LEAN_MAX_RAD = 0.35  # the trunk's lean that follows the pitch, at most
 AIM_INSIDE_DEG = 10.0  # every joint's target kept this far inside its range of motion
 LOADED_N = 50.0
-
-
-def scales(mass_kg: float) -> tuple[float, float]:
-    """(gains' factor, strengths' factor) for a rider of ``mass_kg`` against ``REFERENCE_MASS_KG``
-    (``MASS_SCALING``: both 1 when off)."""
-    if not MASS_SCALING:
-        return 1.0, 1.0
-    r = mass_kg / REFERENCE_MASS_KG
-    return r, r ** STRENGTH_MASS_EXPONENT
 
 
 def edges(terrain, step: float = 0.01) -> list[float]:
@@ -278,9 +266,8 @@ class RiderCallback:
         self.aim = {k: (lo + margin, hi - margin) for k, (lo, hi) in self.ranges.items()}
         self.saddle_peak = 0.0
         self.last = {}
-        g, f = scales(body.mass)
-        self.gains = {k: (kp * g, kd * g) for k, (kp, kd) in GAINS.items()}
-        self.strength = {k: (a * f, b * f) for k, (a, b) in STRENGTH_N_M.items()}
+        self.gains = dict(GAINS)
+        self.strength = dict(STRENGTH_N_M)
         self.clear_peaks()
 
     def clear_peaks(self) -> None:
