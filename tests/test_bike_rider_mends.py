@@ -234,3 +234,15 @@ def test_standing_over_seated_bob_against_the_records():
         amp[seated] = b.amplitude_mm
     ratio = amp[False] / amp[True]
     assert ratio_ridden / 2.0 <= ratio <= 2.0 * ratio_ridden
+
+
+@pytest.mark.parametrize("bike", ["sst", "trail"])
+def test_a_1_5_m_drop_at_6_m_per_s_lands_on_both_bikes(bike):
+    """The issue's second drop: 1.5 m to flat at 6 m/s lands with the active rider (the first
+    version sent the trail bike over the bars once its defects were mended), and the summary
+    reports the time each joint spent at its limit."""
+    res = run_bike(bike, "drop:height_mm=1500", 6.0, rider="active")
+    s = res.summary
+    assert s["crash"] is None
+    assert s["pitch_deg"]["min"] > -45.0
+    assert set(s["rider"]["joints"]) == set(rc.JOINTS)
