@@ -189,6 +189,15 @@ class Controller:
 
 
     @functools.cached_property
+    def _leg_reach(self) -> tuple:
+        """(the ankle's point, the hips' farthest and nearest distance from it) for ``reachable``."""
+        b = self.body
+        ankle = (self.pedal[0] + b.ankle_from_pedal[0], self.pedal[1] + b.ankle_from_pedal[1])
+        l1, l2 = b.thigh.length, b.shank.length
+        far, near = (math.sqrt(l1 * l1 + l2 * l2 + 2.0 * l1 * l2 * math.cos(math.radians(k))) for k in KNEE_BENT_DEG)
+        return ankle, far, near
+
+    @functools.cached_property
     def ledge_back(self) -> float:
         """How far back (m) the hips go on the ledge: at most as far as keeps the body's centre of
         mass ``COM_BEHIND_PEDAL_M`` behind the pedals (bisection on the static pose). Further back
@@ -226,10 +235,7 @@ class Controller:
         ``KNEE_BENT_DEG``: past the far bound the hips go down (at the same fore-aft place) onto
         it, short of the near bound up. A target out of the leg's reach asked the knee to lock
         straight and every muscle for its whole strength (module doc)."""
-        b = self.body
-        ankle = (self.pedal[0] + b.ankle_from_pedal[0], self.pedal[1] + b.ankle_from_pedal[1])
-        l1, l2 = b.thigh.length, b.shank.length
-        far, near = (math.sqrt(l1 * l1 + l2 * l2 + 2.0 * l1 * l2 * math.cos(math.radians(k))) for k in KNEE_BENT_DEG)
+        ankle, far, near = self._leg_reach
         dx, dz = hip[0] - ankle[0], hip[1] - ankle[1]
         d = math.hypot(dx, dz)
         if near <= d <= far:
@@ -266,6 +272,7 @@ class RiderCallback:
         self.aim = {k: (lo + margin, hi - margin) for k, (lo, hi) in self.ranges.items()}
         self.saddle_peak = 0.0
         self.last = {}
+        self.pedalling = getattr(getattr(inner, "drive", None), "mode", None) == "pedal"
         self.gains = dict(GAINS)
         self.strength = dict(STRENGTH_N_M)
         self.clear_peaks()
@@ -326,7 +333,8 @@ class RiderCallback:
             return
         d.qfrc_applied[:] = 0.0
         self.inner(m, d)
-        self._foot_through_leg(d)
+        if self.pedalling:
+            self._foot_through_leg(d)
         Q = self._q
         Q[:] = 0.0
         qvel = d.qvel
