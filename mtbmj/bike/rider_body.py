@@ -186,14 +186,20 @@ def pose(b: Body, pedal, grip, hip, trunk_angle: float) -> Pose:
     elbow = _two_link(shoulder, grip, b.upper_arm.length, b.forearm.length, lambda p: -p[1])
     t_thigh, t_shank = _angle(hip, knee), _angle(knee, ankle)
     t_ua, t_fa = _angle(shoulder, elbow), _angle(elbow, grip)
-    angles = {"hip": _wrap(math.pi - trunk_angle + t_thigh), "knee": _wrap(t_thigh - t_shank),
-              "ankle": _wrap(math.pi / 2.0 - (t_shank + math.pi)), "shoulder": _wrap(t_ua - trunk_angle - math.pi),
-              "elbow": _wrap(t_fa - t_ua)}
-    return Pose(hip, knee, ankle, shoulder, elbow, tuple(grip), angles)
+    raw = {"hip": math.pi - trunk_angle + t_thigh, "knee": t_thigh - t_shank, "ankle": math.pi / 2.0 - (t_shank + math.pi),
+           "shoulder": t_ua - trunk_angle - math.pi, "elbow": t_fa - t_ua}
+    return Pose(hip, knee, ankle, shoulder, elbow, tuple(grip), {k: wrap_joint(k, a) for k, a in raw.items()})
 
 
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
+def wrap_joint(name: str, a: float) -> float:
+    """Angle ``a`` (rad) of joint ``name`` as the one turn centred on the middle of its range of
+    motion (``RANGES_DEG``): the cut half a turn from any angle the joint reaches. (Centred on
+    0, the cut at +-180 deg fell inside the shoulder's range, whose 180 deg of flexion is the arm
+    straight along the trunk's line: a target there flipped between +180 and -180 deg from one
+    evaluation to the next, and the muscle's torque with it, a 100 Hz chatter.)"""
+    lo, hi = RANGES_DEG[name]
+    mid = math.radians(0.5 * (lo + hi))
+    return mid + (a - mid + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def trunk_for_reach(b: Body, hip, grip, reach: float) -> float:
@@ -289,4 +295,4 @@ def attach(ms, spec, b: Body, p: Pose, pedal, visual: bool = True) -> None:
 
 
 __all__ = ["Body", "Segment", "Pose", "body", "pose", "attach", "centre_of_mass", "trunk_for_reach", "DE_LEVA",
-           "RANGES_DEG", "STATURE_M", "HEIGHT_RANGE_M"]
+           "RANGES_DEG", "STATURE_M", "HEIGHT_RANGE_M", "wrap_joint"]

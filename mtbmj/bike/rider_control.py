@@ -31,18 +31,46 @@ On landing the legs and arms take the energy within their torque limits. The con
 state only (no memory of its own), so a stretch stepped again at the fine step (``mtbmj.runpath``)
 is stepped again alike.
 
-Strength sources (one side; *rounded, check at the source*): F. C. Anderson, D. C. Madigan and M.
-A. Nussbaum, "Maximum voluntary joint torque as a function of joint angle and angular velocity",
-J. Biomech. 40:3105-3113 (2007) (hip, knee, ankle of young men: peak isometric torques of the
-order given here); T. Harbo, J. Brincks and H. Andersen, "Maximal isokinetic and isometric muscle
-strength of major muscle groups related to age, body mass, height, and sex in 178 healthy
-subjects", Eur. J. Appl. Physiol. 112:267-275 (2012) (shoulder, elbow, hip, knee and ankle of
-men). Power: a sprint cyclist's peak, 1300-1700 W (J. C. Martin et al., Eur. J. Appl. Physiol.
-75:283 (1997); S. Dorel et al., Int. J. Sports Med. 26:739 (2005)): 1500 W, *assumed*.
+Strength (one side, isometric, N m; checked at the sources for issue 54 where a number was found):
+
+* knee 250 extension / 130 flexion: within a meta-analysis's pooled 95 % intervals for adult men
+  at mid-range knee angles, 2.92-3.45 N m/kg extension and 1.15-1.62 N m/kg flexion (a
+  meta-analysis of isometric knee strength, 411 studies and 13 893 participants, PubMed Central
+  PMC8554160; authors and journal not recorded here): 248-293 and 98-138 N m at 85 kg;
+* shoulder 80 flexion: men's static flexion 89.9 N m with the arm at the side and 68.6 N m at
+  45 deg of flexion (26 men and 25 women, KIN-COM; "Dynamic shoulder flexion strength for use in
+  occupational risk analysis and clinical assessment", its abstract; journal not recorded here);
+  95 extension is *not checked* (no source found in the time);
+* elbow 75 flexion / 60 extension: concentric peak torques of 199 young men, 0.78 and 0.67 N m
+  per kg of body mass (L. Lategan and P. E. Kruger, Afr. J. Phys. Health Educ. Recreat. Dance,
+  2003 special edition:165-172): 66 and 57 N m at 85 kg concentric, the isometric a little more;
+* hip 160 flexion / 250 extension, ankle 45 dorsiflexion / 150 plantar flexion: of the order of
+  D. E. Anderson, M. L. Madigan and M. A. Nussbaum, "Maximum voluntary joint torque as a function
+  of joint angle and angular velocity: model development and application to the lower limb",
+  J. Biomech. 40(14):3105-3113 (2007) (the model's parameters by sex and age; its tables were not
+  read for this round: *not checked*), and T. Harbo, J. Brincks and H. Andersen, Eur. J. Appl.
+  Physiol. 112:267-275 (2012) (regressions on age, height and mass; *not read*).
+
+The module's first version named the 2007 paper's authors wrongly (F. C. Anderson, D. C.
+Madigan); it is Dennis E. Anderson, Michael L. Madigan and Maury A. Nussbaum. Power: a sprint
+cyclist's peak, 1300-1700 W (J. C. Martin et al., Eur. J. Appl. Physiol. 75:283 (1997); S. Dorel
+et al., Int. J. Sports Med. 26:739 (2005)): 1500 W, *assumed*.
+
+The controller's mends (issue 54): joint angles are read on a turn centred on each range
+(``rider_body.wrap_joint``: the shoulder's 180 deg target had flipped to -180 deg, a 100 Hz
+chatter); the hips' target is kept within the leg's reach (``Controller.reachable``) and every
+joint's target ``AIM_INSIDE_DEG`` inside its range (targets outside had every muscle at its limit
+and the knee locked straight); a run started within a drop's ramp starts in its pose instead of
+squeezing the ramp into the run-up (the hop that landed the rear in its bumper on the ledge); the
+frame's pitch steers the hips only past the edge; the drop's pose is let go over ``RELEASE_M``
+once the rear wheel has left the edge (held 1.5 m longer, the hips far back looped the bike out
+after landing). The summary reports, per joint, the torque asked of it (``asked_peak_of_limit``,
+above 1 where the limit cut it) and the time spent at the limit (``at_limit_s``).
 """
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import mujoco
@@ -75,7 +103,14 @@ LEAD_S = 0.8  # s of riding before the edge over which the hips go back
 HIPS_BACK_M, HIPS_DOWN_M = 0.3, 0.0
 PITCH_GAIN_M_PER_RAD, RATE_GAIN_M_S = -1.0, -0.2  # nose down: the hips further back
 TRUNK_GAIN, TRUNK_RATE_S = 1.0, 0.2  # the trunk's lean (rad) per rad of the frame's pitch, per rad/s
-HOLD_AFTER_M = 1.5  # the drop's pose is held this far past where the rear wheel leaves the edge
+KNEE_BENT_DEG = (25.0, 110.0)  # the hips' targets within the leg's reach at these knee flexions (assumed)
+COM_BEHIND_PEDAL_M = 0.05  # on the ledge the body's centre of mass at most this far behind the pedals (assumed)
+FOLLOW_RAMP_M = 0.2  # the pitch's following comes in over this much past the edge
+HOLD_AFTER_M = 0.0  # the drop's pose is held this far past where the rear wheel leaves the edge
+RELEASE_M = 1.0  # and let go over this much riding after it
+BACK_RANGE_M = (-0.15, 0.6)  # the hips' place behind the attack position's, least and most
+LEAN_MAX_RAD = 0.35  # the trunk's lean that follows the pitch, at most
+AIM_INSIDE_DEG = 10.0  # every joint's target kept this far inside its range of motion
 LOADED_N = 50.0
 
 
@@ -116,17 +151,24 @@ class Controller:
     wheelbase: float
     seated: bool = False
     saddle: tuple | None = None
-    x_start: float = -math.inf  # the front axle's start (m): a ramp begun before it begins there
-
+    x_start: float = -math.inf  # the front axle's start (m)
+    hold_x: float | None = None  # the targets as at this front axle's place, wherever it is (the settling)
 
     def drop_share(self, x_front: float) -> float:
-        """How far into a drop's pose (0-1) the rider is with the front axle at ``x_front``."""
+        """How far into a drop's pose (0-1) the rider is with the front axle at ``x_front``. The
+        ramp is the same however far before the edge the run starts: a run started within it
+        starts (settles) in the pose the ramp has there (``hold_x``), where it used to squeeze
+        the whole ramp into the run-up left (1.8 m, 0.36 s at 5 m/s to the 1 m drop): the body
+        thrown back that fast hopped the bike off the ledge and landed it into the rear bumper
+        before the take-off."""
+        if self.hold_x is not None:
+            x_front = self.hold_x
         lead = max(self.speed * LEAD_S, 0.5)
         share = 0.0
         for e in self.edges:
-            begin = max(e - lead, self.x_start)
+            begin = e - lead
             up = _smooth((x_front - begin) / max(e - 0.4 * lead - begin, 0.05))
-            down = 1.0 - _smooth((x_front - (e + self.wheelbase + HOLD_AFTER_M)) / 0.5)
+            down = 1.0 - _smooth((x_front - (e + self.wheelbase + HOLD_AFTER_M)) / RELEASE_M)
             share = max(share, min(up, down))
         return share
 
@@ -134,12 +176,74 @@ class Controller:
         if self.seated:
             return self.hip, self.trunk
         s = self.drop_share(x_front)
-        back = HIPS_BACK_M + PITCH_GAIN_M_PER_RAD * pitch + RATE_GAIN_M_S * rate
-        back = min(max(back, 0.0), 0.45)
-        hip = (self.hip[0] - s * back, self.hip[1] - s * HIPS_DOWN_M)
+        past = self.past_edge(x_front)
+        f = s * past  # the pitch followed once the front wheel is over the edge
+        full = HIPS_BACK_M + PITCH_GAIN_M_PER_RAD * pitch + RATE_GAIN_M_S * rate
+        full = min(max(full, BACK_RANGE_M[0]), BACK_RANGE_M[1])
+        ledge = min(HIPS_BACK_M, self.ledge_back)
+        back = ledge + past * (full - ledge)
+        hip = self.reachable((self.hip[0] - s * back, self.hip[1] - s * HIPS_DOWN_M))
         reach = ARM_REACH * (self.body.upper_arm.length + self.body.forearm.length)
-        lean = s * (TRUNK_GAIN * pitch + TRUNK_RATE_S * rate)
+        lean = f * min(max(TRUNK_GAIN * pitch + TRUNK_RATE_S * rate, -LEAN_MAX_RAD), LEAN_MAX_RAD)
         return hip, rb.trunk_for_reach(self.body, hip, self.grip, reach) + lean
+
+
+    @functools.cached_property
+    def _leg_reach(self) -> tuple:
+        """(the ankle's point, the hips' farthest and nearest distance from it) for ``reachable``."""
+        b = self.body
+        ankle = (self.pedal[0] + b.ankle_from_pedal[0], self.pedal[1] + b.ankle_from_pedal[1])
+        l1, l2 = b.thigh.length, b.shank.length
+        far, near = (math.sqrt(l1 * l1 + l2 * l2 + 2.0 * l1 * l2 * math.cos(math.radians(k))) for k in KNEE_BENT_DEG)
+        return ankle, far, near
+
+    @functools.cached_property
+    def ledge_back(self) -> float:
+        """How far back (m) the hips go on the ledge: at most as far as keeps the body's centre of
+        mass ``COM_BEHIND_PEDAL_M`` behind the pedals (bisection on the static pose). Further back
+        the body hangs on the bars, which its muscles did not hold: settled in a pose 0.3 m back
+        the body sagged backwards and pulled the front wheel up 12 deg before the run began."""
+        reach = ARM_REACH * (self.body.upper_arm.length + self.body.forearm.length)
+
+        def com_x(back):
+            hip = self.reachable((self.hip[0] - back, self.hip[1] - HIPS_DOWN_M))
+            trunk = rb.trunk_for_reach(self.body, hip, self.grip, reach)
+            return rb.centre_of_mass(self.body, rb.pose(self.body, self.pedal, self.grip, hip, trunk), self.pedal)[0]
+
+        want = self.pedal[0] - COM_BEHIND_PEDAL_M
+        lo, hi = 0.0, max(HIPS_BACK_M, 0.0)
+        if com_x(hi) >= want:
+            return hi
+        if com_x(lo) < want:
+            return lo
+        for _ in range(40):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if com_x(mid) >= want else (lo, mid)
+        return lo
+
+    def past_edge(self, x_front: float) -> float:
+        """0 on the ledge, rising to 1 over ``FOLLOW_RAMP_M`` once the front axle is past an edge
+        (``hold_x`` as ``drop_share``'s). On the ledge the pose is held, not steered by the frame's
+        pitch: the body's own motion pitches the frame, and a pitch fed back on the ground is a
+        loop that threw the settling body about (both wheels off the flat before the edge)."""
+        if self.hold_x is not None:
+            x_front = self.hold_x
+        return max((_smooth((x_front - e) / FOLLOW_RAMP_M) for e in self.edges), default=0.0)
+
+    def reachable(self, hip) -> tuple:
+        """``hip`` (m, frame coordinates) held where the leg reaches it with the knee bent between
+        ``KNEE_BENT_DEG``: past the far bound the hips go down (at the same fore-aft place) onto
+        it, short of the near bound up. A target out of the leg's reach asked the knee to lock
+        straight and every muscle for its whole strength (module doc)."""
+        ankle, far, near = self._leg_reach
+        dx, dz = hip[0] - ankle[0], hip[1] - ankle[1]
+        d = math.hypot(dx, dz)
+        if near <= d <= far:
+            return tuple(hip)
+        r = far if d > far else near
+        if abs(dx) < r:
+            return (hip[0], ankle[1] + math.sqrt(r * r - dx * dx))
+        return (ankle[0] + r * dx / d, ankle[1] + r * dz / d)
 
 
 class RiderCallback:
@@ -164,11 +268,23 @@ class RiderCallback:
         self._j1, self._j2 = np.zeros((3, nv)), np.zeros((3, nv))
         self._q = np.zeros(nv)
         self.ranges = {k: tuple(math.radians(v) for v in rb.RANGES_DEG[k]) for k in JOINTS}
-        self.peak_torque = dict.fromkeys(JOINTS, 0.0)  # |muscle torque| N m, the run's largest
-        self.peak_ratio = dict.fromkeys(JOINTS, 0.0)  # of the limit in the torque's direction
-        self.peak_power = 0.0
+        margin = math.radians(AIM_INSIDE_DEG)
+        self.aim = {k: (lo + margin, hi - margin) for k, (lo, hi) in self.ranges.items()}
         self.saddle_peak = 0.0
         self.last = {}
+        self.pedalling = getattr(getattr(inner, "drive", None), "mode", None) == "pedal"
+        self.gains = dict(GAINS)
+        self.strength = dict(STRENGTH_N_M)
+        self.clear_peaks()
+
+    def clear_peaks(self) -> None:
+        """Forget the peaks and the time at the limits (the run starts: the settling is not counted)."""
+        self.peak_torque = dict.fromkeys(JOINTS, 0.0)
+        self.peak_ratio = dict.fromkeys(JOINTS, 0.0)
+        self.peak_demand = dict.fromkeys(JOINTS, 0.0)  # the unlimited torque asked, of the limit
+        self.at_limit_s = dict.fromkeys(JOINTS, 0.0)  # s with the torque held at the limit
+        self.peak_power = self.saddle_peak = 0.0
+        self._t_seen = -math.inf
 
     # the bike callback's face (mtbmj.bike.run reads these)
     @property
@@ -217,6 +333,8 @@ class RiderCallback:
             return
         d.qfrc_applied[:] = 0.0
         self.inner(m, d)
+        if self.pedalling:
+            self._foot_through_leg(d)
         Q = self._q
         Q[:] = 0.0
         qvel = d.qvel
@@ -233,13 +351,18 @@ class RiderCallback:
         ctl = self.controller
         pitch = d.qpos[self.qadr["pitch"]]
         hip, trunk = ctl.targets(d.site_xpos[self.s_front][0], pitch, qvel[self.dof["pitch"]])
-        want = rb.pose(self.body, ctl.pedal, ctl.grip, hip, trunk).angles
+        want = {k: min(max(a, self.aim[k][0]), self.aim[k][1])  # a target the joint reaches
+                for k, a in rb.pose(self.body, ctl.pedal, ctl.grip, hip, trunk).angles.items()}
         now, speed = self.angles(d.qpos), self.rates(qvel)
-        taus = {}
+        taus, clamped = {}, {}
         for k in JOINTS:
-            kp, kd = GAINS[k]
-            flex, ext = STRENGTH_N_M[k]
-            taus[k] = min(max(kp * (want[k] - now[k]) - kd * speed[k], -ext), flex)
+            kp, kd = self.gains[k]
+            flex, ext = self.strength[k]
+            ask = kp * (want[k] - now[k]) - kd * speed[k]
+            taus[k] = min(max(ask, -ext), flex)
+            demand = ask / flex if ask > 0 else -ask / ext
+            self.peak_demand[k] = max(self.peak_demand[k], float(demand))
+            clamped[k] = demand >= 1.0
         power = sum(max(taus[k] * speed[k], 0.0) for k in JOINTS)
         if power > POWER_W:
             scale = POWER_W / power
@@ -250,7 +373,7 @@ class RiderCallback:
         applied = {}
         for k in JOINTS:
             tau = taus[k]
-            flex, ext = STRENGTH_N_M[k]
+            flex, ext = self.strength[k]
             ratio = tau / flex if tau > 0 else -tau / ext
             if abs(tau) > self.peak_torque[k]:
                 self.peak_torque[k] = abs(tau)
@@ -267,10 +390,31 @@ class RiderCallback:
             self.add_torque(Q, k, applied[k])
         if power > self.peak_power:
             self.peak_power = power
+        if d.time > self._t_seen:  # each stretch of time counted once (a stretch stepped again is not)
+            if self._t_seen > -math.inf:
+                for k in JOINTS:
+                    if clamped[k]:
+                        self.at_limit_s[k] += d.time - self._t_seen
+            self._t_seen = d.time
         if ctl.seated and ctl.saddle is not None:
             self._saddle(m, d, Q)
         d.qfrc_applied[:] += Q
         self.last = {"taus": taus, "want": want, "now": now, "applied": applied}
+
+    def _foot_through_leg(self, d) -> None:
+        """Pedalling: the driving foot's push on its pedal has its reaction on the rider (the bike's
+        callback puts it on the ``rider`` body, the rigid rider's whole body). Here the same wrench,
+        on the same line of action, acts on the shank instead (the foot rigid on it): the leg's
+        muscles carry it to the hips, so the pedal stroke moves the body through the legs."""
+        shank = d.xfrc_applied[self.b_shank]
+        shank[:] = 0.0  # nothing else acts there
+        w = d.xfrc_applied[self.b_rider]
+        if not w.any():
+            return
+        f = w[:3].copy()
+        shank[:3] = f
+        shank[3:] = w[3:] + np.cross(d.xipos[self.b_rider] - d.xipos[self.b_shank], f)  # the same line of action
+        w[:] = 0.0
 
     def _saddle(self, m, d, Q) -> None:
         """The saddle's push on the sitting bones (one-sided), and its reaction on the frame."""
@@ -291,8 +435,9 @@ class RiderCallback:
 
     def report(self) -> dict:
         """What the summary says of the rider: each joint's largest muscle torque against its limit."""
-        joints = {k: {"peak_N_m": round(self.peak_torque[k], 3), "limit_flexion_N_m": STRENGTH_N_M[k][0],
-                      "limit_extension_N_m": STRENGTH_N_M[k][1], "peak_of_limit": round(self.peak_ratio[k], 4)}
+        joints = {k: {"peak_N_m": round(self.peak_torque[k], 3), "limit_flexion_N_m": round(self.strength[k][0], 3),
+                      "limit_extension_N_m": round(self.strength[k][1], 3), "peak_of_limit": round(self.peak_ratio[k], 4),
+                      "asked_peak_of_limit": round(self.peak_demand[k], 3), "at_limit_s": round(self.at_limit_s[k], 4)}
                   for k in JOINTS}
         return {"kind": "active", "height_m": self.body.height, "joints": joints,
                 "within_limits": all(v["peak_of_limit"] <= 1.0 + 1e-9 for v in joints.values()),
@@ -341,9 +486,6 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
 
     if p.lock or not p.rear_tire_on:
         raise ConfigError("rider: the active rider rides the whole bike (no --lock, no --lift-rear)")
-    if p.drive.mode == "pedal":
-        raise ConfigError("rider: the active rider does not pedal yet (pedalling through the legs is not built): "
-                          "use --rider passive with --pedal")
     spec = p.spec
     if seated and saddle_point(spec) is None:
         raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider (the saddle the active rider sits on)")
@@ -373,7 +515,8 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     # settle in place: held fore and aft, coasting, the Python callback (a second is 2000 steps)
     coast = BikeCallback(b, p.fork_law, p.shock_law, p.front_tire, rear, Drive("coast", 0.0), p.speed, p.traction,
                          refresh)
-    settle = RiderCallback(b.model, coast, body, pose0, dataclasses.replace(ctl, edges=[]))  # the stance
+    # the pose the controller asks for at the start (the stance, or a drop's pose begun before it)
+    settle = RiderCallback(b.model, coast, body, pose0, dataclasses.replace(ctl, hold_x=ctl.x_start))
     xdof = b.dof_index("bike_x")
     keep = float(b.model.dof_armature[xdof])
     b.model.dof_armature[xdof] = hold
@@ -389,9 +532,7 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     inner.reset()
     with installed(rc):
         mujoco.mj_forward(b.model, data)
-    rc.peak_torque = dict.fromkeys(JOINTS, 0.0)
-    rc.peak_ratio = dict.fromkeys(JOINTS, 0.0)
-    rc.peak_power = rc.saddle_peak = 0.0
+    rc.clear_peaks()
     p.bike, p.callback, p.data = b, rc, data
     p.initial_qpos, p.initial_qvel, p.initial_act = data.qpos.copy(), data.qvel.copy(), data.act.copy()
     p.watch = crash.Watch(b.model, p.terrain, b.qpos_index("pitch"))

@@ -515,8 +515,11 @@ class BikeResult(RunOutput):
         if r.get("kind") != "active":
             return ""
         worst = max(r["joints"], key=lambda k: r["joints"][k]["peak_of_limit"])
+        held = max(r["joints"], key=lambda k: r["joints"][k].get("at_limit_s", 0.0))
+        at = r["joints"][held].get("at_limit_s", 0.0)
+        clamp = f"; held at its limit longest: the {held}'s, {at:.2f} s" if at > 0 else "; none held at its limit"
         return (f"; active rider: joint torques {'within' if r['within_limits'] else 'PAST'} their limits (largest "
-                f"{100 * r['joints'][worst]['peak_of_limit']:.0f} % of the {worst}'s), peak power "
+                f"{100 * r['joints'][worst]['peak_of_limit']:.0f} % of the {worst}'s{clamp}), peak power "
                 f"{r['peak_power_W']:.0f} of {r['power_limit_W']:.0f} W")
 
     def _comfort(self) -> str:

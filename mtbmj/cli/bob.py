@@ -21,7 +21,7 @@ def cmd_bob(args) -> int:
         raise ConfigError(f"--duration: {args.duration:g} s is too short to read a bob over its second half (8 s "
                           f"at least)")
     result = pedalling.against(args.records, args.bike, stances, args.power or 250.0, bike_overrides(args) or None,
-                         args.duration or pedalling.RUN_S)
+                         args.duration or pedalling.RUN_S, args.rider)
     result.write(args.out)
     for line in result.lines():
         print(line)
@@ -39,6 +39,9 @@ def add_parser(sub) -> None:
     p.add_argument("--power", type=float, help="the rider's power in W (default 250)")
     p.add_argument("--duration", type=float, help="simulated seconds per record (default 14; the bob is read over "
                                                   "the second half)")
+    p.add_argument("--rider", choices=("passive", "active"), default="passive",
+                   help="the rigid rider on spring-damper legs (default) or the articulated one, whose legs carry the "
+                        "pedal stroke's reaction")
     add_bike_sets(p)
     add_out(p, "out/bob")
     p.set_defaults(func=cmd_bob)

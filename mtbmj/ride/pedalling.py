@@ -71,7 +71,8 @@ class Against:
                            title=f"{self.rows[i]['record']} ({self.rows[i]['stance']}): four seconds", xlim=(0, 4))
             ax[1, col].legend(fontsize=8)
             ax[1, col].grid(alpha=0.3)
-        fig.suptitle(f"Pedal bob: bike {self.bike} pedalled at each record's cadence ({'{}x{}'.format(*GEAR)}, "
+        rider = self.rows[0].get("rider", "passive") if self.rows else "passive"
+        fig.suptitle(f"Pedal bob: bike {self.bike}, the {rider} rider, pedalled at each record's cadence ({'{}x{}'.format(*GEAR)}, "
                      f"the climb its power holds) beside the records (their amplitudes carry the records' "
                      f"calibration)", fontsize=9)
         return fig
@@ -102,7 +103,7 @@ def run_cadence(run, window) -> float:
 
 
 def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, overrides=None,
-            duration_s: float = RUN_S) -> Against:
+            duration_s: float = RUN_S, rider: str = "passive") -> Against:
     """Each record's bob (``bob``), and the bike pedalled as it was: at the cadence its rear bob
     implies (half its frequency), standing or seated (``stances``, one per record; default
     standing), through ``GEAR`` at ``power_W``, up the climb whose grade that power holds at the
@@ -149,7 +150,7 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
         for attempt in range(ATTEMPTS):
             grade = 100.0 * math.tan(math.asin(sine))
             run = run_bike(spec, f"climb:grade_percent={grade:.3f},length_m={v * duration_s * 1.5 + 10:.1f},at_m=0.5",
-                           None, duration_s, pedal=(cadence, power_W), seated=stance == "seated")
+                           None, duration_s, pedal=(cadence, power_W), seated=stance == "seated", rider=rider)
             had = run_cadence(run, run_stretch(run.raw["time_s"]))
             tried.append((sine, had, run, grade))
             if abs(had / cadence - 1.0) <= CADENCE_TOLERANCE:
@@ -166,7 +167,7 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
         window = run_stretch(t)
         sim = {"rear": bob(t, run.raw["rear_travel_mm"], *window).to_dict(),
                "front": bob(t, run.raw["front_travel_mm"], *window).to_dict()}
-        rows.append({"record": ride.name, "stance": stance, "notes": list(ride.notes), "cadence_rpm": cadence,
+        rows.append({"record": ride.name, "stance": stance, "rider": rider, "notes": list(ride.notes), "cadence_rpm": cadence,
                      "simulated_cadence_rpm": had, "power_W": power_W, "grade_percent": grade, "speed_m_per_s": v,
                      "ride": {"rear": rear.to_dict(), "front": front.to_dict() if front else None},
                      "simulated": sim, "crash": run.summary.get("crash")})
