@@ -452,3 +452,16 @@ def test_the_rl_tests_collect_without_the_test_extras():
               "        if type(skip).__name__ != 'Skipped':\n            raise\n")
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=ROOT)
     assert done.returncode == 0, done.stderr[-2000:]
+
+
+MAX_MODULE_LINES = 700  # issue 50: a module past this is split by role
+
+
+def test_no_module_of_the_package_is_longer_than_the_limit():
+    """Every module of the package (``mtbmj/``, ``controllers/``, ``validation/``) at most
+    ``MAX_MODULE_LINES`` lines: a module that grows past it is split by role, as the reconstruction
+    was (reconstruct.py, 745 lines, into its speed, inverse and whole-bike parts)."""
+    root = Path(__file__).resolve().parents[1]
+    long = {str(p.relative_to(root)): n for d in ("mtbmj", "controllers", "validation")
+            for p in (root / d).rglob("*.py") if (n := len(p.read_text().splitlines())) > MAX_MODULE_LINES}
+    assert long == {}
