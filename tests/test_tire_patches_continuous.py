@@ -200,3 +200,24 @@ def test_one_contact_per_stretch_is_unchanged(name, x0, x1):
         assert abs(fx - want[0]) <= 1e-9 and abs(fz - want[1]) <= 1e-9, (name, cx, cz, (fx, fz), want)
         compared += want != (0.0, 0.0)
     assert compared > 0.9 * (x1 - x0) / 1e-3, compared
+
+
+def test_pieces_run_as_their_segments_on_the_drum():
+    """A run's pieces are consecutive along the profile, each ending where the next starts (the
+    barrier between two contacts is read at that shared point). The drum's cleat has a face running
+    backward in x; its pieces were turned round by the clip to the reach window, and the cleat's
+    corner came out as two contacts at one point (two forces)."""
+    drum = T.make("drum:radius_mm=500,cleat_height_mm=20,cleat_at_deg=10").with_speed(3.0)
+    tire = RadialTire(drum, R_TIRE, K_TIRE, B_TIRE)
+    rng = np.random.default_rng(5)
+    backward = 0
+    for k in range(200):
+        cx, cz, t = rng.uniform(-0.05, 0.05), 0.36 + 0.01 * rng.random(), 0.013 * k
+        ax, az, ex, ez = tire.pieces(cx, t)
+        gap = np.hypot(ax[1:] - (ax[:-1] + ex[:-1]), az[1:] - (az[:-1] + ez[:-1]))
+        inside = np.hypot(cx - ax[1:], cz - az[1:]) < R_TIRE + tire.margin  # the shared point within reach
+        assert np.all(gap[inside] <= 1e-12), (cx, cz, t, gap[inside].max())
+        backward += int(np.any(ex[1:][inside] < 0.0))
+        points = [(round(p[0], 9), round(p[1], 9)) for p in tire.patches(cx, cz, t)]
+        assert len(points) == len(set(points)), (cx, cz, t, points)
+    assert backward > 10  # the cleat's face was met
