@@ -172,7 +172,7 @@ class RadialTire:
                 n, k = 1, 1
             else:
                 work = np.empty(SHARE_BLOCKS * n)
-                k = share_depths(d2[a:b], v2[a:b - 1].copy(), n, r, CAP_MIN_M, work)
+                k = _share_depths()(d2[a:b], v2[a:b - 1].copy(), n, r, CAP_MIN_M, work)
             for c in range(k):
                 i = a + int(work[c])
                 dist = float(d[i])
@@ -225,6 +225,21 @@ def share(depth: float, borne: float) -> float:
     if not depth > 0.0:
         return 1.0
     return min(1.0, max(0.0, borne / depth))
+
+
+_SHARE_DEPTHS = None
+
+
+def _share_depths():
+    """``share_depths`` as the search calls it: its compiled twin where numba is here (the same
+    source, the compiled search's; a run of many minima costs a Python loop per piece otherwise),
+    else the plain function."""
+    global _SHARE_DEPTHS
+    if _SHARE_DEPTHS is None:
+        from mtbmj.controllers.jit import law_function, numba
+
+        _SHARE_DEPTHS = share_depths if numba is None else law_function(share_depths)
+    return _SHARE_DEPTHS
 
 
 def closest_points(cx, cz, ax, az, ex, ez):
