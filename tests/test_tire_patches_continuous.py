@@ -221,3 +221,20 @@ def test_pieces_run_as_their_segments_on_the_drum():
         points = [(round(p[0], 9), round(p[1], 9)) for p in tire.patches(cx, cz, t)]
         assert len(points) == len(set(points)), (cx, cz, t, points)
     assert backward > 10  # the cleat's face was met
+
+
+def test_the_plain_share_depths_is_its_compiled_twin(monkeypatch):
+    """Without numba the search runs share_depths as plain Python: the same patches as its twin."""
+    from mtbmj.rolling import tire as tire_module
+
+    tire = RadialTire(T.make("washboard"), R_TIRE, K_TIRE, B_TIRE)
+    rng = np.random.default_rng(7)
+    points = [(x, 0.02 + R_TIRE - rng.uniform(0.005, 0.03)) for x in rng.uniform(1.5, 3.0, 200)]
+    twin = [tire.patches(cx, cz) for cx, cz in points]
+    monkeypatch.setattr(tire_module, "_SHARE_DEPTHS", tire_module.share_depths)
+    plain = [tire.patches(cx, cz) for cx, cz in points]
+    assert sum(len(p) > 1 for p in plain) > 15  # runs of several contacts met (23 of the 200)
+    for a, b in zip(plain, twin):
+        assert len(a) == len(b)
+        for pa, pb in zip(a, b):
+            assert np.all(np.isclose(pa, pb, rtol=0.0, atol=1e-12)), (pa, pb)
