@@ -556,7 +556,7 @@ def settle(ter: T.Terrain, x_axle: float, duration: float = 1.0):
     weight = (s.body_mass + s.wheel_mass) * s.gravity
     cx, cz, _, _ = cb.axle_state(data.qpos, data.qvel)
     # start near statics along the contact normal (the test is what the physics then holds)
-    qx, qz, nx, nz, _, _ = min(p.tire.patches(cx, cz), key=lambda q: math.hypot(cx - q[0], cz - q[1]))
+    qx, qz, nx, nz, *_ = min(p.tire.patches(cx, cz), key=lambda q: math.hypot(cx - q[0], cz - q[1]))
     target = (qx + nx * (p.tire.radius - weight / nz / p.tire.rate), qz + nz * (p.tire.radius - weight / nz / p.tire.rate))
     data.qpos[cb.xq] += target[0] - cx
     data.qpos[cb.zq] += target[1] - cz

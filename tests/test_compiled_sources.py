@@ -100,8 +100,8 @@ def test_an_edit_of_a_compiled_function_reaches_the_compiled_run(tmp_path):
 
 
 @pytest.mark.parametrize("module,prefix,width", [
-    ("mtbmj.rolling.callback_compiled", "R_", "INT_WIDTH"),
-    ("mtbmj.rolling.callback_compiled", "F_", "F_PATCHES"),
+    ("mtbmj.rolling.search_compiled", "R_", "INT_WIDTH"),
+    ("mtbmj.rolling.search_compiled", "F_", "F_PATCHES"),
     ("mtbmj.bike.callback_compiled", "R_", "INT_WIDTH"),
     ("mtbmj.bike.callback_compiled", "F_", "FLOAT_WIDTH"),
     ("mtbmj.drop.engine_fast", "Q_", "Q_WIDTH"),

@@ -59,18 +59,59 @@ def brute_patches(terrain, cx: float, cz: float, radius: float, margin: float):
             root = np.sqrt(max(half * half - (bx * bx + bz * bz - reach * reach) / length2[i], 0.0))
             t0, t1 = max(-half - root, 0.0), min(-half + root, 1.0)
         parts.append((along[i] + t0 * length[i], along[i] + t1 * length[i], i))
-    patches = []
+    groups = []  # the joined parts: their segments, in order
     for k, (start, end, i) in enumerate(parts):
-        if k and start - parts[k - 1][1] == 0.0:  # through a vertex within reach: the same patch
-            if dist[i] < patches[-1][2]:
-                patches[-1] = (qx[i], qz[i], dist[i])
+        if k and start - parts[k - 1][1] == 0.0:  # through a vertex within reach: the same part
+            groups[-1].append(i)
             continue
         if k and start - parts[k - 1][1] < GAP_M:
             return None  # two parts this close along the profile: the pieces decide
-        patches.append((qx[i], qz[i], dist[i]))
+        groups.append([i])
+    patches = []
+    for group in groups:
+        minima = part_minima(group, dist, np.hypot(cx - x, cz - z))
+        if minima is None:
+            return None
+        patches += [(qx[i], qz[i], dist[i]) for i in minima]
     if any(d <= 1e-9 * 1.01 for _, _, d in patches):
         return None
     return patches
+
+
+def part_minima(group, dist, corner):
+    """The contacts of one joined part (segments ``group``, consecutive; ``dist`` each segment's
+    closest distance, ``corner`` each vertex's, vertex i + 1 between segments i and i + 1): the local
+    minima of the distance along it, a segment's closest point or a corner shared by two (one
+    minimum), each of a prominence (the lower over both sides of the highest distance to a lower
+    point, less its own) beyond round-off; None where a minimum's prominence is within round-off of
+    the search's cut (1e-12 m)."""
+    values = []  # the distance's critical values along the part, each with its segment (or None)
+    for k, i in enumerate(group):
+        if k:
+            values.append((max(corner[i], dist[i], dist[group[k - 1]]), None))
+        values.append((dist[i], i))
+    found = []
+    for k, (v, i) in enumerate(values):
+        if i is None:
+            continue
+        left = [w for w, _ in values[:k]]
+        right = [w for w, _ in values[k + 1:]]
+        if (left and left[-1] <= v + 1e-13) or (right and right[0] < v - 1e-13):
+            continue  # a slope or a corner shared with the segment before: not a minimum here
+        cols = []
+        lower = [j for j, w in enumerate(left) if w <= v + 1e-13]  # of a level pair the earlier is the lower
+        if lower:
+            cols.append(max(left[lower[-1] + 1:]))
+        lower = [j for j, w in enumerate(right) if w < v - 1e-13]
+        if lower:
+            cols.append(max(right[:lower[0]]))
+        prominence = min(cols) - v if cols else np.inf
+        if prominence <= 1e-9:
+            if prominence > 1e-13:
+                return None
+            continue
+        found.append(i)
+    return found
 
 
 def assert_same_lines(got, want, cx, cz, reach, where):
@@ -79,7 +120,7 @@ def assert_same_lines(got, want, cx, cz, reach, where):
     kept over a straight stretch keeps its closest point of the last search, on the same line."""
     acting = [p for p in got if (cx - p[0]) * p[2] + (cz - p[1]) * p[3] < reach]
     assert len(acting) == len(want), (where, got, want)
-    for (qx, qz, nx, nz, sx, sz), (bx, bz, d) in zip(acting, want):
+    for (qx, qz, nx, nz, sx, sz, *_), (bx, bz, d) in zip(acting, want):
         assert (sx, sz) == (0.0, 0.0), where
         normal = ((cx - bx) / d, (cz - bz) / d)
         assert abs(nx - normal[0]) <= 1e-9 and abs(nz - normal[1]) <= 1e-9, (where, (nx, nz), normal)
@@ -151,7 +192,8 @@ def assert_same_patches(got, want, where):
     """The compiled search's patches are the Python search's (to round-off: bit-identical in practice)."""
     assert len(got) == len(want), (where, got, want)
     for a, b in zip(got, want):
-        assert np.max(np.abs(np.subtract(a, b))) <= 1e-12, (where, a, b)
+        a, b = np.array(a), np.array(b)
+        assert np.all(np.isclose(a, b, rtol=0.0, atol=1e-12)), (where, a, b)
 
 
 def test_without_straight_stretches_every_refresh_searches():

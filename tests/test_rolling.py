@@ -33,7 +33,7 @@ def test_edge_contact_is_tilted_and_single():
     cx, cz = 1.1, 0.1 + math.sqrt(0.37**2 - 0.1**2) - 0.005
     patches = tire.patches(cx, cz)
     assert len(patches) == 1
-    qx, qz, nx, nz, _, _ = patches[0]
+    qx, qz, nx, nz, *_ = patches[0]
     assert (qx, qz) == pytest.approx((1.0, 0.1))
     assert nx > 0.2 and nz > 0.9  # pushes the axle forward and up: the corner is behind it
 

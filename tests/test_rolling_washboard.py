@@ -4,7 +4,8 @@ points: its envelope rides over the crests and can sit on two of them), so the m
 the same round tire over the same sampled profile, like with like. Written from the equations,
 without the package's integrator, tire, geometry or fork law: S1's linear spring and damper
 (k x + c v) written out, the tire's radial law per contact patch (k d + c tanh(3 d / 3 mm) dd/dt,
-pushing only) with its patches found here as runs of profile segments within reach of the axle,
+pushing only) with its contacts found here as the local minima of the distance along the runs of
+profile segments within reach of the axle, each bearing its share of the overlap (``contacts``),
 the ideal servo on x0 + v t, and scipy's LSODA."""
 from __future__ import annotations
 
@@ -21,7 +22,7 @@ from mtbmj.rolling.terrain import make
 
 SPEED = 3.0
 DURATION = 0.8
-MARGIN = 0.010  # a patch is a run of segments within radius + 10 mm of the axle
+MARGIN = 0.010  # a run: the segments within radius + 10 mm of the axle
 
 
 class Washboard90:
@@ -50,7 +51,9 @@ class Washboard90:
         return self.x0 + qx, self.z0 + qz - (self.L - qf)  # straight below the crown
 
     def tire(self, ax, az, vx, vz):
-        """Force (Fx, Fz) on the axle and the deepest deflection, from the patches here."""
+        """Force (Fx, Fz) on the axle and the deepest deflection, from the contacts here: along each
+        run of segments within reach the local minima of the distance (contacts), each bearing its
+        share of the overlap's depth (``shares``), its force that fraction of the law at its depth."""
         reach = self.r + MARGIN
         i0 = max(int(np.searchsorted(self.px, ax - reach)) - 1, 0)
         i1 = min(int(np.searchsorted(self.px, ax + reach)) + 1, self.px.size - 1)
@@ -59,23 +62,25 @@ class Washboard90:
         u = np.clip(((ax - x0) * ex + (az - z0) * ez) / (ex * ex + ez * ez), 0.0, 1.0)
         qx, qz = x0 + u * ex, z0 + u * ez
         dist = np.hypot(ax - qx, az - qz)
+        corner = np.hypot(ax - self.px[i0 + 1:i1 + 1], az - self.pz[i0 + 1:i1 + 1])  # each segment's end
         near = dist < reach
         fx = fz = 0.0
         deepest = -math.inf
         start = None
-        for j in range(near.size + 1):  # runs of segments in reach: the patches
+        for j in range(near.size + 1):  # runs of segments in reach
             inside = j < near.size and near[j]
             if inside and start is None:
                 start = j
             if not inside and start is not None:
-                k = start + int(np.argmin(dist[start:j]))
-                nx, nz = (ax - qx[k]) / dist[k], (az - qz[k]) / dist[k]
-                d = self.r - dist[k]
-                deepest = max(deepest, d)
-                if d > 0.0:
-                    rate = -(vx * nx + vz * nz)
-                    f = max(0.0, self.k_tire * d + self.c_tire * math.tanh(3.0 * d / 3e-3) * rate)
-                    fx, fz = fx + f * nx, fz + f * nz
+                for k, w in contacts(dist[start:j], corner[start:j - 1], self.r):
+                    k += start
+                    nx, nz = (ax - qx[k]) / dist[k], (az - qz[k]) / dist[k]
+                    d = self.r - dist[k]
+                    deepest = max(deepest, d)
+                    if d > 0.0:
+                        rate = -(vx * nx + vz * nz)
+                        f = w * max(0.0, self.k_tire * d + self.c_tire * math.tanh(3.0 * d / 3e-3) * rate)
+                        fx, fz = fx + f * nx, fz + f * nz
                 start = None
         return fx, fz, deepest
 
@@ -90,6 +95,49 @@ class Washboard90:
         az_ = (fork - self.M * self.g) / self.M  # the chassis: the fork pushes it up, gravity down
         af = (fz - self.m * self.g - fork) / self.m - az_
         return [vx, vz, vf, ax_, az_, af]
+
+
+def contacts(dist, corner, radius):
+    """The contacts of a run of segments (``dist`` each one's closest distance, ``corner`` the
+    distance of the corner between segment k and k + 1) and the share of its depth each one bears:
+    [(segment, share)]. The contacts are the local minima of the distance along the run (a corner
+    shared by two segments one minimum), each standing out by more than round-off; between two
+    neighbours the barrier is the highest distance between them. As depths (radius - distance), the
+    run's overlap above a level h falls apart at the shallowest barrier above h into two overlaps;
+    each contact bears its depth down to that barrier in its own overlap, and the overlap below it
+    down to h is shared in proportion to those (a lone contact bears its whole depth)."""
+    seq = []  # the distance's critical values along the run: (value, segment or None)
+    for k, d in enumerate(dist):
+        if k:
+            seq.append((max(corner[k - 1], d, dist[k - 1]), None))
+        seq.append((d, k))
+    minima, barriers, last = [], [], None
+    for n, (v, k) in enumerate(seq):
+        if k is None or (n and seq[n - 1][0] <= v) or (n + 1 < len(seq) and seq[n + 1][0] < v):
+            continue
+        lows = [m for m in range(n) if seq[m][0] <= v]
+        cols = [max(w for w, _ in seq[lows[-1] + 1:n])] if lows else []
+        highs = [m for m in range(n + 1, len(seq)) if seq[m][0] < v]
+        cols += [max(w for w, _ in seq[n + 1:highs[0]])] if highs else []
+        if cols and min(cols) - v <= 1e-12:
+            continue
+        if last is not None:
+            barriers.append(radius - max(w for w, _ in seq[last + 1:n]))
+        minima.append((k, radius - v))
+        last = n
+
+    def borne(a, b, h):  # {contact: depth borne below its overlap's top, down to level h}, contacts a..b
+        if a == b:
+            return {a: minima[a][1] - h}
+        t = min(range(a, b), key=lambda m: barriers[m])
+        if barriers[t] <= h:
+            return {**borne(a, t, h), **borne(t + 1, b, h)}
+        above = {**borne(a, t, barriers[t]), **borne(t + 1, b, barriers[t])}
+        total = sum(above.values())
+        return {m: e * (total + barriers[t] - h) / total for m, e in above.items()}
+
+    shares = borne(0, len(minima) - 1, 0.0)
+    return [(k, 1.0 if depth <= 0.0 else min(1.0, max(0.0, shares[m] / depth))) for m, (k, depth) in enumerate(minima)]
 
 
 def test_the_front_end_on_the_washboard_at_90_degrees_is_the_model_written_here():

@@ -74,7 +74,7 @@ DRIVE_PEDAL = 2  # R_DRIVE: 0 coasting, 1 the rider's speed controller, 2 pedall
  F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1, F_RADIUS, F_CHAIN_RING, F_CHAIN_COG) = range(24)
 FLOAT_WIDTH = F_CHAIN_COG + 1
 
-REGISTRY = Registry("mtbmj_bike_registry_v8", SLOTS,
+REGISTRY = Registry("mtbmj_bike_registry_v9", SLOTS,
                     {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
                      "wheel_ints": (2 * WI, np.int64), "wheel_floats": (2 * WF, np.float64),
                      "fork_ints": (LAW_INT_WIDTH, np.int64), "fork_floats": (LAW_FLOAT_WIDTH, np.float64),
@@ -141,9 +141,10 @@ if _numba is not None:
     _leverage_ratio = law_function(_spec.leverage_ratio)
     _leverage_stroke = law_function(_spec.leverage_stroke)
     _update_patches, piece_index = rolling.update_patches, rolling.piece_index
-    (_R_NPATCH, _F_RADIUS, _F_RATE, _F_DAMPING, _F_MARGIN, _F_RIM_D, _F_RIM_K, _F_RIM_C, _F_PATCHES) = (
+    (_R_NPATCH, _F_RADIUS, _F_RATE, _F_DAMPING, _F_MARGIN, _F_RIM_D, _F_RIM_K, _F_RIM_C, _F_PATCHES,
+     _PATCH_WIDTH) = (
         rolling.R_NPATCH, rolling.F_RADIUS, rolling.F_RATE, rolling.F_DAMPING, rolling.F_MARGIN, rolling.F_RIM_D,
-        rolling.F_RIM_K, rolling.F_RIM_C, rolling.F_PATCHES)
+        rolling.F_RIM_K, rolling.F_RIM_C, rolling.F_PATCHES, rolling.PATCH_WIDTH)
 
     @kernel
     def site_velocity(cvel, subtree_com, site_xpos, body, root, site):
@@ -196,7 +197,8 @@ if _numba is not None:
 
     @kernel
     def tire_on_patches(WI_, WF_, cx, cz, vx, vz):
-        """RadialTire.force on the wheel row's patches: (fx, fz, deepest deflection)."""
+        """RadialTire.force on the wheel row's patches (each its share of the law): (fx, fz, deepest
+        deflection)."""
         r = WF_[_F_RADIUS]
         k = WF_[_F_RATE]
         b = WF_[_F_DAMPING]
@@ -204,7 +206,7 @@ if _numba is not None:
         fz = 0.0
         deepest = -math.inf
         for p in range(WI_[_R_NPATCH]):
-            o = _F_PATCHES + 6 * p
+            o = _F_PATCHES + _PATCH_WIDTH * p
             qx, qz, nx, nz, sx, sz = WF_[o], WF_[o + 1], WF_[o + 2], WF_[o + 3], WF_[o + 4], WF_[o + 5]
             d = r - ((cx - qx) * nx + (cz - qz) * nz)
             rate = -((vx - sx) * nx + (vz - sz) * nz)
@@ -214,6 +216,7 @@ if _numba is not None:
                 f = max(0.0, _tire_force(k, b, d, rate))
                 if WF_[_F_RIM_K] > 0.0:  # the rim strikes (Rim.force)
                     f += _rim_force(WF_[_F_RIM_D], WF_[_F_RIM_K], WF_[_F_RIM_C], d, rate)
+                f *= WF_[o + 6]  # its share (RadialTire.force)
                 if f > 0.0:
                     fx += f * nx
                     fz += f * nz
@@ -507,6 +510,7 @@ class CompiledBikeCallback(CompiledShell, ctypes._CFuncPtr):
             raise UnsupportedRolling("terrain profile is empty, ragged or not sorted")
         cap = n + 2
         self._scratch = np.zeros(2 * cap, dtype=np.float64)  # the search's, one wheel after the other
+        self._run = rolling.run_scratch(n, front, rear)  # a run's pieces (run_minima), one wheel after the other
         self._sx, self._sz = rolling.stretch_arrays(front)  # the corners of the terrain's straight stretches
         lev = bike.spec.leverage
         self._lw, self._lr, self._ls = (np.array(v, dtype=np.float64) for v in lev.table)
@@ -573,6 +577,8 @@ class CompiledBikeCallback(CompiledShell, ctypes._CFuncPtr):
                 n, cap, self._tx.ctypes.data, self._tz.ctypes.data, self._scratch.ctypes.data]
             wheel[[rolling.R_NS, rolling.R_SX, rolling.R_SZ]] = [self._sx.size, self._sx.ctypes.data,
                                                                  self._sz.ctypes.data]
+            wheel[[rolling.R_RUN, rolling.R_RUNCAP]] = [self._run.ctypes.data,
+                                                         self._run.size // (rolling.RUN_BLOCKS + tire_model.SHARE_BLOCKS)]
             row = wheel_floats[k * WF:(k + 1) * WF]
             row[[rolling.F_RADIUS, rolling.F_RATE, rolling.F_DAMPING, rolling.F_MARGIN]] = [
                 tire.radius, tire.rate, tire.damping, tire.margin]
@@ -598,10 +604,12 @@ class CompiledBikeCallback(CompiledShell, ctypes._CFuncPtr):
         return bool(_WINTS[self.slot, rolling.R_OVERFLOW] or _WINTS[self.slot, WI + rolling.R_OVERFLOW])
 
     def patches(self, k: int) -> list[tuple[float, ...]]:
-        """Wheel k's (0 front, 1 rear) contact patches: (qx, qz, nx, nz, surface vx, surface vz)."""
+        """Wheel k's (0 front, 1 rear) contact patches: (qx, qz, nx, nz, surface vx, surface vz, share,
+        prominence): ``RadialTire.patches``."""
         n = int(_WINTS[self.slot, k * WI + rolling.R_NPATCH])
         o = k * WF + rolling.F_PATCHES
-        return [tuple(float(v) for v in row) for row in _WFLOATS[self.slot, o:o + 6 * n].reshape(n, 6)]
+        w = rolling.PATCH_WIDTH
+        return [tuple(float(v) for v in row) for row in _WFLOATS[self.slot, o:o + w * n].reshape(n, w)]
 
     def reset(self) -> None:
         """Forget the patches: the next evaluation searches afresh (BikeCallback.reset)."""

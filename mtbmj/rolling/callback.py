@@ -72,7 +72,8 @@ class RollCallback:
 
     @property
     def patches(self) -> list:
-        """The contact patches of the last refresh: (qx, qz, nx, nz, surface vx, surface vz)."""
+        """The contact patches of the last refresh: (qx, qz, nx, nz, surface vx, surface vz, share,
+        prominence): ``RadialTire.patches``."""
         return self.search.patches
 
     def reset(self) -> None:
@@ -112,7 +113,7 @@ class RollCallback:
         patches = self.search.patches
         if patches and self.tire.terrain.moving:
             dt = t - self.patch_time
-            patches = [(qx + sx * dt, qz + sz * dt, nx, nz, sx, sz) for qx, qz, nx, nz, sx, sz in patches]
+            patches = [(p[0] + p[4] * dt, p[1] + p[5] * dt, *p[2:]) for p in patches]  # qx + sx dt, qz + sz dt
         fx, fz, deflection, _, _ = self.tire.force(cx, cz, vx, vz, patches)
         ctrl[self.a_probe] = deflection
         ctrl[self.a_touch] = self.tire.shallowest(cx, cz, patches, deflection)

@@ -17,13 +17,15 @@ Design
   registry of its own (a ``controllers.native_data.Registry``, as the drop's callback has, but a
   separate one, so neither dispatcher ever acts on the other's models) and leaves every other model alone. A slot holds
   integer indices (joints, actuators, array addresses, counters) and float parameters plus the
-  callback's state: the contact patches (closest point q, normal n, surface velocity) of the last
+  callback's state: the contact patches (closest point q, normal n, surface velocity, share,
+  prominence) of the last
   refresh, its time, the next refresh time, the axle x at the refresh.
 * The terrain polyline (static profile x, z; or the drum's polar cleat profile), the corners of
   its straight stretches and scratch buffers are numpy arrays owned by the callback object; the
-  slot holds their addresses. The patch search (``Terrain.polyline`` +
-  ``RadialTire.segment_distances`` + ``RadialTire.patches``: ``refresh_patches``) runs in compiled
-  code, streaming over the pieces without allocating; ``update_patches`` refreshes as
+  slot holds their addresses. The patch search (``Terrain.polyline`` + ``RadialTire.pieces`` +
+  ``RadialTire.patches``: ``refresh_patches``, in ``mtbmj.rolling.search_compiled`` with the slot's
+  layout) runs in compiled code, streaming over the pieces without allocating; each run's contacts
+  and their shares are ``RadialTire``'s own ``share_depths`` compiled; ``update_patches`` refreshes as
   ``mtbmj.rolling.tire.PatchSearch`` does (the patch kept while the axle stays over the straight
   stretch it lies on, on static terrain). It is the one search of the front end and of both wheels
   of the bike (``mtbmj.bike.callback_compiled``, each wheel a row in this slot layout).
@@ -53,27 +55,16 @@ from mtbmj.controllers.lawcodes import FLOAT_WIDTH as LAW_FLOAT_WIDTH, INT_WIDTH
 from mtbmj.controllers.lawcodes import UnsupportedLaw, flatten
 from mtbmj.controllers.native_data import Registry, mjdata_layout, verify
 from mtbmj.controllers.stops import STIFFENING_M
+from mtbmj.rolling import search_compiled as _search
+from mtbmj.rolling.search_compiled import *  # noqa: F401,F403 - the slot layout (R_*, F_*), the search's face
+from mtbmj.rolling.search_compiled import FLOAT_WIDTH, INT_WIDTH, MAX_PATCHES, PATCH_WIDTH, RUN_BLOCKS, \
+    run_scratch, stretch_arrays
 from mtbmj.runpath.callbacks import CompiledShell
 
-MAX_PATCHES = 64
 SLOTS = 64
 
-# integer row of a slot
-(R_MODEL, R_XQ, R_XV, R_ZQ, R_ZV, R_FQ, R_FV, R_A_STATE, R_A_FORK, R_A_DP, R_A_DV, R_A_TX, R_A_TZ, R_A_PROBE,
- R_ACT, R_HAS_STATE, R_DRUM, R_MOVING, R_NPTS, R_TX, R_TZ, R_SCRATCH, R_ISCRATCH, R_CAP, R_CALLS, R_REFRESHES,
- R_NPATCH, R_OVERFLOW, R_SCALED,
- R_NS, R_SX, R_SZ, R_VALID, R_A_TOUCH) = range(34)  # the straight stretches (PatchSearch): corners, and whether kept
-INT_WIDTH = R_A_TOUCH + 1  # one row per name above: the width follows the list
-# float row of a slot: parameters, state, then MAX_PATCHES x (qx, qz, nx, nz, sx, sz)
-(F_X0, F_Z0, F_L, F_COS, F_SIN, F_RADIUS, F_RATE, F_DAMPING, F_MARGIN, F_SPEED, F_XREF0, F_REFRESH, F_DRUM_R,
- F_OMEGA, F_PATCH_TIME, F_NEXT_REFRESH, F_LAST_X, F_REFRESH_DISTANCE, F_PIECE, F_DAMPER_SCALE,
- F_RIM_D, F_RIM_K, F_RIM_C, F_RIM_P0,  # the rim: max deflection, rate (0: no rim), damping
- F_DRIVE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE,  # controllers.drive
- F_LO, F_HI) = range(31)  # the axle x interval over which the kept patch holds (PatchSearch.valid)
-F_PATCHES = F_HI + 1  # the patches follow the state's last row
-FLOAT_WIDTH = F_PATCHES + 6 * MAX_PATCHES
 
-REGISTRY = Registry("mtbmj_rolling_registry_v3", SLOTS,
+REGISTRY = Registry("mtbmj_rolling_registry_v4", SLOTS,
                     {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
                      "law_ints": (LAW_INT_WIDTH, np.int64), "law_floats": (LAW_FLOAT_WIDTH, np.float64)},
                     ("qpos", "qvel", "act", "ctrl", "time"))
@@ -104,283 +95,12 @@ if _numba is not None:
         _kernels.friction_force
     rim_force = _kernels.rim_force  # the one rim law (controllers.stops)
     tire_force = law_function(_tire.rolling_tire_force)  # the one rolling tire law
-    _stretch = law_function(_tire_model.stretch)  # the straight stretches (mtbmj.rolling.tire)
+    TOUCH_CAP_M = _tire_model.TOUCH_CAP_M
+    # the patch search (mtbmj.rolling.search_compiled), also the bike's
+    static_window, drum_window, find_patches, refresh_patches = (
+        _search.static_window, _search.drum_window, _search.find_patches, _search.refresh_patches)
+    piece_index, update_patches = _search.piece_index, _search.update_patches
     drive_force = law_function(_drive.drive_force)  # the rider's drive (controllers.drive)
-
-    @kernel
-    def _clip01(value):
-        """np.clip(value, 0.0, 1.0)"""
-        if value < 0.0:
-            return 0.0
-        if value > 1.0:
-            return 1.0
-        return value
-
-    @kernel
-    def static_window(X, Z, n, x_lo, x_hi, PX, PZ):
-        """Terrain.polyline(x_lo, x_hi) into PX, PZ; returns the number of points."""
-        lo, hi = 0, n
-        while lo < hi:  # np.searchsorted(X, x_lo, side="left")
-            mid = (lo + hi) >> 1
-            if X[mid] < x_lo:
-                lo = mid + 1
-            else:
-                hi = mid
-        i = max(lo - 1, 0)
-        lo, hi = 0, n
-        while lo < hi:  # np.searchsorted(X, x_hi, side="right")
-            mid = (lo + hi) >> 1
-            if X[mid] <= x_hi:
-                lo = mid + 1
-            else:
-                hi = mid
-        j = min(lo + 1, n)
-        m = 0
-        if X[i] > x_lo:
-            PX[0] = x_lo - 1.0
-            PZ[0] = Z[i]
-            m = 1
-        for k in range(i, j):
-            PX[m] = X[k]
-            PZ[m] = Z[k]
-            m += 1
-        if X[j - 1] < x_hi:
-            PX[m] = x_hi + 1.0
-            PZ[m] = Z[j - 1]
-            m += 1
-        return m
-
-    @kernel
-    def drum_window(A, RAD, n, omega, radius, t, x_lo, x_hi, PX, PZ, W, W2, J, J2):
-        """DrumTerrain.polyline(x_lo, x_hi, t) into PX, PZ (W, W2, J, J2: scratch of n)."""
-        wt = omega * t
-        lim = math.asin(min(1.0, max(abs(x_lo), abs(x_hi)) / radius)) + 0.05
-        # Candidates: the angles (sorted ascending) within lim (+ a margin far above round-off)
-        # of wt modulo 2 pi, found by bisection, in index order; the exact test of
-        # DrumTerrain.polyline then decides on each.
-        centre = (wt + math.pi) % (2 * math.pi) - math.pi
-        reach = lim + 1e-6
-        m = 0
-        turn = 2 * math.pi
-        first = int(math.floor((A[0] - centre - reach) / turn))
-        last = int(math.ceil((A[n - 1] - centre + reach) / turn))
-        for q in range(first, last + 1):
-            shift = q * turn
-            lo_angle = centre + shift - reach
-            hi_angle = centre + shift + reach
-            if hi_angle < A[0] or lo_angle > A[n - 1]:
-                continue
-            lo, hi = 0, n
-            while lo < hi:  # first index with A >= lo_angle
-                mid = (lo + hi) >> 1
-                if A[mid] < lo_angle:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            for k in range(lo, n):
-                if A[k] > hi_angle:
-                    break
-                w = (A[k] - wt + math.pi) % (2 * math.pi) - math.pi
-                if abs(w) <= lim:
-                    W[m] = w
-                    J[m] = k
-                    m += 1
-        # np.argsort(kind="stable"): the kept angles are a rotated sorted run; rotate at the
-        # first descent, then an insertion sort on (angle, index) (linear when already sorted)
-        start = 0
-        for k in range(1, m):
-            if W[k] < W[k - 1]:
-                start = k
-                break
-        for k in range(m):
-            W2[k] = W[(start + k) % m]
-            J2[k] = J[(start + k) % m]
-        for k in range(1, m):
-            w, j = W2[k], J2[k]
-            i = k - 1
-            while i >= 0 and (W2[i] > w or (W2[i] == w and J2[i] > j)):
-                W2[i + 1] = W2[i]
-                J2[i + 1] = J2[i]
-                i -= 1
-            W2[i + 1] = w
-            J2[i + 1] = j
-        for k in range(m):
-            a = W2[k]
-            r = RAD[J2[k]]
-            PX[k] = r * math.sin(a)
-            PZ[k] = r * math.cos(a) - radius
-        return m
-
-    @kernel
-    def _emit(F, I, best, bx, bz, cx, cz):
-        if best <= 1e-9:
-            return
-        p = I[R_NPATCH]
-        if p >= MAX_PATCHES:
-            I[R_OVERFLOW] = 1
-            return
-        o = F_PATCHES + 6 * p
-        F[o] = bx
-        F[o + 1] = bz
-        F[o + 2] = (cx - bx) / best
-        F[o + 3] = (cz - bz) / best
-        if I[R_DRUM]:  # DrumTerrain.surface_velocity
-            w = F[F_OMEGA]
-            F[o + 4] = -w * (bz + F[F_DRUM_R])
-            F[o + 5] = w * bx
-        else:
-            F[o + 4] = 0.0
-            F[o + 5] = 0.0
-        I[R_NPATCH] = p + 1
-
-    @kernel
-    def find_patches(I, F, PX, PZ, m, cx, cz):
-        """RadialTire.patches(cx, cz) over the polyline PX[:m], PZ[:m], streamed piece by piece
-        (RadialTire.segment_distances), into the slot's patch rows."""
-        I[R_NPATCH] = 0
-        reach = F[F_RADIUS] + F[F_MARGIN]
-        piece = F[F_PIECE]
-        # A segment whose bounding box is farther than reach (with a margin far above round-off)
-        # has no piece near the axle: skipping its pieces changes nothing but the time.
-        far2 = (reach * (1.0 + 1e-9)) ** 2
-        piece2 = (piece * (1.0 - 1e-9)) ** 2  # below round-off of hypot: a segment this short is one piece
-        near2 = (reach * (1.0 - 1e-9)) ** 2  # within reach beyond round-off
-        in_run = False
-        best = bx = bz = 0.0
-        best2 = 0.0  # the squared distance of the run's closest point so far (it bounds the next)
-        for k in range(m - 1):
-            ax = PX[k]
-            az = PZ[k]
-            bx1 = PX[k + 1]
-            bz1 = PZ[k + 1]
-            gx = max(min(ax, bx1) - cx, cx - max(ax, bx1), 0.0)
-            gz = max(min(az, bz1) - cz, cz - max(az, bz1), 0.0)
-            if gx * gx + gz * gz > far2:
-                if in_run:
-                    in_run = False
-                    _emit(F, I, best, bx, bz, cx, cz)
-                continue
-            ex = bx1 - ax
-            ez = bz1 - az
-            # clipped to the reach window in x (a segment running forward inside it is kept whole:
-            # the clip's divisions would give exactly 0 and 1; one running backward, on the drum,
-            # is turned round by them)
-            if ex != 0.0 and not (ex > 0.0 and ax >= cx - reach and bx1 <= cx + reach):
-                t0 = _clip01((cx - reach - ax) / ex)
-                t1 = _clip01((cx + reach - ax) / ex)
-                ax, az, ex, ez = ax + t0 * ex, az + t0 * ez, (t1 - t0) * ex, (t1 - t0) * ez
-            # pieces of at most ``piece``: one for a segment no longer than that (no square root)
-            if ex * ex + ez * ez <= piece2:
-                kk = 1
-            else:
-                kk = int(max(1.0, math.ceil(math.hypot(ex, ez) / piece)))
-            for p in range(kk):
-                if kk == 1:
-                    pax = ax
-                    paz = az
-                    pex = ex
-                    pez = ez
-                else:
-                    f0 = p / kk
-                    f1 = f0 + 1.0 / kk
-                    pax = ax + f0 * ex
-                    paz = az + f0 * ez
-                    pex = (f1 - f0) * ex
-                    pez = (f1 - f0) * ez
-                    # a piece whose bounding box is beyond reach is not near (as a segment's,
-                    # above): its closest point is not worked out (a long flat segment has many)
-                    gx = max(min(pax, pax + pex) - cx, cx - max(pax, pax + pex), 0.0)
-                    gz = max(min(paz, paz + pez) - cz, cz - max(paz, paz + pez), 0.0)
-                    if gx * gx + gz * gz > far2:
-                        if in_run:
-                            in_run = False
-                            _emit(F, I, best, bx, bz, cx, cz)
-                        continue
-                length2 = pex * pex + pez * pez
-                if not (length2 > 0.0):
-                    length2 = 1.0
-                s = _clip01(((cx - pax) * pex + (cz - paz) * pez) / length2)
-                qx = pax + s * pex
-                qz = paz + s * pez
-                dx = cx - qx
-                dz = cz - qz
-                d2 = dx * dx + dz * dz
-                # No square root where the outcome is known beyond round-off: a piece far beyond
-                # reach, or one well within reach but farther than the run's closest so far (by a
-                # relative 1e-12, far above round-off, so the decisions are those of the distances).
-                if d2 > far2:
-                    d = reach
-                elif in_run and near2 > d2 > best2 * (1.0 + 1e-12):
-                    d = best
-                else:
-                    d = math.hypot(dx, dz)
-                if d < reach:
-                    if not in_run:
-                        in_run = True
-                        best, bx, bz = d, qx, qz
-                        best2 = d2
-                    elif d < best:
-                        best, bx, bz = d, qx, qz
-                        best2 = d2
-                elif in_run:
-                    in_run = False
-                    _emit(F, I, best, bx, bz, cx, cz)
-        if in_run:
-            _emit(F, I, best, bx, bz, cx, cz)
-
-    @kernel
-    def refresh_patches(I, F, cx, cz, t):
-        """RadialTire.patches: the patch search on the slot's terrain arrays (scratch: 2 x (n + 2)
-        doubles on static terrain, 4 x on the drum, with 2 x integers)."""
-        n = I[R_NPTS]
-        cap = I[R_CAP]
-        reach = F[F_RADIUS] + F[F_MARGIN]
-        A = _numba.carray(_f64_pointer(I[R_TX]), (n,))
-        B = _numba.carray(_f64_pointer(I[R_TZ]), (n,))
-        if I[R_DRUM]:
-            S = _numba.carray(_f64_pointer(I[R_SCRATCH]), (4 * cap,))
-            PX, PZ = S[:cap], S[cap:2 * cap]
-            J = _numba.carray(_i64_pointer(I[R_ISCRATCH]), (2 * cap,))
-            m = drum_window(A, B, n, F[F_OMEGA], F[F_DRUM_R], t, cx - reach, cx + reach, PX, PZ,
-                            S[2 * cap:3 * cap], S[3 * cap:], J[:cap], J[cap:])
-        else:
-            S = _numba.carray(_f64_pointer(I[R_SCRATCH]), (2 * cap,))
-            PX, PZ = S[:cap], S[cap:]
-            m = static_window(A, B, n, cx - reach, cx + reach, PX, PZ)
-        find_patches(I, F, PX, PZ, m, cx, cz)
-
-    @kernel
-    def piece_index(X, n, x):
-        """bisect.bisect_right(X[:n], x) - 1"""
-        lo, hi = 0, n
-        while lo < hi:
-            mid = (lo + hi) >> 1
-            if X[mid] <= x:
-                lo = mid + 1
-            else:
-                hi = mid
-        return lo - 1
-
-    @kernel
-    def update_patches(I, F, cx, cz, t):
-        """PatchSearch.refresh on a slot's row (the front end's, or a wheel's of the bike): keep the
-        patch while the axle stays within [F_LO, F_HI] (the straight stretch its one patch lies on),
-        else search (refresh_patches) and, for one patch on a straight stretch, note the stretch.
-        True when it searched."""
-        if I[R_VALID] != 0 and F[F_LO] <= cx <= F[F_HI]:
-            return False
-        refresh_patches(I, F, cx, cz, t)
-        I[R_VALID] = 0
-        ns = I[R_NS]
-        if I[R_NPATCH] == 1 and ns > 0:
-            SX = _numba.carray(_f64_pointer(I[R_SX]), (ns,))
-            SZ = _numba.carray(_f64_pointer(I[R_SZ]), (ns,))
-            ok, _, _, _, _, lo, hi = _stretch(SX, SZ, F[F_RADIUS] + F[F_MARGIN], piece_index(SX, ns, cx), cx)
-            if ok:
-                I[R_VALID] = 1
-                F[F_LO] = lo
-                F[F_HI] = hi
-        return True
 
     @callback(_t.void(_t.voidptr, _t.voidptr))
     def _dispatch(m, d):
@@ -435,7 +155,7 @@ if _numba is not None:
         deepest = -math.inf
         shallowest = math.inf
         for p in range(npatch):
-            o = F_PATCHES + 6 * p
+            o = F_PATCHES + PATCH_WIDTH * p
             qx, qz, nx, nz, sx, sz = F[o], F[o + 1], F[o + 2], F[o + 3], F[o + 4], F[o + 5]
             if shift:
                 qx = qx + sx * dt
@@ -444,7 +164,7 @@ if _numba is not None:
             rate = -((vx - sx) * nx + (vz - sz) * nz)
             if dp > deepest:
                 deepest = dp
-            if dp < shallowest:
+            if dp < shallowest and F[o + 7] >= TOUCH_CAP_M:  # RadialTire.shallowest
                 shallowest = dp
             if dp > 0.0:
                 f = tire_force(k, b, dp, rate)
@@ -452,6 +172,7 @@ if _numba is not None:
                     f = 0.0
                 if F[F_RIM_K] > 0.0:  # the rim strikes (Rim.force)
                     f += rim_force(F[F_RIM_D], F[F_RIM_K], F[F_RIM_C], dp, rate)
+                f *= F[o + 6]  # its share (RadialTire.force)
                 if f > 0.0:
                     fx += f * nx
                     fz += f * nz
@@ -498,17 +219,6 @@ def _dispatcher(model):
 def available() -> bool:
     """True when the compiled rolling path can run here."""
     return unavailable_reason() is None
-
-
-def stretch_arrays(tire) -> tuple[np.ndarray, np.ndarray]:
-    """The corners of ``tire``'s straight stretches (``mtbmj.rolling.tire.straight_stretches``) as the
-    arrays a slot's R_SX, R_SZ point to; empty (no shortcut: R_NS 0) where it has none."""
-    from mtbmj.rolling.tire import straight_stretches
-
-    straight = straight_stretches(tire)
-    if straight is None:
-        return np.zeros(0), np.zeros(0)
-    return np.array(straight.x, dtype=np.float64), np.array(straight.z, dtype=np.float64)
 
 
 def _float_field(index: int, doc: str):
@@ -585,6 +295,7 @@ class CompiledRollCallback(CompiledShell, ctypes._CFuncPtr):
         cap = n + 2
         self._scratch = np.zeros(4 * cap, dtype=np.float64)
         self._iscratch = np.zeros(2 * cap, dtype=np.int64)
+        self._run = run_scratch(n, tire)
         self._closed: dict = {}
         self._sx, self._sz = stretch_arrays(tire)
 
@@ -599,6 +310,7 @@ class CompiledRollCallback(CompiledShell, ctypes._CFuncPtr):
         ints[R_TX], ints[R_TZ] = self._ta.ctypes.data, self._tb.ctypes.data
         ints[R_SCRATCH], ints[R_ISCRATCH] = self._scratch.ctypes.data, self._iscratch.ctypes.data
         ints[R_NS], ints[R_SX], ints[R_SZ] = self._sx.size, self._sx.ctypes.data, self._sz.ctypes.data
+        ints[R_RUN], ints[R_RUNCAP] = self._run.ctypes.data, self._run.size // (RUN_BLOCKS + tire_model.SHARE_BLOCKS)
         floats = np.zeros(FLOAT_WIDTH, dtype=np.float64)
         floats[[F_X0, F_Z0, F_L, F_COS, F_SIN]] = [front.chassis_x0, front.chassis_z0, front.fork_length,
                                                     self.cos, self.sin]
@@ -654,9 +366,10 @@ class CompiledRollCallback(CompiledShell, ctypes._CFuncPtr):
 
     @property
     def patches(self) -> list[tuple[float, ...]]:
-        """The contact patches of the last refresh: (qx, qz, nx, nz, surface vx, surface vz)."""
+        """The contact patches of the last refresh: (qx, qz, nx, nz, surface vx, surface vz, share,
+        prominence): ``RadialTire.patches``."""
         n = int(_INTS[self.slot, R_NPATCH])
-        rows = _FLOATS[self.slot, F_PATCHES:F_PATCHES + 6 * n].reshape(n, 6)
+        rows = _FLOATS[self.slot, F_PATCHES:F_PATCHES + PATCH_WIDTH * n].reshape(n, PATCH_WIDTH)
         return [tuple(float(v) for v in row) for row in rows]
 
     def reset(self) -> None:
@@ -684,4 +397,4 @@ from mtbmj.controllers.compiled import warn_once  # noqa: E402  (one set of warn
 
 
 __all__ = ["CompiledRollCallback", "UnsupportedLaw", "warn_once", "available", "UnsupportedRolling", "MAX_PATCHES",
-           "stretch_arrays"]
+           "stretch_arrays", "run_scratch", "PATCH_WIDTH", "RUN_BLOCKS"]
