@@ -24,6 +24,7 @@ SLOW_HZ = 0.3  # the rider's slow load: the loop that keeps the frame's front on
 SLOW_BOUND = 0.5  # ... bounded by this share of the rider's weight (what a rider can push or pull)
 MAX_PASSES = 8  # the terrain found again over the rear's ground of the pass before, at most this often
 SETTLED_M = 0.2e-3  # ... until the rear predicted moves less than this (RMS) from one pass to the next
+COMPILED = True  # ``ride`` steps compiled where it can (``reconstruct_bike_compiled``); False: in Python
 
 
 def _law_force(law, x, v, z):
@@ -100,7 +101,8 @@ def whole_bike(spec, fork_setup, shock_setup) -> WholeBike:
                      fF0, fR0, wF0, wR0)
 
 
-def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=None, push=None) -> dict:
+def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=None, push=None,
+         compiled: bool | None = None) -> dict:
     """The whole bike ``b`` on ``t`` from rest, its rear wheel over ``rear_ground`` (m).
 
     Prescribed (``front`` = (the front wheel's rise in the frame m, its acceleration, the fork's
@@ -115,7 +117,11 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
     Free (``front_ground`` given, ``push`` the load on the frame's front, N, or None): both wheels on
     their grounds; returns {"front_rise", "rear_rise"}. Rises are the wheels' in the frame (m, 0 at
     full extension). A step that leaves the finite numbers in 1000 substeps ends the run: "diverged_s"
-    its time (None where it ran to the end), every series not a number from there."""
+    its time (None where it ran to the end), every series not a number from there.
+
+    ``compiled`` (default ``COMPILED``): the same steps compiled (``mtbmj.ride.reconstruct_bike_compiled``)
+    where they can run (numba present, both laws with a compiled form; else one warning and the
+    Python loop below, which is their specification); False: the Python loop."""
     dt = float(t[1] - t[0])
     n = t.size
     gR = np.asarray(rear_ground, float)
@@ -139,6 +145,28 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
         wF, aF, fFrame, fTyre, top = front
         ref = np.zeros(n) if reference is None else np.asarray(reference, float)
         vref = np.gradient(ref, dt)
+    if COMPILED if compiled is None else compiled:
+        from mtbmj.ride import reconstruct_bike_compiled
+
+        numbers = {"fa": fa, "fb": fb, "fm": fm, "la": la, "ra": ra, "lr": lr, "rr": rr, "zF_pt0": zF_pt0,
+                   "zR_pt0": zR_pt0, "K": K, "C": C, "bound": bound, "dt": dt}
+        done = reconstruct_bike_compiled.run(b, free, numbers, gR, front_ground=gF if free else None,
+                                             pushed=pushed if free else None, front=None if free else front,
+                                             ref=None if free else ref, vref=None if free else vref)
+        if done is not None:
+            series, bad = done
+            diverged = None
+            if bad >= 0:  # the run ends there, the rest not a number
+                diverged = float(t[bad])
+                for a in series.values():
+                    a[bad:] = math.nan
+            if free:
+                return {"front_rise": series["front"], "rear_rise": series["rear_rise"], "diverged_s": diverged}
+            return {"front_ground": series["front"], "front_tyre": series["tyre"], "rear_rise": series["rear_rise"],
+                    "slow_load": series["slow"], "diverged_s": diverged}
+        from mtbmj.controllers.compiled import warn_once
+
+        warn_once(reconstruct_bike_compiled.unavailable(b, free) or "the reconstruction's whole bike steps in Python")
     last = [0.0, 0.0]  # the frame front's acceleration at the last sample, the slow load there
 
     def rhs(y, i0, i1, s):
@@ -291,4 +319,4 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
             "diverged_s": out["diverged_s"]}
 
 
-__all__ = ["SLOW_HZ", "SLOW_BOUND", "MAX_PASSES", "WholeBike", "whole_bike", "ride", "terrain_and_rear"]
+__all__ = ["SLOW_HZ", "SLOW_BOUND", "COMPILED", "MAX_PASSES", "WholeBike", "whole_bike", "ride", "terrain_and_rear"]

@@ -1,0 +1,158 @@
+"""The reconstruction's whole bike compiled (mtbmj/ride/reconstruct_bike_compiled.py) against its
+specification, the Python loop of ``reconstruct_bike.ride`` (``compiled=False``), on inputs made here:
+a fork stroke record written below (sag, bumps, a bottom-out a fraction of a millimetre past full
+travel with the stops' force added as ``terrain_and_rear`` adds the quarter car's, a top-out flight
+it hangs through), the rear riding a made ground with a step that drives the shock into its bumper
+and a drop it tops out over; in the free mode, both wheels over made grounds with the rider's push.
+Both ways run the same expressions in the same order and the laws through kernels written from the
+same formulas, so the bound is 1e-9 in each series' unit (m, N)."""
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from mtbmj.bike import run as bike_run, spec as spec_mod
+from mtbmj.errors import FallbackWarning
+from mtbmj.ride import reconstruct_bike as rb
+from mtbmj.ride import reconstruct_bike_compiled as rbc
+from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, derivatives, hanging, law_along, lowpass
+
+DT = 1e-3
+T = np.arange(0.0, 3.0, DT)
+BOUND = 1e-9
+
+
+def smooth(t, at, width):
+    """A smooth step from 0 to 1 at ``at`` over about ``width`` (s)."""
+    return 0.5 * (1.0 + np.tanh((t - at) / width))
+
+
+@pytest.fixture(scope="module")
+def bike():
+    spec = spec_mod.load("sst")
+    fork_setup, shock_setup = bike_run.setups(spec)
+    return rb.whole_bike(spec, fork_setup, shock_setup), fork_setup.travel
+
+
+def fork_record(b, travel, past_m):
+    """The fork's stroke (m on T): sag, 3 Hz bumps, a bottom-out ``past_m`` past full travel at 1 s, a
+    top-out flight from 2.0 to 2.2 s; and the prescribed front ``ride`` takes, built as
+    ``terrain_and_rear`` builds it (the stops' force past full travel added after the slow load)."""
+    sag = b.wF0 / b.sin_a
+    x = sag + 0.008 * np.sin(2 * np.pi * 3.0 * T) + (travel + past_m - sag) * np.exp(-((T - 1.0) / 0.04) ** 2)
+    x = x * (1.0 - smooth(T, 2.0, 0.01) * (1.0 - smooth(T, 2.2, 0.01)))
+    _, acc = derivatives(x, DT)
+    force = law_along(b.fork, x, DT, travel) / b.sin_a
+    slow = lowpass(force - b.fF0, DT, HIGHPASS_HZ)
+    stops = np.array([(b.fork.force(v, 0.0, 0.0) - b.fork.force(min(v, travel), 0.0, 0.0)) / b.sin_a for v in x])
+    force = force + stops
+    top = hanging(x, DT)
+    return x, stops, top, (x * b.sin_a, acc * b.sin_a, force - slow, force, top)
+
+
+REAR = 0.01 * np.sin(2 * np.pi * 2.3 * T) + 0.35 * smooth(T, 1.2, 0.008) * (1 - smooth(T, 1.5, 0.05)) \
+    - 0.25 * smooth(T, 2.05, 0.02) * (1 - smooth(T, 2.4, 0.05))
+REFERENCE = 0.004 * np.sin(2 * np.pi * 0.2 * T)
+PUSH = 50.0 * np.sin(2 * np.pi * 0.5 * T)
+
+
+def front_ground(step, width):
+    """The free front wheel's ground (m on T): bumps, a ``step`` up over about ``width`` (s) at 1 s, a drop at 2 s."""
+    return 0.01 * np.sin(2 * np.pi * 1.7 * T) + step * smooth(T, 1.0, width) * (1 - smooth(T, 1.3, 0.05)) \
+        - 0.3 * smooth(T, 2.0, 0.02) * (1 - smooth(T, 2.3, 0.05))
+
+
+def both(**kw):
+    return rb.ride(T, compiled=True, **kw), rb.ride(T, compiled=False, **kw)
+
+
+def agree(c, p, keys):
+    for key in keys:
+        a, b = c[key], p[key]
+        assert np.array_equal(np.isfinite(a), np.isfinite(b)), key
+        ok = np.isfinite(b)
+        assert np.max(np.abs(a[ok] - b[ok])) <= BOUND, (key, np.max(np.abs(a[ok] - b[ok])))
+
+
+PRESCRIBED = ("front_ground", "front_tyre", "rear_rise", "slow_load")
+
+
+def test_the_compiled_whole_bike_rides_the_prescribed_fork_as_the_python_one(bike):
+    b, travel = bike
+    assert rbc.unavailable(b, free=False) is None  # numba is a dependency: the compiled path runs here
+    x, stops, top, front = fork_record(b, travel, 0.15e-3)
+    c, p = both(b=b, rear_ground=REAR, front=front, reference=REFERENCE)
+    assert c["diverged_s"] is None and p["diverged_s"] is None
+    agree(c, p, PRESCRIBED)
+    # the record reached what it was written for: the fork into its stops, a flight hung on the top-out stop,
+    # the shock into its bumper, the rear wheel past full extension into the top-out stop
+    shock = b.shock.spring
+    assert stops.max() > 1e3 and top.sum() > 50 and np.min(p["front_tyre"][top]) <= 0.0
+    assert b.lev.stroke(float(np.max(p["rear_rise"]))) > shock.travel - shock.bumper_length
+    assert np.min(p["rear_rise"]) < 0.0
+    assert np.ptp(p["front_ground"]) > 0.1 and np.ptp(p["slow_load"]) > 100.0
+
+
+def test_the_compiled_whole_bike_rides_free_as_the_python_one(bike):
+    b, _ = bike
+    gF = front_ground(0.25, 0.02)
+    c, p = both(b=b, rear_ground=np.interp(T - 0.3, T, gF), front_ground=gF, push=PUSH)
+    assert c["diverged_s"] is None and p["diverged_s"] is None
+    agree(c, p, ("front_rise", "rear_rise"))
+    assert np.max(p["front_rise"]) / b.sin_a > 0.15 and np.min(p["front_rise"]) < 0.0  # deep, and topped out
+    assert np.ptp(p["rear_rise"]) > 0.1
+
+
+@pytest.mark.parametrize("mode", ["prescribed", "free"])
+def test_a_diverging_whole_bike_diverges_at_the_same_sample(bike, mode):
+    """The fork's record 1.5 mm past full travel (its stops' 30 kN at once), or a 0.3 m step under the free
+    front wheel in 10 ms: both ways end the run at the same sample, every series not a number past it."""
+    b, travel = bike
+    if mode == "prescribed":
+        front = fork_record(b, travel, 1.5e-3)[3]
+        c, p = both(b=b, rear_ground=REAR, front=front, reference=REFERENCE)
+        keys = PRESCRIBED
+    else:
+        gF = front_ground(0.3, 0.01)
+        c, p = both(b=b, rear_ground=np.interp(T - 0.3, T, gF), front_ground=gF, push=PUSH)
+        keys = ("front_rise", "rear_rise")
+    assert p["diverged_s"] is not None and 0.9 < p["diverged_s"] < 1.2
+    assert c["diverged_s"] == p["diverged_s"]
+    i = int(round(p["diverged_s"] / DT))
+    for key in keys:
+        assert np.all(np.isnan(c[key][i:])) and np.all(np.isfinite(c[key][:i]))
+    agree(c, p, keys)
+
+
+def test_without_numba_the_whole_bike_steps_in_python_with_one_warning(bike, monkeypatch):
+    b, _ = bike
+    n = 400
+    t, gF = T[:n], front_ground(0.25, 0.02)[:n]
+    expected = rb.ride(t, b, gF, front_ground=gF, compiled=False)
+    monkeypatch.setattr(rbc, "_numba", None)
+    monkeypatch.setattr("mtbmj.controllers.compiled._WARNED", set())
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        got = rb.ride(t, b, gF, front_ground=gF)  # compiled by default: falls back
+        rb.ride(t, b, gF, front_ground=gF)
+    said = [w for w in caught if issubclass(w.category, FallbackWarning)]
+    assert len(said) == 1 and "whole bike steps in Python" in str(said[0].message)
+    assert np.array_equal(got["front_rise"], expected["front_rise"])
+
+
+def test_ride_runs_compiled_by_default(bike, monkeypatch):
+    b, _ = bike
+    calls = []
+    real = rbc.run
+
+    def spy(*a, **k):
+        calls.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(rbc, "run", spy)
+    gF = front_ground(0.25, 0.02)[:200]
+    out = rb.ride(T[:200], b, gF, front_ground=gF)
+    assert rb.COMPILED and calls == [1] and math.isfinite(out["front_rise"][-1])
