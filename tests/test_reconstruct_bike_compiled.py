@@ -156,3 +156,24 @@ def test_ride_runs_compiled_by_default(bike, monkeypatch):
     gF = front_ground(0.25, 0.02)[:200]
     out = rb.ride(T[:200], b, gF, front_ground=gF)
     assert rb.COMPILED and calls == [1] and math.isfinite(out["front_rise"][-1])
+
+
+def test_the_friction_state_along_a_record_compiled_is_the_midpoint_rule(bike):
+    """``quartercar_compiled.states`` (what ``reconstruct_inverse.law_along`` integrates the law's friction
+    state with) against the explicit midpoint rule written here on the law objects, along the made fork
+    record (sticking, then sliding through the bumps and the bottom-out) and a made shock stroke."""
+    from mtbmj.ride import quartercar_compiled
+
+    b, travel = bike
+    x = fork_record(b, travel, 0.15e-3)[0]
+    shock_x = 0.02 + 0.01 * np.sin(2 * np.pi * 4.0 * T) * smooth(T, 0.5, 0.1)
+    for law, stroke in ((b.fork, x), (b.shock, shock_x)):
+        assert law.has_state
+        v, _ = derivatives(stroke, DT)
+        z = np.zeros(T.size)
+        for i in range(1, T.size):
+            half = z[i - 1] + 0.5 * DT * law.state_rate(v[i - 1], z[i - 1])
+            z[i] = z[i - 1] + DT * law.state_rate(0.5 * (v[i - 1] + v[i]), half)
+        got = quartercar_compiled.states(law, v, DT)
+        assert got is not None and np.max(np.abs(got - z)) <= BOUND
+        assert np.ptp(z) > 1e-4  # the state moved: the law slid

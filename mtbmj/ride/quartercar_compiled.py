@@ -3,7 +3,8 @@ classical RK4 at the record's step, the same substeps where a step diverges, the
 through the compiled kernel every engine runs (``controllers.kernels.fork_force_rate``) and the
 leverage curve through the bike's own lookups (``mtbmj.bike.spec.leverage_ratio`` and
 ``leverage_stroke``, compiled from their source). ``run`` returns None where it cannot run
-(numba missing, a law with no compiled form): ``forward`` then steps in Python.
+(numba missing, a law with no compiled form): ``forward`` then steps in Python. ``states`` integrates
+a law's friction state along a record as ``reconstruct_inverse.law_along`` does (None: in Python).
 """
 from __future__ import annotations
 
@@ -23,6 +24,16 @@ if _numba is not None:
     _jit.law_function(_spec.stroke_piece)
     _ratio = _jit.law_function(_spec.leverage_ratio)
     _stroke = _jit.law_function(_spec.leverage_stroke)
+
+    _state_rate = _kernels.state_rate
+
+    @_jit.kernel
+    def _states(I, P, v, dt, z):
+        """``reconstruct_inverse._states``' loop: the law's friction state along the rates ``v`` (explicit
+        midpoint) into ``z`` (z[0] given)."""
+        for i in range(1, v.size):
+            half = z[i - 1] + 0.5 * dt * _state_rate(I, P, v[i - 1], z[i - 1])
+            z[i] = z[i - 1] + dt * _state_rate(I, P, 0.5 * (v[i - 1] + v[i]), half)
 
     @_jit.kernel
     def _geometry(mode, sin_a, LW, LR, LS, w):
@@ -129,4 +140,21 @@ def run(law, stateful: bool, masses: tuple, mode: int, sin_a: float, leverage, g
     return out, int(bad)
 
 
-__all__ = ["FORK", "LEVERAGE", "run"]
+def states(law, v, dt: float) -> np.ndarray | None:
+    """The law's friction state along a record's stroke rates ``v`` (m/s, step ``dt``), from 0, as
+    ``reconstruct_inverse._states`` integrates it; None where the compiled path cannot run."""
+    if _numba is None:
+        return None
+    from mtbmj.controllers.lawcodes import UnsupportedLaw, law_arrays
+
+    try:
+        I, P = law_arrays(law)
+    except UnsupportedLaw:
+        return None
+    v = np.ascontiguousarray(v, dtype=np.float64)
+    z = np.zeros(v.size)
+    _states(I, P, v, float(dt), z)
+    return z
+
+
+__all__ = ["FORK", "LEVERAGE", "run", "states"]

@@ -84,11 +84,18 @@ def _highpass(x, dt):
     return sosfiltfilt(sos, x)
 
 
-def _states(law, x, v, dt):
-    """The law's friction state along the measured stroke (explicit midpoint), or zeros."""
+def _states(law, x, v, dt, compiled: bool = True):
+    """The law's friction state along the measured stroke (explicit midpoint), or zeros; the same loop
+    compiled (``quartercar_compiled.states``) where it can run and ``compiled``."""
     z = np.zeros_like(x)
     if not law.has_state:
         return z
+    if compiled:
+        from mtbmj.ride import quartercar_compiled
+
+        done = quartercar_compiled.states(law, v, dt)
+        if done is not None:
+            return done
     for i in range(1, x.size):
         half = z[i - 1] + 0.5 * dt * law.state_rate(v[i - 1], z[i - 1])
         z[i] = z[i - 1] + dt * law.state_rate(0.5 * (v[i - 1] + v[i]), half)
