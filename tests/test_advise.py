@@ -77,15 +77,19 @@ def test_a_fork_far_too_soft_gets_a_stiffer_spring(soft, tmp_path):
 @pytest.mark.slow
 def test_a_rebound_far_too_slow_gets_less_rebound_damping(tmp_path):
     """The fork's rebound four times too slow (2800 N s/m, the bike's own 700): the made ride packs
-    down, and the advice is a change, the fork's rebound damping lowered, its reason the packing
-    metric; the bike ridden again at the advised damping packs less, as the advice expects, within
+    down, and the advice is a change, the fork's rebound damping lowered by 30-90 % (the search goes
+    on from the one-step candidate: 734 N s/m), packing predicted to ease beyond its uncertainty; the bike ridden again at the advised damping packs less, as the advice expects, within
     its uncertainty."""
     bike, advice, (fork_mm, rear_mm, t), out = advice_of(tmp_path / "slow", fork_reb=2800.0)
     made = generated_metrics(bike, fork_mm, rear_mm, t)
     assert made["front"]["rebound_over_compression"] < advise.PACKING_RATIO  # the ride made here packs
     assert advice["verdict"]["answer"] == "change", advice["verdict"]
     rec = advice["recommendation"]
-    assert rec is not None and "front.rebound_over_compression" in advice["verdict"]["why"]
+    # the reason: the rule whose penalty fell most on the way (the search says which), and packing
+    # itself predicted to ease beyond its uncertainty (below)
+    assert rec is not None and "driven by the front" in advice["verdict"]["why"]
+    packing = rec["changes"]["front.rebound_over_compression"]
+    assert packing["change"] > (packing["uncertainty"] or 0.0)
     assert rec["config_key"] == "fork.damper.rebound_N_s_per_m" and rec["section"] == "fork.set"
     assert rec["direction"] == "down" and rec["setting"]["to"] < rec["setting"]["from"] == 2800.0
     assert 0.1 <= rec["setting"]["to"] / rec["setting"]["from"] <= 0.7, rec["search"]  # lowered by 30-90 %

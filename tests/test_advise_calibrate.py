@@ -85,9 +85,9 @@ def test_advice_on_a_softer_fork_than_the_file_says_rides_the_calibrated_bike(so
     sst, file = softer
     out = tmp_path / "advice"
     with reconstruction_passing():
-        assert main(["advise", str(sst), "--bike", str(file), "--no-calibrate", "--out", str(out)]) == 2
+        assert main(["advise", str(sst), "--bike", str(file), "--out", str(out)]) == 2
         assert "crashed" in capsys.readouterr().err and not out.exists()
-        assert main(["advise", str(sst), "--bike", str(file), "--out", str(out)]) == 0
+        assert main(["advise", str(sst), "--bike", str(file), "--calibrate", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "calibrated on the ride: fork spring rate" in printed
     d = json.loads((out / "advice.json").read_text())

@@ -24,7 +24,7 @@ def cmd_advise(args) -> int:
     record = ride_record(args.ride, args, bike)
     result = Progress("advise").around(
         lambda progress: advise.advise(record, bike, over or None, args.duration, progress, args.workers,
-                                       tries=tries, calibrated=not args.no_calibrate))
+                                       tries=tries, calibrated=args.calibrate))
     written = result.write(args.out)
     if result.calibration is not None:
         print(result.calibration.line())
@@ -59,9 +59,10 @@ def add_parser(sub) -> None:
                    help="a setting to try (repeatable, all in one try): fork:KEY or shock:KEY of the part's "
                         "configuration (e.g. fork:fork.spring.rate_N_per_mm=7, shock:fork.damper.rebound_clicks=8) "
                         "or a bike key (shock.spring_rate_lb_per_in=500, rider.mass_kg=80); over --try's file")
-    p.add_argument("--no-calibrate", action="store_true",
-                   help="advise on the bike file's springs as they are (default: each end's spring calibrated on the "
-                        "ride first, its mean force the end's static load; the advice relative to that bike)")
+    p.add_argument("--calibrate", action="store_true",
+                   help="calibrate each end's spring on the ride first (its mean force the end's static load) and "
+                        "advise relative to that bike (default: the bike file's springs as they are; see "
+                        "docs/rolling.md for why it is not the default yet)")
     p.add_argument("--workers", type=int, default=2, metavar="N",
                    help="processes the candidate runs spread over (default 2)")
     add_sensor_spans(p)

@@ -88,7 +88,7 @@ def html(advice, png: bytes) -> str:
                        f"(key)</th><th>unit</th><th>bike file</th><th>calibrated</th><th>95 % interval</th>"
                        f"<th>scale (no unit)</th></tr>{rows_c}</table>")
     else:
-        calibration = "<p>Not calibrated: the bike file's springs as they are (--no-calibrate).</p>"
+        calibration = "<p>Not calibrated: the bike file's springs as they are (advise --calibrate reads them from the ride).</p>"
     img = base64.b64encode(png).decode()
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>mtbmj advice: {esc.escape(advice.ride)}</title>
