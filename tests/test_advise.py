@@ -211,6 +211,7 @@ def test_a_recorded_setting_that_crashes_on_the_terrain_is_refused(tmp_path, mon
     assert not out.exists()
 
 
+@pytest.mark.slow  # a reconstruction through the whole bike: 0.5-2 min
 def test_a_rider_no_bike_carries_is_refused_naming_the_key(tmp_path, capsys):
     """A careless --rider-kg 500 on the shipped ride: the bike sinks onto its stops, the
     reconstruction cannot reproduce the rear, and the refusal names the implausible key."""
