@@ -58,9 +58,12 @@ def test_a_fork_far_too_soft_gets_a_stiffer_spring(soft, tmp_path):
     rec = advice["recommendation"]
     assert rec is not None, advice["candidates"]
     assert rec["config_key"] == "fork.spring.rate_N_per_mm" and rec["section"] == "fork.set"
-    assert rec["direction"] == "up" and rec["to"] > rec["from"] == 5.0
-    # this file's bike at the recommended rate: what the advice expects agrees within its uncertainty
-    bike2, _, *again = advise_ride(tmp_path, fork_rate=rec["to"])
+    assert rec["direction"] == "up" and rec["setting"]["to"] > rec["setting"]["from"] == 5.0  # the file's units
+    # the search reaches the answer (issue 52's "how we will know": raised by 20-150 %), for bottoming
+    assert 1.2 <= rec["setting"]["to"] / rec["setting"]["from"] <= 2.5, rec["search"]
+    assert rec["driven_by"] == "front_bottom_outs" and len(rec["search"]) >= 1
+    # this file's bike at the recommended rate (as the rider sets it): what the advice expects agrees
+    bike2, _, *again = advise_ride(tmp_path, fork_rate=rec["setting"]["to"])
     made2 = generated_metrics(bike2, *again)
     for metric in ("front.bottom_outs_per_minute", "front.max_travel_percent", "front.dynamic_sag_percent"):
         c = rec["changes"][metric]
@@ -74,18 +77,23 @@ def test_a_fork_far_too_soft_gets_a_stiffer_spring(soft, tmp_path):
 @pytest.mark.slow
 def test_a_rebound_far_too_slow_gets_less_rebound_damping(tmp_path):
     """The fork's rebound four times too slow (2800 N s/m, the bike's own 700): the made ride packs
-    down, and the advice is a change, the fork's rebound damping lowered, its reason the packing
-    metric; the bike ridden again at the advised damping packs less, as the advice expects, within
+    down, and the advice is a change, the fork's rebound damping lowered by 30-90 % (the search goes
+    on from the one-step candidate: 734 N s/m), packing predicted to ease beyond its uncertainty; the bike ridden again at the advised damping packs less, as the advice expects, within
     its uncertainty."""
     bike, advice, (fork_mm, rear_mm, t), out = advice_of(tmp_path / "slow", fork_reb=2800.0)
     made = generated_metrics(bike, fork_mm, rear_mm, t)
     assert made["front"]["rebound_over_compression"] < advise.PACKING_RATIO  # the ride made here packs
     assert advice["verdict"]["answer"] == "change", advice["verdict"]
     rec = advice["recommendation"]
-    assert rec is not None and "front.rebound_over_compression" in advice["verdict"]["why"]
+    # the reason: the rule whose penalty fell most on the way (the search says which), and packing
+    # itself predicted to ease beyond its uncertainty (below)
+    assert rec is not None and "driven by the front" in advice["verdict"]["why"]
+    packing = rec["changes"]["front.rebound_over_compression"]
+    assert packing["change"] > (packing["uncertainty"] or 0.0)
     assert rec["config_key"] == "fork.damper.rebound_N_s_per_m" and rec["section"] == "fork.set"
-    assert rec["direction"] == "down" and rec["to"] < rec["from"] == 2800.0
-    _, _, *again = advise_ride(tmp_path / "again", fork_reb=rec["to"])
+    assert rec["direction"] == "down" and rec["setting"]["to"] < rec["setting"]["from"] == 2800.0
+    assert 0.1 <= rec["setting"]["to"] / rec["setting"]["from"] <= 0.7, rec["search"]  # lowered by 30-90 %
+    _, _, *again = advise_ride(tmp_path / "again", fork_reb=rec["setting"]["to"])
     made2 = generated_metrics(bike, *again)
     c = rec["changes"]["front.rebound_over_compression"]
     assert c["change"] > 0 and made2["front"]["rebound_over_compression"] > made["front"]["rebound_over_compression"]
@@ -105,7 +113,7 @@ def test_the_report_opens_in_headless_chromium(soft, tmp_path):
     assert result["resources"] == []
     assert result["tables"]["candidates"]["rows"] == 1 + len(advice["candidates"])
     assert result["tables"]["changes"]["visible"] and result["tables"]["changes"]["rows"] > 5
-    assert "raise the fork spring rate from 5 to 5.5" in dom
+    assert f"raise the fork spring rate from 5 to {advice['recommendation']['setting']['to']:g}" in dom
 
 
 def test_the_figure_shows_both_ends_before_and_after():
@@ -203,6 +211,7 @@ def test_a_recorded_setting_that_crashes_on_the_terrain_is_refused(tmp_path, mon
     assert not out.exists()
 
 
+@pytest.mark.slow  # a reconstruction through the whole bike: 0.5-2 min
 def test_a_rider_no_bike_carries_is_refused_naming_the_key(tmp_path, capsys):
     """A careless --rider-kg 500 on the shipped ride: the bike sinks onto its stops, the
     reconstruction cannot reproduce the rear, and the refusal names the implausible key."""

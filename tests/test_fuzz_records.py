@@ -311,6 +311,7 @@ def test_every_figure_is_written_by_the_one_figure_writer():
     assert not bare, bare
 
 
+@pytest.mark.slow  # a reconstruction through the whole bike: 0.5-2 min
 def test_reconstruct_a_ride_whose_name_is_mathtext(tmp_path, capfd):
     ride = tmp_path / "a$\\frac{b$.SST"
     shutil.copyfile(ROOT / "mtbmj" / "data" / "sst" / "00649.SST", ride)

@@ -343,6 +343,7 @@ def test_a_v2_trail_ride_without_a_speed_is_refused_in_one_line(tmp_path, capsys
     assert not out.exists()
 
 
+@pytest.mark.slow  # a reconstruction through the whole bike: 0.5-2 min
 @pytest.mark.shared_data("sst_v2", "00094.SST")
 def test_a_v2_trail_ride_with_standing_stretches_is_read_and_judged(tmp_path, capsys):
     """00094.SST of the shared version-2 rides (a trail section, 5 kHz): stretches where the bike

@@ -153,6 +153,7 @@ def test_two_quarter_cars_are_told_apart_from_the_whole_bike(rebuilt):
     assert c["verdict"].startswith("the model does not describe this ride")
 
 
+@pytest.mark.slow  # a reconstruction through the whole bike: 0.5-2 min
 @pytest.mark.parametrize("wrong", ["fork_spring_x1.5", "rider_25kg_heavier"])
 def test_a_wrong_bike_fails_the_checks_and_says_why(made, tmp_path, capsys, wrong):
     """The same ride read through a bike that is not the one that made it: its fork spring 1.5 times

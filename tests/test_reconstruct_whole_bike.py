@@ -136,6 +136,7 @@ def test_the_terrain_is_found_under_the_jumps_and_drops(made, reconstruction):
     assert max(end - start for start, end in rec.jumps) < 0.5
 
 
+@pytest.mark.slow  # a reconstruction through the whole bike: 0.5-2 min
 @pytest.mark.parametrize("wrong", ["fork_spring_x1.5", "rider_25kg_heavier"])
 def test_a_wrong_bike_fails_the_checks_and_says_why(made, tmp_path, capsys, wrong):
     """The same ride read through a bike that did not make it: its fork spring 1.5 times the made one,

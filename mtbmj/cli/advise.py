@@ -24,8 +24,10 @@ def cmd_advise(args) -> int:
     record = ride_record(args.ride, args, bike)
     result = Progress("advise").around(
         lambda progress: advise.advise(record, bike, over or None, args.duration, progress, args.workers,
-                                       tries=tries))
+                                       tries=tries, calibrated=args.calibrate))
     written = result.write(args.out)
+    if result.calibration is not None:
+        print(result.calibration.line())
     checks = result.reconstruction["checks"]
     print(f"reconstruction: speed {result.reconstruction['speed_m_per_s']:.2f} m/s; check: front reproduced within "
           f"{checks['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted within "
@@ -57,6 +59,10 @@ def add_parser(sub) -> None:
                    help="a setting to try (repeatable, all in one try): fork:KEY or shock:KEY of the part's "
                         "configuration (e.g. fork:fork.spring.rate_N_per_mm=7, shock:fork.damper.rebound_clicks=8) "
                         "or a bike key (shock.spring_rate_lb_per_in=500, rider.mass_kg=80); over --try's file")
+    p.add_argument("--calibrate", action="store_true",
+                   help="calibrate each end's spring on the ride first (its mean force the end's static load) and "
+                        "advise relative to that bike (default: the bike file's springs as they are; see "
+                        "docs/rolling.md for why it is not the default yet)")
     p.add_argument("--workers", type=int, default=2, metavar="N",
                    help="processes the candidate runs spread over (default 2)")
     add_sensor_spans(p)

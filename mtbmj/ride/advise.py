@@ -11,6 +11,16 @@ refuses (a volume spacer that would fill the air chamber, two adjusters whose su
 the measured forces) is skipped, not fatal: :func:`allowed` composes each candidate's fork and
 shock before anything is simulated, and the report names every one skipped and why (``skipped``).
 
+**Calibrated first, on request** (``calibrated``, ``--calibrate``; :mod:`mtbmj.ride.calibrate`): each end's spring
+scaled so that its mean force over the ride is the static load it carries (the record alone, before
+the reconstruction finds anything through the springs); every run rides that bike, and each
+candidate is read in the bike file's units relative to it (``Adjuster.per_unit`` times the scale).
+No scale that carries an end is a refusal (:class:`RideNotDescribed`). Not the default: on a ride
+made in the tests with the bike file's own springs and the fork's rebound four times too slow, the
+calibration reads the fork at x0.97 (the model's rider sits 6.5 cm further back than the test's),
+and that 3 % turns the right answer (rebound lowered 2800 -> 734 N s/m, the true 700) into
+"inconclusive"; the front then reproduces at 7.8 mm RMS against 4.6 with the file's spring.
+
 **What is scored** (:func:`ride_metrics`, each end in % of its own travel): static sag (standing,
 the model's statics); dynamic sag (the mean travel); maximum travel and bottom-outs (within 3 mm
 of full travel, as telemetry tools count them); the share of time deeper than 80 %; the time at low
@@ -71,6 +81,8 @@ from mtbmj.ride.advice_rules import (  # noqa: F401 (advise's names for them)
     UNITS, UNUSED_BELOW_PERCENT, adjusters, bounded_value, bounds, expected,
     flat_metrics, grip_comfort, penalties, ride_metrics, round_setting, unit_of, Trial, compose_setting, trial)
 
+
+from mtbmj.ride.advice_report import metric_unit  # noqa: E402,F401 (advise's name for it)
 
 LEGEND_ROOM = 1.45  # the histograms' height over their tallest bar: the legend sits above the bars
 
@@ -150,6 +162,8 @@ class Advice:
     tries: list = field(default_factory=list)  # (Trial, Run): the settings tried on the ride
     record_t: np.ndarray = field(repr=False, default=None)  # ride time of record_front / record_rear (0 at its start)
     verdict: dict = field(default_factory=dict)  # {"answer": "change" / "inconclusive" / "keep", "why": ...}
+    searched: tuple = None  # (Adjuster, direction, value, Run): the recommendation searched further
+    calibration: object = None  # mtbmj.ride.calibrate.Calibration: the springs ridden (None: the file's as they are)
 
     def tried(self) -> list:
         """Each tried setting: its label, bike file, settings as asked, penalty (and its change), crash,
@@ -244,7 +258,8 @@ class Advice:
                                      "penalties": self.base.penalty, "penalty": self.base.total},
                 "uncertainty": self.uncertainty(), "uncertainty_method": UNCERTAINTY_METHOD,
                 "verdict": self.verdict, "candidates": cands, "skipped": list(self.skipped),
-                "recommendation": self.recommendation, "tried": self.tried(), "wall_time_s": self.wall_s}
+                "recommendation": self.recommendation, "tried": self.tried(), "wall_time_s": self.wall_s,
+                "calibration": None if self.calibration is None else self.calibration.to_dict()}
 
     def line(self) -> str:
         rec, v = self.recommendation, self.verdict or {}
@@ -267,7 +282,8 @@ class Advice:
         shown = best if best is not None else (self.verdict or {}).get("best_candidate")
         run = None
         if shown is not None:
-            run = next((r for a, d, v, r in self.candidates if a.name == shown["key"] and d == shown["direction"]), None)
+            run = next((r for a, d, v, r in ([self.searched] if self.searched else []) + list(self.candidates)
+                        if a.name == shown["key"] and d == shown["direction"] and v == shown["to"]), None)
         for ax, end, rec, top in ((axes[0], "front", self.record_front, self.base.metrics["front"]["travel_mm"]),
                                   (axes[1], "rear", self.record_rear, self.base.metrics["rear"]["travel_mm"])):
             edges = np.linspace(0, 100, 21)
@@ -314,85 +330,9 @@ class Advice:
         return f"{v.get('answer', 'inconclusive').capitalize()}: {v.get('why', '')}"
 
     def html(self, png: bytes) -> str:
-        import base64
-        import html as esc
+        from mtbmj.ride import advice_report
 
-        d = self.to_dict()
-        rec = d["recommendation"]
-        v = d["verdict"] or {}
-        shown = rec if rec is not None else v.get("best_candidate")
-
-        def metric_rows(changes, skip_still=True):
-            out = []
-            for k, c in sorted(changes.items()):
-                if skip_still and c["change"] == 0:
-                    continue
-                out.append(f"<tr><td>{esc.escape(k)}</td><td>{esc.escape(metric_unit(k))}</td><td>{_num(c['recorded'])}"
-                           f"</td><td>{c['from']:.3g}</td><td>{c['to']:.3g}</td><td>{c['change']:+.3g}</td>"
-                           f"<td>{_num(c['uncertainty'])}</td><td>{c['expected']:.3g}</td></tr>")
-            return out
-
-        head = ("<tr><th>metric</th><th>unit</th><th>recorded</th><th>simulated now</th><th>simulated {}</th>"
-                "<th>change</th><th>uncertainty (same unit)</th><th>expected on your ride</th></tr>")
-        blank = "<td></td>" * 7
-        if shown is not None:
-            rows = metric_rows(shown["changes"])
-            caption = ("the recommended change" if rec is not None else
-                       "the best candidate, not advised: what it improves moves less than its uncertainty")
-            rows = rows or [f"<tr><td>no metric moves at {esc.escape(shown['label'])} {shown['to']:g}</td>{blank}</tr>"]
-        else:
-            caption = "no change: " + v.get("answer", "")
-            rows = [f"<tr><td>no candidate to show: {esc.escape(v.get('why', 'no candidate'))}</td>{blank}</tr>"]
-
-        def cand_row(c):
-            st = c["setting"]
-            return (f"<tr><td>{esc.escape(c['label'])} ({esc.escape(st['key'])})</td><td>{esc.escape(st['unit'])}</td>"
-                    f"<td>{st['from']:g}</td><td>{st['to']:g}</td><td>{c['penalty_change']:+.2f}</td>"
-                    f"<td>{esc.escape(c['crash'] or '')}</td></tr>")
-
-        cand = "".join(cand_row(c) for c in d["candidates"])
-        skip = "".join(f"<li>{esc.escape(c['label'])} {c['setting']['from']:g} -&gt; {c['setting']['to']:g} "
-                       f"{esc.escape(c['setting']['unit'])}: {esc.escape(c['why'])}</li>" for c in d["skipped"])
-        if skip:
-            skip = f'<h2>Skipped: not allowed by the part</h2><ul id="skipped">{skip}</ul>'
-        tried = ""
-        for tr in d["tried"]:
-            crash = f" ({esc.escape(tr['crash'])})" if tr["crash"] else ""
-            tried += (f"<h2>Tried: {esc.escape(tr['label'])}</h2><p>rule penalty (no unit) "
-                      f"{d['recorded_setting']['penalty']:.2f} -&gt; {tr['penalty']:.2f}{crash}</p><table class=\"tried\">"
-                      f"{head.format('tried')}{''.join(metric_rows(tr['changes'], False))}</table>")
-        sim, meas, u = flat_metrics(self.base.metrics), flat_metrics(self.measured), d["uncertainty"]
-        match = "".join(f"<tr><td>{esc.escape(k)}</td><td>{esc.escape(metric_unit(k))}</td><td>{meas[k]:.3g}</td>"
-                        f"<td>{sim[k]:.3g}</td><td>{sim[k] - meas[k]:+.3g}</td><td>{_num(u.get(k))}</td></tr>"
-                        for k in sorted(meas) if k in sim and k not in ("duration_s",) and not k.endswith("travel_mm"))
-        rc = d["reconstruction"]["checks"]
-        img = base64.b64encode(png).decode()
-        return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>mtbmj advice: {esc.escape(self.ride)}</title>
-<style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}table{{border-collapse:collapse}}
-td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{text-align:left}}</style></head>
-<body><h1>Setup advice: {esc.escape(self.ride)} on {esc.escape(self.bike)}</h1>
-<p id="recommended"><b>{esc.escape(self.headline())}</b></p>
-<p id="line">{esc.escape(self.line())}</p>
-<p>Reconstruction check: front reproduced within {rc['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted
-{rc['rear_predicted_rms_mm']:.1f} mm RMS ({rc['rear_predicted_rms_percent_of_used']:.0f} % of the travel used),
-{rc['samples_checked_percent']:.0f} % of the ride checked; speed {d['reconstruction']['speed_m_per_s']:.2f} m/s.</p>
-<img id="histograms" src="data:image/png;base64,{img}" alt="travel histograms before and after">
-<h2>Predicted change of every metric: {esc.escape(caption)}</h2>
-<table id="changes">{head.format('after')}
-{''.join(rows)}</table>
-<h2>How well the model matched the ride (recorded setting)</h2>
-<p>Uncertainty: {esc.escape(d['uncertainty_method'])}.</p>
-<table id="match"><tr><th>metric</th><th>unit</th><th>recorded</th><th>simulated</th><th>simulated - recorded</th>
-<th>model's error (same unit)</th></tr>{match}</table>
-<h2>Every candidate</h2>
-<table id="candidates"><tr><th>setting (key)</th><th>unit</th><th>from</th><th>to</th><th>rule penalty change (no unit)</th>
-<th>crash</th></tr>{cand}</table>
-{skip}
-{tried}
-<h2>Rules</h2><ul>{''.join(f'<li>{esc.escape(k)}: {esc.escape(v)}</li>' for k, v in RULES.items())}</ul>
-</body></html>
-"""
+        return advice_report.html(self, png)
 
     def write(self, out_dir) -> list:
         import json
@@ -403,23 +343,6 @@ td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{t
         return output.write_atomically(out_dir, {
             "advice.json": (json.dumps(self.to_dict(), indent=2, default=_json) + "\n").encode(),
             "advice.png": png, "advice.html": self.html(png).encode()})
-
-
-def metric_unit(metric: str) -> str:
-    """The unit of a metric (``flat_metrics`` name), as the report's tables show it."""
-    leaf = metric.rpartition(".")[2]
-    if leaf in SHARES:
-        return "% of time"
-    for end, unit in (("_percent", "% of travel"), ("_per_minute", "per minute"), ("_mm_per_s", "mm/s"),
-                      ("_m_per_s2", "m/s2"), ("_mm", "mm"), ("_s", "s")):
-        if leaf.endswith(end):
-            return unit
-    return {"bottom_outs": "count", "rebound_over_compression": "ratio", "tyre_load_variation": "std/mean",
-            "balance_points": "points of travel %"}.get(leaf, "")
-
-
-def _num(x, spec: str = ".3g") -> str:
-    return "" if x is None else format(x, spec)
 
 
 def _json(o):
@@ -554,13 +477,18 @@ def allowed(bike, candidates, merged) -> tuple[list, list]:
 
 
 def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
-           tries=(), candidates: bool = True) -> Advice:
+           tries=(), candidates: bool = True, calibrated: bool = False, search: bool = True) -> Advice:
     """Advice for ``record`` (a two-ended ``TelemetryRecord``) on ``bike`` (preset, file or
     ``mtbmj.bike.spec.ResolvedBike``: read once, here or before), its keys ``overrides``;
     ``duration`` limits the simulated ride to its first seconds; the runs spread
     over ``workers`` processes. ``tries``: settings to try (:class:`Trial`, from :func:`trial`),
     simulated over the same terrain beside the recorded setting and predicted as the candidates are
-    (``Advice.tries``); ``candidates`` False simulates the tried settings only (:func:`predict`)."""
+    (``Advice.tries``); ``candidates`` False simulates the tried settings only (:func:`predict`).
+    ``calibrated`` (``--calibrate``): the bike's springs calibrated on the ride first
+    (:mod:`mtbmj.ride.calibrate`), every run (the recorded setting, each candidate, each try) on the
+    calibrated bike, the candidates read in the file's units relative to it; False (the default): the
+    bike file as it is. ``search``: the recommended adjuster searched further
+    (:mod:`mtbmj.ride.advice_search`)."""
     import time
 
     from mtbmj.bike import spec as spec_mod
@@ -580,6 +508,13 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
                               f"{MIN_SECONDS:g} s; the ride is {length:.1f} s)")
     bike = spec_mod.resolve(bike)  # the bike file read once: every run below derives its setting from it
     bike = bike.with_overrides(None) if bike.overrides else bike
+    file_spec = spec_mod.load(bike, overrides)
+    cal = None
+    if calibrated:  # the ridden bike's springs from the ride itself, before anything is found through them
+        from mtbmj.ride import calibrate as cal_mod
+
+        cal = cal_mod.calibrate(record, bike, overrides, duration)
+        overrides = cal.apply(bike, overrides)
     rec = rc.reconstruct(record, bike, overrides)
     checks = rec.checks()
     if (checks["samples_checked_percent"] < MIN_CHECKED_PERCENT
@@ -598,7 +533,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     lead_s = 1.0 / speed  # the front axle reaches the ride's first metre
     sim_s = ride_s + lead_s
     terrain = terrain_of(rec)
-    adj = adjusters(spec)
+    adj = adjusters(spec) if cal is None else cal.adjusters(file_spec)
     base_over = dict(overrides or {})
 
     def merged(extra):
@@ -620,53 +555,99 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
 
     jobs = [(bike, base_over, terrain, speed, sim_s, "recorded setting", lead_s)]
     jobs += [(bike, merged(a.overrides(v)), terrain, speed, sim_s, f"{a.label} {v:g}", lead_s) for a, d, v in todo]
-    jobs += [(tr.bike if tr.resolved is None else tr.resolved, tr.overrides, terrain, speed, sim_s, tr.label, lead_s)
-             for tr in tries]
-    runs = [None] * len(jobs)
-    if workers > 1 and len(jobs) > 1:
-        from concurrent.futures import as_completed
+    jobs += [(tr.bike if tr.resolved is None else tr.resolved,
+              tr.overrides if cal is None else cal.apply(tr.bike if tr.resolved is None else tr.resolved, tr.overrides),
+              terrain, speed, sim_s, tr.label, lead_s) for tr in tries]
+    from contextlib import ExitStack
 
-        from mtbmj.workers import process_pool
+    with ExitStack() as stack:
+        pool = None
+        if workers > 1 and len(jobs) > 1:
+            from mtbmj.workers import process_pool
 
-        with process_pool(min(workers, len(jobs))) as pool:
-            futures = {pool.submit(simulate, *job): i for i, job in enumerate(jobs)}
-            for future in as_completed(futures):
-                i = futures[future]
-                try:
-                    runs[i] = future.result()
-                except ConfigError as exc:  # a candidate its part refuses only when run: skipped (the recorded
-                    if i == 0 or i > len(todo):  # setting's own refusal and a tried one's stay the user's error)
-                        raise
-                    runs[i] = exc
-                step()
-    else:
-        for i, job in enumerate(jobs):
-            try:
-                runs[i] = simulate(*job)
-            except ConfigError as exc:
-                if i == 0 or i > len(todo):
-                    raise
-                runs[i] = exc
-            step()
-    base = runs[0]
-    if base.crash:
-        raise RideNotDescribed(f"{record.name}: the recorded setting {base.crash} on the ride's reconstructed terrain: "
-                               f"the model cannot ride this ride as reconstructed, so it cannot predict a change")
-    cands = []
-    for (a, d, v), run in zip(todo, runs[1:1 + len(todo)]):
-        if isinstance(run, ConfigError):
-            skipped.append(_skip(a, d, v, run))
-        else:
-            cands.append((a, d, v, run))
-    t = rec.t
-    keep = t - t[0] <= ride_s
-    measured = ride_metrics(t[keep], rec.front[keep], rec.rear[keep], base.metrics["front"]["travel_mm"],
-                            base.metrics["rear"]["travel_mm"])
-    advice = Advice(rec.name, spec.name, rec.summary(), measured, base, cands, None, rec.front[keep], rec.rear[keep],
-                    skipped=skipped, tries=list(zip(tries, runs[1 + len(todo):])), record_t=t[keep] - t[0])
-    advice.recommendation, advice.verdict = _judge(advice)
+            pool = stack.enter_context(process_pool(min(workers, len(jobs))))
+        # a candidate its part refuses only when run is skipped (the recorded setting's own refusal and a
+        # tried one's stay the user's error)
+        runs = _run_jobs(jobs, pool, lambda i: 0 < i <= len(todo), step)
+        base = runs[0]
+        if base.crash:
+            raise RideNotDescribed(f"{record.name}: the recorded setting {base.crash} on the ride's reconstructed terrain: "
+                                   f"the model cannot ride this ride as reconstructed, so it cannot predict a change")
+        cands = []
+        for (a, d, v), run in zip(todo, runs[1:1 + len(todo)]):
+            if isinstance(run, ConfigError):
+                skipped.append(_skip(a, d, v, run))
+            else:
+                cands.append((a, d, v, run))
+        t = rec.t
+        keep = t - t[0] <= ride_s
+        measured = ride_metrics(t[keep], rec.front[keep], rec.rear[keep], base.metrics["front"]["travel_mm"],
+                                base.metrics["rear"]["travel_mm"])
+        advice = Advice(rec.name, spec.name, rec.summary(), measured, base, cands, None, rec.front[keep], rec.rear[keep],
+                        skipped=skipped, tries=list(zip(tries, runs[1 + len(todo):])), record_t=t[keep] - t[0],
+                        calibration=cal)
+        advice.recommendation, advice.verdict = _judge(advice)
+        if search and advice.recommendation is not None:
+            _search(advice, bike, merged, terrain, speed, sim_s, lead_s, pool)
     advice.wall_s = time.perf_counter() - start
     return advice
+
+
+def _run_jobs(jobs, pool, refusable, step) -> list:
+    """Each job's :func:`simulate` (in ``pool`` where given): a ``ConfigError`` of a job ``refusable(i)``
+    kept as its result, any other raised."""
+    runs = [None] * len(jobs)
+    if pool is not None:
+        from concurrent.futures import as_completed
+
+        futures = {pool.submit(simulate, *job): i for i, job in enumerate(jobs)}
+        done = as_completed(futures)
+    else:
+        done = range(len(jobs))
+    for item in done:
+        i = futures[item] if pool is not None else item
+        try:
+            runs[i] = item.result() if pool is not None else simulate(*jobs[i])
+        except ConfigError as exc:
+            if not refusable(i):
+                raise
+            runs[i] = exc
+        step()
+    return runs
+
+
+def _search(advice, bike, merged, terrain, speed, sim_s, lead_s, pool) -> None:
+    """The recommendation searched further along its adjuster (:mod:`mtbmj.ride.advice_search`):
+    where a farther value improves, the recommendation becomes it (``search``: each step kept)."""
+    from mtbmj.ride import advice_search
+
+    rec = advice.recommendation
+    adj, d, first, run = next((a, d, v, r) for a, d, v, r in advice.candidates
+                              if a.name == rec["key"] and d == rec["direction"])
+
+    def run_values(values):
+        jobs = [(bike, merged(adj.overrides(v)), terrain, speed, sim_s, f"{adj.label} {v:g}", lead_s) for v in values]
+        return _run_jobs(jobs, pool, lambda i: True, lambda: None)
+
+    def allowed_value(v):
+        return bool(allowed(bike, [(adj, d, v)], merged)[0])
+
+    kept = advice_search.search(adj, first, run, advice.base.total, run_values, allowed_value)
+    rec["search"] = [{"to": v, "setting": adj.setting(v), "penalty": r.total} for v, r in kept]
+    if kept:
+        v, r = kept[-1]
+        advice.searched = (adj, d, v, r)
+        u = advice.change_uncertainty(r)
+        st = adj.setting(v)
+        rec.update({"setting": st, "to": v, "penalty_to": r.total, "changes": _changes(advice.base, r, u, advice.measured),
+                    "improves": [k for k in advice.base.penalty if r.penalty[k] < advice.base.penalty[k] - 1e-9]})
+        rec["why"] = (f"{'raise' if d == 'up' else 'lower'} the {adj.label} from {st['from']:g} to {st['to']:g} "
+                      f"{st['unit']} ({st['key']}), found by searching on from the one-step candidate "
+                      f"({len(kept)} step(s) further): the penalty falls {advice.base.total:.2f} -> {r.total:.2f}")
+    rec["driven_by"] = advice_search.driving_rule(advice.base.penalty, (advice.searched or (0, 0, 0, run))[3].penalty)
+    if kept:
+        rec["why"] += f"; driven by the {rec['driven_by'].replace('_', ' ')} rule"
+        advice.verdict = {**advice.verdict, "why": rec["why"]}
 
 
 def predict(record, bike, tries, overrides=None, duration: float | None = None, progress=None,

@@ -1,0 +1,119 @@
+"""The advice's HTML report (``advice.html``): the one recommended change first, the calibration and
+how well the model matched the ride, then every table with its units (``mtbmj.ride.advise``'s
+``Advice.html`` writes it)."""
+from __future__ import annotations
+
+from mtbmj.ride.advice_rules import RULES, SHARES, flat_metrics
+
+
+def metric_unit(metric: str) -> str:
+    """The unit of a metric (``flat_metrics`` name), as the report's tables show it."""
+    leaf = metric.rpartition(".")[2]
+    if leaf in SHARES:
+        return "% of time"
+    for end, unit in (("_percent", "% of travel"), ("_per_minute", "per minute"), ("_mm_per_s", "mm/s"),
+                      ("_m_per_s2", "m/s2"), ("_mm", "mm"), ("_s", "s")):
+        if leaf.endswith(end):
+            return unit
+    return {"bottom_outs": "count", "rebound_over_compression": "ratio", "tyre_load_variation": "std/mean",
+            "balance_points": "points of travel %"}.get(leaf, "")
+
+
+def num(x, spec: str = ".3g") -> str:
+    return "" if x is None else format(x, spec)
+
+
+def html(advice, png: bytes) -> str:
+    """The self-contained report of ``advice`` (an ``Advice``) with its figure ``png`` inlined."""
+    import base64
+    import html as esc
+
+    d = advice.to_dict()
+    rec = d["recommendation"]
+    v = d["verdict"] or {}
+    shown = rec if rec is not None else v.get("best_candidate")
+
+    def metric_rows(changes, skip_still=True):
+        out = []
+        for k, c in sorted(changes.items()):
+            if skip_still and c["change"] == 0:
+                continue
+            out.append(f"<tr><td>{esc.escape(k)}</td><td>{esc.escape(metric_unit(k))}</td><td>{num(c['recorded'])}"
+                       f"</td><td>{c['from']:.3g}</td><td>{c['to']:.3g}</td><td>{c['change']:+.3g}</td>"
+                       f"<td>{num(c['uncertainty'])}</td><td>{c['expected']:.3g}</td></tr>")
+        return out
+
+    head = ("<tr><th>metric</th><th>unit</th><th>recorded</th><th>simulated now</th><th>simulated {}</th>"
+            "<th>change</th><th>uncertainty (same unit)</th><th>expected on your ride</th></tr>")
+    blank = "<td></td>" * 7
+    if shown is not None:
+        rows = metric_rows(shown["changes"])
+        caption = ("the recommended change" if rec is not None else
+                   "the best candidate, not advised: what it improves moves less than its uncertainty")
+        rows = rows or [f"<tr><td>no metric moves at {esc.escape(shown['label'])} {shown['to']:g}</td>{blank}</tr>"]
+    else:
+        caption = "no change: " + v.get("answer", "")
+        rows = [f"<tr><td>no candidate to show: {esc.escape(v.get('why', 'no candidate'))}</td>{blank}</tr>"]
+
+    def cand_row(c):
+        st = c["setting"]
+        return (f"<tr><td>{esc.escape(c['label'])} ({esc.escape(st['key'])})</td><td>{esc.escape(st['unit'])}</td>"
+                f"<td>{st['from']:g}</td><td>{st['to']:g}</td><td>{c['penalty_change']:+.2f}</td>"
+                f"<td>{esc.escape(c['crash'] or '')}</td></tr>")
+
+    cand = "".join(cand_row(c) for c in d["candidates"])
+    skip = "".join(f"<li>{esc.escape(c['label'])} {c['setting']['from']:g} -&gt; {c['setting']['to']:g} "
+                   f"{esc.escape(c['setting']['unit'])}: {esc.escape(c['why'])}</li>" for c in d["skipped"])
+    if skip:
+        skip = f'<h2>Skipped: not allowed by the part</h2><ul id="skipped">{skip}</ul>'
+    tried = ""
+    for tr in d["tried"]:
+        crash = f" ({esc.escape(tr['crash'])})" if tr["crash"] else ""
+        tried += (f"<h2>Tried: {esc.escape(tr['label'])}</h2><p>rule penalty (no unit) "
+                  f"{d['recorded_setting']['penalty']:.2f} -&gt; {tr['penalty']:.2f}{crash}</p><table class=\"tried\">"
+                  f"{head.format('tried')}{''.join(metric_rows(tr['changes'], False))}</table>")
+    sim, meas, u = flat_metrics(advice.base.metrics), flat_metrics(advice.measured), d["uncertainty"]
+    match = "".join(f"<tr><td>{esc.escape(k)}</td><td>{esc.escape(metric_unit(k))}</td><td>{meas[k]:.3g}</td>"
+                    f"<td>{sim[k]:.3g}</td><td>{sim[k] - meas[k]:+.3g}</td><td>{num(u.get(k))}</td></tr>"
+                    for k in sorted(meas) if k in sim and k not in ("duration_s",) and not k.endswith("travel_mm"))
+    rc = d["reconstruction"]["checks"]
+    cal = d.get("calibration")
+    if cal:
+        rows_c = "".join(f"<tr><td>{esc.escape(e)}: {esc.escape(c['key'])}</td><td>{esc.escape(c['unit'])}</td>"
+                         f"<td>{c['file']:g}</td><td>{c['calibrated']:g}</td><td>{c['calibrated_low']:g}-"
+                         f"{c['calibrated_high']:g}</td><td>{c['scale']:.3f}</td></tr>" for e, c in cal["springs"].items())
+        calibration = (f"<h2>Calibrated on the ride</h2><p>{esc.escape(cal['method'])}; not identified: "
+                       f"{esc.escape(cal['not_identified'])}. Every run below rides the calibrated bike; a change is "
+                       f"read in the bike file's units, relative to it.</p><table id=\"calibration\"><tr><th>spring "
+                       f"(key)</th><th>unit</th><th>bike file</th><th>calibrated</th><th>95 % interval</th>"
+                       f"<th>scale (no unit)</th></tr>{rows_c}</table>")
+    else:
+        calibration = "<p>Not calibrated: the bike file's springs as they are (advise --calibrate reads them from the ride).</p>"
+    img = base64.b64encode(png).decode()
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>mtbmj advice: {esc.escape(advice.ride)}</title>
+<style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}table{{border-collapse:collapse}}
+td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{text-align:left}}</style></head>
+<body><h1>Setup advice: {esc.escape(advice.ride)} on {esc.escape(advice.bike)}</h1>
+<p id="recommended"><b>{esc.escape(advice.headline())}</b></p>
+<p id="line">{esc.escape(advice.line())}</p>
+<p>Reconstruction check: front reproduced within {rc['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted
+{rc['rear_predicted_rms_mm']:.1f} mm RMS ({rc['rear_predicted_rms_percent_of_used']:.0f} % of the travel used),
+{rc['samples_checked_percent']:.0f} % of the ride checked; speed {d['reconstruction']['speed_m_per_s']:.2f} m/s.</p>
+{calibration}
+<img id="histograms" src="data:image/png;base64,{img}" alt="travel histograms before and after">
+<h2>Predicted change of every metric: {esc.escape(caption)}</h2>
+<table id="changes">{head.format('after')}
+{''.join(rows)}</table>
+<h2>How well the model matched the ride (recorded setting)</h2>
+<p>Uncertainty: {esc.escape(d['uncertainty_method'])}.</p>
+<table id="match"><tr><th>metric</th><th>unit</th><th>recorded</th><th>simulated</th><th>simulated - recorded</th>
+<th>model's error (same unit)</th></tr>{match}</table>
+<h2>Every candidate</h2>
+<table id="candidates"><tr><th>setting (key)</th><th>unit</th><th>from</th><th>to</th><th>rule penalty change (no unit)</th>
+<th>crash</th></tr>{cand}</table>
+{skip}
+{tried}
+<h2>Rules</h2><ul>{''.join(f'<li>{esc.escape(k)}: {esc.escape(v)}</li>' for k, v in RULES.items())}</ul>
+</body></html>
+"""

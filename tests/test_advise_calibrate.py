@@ -1,0 +1,99 @@
+"""The ridden bike calibrated on the ride before advice (issue 52 item 1; mtbmj/ride/calibrate.py).
+
+The rides are made by the independent whole bike of tests/helpers.py (``advise_ride``: scipy's
+solve_ivp on its own equations, its frame body the frame and the rider's on-bike segments half at
+the pedals and half at the bars, written as SST v3 through the bike file's sensors). The bike file
+the advice is given is written here: the same bike with the fork's spring as the file *says*,
+which is not always what was ridden. The calibration reads only the record and that file."""
+from __future__ import annotations
+
+import json
+from argparse import Namespace
+
+import pytest
+
+from mtbmj.cli import main
+from mtbmj.cli.telemetry import ride_record
+from mtbmj.ride import calibrate
+
+from helpers import advise_ride, bike_text, reconstruction_passing
+
+FILE_RATE = 12.0  # N/mm, the fork's spring as the bike file says
+
+
+def _ride(folder, ridden_rate):
+    """A ride of the whole bike with the fork at ``ridden_rate`` N/mm, and a bike file saying 12."""
+    _, sst, *_ = advise_ride(folder, fork_rate=ridden_rate)
+    file = folder / "said.toml"
+    file.write_text(bike_text(FILE_RATE))
+    return sst, file
+
+
+@pytest.fixture(scope="module")
+def softer(tmp_path_factory):
+    return _ride(tmp_path_factory.mktemp("cal") / "softer", 0.7 * FILE_RATE)  # 30 % softer than it says
+
+
+@pytest.fixture(scope="module")
+def right(tmp_path_factory):
+    return _ride(tmp_path_factory.mktemp("cal") / "right", FILE_RATE)
+
+
+def _calibrated(sst, file):
+    record = ride_record(sst, Namespace(bike=str(file), fork_max_mm=None, shock_max_mm=None))
+    return calibrate.calibrate(record, str(file))
+
+
+def test_a_fork_30_percent_softer_than_its_file_is_found(softer):
+    """Ridden at 8.4 N/mm, the file saying 12: the fork's scale's interval holds 0.7 and is no wider
+    than +-0.1; the shock's (as the file says) holds 1."""
+    cal = _calibrated(*softer)
+    fork, shock = cal.scales["front"], cal.scales["rear"]
+    assert fork.low <= 0.7 <= fork.high, fork
+    assert fork.high - fork.low < 0.2 and fork.value < 0.8
+    assert shock.low <= 1.0 <= shock.high, shock
+    d = cal.to_dict()["springs"]["front"]
+    assert d["file"] == 12.0 and d["unit"] == "N/mm" and d["calibrated_low"] <= 8.4 <= d["calibrated_high"]
+    # the calibrated bike: the fork's rate the file's times the scale, over the recorded keys
+    assert cal.overrides["fork.set"]["fork.spring.rate_N_per_mm"] == pytest.approx(12.0 * fork.value)
+
+
+def test_a_bike_as_its_file_says_calibrates_to_one(right):
+    cal = _calibrated(*right)
+    for end, sc in cal.scales.items():
+        assert sc.low <= 1.0 <= sc.high, (end, sc)
+        assert sc.high - sc.low < 0.2, (end, sc)
+
+
+def test_a_ride_no_spring_can_carry_is_not_described(right, tmp_path):
+    """The same ride against a file whose fork is 5x stiffer (60 N/mm): no scale within x0.3-x3 of it
+    balances the front's mean force; refused naming the fork and the range."""
+    from mtbmj.ride.advice_rules import RideNotDescribed
+
+    sst, _ = right
+    stiff = tmp_path / "stiff.toml"
+    stiff.write_text(bike_text(60.0))
+    with pytest.raises(RideNotDescribed, match=r"no fork spring rate within x0.3-x3 of the bike file's"):
+        _calibrated(sst, stiff)
+
+
+@pytest.mark.slow
+def test_advice_on_a_softer_fork_than_the_file_says_rides_the_calibrated_bike(softer, tmp_path, capsys):
+    """Uncalibrated, this ride's recorded setting loops out on the terrain found through the file's
+    stiffer fork (it is refused); calibrated, it is ridden, the report carries the calibration, and a
+    change of the fork's spring is read in the file's units (from 12)."""
+    sst, file = softer
+    out = tmp_path / "advice"
+    with reconstruction_passing():
+        assert main(["advise", str(sst), "--bike", str(file), "--out", str(out)]) == 2
+        assert "crashed" in capsys.readouterr().err and not out.exists()
+        assert main(["advise", str(sst), "--bike", str(file), "--calibrate", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "calibrated on the ride: fork spring rate" in printed
+    d = json.loads((out / "advice.json").read_text())
+    front = d["calibration"]["springs"]["front"]
+    assert front["calibrated_low"] <= 8.4 <= front["calibrated_high"]
+    for c in d["candidates"]:
+        if c["key"] == "fork:fork.spring.rate_N_per_mm":
+            assert c["setting"]["from"] == 12.0 and c["from"] == pytest.approx(12.0 * front["scale"])
+    assert 'id="calibration"' in (out / "advice.html").read_text()

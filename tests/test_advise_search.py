@@ -1,0 +1,59 @@
+"""The advice's line search (issue 52 item 2; mtbmj/ride/advice_search.py): its steps within what the
+part allows and its stop, on closed forms (a penalty made here as a function of the value)."""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import pytest
+
+from mtbmj.ride import advice_search
+from mtbmj.ride.advice_rules import MIN_GAIN, Adjuster
+
+
+def _adj(key="fork.spring.rate_N_per_mm", value=5.0, unit="N/mm", per_unit=1.0):
+    return Adjuster("front", "fork.set", key, value, None, None, "fork spring rate", "", unit, per_unit)
+
+
+def test_steps_repeat_the_candidate_s_ratio_or_step_within_the_part():
+    a = _adj()
+    assert advice_search.next_value(a, 5.5, 5.5) == pytest.approx(6.05)
+    clicks = _adj("fork.damper.rebound_clicks", 8.0, "clicks")
+    assert advice_search.next_value(clicks, 6.0, 6.0) == 4.0 and advice_search.next_value(clicks, 2.0, 6.0) == 0.0
+    assert advice_search.next_value(clicks, 0.0, 6.0) is None  # below zero: no such click
+    air = _adj("fork.spring.air_pressure_psi", 300.0, "psi")
+    assert advice_search.next_value(air, 363.0, 330.0) == pytest.approx(399.3)
+    assert advice_search.next_value(air, 364.0, 330.0) is None  # 400.4: past the 400 psi forks hold (PLAUSIBLE)
+    # a coil sold in 25 lb/in steps: the next rate sold, in the file's lb/in (per_unit: N/mm per lb/in)
+    coil = _adj("fork.spring.rate_N_per_mm", 450 * 0.1751, "lb/in", 0.1751)
+    nxt = advice_search.next_value(coil, 500 * 0.1751, 500 * 0.1751)
+    assert nxt / 0.1751 == pytest.approx(550.0)
+
+
+def test_the_search_goes_on_while_the_penalty_falls_and_stops_at_its_floor():
+    """A penalty (v - 8)^2 made here: from 5.5 by x1.1 steps the search passes 6.05, 6.66, 7.32, 8.05
+    and stops where the next step does not lower it by MIN_GAIN."""
+    a = _adj()
+    run = lambda v: SimpleNamespace(total=(v - 8.0) ** 2, crash=None)  # noqa: E731
+    asked = []
+
+    def run_values(values):
+        asked.append(list(values))
+        return [run(v) for v in values]
+
+    kept = advice_search.search(a, 5.5, run(5.5), run(5.0).total, run_values, lambda v: True)
+    values = [v for v, _ in kept]
+    assert values == pytest.approx([6.05, 6.655, 7.3205, 8.05255])
+    assert all(len(b) <= 2 for b in asked)  # two at a time
+    last = values[-1]
+    assert (advice_search.next_value(a, last, 5.5) - 8.0) ** 2 > (last - 8.0) ** 2 - MIN_GAIN
+
+
+def test_the_search_stops_at_what_the_part_refuses_or_a_crash():
+    a = _adj()
+    run = lambda v: SimpleNamespace(total=-v, crash=None)  # noqa: E731
+    kept = advice_search.search(a, 5.5, run(5.5), 0.0, lambda vs: [run(v) for v in vs], lambda v: v < 7.0)
+    assert [round(v, 3) for v, _ in kept] == [6.05, 6.655]
+    crash = lambda v: SimpleNamespace(total=-v, crash="crashed" if v > 6.1 else None)  # noqa: E731
+    kept = advice_search.search(a, 5.5, crash(5.5), 0.0, lambda vs: [crash(v) for v in vs], lambda v: True)
+    assert [round(v, 3) for v, _ in kept] == [6.05]
+    assert advice_search.driving_rule({"a": 1.0, "b": 3.0}, {"a": 0.5, "b": 0.2}) == "b"
