@@ -163,6 +163,7 @@ class Advice:
     record_t: np.ndarray = field(repr=False, default=None)  # ride time of record_front / record_rear (0 at its start)
     verdict: dict = field(default_factory=dict)  # {"answer": "change" / "inconclusive" / "keep", "why": ...}
     searched: tuple = None  # (Adjuster, direction, value, Run): the recommendation searched further
+    judged: list = field(default_factory=list)  # the candidates as judged: each searched one where it ended
     calibration: object = None  # mtbmj.ride.calibrate.Calibration: the springs ridden (None: the file's as they are)
 
     def tried(self) -> list:
@@ -282,7 +283,8 @@ class Advice:
         shown = best if best is not None else (self.verdict or {}).get("best_candidate")
         run = None
         if shown is not None:
-            run = next((r for a, d, v, r in ([self.searched] if self.searched else []) + list(self.candidates)
+            run = next((r for a, d, v, r in ([self.searched] if self.searched else []) + list(self.judged)
+                        + list(self.candidates)
                         if a.name == shown["key"] and d == shown["direction"] and v == shown["to"]), None)
         for ax, end, rec, top in ((axes[0], "front", self.record_front, self.base.metrics["front"]["travel_mm"]),
                                   (axes[1], "rear", self.record_rear, self.base.metrics["rear"]["travel_mm"])):
@@ -370,16 +372,18 @@ def _beyond(rules, a: dict, b: dict, u: dict) -> list:
             if m in a and m in b and abs(b[m] - a[m]) > u.get(m, math.inf)]
 
 
-def _judge(advice) -> tuple[dict | None, dict]:
+def _judge(advice, candidates=None) -> tuple[dict | None, dict]:
     """(the recommendation or None, the verdict ``{"answer", "why"}``): a change is advised only where
     it lowers the penalty by ``MIN_GAIN`` or more and a metric of a rule it improves moves by more
     than that change's uncertainty (the best such candidate, grip and comfort breaking ties);
     "keep" only where every candidate is predicted worse beyond its uncertainty (a crash is worse);
-    otherwise "inconclusive", naming why."""
+    otherwise "inconclusive", naming why. ``candidates``: those judged (default the one-step ones;
+    :func:`advise` passes each searched candidate where its search ended)."""
     base, measured = advice.base, advice.measured
+    candidates = advice.candidates if candidates is None else candidates
     a = flat_metrics(base.metrics)
     good, worse, near = [], 0, None
-    for adj, direction, value, run in advice.candidates:
+    for adj, direction, value, run in candidates:
         if run.crash:
             worse += 1
             continue
@@ -395,7 +399,7 @@ def _judge(advice) -> tuple[dict | None, dict]:
             worse += 1
         elif gain >= MIN_GAIN and (near is None or score > near[0]):
             near = (score, adj, direction, value, run, improved, u)
-    n = len(advice.candidates)
+    n = len(candidates)
     if good:
         _, adj, direction, value, run, improved, u = max(good, key=lambda g: g[0])
         moved = _beyond(improved, a, flat_metrics(run.metrics), u)
@@ -487,8 +491,8 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     ``calibrated`` (``--calibrate``): the bike's springs calibrated on the ride first
     (:mod:`mtbmj.ride.calibrate`), every run (the recorded setting, each candidate, each try) on the
     calibrated bike, the candidates read in the file's units relative to it; False (the default): the
-    bike file as it is. ``search``: the recommended adjuster searched further
-    (:mod:`mtbmj.ride.advice_search`)."""
+    bike file as it is. ``search``: every candidate that lowers the penalty searched further along its
+    adjuster before the verdict (:mod:`mtbmj.ride.advice_search`)."""
     import time
 
     from mtbmj.bike import spec as spec_mod
@@ -586,9 +590,11 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
         advice = Advice(rec.name, spec.name, rec.summary(), measured, base, cands, None, rec.front[keep], rec.rear[keep],
                         skipped=skipped, tries=list(zip(tries, runs[1 + len(todo):])), record_t=t[keep] - t[0],
                         calibration=cal)
-        advice.recommendation, advice.verdict = _judge(advice)
-        if search and advice.recommendation is not None:
-            _search(advice, bike, merged, terrain, speed, sim_s, lead_s, pool)
+        searched = _search(advice, bike, merged, terrain, speed, sim_s, lead_s, pool) if search else {}
+        advice.judged = _searched_candidates(advice, searched)
+        advice.recommendation, advice.verdict = _judge(advice, advice.judged)
+        if advice.recommendation is not None and search:
+            _annotate(advice, searched)
     advice.wall_s = time.perf_counter() - start
     return advice
 
@@ -616,37 +622,57 @@ def _run_jobs(jobs, pool, refusable, step) -> list:
     return runs
 
 
-def _search(advice, bike, merged, terrain, speed, sim_s, lead_s, pool) -> None:
-    """The recommendation searched further along its adjuster (:mod:`mtbmj.ride.advice_search`):
-    where a farther value improves, the recommendation becomes it (``search``: each step kept)."""
+def _search(advice, bike, merged, terrain, speed, sim_s, lead_s, pool) -> dict:
+    """Every candidate that lowers the penalty by ``MIN_GAIN`` or more, searched further along its
+    adjuster (:func:`mtbmj.ride.advice_search.search_many`, all in one pool): ``{(adjuster name,
+    direction): [(value, run), ...]}``, the steps each search kept."""
+    from mtbmj.ride import advice_search
+
+    base = advice.base
+    starts = [(a, d, v, r) for a, d, v, r in advice.candidates
+              if not r.crash and base.total - r.total >= MIN_GAIN]
+    if not starts:
+        return {}
+
+    def run_values(asks):
+        jobs = [(bike, merged(starts[i][0].overrides(v)), terrain, speed, sim_s, f"{starts[i][0].label} {v:g}", lead_s)
+                for i, v in asks]
+        return _run_jobs(jobs, pool, lambda i: True, lambda: None)
+
+    def allowed_value(i, v):
+        a, d = starts[i][0], starts[i][1]
+        return bool(allowed(bike, [(a, d, v)], merged)[0])
+
+    kept = advice_search.search_many([(a, v, r) for a, d, v, r in starts], run_values, allowed_value)
+    return {(a.name, d): k for (a, d, _, _), k in zip(starts, kept)}
+
+
+def _searched_candidates(advice, searched: dict) -> list:
+    """The candidates as the verdict judges them: each searched one where its search ended."""
+    out = []
+    for a, d, v, r in advice.candidates:
+        kept = searched.get((a.name, d))
+        out.append((a, d, *kept[-1]) if kept else (a, d, v, r))
+    return out
+
+
+def _annotate(advice, searched: dict) -> None:
+    """The recommendation's search (``search``: each step kept, ``driven_by``: the rule whose penalty
+    fell most) and, where it went past the one-step candidate, that said in its why."""
     from mtbmj.ride import advice_search
 
     rec = advice.recommendation
-    adj, d, first, run = next((a, d, v, r) for a, d, v, r in advice.candidates
-                              if a.name == rec["key"] and d == rec["direction"])
-
-    def run_values(values):
-        jobs = [(bike, merged(adj.overrides(v)), terrain, speed, sim_s, f"{adj.label} {v:g}", lead_s) for v in values]
-        return _run_jobs(jobs, pool, lambda i: True, lambda: None)
-
-    def allowed_value(v):
-        return bool(allowed(bike, [(adj, d, v)], merged)[0])
-
-    kept = advice_search.search(adj, first, run, advice.base.total, run_values, allowed_value)
+    kept = searched.get((rec["key"], rec["direction"]), [])
+    adj = next(a for a, d, v, r in advice.candidates if a.name == rec["key"] and d == rec["direction"])
     rec["search"] = [{"to": v, "setting": adj.setting(v), "penalty": r.total} for v, r in kept]
+    run = kept[-1][1] if kept else next(r for a, d, v, r in advice.candidates
+                                        if a.name == rec["key"] and d == rec["direction"])
     if kept:
-        v, r = kept[-1]
-        advice.searched = (adj, d, v, r)
-        u = advice.change_uncertainty(r)
-        st = adj.setting(v)
-        rec.update({"setting": st, "to": v, "penalty_to": r.total, "changes": _changes(advice.base, r, u, advice.measured),
-                    "improves": [k for k in advice.base.penalty if r.penalty[k] < advice.base.penalty[k] - 1e-9]})
-        rec["why"] = (f"{'raise' if d == 'up' else 'lower'} the {adj.label} from {st['from']:g} to {st['to']:g} "
-                      f"{st['unit']} ({st['key']}), found by searching on from the one-step candidate "
-                      f"({len(kept)} step(s) further): the penalty falls {advice.base.total:.2f} -> {r.total:.2f}")
-    rec["driven_by"] = advice_search.driving_rule(advice.base.penalty, (advice.searched or (0, 0, 0, run))[3].penalty)
+        advice.searched = (adj, rec["direction"], kept[-1][0], run)
+    rec["driven_by"] = advice_search.driving_rule(advice.base.penalty, run.penalty)
     if kept:
-        rec["why"] += f"; driven by the {rec['driven_by'].replace('_', ' ')} rule"
+        rec["why"] += (f"; found by searching on from the one-step candidate ({len(kept)} step(s) further), "
+                       f"driven by the {rec['driven_by'].replace('_', ' ')} rule")
         advice.verdict = {**advice.verdict, "why": rec["why"]}
 
 
