@@ -338,6 +338,7 @@ class RiderCallback:
         Q = self._q
         Q[:] = 0.0
         qvel = d.qvel
+        pins = []
         # the pins: feet at the ankle's point, hands at the grip
         for end, anchor, body in self.s_pins:
             pe, pa = d.site_xpos[end], d.site_xpos[anchor]
@@ -347,6 +348,7 @@ class RiderCallback:
             f = -PIN_N_PER_M * (pe - pa) - PIN_N_S_PER_M * rel
             f[1] = 0.0
             Q += self._j1.T @ f - self._j2.T @ f
+            pins.append((f, rel, pe - pa))
         # the muscles
         ctl = self.controller
         pitch = d.qpos[self.qadr["pitch"]]
@@ -370,7 +372,7 @@ class RiderCallback:
                 if taus[k] * speed[k] > 0.0:
                     taus[k] *= scale
             power = POWER_W
-        applied = {}
+        applied, stops = {}, {}
         for k in JOINTS:
             tau = taus[k]
             flex, ext = self.strength[k]
@@ -386,6 +388,7 @@ class RiderCallback:
                 stop = -STOP_N_M_PER_RAD * (a - hi) - STOP_N_M_S_PER_RAD * speed[k]
             elif a < lo:
                 stop = -STOP_N_M_PER_RAD * (a - lo) - STOP_N_M_S_PER_RAD * speed[k]
+            stops[k] = stop
             applied[k] = tau + stop - TISSUE_DAMPING * speed[k]
             self.add_torque(Q, k, applied[k])
         if power > self.peak_power:
@@ -396,10 +399,13 @@ class RiderCallback:
                     if clamped[k]:
                         self.at_limit_s[k] += d.time - self._t_seen
             self._t_seen = d.time
+        saddle = (0.0, 0.0)
         if ctl.seated and ctl.saddle is not None:
-            self._saddle(m, d, Q)
+            saddle = self._saddle(m, d, Q)
         d.qfrc_applied[:] += Q
-        self.last = {"taus": taus, "want": want, "now": now, "applied": applied}
+        # what the energy balance (mtbmj.bike.energy) reads: each force's parts at this evaluation
+        self.last = {"taus": taus, "want": want, "now": now, "applied": applied, "speed": speed, "stops": stops,
+                     "pins": pins, "saddle": saddle}
 
     def _foot_through_leg(self, d) -> None:
         """Pedalling: the driving foot's push on its pedal has its reaction on the rider (the bike's
@@ -416,15 +422,16 @@ class RiderCallback:
         shank[3:] = w[3:] + np.cross(d.xipos[self.b_rider] - d.xipos[self.b_shank], f)  # the same line of action
         w[:] = 0.0
 
-    def _saddle(self, m, d, Q) -> None:
-        """The saddle's push on the sitting bones (one-sided), and its reaction on the frame."""
+    def _saddle(self, m, d, Q) -> tuple[float, float]:
+        """The saddle's push on the sitting bones (one-sided), and its reaction on the frame:
+        (push N, closing speed m/s), (0, 0) off the saddle."""
         rot = d.xmat[self.b_frame].reshape(3, 3)
         hips = d.site_xpos[self.s_hips]
         seat = d.xpos[self.b_frame] + rot @ np.array([self.controller.saddle[0], 0.0, self.controller.saddle[1]])
         bone = hips - ISCHIAL_BELOW_HIP_M * rot[:, 2]
         depth = float((seat - bone) @ rot[:, 2])  # how far the sitting bones are below the saddle's top
         if depth <= 0.0:
-            return
+            return 0.0, 0.0
         mujoco.mj_jac(m, d, self._j1, None, bone, self.b_rider)
         mujoco.mj_jac(m, d, self._j2, None, bone, self.b_frame)
         closing = float(rot[:, 2] @ (self._j2 @ d.qvel - self._j1 @ d.qvel))
@@ -432,6 +439,7 @@ class RiderCallback:
         f = push * rot[:, 2]
         Q += self._j1.T @ f - self._j2.T @ f
         self.saddle_peak = max(self.saddle_peak, push)
+        return push, closing
 
     def report(self) -> dict:
         """What the summary says of the rider: each joint's largest muscle torque against its limit."""
