@@ -246,6 +246,54 @@ class Controller:
         return (ankle[0] + r * dx / d, ankle[1] + r * dz / d)
 
 
+def aimed(ctl: Controller, aim: dict, x_front: float, pitch: float, rate: float) -> dict:
+    """Each joint's target angle (rad, anatomical) from the controller's targets for the hips and the
+    trunk (``Controller.targets`` with the front axle at ``x_front`` m, the frame's pitch and pitch
+    rate), by the pose's inverse kinematics, held within ``aim`` (name: (least, most) rad)."""
+    hip, trunk = ctl.targets(x_front, pitch, rate)
+    return {k: min(max(a, aim[k][0]), aim[k][1])  # a target the joint reaches
+            for k, a in rb.pose(ctl.body, ctl.pedal, ctl.grip, hip, trunk).angles.items()}
+
+
+def muscle_torques(want: dict, now: dict, speed: dict, gains: dict, strength: dict) -> tuple[dict, dict, float]:
+    """(torques N m, demands, positive power W) of the muscles: each joint's torque toward its target
+    (``gains``' stiffness and damping on the anatomical angle ``now`` and speed ``speed``) limited by
+    its strength in each direction (``strength``: (flexion, extension)), then the torques doing
+    positive work scaled down together to ``POWER_W`` where they would exceed it. A demand is the
+    torque asked over the limit in its direction (1 and above: held at the limit)."""
+    taus, demands = {}, {}
+    for k in JOINTS:
+        kp, kd = gains[k]
+        flex, ext = strength[k]
+        ask = kp * (want[k] - now[k]) - kd * speed[k]
+        taus[k] = min(max(ask, -ext), flex)
+        demands[k] = ask / flex if ask > 0 else -ask / ext
+    power = sum(max(taus[k] * speed[k], 0.0) for k in JOINTS)
+    if power > POWER_W:
+        scale = POWER_W / power
+        for k in JOINTS:
+            if taus[k] * speed[k] > 0.0:
+                taus[k] *= scale
+        power = POWER_W
+    return taus, demands, power
+
+
+def end_stops(now: dict, speed: dict, ranges: dict) -> dict:
+    """Each joint's end-stop torque (N m, anatomical): a spring-damper past its range of motion
+    (``ranges``: (least, most) rad), 0 within it."""
+    out = {}
+    for k in JOINTS:
+        lo, hi = ranges[k]
+        a = now[k]
+        stop = 0.0
+        if a > hi:
+            stop = -STOP_N_M_PER_RAD * (a - hi) - STOP_N_M_S_PER_RAD * speed[k]
+        elif a < lo:
+            stop = -STOP_N_M_PER_RAD * (a - lo) - STOP_N_M_S_PER_RAD * speed[k]
+        out[k] = stop
+    return out
+
+
 class RiderCallback:
     """The bike's callback (``inner``) and the articulated rider's forces (module doc)."""
 
@@ -351,45 +399,22 @@ class RiderCallback:
             pins.append((f, rel, pe - pa))
         # the muscles
         ctl = self.controller
-        pitch = d.qpos[self.qadr["pitch"]]
-        hip, trunk = ctl.targets(d.site_xpos[self.s_front][0], pitch, qvel[self.dof["pitch"]])
-        want = {k: min(max(a, self.aim[k][0]), self.aim[k][1])  # a target the joint reaches
-                for k, a in rb.pose(self.body, ctl.pedal, ctl.grip, hip, trunk).angles.items()}
+        want = aimed(ctl, self.aim, d.site_xpos[self.s_front][0], d.qpos[self.qadr["pitch"]], qvel[self.dof["pitch"]])
         now, speed = self.angles(d.qpos), self.rates(qvel)
-        taus, clamped = {}, {}
-        for k in JOINTS:
-            kp, kd = self.gains[k]
-            flex, ext = self.strength[k]
-            ask = kp * (want[k] - now[k]) - kd * speed[k]
-            taus[k] = min(max(ask, -ext), flex)
-            demand = ask / flex if ask > 0 else -ask / ext
-            self.peak_demand[k] = max(self.peak_demand[k], float(demand))
-            clamped[k] = demand >= 1.0
-        power = sum(max(taus[k] * speed[k], 0.0) for k in JOINTS)
-        if power > POWER_W:
-            scale = POWER_W / power
-            for k in JOINTS:
-                if taus[k] * speed[k] > 0.0:
-                    taus[k] *= scale
-            power = POWER_W
-        applied, stops = {}, {}
+        taus, demands, power = muscle_torques(want, now, speed, self.gains, self.strength)
+        stops = end_stops(now, speed, self.ranges)
+        clamped = {k: demands[k] >= 1.0 for k in JOINTS}
+        applied = {}
         for k in JOINTS:
             tau = taus[k]
             flex, ext = self.strength[k]
+            self.peak_demand[k] = max(self.peak_demand[k], float(demands[k]))
             ratio = tau / flex if tau > 0 else -tau / ext
             if abs(tau) > self.peak_torque[k]:
                 self.peak_torque[k] = abs(tau)
             if ratio > self.peak_ratio[k]:
                 self.peak_ratio[k] = ratio
-            lo, hi = self.ranges[k]
-            a = now[k]
-            stop = 0.0
-            if a > hi:
-                stop = -STOP_N_M_PER_RAD * (a - hi) - STOP_N_M_S_PER_RAD * speed[k]
-            elif a < lo:
-                stop = -STOP_N_M_PER_RAD * (a - lo) - STOP_N_M_S_PER_RAD * speed[k]
-            stops[k] = stop
-            applied[k] = tau + stop - TISSUE_DAMPING * speed[k]
+            applied[k] = tau + stops[k] - TISSUE_DAMPING * speed[k]
             self.add_torque(Q, k, applied[k])
         if power > self.peak_power:
             self.peak_power = power
@@ -548,5 +573,5 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     return p
 
 
-__all__ = ["RiderCallback", "Controller", "activate", "edges", "stance", "saddle_point", "STRENGTH_N_M",
+__all__ = ["RiderCallback", "Controller", "activate", "aimed", "muscle_torques", "end_stops", "edges", "stance", "saddle_point", "STRENGTH_N_M",
            "STRENGTH_ONE_SIDE_N_M", "POWER_W", "GAINS", "JOINTS"]
