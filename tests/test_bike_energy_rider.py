@@ -5,6 +5,7 @@ stops equals the work of the muscles, the tissue's and the pins' damping, the sa
 shock, the tyres and the drive within 1 % of the work done; without the muscles' work it does not."""
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from helpers import rock_garden
@@ -45,3 +46,18 @@ def test_the_balance_misses_without_the_muscles(ridden):
     assert abs(without) > TOLERANCE_PCT / 100.0 * e["work_done_J"]
     # and the muscles' two signs do not cancel into nothing
     assert abs(e["muscle_work_J"]) < e["muscle_positive_J"] - e["muscle_negative_J"]
+
+
+def test_the_suspension_springs_stored_energy_is_their_forces_work(ridden):
+    """The fork's and the shock's stored energy (the laws' own ``elastic_energy``, in the balance)
+    against the work of their spring forces at rest along the run's travel and stroke, summed here
+    by the trapezoid rule over the samples: within 1 % of that work's throughput."""
+    e = ridden.summary["energy"]["stored_change_J"]
+    p = ridden.prepared
+    raw = ridden.raw
+    for key, law, column in (("fork_spring", p.fork_law, "front_travel_mm"), ("shock_spring", p.shock_law, "stroke_mm")):
+        x = np.asarray(raw[column]) / 1000.0
+        f = np.array([law.spring.force(float(v), 0.0) for v in x])
+        parts = 0.5 * (f[1:] + f[:-1]) * np.diff(x)
+        assert np.sum(np.abs(parts)) > 50.0  # the spring worked
+        assert abs(e[key] - np.sum(parts)) <= 0.01 * np.sum(np.abs(parts)), (key, e[key], np.sum(parts))

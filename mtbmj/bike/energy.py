@@ -3,10 +3,12 @@ of the whole system's mechanical energy against the work of every force that act
 term, the muscles' work among them.
 
 Stored (J, at each recorded state): MuJoCo's kinetic and gravitational energy of the model
-(``mj_energyVel``, ``mj_energyPos`` with ``mjENBL_ENERGY``), and the springs the rider's callback
+(``mj_energyVel``, ``mj_energyPos`` with ``mjENBL_ENERGY``); the springs the rider's callback
 applies (``mtbmj.bike.rider_control``): the feet's and hands' pins (1/2 k d^2 over their stretch in
 the pitch plane) and the joints' end stops past the range of motion (1/2 k a^2 over the angle
-past it).
+past it); the fork's and the shock's springs (each law's own ``elastic_energy``: main spring,
+bumper, end stops; the shock at its stroke, ``leverage.stroke`` of the rear wheel's travel) and
+their friction states (1/2 k z^2, the drop's energy balance's convention).
 
 Work (J, the power at each recorded state integrated by the trapezoid rule over the run's output
 step):
@@ -16,11 +18,12 @@ step):
 * ``tissue``: the joints' passive damping; ``stops_damping``: the end stops' damping;
 * ``pins_damping``: the pins' dampers; ``saddle``: the saddle's one-sided push (its spring and damper
   are cut off together where the sum would pull, so they are not split: its work as one);
-* ``fork``, ``shock``: the laws' forces on their joints (the fork's force, the shock's torque) times
-  the joints' speeds. The spring and the damping (and friction) of a law are one force here: not
-  split (a law gives no stored energy of its own), so the suspension's springs appear as work;
-* ``tires``: each tyre's radial force at its axle times the axle's velocity (spring and damping as
-  one, as the laws);
+* ``fork_damping_friction``, ``shock_damping_friction``: the laws' forces on their joints (the fork's
+  force, the shock's torque) times the joints' speeds, less their springs' and friction states'
+  stored change: the damping, the friction and the stops' damping;
+* ``tires``: each tyre's radial force at its axle times the axle's velocity: its spring and its
+  damping as one (not split: a contact shared between patches, ``rolling.tire.share_depths``, has no
+  one stored energy to write), so the tyres' springs appear as work;
 * ``drive``: every other applied wrench (``xfrc_applied``): the drive's and the brakes' forces at
   the axles and their couples, a pedalling foot's push;
 * ``mujoco_passive``, ``mujoco_constraint``: MuJoCo's own joint springs, damping and constraint
@@ -28,10 +31,12 @@ step):
   settling, no limits, no contacts: the tyres are the callback's forces): both are 0, and are
   computed so a model that had them would show it.
 
-What MuJoCo itself does to the energy beyond that is its integrator's error (RK4 at the run's step),
-which the balance's residual is. ``unsplit_W`` is the largest difference, over the states, between
-``qfrc_applied`` . qvel and the sum of the rider's terms above and the laws' (0 when every applied
-generalised force was named).
+The residual is what is left: the stepping's error (RK4 at the run's step) and the trapezoid rule's
+over the output samples, not told apart here. ``unsplit_W`` is the largest difference, over the states, between
+``qfrc_applied + qfrc_actuator`` . qvel and the named terms' power (the rider's, with its springs',
+and the laws'): 0 when every applied generalised force was named. ``work_done_J``, the scale the
+residual is judged against, is the sum over the states of each force's absolute power (the laws'
+and the tyres' whole forces) times the step.
 """
 from __future__ import annotations
 
@@ -43,9 +48,12 @@ import numpy as np
 from mtbmj.bike import rider_control as rc
 from mtbmj.controllers import installed
 
-STORED = ("kinetic_gravity", "pins_spring", "stops_spring")
+STORED = ("kinetic_gravity", "pins_spring", "stops_spring", "fork_spring", "shock_spring", "fork_friction_state",
+          "shock_friction_state")
 WORKS = ("muscle_positive", "muscle_negative", "tissue", "stops_damping", "pins_damping", "saddle", "fork", "shock",
          "tires", "drive", "mujoco_passive", "mujoco_constraint")
+# each law's work is reported less its spring's and its friction state's stored change (its damping and friction)
+ELASTIC = {"fork": ("fork_spring", "fork_friction_state"), "shock": ("shock_spring", "shock_friction_state")}
 
 
 def rider_terms(cb: rc.RiderCallback) -> dict:
@@ -96,6 +104,11 @@ def balance(p, states: np.ndarray) -> dict:
              (int(m.site("rear_axle").id), a("rear_tire_x"), a("rear_tire_z"))]
     vel = np.zeros(6)
     qfrc = np.zeros(m.nv)
+    b = p.bike
+    fork_q = b.qpos_index("fork")
+    lev, rear_z0, frame, rear_site = b.spec.leverage, b.spec.rear_axle[1], int(m.body("frame").id), tires[1][0]
+    laws = (("fork_friction_state", p.fork_law, int(m.actuator_actadr[a("fork_friction_state")])),
+            ("shock_friction_state", p.shock_law, int(m.actuator_actadr[a("shock_friction_state")])))
     flags = m.opt.enableflags
     m.opt.enableflags |= mujoco.mjtEnableBit.mjENBL_ENERGY
     cb.reset()
@@ -111,6 +124,14 @@ def balance(p, states: np.ndarray) -> dict:
                     stored[k][i] = terms[k]
                 for k in ("muscle_positive", "muscle_negative", "tissue", "stops_damping", "pins_damping", "saddle"):
                     power[k][i] = terms[k]
+                # the laws' springs (their own elastic energy: main spring, bumper, stops) and friction states
+                rot = d.xmat[frame].reshape(3, 3)
+                w = float((rot.T @ (d.site_xpos[rear_site] - d.xpos[frame]))[2]) - rear_z0  # the rear's travel
+                stored["fork_spring"][i] = p.fork_law.elastic_energy(float(d.qpos[fork_q]))
+                stored["shock_spring"][i] = p.shock_law.elastic_energy(lev.stroke(w))
+                for key, law, adr in laws:
+                    if law.friction.has_state:
+                        stored[key][i] = 0.5 * law.friction.stiffness * float(d.act[adr]) ** 2
                 power["fork"][i] = d.actuator_force[a_fork] * d.actuator_velocity[a_fork]
                 power["shock"][i] = d.actuator_force[a_shock] * d.actuator_velocity[a_shock]
                 tyre = 0.0
@@ -129,14 +150,16 @@ def balance(p, states: np.ndarray) -> dict:
                 applied = float(d.qfrc_applied @ v) + float(d.qfrc_actuator @ v)
                 named = sum(power[k][i] for k in ("muscle_positive", "muscle_negative", "tissue", "stops_damping",
                                                   "pins_damping", "saddle", "fork", "shock"))
-                named -= sum(rider_spring_power(cb))
-                unsplit = max(unsplit, abs(applied - named))
+                unsplit = max(unsplit, abs(applied - named - rider_spring_power(cb)))
     finally:
         m.opt.enableflags = flags
     dt = np.diff(times)
     trap = lambda x: float(np.sum(0.5 * (x[1:] + x[:-1]) * dt))
     work = {k: trap(power[k]) for k in WORKS}
     change = {k: float(stored[k][-1] - stored[k][0]) for k in STORED}
+    # the laws' work less their springs' (and friction states') change: their damping and friction
+    for law, springs in ELASTIC.items():
+        work[f"{law}_damping_friction"] = work.pop(law) + sum(change[k] for k in springs)
     done = float(np.sum(0.5 * dt * sum(np.abs(power[k][1:]) + np.abs(power[k][:-1]) for k in WORKS)))
     total_work = sum(work.values())
     total_change = sum(change.values())
@@ -151,14 +174,14 @@ def balance(p, states: np.ndarray) -> dict:
             "unsplit_W": round(unsplit, 6), "duration_s": round(float(times[-1] - times[0]), 6)}
 
 
-def rider_spring_power(cb: rc.RiderCallback) -> tuple[float, float]:
-    """The power of the pins' and the stops' springs (W) at the last evaluation (for ``unsplit``:
-    the rider's applied forces are the springs' and the terms of ``rider_terms``)."""
+def rider_spring_power(cb: rc.RiderCallback) -> float:
+    """The power (W) of the pins' and the stops' springs at the callback's last evaluation (the
+    rider's applied forces are these and the terms of ``rider_terms``)."""
     last = cb.last
     pins = sum(-rc.PIN_N_PER_M * (gap[0] * rel[0] + gap[2] * rel[2]) for _, rel, gap in last["pins"])
-    stops = sum(last["stops"][k] * last["speed"][k] for k in rc.JOINTS) - sum(
-        -rc.STOP_N_M_S_PER_RAD * last["speed"][k] ** 2 for k in rc.JOINTS if last["stops"][k] != 0.0)
-    return -pins, -stops
+    stops = sum(last["stops"][k] * last["speed"][k] + rc.STOP_N_M_S_PER_RAD * last["speed"][k] ** 2
+                for k in rc.JOINTS if last["stops"][k] != 0.0)
+    return pins + stops
 
 
 __all__ = ["balance", "rider_terms", "STORED", "WORKS"]
