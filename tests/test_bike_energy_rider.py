@@ -61,3 +61,23 @@ def test_the_suspension_springs_stored_energy_is_their_forces_work(ridden):
         parts = 0.5 * (f[1:] + f[:-1]) * np.diff(x)
         assert np.sum(np.abs(parts)) > 50.0  # the spring worked
         assert abs(e[key] - np.sum(parts)) <= 0.01 * np.sum(np.abs(parts)), (key, e[key], np.sum(parts))
+
+
+@pytest.mark.parametrize("how", ["seated", "pedalling"])
+def test_the_balance_closes_seated_and_pedalling(how, tmp_path):
+    """Seated, the saddle's one-sided push does work (left out, the balance misses by more than
+    1 %); pedalling, the driving foot's push on the shank is in the drive's term: both close."""
+    path = rock_garden(tmp_path / "rocks.csv")
+    if how == "seated":
+        res = run_bike("sst", str(path), 5.0, duration=1.5, rider="active", seated=True)
+    else:
+        res = run_bike("sst", str(path), None, duration=1.5, rider="active", pedal=(80, 250))
+    e = res.summary["energy"]
+    assert e["unsplit_W"] < 1e-6
+    assert abs(e["energy_change_J"] - e["work_total_J"]) <= TOLERANCE_PCT / 100.0 * e["work_done_J"]
+    if how == "seated":
+        saddle = e["work_J"]["saddle"]
+        assert saddle < 0.0  # the saddle's damping takes energy
+        assert abs(e["energy_change_J"] - (e["work_total_J"] - saddle)) > TOLERANCE_PCT / 100.0 * e["work_done_J"]
+    else:
+        assert e["work_J"]["drive"] > 100.0  # the rider's pedalling put energy in
