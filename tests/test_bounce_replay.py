@@ -228,6 +228,25 @@ def test_shared_slams(shared_replays):
     assert alo <= b["spring_scale"] <= ahi and blo <= a["spring_scale"] <= bhi
 
 
+
+@pytest.mark.slow
+@pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
+def test_shared_files_show_the_replay_beside_the_record(shared_replays):
+    """replay_<file>.csv holds the record's and the replay's stroke on one time axis whose misfit is the
+    stated RMS, for the replayed records only; replay.png is a PNG of one panel per replayed record."""
+    from mtbmj.identify.bounce_replay import figure_png
+
+    assert sorted(shared_replays["csv"]) == ["replay_00083.csv", "replay_00085.csv"]
+    for rp in shared_replays["replays"]:
+        cols = rp.csv_columns()
+        assert len({len(v) for v in cols.values()}) == 1
+        miss = cols["stroke_mm"] - cols["record_stroke_mm"]
+        assert math.sqrt(float(np.mean(miss ** 2))) == pytest.approx(rp.rms_mm, rel=0.05)
+        assert cols["time_s"][0] < -0.5 and cols["time_s"][-1] > 1.2  # from the rest before to the ring-down
+    png = figure_png(shared_replays["replays"])
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+
+
 @pytest.mark.slow
 @pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
 @pytest.mark.xfail(strict=True, reason="the replay reads the damper lower at 8 clicks (1426 N s/m) than at 0 (2012): "
@@ -235,3 +254,13 @@ def test_shared_slams(shared_replays):
 def test_shared_damper_rises_with_clicks(shared_replays):
     done = {s["clicks"]: s for s in shared_replays["summary"]}
     assert done[8]["damper_N_s_per_m"] > done[0]["damper_N_s_per_m"]
+
+
+def test_replay_needs_a_bike(tmp_path, capsys):
+    """--replay without --bike: one line naming both, exit status 2, nothing written."""
+    from mtbmj import cli
+
+    rc = cli.main(["fit", "bounce", str(tmp_path / "a.SST"), "--clicks", "0", "--replay", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "--replay" in err[0] and "--bike" in err[0]
+    assert not (tmp_path / "o").exists()

@@ -59,7 +59,7 @@ def bounce_parser(prog: str = "mtbmj fit bounce"):
     p.add_argument("--replay", action="store_true",
                    help="with --bike: replay each slam through the MuJoCo bike with the seated rider compliant "
                         "(--rider-hz, default 5 Hz), pushed as the slam pushed, and fit the shock's spring scale, "
-                        "damper and friction to the record (replay_<file>.csv, replay.png; about a minute per record)")
+                        "damper and friction to the record (replay_<file>.csv, replay.png; one to three minutes per record)")
     add_out(p, "out/fit")
     p.set_defaults(func=cmd_fit_bounce, command="fit", kind="bounce")
     return p

@@ -373,11 +373,6 @@ class Replay:
                                            "push_N")}
 
 
-def _spring(law, x: float) -> float:
-    """The law's force at rest at ``x`` (m)."""
-    return float(law.force(x, 0.0, 0.0) if law.has_state else law.force(x, 0.0))
-
-
 def _rest(t, x, peak_t) -> float:
     early, late = QUIET_BEFORE_S
     w = (t >= peak_t - early) & (t <= peak_t - late)
@@ -441,7 +436,6 @@ def replay(time_s, shock_mm, fork_mm=None, name: str = "record", bike="sst", rid
     lower = np.array([BOUNDS[k][0] for k in NAMES])
     upper = np.array([BOUNDS[k][1] for k in NAMES])
     x0 = np.clip(np.array([init[k] for k in NAMES]), lower + 1e-9, upper - 1e-9)
-    fails = []
     sr.set_shock(*(x0[6:]))
     if sr.rest_acceleration() > REST_ACC:
         raise BounceError(f"{name}: the seated bike does not start at rest (an acceleration of "
@@ -453,8 +447,7 @@ def replay(time_s, shock_mm, fork_mm=None, name: str = "record", bike="sst", rid
     def residual(x, upto=None):
         try:
             out = simulate(x)
-        except BounceError as e:
-            fails.append(str(e))
+        except BounceError:  # a run that diverges: far from the record (the final run says why)
             return np.full(grid.size if upto is None else int(np.sum(grid <= upto)), 10.0 * rise)
         sim = np.interp(grid, out["time_s"], out["stroke_mm"] - out["stroke_mm"][0])
         r = sim - rec_g
