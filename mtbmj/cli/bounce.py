@@ -3,7 +3,8 @@ natural frequency of each end from a rider's own seat slams (SST recordings), th
 rebound click as a law, and the ring-down it predicts at other clicks (``mtbmj.identify.bounce_fit``:
 this module parses, calls it and prints what it found).
 
-Writes fit.json, fit.png and, per predicted click, ringdown_<K>_clicks.csv, atomically. The ``fit``
+Writes fit.json, fit.png and, per predicted click, ringdown_<K>_clicks.csv (with --replay also
+replay_<file>.csv per record and replay.png), atomically. The ``fit``
 command's parser takes it with ``add_bounce_parser(p)`` (``p``: the ``fit`` parser): the kind
 ``bounce`` is then parsed by this module's own parser.
 """
@@ -55,6 +56,10 @@ def bounce_parser(prog: str = "mtbmj fit bounce"):
     p.add_argument("--rider-hz", type=float, metavar="HZ",
                    help="with --bike: the seated rider compliant on the saddle, ringing at HZ with the frame held "
                         "(a seated body: 4-6 Hz; default: held rigid), and the rider's share of each mode stated")
+    p.add_argument("--replay", action="store_true",
+                   help="with --bike: replay each slam through the MuJoCo bike with the seated rider compliant "
+                        "(--rider-hz, default 5 Hz), pushed as the slam pushed, and fit the shock's spring scale, "
+                        "damper and friction to the record (replay_<file>.csv, replay.png; one to three minutes per record)")
     add_out(p, "out/fit")
     p.set_defaults(func=cmd_fit_bounce, command="fit", kind="bounce")
     return p
@@ -85,7 +90,8 @@ def cmd_fit_bounce(args) -> int:
     predict = _numbers(args.predict_clicks, "--predict-clicks") if args.predict_clicks else []
     if args.hit_mm is not None and not (math.isfinite(args.hit_mm) and args.hit_mm > 0):
         raise MtbmjError(f"--hit-mm {args.hit_mm:g}: the hit must be a positive number of millimetres")
-    result = fit_bounce(args.records, clicks, predict, bike=args.bike, hit_mm=args.hit_mm, rider_hz=args.rider_hz)
+    result = fit_bounce(args.records, clicks, predict, bike=args.bike, hit_mm=args.hit_mm, rider_hz=args.rider_hz,
+                        replay=args.replay)
     written = result.write(args.out)
     for line in result.lines():
         print(line)

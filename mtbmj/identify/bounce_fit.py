@@ -31,6 +31,8 @@ class BounceFit:
     csv: dict
     predictions: list = field(default_factory=list)  # bounce_predict.Prediction per predicted click and end
     answers: dict = field(default_factory=dict)  # end -> bounce_clicks.ClickAnswer
+    extra: dict = field(default_factory=dict)  # further files by name (replay.png), as bytes
+    replay_lines: list = field(default_factory=list)  # what --replay prints
 
     def files(self) -> dict[str, bytes]:
         """fit.json, fit.png and ringdown_<K>_clicks.csv per predicted click, as bytes."""
@@ -39,6 +41,7 @@ class BounceFit:
         files = {"fit.json": json_bytes(self.summary), "fit.png": figure_png(self)}
         for name, cols in self.csv.items():
             files[name] = output.csv_bytes(cols)
+        files.update(self.extra)
         return files
 
     def write(self, out_dir) -> list[Path]:
@@ -109,6 +112,7 @@ class BounceFit:
                           f"there)" if p.stop_reached_s() is not None else ""))
         for end, ans in self.answers.items():
             out.append(ans.line())
+        out.extend(self.replay_lines)
         for note in self.summary["notes"]:
             out.append(f"note: {note}")
         return out
@@ -163,14 +167,17 @@ def _damper_law(points) -> dict | None:
             "slope_N_s_per_m_per_click_ci95": interval95(float(beta[1]), math.sqrt(cov[1, 1]))}
 
 
-def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None) -> BounceFit:
+def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None, replay=False) -> BounceFit:
     """The seat slams in the SST records ``paths`` (one number of rebound ``clicks`` each) fitted:
     everything ``mtbmj fit bounce`` writes and prints, as a :class:`BounceFit`; ``predict``: clicks to
     predict the ring-down at. ``bike`` (a preset, a file or a ``BikeSpec``): each ring-down also read
     through that bike's seated model (``mtbmj.identify.bounce_bike``). ``hit_mm``: the hit the answer in
     clicks is for (mm above the static position; default the records' own, ``bounce_clicks.default_hit``).
     ``rider_hz``: with ``bike``, the seated rider compliant on the saddle at that resonance (Hz) instead
-    of rigid (``bounce_bike.SeatedBike``), and each reading gives the rider's share of the mode."""
+    of rigid (``bounce_bike.SeatedBike``), and each reading gives the rider's share of the mode.
+    ``replay``: with ``bike``, each slam also replayed through the MuJoCo bike with the compliant seated
+    rider (at ``rider_hz``, default 5 Hz) and its shock's spring, damper and friction fitted
+    (``mtbmj.identify.bounce_replay``): fit.json's "replay", replay_<file>.csv and replay.png."""
     from mtbmj.identify import bounce
 
     paths = [Path(p) for p in paths]
@@ -178,6 +185,8 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None)
         raise MtbmjError(f"--clicks: {len(clicks)} value(s) for {len(paths)} record(s); give one number of clicks "
                          f"per record, in their order")
     seated = None
+    if replay and bike is None:
+        raise MtbmjError("--replay: the slam is replayed through a bike; give --bike too")
     if rider_hz is not None and bike is None:
         raise MtbmjError("--rider-hz: the rider's resonance is read through a bike; give --bike too")
     if bike is not None:
@@ -305,7 +314,17 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None)
             hit = float(hit_mm) if hit_mm is not None else bc.default_hit(plaw)
             answers[end] = bc.answer(plaw, hit)
             out["answer"][end] = answers[end].summary()
-    return BounceFit(out, records, fits, laws, list(clicks), csvs, predictions, answers)
+    extra, replay_lines = {}, []
+    if replay:
+        from mtbmj.identify import bounce_replay
+
+        done = bounce_replay.replay_records(records, clicks, bike, rider_hz)
+        out["replay"] = done["summary"]
+        csvs.update(done["csv"])
+        if done["replays"]:
+            extra["replay.png"] = bounce_replay.figure_png(done["replays"])
+        replay_lines = done["lines"]
+    return BounceFit(out, records, fits, laws, list(clicks), csvs, predictions, answers, extra, replay_lines)
 
 
 def _decay(records, clicks, out, notes):
