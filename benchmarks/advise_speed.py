@@ -1,6 +1,6 @@
 """``mtbmj advise`` on a whole ride, timed against one bike run over the same terrain, interleaved.
 
-    python benchmarks/advise_speed.py [--ride example] [--bike sst] [--repeats 3] [--workers 2] [--out PATH]
+    python benchmarks/advise_speed.py [--ride example] [--bike sst] [--repeats 3] [--workers 2] [--duration S] [--out PATH]
 
 Each repetition times, in this process: the reconstruction alone (``mtbmj.ride.reconstruct``); one
 bike run over the reconstructed terrain at the ride's speed for the ride's length (the baseline:
@@ -9,6 +9,11 @@ and every candidate, on ``--workers`` processes). Prints each repetition, then t
 spreads (min-max) of the wall times, of the ratio advice / one run, and the advice's wall time per
 100 s of ride. Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
 advise_speed.json``, outside the repository). Not a test: nothing is asserted.
+
+Every shared ride's reconstruction fails its own check today (the rear does not beat a delayed copy
+of the fork by 40 %: ``mtbmj advise`` refuses it after the reconstruction), so the benchmark sets
+that verdict to pass (its numbers as they are) to time the whole advice's work; the answer is not
+what is measured (``verdict_set_to_pass`` in the results).
 """
 from __future__ import annotations
 
@@ -28,6 +33,7 @@ def main(argv=None) -> int:
     ap.add_argument("--bike", default="sst", help="the recorded bike (preset or file)")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--duration", type=float, default=None, help="advise on the ride's first S seconds only")
     add_out_option(ap, __file__)
     args = ap.parse_args(argv)
 
@@ -42,6 +48,10 @@ def main(argv=None) -> int:
     record = telemetry.read_ride(path, **decoding(SimpleNamespace(bike=args.bike, fork_max_mm=None,
                                                                   shock_max_mm=None)))
     seconds = float(record.time_s[-1] - record.time_s[0])
+    if args.duration is not None:
+        seconds = min(seconds, args.duration)
+    checks = reconstruct.Reconstruction.checks  # the verdict set to pass (see the module doc)
+    reconstruct.Reconstruction.checks = lambda self: {**checks(self), "passes": True}
     rows = []
     for i in range(args.repeats):
         t0 = time.perf_counter()
@@ -53,13 +63,15 @@ def main(argv=None) -> int:
         bike_run.run_bike(args.bike, terrain, speed, duration=seconds + 1.0 / speed, drive="rider")
         t_one = time.perf_counter() - t0
         t0 = time.perf_counter()
-        result = advise.advise(record, args.bike, workers=args.workers)
+        result = advise.advise(record, args.bike, duration=args.duration, workers=args.workers)
         t_all = time.perf_counter() - t0
         row = {"reconstruct_s": t_rec, "one_run_s": t_one, "advise_s": t_all, "ratio": t_all / t_one,
-               "candidates": len(result.candidates)}
+               "candidates": len(result.candidates), "search_steps": len((result.recommendation or {}).get("search", [])),
+               "answer": result.verdict.get("answer")}
         rows.append(row)
         print(f"repeat {i + 1}: reconstruct {t_rec:.1f} s, one bike run {t_one:.1f} s, advise {t_all:.1f} s "
-              f"({row['candidates']} candidates; advise / one run {row['ratio']:.2f})", flush=True)
+              f"({row['candidates']} candidates, {row['search_steps']} search steps, {row['answer']}; advise / one "
+              f"run {row['ratio']:.2f})", flush=True)
 
     def stats(key):
         xs = [r[key] for r in rows]
@@ -67,7 +79,9 @@ def main(argv=None) -> int:
 
     out = {"command": f"python benchmarks/advise_speed.py --repeats {args.repeats} --workers {args.workers}"
                       + (f" --ride {args.ride}" if args.ride != "example" else "")
-                      + (f" --bike {args.bike}" if args.bike != "sst" else "") + " --out benchmarks/results/advise_speed.json",
+                      + (f" --bike {args.bike}" if args.bike != "sst" else "")
+                      + (f" --duration {args.duration:g}" if args.duration is not None else "")
+                      + " --out benchmarks/results/advise_speed.json", "verdict_set_to_pass": True,
            "ride": path.name, "ride_seconds": seconds, "workers": args.workers, "repeats": rows,
            "reconstruct_s": stats("reconstruct_s"), "one_run_s": stats("one_run_s"), "advise_s": stats("advise_s"),
            "ratio": stats("ratio"), "advise_s_per_100_s_of_ride": stats("advise_s")["median"] * 100.0 / seconds,
