@@ -7,7 +7,8 @@ bike run over the reconstructed terrain at the ride's speed for the ride's lengt
 one core, what every candidate costs); and the whole advice (reconstruction, the recorded setting
 and every candidate, on ``--workers`` processes). Prints each repetition, then the medians and
 spreads (min-max) of the wall times, of the ratio advice / one run, and the advice's wall time per
-100 s of ride. Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
+100 s of ride; and the advice's CPU time (this process and its workers: what it costs, whatever else
+the machine runs). Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
 advise_speed.json``, outside the repository). Not a test: nothing is asserted.
 
 Every shared ride's reconstruction fails its own check today (the rear does not beat a delayed copy
@@ -25,6 +26,15 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _bench import add_out_option, write_json  # noqa: E402
+
+
+def cpu_s() -> float:
+    """CPU seconds (user + system) of this process and its finished children (the advice's workers):
+    what the advice costs, whatever else the machine runs (its wall time is not)."""
+    import resource
+
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def main(argv=None) -> int:
@@ -62,16 +72,16 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         bike_run.run_bike(args.bike, terrain, speed, duration=seconds + 1.0 / speed, drive="rider")
         t_one = time.perf_counter() - t0
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), cpu_s()
         result = advise.advise(record, args.bike, duration=args.duration, workers=args.workers)
-        t_all = time.perf_counter() - t0
-        row = {"reconstruct_s": t_rec, "one_run_s": t_one, "advise_s": t_all, "ratio": t_all / t_one,
+        t_all, c_all = time.perf_counter() - t0, cpu_s() - c0
+        row = {"reconstruct_s": t_rec, "one_run_s": t_one, "advise_s": t_all, "ratio": t_all / t_one, "advise_cpu_s": c_all,
                "candidates": len(result.candidates), "search_steps": len((result.recommendation or {}).get("search", [])),
                "answer": result.verdict.get("answer")}
         rows.append(row)
         print(f"repeat {i + 1}: reconstruct {t_rec:.1f} s, one bike run {t_one:.1f} s, advise {t_all:.1f} s "
               f"({row['candidates']} candidates, {row['search_steps']} search steps, {row['answer']}; advise / one "
-              f"run {row['ratio']:.2f})", flush=True)
+              f"run {row['ratio']:.2f}; CPU {c_all:.1f} s in this process and its workers)", flush=True)
 
     def stats(key):
         xs = [r[key] for r in rows]
@@ -84,7 +94,7 @@ def main(argv=None) -> int:
                       + " --out benchmarks/results/advise_speed.json", "verdict_set_to_pass": True,
            "ride": path.name, "ride_seconds": seconds, "workers": args.workers, "repeats": rows,
            "reconstruct_s": stats("reconstruct_s"), "one_run_s": stats("one_run_s"), "advise_s": stats("advise_s"),
-           "ratio": stats("ratio"), "advise_s_per_100_s_of_ride": stats("advise_s")["median"] * 100.0 / seconds,
+           "ratio": stats("ratio"), "advise_cpu_s": stats("advise_cpu_s"), "advise_s_per_100_s_of_ride": stats("advise_s")["median"] * 100.0 / seconds,
            "target_s_per_100_s": 120.0}
     print(f"advise {out['advise_s']['median']:.1f} s ({out['advise_s']['min']:.1f}-{out['advise_s']['max']:.1f}) on "
           f"{seconds:.0f} s of ride: {out['advise_s_per_100_s_of_ride']:.0f} s per 100 s; reconstruct "

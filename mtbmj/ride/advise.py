@@ -248,7 +248,9 @@ class Advice:
         """Per metric: half the 5-95 % bootstrap interval of the mean over segments of ``run``'s change
         from the recorded setting (the change's own part of its uncertainty; more segments narrow it)."""
         out = {}
-        for k, d in self._segment_diffs(run, self._run_segments(self.base)).items():
+        if getattr(self, "_base_segments", None) is None:  # the recorded setting's, once for every candidate
+            self._base_segments = self._run_segments(self.base)
+        for k, d in self._segment_diffs(run, self._base_segments).items():
             lo, hi = np.percentile(d[self._boot(d.size)].mean(axis=1), [5, 95])
             out[k] = float(hi - lo) / 2
         return out
