@@ -83,6 +83,17 @@ def test_rides_that_agree_give_their_answer_and_a_narrower_spread():
         "front"]["bottom_outs"]
     d = p.to_dict()
     assert [(e["ride"], e["answer"]) for e in d["rides"]] == [("A.SST", "change"), ("B.SST", "change")]
+    # the report: the rides' table after the change, every column of every table with its unit
+    import re
+
+    html = p.html(b"png")
+    tables = dict(re.findall(r'<table id="(\w+)">(.*?)</table>', html, re.S))
+    assert set(tables) == {"changes", "match", "candidates", "rides"}
+    for name, body in tables.items():
+        heads = re.findall(r"<th>(.*?)</th>", re.search(r"<tr>(.*?)</tr>", body, re.S).group(1))
+        if "unit" not in heads:  # no unit column: each header names its own
+            assert all("(" in h for h in heads[1:]), (name, heads)
+    assert "<td>A.SST</td><td>20.0</td><td>change</td><td>fork spring rate 5 -&gt; 5.5</td>" in tables["rides"]
 
 
 def test_rides_that_contradict_each_other_are_inconclusive_saying_so():

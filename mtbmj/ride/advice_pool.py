@@ -39,8 +39,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mtbmj.ride.advice_rules import AdviseError, penalties
-from mtbmj.ride.advise import Advice, Run, checked_duration, counter, prepare, run_jobs, search_on
+from mtbmj.ride.advice_rules import AdviseError, checked_duration, counter, penalties
+from mtbmj.ride.advise import Advice, Run, prepare, run_jobs, search_on
 from mtbmj.ride.advise import judge as judge_one
 
 

@@ -166,7 +166,7 @@ def html(advice, png: bytes) -> str:
     if "rides" in d:  # several rides pooled (mtbmj.ride.advice_pool): each one's own verdict, the rides left out
         def own(e):
             st = (e["change"] or {}).get("setting")
-            return "" if st is None else f"{st['part']} {st['adjuster']} {st['from']:g} -&gt; {st['to']:g} {esc.escape(st['unit'])}"
+            return "" if st is None else f"{st['part']} {st['adjuster']} {st['from']:g} -&gt; {st['to']:g} {esc.escape(st['unit'])}".rstrip()
         rows_r = "".join(f"<tr><td>{esc.escape(e['ride'])}</td><td>{e['seconds']:.1f}</td><td>{esc.escape(e['answer'])}"
                          f"</td><td>{own(e)}</td></tr>" for e in d["rides"])
         pooled = (f'<h2>The rides pooled</h2><table id="rides"><tr><th>ride</th><th>length (s)</th><th>its own '

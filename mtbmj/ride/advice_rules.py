@@ -433,3 +433,25 @@ def allowed(bike, candidates, merged) -> tuple[list, list]:
         else:
             ok.append((a, d, v))
     return ok, skipped
+
+
+def counter(progress, n: int):
+    """The step each finished run takes: ``progress(fraction, "run i/n")`` (``mtbmj.cli.common.Progress``
+    draws it on a terminal only)."""
+    done = [0]
+
+    def step():
+        done[0] += 1
+        if progress is not None:
+            progress(done[0] / n, f"run {done[0]}/{n}")
+    return step
+
+
+def checked_duration(duration):
+    """``duration`` (s, or None) checked before any ride is read: positive, finite, at least ``MIN_SECONDS``."""
+    if duration is None:
+        return None
+    duration = float(duration)
+    if not (math.isfinite(duration) and duration > 0.0):
+        raise AdviseError(f"--duration: must be a positive number of seconds, got {duration:g}")
+    return duration

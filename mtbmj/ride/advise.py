@@ -82,7 +82,7 @@ from mtbmj.ride.advice_rules import (  # noqa: F401 (advise's names for them)
     GRIP_COMFORT_WEIGHT, HEADLINE, LEAD_IN_M, MAX_REAR_MISS_PERCENT, MIN_CHECKED_PERCENT, MIN_GAIN,
     MIN_SECONDS, PACKING_RATIO, RULES, RideNotDescribed, SAG_POINTS, SAG_WINDOW,
     SEGMENT_S, SHARES, SIGNED, SOLD_LB_PER_IN, SPEED_SPLIT_MM_PER_S, UNCERTAINTY_METHOD,
-    UNITS, UNUSED_BELOW_PERCENT, skipped_entry, adjusters, allowed, bounded_value, bounds, expected,
+    UNITS, UNUSED_BELOW_PERCENT, skipped_entry, adjusters, allowed, checked_duration, counter, bounded_value, bounds, expected,
     flat_metrics, grip_comfort, penalties, ride_metrics, round_setting, unit_of, Trial, compose_setting, trial)
 
 
@@ -486,28 +486,6 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
             search_on(advice, [ride], pool)
     advice.wall_s = time.perf_counter() - start
     return advice
-
-
-def counter(progress, n: int):
-    """The step each finished run takes: ``progress(fraction, "run i/n")`` (``mtbmj.cli.common.Progress``
-    draws it on a terminal only)."""
-    done = [0]
-
-    def step():
-        done[0] += 1
-        if progress is not None:
-            progress(done[0] / n, f"run {done[0]}/{n}")
-    return step
-
-
-def checked_duration(duration):
-    """``duration`` (s, or None) checked before any ride is read: positive, finite, at least ``MIN_SECONDS``."""
-    if duration is None:
-        return None
-    duration = float(duration)
-    if not (math.isfinite(duration) and duration > 0.0):
-        raise AdviseError(f"--duration: must be a positive number of seconds, got {duration:g}")
-    return duration
 
 
 @dataclass
