@@ -637,15 +637,18 @@ def search_on(advice, rides, pool) -> None:
                               if a.name == rec["key"] and d == rec["direction"])
     own = [next(a for a in ride.adj if a.name == adj.name) for ride in rides]  # each ride's (its calibration's)
 
+    def on(a, v):  # the value v of adj as ride's adjuster a has it (the same where its calibration is)
+        return v if a.per_unit == adj.per_unit else v / adj.per_unit * a.per_unit
+
     def run_values(values):
-        jobs = [ride.job(ride.merged(a.overrides(v / adj.per_unit * a.per_unit)), f"{adj.label} {v:g}")
+        jobs = [ride.job(ride.merged(a.overrides(on(a, v))), f"{adj.label} {v:g}")
                 for v in values for ride, a in zip(rides, own)]
         runs = run_jobs(jobs, pool, lambda i: True, lambda: None)
         n = len(rides)
         return [advice.pooled_run(runs[i * n:(i + 1) * n]) for i in range(len(values))]
 
     def allowed_value(v):
-        return all(allowed(ride.bike, [(a, d, v / adj.per_unit * a.per_unit)], ride.merged)[0]
+        return all(allowed(ride.bike, [(a, d, on(a, v))], ride.merged)[0]
                    for ride, a in zip(rides, own))
 
     kept = advice_search.search(adj, first, run, advice.base.total, run_values, allowed_value)
