@@ -204,3 +204,47 @@ def test_pooled_through_the_command_keeps_stderr_clean_when_piped(tmp_path, capf
     assert "seed21.SST alone: " in got.out and "seed5.SST alone: " in got.out
     d = json.loads((out / "advice.json").read_text())
     assert d["ride"] == "2 rides (seed21.SST, seed5.SST)" and len(d["rides"]) == 2
+
+
+@pytest.mark.slow  # 2 x 13 runs of 3 s and the search's: about a minute
+def test_the_pooled_search_runs_every_value_on_every_ride(tmp_path, monkeypatch, capsys):
+    """Two made rides of the fork far too soft through the command, each run cut to its first 3 s
+    (the plumbing of the pooled search, not the advice's numbers): the fork's spring raised and
+    searched on, each step simulated on both rides (twice the runs of one ride's search)."""
+    real, seen = advise.simulate, []
+
+    def short(bike, overrides, terrain, speed, duration, label, lead_s):
+        seen.append(label)
+        return real(bike, overrides, terrain, speed, min(duration, 3.0), label, lead_s)
+
+    monkeypatch.setattr(advise, "simulate", short)
+    bike, (a, b) = _made_rides(tmp_path, (21, 5), 16.0)
+    out = tmp_path / "advice"
+    with reconstruction_passing():
+        assert main(["advise", str(a), str(b), "--bike", str(bike), "--workers", "1", "--out", str(out)]) == 0
+    d = json.loads((out / "advice.json").read_text())
+    rec = d["recommendation"]
+    assert d["verdict"]["answer"] == "change" and rec["key"] == "fork:fork.spring.rate_N_per_mm", d["verdict"]
+    assert rec["search"] and rec["setting"]["to"] == rec["search"][-1]["setting"]["to"] > 5.5
+    for step in rec["search"]:
+        assert seen.count(f"fork spring rate {step['to']:g}") == 2, (step, seen)
+    printed = capsys.readouterr().out
+    assert printed.index("seed21.SST alone: ") < printed.index("Recommended: raise the fork spring rate from 5 to ")
+
+
+def test_the_run_counter_shows_on_a_terminal_only(monkeypatch, capsys):
+    """The progress bar with its run counter ("run 3/12") on a terminal; nothing when stderr is not one."""
+    import sys
+
+    from mtbmj.cli.common import Progress
+
+    step = advise.counter(Progress("advise"), 12)  # stderr captured here: not a terminal
+    for _ in range(3):
+        step()
+    assert capsys.readouterr().err == ""
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)
+    step = advise.counter(Progress("advise"), 12)
+    for _ in range(3):
+        step()
+    err = capsys.readouterr().err
+    assert err.endswith("advise [#######                       ]  25.0% run 3/12") and err.count("\r") == 3, err
