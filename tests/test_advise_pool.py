@@ -158,6 +158,12 @@ def test_made_rides_of_one_setting_pooled(tmp_path):
     assert [e["ride"] for e in d["rides"]] == ["seed21.SST", "seed5.SST"] and d["refused"][0]["ride"] == "seed8.SST"
     html = (out / "advice.html").read_text()
     assert 'id="rides"' in html and 'id="refused"' in html and "<th>length (s)</th>" in html
+    from helpers import CHROMIUM, rendered
+
+    if CHROMIUM.exists():  # the pooled report as a browser shows it: the rides' table there, one row each
+        result, dom = rendered(out / "advice.html", tmp_path)
+        assert result["tables"]["rides"]["visible"] and result["tables"]["rides"]["rows"] == 3
+        assert result["resources"] == [] and "seed8.SST: 10.0 s of ride cannot support advice" in dom
 
 
 def test_a_bad_file_among_the_rides_is_one_line_before_any_work(tmp_path, capsys, monkeypatch):

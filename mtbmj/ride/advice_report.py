@@ -173,7 +173,8 @@ def html(advice, png: bytes) -> str:
                   f'answer (one step, no unit)</th><th>its own change (in the part\'s unit)</th></tr>{rows_r}</table>')
         if d["refused"]:
             pooled += ('<h2>Left out of the pool</h2><ul id="refused">'
-                       + "".join(f"<li>{esc.escape(r['ride'])}: {esc.escape(r['why'])}</li>" for r in d["refused"])
+                       + "".join(f"<li>{esc.escape(r['why'] if r['why'].startswith(r['ride']) else r['ride'] + ': ' + r['why'])}"
+                                 f"</li>" for r in d["refused"])
                        + "</ul>")
     img = base64.b64encode(png).decode()
     return f"""<!DOCTYPE html>
