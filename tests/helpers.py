@@ -806,8 +806,9 @@ def reconstruction_stand_in(monkeypatch) -> list:
 # and pitches, a rider on legs and arms (vertical springs and dampers at the pedals and the bars) who
 # heaves and pitches on it and shifts a slow load fore and aft (a force pair at the bars and pedals),
 # the fork's lower and wheel sliding along the steering axis, the rear wheel on the constant leverage
-# ratio RATIO, point-contact tyres that leave the ground, at a speed that varies along the ride, over
-# terrain made here. Shared with the package (inputs read from the same bike file): the laws' form
+# ratio RATIO, point-contact tyres that leave the ground, their contacts a wheelbase apart that
+# shortens as the fork and the rear go in (the front axle back along the steering axis, the rear axle
+# on its circle about the main pivot), at a speed that varies along the ride, over terrain made here. Shared with the package (inputs read from the same bike file): the laws' form
 # and values (``law``), the masses and geometry, the tyres' rate. Not shared: the pitch coupling, the
 # rider on his limbs and his slow load, the split of the rider's on-bike mass (half at the pedals,
 # half at the bars).
@@ -886,7 +887,7 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
     the rider's slow load ``slow_load_N`` (onto the bars, period ``slow_period_s``). Written as
     ``path``/bike.toml (the recorded setting) and ``path``/ride.SST (SST v3 integer counts through its
     [sensors]); returns the truth: bike, sst, t, fork_mm and rear_mm (wheel travel), h (the terrain),
-    features, wb (the fixed wheelbase), profile, airborne_front (share of the ride the front tyre is
+    features, wb (the wheelbase along the ride, m), profile, airborne_front (share of the ride the front tyre is
     off the ground), dynamic_index, residual (the rest state's largest acceleration, m/s2)."""
     from mtbmj.bike import run, spec as spec_mod
 
@@ -908,7 +909,14 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
     mF = spec.fork_lower_mass + spec.front_wheel_mass
     mR = spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
     xF, xR = spec.front_axle[0], spec.rear_axle[0]
-    wb = xF - xR  # the wheelbase at sag, fixed: the rear contact this far behind the front's
+    # the contacts this far apart: the front axle back along the steering axis by the fork's stroke
+    # times cos(head angle), the rear axle on its circle about the main pivot (the frame's pitch left out)
+    (px, pz), zR = spec.pivot, spec.rear_axle[1]
+    arm = math.hypot(xR - px, zR - pz)
+    ca = math.cos(spec.head_angle)
+
+    def wheelbase(stroke, rise):
+        return xF - stroke * ca - (px - math.sqrt(arm * arm - (zR + rise - pz) ** 2))
     fork_law = law(fork_rate * 1e3, 0.130, 500.0, fork_reb)
     shock_law = law(90e3, 0.050, SHOCK_COMP, SHOCK_REB * shock_reb_scale)
     span = r.arm_x - r.leg_x
@@ -933,6 +941,7 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
         u = slow_load_N * math.sin(2 * math.pi * t / slow_period_s)  # +: onto the bars, off the pedals
         leg, arm = limbs[0] - u, limbs[1] + u
         s = float(along(t))
+        wb = wheelbase((wF + base[0]) / sa, wR + base[1])
         tF = max(0.0, tyre_k * (float(h(s)) - (zw + base[2] - radius)))
         tR = max(0.0, tyre_k * (float(h(s - wb)) - (zq + base[3] - radius)))
         return fF, fR, leg, arm, tF, tR
@@ -948,7 +957,7 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
 
     # the static heights: each wheel's rise at sag (its law carrying the static share), the tyres' deflection
     total = M + mr_ + mF + mR
-    share = ((M * cx + mr_ * rx + mF * xF + mR * xR) / total - xR) / wb
+    share = ((M * cx + mr_ * rx + mF * xF + mR * xR) / total - xR) / (xF - xR)
     wF0 = brentq(lambda w: fork_law(w / sa, 0.0) / sa - (total * share - mF) * g, 0.0, 0.12)
     wR0 = brentq(lambda w: shock_law(w / RATIO, 0.0) / RATIO - (total * (1 - share) - mR) * g, 0.0, 0.12)
     base = [wF0, wR0, radius - total * share * g / tyre_k, radius - total * (1 - share) * g / tyre_k]
@@ -967,6 +976,7 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
     sst = write_v3(path / "ride.SST", np.clip(fork_mm, 0, None), np.clip(rear_mm, 0, None) / RATIO,
                    spec.sensors, int(WHOLE_RATE))
     tyres = np.array([forces(ti, yi)[4:] for ti, yi in zip(t[::10], y.T[::10])])
+    wb = np.array([wheelbase(f * 1e-3, r) for f, r in zip(fork_mm, wR)])
     return {"bike": bike, "sst": sst, "t": t, "h": h, "features": placed, "wb": wb, "fork_mm": fork_mm,
             "rear_mm": rear_mm, "profile": profile, "airborne_front": float(np.mean(tyres[:, 0] <= 0.0)),
             "dynamic_index": I / (M * (xF - cx) * (cx - xR)), "residual": float(np.max(np.abs(info["fvec"])))}

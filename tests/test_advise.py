@@ -78,7 +78,7 @@ def test_a_fork_far_too_soft_gets_a_stiffer_spring(soft, tmp_path):
 def test_a_rebound_far_too_slow_gets_less_rebound_damping(tmp_path):
     """The fork's rebound four times too slow (2800 N s/m, the bike's own 700): the made ride packs
     down, and the advice is a change, the fork's rebound damping lowered by 30-90 % (the search goes
-    on from the one-step candidate: 734 N s/m), packing predicted to ease beyond its uncertainty; the bike ridden again at the advised damping packs less, as the advice expects, within
+    on from the one-step candidate: 1792 N s/m on the made ride whose wheelbase shortens), packing predicted to ease beyond its uncertainty; the bike ridden again at the advised damping packs less, as the advice expects, within
     its uncertainty."""
     bike, advice, (fork_mm, rear_mm, t), out = advice_of(tmp_path / "slow", fork_reb=2800.0)
     made = generated_metrics(bike, fork_mm, rear_mm, t)

@@ -57,3 +57,30 @@ def test_the_search_stops_at_what_the_part_refuses_or_a_crash():
     kept = advice_search.search(a, 5.5, crash(5.5), 0.0, lambda vs: [crash(v) for v in vs], lambda v: True)
     assert [round(v, 3) for v, _ in kept] == [6.05]
     assert advice_search.driving_rule({"a": 1.0, "b": 3.0}, {"a": 0.5, "b": 0.2}) == "b"
+
+
+def test_several_searches_at_once_end_where_each_alone_ends():
+    """Two adjusters searched together (search_many): a spring whose penalty (v - 8)^2 falls from 5.5
+    and a rebound damper whose penalty falls as it is lowered to a floor at 400 (from 2240 by x0.8,
+    the one-step candidate of 2800). Each ends where its search alone ends, the runs of one round are
+    asked for together (up to two per search), and a search that stops leaves the other going."""
+    spring = _adj()
+    rebound = _adj("fork.damper.rebound_N_s_per_m", 2800.0, "N s/m")
+    pen = [lambda v: (v - 8.0) ** 2, lambda v: abs(v - 400.0) / 100.0]
+    run = lambda i, v: SimpleNamespace(total=pen[i](v), crash=None)  # noqa: E731
+    rounds = []
+
+    def run_values(asks):
+        rounds.append(list(asks))
+        return [run(i, v) for i, v in asks]
+
+    kept = advice_search.search_many([(spring, 5.5, run(0, 5.5)), (rebound, 2240.0, run(1, 2240.0))], run_values,
+                                     lambda i, v: True)
+    alone = [advice_search.search(spring, 5.5, run(0, 5.5), 0.0, lambda vs: [run(0, v) for v in vs], lambda v: True),
+             advice_search.search(rebound, 2240.0, run(1, 2240.0), 0.0, lambda vs: [run(1, v) for v in vs],
+                                  lambda v: True)]
+    assert [[v for v, _ in k] for k in kept] == [[v for v, _ in k] for k in alone]
+    assert kept[1][-1][0] == pytest.approx(2240.0 * 0.8 ** 8, rel=1e-3)  # 376: MAX_STEPS (8) past the candidate
+    assert len(kept[1]) == advice_search.MAX_STEPS and kept[0][-1][0] == pytest.approx(8.05255)
+    assert {i for i, _ in rounds[0]} == {0, 1} and all(sum(1 for i, _ in r if i == j) <= 2 for r in rounds for j in (0, 1))
+    assert any({i for i, _ in r} == {1} for r in rounds)  # the spring's search stopped first, the rebound's went on

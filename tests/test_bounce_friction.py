@@ -173,7 +173,12 @@ def test_shared_slams_friction_common_zeta_per_click(shared):
     assert bd.choose(fits) == "both"  # BIC 2.9 against 9.2 (viscous) and 26.0 (friction)
     f = fits["both"]
     d = f.value("friction_band_mm")[0]
-    assert 0.2 < d < 1.5  # 0.70 mm [-0.34, 1.74] at 3 dof
+    assert 0.2 < d < 1.5  # 0.70 mm [0, 1.74] at 3 dof (value -/+ t sd reaches -0.34: a length cut at 0)
+    v, sd = f.value("friction_band_mm")
+    assert v - f.t95 * sd < 0.0  # the plain interval would reach below zero here
+    assert f.interval("friction_band_mm")[0] == 0.0
+    assert f.interval("friction_band_mm")[1] == pytest.approx(v + f.t95 * sd)
+    assert all(f.interval(f"zeta[{i}]")[0] >= 0.0 for i in range(3))
     zs = [f.value(f"zeta[{i}]")[0] for i in range(3)]
     assert zs[0] < zs[1]  # 0.14, 0.20, 0.17: 17 clicks below 8, within its interval
 

@@ -322,7 +322,7 @@ def test_a_standing_window_gives_no_speed():
     x = 0.4 * x / np.ptp(x)  # 0.4 mm of motion
     front, rear = x, np.interp(t - 0.2, t, x)
     assert reconstruct.speed_from_lag(t, front, rear, 1.255)["speed_m_per_s"] == pytest.approx(6.275, rel=0.01)
-    with pytest.raises(reconstruct.ReconstructError, match="of 2 windows: 2 standing"):
+    with pytest.raises(reconstruct.ReconstructError, match=r"of (\d+) windows: \1 standing"):
         reconstruct.speed_from_lag(t, front, rear, 1.255, travel=(front, rear))
     big = reconstruct.speed_from_lag(t, 25 * front, 25 * rear, 1.255, travel=(25 * front, 25 * rear))
     assert big["speed_m_per_s"] == pytest.approx(6.275, rel=0.01)

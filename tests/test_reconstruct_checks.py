@@ -224,10 +224,15 @@ def test_a_window_whose_lag_changes_within_it_is_not_taken_as_sure():
     lag = np.where(t < 7.5, 0.20, 0.26)
     front, rear = np.interp(t, grid, shape), np.interp(t - lag, grid, shape)
     found = reconstruct.speed_from_lag(t, front, rear, 1.255)
-    (a0, v0, _), (a1, v1, _) = found["windows"][:2]
-    sd0, sd1 = found["sd"][:2]
+    span = found["window_s"]
+    (a0, v0, _), sd0 = found["windows"][0], found["sd"][0]
     assert v0 == pytest.approx(1.255 / 0.20, rel=0.01) and 0 < sd0 < 0.01 * v0
     assert found["why"][0] is None
-    assert v1 is None or sd1 >= 5 * sd0, (v1, sd1, sd0)
-    if v1 is None:
-        assert found["why"][1], found["why"]
+    # the windows (they overlap) whose span has the speed step strictly inside: none sure of a speed
+    straddling = [i for i, (a, _, _) in enumerate(found["windows"]) if a < 7.5 - 0.5 and a + span > 7.5 + 0.5]
+    assert straddling
+    for i in straddling:
+        v1, sd1 = found["windows"][i][1], found["sd"][i]
+        assert v1 is None or sd1 >= 5 * sd0, (i, v1, sd1, sd0)
+        if v1 is None:
+            assert found["why"][i], found["why"]

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from mtbmj.bike.reference import Reference
 from mtbmj.bike.run import run_bike
+from mtbmj.errors import ConfigError
 from mtbmj.runpath.crosscheck import CrosscheckResult, compare_series
 
 # column -> (signal, unit, judged at TOLERANCE_MM)
@@ -21,18 +22,27 @@ MAX_STEP_S = 1e-3
 
 def crosscheck(bike, scenario, speed_m_per_s: float | None, duration: float | None = None, drive: str = "rider",
                start_x: float | None = None, reference_rtol: float = 1e-8, pedal=None, overrides=None,
-               seated: bool = False) -> CrosscheckResult:
+               seated: bool = False, rider: str = "passive") -> CrosscheckResult:
     """``mtbmj bike``'s run against this reference from the same state: front and rear wheel
     travel (judged), shock stroke (mm) and pitch (deg), and both tire loads (N; peak and series
     judged relative to the reference's peak). ``reference_rtol``: the reference's relative
     tolerance (scipy's RK45). ``pedal`` (cadence_rpm, power_W), ``overrides`` and ``seated`` as
-    ``run_bike``'s."""
+    ``run_bike``'s. ``rider`` "active": the articulated rider on both sides (the reference
+    ``mtbmj.bike.reference_rider.ReferenceRider``)."""
+    if rider == "active" and (seated or pedal is not None):
+        raise ConfigError("rider: the reference with the active rider has no saddle and no pedalling through the legs "
+                          "(cross-check the active rider standing, on --speed)")
     engine = run_bike(bike, scenario, speed_m_per_s, duration=duration, drive=drive, start_x=start_x, pedal=pedal,
-                      overrides=overrides, seated=seated)
+                      overrides=overrides, seated=seated, rider=rider)
     speed_m_per_s = engine.prepared.speed
     if pedal is not None:
         drive = f"pedal {pedal[0]:g} rpm {pedal[1]:g} W" + (" seated" if seated else "")
-    ref = Reference(engine.prepared)
+    if engine.prepared.articulated is not None:
+        from mtbmj.bike.reference_rider import ReferenceRider
+
+        ref = ReferenceRider(engine.prepared)
+    else:
+        ref = Reference(engine.prepared)
     raw = engine.raw
     times = raw["time_s"]
     y0 = ref.y0(engine.prepared.initial_qpos, engine.prepared.initial_qvel, engine.prepared.initial_act)
@@ -41,6 +51,8 @@ def crosscheck(bike, scenario, speed_m_per_s: float | None, duration: float | No
                for column, (name, unit, judged) in DISPLACEMENTS.items()]
     signals += [compare_series(name, "N", times, raw[column], got[column], FORCE_TOLERANCE, relative=True,
                                judged=("peak", "series")) for column, name in TIRES.items()]
+    if engine.prepared.articulated is not None:
+        drive += ", active rider"
     return CrosscheckResult("bike", f"{engine.name} over {scenario} at {float(speed_m_per_s):g} m/s (drive {drive})",
                             "mujoco", "bike's ODE reference", signals, engine.wall_time_s, got["wall_time_s"],
                             {"bike": engine.name, "scenario": str(scenario), "speed_m_per_s": float(speed_m_per_s),

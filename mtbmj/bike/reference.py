@@ -219,6 +219,11 @@ class Reference:
     def origin(self, q):
         return np.array([self.x0 + q[0], self.z0 + q[1]])
 
+    def com_speed(self, M, qd) -> float:
+        """The centre of mass's horizontal speed: the X row of M qd (the horizontal momentum) over
+        the whole mass (``mtbmj.bike.reference_rider`` counts the articulated rider's in it)."""
+        return float(M[0] @ qd) / M[0, 0]
+
     def forces(self, t, y, dynamics=None):
         """Generalised forces Q (7,) of the suspension, the rider's springs, the tires and the drive
         (gravity and the velocity terms are in ``dynamics``' h), and a dict of the applied forces."""
@@ -263,11 +268,11 @@ class Reference:
         ground = (0.0,) * 6
         foot = None
         if self.drive.mode == "pedal":  # the crank's torque pulls the chain (controllers.drive.pedal_drive)
-            out_p = pedal_drive(q[0], float(M[0] @ qd) / M[0, 0], self.drive.power, *self.chain,
+            out_p = pedal_drive(q[0], self.com_speed(M, qd), self.drive.power, *self.chain,
                                 self.rear_tire.radius, fxf, fzf, df, fxr, fzr, dr, self.traction)
             ground, foot = out_p[:6], out_p[6:]
         elif self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:
-            f = self.drive.force(self.speed, float(M[0] @ qd) / M[0, 0])  # the centre of mass's speed
+            f = self.drive.force(self.speed, self.com_speed(M, qd))  # the centre of mass's speed
             ground = wheel_forces(f, fxf, fzf, df, fxr, fzr, dr, self.traction, self.rear_tire.radius)
         if any(ground):
             pl.apply(Q, q, axles[0], ground[0], ground[1])

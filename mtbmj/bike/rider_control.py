@@ -40,11 +40,21 @@ Strength (one side, isometric, N m; checked at the sources for issue 54 where a 
 * shoulder 80 flexion: men's static flexion 89.9 N m with the arm at the side and 68.6 N m at
   45 deg of flexion (26 men and 25 women, KIN-COM; "Dynamic shoulder flexion strength for use in
   occupational risk analysis and clinical assessment", its abstract; journal not recorded here);
-  95 extension is *not checked* (no source found in the time);
+  95 extension: checked by ratio, extension stronger than flexion by 5:4 in 31 volunteers ("Isokinetic
+  testing of shoulder strength: normal values", Arch. Phys. Med. Rehabil. 66(6):384-386 (1985),
+  PubMed 4004537, its abstract; authors not recorded here): 100 N m from the 80 of flexion;
 * elbow 75 flexion / 60 extension: concentric peak torques of 199 young men, 0.78 and 0.67 N m
   per kg of body mass (L. Lategan and P. E. Kruger, Afr. J. Phys. Health Educ. Recreat. Dance,
   2003 special edition:165-172): 66 and 57 N m at 85 kg concentric, the isometric a little more;
-* hip 160 flexion / 250 extension, ankle 45 dorsiflexion / 150 plantar flexion: of the order of
+* ankle 150 plantar flexion: checked (issue 54 item 5): nine physically active young men's
+  isometric plantar flexion 154.4 +- 37.8 N m with the knee extended and 93.1 +- 22.3 N m with it
+  flexed (PubMed 39577118, its abstract; authors and journal not recorded here): the attack
+  position's knee, 45 deg bent, lies between, so 150 is at the top of what a rider has (*kept*: the
+  landings were tuned with it); 45 dorsiflexion: 47.9-49.4 N m mean peak torque of 200 adults (L. F.
+  da Fonseca et al., World J. Orthop. 16(10):108858 (2025), its Table 1; the mode of contraction and
+  the sexes' mix not read);
+* hip 160 flexion / 250 extension (*not checked*: no published value found in the time) and the
+  ankle above: of the order of
   D. E. Anderson, M. L. Madigan and M. A. Nussbaum, "Maximum voluntary joint torque as a function
   of joint angle and angular velocity: model development and application to the lower limb",
   J. Biomech. 40(14):3105-3113 (2007) (the model's parameters by sex and age; its tables were not
@@ -246,6 +256,54 @@ class Controller:
         return (ankle[0] + r * dx / d, ankle[1] + r * dz / d)
 
 
+def aimed(ctl: Controller, aim: dict, x_front: float, pitch: float, rate: float) -> dict:
+    """Each joint's target angle (rad, anatomical) from the controller's targets for the hips and the
+    trunk (``Controller.targets`` with the front axle at ``x_front`` m, the frame's pitch and pitch
+    rate), by the pose's inverse kinematics, held within ``aim`` (name: (least, most) rad)."""
+    hip, trunk = ctl.targets(x_front, pitch, rate)
+    return {k: min(max(a, aim[k][0]), aim[k][1])  # a target the joint reaches
+            for k, a in rb.pose(ctl.body, ctl.pedal, ctl.grip, hip, trunk).angles.items()}
+
+
+def muscle_torques(want: dict, now: dict, speed: dict, gains: dict, strength: dict) -> tuple[dict, dict, float]:
+    """(torques N m, demands, positive power W) of the muscles: each joint's torque toward its target
+    (``gains``' stiffness and damping on the anatomical angle ``now`` and speed ``speed``) limited by
+    its strength in each direction (``strength``: (flexion, extension)), then the torques doing
+    positive work scaled down together to ``POWER_W`` where they would exceed it. A demand is the
+    torque asked over the limit in its direction (1 and above: held at the limit)."""
+    taus, demands = {}, {}
+    for k in JOINTS:
+        kp, kd = gains[k]
+        flex, ext = strength[k]
+        ask = kp * (want[k] - now[k]) - kd * speed[k]
+        taus[k] = min(max(ask, -ext), flex)
+        demands[k] = ask / flex if ask > 0 else -ask / ext
+    power = sum(max(taus[k] * speed[k], 0.0) for k in JOINTS)
+    if power > POWER_W:
+        scale = POWER_W / power
+        for k in JOINTS:
+            if taus[k] * speed[k] > 0.0:
+                taus[k] *= scale
+        power = POWER_W
+    return taus, demands, power
+
+
+def end_stops(now: dict, speed: dict, ranges: dict) -> dict:
+    """Each joint's end-stop torque (N m, anatomical): a spring-damper past its range of motion
+    (``ranges``: (least, most) rad), 0 within it."""
+    out = {}
+    for k in JOINTS:
+        lo, hi = ranges[k]
+        a = now[k]
+        stop = 0.0
+        if a > hi:
+            stop = -STOP_N_M_PER_RAD * (a - hi) - STOP_N_M_S_PER_RAD * speed[k]
+        elif a < lo:
+            stop = -STOP_N_M_PER_RAD * (a - lo) - STOP_N_M_S_PER_RAD * speed[k]
+        out[k] = stop
+    return out
+
+
 class RiderCallback:
     """The bike's callback (``inner``) and the articulated rider's forces (module doc)."""
 
@@ -338,6 +396,7 @@ class RiderCallback:
         Q = self._q
         Q[:] = 0.0
         qvel = d.qvel
+        pins = []
         # the pins: feet at the ankle's point, hands at the grip
         for end, anchor, body in self.s_pins:
             pe, pa = d.site_xpos[end], d.site_xpos[anchor]
@@ -347,46 +406,25 @@ class RiderCallback:
             f = -PIN_N_PER_M * (pe - pa) - PIN_N_S_PER_M * rel
             f[1] = 0.0
             Q += self._j1.T @ f - self._j2.T @ f
+            pins.append((f, rel, pe - pa))
         # the muscles
         ctl = self.controller
-        pitch = d.qpos[self.qadr["pitch"]]
-        hip, trunk = ctl.targets(d.site_xpos[self.s_front][0], pitch, qvel[self.dof["pitch"]])
-        want = {k: min(max(a, self.aim[k][0]), self.aim[k][1])  # a target the joint reaches
-                for k, a in rb.pose(self.body, ctl.pedal, ctl.grip, hip, trunk).angles.items()}
+        want = aimed(ctl, self.aim, d.site_xpos[self.s_front][0], d.qpos[self.qadr["pitch"]], qvel[self.dof["pitch"]])
         now, speed = self.angles(d.qpos), self.rates(qvel)
-        taus, clamped = {}, {}
-        for k in JOINTS:
-            kp, kd = self.gains[k]
-            flex, ext = self.strength[k]
-            ask = kp * (want[k] - now[k]) - kd * speed[k]
-            taus[k] = min(max(ask, -ext), flex)
-            demand = ask / flex if ask > 0 else -ask / ext
-            self.peak_demand[k] = max(self.peak_demand[k], float(demand))
-            clamped[k] = demand >= 1.0
-        power = sum(max(taus[k] * speed[k], 0.0) for k in JOINTS)
-        if power > POWER_W:
-            scale = POWER_W / power
-            for k in JOINTS:
-                if taus[k] * speed[k] > 0.0:
-                    taus[k] *= scale
-            power = POWER_W
+        taus, demands, power = muscle_torques(want, now, speed, self.gains, self.strength)
+        stops = end_stops(now, speed, self.ranges)
+        clamped = {k: demands[k] >= 1.0 for k in JOINTS}
         applied = {}
         for k in JOINTS:
             tau = taus[k]
             flex, ext = self.strength[k]
+            self.peak_demand[k] = max(self.peak_demand[k], float(demands[k]))
             ratio = tau / flex if tau > 0 else -tau / ext
             if abs(tau) > self.peak_torque[k]:
                 self.peak_torque[k] = abs(tau)
             if ratio > self.peak_ratio[k]:
                 self.peak_ratio[k] = ratio
-            lo, hi = self.ranges[k]
-            a = now[k]
-            stop = 0.0
-            if a > hi:
-                stop = -STOP_N_M_PER_RAD * (a - hi) - STOP_N_M_S_PER_RAD * speed[k]
-            elif a < lo:
-                stop = -STOP_N_M_PER_RAD * (a - lo) - STOP_N_M_S_PER_RAD * speed[k]
-            applied[k] = tau + stop - TISSUE_DAMPING * speed[k]
+            applied[k] = tau + stops[k] - TISSUE_DAMPING * speed[k]
             self.add_torque(Q, k, applied[k])
         if power > self.peak_power:
             self.peak_power = power
@@ -396,10 +434,13 @@ class RiderCallback:
                     if clamped[k]:
                         self.at_limit_s[k] += d.time - self._t_seen
             self._t_seen = d.time
+        saddle = (0.0, 0.0)
         if ctl.seated and ctl.saddle is not None:
-            self._saddle(m, d, Q)
+            saddle = self._saddle(m, d, Q)
         d.qfrc_applied[:] += Q
-        self.last = {"taus": taus, "want": want, "now": now, "applied": applied}
+        # what the energy balance (mtbmj.bike.energy) reads: each force's parts at this evaluation
+        self.last = {"taus": taus, "want": want, "now": now, "applied": applied, "speed": speed, "stops": stops,
+                     "pins": pins, "saddle": saddle}
 
     def _foot_through_leg(self, d) -> None:
         """Pedalling: the driving foot's push on its pedal has its reaction on the rider (the bike's
@@ -416,15 +457,16 @@ class RiderCallback:
         shank[3:] = w[3:] + np.cross(d.xipos[self.b_rider] - d.xipos[self.b_shank], f)  # the same line of action
         w[:] = 0.0
 
-    def _saddle(self, m, d, Q) -> None:
-        """The saddle's push on the sitting bones (one-sided), and its reaction on the frame."""
+    def _saddle(self, m, d, Q) -> tuple[float, float]:
+        """The saddle's push on the sitting bones (one-sided), and its reaction on the frame:
+        (push N, closing speed m/s), (0, 0) off the saddle."""
         rot = d.xmat[self.b_frame].reshape(3, 3)
         hips = d.site_xpos[self.s_hips]
         seat = d.xpos[self.b_frame] + rot @ np.array([self.controller.saddle[0], 0.0, self.controller.saddle[1]])
         bone = hips - ISCHIAL_BELOW_HIP_M * rot[:, 2]
         depth = float((seat - bone) @ rot[:, 2])  # how far the sitting bones are below the saddle's top
         if depth <= 0.0:
-            return
+            return 0.0, 0.0
         mujoco.mj_jac(m, d, self._j1, None, bone, self.b_rider)
         mujoco.mj_jac(m, d, self._j2, None, bone, self.b_frame)
         closing = float(rot[:, 2] @ (self._j2 @ d.qvel - self._j1 @ d.qvel))
@@ -432,6 +474,7 @@ class RiderCallback:
         f = push * rot[:, 2]
         Q += self._j1.T @ f - self._j2.T @ f
         self.saddle_peak = max(self.saddle_peak, push)
+        return push, closing
 
     def report(self) -> dict:
         """What the summary says of the rider: each joint's largest muscle torque against its limit."""
@@ -540,5 +583,5 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     return p
 
 
-__all__ = ["RiderCallback", "Controller", "activate", "edges", "stance", "saddle_point", "STRENGTH_N_M",
+__all__ = ["RiderCallback", "Controller", "activate", "aimed", "muscle_torques", "end_stops", "edges", "stance", "saddle_point", "STRENGTH_N_M",
            "STRENGTH_ONE_SIDE_N_M", "POWER_W", "GAINS", "JOINTS"]

@@ -518,9 +518,13 @@ class BikeResult(RunOutput):
         held = max(r["joints"], key=lambda k: r["joints"][k].get("at_limit_s", 0.0))
         at = r["joints"][held].get("at_limit_s", 0.0)
         clamp = f"; held at its limit longest: the {held}'s, {at:.2f} s" if at > 0 else "; none held at its limit"
+        e = self.summary.get("energy")
+        work = (f"; muscle work {e['muscle_work_J']:.1f} J ({e['muscle_positive_J']:.1f} positive, "
+                f"{e['muscle_negative_J']:.1f} negative), energy balance error {e['error_pct']:.3f} % of "
+                f"{e['work_done_J']:.0f} J of work done") if e else ""
         return (f"; active rider: joint torques {'within' if r['within_limits'] else 'PAST'} their limits (largest "
                 f"{100 * r['joints'][worst]['peak_of_limit']:.0f} % of the {worst}'s{clamp}), peak power "
-                f"{r['peak_power_W']:.0f} of {r['power_limit_W']:.0f} W")
+                f"{r['peak_power_W']:.0f} of {r['power_limit_W']:.0f} W{work}")
 
     def _comfort(self) -> str:
         """Comfort and grip over the feature's window (the whole run's where it has none)."""
@@ -603,6 +607,10 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
             "callback": callback_kind(getattr(p.callback, "inner", p.callback)), "callback_calls": p.callback.calls, "geometry_refreshes": p.callback.refreshes,
             "real_time_factor": duration / wall if wall > 0 else None}
     summary_["rider"] = p.callback.report() if p.articulated is not None else {"kind": "passive"}
+    if p.articulated is not None:  # the energy balance with the muscles' work (evaluates the run's states again)
+        from mtbmj.bike.energy import balance
+
+        summary_["energy"] = balance(p, states)
     if p.articulated is not None:
         info["rider"] = "active"
     if seated:

@@ -67,8 +67,8 @@ def cmd_crosscheck(args) -> int:
 
     if args.speed is not None or args.drive is not None or args.head_angle is not None:
         raise MtbmjError("--speed, --drive and --head-angle: apply to a rolling cross-check (--roll SCENARIO)")
-    if args.pedal is not None or args.power is not None or args.seated:
-        raise MtbmjError("--pedal, --power and --seated: apply to a bike cross-check (--bike)")
+    if args.pedal is not None or args.power is not None or args.seated or args.rider != "passive":
+        raise MtbmjError("--pedal, --power, --seated and --rider: apply to a bike cross-check (--bike)")
 
     engines = [e for e in _engines(args.engines) if e != "ode"] or ["mujoco"]
     checks = crosscheck_all(args.config, engines, args.tolerance_mm, overrides(args.set), args.duration)
@@ -84,8 +84,8 @@ def _crosscheck_roll(args) -> int:
 
     if args.speed is None:
         raise MtbmjError("--roll: give the speed with --speed M_PER_S")
-    if args.pedal is not None or args.power is not None or args.seated:
-        raise MtbmjError("--pedal, --power and --seated: apply to a bike cross-check (--bike)")
+    if args.pedal is not None or args.power is not None or args.seated or args.rider != "passive":
+        raise MtbmjError("--pedal, --power, --seated and --rider: apply to a bike cross-check (--bike)")
     if args.engines != "mujoco" or args.tolerance_mm != 0.1:
         raise MtbmjError("--engines and --tolerance-mm: apply to a drop cross-check; a rolling one compares MuJoCo "
                          "with the rolling reference at 0.02 mm and 1 %")
@@ -118,7 +118,7 @@ def _crosscheck_bike(args) -> int:
     args.drive = args.drive or "rider"
     pedal = pedal_option(args)
     check = crosscheck(args.config, args.roll, args.speed, args.duration, args.drive, pedal=pedal,
-                       seated=args.seated, overrides=bike_set or None)
+                       seated=args.seated, overrides=bike_set or None, rider=args.rider)
     print(check.line())
     return 0 if check.passed else 1
 
@@ -167,5 +167,9 @@ def add_parser(sub) -> None:
 
     add_pedal(p)
     p.add_argument("--seated", action="store_true", help="--bike: the rider seated, held rigid on the frame")
+    p.add_argument("--rider", choices=("passive", "active"), default="passive",
+                   help="--bike: the rigid rider (passive, default) or the articulated one on both sides (active: "
+                        "the reference with the rider's segments, pins and the same controller's torques; standing, "
+                        "not pedalling)")
     add_run_options(p)
     p.set_defaults(func=cmd_crosscheck)

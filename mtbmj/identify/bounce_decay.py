@@ -73,6 +73,7 @@ import numpy as np
 from mtbmj.identify.bounce import SMOOTH_S, SWING_FRACTION, interval95, noise_mm, slam_peak, turning_points
 
 MODELS = ("viscous", "friction", "both")
+NONNEGATIVE = ("friction_band_mm", "zeta")  # bounded at 0 in every fit; their intervals are cut there
 PACE = 1.6  # successive free extrema at most this many half periods apart
 HOLD_FACTOR = 2.0  # an extremum held this many times a free extremum's dwell (plus HOLD_PAD_S) is held
 HOLD_PAD_S = 0.020
@@ -290,8 +291,14 @@ class DecayFit:
         return float(self.theta[i]), float(math.sqrt(max(self.cov[i, i], 0.0)))
 
     def interval(self, name: str) -> list:
+        """The 95 % interval of ``name`` (value -/+ t sd), cut at 0 for a quantity that cannot be
+        negative (a friction band is a length, a damping ratio is not below 0): the fit itself is
+        bounded there, and an interval reaching past it would print a length below zero."""
         v, sd = self.value(name)
-        return [v - self.t95 * sd, v + self.t95 * sd]
+        low = v - self.t95 * sd
+        if name in NONNEGATIVE or name.startswith("zeta["):
+            low = max(0.0, low)
+        return [low, v + self.t95 * sd]
 
 
 def _predict(levels: np.ndarray, sigma: np.ndarray, zeta: float, d: float, xeq: float) -> np.ndarray:

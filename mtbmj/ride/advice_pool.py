@@ -12,7 +12,8 @@ variation) the mean weighted by each ride's length, packing the ratio of the poo
 balance the pooled sags' difference, the rider's acceleration the RMS over all. The uncertainty is
 the single ride's method over the segments of every ride together (``UNCERTAINTY_METHOD``: each
 ride's segments, resampled across rides), so more rides narrow it. One verdict, by the single ride's
-rules (``mtbmj.ride.advise.judge``), then the recommended adjuster searched further on every ride.
+rules (``mtbmj.ride.advise.judge``), every candidate that lowers the penalty searched on first on every ride
+(``mtbmj.ride.advise.search_on``).
 
 **Each ride's own verdict** (``PooledAdvice.rides``, one step, not searched) is kept beside the
 pooled one (``advice.json`` ``rides``, a table in ``advice.html``, a line each on the terminal).
@@ -40,7 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mtbmj.ride.advice_rules import AdviseError, checked_duration, counter, penalties
-from mtbmj.ride.advise import Advice, Run, prepare, run_jobs, search_on
+from mtbmj.ride.advise import Advice, Run, decide, prepare, run_jobs
 from mtbmj.ride.advise import judge as judge_one
 
 
@@ -139,34 +140,39 @@ def _said(rec: dict | None) -> dict:
 
 
 def judge(advice: PooledAdvice) -> None:
+    """:func:`judging` on the pooled advice's candidates as judged (each searched one where its search
+    ended, else the one-step ones), its recommendation and verdict set."""
+    advice.recommendation, advice.verdict = judging(advice, advice.judged or None)
+
+
+def judging(advice: PooledAdvice, candidates=None) -> tuple:
     """The pooled verdict (``mtbmj.ride.advise.judge`` on the pooled runs), made inconclusive where
     the rides contradict each other or it: one ride's change (its recommendation or a change after it)
     the other way on the same adjuster than another's or the pooled one's, or a ride's change where
     the pooled answer is "keep"."""
-    advice.recommendation, advice.verdict = judge_one(advice)
-    rec = advice.recommendation if advice.verdict.get("answer") == "change" else None
+    recommendation, verdict = judge_one(advice, candidates)
+    rec = recommendation if verdict.get("answer") == "change" else None
     each = [(r.ride, r.recommendation if r.verdict.get("answer") == "change" else None) for r in advice.rides]
     ways: dict = {}
     for name, said in [(name, _said(r)) for name, r in each] + [("pooled", _said(rec))]:
         for key, direction in said.items():
             ways.setdefault(key, {}).setdefault(direction, []).append(name)
     crossed = {k: w for k, w in ways.items() if len(w) > 1}
-    keep_crossed = advice.verdict.get("answer") == "keep" and any(r is not None for _, r in each)
+    keep_crossed = verdict.get("answer") == "keep" and any(r is not None for _, r in each)
     if not crossed and not keep_crossed:
-        return
+        return recommendation, verdict
     label = {a.name: a.label for a, *_ in advice.candidates}
     why = "; ".join(f"{label.get(k, k)}: " + ", ".join(f"{'raised' if d == 'up' else 'lowered'} by {' and '.join(n)}"
                                                         for d, n in w.items()) for k, w in crossed.items())
     if keep_crossed:
         why = (why + "; " if why else "") + "the pooled answer keeps, but " + ", ".join(
             f"{name} advises {r['label']} {'up' if r['direction'] == 'up' else 'down'}" for name, r in each if r)
-    best = advice.recommendation
-    advice.recommendation = None
-    advice.verdict = {"answer": "inconclusive", "why": f"the rides disagree ({why}): one setting should give one "
-                                                       f"answer; check that the rides share it, or record again"}
-    if best is not None:
-        advice.verdict["best_candidate"] = {k: best[k] for k in ("setting", "key", "section", "config_key", "label",
-                                                                  "direction", "from", "to", "changes")}
+    verdict = {"answer": "inconclusive", "why": f"the rides disagree ({why}): one setting should give one answer; "
+                                                f"check that the rides share it, or record again"}
+    if recommendation is not None:
+        verdict["best_candidate"] = {k: recommendation[k] for k in ("setting", "key", "section", "config_key", "label",
+                                                                     "direction", "from", "to", "changes")}
+    return None, verdict
 
 
 def pooled(records, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
@@ -220,9 +226,7 @@ def pooled(records, bike, overrides=None, duration: float | None = None, progres
             raise AdviseError(f"none of the {len(records)} rides can be advised on: "
                               + "; ".join(r["why"] for r in refused))
         advice = combine(each, refused)
-        judge(advice)
-        if search and advice.recommendation is not None:
-            search_on(advice, kept, pool)
+        decide(advice, kept, pool, search, judging)
     advice.wall_s = time.perf_counter() - start
     return advice
 
@@ -255,4 +259,4 @@ def combine(each: list, refused: list) -> PooledAdvice:
                         rides=each, refused=refused)
 
 
-__all__ = ["PooledAdvice", "combine", "judge", "pool_metrics", "pool_runs", "pooled"]
+__all__ = ["PooledAdvice", "combine", "judge", "judging", "pool_metrics", "pool_runs", "pooled"]

@@ -33,7 +33,8 @@ def figure(advice):
     shown = best if best is not None else (advice.verdict or {}).get("best_candidate")
     run = None
     if shown is not None:
-        run = next((r for a, d, v, r in ([advice.searched] if advice.searched else []) + list(advice.candidates)
+        run = next((r for a, d, v, r in ([advice.searched] if advice.searched else []) + list(advice.judged)
+                    + list(advice.candidates)
                     if a.name == shown["key"] and d == shown["direction"] and v == shown["to"]), None)
     for ax, end, rec, top in ((axes[0], "front", advice.record_front, advice.base.metrics["front"]["travel_mm"]),
                               (axes[1], "rear", advice.record_rear, advice.base.metrics["rear"]["travel_mm"])):

@@ -1,5 +1,8 @@
-"""The advice's line search (issue 52 item 2): from the best one-step candidate the verdict picks,
-further along the same adjuster, within what the part allows, until the penalty stops improving.
+"""The advice's line search (issue 52 item 2): from every one-step candidate that lowers the penalty
+by ``MIN_GAIN`` or more, further along the same adjuster, within what the part allows, until the
+penalty stops improving; the verdict then judges each searched candidate where it ended (a rebound
+four times too slow is not reached by one x0.8 step, and a spring's one step can look better than
+it until both are searched).
 
 **Steps** (:func:`next_value`): clicks and volume spacers by the candidate's own step (two clicks,
 one spacer), tyre pressure by its 2 psi; a spring, an air pressure or a damper coefficient by the
@@ -8,7 +11,8 @@ candidate's ratio again (x1.1, x0.8 ...), a coil spring rounded to the rates sol
 (``mtbmj.config.PLAUSIBLE``) or one the part refuses (``mtbmj.ride.advise.allowed``: a click outside
 the measured range) ends the search there.
 
-**Stop** (:func:`search`): two steps are simulated at a time (in parallel); the farther one is kept
+**Stop** (:func:`search`, :func:`search_many` for all of them at once): two steps of each search
+are simulated at a time (all in parallel); the farther one is kept
 only where it lowers the penalty by ``MIN_GAIN`` (the verdict's own threshold) or more below the
 best so far without a crash, and the search goes on from it; at most ``MAX_STEPS`` steps. The rule
 that drove the change is the one whose penalty fell most from the recorded setting to the answer.
@@ -43,35 +47,56 @@ def next_value(adj: Adjuster, value: float, first: float) -> float | None:
     return bounded_value(adj.key, nxt)
 
 
+def search_many(starts, run_values, allowed_value) -> list:
+    """Line searches along several adjusters at once, each as :func:`search` does it: ``starts`` a list
+    of ``(adjuster, first, run)`` (a one-step candidate and its run); each round asks every search
+    still going for its next two values, and ``run_values([(i, value), ...])`` simulates them all
+    together (runs in order; a refused one a ``ConfigError``); ``allowed_value(i, value)`` tells
+    whether search ``i``'s part allows a value. Returns each search's kept steps ``[(value, run)]``."""
+    state = [{"value": first, "best": run, "kept": [], "steps": 0, "done": False} for _, first, run in starts]
+    while True:
+        asks = []
+        for i, (adj, first, _) in enumerate(starts):
+            s = state[i]
+            if s["done"] or s["steps"] >= MAX_STEPS:
+                s["done"] = True
+                continue
+            batch, v = [], s["value"]
+            for _ in range(2):
+                v = next_value(adj, v, first)
+                if v is None or not allowed_value(i, v):
+                    break
+                batch.append(v)
+            if not batch:
+                s["done"] = True
+                continue
+            asks.append((i, batch))
+        if not asks:
+            break
+        runs = run_values([(i, v) for i, batch in asks for v in batch])
+        k = 0
+        for i, batch in asks:
+            s, got = state[i], runs[k:k + len(batch)]
+            k += len(batch)
+            s["steps"] += len(batch)
+            moved = False
+            for v, run in zip(batch, got):
+                if isinstance(run, Exception) or run.crash or not run.total <= s["best"].total - MIN_GAIN:
+                    break
+                s["value"], s["best"], moved = v, run, True
+                s["kept"].append((v, run))
+            if not moved or s["kept"][-1][0] != batch[-1]:
+                s["done"] = True
+    return [s["kept"] for s in state]
+
+
 def search(adj: Adjuster, first: float, best_run, base_total: float, run_values, allowed_value) -> list:
     """The line search from ``first`` (the one-step candidate, its run ``best_run``): ``run_values``
     simulates a list of values (runs in order; a refused one a ``ConfigError``), ``allowed_value``
     tells whether the part allows a value. Returns the steps ``[(value, run)]`` kept, the last the
     answer (empty where none improved on the candidate)."""
-    kept = []
-    value, best = first, best_run
-    steps = 0
-    while steps < MAX_STEPS:
-        batch = []
-        v = value
-        for _ in range(2):
-            v = next_value(adj, v, first)
-            if v is None or not allowed_value(v):
-                break
-            batch.append(v)
-        if not batch:
-            break
-        runs = run_values(batch)
-        steps += len(batch)
-        moved = False
-        for v, run in zip(batch, runs):
-            if isinstance(run, Exception) or run.crash or not run.total <= best.total - MIN_GAIN:
-                break
-            value, best, moved = v, run, True
-            kept.append((v, run))
-        if not moved or len(kept) and kept[-1][0] != batch[-1]:
-            break
-    return kept
+    return search_many([(adj, first, best_run)], lambda asks: run_values([v for _, v in asks]),
+                       lambda _, v: allowed_value(v))[0]
 
 
 def driving_rule(base_penalty: dict, penalty: dict) -> str:
@@ -79,4 +104,22 @@ def driving_rule(base_penalty: dict, penalty: dict) -> str:
     return max(base_penalty, key=lambda k: base_penalty[k] - penalty.get(k, 0.0))
 
 
-__all__ = ["MAX_STEPS", "driving_rule", "next_value", "search"]
+def annotate(advice, searched: dict) -> None:
+    """The recommendation's search (``search``: each step kept, ``driven_by``: the rule whose penalty
+    fell most) and, where it went past the one-step candidate, that said in its why."""
+    rec = advice.recommendation
+    kept = searched.get((rec["key"], rec["direction"]), [])
+    adj = next(a for a, d, v, r in advice.candidates if a.name == rec["key"] and d == rec["direction"])
+    rec["search"] = [{"to": v, "setting": adj.setting(v), "penalty": r.total} for v, r in kept]
+    run = kept[-1][1] if kept else next(r for a, d, v, r in advice.candidates
+                                        if a.name == rec["key"] and d == rec["direction"])
+    if kept:
+        advice.searched = (adj, rec["direction"], kept[-1][0], run)
+    rec["driven_by"] = driving_rule(advice.base.penalty, run.penalty)
+    if kept:
+        rec["why"] += (f"; found by searching on from the one-step candidate ({len(kept)} step(s) further), "
+                       f"driven by the {rec['driven_by'].replace('_', ' ')} rule")
+        advice.verdict = {**advice.verdict, "why": rec["why"]}
+
+
+__all__ = ["MAX_STEPS", "annotate", "driving_rule", "next_value", "search", "search_many"]

@@ -18,8 +18,9 @@ candidate is read in the bike file's units relative to it (``Adjuster.per_unit``
 No scale that carries an end is a refusal (:class:`RideNotDescribed`). Not the default: on a ride
 made in the tests with the bike file's own springs and the fork's rebound four times too slow, the
 calibration reads the fork at x0.97 (the model's rider sits 6.5 cm further back than the test's),
-and that 3 % turns the right answer (rebound lowered 2800 -> 734 N s/m, the true 700) into
-"inconclusive"; the front then reproduces at 7.8 mm RMS against 4.6 with the file's spring.
+and that 3 % turned the right answer (rebound lowered 2800 -> 734 N s/m, the true 700) into
+"inconclusive"; the front then reproduced at 7.8 mm RMS against 4.6 with the file's spring (measured
+before the made ride's wheelbase shortened and every candidate was searched; not measured since).
 
 **What is scored** (:func:`ride_metrics`, each end in % of its own travel): static sag (standing,
 the model's statics); dynamic sag (the mean travel); maximum travel and bottom-outs (within 3 mm
@@ -166,6 +167,7 @@ class Advice:
     record_t: np.ndarray = field(repr=False, default=None)  # ride time of record_front / record_rear (0 at its start)
     verdict: dict = field(default_factory=dict)  # {"answer": "change" / "inconclusive" / "keep", "why": ...}
     searched: tuple = None  # (Adjuster, direction, value, Run): the recommendation searched further
+    judged: list = field(default_factory=list)  # the candidates as judged: each searched one where it ended
     calibration: object = None  # mtbmj.ride.calibrate.Calibration: the springs ridden (None: the file's as they are)
 
     def tried(self) -> list:
@@ -365,16 +367,18 @@ def _beyond(rules, a: dict, b: dict, u: dict) -> list:
             if m in a and m in b and abs(b[m] - a[m]) > u.get(m, math.inf)]
 
 
-def judge(advice) -> tuple[dict | None, dict]:
+def judge(advice, candidates=None) -> tuple[dict | None, dict]:
     """(the recommendation or None, the verdict ``{"answer", "why"}``): a change is advised only where
     it lowers the penalty by ``MIN_GAIN`` or more and a metric of a rule it improves moves by more
     than that change's uncertainty (the best such candidate, grip and comfort breaking ties);
     "keep" only where every candidate is predicted worse beyond its uncertainty (a crash is worse);
-    otherwise "inconclusive", naming why."""
+    otherwise "inconclusive", naming why. ``candidates``: those judged (default the one-step ones;
+    :func:`advise` passes each searched candidate where its search ended)."""
     base, measured = advice.base, advice.measured
+    candidates = advice.candidates if candidates is None else candidates
     a = flat_metrics(base.metrics)
     good, worse, near = [], 0, None
-    for adj, direction, value, run in advice.candidates:
+    for adj, direction, value, run in candidates:
         if run.crash:
             worse += 1
             continue
@@ -390,7 +394,7 @@ def judge(advice) -> tuple[dict | None, dict]:
             worse += 1
         elif gain >= MIN_GAIN and (near is None or score > near[0]):
             near = (score, adj, direction, value, run, improved, u)
-    n = len(advice.candidates)
+    n = len(candidates)
     if good:  # the balance of the ends first: a change that mends it before any other
         pick = max([g for g in good if "balance" in g[5] and _beyond(["balance"], a, flat_metrics(g[4].metrics), g[6])]
                    or good, key=lambda g: g[0])
@@ -457,8 +461,9 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     ``calibrated`` (``--calibrate``): the bike's springs calibrated on the ride first
     (:mod:`mtbmj.ride.calibrate`), every run (the recorded setting, each candidate, each try) on the
     calibrated bike, the candidates read in the file's units relative to it; False (the default): the
-    bike file as it is. ``search``: the recommended adjuster searched further
-    (:mod:`mtbmj.ride.advice_search`). Several rides of one setting: :func:`mtbmj.ride.advice_pool.pooled`."""
+    bike file as it is. ``search``: every candidate that lowers the penalty searched further along its
+    adjuster before the verdict (:mod:`mtbmj.ride.advice_search`). Several rides of one setting:
+    :func:`mtbmj.ride.advice_pool.pooled`."""
     import time
 
     from mtbmj.bike import spec as spec_mod
@@ -481,9 +486,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
         # tried one's stay the user's error)
         runs = run_jobs(jobs, pool, ride.refusable, counter(progress, len(jobs)))
         advice = ride.assemble(runs)
-        advice.recommendation, advice.verdict = judge(advice)
-        if search and advice.recommendation is not None:
-            search_on(advice, [ride], pool)
+        decide(advice, [ride], pool, search)
     advice.wall_s = time.perf_counter() - start
     return advice
 
@@ -626,47 +629,49 @@ def run_jobs(jobs, pool, refusable, step) -> list:
     return runs
 
 
-def search_on(advice, rides, pool) -> None:
-    """The recommendation searched further along its adjuster (:mod:`mtbmj.ride.advice_search`) on
-    every ride of ``rides`` (:class:`Prepared`; the pooled advice's runs pooled by ``advice.pooled_run``):
-    where a farther value improves, the recommendation becomes it (``search``: each step kept)."""
+def search_on(advice, rides, pool) -> dict:
+    """Every candidate that lowers the penalty by ``MIN_GAIN`` or more, searched further along its
+    adjuster (:func:`mtbmj.ride.advice_search.search_many`, all in one pool) on every ride of
+    ``rides`` (:class:`Prepared`; a pooled advice's runs pooled by ``advice.pooled_run``):
+    ``{(adjuster name, direction): [(value, run), ...]}``, the steps each search kept."""
     from mtbmj.ride import advice_search
 
-    rec = advice.recommendation
-    adj, d, first, run = next((a, d, v, r) for a, d, v, r in advice.candidates
-                              if a.name == rec["key"] and d == rec["direction"])
-    own = [next(a for a in ride.adj if a.name == adj.name) for ride in rides]  # each ride's (its calibration's)
+    base = advice.base
+    starts = [(a, d, v, r) for a, d, v, r in advice.candidates if not r.crash and base.total - r.total >= MIN_GAIN]
+    if not starts:
+        return {}
+    own = [[next(x for x in ride.adj if x.name == a.name) for ride in rides] for a, *_ in starts]  # each ride's
 
-    def on(a, v):  # the value v of adj as ride's adjuster a has it (the same where its calibration is)
-        return v if a.per_unit == adj.per_unit else v / adj.per_unit * a.per_unit
+    def on(a, x, v):  # the value v of adjuster a as a ride's own x has it (the same where no calibration differs)
+        return v if x.per_unit == a.per_unit else v / a.per_unit * x.per_unit
 
-    def run_values(values):
-        jobs = [ride.job(ride.merged(a.overrides(on(a, v))), f"{adj.label} {v:g}")
-                for v in values for ride, a in zip(rides, own)]
-        runs = run_jobs(jobs, pool, lambda i: True, lambda: None)
-        n = len(rides)
-        return [advice.pooled_run(runs[i * n:(i + 1) * n]) for i in range(len(values))]
+    def run_values(asks):
+        jobs = [ride.job(ride.merged(x.overrides(on(starts[i][0], x, v))), f"{starts[i][0].label} {v:g}")
+                for i, v in asks for ride, x in zip(rides, own[i])]
+        runs, n = run_jobs(jobs, pool, lambda i: True, lambda: None), len(rides)
+        parts = [runs[k * n:(k + 1) * n] for k in range(len(asks))]
+        return [next((r for r in part if isinstance(r, Exception)), None) or advice.pooled_run(part) for part in parts]
 
-    def allowed_value(v):
-        return all(allowed(ride.bike, [(a, d, on(a, v))], ride.merged)[0]
-                   for ride, a in zip(rides, own))
+    def allowed_value(i, v):
+        a, d = starts[i][0], starts[i][1]
+        return all(allowed(ride.bike, [(x, d, on(a, x, v))], ride.merged)[0] for ride, x in zip(rides, own[i]))
 
-    kept = advice_search.search(adj, first, run, advice.base.total, run_values, allowed_value)
-    rec["search"] = [{"to": v, "setting": adj.setting(v), "penalty": r.total} for v, r in kept]
-    if kept:
-        v, r = kept[-1]
-        advice.searched = (adj, d, v, r)
-        u = advice.change_uncertainty(r)
-        st = adj.setting(v)
-        rec.update({"setting": st, "to": v, "penalty_to": r.total, "changes": _changes(advice.base, r, u, advice.measured),
-                    "improves": [k for k in advice.base.penalty if r.penalty[k] < advice.base.penalty[k] - 1e-9]})
-        rec["why"] = (f"{'raise' if d == 'up' else 'lower'} the {adj.label} from {st['from']:g} to {st['to']:g} "
-                      f"{st['unit']} ({st['key']}), found by searching on from the one-step candidate "
-                      f"({len(kept)} step(s) further): the penalty falls {advice.base.total:.2f} -> {r.total:.2f}")
-    rec["driven_by"] = advice_search.driving_rule(advice.base.penalty, (advice.searched or (0, 0, 0, run))[3].penalty)
-    if kept:
-        rec["why"] += f"; driven by the {rec['driven_by'].replace('_', ' ')} rule"
-        advice.verdict = {**advice.verdict, "why": rec["why"]}
+    kept = advice_search.search_many([(a, v, r) for a, d, v, r in starts], run_values, allowed_value)
+    return {(a.name, d): k for (a, d, _, _), k in zip(starts, kept)}
+
+
+def decide(advice, rides, pool, search: bool = True, judging=None) -> None:
+    """The verdict of ``advice`` (``judging(advice, candidates)``, default :func:`judge`): each
+    candidate that lowers the penalty searched on first (:func:`search_on`), the verdict judging each
+    where its search ended (``Advice.judged``), the recommendation's search annotated."""
+    searched = search_on(advice, rides, pool) if search else {}
+    advice.judged = [(a, d, *searched[(a.name, d)][-1]) if searched.get((a.name, d)) else (a, d, v, r)
+                     for a, d, v, r in advice.candidates]
+    advice.recommendation, advice.verdict = (judging or judge)(advice, advice.judged)
+    if advice.recommendation is not None and search:
+        from mtbmj.ride.advice_search import annotate
+
+        annotate(advice, searched)
 
 
 def predict(record, bike, tries, overrides=None, duration: float | None = None, progress=None,

@@ -9,8 +9,8 @@ quarter-car inverse finds (high-passed at 1 Hz: each end's suspension delays its
 its own, the grounds carry none), or where those give no speed in that window, the ends' travel
 velocities (high-passed at 5 Hz), gives v = wheelbase / lag, the wheelbase at the ride's sag
 (:func:`wheelbase_at`, the median travel of each end). A window's rejections and standard error are
-that module's; the speed between the accepted windows' centres is linear (held past the first and
-last), the distance along the ride its integral, the rear's lag wheelbase / v(t). A version-2
+that module's; the windows start every half window (overlapping), the speed between the accepted windows' centres
+is linear (held past the first and last), a sample in no accepted window left out of the checks, the distance along the ride its integral, the rear's lag wheelbase / v(t). A version-2
 record (5 kHz of coarse encoder steps) is low-passed at ``V2_LOWPASS_HZ`` and read at ``RATE_HZ``. A
 ride with no window that gives a speed, or whose windows with one lie wholly where nothing can be
 checked, is refused: no speed estimate, one line, nothing written.
@@ -210,7 +210,7 @@ class Reconstruction:
                 f"baselines: delayed fork {c['baseline_delayed_fork_rms_mm']:.1f}, rear's mean "
                 f"{c['baseline_rear_mean_rms_mm']:.1f} mm), "
                 f"histograms {c['rear_histogram_distance_percent']:.0f} % apart; {len(self.jumps)} flight(s) bridged, "
-                f"{len(self.unaligned or [])} window(s) without a speed left out ({c['samples_checked_percent']:.0f} % "
+                f"{len(self.unaligned or [])} stretch(es) without a speed left out ({c['samples_checked_percent']:.0f} % "
                 f"of the ride checked)")
 
     def terrain_csv(self) -> bytes:
@@ -333,16 +333,14 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     bad[:int(round(float(np.max(lags)) / dt)) + pad] = True  # the rear's first wheelbase has no terrain from the front
     bad[:int(round(2.0 / (HIGHPASS_HZ * 2 * math.pi) / dt))] = True  # the filters' start
     step = int(round(WINDOW_S / dt))
-    unaligned = []
+    covered = np.zeros(t.size, bool)  # within a window that gave a speed (the windows overlap)
     for start, v_window, _ in speed["windows"]:
-        if v_window is None:  # standing, or the ends do not align there: no terrain the rear can be checked on
+        if v_window is not None:
             a = int(round(start / dt))
-            bad[a: a + step] = True
-            unaligned.append((float(t[min(a, t.size - 1)]), float(t[min(a + step, t.size - 1)])))
-    if speed["windows"]:  # past the last window
-        last = int(round(speed["windows"][-1][0] / dt)) + step
-        if last < t.size:
-            bad[last:] = True
+            covered[a: a + step] = True
+    # standing, or the ends do not align there, or past the last window: no terrain the rear can be checked on
+    unaligned = [(float(t[a]), float(t[min(b, t.size - 1)])) for a, b in runs(~covered)]
+    bad |= ~covered
     if bad.all() or not np.ptp(rear[~bad]) > 0.0:
         # the windows that gave a speed lie wholly in jumps, the first wheelbase or the filters' start
         n = sum(1 for _, s, _ in speed["windows"] if s is not None)

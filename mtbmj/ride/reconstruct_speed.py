@@ -3,7 +3,8 @@ mtbmj/ride/reconstruct.py's module doc says how it is used).
 
 The rear wheel meets what the front met a wheelbase later: the lag that best aligns two series of the
 ends (normalised cross-correlation, the peak refined by a parabola) gives v = wheelbase / lag per
-window of ``WINDOW_S`` seconds. A window gives no speed, and says why, where its correlation peak is
+window of ``WINDOW_S`` seconds, a window starting every ``WINDOW_HOP`` of one (overlapping: a speed
+every 2.5 s, the profile linear between them). A window gives no speed, and says why, where its correlation peak is
 below ``MIN_CORRELATION``, has a second peak within ``AMBIGUOUS`` of it, lies at either end of the lags
 searched or has its lobe reach an end, where its ``SUB_WINDOWS`` parts do not find their lags within
 the best peak or its speed's standard error (from those parts' lags) exceeds ``MAX_SPEED_SD`` of it,
@@ -19,6 +20,7 @@ import numpy as np
 from mtbmj.errors import MtbmjError
 
 WINDOW_S = 5.0  # seconds per window of the speed estimate
+WINDOW_HOP = 0.5  # a window starts every this share of a window (they overlap): the profile's points
 MIN_CORRELATION = 0.3  # a window whose best normalised correlation is below this gives no speed
 LAG_HIGHPASS_HZ = 5.0  # travel records high-passed before the lag is sought (the rider's slow motions out)
 AMBIGUOUS = 0.9  # a second correlation peak this close to the best leaves the lag undecided
@@ -149,7 +151,8 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
         moving = lambda a: (np.ptp(tf[a:a + step]) >= STILL_MM  # noqa: E731
                             and np.ptp(tr[a:a + step + k_hi]) >= STILL_MM)
     standing = 0
-    for start in range(0, max(vf.size - k_hi - step // 2, 1), step):
+    hop = max(1, int(round(WINDOW_HOP * step)))
+    for start in range(0, max(vf.size - k_hi - step // 2, 1), hop):
         if moving is not None and not moving(start):
             windows.append((start * dt, None, 0.0))  # standing: nothing the terrain did to align
             sds.append(None)
@@ -218,4 +221,4 @@ def speed_from_either(t, first, second, wheelbase: float, names=("first", "secon
     return _profile(windows, sds, whys, wheelbase, base["window_s"], sources)
 
 
-__all__ = ["WINDOW_S", "SPEED_RANGE", "ReconstructError", "min_seconds", "check_length", "speed_from_lag", "speed_from_either"]
+__all__ = ["WINDOW_S", "WINDOW_HOP", "SPEED_RANGE", "ReconstructError", "min_seconds", "check_length", "speed_from_lag", "speed_from_either"]
