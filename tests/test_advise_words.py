@@ -126,3 +126,71 @@ def test_the_predicted_change_table_is_never_empty_without_saying_why():
     none = _advice([])
     body = tables(none.html(b"png"))["changes"]
     assert "no candidate was simulated" in body
+
+
+def _two_ends(cands, record_off=0.02):
+    """An Advice by hand whose ends are out of balance: the fork at 38 % dynamic sag, the rear at 20 %
+    (18 points apart, the rule's window 10); ``cands``: (adjuster, value, front series shift in % of
+    travel, front static sag %) each."""
+    wave = 50.0 + 15.0 * np.sin(2 * np.pi * 1.3 * T)
+    rear = 0.5 * wave
+
+    def run(shift, static):
+        front = wave - shift / 100 * 130.0
+        m = advise.ride_metrics(T, front, rear, 130.0, 125.0, static=(static / 100 * 130.0, 35.0))
+        return advise.Run("r", {}, m, advise.penalties(m), front, rear, None, T.copy())
+
+    measured = advise.ride_metrics(T, wave - record_off * 130.0, rear, 130.0, 125.0)
+    a = advise.Advice("ride", "bike", {"speed_m_per_s": 6.0, "checks": {
+        "front_reproduced_rms_mm": 0.5, "rear_predicted_rms_mm": 6.0, "baseline_delayed_fork_rms_mm": 12.0,
+        "baseline_rear_mean_rms_mm": 15.0, "beat_margin_percent": 40.0, "rear_predicted_rms_percent_of_used": 20.0,
+        "samples_checked_percent": 90.0}}, measured, run(0.0, 40.0),
+        [(adj, "up", v, run(shift, static)) for adj, v, shift, static in cands], None, wave - record_off * 130.0, rear,
+        record_t=T.copy())
+    a.recommendation, a.verdict = advise.judge(a)
+    return a
+
+
+SPRING = advise.Adjuster("front", "fork.set", "fork.spring.rate_N_per_mm", 5.0, 4.5, 5.5, "fork spring rate",
+                         unit="N/mm")
+REBOUND = advise.Adjuster("front", "fork.set", "fork.damper.rebound_N_s_per_m", 700.0, 560.0, 875.0,
+                          "fork rebound damping", unit="N s/m")
+
+
+def test_the_balance_of_the_ends_is_recommended_before_the_rest():
+    """Two changes advised: the rebound taking the fork's static sag 40 -> 22 % (penalty 3 lower, the
+    ends as unbalanced as before) and the spring taking it to 30 % and the fork 10 points higher (the
+    balance mended: 1.8 lower). The spring first, the balance before the rest; the rebound after it."""
+    a = _two_ends([(SPRING, 5.5, 10.0, 30.0), (REBOUND, 875.0, 0.0, 22.0)])
+    assert a.verdict["answer"] == "change"
+    rec = a.recommendation
+    assert rec["key"] == "fork:fork.spring.rate_N_per_mm" and "balance" in rec["improves"]
+    assert [t["key"] for t in rec["then"]] == ["fork:fork.damper.rebound_N_s_per_m"]
+    assert a.then() == ("Then, one at a time, recording again after each: raise the fork rebound damping from 700 "
+                        "to 875 N s/m")
+    html = a.html(b"png")
+    assert html.index('id="recommended"') < html.index('id="then"') < html.index("<table")
+    # without a change that mends the balance, the best one: the rebound, nothing after it of the same adjuster
+    b = _two_ends([(SPRING, 5.5, 0.0, 30.0), (REBOUND, 875.0, 0.0, 22.0)])
+    assert b.recommendation["key"] == "fork:fork.damper.rebound_N_s_per_m"
+    assert [t["key"] for t in b.recommendation["then"]] == ["fork:fork.spring.rate_N_per_mm"]
+
+
+def test_the_report_says_in_words_how_well_the_model_matched_the_ride():
+    """The rear's RMS beside its two baselines and how far below the better (6 mm against 12 and 15:
+    50 %), each end's mean travel, maximum and bottom-outs simulated beside the ride's, in the
+    report under its heading, before the per-metric table."""
+    from mtbmj.ride import advice_report
+
+    a = _two_ends([(SPRING, 5.5, 10.0, 30.0)])
+    words = advice_report.matched(a)
+    assert words.startswith("The reconstruction predicted the rear wheel's travel within 6.0 mm RMS, against 12.0 mm "
+                            "for a delayed copy of the fork and 15.0 mm for the rear's mean travel: 50 % below the "
+                            "better of the two (the check asks 40 %)")
+    sim, rode = a.base.metrics["front"]["dynamic_sag_percent"], a.measured["front"]["dynamic_sag_percent"]
+    assert round(sim - rode) == 2  # the record 2 % of travel below the model
+    assert (f"the model's fork sat at {sim:.0f} % of its travel on average where the ride's sat at {rode:.0f} %"
+            in words)
+    html = a.html(b"png")
+    i = html.index("How well the model matched the ride")
+    assert i < html.index('<p id="matched">') < html.index('<table id="match">')

@@ -206,9 +206,9 @@ class Reference:
         self.lev = b.spec.leverage
         self.caliper = b.spec.caliper_ratio  # a four-bar's rear caliper: its link's turn per the arm's
         self.x0, self.z0 = b.x0, b.z0
-        from mtbmj.rolling.tire import StraightStretches
+        from mtbmj.rolling.tire import stretches_of
 
-        self.straight = StraightStretches(p.terrain, self.front_tire.radius + self.front_tire.margin)
+        self.straight = stretches_of(p.terrain, self.front_tire.radius + self.front_tire.margin)
         self.chain = b.spec.drive.get("chain_m")  # (chainring, cog) pitch radii, m; None: a hub drive
         # the held coordinates (the run's ``lock``: ``mtbmj.bike.model.LOCKS``' joints) and the free ones
         self.held = sorted({JOINTS.index(j) for key in p.lock for j in LOCKS[key]})

@@ -1,5 +1,6 @@
-"""``mtbmj advise RIDE --bike BIKE``: candidate settings simulated over the ride's reconstructed
-terrain, scored on what riders read, and the change recommended (``mtbmj.ride.advise``)."""
+"""``mtbmj advise RIDE [RIDE ...] --bike BIKE``: candidate settings simulated over the ride's reconstructed
+terrain, scored on what riders read, and the change recommended (``mtbmj.ride.advise``); several rides
+of one setting pooled into one advice (``mtbmj.ride.advice_pool``)."""
 from __future__ import annotations
 
 from mtbmj.cli.common import add_out
@@ -11,7 +12,7 @@ def cmd_advise(args) -> int:
     from mtbmj.cli.common import Progress
     from mtbmj.cli.telemetry import ride_record
     from mtbmj.config import parse_assignment
-    from mtbmj.ride import advise
+    from mtbmj.ride import advice_report, advise
 
     over = bike_overrides(args)
     if args.rider_kg is not None:
@@ -21,11 +22,23 @@ def cmd_advise(args) -> int:
     tries = []  # checked before any work: a bad file, key or value is one line and nothing written
     if args.try_file or sets:
         tries = [advise.trial(bike, over or None, other, sets) for other in (args.try_file or [None])]
-    record = ride_record(args.ride, args, bike)
-    result = Progress("advise").around(
-        lambda progress: advise.advise(record, bike, over or None, args.duration, progress, args.workers,
-                                       tries=tries, calibrated=args.calibrate))
+    # every ride read (and a bad file refused in one line) before anything is simulated
+    records = [ride_record(path, args, bike) for path in args.ride]
+    if len(records) == 1:
+        result = Progress("advise").around(
+            lambda progress: advise.advise(records[0], bike, over or None, args.duration, progress, args.workers,
+                                           tries=tries, calibrated=args.calibrate))
+    else:
+        from mtbmj.ride import advice_pool
+
+        result = Progress("advise").around(
+            lambda progress: advice_pool.pooled(records, bike, over or None, args.duration, progress, args.workers,
+                                                tries=tries, calibrated=args.calibrate))
     written = result.write(args.out)
+    for r in getattr(result, "refused", ()):
+        print(f"left out of the pool: {r['why']}")
+    for r in getattr(result, "rides", ()):
+        print(f"{r.ride} alone: {r.headline()}")
     if result.calibration is not None:
         print(result.calibration.line())
     checks = result.reconstruction["checks"]
@@ -33,11 +46,15 @@ def cmd_advise(args) -> int:
           f"{checks['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted within "
           f"{checks['rear_predicted_rms_percent_of_used']:.0f} % of the travel used")
     for tr in result.tried():
-        print(f"tried {tr['label']}: " + "; ".join(f"{k} {c['from']:.3g} -> {c['to']:.3g} (expected on the ride "
-                                                     f"{c['expected']:.3g} +- {c['uncertainty'] or 0:.2g})"
+        print(f"tried {tr['label']}: " + "; ".join(f"{k} {c['from']:.3g} -> {c['to']:.3g} {advise.metric_unit(k)} "
+                                                     f"(expected on the ride {c['expected']:.3g} +- "
+                                                     f"{c['uncertainty'] or 0:.2g})"
                                                      for k, c in tr["changes"].items() if k in advise.HEADLINE)
               + (f"; {tr['crash']}" if tr["crash"] else ""))
+    print(advice_report.matched(result))
     print(result.headline())
+    if result.then():
+        print(result.then())
     print(f"{result.line()}; {len(result.candidates)} candidates simulated in {result.wall_s:.0f} s; "
           f"wrote {', '.join(p.name for p in written)} to {args.out}")
     return 0
@@ -48,8 +65,14 @@ def add_parser(sub) -> None:
     from mtbmj.cli.telemetry import add_ride, add_sensor_spans
 
     p = sub.add_parser("advise", help="setup advice: candidate settings simulated over the ride's reconstructed "
-                                      "terrain, and the change recommended")
-    add_ride(p, "the recorded bike with the settings it was ridden with (preset or bike file)")
+                                      "terrain, and the change recommended (several rides of one setting: pooled)",
+                       description="Setup advice from a ride: candidate settings simulated over its reconstructed "
+                                   "terrain, the one change recommended first (the balance of the ends before the "
+                                   "rest), in clicks, lb/in and psi as the part is set. Several RIDEs of one bike at "
+                                   "one setting are pooled into one advice (each ride's own answer beside it; a ride "
+                                   "refused is left out and named; that the rides share the setting is your word: it "
+                                   "cannot be told from the files). A progress counter shows on a terminal only.")
+    add_ride(p, "the recorded bike with the settings it was ridden with (preset or bike file)", many=True)
     p.add_argument("--rider-kg", type=float, metavar="KG", help="the whole rider's mass (rider.mass_kg)")
     add_bike_sets(p)  # the settings as ridden, where they differ from the bike file
     p.add_argument("--duration", type=float, metavar="S", help="advise on the ride's first S seconds only")

@@ -67,11 +67,13 @@ class Progress:
         self.enabled = enabled and self.tty
         self.start = time.perf_counter()
 
-    def __call__(self, fraction: float) -> None:
+    def __call__(self, fraction: float, note: str = "") -> None:
+        """Redraw the bar at ``fraction`` (0-1), ``note`` after it ("run 3/12")."""
         if not self.enabled:
             return
         bar = "#" * int(fraction * 30)
-        print(f"\r{self.label} [{bar:<30}] {fraction * 100:5.1f}%", end="", file=sys.stderr, flush=True)
+        print(f"\r{self.label} [{bar:<30}] {fraction * 100:5.1f}%{' ' + note if note else ''}", end="",
+              file=sys.stderr, flush=True)
 
     def done(self) -> None:
         if self.enabled:

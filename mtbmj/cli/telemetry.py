@@ -45,10 +45,12 @@ def add_parser(subparsers):
     return p
 
 
-def add_ride(p, bike_help: str) -> None:
-    """The recorded ride (a positional RIDE) and its --bike, as :func:`ride_record` reads them."""
-    p.add_argument("ride", type=Path, metavar="RIDE",
-                   help="SST v3 or v2 recording or a travel CSV with both ends, or 'example' (the shipped 00649.SST)")
+def add_ride(p, bike_help: str, many: bool = False) -> None:
+    """The recorded ride (a positional RIDE; ``many``: one or more, a list) and its --bike, as
+    :func:`ride_record` reads them."""
+    p.add_argument("ride", type=Path, metavar="RIDE", nargs="+" if many else None,
+                   help="SST v3 or v2 recording or a travel CSV with both ends, or 'example' (the shipped 00649.SST)"
+                        + ("; several rides of one bike at one setting are pooled into one advice" if many else ""))
     p.add_argument("--bike", required=True, metavar="BIKE", help=bike_help)
 
 

@@ -218,15 +218,14 @@ def bottom_out_indices(travel_mm, travel_max_mm: float, margin_mm: float = 3.0, 
         raise MetricsError("margin_mm and release_mm must not be negative")
     enter = x >= top - margin_mm
     leave = x < top - margin_mm - release_mm
-    starts = []
-    inside = False
-    for i in np.flatnonzero(enter | leave):  # only the samples where the state can change
-        if not inside and enter[i]:
-            starts.append(i)
-            inside = True
-        elif inside and leave[i]:
-            inside = False
-    return np.asarray(starts, dtype=int)
+    # only the samples where the state can change (enter and leave exclude each other): an event
+    # starts at an entering sample whose last such sample before it left (or that is the first)
+    idx = np.flatnonzero(enter | leave)
+    if idx.size == 0:
+        return idx.astype(int)
+    entering = enter[idx]
+    first = entering & np.concatenate(([True], ~entering[:-1]))
+    return idx[first].astype(int)
 
 
 def bottom_outs(travel_mm, travel_max_mm: float, margin_mm: float = 3.0, release_mm: float = 5.0) -> int:

@@ -19,6 +19,78 @@ def metric_unit(metric: str) -> str:
             "balance_points": "points of travel %"}.get(leaf, "")
 
 
+LEGEND_ROOM = 1.45  # the histograms' height over their tallest bar: the legend sits above the bars
+
+
+def figure(advice):
+    """Each end's travel histogram: the record, the recorded setting and the recommended (or best) one simulated."""
+    import numpy as np
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(11, 4.8), layout="constrained")
+    axes = fig.subplots(1, 2)
+    best = advice.recommendation
+    shown = best if best is not None else (advice.verdict or {}).get("best_candidate")
+    run = None
+    if shown is not None:
+        run = next((r for a, d, v, r in ([advice.searched] if advice.searched else []) + list(advice.judged)
+                    + list(advice.candidates)
+                    if a.name == shown["key"] and d == shown["direction"] and v == shown["to"]), None)
+    for ax, end, rec, top in ((axes[0], "front", advice.record_front, advice.base.metrics["front"]["travel_mm"]),
+                              (axes[1], "rear", advice.record_rear, advice.base.metrics["rear"]["travel_mm"])):
+        edges = np.linspace(0, 100, 21)
+        series = [("recorded ride", 100 * np.asarray(rec) / top, "0.5"),
+                  ("simulated, recorded setting", 100 * advice.base.front_mm / top if end == "front"
+                   else 100 * advice.base.rear_mm / top, "C0")]
+        if run is not None:
+            st = shown.get("setting", {"from": shown["from"], "to": shown["to"], "unit": ""})
+            series.append((f"simulated, {shown['label']} {st['from']:g} -> {st['to']:g}"
+                           f"{' ' + st['unit'] if st['unit'] else ''}{'' if best is not None else ' (not advised)'}",
+                           100 * (run.front_mm if end == "front" else run.rear_mm) / top, "C3"))
+        tallest = 0.0
+        for label, x, color in series:
+            h, _ = np.histogram(np.clip(x, 0, 100), bins=edges)
+            share = 100 * h / max(h.sum(), 1)
+            tallest = max(tallest, float(share.max()))
+            ax.stairs(share, edges, label=label, color=color, linewidth=1.6)
+        # room above the tallest bar for the legend, so no bar is hidden behind it
+        ax.set_ylim(0.0, LEGEND_ROOM * max(tallest, 1.0))
+        ax.set(xlim=(0, 100), xlabel=f"{'fork' if end == 'front' else 'rear wheel'} travel (% of {top:.0f} mm)",
+               ylabel="time (%)", title=f"{end}: travel histogram")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper right")
+    if best is None:
+        title = (advice.verdict or {}).get("answer", "inconclusive") + ": no change advised"
+    else:
+        st = best.get("setting", {"from": best["from"], "to": best["to"], "unit": ""})
+        title = f"recommended: {best['label']} {st['from']:g} -> {st['to']:g}{' ' + st['unit'] if st['unit'] else ''}"
+    fig.suptitle(f"{advice.ride} on {advice.bike}: " + title)
+    return fig
+
+
+def matched(advice) -> str:
+    """How well the model matched the ride, in words: the reconstruction's rear against its naive
+    baselines (a pooled advice: the worst ride's numbers), and the recorded setting simulated beside
+    the ride recorded (dynamic sag, maximum travel, bottom-outs per end)."""
+    c = advice.reconstruction.get("checks", {})
+    out = []
+    if "baseline_delayed_fork_rms_mm" in c:
+        rms, fork, mean = c["rear_predicted_rms_mm"], c["baseline_delayed_fork_rms_mm"], c["baseline_rear_mean_rms_mm"]
+        better = min(fork, mean)
+        out.append(f"The reconstruction predicted the rear wheel's travel within {rms:.1f} mm RMS, against "
+                   f"{fork:.1f} mm for a delayed copy of the fork and {mean:.1f} mm for the rear's mean travel: "
+                   f"{100.0 * (1.0 - rms / better):.0f} % below the better of the two (the check asks "
+                   f"{c.get('beat_margin_percent', 40.0):g} %)")
+    sim, rode = advice.base.metrics, advice.measured
+    for end, part in (("front", "fork"), ("rear", "rear wheel")):
+        s, r = sim[end], rode[end]
+        out.append(f"at the recorded setting the model's {part} sat at {s['dynamic_sag_percent']:.0f} % of its travel "
+                   f"on average where the ride's sat at {r['dynamic_sag_percent']:.0f} %, reached "
+                   f"{s['max_travel_percent']:.0f} % (the ride {r['max_travel_percent']:.0f} %) and bottomed out "
+                   f"{s['bottom_outs']} times (the ride {r['bottom_outs']})")
+    return "; ".join(out) + "."
+
+
 def num(x, spec: str = ".3g") -> str:
     return "" if x is None else format(x, spec)
 
@@ -89,6 +161,22 @@ def html(advice, png: bytes) -> str:
                        f"<th>scale (no unit)</th></tr>{rows_c}</table>")
     else:
         calibration = "<p>Not calibrated: the bike file's springs as they are (advise --calibrate reads them from the ride).</p>"
+    then = advice.then()
+    then = f'<p id="then">{esc.escape(then)}</p>' if then else ""
+    pooled = ""
+    if "rides" in d:  # several rides pooled (mtbmj.ride.advice_pool): each one's own verdict, the rides left out
+        def own(e):
+            st = (e["change"] or {}).get("setting")
+            return "" if st is None else f"{st['part']} {st['adjuster']} {st['from']:g} -&gt; {st['to']:g} {esc.escape(st['unit'])}".rstrip()
+        rows_r = "".join(f"<tr><td>{esc.escape(e['ride'])}</td><td>{e['seconds']:.1f}</td><td>{esc.escape(e['answer'])}"
+                         f"</td><td>{own(e)}</td></tr>" for e in d["rides"])
+        pooled = (f'<h2>The rides pooled</h2><table id="rides"><tr><th>ride</th><th>length (s)</th><th>its own '
+                  f'answer (one step, no unit)</th><th>its own change (in the part\'s unit)</th></tr>{rows_r}</table>')
+        if d["refused"]:
+            pooled += ('<h2>Left out of the pool</h2><ul id="refused">'
+                       + "".join(f"<li>{esc.escape(r['why'] if r['why'].startswith(r['ride']) else r['ride'] + ': ' + r['why'])}"
+                                 f"</li>" for r in d["refused"])
+                       + "</ul>")
     img = base64.b64encode(png).decode()
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>mtbmj advice: {esc.escape(advice.ride)}</title>
@@ -96,7 +184,7 @@ def html(advice, png: bytes) -> str:
 td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{text-align:left}}</style></head>
 <body><h1>Setup advice: {esc.escape(advice.ride)} on {esc.escape(advice.bike)}</h1>
 <p id="recommended"><b>{esc.escape(advice.headline())}</b></p>
-<p id="line">{esc.escape(advice.line())}</p>
+{then}<p id="line">{esc.escape(advice.line())}</p>
 <p>Reconstruction check: front reproduced within {rc['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted
 {rc['rear_predicted_rms_mm']:.1f} mm RMS ({rc['rear_predicted_rms_percent_of_used']:.0f} % of the travel used),
 {rc['samples_checked_percent']:.0f} % of the ride checked; speed {d['reconstruction']['speed_m_per_s']:.2f} m/s.</p>
@@ -106,6 +194,7 @@ td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{t
 <table id="changes">{head.format('after')}
 {''.join(rows)}</table>
 <h2>How well the model matched the ride (recorded setting)</h2>
+<p id="matched">{esc.escape(matched(advice))}</p>
 <p>Uncertainty: {esc.escape(d['uncertainty_method'])}.</p>
 <table id="match"><tr><th>metric</th><th>unit</th><th>recorded</th><th>simulated</th><th>simulated - recorded</th>
 <th>model's error (same unit)</th></tr>{match}</table>
@@ -113,6 +202,7 @@ td,th{{border:1px solid #bbb;padding:2px 6px;text-align:right}}td:first-child{{t
 <table id="candidates"><tr><th>setting (key)</th><th>unit</th><th>from</th><th>to</th><th>rule penalty change (no unit)</th>
 <th>crash</th></tr>{cand}</table>
 {skip}
+{pooled}
 {tried}
 <h2>Rules</h2><ul>{''.join(f'<li>{esc.escape(k)}: {esc.escape(v)}</li>' for k, v in RULES.items())}</ul>
 </body></html>

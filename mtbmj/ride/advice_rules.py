@@ -402,3 +402,56 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
         (" with " if other is not None else ": ") + ", ".join(f"{k} = {v}" for k, v in settings.items())
         if settings else "")
     return Trial(label, ref, over, settings, file)
+
+
+def skipped_entry(adj: Adjuster, direction: str, value, exc) -> dict:
+    return {"key": adj.name, "label": adj.label, "direction": direction, "from": adj.value, "to": value,
+            "setting": adj.setting(value), "why": str(exc)}
+
+
+def allowed(bike, candidates, merged) -> tuple[list, list]:
+    """(the candidates ``(adjuster, direction, value)`` the part allows, the others as dicts naming
+    why): each candidate's bike (``merged(adjuster.overrides(value))``, the recorded overrides with
+    the candidate's over them; ``bike`` a file, a preset or a ``ResolvedBike``, which is not read
+    again) derived and its fork and shock composed, as its run would; one the
+    part refuses (a click outside the measured range, a volume spacer that fills the air chamber,
+    two adjusters whose summed effects leave the measured forces) is skipped, not fatal. Nothing is
+    simulated here."""
+    import warnings
+
+    from mtbmj.bike import run as bike_run
+    from mtbmj.bike import spec as spec_mod
+
+    ok, skipped = [], []
+    for a, d, v in candidates:
+        try:
+            with warnings.catch_warnings():  # the recorded setting's warnings were issued once already
+                warnings.simplefilter("ignore")
+                bike_run.setups(spec_mod.load(bike, merged(a.overrides(v))))  # a ResolvedBike: not read again
+        except ConfigError as exc:
+            skipped.append(skipped_entry(a, d, v, exc))
+        else:
+            ok.append((a, d, v))
+    return ok, skipped
+
+
+def counter(progress, n: int):
+    """The step each finished run takes: ``progress(fraction, "run i/n")`` (``mtbmj.cli.common.Progress``
+    draws it on a terminal only)."""
+    done = [0]
+
+    def step():
+        done[0] += 1
+        if progress is not None:
+            progress(done[0] / n, f"run {done[0]}/{n}")
+    return step
+
+
+def checked_duration(duration):
+    """``duration`` (s, or None) checked before any ride is read: positive, finite, at least ``MIN_SECONDS``."""
+    if duration is None:
+        return None
+    duration = float(duration)
+    if not (math.isfinite(duration) and duration > 0.0):
+        raise AdviseError(f"--duration: must be a positive number of seconds, got {duration:g}")
+    return duration

@@ -104,4 +104,22 @@ def driving_rule(base_penalty: dict, penalty: dict) -> str:
     return max(base_penalty, key=lambda k: base_penalty[k] - penalty.get(k, 0.0))
 
 
-__all__ = ["MAX_STEPS", "driving_rule", "next_value", "search", "search_many"]
+def annotate(advice, searched: dict) -> None:
+    """The recommendation's search (``search``: each step kept, ``driven_by``: the rule whose penalty
+    fell most) and, where it went past the one-step candidate, that said in its why."""
+    rec = advice.recommendation
+    kept = searched.get((rec["key"], rec["direction"]), [])
+    adj = next(a for a, d, v, r in advice.candidates if a.name == rec["key"] and d == rec["direction"])
+    rec["search"] = [{"to": v, "setting": adj.setting(v), "penalty": r.total} for v, r in kept]
+    run = kept[-1][1] if kept else next(r for a, d, v, r in advice.candidates
+                                        if a.name == rec["key"] and d == rec["direction"])
+    if kept:
+        advice.searched = (adj, rec["direction"], kept[-1][0], run)
+    rec["driven_by"] = driving_rule(advice.base.penalty, run.penalty)
+    if kept:
+        rec["why"] += (f"; found by searching on from the one-step candidate ({len(kept)} step(s) further), "
+                       f"driven by the {rec['driven_by'].replace('_', ' ')} rule")
+        advice.verdict = {**advice.verdict, "why": rec["why"]}
+
+
+__all__ = ["MAX_STEPS", "annotate", "driving_rule", "next_value", "search", "search_many"]

@@ -52,10 +52,14 @@ a change towards a bound scaled by the room the ride has on that side, so the mo
 bottom-outs becoming four take a ride's none to none, not to -1; a count or share is never
 expected below 0, a share of time never above 100 %). Its uncertainty comes from the ride itself
 (``UNCERTAINTY_METHOD``: the ride's segments resampled, the model's error at the recorded setting
-and the change's spread over the segments). The verdict (:func:`_judge`): a change is advised only
+and the change's spread over the segments). The verdict (:func:`judge`): a change is advised only
 where it lowers the total penalty by at least ``MIN_GAIN`` and a metric of a rule it improves moves
 by more than its uncertainty; "keep" only where every candidate is predicted worse beyond its
-uncertainty; otherwise "inconclusive", naming why (never "keep" by default). Every setting is also
+uncertainty; otherwise "inconclusive", naming why (never "keep" by default). Where several
+candidates are advised, one is recommended first, the balance of the ends before the rest (one that
+moves the balance beyond its uncertainty, if any), the others after it (``recommendation["then"]``,
+:meth:`Advice.then`). Several rides of one setting are pooled by :mod:`mtbmj.ride.advice_pool`
+(``mtbmj advise RIDE RIDE ...``). Every setting is also
 given in the rider's words (:meth:`Adjuster.setting`: lb/in at the rates sold for a coil shock,
 psi, clicks where a click map exists). Any other setting can be tried on the ride beside the
 recorded one (:func:`trial`, :func:`predict`; ``--try``, ``--try-set``).
@@ -79,13 +83,11 @@ from mtbmj.ride.advice_rules import (  # noqa: F401 (advise's names for them)
     GRIP_COMFORT_WEIGHT, HEADLINE, LEAD_IN_M, MAX_REAR_MISS_PERCENT, MIN_CHECKED_PERCENT, MIN_GAIN,
     MIN_SECONDS, PACKING_RATIO, RULES, RideNotDescribed, SAG_POINTS, SAG_WINDOW,
     SEGMENT_S, SHARES, SIGNED, SOLD_LB_PER_IN, SPEED_SPLIT_MM_PER_S, UNCERTAINTY_METHOD,
-    UNITS, UNUSED_BELOW_PERCENT, adjusters, bounded_value, bounds, expected,
+    UNITS, UNUSED_BELOW_PERCENT, skipped_entry, adjusters, allowed, checked_duration, counter, bounded_value, bounds, expected,
     flat_metrics, grip_comfort, penalties, ride_metrics, round_setting, unit_of, Trial, compose_setting, trial)
 
 
-from mtbmj.ride.advice_report import metric_unit  # noqa: E402,F401 (advise's name for it)
-
-LEGEND_ROOM = 1.45  # the histograms' height over their tallest bar: the legend sits above the bars
+from mtbmj.ride.advice_report import LEGEND_ROOM, metric_unit  # noqa: E402,F401 (advise's names for them)
 
 
 @dataclass
@@ -100,6 +102,7 @@ class Run:
     rear_mm: np.ndarray = field(repr=False, default=None)
     crash: str | None = None
     time_s: np.ndarray = field(repr=False, default=None)  # ride time of the series (0 where the ride starts)
+    parts: list = field(repr=False, default=None)  # a pooled run: each ride's own (mtbmj.ride.advice_pool)
 
     @property
     def total(self) -> float:
@@ -191,10 +194,21 @@ class Advice:
             out.append(flat_metrics(ride_metrics(t[k], front[k], rear[k], ftop, rtop)) if k.sum() >= 10 else {})
         return out
 
+    def _run_segments(self, run: Run) -> list:
+        """``run``'s per-segment flat metrics (a pooled advice: every ride's segments, ride after ride)."""
+        return self._per_segment(run.time_s, run.front_mm, run.rear_mm)
+
+    def _record_segments(self) -> list:
+        return self._per_segment(self.record_t, self.record_front, self.record_rear)
+
+    def pooled_run(self, runs: list) -> Run:
+        """One run of each ride as the advice's run (one ride: its run)."""
+        return runs[0]
+
     def _segment_diffs(self, run: Run, against) -> dict:
         """Per metric: the array over segments of ``run``'s value less ``against``'s (a list of per-segment
         flat metrics), segments where either has none left out."""
-        mine = self._per_segment(run.time_s, run.front_mm, run.rear_mm)
+        mine = self._run_segments(run)
         out = {}
         for k in (mine[0] if mine else {}):
             d = [m[k] - o[k] for m, o in zip(mine, against) if k in m and k in o]
@@ -212,7 +226,7 @@ class Advice:
             return dict(self._model_error)
         out = {}
         if self.record_t is not None and self.base.time_s is not None:
-            rec = self._per_segment(self.record_t, self.record_front, self.record_rear)
+            rec = self._record_segments()
             for k, d in self._segment_diffs(self.base, rec).items():
                 out[k] = float(np.percentile(np.abs(d[self._boot(d.size)].mean(axis=1)), 90))
         else:  # no series to split (an Advice made by hand): the whole ride's one sample
@@ -232,15 +246,24 @@ class Advice:
             out[f"{end}.bottom_outs"] = max(out.get(f"{end}.bottom_outs", 0.0), n)
             out[f"{end}.bottom_outs_per_minute"] = max(out.get(f"{end}.bottom_outs_per_minute", 0.0), n / minutes)
 
+    def spread(self, run: Run) -> dict:
+        """Per metric: half the 5-95 % bootstrap interval of the mean over segments of ``run``'s change
+        from the recorded setting (the change's own part of its uncertainty; more segments narrow it)."""
+        out = {}
+        if getattr(self, "_base_segments", None) is None:  # the recorded setting's, once for every candidate
+            self._base_segments = self._run_segments(self.base)
+        for k, d in self._segment_diffs(run, self._base_segments).items():
+            lo, hi = np.percentile(d[self._boot(d.size)].mean(axis=1), [5, 95])
+            out[k] = float(hi - lo) / 2
+        return out
+
     def change_uncertainty(self, run: Run) -> dict:
         """Per metric: the uncertainty of ``run``'s change from the recorded setting (``UNCERTAINTY_METHOD``)."""
         model = self.uncertainty()
         out = dict(model)
         if run.time_s is not None and self.base.time_s is not None:
-            base = self._per_segment(self.base.time_s, self.base.front_mm, self.base.rear_mm)
-            for k, d in self._segment_diffs(run, base).items():
-                lo, hi = np.percentile(d[self._boot(d.size)].mean(axis=1), [5, 95])
-                out[k] = float(math.hypot(model.get(k, 0.0), (hi - lo) / 2))
+            for k, half in self.spread(run).items():
+                out[k] = float(math.hypot(model.get(k, 0.0), half))
             for end in ("front", "rear"):
                 if f"{end}.dynamic_sag_percent" in out:
                     out[f"{end}.static_sag_percent"] = out[f"{end}.dynamic_sag_percent"]
@@ -276,47 +299,9 @@ class Advice:
             f"{c['label']} {c['from']:g} -> {c['to']:g} ({c['why']})" for c in self.skipped)
 
     def figure(self):
-        from matplotlib.figure import Figure
+        from mtbmj.ride import advice_report
 
-        fig = Figure(figsize=(11, 4.8), layout="constrained")
-        axes = fig.subplots(1, 2)
-        best = self.recommendation
-        shown = best if best is not None else (self.verdict or {}).get("best_candidate")
-        run = None
-        if shown is not None:
-            run = next((r for a, d, v, r in ([self.searched] if self.searched else []) + list(self.judged)
-                        + list(self.candidates)
-                        if a.name == shown["key"] and d == shown["direction"] and v == shown["to"]), None)
-        for ax, end, rec, top in ((axes[0], "front", self.record_front, self.base.metrics["front"]["travel_mm"]),
-                                  (axes[1], "rear", self.record_rear, self.base.metrics["rear"]["travel_mm"])):
-            edges = np.linspace(0, 100, 21)
-            series = [("recorded ride", 100 * np.asarray(rec) / top, "0.5"),
-                      ("simulated, recorded setting", 100 * self.base.front_mm / top if end == "front"
-                       else 100 * self.base.rear_mm / top, "C0")]
-            if run is not None:
-                st = shown.get("setting", {"from": shown["from"], "to": shown["to"], "unit": ""})
-                series.append((f"simulated, {shown['label']} {st['from']:g} -> {st['to']:g}"
-                               f"{' ' + st['unit'] if st['unit'] else ''}{'' if best is not None else ' (not advised)'}",
-                               100 * (run.front_mm if end == "front" else run.rear_mm) / top, "C3"))
-            tallest = 0.0
-            for label, x, color in series:
-                h, _ = np.histogram(np.clip(x, 0, 100), bins=edges)
-                share = 100 * h / max(h.sum(), 1)
-                tallest = max(tallest, float(share.max()))
-                ax.stairs(share, edges, label=label, color=color, linewidth=1.6)
-            # room above the tallest bar for the legend, so no bar is hidden behind it
-            ax.set_ylim(0.0, LEGEND_ROOM * max(tallest, 1.0))
-            ax.set(xlim=(0, 100), xlabel=f"{'fork' if end == 'front' else 'rear wheel'} travel (% of {top:.0f} mm)",
-                   ylabel="time (%)", title=f"{end}: travel histogram")
-            ax.grid(alpha=0.3)
-            ax.legend(fontsize=8, loc="upper right")
-        if best is None:
-            title = (self.verdict or {}).get("answer", "inconclusive") + ": no change advised"
-        else:
-            st = best.get("setting", {"from": best["from"], "to": best["to"], "unit": ""})
-            title = f"recommended: {best['label']} {st['from']:g} -> {st['to']:g}{' ' + st['unit'] if st['unit'] else ''}"
-        fig.suptitle(f"{self.ride} on {self.bike}: " + title)
-        return fig
+        return advice_report.figure(self)
 
     def png(self) -> bytes:
         from mtbmj.readout import quicklook  # the one figure writer: a "$" in a name drawn as written
@@ -331,6 +316,15 @@ class Advice:
             return (f"Recommended: {'raise' if st['to'] > st['from'] else 'lower'} the {st['part']} {st['adjuster']} "
                     f"from {st['from']:g} to {st['to']:g} {st['unit']} ({st['key']})")
         return f"{v.get('answer', 'inconclusive').capitalize()}: {v.get('why', '')}"
+
+    def then(self) -> str:
+        """The other changes advised, one line, after the recommended one (ride it first, then record again)."""
+        rest = (self.recommendation or {}).get("then") or []
+        if not rest or (self.verdict or {}).get("answer", "change") != "change":
+            return ""
+        return "Then, one at a time, recording again after each: " + "; ".join(
+            f"{'raise' if t['setting']['to'] > t['setting']['from'] else 'lower'} the {t['label']} from "
+            f"{t['setting']['from']:g} to {t['setting']['to']:g} {t['setting']['unit']}" for t in rest)
 
     def html(self, png: bytes) -> str:
         from mtbmj.ride import advice_report
@@ -373,7 +367,7 @@ def _beyond(rules, a: dict, b: dict, u: dict) -> list:
             if m in a and m in b and abs(b[m] - a[m]) > u.get(m, math.inf)]
 
 
-def _judge(advice, candidates=None) -> tuple[dict | None, dict]:
+def judge(advice, candidates=None) -> tuple[dict | None, dict]:
     """(the recommendation or None, the verdict ``{"answer", "why"}``): a change is advised only where
     it lowers the penalty by ``MIN_GAIN`` or more and a metric of a rule it improves moves by more
     than that change's uncertainty (the best such candidate, grip and comfort breaking ties);
@@ -401,8 +395,13 @@ def _judge(advice, candidates=None) -> tuple[dict | None, dict]:
         elif gain >= MIN_GAIN and (near is None or score > near[0]):
             near = (score, adj, direction, value, run, improved, u)
     n = len(candidates)
-    if good:
-        _, adj, direction, value, run, improved, u = max(good, key=lambda g: g[0])
+    if good:  # the balance of the ends first: a change that mends it before any other
+        pick = max([g for g in good if "balance" in g[5] and _beyond(["balance"], a, flat_metrics(g[4].metrics), g[6])]
+                   or good, key=lambda g: g[0])
+        _, adj, direction, value, run, improved, u = pick
+        then = [{"setting": g[1].setting(g[3]), "key": g[1].name, "label": g[1].label, "direction": g[2],
+                 "penalty_to": g[4].total, "improves": g[5]}
+                for g in sorted(good, key=lambda g: -g[0]) if g[1].name != adj.name]
         moved = _beyond(improved, a, flat_metrics(run.metrics), u)
         st = adj.setting(value)
         why = (f"{'raise' if direction == 'up' else 'lower'} the {adj.label} from {st['from']:g} to {st['to']:g} "
@@ -413,7 +412,8 @@ def _judge(advice, candidates=None) -> tuple[dict | None, dict]:
                "label": adj.label,
                "direction": direction, "from": adj.value, "to": value, "penalty_from": base.total,
                "penalty_to": run.total, "improves": improved, "confident": True, "why": why,
-               "changes": _changes(base, run, u, measured)}
+               "changes": _changes(base, run, u, measured),
+               "then": [t for i, t in enumerate(then) if t["key"] not in {o["key"] for o in then[:i]}]}  # best first
         return rec, {"answer": "change", "why": why}
     if n and worse == n:
         return None, {"answer": "keep", "why": f"every one of the {n} candidates is predicted worse beyond its "
@@ -450,69 +450,132 @@ def _changes(base: Run, run: Run, uncertainty: dict, measured: dict) -> dict:
             for k, v0 in a.items() if k in b}
 
 
-def _skip(adj: Adjuster, direction: str, value, exc) -> dict:
-    return {"key": adj.name, "label": adj.label, "direction": direction, "from": adj.value, "to": value,
-            "setting": adj.setting(value), "why": str(exc)}
-
-
-def allowed(bike, candidates, merged) -> tuple[list, list]:
-    """(the candidates ``(adjuster, direction, value)`` the part allows, the others as dicts naming
-    why): each candidate's bike (``merged(adjuster.overrides(value))``, the recorded overrides with
-    the candidate's over them; ``bike`` a file, a preset or a ``ResolvedBike``, which is not read
-    again) derived and its fork and shock composed, as its run would; one the
-    part refuses (a click outside the measured range, a volume spacer that fills the air chamber,
-    two adjusters whose summed effects leave the measured forces) is skipped, not fatal. Nothing is
-    simulated here."""
-    import warnings
-
-    from mtbmj.bike import run as bike_run
-    from mtbmj.bike import spec as spec_mod
-
-    ok, skipped = [], []
-    for a, d, v in candidates:
-        try:
-            with warnings.catch_warnings():  # the recorded setting's warnings were issued once already
-                warnings.simplefilter("ignore")
-                bike_run.setups(spec_mod.load(bike, merged(a.overrides(v))))  # a ResolvedBike: not read again
-        except ConfigError as exc:
-            skipped.append(_skip(a, d, v, exc))
-        else:
-            ok.append((a, d, v))
-    return ok, skipped
-
-
 def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
            tries=(), candidates: bool = True, calibrated: bool = False, search: bool = True) -> Advice:
     """Advice for ``record`` (a two-ended ``TelemetryRecord``) on ``bike`` (preset, file or
     ``mtbmj.bike.spec.ResolvedBike``: read once, here or before), its keys ``overrides``;
     ``duration`` limits the simulated ride to its first seconds; the runs spread
-    over ``workers`` processes. ``tries``: settings to try (:class:`Trial`, from :func:`trial`),
+    over ``workers`` processes, ``progress(fraction, note)`` called as each ends. ``tries``: settings to try (:class:`Trial`, from :func:`trial`),
     simulated over the same terrain beside the recorded setting and predicted as the candidates are
     (``Advice.tries``); ``candidates`` False simulates the tried settings only (:func:`predict`).
     ``calibrated`` (``--calibrate``): the bike's springs calibrated on the ride first
     (:mod:`mtbmj.ride.calibrate`), every run (the recorded setting, each candidate, each try) on the
     calibrated bike, the candidates read in the file's units relative to it; False (the default): the
     bike file as it is. ``search``: every candidate that lowers the penalty searched further along its
-    adjuster before the verdict (:mod:`mtbmj.ride.advice_search`)."""
+    adjuster before the verdict (:mod:`mtbmj.ride.advice_search`). Several rides of one setting:
+    :func:`mtbmj.ride.advice_pool.pooled`."""
     import time
 
     from mtbmj.bike import spec as spec_mod
-    from mtbmj.ride import reconstruct as rc
 
     start = time.perf_counter()
+    duration = checked_duration(duration)
+    bike = spec_mod.resolve(bike)  # the bike file read once: every run below derives its setting from it
+    bike = bike.with_overrides(None) if bike.overrides else bike
+    ride = prepare(record, bike, overrides, duration, calibrated, candidates, tries)
+    jobs = ride.jobs()
+    from contextlib import ExitStack
+
+    with ExitStack() as stack:
+        pool = None
+        if workers > 1 and len(jobs) > 1:
+            from mtbmj.workers import process_pool
+
+            pool = stack.enter_context(process_pool(min(workers, len(jobs))))
+        # a candidate its part refuses only when run is skipped (the recorded setting's own refusal and a
+        # tried one's stay the user's error)
+        runs = run_jobs(jobs, pool, ride.refusable, counter(progress, len(jobs)))
+        advice = ride.assemble(runs)
+        decide(advice, [ride], pool, search)
+    advice.wall_s = time.perf_counter() - start
+    return advice
+
+
+@dataclass
+class Prepared:
+    """One ride made ready for advice (:func:`prepare`): its reconstruction, terrain, speed, the
+    calibrated overrides, the adjusters and the candidates its parts allow; nothing simulated yet."""
+
+    record: object
+    bike: object
+    rec: object
+    spec: object
+    cal: object
+    terrain: object
+    speed: float
+    ride_s: float
+    lead_s: float
+    adj: list
+    base_over: dict
+    todo: list
+    skipped: list
+    tries: list
+
+    @property
+    def sim_s(self) -> float:
+        return self.ride_s + self.lead_s
+
+    def merged(self, extra: dict) -> dict:
+        out = dict(self.base_over)
+        for k, v in extra.items():
+            out[k] = {**out.get(k, {}), **v}
+        return out
+
+    def job(self, overrides: dict, label: str) -> tuple:
+        return (self.bike, overrides, self.terrain, self.speed, self.sim_s, label, self.lead_s)
+
+    def jobs(self) -> list:
+        """The recorded setting, each candidate, each try: :func:`simulate`'s arguments."""
+        out = [self.job(self.base_over, "recorded setting")]
+        out += [self.job(self.merged(a.overrides(v)), f"{a.label} {v:g}") for a, d, v in self.todo]
+        for tr in self.tries:
+            b = tr.bike if tr.resolved is None else tr.resolved
+            out.append((b, tr.overrides if self.cal is None else self.cal.apply(b, tr.overrides), self.terrain,
+                        self.speed, self.sim_s, tr.label, self.lead_s))
+        return out
+
+    def refusable(self, i: int) -> bool:
+        return 0 < i <= len(self.todo)
+
+    def assemble(self, runs) -> Advice:
+        """The ride's :class:`Advice` (not judged) from its runs (in :meth:`jobs`' order); a recorded
+        setting that crashes is a refusal (:class:`RideNotDescribed`)."""
+        base = runs[0]
+        if base.crash:
+            raise RideNotDescribed(f"{self.record.name}: the recorded setting {base.crash} on the ride's reconstructed "
+                                   f"terrain: the model cannot ride this ride as reconstructed, so it cannot predict a "
+                                   f"change")
+        skipped, cands = list(self.skipped), []
+        for (a, d, v), run in zip(self.todo, runs[1:1 + len(self.todo)]):
+            if isinstance(run, ConfigError):
+                skipped.append(skipped_entry(a, d, v, run))
+            else:
+                cands.append((a, d, v, run))
+        t = self.rec.t
+        keep = t - t[0] <= self.ride_s
+        rec = self.rec
+        measured = ride_metrics(t[keep], rec.front[keep], rec.rear[keep], base.metrics["front"]["travel_mm"],
+                                base.metrics["rear"]["travel_mm"])
+        return Advice(rec.name, self.spec.name, rec.summary(), measured, base, cands, None, rec.front[keep],
+                      rec.rear[keep], skipped=skipped, tries=list(zip(self.tries, runs[1 + len(self.todo):])),
+                      record_t=t[keep] - t[0], calibration=self.cal)
+
+
+def prepare(record, bike, overrides=None, duration: float | None = None, calibrated: bool = False,
+            candidates: bool = True, tries=()) -> Prepared:
+    """``record`` made ready for advice on ``bike`` (a ``ResolvedBike`` without overrides): its length
+    checked, calibrated where asked, reconstructed and checked, its terrain, the adjusters and the
+    candidates the parts allow (:func:`allowed`). Refused (:class:`AdviseError`) as :func:`advise` says."""
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.ride import reconstruct as rc
+
     length = float(record.time_s[-1] - record.time_s[0])
     if length < MIN_SECONDS:
         raise AdviseError(f"{record.name}: {length:.1f} s of ride cannot support advice (at least {MIN_SECONDS:g} s)")
     # the minimum holds for the stretch analysed, not only for the file it is cut from
-    if duration is not None:
-        duration = float(duration)
-        if not (math.isfinite(duration) and duration > 0.0):
-            raise AdviseError(f"--duration: must be a positive number of seconds, got {duration:g}")
-        if duration < MIN_SECONDS:
-            raise AdviseError(f"--duration: {duration:g} s of {record.name} cannot support advice (at least "
-                              f"{MIN_SECONDS:g} s; the ride is {length:.1f} s)")
-    bike = spec_mod.resolve(bike)  # the bike file read once: every run below derives its setting from it
-    bike = bike.with_overrides(None) if bike.overrides else bike
+    if duration is not None and duration < MIN_SECONDS:
+        raise AdviseError(f"--duration: {duration:g} s of {record.name} cannot support advice (at least "
+                          f"{MIN_SECONDS:g} s; the ride is {length:.1f} s)")
     file_spec = spec_mod.load(bike, overrides)
     cal = None
     if calibrated:  # the ridden bike's springs from the ride itself, before anything is found through them
@@ -534,73 +597,16 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
                                f"needs a model that beats both naive baselines, so it cannot predict a change")
     spec = spec_mod.load(bike, overrides)
     speed = float(rec.speed["speed_m_per_s"])
-    ride_s = length if duration is None else min(length, float(duration))
-    lead_s = 1.0 / speed  # the front axle reaches the ride's first metre
-    sim_s = ride_s + lead_s
-    terrain = terrain_of(rec)
     adj = adjusters(spec) if cal is None else cal.adjusters(file_spec)
-    base_over = dict(overrides or {})
-
-    def merged(extra):
-        out = dict(base_over)
-        for k, v in extra.items():
-            out[k] = {**out.get(k, {}), **v}
-        return out
-
-    tries = list(tries or ())
-    todo, skipped = allowed(bike, [(a, d, v) for a in adj for d, v in (("down", a.down), ("up", a.up))
-                                   if v is not None and v != a.value] if candidates else [], merged)
-    n = len(todo) + len(tries) + 1
-    done = [0]
-
-    def step():
-        done[0] += 1
-        if progress is not None:
-            progress(done[0] / n)
-
-    jobs = [(bike, base_over, terrain, speed, sim_s, "recorded setting", lead_s)]
-    jobs += [(bike, merged(a.overrides(v)), terrain, speed, sim_s, f"{a.label} {v:g}", lead_s) for a, d, v in todo]
-    jobs += [(tr.bike if tr.resolved is None else tr.resolved,
-              tr.overrides if cal is None else cal.apply(tr.bike if tr.resolved is None else tr.resolved, tr.overrides),
-              terrain, speed, sim_s, tr.label, lead_s) for tr in tries]
-    from contextlib import ExitStack
-
-    with ExitStack() as stack:
-        pool = None
-        if workers > 1 and len(jobs) > 1:
-            from mtbmj.workers import process_pool
-
-            pool = stack.enter_context(process_pool(min(workers, len(jobs))))
-        # a candidate its part refuses only when run is skipped (the recorded setting's own refusal and a
-        # tried one's stay the user's error)
-        runs = _run_jobs(jobs, pool, lambda i: 0 < i <= len(todo), step)
-        base = runs[0]
-        if base.crash:
-            raise RideNotDescribed(f"{record.name}: the recorded setting {base.crash} on the ride's reconstructed terrain: "
-                                   f"the model cannot ride this ride as reconstructed, so it cannot predict a change")
-        cands = []
-        for (a, d, v), run in zip(todo, runs[1:1 + len(todo)]):
-            if isinstance(run, ConfigError):
-                skipped.append(_skip(a, d, v, run))
-            else:
-                cands.append((a, d, v, run))
-        t = rec.t
-        keep = t - t[0] <= ride_s
-        measured = ride_metrics(t[keep], rec.front[keep], rec.rear[keep], base.metrics["front"]["travel_mm"],
-                                base.metrics["rear"]["travel_mm"])
-        advice = Advice(rec.name, spec.name, rec.summary(), measured, base, cands, None, rec.front[keep], rec.rear[keep],
-                        skipped=skipped, tries=list(zip(tries, runs[1 + len(todo):])), record_t=t[keep] - t[0],
-                        calibration=cal)
-        searched = _search(advice, bike, merged, terrain, speed, sim_s, lead_s, pool) if search else {}
-        advice.judged = _searched_candidates(advice, searched)
-        advice.recommendation, advice.verdict = _judge(advice, advice.judged)
-        if advice.recommendation is not None and search:
-            _annotate(advice, searched)
-    advice.wall_s = time.perf_counter() - start
-    return advice
+    ride = Prepared(record, bike, rec, spec, cal, terrain_of(rec), speed,
+                    length if duration is None else min(length, duration), 1.0 / speed,  # the axle at the first metre
+                    adj, dict(overrides or {}), [], [], list(tries or ()))
+    ride.todo, ride.skipped = allowed(bike, [(a, d, v) for a in adj for d, v in (("down", a.down), ("up", a.up))
+                                             if v is not None and v != a.value] if candidates else [], ride.merged)
+    return ride
 
 
-def _run_jobs(jobs, pool, refusable, step) -> list:
+def run_jobs(jobs, pool, refusable, step) -> list:
     """Each job's :func:`simulate` (in ``pool`` where given): a ``ConfigError`` of a job ``refusable(i)``
     kept as its result, any other raised."""
     runs = [None] * len(jobs)
@@ -623,58 +629,49 @@ def _run_jobs(jobs, pool, refusable, step) -> list:
     return runs
 
 
-def _search(advice, bike, merged, terrain, speed, sim_s, lead_s, pool) -> dict:
+def search_on(advice, rides, pool) -> dict:
     """Every candidate that lowers the penalty by ``MIN_GAIN`` or more, searched further along its
-    adjuster (:func:`mtbmj.ride.advice_search.search_many`, all in one pool): ``{(adjuster name,
-    direction): [(value, run), ...]}``, the steps each search kept."""
+    adjuster (:func:`mtbmj.ride.advice_search.search_many`, all in one pool) on every ride of
+    ``rides`` (:class:`Prepared`; a pooled advice's runs pooled by ``advice.pooled_run``):
+    ``{(adjuster name, direction): [(value, run), ...]}``, the steps each search kept."""
     from mtbmj.ride import advice_search
 
     base = advice.base
-    starts = [(a, d, v, r) for a, d, v, r in advice.candidates
-              if not r.crash and base.total - r.total >= MIN_GAIN]
+    starts = [(a, d, v, r) for a, d, v, r in advice.candidates if not r.crash and base.total - r.total >= MIN_GAIN]
     if not starts:
         return {}
+    own = [[next(x for x in ride.adj if x.name == a.name) for ride in rides] for a, *_ in starts]  # each ride's
+
+    def on(a, x, v):  # the value v of adjuster a as a ride's own x has it (the same where no calibration differs)
+        return v if x.per_unit == a.per_unit else v / a.per_unit * x.per_unit
 
     def run_values(asks):
-        jobs = [(bike, merged(starts[i][0].overrides(v)), terrain, speed, sim_s, f"{starts[i][0].label} {v:g}", lead_s)
-                for i, v in asks]
-        return _run_jobs(jobs, pool, lambda i: True, lambda: None)
+        jobs = [ride.job(ride.merged(x.overrides(on(starts[i][0], x, v))), f"{starts[i][0].label} {v:g}")
+                for i, v in asks for ride, x in zip(rides, own[i])]
+        runs, n = run_jobs(jobs, pool, lambda i: True, lambda: None), len(rides)
+        parts = [runs[k * n:(k + 1) * n] for k in range(len(asks))]
+        return [next((r for r in part if isinstance(r, Exception)), None) or advice.pooled_run(part) for part in parts]
 
     def allowed_value(i, v):
         a, d = starts[i][0], starts[i][1]
-        return bool(allowed(bike, [(a, d, v)], merged)[0])
+        return all(allowed(ride.bike, [(x, d, on(a, x, v))], ride.merged)[0] for ride, x in zip(rides, own[i]))
 
     kept = advice_search.search_many([(a, v, r) for a, d, v, r in starts], run_values, allowed_value)
     return {(a.name, d): k for (a, d, _, _), k in zip(starts, kept)}
 
 
-def _searched_candidates(advice, searched: dict) -> list:
-    """The candidates as the verdict judges them: each searched one where its search ended."""
-    out = []
-    for a, d, v, r in advice.candidates:
-        kept = searched.get((a.name, d))
-        out.append((a, d, *kept[-1]) if kept else (a, d, v, r))
-    return out
+def decide(advice, rides, pool, search: bool = True, judging=None) -> None:
+    """The verdict of ``advice`` (``judging(advice, candidates)``, default :func:`judge`): each
+    candidate that lowers the penalty searched on first (:func:`search_on`), the verdict judging each
+    where its search ended (``Advice.judged``), the recommendation's search annotated."""
+    searched = search_on(advice, rides, pool) if search else {}
+    advice.judged = [(a, d, *searched[(a.name, d)][-1]) if searched.get((a.name, d)) else (a, d, v, r)
+                     for a, d, v, r in advice.candidates]
+    advice.recommendation, advice.verdict = (judging or judge)(advice, advice.judged)
+    if advice.recommendation is not None and search:
+        from mtbmj.ride.advice_search import annotate
 
-
-def _annotate(advice, searched: dict) -> None:
-    """The recommendation's search (``search``: each step kept, ``driven_by``: the rule whose penalty
-    fell most) and, where it went past the one-step candidate, that said in its why."""
-    from mtbmj.ride import advice_search
-
-    rec = advice.recommendation
-    kept = searched.get((rec["key"], rec["direction"]), [])
-    adj = next(a for a, d, v, r in advice.candidates if a.name == rec["key"] and d == rec["direction"])
-    rec["search"] = [{"to": v, "setting": adj.setting(v), "penalty": r.total} for v, r in kept]
-    run = kept[-1][1] if kept else next(r for a, d, v, r in advice.candidates
-                                        if a.name == rec["key"] and d == rec["direction"])
-    if kept:
-        advice.searched = (adj, rec["direction"], kept[-1][0], run)
-    rec["driven_by"] = advice_search.driving_rule(advice.base.penalty, run.penalty)
-    if kept:
-        rec["why"] += (f"; found by searching on from the one-step candidate ({len(kept)} step(s) further), "
-                       f"driven by the {rec['driven_by'].replace('_', ' ')} rule")
-        advice.verdict = {**advice.verdict, "why": rec["why"]}
+        annotate(advice, searched)
 
 
 def predict(record, bike, tries, overrides=None, duration: float | None = None, progress=None,
@@ -683,6 +680,8 @@ def predict(record, bike, tries, overrides=None, duration: float | None = None, 
     the advice's reconstruction and uncertainty, no candidate simulated: ``Advice.tried()``."""
     return advise(record, bike, overrides, duration, progress, workers, tries=tries, candidates=False)
 
+
+_judge = judge  # its former name
 
 __all__ = ["Adjuster", "Advice", "AdviseError", "RideNotDescribed", "RULES", "Trial", "adjusters", "advise", "allowed",
            "bounds", "expected", "penalties", "predict", "ride_metrics", "simulate", "terrain_of", "trial"]

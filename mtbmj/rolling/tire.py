@@ -459,7 +459,29 @@ def straight_stretches(tire: RadialTire) -> StraightStretches | None:
     ter = tire.terrain
     if ter.moving or type(ter).polyline is not Terrain.polyline or type(tire).patches is not RadialTire.patches:
         return None
-    return StraightStretches(ter, tire.radius + tire.margin)
+    return stretches_of(ter, tire.radius + tire.margin)
+
+
+STRETCHES_KEPT = 4  # the straight stretches of this many (profile, reach) kept per process
+_stretches: dict = {}
+
+
+def stretches_of(terrain, reach: float) -> StraightStretches:
+    """``StraightStretches(terrain, reach)``, built once per process for a profile of the same points
+    and reach (every run of ``mtbmj advise`` rides one reconstructed terrain, each tire and the
+    reference asked for it: the corner scan is a Python loop over every point), the last
+    ``STRETCHES_KEPT`` kept. Read only once built, so shared."""
+    import hashlib
+
+    x, z = np.ascontiguousarray(terrain.x, float), np.ascontiguousarray(terrain.z, float)
+    key = (hashlib.blake2b(x.tobytes() + b"|" + z.tobytes(), digest_size=16).hexdigest(), float(reach))
+    found = _stretches.pop(key, None)
+    if found is None:
+        found = StraightStretches(terrain, reach)
+    _stretches[key] = found  # the most recent last
+    while len(_stretches) > STRETCHES_KEPT:
+        _stretches.pop(next(iter(_stretches)))
+    return found
 
 
 class PatchSearch:
@@ -491,5 +513,5 @@ class PatchSearch:
         return True
 
 
-__all__ = ["RadialTire", "PatchSearch", "StraightStretches", "stretch", "straight_stretches", "share_depths", "share",
+__all__ = ["RadialTire", "PatchSearch", "StraightStretches", "stretch", "straight_stretches", "stretches_of", "share_depths", "share",
            "SHARE_BLOCKS", "closest_points", "MARGIN_M", "REFRESH_S", "REFRESH_DISTANCE_M", "CAP_MIN_M", "TOUCH_CAP_M"]
