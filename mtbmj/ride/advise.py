@@ -20,7 +20,8 @@ made in the tests with the bike file's own springs and the fork's rebound four t
 calibration reads the fork at x0.97 (the model's rider sits 6.5 cm further back than the test's),
 and that 3 % turned the right answer (rebound lowered 2800 -> 734 N s/m, the true 700) into
 "inconclusive"; the front then reproduced at 7.8 mm RMS against 4.6 with the file's spring (measured
-before the made ride's wheelbase shortened and every candidate was searched; not measured since).
+before the made ride's wheelbase shortened and every candidate was searched; since, calibrated advice
+lowers that rebound 2800 -> 734 N s/m: docs/rolling.md).
 
 **What is scored** (:func:`ride_metrics`, each end in % of its own travel): static sag (standing,
 the model's statics); dynamic sag (the mean travel); maximum travel and bottom-outs (within 3 mm
