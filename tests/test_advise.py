@@ -213,10 +213,18 @@ def test_a_recorded_setting_that_crashes_on_the_terrain_is_refused(tmp_path, mon
 
 @pytest.mark.slow  # a reconstruction through the whole bike: 0.5-2 min
 def test_a_rider_no_bike_carries_is_refused_naming_the_key(tmp_path, capsys):
-    """A careless --rider-kg 500 on the shipped ride: the bike sinks onto its stops, the
-    reconstruction cannot reproduce the rear, and the refusal names the implausible key."""
+    """A careless --rider-kg 500 on the shipped ride: no fork spring within x0.3-x3 of the file's
+    carries such a rider (the calibration, before anything is reconstructed), and the refusal names
+    the implausible key; uncalibrated, the bike sinks onto its stops, the reconstruction cannot
+    reproduce the rear, and that refusal names the key too."""
     out = tmp_path / "advice"
     assert main(["advise", "example", "--bike", "sst", "--rider-kg", "500", "--duration", "30", "--out", str(out)]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("mtbmj: error")]
+    assert len(err) == 1 and "carries the front end's static load" in err[0], err
+    assert "rider.mass_kg = 500 kg is outside 30-150 kg" in err[0]
+    assert not out.exists()
+    assert main(["advise", "example", "--bike", "sst", "--rider-kg", "500", "--duration", "30", "--no-calibrate",
+                 "--out", str(out)]) == 2
     err = [line for line in capsys.readouterr().err.splitlines() if line.startswith("mtbmj: error")]
     assert len(err) == 1 and "fails its own check" in err[0] and "rider.mass_kg = 500 kg is outside 30-150 kg" in err[0]
     assert not out.exists()

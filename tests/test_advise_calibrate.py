@@ -79,15 +79,15 @@ def test_a_ride_no_spring_can_carry_is_not_described(right, tmp_path):
 
 @pytest.mark.slow
 def test_advice_on_a_softer_fork_than_the_file_says_rides_the_calibrated_bike(softer, tmp_path, capsys):
-    """Uncalibrated, this ride's recorded setting loops out on the terrain found through the file's
-    stiffer fork (it is refused); calibrated, it is ridden, the report carries the calibration, and a
+    """Uncalibrated (``--no-calibrate``), this ride's recorded setting loops out on the terrain found
+    through the file's stiffer fork (it is refused); calibrated (the default), it is ridden, the report carries the calibration, and a
     change of the fork's spring is read in the file's units (from 12)."""
     sst, file = softer
     out = tmp_path / "advice"
     with reconstruction_passing():
-        assert main(["advise", str(sst), "--bike", str(file), "--out", str(out)]) == 2
+        assert main(["advise", str(sst), "--bike", str(file), "--no-calibrate", "--out", str(out)]) == 2
         assert "crashed" in capsys.readouterr().err and not out.exists()
-        assert main(["advise", str(sst), "--bike", str(file), "--calibrate", "--out", str(out)]) == 0
+        assert main(["advise", str(sst), "--bike", str(file), "--out", str(out)]) == 0  # calibrated: the default
     printed = capsys.readouterr().out
     assert "calibrated on the ride: fork spring rate" in printed
     d = json.loads((out / "advice.json").read_text())
@@ -102,7 +102,7 @@ def test_advice_on_a_softer_fork_than_the_file_says_rides_the_calibrated_bike(so
 @pytest.mark.slow
 def test_calibrated_advice_on_a_rebound_four_times_too_slow_lowers_it(tmp_path):
     """The fork's rebound four times too slow (2800 N s/m, the bike's own 700), advised with
-    ``--calibrate``: the calibration reads the file's springs (about x0.97 and x1.02), and the advice
+    calibration (the default): the calibration reads the file's springs (about x0.97 and x1.02), and the advice
     (every candidate searched before the verdict) is the fork's rebound lowered by 30-90 %, not the
     spring the one-step screen once preferred (issue 52's "how we will know")."""
     folder = tmp_path / "slow"
@@ -110,7 +110,7 @@ def test_calibrated_advice_on_a_rebound_four_times_too_slow_lowers_it(tmp_path):
     bike, sst, *_ = advise_ride(folder, fork_reb=2800.0)
     out = folder / "advice"
     with reconstruction_passing():
-        assert main(["advise", str(sst), "--bike", str(bike), "--calibrate", "--out", str(out)]) == 0
+        assert main(["advise", str(sst), "--bike", str(bike), "--out", str(out)]) == 0
     advice = json.loads((out / "advice.json").read_text())
     scales = advice["calibration"]
     assert advice["verdict"]["answer"] == "change", advice["verdict"]

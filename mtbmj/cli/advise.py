@@ -3,6 +3,8 @@ terrain, scored on what riders read, and the change recommended (``mtbmj.ride.ad
 of one setting pooled into one advice (``mtbmj.ride.advice_pool``)."""
 from __future__ import annotations
 
+import argparse
+
 from mtbmj.cli.common import add_out
 
 
@@ -82,10 +84,10 @@ def add_parser(sub) -> None:
                    help="a setting to try (repeatable, all in one try): fork:KEY or shock:KEY of the part's "
                         "configuration (e.g. fork:fork.spring.rate_N_per_mm=7, shock:fork.damper.rebound_clicks=8) "
                         "or a bike key (shock.spring_rate_lb_per_in=500, rider.mass_kg=80); over --try's file")
-    p.add_argument("--calibrate", action="store_true",
+    p.add_argument("--calibrate", action=argparse.BooleanOptionalAction, default=True,
                    help="calibrate each end's spring on the ride first (its mean force the end's static load) and "
-                        "advise relative to that bike (default: the bike file's springs as they are; see "
-                        "docs/rolling.md for why it is not the default yet)")
+                        "advise relative to that bike (the default); --no-calibrate: the bike file's springs as "
+                        "they are")
     p.add_argument("--workers", type=int, default=2, metavar="N",
                    help="processes the candidate runs spread over (default 2)")
     add_sensor_spans(p)

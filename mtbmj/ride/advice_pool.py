@@ -176,7 +176,7 @@ def judging(advice: PooledAdvice, candidates=None) -> tuple:
 
 
 def pooled(records, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
-           tries=(), calibrated: bool = False, search: bool = True) -> PooledAdvice:
+           tries=(), calibrated: bool = True, search: bool = True) -> PooledAdvice:
     """One advice from ``records``, several rides of ``bike`` at one setting (``overrides``), as
     :func:`mtbmj.ride.advise.advise` gives for one (the module doc says how they are pooled). A ride
     refused is left out and named; none left: :class:`AdviseError` naming each ride's reason."""

@@ -160,7 +160,7 @@ def html(advice, png: bytes) -> str:
                        f"(key)</th><th>unit</th><th>bike file</th><th>calibrated</th><th>95 % interval</th>"
                        f"<th>scale (no unit)</th></tr>{rows_c}</table>")
     else:
-        calibration = "<p>Not calibrated: the bike file's springs as they are (advise --calibrate reads them from the ride).</p>"
+        calibration = "<p>Not calibrated: the bike file's springs as they are (advise without --no-calibrate reads them from the ride).</p>"
     then = advice.then()
     then = f'<p id="then">{esc.escape(then)}</p>' if then else ""
     pooled = ""

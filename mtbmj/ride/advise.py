@@ -11,17 +11,17 @@ refuses (a volume spacer that would fill the air chamber, two adjusters whose su
 the measured forces) is skipped, not fatal: :func:`allowed` composes each candidate's fork and
 shock before anything is simulated, and the report names every one skipped and why (``skipped``).
 
-**Calibrated first, on request** (``calibrated``, ``--calibrate``; :mod:`mtbmj.ride.calibrate`): each end's spring
+**Calibrated first** (``calibrated``, the default; ``--no-calibrate`` turns it off; :mod:`mtbmj.ride.calibrate`): each end's spring
 scaled so that its mean force over the ride is the static load it carries (the record alone, before
 the reconstruction finds anything through the springs); every run rides that bike, and each
 candidate is read in the bike file's units relative to it (``Adjuster.per_unit`` times the scale).
-No scale that carries an end is a refusal (:class:`RideNotDescribed`). Not the default: on a ride
+No scale that carries an end is a refusal (:class:`RideNotDescribed`). It was opt-in while, on a ride
 made in the tests with the bike file's own springs and the fork's rebound four times too slow, the
 calibration reads the fork at x0.97 (the model's rider sits 6.5 cm further back than the test's),
 and that 3 % turned the right answer (rebound lowered 2800 -> 734 N s/m, the true 700) into
 "inconclusive"; the front then reproduced at 7.8 mm RMS against 4.6 with the file's spring (measured
 before the made ride's wheelbase shortened and every candidate was searched; since, calibrated advice
-lowers that rebound 2800 -> 734 N s/m: docs/rolling.md).
+lowers that rebound 2800 -> 734 N s/m and raises a soft fork 5 -> 11.79 N/mm: docs/rolling.md).
 
 **What is scored** (:func:`ride_metrics`, each end in % of its own travel): static sag (standing,
 the model's statics); dynamic sag (the mean travel); maximum travel and bottom-outs (within 3 mm
@@ -452,17 +452,17 @@ def _changes(base: Run, run: Run, uncertainty: dict, measured: dict) -> dict:
 
 
 def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
-           tries=(), candidates: bool = True, calibrated: bool = False, search: bool = True) -> Advice:
+           tries=(), candidates: bool = True, calibrated: bool = True, search: bool = True) -> Advice:
     """Advice for ``record`` (a two-ended ``TelemetryRecord``) on ``bike`` (preset, file or
     ``mtbmj.bike.spec.ResolvedBike``: read once, here or before), its keys ``overrides``;
     ``duration`` limits the simulated ride to its first seconds; the runs spread
     over ``workers`` processes, ``progress(fraction, note)`` called as each ends. ``tries``: settings to try (:class:`Trial`, from :func:`trial`),
     simulated over the same terrain beside the recorded setting and predicted as the candidates are
     (``Advice.tries``); ``candidates`` False simulates the tried settings only (:func:`predict`).
-    ``calibrated`` (``--calibrate``): the bike's springs calibrated on the ride first
-    (:mod:`mtbmj.ride.calibrate`), every run (the recorded setting, each candidate, each try) on the
-    calibrated bike, the candidates read in the file's units relative to it; False (the default): the
-    bike file as it is. ``search``: every candidate that lowers the penalty searched further along its
+    ``calibrated`` (the default; ``--no-calibrate`` is False): the bike's springs calibrated on the ride
+    first (:mod:`mtbmj.ride.calibrate`), every run (the recorded setting, each candidate, each try) on
+    the calibrated bike, the candidates read in the file's units relative to it; False: the bike file
+    as it is. ``search``: every candidate that lowers the penalty searched further along its
     adjuster before the verdict (:mod:`mtbmj.ride.advice_search`). Several rides of one setting:
     :func:`mtbmj.ride.advice_pool.pooled`."""
     import time
@@ -562,7 +562,7 @@ class Prepared:
                       record_t=t[keep] - t[0], calibration=self.cal)
 
 
-def prepare(record, bike, overrides=None, duration: float | None = None, calibrated: bool = False,
+def prepare(record, bike, overrides=None, duration: float | None = None, calibrated: bool = True,
             candidates: bool = True, tries=()) -> Prepared:
     """``record`` made ready for advice on ``bike`` (a ``ResolvedBike`` without overrides): its length
     checked, calibrated where asked, reconstructed and checked, its terrain, the adjusters and the
