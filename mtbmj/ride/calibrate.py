@@ -149,21 +149,39 @@ def _laws(bike, overrides):
     return spec, reconstruct_bike.whole_bike(spec, fork_setup, shock_setup)
 
 
-def _forces(whole, end: str, x_m, v_m_per_s):
-    """(spring force, damper force) at the wheel, vertical, N, per sample of ``end``'s travel (m:
-    the fork's stroke, the rear wheel's travel) and its speed."""
+def _geometry(whole, end: str, x_m):
+    """The rear's leverage ratio and shock stroke per sample of its wheel travel ``x_m`` (m), or None
+    for the front: geometry, the same at every spring scale, so computed once per ride."""
     if end == "front":
-        law, sa = whole.fork, whole.sin_a
-        one = lambda x, v: law.force(x, v, 0.0) if law.has_state else law.force(x, v)  # noqa: E731
-        spring = np.array([one(x, 0.0) for x in x_m]) / sa
-        total = np.array([one(x, v) for x, v in zip(x_m, v_m_per_s)]) / sa
+        return None
+    return np.array([whole.lev.ratio_at(w) for w in x_m]), whole.lev.strokes(np.asarray(x_m, float))
+
+
+def _total(whole, end: str, x_m, v_m_per_s, geometry=None):
+    """The suspension force at the wheel (spring, stops and damper together), vertical, N, per sample
+    of ``end``'s travel (m: the fork's stroke, the rear wheel's travel) and its speed; ``geometry``
+    the rear's :func:`_geometry` (computed here where None)."""
+    law = whole.fork if end == "front" else whole.shock
+    one = lambda x, v: law.force(x, v, 0.0) if law.has_state else law.force(x, v)  # noqa: E731
+    if end == "front":
+        return np.array([one(x, v) for x, v in zip(x_m, v_m_per_s)]) / whole.sin_a
+    ratio, strokes = _geometry(whole, end, x_m) if geometry is None else geometry
+    return np.array([one(s, v / r) for s, v, r in zip(strokes, v_m_per_s, ratio)]) / ratio
+
+
+def _forces(whole, end: str, x_m, v_m_per_s, geometry=None):
+    """(spring force, damper force) at the wheel, vertical, N, per sample of ``end``'s travel (m:
+    the fork's stroke, the rear wheel's travel) and its speed (the spring's at no speed, the damper's
+    the rest of :func:`_total`)."""
+    law = whole.fork if end == "front" else whole.shock
+    one = lambda x, v: law.force(x, v, 0.0) if law.has_state else law.force(x, v)  # noqa: E731
+    if end == "front":
+        spring = np.array([one(x, 0.0) for x in x_m]) / whole.sin_a
     else:
-        law, lev = whole.shock, whole.lev
-        one = lambda x, v: law.force(x, v, 0.0) if law.has_state else law.force(x, v)  # noqa: E731
-        ratio = np.array([lev.ratio_at(w) for w in x_m])
-        strokes = lev.strokes(np.asarray(x_m, float))
+        ratio, strokes = _geometry(whole, end, x_m) if geometry is None else geometry
+        geometry = (ratio, strokes)
         spring = np.array([one(s, 0.0) for s in strokes]) / ratio
-        total = np.array([one(s, v / r) for s, v, r in zip(strokes, v_m_per_s, ratio)]) / ratio
+    total = _total(whole, end, x_m, v_m_per_s, geometry)
     return spring, total - spring
 
 
@@ -207,10 +225,11 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
         v = m.velocity(t, series[end]) * 1e-3
         load = float(loads[end])
 
-        def mean_force(s):
+        geometry = _geometry(whole, end, x)  # the leverage does not change with the spring
+
+        def mean_force(s):  # the whole force's mean: its spring and damper parts not needed apart here
             _, w = _laws(bike, merged(overrides, adj.overrides(adj.value * s)))
-            spring, damper = _forces(w, end, x, v)
-            return float(np.mean(spring + damper))
+            return float(np.mean(_total(w, end, x, v, geometry)))
 
         lo, hi = SCALE_RANGE
         f_lo, f_hi = mean_force(lo) - load, mean_force(hi) - load
@@ -222,7 +241,7 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
                 f"spring {what} than that): the model does not describe this ride, so it cannot predict a change")
         s = float(brentq(lambda q: mean_force(q) - load, lo, hi, xtol=1e-4))
         _, w = _laws(bike, merged(overrides, adj.overrides(adj.value * s)))
-        spring, damper = _forces(w, end, x, v)
+        spring, damper = _forces(w, end, x, v, geometry)
         sp = np.array([spring[k].mean() for k in segs])
         dm = np.array([damper[k].mean() for k in segs])
         n = np.array([k.sum() for k in segs], float)
