@@ -508,6 +508,15 @@ def advise_speed_rows(d: dict) -> dict[str, list[Row]]:
             f"{num(r['median'], 3)} ({spread(r['min'], r['max'], 3)})", "advise_speed.json", d["command"])]}
 
 
+def calibrate_speed_rows(d: dict) -> dict[str, list[Row]]:
+    r, c, p = d["ratio"], d["calibrate_cpu_s"], d["pass_cpu_s"]
+    return {"bike": [
+        Row(f"the calibration of `mtbmj advise` on the shipped ride ({num(d['ride_seconds'], 3)} s), CPU time in "
+            f"passes of both ends' laws over the ride", "report",
+            f"{num(r['median'], 3)} passes ({spread(r['min'], r['max'], 3)}); {sec(c['median'])} "
+            f"({spread(c['min'], c['max'], 3, ' s')}) of CPU, one pass {sec(p['median'])}", "calibrate_speed.json",
+            d["command"])]}
+
 def _advise_refusal(why: str) -> str:
     """A refusal of ``mtbmj advise`` in a few words (the results file holds it whole)."""
     why = why.split(": ", 1)[-1]
@@ -612,6 +621,7 @@ SOURCES = [
     ("bike_speed.json", bike_speed_rows),
     ("bike_pedal_speed.json", bike_pedal_speed_rows),
     ("advise_speed.json", advise_speed_rows),
+    ("calibrate_speed.json", calibrate_speed_rows),
     ("reconstruct_rides.json", reconstruct_rides_rows),
     ("advise_rides.json", advise_rides_rows),
     ("suite_time.json", suite_time_rows),
