@@ -191,11 +191,20 @@ def _reference_scale(t, travel_mm, bike, end):
     return brentq(lambda q: mean_force(q) - load, *calibrate.SCALE_RANGE, xtol=1e-4)
 
 
-def test_the_mended_calibration_gives_the_same_scales(softer):
-    """The calibration's speed mend (the whole force's mean without its spring apart, the rear's
-    leverage once per ride) gives each end's scale as the plain per-sample loop does, on the first
-    6 s of the softer fork's ride (the same bisection: the same scale to rounding)."""
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "python"])
+def test_the_mended_calibration_gives_the_same_scales(softer, compiled, monkeypatch):
+    """The calibration's speed mends (the whole force's mean without its spring apart, the rear's
+    leverage once per ride, the laws through the compiled kernel where numba is present) give each
+    end's scale as the plain per-sample loop does, on the first 6 s of the softer fork's ride (the
+    same bisection: the same scale to rounding); without numba too (the Python laws per sample)."""
     import numpy as np
+
+    from mtbmj.controllers import jit
+
+    if compiled and jit.numba is None:
+        pytest.skip("numba not installed")
+    if not compiled:
+        monkeypatch.setattr(jit, "numba", None)
 
     from mtbmj.ride.reconstruct import RATE_HZ
 

@@ -16,7 +16,8 @@ a spring scale s (the fork's vertical force F(x, v) / sin(head angle), the shock
 leverage ratio), gives the mean force the ride had at s. The scale is the one whose mean force
 (spring, stops and damper together: a two-rate damper's mean force is not 0) equals the static
 load: one equation per end, solved by bisection (``brentq``) on the composed law, so a progressive
-or air spring is scaled as its own key scales it. A stretch of the ride where the wheel hangs in
+or air spring is scaled as its own key scales it. The law is evaluated along the whole ride at each scale the
+bisection tries, through the compiled kernel the engines run where numba is present (:func:`_along`). A stretch of the ride where the wheel hangs in
 the air carries no force, and that is in the mean too (the frame falls meanwhile).
 
 **Its interval** (``Scale.low``/``high``): the statics' own uncertainty, the rider's mean place fore and
@@ -157,30 +158,51 @@ def _geometry(whole, end: str, x_m):
     return np.array([whole.lev.ratio_at(w) for w in x_m]), whole.lev.strokes(np.asarray(x_m, float))
 
 
+def _along(law, x, v):
+    """``law``'s force (N) at each stroke ``x`` (m) and speed ``v`` (m/s), a stick state at 0 for a law
+    with one: through the compiled kernel every engine runs (``kernels.fork_forces``) where numba is
+    present and the law has a compiled form, else the Python law per sample (its specification)."""
+    from mtbmj.controllers import jit
+
+    x, v = np.ascontiguousarray(x, float), np.ascontiguousarray(v, float)
+    if jit.numba is not None:
+        from mtbmj.controllers.lawcodes import UnsupportedLaw, law_arrays
+
+        try:
+            I, P = law_arrays(law)
+        except UnsupportedLaw:
+            I = None
+        if I is not None:
+            from mtbmj.controllers import kernels
+
+            out = np.empty(x.size)
+            kernels.fork_forces(I, P, x, v, np.zeros(x.size), out)
+            return out
+    one = (lambda a, b: law.force(a, b, 0.0)) if law.has_state else law.force
+    return np.array([one(a, b) for a, b in zip(x, v)])
+
+
 def _total(whole, end: str, x_m, v_m_per_s, geometry=None):
     """The suspension force at the wheel (spring, stops and damper together), vertical, N, per sample
     of ``end``'s travel (m: the fork's stroke, the rear wheel's travel) and its speed; ``geometry``
     the rear's :func:`_geometry` (computed here where None)."""
-    law = whole.fork if end == "front" else whole.shock
-    one = lambda x, v: law.force(x, v, 0.0) if law.has_state else law.force(x, v)  # noqa: E731
     if end == "front":
-        return np.array([one(x, v) for x, v in zip(x_m, v_m_per_s)]) / whole.sin_a
+        return _along(whole.fork, x_m, v_m_per_s) / whole.sin_a
     ratio, strokes = _geometry(whole, end, x_m) if geometry is None else geometry
-    return np.array([one(s, v / r) for s, v, r in zip(strokes, v_m_per_s, ratio)]) / ratio
+    return _along(whole.shock, strokes, np.asarray(v_m_per_s, float) / ratio) / ratio
 
 
 def _forces(whole, end: str, x_m, v_m_per_s, geometry=None):
     """(spring force, damper force) at the wheel, vertical, N, per sample of ``end``'s travel (m:
     the fork's stroke, the rear wheel's travel) and its speed (the spring's at no speed, the damper's
     the rest of :func:`_total`)."""
-    law = whole.fork if end == "front" else whole.shock
-    one = lambda x, v: law.force(x, v, 0.0) if law.has_state else law.force(x, v)  # noqa: E731
+    still = np.zeros(np.asarray(x_m).size)
     if end == "front":
-        spring = np.array([one(x, 0.0) for x in x_m]) / whole.sin_a
+        spring = _along(whole.fork, x_m, still) / whole.sin_a
     else:
         ratio, strokes = _geometry(whole, end, x_m) if geometry is None else geometry
         geometry = (ratio, strokes)
-        spring = np.array([one(s, 0.0) for s in strokes]) / ratio
+        spring = _along(whole.shock, strokes, still) / ratio
     total = _total(whole, end, x_m, v_m_per_s, geometry)
     return spring, total - spring
 
