@@ -16,9 +16,10 @@ a spring scale s (the fork's vertical force F(x, v) / sin(head angle), the shock
 leverage ratio), gives the mean force the ride had at s. The scale is the one whose mean force
 (spring, stops and damper together: a two-rate damper's mean force is not 0) equals the static
 load: one equation per end, solved by bisection (``brentq``) on the composed law, so a progressive
-or air spring is scaled as its own key scales it. The law is evaluated along the whole ride at each scale the
-bisection tries, through the compiled kernel the engines run where numba is present (:func:`_along`). A stretch of the ride where the wheel hangs in
-the air carries no force, and that is in the mean too (the frame falls meanwhile).
+or air spring is scaled as its own key scales it (the law evaluated along the whole ride at each
+scale the bisection tries, through the compiled kernel the engines run where numba is present:
+:func:`_along`). A stretch of the ride where the wheel hangs in the air carries no force, and that
+is in the mean too (the frame falls meanwhile).
 
 **Its interval** (``Scale.low``/``high``): the statics' own uncertainty, the rider's mean place fore and
 aft known to ``RIDER_PLACE_MM`` (assumed; it moves load from one end to the other), and the ride split into the advice's segments
