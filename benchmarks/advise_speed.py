@@ -95,7 +95,7 @@ def main(argv=None) -> int:
            "ride": path.name, "ride_seconds": seconds, "workers": args.workers, "repeats": rows,
            "reconstruct_s": stats("reconstruct_s"), "one_run_s": stats("one_run_s"), "advise_s": stats("advise_s"),
            "ratio": stats("ratio"), "advise_cpu_s": stats("advise_cpu_s"), "advise_s_per_100_s_of_ride": stats("advise_s")["median"] * 100.0 / seconds,
-           "target_s_per_100_s": 120.0}
+           "target_s_per_100_s": 30.0}  # issue 52: 100 s of ride advised in 30 s on two cores
     print(f"advise {out['advise_s']['median']:.1f} s ({out['advise_s']['min']:.1f}-{out['advise_s']['max']:.1f}) on "
           f"{seconds:.0f} s of ride: {out['advise_s_per_100_s_of_ride']:.0f} s per 100 s; reconstruct "
           f"{out['reconstruct_s']['median']:.1f} s; advise / one run {out['ratio']['median']:.2f}")

@@ -508,6 +508,53 @@ def advise_speed_rows(d: dict) -> dict[str, list[Row]]:
             f"{num(r['median'], 3)} ({spread(r['min'], r['max'], 3)})", "advise_speed.json", d["command"])]}
 
 
+def calibrate_speed_rows(d: dict) -> dict[str, list[Row]]:
+    r, c, p = d["ratio"], d["calibrate_cpu_s"], d["pass_cpu_s"]
+    return {"bike": [
+        Row(f"the calibration of `mtbmj advise` on the shipped ride ({num(d['ride_seconds'], 3)} s), CPU time in "
+            f"passes of both ends' laws over the ride", "report",
+            f"{num(r['median'], 3)} passes ({spread(r['min'], r['max'], 3)}); {sec(c['median'])} "
+            f"({spread(c['min'], c['max'], 3, ' s')}) of CPU, one pass {sec(p['median'])}", "calibrate_speed.json",
+            d["command"])]}
+
+def _advise_refusal(why: str) -> str:
+    """A refusal of ``mtbmj advise`` in a few words (the results file holds it whole)."""
+    why = why.split(": ", 1)[-1]
+    if "fails its own check (" in why:
+        return "refused: its reconstruction's check (" + why.split("fails its own check (", 1)[1].split(";")[0] + ")"
+    if "does not beat a delayed copy" in why:
+        return "refused: its reconstruction's rear does not beat a delayed copy of the fork"
+    return "refused: " + why[:120]
+
+
+def advise_rides_rows(d: dict) -> dict[str, list[Row]]:
+    rows, name = [], "advise_rides.json"
+    target = "intervals overlap; one answer for all"
+    for r in d["rides"]:
+        figure = f"{r['ride']}" + (f" (v{r['version']}, {num(r['seconds'], 3)} s)" if "version" in r else "")
+        if "calibration" in r:
+            cal = "; ".join(f"{s['key'].split(':')[0].split('.')[0]} {num(s['calibrated'], 3)} {s['unit']} "
+                            f"({spread(s['calibrated_low'], s['calibrated_high'], 3)}; x{num(s['scale'], 3)} of the file's "
+                            f"{num(s['file'], 3)})" for s in r["calibration"]["springs"].values())
+        else:
+            cal = "calibration " + _advise_refusal(r.get("calibration_refused", r.get("unread", "")))
+        if "advice" in r:
+            a = r["advice"]
+            said = a["answer"] if a["recommendation"] is None else (
+                f"{a['recommendation']['setting']['adjuster']} {num(a['recommendation']['setting']['from'], 3)} -> "
+                f"{num(a['recommendation']['setting']['to'], 3)}")
+        else:
+            said = _advise_refusal(r.get("advice_refused", ""))
+        rows.append(Row(f"{figure}: the springs calibrated, 95 %", target, cal, name, d["command"]))
+        rows.append(Row(f"{figure}: the advice", target, said[:200], name, d["command"]))
+    for end, a in d["agreement"].items():
+        pairs = ", ".join(f"{k.replace('.SST', '').replace(' ', '/')} {'yes' if v else 'no'}" for k, v in a["pairs"].items())
+        common = "none" if a["common"] is None else f"x{num(a['common'][0], 3)}–x{num(a['common'][1], 3)}"
+        rows.append(Row(f"the {len(a['rides'])} rides' {end} spring scales: the range every interval holds", target,
+                        f"{common}; pairs overlapping: {pairs}", name, d["command"]))
+    return {"advise": rows}
+
+
 def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
     rows = []
     margin = d["beat_margin_percent"]
@@ -574,7 +621,9 @@ SOURCES = [
     ("bike_speed.json", bike_speed_rows),
     ("bike_pedal_speed.json", bike_pedal_speed_rows),
     ("advise_speed.json", advise_speed_rows),
+    ("calibrate_speed.json", calibrate_speed_rows),
     ("reconstruct_rides.json", reconstruct_rides_rows),
+    ("advise_rides.json", advise_rides_rows),
     ("suite_time.json", suite_time_rows),
 ]
 
@@ -666,6 +715,15 @@ wheels need to cross the feature (`tests/test_bike_reference.py`); `benchmarks/b
 runs the same terrains for a fixed time with the reference at its default tolerance. The speed is
 real time on one core (simulated seconds per wall second), interleaved with MuJoCo stepping the
 same model with no callback."""),
+    ("advise", "Advice on the shared rides (issue 52)", """\
+`mtbmj advise RIDE --bike sst` on each shared version-3 ride of the SST bike (`data/sst`), as the command runs
+it: the bike's springs calibrated on the ride first (`mtbmj/ride/calibrate.py`: each end's spring scale
+that makes its mean force over the ride the static load it carries; its 95 % interval from the ride's
+5 s segments resampled and the rider's mean place fore and aft, 30 mm, in quadrature), then the
+advice or its refusal. The calibrated values are given in the bike file's units with their interval
+and the scale on the file's value; a ride whose advice is refused still has its calibration (it needs
+no simulation). The last rows say, per end, which values every ride's interval holds (none: the
+rides' calibrations do not agree) and which pairs of rides overlap. Nothing is set to pass."""),
     ("suite", "The test suite", """\
 The README's two test commands, one after the other, from the repository root: the suite and the
 long physics checks that CI also runs (`tests/` marks them `slow`). A wall time on two cores shared

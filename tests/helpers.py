@@ -996,3 +996,18 @@ def advise_ride(path, seconds=ADVISE_SECONDS, **settings):
     fork_reb, shock_reb_scale): (bike file, SST file, fork mm, rear wheel mm, t)."""
     made = whole_bike_ride(path, seconds=seconds, profile=ADVISE_PROFILE, features=ADVISE_FEATURES, **settings)
     return made["bike"], made["sst"], made["fork_mm"], made["rear_mm"], made["t"]
+
+
+# the issue's ranges for a well-set bike: a change of the fork's spring within +-20 %, of a rebound
+# damping within +-30 % (or no change: inconclusive, or keep)
+def outside_well_set_ranges(rec: dict) -> list:
+    """The changes of a recommendation (it and those after it) outside the well-set ranges: a fork
+    spring moved more than 20 %, a rebound (fork or shock) more than 30 %."""
+    out = []
+    for change in [rec] + list(rec.get("then") or []):
+        key, st = change["key"], change["setting"]
+        move = abs(st["to"] / st["from"] - 1.0)
+        limit = 0.2 if key == "fork:fork.spring.rate_N_per_mm" else 0.3 if "rebound" in key else None
+        if limit is not None and move > limit + 1e-9:
+            out.append((key, st["from"], st["to"]))
+    return out

@@ -16,7 +16,7 @@ from mtbmj.cli import main
 from mtbmj.cli.telemetry import ride_record
 from mtbmj.ride import calibrate
 
-from helpers import advise_ride, bike_text, reconstruction_passing
+from helpers import advise_ride, bike_text, outside_well_set_ranges, reconstruction_passing
 
 FILE_RATE = 12.0  # N/mm, the fork's spring as the bike file says
 
@@ -117,3 +117,103 @@ def test_calibrated_advice_on_a_rebound_four_times_too_slow_lowers_it(tmp_path):
     rec = advice["recommendation"]
     assert rec["config_key"] == "fork.damper.rebound_N_s_per_m" and rec["direction"] == "down", rec
     assert 0.1 <= rec["setting"]["to"] / rec["setting"]["from"] <= 0.7, (rec["search"], scales)
+
+
+def test_the_well_set_ranges_catch_a_change_too_far():
+    """The check below can fail: a fork spring raised 25 % or a rebound lowered 36 % is outside."""
+    spring = {"key": "fork:fork.spring.rate_N_per_mm", "setting": {"from": 12.0, "to": 15.0}}
+    rebound = {"key": "fork:fork.damper.rebound_N_s_per_m", "setting": {"from": 700.0, "to": 448.0}}
+    assert outside_well_set_ranges(spring) == [("fork:fork.spring.rate_N_per_mm", 12.0, 15.0)]
+    assert outside_well_set_ranges({**spring, "setting": {"from": 12.0, "to": 13.2}, "then": [rebound]}) == [
+        ("fork:fork.damper.rebound_N_s_per_m", 700.0, 448.0)]
+    assert outside_well_set_ranges({**rebound, "setting": {"from": 700.0, "to": 560.0}}) == []
+
+
+@pytest.mark.slow  # one advice on a 30 s made ride, every candidate searched: 2-4 min on two busy cores
+def test_a_well_set_bike_is_left_about_where_it_is(tmp_path):
+    """The made ride of the bike exactly as its file says (the fork 12 N/mm, its rebound 700 N s/m,
+    the shock's 3500), advised calibrated (the default): the calibration holds 1 at both ends, and
+    the answer is inconclusive, keep, or a change within the issue's ranges for a well-set bike
+    (fork spring within +-20 %, rebound within +-30 %; every change after the first too). Measured:
+    the fork's rebound 700 -> 560 N s/m (one x0.8 step; the search found nothing further), driven by
+    the front bottom-outs the model has and the ride has not (4 against 0: the model's fork reaches
+    101 % of travel where the ride's reached 90 %)."""
+    folder = tmp_path / "well"
+    bike, sst, *_ = advise_ride(folder)  # the helpers' bike at its own file's setting
+    out = folder / "advice"
+    with reconstruction_passing():
+        assert main(["advise", str(sst), "--bike", str(bike), "--out", str(out)]) == 0
+    advice = json.loads((out / "advice.json").read_text())
+    for end, sc in advice["calibration"]["springs"].items():
+        assert sc["low"] <= 1.0 <= sc["high"], (end, sc)
+    answer = advice["verdict"]["answer"]
+    assert answer in ("change", "inconclusive", "keep"), advice["verdict"]
+    if answer == "change":
+        assert outside_well_set_ranges(advice["recommendation"]) == [], advice["recommendation"]
+
+
+def _reference_scale(t, travel_mm, bike, end):
+    """The scale of ``end``'s spring whose mean force at the wheel over ``travel_mm`` is the end's
+    static load, per sample as the module doc states it (the law at the stroke and speed, over
+    sin(head angle) or the leverage ratio), each sample's force in a plain loop: the calibration
+    before its speed mend (the leverage once per ride, the spring not apart), for the answer's sameness."""
+    import numpy as np
+    from scipy.optimize import brentq
+
+    from mtbmj.bike import run as bike_run
+    from mtbmj.bike import spec as spec_mod
+    from mtbmj.measured import metrics
+    from mtbmj.ride import reconstruct_bike
+
+    def whole(over):
+        spec = spec_mod.load(bike, over)
+        return spec, reconstruct_bike.whole_bike(spec, *bike_run.setups(spec))
+
+    spec, w0 = whole(None)
+    adj = calibrate.spring_adjuster(spec, end)
+    x = np.clip(travel_mm, 0.0, None) * 1e-3
+    v = metrics.velocity(t, travel_mm) * 1e-3
+
+    def mean_force(s):
+        _, w = whole(calibrate.merged({}, adj.overrides(adj.value * s)))
+        law = w.fork if end == "front" else w.shock
+        f = []
+        for xi, vi in zip(x, v):
+            if end == "front":
+                f.append((law.force(xi, vi, 0.0) if law.has_state else law.force(xi, vi)) / w.sin_a)
+            else:
+                r = w.lev.ratio_at(xi)
+                st = float(w.lev.strokes(np.array([xi]))[0])
+                f.append((law.force(st, vi / r, 0.0) if law.has_state else law.force(st, vi / r)) / r)
+        return float(np.mean(f))
+
+    load = w0.fF0 if end == "front" else w0.fR0
+    return brentq(lambda q: mean_force(q) - load, *calibrate.SCALE_RANGE, xtol=1e-4)
+
+
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "python"])
+def test_the_mended_calibration_gives_the_same_scales(softer, compiled, monkeypatch):
+    """The calibration's speed mends (the whole force's mean without its spring apart, the rear's
+    leverage once per ride, the laws through the compiled kernel where numba is present) give each
+    end's scale as the plain per-sample loop does, on the first 6 s of the softer fork's ride (the
+    same bisection: the same scale to rounding); without numba too (the Python laws per sample)."""
+    import numpy as np
+
+    from mtbmj.controllers import jit
+
+    if compiled and jit.numba is None:
+        pytest.skip("numba not installed")
+    if not compiled:
+        monkeypatch.setattr(jit, "numba", None)
+
+    from mtbmj.ride.reconstruct import RATE_HZ
+
+    sst, file = softer
+    record = ride_record(sst, Namespace(bike=str(file), fork_max_mm=None, shock_max_mm=None)).decimated(RATE_HZ)
+    t = np.asarray(record.time_s, float)
+    k = t - t[0] <= 6.0
+    front, rear = np.asarray(record.fork_mm, float)[k], np.asarray(record.rear_mm, float)[k]
+    cal = calibrate.spring_scales(t[k], front, rear, str(file))
+    for end, travel in (("front", front), ("rear", rear)):
+        assert cal.scales[end].value == pytest.approx(_reference_scale(t[k], travel, str(file), end), rel=1e-9), end
+    assert cal.scales["front"].value < 0.8  # the softer fork is found on these 6 s too: the check is not idle

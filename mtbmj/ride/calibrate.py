@@ -16,8 +16,10 @@ a spring scale s (the fork's vertical force F(x, v) / sin(head angle), the shock
 leverage ratio), gives the mean force the ride had at s. The scale is the one whose mean force
 (spring, stops and damper together: a two-rate damper's mean force is not 0) equals the static
 load: one equation per end, solved by bisection (``brentq``) on the composed law, so a progressive
-or air spring is scaled as its own key scales it. A stretch of the ride where the wheel hangs in
-the air carries no force, and that is in the mean too (the frame falls meanwhile).
+or air spring is scaled as its own key scales it (the law evaluated along the whole ride at each
+scale the bisection tries, through the compiled kernel the engines run where numba is present:
+:func:`_along`). A stretch of the ride where the wheel hangs in the air carries no force, and that
+is in the mean too (the frame falls meanwhile).
 
 **Its interval** (``Scale.low``/``high``): the statics' own uncertainty, the rider's mean place fore and
 aft known to ``RIDER_PLACE_MM`` (assumed; it moves load from one end to the other), and the ride split into the advice's segments
@@ -149,21 +151,60 @@ def _laws(bike, overrides):
     return spec, reconstruct_bike.whole_bike(spec, fork_setup, shock_setup)
 
 
-def _forces(whole, end: str, x_m, v_m_per_s):
-    """(spring force, damper force) at the wheel, vertical, N, per sample of ``end``'s travel (m:
-    the fork's stroke, the rear wheel's travel) and its speed."""
+def _geometry(whole, end: str, x_m):
+    """The rear's leverage ratio and shock stroke per sample of its wheel travel ``x_m`` (m), or None
+    for the front: geometry, the same at every spring scale, so computed once per ride."""
     if end == "front":
-        law, sa = whole.fork, whole.sin_a
-        one = lambda x, v: law.force(x, v, 0.0) if law.has_state else law.force(x, v)  # noqa: E731
-        spring = np.array([one(x, 0.0) for x in x_m]) / sa
-        total = np.array([one(x, v) for x, v in zip(x_m, v_m_per_s)]) / sa
+        return None
+    return np.array([whole.lev.ratio_at(w) for w in x_m]), whole.lev.strokes(np.asarray(x_m, float))
+
+
+def _along(law, x, v):
+    """``law``'s force (N) at each stroke ``x`` (m) and speed ``v`` (m/s), a stick state at 0 for a law
+    with one: through the compiled kernel every engine runs (``kernels.fork_forces``) where numba is
+    present and the law has a compiled form, else the Python law per sample (its specification)."""
+    from mtbmj.controllers import jit
+
+    x, v = np.ascontiguousarray(x, float), np.ascontiguousarray(v, float)
+    if jit.numba is not None:
+        from mtbmj.controllers.lawcodes import UnsupportedLaw, law_arrays
+
+        try:
+            I, P = law_arrays(law)
+        except UnsupportedLaw:
+            I = None
+        if I is not None:
+            from mtbmj.controllers import kernels
+
+            out = np.empty(x.size)
+            kernels.fork_forces(I, P, x, v, np.zeros(x.size), out)
+            return out
+    one = (lambda a, b: law.force(a, b, 0.0)) if law.has_state else law.force
+    return np.array([one(a, b) for a, b in zip(x, v)])
+
+
+def _total(whole, end: str, x_m, v_m_per_s, geometry=None):
+    """The suspension force at the wheel (spring, stops and damper together), vertical, N, per sample
+    of ``end``'s travel (m: the fork's stroke, the rear wheel's travel) and its speed; ``geometry``
+    the rear's :func:`_geometry` (computed here where None)."""
+    if end == "front":
+        return _along(whole.fork, x_m, v_m_per_s) / whole.sin_a
+    ratio, strokes = _geometry(whole, end, x_m) if geometry is None else geometry
+    return _along(whole.shock, strokes, np.asarray(v_m_per_s, float) / ratio) / ratio
+
+
+def _forces(whole, end: str, x_m, v_m_per_s, geometry=None):
+    """(spring force, damper force) at the wheel, vertical, N, per sample of ``end``'s travel (m:
+    the fork's stroke, the rear wheel's travel) and its speed (the spring's at no speed, the damper's
+    the rest of :func:`_total`)."""
+    still = np.zeros(np.asarray(x_m).size)
+    if end == "front":
+        spring = _along(whole.fork, x_m, still) / whole.sin_a
     else:
-        law, lev = whole.shock, whole.lev
-        one = lambda x, v: law.force(x, v, 0.0) if law.has_state else law.force(x, v)  # noqa: E731
-        ratio = np.array([lev.ratio_at(w) for w in x_m])
-        strokes = lev.strokes(np.asarray(x_m, float))
-        spring = np.array([one(s, 0.0) for s in strokes]) / ratio
-        total = np.array([one(s, v / r) for s, v, r in zip(strokes, v_m_per_s, ratio)]) / ratio
+        ratio, strokes = _geometry(whole, end, x_m) if geometry is None else geometry
+        geometry = (ratio, strokes)
+        spring = _along(whole.shock, strokes, still) / ratio
+    total = _total(whole, end, x_m, v_m_per_s, geometry)
     return spring, total - spring
 
 
@@ -207,10 +248,11 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
         v = m.velocity(t, series[end]) * 1e-3
         load = float(loads[end])
 
-        def mean_force(s):
+        geometry = _geometry(whole, end, x)  # the leverage does not change with the spring
+
+        def mean_force(s):  # the whole force's mean: its spring and damper parts not needed apart here
             _, w = _laws(bike, merged(overrides, adj.overrides(adj.value * s)))
-            spring, damper = _forces(w, end, x, v)
-            return float(np.mean(spring + damper))
+            return float(np.mean(_total(w, end, x, v, geometry)))
 
         lo, hi = SCALE_RANGE
         f_lo, f_hi = mean_force(lo) - load, mean_force(hi) - load
@@ -222,7 +264,7 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
                 f"spring {what} than that): the model does not describe this ride, so it cannot predict a change")
         s = float(brentq(lambda q: mean_force(q) - load, lo, hi, xtol=1e-4))
         _, w = _laws(bike, merged(overrides, adj.overrides(adj.value * s)))
-        spring, damper = _forces(w, end, x, v)
+        spring, damper = _forces(w, end, x, v, geometry)
         sp = np.array([spring[k].mean() for k in segs])
         dm = np.array([damper[k].mean() for k in segs])
         n = np.array([k.sum() for k in segs], float)
