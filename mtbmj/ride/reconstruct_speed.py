@@ -8,7 +8,9 @@ every 2.5 s, the profile linear between them). A window gives no speed, and says
 below ``MIN_CORRELATION``, has a second peak within ``AMBIGUOUS`` of it, lies at either end of the lags
 searched or has its lobe reach an end, where its ``SUB_WINDOWS`` parts do not find their lags within
 the best peak or its speed's standard error (from those parts' lags) exceeds ``MAX_SPEED_SD`` of it,
-or where either end's travel spans less than ``STILL_MM`` (standing). A ride shorter than one window
+where either end's travel spans less than ``STILL_MM`` (standing), or where the rest of the ride
+contradicts it (:func:`drop_unsupported`: both overlapping neighbours against it, or alone and
+``FAR`` times off the ride's median). A ride shorter than one window
 and the slowest lag searched (:func:`min_seconds`) is refused before any work.
 """
 from __future__ import annotations
@@ -28,6 +30,10 @@ GROUND_HIGHPASS_HZ = 1.0  # the two ends' grounds high-passed before the lag is 
 SPEED_RANGE = (1.0, 15.0)  # m/s the lag is searched for
 SUB_WINDOWS = 4  # a window's lag found again in this many parts of it: their spread is its uncertainty
 MAX_SPEED_SD = 0.10  # a window whose speed's standard error exceeds this share of it gives no speed
+NEIGHBOURS_AGREE = 0.15  # two overlapping neighbours this close (share of their mean) agree on the speed ...
+OUTLIER = 0.25  # ... and a window between them this far from their mean gives no speed (drop_unsupported)
+FAR = 2.0  # a window no neighbour supports, this many times off the median of the ride's other windows ...
+FAR_OTHERS = 3  # ... of at least this many, gives no speed
 STILL_MM = 1.0  # a window where either end's travel spans less than this is standing: it gives no speed
 
 
@@ -170,8 +176,49 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
     return _profile(windows, sds, whys, wheelbase, window_s)
 
 
+def drop_unsupported(windows, sds, whys) -> None:
+    """Windows whose speed the rest of the ride contradicts, given no speed (in place). A window spans
+    the second half of the one before it and the first half of the one after it, so (a) where those
+    two agree (within ``NEIGHBOURS_AGREE`` of their mean) its speed cannot lie more than ``OUTLIER``
+    from their mean (and more than three standard errors): its peak is another lag's; (b) a window
+    neither neighbour supports (none gives a speed within ``OUTLIER`` of its) whose speed is more than
+    ``FAR`` times off the median of the ride's other windows (at least ``FAR_OTHERS`` of them) stands
+    alone against the ride: its lag is not the wheelbase's (the terrain's distance axis, integrated
+    from the speed, would be stretched or squeezed that many times around it)."""
+    speeds = [v for _, v, _ in windows]
+    out = []
+    for k, v in enumerate(speeds):
+        if v is None:
+            continue
+        before = speeds[k - 1] if k > 0 else None
+        after = speeds[k + 1] if k + 1 < len(speeds) else None
+        if before is not None and after is not None:
+            mean = 0.5 * (before + after)
+            spread = 3.0 * math.sqrt((sds[k] or 0.0) ** 2 + 0.25 * ((sds[k - 1] or 0.0) ** 2 + (sds[k + 1] or 0.0) ** 2))
+            if abs(before - after) <= NEIGHBOURS_AGREE * mean and abs(v - mean) > max(OUTLIER * mean, spread):
+                out.append((k, f"its speed {v:.2f} m/s where the two windows it overlaps give {before:.2f} and "
+                               f"{after:.2f}: another lag's peak"))
+                continue
+        if any(n is not None and abs(n - v) <= OUTLIER * v for n in (before, after)):
+            continue  # a neighbour supports it
+        others = [u for j, u in enumerate(speeds) if u is not None and j != k]
+        if len(others) >= FAR_OTHERS:
+            median = float(np.median(others))
+            if not median / FAR <= v <= median * FAR:
+                out.append((k, f"its speed {v:.2f} m/s, alone (no overlapping window near it), {max(v / median, median / v):.1f} "
+                               f"times off the {median:.2f} m/s median of the ride's {len(others)} other windows"))
+    for k, why in out:
+        windows[k] = (windows[k][0], None, windows[k][2])
+        sds[k], whys[k] = None, why
+
+
 def _profile(windows, sds, whys, wheelbase: float, window_s: float, sources=None) -> dict:
-    """speed_from_lag's answer from its windows: refused in one line where no window gave a speed."""
+    """speed_from_lag's answer from its windows: refused in one line where no window gave a speed.
+    A window the rest of the ride contradicts gives none (:func:`drop_unsupported`)."""
+    windows, sds, whys = list(windows), list(sds), list(whys)
+    drop_unsupported(windows, sds, whys)
+    if sources is not None:
+        sources = [src if w[1] is not None else None for src, w in zip(sources, windows)]
     good = [(a + 0.5 * window_s, v) for a, v, _ in windows if v is not None]
     if not good:
         top = max((c for _, _, c in windows), default=0.0)
@@ -221,4 +268,4 @@ def speed_from_either(t, first, second, wheelbase: float, names=("first", "secon
     return _profile(windows, sds, whys, wheelbase, base["window_s"], sources)
 
 
-__all__ = ["WINDOW_S", "WINDOW_HOP", "SPEED_RANGE", "ReconstructError", "min_seconds", "check_length", "speed_from_lag", "speed_from_either"]
+__all__ = ["drop_unsupported", "WINDOW_S", "WINDOW_HOP", "SPEED_RANGE", "ReconstructError", "min_seconds", "check_length", "speed_from_lag", "speed_from_either"]
