@@ -300,8 +300,10 @@ def test_shared_files_show_the_replay_beside_the_record(shared_replays):
 
 @pytest.mark.slow
 @pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
-@pytest.mark.xfail(strict=True, reason="the replay reads the damper lower at 8 clicks (1426 N s/m) than at 0 (2012): "
-                                       "the damper does not rise with the rebound clicks here")
+@pytest.mark.xfail(strict=True, reason="the replay reads the damper lower at 8 clicks (1364 N s/m [0, 7083]) than at 0 "
+                                       "(2012 [0, 6768]): one replay does not read the damper (damper-friction "
+                                       "correlation -0.90, -0.94); fitted jointly with one spring and one friction "
+                                       "it is still the lowest at 8 (2069, 1602, 2497 at 0, 8, 17)")
 def test_shared_damper_rises_with_clicks(shared_replays):
     done = {s["clicks"]: s for s in shared_replays["summary"]}
     assert done[8]["damper_N_s_per_m"] > done[0]["damper_N_s_per_m"]
@@ -315,3 +317,48 @@ def test_replay_needs_a_bike(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and "--replay" in err[0] and "--bike" in err[0]
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_pooled_replay_of_two_clicks(seated):
+    """Two slams of this file's generator at two rebound settings (2500 and 3500 N s/m, one spring
+    0.55 x and one friction 30 N) replayed jointly (``bounce_pooled``: one spring and one friction, a
+    damper each): the spring within 15 %, each damper within 30 % and the larger read as the larger."""
+    from mtbmj.identify.bounce_pooled import replay_pooled
+    from mtbmj.identify.bounce_replay import SeatedReplay, prepare_slam
+
+    slams = []
+    for c in (2500.0, 3500.0):
+        t, x = slam(scale=0.55, c=c, fc=30.0, seed=int(c))
+        sr = seated if not slams else SeatedReplay("sst")
+        slams.append(prepare_slam(t, x, None, f"generated {c:g}", sr))
+    replays, refused, pooled = replay_pooled(slams)
+    assert not refused and len(replays) == 2
+    assert pooled["spring_scale"] == pytest.approx(0.55, rel=0.15)
+    (a, b) = (rp.values["damper_N_s_per_m"] for rp in replays)
+    assert a == pytest.approx(2500.0, rel=0.30) and b == pytest.approx(3500.0, rel=0.30) and b > a
+    assert replays[0].values["spring_scale"] == replays[1].values["spring_scale"] == pooled["spring_scale"]
+
+
+def test_push_settles_after_the_slam():
+    """The pooled replay's settling force: none before the slam lobe's end, half of it SETTLE_S / 2
+    after (sin^2 of pi/4 = 1/2), all of it from SETTLE_S on; without settle_N the push is the two lobes."""
+    from mtbmj.identify.bounce_replay import SETTLE_S, push
+
+    p = {"lift_N": 0.0, "lift_start_s": -0.5, "lift_s": 0.2, "slam_N": 0.0, "slam_end_s": 0.02, "slam_s": 0.1}
+    t = np.array([0.0, 0.02 + SETTLE_S / 2, 0.02 + SETTLE_S, 1.0])
+    assert np.allclose(push(t, {**p, "settle_N": 400.0}), [0.0, -200.0, -400.0, -400.0])
+    assert np.allclose(push(t, p), 0.0)
+
+
+def test_compression_set_apart_from_rebound(seated):
+    """set_shock's compression coefficient (the pooled replay's shared one) reaches the shock's law
+    apart from the rebound's; without it both are the damper's."""
+    from mtbmj.identify.bounce_replay import SHOCK_KEYS
+
+    seated.set_rest(12.0, None)
+    seated.set_shock(0.5, 2000.0, 30.0, 900.0)
+    cfg = seated.p.shock_setup.config
+    assert cfg.get(SHOCK_KEYS["compression"]) == 900.0 and cfg.get(SHOCK_KEYS["rebound"]) == 2000.0
+    seated.set_shock(0.5, 2000.0, 30.0)
+    assert seated.p.shock_setup.config.get(SHOCK_KEYS["compression"]) == 2000.0

@@ -174,8 +174,15 @@ class SeatedReplay:
             shock = compose.setup(load(self.spec.shock_config, over_s))
             fork = compose.setup(load(self.spec.fork_config, over_f or None))
         p.shock_setup, p.shock_law, p.fork_setup, p.fork_law = shock, shock.fork, fork, fork.fork
-        p.callback = bike_run.make_callback(self.kind, p.bike, fork.fork, shock.fork, p.front_tire, p.rear_tire,
-                                            p.drive, p.speed, p.traction, p.callback.refresh)
+        args = (self.kind, p.bike, fork.fork, shock.fork, p.front_tire, p.rear_tire, p.drive, p.speed, p.traction,
+                p.callback.refresh)
+        try:
+            p.callback = bike_run.make_callback(*args)
+        except RuntimeError:  # the compiled callbacks' slots full of ones not yet collected (several replays alive)
+            import gc
+
+            gc.collect()
+            p.callback = bike_run.make_callback(*args)
 
     def _static(self):
         ref = Reference(self.p)
