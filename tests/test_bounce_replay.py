@@ -2,19 +2,28 @@
 (``mtbmj.identify.bounce_replay``, ``fit bounce --replay``).
 
 (a) A slam made here by a model of this file's own (``slam`` below: its own fixed-step integrator,
-a bike-like two-mass in the shock's stroke with the seated rider on a saddle spring-damper, a coil
-with preload, a linear damper, Coulomb friction with a stick condition and a stiff top-out stop,
-started at rest, pushed by a known lift and slam): the replay gives back the spring scale and the
-damper. What the two models share: the seated body's 5 Hz and 0.475 (Fairley and Griffin 1989), the
-linear damper both ways, Coulomb friction, the top-out at 0 mm, the rest level matched by preload
-and the mass the shock carries, here taken from the preset's documented seated rear mode (1.97 Hz
-at its 80 N/mm, docs/identification.md: 522 kg reflected to the stroke). Not shared: the integrator,
-the bike's pitch and fork, the leverage curve, the tyres, the friction law (a stick condition here,
-the shock law's friction state there), the push's shape (half sines here, sin^2 lobes there) and
-where it acts. The stated tolerance, 15 % on the spring and 30 % on the damper, is that mismatch: the
-one-mode mass holds the rear mode at the preset's spring; at half of it the front and the pitch take
-part otherwise (the rear mode's mass changes by some per cent), and the damper shares the ring-down's
-loss with the rider's body damping and the friction, whose split the two models make differently.
+a one-mode model in the shock's stroke with the seated rider on a saddle spring-damper, a coil with
+preload on the preset's top-out spring, a stiffness beside the coil, a linear damper, Coulomb
+friction with a stick condition, started at rest, pushed by a known lift and slam): the replay gives
+back the spring scale and the damper. What the two models share: the seated body's 5 Hz and 0.475
+(Fairley and Griffin 1989), the linear damper both ways, Coulomb friction, the preset's top-out spring
+(300 N/mm carrying the coil's preload, ``TopOutSpring``), the rest level matched by preload, and the
+rear mode's two lumped values in the stroke: its mass (665 kg) and the stiffness beside the coil
+(17.8 kN/m: the tyre, the leverage's progression under the static load, the pitch), solved so that
+this model rings as the MuJoCo bike's free ring-downs at its 10 mm rest were measured, 1.488 Hz at
+0.55 x the preset's coil and 1.842 Hz at 1.0 x (``test_generator_rings_as_the_bike`` holds it).
+Not shared: the integrator, the bike's pitch and fork, the leverage curve, the tyres, the friction
+law (a stick condition here, the shock law's friction state there), the push's shape (half sines
+here, sin^2 lobes there) and where it acts. The stated tolerance is 15 % on the spring and 30 % on
+the damper. It holds lightly damped (2500 N s/m); heavily damped (5000 N s/m) the one-mode model is
+not the bike (its damped frequency falls with the damper, the bike's rises: the tyre in series), kept
+as a strict xfail with the measured frequencies.
+
+An earlier form of this generator took the mass from the preset's rear mode at its own spring alone
+(522 kg, no stiffness beside the coil) and a top-out stop 100 x stiffer than the preset's: at
+0.55 x that model rang as the bike does at 0.47 x (1.420 Hz against 1.488), and its damping at
+2500 N s/m as the bike's at about 3070; the replay then read it 0.45 and 0.40 x. It was the
+generator that was not the bike it claimed to be.
 
 (b) Wrong input: the record's travel scaled x2 (it leaves the shock's stroke) is refused in one
 line; a slam the bike cannot follow (a ring-down at 6 Hz, three times faster than any spring scale
@@ -32,19 +41,21 @@ import pytest
 from mtbmj.identify.bounce import BounceError
 
 K0 = 80e3  # N/m at the shock: the preset's coil (sst), the rate the replay scales
-F_BIKE = 1.97  # Hz: the preset's seated bike's rear mode at its own spring (docs/identification.md)
-M_SHOCK = K0 / (2 * math.pi * F_BIKE) ** 2  # kg reflected to the stroke (522 kg)
+M_SHOCK = 665.0  # kg: the rear mode's mass in the stroke (module docstring)
+K_OTHER = 17.8e3  # N/m: the rear mode's stiffness beside the coil (module docstring)
 RIDER_SHARE = 0.7  # of that mass, the rider's body on the saddle
 RIDER_HZ, RIDER_ZETA = 5.0, 0.475  # the seated body (Fairley and Griffin 1989)
 W_SHOCK = 1850.0  # N: the shock's static force (the preset's: 80 N/mm at about 20 mm, 250 N preload)
-STOP = 3e7  # N/m: the top-out stop (stiff: under 1 mm past it)
+TOP_OUT = 300e3  # N/m: the preset's top-out spring (fork.spring.top_out_rate_N_per_mm = 300 in the sst shock)
 FS = 5000.0
 
 
-def slam(scale=0.55, c=2500.0, fc=30.0, rest_mm=10.0, lift=0.6, push=1.3, noise=0.05, seed=1, dt=2e-5,
+def slam(scale=0.55, c=2500.0, fc=30.0, rest_mm=14.0, lift=0.6, push=1.0, noise=0.05, seed=1, dt=2e-5,
          quiet=2.0, after=1.6):
     """(time_s, stroke_mm) of a seat slam: at rest for ``quiet`` s, a lift (``lift`` x the static force,
-    a half sine over 0.35 s) and a slam (``push`` x, a half sine over 0.2 s) on the rider, then free."""
+    a half sine over 0.35 s) and a slam (``push`` x, a half sine over 0.2 s) on the rider, then free.
+    The coil's preload P rests the shock at ``rest_mm``; near full extension the top-out spring takes
+    it up, P + k x - k_t max(0, P / k_t - x), so the force is 0 at full extension (x = 0)."""
     k = scale * K0
     m_r, m_b = RIDER_SHARE * M_SHOCK, (1 - RIDER_SHARE) * M_SHOCK
     k_r = m_r * (2 * math.pi * RIDER_HZ) ** 2
@@ -66,7 +77,7 @@ def slam(scale=0.55, c=2500.0, fc=30.0, rest_mm=10.0, lift=0.6, push=1.3, noise=
         if t_slam < t < t_slam + T_slam:
             f += push * W_SHOCK * math.sin(math.pi * (t - t_slam) / T_slam)
         saddle = k_r * y + c_r * vy
-        spring = preload + k * xb if xb > 0 else preload + STOP * xb
+        spring = preload + k * xb + K_OTHER * (xb - x_rest) - TOP_OUT * max(0.0, preload / TOP_OUT - xb)
         net = g_b + saddle - spring - c * vb
         if abs(vb) < 1e-4 and abs(net) <= fc:  # stuck
             ab, vb = 0.0, 0.0
@@ -83,13 +94,22 @@ def slam(scale=0.55, c=2500.0, fc=30.0, rest_mm=10.0, lift=0.6, push=1.3, noise=
     return np.arange(x.size) / FS, x + noise * np.random.default_rng(seed).standard_normal(x.size)
 
 
+def ring_frequency(t, x) -> float:
+    """The mean frequency of a ring-down about 0 from its zero crossings (Hz)."""
+    i = np.nonzero(np.diff(np.sign(x)) != 0)[0]
+    tz = t[i] - x[i] * (t[i + 1] - t[i]) / (x[i + 1] - x[i])
+    return float(1.0 / (2.0 * np.mean(np.diff(tz))))
+
+
 def test_generator_is_a_slam():
-    """The test's own slam: at rest at 10 mm before, a slam deep into the stroke, a ring-down that tops out."""
+    """The test's own slam: at rest at 14 mm before, a slam deep into the stroke, a ring-down that tops
+    out (reaches the top-out spring, P / k_t = 4 mm) and stays within the bike's stroke."""
     t, x = slam()
     before = x[t < 1.4]
-    assert abs(np.median(before) - 10.0) < 0.05
+    assert abs(np.median(before) - 14.0) < 0.05
     assert 40.0 < x.max() < 65.0
-    assert x[t > t[np.argmax(x)]].min() < 1.0
+    after = x[t > t[np.argmax(x)]]
+    assert -1.3 < after.min() < 1.0
 
 
 @pytest.fixture(scope="module")
@@ -141,6 +161,24 @@ def test_saddle_rings_at_rider_hz(seated):
     assert math.sqrt(k / mass) / (2 * math.pi) == pytest.approx(5.0, rel=0.05)
 
 
+@pytest.mark.parametrize("scale,hz", [(0.55, 1.488), (1.0, 1.842)])
+def test_generator_rings_as_the_bike(seated, scale, hz):
+    """The generator's one-mode values (M_SHOCK, K_OTHER) hold: a small free ring-down of this file's
+    model (no friction, 100 N s/m, its rest at 10 mm) and of the MuJoCo bike (the same) ring at the
+    frequency measured on the bike (module docstring), within 1 %."""
+    t, x = slam(scale=scale, c=100.0, fc=0.0, rest_mm=10.0, lift=0.0, push=0.15, noise=0.0, dt=1e-4, after=3.0)
+    free = t > 2.05
+    f_test = ring_frequency(t[free], x[free] - 10.0)
+    seated.set_rest(10.0, None)
+    out = seated.run({"lift_N": 0.0, "lift_start_s": -0.5, "lift_s": 0.1, "slam_N": 300.0, "slam_end_s": 0.0,
+                      "slam_s": 0.1, "spring_scale": scale, "damper_N_s_per_m": 100.0, "friction_N": 0.0},
+                     before_s=0.2, after_s=3.0)
+    tb, xb = out["time_s"], out["stroke_mm"] - out["stroke_mm"][0]
+    f_bike = ring_frequency(tb[tb > 0.05], xb[tb > 0.05])
+    assert f_bike == pytest.approx(hz, rel=0.01)
+    assert f_test == pytest.approx(f_bike, rel=0.01)
+
+
 @pytest.fixture(scope="module")
 def generated(seated):
     """The replays of two slams of this file's generator: spring 0.55 x the preset's, damper 2500 and
@@ -164,15 +202,28 @@ def test_follows_an_independent_slam(generated):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="the model mismatch is larger than stated: the spring comes back 0.45 and "
-                                       "0.40 x (generator 0.55: 17 and 28 % low) and the damper 3726 and 4974 N s/m "
-                                       "(2500 and 5000: 49 % high, 0.5 % low)")
 def test_recovers_spring_and_damper(generated):
-    """(a) Within the stated tolerance (module docstring): the spring scale within 15 %, the damper
-    within 30 %."""
-    for c, rp in generated.items():
-        assert rp.values["spring_scale"] == pytest.approx(0.55, rel=0.15)
-        assert rp.values["damper_N_s_per_m"] == pytest.approx(c, rel=0.30)
+    """(a) Within the stated tolerance (module docstring), lightly damped (2500 N s/m, a damping ratio
+    of about 0.19): the spring scale within 15 %, the damper within 30 %, each inside its interval."""
+    rp = generated[2500.0]
+    s = rp.summary()
+    assert rp.values["spring_scale"] == pytest.approx(0.55, rel=0.15)
+    assert rp.values["damper_N_s_per_m"] == pytest.approx(2500.0, rel=0.30)
+    assert s["spring_scale_ci95"][0] <= 0.55 <= s["spring_scale_ci95"][1]
+    assert s["damper_N_s_per_m_ci95"][0] <= 2500.0 <= s["damper_N_s_per_m_ci95"][1]
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="heavily damped (5000 N s/m, zeta 0.36) the one-mode generator is not the "
+                                       "bike: its damped frequency falls with the damper (1.395 Hz at 0.55 x) while "
+                                       "the bike's rises (1.511 Hz at 0.55 x, 4400 N s/m: the tyre in series); the "
+                                       "replay reads 0.461 x [0.39, 0.53] and 4083 N s/m, the bike's values for "
+                                       "that frequency (1.414 Hz at 0.461 x)")
+def test_recovers_spring_heavily_damped(generated):
+    """(a) The same at 5000 N s/m."""
+    rp = generated[5000.0]
+    assert rp.values["spring_scale"] == pytest.approx(0.55, rel=0.15)
+    assert rp.values["damper_N_s_per_m"] == pytest.approx(5000.0, rel=0.30)
 
 
 def test_travel_doubled_is_refused(seated):
@@ -249,8 +300,10 @@ def test_shared_files_show_the_replay_beside_the_record(shared_replays):
 
 @pytest.mark.slow
 @pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
-@pytest.mark.xfail(strict=True, reason="the replay reads the damper lower at 8 clicks (1426 N s/m) than at 0 (2012): "
-                                       "the damper does not rise with the rebound clicks here")
+@pytest.mark.xfail(strict=True, reason="the replay reads the damper lower at 8 clicks (1364 N s/m [0, 7083]) than at 0 "
+                                       "(2012 [0, 6768]): one replay does not read the damper (damper-friction "
+                                       "correlation -0.90, -0.94); fitted jointly with one spring and one friction "
+                                       "it is still the lowest at 8 (2069, 1602, 2497 at 0, 8, 17)")
 def test_shared_damper_rises_with_clicks(shared_replays):
     done = {s["clicks"]: s for s in shared_replays["summary"]}
     assert done[8]["damper_N_s_per_m"] > done[0]["damper_N_s_per_m"]
@@ -264,3 +317,48 @@ def test_replay_needs_a_bike(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and "--replay" in err[0] and "--bike" in err[0]
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow
+def test_pooled_replay_of_two_clicks(seated):
+    """Two slams of this file's generator at two rebound settings (2500 and 3500 N s/m, one spring
+    0.55 x and one friction 30 N) replayed jointly (``bounce_pooled``: one spring and one friction, a
+    damper each): the spring within 15 %, each damper within 30 % and the larger read as the larger."""
+    from mtbmj.identify.bounce_pooled import replay_pooled
+    from mtbmj.identify.bounce_replay import SeatedReplay, prepare_slam
+
+    slams = []
+    for c in (2500.0, 3500.0):
+        t, x = slam(scale=0.55, c=c, fc=30.0, seed=int(c))
+        sr = seated if not slams else SeatedReplay("sst")
+        slams.append(prepare_slam(t, x, None, f"generated {c:g}", sr))
+    replays, refused, pooled = replay_pooled(slams)
+    assert not refused and len(replays) == 2
+    assert pooled["spring_scale"] == pytest.approx(0.55, rel=0.15)
+    (a, b) = (rp.values["damper_N_s_per_m"] for rp in replays)
+    assert a == pytest.approx(2500.0, rel=0.30) and b == pytest.approx(3500.0, rel=0.30) and b > a
+    assert replays[0].values["spring_scale"] == replays[1].values["spring_scale"] == pooled["spring_scale"]
+
+
+def test_push_settles_after_the_slam():
+    """The pooled replay's settling force: none before the slam lobe's end, half of it SETTLE_S / 2
+    after (sin^2 of pi/4 = 1/2), all of it from SETTLE_S on; without settle_N the push is the two lobes."""
+    from mtbmj.identify.bounce_replay import SETTLE_S, push
+
+    p = {"lift_N": 0.0, "lift_start_s": -0.5, "lift_s": 0.2, "slam_N": 0.0, "slam_end_s": 0.02, "slam_s": 0.1}
+    t = np.array([0.0, 0.02 + SETTLE_S / 2, 0.02 + SETTLE_S, 1.0])
+    assert np.allclose(push(t, {**p, "settle_N": 400.0}), [0.0, -200.0, -400.0, -400.0])
+    assert np.allclose(push(t, p), 0.0)
+
+
+def test_compression_set_apart_from_rebound(seated):
+    """set_shock's compression coefficient (the pooled replay's shared one) reaches the shock's law
+    apart from the rebound's; without it both are the damper's."""
+    from mtbmj.identify.bounce_replay import SHOCK_KEYS
+
+    seated.set_rest(12.0, None)
+    seated.set_shock(0.5, 2000.0, 30.0, 900.0)
+    cfg = seated.p.shock_setup.config
+    assert cfg.get(SHOCK_KEYS["compression"]) == 900.0 and cfg.get(SHOCK_KEYS["rebound"]) == 2000.0
+    seated.set_shock(0.5, 2000.0, 30.0)
+    assert seated.p.shock_setup.config.get(SHOCK_KEYS["compression"]) == 2000.0

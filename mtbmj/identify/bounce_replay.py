@@ -29,8 +29,9 @@ and the slam's amplitude on the whole replay, the push's timing held. The shock'
 rate's scale on the bike file's, a linear damper (the same coefficient in compression and rebound,
 N s/m at the shock, as the linear reading through the bike, ``bounce_bike``: a slam's compression is
 driven by the fitted push, which takes up a compression coefficient fitted beside it) and its
-Coulomb friction (N at the shock). 95 % intervals of the last stage's values (conditional on the
-push's timing): the Jacobian's covariance with the residual's variance, inflated for its lag-1
+Coulomb friction (N at the shock). 95 % intervals of all nine values together (the push's timing
+trades with the spring; held, it made a heavily damped slam's spring interval too narrow): the
+Jacobian's (forward differences at the fitted values) covariance with the residual's variance, inflated for its lag-1
 autocorrelation (a replay's residual is model error, smooth in time: the effective number of
 samples n (1 - rho) / (1 + rho)), Student's t; the shock's values' intervals cut at 0 below.
 
@@ -63,6 +64,7 @@ BEFORE_S = 0.6  # the replay starts this long before the slam's peak (the rider 
 AFTER_S = 1.3  # ... and ends this long after it (about two cycles of the ring-down)
 SAMPLE_S = 0.005  # the residual's spacing
 PUSH_FIT_S = 0.0  # the push is first fitted alone on the record up to the slam's peak
+SETTLE_S = 0.15  # the pooled replay's settling force rises over this after the slam lobe
 SLAM_END_S = 0.05  # the slam lobe ends at the latest this long after the record's peak: then the bike is free
 STILL_M_PER_S = 1e-3  # prepare() needs a speed; the bike then stands still (its speed set to 0)
 REST_ACC = 1e-3  # m/s^2 (rad/s^2): the start is at rest when every acceleration is below this
@@ -89,7 +91,7 @@ METHOD = ("the whole MuJoCo bike standing on flat ground with the seated rider c
           "0.475), started at rest at its seated static equilibrium, pushed by a vertical force on the rider (a lift "
           "lobe and a slam lobe, sin^2 each, fitted), then free; the shock's spring-rate scale, rebound damping and "
           "Coulomb friction fitted with the push by least squares on the stroke less its rest level; 95 % "
-          "intervals from the Jacobian, inflated for the residual's lag-1 autocorrelation")
+          "intervals of all nine values from the Jacobian, inflated for the residual's lag-1 autocorrelation")
 
 
 def pulse(t, amplitude, start, duration):
@@ -100,9 +102,17 @@ def pulse(t, amplitude, start, duration):
 
 
 def push(t, p: dict):
-    """The push on the rider (N, up positive) at times ``t`` (s from the slam's peak)."""
-    return (pulse(t, p["lift_N"], p["lift_start_s"], p["lift_s"])
-            - pulse(t, p["slam_N"], p["slam_end_s"] - p["slam_s"], p["slam_s"]))
+    """The push on the rider (N, up positive) at times ``t`` (s from the slam's peak); with
+    ``settle_N`` (the pooled replay's) the rider's weight shifted onto the saddle after the slam: a
+    force down rising as sin^2 over ``SETTLE_S`` from the slam lobe's end, then held."""
+    t = np.asarray(t, float)
+    out = (pulse(t, p["lift_N"], p["lift_start_s"], p["lift_s"])
+           - pulse(t, p["slam_N"], p["slam_end_s"] - p["slam_s"], p["slam_s"]))
+    settle = p.get("settle_N", 0.0)
+    if settle:
+        u = np.clip((t - p["slam_end_s"]) / SETTLE_S, 0.0, 1.0)
+        out = out - settle * np.sin(0.5 * np.pi * u) ** 2
+    return out
 
 
 class SeatedReplay:
@@ -145,8 +155,10 @@ class SeatedReplay:
     def set_rest(self, shock_mm: float | None, fork_mm: float | None) -> None:
         """The travel each end rests at before the slam (the record's own; None: the bike file's): the
         spring preloads are set so the seated static equilibrium rests there (``set_shock``)."""
-        self.rest_mm = {"shock": shock_mm, "fork": fork_mm}
-        self._key = None
+        rest = {"shock": shock_mm, "fork": fork_mm}
+        if rest != self.rest_mm:
+            self.rest_mm = rest
+            self._key = None
 
     def _laws(self, over_s: dict, over_f: dict) -> None:
         from mtbmj import compose
@@ -162,8 +174,15 @@ class SeatedReplay:
             shock = compose.setup(load(self.spec.shock_config, over_s))
             fork = compose.setup(load(self.spec.fork_config, over_f or None))
         p.shock_setup, p.shock_law, p.fork_setup, p.fork_law = shock, shock.fork, fork, fork.fork
-        p.callback = bike_run.make_callback(self.kind, p.bike, fork.fork, shock.fork, p.front_tire, p.rear_tire,
-                                            p.drive, p.speed, p.traction, p.callback.refresh)
+        args = (self.kind, p.bike, fork.fork, shock.fork, p.front_tire, p.rear_tire, p.drive, p.speed, p.traction,
+                p.callback.refresh)
+        try:
+            p.callback = bike_run.make_callback(*args)
+        except RuntimeError:  # the compiled callbacks' slots full of ones not yet collected (several replays alive)
+            import gc
+
+            gc.collect()
+            p.callback = bike_run.make_callback(*args)
 
     def _static(self):
         ref = Reference(self.p)
@@ -177,15 +196,16 @@ class SeatedReplay:
         self._guess = q
         return ref, q
 
-    def set_shock(self, scale: float, damper: float, friction: float) -> None:
+    def set_shock(self, scale: float, damper: float, friction: float, compression: float | None = None) -> None:
         """The shock law with the spring rate scaled, the rebound coefficient and the friction set, its
         callback, each end's preload so the seated static equilibrium rests at ``rest_mm`` (when set),
         that equilibrium, and the saddle (spring, damper, preload) there."""
-        key = (float(scale), float(damper), float(friction))
+        compression = damper if compression is None else float(compression)
+        key = (float(scale), float(damper), float(friction), compression)
         if key == self._key:
             return
         over_s = {**self.shock_over, SHOCK_KEYS["scale"]: self.shock_rate0 * scale,
-                  SHOCK_KEYS["rebound"]: damper, SHOCK_KEYS["compression"]: damper,
+                  SHOCK_KEYS["rebound"]: damper, SHOCK_KEYS["compression"]: compression,
                   SHOCK_KEYS["friction"]: friction}
         over_f = dict(self.spec.fork_overrides)
         preload = {"shock": float(self.p.shock_setup.config.get(PRELOAD)) if self.preload["shock"] is None
@@ -286,7 +306,7 @@ class SeatedReplay:
         BounceError when the bike leaves its envelope (a crash, a value not finite)."""
         from mtbmj.controllers import installed
 
-        self.set_shock(*(p[k] for k in SHOCK_NAMES))
+        self.set_shock(*(p[k] for k in SHOCK_NAMES), p.get("compression_N_s_per_m"))
         self.start()
         m, d, b = self.model, self.p.data, self.p.bike
         dt = self.p.timestep
@@ -334,13 +354,14 @@ class Replay:
     shares: dict | None
     fork_rms_mm: float | None
     nfev: int
+    correlation: dict | None = None  # "a|b" -> the last stage's correlation of values a and b (FREE_INDEX's)
 
     def summary(self) -> dict:
         v, sd = self.values, self.sd
         out = {"method": METHOD, "rms_mm": self.rms_mm, "slam_rise_mm": self.rise_mm,
                "rest_offset_mm": self.rest_offset_mm, "shock_preload_N": self.shock_preload_N,
                "fork_rest_offset_mm": self.fork_rest_offset_mm, "runs": self.nfev, "rider": self.saddle}
-        for k in NAMES:  # the push's timing is held in the last stage: no interval
+        for k in NAMES:
             out[k] = v[k]
             ci = interval95(v[k], sd[k]) if math.isfinite(sd[k]) else None
             if ci is not None and k in SHOCK_NAMES:  # a rate, a damper and a friction are not negative
@@ -379,7 +400,7 @@ def _rest(t, x, peak_t) -> float:
     return float(np.median(x[w]))
 
 
-def _lag1(r: np.ndarray) -> float:
+def lag1(r: np.ndarray) -> float:
     r = r - r.mean()
     den = float(r @ r)
     return float(np.clip((r[1:] @ r[:-1]) / den, 0.0, 0.99)) if den > 0 else 0.0
@@ -398,17 +419,48 @@ def _start(t, s, rest) -> dict:
             "slam_N": 1500.0, "slam_end_s": 0.0, "slam_s": min(max(0.1 - last, 0.1), 0.4)}
 
 
-def replay(time_s, shock_mm, fork_mm=None, name: str = "record", bike="sst", rider_hz: float = RIDER_HZ,
-           shock_max_mm: float | None = None, seated: SeatedReplay | None = None, start: dict | None = None,
-           max_nfev: int = 40, max_relative_rms: float = MAX_RELATIVE_RMS) -> Replay:
-    """The slam in (time_s, shock_mm) replayed through the bike and fitted (module docstring)."""
-    from scipy.optimize import least_squares
-    from scipy.stats import t as student
+@dataclasses.dataclass
+class Slam:
+    """A record's slam made ready for the replay (``prepare_slam``): the window from ``BEFORE_S`` before
+    its peak to ``AFTER_S`` after, the rest levels, the record on the residual's grid and the start values."""
 
+    name: str
+    sr: SeatedReplay
+    rest: float  # the shock's rest before the slam (mm)
+    frest: float | None  # the fork's (mm), or None
+    tt: np.ndarray  # the window's times from the peak
+    rec: np.ndarray  # the shock's travel less its rest, in the window
+    fork: np.ndarray | None  # the fork's travel in the window
+    rise: float  # the slam's peak above rest (mm)
+    grid: np.ndarray
+    rec_g: np.ndarray
+    x0: np.ndarray  # NAMES' start values
+    base: np.ndarray  # NAMES' scales (the fit's unknowns are x0 + u base)
+
+    def residual(self, x, upto=None, extra: dict | None = None) -> np.ndarray:
+        """The replay of values ``x`` (NAMES, with ``extra``'s: the pooled replay's compression and
+        settling) less the record on the grid (up to ``upto`` s, or all)."""
+        self.sr.set_rest(self.rest, None)
+        try:
+            out = self.sr.run({**dict(zip(NAMES, x)), **(extra or {})})
+        except BounceError:  # a run that diverges: far from the record (the final run says why)
+            return np.full(self.grid.size if upto is None else int(np.sum(self.grid <= upto)), 10.0 * self.rise)
+        sim = np.interp(self.grid, out["time_s"], out["stroke_mm"] - out["stroke_mm"][0])
+        r = sim - self.rec_g
+        return r if upto is None else r[self.grid <= upto]
+
+
+LOWER = np.array([BOUNDS[k][0] for k in NAMES])
+UPPER = np.array([BOUNDS[k][1] for k in NAMES])
+
+
+def prepare_slam(time_s, shock_mm, fork_mm, name: str, sr: SeatedReplay, shock_max_mm: float | None = None,
+                 start: dict | None = None) -> Slam:
+    """The record's slam read for the replay; refused (``BounceError``) when the record is too short or
+    leaves the shock's stroke, or when the seated bike does not start at rest at its level."""
     t = np.asarray(time_s, float)
     s = np.asarray(shock_mm, float)
     peak = find_slam(t, s, f"{name} (shock)")
-    sr = seated or SeatedReplay(bike, rider_hz)
     stroke_mm = sr.spec.shock_stroke * 1e3 if shock_max_mm is None else float(shock_max_mm)
     window = (t >= t[peak] - BEFORE_S) & (t <= t[peak] + AFTER_S)
     if window.sum() < 10 or t[peak] + AFTER_S > t[-1]:
@@ -425,98 +477,147 @@ def replay(time_s, shock_mm, fork_mm=None, name: str = "record", bike="sst", rid
     sr.set_rest(rest, None)  # the fork is not fitted: it rests where the bike file's preload puts it
     tt = t[window] - tp
     rec = s[window] - rest
-    rise = float(s[peak] - rest)
     grid = np.arange(-BEFORE_S + SAMPLE_S, AFTER_S - SAMPLE_S / 2, SAMPLE_S)
-    rec_g = np.interp(grid, tt, rec)
     init = dict(_start(tt, rec + rest, rest) if start is None else start)
     init.setdefault("spring_scale", 0.6)
     init.setdefault("damper_N_s_per_m", 2000.0)
     init.setdefault("friction_N", sr.friction0)
     base = np.array([0.1 if k.endswith(("start_s", "end_s")) else max(abs(init[k]), 0.05) for k in NAMES])
-    lower = np.array([BOUNDS[k][0] for k in NAMES])
-    upper = np.array([BOUNDS[k][1] for k in NAMES])
-    x0 = np.clip(np.array([init[k] for k in NAMES]), lower + 1e-9, upper - 1e-9)
+    x0 = np.clip(np.array([init[k] for k in NAMES]), LOWER + 1e-9, UPPER - 1e-9)
     sr.set_shock(*(x0[6:]))
     if sr.rest_acceleration() > REST_ACC:
         raise BounceError(f"{name}: the seated bike does not start at rest (an acceleration of "
                           f"{sr.rest_acceleration():.3g} at its static equilibrium)")
+    return Slam(name, sr, rest, frest, tt, rec, None if fork_mm is None else np.asarray(fork_mm, float)[window],
+                float(s[peak] - rest), grid, np.interp(grid, tt, rec), x0, base)
 
-    def simulate(x) -> dict:
-        return sr.run(dict(zip(NAMES, x)))
 
-    def residual(x, upto=None):
-        try:
-            out = simulate(x)
-        except BounceError:  # a run that diverges: far from the record (the final run says why)
-            return np.full(grid.size if upto is None else int(np.sum(grid <= upto)), 10.0 * rise)
-        sim = np.interp(grid, out["time_s"], out["stroke_mm"] - out["stroke_mm"][0])
-        r = sim - rec_g
-        return r if upto is None else r[grid <= upto]
+def fit_push(sl: Slam, u: np.ndarray, max_nfev: int = 40, extra: dict | None = None) -> int:
+    """The push's six values (``PUSH_INDEX``) fitted on the record up to its peak, the rest of ``u``
+    held; ``u`` updated in place; returns the runs taken."""
+    from scipy.optimize import least_squares
 
-    # alternately: the push alone on the record up to its peak (the suspension held), then the
-    # suspension with the slam's amplitude on the whole replay (the push's timing held); twice
-    lo_u, hi_u = (lower - x0) / base, (upper - x0) / base
-    u = np.zeros(len(NAMES))
-    nfev = 0
-    sol = None
-    for _ in range(ROUNDS):
-        for which, upto in ((PUSH_INDEX, PUSH_FIT_S), (FREE_INDEX, None)):
-            def part(v, which=which, upto=upto):
-                full = u.copy()
-                full[which] = v
-                return residual(x0 + full * base, upto)
+    lo_u, hi_u = (LOWER - sl.x0) / sl.base, (UPPER - sl.x0) / sl.base
 
-            sol = least_squares(part, u[which], bounds=(lo_u[which], hi_u[which]), diff_step=1e-3,
-                                max_nfev=max_nfev)
-            u[which] = sol.x
-            nfev += sol.nfev
-    sol.nfev = nfev
-    sol.x = u
-    fitted = FREE_INDEX
-    x = x0 + sol.x * base
-    r = sol.fun
-    rms = float(np.sqrt(np.mean(r * r)))
-    if rms > max_relative_rms * rise:
-        raise BounceError(f"{name}: the replay through the bike cannot follow the record: RMS {rms:.1f} mm of a "
-                          f"{rise:.1f} mm slam (more than {100 * MAX_RELATIVE_RMS:.0f} %)")
-    # a value at its bound (friction at 0 is no friction found, not a bound)
-    at_bound = [k for k, v, lo, hi in zip(SHOCK_NAMES, x[6:], lower[6:], upper[6:])
-                if hi - v < 1e-3 * (hi - lo) or (k != "friction_N" and v - lo < 1e-3 * (hi - lo))]
-    if at_bound:
-        raise BounceError(f"{name}: the replay's {at_bound[0]} ends at its bound ({x[NAMES.index(at_bound[0])]:.4g}): "
-                          f"the bike cannot describe the record within it")
-    # intervals of the last stage's values (the push's timing held: conditional on it)
-    J = sol.jac / base[fitted]  # d residual / d value
-    n, k = r.size, len(fitted)
-    rho = _lag1(r)
+    def part(v):
+        full = u.copy()
+        full[PUSH_INDEX] = v
+        return sl.residual(sl.x0 + full * sl.base, PUSH_FIT_S, extra)
+
+    sol = least_squares(part, u[PUSH_INDEX], bounds=(lo_u[PUSH_INDEX], hi_u[PUSH_INDEX]), diff_step=1e-3,
+                        max_nfev=max_nfev)
+    u[PUSH_INDEX] = sol.x
+    return int(sol.nfev)
+
+
+def covariance(r: np.ndarray, J: np.ndarray, rho: float | None = None):
+    """(covariance of the values, t-quantile factor): the Jacobian ``J`` (d residual / d value) with the
+    residual's variance, inflated for its lag-1 autocorrelation (``rho``, or read from ``r``)."""
+    from scipy.stats import t as student
+
+    n, k = r.size, J.shape[1]
+    rho = lag1(r) if rho is None else rho
     n_eff = max(n * (1 - rho) / (1 + rho), k + 2.0)
     s2 = float(r @ r) / max(n - k, 1) * n / n_eff
     cov = np.linalg.pinv(J.T @ J) * s2
-    tq = float(student.ppf(0.975, max(n_eff - k, 1.0)) / 1.959963984540054)
-    sd = {name_: math.nan for name_ in NAMES}
-    for j, i in enumerate(fitted):
-        sd[NAMES[i]] = float(math.sqrt(max(cov[j, j], 0.0)) * tq)
-    values = dict(zip(NAMES, (float(v) for v in x)))
-    out = simulate(x)
+    return cov, float(student.ppf(0.975, max(n_eff - k, 1.0)) / 1.959963984540054)
+
+
+def correlations(cov: np.ndarray, names) -> dict:
+    dev = np.sqrt(np.maximum(np.diag(cov), 1e-300))
+    return {f"{a}|{b}": float(cov[i, j] / (dev[i] * dev[j]))
+            for i, a in enumerate(names) for j, b in enumerate(names) if i < j}
+
+
+def finish(sl: Slam, x: np.ndarray, sd: dict, rms: float, nfev: int, corr: dict | None,
+           extra: dict | None = None) -> Replay:
+    """The Replay of values ``x`` (and ``extra``'s): the final run beside the record, the rider's share."""
+    sr = sl.sr
+    sr.set_rest(sl.rest, None)
+    values = {**dict(zip(NAMES, (float(v) for v in x))), **(extra or {})}
+    out = sr.run(values)
+    rest = sl.rest
     trace = {"time_s": out["time_s"], "stroke_mm": out["stroke_mm"] - out["stroke_mm"][0] + rest,
-             "record_stroke_mm": np.interp(out["time_s"], tt, rec + rest), "fork_mm": out["fork_mm"],
+             "record_stroke_mm": np.interp(out["time_s"], sl.tt, sl.rec + rest), "fork_mm": out["fork_mm"],
              "push_N": out["push_N"]}
     fork_rms = None
-    if fork_mm is not None:
-        f = np.asarray(fork_mm, float)
-        rec_f = np.interp(out["time_s"], tt, f[window] - frest)
+    if sl.fork is not None:
+        rec_f = np.interp(out["time_s"], sl.tt, sl.fork - sl.frest)
         sim_f = out["fork_mm"] - out["fork_mm"][0]
-        trace["fork_mm"] = sim_f + frest
-        trace["record_fork_mm"] = rec_f + frest
+        trace["fork_mm"] = sim_f + sl.frest
+        trace["record_fork_mm"] = rec_f + sl.frest
         fork_rms = float(np.sqrt(np.mean((sim_f - rec_f) ** 2)))
     else:
         trace["record_fork_mm"] = np.full(out["time_s"].size, math.nan)
     rest_offset = float(rest - out["stroke_mm"][0])
     shares = _shares(sr, values["spring_scale"], values["damper_N_s_per_m"])
-    fork_off = None if frest is None else float(frest - out["fork_mm"][0])
-    return Replay(name, values, sd, trace, rms, rise, rest_offset, float(sr.preload["shock"]), fork_off,
-                  values["spring_scale"] * sr.shock_rate0,
-                  sr.shock_rate0, dict(sr.saddle), shares, fork_rms, int(sol.nfev))
+    fork_off = None if sl.frest is None else float(sl.frest - out["fork_mm"][0])
+    return Replay(sl.name, values, sd, trace, rms, sl.rise, rest_offset, float(sr.preload["shock"]), fork_off,
+                  values["spring_scale"] * sr.shock_rate0, sr.shock_rate0, dict(sr.saddle), shares, fork_rms,
+                  int(nfev), corr)
+
+
+def at_bound(x: np.ndarray) -> list:
+    """The shock's values (SHOCK_NAMES) at a bound (friction at 0 is no friction found, not a bound)."""
+    return [k for k, v, lo, hi in zip(SHOCK_NAMES, x[6:], LOWER[6:], UPPER[6:])
+            if hi - v < 1e-3 * (hi - lo) or (k != "friction_N" and v - lo < 1e-3 * (hi - lo))]
+
+
+def replay(time_s, shock_mm, fork_mm=None, name: str = "record", bike="sst", rider_hz: float = RIDER_HZ,
+           shock_max_mm: float | None = None, seated: SeatedReplay | None = None, start: dict | None = None,
+           max_nfev: int = 40, max_relative_rms: float = MAX_RELATIVE_RMS) -> Replay:
+    """The slam in (time_s, shock_mm) replayed through the bike and fitted (module docstring)."""
+    from scipy.optimize import least_squares
+
+    sr = seated or SeatedReplay(bike, rider_hz)
+    sl = prepare_slam(time_s, shock_mm, fork_mm, name, sr, shock_max_mm, start)
+    x0, base = sl.x0, sl.base
+    # alternately: the push alone on the record up to its peak (the suspension held), then the
+    # suspension with the slam's amplitude on the whole replay (the push's timing held); twice
+    lo_u, hi_u = (LOWER - x0) / base, (UPPER - x0) / base
+    u = np.zeros(len(NAMES))
+    nfev = 0
+    sol = None
+    for _ in range(ROUNDS):
+        nfev += fit_push(sl, u, max_nfev)
+
+        def part(v):
+            full = u.copy()
+            full[FREE_INDEX] = v
+            return sl.residual(x0 + full * base)
+
+        sol = least_squares(part, u[FREE_INDEX], bounds=(lo_u[FREE_INDEX], hi_u[FREE_INDEX]), diff_step=1e-3,
+                            max_nfev=max_nfev)
+        u[FREE_INDEX] = sol.x
+        nfev += sol.nfev
+    fitted = FREE_INDEX
+    x = x0 + u * base
+    r = sol.fun
+    rms = float(np.sqrt(np.mean(r * r)))
+    if rms > max_relative_rms * sl.rise:
+        raise BounceError(f"{name}: the replay through the bike cannot follow the record: RMS {rms:.1f} mm of a "
+                          f"{sl.rise:.1f} mm slam (more than {100 * MAX_RELATIVE_RMS:.0f} %)")
+    bound = at_bound(x)
+    if bound:
+        raise BounceError(f"{name}: the replay's {bound[0]} ends at its bound ({x[NAMES.index(bound[0])]:.4g}): "
+                          f"the bike cannot describe the record within it")
+    # intervals of all nine values together: the push's timing trades with the spring (conditional on
+    # the timing, the spring's interval of a heavily damped slam missed the generator's value)
+    J = jacobian(sl.residual, x, base, r)
+    cov, tq = covariance(r, J)
+    sd = {name_: float(math.sqrt(max(cov[i, i], 0.0)) * tq) for i, name_ in enumerate(NAMES)}
+    return finish(sl, x, sd, rms, nfev, correlations(cov, list(NAMES)))
+
+
+def jacobian(fn, x: np.ndarray, base: np.ndarray, r0: np.ndarray, step: float = 1e-3) -> np.ndarray:
+    """d fn / d x by forward differences of ``step`` x ``base`` (a value at its upper bound steps down)."""
+    J = np.empty((r0.size, x.size))
+    for i in range(x.size):
+        h = step * base[i] * (-1.0 if x[i] + step * base[i] > UPPER[i] else 1.0)
+        xi = x.copy()
+        xi[i] += h
+        J[:, i] = (fn(xi) - r0) / h
+    return J
 
 
 def _shares(sr: SeatedReplay, scale: float, rebound: float) -> dict:
