@@ -572,11 +572,14 @@ def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
         rows.append(Row(name, target, f"{num(p['median_m_per_s'], 3)} m/s ({num(p['min_m_per_s'], 3)}–"
                         f"{num(p['max_m_per_s'], 3)}), {p['windows_accepted']}/{p['windows_accepted'] + p['windows_rejected']} "
                         f"windows" + (f", sd {num(sd, 2)}" if sd is not None else "")
-                        + f"; rear {mm(c['rear_predicted_rms_mm'], 3)}"
-                        + (f" (corr {num(r['rear_correlation'], 2)})" if r.get("rear_correlation") is not None else "")
-                        + ", delayed fork "
-                        f"{num(c['baseline_delayed_fork_rms_mm'], 3)}, mean {num(c['baseline_rear_mean_rms_mm'], 3)}; "
-                        f"{num(c['samples_checked_percent'], 2)} % checked; "
+                        + (f"; rear {mm(c['rear_predicted_rms_mm'], 3)}"
+                           + (f" (corr {num(r['rear_correlation'], 2)})" if r.get("rear_correlation") is not None
+                              else "")
+                           + ", delayed fork "
+                           f"{num(c['baseline_delayed_fork_rms_mm'], 3)}, mean {num(c['baseline_rear_mean_rms_mm'], 3)}; "
+                           f"{num(c['samples_checked_percent'], 2)} % checked; "
+                           if c["samples_checked_percent"] > 0 else "; no sample checked (nothing before the divergence "
+                           "lies where a window gave a speed); ")
                         + ("**passes**" if c["passes"] else (
                             f"**fails** (the whole bike diverged at {num(r['whole_bike']['diverged_s'], 3)} s)"
                             if (r.get("whole_bike") or {}).get("diverged_s") is not None

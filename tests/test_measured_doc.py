@@ -97,3 +97,25 @@ def test_a_missing_results_file_gives_no_rows(report, tmp_path, monkeypatch):
     assert {shlex.split(row[-1].strip("`"))[1] for row in rows} == {"benchmarks/native_loop.py", "benchmarks/rolling.py"}
     assert rows[0][3].startswith("2030-01-02, abc1234")
     assert "## Fits" not in report.render()
+
+
+def test_no_cell_shows_a_number_that_is_not_one():
+    """A figure with nothing behind it (a ride whose whole bike diverged before any checked sample)
+    is said in words, never printed as nan or inf."""
+    for row in table_rows(PAGE.read_text()):
+        for cell in row:
+            assert not re.search(r"\b(nan|inf)\b", cell.lower()), cell
+
+
+def test_a_ride_with_no_sample_checked_says_so(report):
+    """reconstruct_rides_rows on a ride written here whose checks have no sample (all nan)."""
+    nan = float("nan")
+    ride = {"folder": "sst_v2", "ride": "X.SST", "version": 2, "seconds": 122.0,
+            "speed_profile": {"median_m_per_s": 6.37, "min_m_per_s": 5.73, "max_m_per_s": 6.47, "windows_accepted": 3,
+                              "windows_rejected": 45},
+            "speed_sd_median_m_per_s": 0.15, "rear_correlation": None, "whole_bike": {"diverged_s": 57.7},
+            "checks": {"rear_predicted_rms_mm": nan, "baseline_delayed_fork_rms_mm": nan, "baseline_rear_mean_rms_mm": nan,
+                       "samples_checked_percent": 0.0, "passes": False}}
+    [row] = report.reconstruct_rides_rows({"beat_margin_percent": 40.0, "rides": [ride], "command": "x"})["reconstruct"]
+    assert "no sample checked" in row.measured and "nan" not in row.measured
+    assert row.measured.endswith("**fails** (the whole bike diverged at 57.7 s)")
