@@ -51,6 +51,27 @@ def add_out_option(parser: argparse.ArgumentParser, script: str, *, name: str | 
     parser.add_argument("--out", type=_out_file, default=None, metavar="PATH", help=text.replace("%", "%%"))
 
 
+def add_ride_options(parser: argparse.ArgumentParser, repeats: int) -> None:
+    """``--ride`` (an SST recording or a travel CSV, or 'example': the shipped 00649.SST), ``--bike``
+    (the recorded bike: a preset or a file) and ``--repeats``, as every ride benchmark takes them."""
+    parser.add_argument("--ride", default="example", help="an SST recording or a travel CSV, or 'example' (00649.SST)")
+    parser.add_argument("--bike", default="sst", help="the recorded bike (preset or file)")
+    parser.add_argument("--repeats", type=int, default=repeats)
+
+
+def read_ride(args, bike=None):
+    """The ride ``args.ride`` read as ``mtbmj`` reads it for ``args.bike`` (``bike``: its resolved
+    bike where the caller has it)."""
+    from types import SimpleNamespace
+
+    from mtbmj.cli.telemetry import decoding
+    from mtbmj.measured import telemetry
+
+    path = telemetry.example_path() if args.ride == "example" else Path(args.ride)
+    how = SimpleNamespace(bike=args.bike, fork_max_mm=None, shock_max_mm=None)
+    return telemetry.read_ride(path, **(decoding(how) if bike is None else decoding(how, bike)))
+
+
 def environment() -> dict:
     import mujoco
     import numpy

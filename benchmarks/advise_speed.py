@@ -25,7 +25,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench import add_out_option, write_json  # noqa: E402
+from _bench import add_out_option, add_ride_options, read_ride, write_json  # noqa: E402
 
 
 def cpu_s() -> float:
@@ -39,24 +39,16 @@ def cpu_s() -> float:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--ride", default="example", help="an SST recording or a travel CSV, or 'example' (00649.SST)")
-    ap.add_argument("--bike", default="sst", help="the recorded bike (preset or file)")
-    ap.add_argument("--repeats", type=int, default=3)
+    add_ride_options(ap, repeats=3)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--duration", type=float, default=None, help="advise on the ride's first S seconds only")
     add_out_option(ap, __file__)
     args = ap.parse_args(argv)
 
-    from types import SimpleNamespace
-
     from mtbmj.bike import run as bike_run
-    from mtbmj.cli.telemetry import decoding
     from mtbmj.ride import advise, reconstruct
-    from mtbmj.measured import telemetry
 
-    path = telemetry.example_path() if args.ride == "example" else Path(args.ride)
-    record = telemetry.read_ride(path, **decoding(SimpleNamespace(bike=args.bike, fork_max_mm=None,
-                                                                  shock_max_mm=None)))
+    record = read_ride(args)
     seconds = float(record.time_s[-1] - record.time_s[0])
     if args.duration is not None:
         seconds = min(seconds, args.duration)
@@ -92,7 +84,7 @@ def main(argv=None) -> int:
                       + (f" --bike {args.bike}" if args.bike != "sst" else "")
                       + (f" --duration {args.duration:g}" if args.duration is not None else "")
                       + " --out benchmarks/results/advise_speed.json", "verdict_set_to_pass": True,
-           "ride": path.name, "ride_seconds": seconds, "workers": args.workers, "repeats": rows,
+           "ride": record.name, "ride_seconds": seconds, "workers": args.workers, "repeats": rows,
            "reconstruct_s": stats("reconstruct_s"), "one_run_s": stats("one_run_s"), "advise_s": stats("advise_s"),
            "ratio": stats("ratio"), "advise_cpu_s": stats("advise_cpu_s"), "advise_s_per_100_s_of_ride": stats("advise_s")["median"] * 100.0 / seconds,
            "target_s_per_100_s": 30.0}  # issue 52: 100 s of ride advised in 30 s on two cores

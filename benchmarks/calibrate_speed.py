@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench import add_out_option, write_json  # noqa: E402
+from _bench import add_out_option, add_ride_options, read_ride, write_json  # noqa: E402
 
 
 def one_pass(record, bike) -> None:
@@ -52,21 +52,13 @@ def one_pass(record, bike) -> None:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--ride", default="example", help="an SST recording, or 'example' (the shipped 00649.SST)")
-    ap.add_argument("--bike", default="sst", help="the recorded bike (preset or file)")
-    ap.add_argument("--repeats", type=int, default=3)
+    add_ride_options(ap, repeats=3)
     add_out_option(ap, __file__)
     args = ap.parse_args(argv)
 
-    from types import SimpleNamespace
-
-    from mtbmj.cli.telemetry import decoding
-    from mtbmj.measured import telemetry
     from mtbmj.ride import calibrate
 
-    path = telemetry.example_path() if args.ride == "example" else Path(args.ride)
-    record = telemetry.read_ride(path, **decoding(SimpleNamespace(bike=args.bike, fork_max_mm=None,
-                                                                  shock_max_mm=None)))
+    record = read_ride(args)
     seconds = float(record.time_s[-1] - record.time_s[0])
     one_pass(record, args.bike)  # the laws loaded once before any timing
     rows = []
@@ -91,7 +83,7 @@ def main(argv=None) -> int:
                       + (f" --ride {args.ride}" if args.ride != "example" else "")
                       + (f" --bike {args.bike}" if args.bike != "sst" else "")
                       + " --out benchmarks/results/calibrate_speed.json",
-           "ride": path.name, "ride_seconds": seconds, "repeats": rows, "pass_cpu_s": stats("pass_cpu_s"),
+           "ride": record.name, "ride_seconds": seconds, "repeats": rows, "pass_cpu_s": stats("pass_cpu_s"),
            "calibrate_cpu_s": stats("calibrate_cpu_s"), "calibrate_wall_s": stats("calibrate_wall_s"),
            "ratio": stats("ratio")}
     print(f"calibration {out['calibrate_cpu_s']['median']:.2f} s CPU on {seconds:.0f} s of ride: "

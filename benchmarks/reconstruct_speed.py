@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench import add_out_option, write_json  # noqa: E402
+from _bench import add_out_option, add_ride_options, read_ride, write_json  # noqa: E402
 
 
 def _timed(module, name: str, spent: dict):
@@ -42,23 +42,15 @@ def _timed(module, name: str, spent: dict):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--ride", default="example", help="an SST recording or a travel CSV, or 'example' (00649.SST)")
-    ap.add_argument("--bike", default="sst", help="the recorded bike (preset or file)")
-    ap.add_argument("--repeats", type=int, default=2)
+    add_ride_options(ap, repeats=2)
     add_out_option(ap, __file__)
     args = ap.parse_args(argv)
 
-    from types import SimpleNamespace
-
     from mtbmj.bike import spec
-    from mtbmj.cli.telemetry import decoding
-    from mtbmj.measured import telemetry
     from mtbmj.ride import reconstruct, reconstruct_bike
 
-    path = telemetry.example_path() if args.ride == "example" else Path(args.ride)
     bike = spec.resolve(args.bike)
-    record = telemetry.read_ride(path, **decoding(SimpleNamespace(bike=args.bike, fork_max_mm=None, shock_max_mm=None),
-                                                   bike))
+    record = read_ride(args, bike)
     seconds = float(record.time_s[-1] - record.time_s[0])
     rows = []
     for i in range(args.repeats):
@@ -93,7 +85,7 @@ def main(argv=None) -> int:
                       + (f" --ride {args.ride}" if args.ride != "example" else "")
                       + (f" --bike {args.bike}" if args.bike != "sst" else "")
                       + f" --repeats {args.repeats} --out benchmarks/results/reconstruct_speed.json",
-           "ride": path.name, "ride_seconds": seconds, "repeats": rows,
+           "ride": record.name, "ride_seconds": seconds, "repeats": rows,
            "wall_s": median("wall_s"), "ratio_to_ride": median("ratio_to_ride"), "target_ratio": 0.1,
            "shares": {k: median("shares", k) for k in rows[0]["shares"]},
            "whole_bike_passes": median("whole_bike_passes"),

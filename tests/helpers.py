@@ -167,12 +167,18 @@ def shell_commands(page: Path) -> list[tuple[int, list[str]]]:
 def script_parser(script: Path) -> argparse.ArgumentParser:
     """The script's argparse options, rebuilt from its ``add_argument`` calls (the scripts build
     their parser inside ``main``): option strings, ``action``, ``type`` and literal ``choices``; a
-    call of ``_bench.add_out_option`` adds ``--out PATH``."""
+    call of ``_bench.add_out_option`` adds ``--out PATH``, one of ``_bench.add_ride_options``
+    ``--ride``, ``--bike`` and ``--repeats N``."""
     parser = argparse.ArgumentParser(prog=script.name, exit_on_error=False)
     types = {"int": int, "float": float, "str": str, "Path": Path}
     for node in ast.walk(ast.parse(script.read_text())):
         if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == "add_out_option":
             parser.add_argument("--out", type=Path)
+            continue
+        if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == "add_ride_options":
+            parser.add_argument("--ride")
+            parser.add_argument("--bike")
+            parser.add_argument("--repeats", type=int)
             continue
         if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "add_argument"):
             continue
