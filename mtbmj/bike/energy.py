@@ -67,11 +67,9 @@ def rider_terms(cb: rc.RiderCallback) -> dict:
         pw = taus[k] * w
         out["muscle_positive" if pw > 0.0 else "muscle_negative"] += pw
         out["tissue"] -= rc.TISSUE_DAMPING * w * w
-        if stops[k] != 0.0:
-            out["stops_damping"] -= rc.STOP_N_M_S_PER_RAD * w * w
-            lo, hi = cb.ranges[k]
-            a = last["now"][k]
-            past = a - hi if a > hi else a - lo
+        past = rc.stop_penetration(last["now"][k], *cb.ranges[k])
+        if past != 0.0:
+            out["stops_damping"] -= rc.stop_damping(past) * w * w
             out["stops_spring"] += 0.5 * rc.STOP_N_M_PER_RAD * past * past
     for f, rel, gap in last["pins"]:
         out["pins_damping"] -= rc.PIN_N_S_PER_M * (rel[0] * rel[0] + rel[2] * rel[2])
@@ -179,8 +177,9 @@ def rider_spring_power(cb: rc.RiderCallback) -> float:
     rider's applied forces are these and the terms of ``rider_terms``)."""
     last = cb.last
     pins = sum(-rc.PIN_N_PER_M * (gap[0] * rel[0] + gap[2] * rel[2]) for _, rel, gap in last["pins"])
-    stops = sum(last["stops"][k] * last["speed"][k] + rc.STOP_N_M_S_PER_RAD * last["speed"][k] ** 2
-                for k in rc.JOINTS if last["stops"][k] != 0.0)
+    stops = sum(last["stops"][k] * last["speed"][k]
+                + rc.stop_damping(rc.stop_penetration(last["now"][k], *cb.ranges[k])) * last["speed"][k] ** 2
+                for k in rc.JOINTS)
     return pins + stops
 
 

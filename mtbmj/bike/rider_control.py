@@ -87,6 +87,7 @@ import mujoco
 import numpy as np
 
 from mtbmj.bike import rider_body as rb
+from mtbmj.controllers.stops import DAMPING_RAMP
 from mtbmj.errors import ConfigError
 
 JOINTS = ("hip", "knee", "ankle", "shoulder", "elbow")
@@ -101,6 +102,11 @@ GAINS = {"hip": (1500.0, 60.0), "knee": (1500.0, 60.0), "ankle": (800.0, 30.0), 
          "elbow": (300.0, 12.0)}
 TISSUE_DAMPING = 2.0  # N m s/rad at every joint (assumed)
 STOP_N_M_PER_RAD, STOP_N_M_S_PER_RAD = 600.0, 20.0  # past the range of motion (assumed)
+# the end stop's damping sets in over this much past the range, c tanh(DAMPING_RAMP p / p0) (the
+# suspension's stops' and the rim's ramp, ``controllers.stops``): at full strength from the range's
+# end it jumped by c times the joint's speed (69 N m at the elbow leaving its stop off the 1 m drop),
+# which a fixed step meets inside a step (assumed: 99.5 % of c at 2 deg past the range)
+STOP_RAMP_RAD = math.radians(2.0)
 PIN_N_PER_M, PIN_N_S_PER_M = 4e5, 1500.0  # the feet and hands pinned (assumed: shoe, pedal, grip)
 SADDLE_N_PER_M, SADDLE_N_S_PER_M = 6e4, 1200.0  # assumed: the seated body's 4-6 Hz vertical resonance
 ISCHIAL_BELOW_HIP_M = 0.08  # assumed: the sitting bones this far below the hip joints
@@ -288,19 +294,26 @@ def muscle_torques(want: dict, now: dict, speed: dict, gains: dict, strength: di
     return taus, demands, power
 
 
+def stop_penetration(a: float, lo: float, hi: float) -> float:
+    """How far (rad) the anatomical angle ``a`` is past its range (lo, hi): positive above ``hi``,
+    negative below ``lo``, 0 within."""
+    return a - hi if a > hi else (a - lo if a < lo else 0.0)
+
+
+def stop_damping(past: float) -> float:
+    """The end stop's damping (N m s/rad) at ``past`` rad beyond the range: ``STOP_N_M_S_PER_RAD``
+    ramped in over ``STOP_RAMP_RAD``, so the stop's torque is continuous where the joint enters or
+    leaves it."""
+    return STOP_N_M_S_PER_RAD * math.tanh(DAMPING_RAMP * abs(past) / STOP_RAMP_RAD)
+
+
 def end_stops(now: dict, speed: dict, ranges: dict) -> dict:
     """Each joint's end-stop torque (N m, anatomical): a spring-damper past its range of motion
-    (``ranges``: (least, most) rad), 0 within it."""
+    (``ranges``: (least, most) rad), its damping ramped in (``stop_damping``), 0 within it."""
     out = {}
     for k in JOINTS:
-        lo, hi = ranges[k]
-        a = now[k]
-        stop = 0.0
-        if a > hi:
-            stop = -STOP_N_M_PER_RAD * (a - hi) - STOP_N_M_S_PER_RAD * speed[k]
-        elif a < lo:
-            stop = -STOP_N_M_PER_RAD * (a - lo) - STOP_N_M_S_PER_RAD * speed[k]
-        out[k] = stop
+        past = stop_penetration(now[k], *ranges[k])
+        out[k] = -STOP_N_M_PER_RAD * past - stop_damping(past) * speed[k] if past != 0.0 else 0.0
     return out
 
 
@@ -583,5 +596,5 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     return p
 
 
-__all__ = ["RiderCallback", "Controller", "activate", "aimed", "muscle_torques", "end_stops", "edges", "stance", "saddle_point", "STRENGTH_N_M",
+__all__ = ["RiderCallback", "Controller", "activate", "aimed", "muscle_torques", "end_stops", "stop_penetration", "stop_damping", "edges", "stance", "saddle_point", "STRENGTH_N_M",
            "STRENGTH_ONE_SIDE_N_M", "POWER_W", "GAINS", "JOINTS"]
