@@ -590,7 +590,6 @@ def replay(time_s, shock_mm, fork_mm=None, name: str = "record", bike="sst", rid
                             max_nfev=max_nfev)
         u[FREE_INDEX] = sol.x
         nfev += sol.nfev
-    fitted = FREE_INDEX
     x = x0 + u * base
     r = sol.fun
     rms = float(np.sqrt(np.mean(r * r)))
