@@ -59,6 +59,13 @@ def add_ride_options(parser: argparse.ArgumentParser, repeats: int) -> None:
     parser.add_argument("--repeats", type=int, default=repeats)
 
 
+def ride_options_shown(args) -> str:
+    """The ``--ride`` and ``--bike`` of ``add_ride_options`` as a results file's command repeats them
+    (each left out at its default)."""
+    return ((f" --ride {args.ride}" if args.ride != "example" else "")
+            + (f" --bike {args.bike}" if args.bike != "sst" else ""))
+
+
 def read_ride(args, bike=None):
     """The ride ``args.ride`` read as ``mtbmj`` reads it for ``args.bike`` (``bike``: its resolved
     bike where the caller has it)."""

@@ -19,13 +19,13 @@ what is measured (``verdict_set_to_pass`` in the results).
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench import add_out_option, add_ride_options, read_ride, write_json  # noqa: E402
+from _bench import add_out_option, add_ride_options, read_ride, ride_options_shown, write_json  # noqa: E402
+from _bench import stats as spread_of  # noqa: E402
 
 
 def cpu_s() -> float:
@@ -76,12 +76,10 @@ def main(argv=None) -> int:
               f"run {row['ratio']:.2f}; CPU {c_all:.1f} s in this process and its workers)", flush=True)
 
     def stats(key):
-        xs = [r[key] for r in rows]
-        return {"median": statistics.median(xs), "min": min(xs), "max": max(xs)}
+        return spread_of([r[key] for r in rows])
 
     out = {"command": f"python benchmarks/advise_speed.py --repeats {args.repeats} --workers {args.workers}"
-                      + (f" --ride {args.ride}" if args.ride != "example" else "")
-                      + (f" --bike {args.bike}" if args.bike != "sst" else "")
+                      + ride_options_shown(args)
                       + (f" --duration {args.duration:g}" if args.duration is not None else "")
                       + " --out benchmarks/results/advise_speed.json", "verdict_set_to_pass": True,
            "ride": record.name, "ride_seconds": seconds, "workers": args.workers, "repeats": rows,

@@ -15,13 +15,13 @@ mtbmj-benchmarks/calibrate_speed.json``, outside the repository). Not a test: no
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench import add_out_option, add_ride_options, read_ride, write_json  # noqa: E402
+from _bench import add_out_option, add_ride_options, read_ride, ride_options_shown, write_json  # noqa: E402
+from _bench import stats as spread_of  # noqa: E402
 
 
 def one_pass(record, bike) -> None:
@@ -76,12 +76,10 @@ def main(argv=None) -> int:
               f"({w_cal:.1f} s wall): {c_cal / c_pass:.1f} passes; {cal.line()}", flush=True)
 
     def stats(key):
-        xs = [r[key] for r in rows]
-        return {"median": statistics.median(xs), "min": min(xs), "max": max(xs)}
+        return spread_of([r[key] for r in rows])
 
     out = {"command": f"python benchmarks/calibrate_speed.py --repeats {args.repeats}"
-                      + (f" --ride {args.ride}" if args.ride != "example" else "")
-                      + (f" --bike {args.bike}" if args.bike != "sst" else "")
+                      + ride_options_shown(args)
                       + " --out benchmarks/results/calibrate_speed.json",
            "ride": record.name, "ride_seconds": seconds, "repeats": rows, "pass_cpu_s": stats("pass_cpu_s"),
            "calibrate_cpu_s": stats("calibrate_cpu_s"), "calibrate_wall_s": stats("calibrate_wall_s"),

@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _bench import add_out_option, add_ride_options, read_ride, write_json  # noqa: E402
+from _bench import add_out_option, add_ride_options, read_ride, ride_options_shown, write_json  # noqa: E402
 
 
 def _timed(module, name: str, spent: dict):
@@ -82,8 +82,7 @@ def main(argv=None) -> int:
         return statistics.median(r[key] if sub is None else r[key][sub] for r in rows)
 
     out = {"command": "python benchmarks/reconstruct_speed.py"
-                      + (f" --ride {args.ride}" if args.ride != "example" else "")
-                      + (f" --bike {args.bike}" if args.bike != "sst" else "")
+                      + ride_options_shown(args)
                       + f" --repeats {args.repeats} --out benchmarks/results/reconstruct_speed.json",
            "ride": record.name, "ride_seconds": seconds, "repeats": rows,
            "wall_s": median("wall_s"), "ratio_to_ride": median("ratio_to_ride"), "target_ratio": 0.1,
