@@ -193,7 +193,11 @@ class PlanarBike:
 
 
 class Reference:
-    """The ODE of a prepared bike run (``mtbmj.bike.run.prepare``), from its state at t = 0."""
+    """The ODE of a prepared bike run (``mtbmj.bike.run.prepare``), from its state at t = 0. Its
+    state: the ``COORDINATES`` (MuJoCo's joints of those names), their speeds, then the friction
+    states of the fork and the shock where their laws have them."""
+
+    COORDINATES = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")  # NQ of them
 
     def __init__(self, prepared):
         p = prepared
@@ -314,21 +318,17 @@ class Reference:
         return qdd, out
 
     def rhs(self, t, y):
+        n = len(self.COORDINATES)
         qdd, out = self.accelerations(t, y)
         rates = [out["fork_rate"]] * self.nf + [out["shock_rate"]] * self.ns
-        return np.concatenate((y[NQ:2 * NQ], qdd, rates))
+        return np.concatenate((y[n:2 * n], qdd, rates))
 
     def y0(self, qpos, qvel, act) -> np.ndarray:
         """The state vector from MuJoCo's qpos, qvel and act (the friction states)."""
         b = self.p.bike
-        names = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")
-        q = [qpos[b.qpos_index(n)] for n in names]
-        v = [qvel[b.dof_index(n)] for n in names]
-        states = []
-        if self.nf:
-            states.append(act[0])
-        if self.ns:
-            states.append(act[1])
+        q = [qpos[b.qpos_index(n)] for n in self.COORDINATES]
+        v = [qvel[b.dof_index(n)] for n in self.COORDINATES]
+        states = ([act[0]] if self.nf else []) + ([act[1]] if self.ns else [])
         return np.array(q + v + states, float)
 
     def run(self, y0, times, max_step: float, rtol: float = 1e-8, atol: float = 1e-10, method: str = "RK45") -> dict:

@@ -135,7 +135,10 @@ def world_jacobian(R, r, dr=None) -> np.ndarray:
 
 
 class ReferenceRider(Reference):
-    """The ODE of a prepared bike run with the active rider (``mtbmj.bike.run.prepare(rider="active")``)."""
+    """The ODE of a prepared bike run with the active rider (``mtbmj.bike.run.prepare(rider="active")``):
+    the state of :class:`Reference` over the ``NAMES`` coordinates."""
+
+    COORDINATES = NAMES
 
     def __init__(self, prepared):
         p = prepared
@@ -242,19 +245,6 @@ class ReferenceRider(Reference):
         dyn = self.dynamics(q, qd)
         Q, out = self.forces(t, y, dyn)
         return np.linalg.solve(dyn[0], Q + dyn[1]), out
-
-    def rhs(self, t, y):
-        qdd, out = self.accelerations(t, y)
-        rates = [out["fork_rate"]] * self.nf + [out["shock_rate"]] * self.ns
-        return np.concatenate((y[NQR:2 * NQR], qdd, rates))
-
-    def y0(self, qpos, qvel, act) -> np.ndarray:
-        """The state vector from MuJoCo's qpos, qvel and act (the friction states)."""
-        b = self.p.bike
-        q = [qpos[b.qpos_index(n)] for n in NAMES]
-        v = [qvel[b.dof_index(n)] for n in NAMES]
-        states = ([act[0]] if self.nf else []) + ([act[1]] if self.ns else [])
-        return np.array(q + v + states, float)
 
 
 __all__ = ["ReferenceRider", "RiderChain", "GRADIENTS", "NAMES", "NQR"]
