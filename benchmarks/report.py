@@ -517,6 +517,7 @@ def calibrate_speed_rows(d: dict) -> dict[str, list[Row]]:
             f"({spread(c['min'], c['max'], 3, ' s')}) of CPU, one pass {sec(p['median'])}", "calibrate_speed.json",
             d["command"])]}
 
+
 def _advise_refusal(why: str) -> str:
     """A refusal of ``mtbmj advise`` in a few words (the results file holds it whole)."""
     why = why.split(": ", 1)[-1]
@@ -569,17 +570,16 @@ def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
         p, c = r["speed_profile"], r["checks"]
         sd = r["speed_sd_median_m_per_s"]
         better = "delayed fork" if c["baseline_delayed_fork_rms_mm"] <= c["baseline_rear_mean_rms_mm"] else "mean"
+        if c["samples_checked_percent"] > 0:
+            checked = (f"; rear {mm(c['rear_predicted_rms_mm'], 3)}"
+                       + (f" (corr {num(r['rear_correlation'], 2)})" if r.get("rear_correlation") is not None else "")
+                       + f", delayed fork {num(c['baseline_delayed_fork_rms_mm'], 3)}, mean "
+                       f"{num(c['baseline_rear_mean_rms_mm'], 3)}; {num(c['samples_checked_percent'], 2)} % checked; ")
+        else:  # its whole bike diverged before any sample it could check: no figure to give
+            checked = "; no sample checked (nothing before the divergence lies where a window gave a speed); "
         rows.append(Row(name, target, f"{num(p['median_m_per_s'], 3)} m/s ({num(p['min_m_per_s'], 3)}–"
                         f"{num(p['max_m_per_s'], 3)}), {p['windows_accepted']}/{p['windows_accepted'] + p['windows_rejected']} "
-                        f"windows" + (f", sd {num(sd, 2)}" if sd is not None else "")
-                        + (f"; rear {mm(c['rear_predicted_rms_mm'], 3)}"
-                           + (f" (corr {num(r['rear_correlation'], 2)})" if r.get("rear_correlation") is not None
-                              else "")
-                           + ", delayed fork "
-                           f"{num(c['baseline_delayed_fork_rms_mm'], 3)}, mean {num(c['baseline_rear_mean_rms_mm'], 3)}; "
-                           f"{num(c['samples_checked_percent'], 2)} % checked; "
-                           if c["samples_checked_percent"] > 0 else "; no sample checked (nothing before the divergence "
-                           "lies where a window gave a speed); ")
+                        f"windows" + (f", sd {num(sd, 2)}" if sd is not None else "") + checked
                         + ("**passes**" if c["passes"] else (
                             f"**fails** (the whole bike diverged at {num(r['whole_bike']['diverged_s'], 3)} s)"
                             if (r.get("whole_bike") or {}).get("diverged_s") is not None
