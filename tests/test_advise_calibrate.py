@@ -199,12 +199,12 @@ def test_the_mended_calibration_gives_the_same_scales(softer, compiled, monkeypa
     same bisection: the same scale to rounding); without numba too (the Python laws per sample)."""
     import numpy as np
 
-    from mtbmj.controllers import jit
+    from mtbmj.controllers import compiled as kernels_face
 
-    if compiled and jit.numba is None:
+    if compiled and kernels_face.numba is None:
         pytest.skip("numba not installed")
-    if not compiled:
-        monkeypatch.setattr(jit, "numba", None)
+    if not compiled:  # the compiled kernels' face says it cannot run: the Python laws per sample
+        monkeypatch.setattr(kernels_face, "numba", None)
 
     from mtbmj.ride.reconstruct import RATE_HZ
 

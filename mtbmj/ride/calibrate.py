@@ -162,23 +162,14 @@ def _geometry(whole, end: str, x_m):
 def _along(law, x, v):
     """``law``'s force (N) at each stroke ``x`` (m) and speed ``v`` (m/s), a stick state at 0 for a law
     with one: through the compiled kernel every engine runs (``kernels.fork_forces``) where numba is
-    present and the law has a compiled form, else the Python law per sample (its specification)."""
-    from mtbmj.controllers import jit
+    present and the law has a compiled form (``compiled.fork_forces_along``), else the Python law per
+    sample (its specification)."""
+    from mtbmj.controllers.compiled import fork_forces_along
 
-    x, v = np.ascontiguousarray(x, float), np.ascontiguousarray(v, float)
-    if jit.numba is not None:
-        from mtbmj.controllers.lawcodes import UnsupportedLaw, law_arrays
-
-        try:
-            I, P = law_arrays(law)
-        except UnsupportedLaw:
-            I = None
-        if I is not None:
-            from mtbmj.controllers import kernels
-
-            out = np.empty(x.size)
-            kernels.fork_forces(I, P, x, v, np.zeros(x.size), out)
-            return out
+    x, v = np.asarray(x, float), np.asarray(v, float)
+    out = fork_forces_along(law, x, v, np.zeros(x.size))
+    if out is not None:
+        return out
     one = (lambda a, b: law.force(a, b, 0.0)) if law.has_state else law.force
     return np.array([one(a, b) for a, b in zip(x, v)])
 
