@@ -299,8 +299,7 @@ def _fit(rd: RingDown, t: np.ndarray, x: np.ndarray, half_s: float) -> RingDown:
         dn[k] -= h
         jac[:, k] = (model(up) - model(dn)) / (2 * h)
     s2 = float(r @ r) / max(1, n - 5)
-    rc = r - r.mean()
-    rho = float(np.clip((rc[1:] @ rc[:-1]) / max(rc @ rc, 1e-300), 0.0, 0.999999)) if n > 2 else 0.0
+    rho = lag1(r, upper=0.999999) if n > 2 else 0.0
     inflate = (1.0 + rho) / (1.0 - rho)
     try:
         cov = np.linalg.inv(jac.T @ jac) * s2 * inflate
@@ -318,6 +317,14 @@ def _fit(rd: RingDown, t: np.ndarray, x: np.ndarray, half_s: float) -> RingDown:
     rd.rest_mm, rd.x0_mm, rd.v0_mm_per_s = float(rest), float(b), float(-a * b + wd * c)
     rd.rms_mm, rd.rho = float(math.sqrt(float(r @ r) / n)), rho
     return rd
+
+
+def lag1(r: np.ndarray, upper: float = 0.99) -> float:
+    """The lag-1 autocorrelation of a residual ``r`` (its mean removed), within 0..``upper`` (0 for a
+    residual that is all one value): a fit's residual smooth in time counts as fewer samples."""
+    r = r - r.mean()
+    den = float(r @ r)
+    return float(np.clip((r[1:] @ r[:-1]) / den, 0.0, upper)) if den > 0 else 0.0
 
 
 def find_slam(time_s: np.ndarray, x_mm: np.ndarray, name: str) -> int:
@@ -443,7 +450,7 @@ def click_law(end: str, clicks, fits) -> ClickLaw:
     return ClickLaw(end, tuple(float(c) for c in k), float(beta[0]), float(beta[1]), cov, fn_mean, fn_sd, chi2)
 
 
-__all__ = ["BounceError", "ClickLaw", "RingDown", "click_law", "find_slam", "fit_record",
+__all__ = ["BounceError", "ClickLaw", "RingDown", "click_law", "find_slam", "fit_record", "lag1",
            "ring_down",
            "weighted_line",
            "METHOD", "LAW_FORM"]

@@ -56,7 +56,7 @@ from mtbmj.bike import run as bike_run
 from mtbmj.bike import spec as spec_mod
 from mtbmj.bike.reference import NQ, Reference, static_equilibrium
 from mtbmj.errors import MtbmjError
-from mtbmj.identify.bounce import QUIET_BEFORE_S, BounceError, find_slam, interval95
+from mtbmj.identify.bounce import QUIET_BEFORE_S, BounceError, find_slam, interval95, lag1
 from mtbmj.identify.bounce_bike import RIDER_SOURCE, RIDER_ZETA
 
 RIDER_HZ = 5.0  # the seated body's vertical resonance (Fairley and Griffin 1989: 5 Hz; 4-6 Hz, Griffin 1990, ISO 2631-1)
@@ -398,12 +398,6 @@ def _rest(t, x, peak_t) -> float:
     early, late = QUIET_BEFORE_S
     w = (t >= peak_t - early) & (t <= peak_t - late)
     return float(np.median(x[w]))
-
-
-def lag1(r: np.ndarray) -> float:
-    r = r - r.mean()
-    den = float(r @ r)
-    return float(np.clip((r[1:] @ r[:-1]) / den, 0.0, 0.99)) if den > 0 else 0.0
 
 
 def _start(t, s, rest) -> dict:
