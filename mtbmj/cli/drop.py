@@ -57,6 +57,14 @@ def _engines(text: str) -> list[str]:
     return engines
 
 
+def _refuse_bike_options(args) -> None:
+    """A drop or rolling cross-check given an option only the bike's has: refused in one line."""
+    from mtbmj.errors import MtbmjError
+
+    if args.pedal is not None or args.power is not None or args.seated or args.rider != "passive":
+        raise MtbmjError("--pedal, --power, --seated and --rider: apply to a bike cross-check (--bike)")
+
+
 def cmd_crosscheck(args) -> int:
     if args.bike:
         return _crosscheck_bike(args)
@@ -67,8 +75,7 @@ def cmd_crosscheck(args) -> int:
 
     if args.speed is not None or args.drive is not None or args.head_angle is not None:
         raise MtbmjError("--speed, --drive and --head-angle: apply to a rolling cross-check (--roll SCENARIO)")
-    if args.pedal is not None or args.power is not None or args.seated or args.rider != "passive":
-        raise MtbmjError("--pedal, --power, --seated and --rider: apply to a bike cross-check (--bike)")
+    _refuse_bike_options(args)
 
     engines = [e for e in _engines(args.engines) if e != "ode"] or ["mujoco"]
     checks = crosscheck_all(args.config, engines, args.tolerance_mm, overrides(args.set), args.duration)
@@ -84,8 +91,7 @@ def _crosscheck_roll(args) -> int:
 
     if args.speed is None:
         raise MtbmjError("--roll: give the speed with --speed M_PER_S")
-    if args.pedal is not None or args.power is not None or args.seated or args.rider != "passive":
-        raise MtbmjError("--pedal, --power, --seated and --rider: apply to a bike cross-check (--bike)")
+    _refuse_bike_options(args)
     if args.engines != "mujoco" or args.tolerance_mm != 0.1:
         raise MtbmjError("--engines and --tolerance-mm: apply to a drop cross-check; a rolling one compares MuJoCo "
                          "with the rolling reference at 0.02 mm and 1 %")
