@@ -172,10 +172,11 @@ def script_parser(script: Path) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog=script.name, exit_on_error=False)
     types = {"int": int, "float": float, "str": str, "Path": Path}
     for node in ast.walk(ast.parse(script.read_text())):
-        if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == "add_out_option":
+        called = getattr(node.func, "id", getattr(node.func, "attr", None)) if isinstance(node, ast.Call) else None
+        if called == "add_out_option":
             parser.add_argument("--out", type=Path)
             continue
-        if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) == "add_ride_options":
+        if called == "add_ride_options":
             parser.add_argument("--ride")
             parser.add_argument("--bike")
             parser.add_argument("--repeats", type=int)
