@@ -9,8 +9,9 @@ quarter-car inverse finds (high-passed at 1 Hz: each end's suspension delays its
 its own, the grounds carry none), or where those give no speed in that window, the ends' travel
 velocities (high-passed at 5 Hz), gives v = wheelbase / lag, the wheelbase at the ride's sag
 (:func:`wheelbase_at`, the median travel of each end). A window's rejections and standard error are
-that module's; the windows start every half window (overlapping), the speed between the accepted windows' centres
-is linear (held past the first and last), a sample in no accepted window left out of the checks, the distance along the ride its integral, the rear's lag wheelbase / v(t). A version-2
+that module's; the windows start every half window (overlapping), the speed between the accepted
+windows' centres is linear (held past the first and last), a sample in no accepted window left out
+of the checks, the distance along the ride its integral, the rear's lag wheelbase / v(t). A version-2
 record (5 kHz of coarse encoder steps) is low-passed at ``V2_LOWPASS_HZ`` and read at ``RATE_HZ``. A
 ride with no window that gives a speed, or whose windows with one lie wholly where nothing can be
 checked, is refused: no speed estimate, one line, nothing written.
