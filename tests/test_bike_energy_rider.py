@@ -2,7 +2,8 @@
 1 m drop at 5 m/s and over a rock garden (a profile written in tests/helpers.py, seven rocks
 50-110 mm), the change of MuJoCo's kinetic and gravitational energy and of the rider's pins and end
 stops equals the work of the muscles, the tissue's and the pins' damping, the saddle, the fork, the
-shock, the tyres and the drive within 1 % of the work done; without the muscles' work it does not."""
+shock, the tyres and the drive within 1 % of the work done; without the muscles' positive or negative
+work it does not."""
 from __future__ import annotations
 
 import numpy as np
@@ -40,10 +41,14 @@ def test_the_balance_closes_with_the_muscles_work(ridden):
 
 
 def test_the_balance_misses_without_the_muscles(ridden):
-    """The check can fail: leave the muscles' work out and the balance misses by more than 1 %."""
+    """The check can fail: leave the muscles' positive or their negative work out and the balance
+    misses by more than 1 %. (Their net work is not the test: off the drop it is -13 J of 3532 J
+    done, 801 J positive against -814 J negative, since the rider meets the bike's nose-up pitch
+    after the drop's pose; it had been -101.5 J.)"""
     e = ridden.summary["energy"]
-    without = e["energy_change_J"] - (e["work_total_J"] - e["muscle_work_J"])
-    assert abs(without) > TOLERANCE_PCT / 100.0 * e["work_done_J"]
+    for part in ("muscle_positive_J", "muscle_negative_J"):
+        without = e["energy_change_J"] - (e["work_total_J"] - e[part])
+        assert abs(without) > TOLERANCE_PCT / 100.0 * e["work_done_J"], part
     # and the muscles' two signs do not cancel into nothing
     assert abs(e["muscle_work_J"]) < e["muscle_positive_J"] - e["muscle_negative_J"]
 

@@ -246,3 +246,46 @@ def test_a_1_5_m_drop_at_6_m_per_s_lands_on_both_bikes(bike):
     assert s["crash"] is None
     assert s["pitch_deg"]["min"] > -45.0
     assert set(s["rider"]["joints"]) == set(rc.JOINTS)
+
+
+def test_after_the_drops_pose_a_nose_up_pitch_is_still_met():
+    """Once the drop's pose is let go (the front axle 1.2 m past where the rear wheel left the edge),
+    a nose-up pitch (past WHEELIE_FROM_DEG) moves the hips forward of the attack position and leans
+    the trunk as the pose's own following does; a nose-down pitch moves neither (it was let go with
+    the pose: nothing then met the wheelie a hard front landing throws the bike into)."""
+    ctl, _ = _controller()
+    after = ctl.edges[0] + ctl.wheelbase + rc.RELEASE_M + 0.2
+    assert ctl.drop_share(after) == 0.0 and ctl.past_edge(after) == 1.0
+    level_hip, level_trunk = ctl.targets(after, 0.0, 0.0)
+    assert level_hip == pytest.approx(ctl.hip)
+    up_hip, up_trunk = ctl.targets(after, math.radians(20.0), 2.0)
+    # forward by the pitch's following (clamped at WHEELIE_FORWARD_M), the trunk leaning nose-up by
+    # the pose's own following, clamped (20 deg and 2 rad/s ask more than LEAN_MAX_RAD)
+    assert math.radians(20.0) > math.radians(rc.WHEELIE_FROM_DEG + rc.WHEELIE_OVER_DEG)  # fully met
+    assert up_hip[0] - ctl.hip[0] == pytest.approx(rc.WHEELIE_FORWARD_M)
+    reach = rc.ARM_REACH * (ctl.body.upper_arm.length + ctl.body.forearm.length)
+    assert up_trunk - rb.trunk_for_reach(ctl.body, up_hip, ctl.grip, reach) == pytest.approx(rc.LEAN_MAX_RAD)
+    down_hip, down_trunk = ctl.targets(after, math.radians(-20.0), -2.0)
+    assert down_hip == pytest.approx(ctl.hip) and down_trunk == pytest.approx(level_trunk)
+    # nor a level frame pitching up (the wheelie is met by its pitch, not by a rebound's rate)
+    assert ctl.targets(after, 0.0, 3.0) == ctl.targets(after, 0.0, 0.0)
+    # on the flat before any drop, the pitch moves nothing
+    before = ctl.edges[0] - 10.0
+    assert ctl.targets(before, math.radians(20.0), 2.0) == ctl.targets(before, 0.0, 0.0)
+
+
+def test_the_sst_bike_off_0_8_m_at_4_m_per_s_lands():
+    """The SST bike off 0.8 m at 4 m/s: its front wheel lands steep (the nose 43 deg down, the rim
+    struck), the bike is thrown nose-up and comes down on its rear wheel pitching up; it looped out
+    at 1.29 s, after landing, while the drop's pose was let go in the air. Now met, the wheelie tops
+    out below 45 deg, both wheels come down and the run ends with the frame level."""
+    res = run_bike("sst", "drop:height_mm=800", 4.0, rider="active")
+    s = res.summary
+    assert s["crash"] is None
+    assert -45.0 < s["pitch_deg"]["min"] < -35.0  # the steep front landing is still there
+    assert s["pitch_deg"]["max"] < 45.0
+    raw = res.raw
+    after = np.arange(raw["time_s"].size) > int(np.argmax(raw["pitch_deg"]))  # past the wheelie's top
+    assert np.any(after & (raw["front_tire_N"] > 0.0) & (raw["rear_tire_N"] > 0.0))  # both wheels down again
+    end = raw["time_s"] > raw["time_s"][-1] - 0.2
+    assert np.all(np.abs(raw["pitch_deg"][end]) < 5.0)

@@ -43,6 +43,11 @@ from mtbmj.controllers.drive import chain_pull, pedal_drive, wheel_forces
 from mtbmj.errors import RunError
 
 NQ = 7
+# the reference's solver is stalled when it has evaluated the equations STALL_CALLS times in a row
+# within STALL_SPAN_S: a force that jumps where the state comes to rest (a sliding mode)
+# holds an explicit solver there for ever (the muscles' power limit did, at 1.0402 s off the 1 m drop:
+# 425 000 evaluations within 20 ns). The most a run met legitimately: 132 within 1 us, at a stop.
+STALL_SPAN_S, STALL_CALLS = 1e-6, 5000
 
 
 def _rot(a: float) -> np.ndarray:
@@ -334,10 +339,11 @@ class Reference:
     def run(self, y0, times, max_step: float, rtol: float = 1e-8, atol: float = 1e-10, method: str = "RK45") -> dict:
         """The reference's signals at ``times``. RK45 at rtol 1e-8: on the 50 mm root at 5 m/s (0.5 s)
         its front travel is within 1.1e-5 mm of DOP853's at rtol 1e-9 and 1e-10, with a quarter of
-        their evaluations (the profile's polygon corners cut the high-order method's steps)."""
+        their evaluations (the profile's polygon corners cut the high-order method's steps). A
+        solver that stalls is stopped (``Stall``): ``RunError`` saying where."""
         start = time.perf_counter()
-        sol = solve_ivp(self.rhs, (0.0, float(times[-1])), y0, method=method, t_eval=times, rtol=rtol, atol=atol,
-                        max_step=max_step)
+        sol = solve_ivp(Stall(self.rhs, self.COORDINATES), (0.0, float(times[-1])), y0, method=method, t_eval=times,
+                        rtol=rtol, atol=atol, max_step=max_step)
         if not sol.success:
             raise RunError(f"bike reference: {sol.message}")
         y = sol.y
@@ -355,6 +361,39 @@ class Reference:
         sig.update(time_s=times, front_travel_mm=y[3] * 1e3, pitch_deg=np.degrees(y[2]), frame_z_mm=y[1] * 1e3,
                    wall_time_s=time.perf_counter() - start, nfev=int(sol.nfev))
         return sig
+
+
+class Stall:
+    """The equations' right-hand side ``rhs`` watched for a stalled solver: ``STALL_CALLS``
+    evaluations in a row within ``STALL_SPAN_S`` of the first of them end the run with a ``RunError``
+    naming the time and the coordinate whose acceleration jumps most between those evaluations
+    (``names``: the state's coordinates, the accelerations following their speeds), instead of a
+    reference that crawls on for hours. A sliding mode (a force that jumps where the state comes to
+    rest) does this; a stiff stop does not (its steps are short, but they advance)."""
+
+    def __init__(self, rhs, names):
+        self.rhs, self.names = rhs, tuple(names)
+        self.anchor, self.count, self.first = -math.inf, 0, math.inf
+        self.low = self.high = None
+
+    def __call__(self, t, y):
+        out = self.rhs(t, y)
+        if abs(t - self.anchor) > STALL_SPAN_S:  # a new stretch: the evaluations counted only while they stay near
+            self.anchor, self.count, self.first = t, 0, t
+            self.low, self.high = out.copy(), out.copy()
+            return out
+        self.count += 1
+        self.first = min(self.first, t)
+        np.minimum(self.low, out, out=self.low)
+        np.maximum(self.high, out, out=self.high)
+        if self.count >= STALL_CALLS:
+            n = len(self.names)
+            spread = (self.high - self.low)[n:2 * n]
+            k = int(np.argmax(spread))
+            raise RunError(f"bike reference: the solver stalled at t = {self.first:.6f} s ({self.count} evaluations "
+                           f"within {STALL_SPAN_S * 1e6:g} us; the {self.names[k]} acceleration jumping between "
+                           f"{self.low[n + k]:.4g} and {self.high[n + k]:.4g}): a force that jumps with the state")
+        return out
 
 
 def static_equilibrium(reference: Reference, guess=None, acceptable=None, held=()) -> np.ndarray:
@@ -424,4 +463,4 @@ def static_equilibrium(reference: Reference, guess=None, acceptable=None, held=(
                    f"and the shock's rates and preloads; last solver message: {why})")
 
 
-__all__ = ["PlanarBike", "Reference", "static_equilibrium", "NQ"]
+__all__ = ["PlanarBike", "Reference", "Stall", "static_equilibrium", "NQ"]

@@ -11,7 +11,8 @@ stiffness, so they put nothing on the trunk) and adds, every evaluation, into ``
   anatomical angle to its target (stiffness and damping ``GAINS``), limited by the joint's
   isometric strength in each direction (``STRENGTH_N_M``, both sides together) and, all joints
   together, by the power a rider's muscles give (``POWER_W``): where the joints' positive work
-  would exceed it, the torques doing positive work are scaled down to it;
+  would exceed it, the torques doing positive work are cut to it, each the more the more work it
+  does (``power_factors``; continuous in the joints' speeds, so a joint at rest keeps its torque);
 * the passive tissue: a little damping at each joint and, past the joint's range of motion
   (``mtbmj.bike.rider_body.RANGES_DEG``), a stiff end stop (not a muscle: not in the limits);
 * seated: the saddle, a one-sided spring-damper under the ischial point (``SADDLE_*``).
@@ -74,7 +75,8 @@ and the knee locked straight); a run started within a drop's ramp starts in its 
 squeezing the ramp into the run-up (the hop that landed the rear in its bumper on the ledge); the
 frame's pitch steers the hips only past the edge; the drop's pose is let go over ``RELEASE_M``
 once the rear wheel has left the edge (held 1.5 m longer, the hips far back looped the bike out
-after landing). The summary reports, per joint, the torque asked of it (``asked_peak_of_limit``,
+after landing), and after it a nose-up pitch is still met, a nose-down one not (``Controller.targets``:
+the SST bike off 0.8 m at 4 m/s looped out without). The summary reports, per joint, the torque asked of it (``asked_peak_of_limit``,
 above 1 where the limit cut it) and the time spent at the limit (``at_limit_s``).
 """
 from __future__ import annotations
@@ -128,6 +130,10 @@ BACK_RANGE_M = (-0.15, 0.6)  # the hips' place behind the attack position's, lea
 LEAN_MAX_RAD = 0.35  # the trunk's lean that follows the pitch, at most
 AIM_INSIDE_DEG = 10.0  # every joint's target kept this far inside its range of motion
 LOADED_N = 50.0
+# once the drop's pose is let go, a nose-up pitch past WHEELIE_FROM_DEG (fully over the next
+# WHEELIE_OVER_DEG) is met by the pose's own following, forward only (assumed)
+WHEELIE_FROM_DEG, WHEELIE_OVER_DEG = 0.0, 10.0
+WHEELIE_FORWARD_M = 0.3  # and the hips go forward of the attack position by at most this (assumed)
 
 
 def edges(terrain, step: float = 0.01) -> list[float]:
@@ -189,20 +195,29 @@ class Controller:
         return share
 
     def targets(self, x_front: float, pitch: float, rate: float) -> tuple[tuple, float]:
+        """(hips m, trunk rad) asked with the front axle at ``x_front`` and the frame's ``pitch``
+        and pitch ``rate``: the drop's pose (``drop_share``) with the hips following the pitch
+        past the edge; once the pose is let go, a nose-up pitch past ``WHEELIE_FROM_DEG`` is still
+        met by the same following, forward only (the hips up to ``WHEELIE_FORWARD_M`` ahead of the
+        attack position, the trunk leaning as the pose's does), a nose-down one no longer: the SST
+        bike off 0.8 m at 4 m/s came down on its front wheel 43 deg nose-down, was thrown nose-up
+        by the rim strike and, the pose let go in the air, landed on its rear wheel pitching up at
+        190 deg/s and looped out."""
         if self.seated:
             return self.hip, self.trunk
         s = self.drop_share(x_front)
         past = self.past_edge(x_front)
-        f = s * past  # the pitch followed once the front wheel is over the edge
-        full = HIPS_BACK_M + PITCH_GAIN_M_PER_RAD * pitch + RATE_GAIN_M_S * rate
-        full = min(max(full, BACK_RANGE_M[0]), BACK_RANGE_M[1])
+        follow = PITCH_GAIN_M_PER_RAD * pitch + RATE_GAIN_M_S * rate  # nose down: the hips further back
+        full = min(max(HIPS_BACK_M + follow, BACK_RANGE_M[0]), BACK_RANGE_M[1])
         ledge = min(HIPS_BACK_M, self.ledge_back)
-        back = ledge + past * (full - ledge)
-        hip = self.reachable((self.hip[0] - s * back, self.hip[1] - s * HIPS_DOWN_M))
+        back = s * (ledge + past * (full - ledge))
+        wheelie = (1.0 - s) * past * _smooth((math.degrees(pitch) - WHEELIE_FROM_DEG) / WHEELIE_OVER_DEG)
+        back += wheelie * max(min(follow, 0.0), -WHEELIE_FORWARD_M)  # let go: a nose-up pitch only
+        hip = self.reachable((self.hip[0] - back, self.hip[1] - s * HIPS_DOWN_M))
         reach = ARM_REACH * (self.body.upper_arm.length + self.body.forearm.length)
-        lean = f * min(max(TRUNK_GAIN * pitch + TRUNK_RATE_S * rate, -LEAN_MAX_RAD), LEAN_MAX_RAD)
+        lean = min(max(TRUNK_GAIN * pitch + TRUNK_RATE_S * rate, -LEAN_MAX_RAD), LEAN_MAX_RAD)
+        lean = s * past * lean + wheelie * max(lean, 0.0)
         return hip, rb.trunk_for_reach(self.body, hip, self.grip, reach) + lean
-
 
     @functools.cached_property
     def _leg_reach(self) -> tuple:
@@ -271,12 +286,42 @@ def aimed(ctl: Controller, aim: dict, x_front: float, pitch: float, rate: float)
             for k, a in rb.pose(ctl.body, ctl.pedal, ctl.grip, hip, trunk).angles.items()}
 
 
+def power_factors(powers: dict, limit: float) -> dict:
+    """Each joint's factor (0-1] on its torque that keeps the joints' positive power together within
+    ``limit`` W, from each joint's power ``powers`` (W, torque times speed, before the limit): 1 where
+    the sum of the positive ones is within it; past it, a joint's positive power p is cut to
+    p / (1 + c p), c > 0 the root of sum p / (1 + c p) = limit (Newton's method from c = 0, which
+    this sum, convex and falling in c, approaches from below). The joint doing the most work gives up
+    the most, and one doing none (at rest, or absorbing) keeps its whole torque: each factor is
+    continuous in every joint's speed. One shared scale on every torque doing positive work jumped
+    where a joint's speed changed sign: the shoulder's torque between -140 and -93 N m at rest, a
+    sliding mode that the ODE reference's RK45 could not step past (at 1.0402 s off the 1 m drop,
+    425 000 evaluations within 20 ns) and that the engine's fixed step chattered through."""
+    out = dict.fromkeys(powers, 1.0)
+    pos = [p for p in powers.values() if p > 0.0]
+    if sum(pos) <= limit:
+        return out
+    c = 0.0
+    for _ in range(100):
+        f = sum(p / (1.0 + c * p) for p in pos) - limit
+        slope = sum((p / (1.0 + c * p)) ** 2 for p in pos)
+        step = f / slope
+        c += step
+        if step <= 4.0 * math.ulp(c):  # converged to the last bit (from below: step >= 0 but for rounding)
+            break
+    for k, p in powers.items():
+        if p > 0.0:
+            out[k] = 1.0 / (1.0 + c * p)
+    return out
+
+
 def muscle_torques(want: dict, now: dict, speed: dict, gains: dict, strength: dict) -> tuple[dict, dict, float]:
     """(torques N m, demands, positive power W) of the muscles: each joint's torque toward its target
     (``gains``' stiffness and damping on the anatomical angle ``now`` and speed ``speed``) limited by
     its strength in each direction (``strength``: (flexion, extension)), then the torques doing
-    positive work scaled down together to ``POWER_W`` where they would exceed it. A demand is the
-    torque asked over the limit in its direction (1 and above: held at the limit)."""
+    positive work cut to ``POWER_W`` together where they would exceed it (``power_factors``: each
+    the more the more work it does, continuous in the joints' speeds). A demand is the torque asked
+    over the limit in its direction (1 and above: held at the limit)."""
     taus, demands = {}, {}
     for k in JOINTS:
         kp, kd = gains[k]
@@ -284,13 +329,10 @@ def muscle_torques(want: dict, now: dict, speed: dict, gains: dict, strength: di
         ask = kp * (want[k] - now[k]) - kd * speed[k]
         taus[k] = min(max(ask, -ext), flex)
         demands[k] = ask / flex if ask > 0 else -ask / ext
+    factors = power_factors({k: taus[k] * speed[k] for k in JOINTS}, POWER_W)
+    for k in JOINTS:
+        taus[k] *= factors[k]
     power = sum(max(taus[k] * speed[k], 0.0) for k in JOINTS)
-    if power > POWER_W:
-        scale = POWER_W / power
-        for k in JOINTS:
-            if taus[k] * speed[k] > 0.0:
-                taus[k] *= scale
-        power = POWER_W
     return taus, demands, power
 
 
@@ -596,5 +638,5 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     return p
 
 
-__all__ = ["RiderCallback", "Controller", "activate", "aimed", "muscle_torques", "end_stops", "stop_penetration", "stop_damping", "edges", "stance", "saddle_point", "STRENGTH_N_M",
+__all__ = ["RiderCallback", "Controller", "activate", "aimed", "muscle_torques", "power_factors", "end_stops", "stop_penetration", "stop_damping", "edges", "stance", "saddle_point", "STRENGTH_N_M",
            "STRENGTH_ONE_SIDE_N_M", "POWER_W", "GAINS", "JOINTS"]
