@@ -320,6 +320,7 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
 
         done = bounce_replay.replay_records(records, clicks, bike, rider_hz)
         out["replay"] = done["summary"]
+        out["replay_check"] = done["check"]
         csvs.update(done["csv"])
         if done["replays"]:
             extra["replay.png"] = bounce_replay.figure_png(done["replays"])
