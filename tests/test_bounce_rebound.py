@@ -126,3 +126,25 @@ def test_shared_records_slow_with_the_clicks():
     speeds = [e["record_rebound"]["rebound_speed_mm_per_s"] for e in entries]
     assert speeds[0] > speeds[1] > speeds[2]
     assert [e["record_rebound"]["topped_out"] for e in entries] == [True, True, False]
+
+
+@pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
+def test_shared_forks_are_refused_with_the_reason():
+    """``fit bounce --replay`` does not replay the fork: per shared record one reason naming how few free
+    half cycles it has (the decay reading's note) and where it rests after the slam against before,
+    beside the shock: the fork less compressed after, the shock more (the rider's weight moved)."""
+    from conftest import SHARED_DATA
+
+    from mtbmj.identify import bounce_decay as bd
+    from mtbmj.identify.bounce_fit import fork_refusals
+    from mtbmj.measured.telemetry import read_sst
+
+    records = [read_sst(os.path.join(SHARED_DATA, "sst_v2", f + ".SST")) for f in ("00083", "00085", "00087")]
+    summaries = [{"fork": {"decay": bd.fit_record(r)["fork"].summary()}} for r in records]
+    got = fork_refusals(records, summaries)
+    assert len(got) == 3
+    for e in got:
+        assert "free half cycle" in e["refused"] or "no free extremum" in e["refused"]
+        assert e["rest_after_mm"] < e["rest_before_mm"] - 5.0
+        assert "opposite ways, the rider's weight moved" in e["refused"]
+        assert e["refused"].endswith("the fork's spring, damper and friction are not replayed")

@@ -457,10 +457,11 @@ def first_rebound(time_s, x_mm, peak: int, rest_mm: float) -> dict:
     """The slam's first rebound read off the trace, no model (``fit bounce --replay``'s check of the
     damper): on the 10 ms-smoothed travel from the slam's peak (index ``peak``) to the first trough
     (where it first turns by 1 % of the slam's height, or the record's end), the largest extension
-    speed (the smoothed travel's slope over 10 ms), the mean speed through the rebound's middle (from 75 % to 25 % of the peak's height above
-    ``rest_mm``: the same stroke for slams of the same height, where one spring pushes alike, so the
-    slower the more rebound damping), the time to the trough and its level (``topped_out`` when it
-    lies within 1 mm of full extension: the stroke clipped there, not free)."""
+    speed (the smoothed travel's slope over 10 ms), the mean speed through the rebound's middle (from
+    75 % to 25 % of the peak's height above ``rest_mm``: the same stroke for slams of the same height,
+    where one spring pushes alike, so the slower the more rebound damping), the time to the trough
+    and its level (``topped_out`` when it lies within 1 mm of full extension: the stroke clipped
+    there, not free)."""
     t = np.asarray(time_s, float)
     dt = float(t[1] - t[0])
     xs = _smooth(np.asarray(x_mm, float), max(int(round(SMOOTH_S / dt)), 1))
@@ -490,13 +491,30 @@ def first_rebound(time_s, x_mm, peak: int, rest_mm: float) -> dict:
             "topped_out": bool(xs[trough] < 1.0), "peak_above_rest_mm": height}
 
 
+SETTLED_AFTER_S = (1.0, 1.5)  # the level after the slam: its median over this window after the peak (s)
+
+
+def rest_shift(time_s, x_mm, peak: int) -> tuple[float, float] | None:
+    """(level before, level after) the slam (mm): the medians over ``QUIET_BEFORE_S`` before the peak
+    and ``SETTLED_AFTER_S`` after it; None when the record ends before that."""
+    t = np.asarray(time_s, float)
+    x = np.asarray(x_mm, float)
+    tp = t[peak]
+    before = (t >= tp - QUIET_BEFORE_S[0]) & (t <= tp - QUIET_BEFORE_S[1])
+    after = (t >= tp + SETTLED_AFTER_S[0]) & (t <= tp + SETTLED_AFTER_S[1])
+    if not before.any() or t[-1] < tp + SETTLED_AFTER_S[1]:
+        return None
+    return float(np.median(x[before])), float(np.median(x[after]))
+
+
 def rebound_check(entries) -> dict | None:
     """Do the records' own first rebounds (``first_rebound``'s middle speed, model-free) slow as the
     rebound clicks rise, and do the replayed dampers rise with them? ``entries``: per record a dict
     with "clicks", "record_rebound" and, when replayed, "damper_N_s_per_m". None with fewer than two
     distinct clicks. "records_order" / "replay_orders": strictly monotone in clicks (ties in clicks
     not compared); "line" states the outcome."""
-    rows = sorted((e for e in entries if e.get("record_rebound") and e["record_rebound"]["mid_rebound_speed_mm_per_s"]),
+    rows = sorted((e for e in entries
+                   if e.get("record_rebound") and e["record_rebound"]["mid_rebound_speed_mm_per_s"]),
                   key=lambda e: e["clicks"])
     if len({e["clicks"] for e in rows}) < 2:
         return None
@@ -525,7 +543,7 @@ def rebound_check(entries) -> dict | None:
             "clicks": [e["clicks"] for e in rows], "line": line}
 
 
-__all__ = ["BounceError", "ClickLaw", "RingDown", "click_law", "find_slam", "first_rebound", "fit_record", "rebound_check", "lag1",
-           "ring_down",
+__all__ = ["BounceError", "ClickLaw", "RingDown", "click_law", "find_slam", "first_rebound", "fit_record",
+           "rebound_check", "rest_shift", "lag1", "ring_down",
            "weighted_line",
            "METHOD", "LAW_FORM"]
