@@ -450,7 +450,100 @@ def click_law(end: str, clicks, fits) -> ClickLaw:
     return ClickLaw(end, tuple(float(c) for c in k), float(beta[0]), float(beta[1]), cov, fn_mean, fn_sd, chi2)
 
 
-__all__ = ["BounceError", "ClickLaw", "RingDown", "click_law", "find_slam", "fit_record", "lag1",
-           "ring_down",
+REBOUND_BAND = (0.75, 0.25)  # the first rebound's middle: from this share of the peak's height above rest to this
+
+
+def first_rebound(time_s, x_mm, peak: int, rest_mm: float) -> dict:
+    """The slam's first rebound read off the trace, no model (``fit bounce --replay``'s check of the
+    damper): on the 10 ms-smoothed travel from the slam's peak (index ``peak``) to the first trough
+    (where it first turns by 1 % of the slam's height, or the record's end), the largest extension
+    speed (the smoothed travel's slope over 10 ms), the mean speed through the rebound's middle (from
+    75 % to 25 % of the peak's height above ``rest_mm``: the same stroke for slams of the same height,
+    where one spring pushes alike, so the slower the more rebound damping), the time to the trough
+    and its level (``topped_out`` when it lies within 1 mm of full extension: the stroke clipped
+    there, not free)."""
+    t = np.asarray(time_s, float)
+    dt = float(t[1] - t[0])
+    xs = _smooth(np.asarray(x_mm, float), max(int(round(SMOOTH_S / dt)), 1))
+    height = float(xs[peak] - rest_mm)
+    if height <= 0.0:
+        raise BounceError(f"the slam's peak ({xs[peak]:.1f} mm) is not above the rest before it ({rest_mm:.1f} mm)")
+    turns = turning_points(xs, peak, 0.01 * height, falling=True)
+    trough = turns[0] if turns else xs.size - 1
+    h = max(int(round(SMOOTH_S / dt)) // 2, 1)  # the speed over the smoothing's own span: the noise's slope small
+    i = np.arange(peak, trough + 1)
+    v = (xs[np.minimum(i + h, xs.size - 1)] - xs[np.maximum(i - h, 0)]) / ((np.minimum(i + h, xs.size - 1)
+                                                                             - np.maximum(i - h, 0)) * dt)
+    hi, lo = (rest_mm + f * height for f in REBOUND_BAND)
+    seg = xs[peak:trough + 1]
+
+    def crossing(level):
+        j = np.flatnonzero(seg <= level)
+        if not j.size or j[0] == 0:
+            return None
+        j = int(j[0])
+        return float(t[peak + j - 1] + (level - seg[j - 1]) * dt / (seg[j] - seg[j - 1]))
+
+    a, b = crossing(hi), crossing(lo)
+    return {"rebound_speed_mm_per_s": float(max(0.0, -float(np.min(v)))),
+            "mid_rebound_speed_mm_per_s": None if a is None or b is None or b <= a else float((hi - lo) / (b - a)),
+            "trough_s": float(t[trough] - t[peak]), "trough_mm": float(xs[trough]),
+            "topped_out": bool(xs[trough] < 1.0), "peak_above_rest_mm": height}
+
+
+SETTLED_AFTER_S = (1.0, 1.5)  # the level after the slam: its median over this window after the peak (s)
+
+
+def rest_shift(time_s, x_mm, peak: int) -> tuple[float, float] | None:
+    """(level before, level after) the slam (mm): the medians over ``QUIET_BEFORE_S`` before the peak
+    and ``SETTLED_AFTER_S`` after it; None when the record ends before that."""
+    t = np.asarray(time_s, float)
+    x = np.asarray(x_mm, float)
+    tp = t[peak]
+    before = (t >= tp - QUIET_BEFORE_S[0]) & (t <= tp - QUIET_BEFORE_S[1])
+    after = (t >= tp + SETTLED_AFTER_S[0]) & (t <= tp + SETTLED_AFTER_S[1])
+    if not before.any() or t[-1] < tp + SETTLED_AFTER_S[1]:
+        return None
+    return float(np.median(x[before])), float(np.median(x[after]))
+
+
+def rebound_check(entries) -> dict | None:
+    """Do the records' own first rebounds (``first_rebound``'s middle speed, model-free) slow as the
+    rebound clicks rise, and do the replayed dampers rise with them? ``entries``: per record a dict
+    with "clicks", "record_rebound" and, when replayed, "damper_N_s_per_m". None with fewer than two
+    distinct clicks. "records_order" / "replay_orders": strictly monotone in clicks (ties in clicks
+    not compared); "line" states the outcome."""
+    rows = sorted((e for e in entries
+                   if e.get("record_rebound") and e["record_rebound"]["mid_rebound_speed_mm_per_s"]),
+                  key=lambda e: e["clicks"])
+    if len({e["clicks"] for e in rows}) < 2:
+        return None
+    pairs = [(a, b) for a, b in zip(rows, rows[1:]) if b["clicks"] > a["clicks"]]
+    speed = [e["record_rebound"]["mid_rebound_speed_mm_per_s"] for e in rows]
+    slows = all(b["record_rebound"]["mid_rebound_speed_mm_per_s"] < a["record_rebound"]["mid_rebound_speed_mm_per_s"]
+                for a, b in pairs)
+    done = [e for e in rows if "damper_N_s_per_m" in e]
+    rises = None
+    if len({e["clicks"] for e in done}) >= 2:
+        rises = all(b["damper_N_s_per_m"] > a["damper_N_s_per_m"]
+                    for a, b in zip(done, done[1:]) if b["clicks"] > a["clicks"])
+    ks = ", ".join(f"{e['clicks']:g}" for e in rows)
+    said = (f"the records' first rebounds {'slow' if slows else 'do not slow'} as the clicks rise (mid-rebound "
+            f"speed {', '.join(f'{v:.0f}' for v in speed)} mm/s at {ks} clicks, model-free)")
+    if not slows:
+        line = f"{said}: the records themselves do not show more rebound damping at more clicks"
+    elif rises is None:
+        line = f"{said}; fewer than two replays to compare"
+    else:
+        cs = ", ".join(f"{e['damper_N_s_per_m']:.0f}" for e in done)
+        dampers = f"replayed dampers {cs} N s/m at {', '.join(format(e['clicks'], 'g') for e in done)} clicks"
+        line = (f"{said}, and the {dampers} rise with them" if rises else
+                f"{said}, but the {dampers} do not rise with them: the replay does not read the rebound damper")
+    return {"records_order": bool(slows), "replay_orders": rises, "mid_rebound_speed_mm_per_s": speed,
+            "clicks": [e["clicks"] for e in rows], "line": line}
+
+
+__all__ = ["BounceError", "ClickLaw", "RingDown", "click_law", "find_slam", "first_rebound", "fit_record",
+           "rebound_check", "rest_shift", "lag1", "ring_down",
            "weighted_line",
            "METHOD", "LAW_FORM"]

@@ -320,11 +320,50 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
 
         done = bounce_replay.replay_records(records, clicks, bike, rider_hz)
         out["replay"] = done["summary"]
+        out["replay_check"] = done["check"]
+        from mtbmj.identify import bounce_rebound
+
+        out["rebound_dampers"] = bounce_rebound.read_records(records, clicks, done["summary"], bike, rider_hz)
+        if out["rebound_dampers"] is not None:
+            done["lines"].append(out["rebound_dampers"]["line"])
+        out["replay_fork"] = fork_refusals(records, out["records"])
+        done["lines"] += [f"fork not replayed: {e['refused']}" for e in out["replay_fork"]]
         csvs.update(done["csv"])
         if done["replays"]:
             extra["replay.png"] = bounce_replay.figure_png(done["replays"])
         replay_lines = done["lines"]
     return BounceFit(out, records, fits, laws, list(clicks), csvs, predictions, answers, extra, replay_lines)
+
+
+SHIFT_MM = 2.0  # a level after the slam this far from the one before is a moved rest (the records': 7-13 mm)
+
+
+def fork_refusals(records, summaries) -> list:
+    """``--replay``'s word on the fork (its spring, damper and friction are not replayed): per record with
+    a fork, the decay reading's note (``bounce_decay``: how many free half cycles it has) and how far its
+    level after the slam lies from its level before (``bounce.rest_shift``), beside the shock's."""
+    from mtbmj.identify import bounce
+
+    out = []
+    for rec, summ in zip(records, summaries):
+        if rec.fork_mm is None or rec.shock_mm is None:
+            continue
+        peak = bounce.find_slam(rec.time_s, rec.shock_mm, rec.name)
+        fork = bounce.rest_shift(rec.time_s, rec.fork_mm, peak)
+        shock = bounce.rest_shift(rec.time_s, rec.shock_mm, peak)
+        note = (summ.get("fork", {}).get("decay") or {}).get("note") or "its decay was read"
+        why = f"{rec.name}: {note}"
+        if fork is not None and shock is not None:
+            df, ds = fork[1] - fork[0], shock[1] - shock[0]
+            why += (f"; after the slam it rests {df:+.1f} mm from its level before ({fork[0]:.1f} to "
+                    f"{fork[1]:.1f} mm), the shock {ds:+.1f} mm ({shock[0]:.1f} to {shock[1]:.1f})")
+            if df * ds < 0 and min(abs(df), abs(ds)) > SHIFT_MM:
+                why += (": opposite ways, the rider's weight moved between the bars and the saddle, which the "
+                        "replay's vertical push on the rider does not make")
+        why += "; the fork's spring, damper and friction are not replayed"
+        out.append({"file": rec.name, "refused": why, "rest_before_mm": None if fork is None else fork[0],
+                    "rest_after_mm": None if fork is None else fork[1]})
+    return out
 
 
 def _decay(records, clicks, out, notes):
@@ -605,4 +644,4 @@ def json_bytes(data) -> bytes:
     return (json.dumps(data, indent=2, allow_nan=False) + "\n").encode()
 
 
-__all__ = ["BounceFit", "RATE_AGREES", "figure", "figure_png", "fit_bounce", "interval", "json_bytes"]
+__all__ = ["BounceFit", "RATE_AGREES", "figure", "figure_png", "fit_bounce", "fork_refusals", "interval", "json_bytes"]

@@ -56,7 +56,8 @@ from mtbmj.bike import run as bike_run
 from mtbmj.bike import spec as spec_mod
 from mtbmj.bike.reference import NQ, Reference, static_equilibrium
 from mtbmj.errors import MtbmjError
-from mtbmj.identify.bounce import QUIET_BEFORE_S, BounceError, find_slam, interval95, lag1
+from mtbmj.identify.bounce import (QUIET_BEFORE_S, BounceError, find_slam, first_rebound, interval95, lag1,
+                                   rebound_check)
 from mtbmj.identify.bounce_bike import RIDER_SOURCE, RIDER_ZETA
 
 RIDER_HZ = 5.0  # the seated body's vertical resonance (Fairley and Griffin 1989: 5 Hz; 4-6 Hz, Griffin 1990, ISO 2631-1)
@@ -625,26 +626,37 @@ def _shares(sr: SeatedReplay, scale: float, rebound: float) -> dict:
 
 def replay_records(records, clicks, bike="sst", rider_hz: float | None = None) -> dict:
     """Each record's slam replayed (``fit bounce --replay``): {"summary": fit.json's "replay" list,
-    "csv": replay_<file>.csv columns by name, "replays": the Replay objects, "lines": printed}. A
-    record whose replay is refused gets ``"refused"`` (the reason) and no values, trace or file."""
+    "csv": replay_<file>.csv columns by name, "replays": the Replay objects, "lines": printed, "check":
+    ``bounce.rebound_check``}. Each entry has "record_rebound" (``bounce.first_rebound``, model-free) and,
+    replayed, "replay_rebound" (the same on the replay). A record whose replay is refused gets
+    ``"refused"`` (the reason) and no values, trace or file."""
     sr = SeatedReplay(bike, RIDER_HZ if rider_hz is None else rider_hz)
     out = {"summary": [], "csv": {}, "replays": [], "lines": []}
     for rec, k in zip(records, clicks):
         name = getattr(rec, "name", None) or str(getattr(rec, "path", "record"))
         if rec.shock_mm is None:
             raise BounceError(f"{name}: no shock sensor: the replay fits the shock's slam")
+        t, s = np.asarray(rec.time_s, float), np.asarray(rec.shock_mm, float)
+        peak = find_slam(t, s, name)
+        own = {"record_rebound": first_rebound(t, s, peak, _rest(t, s, t[peak]))}
         try:
             rp = replay(rec.time_s, rec.shock_mm, rec.fork_mm, name=name, seated=sr,
                         shock_max_mm=getattr(rec, "shock_max_mm", None))
         except BounceError as e:  # this record's replay says why, the others are still replayed
-            out["summary"].append({"file": name, "clicks": k, "refused": str(e)})
+            out["summary"].append({"file": name, "clicks": k, "refused": str(e), **own})
             out["lines"].append(f"replay refused: {e}")
             continue
-        out["summary"].append({"file": name, "clicks": k, **rp.summary()})
+        tr = rp.trace
+        top = int(np.argmax(np.where(np.abs(tr["time_s"]) < 0.1, tr["stroke_mm"], -np.inf)))
+        own["replay_rebound"] = first_rebound(tr["time_s"], tr["stroke_mm"], top, rp.trace["stroke_mm"][0])
+        out["summary"].append({"file": name, "clicks": k, **rp.summary(), **own})
         stem = str(name).rsplit("/", 1)[-1].rsplit(".", 1)[0]
         out["csv"][f"replay_{stem}.csv"] = rp.csv_columns()
         out["replays"].append(rp)
         out["lines"].append(f"{rp.line()} (at {k:g} clicks)")
+    out["check"] = rebound_check(out["summary"])
+    if out["check"] is not None:
+        out["lines"].append(f"replay check: {out['check']['line']}")
     return out
 
 

@@ -1,0 +1,150 @@
+"""The slam's first rebound read off the trace with no model (``bounce.first_rebound``) and the check
+of the replayed dampers against it (``bounce.rebound_check``, ``fit bounce --replay``'s "replay_check").
+
+(a) A record made here in closed form: at rest, a quick compression, then from rest at the peak the
+free motion of one linear damped oscillator, x = rest + A e^(-zeta wn t) (cos wd t + zeta / sqrt(1 -
+zeta^2) sin wd t), sampled at 5 kHz with noise. Its largest extension speed, A wn / sqrt(1 - zeta^2)
+e^(-zeta wn t*) sin(wd t*) at tan(wd t*) = sqrt(1 - zeta^2) / zeta, its trough at pi / wd and its
+speed through the rebound's middle (from 75 % to 25 % of A above rest, the crossings solved here
+with brentq) are given back; more damping, a slower rebound. (b) The check on entries written here.
+(c) The shared slams (00083, 00085, 00087 at 0, 8, 17 rebound clicks): read off the records, no replay.
+"""
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from mtbmj.identify.bounce import BounceError, first_rebound, rebound_check
+
+FS = 5000.0
+
+
+def closed_form(zeta, hz=1.5, amp=40.0, rest=10.0, noise=0.05, seed=3):
+    """(time_s, x_mm, peak index, x(t) after the peak) of a slam whose rebound is the closed form."""
+    wn = 2 * math.pi * hz
+    wd = wn * math.sqrt(1 - zeta ** 2)
+
+    def free(t):
+        return rest + amp * np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta / math.sqrt(1 - zeta ** 2) * np.sin(wd * t))
+
+    t = np.arange(0.0, 4.0, 1 / FS)
+    t_peak, rise = 2.0, 0.12
+    x = np.full(t.size, rest)
+    up = (t > t_peak - rise) & (t <= t_peak)
+    x[up] = rest + amp * np.sin(0.5 * np.pi * (t[up] - (t_peak - rise)) / rise) ** 2
+    after = t > t_peak
+    x[after] = free(t[after] - t_peak)
+    x = x + noise * np.random.default_rng(seed).standard_normal(t.size)
+    return t, x, int(np.argmin(np.abs(t - t_peak))), free, wn, wd
+
+
+@pytest.mark.parametrize("zeta", [0.1, 0.25, 0.4])
+def test_first_rebound_of_a_closed_form(zeta):
+    """Rest 30 mm, 25 mm above it: the trough stays clear of full extension at every zeta."""
+    t, x, peak, free, wn, wd = closed_form(zeta, amp=25.0, rest=30.0)
+    got = first_rebound(t, x, peak, 30.0)
+    t_star = math.atan(math.sqrt(1 - zeta ** 2) / zeta) / wd
+    v_max = 25.0 * wn / math.sqrt(1 - zeta ** 2) * math.exp(-zeta * wn * t_star) * math.sin(wd * t_star)
+    a = brentq(lambda s: free(s) - (30.0 + 0.75 * 25.0), 1e-6, math.pi / wd)
+    b = brentq(lambda s: free(s) - (30.0 + 0.25 * 25.0), 1e-6, math.pi / wd)
+    assert got["rebound_speed_mm_per_s"] == pytest.approx(v_max, rel=0.01)
+    assert got["mid_rebound_speed_mm_per_s"] == pytest.approx(0.5 * 25.0 / (b - a), rel=0.01)
+    assert got["trough_s"] == pytest.approx(math.pi / wd, abs=0.005)
+    assert got["trough_mm"] == pytest.approx(float(free(math.pi / wd)), abs=0.1)
+    assert got["topped_out"] is False
+    assert got["peak_above_rest_mm"] == pytest.approx(25.0, abs=0.2)
+
+
+def test_more_damping_a_slower_rebound():
+    speeds = [first_rebound(*closed_form(z)[:3], 10.0)["mid_rebound_speed_mm_per_s"] for z in (0.1, 0.25, 0.4)]
+    assert speeds[0] > speeds[1] > speeds[2]
+
+
+def test_a_rebound_to_full_extension_is_topped_out():
+    """The trace clipped at 0 mm (the shock at full extension) on its first rebound: topped_out."""
+    t, x, peak, *_ = closed_form(0.1, rest=5.0)
+    got = first_rebound(t, np.maximum(x, 0.0), peak, 5.0)
+    assert got["topped_out"] is True and got["trough_mm"] < 1.0
+
+
+def test_a_peak_below_rest_is_refused():
+    t, x, peak, *_ = closed_form(0.2)
+    with pytest.raises(BounceError, match="not above the rest"):
+        first_rebound(t, x, peak, 80.0)
+
+
+def _entry(clicks, speed, damper=None):
+    e = {"clicks": clicks, "record_rebound": {"mid_rebound_speed_mm_per_s": speed}}
+    if damper is not None:
+        e["damper_N_s_per_m"] = damper
+    return e
+
+
+def test_check_says_which_orders():
+    """(b) Records slowing with the clicks and dampers rising: both order. Dampers not rising: the line
+    says the replay does not read the damper. Records not slowing: the line says the records do not show
+    it. One click setting: no check. A refused record (no damper) is compared on its record only."""
+    ok = rebound_check([_entry(8, 300.0, 2000.0), _entry(0, 350.0, 1500.0), _entry(17, 230.0, 2600.0)])
+    assert ok["records_order"] is True and ok["replay_orders"] is True and "rise with them" in ok["line"]
+    assert ok["clicks"] == [0, 8, 17] and ok["mid_rebound_speed_mm_per_s"] == [350.0, 300.0, 230.0]
+    bad = rebound_check([_entry(0, 350.0, 2012.0), _entry(8, 290.0, 1364.0), _entry(17, 227.0)])
+    assert bad["records_order"] is True and bad["replay_orders"] is False
+    assert "do not rise with them: the replay does not read the rebound damper" in bad["line"]
+    flat = rebound_check([_entry(0, 300.0, 1000.0), _entry(8, 310.0, 2000.0)])
+    assert flat["records_order"] is False and "the records themselves do not show" in flat["line"]
+    assert rebound_check([_entry(4, 300.0, 1000.0), _entry(4, 250.0, 2000.0)]) is None
+    one = rebound_check([_entry(0, 350.0, 1500.0), _entry(8, 290.0)])
+    assert one["replay_orders"] is None and "fewer than two replays" in one["line"]
+
+
+@pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
+def test_shared_records_slow_with_the_clicks():
+    """(c) The shared slams, read off the records: all three rise 44-45 mm above their rest, so one
+    spring pushes them alike through the rebound's middle; there they slow as the clicks rise (the
+    records do show the rebound adjuster), the 0- and 8-click rebounds reach full extension, the
+    17-click one turns before it."""
+    from conftest import SHARED_DATA
+
+    from mtbmj.identify.bounce import QUIET_BEFORE_S, find_slam
+    from mtbmj.measured.telemetry import read_sst
+
+    entries = []
+    for f, k in (("00083", 0), ("00085", 8), ("00087", 17)):
+        rec = read_sst(os.path.join(SHARED_DATA, "sst_v2", f + ".SST"))
+        t, s = np.asarray(rec.time_s), np.asarray(rec.shock_mm)
+        p = find_slam(t, s, f)
+        w = (t >= t[p] - QUIET_BEFORE_S[0]) & (t <= t[p] - QUIET_BEFORE_S[1])
+        entries.append({"clicks": k, "record_rebound": first_rebound(t, s, p, float(np.median(s[w])))})
+    heights = [e["record_rebound"]["peak_above_rest_mm"] for e in entries]
+    assert max(heights) - min(heights) < 0.05 * min(heights)
+    check = rebound_check(entries)
+    assert check["records_order"] is True
+    speeds = [e["record_rebound"]["rebound_speed_mm_per_s"] for e in entries]
+    assert speeds[0] > speeds[1] > speeds[2]
+    assert [e["record_rebound"]["topped_out"] for e in entries] == [True, True, False]
+
+
+@pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
+def test_shared_forks_are_refused_with_the_reason():
+    """``fit bounce --replay`` does not replay the fork: per shared record one reason naming how few free
+    half cycles it has (the decay reading's note) and where it rests after the slam against before,
+    beside the shock: the fork less compressed after, the shock more (the rider's weight moved)."""
+    from conftest import SHARED_DATA
+
+    from mtbmj.identify import bounce_decay as bd
+    from mtbmj.identify.bounce_fit import fork_refusals
+    from mtbmj.measured.telemetry import read_sst
+
+    records = [read_sst(os.path.join(SHARED_DATA, "sst_v2", f + ".SST")) for f in ("00083", "00085", "00087")]
+    summaries = [{"fork": {"decay": bd.fit_record(r)["fork"].summary()}} for r in records]
+    got = fork_refusals(records, summaries)
+    assert len(got) == 3
+    for e in got:
+        assert "free half cycle" in e["refused"] or "no free extremum" in e["refused"]
+        assert e["rest_after_mm"] < e["rest_before_mm"] - 5.0
+        assert "opposite ways, the rider's weight moved" in e["refused"]
+        assert e["refused"].endswith("the fork's spring, damper and friction are not replayed")
