@@ -658,7 +658,8 @@ def search_on(advice, rides, pool) -> dict:
         a, d = starts[i][0], starts[i][1]
         return all(allowed(ride.bike, [(x, d, on(a, x, v))], ride.merged)[0] for ride, x in zip(rides, own[i]))
 
-    kept = advice_search.search_many([(a, v, r) for a, d, v, r in starts], run_values, allowed_value)
+    per_round = max(1, (1 if pool is None else pool.workers) // len(rides))  # values the pool runs at once
+    kept = advice_search.search_many([(a, v, r) for a, d, v, r in starts], run_values, allowed_value, per_round)
     return {(a.name, d): k for (a, d, _, _), k in zip(starts, kept)}
 
 
