@@ -1,6 +1,7 @@
 """What advice measures and judges a ride by, and what it may change: the rider metrics of a ride
 or a run (:func:`ride_metrics`), the rules' windows and their penalties (:data:`RULES`,
-:func:`penalties`; sources in ``mtbmj.ride.advise``'s module text), each metric's bounds and the
+:func:`penalties`; sources in ``mtbmj.ride.advise``'s module text) and what they are scored on (the
+ride expected at a setting: :func:`on_the_ride`), each metric's bounds and the
 value expected on the ride at another setting (:func:`bounds`, :func:`expected`), and the bike's
 adjusters in the rider's words (:class:`Adjuster`, :func:`adjusters`) and a setting tried on a ride
 (:func:`trial`). The search, the verdict and
