@@ -57,6 +57,11 @@ class Pool(ProcessPoolExecutor):
     its ``with`` block on an exception (an interrupt, an error) ends the workers at once instead
     of waiting for the tasks they are running."""
 
+    @property
+    def workers(self) -> int:
+        """How many processes the pool runs at once."""
+        return self._max_workers
+
     def terminate(self) -> None:
         """Kill the workers and drop the queued tasks; returns without waiting for them. Every
         unfinished future gets ``BrokenProcessPool`` now; the executor's own work items get

@@ -135,7 +135,8 @@ def test_a_well_set_bike_is_left_about_where_it_is(tmp_path):
     the shock's 3500), advised calibrated (the default): the calibration holds 1 at both ends, and
     the answer is inconclusive, keep, or a change within the issue's ranges for a well-set bike
     (fork spring within +-20 %, rebound within +-30 %; every change after the first too). Measured:
-    the fork's rebound 700 -> 560 N s/m (one x0.8 step; the search found nothing further), driven by
+    inconclusive (the rules scored on the ride: no rule outside its window at the recorded setting).
+    Before, with the rules on the model's own values: the fork's rebound 700 -> 560 N s/m, driven by
     the front bottom-outs the model has and the ride has not (4 against 0: the model's fork reaches
     101 % of travel where the ride's reached 90 %)."""
     folder = tmp_path / "well"

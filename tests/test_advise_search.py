@@ -84,3 +84,51 @@ def test_several_searches_at_once_end_where_each_alone_ends():
     assert len(kept[1]) == advice_search.MAX_STEPS and kept[0][-1][0] == pytest.approx(8.05255)
     assert {i for i, _ in rounds[0]} == {0, 1} and all(sum(1 for i, _ in r if i == j) <= 2 for r in rounds for j in (0, 1))
     assert any({i for i, _ in r} == {1} for r in rounds)  # the spring's search stopped first, the rebound's went on
+
+
+def test_a_step_past_the_next_is_asked_only_where_the_pool_has_room():
+    """Three searches made here (a spring whose penalty (v - 8)^2 falls from 5.5, a rebound damper
+    falling to a floor at 400 from 2240, a compression damper whose penalty rises at once): with a
+    pool of two (``per_round`` 2), a round with two or three searches going asks one step of each,
+    one going asks two; served serially (1), one step of each search a round. The steps kept are those of a pool with
+    room for two of each (6) and of each search alone, with fewer runs: no step asked past the first
+    that fails while the other searches fill the pool."""
+    spring = _adj()
+    rebound = _adj("fork.damper.rebound_N_s_per_m", 2800.0, "N s/m")
+    compression = _adj("fork.damper.compression_N_s_per_m", 500.0, "N s/m")
+    pen = [lambda v: (v - 8.0) ** 2, lambda v: abs(v - 400.0) / 100.0, lambda v: v / 100.0]
+    run = lambda i, v: SimpleNamespace(total=pen[i](v), crash=None)  # noqa: E731
+    starts = [(spring, 5.5, run(0, 5.5)), (rebound, 2240.0, run(1, 2240.0)), (compression, 625.0, run(2, 625.0))]
+
+    def searched(per_round):
+        rounds = []
+
+        def run_values(asks):
+            rounds.append(list(asks))
+            return [run(i, v) for i, v in asks]
+
+        kept = advice_search.search_many(starts, run_values, lambda i, v: True, per_round)
+        return [[v for v, _ in k] for k in kept], rounds
+
+    roomy, roomy_rounds = searched(6)
+    two, two_rounds = searched(2)
+    one, one_rounds = searched(1)
+    alone = [[v for v, _ in advice_search.search(a, f, r, 0.0, lambda vs, i=i: [run(i, v) for v in vs], lambda v: True)]
+             for i, (a, f, r) in enumerate(starts)]
+    assert two == roomy == one == alone
+    assert len(alone[1]) == advice_search.MAX_STEPS and alone[2] == []  # the test is not idle: one long, one none
+    assert all(len(r) <= 3 for r in two_rounds) and all(len(r) == len({i for i, _ in r}) for r in one_rounds)
+    for r in two_rounds:  # two steps of one search only where it alone is going
+        going = {i for i, _ in r}
+        assert len(r) == (len(going) if len(going) > 1 else len(r)) and len(r) <= 2 * len(going)
+    asked = lambda rounds: sum(len(r) for r in rounds)  # noqa: E731
+    assert asked(two_rounds) < asked(roomy_rounds)
+    assert asked(one_rounds) <= asked(two_rounds)
+
+
+def test_the_pool_says_how_many_it_runs_at_once():
+    """What the search sizes its rounds by (``mtbmj.ride.advise.search_on``)."""
+    from mtbmj.workers import process_pool
+
+    with process_pool(3) as pool:
+        assert pool.workers == 3

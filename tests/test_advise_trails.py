@@ -7,18 +7,18 @@ N/mm, its rebound 700 N s/m, the shock's 3500) for 30 s at 6.5 +- 0.5 m/s: two o
 hard course on the roughness of seeds 21 and 5, the third over a different mix made here
 (``TRAIL_MIX``: G-outs and a smaller drop where the course has its 0.5-0.6 m drops) on seed 8's.
 
-Measured (2026-12-04): alone (one step each, ``PooledAdvice.rides``) seeds 21 and 5 lower the fork's
-rebound 700 -> 560 N s/m, seed 8 is inconclusive (every rule inside its window at the recorded
-setting); pooled (every candidate searched), inconclusive (the best candidate, the fork's
-compression 500 -> 625, improves only the front bottom-outs, 4.7 -> 2 a minute against +- 7.6).
-So the rides do not contradict each other and nothing leaves the well-set ranges, but they do not
-give one answer. The rules read the trail as much as the setting: the rides' own fork rebounds at
-0.52, 0.56 and 0.59 of its compression speed (the packing rule's assumed 0.6) and reaches 90 %, 75 %
-and 72 % of its travel without a bottom-out (the rule asks 85 %); and the model sees them through its
-own bias (its fork bottoms 4 times on seed 21's drops where the ride had none, 101 % of travel
-against 90 %; on seed 8 every rule of the model's ride is inside its window). docs/rolling.md has it.
-``test_the_three_give_one_answer`` holds the issue's demand as a strict xfail: it fails today for
-that reason and will say so when it no longer does."""
+Measured before (2026-12-04, the rules on the model's own simulated values, packing below 0.6
+alone): alone, seeds 21 and 5 lowered the fork's rebound 700 -> 560 N s/m and seed 8 was
+inconclusive; pooled, inconclusive. The rules read the trail and the model's bias: the rides' own
+fork rebounds at 0.52, 0.56 and 0.59 of its compression speed (harder hits, faster compression),
+and the model's fork bottoms 4 times on seed 21 where the ride had none.
+
+Now (the rules scored on the ride, ``Advice.score``; packing read against the other end on the
+ride as recorded): all three alone and the pool are inconclusive (seed 21 and the pool: no rule
+outside its window at the recorded setting; seeds 5 and 8: the front's maximum, 75 % and 72 % of
+travel without a bottom-out, leaves travel unused by the 85 % rule, but no candidate moves it
+beyond its uncertainty, +- 28 and +- 21 points). One answer: ``test_the_three_give_one_answer``.
+docs/rolling.md has it."""
 from __future__ import annotations
 
 import shutil
@@ -86,9 +86,6 @@ def test_the_pooled_uncertainty_is_narrower_than_each_ride_s(pooled):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="two trails lower the fork's rebound one step, the third and the pool are "
-                                       "inconclusive: the rules read the trail (packing, unused travel) and the "
-                                       "model's own bottom-outs (see the module doc)")
 def test_the_three_give_one_answer(pooled):
     """The issue's demand: every ride alone and the pool give the same recommendation, or all are
     inconclusive."""

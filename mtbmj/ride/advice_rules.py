@@ -1,6 +1,7 @@
 """What advice measures and judges a ride by, and what it may change: the rider metrics of a ride
 or a run (:func:`ride_metrics`), the rules' windows and their penalties (:data:`RULES`,
-:func:`penalties`; sources in ``mtbmj.ride.advise``'s module text), each metric's bounds and the
+:func:`penalties`; sources in ``mtbmj.ride.advise``'s module text) and what they are scored on (the
+ride expected at a setting: :func:`on_the_ride`), each metric's bounds and the
 value expected on the ride at another setting (:func:`bounds`, :func:`expected`), and the bike's
 adjusters in the rider's words (:class:`Adjuster`, :func:`adjusters`) and a setting tried on a ride
 (:func:`trial`). The search, the verdict and
@@ -19,7 +20,9 @@ SAG_POINTS = 5.0  # % points outside the window per unit of penalty
 BOTTOM_OUTS_PER_MINUTE = 2.0  # assumed: more than this is too many
 UNUSED_BELOW_PERCENT = 85.0  # assumed: no bottom-out and less travel than this leaves travel unused
 DEEP_PERCENT = 80.0  # the deep-travel share counts time beyond this % of travel
-PACKING_RATIO = 0.6  # assumed: rebound p95 speed below this share of compression p95 is packing
+PACKING_SHARE = 0.8  # assumed: an end whose rebound-over-compression is below this share of the other end's packs
+PACKING_FLOOR = 0.4  # assumed: rebound p95 below this share of compression p95 packs whatever the other end does
+PACKING_RATIO = PACKING_SHARE  # its former name (the packing rule's number)
 BALANCE_POINTS = 10.0  # assumed: the ends' dynamic sags this close move "about the same"
 GRIP_COMFORT_WEIGHT = 1.0  # penalty per relative change of tyre-load variation and rider acceleration
 MIN_GAIN = 0.1  # a recommendation lowers the penalty by at least this
@@ -47,7 +50,10 @@ RULES = {
                    f"that rate one unit of penalty per {BOTTOM_OUTS_PER_MINUTE:g} (assumed)",
     "travel_unused": f"no bottom-out and a maximum below {UNUSED_BELOW_PERCENT:g} % of travel: travel left unused, "
                      f"one unit of penalty per 10 points (assumed)",
-    "packing": f"rebound p95 speed at least {PACKING_RATIO:g} of compression p95 (assumed)",
+    "packing": f"each end's rebound p95 speed over its compression p95 at least {PACKING_SHARE:g} of the other end's, "
+               f"on the ride as recorded, the same terrain (front and rear rebound about the same: Motion Instruments' balance, read "
+               f"secondhand; number assumed), and at least {PACKING_FLOOR:g} whatever the other end does (assumed); "
+               f"one unit of penalty per 0.2 short of the stricter",
     "balance": f"front and rear dynamic sag within {BALANCE_POINTS:g} points (Motion Instruments; number assumed)",
     "grip_comfort": "lower tyre-load variation and rider acceleration, as tie-breakers (assumed weight)",
     "authority": "a change is advised only where a metric of a rule it improves moves by more than its uncertainty "
@@ -224,8 +230,12 @@ def ride_metrics(t, front_mm, rear_mm, front_top: float, rear_top: float, static
     return out
 
 
-def penalties(mt: dict) -> dict:
-    """Each rule's penalty (0 inside its window) of a metrics dict (:func:`ride_metrics`)."""
+def penalties(mt: dict, terrain: dict | None = None) -> dict:
+    """Each rule's penalty (0 inside its window) of a metrics dict (:func:`ride_metrics`). ``terrain``:
+    the metrics of the ride as recorded, whose ends read the terrain for the packing rule (each end's
+    rebound-over-compression against the other end's there: a setting tried does not change the
+    terrain, so slowing the other end does not mend one that packs); default ``mt`` itself."""
+    terrain = mt if terrain is None else terrain
     p = {}
     for end in ("front", "rear"):
         e = mt[end]
@@ -236,10 +246,30 @@ def penalties(mt: dict) -> dict:
         unused = (UNUSED_BELOW_PERCENT - e["max_travel_percent"]) / 10.0 if e["bottom_outs"] == 0 else 0.0
         p[f"{end}_bottom_outs"] = max(over / BOTTOM_OUTS_PER_MINUTE, 0.0)
         p[f"{end}_travel_unused"] = max(unused, 0.0)
-        r = e["rebound_over_compression"]
-        p[f"{end}_packing"] = 0.0 if r is None else max(PACKING_RATIO - r, 0.0) / 0.2
+        r, o = e["rebound_over_compression"], terrain["rear" if end == "front" else "front"]["rebound_over_compression"]
+        short = 0.0 if r is None else max(PACKING_FLOOR - r, PACKING_SHARE - r / o if o else 0.0, 0.0)
+        p[f"{end}_packing"] = short / 0.2  # the terrain sets compression speeds: the other end reads it too
     p["balance"] = max(abs(mt["balance_points"]) - BALANCE_POINTS, 0.0) / BALANCE_POINTS
     return p
+
+
+RULE_METRICS = {"static_sag": "static_sag_percent", "bottom_outs": "bottom_outs_per_minute",
+                "travel_unused": "max_travel_percent", "packing": "rebound_over_compression"}
+
+
+def rule_metric(rule: str) -> str:
+    """The metric (``flat_metrics`` name) a penalty ``rule`` (``front_static_sag``, ``balance``) reads."""
+    if rule == "balance":
+        return "balance_points"
+    end, _, name = rule.partition("_")
+    return f"{end}.{RULE_METRICS[name]}"
+
+
+def beyond(rules, a: dict, b: dict, u: dict) -> list:
+    """The metrics of ``rules`` (penalty names) that move from ``a`` to ``b`` by more than their
+    uncertainty ``u`` (a metric without one never does)."""
+    return [m for m in dict.fromkeys(rule_metric(k) for k in rules)
+            if m in a and m in b and abs(b[m] - a[m]) > u.get(m, math.inf)]
 
 
 def grip_comfort(base: dict, cand: dict) -> float:
@@ -288,6 +318,31 @@ def expected(metric: str, recorded: float, sim_from: float, sim_to: float) -> fl
     else:
         value = recorded + change
     return float(min(max(value, lo), hi))
+
+
+def on_the_ride(recorded: dict, sim_from: dict, sim_to: dict) -> dict:
+    """The metrics (:func:`ride_metrics`' shape) the rider's own ride is expected to show at a setting
+    the model rides as ``sim_to`` where it rides the recorded setting as ``sim_from`` and the ride
+    recorded ``recorded``: every metric the ride records its :func:`expected` value (the recorded
+    value moved by the model's predicted change, within its bounds; at the recorded setting the
+    recorded value itself), every other (static sag, tyre loads, the rider's acceleration: no ride
+    records them) the model's. The rules are scored on these (``mtbmj.ride.advise.Advice.score``): they
+    judge the bike as ridden and the change the model predicts, not the model's own bias (its
+    bottom-outs where the ride had none)."""
+    out = {}
+    for key, value in sim_to.items():
+        if isinstance(value, dict):
+            rec, frm = recorded.get(key) or {}, sim_from.get(key) or {}
+            out[key] = {k: (expected(f"{key}.{k}", rec[k], frm[k], v)
+                            if k != "travel_mm" and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                        for x in (rec.get(k), frm.get(k), v)) else v)
+                        for k, v in value.items()}
+        elif key == "balance_points" and all(isinstance(x, (int, float)) for x in
+                                             (recorded.get(key), sim_from.get(key), value)):
+            out[key] = expected(key, recorded[key], sim_from[key], value)
+        else:
+            out[key] = value
+    return out
 
 
 def flat_metrics(d: dict, prefix: str = "") -> dict:

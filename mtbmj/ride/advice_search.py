@@ -11,10 +11,14 @@ candidate's ratio again (x1.1, x0.8 ...), a coil spring rounded to the rates sol
 (``mtbmj.config.PLAUSIBLE``) or one the part refuses (``mtbmj.ride.advise.allowed``: a click outside
 the measured range) ends the search there.
 
-**Stop** (:func:`search`, :func:`search_many` for all of them at once): two steps of each search
-are simulated at a time (all in parallel); the farther one is kept
-only where it lowers the penalty by ``MIN_GAIN`` (the verdict's own threshold) or more below the
-best so far without a crash, and the search goes on from it; at most ``MAX_STEPS`` steps. The rule
+**Stop** (:func:`search`, :func:`search_many` for all of them at once): each step is kept only where
+it lowers the penalty by ``MIN_GAIN`` (the verdict's own threshold) or more below the best so far
+without a crash, and the search goes on from it; at most ``MAX_STEPS`` steps. The steps of every
+search still going are simulated together, one round at a time (all in parallel): each search asks
+for its next step, and for the one after it too (at most ``LOOKAHEAD``) only where the pool has room
+for it (``per_round``: the values one round runs at once) - a step past one that fails is a run thrown
+away, and with several searches going the pool is full without it. The steps kept are the same
+however many are asked at a time (each is judged against the one before it). The rule
 that drove the change is the one whose penalty fell most from the recorded setting to the answer.
 """
 from __future__ import annotations
@@ -22,6 +26,7 @@ from __future__ import annotations
 from mtbmj.ride.advice_rules import MIN_GAIN, SOLD_LB_PER_IN, Adjuster, bounded_value
 
 MAX_STEPS = 8  # steps beyond the one-step candidate, at most
+LOOKAHEAD = 2  # steps of one search asked in one round, at most
 ADDITIVE_UNITS = ("clicks", "spacers")
 
 
@@ -47,22 +52,26 @@ def next_value(adj: Adjuster, value: float, first: float) -> float | None:
     return bounded_value(adj.key, nxt)
 
 
-def search_many(starts, run_values, allowed_value) -> list:
+def search_many(starts, run_values, allowed_value, per_round: int = LOOKAHEAD) -> list:
     """Line searches along several adjusters at once, each as :func:`search` does it: ``starts`` a list
     of ``(adjuster, first, run)`` (a one-step candidate and its run); each round asks every search
-    still going for its next two values, and ``run_values([(i, value), ...])`` simulates them all
-    together (runs in order; a refused one a ``ConfigError``); ``allowed_value(i, value)`` tells
+    still going for its next value, and for up to ``LOOKAHEAD`` where ``per_round`` (the values the
+    pool runs at once) leaves room for them all, and ``run_values([(i, value), ...])`` simulates them
+    all together (runs in order; a refused one a ``ConfigError``); ``allowed_value(i, value)`` tells
     whether search ``i``'s part allows a value. Returns each search's kept steps ``[(value, run)]``."""
     state = [{"value": first, "best": run, "kept": [], "steps": 0, "done": False} for _, first, run in starts]
     while True:
         asks = []
+        for s in state:
+            s["done"] = s["done"] or s["steps"] >= MAX_STEPS
+        going = sum(not s["done"] for s in state)
+        ahead = max(1, min(LOOKAHEAD, per_round // max(going, 1)))
         for i, (adj, first, _) in enumerate(starts):
             s = state[i]
-            if s["done"] or s["steps"] >= MAX_STEPS:
-                s["done"] = True
+            if s["done"]:
                 continue
             batch, v = [], s["value"]
-            for _ in range(2):
+            for _ in range(min(ahead, MAX_STEPS - s["steps"])):
                 v = next_value(adj, v, first)
                 if v is None or not allowed_value(i, v):
                     break
@@ -90,13 +99,14 @@ def search_many(starts, run_values, allowed_value) -> list:
     return [s["kept"] for s in state]
 
 
-def search(adj: Adjuster, first: float, best_run, base_total: float, run_values, allowed_value) -> list:
+def search(adj: Adjuster, first: float, best_run, base_total: float, run_values, allowed_value,
+           per_round: int = LOOKAHEAD) -> list:
     """The line search from ``first`` (the one-step candidate, its run ``best_run``): ``run_values``
     simulates a list of values (runs in order; a refused one a ``ConfigError``), ``allowed_value``
     tells whether the part allows a value. Returns the steps ``[(value, run)]`` kept, the last the
     answer (empty where none improved on the candidate)."""
     return search_many([(adj, first, best_run)], lambda asks: run_values([v for _, v in asks]),
-                       lambda _, v: allowed_value(v))[0]
+                       lambda _, v: allowed_value(v), per_round)[0]
 
 
 def driving_rule(base_penalty: dict, penalty: dict) -> str:
@@ -122,4 +132,4 @@ def annotate(advice, searched: dict) -> None:
         advice.verdict = {**advice.verdict, "why": rec["why"]}
 
 
-__all__ = ["MAX_STEPS", "annotate", "driving_rule", "next_value", "search", "search_many"]
+__all__ = ["LOOKAHEAD", "MAX_STEPS", "annotate", "driving_rule", "next_value", "search", "search_many"]

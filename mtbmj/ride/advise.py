@@ -40,11 +40,21 @@ guides' current editions), marked *assumed* where no source gives the number):
 - bottom-outs: occasional is right ("an occasional bottom-out is a good thing", RockShox): more than
   ``BOTTOM_OUTS_PER_MINUTE`` per minute of ride costs (assumed), none with the maximum below 85 % of
   travel costs too (travel left unused: assumed);
-- packing: rebound p95 below ``PACKING_RATIO`` of compression p95 (assumed);
+- packing: an end's rebound p95 over its compression p95 below ``PACKING_SHARE`` of the other end's
+  on the ride as recorded (the terrain sets the compression speeds, and the other end rides the same
+  terrain: "front and rear rebound about the same", Motion Instruments' balance; the number assumed),
+  or below ``PACKING_FLOOR`` whatever the other end does (assumed; docs/rolling.md says why);
 - balance: the ends' dynamic sags within ``BALANCE_POINTS`` points ("front and rear should move about
   the same", Motion Instruments; the number assumed);
 - grip and comfort: a small weight on the relative change of tyre-load variation and rider
   acceleration (tie-breakers, assumed).
+
+**Scored on the ride, not on the model** (:meth:`Advice.score`, :func:`on_the_ride`): the rules
+judge what the rider's own ride is expected to show at each setting, the recorded metrics moved by
+the model's predicted change (below), static sag the model's (no ride records it). At the recorded
+setting that is the ride as recorded. So the rules judge the bike that was ridden and a candidate
+by the change the model predicts, not the model's own bias: on the tests' well-set bike the model's
+fork bottoms 4 times where the ride had none, and curing those had been the advice.
 
 The predicted change of every metric is the candidate's simulated value less the recorded
 setting's, and the value expected on the rider's own ride (``expected``; the simulated ``to``
@@ -82,10 +92,11 @@ from mtbmj.errors import ConfigError
 from mtbmj.ride.advice_rules import (  # noqa: F401 (advise's names for them)
     MAX_SEGMENTS, MIN_SEGMENTS, Adjuster, AdviseError, BALANCE_POINTS, BOOTSTRAP, BOTTOM_OUTS_PER_MINUTE, DEEP_PERCENT,
     GRIP_COMFORT_WEIGHT, HEADLINE, LEAD_IN_M, MAX_REAR_MISS_PERCENT, MIN_CHECKED_PERCENT, MIN_GAIN,
-    MIN_SECONDS, PACKING_RATIO, RULES, RideNotDescribed, SAG_POINTS, SAG_WINDOW,
+    MIN_SECONDS, PACKING_FLOOR, PACKING_RATIO, PACKING_SHARE, RULES, RideNotDescribed, SAG_POINTS, SAG_WINDOW,
     SEGMENT_S, SHARES, SIGNED, SOLD_LB_PER_IN, SPEED_SPLIT_MM_PER_S, UNCERTAINTY_METHOD,
     UNITS, UNUSED_BELOW_PERCENT, skipped_entry, adjusters, allowed, checked_duration, counter, bounded_value, bounds, expected,
-    flat_metrics, grip_comfort, penalties, ride_metrics, round_setting, unit_of, Trial, compose_setting, trial)
+    beyond, flat_metrics, grip_comfort, on_the_ride, rule_metric, penalties, ride_metrics, round_setting, unit_of,
+    Trial, compose_setting, trial)
 
 
 from mtbmj.ride.advice_report import LEGEND_ROOM, metric_unit  # noqa: E402,F401 (advise's names for them)
@@ -170,6 +181,12 @@ class Advice:
     searched: tuple = None  # (Adjuster, direction, value, Run): the recommendation searched further
     judged: list = field(default_factory=list)  # the candidates as judged: each searched one where it ended
     calibration: object = None  # mtbmj.ride.calibrate.Calibration: the springs ridden (None: the file's as they are)
+
+    def score(self, run: Run) -> Run:
+        """``run`` (any setting's) with its penalties scored on the ride (the module doc): the rules on
+        :func:`on_the_ride` of it, the packing rule's terrain the ride as recorded. Returns ``run``."""
+        run.penalty = penalties(on_the_ride(self.measured, self.base.metrics, run.metrics), self.measured)
+        return run
 
     def tried(self) -> list:
         """Each tried setting: its label, bike file, settings as asked, penalty (and its change), crash,
@@ -349,25 +366,6 @@ def _json(o):
     raise TypeError(type(o).__name__)
 
 
-RULE_METRICS = {"static_sag": "static_sag_percent", "bottom_outs": "bottom_outs_per_minute",
-                "travel_unused": "max_travel_percent", "packing": "rebound_over_compression"}
-
-
-def _rule_metric(rule: str) -> str:
-    """The metric (``flat_metrics`` name) a penalty ``rule`` (``front_static_sag``, ``balance``) reads."""
-    if rule == "balance":
-        return "balance_points"
-    end, _, name = rule.partition("_")
-    return f"{end}.{RULE_METRICS[name]}"
-
-
-def _beyond(rules, a: dict, b: dict, u: dict) -> list:
-    """The metrics of ``rules`` (penalty names) that move from ``a`` to ``b`` by more than their
-    uncertainty ``u`` (a metric without one never does)."""
-    return [m for m in dict.fromkeys(_rule_metric(k) for k in rules)
-            if m in a and m in b and abs(b[m] - a[m]) > u.get(m, math.inf)]
-
-
 def judge(advice, candidates=None) -> tuple[dict | None, dict]:
     """(the recommendation or None, the verdict ``{"answer", "why"}``): a change is advised only where
     it lowers the penalty by ``MIN_GAIN`` or more and a metric of a rule it improves moves by more
@@ -375,8 +373,10 @@ def judge(advice, candidates=None) -> tuple[dict | None, dict]:
     "keep" only where every candidate is predicted worse beyond its uncertainty (a crash is worse);
     otherwise "inconclusive", naming why. ``candidates``: those judged (default the one-step ones;
     :func:`advise` passes each searched candidate where its search ended)."""
-    base, measured = advice.base, advice.measured
+    base, measured = advice.score(advice.base), advice.measured
     candidates = advice.candidates if candidates is None else candidates
+    for *_, run in candidates:  # each scored on the ride (Advice.score; the same scores again where they were)
+        advice.score(run)
     a = flat_metrics(base.metrics)
     good, worse, near = [], 0, None
     for adj, direction, value, run in candidates:
@@ -389,21 +389,21 @@ def judge(advice, candidates=None) -> tuple[dict | None, dict]:
         improved = [k for k in base.penalty if run.penalty[k] < base.penalty[k] - 1e-9]
         worsened = [k for k in base.penalty if run.penalty[k] > base.penalty[k] + 1e-9]
         score = gain - grip_comfort(base.metrics, run.metrics)
-        if gain >= MIN_GAIN and _beyond(improved, a, b, u):
+        if gain >= MIN_GAIN and beyond(improved, a, b, u):
             good.append((score, adj, direction, value, run, improved, u))
-        elif gain <= -MIN_GAIN and _beyond(worsened, a, b, u):
+        elif gain <= -MIN_GAIN and beyond(worsened, a, b, u):
             worse += 1
         elif gain >= MIN_GAIN and (near is None or score > near[0]):
             near = (score, adj, direction, value, run, improved, u)
     n = len(candidates)
     if good:  # the balance of the ends first: a change that mends it before any other
-        pick = max([g for g in good if "balance" in g[5] and _beyond(["balance"], a, flat_metrics(g[4].metrics), g[6])]
+        pick = max([g for g in good if "balance" in g[5] and beyond(["balance"], a, flat_metrics(g[4].metrics), g[6])]
                    or good, key=lambda g: g[0])
         _, adj, direction, value, run, improved, u = pick
         then = [{"setting": g[1].setting(g[3]), "key": g[1].name, "label": g[1].label, "direction": g[2],
                  "penalty_to": g[4].total, "improves": g[5]}
                 for g in sorted(good, key=lambda g: -g[0]) if g[1].name != adj.name]
-        moved = _beyond(improved, a, flat_metrics(run.metrics), u)
+        moved = beyond(improved, a, flat_metrics(run.metrics), u)
         st = adj.setting(value)
         why = (f"{'raise' if direction == 'up' else 'lower'} the {adj.label} from {st['from']:g} to {st['to']:g} "
                f"{st['unit']} ({st['key']}): the penalty falls {base.total:.2f} -> {run.total:.2f} "
@@ -424,7 +424,7 @@ def judge(advice, candidates=None) -> tuple[dict | None, dict]:
     if near is not None:
         _, adj, direction, value, run, improved, u = near
         b = flat_metrics(run.metrics)
-        ms = list(dict.fromkeys(_rule_metric(k) for k in improved))
+        ms = list(dict.fromkeys(rule_metric(k) for k in improved))
         return None, {"answer": "inconclusive",
                       "why": f"the best candidate, the {adj.label} {adj.setting(value)['from']:g} -> "
                              f"{adj.setting(value)['to']:g} {adj.unit}, lowers the penalty "
@@ -651,13 +651,15 @@ def search_on(advice, rides, pool) -> dict:
                 for i, v in asks for ride, x in zip(rides, own[i])]
         runs, n = run_jobs(jobs, pool, lambda i: True, lambda: None), len(rides)
         parts = [runs[k * n:(k + 1) * n] for k in range(len(asks))]
-        return [next((r for r in part if isinstance(r, Exception)), None) or advice.pooled_run(part) for part in parts]
+        return [next((r for r in part if isinstance(r, Exception)), None) or advice.score(advice.pooled_run(part))
+                for part in parts]
 
     def allowed_value(i, v):
         a, d = starts[i][0], starts[i][1]
         return all(allowed(ride.bike, [(x, d, on(a, x, v))], ride.merged)[0] for ride, x in zip(rides, own[i]))
 
-    kept = advice_search.search_many([(a, v, r) for a, d, v, r in starts], run_values, allowed_value)
+    per_round = max(1, (1 if pool is None else pool.workers) // len(rides))  # values the pool runs at once
+    kept = advice_search.search_many([(a, v, r) for a, d, v, r in starts], run_values, allowed_value, per_round)
     return {(a.name, d): k for (a, d, _, _), k in zip(starts, kept)}
 
 
@@ -665,6 +667,8 @@ def decide(advice, rides, pool, search: bool = True, judging=None) -> None:
     """The verdict of ``advice`` (``judging(advice, candidates)``, default :func:`judge`): each
     candidate that lowers the penalty searched on first (:func:`search_on`), the verdict judging each
     where its search ended (``Advice.judged``), the recommendation's search annotated."""
+    for run in [advice.base] + [r for *_, r in advice.candidates] + [r for _, r in advice.tries]:
+        advice.score(run)  # the recorded setting first: every other is scored against it
     searched = search_on(advice, rides, pool) if search else {}
     advice.judged = [(a, d, *searched[(a.name, d)][-1]) if searched.get((a.name, d)) else (a, d, v, r)
                      for a, d, v, r in advice.candidates]
