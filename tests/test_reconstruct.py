@@ -399,3 +399,60 @@ def test_speed_windows_that_leave_nothing_to_check_are_refused(tmp_path, capsys,
     with warnings.catch_warnings():
         warnings.simplefilter("error", RuntimeWarning)
         assert rec.checks()["samples_checked_percent"] == 0.0
+
+
+def test_a_flight_is_bridged_from_a_drops_edge_or_by_the_chord():
+    """reconstruct_inverse.bridge on grounds written here (1 kHz): a 0.2 s flight off a 0.3 m drop
+    (the wheel's path a parabola from the edge down to the landing) gets the landing's level from the
+    take-off on; a 0.2 s flight that lands 0.1 m higher, one that lands 0.1 m lower (a rock's back,
+    within EDGE_DROP_M) and a 0.05 s hop that lands 0.3 m lower get the chord; nothing is put above
+    the path the wheel flew."""
+    from mtbmj.ride.reconstruct_inverse import EDGE_DROP_M, EDGE_FLIGHT_S, bridge
+
+    dt = 1e-3
+    n = 1000
+
+    def flight(a, b, before, after):
+        """The ground found: level ``before`` up to ``a``, the wheel's path (a parabola through both
+        ends, 0.05 m above the chord at its middle) over ``a..b``, level ``after`` past it."""
+        g = np.full(n, float(before))
+        g[b:] = after
+        s = np.linspace(0.0, 1.0, b - a + 2)  # from the last sample on the ground to the first back on it
+        g[a - 1:b + 1] = before + (after - before) * s + 0.2 * s * (1.0 - s)
+        off = np.zeros(n, bool)
+        off[a:b] = True
+        return g, off
+
+    assert EDGE_FLIGHT_S <= 0.2 and 0.1 < EDGE_DROP_M < 0.3
+    g, off = flight(300, 500, 0.0, -0.3)  # a drop's flight: the landing's level from the edge on
+    out, air = bridge(g, off, dt)
+    assert np.all(out <= g + 1e-12) and air[300:500].all() and not air[:300].any() and not air[500:].any()
+    assert out[299] == 0.0 and np.all(out[300:] == -0.3)
+    out, _ = bridge(g, off, dt, edges=False)  # the quarter car's: the chord
+    assert np.allclose(out[299:501], np.linspace(0.0, -0.3, 202))
+    for after, (a, b) in ((0.1, (300, 500)), (-0.1, (300, 500)), (-0.3, (300, 350))):
+        g, off = flight(a, b, 0.0, after)  # landing higher, a little lower, or a short hop: the chord
+        out, _ = bridge(g, off, dt)
+        assert np.allclose(out[a - 1:b + 1], np.linspace(0.0, after, b - a + 2)) and np.all(out <= g + 1e-12)
+
+
+def test_a_long_flights_take_off_is_where_the_tyre_unloaded():
+    """reconstruct_inverse.unloaded on tyre forces written here (1 kHz, 400 N at rest): a 0.2 s flight
+    whose force had hovered at 20-35 N (below 10 % of the static load) for 80 ms before it read zero
+    starts where it first fell below 40 N; a 0.05 s hop after the same hovering keeps its start (its
+    ground gets the chord, whose start a hop does not need moved); a force that hovers low but never
+    reads zero is no flight; the end of each flight is where the force returns."""
+    from mtbmj.ride.reconstruct_inverse import TAKE_OFF_SHARE, unloaded
+
+    dt, static = 1e-3, 400.0
+    assert TAKE_OFF_SHARE == pytest.approx(0.1)
+    tyre = np.full(2000, static)
+    tyre[220:300] = 20.0 + 15.0 * np.sin(np.arange(80) / 5.0) ** 2  # 20-35 N: the wheel following down
+    tyre[300:500] = -1.0  # the long flight
+    tyre[500:520] = 900.0  # its landing
+    tyre[1120:1200] = 30.0
+    tyre[1200:1250] = 0.0  # the short hop
+    tyre[1600:1700] = 25.0  # low, never zero
+    off = unloaded(tyre, static, dt)
+    assert off[220:500].all() and not off[:220].any() and not off[500:1200].any()
+    assert off[1200:1250].all() and not off[1250:].any()

@@ -22,6 +22,7 @@ on-bike mass (half at the pedals, half at the bars here).
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -118,18 +119,29 @@ def test_the_right_bike_describes_the_ride(rebuilt, reconstruction):
     assert np.corrcoef(reconstruction.rear_predicted[v], reconstruction.rear[v])[0, 1] > 0.8
 
 
-@pytest.mark.xfail(strict=True, reason="issue 51's targets, not reached: on this ride the terrain is found within "
-                                       "about 21 mm RMS after a 5 m high-pass (target 15), the rear within about "
-                                       "0.51 of the delayed fork's RMS (target 0.5) at a correlation of about 0.88 "
-                                       "(target 0.9), one window's speed 3.2 % off (target 3 %)")
-def test_issue_51_targets(made, reconstruction):
+def test_the_rear_is_predicted_within_half_the_delayed_forks_error(reconstruction):
+    """Issue 51's rear target: the rear predicted from the fork's record within half the RMS error of
+    the delayed-fork baseline, at a correlation of at least 0.9 with the record (0.44 of it at 0.914
+    since a long flight's take-off is put where the tyre's force fell toward zero and one that lands
+    lower is bridged from a drop's edge; 0.52 at 0.88 with the chord from a late take-off)."""
     c = reconstruction.checks()
     v = reconstruction.valid
-    for (start, found, _) in reconstruction.speed["windows"]:
-        assert found is None or found == pytest.approx(float(speed(start + 2.5)), rel=0.03)
-    assert terrain_error_mm(made, reconstruction) < 15.0
     assert c["rear_predicted_rms_mm"] <= 0.5 * c["baseline_delayed_fork_rms_mm"]
     assert np.corrcoef(reconstruction.rear_predicted[v], reconstruction.rear[v])[0, 1] >= 0.9
+
+
+def test_the_terrain_is_found_within_15_mm(made, reconstruction):
+    """Issue 51's terrain target on this ride: within 15 mm RMS after a 5 m high-pass (10.2 mm when
+    written; 20.2 with the chord from a late take-off, most of it at the 0.5 m drop's edge)."""
+    assert terrain_error_mm(made, reconstruction) < 15.0
+
+
+@pytest.mark.xfail(strict=True, reason="issue 51's speed target, not reached: one window's speed 3.4 % off the "
+                                       "speed at its centre (target 3 %; 2.7 % off its own span's mean, which "
+                                       "test_the_speed_along_the_ride_comes_back holds)")
+def test_issue_51_speed_target(reconstruction):
+    for (start, found, _) in reconstruction.speed["windows"]:
+        assert found is None or found == pytest.approx(float(speed(start + 2.5)), rel=0.03)
 
 
 def test_the_terrain_is_found_under_the_jumps_and_drops(made, reconstruction):
@@ -175,3 +187,39 @@ def test_the_whole_bike_rides_its_reconstruction(made, rebuilt, tmp_path, capsys
                  "--duration", f"{0.9 * length / V0:.1f}", "--no-figure", "--quiet", "--out", str(tmp_path / "bike")])
     out = capsys.readouterr()
     assert code == 0 and "crashed" not in out.out + out.err, out
+
+
+@pytest.mark.slow
+def test_a_drops_edge_beats_the_chord_on_a_ride_of_its_own(tmp_path, monkeypatch):
+    """A long flight's take-off where the tyre's force fell toward zero and, where it lands more than
+    0.15 m lower, the ground bridged from the edge the wheel left (reconstruct_inverse.unloaded and
+    bridge), against the chord under every flight from where the force read zero, on a ride made here
+    with its own seed, features and speed (5 +- 0.8 m/s over rocks, a 0.4 m drop, a G-out and a 0.5 m
+    tabletop; nothing was tuned on it): the terrain's error after a 5 m high-pass at most 0.8 of the
+    chord's (13.9 against 18.6 mm when written). Not asserted, because it does not hold on this ride:
+    the rear predicted is worse with the edge (5.9 against 4.9 mm RMS, the delayed fork 6.9), all of
+    it in the second of the 0.4 m drop, whose step the edge puts 0.27 m deep: the quarter car's slow
+    reference rises 0.12 m before the edge, so the rear's flight off it is short."""
+    from types import SimpleNamespace
+
+    from mtbmj.cli.telemetry import decoding
+    from mtbmj.measured import telemetry
+    from mtbmj.ride import reconstruct, reconstruct_inverse
+
+    profile = SpeedProfile(5.0, 0.8, 15.0)
+    features = (("rocks", 20.0, 0.08), ("drop", 50.0, 0.4), ("g_out", 80.0, 0.3), ("jump", 110.0, 0.5))
+    ride = whole_bike_ride(tmp_path, seed=11, seconds=30.0, profile=profile, features=features)
+    record = telemetry.read_ride(ride["sst"], **decoding(SimpleNamespace(bike=str(ride["bike"]), fork_max_mm=None,
+                                                                         shock_max_mm=None)))
+    sos = butter(2, profile.v0 / 5.0, btype="highpass", fs=RATE, output="sos")
+    truth = sosfiltfilt(sos, ride["h"](profile.along(ride["t"])))
+
+    def error_mm():
+        rec = reconstruct.reconstruct(record, str(ride["bike"]))
+        e = sosfiltfilt(sos, rec.ground) - truth
+        return 1e3 * float(np.sqrt(np.mean(e[rec.valid] ** 2)))
+
+    edge = error_mm()
+    monkeypatch.setattr(reconstruct_inverse, "EDGE_FLIGHT_S", math.inf)  # the chord under every flight
+    chord = error_mm()
+    assert edge <= 0.8 * chord, (edge, chord)

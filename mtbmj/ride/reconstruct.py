@@ -19,14 +19,17 @@ checked, is refused: no speed estimate, one line, nothing written.
 **Terrain** (:mod:`mtbmj.ride.reconstruct_bike`, from the fork's record alone: the rear's record is
 never used to make it). A first guess from the front's quarter car (:mod:`mtbmj.ride.
 reconstruct_inverse`: closed form, the body's drift removed below 0.3 Hz, a fork hanging on its
-top-out stop flying with its wheel, flights merged and bridged by the chord from take-off to
-landing); then the whole bike (the frame pitching, the rider on his legs and arms, both wheels, the
-fork's and shock's laws, the tyres) rides with its fork's stroke prescribed by the record, the ground
-under the front wheel found at every sample, its rear wheel over the ground of the pass before a
-wheelbase later, until the rear predicted settles. The fork's slow load (below 0.3 Hz) is the
-rider's; the frame's front is held near the quarter car's slow height by a load bounded by half the
-rider's weight (the rider's slow load, estimated). Take-offs: where the tyre's force falls to zero or
-the fork hangs on its top-out stop; the flight bridged, the landing where the force returns.
+top-out stop flying with its wheel, flights merged and bridged by the chord); then the whole bike
+(the frame pitching, the rider on his legs and arms, both wheels, the fork's and shock's laws, the
+tyres) rides with its fork's stroke prescribed by the record, the ground under the front wheel found
+at every sample, its rear wheel over the ground of the pass before a wheelbase later, until the rear
+predicted settles. The fork's slow load (below 0.3 Hz) is the rider's; the frame's front is held
+near the quarter car's slow height by a load bounded by half the rider's weight (the rider's slow
+load, estimated). Take-offs: where the tyre's force falls to zero or the fork hangs on its top-out
+stop, a flight of 0.1 s or more from where the force last fell below 10 % of its load at rest
+(``reconstruct_inverse.unloaded``); a flight that long landing more than 0.15 m lower bridged by the
+landing's level from the take-off on (a drop's edge), any other by the chord; the landing where the
+force returns.
 
 **Checks.** The whole bike free over the terrain found (the rider's slow load on its front)
 reproduces the front record (its RMS difference); the rear predicted (the whole bike's rear in the
@@ -39,7 +42,9 @@ the rear travel the ride used and the distance between the two travel histograms
 
 Assumed: the whole bike in the plane with small pitch angles and vertical motion only (the wheelbase
 at sag), point-contact tyres without damping, the fork's slow load the rider's (the rear given
-none), the ground under a flight the chord. Measured numbers: docs/rolling.md and docs/measured.md.
+none), the ground under a flight of 0.1 s or more the landing's level from the take-off on where
+the wheel lands more than 0.15 m lower (a drop's edge where it left), else the chord. Measured numbers:
+docs/rolling.md and docs/measured.md.
 """
 from __future__ import annotations
 
@@ -192,9 +197,10 @@ class Reconstruction:
                 "checks": self.checks(),
                 "assumed": "the whole bike of the bike file in the plane (frame pitch, the rider on vertical legs and "
                            "arms), vertical motion only, the wheelbase at sag, point-contact tyres without damping, "
-                           "the fork's slow load the rider's (the rear given none), the ground under a flight the "
-                           "chord from take-off to landing, the speed linear between the windows that gave one "
-                           "(mtbmj/ride/reconstruct.py)"}
+                           "the fork's slow load the rider's (the rear given none), the ground under a flight of "
+                           "0.1 s or more the landing's level from the take-off on where the wheel lands 0.15 m lower "
+                           "or more (a drop's edge), else the chord from take-off to landing, the speed linear "
+                           "between the windows that gave one (mtbmj/ride/reconstruct.py)"}
 
     def line(self) -> str:
         s = self.summary()

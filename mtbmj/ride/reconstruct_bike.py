@@ -284,7 +284,7 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     "tyre", "rear_rise", "slow_load" (N on the frame's front: the rider's and the loop's),
     "rider_slow_load" (the rider's alone), "passes", "settled_m", "diverged_s" (where a pass diverged:
     the passes end there, the rear not a number past it)}."""
-    from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, bridge, derivatives, hanging, law_along, lowpass
+    from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, bridge, derivatives, hanging, law_along, lowpass, unloaded
 
     dt = float(t[1] - t[0])
     x = np.asarray(fork_stroke, float)
@@ -302,7 +302,7 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
         passes += 1
         ok = np.isfinite(out["front_ground"])
         found, air = bridge(np.where(ok, out["front_ground"], ground[-1] if not ok.all() else 0.0),
-                            ((out["front_tyre"] <= 0.0) | top) & ok, dt)
+                            (unloaded(out["front_tyre"], b.fF0 + b.mF * b.g, dt) | top) & ok, dt)
         if not ok.all():  # diverged: past it the ground of the pass before, level past that
             last = int(np.argmin(ok))
             found[last:] = found[last - 1] if last else 0.0

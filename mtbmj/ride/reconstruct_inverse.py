@@ -15,6 +15,9 @@ DERIVATIVE_WINDOW_S = 0.02  # the Savitzky-Golay window of the records' derivati
 HIGHPASS_HZ = 0.3  # the body height's drift removed below this
 JUMP_GAP_S = 0.05  # the tyre's force found back above 0 for less than this within a jump (its noise): one jump
 TOP_OUT_MARGIN_M = 0.5e-3  # a stroke this close to full extension hangs on the top-out stop (its force unseen)
+EDGE_FLIGHT_S = 0.1  # a flight this long that lands lower than it took off left the ground at an edge (bridge)
+EDGE_DROP_M = 0.15  # ... lower by more than this (a rock's back falls less)
+TAKE_OFF_SHARE = 0.1  # such a flight left where the tyre's force last fell below this share of its static load
 MAX_FLIGHT_S = 1.5  # a fork fully out longer than this is not flying (a bike standing unweighted): the law's force at 0
 BOTTOM_OUT_MARGIN_M = 0.5e-3  # a stroke this close to full travel is a bottom-out (the hard stop's force unseen)
 BOTTOM_OUT_WINDOW_S = 1.0  # after a bottom-out the body's speed is set so its height stays level over this
@@ -137,18 +140,46 @@ def derivatives(x, dt: float):
     return _derivatives(np.asarray(x, float), dt)
 
 
-def bridge(ground, off, dt: float):
+def bridge(ground, off, dt: float, edges: bool = True):
     """(the ground with each flight bridged, the airborne mask): the stretches of ``off`` (the tyre
-    carrying nothing) closer than ``JUMP_GAP_S`` merged into one flight, the ground under it the chord
-    from take-off to landing, kept below the wheel's path."""
+    carrying nothing) closer than ``JUMP_GAP_S`` merged into one flight. The wheel does not see the
+    ground under a flight; it is put where a wheel leaves and meets it: a flight of at least
+    ``EDGE_FLIGHT_S`` that lands more than ``EDGE_DROP_M`` lower than it took off left at an edge (a
+    drop's), so the landing's level from the take-off on (``edges``); a shorter hop (off a bump's
+    crest, whose back falls away gently), one landing less lower, or one landing higher, the chord
+    from take-off to landing (landing higher the wheel meets a face: a step there would be a wall a
+    forward run hits). Kept below the wheel's path either way."""
     ground = np.array(ground, float)
     air = np.zeros(ground.size, bool)
     for a, b in flights(off, dt):
         air[a:b] = True
         a0, b0 = max(a - 1, 0), min(b, ground.size - 1)  # the last sample on the ground, the first back on it
-        chord = np.linspace(ground[a0], ground[b0], b0 - a0 + 1)
-        ground[a0:b0 + 1] = np.minimum(ground[a0:b0 + 1], chord)
+        if edges and ground[b0] < ground[a0] - EDGE_DROP_M and (b - a) * dt >= EDGE_FLIGHT_S:  # fell away at an edge
+            under = np.full(b0 - a0 + 1, ground[b0])
+            under[0] = ground[a0]
+        else:
+            under = np.linspace(ground[a0], ground[b0], b0 - a0 + 1)
+        ground[a0:b0 + 1] = np.minimum(ground[a0:b0 + 1], under)
     return ground, air
+
+
+def unloaded(tyre, static: float, dt: float) -> np.ndarray:
+    """Where a tyre carries nothing: its force ``tyre`` (N) not positive, and before a flight of at
+    least ``EDGE_FLIGHT_S`` back to where its force last rose above ``TAKE_OFF_SHARE`` of ``static``
+    (its load at rest): the inverse follows a wheel down as it unloads off an edge (the force within a
+    few tens of newtons of zero for up to 0.1 s before it reads zero), which put the take-off that
+    late and the ground under it falling with the wheel. A shorter flight keeps its start."""
+    tyre = np.asarray(tyre, float)
+    off = tyre <= 0.0
+    out = off.copy()
+    low = tyre <= TAKE_OFF_SHARE * static
+    for a, b in flights(off, dt):
+        if (b - a) * dt >= EDGE_FLIGHT_S:
+            k = a
+            while k > 0 and low[k - 1]:
+                k -= 1
+            out[k:a] = True
+    return out
 
 
 def ground_under(t, rise, stroke, car: QuarterCar, ratio):
@@ -163,7 +194,9 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio):
     of mass falls at g, the body's acceleration -g less the wheel's relative one in the share m / (M +
     m)) and the tyre carries nothing. Airborne is where the tyre's force is not positive, stretches
     closer than ``JUMP_GAP_S`` merged (one flight); the ground under a flight is not seen by the
-    wheel: it is bridged by the chord from take-off to landing, kept below the wheel's path."""
+    wheel: it is bridged by the chord from take-off to landing (``bridge`` without edges: the whole bike
+    puts a drop's edge where the quarter car's slow reference would put it late), kept below the wheel's
+    path; a long flight's take-off where the tyre's force first fell toward zero (``unloaded``)."""
     dt = float(t[1] - t[0])
     w, x = np.asarray(rise, float), np.asarray(stroke, float)
     f = law_along(car.law, x, dt, car.travel) / ratio(w)
@@ -196,7 +229,7 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio):
     tyre = np.where(top, 0.0, car.unsprung * (wheel_acc + car.gravity) + f)
     deflection = np.minimum(np.maximum(tyre, 0.0) / car.tyre_rate, car.max_deflection)  # the rim stops it
     ground = wheel - car.radius + deflection
-    ground, air = bridge(ground, tyre <= 0.0, dt)
+    ground, air = bridge(ground, unloaded(tyre, (car.sprung + car.unsprung) * car.gravity, dt), dt, edges=False)
     return ground - ground[0], tyre, air, extra, body, stops
 
 
@@ -291,4 +324,4 @@ def runs(mask):
 
 
 
-__all__ = ["QuarterCar", "ground_under", "flights", "bridge", "law_along", "derivatives", "hanging", "forward", "wheelbase_at", "lowpass", "runs"]
+__all__ = ["QuarterCar", "ground_under", "flights", "bridge", "unloaded", "law_along", "derivatives", "hanging", "forward", "wheelbase_at", "lowpass", "runs"]
