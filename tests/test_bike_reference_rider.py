@@ -150,7 +150,7 @@ def test_crosscheck_off_a_1_m_drop_over_the_whole_drop():
 def test_end_stops_torque_is_continuous_at_the_range():
     """The end stop's torque where a joint enters or leaves its range, moving at 3 rad/s: 0 at the
     range's end (its damping ramped in, not c times the speed at once), and the full spring-damper
-    k p + c w a few degrees past it (closed forms of the stop's constants)."""
+    k p + c w a few degrees past it, stiffer past STOP_HARD_FROM_DEG (closed forms of the stop's constants)."""
     import math
 
     from mtbmj.bike import rider_control as rc
@@ -163,7 +163,8 @@ def test_end_stops_torque_is_continuous_at_the_range():
     for past_deg in (5.0, 10.0):
         p = math.radians(past_deg)
         deep = rc.end_stops(dict.fromkeys(rc.JOINTS, hi + p), speed, ranges)["elbow"]
-        assert deep == pytest.approx(-rc.STOP_N_M_PER_RAD * p - rc.STOP_N_M_S_PER_RAD * 3.0, rel=1e-4)
+        hard = (rc.STOP_HARD_N_M_PER_RAD - rc.STOP_N_M_PER_RAD) * max(p - math.radians(rc.STOP_HARD_FROM_DEG), 0.0)
+        assert deep == pytest.approx(-rc.STOP_N_M_PER_RAD * p - hard - rc.STOP_N_M_S_PER_RAD * 3.0, rel=1e-4)
     lo = ranges["knee"][0]
     below = rc.end_stops(dict.fromkeys(rc.JOINTS, lo - math.radians(5.0)), {k: -3.0 for k in rc.JOINTS}, ranges)
     assert below["knee"] == pytest.approx(rc.STOP_N_M_PER_RAD * math.radians(5.0) + rc.STOP_N_M_S_PER_RAD * 3.0,

@@ -70,7 +70,7 @@ def rider_terms(cb: rc.RiderCallback) -> dict:
         past = rc.stop_penetration(last["now"][k], *cb.ranges[k])
         if past != 0.0:
             out["stops_damping"] -= rc.stop_damping(past) * w * w
-            out["stops_spring"] += 0.5 * rc.STOP_N_M_PER_RAD * past * past
+            out["stops_spring"] += rc.stop_spring(past)[1]
     for f, rel, gap in last["pins"]:
         out["pins_damping"] -= rc.PIN_N_S_PER_M * (rel[0] * rel[0] + rel[2] * rel[2])
         out["pins_spring"] += 0.5 * rc.PIN_N_PER_M * (gap[0] * gap[0] + gap[2] * gap[2])

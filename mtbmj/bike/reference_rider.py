@@ -233,7 +233,7 @@ class ReferenceRider(Reference):
         x_front = self.x0 + q[0] + px  # the front axle's world x, where the controller reads it
         want = rc.aimed(self.controller, self.aim, x_front, q[2], qd[2])
         now, speed = self.angles(q, qd)
-        taus, _, _ = rc.muscle_torques(want, now, speed, self.gains, self.strength)
+        taus, _, _ = rc.muscle_torques(want, now, speed, rc.gains_at(self.controller, self.gains, x_front), self.strength)
         stops = rc.end_stops(now, speed, self.ranges)
         for k in rc.JOINTS:
             Q += (taus[k] + stops[k] - rc.TISSUE_DAMPING * speed[k]) * GRADIENTS[k]

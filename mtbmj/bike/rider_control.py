@@ -76,7 +76,10 @@ squeezing the ramp into the run-up (the hop that landed the rear in its bumper o
 frame's pitch steers the hips only past the edge; the drop's pose is let go over ``RELEASE_M``
 once the rear wheel has left the edge (held 1.5 m longer, the hips far back looped the bike out
 after landing), and after it a nose-up pitch is still met, a nose-down one not (``Controller.targets``:
-the SST bike off 0.8 m at 4 m/s looped out without). The summary reports, per joint, the torque asked of it (``asked_peak_of_limit``,
+the SST bike off 0.8 m at 4 m/s looped out without). As the pose is let go the arms' gains fall to
+``ARM_LANDING_SHARE`` for the landing (``Controller.arm_share``, ``gains_at``, the ODE reference's too):
+stiff, the arms took the landing at their whole strength; the end stops' stiffening past
+``STOP_HARD_FROM_DEG`` (``stop_spring``) keeps a landing from folding the body onto the bars. The summary reports, per joint, the torque asked of it (``asked_peak_of_limit``,
 above 1 where the limit cut it) and the time spent at the limit (``at_limit_s``).
 """
 from __future__ import annotations
@@ -104,6 +107,11 @@ GAINS = {"hip": (1500.0, 60.0), "knee": (1500.0, 60.0), "ankle": (800.0, 30.0), 
          "elbow": (300.0, 12.0)}
 TISSUE_DAMPING = 2.0  # N m s/rad at every joint (assumed)
 STOP_N_M_PER_RAD, STOP_N_M_S_PER_RAD = 600.0, 20.0  # past the range of motion (assumed)
+# and, further than STOP_HARD_FROM_DEG past it, this stiffness (assumed: a joint's passive moment rises
+# steeply at the end of its range). At 600 N m/rad throughout the ankle was pushed 26 deg past its 20 deg
+# of dorsiflexion on landings with the arms softened, the body folded onto the bars and stayed there
+# (knee, ankle and shoulder at their limits 0.7-0.9 s to the run's end)
+STOP_HARD_N_M_PER_RAD, STOP_HARD_FROM_DEG = 3000.0, 5.0
 # the end stop's damping sets in over this much past the range, c tanh(DAMPING_RAMP p / p0) (the
 # suspension's stops' and the rim's ramp, ``controllers.stops``): at full strength from the range's
 # end it jumped by c times the joint's speed (69 N m at the elbow leaving its stop off the 1 m drop),
@@ -134,6 +142,11 @@ LOADED_N = 50.0
 # WHEELIE_OVER_DEG) is met by the pose's own following, forward only (assumed)
 WHEELIE_FROM_DEG, WHEELIE_OVER_DEG = 0.0, 10.0
 WHEELIE_FORWARD_M = 0.3  # and the hips go forward of the attack position by at most this (assumed)
+# the landing: as the drop's pose is let go the arms' stiffness and damping fall to this share of
+# GAINS', stay there LANDING_M of riding past the release and come back over RELEASE_M (assumed): the
+# legs take the landing, the arms give with the bars (``Controller.arm_share``)
+ARM_LANDING_SHARE, LANDING_M = 0.25, 1.0
+ARMS = ("shoulder", "elbow")
 
 
 def edges(terrain, step: float = 0.01) -> list[float]:
@@ -193,6 +206,20 @@ class Controller:
             down = 1.0 - _smooth((x_front - (e + self.wheelbase + HOLD_AFTER_M)) / RELEASE_M)
             share = max(share, min(up, down))
         return share
+
+    def arm_share(self, x_front: float) -> float:
+        """The share (``ARM_LANDING_SHARE``-1) of the arms' gains with the front axle at ``x_front``
+        (``hold_x`` as ``drop_share``'s): falling as the drop's pose is let go (the same ramp),
+        held ``LANDING_M`` past it, back over ``RELEASE_M``. Stiff arms took the landing: the
+        bars coming up as the rear wheel lands bent the elbows and pushed the shoulders into
+        extension against the muscles' whole strength (0.34-0.44 s off 1.5 m)."""
+        if self.hold_x is not None:
+            x_front = self.hold_x
+        soft = 0.0
+        for e in self.edges:
+            a = e + self.wheelbase + HOLD_AFTER_M
+            soft = max(soft, _smooth((x_front - a) / RELEASE_M) * (1.0 - _smooth((x_front - a - RELEASE_M - LANDING_M) / RELEASE_M)))
+        return 1.0 - (1.0 - ARM_LANDING_SHARE) * soft
 
     def targets(self, x_front: float, pitch: float, rate: float) -> tuple[tuple, float]:
         """(hips m, trunk rad) asked with the front axle at ``x_front`` and the frame's ``pitch``
@@ -286,6 +313,13 @@ def aimed(ctl: Controller, aim: dict, x_front: float, pitch: float, rate: float)
             for k, a in rb.pose(ctl.body, ctl.pedal, ctl.grip, hip, trunk).angles.items()}
 
 
+def gains_at(ctl: Controller, gains: dict, x_front: float) -> dict:
+    """The muscles' gains with the front axle at ``x_front``: ``gains`` with the arms' scaled by
+    ``Controller.arm_share`` (the engine's callback and the ODE reference alike)."""
+    share = ctl.arm_share(x_front)
+    return {k: ((kp * share, kd * share) if k in ARMS else (kp, kd)) for k, (kp, kd) in gains.items()}
+
+
 def power_factors(powers: dict, limit: float) -> dict:
     """Each joint's factor (0-1] on its torque that keeps the joints' positive power together within
     ``limit`` W, from each joint's power ``powers`` (W, torque times speed, before the limit): 1 where
@@ -349,13 +383,22 @@ def stop_damping(past: float) -> float:
     return STOP_N_M_S_PER_RAD * math.tanh(DAMPING_RAMP * abs(past) / STOP_RAMP_RAD)
 
 
+def stop_spring(past: float) -> tuple[float, float]:
+    """(torque N m, stored energy J) of the end stop's spring ``past`` rad beyond the range:
+    ``STOP_N_M_PER_RAD`` and, past ``STOP_HARD_FROM_DEG``, ``STOP_HARD_N_M_PER_RAD`` (continuous)."""
+    deep = max(abs(past) - math.radians(STOP_HARD_FROM_DEG), 0.0)
+    extra = STOP_HARD_N_M_PER_RAD - STOP_N_M_PER_RAD
+    torque = -STOP_N_M_PER_RAD * past - math.copysign(extra * deep, past)
+    return torque, 0.5 * STOP_N_M_PER_RAD * past * past + 0.5 * extra * deep * deep
+
+
 def end_stops(now: dict, speed: dict, ranges: dict) -> dict:
     """Each joint's end-stop torque (N m, anatomical): a spring-damper past its range of motion
     (``ranges``: (least, most) rad), its damping ramped in (``stop_damping``), 0 within it."""
     out = {}
     for k in JOINTS:
         past = stop_penetration(now[k], *ranges[k])
-        out[k] = -STOP_N_M_PER_RAD * past - stop_damping(past) * speed[k] if past != 0.0 else 0.0
+        out[k] = stop_spring(past)[0] - stop_damping(past) * speed[k] if past != 0.0 else 0.0
     return out
 
 
@@ -466,7 +509,8 @@ class RiderCallback:
         ctl = self.controller
         want = aimed(ctl, self.aim, d.site_xpos[self.s_front][0], d.qpos[self.qadr["pitch"]], qvel[self.dof["pitch"]])
         now, speed = self.angles(d.qpos), self.rates(qvel)
-        taus, demands, power = muscle_torques(want, now, speed, self.gains, self.strength)
+        gains = gains_at(ctl, self.gains, d.site_xpos[self.s_front][0])
+        taus, demands, power = muscle_torques(want, now, speed, gains, self.strength)
         stops = end_stops(now, speed, self.ranges)
         clamped = {k: demands[k] >= 1.0 for k in JOINTS}
         applied = {}
@@ -638,5 +682,5 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     return p
 
 
-__all__ = ["RiderCallback", "Controller", "activate", "aimed", "muscle_torques", "power_factors", "end_stops", "stop_penetration", "stop_damping", "edges", "stance", "saddle_point", "STRENGTH_N_M",
+__all__ = ["RiderCallback", "Controller", "activate", "aimed", "gains_at", "muscle_torques", "power_factors", "end_stops", "stop_penetration", "stop_damping", "stop_spring", "edges", "stance", "saddle_point", "STRENGTH_N_M",
            "STRENGTH_ONE_SIDE_N_M", "POWER_W", "GAINS", "JOINTS"]

@@ -515,9 +515,12 @@ class BikeResult(RunOutput):
         if r.get("kind") != "active":
             return ""
         worst = max(r["joints"], key=lambda k: r["joints"][k]["peak_of_limit"])
-        held = max(r["joints"], key=lambda k: r["joints"][k].get("at_limit_s", 0.0))
-        at = r["joints"][held].get("at_limit_s", 0.0)
-        clamp = f"; held at its limit longest: the {held}'s, {at:.2f} s" if at > 0 else "; none held at its limit"
+        # every joint held at its limit, longest first (the first named as before)
+        held = sorted((k for k in r["joints"] if r["joints"][k].get("at_limit_s", 0.0) > 0.0),
+                      key=lambda k: -r["joints"][k]["at_limit_s"])
+        rest = ", ".join(f"the {k}'s {r['joints'][k]['at_limit_s']:.2f} s" for k in held[1:])
+        clamp = (f"; held at its limit longest: the {held[0]}'s, {r['joints'][held[0]]['at_limit_s']:.2f} s"
+                 + (f" (then {rest})" if rest else "") if held else "; none held at its limit")
         e = self.summary.get("energy")
         work = (f"; muscle work {e['muscle_work_J']:.1f} J ({e['muscle_positive_J']:.1f} positive, "
                 f"{e['muscle_negative_J']:.1f} negative), energy balance error {e['error_pct']:.3f} % of "
