@@ -189,6 +189,11 @@ class Controller:
     x_start: float = -math.inf  # the front axle's start (m)
     hold_x: float | None = None  # the targets as at this front axle's place, wherever it is (the settling)
 
+    def released_at(self, edge: float) -> float:
+        """Where (the front axle's x, m) the drop's pose starts to be let go off the edge at ``edge``:
+        once the rear wheel has left it and ``HOLD_AFTER_M`` more (``drop_share`` and ``arm_share``)."""
+        return edge + self.wheelbase + HOLD_AFTER_M
+
     def drop_share(self, x_front: float) -> float:
         """How far into a drop's pose (0-1) the rider is with the front axle at ``x_front``. The
         ramp is the same however far before the edge the run starts: a run started within it
@@ -203,7 +208,7 @@ class Controller:
         for e in self.edges:
             begin = e - lead
             up = _smooth((x_front - begin) / max(e - 0.4 * lead - begin, 0.05))
-            down = 1.0 - _smooth((x_front - (e + self.wheelbase + HOLD_AFTER_M)) / RELEASE_M)
+            down = 1.0 - _smooth((x_front - self.released_at(e)) / RELEASE_M)
             share = max(share, min(up, down))
         return share
 
@@ -217,8 +222,9 @@ class Controller:
             x_front = self.hold_x
         soft = 0.0
         for e in self.edges:
-            a = e + self.wheelbase + HOLD_AFTER_M
-            soft = max(soft, _smooth((x_front - a) / RELEASE_M) * (1.0 - _smooth((x_front - a - RELEASE_M - LANDING_M) / RELEASE_M)))
+            a = self.released_at(e)
+            back = _smooth((x_front - a - RELEASE_M - LANDING_M) / RELEASE_M)
+            soft = max(soft, _smooth((x_front - a) / RELEASE_M) * (1.0 - back))
         return 1.0 - (1.0 - ARM_LANDING_SHARE) * soft
 
     def targets(self, x_front: float, pitch: float, rate: float) -> tuple[tuple, float]:
