@@ -22,7 +22,6 @@ UNUSED_BELOW_PERCENT = 85.0  # assumed: no bottom-out and less travel than this 
 DEEP_PERCENT = 80.0  # the deep-travel share counts time beyond this % of travel
 PACKING_SHARE = 0.8  # assumed: an end whose rebound-over-compression is below this share of the other end's packs
 PACKING_FLOOR = 0.4  # assumed: rebound p95 below this share of compression p95 packs whatever the other end does
-PACKING_RATIO = PACKING_SHARE  # its former name (the packing rule's number)
 BALANCE_POINTS = 10.0  # assumed: the ends' dynamic sags this close move "about the same"
 GRIP_COMFORT_WEIGHT = 1.0  # penalty per relative change of tyre-load variation and rider acceleration
 MIN_GAIN = 0.1  # a recommendation lowers the penalty by at least this

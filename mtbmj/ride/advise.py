@@ -92,7 +92,7 @@ from mtbmj.errors import ConfigError
 from mtbmj.ride.advice_rules import (  # noqa: F401 (advise's names for them)
     MAX_SEGMENTS, MIN_SEGMENTS, Adjuster, AdviseError, BALANCE_POINTS, BOOTSTRAP, BOTTOM_OUTS_PER_MINUTE, DEEP_PERCENT,
     GRIP_COMFORT_WEIGHT, HEADLINE, LEAD_IN_M, MAX_REAR_MISS_PERCENT, MIN_CHECKED_PERCENT, MIN_GAIN,
-    MIN_SECONDS, PACKING_FLOOR, PACKING_RATIO, PACKING_SHARE, RULES, RideNotDescribed, SAG_POINTS, SAG_WINDOW,
+    MIN_SECONDS, PACKING_FLOOR, PACKING_SHARE, RULES, RideNotDescribed, SAG_POINTS, SAG_WINDOW,
     SEGMENT_S, SHARES, SIGNED, SOLD_LB_PER_IN, SPEED_SPLIT_MM_PER_S, UNCERTAINTY_METHOD,
     UNITS, UNUSED_BELOW_PERCENT, skipped_entry, adjusters, allowed, checked_duration, counter, bounded_value, bounds, expected,
     beyond, flat_metrics, grip_comfort, on_the_ride, rule_metric, penalties, ride_metrics, round_setting, unit_of,
