@@ -198,8 +198,8 @@ class Reconstruction:
                 "assumed": "the whole bike of the bike file in the plane (frame pitch, the rider on vertical legs and "
                            "arms), vertical motion only, the wheelbase at sag, point-contact tyres without damping, "
                            "the fork's slow load the rider's (the rear given none), the ground under a flight of "
-                           "0.1 s or more the landing's level from the take-off on where the wheel lands 0.15 m lower "
-                           "or more (a drop's edge), else the chord from take-off to landing, the speed linear "
+                           "0.1 s or more the landing's level from the take-off on where the wheel lands more than "
+                           "0.15 m lower (a drop's edge), else the chord from take-off to landing, the speed linear "
                            "between the windows that gave one (mtbmj/ride/reconstruct.py)"}
 
     def line(self) -> str:
