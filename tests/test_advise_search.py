@@ -132,3 +132,80 @@ def test_the_pool_says_how_many_it_runs_at_once():
 
     with process_pool(3) as pool:
         assert pool.workers == 3
+
+
+class Clock:
+    """A pool of ``slots`` processes made here on a virtual clock: each run takes ``seconds(i, value)``
+    and ends at its start plus that; ``wait`` moves the clock to the first end among those waited
+    for and returns every one ended by then. Counts the runs and the most ever running at once."""
+
+    def __init__(self, run, seconds):
+        self.run, self.seconds, self.now, self.ends, self.asked, self.most = run, seconds, 0.0, {}, [], 0
+
+    def submit(self, i, v):
+        handle = len(self.asked)
+        self.asked.append((i, v))
+        self.ends[handle] = (self.now + self.seconds(i, v), self.run(i, v))
+        self.most = max(self.most, sum(1 for e, _ in self.ends.values() if e > self.now))
+        return handle
+
+    def wait(self, handles):
+        self.now = max(self.now, min(self.ends[h][0] for h in handles))
+        return [(h, self.ends[h][1]) for h in handles if self.ends[h][0] <= self.now]
+
+
+def _three():
+    spring = _adj()
+    rebound = _adj("fork.damper.rebound_N_s_per_m", 2800.0, "N s/m")
+    compression = _adj("fork.damper.compression_N_s_per_m", 500.0, "N s/m")
+    pen = [lambda v: (v - 8.0) ** 2, lambda v: abs(v - 400.0) / 100.0, lambda v: v / 100.0]
+    run = lambda i, v: SimpleNamespace(total=pen[i](v), crash="crashed" if i == 1 and v < 700 else None)  # noqa: E731
+    return [(spring, 5.5, run(0, 5.5)), (rebound, 2240.0, run(1, 2240.0)), (compression, 625.0, run(2, 625.0))], run
+
+
+def test_the_flowing_search_keeps_the_steps_of_the_rounds_however_its_runs_end():
+    """Three searches made here (a spring whose penalty (v - 8)^2 falls from 5.5, a rebound damper
+    falling towards 400 from 2240 that crashes below 700, a compression damper whose penalty rises at
+    once), searched with each run ending as it does (``search_flow``) on 1 to 6 processes, the runs'
+    lengths drawn at random (they end out of order): the steps kept are those of the rounds
+    (``search_many``) and of each search alone, and no more runs go at once than the pool has."""
+    import random
+
+    starts, run = _three()
+    rounds = [[v for v, _ in k] for k in advice_search.search_many(
+        starts, lambda asks: [run(i, v) for i, v in asks], lambda i, v: True, 2)]
+    alone = [[v for v, _ in advice_search.search(a, f, r, 0.0, lambda vs, i=i: [run(i, v) for v in vs], lambda v: True)]
+             for i, (a, f, r) in enumerate(starts)]
+    assert rounds == alone and len(alone[0]) == 4 and 0 < len(alone[1]) < advice_search.MAX_STEPS and alone[2] == []
+    for slots in (1, 2, 3, 6):
+        for seed in range(5):
+            rng = random.Random(seed)
+            clock = Clock(run, lambda i, v: rng.uniform(0.5, 2.0))
+            kept = advice_search.search_flow(starts, clock.submit, clock.wait, lambda i, v: True, slots)
+            assert [[v for v, _ in k] for k in kept] == rounds, (slots, seed)
+            assert clock.most <= slots
+    refused = advice_search.search_flow(starts, clock.submit, clock.wait, lambda i, v: not (i == 0 and v > 7.0), 2)
+    assert [v for v, _ in refused[0]] == pytest.approx([6.05, 6.655])  # the part refuses 7.32: the search ends
+
+
+def test_the_flowing_search_keeps_two_processes_busy_where_the_rounds_wait():
+    """The same three searches on two processes, every run 1 s long (the virtual clock): in rounds, a
+    round waits for its slowest search and a process stands idle where a round has an odd number of
+    runs; flowing, each search goes on as its own last step is judged, an idle process takes the step
+    after one still running. The flow ends sooner, in no more than the runs it needs (each kept step
+    and the one that ends each search) on two processes would take, plus one."""
+    starts, run = _three()
+    rounds = []
+
+    def run_values(asks):
+        rounds.append(len(asks))
+        return [run(i, v) for i, v in asks]
+
+    kept = advice_search.search_many(starts, run_values, lambda i, v: True, 2)
+    in_rounds = sum(-(-n // 2) for n in rounds)  # seconds: each round's runs on two processes
+    clock = Clock(run, lambda i, v: 1.0)
+    flowing = advice_search.search_flow(starts, clock.submit, clock.wait, lambda i, v: True, 2)
+    assert [[v for v, _ in k] for k in flowing] == [[v for v, _ in k] for k in kept]
+    needed = sum(len(k) + 1 for k in kept)  # every kept step and the one that ended each search
+    assert clock.now < in_rounds, (clock.now, in_rounds, rounds)
+    assert clock.now <= -(-needed // 2) + 1, (clock.now, needed)

@@ -13,12 +13,14 @@ the measured range) ends the search there.
 
 **Stop** (:func:`search`, :func:`search_many` for all of them at once): each step is kept only where
 it lowers the penalty by ``MIN_GAIN`` (the verdict's own threshold) or more below the best so far
-without a crash, and the search goes on from it; at most ``MAX_STEPS`` steps. The steps of every
-search still going are simulated together, one round at a time (all in parallel): each search asks
-for its next step, and for the one after it too (at most ``LOOKAHEAD``) only where the pool has room
-for it (``per_round``: the values one round runs at once) - a step past one that fails is a run thrown
-away, and with several searches going the pool is full without it. The steps kept are the same
-however many are asked at a time (each is judged against the one before it). The rule
+without a crash, and the search goes on from it; at most ``MAX_STEPS`` steps. ``mtbmj advise`` runs
+every search at once as its runs end (:func:`search_flow`): each search asks for its next step as soon
+as its own last one is judged, the pool's processes kept busy with the steps every search needs (the
+search fewest steps along first), and a process that would stand idle takes the step after one still
+running (at most ``LOOKAHEAD`` of one search in flight: a step past one that fails is a run thrown
+away, in a slot that would have done nothing). :func:`search_many` runs them one round at a time (a
+round waits for its slowest run). The steps kept are the same either way and however the runs end
+(each is judged against the one before it, in order). The rule
 that drove the change is the one whose penalty fell most from the recorded setting to the answer.
 """
 from __future__ import annotations
@@ -99,6 +101,66 @@ def search_many(starts, run_values, allowed_value, per_round: int = LOOKAHEAD) -
     return [s["kept"] for s in state]
 
 
+def search_flow(starts, submit, wait, allowed_value, slots: int) -> list:
+    """The searches of :func:`search_many` (the same values asked, each step judged as there, the same
+    steps kept), each going on as soon as its own last step is judged, not a round at a time: a pool
+    of ``slots`` processes is kept busy with the next step of every search still going (the steps
+    every search needs first), and only where a process would otherwise stand idle with the step
+    after one still running (up to ``LOOKAHEAD`` of one search in flight: a step past one that fails
+    is a run thrown away, but in a slot that would have done nothing). ``submit(i, value)`` starts
+    search ``i``'s run of ``value`` and returns a handle; ``wait(handles)`` blocks until at least
+    one of them has finished and returns ``[(handle, run), ...]`` for those finished (a refused run
+    a ``ConfigError``); ``allowed_value(i, value)`` as in :func:`search_many`. Returns each search's
+    kept steps ``[(value, run)]``."""
+    state = [{"best": run, "kept": [], "asked": [], "got": {}, "done": False} for _, _, run in starts]
+    flying = {}  # handle -> (search, value)
+
+    def ask(i, s):  # the value after the last one asked (or judged), where the part has one
+        v = s["asked"][-1] if s["asked"] else (s["kept"][-1][0] if s["kept"] else starts[i][1])
+        if len(s["kept"]) + len(s["asked"]) >= MAX_STEPS:
+            return False
+        v = next_value(starts[i][0], v, starts[i][1])
+        if v is None or not allowed_value(i, v):
+            if not s["asked"]:
+                s["done"] = True
+            return False
+        s["asked"].append(v)
+        flying[submit(i, v)] = (i, v)
+        return True
+
+    def fill():
+        for i in sorted(range(len(state)), key=lambda i: len(state[i]["kept"])):  # every search's next step:
+            s = state[i]  # needed (the search fewest steps along first, as the rounds have it)
+            if len(flying) < slots and not s["done"] and not s["asked"]:
+                ask(i, s)
+        while len(flying) < slots:  # a process otherwise idle: the step after one in flight
+            going = [(len(s["asked"]), i) for i, s in enumerate(state)
+                     if not s["done"] and 0 < len(s["asked"]) < LOOKAHEAD]
+            if not going or not ask(min(going)[1], state[min(going)[1]]):
+                break
+
+    fill()
+    while flying:
+        for handle, run in wait(list(flying)):
+            i, v = flying.pop(handle)
+            s = state[i]
+            if s["done"] or v not in s["asked"]:
+                continue  # a step past one that failed: thrown away
+            s["got"][v] = run
+            while s["asked"] and s["asked"][0] in s["got"]:  # judged in order, each against the one before
+                v0 = s["asked"].pop(0)
+                r = s["got"].pop(v0)
+                if isinstance(r, Exception) or r.crash or not r.total <= s["best"].total - MIN_GAIN:
+                    s["done"], s["asked"], s["got"] = True, [], {}
+                    break
+                s["best"] = r
+                s["kept"].append((v0, r))
+            if not s["done"] and not s["asked"] and len(s["kept"]) >= MAX_STEPS:
+                s["done"] = True
+        fill()
+    return [s["kept"] for s in state]
+
+
 def search(adj: Adjuster, first: float, best_run, base_total: float, run_values, allowed_value,
            per_round: int = LOOKAHEAD) -> list:
     """The line search from ``first`` (the one-step candidate, its run ``best_run``): ``run_values``
@@ -132,4 +194,5 @@ def annotate(advice, searched: dict) -> None:
         advice.verdict = {**advice.verdict, "why": rec["why"]}
 
 
-__all__ = ["LOOKAHEAD", "MAX_STEPS", "annotate", "driving_rule", "next_value", "search", "search_many"]
+__all__ = ["LOOKAHEAD", "MAX_STEPS", "annotate", "driving_rule", "next_value", "search", "search_flow",
+           "search_many"]
