@@ -141,10 +141,12 @@ class Clock:
 
     def __init__(self, run, seconds):
         self.run, self.seconds, self.now, self.ends, self.asked, self.most = run, seconds, 0.0, {}, [], 0
+        self.started = {}
 
     def submit(self, i, v):
         handle = len(self.asked)
         self.asked.append((i, v))
+        self.started[(i, v)] = self.now
         self.ends[handle] = (self.now + self.seconds(i, v), self.run(i, v))
         self.most = max(self.most, sum(1 for e, _ in self.ends.values() if e > self.now))
         return handle
@@ -209,3 +211,29 @@ def test_the_flowing_search_keeps_two_processes_busy_where_the_rounds_wait():
     needed = sum(len(k) + 1 for k in kept)  # every kept step and the one that ended each search
     assert clock.now < in_rounds, (clock.now, in_rounds, rounds)
     assert clock.now <= -(-needed // 2) + 1, (clock.now, needed)
+    # a step asked past the one that ended its search started with that step, not after it: it did not
+    # hold the search past its end
+    for i, (adj, first, _) in enumerate(starts):
+        ending = advice_search.next_value(adj, kept[i][-1][0] if kept[i] else first, first)
+        past = advice_search.next_value(adj, ending, first)
+        if (i, past) in clock.started:
+            assert clock.started[(i, past)] == clock.started[(i, ending)], (i, clock.started)
+    assert clock.now == max(clock.started[(i, v)] + 1.0 for i, v in clock.asked)
+
+
+def test_a_step_past_the_next_is_not_started_late_to_hold_the_search_past_its_end():
+    """A spring search (penalty (v - 6.2)^2 from 5.5: 6.05 kept, 6.655 ends it) beside a compression
+    damper whose penalty rises at once, its run 1.5 s where the spring's take 1 s (the virtual clock):
+    when the damper's run ends at 1.5 s, the spring's 6.655 is half way; the step after it, started
+    then, would run to 2.5 s though the search ends at 2 s with 6.655. It is not asked: the flow ends
+    at 2 s."""
+    spring = _adj()
+    compression = _adj("fork.damper.compression_N_s_per_m", 500.0, "N s/m")
+    pen = [lambda v: (v - 6.2) ** 2, lambda v: v / 100.0]
+    run = lambda i, v: SimpleNamespace(total=pen[i](v), crash=None)  # noqa: E731
+    starts = [(spring, 5.5, run(0, 5.5)), (compression, 625.0, run(1, 625.0))]
+    clock = Clock(run, lambda i, v: 1.5 if i == 1 else 1.0)
+    kept = advice_search.search_flow(starts, clock.submit, clock.wait, lambda i, v: True, 2)
+    assert [v for v, _ in kept[0]] == pytest.approx([6.05]) and kept[1] == []
+    assert clock.started[(0, 6.655)] == 1.0 and clock.now == 2.0, clock.started
+    assert (0, advice_search.next_value(spring, 6.655, 5.5)) not in clock.started

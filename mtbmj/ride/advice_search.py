@@ -16,9 +16,10 @@ it lowers the penalty by ``MIN_GAIN`` (the verdict's own threshold) or more belo
 without a crash, and the search goes on from it; at most ``MAX_STEPS`` steps. ``mtbmj advise`` runs
 every search at once as its runs end (:func:`search_flow`): each search asks for its next step as soon
 as its own last one is judged, the pool's processes kept busy with the steps every search needs (the
-search fewest steps along first), and a process that would stand idle takes the step after one still
-running (at most ``LOOKAHEAD`` of one search in flight: a step past one that fails is a run thrown
-away, in a slot that would have done nothing). :func:`search_many` runs them one round at a time (a
+search fewest steps along first), and a process that would stand idle takes the step after one that
+starts with it (at most ``LOOKAHEAD`` of one search in flight: a step past one that fails is a run
+thrown away, in a slot that would have done nothing and ending about when that step does; one
+started after a step long running would hold its process past the search's end). :func:`search_many` runs them one round at a time (a
 round waits for its slowest run). The steps kept are the same either way and however the runs end
 (each is judged against the one before it, in order). The rule
 that drove the change is the one whose penalty fell most from the recorded setting to the answer.
@@ -106,8 +107,9 @@ def search_flow(starts, submit, wait, allowed_value, slots: int) -> list:
     steps kept), each going on as soon as its own last step is judged, not a round at a time: a pool
     of ``slots`` processes is kept busy with the next step of every search still going (the steps
     every search needs first), and only where a process would otherwise stand idle with the step
-    after one still running (up to ``LOOKAHEAD`` of one search in flight: a step past one that fails
-    is a run thrown away, but in a slot that would have done nothing). ``submit(i, value)`` starts
+    after one starting now (up to ``LOOKAHEAD`` of one search in flight: a step past one that fails
+    is a run thrown away, but in a slot that would have done nothing; only beside a step that starts
+    with it, so that it ends about when that step does). ``submit(i, value)`` starts
     search ``i``'s run of ``value`` and returns a handle; ``wait(handles)`` blocks until at least
     one of them has finished and returns ``[(handle, run), ...]`` for those finished (a refused run
     a ``ConfigError``); ``allowed_value(i, value)`` as in :func:`search_many`. Returns each search's
@@ -129,13 +131,14 @@ def search_flow(starts, submit, wait, allowed_value, slots: int) -> list:
         return True
 
     def fill():
+        fresh = []  # the searches whose next step starts now
         for i in sorted(range(len(state)), key=lambda i: len(state[i]["kept"])):  # every search's next step:
             s = state[i]  # needed (the search fewest steps along first, as the rounds have it)
-            if len(flying) < slots and not s["done"] and not s["asked"]:
-                ask(i, s)
-        while len(flying) < slots:  # a process otherwise idle: the step after one in flight
-            going = [(len(s["asked"]), i) for i, s in enumerate(state)
-                     if not s["done"] and 0 < len(s["asked"]) < LOOKAHEAD]
+            if len(flying) < slots and not s["done"] and not s["asked"] and ask(i, s):
+                fresh.append(i)
+        while len(flying) < slots:  # a process otherwise idle: the step after one starting with it (a step
+            going = [(len(state[i]["asked"]), i) for i in fresh  # after one long running would hold its
+                     if not state[i]["done"] and len(state[i]["asked"]) < LOOKAHEAD]  # process past its end)
             if not going or not ask(min(going)[1], state[min(going)[1]]):
                 break
 
