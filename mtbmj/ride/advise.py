@@ -39,7 +39,9 @@ guides' current editions), marked *assumed* where no source gives the number):
   bikes); a point outside costs 1/5;
 - bottom-outs: occasional is right ("an occasional bottom-out is a good thing", RockShox): more than
   ``BOTTOM_OUTS_PER_MINUTE`` per minute of ride costs (assumed), none with the maximum below 85 % of
-  travel costs too (travel left unused: assumed);
+  travel and below ``UNUSED_SHARE`` of the other end's maximum on the ride as recorded costs too
+  (travel left unused, read against what the terrain asked of the other end: a smooth trail asks for
+  less; assumed);
 - packing: an end's rebound p95 over its compression p95 below ``PACKING_SHARE`` of the other end's
   on the ride as recorded (the terrain sets the compression speeds, and the other end rides the same
   terrain: "front and rear rebound about the same", Motion Instruments' balance; the number assumed),
@@ -94,7 +96,7 @@ from mtbmj.ride.advice_rules import (  # noqa: F401 (advise's names for them)
     GRIP_COMFORT_WEIGHT, HEADLINE, LEAD_IN_M, MAX_REAR_MISS_PERCENT, MIN_CHECKED_PERCENT, MIN_GAIN,
     MIN_SECONDS, PACKING_FLOOR, PACKING_SHARE, RULES, RideNotDescribed, SAG_POINTS, SAG_WINDOW,
     SEGMENT_S, SHARES, SIGNED, SOLD_LB_PER_IN, SPEED_SPLIT_MM_PER_S, UNCERTAINTY_METHOD,
-    UNITS, UNUSED_BELOW_PERCENT, skipped_entry, adjusters, allowed, checked_duration, counter, bounded_value, bounds, expected,
+    UNITS, UNUSED_BELOW_PERCENT, UNUSED_SHARE, skipped_entry, adjusters, allowed, checked_duration, counter, bounded_value, bounds, expected,
     beyond, flat_metrics, grip_comfort, on_the_ride, rule_metric, penalties, ride_metrics, round_setting, unit_of,
     Trial, compose_setting, trial)
 
