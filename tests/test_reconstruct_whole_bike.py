@@ -58,7 +58,7 @@ def test_the_made_ride_has_what_it_must(made):
 
 def test_the_speed_along_the_ride_comes_back(made, rebuilt):
     """Issue 51 item 1: every window's speed within 3 % of the made ride's mean speed over that window
-    (what a window's lag measures: its 5 s span's mean) and within 5 % of the made speed at its centre;
+    (what a window's lag measures: its span's mean) and within 5 % of the made speed at its centre;
     the profile (linear between the windows' centres) within 3 % RMS over the samples checked; the
     wheelbase it is found with (the ride's sag) within 0.5 % of the made ride's median; the distance
     axis (terrain.csv's, past its lead-in) within 3 % of the made distance at the end."""
@@ -136,12 +136,17 @@ def test_the_terrain_is_found_within_15_mm(made, reconstruction):
     assert terrain_error_mm(made, reconstruction) < 15.0
 
 
-@pytest.mark.xfail(strict=True, reason="issue 51's speed target, not reached: one window's speed 3.4 % off the "
-                                       "speed at its centre (target 3 %; 2.7 % off its own span's mean, which "
-                                       "test_the_speed_along_the_ride_comes_back holds)")
 def test_issue_51_speed_target(reconstruction):
-    for (start, found, _) in reconstruction.speed["windows"]:
-        assert found is None or found == pytest.approx(float(speed(start + 2.5)), rel=0.03)
+    """Issue 51's speed target: every window that gives a speed within 3 % of the made speed at its
+    centre (1.8 % at most when written, with the speed found again from the rear predicted: 2.5 s
+    windows; 3.4 % with the two ends' lag alone, 5 s windows, whose lag is their span's mean); and the
+    speed was found again (the first pass's rear beats the naive baselines on this ride)."""
+    sp = reconstruction.speed
+    assert "first" in sp and sp["window_s"] < sp["first"]["window_s"]
+    found = [(start, v) for start, v, _ in sp["windows"] if v is not None]
+    assert len(found) >= 0.6 * len(sp["windows"])
+    for start, v in found:
+        assert v == pytest.approx(float(speed(start + 0.5 * sp["window_s"])), rel=0.03), start
 
 
 def test_the_terrain_is_found_under_the_jumps_and_drops(made, reconstruction):
