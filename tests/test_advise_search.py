@@ -59,6 +59,26 @@ def test_the_search_stops_at_what_the_part_refuses_or_a_crash():
     assert advice_search.driving_rule({"a": 1.0, "b": 3.0}, {"a": 0.5, "b": 0.2}) == "b"
 
 
+def test_a_lone_crash_is_passed_over_and_said_two_in_a_row_stop_the_search():
+    """A penalty -v made here with the model crashing at one value only (6.655, as the made soft-fork
+    ride looped out at 5.87 N/mm and rode home at 6.5 and 8): the search passes over it, goes on to
+    the part's limit, and names it in ``passed``; two crashes in a row end it before them; a crash
+    after which the penalty does not fall below the best before it ends it there too; one past the
+    answer is not listed."""
+    a = _adj()
+    lone = lambda v: SimpleNamespace(total=-v, crash="looped out" if abs(v - 6.655) < 1e-3 else None)  # noqa: E731
+    kept = advice_search.search(a, 5.5, lone(5.5), 0.0, lambda vs: [lone(v) for v in vs], lambda v: v < 9.0)
+    assert [round(v, 3) for v, _ in kept] == [6.05, 7.321, 8.053, 8.858]
+    assert [(round(v, 3), why) for v, why in kept.passed] == [(6.655, "looped out")]
+    assert not any(r.crash for _, r in kept)
+    two = lambda v: SimpleNamespace(total=-v, crash="looped out" if 6.6 < v < 7.4 else None)  # noqa: E731
+    kept = advice_search.search(a, 5.5, two(5.5), 0.0, lambda vs: [two(v) for v in vs], lambda v: v < 9.0)
+    assert [round(v, 3) for v, _ in kept] == [6.05] and kept.passed == []
+    worse = lambda v: SimpleNamespace(total=-v if v < 6.6 else 0.0, crash="x" if abs(v - 6.655) < 1e-3 else None)  # noqa: E731
+    kept = advice_search.search(a, 5.5, worse(5.5), 0.0, lambda vs: [worse(v) for v in vs], lambda v: v < 9.0)
+    assert [round(v, 3) for v, _ in kept] == [6.05] and kept.passed == []
+
+
 def test_several_searches_at_once_end_where_each_alone_ends():
     """Two adjusters searched together (search_many): a spring whose penalty (v - 8)^2 falls from 5.5
     and a rebound damper whose penalty falls as it is lowered to a floor at 400 (from 2240 by x0.8,
