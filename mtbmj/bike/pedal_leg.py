@@ -8,21 +8,27 @@ carries the body's weight and posture. What pedalling adds is the two legs' diff
 goes round with its pedal, and on its downstroke pushes it. This module is that driving leg, as a
 *massless* chain from the hips (the trunk's hip point, wherever the body is) to the driving pedal
 (``controllers.drive.pedal_forces``' place at the crank's angle), the ankle ``rider_body``'s offset
-from the pedal (the foot keeps its attitude on the frame: it translates with the pedal), the knee
-ahead of the line from the ankle to the hip (``rider_body.pose``). Being massless it is in statics:
-the foot's force F on the pedal (the stroke's) is made by the joint torques tau_j = (P - j) x F
-(P the pedal's spindle, j the hip, the knee or the ankle; x the pitch-plane cross product, nose-up
-positive), J^T F, and the leg passes -F to the hips along the same line of action (the wrench the
-bike's callback puts on the ``rider`` body, the trunk). Its joints' speeds follow from the pedal's
-and the hips' motion on the frame (``leg_rates``), and the muscles' power is sum tau w = F . (v_P -
-v_trunk(P)): the crank's power F . v_P less what the reaction does on the body. So the pedalling's
-work is the muscles' (``mtbmj.bike.energy``) and the body moves with the reaction.
+from the pedal (the foot keeps its attitude on the frame, translating with the pedal, but tips
+heel-up about the spindle where the hips are further than the leg reaches with the knee
+``KNEE_LEAST_DEG`` bent: ``foot_tip``), the knee ahead of the line from the ankle to the hip
+(``rider_body.pose``). Being massless it is in statics: the foot's force F on the pedal is made by
+the joint torques tau_j = (P - j) x F (P the pedal's spindle, j the hip, the knee or the ankle; x
+the pitch-plane cross product, nose-up positive), J^T F, and the leg passes -F to the hips along
+the same line of action. F is the stroke's (along the crank circle's tangent, the wrench the bike's
+callback puts on the ``rider`` body, the trunk) and a push along the crank that makes the joints'
+torques least against their strength (``PedalLeg.radial``; no crank torque, no work on the crank;
+``PedalLeg.apply`` puts it on the frame at the pedal and its reaction on the trunk). Its joints'
+speeds follow from the pedal's and the hips' motion on the frame (``leg_rates``), and the muscles'
+power is sum tau w = F . (v_P - v_trunk(P)): the crank's power F . v_P less what the reaction does
+on the body. So the pedalling's work is the muscles' (``mtbmj.bike.energy``) and the body moves
+with the reaction. Standing, the pedalling rider's hips are lowered so that the driving leg reaches
+the stroke's bottom (``pedalling_hip``, used by ``rider_control.stance``).
 
 Not modelled: the legs' own mass going round (their swing: the lumped leg keeps both legs' mass on
-the mean posture), a foot that rocks on the pedal (its attitude is the frame's), and the cut of the
-stroke by the leg's strength and power: the stroke is the drive's (``controllers.drive``), and the
-summary reports the driving leg's torques against one side's strength with half the common leg's
-torque added (``PedalLeg.report``); a run that asks more says so in its headline.
+the mean posture), a foot that rocks on the pedal other than the tip at the bottom, and the cut of
+the stroke by the leg's strength and power: the stroke is the drive's (``controllers.drive``), and
+the summary reports the driving leg's torques against one side's strength with half the common
+leg's torque added (``PedalLeg.report``); the headline says whether that stayed within it.
 """
 from __future__ import annotations
 
