@@ -166,6 +166,15 @@ def test_shuffled_labels_are_refused_in_one_line():
     assert got["lines"][0].startswith("rebound law refused: no law in clicks")
 
 
+def test_a_record_without_its_noise_is_refused():
+    from mtbmj.identify.bounce_rebound_clicks import fit_law
+
+    e = law_entries()
+    e[2]["rebound_noise_ci95"] = [None, None]
+    with pytest.raises(BounceError, match="the noise of r10 was not read"):
+        fit_law(e)
+
+
 def test_records_that_do_not_slow_are_flagged():
     """The coefficients rise but the records' own rates do not fall with the clicks (one swapped): the
     law is fitted and flagged."""

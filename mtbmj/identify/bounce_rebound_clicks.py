@@ -75,9 +75,11 @@ def fit_law(entries, key: str = "rebound_N_s_per_m") -> dict:
                           f"clicks to {b[key]:.0f} at {b['clicks']:g} (more rebound clicks, more damping): the clicks "
                           f"may be mislabelled or a record is not a clean slam")
     sds = [_sd(e) for e in rows]
-    sd = np.array([s if s is not None else np.nan for s in sds])
-    if not np.isfinite(sd).all():
-        sd = np.full(c.size, max(float(np.std(c)), 1.0))  # no noise read: equal weights
+    if None in sds:
+        none = [e["file"] for e, v in zip(rows, sds) if v is None]
+        raise BounceError(f"no law in clicks: the noise of {', '.join(none)} was not read (its first rebound read in "
+                          f"fewer than half the resampled records), so the law's weights and interval are not known")
+    sd = np.array(sds)
     X = np.column_stack((np.ones_like(ks), ks))
     W = 1.0 / sd ** 2
     cov = np.linalg.inv(X.T @ (X * W[:, None]))
