@@ -96,6 +96,7 @@ def law_entries(clicks=(0, 5, 10, 15), c0=1000.0, slope=300.0, sd=60.0, seed=0, 
     labels = list(clicks) if shuffle is None else [clicks[i] for i in shuffle]
     return [{"file": f"r{k}", "clicks": lab, "rebound_N_s_per_m": float(c),
              "rebound_noise_ci95": [float(c - 1.96 * sd), float(c + 1.96 * sd)],
+             "rebound_N_s_per_m_ci95": [float(c - 1.96 * sd), float(c + 1.96 * sd)], "interval_open": [],
              "record_mid_rebound_per_s": float(rate_of(c)), "record_rate_sd_per_s": float(
                  abs(R / C_HALF / (1 + c / C_HALF) ** 2) * sd), "rate_curve": curve}
             for k, lab, c in zip(clicks, labels, cs)]
@@ -365,3 +366,36 @@ def test_generator_answer_in_clicks(generated):
     ans = got["answer"]
     assert ans["set_clicks"] == 6
     assert ans["clicks_range95"][0] <= 6 <= ans["clicks_range95"][1]
+
+
+@pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
+def test_cli_writes_and_prints_the_answer(tmp_path, monkeypatch, capsys):
+    """``fit bounce --replay --rebound-target-per-s``'s wiring, the replays (minutes) replaced by this
+    file's closed-form entries at the records' clicks: fit.json's "rebound_dampers" has the law, the
+    held-out rows and the answer for the target, the lines are printed and rebound.png is written."""
+    import json
+    import os
+
+    from conftest import SHARED_DATA
+
+    from mtbmj.cli import main
+    from mtbmj.identify import bounce_rebound, bounce_replay
+
+    monkeypatch.setattr(bounce_replay, "replay_records", lambda records, clicks, bike, rider_hz: {
+        "summary": [], "csv": {}, "replays": [], "lines": [], "check": None})
+
+    def read(records, clicks, replayed, bike, rider_hz, target):
+        e = law_entries(clicks=tuple(int(k) for k in clicks), sd=30.0, seed=5)
+        return {"from": "test", "records": e, "rises": True, "line": "dampers", **bounce_rebound.law_in_clicks(e, target)}
+
+    monkeypatch.setattr(bounce_rebound, "read_records", read)
+    files = [os.path.join(SHARED_DATA, "sst_v2", f) for f in ("00083.SST", "00085.SST", "00087.SST")]
+    target = float(rate_of(1000.0 + 300.0 * 7))
+    assert main(["fit", "bounce", *files, "--clicks", "0,8,17", "--bike", "sst", "--replay",
+                 "--rebound-target-per-s", str(target), "--out", str(tmp_path / "o")]) == 0
+    printed = capsys.readouterr().out
+    got = json.loads((tmp_path / "o" / "fit.json").read_text())["rebound_dampers"]
+    assert got["answer"]["set_clicks"] == 7 and got["answer"]["target_per_s"] == pytest.approx(target)
+    assert len(got["held_out"]) == 3 and "c0_N_s_per_m" in got["law"]
+    assert "rebound answer (first rebound at" in printed and "set 7 clicks" in printed
+    assert (tmp_path / "o" / "rebound.png").read_bytes()[:4] == b"\x89PNG"
