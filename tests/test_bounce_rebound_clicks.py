@@ -399,3 +399,16 @@ def test_cli_writes_and_prints_the_answer(tmp_path, monkeypatch, capsys):
     assert len(got["held_out"]) == 3 and "c0_N_s_per_m" in got["law"]
     assert "rebound answer (first rebound at" in printed and "set 7 clicks" in printed
     assert (tmp_path / "o" / "rebound.png").read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.slow
+def test_generator_shuffled_labels_refused(generated):
+    """The four slams read with their clicks labels shuffled (0, 4, 8, 12 labelled 8, 0, 12, 4): the
+    coefficients do not rise with the labels: the law refused in one line, no answer."""
+    from mtbmj.identify.bounce_rebound import law_in_clicks
+
+    entries, target = generated
+    wrong = [{**e, "clicks": k} for e, k in zip(entries, (8, 0, 12, 4))]
+    got = law_in_clicks(wrong, target)
+    assert "mislabelled" in got["law"]["refused"] and "\n" not in got["law"]["refused"]
+    assert got["answer"]["set_clicks"] is None and got["held_out"] == []
