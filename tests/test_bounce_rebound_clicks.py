@@ -399,7 +399,8 @@ def test_cli_writes_and_prints_the_answer(tmp_path, monkeypatch, capsys):
 
     def read(records, clicks, replayed, bike, rider_hz, target):
         e = law_entries(clicks=tuple(int(k) for k in clicks), sd=30.0, seed=5)
-        return {"from": "test", "records": e, "rises": True, "line": "dampers", **bounce_rebound.law_in_clicks(e, target)}
+        return {"from": "test", "records": e, "rises": True, "line": "dampers",
+                **bounce_rebound.law_in_clicks(e, target)}
 
     monkeypatch.setattr(bounce_rebound, "read_records", read)
     files = [os.path.join(SHARED_DATA, "sst_v2", f) for f in ("00083.SST", "00085.SST", "00087.SST")]

@@ -338,7 +338,8 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
         csvs.update(done["csv"])
         if done["replays"]:
             extra["replay.png"] = bounce_replay.figure_png(done["replays"])
-        if out["rebound_dampers"] is not None and any("rebound_N_s_per_m" in e for e in out["rebound_dampers"]["records"]):
+        read = out["rebound_dampers"]["records"] if out["rebound_dampers"] is not None else []
+        if any("rebound_N_s_per_m" in e for e in read):
             from mtbmj.identify.bounce_rebound_clicks import figure_png
 
             extra["rebound.png"] = figure_png(out["rebound_dampers"])

@@ -7,9 +7,10 @@ least squares with each record's standard deviation (the half-width of its noise
 with more records than two the covariance is widened by chi^2 / dof when that exceeds 1 (the records
 scatter more than their noise says). The spring's interval moves every record's coefficient the same
 way, so it is carried as a second answer at each of its ends rather than into the law. Refused (a
-reason, no law) with fewer than two distinct clicks read, or when the coefficients do not rise with
-the clicks (a rebound adjuster adds damping one way: clicks mislabelled or a record that is not a
-clean slam); flagged when the records' own rates do not fall with the clicks.
+reason, no law) with fewer than two distinct clicks read, when a record's noise was not read, or when
+the coefficients do not rise with the clicks (a rebound adjuster adds damping one way: clicks
+mislabelled or a record that is not a clean slam); flagged when the records' own rates do not fall
+with the clicks.
 
 **Held out.** Each record in turn: the law fitted on the others, its coefficient predicted at the
 record's clicks with the law's interval, carried to the record's first-rebound rate (1/s per mm of
@@ -24,13 +25,16 @@ needs more rebound damping to rebound as fast: Vorsprung Suspension, "Mountain b
 understanding rebound damping"), so the target is a rate, not a coefficient: the coefficient it needs
 follows the spring. Its value is the rider's (``--rebound-target-per-s``); none is assumed.
 
-**The answer.** Each record's curve inverted at the target gives the coefficient that slam needs (their
-mean, their spread its standard deviation); the law solved for it gives the clicks; 2000 draws of the
-law's two values and of that coefficient (seeded) give the range of clicks within the uncertainty (the
-2.5 and 97.5 percentiles widened to whole clicks). Only the clicks between the records' are searched
-(the line is not extrapolated): an answer past them is refused with the side it lies on. Repeated with
-the dampers and curves at the spring interval's ends (``at_spring_ci95``), each end's answer or why
-there is none. Beside it, model-free, the clicks where the records' own rates joined by straight lines
+**The answer.** The first click (searched in ``STEP``) where the law's coefficient, carried through the
+curves of the two records that bracket the click (their rates weighted linearly in clicks; at a
+record, its own curve), gives the target; "set N clicks" is the nearest whole click. Its range: the
+2.5 and 97.5 percentiles over ``DRAWS // 4`` draws of the law's two values (seeded), widened to hold
+the answers from the lower and from the upper bracketing record's curve alone (a replayed slam's rate
+at one coefficient is not the same for every slam: on the shared slams at 7 /s the 0- and 8-click
+slams' curves alone give 8.0 and 4.9 clicks), then to whole clicks. Only the clicks between the
+records' are searched (the line is not extrapolated): a target past them is refused with its side.
+Repeated with the dampers and curves at the spring interval's ends (``at_spring_ci95``), each end's
+answer or why there is none. Beside it, model-free, the clicks where the records' own rates joined by straight lines
 in clicks reach the target (``records_clicks``).
 """
 from __future__ import annotations
@@ -290,8 +294,8 @@ def answer_line(ans: dict) -> str:
         head += f" (first rebound at {ans['target_per_s']:.2f} /s per mm of height)"
     if ans.get("set_clicks") is None:
         return f"{head}: {ans.get('note', 'none')}"
-    text = (f"{head}: set {ans['set_clicks']} clicks ({ans['clicks_exact']:.1f} on the law, {ans['needed_N_s_per_m']:.0f} "
-            f"N s/m); within the uncertainty {ans['clicks_range95'][0]}-{ans['clicks_range95'][1]} clicks (95 % of the "
+    text = (f"{head}: set {ans['set_clicks']} clicks ({ans['clicks_exact']:.1f} on the law, "
+            f"{ans['needed_N_s_per_m']:.0f} N s/m); within the uncertainty {ans['clicks_range95'][0]}-{ans['clicks_range95'][1]} clicks (95 % of the "
             f"law's draws and either bracketing slam's curve alone)")
     ends = ans.get("at_spring_ci95") or []
     said = []
@@ -379,4 +383,5 @@ def figure(got: dict):
     return fig
 
 
-__all__ = ["HOLD_SIGMAS", "figure", "figure_png", "RULE", "SOURCE", "answer", "answer_line", "fit_law", "held_out", "held_out_line"]
+__all__ = ["HOLD_SIGMAS", "RULE", "SOURCE", "answer", "answer_line", "figure", "figure_png", "fit_law", "held_out",
+           "held_out_line", "records_clicks"]
