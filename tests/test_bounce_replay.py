@@ -482,7 +482,9 @@ def test_shared_rebound_dampers_rise_with_clicks(shared_replays):
     """The shared slams' rebound coefficients read from their first rebounds (``bounce_rebound``, the
     spring, friction and compression of the best-determined whole-trace replay): all three read (the
     17-click slam too, which the whole-trace replay refuses) and rising with the clicks, as the
-    records' own rebounds slow; at the spring interval's upper end they rise too."""
+    records' own rebounds slow; at the spring interval's upper end they rise too. Their intervals open
+    below, the law's slope above 0, each record held out within its 2 sd, and the answer for 7 /s
+    holding the clicks where the records' own rates reach it."""
     from conftest import SHARED_DATA
 
     from mtbmj.identify.bounce_rebound import read_records
@@ -495,3 +497,19 @@ def test_shared_rebound_dampers_rise_with_clicks(shared_replays):
     upper = [e["at_spring_ci95"][1] for e in got["records"]]
     assert None not in upper and upper[0] < upper[1] < upper[2]
     assert got["line"].endswith("they rise with the clicks")
+    # the intervals (bounce_rebound.combine): open below, said so; the noise interval holds the value
+    for e in got["records"]:
+        lo, hi = e["rebound_N_s_per_m_ci95"]
+        assert lo is None and e["interval_open"][0].startswith("open below")
+        assert hi >= e["at_spring_ci95"][1]
+        n_lo, n_hi = e["rebound_noise_ci95"]
+        assert n_lo < e["rebound_N_s_per_m"] < n_hi
+    # the law in clicks, each record held out (issue 53: within its own 2 sd), and an answer for 7 /s
+    # whose range holds the records' own rates joined in clicks (model-free)
+    from mtbmj.identify.bounce_rebound import law_in_clicks
+
+    assert got["law"]["slope_ci95"][0] > 0
+    assert len(got["held_out"]) == 3 and all(r["holds"] for r in got["held_out"])
+    ans = law_in_clicks(got["records"], 7.0)["answer"]
+    assert ans["set_clicks"] is not None and ans["records_clicks"] is not None
+    assert ans["clicks_range95"][0] <= ans["records_clicks"] <= ans["clicks_range95"][1]
