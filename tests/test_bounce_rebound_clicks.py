@@ -32,7 +32,7 @@ import math
 import numpy as np
 import pytest
 
-from mtbmj.identify.bounce import BounceError, first_rebound
+from mtbmj.identify.bounce import BounceError
 
 FS = 5000.0
 
@@ -235,10 +235,8 @@ def test_cli_target_needs_replay_and_a_positive_rate(tmp_path, capsys):
 
 
 # (b) slams of an independent model ----------------------------------------------------------------
-K0 = 80e3  # N/m: the preset's coil (sst), the rate the replay scales
-M_SHOCK, K_OTHER, M_WHEEL, K_TYRE = 529.0, 9.2e3, 34.0, 680e3  # measured for test_bounce_replay's generator
-RIDER_SHARE, RIDER_HZ, RIDER_ZETA = 0.7, 5.0, 0.475  # the seated body (Fairley and Griffin 1989)
-W_SHOCK, TOP_OUT = 1850.0, 300e3  # N: the shock's static force; N/m: the preset's top-out spring
+from helpers import (SLAM_K_OTHER as K_OTHER, SLAM_K_TYRE as K_TYRE, SLAM_TOP_OUT as TOP_OUT,  # noqa: E402
+                     SLAM_W_SHOCK as W_SHOCK, slam_parts)
 SCALE, COMPRESSION, FRICTION = 0.55, 2500.0, 30.0
 
 
@@ -250,13 +248,7 @@ def slam(rebound, seed=0, dt=2e-5, quiet=2.0, after=1.6, noise=0.05, rest_mm=14.
     """(time_s, stroke_mm): at rest, a lift (0.6 x the static force over 0.35 s) and a slam (1.0 x over
     0.2 s) on the rider, then free. State y = (body, wheel, saddle) positions and speeds, down positive;
     stepped with the midpoint rule (velocities and positions from the half step's forces)."""
-    k = SCALE * K0
-    m_r, m_b, m_w = RIDER_SHARE * M_SHOCK, (1 - RIDER_SHARE) * M_SHOCK, M_WHEEL
-    k_r = m_r * (2 * math.pi * RIDER_HZ) ** 2
-    c_r = 2 * RIDER_ZETA * math.sqrt(k_r * m_r)
-    g_r, g_b = RIDER_SHARE * W_SHOCK, (1 - RIDER_SHARE) * W_SHOCK
-    x_rest = rest_mm / 1e3
-    preload = W_SHOCK - k * x_rest
+    k, m_r, m_b, m_w, k_r, c_r, g_r, g_b, x_rest, preload = slam_parts(SCALE, rest_mm)
 
     def acc(t, p, v):
         zb, zw, y = p
