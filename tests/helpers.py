@@ -1018,3 +1018,30 @@ def outside_well_set_ranges(rec: dict) -> list:
         if limit is not None and move > limit + 1e-9:
             out.append((key, st["from"], st["to"]))
     return out
+
+
+# The seat slam's independent three-mass model (tests/test_bounce_replay.py's generator, whose module
+# docstring says where each number comes from; tests/test_bounce_rebound_clicks.py rides it too)
+SLAM_K0 = 80e3  # N/m at the shock: the preset's coil (sst), the rate the replay scales
+SLAM_M_SHOCK = 529.0  # kg: the sprung mass in the stroke, the rider's body and the frame
+SLAM_K_OTHER = 9.2e3  # N/m: the stiffness beside the coil
+SLAM_M_WHEEL = 34.0  # kg: the rear wheel and half the swingarm (3.5 kg) times the leverage ratio squared (3.1^2)
+SLAM_K_TYRE = 680e3  # N/m: the spring in series under the shock, the tyre and what flexes with it
+SLAM_RIDER_SHARE = 0.7  # of the sprung mass, the rider's body on the saddle
+SLAM_RIDER_HZ, SLAM_RIDER_ZETA = 5.0, 0.475  # the seated body (Fairley and Griffin 1989)
+SLAM_W_SHOCK = 1850.0  # N: the shock's static force (the preset's: 80 N/mm at about 20 mm, 250 N preload)
+SLAM_TOP_OUT = 300e3  # N/m: the preset's top-out spring (fork.spring.top_out_rate_N_per_mm = 300 in the sst shock)
+
+
+def slam_parts(scale: float, rest_mm: float) -> tuple:
+    """The three-mass slam model's parts at a coil ``scale`` x SLAM_K0 resting at ``rest_mm``: (k, m_r,
+    m_b, m_w, k_r, c_r, g_r, g_b, x_rest, preload): the coil's rate, the rider's, body's and wheel's
+    masses, the saddle's spring and damper (the seated body's resonance and damping ratio), the
+    rider's and the body's weights on the shock, the rest stroke (m) and the coil's preload (N)."""
+    k = scale * SLAM_K0
+    m_r, m_b, m_w = SLAM_RIDER_SHARE * SLAM_M_SHOCK, (1 - SLAM_RIDER_SHARE) * SLAM_M_SHOCK, SLAM_M_WHEEL
+    k_r = m_r * (2 * math.pi * SLAM_RIDER_HZ) ** 2
+    c_r = 2 * SLAM_RIDER_ZETA * math.sqrt(k_r * m_r)
+    g_r, g_b = SLAM_RIDER_SHARE * SLAM_W_SHOCK, (1 - SLAM_RIDER_SHARE) * SLAM_W_SHOCK
+    x_rest = rest_mm / 1e3
+    return k, m_r, m_b, m_w, k_r, c_r, g_r, g_b, x_rest, SLAM_W_SHOCK - k * x_rest

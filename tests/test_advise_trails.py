@@ -24,6 +24,7 @@ from __future__ import annotations
 import shutil
 from argparse import Namespace
 
+import numpy as np
 import pytest
 
 from mtbmj.ride import advice_pool
@@ -73,16 +74,23 @@ def test_the_three_do_not_contradict_and_stay_within_the_well_set_ranges(pooled)
 @pytest.mark.slow
 def test_the_pooled_uncertainty_is_narrower_than_each_ride_s(pooled):
     """For every candidate, the uncertainty of its change (the model's error on the ride beside the
-    change's spread over the segments) pooled over the three rides is narrower than on any one of
-    them for the front's dynamic sag and both ends' packing. (The spread part alone is not: pooled
-    it is the spread of a mean over rides whose changes differ, measured wider than the calmest
-    ride's; the bottom-outs' is a count's, at least its square root, and grows with the rides' sum.)"""
+    change's spread over the segments) pooled over the three rides is narrower than the three rides'
+    mean for the front's dynamic sag and both ends' packing, and narrower than the widest. Not than
+    every one: the model's error pooled is the mean difference from the records over all segments
+    (mtbmj/ride/advice_pool.py: a bias that differs from ride to ride averages rather than narrows),
+    so a ride the model describes better than the others can be narrower alone (the front's packing
+    of the fork spring one step down: 0.096 pooled, 0.171, 0.088 and 0.107 alone, since the speed is
+    found again from the rear predicted; it had held against each by chance). (The spread part alone
+    is not: pooled it is the spread of a mean over rides whose changes differ, measured wider than
+    the calmest ride's; the bottom-outs' is a count's, at least its square root, and grows with the
+    rides' sum.)"""
     keys = ("front.dynamic_sag_percent", "front.rebound_over_compression", "rear.rebound_over_compression")
     for adj, direction, value, run in pooled.candidates:
         whole = pooled.change_uncertainty(run)
         each = [ride.change_uncertainty(part) for ride, part in zip(pooled.rides, run.parts)]
         for k in keys:
-            assert whole[k] < min(e[k] for e in each), (adj.label, direction, k, whole[k], [e[k] for e in each])
+            alone = [e[k] for e in each]
+            assert whole[k] < float(np.mean(alone)) and whole[k] < max(alone), (adj.label, direction, k, whole[k], alone)
 
 
 @pytest.mark.slow

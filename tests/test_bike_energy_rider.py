@@ -71,7 +71,8 @@ def test_the_suspension_springs_stored_energy_is_their_forces_work(ridden):
 @pytest.mark.parametrize("how", ["seated", "pedalling"])
 def test_the_balance_closes_seated_and_pedalling(how, tmp_path):
     """Seated, the saddle's one-sided push does work (left out, the balance misses by more than
-    1 %); pedalling, the driving foot's push on the shank is in the drive's term: both close."""
+    1 %); pedalling, the driving leg's muscles do the crank's work (mtbmj/bike/pedal_leg.py): both
+    close, and pedalling without the driving leg's work the balance misses."""
     path = rock_garden(tmp_path / "rocks.csv")
     if how == "seated":
         res = run_bike("sst", str(path), 5.0, duration=1.5, rider="active", seated=True)
@@ -85,4 +86,6 @@ def test_the_balance_closes_seated_and_pedalling(how, tmp_path):
         assert saddle < 0.0  # the saddle's damping takes energy
         assert abs(e["energy_change_J"] - (e["work_total_J"] - saddle)) > TOLERANCE_PCT / 100.0 * e["work_done_J"]
     else:
-        assert e["work_J"]["drive"] > 100.0  # the rider's pedalling put energy in
+        assert e["pedal_leg_J"] > 100.0  # the rider's legs put the pedalling's energy in
+        assert e["muscle_positive_J"] >= e["crank_J"] > 100.0
+        assert abs(e["energy_change_J"] - (e["work_total_J"] - e["pedal_leg_J"])) > TOLERANCE_PCT / 100.0 * e["work_done_J"]

@@ -100,6 +100,43 @@ def test_accelerations_are_mujocos_with_the_riders_callback(prepared):
     assert max(np.hypot(*f) for f in out["pins"]) > 1.0  # and the pins
 
 
+@pytest.mark.parametrize("x", [0.08, 0.21, 0.33])
+def test_accelerations_pedalling_are_mujocos(x):
+    """Pedalling standing (the driving leg's push on the pedal, its reaction on the trunk, its push
+    along the crank: mtbmj/bike/pedal_leg.py): the reference's q'' against MuJoCo's at states along
+    the stroke, moving; the driving foot pushed (its force in the reference's forces)."""
+    from mtbmj.bike.reference_rider import NAMES, ReferenceRider
+    from mtbmj.bike.run import prepare
+
+    p = prepare("sst", "climb:grade_percent=10,length_m=20,at_m=0.5", None, pedal=(70.0, 250.0), rider="active")
+    ref = ReferenceRider(p)
+    m, d = _state(p, 3, 0.01, 0.3)
+    d.qpos[p.bike.qpos_index("bike_x")] += x
+    with installed(p.callback):
+        mujoco.mj_forward(m, d)
+    got, out = ref.accelerations(0.0, ref.y0(d.qpos, d.qvel, d.act))
+    want = d.qacc[[p.bike.dof_index(n) for n in NAMES]]
+    assert np.max(np.abs(got - want)) <= 1e-6 * np.max(np.abs(want))
+    assert np.hypot(*out["leg"]["force"]) > 50.0  # the foot pushed
+    assert abs(out["leg"]["radial"] @ out["leg"]["pedal"]) > 1.0  # and along the crank
+
+
+@pytest.mark.slow
+def test_crosscheck_pedalling_standing():
+    """Pedalling standing up a 14 % climb for 1 s at 60 rpm and 250 W (the docs' command): within
+    0.1 mm of travel and 1 % of the tyre loads' peaks, the driving leg's reaction on the trunk in both."""
+    from mtbmj.bike.crosscheck import crosscheck
+
+    res = crosscheck("sst", "climb:grade_percent=14,length_m=40,at_m=0.5", None, duration=1.0, rider="active",
+                     pedal=(60.0, 250.0), overrides={"drive.chainring_teeth": 32, "drive.cog_teeth": 42})
+    by = {s.name: s for s in res.signals}
+    assert by["front_travel"].max_abs < 0.1 and by["rear_travel"].max_abs < 0.1
+    for name in ("front_tire_load", "rear_tire_load"):
+        assert by[name].max_abs < 0.01 * by[name].reference_peak
+    assert res.passed
+    assert "active rider" in res.case and "pedal" in res.case
+
+
 def test_a_run_without_the_active_rider_is_refused():
     from mtbmj.bike.reference_rider import ReferenceRider
     from mtbmj.bike.run import prepare

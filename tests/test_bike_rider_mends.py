@@ -168,36 +168,7 @@ def test_time_at_the_limits_is_reported(drop):
 
 # pedalling through the legs (issue 54, item 4)
 
-def test_the_foots_reaction_goes_through_the_leg():
-    """Pedalling, the bike's callback puts the driving foot's reaction on the ``rider`` body; the
-    active rider moves that wrench onto the shank on the same line of action: the force the same,
-    its moment about one point the same (written here: tau_O = tau_c + c x F), the trunk freed."""
-    import mujoco
-
-    from mtbmj.bike import run
-
-    p = run.prepare("sst", "climb:grade_percent=10,length_m=20,at_m=0.5", None, pedal=(70.0, 300.0),
-                    rider="active")
-    m, d, cb = p.bike.model, p.data, p.callback
-    rider, shank = m.body("rider").id, m.body("shank").id
-    found = 0
-    for x in np.linspace(0.05, 0.4, 8):  # crank angles along the stroke: where a foot drives
-        d.qpos[p.bike.qpos_index("bike_x")] = p.initial_qpos[p.bike.qpos_index("bike_x")] + x
-        mujoco.mj_forward(m, d)
-        d.xfrc_applied[:] = 0.0
-        cb.inner(m, d)  # the bike's own forces: the foot's reaction on the rider body
-        w = d.xfrc_applied[rider].copy()
-        if not w[:3].any():
-            continue
-        found += 1
-        about_origin = w[3:] + np.cross(d.xipos[rider], w[:3])
-        d.xfrc_applied[:] = 0.0
-        cb(m, d)
-        got = d.xfrc_applied[shank]
-        assert not d.xfrc_applied[rider].any()
-        assert got[:3] == pytest.approx(w[:3], rel=1e-12)
-        assert got[3:] + np.cross(d.xipos[shank], got[:3]) == pytest.approx(about_origin, rel=1e-9, abs=1e-9)
-    assert found >= 4
+# (the driving leg's statics, its reaction on the trunk and its work: tests/test_bike_pedal_leg.py)
 
 
 @pytest.mark.shared_data("sst_v2", "00089.SST", "00090.SST")

@@ -49,15 +49,9 @@ import pytest
 
 from mtbmj.identify.bounce import BounceError
 
-K0 = 80e3  # N/m at the shock: the preset's coil (sst), the rate the replay scales
-M_SHOCK = 529.0  # kg: the sprung mass in the stroke, the rider's body and the frame (module docstring)
-K_OTHER = 9.2e3  # N/m: the stiffness beside the coil (module docstring)
-M_WHEEL = 34.0  # kg: the rear wheel and half the swingarm (3.5 kg) times the leverage ratio squared (3.1^2)
-K_TYRE = 680e3  # N/m: the spring in series under the shock, the tyre and what flexes with it (module docstring)
-RIDER_SHARE = 0.7  # of the sprung mass, the rider's body on the saddle
-RIDER_HZ, RIDER_ZETA = 5.0, 0.475  # the seated body (Fairley and Griffin 1989)
-W_SHOCK = 1850.0  # N: the shock's static force (the preset's: 80 N/mm at about 20 mm, 250 N preload)
-TOP_OUT = 300e3  # N/m: the preset's top-out spring (fork.spring.top_out_rate_N_per_mm = 300 in the sst shock)
+from helpers import (SLAM_K_OTHER as K_OTHER, SLAM_K_TYRE as K_TYRE, SLAM_TOP_OUT as TOP_OUT,  # noqa: E402
+                     SLAM_W_SHOCK as W_SHOCK, slam_parts)
+
 FS = 5000.0
 STILL_M_PER_S = 1e-4  # the stroke's speed under which the friction may hold it
 
@@ -74,14 +68,8 @@ def slam(scale=0.55, c=2500.0, fc=30.0, rest_mm=14.0, lift=0.6, push=1.0, noise=
     under STILL_M_PER_S and the force it needs (the body's and wheel's forces apart, their reduced
     mass) is within ``fc``; then body and wheel move as one. The damper is ``c`` both ways, or ``c`` in
     compression and ``rebound`` in extension when given."""
-    k = scale * K0
     c_reb = c if rebound is None else rebound
-    m_r, m_b, m_w = RIDER_SHARE * M_SHOCK, (1 - RIDER_SHARE) * M_SHOCK, M_WHEEL
-    k_r = m_r * (2 * math.pi * RIDER_HZ) ** 2
-    c_r = 2 * RIDER_ZETA * math.sqrt(k_r * m_r)
-    g_r, g_b = RIDER_SHARE * W_SHOCK, (1 - RIDER_SHARE) * W_SHOCK
-    x_rest = rest_mm / 1e3
-    preload = W_SHOCK - k * x_rest
+    k, m_r, m_b, m_w, k_r, c_r, g_r, g_b, x_rest, preload = slam_parts(scale, rest_mm)
     t_lift, T_lift = quiet - 0.55, 0.35
     t_slam, T_slam = quiet - 0.2, 0.2
     zb, vb = x_rest, 0.0  # the body (so the stroke is zb - zw)
@@ -482,7 +470,9 @@ def test_shared_rebound_dampers_rise_with_clicks(shared_replays):
     """The shared slams' rebound coefficients read from their first rebounds (``bounce_rebound``, the
     spring, friction and compression of the best-determined whole-trace replay): all three read (the
     17-click slam too, which the whole-trace replay refuses) and rising with the clicks, as the
-    records' own rebounds slow; at the spring interval's upper end they rise too."""
+    records' own rebounds slow; at the spring interval's upper end they rise too. Their intervals open
+    below, the law's slope above 0, each record held out within its 2 sd, and the answer for 7 /s
+    holding the clicks where the records' own rates reach it."""
     from conftest import SHARED_DATA
 
     from mtbmj.identify.bounce_rebound import read_records
@@ -495,3 +485,19 @@ def test_shared_rebound_dampers_rise_with_clicks(shared_replays):
     upper = [e["at_spring_ci95"][1] for e in got["records"]]
     assert None not in upper and upper[0] < upper[1] < upper[2]
     assert got["line"].endswith("they rise with the clicks")
+    # the intervals (bounce_rebound.combine): open below, said so; the noise interval holds the value
+    for e in got["records"]:
+        lo, hi = e["rebound_N_s_per_m_ci95"]
+        assert lo is None and e["interval_open"][0].startswith("open below")
+        assert hi >= e["at_spring_ci95"][1]
+        n_lo, n_hi = e["rebound_noise_ci95"]
+        assert n_lo < e["rebound_N_s_per_m"] < n_hi
+    # the law in clicks, each record held out (issue 53: within its own 2 sd), and an answer for 7 /s
+    # whose range holds the records' own rates joined in clicks (model-free)
+    from mtbmj.identify.bounce_rebound import law_in_clicks
+
+    assert got["law"]["slope_ci95"][0] > 0
+    assert len(got["held_out"]) == 3 and all(r["holds"] for r in got["held_out"])
+    ans = law_in_clicks(got["records"], 7.0)["answer"]
+    assert ans["set_clicks"] is not None and ans["records_clicks"] is not None
+    assert ans["clicks_range95"][0] <= ans["records_clicks"] <= ans["clicks_range95"][1]

@@ -58,7 +58,7 @@ def test_the_made_ride_has_what_it_must(made):
 
 def test_the_speed_along_the_ride_comes_back(made, rebuilt):
     """Issue 51 item 1: every window's speed within 3 % of the made ride's mean speed over that window
-    (what a window's lag measures: its 5 s span's mean) and within 5 % of the made speed at its centre;
+    (what a window's lag measures: its span's mean) and within 5 % of the made speed at its centre;
     the profile (linear between the windows' centres) within 3 % RMS over the samples checked; the
     wheelbase it is found with (the ride's sag) within 0.5 % of the made ride's median; the distance
     axis (terrain.csv's, past its lead-in) within 3 % of the made distance at the end."""
@@ -136,12 +136,17 @@ def test_the_terrain_is_found_within_15_mm(made, reconstruction):
     assert terrain_error_mm(made, reconstruction) < 15.0
 
 
-@pytest.mark.xfail(strict=True, reason="issue 51's speed target, not reached: one window's speed 3.4 % off the "
-                                       "speed at its centre (target 3 %; 2.7 % off its own span's mean, which "
-                                       "test_the_speed_along_the_ride_comes_back holds)")
 def test_issue_51_speed_target(reconstruction):
-    for (start, found, _) in reconstruction.speed["windows"]:
-        assert found is None or found == pytest.approx(float(speed(start + 2.5)), rel=0.03)
+    """Issue 51's speed target: every window that gives a speed within 3 % of the made speed at its
+    centre (1.8 % at most when written, with the speed found again from the rear predicted: 2.5 s
+    windows; 3.4 % with the two ends' lag alone, 5 s windows, whose lag is their span's mean); and the
+    speed was found again (the first pass's rear beats the naive baselines on this ride)."""
+    sp = reconstruction.speed
+    assert "first" in sp and sp["window_s"] < sp["first"]["window_s"]
+    found = [(start, v) for start, v, _ in sp["windows"] if v is not None]
+    assert len(found) >= 0.6 * len(sp["windows"])
+    for start, v in found:
+        assert v == pytest.approx(float(speed(start + 0.5 * sp["window_s"])), rel=0.03), start
 
 
 def test_the_terrain_is_found_under_the_jumps_and_drops(made, reconstruction):
@@ -196,10 +201,11 @@ def test_a_drops_edge_beats_the_chord_on_a_ride_of_its_own(tmp_path, monkeypatch
     bridge), against the chord under every flight from where the force read zero, on a ride made here
     with its own seed, features and speed (5 +- 0.8 m/s over rocks, a 0.4 m drop, a G-out and a 0.5 m
     tabletop; nothing was tuned on it): the terrain's error after a 5 m high-pass at most 0.8 of the
-    chord's (13.9 against 18.6 mm when written). Not asserted, because it does not hold on this ride:
-    the rear predicted is worse with the edge (5.9 against 4.9 mm RMS, the delayed fork 6.9), all of
-    it in the second of the 0.4 m drop, whose step the edge puts 0.27 m deep: the quarter car's slow
-    reference rises 0.12 m before the edge, so the rear's flight off it is short."""
+    chord's (10.5 against 17.3 mm when written), and the rear predicted closer with the edge (4.4
+    against 5.2 mm RMS, the delayed fork 6.9). Before the speed was found again from the rear
+    predicted, the rear was worse with the edge (5.9 against 4.9 mm): one window's speed 10.5 % off
+    put the 0.4 m drop's step 0.27 m deep. Issue 51's speed target holds on this ride too: every
+    window found again within 3 % of the made speed at its centre (1.9 % at most when written)."""
     from types import SimpleNamespace
 
     from mtbmj.cli.telemetry import decoding
@@ -217,9 +223,14 @@ def test_a_drops_edge_beats_the_chord_on_a_ride_of_its_own(tmp_path, monkeypatch
     def error_mm():
         rec = reconstruct.reconstruct(record, str(ride["bike"]))
         e = sosfiltfilt(sos, rec.ground) - truth
-        return 1e3 * float(np.sqrt(np.mean(e[rec.valid] ** 2)))
+        return 1e3 * float(np.sqrt(np.mean(e[rec.valid] ** 2))), rec
 
-    edge = error_mm()
+    edge, rec = error_mm()
+    sp = rec.speed
+    assert "first" in sp
+    for start, v, _ in sp["windows"]:
+        assert v is None or v == pytest.approx(float(profile.at(start + 0.5 * sp["window_s"])), rel=0.03), start
     monkeypatch.setattr(reconstruct_inverse, "EDGE_FLIGHT_S", math.inf)  # the chord under every flight
-    chord = error_mm()
+    chord, by_chord = error_mm()
     assert edge <= 0.8 * chord, (edge, chord)
+    assert rec.checks()["rear_predicted_rms_mm"] < by_chord.checks()["rear_predicted_rms_mm"]

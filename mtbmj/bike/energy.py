@@ -14,7 +14,9 @@ Work (J, the power at each recorded state integrated by the trapezoid rule over 
 step):
 
 * ``muscles``: each joint's muscle torque times the joint's anatomical speed, its positive and its
-  negative work apart (``muscle_positive``, ``muscle_negative``, summed over the joints per state);
+  negative work apart (``muscle_positive``, ``muscle_negative``, summed over the joints per state),
+  pedalling the driving leg's joints among them (``pedal_leg_J``, ``pedal_leg_positive_J`` apart;
+  ``crank_J``, not a term, the foot's work on its pedal: the crank's);
 * ``tissue``: the joints' passive damping; ``stops_damping``: the end stops' damping;
 * ``pins_damping``: the pins' dampers; ``saddle``: the saddle's one-sided push (its spring and damper
   are cut off together where the sum would pull, so they are not split: its work as one);
@@ -25,7 +27,10 @@ step):
   damping as one (not split: a contact shared between patches, ``rolling.tire.share_depths``, has no
   one stored energy to write), so the tyres' springs appear as work;
 * ``drive``: every other applied wrench (``xfrc_applied``): the drive's and the brakes' forces at
-  the axles and their couples, a pedalling foot's push;
+  the axles and their couples, a pedalling foot's push on the pedal and its reaction on the trunk,
+  less the driving leg's muscles' power (``mtbmj.bike.pedal_leg``: the muscles' terms hold it), so
+  pedalling leaves here the chain's and the ground's work less the crank's (the crank's angle is the
+  bike's x rolled through the gear, the ground's push the chain's at the loaded radius);
 * ``mujoco_passive``, ``mujoco_constraint``: MuJoCo's own joint springs, damping and constraint
   forces (limits, contacts). The bike's model has none (no joint damping, no armature outside the
   settling, no limits, no contacts: the tyres are the callback's forces): both are 0, and are
@@ -61,7 +66,12 @@ def rider_terms(cb: rc.RiderCallback) -> dict:
     last = cb.last
     speed, taus, stops = last["speed"], last["taus"], last["stops"]
     out = dict.fromkeys(("muscle_positive", "muscle_negative", "tissue", "stops_damping", "pins_damping", "saddle",
-                         "pins_spring", "stops_spring"), 0.0)
+                         "pins_spring", "stops_spring", "pedal_leg", "crank"), 0.0)
+    leg = last.get("leg")
+    out["crank"] = 0.0 if leg is None else leg["crank_power"]
+    for pw in ([] if leg is None else [leg["taus"][k] * leg["rates"][k] for k in leg["taus"]]):
+        out["muscle_positive" if pw > 0.0 else "muscle_negative"] += pw  # the driving leg's (pedal_leg)
+        out["pedal_leg"] += pw
     for k in rc.JOINTS:
         w = speed[k]
         pw = taus[k] * w
@@ -96,6 +106,8 @@ def balance(p, states: np.ndarray) -> dict:
     stored = {k: np.zeros(n) for k in STORED}
     power = {k: np.zeros(n) for k in WORKS}
     unsplit = 0.0
+    leg = np.zeros(n)  # the driving leg's muscles' power (W; pedalling, mtbmj.bike.pedal_leg)
+    crank = np.zeros(n)  # the foot's power on its pedal (W), the crank's
     a = lambda name: int(m.actuator(name).id)
     a_fork, a_shock = a("fork_force"), a("shock_torque")
     tires = [(int(m.site("front_axle").id), a("front_tire_x"), a("front_tire_z")),
@@ -122,6 +134,7 @@ def balance(p, states: np.ndarray) -> dict:
                     stored[k][i] = terms[k]
                 for k in ("muscle_positive", "muscle_negative", "tissue", "stops_damping", "pins_damping", "saddle"):
                     power[k][i] = terms[k]
+                leg[i], crank[i] = terms["pedal_leg"], terms["crank"]
                 # the laws' springs (their own elastic energy: main spring, bumper, stops) and friction states
                 rot = d.xmat[frame].reshape(3, 3)
                 w = float((rot.T @ (d.site_xpos[rear_site] - d.xpos[frame]))[2]) - rear_z0  # the rear's travel
@@ -142,13 +155,15 @@ def balance(p, states: np.ndarray) -> dict:
                     w = d.xfrc_applied[body]
                     if w.any():
                         mujoco.mj_applyFT(m, d, w[:3], w[3:], d.xipos[body], body, qfrc)
-                power["drive"][i] = float(qfrc @ v) - tyre
+                # less the driving leg's muscles' power: the foot's push on the pedal and its reaction on
+                # the trunk, with the crank's and chain's forces, are the work the leg's muscles do
+                power["drive"][i] = float(qfrc @ v) - tyre - leg[i]
                 power["mujoco_passive"][i] = float(d.qfrc_passive @ v)
                 power["mujoco_constraint"][i] = float(d.qfrc_constraint @ v)
                 applied = float(d.qfrc_applied @ v) + float(d.qfrc_actuator @ v)
                 named = sum(power[k][i] for k in ("muscle_positive", "muscle_negative", "tissue", "stops_damping",
                                                   "pins_damping", "saddle", "fork", "shock"))
-                unsplit = max(unsplit, abs(applied - named - rider_spring_power(cb)))
+                unsplit = max(unsplit, abs(applied - (named - leg[i]) - rider_spring_power(cb)))
     finally:
         m.opt.enableflags = flags
     dt = np.diff(times)
@@ -169,7 +184,9 @@ def balance(p, states: np.ndarray) -> dict:
             "energy_change_J": round(total_change, 3), "work_total_J": round(total_work, 3),
             "work_done_J": round(done, 3), "residual_J": round(residual, 4),
             "error_pct": round(100.0 * abs(residual) / done, 4) if done > 0 else math.nan,
-            "unsplit_W": round(unsplit, 6), "duration_s": round(float(times[-1] - times[0]), 6)}
+            "unsplit_W": round(unsplit, 6), "duration_s": round(float(times[-1] - times[0]), 6),
+            "pedal_leg_J": round(trap(leg), 3), "pedal_leg_positive_J": round(trap(np.maximum(leg, 0.0)), 3),
+            "crank_J": round(trap(crank), 3)}
 
 
 def rider_spring_power(cb: rc.RiderCallback) -> float:

@@ -306,6 +306,7 @@ class Reference:
             pl.apply(Q, q, (foot[2], foot[3], 0, 0.0, 0.0), wx, wz)
             pl.apply_rider(Q, q, foot[2], foot[3], -wx, -wz)
         out["drive"] = (ground[0] + ground[3], ground[1] + ground[4])
+        out["foot"] = foot  # pedalling: the foot's force on its pedal and the pedal's place (frame), or None
         out["static"] = h  # gravity less the velocity terms
         return Q, out
 

@@ -37,7 +37,11 @@ fixed combination of the hinges, ``GRADIENTS``) and the torques' generalised for
 work (Q = tau d angle / dq). Shared with the engine, then, and not checked by the cross-check: the
 controller's law, the gains, the limits, the pose's geometry and the segments' parameters.
 
-Not covered: a seated rider's saddle and pedalling through the legs (refused: ``RunError``).
+Pedalling (``--pedal RPM``, standing): the driving leg's push on its pedal (``mtbmj.bike.pedal_leg``:
+the stroke's force and its push along the crank, the same code as the engine's) has its reaction on
+the trunk at the pedal's point (``ReferenceRider.pedal_leg``).
+
+Not covered: a seated rider's saddle (refused: ``RunError``).
 """
 from __future__ import annotations
 
@@ -148,11 +152,11 @@ class ReferenceRider(Reference):
         ctl = p.callback.controller
         if ctl.seated:
             raise RunError("bike reference: the seated active rider's saddle is not in the reference")
-        if self.drive.mode == "pedal":
-            raise RunError("bike reference: pedalling through the active rider's legs is not in the reference")
         body, pose = p.articulated
         self.body, self.pose0, self.controller = body, pose, ctl
         self.chain_r = RiderChain(body, pose)
+        self.leg = p.callback.leg  # pedalling: the driving leg (mtbmj.bike.pedal_leg; its law the engine's)
+        self.trunk0 = math.atan2(pose.shoulder[1] - pose.hip[1], pose.shoulder[0] - pose.hip[0])
         pl = self.planar
         spec = p.spec
         r = spec.rider
@@ -238,7 +242,26 @@ class ReferenceRider(Reference):
         for k in rc.JOINTS:
             Q += (taus[k] + stops[k] - rc.TISSUE_DAMPING * speed[k]) * GRADIENTS[k]
         out["muscles"], out["pins"] = taus, pins
+        if self.leg is not None and out["foot"] is not None:
+            self.pedal_leg(Q, q, qd, R, out)
         return Q, out
+
+    def pedal_leg(self, Q, q, qd, R, out) -> None:
+        """Pedalling: the driving leg (``mtbmj.bike.pedal_leg``) pushes the pedal with the stroke's
+        force and its own push along the crank, and their reaction acts on the trunk at the pedal's
+        point. ``Reference.forces`` put the stroke's force on the frame there and its reaction on the
+        rigid rider, whose coordinates are out: on the bike's three the pair cancels, as the push along
+        the crank's on the frame and the trunk does. What is added is the reaction on the rider's
+        coordinates: the trunk's point at the pedal moves with the hips' slides and the trunk's turn."""
+        fx, fz, px, pz = out["foot"]
+        hip = self.chain_r.hip0 + np.array([q[IRX], q[IRZ]])
+        leg = self.leg.state(tuple(hip), (qd[IRX], qd[IRZ]), self.trunk0 + q[IRP], qd[IRP], q[0], qd[0], (fx, fz))
+        arm = np.array([px, pz]) - hip
+        dr = np.zeros((2, NQR))
+        dr[0, IRX] = dr[1, IRZ] = 1.0
+        dr[:, IRP] = _J @ arm
+        Q[5:] += (R @ dr[:, 5:]).T @ (R @ -leg["force"])
+        out["leg"] = leg
 
     def accelerations(self, t, y):
         q, qd = y[:NQR], y[NQR:2 * NQR]

@@ -15,7 +15,9 @@ stiffness, so they put nothing on the trunk) and adds, every evaluation, into ``
   does (``power_factors``; continuous in the joints' speeds, so a joint at rest keeps its torque);
 * the passive tissue: a little damping at each joint and, past the joint's range of motion
   (``mtbmj.bike.rider_body.RANGES_DEG``), a stiff end stop (not a muscle: not in the limits);
-* seated: the saddle, a one-sided spring-damper under the ischial point (``SADDLE_*``).
+* seated: the saddle, a one-sided spring-damper under the ischial point (``SADDLE_*``);
+* pedalling: the driving leg (``mtbmj.bike.pedal_leg``), whose push on the pedal the bike's
+  callback puts on the trunk; its push along the crank added on the frame and the trunk.
 
 The controller (``Controller.targets``) sets where the hips are and how the trunk leans, in the
 frame's coordinates, and the joints' targets follow by the pose's inverse kinematics
@@ -92,6 +94,7 @@ import mujoco
 import numpy as np
 
 from mtbmj.bike import rider_body as rb
+from mtbmj.bike.pedal_leg import PedalLeg, pedalling_hip
 from mtbmj.controllers.stops import DAMPING_RAMP
 from mtbmj.errors import ConfigError
 
@@ -434,7 +437,7 @@ class RiderCallback:
         self.aim = {k: (lo + margin, hi - margin) for k, (lo, hi) in self.ranges.items()}
         self.saddle_peak = 0.0
         self.last = {}
-        self.pedalling = getattr(getattr(inner, "drive", None), "mode", None) == "pedal"
+        self.leg = None  # pedalling: the driving leg (mtbmj.bike.pedal_leg.PedalLeg, set by ``activate``)
         self.gains = dict(GAINS)
         self.strength = dict(STRENGTH_N_M)
         self.clear_peaks()
@@ -447,6 +450,8 @@ class RiderCallback:
         self.at_limit_s = dict.fromkeys(JOINTS, 0.0)  # s with the torque held at the limit
         self.peak_power = self.saddle_peak = 0.0
         self._t_seen = -math.inf
+        if getattr(self, "leg", None) is not None:
+            self.leg.clear_peaks()
 
     # the bike callback's face (mtbmj.bike.run reads these)
     @property
@@ -495,8 +500,6 @@ class RiderCallback:
             return
         d.qfrc_applied[:] = 0.0
         self.inner(m, d)
-        if self.pedalling:
-            self._foot_through_leg(d)
         Q = self._q
         Q[:] = 0.0
         qvel = d.qvel
@@ -543,24 +546,15 @@ class RiderCallback:
         if ctl.seated and ctl.saddle is not None:
             saddle = self._saddle(m, d, Q)
         d.qfrc_applied[:] += Q
+        # pedalling: the driving leg's torques that push the pedal (its reaction is on the trunk, where
+        # the bike's callback puts it: mtbmj.bike.pedal_leg)
+        leg = None if self.leg is None else self.leg.engine(d)
+        if leg is not None:
+            self.leg.apply(d, leg)
+            self.leg.note(leg, taus, STRENGTH_ONE_SIDE_N_M, d.time)
         # what the energy balance (mtbmj.bike.energy) reads: each force's parts at this evaluation
         self.last = {"taus": taus, "want": want, "now": now, "applied": applied, "speed": speed, "stops": stops,
-                     "pins": pins, "saddle": saddle}
-
-    def _foot_through_leg(self, d) -> None:
-        """Pedalling: the driving foot's push on its pedal has its reaction on the rider (the bike's
-        callback puts it on the ``rider`` body, the rigid rider's whole body). Here the same wrench,
-        on the same line of action, acts on the shank instead (the foot rigid on it): the leg's
-        muscles carry it to the hips, so the pedal stroke moves the body through the legs."""
-        shank = d.xfrc_applied[self.b_shank]
-        shank[:] = 0.0  # nothing else acts there
-        w = d.xfrc_applied[self.b_rider]
-        if not w.any():
-            return
-        f = w[:3].copy()
-        shank[:3] = f
-        shank[3:] = w[3:] + np.cross(d.xipos[self.b_rider] - d.xipos[self.b_shank], f)  # the same line of action
-        w[:] = 0.0
+                     "pins": pins, "saddle": saddle, "leg": leg}
 
     def _saddle(self, m, d, Q) -> tuple[float, float]:
         """The saddle's push on the sitting bones (one-sided), and its reaction on the frame:
@@ -590,7 +584,8 @@ class RiderCallback:
         return {"kind": "active", "height_m": self.body.height, "joints": joints,
                 "within_limits": all(v["peak_of_limit"] <= 1.0 + 1e-9 for v in joints.values()),
                 "peak_power_W": round(self.peak_power, 1), "power_limit_W": POWER_W,
-                "drops_seen_m": [round(e, 3) for e in self.controller.edges]}
+                "drops_seen_m": [round(e, 3) for e in self.controller.edges],
+                **({} if self.leg is None else {"pedal_leg": self.leg.report()})}
 
 
 def saddle_point(spec) -> tuple[float, float] | None:
@@ -600,10 +595,11 @@ def saddle_point(spec) -> tuple[float, float] | None:
     return None if c is None else (c[0] - SEATED_FROM_SADDLE_M[0], c[1] - SEATED_FROM_SADDLE_M[1])
 
 
-def stance(spec, body: rb.Body, seated: bool = False) -> tuple[tuple, float]:
+def stance(spec, body: rb.Body, seated: bool = False, pedalling: bool = False) -> tuple[tuple, float]:
     """(hips m, trunk rad) of the standing attack position (ankles ``ATTACK_ANKLE_DEG`` dorsiflexed,
     knees ``ATTACK_KNEE_DEG`` bent: the hips behind the pedals) or seated (the sitting bones on the saddle), the shoulder
-    ``ARM_REACH`` of the arm's length from the grip."""
+    ``ARM_REACH`` of the arm's length from the grip. Standing and ``pedalling``, the hips as low as
+    the driving leg needs to reach the stroke's bottom (``pedal_leg.pedalling_hip``)."""
     r = spec.rider
     grip = (r.arm_x, r.arm_z)
     if seated:
@@ -615,6 +611,8 @@ def stance(spec, body: rb.Body, seated: bool = False) -> tuple[tuple, float]:
         knee = (ankle[0] + body.shank.length * math.sin(lean), ankle[1] + body.shank.length * math.cos(lean))
         thigh = -math.pi / 2.0 - lean + bend  # the thigh's direction, hip to knee
         hip = (knee[0] - body.thigh.length * math.cos(thigh), knee[1] - body.thigh.length * math.sin(thigh))
+        if pedalling:
+            hip = pedalling_hip(body, hip, (r.leg_x, r.leg_z))
     reach = ARM_REACH * (body.upper_arm.length + body.forearm.length)
     return hip, rb.trunk_for_reach(body, hip, grip, reach)
 
@@ -640,7 +638,8 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     r = spec.rider
     body = rb.body(r.mass + r.on_bike_mass, r.height)
     pedal, grip = (r.leg_x, r.leg_z), (r.arm_x, r.arm_z)
-    hip, trunk = stance(spec, body, seated)
+    pedalling = getattr(getattr(p.callback, "drive", None), "mode", None) == "pedal"
+    hip, trunk = stance(spec, body, seated, pedalling)
     pose0 = rb.pose(body, pedal, grip, hip, trunk)
     limp = dataclasses.replace(spec, rider=dataclasses.replace(r, leg_stiffness=0.0, leg_damping=0.0,
                                                                 arm_stiffness=0.0, arm_damping=0.0))
@@ -655,6 +654,9 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     refresh = p.callback.refresh
     inner = make_inner(b)
     rc = RiderCallback(b.model, inner, body, pose0, ctl)
+    if pedalling:
+        ring, cog = spec.drive["chain_m"]
+        rc.leg = PedalLeg(body, grip, cog / (ring * rear.radius), STRENGTH_ONE_SIDE_N_M).bind(b.model)
     data = mujoco.MjData(b.model)
     names = ("bike_x", "bike_z", "pitch", "fork", "swingarm")
     for name in names:

@@ -525,9 +525,16 @@ class BikeResult(RunOutput):
         work = (f"; muscle work {e['muscle_work_J']:.1f} J ({e['muscle_positive_J']:.1f} positive, "
                 f"{e['muscle_negative_J']:.1f} negative), energy balance error {e['error_pct']:.3f} % of "
                 f"{e['work_done_J']:.0f} J of work done") if e else ""
+        leg = r.get("pedal_leg")
+        if leg:  # pedalling: the driving leg (mtbmj.bike.pedal_leg), its side's torques against one side's strength
+            top = max(leg["side_peak_of_limit"], key=leg["side_peak_of_limit"].get)
+            reach = f", its pedal out of its reach {leg['out_of_reach_s']:.2f} s" if leg["out_of_reach_s"] > 0 else ""
+            leg = (f"; the driving leg {'within' if leg['within_limits'] else 'PAST'} one side's strength (largest "
+                   f"{100 * leg['side_peak_of_limit'][top]:.0f} % of the {top}'s), peak power "
+                   f"{leg['peak_power_W']:.0f} W{reach}")
         return (f"; active rider: joint torques {'within' if r['within_limits'] else 'PAST'} their limits (largest "
                 f"{100 * r['joints'][worst]['peak_of_limit']:.0f} % of the {worst}'s{clamp}), peak power "
-                f"{r['peak_power_W']:.0f} of {r['power_limit_W']:.0f} W{work}")
+                f"{r['peak_power_W']:.0f} of {r['power_limit_W']:.0f} W{leg or ''}{work}")
 
     def _comfort(self) -> str:
         """Comfort and grip over the feature's window (the whole run's where it has none)."""

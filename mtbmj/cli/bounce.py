@@ -4,7 +4,7 @@ rebound click as a law, and the ring-down it predicts at other clicks (``mtbmj.i
 this module parses, calls it and prints what it found).
 
 Writes fit.json, fit.png and, per predicted click, ringdown_<K>_clicks.csv (with --replay also
-replay_<file>.csv per record and replay.png), atomically. The ``fit``
+replay_<file>.csv per record, replay.png and rebound.png), atomically. The ``fit``
 command's parser takes it with ``add_bounce_parser(p)`` (``p``: the ``fit`` parser): the kind
 ``bounce`` is then parsed by this module's own parser.
 """
@@ -60,6 +60,9 @@ def bounce_parser(prog: str = "mtbmj fit bounce"):
                    help="with --bike: replay each slam through the MuJoCo bike with the seated rider compliant "
                         "(--rider-hz, default 5 Hz), pushed as the slam pushed, and fit the shock's spring scale, "
                         "damper and friction to the record (replay_<file>.csv, replay.png; one to three minutes per record)")
+    p.add_argument("--rebound-target-per-s", type=float, metavar="RATE",
+                   help="with --replay: the first rebound's rate to aim for (its mean speed from 75 %% to 25 %% of the "
+                        "slam's height per mm of that height, 1/s): the answer in clicks from the rebound dampers")
     add_out(p, "out/fit")
     p.set_defaults(func=cmd_fit_bounce, command="fit", kind="bounce")
     return p
@@ -90,8 +93,13 @@ def cmd_fit_bounce(args) -> int:
     predict = _numbers(args.predict_clicks, "--predict-clicks") if args.predict_clicks else []
     if args.hit_mm is not None and not (math.isfinite(args.hit_mm) and args.hit_mm > 0):
         raise MtbmjError(f"--hit-mm {args.hit_mm:g}: the hit must be a positive number of millimetres")
+    target = args.rebound_target_per_s
+    if target is not None and not (math.isfinite(target) and target > 0):
+        raise MtbmjError(f"--rebound-target-per-s {target:g}: the target rate must be a positive number (1/s)")
+    if target is not None and not args.replay:
+        raise MtbmjError("--rebound-target-per-s: the answer from the rebound dampers needs --replay (and --bike)")
     result = fit_bounce(args.records, clicks, predict, bike=args.bike, hit_mm=args.hit_mm, rider_hz=args.rider_hz,
-                        replay=args.replay)
+                        replay=args.replay, rebound_target_per_s=target)
     written = result.write(args.out)
     for line in result.lines():
         print(line)

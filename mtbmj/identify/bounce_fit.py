@@ -167,7 +167,8 @@ def _damper_law(points) -> dict | None:
             "slope_N_s_per_m_per_click_ci95": interval95(float(beta[1]), math.sqrt(cov[1, 1]))}
 
 
-def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None, replay=False) -> BounceFit:
+def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None, replay=False,
+               rebound_target_per_s=None) -> BounceFit:
     """The seat slams in the SST records ``paths`` (one number of rebound ``clicks`` each) fitted:
     everything ``mtbmj fit bounce`` writes and prints, as a :class:`BounceFit`; ``predict``: clicks to
     predict the ring-down at. ``bike`` (a preset, a file or a ``BikeSpec``): each ring-down also read
@@ -177,7 +178,9 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
     of rigid (``bounce_bike.SeatedBike``), and each reading gives the rider's share of the mode.
     ``replay``: with ``bike``, each slam also replayed through the MuJoCo bike with the compliant seated
     rider (at ``rider_hz``, default 5 Hz) and its shock's spring, damper and friction fitted
-    (``mtbmj.identify.bounce_replay``): fit.json's "replay", replay_<file>.csv and replay.png."""
+    (``mtbmj.identify.bounce_replay``): fit.json's "replay", replay_<file>.csv and replay.png; with it
+    "rebound_dampers" (``bounce_rebound``: each record's rebound coefficient with its interval, the law
+    in clicks, each record held out, and the answer for ``rebound_target_per_s``, 1/s per mm of height)."""
     from mtbmj.identify import bounce
 
     paths = [Path(p) for p in paths]
@@ -187,6 +190,8 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
     seated = None
     if replay and bike is None:
         raise MtbmjError("--replay: the slam is replayed through a bike; give --bike too")
+    if rebound_target_per_s is not None and not replay:
+        raise MtbmjError("--rebound-target-per-s: the answer from the rebound dampers needs --replay (and --bike)")
     if rider_hz is not None and bike is None:
         raise MtbmjError("--rider-hz: the rider's resonance is read through a bike; give --bike too")
     if bike is not None:
@@ -323,14 +328,21 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
         out["replay_check"] = done["check"]
         from mtbmj.identify import bounce_rebound
 
-        out["rebound_dampers"] = bounce_rebound.read_records(records, clicks, done["summary"], bike, rider_hz)
+        out["rebound_dampers"] = bounce_rebound.read_records(records, clicks, done["summary"], bike, rider_hz,
+                                                             rebound_target_per_s)
         if out["rebound_dampers"] is not None:
             done["lines"].append(out["rebound_dampers"]["line"])
+            done["lines"] += out["rebound_dampers"]["lines"]
         out["replay_fork"] = fork_refusals(records, out["records"])
         done["lines"] += [f"fork not replayed: {e['refused']}" for e in out["replay_fork"]]
         csvs.update(done["csv"])
         if done["replays"]:
             extra["replay.png"] = bounce_replay.figure_png(done["replays"])
+        read = out["rebound_dampers"]["records"] if out["rebound_dampers"] is not None else []
+        if any("rebound_N_s_per_m" in e for e in read):
+            from mtbmj.identify.bounce_rebound_clicks import figure_png
+
+            extra["rebound.png"] = figure_png(out["rebound_dampers"])
         replay_lines = done["lines"]
     return BounceFit(out, records, fits, laws, list(clicks), csvs, predictions, answers, extra, replay_lines)
 

@@ -16,11 +16,17 @@ changes none of them), the push fitted on the record up to its peak (``bounce_re
 then the rebound coefficient solved (``brentq``) so that the replay's first rebound, read as the
 record's (``bounce.first_rebound``), has the record's middle speed per millimetre of the peak's
 height above rest (1/s: for a linear end independent of how high the slam went, so the replay's
-peak need not match the record's). Its spread: the same solve with the spring at the ends of the
-interval given (``spring_ci95``), which is what moves it most (0.49 x gives 208, 2591, 5368 N s/m
-on the shared slams, 0.6 x 961, 3956, 7065). Refused for the record (a reason, no value) when no
-coefficient within ``BOUNDS`` gives the record's speed: the bike with the spring given rebounds
-slower than the record even undamped, or faster even at the largest coefficient.
+peak need not match the record's). Its 95 % interval (``combine``): the record's own noise (``rate_spread``:
+the record less its 10 ms moving average resampled in blocks onto the average, the rate read again;
+its 95 % ends solved through on the same replay, ``rebound_noise_ci95``) and the spring's interval
+(the same solve with the spring at the ends of the interval given, ``spring_ci95``, which is what
+moves it most: 0.49 x gives 208, 2591, 5368 N s/m on the shared slams, 0.6 x 961, 3956, 7065), their
+half-widths added in quadrature on each side; a side whose end has no coefficient is open (None),
+said in ``interval_open`` (on the shared slams every interval is open below: at the spring's lower end
+the bike rebounds slower than the records even undamped). Refused for the record (a reason, no
+value) when no coefficient within ``BOUNDS`` gives the record's speed: the bike with the spring given
+rebounds slower than the record even undamped, or faster even at the largest coefficient. The law in
+clicks, each record held out and the answer in clicks: ``law_in_clicks`` (``bounce_rebound_clicks``).
 """
 from __future__ import annotations
 
@@ -31,6 +37,9 @@ from mtbmj.identify.bounce_replay import NAMES, Slam, fit_push
 
 BOUNDS = (50.0, 30000.0)  # N s/m: the rebound coefficient sought within these (bounce_replay's damper bounds)
 XTOL = 1.0  # N s/m
+NOISE_S = 0.010  # the record's noise: what is left after a moving average over this (first_rebound's smoothing)
+DRAWS = 200  # the record's noise resampled this many times (rate_spread)
+Z95 = 1.959963984540054
 DAMPER = NAMES.index("damper_N_s_per_m")
 
 
@@ -48,63 +57,182 @@ def _per_mm(rb: dict) -> float:
     return float("nan") if v is None else float(v / rb["peak_above_rest_mm"])
 
 
-def solve(sl: Slam, record: dict, spring_scale: float, friction_N: float, compression: float) -> float:
-    """The rebound coefficient (N s/m) whose replay has the record's first rebound (``record``:
-    ``first_rebound`` of the record) per mm of height; BounceError when none within BOUNDS does."""
-    from scipy.optimize import brentq
+class _Curve:
+    """The replay's first-rebound rate per mm of height (1/s) against the rebound coefficient for one
+    slam, the spring, friction, compression and push held: every run kept, so solves for several
+    targets share them (a run is about 0.1 s; the push's fit, 25-30 s, is done once)."""
 
-    target = _per_mm(record)
-    if not np.isfinite(target):
-        raise BounceError(f"{sl.name}: the record's first rebound has no middle (it does not pass from 75 % to "
-                          f"25 % of the slam's height): no rebound damper is read from it")
+    def __init__(self, sl: Slam, x: np.ndarray, extra: dict):
+        self.sl, self.x, self.extra, self.seen = sl, x, extra, {}
+
+    def __call__(self, c: float) -> float:
+        c = float(c)
+        if c not in self.seen:
+            xx = self.x.copy()
+            xx[DAMPER] = c
+            self.seen[c] = _per_mm(replay_rebound(self.sl, xx, self.extra))
+        return self.seen[c]
+
+    def points(self) -> list:
+        """[(coefficient, rate)] seen, by coefficient, the finite ones."""
+        return [(c, v) for c, v in sorted(self.seen.items()) if np.isfinite(v)]
+
+
+def curve(sl: Slam, spring_scale: float, friction_N: float, compression: float) -> _Curve:
+    """The slam's rate-against-coefficient curve at the spring, friction and compression given, the
+    push fitted on the record up to its peak (``bounce_replay.fit_push``)."""
     x = sl.x0.copy()
     x[NAMES.index("spring_scale")], x[NAMES.index("friction_N")] = spring_scale, friction_N
     extra = {"compression_N_s_per_m": float(compression)}
     u = (x - sl.x0) / sl.base
     fit_push(sl, u, extra=extra)  # the push on the compression, the shock held
-    x = sl.x0 + u * sl.base
+    return _Curve(sl, sl.x0 + u * sl.base, extra)
 
-    def gap(c):
-        xx = x.copy()
-        xx[DAMPER] = c
-        return _per_mm(replay_rebound(sl, xx, extra)) - target
 
-    lo, hi = gap(BOUNDS[0]), gap(BOUNDS[1])
+def solve_on(cv: _Curve, target: float, spring_scale: float) -> float:
+    """The coefficient whose replay's rate is ``target`` (1/s) on the curve ``cv``; BounceError when none
+    within BOUNDS gives it."""
+    from scipy.optimize import brentq
+
+    lo, hi = cv(BOUNDS[0]) - target, cv(BOUNDS[1]) - target
     if not (np.isfinite(lo) and np.isfinite(hi)) or lo < 0.0 or hi > 0.0:
         side = "slower than the record even undamped" if lo < 0.0 else "faster than the record at the largest"
-        raise BounceError(f"{sl.name}: no rebound coefficient within {BOUNDS[0]:g}-{BOUNDS[1]:g} N s/m gives the "
+        raise BounceError(f"{cv.sl.name}: no rebound coefficient within {BOUNDS[0]:g}-{BOUNDS[1]:g} N s/m gives the "
                           f"record's first rebound ({target:.2f} /s): with the spring at {spring_scale:.2f} x the bike "
                           f"rebounds {side} coefficient")
-    return float(brentq(gap, *BOUNDS, xtol=XTOL))
+    return float(brentq(lambda c: cv(c) - target, *BOUNDS, xtol=XTOL))
+
+
+def solve(sl: Slam, record: dict, spring_scale: float, friction_N: float, compression: float) -> float:
+    """The rebound coefficient (N s/m) whose replay has the record's first rebound (``record``:
+    ``first_rebound`` of the record) per mm of height; BounceError when none within BOUNDS does."""
+    target = _per_mm(record)
+    if not np.isfinite(target):
+        raise BounceError(f"{sl.name}: the record's first rebound has no middle (it does not pass from 75 % to "
+                          f"25 % of the slam's height): no rebound damper is read from it")
+    return solve_on(curve(sl, spring_scale, friction_N, compression), target, spring_scale)
+
+
+def _moving_average(x: np.ndarray, n: int) -> np.ndarray:
+    if n <= 1:
+        return x.copy()
+    pad = np.concatenate((np.full(n // 2, x[0]), x, np.full(n - 1 - n // 2, x[-1])))
+    return np.convolve(pad, np.ones(n) / n, mode="valid")
+
+
+def rate_spread(time_s, x_mm, peak: int, rest_mm: float = 0.0, draws: int = DRAWS, seed: int = 0) -> dict:
+    """The record's own noise carried into its first-rebound rate (1/s per mm of height, ``first_rebound``):
+    the record split into its ``NOISE_S`` moving average and what is left (its noise: sensor counts,
+    the frame's buzz), the left-over resampled in blocks of ``NOISE_S`` (its correlation kept) onto the
+    average ``draws`` times (seeded), the rate read again each time. {"rate_per_s", "sd_per_s",
+    "noise_mm" (the left-over's RMS), "draws" (how many read)}; sd None when fewer than half read."""
+    t = np.asarray(time_s, float)
+    x = np.asarray(x_mm, float)
+    dt = float(t[1] - t[0])
+    n = max(int(round(NOISE_S / dt)), 1)
+    smooth = _moving_average(x, n)
+    left = x - smooth
+    rng = np.random.default_rng(seed)
+    starts = np.arange(0, max(left.size - n, 1))
+    rates = []
+    for _ in range(draws):
+        idx = np.concatenate([s + np.arange(n) for s in rng.choice(starts, size=left.size // n + 1)])[:left.size]
+        try:
+            r = _per_mm(first_rebound(t, smooth + left[np.minimum(idx, left.size - 1)], peak, rest_mm))
+        except BounceError:
+            continue
+        if np.isfinite(r):
+            rates.append(r)
+    own = _per_mm(first_rebound(t, x, peak, rest_mm))
+    sd = float(np.std(rates, ddof=1)) if len(rates) >= max(draws // 2, 2) else None
+    return {"rate_per_s": own, "sd_per_s": sd, "noise_mm": float(np.sqrt(np.mean(left * left))), "draws": len(rates)}
+
+
+def _ends(cv: _Curve, target: float, sd, spring_scale: float) -> list:
+    """The coefficients at the rate's own 95 % ends (target -/+ Z95 sd; a faster rebound needs less
+    damping, so the slower end gives the larger coefficient), None where none within BOUNDS does."""
+    if sd is None:
+        return [None, None]
+    out = []
+    for rate in (target + Z95 * sd, target - Z95 * sd):
+        try:
+            out.append(solve_on(cv, rate, spring_scale))
+        except BounceError:
+            out.append(None)
+    return out
+
+
+def combine(c: float, noise, spring) -> tuple[list, list]:
+    """The damper's 95 % interval: the half-widths from the record's noise and from the spring's interval
+    added in quadrature on each side; a side whose end is missing (None: no coefficient within BOUNDS
+    gives it) is open, with why. Returns ([low or None, high or None], [reasons for open sides])."""
+    ends, why = [], []
+    for side, k in (("low", 0), ("high", 1)):
+        n = None if noise is None else noise[k]
+        sp = None if spring is None else spring[k]
+        if n is None or (spring is not None and sp is None):
+            ends.append(None)
+            which = "the spring interval's " + ("lower" if k == 0 else "upper") + " end" if n is not None else \
+                "the record's rate at its " + ("fast" if k == 0 else "slow") + " 95 % end"
+            why.append(f"open {'below' if k == 0 else 'above'}: no coefficient within {BOUNDS[0]:g}-{BOUNDS[1]:g} "
+                       f"N s/m at {which}")
+            continue
+        half = float(np.hypot(c - n, 0.0 if sp is None else c - sp))
+        ends.append(max(c - half, 0.0) if k == 0 else c + half)
+    return ends, why
 
 
 def rebound_dampers(slams, clicks, spring_scale: float, friction_N: float, compression: float,
-                    spring_ci95=None) -> list[dict]:
+                    spring_ci95=None, draws: int = DRAWS) -> list[dict]:
     """Per slam (``bounce_replay.prepare_slam``; each record's ``first_rebound`` read from its own
-    window) its rebound coefficient, or ``"refused"`` with the reason; with ``spring_ci95`` also the
-    coefficients at the spring's interval ends (``at_spring_ci95``, either None where refused)."""
+    window) its rebound coefficient with its 95 % interval, or ``"refused"`` with the reason. The
+    interval: the record's noise (``rate_spread``) solved through at the spring given, and with
+    ``spring_ci95`` the coefficients at the spring's interval ends (``at_spring_ci95``, either None
+    where refused), combined by ``combine`` (an open side said in ``"interval_open"``). ``rate_curve``:
+    the replay's rate against the coefficient at the spring given (``rate_curve_at_spring_ci95`` at
+    its ends), for the law in clicks (``bounce_rebound_clicks``)."""
     out = []
     for sl, k in zip(slams, clicks):
         peak = int(np.argmin(np.abs(sl.tt)))
         record = first_rebound(sl.tt, sl.rec, peak, 0.0)
         per_mm = _per_mm(record)
+        spread = rate_spread(sl.tt, sl.rec, peak, 0.0, draws) if np.isfinite(per_mm) else None
+        sd = None if spread is None else spread["sd_per_s"]
         entry = {"file": sl.name, "clicks": k, "record_mid_rebound_per_s": per_mm if np.isfinite(per_mm) else None,
+                 "record_rate_sd_per_s": sd, "record_noise_mm": None if spread is None else spread["noise_mm"],
                  "spring_scale": float(spring_scale), "friction_N": float(friction_N),
                  "compression_N_s_per_m": float(compression)}
+        if not np.isfinite(per_mm):
+            entry["refused"] = (f"{sl.name}: the record's first rebound has no middle (it does not pass from 75 % to "
+                                f"25 % of the slam's height): no rebound damper is read from it")
+            out.append(entry)
+            continue
         try:
-            entry["rebound_N_s_per_m"] = solve(sl, record, spring_scale, friction_N, compression)
+            cv = curve(sl, spring_scale, friction_N, compression)
+            c = solve_on(cv, per_mm, spring_scale)
         except BounceError as e:
             entry["refused"] = str(e)
             out.append(entry)
             continue
+        entry["rebound_N_s_per_m"] = c
+        noise = _ends(cv, per_mm, sd, spring_scale)
+        entry["rebound_noise_ci95"] = noise
+        entry["rate_curve"] = [list(p) for p in cv.points()]
+        spring = None
         if spring_ci95 is not None:
-            ends = []
+            spring, curves = [], []
             for s in spring_ci95:
+                s = max(float(s), 0.2)
                 try:
-                    ends.append(solve(sl, record, max(float(s), 0.2), friction_N, compression))
+                    cs = curve(sl, s, friction_N, compression)
+                    spring.append(solve_on(cs, per_mm, s))
+                    curves.append([list(p) for p in cs.points()])
                 except BounceError:
-                    ends.append(None)
-            entry["at_spring_ci95"] = ends
+                    spring.append(None)
+                    curves.append(None)
+            entry["at_spring_ci95"] = spring
+            entry["rate_curve_at_spring_ci95"] = curves
+        entry["rebound_N_s_per_m_ci95"], entry["interval_open"] = combine(c, noise, spring)
         out.append(entry)
     return out
 
@@ -118,11 +246,14 @@ def rises(entries) -> bool | None:
                if b["clicks"] > a["clicks"])
 
 
-def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | None = None) -> dict | None:
+def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | None = None,
+                 target_per_s: float | None = None) -> dict | None:
     """``fit bounce --replay``'s ``"rebound_dampers"``: every record's rebound coefficient, the spring
     (with its interval), friction and compression given by the best-determined whole-trace replay
     (``replayed``: ``bounce_replay.replay_records``' summary; the one whose spring interval is the
-    narrowest; its one damper taken as the compression). None when no record was replayed."""
+    narrowest; its one damper taken as the compression), each with its interval; the law in clicks, each
+    record held out and the answer for ``target_per_s`` (``bounce_rebound_clicks``; "lines" printed).
+    None when no record was replayed."""
     from mtbmj.identify.bounce_replay import RIDER_HZ, SeatedReplay, prepare_slam
 
     done = [e for e in replayed if "refused" not in e]
@@ -144,13 +275,46 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
     entries.sort(key=lambda e: e["clicks"])
     up = rises(entries)
     read = [e for e in entries if "rebound_N_s_per_m" in e]
-    said = ", ".join(f"{e['rebound_N_s_per_m']:.0f}" for e in read)
+
+    def said(e):
+        lo, hi = e.get("rebound_N_s_per_m_ci95", [None, None])
+        return (f"{e['rebound_N_s_per_m']:.0f} [{'open' if lo is None else format(lo, '.0f')}, "
+                f"{'open' if hi is None else format(hi, '.0f')}]")
+
     at = ", ".join(format(e["clicks"], "g") for e in read)
     line = (f"rebound dampers from the first rebounds (spring {best['spring_scale']:.2f} x, friction "
             f"{best['friction_N']:.0f} N, compression {best['damper_N_s_per_m']:.0f} N s/m from {best['file']}'s "
-            f"replay): {said or 'none'} N s/m at {at or 'no'} clicks"
+            f"replay): {', '.join(said(e) for e in read) or 'none'} N s/m (95 %: the record's noise and the spring's "
+            f"interval) at {at or 'no'} clicks"
             + ("" if up is None else ": they rise with the clicks" if up else ": they do not rise with the clicks"))
-    return {"from": best["file"], "records": entries, "rises": up, "line": line}
+    out = {"from": best["file"], "records": entries, "rises": up, "line": line}
+    out.update(law_in_clicks(entries, target_per_s))
+    return out
 
 
-__all__ = ["BOUNDS", "read_records", "rebound_dampers", "replay_rebound", "rises", "solve"]
+def law_in_clicks(entries, target_per_s: float | None = None) -> dict:
+    """The law in clicks, each record held out and the answer (``bounce_rebound_clicks``), with the
+    lines they print ("lines")."""
+    from mtbmj.identify import bounce_rebound_clicks as rc
+
+    lines = []
+    try:
+        law = rc.fit_law(entries)
+        lines.append(f"rebound law: {law['c0_N_s_per_m']:.0f} + {law['slope_N_s_per_m_per_click']:.1f} x clicks N s/m "
+                     f"(slope 95 % [{law['slope_ci95'][0]:.1f}, {law['slope_ci95'][1]:.1f}])"
+                     + ("" if law["records_rates_fall"] else "; flagged: the records' own first rebounds do not slow "
+                        "with the clicks"))
+    except BounceError as e:
+        law = {"refused": str(e)}
+        lines.append(f"rebound law refused: {e}")
+    rows = rc.held_out(entries) if "refused" not in law else []
+    if rc.held_out_line(rows):
+        lines.append(rc.held_out_line(rows))
+    ans = rc.answer(entries, target_per_s) if "refused" not in law else {
+        "target_per_s": target_per_s, "set_clicks": None, "note": law["refused"]}
+    lines.append(rc.answer_line(ans))
+    return {"law": law, "held_out": rows, "answer": ans, "lines": lines}
+
+
+__all__ = ["BOUNDS", "combine", "curve", "law_in_clicks", "rate_spread", "read_records", "rebound_dampers",
+           "replay_rebound", "rises", "solve", "solve_on"]

@@ -13,7 +13,12 @@ the measured range) ends the search there.
 
 **Stop** (:func:`search`, :func:`search_many` for all of them at once): each step is kept only where
 it lowers the penalty by ``MIN_GAIN`` (the verdict's own threshold) or more below the best so far
-without a crash, and the search goes on from it; at most ``MAX_STEPS`` steps. ``mtbmj advise`` runs
+without a crash, and the search goes on from it; at most ``MAX_STEPS`` steps. A step where the model
+crashed is passed over once (``CRASH_PATIENCE``): a crash on the reconstructed terrain can hang on a
+hair (the made soft-fork ride loops out at 28.5 s of 30 at 5.87 N/mm and rides home at 5.0, 6.5, 8
+and 11), so the search asks the step after it, keeps going if that one rides home and is better than
+the best before the crash, and stops otherwise; a crash passed over on the way to the answer is
+listed with it (``passed``), and the answer itself never crashed. ``mtbmj advise`` runs
 every search at once as its runs end (:func:`search_flow`): each search asks for its next step as soon
 as its own last one is judged, the pool's processes kept busy with the steps every search needs (the
 search fewest steps along first), and a process that would stand idle takes the step after one that
@@ -30,6 +35,7 @@ from mtbmj.ride.advice_rules import MIN_GAIN, SOLD_LB_PER_IN, Adjuster, bounded_
 
 MAX_STEPS = 8  # steps beyond the one-step candidate, at most
 LOOKAHEAD = 2  # steps of one search asked in one round, at most
+CRASH_PATIENCE = 1  # a step where the model crashes is passed over (once in a row) if the next one is better
 ADDITIVE_UNITS = ("clicks", "spacers")
 
 
@@ -62,7 +68,8 @@ def search_many(starts, run_values, allowed_value, per_round: int = LOOKAHEAD) -
     pool runs at once) leaves room for them all, and ``run_values([(i, value), ...])`` simulates them
     all together (runs in order; a refused one a ``ConfigError``); ``allowed_value(i, value)`` tells
     whether search ``i``'s part allows a value. Returns each search's kept steps ``[(value, run)]``."""
-    state = [{"value": first, "best": run, "kept": [], "steps": 0, "done": False} for _, first, run in starts]
+    state = [{"value": first, "best": run, "kept": [], "steps": 0, "done": False, "over": 0, "passed": []}
+             for _, first, run in starts]
     while True:
         asks = []
         for s in state:
@@ -91,15 +98,31 @@ def search_many(starts, run_values, allowed_value, per_round: int = LOOKAHEAD) -
             s, got = state[i], runs[k:k + len(batch)]
             k += len(batch)
             s["steps"] += len(batch)
-            moved = False
             for v, run in zip(batch, got):
+                if not isinstance(run, Exception) and run.crash and s["over"] < CRASH_PATIENCE:
+                    s["value"], s["over"] = v, s["over"] + 1  # passed over: the search goes on past it, keeping none
+                    s["passed"].append((v, run.crash))
+                    continue
                 if isinstance(run, Exception) or run.crash or not run.total <= s["best"].total - MIN_GAIN:
+                    s["done"] = True
                     break
-                s["value"], s["best"], moved = v, run, True
+                s["value"], s["best"], s["over"] = v, run, 0
                 s["kept"].append((v, run))
-            if not moved or s["kept"][-1][0] != batch[-1]:
-                s["done"] = True
-    return [s["kept"] for s in state]
+    return _finish(state, starts)
+
+
+def _finish(state, starts) -> list:
+    """Each search's kept steps as a ``_Kept``, a crash passed over on the way to the answer said
+    with it (one past the answer was a stop, not passed over)."""
+    out = []
+    for s, (adj, _, _) in zip(state, starts):
+        kept = {v for v, _ in s["kept"]}
+        last = s["kept"][-1][0] if s["kept"] else None
+        k = _Kept(s["kept"])
+        k.passed = [(v, why) for v, why in s["passed"] if last is not None and v not in kept
+                    and (v - adj.value) * (last - v) > 0]
+        out.append(k)
+    return out
 
 
 def search_flow(starts, submit, wait, allowed_value, slots: int) -> list:
@@ -114,12 +137,13 @@ def search_flow(starts, submit, wait, allowed_value, slots: int) -> list:
     one of them has finished and returns ``[(handle, run), ...]`` for those finished (a refused run
     a ``ConfigError``); ``allowed_value(i, value)`` as in :func:`search_many`. Returns each search's
     kept steps ``[(value, run)]``."""
-    state = [{"best": run, "kept": [], "asked": [], "got": {}, "done": False} for _, _, run in starts]
+    state = [{"best": run, "kept": [], "asked": [], "got": {}, "done": False, "at": None, "over": 0, "passed": []}
+             for _, _, run in starts]
     flying = {}  # handle -> (search, value)
 
     def ask(i, s):  # the value after the last one asked (or judged), where the part has one
-        v = s["asked"][-1] if s["asked"] else (s["kept"][-1][0] if s["kept"] else starts[i][1])
-        if len(s["kept"]) + len(s["asked"]) >= MAX_STEPS:
+        v = s["asked"][-1] if s["asked"] else (s["at"] if s["at"] is not None else starts[i][1])
+        if len(s["kept"]) + len(s["passed"]) + len(s["asked"]) >= MAX_STEPS:
             return False
         v = next_value(starts[i][0], v, starts[i][1])
         if v is None or not allowed_value(i, v):
@@ -153,15 +177,26 @@ def search_flow(starts, submit, wait, allowed_value, slots: int) -> list:
             while s["asked"] and s["asked"][0] in s["got"]:  # judged in order, each against the one before
                 v0 = s["asked"].pop(0)
                 r = s["got"].pop(v0)
+                if not isinstance(r, Exception) and r.crash and s["over"] < CRASH_PATIENCE:
+                    s["at"], s["over"] = v0, s["over"] + 1  # passed over: the search goes on past it, keeping none
+                    s["passed"].append((v0, r.crash))
+                    continue
                 if isinstance(r, Exception) or r.crash or not r.total <= s["best"].total - MIN_GAIN:
                     s["done"], s["asked"], s["got"] = True, [], {}
                     break
-                s["best"] = r
+                s["best"], s["at"], s["over"] = r, v0, 0
                 s["kept"].append((v0, r))
-            if not s["done"] and not s["asked"] and len(s["kept"]) >= MAX_STEPS:
+            if not s["done"] and not s["asked"] and len(s["kept"]) + len(s["passed"]) >= MAX_STEPS:
                 s["done"] = True
         fill()
-    return [s["kept"] for s in state]
+    return _finish(state, starts)
+
+
+class _Kept(list):
+    """A search's kept steps ``[(value, run)]``, and in ``passed`` the values passed over on the way to
+    the last of them because the model crashed there ``[(value, the crash's line)]``."""
+
+    passed: list = []
 
 
 def search(adj: Adjuster, first: float, best_run, base_total: float, run_values, allowed_value,
@@ -191,8 +226,13 @@ def annotate(advice, searched: dict) -> None:
     if kept:
         advice.searched = (adj, rec["direction"], kept[-1][0], run)
     rec["driven_by"] = driving_rule(advice.base.penalty, run.penalty)
+    passed = getattr(kept, "passed", [])
+    rec["search_passed_crashes"] = [{"to": v, "setting": adj.setting(v), "crash": why} for v, why in passed]
     if kept:
-        rec["why"] += (f"; found by searching on from the one-step candidate ({len(kept)} step(s) further), "
+        values = ", ".join(f"{adj.setting(v)['to']:g}" for v, _ in passed)
+        over = ("" if not passed else f", passing over {len(passed)} setting(s) where the model crashed on the "
+                f"ride's terrain ({values} {adj.unit})")
+        rec["why"] += (f"; found by searching on from the one-step candidate ({len(kept)} step(s) further{over}), "
                        f"driven by the {rec['driven_by'].replace('_', ' ')} rule")
         advice.verdict = {**advice.verdict, "why": rec["why"]}
 

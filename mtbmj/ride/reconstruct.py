@@ -11,7 +11,15 @@ velocities (high-passed at 5 Hz), gives v = wheelbase / lag, the wheelbase at th
 (:func:`wheelbase_at`, the median travel of each end). A window's rejections and standard error are
 that module's; the windows start every half window (overlapping), the speed between the accepted
 windows' centres is linear (held past the first and last), a sample in no accepted window left out
-of the checks, the distance along the ride its integral, the rear's lag wheelbase / v(t). A version-2
+of the checks, the distance along the ride its integral, the rear's lag wheelbase / v(t). Then the speed is found
+again (``REFINE_PASSES`` times, :func:`mtbmj.ride.reconstruct_speed.refine`), on a ride whose first
+pass predicts the rear better than both naive baselines (below; elsewhere the rear predicted's timing
+is the model's more than the ride's, and the first estimate stands): the rear predicted
+through the whole bike over the terrain laid at those lags and the rear's record are the same kind
+of series, so the shift left between them (searched within half the lag, per 2.5 s window) says
+how far each lag is off; where they align, that speed replaces the first, and the terrain is found
+again at it (the rear's record sets when the rear met what the front met, never a height). A
+version-2
 record (5 kHz of coarse encoder steps) is low-passed at ``V2_LOWPASS_HZ`` and read at ``RATE_HZ``. A
 ride with no window that gives a speed, or whose windows with one lie wholly where nothing can be
 checked, is refused: no speed estimate, one line, nothing written.
@@ -56,7 +64,8 @@ import numpy as np
 from mtbmj.ride.reconstruct_inverse import QuarterCar, forward, ground_under, lowpass, runs, wheelbase_at
 from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
-                                          check_length, min_seconds, speed_from_either, speed_from_lag)
+                                          check_length, merged, min_seconds, refine, speed_from_either,
+                                          speed_from_lag)
 # The rate a ride is read at (the version-3 recorder's): a faster record is low-passed and decimated
 # to it (``TelemetryRecord.decimated``), so two derivatives do not amplify its count steps and a
 # 100 s ride at 5 kHz costs what it costs at 1 kHz
@@ -75,6 +84,7 @@ def histogram_distance(a, b, top: float, bins: int = 20) -> float:
 
 BEAT_MARGIN = 0.40  # the rear predicted must be this much (40 %) lower in RMS than the better naive baseline
 TERRAIN_LEAD_IN_M = 3.0  # terrain.csv starts on this much level ground before the ride's first metre
+REFINE_PASSES = 2  # the speed found again from the rear predicted, and the terrain at it, this many times
 LEFT_OUT_S = 0.2  # around an airborne stretch, this much either side is left out of the checks
 
 
@@ -165,24 +175,40 @@ class Reconstruction:
                 "samples_checked_percent": 100.0 * float(np.mean(v))}
 
     def summary(self) -> dict:
+        def listed(stage):
+            sds = stage.get("sd") or [None] * len(stage["windows"])
+            whys = stage.get("why") or [None] * len(stage["windows"])
+            width = stage.get("window_s", WINDOW_S)
+            return [{"start_s": float(a), "end_s": float(a + width), "speed_m_per_s": None if v is None else float(v),
+                     "speed_sd_m_per_s": None if sd is None else float(sd), "correlation": float(c),
+                     "rejected": None if v is not None else (why or "no speed")}
+                    for (a, v, c), sd, why in zip(stage["windows"], sds, whys)]
+
         speeds = [s for _, s, _ in self.speed["windows"] if s is not None]
-        sds = self.speed.get("sd") or [None] * len(self.speed["windows"])
-        whys = self.speed.get("why") or [None] * len(self.speed["windows"])
-        width = self.speed.get("window_s", WINDOW_S)
-        windows = [{"start_s": float(a), "end_s": float(a + width), "speed_m_per_s": None if v is None else float(v),
-                    "speed_sd_m_per_s": None if sd is None else float(sd), "correlation": float(c),
-                    "rejected": None if v is not None else (why or "no speed")}
-                   for (a, v, c), sd, why in zip(self.speed["windows"], sds, whys)]
+        windows = listed(self.speed)
+        first = self.speed.get("first")
+        profile = {"median_m_per_s": self.speed["speed_m_per_s"],
+                   "min_m_per_s": min(speeds) if speeds else None,
+                   "max_m_per_s": max(speeds) if speeds else None,
+                   "windows_accepted": len(speeds),
+                   "windows_rejected": len(windows) - len(speeds),
+                   "window_s": float(self.speed.get("window_s", WINDOW_S)),
+                   "found_from": ("the lag left between the rear's record and the rear predicted over the terrain "
+                                  "found (its timing only), the two ends' lag kept where those do not align"
+                                  if first is not None else "the lag between the two ends"),
+                   "between_windows": "linear between the accepted windows' centres, held past the "
+                                      "first and last; the distance integrated from it"}
+        if first is not None:
+            firsts = [s for _, s, _ in first["windows"] if s is not None]
+            profile["first_estimate"] = {"from": "the lag between the two ends", "window_s": float(first["window_s"]),
+                                         "windows_accepted": len(firsts),
+                                         "windows_rejected": len(first["windows"]) - len(firsts),
+                                         "windows_kept": int(self.speed.get("first_kept", 0)),
+                                         "windows": listed(first)}
         return {"ride": self.name, "bike": self.bike, "duration_s": float(self.t[-1] - self.t[0]),
                 "speed_m_per_s": self.speed["speed_m_per_s"], "lag_s": self.speed["lag_s"],
                 "speed_from": self.speed.get("from"), "wheelbase_at_sag_m": float(self.wheelbase),
-                "speed_profile": {"median_m_per_s": self.speed["speed_m_per_s"],
-                                  "min_m_per_s": min(speeds) if speeds else None,
-                                  "max_m_per_s": max(speeds) if speeds else None,
-                                  "windows_accepted": len(speeds),
-                                  "windows_rejected": len(windows) - len(speeds),
-                                  "between_windows": "linear between the accepted windows' centres, held past the "
-                                                     "first and last; the distance integrated from it"},
+                "speed_profile": profile,
                 "windows": windows,
                 "window_speeds_m_per_s": [None if s is None else float(s) for _, s, _ in self.speed["windows"]],
                 "window_speed_range_m_per_s": [min(speeds), max(speeds)] if speeds else None,
@@ -208,9 +234,12 @@ class Reconstruction:
         rng = s["window_speed_range_m_per_s"]
         spread = f" (windows {rng[0]:.2f}-{rng[1]:.2f})" if rng else ""
         p = s["speed_profile"]
+        f = p.get("first_estimate")
+        refined = ("" if f is None else f" of {p['window_s']:g} s aligning the rear predicted (and "
+                   f"{f['windows_kept']} of the ends' lag)")
         return (f"{self.name} through {self.bike}: {c['verdict']}; speed {s['speed_m_per_s']:.2f} m/s median "
                 f"from a {1e3 * s['lag_s']:.0f} ms lag{spread}, {p['windows_accepted']} of "
-                f"{p['windows_accepted'] + p['windows_rejected']} windows, terrain {s['terrain_length_m']:.0f} m; "
+                f"{p['windows_accepted'] + p['windows_rejected']} windows{refined}, terrain {s['terrain_length_m']:.0f} m; "
                 f"check: front reproduced within "
                 f"{c['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted {c['rear_predicted_rms_mm']:.1f} mm RMS "
                 f"({c['rear_predicted_rms_percent_of_used']:.0f} % of the {c['rear_travel_used_mm']:.0f} mm used; "
@@ -334,47 +363,74 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     except ReconstructError as exc:
         raise ReconstructError(f"{record.name}: {exc}") from None
     speed["from"] = ", ".join(sorted({s for s in speed["sources"] if s})) or None
-    pad = int(round(LEFT_OUT_S / dt))
-    lags = wheelbase / speed["speed_at"](t)  # s, the rear's lag behind the front at each moment
-    bad = np.zeros(t.size, bool)
-    bad[:int(round(float(np.max(lags)) / dt)) + pad] = True  # the rear's first wheelbase has no terrain from the front
-    bad[:int(round(2.0 / (HIGHPASS_HZ * 2 * math.pi) / dt))] = True  # the filters' start
-    step = int(round(WINDOW_S / dt))
-    covered = np.zeros(t.size, bool)  # within a window that gave a speed (the windows overlap)
-    for start, v_window, _ in speed["windows"]:
-        if v_window is not None:
-            a = int(round(start / dt))
-            covered[a: a + step] = True
-    # standing, or the ends do not align there, or past the last window: no terrain the rear can be checked on
-    unaligned = [(float(t[a]), float(t[min(b, t.size - 1)])) for a, b in runs(~covered)]
-    bad |= ~covered
-    if bad.all() or not np.ptp(rear[~bad]) > 0.0:
-        # the windows that gave a speed lie wholly in jumps, the first wheelbase or the filters' start
-        n = sum(1 for _, s, _ in speed["windows"] if s is not None)
-        raise ReconstructError(f"{record.name}: no speed estimate that can be checked: the {n} window(s) of "
-                               f"{len(speed['windows'])} whose two ends aligned lie wholly where the front wheel was "
-                               f"off the ground, or in the ride's first wheelbase or its filters' start (or the rear "
-                               f"does not move there): no sample of the ride can be checked")
-    # the terrain and the rear from the fork's record through the whole bike (the rear's record unused)
     from mtbmj.ride import reconstruct_bike
 
     whole = reconstruct_bike.whole_bike(spec, fork_setup, shock_setup)
-    found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel, stops)
-    ground, rear_predicted = found["ground"], found["rear_rise"]
-    jumps = [(float(t[a]), float(t[min(b, t.size - 1)])) for a, b in runs(found["airborne"])]
-    # the check: the whole bike free over the terrain found, the rider's slow load on its front
-    again = reconstruct_bike.ride(t, whole, np.interp(t - lags, t, ground), front_ground=ground,
-                                  push=found["rider_slow_load"])
-    front_again = again["front_rise"] / sin_a
-    bad |= ~(np.isfinite(rear_predicted) & np.isfinite(front_again))  # past a divergence nothing is checked
-    diverged = [d for d in (found["diverged_s"], again["diverged_s"]) if d is not None]
-    v = speed["speed_at"](t)
-    distance = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)))
-    return Reconstruction(record.name, spec.name, t, speed, distance, ground, ~bad, fork * 1e3, front_again * 1e3,
-                          rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps, unaligned,
-                          np.interp(t - lags, t, fork * 1e3), wheelbase, found["passes"], found["settled_m"],
-                          min(diverged) if diverged else None)
 
+    def through(speed):
+        """The terrain and the rear from the fork's record through the whole bike at ``speed``'s lags
+        (the rear's record unused), the whole bike free over it again, and the samples checked."""
+        pad = int(round(LEFT_OUT_S / dt))
+        lags = wheelbase / speed["speed_at"](t)  # s, the rear's lag behind the front at each moment
+        bad = np.zeros(t.size, bool)
+        bad[:int(round(float(np.max(lags)) / dt)) + pad] = True  # the rear's first wheelbase has no terrain from the front
+        bad[:int(round(2.0 / (HIGHPASS_HZ * 2 * math.pi) / dt))] = True  # the filters' start
+        covered = np.zeros(t.size, bool)  # within a window that gave a speed (the windows overlap)
+        for stage in (speed, speed.get("first")):
+            for start, v_window, _ in (stage or {}).get("windows", []):
+                if v_window is not None:
+                    i = int(round(start / dt))
+                    covered[max(i, 0): i + int(round(stage["window_s"] / dt))] = True
+        # standing, or the ends do not align there, or past the last window: no terrain the rear can be checked on
+        unaligned = [(float(t[i]), float(t[min(j, t.size - 1)])) for i, j in runs(~covered)]
+        bad |= ~covered
+        if bad.all() or not np.ptp(rear[~bad]) > 0.0:
+            # the windows that gave a speed lie wholly in jumps, the first wheelbase or the filters' start
+            n = sum(1 for _, s, _ in speed["windows"] if s is not None)
+            raise ReconstructError(f"{record.name}: no speed estimate that can be checked: the {n} window(s) of "
+                                   f"{len(speed['windows'])} whose two ends aligned lie wholly where the front wheel was "
+                                   f"off the ground, or in the ride's first wheelbase or its filters' start (or the rear "
+                                   f"does not move there): no sample of the ride can be checked")
+        found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, first_ground, body, fork_setup.travel, stops)
+        # the check: the whole bike free over the terrain found, the rider's slow load on its front
+        again = reconstruct_bike.ride(t, whole, np.interp(t - lags, t, found["ground"]), front_ground=found["ground"],
+                                      push=found["rider_slow_load"])
+        return {"lags": lags, "bad": bad, "unaligned": unaligned, "found": found, "again": again}
+
+    first_ground = ground
+
+    def built(done, speed) -> Reconstruction:
+        found, again = done["found"], done["again"]
+        rear_predicted, front_again = found["rear_rise"], again["front_rise"] / sin_a
+        bad = done["bad"] | ~(np.isfinite(rear_predicted) & np.isfinite(front_again))  # past a divergence: unchecked
+        diverged = [d for d in (found["diverged_s"], again["diverged_s"]) if d is not None]
+        jumps = [(float(t[i]), float(t[min(j, t.size - 1)])) for i, j in runs(found["airborne"])]
+        v = speed["speed_at"](t)
+        distance = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)))
+        return Reconstruction(record.name, spec.name, t, speed, distance, found["ground"], ~bad, fork * 1e3,
+                              front_again * 1e3, rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps,
+                              done["unaligned"], np.interp(t - done["lags"], t, fork * 1e3), wheelbase,
+                              found["passes"], found["settled_m"], min(diverged) if diverged else None)
+
+    done = through(speed)
+    result = built(done, speed)
+    # the speed found again where the rear predicted and the rear's record align (its timing only: the
+    # terrain's heights still come from the fork's record alone), and the terrain found again at it; only
+    # where the first pass's rear predicted beats the better naive baseline: where it does not, its
+    # timing is the model's more than the ride's, and would pull the speed
+    first = speed
+    c = result.checks()
+    if c["rear_predicted_rms_mm"] < min(c["baseline_delayed_fork_rms_mm"], c["baseline_rear_mean_rms_mm"]):
+        for _ in range(REFINE_PASSES):
+            try:
+                again = merged(first, refine(t, rear * 1e3, done["found"]["rear_rise"] * 1e3, done["lags"],
+                                             wheelbase))
+            except ReconstructError:
+                break  # no refining window aligned: the estimate before stands
+            again["from"] = ", ".join(sorted({s for s in first["sources"] if s} | {"the rear predicted"}))
+            done, speed = through(again), again
+            result = built(done, speed)
+    return result
 
 __all__ = ["min_seconds", "speed_from_lag", "ground_under", "forward", "histogram_distance", "reconstruct", "Reconstruction",
            "QuarterCar", "ReconstructError"]

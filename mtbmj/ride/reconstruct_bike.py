@@ -101,6 +101,26 @@ def whole_bike(spec, fork_setup, shock_setup) -> WholeBike:
                      fF0, fR0, wF0, wR0)
 
 
+STATE_MARGIN = 2.0  # a friction state past this many times its largest steady deflection is integrated unstably
+
+
+def state_bound(law) -> float:
+    """The largest |state| a law's friction state reaches when integrated stably, with a margin
+    (``STATE_MARGIN`` times its largest level over its bristles' stiffness: LuGre's and the sticking
+    law's deflections stay within level / stiffness), or infinity for a law without one. A step
+    that leaves it is taken again in substeps: a sliding bristle's equation is stiff (its rate
+    |v| / (level / stiffness), 2e4 1/s at 9 m/s through a 40 N, 1e5 N/m fork), and one classical RK4
+    step of a record's millisecond past 2.8 / rate grows it without bound while the positions stay
+    finite for a while (the shared ride 00092 diverged so, at 48.48 s)."""
+    f = getattr(law, "friction", None)
+    if f is None or not getattr(f, "has_state", False):
+        return math.inf
+    inner = getattr(f, "inner", f)
+    level = max(float(getattr(inner, "coulomb", 0.0)), float(getattr(inner, "breakaway", 0.0) or 0.0))
+    stiffness = float(getattr(f, "stiffness", 0.0))
+    return STATE_MARGIN * level / stiffness if level > 0.0 and stiffness > 0.0 else math.inf
+
+
 def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=None, push=None,
          compiled: bool | None = None) -> dict:
     """The whole bike ``b`` on ``t`` from rest, its rear wheel over ``rear_ground`` (m).
@@ -138,6 +158,7 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
     m_front = b.fF0 / g
     K, C = m_front * (2 * math.pi * SLOW_HZ) ** 2, 2.0 * m_front * 2 * math.pi * SLOW_HZ
     bound = SLOW_BOUND * b.mr * g
+    zmax_r, zmax_f = state_bound(shock), state_bound(fork)  # past them a friction state is integrated unstably
     if free:
         gF = np.asarray(front_ground, float)
         pushed = np.zeros(n) if push is None else np.asarray(push, float)
@@ -149,7 +170,7 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
         from mtbmj.ride import reconstruct_bike_compiled
 
         numbers = {"fa": fa, "fb": fb, "fm": fm, "la": la, "ra": ra, "lr": lr, "rr": rr, "zF_pt0": zF_pt0,
-                   "zR_pt0": zR_pt0, "K": K, "C": C, "bound": bound, "dt": dt}
+                   "zR_pt0": zR_pt0, "K": K, "C": C, "bound": bound, "dt": dt, "zmax_r": zmax_r, "zmax_f": zmax_f}
         done = reconstruct_bike_compiled.run(b, free, numbers, gR, front_ground=gF if free else None,
                                              pushed=pushed if free else None, front=None if free else front,
                                              ref=None if free else ref, vref=None if free else vref)
@@ -251,7 +272,8 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
                     nxt = rk4(y, i, m)
             except (ArithmeticError, ValueError, IndexError):  # a state past the finite numbers (a lookup of NaN)
                 nxt = [math.nan] * size
-            if all(math.isfinite(a) for a in nxt) and all(abs(a - c) < 1.0 for a, c in zip(nxt[:half], y[:half])):
+            if all(math.isfinite(a) for a in nxt) and all(abs(a - c) < 1.0 for a, c in zip(nxt[:half], y[:half])) \
+                    and abs(nxt[half * 2]) <= zmax_r and (not free or abs(nxt[-1]) <= zmax_f):
                 break
             m *= 10  # a hard stop stiffer than the record's step resolves: substeps
             if m > 1000:

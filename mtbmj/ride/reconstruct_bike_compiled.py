@@ -125,7 +125,7 @@ if _numba is not None:
 
     @_jit.kernel
     def _ride(free, IS, PS, stateful_r, IF, PF, stateful_f, q, LW, LR, LS, gR, gF, pushed, wF, aF, fFrame, fTyre,
-              top, ref, vref, maxdef, dt, y, rear_rise, out_front, tyre_front, slow):
+              top, ref, vref, maxdef, dt, zmax_r, zmax_f, y, rear_rise, out_front, tyre_front, slow):
         """``reconstruct_bike.ride``'s loop: the series into the four arrays from the state ``y``;
         returns -1, or the sample where the run diverged."""
         n = gR.size
@@ -147,6 +147,8 @@ if _numba is not None:
                     for a in range(half):
                         if not abs(nxt[a] - y[a]) < 1.0:
                             ok = False
+                    if not (abs(nxt[12]) <= zmax_r and abs(nxt[13]) <= zmax_f):  # a friction state unstable
+                        ok = False
                     if ok:
                         break
                     m *= 10
@@ -217,8 +219,8 @@ def run(b, free: bool, numbers: dict, rear_ground, front_ground=None, pushed=Non
     rear_rise, out_front = np.empty(n), np.empty(n)
     tyre_front, slow = np.zeros(n), np.zeros(n)
     bad = _ride(bool(free), IS, PS, bool(b.shock.has_state), IF, PF, bool(b.fork.has_state), q, LW, LR, LS, gR, gF,
-                pushed, wF, aF, fFrame, fTyre, top, ref, vref, float(b.max_deflection), float(v["dt"]), y, rear_rise,
-                out_front, tyre_front, slow)
+                pushed, wF, aF, fFrame, fTyre, top, ref, vref, float(b.max_deflection), float(v["dt"]),
+                float(v["zmax_r"]), float(v["zmax_f"]), y, rear_rise, out_front, tyre_front, slow)
     return {"rear_rise": rear_rise, "front": out_front, "tyre": tyre_front, "slow": slow}, int(bad)
 
 

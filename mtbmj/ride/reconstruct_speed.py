@@ -35,6 +35,9 @@ OUTLIER = 0.25  # ... and a window between them this far from their mean gives n
 FAR = 2.0  # a window no neighbour supports, this many times off the median of the ride's other windows ...
 FAR_OTHERS = 3  # ... of at least this many, gives no speed
 STILL_MM = 1.0  # a window where either end's travel spans less than this is standing: it gives no speed
+REFINE_WINDOW_S = 2.5  # seconds per window of the speed found again from the rear predicted (refine)
+REFINE_SPAN = 0.5  # the lag left is searched within +- this share of the first estimate's lag
+REFINE_MIN_CORRELATION = 0.5  # a refining window whose best correlation is below this gives no speed
 
 
 class ReconstructError(MtbmjError):
@@ -88,6 +91,42 @@ def _vertex(s, i: int) -> float:
     return 0.0
 
 
+def _best(a, b, k_lo: int, k_hi: int, dt: float, min_correlation: float = MIN_CORRELATION):
+    """The lag (s) that best aligns ``a[:n]`` with ``b[k:k + n]`` for k in k_lo..k_hi (n = a.size - k_hi):
+    (lag s or None, correlation, why none, the lag's standard error s); see :func:`speed_from_lag`."""
+    n = a.size - k_hi
+    if n < 10:
+        return None, 0.0, "too short", None
+    s = _scores(a, b, k_lo, k_hi, n)
+    i = int(np.argmax(s))
+    if i == 0 or i == s.size - 1:  # the best lag at the end of the search: the peak lies outside it
+        return None, float(s[i]), "the best lag at the edge of the search", None
+    if s[i] < min_correlation:
+        return None, float(s[i]), f"best correlation below {min_correlation:g}", None
+    low = np.flatnonzero(s <= 0.5 * s[i])  # the best peak's lobe: down to half its height each side
+    left, right = (low[low < i].max() if np.any(low < i) else -1), (low[low > i].min() if np.any(low > i) else s.size)
+    if left < 0 or right >= s.size:  # the peak's lobe runs into the end of the search: it may lie beyond
+        return None, float(s[i]), "the best peak's lobe reaches the edge of the search", None
+    peaks = np.flatnonzero((s[1:-1] > s[:-2]) & (s[1:-1] >= s[2:])) + 1
+    if np.any(((peaks < left) | (peaks > right)) & (s[peaks] >= AMBIGUOUS * s[i])):
+        return None, float(s[i]), f"a second peak within {AMBIGUOUS:g} of the best", None  # periodic: no speed
+    lag = (k_lo + i + _vertex(s, i)) * dt
+    # the lag's standard error: found again in each part of the window, within the best lobe
+    a_lo, a_hi = k_lo + max(left, 0), k_lo + min(right, s.size - 1)
+    part = n // SUB_WINDOWS
+    lags = []
+    for j in range(SUB_WINDOWS):  # each part's own best lag over the whole search, kept if within the lobe
+        sub = _scores(a[j * part:], b[j * part:], k_lo, k_hi, part)
+        m = int(np.argmax(sub))
+        if a_lo < k_lo + m < a_hi:
+            lags.append((k_lo + m + _vertex(sub, m)) * dt)
+    if len(lags) < SUB_WINDOWS - 1:  # the parts do not find the window's lag: it is not one lag
+        return None, float(s[i]), (f"its parts disagree ({SUB_WINDOWS - len(lags)} of {SUB_WINDOWS} find their "
+                                   f"own best lag outside the window's best peak)"), None
+    sd = float(np.std(lags, ddof=1)) / math.sqrt(len(lags))
+    return lag, float(s[i]), None, max(sd, dt / math.sqrt(12.0))  # no finer than the sample step's
+
+
 def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S, highpass_hz: float = LAG_HIGHPASS_HZ,
                    travel=None) -> dict:
     """{"speed_m_per_s": the median of the windows' speeds, "lag_s", "windows": [(start_s, speed or
@@ -115,40 +154,6 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
     lo, hi = wheelbase / SPEED_RANGE[1], wheelbase / SPEED_RANGE[0]
     k_lo, k_hi = max(1, int(math.floor(lo / dt))), int(math.ceil(hi / dt))
 
-    def best(a, b):
-        """(lag s or None, correlation, why none, the lag's standard error s)."""
-        n = a.size - k_hi
-        if n < 10:
-            return None, 0.0, "too short", None
-        s = _scores(a, b, k_lo, k_hi, n)
-        i = int(np.argmax(s))
-        if i == 0 or i == s.size - 1:  # the best lag at the end of the search: the peak lies outside it
-            return None, float(s[i]), "the best lag at the edge of the search", None
-        if s[i] < MIN_CORRELATION:
-            return None, float(s[i]), f"best correlation below {MIN_CORRELATION:g}", None
-        low = np.flatnonzero(s <= 0.5 * s[i])  # the best peak's lobe: down to half its height each side
-        left, right = (low[low < i].max() if np.any(low < i) else -1), (low[low > i].min() if np.any(low > i) else s.size)
-        if left < 0 or right >= s.size:  # the peak's lobe runs into the end of the search: it may lie beyond
-            return None, float(s[i]), "the best peak's lobe reaches the edge of the search", None
-        peaks = np.flatnonzero((s[1:-1] > s[:-2]) & (s[1:-1] >= s[2:])) + 1
-        if np.any(((peaks < left) | (peaks > right)) & (s[peaks] >= AMBIGUOUS * s[i])):
-            return None, float(s[i]), f"a second peak within {AMBIGUOUS:g} of the best", None  # periodic: no speed
-        lag = (k_lo + i + _vertex(s, i)) * dt
-        # the lag's standard error: found again in each part of the window, within the best lobe
-        a_lo, a_hi = k_lo + max(left, 0), k_lo + min(right, s.size - 1)
-        part = n // SUB_WINDOWS
-        lags = []
-        for j in range(SUB_WINDOWS):  # each part's own best lag over the whole search, kept if within the lobe
-            sub = _scores(a[j * part:], b[j * part:], k_lo, k_hi, part)
-            m = int(np.argmax(sub))
-            if a_lo < k_lo + m < a_hi:
-                lags.append((k_lo + m + _vertex(sub, m)) * dt)
-        if len(lags) < SUB_WINDOWS - 1:  # the parts do not find the window's lag: it is not one lag
-            return None, float(s[i]), (f"its parts disagree ({SUB_WINDOWS - len(lags)} of {SUB_WINDOWS} find their "
-                                       f"own best lag outside the window's best peak)"), None
-        sd = float(np.std(lags, ddof=1)) / math.sqrt(len(lags))
-        return lag, float(s[i]), None, max(sd, dt / math.sqrt(12.0))  # no finer than the sample step's
-
     windows, sds, whys = [], [], []
     step = int(round(window_s / dt))
     moving = None
@@ -165,7 +170,7 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
             whys.append(f"standing (an end moving less than {STILL_MM:g} mm)")
             standing += 1
             continue
-        wl, wc, why, sd = best(vf[start:start + step + k_hi], vr[start:start + step + k_hi])
+        wl, wc, why, sd = _best(vf[start:start + step + k_hi], vr[start:start + step + k_hi], k_lo, k_hi, dt)
         v = None if wl is None else wheelbase / wl
         if v is not None and sd / wl > MAX_SPEED_SD:  # its parts disagree: no speed to take from it
             v, why = None, f"its parts' lags scatter (the speed uncertain by {100 * sd / wl:.0f} %, over " \
@@ -210,6 +215,89 @@ def drop_unsupported(windows, sds, whys) -> None:
     for k, why in out:
         windows[k] = (windows[k][0], None, windows[k][2])
         sds[k], whys[k] = None, why
+
+
+def refine(t, recorded, predicted, lags, wheelbase: float, window_s: float = REFINE_WINDOW_S) -> dict:
+    """The speed found again from the lag left between the rear's record and the rear predicted
+    (both mm on ``t``) through the bike over terrain laid a lag ``lags`` (s, on ``t``, the first
+    estimate's) behind the front: where the first estimate's lag is right the two align at no shift;
+    where it is off by d, the record runs d behind the prediction. Both are the same kind of series
+    (the rear's travel through the same suspension), so they align far better than the two ends'
+    grounds do, and a shorter window (``REFINE_WINDOW_S``) can be used. Per window (starting every
+    half window, in the rear's time) the shift d is searched within +- ``REFINE_SPAN`` of the local
+    lag, with the rejections of :func:`speed_from_lag` (the edge of the search, a second peak, parts
+    that disagree, a correlation below ``REFINE_MIN_CORRELATION``, an uncertainty over
+    ``MAX_SPEED_SD``, the rear standing, the prediction missing past a divergence) and of
+    :func:`drop_unsupported`; its speed wheelbase / (lag + d) is put where the window's motion is (the
+    centre of the record's squared velocity over it: a window's lag is mostly that of its largest
+    motions), less half the lag (midway between the front's and the rear's meeting the terrain); a
+    window's start and end in the answer are that time -+ half a window. The rear's
+    record sets only when the rear met what the front met (the speed), never the terrain's heights.
+    Returns speed_from_lag's answer (``ReconstructError`` where no window gives a speed)."""
+    from scipy.signal import butter, sosfiltfilt
+
+    dt = float(t[1] - t[0])
+    recorded, predicted = np.asarray(recorded, float), np.asarray(predicted, float)
+    missing = ~np.isfinite(predicted)
+    sos = butter(2, LAG_HIGHPASS_HZ, btype="highpass", fs=1.0 / dt, output="sos")
+    a = np.gradient(sosfiltfilt(sos, recorded), dt)
+    b = np.gradient(sosfiltfilt(sos, np.where(missing, 0.0, predicted)), dt)
+    lags = np.asarray(lags, float)
+    step = int(round(window_s / dt))
+    far = int(math.ceil(REFINE_SPAN * float(np.max(lags)) / dt)) + 1
+    windows, sds, whys = [], [], []
+    for st in range(far, max(t.size - step - far, far + 1), max(1, step // 2)):
+        here = float(lags[st + step // 2])
+        k = max(2, int(math.ceil(REFINE_SPAN * here / dt)))
+        why, v, sd, c = None, None, None, 0.0
+        if missing[st - k:st + step + k].any():
+            why = "the rear predicted is missing here (the whole bike diverged before it)"
+        elif np.ptp(recorded[st:st + step]) < STILL_MM:
+            why = f"standing (the rear moving less than {STILL_MM:g} mm)"
+        else:
+            lag_b, c, why, sd_lag = _best(a[st:st + step + 2 * k], b[st - k:st + step + k], 0, 2 * k, dt,
+                                          REFINE_MIN_CORRELATION)
+            if lag_b is not None:
+                lag = here + k * dt - lag_b
+                if not wheelbase / SPEED_RANGE[1] < lag < wheelbase / SPEED_RANGE[0]:
+                    why = f"its lag {lag:.3f} s outside {SPEED_RANGE[0]:g}-{SPEED_RANGE[1]:g} m/s"
+                elif sd_lag / lag > MAX_SPEED_SD:
+                    why = (f"its parts' lags scatter (the speed uncertain by {100 * sd_lag / lag:.0f} %, over "
+                           f"{100 * MAX_SPEED_SD:g} %)")
+                else:
+                    v, sd = wheelbase / lag, wheelbase / lag * sd_lag / lag
+        # the lag is that of where the window's motion is: its time the centre of the record's squared
+        # velocity over it, less half the lag (between the front's and the rear's meeting the terrain)
+        weight = a[st:st + step] ** 2
+        centre = (st + (float(np.arange(step) @ weight) / float(weight.sum()) if weight.sum() > 0 else 0.5 * step)) * dt
+        mid = centre - 0.5 * window_s - 0.5 * (wheelbase / v if v is not None else here)
+        windows.append((mid, v, float(c)))
+        sds.append(sd)
+        whys.append(why)
+    return _profile(windows, sds, whys, wheelbase, window_s)
+
+
+def merged(first: dict, again: dict) -> dict:
+    """The speed profile from the windows :func:`refine` accepted, with the first estimate's (the two
+    ends' lag) kept where no refined window lies within one of its windows of them (a stretch the
+    rear predicted does not align). The answer has the refined windows as "windows" (their sources
+    "the rear predicted"), the first estimate's as "first", and a profile linear between all kept
+    centres ("speed_at")."""
+    w1, w2 = first["window_s"], again["window_s"]
+    points = [(a + 0.5 * w2, v) for a, v, _ in again["windows"] if v is not None]
+    refined = np.array([c for c, _ in points])
+    kept = [(a + 0.5 * w1, v) for a, v, _ in first["windows"] if v is not None]
+    points += [(c, v) for c, v in kept if not refined.size or np.min(np.abs(refined - c)) > w1]
+    points.sort()
+    centres, speeds = np.array([c for c, _ in points]), np.array([v for _, v in points])
+    out = dict(again)
+    out["first"] = first
+    out["sources"] = ["the rear predicted" if v is not None else None for _, v, _ in again["windows"]]
+    out["first_kept"] = len(points) - int(refined.size)
+    out["speed_m_per_s"] = float(np.median(speeds))
+    out["lag_s"] = first["wheelbase_m"] / out["speed_m_per_s"]
+    out["speed_at"] = lambda time: np.interp(time, centres, speeds)
+    return out
 
 
 def _profile(windows, sds, whys, wheelbase: float, window_s: float, sources=None) -> dict:
@@ -268,4 +356,4 @@ def speed_from_either(t, first, second, wheelbase: float, names=("first", "secon
     return _profile(windows, sds, whys, wheelbase, base["window_s"], sources)
 
 
-__all__ = ["drop_unsupported", "WINDOW_S", "WINDOW_HOP", "SPEED_RANGE", "ReconstructError", "min_seconds", "check_length", "speed_from_lag", "speed_from_either"]
+__all__ = ["refine", "merged", "REFINE_WINDOW_S", "drop_unsupported", "WINDOW_S", "WINDOW_HOP", "SPEED_RANGE", "ReconstructError", "min_seconds", "check_length", "speed_from_lag", "speed_from_either"]

@@ -1,0 +1,249 @@
+"""The driving leg of a pedalling active rider (``--pedal RPM --rider active``): the joint torques
+that push the pedal along the stroke, and their power.
+
+The articulated rider's leg (``mtbmj.bike.rider_body``) is both legs lumped into one, its ankle
+pinned to the mean of the two ankles: the bottom bracket's point plus the foot's offset, fixed on
+the frame (the pedals half a turn apart, their mean place is the bottom bracket). That common leg
+carries the body's weight and posture. What pedalling adds is the two legs' difference: one foot
+goes round with its pedal, and on its downstroke pushes it. This module is that driving leg, as a
+*massless* chain from the hips (the trunk's hip point, wherever the body is) to the driving pedal
+(``controllers.drive.pedal_forces``' place at the crank's angle), the ankle ``rider_body``'s offset
+from the pedal (the foot keeps its attitude on the frame, translating with the pedal, but tips
+heel-up about the spindle where the hips are further than the leg reaches with the knee
+``KNEE_LEAST_DEG`` bent: ``foot_tip``), the knee ahead of the line from the ankle to the hip
+(``rider_body.pose``). Being massless it is in statics: the foot's force F on the pedal is made by
+the joint torques tau_j = (P - j) x F (P the pedal's spindle, j the hip, the knee or the ankle; x
+the pitch-plane cross product, nose-up positive), J^T F, and the leg passes -F to the hips along
+the same line of action. F is the stroke's (along the crank circle's tangent, the wrench the bike's
+callback puts on the ``rider`` body, the trunk) and a push along the crank that makes the joints'
+torques least against their strength (``PedalLeg.radial``; no crank torque, no work on the crank;
+``PedalLeg.apply`` puts it on the frame at the pedal and its reaction on the trunk). Its joints'
+speeds follow from the pedal's and the hips' motion on the frame (``leg_rates``), and the muscles'
+power is sum tau w = F . (v_P - v_trunk(P)): the crank's power F . v_P less what the reaction does
+on the body. So the pedalling's work is the muscles' (``mtbmj.bike.energy``) and the body moves
+with the reaction. Standing, the pedalling rider's hips are lowered so that the driving leg reaches
+the stroke's bottom (``pedalling_hip``, used by ``rider_control.stance``).
+
+Not modelled: the legs' own mass going round (their swing: the lumped leg keeps both legs' mass on
+the mean posture), a foot that rocks on the pedal other than the tip at the bottom, and the cut of
+the stroke by the leg's strength and power: the stroke is the drive's (``controllers.drive``), and
+the summary reports the driving leg's torques against one side's strength with half the common
+leg's torque added (``PedalLeg.report``); the headline says whether that stayed within it.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mtbmj.bike import rider_body as rb
+from mtbmj.controllers.drive import CRANK_LENGTH_M, pedal_forces
+
+LEG_JOINTS = ("hip", "knee", "ankle")
+# standing and pedalling, the hips as low as puts the driving leg's knee this far bent at the stroke's
+# bottom (assumed: bike fitters set 25-35 deg there, seated; the attack position's hips, its knees 45 deg
+# bent over the pedals' mean, are out of the leg's reach at the bottom with 170 mm cranks)
+BOTTOM_KNEE_DEG = 25.0
+# the driving leg's knee is kept this far bent at least: where the hips are further from the pedal the
+# foot tips heel-up about the spindle (plantar flexion), as riders' do at the stroke's bottom (assumed)
+KNEE_LEAST_DEG = 15.0
+
+
+def pedalling_hip(body: rb.Body, hip, pedal) -> tuple:
+    """The standing pedalling rider's hips (m, frame coordinates): ``hip`` (the attack position's),
+    lowered at its fore-aft place until the driving leg reaches the stroke's bottom (the pedal
+    ``CRANK_LENGTH_M`` below the pedals' mean ``pedal``) with the knee ``BOTTOM_KNEE_DEG`` bent;
+    ``hip`` itself where it is already that low."""
+    l1, l2 = body.thigh.length, body.shank.length
+    reach = math.sqrt(l1 * l1 + l2 * l2 + 2.0 * l1 * l2 * math.cos(math.radians(BOTTOM_KNEE_DEG)))
+    ankle = (pedal[0] + body.ankle_from_pedal[0], pedal[1] - CRANK_LENGTH_M + body.ankle_from_pedal[1])
+    dx = hip[0] - ankle[0]
+    z = ankle[1] + math.sqrt(max(reach * reach - dx * dx, 0.0))
+    return (hip[0], min(hip[1], z))
+
+
+def cross(r, f) -> float:
+    """The pitch-plane moment (nose-up positive, x forward and z up) of force ``f`` at arm ``r``."""
+    return float(r[0] * f[1] - r[1] * f[0])
+
+
+def leg_torques(hip, knee, ankle, pedal, force) -> dict:
+    """The anatomical torques (N m: hip and knee flexion, ankle dorsiflexion positive) with which a
+    massless leg (joints at ``hip``, ``knee``, ``ankle``, the foot on ``pedal``; frame coordinates,
+    m) pushes its pedal with ``force`` (N, frame coordinates): each joint's torque on its distal part
+    balances the pedal's push back at the spindle, tau_j = (P - j) x F; knee flexion turns the shank
+    back on the thigh (its torque the shank's nose-down), the others their distal part nose-up."""
+    p = np.asarray(pedal, float)
+    f = np.asarray(force, float)
+    return {"hip": cross(p - np.asarray(hip, float), f), "knee": -cross(p - np.asarray(knee, float), f),
+            "ankle": cross(p - np.asarray(ankle, float), f)}
+
+
+def leg_rates(hip, knee, ankle, v_hip, v_ankle, w_trunk: float, w_foot: float = 0.0) -> dict:
+    """The anatomical speeds (rad/s) of the leg hip-knee-ankle whose hips move at ``v_hip`` and
+    ankle at ``v_ankle`` (m/s), the trunk turns at ``w_trunk`` and the foot at ``w_foot`` (rad/s,
+    nose-up), all relative to the frame. The thigh's and the shank's turn rates solve
+    v_ankle - v_hip = w_t J (knee - hip) + w_s J (ankle - knee), J the quarter turn nose-up."""
+    h, k, a = (np.asarray(v, float) for v in (hip, knee, ankle))
+    u, s = k - h, a - k
+    m = np.array([[-u[1], -s[1]], [u[0], s[0]]])
+    w_t, w_s = np.linalg.solve(m, np.asarray(v_ankle, float) - np.asarray(v_hip, float))
+    return {"hip": float(w_t - w_trunk), "knee": float(w_t - w_s), "ankle": float(w_foot - w_s)}
+
+
+def _rot(a: float, v) -> np.ndarray:
+    c, s = math.cos(a), math.sin(a)
+    return np.array([c * v[0] - s * v[1], s * v[0] + c * v[1]])
+
+
+def foot_tip(hip, v_hip, pedal, v_pedal, offset, longest: float) -> tuple[float, float, bool]:
+    """(turn rad, its rate rad/s, reached) of the foot about the pedal's spindle (nose-up positive;
+    heel up is nose-down) that keeps the ankle (``offset`` from the spindle, turned with the foot)
+    within ``longest`` of the hips: 0 where it already is; else the smaller turn that puts it at
+    ``longest`` (its rate from d/dt |hip - ankle|^2 = 0); where no turn does, the ankle on the line to
+    the hips (reached False). Frame coordinates, speeds relative to the frame."""
+    d = np.asarray(hip, float) - np.asarray(pedal, float)
+    o = np.asarray(offset, float)
+    if float(np.hypot(*(d - o))) <= longest:
+        return 0.0, 0.0, True
+    nd, no = float(np.hypot(*d)), float(np.hypot(*o))
+    c = (nd * nd + no * no - longest * longest) / (2.0 * nd * no)  # cos of the angle from d to the ankle's offset
+    v_d = np.asarray(v_hip, float) - np.asarray(v_pedal, float)
+    base = math.atan2(d[1], d[0]) - math.atan2(o[1], o[0])
+    if c >= 1.0:  # past any turn's reach: pointed at the hips
+        return math.remainder(base, 2.0 * math.pi), cross(d, v_d) / (nd * nd), False
+    g = math.acos(max(c, -1.0))
+    phi = min((math.remainder(base + sg * g, 2.0 * math.pi) for sg in (1.0, -1.0)), key=abs)
+    a = _rot(phi, o)
+    r = d - a  # the ankle to the hips
+    return phi, float(r @ v_d) / float(r @ np.array([-a[1], a[0]])), True
+
+
+class PedalLeg:
+    """The driving leg's statics and power at each evaluation of a pedalling active rider's run
+    (module doc). ``gear``: crank radians per metre of the bike's x rolled (cog / (ring radius), as
+    ``controllers.drive.pedal_drive``'s)."""
+
+    def __init__(self, body: rb.Body, grip, gear: float, strength_one_side: dict):
+        self.body, self.grip, self.gear = body, tuple(grip), float(gear)
+        self.strength = {k: strength_one_side[k] for k in LEG_JOINTS}  # (flexion, extension) N m
+        l1, l2 = body.thigh.length, body.shank.length  # the hips at most this far from the ankle (KNEE_LEAST_DEG)
+        self.longest = math.sqrt(l1 * l1 + l2 * l2 + 2.0 * l1 * l2 * math.cos(math.radians(KNEE_LEAST_DEG)))
+        self.clear_peaks()
+
+    def clear_peaks(self) -> None:
+        self.peak = dict.fromkeys(LEG_JOINTS, 0.0)  # the largest |torque| (N m) of the driving leg alone
+        self.peak_side = dict.fromkeys(LEG_JOINTS, 0.0)  # with half the common leg's: its side's, of the limit
+        self.peak_power = 0.0
+        self.out_of_reach_s = 0.0  # s with the driving pedal past the leg's reach from the hips
+        self._t_seen = -math.inf
+
+    def bind(self, model) -> "PedalLeg":
+        """Read the engine's state from ``model`` (the articulated bike's: ``rider_body.attach``)."""
+        self.frame, self.rider = int(model.body("frame").id), int(model.body("rider").id)
+        self.hips, self.shoulders = int(model.site("hips").id), int(model.site("shoulders").id)
+        dof = lambda name: int(model.joint(name).dofadr[0])
+        self.v_idx = (dof("rider_x"), dof("rider_z"), dof("rider_pitch"), dof("bike_x"))
+        self.x_idx = int(model.joint("bike_x").qposadr[0])
+        return self
+
+    def engine(self, d) -> dict:
+        """``state`` from the engine's data ``d`` after the bike's callback: the foot's force is the
+        reaction the callback put on the ``rider`` body (the trunk), turned into the frame's axes; the
+        hips slide on the frame along its x and z and the trunk turns on it (``rider_body.attach``)."""
+        rot = d.xmat[self.frame].reshape(3, 3)
+        o = d.xpos[self.frame]
+        hip = rot.T @ (d.site_xpos[self.hips] - o)
+        sh = rot.T @ (d.site_xpos[self.shoulders] - o)
+        f = rot.T @ -d.xfrc_applied[self.rider][:3]
+        vx, vz, wp, vb = (float(d.qvel[i]) for i in self.v_idx)
+        return self.state((hip[0], hip[2]), (vx, vz), math.atan2(sh[2] - hip[2], sh[0] - hip[0]), wp,
+                          float(d.qpos[self.x_idx]), vb, (f[0], f[2]))
+
+    def pedal(self, x: float, x_rate: float) -> tuple[np.ndarray, np.ndarray]:
+        """(place m, speed m/s) of the driving pedal on the frame, the bike's x at ``x`` moving at ``x_rate``."""
+        _, _, _, px, pz = pedal_forces(x * self.gear, 1.0, CRANK_LENGTH_M)
+        w = x_rate * self.gear
+        # d/dtheta of the place (crank sin, crank cos), on whichever crank drives (pedal_forces' sign)
+        return np.array([px, pz]), w * np.array([pz, -px])
+
+    def radial(self, hip, knee, ankle, pedal, force) -> np.ndarray:
+        """The force (N, frame coordinates) along the crank with which the foot pushes besides the
+        stroke's ``force`` (along the crank circle's tangent: ``controllers.drive.pedal_forces``): the
+        one that makes the joints' torques least against their strength, sum (tau_j / S_j)^2 least
+        (S_j one side's strength in the direction the stroke's force alone turns joint j). It makes no
+        crank torque and does no work on the crank; the bottom bracket takes it (a common assumption
+        of pedalling models: the leg pushes as its joints are strongest, *assumed*)."""
+        f = np.asarray(force, float)
+        if not f.any():
+            return np.zeros(2)
+        p = np.asarray(pedal, float)
+        n = p / float(np.hypot(*p))  # along the crank, outward
+        a = leg_torques(hip, knee, ankle, p, f)
+        b = leg_torques(hip, knee, ankle, p, n)
+        w = {k: 1.0 / self.strength[k][0 if a[k] > 0.0 else 1] ** 2 for k in LEG_JOINTS}
+        lam = -sum(w[k] * a[k] * b[k] for k in LEG_JOINTS) / sum(w[k] * b[k] * b[k] for k in LEG_JOINTS)
+        return lam * n
+
+    def state(self, hip, v_hip, trunk: float, w_trunk: float, x: float, x_rate: float, force) -> dict:
+        """The driving leg at one evaluation: the hips at ``hip`` moving at ``v_hip`` (m, m/s), the
+        trunk at ``trunk`` rad turning at ``w_trunk``, the bike's x and its rate, the foot's force on
+        its pedal ``force`` (N); all in frame coordinates. Returns the joints' places, the pedal's,
+        the anatomical angles, torques (N m), speeds (rad/s) and the power (W)."""
+        p, v_p = self.pedal(x, x_rate)
+        b = self.body
+        phi, w_foot, reached = foot_tip(hip, v_hip, p, v_p, b.ankle_from_pedal, self.longest)
+        a = _rot(phi, b.ankle_from_pedal)
+        v_a = v_p + w_foot * np.array([-a[1], a[0]])
+        # rider_body.pose puts the ankle at the pedal plus the offset: given the spindle less it, the tipped ankle
+        pose = rb.pose(b, tuple(p + a - np.asarray(b.ankle_from_pedal)), self.grip, tuple(hip), trunk)
+        radial = self.radial(pose.hip, pose.knee, pose.ankle, p, force)
+        force = np.asarray(force, float) + radial
+        taus = leg_torques(pose.hip, pose.knee, pose.ankle, p, force)
+        rates = leg_rates(pose.hip, pose.knee, pose.ankle, v_hip, v_a, w_trunk, w_foot)
+        power = sum(taus[k] * rates[k] for k in LEG_JOINTS)
+        angles = {k: pose.angles[k] for k in LEG_JOINTS}
+        angles["ankle"] += phi  # the foot's own turn: dorsiflexion nose-up
+        return {"pedal": p, "pedal_speed": v_p, "knee": pose.knee, "ankle": pose.ankle, "foot_turn": phi,
+                "force": force, "radial": radial, "crank_power": float(force @ v_p),
+                "angles": angles, "taus": taus, "rates": rates, "power": power, "reached": reached}
+
+    def apply(self, d, state: dict) -> None:
+        """Put the foot's push along the crank (``radial``) into the engine's ``xfrc_applied``: on the
+        frame at the pedal (the crank takes it to the bottom bracket) and its reaction on the trunk
+        at the same point (the leg carries it to the hips), as the bike's callback puts the stroke's."""
+        f = state["radial"]
+        if not f.any():
+            return
+        rot = d.xmat[self.frame].reshape(3, 3)
+        fw = rot @ np.array([f[0], 0.0, f[1]])
+        at = d.xpos[self.frame] + rot @ np.array([state["pedal"][0], 0.0, state["pedal"][1]])
+        for body, sign in ((self.frame, 1.0), (self.rider, -1.0)):
+            w = d.xfrc_applied[body]
+            w[:3] += sign * fw
+            w[3:] += np.cross(at - d.xipos[body], sign * fw)
+
+    def note(self, state: dict, common: dict, strength_one_side: dict, t: float) -> None:
+        """Keep the peaks: the driving leg's torques alone and with half the common leg's muscle
+        torque (``common``, both legs') against one side's strength (flexion, extension); and the time
+        (``t`` s, each stretch counted once) with the pedal out of the leg's reach."""
+        if t > self._t_seen:
+            if self._t_seen > -math.inf and not state["reached"]:
+                self.out_of_reach_s += t - self._t_seen
+            self._t_seen = t
+        for k in LEG_JOINTS:
+            tau = state["taus"][k]
+            self.peak[k] = max(self.peak[k], abs(tau))
+            side = tau + 0.5 * common[k]
+            flex, ext = strength_one_side[k]
+            self.peak_side[k] = max(self.peak_side[k], side / flex if side > 0 else -side / ext)
+        self.peak_power = max(self.peak_power, state["power"])
+
+    def report(self) -> dict:
+        return {"peak_N_m": {k: round(v, 2) for k, v in self.peak.items()},
+                "side_peak_of_limit": {k: round(v, 4) for k, v in self.peak_side.items()},
+                "within_limits": all(v <= 1.0 + 1e-9 for v in self.peak_side.values()),
+                "peak_power_W": round(self.peak_power, 1), "out_of_reach_s": round(self.out_of_reach_s, 4)}
+
+
+__all__ = ["PedalLeg", "leg_torques", "leg_rates", "foot_tip", "cross", "pedalling_hip", "LEG_JOINTS", "BOTTOM_KNEE_DEG"]

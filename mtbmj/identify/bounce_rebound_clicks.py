@@ -1,0 +1,387 @@
+"""An answer in clicks from the rebound dampers read off the slams' first rebounds (``fit bounce
+--replay``'s ``"rebound_dampers"``: ``"law"``, ``"held_out"``, ``"answer"``).
+
+**The law.** The rebound coefficients per record (``bounce_rebound.rebound_dampers``, each with its
+interval from the record's noise) as a straight line in clicks, c = c0 + slope x clicks, by weighted
+least squares with each record's standard deviation (the half-width of its noise interval / 1.96);
+with more records than two the covariance is widened by chi^2 / dof when that exceeds 1 (the records
+scatter more than their noise says). The spring's interval moves every record's coefficient the same
+way, so it is carried as a second answer at each of its ends rather than into the law. Refused (a
+reason, no law) with fewer than two distinct clicks read, when a record's noise was not read, or when
+the coefficients do not rise with the clicks (a rebound adjuster adds damping one way: clicks
+mislabelled or a record that is not a clean slam); flagged when the records' own rates do not fall
+with the clicks.
+
+**Held out.** Each record in turn: the law fitted on the others, its coefficient predicted at the
+record's clicks with the law's interval, carried to the record's first-rebound rate (1/s per mm of
+height) through that record's own rate-against-coefficient curve (the replay at the spring given),
+and compared with the record's rate: it holds when the two lie within 2 combined standard deviations
+(the prediction's and the record's noise).
+
+**The target** (``RULE``, ``SOURCE``): a first-rebound rate, the mean speed from 75 % to 25 % of the
+slam's height per mm of that height (1/s) that the rider aims for. The rebound matched to the spring
+as the makers' charts do keeps the rate of extension about the same for every spring (a stiffer spring
+needs more rebound damping to rebound as fast: Vorsprung Suspension, "Mountain bike suspension 101:
+understanding rebound damping"), so the target is a rate, not a coefficient: the coefficient it needs
+follows the spring. Its value is the rider's (``--rebound-target-per-s``); none is assumed.
+
+**The answer.** The first click (searched in ``STEP``) where the law's coefficient, carried through the
+curves of the two records that bracket the click (their rates weighted linearly in clicks; at a
+record, its own curve), gives the target; "set N clicks" is the nearest whole click. Its range: the
+2.5 and 97.5 percentiles over ``DRAWS // 4`` draws of the law's two values (seeded), widened to hold
+the answers from the lower and from the upper bracketing record's curve alone (a replayed slam's rate
+at one coefficient is not the same for every slam: on the shared slams at 7 /s the 0- and 8-click
+slams' curves alone give 8.0 and 4.9 clicks), then to whole clicks. Only the clicks between the
+records' are searched (the line is not extrapolated): a target past them is refused with its side.
+Repeated with the dampers and curves at the spring interval's ends (``at_spring_ci95``), each end's
+answer or why there is none. Beside it, model-free, the clicks where the records' own rates joined by straight lines
+in clicks reach the target (``records_clicks``).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mtbmj.identify.bounce import BounceError
+
+Z95 = 1.959963984540054
+HOLD_SIGMAS = 2.0
+DRAWS = 2000
+RULE = ("the first rebound's mean speed from 75 % to 25 % of the slam's height per mm of that height (1/s) at the "
+        "target; the answer: the whole click nearest where the rebound-coefficient law meets the coefficient the "
+        "records' replays need for it")
+SOURCE = ("Vorsprung Suspension, 'Mountain bike suspension 101: understanding rebound damping' (stiffer springs need "
+          "more rebound damping so the rate of extension stays about the same): the rebound matched to the spring as "
+          "the makers' charts do is a rate, its value the rider's")
+
+
+def _sd(e: dict) -> float | None:
+    """A record's coefficient's standard deviation from its noise interval (the mean half-width / Z95)."""
+    c, n = e["rebound_N_s_per_m"], e.get("rebound_noise_ci95") or [None, None]
+    halves = [abs(c - v) for v in n if v is not None]
+    return None if not halves else max(float(np.mean(halves)) / Z95, 1e-6 * max(c, 1.0))
+
+
+def fit_law(entries, key: str = "rebound_N_s_per_m") -> dict:
+    """The line c = c0 + slope x clicks through the read records (``entries``: ``rebound_dampers``'
+    entries; ``key`` the coefficient's, e.g. a spring end's). BounceError when it cannot be fitted."""
+    rows = sorted((e for e in entries if e.get(key) is not None), key=lambda e: e["clicks"])
+    ks = np.array([e["clicks"] for e in rows], float)
+    if np.unique(ks).size < 2:
+        raise BounceError(f"no law in clicks: {len(rows)} record(s) read at {np.unique(ks).size} distinct click "
+                          f"setting(s); it needs two")
+    c = np.array([e[key] for e in rows], float)
+    bad = [(a, b) for a, b in zip(rows, rows[1:]) if b["clicks"] > a["clicks"] and b[key] <= a[key]]
+    if bad:
+        a, b = bad[0]
+        raise BounceError(f"no law in clicks: the rebound coefficient falls from {a[key]:.0f} N s/m at {a['clicks']:g} "
+                          f"clicks to {b[key]:.0f} at {b['clicks']:g} (more rebound clicks, more damping): the clicks "
+                          f"may be mislabelled or a record is not a clean slam")
+    sds = [_sd(e) for e in rows]
+    if None in sds:
+        none = [e["file"] for e, v in zip(rows, sds) if v is None]
+        raise BounceError(f"no law in clicks: the noise of {', '.join(none)} was not read (its first rebound read in "
+                          f"fewer than half the resampled records), so the law's weights and interval are not known")
+    sd = np.array(sds)
+    X = np.column_stack((np.ones_like(ks), ks))
+    W = 1.0 / sd ** 2
+    cov = np.linalg.inv(X.T @ (X * W[:, None]))
+    theta = cov @ (X.T @ (W * c))
+    r = (c - X @ theta) / sd
+    dof = c.size - 2
+    chi2 = float(r @ r)
+    widen = max(chi2 / dof, 1.0) if dof > 0 else 1.0
+    cov = cov * widen
+    rates = [e.get("record_mid_rebound_per_s") for e in rows]
+    slows = all(b is not None and a is not None and b < a for a, b, ea, eb in zip(rates, rates[1:], rows, rows[1:])
+                if eb["clicks"] > ea["clicks"])
+    return {"c0_N_s_per_m": float(theta[0]), "slope_N_s_per_m_per_click": float(theta[1]),
+            "c0_ci95": [float(theta[0] - Z95 * math.sqrt(cov[0, 0])), float(theta[0] + Z95 * math.sqrt(cov[0, 0]))],
+            "slope_ci95": [float(theta[1] - Z95 * math.sqrt(cov[1, 1])), float(theta[1] + Z95 * math.sqrt(cov[1, 1]))],
+            "cov": cov.tolist(), "chi2": chi2, "dof": dof, "widened_by": widen,
+            "clicks": ks.tolist(), "records": [e["file"] for e in rows], "records_rates_fall": bool(slows)}
+
+
+def _rate_at(points, c: float) -> float:
+    """The rate (1/s) at coefficient ``c`` on a record's curve ([(coefficient, rate)], by coefficient)."""
+    p = np.asarray(points, float)
+    return float(np.interp(c, p[:, 0], p[:, 1]))
+
+
+def _coefficient_for(points, rate: float) -> float | None:
+    """The coefficient giving ``rate`` on a curve (the rate falls with the coefficient); None outside it."""
+    p = np.asarray(points, float)
+    c, v = p[:, 0], p[:, 1]
+    if not (v.min() <= rate <= v.max()):
+        return None
+    order = np.argsort(v)
+    return float(np.interp(rate, v[order], c[order]))
+
+
+def held_out(entries) -> list[dict]:
+    """Each read record predicted from a law fitted on the others (module docstring); [] with fewer than
+    three read. Per record: predicted coefficient and rate with their sd, the record's, z, holds."""
+    read = [e for e in entries if e.get("rebound_N_s_per_m") is not None and e.get("rate_curve")]
+    out = []
+    if len(read) < 3:
+        return out
+    for j, e in enumerate(read):
+        rest = read[:j] + read[j + 1:]
+        row = {"file": e["file"], "clicks": e["clicks"], "from": [r["file"] for r in rest]}
+        try:
+            law = fit_law(rest)
+        except BounceError as err:
+            row["refused"] = str(err)
+            out.append(row)
+            continue
+        cov = np.asarray(law["cov"])
+        x = np.array([1.0, e["clicks"]])
+        c = law["c0_N_s_per_m"] + law["slope_N_s_per_m_per_click"] * e["clicks"]
+        c_sd = float(math.sqrt(x @ cov @ x))
+        pts = e["rate_curve"]
+        rate = _rate_at(pts, c)
+        h = max(c_sd, 10.0)
+        slope = (_rate_at(pts, c + h) - _rate_at(pts, c - h)) / (2 * h)
+        rate_sd = abs(slope) * c_sd
+        rec, rec_sd = e["record_mid_rebound_per_s"], e.get("record_rate_sd_per_s") or 0.0
+        both = math.hypot(rate_sd, rec_sd)
+        z = (rate - rec) / both if both > 0 else math.inf
+        row.update({"predicted_N_s_per_m": c, "predicted_sd_N_s_per_m": c_sd, "read_N_s_per_m": e["rebound_N_s_per_m"],
+                    "predicted_rate_per_s": rate, "predicted_rate_sd_per_s": rate_sd, "record_rate_per_s": rec,
+                    "record_rate_sd_per_s": rec_sd, "z": float(z), "holds": bool(abs(z) <= HOLD_SIGMAS)})
+        out.append(row)
+    return out
+
+
+STEP = 0.05  # clicks searched in this step
+
+
+def _rates(law_ab, ks, rows, curve_of, only: int | None = None) -> np.ndarray:
+    """The predicted first-rebound rate at clicks ``ks`` for law values ``law_ab`` (c0, slope): the law's
+    coefficient carried through the curves of the two records that bracket each click, weighted
+    linearly in clicks (at a record, its own curve); ``only``: 0 or 1, the lower or upper record's
+    curve alone."""
+    a, b = law_ab
+    kr = np.array([e["clicks"] for e in rows], float)
+    c = a + b * ks
+    j = np.clip(np.searchsorted(kr, ks, side="right") - 1, 0, kr.size - 2)
+    out = np.empty(ks.size)
+    for i in range(kr.size - 1):
+        m = j == i
+        if not m.any():
+            continue
+        lo, hi = (np.asarray(curve_of(rows[i]), float), np.asarray(curve_of(rows[i + 1]), float))
+        r_lo, r_hi = np.interp(c[m], lo[:, 0], lo[:, 1]), np.interp(c[m], hi[:, 0], hi[:, 1])
+        w = np.clip((ks[m] - kr[i]) / (kr[i + 1] - kr[i]), 0.0, 1.0)
+        out[m] = r_lo if only == 0 else r_hi if only == 1 else (1 - w) * r_lo + w * r_hi
+    return out
+
+
+def _crossing(ks, rates, target) -> float | None:
+    """The first click where ``rates`` (falling with the clicks) reach ``target``; None when they do not."""
+    below = np.flatnonzero(rates <= target)
+    if not below.size or below[0] == 0:
+        return None
+    i = int(below[0])
+    return float(ks[i - 1] + (rates[i - 1] - target) / (rates[i - 1] - rates[i]) * (ks[i] - ks[i - 1]))
+
+
+def _one_answer(entries, target: float, key: str, curve_of, seed: int = 0) -> dict:
+    """The answer at one spring (``key``: the coefficients', ``curve_of(e)``: each record's curve): the
+    clicks where the law's coefficient, carried through the bracketing records' curves (``_rates``),
+    gives the target rate; its range from ``DRAWS`` draws of the law, widened to hold the answers from
+    the lower and the upper record's curve alone (the slams' curves differ: a replayed slam's rate per
+    mm is not the same at one coefficient for every slam)."""
+    law = fit_law(entries, key)
+    rows = sorted((e for e in entries if e.get(key) is not None and curve_of(e)), key=lambda e: e["clicks"])
+    lo, hi = min(law["clicks"]), max(law["clicks"])
+    ks = np.arange(lo, hi + 0.5 * STEP, STEP)
+    ab = (law["c0_N_s_per_m"], law["slope_N_s_per_m_per_click"])
+    rates = _rates(ab, ks, rows, curve_of)
+    row = {"law": law, "searched_clicks": [lo, hi], "rate_at_searched_ends_per_s": [float(rates[0]), float(rates[-1])]}
+    k = _crossing(ks, rates, target)
+    if k is None:
+        above = target < rates[-1]
+        row["set_clicks"] = None
+        row["note"] = (f"no answer within the records: the law's rebound at {hi if above else lo:g} clicks is "
+                       f"{rates[-1] if above else rates[0]:.2f} /s, still {'faster' if above else 'slower'} than the "
+                       f"target: {'more' if above else 'fewer'} than {hi if above else lo:g} clicks (the law is not "
+                       f"extrapolated): record a slam there")
+        return row
+    row["clicks_exact"] = k
+    row["needed_N_s_per_m"] = float(ab[0] + ab[1] * k)
+    rng = np.random.default_rng(seed)
+    got, outside = [], 0
+    for th in rng.multivariate_normal(ab, np.asarray(law["cov"]), size=DRAWS // 4):
+        r = _rates(th, ks, rows, curve_of)
+        kk = _crossing(ks, r, target)
+        if kk is None:
+            outside += 1
+            kk = hi + 1.0 if target < r[-1] else lo - 1.0
+        got.append(kk)
+    alone = [_crossing(ks, _rates(ab, ks, rows, curve_of, only), target) for only in (0, 1)]
+    row["clicks_by_curve"] = {"lower_record": alone[0], "upper_record": alone[1]}
+    p_lo, p_hi = np.percentile(got, [2.5, 97.5])
+    span = [p_lo, p_hi] + [a for a in alone if a is not None]
+    row["set_clicks"] = int(round(k))
+    row["clicks_range95"] = [int(math.floor(max(min(span), lo))), int(math.ceil(min(max(span), hi)))]
+    share = outside / (DRAWS // 4)
+    row["draws_outside_searched"] = share
+    if share > 0.025 or None in alone:
+        row["note"] = "the range reaches past the records' clicks: it is wider than shown"
+    return row
+
+
+def records_clicks(entries, target: float) -> float | None:
+    """The model-free cross-check: the clicks where the records' own first-rebound rates, joined by
+    straight lines in clicks, reach ``target``; None when they do not fall with the clicks or the
+    target lies outside them."""
+    rows = sorted((e for e in entries if e.get("record_mid_rebound_per_s") is not None), key=lambda e: e["clicks"])
+    ks = np.array([e["clicks"] for e in rows], float)
+    rs = np.array([e["record_mid_rebound_per_s"] for e in rows], float)
+    if ks.size < 2 or np.unique(ks).size < ks.size or not np.all(np.diff(rs) < 0) or not rs[-1] <= target <= rs[0]:
+        return None
+    return float(np.interp(target, rs[::-1], ks[::-1]))
+
+
+def answer(entries, target_per_s: float | None) -> dict:
+    """The setting for the target rate (module docstring), at the spring given and at its interval's ends.
+    {"target_per_s", "rule", "source", "set_clicks", ...}; with no target, why there is no answer."""
+    base = {"target_per_s": target_per_s, "rule": RULE, "source": SOURCE}
+    if target_per_s is None:
+        return {**base, "set_clicks": None,
+                "note": "no target given (--rebound-target-per-s: the first rebound's rate to aim for, 1/s per mm of "
+                        "height): no answer in clicks"}
+    try:
+        row = _one_answer(entries, target_per_s, "rebound_N_s_per_m", lambda e: e.get("rate_curve"))
+    except BounceError as e:
+        return {**base, "set_clicks": None, "note": str(e)}
+    ends = []
+    for i, which in ((0, "lower"), (1, "upper")):
+        read = [e for e in entries if e.get("rebound_N_s_per_m") is not None]
+        at = [{**e, "end_c": (e.get("at_spring_ci95") or [None, None])[i]} for e in read]
+        if not any("at_spring_ci95" in e for e in read):
+            ends.append(None)
+            continue
+        if any(e["end_c"] is None for e in at):
+            none = [e["file"] for e in at if e["end_c"] is None]
+            ends.append({"set_clicks": None, "note": f"none at the spring interval's {which} end ({', '.join(none)} "
+                                                     f"read no coefficient there)"})
+            continue
+        try:
+            r = _one_answer(at, target_per_s, "end_c", lambda e, i=i: (e.get("rate_curve_at_spring_ci95")
+                                                                       or [None, None])[i])
+            ends.append({k: r[k] for k in ("set_clicks", "clicks_exact", "note") if k in r})
+        except BounceError as err:
+            ends.append({"set_clicks": None, "note": f"none at the spring interval's {which} end: {err}"})
+    return {**base, **row, "at_spring_ci95": ends, "records_clicks": records_clicks(entries, target_per_s)}
+
+
+def held_out_line(rows) -> str | None:
+    done = [r for r in rows if "holds" in r]
+    if not done:
+        return None
+    parts = [f"{r['clicks']:g} clicks {r['predicted_rate_per_s']:.2f} /s against {r['record_rate_per_s']:.2f} "
+             f"({r['z']:+.1f} sd, {'holds' if r['holds'] else 'MISSES'})" for r in done]
+    n = sum(r["holds"] for r in done)
+    return f"rebound law held out (each record from the others): {'; '.join(parts)}: {n} of {len(done)} within 2 sd"
+
+
+def answer_line(ans: dict) -> str:
+    head = "rebound answer"
+    if ans["target_per_s"] is not None:
+        head += f" (first rebound at {ans['target_per_s']:.2f} /s per mm of height)"
+    if ans.get("set_clicks") is None:
+        return f"{head}: {ans.get('note', 'none')}"
+    text = (f"{head}: set {ans['set_clicks']} clicks ({ans['clicks_exact']:.1f} on the law, "
+            f"{ans['needed_N_s_per_m']:.0f} N s/m); within the uncertainty {ans['clicks_range95'][0]}-{ans['clicks_range95'][1]} clicks (95 % of the "
+            f"law's draws and either bracketing slam's curve alone)")
+    ends = ans.get("at_spring_ci95") or []
+    said = []
+    for which, e in zip(("lower", "upper"), ends):
+        if e is None:
+            continue
+        said.append(f"at the spring's {which} end {e['set_clicks']} clicks" if e.get("set_clicks") is not None
+                    else e.get("note", f"none at the spring's {which} end"))
+    if said:
+        text += "; " + "; ".join(said)
+    if ans.get("note"):
+        text += f"; {ans['note']}"
+    if ans.get("records_clicks") is not None:
+        text += f"; model-free, the records' own rates joined in clicks reach it at {ans['records_clicks']:.1f} clicks"
+    return text
+
+
+def figure_png(got: dict) -> bytes:
+    """rebound.png (``figure``) as PNG bytes."""
+    from mtbmj.readout.quicklook import png
+
+    return png(figure(got), dpi=80)
+
+
+def figure(got: dict):
+    """rebound.png's figure: (left) each record's rebound coefficient against its clicks with its 95 % interval
+    (an open side drawn to the axis' edge, dashed), the law with its 95 % band and the answer's clicks
+    and coefficient; (right) the records' first-rebound rates with their 95 % noise, the held-out
+    predictions with theirs, and the target."""
+    from matplotlib.figure import Figure
+
+    recs = [e for e in got["records"] if e.get("rebound_N_s_per_m") is not None]
+    fig = Figure(figsize=(10.0, 4.0))
+    ax, bx = fig.subplots(1, 2)
+    top = max([e["rebound_N_s_per_m_ci95"][1] or e["rebound_N_s_per_m"] for e in recs] + [1.0]) * 1.1
+    for e in recs:
+        k, c = e["clicks"], e["rebound_N_s_per_m"]
+        lo, hi = e["rebound_N_s_per_m_ci95"]
+        ax.plot([k, k], [c, hi if hi is not None else top], color="k", lw=1.2, ls="-" if hi is not None else "--")
+        ax.plot([k, k], [lo if lo is not None else 0.0, c], color="k", lw=1.2, ls="-" if lo is not None else "--")
+        n = e.get("rebound_noise_ci95") or [None, None]
+        if None not in n:
+            ax.plot([k, k], n, "C3-", lw=4, alpha=0.6)
+        ax.plot(k, c, "ko")
+    law = got.get("law") or {}
+    if "c0_N_s_per_m" in law:
+        ks = np.linspace(min(law["clicks"]), max(law["clicks"]), 100)
+        cov = np.asarray(law["cov"])
+        X = np.column_stack((np.ones_like(ks), ks))
+        mid = law["c0_N_s_per_m"] + law["slope_N_s_per_m_per_click"] * ks
+        band = Z95 * np.sqrt(np.einsum("ij,jk,ik->i", X, cov, X))
+        ax.plot(ks, mid, "C0", label=f"law {law['c0_N_s_per_m']:.0f} + {law['slope_N_s_per_m_per_click']:.1f} x clicks")
+        ax.fill_between(ks, mid - band, mid + band, color="C0", alpha=0.3)
+    ans = got.get("answer") or {}
+    if ans.get("set_clicks") is not None:
+        ax.axvspan(*ans["clicks_range95"], color="C2", alpha=0.15, label="answer's range (95 %)")
+        ax.plot(ans["clicks_exact"], ans["needed_N_s_per_m"], "C2*", ms=12,
+                label=f"set {ans['set_clicks']} clicks for {ans['target_per_s']:.2f} /s")
+    ax.plot([], [], "k--", label="open side (spring's end reads none)")
+    ax.plot([], [], "C3-", lw=4, alpha=0.6, label="record's noise alone")
+    ax.set_ylim(0.0, top)
+    ax.set_xlabel("rebound clicks")
+    ax.set_ylabel("rebound coefficient at the shock (N s/m)")
+    ax.set_title("rebound dampers from the first rebounds (95 %: noise and spring)", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left")
+    ax.grid(alpha=0.3)
+    for e in got["records"]:
+        r, sd = e.get("record_mid_rebound_per_s"), e.get("record_rate_sd_per_s") or 0.0
+        if r is not None:
+            bx.errorbar(e["clicks"], r, yerr=Z95 * sd, fmt="ko", capsize=3)
+    bx.plot([], [], "ko", label="record (95 % noise)")
+    for row in got.get("held_out") or []:
+        if "holds" in row:
+            bx.errorbar(row["clicks"] + 0.3, row["predicted_rate_per_s"], yerr=Z95 * row["predicted_rate_sd_per_s"],
+                        fmt="s", color="C1" if row["holds"] else "C3", capsize=3)
+    bx.plot([], [], "s", color="C1", label="held out: predicted from the others")
+    if ans.get("target_per_s") is not None:
+        bx.axhline(ans["target_per_s"], color="C2", ls=":", label=f"target {ans['target_per_s']:.2f} /s")
+    bx.set_xlabel("rebound clicks")
+    bx.set_ylabel("first rebound: mid speed per mm of height (1/s)")
+    bx.set_title("the records' first rebounds and each held out", fontsize=9)
+    bx.legend(fontsize=7)
+    bx.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+__all__ = ["HOLD_SIGMAS", "RULE", "SOURCE", "answer", "answer_line", "figure", "figure_png", "fit_law", "held_out",
+           "held_out_line", "records_clicks"]

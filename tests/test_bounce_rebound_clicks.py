@@ -1,0 +1,420 @@
+"""The rebound dampers read off the slams' first rebounds with their intervals, the law in clicks, each
+record held out, and the answer in clicks (``bounce_rebound``, ``bounce_rebound_clicks``; ``fit bounce
+--replay``'s ``"rebound_dampers"``).
+
+(a) Closed forms, no replay: a damped rebound made here (x = rest + A e^(-zeta wn t) (cos wd t +
+zeta / sqrt(1 - zeta^2) sin wd t) after a sin^2 rise) with white noise of a known sd: the spread
+``rate_spread`` reads from the record alone matches the spread of the rate over 60 independent noise
+draws made here. A law and curves made here in closed form (coefficients on a line in clicks, a
+rate falling with the coefficient as r(c) = R / (1 + c / C)): the law, each record held out and the
+answer for a target the test sets come back; labels shuffled and a record that does not rise are
+refused in one line; an open side of the interval is said.
+
+(b) Slams made here by an independent model at four rebound settings (``slam``: its own fixed-step
+integrator, three masses on one line in the shock's stroke: the rider on a 5 Hz saddle, the body on
+the shock, the wheel on a tyre spring; a coil with preload, the stiffness beside it, the top-out
+spring, compression 2500 N s/m and rebound 1500 + 250 x clicks N s/m, Coulomb friction smoothed over
+1 mm/s, noise 0.05 mm; the lumped values are those measured for ``tests/test_bounce_replay.py``'s
+generator, which this one does not import) replayed with the spring (its interval 0.45-0.65 x),
+friction and compression given: each click's rebound coefficient with its interval, the law, each
+slam held out, and the answer for the rate a fifth slam at 6 clicks has (read by the test's own
+reader). Measured: the coefficients read 2055, 2951, 3893 and 4794 N s/m for 1500, 2500, 3500 and
+4500 (high by an offset that shrinks from 555 to 294 N s/m: the 0-click one is 37 % high, a strict
+xfail; outside the record's noise alone, a strict xfail; inside the interval with the spring's), the
+law's slope 229 N s/m per click for 250, and the answer 6 clicks (6.2 on the law, range 6-7; 6 at
+both of the spring's ends): the offset is the same reading's at every click, so it cancels in the
+answer.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mtbmj.identify.bounce import BounceError
+
+FS = 5000.0
+
+
+# (a) closed forms ------------------------------------------------------------------------------
+def rebound_record(zeta=0.25, hz=1.6, amp=40.0, noise=0.05, seed=0):
+    """(time_s, x_mm, peak): at rest at 0, a sin^2 rise of ``amp`` over 0.12 s, then the damped free motion."""
+    wn = 2 * math.pi * hz
+    wd = wn * math.sqrt(1 - zeta ** 2)
+    t = np.arange(0.0, 3.0, 1 / FS)
+    tp = 1.0
+    x = np.zeros(t.size)
+    up = (t > tp - 0.12) & (t <= tp)
+    x[up] = amp * np.sin(0.5 * np.pi * (t[up] - (tp - 0.12)) / 0.12) ** 2
+    a = t > tp
+    s = t[a] - tp
+    x[a] = amp * np.exp(-zeta * wn * s) * (np.cos(wd * s) + zeta / math.sqrt(1 - zeta ** 2) * np.sin(wd * s))
+    return t, x + noise * np.random.default_rng(seed).standard_normal(t.size), int(np.argmin(np.abs(t - tp)))
+
+
+def own_rate(t, x, peak) -> float:
+    """The test's own reading of the first rebound's rate (1/s): a 10 ms moving average, the times it
+    falls through 75 % and 25 % of the peak's height (linear between samples), the height's half over
+    that time, per mm of the height."""
+    n = int(round(0.010 * FS))
+    xs = np.convolve(np.concatenate((np.full(n // 2, x[0]), x, np.full(n - 1 - n // 2, x[-1]))), np.ones(n) / n,
+                     "valid")
+    h = xs[peak]
+    times = []
+    for f in (0.75, 0.25):
+        j = peak + int(np.flatnonzero(xs[peak:] <= f * h)[0])
+        times.append(t[j - 1] + (f * h - xs[j - 1]) / (xs[j] - xs[j - 1]) / FS)
+    return 0.5 * h / (times[1] - times[0]) / h
+
+
+def test_rate_spread_is_the_noise_carried_into_the_rate():
+    """The spread read from one record (its left-over over a 10 ms average, resampled) against the
+    spread over 60 records made with fresh noise of the same sd: within 35 % (the spread of 60 draws'
+    sd alone is about 9 %, and the left-over of a 10 ms average is not all the noise)."""
+    from mtbmj.identify.bounce_rebound import rate_spread
+
+    t, x, peak = rebound_record(noise=0.3, seed=1)
+    got = rate_spread(t, x, peak, 0.0)
+    truth = np.std([own_rate(*rebound_record(noise=0.3, seed=s)[:2], peak) for s in range(100, 160)], ddof=1)
+    assert got["sd_per_s"] == pytest.approx(truth, rel=0.35)
+    assert got["noise_mm"] == pytest.approx(0.3, rel=0.35)
+    assert got["rate_per_s"] == pytest.approx(own_rate(t, x, peak), rel=0.01)
+
+
+R, C_HALF = 12.0, 4000.0  # the closed-form curve: r(c) = R / (1 + c / C_HALF)
+
+
+def rate_of(c):
+    return R / (1.0 + np.asarray(c, float) / C_HALF)
+
+
+def law_entries(clicks=(0, 5, 10, 15), c0=1000.0, slope=300.0, sd=60.0, seed=0, shuffle=None):
+    """Entries as ``rebound_dampers`` gives them: coefficients on the line (with noise of ``sd``), their
+    noise intervals +-1.96 sd, the record's rate from the curve, and the curve."""
+    rng = np.random.default_rng(seed)
+    cs = np.array([c0 + slope * k for k in clicks]) + sd * rng.standard_normal(len(clicks))
+    curve = [[c, float(rate_of(c))] for c in np.geomspace(50.0, 30000.0, 40)]
+    labels = list(clicks) if shuffle is None else [clicks[i] for i in shuffle]
+    return [{"file": f"r{k}", "clicks": lab, "rebound_N_s_per_m": float(c),
+             "rebound_noise_ci95": [float(c - 1.96 * sd), float(c + 1.96 * sd)],
+             "rebound_N_s_per_m_ci95": [float(c - 1.96 * sd), float(c + 1.96 * sd)], "interval_open": [],
+             "record_mid_rebound_per_s": float(rate_of(c)), "record_rate_sd_per_s": float(
+                 abs(R / C_HALF / (1 + c / C_HALF) ** 2) * sd), "rate_curve": curve}
+            for k, lab, c in zip(clicks, labels, cs)]
+
+
+def test_law_comes_back_within_its_interval():
+    from mtbmj.identify.bounce_rebound_clicks import fit_law
+
+    hits = 0
+    for seed in range(40):
+        law = fit_law(law_entries(seed=seed))
+        lo, hi = law["slope_ci95"]
+        hits += lo <= 300.0 <= hi
+        assert law["records_rates_fall"]
+    assert hits >= 34  # 95 % of 40 is 38; 34 is its binomial 1 % lower limit
+
+
+def test_held_out_holds_on_a_line_and_misses_a_kink():
+    """Records on the line (50 sets of four, fresh noise): the held-out z (prediction less the record,
+    over their combined sd) has a spread near 1 and about 95 % hold (at least 90 % of 200; a z that is
+    all noise). The last record moved 2500 N s/m off the line (41 of its sd): held out, it misses."""
+    from mtbmj.identify.bounce_rebound_clicks import held_out
+
+    zs = np.array([r["z"] for s in range(50) for r in held_out(law_entries(seed=s))])
+    assert zs.size == 200 and 0.75 < np.std(zs) < 1.25
+    assert np.mean(np.abs(zs) <= 2.0) >= 0.90
+    bent = law_entries(seed=3)
+    bent[-1]["rebound_N_s_per_m"] += 2500.0
+    bent[-1]["rebound_noise_ci95"] = [v + 2500.0 for v in bent[-1]["rebound_noise_ci95"]]
+    bent[-1]["record_mid_rebound_per_s"] = float(rate_of(bent[-1]["rebound_N_s_per_m"]))
+    rows = held_out(bent)
+    assert rows[-1]["holds"] is False and abs(rows[-1]["z"]) > 2
+
+
+@pytest.mark.parametrize("k_true", [3.0, 7.0, 12.0])
+def test_answer_for_a_target_the_test_sets(k_true):
+    """The target: the rate the closed-form curve has at the line's coefficient for ``k_true`` clicks;
+    the answer is that click, within the range."""
+    from mtbmj.identify.bounce_rebound_clicks import answer, answer_line
+
+    target = float(rate_of(1000.0 + 300.0 * k_true))
+    ans = answer(law_entries(sd=30.0, seed=5), target)
+    assert ans["set_clicks"] == round(k_true)
+    lo, hi = ans["clicks_range95"]
+    assert lo <= k_true <= hi and hi - lo <= 3
+    assert f"set {round(k_true)} clicks" in answer_line(ans)
+    assert ans["records_clicks"] == pytest.approx(k_true, abs=1.0)  # the rates joined by chords: near the curve
+
+
+def test_answer_past_the_records_is_refused_with_its_side():
+    from mtbmj.identify.bounce_rebound_clicks import answer
+
+    ans = answer(law_entries(), float(rate_of(1000.0 + 300.0 * 22)))
+    assert ans["set_clicks"] is None and "more than 15 clicks" in ans["note"]
+    ans = answer(law_entries(), None)
+    assert ans["set_clicks"] is None and "no target given" in ans["note"]
+
+
+def test_shuffled_labels_are_refused_in_one_line():
+    """The clicks' labels shuffled (the records are at 0, 5, 10, 15; labelled 10, 0, 15, 5): the
+    coefficients do not rise with the labels: refused, one line, no answer."""
+    from mtbmj.identify.bounce_rebound import law_in_clicks
+
+    got = law_in_clicks(law_entries(shuffle=[2, 0, 3, 1]), 6.0)
+    assert "refused" in got["law"] and "mislabelled" in got["law"]["refused"]
+    assert "\n" not in got["law"]["refused"]
+    assert got["answer"]["set_clicks"] is None and got["held_out"] == []
+    assert got["lines"][0].startswith("rebound law refused: no law in clicks")
+
+
+def test_a_record_without_its_noise_is_refused():
+    from mtbmj.identify.bounce_rebound_clicks import fit_law
+
+    e = law_entries()
+    e[2]["rebound_noise_ci95"] = [None, None]
+    with pytest.raises(BounceError, match="the noise of r10 was not read"):
+        fit_law(e)
+
+
+def test_records_that_do_not_slow_are_flagged():
+    """The coefficients rise but the records' own rates do not fall with the clicks (one swapped): the
+    law is fitted and flagged."""
+    from mtbmj.identify.bounce_rebound import law_in_clicks
+
+    e = law_entries()
+    e[1]["record_mid_rebound_per_s"], e[2]["record_mid_rebound_per_s"] = (e[2]["record_mid_rebound_per_s"],
+                                                                          e[1]["record_mid_rebound_per_s"])
+    got = law_in_clicks(e, None)
+    assert got["law"]["records_rates_fall"] is False
+    assert "flagged: the records' own first rebounds do not slow" in got["lines"][0]
+
+
+def test_interval_open_where_an_end_is_missing():
+    from mtbmj.identify.bounce_rebound import combine
+
+    ends, why = combine(1000.0, [900.0, 1100.0], [None, 1400.0])
+    assert ends[0] is None and ends[1] == pytest.approx(1000.0 + math.hypot(100.0, 400.0))
+    assert why == ["open below: no coefficient within 50-30000 N s/m at the spring interval's lower end"]
+    ends, why = combine(1000.0, [900.0, 1100.0], [700.0, 1400.0])
+    assert ends == pytest.approx([1000.0 - math.hypot(100.0, 300.0), 1000.0 + math.hypot(100.0, 400.0)]) and not why
+
+
+def test_figure_shows_the_law_the_answer_and_open_sides():
+    """rebound.png: the law's line through its two values, the answer's star at its clicks, one
+    dashed line per open side, and on the right one held-out marker per record."""
+    from mtbmj.identify.bounce_rebound import law_in_clicks
+    from mtbmj.identify.bounce_rebound_clicks import figure, figure_png
+
+    e = law_entries(sd=30.0, seed=5)
+    for x in e:
+        x["rebound_N_s_per_m_ci95"] = [None, x["rebound_noise_ci95"][1] + 500.0]
+    got = {"records": e, **law_in_clicks(e, float(rate_of(1000.0 + 300.0 * 7)))}
+    ax, bx = figure(got).axes
+    law = got["law"]
+    line = [ln for ln in ax.get_lines() if ln.get_label().startswith("law ")][0]
+    xs, ys = line.get_data()
+    assert ys[0] == pytest.approx(law["c0_N_s_per_m"] + law["slope_N_s_per_m_per_click"] * xs[0])
+    star = [ln for ln in ax.get_lines() if ln.get_label().startswith("set 7 clicks")][0]
+    assert star.get_xdata()[0] == pytest.approx(got["answer"]["clicks_exact"])
+    dashed = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--" and len(ln.get_xdata()) == 2]
+    assert len(dashed) == len(e)
+    assert figure_png(got)[:4] == b"\x89PNG"
+    assert len(bx.containers) == 2 * len(e)  # the records' and the held-out error bars
+
+
+def test_cli_target_needs_replay_and_a_positive_rate(tmp_path, capsys):
+    from helpers import one_line
+
+    one_line(capsys, ["fit", "bounce", "a.SST", "--clicks", "0", "--rebound-target-per-s", "7",
+                      "--out", str(tmp_path / "o")], "--rebound-target-per-s", "--replay")
+    one_line(capsys, ["fit", "bounce", "a.SST", "--clicks", "0", "--replay", "--bike", "sst",
+                      "--rebound-target-per-s", "-1", "--out", str(tmp_path / "o")], "positive")
+    assert not (tmp_path / "o").exists()
+
+
+# (b) slams of an independent model ----------------------------------------------------------------
+from helpers import (SLAM_K_OTHER as K_OTHER, SLAM_K_TYRE as K_TYRE, SLAM_TOP_OUT as TOP_OUT,  # noqa: E402
+                     SLAM_W_SHOCK as W_SHOCK, slam_parts)
+SCALE, COMPRESSION, FRICTION = 0.55, 2500.0, 30.0
+
+
+def rebound_at(clicks):
+    return 1500.0 + 250.0 * clicks  # N s/m: the generator's rebound per click
+
+
+def slam(rebound, seed=0, dt=2e-5, quiet=2.0, after=1.6, noise=0.05, rest_mm=14.0):
+    """(time_s, stroke_mm): at rest, a lift (0.6 x the static force over 0.35 s) and a slam (1.0 x over
+    0.2 s) on the rider, then free. State y = (body, wheel, saddle) positions and speeds, down positive;
+    stepped with the midpoint rule (velocities and positions from the half step's forces)."""
+    k, m_r, m_b, m_w, k_r, c_r, g_r, g_b, x_rest, preload = slam_parts(SCALE, rest_mm)
+
+    def acc(t, p, v):
+        zb, zw, y = p
+        vb, vw, vy = v
+        f = 0.0
+        if quiet - 0.55 < t < quiet - 0.2:
+            f -= 0.6 * W_SHOCK * math.sin(math.pi * (t - quiet + 0.55) / 0.35)
+        if quiet - 0.2 < t < quiet:
+            f += W_SHOCK * math.sin(math.pi * (t - quiet + 0.2) / 0.2)
+        x, xv = zb - zw, vb - vw
+        saddle = k_r * y + c_r * vy
+        spring = preload + k * x + K_OTHER * (x - x_rest) - TOP_OUT * max(0.0, preload / TOP_OUT - x)
+        damper = (COMPRESSION if xv > 0 else rebound) * xv + FRICTION * math.tanh(xv / 1e-3)
+        tyre = max(0.0, W_SHOCK + K_TYRE * zw)
+        ab = (g_b + saddle - spring - damper) / m_b
+        aw = (spring + damper - tyre) / m_w
+        return np.array([ab, aw, (g_r + f - saddle) / m_r - ab])
+
+    p = np.array([x_rest, 0.0, g_r / k_r])
+    v = np.zeros(3)
+    every = int(round(1 / (FS * dt)))
+    out = []
+    for i in range(int(round((quiet + after) / dt))):
+        t = i * dt
+        a1 = acc(t, p, v)
+        ph, vh = p + 0.5 * dt * v, v + 0.5 * dt * a1
+        a2 = acc(t + 0.5 * dt, ph, vh)
+        p, v = p + dt * vh, v + dt * a2
+        if i % every == 0:
+            out.append(p[0] - p[1])
+    x = np.array(out) * 1e3
+    return np.arange(x.size) / FS, x + noise * np.random.default_rng(seed).standard_normal(x.size)
+
+
+GEN_CLICKS = (0, 4, 8, 12)
+SPRING_CI95 = (SCALE - 0.10, SCALE + 0.10)  # the spring's interval given (the shared replays' is +-0.34)
+
+
+@pytest.fixture(scope="module")
+def generated():
+    from mtbmj.identify.bounce_rebound import rebound_dampers
+    from mtbmj.identify.bounce_replay import SeatedReplay, prepare_slam
+
+    sr = SeatedReplay("sst")
+    slams = []
+    for k in GEN_CLICKS:
+        t, x = slam(rebound_at(k), seed=k)
+        slams.append(prepare_slam(t, x, None, f"clicks {k}", sr))
+    entries = rebound_dampers(slams, list(GEN_CLICKS), SCALE, FRICTION, COMPRESSION, spring_ci95=SPRING_CI95)
+    t, x = slam(rebound_at(6), seed=6)
+    peak = int(np.argmax(x))
+    target = own_rate(t, x - np.median(x[(t > 0.5) & (t < 1.5)]), peak)
+    return entries, target
+
+
+@pytest.mark.slow
+def test_generator_rebound_per_click(generated):
+    """Each click's rebound coefficient read, inside its own interval, and rising with the clicks; at
+    4, 8 and 12 clicks (2500-4500 N s/m) within 30 % of the generator's (the method's stated tolerance
+    on an independent generator, ``test_bounce_replay``); 0 clicks: the next test."""
+    entries, _ = generated
+    assert [e.get("refused") for e in entries] == [None] * len(GEN_CLICKS)
+    for e in entries:
+        lo, hi = e["rebound_N_s_per_m_ci95"]
+        assert lo < e["rebound_N_s_per_m"] < hi and not e["interval_open"]
+        if e["clicks"] > 0:
+            assert e["rebound_N_s_per_m"] == pytest.approx(rebound_at(e["clicks"]), rel=0.30)
+    cs = [e["rebound_N_s_per_m"] for e in entries]
+    assert all(b > a for a, b in zip(cs, cs[1:]))
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="measured: the replay reads the generator 294-555 N s/m high (2055, 2951, 3893, "
+                                       "4794 for 1500, 2500, 3500, 4500): 37 % at 0 clicks, past the 30 % tolerance")
+def test_generator_lowest_click_within_tolerance(generated):
+    entries, _ = generated
+    assert entries[0]["rebound_N_s_per_m"] == pytest.approx(rebound_at(0), rel=0.30)
+
+
+@pytest.mark.slow
+def test_generator_truth_within_the_interval(generated):
+    """With the spring's interval 0.45-0.65 x given, every click's 95 % interval (the record's noise and
+    the spring's ends) holds the generator's rebound coefficient, and none is open."""
+    entries, _ = generated
+    for e in entries:
+        lo, hi = e["rebound_N_s_per_m_ci95"]
+        assert not e["interval_open"] and lo <= rebound_at(e["clicks"]) <= hi
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="the record's noise alone: +-25-30 N s/m, while the replay reads the generator "
+                                       "294-555 N s/m high (model error: the generator is not the bike)")
+def test_generator_truth_within_the_noise_alone(generated):
+    entries, _ = generated
+    for e in entries:
+        lo, hi = e["rebound_noise_ci95"]
+        assert lo <= rebound_at(e["clicks"]) <= hi
+
+
+@pytest.mark.slow
+def test_generator_held_out(generated):
+    """Each of the four slams predicted from the other three's law, carried to its first-rebound rate:
+    within 2 sd of the record's (the reading's offset is the same at every click, so it cancels)."""
+    from mtbmj.identify.bounce_rebound_clicks import held_out
+
+    rows = held_out(generated[0])
+    assert len(rows) == 4 and all(r["holds"] for r in rows)
+
+
+@pytest.mark.slow
+def test_generator_answer_in_clicks(generated):
+    """The target: the first-rebound rate of a fifth slam at 6 clicks (not among the four fitted),
+    read by the test's own reader; the answer is 6 clicks, 6 within its range."""
+    from mtbmj.identify.bounce_rebound import law_in_clicks
+
+    entries, target = generated
+    got = law_in_clicks(entries, target)
+    assert "refused" not in got["law"] and got["law"]["slope_N_s_per_m_per_click"] > 0
+    ans = got["answer"]
+    assert ans["set_clicks"] == 6
+    assert ans["clicks_range95"][0] <= 6 <= ans["clicks_range95"][1]
+    assert [end["set_clicks"] for end in ans["at_spring_ci95"]] == [6, 6]  # the spring's ends: the same answer
+
+
+@pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
+def test_cli_writes_and_prints_the_answer(tmp_path, monkeypatch, capsys):
+    """``fit bounce --replay --rebound-target-per-s``'s wiring, the replays (minutes) replaced by this
+    file's closed-form entries at the records' clicks: fit.json's "rebound_dampers" has the law, the
+    held-out rows and the answer for the target, the lines are printed and rebound.png is written."""
+    import json
+    import os
+
+    from conftest import SHARED_DATA
+
+    from mtbmj.cli import main
+    from mtbmj.identify import bounce_rebound, bounce_replay
+
+    monkeypatch.setattr(bounce_replay, "replay_records", lambda records, clicks, bike, rider_hz: {
+        "summary": [], "csv": {}, "replays": [], "lines": [], "check": None})
+
+    def read(records, clicks, replayed, bike, rider_hz, target):
+        e = law_entries(clicks=tuple(int(k) for k in clicks), sd=30.0, seed=5)
+        return {"from": "test", "records": e, "rises": True, "line": "dampers",
+                **bounce_rebound.law_in_clicks(e, target)}
+
+    monkeypatch.setattr(bounce_rebound, "read_records", read)
+    files = [os.path.join(SHARED_DATA, "sst_v2", f) for f in ("00083.SST", "00085.SST", "00087.SST")]
+    target = float(rate_of(1000.0 + 300.0 * 7))
+    assert main(["fit", "bounce", *files, "--clicks", "0,8,17", "--bike", "sst", "--replay",
+                 "--rebound-target-per-s", str(target), "--out", str(tmp_path / "o")]) == 0
+    printed = capsys.readouterr().out
+    got = json.loads((tmp_path / "o" / "fit.json").read_text())["rebound_dampers"]
+    assert got["answer"]["set_clicks"] == 7 and got["answer"]["target_per_s"] == pytest.approx(target)
+    assert len(got["held_out"]) == 3 and "c0_N_s_per_m" in got["law"]
+    assert "rebound answer (first rebound at" in printed and "set 7 clicks" in printed
+    assert (tmp_path / "o" / "rebound.png").read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.slow
+def test_generator_shuffled_labels_refused(generated):
+    """The four slams read with their clicks labels shuffled (0, 4, 8, 12 labelled 8, 0, 12, 4): the
+    coefficients do not rise with the labels: the law refused in one line, no answer."""
+    from mtbmj.identify.bounce_rebound import law_in_clicks
+
+    entries, target = generated
+    wrong = [{**e, "clicks": k} for e, k in zip(entries, (8, 0, 12, 4))]
+    got = law_in_clicks(wrong, target)
+    assert "mislabelled" in got["law"]["refused"] and "\n" not in got["law"]["refused"]
+    assert got["answer"]["set_clicks"] is None and got["held_out"] == []
