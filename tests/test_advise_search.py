@@ -152,3 +152,142 @@ def test_the_pool_says_how_many_it_runs_at_once():
 
     with process_pool(3) as pool:
         assert pool.workers == 3
+
+
+class Clock:
+    """A pool of ``slots`` processes made here on a virtual clock: each run takes ``seconds(i, value)``
+    and ends at its start plus that; ``wait`` moves the clock to the first end among those waited
+    for and returns every one ended by then. Counts the runs and the most ever running at once."""
+
+    def __init__(self, run, seconds):
+        self.run, self.seconds, self.now, self.ends, self.asked, self.most = run, seconds, 0.0, {}, [], 0
+        self.started = {}
+
+    def submit(self, i, v):
+        handle = len(self.asked)
+        self.asked.append((i, v))
+        self.started[(i, v)] = self.now
+        self.ends[handle] = (self.now + self.seconds(i, v), self.run(i, v))
+        self.most = max(self.most, sum(1 for e, _ in self.ends.values() if e > self.now))
+        return handle
+
+    def wait(self, handles):
+        self.now = max(self.now, min(self.ends[h][0] for h in handles))
+        return [(h, self.ends[h][1]) for h in handles if self.ends[h][0] <= self.now]
+
+
+def _three():
+    spring = _adj()
+    rebound = _adj("fork.damper.rebound_N_s_per_m", 2800.0, "N s/m")
+    compression = _adj("fork.damper.compression_N_s_per_m", 500.0, "N s/m")
+    pen = [lambda v: (v - 8.0) ** 2, lambda v: abs(v - 400.0) / 100.0, lambda v: v / 100.0]
+    run = lambda i, v: SimpleNamespace(total=pen[i](v), crash="crashed" if i == 1 and v < 700 else None)  # noqa: E731
+    return [(spring, 5.5, run(0, 5.5)), (rebound, 2240.0, run(1, 2240.0)), (compression, 625.0, run(2, 625.0))], run
+
+
+def test_the_flowing_search_keeps_the_steps_of_the_rounds_however_its_runs_end():
+    """Three searches made here (a spring whose penalty (v - 8)^2 falls from 5.5, a rebound damper
+    falling towards 400 from 2240 that crashes below 700, a compression damper whose penalty rises at
+    once), searched with each run ending as it does (``search_flow``) on 1 to 6 processes, the runs'
+    lengths drawn at random (they end out of order): the steps kept are those of the rounds
+    (``search_many``) and of each search alone, and no more runs go at once than the pool has."""
+    import random
+
+    starts, run = _three()
+    rounds = [[v for v, _ in k] for k in advice_search.search_many(
+        starts, lambda asks: [run(i, v) for i, v in asks], lambda i, v: True, 2)]
+    alone = [[v for v, _ in advice_search.search(a, f, r, 0.0, lambda vs, i=i: [run(i, v) for v in vs], lambda v: True)]
+             for i, (a, f, r) in enumerate(starts)]
+    assert rounds == alone and len(alone[0]) == 4 and 0 < len(alone[1]) < advice_search.MAX_STEPS and alone[2] == []
+    for slots in (1, 2, 3, 6):
+        for seed in range(5):
+            rng = random.Random(seed)
+            clock = Clock(run, lambda i, v: rng.uniform(0.5, 2.0))
+            kept = advice_search.search_flow(starts, clock.submit, clock.wait, lambda i, v: True, slots)
+            assert [[v for v, _ in k] for k in kept] == rounds, (slots, seed)
+            assert clock.most <= slots
+    refused = advice_search.search_flow(starts, clock.submit, clock.wait, lambda i, v: not (i == 0 and v > 7.0), 2)
+    assert [v for v, _ in refused[0]] == pytest.approx([6.05, 6.655])  # the part refuses 7.32: the search ends
+
+
+def test_the_flowing_search_passes_over_a_lone_crash_as_the_rounds_do():
+    """A spring search whose model crashes at one value only (6.655) beside a rebound search falling
+    towards 400, with each run ending as it does (``search_flow``) on 1, 2 and 3 processes and runs of
+    random length: the crash is passed over and named, and the steps kept and passed are those of the
+    rounds (``search_many``)."""
+    import random
+
+    spring, rebound = _adj(), _adj("fork.damper.rebound_N_s_per_m", 2800.0, "N s/m")
+
+    def run(i, v):
+        if i == 0:
+            return SimpleNamespace(total=-v, crash="looped out" if abs(v - 6.655) < 1e-3 else None)
+        return SimpleNamespace(total=abs(v - 400.0) / 100.0, crash=None)
+
+    starts = [(spring, 5.5, run(0, 5.5)), (rebound, 2240.0, run(1, 2240.0))]
+    allowed = lambda i, v: v < 9.0 if i == 0 else True  # noqa: E731
+    rounds = advice_search.search_many(starts, lambda asks: [run(i, v) for i, v in asks], allowed, 2)
+    assert [round(v, 3) for v, _ in rounds[0]] == [6.05, 7.321, 8.053, 8.858]
+    assert [round(v, 3) for v, _ in rounds[0].passed] == [6.655]
+    for slots in (1, 2, 3):
+        for seed in range(4):
+            rng = random.Random(seed)
+            clock = Clock(run, lambda i, v: rng.uniform(0.5, 2.0))
+            kept = advice_search.search_flow(starts, clock.submit, clock.wait, allowed, slots)
+            assert [[v for v, _ in k] for k in kept] == [[v for v, _ in k] for k in rounds], (slots, seed)
+            assert [k.passed for k in kept] == [k.passed for k in rounds], (slots, seed)
+
+
+@pytest.mark.parametrize("patience", [0, 1])
+def test_the_flowing_search_keeps_two_processes_busy_where_the_rounds_wait(patience, monkeypatch):
+    """The same three searches on two processes, every run 1 s long (the virtual clock): in rounds, a
+    round waits for its slowest search and a process stands idle where a round has an odd number of
+    runs; flowing, each search goes on as its own last step is judged, an idle process takes the step
+    after one still running. With a crash ending its search at once (``CRASH_PATIENCE`` 0) the flow
+    ends sooner (6 s against 7), in no more than the runs it needs (each kept step and the one that
+    ends each search) on two processes would take, plus one. With the crash passed over once (the
+    default) the rebound's search runs one step further and both take 7 s: the flow is no slower."""
+    monkeypatch.setattr(advice_search, "CRASH_PATIENCE", patience)
+    starts, run = _three()
+    rounds = []
+
+    def run_values(asks):
+        rounds.append(len(asks))
+        return [run(i, v) for i, v in asks]
+
+    kept = advice_search.search_many(starts, run_values, lambda i, v: True, 2)
+    in_rounds = sum(-(-n // 2) for n in rounds)  # seconds: each round's runs on two processes
+    clock = Clock(run, lambda i, v: 1.0)
+    flowing = advice_search.search_flow(starts, clock.submit, clock.wait, lambda i, v: True, 2)
+    assert [[v for v, _ in k] for k in flowing] == [[v for v, _ in k] for k in kept]
+    needed = sum(len(k) + 1 + patience * (i == 1) for i, k in enumerate(kept))  # every kept step and what ended
+    assert (clock.now < in_rounds) if patience == 0 else (clock.now <= in_rounds), (clock.now, in_rounds, rounds)
+    assert clock.now <= -(-needed // 2) + 1, (clock.now, needed)
+    # a step asked past the one that ended its search started with that step, not after it: it did not
+    # hold the search past its end
+    for i, (adj, first, _) in enumerate(starts):
+        ending = advice_search.next_value(adj, kept[i][-1][0] if kept[i] else first, first)
+        if patience and run(i, ending).crash:  # passed over: the search ended at the step after it
+            ending = advice_search.next_value(adj, ending, first)
+        past = advice_search.next_value(adj, ending, first)
+        if (i, past) in clock.started:
+            assert clock.started[(i, past)] == clock.started[(i, ending)], (i, clock.started)
+    assert clock.now == max(clock.started[(i, v)] + 1.0 for i, v in clock.asked)
+
+
+def test_a_step_past_the_next_is_not_started_late_to_hold_the_search_past_its_end():
+    """A spring search (penalty (v - 6.2)^2 from 5.5: 6.05 kept, 6.655 ends it) beside a compression
+    damper whose penalty rises at once, its run 1.5 s where the spring's take 1 s (the virtual clock):
+    when the damper's run ends at 1.5 s, the spring's 6.655 is half way; the step after it, started
+    then, would run to 2.5 s though the search ends at 2 s with 6.655. It is not asked: the flow ends
+    at 2 s."""
+    spring = _adj()
+    compression = _adj("fork.damper.compression_N_s_per_m", 500.0, "N s/m")
+    pen = [lambda v: (v - 6.2) ** 2, lambda v: v / 100.0]
+    run = lambda i, v: SimpleNamespace(total=pen[i](v), crash=None)  # noqa: E731
+    starts = [(spring, 5.5, run(0, 5.5)), (compression, 625.0, run(1, 625.0))]
+    clock = Clock(run, lambda i, v: 1.5 if i == 1 else 1.0)
+    kept = advice_search.search_flow(starts, clock.submit, clock.wait, lambda i, v: True, 2)
+    assert [v for v, _ in kept[0]] == pytest.approx([6.05]) and kept[1] == []
+    assert clock.started[(0, 6.655)] == 1.0 and clock.now == 2.0, clock.started
+    assert (0, advice_search.next_value(spring, 6.655, 5.5)) not in clock.started

@@ -18,7 +18,8 @@ from mtbmj.errors import ConfigError, MtbmjError, RunError
 SAG_WINDOW = {"front": (20.0, 25.0), "rear": (27.0, 30.0)}  # % of travel, static (sources above)
 SAG_POINTS = 5.0  # % points outside the window per unit of penalty
 BOTTOM_OUTS_PER_MINUTE = 2.0  # assumed: more than this is too many
-UNUSED_BELOW_PERCENT = 85.0  # assumed: no bottom-out and less travel than this leaves travel unused
+UNUSED_BELOW_PERCENT = 85.0  # assumed: no bottom-out and less travel than this leaves travel unused ...
+UNUSED_SHARE = 0.8  # assumed: ... where it is also less than this share of the other end's maximum on the ride
 DEEP_PERCENT = 80.0  # the deep-travel share counts time beyond this % of travel
 PACKING_SHARE = 0.8  # assumed: an end whose rebound-over-compression is below this share of the other end's packs
 PACKING_FLOOR = 0.4  # assumed: rebound p95 below this share of compression p95 packs whatever the other end does
@@ -47,8 +48,10 @@ RULES = {
     "static_sag": "front 20-25 %, rear 27-30 % of travel (Fox, RockShox; rear common on trail bikes; secondhand)",
     "bottom_outs": f"occasional (RockShox): more than {BOTTOM_OUTS_PER_MINUTE:g} per minute too many, the excess over "
                    f"that rate one unit of penalty per {BOTTOM_OUTS_PER_MINUTE:g} (assumed)",
-    "travel_unused": f"no bottom-out and a maximum below {UNUSED_BELOW_PERCENT:g} % of travel: travel left unused, "
-                     f"one unit of penalty per 10 points (assumed)",
+    "travel_unused": f"no bottom-out and a maximum below {UNUSED_BELOW_PERCENT:g} % of travel and below "
+                     f"{UNUSED_SHARE:g} of the other end's maximum on the ride as recorded (the same terrain: a trail "
+                     f"whose hits take neither end deep asks for no more travel; assumed): travel left unused, one "
+                     f"unit of penalty per 10 points short of the lower (assumed)",
     "packing": f"each end's rebound p95 speed over its compression p95 at least {PACKING_SHARE:g} of the other end's, "
                f"on the ride as recorded, the same terrain (front and rear rebound about the same: Motion Instruments' balance, read "
                f"secondhand; number assumed), and at least {PACKING_FLOOR:g} whatever the other end does (assumed); "
@@ -231,9 +234,12 @@ def ride_metrics(t, front_mm, rear_mm, front_top: float, rear_top: float, static
 
 def penalties(mt: dict, terrain: dict | None = None) -> dict:
     """Each rule's penalty (0 inside its window) of a metrics dict (:func:`ride_metrics`). ``terrain``:
-    the metrics of the ride as recorded, whose ends read the terrain for the packing rule (each end's
-    rebound-over-compression against the other end's there: a setting tried does not change the
-    terrain, so slowing the other end does not mend one that packs); default ``mt`` itself."""
+    the metrics of the ride as recorded, whose ends read the terrain for the packing and the
+    travel-unused rules (each end's rebound-over-compression against the other end's there, and its
+    maximum travel against the other end's: a setting tried does not change the terrain, so slowing
+    or stiffening the other end mends neither); default ``mt`` itself. The travel one end is asked to
+    use is ``UNUSED_BELOW_PERCENT`` of its travel, or ``UNUSED_SHARE`` of the other end's maximum
+    where that is less: a smooth trail whose hits take the other end to 73 % asks for 58 %, not 85."""
     terrain = mt if terrain is None else terrain
     p = {}
     for end in ("front", "rear"):
@@ -242,7 +248,9 @@ def penalties(mt: dict, terrain: dict | None = None) -> dict:
         s = e.get("static_sag_percent")
         p[f"{end}_static_sag"] = 0.0 if s is None else max(lo - s, s - hi, 0.0) / SAG_POINTS
         over = e["bottom_outs_per_minute"] - BOTTOM_OUTS_PER_MINUTE
-        unused = (UNUSED_BELOW_PERCENT - e["max_travel_percent"]) / 10.0 if e["bottom_outs"] == 0 else 0.0
+        other = terrain["rear" if end == "front" else "front"]  # the same terrain's hits, through the other end
+        asked = min(UNUSED_BELOW_PERCENT, UNUSED_SHARE * other["max_travel_percent"])
+        unused = (asked - e["max_travel_percent"]) / 10.0 if e["bottom_outs"] == 0 else 0.0
         p[f"{end}_bottom_outs"] = max(over / BOTTOM_OUTS_PER_MINUTE, 0.0)
         p[f"{end}_travel_unused"] = max(unused, 0.0)
         r, o = e["rebound_over_compression"], terrain["rear" if end == "front" else "front"]["rebound_over_compression"]

@@ -18,12 +18,15 @@ crashed is passed over once (``CRASH_PATIENCE``): a crash on the reconstructed t
 hair (the made soft-fork ride loops out at 28.5 s of 30 at 5.87 N/mm and rides home at 5.0, 6.5, 8
 and 11), so the search asks the step after it, keeps going if that one rides home and is better than
 the best before the crash, and stops otherwise; a crash passed over on the way to the answer is
-listed with it (``passed``), and the answer itself never crashed. The steps of every
-search still going are simulated together, one round at a time (all in parallel): each search asks
-for its next step, and for the one after it too (at most ``LOOKAHEAD``) only where the pool has room
-for it (``per_round``: the values one round runs at once) - a step past one that fails is a run thrown
-away, and with several searches going the pool is full without it. The steps kept are the same
-however many are asked at a time (each is judged against the one before it). The rule
+listed with it (``passed``), and the answer itself never crashed. ``mtbmj advise`` runs
+every search at once as its runs end (:func:`search_flow`): each search asks for its next step as soon
+as its own last one is judged, the pool's processes kept busy with the steps every search needs (the
+search fewest steps along first), and a process that would stand idle takes the step after one that
+starts with it (at most ``LOOKAHEAD`` of one search in flight: a step past one that fails is a run
+thrown away, in a slot that would have done nothing and ending about when that step does; one
+started after a step long running would hold its process past the search's end). :func:`search_many` runs them one round at a time (a
+round waits for its slowest run). The steps kept are the same either way and however the runs end
+(each is judged against the one before it, in order). The rule
 that drove the change is the one whose penalty fell most from the recorded setting to the answer.
 """
 from __future__ import annotations
@@ -105,14 +108,88 @@ def search_many(starts, run_values, allowed_value, per_round: int = LOOKAHEAD) -
                     break
                 s["value"], s["best"], s["over"] = v, run, 0
                 s["kept"].append((v, run))
+    return _finish(state, starts)
+
+
+def _finish(state, starts) -> list:
+    """Each search's kept steps as a ``_Kept``, a crash passed over on the way to the answer said
+    with it (one past the answer was a stop, not passed over)."""
+    out = []
     for s, (adj, _, _) in zip(state, starts):
         kept = {v for v, _ in s["kept"]}
         last = s["kept"][-1][0] if s["kept"] else None
-        # a crash passed over on the way to the answer is said with it; one past the answer is a stop
-        s["kept"] = _Kept(s["kept"])
-        s["kept"].passed = [(v, why) for v, why in s["passed"] if last is not None and v not in kept
-                            and (v - adj.value) * (last - v) > 0]
-    return [s["kept"] for s in state]
+        k = _Kept(s["kept"])
+        k.passed = [(v, why) for v, why in s["passed"] if last is not None and v not in kept
+                    and (v - adj.value) * (last - v) > 0]
+        out.append(k)
+    return out
+
+
+def search_flow(starts, submit, wait, allowed_value, slots: int) -> list:
+    """The searches of :func:`search_many` (the same values asked, each step judged as there, the same
+    steps kept), each going on as soon as its own last step is judged, not a round at a time: a pool
+    of ``slots`` processes is kept busy with the next step of every search still going (the steps
+    every search needs first), and only where a process would otherwise stand idle with the step
+    after one starting now (up to ``LOOKAHEAD`` of one search in flight: a step past one that fails
+    is a run thrown away, but in a slot that would have done nothing; only beside a step that starts
+    with it, so that it ends about when that step does). ``submit(i, value)`` starts
+    search ``i``'s run of ``value`` and returns a handle; ``wait(handles)`` blocks until at least
+    one of them has finished and returns ``[(handle, run), ...]`` for those finished (a refused run
+    a ``ConfigError``); ``allowed_value(i, value)`` as in :func:`search_many`. Returns each search's
+    kept steps ``[(value, run)]``."""
+    state = [{"best": run, "kept": [], "asked": [], "got": {}, "done": False, "at": None, "over": 0, "passed": []}
+             for _, _, run in starts]
+    flying = {}  # handle -> (search, value)
+
+    def ask(i, s):  # the value after the last one asked (or judged), where the part has one
+        v = s["asked"][-1] if s["asked"] else (s["at"] if s["at"] is not None else starts[i][1])
+        if len(s["kept"]) + len(s["passed"]) + len(s["asked"]) >= MAX_STEPS:
+            return False
+        v = next_value(starts[i][0], v, starts[i][1])
+        if v is None or not allowed_value(i, v):
+            if not s["asked"]:
+                s["done"] = True
+            return False
+        s["asked"].append(v)
+        flying[submit(i, v)] = (i, v)
+        return True
+
+    def fill():
+        fresh = []  # the searches whose next step starts now
+        for i in sorted(range(len(state)), key=lambda i: len(state[i]["kept"])):  # every search's next step:
+            s = state[i]  # needed (the search fewest steps along first, as the rounds have it)
+            if len(flying) < slots and not s["done"] and not s["asked"] and ask(i, s):
+                fresh.append(i)
+        while len(flying) < slots:  # a process otherwise idle: the step after one starting with it (a step
+            going = [(len(state[i]["asked"]), i) for i in fresh  # after one long running would hold its
+                     if not state[i]["done"] and len(state[i]["asked"]) < LOOKAHEAD]  # process past its end)
+            if not going or not ask(min(going)[1], state[min(going)[1]]):
+                break
+
+    fill()
+    while flying:
+        for handle, run in wait(list(flying)):
+            i, v = flying.pop(handle)
+            s = state[i]
+            if s["done"] or v not in s["asked"]:
+                continue  # a step past one that failed: thrown away
+            s["got"][v] = run
+            while s["asked"] and s["asked"][0] in s["got"]:  # judged in order, each against the one before
+                v0 = s["asked"].pop(0)
+                r = s["got"].pop(v0)
+                if not isinstance(r, Exception) and r.crash and s["over"] < CRASH_PATIENCE:
+                    s["at"], s["over"] = v0, s["over"] + 1  # passed over: the search goes on past it, keeping none
+                    s["passed"].append((v0, r.crash))
+                    continue
+                if isinstance(r, Exception) or r.crash or not r.total <= s["best"].total - MIN_GAIN:
+                    s["done"], s["asked"], s["got"] = True, [], {}
+                    break
+                s["best"], s["at"], s["over"] = r, v0, 0
+                s["kept"].append((v0, r))
+            if not s["done"] and not s["asked"] and len(s["kept"]) + len(s["passed"]) >= MAX_STEPS:
+                s["done"] = True
+        fill()
+    return _finish(state, starts)
 
 
 class _Kept(list):
@@ -160,4 +237,5 @@ def annotate(advice, searched: dict) -> None:
         advice.verdict = {**advice.verdict, "why": rec["why"]}
 
 
-__all__ = ["LOOKAHEAD", "MAX_STEPS", "annotate", "driving_rule", "next_value", "search", "search_many"]
+__all__ = ["LOOKAHEAD", "MAX_STEPS", "annotate", "driving_rule", "next_value", "search", "search_flow",
+           "search_many"]

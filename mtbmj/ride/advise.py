@@ -39,7 +39,9 @@ guides' current editions), marked *assumed* where no source gives the number):
   bikes); a point outside costs 1/5;
 - bottom-outs: occasional is right ("an occasional bottom-out is a good thing", RockShox): more than
   ``BOTTOM_OUTS_PER_MINUTE`` per minute of ride costs (assumed), none with the maximum below 85 % of
-  travel costs too (travel left unused: assumed);
+  travel and below ``UNUSED_SHARE`` of the other end's maximum on the ride as recorded costs too
+  (travel left unused, read against what the terrain asked of the other end: a smooth trail asks for
+  less; assumed);
 - packing: an end's rebound p95 over its compression p95 below ``PACKING_SHARE`` of the other end's
   on the ride as recorded (the terrain sets the compression speeds, and the other end rides the same
   terrain: "front and rear rebound about the same", Motion Instruments' balance; the number assumed),
@@ -94,12 +96,13 @@ from mtbmj.ride.advice_rules import (  # noqa: F401 (advise's names for them)
     GRIP_COMFORT_WEIGHT, HEADLINE, LEAD_IN_M, MAX_REAR_MISS_PERCENT, MIN_CHECKED_PERCENT, MIN_GAIN,
     MIN_SECONDS, PACKING_FLOOR, PACKING_SHARE, RULES, RideNotDescribed, SAG_POINTS, SAG_WINDOW,
     SEGMENT_S, SHARES, SIGNED, SOLD_LB_PER_IN, SPEED_SPLIT_MM_PER_S, UNCERTAINTY_METHOD,
-    UNITS, UNUSED_BELOW_PERCENT, skipped_entry, adjusters, allowed, checked_duration, counter, bounded_value, bounds, expected,
+    UNITS, UNUSED_BELOW_PERCENT, UNUSED_SHARE, skipped_entry, adjusters, allowed, checked_duration, counter, bounded_value, bounds, expected,
     beyond, flat_metrics, grip_comfort, on_the_ride, rule_metric, penalties, ride_metrics, round_setting, unit_of,
     Trial, compose_setting, trial)
 
 
 from mtbmj.ride.advice_report import LEGEND_ROOM, metric_unit  # noqa: E402,F401 (advise's names for them)
+from mtbmj.ride.advice_verdict import changes, judge  # noqa: E402,F401 (advise's names for them)
 
 
 @dataclass
@@ -193,7 +196,7 @@ class Advice:
         and every metric's predicted change (as a recommendation's ``changes``)."""
         return [{"label": tr.label, "bike": tr.bike, "settings": dict(tr.settings), "penalty": run.total,
                  "penalty_change": run.total - self.base.total, "crash": run.crash,
-                 "changes": _changes(self.base, run, self.change_uncertainty(run), self.measured)}
+                 "changes": changes(self.base, run, self.change_uncertainty(run), self.measured)}
                 for tr, run in self.tries]
 
     def segments(self) -> np.ndarray:
@@ -364,91 +367,6 @@ def _json(o):
     if isinstance(o, np.generic):
         return o.item()
     raise TypeError(type(o).__name__)
-
-
-def judge(advice, candidates=None) -> tuple[dict | None, dict]:
-    """(the recommendation or None, the verdict ``{"answer", "why"}``): a change is advised only where
-    it lowers the penalty by ``MIN_GAIN`` or more and a metric of a rule it improves moves by more
-    than that change's uncertainty (the best such candidate, grip and comfort breaking ties);
-    "keep" only where every candidate is predicted worse beyond its uncertainty (a crash is worse);
-    otherwise "inconclusive", naming why. ``candidates``: those judged (default the one-step ones;
-    :func:`advise` passes each searched candidate where its search ended)."""
-    base, measured = advice.score(advice.base), advice.measured
-    candidates = advice.candidates if candidates is None else candidates
-    for *_, run in candidates:  # each scored on the ride (Advice.score; the same scores again where they were)
-        advice.score(run)
-    a = flat_metrics(base.metrics)
-    good, worse, near = [], 0, None
-    for adj, direction, value, run in candidates:
-        if run.crash:
-            worse += 1
-            continue
-        u = advice.change_uncertainty(run)
-        b = flat_metrics(run.metrics)
-        gain = base.total - run.total
-        improved = [k for k in base.penalty if run.penalty[k] < base.penalty[k] - 1e-9]
-        worsened = [k for k in base.penalty if run.penalty[k] > base.penalty[k] + 1e-9]
-        score = gain - grip_comfort(base.metrics, run.metrics)
-        if gain >= MIN_GAIN and beyond(improved, a, b, u):
-            good.append((score, adj, direction, value, run, improved, u))
-        elif gain <= -MIN_GAIN and beyond(worsened, a, b, u):
-            worse += 1
-        elif gain >= MIN_GAIN and (near is None or score > near[0]):
-            near = (score, adj, direction, value, run, improved, u)
-    n = len(candidates)
-    if good:  # the balance of the ends first: a change that mends it before any other
-        pick = max([g for g in good if "balance" in g[5] and beyond(["balance"], a, flat_metrics(g[4].metrics), g[6])]
-                   or good, key=lambda g: g[0])
-        _, adj, direction, value, run, improved, u = pick
-        then = [{"setting": g[1].setting(g[3]), "key": g[1].name, "label": g[1].label, "direction": g[2],
-                 "penalty_to": g[4].total, "improves": g[5]}
-                for g in sorted(good, key=lambda g: -g[0]) if g[1].name != adj.name]
-        moved = beyond(improved, a, flat_metrics(run.metrics), u)
-        st = adj.setting(value)
-        why = (f"{'raise' if direction == 'up' else 'lower'} the {adj.label} from {st['from']:g} to {st['to']:g} "
-               f"{st['unit']} ({st['key']}): the penalty falls {base.total:.2f} -> {run.total:.2f} "
-               f"({', '.join(k.replace('_', ' ') for k in improved)}; "
-               + ", ".join(f"{m} {a[m]:.3g} -> {flat_metrics(run.metrics)[m]:.3g} +- {u[m]:.2g}" for m in moved) + ")")
-        rec = {"setting": adj.setting(value), "key": adj.name, "section": adj.section, "config_key": adj.key,
-               "label": adj.label,
-               "direction": direction, "from": adj.value, "to": value, "penalty_from": base.total,
-               "penalty_to": run.total, "improves": improved, "confident": True, "why": why,
-               "changes": _changes(base, run, u, measured),
-               "then": [t for i, t in enumerate(then) if t["key"] not in {o["key"] for o in then[:i]}]}  # best first
-        return rec, {"answer": "change", "why": why}
-    if n and worse == n:
-        return None, {"answer": "keep", "why": f"every one of the {n} candidates is predicted worse beyond its "
-                                               f"uncertainty (or crashes)"}
-    if not n:
-        return None, {"answer": "inconclusive", "why": "no candidate was simulated"}
-    if near is not None:
-        _, adj, direction, value, run, improved, u = near
-        b = flat_metrics(run.metrics)
-        ms = list(dict.fromkeys(rule_metric(k) for k in improved))
-        return None, {"answer": "inconclusive",
-                      "why": f"the best candidate, the {adj.label} {adj.setting(value)['from']:g} -> "
-                             f"{adj.setting(value)['to']:g} {adj.unit}, lowers the penalty "
-                             f"{base.total:.2f} -> {run.total:.2f}, but what it improves moves less than its "
-                             f"uncertainty ("
-                             + ", ".join(f"{m} {a[m]:.3g} -> {b[m]:.3g} +- {u.get(m, math.inf):.2g}" for m in ms if m in b)
-                             + "): try it and record again",
-                      "best_candidate": {"setting": adj.setting(value), "key": adj.name, "section": adj.section,
-                                         "config_key": adj.key, "label": adj.label, "direction": direction,
-                                         "from": adj.value, "to": value, "changes": _changes(base, run, u, measured)}}
-    return None, {"answer": "inconclusive",
-                  "why": f"no candidate of {n} lowers the penalty by {MIN_GAIN:g} or more beyond its uncertainty, "
-                         f"and {n - worse} of them are not predicted worse beyond it either: the ride cannot tell "
-                         f"these settings apart"}
-
-
-def _changes(base: Run, run: Run, uncertainty: dict, measured: dict) -> dict:
-    """Per metric (``flat_metrics`` name): the simulated value at the recorded setting (``from``) and at
-    ``run``'s (``to``), the change, its uncertainty, the recorded value and the one expected on the
-    rider's ride (:func:`expected`)."""
-    a, b, rode = flat_metrics(base.metrics), flat_metrics(run.metrics), flat_metrics(measured)
-    return {k: {"from": v0, "to": b[k], "change": b[k] - v0, "uncertainty": uncertainty.get(k),
-                "recorded": rode.get(k), "expected": expected(k, rode[k], v0, b[k]) if k in rode else b[k]}
-            for k, v0 in a.items() if k in b}
 
 
 def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
@@ -632,9 +550,12 @@ def run_jobs(jobs, pool, refusable, step) -> list:
 
 def search_on(advice, rides, pool) -> dict:
     """Every candidate that lowers the penalty by ``MIN_GAIN`` or more, searched further along its
-    adjuster (:func:`mtbmj.ride.advice_search.search_many`, all in one pool) on every ride of
+    adjuster (:func:`mtbmj.ride.advice_search.search_flow`, all in one pool, each as its runs end) on every ride of
     ``rides`` (:class:`Prepared`; a pooled advice's runs pooled by ``advice.pooled_run``):
     ``{(adjuster name, direction): [(value, run), ...]}``, the steps each search kept."""
+    from concurrent import futures
+    from concurrent.futures import Future
+
     from mtbmj.ride import advice_search
 
     base = advice.base
@@ -646,20 +567,38 @@ def search_on(advice, rides, pool) -> dict:
     def on(a, x, v):  # the value v of adjuster a as a ride's own x has it (the same where no calibration differs)
         return v if x.per_unit == a.per_unit else v / a.per_unit * x.per_unit
 
-    def run_values(asks):
+    def submit(i, v):  # search i's value v on every ride: a future each (run here where there is no pool)
         jobs = [ride.job(ride.merged(x.overrides(on(starts[i][0], x, v))), f"{starts[i][0].label} {v:g}")
-                for i, v in asks for ride, x in zip(rides, own[i])]
-        runs, n = run_jobs(jobs, pool, lambda i: True, lambda: None), len(rides)
-        parts = [runs[k * n:(k + 1) * n] for k in range(len(asks))]
-        return [next((r for r in part if isinstance(r, Exception)), None) or advice.score(advice.pooled_run(part))
-                for part in parts]
+                for ride, x in zip(rides, own[i])]
+        if pool is not None:
+            return tuple(pool.submit(simulate, *job) for job in jobs)
+        done = []
+        for job in jobs:
+            done.append(Future())
+            try:
+                done[-1].set_result(simulate(*job))
+            except Exception as exc:  # noqa: BLE001 - raised again where it is read, as the pool's would be
+                done[-1].set_exception(exc)
+        return tuple(done)
+
+    def wait(handles):  # the handles whose every ride's run has ended, each as one (pooled) scored run
+        futures.wait([f for h in handles for f in h], return_when=futures.FIRST_COMPLETED)
+        out = []
+        for h in handles:
+            if all(f.done() for f in h):
+                parts = [f.exception() or f.result() for f in h]
+                bad = next((r for r in parts if isinstance(r, Exception)), None)
+                if bad is not None and not isinstance(bad, ConfigError):
+                    raise bad
+                out.append((h, bad or advice.score(advice.pooled_run(parts))))
+        return out
 
     def allowed_value(i, v):
         a, d = starts[i][0], starts[i][1]
         return all(allowed(ride.bike, [(x, d, on(a, x, v))], ride.merged)[0] for ride, x in zip(rides, own[i]))
 
-    per_round = max(1, (1 if pool is None else pool.workers) // len(rides))  # values the pool runs at once
-    kept = advice_search.search_many([(a, v, r) for a, d, v, r in starts], run_values, allowed_value, per_round)
+    slots = max(1, (1 if pool is None else pool.workers) // len(rides))  # values the pool runs at once
+    kept = advice_search.search_flow([(a, v, r) for a, d, v, r in starts], submit, wait, allowed_value, slots)
     return {(a.name, d): k for (a, d, _, _), k in zip(starts, kept)}
 
 
