@@ -170,6 +170,16 @@ def test_the_figure_marks_what_was_left_out(made, tmp_path):
     assert "red, the front wheel off the ground (bridged, checked); grey, no speed (left out)" in fig.get_suptitle()
     shaded = [p for p in fig.axes[2].patches]
     assert len(shaded) == len(rec.jumps) + len(rec.unaligned)  # each stretch left out is drawn
+    # the speed along the ride: the profile the distance is integrated from, each window's speed
+    speed = fig.axes[3]
+    assert speed.get_title().startswith(f"Speed along the ride: median {rec.speed['speed_m_per_s']:.2f} m/s")
+    assert speed.get_ylabel() == "speed (m/s)" and speed.get_xlim() == pytest.approx((0.0, SECONDS - 1.0 / RATE))
+    profile = speed.get_lines()[0]
+    assert np.allclose(profile.get_ydata(), rec.speed["speed_at"](rec.t))
+    accepted = [v for _, v, _ in rec.speed["windows"] if v is not None]
+    labels = [t.get_text() for t in speed.get_legend().get_texts()]
+    assert any(f"({len(accepted)}, +-2 standard errors)" in x for x in labels), labels
+    assert SPEED * 0.97 < np.median(profile.get_ydata()) < SPEED * 1.03
 
 
 def test_one_end_alone_or_no_alignment_is_refused_in_one_line(made, tmp_path, capsys):

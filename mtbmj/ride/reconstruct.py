@@ -263,8 +263,8 @@ class Reconstruction:
     def figure(self):
         from matplotlib.figure import Figure
 
-        fig = Figure(figsize=(11, 8), layout="constrained")
-        ax = fig.subplots(3, 1, sharex=False)
+        fig = Figure(figsize=(11, 10.5), layout="constrained")
+        ax = fig.subplots(4, 1, sharex=False)
         ax[0].plot(self.distance, self.ground * 1e3, color="0.3")
         ax[0].set(xlabel="distance (m)", ylabel="height (mm)",
                   title=f"Terrain under the front wheel (median speed {self.speed['speed_m_per_s']:.2f} m/s)")
@@ -282,8 +282,9 @@ class Reconstruction:
                    label=f"baseline: the fork delayed, scaled ({c['baseline_delayed_fork_rms_mm']:.1f} mm RMS)")
         ax[2].set(xlabel="time (s)", ylabel="rear wheel travel (mm)",
                   title="Rear: predicted from the front's terrain, beside the naive baseline (RMS over the checked samples)")
+        self._speed_panel(ax[3])
         for a in ax[1:]:
-            a.legend(loc="upper right")
+            a.legend(loc="best" if a is ax[3] else "upper right")
             a.set_xlim(float(self.t[0]), float(self.t[-1]))
             for s0, s1 in self.jumps:
                 a.axvspan(s0, s1, color="C3", alpha=0.2)
@@ -295,6 +296,27 @@ class Reconstruction:
         fig.suptitle(f"{self.name} through {self.bike}: {verdict}\nred, the front wheel off the ground (bridged, "
                      f"checked); grey, no speed (left out)")
         return fig
+
+    def _speed_panel(self, a) -> None:
+        """The speed along the ride: each window that gave one at its time with two standard errors,
+        the profile between them (what the distance is integrated from), and where the speed was found
+        again, the first estimate's windows (the two ends' lag) beside them."""
+        sp = self.speed
+        a.plot(self.t, sp["speed_at"](self.t), color="0.3", label="speed profile (the distance's)")
+        stages = [(sp, "C0", "o", "windows: " + ("the rear predicted aligned" if "first" in sp else "the two ends' lag"))]
+        if "first" in sp:
+            stages.append((sp["first"], "C1", "s", "first estimate: the two ends' lag"))
+        for stage, colour, marker, label in stages:
+            half = 0.5 * stage["window_s"]
+            pts = [(start + half, v, sd) for (start, v, _), sd in zip(stage["windows"], stage["sd"] or [None] * 99999)
+                   if v is not None]
+            if pts:
+                a.errorbar([c for c, _, _ in pts], [v for _, v, _ in pts], yerr=[2.0 * (sd or 0.0) for _, _, sd in pts],
+                           fmt=marker, color=colour, mfc="none" if stage is not sp else colour, ms=4, capsize=2,
+                           label=f"{label} ({len(pts)}, +-2 standard errors)")
+        a.set(xlabel="time (s)", ylabel="speed (m/s)",
+              title=f"Speed along the ride: median {sp['speed_m_per_s']:.2f} m/s "
+                    f"(wheelbase {self.wheelbase:.3f} m / the lag per window)")
 
     def write(self, out_dir) -> list:
         import json
