@@ -413,13 +413,11 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
                                    f"{len(speed['windows'])} whose two ends aligned lie wholly where the front wheel was "
                                    f"off the ground, or in the ride's first wheelbase or its filters' start (or the rear "
                                    f"does not move there): no sample of the ride can be checked")
-        found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, first_ground, body, fork_setup.travel, stops)
+        found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel, stops)
         # the check: the whole bike free over the terrain found, the rider's slow load on its front
         again = reconstruct_bike.ride(t, whole, np.interp(t - lags, t, found["ground"]), front_ground=found["ground"],
                                       push=found["rider_slow_load"])
         return {"lags": lags, "bad": bad, "unaligned": unaligned, "found": found, "again": again}
-
-    first_ground = ground
 
     def built(done, speed) -> Reconstruction:
         found, again = done["found"], done["again"]
@@ -447,10 +445,10 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
             try:
                 again = merged(first, refine(t, rear * 1e3, done["found"]["rear_rise"] * 1e3, done["lags"],
                                              wheelbase))
+                again["from"] = ", ".join(sorted({s for s in first["sources"] if s} | {"the rear predicted"}))
+                done, speed = through(again), again
             except ReconstructError:
-                break  # no refining window aligned: the estimate before stands
-            again["from"] = ", ".join(sorted({s for s in first["sources"] if s} | {"the rear predicted"}))
-            done, speed = through(again), again
+                break  # no refining window aligned, or none left to check: the estimate before stands
             result = built(done, speed)
     return result
 

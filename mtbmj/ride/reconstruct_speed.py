@@ -127,6 +127,14 @@ def _best(a, b, k_lo: int, k_hi: int, dt: float, min_correlation: float = MIN_CO
     return lag, float(s[i]), None, max(sd, dt / math.sqrt(12.0))  # no finer than the sample step's
 
 
+def _scatter(sd: float, lag: float) -> str | None:
+    """Why a window whose lag ``lag`` (s) has the standard error ``sd`` (s) gives no speed: its parts'
+    lags scatter over ``MAX_SPEED_SD`` of it; None where they do not."""
+    if sd / lag > MAX_SPEED_SD:
+        return f"its parts' lags scatter (the speed uncertain by {100 * sd / lag:.0f} %, over {100 * MAX_SPEED_SD:g} %)"
+    return None
+
+
 def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S, highpass_hz: float = LAG_HIGHPASS_HZ,
                    travel=None) -> dict:
     """{"speed_m_per_s": the median of the windows' speeds, "lag_s", "windows": [(start_s, speed or
@@ -172,9 +180,8 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
             continue
         wl, wc, why, sd = _best(vf[start:start + step + k_hi], vr[start:start + step + k_hi], k_lo, k_hi, dt)
         v = None if wl is None else wheelbase / wl
-        if v is not None and sd / wl > MAX_SPEED_SD:  # its parts disagree: no speed to take from it
-            v, why = None, f"its parts' lags scatter (the speed uncertain by {100 * sd / wl:.0f} %, over " \
-                           f"{100 * MAX_SPEED_SD:g} %)"
+        if v is not None and _scatter(sd, wl):  # its parts disagree: no speed to take from it
+            v, why = None, _scatter(sd, wl)
         windows.append((start * dt, v, wc))
         sds.append(None if v is None else v * sd / wl)
         whys.append(why)
@@ -261,15 +268,15 @@ def refine(t, recorded, predicted, lags, wheelbase: float, window_s: float = REF
                 lag = here + k * dt - lag_b
                 if not wheelbase / SPEED_RANGE[1] < lag < wheelbase / SPEED_RANGE[0]:
                     why = f"its lag {lag:.3f} s outside {SPEED_RANGE[0]:g}-{SPEED_RANGE[1]:g} m/s"
-                elif sd_lag / lag > MAX_SPEED_SD:
-                    why = (f"its parts' lags scatter (the speed uncertain by {100 * sd_lag / lag:.0f} %, over "
-                           f"{100 * MAX_SPEED_SD:g} %)")
+                elif _scatter(sd_lag, lag):
+                    why = _scatter(sd_lag, lag)
                 else:
                     v, sd = wheelbase / lag, wheelbase / lag * sd_lag / lag
         # the lag is that of where the window's motion is: its time the centre of the record's squared
         # velocity over it, less half the lag (between the front's and the rear's meeting the terrain)
         weight = a[st:st + step] ** 2
-        centre = (st + (float(np.arange(step) @ weight) / float(weight.sum()) if weight.sum() > 0 else 0.5 * step)) * dt
+        total = float(weight.sum())
+        centre = (st + (float(np.arange(step) @ weight) / total if total > 0 else 0.5 * step)) * dt
         mid = centre - 0.5 * window_s - 0.5 * (wheelbase / v if v is not None else here)
         windows.append((mid, v, float(c)))
         sds.append(sd)
