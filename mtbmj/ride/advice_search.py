@@ -68,8 +68,7 @@ def search_many(starts, run_values, allowed_value, per_round: int = LOOKAHEAD) -
     pool runs at once) leaves room for them all, and ``run_values([(i, value), ...])`` simulates them
     all together (runs in order; a refused one a ``ConfigError``); ``allowed_value(i, value)`` tells
     whether search ``i``'s part allows a value. Returns each search's kept steps ``[(value, run)]``."""
-    state = [{"value": first, "best": run, "kept": [], "steps": 0, "done": False, "over": 0, "passed": []}
-             for _, first, run in starts]
+    state = [_state(first, run) | {"steps": 0} for _, first, run in starts]
     while True:
         asks = []
         for s in state:
@@ -80,7 +79,7 @@ def search_many(starts, run_values, allowed_value, per_round: int = LOOKAHEAD) -
             s = state[i]
             if s["done"]:
                 continue
-            batch, v = [], s["value"]
+            batch, v = [], s["at"]
             for _ in range(min(ahead, MAX_STEPS - s["steps"])):
                 v = next_value(adj, v, first)
                 if v is None or not allowed_value(i, v):
@@ -99,16 +98,32 @@ def search_many(starts, run_values, allowed_value, per_round: int = LOOKAHEAD) -
             k += len(batch)
             s["steps"] += len(batch)
             for v, run in zip(batch, got):
-                if not isinstance(run, Exception) and run.crash and s["over"] < CRASH_PATIENCE:
-                    s["value"], s["over"] = v, s["over"] + 1  # passed over: the search goes on past it, keeping none
-                    s["passed"].append((v, run.crash))
-                    continue
-                if isinstance(run, Exception) or run.crash or not run.total <= s["best"].total - MIN_GAIN:
+                if not _judge(s, v, run):
                     s["done"] = True
                     break
-                s["value"], s["best"], s["over"] = v, run, 0
-                s["kept"].append((v, run))
     return _finish(state, starts)
+
+
+def _state(first, run) -> dict:
+    """A search's state: where it stands (``at``: the last value judged, from the one-step candidate
+    ``first``), its best run so far, its steps kept, the crashes passed over (``over`` of them in a
+    row), whether it is done."""
+    return {"at": first, "best": run, "kept": [], "done": False, "over": 0, "passed": []}
+
+
+def _judge(s: dict, v: float, run) -> bool:
+    """Search ``s`` takes the step ``v`` and its run: passed over where the model crashed there (at most
+    ``CRASH_PATIENCE`` in a row), kept where it lowers the best by ``MIN_GAIN`` or more without a crash;
+    False where the search ends there (a refused run, a crash past the patience, no gain)."""
+    if not isinstance(run, Exception) and run.crash and s["over"] < CRASH_PATIENCE:
+        s["at"], s["over"] = v, s["over"] + 1  # passed over: the search goes on past it, keeping none
+        s["passed"].append((v, run.crash))
+        return True
+    if isinstance(run, Exception) or run.crash or not run.total <= s["best"].total - MIN_GAIN:
+        return False
+    s["at"], s["best"], s["over"] = v, run, 0
+    s["kept"].append((v, run))
+    return True
 
 
 def _finish(state, starts) -> list:
@@ -118,10 +133,8 @@ def _finish(state, starts) -> list:
     for s, (adj, _, _) in zip(state, starts):
         kept = {v for v, _ in s["kept"]}
         last = s["kept"][-1][0] if s["kept"] else None
-        k = _Kept(s["kept"])
-        k.passed = [(v, why) for v, why in s["passed"] if last is not None and v not in kept
-                    and (v - adj.value) * (last - v) > 0]
-        out.append(k)
+        out.append(_Kept(s["kept"], [(v, why) for v, why in s["passed"] if last is not None and v not in kept
+                                     and (v - adj.value) * (last - v) > 0]))
     return out
 
 
@@ -137,12 +150,11 @@ def search_flow(starts, submit, wait, allowed_value, slots: int) -> list:
     one of them has finished and returns ``[(handle, run), ...]`` for those finished (a refused run
     a ``ConfigError``); ``allowed_value(i, value)`` as in :func:`search_many`. Returns each search's
     kept steps ``[(value, run)]``."""
-    state = [{"best": run, "kept": [], "asked": [], "got": {}, "done": False, "at": None, "over": 0, "passed": []}
-             for _, _, run in starts]
+    state = [_state(first, run) | {"asked": [], "got": {}} for _, first, run in starts]
     flying = {}  # handle -> (search, value)
 
     def ask(i, s):  # the value after the last one asked (or judged), where the part has one
-        v = s["asked"][-1] if s["asked"] else (s["at"] if s["at"] is not None else starts[i][1])
+        v = s["asked"][-1] if s["asked"] else s["at"]
         if len(s["kept"]) + len(s["passed"]) + len(s["asked"]) >= MAX_STEPS:
             return False
         v = next_value(starts[i][0], v, starts[i][1])
@@ -176,16 +188,9 @@ def search_flow(starts, submit, wait, allowed_value, slots: int) -> list:
             s["got"][v] = run
             while s["asked"] and s["asked"][0] in s["got"]:  # judged in order, each against the one before
                 v0 = s["asked"].pop(0)
-                r = s["got"].pop(v0)
-                if not isinstance(r, Exception) and r.crash and s["over"] < CRASH_PATIENCE:
-                    s["at"], s["over"] = v0, s["over"] + 1  # passed over: the search goes on past it, keeping none
-                    s["passed"].append((v0, r.crash))
-                    continue
-                if isinstance(r, Exception) or r.crash or not r.total <= s["best"].total - MIN_GAIN:
+                if not _judge(s, v0, s["got"].pop(v0)):
                     s["done"], s["asked"], s["got"] = True, [], {}
                     break
-                s["best"], s["at"], s["over"] = r, v0, 0
-                s["kept"].append((v0, r))
             if not s["done"] and not s["asked"] and len(s["kept"]) + len(s["passed"]) >= MAX_STEPS:
                 s["done"] = True
         fill()
@@ -196,7 +201,9 @@ class _Kept(list):
     """A search's kept steps ``[(value, run)]``, and in ``passed`` the values passed over on the way to
     the last of them because the model crashed there ``[(value, the crash's line)]``."""
 
-    passed: list = []
+    def __init__(self, steps=(), passed=()):
+        super().__init__(steps)
+        self.passed = list(passed)
 
 
 def search(adj: Adjuster, first: float, best_run, base_total: float, run_values, allowed_value,
