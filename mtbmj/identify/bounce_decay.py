@@ -95,7 +95,8 @@ def ratio(zeta: float) -> float:
     return math.exp(-math.pi * zeta / math.sqrt(1.0 - zeta * zeta))
 
 
-def _moving_average(x: np.ndarray, n: int) -> np.ndarray:
+def moving_average(x: np.ndarray, n: int) -> np.ndarray:
+    """The centred mean of ``x`` over ``n`` samples, its ends padded with the end values (a copy where n <= 1)."""
     if n <= 1:
         return x.copy()
     padded = np.concatenate((np.full(n // 2, x[0]), x, np.full(n - 1 - n // 2, x[-1])))
@@ -155,7 +156,7 @@ def extrema(time_s, x_mm, end: str, slam_index: int | None = None) -> Extrema:
     x = np.asarray(x_mm, float)
     dt = float(t[1] - t[0])
     n_smooth = max(1, int(round(SMOOTH_S / dt)))
-    xs = _moving_average(x, n_smooth)
+    xs = moving_average(x, n_smooth)
     peak = slam_peak(xs, dt, slam_index)
     noise = noise_mm(x)
     drop = xs[peak] - float(np.min(xs[peak:]))
@@ -510,7 +511,7 @@ def fit_end(seq: Extrema) -> EndDecay:
 def slam_index(record) -> int:
     """The slam: the largest compression of the shock's smoothed travel (the fork's when no shock)."""
     lead = record.shock_mm if record.shock_mm is not None else record.fork_mm
-    return int(np.argmax(_moving_average(np.asarray(lead, float), max(1, int(round(SMOOTH_S * record.sample_rate_Hz))))))
+    return int(np.argmax(moving_average(np.asarray(lead, float), max(1, int(round(SMOOTH_S * record.sample_rate_Hz))))))
 
 
 def fit_record(record) -> dict:
@@ -567,6 +568,6 @@ def held_out(seqs, clicks, i: int, model: str = "both") -> dict:
     return out
 
 
-__all__ = ["COMMON_FRICTION", "DecayFit", "EndDecay", "Extrema", "IC", "LAW_FORM", "MODELS", "choose", "extrema",
+__all__ = ["COMMON_FRICTION", "DecayFit", "EndDecay", "Extrema", "IC", "LAW_FORM", "MODELS", "choose", "extrema", "moving_average",
            "first_decay_sd", "fit_common", "fit_end", "fit_record", "fit_sequence", "held_out", "law_prediction", "predicted_first_decay", "ratio",
            "slam_index"]

@@ -33,6 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from mtbmj.identify.bounce import BounceError, first_rebound
+from mtbmj.identify.bounce_decay import moving_average
 from mtbmj.identify.bounce_replay import NAMES, Slam, fit_push
 
 BOUNDS = (50.0, 30000.0)  # N s/m: the rebound coefficient sought within these (bounce_replay's damper bounds)
@@ -113,13 +114,6 @@ def solve(sl: Slam, record: dict, spring_scale: float, friction_N: float, compre
     return solve_on(curve(sl, spring_scale, friction_N, compression), target, spring_scale)
 
 
-def _moving_average(x: np.ndarray, n: int) -> np.ndarray:
-    if n <= 1:
-        return x.copy()
-    pad = np.concatenate((np.full(n // 2, x[0]), x, np.full(n - 1 - n // 2, x[-1])))
-    return np.convolve(pad, np.ones(n) / n, mode="valid")
-
-
 def rate_spread(time_s, x_mm, peak: int, rest_mm: float = 0.0, draws: int = DRAWS, seed: int = 0) -> dict:
     """The record's own noise carried into its first-rebound rate (1/s per mm of height, ``first_rebound``):
     the record split into its ``NOISE_S`` moving average and what is left (its noise: sensor counts,
@@ -130,7 +124,7 @@ def rate_spread(time_s, x_mm, peak: int, rest_mm: float = 0.0, draws: int = DRAW
     x = np.asarray(x_mm, float)
     dt = float(t[1] - t[0])
     n = max(int(round(NOISE_S / dt)), 1)
-    smooth = _moving_average(x, n)
+    smooth = moving_average(x, n)
     left = x - smooth
     rng = np.random.default_rng(seed)
     starts = np.arange(0, max(left.size - n, 1))
