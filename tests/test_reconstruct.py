@@ -450,6 +450,30 @@ def test_a_flight_is_bridged_from_a_drops_edge_or_by_the_chord():
         assert np.allclose(out[a - 1:b + 1], np.linspace(0.0, after, b - a + 2)) and np.all(out <= g + 1e-12)
 
 
+def test_a_flight_whose_force_only_flickers_back_is_one_flight():
+    """reconstruct_inverse.unloaded on tyre forces written here (1 kHz, 400 N at rest): a wheel off a
+    drop whose computed force reads zero for 10 ms, then flickers at 0-56 N (mean about 20 N, below 10 %
+    of the static load) for 90 ms, then reads zero again for 90 ms is one flight of 0.19 s, from where
+    the force first fell below 40 N; two zero stretches with a real contact between (300 N for 90 ms)
+    stay two hops of their own, each keeping its start."""
+    from mtbmj.ride.reconstruct_inverse import unloaded
+
+    dt, static = 1e-3, 400.0
+    rng = np.random.default_rng(3)
+    tyre = np.full(3000, static)
+    tyre[795:800] = 30.0  # the last of the load as the wheel leaves the edge
+    tyre[800:810] = -20.0
+    tyre[810:900] = rng.uniform(0.0, 56.0, 90)  # the inverse's noise about nothing
+    tyre[900:990] = -5.0
+    tyre[990:1010] = 1500.0  # the landing
+    tyre[2000:2010] = -20.0
+    tyre[2010:2100] = 300.0  # on the ground between
+    tyre[2100:2190] = -5.0
+    off = unloaded(tyre, static, dt)
+    assert off[795:990].all() and not off[:795].any() and not off[990:2000].any()
+    assert off[2000:2010].all() and not off[2010:2100].any() and off[2100:2190].all() and not off[2190:].any()
+
+
 def test_a_long_flights_take_off_is_where_the_tyre_unloaded():
     """reconstruct_inverse.unloaded on tyre forces written here (1 kHz, 400 N at rest): a 0.2 s flight
     whose force had hovered at 20-35 N (below 10 % of the static load) for 80 ms before it read zero

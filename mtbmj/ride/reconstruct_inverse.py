@@ -168,11 +168,18 @@ def unloaded(tyre, static: float, dt: float) -> np.ndarray:
     least ``EDGE_FLIGHT_S`` back to where its force last rose above ``TAKE_OFF_SHARE`` of ``static``
     (its load at rest): the inverse follows a wheel down as it unloads off an edge (the force within a
     few tens of newtons of zero for up to 0.1 s before it reads zero), which put the take-off that
-    late and the ground under it falling with the wheel. A shorter flight keeps its start."""
+    late and the ground under it falling with the wheel. A shorter flight keeps its start. Two stretches
+    of zero with a force between them that averages no more than ``TAKE_OFF_SHARE`` of ``static`` are one
+    flight (the inverse's force, two derivatives of the record, flickers by tens of newtons about
+    nothing: read stretch by stretch, a 0.19 s fall off a 0.35 m drop was two hops of 0.09 s and its
+    ground followed the wheel down)."""
     tyre = np.asarray(tyre, float)
     off = tyre <= 0.0
-    out = off.copy()
     low = tyre <= TAKE_OFF_SHARE * static
+    for (_, b), (a, _) in zip(runs(off)[:-1], runs(off)[1:]):
+        if np.mean(tyre[b:a]) <= TAKE_OFF_SHARE * static:  # between two zeros the force carried next to nothing: one flight
+            off[b:a] = True
+    out = off.copy()
     for a, b in flights(off, dt):
         if (b - a) * dt >= EDGE_FLIGHT_S:
             k = a
