@@ -363,8 +363,11 @@ def test_a_v2_trail_ride_with_standing_stretches_is_read_and_judged(tmp_path, ca
     """00094.SST of the shared version-2 rides (a trail section, 5 kHz): stretches where the bike
     stood. It ended in 'run diverged (Mean of empty slice)' after minutes, then in 'no speed' (no
     window aligned while its coarse 5 kHz steps were differentiated raw). Low-passed first (issue
-    51), a few windows align; the standing ones are named so, and the checks say in words that the
-    model does not describe this ride (its rear predicted worse than a naive baseline)."""
+    51), a few windows align, and the checks say in words that the model does not describe this ride
+    (its rear predicted worse than a naive baseline). Its bike stood unweighted mid-ride, 31.2-54.7 s
+    (both ends fully out: the rider off it), which the whole bike with its rider on cannot ride (it
+    diverged at 57.7-59.7 s, after the stand, as soon as the terrain changed a little): the longest part
+    ridden (54.7 s to the end) is reconstructed, and the line and the summary say so."""
     import json
 
     from conftest import SHARED_DATA
@@ -376,8 +379,48 @@ def test_a_v2_trail_ride_with_standing_stretches_is_read_and_judged(tmp_path, ca
     assert "the model does not describe this ride" in captured.out and "empty" not in captured.err + captured.out
     summary = json.loads((out / "reconstruction.json").read_text())
     assert summary["checks"]["passes"] is False
-    whys = [w["rejected"] or "" for w in summary["windows"]]
-    assert sum(w.startswith("standing") for w in whys) >= 3  # the bike stood for 15 s and more
+    assert summary["whole_bike"]["diverged_s"] is None
+    assert summary["record_part_s"] == pytest.approx([54.7, 121.7], abs=0.1)
+    assert [pytest.approx(a, abs=0.1) for a in summary["stood_unweighted_s"][0]] == [31.2, 54.7]
+    assert captured.out.startswith("00094.SST (the record's 54.7-121.7 s, its times from there: the bike stood "
+                                   "unweighted at 31.2-54.7 s) through sst: "), captured.out
+    assert summary["duration_s"] == pytest.approx(67.0, abs=0.1)
+
+
+def _record(t, fork, rear):
+    from mtbmj.measured.telemetry import TelemetryRecord
+
+    return TelemetryRecord("made.SST", 3, 1000.0, 0, t, fork, None, rear)
+
+
+def test_a_bike_standing_unweighted_mid_ride_is_cut_out():
+    """reconstruct.ridden_part on records written here (1 kHz): riding 0-20 s, standing unweighted
+    (both ends at 0.0-0.3 mm) 20-35 s, riding 35-80 s, standing again to the end: the longer part
+    ridden, 35 s to the end, its times from 0, the stand named (the end's stand is the rider getting
+    off, kept); riding with only the ends standing, or a 1 s flight (both ends fully out) mid-ride, or a
+    stand of the fork alone: the record itself."""
+    from mtbmj.ride.reconstruct import ridden_part
+
+    t = np.arange(0.0, 90.0, 1e-3)
+    rng = np.random.default_rng(5)
+    ride = lambda: 30.0 + 10.0 * rng.standard_normal(t.size)  # noqa: E731
+    fork, rear = ride(), ride()
+    stand = ((t >= 20.0) & (t < 35.0)) | (t >= 80.0)
+    fork[stand], rear[stand] = 0.3 * rng.random(int(stand.sum())), 0.0
+    part, span, stands = ridden_part(_record(t, fork, rear))
+    assert span == pytest.approx((35.0, 90.0 - 1e-3), abs=2e-3)
+    assert stands == [pytest.approx((20.0, 35.0), abs=2e-3)]
+    assert part.time_s[0] == 0.0 and part.time_s.size == np.count_nonzero(t >= 35.0)
+    assert np.array_equal(part.fork_mm, fork[t >= 35.0]) and np.array_equal(part.rear_mm, rear[t >= 35.0])
+    fork, rear = ride(), ride()
+    ends = (t < 2.0) | (t > 88.0)
+    fork[ends], rear[ends] = 0.0, 0.0
+    flight = (t >= 40.0) & (t < 41.0)
+    fork[flight], rear[flight] = 0.0, 0.0
+    fork_only = (t >= 50.0) & (t < 60.0)
+    fork[fork_only] = 0.0
+    record = _record(t, fork, rear)
+    assert ridden_part(record) == (record, None, [])
 
 
 def test_speed_windows_that_leave_nothing_to_check_are_refused(tmp_path, capsys, monkeypatch):

@@ -488,7 +488,10 @@ def prepare(record, bike, overrides=None, duration: float | None = None, calibra
     from mtbmj.bike import spec as spec_mod
     from mtbmj.ride import reconstruct as rc
 
-    length = float(record.time_s[-1] - record.time_s[0])
+    # a bike that stood unweighted mid-ride: its longest part ridden (the reconstruction cuts it too, and
+    # says so in its summary), so the calibration and the length read what is reconstructed
+    ridden = rc.ridden_part(record)[0]
+    length = float(ridden.time_s[-1] - ridden.time_s[0])
     if length < MIN_SECONDS:
         raise AdviseError(f"{record.name}: {length:.1f} s of ride cannot support advice (at least {MIN_SECONDS:g} s)")
     # the minimum holds for the stretch analysed, not only for the file it is cut from
@@ -500,7 +503,7 @@ def prepare(record, bike, overrides=None, duration: float | None = None, calibra
     if calibrated:  # the ridden bike's springs from the ride itself, before anything is found through them
         from mtbmj.ride import calibrate as cal_mod
 
-        cal = cal_mod.calibrate(record, bike, overrides, duration)
+        cal = cal_mod.calibrate(ridden, bike, overrides, duration)
         overrides = cal.apply(bike, overrides)
     rec = rc.reconstruct(record, bike, overrides)
     checks = rec.checks()

@@ -71,6 +71,7 @@ from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, W
 # to it (``TelemetryRecord.decimated``), so two derivatives do not amplify its count steps and a
 # 100 s ride at 5 kHz costs what it costs at 1 kHz
 RATE_HZ = 1000.0
+STAND_MM = 0.5  # both ends this close to full extension for longer than a flight: the bike stands unweighted
 
 
 def histogram_distance(a, b, top: float, bins: int = 20) -> float:
@@ -120,6 +121,8 @@ class Reconstruction:
     passes: int = 0  # the whole bike's passes over the terrain (reconstruct_bike.terrain_and_rear)
     settled_m: float = math.nan  # the rear predicted's RMS change in the last pass
     diverged_s: float | None = None  # where the whole bike diverged (finding the terrain or riding it), or None
+    part_s: tuple | None = None  # (start, end) s of the record reconstructed where it stood unweighted mid-ride, or None
+    stands: list = None  # (start s, end s) of the record: the bike standing unweighted mid-ride (its rider off it)
 
     def baselines(self) -> dict:
         """The two naive predictions of the rear the model must beat, on the samples checked: (a) the
@@ -206,7 +209,13 @@ class Reconstruction:
                                          "windows_rejected": len(first["windows"]) - len(firsts),
                                          "windows_kept": int(self.speed.get("first_kept", 0)),
                                          "windows": listed(first)}
-        return {"ride": self.name, "bike": self.bike, "duration_s": float(self.t[-1] - self.t[0]),
+        part = {} if self.part_s is None else {
+            "record_part_s": [float(self.part_s[0]), float(self.part_s[1])],
+            "stood_unweighted_s": [[float(a), float(b)] for a, b in self.stands],
+            "record_part_why": "the bike stood unweighted mid-ride (both ends fully out, its rider off it), which the "
+                               "whole bike with its rider on cannot ride: the longest part ridden is reconstructed, "
+                               "its times from its own start"}
+        return {"ride": self.name, "bike": self.bike, "duration_s": float(self.t[-1] - self.t[0]), **part,
                 "speed_m_per_s": self.speed["speed_m_per_s"], "lag_s": self.speed["lag_s"],
                 "speed_from": self.speed.get("from"), "wheelbase_at_sag_m": float(self.wheelbase),
                 "speed_profile": profile,
@@ -238,7 +247,10 @@ class Reconstruction:
         f = p.get("first_estimate")
         refined = ("" if f is None else f" of {p['window_s']:g} s aligning the rear predicted (and "
                    f"{f['windows_kept']} of the ends' lag)")
-        return (f"{self.name} through {self.bike}: {c['verdict']}; speed {s['speed_m_per_s']:.2f} m/s median "
+        part = ("" if self.part_s is None else
+                f" (the record's {self.part_s[0]:.1f}-{self.part_s[1]:.1f} s, its times from there: the bike stood "
+                f"unweighted at " + ", ".join(f"{a:.1f}-{b:.1f} s" for a, b in self.stands) + ")")
+        return (f"{self.name}{part} through {self.bike}: {c['verdict']}; speed {s['speed_m_per_s']:.2f} m/s median "
                 f"from a {1e3 * s['lag_s']:.0f} ms lag{spread}, {p['windows_accepted']} of "
                 f"{p['windows_accepted'] + p['windows_rejected']} windows{refined}, terrain {s['terrain_length_m']:.0f} m; "
                 f"check: front reproduced within "
@@ -337,6 +349,35 @@ class Reconstruction:
 
 
 
+def ridden_part(record):
+    """(the record, None, []) where it never stands unweighted mid-ride; else (its longest part between
+    such stands, its times from 0 there; (start, end) s of that part in the record; the stands' (start,
+    end) s). Standing unweighted: both ends within ``STAND_MM`` of full extension for longer than
+    ``reconstruct_inverse.MAX_FLIGHT_S``, not at the record's start or end (a rider getting on or off,
+    which the checks leave out by their filters' start and the windows). The whole bike rides with its
+    rider on: over a stand it pressed the bike to its sag where the record stood fully out, and the
+    fork's slow load then read as the rider lifting the front by its whole static load, which the free
+    run carried for seconds past the stand (00094, 23.5 s standing, diverged there)."""
+    from dataclasses import replace
+
+    from mtbmj.ride.reconstruct_inverse import MAX_FLIGHT_S
+
+    if record.fork_mm is None or record.rear_mm is None:
+        return record, None, []
+    t = np.asarray(record.time_s, float)
+    dt = float(t[1] - t[0])
+    out = (np.asarray(record.fork_mm, float) <= STAND_MM) & (np.asarray(record.rear_mm, float) <= STAND_MM)
+    stands = [(a, b) for a, b in runs(out) if (b - a) * dt > MAX_FLIGHT_S and a > 0 and b < t.size]
+    if not stands:
+        return record, None, []
+    edges = [0] + [k for ab in stands for k in ab] + [t.size]
+    a, b = max(zip(edges[0::2], edges[1::2]), key=lambda ab: ab[1] - ab[0])
+    cut = lambda x: None if x is None else np.ascontiguousarray(np.asarray(x)[a:b])  # noqa: E731
+    part = replace(record, time_s=np.ascontiguousarray(t[a:b] - t[a]), fork_mm=cut(record.fork_mm),
+                   shock_mm=cut(record.shock_mm), rear_mm=cut(record.rear_mm), counts=cut(record.counts))
+    return part, (float(t[a]), float(t[b - 1])), [(float(t[i]), float(t[min(j, t.size - 1)])) for i, j in stands]
+
+
 def reconstruct(record, bike, overrides=None) -> Reconstruction:
     """``record`` (a ``mtbmj.measured.telemetry.TelemetryRecord`` with both ends) through the bike
     ``bike`` (preset, file or ``mtbmj.bike.spec.ResolvedBike``, which is not read again; ``overrides``
@@ -347,6 +388,7 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     if record.fork_mm is None or record.rear_mm is None:
         raise ReconstructError(f"{record.name}: needs both ends' records (the rear meets what the front met)")
     record = record.decimated(RATE_HZ)  # a 5 kHz version-2 record read at 1 kHz, low-passed first
+    record, part_s, stands = ridden_part(record)
     spec = spec_mod.load(bike, overrides)  # a ResolvedBike is derived again, not read
     t = np.asarray(record.time_s, float)
     check_length(t, spec.front_axle[0] - spec.rear_axle[0], WINDOW_S, record.name)  # before any work
@@ -431,7 +473,8 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
         return Reconstruction(record.name, spec.name, t, speed, distance, found["ground"], ~bad, fork * 1e3,
                               front_again * 1e3, rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps,
                               done["unaligned"], np.interp(t - done["lags"], t, fork * 1e3), wheelbase,
-                              found["passes"], found["settled_m"], min(diverged) if diverged else None)
+                              found["passes"], found["settled_m"], min(diverged) if diverged else None, part_s,
+                              stands)
 
     done = through(speed)
     result = built(done, speed)
