@@ -1,0 +1,204 @@
+"""The bike's own spring along the stroke and the held-out frequency carried to a record's centre
+(``mtbmj.identify.bounce_stroke``).
+
+The wheel rate is checked against its closed form for a leverage ratio linear in wheel travel,
+LR(w) = R0 - b w (a falling, progressive curve) on a preloaded linear coil: the stroke
+s(w) = -ln(1 - b w / R0) / b, the wheel force F_w = (P + k s) / LR and its rate
+k_w = k / LR^2 + (P + k s) b / LR^2, written here, not taken from the module.
+
+The made records come from a model written here with its own integrator (solve_ivp with events):
+one mass in wheel coordinates on that spring, viscous damping set by the clicks, Coulomb friction with
+a stick condition, and a constant push (the rider's weight on the bars) that sets each record's
+centre in the stroke (20, 30, 40 mm); the slam is a half-sine push. The mass is the same in every
+record, so the deeper centre rings faster by the rate alone.
+"""
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from mtbmj.identify import bounce_decay as bd
+from mtbmj.identify import bounce_predict as bp
+from mtbmj.identify import bounce_stroke as bs
+from mtbmj.measured.leverage import Leverage
+
+from conftest import SHARED_DATA
+
+R0, B = 3.2, 5.0  # LR(w) = R0 - B w (w in m): 3.2 at full extension, 2.3 at 180 mm of wheel travel
+K, P = 80e3, 250.0  # the coil: N/m and preload N
+RATE, NOISE = 5000, 0.15
+M = 80.0  # kg, the sprung mass in wheel coordinates
+CENTRES_MM = (20.0, 30.0, 40.0)
+CLICKS = (0, 8, 17)
+
+
+def lr(w):
+    return R0 - B * w
+
+
+def stroke(w):
+    return -np.log(1.0 - B * w / R0) / B
+
+
+def travel(s):
+    return R0 * (1.0 - np.exp(-B * s)) / B
+
+
+def wheel_force(w):
+    return (P + K * stroke(w)) / lr(w)
+
+
+def closed_rate(s_mm):
+    w = travel(s_mm * 1e-3)
+    return K / lr(w) ** 2 + (P + K * s_mm * 1e-3) * B / lr(w) ** 2
+
+
+def linear_leverage(r0=R0, b=B):
+    w = np.arange(0, 181) * 1e-3
+    return Leverage(tuple(w), tuple(r0 - b * w))
+
+
+SPRING = bs.BikeSpring(linear_leverage(), lambda s: P + K * s)
+
+
+@pytest.mark.parametrize("s_mm", [5.0, 15.0, 25.0, 35.0, 50.0])
+def test_wheel_rate_is_the_closed_form_not_the_coil_through_the_leverage_squared(s_mm):
+    got = SPRING.wheel_rate(s_mm)
+    assert got == pytest.approx(closed_rate(s_mm), rel=1e-4)
+    naive = K / lr(travel(s_mm * 1e-3)) ** 2  # the geometric term of the static force left out
+    assert abs(naive / got - 1) > 100 * 1e-4
+
+
+def test_frequency_ratio_is_the_square_root_of_the_rates():
+    q = SPRING.frequency_ratio(35.0, 15.0)
+    assert q == pytest.approx(math.sqrt(closed_rate(35.0) / closed_rate(15.0)), rel=1e-4)
+    assert q > 1.05  # a falling leverage stiffens
+    flat = bs.BikeSpring(linear_leverage(b=0.0), lambda s: P + K * s)
+    assert flat.frequency_ratio(35.0, 15.0) == pytest.approx(1.0, abs=1e-9)
+
+
+def test_the_sst_bike_stiffens_with_stroke():
+    """The sst preset (a linear 80 N/mm coil, its leverage falling from 3.18 to 2.37): 10.80 N/mm at the
+    wheel about 16.5 mm of stroke, 11.32 about 19.6 mm, 13.60 about 35 mm."""
+    sp = bs.BikeSpring.of_bike("sst")
+    assert sp.wheel_rate(16.5) / 1e3 == pytest.approx(10.80, abs=0.02)
+    assert sp.wheel_rate(19.6) / 1e3 == pytest.approx(11.32, abs=0.02)
+    assert sp.wheel_rate(35.0) / 1e3 == pytest.approx(13.60, abs=0.02)
+
+
+# --- made records: one mass on the progressive spring, centred at three depths -------------------------
+
+def zeta_of(clicks):
+    return 0.05 + 0.008 * clicks
+
+
+def made_record(centre_mm, clicks, seed, seconds=8.0, t_push=1.0, push_s=0.25, push_n=300.0, fc=6.0):
+    """Shock stroke (mm) at RATE: at rest at ``centre_mm`` until ``t_push``, the push, the free motion."""
+    from scipy.integrate import solve_ivp
+
+    w_c = travel(centre_mm * 1e-3)
+    load = wheel_force(w_c)  # the constant push that holds the centre there (the mass is the same)
+    c = 2 * zeta_of(clicks) * math.sqrt(closed_rate(25.0) * M)  # the damper: clicks only, not the centre
+
+    def net(t, w, v):
+        f = load - wheel_force(w) - c * v
+        if t_push <= t <= t_push + push_s:
+            f += push_n * math.sin(math.pi * (t - t_push) / push_s)
+        return f
+
+    t = np.arange(int(seconds * RATE)) / RATE
+    t_move = t_push + push_s / math.pi * math.asin(fc / push_n)  # the push overcomes the friction
+    ts, ws = [t[t < t_move]], [np.full(int(np.sum(t < t_move)), w_c)]
+    y, t0, mode = np.array([w_c, 0.0]), t_move, 1
+    while t0 < seconds - 1e-9:
+        def rhs(tt, q, s=mode):
+            return [q[1], (net(tt, q[0], q[1]) - fc * s) / M]
+
+        def rev(tt, q):
+            return q[1]
+        rev.terminal, rev.direction = True, -mode
+        sol = solve_ivp(rhs, (t0, seconds), y, events=(rev,), rtol=1e-10, atol=1e-12, dense_output=True)
+        grid = t[(t >= t0) & (t < sol.t[-1])]
+        if grid.size:
+            ts.append(grid)
+            ws.append(sol.sol(grid)[0])
+        t0, y = sol.t[-1], sol.y[:, -1].copy()
+        if sol.status != 1:
+            break
+        y[1] = 0.0
+        f = net(t0, y[0], 0.0)
+        if abs(f) <= fc:  # stuck (the push is over by then: it drives the mass one way throughout)
+            assert t0 > t_push + push_s
+            break
+        mode = 1 if f > 0 else -1
+    ts.append([t0])
+    ws.append([y[0]])  # at rest there from the last reversal on
+    tt, ww = np.concatenate(ts), np.concatenate(ws)
+    w = np.interp(t, tt, ww, right=ww[-1])
+    x = 1e3 * stroke(w) + np.random.default_rng(seed).normal(0, NOISE, t.size)
+    return t, np.round(np.clip(x, 0, None) / 0.02) * 0.02
+
+
+@pytest.fixture(scope="module")
+def made():
+    recs, xs, seqs = [], [], []
+    for j, (c, k) in enumerate(zip(CENTRES_MM, CLICKS)):
+        t, x = made_record(c, k, seed=j + 1)
+        recs.append(SimpleNamespace(time_s=t, name=f"{k} clicks"))
+        xs.append(x)
+        seqs.append(bd.extrema(t, x, "shock", int(np.argmax(x))))
+    return recs, xs, seqs
+
+
+def true_fd(centre_mm, clicks):
+    z = zeta_of(clicks) * math.sqrt(closed_rate(25.0) / closed_rate(centre_mm))
+    return math.sqrt(closed_rate(centre_mm) / M) * math.sqrt(1 - z * z) / (2 * math.pi)
+
+
+def test_made_records_ring_at_their_own_centres(made):
+    """The generator's centres and frequencies: each record's fitted x_eq within 0.5 mm of its centre,
+    and its timed frequency within 1 % of the linear frequency at that centre (measured 0.14, 0.28,
+    0.83 % below it; the rate's rise from 20 to 40 mm gives 13 % in frequency)."""
+    recs, xs, seqs = made
+    pl = bs.placements(seqs, CLICKS, recs, xs)
+    for p, c, k, r, x, s in zip(pl, CENTRES_MM, CLICKS, recs, xs, seqs):
+        assert p.centre_mm == pytest.approx(c, abs=0.5)
+        assert abs(p.rest_before_mm - c) < 3 * NOISE
+        tm = bp.timing(s, r.time_s, x)
+        assert tm.frequency_hz == pytest.approx(true_fd(c, k), rel=0.01)
+    assert true_fd(40.0, 17) / true_fd(20.0, 17) > 1.10
+
+
+def _stiffened_within_2_sd(made, i):
+    recs, xs, seqs = made
+    ho = bs.held_out(seqs, list(CLICKS), recs, xs, i, SPRING)
+    assert ho["centre_mm"] == pytest.approx(CENTRES_MM[i], abs=0.5)
+    assert ho["frequency_stiffened_misses_by_sd"] <= 2.0
+
+
+# measured: with the stiffening the held-out frequency misses by 1.56, 0.51, 2.16 sd at 20, 30, 40 mm
+# (0, 8, 17 clicks); without it by 3.04, 0.00, 3.00
+@pytest.mark.parametrize("i", [0, 1])
+def test_held_out_frequency_with_the_stiffening_within_2_sd(made, i):
+    _stiffened_within_2_sd(made, i)
+
+
+@pytest.mark.xfail(strict=True, reason="40 mm, 17 clicks (extrapolated from 20 and 30 mm): 2.16 sd; the records' "
+                                         "timed frequencies lie 0.14, 0.28, 0.83 % below the linear frequency at "
+                                         "their centres (deeper and more damped, further below), which the "
+                                         "stiffening ratio does not carry, nor the damping ratio's change with the "
+                                         "rate (the damper's c is the clicks', zeta moves with 1 / sqrt(k))")
+def test_held_out_frequency_with_the_stiffening_within_2_sd_at_the_deepest_centre(made):
+    _stiffened_within_2_sd(made, 2)
+
+
+@pytest.mark.parametrize("i", [0, 2])
+def test_a_common_spring_or_a_wrong_leverage_misses_the_outer_centres(made, i):
+    """The law without the stiffening (one f_n for every centre) and the law with the leverage turned
+    round (rising: a softening rate) both miss the records held out at the outer centres by more than 2 sd."""
+    recs, xs, seqs = made
+    ho = bs.held_out(seqs, list(CLICKS), recs, xs, i, SPRING)
+    assert ho["frequency_misses_by_sd"] > 2.0
+    rising = bs.BikeSpring(linear_leverage(r0=2.3, b=-5.0), lambda s: P + K * s)
+    assert bs.held_out(seqs, list(CLICKS), recs, xs, i, rising)["frequency_stiffened_misses_by_sd"] > 2.0
