@@ -202,3 +202,79 @@ def test_a_common_spring_or_a_wrong_leverage_misses_the_outer_centres(made, i):
     assert ho["frequency_misses_by_sd"] > 2.0
     rising = bs.BikeSpring(linear_leverage(r0=2.3, b=-5.0), lambda s: P + K * s)
     assert bs.held_out(seqs, list(CLICKS), recs, xs, i, rising)["frequency_stiffened_misses_by_sd"] > 2.0
+
+
+# --- the shared seat slams (0, 8, 17 clicks) ---------------------------------------------------------
+
+SLAMS = ("00083.SST", "00085.SST", "00087.SST")
+SHARED_CLICKS = [0, 8, 17]
+
+
+@pytest.fixture(scope="module")
+def shared():
+    from mtbmj.measured.telemetry import read_sst
+
+    recs = [read_sst(f"{SHARED_DATA}/sst_v2/{n}") for n in SLAMS]
+    return recs, [r.shock_mm for r in recs], [bd.extrema(r.time_s, r.shock_mm, "shock", bd.slam_index(r)) for r in recs]
+
+
+@pytest.mark.shared_data("sst_v2", *SLAMS)
+def test_shared_slams_sit_alike_and_ring_about_alike_centres(shared):
+    """Measured: the rest before the slam (as the rider sat) 11.37, 9.70, 10.07 mm at 0, 8, 17 clicks;
+    the ring-downs' centres (x_eq) 16.64, 16.54, 19.58 mm; their first free swings 30.7, 24.0, 17.7 mm.
+    The sag differs by 1.7 mm at most and the 17-click centre lies 3 mm deeper than the others'."""
+    recs, xs, seqs = shared
+    pl = bs.placements(seqs, SHARED_CLICKS, recs, xs)
+    rests = [p.rest_before_mm for p in pl]
+    centres = [p.centre_mm for p in pl]
+    assert rests == pytest.approx([11.37, 9.70, 10.07], abs=0.05)
+    assert centres == pytest.approx([16.64, 16.54, 19.58], abs=0.05)
+    assert max(rests) - min(rests) < 2.0 and max(centres) - min(centres) < 3.5
+
+
+@pytest.mark.shared_data("sst_v2", *SLAMS)
+def test_shared_17_clicks_rings_faster_on_both_of_its_half_cycles(shared):
+    """The 17-click slam's one timed half cycle (a compression, 7.6 -> 25.4 mm) takes 0.280 s; the
+    rebound after it, to where it sticks at 17.3 mm, about 0.28 s too (the first time the 10 ms mean
+    comes within 0.05 mm of the stuck level, read here, not by the package). The 0- and 8-click
+    slams' free half cycles take 0.290-0.350 s (compression 0.309, 0.290; rebound 0.339, 0.350, 0.331,
+    0.290): the 17-click slam rings about 15 % faster in both directions."""
+    recs, xs, seqs = shared
+    pl = bs.placements(seqs, SHARED_CLICKS, recs, xs)
+    (d17, a, b, h17), = pl[2].half_periods
+    assert d17 == "compression" and h17 == pytest.approx(0.280, abs=0.002)
+    others = [h for p in pl[:2] for _, _, _, h in p.half_periods]
+    assert len(others) == 6 and min(others) > 0.288 and np.mean(others) > 1.1 * h17
+    t, x = np.asarray(recs[2].time_s), np.asarray(xs[2])
+    xm = bd.moving_average(x, int(0.010 * RATE))
+    t_peak = float(seqs[2].times_s[1])
+    after = np.flatnonzero((t > t_peak) & (np.abs(xm - seqs[2].levels_mm[-1]) < 0.05))
+    rebound = float(t[after[0]]) - t_peak
+    assert 0.25 < rebound < 0.30
+
+
+@pytest.mark.shared_data("sst_v2", *SLAMS)
+def test_shared_stiffening_moves_the_17_click_prediction_by_2_6_percent(shared):
+    """The bike's own spring (sst preset) at the 17-click slam's centre (19.9 mm with the law's zeta and
+    d held) against the 0- and 8-click slams' (16.6, 16.5 mm): rates 11.37 against 10.82 N/mm at the
+    wheel, f_n x 1.026; the held-out frequency 1.492 -> 1.531 Hz; the record's 1.786 Hz needs x 1.20,
+    a centre past 50 mm of the 65 mm stroke (x 1.192 there), where the ring-down spans 7.6-25.4 mm."""
+    recs, xs, seqs = shared
+    sp = bs.BikeSpring.of_bike("sst")
+    ho = bs.held_out(seqs, SHARED_CLICKS, recs, xs, 2, sp)
+    assert ho["stiffening_ratio"] == pytest.approx(1.026, abs=0.002)
+    assert ho["frequency_hz"] == pytest.approx(1.492, abs=0.002)
+    assert ho["frequency_stiffened_hz"] == pytest.approx(1.531, abs=0.002)
+    needed = ho["frequency_measured"] / ho["frequency_hz"]
+    assert needed > 1.19 and sp.frequency_ratio(50.0, 16.6) < needed
+
+
+@pytest.mark.shared_data("sst_v2", *SLAMS)
+@pytest.mark.xfail(strict=True, reason="17 clicks held out with the bike's stiffening at its centre: 1.531 +- 0.043 "
+                                         "Hz predicted, 1.786 +- 0.002 measured (5.9 sd; 7.0 without it): the "
+                                         "centres lie within 3.4 mm and the sag within 1.7 mm, so the stroke "
+                                         "explains 0.039 of the 0.293 Hz")
+def test_shared_17_clicks_frequency_with_the_stiffening_within_2_sd(shared):
+    recs, xs, seqs = shared
+    ho = bs.held_out(seqs, SHARED_CLICKS, recs, xs, 2, bs.BikeSpring.of_bike("sst"))
+    assert ho["frequency_stiffened_misses_by_sd"] <= 2.0
