@@ -93,7 +93,7 @@ def zeta_of(clicks):
     return 0.05 + 0.008 * clicks
 
 
-def made_record(centre_mm, clicks, seed, seconds=8.0, t_push=1.0, push_s=0.25, push_n=300.0, fc=6.0):
+def made_record(centre_mm, clicks, seed, seconds=9.0, t_push=2.0, push_s=0.25, push_n=300.0, fc=6.0):
     """Shock stroke (mm) at RATE: at rest at ``centre_mm`` until ``t_push``, the push, the free motion."""
     from scipy.integrate import solve_ivp
 
@@ -158,8 +158,8 @@ def true_fd(centre_mm, clicks):
 
 def test_made_records_ring_at_their_own_centres(made):
     """The generator's centres and frequencies: each record's fitted x_eq within 0.5 mm of its centre,
-    and its timed frequency within 1 % of the linear frequency at that centre (measured 0.14, 0.28,
-    0.83 % below it; the rate's rise from 20 to 40 mm gives 13 % in frequency)."""
+    and its timed frequency within 1 % of the linear frequency at that centre (measured 0.11, 0.37,
+    0.58 % below it; the rate's rise from 20 to 40 mm gives 13 % in frequency)."""
     recs, xs, seqs = made
     pl = bs.placements(seqs, CLICKS, recs, xs)
     for p, c, k, r, x, s in zip(pl, CENTRES_MM, CLICKS, recs, xs, seqs):
@@ -177,31 +177,48 @@ def _stiffened_within_2_sd(made, i):
     assert ho["frequency_stiffened_misses_by_sd"] <= 2.0
 
 
-# measured: with the stiffening the held-out frequency misses by 1.56, 0.51, 2.16 sd at 20, 30, 40 mm
-# (0, 8, 17 clicks); without it by 3.04, 0.00, 3.00
-@pytest.mark.parametrize("i", [0, 1])
+# measured (these seeds): with the stiffening the held-out frequency misses by 2.22, 0.00, 0.99 sd at 20, 30,
+# 40 mm (0, 8, 17 clicks), 0.6 %, 0.0 %, 0.3 % of the measured; without it by 2.91, 0.03, 3.13 sd (10 %, 0 %,
+# 11 %). Over five noise draws the stiffened misses were 1.73-2.73 sd at 20 mm, 0.00-0.83 at 30, 0.05-1.60
+# at 40; the common spring's 2.79-3.27 sd at 20 and 40 mm.
+@pytest.mark.parametrize("i", [1, 2])
 def test_held_out_frequency_with_the_stiffening_within_2_sd(made, i):
     _stiffened_within_2_sd(made, i)
 
 
-@pytest.mark.xfail(strict=True, reason="40 mm, 17 clicks (extrapolated from 20 and 30 mm): 2.16 sd; the records' "
-                                         "timed frequencies lie 0.14, 0.28, 0.83 % below the linear frequency at "
-                                         "their centres (deeper and more damped, further below), which the "
-                                         "stiffening ratio does not carry, nor the damping ratio's change with the "
-                                         "rate (the damper's c is the clicks', zeta moves with 1 / sqrt(k))")
-def test_held_out_frequency_with_the_stiffening_within_2_sd_at_the_deepest_centre(made):
-    _stiffened_within_2_sd(made, 2)
+@pytest.mark.xfail(strict=True, reason="20 mm, 0 clicks (extrapolated from 30 and 40 mm): 2.22 sd, 0.6 % (1.73-2.73 "
+                                         "sd over five noise draws): the records' timed frequencies lie 0.11, 0.37, "
+                                         "0.58 % below the linear frequency at their centres (an amplitude and "
+                                         "damping effect of the nonlinear spring), which the stiffening ratio does "
+                                         "not carry, and two records' f_n agreeing by chance make the sd 0.3 %")
+def test_held_out_frequency_with_the_stiffening_within_2_sd_at_the_shallowest_centre(made):
+    _stiffened_within_2_sd(made, 0)
+
+
+@pytest.mark.parametrize("i", range(3))
+def test_held_out_frequency_with_the_stiffening_within_1_percent(made, i):
+    """In Hz rather than in sd: the stiffened prediction within 1 % of the record's timed frequency; at
+    the outer centres the common spring's misses by more than 5 %."""
+    recs, xs, seqs = made
+    ho = bs.held_out(seqs, list(CLICKS), recs, xs, i, SPRING)
+    f = ho["frequency_measured"]
+    assert abs(ho["frequency_stiffened_hz"] - f) < 0.01 * f
+    if i != 1:
+        assert abs(ho["frequency_hz"] - f) > 0.05 * f
 
 
 @pytest.mark.parametrize("i", [0, 2])
 def test_a_common_spring_or_a_wrong_leverage_misses_the_outer_centres(made, i):
     """The law without the stiffening (one f_n for every centre) and the law with the leverage turned
-    round (rising: a softening rate) both miss the records held out at the outer centres by more than 2 sd."""
+    round (rising: a softening rate) both miss the records held out at the outer centres by more than 2 sd
+    and 5 % (measured 2.91 and 3.13 sd, 2.71 and 3.36 sd)."""
     recs, xs, seqs = made
     ho = bs.held_out(seqs, list(CLICKS), recs, xs, i, SPRING)
     assert ho["frequency_misses_by_sd"] > 2.0
     rising = bs.BikeSpring(linear_leverage(r0=2.3, b=-5.0), lambda s: P + K * s)
-    assert bs.held_out(seqs, list(CLICKS), recs, xs, i, rising)["frequency_stiffened_misses_by_sd"] > 2.0
+    wrong = bs.held_out(seqs, list(CLICKS), recs, xs, i, rising)
+    assert wrong["frequency_stiffened_misses_by_sd"] > 2.0
+    assert abs(wrong["frequency_stiffened_hz"] / wrong["frequency_measured"] - 1) > 0.05
 
 
 # --- the shared seat slams (0, 8, 17 clicks) ---------------------------------------------------------
@@ -278,3 +295,44 @@ def test_shared_17_clicks_frequency_with_the_stiffening_within_2_sd(shared):
     recs, xs, seqs = shared
     ho = bs.held_out(seqs, SHARED_CLICKS, recs, xs, 2, bs.BikeSpring.of_bike("sst"))
     assert ho["frequency_stiffened_misses_by_sd"] <= 2.0
+
+
+def test_fit_bounce_writes_placements_and_the_stiffened_held_out(made, tmp_path):
+    """``mtbmj fit bounce --bike``: the made records written as SST files, the bike the sst preset with
+    this file's leverage (its shock is the same preloaded 80 N/mm coil). fit.json gives each record's
+    placement (the generator's centres within 0.5 mm) and, held out, the frequency carried to each
+    centre: its ratio to the common law's that of the closed form, n sqrt(k_i) / sum_j sqrt(k_j) over
+    the two records fitted (within 0.5 %), and without a bike no stiffened entry."""
+    import json
+    import re
+    import struct
+    from pathlib import Path
+
+    from helpers import FORK, SHOCK, counts_of
+    from mtbmj import cli
+    from mtbmj.bike import presets
+
+    recs, xs, _ = made
+    paths = []
+    for (k, x) in zip(CLICKS, xs):
+        shock = np.clip(np.rint(counts_of(x, *SHOCK)), 0, None).astype("<u2")
+        p = tmp_path / f"{k}.SST"
+        p.write_bytes(struct.pack("<3sBH", b"SST", 2, RATE) + np.column_stack((np.full_like(shock, 300), shock))
+                      .astype("<u2").tobytes())
+        paths.append(str(p))
+    text = Path(presets.__file__).with_name("sst.toml").read_text()
+    w = np.arange(0, 175)
+    text = re.sub(r"(?m)^wheel_travel_mm = \[.*\]$", "wheel_travel_mm = [" + ", ".join(map(str, w)) + "]", text)
+    text = re.sub(r"(?m)^ratio = \[.*\]$", "ratio = [" + ", ".join(repr(float(R0 - B * v * 1e-3)) for v in w) + "]",
+                  text)
+    (tmp_path / "bike.toml").write_text(text)
+    for bike, out in (([ "--bike", str(tmp_path / "bike.toml")], tmp_path / "with"), ([], tmp_path / "without")):
+        assert cli.main(["fit", "bounce", *paths, "--clicks", "0,8,17", *bike, "--out", str(out)]) == 0
+    law = json.loads((tmp_path / "with" / "fit.json").read_text())["decay_law"]["shock"]
+    assert [p["centre_mm"] for p in law["placements"]] == pytest.approx(list(CENTRES_MM), abs=0.5)
+    for i, ho in enumerate(law["held_out"]):
+        others = [CENTRES_MM[j] for j in range(3) if j != i]
+        closed = 2 * math.sqrt(closed_rate(CENTRES_MM[i])) / sum(math.sqrt(closed_rate(c)) for c in others)
+        assert ho["stiffening_ratio"] == pytest.approx(closed, rel=0.005)
+    plain = json.loads((tmp_path / "without" / "fit.json").read_text())["decay_law"]["shock"]
+    assert len(plain["placements"]) == 3 and all("frequency_stiffened_hz" not in h for h in plain["held_out"])
