@@ -24,7 +24,7 @@ before the records' mean is taken (:func:`mtbmj.identify.bounce_predict.common_f
 record's centre is its x_eq in the law's fit, the held-out record's its x_eq with the law's zeta and
 d held (as its prediction starts from it). With one centre for all the records this is the law of
 :mod:`mtbmj.identify.bounce_predict`. The decay is left as that law gives it: zeta = c / (2 sqrt(k m))
-moves by the square root of the same ratio, under 1.2 % on the shared slams.
+moves by the inverse of the same frequency ratio (at most 2.6 % on the shared slams).
 
 **What each record's placement is** (:func:`placements`): its centre (x_eq of the per-record fit, with
 its sd), its first free swing, its rest before the slam (the sag as the rider sat: the median travel
