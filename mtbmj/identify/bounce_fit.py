@@ -264,7 +264,7 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
                        "rider": "rigid on the frame" if seated.saddle is None else
                        f"compliant on the saddle at {seated.rider_hz:g} Hz (damping ratio {seated.saddle['damping_ratio']:g})"}
     decay_fits, _ = _decay(records, clicks, out, notes)
-    plaws = _prediction_laws(records, clicks, decay_fits, out)
+    plaws = _prediction_laws(records, clicks, decay_fits, out, seated.spec if seated is not None else None)
     csvs, predictions = {}, []
     for k in predict:
         entry = {"clicks": k}
@@ -426,10 +426,13 @@ def _decay(records, clicks, out, notes):
     return fits, laws
 
 
-def _prediction_laws(records, clicks, decay_fits, out) -> dict:
+def _prediction_laws(records, clicks, decay_fits, out, spec=None) -> dict:
     """end -> (DecayLaw, record indices) for each end whose decay law across clicks was fitted, with the
-    records' held-out checks under ``decay_law[end]["held_out"]`` (three or more click settings)."""
+    records' placements in the stroke under ``decay_law[end]["placements"]`` and their held-out checks
+    under ``decay_law[end]["held_out"]`` (three or more click settings; the shock's with the bike's own
+    stiffening at each held-out centre beside, given a bike ``spec``)."""
     from mtbmj.identify import bounce_predict as bp
+    from mtbmj.identify import bounce_stroke as bs
 
     plaws = {}
     for end, entry in out.get("decay_law", {}).items():
@@ -444,9 +447,15 @@ def _prediction_laws(records, clicks, decay_fits, out) -> dict:
         plaws[end] = (law, rows)
         entry["undamped_frequency_hz"] = law.fn_hz
         entry["undamped_frequency_hz_ci95"] = interval(law.fn_hz, law.fn_sd)
+        recs = [records[i] for i in rows]
+        entry["placements"] = [_finite_or_none(p.summary()) for p in bs.placements(seqs, ks, recs, series,
+                                                                                    entry["model"])]
         if len(set(ks)) >= 3:
-            entry["held_out"] = [_finite_or_none(bp.held_out(seqs, ks, [records[i] for i in rows], series, j,
-                                                             entry["model"])) for j in range(len(rows))]
+            spring = bs.BikeSpring.of_bike(spec) if spec is not None and end == "shock" else None
+            entry["held_out"] = [_finite_or_none(bs.held_out(seqs, ks, recs, series, j, spring, entry["model"])
+                                                 if spring is not None else
+                                                 bp.held_out(seqs, ks, recs, series, j, entry["model"]))
+                                 for j in range(len(rows))]
     return plaws
 
 

@@ -237,6 +237,8 @@ class DecayLaw:
     timings: list
     fn_hz: float
     fn_sd: float
+    zetas: list = field(default_factory=list)  # the timed records' own zetas (per-record fit), as ``timings``
+    timed: list = field(default_factory=list)  # the indices (into ``seqs``) of the timed records
 
     def zeta_d(self, clicks: float) -> tuple[float, float, np.ndarray]:
         """zeta and d at ``clicks`` and their 2 x 2 covariance."""
@@ -321,7 +323,7 @@ def decay_law(end: str, seqs, clicks, records, ends_mm, model: str = "both") -> 
     if fit is None:
         return None
     per = bd.fit_common(seqs, clicks, model, law=False)
-    tms, zs = [], []
+    tms, zs, timed = [], [], []
     for i, (s, r, x) in enumerate(zip(seqs, records, ends_mm)):
         tm = timing(s, np.asarray(r.time_s, float), np.asarray(x, float))
         if tm is None:
@@ -331,10 +333,11 @@ def decay_law(end: str, seqs, clicks, records, ends_mm, model: str = "both") -> 
             fit.theta[0] + fit.theta[1] * clicks[i] if "zeta0" in fit.names else 0.0)
         tms.append(tm)
         zs.append(z)
+        timed.append(i)
     if not tms:
         return None
     fn, fsd = common_fn(tms, zs)
-    return DecayLaw(end, fit, list(seqs), list(clicks), tms, fn, fsd)
+    return DecayLaw(end, fit, list(seqs), list(clicks), tms, fn, fsd, zs, timed)
 
 
 def held_out(seqs, clicks, records, ends_mm, i: int, model: str = "both") -> dict:
