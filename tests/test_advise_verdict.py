@@ -80,3 +80,42 @@ def test_keep_only_where_every_candidate_is_worse_beyond_its_uncertainty():
     assert b.verdict["answer"] == "inconclusive" and "cannot tell" in b.verdict["why"]
     c = made(FRONT - 0.30 * TOP_F, worse, base_static=22.0)  # worse, but within a 30-point error
     assert c.verdict["answer"] == "inconclusive"
+
+
+def two_ways(offset_points):
+    """A fork 40 % in static sag; the spring one step up takes it to 30 % (5 points outside the 20-25 %
+    window), the compression damping one step up to 24 % (inside): the damping scores better by one
+    unit of penalty. The model matches the ride within ``offset_points`` of static sag."""
+    base = run("recorded setting", FRONT, REAR, 40.0)
+    record = FRONT - offset_points / 100 * TOP_F
+    measured = advise.ride_metrics(T, record, REAR, TOP_F, TOP_R)
+    spring = advise.Adjuster("front", "fork.set", "fork.spring.rate_N_per_mm", 5.0, 4.5, 5.5, "fork spring rate")
+    comp = advise.Adjuster("front", "fork.set", "fork.damper.compression_N_s_per_m", 500.0, 400.0, 625.0,
+                           "fork compression damping")
+    cands = [(comp, "up", 625.0, run("firmer", FRONT, REAR, 24.0)), (spring, "up", 5.5, run("stiffer", FRONT, REAR, 30.0))]
+    a = advise.Advice("ride", "bike", {}, measured, base, cands, None, record, REAR, record_t=T.copy())
+    a.recommendation, a.verdict = advise._judge(a)
+    return a
+
+
+def test_changes_the_ride_cannot_tell_apart_follow_the_setup_order():
+    """Both changes move the static sag beyond its uncertainty. Where the model matches the ride within
+    8 points, 30 % and 24 % lie 6 points apart, within it: the ride cannot tell them apart, the spring is
+    advised (sag first, as setup guides order it), the damping named beside it as doing as well, though it
+    scored better. Within 2 points they are told apart and the better-scoring damping is advised. The order
+    itself: springs, air and spacers before rebound before compression before a tyre."""
+    from mtbmj.ride.advice_verdict import setup_rank
+
+    tied = two_ways(8.0)
+    assert tied.verdict["answer"] == "change"
+    assert tied.recommendation["config_key"] == "fork.spring.rate_N_per_mm" and tied.recommendation["to"] == 5.5
+    assert [t["key"] for t in tied.recommendation["tied_with"]] == [tied.candidates[0][0].name]
+    assert tied.recommendation["penalty_to"] > tied.recommendation["tied_with"][0]["penalty_to"]
+    assert "would do as well within the uncertainty" in tied.verdict["why"] and "sag first" in tied.verdict["why"]
+    apart = two_ways(2.0)
+    assert apart.verdict["answer"] == "change"
+    assert apart.recommendation["config_key"] == "fork.damper.compression_N_s_per_m"
+    assert apart.recommendation["tied_with"] == [] and "as well" not in apart.verdict["why"]
+    keys = ["fork.spring.air_pressure_psi", "fork.spring.tokens", "fork.damper.rebound_N_s_per_m",
+            "fork.damper.low_speed_compression_clicks", "tire.pressure_psi"]
+    assert [setup_rank(k) for k in keys] == [0, 0, 1, 2, 3]

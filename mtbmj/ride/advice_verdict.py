@@ -41,8 +41,10 @@ def judge(advice, candidates=None) -> tuple[dict | None, dict]:
             near = (score, adj, direction, value, run, improved, u)
     n = len(candidates)
     if good:  # the balance of the ends first: a change that mends it before any other
-        pick = max([g for g in good if "balance" in g[5] and beyond(["balance"], a, flat_metrics(g[4].metrics), g[6])]
-                   or good, key=lambda g: g[0])
+        pool = [g for g in good if "balance" in g[5] and beyond(["balance"], a, flat_metrics(g[4].metrics), g[6])] or good
+        best = max(pool, key=lambda g: g[0])
+        tied = ties(best, pool)
+        pick = min([best] + tied, key=lambda g: (setup_rank(g[1].key), -g[0]))
         _, adj, direction, value, run, improved, u = pick
         then = [{"setting": g[1].setting(g[3]), "key": g[1].name, "label": g[1].label, "direction": g[2],
                  "penalty_to": g[4].total, "improves": g[5]}
@@ -53,12 +55,19 @@ def judge(advice, candidates=None) -> tuple[dict | None, dict]:
                f"{st['unit']} ({st['key']}): the penalty falls {base.total:.2f} -> {run.total:.2f} "
                f"({', '.join(k.replace('_', ' ') for k in improved)}; "
                + ", ".join(f"{m} {a[m]:.3g} -> {flat_metrics(run.metrics)[m]:.3g} +- {u[m]:.2g}" for m in moved) + ")")
+        if tied:  # the candidates the ride cannot tell apart from the best: the setup guides' order decides
+            others = [g for g in [best] + tied if g is not pick]
+            why += ("; " + ", ".join(f"the {g[1].label} {g[1].setting(g[3])['from']:g} -> {g[1].setting(g[3])['to']:g} "
+                                     f"{g[1].setting(g[3])['unit']}" for g in others)
+                    + f" would do as well within the uncertainty, and {SETUP_ORDER_WHY}")
         rec = {"setting": adj.setting(value), "key": adj.name, "section": adj.section, "config_key": adj.key,
                "label": adj.label,
                "direction": direction, "from": adj.value, "to": value, "penalty_from": base.total,
                "penalty_to": run.total, "improves": improved, "confident": True, "why": why,
                "changes": changes(base, run, u, measured),
-               "then": [t for i, t in enumerate(then) if t["key"] not in {o["key"] for o in then[:i]}]}  # best first
+               "then": [t for i, t in enumerate(then) if t["key"] not in {o["key"] for o in then[:i]}],  # best first
+               "tied_with": [{"setting": g[1].setting(g[3]), "key": g[1].name, "label": g[1].label,
+                              "penalty_to": g[4].total} for g in [best] + tied if g is not pick]}
         return rec, {"answer": "change", "why": why}
     if n and worse == n:
         return None, {"answer": "keep", "why": f"every one of the {n} candidates is predicted worse beyond its "
@@ -85,6 +94,39 @@ def judge(advice, candidates=None) -> tuple[dict | None, dict]:
                          f"these settings apart"}
 
 
+# Where the ride cannot tell two changes apart, the spring (or air pressure, or volume spacers) first, then
+# rebound, then compression: the order the setup guides give (sag, set by the spring, "long before you touch
+# any of your hydraulic adjustments": "Refresher course: mountain bike suspension tuning for dummies",
+# Mountain Bike Action, mbaction.com; sag, then rebound, then compression in the usual step-by-step guides)
+SETUP_ORDER_WHY = ("the spring comes before the dampers where the ride cannot choose (sag first, then rebound, "
+                   "then compression, as setup guides order them)")
+
+
+def setup_rank(key: str) -> int:
+    """0 for a spring, air pressure or volume spacers, 1 rebound, 2 compression, 3 anything else (a
+    tyre's pressure): the setup guides' order (``SETUP_ORDER_WHY``)."""
+    k = key.lower()
+    if "spring" in k or "pressure_psi" in k and not k.startswith("tire") or "tokens" in k:
+        return 0
+    return 1 if "rebound" in k else 2 if "compression" in k else 3
+
+
+def ties(best, pool) -> list:
+    """The candidates of ``pool`` (judge's tuples) on another adjuster than ``best`` that the ride cannot
+    tell apart from it: no metric of the rules either improves moves between the two by more than the
+    larger of their uncertainties. A near-tie in the penalty alone (13.74 against 13.96 on a soft fork's
+    ride) let whichever search went furthest decide the answer, and a crash at one step could end it."""
+    a = flat_metrics(best[4].metrics)
+    out = []
+    for g in pool:
+        if g is best or g[1].name == best[1].name:
+            continue
+        u = {m: max(best[6].get(m, math.inf), g[6].get(m, math.inf)) for m in set(best[6]) | set(g[6])}
+        if not beyond(set(best[5]) | set(g[5]), a, flat_metrics(g[4].metrics), u):
+            out.append(g)
+    return out
+
+
 def changes(base, run, uncertainty: dict, measured: dict) -> dict:
     """Per metric (``flat_metrics`` name): the simulated value at the recorded setting (``from``) and at
     ``run``'s (``to``), the change, its uncertainty, the recorded value and the one expected on the
@@ -95,4 +137,4 @@ def changes(base, run, uncertainty: dict, measured: dict) -> dict:
             for k, v0 in a.items() if k in b}
 
 
-__all__ = ["changes", "judge"]
+__all__ = ["changes", "judge", "ties", "setup_rank", "SETUP_ORDER_WHY"]

@@ -70,7 +70,8 @@ where it lowers the total penalty by at least ``MIN_GAIN`` and a metric of a rul
 by more than its uncertainty; "keep" only where every candidate is predicted worse beyond its
 uncertainty; otherwise "inconclusive", naming why (never "keep" by default). Where several
 candidates are advised, one is recommended first, the balance of the ends before the rest (one that
-moves the balance beyond its uncertainty, if any), the others after it (``recommendation["then"]``,
+moves the balance beyond its uncertainty, if any; among changes the ride cannot tell apart, the spring
+before rebound before compression: ``advice_verdict.ties``), the others after it (``recommendation["then"]``,
 :meth:`Advice.then`). Several rides of one setting are pooled by :mod:`mtbmj.ride.advice_pool`
 (``mtbmj advise RIDE RIDE ...``). Every setting is also
 given in the rider's words (:meth:`Adjuster.setting`: lb/in at the rates sold for a coil shock,
