@@ -225,3 +225,150 @@ def test_the_muscles_do_the_pedalling_work(climbing):
     # the headline says whether the driving leg's side stayed within one side's strength
     said = "the driving leg within" if leg["within_limits"] else "the driving leg PAST"
     assert said in climbing.headline()
+    # 250 W: the stroke within strength, or all but (the ankle's dorsiflexion at the stroke's top)
+    assert leg["delivered_of_asked"] >= 0.99
+
+
+# the stroke cut by the leg's strength and power (PedalLeg.limit): J^T F of the leg solved here
+
+
+def _torques_here(pose, pedal, force):
+    """The anatomical torques (hip, knee flexion, ankle dorsiflexion) with which the leg of ``pose`` pushes
+    its pedal with ``force``: J^T F, J the pedal's place over the leg's absolute angles by central
+    differences of ``leg_points`` (the test's leg), as in the first test of this file."""
+    hip, knee, ankle = (np.asarray(v, float) for v in (pose.hip, pose.knee, pose.ankle))
+    l1, l2 = float(np.hypot(*(knee - hip))), float(np.hypot(*(ankle - knee)))
+    angles = np.array([math.atan2(*(knee - hip)[::-1]), math.atan2(*(ankle - knee)[::-1]), 0.0])
+    offset = tuple(ankle - np.asarray(pedal, float))
+    assert leg_points(hip, l1, l2, offset, *angles)[2] == pytest.approx(pedal, abs=1e-12)
+    h, jac = 1e-6, np.zeros((2, 3))
+    for j in range(3):
+        dp, dm = angles.copy(), angles.copy()
+        dp[j] += h
+        dm[j] -= h
+        jac[:, j] = (leg_points(hip, l1, l2, offset, *dp)[2] - leg_points(hip, l1, l2, offset, *dm)[2]) / (2 * h)
+    q = jac.T @ np.asarray(force, float)
+    return {"hip": q[0] + q[1] + q[2], "knee": -(q[1] + q[2]), "ankle": q[2]}
+
+
+def _stroke_here(theta):
+    """The stroke's force per N m of peak crank torque and the pedal's place at crank angle ``theta``
+    (0 < theta < pi: the right foot drives, along the crank circle's tangent, |F| = sin theta / L)."""
+    L = pl.CRANK_LENGTH_M
+    return math.sin(theta) / L * np.array([math.cos(theta), -math.sin(theta)]), L * np.array([math.sin(theta), math.cos(theta)])
+
+
+CUT_HIP, CUT_TRUNK = (-0.23, 0.77), 0.8
+COMMON = {"hip": 120.0, "knee": -300.0, "ankle": 40.0}  # both legs' muscle torques (N m), made up
+
+
+@pytest.mark.parametrize("theta", [0.6, 1.5, 2.4])
+def test_a_stroke_past_strength_is_cut_to_the_limit(theta):
+    """A stroke asked for far past one side's strength (900 W at 40 rpm): the share ``limit`` gives is
+    the closed form min_j (limit_j - common_j / 2) / (peak |a_j|), a_j the joint's torque per N m of
+    peak from J^T F here (F the stroke's force and the push along the crank), the limit the side's
+    strength in the direction a_j turns; the cut stroke puts the binding joint at (not past) its limit
+    and every other within; without the cut it was past."""
+    body = rb.body(85.0, 1.78)
+    leg = pl.PedalLeg(body, (0.45, 0.67), 1.0, rc.STRENGTH_ONE_SIDE_N_M, 1500.0)
+    omega = 40.0 * math.pi / 30.0
+    peak = math.pi * 900.0 / (2.0 * omega)  # the stroke's peak crank torque at 900 W, 40 rpm
+    g = leg.geometry(CUT_HIP, (0.0, 0.0), CUT_TRUNK, 0.0, theta, 0.0)  # gear 1: the crank's angle is x; at rest
+    f1, pedal = _stroke_here(theta)
+    assert g["pedal"] == pytest.approx(pedal, abs=1e-12)
+    pose = g["pose"]
+    whole = f1 + leg.radial(pose.hip, pose.knee, pose.ankle, pedal, f1)
+    a = _torques_here(pose, pedal, whole)
+    room = {}
+    for k in pl.LEG_JOINTS:
+        flex, ext = rc.STRENGTH_ONE_SIDE_N_M[k]
+        room[k] = (flex - COMMON[k] / 2) / a[k] if a[k] > 0 else (ext + COMMON[k] / 2) / -a[k]
+    by = min(room, key=room.get)
+    share = room[by] / peak
+    assert share < 0.7  # asked past strength
+    cut = leg.limit(g, theta, omega, 900.0, COMMON, math.inf)
+    assert cut["share"] == pytest.approx(share, rel=1e-6)
+    assert cut["by"] == by
+    assert cut["asked_W"] == 0.0  # the pedal at rest: no crank power asked
+    for s, at_limit in ((cut["share"], True), (1.0, False)):
+        st = leg.state(CUT_HIP, (0.0, 0.0), CUT_TRUNK, 0.0, theta, 0.0, s * peak * f1)
+        side = {k: st["taus"][k] + COMMON[k] / 2 for k in pl.LEG_JOINTS}
+        of = {k: side[k] / rc.STRENGTH_ONE_SIDE_N_M[k][0] if side[k] > 0 else -side[k] / rc.STRENGTH_ONE_SIDE_N_M[k][1]
+              for k in pl.LEG_JOINTS}
+        if at_limit:
+            assert of[by] == pytest.approx(1.0, abs=1e-9)
+            assert max(of.values()) <= 1.0 + 1e-9
+        else:
+            assert of[by] > 1.2  # uncut, past the limit
+    # the common leg's half counted: without it the share is another
+    alone = leg.limit(g, theta, omega, 900.0, dict.fromkeys(pl.LEG_JOINTS, 0.0), math.inf)
+    assert alone["share"] != pytest.approx(share, rel=1e-3)
+
+
+def test_a_stroke_within_strength_is_untouched():
+    """50 W at 90 rpm: every joint within one side's strength with the common leg's half: share 1,
+    nothing named, and the state's torques those of the uncut stroke."""
+    leg = pl.PedalLeg(rb.body(85.0, 1.78), (0.45, 0.67), 1.0, rc.STRENGTH_ONE_SIDE_N_M, 1500.0)
+    for theta in (0.3, 1.5, 2.8):
+        g = leg.geometry(CUT_HIP, (0.0, 0.0), CUT_TRUNK, 0.0, theta, 0.0)
+        cut = leg.limit(g, theta, 9.42, 50.0, COMMON, 1000.0)
+        assert cut["share"] == 1.0 and cut["by"] is None
+
+
+def test_the_stroke_is_cut_by_the_power_left():
+    """The leg moving (the crank at 60 rpm, the hips and the trunk moving on the frame): where the
+    rider's muscles leave the leg 40 W, the stroke's share is 40 W over its power per N m of peak,
+    F . (v_pedal - v_trunk(P)) computed here (the crank's tangent speed, the trunk's point at the pedal
+    moving with the hips and the trunk's turn), and the cut names the power."""
+    leg = pl.PedalLeg(rb.body(85.0, 1.78), (0.45, 0.67), 1.0, rc.STRENGTH_ONE_SIDE_N_M, 1500.0)
+    theta, omega, v_hip, w_trunk = 1.4, 2.0 * math.pi, np.array([0.1, -0.05]), 0.3
+    g = leg.geometry(CUT_HIP, tuple(v_hip), CUT_TRUNK, w_trunk, theta, omega)
+    f1, pedal = _stroke_here(theta)
+    pose = g["pose"]
+    whole = f1 + leg.radial(pose.hip, pose.knee, pose.ankle, pedal, f1)
+    v_pedal = omega * pl.CRANK_LENGTH_M * np.array([math.cos(theta), -math.sin(theta)])
+    arm = pedal - np.asarray(CUT_HIP)
+    per_peak = float(whole @ (v_pedal - v_hip - w_trunk * np.array([-arm[1], arm[0]])))
+    assert per_peak > 0.0
+    peak = math.pi * 200.0 / (2.0 * omega)
+    cut = leg.limit(g, theta, omega, 200.0, COMMON, 40.0)
+    assert cut["by"] == "power"
+    assert cut["share"] == pytest.approx(40.0 / (peak * per_peak), rel=1e-6)
+    assert cut["asked_W"] == pytest.approx(peak * float(f1 @ v_pedal), rel=1e-9)
+    # with the power to spare, strength alone
+    assert leg.limit(g, theta, omega, 200.0, COMMON, 1e6)["by"] != "power"
+
+
+@pytest.fixture(scope="module")
+def straining():
+    from mtbmj.bike.run import run_bike
+
+    return run_bike("sst", "climb:grade_percent=8,length_m=40,at_m=0.5", None, duration=3.0, rider="active",
+                    pedal=(50.0, 700.0))
+
+
+def test_a_stroke_past_strength_is_cut_in_the_engine(straining):
+    """700 W at 50 rpm standing asks the driving leg past one side's strength: the stroke is cut so
+    the side's torques reach their limits and never pass them; the crank gets less work than asked
+    (the balance's crank work, the foot's force times the pedal's speed, is what the summary says
+    was delivered); the cut's shares are shares; the balance still closes within 1 % of the work."""
+    s = straining.summary
+    assert s["crash"] is None
+    leg = s["rider"]["pedal_leg"]
+    assert leg["within_limits"]
+    assert 0.999 <= max(leg["side_peak_of_limit"].values()) <= 1.0
+    assert 0.5 < leg["delivered_of_asked"] < 0.97
+    assert leg["delivered_crank_J"] < leg["asked_crank_J"]
+    e = s["energy"]
+    assert e["crank_J"] == pytest.approx(leg["delivered_crank_J"], rel=0.02)
+    shares = leg["cut_of_stroke_time"]
+    assert all(0.0 <= v <= 1.0 for v in shares.values()) and 0.0 < sum(shares.values()) <= 1.0
+    assert e["error_pct"] < 1.0
+    head = straining.headline()
+    assert "the driving leg within one side's strength" in head and "crank work delivered (cut by" in head
+    # the headline says "within" only when so
+    leg["within_limits"] = False
+    try:
+        assert "the driving leg PAST one side's strength" in straining.headline()
+    finally:
+        leg["within_limits"] = True

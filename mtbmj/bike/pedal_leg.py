@@ -34,10 +34,11 @@ from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 
 from mtbmj.bike import rider_body as rb
-from mtbmj.controllers.drive import CRANK_LENGTH_M, pedal_forces
+from mtbmj.controllers.drive import CRANK_LENGTH_M, pedal_forces, pedal_peak
 
 LEG_JOINTS = ("hip", "knee", "ankle")
 # standing and pedalling, the hips as low as puts the driving leg's knee this far bent at the stroke's
@@ -124,11 +125,13 @@ class PedalLeg:
     (module doc). ``gear``: crank radians per metre of the bike's x rolled (cog / (ring radius), as
     ``controllers.drive.pedal_drive``'s)."""
 
-    def __init__(self, body: rb.Body, grip, gear: float, strength_one_side: dict):
+    def __init__(self, body: rb.Body, grip, gear: float, strength_one_side: dict, power_limit: float = math.inf):
         self.body, self.grip, self.gear = body, tuple(grip), float(gear)
         self.strength = {k: strength_one_side[k] for k in LEG_JOINTS}  # (flexion, extension) N m
+        self.power_limit = float(power_limit)  # W, all the rider's muscles' positive power together
         l1, l2 = body.thigh.length, body.shank.length  # the hips at most this far from the ankle (KNEE_LEAST_DEG)
         self.longest = math.sqrt(l1 * l1 + l2 * l2 + 2.0 * l1 * l2 * math.cos(math.radians(KNEE_LEAST_DEG)))
+        self.now = {"share": 1.0, "by": None, "asked_W": 0.0}  # the engine's cut at its last evaluation
         self.clear_peaks()
 
     def clear_peaks(self) -> None:
@@ -136,6 +139,9 @@ class PedalLeg:
         self.peak_side = dict.fromkeys(LEG_JOINTS, 0.0)  # with half the common leg's: its side's, of the limit
         self.peak_power = 0.0
         self.out_of_reach_s = 0.0  # s with the driving pedal past the leg's reach from the hips
+        self.asked_J = self.delivered_J = 0.0  # the stroke's crank work asked and let through by the cut
+        self.pushing_s = 0.0  # s with the stroke asking work of the crank
+        self.cut_s = dict.fromkeys(LEG_JOINTS + ("power",), 0.0)  # s with the cut set by each limit
         self._t_seen = -math.inf
 
     def bind(self, model) -> "PedalLeg":
@@ -145,20 +151,40 @@ class PedalLeg:
         dof = lambda name: int(model.joint(name).dofadr[0])
         self.v_idx = (dof("rider_x"), dof("rider_z"), dof("rider_pitch"), dof("bike_x"))
         self.x_idx = int(model.joint("bike_x").qposadr[0])
+        self._momentum = np.zeros(model.nv)
+        self.total_mass = float(model.body_subtreemass[self.frame])  # as the bike's callback reads the speed
         return self
 
-    def engine(self, d) -> dict:
-        """``state`` from the engine's data ``d`` after the bike's callback: the foot's force is the
-        reaction the callback put on the ``rider`` body (the trunk), turned into the frame's axes; the
-        hips slide on the frame along its x and z and the trunk turns on it (``rider_body.attach``)."""
+    def inputs(self, d) -> tuple:
+        """(hips m, their speed m/s, trunk rad, its turn rate rad/s, the bike's x m and its rate m/s),
+        ``geometry``'s arguments, from the engine's data ``d``: the hips slide on the frame along its x
+        and z and the trunk turns on it (``rider_body.attach``)."""
         rot = d.xmat[self.frame].reshape(3, 3)
         o = d.xpos[self.frame]
         hip = rot.T @ (d.site_xpos[self.hips] - o)
         sh = rot.T @ (d.site_xpos[self.shoulders] - o)
-        f = rot.T @ -d.xfrc_applied[self.rider][:3]
         vx, vz, wp, vb = (float(d.qvel[i]) for i in self.v_idx)
-        return self.state((hip[0], hip[2]), (vx, vz), math.atan2(sh[2] - hip[2], sh[0] - hip[0]), wp,
-                          float(d.qpos[self.x_idx]), vb, (f[0], f[2]))
+        return ((hip[0], hip[2]), (vx, vz), math.atan2(sh[2] - hip[2], sh[0] - hip[0]), wp,
+                float(d.qpos[self.x_idx]), vb)
+
+    def engine(self, d) -> dict:
+        """``state`` from the engine's data ``d`` after the bike's callback: the foot's force is the
+        reaction the callback put on the ``rider`` body (the trunk), turned into the frame's axes."""
+        f = d.xmat[self.frame].reshape(3, 3).T @ -d.xfrc_applied[self.rider][:3]
+        return self.state(*self.inputs(d), (f[0], f[2]))
+
+    def hold(self, m, d, inner, common: dict, common_power: float) -> None:
+        """Before the bike's callback ``inner`` (``BikeCallback`` or its compiled twin): the stroke's
+        cut at this evaluation (``limit``, with the muscles' torques ``common`` and their positive
+        power ``common_power``, both legs' lumped), set as the power the stroke asks of ``inner``
+        (``pedal_power``: the stroke's force is proportional to it). The centre of mass's speed, the
+        cadence's, is the bike's callback's: the bike's x row of M qvel over the whole mass."""
+        mujoco.mj_mulM(m, d, self._momentum, d.qvel)
+        inputs = self.inputs(d)
+        asked = inner.drive.power
+        self.now = self.limit(self.geometry(*inputs), inputs[4], self._momentum[self.v_idx[3]] / self.total_mass,
+                              asked, common, self.power_limit - common_power)
+        inner.pedal_power = asked * self.now["share"]
 
     def pedal(self, x: float, x_rate: float) -> tuple[np.ndarray, np.ndarray]:
         """(place m, speed m/s) of the driving pedal on the frame, the bike's x at ``x`` moving at ``x_rate``."""
@@ -185,11 +211,11 @@ class PedalLeg:
         lam = -sum(w[k] * a[k] * b[k] for k in LEG_JOINTS) / sum(w[k] * b[k] * b[k] for k in LEG_JOINTS)
         return lam * n
 
-    def state(self, hip, v_hip, trunk: float, w_trunk: float, x: float, x_rate: float, force) -> dict:
-        """The driving leg at one evaluation: the hips at ``hip`` moving at ``v_hip`` (m, m/s), the
-        trunk at ``trunk`` rad turning at ``w_trunk``, the bike's x and its rate, the foot's force on
-        its pedal ``force`` (N); all in frame coordinates. Returns the joints' places, the pedal's,
-        the anatomical angles, torques (N m), speeds (rad/s) and the power (W)."""
+    def geometry(self, hip, v_hip, trunk: float, w_trunk: float, x: float, x_rate: float) -> dict:
+        """The driving leg's places and speeds: the hips at ``hip`` moving at ``v_hip`` (m, m/s), the
+        trunk at ``trunk`` rad turning at ``w_trunk``, the bike's x and its rate, all in frame
+        coordinates. Returns the pedal's place and speed, the foot's turn (``foot_tip``), the pose
+        (``rider_body.pose``: hip, knee, ankle) and the joints' anatomical speeds (rad/s)."""
         p, v_p = self.pedal(x, x_rate)
         b = self.body
         phi, w_foot, reached = foot_tip(hip, v_hip, p, v_p, b.ankle_from_pedal, self.longest)
@@ -197,16 +223,64 @@ class PedalLeg:
         v_a = v_p + w_foot * np.array([-a[1], a[0]])
         # rider_body.pose puts the ankle at the pedal plus the offset: given the spindle less it, the tipped ankle
         pose = rb.pose(b, tuple(p + a - np.asarray(b.ankle_from_pedal)), self.grip, tuple(hip), trunk)
-        radial = self.radial(pose.hip, pose.knee, pose.ankle, p, force)
-        force = np.asarray(force, float) + radial
-        taus = leg_torques(pose.hip, pose.knee, pose.ankle, p, force)
-        rates = leg_rates(pose.hip, pose.knee, pose.ankle, v_hip, v_a, w_trunk, w_foot)
+        return {"pedal": p, "pedal_speed": v_p, "foot_turn": phi, "reached": reached, "pose": pose,
+                "rates": leg_rates(pose.hip, pose.knee, pose.ankle, v_hip, v_a, w_trunk, w_foot)}
+
+    def push(self, g: dict, force) -> tuple[np.ndarray, np.ndarray, dict]:
+        """(the foot's whole force, its push along the crank ``radial``, the joints' torques) with
+        which the leg at ``geometry`` ``g`` makes the stroke's ``force`` (N, frame coordinates)."""
+        pose = g["pose"]
+        radial = self.radial(pose.hip, pose.knee, pose.ankle, g["pedal"], force)
+        whole = np.asarray(force, float) + radial
+        return whole, radial, leg_torques(pose.hip, pose.knee, pose.ankle, g["pedal"], whole)
+
+    def limit(self, g: dict, x: float, speed: float, power: float, common: dict, spare: float) -> dict:
+        """The cut of the stroke by the leg's strength and power, at ``geometry`` ``g`` with the bike's
+        x at ``x`` (the crank's angle through the gear) and the centre of mass at ``speed`` m/s (the
+        cadence's), the stroke asking ``power`` W (``controllers.drive.pedal_forces`` with
+        ``pedal_peak``'s torque). The stroke's force and its push along the crank (``radial``:
+        proportional to it) make joint torques proportional to the stroke's peak torque k, tau_j =
+        k a_j; with half the common leg's muscle torque ``common`` (both legs') added, each joint
+        must stay within one side's strength, -ext_j <= k a_j + common_j / 2 <= flex_j, and the
+        leg's power k sum a_j w_j within ``spare`` W (what the rider's ``power_limit`` leaves the
+        common leg's muscles). Returns ``share`` (0-1: the largest k within all of them over the
+        asked one, 1 within), ``by`` (the joint, or "power", that sets a share below 1; None) and
+        ``asked_W`` (the crank's power the uncut stroke asks here, the traction's cap not counted)."""
+        theta = x * self.gear
+        peak = pedal_peak(power, speed * self.gear)
+        _, fx, fz, _, _ = pedal_forces(theta, 1.0, CRANK_LENGTH_M)
+        unit = np.array([fx, fz])  # the stroke's force per N m of its peak torque
+        asked = peak * float(unit @ g["pedal_speed"])
+        if peak <= 0.0 or not unit.any():
+            return {"share": 1.0, "by": None, "asked_W": asked}
+        _, _, a = self.push(g, unit)
+        best, by = math.inf, None
+        for k in LEG_JOINTS:
+            flex, ext = self.strength[k]
+            half = 0.5 * common[k]
+            room = (flex - half) / a[k] if a[k] > 0.0 else ((ext + half) / -a[k] if a[k] < 0.0 else math.inf)
+            if room < best:
+                best, by = max(room, 0.0), k
+        work = sum(a[k] * g["rates"][k] for k in LEG_JOINTS)
+        if work > 0.0 and max(spare, 0.0) / work < best:
+            best, by = max(spare, 0.0) / work, "power"
+        share = min(best / peak, 1.0)
+        return {"share": share, "by": by if share < 1.0 else None, "asked_W": asked}
+
+    def state(self, hip, v_hip, trunk: float, w_trunk: float, x: float, x_rate: float, force) -> dict:
+        """The driving leg at one evaluation: ``geometry``'s arguments and the foot's force on its
+        pedal ``force`` (N, frame coordinates; the stroke's, as cut). Returns the joints' places, the
+        pedal's, the anatomical angles, torques (N m), speeds (rad/s) and the power (W)."""
+        g = self.geometry(hip, v_hip, trunk, w_trunk, x, x_rate)
+        pose, p, rates = g["pose"], g["pedal"], g["rates"]
+        force, radial, taus = self.push(g, force)
         power = sum(taus[k] * rates[k] for k in LEG_JOINTS)
         angles = {k: pose.angles[k] for k in LEG_JOINTS}
-        angles["ankle"] += phi  # the foot's own turn: dorsiflexion nose-up
-        return {"pedal": p, "pedal_speed": v_p, "knee": pose.knee, "ankle": pose.ankle, "foot_turn": phi,
-                "force": force, "radial": radial, "crank_power": float(force @ v_p),
-                "angles": angles, "taus": taus, "rates": rates, "power": power, "reached": reached}
+        angles["ankle"] += g["foot_turn"]  # the foot's own turn: dorsiflexion nose-up
+        return {"pedal": p, "pedal_speed": g["pedal_speed"], "knee": pose.knee, "ankle": pose.ankle,
+                "foot_turn": g["foot_turn"], "force": force, "radial": radial,
+                "crank_power": float(force @ g["pedal_speed"]), "angles": angles, "taus": taus, "rates": rates,
+                "power": power, "reached": g["reached"]}
 
     def apply(self, d, state: dict) -> None:
         """Put the foot's push along the crank (``radial``) into the engine's ``xfrc_applied``: on the
@@ -225,11 +299,21 @@ class PedalLeg:
 
     def note(self, state: dict, common: dict, strength_one_side: dict, t: float) -> None:
         """Keep the peaks: the driving leg's torques alone and with half the common leg's muscle
-        torque (``common``, both legs') against one side's strength (flexion, extension); and the time
-        (``t`` s, each stretch counted once) with the pedal out of the leg's reach."""
+        torque (``common``, both legs') against one side's strength (flexion, extension); and, each
+        stretch of time (``t`` s) counted once, the time with the pedal out of the leg's reach, the
+        stroke's crank work asked and let through by the cut (``now``, ``hold``'s) and the time the
+        cut was set by each limit."""
         if t > self._t_seen:
-            if self._t_seen > -math.inf and not state["reached"]:
-                self.out_of_reach_s += t - self._t_seen
+            if self._t_seen > -math.inf:
+                dt = t - self._t_seen
+                if not state["reached"]:
+                    self.out_of_reach_s += dt
+                asked, share = max(self.now["asked_W"], 0.0), self.now["share"]
+                self.asked_J += dt * asked
+                self.delivered_J += dt * share * asked
+                self.pushing_s += dt if asked > 0.0 else 0.0
+                if self.now["by"] is not None:
+                    self.cut_s[self.now["by"]] += dt
             self._t_seen = t
         for k in LEG_JOINTS:
             tau = state["taus"][k]
@@ -240,10 +324,17 @@ class PedalLeg:
         self.peak_power = max(self.peak_power, state["power"])
 
     def report(self) -> dict:
+        """The driving leg's peaks (``note``) and the stroke's cut: the share of the crank work the
+        stroke asked that the leg's limits let through, and of the time the stroke pushed, the share
+        the cut was set by each limit (a joint's strength or the power)."""
+        push = self.pushing_s
         return {"peak_N_m": {k: round(v, 2) for k, v in self.peak.items()},
                 "side_peak_of_limit": {k: round(v, 4) for k, v in self.peak_side.items()},
                 "within_limits": all(v <= 1.0 + 1e-9 for v in self.peak_side.values()),
-                "peak_power_W": round(self.peak_power, 1), "out_of_reach_s": round(self.out_of_reach_s, 4)}
+                "peak_power_W": round(self.peak_power, 1), "out_of_reach_s": round(self.out_of_reach_s, 4),
+                "asked_crank_J": round(self.asked_J, 3), "delivered_crank_J": round(self.delivered_J, 3),
+                "delivered_of_asked": round(self.delivered_J / self.asked_J, 4) if self.asked_J > 0.0 else 1.0,
+                "cut_of_stroke_time": {k: round(v / push, 4) if push > 0.0 else 0.0 for k, v in self.cut_s.items()}}
 
 
 __all__ = ["PedalLeg", "leg_torques", "leg_rates", "foot_tip", "cross", "pedalling_hip", "LEG_JOINTS", "BOTTOM_KNEE_DEG"]

@@ -499,6 +499,13 @@ class RiderCallback:
         if m is not self._model and m._address != self._model._address:
             return
         d.qfrc_applied[:] = 0.0
+        ctl = self.controller  # the muscles first: the driving leg's stroke is cut with them (pedal_leg.hold)
+        want = aimed(ctl, self.aim, d.site_xpos[self.s_front][0], d.qpos[self.qadr["pitch"]], d.qvel[self.dof["pitch"]])
+        now, speed = self.angles(d.qpos), self.rates(d.qvel)
+        taus, demands, power = muscle_torques(want, now, speed, gains_at(ctl, self.gains, d.site_xpos[self.s_front][0]),
+                                              self.strength)
+        if self.leg is not None:
+            self.leg.hold(m, d, self.inner, taus, power)
         self.inner(m, d)
         Q = self._q
         Q[:] = 0.0
@@ -514,12 +521,7 @@ class RiderCallback:
             f[1] = 0.0
             Q += self._j1.T @ f - self._j2.T @ f
             pins.append((f, rel, pe - pa))
-        # the muscles
-        ctl = self.controller
-        want = aimed(ctl, self.aim, d.site_xpos[self.s_front][0], d.qpos[self.qadr["pitch"]], qvel[self.dof["pitch"]])
-        now, speed = self.angles(d.qpos), self.rates(qvel)
-        gains = gains_at(ctl, self.gains, d.site_xpos[self.s_front][0])
-        taus, demands, power = muscle_torques(want, now, speed, gains, self.strength)
+        # the muscles' torques (above), the end stops, the tissue
         stops = end_stops(now, speed, self.ranges)
         clamped = {k: demands[k] >= 1.0 for k in JOINTS}
         applied = {}
@@ -656,7 +658,7 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     rc = RiderCallback(b.model, inner, body, pose0, ctl)
     if pedalling:
         ring, cog = spec.drive["chain_m"]
-        rc.leg = PedalLeg(body, grip, cog / (ring * rear.radius), STRENGTH_ONE_SIDE_N_M).bind(b.model)
+        rc.leg = PedalLeg(body, grip, cog / (ring * rear.radius), STRENGTH_ONE_SIDE_N_M, POWER_W).bind(b.model)
     data = mujoco.MjData(b.model)
     names = ("bike_x", "bike_z", "pitch", "fork", "swingarm")
     for name in names:

@@ -529,9 +529,12 @@ class BikeResult(RunOutput):
         if leg:  # pedalling: the driving leg (mtbmj.bike.pedal_leg), its side's torques against one side's strength
             top = max(leg["side_peak_of_limit"], key=leg["side_peak_of_limit"].get)
             reach = f", its pedal out of its reach {leg['out_of_reach_s']:.2f} s" if leg["out_of_reach_s"] > 0 else ""
+            cut = {k: v for k, v in leg["cut_of_stroke_time"].items() if v > 0.0}
+            by = ", ".join(f"the {k}'s {100 * v:.1f} %" for k, v in sorted(cut.items(), key=lambda kv: -kv[1]))
             leg = (f"; the driving leg {'within' if leg['within_limits'] else 'PAST'} one side's strength (largest "
                    f"{100 * leg['side_peak_of_limit'][top]:.0f} % of the {top}'s), peak power "
-                   f"{leg['peak_power_W']:.0f} W{reach}")
+                   f"{leg['peak_power_W']:.0f} W{reach}, {100 * leg['delivered_of_asked']:.1f} % of the stroke's asked "
+                   f"crank work delivered" + (f" (cut by {by} of the stroke's time)" if cut else " (never cut)"))
         return (f"; active rider: joint torques {'within' if r['within_limits'] else 'PAST'} their limits (largest "
                 f"{100 * r['joints'][worst]['peak_of_limit']:.0f} % of the {worst}'s{clamp}), peak power "
                 f"{r['peak_power_W']:.0f} of {r['power_limit_W']:.0f} W{leg or ''}{work}")
