@@ -48,6 +48,9 @@ BOTTOM_KNEE_DEG = 25.0
 # the driving leg's knee is kept this far bent at least: where the hips are further from the pedal the
 # foot tips heel-up about the spindle (plantar flexion), as riders' do at the stroke's bottom (assumed)
 KNEE_LEAST_DEG = 15.0
+# the legs' swing (``PedalLeg.swung``): tabulated at this many crank angles over a turn, kept to this many
+# harmonics of the crank's turn (the swing's own is the second: the legs half a turn apart)
+SWING_SAMPLES, SWING_HARMONICS = 256, 16
 
 
 def pedalling_hip(body: rb.Body, hip, pedal) -> tuple:
@@ -120,6 +123,26 @@ def foot_tip(hip, v_hip, pedal, v_pedal, offset, longest: float) -> tuple[float,
     return phi, float(r @ v_d) / float(r @ np.array([-a[1], a[0]])), True
 
 
+def _derivative(values: np.ndarray, order: int) -> np.ndarray:
+    """The ``order``-th derivative over the turn of samples ``values`` evenly spaced over one turn
+    (spectral: the Fourier series differentiated)."""
+    c = np.fft.rfft(values)
+    k = np.arange(c.size)
+    return np.fft.irfft(c * (1j * k) ** order, n=values.size)
+
+
+def _series(values: np.ndarray) -> np.ndarray:
+    """The Fourier coefficients (``SWING_HARMONICS`` + 1, complex) of samples ``values`` evenly spaced
+    over one turn: f(theta) = Re sum_k c_k e^(i k theta) (``_at``)."""
+    c = np.fft.rfft(values)[:SWING_HARMONICS + 1] * (2.0 / values.size)
+    c[0] *= 0.5
+    return c
+
+
+def _at(c: np.ndarray, theta: float) -> float:
+    return float(np.real(np.sum(c * np.exp(1j * theta * np.arange(c.size)))))
+
+
 class PedalLeg:
     """The driving leg's statics and power at each evaluation of a pedalling active rider's run
     (module doc). ``gear``: crank radians per metre of the bike's x rolled (cog / (ring radius), as
@@ -132,6 +155,7 @@ class PedalLeg:
         l1, l2 = body.thigh.length, body.shank.length  # the hips at most this far from the ankle (KNEE_LEAST_DEG)
         self.longest = math.sqrt(l1 * l1 + l2 * l2 + 2.0 * l1 * l2 * math.cos(math.radians(KNEE_LEAST_DEG)))
         self.now = {"share": 1.0, "by": None, "asked_W": 0.0}  # the engine's cut at its last evaluation
+        self.series = None  # the legs' swing (``swung``); None: no swing
         self.clear_peaks()
 
     def clear_peaks(self) -> None:
@@ -152,6 +176,7 @@ class PedalLeg:
         self.v_idx = (dof("rider_x"), dof("rider_z"), dof("rider_pitch"), dof("bike_x"))
         self.x_idx = int(model.joint("bike_x").qposadr[0])
         self._momentum = np.zeros(model.nv)
+        self.gravity = np.array(model.opt.gravity, float)
         self.total_mass = float(model.body_subtreemass[self.frame])  # as the bike's callback reads the speed
         return self
 
@@ -282,14 +307,73 @@ class PedalLeg:
                 "crank_power": float(force @ g["pedal_speed"]), "angles": angles, "taus": taus, "rates": rates,
                 "power": power, "reached": g["reached"]}
 
+    def swung(self, hip, trunk: float) -> "PedalLeg":
+        """Tabulate the two legs' swing about the lumped leg at the stance (the hips at ``hip``, m, the
+        trunk at ``trunk`` rad, frame coordinates): over a crank turn, each leg (half the lumped thigh's
+        and shank's mass) posed on its own pedal (half a turn apart about the bottom bracket, the frame's
+        origin; the foot tipped as ``geometry``'s), against the lumped leg posed on the pedals' mean.
+        Kept as Fourier series (``SWING_HARMONICS``) of S, the first moment about the hips of the legs'
+        mass less the lumped leg's (kg m), of S'' and of K' (K = sum m h x dh/dtheta, h a centre from
+        the hips), for ``swing``."""
+        b, offset = self.body, np.asarray(self.body.ankle_from_pedal, float)
+        segs = ((b.thigh, lambda p: (p.hip, p.knee)), (b.shank, lambda p: (p.knee, p.ankle)))
+        h0 = np.asarray(hip, float)
+
+        def centres(pedal):  # each segment's centre less the hips (m)
+            phi = foot_tip(hip, (0.0, 0.0), pedal, (0.0, 0.0), offset, self.longest)[0]
+            pose = rb.pose(b, tuple(pedal + _rot(phi, offset) - offset), self.grip, tuple(hip), trunk)
+            out = []
+            for seg, ends in segs:
+                a, e = (np.asarray(v, float) for v in ends(pose))
+                out.append(a + seg.com / float(np.hypot(*(e - a))) * (e - a) - h0)
+            return out
+
+        n = SWING_SAMPLES
+        th = 2.0 * math.pi * np.arange(n) / n
+        first, spin = np.zeros((n, 2)), np.zeros(n)
+        for sign in (1.0, -1.0):
+            h = np.array([centres(sign * CRANK_LENGTH_M * np.array([math.sin(t), math.cos(t)])) for t in th])
+            for j, (seg, _) in enumerate(segs):  # h[:, j]: (n, 2)
+                dh = np.stack([_derivative(h[:, j, i], 1) for i in (0, 1)], axis=1)
+                first += 0.5 * seg.mass * h[:, j]
+                spin += 0.5 * seg.mass * (h[:, j, 0] * dh[:, 1] - h[:, j, 1] * dh[:, 0])
+        for (seg, _), c in zip(segs, centres(np.zeros(2))):
+            first -= seg.mass * c
+        self.series = {"S": [_series(first[:, i]) for i in (0, 1)],
+                       "S2": [_series(_derivative(first[:, i], 2)) for i in (0, 1)],
+                       "K1": _series(_derivative(spin, 1))}
+        return self
+
+    def swing(self, x: float, x_rate: float, gravity) -> tuple[np.ndarray, float]:
+        """(force N, moment N m about the hips, nose-up) on the trunk, frame coordinates, of the two
+        legs' swing (``swung``) with the bike's x at ``x`` moving at ``x_rate`` (the crank's angle
+        and speed through the gear) and ``gravity`` (m/s2, frame coordinates): the d'Alembert force
+        of the legs' motion about the hips, -S'' w^2, and its moment, -K' w^2, with the moment of
+        their weight moved from the lumped leg's place, S x g. The stroke's force on the pedal is the
+        drive's, so what moves the legs' mass comes through the hips (zeros without ``swung``)."""
+        if self.series is None:
+            return np.zeros(2), 0.0
+        theta, w2 = x * self.gear, (x_rate * self.gear) ** 2
+        sr = self.series
+        first = np.array([_at(c, theta) for c in sr["S"]])
+        force = -w2 * np.array([_at(c, theta) for c in sr["S2"]])
+        return force, cross(first, gravity) - w2 * _at(sr["K1"], theta)
+
     def apply(self, d, state: dict) -> None:
         """Put the foot's push along the crank (``radial``) into the engine's ``xfrc_applied``: on the
         frame at the pedal (the crank takes it to the bottom bracket) and its reaction on the trunk
         at the same point (the leg carries it to the hips), as the bike's callback puts the stroke's."""
+        rot = d.xmat[self.frame].reshape(3, 3)
+        g = rot.T @ self.gravity
+        force, moment = self.swing(float(d.qpos[self.x_idx]), float(d.qvel[self.v_idx[3]]), (g[0], g[2]))
+        if force.any() or moment:  # the legs' swing on the trunk: its force at the hips and its moment
+            fw = rot @ np.array([force[0], 0.0, force[1]])
+            w = d.xfrc_applied[self.rider]
+            w[:3] += fw
+            w[3:] += np.cross(d.site_xpos[self.hips] - d.xipos[self.rider], fw) + rot @ np.array([0.0, -moment, 0.0])
         f = state["radial"]
         if not f.any():
             return
-        rot = d.xmat[self.frame].reshape(3, 3)
         fw = rot @ np.array([f[0], 0.0, f[1]])
         at = d.xpos[self.frame] + rot @ np.array([state["pedal"][0], 0.0, state["pedal"][1]])
         for body, sign in ((self.frame, 1.0), (self.rider, -1.0)):

@@ -268,6 +268,12 @@ class ReferenceRider(Reference):
         dr[0, IRX] = dr[1, IRZ] = 1.0
         dr[:, IRP] = _J @ arm
         Q[5:] += (R @ dr[:, 5:]).T @ (R @ -leg["force"])
+        # the legs' swing (PedalLeg.swing): its force at the hips and its moment on the trunk
+        force, moment = self.leg.swing(q[0], qd[0], tuple(R.T @ np.array([0.0, -self.planar.g])))
+        dr[:, IRP] = 0.0
+        Q += world_jacobian(R, hip, dr).T @ (R @ force)
+        Q[2] += moment
+        Q[IRP] += moment
         out["leg"] = leg
 
     def leg_inputs(self, q, qd) -> tuple:
