@@ -24,11 +24,29 @@ on the body. So the pedalling's work is the muscles' (``mtbmj.bike.energy``) and
 with the reaction. Standing, the pedalling rider's hips are lowered so that the driving leg reaches
 the stroke's bottom (``pedalling_hip``, used by ``rider_control.stance``).
 
-Not modelled: the legs' own mass going round (their swing: the lumped leg keeps both legs' mass on
-the mean posture), a foot that rocks on the pedal other than the tip at the bottom, and the cut of
-the stroke by the leg's strength and power: the stroke is the drive's (``controllers.drive``), and
-the summary reports the driving leg's torques against one side's strength with half the common
-leg's torque added (``PedalLeg.report``); the headline says whether that stayed within it.
+The stroke cut by the leg's strength and power (``PedalLeg.limit``, set by ``hold`` before the bike's
+callback as the power its stroke asks, ``pedal_power``; the ODE reference the same from its own
+state): the stroke's force and the push along the crank make joint torques proportional to the
+stroke's peak crank torque, so the largest peak that keeps every joint within one side's strength
+(flexion, extension) with half the common leg's muscle torque added, and the leg's power within what
+the rider's muscles' ``POWER_W`` leaves the common leg's (``rider_control.muscle_torques``' positive
+power), has a closed form; where the asked stroke is past it, the stroke is scaled to it (the crank
+gets less torque; the radial push, proportional to the stroke, with it). The summary
+(``PedalLeg.report``) gives the crank work the stroke asked and the work delivered, and for each
+limit the share of the stroke's time it set the cut.
+
+The legs' swing (``PedalLeg.swung``, ``swing``): the lumped leg keeps both legs' mass on the mean
+posture, where the two legs go round with their pedals. Their thigh and shank (half the lumped
+masses each) posed on their own pedals at the stance's hips, against the lumped leg on the pedals'
+mean, give the first moment S(theta) of the difference about the hips and K(theta) = sum m h x h';
+at a steady cadence w the legs' d'Alembert force is -S'' w^2, its moment about the hips -K' w^2, and
+their weight's moment moved from the lumped leg's place S x g. The stroke's force on the pedal is the
+drive's, so what moves the legs comes through the hips: the wrench acts on the trunk there (in the
+engine and the reference alike). *Assumed*: the cadence's change (theta'') and the hips' and the
+frame's own motion left out of the legs' accelerations, and the swing kept at the stance's hips
+(tabulated once, ``SWING_HARMONICS`` of the crank's turn); the joint torques that swing the legs
+are not added to the driving leg's (nor cut). Its work is an applied wrench's (the energy balance's
+``drive`` term). Not modelled: a foot that rocks on the pedal other than the tip at the bottom.
 """
 from __future__ import annotations
 
