@@ -173,7 +173,7 @@ def test_the_reaction_is_on_the_trunk():
     from mtbmj.bike import run
 
     p = run.prepare("sst", "climb:grade_percent=10,length_m=20,at_m=0.5", None, pedal=(70.0, 250.0),
-                    rider="active")
+                    rider="active", legs_swing=True)
     m, d, cb = p.bike.model, p.data, p.callback
     rider, shank, frame = m.body("rider").id, m.body("shank").id, m.body("frame").id
     found = 0
@@ -189,7 +189,7 @@ def test_the_reaction_is_on_the_trunk():
         rot = d.xmat[frame].reshape(3, 3)
         f = rot @ np.array([leg["force"][0], 0.0, leg["force"][1]])
         at = d.xpos[frame] + rot @ np.array([leg["pedal"][0], 0.0, leg["pedal"][1]])
-        # the legs' swing (PedalLeg.swing) on the trunk besides: its force at the hips and its moment
+        # the legs' swing (PedalLeg.swing, legs_swing) on the trunk besides: its force at the hips and its moment
         g = rot.T @ m.opt.gravity
         sf, sm = cb.leg.swing(d.qpos[p.bike.qpos_index("bike_x")], d.qvel[p.bike.dof_index("bike_x")], (g[0], g[2]))
         sw = rot @ np.array([sf[0], 0.0, sf[1]])
@@ -199,6 +199,7 @@ def test_the_reaction_is_on_the_trunk():
         assert w[3:] + np.cross(d.xipos[rider], w[:3]) == pytest.approx(np.cross(at, -f), rel=1e-9, abs=1e-6)
         assert not d.xfrc_applied[shank].any()
         assert abs(leg["radial"] @ leg["pedal"]) > 0.0  # a push along the crank was added
+        assert np.hypot(*sw[[0, 2]]) > 5.0  # and the legs swung
     assert found >= 4
 
 
@@ -437,3 +438,13 @@ def test_the_legs_swing_against_their_centres_moved_here():
     assert f2 == pytest.approx(4.0 * f1, rel=1e-12)
     # without swung, no swing
     assert not pl.PedalLeg(body, grip, 1.0, rc.STRENGTH_ONE_SIDE_N_M).swing(1.0, w, tuple(g))[0].any()
+
+
+def test_the_legs_swing_only_for_a_pedalling_active_rider():
+    from mtbmj.bike.run import prepare
+    from mtbmj.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="legs_swing: the legs swing only for a pedalling active rider"):
+        prepare("sst", "flat", 4.0, rider="active", legs_swing=True)
+    with pytest.raises(ConfigError, match="legs_swing"):
+        prepare("sst", "flat", None, pedal=(70.0, 250.0), legs_swing=True)

@@ -661,7 +661,7 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     rc = RiderCallback(b.model, inner, body, pose0, ctl)
     if pedalling:
         ring, cog = spec.drive["chain_m"]
-        rc.leg = PedalLeg(body, grip, cog / (ring * rear.radius), STRENGTH_ONE_SIDE_N_M, POWER_W).bind(b.model).swung(hip, trunk)
+        rc.leg = PedalLeg(body, grip, cog / (ring * rear.radius), STRENGTH_ONE_SIDE_N_M, POWER_W).bind(b.model)
     data = mujoco.MjData(b.model)
     names = ("bike_x", "bike_z", "pitch", "fork", "swingarm")
     for name in names:
