@@ -35,7 +35,8 @@ gets less torque; the radial push, proportional to the stroke, with it). The sum
 (``PedalLeg.report``) gives the crank work the stroke asked and the work delivered, and for each
 limit the share of the stroke's time it set the cut.
 
-The legs' swing (``PedalLeg.swung``, ``swing``): the lumped leg keeps both legs' mass on the mean
+The legs' swing (``PedalLeg.swung``, ``swing``; off by default, ``run_bike(..., legs_swing=True)``:
+on, the standing bob twice a turn all but cancels, docs/bike.md): the lumped leg keeps both legs' mass on the mean
 posture, where the two legs go round with their pedals. Their thigh and shank (half the lumped
 masses each) posed on their own pedals at the stance's hips, against the lumped leg on the pedals'
 mean, give the first moment S(theta) of the difference about the hips and K(theta) = sum m h x h';
