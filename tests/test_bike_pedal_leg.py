@@ -231,8 +231,11 @@ def test_the_muscles_do_the_pedalling_work(climbing):
     # the headline says whether the driving leg's side stayed within one side's strength
     said = "the driving leg within" if leg["within_limits"] else "the driving leg PAST"
     assert said in climbing.headline()
-    # 250 W: the stroke within strength, or all but (the ankle's dorsiflexion at the stroke's top)
-    assert leg["delivered_of_asked"] >= 0.99
+    # 250 W standing: the stroke within strength, or all but (the ankle's dorsiflexion, 0.3 % of the
+    # stroke's time); seated the common leg holds larger torques and the cut takes 2.2 % of the work
+    seated = climbing.prepared.callback.controller.seated
+    assert leg["delivered_of_asked"] >= (0.95 if seated else 0.99)
+    assert leg["within_limits"] and max(leg["side_peak_of_limit"].values()) <= 1.0
 
 
 # the stroke cut by the leg's strength and power (PedalLeg.limit): J^T F of the leg solved here
