@@ -35,6 +35,9 @@ class BikeCallback:
         self.bike, self.fork, self.shock = bike, fork_law, shock_law
         self.tires = (front, rear)
         self.drive, self.speed, self.traction, self.refresh = drive, float(speed), float(traction), float(refresh)
+        # pedalling: the power the stroke asks at this evaluation (the drive's; the active rider's leg
+        # cuts it where its strength or power would be passed: mtbmj.bike.pedal_leg, ``set_pedal_power``)
+        self.pedal_power = drive.power
         self.lev = bike.spec.leverage
         # a four-bar's rear caliper on a link that turns otherwise than the arm (spec.caliper_ratio)
         self.caliper = bike.spec.caliper_ratio
@@ -180,7 +183,7 @@ class BikeCallback:
         if self.drive.mode == "pedal":  # the crank's torque makes the chain's tension (controllers.drive.pedal_drive)
             mujoco.mj_mulM(m, d, self._momentum, qvel)
             ring, cog = self.chain
-            out = pedal_drive(qpos[self.xq], self._momentum[self.xv] / self.total_mass, self.drive.power, ring, cog,
+            out = pedal_drive(qpos[self.xq], self._momentum[self.xv] / self.total_mass, self.pedal_power, ring, cog,
                               self.tires[1].radius, fxf, fzf, df, fxr, fzr, dr, self.traction)
             ground, foot = out[:6], out[6:]
         elif self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:

@@ -597,6 +597,15 @@ class CompiledBikeCallback(CompiledShell, ctypes._CFuncPtr):
     refreshes = _int_field(R_REFRESHES, "geometry searches (patch refreshes off a straight stretch)")
 
     @property
+    def pedal_power(self) -> float:
+        """Pedalling: the power (W) the stroke asks at the next evaluation (``BikeCallback.pedal_power``)."""
+        return float(_FLOATS[self.slot, F_DRIVE_POWER])
+
+    @pedal_power.setter
+    def pedal_power(self, watts: float) -> None:
+        _FLOATS[self.slot, F_DRIVE_POWER] = watts
+
+    @property
     def overflowed(self) -> bool:
         """True if a tire met more than MAX_PATCHES patches (the run must be redone in Python)."""
         if not self._finalizer.alive:

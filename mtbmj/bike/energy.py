@@ -27,8 +27,8 @@ step):
   damping as one (not split: a contact shared between patches, ``rolling.tire.share_depths``, has no
   one stored energy to write), so the tyres' springs appear as work;
 * ``drive``: every other applied wrench (``xfrc_applied``): the drive's and the brakes' forces at
-  the axles and their couples, a pedalling foot's push on the pedal and its reaction on the trunk,
-  less the driving leg's muscles' power (``mtbmj.bike.pedal_leg``: the muscles' terms hold it), so
+  the axles and their couples, a pedalling foot's push on the pedal and its reaction on the trunk
+  (and the legs' swing on the trunk, ``PedalLeg.swing``), less the driving leg's muscles' power (``mtbmj.bike.pedal_leg``: the muscles' terms hold it), so
   pedalling leaves here the chain's and the ground's work less the crank's (the crank's angle is the
   bike's x rolled through the gear, the ground's push the chain's at the loaded radius);
 * ``mujoco_passive``, ``mujoco_constraint``: MuJoCo's own joint springs, damping and constraint

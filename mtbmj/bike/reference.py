@@ -212,6 +212,7 @@ class Reference:
         self.fork, self.shock = p.fork_law, p.shock_law
         self.front_tire, self.rear_tire = p.front_tire, p.rear_tire
         self.drive, self.speed, self.traction = p.drive, p.speed, p.traction
+        self.pedal_power = p.drive.power  # pedalling: the stroke's asked power (BikeCallback.pedal_power)
         self.lev = b.spec.leverage
         self.caliper = b.spec.caliper_ratio  # a four-bar's rear caliper: its link's turn per the arm's
         self.x0, self.z0 = b.x0, b.z0
@@ -277,7 +278,7 @@ class Reference:
         ground = (0.0,) * 6
         foot = None
         if self.drive.mode == "pedal":  # the crank's torque pulls the chain (controllers.drive.pedal_drive)
-            out_p = pedal_drive(q[0], self.com_speed(M, qd), self.drive.power, *self.chain,
+            out_p = pedal_drive(q[0], self.com_speed(M, qd), self.pedal_power, *self.chain,
                                 self.rear_tire.radius, fxf, fzf, df, fxr, fzr, dr, self.traction)
             ground, foot = out_p[:6], out_p[6:]
         elif self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:

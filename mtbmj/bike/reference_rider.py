@@ -39,7 +39,8 @@ controller's law, the gains, the limits, the pose's geometry and the segments' p
 
 Pedalling (``--pedal RPM``, standing): the driving leg's push on its pedal (``mtbmj.bike.pedal_leg``:
 the stroke's force and its push along the crank, the same code as the engine's) has its reaction on
-the trunk at the pedal's point (``ReferenceRider.pedal_leg``).
+the trunk at the pedal's point (``ReferenceRider.pedal_leg``); the stroke is cut by the leg's strength
+and power as the engine's is (``PedalLeg.limit``, with the same muscles' torques, before the drive).
 
 Not covered: a seated rider's saddle (refused: ``RunError``).
 """
@@ -220,6 +221,17 @@ class ReferenceRider(Reference):
         M, h, axles = self.dynamics(q, qd) if dynamics is None else dynamics
         self._vx = float(M[0] @ qd) / M[0, 0]
         y7 = np.concatenate((q[:5], [0.0, 0.0], qd[:5], [0.0, 0.0], y[2 * NQR:]))
+        # the muscles first: pedalling, the stroke is cut with them (pedal_leg.PedalLeg.limit, as the engine's hold)
+        px = self.planar.axle_state(y7[:NQ], y7[NQ:2 * NQ], axles[0])[0]
+        x_front = self.x0 + q[0] + px  # the front axle's world x, where the controller reads it
+        want = rc.aimed(self.controller, self.aim, x_front, q[2], qd[2])
+        now, speed = self.angles(q, qd)
+        taus, _, power = rc.muscle_torques(want, now, speed, rc.gains_at(self.controller, self.gains, x_front),
+                                           self.strength)
+        if self.leg is not None:
+            g = self.leg.geometry(*self.leg_inputs(q, qd))
+            cut = self.leg.limit(g, q[0], self._vx, self.drive.power, taus, self.leg.power_limit - power)
+            self.pedal_power = self.drive.power * cut["share"]
         Q7, out = super().forces(t, y7, (M, h, axles))
         Q = np.zeros(NQR)
         Q[:5] = Q7[:5]
@@ -233,11 +245,6 @@ class ReferenceRider(Reference):
             f = -rc.PIN_N_PER_M * gap - rc.PIN_N_S_PER_M * (jd @ qd)
             Q += jd.T @ f
             pins.append(f)
-        px = self.planar.axle_state(y7[:NQ], y7[NQ:2 * NQ], axles[0])[0]
-        x_front = self.x0 + q[0] + px  # the front axle's world x, where the controller reads it
-        want = rc.aimed(self.controller, self.aim, x_front, q[2], qd[2])
-        now, speed = self.angles(q, qd)
-        taus, _, _ = rc.muscle_torques(want, now, speed, rc.gains_at(self.controller, self.gains, x_front), self.strength)
         stops = rc.end_stops(now, speed, self.ranges)
         for k in rc.JOINTS:
             Q += (taus[k] + stops[k] - rc.TISSUE_DAMPING * speed[k]) * GRADIENTS[k]
@@ -255,13 +262,25 @@ class ReferenceRider(Reference):
         coordinates: the trunk's point at the pedal moves with the hips' slides and the trunk's turn."""
         fx, fz, px, pz = out["foot"]
         hip = self.chain_r.hip0 + np.array([q[IRX], q[IRZ]])
-        leg = self.leg.state(tuple(hip), (qd[IRX], qd[IRZ]), self.trunk0 + q[IRP], qd[IRP], q[0], qd[0], (fx, fz))
+        leg = self.leg.state(*self.leg_inputs(q, qd), (fx, fz))
         arm = np.array([px, pz]) - hip
         dr = np.zeros((2, NQR))
         dr[0, IRX] = dr[1, IRZ] = 1.0
         dr[:, IRP] = _J @ arm
         Q[5:] += (R @ dr[:, 5:]).T @ (R @ -leg["force"])
+        # the legs' swing (PedalLeg.swing): its force at the hips and its moment on the trunk
+        force, moment = self.leg.swing(q[0], qd[0], tuple(R.T @ np.array([0.0, -self.planar.g])))
+        dr[:, IRP] = 0.0
+        Q += world_jacobian(R, hip, dr).T @ (R @ force)
+        Q[2] += moment
+        Q[IRP] += moment
         out["leg"] = leg
+
+    def leg_inputs(self, q, qd) -> tuple:
+        """The driving leg's ``PedalLeg.geometry`` arguments (the engine's ``PedalLeg.inputs``): the hips
+        and their speed on the frame, the trunk's angle and turn rate, the bike's x and its rate."""
+        hip = self.chain_r.hip0 + np.array([q[IRX], q[IRZ]])
+        return tuple(hip), (qd[IRX], qd[IRZ]), self.trunk0 + q[IRP], qd[IRP], q[0], qd[0]
 
     def accelerations(self, t, y):
         q, qd = y[:NQR], y[NQR:2 * NQR]

@@ -17,7 +17,8 @@ stiffness, so they put nothing on the trunk) and adds, every evaluation, into ``
   (``mtbmj.bike.rider_body.RANGES_DEG``), a stiff end stop (not a muscle: not in the limits);
 * seated: the saddle, a one-sided spring-damper under the ischial point (``SADDLE_*``);
 * pedalling: the driving leg (``mtbmj.bike.pedal_leg``), whose push on the pedal the bike's
-  callback puts on the trunk; its push along the crank added on the frame and the trunk.
+  callback puts on the trunk; its push along the crank added on the frame and the trunk; the
+  stroke cut where it would pass the leg's strength or the power left (``PedalLeg.hold``).
 
 The controller (``Controller.targets``) sets where the hips are and how the trunk leans, in the
 frame's coordinates, and the joints' targets follow by the pose's inverse kinematics
@@ -56,13 +57,15 @@ Strength (one side, isometric, N m; checked at the sources for issue 54 where a 
   landings were tuned with it); 45 dorsiflexion: 47.9-49.4 N m mean peak torque of 200 adults (L. F.
   da Fonseca et al., World J. Orthop. 16(10):108858 (2025), its Table 1; the mode of contraction and
   the sexes' mix not read);
-* hip 160 flexion / 250 extension (*not checked*: no published value found in the time) and the
-  ankle above: of the order of
-  D. E. Anderson, M. L. Madigan and M. A. Nussbaum, "Maximum voluntary joint torque as a function
-  of joint angle and angular velocity: model development and application to the lower limb",
-  J. Biomech. 40(14):3105-3113 (2007) (the model's parameters by sex and age; its tables were not
-  read for this round: *not checked*), and T. Harbo, J. Brincks and H. Andersen, Eur. J. Appl.
-  Physiol. 112:267-275 (2012) (regressions on age, height and mass; *not read*).
+* hip 160 flexion / 250 extension: D. E. Anderson, M. L. Madigan and M. A. Nussbaum, "Maximum
+  voluntary joint torque as a function of joint angle and angular velocity: model development and
+  application to the lower limb", J. Biomech. 40(14):3105-3113 (2007), Table 3, as transcribed in
+  RBDL's muscle addon (github.com/rbdl/rbdl, addons/muscle/Millard2016TorqueMuscle.cc, whose peak
+  isometric torque is c1 x body mass x g x height): young men (18-25) c1 0.161 hip extension, 0.113
+  flexion, 239 and 168 N m at 85 kg and 1.78 m (the transcription checked, not the paper's own table,
+  its posture or its dynamometer); the same rows give the knee 242 / 129 and the ankle 141 / 49 N m,
+  beside the 250 / 130 and 150 / 45 above. T. Harbo, J. Brincks and H. Andersen, Eur. J. Appl.
+  Physiol. 112:267-275 (2012) (regressions on age, height and mass): *not read*.
 
 The module's first version named the 2007 paper's authors wrongly (F. C. Anderson, D. C.
 Madigan); it is Dennis E. Anderson, Michael L. Madigan and Maury A. Nussbaum. Power: a sprint
@@ -499,6 +502,13 @@ class RiderCallback:
         if m is not self._model and m._address != self._model._address:
             return
         d.qfrc_applied[:] = 0.0
+        ctl = self.controller  # the muscles first: the driving leg's stroke is cut with them (pedal_leg.hold)
+        want = aimed(ctl, self.aim, d.site_xpos[self.s_front][0], d.qpos[self.qadr["pitch"]], d.qvel[self.dof["pitch"]])
+        now, speed = self.angles(d.qpos), self.rates(d.qvel)
+        taus, demands, power = muscle_torques(want, now, speed, gains_at(ctl, self.gains, d.site_xpos[self.s_front][0]),
+                                              self.strength)
+        if self.leg is not None:
+            self.leg.hold(m, d, self.inner, taus, power)
         self.inner(m, d)
         Q = self._q
         Q[:] = 0.0
@@ -514,12 +524,7 @@ class RiderCallback:
             f[1] = 0.0
             Q += self._j1.T @ f - self._j2.T @ f
             pins.append((f, rel, pe - pa))
-        # the muscles
-        ctl = self.controller
-        want = aimed(ctl, self.aim, d.site_xpos[self.s_front][0], d.qpos[self.qadr["pitch"]], qvel[self.dof["pitch"]])
-        now, speed = self.angles(d.qpos), self.rates(qvel)
-        gains = gains_at(ctl, self.gains, d.site_xpos[self.s_front][0])
-        taus, demands, power = muscle_torques(want, now, speed, gains, self.strength)
+        # the muscles' torques (above), the end stops, the tissue
         stops = end_stops(now, speed, self.ranges)
         clamped = {k: demands[k] >= 1.0 for k in JOINTS}
         applied = {}
@@ -656,7 +661,7 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     rc = RiderCallback(b.model, inner, body, pose0, ctl)
     if pedalling:
         ring, cog = spec.drive["chain_m"]
-        rc.leg = PedalLeg(body, grip, cog / (ring * rear.radius), STRENGTH_ONE_SIDE_N_M).bind(b.model)
+        rc.leg = PedalLeg(body, grip, cog / (ring * rear.radius), STRENGTH_ONE_SIDE_N_M, POWER_W).bind(b.model)
     data = mujoco.MjData(b.model)
     names = ("bike_x", "bike_z", "pitch", "fork", "swingarm")
     for name in names:

@@ -137,7 +137,8 @@ def setups(spec) -> tuple[compose.Setup, compose.Setup]:
 
 def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, drive: str = "rider",
             start_x: float | None = None, callback: str = "auto", lock=(), rear_tire: bool = True,
-            overrides=None, seated: bool = False, pedal=None, rider: str = "passive") -> Prepared:
+            overrides=None, seated: bool = False, pedal=None, rider: str = "passive",
+            legs_swing: bool = False) -> Prepared:
     """Everything a run needs, with the data at t = 0: the bike at rest on its static equilibrium
     over the start, moving at the set speed. ``callback``: "auto" (the compiled callback where numba
     is installed, else the Python one with a ``FallbackWarning``), "compiled" or "python".
@@ -163,7 +164,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
 
     ``rider``: "passive" (the rigid body on spring-damper legs and arms) or "active" (the
     articulated rider with its muscles and riding controller, ``mtbmj.bike.rider_control``; seated,
-    on the saddle's contact instead of held)."""
+    on the saddle's contact instead of held). ``legs_swing``: the pedalling active rider's two legs'
+    swing on the trunk (``mtbmj.bike.pedal_leg.PedalLeg.swung``; off by default: docs/bike.md)."""
     from mtbmj.bike.reference import Reference, static_equilibrium
 
     if rider not in RIDERS:
@@ -176,11 +178,19 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
         p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire, overrides, False, pedal)
         kind = callback_kind(p.callback)
         rear = p.rear_tire
-        return rider_control.activate(
+        p = rider_control.activate(
             p, lambda b: make_callback(kind, b, p.fork_law, p.shock_law, p.front_tire, rear, p.drive, p.speed,
                                        p.traction, p.callback.refresh),
             INTEGRATORS[p.fork_setup.integrator], LOCK_ARMATURE, seated)
+        if legs_swing:  # at the stance the run starts in (the ODE reference shares the leg)
+            if p.callback.leg is None:
+                raise ConfigError("legs_swing: the legs swing only for a pedalling active rider (pedal=...)")
+            pose = p.articulated[1]
+            p.callback.leg.swung(pose.hip, math.atan2(pose.shoulder[1] - pose.hip[1], pose.shoulder[0] - pose.hip[0]))
+        return p
 
+    if legs_swing:
+        raise ConfigError("legs_swing: the legs swing only for a pedalling active rider (rider='active', pedal=...)")
     if pedal is not None:
         if drive != "rider":
             raise ConfigError(f"pedal: a pedalling rider is the drive; drive {drive!r} cannot be given with it")
@@ -529,9 +539,12 @@ class BikeResult(RunOutput):
         if leg:  # pedalling: the driving leg (mtbmj.bike.pedal_leg), its side's torques against one side's strength
             top = max(leg["side_peak_of_limit"], key=leg["side_peak_of_limit"].get)
             reach = f", its pedal out of its reach {leg['out_of_reach_s']:.2f} s" if leg["out_of_reach_s"] > 0 else ""
+            cut = {k: v for k, v in leg["cut_of_stroke_time"].items() if v > 0.0}
+            by = ", ".join(f"the {k}'s {100 * v:.1f} %" for k, v in sorted(cut.items(), key=lambda kv: -kv[1]))
             leg = (f"; the driving leg {'within' if leg['within_limits'] else 'PAST'} one side's strength (largest "
                    f"{100 * leg['side_peak_of_limit'][top]:.0f} % of the {top}'s), peak power "
-                   f"{leg['peak_power_W']:.0f} W{reach}")
+                   f"{leg['peak_power_W']:.0f} W{reach}, {100 * leg['delivered_of_asked']:.1f} % of the stroke's asked "
+                   f"crank work delivered" + (f" (cut by {by} of the stroke's time)" if cut else " (never cut)"))
         return (f"; active rider: joint torques {'within' if r['within_limits'] else 'PAST'} their limits (largest "
                 f"{100 * r['joints'][worst]['peak_of_limit']:.0f} % of the {worst}'s{clamp}), peak power "
                 f"{r['peak_power_W']:.0f} of {r['power_limit_W']:.0f} W{leg or ''}{work}")
@@ -581,7 +594,7 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
              drive: str = "rider", start_x: float | None = None,
              progress: Callable[[float], None] | None = None, callback: str = "auto", lock=(),
              rear_tire: bool = True, overrides=None, seated: bool = False, pedal=None,
-             rider: str = "passive") -> BikeResult:
+             rider: str = "passive", legs_swing: bool = False) -> BikeResult:
     """Roll the bike ``bike`` (a preset name, a TOML path, a ``mtbmj.bike.spec.ResolvedBike``, which
     ``overrides`` derive again without reading its file, or a ``BikeSpec``) over ``scenario`` (a
     terrain spec of ``mtbmj roll``) at ``speed_m_per_s``; ``duration`` defaults to the time for both
@@ -597,10 +610,10 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
     (``prepare``; ``speed_m_per_s`` None: the gear's speed at the cadence); ``rider`` "passive" (the
     rigid rider on spring-damper limbs) or "active" (the articulated rider with muscles and a
     riding controller, ``mtbmj.bike.rider_control``; the summary's ``rider`` then reports each
-    joint's largest torque against its limit)."""
+    joint's largest torque against its limit); ``legs_swing`` (``prepare``)."""
     _check(speed_m_per_s, duration, pedal)
     p = guard.prepared("bike", lambda: prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire,
-                                               overrides, seated, pedal, rider),
+                                               overrides, seated, pedal, rider, legs_swing),
                        model_of=lambda p: p.bike.model)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.timestep, 1.0 / p.timestep)
