@@ -451,3 +451,24 @@ def test_the_legs_swing_only_for_a_pedalling_active_rider():
         prepare("sst", "flat", 4.0, rider="active", legs_swing=True)
     with pytest.raises(ConfigError, match="legs_swing"):
         prepare("sst", "flat", None, pedal=(70.0, 250.0), legs_swing=True)
+
+
+def test_the_legs_swing_from_the_command_line(tmp_path, capsys):
+    """`mtbmj bike ... --legs-swing`: without a pedalling active rider one line naming the option, exit
+    2, nothing written; with one, the run goes and its summary says the legs swung (off: they did not)."""
+    import json
+
+    from mtbmj.cli import main
+
+    out = tmp_path / "no"
+    assert main(["bike", "sst", "flat", "--speed", "4", "--rider", "active", "--legs-swing", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mtbmj: error: --legs-swing: ") and "--pedal RPM --rider active" in err[0]
+    assert not out.exists()
+    for swing in (True, False):
+        out = tmp_path / f"swing_{swing}"
+        args = ["bike", "sst", "climb:grade_percent=8,length_m=40,at_m=0.5", "--pedal", "70", "--rider", "active",
+                "--duration", "0.6", "--no-figure", "--quiet", "--out", str(out)] + (["--legs-swing"] if swing else [])
+        assert main(args) == 0
+        s = json.loads((out / "summary.json").read_text())
+        assert s["rider"]["pedal_leg"]["legs_swing"] is swing

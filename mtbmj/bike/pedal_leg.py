@@ -437,7 +437,8 @@ class PedalLeg:
                 "peak_power_W": round(self.peak_power, 1), "out_of_reach_s": round(self.out_of_reach_s, 4),
                 "asked_crank_J": round(self.asked_J, 3), "delivered_crank_J": round(self.delivered_J, 3),
                 "delivered_of_asked": round(self.delivered_J / self.asked_J, 4) if self.asked_J > 0.0 else 1.0,
-                "cut_of_stroke_time": {k: round(v / push, 4) if push > 0.0 else 0.0 for k, v in self.cut_s.items()}}
+                "cut_of_stroke_time": {k: round(v / push, 4) if push > 0.0 else 0.0 for k, v in self.cut_s.items()},
+                "legs_swing": self.series is not None}
 
 
 __all__ = ["PedalLeg", "leg_torques", "leg_rates", "foot_tip", "cross", "pedalling_hip", "LEG_JOINTS", "BOTTOM_KNEE_DEG"]

@@ -26,11 +26,15 @@ def cmd_bike(args) -> int:
         gl_backend()  # no headless OpenGL: one line before any work
     overrides = bike_overrides(args)
     pedal = pedal_option(args)
+    if args.legs_swing and (pedal is None or args.rider != "active"):
+        from mtbmj.errors import ConfigError
+
+        raise ConfigError("--legs-swing: the legs swing only for a pedalling active rider (--pedal RPM --rider active)")
     result = Progress(f"bike {args.bike} over {args.scenario}", not args.quiet).around(
         lambda progress: run_bike(args.bike, args.scenario, args.speed, args.duration, args.drive, args.start_m,
                                   progress, lock=tuple(k.strip() for k in args.lock.split(",")) if args.lock else (),
                                   rear_tire=not args.lift_rear, overrides=overrides, seated=args.seated, rider=args.rider,
-                                  pedal=pedal))
+                                  pedal=pedal, legs_swing=args.legs_swing))
     extra = None
     if args.ride is not None:  # beside a real ride
         from mtbmj.ride import beside
@@ -130,6 +134,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("--seated", action="store_true",
                    help="the rider seated on the saddle, held rigid on the frame (rider.seated_com_mm)")
     add_pedal(p)
+    p.add_argument("--legs-swing", action="store_true", dest="legs_swing",
+                   help="--pedal --rider active: the two legs' thighs and shanks swing on their own pedals about the "
+                        "lumped leg, their inertia and weight on the trunk at the hips (off by default: on, the bob "
+                        "no longer matches the shared pedalling records; docs/bike.md)")
     add_bike_sets(p)
     add_out(p, "out/bike")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
