@@ -8,6 +8,24 @@ damped period ``pi / w_d``, and ``f_n = f_d / sqrt(1 - zeta^2)`` with the record
 common to the records (the spring and the sprung mass do not change with the clicks): its mean over
 the records, its sd the larger of the records' scatter over sqrt(n) and the timing's.
 
+**A record's frequency is measured with the model's own error** (:func:`half_scatter`,
+:func:`honest_timing`). The law holds one frequency for every half cycle. The records do not: within
+one record single half periods differ by several per cent (friction, the rider's body), and rebound
+halves run longer than compression ones (the clicks damp the rebound). A frequency read from vertex
+times alone carries only their timing error (1-3 mHz). That is far too small, above all from one timed
+half cycle, because the model is wrong by the scatter between half periods. So each half period is
+taken as ``log h = a_record + shift x s + e`` (s = +1 rebound, -1 compression). The shift and e's sd
+are pooled by least squares over the records with two half periods or more (a record's own mean
+absorbs its level). The shift is left out where no record has both directions or the pool would have
+no degree of freedom left. A record's frequency is ``1 / (2 exp(a))``, a its shifted half periods'
+mean log. Its sd is the pooled scatter over sqrt(n), the shift's sd times the record's mean s (a
+record with as many halves each way does not feel it), and the vertices' timing, in quadrature.
+Its 95 % interval uses Student's t at the pool's dof. The pool is a property of the measurement,
+not of the law: held out, it is taken over every record. Records with no pool (no record with two
+half periods) keep the vertex timing (:func:`timing`). Checked in tests/test_bounce_predict.py: on
+made records with direction-dependent damping and friction, the interval holds the exact frequency at
+about its nominal rate, and a record on a stiffer spring is still told apart.
+
 **The predicted trace** starts from a record's own state: the record itself up to the slam's peak
 (the compression stroke the rider made, which a rebound adjuster does not act on: an assumption),
 then from rest at the peak the law's own motion, ``m x'' + c x' + F_c sign(x') + k (x - x_eq) = 0``
