@@ -8,6 +8,24 @@ damped period ``pi / w_d``, and ``f_n = f_d / sqrt(1 - zeta^2)`` with the record
 common to the records (the spring and the sprung mass do not change with the clicks): its mean over
 the records, its sd the larger of the records' scatter over sqrt(n) and the timing's.
 
+**A record's frequency is measured with the model's own error** (:func:`half_scatter`,
+:func:`honest_timing`). The law holds one frequency for every half cycle. The records do not: within
+one record single half periods differ by several per cent (friction, the rider's body), and rebound
+halves run longer than compression ones (the clicks damp the rebound). A frequency read from vertex
+times alone carries only their timing error (1-3 mHz). That is far too small, above all from one timed
+half cycle, because the model is wrong by the scatter between half periods. So each half period is
+taken as ``log h = a_record + shift x s + e`` (s = +1 rebound, -1 compression). The shift and e's sd
+are pooled by least squares over the records with two half periods or more (a record's own mean
+absorbs its level). The shift is left out where no record has both directions or the pool would have
+no degree of freedom left. A record's frequency is ``1 / (2 exp(a))``, a its shifted half periods'
+mean log. Its sd is the pooled scatter over sqrt(n), the shift's sd times the record's mean s (a
+record with as many halves each way does not feel it), and the vertices' timing, in quadrature.
+Its 95 % interval uses Student's t at the pool's dof. The pool is a property of the measurement,
+not of the law: held out, it is taken over every record. Records with no pool (no record with two
+half periods) keep the vertex timing (:func:`timing`). Checked in tests/test_bounce_predict.py: on
+made records with direction-dependent damping and friction, the interval holds the exact frequency at
+about its nominal rate, and a record on a stiffer spring is still told apart.
+
 **The predicted trace** starts from a record's own state: the record itself up to the slam's peak
 (the compression stroke the rider made, which a rebound adjuster does not act on: an assumption),
 then from rest at the peak the law's own motion, ``m x'' + c x' + F_c sign(x') + k (x - x_eq) = 0``
@@ -75,6 +93,7 @@ class Timing:
     frequency_hz: float
     sd: float
     n_times: int
+    vertex_sd: float = float("nan")  # the part of sd from the vertices' timing alone
 
 
 def timing(seq: bd.Extrema, t: np.ndarray, x: np.ndarray) -> Timing | None:
@@ -94,7 +113,96 @@ def timing(seq: bd.Extrema, t: np.ndarray, x: np.ndarray) -> Timing | None:
         chi2 = float(np.sum(w * (tv[:, 0] - X @ beta) ** 2) / (times.size - 2))
         cov = cov * max(1.0, chi2)
     half, hsd = float(beta[1]), float(math.sqrt(cov[1, 1]))
-    return Timing(0.5 / half, 0.5 * hsd / half ** 2, int(times.size))
+    return Timing(0.5 / half, 0.5 * hsd / half ** 2, int(times.size), 0.5 * hsd / half ** 2)
+
+
+@dataclass
+class HalfScatter:
+    """The half periods' own scatter, pooled over records: log h = a_i + shift x s + e (s = +1 for a
+    rebound half, -1 for a compression half; e of sd ``rel_sd``, relative), ``dof`` its degrees of
+    freedom; ``shift`` 0 (sd 0) where no record has both directions or the pool cannot spare a degree."""
+
+    rel_sd: float
+    dof: int
+    shift: float
+    shift_sd: float
+    n_records: int
+
+    @property
+    def t95(self) -> float:
+        """Student's t at the pool's degrees of freedom: a 95 % interval is the sd times this."""
+        from scipy.stats import t as student
+
+        return float(student.ppf(0.975, self.dof))
+
+    def summary(self) -> dict:
+        return {"relative_sd": self.rel_sd, "dof": self.dof, "t95": self.t95, "rebound_shift": self.shift,
+                "rebound_shift_sd": self.shift_sd, "records_pooled": self.n_records, "model": HALF_MODEL}
+
+
+HALF_MODEL = ("log h = a_record + shift x s + e, s = +1 rebound half / -1 compression half, e the scatter of one "
+              "half period about its record's mean (pooled over the records with more than one half period); a "
+              "record's frequency 1 / (2 exp(a)), its sd the scatter over sqrt(its halves), the shift's sd and the "
+              "vertex timing's")
+
+
+def timed_halves(seq: bd.Extrema, t: np.ndarray, x: np.ndarray) -> list:
+    """The free half cycles of one record: (direction, from_mm, to_mm, seconds, sd) between vertex times
+    (the sd from the two vertices' standard errors)."""
+    times = seq.times_s[np.isfinite(seq.times_s)]
+    if times.size < 2:
+        return []
+    half0 = float(np.median(np.diff(times)))
+    tv = [vertex_time(t, x, ti, half0) for ti in times]
+    lv = seq.levels_mm
+    return [("compression" if lv[j + 1] > lv[j] else "rebound", float(lv[j]), float(lv[j + 1]),
+             tv[j + 1][0] - tv[j][0], math.hypot(tv[j + 1][1], tv[j][1])) for j in range(times.size - 1)]
+
+
+def half_scatter(halves_per_record) -> HalfScatter | None:
+    """The pooled scatter of single half periods about their record's mean (``HALF_MODEL``), from each
+    record's :func:`timed_halves`; None when no record has two half periods."""
+    use = [h for h in halves_per_record if len(h) >= 2]
+    if not use:
+        return None
+    both = any(len({q[0] for q in h}) == 2 for h in use)
+    n = sum(len(h) for h in use)
+    shift_on = both and n - len(use) - 1 >= 1
+    cols = len(use) + (1 if shift_on else 0)
+    X = np.zeros((n, cols))
+    y = np.empty(n)
+    k = 0
+    for j, h in enumerate(use):
+        for q in h:
+            X[k, j] = 1.0
+            if shift_on:
+                X[k, -1] = 1.0 if q[0] == "rebound" else -1.0
+            y[k] = math.log(q[3])
+            k += 1
+    beta = np.linalg.lstsq(X, y, rcond=None)[0]
+    res = y - X @ beta
+    dof = n - cols
+    s2 = float(res @ res) / dof
+    cov = s2 * np.linalg.inv(X.T @ X)
+    shift, ssd = (float(beta[-1]), float(math.sqrt(cov[-1, -1]))) if shift_on else (0.0, 0.0)
+    return HalfScatter(float(math.sqrt(s2)), int(dof), shift, ssd, len(use))
+
+
+def honest_timing(halves: list, sc: HalfScatter | None) -> Timing | None:
+    """A record's damped frequency from its half periods under the pooled scatter ``sc``: each half
+    corrected by the rebound shift, their log mean a, f_d = 1 / (2 exp(a)); its sd from the scatter over
+    sqrt(n), the shift's sd times the record's share of unbalanced halves, and the vertices' timing.
+    None without a half period or without a pool."""
+    if not halves or sc is None:
+        return None
+    s = np.array([1.0 if q[0] == "rebound" else -1.0 for q in halves])
+    h = np.array([q[3] for q in halves])
+    a = float(np.mean(np.log(h) - sc.shift * s))
+    n = h.size
+    vertex = float(math.sqrt(np.sum((np.array([q[4] for q in halves]) / h) ** 2)) / n)
+    sd_a = math.sqrt(sc.rel_sd ** 2 / n + (float(np.mean(s)) * sc.shift_sd) ** 2 + vertex ** 2)
+    f = 0.5 * math.exp(-a)
+    return Timing(f, f * sd_a, n + 1, f * vertex)
 
 
 def common_fn(timings, zetas) -> tuple[float, float]:
@@ -239,6 +347,7 @@ class DecayLaw:
     fn_sd: float
     zetas: list = field(default_factory=list)  # the timed records' own zetas (per-record fit), as ``timings``
     timed: list = field(default_factory=list)  # the indices (into ``seqs``) of the timed records
+    scatter: HalfScatter | None = None  # the half periods' pooled scatter the timings carry (None: vertex only)
 
     def zeta_d(self, clicks: float) -> tuple[float, float, np.ndarray]:
         """zeta and d at ``clicks`` and their 2 x 2 covariance."""
@@ -315,17 +424,31 @@ class DecayLaw:
                           Estimate(v, float(lo), float(hi)), float(x_eq), float(stroke_mm), float(t[peak]), time, travel)
 
 
-def decay_law(end: str, seqs, clicks, records, ends_mm, model: str = "both") -> DecayLaw | None:
+def record_timings(seqs, records, ends_mm, scatter: HalfScatter | None = None) -> tuple[list, HalfScatter | None]:
+    """Each record's Timing (None: untimed) under the half periods' pooled scatter (``scatter``, or pooled
+    over these records); the vertex-only :func:`timing` where there is no pool."""
+    halves = [timed_halves(s, np.asarray(r.time_s, float), np.asarray(x, float))
+              for s, r, x in zip(seqs, records, ends_mm)]
+    sc = scatter if scatter is not None else half_scatter(halves)
+    if sc is None:
+        return [timing(s, np.asarray(r.time_s, float), np.asarray(x, float))
+                for s, r, x in zip(seqs, records, ends_mm)], None
+    return [honest_timing(h, sc) for h in halves], sc
+
+
+def decay_law(end: str, seqs, clicks, records, ends_mm, model: str = "both",
+              scatter: HalfScatter | None = None) -> DecayLaw | None:
     """The law of one end across ``clicks`` (``model`` with the friction band common, zeta linear in
-    clicks) and its common undamped frequency; None when the law has no degree of freedom or fewer
+    clicks) and its common undamped frequency (the records' timings under the half periods' scatter,
+    ``scatter`` or pooled over these records); None when the law has no degree of freedom or fewer
     than two records are timed."""
     fit = bd.fit_common(seqs, clicks, model, law=True)
     if fit is None:
         return None
     per = bd.fit_common(seqs, clicks, model, law=False)
     tms, zs, timed = [], [], []
-    for i, (s, r, x) in enumerate(zip(seqs, records, ends_mm)):
-        tm = timing(s, np.asarray(r.time_s, float), np.asarray(x, float))
+    all_tm, sc = record_timings(seqs, records, ends_mm, scatter)
+    for i, tm in enumerate(all_tm):
         if tm is None:
             continue
         zname = f"zeta[{i}]"
@@ -337,16 +460,18 @@ def decay_law(end: str, seqs, clicks, records, ends_mm, model: str = "both") -> 
     if not tms:
         return None
     fn, fsd = common_fn(tms, zs)
-    return DecayLaw(end, fit, list(seqs), list(clicks), tms, fn, fsd, zs, timed)
+    return DecayLaw(end, fit, list(seqs), list(clicks), tms, fn, fsd, zs, timed, sc)
 
 
 def held_out(seqs, clicks, records, ends_mm, i: int, model: str = "both") -> dict:
     """Record ``i`` held out: the law fitted on the others predicts its first free half cycle's decay
     (at its own first swing) and its frequency; each compared with the record's own measurement
-    (combined sd: the prediction's and the measurement's)."""
+    (combined sd: the prediction's and the measurement's). Every record's frequency carries the half
+    periods' scatter pooled over all the records (a property of the measurement, not of the law)."""
     keep = [j for j in range(len(seqs)) if j != i]
+    all_tm, sc = record_timings(seqs, records, ends_mm)
     law = decay_law("held-out", [seqs[j] for j in keep], [clicks[j] for j in keep], [records[j] for j in keep],
-                    [ends_mm[j] for j in keep], model)
+                    [ends_mm[j] for j in keep], model, scatter=sc)
     out = {"clicks": clicks[i], "fitted_on_clicks": [clicks[j] for j in keep]}
     if law is None:
         out["note"] = "no degree of freedom left"
@@ -356,13 +481,19 @@ def held_out(seqs, clicks, records, ends_mm, i: int, model: str = "both") -> dic
     out.update({"decay": dec, "decay_sd": dsd, "decay_measured": s.first_decay()})
     out["decay_misses_by_sd"] = abs(out["decay_measured"] - dec) / dsd
     fd, fsd = law.frequency(clicks[i])
-    tm = timing(s, np.asarray(records[i].time_s, float), np.asarray(ends_mm[i], float))
+    tm = all_tm[i]
     out.update({"frequency_hz": fd, "frequency_sd": fsd})
+    if sc is not None:
+        out["half_period_scatter"] = sc.summary()
     if tm is not None:
         out.update({"frequency_measured": tm.frequency_hz, "frequency_measured_sd": tm.sd,
+                    "frequency_measured_vertex_sd": tm.vertex_sd,
+                    "frequency_measured_ci95": [tm.frequency_hz - (sc.t95 if sc else Z95) * tm.sd,
+                                                tm.frequency_hz + (sc.t95 if sc else Z95) * tm.sd],
                     "frequency_misses_by_sd": abs(tm.frequency_hz - fd) / math.hypot(fsd, tm.sd)})
     return out
 
 
-__all__ = ["DecayLaw", "Estimate", "Prediction", "Timing", "common_fn", "decay_law", "free_motion", "held_out",
-           "rebound_speed", "timing", "vertex_time"]
+__all__ = ["DecayLaw", "Estimate", "HalfScatter", "Prediction", "Timing", "common_fn", "decay_law", "free_motion",
+           "half_scatter", "held_out", "honest_timing", "rebound_speed", "record_timings", "timed_halves", "timing",
+           "vertex_time"]

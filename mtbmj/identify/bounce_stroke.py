@@ -145,8 +145,9 @@ def held_out(seqs, clicks, records, ends_mm, i: int, spring: BikeSpring, model: 
     miss in combined sd), the centres (``centre_mm``, ``fitted_centres_mm``) and the stiffening's ratio."""
     out = bp.held_out(seqs, clicks, records, ends_mm, i, model)
     keep = [j for j in range(len(seqs)) if j != i]
+    sc = bp.record_timings(seqs, records, ends_mm)[1]
     law = bp.decay_law("held-out", [seqs[j] for j in keep], [clicks[j] for j in keep], [records[j] for j in keep],
-                       [ends_mm[j] for j in keep], model)
+                       [ends_mm[j] for j in keep], model, scatter=sc)
     if law is None:
         return out
     centre = law.x_eq_of(seqs[i], clicks[i])
