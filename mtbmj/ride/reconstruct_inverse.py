@@ -176,7 +176,8 @@ def unloaded(tyre, static: float, dt: float) -> np.ndarray:
     tyre = np.asarray(tyre, float)
     off = tyre <= 0.0
     low = tyre <= TAKE_OFF_SHARE * static
-    for (_, b), (a, _) in zip(runs(off)[:-1], runs(off)[1:]):
+    zeros = runs(off)
+    for (_, b), (a, _) in zip(zeros[:-1], zeros[1:]):
         if np.mean(tyre[b:a]) <= TAKE_OFF_SHARE * static:  # between two zeros the force carried next to nothing: one flight
             off[b:a] = True
     out = off.copy()
