@@ -537,3 +537,47 @@ def test_a_long_flights_take_off_is_where_the_tyre_unloaded():
     off = unloaded(tyre, static, dt)
     assert off[220:500].all() and not off[:220].any() and not off[500:1200].any()
     assert off[1200:1250].all() and not off[1250:].any()
+
+
+def test_the_rear_is_checked_band_by_band_against_series_written_here():
+    """Reconstruction.checks()["bands"] on series written here (200 Hz, 200 s), each band's part of the
+    rear made by hand: a 0.2 Hz swing (the rider's slow load), a 1.2 Hz one (the body) and noise
+    between 3 and 8 Hz (the wheels). A prediction that has the slow and body parts right and the wheels'
+    noise of another draw is described in those two bands and not in the wheels' (its correlation
+    there near zero); the same prediction with the body's part reversed is not described in the body's
+    band (correlation about -1); the line names each band's verdict."""
+    from scipy.signal import butter, sosfiltfilt
+
+    from mtbmj.ride import reconstruct
+
+    rng = np.random.default_rng(5)
+    fs, n = 200.0, 40000
+    t = np.arange(n) / fs
+    slow, body = 8.0 * np.sin(2 * math.pi * 0.2 * t), 6.0 * np.sin(2 * math.pi * 1.2 * t + 0.4)
+    sos = butter(4, (3.0, 8.0), btype="bandpass", fs=fs, output="sos")
+    wheels = lambda: 40.0 * sosfiltfilt(sos, rng.standard_normal(n))  # noqa: E731
+    rear = 50.0 + slow + body + wheels()
+    fork_delayed = 60.0 + wheels()  # a baseline that shares nothing with the rear but its mean
+    valid = np.ones(n, bool)
+    valid[:2000] = valid[-2000:] = False  # the filters' ends are not what is checked
+
+    def bands(predicted):
+        rec = reconstruct.Reconstruction("r", "b", t, {"windows": []}, t, t, valid, rear, rear, rear, predicted, 150.0,
+                                         [], fork_delayed=fork_delayed)
+        return {tuple(b["band_Hz"]): b for b in rec.checks()["bands"]}
+
+    right = bands(50.0 + slow + body + wheels())
+    assert set(right) == {(0.05, 0.5), (0.5, 2.0), (2.0, 10.0)}
+    assert right[(0.05, 0.5)]["described"] and right[(0.5, 2.0)]["described"]
+    assert right[(0.5, 2.0)]["predicted_correlation"] > 0.99
+    assert not right[(2.0, 10.0)]["described"]
+    assert abs(right[(2.0, 10.0)]["predicted_correlation"]) < 0.1
+    # the wheels' band holds the noise the rear has there (its RMS about 40 * the filter's share)
+    assert right[(2.0, 10.0)]["record_rms_mm"] > 3.0 * right[(0.5, 2.0)]["predicted_error_rms_mm"]
+    wrong = bands(50.0 + slow - body + wheels())
+    assert not wrong[(0.5, 2.0)]["described"] and wrong[(0.5, 2.0)]["predicted_correlation"] < -0.95
+    assert wrong[(0.05, 0.5)]["described"]
+    rec = reconstruct.Reconstruction("r", "b", t, {"windows": [(0.0, 5.0, 0.9)], "speed_m_per_s": 5.0, "lag_s": 0.24},
+                                     t, t, valid, rear, rear, rear, 50.0 + slow + body + wheels(), 150.0, [],
+                                     fork_delayed=fork_delayed)
+    assert "the rear by band (correlation, described): 0.05-0.5 Hz 1.00 yes, 0.5-2 Hz 1.00 yes, 2-10 Hz" in rec.line()

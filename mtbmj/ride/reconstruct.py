@@ -88,6 +88,38 @@ BEAT_MARGIN = 0.40  # the rear predicted must be this much (40 %) lower in RMS t
 TERRAIN_LEAD_IN_M = 3.0  # terrain.csv starts on this much level ground before the ride's first metre
 REFINE_PASSES = 2  # the speed found again from the rear predicted, and the terrain at it, this many times
 LEFT_OUT_S = 0.2  # around an airborne stretch, this much either side is left out of the checks
+# the rear's check again per band of frequency (Hz): what each band of the rear's motion is on a ride
+BANDS = (((0.05, 0.5), "the rider's slow load"), ((0.5, 2.0), "the body's heave and pitch"),
+         ((2.0, 10.0), "the wheels over the terrain"))
+
+
+def band_checks(t, rear, predicted, fork_delayed, valid) -> list:
+    """The rear's check per band of ``BANDS``: the rear's record, the rear predicted and the delayed fork
+    (mm on ``t``) each band-passed over the whole record (a 2nd-order Butterworth run forward and back;
+    a missing prediction taken as the record's mean), compared on the ``valid`` samples. Per band: the
+    record's RMS (the error of predicting nothing there, the mean's), the prediction's RMS error and
+    correlation, the delayed fork's RMS error with its least-squares scale in that band, and whether the
+    prediction is ``BEAT_MARGIN`` below the better of those two baselines."""
+    from scipy.signal import butter, sosfiltfilt
+
+    fs = 1.0 / float(t[1] - t[0])
+    out = []
+    if int(np.count_nonzero(valid)) < 3 or t.size < 30:
+        return out
+    fill = lambda x: np.where(np.isfinite(x), x, float(np.nanmean(rear)))  # noqa: E731
+    for (lo, hi), what in BANDS:
+        if hi >= 0.5 * fs or t.size * lo / fs < 2.0:  # the record too short or too coarse for this band
+            continue
+        sos = butter(2, (lo, hi), btype="bandpass", fs=fs, output="sos")
+        r, p, f = (sosfiltfilt(sos, fill(np.asarray(x, float)))[valid] for x in (rear, predicted, fork_delayed))
+        rms = lambda x: float(np.sqrt(np.mean(x * x)))  # noqa: E731
+        scale = float(f @ r / (f @ f)) if f @ f > 0 else 0.0
+        err, base_fork, base_mean = rms(p - r), rms(scale * f - r), rms(r)
+        corr = float(np.corrcoef(p, r)[0, 1]) if np.std(p) > 0 and np.std(r) > 0 else 0.0
+        out.append({"band_Hz": [lo, hi], "what": what, "record_rms_mm": base_mean, "predicted_error_rms_mm": err,
+                    "predicted_correlation": corr, "delayed_fork_error_rms_mm": base_fork,
+                    "described": bool(err <= (1.0 - BEAT_MARGIN) * min(base_fork, base_mean))})
+    return out
 
 
 def _statics(spec):
@@ -146,7 +178,7 @@ class Reconstruction:
                         f"the whole bike diverged at {self.diverged_s:.2f} s (finding the terrain or riding it): "
                         if self.diverged_s is not None else "") + "no sample of it can be checked",
                     "rear_predicted_rms_percent_of_used": nan, "rear_histogram_distance_percent": nan,
-                    "samples_checked_percent": 0.0}
+                    "samples_checked_percent": 0.0, "bands": []}
         used = float(np.ptp(self.rear[v]))
         rms_front = float(np.sqrt(np.mean((self.front_again[v] - self.front[v]) ** 2)))
         rms_rear = float(np.sqrt(np.mean((self.rear_predicted[v] - self.rear[v]) ** 2)))
@@ -176,7 +208,9 @@ class Reconstruction:
                 "rear_travel_used_mm": used, "rear_predicted_rms_percent_of_used": 100.0 * rms_rear / used,
                 "rear_histogram_distance_percent": histogram_distance(self.rear[v], self.rear_predicted[v],
                                                                         self.rear_top),
-                "samples_checked_percent": 100.0 * float(np.mean(v))}
+                "samples_checked_percent": 100.0 * float(np.mean(v)),
+                "bands": band_checks(self.t, self.rear, self.rear_predicted,
+                                     self.fork_delayed if self.fork_delayed is not None else self.front, v)}
 
     def summary(self) -> dict:
         def listed(stage):
@@ -258,7 +292,11 @@ class Reconstruction:
                 f"({c['rear_predicted_rms_percent_of_used']:.0f} % of the {c['rear_travel_used_mm']:.0f} mm used; "
                 f"baselines: delayed fork {c['baseline_delayed_fork_rms_mm']:.1f}, rear's mean "
                 f"{c['baseline_rear_mean_rms_mm']:.1f} mm), "
-                f"histograms {c['rear_histogram_distance_percent']:.0f} % apart; {len(self.jumps)} flight(s) bridged, "
+                f"histograms {c['rear_histogram_distance_percent']:.0f} % apart"
+                + ("" if not c["bands"] else "; the rear by band (correlation, described): " + ", ".join(
+                    f"{b['band_Hz'][0]:g}-{b['band_Hz'][1]:g} Hz {b['predicted_correlation']:.2f} "
+                    f"{'yes' if b['described'] else 'no'}" for b in c["bands"]))
+                + f"; {len(self.jumps)} flight(s) bridged, "
                 f"{len(self.unaligned or [])} stretch(es) without a speed left out ({c['samples_checked_percent']:.0f} % "
                 f"of the ride checked)")
 
