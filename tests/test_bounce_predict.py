@@ -451,6 +451,47 @@ def test_a_law_without_friction_is_told_apart_from_a_records_measured_decay(deca
     assert np.mean([abs(r["value"] - r["no_friction"]) > 2.0 * r["sd"] for r in decay_coverage]) >= 0.8
 
 
+def made_sequence(levels):
+    """An Extrema of given levels (mm), peak first when the second is lower."""
+    lv = np.asarray(levels, float)
+    return bd.Extrema("shock", 0.0, lv, np.arange(lv.size, dtype=float), bool(lv[1] < lv[0]), False,
+                      floor_mm=0.01, noise_mm=0.1)
+
+
+def test_decay_scatter_recovers_a_made_scatter_and_shift():
+    """Swings written here: 60 records of 5 swings, s_{n+1} = (r - D / s_n + shift x dir_n + N(0, 0.03)) s_n
+    with r and D per record: the pooled sd comes back, the shift is kept where it is 0.08 and left out
+    where it is 0; a record with fewer than 3 decays is not pooled, and with no pool the measured decay
+    carries its read error alone."""
+    rng = np.random.default_rng(7)
+
+    def records(shift):
+        out = []
+        for _ in range(60):
+            r, D = rng.uniform(0.5, 0.8), rng.uniform(0.3, 1.0)
+            sw, lv = [rng.uniform(25, 35)], [40.0]
+            for n in range(4):
+                dirn = 1.0 if n % 2 == 0 else -1.0  # peak first: swing 0 is a rebound
+                sw.append(sw[-1] * (r - D / sw[-1] + shift * dirn + rng.normal(0, 0.03)))
+            for n, w in enumerate(sw):
+                lv.append(lv[-1] - w if n % 2 == 0 else lv[-1] + w)
+            out.append(made_sequence(lv))
+        return out
+
+    sc = bp.decay_scatter(records(0.08))
+    assert sc.sd == pytest.approx(0.03, rel=0.15)
+    assert sc.shift == pytest.approx(0.08, abs=3 * sc.shift_sd) and sc.shift_sd > 0
+    seq = records(0.08)[0]
+    val, sd = bp.measured_decay(seq, sc)
+    assert val == pytest.approx(seq.first_decay() - sc.shift)  # a rebound-first decay, shifted back
+    assert sd == pytest.approx(math.sqrt(sc.sd ** 2 + sc.shift_sd ** 2 + bp.read_sd(seq) ** 2))
+    none = bp.decay_scatter(records(0.0))
+    assert none.shift == 0.0 and none.shift_sd == 0.0 and abs(none.shift_tried) < 3 * none.shift_tried_sd
+    short = made_sequence([40.0, 10.0, 30.0, 15.0])  # 2 decays: not pooled
+    assert bp.decay_scatter([short]) is None
+    assert bp.measured_decay(short, None) == (short.first_decay(), bp.read_sd(short))
+
+
 def test_half_scatter_recovers_a_made_scatter_and_shift():
     """Half periods written here: 40 records of 4 halves, log h = a_i + 0.05 s + N(0, 0.03): the pooled
     sd and the shift come back; a single compression half's frequency is corrected by the shift."""

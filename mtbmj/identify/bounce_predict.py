@@ -608,7 +608,9 @@ def held_out(seqs, clicks, records, ends_mm, i: int, model: str = "both") -> dic
     """Record ``i`` held out: the law fitted on the others predicts its first free half cycle's decay
     (at its own first swing) and its frequency; each compared with the record's own measurement
     (combined sd: the prediction's and the measurement's). Every record's frequency carries the half
-    periods' scatter pooled over all the records (a property of the measurement, not of the law)."""
+    periods' scatter pooled over all the records, and its first decay the decays' scatter about their
+    record's law pooled over all the records (:func:`held_out_decay`): properties of the measurement,
+    not of the law."""
     keep = [j for j in range(len(seqs)) if j != i]
     all_tm, sc = record_timings(seqs, records, ends_mm)
     law = decay_law("held-out", [seqs[j] for j in keep], [clicks[j] for j in keep], [records[j] for j in keep],
