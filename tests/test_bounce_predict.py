@@ -65,11 +65,13 @@ def modal_zeta(c):
     return float(phi @ C @ phi / (2 * math.sqrt((phi @ Km @ phi) * (phi @ M @ phi))))
 
 
-def ring_down(c, fc=F_C, seconds=9.0, seed=0, c_comp=None, push=PUSH_N, k=K, k_t=K_T, noise=NOISE, raw=False):
+def ring_down(c, fc=F_C, seconds=9.0, seed=0, c_comp=None, push=PUSH_N, k=K, k_t=K_T, noise=NOISE, raw=False,
+              stall_limit=None):
     """Travel (mm, compression positive) at RATE of the three-mass model: seated at rest, the push,
     the free motion with stick-slip friction and the bumper. ``c_comp``: the suspension's damping while
     it compresses (None: ``c`` both ways; the clicks set rebound only); ``raw``: the exact travel, without
-    noise, rounding or clipping."""
+    noise, rounding or clipping; ``stall_limit``: raise RuntimeError after that many switches in a row
+    that do not advance the time (a stick-slip switch can chatter for good in the bumper; None: never)."""
     from scipy.integrate import solve_ivp
 
     M, Km, C = matrices(c, k, k_t)
@@ -89,6 +91,7 @@ def ring_down(c, fc=F_C, seconds=9.0, seed=0, c_comp=None, push=PUSH_N, k=K, k_t
     t = np.arange(int(seconds * RATE)) / RATE
     y, t0, mode = np.zeros(6), 0.0, 0  # mode 0: the bike stuck; +1 / -1: slipping that way
     ts, xs = [], []
+    stalls = 0
     while t0 < seconds - 1e-9:
         if mode == 0:
             def rhs(tt, q):
@@ -115,6 +118,9 @@ def ring_down(c, fc=F_C, seconds=9.0, seed=0, c_comp=None, push=PUSH_N, k=K, k_t
         if grid.size:
             ts.extend(grid)
             xs.extend(sol.sol(grid)[0])
+        stalls = stalls + 1 if sol.t[-1] <= t0 else 0
+        if stall_limit is not None and stalls > stall_limit:
+            raise RuntimeError(f"the stick-slip switch chatters at {t0:.4f} s")
         t0, y = sol.t[-1], sol.y[:, -1].copy()
         if sol.status != 1:
             break
@@ -187,7 +193,8 @@ def _held(five, i):
 
 
 # measured (held out in turn, fitted on the other four): trace RMS 1.68, 1.07, 0.17, 0.34, 0.26 mm;
-# first half cycle's decay misses by 0.09, 0.17, 0.25, 0.63, 0.53 sd; frequency by 0.13, 0.89, 0.83,
+# first half cycle's decay misses by 0.08, 0.07, 0.22, 0.53, 0.47 sd with the measured decay's scatter
+# (0.008, pooled over 0 and 4 clicks, 5 dof; 0.09, 0.17, 0.25, 0.63, 0.53 with its read error alone); frequency by 0.13, 0.89, 0.83,
 # 0.00, 1.00 sd (0.08, 1.02, 2.08, 0.48, 1.44 with the vertex timing's sd alone)
 TRACE_RMS = 2.5 * NOISE
 
@@ -266,14 +273,19 @@ def true_frequency(t, x):
     return 0.5 * math.exp(-(np.mean(reb) + np.mean(com)) / 2)
 
 
+def directed_draw(seed):
+    """One set's push (N), torso stiffness, friction (N) and compression damping ratio."""
+    rng = np.random.default_rng(100 + seed)
+    push, f_t = rng.uniform(200, 320), rng.uniform(4.0, 6.0)
+    fc, z_c = K * 1e-3 * rng.uniform(0.3, 0.8), rng.uniform(0.08, 0.16)
+    return push, M_TORSO * (2 * math.pi * f_t) ** 2, fc, z_c
+
+
 def directed_set(seed, stiff_at=None, stiff=1.0):
     """Three records (DIRECTED) of one rider and shock: the clicks set the rebound's damping only, the
     compression's is the shock's own; push, torso resonance, friction and compression damping drawn
     per set; ``stiff_at``: that record's spring ``stiff`` times stiffer (a wrong law's record)."""
-    rng = np.random.default_rng(100 + seed)
-    push, f_t = rng.uniform(200, 320), rng.uniform(4.0, 6.0)
-    fc, z_c = K * 1e-3 * rng.uniform(0.3, 0.8), rng.uniform(0.08, 0.16)
-    k_t = M_TORSO * (2 * math.pi * f_t) ** 2
+    push, k_t, fc, z_c = directed_draw(seed)
     recs, xs, seqs, truth = [], [], [], []
     for i, (k, z) in enumerate(DIRECTED):
         kk = K * (stiff if i == stiff_at else 1.0)
@@ -322,6 +334,162 @@ def test_a_stiffer_held_out_record_is_still_told_apart():
     recs, xs, seqs, _ = directed_set(0)
     right = bp.held_out(seqs, [k for k, _ in DIRECTED], recs, xs, 2)
     assert right["frequency_misses_by_sd"] <= 2.0
+
+
+# --- a record's measured first half cycle's decay: the decays' own scatter (coverage) ----------------
+
+DECAY_PUSHES = (0.75, 1.0, 1.25)  # the pushes whose noise-free ring-downs define a click setting's smooth law
+
+
+def free_swings(t, x):
+    """The noise-free travel's free swings after the slam's peak, written here: its turning points
+    (the velocity's sign changes), the swings between them with both ends 1 mm or more into the stroke
+    (none into or out of the bumper) and at least 0.2 mm, from the first such swing to the first that
+    is not (the stick)."""
+    p = int(np.argmax(x))
+    sgn = np.sign(np.diff(x[p:]))
+    nz = np.flatnonzero(sgn != 0)
+    tp, last = [p], sgn[nz[0]]
+    for j in nz:
+        if sgn[j] != last:
+            tp.append(p + int(j))
+            last = sgn[j]
+    out = []
+    for a, b in zip(tp[:-1], tp[1:]):
+        if min(x[a], x[b]) < 1.0 or abs(x[b] - x[a]) < 0.2:
+            if out:
+                break
+            continue
+        out.append(abs(x[b] - x[a]))
+    return out
+
+
+def setting_laws(z, kw):
+    """The click setting's smooth law, fitted here: s_{n+1} / s_n = r - D / s_n (viscous + Coulomb in
+    swings) by least squares over the noise-free ring-downs of the set's rider and shock at DECAY_PUSHES
+    x its push, as (r, D); beside it the same swings' law with the friction left out (D = 0: r alone, the
+    mean decay) as (r, 0). None when fewer than four decays (a run whose stick-slip chatters is left out)."""
+    ys, ss = [], []
+    for f in DECAY_PUSHES:
+        try:
+            t, x = ring_down(c_of(z), raw=True, stall_limit=200, **dict(kw, push=kw["push"] * f))
+        except RuntimeError:
+            continue
+        sw = free_swings(t, x)
+        ys += [b / a for a, b in zip(sw[:-1], sw[1:])]
+        ss += sw[:-1]
+    if len(ys) < 4:
+        return None
+    ss = np.array(ss)
+    (r, D), *_ = np.linalg.lstsq(np.column_stack((np.ones_like(ss), -1.0 / ss)), np.array(ys), rcond=None)
+    return (float(r), float(D)), (float(np.mean(ys)), 0.0)
+
+
+@pytest.fixture(scope="module")
+def decay_coverage():
+    """Per record over the draws: the measured first decay, its sd, the pool's t95, the read-only sd, and
+    at its first swing the truth (its setting's law), the law without friction and the neighbouring
+    setting's law (the clicks doing nothing between them: a click law with the wrong slope)."""
+    rows = []
+    for seed in range(COVERAGE_DRAWS):
+        push, k_t, fc, z_c = directed_draw(seed)
+        seqs = []
+        for k, z in DIRECTED:
+            t, x = ring_down(c_of(z), seed=31 * seed + k + 1, c_comp=c_of(z_c), push=push, k_t=k_t, fc=fc)
+            seqs.append(bd.extrema(t, x, "shock", int(np.argmax(x))))
+        sc = bp.decay_scatter(seqs)
+        laws = [setting_laws(z, dict(c_comp=c_of(z_c), push=push, k_t=k_t, fc=fc)) for _, z in DIRECTED]
+        for i, s in enumerate(seqs):
+            nb = laws[1] if i != 1 else laws[2]
+            if laws[i] is None or nb is None:
+                continue
+            s0 = float(s.swings[0])
+            at = [r - D / s0 for r, D in (laws[i][0], laws[i][1], nb[0])]
+            val, sd = bp.measured_decay(s, sc)
+            rows.append(dict(clicks=DIRECTED[i][0], value=val, sd=sd, t95=sc.t95, read_sd=bp.read_sd(s), truth=at[0],
+                             no_friction=at[1], neighbour=at[2]))
+    return rows
+
+
+@pytest.mark.slow
+def test_a_records_measured_decay_interval_holds_the_settings_law_at_its_nominal_rate(decay_coverage):
+    """Measured over 6 draws x 3 records (DIRECTED: the clicks on the rebound only), the truth each
+    record's setting's law fitted here on its noise-free ring-downs at three pushes: the decays scatter
+    about their record's law by 0.016-0.050 (pooled over the records with 3 decays or more, 2-7 dof; the
+    direction shift never told apart: -0.022 to +0.013); the measured first decay's 95 % interval
+    (Student's t) holds its setting's law 17 times in 18 (z from -0.97 to 4.96), the read error alone
+    (0.0013-0.0022) 2 times in 18 (z up to 75). The 17-click records' first decays (compression first)
+    sit above their setting's law every time (z 1.55-4.96, the one miss among them): their rebound is
+    damped 2-4 x their compression, which a law common to both directions and a pooled shift do not
+    carry."""
+    rows = decay_coverage
+    assert len(rows) >= 15
+    honest = [abs(r["value"] - r["truth"]) <= r["t95"] * r["sd"] for r in rows]
+    read = [abs(r["value"] - r["truth"]) <= 1.96 * r["read_sd"] for r in rows]
+    assert np.mean(honest) >= 0.85
+    assert np.mean(read) <= 0.5  # the read error alone (the error model replaced) misses the law most of the time
+
+
+@pytest.mark.slow
+def test_a_click_law_with_the_wrong_slope_is_still_told_apart_from_a_records_measured_decay(decay_coverage):
+    """The neighbouring setting's law (8 clicks' at 0 and 17 clicks, 17 clicks' at 8: the clicks doing
+    nothing between them, a click law with the wrong slope) lies more than 2 sd from the measured first
+    decay at all 12 records at 0 and 8 clicks (2.33-8.01 sd). At 17 clicks it does in 1 of 6 (left out
+    here, and said: the direction bias above puts the measurement nearer 8 clicks' law than its own)."""
+    rows = [r for r in decay_coverage if r["clicks"] != 17]
+    assert len(rows) >= 10
+    assert np.mean([abs(r["value"] - r["neighbour"]) > 2.0 * r["sd"] for r in rows]) >= 0.8
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="the law with the friction left out (D = 0, fitted on the same noise-free "
+                                         "swings) lies more than 2 sd from the measured first decay in 8 of 18 "
+                                         "records only (0.61-5.75 sd): one first half cycle's decay, with the "
+                                         "decays' own scatter, is no test of the friction; the friction band is "
+                                         "read from the whole ring-down")
+def test_a_law_without_friction_is_told_apart_from_a_records_measured_decay(decay_coverage):
+    assert np.mean([abs(r["value"] - r["no_friction"]) > 2.0 * r["sd"] for r in decay_coverage]) >= 0.8
+
+
+def made_sequence(levels):
+    """An Extrema of given levels (mm), peak first when the second is lower."""
+    lv = np.asarray(levels, float)
+    return bd.Extrema("shock", 0.0, lv, np.arange(lv.size, dtype=float), bool(lv[1] < lv[0]), False,
+                      floor_mm=0.01, noise_mm=0.1)
+
+
+def test_decay_scatter_recovers_a_made_scatter_and_shift():
+    """Swings written here: 60 records of 5 swings, s_{n+1} = (r - D / s_n + shift x dir_n + N(0, 0.03)) s_n
+    with r and D per record: the pooled sd comes back, the shift is kept where it is 0.08 and left out
+    where it is 0; a record with fewer than 3 decays is not pooled, and with no pool the measured decay
+    carries its read error alone."""
+    rng = np.random.default_rng(7)
+
+    def records(shift):
+        out = []
+        for _ in range(60):
+            r, D = rng.uniform(0.5, 0.8), rng.uniform(0.3, 1.0)
+            sw, lv = [rng.uniform(25, 35)], [40.0]
+            for n in range(4):
+                dirn = 1.0 if n % 2 == 0 else -1.0  # peak first: swing 0 is a rebound
+                sw.append(sw[-1] * (r - D / sw[-1] + shift * dirn + rng.normal(0, 0.03)))
+            for n, w in enumerate(sw):
+                lv.append(lv[-1] - w if n % 2 == 0 else lv[-1] + w)
+            out.append(made_sequence(lv))
+        return out
+
+    sc = bp.decay_scatter(records(0.08))
+    assert sc.sd == pytest.approx(0.03, rel=0.15)
+    assert sc.shift == pytest.approx(0.08, abs=3 * sc.shift_sd) and sc.shift_sd > 0
+    seq = records(0.08)[0]
+    val, sd = bp.measured_decay(seq, sc)
+    assert val == pytest.approx(seq.first_decay() - sc.shift)  # a rebound-first decay, shifted back
+    assert sd == pytest.approx(math.sqrt(sc.sd ** 2 + sc.shift_sd ** 2 + bp.read_sd(seq) ** 2))
+    none = bp.decay_scatter(records(0.0))
+    assert none.shift == 0.0 and none.shift_sd == 0.0 and abs(none.shift_tried) < 3 * none.shift_tried_sd
+    short = made_sequence([40.0, 10.0, 30.0, 15.0])  # 2 decays: not pooled
+    assert bp.decay_scatter([short]) is None
+    assert bp.measured_decay(short, None) == (short.first_decay(), bp.read_sd(short))
 
 
 def test_half_scatter_recovers_a_made_scatter_and_shift():
@@ -421,23 +589,28 @@ def test_shared_17_clicks_comes_to_rest_after_two_free_half_cycles(shared):
 @pytest.mark.parametrize("i,what", [(1, "decay"), (2, "decay"), (0, "frequency"), (1, "frequency"),
                                     (2, "frequency")])
 def test_shared_held_out_within_2_sd(shared, i, what):
-    """Measured: decay held out at 0 / 8 / 17 clicks misses by 10.19 / 1.27 / 1.25 sd; frequency by
-    1.95 / 0.51 / 1.05 sd (fitted on the other two; combined sd of prediction and measurement; each
-    record's frequency with the half periods' scatter pooled over the three records: 5.7 % per half,
-    rebound halves 4.4 +- 2.5 % longer, 3 dof). With the vertex timing's sd alone (the error model
-    before, which held the generator's truth 3 times in 18) the 17-click miss was 7.03 sd."""
+    """Measured: decay held out at 0 / 8 / 17 clicks misses by 5.26 / 1.19 / 1.22 sd (10.19 / 1.27 / 1.25
+    with the measured decay's read error alone); frequency by 1.95 / 0.51 / 1.05 sd (fitted on the other
+    two; combined sd of prediction and measurement; each record's frequency with the half periods'
+    scatter pooled over the three records: 5.7 % per half, rebound halves 4.4 +- 2.5 % longer, 3 dof;
+    each record's first decay with the decays' scatter about their record's law, 0.027, pooled over 0 and
+    8 clicks, 2 dof). With the vertex timing's sd alone (the error model before, which held the
+    generator's truth 3 times in 18) the 17-click miss was 7.03 sd."""
     recs, xs, seqs = shared
     ho = bp.held_out(seqs, [0, 8, 17], recs, xs, i)
     assert ho[f"{what}_misses_by_sd"] <= 2.0
 
 
 @pytest.mark.shared_data("sst_v2", *SLAMS)
-@pytest.mark.xfail(strict=True, reason="0 clicks held out (an extrapolation from 8 and 17): first decay 0.41 "
-                                         "+- 0.016 predicted, 0.58 measured (10.2 sd): fitted on 8 and 17 the law's "
-                                         "zeta falls with the clicks (0.255 - 0.0024 / click, the 17-click slam "
-                                         "decays per half cycle no faster than the 8-click one: 0.454 and 0.431); "
-                                         "a law with the clicks on the rebound halves only has 6 parameters for "
-                                         "the 6 relations of 8 and 17 clicks: no degree of freedom")
+@pytest.mark.xfail(strict=True, reason="0 clicks held out (an extrapolation from 8 and 17): first decay 0.411 "
+                                         "+- 0.016 predicted, 0.578 +- 0.027 measured (the decays' own scatter about "
+                                         "their record's law, pooled over 0 and 8 clicks, 2 dof; 95 % interval "
+                                         "0.461-0.695 with t = 4.30): 5.26 sd combined, outside the t interval too "
+                                         "(10.2 sd with the read error alone): fitted on 8 and 17 the law's zeta "
+                                         "falls with the clicks (0.255 - 0.0024 / click, the 17-click slam decays "
+                                         "per half cycle no faster than the 8-click one: 0.454 and 0.431); a law "
+                                         "with the clicks on the rebound halves only has 6 parameters for the 6 "
+                                         "relations of 8 and 17 clicks (4 for the 4 decays): no degree of freedom")
 @pytest.mark.parametrize("i,what", [(0, "decay")])
 def test_shared_held_out_misses(shared, i, what):
     recs, xs, seqs = shared

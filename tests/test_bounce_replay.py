@@ -464,22 +464,28 @@ def test_rebound_no_coefficient_gives_is_refused(two_rebounds):
     assert rises(got) is None
 
 
-@pytest.mark.slow
-@pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
-def test_shared_rebound_dampers_rise_with_clicks(shared_replays):
-    """The shared slams' rebound coefficients read from their first rebounds (``bounce_rebound``, the
-    spring, friction and compression of the best-determined whole-trace replay): all three read (the
-    17-click slam too, which the whole-trace replay refuses) and rising with the clicks, as the
-    records' own rebounds slow; at the spring interval's upper end they rise too. Their intervals open
-    below, the law's slope above 0, each record held out (within its 2 sd: the next test, not reproducible
-    across machines), and the answer for 7 /s holding the clicks where the records' own rates reach it."""
+@pytest.fixture(scope="module")
+def shared_rebound(shared_replays):
+    """The shared slams' first rebounds read once (``bounce_rebound.read_records``) for the two tests below."""
     from conftest import SHARED_DATA
 
     from mtbmj.identify.bounce_rebound import read_records
     from mtbmj.measured.telemetry import read_sst
 
     records = [read_sst(os.path.join(SHARED_DATA, "sst_v2", f)) for f in ("00083.SST", "00085.SST", "00087.SST")]
-    got = read_records(records, [0, 8, 17], shared_replays["summary"], "sst")
+    return read_records(records, [0, 8, 17], shared_replays["summary"], "sst")
+
+
+@pytest.mark.slow
+@pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
+def test_shared_rebound_dampers_rise_with_clicks(shared_rebound):
+    """The shared slams' rebound coefficients read from their first rebounds (``bounce_rebound``, the
+    spring, friction and compression of the best-determined whole-trace replay): all three read (the
+    17-click slam too, which the whole-trace replay refuses) and rising with the clicks, as the
+    records' own rebounds slow; at the spring interval's upper end they rise too. Their intervals open
+    below, the law's slope above 0, each record held out (within its 2 sd: the next test, not reproducible
+    across machines), and the answer for 7 /s holding the clicks where the records' own rates reach it."""
+    got = shared_rebound
     assert [e["clicks"] for e in got["records"]] == [0, 8, 17]
     assert all("rebound_N_s_per_m" in e for e in got["records"]) and got["rises"] is True
     upper = [e["at_spring_ci95"][1] for e in got["records"]]
@@ -513,12 +519,6 @@ def test_shared_rebound_dampers_rise_with_clicks(shared_replays):
                                         "the replays' spring, friction and compression move with floating-point "
                                         "differences by more than the records' noise (0.13 % of the rate), which is "
                                         "all the held-out sd carries")
-def test_shared_rebound_dampers_each_held_out_within_2_sd(shared_replays):
-    from conftest import SHARED_DATA
-
-    from mtbmj.identify.bounce_rebound import read_records
-    from mtbmj.measured.telemetry import read_sst
-
-    records = [read_sst(os.path.join(SHARED_DATA, "sst_v2", f)) for f in ("00083.SST", "00085.SST", "00087.SST")]
-    got = read_records(records, [0, 8, 17], shared_replays["summary"], "sst")
+def test_shared_rebound_dampers_each_held_out_within_2_sd(shared_rebound):
+    got = shared_rebound
     assert all(r["holds"] for r in got["held_out"])
