@@ -248,11 +248,9 @@ DIRECTED = [(0, 0.08), (8, 0.20), (17, 0.33)]  # clicks and the rebound's rigid-
 COVERAGE_DRAWS = 6
 
 
-def true_frequency(t, x):
-    """The exact record's frequency, written here: the noise-free travel's turning points after the slam's
-    peak (its velocity's sign changes), the free half cycles (both ends more than 1 mm into the stroke,
-    a swing of at least 1 mm: none into or out of the bumper, up to where it sticks), and
-    1 / (2 H) with log H the mean of the rebound halves' and the compression halves' mean log period."""
+def turning_points(x) -> list:
+    """The noise-free travel's turning points after the slam's peak (its velocity's sign changes), the
+    peak first: sample indices, written here."""
     p = int(np.argmax(x))
     sgn = np.sign(np.diff(x[p:]))
     nz = np.flatnonzero(sgn != 0)
@@ -261,6 +259,15 @@ def true_frequency(t, x):
         if sgn[j] != last:
             tp.append(p + int(j))
             last = sgn[j]
+    return tp
+
+
+def true_frequency(t, x):
+    """The exact record's frequency, written here: the noise-free travel's turning points after the slam's
+    peak (its velocity's sign changes), the free half cycles (both ends more than 1 mm into the stroke,
+    a swing of at least 1 mm: none into or out of the bumper, up to where it sticks), and
+    1 / (2 H) with log H the mean of the rebound halves' and the compression halves' mean log period."""
+    tp = turning_points(x)
     halves = []
     for a, b in zip(tp[:-1], tp[1:]):
         if min(x[a], x[b]) < 1.0 or abs(x[b] - x[a]) < 1.0:
@@ -346,14 +353,7 @@ def free_swings(t, x):
     (the velocity's sign changes), the swings between them with both ends 1 mm or more into the stroke
     (none into or out of the bumper) and at least 0.2 mm, from the first such swing to the first that
     is not (the stick)."""
-    p = int(np.argmax(x))
-    sgn = np.sign(np.diff(x[p:]))
-    nz = np.flatnonzero(sgn != 0)
-    tp, last = [p], sgn[nz[0]]
-    for j in nz:
-        if sgn[j] != last:
-            tp.append(p + int(j))
-            last = sgn[j]
+    tp = turning_points(x)
     out = []
     for a, b in zip(tp[:-1], tp[1:]):
         if min(x[a], x[b]) < 1.0 or abs(x[b] - x[a]) < 0.2:
@@ -687,7 +687,7 @@ def test_fit_bounce_answers_in_clicks_on_the_cli_and_in_the_figure(five, tmp_pat
     import json
     import struct
 
-    from helpers import FORK, SHOCK, counts_of
+    from helpers import SHOCK, counts_of
     from mtbmj import cli
     from mtbmj.identify.bounce_fit import figure, fit_bounce
 
