@@ -262,19 +262,27 @@ def turning_points(x) -> list:
     return tp
 
 
+def free_halves(x, min_swing_mm: float) -> list:
+    """The free half cycles between the turning points: (start, end) sample pairs with both ends 1 mm or
+    more into the stroke (none into or out of the bumper) and a swing of at least ``min_swing_mm``, from
+    the first such half cycle to the first that is not (the stick)."""
+    tp = turning_points(x)
+    out = []
+    for a, b in zip(tp[:-1], tp[1:]):
+        if min(x[a], x[b]) < 1.0 or abs(x[b] - x[a]) < min_swing_mm:
+            if out:
+                break
+            continue
+        out.append((a, b))
+    return out
+
+
 def true_frequency(t, x):
     """The exact record's frequency, written here: the noise-free travel's turning points after the slam's
     peak (its velocity's sign changes), the free half cycles (both ends more than 1 mm into the stroke,
     a swing of at least 1 mm: none into or out of the bumper, up to where it sticks), and
     1 / (2 H) with log H the mean of the rebound halves' and the compression halves' mean log period."""
-    tp = turning_points(x)
-    halves = []
-    for a, b in zip(tp[:-1], tp[1:]):
-        if min(x[a], x[b]) < 1.0 or abs(x[b] - x[a]) < 1.0:
-            if halves:
-                break
-            continue
-        halves.append((x[b] < x[a], t[b] - t[a]))
+    halves = [(x[b] < x[a], t[b] - t[a]) for a, b in free_halves(x, 1.0)]
     reb = [math.log(h) for r, h in halves if r]
     com = [math.log(h) for r, h in halves if not r]
     return 0.5 * math.exp(-(np.mean(reb) + np.mean(com)) / 2)
@@ -353,15 +361,7 @@ def free_swings(t, x):
     (the velocity's sign changes), the swings between them with both ends 1 mm or more into the stroke
     (none into or out of the bumper) and at least 0.2 mm, from the first such swing to the first that
     is not (the stick)."""
-    tp = turning_points(x)
-    out = []
-    for a, b in zip(tp[:-1], tp[1:]):
-        if min(x[a], x[b]) < 1.0 or abs(x[b] - x[a]) < 0.2:
-            if out:
-                break
-            continue
-        out.append(abs(x[b] - x[a]))
-    return out
+    return [abs(x[b] - x[a]) for a, b in free_halves(x, 0.2)]
 
 
 def setting_laws(z, kw):

@@ -297,10 +297,9 @@ def decay_scatter(seqs) -> DecayScatter | None:
         b1, c1, s21, dof1 = fit(True)
         shift, ssd = float(b1[-1]), float(math.sqrt(max(c1[-1, -1], 0.0)))
         out.shift_tried, out.shift_tried_sd = shift, ssd
-        from scipy.stats import t as student
-
-        if abs(shift) > float(student.ppf(0.975, dof1)) * ssd:  # the directions told apart: keep the shift
-            out = DecayScatter(float(math.sqrt(s21)), int(dof1), shift, ssd, m, shift, ssd)
+        kept = DecayScatter(float(math.sqrt(s21)), int(dof1), shift, ssd, m, shift, ssd)
+        if abs(shift) > kept.t95 * ssd:  # the directions told apart (at the shifted fit's dof): keep the shift
+            out = kept
     return out
 
 

@@ -107,12 +107,12 @@ def band_checks(t, rear, predicted, fork_delayed, valid) -> list:
     if int(np.count_nonzero(valid)) < 3 or t.size < 30:
         return out
     fill = lambda x: np.where(np.isfinite(x), x, float(np.nanmean(rear)))  # noqa: E731
+    rms = lambda x: float(np.sqrt(np.mean(x * x)))  # noqa: E731
     for (lo, hi), what in BANDS:
         if hi >= 0.5 * fs or t.size * lo / fs < 2.0:  # the record too short or too coarse for this band
             continue
         sos = butter(2, (lo, hi), btype="bandpass", fs=fs, output="sos")
         r, p, f = (sosfiltfilt(sos, fill(np.asarray(x, float)))[valid] for x in (rear, predicted, fork_delayed))
-        rms = lambda x: float(np.sqrt(np.mean(x * x)))  # noqa: E731
         scale = float(f @ r / (f @ f)) if f @ f > 0 else 0.0
         err, base_fork, base_mean = rms(p - r), rms(scale * f - r), rms(r)
         corr = float(np.corrcoef(p, r)[0, 1]) if np.std(p) > 0 and np.std(r) > 0 else 0.0
@@ -156,13 +156,19 @@ class Reconstruction:
     part_s: tuple | None = None  # (start, end) s of the record reconstructed where it stood unweighted mid-ride, or None
     stands: list = None  # (start s, end s) of the record: the bike standing unweighted mid-ride (its rider off it)
 
+    @property
+    def fork_delayed_or_front(self) -> np.ndarray:
+        """The delayed-fork baseline's input: the fork's record delayed by wheelbase / speed(t), or as
+        recorded where no delay was given."""
+        return self.fork_delayed if self.fork_delayed is not None else self.front
+
     def baselines(self) -> dict:
         """The two naive predictions of the rear the model must beat, on the samples checked: (a) the
         fork's record delayed by wheelbase / speed(t) with a least-squares scale and offset (fitted
         on those very samples), (b) the rear's mean. {"delayed_fork_mm": series, "delayed_fork_scale",
         "delayed_fork_offset_mm", "mean_mm"}."""
         v = self.valid
-        fd = self.fork_delayed if self.fork_delayed is not None else self.front
+        fd = self.fork_delayed_or_front
         A = np.column_stack((fd[v], np.ones(int(v.sum()))))
         (a, b), *_ = np.linalg.lstsq(A, self.rear[v], rcond=None)
         return {"delayed_fork_mm": a * fd + b, "delayed_fork_scale": float(a), "delayed_fork_offset_mm": float(b),
@@ -209,8 +215,7 @@ class Reconstruction:
                 "rear_histogram_distance_percent": histogram_distance(self.rear[v], self.rear_predicted[v],
                                                                         self.rear_top),
                 "samples_checked_percent": 100.0 * float(np.mean(v)),
-                "bands": band_checks(self.t, self.rear, self.rear_predicted,
-                                     self.fork_delayed if self.fork_delayed is not None else self.front, v)}
+                "bands": band_checks(self.t, self.rear, self.rear_predicted, self.fork_delayed_or_front, v)}
 
     def summary(self) -> dict:
         def listed(stage):
