@@ -887,11 +887,12 @@ def whole_bike_terrain(length, seed=21, features=WHOLE_FEATURES):
 
 
 def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=40.0, profile=SpeedProfile(),
-                    features=WHOLE_FEATURES, fork_reb=700.0, slow_load_N=80.0, slow_period_s=7.0):
+                    features=WHOLE_FEATURES, fork_reb=700.0, slow_load_N=80.0, slow_period_s=7.0, rider_forward_m=0.0):
     """This file's bike (``bike_text``: the fork at ``fork_rate`` N/mm and ``fork_reb`` N s/m of
     rebound, the shock's rebound ``shock_reb_scale`` times SHOCK_REB) ridden for ``seconds`` by the
     independent whole bike above at ``profile``'s speed over ``whole_bike_terrain(seed, features)``,
-    the rider's slow load ``slow_load_N`` (onto the bars, period ``slow_period_s``). Written as
+    the rider's slow load ``slow_load_N`` (onto the bars, period ``slow_period_s``), the rider's centre
+    of mass ``rider_forward_m`` ahead of where the bike file puts it the whole ride. Written as
     ``path``/bike.toml (the recorded setting) and ``path``/ride.SST (SST v3 integer counts through its
     [sensors]); returns the truth: bike, sst, t, fork_mm and rear_mm (wheel travel), h (the terrain),
     features, wb (the wheelbase along the ride, m), profile, airborne_front (share of the ride the front tyre is
@@ -912,7 +913,7 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
     M = sum(p[0] for p in parts)
     cx, cz = (sum(p[0] * p[1][i] for p in parts) / M for i in (0, 1))
     I = sum(p[2] + p[0] * ((p[1][0] - cx) ** 2 + (p[1][1] - cz) ** 2) for p in parts)
-    mr_, Ir, rx = r.mass, r.pitch_inertia, r.com[0]
+    mr_, Ir, rx = r.mass, r.pitch_inertia, r.com[0] + rider_forward_m
     mF = spec.fork_lower_mass + spec.front_wheel_mass
     mR = spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
     xF, xR = spec.front_axle[0], spec.rear_axle[0]

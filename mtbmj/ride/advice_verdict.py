@@ -22,7 +22,8 @@ def judge(advice, candidates=None) -> tuple[dict | None, dict]:
     for *_, run in candidates:  # each scored on the ride (Advice.score; the same scores again where they were)
         advice.score(run)
     a = flat_metrics(base.metrics)
-    good, worse, near = [], 0, None
+    good, worse, near, split = [], 0, None, None
+    other_base = advice.other_reading(base) if hasattr(advice, "other_reading") else None
     for adj, direction, value, run in candidates:
         if run.crash:
             worse += 1
@@ -34,7 +35,11 @@ def judge(advice, candidates=None) -> tuple[dict | None, dict]:
         worsened = [k for k in base.penalty if run.penalty[k] > base.penalty[k] + 1e-9]
         score = gain - grip_comfort(base.metrics, run.metrics)
         if gain >= MIN_GAIN and beyond(improved, a, b, u):
-            good.append((score, adj, direction, value, run, improved, u))
+            other = _other_gain(advice, other_base, run, a, b, u)
+            if other is None or other[1]:
+                good.append((score, adj, direction, value, run, improved, u))
+            elif split is None or score > split[0][0]:  # not a change on the calibration's other reading
+                split = ((score, adj, direction, value, run, improved, u), other[0])
         elif gain <= -MIN_GAIN and beyond(worsened, a, b, u):
             worse += 1
         elif gain >= MIN_GAIN and (near is None or score > near[0]):
@@ -74,6 +79,23 @@ def judge(advice, candidates=None) -> tuple[dict | None, dict]:
                                                f"uncertainty (or crashes)"}
     if not n:
         return None, {"answer": "inconclusive", "why": "no candidate was simulated"}
+    if split is not None:
+        (_, adj, direction, value, run, improved, u), other_total = split
+        st, cal = adj.setting(value), advice.calibration
+        return None, {"answer": "inconclusive",
+                      "why": f"the best candidate, the {adj.label} {st['from']:g} -> {st['to']:g} {st['unit']}, lowers "
+                             f"the penalty {base.total:.2f} -> {run.total:.2f} with the springs as calibrated ("
+                             + ", ".join(f"{sc.adjuster.label} x{sc.value:.2f}" for sc in cal.scales.values())
+                             + f"), but not on the calibration's other reading of the same ride, both springs "
+                             f"x{cal.split.common:.2f} with {abs(cal.split.shift_N):.0f} N carried "
+                             f"{'forward' if cal.split.shift_N >= 0 else 'rearward'} ({sum(other_base.values()):.2f} -> "
+                             f"{other_total:.2f}, its static sags "
+                             + ", ".join(f"{e} {b_:.0f} %" for e, (_, b_) in cal.split.static_sag.items())
+                             + "): the travel cannot tell a spring off from a load carried fore-aft (a descent, "
+                             "braking, the rider's stance); measure the static sag standing on level ground",
+                      "best_candidate": {"setting": st, "key": adj.name, "section": adj.section,
+                                         "config_key": adj.key, "label": adj.label, "direction": direction,
+                                         "from": adj.value, "to": value, "changes": changes(base, run, u, measured)}}
     if near is not None:
         _, adj, direction, value, run, improved, u = near
         b = flat_metrics(run.metrics)
@@ -92,6 +114,19 @@ def judge(advice, candidates=None) -> tuple[dict | None, dict]:
                   "why": f"no candidate of {n} lowers the penalty by {MIN_GAIN:g} or more beyond its uncertainty, "
                          f"and {n - worse} of them are not predicted worse beyond it either: the ride cannot tell "
                          f"these settings apart"}
+
+
+def _other_gain(advice, other_base, run, a, b, u):
+    """(the penalty's total, whether it is a change) of ``run`` on the calibration's other reading of the
+    ride (``Advice.other_reading``: the static sags as one spring scale and a load carried fore-aft give
+    them): a change there too lowers the penalty by ``MIN_GAIN`` or more, a metric of a rule it improves
+    moving beyond its uncertainty. None where there is no other reading."""
+    if other_base is None:
+        return None
+    other = advice.other_reading(run)
+    improved = [k for k in other_base if other[k] < other_base[k] - 1e-9]
+    total = sum(other.values())
+    return total, sum(other_base.values()) - total >= MIN_GAIN and beyond(improved, a, b, u)
 
 
 # Where the ride cannot tell two changes apart, the spring (or air pressure, or volume spacers) first, then

@@ -192,6 +192,20 @@ class Advice:
         run.penalty = penalties(on_the_ride(self.measured, self.base.metrics, run.metrics), self.measured)
         return run
 
+    def other_reading(self, run: Run) -> dict | None:
+        """``run``'s penalties scored on the ride as :meth:`score` does, but with each end's static sag
+        as the calibration's other reading of the ride gives it (``Calibration.split``: both springs at
+        one scale and a load carried fore-aft; its static sags less the per-end reading's added to the
+        model's); None where the calibration has no other reading (or there is no calibration)."""
+        cal = self.calibration
+        if cal is None or getattr(cal, "split", None) is None:
+            return None
+        mt = on_the_ride(self.measured, self.base.metrics, run.metrics)
+        for end, off in cal.static_sag_offsets().items():
+            if mt[end].get("static_sag_percent") is not None:
+                mt[end] = {**mt[end], "static_sag_percent": mt[end]["static_sag_percent"] + off}
+        return penalties(mt, self.measured)
+
     def tried(self) -> list:
         """Each tried setting: its label, bike file, settings as asked, penalty (and its change), crash,
         and every metric's predicted change (as a recommendation's ``changes``)."""

@@ -36,6 +36,27 @@ The scales are then those of the springs that carry the file's rider as the ridd
 the real one, which is what a change of spring is judged against; the rider's mass itself is not
 identified (``--rider-kg`` sets it). The damping is not calibrated here.
 
+**Nor how the ride's load is split fore and aft** (:class:`Split`, ``Calibration.split``). Each end's
+balance takes the end's load as the bike at rest on level ground carries it. A ride that carries load
+forward (a descent at a steady speed: the weight's component along the slope acts at the centre of
+mass, ``h`` above the ground, and moves ``m g h sin(slope) / wheelbase`` onto the front; braking;
+the rider further forward than the file's place) sinks the fork and lifts the rear as a softer fork
+and a stiffer shock would: with a linear spring the two are the same motion (the sag, and with it the
+frequency, is the load over the rate). So the same two balances are also read the other way: both
+springs at one scale, from their sum (the whole weight, which no fore-aft split moves), and what is
+left of the front's balance a load carried forward (``shift_N``, as the rider's place or a mean
+descent). Measured on rides made in the tests: the file's bike ridden with the rider 150 mm forward
+reads per end as the fork x0.81 and the shock x1.22, and the other reading gives both x1.00 with the
+load the rider moved (86 N against the 86 N of their weight times 0.15 m over the wheelbase); a fork
+30 % softer than its file reads per end right (x0.68), the other reading both x0.84 with 96 N forward.
+The shared rides of one setting read per end x0.61/1.23, x0.60/1.16 and x0.79/1.09 (fork/shock), the
+other way x0.89, x0.86 and x0.95 with 131, 123 and 59 N forward (descents of 8.9, 8.4 and 4.0 deg):
+their common scale agrees better ride to ride than their fork's (10 % against 26 %), but nothing in the
+travel decides. The advice therefore judges a change that rests on the static sag (which depends on
+the reading; the ride's own metrics do not) on both readings (``mtbmj.ride.advise.Advice.other_reading``,
+``mtbmj.ride.advice_verdict``): a change that holds on one only is "inconclusive", and says that the
+static sag measured standing on level ground is what tells them apart.
+
 **When no calibration describes the ride** (:class:`~mtbmj.ride.advice_rules.RideNotDescribed`): no
 scale within ``SCALE_RANGE`` of the file's balances an end's mean force (the end sits on its stop,
 or the ride's mean travel is beyond what any spring of that kind gives the file's rider). Whether the
@@ -54,6 +75,8 @@ from mtbmj.ride.advice_rules import (BOOTSTRAP, MAX_SEGMENTS, MIN_SEGMENTS, SEGM
 
 SCALE_RANGE = (0.3, 3.0)  # a spring scale beyond these of the file's is no calibration: the ride is not described
 SPRING_LABELS = ("spring rate", "air pressure")  # the adjuster that scales an end's spring
+NOT_IDENTIFIED = ("the rider's mass (a heavier rider reads as softer springs), how the ride's load is split fore and aft "
+                  "(a fork softer than the file reads as a load carried forward: see \"or\") and the damping")
 RIDER_PLACE_MM = 30.0  # assumed (95 %): the rider's mean place fore and aft, rider to rider (moves load between ends)
 
 
@@ -85,6 +108,36 @@ class Scale:
                 f"{d['calibrated_high']:g}; the file's {d['file']:g}, x{self.value:.2f})")
 
 
+@dataclass(frozen=True)
+class Split:
+    """The same ride read the other way (see the module doc, "What it cannot separate"): both springs
+    at one scale ``common`` (from the sum of the ends' balances, the whole weight), and the front's
+    mean force over its static load at that scale a load the ride moved forward, ``shift_N`` (N at the
+    front wheel, off the rear). ``place_mm``: the rider's mean place forward that moves it; ``slope_deg``:
+    the mean descent that moves it at a steady speed (the weight's component along the slope at the
+    centre of mass, ``com_height_m`` above the ground). ``static_sag``: per end, the static sag (% of
+    travel, closed-form statics) as the per-end scales give it and as the common scale does."""
+
+    common: float
+    shift_N: float
+    place_mm: float
+    slope_deg: float
+    com_height_m: float
+    static_sag: dict
+
+    def to_dict(self) -> dict:
+        return {"common_scale": self.common, "load_forward_N": self.shift_N, "rider_place_forward_mm": self.place_mm,
+                "descent_deg": self.slope_deg, "com_height_m": self.com_height_m,
+                "static_sag_percent": {e: {"springs_apart": a, "springs_together": b}
+                                       for e, (a, b) in self.static_sag.items()}}
+
+    def line(self) -> str:
+        where = "forward" if self.shift_N >= 0 else "rearward"
+        return (f"or both springs x{self.common:.2f} with {abs(self.shift_N):.0f} N carried {where} of rest (the rider "
+                f"{abs(self.place_mm):.0f} mm {where}, or a {abs(self.slope_deg):.1f} deg "
+                f"{'descent' if self.slope_deg >= 0 else 'climb'}): the travel alone cannot tell these apart")
+
+
 @dataclass
 class Calibration:
     """The ridden bike's springs (:class:`Scale` per end with a spring adjuster) and the overrides
@@ -93,14 +146,24 @@ class Calibration:
     scales: dict
     overrides: dict = field(default_factory=dict)
     method: str = "mean suspension force = static load, per end (closed form; see mtbmj.ride.calibrate)"
+    split: Split | None = None  # the same balances read as one spring scale and a load moved fore-aft
 
     def to_dict(self) -> dict:
         return {"method": self.method, "springs": {e: s.to_dict() for e, s in self.scales.items()},
                 "overrides": self.overrides,
-                "not_identified": "the rider's mass (a heavier rider reads as softer springs) and the damping"}
+                "not_identified": NOT_IDENTIFIED,
+                "or": None if self.split is None else self.split.to_dict()}
 
     def line(self) -> str:
-        return "calibrated on the ride: " + "; ".join(s.line() for s in self.scales.values())
+        out = "calibrated on the ride: " + "; ".join(s.line() for s in self.scales.values())
+        return out if self.split is None else f"{out}; {self.split.line()}"
+
+    def static_sag_offsets(self) -> dict:
+        """Per end, the static sag (points of travel) the other reading (:class:`Split`) gives over this
+        calibration's: 0 where there is no split."""
+        if self.split is None:
+            return {"front": 0.0, "rear": 0.0}
+        return {e: b - a for e, (a, b) in self.split.static_sag.items()}
 
     def apply(self, bike, overrides=None) -> dict:
         """``overrides`` with each calibrated end's spring (as ``bike`` with them sets it) times its
@@ -199,6 +262,68 @@ def _forces(whole, end: str, x_m, v_m_per_s, geometry=None):
     return spring, total - spring
 
 
+class _MeanForce:
+    """``end``'s mean suspension force over the ride (N, at the wheel: spring, stops and damper) at a
+    scale ``s`` on its spring adjuster ``adj``; ``geometry`` the rear's leverage along the ride, the same
+    at every scale (computed once)."""
+
+    def __init__(self, bike, overrides, adj, whole, end, x, v):
+        self.bike, self.overrides, self.adj, self.end, self.x, self.v = bike, overrides, adj, end, x, v
+        self.geometry = _geometry(whole, end, x)
+
+    def __call__(self, s: float) -> float:
+        _, w = _laws(self.bike, merged(self.overrides, self.adj.overrides(self.adj.value * s)))
+        return float(np.mean(_total(w, self.end, self.x, self.v, self.geometry)))
+
+
+_mean_force = _MeanForce
+
+
+def static_sags(bike, overrides=None) -> dict:
+    """Each end's static sag, % of its travel (the fork's stroke, the rear wheel's), of ``bike`` with
+    ``overrides``: the closed-form statics of ``reconstruct_bike.whole_bike`` (the file's rider in its
+    place on level ground), not a simulation."""
+    _, w = _laws(bike, overrides)
+    return {"front": 100.0 * w.wF0 / w.sin_a / w.fork_travel, "rear": 100.0 * w.wR0 / w.lev.full_travel}
+
+
+def _com_height(spec, whole) -> float:
+    """The whole bike's centre of mass above level ground (m): frame body, rider, the wheels at their axles."""
+    from mtbmj.bike.model import frame_body
+
+    M, (_, cz), _ = frame_body(spec)
+    axle = 0.5 * (spec.front_axle[1] + spec.rear_axle[1])
+    parts = ((M, cz), (whole.mr, spec.rider.com[1]), (whole.mF, spec.front_axle[1]), (whole.mR, spec.rear_axle[1]))
+    return sum(m * z for m, z in parts) / sum(m for m, _ in parts) - axle + whole.radius
+
+
+def _split(spec, whole, bike, overrides, scales, mean_forces) -> Split:
+    """The other reading of the same two balances (:class:`Split`): both springs at one scale, from
+    their sum, and what is left of the front's balance a load moved forward."""
+    from scipy.optimize import brentq
+
+    total = whole.fF0 + whole.fR0
+    lo, hi = SCALE_RANGE
+
+    def excess(q):
+        return mean_forces["front"](q) + mean_forces["rear"](q) - total
+
+    if not excess(lo) < 0.0 < excess(hi):  # each end balanced within the range, their sum is too
+        return None
+    common = float(brentq(excess, lo, hi, xtol=1e-4))
+    shift = mean_forces["front"](common) - whole.fF0
+    wheelbase = whole.xF - whole.xR
+    everything = whole.M + whole.mr + whole.mF + whole.mR
+    h = _com_height(spec, whole)
+    slope = math.degrees(math.asin(max(-1.0, min(1.0, shift * wheelbase / (everything * whole.g * h)))))
+    sep = {e: merged(overrides, sc.adjuster.overrides(sc.adjuster.value * sc.value)) for e, sc in scales.items()}
+    apart = static_sags(bike, merged(sep["front"], sep["rear"]))
+    together = static_sags(bike, merged(merged(overrides, scales["front"].adjuster.overrides(
+        scales["front"].adjuster.value * common)), scales["rear"].adjuster.overrides(scales["rear"].adjuster.value * common)))
+    return Split(common, float(shift), 1e3 * shift * wheelbase / (whole.mr * whole.g), slope, h,
+                 {e: (apart[e], together[e]) for e in ("front", "rear")})
+
+
 def merged(base: dict, extra: dict) -> dict:
     """``base`` overrides with ``extra``'s over them (a section's keys merged)."""
     out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in (base or {}).items()}
@@ -230,7 +355,7 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
     segs = _segments(t)
     rng = np.random.default_rng(0)
     pick = rng.integers(0, len(segs), size=(BOOTSTRAP, len(segs)))
-    scales, over = {}, {}
+    scales, over, mean_forces = {}, {}, {}
     for end in ("front", "rear"):
         adj = spring_adjuster(spec, end)
         if adj is None:
@@ -238,12 +363,8 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
         x = np.clip(series[end], 0.0, None) * 1e-3
         v = m.velocity(t, series[end]) * 1e-3
         load = float(loads[end])
-
-        geometry = _geometry(whole, end, x)  # the leverage does not change with the spring
-
-        def mean_force(s):  # the whole force's mean: its spring and damper parts not needed apart here
-            _, w = _laws(bike, merged(overrides, adj.overrides(adj.value * s)))
-            return float(np.mean(_total(w, end, x, v, geometry)))
+        mean_force = _mean_force(bike, overrides, adj, whole, end, x, v)
+        mean_forces[end] = mean_force
 
         lo, hi = SCALE_RANGE
         f_lo, f_hi = mean_force(lo) - load, mean_force(hi) - load
@@ -255,7 +376,7 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
                 f"spring {what} than that): the model does not describe this ride, so it cannot predict a change")
         s = float(brentq(lambda q: mean_force(q) - load, lo, hi, xtol=1e-4))
         _, w = _laws(bike, merged(overrides, adj.overrides(adj.value * s)))
-        spring, damper = _forces(w, end, x, v, geometry)
+        spring, damper = _forces(w, end, x, v, mean_force.geometry)
         sp = np.array([spring[k].mean() for k in segs])
         dm = np.array([damper[k].mean() for k in segs])
         n = np.array([k.sum() for k in segs], float)
@@ -270,7 +391,8 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
         low, high = s - math.hypot(s - low, place), s + math.hypot(high - s, place)
         scales[end] = Scale(end, s, float(min(low, s)), float(max(high, s)), adj, load, len(segs))
         over = merged(over, adj.overrides(adj.value * s))
-    return Calibration(scales, over)
+    split = _split(spec, whole, bike, overrides, scales, mean_forces) if len(scales) == 2 else None
+    return Calibration(scales, over, split=split)
 
 
 def calibrate(record, bike, overrides=None, duration: float | None = None) -> Calibration:
@@ -285,4 +407,5 @@ def calibrate(record, bike, overrides=None, duration: float | None = None) -> Ca
                          overrides, rec.name)
 
 
-__all__ = ["Calibration", "Scale", "SCALE_RANGE", "calibrate", "merged", "spring_adjuster", "spring_scales"]
+__all__ = ["Calibration", "Scale", "SCALE_RANGE", "Split", "calibrate", "merged", "spring_adjuster", "spring_scales",
+           "static_sags"]
