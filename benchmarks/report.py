@@ -537,6 +537,10 @@ def advise_rides_rows(d: dict) -> dict[str, list[Row]]:
             cal = "; ".join(f"{s['key'].split(':')[0].split('.')[0]} {num(s['calibrated'], 3)} {s['unit']} "
                             f"({spread(s['calibrated_low'], s['calibrated_high'], 3)}; x{num(s['scale'], 3)} of the file's "
                             f"{num(s['file'], 3)})" for s in r["calibration"]["springs"].values())
+            other = r["calibration"].get("or")
+            if other:
+                cal += (f"; or both x{num(other['common_scale'], 3)} with {num(other['load_forward_N'], 3)} N carried "
+                        f"forward ({num(other['descent_deg'], 2)} deg of descent)")
         else:
             cal = "calibration " + _advise_refusal(r.get("calibration_refused", r.get("unread", "")))
         if "advice" in r:
@@ -553,6 +557,13 @@ def advise_rides_rows(d: dict) -> dict[str, list[Row]]:
         common = "none" if a["common"] is None else f"x{num(a['common'][0], 3)}–x{num(a['common'][1], 3)}"
         rows.append(Row(f"the {len(a['rides'])} rides' {end} spring scales: the range every interval holds", target,
                         f"{common}; pairs overlapping: {pairs}", name, d["command"]))
+    commons = {r["ride"]: r["calibration"]["or"]["common_scale"] for r in d["rides"]
+               if (r.get("calibration") or {}).get("or")}
+    if len(commons) > 1:
+        lo, hi = min(commons.values()), max(commons.values())
+        rows.append(Row(f"the {len(commons)} rides' springs read the other way (one scale for both, the rest a load "
+                        f"carried forward)", target, f"x{num(lo, 3)}–x{num(hi, 3)} ({num(100 * (hi / lo - 1), 2)} % apart)",
+                        name, d["command"]))
     return {"advise": rows}
 
 
@@ -726,7 +737,11 @@ that makes its mean force over the ride the static load it carries; its 95 % int
 advice or its refusal. The calibrated values are given in the bike file's units with their interval
 and the scale on the file's value; a ride whose advice is refused still has its calibration (it needs
 no simulation). The last rows say, per end, which values every ride's interval holds (none: the
-rides' calibrations do not agree) and which pairs of rides overlap. Nothing is set to pass."""),
+rides' calibrations do not agree) and which pairs of rides overlap. Each calibration also reads the
+same ride the other way ("or"): both springs at one scale from the sum of the ends' balances, and the
+rest of the front's a load carried forward (a descent, braking, the rider's stance), which the travel
+alone cannot tell from a fork softer and a shock stiffer than the file (`mtbmj/ride/calibrate.py`); the
+last row gives the range of that one scale over the rides. Nothing is set to pass."""),
     ("suite", "The test suite", """\
 The README's two test commands, one after the other, from the repository root: the suite and the
 long physics checks that CI also runs (`tests/` marks them `slow`). A wall time on two cores shared

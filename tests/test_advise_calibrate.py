@@ -16,17 +16,20 @@ from mtbmj.cli import main
 from mtbmj.cli.telemetry import ride_record
 from mtbmj.ride import calibrate
 
-from helpers import advise_ride, bike_text, outside_well_set_ranges, reconstruction_passing
+from helpers import RATIO, advise_ride, bike_text, outside_well_set_ranges, reconstruction_passing
 
 FILE_RATE = 12.0  # N/mm, the fork's spring as the bike file says
 
 
-def _ride(folder, ridden_rate):
-    """A ride of the whole bike with the fork at ``ridden_rate`` N/mm, and a bike file saying 12."""
-    _, sst, *_ = advise_ride(folder, fork_rate=ridden_rate)
+def _ride(folder, ridden_rate, **settings):
+    """A ride of the whole bike with the fork at ``ridden_rate`` N/mm, and a bike file saying 12: (the SST
+    file, the bike file, the static sag a rider measures on this bike standing in the file's place on level
+    ground: the fork's stroke and the shock's, mm: the made bike at rest, in place, at that rate)."""
+    _, sst, *_ = advise_ride(folder, fork_rate=ridden_rate, **settings)
     file = folder / "said.toml"
     file.write_text(bike_text(FILE_RATE))
-    return sst, file
+    _, _, fork_mm, rear_mm, _ = advise_ride(folder / "at_rest", seconds=0.01, fork_rate=ridden_rate)
+    return sst, file, (float(fork_mm[0]), float(rear_mm[0]) / RATIO)
 
 
 @pytest.fixture(scope="module")
@@ -39,9 +42,11 @@ def right(tmp_path_factory):
     return _ride(tmp_path_factory.mktemp("cal") / "right", FILE_RATE)
 
 
-def _calibrated(sst, file):
+def _calibrated(sst, file, sag=None, measured=False):
+    """The calibration of the ride ``sst`` on the bike file ``file``: on the ride's balances, or on the
+    static sag ``sag`` (fork, shock mm) where ``measured``."""
     record = ride_record(sst, Namespace(bike=str(file), fork_max_mm=None, shock_max_mm=None))
-    return calibrate.calibrate(record, str(file))
+    return calibrate.calibrate(record, str(file), static_sag_mm=sag if measured else None)
 
 
 def test_a_fork_30_percent_softer_than_its_file_is_found(softer):
@@ -72,11 +77,7 @@ RIDER_FORWARD_M = 0.15  # the forward ride's rider, ahead of where the bike file
 def forward(tmp_path_factory):
     """The bike as its file says (12 N/mm), ridden with the rider's centre of mass 150 mm ahead of the
     file's place the whole ride (as on a descent, or a rider who rides over the bars)."""
-    folder = tmp_path_factory.mktemp("cal") / "forward"
-    _, sst, *_ = advise_ride(folder, rider_forward_m=RIDER_FORWARD_M)
-    file = folder / "said.toml"
-    file.write_text(bike_text(FILE_RATE))
-    return sst, file
+    return _ride(tmp_path_factory.mktemp("cal") / "forward", FILE_RATE, rider_forward_m=RIDER_FORWARD_M)
 
 
 def _moved_forward_N(file) -> float:
@@ -113,12 +114,51 @@ def test_a_rider_carried_forward_reads_as_a_soft_fork_and_the_other_reading_find
     assert d["common_scale"] == fwd.split.common and d["load_forward_N"] > 0 and "cannot tell" in fwd.line()
 
 
+def test_the_static_sag_measured_tells_a_soft_fork_from_a_rider_forward(forward, softer, right):
+    """The two rides the travel alone reads alike (above), each with the static sag its rider would
+    measure on level ground (``--static-sag-mm``: the made bike at rest in the file's place): the forward
+    ride's springs are found as the file says (x1 within 5 %, intervals holding the right bike's own sag
+    reading) and the load its rider carried forward (their weight x 0.15 m / wheelbase over what the right
+    ride carries, within 15 %); the soft fork's ride is found soft (x0.7 held, the shock x1) with no such
+    load (under a fifth of it). The sags are the test bike's, solved by its own statics."""
+    fwd = _calibrated(*forward, measured=True)
+    soft = _calibrated(*softer, measured=True)
+    base = _calibrated(*right, measured=True)
+    moved = _moved_forward_N(forward[1])
+    for end in ("front", "rear"):
+        assert fwd.scales[end].value == pytest.approx(base.scales[end].value, rel=0.005), end  # the same bike, sag
+        assert fwd.scales[end].value == pytest.approx(1.0, abs=0.05), (end, fwd.scales[end])
+    assert fwd.carried["load_forward_N"] - base.carried["load_forward_N"] == pytest.approx(moved, rel=0.15), fwd.carried
+    assert soft.scales["front"].low <= 0.7 <= soft.scales["front"].high and soft.scales["front"].high < 0.8
+    assert soft.scales["rear"].low <= 1.0 <= soft.scales["rear"].high
+    assert abs(soft.carried["load_forward_N"] - base.carried["load_forward_N"]) < 0.2 * moved, soft.carried
+    assert fwd.split is None and "calibrated on the static sag" in fwd.line() and "carried" in fwd.line()
+    assert fwd.to_dict()["carried"]["rider_place_forward_mm"] > 100.0
+
+
+@pytest.mark.parametrize("given, why", [
+    (["--static-sag-mm", "40"], "is not two sags in mm"),
+    (["--static-sag-mm", "40,-3"], "is not two sags in mm"),
+    (["--static-sag-mm", "forty,15"], "is not two sags in mm"),
+    (["--static-sag-mm", "40,15", "--no-calibrate"], "cannot go with --no-calibrate"),
+    (["--static-sag-mm", "400,15"], "the fork's 400 mm is not a static sag any fork spring rate"),
+], ids=["one", "negative", "words", "uncalibrated", "past-any-spring"])
+def test_a_static_sag_that_cannot_be_is_refused_in_one_line(right, tmp_path, capsys, given, why):
+    """A careless --static-sag-mm: one line naming the option and the cause, exit status 2, nothing written."""
+    sst, file, _ = right
+    out = tmp_path / "advice"
+    assert main(["advise", str(sst), "--bike", str(file), *given, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--static-sag-mm" in err[0] and why in err[0], err
+    assert not out.exists()
+
+
 def test_a_ride_no_spring_can_carry_is_not_described(right, tmp_path):
     """The same ride against a file whose fork is 5x stiffer (60 N/mm): no scale within x0.3-x3 of it
     balances the front's mean force; refused naming the fork and the range."""
     from mtbmj.ride.advice_rules import RideNotDescribed
 
-    sst, _ = right
+    sst, *_ = right
     stiff = tmp_path / "stiff.toml"
     stiff.write_text(bike_text(60.0))
     with pytest.raises(RideNotDescribed, match=r"no fork spring rate within x0.3-x3 of the bike file's"):
@@ -130,7 +170,7 @@ def test_advice_on_a_softer_fork_than_the_file_says_rides_the_calibrated_bike(so
     """Uncalibrated (``--no-calibrate``), this ride's recorded setting loops out on the terrain found
     through the file's stiffer fork (it is refused); calibrated (the default), it is ridden, the report carries the calibration, and a
     change of the fork's spring is read in the file's units (from 12)."""
-    sst, file = softer
+    sst, file, _ = softer
     out = tmp_path / "advice"
     with reconstruction_passing():
         assert main(["advise", str(sst), "--bike", str(file), "--no-calibrate", "--out", str(out)]) == 2
@@ -208,7 +248,7 @@ def test_a_well_set_bike_ridden_forward_is_not_given_a_stiffer_fork(forward, tmp
     measured, the advice before it judged the other reading too); on the other reading (both springs as
     the file says, the load carried forward) it raises it. The advice is not that change: inconclusive,
     naming the other reading, with the fork's spring the candidate it could not confirm."""
-    sst, file = forward
+    sst, file, _ = forward
     out = tmp_path / "advice"
     with reconstruction_passing():
         assert main(["advise", str(sst), "--bike", str(file), "--out", str(out)]) == 0
@@ -223,6 +263,33 @@ def test_a_well_set_bike_ridden_forward_is_not_given_a_stiffer_fork(forward, tmp
         best = verdict["best_candidate"]
         assert best["config_key"] == "fork.spring.rate_N_per_mm" and best["direction"] == "up", best
     assert 'id="other-reading"' in (out / "advice.html").read_text()
+
+
+@pytest.mark.slow  # one advice on a 30 s made ride, every candidate searched: 1-3 min on two busy cores
+def test_advice_on_the_forward_ride_with_its_static_sag_rides_it_as_carried(forward, tmp_path):
+    """The forward ride advised with the static sag its rider measures (``--static-sag-mm``, the made bike
+    at rest in the file's place): the springs as the file says, the rider moved to where the ride carried
+    the load (so the whole bike rides the reconstruction: without the move it looped out at 21 s), the
+    model's fork sitting where the ride's sat (its mean travel within 3 points of the record's), the static
+    sag the rules judge the one measured (within 2 points of the test bike's own at rest), and no stiffer
+    fork advised (the per-end reading raised it 12 -> 14.52 N/mm)."""
+    sst, file, sag = forward
+    out = tmp_path / "advice"
+    with reconstruction_passing():
+        assert main(["advise", str(sst), "--bike", str(file), "--static-sag-mm", f"{sag[0]:.3f},{sag[1]:.3f}",
+                     "--out", str(out)]) == 0
+    advice = json.loads((out / "advice.json").read_text())
+    cal = advice["calibration"]
+    for end, sc in cal["springs"].items():
+        assert sc["scale"] == pytest.approx(1.0, abs=0.05), (end, sc)
+    assert cal["carried"]["rider_place_forward_mm"] == pytest.approx(1e3 * RIDER_FORWARD_M, abs=25.0), cal["carried"]
+    rec, sim = advice["recorded_setting"]["measured"], advice["recorded_setting"]["simulated"]
+    assert abs(sim["front"]["dynamic_sag_percent"] - rec["front"]["dynamic_sag_percent"]) < 3.0, (sim["front"], rec["front"])
+    assert sim["front"]["static_sag_percent"] == pytest.approx(100 * sag[0] / rec["front"]["travel_mm"], abs=2.0)
+    verdict = advice["verdict"]
+    if verdict["answer"] == "change":
+        assert outside_well_set_ranges(advice["recommendation"]) == [], advice["recommendation"]
+    assert 'id="carried"' in (out / "advice.html").read_text()
 
 
 def _reference_scale(t, travel_mm, bike, end):
@@ -281,7 +348,7 @@ def test_the_mended_calibration_gives_the_same_scales(softer, compiled, monkeypa
 
     from mtbmj.ride.reconstruct import RATE_HZ
 
-    sst, file = softer
+    sst, file, _ = softer
     record = ride_record(sst, Namespace(bike=str(file), fork_max_mm=None, shock_max_mm=None)).decimated(RATE_HZ)
     t = np.asarray(record.time_s, float)
     k = t - t[0] <= 6.0

@@ -17,6 +17,7 @@ def cmd_advise(args) -> int:
     from mtbmj.ride import advice_report, advise
 
     over = bike_overrides(args)
+    sag = static_sag(args.static_sag_mm, args.calibrate)
     if args.rider_kg is not None:
         over["rider.mass_kg"] = args.rider_kg
     sets = [parse_assignment(text) for text in args.try_set or ()]
@@ -29,13 +30,13 @@ def cmd_advise(args) -> int:
     if len(records) == 1:
         result = Progress("advise").around(
             lambda progress: advise.advise(records[0], bike, over or None, args.duration, progress, args.workers,
-                                           tries=tries, calibrated=args.calibrate))
+                                           tries=tries, calibrated=args.calibrate, static_sag_mm=sag))
     else:
         from mtbmj.ride import advice_pool
 
         result = Progress("advise").around(
             lambda progress: advice_pool.pooled(records, bike, over or None, args.duration, progress, args.workers,
-                                                tries=tries, calibrated=args.calibrate))
+                                                tries=tries, calibrated=args.calibrate, static_sag_mm=sag))
     written = result.write(args.out)
     for r in getattr(result, "refused", ()):
         print(f"left out of the pool: {r['why']}")
@@ -60,6 +61,28 @@ def cmd_advise(args) -> int:
     print(f"{result.line()}; {len(result.candidates)} candidates simulated in {result.wall_s:.0f} s; "
           f"wrote {', '.join(p.name for p in written)} to {args.out}")
     return 0
+
+
+def static_sag(text, calibrate: bool):
+    """``--static-sag-mm FORK,SHOCK`` read: (fork mm, shock mm), or None where not given; a bad value or
+    the option beside ``--no-calibrate`` is a ``ConfigError`` naming it."""
+    import math
+
+    from mtbmj.errors import ConfigError
+
+    if text is None:
+        return None
+    if not calibrate:
+        raise ConfigError("--static-sag-mm calibrates the springs on the sag measured: it cannot go with --no-calibrate")
+    parts = text.split(",")
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError:
+        values = ()
+    if len(values) != 2 or not all(math.isfinite(v) and v > 0.0 for v in values):
+        raise ConfigError(f"--static-sag-mm: {text!r} is not two sags in mm, the fork's stroke and the shock's, "
+                          f"both > 0 (e.g. --static-sag-mm 40,15)")
+    return values
 
 
 def add_parser(sub) -> None:
@@ -88,6 +111,11 @@ def add_parser(sub) -> None:
                    help="calibrate each end's spring on the ride first (its mean force the end's static load) and "
                         "advise relative to that bike (the default); --no-calibrate: the bike file's springs as "
                         "they are")
+    p.add_argument("--static-sag-mm", metavar="FORK,SHOCK",
+                   help="the static sag measured standing on level ground in the riding position, mm: the fork's "
+                        "stroke and the shock's (the O-rings); the springs are calibrated on it, and the ride then "
+                        "says what load it carried fore-aft (the travel alone cannot tell a soft fork from a "
+                        "descent)")
     p.add_argument("--workers", type=int, default=2, metavar="N",
                    help="processes the candidate runs spread over (default 2)")
     add_sensor_spans(p)

@@ -176,7 +176,7 @@ def judging(advice: PooledAdvice, candidates=None) -> tuple:
 
 
 def pooled(records, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
-           tries=(), calibrated: bool = True, search: bool = True) -> PooledAdvice:
+           tries=(), calibrated: bool = True, search: bool = True, static_sag_mm=None) -> PooledAdvice:
     """One advice from ``records``, several rides of ``bike`` at one setting (``overrides``), as
     :func:`mtbmj.ride.advise.advise` gives for one (the module doc says how they are pooled). A ride
     refused is left out and named; none left: :class:`AdviseError` naming each ride's reason."""
@@ -192,7 +192,7 @@ def pooled(records, bike, overrides=None, duration: float | None = None, progres
     ready, refused = [], []
     for record in records:
         try:
-            ready.append(prepare(record, bike, overrides, duration, calibrated, True, tries))
+            ready.append(prepare(record, bike, overrides, duration, calibrated, True, tries, static_sag_mm))
         except (AdviseError, ReconstructError) as exc:
             refused.append({"ride": record.name, "why": str(exc)})
     jobs = [ride.jobs() for ride in ready]

@@ -170,6 +170,14 @@ def html(advice, png: bytes) -> str:
                             f"{abs(other['descent_deg']):.1f} deg mean {'descent' if other['descent_deg'] >= 0 else 'climb'}). "
                             f"The travel cannot tell the two apart; static sag (closed-form statics): {esc.escape(sags)}. "
                             f"A change that rests on static sag is advised only where it holds on both.</p>")
+        carried = cal.get("carried") or {}
+        if "load_forward_N" in carried:
+            where = "forward" if carried["load_forward_N"] >= 0 else "rearward"
+            calibration += (f"<p id=\"carried\">The springs from the static sag measured; the ride carried "
+                            f"{abs(carried['load_forward_N']):.0f} N {where} of rest (the rider "
+                            f"{abs(carried['rider_place_forward_mm']):.0f} mm {where}, or a {abs(carried['descent_deg']):.1f} "
+                            f"deg mean {'descent' if carried['descent_deg'] >= 0 else 'climb'}) and "
+                            f"{carried['weight_beyond_file_kg']:+.1f} kg of weight beyond the file's rider.</p>")
     else:
         calibration = "<p>Not calibrated: the bike file's springs as they are (advise without --no-calibrate reads them from the ride).</p>"
     then = advice.then()

@@ -119,6 +119,7 @@ class Run:
     crash: str | None = None
     time_s: np.ndarray = field(repr=False, default=None)  # ride time of the series (0 where the ride starts)
     parts: list = field(repr=False, default=None)  # a pooled run: each ride's own (mtbmj.ride.advice_pool)
+    levelled: bool = field(repr=False, default=False)  # its static sags moved to the file's place (Advice.levelled)
 
     @property
     def total(self) -> float:
@@ -189,7 +190,21 @@ class Advice:
     def score(self, run: Run) -> Run:
         """``run`` (any setting's) with its penalties scored on the ride (the module doc): the rules on
         :func:`on_the_ride` of it, the packing rule's terrain the ride as recorded. Returns ``run``."""
+        self.levelled(run)
         run.penalty = penalties(on_the_ride(self.measured, self.base.metrics, run.metrics), self.measured)
+        return run
+
+    def levelled(self, run: Run) -> Run:
+        """``run`` with its static sags as standing in the file's place on level ground, once: where the
+        calibration moved the rider to where the ride carried the load (``Calibration.level_offsets``,
+        the sag path of ``--static-sag-mm``), the points that move takes off. Returns ``run``."""
+        cal = self.calibration
+        if cal is None or not hasattr(cal, "level_offsets") or getattr(run, "levelled", False):
+            return run
+        for end, off in cal.level_offsets().items():
+            if off and run.metrics[end].get("static_sag_percent") is not None:
+                run.metrics[end] = {**run.metrics[end], "static_sag_percent": run.metrics[end]["static_sag_percent"] + off}
+        run.levelled = True
         return run
 
     def other_reading(self, run: Run) -> dict | None:
@@ -209,6 +224,8 @@ class Advice:
     def tried(self) -> list:
         """Each tried setting: its label, bike file, settings as asked, penalty (and its change), crash,
         and every metric's predicted change (as a recommendation's ``changes``)."""
+        for _, run in self.tries:
+            self.levelled(run)
         return [{"label": tr.label, "bike": tr.bike, "settings": dict(tr.settings), "penalty": run.total,
                  "penalty_change": run.total - self.base.total, "crash": run.crash,
                  "changes": changes(self.base, run, self.change_uncertainty(run), self.measured)}
@@ -385,7 +402,8 @@ def _json(o):
 
 
 def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
-           tries=(), candidates: bool = True, calibrated: bool = True, search: bool = True) -> Advice:
+           tries=(), candidates: bool = True, calibrated: bool = True, search: bool = True,
+           static_sag_mm=None) -> Advice:
     """Advice for ``record`` (a two-ended ``TelemetryRecord``) on ``bike`` (preset, file or
     ``mtbmj.bike.spec.ResolvedBike``: read once, here or before), its keys ``overrides``;
     ``duration`` limits the simulated ride to its first seconds; the runs spread
@@ -396,7 +414,9 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     first (:mod:`mtbmj.ride.calibrate`), every run (the recorded setting, each candidate, each try) on
     the calibrated bike, the candidates read in the file's units relative to it; False: the bike file
     as it is. ``search``: every candidate that lowers the penalty searched further along its
-    adjuster before the verdict (:mod:`mtbmj.ride.advice_search`). Several rides of one setting:
+    adjuster before the verdict (:mod:`mtbmj.ride.advice_search`). ``static_sag_mm`` (fork, shock stroke
+    mm, standing on level ground; ``--static-sag-mm``): the springs calibrated on it instead of the ride's
+    balances (:func:`mtbmj.ride.calibrate.sag_scales`). Several rides of one setting:
     :func:`mtbmj.ride.advice_pool.pooled`."""
     import time
 
@@ -406,7 +426,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     duration = checked_duration(duration)
     bike = spec_mod.resolve(bike)  # the bike file read once: every run below derives its setting from it
     bike = bike.with_overrides(None) if bike.overrides else bike
-    ride = prepare(record, bike, overrides, duration, calibrated, candidates, tries)
+    ride = prepare(record, bike, overrides, duration, calibrated, candidates, tries, static_sag_mm)
     jobs = ride.jobs()
     from contextlib import ExitStack
 
@@ -496,7 +516,7 @@ class Prepared:
 
 
 def prepare(record, bike, overrides=None, duration: float | None = None, calibrated: bool = True,
-            candidates: bool = True, tries=()) -> Prepared:
+            candidates: bool = True, tries=(), static_sag_mm=None) -> Prepared:
     """``record`` made ready for advice on ``bike`` (a ``ResolvedBike`` without overrides): its length
     checked, calibrated where asked, reconstructed and checked, its terrain, the adjusters and the
     candidates the parts allow (:func:`allowed`). Refused (:class:`AdviseError`) as :func:`advise` says."""
@@ -518,7 +538,7 @@ def prepare(record, bike, overrides=None, duration: float | None = None, calibra
     if calibrated:  # the ridden bike's springs from the ride itself, before anything is found through them
         from mtbmj.ride import calibrate as cal_mod
 
-        cal = cal_mod.calibrate(ridden, bike, overrides, duration)
+        cal = cal_mod.calibrate(ridden, bike, overrides, duration, static_sag_mm)
         overrides = cal.apply(bike, overrides)
     rec = rc.reconstruct(record, bike, overrides)
     checks = rec.checks()

@@ -57,6 +57,19 @@ the reading; the ride's own metrics do not) on both readings (``mtbmj.ride.advis
 ``mtbmj.ride.advice_verdict``): a change that holds on one only is "inconclusive", and says that the
 static sag measured standing on level ground is what tells them apart.
 
+**The static sag measured decides it** (``static_sag_mm``, ``--static-sag-mm FORK,SHOCK``:
+:func:`sag_scales`). Each end's spring is the scale whose closed-form static stroke under the file's
+rider in the file's place is the one measured (its interval the scales at the sag +- ``SAG_READ_MM``).
+The ride's balances then give what the ride carried (:func:`_carried`, ``Calibration.carried``): half
+the difference of the ends' excess mean forces a load carried forward (as the rider's place and a mean
+descent), their sum a weight the file's rider does not have. The calibrated bike rides with its rider
+moved to that place (``Calibration.apply``: the reconstruction and every run carry the load as the
+ride did; on the made forward ride the bike looped out at 21 s without the move), and a run's static
+sag is taken back to the file's place before the rules read it (``Calibration.level_offsets``,
+``mtbmj.ride.advise.Advice.levelled``): the rules judge the sag the rider measured. Measured on the
+made rides: the forward ride's springs x0.97/x1.02 with 85 N carried forward (the rider 149 mm, made
+150); the soft fork's x0.68 (made 0.7) with none.
+
 **When no calibration describes the ride** (:class:`~mtbmj.ride.advice_rules.RideNotDescribed`): no
 scale within ``SCALE_RANGE`` of the file's balances an end's mean force (the end sits on its stop,
 or the ride's mean travel is beyond what any spring of that kind gives the file's rider). Whether the
@@ -77,6 +90,8 @@ SCALE_RANGE = (0.3, 3.0)  # a spring scale beyond these of the file's is no cali
 SPRING_LABELS = ("spring rate", "air pressure")  # the adjuster that scales an end's spring
 NOT_IDENTIFIED = ("the rider's mass (a heavier rider reads as softer springs), how the ride's load is split fore and aft "
                   "(a fork softer than the file reads as a load carried forward: see \"or\") and the damping")
+SAG_READ_MM = 2.0  # assumed: a static sag read at an O-ring, the rider's stance as they ride, to +-2 mm (95 %)
+SAG_METHOD = "the static sag measured (--static-sag-mm), per end (closed-form statics; see mtbmj.ride.calibrate)"
 RIDER_PLACE_MM = 30.0  # assumed (95 %): the rider's mean place fore and aft, rider to rider (moves load between ends)
 
 
@@ -146,17 +161,35 @@ class Calibration:
     scales: dict
     overrides: dict = field(default_factory=dict)
     method: str = "mean suspension force = static load, per end (closed form; see mtbmj.ride.calibrate)"
-    split: Split | None = None  # the same balances read as one spring scale and a load moved fore-aft
+    split: Split | None = None  # the same balances read as one spring scale and a load carried fore-aft
+    carried: dict | None = None  # with the springs from a measured static sag: the load the ride carried (_carried)
+    level: dict | None = None  # per end, static sag points from the rider as carried to the rider in place (sag path)
 
     def to_dict(self) -> dict:
         return {"method": self.method, "springs": {e: s.to_dict() for e, s in self.scales.items()},
                 "overrides": self.overrides,
                 "not_identified": NOT_IDENTIFIED,
-                "or": None if self.split is None else self.split.to_dict()}
+                "or": None if self.split is None else self.split.to_dict(), "carried": self.carried}
 
     def line(self) -> str:
+        if self.carried is not None:
+            c = self.carried
+            out = "calibrated on the static sag: " + "; ".join(s.line() for s in self.scales.values())
+            if "load_forward_N" not in c:
+                return out
+            where = "forward" if c["load_forward_N"] >= 0 else "rearward"
+            return (f"{out}; the ride carried {abs(c['load_forward_N']):.0f} N {where} of rest (the rider "
+                    f"{abs(c['rider_place_forward_mm']):.0f} mm {where}, or a {abs(c['descent_deg']):.1f} deg mean "
+                    f"{'descent' if c['descent_deg'] >= 0 else 'climb'}) and {c['weight_beyond_file_kg']:+.1f} kg of "
+                    f"weight beyond the file's rider")
         out = "calibrated on the ride: " + "; ".join(s.line() for s in self.scales.values())
         return out if self.split is None else f"{out}; {self.split.line()}"
+
+    def level_offsets(self) -> dict:
+        """Per end, the static sag (points of travel) to add to a run's, whose rider rides where the ride
+        carried the load (``carried``: the rider moved in ``overrides``), for the sag standing in the
+        file's place on level ground, which the rules judge (and the rider measured): 0 without a move."""
+        return dict(self.level) if self.level else {"front": 0.0, "rear": 0.0}
 
     def static_sag_offsets(self) -> dict:
         """Per end, the static sag (points of travel) the other reading (:class:`Split`) gives over this
@@ -167,7 +200,8 @@ class Calibration:
 
     def apply(self, bike, overrides=None) -> dict:
         """``overrides`` with each calibrated end's spring (as ``bike`` with them sets it) times its
-        scale: the ridden bike at that setting (a spring tried is the one labelled so, ridden)."""
+        scale: the ridden bike at that setting (a spring tried is the one labelled so, ridden); on the sag
+        path (``--static-sag-mm``) the rider moved forward by the place the ride carried its load at."""
         from mtbmj.bike import spec as spec_mod
 
         with warnings.catch_warnings():
@@ -178,6 +212,10 @@ class Calibration:
             a = spring_adjuster(spec, end)
             if a is not None:
                 out = merged(out, a.overrides(a.value * sc.value))
+        place = (self.carried or {}).get("rider_place_forward_mm")
+        if place is not None and self.level:  # the sag path: the rider where the ride carried the load
+            x, z = (1e3 * c for c in spec.rider.com)
+            out = merged(out, {"rider.com_mm": [x + place, z]})
         return out
 
     def adjusters(self, spec) -> list:
@@ -324,6 +362,65 @@ def _split(spec, whole, bike, overrides, scales, mean_forces) -> Split:
                  {e: (apart[e], together[e]) for e in ("front", "rear")})
 
 
+def static_strokes(bike, overrides=None) -> dict:
+    """Each end's static stroke, mm (the fork's, the shock's) of ``bike`` with ``overrides``: the
+    closed-form statics of ``reconstruct_bike.whole_bike`` (the file's rider in its place, level ground)."""
+    _, w = _laws(bike, overrides)
+    return {"front": 1e3 * w.wF0 / w.sin_a, "rear": 1e3 * float(w.lev.strokes(np.array([w.wR0]))[0])}
+
+
+def sag_scales(bike, overrides, static_sag_mm, segments: int = 0) -> dict:
+    """Each end's spring scale (:class:`Scale`) whose static stroke (:func:`static_strokes`, the file's
+    rider) is the one measured, ``static_sag_mm`` = (fork, shock) mm; its interval the scales at the
+    sag +- ``SAG_READ_MM``. Raises ``ConfigError`` naming ``--static-sag-mm`` where no scale within
+    ``SCALE_RANGE`` sags so far (or the sag is beyond the stroke)."""
+    from scipy.optimize import brentq
+
+    from mtbmj.errors import ConfigError
+
+    spec, whole = _laws(bike, overrides)
+    loads = {"front": whole.fF0, "rear": whole.fR0}
+    out = {}
+    for end, target in zip(("front", "rear"), static_sag_mm):
+        adj = spring_adjuster(spec, end)
+        if adj is None:
+            continue
+
+        def sag(q, adj=adj, end=end):
+            return static_strokes(bike, merged(overrides, adj.overrides(adj.value * q)))[end]
+
+        lo, hi = SCALE_RANGE
+        values = []
+        for mm in (target, target + SAG_READ_MM, max(target - SAG_READ_MM, 0.0)):
+            if not sag(hi) < mm < sag(lo):
+                part = "fork's" if end == "front" else "shock's"
+                raise ConfigError(
+                    f"--static-sag-mm: the {part} {target:g} mm is not a static sag any {adj.label} within x{lo:g}-x{hi:g} "
+                    f"of the bike file's gives its rider ({sag(hi):.1f}-{sag(lo):.1f} mm): check the number, the end "
+                    f"(fork first, then shock) and --rider-kg")
+            values.append(float(brentq(lambda q: sag(q) - mm, lo, hi, xtol=1e-5)))
+        s, low, high = values[0], min(values), max(values)
+        out[end] = Scale(end, s, low, high, adj, float(loads[end]), segments)
+    return out
+
+
+def _carried(spec, whole, scales, mean_forces) -> dict:
+    """The load the ride carried over what rest carries (N, each end's mean force at its scale less its
+    static load), read as a load moved forward (half their difference) and a weight the file's rider
+    does not have (their sum, kg): the rider's place and the descent that would move it (as :class:`Split`)."""
+    extra = {e: mean_forces[e](scales[e].value) - (whole.fF0 if e == "front" else whole.fR0) for e in scales}
+    if len(extra) < 2:
+        return {f"{e}_N": v for e, v in extra.items()}
+    forward = 0.5 * (extra["front"] - extra["rear"])
+    wheelbase = whole.xF - whole.xR
+    everything = whole.M + whole.mr + whole.mF + whole.mR
+    sine = forward * wheelbase / (everything * whole.g * _com_height(spec, whole))
+    return {"front_N": extra["front"], "rear_N": extra["rear"], "load_forward_N": forward,
+            "rider_place_forward_mm": 1e3 * forward * wheelbase / (whole.mr * whole.g),
+            "descent_deg": math.degrees(math.asin(max(-1.0, min(1.0, sine)))),
+            "weight_beyond_file_kg": (extra["front"] + extra["rear"]) / whole.g}
+
+
 def merged(base: dict, extra: dict) -> dict:
     """``base`` overrides with ``extra``'s over them (a section's keys merged)."""
     out = {k: (dict(v) if isinstance(v, dict) else v) for k, v in (base or {}).items()}
@@ -339,11 +436,13 @@ def _segments(t) -> list:
     return [(t >= a) & (t <= b) for a, b in zip(edges[:-1], edges[1:])]
 
 
-def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride") -> Calibration:
+def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride", static_sag_mm=None) -> Calibration:
     """Each end's spring scale from the ride (see the module doc): ``t`` s, ``front_mm`` the fork's
     travel and ``rear_mm`` the rear wheel's (compression positive) on it; ``bike`` a preset, file or
     ``ResolvedBike``, ``overrides`` its recorded keys. Raises ``RideNotDescribed`` naming the end
-    where no scale within ``SCALE_RANGE`` balances it."""
+    where no scale within ``SCALE_RANGE`` balances it. ``static_sag_mm`` (the fork's stroke, the shock's
+    stroke, mm, measured standing on level ground): the springs from it instead (:func:`sag_scales`),
+    the ride's balances then the load it carried (``Calibration.carried``)."""
     from scipy.optimize import brentq
 
     from mtbmj.measured import metrics as m
@@ -391,21 +490,35 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
         low, high = s - math.hypot(s - low, place), s + math.hypot(high - s, place)
         scales[end] = Scale(end, s, float(min(low, s)), float(max(high, s)), adj, load, len(segs))
         over = merged(over, adj.overrides(adj.value * s))
+    if static_sag_mm is not None:  # the springs from the sag measured: the ride's balances give the load carried
+        scales = sag_scales(bike, overrides, static_sag_mm, len(segs))
+        over = {}
+        for sc in scales.values():
+            over = merged(over, sc.adjuster.overrides(sc.adjuster.value * sc.value))
+        carried = _carried(spec, whole, scales, mean_forces)
+        level = {"front": 0.0, "rear": 0.0}
+        if "rider_place_forward_mm" in carried:  # the rider carried where the ride put the load: the model rides it so
+            x, z = (1e3 * c for c in spec.rider.com)
+            moved = merged(over, {"rider.com_mm": [x + carried["rider_place_forward_mm"], z]})
+            at_rest, riding = static_sags(bike, merged(overrides, over)), static_sags(bike, merged(overrides, moved))
+            level = {e: at_rest[e] - riding[e] for e in level}
+            over = moved
+        return Calibration(scales, over, SAG_METHOD, carried=carried, level=level)
     split = _split(spec, whole, bike, overrides, scales, mean_forces) if len(scales) == 2 else None
     return Calibration(scales, over, split=split)
 
 
-def calibrate(record, bike, overrides=None, duration: float | None = None) -> Calibration:
+def calibrate(record, bike, overrides=None, duration: float | None = None, static_sag_mm=None) -> Calibration:
     """:func:`spring_scales` of a ``TelemetryRecord`` with both ends (its first ``duration`` s), read
-    as the reconstruction reads it (at ``mtbmj.ride.reconstruct.RATE_HZ``)."""
+    as the reconstruction reads it (at ``mtbmj.ride.reconstruct.RATE_HZ``); ``static_sag_mm`` as there."""
     from mtbmj.ride.reconstruct import RATE_HZ
 
     rec = record.decimated(RATE_HZ)
     t = np.asarray(rec.time_s, float)
     keep = (t - t[0] <= duration) if duration is not None else np.ones(t.size, bool)
     return spring_scales(t[keep], np.asarray(rec.fork_mm, float)[keep], np.asarray(rec.rear_mm, float)[keep], bike,
-                         overrides, rec.name)
+                         overrides, rec.name, static_sag_mm)
 
 
-__all__ = ["Calibration", "Scale", "SCALE_RANGE", "Split", "calibrate", "merged", "spring_adjuster", "spring_scales",
-           "static_sags"]
+__all__ = ["Calibration", "Scale", "SCALE_RANGE", "SAG_READ_MM", "Split", "calibrate", "merged", "sag_scales",
+           "spring_adjuster", "spring_scales", "static_sags", "static_strokes"]
