@@ -254,3 +254,41 @@ def test_the_run_counter_shows_on_a_terminal_only(monkeypatch, capsys):
         step()
     err = capsys.readouterr().err
     assert err.endswith("advise [#######                       ]  25.0% run 3/12") and err.count("\r") == 3, err
+
+
+def _ride_with(offsets, level, seconds, static):
+    """A ride's stand-in for the pooled advice's calibration bookkeeping: its calibration's other reading
+    (static sag offsets, None for none), its level offsets (the sag path), its length and a part run whose
+    static sags are ``static`` (front, rear)."""
+    from types import SimpleNamespace
+
+    cal = SimpleNamespace(split=None if offsets is None else object(), static_sag_offsets=lambda: dict(offsets or {}),
+                          level_offsets=lambda: dict(level))
+    ride = advise.Advice.__new__(advise.Advice)
+    ride.calibration, ride.base = cal, SimpleNamespace(metrics={"duration_s": seconds})
+    part = advise.Run("part", {}, {"front": {"static_sag_percent": static[0]}, "rear": {"static_sag_percent": static[1]},
+                                   "duration_s": seconds}, {})
+    return ride, part
+
+
+def test_pooled_rides_read_the_other_way_and_levelled_each_by_its_own_calibration():
+    """Two rides of 60 s and 120 s: the pooled other reading moves each end's static sag by the rides'
+    own offsets weighted by length (front +9 and -3 -> +1; rear -6 and 0 -> -2), none where one ride has no
+    other reading; on the sag path each part is levelled by its own ride's offsets (front -10 on a 30 %
+    part, 0 on a 20 % one) before they are pooled again (by length: (20 + 40) / 3 = 20), once only."""
+    a, pa = _ride_with({"front": 9.0, "rear": -6.0}, {"front": -10.0, "rear": 0.0}, 60.0, (30.0, 28.0))
+    b, pb = _ride_with({"front": -3.0, "rear": 0.0}, {"front": 0.0, "rear": 0.0}, 120.0, (20.0, 28.0))
+    pooled = advice_pool.PooledAdvice.__new__(advice_pool.PooledAdvice)
+    pooled.rides, pooled.calibration = [a, b], a.calibration
+    assert pooled.other_offsets() == pytest.approx({"front": 1.0, "rear": -2.0})
+    c, _ = _ride_with(None, {"front": 0.0, "rear": 0.0}, 60.0, (20.0, 28.0))
+    lone = advice_pool.PooledAdvice.__new__(advice_pool.PooledAdvice)
+    lone.rides, lone.calibration = [a, c], a.calibration
+    assert lone.other_offsets() is None
+    run = advise.Run("pooled", {}, {"front": {"static_sag_percent": 23.3}, "rear": {"static_sag_percent": 28.0}}, {},
+                     parts=[pa, pb])
+    pooled.levelled(run)
+    assert run.metrics["front"]["static_sag_percent"] == pytest.approx((60 * 20.0 + 120 * 20.0) / 180)
+    assert pa.metrics["front"]["static_sag_percent"] == pytest.approx(20.0) and run.levelled
+    pooled.levelled(run)  # once only
+    assert pa.metrics["front"]["static_sag_percent"] == pytest.approx(20.0)

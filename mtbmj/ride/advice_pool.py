@@ -111,6 +111,30 @@ class PooledAdvice(Advice):
     def pooled_run(self, runs: list) -> Run:
         return pool_runs(runs)
 
+    def levelled(self, run: Run) -> Run:
+        """``run``'s static sags levelled (``Advice.levelled``) ride by ride, each part by its own ride's
+        calibration (each ride's rider moved by its own carried load), then pooled again."""
+        if getattr(run, "levelled", False) or not run.parts or len(run.parts) != len(self.rides):
+            return super().levelled(run)
+        for ride, part in zip(self.rides, run.parts):
+            ride.levelled(part)
+        w = np.array([part.metrics["duration_s"] for part in run.parts], float)
+        for end in ("front", "rear"):  # pooled again as pool_metrics pools it: weighted by the rides' lengths
+            sags = [part.metrics[end].get("static_sag_percent") for part in run.parts]
+            if all(v is not None for v in sags):
+                run.metrics[end] = {**run.metrics[end], "static_sag_percent": float(np.dot(w, sags) / w.sum())}
+        run.levelled = True
+        return run
+
+    def other_offsets(self) -> dict | None:
+        """As ``Advice.other_offsets``, the rides' own, weighted by their lengths as the pooled metrics are
+        (None where a ride has no other reading)."""
+        cals = [ride.calibration for ride in self.rides]
+        if not cals or any(c is None or getattr(c, "split", None) is None for c in cals):
+            return None
+        w = np.array([ride.base.metrics["duration_s"] for ride in self.rides], float)
+        return {e: float(np.dot(w, [c.static_sag_offsets()[e] for c in cals]) / w.sum()) for e in ("front", "rear")}
+
     def each(self) -> list:
         """Each ride's own verdict: {"ride", "seconds", "answer", "change"} (the change in the rider's
         words, or None)."""

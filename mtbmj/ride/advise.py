@@ -207,16 +207,22 @@ class Advice:
         run.levelled = True
         return run
 
+    def other_offsets(self) -> dict | None:
+        """Per end, the static sag points the calibration's other reading adds (``Calibration.split``), or
+        None where it has none."""
+        cal = self.calibration
+        return None if cal is None or getattr(cal, "split", None) is None else cal.static_sag_offsets()
+
     def other_reading(self, run: Run) -> dict | None:
         """``run``'s penalties scored on the ride as :meth:`score` does, but with each end's static sag
         as the calibration's other reading of the ride gives it (``Calibration.split``: both springs at
         one scale and a load carried fore-aft; its static sags less the per-end reading's added to the
         model's); None where the calibration has no other reading (or there is no calibration)."""
-        cal = self.calibration
-        if cal is None or getattr(cal, "split", None) is None:
+        offsets = self.other_offsets()
+        if offsets is None:
             return None
         mt = on_the_ride(self.measured, self.base.metrics, run.metrics)
-        for end, off in cal.static_sag_offsets().items():
+        for end, off in offsets.items():
             if mt[end].get("static_sag_percent") is not None:
                 mt[end] = {**mt[end], "static_sag_percent": mt[end]["static_sag_percent"] + off}
         return penalties(mt, self.measured)
