@@ -357,3 +357,29 @@ def test_the_mended_calibration_gives_the_same_scales(softer, compiled, monkeypa
     for end, travel in (("front", front), ("rear", rear)):
         assert cal.scales[end].value == pytest.approx(_reference_scale(t[k], travel, str(file), end), rel=1e-9), end
     assert cal.scales["front"].value < 0.8  # the softer fork is found on these 6 s too: the check is not idle
+
+
+@pytest.mark.shared_data("sst_v2", "00088.SST", "00089.SST", "00090.SST", "00091.SST")
+def test_the_shared_pedalling_runs_standing_carry_load_forward_of_seated():
+    """The shared pedalling runs of one bike and setting (the recording's own labels): standing up (00088,
+    00089) the rider's weight is over the pedals and bars, seated (00090, 00091) on the saddle, behind.
+    The calibration's other reading (one spring scale, the rest a load carried fore-aft) must put every
+    standing run's load forward of every seated run's: measured 50 and 135 N forward standing, 60 and 45 N
+    rearward seated. Version-2 amplitudes are approximate (a placeholder decoding), the same for all four,
+    so the order is what is read, not the newtons; the per-end reading says the same thing in its own
+    terms (the fork read softer than the shock standing, stiffer seated), and a reading with the labels
+    swapped fails."""
+    import os
+
+    from conftest import SHARED_DATA
+    from mtbmj.measured.telemetry import read_ride
+
+    def read(n):
+        return calibrate.calibrate(read_ride(os.path.join(SHARED_DATA, "sst_v2", f"{n}.SST")), "sst")
+
+    standing, seated = [read(n) for n in ("00088", "00089")], [read(n) for n in ("00090", "00091")]
+    assert min(c.split.shift_N for c in standing) > max(c.split.shift_N for c in seated) + 50.0, \
+        ([c.split for c in standing], [c.split for c in seated])
+    assert all(c.split.shift_N < 0 for c in seated) and all(c.split.shift_N > 0 for c in standing)
+    ratio = [c.scales["front"].value / c.scales["rear"].value for c in standing + seated]
+    assert max(ratio[:2]) < 1.0 < min(ratio[2:]), ratio
