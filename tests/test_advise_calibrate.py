@@ -142,9 +142,12 @@ def test_the_static_sag_measured_tells_a_soft_fork_from_a_rider_forward(forward,
     (["--static-sag-mm", "forty,15"], "is not two sags in mm"),
     (["--static-sag-mm", "40,15", "--no-calibrate"], "cannot go with --no-calibrate"),
     (["--static-sag-mm", "400,15"], "the fork's 400 mm is not a static sag any fork spring rate"),
-], ids=["one", "negative", "words", "uncalibrated", "past-any-spring"])
+    (["--static-sag-mm", "15,13.9"], "would ride 458 mm from the pedals, past the bars"),
+], ids=["one", "negative", "words", "uncalibrated", "past-any-spring", "load-past-the-bars"])
 def test_a_static_sag_that_cannot_be_is_refused_in_one_line(right, tmp_path, capsys, given, why):
-    """A careless --static-sag-mm: one line naming the option and the cause, exit status 2, nothing written."""
+    """A careless --static-sag-mm: one line naming the option and the cause, exit status 2, nothing written
+    (a fork sag half the bike's own, 15 mm for 30.7: the stiff fork it gives leaves 221 N of the ride's front
+    load to be carried forward, the rider past the bars: the ride is not described with that sag)."""
     sst, file, _ = right
     out = tmp_path / "advice"
     assert main(["advise", str(sst), "--bike", str(file), *given, "--out", str(out)]) == 2

@@ -499,7 +499,16 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
         level = {"front": 0.0, "rear": 0.0}
         if "rider_place_forward_mm" in carried:  # the rider carried where the ride put the load: the model rides it so
             x, z = (1e3 * c for c in spec.rider.com)
-            moved = merged(over, {"rider.com_mm": [x + carried["rider_place_forward_mm"], z]})
+            place = x + carried["rider_place_forward_mm"]
+            pedals, bars = 1e3 * spec.rider.leg_x, 1e3 * spec.rider.arm_x
+            if not pedals < place < bars:
+                where = "past the bars" if place >= bars else "behind the pedals"
+                raise RideNotDescribed(
+                    f"{name}: with the springs --static-sag-mm gives, the ride carried {carried['load_forward_N']:.0f} N "
+                    f"forward of rest: the rider would ride {place:.0f} mm from the pedals, {where} (pedals {pedals:.0f}, "
+                    f"bars {bars:.0f} mm), so the model cannot carry the load as the ride did (a steep descent or climb, "
+                    f"long braking): it does not describe this ride with that sag")
+            moved = merged(over, {"rider.com_mm": [place, z]})
             at_rest, riding = static_sags(bike, merged(overrides, over)), static_sags(bike, merged(overrides, moved))
             level = {e: at_rest[e] - riding[e] for e in level}
             over = moved
