@@ -66,7 +66,7 @@ from mtbmj.ride.reconstruct_inverse import QuarterCar, forward, ground_under, lo
 from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
                                           check_length, merged, min_seconds, refine, speed_from_either,
-                                          speed_from_lag)
+                                          speed_from_lag, tracked)
 # The rate a ride is read at (the version-3 recorder's): a faster record is low-passed and decimated
 # to it (``TelemetryRecord.decimated``), so two derivatives do not amplify its count steps and a
 # 100 s ride at 5 kHz costs what it costs at 1 kHz
@@ -465,11 +465,13 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     # delays its travel behind its ground by its own phase; the grounds carry none)
     ground_back, *_ = ground_under(t, rear, shock, rear_car, ratios)
     travel = (fork_mm, rear_mm)  # a window where either end stands still gives no speed
+    pairs = ((ground, ground_back, GROUND_HIGHPASS_HZ), (fork_mm, rear_mm, LAG_HIGHPASS_HZ))
     try:  # per window: the grounds' lag where they align, else the travels' (high-passed at 5 Hz)
-        speed = speed_from_either(t, (ground, ground_back, GROUND_HIGHPASS_HZ), (fork_mm, rear_mm, LAG_HIGHPASS_HZ),
-                                  wheelbase, names=("the two ends' grounds", "the two ends' travel"), travel=travel)
+        speed = speed_from_either(t, *pairs, wheelbase, names=("the two ends' grounds", "the two ends' travel"),
+                                  travel=travel)
     except ReconstructError as exc:
         raise ReconstructError(f"{record.name}: {exc}") from None
+    speed = tracked(t, pairs, speed, wheelbase, travel=travel)  # the gaps near strict windows tracked
     speed["from"] = ", ".join(sorted({s for s in speed["sources"] if s})) or None
     from mtbmj.ride import reconstruct_bike
 
