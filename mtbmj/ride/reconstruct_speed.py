@@ -44,6 +44,7 @@ TRACK_PENALTY = 20.0  # the tracked path's cost per (change of ln speed)^2 from 
 TRACK_MIN_CORRELATION = 0.2  # a tracked window whose correlation at the path is below this gives no speed
 TRACK_SNAP = 0.02  # the path's speed taken to its window's nearest correlation peak within this change of ln speed
 TRACK_PARTS = 2  # ... and at least this many of its SUB_WINDOWS parts find their best speed in the range there
+TRACK_PARTS_SPAN = 0.05  # ... within this change of ln speed of the window's (a speed changing within it spreads them)
 TRACK_SD = 0.10  # a tracked window's standard error, as a share of its speed
 TRACK_GRID = 400  # log-spaced speeds over SPEED_RANGE the path runs on
 
@@ -422,7 +423,7 @@ def tracked(t, sources, strict: dict, wheelbase: float, travel=None) -> dict:
     window's, it moves (not standing) and its correlation has a peak (inside the allowed range) within
     ``TRACK_SNAP`` (ln speed) of the path, of at least ``TRACK_MIN_CORRELATION``, which at least
     ``TRACK_PARTS`` of its ``SUB_WINDOWS`` parts find too (each part's best speed in the allowed range,
-    its correlogram the sources' mean, within ``TRACK_SNAP`` of it): its speed is that
+    its correlogram the sources' mean, within ``TRACK_PARTS_SPAN`` of it): its speed is that
     peak's (the nearest to the path, refined by a parabola); its standard error is
     ``TRACK_SD`` of its speed (the strict ones' are their parts' spread). The answer is
     speed_from_lag's, "kinds" saying per window "strict" or "tracked"; a ride with no strict window
@@ -490,7 +491,7 @@ def tracked(t, sources, strict: dict, wheelbase: float, travel=None) -> dict:
                     continue
                 g = int(peaks[np.argmin(np.abs(grid_ln[peaks] - grid_ln[path[r]]))])
                 c = float(row[g])
-                agree = sum(abs(grid_ln[q] - grid_ln[g]) <= TRACK_SNAP for q in part_best[r])
+                agree = sum(abs(grid_ln[q] - grid_ln[g]) <= TRACK_PARTS_SPAN for q in part_best[r])
                 if c >= TRACK_MIN_CORRELATION and agree >= TRACK_PARTS:
                     v = float(math.exp(grid_ln[g] + _vertex(row, g) * (grid_ln[1] - grid_ln[0])))
                     windows[w] = (windows[w][0], v, c)
