@@ -229,7 +229,7 @@ class Reconstruction:
             for (start, v, _), kind in zip((stage or {}).get("windows", []), kinds):
                 if v is None:
                     continue
-                i, n = int(round(start / dt)), int(round(stage["window_s"] / dt))
+                i, n = int(round(start / dt)), int(round(stage.get("window_s", WINDOW_S) / dt))
                 covered["any"][max(i, 0):i + n] = True
                 if kind != "tracked":
                     covered["strict"][max(i, 0):i + n] = True

@@ -428,7 +428,7 @@ def tracked(t, sources, strict: dict, wheelbase: float, travel=None) -> dict:
     ``TRACK_SD`` of its speed (the strict ones' are their parts' spread). The answer is
     speed_from_lag's, "kinds" saying per window "strict" or "tracked"; a ride with no strict window
     has no anchor and gets no tracked speed (the caller refuses it before)."""
-    window_s = strict["window_s"]
+    window_s = strict.get("window_s", WINDOW_S)
     layouts = [_layout(t, front, rear, wheelbase, window_s, hz, travel) for front, rear, hz in sources]
     dt, _, _, k_lo, k_hi, step, _, moving = layouts[0]
     grid = np.exp(np.linspace(math.log(SPEED_RANGE[0]), math.log(SPEED_RANGE[1]), TRACK_GRID))
@@ -438,7 +438,8 @@ def tracked(t, sources, strict: dict, wheelbase: float, travel=None) -> dict:
     n = len(windows)
     speeds = [v for _, v, _ in windows]
     kinds = list(strict.get("kinds") or [None if v is None else "strict" for v in speeds])
-    sds, whys = list(strict["sd"]), list(strict["why"])
+    sds = list(strict.get("sd") or [None] * n)
+    whys = list(strict.get("why") or [None] * n)
     srcs = list(strict.get("sources") or [None] * n)
     centres = np.array([a + 0.5 * window_s for a, _, _ in windows])
     anchors = [k for k in range(n) if speeds[k] is not None]
