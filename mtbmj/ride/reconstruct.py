@@ -11,7 +11,8 @@ velocities (high-passed at 5 Hz), gives v = wheelbase / lag, the wheelbase at th
 (:func:`wheelbase_at`, the median travel of each end). A window's rejections and standard error are
 that module's; the windows start every half window (overlapping), the speed between the accepted
 windows' centres is linear (held past the first and last), a sample in no accepted window left out
-of the checks, the distance along the ride its integral, the rear's lag wheelbase / v(t). Then the speed is found
+of the checks (between these strict windows, within 20 s of one, a speed tracked through the windows'
+correlograms: :func:`mtbmj.ride.reconstruct_speed.tracked`, each window marked strict or tracked), the distance along the ride its integral, the rear's lag wheelbase / v(t). Then the speed is found
 again (``REFINE_PASSES`` times, :func:`mtbmj.ride.reconstruct_speed.refine`), on a ride whose first
 pass predicts the rear better than both naive baselines (below; elsewhere the rear predicted's timing
 is the model's more than the ride's, and the first estimate stands): the rear predicted

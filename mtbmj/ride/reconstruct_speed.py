@@ -11,7 +11,10 @@ the best peak or its speed's standard error (from those parts' lags) exceeds ``M
 where either end's travel spans less than ``STILL_MM`` (standing), or where the rest of the ride
 contradicts it (:func:`drop_unsupported`: both overlapping neighbours against it, or alone and
 ``FAR`` times off the ride's median). A ride shorter than one window
-and the slowest lag searched (:func:`min_seconds`) is refused before any work.
+and the slowest lag searched (:func:`min_seconds`) is refused before any work. Those are the
+strict windows; :func:`tracked` fills the gaps near them with a speed tracked through the windows'
+correlograms (each window marked "strict" or "tracked" in "kinds", a tracked one with a wider
+uncertainty), never where no strict window lies within ``TRACK_ANCHOR_S``.
 """
 from __future__ import annotations
 
