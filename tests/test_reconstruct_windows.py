@@ -69,11 +69,13 @@ def test_the_shared_rides_lone_slow_window_is_dropped_and_the_recorded_bike_ride
                                                                "samples_checked_percent": 100.0,
                                                                "rear_predicted_rms_percent_of_used": 0.0})
         ride = advise.prepare(record, "sst", calibrated=True)
-    # the two ends' lag (the speed is not found again from the rear predicted: the first pass's rear does
-    # not beat the naive baselines on this ride)
-    assert "first" not in ride.rec.speed
-    speeds = {round(w[0], 1): w[1] for w in ride.rec.speed["windows"]}
-    assert speeds[42.5] is None and "alone" in ride.rec.speed["why"][17]
+    # the two ends' lag: the estimate itself, or its first where the speed was found again from the rear
+    # predicted (with the windows tracked between the strict ones the first pass's rear and both naive
+    # baselines are level on this ride, 14.6 mm against 14.6 and 14.7, so whether it is found again can
+    # turn on a tenth of a millimetre)
+    first = ride.rec.speed.get("first", ride.rec.speed)
+    speeds = {round(w[0], 1): w[1] for w in first["windows"]}
+    assert speeds[42.5] is None and "alone" in first["why"][17] and first["kinds"][17] is None
     assert all(8.0 < v < 11.0 for v in speeds.values() if v is not None)
     run = advise.simulate(ride.bike, ride.base_over, ride.terrain, ride.speed, ride.sim_s, "recorded", ride.lead_s)
     assert run.crash is None, run.crash

@@ -11,7 +11,8 @@ velocities (high-passed at 5 Hz), gives v = wheelbase / lag, the wheelbase at th
 (:func:`wheelbase_at`, the median travel of each end). A window's rejections and standard error are
 that module's; the windows start every half window (overlapping), the speed between the accepted
 windows' centres is linear (held past the first and last), a sample in no accepted window left out
-of the checks, the distance along the ride its integral, the rear's lag wheelbase / v(t). Then the speed is found
+of the checks (between these strict windows, within 20 s of one, a speed tracked through the windows'
+correlograms: :func:`mtbmj.ride.reconstruct_speed.tracked`, each window marked strict or tracked), the distance along the ride its integral, the rear's lag wheelbase / v(t). Then the speed is found
 again (``REFINE_PASSES`` times, :func:`mtbmj.ride.reconstruct_speed.refine`), on a ride whose first
 pass predicts the rear better than both naive baselines (below; elsewhere the rear predicted's timing
 is the model's more than the ride's, and the first estimate stands): the rear predicted
@@ -66,7 +67,8 @@ from mtbmj.ride.reconstruct_inverse import QuarterCar, forward, ground_under, lo
 from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
                                           check_length, merged, min_seconds, refine, speed_from_either,
-                                          speed_from_lag)
+                                          speed_from_lag, tracked)
+from mtbmj.ride.reconstruct_speed import TRACK_ANCHOR_S, TRACK_MARGIN, TRACK_SD
 # The rate a ride is read at (the version-3 recorder's): a faster record is low-passed and decimated
 # to it (``TelemetryRecord.decimated``), so two derivatives do not amplify its count steps and a
 # 100 s ride at 5 kHz costs what it costs at 1 kHz
@@ -217,15 +219,35 @@ class Reconstruction:
                 "samples_checked_percent": 100.0 * float(np.mean(v)),
                 "bands": band_checks(self.t, self.rear, self.rear_predicted, self.fork_delayed_or_front, v)}
 
+    def speed_cover(self) -> dict:
+        """How much of the ride lies within a window with a speed: any (strict or tracked, the refined
+        estimate's and the first's) and strict alone, in % of its duration; and the windows tracked."""
+        covered = {"any": np.zeros(self.t.size, bool), "strict": np.zeros(self.t.size, bool)}
+        dt = float(self.t[1] - self.t[0])
+        tracked = 0
+        for stage in (self.speed, self.speed.get("first")):
+            kinds = (stage or {}).get("kinds") or [None] * len((stage or {}).get("windows", []))
+            for (start, v, _), kind in zip((stage or {}).get("windows", []), kinds):
+                if v is None:
+                    continue
+                i, n = int(round(start / dt)), int(round(stage.get("window_s", WINDOW_S) / dt))
+                covered["any"][max(i, 0):i + n] = True
+                if kind != "tracked":
+                    covered["strict"][max(i, 0):i + n] = True
+                tracked += kind == "tracked"
+        return {"speed_covers_percent": 100.0 * float(np.mean(covered["any"])),
+                "strict_covers_percent": 100.0 * float(np.mean(covered["strict"])), "windows_tracked": tracked}
+
     def summary(self) -> dict:
         def listed(stage):
             sds = stage.get("sd") or [None] * len(stage["windows"])
             whys = stage.get("why") or [None] * len(stage["windows"])
             width = stage.get("window_s", WINDOW_S)
+            kinds = stage.get("kinds") or [None if v is None else "strict" for _, v, _ in stage["windows"]]
             return [{"start_s": float(a), "end_s": float(a + width), "speed_m_per_s": None if v is None else float(v),
-                     "speed_sd_m_per_s": None if sd is None else float(sd), "correlation": float(c),
+                     "speed_sd_m_per_s": None if sd is None else float(sd), "correlation": float(c), "kind": kind,
                      "rejected": None if v is not None else (why or "no speed")}
-                    for (a, v, c), sd, why in zip(stage["windows"], sds, whys)]
+                    for (a, v, c), sd, why, kind in zip(stage["windows"], sds, whys, kinds)]
 
         speeds = [s for _, s, _ in self.speed["windows"] if s is not None]
         windows = listed(self.speed)
@@ -240,13 +262,18 @@ class Reconstruction:
                                   "found (its timing only), the two ends' lag kept where those do not align"
                                   if first is not None else "the lag between the two ends"),
                    "between_windows": "linear between the accepted windows' centres, held past the "
-                                      "first and last; the distance integrated from it"}
+                                      "first and last; the distance integrated from it",
+                   "kinds": "each window's kind: strict (its own lag, every rejection) or tracked (between strict "
+                            f"windows, within {TRACK_ANCHOR_S:g} s of one and {100 * TRACK_MARGIN:.0f} % of their "
+                            f"speeds, its standard error {100 * TRACK_SD:.0f} % of its speed)",
+                   **self.speed_cover()}
         if first is not None:
             firsts = [s for _, s, _ in first["windows"] if s is not None]
             profile["first_estimate"] = {"from": "the lag between the two ends", "window_s": float(first["window_s"]),
                                          "windows_accepted": len(firsts),
                                          "windows_rejected": len(first["windows"]) - len(firsts),
                                          "windows_kept": int(self.speed.get("first_kept", 0)),
+                                         "windows_tracked": sum(1 for k in first.get("kinds") or [] if k == "tracked"),
                                          "windows": listed(first)}
         part = {} if self.part_s is None else {
             "record_part_s": [float(self.part_s[0]), float(self.part_s[1])],
@@ -291,7 +318,9 @@ class Reconstruction:
                 f"unweighted at " + ", ".join(f"{a:.1f}-{b:.1f} s" for a, b in self.stands) + ")")
         return (f"{self.name}{part} through {self.bike}: {c['verdict']}; speed {s['speed_m_per_s']:.2f} m/s median "
                 f"from a {1e3 * s['lag_s']:.0f} ms lag{spread}, {p['windows_accepted']} of "
-                f"{p['windows_accepted'] + p['windows_rejected']} windows{refined}, terrain {s['terrain_length_m']:.0f} m; "
+                f"{p['windows_accepted'] + p['windows_rejected']} windows{refined}, {p['windows_tracked']} tracked "
+                f"between strict ones: a speed over {p['speed_covers_percent']:.0f} % of the ride "
+                f"({p['strict_covers_percent']:.0f} % from strict windows); terrain {s['terrain_length_m']:.0f} m; "
                 f"check: front reproduced within "
                 f"{c['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted {c['rear_predicted_rms_mm']:.1f} mm RMS "
                 f"({c['rear_predicted_rms_percent_of_used']:.0f} % of the {c['rear_travel_used_mm']:.0f} mm used; "
@@ -364,12 +393,16 @@ class Reconstruction:
             stages.append((sp["first"], "C1", "s", "first estimate: the two ends' lag"))
         for stage, colour, marker, label in stages:
             half = 0.5 * stage["window_s"]
-            pts = [(start + half, v, sd) for (start, v, _), sd in zip(stage["windows"], stage["sd"] or [None] * 99999)
-                   if v is not None]
-            if pts:
-                a.errorbar([c for c, _, _ in pts], [v for _, v, _ in pts], yerr=[2.0 * (sd or 0.0) for _, _, sd in pts],
-                           fmt=marker, color=colour, mfc="none" if stage is not sp else colour, ms=4, capsize=2,
-                           label=f"{label} ({len(pts)}, +-2 standard errors)")
+            kinds = stage.get("kinds") or [None] * len(stage["windows"])
+            for tracked_only in (False, True):
+                pts = [(start + half, v, sd) for (start, v, _), sd, kind in
+                       zip(stage["windows"], stage["sd"] or [None] * len(kinds), kinds)
+                       if v is not None and (kind == "tracked") == tracked_only]
+                if pts:
+                    a.errorbar([c for c, _, _ in pts], [v for _, v, _ in pts],
+                               yerr=[2.0 * (sd or 0.0) for _, _, sd in pts], fmt="x" if tracked_only else marker,
+                               color=colour, mfc="none" if stage is not sp else colour, ms=5, capsize=2,
+                               label=f"{label}{', tracked' if tracked_only else ''} ({len(pts)}, +-2 standard errors)")
         a.set(xlabel="time (s)", ylabel="speed (m/s)",
               title=f"Speed along the ride: median {sp['speed_m_per_s']:.2f} m/s "
                     f"(wheelbase {self.wheelbase:.3f} m / the lag per window)")
@@ -465,11 +498,13 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
     # delays its travel behind its ground by its own phase; the grounds carry none)
     ground_back, *_ = ground_under(t, rear, shock, rear_car, ratios)
     travel = (fork_mm, rear_mm)  # a window where either end stands still gives no speed
+    pairs = ((ground, ground_back, GROUND_HIGHPASS_HZ), (fork_mm, rear_mm, LAG_HIGHPASS_HZ))
     try:  # per window: the grounds' lag where they align, else the travels' (high-passed at 5 Hz)
-        speed = speed_from_either(t, (ground, ground_back, GROUND_HIGHPASS_HZ), (fork_mm, rear_mm, LAG_HIGHPASS_HZ),
-                                  wheelbase, names=("the two ends' grounds", "the two ends' travel"), travel=travel)
+        speed = speed_from_either(t, *pairs, wheelbase, names=("the two ends' grounds", "the two ends' travel"),
+                                  travel=travel)
     except ReconstructError as exc:
         raise ReconstructError(f"{record.name}: {exc}") from None
+    speed = tracked(t, pairs, speed, wheelbase, travel=travel)  # the gaps near strict windows tracked
     speed["from"] = ", ".join(sorted({s for s in speed["sources"] if s})) or None
     from mtbmj.ride import reconstruct_bike
 

@@ -11,7 +11,10 @@ the best peak or its speed's standard error (from those parts' lags) exceeds ``M
 where either end's travel spans less than ``STILL_MM`` (standing), or where the rest of the ride
 contradicts it (:func:`drop_unsupported`: both overlapping neighbours against it, or alone and
 ``FAR`` times off the ride's median). A ride shorter than one window
-and the slowest lag searched (:func:`min_seconds`) is refused before any work.
+and the slowest lag searched (:func:`min_seconds`) is refused before any work. Those are the
+strict windows; :func:`tracked` fills the gaps near them with a speed tracked through the windows'
+correlograms (each window marked "strict" or "tracked" in "kinds", a tracked one with a wider
+uncertainty), never where no strict window lies within ``TRACK_ANCHOR_S``.
 """
 from __future__ import annotations
 
@@ -38,6 +41,15 @@ STILL_MM = 1.0  # a window where either end's travel spans less than this is sta
 REFINE_WINDOW_S = 2.5  # seconds per window of the speed found again from the rear predicted (refine)
 REFINE_SPAN = 0.5  # the lag left is searched within +- this share of the first estimate's lag
 REFINE_MIN_CORRELATION = 0.5  # a refining window whose best correlation is below this gives no speed
+TRACK_ANCHOR_S = 20.0  # a tracked window's centre lies within this many seconds of a strict window's centre
+TRACK_MARGIN = 0.30  # a tracked speed is sought within the neighbouring strict windows' speeds widened by this share
+TRACK_PENALTY = 20.0  # the tracked path's cost per (change of ln speed)^2 from one window to the next
+TRACK_MIN_CORRELATION = 0.2  # a tracked window whose correlation at the path is below this gives no speed
+TRACK_SNAP = 0.02  # the path's speed taken to its window's nearest correlation peak within this change of ln speed
+TRACK_PARTS = 2  # ... and at least this many of its SUB_WINDOWS parts find their best speed in the range there
+TRACK_PARTS_SPAN = 0.05  # ... within this change of ln speed of the window's (a speed changing within it spreads them)
+TRACK_SD = 0.10  # a tracked window's standard error, as a share of its speed
+TRACK_GRID = 400  # log-spaced speeds over SPEED_RANGE the path runs on
 
 
 class ReconstructError(MtbmjError):
@@ -135,6 +147,29 @@ def _scatter(sd: float, lag: float) -> str | None:
     return None
 
 
+def _layout(t, front, rear, wheelbase: float, window_s: float, highpass_hz: float, travel):
+    """What :func:`speed_from_lag` and :func:`tracked` share: (dt, the two series high-passed at
+    ``highpass_hz`` and differentiated, the shortest and longest lag searched in samples, a window's
+    samples, the windows' first samples, a test of whether both ends move in a window (None without
+    ``travel``))."""
+    dt = float(t[1] - t[0])
+    from scipy.signal import butter, sosfiltfilt
+
+    sos = butter(2, highpass_hz, btype="highpass", fs=1.0 / dt, output="sos")
+    vf = np.gradient(sosfiltfilt(sos, np.asarray(front, float)), dt)
+    vr = np.gradient(sosfiltfilt(sos, np.asarray(rear, float)), dt)
+    lo, hi = wheelbase / SPEED_RANGE[1], wheelbase / SPEED_RANGE[0]
+    k_lo, k_hi = max(1, int(math.floor(lo / dt))), int(math.ceil(hi / dt))
+    step = int(round(window_s / dt))
+    moving = None
+    if travel is not None:
+        tf, tr = (np.asarray(x, float) for x in travel)
+        moving = lambda a: (np.ptp(tf[a:a + step]) >= STILL_MM  # noqa: E731
+                            and np.ptp(tr[a:a + step + k_hi]) >= STILL_MM)
+    hop = max(1, int(round(WINDOW_HOP * step)))
+    return dt, vf, vr, k_lo, k_hi, step, range(0, max(vf.size - k_hi - step // 2, 1), hop), moving
+
+
 def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S, highpass_hz: float = LAG_HIGHPASS_HZ,
                    travel=None) -> dict:
     """{"speed_m_per_s": the median of the windows' speeds, "lag_s", "windows": [(start_s, speed or
@@ -153,25 +188,10 @@ def speed_from_lag(t, front, rear, wheelbase: float, window_s: float = WINDOW_S,
     their number; a window where more than one part finds its own best lag (over the whole search)
     outside that lobe (the window holds more than one lag) gives no speed."""
     check_length(t, wheelbase, window_s)
-    dt = float(t[1] - t[0])
-    from scipy.signal import butter, sosfiltfilt
-
-    sos = butter(2, highpass_hz, btype="highpass", fs=1.0 / dt, output="sos")
-    vf = np.gradient(sosfiltfilt(sos, np.asarray(front, float)), dt)
-    vr = np.gradient(sosfiltfilt(sos, np.asarray(rear, float)), dt)
-    lo, hi = wheelbase / SPEED_RANGE[1], wheelbase / SPEED_RANGE[0]
-    k_lo, k_hi = max(1, int(math.floor(lo / dt))), int(math.ceil(hi / dt))
-
+    dt, vf, vr, k_lo, k_hi, step, starts, moving = _layout(t, front, rear, wheelbase, window_s, highpass_hz, travel)
     windows, sds, whys = [], [], []
-    step = int(round(window_s / dt))
-    moving = None
-    if travel is not None:
-        tf, tr = (np.asarray(x, float) for x in travel)
-        moving = lambda a: (np.ptp(tf[a:a + step]) >= STILL_MM  # noqa: E731
-                            and np.ptp(tr[a:a + step + k_hi]) >= STILL_MM)
     standing = 0
-    hop = max(1, int(round(WINDOW_HOP * step)))
-    for start in range(0, max(vf.size - k_hi - step // 2, 1), hop):
+    for start in starts:
         if moving is not None and not moving(start):
             windows.append((start * dt, None, 0.0))  # standing: nothing the terrain did to align
             sds.append(None)
@@ -307,13 +327,20 @@ def merged(first: dict, again: dict) -> dict:
     return out
 
 
-def _profile(windows, sds, whys, wheelbase: float, window_s: float, sources=None) -> dict:
+def _profile(windows, sds, whys, wheelbase: float, window_s: float, sources=None, kinds=None,
+             contradicted: bool = True) -> dict:
     """speed_from_lag's answer from its windows: refused in one line where no window gave a speed.
-    A window the rest of the ride contradicts gives none (:func:`drop_unsupported`)."""
+    A window the rest of the ride contradicts gives none (:func:`drop_unsupported`; not asked again by
+    :func:`tracked`, whose windows must not overrule the strict ones they are anchored on). "kinds" says per
+    window "strict" (its own lag, the rejections above) or "tracked" (:func:`tracked`), None where it
+    gave no speed."""
     windows, sds, whys = list(windows), list(sds), list(whys)
-    drop_unsupported(windows, sds, whys)
+    if contradicted:
+        drop_unsupported(windows, sds, whys)
     if sources is not None:
         sources = [src if w[1] is not None else None for src, w in zip(sources, windows)]
+    kinds = [(k or "strict") if w[1] is not None else None
+             for k, w in zip(kinds or [None] * len(windows), windows)]
     good = [(a + 0.5 * window_s, v) for a, v, _ in windows if v is not None]
     if not good:
         top = max((c for _, _, c in windows), default=0.0)
@@ -328,7 +355,7 @@ def _profile(windows, sds, whys, wheelbase: float, window_s: float, sources=None
     centres, speeds = np.array([c for c, _ in good]), np.array([v for _, v in good])
     speed = float(np.median(speeds))
     return {"speed_m_per_s": speed, "lag_s": wheelbase / speed, "windows": windows, "sd": sds, "why": whys,
-            "wheelbase_m": wheelbase, "window_s": window_s, "sources": sources,
+            "wheelbase_m": wheelbase, "window_s": window_s, "sources": sources, "kinds": kinds,
             "speed_at": lambda time: np.interp(time, centres, speeds)}
 
 
@@ -363,4 +390,122 @@ def speed_from_either(t, first, second, wheelbase: float, names=("first", "secon
     return _profile(windows, sds, whys, wheelbase, base["window_s"], sources)
 
 
-__all__ = ["refine", "merged", "REFINE_WINDOW_S", "drop_unsupported", "WINDOW_S", "WINDOW_HOP", "SPEED_RANGE", "ReconstructError", "min_seconds", "check_length", "speed_from_lag", "speed_from_either"]
+def _path(scores, allowed, first_v, last_v, grid_ln):
+    """The speeds (indices into the grid) through a run of windows that maximise the sum of each
+    window's correlation at its speed less ``TRACK_PENALTY`` (change of ln speed)^2 from window to
+    window, from the strict speed before the run (``first_v``, or None) to the one after it
+    (``last_v``), each window's speed within ``allowed`` (a boolean row per window)."""
+    pen = TRACK_PENALTY * (grid_ln[:, None] - grid_ln[None, :]) ** 2  # [to, from]
+    blocked = -1e9
+    acc = np.where(allowed[0], scores[0], blocked)
+    if first_v is not None:
+        acc = acc - TRACK_PENALTY * (grid_ln - math.log(first_v)) ** 2
+    back = np.zeros(scores.shape, int)
+    for w in range(1, scores.shape[0]):
+        total = acc[None, :] - pen
+        back[w] = np.argmax(total, axis=1)
+        acc = total[np.arange(grid_ln.size), back[w]] + np.where(allowed[w], scores[w], blocked)
+    if last_v is not None:
+        acc = acc - TRACK_PENALTY * (grid_ln - math.log(last_v)) ** 2
+    path = np.zeros(scores.shape[0], int)
+    path[-1] = int(np.argmax(acc))
+    for w in range(scores.shape[0] - 1, 0, -1):
+        path[w - 1] = back[w, path[w]]
+    return path
+
+
+def tracked(t, sources, strict: dict, wheelbase: float, travel=None) -> dict:
+    """The strict windows' speed profile (``strict``, :func:`speed_from_either`'s answer for the same
+    ``sources``, a list of (front, rear, high-pass Hz)) with its gaps filled by a tracked speed. Per
+    window, its correlation over speed is the mean of the sources' correlograms (on ``TRACK_GRID``
+    log-spaced speeds); through each run of windows without a strict speed, a path (:func:`_path`)
+    maximises the correlation along it less ``TRACK_PENALTY`` (change of ln speed)^2 between
+    neighbouring windows, tied to the strict speeds at both ends of the run, and kept within them
+    widened by ``TRACK_MARGIN`` (the lowest over 1 + margin, the highest times it). A window of the
+    path gives a tracked speed only where its centre lies within ``TRACK_ANCHOR_S`` of a strict
+    window's, it moves (not standing) and its correlation has a peak (inside the allowed range) within
+    ``TRACK_SNAP`` (ln speed) of the path, of at least ``TRACK_MIN_CORRELATION``, which at least
+    ``TRACK_PARTS`` of its ``SUB_WINDOWS`` parts find too (each part's best speed in the allowed range,
+    its correlogram the sources' mean, within ``TRACK_PARTS_SPAN`` of it): its speed is that
+    peak's (the nearest to the path, refined by a parabola); its standard error is
+    ``TRACK_SD`` of its speed (the strict ones' are their parts' spread). The answer is
+    speed_from_lag's, "kinds" saying per window "strict" or "tracked"; a ride with no strict window
+    has no anchor and gets no tracked speed (the caller refuses it before)."""
+    window_s = strict.get("window_s", WINDOW_S)
+    layouts = [_layout(t, front, rear, wheelbase, window_s, hz, travel) for front, rear, hz in sources]
+    dt, _, _, k_lo, k_hi, step, _, moving = layouts[0]
+    grid = np.exp(np.linspace(math.log(SPEED_RANGE[0]), math.log(SPEED_RANGE[1]), TRACK_GRID))
+    grid_ln = np.log(grid)
+    at = wheelbase / grid / dt - k_lo  # each grid speed's lag as a (fractional) index into a correlogram
+    windows = list(strict["windows"])
+    n = len(windows)
+    speeds = [v for _, v, _ in windows]
+    kinds = list(strict.get("kinds") or [None if v is None else "strict" for v in speeds])
+    sds = list(strict.get("sd") or [None] * n)
+    whys = list(strict.get("why") or [None] * n)
+    srcs = list(strict.get("sources") or [None] * n)
+    centres = np.array([a + 0.5 * window_s for a, _, _ in windows])
+    anchors = [k for k in range(n) if speeds[k] is not None]
+    if not anchors:
+        return strict
+    k = 0
+    while k < n:
+        if speeds[k] is not None:
+            k += 1
+            continue
+        j = k
+        while j < n and speeds[j] is None:
+            j += 1
+        run = list(range(k, j))  # windows k..j-1 without a strict speed
+        before = speeds[k - 1] if k > 0 else None
+        after = speeds[j] if j < n else None
+        ends = [v for v in (before, after) if v is not None]
+        near = [w for w in run if np.min(np.abs(centres[anchors] - centres[w])) <= TRACK_ANCHOR_S]
+        if ends and near:
+            lo, hi = min(ends) / (1.0 + TRACK_MARGIN), max(ends) * (1.0 + TRACK_MARGIN)
+            allowed = np.tile((grid >= lo) & (grid <= hi), (len(run), 1))
+            scores = np.zeros((len(run), grid.size))
+            has = np.zeros(len(run), bool)
+            part_best = [[] for _ in run]  # each part's best grid speed within the allowed range
+            for r, w in enumerate(run):
+                start = int(round(windows[w][0] / dt))
+                if moving is not None and not moving(start):
+                    continue
+                grams, parts = [], []
+                for _, vf, vr, *_ in layouts:
+                    a, b = vf[start:start + step + k_hi], vr[start:start + step + k_hi]
+                    m = a.size - k_hi
+                    if m >= 10 * SUB_WINDOWS:
+                        grams.append(np.interp(at, np.arange(k_hi - k_lo + 1), _scores(a, b, k_lo, k_hi, m)))
+                        p = m // SUB_WINDOWS
+                        parts.append([np.interp(at, np.arange(k_hi - k_lo + 1),
+                                                _scores(a[j * p:], b[j * p:], k_lo, k_hi, p)) for j in range(SUB_WINDOWS)])
+                if grams:
+                    scores[r], has[r] = np.mean(grams, axis=0), True
+                    part_best[r] = [int(np.argmax(np.where(allowed[r], np.mean(g, axis=0), -np.inf)))
+                                    for g in zip(*parts)]
+            path = _path(scores, allowed, before, after, grid_ln)
+            inside = np.flatnonzero(allowed[0])
+            for r, w in enumerate(run):
+                row = scores[r]
+                peaks = inside[(inside > inside[0]) & (inside < inside[-1])]
+                peaks = peaks[(row[peaks] > row[peaks - 1]) & (row[peaks] >= row[peaks + 1])]
+                peaks = peaks[np.abs(grid_ln[peaks] - grid_ln[path[r]]) <= TRACK_SNAP]
+                if w not in near or not has[r] or not peaks.size:
+                    continue
+                g = int(peaks[np.argmin(np.abs(grid_ln[peaks] - grid_ln[path[r]]))])
+                c = float(row[g])
+                agree = sum(abs(grid_ln[q] - grid_ln[g]) <= TRACK_PARTS_SPAN for q in part_best[r])
+                if c >= TRACK_MIN_CORRELATION and agree >= TRACK_PARTS:
+                    v = float(math.exp(grid_ln[g] + _vertex(row, g) * (grid_ln[1] - grid_ln[0])))
+                    windows[w] = (windows[w][0], v, c)
+                    sds[w], whys[w], kinds[w] = TRACK_SD * v, None, "tracked"
+                    srcs[w] = "tracked between the strict windows"
+        k = j
+    for w in range(n):  # why a window left without a speed was not tracked either, said after its own reason
+        if windows[w][1] is None and whys[w] and np.min(np.abs(centres[anchors] - centres[w])) > TRACK_ANCHOR_S:
+            whys[w] = f"{whys[w]}; not tracked: no strict window within {TRACK_ANCHOR_S:g} s"
+    return _profile(windows, sds, whys, wheelbase, window_s, srcs, kinds, contradicted=False)
+
+
+__all__ = ["tracked", "TRACK_ANCHOR_S", "refine", "merged", "REFINE_WINDOW_S", "drop_unsupported", "WINDOW_S", "WINDOW_HOP", "SPEED_RANGE", "ReconstructError", "min_seconds", "check_length", "speed_from_lag", "speed_from_either"]
