@@ -7,21 +7,26 @@ slam is arrested by that damper and the spring, so the push that makes the recor
 overshoots the record's peak (0 clicks: 51.6 mm above rest against 44.0) or, at a weaker push, comes
 late (8 clicks: 25 ms late, 47.3 against 45.0 mm), and the damper is spent on both and on the level
 after the slam. Measured one factor at a time at that replay's values (docs/identification.md): the
-friction (0-150 N) moves the 0-click peak by 0.3 mm, the rider's resonance (4-8 Hz) by 0.8 mm; the
-compression coefficient alone moves it by 6-21 mm. With a compression coefficient of its own, fitted
-with the push, the replay meets the peak within 1 mm. A rebound adjuster changes the rebound
-coefficient only, so the spring and the compression coefficient are shared by the records.
+friction (0-150 N) moves the peak by 0.3 mm (0 clicks) and 2.9 mm (8), the rider's resonance (4-8 Hz)
+by 0.8 and 4.3 mm, the compression coefficient alone (4000 and 8000 N s/m for 1794 and 1450) by 6-25
+mm. With a compression coefficient of its own, fitted with the push, the replay meets the peak within
+about 1 mm and 10-25 ms. A rebound adjuster changes the rebound coefficient only, so the spring and
+the compression coefficient are shared by the records.
 
 Method. Per record, the replay's stroke less the record's on ``bounce_replay``'s grid from
 ``BEFORE_S`` before the peak to where the record's first rebound crosses the rest level before the
 slam (``window_end``: before the top-out the 0- and 8-click rebounds reach, and before the level after
 the slam moves). The values: the shared spring scale and compression coefficient, and per record the
 push's six (``bounce_replay.PUSH_NAMES``) and its rebound coefficient; the friction is given (the
-best-determined whole-trace replay's: it moves these windows by under 0.5 mm). Fitted by
+best-determined whole-trace replay's), not fitted. Fitted by
 ``scipy.optimize.least_squares`` on all records' residuals together, the Jacobian by forward
 differences record by record (a record's residual depends on the shared values and its own). 95 %
 intervals from that Jacobian with the residual's variance, inflated for its lag-1 autocorrelation
-(the records' mean; ``bounce_replay.covariance``), Student's t. A record whose window the replay
+(each record's effective samples n (1 - rho) / (1 + rho) summed; ``bounce_replay.covariance``),
+Student's t; shared values ``held`` are given, not fitted, and the others' intervals are then
+conditional on them. The window does not identify the spring: on the shared slams the cost is flat
+from 0.45 to 0.73 x (113.6, 114.9, 115.6), the spring trading with the rebound coefficients
+(correlation 0.90-0.99), so every interval is wide. A record whose window the replay
 cannot follow (RMS over ``MAX_RELATIVE_RMS`` of its rise) or a value at its bound is said in the
 line and the entry (``"refused"``), not hidden.
 """
