@@ -177,8 +177,9 @@ def _ci(v, s, floor=None):
 
 
 def _summary(pool, x, sd, parts, clicks, cov, sol) -> dict:
-    at_bound = [n for n, v, lo, hi in zip(pool.names, x, pool.lower, pool.upper)
-                if (hi - v < 1e-3 * (hi - lo) or v - lo < 1e-3 * (hi - lo)) and not n.endswith("_s")]
+    at_bound = [n for n, v, lo, hi in zip(pool.names, x, pool.lower, pool.upper)  # the shock's values only
+                if (hi - v < 1e-3 * (hi - lo) or v - lo < 1e-3 * (hi - lo))
+                and n.split(":")[-1] in SHARED + ("rebound_N_s_per_m",)]
     out = {"method": METHOD, "friction_N": pool.friction, "runs": int(sol.nfev), "cost": float(sol.cost)}
     for j, k in enumerate(SHARED):
         out[k] = float(x[j])
