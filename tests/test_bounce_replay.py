@@ -522,3 +522,133 @@ def test_shared_rebound_dampers_rise_with_clicks(shared_rebound):
 def test_shared_rebound_dampers_each_held_out_within_2_sd(shared_rebound):
     got = shared_rebound
     assert all(r["holds"] for r in got["held_out"])
+
+
+# (e) the slams and first rebounds fitted together (``bounce_slam_rebound``)
+def test_slam_rebound_window_ends_where_the_record_first_returns_to_rest():
+    """The fitted window's end on a made rebound, x = 40 exp(-2 t) cos(2 pi 1.5 t) mm after the peak at t = 0:
+    the first grid time at or below the rest, within one 5 ms step after the closed form's zero, 1 / (4 x
+    1.5) s; the whole cycle's end is the next peak, 1 / 1.5 s; a record that never returns is refused."""
+    from types import SimpleNamespace
+
+    from mtbmj.identify.bounce_slam_rebound import window_end
+
+    g = np.arange(-0.6, 1.3, 0.005)
+    x = np.where(g < 0, 40.0 * np.exp(-((g / 0.08) ** 2)), 40.0 * np.exp(-2.0 * g) * np.cos(2 * math.pi * 1.5 * g))
+    sl = SimpleNamespace(grid=g, rec_g=x, name="made")
+    end = window_end(sl)
+    assert 1 / 6 <= end < 1 / 6 + 0.005 + 1e-9
+    # the whole cycle: the peak of exp(-2 t) cos(w t) is where tan(w t) = -2 / w, after one period
+    w = 2 * math.pi * 1.5
+    peak2 = (2 * math.pi + math.atan(-2.0 / w)) / w
+    assert window_end(sl, cycle=True) == pytest.approx(peak2, abs=0.005)
+    with pytest.raises(BounceError, match="never reaches the rest"):
+        window_end(SimpleNamespace(grid=g, rec_g=np.abs(x) + 1.0, name="stays"))
+
+
+def test_slam_rebound_verdict_needs_the_order_and_intervals_clear_of_0():
+    """``rises``: rising values with every interval above 0 is True; the same values with the clicks
+    swapped, or with one interval down to 0, is False; one record read is None."""
+    from mtbmj.identify.bounce_slam_rebound import rises
+
+    recs = [{"clicks": 0, "rebound_N_s_per_m": 1000.0, "rebound_N_s_per_m_ci95": [400.0, 1600.0]},
+            {"clicks": 8, "rebound_N_s_per_m": 3000.0, "rebound_N_s_per_m_ci95": [2000.0, 4000.0]}]
+    assert rises(recs) is True
+    assert rises(recs[::-1]) is False
+    assert rises([recs[0] | {"rebound_N_s_per_m_ci95": [0.0, 1600.0]}, recs[1]]) is False
+    assert rises(recs[:1]) is None
+
+
+@pytest.fixture(scope="module")
+def slam_rebound_generated():
+    """The two slams of ``two_rebounds`` (the same seeds: rebound 2500 and 5000 N s/m, compression 2500,
+    spring 0.55 x, friction 30 N), each on a bike of its own, fitted together with the friction given."""
+    from mtbmj.identify.bounce_replay import SeatedReplay, prepare_slam
+    from mtbmj.identify.bounce_slam_rebound import fit
+
+    slams = []
+    for reb in (2500.0, 5000.0):
+        t, x = slam(scale=0.55, c=2500.0, rebound=reb, fc=30.0, seed=int(reb))
+        slams.append(prepare_slam(t, x, None, f"rebound {reb:g}", SeatedReplay("sst")))
+    return fit(slams, [0, 10], 30.0)
+
+
+@pytest.mark.slow
+def test_slam_rebound_recovers_the_generators_rebound(slam_rebound_generated):
+    """(e) ``bounce_slam_rebound`` on the generator's two rebound settings, the spring and compression
+    fitted (shared), the friction given: each rebound coefficient within 30 % of the generator's and
+    inside its interval, the larger read as the larger, and the replay's peak within 1 mm and 10 ms of
+    the record's (the spring's and compression's intervals hold 0.55 x and 2500 N s/m)."""
+    got = slam_rebound_generated
+    (a, b) = got["records"]
+    for e, truth in ((a, 2500.0), (b, 5000.0)):
+        assert "refused" not in e
+        assert e["rebound_N_s_per_m"] == pytest.approx(truth, rel=0.30)
+        lo, hi = e["rebound_N_s_per_m_ci95"]
+        assert lo <= truth <= hi
+        assert abs(e["replay_peak"]["above_rest_mm"] - e["record_peak"]["above_rest_mm"]) < 1.0
+        assert abs(e["replay_peak"]["time_s"] - e["record_peak"]["time_s"]) <= 0.010 + 1e-9
+    assert b["rebound_N_s_per_m"] > a["rebound_N_s_per_m"]
+    assert got["spring_scale_ci95"][0] <= 0.55 <= got["spring_scale_ci95"][1]
+    assert got["compression_N_s_per_m_ci95"][0] <= 2500.0 <= got["compression_N_s_per_m_ci95"][1]
+
+
+@pytest.fixture(scope="module")
+def shared_slam_rebound(shared_replays):
+    from conftest import SHARED_DATA
+
+    from mtbmj.identify.bounce_slam_rebound import read_records
+    from mtbmj.measured.telemetry import read_sst
+
+    records = [read_sst(os.path.join(SHARED_DATA, "sst_v2", f)) for f in ("00083.SST", "00085.SST", "00087.SST")]
+    return read_records(records, [0, 8, 17], shared_replays["summary"], "sst")
+
+
+@pytest.mark.slow
+@pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
+def test_shared_slam_rebound_meets_the_peak(shared_slam_rebound):
+    """(e) The shared slams fitted together on each slam and first rebound: every record followed (the 17-click
+    one too, which the whole-trace replay refuses) within 2 % of its rise, the replay's peak within 1.5 mm and
+    15 ms of the record's (the whole-trace replay's: 7.6 mm high at 0 clicks, 30 ms late at 8), and the rebound
+    coefficients in the clicks' order."""
+    got = shared_slam_rebound
+    recs = got["records"]
+    assert [e["clicks"] for e in recs] == [0, 8, 17] and not any("refused" in e for e in recs)
+    for e in recs:
+        assert e["rms_mm"] < 0.02 * e["slam_rise_mm"]
+        assert abs(e["replay_peak"]["above_rest_mm"] - e["record_peak"]["above_rest_mm"]) < 1.5
+        assert abs(e["replay_peak"]["time_s"] - e["record_peak"]["time_s"]) <= 0.015 + 1e-9
+    reb = [e["rebound_N_s_per_m"] for e in recs]
+    assert reb[0] < reb[1] < reb[2]
+
+
+@pytest.mark.slow
+@pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
+@pytest.mark.xfail(strict=True, reason="the slam and first rebound fitted together rise with the clicks (2780, 6815, "
+                                       "9522 N s/m at 0, 8, 17) but every interval reaches 0 ([0, 9120], [0, 17579], "
+                                       "[0, 21889]): the window does not identify the spring (0.73 x [0.00, 1.95]; the "
+                                       "cost 113.6, 114.9, 115.6 at 0.45, 0.55, 0.73 x) and the spring trades with "
+                                       "the rebound coefficients (correlation 0.90-0.99); the spring held at 0.45 x, "
+                                       "1730 [0, 4744], 4589 [1656, 7521], 6878 [4934, 8823]")
+def test_shared_slam_rebound_rises_clear_of_0(shared_slam_rebound):
+    assert shared_slam_rebound["rises"] is True
+
+
+@pytest.mark.slow
+def test_slam_rebound_with_the_spring_given_clears_0():
+    """(e) The same two slams with the spring held at the generator's 0.55 x: each rebound coefficient
+    within 20 %, its interval holding the truth and clear of 0 (given the spring, the window identifies
+    the rebound; freed, the spring trades with it and every interval reaches 0)."""
+    from mtbmj.identify.bounce_replay import SeatedReplay, prepare_slam
+    from mtbmj.identify.bounce_slam_rebound import fit
+
+    slams = []
+    for reb in (2500.0, 5000.0):
+        t, x = slam(scale=0.55, c=2500.0, rebound=reb, fc=30.0, seed=int(reb))
+        slams.append(prepare_slam(t, x, None, f"rebound {reb:g}", SeatedReplay("sst")))
+    got = fit(slams, [0, 10], 30.0, held={"spring_scale": 0.55})
+    for e, truth in zip(got["records"], (2500.0, 5000.0)):
+        lo, hi = e["rebound_N_s_per_m_ci95"]
+        assert e["rebound_N_s_per_m"] == pytest.approx(truth, rel=0.20)
+        assert 0.0 < lo <= truth <= hi
+    assert got["rises"] is True and got["spring_scale_ci95"] == [0.55, 0.55]

@@ -4,7 +4,7 @@ rebound click as a law, and the ring-down it predicts at other clicks (``mtbmj.i
 this module parses, calls it and prints what it found).
 
 Writes fit.json, fit.png and, per predicted click, ringdown_<K>_clicks.csv (with --replay also
-replay_<file>.csv per record, replay.png and rebound.png), atomically. The ``fit``
+replay_<file>.csv per record, replay.png, slam_rebound.png and rebound.png), atomically. The ``fit``
 command's parser takes it with ``add_bounce_parser(p)`` (``p``: the ``fit`` parser): the kind
 ``bounce`` is then parsed by this module's own parser.
 """
@@ -59,7 +59,9 @@ def bounce_parser(prog: str = "mtbmj fit bounce"):
     p.add_argument("--replay", action="store_true",
                    help="with --bike: replay each slam through the MuJoCo bike with the seated rider compliant "
                         "(--rider-hz, default 5 Hz), pushed as the slam pushed, and fit the shock's spring scale, "
-                        "damper and friction to the record (replay_<file>.csv, replay.png; one to three minutes per record)")
+                        "damper and friction to the record, and the slams with their first rebounds together for a "
+                        "rebound coefficient per record (replay_<file>.csv, replay.png, slam_rebound.png; two to four "
+                        "minutes per record)")
     p.add_argument("--rebound-target-per-s", type=float, metavar="RATE",
                    help="with --replay: the first rebound's rate to aim for (its mean speed from 75 %% to 25 %% of the "
                         "slam's height per mm of that height, 1/s): the answer in clicks from the rebound dampers")

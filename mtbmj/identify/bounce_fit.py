@@ -180,7 +180,9 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
     rider (at ``rider_hz``, default 5 Hz) and its shock's spring, damper and friction fitted
     (``mtbmj.identify.bounce_replay``): fit.json's "replay", replay_<file>.csv and replay.png; with it
     "rebound_dampers" (``bounce_rebound``: each record's rebound coefficient with its interval, the law
-    in clicks, each record held out, and the answer for ``rebound_target_per_s``, 1/s per mm of height)."""
+    in clicks, each record held out, and the answer for ``rebound_target_per_s``, 1/s per mm of height)
+    and "slam_rebound" (``bounce_slam_rebound``: the slams and first rebounds fitted together, a rebound
+    coefficient per record with its interval)."""
     from mtbmj.identify import bounce
 
     paths = [Path(p) for p in paths]
@@ -333,6 +335,13 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
         if out["rebound_dampers"] is not None:
             done["lines"].append(out["rebound_dampers"]["line"])
             done["lines"] += out["rebound_dampers"]["lines"]
+        from mtbmj.identify import bounce_slam_rebound as bsr
+
+        pooled = bsr.read_records(records, clicks, done["summary"], bike, rider_hz)
+        out["slam_rebound"] = bsr.public(pooled)
+        if pooled is not None:
+            done["lines"].append(pooled["line"])
+            extra["slam_rebound.png"] = bsr.figure_png(pooled)
         out["replay_fork"] = fork_refusals(records, out["records"])
         done["lines"] += [f"fork not replayed: {e['refused']}" for e in out["replay_fork"]]
         csvs.update(done["csv"])
