@@ -48,7 +48,7 @@ CYCLE = False  # the window runs one whole cycle, to the record's second peak (F
 Z95 = 1.959963984540054
 STEP = 1e-3  # the forward difference's step, in each value's scale
 MAX_NFEV = 30
-RING_SCALES = (0.35, 0.45, 0.55, 0.65, 0.75)  # the spring scales the ring-down is simulated at
+RING_SCALES = (0.25, 0.35, 0.45, 0.55, 0.65, 0.75, 0.9)  # the spring scales the ring-down is simulated at
 RING_AFTER_S = 2.5  # ... for this long after the slam's peak (the records' free halves end within ~1.5 s)
 RING_METHOD = ("each record's free half periods after the slam (bounce_decay.extrema, vertex times) against the same "
                "half cycles (the k-th of each direction) of its whole-trace replay's run (its push, damper and "
