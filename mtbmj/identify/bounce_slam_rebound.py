@@ -38,8 +38,8 @@ damper and friction; ``RING_AFTER_S`` past the peak); the mean log ratio over al
 interpolated to 0 in log scale, its 95 % interval the ratios' scatter (Student's t) through the slope.
 ``read_records`` holds that spring in :func:`fit` and carries its interval into the others'
 (``held_ci95``: linearised, added in quadrature); ``"spring_from"`` says which. On the shared slams:
-0.47 x [0.35, 0.62] from 7 halves, and the rebound coefficients 1905 [0, 5033], 4496 [1083, 7909],
-6855 [4304, 9406] N s/m at 0, 8, 17 clicks (the 0-click interval still reaches 0); on the test file's
+0.47 x [0.35, 0.62] from 7 halves, and the rebound coefficients 1907 [0, 5077], 4504 [1080, 7928],
+6859 [4302, 9416] N s/m at 0, 8, 17 clicks (the 0-click interval still reaches 0); on the test file's
 generator 0.47 x [0.36, 0.60] for 0.55 x (docs/identification.md).
 """
 from __future__ import annotations
