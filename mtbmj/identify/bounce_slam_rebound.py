@@ -29,6 +29,18 @@ from 0.45 to 0.73 x (113.6, 114.9, 115.6), the spring trading with the rebound c
 (correlation 0.90-0.99), so every interval is wide. A record whose window the replay
 cannot follow (RMS over ``MAX_RELATIVE_RMS`` of its rise) or a value at its bound is said in the
 line and the entry (``"refused"``), not hidden.
+
+The spring from the ring-down's period (``spring_from_periods``, ``read_records``' ``"ring_spring"``).
+The spring's information is in the free oscillation after the first rebound, outside the window. Each
+record's free half periods (``bounce_decay.extrema``, vertex times) are set against the same half cycles
+(the k-th of each direction) of its whole-trace replay's run at each of ``RING_SCALES`` (its push,
+damper and friction; ``RING_AFTER_S`` past the peak); the mean log ratio over all records' halves is
+interpolated to 0 in log scale, its 95 % interval the ratios' scatter (Student's t) through the slope.
+``read_records`` holds that spring in :func:`fit` and carries its interval into the others'
+(``held_ci95``: linearised, added in quadrature); ``"spring_from"`` says which. On the shared slams:
+0.47 x [0.35, 0.62] from 7 halves, and the rebound coefficients 1907 [0, 5077], 4504 [1080, 7928],
+6859 [4302, 9416] N s/m at 0, 8, 17 clicks (the 0-click interval still reaches 0); on the test file's
+generator 0.47 x [0.36, 0.60] for 0.55 x (docs/identification.md).
 """
 from __future__ import annotations
 
@@ -45,8 +57,15 @@ OWN = PUSH_NAMES + ("rebound_N_s_per_m",)
 LIMITS = {**BOUNDS, "compression_N_s_per_m": BOUNDS["damper_N_s_per_m"],
           "rebound_N_s_per_m": BOUNDS["damper_N_s_per_m"]}
 CYCLE = False  # the window runs one whole cycle, to the record's second peak (False: to the first rest crossing)
+Z95 = 1.959963984540054
 STEP = 1e-3  # the forward difference's step, in each value's scale
 MAX_NFEV = 30
+RING_SCALES = (0.25, 0.35, 0.45, 0.55, 0.65, 0.75, 0.9)  # the spring scales the ring-down is simulated at
+RING_AFTER_S = 2.5  # ... for this long after the slam's peak (the records' free halves end within ~1.5 s)
+RING_METHOD = ("each record's free half periods after the slam (bounce_decay.extrema, vertex times) against the same "
+               "half cycles (the k-th of each direction) of its whole-trace replay's run (its push, damper and "
+               "friction) at each spring scale tried; the mean log ratio over all records' halves interpolated to 0 "
+               "in log scale; 95 % from the ratios' scatter at that scale (Student's t, n - 1) through the slope")
 START = {"spring_scale": 0.5, "compression_N_s_per_m": 4000.0, "rebound_N_s_per_m": 2000.0}
 METHOD = ("the slam and its first rebound (to the record's rest level) of every record replayed on the seated "
           "MuJoCo bike together: one spring scale and one compression coefficient shared, a push (lift and slam "
@@ -134,11 +153,12 @@ class _Pool:
 
 
 def fit(slams, clicks, friction_N: float, starts: list[dict] | None = None, max_nfev: int = MAX_NFEV,
-        held: dict | None = None) -> dict:
+        held: dict | None = None, held_ci95: list | None = None) -> dict:
     """The slams' (``bounce_replay.prepare_slam``; one ``SeatedReplay`` each is safest) shared spring and
     compression and each one's rebound coefficient (module docstring): {"spring_scale", ...,
     "records": [per record], "rises", "line"}. ``held``: shared values given instead of fitted (their
-    interval then 0 wide: the others' are conditional on them)."""
+    interval then 0 wide: the others' are conditional on them); ``held_ci95``: the held spring's 95 %
+    interval, carried into the others' (linearised) and reported as the spring's."""
     from scipy.optimize import least_squares
 
     held = held or {}
@@ -168,7 +188,24 @@ def fit(slams, clicks, friction_N: float, starts: list[dict] | None = None, max_
     cov = np.zeros((x.size, x.size))
     cov[np.ix_(free, free)] = cov_free
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0)) * tq
-    return _summary(pool, x, sd, parts, clicks, cov, sol)
+    out_held = {}
+    if held_ci95 and "spring_scale" in held:
+        # the spring's interval carried into the others': each value's derivative on the spring at the
+        # solution, dx/ds = -(J^T J)^-1 J^T J_s (J_s one more Jacobian column), times the spring's 95 %
+        # half-width (the wider side), added in quadrature to the conditional 95 % half-width
+        js = pool.jacobian(x, r, cols=[0])[:, 0]
+        g = -np.linalg.lstsq(J[:, free], js, rcond=None)[0]
+        half = max(held["spring_scale"] - held_ci95[0], held_ci95[1] - held["spring_scale"])
+        sd[free] = np.hypot(sd[free], g * half / Z95)  # sd here is a 95 % half-width over Z95
+        sd[0] = half / Z95
+        out_held = {"d_value_d_spring": {pool.names[j]: float(v) for j, v in zip(free, g)
+                                         if pool.names[j].split(":")[-1] in SHARED + ("rebound_N_s_per_m",)}}
+    out = _summary(pool, x, sd, parts, clicks, cov, sol)
+    if out_held:
+        out["spring_scale_ci95"] = [float(held_ci95[0]), float(held_ci95[1])]
+        out.update(out_held)
+        out["line"] = line(out)
+    return out
 
 
 def _ci(v, s, floor=None):
@@ -246,6 +283,71 @@ def line(out: dict) -> str:
             f"{out['friction_N']:.0f} N given): rebound {'; '.join(said(e) for e in out['records'])} N s/m: {verdict}")
 
 
+def _halves(t, x, peak: int) -> list:
+    """The free half periods after the slam at ``peak`` (``bounce_decay.extrema``, vertex times:
+    ``bounce_predict.timed_halves``), as the ring-down readings take them."""
+    from mtbmj.identify import bounce_decay as bd
+    from mtbmj.identify import bounce_predict as bp
+
+    t, x = np.asarray(t, float), np.asarray(x, float)
+    return bp.timed_halves(bd.extrema(t, x, "shock", peak), t, x)
+
+
+def _matched(rec: list, sim: list) -> list:
+    """log(simulated / recorded) of the same half cycles: the k-th of each direction in both."""
+    out = []
+    for d in ("rebound", "compression"):
+        r, s = ([q[3] for q in h if q[0] == d] for h in (rec, sim))
+        out += [math.log(b / a) for a, b in zip(r, s)] if len(s) >= len(r) else [None] * len(r)
+    return out
+
+
+def spring_from_periods(rings, scales=RING_SCALES) -> dict:
+    """The spring scale whose simulated ring-down has the records' free half periods (module docstring,
+    "The spring from the ring-down's period"). ``rings``: per record (name, time_s, shock_mm, slam, values),
+    ``slam`` a ``prepare_slam`` result and ``values`` its replay's (``NAMES``; the spring is replaced).
+    {"spring_scale", "spring_scale_ci95", "halves", "mean_log_ratio" per scale, "line"} or {"refused"}."""
+    from mtbmj.identify.bounce import find_slam
+
+    rows = {}  # scale -> every record's matched log ratios (None: the simulated ring-down has too few halves)
+    n_rec = 0
+    for name, t, x, sl, v in rings:
+        rec = _halves(t, x, find_slam(np.asarray(t, float), np.asarray(x, float), name))
+        n_rec += len(rec)
+        for sc in scales:
+            sl.sr.set_rest(sl.rest, None)
+            try:
+                out = sl.sr.run({**v, "spring_scale": sc}, after_s=RING_AFTER_S)
+                sim = _halves(out["time_s"], out["stroke_mm"], int(np.argmin(np.abs(out["time_s"]))))
+            except BounceError:
+                sim = []
+            rows.setdefault(sc, []).extend(_matched(rec, sim))
+    use = sorted(sc for sc, r in rows.items() if r and all(q is not None for q in r))
+    means = {sc: float(np.mean(rows[sc])) for sc in use}
+    base = {"halves": n_rec, "mean_log_ratio": {f"{sc:g}": means.get(sc) for sc in scales},
+            "method": RING_METHOD}
+    pair = next(((a, b) for a, b in zip(use, use[1:]) if means[a] >= 0.0 >= means[b]), None)
+    if n_rec < 2 or pair is None:
+        why = (f"{n_rec} free half period(s) in the records" if n_rec < 2 else
+               "no two spring scales tried bracket the records' half periods")
+        return {**base, "refused": f"the spring from the ring-down's period not read: {why}",
+                "line": f"spring from the ring-down's period not read: {why}"}
+    a, b = pair
+    la, lb = math.log(a), math.log(b)
+    slope = (means[b] - means[a]) / (lb - la)  # d mean log ratio / d log scale (about -1/2)
+    u = -means[a] / (means[b] - means[a])
+    ls = la + u * (lb - la)
+    d = np.array([(1 - u) * p + u * q for p, q in zip(rows[a], rows[b])])  # each half's misfit at the root
+    from scipy.stats import t as student
+
+    half = float(student.ppf(0.975, d.size - 1)) * float(np.std(d, ddof=1)) / math.sqrt(d.size)
+    lo, hi = sorted((math.exp(ls - half / slope), math.exp(ls + half / slope)))
+    spring = math.exp(ls)
+    return {**base, "spring_scale": spring, "spring_scale_ci95": [lo, hi],
+            "line": (f"spring from the ring-down's period: {spring:.2f} x [{lo:.2f}, {hi:.2f}] ({n_rec} free half "
+                     f"periods of {len(rings)} records matched on the MuJoCo bike at {', '.join(f'{s:g}' for s in use)} x)")}
+
+
 def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | None = None) -> dict | None:
     """``fit bounce --replay``'s ``"slam_rebound"``: the records' slams (each on a seated bike of its own)
     fitted together, the friction and the starting spring from the best-determined whole-trace replay
@@ -258,7 +360,7 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
         return None
     best = min(done, key=lambda e: e["spring_scale_ci95"][1] - e["spring_scale_ci95"][0])
     by_file = {e["file"]: e for e in done}
-    slams, ks, starts, refused = [], [], [], []
+    slams, ks, starts, refused, rings = [], [], [], [], []
     for rec, k in zip(records, clicks):
         name = getattr(rec, "name", None) or str(getattr(rec, "path", "record"))
         sr = SeatedReplay(bike, RIDER_HZ if rider_hz is None else rider_hz)
@@ -272,9 +374,19 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
             continue
         ks.append(k)
         starts.append({**{kk: own[kk] for kk in PUSH_NAMES}, "spring_scale": best["spring_scale"]})
+        rings.append((name, rec.time_s, rec.shock_mm, slams[-1], {kk: own[kk] for kk in NAMES}))
     if len(slams) < 1:
         return None
-    out = fit(slams, ks, best["friction_N"], starts)
+    ring = spring_from_periods(rings)
+    if "refused" in ring:
+        out = fit(slams, ks, best["friction_N"], starts)
+        out["spring_from"] = "fitted on the window (" + ring["refused"] + ")"
+    else:
+        out = fit(slams, ks, best["friction_N"], starts, held={"spring_scale": ring["spring_scale"]},
+                  held_ci95=ring["spring_scale_ci95"])
+        out["spring_from"] = "the ring-down's period"
+    out["ring_spring"] = ring
+    out["line"] = ring["line"] + "; " + out["line"]
     out["from"] = best["file"]
     out["records"] = sorted(out["records"] + refused, key=lambda e: e["clicks"])
     return out
@@ -312,10 +424,10 @@ def figure_png(out: dict) -> bytes:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="upper right")
     axes[-1, 0].set_xlabel("time from the slam's peak (s); dashed: the fitted window's end")
-    fig.suptitle(f"shared: spring {out['spring_scale']:.2f} x, compression {out['compression_N_s_per_m']:.0f} N s/m, "
+    fig.suptitle(f"shared: spring {out['spring_scale']:.2f} x ({out.get('spring_from', 'fitted')}), compression {out['compression_N_s_per_m']:.0f} N s/m, "
                  f"friction {out['friction_N']:.0f} N (given)", fontsize=9)
     fig.tight_layout()
     return png(fig, dpi=80)
 
 
-__all__ = ["METHOD", "figure_png", "fit", "public", "read_records", "rises", "window_end"]
+__all__ = ["METHOD", "figure_png", "fit", "public", "read_records", "rises", "spring_from_periods", "window_end"]
