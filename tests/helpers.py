@@ -57,7 +57,7 @@ def gone(pids, timeout=10.0) -> bool:
                 with open(f"/proc/{pid}/stat") as handle:
                     if handle.read().split(")")[-1].split()[0] != "Z":
                         alive.append(pid)
-            except FileNotFoundError:
+            except (FileNotFoundError, ProcessLookupError):  # gone between the listing and the read (ESRCH)
                 pass
         if not alive:
             return True

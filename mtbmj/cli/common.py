@@ -143,7 +143,11 @@ def show_compile_notices() -> None:
 
 def _note(message, category, filename, lineno, file=None, line=None) -> None:
     """Warnings that reach the command line (a FallbackWarning: the run goes on along a slower
-    path) as one line on stderr, without the source location."""
+    path) as one line on stderr, without the source location; none once Ctrl-C came (an interrupt
+    inside a C extension's import comes up as that import's failure, which a library may turn into a
+    warning: matplotlib's "Unable to import Axes3D" beside "mtbmj: interrupted", 1 of 25 slow trials)."""
+    if interrupted():
+        return
     print(f"mtbmj: note: {message}", file=sys.stderr)
 
 
