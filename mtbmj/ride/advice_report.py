@@ -159,25 +159,22 @@ def html(advice, png: bytes) -> str:
                        f"read in the bike file's units, relative to it.</p><table id=\"calibration\"><tr><th>spring "
                        f"(key)</th><th>unit</th><th>bike file</th><th>calibrated</th><th>95 % interval</th>"
                        f"<th>scale (no unit)</th></tr>{rows_c}</table>")
+        from mtbmj.ride.calibrate import carried_words
+
         other = cal.get("or")
         if other:
-            where = "forward" if other["load_forward_N"] >= 0 else "rearward"
             sags = ", ".join(f"{e} {v['springs_apart']:.1f} % calibrated, {v['springs_together']:.1f} % the other way"
                              for e, v in other["static_sag_percent"].items())
             calibration += (f"<p id=\"other-reading\">The same ride read the other way: both springs "
-                            f"x{other['common_scale']:.3f} of the file's with {abs(other['load_forward_N']):.0f} N carried "
-                            f"{where} of rest (the rider {abs(other['rider_place_forward_mm']):.0f} mm {where}, or a "
-                            f"{abs(other['descent_deg']):.1f} deg mean {'descent' if other['descent_deg'] >= 0 else 'climb'}). "
+                            f"x{other['common_scale']:.3f} of the file's with "
+                            f"{carried_words(other['load_forward_N'], other['rider_place_forward_mm'], other['descent_deg'])}. "
                             f"The travel cannot tell the two apart; static sag (closed-form statics): {esc.escape(sags)}. "
                             f"A change that rests on static sag is advised only where it holds on both.</p>")
         carried = cal.get("carried") or {}
         if "load_forward_N" in carried:
-            where = "forward" if carried["load_forward_N"] >= 0 else "rearward"
-            calibration += (f"<p id=\"carried\">The springs from the static sag measured; the ride carried "
-                            f"{abs(carried['load_forward_N']):.0f} N {where} of rest (the rider "
-                            f"{abs(carried['rider_place_forward_mm']):.0f} mm {where}, or a {abs(carried['descent_deg']):.1f} "
-                            f"deg mean {'descent' if carried['descent_deg'] >= 0 else 'climb'}) and "
-                            f"{carried['weight_beyond_file_kg']:+.1f} kg of weight beyond the file's rider.</p>")
+            calibration += (f"<p id=\"carried\">The springs from the static sag measured; on the ride "
+                            f"{carried_words(carried['load_forward_N'], carried['rider_place_forward_mm'], carried['descent_deg'])} "
+                            f"and {carried['weight_beyond_file_kg']:+.1f} kg of weight beyond the file's rider.</p>")
     else:
         calibration = "<p>Not calibrated: the bike file's springs as they are (advise without --no-calibrate reads them from the ride).</p>"
     then = advice.then()

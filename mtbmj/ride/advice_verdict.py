@@ -80,6 +80,8 @@ def judge(advice, candidates=None) -> tuple[dict | None, dict]:
     if not n:
         return None, {"answer": "inconclusive", "why": "no candidate was simulated"}
     if split is not None:
+        from mtbmj.ride.calibrate import carried_words
+
         (_, adj, direction, value, run, improved, u), other_total = split
         st, cal = adj.setting(value), advice.calibration
         return None, {"answer": "inconclusive",
@@ -87,8 +89,8 @@ def judge(advice, candidates=None) -> tuple[dict | None, dict]:
                              f"the penalty {base.total:.2f} -> {run.total:.2f} with the springs as calibrated ("
                              + ", ".join(f"{sc.adjuster.label} x{sc.value:.2f}" for sc in cal.scales.values())
                              + f"), but not on the calibration's other reading of the same ride, both springs "
-                             f"x{cal.split.common:.2f} with {abs(cal.split.shift_N):.0f} N carried "
-                             f"{'forward' if cal.split.shift_N >= 0 else 'rearward'} ({sum(other_base.values()):.2f} -> "
+                             f"x{cal.split.common:.2f} with {carried_words(cal.split.shift_N, cal.split.place_mm, cal.split.slope_deg)} "
+                             f"({sum(other_base.values()):.2f} -> "
                              f"{other_total:.2f}, its static sags "
                              + ", ".join(f"{e} {b_:.0f} %" for e, (_, b_) in cal.split.static_sag.items())
                              + "): the travel cannot tell a spring off from a load carried fore-aft (a descent, "

@@ -167,6 +167,16 @@ def simulate(bike, overrides: dict, terrain, speed: float, duration: float, labe
                raw["time_s"][keep] - lead_s)
 
 
+def sags_moved(metrics: dict, offsets: dict) -> dict:
+    """``metrics`` (:func:`ride_metrics`' shape) with each end's static sag moved by ``offsets`` (points of
+    travel per end), a new dict; an end without a static sag, or a 0 offset, as it was."""
+    out = dict(metrics)
+    for end, off in offsets.items():
+        if off and out[end].get("static_sag_percent") is not None:
+            out[end] = {**out[end], "static_sag_percent": out[end]["static_sag_percent"] + off}
+    return out
+
+
 @dataclass
 class Advice:
     ride: str
@@ -201,9 +211,7 @@ class Advice:
         cal = self.calibration
         if cal is None or not hasattr(cal, "level_offsets") or getattr(run, "levelled", False):
             return run
-        for end, off in cal.level_offsets().items():
-            if off and run.metrics[end].get("static_sag_percent") is not None:
-                run.metrics[end] = {**run.metrics[end], "static_sag_percent": run.metrics[end]["static_sag_percent"] + off}
+        run.metrics = sags_moved(run.metrics, cal.level_offsets())
         run.levelled = True
         return run
 
@@ -221,11 +229,7 @@ class Advice:
         offsets = self.other_offsets()
         if offsets is None:
             return None
-        mt = on_the_ride(self.measured, self.base.metrics, run.metrics)
-        for end, off in offsets.items():
-            if mt[end].get("static_sag_percent") is not None:
-                mt[end] = {**mt[end], "static_sag_percent": mt[end]["static_sag_percent"] + off}
-        return penalties(mt, self.measured)
+        return penalties(sags_moved(on_the_ride(self.measured, self.base.metrics, run.metrics), offsets), self.measured)
 
     def tried(self) -> list:
         """Each tried setting: its label, bike file, settings as asked, penalty (and its change), crash,

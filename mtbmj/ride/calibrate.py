@@ -123,6 +123,14 @@ class Scale:
                 f"{d['calibrated_high']:g}; the file's {d['file']:g}, x{self.value:.2f})")
 
 
+def carried_words(load_N: float, place_mm: float, descent_deg: float) -> str:
+    """A load carried fore-aft in words, as every line and report says it: "131 N carried forward of rest
+    (the rider 234 mm forward, or a 8.9 deg mean descent)"."""
+    where = "forward" if load_N >= 0 else "rearward"
+    return (f"{abs(load_N):.0f} N carried {where} of rest (the rider {abs(place_mm):.0f} mm {where}, or a "
+            f"{abs(descent_deg):.1f} deg mean {'descent' if descent_deg >= 0 else 'climb'})")
+
+
 @dataclass(frozen=True)
 class Split:
     """The same ride read the other way (see the module doc, "What it cannot separate"): both springs
@@ -147,10 +155,8 @@ class Split:
                                        for e, (a, b) in self.static_sag.items()}}
 
     def line(self) -> str:
-        where = "forward" if self.shift_N >= 0 else "rearward"
-        return (f"or both springs x{self.common:.2f} with {abs(self.shift_N):.0f} N carried {where} of rest (the rider "
-                f"{abs(self.place_mm):.0f} mm {where}, or a {abs(self.slope_deg):.1f} deg "
-                f"{'descent' if self.slope_deg >= 0 else 'climb'}): the travel alone cannot tell these apart")
+        return (f"or both springs x{self.common:.2f} with {carried_words(self.shift_N, self.place_mm, self.slope_deg)}: "
+                f"the travel alone cannot tell these apart")
 
 
 @dataclass
@@ -177,11 +183,8 @@ class Calibration:
             out = "calibrated on the static sag: " + "; ".join(s.line() for s in self.scales.values())
             if "load_forward_N" not in c:
                 return out
-            where = "forward" if c["load_forward_N"] >= 0 else "rearward"
-            return (f"{out}; the ride carried {abs(c['load_forward_N']):.0f} N {where} of rest (the rider "
-                    f"{abs(c['rider_place_forward_mm']):.0f} mm {where}, or a {abs(c['descent_deg']):.1f} deg mean "
-                    f"{'descent' if c['descent_deg'] >= 0 else 'climb'}) and {c['weight_beyond_file_kg']:+.1f} kg of "
-                    f"weight beyond the file's rider")
+            return (f"{out}; on the ride {carried_words(c['load_forward_N'], c['rider_place_forward_mm'], c['descent_deg'])} "
+                    f"and {c['weight_beyond_file_kg']:+.1f} kg of weight beyond the file's rider")
         out = "calibrated on the ride: " + "; ".join(s.line() for s in self.scales.values())
         return out if self.split is None else f"{out}; {self.split.line()}"
 
@@ -214,8 +217,7 @@ class Calibration:
                 out = merged(out, a.overrides(a.value * sc.value))
         place = (self.carried or {}).get("rider_place_forward_mm")
         if place is not None and self.level:  # the sag path: the rider where the ride carried the load
-            x, z = (1e3 * c for c in spec.rider.com)
-            out = merged(out, {"rider.com_mm": [x + place, z]})
+            out = merged(out, _rider_moved(spec, place))
         return out
 
     def adjusters(self, spec) -> list:
@@ -310,11 +312,8 @@ class _MeanForce:
         self.geometry = _geometry(whole, end, x)
 
     def __call__(self, s: float) -> float:
-        _, w = _laws(self.bike, merged(self.overrides, self.adj.overrides(self.adj.value * s)))
+        _, w = _laws(self.bike, _scaled(self.overrides, self.adj, s))
         return float(np.mean(_total(w, self.end, self.x, self.v, self.geometry)))
-
-
-_mean_force = _MeanForce
 
 
 def static_sags(bike, overrides=None) -> dict:
@@ -335,6 +334,35 @@ def _com_height(spec, whole) -> float:
     return sum(m * z for m, z in parts) / sum(m for m, _ in parts) - axle + whole.radius
 
 
+def _scaled(overrides, adj, s: float) -> dict:
+    """``overrides`` with the spring adjuster ``adj`` at ``s`` times its value."""
+    return merged(overrides, adj.overrides(adj.value * s))
+
+
+def _springs_at(overrides, scales) -> dict:
+    """``overrides`` with each spring adjuster of ``scales`` ((adjuster, scale) pairs) at that scale."""
+    out = overrides
+    for adj, s in scales:
+        out = _scaled(out, adj, s)
+    return dict(out or {})
+
+
+def _load_as(spec, whole, forward_N: float) -> tuple:
+    """A load ``forward_N`` carried onto the front (off the rear) read as (the rider's place forward that
+    moves it, mm; the mean descent that moves it at a steady speed, deg; the centre of mass's height, m)."""
+    wheelbase = whole.xF - whole.xR
+    everything = whole.M + whole.mr + whole.mF + whole.mR
+    h = _com_height(spec, whole)
+    sine = max(-1.0, min(1.0, forward_N * wheelbase / (everything * whole.g * h)))
+    return 1e3 * forward_N * wheelbase / (whole.mr * whole.g), math.degrees(math.asin(sine)), h
+
+
+def _rider_moved(spec, forward_mm: float) -> dict:
+    """The override that moves ``spec``'s rider ``forward_mm`` forward of its place (``rider.com_mm``)."""
+    x, z = (1e3 * c for c in spec.rider.com)
+    return {"rider.com_mm": [x + forward_mm, z]}
+
+
 def _split(spec, whole, bike, overrides, scales, mean_forces) -> Split:
     """The other reading of the same two balances (:class:`Split`): both springs at one scale, from
     their sum, and what is left of the front's balance a load moved forward."""
@@ -350,16 +378,10 @@ def _split(spec, whole, bike, overrides, scales, mean_forces) -> Split:
         return None
     common = float(brentq(excess, lo, hi, xtol=1e-4))
     shift = mean_forces["front"](common) - whole.fF0
-    wheelbase = whole.xF - whole.xR
-    everything = whole.M + whole.mr + whole.mF + whole.mR
-    h = _com_height(spec, whole)
-    slope = math.degrees(math.asin(max(-1.0, min(1.0, shift * wheelbase / (everything * whole.g * h)))))
-    sep = {e: merged(overrides, sc.adjuster.overrides(sc.adjuster.value * sc.value)) for e, sc in scales.items()}
-    apart = static_sags(bike, merged(sep["front"], sep["rear"]))
-    together = static_sags(bike, merged(merged(overrides, scales["front"].adjuster.overrides(
-        scales["front"].adjuster.value * common)), scales["rear"].adjuster.overrides(scales["rear"].adjuster.value * common)))
-    return Split(common, float(shift), 1e3 * shift * wheelbase / (whole.mr * whole.g), slope, h,
-                 {e: (apart[e], together[e]) for e in ("front", "rear")})
+    place, slope, h = _load_as(spec, whole, shift)
+    apart = static_sags(bike, _springs_at(overrides, [(sc.adjuster, sc.value) for sc in scales.values()]))
+    together = static_sags(bike, _springs_at(overrides, [(sc.adjuster, common) for sc in scales.values()]))
+    return Split(common, float(shift), place, slope, h, {e: (apart[e], together[e]) for e in ("front", "rear")})
 
 
 def static_strokes(bike, overrides=None) -> dict:
@@ -387,7 +409,7 @@ def sag_scales(bike, overrides, static_sag_mm, segments: int = 0) -> dict:
             continue
 
         def sag(q, adj=adj, end=end):
-            return static_strokes(bike, merged(overrides, adj.overrides(adj.value * q)))[end]
+            return static_strokes(bike, _scaled(overrides, adj, q))[end]
 
         lo, hi = SCALE_RANGE
         values = []
@@ -412,12 +434,9 @@ def _carried(spec, whole, scales, mean_forces) -> dict:
     if len(extra) < 2:
         return {f"{e}_N": v for e, v in extra.items()}
     forward = 0.5 * (extra["front"] - extra["rear"])
-    wheelbase = whole.xF - whole.xR
-    everything = whole.M + whole.mr + whole.mF + whole.mR
-    sine = forward * wheelbase / (everything * whole.g * _com_height(spec, whole))
+    place, descent, _ = _load_as(spec, whole, forward)
     return {"front_N": extra["front"], "rear_N": extra["rear"], "load_forward_N": forward,
-            "rider_place_forward_mm": 1e3 * forward * wheelbase / (whole.mr * whole.g),
-            "descent_deg": math.degrees(math.asin(max(-1.0, min(1.0, sine)))),
+            "rider_place_forward_mm": place, "descent_deg": descent,
             "weight_beyond_file_kg": (extra["front"] + extra["rear"]) / whole.g}
 
 
@@ -462,7 +481,7 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
         x = np.clip(series[end], 0.0, None) * 1e-3
         v = m.velocity(t, series[end]) * 1e-3
         load = float(loads[end])
-        mean_force = _mean_force(bike, overrides, adj, whole, end, x, v)
+        mean_force = _MeanForce(bike, overrides, adj, whole, end, x, v)
         mean_forces[end] = mean_force
 
         lo, hi = SCALE_RANGE
@@ -473,8 +492,10 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
                 f"{name}: no {adj.label} within x{lo:g}-x{hi:g} of the bike file's carries the {end} end's static "
                 f"load ({load:.0f} N) over the ride's travel (the ride's mean {series[end].mean():.1f} mm needs a "
                 f"spring {what} than that): the model does not describe this ride, so it cannot predict a change")
+        if static_sag_mm is not None:  # the springs come from the sag: this end's balance is only needed described
+            continue
         s = float(brentq(lambda q: mean_force(q) - load, lo, hi, xtol=1e-4))
-        _, w = _laws(bike, merged(overrides, adj.overrides(adj.value * s)))
+        _, w = _laws(bike, _scaled(overrides, adj, s))
         spring, damper = _forces(w, end, x, v, mean_force.geometry)
         sp = np.array([spring[k].mean() for k in segs])
         dm = np.array([damper[k].mean() for k in segs])
@@ -491,30 +512,35 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
         scales[end] = Scale(end, s, float(min(low, s)), float(max(high, s)), adj, load, len(segs))
         over = merged(over, adj.overrides(adj.value * s))
     if static_sag_mm is not None:  # the springs from the sag measured: the ride's balances give the load carried
-        scales = sag_scales(bike, overrides, static_sag_mm, len(segs))
-        over = {}
-        for sc in scales.values():
-            over = merged(over, sc.adjuster.overrides(sc.adjuster.value * sc.value))
-        carried = _carried(spec, whole, scales, mean_forces)
-        level = {"front": 0.0, "rear": 0.0}
-        if "rider_place_forward_mm" in carried:  # the rider carried where the ride put the load: the model rides it so
-            x, z = (1e3 * c for c in spec.rider.com)
-            place = x + carried["rider_place_forward_mm"]
-            pedals, bars = 1e3 * spec.rider.leg_x, 1e3 * spec.rider.arm_x
-            if not pedals < place < bars:
-                where = "past the bars" if place >= bars else "behind the pedals"
-                raise RideNotDescribed(
-                    f"{name}: with the springs --static-sag-mm gives, the ride carried {carried['load_forward_N']:.0f} N "
-                    f"forward of rest: the rider would ride {place:.0f} mm from the pedals, {where} (pedals {pedals:.0f}, "
-                    f"bars {bars:.0f} mm), so the model cannot carry the load as the ride did (a steep descent or climb, "
-                    f"long braking): it does not describe this ride with that sag")
-            moved = merged(over, {"rider.com_mm": [place, z]})
-            at_rest, riding = static_sags(bike, merged(overrides, over)), static_sags(bike, merged(overrides, moved))
-            level = {e: at_rest[e] - riding[e] for e in level}
-            over = moved
-        return Calibration(scales, over, SAG_METHOD, carried=carried, level=level)
+        return _on_the_sag(spec, whole, bike, overrides, static_sag_mm, len(segs), mean_forces, name)
     split = _split(spec, whole, bike, overrides, scales, mean_forces) if len(scales) == 2 else None
     return Calibration(scales, over, split=split)
+
+
+def _on_the_sag(spec, whole, bike, overrides, static_sag_mm, segments: int, mean_forces, name: str) -> Calibration:
+    """The calibration on a measured static sag (:func:`sag_scales`), the load the ride carried
+    (:func:`_carried`), the rider moved to where it was carried and the static sag points that move adds
+    (``Calibration.level``). Raises ``RideNotDescribed`` where that place is past the bars or behind the pedals."""
+    scales = sag_scales(bike, overrides, static_sag_mm, segments)
+    over = _springs_at({}, [(sc.adjuster, sc.value) for sc in scales.values()])
+    carried = _carried(spec, whole, scales, mean_forces)
+    level = {"front": 0.0, "rear": 0.0}
+    if "rider_place_forward_mm" in carried:  # the rider carried where the ride put the load: the model rides it so
+        moved = _rider_moved(spec, carried["rider_place_forward_mm"])
+        place, _ = moved["rider.com_mm"]
+        pedals, bars = 1e3 * spec.rider.leg_x, 1e3 * spec.rider.arm_x
+        if not pedals < place < bars:
+            where = "past the bars" if place >= bars else "behind the pedals"
+            raise RideNotDescribed(
+                f"{name}: with the springs --static-sag-mm gives, the ride carried {carried['load_forward_N']:.0f} N "
+                f"forward of rest: the rider would ride {place:.0f} mm from the pedals, {where} (pedals {pedals:.0f}, "
+                f"bars {bars:.0f} mm), so the model cannot carry the load as the ride did (a steep descent or climb, "
+                f"long braking): it does not describe this ride with that sag")
+        moved = merged(over, moved)
+        at_rest, riding = static_sags(bike, merged(overrides, over)), static_sags(bike, merged(overrides, moved))
+        level = {e: at_rest[e] - riding[e] for e in level}
+        over = moved
+    return Calibration(scales, over, SAG_METHOD, carried=carried, level=level)
 
 
 def calibrate(record, bike, overrides=None, duration: float | None = None, static_sag_mm=None) -> Calibration:
