@@ -12,7 +12,8 @@ command runs it (calibrated, every candidate searched): its verdict and recommen
 one-line refusal (the reconstruction's check, the recorded setting crashing). Then, per end, whether
 the rides' intervals agree: the range every interval holds (the largest low to the smallest high;
 none where that is empty) and each pair's overlap. Where two rides or more are advised, the pooled
-advice (``mtbmj.ride.advice_pool.pooled``) too. Nothing here sets a verdict to pass: what is
+advice (``mtbmj.ride.advice_pool.pooled``) too; where two or more are calibrated, their pooled calibration
+(``mtbmj.ride.calibrate.calibrate_pooled``, the one bike ``advise RIDE RIDE ...`` reports). Nothing here sets a verdict to pass: what is
 recorded is what the command answers. Writes its results where ``--out`` says (default
 ``<tempdir>/mtbmj-benchmarks/advise_rides.json``, outside the repository). Not a test: nothing is
 asserted.
@@ -72,7 +73,7 @@ def main(argv=None) -> int:
     rides = []
     for ride in args.rides:
         rides += sorted(str(p) for p in Path(ride).glob("*.SST")) if Path(ride).is_dir() else [ride]
-    rows, cals, advised = [], {}, []
+    rows, cals, advised, calibrated = [], {}, [], []
     for ride in rides:
         path = Path(ride)
         row = {"ride": path.name, "folder": path.parent.name}
@@ -90,6 +91,7 @@ def main(argv=None) -> int:
             cal = calibrate.calibrate(record, args.bike)
             row["calibration"] = cal.to_dict()
             cals[path.name] = row["calibration"]
+            calibrated.append(record)
             print(f"{path.name}: {cal.line()}", flush=True)
         except MtbmjError as exc:
             row["calibration_refused"] = str(exc)
@@ -108,6 +110,14 @@ def main(argv=None) -> int:
             print(f"{path.name}: advice refused: {exc}", flush=True)
         row["wall_s"] = time.perf_counter() - t0
         rows.append(row)
+    pooled_cal = None
+    if len(calibrated) >= 2:  # the rides' one bike: every calibrated ride's balances together (advise RIDE RIDE's)
+        try:
+            pc = calibrate.calibrate_pooled(calibrated, args.bike)
+            pooled_cal = {"rides": [r.name for r in calibrated], **pc.to_dict()}
+            print(f"pooled: {pc.line()}", flush=True)
+        except MtbmjError as exc:
+            pooled_cal = {"refused": str(exc)}
     pooled = None
     if len(advised) >= 2:
         try:
@@ -125,6 +135,7 @@ def main(argv=None) -> int:
                       + (f" --workers {args.workers}" if args.workers != 2 else "")
                       + " --out benchmarks/results/advise_rides.json",
            "bike": args.bike, "rides": rows, "agreement": agree, "pooled": pooled,
+           "pooled_calibration": pooled_cal,
            "verdict_set_to_pass": False}
     print(f"wrote {write_json(__file__, out, args.out)}")
     return 0

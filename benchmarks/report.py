@@ -557,6 +557,18 @@ def advise_rides_rows(d: dict) -> dict[str, list[Row]]:
         common = "none" if a["common"] is None else f"x{num(a['common'][0], 3)}–x{num(a['common'][1], 3)}"
         rows.append(Row(f"the {len(a['rides'])} rides' {end} spring scales: the range every interval holds", target,
                         f"{common}; pairs overlapping: {pairs}", name, d["command"]))
+    pc = d.get("pooled_calibration")
+    if pc and "springs" in pc:
+        cal = "; ".join(f"{s['key'].split(':')[0].split('.')[0]} {num(s['calibrated'], 3)} {s['unit']} "
+                        f"({spread(s['calibrated_low'], s['calibrated_high'], 3)}; x{num(s['scale'], 3)})"
+                        for s in pc["springs"].values())
+        if pc.get("or"):
+            cal += f"; or both x{num(pc['or']['common_scale'], 3)} with {num(pc['or']['load_forward_N'], 3)} N forward"
+        rows.append(Row(f"the {len(pc['rides'])} rides pooled ({', '.join(r.replace('.SST', '') for r in pc['rides'])}): "
+                        f"one bike's springs calibrated, 95 %", target, cal, name, d["command"]))
+    elif pc:
+        rows.append(Row("the rides pooled: one bike's springs calibrated", target,
+                        "calibration " + _advise_refusal(pc["refused"]), name, d["command"]))
     commons = {r["ride"]: r["calibration"]["or"]["common_scale"] for r in d["rides"]
                if (r.get("calibration") or {}).get("or")}
     if len(commons) > 1:

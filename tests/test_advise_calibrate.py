@@ -143,7 +143,9 @@ def test_the_static_sag_measured_tells_a_soft_fork_from_a_rider_forward(forward,
     (["--static-sag-mm", "40,15", "--no-calibrate"], "cannot go with --no-calibrate"),
     (["--static-sag-mm", "400,15"], "the fork's 400 mm is not a static sag any fork spring rate"),
     (["--static-sag-mm", "15,13.9"], "would ride 458 mm from the pedals, past the bars"),
-], ids=["one", "negative", "words", "uncalibrated", "past-any-spring", "load-past-the-bars"])
+    (["--carried-as", "descent"], "--carried-as says how the runs carry the load a measured static sag leaves: it "
+                                  "needs --static-sag-mm"),
+], ids=["one", "negative", "words", "uncalibrated", "past-any-spring", "load-past-the-bars", "carried-without-sag"])
 def test_a_static_sag_that_cannot_be_is_refused_in_one_line(right, tmp_path, capsys, given, why):
     """A careless --static-sag-mm: one line naming the option and the cause, exit status 2, nothing written
     (a fork sag half the bike's own, 15 mm for 30.7: the stiff fork it gives leaves 221 N of the ride's front
@@ -295,11 +297,75 @@ def test_advice_on_the_forward_ride_with_its_static_sag_rides_it_as_carried(forw
     assert 'id="carried"' in (out / "advice.html").read_text()
 
 
+@pytest.mark.slow  # one advice on a 30 s made ride, every candidate searched: 1-3 min on two busy cores
+def test_advice_on_the_forward_ride_carried_as_a_descent_sits_where_the_ride_sat(forward, tmp_path):
+    """The forward ride advised with its static sag and ``--carried-as descent``: the rider stays in the file's
+    place and every run rides the reconstructed terrain laid on the descent that carries the 85 N the ride
+    carried (the grade found through the engine, ``calibrate_descent.grade_for``). The model's fork and rear
+    then sit where the ride's sat (mean travel within 3 points; ridden at the closed form's grade with the
+    rider moved as well, the fork sat at 37 % for the ride's 31 %), the static sag the rules judge is the one
+    measured, the bike rides the whole ride, and no change beyond the well-set ranges is advised."""
+    sst, file, sag = forward
+    out = tmp_path / "advice"
+    with reconstruction_passing():
+        assert main(["advise", str(sst), "--bike", str(file), "--static-sag-mm", f"{sag[0]:.3f},{sag[1]:.3f}",
+                     "--carried-as", "descent", "--out", str(out)]) == 0
+    advice = json.loads((out / "advice.json").read_text())
+    carried = advice["calibration"]["carried"]
+    assert carried["as"] == "descent" and 3.0 < carried["ridden_descent_deg"] < 9.0, carried
+    assert carried["load_forward_N"] == pytest.approx(_moved_forward_N(file), rel=0.1), carried
+    rec, sim = advice["recorded_setting"]["measured"], advice["recorded_setting"]["simulated"]
+    for end in ("front", "rear"):
+        assert abs(sim[end]["dynamic_sag_percent"] - rec[end]["dynamic_sag_percent"]) < 3.0, (end, sim[end], rec[end])
+    assert sim["front"]["static_sag_percent"] == pytest.approx(100 * sag[0] / rec["front"]["travel_mm"], abs=2.0)
+    assert advice["recorded_setting"].get("crash") is None
+    if advice["verdict"]["answer"] == "change":
+        assert outside_well_set_ranges(advice["recommendation"]) == [], advice["recommendation"]
+
+
+def test_the_descent_that_carries_a_load_is_found_as_the_moment_balance_says(right):
+    """``calibrate.descent_for`` (``calibrate_descent.grade_for``) on the test bike: the descent whose steady run the calibration reads as
+    85 N carried forward is the one a moment balance gives, m g sin(theta) h / L = 85 N, h and L the bike's
+    centre of mass height and wheelbase from MuJoCo's model at rest (within 0.7 deg: the brakes' dive and
+    the frame's pitch on the grade are in the run, not in the balance); a load no trail's steady descent
+    carries (400 N: 29 deg) is refused naming the load."""
+    import math
+
+    import mujoco
+
+    from mtbmj.bike.run import run_bike
+    from mtbmj.ride import calibrate_descent
+    from mtbmj.ride.advice_rules import RideNotDescribed
+
+    sst, file, sag = right
+    cal = _calibrated(sst, file, sag, measured=True)
+    level = run_bike(str(file), "flat:length_m=5", 5.0, duration=0.01, overrides=cal.overrides)
+    p = level.prepared
+    m, d = p.bike.model, mujoco.MjData(p.bike.model)
+    d.qpos[:] = p.initial_qpos
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    h = float(d.subtree_com[0][2])
+    wheelbase = float(d.xpos[m.body("front_wheel").id][0] - d.xpos[m.body("rear_wheel").id][0])
+    want = math.degrees(math.asin(85.0 * wheelbase / (float(m.body_subtreemass[0]) * 9.81 * h)))
+    found = calibrate.descent_for(str(file), None, cal.scales, 85.0, 3.0)  # from a poor first guess
+    assert found["descent_deg"] == pytest.approx(want, abs=0.7), (found, want)
+    assert abs(found["read_N"] - 85.0) <= calibrate_descent.TOLERANCE_N and found["runs"] <= 5, found
+    with pytest.raises(RideNotDescribed, match="400 N.*steeper than 20 deg"):
+        calibrate.descent_for(str(file), None, cal.scales, 400.0, 29.0)
+
+
 def _reference_scale(t, travel_mm, bike, end):
+    return _reference_pooled_scale([(t, travel_mm)], bike, end)
+
+
+def _reference_pooled_scale(parts, bike, end):
     """The scale of ``end``'s spring whose mean force at the wheel over ``travel_mm`` is the end's
     static load, per sample as the module doc states it (the law at the stroke and speed, over
     sin(head angle) or the leverage ratio), each sample's force in a plain loop: the calibration
-    before its speed mend (the leverage once per ride, the spring not apart), for the answer's sameness."""
+    before its speed mend (the leverage once per ride, the spring not apart), for the answer's sameness.
+    ``parts``: [(t, travel_mm)] of one ride or several, each one's speed on its own time, the mean over
+    all their samples."""
     import numpy as np
     from scipy.optimize import brentq
 
@@ -314,8 +380,8 @@ def _reference_scale(t, travel_mm, bike, end):
 
     spec, w0 = whole(None)
     adj = calibrate.spring_adjuster(spec, end)
-    x = np.clip(travel_mm, 0.0, None) * 1e-3
-    v = metrics.velocity(t, travel_mm) * 1e-3
+    x = np.concatenate([np.clip(travel_mm, 0.0, None) for _, travel_mm in parts]) * 1e-3
+    v = np.concatenate([metrics.velocity(t, travel_mm) for t, travel_mm in parts]) * 1e-3
 
     def mean_force(s):
         _, w = whole(calibrate.merged({}, adj.overrides(adj.value * s)))
@@ -386,3 +452,40 @@ def test_the_shared_pedalling_runs_standing_carry_load_forward_of_seated():
     assert all(c.split.shift_N < 0 for c in seated) and all(c.split.shift_N > 0 for c in standing)
     ratio = [c.scales["front"].value / c.scales["rear"].value for c in standing + seated]
     assert max(ratio[:2]) < 1.0 < min(ratio[2:]), ratio
+
+
+def _first(sst, file, seconds):
+    """(record, t, fork mm, rear mm) of the ride ``sst``'s first ``seconds`` as the calibration reads it."""
+    import numpy as np
+
+    from mtbmj.ride.reconstruct import RATE_HZ
+
+    record = ride_record(sst, Namespace(bike=str(file), fork_max_mm=None, shock_max_mm=None))
+    rec = record.decimated(RATE_HZ)
+    t = np.asarray(rec.time_s, float)
+    k = t - t[0] <= seconds
+    return record, t[k], np.asarray(rec.fork_mm, float)[k], np.asarray(rec.rear_mm, float)[k]
+
+
+def test_rides_pooled_calibrate_as_one_ride_of_all_their_samples(softer, right):
+    """Two rides' pooled calibration (``advise RIDE RIDE``'s one bike) is each end's scale whose mean force
+    over every sample of both is the end's load, each ride's speed on its own time: the plain per-sample
+    reference above on the first 6 s of the softer fork's ride and of the right one's. The pooled fork
+    lies between the two rides' own (a mix of two settings is not told apart: that the rides share one is
+    the rider's word), and a ride pooled with itself reads as alone, its interval no wider."""
+    rec_s, ts, fs, rs = _first(*softer[:2], 6.0)
+    rec_r, tr, fr, rr = _first(*right[:2], 6.0)
+    file = str(softer[1])  # the two bike files are the same text: 12 N/mm
+    cal = calibrate.calibrate_pooled([rec_s, rec_r], file, duration=6.0)
+    assert cal.scales["front"].value == pytest.approx(_reference_pooled_scale([(ts, fs), (tr, fr)], file, "front"),
+                                                      rel=1e-6)
+    assert cal.scales["rear"].value == pytest.approx(_reference_pooled_scale([(ts, rs), (tr, rr)], file, "rear"),
+                                                     rel=1e-6)
+    alone_s = calibrate.calibrate(rec_s, file, duration=6.0).scales["front"]
+    alone_r = calibrate.calibrate(rec_r, file, duration=6.0).scales["front"]
+    assert alone_s.value < cal.scales["front"].value < alone_r.value, (alone_s, cal.scales["front"], alone_r)
+    twice = calibrate.calibrate_pooled([rec_s, rec_s], file, duration=6.0).scales["front"]
+    assert twice.value == pytest.approx(alone_s.value, rel=1e-6)
+    assert twice.high - twice.low <= alone_s.high - alone_s.low + 1e-9
+    assert "2 rides pooled" in cal.method and cal.line().startswith("calibrated on 2 rides pooled: fork spring rate")
+    assert cal.to_dict()["rides"] == 2 and calibrate.calibrate(rec_s, file, duration=6.0).to_dict()["rides"] == 1

@@ -156,6 +156,15 @@ def test_made_rides_of_one_setting_pooled(tmp_path):
     p.write(out)
     d = json.loads((out / "advice.json").read_text())
     assert [e["ride"] for e in d["rides"]] == ["seed21.SST", "seed5.SST"] and d["refused"][0]["ride"] == "seed8.SST"
+    # one calibration for the pool, from both kept rides (not the first's): between the rides' own scales
+    cal = d["calibration"]
+    assert "2 rides pooled" in cal["method"]
+    for end in ("front", "rear"):
+        per = [e["spring_scales"][end] for e in d["rides"]]
+        assert min(per) - 1e-9 <= cal["springs"][end]["scale"] <= max(per) + 1e-9, (end, per, cal["springs"][end])
+    for end in ("front", "rear"):  # the bike file says the springs ridden (the soft fork's 5 N/mm): x1 held
+        assert cal["springs"][end]["low"] <= 1.0 <= cal["springs"][end]["high"], (end, cal["springs"][end])
+    assert cal["rides"] == 2 and d["rides"][0]["spring_scales"] != d["rides"][1]["spring_scales"]
     html = (out / "advice.html").read_text()
     assert 'id="rides"' in html and 'id="refused"' in html and "<th>length (s)</th>" in html
     from helpers import CHROMIUM, rendered

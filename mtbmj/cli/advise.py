@@ -18,6 +18,12 @@ def cmd_advise(args) -> int:
 
     over = bike_overrides(args)
     sag = static_sag(args.static_sag_mm, args.calibrate)
+    if args.carried_as is not None and sag is None:
+        from mtbmj.errors import ConfigError
+
+        raise ConfigError("--carried-as says how the runs carry the load a measured static sag leaves: it needs "
+                          "--static-sag-mm FORK,SHOCK")
+    carried = args.carried_as or "rider"
     if args.rider_kg is not None:
         over["rider.mass_kg"] = args.rider_kg
     sets = [parse_assignment(text) for text in args.try_set or ()]
@@ -30,13 +36,15 @@ def cmd_advise(args) -> int:
     if len(records) == 1:
         result = Progress("advise").around(
             lambda progress: advise.advise(records[0], bike, over or None, args.duration, progress, args.workers,
-                                           tries=tries, calibrated=args.calibrate, static_sag_mm=sag))
+                                           tries=tries, calibrated=args.calibrate, static_sag_mm=sag,
+                                           carried_as=carried))
     else:
         from mtbmj.ride import advice_pool
 
         result = Progress("advise").around(
             lambda progress: advice_pool.pooled(records, bike, over or None, args.duration, progress, args.workers,
-                                                tries=tries, calibrated=args.calibrate, static_sag_mm=sag))
+                                                tries=tries, calibrated=args.calibrate, static_sag_mm=sag,
+                                           carried_as=carried))
     written = result.write(args.out)
     for r in getattr(result, "refused", ()):
         print(f"left out of the pool: {r['why']}")
@@ -116,6 +124,10 @@ def add_parser(sub) -> None:
                         "stroke and the shock's (the O-rings); the springs are calibrated on it, and the ride then "
                         "says what load it carried fore-aft (the travel alone cannot tell a soft fork from a "
                         "descent)")
+    p.add_argument("--carried-as", choices=("rider", "descent"), default=None,
+                   help="with --static-sag-mm: how every run carries the load the ride carried fore-aft: rider (the "
+                        "rider moved to where it was carried, the default) or descent (the reconstructed terrain laid "
+                        "on the mean descent that carries it, the rider in place)")
     p.add_argument("--workers", type=int, default=2, metavar="N",
                    help="processes the candidate runs spread over (default 2)")
     add_sensor_spans(p)

@@ -15,6 +15,12 @@ ride's segments, resampled across rides), so more rides narrow it. One verdict, 
 rules (``mtbmj.ride.advise.judge``), every candidate that lowers the penalty searched on first on every ride
 (``mtbmj.ride.advise.search_on``).
 
+**One calibration for the pool** (``advice.json`` ``calibration``, the line, ``advice.html``): the
+springs from every kept ride's balances together (``mtbmj.ride.calibrate.calibrate_pooled``: the rides
+joined end to end, each weighted by its length), and so its other reading, which the verdict's words
+quote; each ride still rides at its own calibration (its own descents and loads), and its own scales
+are in ``rides`` (``spring_scales``).
+
 **Each ride's own verdict** (``PooledAdvice.rides``, one step, not searched) is kept beside the
 pooled one (``advice.json`` ``rides``, a table in ``advice.html``, a line each on the terminal).
 Where the rides contradict each other or the pooled answer (:func:`judge`: one raises an adjuster
@@ -143,7 +149,9 @@ class PooledAdvice(Advice):
             rec = r.recommendation if (r.verdict or {}).get("answer") == "change" else None
             out.append({"ride": r.ride, "seconds": r.base.metrics["duration_s"], "answer": r.verdict.get("answer"),
                         "why": r.verdict.get("why"), "change": None if rec is None else
-                        {"key": rec["key"], "direction": rec["direction"], "setting": rec["setting"]}})
+                        {"key": rec["key"], "direction": rec["direction"], "setting": rec["setting"]},
+                        "spring_scales": None if r.calibration is None else
+                        {e: s.value for e, s in r.calibration.scales.items()}})
         return out
 
     def to_dict(self) -> dict:
@@ -200,7 +208,8 @@ def judging(advice: PooledAdvice, candidates=None) -> tuple:
 
 
 def pooled(records, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
-           tries=(), calibrated: bool = True, search: bool = True, static_sag_mm=None) -> PooledAdvice:
+           tries=(), calibrated: bool = True, search: bool = True, static_sag_mm=None,
+           carried_as: str = "rider") -> PooledAdvice:
     """One advice from ``records``, several rides of ``bike`` at one setting (``overrides``), as
     :func:`mtbmj.ride.advise.advise` gives for one (the module doc says how they are pooled). A ride
     refused is left out and named; none left: :class:`AdviseError` naming each ride's reason."""
@@ -216,7 +225,7 @@ def pooled(records, bike, overrides=None, duration: float | None = None, progres
     ready, refused = [], []
     for record in records:
         try:
-            ready.append(prepare(record, bike, overrides, duration, calibrated, True, tries, static_sag_mm))
+            ready.append(prepare(record, bike, overrides, duration, calibrated, True, tries, static_sag_mm, carried_as))
         except (AdviseError, ReconstructError) as exc:
             refused.append({"ride": record.name, "why": str(exc)})
     jobs = [ride.jobs() for ride in ready]
@@ -250,6 +259,12 @@ def pooled(records, bike, overrides=None, duration: float | None = None, progres
             raise AdviseError(f"none of the {len(records)} rides can be advised on: "
                               + "; ".join(r["why"] for r in refused))
         advice = combine(each, refused)
+        if calibrated and len(kept) > 1:  # one bike for the pool: its springs from every kept ride's balances
+            from mtbmj.ride import calibrate as cal_mod
+            from mtbmj.ride import reconstruct as rc
+
+            advice.calibration = cal_mod.calibrate_pooled([rc.ridden_part(r.record)[0] for r in kept], bike,
+                                                          overrides, duration, static_sag_mm, carried_as)
         decide(advice, kept, pool, search, judging)
     advice.wall_s = time.perf_counter() - start
     return advice

@@ -105,6 +105,8 @@ from mtbmj.ride.advice_rules import (  # noqa: F401 (advise's names for them)
 from mtbmj.ride.advice_report import LEGEND_ROOM, metric_unit  # noqa: E402,F401 (advise's names for them)
 from mtbmj.ride.advice_verdict import changes, judge  # noqa: E402,F401 (advise's names for them)
 
+DESCENT_LEAD_M = 10.0  # --carried-as descent: the level start this much further before the ride (the grade entered)
+
 
 @dataclass
 class Run:
@@ -126,11 +128,13 @@ class Run:
         return float(sum(self.penalty.values()))
 
 
-def terrain_of(rec):
+def terrain_of(rec, descent_deg: float = 0.0):
     """The reconstruction's terrain with a flat lead-in (the bike starts at rest on level ground);
     where the front wheel was off the ground (a jump) the ground is unknown, and its found height
-    is the wheel's flight: the straight line from take-off to landing stands in for it."""
-    from mtbmj.rolling.terrain import Terrain
+    is the wheel's flight: the straight line from take-off to landing stands in for it. ``descent_deg``
+    (``--carried-as descent``): laid on that mean descent, entered over 5 m from 2 m after the start,
+    the start ``DESCENT_LEAD_M`` further back so the ride's first metre is on the steady grade."""
+    from mtbmj.rolling.terrain import Terrain, on_grade
 
     ground = np.array(rec.ground, float)
     for a, b in rec.jumps:
@@ -142,8 +146,9 @@ def terrain_of(rec):
     x, z = rec.distance[keep], ground[keep]
     x = np.concatenate(([x[0] - LEAD_IN_M - 50.0, x[0] - 0.01], x, [x[-1] + 50.0]))
     z = np.concatenate(([z[0], z[0]], z, [z[-1]]))
-    start = float(rec.distance[0] - 1.0)  # the front axle 1 m before the ride's first metre
-    return Terrain(f"{rec.name} (reconstructed)", x, z, start, float(rec.distance[-1] - start), {"ride": rec.name})
+    start = float(rec.distance[0] - 1.0 - (DESCENT_LEAD_M if descent_deg else 0.0))  # the axle 1 m before the ride
+    ter = Terrain(f"{rec.name} (reconstructed)", x, z, start, float(rec.distance[-1] - start), {"ride": rec.name})
+    return on_grade(ter, -100.0 * math.tan(math.radians(descent_deg)), start + 2.0, 5.0) if descent_deg else ter
 
 
 def simulate(bike, overrides: dict, terrain, speed: float, duration: float, label: str, lead_s: float) -> Run:
@@ -413,7 +418,7 @@ def _json(o):
 
 def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
            tries=(), candidates: bool = True, calibrated: bool = True, search: bool = True,
-           static_sag_mm=None) -> Advice:
+           static_sag_mm=None, carried_as: str = "rider") -> Advice:
     """Advice for ``record`` (a two-ended ``TelemetryRecord``) on ``bike`` (preset, file or
     ``mtbmj.bike.spec.ResolvedBike``: read once, here or before), its keys ``overrides``;
     ``duration`` limits the simulated ride to its first seconds; the runs spread
@@ -426,7 +431,8 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     as it is. ``search``: every candidate that lowers the penalty searched further along its
     adjuster before the verdict (:mod:`mtbmj.ride.advice_search`). ``static_sag_mm`` (fork, shock stroke
     mm, standing on level ground; ``--static-sag-mm``): the springs calibrated on it instead of the ride's
-    balances (:func:`mtbmj.ride.calibrate.sag_scales`). Several rides of one setting:
+    balances (:func:`mtbmj.ride.calibrate.sag_scales`), the load the ride carried fore-aft carried by every run
+    as ``carried_as`` says ("rider" or "descent": ``mtbmj.ride.calibrate.spring_scales``). Several rides of one setting:
     :func:`mtbmj.ride.advice_pool.pooled`."""
     import time
 
@@ -436,7 +442,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     duration = checked_duration(duration)
     bike = spec_mod.resolve(bike)  # the bike file read once: every run below derives its setting from it
     bike = bike.with_overrides(None) if bike.overrides else bike
-    ride = prepare(record, bike, overrides, duration, calibrated, candidates, tries, static_sag_mm)
+    ride = prepare(record, bike, overrides, duration, calibrated, candidates, tries, static_sag_mm, carried_as)
     jobs = ride.jobs()
     from contextlib import ExitStack
 
@@ -526,7 +532,7 @@ class Prepared:
 
 
 def prepare(record, bike, overrides=None, duration: float | None = None, calibrated: bool = True,
-            candidates: bool = True, tries=(), static_sag_mm=None) -> Prepared:
+            candidates: bool = True, tries=(), static_sag_mm=None, carried_as: str = "rider") -> Prepared:
     """``record`` made ready for advice on ``bike`` (a ``ResolvedBike`` without overrides): its length
     checked, calibrated where asked, reconstructed and checked, its terrain, the adjusters and the
     candidates the parts allow (:func:`allowed`). Refused (:class:`AdviseError`) as :func:`advise` says."""
@@ -548,9 +554,9 @@ def prepare(record, bike, overrides=None, duration: float | None = None, calibra
     if calibrated:  # the ridden bike's springs from the ride itself, before anything is found through them
         from mtbmj.ride import calibrate as cal_mod
 
-        cal = cal_mod.calibrate(ridden, bike, overrides, duration, static_sag_mm)
-        overrides = cal.apply(bike, overrides)
-    rec = rc.reconstruct(record, bike, overrides)
+        cal = cal_mod.calibrate(ridden, bike, overrides, duration, static_sag_mm, carried_as)
+        overrides, statics = cal.apply(bike, overrides), cal.apply(bike, overrides, statics=True)
+    rec = rc.reconstruct(record, bike, statics if cal is not None else overrides)
     checks = rec.checks()
     if (checks["samples_checked_percent"] < MIN_CHECKED_PERCENT
             or not checks["rear_predicted_rms_percent_of_used"] <= MAX_REAR_MISS_PERCENT):
@@ -565,8 +571,9 @@ def prepare(record, bike, overrides=None, duration: float | None = None, calibra
     spec = spec_mod.load(bike, overrides)
     speed = float(rec.speed["speed_m_per_s"])
     adj = adjusters(spec) if cal is None else cal.adjusters(file_spec)
-    ride = Prepared(record, bike, rec, spec, cal, terrain_of(rec), speed,
-                    length if duration is None else min(length, duration), 1.0 / speed,  # the axle at the first metre
+    terrain = terrain_of(rec, 0.0 if cal is None else cal.descent_deg)
+    ride = Prepared(record, bike, rec, spec, cal, terrain, speed,  # metrics from the axle at the ride's first metre
+                    length if duration is None else min(length, duration), (rec.distance[0] - terrain.start_x) / speed,
                     adj, dict(overrides or {}), [], [], list(tries or ()))
     ride.todo, ride.skipped = allowed(bike, [(a, d, v) for a in adj for d, v in (("down", a.down), ("up", a.up))
                                              if v is not None and v != a.value] if candidates else [], ride.merged)

@@ -68,7 +68,10 @@ ride did; on the made forward ride the bike looped out at 21 s without the move)
 sag is taken back to the file's place before the rules read it (``Calibration.level_offsets``,
 ``mtbmj.ride.advise.Advice.levelled``): the rules judge the sag the rider measured. Measured on the
 made rides: the forward ride's springs x0.97/x1.02 with 85 N carried forward (the rider 149 mm, made
-150); the soft fork's x0.68 (made 0.7) with none.
+150); the soft fork's x0.68 (made 0.7) with none. Or (``carried_as="descent"``, ``--carried-as descent``) the rider stays in
+place and the runs ride the terrain laid on the steady descent that carries the load
+(``Calibration.descent_deg``, found through the engine: :mod:`mtbmj.ride.calibrate_descent`); the
+reconstruction's level-ground statics then carry it with the rider at that place (``apply(statics=True)``).
 
 **When no calibration describes the ride** (:class:`~mtbmj.ride.advice_rules.RideNotDescribed`): no
 scale within ``SCALE_RANGE`` of the file's balances an end's mean force (the end sits on its stop,
@@ -92,6 +95,7 @@ NOT_IDENTIFIED = ("the rider's mass (a heavier rider reads as softer springs), h
                   "(a fork softer than the file reads as a load carried forward: see \"or\") and the damping")
 SAG_READ_MM = 2.0  # assumed: a static sag read at an O-ring, the rider's stance as they ride, to +-2 mm (95 %)
 SAG_METHOD = "the static sag measured (--static-sag-mm), per end (closed-form statics; see mtbmj.ride.calibrate)"
+CARRIED_AS = ("rider", "descent")  # how the sag path's runs carry the load the ride carried fore-aft
 RIDER_PLACE_MM = 30.0  # assumed (95 %): the rider's mean place fore and aft, rider to rider (moves load between ends)
 
 
@@ -170,9 +174,11 @@ class Calibration:
     split: Split | None = None  # the same balances read as one spring scale and a load carried fore-aft
     carried: dict | None = None  # with the springs from a measured static sag: the load the ride carried (_carried)
     level: dict | None = None  # per end, static sag points from the rider as carried to the rider in place (sag path)
+    rides: int = 1  # the rides it was read from (several: calibrate_pooled)
+    descent_deg: float = 0.0  # the sag path's load carried as a mean descent: the grade every run rides (deg)
 
     def to_dict(self) -> dict:
-        return {"method": self.method, "springs": {e: s.to_dict() for e, s in self.scales.items()},
+        return {"method": self.method, "rides": self.rides, "springs": {e: s.to_dict() for e, s in self.scales.items()},
                 "overrides": self.overrides,
                 "not_identified": NOT_IDENTIFIED,
                 "or": None if self.split is None else self.split.to_dict(), "carried": self.carried}
@@ -180,12 +186,16 @@ class Calibration:
     def line(self) -> str:
         if self.carried is not None:
             c = self.carried
-            out = "calibrated on the static sag: " + "; ".join(s.line() for s in self.scales.values())
+            on = "" if self.rides == 1 else f" ({self.rides} rides pooled)"
+            out = f"calibrated on the static sag{on}: " + "; ".join(s.line() for s in self.scales.values())
             if "load_forward_N" not in c:
                 return out
+            ridden = (f"; ridden as a {abs(self.descent_deg):.1f} deg mean {'descent' if self.descent_deg >= 0 else 'climb'} "
+                      f"(--carried-as descent)" if c.get("as") == "descent" else "")
             return (f"{out}; on the ride {carried_words(c['load_forward_N'], c['rider_place_forward_mm'], c['descent_deg'])} "
-                    f"and {c['weight_beyond_file_kg']:+.1f} kg of weight beyond the file's rider")
-        out = "calibrated on the ride: " + "; ".join(s.line() for s in self.scales.values())
+                    f"and {c['weight_beyond_file_kg']:+.1f} kg of weight beyond the file's rider{ridden}")
+        on = "the ride" if self.rides == 1 else f"{self.rides} rides pooled"
+        out = f"calibrated on {on}: " + "; ".join(s.line() for s in self.scales.values())
         return out if self.split is None else f"{out}; {self.split.line()}"
 
     def level_offsets(self) -> dict:
@@ -201,10 +211,12 @@ class Calibration:
             return {"front": 0.0, "rear": 0.0}
         return {e: b - a for e, (a, b) in self.split.static_sag.items()}
 
-    def apply(self, bike, overrides=None) -> dict:
+    def apply(self, bike, overrides=None, statics: bool = False) -> dict:
         """``overrides`` with each calibrated end's spring (as ``bike`` with them sets it) times its
         scale: the ridden bike at that setting (a spring tried is the one labelled so, ridden); on the sag
-        path (``--static-sag-mm``) the rider moved forward by the place the ride carried its load at."""
+        path (``--static-sag-mm``) the rider moved forward by the place the ride carried its load at
+        (carried as a descent: only where ``statics``, the reconstruction's, whose level-ground statics
+        then carry the descent's mean load as the ride did, while the runs ride the grade)."""
         from mtbmj.bike import spec as spec_mod
 
         with warnings.catch_warnings():
@@ -216,7 +228,8 @@ class Calibration:
             if a is not None:
                 out = merged(out, a.overrides(a.value * sc.value))
         place = (self.carried or {}).get("rider_place_forward_mm")
-        if place is not None and self.level:  # the sag path: the rider where the ride carried the load
+        how = (self.carried or {}).get("as")
+        if place is not None and (how == "rider" or (statics and how == "descent")):  # where the load was carried
             out = merged(out, _rider_moved(spec, place))
         return out
 
@@ -455,13 +468,18 @@ def _segments(t) -> list:
     return [(t >= a) & (t <= b) for a, b in zip(edges[:-1], edges[1:])]
 
 
-def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride", static_sag_mm=None) -> Calibration:
+def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride", static_sag_mm=None,
+                  velocity=None, carried_as: str = "rider") -> Calibration:
     """Each end's spring scale from the ride (see the module doc): ``t`` s, ``front_mm`` the fork's
     travel and ``rear_mm`` the rear wheel's (compression positive) on it; ``bike`` a preset, file or
     ``ResolvedBike``, ``overrides`` its recorded keys. Raises ``RideNotDescribed`` naming the end
     where no scale within ``SCALE_RANGE`` balances it. ``static_sag_mm`` (the fork's stroke, the shock's
     stroke, mm, measured standing on level ground): the springs from it instead (:func:`sag_scales`),
-    the ride's balances then the load it carried (``Calibration.carried``)."""
+    the ride's balances then the load it carried (``Calibration.carried``). ``velocity``: each end's
+    travel speed (mm/s on ``t``, {"front", "rear"}) where it is not the derivative of the travel on ``t``
+    (rides joined end to end: :func:`calibrate_pooled`). ``carried_as`` (with ``static_sag_mm``): how the runs
+    carry the load the ride carried fore-aft, "rider" (the rider moved to that place) or "descent" (a mean
+    descent at a steady speed: the runs ride the terrain laid on that grade, the rider in the file's place)."""
     from scipy.optimize import brentq
 
     from mtbmj.measured import metrics as m
@@ -479,7 +497,7 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
         if adj is None:
             continue
         x = np.clip(series[end], 0.0, None) * 1e-3
-        v = m.velocity(t, series[end]) * 1e-3
+        v = (m.velocity(t, series[end]) if velocity is None else np.asarray(velocity[end], float)) * 1e-3
         load = float(loads[end])
         mean_force = _MeanForce(bike, overrides, adj, whole, end, x, v)
         mean_forces[end] = mean_force
@@ -512,20 +530,34 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
         scales[end] = Scale(end, s, float(min(low, s)), float(max(high, s)), adj, load, len(segs))
         over = merged(over, adj.overrides(adj.value * s))
     if static_sag_mm is not None:  # the springs from the sag measured: the ride's balances give the load carried
-        return _on_the_sag(spec, whole, bike, overrides, static_sag_mm, len(segs), mean_forces, name)
+        return _on_the_sag(spec, whole, bike, overrides, static_sag_mm, len(segs), mean_forces, name, carried_as)
     split = _split(spec, whole, bike, overrides, scales, mean_forces) if len(scales) == 2 else None
     return Calibration(scales, over, split=split)
 
 
-def _on_the_sag(spec, whole, bike, overrides, static_sag_mm, segments: int, mean_forces, name: str) -> Calibration:
+def _on_the_sag(spec, whole, bike, overrides, static_sag_mm, segments: int, mean_forces, name: str,
+                carried_as: str = "rider") -> Calibration:
     """The calibration on a measured static sag (:func:`sag_scales`), the load the ride carried
-    (:func:`_carried`), the rider moved to where it was carried and the static sag points that move adds
-    (``Calibration.level``). Raises ``RideNotDescribed`` where that place is past the bars or behind the pedals."""
+    (:func:`_carried`), and that load carried by the runs as ``carried_as`` says: "rider", the rider moved
+    to where it was carried and the static sag points that move adds (``Calibration.level``; raises
+    ``RideNotDescribed`` where that place is past the bars or behind the pedals); "descent", the rider in
+    place and every run on the mean descent that carries it (``Calibration.descent_deg``)."""
+    if carried_as not in CARRIED_AS:
+        raise ValueError(f"carried_as: one of {', '.join(CARRIED_AS)}, got {carried_as!r}")
     scales = sag_scales(bike, overrides, static_sag_mm, segments)
     over = _springs_at({}, [(sc.adjuster, sc.value) for sc in scales.values()])
     carried = _carried(spec, whole, scales, mean_forces)
     level = {"front": 0.0, "rear": 0.0}
-    if "rider_place_forward_mm" in carried:  # the rider carried where the ride put the load: the model rides it so
+    if "descent_deg" in carried and carried_as == "descent":  # the load a descent's: the terrain laid on its grade
+        try:
+            found = descent_for(bike, overrides, scales, carried["load_forward_N"], carried["descent_deg"])
+        except RideNotDescribed as exc:
+            raise RideNotDescribed(f"{name}: with the springs --static-sag-mm gives, {exc}: the model does not "
+                                   f"describe this ride with that sag") from None
+        carried.update({"as": "descent", "ridden_descent_deg": found["descent_deg"], "descent_runs": found["runs"]})
+        return Calibration(scales, over, SAG_METHOD, carried=carried, level=level, descent_deg=found["descent_deg"])
+    if "rider_place_forward_mm" in carried:
+        carried["as"] = "rider"  # the rider carried where the ride put the load: the model rides it so
         moved = _rider_moved(spec, carried["rider_place_forward_mm"])
         place, _ = moved["rider.com_mm"]
         pedals, bars = 1e3 * spec.rider.leg_x, 1e3 * spec.rider.arm_x
@@ -534,8 +566,8 @@ def _on_the_sag(spec, whole, bike, overrides, static_sag_mm, segments: int, mean
             raise RideNotDescribed(
                 f"{name}: with the springs --static-sag-mm gives, the ride carried {carried['load_forward_N']:.0f} N "
                 f"forward of rest: the rider would ride {place:.0f} mm from the pedals, {where} (pedals {pedals:.0f}, "
-                f"bars {bars:.0f} mm), so the model cannot carry the load as the ride did (a steep descent or climb, "
-                f"long braking): it does not describe this ride with that sag")
+                f"bars {bars:.0f} mm), so the model cannot carry the load as the ride did there: a descent of "
+                f"{carried['descent_deg']:.1f} deg carries it (--carried-as descent), or the ride does not fit this sag")
         moved = merged(over, moved)
         at_rest, riding = static_sags(bike, merged(overrides, over)), static_sags(bike, merged(overrides, moved))
         level = {e: at_rest[e] - riding[e] for e in level}
@@ -543,17 +575,82 @@ def _on_the_sag(spec, whole, bike, overrides, static_sag_mm, segments: int, mean
     return Calibration(scales, over, SAG_METHOD, carried=carried, level=level)
 
 
-def calibrate(record, bike, overrides=None, duration: float | None = None, static_sag_mm=None) -> Calibration:
+def _read_on_grade(bike, overrides, scales, grade_percent: float) -> tuple:
+    """(the load forward of rest, N, this module reads from a steady run of ``bike`` with ``overrides`` and
+    each end's spring at its scale in ``scales``, at ``grade_percent`` (0: level ground); the run): each end's
+    mean force over the run's travels on its steady stretch, as a ride's is read (:class:`_MeanForce`)."""
+    from mtbmj.bike import run as bike_run
+    from mtbmj.measured import metrics as m
+    from mtbmj.ride import calibrate_descent as cd
+
+    scenario = (f"climb:grade_percent={grade_percent:.6g},length_m={cd.LENGTH_M:g},at_m={cd.AT_M:g}" if grade_percent
+                else f"flat:length_m={cd.LENGTH_M + cd.AT_M:g}")
+    ridden = merged(overrides or {}, _springs_at({}, [(sc.adjuster, sc.value) for sc in scales.values()]))
+    r = bike_run.run_bike(bike, scenario, cd.SPEED_M_PER_S, overrides=ridden or None,
+                          duration=(cd.AT_M + cd.SETTLE_M + cd.READ_M + 2.0) / cd.SPEED_M_PER_S)
+    raw = r.raw
+    k = (raw["front_axle_x_m"] >= cd.AT_M + cd.SETTLE_M) & (raw["front_axle_x_m"] <= cd.AT_M + cd.SETTLE_M + cd.READ_M)
+    _, whole = _laws(bike, overrides)
+    excess = {}
+    for end, column in (("front", "front_travel_mm"), ("rear", "rear_travel_mm")):
+        x_mm, sc = raw[column][k], scales[end]
+        mean = _MeanForce(bike, overrides, sc.adjuster, whole, end, np.clip(x_mm, 0.0, None) * 1e-3,
+                          m.velocity(raw["time_s"][k], x_mm) * 1e-3)
+        excess[end] = mean(sc.value) - (whole.fF0 if end == "front" else whole.fR0)
+    return 0.5 * (excess["front"] - excess["rear"]), r
+
+
+def descent_for(bike, overrides, scales, load_forward_N: float, first_deg: float) -> dict:
+    """The steady mean descent (deg) whose run of ``bike`` (``overrides`` the recorded ones, the rider in
+    place, each end's spring at its scale in ``scales``) this module reads as ``load_forward_N`` carried
+    forward, from ``first_deg``: :func:`mtbmj.ride.calibrate_descent.grade_for` on :func:`_read_on_grade`."""
+    from mtbmj.ride.calibrate_descent import grade_for
+
+    return grade_for(lambda g: _read_on_grade(bike, overrides, scales, g), load_forward_N, first_deg)
+
+
+def calibrate(record, bike, overrides=None, duration: float | None = None, static_sag_mm=None,
+              carried_as: str = "rider") -> Calibration:
     """:func:`spring_scales` of a ``TelemetryRecord`` with both ends (its first ``duration`` s), read
-    as the reconstruction reads it (at ``mtbmj.ride.reconstruct.RATE_HZ``); ``static_sag_mm`` as there."""
+    as the reconstruction reads it (at ``mtbmj.ride.reconstruct.RATE_HZ``); ``static_sag_mm`` and
+    ``carried_as`` as there."""
     from mtbmj.ride.reconstruct import RATE_HZ
 
     rec = record.decimated(RATE_HZ)
     t = np.asarray(rec.time_s, float)
     keep = (t - t[0] <= duration) if duration is not None else np.ones(t.size, bool)
     return spring_scales(t[keep], np.asarray(rec.fork_mm, float)[keep], np.asarray(rec.rear_mm, float)[keep], bike,
-                         overrides, rec.name, static_sag_mm)
+                         overrides, rec.name, static_sag_mm, carried_as=carried_as)
 
 
-__all__ = ["Calibration", "Scale", "SCALE_RANGE", "SAG_READ_MM", "Split", "calibrate", "merged", "sag_scales",
+def calibrate_pooled(records, bike, overrides=None, duration: float | None = None, static_sag_mm=None,
+                     carried_as: str = "rider") -> Calibration:
+    """:func:`calibrate` of several rides of one setting as one ride (``mtbmj advise RIDE RIDE ...``): each
+    ride read as :func:`calibrate` reads it (its first ``duration`` s), its travel speeds taken on its own
+    time, and the rides joined end to end, so each end's balance is the mean force over all their samples
+    (each ride weighted by its length) and the interval resamples the segments of every ride together."""
+    from mtbmj.measured import metrics as m
+    from mtbmj.ride.reconstruct import RATE_HZ
+
+    ts, series, speeds, offset = [], {"front": [], "rear": []}, {"front": [], "rear": []}, 0.0
+    for record in records:
+        rec = record.decimated(RATE_HZ)
+        t = np.asarray(rec.time_s, float)
+        keep = (t - t[0] <= duration) if duration is not None else np.ones(t.size, bool)
+        t = t[keep]
+        for end, x in (("front", rec.fork_mm), ("rear", rec.rear_mm)):
+            x = np.asarray(x, float)[keep]
+            series[end].append(x)
+            speeds[end].append(m.velocity(t, x))
+        ts.append(t - t[0] + offset)
+        offset = float(ts[-1][-1]) + 1.0 / RATE_HZ
+    cal = spring_scales(np.concatenate(ts), np.concatenate(series["front"]), np.concatenate(series["rear"]), bike,
+                        overrides, f"{len(ts)} rides", static_sag_mm,
+                        {end: np.concatenate(v) for end, v in speeds.items()}, carried_as)
+    cal.method = f"{cal.method}; {len(ts)} rides pooled as one (each weighted by its length)"
+    cal.rides = len(ts)
+    return cal
+
+
+__all__ = ["CARRIED_AS", "Calibration", "Scale", "descent_for", "SCALE_RANGE", "SAG_READ_MM", "Split", "calibrate", "calibrate_pooled", "merged", "sag_scales",
            "spring_adjuster", "spring_scales", "static_sags", "static_strokes"]

@@ -156,6 +156,32 @@ def climb(grade_percent: float = 10.0, length_m: float = 40.0, at_m: float = LEA
                     params={"grade_percent": grade_percent, "length_m": length_m, "at_m": at_m})
 
 
+def on_grade(ter: Terrain, grade_percent: float, at_m: float, transition_m: float = 3.0) -> Terrain:
+    """``ter``'s profile laid on a steady grade (a descent: negative): its heights as they are to ``at_m``,
+    then the grade's ``grade_percent`` (100 x rise / run) added from ``at_m`` on, entered over a
+    parabolic transition ``transition_m`` long as :func:`climb` enters its own (the grade grows
+    linearly along it). The transition is sampled every 50 mm; the profile's own samples are kept."""
+    if not -40.0 <= grade_percent <= 40.0:
+        raise TerrainError(f"grade_percent {grade_percent:g} is outside -40 to 40 % (steeper than any trail a bike is "
+                           f"ridden up or down seated on its wheels)")
+    x = np.asarray(ter.x, float)
+    z = np.asarray(ter.z, float)
+    added = at_m + np.linspace(0.0, transition_m, max(2, int(round(transition_m / 0.05)) + 1))
+    added = added[(added > x[0]) & (added < x[-1])]
+    near = np.searchsorted(x, added)  # none within a micrometre of the profile's own samples
+    gap = np.minimum(np.abs(added - x[np.clip(near, 0, x.size - 1)]), np.abs(added - x[np.clip(near - 1, 0, x.size - 1)]))
+    added = added[gap > 1e-6]
+    xs = np.concatenate((x, added))
+    # the profile's height at the added points (a wall's two ends kept in order: a stable sort after x's own)
+    zs = np.concatenate((z, np.interp(added, x, z)))
+    order = np.argsort(xs, kind="stable")
+    xs, zs = xs[order], zs[order]
+    g, s = grade_percent / 100.0, np.clip(xs - at_m, 0.0, None)
+    zs = zs + np.where(s < transition_m, 0.5 * g * s * s / transition_m, g * (s - 0.5 * transition_m))
+    return Terrain(ter.name, xs, zs, ter.start_x, ter.length,
+                   {**ter.params, "grade_percent": grade_percent, "grade_at_m": at_m})
+
+
 def step_up(height_mm: float = 50.0, at_m: float = LEAD_IN_M) -> Terrain:
     h = height_mm * MM
     return _profile("step_up", [_flat(-LEAD_IN_M, at_m), _flat(at_m, at_m + RUN_OUT_M, h)],
@@ -413,5 +439,5 @@ def names() -> list[str]:
     return list(LIBRARY)
 
 
-__all__ = ["Terrain", "DrumTerrain", "TerrainError", "LIBRARY", "make", "parse", "names", "flat", "climb", "step_up",
+__all__ = ["Terrain", "DrumTerrain", "TerrainError", "LIBRARY", "make", "parse", "names", "flat", "climb", "on_grade", "step_up",
            "step_down", "square_edge", "root", "rock", "rock_garden", "drop", "washboard", "iso8608", "drum", "from_csv"]
