@@ -60,9 +60,11 @@ def main(argv=None) -> int:
         rec = reconstruct.reconstruct(record, args.bike)
         t_rec = time.perf_counter() - t0
         terrain = advise.terrain_of(rec)
-        speed = float(rec.speed["speed_m_per_s"])
+        profile = rec.speed_along()  # as advise rides it: the ride's speed along the terrain
+        speed = float(profile[1][0])
         t0 = time.perf_counter()
-        bike_run.run_bike(args.bike, terrain, speed, duration=seconds + 1.0 / speed, drive="rider")
+        bike_run.run_bike(args.bike, terrain, speed, duration=seconds + 1.0 / speed, drive="rider",
+                          speed_profile=profile)
         t_one = time.perf_counter() - t0
         t0, c0 = time.perf_counter(), cpu_s()
         result = advise.advise(record, args.bike, duration=args.duration, workers=args.workers)

@@ -194,8 +194,8 @@ def test_a_recorded_setting_that_crashes_on_the_terrain_is_refused(tmp_path, mon
     predict a change: one line, exit 2, nothing written."""
     real = advise.simulate
 
-    def crashing(bike, overrides, terrain, speed, duration, label, lead_s):
-        run = real(bike, overrides, terrain, speed, min(duration, 0.3), label, lead_s)
+    def crashing(bike, overrides, terrain, speed, duration, label, lead_s, profile=None):
+        run = real(bike, overrides, terrain, speed, min(duration, 0.3), label, lead_s, profile)
         run.crash = "crashed: over the bars at 0.250 s (pitch -45.1 deg)"
         return run
 
@@ -321,12 +321,12 @@ def test_a_candidate_refused_only_when_run_is_skipped_and_reported(tmp_path, mon
     line, the HTML), and no expected count or share is negative."""
     real = advise.simulate
 
-    def refusing(bike, overrides, terrain, speed, duration, label, lead_s):
+    def refusing(bike, overrides, terrain, speed, duration, label, lead_s, profile=None):
         if label.startswith("shock rebound damping"):
             from mtbmj.errors import ConfigError
 
             raise ConfigError("fork.damper.rebound_N_s_per_m: refused here (the test's part)")
-        return real(bike, overrides, terrain, speed, min(duration, 0.3), label, lead_s)
+        return real(bike, overrides, terrain, speed, min(duration, 0.3), label, lead_s, profile)
 
     monkeypatch.setattr(advise, "simulate", refusing)
     bike, fork_mm, rear_mm, t = ride(tmp_path, fork_reb=2500.0)  # the packing ride, whose reconstruction checks

@@ -206,8 +206,8 @@ def test_pooled_through_the_command_keeps_stderr_clean_when_piped(tmp_path, capf
     not a terminal here)."""
     real = advise.simulate
 
-    def short(bike, overrides, terrain, speed, duration, label, lead_s):
-        return real(bike, overrides, terrain, speed, min(duration, 0.3), label, lead_s)
+    def short(bike, overrides, terrain, speed, duration, label, lead_s, profile=None):
+        return real(bike, overrides, terrain, speed, min(duration, 0.3), label, lead_s, profile)
 
     monkeypatch.setattr(advise, "simulate", short)
     bike, (a, b) = _made_rides(tmp_path, (21, 5), 16.0)
@@ -228,9 +228,9 @@ def test_the_pooled_search_runs_every_value_on_every_ride(tmp_path, monkeypatch,
     searched on, each step simulated on both rides (twice the runs of one ride's search)."""
     real, seen = advise.simulate, []
 
-    def short(bike, overrides, terrain, speed, duration, label, lead_s):
+    def short(bike, overrides, terrain, speed, duration, label, lead_s, profile=None):
         seen.append(label)
-        return real(bike, overrides, terrain, speed, min(duration, 3.0), label, lead_s)
+        return real(bike, overrides, terrain, speed, min(duration, 3.0), label, lead_s, profile)
 
     monkeypatch.setattr(advise, "simulate", short)
     bike, (a, b) = _made_rides(tmp_path, (21, 5), 16.0)

@@ -77,7 +77,8 @@ def test_the_shared_rides_lone_slow_window_is_dropped_and_the_recorded_bike_ride
     speeds = {round(w[0], 1): w[1] for w in first["windows"]}
     assert speeds[42.5] is None and "alone" in first["why"][17] and first["kinds"][17] is None
     assert all(8.0 < v < 11.0 for v in speeds.values() if v is not None)
-    run = advise.simulate(ride.bike, ride.base_over, ride.terrain, ride.speed, ride.sim_s, "recorded", ride.lead_s)
+    run = advise.simulate(ride.bike, ride.base_over, ride.terrain, ride.speed, ride.sim_s, "recorded", ride.lead_s,
+                          ride.profile)
     assert run.crash is None, run.crash
 
 

@@ -91,6 +91,10 @@ class BikeCallback:
         """Each wheel's (front, rear) contact patches of its last refresh."""
         return [search.patches for search in self.search]
 
+    def set_speed(self, v: float) -> None:
+        """The drive's set speed (m/s) from now on (a run on a speed profile: ``mtbmj.bike.schedule``)."""
+        self.speed = float(v)
+
     def reset(self) -> None:
         for search in self.search:
             search.reset()

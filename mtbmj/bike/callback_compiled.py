@@ -620,6 +620,11 @@ class CompiledBikeCallback(CompiledShell, ctypes._CFuncPtr):
         w = rolling.PATCH_WIDTH
         return [tuple(float(v) for v in row) for row in _WFLOATS[self.slot, o:o + w * n].reshape(n, w)]
 
+    def set_speed(self, v: float) -> None:
+        """The drive's set speed (m/s) from the next evaluation on (``BikeCallback.set_speed``)."""
+        self.speed = float(v)
+        _FLOATS[self.slot, F_SPEED] = self.speed
+
     def reset(self) -> None:
         """Forget the patches: the next evaluation searches afresh (BikeCallback.reset)."""
         for k in (0, 1):

@@ -99,6 +99,7 @@ class Prepared:
     refined_steps: int = 0  # coarse steps stepped again at the fine step (a stop or the rim within reach)
     stepped: int = 0  # coarse steps made
     watch: crash.Watch | None = None  # the run's crash check (``mtbmj.bike.crash``)
+    speed_profile: object = None  # mtbmj.bike.schedule.SpeedProfile: the set speed along the terrain, or None
     articulated: tuple | None = None  # the active rider's (body, pose) (``mtbmj.bike.rider_control``), None: rigid
 
     def visual_model(self) -> mujoco.MjModel:
@@ -138,7 +139,7 @@ def setups(spec) -> tuple[compose.Setup, compose.Setup]:
 def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, drive: str = "rider",
             start_x: float | None = None, callback: str = "auto", lock=(), rear_tire: bool = True,
             overrides=None, seated: bool = False, pedal=None, rider: str = "passive",
-            legs_swing: bool = False) -> Prepared:
+            legs_swing: bool = False, speed_profile=None) -> Prepared:
     """Everything a run needs, with the data at t = 0: the bike at rest on its static equilibrium
     over the start, moving at the set speed. ``callback``: "auto" (the compiled callback where numba
     is installed, else the Python one with a ``FallbackWarning``), "compiled" or "python".
@@ -165,7 +166,9 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     ``rider``: "passive" (the rigid body on spring-damper legs and arms) or "active" (the
     articulated rider with its muscles and riding controller, ``mtbmj.bike.rider_control``; seated,
     on the saddle's contact instead of held). ``legs_swing``: the pedalling active rider's two legs'
-    swing on the trunk (``mtbmj.bike.pedal_leg.PedalLeg.swung``; off by default: docs/bike.md)."""
+    swing on the trunk (``mtbmj.bike.pedal_leg.PedalLeg.swung``; off by default: docs/bike.md).
+    ``speed_profile`` (x_m, v_m_per_s): the drive's set speed along the terrain at the front axle
+    (``mtbmj.bike.schedule``; the passive rider holding a speed only), ``speed_m_per_s`` the start's."""
     from mtbmj.bike.reference import Reference, static_equilibrium
 
     if rider not in RIDERS:
@@ -175,6 +178,9 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
 
         if lock or not rear_tire:
             raise ConfigError("rider: the active rider rides the whole bike (no lock, no lifted rear)")
+        if speed_profile is not None:
+            raise ConfigError("speed_profile: the passive rider's drive holds a set speed along the terrain, the "
+                              "active rider's does not yet")
         p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire, overrides, False, pedal)
         kind = callback_kind(p.callback)
         rear = p.rear_tire
@@ -191,6 +197,9 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
 
     if legs_swing:
         raise ConfigError("legs_swing: the legs swing only for a pedalling active rider (rider='active', pedal=...)")
+    if speed_profile is not None and (pedal is not None or drive != "rider"):
+        raise ConfigError("speed_profile: the rider's drive holds a set speed along the terrain; a pedalling or "
+                          "coasting run has none")
     if pedal is not None:
         if drive != "rider":
             raise ConfigError(f"pedal: a pedalling rider is the drive; drive {drive!r} cannot be given with it")
@@ -278,6 +287,10 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
         mujoco.mj_forward(b.model, data)
     p.initial_qpos, p.initial_qvel, p.initial_act = data.qpos.copy(), data.qvel.copy(), data.act.copy()
     p.watch = crash.Watch(b.model, ter, b.qpos_index("pitch"), pitch_locked="pitch" in lock)
+    if speed_profile is not None:
+        from mtbmj.bike.schedule import SpeedProfile
+
+        p.speed_profile = SpeedProfile.checked(speed_profile)
     return p
 
 
@@ -403,10 +416,17 @@ def _simulate(p: Prepared, duration: float, progress=None):
     plan = p.stepping.refinement(1 + b.qpos_index("fork"), 1 + b.qpos_index("swingarm"), sensors,
                                  lambda: p.callback.reset())  # the patches of the chunk's end: searched afresh
     counts = loop.Counts()
+    chunk, stop = CHUNK, p.watch
+    if p.speed_profile is not None:  # the set speed updated between chunks (mtbmj.bike.schedule)
+        from mtbmj.bike import schedule
+
+        chunk = max(1, int(round(schedule.UPDATE_S / p.timestep)))
+        stop = schedule.steering(p.speed_profile, p.callback, p.watch, 1 + b.qpos_index("bike_x"),
+                                 b.x0 + b.spec.front_axle[0] - float(p.initial_qpos[b.qpos_index("bike_x")]))
     try:
         with installed(p.callback):
             return loop.chunked(model, p.data, steps, p.timestep, "bike", plan if plan.substeps > 1 else None,
-                                progress, counts, chunk=CHUNK, report_every=CHUNK, stop=p.watch)
+                                progress, counts, chunk=chunk, report_every=CHUNK, stop=stop)
     finally:
         p.stepped += counts.stepped
         p.refined_steps += counts.refined
@@ -511,8 +531,11 @@ class BikeResult(RunOutput):
             held = ""
         m = s["mass_kg"]
         crashed = f"{s['crash']['line']}: " if s.get("crash") else ""
-        return (f"{crashed}bike {self.name}{held} (rider {m['rider']:.1f} kg, bike {m['bike']:.1f} kg) over {self.scenario} at "
-                f"{s['speed_m_per_s']:g} m/s set ({s['min_speed_m_per_s']:.2f}-{s['max_speed_m_per_s']:.2f} m/s): "
+        prof = s.get("speed_profile_m_per_s")
+        at = (f"at {s['speed_m_per_s']:g} m/s set" if prof is None else
+              f"along a speed profile ({prof[0]:.3g}-{prof[1]:.3g} m/s set)")
+        return (f"{crashed}bike {self.name}{held} (rider {m['rider']:.1f} kg, bike {m['bike']:.1f} kg) over {self.scenario} "
+                f"{at} ({s['min_speed_m_per_s']:.2f}-{s['max_speed_m_per_s']:.2f} m/s): "
                 f"front travel peak "
                 f"{s['max_front_travel_mm']:.1f} of {f['travel_mm']:g} mm{ends(f)}, rear {s['max_rear_travel_mm']:.1f} of "
                 f"{s['rear_wheel_travel_mm']:.4g} mm (shock {s['max_stroke_mm']:.1f} of {r['travel_mm']:g} mm){ends(r)}, "
@@ -594,7 +617,7 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
              drive: str = "rider", start_x: float | None = None,
              progress: Callable[[float], None] | None = None, callback: str = "auto", lock=(),
              rear_tire: bool = True, overrides=None, seated: bool = False, pedal=None,
-             rider: str = "passive", legs_swing: bool = False) -> BikeResult:
+             rider: str = "passive", legs_swing: bool = False, speed_profile=None) -> BikeResult:
     """Roll the bike ``bike`` (a preset name, a TOML path, a ``mtbmj.bike.spec.ResolvedBike``, which
     ``overrides`` derive again without reading its file, or a ``BikeSpec``) over ``scenario`` (a
     terrain spec of ``mtbmj roll``) at ``speed_m_per_s``; ``duration`` defaults to the time for both
@@ -610,10 +633,10 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
     (``prepare``; ``speed_m_per_s`` None: the gear's speed at the cadence); ``rider`` "passive" (the
     rigid rider on spring-damper limbs) or "active" (the articulated rider with muscles and a
     riding controller, ``mtbmj.bike.rider_control``; the summary's ``rider`` then reports each
-    joint's largest torque against its limit); ``legs_swing`` (``prepare``)."""
+    joint's largest torque against its limit); ``legs_swing`` and ``speed_profile`` (``prepare``)."""
     _check(speed_m_per_s, duration, pedal)
     p = guard.prepared("bike", lambda: prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire,
-                                               overrides, seated, pedal, rider, legs_swing),
+                                               overrides, seated, pedal, rider, legs_swing, speed_profile),
                        model_of=lambda p: p.bike.model)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.timestep, 1.0 / p.timestep)

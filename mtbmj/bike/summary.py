@@ -218,6 +218,9 @@ def summary(p, raw: dict) -> dict:
                     "bike": p.spec.total_mass - p.spec.rider.mass - p.spec.rider.on_bike_mass,
                     "total": p.spec.total_mass},
         "speed_m_per_s": p.speed,
+        # the set speed along the terrain (mtbmj.bike.schedule): its range, None where one speed was held
+        "speed_profile_m_per_s": None if getattr(p, "speed_profile", None) is None else
+        [float(p.speed_profile.v.min()), float(p.speed_profile.v.max())],
         "start_m": float(p.bike.x0 + p.spec.front_axle[0]),  # the front axle's start along the terrain
         "duration_s": float(t[-1] + dt),
         "timestep_s": dt,

@@ -25,6 +25,13 @@ def cmd_bike(args) -> int:
 
         gl_backend()  # no headless OpenGL: one line before any work
     overrides = bike_overrides(args)
+    profile = None
+    if args.speed_profile is not None:  # a bad file: one line before any work
+        from mtbmj.bike.schedule import read_csv
+
+        profile = read_csv(args.speed_profile)
+        if args.speed is None:  # the start's: the profile's first
+            args.speed = float(profile.v[0])
     pedal = pedal_option(args)
     if args.legs_swing and (pedal is None or args.rider != "active"):
         from mtbmj.errors import ConfigError
@@ -34,7 +41,8 @@ def cmd_bike(args) -> int:
         lambda progress: run_bike(args.bike, args.scenario, args.speed, args.duration, args.drive, args.start_m,
                                   progress, lock=tuple(k.strip() for k in args.lock.split(",")) if args.lock else (),
                                   rear_tire=not args.lift_rear, overrides=overrides, seated=args.seated, rider=args.rider,
-                                  pedal=pedal, legs_swing=args.legs_swing))
+                                  pedal=pedal, legs_swing=args.legs_swing,
+                                  speed_profile=None if profile is None else (profile.x, profile.v)))
     extra = None
     if args.ride is not None:  # beside a real ride
         from mtbmj.ride import beside
@@ -112,7 +120,10 @@ def add_parser(subparsers) -> None:
     p.add_argument("bike", help="bike preset (sst, trail) or a bike TOML file (see docs/bike.md)")
     p.add_argument("scenario", help=f"terrain: {', '.join(n for n in names() if n != 'drum')} (optionally "
                                     "name:key=value,...) or a CSV profile (distance_m, height_mm)")
-    p.add_argument("--speed", type=float, help="speed in m/s (> 0); with --pedal the start speed")
+    p.add_argument("--speed", type=float, help="speed in m/s (> 0); with --pedal or --speed-profile the start speed")
+    p.add_argument("--speed-profile", metavar="CSV", dest="speed_profile",
+                   help="the speed held along the terrain: a CSV of distance_m (the terrain's x) and speed_m_per_s "
+                        "(mtbmj reconstruct writes speed.csv beside terrain.csv)")
     p.add_argument("--drive", choices=("rider", "coast"), default="rider",
                    help="rider (default): a speed controller at the rear wheel within a rider's push, power and "
                         "braking and the rear tire's traction; coast: no drive")

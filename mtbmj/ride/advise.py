@@ -151,11 +151,14 @@ def terrain_of(rec, descent_deg: float = 0.0):
     return on_grade(ter, -100.0 * math.tan(math.radians(descent_deg)), start + 2.0, 5.0) if descent_deg else ter
 
 
-def simulate(bike, overrides: dict, terrain, speed: float, duration: float, label: str, lead_s: float) -> Run:
-    """The bike with ``overrides`` over ``terrain`` at ``speed``: its metrics from ``lead_s`` on."""
+def simulate(bike, overrides: dict, terrain, speed: float, duration: float, label: str, lead_s: float,
+             profile=None) -> Run:
+    """The bike with ``overrides`` over ``terrain`` from ``speed`` (held, or along ``profile``: (x m, v m/s),
+    the ride's, ``Reconstruction.speed_along``): its metrics from ``lead_s`` on."""
     from mtbmj.bike import run as bike_run
 
-    r = bike_run.run_bike(bike, terrain, speed, duration=duration, drive="rider", overrides=overrides or None)
+    r = bike_run.run_bike(bike, terrain, speed, duration=duration, drive="rider", overrides=overrides or None,
+                          speed_profile=profile)
     raw = r.raw
     s = r.summary
     keep = raw["time_s"] >= lead_s
@@ -480,6 +483,7 @@ class Prepared:
     todo: list
     skipped: list
     tries: list
+    profile: tuple | None = None  # (x m, v m/s): the speed along the terrain every run holds (the ride's)
 
     @property
     def sim_s(self) -> float:
@@ -492,7 +496,7 @@ class Prepared:
         return out
 
     def job(self, overrides: dict, label: str) -> tuple:
-        return (self.bike, overrides, self.terrain, self.speed, self.sim_s, label, self.lead_s)
+        return (self.bike, overrides, self.terrain, self.speed, self.sim_s, label, self.lead_s, self.profile)
 
     def jobs(self) -> list:
         """The recorded setting, each candidate, each try: :func:`simulate`'s arguments."""
@@ -501,7 +505,7 @@ class Prepared:
         for tr in self.tries:
             b = tr.bike if tr.resolved is None else tr.resolved
             out.append((b, tr.overrides if self.cal is None else self.cal.apply(b, tr.overrides), self.terrain,
-                        self.speed, self.sim_s, tr.label, self.lead_s))
+                        self.speed, self.sim_s, tr.label, self.lead_s, self.profile))
         return out
 
     def refusable(self, i: int) -> bool:
@@ -569,12 +573,13 @@ def prepare(record, bike, overrides=None, duration: float | None = None, calibra
         raise RideNotDescribed(f"{record.name}: its reconstruction fails its own check: {checks['verdict']}; advice "
                                f"needs a model that beats both naive baselines, so it cannot predict a change")
     spec = spec_mod.load(bike, overrides)
-    speed = float(rec.speed["speed_m_per_s"])
+    profile = rec.speed_along()  # every run holds the ride's speed where the ride had it
+    speed = float(profile[1][0])  # and the first metre's up to it
     adj = adjusters(spec) if cal is None else cal.adjusters(file_spec)
     terrain = terrain_of(rec, 0.0 if cal is None else cal.descent_deg)
     ride = Prepared(record, bike, rec, spec, cal, terrain, speed,  # metrics from the axle at the ride's first metre
                     length if duration is None else min(length, duration), (rec.distance[0] - terrain.start_x) / speed,
-                    adj, dict(overrides or {}), [], [], list(tries or ()))
+                    adj, dict(overrides or {}), [], [], list(tries or ()), profile)
     ride.todo, ride.skipped = allowed(bike, [(a, d, v) for a in adj for d, v in (("down", a.down), ("up", a.up))
                                              if v is not None and v != a.value] if candidates else [], ride.merged)
     return ride

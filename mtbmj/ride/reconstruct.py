@@ -304,6 +304,14 @@ class Reconstruction:
                            "0.15 m lower (a drop's edge), else the chord from take-off to landing, the speed linear "
                            "between the windows that gave one (mtbmj/ride/reconstruct.py)"}
 
+    def speed_along(self) -> tuple:
+        """(x m, v m/s): the ride's speed at each place of the terrain found (the distance's rate on the ride's
+        time: the speed profile, linear between its windows), for a run that rides it as it was ridden
+        (``run_bike(..., speed_profile=)``); clipped to 0.5-30 m/s."""
+        keep = np.concatenate(([True], np.diff(self.distance) > 1e-9))
+        x, t = self.distance[keep], self.t[keep]
+        return x, np.clip(np.gradient(x, t), 0.5, 30.0)
+
     def line(self) -> str:
         s = self.summary()
         c = s["checks"]
@@ -344,6 +352,15 @@ class Reconstruction:
         keep = np.concatenate(([True], np.diff(self.distance) > 1e-9))
         x, z = self.distance[keep] + TERRAIN_LEAD_IN_M, self.ground[keep] * 1e3
         return output.csv_bytes({"distance_m": np.concatenate(([0.0], x)), "height_mm": np.concatenate(([z[0]], z))})
+
+    def speed_csv(self) -> bytes:
+        """The ride's speed along ``terrain_csv``'s distance (distance_m, speed_m_per_s: :meth:`speed_along`,
+        the lead-in at the first speed), which ``mtbmj bike BIKE terrain.csv --speed-profile speed.csv`` holds."""
+        from mtbmj import output
+
+        x, v = self.speed_along()
+        return output.csv_bytes({"distance_m": np.concatenate(([0.0], x + TERRAIN_LEAD_IN_M)),
+                                 "speed_m_per_s": np.concatenate(([v[0]], v))})
 
     def figure(self):
         from matplotlib.figure import Figure
@@ -419,7 +436,8 @@ class Reconstruction:
                                    "rear_baseline_delayed_fork_mm": self.baselines()["delayed_fork_mm"],
                                    "speed_m_per_s": self.speed["speed_at"](self.t),
                                    "checked": self.valid.astype(int)})
-        return output.write_atomically(out_dir, {"terrain.csv": self.terrain_csv(), "series.csv": series,
+        return output.write_atomically(out_dir, {"terrain.csv": self.terrain_csv(), "speed.csv": self.speed_csv(),
+                                                 "series.csv": series,
                                                  "reconstruction.png": png,
                                                  "reconstruction.json": (json.dumps(self.summary(), indent=2) + "\n").encode()})
 

@@ -1,0 +1,94 @@
+"""A bike run's set speed along the terrain (``run_bike(..., speed_profile=(x_m, v_m_per_s))``): the rider's
+drive holds the speed the profile gives where the front axle is, not one speed for the whole run.
+
+A recorded ride is not ridden at one speed (the shared rides' reconstructed speeds run from 1.3 to 7.3 m/s
+within one ride), and the speed sets how hard each bump is met: the same terrain ridden at the ride's
+median speed over-drives its slow stretches and under-drives its fast ones. The reconstruction lays the
+terrain out along the distance its speed profile integrates to (``mtbmj.ride.reconstruct``), so the
+speed at each place is known where the terrain is.
+
+How: the run is stepped in chunks of ``UPDATE_S`` of simulated time (``mtbmj.runpath.loop.chunked``),
+and between chunks the set speed is the profile's at the front axle's place (the frame's x from the
+state, the front axle's offset at rest: the pitch's few millimetres left out). The drive then holds it
+within its limits (``controllers.drive.drive_force``: ``drive.push_N``, ``power_W``, ``brake_N``): where
+the ride accelerated harder than those allow, the run lags, and says nothing of it here (the run's own
+speed is in its output). Only the passive rider's drive holds a set speed this way: a pedalling rider's
+speed is what the pedals make of it, and the active rider's wrapper is not taught it."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mtbmj.errors import ConfigError
+
+UPDATE_S = 0.1  # s of simulated time between updates of the set speed
+SPEED_RANGE = (0.3, 30.0)  # m/s: a profile beyond is not a ride's
+
+
+@dataclass(frozen=True)
+class SpeedProfile:
+    """The set speed ``v`` (m/s) at each place ``x`` (m, the terrain's x, increasing); held past the ends."""
+
+    x: np.ndarray
+    v: np.ndarray
+
+    @classmethod
+    def checked(cls, profile) -> SpeedProfile:
+        """``profile`` (x_m, v_m_per_s) as a :class:`SpeedProfile`; a ``ConfigError`` naming what is wrong."""
+        try:
+            x, v = (np.asarray(a, float) for a in profile)
+        except (TypeError, ValueError):
+            raise ConfigError("speed_profile: give two sequences, the places (m) and the speeds (m/s)") from None
+        if x.ndim != 1 or x.shape != v.shape or x.size < 2:
+            raise ConfigError(f"speed_profile: places and speeds of one length, at least 2 (got {x.shape} and {v.shape})")
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
+            raise ConfigError("speed_profile: a place or a speed is not a number")
+        if np.any(np.diff(x) <= 0.0):
+            i = int(np.argmax(np.diff(x) <= 0.0)) + 1
+            raise ConfigError(f"speed_profile: the places must increase (place {i}: {x[i]:g} m after {x[i - 1]:g} m)")
+        lo, hi = SPEED_RANGE
+        if np.any(v < lo) or np.any(v > hi):
+            bad = float(v[np.argmax((v < lo) | (v > hi))])
+            raise ConfigError(f"speed_profile: a speed of {bad:g} m/s is outside {lo:g}-{hi:g} m/s (a ride's)")
+        return cls(x, v)
+
+    def at(self, x: float) -> float:
+        return float(np.interp(x, self.x, self.v))
+
+
+def read_csv(path) -> SpeedProfile:
+    """A speed profile from a CSV of exactly the columns ``distance_m`` (the terrain's x, as a terrain CSV's)
+    and ``speed_m_per_s`` (``mtbmj reconstruct`` writes one, ``speed.csv``, beside its ``terrain.csv``); a
+    ``ConfigError`` naming the file and what is wrong."""
+    from mtbmj.errors import MtbmjError
+    from mtbmj.measured.records import read_record
+
+    try:
+        rec = read_record(path)
+    except MtbmjError as exc:
+        raise ConfigError(f"--speed-profile: {exc}") from None
+    if rec.units != {"distance": "m", "speed": "m_per_s"}:
+        have = ", ".join(f"{q}_{u}" for q, u in rec.units.items())
+        raise ConfigError(f"--speed-profile: {path}: a speed profile needs exactly the columns distance_m, "
+                          f"speed_m_per_s (has {have})")
+    try:
+        return SpeedProfile.checked((rec["distance"], rec["speed"]))
+    except ConfigError as exc:
+        raise ConfigError(f"--speed-profile: {path}: {str(exc).split(': ', 1)[-1]}") from None
+
+
+def steering(profile: SpeedProfile, callback, watch, x_col: int, x_offset: float):
+    """The run loop's ``stop`` (``mtbmj.runpath.loop.stepped``) for a run on ``profile``: after each chunk the
+    callback's set speed (``set_speed``) is the profile's at the front axle (state column ``x_col`` plus
+    ``x_offset``), then the run's own ``watch`` (its crash check, or None) decides whether it ends."""
+
+    def stop(first, states, sensors):
+        if len(states):
+            callback.set_speed(profile.at(float(states[-1, x_col]) + x_offset))
+        return None if watch is None else watch(first, states, sensors)
+
+    return stop
+
+
+__all__ = ["SpeedProfile", "UPDATE_S", "read_csv", "steering"]

@@ -1,0 +1,59 @@
+"""A bike run holding a set speed along the terrain (``run_bike(..., speed_profile=)``, ``mtbmj.bike.schedule``):
+the speed profile a reconstructed ride gives its advice runs (``Reconstruction.speed_along``).
+
+The check is the run's own speed against the profile written here, and the time it takes to ride a stretch
+against the profile's integral (the closed form: the time of each metre is 1 / v). The drive's tracking lag
+(a first-order speed loop, ``controllers.drive.drive_force``) is the tolerance's reason: where the profile's
+speed changes the run follows it a fraction of a second later."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mtbmj.bike.run import run_bike
+from mtbmj.errors import ConfigError
+
+X = np.array([-100.0, 10.0, 40.0, 80.0, 300.0])
+V = np.array([4.0, 4.0, 7.0, 3.0, 3.0])
+
+
+@pytest.fixture(scope="module", params=["compiled", "python"])
+def ridden(request):
+    return run_bike("sst", "flat:length_m=150", 4.0, duration=20.0, speed_profile=(X, V), callback=request.param)
+
+
+def test_the_run_holds_the_profile_s_speed_where_the_front_axle_is(ridden):
+    raw = ridden.raw
+    x, v = raw["front_axle_x_m"], raw["speed_m_per_s"]
+    for at in (5.0, 30.0, 40.0, 55.0, 70.0, 90.0):
+        i = int(np.searchsorted(x, at))
+        assert v[i] == pytest.approx(np.interp(at, X, V), rel=0.08), (at, v[i])
+    # a metre takes 1 / v: the stretch 10-90 m in the profile's time, within the loop's lag
+    t = raw["time_s"]
+    ridden_s = float(np.interp(90.0, x, t) - np.interp(10.0, x, t))
+    xs = np.linspace(10.0, 90.0, 2001)
+    want = float(np.trapezoid(1.0 / np.interp(xs, X, V), xs))
+    assert ridden_s == pytest.approx(want, rel=0.03), (ridden_s, want)
+    held = run_bike("sst", "flat:length_m=150", 4.0, duration=26.0)  # the check can fail: one speed held (20 s)
+    th = held.raw["time_s"]
+    held_s = float(np.interp(90.0, held.raw["front_axle_x_m"], th) - np.interp(10.0, held.raw["front_axle_x_m"], th))
+    assert abs(held_s - want) > 0.1 * want
+
+
+@pytest.mark.parametrize("profile, why", [
+    (([0.0, 1.0], [3.0]), "of one length"),
+    (([0.0, 0.0], [3.0, 3.0]), "must increase"),
+    (([0.0, 1.0], [3.0, 60.0]), "outside 0.3-30 m/s"),
+    (([0.0, float("nan")], [3.0, 3.0]), "not a number"),
+    ("fast", "two sequences"),
+], ids=["lengths", "places", "speed", "nan", "words"])
+def test_a_profile_that_cannot_be_is_refused_naming_why(profile, why):
+    with pytest.raises(ConfigError, match=why):
+        run_bike("sst", "flat:length_m=20", 4.0, duration=0.1, speed_profile=profile)
+
+
+def test_a_profile_needs_the_rider_s_drive():
+    with pytest.raises(ConfigError, match="coasting run has none"):
+        run_bike("sst", "flat:length_m=20", 4.0, duration=0.1, drive="coast", speed_profile=(X, V))
+    with pytest.raises(ConfigError, match="active rider's does not yet"):
+        run_bike("sst", "flat:length_m=20", 4.0, duration=0.1, rider="active", speed_profile=(X, V))
