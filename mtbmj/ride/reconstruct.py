@@ -65,6 +65,7 @@ import numpy as np
 
 from mtbmj.ride.reconstruct_inverse import QuarterCar, forward, ground_under, lowpass, runs, wheelbase_at
 from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ
+from mtbmj.ride.reconstruct_bands import BANDS, BEAT_MARGIN, band_checks  # noqa: F401 (BANDS: this module's name too)
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
                                           check_length, merged, min_seconds, refine, speed_from_either,
                                           speed_from_lag, tracked)
@@ -84,44 +85,9 @@ def histogram_distance(a, b, top: float, bins: int = 20) -> float:
     return float(100.0 * np.sum(np.abs(ha - hb)))
 
 
-
-
-BEAT_MARGIN = 0.40  # the rear predicted must be this much (40 %) lower in RMS than the better naive baseline
 TERRAIN_LEAD_IN_M = 3.0  # terrain.csv starts on this much level ground before the ride's first metre
 REFINE_PASSES = 2  # the speed found again from the rear predicted, and the terrain at it, this many times
 LEFT_OUT_S = 0.2  # around an airborne stretch, this much either side is left out of the checks
-# the rear's check again per band of frequency (Hz): what each band of the rear's motion is on a ride
-BANDS = (((0.05, 0.5), "the rider's slow load"), ((0.5, 2.0), "the body's heave and pitch"),
-         ((2.0, 10.0), "the wheels over the terrain"))
-
-
-def band_checks(t, rear, predicted, fork_delayed, valid) -> list:
-    """The rear's check per band of ``BANDS``: the rear's record, the rear predicted and the delayed fork
-    (mm on ``t``) each band-passed over the whole record (a 2nd-order Butterworth run forward and back;
-    a missing prediction taken as the record's mean), compared on the ``valid`` samples. Per band: the
-    record's RMS (the error of predicting nothing there, the mean's), the prediction's RMS error and
-    correlation, the delayed fork's RMS error with its least-squares scale in that band, and whether the
-    prediction is ``BEAT_MARGIN`` below the better of those two baselines."""
-    from scipy.signal import butter, sosfiltfilt
-
-    fs = 1.0 / float(t[1] - t[0])
-    out = []
-    if int(np.count_nonzero(valid)) < 3 or t.size < 30:
-        return out
-    fill = lambda x: np.where(np.isfinite(x), x, float(np.nanmean(rear)))  # noqa: E731
-    rms = lambda x: float(np.sqrt(np.mean(x * x)))  # noqa: E731
-    for (lo, hi), what in BANDS:
-        if hi >= 0.5 * fs or t.size * lo / fs < 2.0:  # the record too short or too coarse for this band
-            continue
-        sos = butter(2, (lo, hi), btype="bandpass", fs=fs, output="sos")
-        r, p, f = (sosfiltfilt(sos, fill(np.asarray(x, float)))[valid] for x in (rear, predicted, fork_delayed))
-        scale = float(f @ r / (f @ f)) if f @ f > 0 else 0.0
-        err, base_fork, base_mean = rms(p - r), rms(scale * f - r), rms(r)
-        corr = float(np.corrcoef(p, r)[0, 1]) if np.std(p) > 0 and np.std(r) > 0 else 0.0
-        out.append({"band_Hz": [lo, hi], "what": what, "record_rms_mm": base_mean, "predicted_error_rms_mm": err,
-                    "predicted_correlation": corr, "delayed_fork_error_rms_mm": base_fork,
-                    "described": bool(err <= (1.0 - BEAT_MARGIN) * min(base_fork, base_mean))})
-    return out
 
 
 def _statics(spec):
@@ -163,6 +129,12 @@ class Reconstruction:
         """The delayed-fork baseline's input: the fork's record delayed by wheelbase / speed(t), or as
         recorded where no delay was given."""
         return self.fork_delayed if self.fork_delayed is not None else self.front
+
+    @property
+    def lags(self) -> np.ndarray | None:
+        """The rear's lag behind the front at each sample (s): wheelbase / speed(t); None without a speed."""
+        at = self.speed.get("speed_at")
+        return None if at is None or not math.isfinite(self.wheelbase) else self.wheelbase / at(self.t)
 
     def baselines(self) -> dict:
         """The two naive predictions of the rear the model must beat, on the samples checked: (a) the
@@ -217,7 +189,8 @@ class Reconstruction:
                 "rear_histogram_distance_percent": histogram_distance(self.rear[v], self.rear_predicted[v],
                                                                         self.rear_top),
                 "samples_checked_percent": 100.0 * float(np.mean(v)),
-                "bands": band_checks(self.t, self.rear, self.rear_predicted, self.fork_delayed_or_front, v)}
+                "bands": band_checks(self.t, self.rear, self.rear_predicted, self.fork_delayed_or_front, v,
+                                     fork=self.front, lags=self.lags)}
 
     def speed_cover(self) -> dict:
         """How much of the ride lies within a window with a speed: any (strict or tracked, the refined
