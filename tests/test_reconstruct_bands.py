@@ -114,3 +114,23 @@ def test_timing_alone_on_a_pure_delay():
     lags = np.full(t.size, 0.04)  # s; half a lag is 0.02 s, well inside the 3 Hz period (0.33 s)
     tm = timing(t, np.interp(t - 0.02, t, x), x, x, lags, valid)
     assert tm["shift_lags"] == 0.5 and tm["shift_correlation"] > 0.999
+
+
+def test_the_fork_at_once_is_reported_beside_and_does_not_judge():
+    """A rear that is the fork's record at the same moment, scaled and offset (0.6 x + 12 mm): the fork
+    at once reproduces it (its RMS 0), the delayed fork does not; a prediction equal to the rear still
+    passes and one equal to the delayed fork's fit does not (the verdict is the two baselines' alone)."""
+    ground = noise(9, 0.3, 8.0)
+    fork = 40.0 + ground
+    rear = 12.0 + 0.6 * fork
+    sp = {"windows": [], "speed_at": lambda x: np.interp(x, t, speed)}
+
+    def checks(predicted):
+        return reconstruct.Reconstruction("r", "b", t, sp, t, t, valid, fork, fork, rear, predicted, 150.0, [],
+                                          fork_delayed=delayed(fork), wheelbase=WHEELBASE).checks()
+
+    right = checks(rear.copy())
+    assert right["fork_at_once_rms_mm"] < 1e-6 and right["baseline_delayed_fork_rms_mm"] > 5.0
+    assert right["passes"]
+    late = checks(12.0 + 0.6 * delayed(fork))
+    assert not late["passes"] and late["fork_at_once_rms_mm"] < 1e-6

@@ -46,7 +46,11 @@ reproduces the front record (its RMS difference); the rear predicted (the whole 
 last pass) is compared with the rear record beside two naive baselines on the same samples: the
 fork's record delayed by wheelbase / v(t) with a least-squares scale and offset, and the rear's mean.
 The reconstruction passes only if its rear's RMS error is ``BEAT_MARGIN`` (40 %) below the better, and
-its line says in words whether the model describes the ride. Where the whole bike diverges (finding
+its line says in words whether the model describes the ride. Reported beside, never judged by: the
+fork's record at the same moment with its own least-squares scale and offset (``fork_at_once_rms_mm``:
+on the shared rides the rear follows the fork at once more than a wheelbase later), and per band
+(:mod:`mtbmj.ride.reconstruct_bands`) when the rear moves against the prediction and the fork.
+Where the whole bike diverges (finding
 the terrain or riding it) the line says where, and the ride is not described. Also the RMS in % of
 the rear travel the ride used and the distance between the two travel histograms.
 
@@ -181,8 +185,11 @@ class Reconstruction:
                        f"{rms_rear:.1f} mm RMS against {min(rms_fork, rms_mean):.1f} mm (the delayed fork "
                        f"{rms_fork:.1f}, the mean {rms_mean:.1f}; a pass needs {100 * BEAT_MARGIN:.0f} % below "
                        f"the better, {need:.1f} mm)")
+        A = np.column_stack((self.front[v], np.ones(int(v.sum()))))  # reported beside, not judged by
+        rms_now = float(np.sqrt(np.mean((A @ np.linalg.lstsq(A, self.rear[v], rcond=None)[0] - self.rear[v]) ** 2)))
         return {"front_reproduced_rms_mm": rms_front, "rear_predicted_rms_mm": rms_rear,
                 "baseline_delayed_fork_rms_mm": rms_fork, "baseline_rear_mean_rms_mm": rms_mean,
+                "fork_at_once_rms_mm": rms_now,
                 "baseline_delayed_fork_scale": base["delayed_fork_scale"],
                 "beat_margin_percent": 100.0 * BEAT_MARGIN, "passes": passes, "verdict": verdict,
                 "rear_travel_used_mm": used, "rear_predicted_rms_percent_of_used": 100.0 * rms_rear / used,
