@@ -134,3 +134,31 @@ def test_the_fork_at_once_is_reported_beside_and_does_not_judge():
     assert right["passes"]
     late = checks(12.0 + 0.6 * delayed(fork))
     assert not late["passes"] and late["fork_at_once_rms_mm"] < 1e-6
+
+
+def test_the_share_met_at_once_is_the_one_mixed_in():
+    """at_once_share on series written here: a rear that is 0.3 of a prediction met at once and 0.7 of
+    one met at the lag, with an offset of its own (the share is timing, never a height), gives 0.3; a
+    rear beyond either end is clipped to 0 or 1; two predictions that do not differ give 0."""
+    from mtbmj.ride.reconstruct import at_once_share
+
+    ground = noise(10, 0.3, 8.0)
+    at_lag, at_once = 40.0 + delayed(ground), 45.0 + ground
+    rear = 0.7 * at_lag + 0.3 * at_once + 9.0
+    assert abs(at_once_share(rear, at_lag, at_once, valid) - 0.3) < 1e-9
+    assert at_once_share(at_lag + 0.5 * (at_lag - at_once), at_lag, at_once, valid) == 0.0
+    assert at_once_share(at_once + 0.5 * (at_once - at_lag), at_lag, at_once, valid) == 1.0
+    assert at_once_share(rear, at_lag, at_lag.copy(), valid) == 0.0
+    noisy = rear + 0.5 * noise(11, 0.3, 8.0)  # a rear with noise of its own: the share still found
+    assert abs(at_once_share(noisy, at_lag, at_once, valid) - 0.3) < 0.05
+
+
+def test_the_rears_ground_met_at_once_is_mixed_from_the_two_timings():
+    """reconstruct_bike.rear_ground: none at once is the ground a lag behind; all at once is the ground
+    under the front at the same moment; a share between mixes the two linearly."""
+    from mtbmj.ride.reconstruct_bike import rear_ground
+
+    ground = noise(12, 0.3, 8.0) * 1e-3
+    np.testing.assert_allclose(rear_ground(t, LAGS, ground), delayed(ground))
+    np.testing.assert_allclose(rear_ground(t, LAGS, ground, 1.0), ground)
+    np.testing.assert_allclose(rear_ground(t, LAGS, ground, 0.25), 0.75 * delayed(ground) + 0.25 * ground)

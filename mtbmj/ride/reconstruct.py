@@ -127,6 +127,8 @@ class Reconstruction:
     diverged_s: float | None = None  # where the whole bike diverged (finding the terrain or riding it), or None
     part_s: tuple | None = None  # (start, end) s of the record reconstructed where it stood unweighted mid-ride, or None
     stands: list = None  # (start s, end s) of the record: the bike standing unweighted mid-ride (its rider off it)
+    at_once: float = 0.0  # the share of the rear's ground met at the front's moment (at_once_share), 0..1
+    at_once_fit: dict | None = None  # reconstruct(at_once=True): the rear with that share fitted (fitted_summary)
 
     @property
     def fork_delayed_or_front(self) -> np.ndarray:
@@ -199,6 +201,22 @@ class Reconstruction:
                 "bands": band_checks(self.t, self.rear, self.rear_predicted, self.fork_delayed_or_front, v,
                                      fork=self.front, lags=self.lags)}
 
+    def fitted_summary(self, valid) -> dict:
+        """This reconstruction's rear on the ``valid`` samples of another (the one judged): its share of the
+        rear's ground met at once, the rear predicted's RMS error and correlation, and per band its error
+        and correlation (``reconstruct_bands.band_checks``)."""
+        v = valid & np.isfinite(self.rear_predicted)
+        e = self.rear_predicted[v] - self.rear[v]
+        bands = band_checks(self.t, self.rear, self.rear_predicted, self.fork_delayed_or_front, v)
+        return {"share": self.at_once, "rear_predicted_rms_mm": float(np.sqrt(np.mean(e * e))),
+                "rear_predicted_rms_less_mean_mm": float(np.std(e)),
+                "rear_correlation": float(np.corrcoef(self.rear_predicted[v], self.rear[v])[0, 1]),
+                "samples_percent_of_judged": 100.0 * float(v.sum()) / max(int(valid.sum()), 1),
+                "bands": [{k: b[k] for k in ("band_Hz", "predicted_error_rms_mm", "predicted_correlation")}
+                          for b in bands],
+                "diverged_s": self.diverged_s, "fitted_on": "the rear's record (its timing alone: one number)",
+                "judged": False}
+
     def speed_cover(self) -> dict:
         """How much of the ride lies within a window with a speed: any (strict or tracked, the refined
         estimate's and the first's) and strict alone, in % of its duration; and the windows tracked."""
@@ -264,7 +282,7 @@ class Reconstruction:
         return {"ride": self.name, "bike": self.bike, "duration_s": float(self.t[-1] - self.t[0]), **part,
                 "speed_m_per_s": self.speed["speed_m_per_s"], "lag_s": self.speed["lag_s"],
                 "speed_from": self.speed.get("from"), "wheelbase_at_sag_m": float(self.wheelbase),
-                "speed_profile": profile,
+                "speed_profile": profile, **({} if self.at_once_fit is None else {"at_once_fit": self.at_once_fit}),
                 "windows": windows,
                 "window_speeds_m_per_s": [None if s is None else float(s) for _, s, _ in self.speed["windows"]],
                 "window_speed_range_m_per_s": [min(speeds), max(speeds)] if speeds else None,
@@ -305,8 +323,12 @@ class Reconstruction:
                 f"{c['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted {c['rear_predicted_rms_mm']:.1f} mm RMS "
                 f"({c['rear_predicted_rms_percent_of_used']:.0f} % of the {c['rear_travel_used_mm']:.0f} mm used; "
                 f"baselines: delayed fork {c['baseline_delayed_fork_rms_mm']:.1f}, rear's mean "
-                f"{c['baseline_rear_mean_rms_mm']:.1f} mm), "
-                f"histograms {c['rear_histogram_distance_percent']:.0f} % apart"
+                f"{c['baseline_rear_mean_rms_mm']:.1f} mm; the fork at once {c['fork_at_once_rms_mm']:.1f}, not "
+                f"judged by), "
+                + ("" if not self.at_once_fit else f"with {100 * self.at_once_fit['share']:.0f} % of the rear's ground "
+                   f"met at the front's moment (fitted on the rear's record, not judged) the rear "
+                   f"{self.at_once_fit['rear_predicted_rms_mm']:.1f} mm, ")
+                + f"histograms {c['rear_histogram_distance_percent']:.0f} % apart"
                 + ("" if not c["bands"] else "; the rear by band (correlation, described): " + ", ".join(
                     f"{b['band_Hz'][0]:g}-{b['band_Hz'][1]:g} Hz {b['predicted_correlation']:.2f} "
                     f"{'yes' if b['described'] else 'no'}" for b in c["bands"]))
@@ -434,10 +456,11 @@ def ridden_part(record):
     return part, (float(t[a]), float(t[b - 1])), [(float(t[i]), float(t[min(j, t.size - 1)])) for i, j in stands]
 
 
-def reconstruct(record, bike, overrides=None) -> Reconstruction:
+def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstruction:
     """``record`` (a ``mtbmj.measured.telemetry.TelemetryRecord`` with both ends) through the bike
     ``bike`` (preset, file or ``mtbmj.bike.spec.ResolvedBike``, which is not read again; ``overrides``
-    its keys): see the module doc."""
+    its keys): see the module doc. ``at_once``: also the rear with the share of its ground met at the
+    front's moment fitted on the rear's record (``Reconstruction.at_once_fit``, reported, not judged)."""
     from mtbmj.bike import run as bike_run
     from mtbmj.bike import spec as spec_mod
 
@@ -490,9 +513,10 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
 
     whole = reconstruct_bike.whole_bike(spec, fork_setup, shock_setup)
 
-    def through(speed):
+    def through(speed, at_once=0.0):
         """The terrain and the rear from the fork's record through the whole bike at ``speed``'s lags
-        (the rear's record unused), the whole bike free over it again, and the samples checked."""
+        (the rear's record unused; ``at_once`` of the rear's ground taken at the front's moment), the
+        whole bike free over it again, and the samples checked."""
         pad = int(round(LEFT_OUT_S / dt))
         lags = wheelbase / speed["speed_at"](t)  # s, the rear's lag behind the front at each moment
         bad = np.zeros(t.size, bool)
@@ -514,13 +538,14 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
                                    f"{len(speed['windows'])} whose two ends aligned lie wholly where the front wheel was "
                                    f"off the ground, or in the ride's first wheelbase or its filters' start (or the rear "
                                    f"does not move there): no sample of the ride can be checked")
-        found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel, stops)
+        found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel, stops,
+                                                  at_once=at_once)
         # the check: the whole bike free over the terrain found, the rider's slow load on its front
-        again = reconstruct_bike.ride(t, whole, np.interp(t - lags, t, found["ground"]), front_ground=found["ground"],
-                                      push=found["rider_slow_load"])
+        again = reconstruct_bike.ride(t, whole, reconstruct_bike.rear_ground(t, lags, found["ground"], at_once),
+                                      front_ground=found["ground"], push=found["rider_slow_load"])
         return {"lags": lags, "bad": bad, "unaligned": unaligned, "found": found, "again": again}
 
-    def built(done, speed) -> Reconstruction:
+    def built(done, speed, at_once=0.0) -> Reconstruction:
         found, again = done["found"], done["again"]
         rear_predicted, front_again = found["rear_rise"], again["front_rise"] / sin_a
         bad = done["bad"] | ~(np.isfinite(rear_predicted) & np.isfinite(front_again))  # past a divergence: unchecked
@@ -532,7 +557,7 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
                               front_again * 1e3, rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps,
                               done["unaligned"], np.interp(t - done["lags"], t, fork * 1e3), wheelbase,
                               found["passes"], found["settled_m"], min(diverged) if diverged else None, part_s,
-                              stands)
+                              stands, at_once)
 
     done = through(speed)
     result = built(done, speed)
@@ -552,7 +577,44 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
             except ReconstructError:
                 break  # no refining window aligned, or none left to check: the estimate before stands
             result = built(done, speed)
+    if at_once:  # reported beside, not judged: the share of the rear's ground met at once, from the rear's record
+        ends = built(through(speed, 1.0), speed, 1.0)
+        a = at_once_share(ends.rear, result.rear_predicted, ends.rear_predicted, result.valid)
+        tried = [result, ends] + ([built(through(speed, a), speed, a)] if 0.0 < a < 1.0 else [])
+        # the one whose rear predicted, less its mean, is closest to the record's on the samples checked
+        # without it; one that diverges earlier than the bike without it is not taken
+        kept = [r for r in tried if r.diverged_s is None or (result.diverged_s is not None
+                                                             and r.diverged_s >= result.diverged_s)]
+        best = min(kept, key=lambda r: _timing_error(r.rear, r.rear_predicted, result.valid))
+        result.at_once_fit = best.fitted_summary(result.valid)
     return result
+
+
+def _timing_error(rear, predicted, valid) -> float:
+    ok = valid & np.isfinite(predicted)
+    if not ok.any():
+        return math.inf
+    e = (predicted - rear)[ok]
+    return float(np.sqrt(np.mean((e - e.mean()) ** 2)) + (math.inf if ok.sum() < valid.sum() else 0.0))
+
+
+def at_once_share(rear, at_lag, at_once, valid) -> float:
+    """The share (0..1) of the rear's ground met at the front's moment that best matches the rear's
+    record (mm) on the ``valid`` samples, from the rear predicted with none of it (``at_lag``) and with
+    all of it (``at_once``): least squares on the series less their means (the timing alone, never a
+    height), the rear predicted taken linear in the share between the two, clipped to 0..1; 0 where
+    the two do not differ or there are fewer than 3 samples. The whole bike is not linear in it (the
+    terrain found moves with the rear's ground through the pitch): ``reconstruct`` rides the share
+    found and keeps whichever of none, all and it matches the record best."""
+    ok = valid & np.isfinite(at_lag) & np.isfinite(at_once)
+    if ok.sum() < 3:
+        return 0.0
+    e0 = (at_lag - rear)[ok]
+    d = (at_once - at_lag)[ok]
+    e0, d = e0 - e0.mean(), d - d.mean()
+    if not d @ d > 0.0:
+        return 0.0
+    return float(min(max(-(e0 @ d) / (d @ d), 0.0), 1.0))
 
 __all__ = ["min_seconds", "speed_from_lag", "ground_under", "forward", "histogram_distance", "reconstruct", "Reconstruction",
            "QuarterCar", "ReconstructError"]
