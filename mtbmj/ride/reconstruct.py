@@ -49,7 +49,12 @@ The reconstruction passes only if its rear's RMS error is ``BEAT_MARGIN`` (40 %)
 its line says in words whether the model describes the ride. Reported beside, never judged by: the
 fork's record at the same moment with its own least-squares scale and offset (``fork_at_once_rms_mm``:
 on the shared rides the rear follows the fork at once more than a wheelbase later), and per band
-(:mod:`mtbmj.ride.reconstruct_bands`) when the rear moves against the prediction and the fork.
+(:mod:`mtbmj.ride.reconstruct_bands`) when the rear moves against the prediction and the fork; with
+``reconstruct(..., at_once=True)`` also the rear with a share of its ground met at the front's moment
+(a load on both ends at once, a turn or a compression, rather than the terrain a wheelbase ahead),
+that share fitted on the rear's record (:func:`at_once_share`: the timing alone, one number, never a
+height; ``Reconstruction.at_once_fit``). Fitted, it would let a wrong bike pass (the made ride read
+with the fork spring 1.5 times did), so it is never judged.
 Where the whole bike diverges (finding
 the terrain or riding it) the line says where, and the ride is not described. Also the RMS in % of
 the rear travel the ride used and the distance between the two travel histograms.
