@@ -8,7 +8,10 @@ Each ride (an SST recording or a travel CSV; 'example' for the shipped 00649.SST
 command refuses is kept with its one-line reason. Per ride: its length, the windows' speeds (median,
 range, accepted and rejected windows, the median of the accepted windows' standard errors), the rear
 predicted's RMS error, the two baselines' (the fork's record delayed by wheelbase / speed(t) with a
-least-squares scale and offset; the rear's mean), the rear predicted's correlation with the record,
+least-squares scale and offset; the rear's mean), the rear predicted's correlation with the record, the
+fork's record at the same moment with its own scale and offset (reported, not judged by), the rear
+with the share of its ground met at the front's moment fitted on its record (``at_once_fit``:
+``reconstruct(..., at_once=True)``, reported, not judged; the wall time includes it),
 the whole bike's passes and where it diverged (if it did), the share of the ride checked, the verdict
 and the wall time. Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
 reconstruct_rides.json``, outside the repository). Not a test: nothing is asserted.
@@ -61,7 +64,7 @@ def main(argv=None) -> int:
             record = telemetry.read_ride(path, **decoding(SimpleNamespace(bike=args.bike, fork_max_mm=None,
                                                                           shock_max_mm=None)))
             row["version"], row["seconds"] = record.version, float(record.time_s[-1] - record.time_s[0])
-            rec = reconstruct.reconstruct(record, args.bike)
+            rec = reconstruct.reconstruct(record, args.bike, at_once=True)
         except MtbmjError as exc:
             row.update(refused=str(exc), wall_s=time.perf_counter() - t0)
             rows.append(row)
@@ -77,7 +80,8 @@ def main(argv=None) -> int:
                    rear_correlation=corr,
                    speed_sd_median_m_per_s=statistics.median(sds) if sds else None,
                    rejected=sorted({w["rejected"].split(" (")[0].split(":")[0] for w in s["windows"] if w["rejected"]}),
-                   checks=s["checks"], wheelbase_at_sag_m=s["wheelbase_at_sag_m"])
+                   checks=s["checks"], wheelbase_at_sag_m=s["wheelbase_at_sag_m"], at_once_fit=s.get("at_once_fit"),
+                   wall_s_includes="the at-once fit (two or three more runs of the whole bike than the command's)")
         rows.append(row)
         print(f"{path.name}: {s['checks']['verdict']} ({row['wall_s']:.1f} s)", flush=True)
     out = {"command": "python benchmarks/reconstruct_rides.py" + "".join(f" --rides {r}" for r in named)

@@ -268,3 +268,25 @@ def test_a_drop_whose_tyre_force_flickers_is_found_on_a_ride_of_its_own(tmp_path
     sp = rec.speed
     for start, s, _ in sp["windows"]:
         assert s is None or s == pytest.approx(float(profile.at(start + 0.5 * sp["window_s"])), rel=0.03), start
+
+
+@pytest.mark.slow  # the reconstruction again with two or three more runs of the whole bike: 0.5-1 min
+def test_the_share_met_at_once_is_none_on_a_ride_whose_rear_meets_the_terrain_a_wheelbase_later(made, reconstruction):
+    """reconstruct(at_once=True) on the made ride, whose rear meets what the front met a wheelbase later
+    (no load on both ends at once beyond the rider's slow one): the share fitted on the rear's record is
+    0, its rear is the judged one's, and the judged checks are those of the plain reconstruction (the
+    fit is reported beside, never judged)."""
+    from types import SimpleNamespace
+
+    from mtbmj.cli.telemetry import decoding
+    from mtbmj.measured import telemetry
+    from mtbmj.ride import reconstruct
+
+    record = telemetry.read_ride(made["sst"], **decoding(SimpleNamespace(bike=str(made["bike"]), fork_max_mm=None,
+                                                                         shock_max_mm=None)))
+    rec = reconstruct.reconstruct(record, str(made["bike"]), at_once=True)
+    fit, c, plain = rec.at_once_fit, rec.checks(), reconstruction.checks()
+    assert fit["share"] == 0.0 and fit["judged"] is False
+    assert abs(fit["rear_predicted_rms_mm"] - c["rear_predicted_rms_mm"]) < 1e-9
+    assert c["rear_predicted_rms_mm"] == plain["rear_predicted_rms_mm"] and c["passes"] == plain["passes"]
+    assert "met at the front's moment" not in reconstruction.line() and rec.summary()["at_once_fit"] == fit

@@ -46,7 +46,16 @@ reproduces the front record (its RMS difference); the rear predicted (the whole 
 last pass) is compared with the rear record beside two naive baselines on the same samples: the
 fork's record delayed by wheelbase / v(t) with a least-squares scale and offset, and the rear's mean.
 The reconstruction passes only if its rear's RMS error is ``BEAT_MARGIN`` (40 %) below the better, and
-its line says in words whether the model describes the ride. Where the whole bike diverges (finding
+its line says in words whether the model describes the ride. Reported beside, never judged by: the
+fork's record at the same moment with its own least-squares scale and offset (``fork_at_once_rms_mm``:
+on the shared rides the rear follows the fork at once more than a wheelbase later), and per band
+(:mod:`mtbmj.ride.reconstruct_bands`) when the rear moves against the prediction and the fork; with
+``reconstruct(..., at_once=True)`` also the rear with a share of its ground met at the front's moment
+(a load on both ends at once, a turn or a compression, rather than the terrain a wheelbase ahead),
+that share fitted on the rear's record (:func:`at_once_share`: the timing alone, one number, never a
+height; ``Reconstruction.at_once_fit``). Fitted, it would let a wrong bike pass (the made ride read
+with the fork spring 1.5 times did), so it is never judged.
+Where the whole bike diverges (finding
 the terrain or riding it) the line says where, and the ride is not described. Also the RMS in % of
 the rear travel the ride used and the distance between the two travel histograms.
 
@@ -65,6 +74,7 @@ import numpy as np
 
 from mtbmj.ride.reconstruct_inverse import QuarterCar, forward, ground_under, lowpass, runs, wheelbase_at
 from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ
+from mtbmj.ride.reconstruct_bands import BANDS, BEAT_MARGIN, band_checks  # noqa: F401 (BANDS: this module's name too)
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
                                           check_length, merged, min_seconds, refine, speed_from_either,
                                           speed_from_lag, tracked)
@@ -84,44 +94,9 @@ def histogram_distance(a, b, top: float, bins: int = 20) -> float:
     return float(100.0 * np.sum(np.abs(ha - hb)))
 
 
-
-
-BEAT_MARGIN = 0.40  # the rear predicted must be this much (40 %) lower in RMS than the better naive baseline
 TERRAIN_LEAD_IN_M = 3.0  # terrain.csv starts on this much level ground before the ride's first metre
 REFINE_PASSES = 2  # the speed found again from the rear predicted, and the terrain at it, this many times
 LEFT_OUT_S = 0.2  # around an airborne stretch, this much either side is left out of the checks
-# the rear's check again per band of frequency (Hz): what each band of the rear's motion is on a ride
-BANDS = (((0.05, 0.5), "the rider's slow load"), ((0.5, 2.0), "the body's heave and pitch"),
-         ((2.0, 10.0), "the wheels over the terrain"))
-
-
-def band_checks(t, rear, predicted, fork_delayed, valid) -> list:
-    """The rear's check per band of ``BANDS``: the rear's record, the rear predicted and the delayed fork
-    (mm on ``t``) each band-passed over the whole record (a 2nd-order Butterworth run forward and back;
-    a missing prediction taken as the record's mean), compared on the ``valid`` samples. Per band: the
-    record's RMS (the error of predicting nothing there, the mean's), the prediction's RMS error and
-    correlation, the delayed fork's RMS error with its least-squares scale in that band, and whether the
-    prediction is ``BEAT_MARGIN`` below the better of those two baselines."""
-    from scipy.signal import butter, sosfiltfilt
-
-    fs = 1.0 / float(t[1] - t[0])
-    out = []
-    if int(np.count_nonzero(valid)) < 3 or t.size < 30:
-        return out
-    fill = lambda x: np.where(np.isfinite(x), x, float(np.nanmean(rear)))  # noqa: E731
-    rms = lambda x: float(np.sqrt(np.mean(x * x)))  # noqa: E731
-    for (lo, hi), what in BANDS:
-        if hi >= 0.5 * fs or t.size * lo / fs < 2.0:  # the record too short or too coarse for this band
-            continue
-        sos = butter(2, (lo, hi), btype="bandpass", fs=fs, output="sos")
-        r, p, f = (sosfiltfilt(sos, fill(np.asarray(x, float)))[valid] for x in (rear, predicted, fork_delayed))
-        scale = float(f @ r / (f @ f)) if f @ f > 0 else 0.0
-        err, base_fork, base_mean = rms(p - r), rms(scale * f - r), rms(r)
-        corr = float(np.corrcoef(p, r)[0, 1]) if np.std(p) > 0 and np.std(r) > 0 else 0.0
-        out.append({"band_Hz": [lo, hi], "what": what, "record_rms_mm": base_mean, "predicted_error_rms_mm": err,
-                    "predicted_correlation": corr, "delayed_fork_error_rms_mm": base_fork,
-                    "described": bool(err <= (1.0 - BEAT_MARGIN) * min(base_fork, base_mean))})
-    return out
 
 
 def _statics(spec):
@@ -157,12 +132,20 @@ class Reconstruction:
     diverged_s: float | None = None  # where the whole bike diverged (finding the terrain or riding it), or None
     part_s: tuple | None = None  # (start, end) s of the record reconstructed where it stood unweighted mid-ride, or None
     stands: list = None  # (start s, end s) of the record: the bike standing unweighted mid-ride (its rider off it)
+    at_once: float = 0.0  # the share of the rear's ground met at the front's moment (at_once_share), 0..1
+    at_once_fit: dict | None = None  # reconstruct(at_once=True): the rear with that share fitted (fitted_summary)
 
     @property
     def fork_delayed_or_front(self) -> np.ndarray:
         """The delayed-fork baseline's input: the fork's record delayed by wheelbase / speed(t), or as
         recorded where no delay was given."""
         return self.fork_delayed if self.fork_delayed is not None else self.front
+
+    @property
+    def lags(self) -> np.ndarray | None:
+        """The rear's lag behind the front at each sample (s): wheelbase / speed(t); None without a speed."""
+        at = self.speed.get("speed_at")
+        return None if at is None or not math.isfinite(self.wheelbase) else self.wheelbase / at(self.t)
 
     def baselines(self) -> dict:
         """The two naive predictions of the rear the model must beat, on the samples checked: (a) the
@@ -209,15 +192,35 @@ class Reconstruction:
                        f"{rms_rear:.1f} mm RMS against {min(rms_fork, rms_mean):.1f} mm (the delayed fork "
                        f"{rms_fork:.1f}, the mean {rms_mean:.1f}; a pass needs {100 * BEAT_MARGIN:.0f} % below "
                        f"the better, {need:.1f} mm)")
+        A = np.column_stack((self.front[v], np.ones(int(v.sum()))))  # reported beside, not judged by
+        rms_now = float(np.sqrt(np.mean((A @ np.linalg.lstsq(A, self.rear[v], rcond=None)[0] - self.rear[v]) ** 2)))
         return {"front_reproduced_rms_mm": rms_front, "rear_predicted_rms_mm": rms_rear,
                 "baseline_delayed_fork_rms_mm": rms_fork, "baseline_rear_mean_rms_mm": rms_mean,
+                "fork_at_once_rms_mm": rms_now,
                 "baseline_delayed_fork_scale": base["delayed_fork_scale"],
                 "beat_margin_percent": 100.0 * BEAT_MARGIN, "passes": passes, "verdict": verdict,
                 "rear_travel_used_mm": used, "rear_predicted_rms_percent_of_used": 100.0 * rms_rear / used,
                 "rear_histogram_distance_percent": histogram_distance(self.rear[v], self.rear_predicted[v],
                                                                         self.rear_top),
                 "samples_checked_percent": 100.0 * float(np.mean(v)),
-                "bands": band_checks(self.t, self.rear, self.rear_predicted, self.fork_delayed_or_front, v)}
+                "bands": band_checks(self.t, self.rear, self.rear_predicted, self.fork_delayed_or_front, v,
+                                     fork=self.front, lags=self.lags)}
+
+    def fitted_summary(self, valid) -> dict:
+        """This reconstruction's rear on the ``valid`` samples of another (the one judged): its share of the
+        rear's ground met at once, the rear predicted's RMS error and correlation, and per band its error
+        and correlation (``reconstruct_bands.band_checks``)."""
+        v = valid & np.isfinite(self.rear_predicted)
+        e = self.rear_predicted[v] - self.rear[v]
+        bands = band_checks(self.t, self.rear, self.rear_predicted, self.fork_delayed_or_front, v)
+        return {"share": self.at_once, "rear_predicted_rms_mm": float(np.sqrt(np.mean(e * e))),
+                "rear_predicted_rms_less_mean_mm": float(np.std(e)),
+                "rear_correlation": float(np.corrcoef(self.rear_predicted[v], self.rear[v])[0, 1]),
+                "samples_percent_of_judged": 100.0 * float(v.sum()) / max(int(valid.sum()), 1),
+                "bands": [{k: b[k] for k in ("band_Hz", "predicted_error_rms_mm", "predicted_correlation")}
+                          for b in bands],
+                "diverged_s": self.diverged_s, "fitted_on": "the rear's record (its timing alone: one number)",
+                "judged": False}
 
     def speed_cover(self) -> dict:
         """How much of the ride lies within a window with a speed: any (strict or tracked, the refined
@@ -284,7 +287,7 @@ class Reconstruction:
         return {"ride": self.name, "bike": self.bike, "duration_s": float(self.t[-1] - self.t[0]), **part,
                 "speed_m_per_s": self.speed["speed_m_per_s"], "lag_s": self.speed["lag_s"],
                 "speed_from": self.speed.get("from"), "wheelbase_at_sag_m": float(self.wheelbase),
-                "speed_profile": profile,
+                "speed_profile": profile, **({} if self.at_once_fit is None else {"at_once_fit": self.at_once_fit}),
                 "windows": windows,
                 "window_speeds_m_per_s": [None if s is None else float(s) for _, s, _ in self.speed["windows"]],
                 "window_speed_range_m_per_s": [min(speeds), max(speeds)] if speeds else None,
@@ -333,8 +336,12 @@ class Reconstruction:
                 f"{c['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted {c['rear_predicted_rms_mm']:.1f} mm RMS "
                 f"({c['rear_predicted_rms_percent_of_used']:.0f} % of the {c['rear_travel_used_mm']:.0f} mm used; "
                 f"baselines: delayed fork {c['baseline_delayed_fork_rms_mm']:.1f}, rear's mean "
-                f"{c['baseline_rear_mean_rms_mm']:.1f} mm), "
-                f"histograms {c['rear_histogram_distance_percent']:.0f} % apart"
+                f"{c['baseline_rear_mean_rms_mm']:.1f} mm; the fork at once {c['fork_at_once_rms_mm']:.1f}, not "
+                f"judged by), "
+                + ("" if not self.at_once_fit else f"with {100 * self.at_once_fit['share']:.0f} % of the rear's ground "
+                   f"met at the front's moment (fitted on the rear's record, not judged) the rear "
+                   f"{self.at_once_fit['rear_predicted_rms_mm']:.1f} mm, ")
+                + f"histograms {c['rear_histogram_distance_percent']:.0f} % apart"
                 + ("" if not c["bands"] else "; the rear by band (correlation, described): " + ", ".join(
                     f"{b['band_Hz'][0]:g}-{b['band_Hz'][1]:g} Hz {b['predicted_correlation']:.2f} "
                     f"{'yes' if b['described'] else 'no'}" for b in c["bands"]))
@@ -472,10 +479,11 @@ def ridden_part(record):
     return part, (float(t[a]), float(t[b - 1])), [(float(t[i]), float(t[min(j, t.size - 1)])) for i, j in stands]
 
 
-def reconstruct(record, bike, overrides=None) -> Reconstruction:
+def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstruction:
     """``record`` (a ``mtbmj.measured.telemetry.TelemetryRecord`` with both ends) through the bike
     ``bike`` (preset, file or ``mtbmj.bike.spec.ResolvedBike``, which is not read again; ``overrides``
-    its keys): see the module doc."""
+    its keys): see the module doc. ``at_once``: also the rear with the share of its ground met at the
+    front's moment fitted on the rear's record (``Reconstruction.at_once_fit``, reported, not judged)."""
     from mtbmj.bike import run as bike_run
     from mtbmj.bike import spec as spec_mod
 
@@ -528,9 +536,10 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
 
     whole = reconstruct_bike.whole_bike(spec, fork_setup, shock_setup)
 
-    def through(speed):
+    def through(speed, at_once=0.0):
         """The terrain and the rear from the fork's record through the whole bike at ``speed``'s lags
-        (the rear's record unused), the whole bike free over it again, and the samples checked."""
+        (the rear's record unused; ``at_once`` of the rear's ground taken at the front's moment), the
+        whole bike free over it again, and the samples checked."""
         pad = int(round(LEFT_OUT_S / dt))
         lags = wheelbase / speed["speed_at"](t)  # s, the rear's lag behind the front at each moment
         bad = np.zeros(t.size, bool)
@@ -552,13 +561,14 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
                                    f"{len(speed['windows'])} whose two ends aligned lie wholly where the front wheel was "
                                    f"off the ground, or in the ride's first wheelbase or its filters' start (or the rear "
                                    f"does not move there): no sample of the ride can be checked")
-        found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel, stops)
+        found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel, stops,
+                                                  at_once=at_once)
         # the check: the whole bike free over the terrain found, the rider's slow load on its front
-        again = reconstruct_bike.ride(t, whole, np.interp(t - lags, t, found["ground"]), front_ground=found["ground"],
-                                      push=found["rider_slow_load"])
+        again = reconstruct_bike.ride(t, whole, reconstruct_bike.rear_ground(t, lags, found["ground"], at_once),
+                                      front_ground=found["ground"], push=found["rider_slow_load"])
         return {"lags": lags, "bad": bad, "unaligned": unaligned, "found": found, "again": again}
 
-    def built(done, speed) -> Reconstruction:
+    def built(done, speed, at_once=0.0) -> Reconstruction:
         found, again = done["found"], done["again"]
         rear_predicted, front_again = found["rear_rise"], again["front_rise"] / sin_a
         bad = done["bad"] | ~(np.isfinite(rear_predicted) & np.isfinite(front_again))  # past a divergence: unchecked
@@ -570,7 +580,7 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
                               front_again * 1e3, rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps,
                               done["unaligned"], np.interp(t - done["lags"], t, fork * 1e3), wheelbase,
                               found["passes"], found["settled_m"], min(diverged) if diverged else None, part_s,
-                              stands)
+                              stands, at_once)
 
     done = through(speed)
     result = built(done, speed)
@@ -590,7 +600,44 @@ def reconstruct(record, bike, overrides=None) -> Reconstruction:
             except ReconstructError:
                 break  # no refining window aligned, or none left to check: the estimate before stands
             result = built(done, speed)
+    if at_once:  # reported beside, not judged: the share of the rear's ground met at once, from the rear's record
+        ends = built(through(speed, 1.0), speed, 1.0)
+        a = at_once_share(ends.rear, result.rear_predicted, ends.rear_predicted, result.valid)
+        tried = [result, ends] + ([built(through(speed, a), speed, a)] if 0.0 < a < 1.0 else [])
+        # the one whose rear predicted, less its mean, is closest to the record's on the samples checked
+        # without it; one that diverges earlier than the bike without it is not taken
+        kept = [r for r in tried if r.diverged_s is None or (result.diverged_s is not None
+                                                             and r.diverged_s >= result.diverged_s)]
+        best = min(kept, key=lambda r: _timing_error(r.rear, r.rear_predicted, result.valid))
+        result.at_once_fit = best.fitted_summary(result.valid)
     return result
+
+
+def _timing_error(rear, predicted, valid) -> float:
+    ok = valid & np.isfinite(predicted)
+    if not ok.any():
+        return math.inf
+    e = (predicted - rear)[ok]
+    return float(np.sqrt(np.mean((e - e.mean()) ** 2)) + (math.inf if ok.sum() < valid.sum() else 0.0))
+
+
+def at_once_share(rear, at_lag, at_once, valid) -> float:
+    """The share (0..1) of the rear's ground met at the front's moment that best matches the rear's
+    record (mm) on the ``valid`` samples, from the rear predicted with none of it (``at_lag``) and with
+    all of it (``at_once``): least squares on the series less their means (the timing alone, never a
+    height), the rear predicted taken linear in the share between the two, clipped to 0..1; 0 where
+    the two do not differ or there are fewer than 3 samples. The whole bike is not linear in it (the
+    terrain found moves with the rear's ground through the pitch): ``reconstruct`` rides the share
+    found and keeps whichever of none, all and it matches the record best."""
+    ok = valid & np.isfinite(at_lag) & np.isfinite(at_once)
+    if ok.sum() < 3:
+        return 0.0
+    e0 = (at_lag - rear)[ok]
+    d = (at_once - at_lag)[ok]
+    e0, d = e0 - e0.mean(), d - d.mean()
+    if not d @ d > 0.0:
+        return 0.0
+    return float(min(max(-(e0 @ d) / (d @ d), 0.0), 1.0))
 
 __all__ = ["min_seconds", "speed_from_lag", "ground_under", "forward", "histogram_distance", "reconstruct", "Reconstruction",
            "QuarterCar", "ReconstructError"]

@@ -291,8 +291,16 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
             "diverged_s": diverged}
 
 
+def rear_ground(t, lag, ground, at_once: float = 0.0):
+    """The ground the rear wheel rides (m on ``t``): the ground found under the front ``lag`` (s) earlier,
+    its share ``at_once`` taken at the same moment instead (what the fork felt as a load on both ends
+    at once, a turn or a compression, rather than as the terrain a wheelbase ahead)."""
+    behind = np.interp(t - lag, t, ground)
+    return behind if at_once == 0.0 else (1.0 - at_once) * behind + at_once * np.asarray(ground, float)
+
+
 def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference, fork_travel: float,
-                     stops=None) -> dict:
+                     stops=None, at_once: float = 0.0) -> dict:
     """The terrain under the front wheel and the rear's travel predicted, from the fork's record alone
     (``fork_stroke`` m on ``t``): the whole bike rides with its fork's stroke prescribed, its rear
     wheel over the ground found under the front ``lag`` (s, on ``t``) earlier; the ground of one pass
@@ -301,7 +309,8 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     is the rider's, taken off the frame as the quarter car takes it (the tyre carries it); the frame's
     front is held near ``reference`` (the quarter car's body, its drift removed) by the bounded slow
     load of :func:`ride`. ``stops`` (N at the wheel, or None): the fork's hard-stop force across each
-    bottom-out (not in the record; the quarter car's, keeping its body level after it). Flights: where the tyre's force is not positive or the fork hangs on its
+    bottom-out (not in the record; the quarter car's, keeping its body level after it). ``at_once``: the
+    share of the rear's ground taken at the front's moment (:func:`rear_ground`). Flights: where the tyre's force is not positive or the fork hangs on its
     top-out stop, merged and bridged (``reconstruct_inverse.bridge``). Returns {"ground", "airborne",
     "tyre", "rear_rise", "slow_load" (N on the frame's front: the rider's and the loop's),
     "rider_slow_load" (the rider's alone), "passes", "settled_m", "diverged_s" (where a pass diverged:
@@ -320,7 +329,7 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     ground = np.asarray(first_ground, float)
     before, change, passes = None, math.inf, 0
     while passes < MAX_PASSES:
-        out = ride(t, b, np.interp(t - lag, t, ground), front=front, reference=reference)
+        out = ride(t, b, rear_ground(t, lag, ground, at_once), front=front, reference=reference)
         passes += 1
         ok = np.isfinite(out["front_ground"])
         found, air = bridge(np.where(ok, out["front_ground"], ground[-1] if not ok.all() else 0.0),
@@ -341,4 +350,5 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
             "diverged_s": out["diverged_s"]}
 
 
-__all__ = ["SLOW_HZ", "SLOW_BOUND", "COMPILED", "MAX_PASSES", "WholeBike", "whole_bike", "ride", "terrain_and_rear"]
+__all__ = ["SLOW_HZ", "SLOW_BOUND", "COMPILED", "MAX_PASSES", "WholeBike", "whole_bike", "ride", "rear_ground",
+           "terrain_and_rear"]
