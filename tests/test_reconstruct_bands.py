@@ -162,3 +162,19 @@ def test_the_rears_ground_met_at_once_is_mixed_from_the_two_timings():
     np.testing.assert_allclose(rear_ground(t, LAGS, ground), delayed(ground))
     np.testing.assert_allclose(rear_ground(t, LAGS, ground, 1.0), ground)
     np.testing.assert_allclose(rear_ground(t, LAGS, ground, 0.25), 0.75 * delayed(ground) + 0.25 * ground)
+
+
+def test_the_share_met_at_once_from_the_command_line_is_reported_not_judged(tmp_path):
+    """``mtbmj reconstruct RIDE --at-once``: ``reconstruction.json`` carries ``at_once_fit`` (its share within
+    0-1, the rear's error with it, marked not judged) and the verdict is the one without it."""
+    import json
+
+    from mtbmj.cli import main
+
+    out, plain = tmp_path / "at_once", tmp_path / "plain"
+    assert main(["reconstruct", "example", "--bike", "sst", "--at-once", "--out", str(out)]) == 0
+    assert main(["reconstruct", "example", "--bike", "sst", "--out", str(plain)]) == 0
+    d, p = (json.loads((o / "reconstruction.json").read_text()) for o in (out, plain))
+    fit = d["at_once_fit"]
+    assert 0.0 <= fit["share"] <= 1.0 and fit["judged"] is False and fit["rear_predicted_rms_mm"] > 0.0
+    assert d["checks"]["verdict"] == p["checks"]["verdict"] and p.get("at_once_fit") is None
