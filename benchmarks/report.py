@@ -608,6 +608,12 @@ def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
                             if (r.get("whole_bike") or {}).get("diverged_s") is not None
                             else f"**fails** (not below the {better})")),
                         "reconstruct_rides.json", d["command"]))
+        fit = r.get("at_once_fit")
+        if fit and fit.get("rear_predicted_rms_mm") is not None and c.get("fork_at_once_rms_mm") is not None:
+            rows.append(Row(f"{name}: beside the check, not judged", "report",
+                            f"the fork at once {mm(c['fork_at_once_rms_mm'], 3)}; the rear with a share "
+                            f"{num(fit['share'], 2)} met at once (fitted on the rear) {mm(fit['rear_predicted_rms_mm'], 3)}",
+                            "reconstruct_rides.json", d["command"]))
     return {"reconstruct": rows}
 
 

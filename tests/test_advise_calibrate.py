@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 from argparse import Namespace
 
+import numpy as np
 import pytest
 
 from mtbmj.cli import main
@@ -297,30 +298,49 @@ def test_advice_on_the_forward_ride_with_its_static_sag_rides_it_as_carried(forw
     assert 'id="carried"' in (out / "advice.html").read_text()
 
 
-@pytest.mark.slow  # one advice on a 30 s made ride, every candidate searched: 1-3 min on two busy cores
-def test_advice_on_the_forward_ride_carried_as_a_descent_sits_where_the_ride_sat(forward, tmp_path):
-    """The forward ride advised with its static sag and ``--carried-as descent``: the rider stays in the file's
-    place and every run rides the reconstructed terrain laid on the descent that carries the 85 N the ride
-    carried (the grade found through the engine, ``calibrate_descent.grade_for``). The model's fork and rear
-    then sit where the ride's sat (mean travel within 3 points; ridden at the closed form's grade with the
-    rider moved as well, the fork sat at 37 % for the ride's 31 %), the static sag the rules judge is the one
-    measured, the bike rides the whole ride, and no change beyond the well-set ranges is advised."""
-    sst, file, sag = forward
+@pytest.mark.slow  # a 40 s engine run and one advice on 35 s of it: about a minute on two busy cores
+def test_a_ride_down_a_steady_descent_is_ridden_on_its_descent(tmp_path):
+    """A ride down a 10 % grade (5.71 deg) over ISO 8608 class C roughness at 6 m/s, made by the package's own
+    whole bike (MuJoCo: no independent whole bike here rides along a slope with its brakes) and written as SST
+    version-3 counts; the static sag its rider measures the bike at rest on level ground. What this shares
+    with the engine: everything that made the ride, so it checks the reading, not the physics (the engine on
+    a descent is checked against a moment balance in tests/test_bike_descent.py): advised with the sag and
+    ``--carried-as descent``, the springs read as the file's (x1 within each interval), the load carried
+    forward read as the grade ridden (within 0.5 deg), every run on that grade sitting where the ride sat
+    (mean travel within 3 points at both ends), the static sag judged the one measured, and the bike riding
+    the whole ride. (On the made ride of a rider 150 mm forward on the flat, the descent is the wrong reading:
+    ridden so at the ride's own speed the bike loops out at its 0.4 m tabletop, and ``rider`` is right.)"""
+    from mtbmj.bike.run import run_bike
+    from mtbmj.rolling import terrain as terrain_mod
+
+    from helpers import write_v3
+
+    file = tmp_path / "bike.toml"
+    file.write_text(bike_text(FILE_RATE))
+    ground = terrain_mod.on_grade(terrain_mod.make("iso8608:class=C,seed=5,length_m=400,at_m=15"), -10.0, 2.0, 5.0)
+    made = run_bike(str(file), ground, 6.0, duration=40.0)
+    assert made.summary.get("crash") is None
+    raw = made.raw
+    t = np.arange(0.0, raw["time_s"][-1], 1e-3)
+    on = t >= 5.0  # on the grade (the front axle past 25 m)
+    fork, rear = (np.interp(t, raw["time_s"], raw[c])[on] for c in ("front_travel_mm", "rear_travel_mm"))
+    sst = write_v3(tmp_path / "ride.SST", np.clip(fork, 0, None), np.clip(rear, 0, None) / RATIO)
+    sag = (made.summary["static_front_travel_mm"], made.summary["static_rear_travel_mm"] / RATIO)
     out = tmp_path / "advice"
     with reconstruction_passing():
         assert main(["advise", str(sst), "--bike", str(file), "--static-sag-mm", f"{sag[0]:.3f},{sag[1]:.3f}",
                      "--carried-as", "descent", "--out", str(out)]) == 0
     advice = json.loads((out / "advice.json").read_text())
-    carried = advice["calibration"]["carried"]
-    assert carried["as"] == "descent" and 3.0 < carried["ridden_descent_deg"] < 9.0, carried
-    assert carried["load_forward_N"] == pytest.approx(_moved_forward_N(file), rel=0.1), carried
+    cal = advice["calibration"]
+    for end, sc in cal["springs"].items():
+        assert sc["low"] <= 1.0 <= sc["high"], (end, sc)
+    carried = cal["carried"]
+    assert carried["as"] == "descent" and carried["ridden_descent_deg"] == pytest.approx(5.71, abs=0.5), carried
     rec, sim = advice["recorded_setting"]["measured"], advice["recorded_setting"]["simulated"]
     for end in ("front", "rear"):
         assert abs(sim[end]["dynamic_sag_percent"] - rec[end]["dynamic_sag_percent"]) < 3.0, (end, sim[end], rec[end])
     assert sim["front"]["static_sag_percent"] == pytest.approx(100 * sag[0] / rec["front"]["travel_mm"], abs=2.0)
     assert advice["recorded_setting"].get("crash") is None
-    if advice["verdict"]["answer"] == "change":
-        assert outside_well_set_ranges(advice["recommendation"]) == [], advice["recommendation"]
 
 
 def test_the_descent_that_carries_a_load_is_found_as_the_moment_balance_says(right):
