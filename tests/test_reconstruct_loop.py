@@ -1,0 +1,66 @@
+"""The reconstruct-then-ride loop on a ride the engine itself made: the terrain found from the ride's fork
+record (``mtbmj.ride.reconstruct``) ridden again by the same MuJoCo bike at the same setting
+(``mtbmj.ride.advise``'s recorded-setting run) should give back the ride's own metrics. It is the least a
+model that advises from a ride owes: here nothing is unknown (the bike, its setting, the speed held, the
+ground an ISO 8608 class C profile), so every miss is the loop's own.
+
+What the loop shares with the ride: the engine that rides the terrain found (the same MuJoCo bike). What
+it does not: the reconstruction's own whole bike (``reconstruct_bike``: point-contact tyres without
+damping, vertical motion), through which the terrain is found, and the record's integer counts.
+
+Measured (2026-12-05): the sags come back (front 24.2 % for 23.7, rear 28.9 for 28.8), the velocities do not
+(p95 compression 378 mm/s for the ride's 181 at the fork, 340 for 160 at the rear; high-speed share 57 % for
+25 %), and the fork's maximum 38 % for 29 %. The terrain found has 8.6 times the true profile's power at
+1-2 cycles/m (0.5-1 m wavelengths: the wheel's hop at 6 m/s) and 2-3.5 times below; low-passing it at a
+0.5 m wavelength takes the fork's p95 only to 311 mm/s. A lead: the reconstruction's tyres have no damping
+where the engine's have, so the inverse reads the tyre's damping force as ground."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from mtbmj.bike.run import run_bike
+from mtbmj.cli import main
+from mtbmj.rolling import terrain as terrain_mod
+
+from helpers import RATIO, bike_text, reconstruction_passing, write_v3
+
+
+@pytest.fixture(scope="module")
+def looped(tmp_path_factory):
+    """(the ride's measured metrics, the loop's simulated ones) of a 37 s ride at 6 m/s over ISO 8608 class C."""
+    folder = tmp_path_factory.mktemp("loop")
+    file = folder / "bike.toml"
+    file.write_text(bike_text(12.0))
+    made = run_bike(str(file), terrain_mod.make("iso8608:class=C,seed=5,length_m=400,at_m=15"), 6.0, duration=40.0)
+    assert made.summary.get("crash") is None
+    raw = made.raw
+    t = np.arange(0.0, raw["time_s"][-1], 1e-3)
+    on = t >= 3.0
+    fork, rear = (np.interp(t, raw["time_s"], raw[c])[on] for c in ("front_travel_mm", "rear_travel_mm"))
+    sst = write_v3(folder / "ride.SST", np.clip(fork, 0, None), np.clip(rear, 0, None) / RATIO)
+    out = folder / "advice"
+    with reconstruction_passing():
+        assert main(["advise", str(sst), "--bike", str(file), "--no-calibrate", "--workers", "1", "--out", str(out)]) == 0
+    d = json.loads((out / "advice.json").read_text())
+    return d["recorded_setting"]["measured"], d["recorded_setting"]["simulated"]
+
+
+@pytest.mark.slow  # a 40 s engine run and one advice on 37 s of it: about a minute
+def test_the_loop_gives_back_the_ride_s_sags(looped):
+    rec, sim = looped
+    for end in ("front", "rear"):
+        assert sim[end]["dynamic_sag_percent"] == pytest.approx(rec[end]["dynamic_sag_percent"], abs=2.0), end
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="the loop doubles the ride's velocities: p95 compression 378 mm/s for 181 at "
+                                       "the fork, 340 for 160 at the rear; high-speed share 57 % for 25 % (the terrain "
+                                       "found has 8.6x the true power at 1-2 cycles/m)")
+def test_the_loop_gives_back_the_ride_s_speeds_and_depth(looped):
+    rec, sim = looped
+    for end in ("front", "rear"):
+        assert sim[end]["p95_compression_mm_per_s"] == pytest.approx(rec[end]["p95_compression_mm_per_s"], rel=0.25), end
+        assert sim[end]["max_travel_percent"] == pytest.approx(rec[end]["max_travel_percent"], abs=5.0), end
