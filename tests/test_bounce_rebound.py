@@ -148,3 +148,22 @@ def test_shared_forks_are_refused_with_the_reason():
         assert e["rest_after_mm"] < e["rest_before_mm"] - 5.0
         assert "opposite ways, the rider's weight moved" in e["refused"]
         assert e["refused"].endswith("the fork's spring, damper and friction are not replayed")
+
+
+def test_rebound_dampers_spring_from_the_ring_down_period_else_the_replay():
+    """``bounce_rebound.spring_given``: the ring-down's period reading's spring and interval where it was
+    read, said so; the best whole-trace replay's where the reading was refused (its reason kept) or not
+    tried; a wrong source (the replay's spring where a reading exists) is told apart."""
+    from mtbmj.identify.bounce_rebound import RING_FROM, spring_given
+
+    best = {"file": "00083.SST", "spring_scale": 0.49, "spring_scale_ci95": [0.14, 0.85]}
+    ring = {"spring_scale": 0.47, "spring_scale_ci95": [0.35, 0.62]}
+    (s, ci), src = spring_given(ring, best)
+    assert (s, ci, src) == (0.47, [0.35, 0.62], RING_FROM)
+    assert (s, ci) != (best["spring_scale"], best["spring_scale_ci95"])
+    refused = {"refused": "the spring from the ring-down's period not read: 1 free half period(s) in the records"}
+    (s, ci), src = spring_given(refused, best)
+    assert (s, ci) == (0.49, [0.14, 0.85])
+    assert src.startswith("the whole-trace replay of 00083.SST") and "1 free half period(s)" in src
+    (s, ci), src = spring_given(None, best)
+    assert s == 0.49 and src.endswith("(the ring-down's period: not tried)")

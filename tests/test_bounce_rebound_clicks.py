@@ -389,7 +389,8 @@ def test_cli_writes_and_prints_the_answer(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(bounce_replay, "replay_records", lambda records, clicks, bike, rider_hz: {
         "summary": [], "csv": {}, "replays": [], "lines": [], "check": None})
 
-    def read(records, clicks, replayed, bike, rider_hz, target):
+    def read(records, clicks, replayed, bike, rider_hz, target, ring="unset"):
+        assert ring is None  # no record replayed: no ring-down period reading to give the spring
         e = law_entries(clicks=tuple(int(k) for k in clicks), sd=30.0, seed=5)
         return {"from": "test", "records": e, "rises": True, "line": "dampers",
                 **bounce_rebound.law_in_clicks(e, target)}

@@ -285,20 +285,25 @@ def line(out: dict) -> str:
 
 def _halves(t, x, peak: int) -> list:
     """The free half periods after the slam at ``peak`` (``bounce_decay.extrema``, vertex times:
-    ``bounce_predict.timed_halves``), as the ring-down readings take them."""
+    ``bounce_predict.timed_halves``), as the ring-down readings take them, each led by its place: the
+    turning point it starts from, counted from the slam's peak (1: the first after it)."""
     from mtbmj.identify import bounce_decay as bd
     from mtbmj.identify import bounce_predict as bp
 
     t, x = np.asarray(t, float), np.asarray(x, float)
-    return bp.timed_halves(bd.extrema(t, x, "shock", peak), t, x)
+    seq = bd.extrema(t, x, "shock", peak)
+    return [(seq.first_turn + j, *h) for j, h in enumerate(bp.timed_halves(seq, t, x))]
 
 
 def _matched(rec: list, sim: list) -> list:
-    """log(simulated / recorded) of the same half cycles: the k-th of each direction in both."""
+    """log(simulated / recorded) of the same half cycles: the one starting at the same turning point after
+    the slam in both (a first trough at the top-out is left out of one trace and not the other, so the
+    k-th free half of a direction need not be the same half cycle); None where the simulation has none."""
+    by_turn = {q[0]: q for q in sim}
     out = []
-    for d in ("rebound", "compression"):
-        r, s = ([q[3] for q in h if q[0] == d] for h in (rec, sim))
-        out += [math.log(b / a) for a, b in zip(r, s)] if len(s) >= len(r) else [None] * len(r)
+    for q in rec:
+        s = by_turn.get(q[0])
+        out.append(math.log(s[4] / q[4]) if s is not None and s[1] == q[1] else None)
     return out
 
 
