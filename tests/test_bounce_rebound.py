@@ -167,3 +167,39 @@ def test_rebound_dampers_spring_from_the_ring_down_period_else_the_replay():
     assert src.startswith("the whole-trace replay of 00083.SST") and "1 free half period(s)" in src
     (s, ci), src = spring_given(None, best)
     assert s == 0.49 and src.endswith("(the ring-down's period: not tried)")
+
+
+def test_ring_period_halves_matched_by_their_turning_point_from_the_slam():
+    """``bounce_slam_rebound._matched``: the period reading pairs the record's and the simulation's half
+    cycles that start at the same turning point after the slam. A made ring-down whose half periods
+    lengthen (phase 2 pi (1.5 t - 0.12 t^2)) as the record (its first trough clipped at the top-out, a
+    stop the reading leaves out: its first free extremum is the 2nd turning point) and, as the
+    simulation, the same motion 15 mm higher (its first trough free: the 1st): every pair is the same
+    half cycle (log ratio under 1e-3), where pairing the k-th free half of each direction (written here)
+    pairs the record's first compression with the simulation's one a cycle earlier (log ratio over 0.1)."""
+    from mtbmj.identify.bounce_slam_rebound import _halves, _matched
+
+    t = np.arange(-1.5, 2.5, 1 / 500)
+
+    def made(rest):
+        return np.where(t < 0, rest + 30 * np.exp(-(t / 0.08) ** 2),
+                        rest + 30 * np.exp(-1.2 * t) * np.cos(2 * np.pi * (1.5 * t - 0.12 * t * t)))
+
+    noise = 0.02 * np.random.default_rng(3).standard_normal(t.size)
+    peak = int(np.argmin(np.abs(t)))
+    rec = _halves(t, np.maximum(made(20.0), 0.0) + noise, peak)
+    sim = _halves(t, made(35.0) + noise, peak)
+    assert [q[0] for q in rec][:1] == [2] and [q[0] for q in sim][:1] == [1] and len(rec) >= 3
+    got = _matched(rec, sim)
+    assert len(got) == len(rec) and max(abs(g) for g in got) < 1e-3
+
+    def kth_of_each_direction(rec, sim):
+        out = []
+        for d in ("rebound", "compression"):
+            r, s = ([q[4] for q in h if q[1] == d] for h in (rec, sim))
+            out += [math.log(b / a) for a, b in zip(r, s)]
+        return out
+
+    assert max(abs(g) for g in kth_of_each_direction(rec, sim)) > 0.1
+    # a simulation without the record's later halves gives None for them (that spring scale is not used)
+    assert _matched(rec, sim[:2])[-1] is None
