@@ -18,7 +18,8 @@ ratio; ``test_generator_rings_as_the_bike`` holds six of them, lightly and heavi
 and 5 %). Not shared: the integrator, the bike's pitch and fork, the leverage curve (the bike
 stiffens with stroke, the generator does not), the tyres' law, the friction law (a stick condition
 here, the shock law's friction state there), the push's shape (half sines here, sin^2 lobes there)
-and where it acts. The stated tolerance is 15 % on the spring and 30 % on the damper. It holds
+and where it acts (the stiffening is small: the two ring within 0.2 % about the slam's 14 mm rest,
+2.1 % apart about 30 mm). The stated tolerance is 15 % on the spring and 30 % on the damper. It holds
 lightly (2500 N s/m) and heavily (5000 N s/m) damped; the spring's interval holds the generator's
 heavily damped, not lightly (a strict xfail with the numbers).
 
@@ -292,11 +293,14 @@ def test_recovers_spring_and_damper(generated):
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="the spring is read 11 % low lightly damped, 0.490 x [0.437, 0.544] for 0.55 "
-                                       "(9 % heavily damped, 0.50 [0.43, 0.56], which holds it): the bike stiffens "
-                                       "with stroke and the generator does not (at 0.55 x and 2500 N s/m the bike rings "
-                                       "at 1.461 Hz, zeta 0.201 about a 10 mm rest and 1.506 Hz, 0.225 about 35 mm; "
-                                       "the generator at 1.467 Hz, 0.200 at both), a model difference the "
-                                       "intervals do not carry")
+                                       "(9 % heavily damped, 0.50 [0.43, 0.56], which holds it). The bike stiffens "
+                                       "with stroke and the generator does not, but by little: at 0.55 x and 2500 N s/m "
+                                       "they ring within 0.2 % about the slam's 14 mm rest, the bike 2.1 % faster about "
+                                       "30 mm (test_generator_and_bike_along_the_stroke): a spring about 0.4-4 % apart, "
+                                       "not 11 %; "
+                                       "the replay's friction, read 64 N for the generator's 30 on the same model's "
+                                       "slam (seed 2500), trades with the spring as in the period reading (below); "
+                                       "not shown to be the whole of it")
 def test_spring_interval_holds_lightly_damped(generated):
     s = generated[2500.0].summary()
     assert s["spring_scale_ci95"][0] <= 0.55 <= s["spring_scale_ci95"][1]
@@ -737,7 +741,15 @@ def test_spring_from_the_ring_downs_period_holds_the_generators(ring_generated):
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="the spring from the generator's ring-down periods reads 0.47 x [0.36, 0.60] "
-                                       "for 0.55 x: 15 % low (within 10 % is the target)")
+                                       "for 0.55 x: 15 % low (within 10 % is the target). Not the bike's stiffening "
+                                       "(at 0.55 x the bike's free halves are 0.5-0.8 % shorter than the generator's "
+                                       "with the generator's own damper, friction 0: a 2 % spring). The reading runs "
+                                       "the bike with the whole-trace replays' friction (64 and 0 N for 30) and one "
+                                       "damper both ways (1888 and 3742 N s/m for 2500 both ways and 2500 / 5000); "
+                                       "with the generator's friction given instead it reads 0.52 [0.49, 0.56], with "
+                                       "its damper and friction 0.52 [0.46, 0.58]: the halves of a 2-3 half ring-down "
+                                       "move about 0.3 x the log spring, so a 5 % period shift from borrowed friction "
+                                       "and damping is a 15 % spring")
 def test_spring_from_the_ring_downs_period_within_10_percent(ring_generated):
     from mtbmj.identify.bounce_slam_rebound import spring_from_periods
 
