@@ -63,9 +63,10 @@ MAX_NFEV = 30
 RING_SCALES = (0.25, 0.35, 0.45, 0.55, 0.65, 0.75, 0.9)  # the spring scales the ring-down is simulated at
 RING_AFTER_S = 2.5  # ... for this long after the slam's peak (the records' free halves end within ~1.5 s)
 RING_METHOD = ("each record's free half periods after the slam (bounce_decay.extrema, vertex times) against the same "
-               "half cycles (the k-th of each direction) of its whole-trace replay's run (its push, damper and "
-               "friction) at each spring scale tried; the mean log ratio over all records' halves interpolated to 0 "
-               "in log scale; 95 % from the ratios' scatter at that scale (Student's t, n - 1) through the slope")
+               "half cycles (those starting at the same turning point after the slam) of its whole-trace replay's run "
+               "(its push, damper and friction) at each spring scale tried; the mean log ratio over the halves "
+               "simulated at two neighbouring scales interpolated to 0 in log scale; 95 % from the ratios' scatter "
+               "at that scale (Student's t, n - 1) through the slope")
 START = {"spring_scale": 0.5, "compression_N_s_per_m": 4000.0, "rebound_N_s_per_m": 2000.0}
 METHOD = ("the slam and its first rebound (to the record's rest level) of every record replayed on the seated "
           "MuJoCo bike together: one spring scale and one compression coefficient shared, a push (lift and slam "
@@ -327,30 +328,38 @@ def spring_from_periods(rings, scales=RING_SCALES) -> dict:
             except BounceError:
                 sim = []
             rows.setdefault(sc, []).extend(_matched(rec, sim))
-    use = sorted(sc for sc, r in rows.items() if r and all(q is not None for q in r))
-    means = {sc: float(np.mean(rows[sc])) for sc in use}
-    base = {"halves": n_rec, "mean_log_ratio": {f"{sc:g}": means.get(sc) for sc in scales},
-            "method": RING_METHOD}
-    pair = next(((a, b) for a, b in zip(use, use[1:]) if means[a] >= 0.0 >= means[b]), None)
-    if n_rec < 2 or pair is None:
+    scales = sorted(rows)
+    matched = {sc: {i for i, q in enumerate(rows[sc]) if q is not None} for sc in scales}
+    means = {sc: float(np.mean([rows[sc][i] for i in matched[sc]])) if matched[sc] else None for sc in scales}
+    base = {"halves": n_rec, "mean_log_ratio": {f"{sc:g}": means[sc] for sc in scales}, "method": RING_METHOD}
+    pair, keep = None, []
+    for a, b in zip(scales, scales[1:]):  # the halves both scales simulate, the same on either side of the root
+        keep = sorted(matched[a] & matched[b])
+        if len(keep) >= 2 and np.mean([rows[a][i] for i in keep]) >= 0.0 >= np.mean([rows[b][i] for i in keep]):
+            pair = (a, b)
+            break
+    if pair is None:
         why = (f"{n_rec} free half period(s) in the records" if n_rec < 2 else
-               "no two spring scales tried bracket the records' half periods")
+               "no two spring scales tried bracket the records' half periods (two halves or more simulated at both)")
         return {**base, "refused": f"the spring from the ring-down's period not read: {why}",
                 "line": f"spring from the ring-down's period not read: {why}"}
     a, b = pair
+    ra, rb = np.array([rows[a][i] for i in keep]), np.array([rows[b][i] for i in keep])
     la, lb = math.log(a), math.log(b)
-    slope = (means[b] - means[a]) / (lb - la)  # d mean log ratio / d log scale (about -1/2)
-    u = -means[a] / (means[b] - means[a])
+    slope = (rb.mean() - ra.mean()) / (lb - la)  # d mean log ratio / d log scale (about -1/2)
+    u = -ra.mean() / (rb.mean() - ra.mean())
     ls = la + u * (lb - la)
-    d = np.array([(1 - u) * p + u * q for p, q in zip(rows[a], rows[b])])  # each half's misfit at the root
+    d = (1 - u) * ra + u * rb  # each half's misfit at the root
     from scipy.stats import t as student
 
     half = float(student.ppf(0.975, d.size - 1)) * float(np.std(d, ddof=1)) / math.sqrt(d.size)
     lo, hi = sorted((math.exp(ls - half / slope), math.exp(ls + half / slope)))
     spring = math.exp(ls)
-    return {**base, "spring_scale": spring, "spring_scale_ci95": [lo, hi],
-            "line": (f"spring from the ring-down's period: {spring:.2f} x [{lo:.2f}, {hi:.2f}] ({n_rec} free half "
-                     f"periods of {len(rings)} records matched on the MuJoCo bike at {', '.join(f'{s:g}' for s in use)} x)")}
+    left = n_rec - len(keep)
+    return {**base, "spring_scale": spring, "spring_scale_ci95": [lo, hi], "halves_matched": len(keep),
+            "line": (f"spring from the ring-down's period: {spring:.2f} x [{lo:.2f}, {hi:.2f}] ({len(keep)} free half "
+                     f"periods of {len(rings)} records matched on the MuJoCo bike between {a:g} and {b:g} x"
+                     + (f"; {left} of the records' halves not simulated there, left out" if left else "") + ")")}
 
 
 def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | None = None) -> dict | None:
