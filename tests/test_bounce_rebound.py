@@ -203,3 +203,40 @@ def test_ring_period_halves_matched_by_their_turning_point_from_the_slam():
     assert max(abs(g) for g in kth_of_each_direction(rec, sim)) > 0.1
     # a simulation without the record's later halves gives None for them (that spring scale is not used)
     assert _matched(rec, sim[:2])[-1] is None
+
+
+def test_ring_period_reading_leaves_out_a_half_the_simulation_lacks():
+    """``spring_from_periods`` on made ring-downs (x = rest + 30 exp(-1.2 t) cos(2 pi f t) mm after the slam's
+    peak, f = 1.5 sqrt(scale / 0.5) Hz: the period alone says the scale) through a stand-in bike that runs the
+    same law at each scale tried from a 20 mm rest, its first trough clipped at the top-out (a stop). Two
+    records at 0.5 x: one resting at 20 mm (the same stop), one at 25 mm whose first trough is free (as the
+    17-click shared slam's: its first free half starts a turning point earlier than any simulation's).
+    The reading is 0.5 x within 1 % from the halves simulated at both neighbouring scales, saying how many
+    were left out; the same records at 0.4 x read 0.4 x (the reading follows the periods, not the stand-in)."""
+    from types import SimpleNamespace
+
+    from mtbmj.identify.bounce_slam_rebound import spring_from_periods
+
+    def made(t, rest, scale, floor=None):
+        f = 1.5 * math.sqrt(scale / 0.5)
+        x = np.where(t < 0, rest + 30 * np.exp(-(t / 0.08) ** 2), rest + 30 * np.exp(-1.2 * t) * np.cos(2 * np.pi * f * t))
+        return x if floor is None else np.maximum(x, floor)
+
+    class StandIn:
+        def set_rest(self, *_):
+            pass
+
+        def run(self, p, after_s=2.5):
+            t = np.arange(-0.6, after_s, 1 / 2000)
+            return {"time_s": t, "stroke_mm": made(t, 20.0, p["spring_scale"], 0.0)}
+
+    t = np.arange(-1.5, 2.5, 1 / 500)
+    noise = 0.02 * np.random.default_rng(4).standard_normal(t.size)
+    for truth in (0.5, 0.4):
+        rings = [(f"made {rest:g}", t, made(t, rest, truth, 0.0) + noise, SimpleNamespace(sr=StandIn(), rest=rest), {})
+                 for rest in (25.0, 20.0)]
+        got = spring_from_periods(rings)
+        assert got["spring_scale"] == pytest.approx(truth, rel=0.01)
+        lo, hi = got["spring_scale_ci95"]
+        assert lo <= truth <= hi
+        assert got["halves_matched"] < got["halves"] and "left out" in got["line"]
