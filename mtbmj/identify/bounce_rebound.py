@@ -12,7 +12,9 @@ adjuster changes is the first rebound's speed from the peak, which needs neither
 
 Method. Per record, on the seated MuJoCo bike of the replay (its start, its rest): the spring scale,
 the friction and the compression coefficient given (shared by the records: a rebound adjuster
-changes none of them), the push fitted on the record up to its peak (``bounce_replay.fit_push``),
+changes none of them; ``read_records`` takes the spring from the ring-down's period reading,
+``bounce_slam_rebound.spring_from_periods``, where it was read, else from the best whole-trace replay,
+``spring_given``, and says which in ``"spring_from"``), the push fitted on the record up to its peak (``bounce_replay.fit_push``),
 then the rebound coefficient solved (``brentq``) so that the replay's first rebound, read as the
 record's (``bounce.first_rebound``), has the record's middle speed per millimetre of the peak's
 height above rest (1/s: for a linear end independent of how high the slam went, so the replay's

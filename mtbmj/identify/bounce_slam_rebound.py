@@ -33,9 +33,13 @@ line and the entry (``"refused"``), not hidden.
 The spring from the ring-down's period (``spring_from_periods``, ``read_records``' ``"ring_spring"``).
 The spring's information is in the free oscillation after the first rebound, outside the window. Each
 record's free half periods (``bounce_decay.extrema``, vertex times) are set against the same half cycles
-(the k-th of each direction) of its whole-trace replay's run at each of ``RING_SCALES`` (its push,
-damper and friction; ``RING_AFTER_S`` past the peak); the mean log ratio over all records' halves is
-interpolated to 0 in log scale, its 95 % interval the ratios' scatter (Student's t) through the slope.
+(those starting at the same turning point after the slam, ``Extrema.first_turn``) of its whole-trace
+replay's run at each of ``RING_SCALES`` (its push, damper and friction; ``RING_AFTER_S`` past the peak);
+over the halves two neighbouring scales both simulate (a record's half the simulation lacks is left out
+and said), the mean log ratio is interpolated to 0 in log scale, its 95 % interval the ratios' scatter
+(Student's t) through the slope. The run borrows the whole-trace replay's friction and one damper: on the
+test file's generator those are off (64 and 0 N for 30) and read its spring 15 % low (0.52 x with its
+friction given; docs/identification.md).
 ``read_records`` holds that spring in :func:`fit` and carries its interval into the others'
 (``held_ci95``: linearised, added in quadrature); ``"spring_from"`` says which. On the shared slams:
 0.47 x [0.35, 0.62] from 7 halves, and the rebound coefficients 1907 [0, 5077], 4504 [1080, 7928],
