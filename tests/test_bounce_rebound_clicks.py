@@ -222,6 +222,11 @@ def test_figure_shows_the_law_the_answer_and_open_sides():
     assert len(dashed) == len(e)
     assert figure_png(got)[:4] == b"\x89PNG"
     assert len(bx.containers) == 2 * len(e)  # the records' and the held-out error bars
+    assert "\n" not in ax.get_title()  # nothing to say: no spring source given, none refused
+    # the spring's source and a refused record said in the title
+    said = {**got, "spring_scale": 0.46, "spring_from": "the ring-down's period",
+            "records": [{"clicks": -4, "refused": "no coefficient"}] + e}
+    assert figure(said).axes[0].get_title().endswith("spring 0.46 x from the ring-down's period; refused at -4 clicks")
 
 
 def test_cli_target_needs_replay_and_a_positive_rate(tmp_path, capsys):
