@@ -42,8 +42,8 @@ test file's generator those are off (64 and 0 N for 30) and read its spring 15 %
 friction given; docs/identification.md).
 ``read_records`` holds that spring in :func:`fit` and carries its interval into the others'
 (``held_ci95``: linearised, added in quadrature); ``"spring_from"`` says which. On the shared slams:
-0.47 x [0.35, 0.62] from 7 halves, and the rebound coefficients 1907 [0, 5077], 4504 [1080, 7928],
-6859 [4302, 9416] N s/m at 0, 8, 17 clicks (the 0-click interval still reaches 0); on the test file's
+0.46 x [0.33, 0.64] from 6 of 7 halves, and the rebound coefficients 1794 [0, 4938], 4418 [953, 7883],
+6754 [4051, 9456] N s/m at 0, 8, 17 clicks (the 0-click interval still reaches 0); on the test file's
 generator 0.47 x [0.36, 0.60] for 0.55 x (docs/identification.md).
 """
 from __future__ import annotations
