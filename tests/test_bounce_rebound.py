@@ -148,3 +148,95 @@ def test_shared_forks_are_refused_with_the_reason():
         assert e["rest_after_mm"] < e["rest_before_mm"] - 5.0
         assert "opposite ways, the rider's weight moved" in e["refused"]
         assert e["refused"].endswith("the fork's spring, damper and friction are not replayed")
+
+
+def test_rebound_dampers_spring_from_the_ring_down_period_else_the_replay():
+    """``bounce_rebound.spring_given``: the ring-down's period reading's spring and interval where it was
+    read, said so; the best whole-trace replay's where the reading was refused (its reason kept) or not
+    tried; a wrong source (the replay's spring where a reading exists) is told apart."""
+    from mtbmj.identify.bounce_rebound import RING_FROM, spring_given
+
+    best = {"file": "00083.SST", "spring_scale": 0.49, "spring_scale_ci95": [0.14, 0.85]}
+    ring = {"spring_scale": 0.47, "spring_scale_ci95": [0.35, 0.62]}
+    (s, ci), src = spring_given(ring, best)
+    assert (s, ci, src) == (0.47, [0.35, 0.62], RING_FROM)
+    assert (s, ci) != (best["spring_scale"], best["spring_scale_ci95"])
+    refused = {"refused": "the spring from the ring-down's period not read: 1 free half period(s) in the records"}
+    (s, ci), src = spring_given(refused, best)
+    assert (s, ci) == (0.49, [0.14, 0.85])
+    assert src.startswith("the whole-trace replay of 00083.SST") and "1 free half period(s)" in src
+    (s, ci), src = spring_given(None, best)
+    assert s == 0.49 and src.endswith("(the ring-down's period: not tried)")
+
+
+def test_ring_period_halves_matched_by_their_turning_point_from_the_slam():
+    """``bounce_slam_rebound._matched``: the period reading pairs the record's and the simulation's half
+    cycles that start at the same turning point after the slam. A made ring-down whose half periods
+    lengthen (phase 2 pi (1.5 t - 0.12 t^2)) as the record (its first trough clipped at the top-out, a
+    stop the reading leaves out: its first free extremum is the 2nd turning point) and, as the
+    simulation, the same motion 15 mm higher (its first trough free: the 1st): every pair is the same
+    half cycle (log ratio under 1e-3), where pairing the k-th free half of each direction (written here)
+    pairs the record's first compression with the simulation's one a cycle earlier (log ratio over 0.1)."""
+    from mtbmj.identify.bounce_slam_rebound import _halves, _matched
+
+    t = np.arange(-1.5, 2.5, 1 / 500)
+
+    def made(rest):
+        return np.where(t < 0, rest + 30 * np.exp(-(t / 0.08) ** 2),
+                        rest + 30 * np.exp(-1.2 * t) * np.cos(2 * np.pi * (1.5 * t - 0.12 * t * t)))
+
+    noise = 0.02 * np.random.default_rng(3).standard_normal(t.size)
+    peak = int(np.argmin(np.abs(t)))
+    rec = _halves(t, np.maximum(made(20.0), 0.0) + noise, peak)
+    sim = _halves(t, made(35.0) + noise, peak)
+    assert [q[0] for q in rec][:1] == [2] and [q[0] for q in sim][:1] == [1] and len(rec) >= 3
+    got = _matched(rec, sim)
+    assert len(got) == len(rec) and max(abs(g) for g in got) < 1e-3
+
+    def kth_of_each_direction(rec, sim):
+        out = []
+        for d in ("rebound", "compression"):
+            r, s = ([q[4] for q in h if q[1] == d] for h in (rec, sim))
+            out += [math.log(b / a) for a, b in zip(r, s)]
+        return out
+
+    assert max(abs(g) for g in kth_of_each_direction(rec, sim)) > 0.1
+    # a simulation without the record's later halves gives None for them (that spring scale is not used)
+    assert _matched(rec, sim[:2])[-1] is None
+
+
+def test_ring_period_reading_leaves_out_a_half_the_simulation_lacks():
+    """``spring_from_periods`` on made ring-downs (x = rest + 30 exp(-1.2 t) cos(2 pi f t) mm after the slam's
+    peak, f = 1.5 sqrt(scale / 0.5) Hz: the period alone says the scale) through a stand-in bike that runs the
+    same law at each scale tried from a 20 mm rest, its first trough clipped at the top-out (a stop). Two
+    records at 0.5 x: one resting at 20 mm (the same stop), one at 25 mm whose first trough is free (as the
+    17-click shared slam's: its first free half starts a turning point earlier than any simulation's).
+    The reading is 0.5 x within 1 % from the halves simulated at both neighbouring scales, saying how many
+    were left out; the same records at 0.4 x read 0.4 x (the reading follows the periods, not the stand-in)."""
+    from types import SimpleNamespace
+
+    from mtbmj.identify.bounce_slam_rebound import spring_from_periods
+
+    def made(t, rest, scale, floor=None):
+        f = 1.5 * math.sqrt(scale / 0.5)
+        x = np.where(t < 0, rest + 30 * np.exp(-(t / 0.08) ** 2), rest + 30 * np.exp(-1.2 * t) * np.cos(2 * np.pi * f * t))
+        return x if floor is None else np.maximum(x, floor)
+
+    class StandIn:
+        def set_rest(self, *_):
+            pass
+
+        def run(self, p, after_s=2.5):
+            t = np.arange(-0.6, after_s, 1 / 2000)
+            return {"time_s": t, "stroke_mm": made(t, 20.0, p["spring_scale"], 0.0)}
+
+    t = np.arange(-1.5, 2.5, 1 / 500)
+    noise = 0.02 * np.random.default_rng(4).standard_normal(t.size)
+    for truth in (0.5, 0.4):
+        rings = [(f"made {rest:g}", t, made(t, rest, truth, 0.0) + noise, SimpleNamespace(sr=StandIn(), rest=rest), {})
+                 for rest in (25.0, 20.0)]
+        got = spring_from_periods(rings)
+        assert got["spring_scale"] == pytest.approx(truth, rel=0.01)
+        lo, hi = got["spring_scale_ci95"]
+        assert lo <= truth <= hi
+        assert got["halves_matched"] < got["halves"] and "left out" in got["line"]

@@ -222,6 +222,11 @@ def test_figure_shows_the_law_the_answer_and_open_sides():
     assert len(dashed) == len(e)
     assert figure_png(got)[:4] == b"\x89PNG"
     assert len(bx.containers) == 2 * len(e)  # the records' and the held-out error bars
+    assert "\n" not in ax.get_title()  # nothing to say: no spring source given, none refused
+    # the spring's source and a refused record said in the title
+    said = {**got, "spring_scale": 0.46, "spring_from": "the ring-down's period",
+            "records": [{"clicks": -4, "refused": "no coefficient"}] + e}
+    assert figure(said).axes[0].get_title().endswith("spring 0.46 x from the ring-down's period; refused at -4 clicks")
 
 
 def test_cli_target_needs_replay_and_a_positive_rate(tmp_path, capsys):
@@ -389,7 +394,8 @@ def test_cli_writes_and_prints_the_answer(tmp_path, monkeypatch, capsys):
     monkeypatch.setattr(bounce_replay, "replay_records", lambda records, clicks, bike, rider_hz: {
         "summary": [], "csv": {}, "replays": [], "lines": [], "check": None})
 
-    def read(records, clicks, replayed, bike, rider_hz, target):
+    def read(records, clicks, replayed, bike, rider_hz, target, ring="unset"):
+        assert ring is None  # no record replayed: no ring-down period reading to give the spring
         e = law_entries(clicks=tuple(int(k) for k in clicks), sd=30.0, seed=5)
         return {"from": "test", "records": e, "rises": True, "line": "dampers",
                 **bounce_rebound.law_in_clicks(e, target)}

@@ -118,6 +118,7 @@ class Extrema:
     noise_mm: float = 0.0  # the record's sample noise
     half_period_s: float = float("nan")
     note: str = ""
+    first_turn: int = 0  # the first free extremum's place among the turning points after the slam (1: the first)
 
     @property
     def sigma(self) -> np.ndarray:
@@ -222,6 +223,7 @@ def extrema(time_s, x_mm, end: str, slam_index: int | None = None) -> Extrema:
         out.note = "no free extremum after the slam"
         return out
     what, level = kind(start)
+    out.first_turn = start
     levels, times = [level], [float(t[idx[start]]) if what == "free" else float("nan")]
     stuck = what == "stuck"
     k = start

@@ -329,15 +329,16 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
         out["replay"] = done["summary"]
         out["replay_check"] = done["check"]
         from mtbmj.identify import bounce_rebound
+        from mtbmj.identify import bounce_slam_rebound as bsr
 
+        # the slams and first rebounds first: the rebound dampers take the spring its ring-down period reading holds
+        pooled = bsr.read_records(records, clicks, done["summary"], bike, rider_hz)
         out["rebound_dampers"] = bounce_rebound.read_records(records, clicks, done["summary"], bike, rider_hz,
-                                                             rebound_target_per_s)
+                                                             rebound_target_per_s,
+                                                             ring=None if pooled is None else pooled["ring_spring"])
         if out["rebound_dampers"] is not None:
             done["lines"].append(out["rebound_dampers"]["line"])
             done["lines"] += out["rebound_dampers"]["lines"]
-        from mtbmj.identify import bounce_slam_rebound as bsr
-
-        pooled = bsr.read_records(records, clicks, done["summary"], bike, rider_hz)
         out["slam_rebound"] = bsr.public(pooled)
         if pooled is not None:
             done["lines"].append(pooled["line"])

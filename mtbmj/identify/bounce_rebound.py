@@ -12,7 +12,9 @@ adjuster changes is the first rebound's speed from the peak, which needs neither
 
 Method. Per record, on the seated MuJoCo bike of the replay (its start, its rest): the spring scale,
 the friction and the compression coefficient given (shared by the records: a rebound adjuster
-changes none of them), the push fitted on the record up to its peak (``bounce_replay.fit_push``),
+changes none of them; ``read_records`` takes the spring from the ring-down's period reading,
+``bounce_slam_rebound.spring_from_periods``, where it was read, else from the best whole-trace replay,
+``spring_given``, and says which in ``"spring_from"``), the push fitted on the record up to its peak (``bounce_replay.fit_push``),
 then the rebound coefficient solved (``brentq``) so that the replay's first rebound, read as the
 record's (``bounce.first_rebound``), has the record's middle speed per millimetre of the peak's
 height above rest (1/s: for a linear end independent of how high the slam went, so the replay's
@@ -241,13 +243,15 @@ def rises(entries) -> bool | None:
 
 
 def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | None = None,
-                 target_per_s: float | None = None) -> dict | None:
-    """``fit bounce --replay``'s ``"rebound_dampers"``: every record's rebound coefficient, the spring
-    (with its interval), friction and compression given by the best-determined whole-trace replay
-    (``replayed``: ``bounce_replay.replay_records``' summary; the one whose spring interval is the
-    narrowest; its one damper taken as the compression), each with its interval; the law in clicks, each
-    record held out and the answer for ``target_per_s`` (``bounce_rebound_clicks``; "lines" printed).
-    None when no record was replayed."""
+                 target_per_s: float | None = None, ring: dict | None = None) -> dict | None:
+    """``fit bounce --replay``'s ``"rebound_dampers"``: every record's rebound coefficient, the friction
+    and compression given by the best-determined whole-trace replay (``replayed``:
+    ``bounce_replay.replay_records``' summary; the one whose spring interval is the narrowest; its one
+    damper taken as the compression), the spring (with its interval) by the ring-down's period
+    (``ring``: ``bounce_slam_rebound.spring_from_periods``' result) where it was read, else by that
+    replay (``"spring_from"`` says which, and why not the period), each coefficient with its interval;
+    the law in clicks, each record held out and the answer for ``target_per_s``
+    (``bounce_rebound_clicks``; "lines" printed). None when no record was replayed."""
     from mtbmj.identify.bounce_replay import RIDER_HZ, SeatedReplay, prepare_slam
 
     done = [e for e in replayed if "refused" not in e]
@@ -264,8 +268,9 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
             ks.append(k)
         except BounceError as e:
             entries.append({"file": name, "clicks": k, "refused": str(e)})
-    entries = rebound_dampers(slams, ks, best["spring_scale"], best["friction_N"], best["damper_N_s_per_m"],
-                              best["spring_scale_ci95"]) + entries
+    spring, spring_from = spring_given(ring, best)
+    entries = rebound_dampers(slams, ks, spring[0], best["friction_N"], best["damper_N_s_per_m"],
+                              spring[1]) + entries
     entries.sort(key=lambda e: e["clicks"])
     up = rises(entries)
     read = [e for e in entries if "rebound_N_s_per_m" in e]
@@ -276,14 +281,29 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
                 f"{'open' if hi is None else format(hi, '.0f')}]")
 
     at = ", ".join(format(e["clicks"], "g") for e in read)
-    line = (f"rebound dampers from the first rebounds (spring {best['spring_scale']:.2f} x, friction "
+    said_spring = "the ring-down's period" if spring_from == RING_FROM else f"{best['file']}'s replay"
+    line = (f"rebound dampers from the first rebounds (spring {spring[0]:.2f} x from {said_spring}, friction "
             f"{best['friction_N']:.0f} N, compression {best['damper_N_s_per_m']:.0f} N s/m from {best['file']}'s "
             f"replay): {', '.join(said(e) for e in read) or 'none'} N s/m (95 %: the record's noise and the spring's "
             f"interval) at {at or 'no'} clicks"
             + ("" if up is None else ": they rise with the clicks" if up else ": they do not rise with the clicks"))
-    out = {"from": best["file"], "records": entries, "rises": up, "line": line}
+    out = {"from": best["file"], "spring_scale": spring[0], "spring_scale_ci95": list(spring[1]),
+           "spring_from": spring_from, "records": entries, "rises": up, "line": line}
     out.update(law_in_clicks(entries, target_per_s))
     return out
+
+
+RING_FROM = "the ring-down's period"
+
+
+def spring_given(ring: dict | None, best: dict) -> tuple[tuple[float, list], str]:
+    """((spring scale, its 95 % interval), where it came from): the ring-down's period reading (``ring``)
+    where it was read, else the best-determined whole-trace replay's (``best``), saying why."""
+    if ring is not None and "refused" not in ring:
+        return (float(ring["spring_scale"]), list(ring["spring_scale_ci95"])), RING_FROM
+    why = "not tried" if ring is None else ring["refused"]
+    return ((float(best["spring_scale"]), list(best["spring_scale_ci95"])),
+            f"the whole-trace replay of {best['file']} (the ring-down's period: {why})")
 
 
 def law_in_clicks(entries, target_per_s: float | None = None) -> dict:

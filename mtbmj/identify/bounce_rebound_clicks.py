@@ -359,7 +359,11 @@ def figure(got: dict):
     ax.set_ylim(0.0, top)
     ax.set_xlabel("rebound clicks")
     ax.set_ylabel("rebound coefficient at the shock (N s/m)")
-    ax.set_title("rebound dampers from the first rebounds (95 %: noise and spring)", fontsize=9)
+    refused = ", ".join(format(e["clicks"], "g") for e in got["records"] if "refused" in e)
+    said = [f"spring {got['spring_scale']:.2f} x from {got['spring_from'].split(' (')[0]}"] if "spring_from" in got else []
+    said += [f"refused at {refused} clicks"] if refused else []
+    ax.set_title("rebound dampers from the first rebounds (95 %: noise and spring)"
+                 + ("\n" + "; ".join(said) if said else ""), fontsize=8)
     ax.legend(fontsize=7, loc="upper left")
     ax.grid(alpha=0.3)
     for e in got["records"]:
