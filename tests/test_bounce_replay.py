@@ -510,9 +510,9 @@ def test_rebound_no_coefficient_gives_is_refused(two_rebounds):
 @pytest.fixture(scope="module")
 def shared_first_rebounds(shared_replays):
     """The shared slams' slams and first rebounds read once, as ``fit bounce --replay`` reads them: fitted
-    together (``bounce_slam_rebound.read_records``, "slam_rebound"), then each record's rebound damper
-    (``bounce_rebound.read_records``, "rebound_dampers") with the spring of the first's ring-down period
-    reading."""
+    together (``bounce_slam_rebound.read_records``, "slam_rebound", the spring from their ring-down period),
+    then each record's rebound damper (``bounce_rebound.read_records``, "rebound_dampers") with the best
+    whole-trace replay's spring (the period's is not yet theirs: ``bounce_fit``)."""
     from conftest import SHARED_DATA
 
     from mtbmj.identify import bounce_rebound, bounce_slam_rebound
@@ -520,8 +520,7 @@ def shared_first_rebounds(shared_replays):
 
     records = [read_sst(os.path.join(SHARED_DATA, "sst_v2", f)) for f in ("00083.SST", "00085.SST", "00087.SST")]
     pooled = bounce_slam_rebound.read_records(records, [0, 8, 17], shared_replays["summary"], "sst")
-    dampers = bounce_rebound.read_records(records, [0, 8, 17], shared_replays["summary"], "sst",
-                                          ring=pooled["ring_spring"])
+    dampers = bounce_rebound.read_records(records, [0, 8, 17], shared_replays["summary"], "sst")
     return {"slam_rebound": pooled, "rebound_dampers": dampers}
 
 
@@ -537,53 +536,33 @@ def shared_slam_rebound(shared_first_rebounds):
 
 @pytest.mark.slow
 @pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
-def test_shared_rebound_dampers_rise_with_clicks(shared_first_rebounds):
-    """The shared slams' rebound coefficients read from their first rebounds (``bounce_rebound``) with the
-    spring of the ring-down's period (the one the slam-and-first-rebound fit holds, said in
-    ``spring_from``), the friction and compression of the best-determined whole-trace replay: the
-    records read (8 and 17 clicks; the 17-click slam, which the whole-trace replay refuses, too) rise with
-    the clicks, as the records' own rebounds slow, and at the spring interval's upper end too; their
-    intervals open below, each holding its noise interval; the law's slope above 0. The 0-click slam is
-    refused with the reason (the next test): at the period's spring the bike rebounds slower than it even
-    undamped."""
-    got = shared_first_rebounds["rebound_dampers"]
-    ring = shared_first_rebounds["slam_rebound"]["ring_spring"]
-    assert got["spring_from"] == "the ring-down's period"
-    assert got["spring_scale"] == ring["spring_scale"] and got["spring_scale_ci95"] == ring["spring_scale_ci95"]
+def test_shared_rebound_dampers_rise_with_clicks(shared_rebound):
+    """The shared slams' rebound coefficients read from their first rebounds (``bounce_rebound``, the
+    spring, friction and compression of the best-determined whole-trace replay, as ``fit bounce`` reads them:
+    the ring-down period's spring, 0.46 x, refuses the 0-click slam, docs/identification.md): all three read (the
+    17-click slam too, which the whole-trace replay refuses) and rising with the clicks, as the
+    records' own rebounds slow; at the spring interval's upper end they rise too. Their intervals open
+    below, the law's slope above 0, each record held out (within its 2 sd: the next test, not reproducible
+    across machines), and the answer for 7 /s holding the clicks where the records' own rates reach it."""
+    got = shared_rebound
+    assert got["spring_from"].startswith("the whole-trace replay of")
     assert [e["clicks"] for e in got["records"]] == [0, 8, 17]
-    read = [e for e in got["records"] if "rebound_N_s_per_m" in e]
-    assert [e["clicks"] for e in read][-2:] == [8, 17] and got["rises"] is True
-    refused = [e for e in got["records"] if "refused" in e]
-    assert all("slower than the record even undamped" in e["refused"] for e in refused)
-    upper = [e["at_spring_ci95"][1] for e in read]
-    assert None not in upper and upper == sorted(upper)
-    assert got["line"].endswith("they rise with the clicks") and "from the ring-down's period" in got["line"]
+    assert all("rebound_N_s_per_m" in e for e in got["records"]) and got["rises"] is True
+    upper = [e["at_spring_ci95"][1] for e in got["records"]]
+    assert None not in upper and upper[0] < upper[1] < upper[2]
+    assert got["line"].endswith("they rise with the clicks")
     # the intervals (bounce_rebound.combine): open below, said so; the noise interval holds the value
-    for e in read:
+    for e in got["records"]:
         lo, hi = e["rebound_N_s_per_m_ci95"]
         assert lo is None and e["interval_open"][0].startswith("open below")
         assert hi >= e["at_spring_ci95"][1]
         n_lo, n_hi = e["rebound_noise_ci95"]
         assert n_lo < e["rebound_N_s_per_m"] < n_hi
-    assert got["law"]["slope_ci95"][0] > 0
-
-
-@pytest.mark.slow
-@pytest.mark.shared_data("sst_v2", "00083.SST", "00085.SST", "00087.SST")
-@pytest.mark.xfail(strict=True, reason="with the spring of the ring-down's period, 0.46 x [0.33, 0.64] (6 of 7 free "
-                                       "halves), the 0-click slam is refused: the bike rebounds slower than its 8.00 /s "
-                                       "even undamped (friction 45 N and compression 1794 N s/m from 00083's replay); "
-                                       "8 and 17 clicks read 2102 [open, 4318] and 4778 [open, 7530] N s/m, the law "
-                                       "-277 + 297 x clicks from those two, no record held out and no answer for 7 /s "
-                                       "(below 8 clicks). With the whole-trace replay's 0.49 x [0.14, 0.85] all three "
-                                       "read, 182, 2540, 5313 N s/m, and 7 /s gave 6 clicks (4-8)")
-def test_shared_rebound_dampers_all_three_read_and_answer(shared_rebound):
-    """Every shared slam's rebound coefficient read, each held out, and an answer for 7 /s whose range
-    holds the clicks where the records' own rates reach it (model-free)."""
-    got = shared_rebound
-    assert all("rebound_N_s_per_m" in e for e in got["records"])
+    # the law in clicks, each record held out (issue 53: within its own 2 sd), and an answer for 7 /s
+    # whose range holds the records' own rates joined in clicks (model-free)
     from mtbmj.identify.bounce_rebound import law_in_clicks
 
+    assert got["law"]["slope_ci95"][0] > 0
     assert len(got["held_out"]) == 3
     ans = law_in_clicks(got["records"], 7.0)["answer"]
     assert ans["set_clicks"] is not None and ans["records_clicks"] is not None
