@@ -57,3 +57,38 @@ def test_a_profile_needs_the_rider_s_drive():
         run_bike("sst", "flat:length_m=20", 4.0, duration=0.1, drive="coast", speed_profile=(X, V))
     with pytest.raises(ConfigError, match="active rider's does not yet"):
         run_bike("sst", "flat:length_m=20", 4.0, duration=0.1, rider="active", speed_profile=(X, V))
+
+
+@pytest.mark.parametrize("text, why", [
+    ("distance_m,speed_m_per_s\n0,5\n0,6\n", "the places must increase"),
+    ("distance_m,height_mm\n0,5\n1,6\n", "exactly the columns distance_m, speed_m_per_s"),
+    ("distance_m,speed_m_per_s\n0,5\n1,90\n", "outside 0.3-30 m/s"),
+], ids=["places", "columns", "speed"])
+def test_a_bad_speed_profile_file_is_one_line_and_nothing_written(tmp_path, capsys, text, why):
+    from mtbmj.cli import main
+
+    bad = tmp_path / "speed.csv"
+    bad.write_text(text)
+    out = tmp_path / "out"
+    assert main(["bike", "sst", "flat:length_m=20", "--speed-profile", str(bad), "--duration", "1", "--out",
+                 str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--speed-profile" in err[0] and str(bad) in err[0] and why in err[0], err
+    assert not out.exists()
+
+
+def test_the_command_rides_a_speed_profile_file(tmp_path):
+    """``mtbmj bike ... --speed-profile CSV``: the start's speed the profile's first, the summary's set range
+    the profile's, and the run at the profile's speeds (4 then 6 m/s)."""
+    import json
+
+    from mtbmj.cli import main
+
+    prof = tmp_path / "speed.csv"
+    prof.write_text("distance_m,speed_m_per_s\n0,4\n10,4\n20,6\n200,6\n")
+    out = tmp_path / "out"
+    assert main(["bike", "sst", "flat:length_m=80", "--speed-profile", str(prof), "--duration", "8", "--no-figure",
+                 "--quiet", "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["speed_m_per_s"] == 4.0 and s["speed_profile_m_per_s"] == [4.0, 6.0]
+    assert s["min_speed_m_per_s"] == pytest.approx(4.0, abs=0.1) and s["max_speed_m_per_s"] == pytest.approx(6.0, abs=0.3)
