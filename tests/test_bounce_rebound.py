@@ -166,7 +166,8 @@ def test_rebound_dampers_spring_from_the_ring_down_period_else_the_replay():
     assert (s, ci) == (0.49, [0.14, 0.85])
     assert src.startswith("the whole-trace replay of 00083.SST") and "1 free half period(s)" in src
     (s, ci), src = spring_given(None, best)
-    assert s == 0.49 and src.endswith("(the ring-down's period: not tried)")
+    assert s == 0.49 and src.endswith("(the ring-down's period: not used here: it borrows that replay's friction and "
+                                      "damper and reads the tests' generator 15 % low)")
 
 
 def test_ring_period_halves_matched_by_their_turning_point_from_the_slam():
