@@ -114,7 +114,7 @@ def main(argv=None) -> int:
     if len(calibrated) >= 2:  # the rides' one bike: every calibrated ride's balances together (advise RIDE RIDE's)
         try:
             pc = calibrate.calibrate_pooled(calibrated, args.bike)
-            pooled_cal = {"rides": [r.name for r in calibrated], **pc.to_dict()}
+            pooled_cal = {**pc.to_dict(), "ride_names": [r.name for r in calibrated]}
             print(f"pooled: {pc.line()}", flush=True)
         except MtbmjError as exc:
             pooled_cal = {"refused": str(exc)}

@@ -564,7 +564,7 @@ def advise_rides_rows(d: dict) -> dict[str, list[Row]]:
                         for s in pc["springs"].values())
         if pc.get("or"):
             cal += f"; or both x{num(pc['or']['common_scale'], 3)} with {num(pc['or']['load_forward_N'], 3)} N forward"
-        rows.append(Row(f"the {len(pc['rides'])} rides pooled ({', '.join(r.replace('.SST', '') for r in pc['rides'])}): "
+        rows.append(Row(f"the {len(pc['ride_names'])} rides pooled ({', '.join(r.replace('.SST', '') for r in pc['ride_names'])}): "
                         f"one bike's springs calibrated, 95 %", target, cal, name, d["command"]))
     elif pc:
         rows.append(Row("the rides pooled: one bike's springs calibrated", target,
