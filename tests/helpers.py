@@ -999,6 +999,24 @@ ADVISE_FEATURES = (("rocks", 10.0, 0.1), ("drop", 30.0, 0.5), ("rocks", 40.0, 0.
                    ("rocks", 135.0, 0.1), ("drop", 160.0, 0.6), ("rocks", 170.0, 0.1))
 
 
+def engine_ride(folder, terrain, speed=6.0, seconds=40.0, from_s=3.0):
+    """A ride made by the package's own MuJoCo bike (the tests' ``bike_text()`` bike, ``folder/bike.toml``)
+    over ``terrain`` at ``speed`` for ``seconds``, its travels from ``from_s`` on written as SST version-3
+    counts at 1 kHz (``folder/ride.SST``): (bike file, SST file, the run). Where the engine is what makes the
+    ride, a test checks a reading of it, not the physics."""
+    from mtbmj.bike.run import run_bike
+
+    file = folder / "bike.toml"
+    file.write_text(bike_text(12.0))
+    made = run_bike(str(file), terrain, speed, duration=seconds)
+    assert made.summary.get("crash") is None
+    raw = made.raw
+    t = np.arange(0.0, raw["time_s"][-1], 1e-3)
+    on = t >= from_s
+    fork, rear = (np.interp(t, raw["time_s"], raw[c])[on] for c in ("front_travel_mm", "rear_travel_mm"))
+    return file, write_v3(folder / "ride.SST", np.clip(fork, 0, None), np.clip(rear, 0, None) / RATIO), made
+
+
 def advise_ride(path, seconds=ADVISE_SECONDS, **settings):
     """``whole_bike_ride`` over the advice's course (``settings``: its bike's, e.g. fork_rate,
     fork_reb, shock_reb_scale): (bike file, SST file, fork mm, rear wheel mm, t)."""

@@ -10,7 +10,6 @@ from __future__ import annotations
 import json
 from argparse import Namespace
 
-import numpy as np
 import pytest
 
 from mtbmj.cli import main
@@ -310,21 +309,12 @@ def test_a_ride_down_a_steady_descent_is_ridden_on_its_descent(tmp_path):
     (mean travel within 3 points at both ends), the static sag judged the one measured, and the bike riding
     the whole ride. (On the made ride of a rider 150 mm forward on the flat, the descent is the wrong reading:
     ridden so at the ride's own speed the bike loops out at its 0.4 m tabletop, and ``rider`` is right.)"""
-    from mtbmj.bike.run import run_bike
     from mtbmj.rolling import terrain as terrain_mod
 
-    from helpers import write_v3
+    from helpers import engine_ride
 
-    file = tmp_path / "bike.toml"
-    file.write_text(bike_text(FILE_RATE))
     ground = terrain_mod.on_grade(terrain_mod.make("iso8608:class=C,seed=5,length_m=400,at_m=15"), -10.0, 2.0, 5.0)
-    made = run_bike(str(file), ground, 6.0, duration=40.0)
-    assert made.summary.get("crash") is None
-    raw = made.raw
-    t = np.arange(0.0, raw["time_s"][-1], 1e-3)
-    on = t >= 5.0  # on the grade (the front axle past 25 m)
-    fork, rear = (np.interp(t, raw["time_s"], raw[c])[on] for c in ("front_travel_mm", "rear_travel_mm"))
-    sst = write_v3(tmp_path / "ride.SST", np.clip(fork, 0, None), np.clip(rear, 0, None) / RATIO)
+    file, sst, made = engine_ride(tmp_path, ground, from_s=5.0)  # from 5 s: on the grade (the front axle past 25 m)
     sag = (made.summary["static_front_travel_mm"], made.summary["static_rear_travel_mm"] / RATIO)
     out = tmp_path / "advice"
     with reconstruction_passing():

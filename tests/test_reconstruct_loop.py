@@ -18,29 +18,19 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
 import pytest
 
-from mtbmj.bike.run import run_bike
 from mtbmj.cli import main
 from mtbmj.rolling import terrain as terrain_mod
 
-from helpers import RATIO, bike_text, reconstruction_passing, write_v3
+from helpers import engine_ride, reconstruction_passing
 
 
 @pytest.fixture(scope="module")
 def looped(tmp_path_factory):
     """(the ride's measured metrics, the loop's simulated ones) of a 37 s ride at 6 m/s over ISO 8608 class C."""
     folder = tmp_path_factory.mktemp("loop")
-    file = folder / "bike.toml"
-    file.write_text(bike_text(12.0))
-    made = run_bike(str(file), terrain_mod.make("iso8608:class=C,seed=5,length_m=400,at_m=15"), 6.0, duration=40.0)
-    assert made.summary.get("crash") is None
-    raw = made.raw
-    t = np.arange(0.0, raw["time_s"][-1], 1e-3)
-    on = t >= 3.0
-    fork, rear = (np.interp(t, raw["time_s"], raw[c])[on] for c in ("front_travel_mm", "rear_travel_mm"))
-    sst = write_v3(folder / "ride.SST", np.clip(fork, 0, None), np.clip(rear, 0, None) / RATIO)
+    file, sst, _ = engine_ride(folder, terrain_mod.make("iso8608:class=C,seed=5,length_m=400,at_m=15"))
     out = folder / "advice"
     with reconstruction_passing():
         assert main(["advise", str(sst), "--bike", str(file), "--no-calibrate", "--workers", "1", "--out", str(out)]) == 0

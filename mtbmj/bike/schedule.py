@@ -34,23 +34,24 @@ class SpeedProfile:
     v: np.ndarray
 
     @classmethod
-    def checked(cls, profile) -> SpeedProfile:
-        """``profile`` (x_m, v_m_per_s) as a :class:`SpeedProfile`; a ``ConfigError`` naming what is wrong."""
+    def checked(cls, profile, said: str = "speed_profile") -> SpeedProfile:
+        """``profile`` (x_m, v_m_per_s) as a :class:`SpeedProfile`; a ``ConfigError`` naming what is wrong,
+        after ``said`` (what the caller calls the profile)."""
         try:
             x, v = (np.asarray(a, float) for a in profile)
         except (TypeError, ValueError):
-            raise ConfigError("speed_profile: give two sequences, the places (m) and the speeds (m/s)") from None
+            raise ConfigError(f"{said}: give two sequences, the places (m) and the speeds (m/s)") from None
         if x.ndim != 1 or x.shape != v.shape or x.size < 2:
-            raise ConfigError(f"speed_profile: places and speeds of one length, at least 2 (got {x.shape} and {v.shape})")
+            raise ConfigError(f"{said}: places and speeds of one length, at least 2 (got {x.shape} and {v.shape})")
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(v))):
-            raise ConfigError("speed_profile: a place or a speed is not a number")
+            raise ConfigError(f"{said}: a place or a speed is not a number")
         if np.any(np.diff(x) <= 0.0):
             i = int(np.argmax(np.diff(x) <= 0.0)) + 1
-            raise ConfigError(f"speed_profile: the places must increase (place {i}: {x[i]:g} m after {x[i - 1]:g} m)")
+            raise ConfigError(f"{said}: the places must increase (place {i}: {x[i]:g} m after {x[i - 1]:g} m)")
         lo, hi = SPEED_RANGE
         if np.any(v < lo) or np.any(v > hi):
             bad = float(v[np.argmax((v < lo) | (v > hi))])
-            raise ConfigError(f"speed_profile: a speed of {bad:g} m/s is outside {lo:g}-{hi:g} m/s (a ride's)")
+            raise ConfigError(f"{said}: a speed of {bad:g} m/s is outside {lo:g}-{hi:g} m/s (a ride's)")
         return cls(x, v)
 
     def at(self, x: float) -> float:
@@ -72,10 +73,7 @@ def read_csv(path) -> SpeedProfile:
         have = ", ".join(f"{q}_{u}" for q, u in rec.units.items())
         raise ConfigError(f"--speed-profile: {path}: a speed profile needs exactly the columns distance_m, "
                           f"speed_m_per_s (has {have})")
-    try:
-        return SpeedProfile.checked((rec["distance"], rec["speed"]))
-    except ConfigError as exc:
-        raise ConfigError(f"--speed-profile: {path}: {str(exc).split(': ', 1)[-1]}") from None
+    return SpeedProfile.checked((rec["distance"], rec["speed"]), f"--speed-profile: {path}")
 
 
 def steering(profile: SpeedProfile, callback, watch, x_col: int, x_offset: float):

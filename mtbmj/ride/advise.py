@@ -560,7 +560,9 @@ def prepare(record, bike, overrides=None, duration: float | None = None, calibra
 
         cal = cal_mod.calibrate(ridden, bike, overrides, duration, static_sag_mm, carried_as)
         overrides, statics = cal.apply(bike, overrides), cal.apply(bike, overrides, statics=True)
-    rec = rc.reconstruct(record, bike, statics if cal is not None else overrides)
+    else:
+        statics = overrides
+    rec = rc.reconstruct(record, bike, statics)
     checks = rec.checks()
     if (checks["samples_checked_percent"] < MIN_CHECKED_PERCENT
             or not checks["rear_predicted_rms_percent_of_used"] <= MAX_REAR_MISS_PERCENT):

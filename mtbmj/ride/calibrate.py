@@ -575,22 +575,21 @@ def _on_the_sag(spec, whole, bike, overrides, static_sag_mm, segments: int, mean
     return Calibration(scales, over, SAG_METHOD, carried=carried, level=level)
 
 
-def _read_on_grade(bike, overrides, scales, grade_percent: float) -> tuple:
-    """(the load forward of rest, N, this module reads from a steady run of ``bike`` with ``overrides`` and
-    each end's spring at its scale in ``scales``, at ``grade_percent`` (0: level ground); the run): each end's
-    mean force over the run's travels on its steady stretch, as a ride's is read (:class:`_MeanForce`)."""
+def _read_on_grade(bike, overrides, scales, whole, ridden, grade_percent: float) -> tuple:
+    """(the load forward of rest, N, this module reads from a steady run of ``bike`` with ``ridden`` (the
+    overrides ``overrides`` with each end's spring at its scale in ``scales``) at ``grade_percent`` (0:
+    level ground); the run): each end's mean force over the run's travels on its steady stretch, as a
+    ride's is read (:class:`_MeanForce`, ``whole`` the bike of ``overrides``)."""
     from mtbmj.bike import run as bike_run
     from mtbmj.measured import metrics as m
     from mtbmj.ride import calibrate_descent as cd
 
     scenario = (f"climb:grade_percent={grade_percent:.6g},length_m={cd.LENGTH_M:g},at_m={cd.AT_M:g}" if grade_percent
                 else f"flat:length_m={cd.LENGTH_M + cd.AT_M:g}")
-    ridden = merged(overrides or {}, _springs_at({}, [(sc.adjuster, sc.value) for sc in scales.values()]))
     r = bike_run.run_bike(bike, scenario, cd.SPEED_M_PER_S, overrides=ridden or None,
                           duration=(cd.AT_M + cd.SETTLE_M + cd.READ_M + 2.0) / cd.SPEED_M_PER_S)
     raw = r.raw
     k = (raw["front_axle_x_m"] >= cd.AT_M + cd.SETTLE_M) & (raw["front_axle_x_m"] <= cd.AT_M + cd.SETTLE_M + cd.READ_M)
-    _, whole = _laws(bike, overrides)
     excess = {}
     for end, column in (("front", "front_travel_mm"), ("rear", "rear_travel_mm")):
         x_mm, sc = raw[column][k], scales[end]
@@ -606,7 +605,9 @@ def descent_for(bike, overrides, scales, load_forward_N: float, first_deg: float
     forward, from ``first_deg``: :func:`mtbmj.ride.calibrate_descent.grade_for` on :func:`_read_on_grade`."""
     from mtbmj.ride.calibrate_descent import grade_for
 
-    return grade_for(lambda g: _read_on_grade(bike, overrides, scales, g), load_forward_N, first_deg)
+    _, whole = _laws(bike, overrides)
+    ridden = _springs_at(overrides, [(sc.adjuster, sc.value) for sc in scales.values()])
+    return grade_for(lambda g: _read_on_grade(bike, overrides, scales, whole, ridden, g), load_forward_N, first_deg)
 
 
 def calibrate(record, bike, overrides=None, duration: float | None = None, static_sag_mm=None,
@@ -614,13 +615,19 @@ def calibrate(record, bike, overrides=None, duration: float | None = None, stati
     """:func:`spring_scales` of a ``TelemetryRecord`` with both ends (its first ``duration`` s), read
     as the reconstruction reads it (at ``mtbmj.ride.reconstruct.RATE_HZ``); ``static_sag_mm`` and
     ``carried_as`` as there."""
+    t, front, rear = _as_read(record, duration)
+    return spring_scales(t, front, rear, bike, overrides, record.name, static_sag_mm, carried_as=carried_as)
+
+
+def _as_read(record, duration: float | None):
+    """(t s, fork mm, rear wheel mm) of ``record``'s first ``duration`` s, read as the reconstruction reads it
+    (at ``mtbmj.ride.reconstruct.RATE_HZ``)."""
     from mtbmj.ride.reconstruct import RATE_HZ
 
     rec = record.decimated(RATE_HZ)
     t = np.asarray(rec.time_s, float)
     keep = (t - t[0] <= duration) if duration is not None else np.ones(t.size, bool)
-    return spring_scales(t[keep], np.asarray(rec.fork_mm, float)[keep], np.asarray(rec.rear_mm, float)[keep], bike,
-                         overrides, rec.name, static_sag_mm, carried_as=carried_as)
+    return t[keep], np.asarray(rec.fork_mm, float)[keep], np.asarray(rec.rear_mm, float)[keep]
 
 
 def calibrate_pooled(records, bike, overrides=None, duration: float | None = None, static_sag_mm=None,
@@ -634,12 +641,8 @@ def calibrate_pooled(records, bike, overrides=None, duration: float | None = Non
 
     ts, series, speeds, offset = [], {"front": [], "rear": []}, {"front": [], "rear": []}, 0.0
     for record in records:
-        rec = record.decimated(RATE_HZ)
-        t = np.asarray(rec.time_s, float)
-        keep = (t - t[0] <= duration) if duration is not None else np.ones(t.size, bool)
-        t = t[keep]
-        for end, x in (("front", rec.fork_mm), ("rear", rec.rear_mm)):
-            x = np.asarray(x, float)[keep]
+        t, front, rear = _as_read(record, duration)
+        for end, x in (("front", front), ("rear", rear)):
             series[end].append(x)
             speeds[end].append(m.velocity(t, x))
         ts.append(t - t[0] + offset)

@@ -138,6 +138,12 @@ def flat(length_m: float = 10.0) -> Terrain:
     return _profile("flat", [_flat(-LEAD_IN_M, length_m)], length=length_m, params={"length_m": length_m})
 
 
+def _graded(s, g: float, transition_m: float):
+    """The rise (m) at ``s`` m along a grade ``g`` (rise / run) entered over a parabolic transition
+    ``transition_m`` long from s = 0 (the grade grows linearly along it, so no kink jolts the wheels)."""
+    return np.where(s < transition_m, 0.5 * g * s * s / transition_m, g * (s - 0.5 * transition_m))
+
+
 def climb(grade_percent: float = 10.0, length_m: float = 40.0, at_m: float = LEAD_IN_M,
           transition_m: float = 3.0) -> Terrain:
     """A steady climb (or descent, a negative grade): flat to ``at_m``, then rising at
@@ -149,7 +155,7 @@ def climb(grade_percent: float = 10.0, length_m: float = 40.0, at_m: float = LEA
                            f"a bike is ridden up or down seated on its wheels)")
     g, lt = grade_percent / 100.0, min(transition_m, length_m)
     s = np.linspace(0.0, length_m, max(2, int(round(length_m / 0.05)) + 1))
-    z = np.where(s < lt, 0.5 * g * s * s / lt, g * (s - 0.5 * lt))
+    z = _graded(s, g, lt)
     return _profile("climb", [_flat(-LEAD_IN_M, at_m), (at_m + s[1:], z[1:]),
                               _flat(at_m + length_m, at_m + length_m + RUN_OUT_M, z[-1])],
                     length=at_m + length_m,
@@ -177,7 +183,7 @@ def on_grade(ter: Terrain, grade_percent: float, at_m: float, transition_m: floa
     order = np.argsort(xs, kind="stable")
     xs, zs = xs[order], zs[order]
     g, s = grade_percent / 100.0, np.clip(xs - at_m, 0.0, None)
-    zs = zs + np.where(s < transition_m, 0.5 * g * s * s / transition_m, g * (s - 0.5 * transition_m))
+    zs = zs + _graded(s, g, transition_m)
     return Terrain(ter.name, xs, zs, ter.start_x, ter.length,
                    {**ter.params, "grade_percent": grade_percent, "grade_at_m": at_m})
 
