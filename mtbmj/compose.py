@@ -445,12 +445,61 @@ def fork_law(c: Config) -> law.ForkLaw:
     return law.ForkLaw(_spring(c), _damper(c), _friction(c))
 
 
+# the keys whose meaning a model chooses: a key set here that the part's model does not read changes nothing
+MODEL_FAMILIES = ("fork.spring.", "fork.damper.", "fork.friction.", "tire.")
+
+
+class NotRead(ConfigError):
+    """A key the caller set that the part's model does not read (``_composed``)."""
+
+
+class _Reading:
+    """A configuration seen through a note of every key asked for (``get``, ``require``, ``[]``)."""
+
+    def __init__(self, c, read=None):
+        self._c, self.read = c, set() if read is None else read
+
+    def __getattr__(self, name):
+        return getattr(self._c, name)
+
+    def get(self, key, default=None):
+        self.read.add(key)
+        return self._c.get(key, default)
+
+    def require(self, key, why=""):
+        self.read.add(key)
+        return self._c.require(key, why)
+
+    __getitem__ = require
+
+    def with_overrides(self, overrides):
+        return _Reading(self._c.with_overrides(overrides), self.read)
+
+
+def _composed(c: Config):
+    """(fork law, tire law) of ``c``, refusing in one line a key the caller set (``Config.given``: an
+    override, a bike file's ``[fork.set]``) that the part's model does not read: the spring, damper,
+    friction or tire model chosen reads other keys, so the setting would change nothing."""
+    typed = sorted(k for k in c.given if k.startswith(MODEL_FAMILIES))
+    if not typed:
+        return fork_law(c), _tire(c)
+    seen = _Reading(c)
+    laws = fork_law(seen), _tire(seen)
+    for key in typed:
+        if key not in seen.read:
+            family = next(f for f in MODEL_FAMILIES if key.startswith(f))
+            model = f"{family}model"
+            reads = sorted(k[len(family):] for k in seen.read if k.startswith(family) and k != model and k in c.values)
+            raise NotRead(f"{key}: set, but {model} = {c.get(model)!r} does not read it, so it would change "
+                              f"nothing (that model reads {family}{{{', '.join(reads)}}})")
+    return laws
+
+
 def setup(c: Config) -> Setup:
     """Build and cross-check everything a run needs."""
     wheel = c.require("sled.wheel_mass_kg")
     body = c.require("sled.body_mass_kg")
-    fork = fork_law(c)
-    tire = _tire(c)
+    fork, tire = _composed(c)
     s = Setup(
         config=c,
         body_mass=body,

@@ -473,6 +473,7 @@ class Config:
     sources: tuple[str, ...] = field(default=())
     # the plausibility warnings of the values in effect, keyed by the key each concerns
     notes: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
+    given: frozenset = field(default=frozenset(), compare=False, repr=False)  # the keys overrides set
 
     @property
     def warnings(self) -> list[str]:
@@ -487,8 +488,7 @@ class Config:
 
     def require(self, key: str, why: str = "") -> Any:
         if key not in self.values:
-            reason = f" ({why})" if why else ""
-            raise ConfigError(f"{key}: missing{reason}")
+            raise ConfigError(f"{key}: missing" + (f" ({why})" if why else ""))
         return self.values[key]
 
     def with_overrides(self, overrides: Mapping[str, Any]) -> "Config":
@@ -497,7 +497,8 @@ class Config:
         (issued by :func:`load`, not here: fits and solvers call this in their loops)."""
         values, notes = dict(self.values), dict(self.notes)
         _apply(values, notes, overrides)
-        return Config(self.name, values, self.sources, notes)
+        given = self.given | {ALTERNATIVES.get(k, (k,))[0] for k in overrides}  # compose.setup checks each is read
+        return Config(self.name, values, self.sources, notes, given)
 
     def digest(self) -> str:
         """SHA-256 of the canonical JSON of the values: the config hash in manifests."""

@@ -237,7 +237,7 @@ def test_a_unit_mistake_gets_a_warning_saying_what_was_probably_meant(key, value
 @pytest.mark.parametrize("key, value, meant", MISTAKES[:3])
 def test_the_command_line_warns_once_and_runs(tmp_path, capsys, key, value, meant):
     out = tmp_path / "out"
-    assert cli.main(["drop", "S12", "--set", f"{key}={value}", "--engine", "fast", "--duration", "0.2", "--quiet",
+    assert cli.main(["drop", "S1", "--set", f"{key}={value}", "--engine", "fast", "--duration", "0.2", "--quiet",
                      "--out", str(out)]) == 0
     captured = capsys.readouterr()
     err = captured.err.splitlines()

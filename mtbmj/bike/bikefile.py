@@ -205,6 +205,18 @@ def gated(table: dict, location=None) -> dict:
         raise ConfigError(f"{location}: {exc}" if isinstance(location, Path) else str(exc)) from None
 
 
+def over_set(old: dict, new: dict) -> dict:
+    """A part's ``set`` table ``old`` with ``new`` over it: a key ``new`` gives in another unit
+    (``fork.spring.rate_lb_per_in`` over the file's ``rate_N_per_mm``) replaces the old one's."""
+    from mtbmj.config import ALTERNATIVES
+
+    def canonical(key):
+        return ALTERNATIVES.get(key, (key,))[0]
+
+    given = {canonical(k) for k in new}
+    return {**{k: v for k, v in old.items() if canonical(k) not in given}, **new}
+
+
 def overridden(table: dict, overrides) -> dict:
     """``table`` with ``overrides`` applied: ``"section.key": value`` for a bike key (``rider.mass_kg``),
     ``"fork.set": {KEY: value}`` / ``"shock.set": {KEY: value}`` for keys of the fork's and the
@@ -218,7 +230,7 @@ def overridden(table: dict, overrides) -> dict:
             section = out.setdefault(key.split(".")[0], {})
             if not isinstance(section, dict):
                 raise ConfigError(f"{key.split('.')[0]}: must be a table")
-            section["set"] = {**section.get("set", {}), **value}
+            section["set"] = over_set(section.get("set", {}), value)
             continue
         section, dot, name = str(key).partition(".")
         if not dot or not name:

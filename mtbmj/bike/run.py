@@ -124,12 +124,18 @@ def _check(speed, duration, pedal=None):
 
 def setups(spec) -> tuple[compose.Setup, compose.Setup]:
     """(fork, shock) setups: each configuration with the bike's overrides, composed by ``mtbmj.compose``."""
-    from mtbmj.config import load
+    from mtbmj.config import ALTERNATIVES, load
 
-    fork = compose.setup(load(spec.fork_config, spec.fork_overrides or None))
-    shock_over = dict(spec.shock_overrides)
-    shock_over.setdefault("fork.travel_mm", spec.shock_stroke * 1e3)
-    shock = compose.setup(load(spec.shock_config, shock_over))
+    def part(section, config, over):  # checked that the caller's keys (--fork-set, not the files') are read
+        c = load(config, over or None)
+        typed = {ALTERNATIVES.get(k, (k,))[0] for k in (spec.overrides.get(section) or {})}
+        try:
+            return compose.setup(dataclasses.replace(c, given=c.given & typed))
+        except compose.NotRead as exc:
+            raise ConfigError(f"--{section.replace('.', '-')} {exc}") from None
+
+    fork = part("fork.set", spec.fork_config, spec.fork_overrides)
+    shock = part("shock.set", spec.shock_config, {"fork.travel_mm": spec.shock_stroke * 1e3, **spec.shock_overrides})
     if abs(shock.travel - spec.shock_stroke) > 1e-9:
         raise ConfigError(f"shock.stroke_mm: {spec.shock_stroke * 1e3:g} mm, but the shock configuration's "
                           f"fork.travel_mm is {shock.travel * 1e3:g} mm")
