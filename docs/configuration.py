@@ -345,6 +345,14 @@ def markdown() -> str:
         "NaN, infinity, an integer too large for a float (1 followed by 400 zeros) and a value beyond 1e30",
         "in its unit are refused in one line naming the key, before any value is used.",
         "",
+        "A key of `[fork.spring]`, `[fork.damper]`, `[fork.friction]` or `[tire]` typed on the command line",
+        "(`--set`, or a bike's `--fork-set` / `--shock-set`) that the part's chosen model does not read is",
+        "refused in one line naming the model and the keys it reads: on a progressive fork,",
+        "`--fork-set fork.spring.rate_N_per_mm=9.75` would change nothing (its rate is",
+        "`fork.spring.progressive_rate_N_per_mm`). The keys a file carries for other models (the reference",
+        "preset holds every key; a bike file may change the model its base chose) are the file's and pass, as",
+        "do the keys a program sets (a sweep's variants, a fit's trials, `overrides=` from Python).",
+        "",
     ]
     section = None
     for key in cfg.SCHEMA:

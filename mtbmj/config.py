@@ -473,15 +473,12 @@ class Config:
     sources: tuple[str, ...] = field(default=())
     # the plausibility warnings of the values in effect, keyed by the key each concerns
     notes: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
-    given: frozenset = field(default=frozenset(), compare=False, repr=False)  # the keys overrides set
+    given: frozenset = field(default=frozenset(), compare=False, repr=False)  # the keys a person set
 
     @property
     def warnings(self) -> list[str]:
         """One line per value far outside what any bike or sled has (see :func:`plausibility`)."""
         return list(self.notes.values())
-
-    def __getitem__(self, key: str) -> Any:
-        return self.require(key)
 
     def get(self, key: str, default: Any = None) -> Any:
         return self.values.get(key, default)
@@ -491,13 +488,16 @@ class Config:
             raise ConfigError(f"{key}: missing" + (f" ({why})" if why else ""))
         return self.values[key]
 
+    __getitem__ = require
+
     def with_overrides(self, overrides: Mapping[str, Any]) -> "Config":
         """A copy with ``overrides`` applied as one source: an alternative-unit key sets its
         canonical key, rider inputs set ``sled.body_mass_kg``; the copy's ``warnings`` cover them
         (issued by :func:`load`, not here: fits and solvers call this in their loops)."""
         values, notes = dict(self.values), dict(self.notes)
         _apply(values, notes, overrides)
-        given = self.given | {ALTERNATIVES.get(k, (k,))[0] for k in overrides}  # compose.setup checks each is read
+        typed = getattr(overrides, "typed", False)  # a person's keys (mtbmj.cli.common.Typed): each must be read
+        given = self.given | ({ALTERNATIVES.get(k, (k,))[0] for k in overrides} if typed else set())
         return Config(self.name, values, self.sources, notes, given)
 
     def digest(self) -> str:

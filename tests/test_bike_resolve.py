@@ -92,7 +92,7 @@ def test_a_run_takes_the_resolved_bike_as_it_takes_the_file(tmp_path, reads):
 
     path = tmp_path / "bike.toml"
     path.write_text('base = "trail"\n[rider]\nmass_kg = 82.0\n')
-    over = {"fork.set": {"fork.spring.rate_N_per_mm": 11.0}}
+    over = {"fork.set": {"fork.spring.progressive_rate_N_per_mm": 11.0}}  # (the fork is progressive)
     by_path = run.run_bike(str(path), "root:at_m=0.4", 5.0, duration=0.3, overrides=over)
     n = reads[str(path)]
     resolved = spec_mod.resolve(str(path))

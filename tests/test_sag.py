@@ -105,7 +105,6 @@ def test_linear_coil_preload_and_band_in_closed_form():
         line = setting.line()
         assert printed_band(line) == (f"{sag_mm - coulomb / rate:.1f}", f"{sag_mm + coulomb / rate:.1f}")
         assert f"{coulomb / rate:.1f} mm less to {coulomb / rate:.1f} mm more than the sag" in line
-        sets.pop("fork.friction.coulomb_N")  # (a friction set beside model "none" is refused: it would change nothing)
         bare = mtbmj.solve_sag("S12", load_kg, sag_percent, {**sets, "fork.friction.model": "none"})
         assert bare.value == pytest.approx(preload, rel=1e-9)
         assert bare.holding_N == 0.0 and bare.rest_low_mm == bare.rest_high_mm == pytest.approx(sag_mm)

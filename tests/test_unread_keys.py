@@ -9,6 +9,7 @@ from __future__ import annotations
 import pytest
 
 from mtbmj import cli, compose
+from mtbmj.cli.common import Typed
 from mtbmj.bike import run, spec
 from mtbmj.config import load
 from mtbmj.errors import ConfigError
@@ -62,15 +63,23 @@ def test_a_spring_typed_in_the_other_unit_replaces_the_file_s():
         load("reference", {"fork.spring.rate_lb_per_in": 500.0, "fork.spring.rate_N_per_mm": 80.0})
 
 
-def test_a_file_s_keys_beneath_a_changed_model_are_not_the_caller_s():
+def test_only_the_keys_a_person_typed_are_held_to_it():
     """A bike file whose base set a bilinear shock damper and which itself chooses a table of clicks keeps
-    the base's coefficients in [shock.set] unread: they are the files', not a key the caller typed, and the
-    bike composes (``tests/test_bike_shock_clicks.py`` has such a file). A programmatic override is the
-    caller's: the same composition with the bilinear key typed is refused."""
+    the base's coefficients in [shock.set] unread: they are the files', and the bike composes
+    (``tests/test_bike_shock_clicks.py`` has such a file). Keys a program sets (a sweep's grid, a fit's
+    trial: a plain dict) pass; the command line's (``mtbmj.cli.common.Typed``) are refused."""
     c = load("S1")  # a linear spring: its file's progressive keys (from the reference) are not read
     assert "fork.spring.progressive_rate_N_per_mm" in c.values
     compose.setup(c)  # taken
+    compose.setup(c.with_overrides({"fork.spring.progressive_rate_N_per_mm": 7.0}))  # a program's: taken
     with pytest.raises(compose.NotRead, match="progressive_rate_N_per_mm"):
-        compose.setup(c.with_overrides({"fork.spring.progressive_rate_N_per_mm": 7.0}))
-    taken = compose.setup(c.with_overrides({"fork.spring.rate_N_per_mm": 7.0}))
+        compose.setup(c.with_overrides(Typed({"fork.spring.progressive_rate_N_per_mm": 7.0})))
+    with pytest.raises(compose.NotRead, match="progressive_rate_N_per_mm"):  # typed once, held through later sets
+        compose.setup(load("S1", Typed({"fork.spring.progressive_rate_N_per_mm": 7.0}))
+                      .with_overrides({"fork.spring.rate_N_per_mm": 9.0}))
+    taken = compose.setup(c.with_overrides(Typed({"fork.spring.rate_N_per_mm": 7.0})))
     assert taken.fork.spring.main.rate == pytest.approx(7e3)
+    # the bike: a program's set table passes, the command line's is refused naming its option
+    run.setups(spec.load("sst", {"fork.set": {"fork.spring.rate_N_per_mm": 9.75}}))
+    with pytest.raises(ConfigError, match="--fork-set fork.spring.rate_N_per_mm"):
+        run.setups(spec.load("sst", {"fork.set": Typed({"fork.spring.rate_N_per_mm": 9.75})}))

@@ -126,11 +126,11 @@ def setups(spec) -> tuple[compose.Setup, compose.Setup]:
     """(fork, shock) setups: each configuration with the bike's overrides, composed by ``mtbmj.compose``."""
     from mtbmj.config import ALTERNATIVES, load
 
-    def part(section, config, over):  # checked that the caller's keys (--fork-set, not the files') are read
-        c = load(config, over or None)
-        typed = {ALTERNATIVES.get(k, (k,))[0] for k in (spec.overrides.get(section) or {})}
+    def part(section, config, over):  # a person's keys (--fork-set, not the files') checked to be read
+        c, mine = load(config, over or None), spec.overrides.get(section)
+        typed = {ALTERNATIVES.get(k, (k,))[0] for k in mine} if getattr(mine, "typed", False) else set()
         try:
-            return compose.setup(dataclasses.replace(c, given=c.given & typed))
+            return compose.setup(dataclasses.replace(c, given=typed))
         except compose.NotRead as exc:
             raise ConfigError(f"--{section.replace('.', '-')} {exc}") from None
 

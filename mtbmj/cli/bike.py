@@ -7,7 +7,7 @@ that ends in a crash (a part other than a tyre on the ground, or the pitch past 
 recovers from) is written up to the crash, its headline starting "crashed: ...", exit status 3."""
 from __future__ import annotations
 
-from mtbmj.cli.common import Progress, add_out
+from mtbmj.cli.common import Progress, Typed, add_out
 
 # A run that ended in a crash (``mtbmj.bike.crash``): its folder is written, up to the crash
 EXIT_CRASHED = 3
@@ -99,7 +99,7 @@ def bike_overrides(args) -> dict:
     for option, section in (("fork_set", "fork.set"), ("shock_set", "shock.set")):
         for text in getattr(args, option) or ():
             key, value = parse_assignment(text)
-            out.setdefault(section, {})[key] = value
+            out.setdefault(section, Typed())[key] = value  # a person's keys: each must be read (compose)
     return out
 
 

@@ -111,8 +111,16 @@ def numeric(option: str, integer: bool = False):
     return parse
 
 
+class Typed(dict):
+    """Overrides a person typed (``--set``, ``--fork-set``, ``--shock-set``): ``mtbmj.compose`` refuses,
+    in one line, a key of these that the part's model does not read (it would change nothing). Keys a
+    program sets (a sweep's grid, a fit's trial) are not held to it."""
+
+    typed = True
+
+
 def overrides(pairs) -> dict:
-    return dict(parse_assignment(p) for p in pairs or [])
+    return Typed(parse_assignment(p) for p in pairs or [])
 
 
 def add_run_options(p) -> None:
