@@ -2,7 +2,9 @@
 frame heaving and pitching, the rider on his legs and arms (vertical springs and dampers at the pedals
 and the bars, preloaded by the lever rule) heaving and pitching on it, the fork's lower and wheel
 along the steering axis, the rear wheel through the leverage curve, point-contact tyres that leave
-the ground; small pitch angles, vertical motion only (the wheelbase fixed at the ride's sag), the
+the ground; small pitch angles, vertical motion only (the wheelbase fixed at the ride's sag) except
+that the frame's pitch carries the bike's masses fore and aft (:func:`carried_inertia`: the rider on
+his limbs and the wheels are held fore and aft by the frame, as in the MuJoCo bike), the
 frame body's and the rider's masses, centres and inertias from the bike file
 (``mtbmj.bike.model.frame_body``), the rear's unsprung mass the wheel and half the swingarm.
 
