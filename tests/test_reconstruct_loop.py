@@ -54,3 +54,49 @@ def test_the_loop_gives_back_the_ride_s_speeds_and_depth(looped):
     for end in ("front", "rear"):
         assert sim[end]["p95_compression_mm_per_s"] == pytest.approx(rec[end]["p95_compression_mm_per_s"], rel=0.25), end
         assert sim[end]["max_travel_percent"] == pytest.approx(rec[end]["max_travel_percent"], abs=5.0), end
+
+
+@pytest.fixture(scope="module")
+def shipped():
+    """(the shipped ride's measured metrics, the calibrated recorded setting's simulated ones over its
+    reconstruction: what every advice compares its candidates with), the reconstruction's check set aside."""
+    from argparse import Namespace
+
+    import numpy as np
+
+    from mtbmj.cli.telemetry import ride_record
+    from mtbmj.ride import advise
+    from mtbmj.ride.advice_rules import ride_metrics
+
+    rec = ride_record("example", Namespace(bike="sst", fork_max_mm=None, shock_max_mm=None))
+    with reconstruction_passing():
+        ride = advise.prepare(rec, "sst", candidates=False)
+    run = advise.simulate(ride.bike, ride.base_over, ride.terrain, ride.speed, ride.sim_s, "recorded", ride.lead_s,
+                          ride.profile)
+    t = ride.rec.t
+    keep = t - t[0] <= ride.sim_s
+    assert np.count_nonzero(keep) > 0.9 * t.size  # the whole ride, not a piece of it
+    return (ride_metrics(t[keep], ride.rec.front[keep], ride.rec.rear[keep], run.metrics["front"]["travel_mm"],
+                         run.metrics["rear"]["travel_mm"]), run.metrics)
+
+
+@pytest.mark.slow  # the shipped ride's calibration, reconstruction and one 76 s run: about half a minute
+def test_the_shipped_ride_s_speeds_come_back_at_its_recorded_setting(shipped):
+    """A real ride, not made here: the shipped 00649 (SST bike, 76 s) at its recorded setting, calibrated.
+    Before the reconstruction's whole bike carried the frame's masses fore and aft in pitch the model's
+    p95 compression speeds were 739 mm/s at the fork and 573 at the rear for the ride's 436 and 498; now
+    421 and 429. The same criteria as the engine's own ride above: within 25 %."""
+    rec, sim = shipped
+    for end in ("front", "rear"):
+        assert sim[end]["p95_compression_mm_per_s"] == pytest.approx(rec[end]["p95_compression_mm_per_s"], rel=0.25), end
+        assert sim[end]["dynamic_sag_percent"] == pytest.approx(rec[end]["dynamic_sag_percent"], abs=2.0), end
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="the shipped ride's depth does not come back at its recorded setting: the model's "
+                                       "fork reaches 75.8 % of its travel for the ride's 66.4, its rear 67.3 for 79.1 "
+                                       "(2026-12-05; before the carried inertia the fork reached 97.8)")
+def test_the_shipped_ride_s_depth_comes_back_at_its_recorded_setting(shipped):
+    rec, sim = shipped
+    for end in ("front", "rear"):
+        assert sim[end]["max_travel_percent"] == pytest.approx(rec[end]["max_travel_percent"], abs=5.0), end
