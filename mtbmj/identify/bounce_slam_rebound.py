@@ -366,11 +366,14 @@ def spring_from_periods(rings, scales=RING_SCALES) -> dict:
                      + (f"; {left} of the records' halves not simulated there, left out" if left else "") + ")")}
 
 
-def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | None = None) -> dict | None:
+def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | None = None,
+                 ring_fit: bool = True) -> dict | None:
     """``fit bounce --replay``'s ``"slam_rebound"``: the records' slams (each on a seated bike of its own)
     fitted together, the friction and the starting spring from the best-determined whole-trace replay
     (``replayed``: ``bounce_replay.replay_records``' summary; the narrowest spring interval), each
-    record's push started from its own replay (or the best one's). None when no record was replayed."""
+    record's push started from its own replay (or the best one's). ``ring_fit``: then the spring,
+    friction and a scale on these dampers read from the free ring-downs (``bounce_ring.from_slam_rebound``,
+    ``"ring_fit"``: the spring the rebound dampers take). None when no record was replayed."""
     from mtbmj.identify.bounce_replay import RIDER_HZ, SeatedReplay, prepare_slam
 
     done = [e for e in replayed if "refused" not in e]
@@ -405,6 +408,11 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
         out["spring_from"] = "the ring-down's period"
     out["ring_spring"] = ring
     out["line"] = ring["line"] + "; " + out["line"]
+    if ring_fit:  # the spring read again on the ring-down with its own friction and these dampers (bounce_ring)
+        from mtbmj.identify.bounce_ring import from_slam_rebound
+
+        out["ring_fit"] = from_slam_rebound(rings, out)
+        out["line"] += "; " + out["ring_fit"]["line"]
     out["from"] = best["file"]
     out["records"] = sorted(out["records"] + refused, key=lambda e: e["clicks"])
     return out

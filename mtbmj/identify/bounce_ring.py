@@ -1,0 +1,254 @@
+"""The spring read from the seat slams' free ring-downs through the bike with a friction and dampers of its
+own (``fit bounce --replay``'s ``"ring_fit"``): the spring scale and the Coulomb friction fitted together on
+the free half cycles' periods and amplitudes, the dampers given.
+
+Why. ``bounce_slam_rebound.spring_from_periods`` reads the spring from the free half periods alone, on
+a ring-down simulated with the whole-trace replay's friction and one damper both ways. Those are off
+(on the tests' generator 64 and 0.25 N for its 30, 1888 and 3742 N s/m both ways for 2500 in compression
+and 2500 / 5000 in rebound), and since a 2-3 half ring-down's halves move only about 0.3 x the log
+spring, the 5 % they shift the periods is a 15 % spring. Friction and viscous damping leave different
+signatures in the amplitudes (REFERENCE.md section 8: Feeny and Liang 1996): with dry friction F
+alone the swing loses a constant 2 F / k each half cycle, with viscous damping alone it keeps a
+constant share. So the amplitudes read the friction, and the periods then the spring.
+
+Method. Per record, the replay's push (its whole-trace replay's) and the dampers given (``dampers``:
+per record its compression and rebound coefficients, ``"compression_N_s_per_m"`` and
+``"rebound_N_s_per_m"``; the slam-and-first-rebound fit's in ``read_records``), the MuJoCo bike run
+``RING_AFTER_S`` past the slam's peak. Its turning points (``bounce_decay.extrema``, vertex times as
+``bounce_predict.timed_halves``; the slam's peak is turning point 0) set against the record's, each by
+its place after the slam (``Extrema.first_turn``): per half cycle both have, the log ratio of its
+duration over ``PERIOD_SD`` and, per two successive half cycles both have (the slam's peak to the
+first turning point counts where the record's first is free), the difference of the swing ratios
+(the second swing over the first: a constant for viscous damping, falling with the swing for
+friction; no rest level needed, which the shared records' rider moves after the slam) over
+``RATIO_SD``. The values: log spring scale and friction (``FITTED``; any of them ``held``), by
+``scipy.optimize.least_squares`` (forward differences). 95 % intervals from the Jacobian with the
+residual's variance (Student's t at n - p; none with n <= p: ``"refused"``). The friction is stated
+with its interval, and whether an interval holds 0 (the ring-down reads as viscous only) is said.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mtbmj.identify.bounce import BounceError, find_slam
+
+RING_AFTER_S = 2.5
+PERIOD_SD = 0.01  # a half period's relative scatter about its model (the records' 1.2-2.1 %, docs/identification.md)
+RATIO_SD = 0.03  # a swing ratio's scatter (the swing's vertex levels, a few tenths of a mm of 10-40 mm)
+FITTED = ("spring_scale", "friction_N")
+LIMITS = {"spring_scale": (0.2, 3.0), "friction_N": (0.0, 400.0), "damper_scale": (0.05, 20.0),
+          "compression_scale": (0.05, 20.0), "rebound_scale": (0.05, 20.0)}
+START = {"spring_scale": 0.5, "friction_N": 30.0, "damper_scale": 1.0, "compression_scale": 1.0, "rebound_scale": 1.0}
+LOG = ("spring_scale", "damper_scale", "compression_scale", "rebound_scale")  # fitted in log
+STEP = 0.01  # forward-difference step in the scaled value
+MAX_NFEV = 40
+PEAK_WINDOW_S = 0.1
+METHOD = ("the records' free half cycles after the slam against the same half cycles (by turning point after the "
+          "slam's peak) of the MuJoCo bike's run with each record's whole-trace replay's push and the dampers given: "
+          "each half's log duration ratio (sd 1 %) and each two successive halves' swing ratio (sd 0.03); the "
+          "spring scale and Coulomb friction fitted by least squares, 95 % from the Jacobian (Student's t, n - p)")
+
+
+def turning_points(t, x, peak: int) -> list:
+    """The slam's peak and the free turning points after it: [(turn, level_mm, time_s)], turn 0 the peak,
+    then ``Extrema.first_turn`` onwards (a stuck level's time nan), times the vertex times
+    (``bounce_predict.vertex_time``)."""
+    from mtbmj.identify import bounce_decay as bd
+    from mtbmj.identify import bounce_predict as bp
+
+    t, x = np.asarray(t, float), np.asarray(x, float)
+    dt = float(t[1] - t[0])
+    w = max(int(round(PEAK_WINDOW_S / dt)), 1)
+    lo = max(peak - w, 0)
+    p = lo + int(np.argmax(x[lo:peak + w + 1]))
+    out = [(0, float(x[p]), float(t[p]))]
+    seq = bd.extrema(t, x, "shock", peak)
+    times = seq.times_s
+    fin = times[np.isfinite(times)]
+    half0 = float(np.median(np.diff(fin))) if fin.size >= 2 else 0.3
+    for j, (lv, ti) in enumerate(zip(seq.levels_mm, times)):
+        tv = bp.vertex_time(t, x, ti, half0)[0] if np.isfinite(ti) else float("nan")
+        out.append((seq.first_turn + j, float(lv), float(tv)))
+    return out
+
+
+def residuals(rec: list, sim: list) -> tuple[np.ndarray, dict]:
+    """The scaled residuals of the record's turning points ``rec`` against the simulation's ``sim`` (each
+    ``turning_points``), one per half cycle and per two successive halves of the record, so their number
+    is the record's whatever the simulation does: a half's log duration ratio (the slam's peak to the
+    first turn left out: the push ends there), 0 where the simulation lacks the half (it stuck sooner,
+    or topped out where the record did not); two successive halves' swing ratio less the record's, the
+    simulation's ratio 0 where it lacks the second half (stuck: no swing). ({"periods", "ratios",
+    "missing"} counts)."""
+    by = {q[0]: q for q in sim}
+    have = {q[0]: q for q in rec}
+    per, rat, missing = [], [], 0
+    for a in sorted(have):
+        b, c = a + 1, a + 2
+        if b not in have:
+            continue
+        ra, rb = have[a], have[b]
+        if a > 0 and np.isfinite(ra[2]) and np.isfinite(rb[2]) and rb[2] > ra[2]:
+            sa, sb = by.get(a), by.get(b)
+            ok = sa is not None and sb is not None and np.isfinite(sa[2]) and np.isfinite(sb[2]) and sb[2] > sa[2]
+            per.append(math.log((sb[2] - sa[2]) / (rb[2] - ra[2])) / PERIOD_SD if ok else 0.0)
+            missing += 0 if ok else 1
+        if c in have:
+            rr = abs(have[c][1] - rb[1]) / max(abs(rb[1] - ra[1]), 1e-9)
+            if a in by and b in by:
+                sa, sb = by[a], by[b]
+                ss = abs(by[c][1] - sb[1]) / max(abs(sb[1] - sa[1]), 1e-9) if c in by else 0.0
+            else:
+                ss = 0.0
+            missing += 0 if (a in by and b in by and c in by) else 1
+            rat.append((ss - rr) / RATIO_SD)
+    return np.array(per + rat, float), {"periods": len(per), "ratios": len(rat), "missing": missing}
+
+
+def _values(x, names, held):
+    v = dict(held)
+    for k, u in zip(names, x):
+        v[k] = math.exp(u) if k in LOG else u
+    return v
+
+
+def _run(ring, v) -> list:
+    name, t, xr, sl, push, damp = ring
+    sc = v.get("damper_scale", 1.0)
+    p = {**push, "spring_scale": v["spring_scale"], "friction_N": v["friction_N"],
+         "damper_N_s_per_m": sc * v.get("rebound_scale", 1.0) * damp["rebound_N_s_per_m"],
+         "compression_N_s_per_m": sc * v.get("compression_scale", 1.0) * damp["compression_N_s_per_m"]}
+    sl.sr.set_rest(sl.rest, None)
+    try:
+        out = sl.sr.run(p, after_s=RING_AFTER_S)
+    except BounceError:
+        return []
+    return turning_points(out["time_s"], out["stroke_mm"], int(np.argmin(np.abs(out["time_s"]))))
+
+
+def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = None, max_nfev: int = MAX_NFEV) -> dict:
+    """The spring scale and friction (``fitted``) read from the free ring-downs (module docstring).
+    ``rings``: per record (name, time_s, shock_mm, slam, push, dampers): ``slam`` a
+    ``bounce_replay.prepare_slam`` result, ``push`` its replay's push (``PUSH_NAMES``), ``dampers``
+    {"compression_N_s_per_m", "rebound_N_s_per_m"}. ``held``: values given (default the dampers'
+    scale 1). {"spring_scale", "spring_scale_ci95", "friction_N", ..., "halves", "line"} or
+    {"refused", "line"}."""
+    from scipy.optimize import least_squares
+    from scipy.stats import t as student
+
+    held = {**({} if "damper_scale" in fitted else {"damper_scale": 1.0}), **(held or {})}
+    names = [k for k in fitted if k not in held]
+    st = {**START, **(start or {})}
+    recs = [turning_points(t, x, find_slam(np.asarray(t, float), np.asarray(x, float), name))
+            for name, t, x, *_ in rings]
+    x0 = np.array([math.log(st[k]) if k in LOG else st[k] for k in names])
+    lo = np.array([math.log(LIMITS[k][0]) if k in LOG else LIMITS[k][0] for k in names])
+    hi = np.array([math.log(LIMITS[k][1]) if k in LOG else LIMITS[k][1] for k in names])
+    scale = np.array([1.0 if k in LOG else 30.0 for k in names])
+    counts = {}
+
+    def res(u):
+        v = _values(x0 + u * scale, names, held)
+        parts, n = [], {"periods": 0, "ratios": 0, "missing": 0}
+        for ring, rec in zip(rings, recs):
+            r, c = residuals(rec, _run(ring, v))
+            parts.append(r)
+            n = {k: n[k] + c[k] for k in n}
+        counts.update(n)
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    r0 = res(np.zeros(len(names)))
+    n_res = r0.size
+    base = {"method": METHOD, "held": held, "records": len(rings),
+            "halves_in_records": sum(max(len(q) - 2, 0) for q in recs)}
+    if n_res <= len(names):
+        why = f"{n_res} residual(s) from the records' free half cycles for {len(names)} value(s)"
+        return {**base, "refused": f"the ring-down fit not read: {why}", "line": f"ring-down fit not read: {why}"}
+    sol = least_squares(res, np.zeros(len(names)), bounds=((lo - x0) / scale, (hi - x0) / scale),
+                        diff_step=STEP, max_nfev=max_nfev, x_scale=1.0)
+    r = res(sol.x)
+    J = sol.jac / scale[None, :]
+    dof = r.size - len(names)
+    s2 = float(r @ r) / dof
+    try:
+        cov = np.linalg.inv(J.T @ J) * s2
+    except np.linalg.LinAlgError:
+        cov = np.linalg.pinv(J.T @ J) * s2
+    tq = float(student.ppf(0.975, dof))
+    u = x0 + sol.x * scale
+    out = {**base, "residual_counts": dict(counts), "rms_scaled": float(math.sqrt(float(r @ r) / r.size)),
+           "dof": dof, "runs": int(sol.nfev)}
+    for j, k in enumerate(names):
+        half = tq * math.sqrt(max(cov[j, j], 0.0))
+        if k in LOG:
+            out[k], out[k + "_ci95"] = math.exp(u[j]), [math.exp(u[j] - half), math.exp(u[j] + half)]
+        else:
+            out[k], out[k + "_ci95"] = float(u[j]), [max(float(u[j] - half), 0.0), float(u[j] + half)]
+        span = LIMITS[k]
+        if min(abs(out[k] - span[0]), abs(span[1] - out[k])) < 1e-3 * (span[1] - span[0]):
+            out.setdefault("at_bound", []).append(k)
+    for k, v in held.items():
+        out.setdefault(k, v)
+    out["line"] = line(out)
+    return out
+
+
+def line(out: dict) -> str:
+    if "refused" in out:
+        return out["line"]
+    said = []
+    for k, unit in (("spring_scale", "x"), ("friction_N", "N"), ("damper_scale", "x the dampers given"),
+                    ("compression_scale", "x the compression given"), ("rebound_scale", "x the rebound given")):
+        if k + "_ci95" in out:
+            lo, hi = out[k + "_ci95"]
+            f = ".2f" if k != "friction_N" else ".0f"
+            said.append(f"{k.split('_')[0]} {out[k]:{f}} {unit} [{lo:{f}}, {hi:{f}}]")
+        elif k in out and k in ("spring_scale", "friction_N", "damper_scale"):
+            said.append(f"{k.split('_')[0]} {out[k]:.4g} given")
+    c = out["residual_counts"]
+    visc = "friction_N_ci95" in out and out["friction_N_ci95"][0] <= 0.0
+    return (f"ring-down fit (free half periods and swing ratios, {c['periods']} and {c['ratios']}, of "
+            f"{out['records']} records): " + ", ".join(said)
+            + ("; the friction's interval holds 0 (viscous only within the uncertainty)" if visc else "")
+            + (f"; at a bound: {', '.join(out['at_bound'])}" if out.get("at_bound") else ""))
+
+
+__all__ = ["METHOD", "fit", "line", "residuals", "turning_points"]
+
+
+DEFAULT_FITTED = ("spring_scale", "friction_N", "damper_scale")
+SPRING_FROM = ("the ring-down fit (the free half periods and swing ratios, with its own friction and the "
+               "slam-and-first-rebound fit's dampers scaled)")
+
+
+def from_slam_rebound(rings, pooled: dict) -> dict:
+    """``fit bounce --replay``'s ``"ring_fit"``: the spring scale, friction and one scale on the dampers of
+    the slam-and-first-rebound fit (``pooled``: ``bounce_slam_rebound.fit``'s result: its shared
+    compression, each record's rebound) read from the free ring-downs, each record pushed as its
+    whole-trace replay (``rings``: per record (name, time_s, shock_mm, slam, replay values), as
+    ``spring_from_periods`` takes them). Adds ``compression_N_s_per_m`` and per record
+    ``rebound_N_s_per_m`` (the given ones times the scale fitted) and their sources."""
+    from mtbmj.identify.bounce_replay import PUSH_NAMES
+
+    by = {e["file"]: e for e in pooled["records"] if "rebound_N_s_per_m" in e and "refused" not in e}
+    comp = float(pooled["compression_N_s_per_m"])
+    use = [(name, t, x, sl, {k: v[k] for k in PUSH_NAMES},
+            {"compression_N_s_per_m": comp, "rebound_N_s_per_m": float(by[name]["rebound_N_s_per_m"])})
+           for name, t, x, sl, v in rings if name in by]
+    if not use:
+        why = "no record read by the slam-and-first-rebound fit"
+        return {"refused": f"the ring-down fit not read: {why}", "line": f"ring-down fit not read: {why}"}
+    out = fit(use, fitted=DEFAULT_FITTED)
+    out["dampers_given"] = {"compression_N_s_per_m": comp,
+                            "rebound_N_s_per_m": {n: d["rebound_N_s_per_m"] for n, *_, d in use},
+                            "from": "the slam-and-first-rebound fit"}
+    if "refused" not in out:
+        sc = out["damper_scale"]
+        out["compression_N_s_per_m"] = sc * comp
+        out["rebound_N_s_per_m"] = {n: sc * d["rebound_N_s_per_m"] for n, *_, d in use}
+    return out
+
+
+__all__ += ["DEFAULT_FITTED", "SPRING_FROM", "from_slam_rebound"]
