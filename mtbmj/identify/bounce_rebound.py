@@ -12,11 +12,11 @@ adjuster changes is the first rebound's speed from the peak, which needs neither
 
 Method. Per record, on the seated MuJoCo bike of the replay (its start, its rest): the spring scale,
 the friction and the compression coefficient given (shared by the records: a rebound adjuster
-changes none of them; ``read_records`` takes the spring from the ring-down's period reading,
-``bounce_slam_rebound.spring_from_periods``, where it is given (``ring=``) and was read, else from the best
-whole-trace replay, ``spring_given``, and says which in ``"spring_from"``; ``fit bounce --replay`` gives
-none: the period's reading borrows that replay's friction and damper and reads the tests' generator
-15 % low, and at its 0.46 x the shared 0-click slam is refused), the push fitted on the record up to its peak (``bounce_replay.fit_push``),
+changes none of them; ``read_records`` takes the spring, friction and compression of the ring-down fit
+(``bounce_ring.from_slam_rebound``: the free half periods and swing ratios with a friction and dampers of
+its own) where it is given (``ring=``, as ``fit bounce --replay`` gives it) and read, the spring alone from
+the ring-down's period reading (``bounce_slam_rebound.spring_from_periods``) where that is given, else all
+three from the best whole-trace replay, ``spring_given``, and says which in ``"spring_from"``), the push fitted on the record up to its peak (``bounce_replay.fit_push``),
 then the rebound coefficient solved (``brentq``) so that the replay's first rebound, read as the
 record's (``bounce.first_rebound``), has the record's middle speed per millimetre of the peak's
 height above rest (1/s: for a linear end independent of how high the slam went, so the replay's

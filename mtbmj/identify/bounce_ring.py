@@ -74,19 +74,45 @@ def turning_points(t, x, peak: int) -> list:
     return out
 
 
+def _pairs(tp: list) -> list:
+    """Two successive half cycles of turning points ``tp``: (first swing, second over first, the second's
+    direction: +1 compression, -1 rebound), where the three turning points are consecutive."""
+    by = {q[0]: q for q in tp}
+    out = []
+    for a in sorted(by):
+        if a + 1 in by and a + 2 in by:
+            s1 = abs(by[a + 1][1] - by[a][1])
+            s2 = abs(by[a + 2][1] - by[a + 1][1])
+            if s1 > 0.0:
+                out.append((s1, s2 / s1, 1 if by[a + 2][1] > by[a + 1][1] else -1, a))
+    return out
+
+
+def swing_ratio_at(sim_pairs: list, swing: float, direction: int) -> float:
+    """The simulation's swing ratio (second over first) at a first swing of ``swing`` mm into a half of
+    ``direction``: interpolated in its own pairs of that direction by their first swing, held at the
+    nearest beyond them (a viscous ratio does not depend on the swing, a friction one does, so the
+    record and the simulation are compared at the same swing, not at the same turning point); 0 where
+    the simulation has no such pair (it stuck sooner: no swing)."""
+    own = sorted((s1, r) for s1, r, d, _ in sim_pairs if d == direction)
+    if not own:
+        return 0.0
+    return float(np.interp(swing, [q[0] for q in own], [q[1] for q in own]))
+
+
 def residuals(rec: list, sim: list) -> tuple[np.ndarray, dict]:
     """The scaled residuals of the record's turning points ``rec`` against the simulation's ``sim`` (each
     ``turning_points``), one per half cycle and per two successive halves of the record, so their number
-    is the record's whatever the simulation does: a half's log duration ratio (the slam's peak to the
-    first turn left out: the push ends there), 0 where the simulation lacks the half (it stuck sooner,
-    or topped out where the record did not); two successive halves' swing ratio less the record's, the
-    simulation's ratio 0 where it lacks the second half (stuck: no swing). ({"periods", "ratios",
-    "missing"} counts)."""
+    is the record's whatever the simulation does: a half's log duration ratio, the same half cycle (by
+    turning point) in both (the slam's peak to the first turn left out: the push ends there), 0 where
+    the simulation lacks it (it stuck sooner, or topped out where the record did not); two successive
+    halves' swing ratio (the second swing over the first) less the simulation's at the same first swing
+    and direction (``swing_ratio_at``), over RATIO_SD. ({"periods", "ratios", "missing"} counts)."""
     by = {q[0]: q for q in sim}
     have = {q[0]: q for q in rec}
-    per, rat, missing = [], [], 0
+    per, missing = [], 0
     for a in sorted(have):
-        b, c = a + 1, a + 2
+        b = a + 1
         if b not in have:
             continue
         ra, rb = have[a], have[b]
@@ -95,15 +121,12 @@ def residuals(rec: list, sim: list) -> tuple[np.ndarray, dict]:
             ok = sa is not None and sb is not None and np.isfinite(sa[2]) and np.isfinite(sb[2]) and sb[2] > sa[2]
             per.append(math.log((sb[2] - sa[2]) / (rb[2] - ra[2])) / PERIOD_SD if ok else 0.0)
             missing += 0 if ok else 1
-        if c in have:
-            rr = abs(have[c][1] - rb[1]) / max(abs(rb[1] - ra[1]), 1e-9)
-            if a in by and b in by:
-                sa, sb = by[a], by[b]
-                ss = abs(by[c][1] - sb[1]) / max(abs(sb[1] - sa[1]), 1e-9) if c in by else 0.0
-            else:
-                ss = 0.0
-            missing += 0 if (a in by and b in by and c in by) else 1
-            rat.append((ss - rr) / RATIO_SD)
+    sp = _pairs(sim)
+    rat = []
+    for s1, r, d, _ in _pairs(rec):
+        if not any(q[2] == d for q in sp):
+            missing += 1
+        rat.append((swing_ratio_at(sp, s1, d) - r) / RATIO_SD)
     return np.array(per + rat, float), {"periods": len(per), "ratios": len(rat), "missing": missing}
 
 
@@ -215,7 +238,7 @@ def line(out: dict) -> str:
             + (f"; at a bound: {', '.join(out['at_bound'])}" if out.get("at_bound") else ""))
 
 
-__all__ = ["METHOD", "fit", "line", "residuals", "turning_points"]
+__all__ = ["METHOD", "fit", "line", "residuals", "swing_ratio_at", "turning_points"]
 
 
 DEFAULT_FITTED = ("spring_scale", "friction_N", "damper_scale")

@@ -41,7 +41,10 @@ and said), the mean log ratio is interpolated to 0 in log scale, its 95 % interv
 test file's generator those are off (64 and 0 N for 30) and read its spring 15 % low (0.52 x with its
 friction given; docs/identification.md).
 ``read_records`` holds that spring in :func:`fit` and carries its interval into the others'
-(``held_ci95``: linearised, added in quadrature); ``"spring_from"`` says which. On the shared slams:
+(``held_ci95``: linearised, added in quadrature); ``"spring_from"`` says which. Then the spring is read
+again on the free ring-downs with a friction of its own and a scale on this fit's dampers
+(``bounce_ring.from_slam_rebound``, ``"ring_fit"``): the spring, friction and compression the rebound
+dampers take (``bounce_rebound``); this fit is not refitted at it. On the shared slams:
 0.46 x [0.33, 0.64] from 6 of 7 halves, and the rebound coefficients 1794 [0, 4938], 4418 [953, 7883],
 6754 [4051, 9456] N s/m at 0, 8, 17 clicks (the 0-click interval still reaches 0); on the test file's
 generator 0.47 x [0.36, 0.60] for 0.55 x (docs/identification.md).
