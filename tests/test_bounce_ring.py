@@ -107,3 +107,84 @@ def test_residuals_keep_their_number_when_the_simulation_sticks_sooner():
     assert r.size == r_full.size and n["missing"] == 3
     assert r[n["periods"] - 1] == 0.0
     assert r[-1] == pytest.approx(-(6.0 / 10.0) / RATIO_SD)
+
+
+# (c) the fit itself (``bounce_ring.fit``) with the bike replaced by a closed form written here: one mass on a
+# spring (80 N/mm x the spring scale, 529 kg: 1.45 Hz at 0.55 x), a damper (1000 N s/m x the damper scale) and Coulomb friction F,
+# its turning points half a damped period apart, each about the centre the friction shifts to, sign(a) F / k:
+# a' - e = -r (a - e), r = exp(-pi zeta / sqrt(1 - zeta^2)), stuck where |a'| <= F / k (Den Hartog).
+K0, C0, M0 = 80000.0, 1000.0, 529.0
+
+
+def closed_points(scale, friction, damper, start_mm=40.0, rest=20.0, time_noise=0.0, level_noise=0.0, seed=0):
+    k, m = K0 * scale, M0
+    c = C0 * damper
+    zeta = c / (2.0 * math.sqrt(k * m))
+    wd = math.sqrt(k / m) * math.sqrt(1.0 - zeta ** 2)
+    r = math.exp(-math.pi * zeta / math.sqrt(1.0 - zeta ** 2))
+    band = 1e3 * friction / k
+    rng = np.random.default_rng(seed)
+    a, out = start_mm, [(0, rest + start_mm, 0.0)]
+    for j in range(1, 12):
+        e = math.copysign(band, a)
+        a = e - r * (a - e)
+        stuck = abs(a) <= band
+        t = float("nan") if stuck else j * math.pi / wd + time_noise * rng.standard_normal()
+        out.append((j, rest + a + level_noise * rng.standard_normal(), t))
+        if stuck:
+            break
+    return out
+
+
+@pytest.fixture()
+def closed_form_bike(monkeypatch):
+    """``bounce_ring``'s record and simulation replaced by the closed form: each ring's "record" its turning
+    points given, the simulation's those of the closed form at the values tried."""
+    from mtbmj.identify import bounce_ring
+
+    monkeypatch.setattr(bounce_ring, "_record_points", lambda ring: ring[3])
+    monkeypatch.setattr(bounce_ring, "_run", lambda ring, v: closed_points(v["spring_scale"], v["friction_N"],
+                                                                            v.get("damper_scale", 1.0)))
+    return bounce_ring
+
+
+def test_fit_recovers_spring_friction_and_damper(closed_form_bike):
+    """(c) A record of the closed form at 0.55 x, 30 N and the damper's scale 1 (vertex times within 0.5 ms,
+    levels within 0.05 mm): the fit from 0.5 x, 30 N, 1 gives the spring within 2 %, the friction within 5 N,
+    the damper's scale within 10 %, each interval holding it, not refused."""
+    rec = closed_points(0.55, 30.0, 1.0, time_noise=5e-4, level_noise=0.05, seed=1)
+    got = closed_form_bike.fit([("made", None, None, rec)], fitted=("spring_scale", "friction_N", "damper_scale"))
+    assert "refused" not in got
+    assert got["spring_scale"] == pytest.approx(0.55, rel=0.02)
+    assert got["friction_N"] == pytest.approx(30.0, abs=5.0)
+    assert got["damper_scale"] == pytest.approx(1.0, rel=0.10)
+    for k, truth in (("spring_scale", 0.55), ("friction_N", 30.0), ("damper_scale", 1.0)):
+        lo, hi = got[k + "_ci95"]
+        assert lo <= truth <= hi
+
+
+def test_fit_reads_a_viscous_ring_down_without_friction(closed_form_bike):
+    """(c) Wrong input told apart: viscous only (0 N, the damper's scale 1) reads a friction under 3 N, its interval
+    from below 1 N (measured 1 [0, 1]), the spring and the damper within 2 %; a dry ring-down (150 N, the
+    damper's scale 0.05) read with the friction held at 0 (the viscous reading) cannot be followed: refused."""
+    visc = closed_points(0.55, 0.0, 1.0, time_noise=5e-4, level_noise=0.05, seed=2)
+    got = closed_form_bike.fit([("made", None, None, visc)], fitted=("spring_scale", "friction_N", "damper_scale"))
+    assert "refused" not in got
+    assert got["friction_N"] < 3.0 and got["friction_N_ci95"][0] < 1.0
+    assert got["spring_scale"] == pytest.approx(0.55, rel=0.02) and got["damper_scale"] == pytest.approx(1.0, rel=0.02)
+    dry = closed_points(0.55, 150.0, 0.05, time_noise=5e-4, level_noise=0.05, seed=3)
+    held = closed_form_bike.fit([("made", None, None, dry)], fitted=("spring_scale", "damper_scale"),
+                                held={"friction_N": 0.0})
+    assert "refused" in held and "does not follow" in held["refused"]
+
+
+@pytest.mark.xfail(strict=True, reason="a dry ring-down of the closed form (150 N, the damper's scale 0.05: 50 N s/m; 4 "
+                                       "half periods and 5 swing ratios before it sticks) is refused at 3.1 sd RMS, "
+                                       "spring 0.58 x, where the truth's residual is 0.2 sd: where the simulation sticks "
+                                       "a half cycle sooner or later the residual jumps, and least squares from the "
+                                       "best of the start grid (0.3-0.9 x, 1-240 N, 0.25-2 x) stays in a local minimum")
+def test_fit_reads_a_dry_ring_down_without_damping(closed_form_bike):
+    dry = closed_points(0.55, 150.0, 0.05, time_noise=5e-4, level_noise=0.05, seed=3)
+    got = closed_form_bike.fit([("made", None, None, dry)], fitted=("spring_scale", "friction_N", "damper_scale"))
+    assert "refused" not in got
+    assert got["friction_N"] == pytest.approx(150.0, abs=10.0) and got["damper_scale"] < 0.3

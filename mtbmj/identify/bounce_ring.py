@@ -22,12 +22,15 @@ first turning point counts where the record's first is free), the difference of 
 (the second swing over the first: a constant for viscous damping, falling with the swing for
 friction; no rest level needed, which the shared records' rider moves after the slam) over
 ``RATIO_SD``. The values: log spring scale and friction (``FITTED``; any of them ``held``), by
-``scipy.optimize.least_squares`` (forward differences). 95 % intervals from the Jacobian with the
+``scipy.optimize.least_squares`` (forward differences), started from the best of a grid (``SPRING_STARTS`` by ``FRICTION_STARTS`` by ``DAMPER_STARTS``: a friction
+that sticks the simulation sooner than the record makes the residual jump, and a fit started far off
+stays in a local minimum). 95 % intervals from the Jacobian with the
 residual's variance (Student's t at n - p; none with n <= p: ``"refused"``). The friction is stated
 with its interval, and whether an interval holds 0 (the ring-down reads as viscous only) is said.
 """
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -44,6 +47,13 @@ START = {"spring_scale": 0.5, "friction_N": 30.0, "damper_scale": 1.0, "compress
 LOG = ("spring_scale", "damper_scale", "compression_scale", "rebound_scale")  # fitted in log
 STEP = 0.01  # forward-difference step in the scaled value
 MAX_NFEV = 40
+SPRING_STARTS = (0.3, 0.4, 0.5, 0.6, 0.75, 0.9)
+FRICTION_STARTS = (1.0, 15.0, 30.0, 60.0, 120.0, 240.0)  # N: the fit starts from the best of these and
+DAMPER_STARTS = (0.25, 0.5, 1.0, 2.0)  # the dampers' scales (where fitted; the others at START): a friction
+# that sticks the simulation sooner than the record leaves its halves missing, where the residual is flat
+# or jumps, and a fit started there stays
+MAX_RMS_SD = 3.0  # the fit's residuals' RMS (in their sd) over this: the bike does not follow the ring-downs, refused
+MAX_MISSING = 1 / 3  # ... or more than this share of the records' halves and pairs has none in the simulation
 PEAK_WINDOW_S = 0.1
 METHOD = ("the records' free half cycles after the slam against the same half cycles (by turning point after the "
           "slam's peak) of the MuJoCo bike's run with each record's whole-trace replay's push and the dampers given: "
@@ -137,7 +147,16 @@ def _values(x, names, held):
     return v
 
 
+def _record_points(ring) -> list:
+    """The record's turning points (``turning_points`` from its slam's peak)."""
+    name, t, x = ring[:3]
+    t, x = np.asarray(t, float), np.asarray(x, float)
+    return turning_points(t, x, find_slam(t, x, name))
+
+
 def _run(ring, v) -> list:
+    """The simulation's turning points at values ``v`` (the MuJoCo bike pushed as given, ``RING_AFTER_S``
+    past the peak; none when it leaves its envelope)."""
     name, t, xr, sl, push, damp = ring
     sc = v.get("damper_scale", 1.0)
     p = {**push, "spring_scale": v["spring_scale"], "friction_N": v["friction_N"],
@@ -164,8 +183,7 @@ def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = Non
     held = {**({} if "damper_scale" in fitted else {"damper_scale": 1.0}), **(held or {})}
     names = [k for k in fitted if k not in held]
     st = {**START, **(start or {})}
-    recs = [turning_points(t, x, find_slam(np.asarray(t, float), np.asarray(x, float), name))
-            for name, t, x, *_ in rings]
+    recs = [_record_points(ring) for ring in rings]
     x0 = np.array([math.log(st[k]) if k in LOG else st[k] for k in names])
     lo = np.array([math.log(LIMITS[k][0]) if k in LOG else LIMITS[k][0] for k in names])
     hi = np.array([math.log(LIMITS[k][1]) if k in LOG else LIMITS[k][1] for k in names])
@@ -182,6 +200,18 @@ def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = Non
         counts.update(n)
         return np.concatenate(parts) if parts else np.zeros(0)
 
+    # the start: the best of the grid SPRING_STARTS x FRICTION_STARTS x DAMPER_STARTS (those fitted)
+    starts = {"spring_scale": SPRING_STARTS, "friction_N": FRICTION_STARTS, "damper_scale": DAMPER_STARTS}
+    grid = [(k, starts[k]) for k in names if k in starts]
+    if grid:
+        best, cols = (math.inf, None), [names.index(k) for k, _ in grid]
+        for point in itertools.product(*(g for _, g in grid)):
+            for j, (k, _), p in zip(cols, grid, point):
+                x0[j] = math.log(p) if k in LOG else p
+            r = res(np.zeros(len(names)))
+            best = min(best, (float(r @ r), point), key=lambda q: q[0])
+        for j, (k, _), p in zip(cols, grid, best[1]):
+            x0[j] = math.log(p) if k in LOG else p
     r0 = res(np.zeros(len(names)))
     n_res = r0.size
     base = {"method": METHOD, "held": held, "records": len(rings),
@@ -214,13 +244,19 @@ def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = Non
             out.setdefault("at_bound", []).append(k)
     for k, v in held.items():
         out.setdefault(k, v)
+    miss = counts["missing"] / max(r.size, 1)
+    if out["rms_scaled"] > MAX_RMS_SD or miss > MAX_MISSING:
+        why = (f"the bike does not follow the records' free ring-downs: residual RMS {out['rms_scaled']:.1f} sd "
+               f"(at most {MAX_RMS_SD:g}), {counts['missing']} of {r.size} halves and pairs missing in the simulation "
+               f"(at most {MAX_MISSING:.0%}); at spring {out['spring_scale']:.2f} x")
+        out["refused"] = f"the ring-down fit refused: {why}"
     out["line"] = line(out)
     return out
 
 
 def line(out: dict) -> str:
     if "refused" in out:
-        return out["line"]
+        return out.get("line") or out["refused"]
     said = []
     for k, unit in (("spring_scale", "x"), ("friction_N", "N"), ("damper_scale", "x the dampers given"),
                     ("compression_scale", "x the compression given"), ("rebound_scale", "x the rebound given")):
@@ -249,15 +285,16 @@ SPRING_FROM = ("the ring-down fit (the free half periods and swing ratios, with 
 def from_slam_rebound(rings, pooled: dict) -> dict:
     """``fit bounce --replay``'s ``"ring_fit"``: the spring scale, friction and one scale on the dampers of
     the slam-and-first-rebound fit (``pooled``: ``bounce_slam_rebound.fit``'s result: its shared
-    compression, each record's rebound) read from the free ring-downs, each record pushed as its
-    whole-trace replay (``rings``: per record (name, time_s, shock_mm, slam, replay values), as
+    compression, each record's rebound) read from the free ring-downs, each record pushed as that fit
+    pushed it (its push was fitted with those dampers; the whole-trace replay's, ``rings``' values,
+    where it has none; ``rings``: per record (name, time_s, shock_mm, slam, replay values), as
     ``spring_from_periods`` takes them). Adds ``compression_N_s_per_m`` and per record
     ``rebound_N_s_per_m`` (the given ones times the scale fitted) and their sources."""
     from mtbmj.identify.bounce_replay import PUSH_NAMES
 
     by = {e["file"]: e for e in pooled["records"] if "rebound_N_s_per_m" in e and "refused" not in e}
     comp = float(pooled["compression_N_s_per_m"])
-    use = [(name, t, x, sl, {k: v[k] for k in PUSH_NAMES},
+    use = [(name, t, x, sl, {k: float(by[name].get("push", v)[k]) for k in PUSH_NAMES},
             {"compression_N_s_per_m": comp, "rebound_N_s_per_m": float(by[name]["rebound_N_s_per_m"])})
            for name, t, x, sl, v in rings if name in by]
     if not use:
