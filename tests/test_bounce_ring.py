@@ -6,7 +6,7 @@
 Coulomb friction (a stick condition), released from a slam's height above rest, stepped by
 semi-implicit Euler at 20 us and sampled at 5 kHz. Viscous damping alone keeps a constant share of the
 swing each half cycle (exp(-pi zeta / sqrt(1 - zeta^2)), Den Hartog); friction alone takes a constant
-4 F / k off it (REFERENCE.md section 8, Feeny and Liang 1996). ``turning_points`` gives those back, so
+4 F / k off it (Feeny and Liang, J. Sound Vib. 195(1), 1996). ``turning_points`` gives those back, so
 the swing ratios ``residuals`` compares carry the difference between the two.
 (b) ``residuals`` on turning points written here: zero on the record itself, log(1.05) / sd for half
 periods 5 % longer, as many entries when the simulation sticks a half cycle sooner (its swing then 0).

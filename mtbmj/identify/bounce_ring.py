@@ -7,7 +7,7 @@ a ring-down simulated with the whole-trace replay's friction and one damper both
 (on the tests' generator 64 and 0.25 N for its 30, 1888 and 3742 N s/m both ways for 2500 in compression
 and 2500 / 5000 in rebound), and since a 2-3 half ring-down's halves move only about 0.3 x the log
 spring, the 5 % they shift the periods is a 15 % spring. Friction and viscous damping leave different
-signatures in the amplitudes (REFERENCE.md section 8: Feeny and Liang 1996): with dry friction F
+signatures in the amplitudes (Feeny and Liang, J. Sound Vib. 195(1), 1996; Den Hartog 1931): with dry friction F
 alone the swing loses a constant 2 F / k each half cycle, with viscous damping alone it keeps a
 constant share. So the amplitudes read the friction, and the periods then the spring.
 
