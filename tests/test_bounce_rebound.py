@@ -151,9 +151,9 @@ def test_shared_forks_are_refused_with_the_reason():
 
 
 def test_rebound_dampers_spring_from_the_ring_down_period_else_the_replay():
-    """``bounce_rebound.spring_given``: the ring-down's period reading's spring and interval where it was
-    read, said so; the best whole-trace replay's where the reading was refused (its reason kept) or not
-    tried; a wrong source (the replay's spring where a reading exists) is told apart."""
+    """``bounce_rebound.spring_given``: the ring-down fit's or the ring-down's period reading's spring and
+    interval where it was read, said so; the best whole-trace replay's where the reading was refused (its
+    reason kept) or not given; a wrong source (the replay's spring where a reading exists) is told apart."""
     from mtbmj.identify.bounce_rebound import RING_FROM, spring_given
 
     best = {"file": "00083.SST", "spring_scale": 0.49, "spring_scale_ci95": [0.14, 0.85]}
@@ -166,8 +166,16 @@ def test_rebound_dampers_spring_from_the_ring_down_period_else_the_replay():
     assert (s, ci) == (0.49, [0.14, 0.85])
     assert src.startswith("the whole-trace replay of 00083.SST") and "1 free half period(s)" in src
     (s, ci), src = spring_given(None, best)
-    assert s == 0.49 and src.endswith("(the ring-down's period: not used here: it borrows that replay's friction and "
-                                      "damper and reads the tests' generator 15 % low)")
+    assert s == 0.49 and src.endswith("(the ring-down: not given)")
+    # the ring-down fit (bounce_ring: a friction and compression of its own) is said as such, and its friction
+    # and compression are the ones the rebound dampers take (_is_fit); the period's reading has neither
+    from mtbmj.identify.bounce_rebound import _is_fit
+    from mtbmj.identify.bounce_ring import SPRING_FROM
+
+    fitted = {**ring, "friction_N": 18.0, "compression_N_s_per_m": 2860.0}
+    (s, ci), src = spring_given(fitted, best)
+    assert (s, ci, src) == (0.47, [0.35, 0.62], SPRING_FROM)
+    assert _is_fit(fitted) and not _is_fit(ring) and not _is_fit({**fitted, "refused": "x"}) and not _is_fit(None)
 
 
 def test_ring_period_halves_matched_by_their_turning_point_from_the_slam():

@@ -395,7 +395,7 @@ def test_cli_writes_and_prints_the_answer(tmp_path, monkeypatch, capsys):
         "summary": [], "csv": {}, "replays": [], "lines": [], "check": None})
 
     def read(records, clicks, replayed, bike, rider_hz, target, ring="unset"):
-        assert ring == "unset"  # fit bounce gives no period spring: the replay's (bounce_fit, docs/identification.md)
+        assert ring is None  # fit bounce gives the slam-and-first-rebound's "ring_fit": none here, nothing replayed
         e = law_entries(clicks=tuple(int(k) for k in clicks), sd=30.0, seed=5)
         return {"from": "test", "records": e, "rises": True, "line": "dampers",
                 **bounce_rebound.law_in_clicks(e, target)}

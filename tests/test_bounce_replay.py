@@ -510,9 +510,10 @@ def test_rebound_no_coefficient_gives_is_refused(two_rebounds):
 @pytest.fixture(scope="module")
 def shared_first_rebounds(shared_replays):
     """The shared slams' slams and first rebounds read once, as ``fit bounce --replay`` reads them: fitted
-    together (``bounce_slam_rebound.read_records``, "slam_rebound", the spring from their ring-down period),
-    then each record's rebound damper (``bounce_rebound.read_records``, "rebound_dampers") with the best
-    whole-trace replay's spring (the period's is not yet theirs: ``bounce_fit``)."""
+    together (``bounce_slam_rebound.read_records``, "slam_rebound", the spring from their ring-down period,
+    then the ring-down fit, "ring_fit"), then each record's rebound damper (``bounce_rebound.read_records``,
+    "rebound_dampers") with the ring-down fit's spring, friction and compression where it is read (on these
+    slams it is refused: the best whole-trace replay's)."""
     from conftest import SHARED_DATA
 
     from mtbmj.identify import bounce_rebound, bounce_slam_rebound
@@ -520,7 +521,8 @@ def shared_first_rebounds(shared_replays):
 
     records = [read_sst(os.path.join(SHARED_DATA, "sst_v2", f)) for f in ("00083.SST", "00085.SST", "00087.SST")]
     pooled = bounce_slam_rebound.read_records(records, [0, 8, 17], shared_replays["summary"], "sst")
-    dampers = bounce_rebound.read_records(records, [0, 8, 17], shared_replays["summary"], "sst")
+    dampers = bounce_rebound.read_records(records, [0, 8, 17], shared_replays["summary"], "sst",
+                                          ring=pooled["ring_fit"])
     return {"slam_rebound": pooled, "rebound_dampers": dampers}
 
 
@@ -539,13 +541,15 @@ def shared_slam_rebound(shared_first_rebounds):
 def test_shared_rebound_dampers_rise_with_clicks(shared_rebound):
     """The shared slams' rebound coefficients read from their first rebounds (``bounce_rebound``, the
     spring, friction and compression of the best-determined whole-trace replay, as ``fit bounce`` reads them:
-    the ring-down period's spring, 0.46 x, refuses the 0-click slam, docs/identification.md): all three read (the
+    the ring-down fit is refused on these slams, the bike not following their free ring-downs after the
+    top-out, and the ring-down period's spring, 0.46 x, refuses the 0-click slam, docs/identification.md): all three read (the
     17-click slam too, which the whole-trace replay refuses) and rising with the clicks, as the
     records' own rebounds slow; at the spring interval's upper end they rise too. Their intervals open
     below, the law's slope above 0, each record held out (within its 2 sd: the next test, not reproducible
     across machines), and the answer for 7 /s holding the clicks where the records' own rates reach it."""
     got = shared_rebound
     assert got["spring_from"].startswith("the whole-trace replay of")
+    assert "the ring-down fit refused: the bike does not follow the records' free ring-downs" in got["spring_from"]
     assert [e["clicks"] for e in got["records"]] == [0, 8, 17]
     assert all("rebound_N_s_per_m" in e for e in got["records"]) and got["rises"] is True
     upper = [e["at_spring_ci95"][1] for e in got["records"]]
@@ -712,10 +716,11 @@ def test_slam_rebound_with_the_spring_given_clears_0():
 def ring_generated():
     """The two generator slams of ``slam_rebound_generated`` (spring 0.55 x), each replayed whole
     (``bounce_replay.replay``: the push, damper and friction the ring-down is simulated with), ready for
-    ``spring_from_periods``: (rings, the same with the records' time stretched by 10 %)."""
+    ``spring_from_periods``: (rings, the same with the records' time stretched by 10 %, the replays'
+    summaries as ``replay_records`` gives them)."""
     from mtbmj.identify.bounce_replay import SeatedReplay, prepare_slam, replay
 
-    rings, slow = [], []
+    rings, slow, summary = [], [], []
     for reb in (2500.0, 5000.0):
         t, x = slam(scale=0.55, c=2500.0, rebound=reb, fc=30.0, seed=int(reb))
         sr = SeatedReplay("sst")
@@ -723,7 +728,8 @@ def ring_generated():
         sl = prepare_slam(t, x, None, f"rebound {reb:g}", sr, start=dict(rp.values))
         rings.append((sl.name, t, x, sl, dict(rp.values)))
         slow.append((sl.name, 1.1 * t, x, sl, dict(rp.values)))
-    return rings, slow
+        summary.append({**{k: float(v) for k, v in rp.values.items()}, **rp.summary(), "file": sl.name})
+    return rings, slow, summary
 
 
 @pytest.mark.slow
@@ -735,7 +741,7 @@ def test_spring_from_the_ring_downs_period_holds_the_generators(ring_generated):
     freedom, is too wide to exclude 0.55 x)."""
     from mtbmj.identify.bounce_slam_rebound import spring_from_periods
 
-    rings, slow = ring_generated
+    rings, slow, _ = ring_generated
     got = spring_from_periods(rings)
     lo, hi = got["spring_scale_ci95"]
     assert lo <= 0.55 <= hi and 0.0 < lo
@@ -744,8 +750,22 @@ def test_spring_from_the_ring_downs_period_holds_the_generators(ring_generated):
     assert "refused" in wrong or wrong["spring_scale"] < lo
 
 
+@pytest.fixture(scope="module")
+def ring_fit_generated(ring_generated):
+    """The generator's two slams read as ``fit bounce --replay`` reads them (``bounce_slam_rebound.read_records``
+    on its whole-trace replays: the period's spring, the slam-and-first-rebound fit held at it, then the
+    ring-down fit, ``"ring_fit"``)."""
+    from types import SimpleNamespace
+
+    from mtbmj.identify import bounce_slam_rebound as bsr
+
+    rings, _, summary = ring_generated
+    records = [SimpleNamespace(name=name, time_s=t, shock_mm=x, fork_mm=None) for name, t, x, *_ in rings]
+    return bsr.read_records(records, [0, 10], summary, "sst")
+
+
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="the spring from the generator's ring-down periods reads 0.47 x [0.36, 0.60] "
+@pytest.mark.xfail(strict=True, reason="the spring from the generator's ring-down periods alone reads 0.47 x [0.36, 0.60] "
                                        "for 0.55 x: 15 % low (within 10 % is the target). Not the bike's stiffening "
                                        "(at 0.55 x the bike's free halves are 0.5-0.8 % shorter than the generator's "
                                        "with the generator's own damper, friction 0: a 2 % spring). The reading runs "
@@ -754,8 +774,76 @@ def test_spring_from_the_ring_downs_period_holds_the_generators(ring_generated):
                                        "with the generator's friction given instead it reads 0.52 [0.49, 0.56], with "
                                        "its damper and friction 0.52 [0.46, 0.58]: the halves of a 2-3 half ring-down "
                                        "move about 0.3 x the log spring, so a 5 % period shift from borrowed friction "
-                                       "and damping is a 15 % spring")
-def test_spring_from_the_ring_downs_period_within_10_percent(ring_generated):
+                                       "and damping is a 15 % spring. The ring-down fit (bounce_ring, the next test), "
+                                       "with a friction and dampers of its own, meets it")
+def test_spring_from_the_periods_alone_within_10_percent(ring_generated):
     from mtbmj.identify.bounce_slam_rebound import spring_from_periods
 
     assert spring_from_periods(ring_generated[0])["spring_scale"] == pytest.approx(0.55, rel=0.10)
+
+
+@pytest.mark.slow
+def test_spring_from_the_ring_downs_period_within_10_percent(ring_fit_generated):
+    """(e) The ring-down fit (``bounce_ring.from_slam_rebound``: the free half periods and swing ratios, the spring,
+    friction and a scale on the slam-and-first-rebound fit's dampers fitted together) on the generator's two slams
+    reads its spring within 10 % (measured 0.54 x [0.52, 0.57] for 0.55; the periods alone with the borrowed
+    friction and damper 0.47 x), its interval holding it, a friction clear of 0 (measured 23 N [15, 32] for the
+    generator's 30) and the dampers it gives within 20 % of the generator's (measured compression 2740 for
+    2500, rebound 2250 and 4620 for 2500 and 5000: the slam-and-first-rebound fit's 2360, 1936 and 3984 at the
+    period's spring, scaled 1.16)."""
+    got = ring_fit_generated["ring_fit"]
+    assert "refused" not in got
+    assert got["spring_scale"] == pytest.approx(0.55, rel=0.10)
+    lo, hi = got["spring_scale_ci95"]
+    assert lo <= 0.55 <= hi
+    assert got["friction_N_ci95"][0] > 0.0
+    assert got["compression_N_s_per_m"] == pytest.approx(2500.0, rel=0.20)
+    reb = got["rebound_N_s_per_m"]
+    assert reb["rebound 2500"] == pytest.approx(2500.0, rel=0.20)
+    assert reb["rebound 5000"] == pytest.approx(5000.0, rel=0.20)
+
+
+def _ring_alone(c, fc):
+    """A slam of this file's generator (spring 0.55 x, damper ``c`` both ways, friction ``fc``; resting at 30 mm
+    and pushed lightly so its ring-down stays clear of the top-out: seven free turning points or more), its push
+    fitted up to the peak on the bike (spring 0.55 x, 1000 N s/m both ways), then the ring-down fit with 1000 N
+    s/m both ways given and scaled."""
+    from mtbmj.identify import bounce_ring
+    from mtbmj.identify.bounce_replay import NAMES, PUSH_NAMES, SeatedReplay, fit_push, prepare_slam
+
+    t, x = slam(scale=0.55, c=c, fc=fc, push=0.3, lift=0.3, rest_mm=30.0, seed=7, after=3.0)
+    start = {"lift_N": 400.0, "lift_start_s": -0.6, "lift_s": 0.25, "slam_N": 400.0, "slam_end_s": -0.08,
+             "slam_s": 0.2, "spring_scale": 0.55, "damper_N_s_per_m": 1000.0, "friction_N": 30.0}
+    sl = prepare_slam(t, x, None, "made", SeatedReplay("sst"), start=start)
+    u = np.zeros(sl.x0.size)
+    fit_push(sl, u, extra={"compression_N_s_per_m": 1000.0})
+    push = dict(zip(NAMES, sl.x0 + u * sl.base))
+    given = {"compression_N_s_per_m": 1000.0, "rebound_N_s_per_m": 1000.0}
+    return bounce_ring.fit([("made", t, x, sl, {k: push[k] for k in PUSH_NAMES}, given)],
+                           fitted=("spring_scale", "friction_N", "damper_scale"))
+
+
+@pytest.mark.slow
+def test_ring_fit_reads_a_viscous_ring_down_without_friction():
+    """(e) Wrong input told apart: the generator with viscous damping only (1000 N s/m both ways, no friction)
+    reads a friction whose interval holds 0 and under 10 N (measured 5 N [0, 20]), the damper's interval holding
+    1000 N s/m (measured 1.21 x 1000 [0.74, 1.98]; the spring 0.53 x [0.50, 0.57], at 2.4 sd RMS)."""
+    got = _ring_alone(1000.0, 0.0)
+    assert got["friction_N_ci95"][0] == 0.0 and got["friction_N"] < 10.0
+    lo, hi = got["damper_scale_ci95"]
+    assert lo <= 1.0 <= hi
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="the generator with friction only (80 N, 100 N s/m both ways) reads friction 53 N "
+                                       "[0, 113] and a damper 0.37 x 1000 N s/m [0.06, 2.38], the spring 0.49 x [0.43, "
+                                       "0.57], at 2.6 sd RMS (44 N [15, 73] and 0.48 x before the start grid): the bike "
+                                       "with the generator's own friction decays slower than the generator at the same "
+                                       "swing (on a 40 mm slam at 25 mm rest its swing ratios 0.73-0.80 where the "
+                                       "record's are 0.62-0.80), so the fit takes damping for friction; the bike's "
+                                       "Coulomb law is regularised within 5 mm/s and does not stick off-centre, the "
+                                       "generator's does (not separated)")
+def test_ring_fit_reads_a_friction_ring_down_without_damping():
+    got = _ring_alone(100.0, 80.0)
+    assert got["friction_N"] == pytest.approx(80.0, rel=0.2)
+    assert got["damper_scale_ci95"][0] * 1000.0 < 300.0

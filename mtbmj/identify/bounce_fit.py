@@ -331,13 +331,13 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
         from mtbmj.identify import bounce_rebound
         from mtbmj.identify import bounce_slam_rebound as bsr
 
-        # the slams and first rebounds first (their spring read from the ring-down's period, reported there); the
-        # rebound dampers keep the best whole-trace replay's spring: the period's borrows that replay's friction and
-        # damper and reads the test's generator 15 % low, and at its 0.46 x the shared 0-click slam is refused
-        # (docs/identification.md), so it is not yet theirs (``ring=`` takes it)
+        # the slams and first rebounds first, then the spring, friction and dampers' scale read on the free
+        # ring-downs (``"ring_fit"``, bounce_ring), which the rebound dampers take (the whole-trace replay's where
+        # it is not read; docs/identification.md)
         pooled = bsr.read_records(records, clicks, done["summary"], bike, rider_hz)
         out["rebound_dampers"] = bounce_rebound.read_records(records, clicks, done["summary"], bike, rider_hz,
-                                                             rebound_target_per_s)
+                                                             rebound_target_per_s,
+                                                             ring=None if pooled is None else pooled.get("ring_fit"))
         if out["rebound_dampers"] is not None:
             done["lines"].append(out["rebound_dampers"]["line"])
             done["lines"] += out["rebound_dampers"]["lines"]

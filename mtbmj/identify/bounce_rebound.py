@@ -12,11 +12,11 @@ adjuster changes is the first rebound's speed from the peak, which needs neither
 
 Method. Per record, on the seated MuJoCo bike of the replay (its start, its rest): the spring scale,
 the friction and the compression coefficient given (shared by the records: a rebound adjuster
-changes none of them; ``read_records`` takes the spring from the ring-down's period reading,
-``bounce_slam_rebound.spring_from_periods``, where it is given (``ring=``) and was read, else from the best
-whole-trace replay, ``spring_given``, and says which in ``"spring_from"``; ``fit bounce --replay`` gives
-none: the period's reading borrows that replay's friction and damper and reads the tests' generator
-15 % low, and at its 0.46 x the shared 0-click slam is refused), the push fitted on the record up to its peak (``bounce_replay.fit_push``),
+changes none of them; ``read_records`` takes the spring, friction and compression of the ring-down fit
+(``bounce_ring.from_slam_rebound``: the free half periods and swing ratios with a friction and dampers of
+its own) where it is given (``ring=``, as ``fit bounce --replay`` gives it) and read, the spring alone from
+the ring-down's period reading (``bounce_slam_rebound.spring_from_periods``) where that is given, else all
+three from the best whole-trace replay, ``spring_given``, and says which in ``"spring_from"``), the push fitted on the record up to its peak (``bounce_replay.fit_push``),
 then the rebound coefficient solved (``brentq``) so that the replay's first rebound, read as the
 record's (``bounce.first_rebound``), has the record's middle speed per millimetre of the peak's
 height above rest (1/s: for a linear end independent of how high the slam went, so the replay's
@@ -271,8 +271,10 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
         except BounceError as e:
             entries.append({"file": name, "clicks": k, "refused": str(e)})
     spring, spring_from = spring_given(ring, best)
-    entries = rebound_dampers(slams, ks, spring[0], best["friction_N"], best["damper_N_s_per_m"],
-                              spring[1]) + entries
+    own = _is_fit(ring)  # the ring-down fit's friction and compression with its spring, else the replay's
+    friction = float(ring["friction_N"]) if own else float(best["friction_N"])
+    compression = float(ring["compression_N_s_per_m"]) if own else float(best["damper_N_s_per_m"])
+    entries = rebound_dampers(slams, ks, spring[0], friction, compression, spring[1]) + entries
     entries.sort(key=lambda e: e["clicks"])
     up = rises(entries)
     read = [e for e in entries if "rebound_N_s_per_m" in e]
@@ -283,14 +285,16 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
                 f"{'open' if hi is None else format(hi, '.0f')}]")
 
     at = ", ".join(format(e["clicks"], "g") for e in read)
-    said_spring = "the ring-down's period" if spring_from == RING_FROM else f"{best['file']}'s replay"
+    said_spring = ("the ring-down fit" if own else "the ring-down's period" if spring_from == RING_FROM
+                   else f"{best['file']}'s replay")
+    said_from = "the ring-down fit" if own else f"{best['file']}'s replay"
     line = (f"rebound dampers from the first rebounds (spring {spring[0]:.2f} x from {said_spring}, friction "
-            f"{best['friction_N']:.0f} N, compression {best['damper_N_s_per_m']:.0f} N s/m from {best['file']}'s "
-            f"replay): {', '.join(said(e) for e in read) or 'none'} N s/m (95 %: the record's noise and the spring's "
+            f"{friction:.0f} N, compression {compression:.0f} N s/m from {said_from}): {', '.join(said(e) for e in read) or 'none'} N s/m (95 %: the record's noise and the spring's "
             f"interval) at {at or 'no'} clicks"
             + ("" if up is None else ": they rise with the clicks" if up else ": they do not rise with the clicks"))
     out = {"from": best["file"], "spring_scale": spring[0], "spring_scale_ci95": list(spring[1]),
-           "spring_from": spring_from, "records": entries, "rises": up, "line": line}
+           "spring_from": spring_from, "friction_N": friction, "compression_N_s_per_m": compression,
+           "records": entries, "rises": up, "line": line}
     out.update(law_in_clicks(entries, target_per_s))
     return out
 
@@ -299,14 +303,22 @@ RING_FROM = "the ring-down's period"
 
 
 def spring_given(ring: dict | None, best: dict) -> tuple[tuple[float, list], str]:
-    """((spring scale, its 95 % interval), where it came from): the ring-down's period reading (``ring``)
-    where it was read, else the best-determined whole-trace replay's (``best``), saying why."""
+    """((spring scale, its 95 % interval), where it came from): the ring-down fit's
+    (``bounce_ring.from_slam_rebound``: it has a friction of its own) or the ring-down's period reading
+    (``ring``) where it was read, else the best-determined whole-trace replay's (``best``), saying why."""
+    from mtbmj.identify.bounce_ring import SPRING_FROM
+
     if ring is not None and "refused" not in ring:
-        return (float(ring["spring_scale"]), list(ring["spring_scale_ci95"])), RING_FROM
-    why = ("not used here: it borrows that replay's friction and damper and reads the tests' generator 15 % low"
-           if ring is None else ring["refused"])
+        return ((float(ring["spring_scale"]), list(ring["spring_scale_ci95"])),
+                SPRING_FROM if _is_fit(ring) else RING_FROM)
+    why = ("not given" if ring is None else ring["refused"])
     return ((float(best["spring_scale"]), list(best["spring_scale_ci95"])),
-            f"the whole-trace replay of {best['file']} (the ring-down's period: {why})")
+            f"the whole-trace replay of {best['file']} (the ring-down: {why})")
+
+
+def _is_fit(ring: dict | None) -> bool:
+    """Whether ``ring`` is the ring-down fit (its own friction and compression) and read."""
+    return ring is not None and "refused" not in ring and "compression_N_s_per_m" in ring
 
 
 def law_in_clicks(entries, target_per_s: float | None = None) -> dict:

@@ -41,7 +41,10 @@ and said), the mean log ratio is interpolated to 0 in log scale, its 95 % interv
 test file's generator those are off (64 and 0 N for 30) and read its spring 15 % low (0.52 x with its
 friction given; docs/identification.md).
 ``read_records`` holds that spring in :func:`fit` and carries its interval into the others'
-(``held_ci95``: linearised, added in quadrature); ``"spring_from"`` says which. On the shared slams:
+(``held_ci95``: linearised, added in quadrature); ``"spring_from"`` says which. Then the spring is read
+again on the free ring-downs with a friction of its own and a scale on this fit's dampers
+(``bounce_ring.from_slam_rebound``, ``"ring_fit"``): the spring, friction and compression the rebound
+dampers take (``bounce_rebound``); this fit is not refitted at it. On the shared slams:
 0.46 x [0.33, 0.64] from 6 of 7 halves, and the rebound coefficients 1794 [0, 4938], 4418 [953, 7883],
 6754 [4051, 9456] N s/m at 0, 8, 17 clicks (the 0-click interval still reaches 0); on the test file's
 generator 0.47 x [0.36, 0.60] for 0.55 x (docs/identification.md).
@@ -366,11 +369,14 @@ def spring_from_periods(rings, scales=RING_SCALES) -> dict:
                      + (f"; {left} of the records' halves not simulated there, left out" if left else "") + ")")}
 
 
-def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | None = None) -> dict | None:
+def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | None = None,
+                 ring_fit: bool = True) -> dict | None:
     """``fit bounce --replay``'s ``"slam_rebound"``: the records' slams (each on a seated bike of its own)
     fitted together, the friction and the starting spring from the best-determined whole-trace replay
     (``replayed``: ``bounce_replay.replay_records``' summary; the narrowest spring interval), each
-    record's push started from its own replay (or the best one's). None when no record was replayed."""
+    record's push started from its own replay (or the best one's). ``ring_fit``: then the spring,
+    friction and a scale on these dampers read from the free ring-downs (``bounce_ring.from_slam_rebound``,
+    ``"ring_fit"``: the spring the rebound dampers take). None when no record was replayed."""
     from mtbmj.identify.bounce_replay import RIDER_HZ, SeatedReplay, prepare_slam
 
     done = [e for e in replayed if "refused" not in e]
@@ -405,6 +411,11 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
         out["spring_from"] = "the ring-down's period"
     out["ring_spring"] = ring
     out["line"] = ring["line"] + "; " + out["line"]
+    if ring_fit:  # the spring read again on the ring-down with its own friction and these dampers (bounce_ring)
+        from mtbmj.identify.bounce_ring import from_slam_rebound
+
+        out["ring_fit"] = from_slam_rebound(rings, out)
+        out["line"] += "; " + out["ring_fit"]["line"]
     out["from"] = best["file"]
     out["records"] = sorted(out["records"] + refused, key=lambda e: e["clicks"])
     return out

@@ -1,0 +1,321 @@
+"""The spring read from the seat slams' free ring-downs through the bike with a friction and dampers of its
+own (``fit bounce --replay``'s ``"ring_fit"``): the spring scale, the Coulomb friction and a scale on the
+dampers given fitted together on the free half cycles' durations and swing ratios.
+
+Why. ``bounce_slam_rebound.spring_from_periods`` reads the spring from the free half periods alone, on
+a ring-down simulated with the whole-trace replay's friction and one damper both ways. Those are off
+(on the tests' generator 64 and 0.25 N for its 30, 1888 and 3742 N s/m both ways for 2500 in compression
+and 2500 / 5000 in rebound), and since a 2-3 half ring-down's halves move only about 0.3 x the log
+spring, the 5 % they shift the periods is a 15 % spring. Friction and viscous damping leave different
+signatures in the amplitudes (Feeny and Liang, J. Sound Vib. 195(1), 1996; Den Hartog 1931): with dry
+friction F alone the swing loses a constant amount each half cycle, with viscous damping alone it keeps
+a constant share. So the swings read the friction and the damping, and the periods then the spring.
+
+Method. Per record, a push and the dampers given (``fit``'s ``rings``; ``from_slam_rebound``: the
+slam-and-first-rebound fit's push, compression and rebound coefficients), the MuJoCo bike run
+``RING_AFTER_S`` past the slam's peak. Its turning points (``bounce_decay.extrema``, vertex times as
+``bounce_predict.vertex_time``; the slam's peak is turning point 0) set against the record's
+(``residuals``): per half cycle of the record (the slam's peak to the first turning point left out),
+the log ratio of the same half cycle's duration (by its turning point after the slam,
+``Extrema.first_turn``) over ``PERIOD_SD``; per two successive half cycles of the record, its swing
+ratio (the second swing over the first) less the simulation's at the same first swing and direction
+(``swing_ratio_at``: a friction ratio depends on the swing, so the two are compared at the same swing;
+no rest level needed, which the shared records' rider moves after the slam) over ``RATIO_SD``. A half
+or pair the simulation lacks (it stuck sooner) keeps its place: the half's residual 0, the pair's
+ratio 0 (no swing). The values (``fitted``: log spring scale, friction, log dampers' scale; any
+``held``) by ``scipy.optimize.least_squares`` (forward differences), started from the best point of
+the grid ``SPRING_STARTS`` by ``FRICTION_STARTS`` by ``DAMPER_STARTS`` (where the simulation sticks a half
+cycle sooner or later the residual jumps, and a fit started far off stays in a local minimum). 95 %
+intervals from the Jacobian with the residual's variance (Student's t at n - p). Refused, with its
+reason and the values it stopped at, with n <= p residuals, or where the bike does not follow the
+records (RMS over ``MAX_RMS_SD`` sd, or more than ``MAX_MISSING`` of the halves and pairs missing).
+
+Measured (docs/identification.md): the tests' generator at 0.55 x read 0.54 x [0.52, 0.57] and 0.59 x
+[0.52, 0.67] on two pairs of slams (the periods alone 0.47 and 0.53 x); the shared slams refused (6.4
+sd: their ring-downs start after the top-out, which the bike pushed so does not follow).
+"""
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+from mtbmj.identify.bounce import BounceError, find_slam
+
+RING_AFTER_S = 2.5
+PERIOD_SD = 0.01  # a half period's relative scatter about its model (the records' 1.2-2.1 %, docs/identification.md)
+RATIO_SD = 0.03  # a swing ratio's scatter (the swing's vertex levels, a few tenths of a mm of 10-40 mm)
+FITTED = ("spring_scale", "friction_N")
+LIMITS = {"spring_scale": (0.2, 3.0), "friction_N": (0.0, 400.0), "damper_scale": (0.05, 20.0),
+          "compression_scale": (0.05, 20.0), "rebound_scale": (0.05, 20.0)}
+START = {"spring_scale": 0.5, "friction_N": 30.0, "damper_scale": 1.0, "compression_scale": 1.0, "rebound_scale": 1.0}
+LOG = ("spring_scale", "damper_scale", "compression_scale", "rebound_scale")  # fitted in log
+STEP = 0.01  # forward-difference step in the scaled value
+MAX_NFEV = 40
+SPRING_STARTS = (0.3, 0.4, 0.5, 0.6, 0.75, 0.9)
+FRICTION_STARTS = (1.0, 15.0, 30.0, 60.0, 120.0, 240.0)  # N: the fit starts from the best of these and
+DAMPER_STARTS = (0.25, 0.5, 1.0, 2.0)  # the dampers' scales (where fitted; the others at START): a friction
+# that sticks the simulation sooner than the record leaves its halves missing, where the residual is flat
+# or jumps, and a fit started there stays
+MAX_RMS_SD = 3.0  # the fit's residuals' RMS (in their sd) over this: the bike does not follow the ring-downs, refused
+MAX_MISSING = 1 / 3  # ... or more than this share of the records' halves and pairs has none in the simulation
+PEAK_WINDOW_S = 0.1
+METHOD = ("the records' free half cycles after the slam against the MuJoCo bike's run with each record's push and the "
+          "dampers given: each half's log duration ratio against the same half cycle (by turning point after the "
+          "slam's peak; sd 1 %) and each two successive halves' swing ratio against the bike's at the same swing "
+          "(sd 0.03); the spring scale, Coulomb friction and a scale on the dampers fitted by least squares from the "
+          "best point of a grid, 95 % from the Jacobian (Student's t, n - p)")
+
+
+def turning_points(t, x, peak: int) -> list:
+    """The slam's peak and the free turning points after it: [(turn, level_mm, time_s)], turn 0 the peak,
+    then ``Extrema.first_turn`` onwards (a stuck level's time nan), times the vertex times
+    (``bounce_predict.vertex_time``)."""
+    from mtbmj.identify import bounce_decay as bd
+    from mtbmj.identify import bounce_predict as bp
+
+    t, x = np.asarray(t, float), np.asarray(x, float)
+    dt = float(t[1] - t[0])
+    w = max(int(round(PEAK_WINDOW_S / dt)), 1)
+    lo = max(peak - w, 0)
+    p = lo + int(np.argmax(x[lo:peak + w + 1]))
+    out = [(0, float(x[p]), float(t[p]))]
+    seq = bd.extrema(t, x, "shock", peak)
+    times = seq.times_s
+    fin = times[np.isfinite(times)]
+    half0 = float(np.median(np.diff(fin))) if fin.size >= 2 else 0.3
+    for j, (lv, ti) in enumerate(zip(seq.levels_mm, times)):
+        tv = bp.vertex_time(t, x, ti, half0)[0] if np.isfinite(ti) else float("nan")
+        out.append((seq.first_turn + j, float(lv), float(tv)))
+    return out
+
+
+def _pairs(tp: list) -> list:
+    """Two successive half cycles of turning points ``tp``: (first swing, second over first, the second's
+    direction: +1 compression, -1 rebound), where the three turning points are consecutive."""
+    by = {q[0]: q for q in tp}
+    out = []
+    for a in sorted(by):
+        if a + 1 in by and a + 2 in by:
+            s1 = abs(by[a + 1][1] - by[a][1])
+            s2 = abs(by[a + 2][1] - by[a + 1][1])
+            if s1 > 0.0:
+                out.append((s1, s2 / s1, 1 if by[a + 2][1] > by[a + 1][1] else -1, a))
+    return out
+
+
+def swing_ratio_at(sim_pairs: list, swing: float, direction: int) -> float:
+    """The simulation's swing ratio (second over first) at a first swing of ``swing`` mm into a half of
+    ``direction``: interpolated in its own pairs of that direction by their first swing, held at the
+    nearest beyond them (a viscous ratio does not depend on the swing, a friction one does, so the
+    record and the simulation are compared at the same swing, not at the same turning point); 0 where
+    the simulation has no such pair (it stuck sooner: no swing)."""
+    own = sorted((s1, r) for s1, r, d, _ in sim_pairs if d == direction)
+    if not own:
+        return 0.0
+    return float(np.interp(swing, [q[0] for q in own], [q[1] for q in own]))
+
+
+def residuals(rec: list, sim: list) -> tuple[np.ndarray, dict]:
+    """The scaled residuals of the record's turning points ``rec`` against the simulation's ``sim`` (each
+    ``turning_points``), one per half cycle and per two successive halves of the record, so their number
+    is the record's whatever the simulation does: a half's log duration ratio, the same half cycle (by
+    turning point) in both (the slam's peak to the first turn left out: the push ends there), 0 where
+    the simulation lacks it (it stuck sooner, or topped out where the record did not); two successive
+    halves' swing ratio (the second swing over the first) less the simulation's at the same first swing
+    and direction (``swing_ratio_at``), over RATIO_SD. ({"periods", "ratios", "missing"} counts)."""
+    by = {q[0]: q for q in sim}
+    have = {q[0]: q for q in rec}
+    per, missing = [], 0
+    for a in sorted(have):
+        b = a + 1
+        if b not in have:
+            continue
+        ra, rb = have[a], have[b]
+        if a > 0 and np.isfinite(ra[2]) and np.isfinite(rb[2]) and rb[2] > ra[2]:
+            sa, sb = by.get(a), by.get(b)
+            ok = sa is not None and sb is not None and np.isfinite(sa[2]) and np.isfinite(sb[2]) and sb[2] > sa[2]
+            per.append(math.log((sb[2] - sa[2]) / (rb[2] - ra[2])) / PERIOD_SD if ok else 0.0)
+            missing += 0 if ok else 1
+    sp = _pairs(sim)
+    rat = []
+    for s1, r, d, _ in _pairs(rec):
+        if not any(q[2] == d for q in sp):
+            missing += 1
+        rat.append((swing_ratio_at(sp, s1, d) - r) / RATIO_SD)
+    return np.array(per + rat, float), {"periods": len(per), "ratios": len(rat), "missing": missing}
+
+
+def _values(x, names, held):
+    v = dict(held)
+    for k, u in zip(names, x):
+        v[k] = math.exp(u) if k in LOG else u
+    return v
+
+
+def _record_points(ring) -> list:
+    """The record's turning points (``turning_points`` from its slam's peak)."""
+    name, t, x = ring[:3]
+    t, x = np.asarray(t, float), np.asarray(x, float)
+    return turning_points(t, x, find_slam(t, x, name))
+
+
+def _run(ring, v) -> list:
+    """The simulation's turning points at values ``v`` (the MuJoCo bike pushed as given, ``RING_AFTER_S``
+    past the peak; none when it leaves its envelope)."""
+    name, t, xr, sl, push, damp = ring
+    sc = v.get("damper_scale", 1.0)
+    p = {**push, "spring_scale": v["spring_scale"], "friction_N": v["friction_N"],
+         "damper_N_s_per_m": sc * v.get("rebound_scale", 1.0) * damp["rebound_N_s_per_m"],
+         "compression_N_s_per_m": sc * v.get("compression_scale", 1.0) * damp["compression_N_s_per_m"]}
+    sl.sr.set_rest(sl.rest, None)
+    try:
+        out = sl.sr.run(p, after_s=RING_AFTER_S)
+    except BounceError:
+        return []
+    return turning_points(out["time_s"], out["stroke_mm"], int(np.argmin(np.abs(out["time_s"]))))
+
+
+def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = None, max_nfev: int = MAX_NFEV) -> dict:
+    """The spring scale and friction (``fitted``) read from the free ring-downs (module docstring).
+    ``rings``: per record (name, time_s, shock_mm, slam, push, dampers): ``slam`` a
+    ``bounce_replay.prepare_slam`` result, ``push`` its replay's push (``PUSH_NAMES``), ``dampers``
+    {"compression_N_s_per_m", "rebound_N_s_per_m"}. ``held``: values given (default the dampers'
+    scale 1). {"spring_scale", "spring_scale_ci95", "friction_N", ..., "halves", "line"} or
+    {"refused", "line"}."""
+    from scipy.optimize import least_squares
+    from scipy.stats import t as student
+
+    held = {**({} if "damper_scale" in fitted else {"damper_scale": 1.0}), **(held or {})}
+    names = [k for k in fitted if k not in held]
+    st = {**START, **(start or {})}
+    recs = [_record_points(ring) for ring in rings]
+    x0 = np.array([math.log(st[k]) if k in LOG else st[k] for k in names])
+    lo = np.array([math.log(LIMITS[k][0]) if k in LOG else LIMITS[k][0] for k in names])
+    hi = np.array([math.log(LIMITS[k][1]) if k in LOG else LIMITS[k][1] for k in names])
+    scale = np.array([1.0 if k in LOG else 30.0 for k in names])
+    counts = {}
+
+    def res(u):
+        v = _values(x0 + u * scale, names, held)
+        parts, n = [], {"periods": 0, "ratios": 0, "missing": 0}
+        for ring, rec in zip(rings, recs):
+            r, c = residuals(rec, _run(ring, v))
+            parts.append(r)
+            n = {k: n[k] + c[k] for k in n}
+        counts.update(n)
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    # the start: the best of the grid SPRING_STARTS x FRICTION_STARTS x DAMPER_STARTS (those fitted)
+    starts = {"spring_scale": SPRING_STARTS, "friction_N": FRICTION_STARTS, "damper_scale": DAMPER_STARTS}
+    grid = [(k, starts[k]) for k in names if k in starts]
+    if grid:
+        best, cols = (math.inf, None), [names.index(k) for k, _ in grid]
+        for point in itertools.product(*(g for _, g in grid)):
+            for j, (k, _), p in zip(cols, grid, point):
+                x0[j] = math.log(p) if k in LOG else p
+            r = res(np.zeros(len(names)))
+            best = min(best, (float(r @ r), point), key=lambda q: q[0])
+        for j, (k, _), p in zip(cols, grid, best[1]):
+            x0[j] = math.log(p) if k in LOG else p
+    r0 = res(np.zeros(len(names)))
+    n_res = r0.size
+    base = {"method": METHOD, "held": held, "records": len(rings),
+            "halves_in_records": sum(max(len(q) - 2, 0) for q in recs)}
+    if n_res <= len(names):
+        why = f"{n_res} residual(s) from the records' free half cycles for {len(names)} value(s)"
+        return {**base, "refused": f"the ring-down fit not read: {why}", "line": f"ring-down fit not read: {why}"}
+    sol = least_squares(res, np.zeros(len(names)), bounds=((lo - x0) / scale, (hi - x0) / scale),
+                        diff_step=STEP, max_nfev=max_nfev, x_scale=1.0)
+    r = res(sol.x)
+    J = sol.jac / scale[None, :]
+    dof = r.size - len(names)
+    s2 = float(r @ r) / dof
+    try:
+        cov = np.linalg.inv(J.T @ J) * s2
+    except np.linalg.LinAlgError:
+        cov = np.linalg.pinv(J.T @ J) * s2
+    tq = float(student.ppf(0.975, dof))
+    u = x0 + sol.x * scale
+    out = {**base, "residual_counts": dict(counts), "rms_scaled": float(math.sqrt(float(r @ r) / r.size)),
+           "dof": dof, "runs": int(sol.nfev)}
+    for j, k in enumerate(names):
+        half = tq * math.sqrt(max(cov[j, j], 0.0))
+        if k in LOG:
+            out[k], out[k + "_ci95"] = math.exp(u[j]), [math.exp(u[j] - half), math.exp(u[j] + half)]
+        else:
+            out[k], out[k + "_ci95"] = float(u[j]), [max(float(u[j] - half), 0.0), float(u[j] + half)]
+        span = LIMITS[k]
+        if min(abs(out[k] - span[0]), abs(span[1] - out[k])) < 1e-3 * (span[1] - span[0]):
+            out.setdefault("at_bound", []).append(k)
+    for k, v in held.items():
+        out.setdefault(k, v)
+    miss = counts["missing"] / max(r.size, 1)
+    if out["rms_scaled"] > MAX_RMS_SD or miss > MAX_MISSING:
+        why = (f"the bike does not follow the records' free ring-downs: residual RMS {out['rms_scaled']:.1f} sd "
+               f"(at most {MAX_RMS_SD:g}), {counts['missing']} of {r.size} halves and pairs missing in the simulation "
+               f"(at most {MAX_MISSING:.0%}); at spring {out['spring_scale']:.2f} x")
+        out["refused"] = f"the ring-down fit refused: {why}"
+    out["line"] = line(out)
+    return out
+
+
+def line(out: dict) -> str:
+    if "refused" in out:
+        return out.get("line") or out["refused"]
+    said = []
+    for k, unit in (("spring_scale", "x"), ("friction_N", "N"), ("damper_scale", "x the dampers given"),
+                    ("compression_scale", "x the compression given"), ("rebound_scale", "x the rebound given")):
+        if k + "_ci95" in out:
+            lo, hi = out[k + "_ci95"]
+            f = ".2f" if k != "friction_N" else ".0f"
+            said.append(f"{k.split('_')[0]} {out[k]:{f}} {unit} [{lo:{f}}, {hi:{f}}]")
+        elif k in out and k in ("spring_scale", "friction_N", "damper_scale"):
+            said.append(f"{k.split('_')[0]} {out[k]:.4g} given")
+    c = out["residual_counts"]
+    visc = "friction_N_ci95" in out and out["friction_N_ci95"][0] <= 0.0
+    return (f"ring-down fit (free half periods and swing ratios, {c['periods']} and {c['ratios']}, of "
+            f"{out['records']} records): " + ", ".join(said)
+            + ("; the friction's interval holds 0 (viscous only within the uncertainty)" if visc else "")
+            + (f"; at a bound: {', '.join(out['at_bound'])}" if out.get("at_bound") else ""))
+
+
+__all__ = ["METHOD", "fit", "line", "residuals", "swing_ratio_at", "turning_points"]
+
+
+DEFAULT_FITTED = ("spring_scale", "friction_N", "damper_scale")
+SPRING_FROM = ("the ring-down fit (the free half periods and swing ratios, with its own friction and the "
+               "slam-and-first-rebound fit's dampers scaled)")
+
+
+def from_slam_rebound(rings, pooled: dict) -> dict:
+    """``fit bounce --replay``'s ``"ring_fit"``: the spring scale, friction and one scale on the dampers of
+    the slam-and-first-rebound fit (``pooled``: ``bounce_slam_rebound.fit``'s result: its shared
+    compression, each record's rebound) read from the free ring-downs, each record pushed as that fit
+    pushed it (its push was fitted with those dampers; the whole-trace replay's, ``rings``' values,
+    where it has none; ``rings``: per record (name, time_s, shock_mm, slam, replay values), as
+    ``spring_from_periods`` takes them). Adds ``compression_N_s_per_m`` and per record
+    ``rebound_N_s_per_m`` (the given ones times the scale fitted) and their sources."""
+    from mtbmj.identify.bounce_replay import PUSH_NAMES
+
+    by = {e["file"]: e for e in pooled["records"] if "rebound_N_s_per_m" in e and "refused" not in e}
+    comp = float(pooled["compression_N_s_per_m"])
+    use = [(name, t, x, sl, {k: float(by[name].get("push", v)[k]) for k in PUSH_NAMES},
+            {"compression_N_s_per_m": comp, "rebound_N_s_per_m": float(by[name]["rebound_N_s_per_m"])})
+           for name, t, x, sl, v in rings if name in by]
+    if not use:
+        why = "no record read by the slam-and-first-rebound fit"
+        return {"refused": f"the ring-down fit not read: {why}", "line": f"ring-down fit not read: {why}"}
+    out = fit(use, fitted=DEFAULT_FITTED)
+    out["dampers_given"] = {"compression_N_s_per_m": comp,
+                            "rebound_N_s_per_m": {n: d["rebound_N_s_per_m"] for n, *_, d in use},
+                            "from": "the slam-and-first-rebound fit"}
+    if "refused" not in out:
+        sc = out["damper_scale"]
+        out["compression_N_s_per_m"] = sc * comp
+        out["rebound_N_s_per_m"] = {n: sc * d["rebound_N_s_per_m"] for n, *_, d in use}
+    return out
+
+
+__all__ += ["DEFAULT_FITTED", "SPRING_FROM", "from_slam_rebound"]
