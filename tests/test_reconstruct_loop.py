@@ -81,11 +81,14 @@ def shipped():
 
 
 @pytest.mark.slow  # the shipped ride's calibration, reconstruction and one 76 s run: about half a minute
+@pytest.mark.xfail(strict=True, reason="the model at the shipped ride's recorded setting, calibrated, doubles its speeds: "
+                                       "p95 compression 739 mm/s at the fork and 573 at the rear for the ride's 436 and "
+                                       "498 (with the reconstruction's pitch carrying the masses fore and aft, branch "
+                                       "loop51n, 421 and 429: not landed, it moved seven advice tests' made rides)")
 def test_the_shipped_ride_s_speeds_come_back_at_its_recorded_setting(shipped):
     """A real ride, not made here: the shipped 00649 (SST bike, 76 s) at its recorded setting, calibrated.
-    Before the reconstruction's whole bike carried the frame's masses fore and aft in pitch the model's
-    p95 compression speeds were 739 mm/s at the fork and 573 at the rear for the ride's 436 and 498; now
-    421 and 429. The same criteria as the engine's own ride above: within 25 %."""
+    The same criteria as the engine's own ride above: the p95 compression speeds within 25 %, the sags
+    within 2 points."""
     rec, sim = shipped
     for end in ("front", "rear"):
         assert sim[end]["p95_compression_mm_per_s"] == pytest.approx(rec[end]["p95_compression_mm_per_s"], rel=0.25), end
@@ -94,8 +97,7 @@ def test_the_shipped_ride_s_speeds_come_back_at_its_recorded_setting(shipped):
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="the shipped ride's depth does not come back at its recorded setting: the model's "
-                                       "fork reaches 75.8 % of its travel for the ride's 66.4, its rear 67.3 for 79.1 "
-                                       "(2026-12-05; before the carried inertia the fork reached 97.8)")
+                                       "fork reaches 97.8 % of its travel for the ride's 66.4 (75.8 on branch loop51n)")
 def test_the_shipped_ride_s_depth_comes_back_at_its_recorded_setting(shipped):
     rec, sim = shipped
     for end in ("front", "rear"):
