@@ -477,9 +477,10 @@ class _Reading:
 
 
 def _composed(c: Config):
-    """(fork law, tire law) of ``c``, refusing in one line a key the caller set (``Config.given``: an
-    override, a bike file's ``[fork.set]``) that the part's model does not read: the spring, damper,
-    friction or tire model chosen reads other keys, so the setting would change nothing."""
+    """(fork law, tire law) of ``c``, refusing in one line a key a person typed (``Config.given``:
+    ``--set``, a bike's ``--fork-set`` / ``--shock-set``; not a file's or a program's) that the part's
+    model does not read: the spring, damper, friction or tire model chosen reads other keys, so the
+    setting would change nothing."""
     typed = sorted(k for k in c.given if k.startswith(MODEL_FAMILIES))
     if not typed:
         return fork_law(c), _tire(c)
@@ -491,7 +492,7 @@ def _composed(c: Config):
             model = f"{family}model"
             reads = sorted(k[len(family):] for k in seen.read if k.startswith(family) and k != model and k in c.values)
             raise NotRead(f"{key}: set, but {model} = {c.get(model)!r} does not read it, so it would change "
-                              f"nothing (that model reads {family}{{{', '.join(reads)}}})")
+                          f"nothing (that model reads {family}{{{', '.join(reads)}}})")
     return laws
 
 
