@@ -917,6 +917,14 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
     mF = spec.fork_lower_mass + spec.front_wheel_mass
     mR = spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
     xF, xR = spec.front_axle[0], spec.rear_axle[0]
+    # fore and aft the frame carries the rider (held by his limbs), the wheels (the fork, the swingarm):
+    # a pitch th moves each body at height d above the frame body's centre by -d th, and X (the frame
+    # body's centre) is free, no horizontal force on the bike: m_total X'' - sum(m d) th'' = 0 and
+    # (I + sum(m d^2)) th'' - sum(m d) X'' = the moment; th'' = the moment times this inverse's corner
+    carried = [(M, 0.0), (mr_, r.com[1] - cz), (mF, spec.front_axle[1] - cz), (mR, spec.rear_axle[1] - cz)]
+    A = np.array([[sum(m for m, _ in carried), -sum(m * d for m, d in carried)],
+                  [-sum(m * d for m, d in carried), I + sum(m * d * d for m, d in carried)]])
+    per_moment = float(np.linalg.inv(A)[1, 1])  # th'' per N m of moment
     # the contacts this far apart: the front axle back along the steering axis by the fork's stroke
     # times cos(head angle), the rear axle on its circle about the main pivot (the frame's pitch left out)
     (px, pz), zR = spec.pivot, spec.rear_axle[1]
@@ -961,7 +969,7 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
         Mo = (xF - cx) * fF + (xR - cx) * fR - (r.leg_x - cx) * leg - (r.arm_x - cx) * arm
         Rz = leg + arm - mr_ * g
         Ro = (r.leg_x - rx) * leg + (r.arm_x - rx) * arm
-        return [vf, om, vr, orr, vw, vq, Fz / M, Mo / I, Rz / mr_, Ro / Ir, (tF - fF) / mF - g, (tR - fR) / mR - g]
+        return [vf, om, vr, orr, vw, vq, Fz / M, Mo * per_moment, Rz / mr_, Ro / Ir, (tF - fF) / mF - g, (tR - fR) / mR - g]
 
     # the static heights: each wheel's rise at sag (its law carrying the static share), the tyres' deflection
     total = M + mr_ + mF + mR
