@@ -887,12 +887,15 @@ def whole_bike_terrain(length, seed=21, features=WHOLE_FEATURES):
 
 
 def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=40.0, profile=SpeedProfile(),
-                    features=WHOLE_FEATURES, fork_reb=700.0, slow_load_N=80.0, slow_period_s=7.0, rider_forward_m=0.0):
+                    features=WHOLE_FEATURES, fork_reb=700.0, slow_load_N=80.0, slow_period_s=7.0, rider_forward_m=0.0,
+                    carried=True):
     """This file's bike (``bike_text``: the fork at ``fork_rate`` N/mm and ``fork_reb`` N s/m of
     rebound, the shock's rebound ``shock_reb_scale`` times SHOCK_REB) ridden for ``seconds`` by the
     independent whole bike above at ``profile``'s speed over ``whole_bike_terrain(seed, features)``,
     the rider's slow load ``slow_load_N`` (onto the bars, period ``slow_period_s``), the rider's centre
-    of mass ``rider_forward_m`` ahead of where the bike file puts it the whole ride. Written as
+    of mass ``rider_forward_m`` ahead of where the bike file puts it the whole ride; ``carried=False``:
+    the frame pitching about its own body's inertia alone, the masses it carries fore and aft left out
+    (the advice's rides, ``ADVISE_CARRIED``; not what the MuJoCo bike does). Written as
     ``path``/bike.toml (the recorded setting) and ``path``/ride.SST (SST v3 integer counts through its
     [sensors]); returns the truth: bike, sst, t, fork_mm and rear_mm (wheel travel), h (the terrain),
     features, wb (the wheelbase along the ride, m), profile, airborne_front (share of the ride the front tyre is
@@ -917,6 +920,14 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
     mF = spec.fork_lower_mass + spec.front_wheel_mass
     mR = spec.rear_wheel_mass + 0.5 * spec.swingarm_mass
     xF, xR = spec.front_axle[0], spec.rear_axle[0]
+    # fore and aft the frame carries the rider (held by his limbs), the wheels (the fork, the swingarm):
+    # a pitch th moves each body at height d above the frame body's centre by -d th, and X (the frame
+    # body's centre) is free, no horizontal force on the bike: m_total X'' - sum(m d) th'' = 0 and
+    # (I + sum(m d^2)) th'' - sum(m d) X'' = the moment; th'' = the moment times this inverse's corner
+    held = [(M, 0.0), (mr_, r.com[1] - cz), (mF, spec.front_axle[1] - cz), (mR, spec.rear_axle[1] - cz)]
+    A = np.array([[sum(m for m, _ in held), -sum(m * d for m, d in held)],
+                  [-sum(m * d for m, d in held), I + sum(m * d * d for m, d in held)]])
+    per_moment = float(np.linalg.inv(A)[1, 1]) if carried else 1.0 / I  # th'' per N m of moment
     # the contacts this far apart: the front axle back along the steering axis by the fork's stroke
     # times cos(head angle), the rear axle on its circle about the main pivot (the frame's pitch left out)
     (px, pz), zR = spec.pivot, spec.rear_axle[1]
@@ -961,7 +972,7 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
         Mo = (xF - cx) * fF + (xR - cx) * fR - (r.leg_x - cx) * leg - (r.arm_x - cx) * arm
         Rz = leg + arm - mr_ * g
         Ro = (r.leg_x - rx) * leg + (r.arm_x - rx) * arm
-        return [vf, om, vr, orr, vw, vq, Fz / M, Mo / I, Rz / mr_, Ro / Ir, (tF - fF) / mF - g, (tR - fR) / mR - g]
+        return [vf, om, vr, orr, vw, vq, Fz / M, Mo * per_moment, Rz / mr_, Ro / Ir, (tF - fF) / mF - g, (tR - fR) / mR - g]
 
     # the static heights: each wheel's rise at sag (its law carrying the static share), the tyres' deflection
     total = M + mr_ + mF + mR
@@ -993,6 +1004,13 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
 # the advice's rides: 30 s at 6.5 +- 0.5 m/s over a hard course (rock gardens of rocks up to 0.1 m,
 # drops of 0.5 and 0.6 m, a G-out, a tabletop), where a fork too soft bottoms several times
 ADVISE_SECONDS = 30.0
+# The advice's rides are made by the whole bike pitching about its frame body's inertia alone (3.2 kg m^2
+# where carrying the rider and the wheels fore and aft adds 12.0): on this course, made by the carried
+# bike (as the MuJoCo bike pitches: at 7 N/mm its front is airborne 29 % of the first 16 s, the engine's
+# 28 %), the reconstruction loses the ground under the front's long flights in the rock gardens and the
+# recorded setting crashes on its own terrain (tests/test_advise_carried.py, a strict xfail: issue 51's
+# flights). The advice's logic is checked on the rides it can reconstruct until then.
+ADVISE_CARRIED = False
 ADVISE_PROFILE = SpeedProfile(6.5, 0.5, 25.0)
 ADVISE_FEATURES = (("rocks", 10.0, 0.1), ("drop", 30.0, 0.5), ("rocks", 40.0, 0.1), ("g_out", 60.0, 0.3),
                    ("drop", 75.0, 0.5), ("rocks", 85.0, 0.1), ("jump", 105.0, 0.4), ("drop", 125.0, 0.6),
@@ -1020,7 +1038,8 @@ def engine_ride(folder, terrain, speed=6.0, seconds=40.0, from_s=3.0):
 def advise_ride(path, seconds=ADVISE_SECONDS, **settings):
     """``whole_bike_ride`` over the advice's course (``settings``: its bike's, e.g. fork_rate,
     fork_reb, shock_reb_scale): (bike file, SST file, fork mm, rear wheel mm, t)."""
-    made = whole_bike_ride(path, seconds=seconds, profile=ADVISE_PROFILE, features=ADVISE_FEATURES, **settings)
+    made = whole_bike_ride(path, seconds=seconds, profile=ADVISE_PROFILE, features=ADVISE_FEATURES,
+                           carried=settings.pop("carried", ADVISE_CARRIED), **settings)
     return made["bike"], made["sst"], made["fork_mm"], made["rear_mm"], made["t"]
 
 

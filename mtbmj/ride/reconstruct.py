@@ -60,7 +60,8 @@ the terrain or riding it) the line says where, and the ride is not described. Al
 the rear travel the ride used and the distance between the two travel histograms.
 
 Assumed: the whole bike in the plane with small pitch angles and vertical motion only (the wheelbase
-at sag), point-contact tyres without damping, the fork's slow load the rider's (the rear given
+at sag; fore and aft the frame's pitch carries the rider and the wheels, the bike's horizontal momentum
+free: ``reconstruct_bike.carried_inertia``), point-contact tyres without damping, the fork's slow load the rider's (the rear given
 none), the ground under a flight of 0.1 s or more the landing's level from the take-off on where
 the wheel lands more than 0.15 m lower (a drop's edge where it left), else the chord. Measured numbers:
 docs/rolling.md and docs/measured.md.
@@ -301,7 +302,8 @@ class Reconstruction:
                                "diverged_s": self.diverged_s},
                 "checks": self.checks(),
                 "assumed": "the whole bike of the bike file in the plane (frame pitch, the rider on vertical legs and "
-                           "arms), vertical motion only, the wheelbase at sag, point-contact tyres without damping, "
+                           "arms), vertical motion only, the frame's pitch carrying the rider and wheels fore and aft, "
+                           "the wheelbase at sag, point-contact tyres without damping, "
                            "the fork's slow load the rider's (the rear given none), the ground under a flight of "
                            "0.1 s or more the landing's level from the take-off on where the wheel lands more than "
                            "0.15 m lower (a drop's edge), else the chord from take-off to landing, the speed linear "

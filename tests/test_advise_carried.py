@@ -1,0 +1,84 @@
+"""The advice's course ridden by the tests' whole bike carrying its masses fore and aft in pitch (as the
+MuJoCo bike does), and why the advice's tests make their rides without it (``helpers.ADVISE_CARRIED``).
+
+The tests' whole bike (``helpers.whole_bike_ride``, scipy's solve_ivp on its own equations) with
+``carried=True`` pitches as the MuJoCo bike does: the frame carries the rider and the wheels fore and
+aft. On the advice's course at a fork far too soft (7 N/mm), its front is in the air about 29 % of the
+first 16 s (the rock gardens throw it up, the drops); the engine's over the same terrain and speed,
+28 %. The reconstruction loses the ground under such flights (it bridges 0.6-0.7 s flights after a
+rock as drops), and the recorded setting then crashes on its own terrain: issue 51's flights, a strict
+xfail here. Made without the carried masses (the advice tests' rides), the same ride is ridden through."""
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from helpers import ADVISE_FEATURES, ADVISE_PROFILE, whole_bike_ride
+
+SECONDS = 16.0
+
+
+def _made(folder, carried):
+    return whole_bike_ride(folder, fork_rate=7.0, seconds=SECONDS, profile=ADVISE_PROFILE, features=ADVISE_FEATURES,
+                           carried=carried)
+
+
+def _ridden(made):
+    """The made ride reconstructed, and its recorded setting ridden over the terrain found at the ride's
+    speed along it (what ``mtbmj advise`` does first): the crash line, or None."""
+    from mtbmj.cli.telemetry import decoding
+    from mtbmj.measured import telemetry
+    from mtbmj.ride import advise, reconstruct
+
+    record = telemetry.read_ride(made["sst"], **decoding(SimpleNamespace(bike=str(made["bike"]), fork_max_mm=None,
+                                                                         shock_max_mm=None)))
+    rec = reconstruct.reconstruct(record, str(made["bike"]))
+    x, v = rec.speed_along()
+    run = advise.simulate(str(made["bike"]), {}, advise.terrain_of(rec), float(np.median(v)),
+                          float(rec.t[-1] - rec.t[0]) + 1.0, "recorded", 1.0, profile=(x, v))
+    return run.crash
+
+
+@pytest.mark.slow  # a 16 s made ride, its reconstruction and one bike run: about 30 s
+def test_the_advice_tests_ride_is_ridden_on_its_reconstruction(tmp_path):
+    assert _ridden(_made(tmp_path, carried=False)) is None
+
+
+@pytest.mark.slow  # the same, made by the carried bike
+@pytest.mark.xfail(strict=True, reason="made by the bike carrying its masses fore and aft (as the MuJoCo bike), "
+                                       "the front airborne 29 % of the ride: the reconstruction bridges 0.6-0.7 s "
+                                       "flights after rocks as drops, and the recorded setting goes over the bars "
+                                       "at 4.5 s on its reconstruction (issue 51: flights)")
+def test_the_carried_bike_s_ride_is_ridden_on_its_reconstruction(tmp_path):
+    assert _ridden(_made(tmp_path, carried=True)) is None
+
+
+@pytest.mark.slow  # the engine over 16 s of the course: about 20 s
+def test_the_carried_bike_leaves_the_ground_as_the_engine_does(tmp_path):
+    """The carried bike's front airborne share, fork maximum and p95 compression speed over the first
+    16 s of the course at 7 N/mm against the MuJoCo bike's over the same terrain and speed profile (the
+    engine shares the bike file, the speed and the terrain, not the equations); the bike without the
+    carried masses is further from the engine on the airborne share."""
+    from mtbmj.bike.run import run_bike
+    from mtbmj.rolling.terrain import Terrain
+
+    made = {c: _made(tmp_path / str(c), carried=c) for c in (True, False)}
+    h = made[True]["h"]
+    x = np.arange(-60.0, float(ADVISE_PROFILE.along(SECONDS)) + 20.0, 0.005)
+    ter = Terrain("course", x, h(x), -1.0, float(ADVISE_PROFILE.along(SECONDS)) + 2.0, {})
+    tt = np.linspace(0.0, SECONDS, 2000)
+    run = run_bike(str(made[True]["bike"]), ter, 6.5, duration=SECONDS, drive="rider",
+                   speed_profile=(ADVISE_PROFILE.along(tt), ADVISE_PROFILE.at(tt)))
+    assert run.summary.get("crash") is None
+    raw = run.raw
+    engine_air = float(np.mean(raw["front_tire_N"] <= 0.0))
+    assert engine_air > 0.15  # the course throws the soft fork's front up (a check of the reading)
+
+    def p95(series, t):
+        return float(np.percentile(np.gradient(series, t), 95))
+    got = made[True]
+    assert got["airborne_front"] == pytest.approx(engine_air, abs=0.04)
+    assert p95(got["fork_mm"], got["t"]) == pytest.approx(p95(raw["front_travel_mm"], raw["time_s"]), rel=0.15)
+    assert abs(made[False]["airborne_front"] - engine_air) > abs(got["airborne_front"] - engine_air)
