@@ -233,7 +233,7 @@ def test_a_made_ride_whose_whole_bike_blew_up_rides_through(tmp_path, monkeypatc
     from mtbmj.cli.telemetry import ride_record
     from mtbmj.ride import calibrate, reconstruct
 
-    bike, sst, *_ = advise_ride(tmp_path, seconds=16.0, fork_rate=5.0, seed=21)
+    bike, sst, *_ = advise_ride(tmp_path, seconds=16.0, fork_rate=5.0, seed=21, carried=True)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the ride is shorter than 30 s
         rec = ride_record(sst, Namespace(bike=str(bike), fork_max_mm=None, shock_max_mm=None))
