@@ -82,3 +82,25 @@ def test_the_carried_bike_leaves_the_ground_as_the_engine_does(tmp_path):
     assert got["airborne_front"] == pytest.approx(engine_air, abs=0.04)
     assert p95(got["fork_mm"], got["t"]) == pytest.approx(p95(raw["front_travel_mm"], raw["time_s"]), rel=0.15)
     assert abs(made[False]["airborne_front"] - engine_air) > abs(got["airborne_front"] - engine_air)
+
+
+@pytest.mark.slow  # a 30 s made ride, its calibration, reconstruction and 12 candidates: about a minute
+@pytest.mark.xfail(strict=True, reason="on the carried bike's ride at a fork far too soft (5 N/mm, seed 21) the advice "
+                                       "is inconclusive: no candidate lowers the penalty beyond its uncertainty (the "
+                                       "fork's 62.7 % static sag read through a reconstruction reproducing the front "
+                                       "within 14.9 mm RMS); on the advice tests' rides, raised 5 -> 11.8 N/mm")
+def test_a_fork_far_too_soft_on_the_carried_bike_gets_a_stiffer_spring(tmp_path):
+    """issue 52's first target on the bike that pitches as the MuJoCo bike does: the fork's spring
+    raised by 20-150 % (tests/test_advise.py checks it on the advice tests' rides)."""
+    import json
+
+    from mtbmj.cli import main
+    from helpers import advise_ride, reconstruction_passing
+
+    bike, sst, *_ = advise_ride(tmp_path, fork_rate=5.0, carried=True)
+    out = tmp_path / "advice"
+    with reconstruction_passing():
+        assert main(["advise", str(sst), "--bike", str(bike), "--out", str(out)]) == 0
+    rec = json.loads((out / "advice.json").read_text())["recommendation"]
+    assert rec is not None and rec["config_key"] == "fork.spring.rate_N_per_mm"
+    assert 1.2 <= rec["setting"]["to"] / rec["setting"]["from"] <= 2.5

@@ -137,8 +137,9 @@ def test_a_sliding_friction_state_is_substepped_not_left_to_diverge(bike, mode, 
     the free front wheel in 10 ms): with the friction states bounded (``state_bound``: twice the
     largest steady bristle deflection) the step is taken again in substeps where a state leaves it,
     and the run rides through, both ways alike; free, the same run at a tenth of the step (the bound
-    unused there: stable at 0.1 ms) within 5 mm RMS of travel. With no bound (``STATE_MARGIN``
-    infinite) the same input still diverges: the bound, not another change, is what holds it."""
+    unused there: stable at 0.1 ms) within 5 mm RMS of travel. With the state unbounded (``STATE_MARGIN``
+    infinite) the rates' bound (``RATE_JUMP``: a rate changing by 20 m/s in a step) substeps it too; with
+    neither the same input still diverges: the bounds, not another change, are what hold it."""
     b, travel = bike
     fine_t = np.arange(0.0, 3.0, DT / 10)
 
@@ -159,7 +160,9 @@ def test_a_sliding_friction_state_is_substepped_not_left_to_diverge(bike, mode, 
         assert fine["diverged_s"] is None
         for k in (key, "rear_rise"):
             assert np.sqrt(np.mean((p[k] - fine[k][::10]) ** 2)) < 5e-3, k
-    monkeypatch.setattr(rb, "STATE_MARGIN", math.inf)
+    monkeypatch.setattr(rb, "STATE_MARGIN", math.inf)  # the state unbounded: the rates' bound (RATE_JUMP) holds it too
+    assert run(T, compiled=False)["diverged_s"] is None
+    monkeypatch.setattr(rb, "RATE_JUMP", math.inf)  # neither bound: it diverges
     assert run(T, compiled=False)["diverged_s"] is not None
 
 
@@ -213,3 +216,29 @@ def test_the_friction_state_along_a_record_compiled_is_the_midpoint_rule(bike):
         got = quartercar_compiled.states(law, v, DT)
         assert got is not None and np.max(np.abs(got - z)) <= BOUND
         assert np.ptp(z) > 1e-4  # the state moved: the law slid
+
+
+@pytest.mark.slow  # a 16 s made ride, its calibration and two reconstructions: about a minute
+def test_a_made_ride_whose_whole_bike_blew_up_rides_through(tmp_path, monkeypatch):
+    """A ride made by the tests' independent whole bike (the soft fork, 5 N/mm, on seed 21's terrain of
+    jumps from 1.6 s), calibrated: riding the terrain found, the reconstruction's whole bike grew an
+    oscillation at the record's step that no position check saw until its rates were tens of millions
+    of m/s (2.57 s), and 0.4 % of the ride was checked. With a step that changes a rate by more than
+    ``RATE_JUMP`` (20 m/s: no body of a bike moves so) taken again in substeps, it rides through; without
+    that bound the same ride still blows up."""
+    from argparse import Namespace
+
+    from helpers import advise_ride
+
+    from mtbmj.cli.telemetry import ride_record
+    from mtbmj.ride import calibrate, reconstruct
+
+    bike, sst, *_ = advise_ride(tmp_path, seconds=16.0, fork_rate=5.0, seed=21, carried=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the ride is shorter than 30 s
+        rec = ride_record(sst, Namespace(bike=str(bike), fork_max_mm=None, shock_max_mm=None))
+    statics = calibrate.calibrate(rec, str(bike)).apply(str(bike), None, statics=True)
+    through = reconstruct.reconstruct(rec, str(bike), statics)
+    assert through.diverged_s is None and through.checks()["samples_checked_percent"] > 80.0
+    monkeypatch.setattr(rb, "RATE_JUMP", math.inf)
+    assert reconstruct.reconstruct(rec, str(bike), statics).diverged_s is not None

@@ -26,6 +26,7 @@ SLOW_HZ = 0.3  # the rider's slow load: the loop that keeps the frame's front on
 SLOW_BOUND = 0.5  # ... bounded by this share of the rider's weight (what a rider can push or pull)
 MAX_PASSES = 8  # the terrain found again over the rear's ground of the pass before, at most this often
 SETTLED_M = 0.2e-3  # ... until the rear predicted moves less than this (RMS) from one pass to the next
+RATE_JUMP = 20.0  # m/s (rad/s): no body of a bike moves at this (a 20 m fall): a step changing a rate by more is unstable
 COMPILED = True  # ``ride`` steps compiled where it can (``reconstruct_bike_compiled``); False: in Python
 
 
@@ -160,7 +161,8 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
 
     Free (``front_ground`` given, ``push`` the load on the frame's front, N, or None): both wheels on
     their grounds; returns {"front_rise", "rear_rise"}. Rises are the wheels' in the frame (m, 0 at
-    full extension). A step that leaves the finite numbers in 1000 substeps ends the run: "diverged_s"
+    full extension). A step that leaves the finite numbers, moves a position by a metre or changes a rate
+    by more than ``RATE_JUMP`` is taken again in 10, 100, 1000 substeps; one that still does in 1000 ends the run: "diverged_s"
     its time (None where it ran to the end), every series not a number from there.
 
     ``compiled`` (default ``COMPILED``): the same steps compiled (``mtbmj.ride.reconstruct_bike_compiled``)
@@ -183,6 +185,7 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
     K, C = m_front * (2 * math.pi * SLOW_HZ) ** 2, 2.0 * m_front * 2 * math.pi * SLOW_HZ
     bound = SLOW_BOUND * b.mr * g
     zmax_r, zmax_f = state_bound(shock), state_bound(fork)  # past them a friction state is integrated unstably
+    jump = RATE_JUMP  # a rate changing by more in one step (any step): an unstable step (a stiff stop), substepped
     if free:
         gF = np.asarray(front_ground, float)
         pushed = np.zeros(n) if push is None else np.asarray(push, float)
@@ -194,7 +197,8 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
         from mtbmj.ride import reconstruct_bike_compiled
 
         numbers = {"fa": fa, "fb": fb, "fm": fm, "la": la, "ra": ra, "lr": lr, "rr": rr, "zF_pt0": zF_pt0,
-                   "zR_pt0": zR_pt0, "K": K, "C": C, "bound": bound, "dt": dt, "zmax_r": zmax_r, "zmax_f": zmax_f}
+                   "zR_pt0": zR_pt0, "K": K, "C": C, "bound": bound, "dt": dt, "zmax_r": zmax_r, "zmax_f": zmax_f,
+                   "jump": jump}
         done = reconstruct_bike_compiled.run(b, free, numbers, gR, front_ground=gF if free else None,
                                              pushed=pushed if free else None, front=None if free else front,
                                              ref=None if free else ref, vref=None if free else vref)
@@ -297,6 +301,7 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
             except (ArithmeticError, ValueError, IndexError):  # a state past the finite numbers (a lookup of NaN)
                 nxt = [math.nan] * size
             if all(math.isfinite(a) for a in nxt) and all(abs(a - c) < 1.0 for a, c in zip(nxt[:half], y[:half])) \
+                    and all(abs(a - c) < jump for a, c in zip(nxt[half:2 * half], y[half:2 * half])) \
                     and abs(nxt[half * 2]) <= zmax_r and (not free or abs(nxt[-1]) <= zmax_f):
                 break
             m *= 10  # a hard stop stiffer than the record's step resolves: substeps

@@ -1,6 +1,7 @@
 """The reconstruction's whole bike (``mtbmj.ride.reconstruct_bike.ride``) compiled: the same equations,
 the same classical RK4 at the record's step with the same substeps (1, 10, 100, 1000) where a step
-leaves the finite numbers or moves a position by a metre, the same outputs. The fork's and the
+leaves the finite numbers, moves a position by a metre or changes a rate by more than
+``reconstruct_bike.RATE_JUMP``, the same outputs. The fork's and the
 shock's laws run through the compiled kernel every engine runs (``controllers.kernels.fork_force_rate``),
 the leverage curve through the bike's own lookups (``mtbmj.bike.spec.leverage_ratio`` and
 ``leverage_stroke``, compiled from their source), as ``quartercar_compiled`` does for the quarter
@@ -125,7 +126,7 @@ if _numba is not None:
 
     @_jit.kernel
     def _ride(free, IS, PS, stateful_r, IF, PF, stateful_f, q, LW, LR, LS, gR, gF, pushed, wF, aF, fFrame, fTyre,
-              top, ref, vref, maxdef, dt, zmax_r, zmax_f, y, rear_rise, out_front, tyre_front, slow):
+              top, ref, vref, maxdef, dt, zmax_r, zmax_f, jump, y, rear_rise, out_front, tyre_front, slow):
         """``reconstruct_bike.ride``'s loop: the series into the four arrays from the state ``y``;
         returns -1, or the sample where the run diverged."""
         n = gR.size
@@ -146,6 +147,8 @@ if _numba is not None:
                             ok = False
                     for a in range(half):
                         if not abs(nxt[a] - y[a]) < 1.0:
+                            ok = False
+                        if not abs(nxt[POSITIONS + a] - y[POSITIONS + a]) < jump:  # its rate (ride's RATE_JUMP)
                             ok = False
                     if not (abs(nxt[12]) <= zmax_r and abs(nxt[13]) <= zmax_f):  # a friction state unstable
                         ok = False
@@ -220,7 +223,7 @@ def run(b, free: bool, numbers: dict, rear_ground, front_ground=None, pushed=Non
     tyre_front, slow = np.zeros(n), np.zeros(n)
     bad = _ride(bool(free), IS, PS, bool(b.shock.has_state), IF, PF, bool(b.fork.has_state), q, LW, LR, LS, gR, gF,
                 pushed, wF, aF, fFrame, fTyre, top, ref, vref, float(b.max_deflection), float(v["dt"]),
-                float(v["zmax_r"]), float(v["zmax_f"]), y, rear_rise, out_front, tyre_front, slow)
+                float(v["zmax_r"]), float(v["zmax_f"]), float(v["jump"]), y, rear_rise, out_front, tyre_front, slow)
     return {"rear_rise": rear_rise, "front": out_front, "tyre": tyre_front, "slow": slow}, int(bad)
 
 
