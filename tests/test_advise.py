@@ -6,7 +6,9 @@ equations, not the package's engines or laws' code): a frame that heaves and pit
 and arms who shifts a slow load fore and aft, the fork's spring, bumper, hard stop and two-rate damper
 acting along the steering axis, the shock's through a constant leverage ratio, point-contact tyres
 that leave the ground, at a speed that varies along the ride, over rock gardens, drops, a G-out and a
-tabletop; both ends' travel written as an SST version-3 file in integer counts through the
+tabletop (the frame pitching about its own body's inertia, the masses it carries fore and aft left out:
+``helpers.ADVISE_CARRIED`` says why, tests/test_advise_carried.py what the carried bike gives); both
+ends' travel written as an SST version-3 file in integer counts through the
 [sensors] calibration of the bike file (the law of cosines inverted in tests/helpers.py, not by the
 reader). One ride is made with the fork far too soft (5 N/mm: it bottoms several times), one with
 the fork's rebound four times too slow (it packs down). The advice must move the right setting the
