@@ -1007,11 +1007,11 @@ ADVISE_SECONDS = 30.0
 # The advice's rides are made by the whole bike pitching about its frame body's inertia alone (3.2 kg m^2
 # where carrying the rider and the wheels fore and aft adds 12.0): on this course at the advice tests'
 # soft forks (5-7 N/mm) on seed 21, made by the carried bike (as the MuJoCo bike pitches: at 7 N/mm its
-# front is airborne 29 % of the first 16 s, the engine's 28 %), the reconstruction takes the front's long
-# flights off rocks for drops, the recorded setting crashes on its own terrain and the soft fork's advice
-# is inconclusive (tests/test_advise_carried.py, strict xfails: issue 51's flights; on seed 5 and at 9-12
-# N/mm the carried bike's rides are reconstructed, better than this bike's). The advice's logic is
-# checked on rides it can reconstruct until then.
+# front is airborne 29 % of the first 16 s, the engine's 28 %), the soft fork's advice is inconclusive
+# (tests/test_advise_carried.py, a strict xfail; its recorded setting went over the bars on its own
+# reconstruction until a flight thrown off a rock stopped being taken for a drop's edge; on seed 5 and at
+# 9-12 N/mm the carried bike's rides are reconstructed better than this bike's). The advice's logic is
+# checked on these rides until the advice holds on the carried bike's.
 ADVISE_CARRIED = False
 ADVISE_PROFILE = SpeedProfile(6.5, 0.5, 25.0)
 ADVISE_FEATURES = (("rocks", 10.0, 0.1), ("drop", 30.0, 0.5), ("rocks", 40.0, 0.1), ("g_out", 60.0, 0.3),

@@ -17,6 +17,8 @@ JUMP_GAP_S = 0.05  # the tyre's force found back above 0 for less than this with
 TOP_OUT_MARGIN_M = 0.5e-3  # a stroke this close to full extension hangs on the top-out stop (its force unseen)
 EDGE_FLIGHT_S = 0.1  # a flight this long that lands lower than it took off left the ground at an edge (bridge)
 EDGE_DROP_M = 0.15  # ... lower by more than this (a rock's back falls less)
+EDGE_RISE_M = 0.05  # ... and the ground rose less than this into the take-off over EDGE_RISE_S (else thrown)
+EDGE_RISE_S = 0.1
 TAKE_OFF_SHARE = 0.1  # such a flight left where the tyre's force last fell below this share of its static load
 MAX_FLIGHT_S = 1.5  # a fork fully out longer than this is not flying (a bike standing unweighted): the law's force at 0
 BOTTOM_OUT_MARGIN_M = 0.5e-3  # a stroke this close to full travel is a bottom-out (the hard stop's force unseen)
@@ -144,8 +146,12 @@ def bridge(ground, off, dt: float, edges: bool = True):
     """(the ground with each flight bridged, the airborne mask): the stretches of ``off`` (the tyre
     carrying nothing) closer than ``JUMP_GAP_S`` merged into one flight. The wheel does not see the
     ground under a flight; it is put where a wheel leaves and meets it: a flight of at least
-    ``EDGE_FLIGHT_S`` that lands more than ``EDGE_DROP_M`` lower than it took off left at an edge (a
-    drop's), so the landing's level from the take-off on (``edges``); a shorter hop (off a bump's
+    ``EDGE_FLIGHT_S`` that lands more than ``EDGE_DROP_M`` lower than it took off, the ground having
+    risen less than ``EDGE_RISE_M`` into the take-off over the ``EDGE_RISE_S`` before it, left at an
+    edge (a drop's: a wheel leaves one level or falling), so the landing's level from the take-off on
+    (``edges``); a wheel the ground threw up into its flight (off a rock's face, a kicker) flies over
+    ground the landing does not give, and a long flight lets the found wheel's height drift, so it is a
+    chord like the rest; a shorter hop (off a bump's
     crest, whose back falls away gently), one landing less lower, or one landing higher, the chord
     from take-off to landing (landing higher the wheel meets a face: a step there would be a wall a
     forward run hits). Kept below the wheel's path either way."""
@@ -154,7 +160,9 @@ def bridge(ground, off, dt: float, edges: bool = True):
     for a, b in flights(off, dt):
         air[a:b] = True
         a0, b0 = max(a - 1, 0), min(b, ground.size - 1)  # the last sample on the ground, the first back on it
-        if edges and ground[b0] < ground[a0] - EDGE_DROP_M and (b - a) * dt >= EDGE_FLIGHT_S:  # fell away at an edge
+        before = ground[max(a0 - int(round(EDGE_RISE_S / dt)), 0):a0 + 1]
+        level = ground[a0] - before.min() < EDGE_RISE_M  # not thrown up into the flight
+        if edges and level and ground[b0] < ground[a0] - EDGE_DROP_M and (b - a) * dt >= EDGE_FLIGHT_S:  # an edge
             under = np.full(b0 - a0 + 1, ground[b0])
             under[0] = ground[a0]
         else:
