@@ -1037,11 +1037,11 @@ def engine_ride(folder, terrain, speed=6.0, seconds=40.0, from_s=3.0):
     return file, write_v3(folder / "ride.SST", np.clip(fork, 0, None), np.clip(rear, 0, None) / RATIO), made
 
 
-def advise_ride(path, seconds=ADVISE_SECONDS, **settings):
+def advise_ride(path, seconds=ADVISE_SECONDS, carried=ADVISE_CARRIED, **settings):
     """``whole_bike_ride`` over the advice's course (``settings``: its bike's, e.g. fork_rate,
     fork_reb, shock_reb_scale): (bike file, SST file, fork mm, rear wheel mm, t)."""
     made = whole_bike_ride(path, seconds=seconds, profile=ADVISE_PROFILE, features=ADVISE_FEATURES,
-                           carried=settings.pop("carried", ADVISE_CARRIED), **settings)
+                           carried=carried, **settings)
     return made["bike"], made["sst"], made["fork_mm"], made["rear_mm"], made["t"]
 
 

@@ -160,15 +160,21 @@ def bridge(ground, off, dt: float, edges: bool = True):
     for a, b in flights(off, dt):
         air[a:b] = True
         a0, b0 = max(a - 1, 0), min(b, ground.size - 1)  # the last sample on the ground, the first back on it
-        before = ground[max(a0 - int(round(EDGE_RISE_S / dt)), 0):a0 + 1]
-        level = ground[a0] - before.min() < EDGE_RISE_M  # not thrown up into the flight
-        if edges and level and ground[b0] < ground[a0] - EDGE_DROP_M and (b - a) * dt >= EDGE_FLIGHT_S:  # an edge
+        if (edges and ground[b0] < ground[a0] - EDGE_DROP_M and (b - a) * dt >= EDGE_FLIGHT_S
+                and not _thrown(ground, a0, dt)):  # fell away at an edge
             under = np.full(b0 - a0 + 1, ground[b0])
             under[0] = ground[a0]
         else:
             under = np.linspace(ground[a0], ground[b0], b0 - a0 + 1)
         ground[a0:b0 + 1] = np.minimum(ground[a0:b0 + 1], under)
     return ground, air
+
+
+def _thrown(ground, a0: int, dt: float) -> bool:
+    """The ground rose ``EDGE_RISE_M`` or more into the take-off at ``a0`` over the ``EDGE_RISE_S``
+    before it: the wheel was thrown into its flight (a rock's face, a kicker), not left at an edge."""
+    before = ground[max(a0 - int(round(EDGE_RISE_S / dt)), 0):a0 + 1]
+    return ground[a0] - before.min() >= EDGE_RISE_M
 
 
 def unloaded(tyre, static: float, dt: float) -> np.ndarray:
