@@ -189,6 +189,29 @@ def test_a_bad_file_among_the_rides_is_one_line_before_any_work(tmp_path, capsys
     assert not reached and not out.exists()
 
 
+def test_one_ride_given_twice_is_refused_in_one_line_before_any_work(tmp_path, capsys, monkeypatch):
+    """A careless pool: the same ride twice, by one path or by a copy under another name (a glob over two
+    folders): one line naming both, exit 2, nothing reconstructed, nothing written. Two different rides of
+    one setting are not taken for one (the check can fail)."""
+    import pathlib
+
+    reached = reconstruction_stand_in(monkeypatch)
+    bike, (a, b) = _made_rides(tmp_path, (21, 5), 10.0)
+    a, b = pathlib.Path(a), pathlib.Path(b)
+    copy = tmp_path / "copy.SST"
+    shutil.copyfile(a, copy)
+    for pair in ((a, a), (a, copy)):
+        out = tmp_path / "advice"
+        assert main(["advise", *map(str, pair), "--bike", str(bike), "--out", str(out)]) == 2
+        err = [ln for ln in capsys.readouterr().err.splitlines() if not ln.startswith("mtbmj: warning")]
+        assert len(err) == 1 and err[0].startswith(f"mtbmj: error: {pair[1].name}: the same ride as {a.name}"), err
+        assert not reached and not out.exists()
+    from mtbmj.ride.advice_pool import repeated
+    from mtbmj.measured.telemetry import read_ride
+
+    assert repeated([read_ride(a), read_ride(b)]) is None
+
+
 def test_no_ride_left_is_a_refusal_naming_each(tmp_path, capsys):
     """Two rides each too short: the refusal names both and why, exit 2, nothing written."""
     bike, (a, b) = _made_rides(tmp_path, (21, 5), 10.0)

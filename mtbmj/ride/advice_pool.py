@@ -40,6 +40,7 @@ general: that the rides share one setting is the rider's word.
 """
 from __future__ import annotations
 
+import hashlib
 import math
 import time
 from dataclasses import dataclass, field
@@ -207,6 +208,23 @@ def judging(advice: PooledAdvice, candidates=None) -> tuple:
     return None, verdict
 
 
+def repeated(records) -> str | None:
+    """The line refusing a pool that holds one ride twice (the same travels on the same clock, under its own
+    name or another's: a file given twice, or copied), else None. Pooled with itself a ride's segments count
+    twice, and the spread its resampling reads narrows though nothing new was ridden."""
+    seen = {}
+    for record in records:
+        series = (record.time_s, record.fork_mm, record.shock_mm, record.rear_mm)
+        key = hashlib.sha256(b"|".join(b"-" if a is None else np.ascontiguousarray(a, float).tobytes()
+                                       for a in series)).hexdigest()
+        if key in seen:
+            first = seen[key]
+            return (f"{record.name}: the same ride as {first} (the same travels on the same clock): a ride pooled with "
+                    f"itself counts twice and narrows the spread without anything new ridden; give each ride once")
+        seen[key] = record.name
+    return None
+
+
 def pooled(records, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
            tries=(), calibrated: bool = True, search: bool = True, static_sag_mm=None,
            carried_as: str = "rider") -> PooledAdvice:
@@ -220,6 +238,9 @@ def pooled(records, bike, overrides=None, duration: float | None = None, progres
 
     start = time.perf_counter()
     duration = checked_duration(duration)
+    twice = repeated(records)
+    if twice:
+        raise AdviseError(twice)
     bike = spec_mod.resolve(bike)
     bike = bike.with_overrides(None) if bike.overrides else bike
     ready, refused = [], []
