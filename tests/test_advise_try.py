@@ -72,6 +72,8 @@ def test_a_bad_try_is_one_line_before_any_work(tmp_path, capsys, monkeypatch):
     for args, says in ((["--try", str(tmp_path / "none.toml")], "none.toml: no such bike file"),
                        (["--try-set", "fork:fork.spring.air_pressure_psi=60"], "the bike's fork has no "
                                                                                 "fork.spring.air_pressure_psi"),
+                       (["--try-set", "fork:fork.damper.rebound_N_s_per_mm=500"],  # a unit mistyped
+                        "has no fork.damper.rebound_N_s_per_mm (did you mean fork:fork.damper.rebound_N_s_per_m"),
                        (["--try-set", "shock:fork.spring.rate_N_per_mm=-5"], "must be positive"),
                        (["--try-set", "fork:fork.spring.rate_N_per_mm=900"], "far above what any bike"),
                        (["--try-set", "shock.pressure_psi=200"], "the shock is a coil"),

@@ -65,6 +65,23 @@ def test_telemetry_refuses_a_folder_that_is_no_run(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_telemetry_of_a_ride_too_short_for_a_velocity_names_the_file(tmp_path, capsys):
+    """A travel CSV of two samples (a careless export): one line naming the file and what a velocity needs,
+    exit 2, nothing written; five samples are enough (the line is about length, not the file)."""
+    out = tmp_path / "tel"
+    for n, status in ((2, 2), (5, 0)):
+        ride = tmp_path / f"ride{n}.csv"
+        ride.write_text("time_s,fork_mm,rear_mm\n" + "".join(f"{i / 1000},{10 + i},{12 + i}\n" for i in range(n)))
+        assert cli.main(["telemetry", str(ride), "--out", str(out)]) == status
+        err = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("mtbmj: error")]
+        if status:
+            assert err == [f"mtbmj: error: ride{n}.csv: travel_mm: 2 samples are too few for a velocity (its "
+                           "Savitzky-Golay fit of order 3 needs 5 or more)"], err
+            assert not out.exists()
+        else:
+            assert not err
+
+
 @pytest.fixture()
 def backend(monkeypatch):
     monkeypatch.delenv("MUJOCO_GL", raising=False)  # conftest disables GL for dm_control

@@ -91,7 +91,8 @@ def velocity(time_s, travel_mm, window_s: float = VELOCITY_WINDOW_S, polyorder: 
                            f"needs ({need / window_s:.0f} Hz or more)")
     window = min(window, x.size if x.size % 2 else x.size - 1)
     if window <= polyorder:
-        raise MetricsError(f"travel_mm: {x.size} samples are too few for a polynomial of order {polyorder}")
+        raise MetricsError(f"travel_mm: {x.size} samples are too few for a velocity (its Savitzky-Golay fit of order "
+                           f"{polyorder} needs {polyorder + 2 if polyorder % 2 else polyorder + 1} or more)")
     from scipy import signal  # scipy.signal takes ~0.7 s to import: only when a velocity is needed
 
     return signal.savgol_filter(x, window, polyorder, deriv=1, delta=dt, mode="interp")

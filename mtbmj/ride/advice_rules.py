@@ -437,9 +437,14 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
                           else (spec.shock_config, spec.shock_overrides))
             have = load(cfg, cover).values
             canonical = ALTERNATIVES.get(name, (name, 1.0))[0]
-            if canonical not in have:
-                raise ConfigError(f"--try-set {key}: the bike's {part} has no {name} (its adjusters: "
-                                  f"{', '.join(a.name for a in adjusters(spec) if a.section == part + '.set') or 'none'})")
+            if canonical not in have:  # the keys nearest the one typed, else the adjusters the advice tries
+                import difflib
+
+                near = difflib.get_close_matches(name, sorted(have), n=3)
+                raise ConfigError(f"--try-set {key}: the bike's {part} has no {name} (" + (
+                    f"did you mean {' or '.join(part + ':' + k for k in near)}?" if near else "the adjusters the advice "
+                    f"tries: {', '.join(a.name for a in adjusters(spec) if a.section == part + '.set') or 'none'}; "
+                    f"any key of the {part}'s configuration is taken, docs/configuration.md") + ")")
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise ConfigError(f"--try-set {key}: must be a number, got {value!r}")
             over.setdefault(f"{part}.set", {})[name] = value

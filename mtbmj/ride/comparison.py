@@ -157,7 +157,10 @@ def compare(record: telemetry.TelemetryRecord, runs: list[dict], threshold_mm_pe
     """Metrics of the ride and of each run's fork (and a bike run's rear wheel), with shared velocity
     bins (``runs``: :func:`load_run`'s); the summary JSON-ready."""
     signals = [v for v in (record.fork_mm, record.rear_mm) if v is not None]
-    velocities = [ride_metrics.velocity(record.time_s, v) for v in signals]
+    try:
+        velocities = [ride_metrics.velocity(record.time_s, v) for v in signals]
+    except ride_metrics.MetricsError as exc:
+        raise MtbmjError(f"{Path(record.path).name}: {exc}") from None
     run_ends = []  # (run, end, travel, travel max, velocity) of every simulated end
     for run in runs:
         try:
