@@ -105,16 +105,39 @@ def _pairs(tp: list) -> list:
     return out
 
 
+def _decrement_law(pairs: list) -> tuple[float, float] | None:
+    """The swing decrement law s2 = alpha s1 - beta least squares through the pairs (first swing, ratio):
+    viscous damping gives alpha (beta 0), Coulomb friction beta (alpha 1), both together both (a linear
+    oscillator's swings: s2 = r s1 - 2 (1 + r) F / k, Den Hartog); None from fewer than two distinct swings."""
+    s1 = np.array([q[0] for q in pairs], float)
+    if s1.size < 2 or np.ptp(s1) <= 1e-9 * max(float(np.max(s1)), 1.0):
+        return None
+    s2 = s1 * np.array([q[1] for q in pairs], float)
+    alpha, c = np.polyfit(s1, s2, 1)
+    return float(alpha), float(-c)
+
+
 def swing_ratio_at(sim_pairs: list, swing: float, direction: int) -> float:
     """The simulation's swing ratio (second over first) at a first swing of ``swing`` mm into a half of
-    ``direction``: interpolated in its own pairs of that direction by their first swing, held at the
-    nearest beyond them (a viscous ratio does not depend on the swing, a friction one does, so the
-    record and the simulation are compared at the same swing, not at the same turning point); 0 where
-    the simulation has no such pair (it stuck sooner: no swing)."""
+    ``direction``: interpolated in its own pairs of that direction by their first swing (a viscous ratio
+    does not depend on the swing, a friction one does, so the record and the simulation are compared at
+    the same swing, not at the same turning point); beyond them, the simulation's own swing decrement
+    law (``_decrement_law`` on that direction's pairs, or on both directions' where one has fewer than
+    two; a single pair's ratio held), down to 0 where that law leaves no swing (it sticks there); 0
+    where the simulation has no pair at all (it stuck sooner: no swing). So the ratio moves smoothly
+    where a value tried sticks the simulation a half cycle sooner or later, not by the jump from the
+    last pair's ratio to nothing."""
     own = sorted((s1, r) for s1, r, d, _ in sim_pairs if d == direction)
-    if not own:
+    every = sorted((s1, r) for s1, r, d, _ in sim_pairs)
+    if not every:
         return 0.0
-    return float(np.interp(swing, [q[0] for q in own], [q[1] for q in own]))
+    if own and own[0][0] <= swing <= own[-1][0]:
+        return float(np.interp(swing, [q[0] for q in own], [q[1] for q in own]))
+    law = _decrement_law(own) or _decrement_law(every)
+    if law is None:
+        return float((own or every)[0][1])
+    alpha, beta = law
+    return float(max(alpha - beta / max(swing, 1e-9), 0.0))
 
 
 def residuals(rec: list, sim: list) -> tuple[np.ndarray, dict]:
@@ -128,16 +151,19 @@ def residuals(rec: list, sim: list) -> tuple[np.ndarray, dict]:
     by = {q[0]: q for q in sim}
     have = {q[0]: q for q in rec}
     per, missing = [], 0
+    halves = {a: by[a + 1][2] - by[a][2] for a in by if a > 0 and a + 1 in by
+              and np.isfinite(by[a][2]) and np.isfinite(by[a + 1][2]) and by[a + 1][2] > by[a][2]}
     for a in sorted(have):
         b = a + 1
         if b not in have:
             continue
         ra, rb = have[a], have[b]
         if a > 0 and np.isfinite(ra[2]) and np.isfinite(rb[2]) and rb[2] > ra[2]:
-            sa, sb = by.get(a), by.get(b)
-            ok = sa is not None and sb is not None and np.isfinite(sa[2]) and np.isfinite(sb[2]) and sb[2] > sa[2]
-            per.append(math.log((sb[2] - sa[2]) / (rb[2] - ra[2])) / PERIOD_SD if ok else 0.0)
-            missing += 0 if ok else 1
+            dur = halves.get(a)
+            if dur is None and halves:  # the simulation's nearest half cycle (the later one on a tie)
+                dur = halves[min(halves, key=lambda j: (abs(j - a), -j))]
+            per.append(math.log(dur / (rb[2] - ra[2])) / PERIOD_SD if dur is not None else 0.0)
+            missing += 0 if a in halves else 1
     sp = _pairs(sim)
     rat = []
     for s1, r, d, _ in _pairs(rec):
@@ -177,28 +203,38 @@ def _run(ring, v) -> list:
     return turning_points(out["time_s"], out["stroke_mm"], int(np.argmin(np.abs(out["time_s"]))))
 
 
-def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = None, max_nfev: int = MAX_NFEV) -> dict:
-    """The spring scale and friction (``fitted``) read from the free ring-downs (module docstring).
-    ``rings``: per record (name, time_s, shock_mm, slam, push, dampers): ``slam`` a
-    ``bounce_replay.prepare_slam`` result, ``push`` its replay's push (``PUSH_NAMES``), ``dampers``
-    {"compression_N_s_per_m", "rebound_N_s_per_m"}. ``held``: values given (default the dampers'
-    scale 1). {"spring_scale", "spring_scale_ci95", "friction_N", ..., "halves", "line"} or
-    {"refused", "line"}."""
+MODELS = {"viscous": {"friction_N": 0.0}, "friction": {"damper_scale": 0.0}, "both": {}}
+MODEL_WORDS = {"viscous": "viscous damping only", "friction": "Coulomb friction only",
+               "both": "viscous damping and Coulomb friction"}
+CRITERION = ("AICc: n ln(RSS / n) + 2 k + 2 k (k + 1) / (n - k - 1), n the residuals, RSS their sum of squares in "
+             "their sd, k the values fitted and the residual's variance; the lowest chosen")
+
+
+def aicc(rss: float, n: int, p: int) -> float:
+    """The small-sample Akaike criterion of a least-squares fit of ``p`` values on ``n`` residuals whose
+    sum of squares is ``rss`` (the variance fitted too: k = p + 1); inf where n - k - 1 <= 0."""
+    k = p + 1
+    if n - k - 1 <= 0:
+        return math.inf
+    return n * math.log(max(rss / n, 1e-12)) + 2 * k + 2 * k * (k + 1) / (n - k - 1)
+
+
+def _fit_one(rings, recs, names, held, st, max_nfev, extra=()) -> dict:
+    """One model's least squares (``fit``): ``names`` fitted, ``held`` given; started from the best point
+    of the start grid of those fitted, and from each of ``extra`` (value dicts: the restricted models'
+    answers), the lowest sum of squares kept."""
     from scipy.optimize import least_squares
     from scipy.stats import t as student
 
-    held = {**({} if "damper_scale" in fitted else {"damper_scale": 1.0}), **(held or {})}
-    names = [k for k in fitted if k not in held]
-    st = {**START, **(start or {})}
-    recs = [_record_points(ring) for ring in rings]
-    x0 = np.array([math.log(st[k]) if k in LOG else st[k] for k in names])
-    lo = np.array([math.log(LIMITS[k][0]) if k in LOG else LIMITS[k][0] for k in names])
-    hi = np.array([math.log(LIMITS[k][1]) if k in LOG else LIMITS[k][1] for k in names])
+    def to_x(v):
+        return np.array([math.log(max(v[k], LIMITS[k][0])) if k in LOG else v[k] for k in names])
+
+    lo, hi = to_x({k: LIMITS[k][0] for k in names}), to_x({k: LIMITS[k][1] for k in names})
     scale = np.array([1.0 if k in LOG else 30.0 for k in names])
     counts = {}
 
-    def res(u):
-        v = _values(x0 + u * scale, names, held)
+    def res_x(x):
+        v = _values(x, names, held)
         parts, n = [], {"periods": 0, "ratios": 0, "missing": 0}
         for ring, rec in zip(rings, recs):
             r, c = residuals(rec, _run(ring, v))
@@ -207,39 +243,40 @@ def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = Non
         counts.update(n)
         return np.concatenate(parts) if parts else np.zeros(0)
 
-    # the start: the best of the grid SPRING_STARTS x FRICTION_STARTS x DAMPER_STARTS (those fitted)
     starts = {"spring_scale": SPRING_STARTS, "friction_N": FRICTION_STARTS, "damper_scale": DAMPER_STARTS}
+    base_v = {k: st[k] for k in names}
     grid = [(k, starts[k]) for k in names if k in starts]
-    if grid:
-        best, cols = (math.inf, None), [names.index(k) for k, _ in grid]
-        for point in itertools.product(*(g for _, g in grid)):
-            for j, (k, _), p in zip(cols, grid, point):
-                x0[j] = math.log(p) if k in LOG else p
-            r = res(np.zeros(len(names)))
-            best = min(best, (float(r @ r), point), key=lambda q: q[0])
-        for j, (k, _), p in zip(cols, grid, best[1]):
-            x0[j] = math.log(p) if k in LOG else p
-    r0 = res(np.zeros(len(names)))
-    n_res = r0.size
-    base = {"method": METHOD, "held": held, "records": len(rings),
-            "halves_in_records": sum(max(len(q) - 2, 0) for q in recs)}
+    best = (math.inf, base_v)
+    for point in (itertools.product(*(g for _, g in grid)) if grid else [()]):
+        v = {**base_v, **dict(zip((k for k, _ in grid), point))}
+        r = res_x(to_x(v))
+        best = min(best, (float(r @ r), v), key=lambda q: q[0])
+    n_res = res_x(to_x(best[1])).size
+    out = {"halves_in_records": sum(max(len(q) - 2, 0) for q in recs)}
     if n_res <= len(names):
         why = f"{n_res} residual(s) from the records' free half cycles for {len(names)} value(s)"
-        return {**base, "refused": f"the ring-down fit not read: {why}", "line": f"ring-down fit not read: {why}"}
-    sol = least_squares(res, np.zeros(len(names)), bounds=((lo - x0) / scale, (hi - x0) / scale),
-                        diff_step=STEP, max_nfev=max_nfev, x_scale=1.0)
-    r = res(sol.x)
+        return {**out, "refused": f"the ring-down fit not read: {why}", "line": f"ring-down fit not read: {why}"}
+    sol = None
+    for v in [best[1]] + [{k: e.get(k, best[1][k]) for k in names} for e in extra]:
+        x0 = np.clip(to_x(v), lo, hi)
+        s = least_squares(lambda u: res_x(x0 + u * scale), np.zeros(len(names)),
+                          bounds=((lo - x0) / scale, (hi - x0) / scale), diff_step=STEP, max_nfev=max_nfev,
+                          x_scale=1.0)
+        if sol is None or s.cost < sol[0].cost:
+            sol = (s, x0)
+    sol, x0 = sol
+    r = res_x(x0 + sol.x * scale)
     J = sol.jac / scale[None, :]
     dof = r.size - len(names)
-    s2 = float(r @ r) / dof
+    rss = float(r @ r)
     try:
-        cov = np.linalg.inv(J.T @ J) * s2
+        cov = np.linalg.inv(J.T @ J) * rss / dof
     except np.linalg.LinAlgError:
-        cov = np.linalg.pinv(J.T @ J) * s2
+        cov = np.linalg.pinv(J.T @ J) * rss / dof
     tq = float(student.ppf(0.975, dof))
     u = x0 + sol.x * scale
-    out = {**base, "residual_counts": dict(counts), "rms_scaled": float(math.sqrt(float(r @ r) / r.size)),
-           "dof": dof, "runs": int(sol.nfev)}
+    out.update({"residual_counts": dict(counts), "rms_scaled": float(math.sqrt(rss / r.size)), "dof": dof,
+                "runs": int(sol.nfev), "rss": rss, "n_residuals": int(r.size)})
     for j, k in enumerate(names):
         half = tq * math.sqrt(max(cov[j, j], 0.0))
         if k in LOG:
@@ -257,6 +294,50 @@ def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = Non
                f"(at most {MAX_RMS_SD:g}), {counts['missing']} of {r.size} halves and pairs missing in the simulation "
                f"(at most {MAX_MISSING:.0%}); at spring {out['spring_scale']:.2f} x")
         out["refused"] = f"the ring-down fit refused: {why}"
+    return out
+
+
+def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = None, max_nfev: int = MAX_NFEV) -> dict:
+    """The spring scale and friction (``fitted``) read from the free ring-downs (module docstring).
+    ``rings``: per record (name, time_s, shock_mm, slam, push, dampers): ``slam`` a
+    ``bounce_replay.prepare_slam`` result, ``push`` its replay's push (``PUSH_NAMES``), ``dampers``
+    {"compression_N_s_per_m", "rebound_N_s_per_m"}. ``held``: values given (default the dampers'
+    scale 1). With the friction and the dampers' scale both fitted, the three models (``MODELS``:
+    viscous only, friction only, both) are each fitted, both started also from the other two's answers,
+    and one chosen by ``aicc``: ``"model"``, ``"models"`` (each one's values, intervals, RMS and
+    criterion), ``"criterion"``; the values and intervals given are both's. {"spring_scale",
+    "spring_scale_ci95", "friction_N", ..., "line"} or {"refused", "line"}."""
+    held = {**({} if "damper_scale" in fitted else {"damper_scale": 1.0}), **(held or {})}
+    names = [k for k in fitted if k not in held]
+    st = {**START, **(start or {})}
+    recs = [_record_points(ring) for ring in rings]
+    base = {"method": METHOD, "held": held, "records": len(rings)}
+    if not ("friction_N" in names and "damper_scale" in names):
+        out = {**base, **_fit_one(rings, recs, names, held, st, max_nfev)}
+        out["line"] = line(out)
+        return out
+    sub = {m: _fit_one(rings, recs, [k for k in names if k not in MODELS[m]], {**held, **MODELS[m]}, st, max_nfev)
+           for m in ("viscous", "friction")}
+    extra = [{**s, **{k: st[k] for k in MODELS[m]}} for m, s in sub.items() if "rss" in s]
+    extra = [{**e, "friction_N": FRICTION_STARTS[0]} if e["friction_N"] == 0.0 else e for e in extra]
+    extra = [{**e, "damper_scale": LIMITS["damper_scale"][0]} if e["damper_scale"] == 0.0 else e for e in extra]
+    both = _fit_one(rings, recs, names, held, st, max_nfev, extra=extra)
+    out = {**base, **both}
+    models = {}
+    for m, s in (*sub.items(), ("both", both)):
+        p = len(names) - len(MODELS[m])
+        e = {"fitted": [k for k in names if k not in MODELS[m]], "held": dict(MODELS[m])}
+        if "rss" in s:
+            e.update({k: s[k] for k in names}, rms_scaled=s["rms_scaled"], rss=s["rss"],
+                     aicc=aicc(s["rss"], s["n_residuals"], p))
+            e.update({k + "_ci95": s[k + "_ci95"] for k in names if k + "_ci95" in s})
+        if "refused" in s:
+            e["refused"] = s["refused"]
+        models[m] = e
+    scored = {m: e["aicc"] for m, e in models.items() if "aicc" in e and math.isfinite(e["aicc"])}
+    if scored:
+        out["model"] = min(scored, key=scored.get)
+    out.update(models=models, criterion=CRITERION)
     out["line"] = line(out)
     return out
 
@@ -278,10 +359,33 @@ def line(out: dict) -> str:
     return (f"ring-down fit (free half periods and swing ratios, {c['periods']} and {c['ratios']}, of "
             f"{out['records']} records): " + ", ".join(said)
             + ("; the friction's interval holds 0 (viscous only within the uncertainty)" if visc else "")
-            + (f"; at a bound: {', '.join(out['at_bound'])}" if out.get("at_bound") else ""))
+            + (f"; at a bound: {', '.join(out['at_bound'])}" if out.get("at_bound") else "") + _model_words(out))
 
 
-__all__ = ["METHOD", "fit", "line", "residuals", "swing_ratio_at", "turning_points"]
+def _model_words(out: dict) -> str:
+    """The model the criterion chose with each model's AICc (``fit``) and, where it is not both, its own
+    values and intervals; nothing without a choice."""
+    if "model" not in out:
+        return ""
+    m = out["model"]
+    said = ", ".join(f"{k} {e['aicc']:.1f}" for k, e in out["models"].items() if "aicc" in e)
+    own = ""
+    if m != "both":
+        e = out["models"][m]
+        vals = []
+        for k, unit, f in (("spring_scale", "x", ".2f"), ("friction_N", "N", ".0f"), ("damper_scale", "x", ".2f")):
+            if k + "_ci95" in e:
+                lo, hi = e[k + "_ci95"]
+                vals.append(f"{k.split('_')[0]} {e[k]:{f}} {unit} [{lo:{f}}, {hi:{f}}]")
+            elif k in e["held"]:
+                vals.append(f"{k.split('_')[0]} {e[k]:g} held")
+        own = ": " + ", ".join(vals) + ("" if "refused" not in e else " (the bike does not follow it: "
+                                        f"RMS {e['rms_scaled']:.1f} sd)")
+    return f"; model by AICc: {MODEL_WORDS[m]}{own} (AICc {said}; the values before are both's)" if m != "both" \
+        else f"; model by AICc: {MODEL_WORDS[m]} (AICc {said})"
+
+
+__all__ = ["CRITERION", "METHOD", "MODELS", "aicc", "fit", "line", "residuals", "swing_ratio_at", "turning_points"]
 
 
 DEFAULT_FITTED = ("spring_scale", "friction_N", "damper_scale")
