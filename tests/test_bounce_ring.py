@@ -9,7 +9,11 @@ swing each half cycle (exp(-pi zeta / sqrt(1 - zeta^2)), Den Hartog); friction a
 4 F / k off it (Feeny and Liang, J. Sound Vib. 195(1), 1996). ``turning_points`` gives those back, so
 the swing ratios ``residuals`` compares carry the difference between the two.
 (b) ``residuals`` on turning points written here: zero on the record itself, log(1.05) / sd for half
-periods 5 % longer, as many entries when the simulation sticks a half cycle sooner (its swing then 0).
+periods 5 % longer, as many entries when the simulation sticks a half cycle sooner (a missing half against
+its nearest, a missing pair's ratio from its swing decrement law, 0 with no pair at all), and a sum of
+squares that moves smoothly there.
+(c) The fit with the bike replaced by a closed form (below). (d) The model chosen (viscous only, friction
+only, both) on (a)'s ring-downs, the simulation (c)'s closed form at (a)'s mass.
 """
 from __future__ import annotations
 
@@ -283,3 +287,15 @@ def test_model_chosen_and_values_recovered_on_made_ring_downs(generator_bike, c,
 def test_model_chosen_on_a_short_mixed_ring_down(generator_bike):
     got = _generated_fit(generator_bike, 95.0, 20.0, drop_mm=40.0, after=4.0)
     assert got["model"] == "both"
+
+
+def test_a_model_with_too_few_residuals_has_no_criterion_and_fit_json_writes(generator_bike):
+    """(d) Friction only (40 N) from 40 mm for 4 s: 5 turning points, 5 residuals, too few for both's AICc
+    (n - k - 1 = 0): its "aicc" is null, the line says so, the choice is among the others (friction), and
+    fit.json's strict writer takes the result (an inf would be refused)."""
+    from mtbmj.identify.bounce_fit import json_bytes
+
+    got = _generated_fit(generator_bike, 0.0, 40.0, drop_mm=40.0, after=4.0)
+    assert got["models"]["both"]["aicc"] is None and got["model"] == "friction"
+    assert "both none (too few residuals)" in got["line"]
+    assert b'"aicc": null' in json_bytes(got)

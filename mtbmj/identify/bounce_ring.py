@@ -21,14 +21,26 @@ the log ratio of the same half cycle's duration (by its turning point after the 
 ratio (the second swing over the first) less the simulation's at the same first swing and direction
 (``swing_ratio_at``: a friction ratio depends on the swing, so the two are compared at the same swing;
 no rest level needed, which the shared records' rider moves after the slam) over ``RATIO_SD``. A half
-or pair the simulation lacks (it stuck sooner) keeps its place: the half's residual 0, the pair's
-ratio 0 (no swing). The values (``fitted``: log spring scale, friction, log dampers' scale; any
-``held``) by ``scipy.optimize.least_squares`` (forward differences), started from the best point of
-the grid ``SPRING_STARTS`` by ``FRICTION_STARTS`` by ``DAMPER_STARTS`` (where the simulation sticks a half
-cycle sooner or later the residual jumps, and a fit started far off stays in a local minimum). 95 %
-intervals from the Jacobian with the residual's variance (Student's t at n - p). Refused, with its
-reason and the values it stopped at, with n <= p residuals, or where the bike does not follow the
-records (RMS over ``MAX_RMS_SD`` sd, or more than ``MAX_MISSING`` of the halves and pairs missing).
+or pair the simulation lacks (it stuck sooner) keeps its place, and the residual moves smoothly where a
+value tried sticks the simulation a half cycle sooner or later: a missing half against the simulation's
+nearest half cycle, a missing pair's ratio from the simulation's own swing decrement law s2 = alpha s1 -
+beta (``swing_ratio_at``; a linear oscillator with Coulomb friction keeps it, Den Hartog), down to 0 where
+it leaves no swing; 0 only where the simulation has no pair at all. (Before, a missing half read 0 and a
+missing pair the last pair's ratio: a jump of hundreds in the sum of squares where the simulation stuck a
+half sooner, and the least squares stayed in a local minimum on a dry ring-down.) The values
+(``fitted``: log spring scale, friction, log dampers' scale; any ``held``) by
+``scipy.optimize.least_squares`` (forward differences), started from the best point of the grid
+``SPRING_STARTS`` by ``FRICTION_STARTS`` by ``DAMPER_STARTS`` (of those fitted). 95 % intervals from the
+Jacobian with the residual's variance (Student's t at n - p). With the friction and the dampers' scale
+both fitted, three models (``MODELS``) are fitted, each from its own grid: viscous only (friction held
+0), friction only (the dampers' scale held 0) and both (started also from the other two's answers, the
+lowest sum of squares kept), and one chosen by the small-sample Akaike criterion (``aicc``, the residual's
+variance unknown: its sd scales are not known well enough for a chi-square); ``"model"`` says which, and
+the line says it with each model's AICc and, where it is not both, the chosen model's values. The values
+and intervals given (and taken by ``from_slam_rebound``) stay both's: a model with the dampers at 0 would
+give the rebound fits no compression. Refused, with its reason and the values it stopped at, with n <= p
+residuals, or where the bike does not follow the records (RMS over ``MAX_RMS_SD`` sd, or more than
+``MAX_MISSING`` of the halves and pairs missing).
 
 Measured (docs/identification.md): the tests' generator at 0.55 x read 0.54 x [0.52, 0.57] and 0.59 x
 [0.52, 0.67] on two pairs of slams (the periods alone 0.47 and 0.53 x); the shared slams refused (6.4
@@ -64,8 +76,10 @@ PEAK_WINDOW_S = 0.1
 METHOD = ("the records' free half cycles after the slam against the MuJoCo bike's run with each record's push and the "
           "dampers given: each half's log duration ratio against the same half cycle (by turning point after the "
           "slam's peak; sd 1 %) and each two successive halves' swing ratio against the bike's at the same swing "
-          "(sd 0.03); the spring scale, Coulomb friction and a scale on the dampers fitted by least squares from the "
-          "best point of a grid, 95 % from the Jacobian (Student's t, n - p)")
+          "(sd 0.03), a half or pair the simulation lacks against its nearest half and its swing decrement law; the "
+          "spring scale, Coulomb friction and a scale on the dampers fitted by least squares from the best point of "
+          "a grid, 95 % from the Jacobian (Student's t, n - p); viscous only, friction only and both fitted apart "
+          "and one chosen by AICc")
 
 
 def turning_points(t, x, peak: int) -> list:
@@ -328,13 +342,14 @@ def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = Non
         p = len(names) - len(MODELS[m])
         e = {"fitted": [k for k in names if k not in MODELS[m]], "held": dict(MODELS[m])}
         if "rss" in s:
+            a = aicc(s["rss"], s["n_residuals"], p)  # null where too few residuals (fit.json has no inf)
             e.update({k: s[k] for k in names}, rms_scaled=s["rms_scaled"], rss=s["rss"],
-                     aicc=aicc(s["rss"], s["n_residuals"], p))
+                     aicc=a if math.isfinite(a) else None)
             e.update({k + "_ci95": s[k + "_ci95"] for k in names if k + "_ci95" in s})
         if "refused" in s:
             e["refused"] = s["refused"]
         models[m] = e
-    scored = {m: e["aicc"] for m, e in models.items() if "aicc" in e and math.isfinite(e["aicc"])}
+    scored = {m: e["aicc"] for m, e in models.items() if e.get("aicc") is not None}
     if scored:
         out["model"] = min(scored, key=scored.get)
     out.update(models=models, criterion=CRITERION)
@@ -368,7 +383,8 @@ def _model_words(out: dict) -> str:
     if "model" not in out:
         return ""
     m = out["model"]
-    said = ", ".join(f"{k} {e['aicc']:.1f}" for k, e in out["models"].items() if "aicc" in e)
+    said = ", ".join(f"{k} {e['aicc']:.1f}" if e.get("aicc") is not None else f"{k} none (too few residuals)"
+                     for k, e in out["models"].items() if "aicc" in e)
     own = ""
     if m != "both":
         e = out["models"][m]
