@@ -299,3 +299,20 @@ def test_a_model_with_too_few_residuals_has_no_criterion_and_fit_json_writes(gen
     assert got["models"]["both"]["aicc"] is None and got["model"] == "friction"
     assert "both none (too few residuals)" in got["line"]
     assert b'"aicc": null' in json_bytes(got)
+
+
+def test_a_value_the_residual_does_not_move_with_is_not_determined(monkeypatch):
+    """(c) With a simulation that ignores the friction (the closed form at friction 0 whatever is tried),
+    the friction's Jacobian column is 0: its interval is its whole range (0-400 N) and it is named
+    undetermined, not given a 0-wide interval (as the shared slams' friction-only model had: [15, 15]); the
+    spring's interval is still its own (holding 0.55 x)."""
+    from mtbmj.identify import bounce_ring
+
+    monkeypatch.setattr(bounce_ring, "_record_points", lambda ring: ring[3])
+    monkeypatch.setattr(bounce_ring, "_run", lambda ring, v: closed_points(v["spring_scale"], 0.0, 1.0))
+    rec = closed_points(0.55, 0.0, 1.0, time_noise=5e-4, level_noise=0.05, seed=2)
+    got = bounce_ring.fit([("made", None, None, rec)], fitted=("spring_scale", "friction_N"))
+    assert got["undetermined"] == ["friction_N"] and got["friction_N_ci95"] == [0.0, 400.0]
+    assert "not determined" in got["line"]
+    lo, hi = got["spring_scale_ci95"]
+    assert lo <= 0.55 <= hi and hi - lo < 0.05

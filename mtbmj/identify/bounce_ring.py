@@ -293,6 +293,10 @@ def _fit_one(rings, recs, names, held, st, max_nfev, extra=()) -> dict:
                 "runs": int(sol.nfev), "rss": rss, "n_residuals": int(r.size)})
     for j, k in enumerate(names):
         half = tq * math.sqrt(max(cov[j, j], 0.0))
+        if not np.any(J[:, j]):  # the residual did not move with it: its interval is its whole range, not 0 wide
+            out.setdefault("undetermined", []).append(k)
+            out[k], out[k + "_ci95"] = (math.exp(u[j]) if k in LOG else float(u[j])), list(LIMITS[k])
+            continue
         if k in LOG:
             out[k], out[k + "_ci95"] = math.exp(u[j]), [math.exp(u[j] - half), math.exp(u[j] + half)]
         else:
@@ -346,6 +350,8 @@ def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = Non
             e.update({k: s[k] for k in names}, rms_scaled=s["rms_scaled"], rss=s["rss"],
                      aicc=a if math.isfinite(a) else None)
             e.update({k + "_ci95": s[k + "_ci95"] for k in names if k + "_ci95" in s})
+            if s.get("undetermined"):
+                e["undetermined"] = s["undetermined"]
         if "refused" in s:
             e["refused"] = s["refused"]
         models[m] = e
@@ -374,7 +380,9 @@ def line(out: dict) -> str:
     return (f"ring-down fit (free half periods and swing ratios, {c['periods']} and {c['ratios']}, of "
             f"{out['records']} records): " + ", ".join(said)
             + ("; the friction's interval holds 0 (viscous only within the uncertainty)" if visc else "")
-            + (f"; at a bound: {', '.join(out['at_bound'])}" if out.get("at_bound") else "") + _model_words(out))
+            + (f"; at a bound: {', '.join(out['at_bound'])}" if out.get("at_bound") else "")
+            + (f"; not determined (the residual does not move with it): {', '.join(out['undetermined'])}"
+               if out.get("undetermined") else "") + _model_words(out))
 
 
 def _model_words(out: dict) -> str:
