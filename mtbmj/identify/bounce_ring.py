@@ -43,8 +43,10 @@ residuals, or where the bike does not follow the records (RMS over ``MAX_RMS_SD`
 ``MAX_MISSING`` of the halves and pairs missing).
 
 Measured (docs/identification.md): the tests' generator at 0.55 x read 0.54 x [0.52, 0.57] and 0.59 x
-[0.52, 0.67] on two pairs of slams (the periods alone 0.47 and 0.53 x); the shared slams refused (6.4
-sd: their ring-downs start after the top-out, which the bike pushed so does not follow).
+[0.52, 0.67] on two pairs of slams before the model choice (the periods alone 0.47 and 0.53 x); its
+friction-only slam (80 N) chosen friction only, 85 N [73, 96], its viscous-only one viscous only; the
+closed form's dry ring-down (150 N) read at 150 N [147, 153]; the shared slams refused (6.0 sd, every
+model: their ring-downs start after the top-out, which the bike pushed so does not follow).
 """
 from __future__ import annotations
 
