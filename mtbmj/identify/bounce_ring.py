@@ -33,9 +33,10 @@ half sooner, and the least squares stayed in a local minimum on a dry ring-down.
 ``SPRING_STARTS`` by ``FRICTION_STARTS`` by ``DAMPER_STARTS`` (of those fitted). 95 % intervals from the
 Jacobian with the residual's variance (Student's t at n - p). With the friction and the dampers' scale
 both fitted, three models (``MODELS``) are fitted, each from its own grid: viscous only (friction held
-0), friction only (the dampers' scale held 0) and both (started also from the other two's answers, the
-lowest sum of squares kept), and one chosen by the small-sample Akaike criterion (``aicc``, the residual's
-variance unknown: its sd scales are not known well enough for a chi-square); ``"model"`` says which, and
+0), friction only (the dampers' scale held 0) and both (started also from the other two's answers with
+the value each held at its ``START``, the lowest sum of squares kept), and one chosen by the
+small-sample Akaike criterion (``aicc``, the residual's variance unknown: its sd scales are not known
+well enough for a chi-square); ``"model"`` says which, and
 the line says it with each model's AICc and, where it is not both, the chosen model's values. The values
 and intervals given (and taken by ``from_slam_rebound``) stay both's: a model with the dampers at 0 would
 give the rebound fits no compression. Refused, with its reason and the values it stopped at, with n <= p
@@ -323,9 +324,10 @@ def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = Non
     ``bounce_replay.prepare_slam`` result, ``push`` its replay's push (``PUSH_NAMES``), ``dampers``
     {"compression_N_s_per_m", "rebound_N_s_per_m"}. ``held``: values given (default the dampers'
     scale 1). With the friction and the dampers' scale both fitted, the three models (``MODELS``:
-    viscous only, friction only, both) are each fitted, both started also from the other two's answers,
-    and one chosen by ``aicc``: ``"model"``, ``"models"`` (each one's values, intervals, RMS and
-    criterion), ``"criterion"``; the values and intervals given are both's. {"spring_scale",
+    viscous only, friction only, both) are each fitted, both started also from the other two's answers
+    (the value each holds at its start value), and one chosen by ``aicc``: ``"model"``, ``"models"``
+    (each one's values, intervals, RMS and criterion), ``"criterion"``; the values and intervals given
+    are both's. {"spring_scale",
     "spring_scale_ci95", "friction_N", ..., "line"} or {"refused", "line"}."""
     held = {**({} if "damper_scale" in fitted else {"damper_scale": 1.0}), **(held or {})}
     names = [k for k in fitted if k not in held]
@@ -338,9 +340,8 @@ def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = Non
         return out
     sub = {m: _fit_one(rings, recs, [k for k in names if k not in MODELS[m]], {**held, **MODELS[m]}, st, max_nfev)
            for m in ("viscous", "friction")}
+    # both also from each restricted model's answer, the value it held at its start value (START: 30 N, 1 x)
     extra = [{**s, **{k: st[k] for k in MODELS[m]}} for m, s in sub.items() if "rss" in s]
-    extra = [{**e, "friction_N": FRICTION_STARTS[0]} if e["friction_N"] == 0.0 else e for e in extra]
-    extra = [{**e, "damper_scale": LIMITS["damper_scale"][0]} if e["damper_scale"] == 0.0 else e for e in extra]
     both = _fit_one(rings, recs, names, held, st, max_nfev, extra=extra)
     out = {**base, **both}
     models = {}
