@@ -21,18 +21,33 @@ the log ratio of the same half cycle's duration (by its turning point after the 
 ratio (the second swing over the first) less the simulation's at the same first swing and direction
 (``swing_ratio_at``: a friction ratio depends on the swing, so the two are compared at the same swing;
 no rest level needed, which the shared records' rider moves after the slam) over ``RATIO_SD``. A half
-or pair the simulation lacks (it stuck sooner) keeps its place: the half's residual 0, the pair's
-ratio 0 (no swing). The values (``fitted``: log spring scale, friction, log dampers' scale; any
-``held``) by ``scipy.optimize.least_squares`` (forward differences), started from the best point of
-the grid ``SPRING_STARTS`` by ``FRICTION_STARTS`` by ``DAMPER_STARTS`` (where the simulation sticks a half
-cycle sooner or later the residual jumps, and a fit started far off stays in a local minimum). 95 %
-intervals from the Jacobian with the residual's variance (Student's t at n - p). Refused, with its
-reason and the values it stopped at, with n <= p residuals, or where the bike does not follow the
-records (RMS over ``MAX_RMS_SD`` sd, or more than ``MAX_MISSING`` of the halves and pairs missing).
+or pair the simulation lacks (it stuck sooner) keeps its place, and the residual moves smoothly where a
+value tried sticks the simulation a half cycle sooner or later: a missing half against the simulation's
+nearest half cycle, a missing pair's ratio from the simulation's own swing decrement law s2 = alpha s1 -
+beta (``swing_ratio_at``; a linear oscillator with Coulomb friction keeps it, Den Hartog), down to 0 where
+it leaves no swing; 0 only where the simulation has no pair at all. (Before, a missing half read 0 and a
+missing pair the last pair's ratio: a jump of hundreds in the sum of squares where the simulation stuck a
+half sooner, and the least squares stayed in a local minimum on a dry ring-down.) The values
+(``fitted``: log spring scale, friction, log dampers' scale; any ``held``) by
+``scipy.optimize.least_squares`` (forward differences), started from the best point of the grid
+``SPRING_STARTS`` by ``FRICTION_STARTS`` by ``DAMPER_STARTS`` (of those fitted). 95 % intervals from the
+Jacobian with the residual's variance (Student's t at n - p). With the friction and the dampers' scale
+both fitted, three models (``MODELS``) are fitted, each from its own grid: viscous only (friction held
+0), friction only (the dampers' scale held 0) and both (started also from the other two's answers with
+the value each held at its ``START``, the lowest sum of squares kept), and one chosen by the
+small-sample Akaike criterion (``aicc``, the residual's variance unknown: its sd scales are not known
+well enough for a chi-square); ``"model"`` says which, and
+the line says it with each model's AICc and, where it is not both, the chosen model's values. The values
+and intervals given (and taken by ``from_slam_rebound``) stay both's: a model with the dampers at 0 would
+give the rebound fits no compression. Refused, with its reason and the values it stopped at, with n <= p
+residuals, or where the bike does not follow the records (RMS over ``MAX_RMS_SD`` sd, or more than
+``MAX_MISSING`` of the halves and pairs missing).
 
 Measured (docs/identification.md): the tests' generator at 0.55 x read 0.54 x [0.52, 0.57] and 0.59 x
-[0.52, 0.67] on two pairs of slams (the periods alone 0.47 and 0.53 x); the shared slams refused (6.4
-sd: their ring-downs start after the top-out, which the bike pushed so does not follow).
+[0.52, 0.67] on two pairs of slams before the model choice (the periods alone 0.47 and 0.53 x); its
+friction-only slam (80 N) chosen friction only, 85 N [73, 96], its viscous-only one viscous only; the
+closed form's dry ring-down (150 N) read at 150 N [147, 153]; the shared slams refused (6.0 sd, every
+model: their ring-downs start after the top-out, which the bike pushed so does not follow).
 """
 from __future__ import annotations
 
@@ -64,8 +79,10 @@ PEAK_WINDOW_S = 0.1
 METHOD = ("the records' free half cycles after the slam against the MuJoCo bike's run with each record's push and the "
           "dampers given: each half's log duration ratio against the same half cycle (by turning point after the "
           "slam's peak; sd 1 %) and each two successive halves' swing ratio against the bike's at the same swing "
-          "(sd 0.03); the spring scale, Coulomb friction and a scale on the dampers fitted by least squares from the "
-          "best point of a grid, 95 % from the Jacobian (Student's t, n - p)")
+          "(sd 0.03), a half or pair the simulation lacks against its nearest half and its swing decrement law; the "
+          "spring scale, Coulomb friction and a scale on the dampers fitted by least squares from the best point of "
+          "a grid, 95 % from the Jacobian (Student's t, n - p); viscous only, friction only and both fitted apart "
+          "and one chosen by AICc")
 
 
 def turning_points(t, x, peak: int) -> list:
@@ -105,16 +122,39 @@ def _pairs(tp: list) -> list:
     return out
 
 
+def _decrement_law(pairs: list) -> tuple[float, float] | None:
+    """The swing decrement law s2 = alpha s1 - beta least squares through the pairs (first swing, ratio):
+    viscous damping gives alpha (beta 0), Coulomb friction beta (alpha 1), both together both (a linear
+    oscillator's swings: s2 = r s1 - 2 (1 + r) F / k, Den Hartog); None from fewer than two distinct swings."""
+    s1 = np.array([q[0] for q in pairs], float)
+    if s1.size < 2 or np.ptp(s1) <= 1e-9 * max(float(np.max(s1)), 1.0):
+        return None
+    s2 = s1 * np.array([q[1] for q in pairs], float)
+    alpha, c = np.polyfit(s1, s2, 1)
+    return float(alpha), float(-c)
+
+
 def swing_ratio_at(sim_pairs: list, swing: float, direction: int) -> float:
     """The simulation's swing ratio (second over first) at a first swing of ``swing`` mm into a half of
-    ``direction``: interpolated in its own pairs of that direction by their first swing, held at the
-    nearest beyond them (a viscous ratio does not depend on the swing, a friction one does, so the
-    record and the simulation are compared at the same swing, not at the same turning point); 0 where
-    the simulation has no such pair (it stuck sooner: no swing)."""
+    ``direction``: interpolated in its own pairs of that direction by their first swing (a viscous ratio
+    does not depend on the swing, a friction one does, so the record and the simulation are compared at
+    the same swing, not at the same turning point); beyond them, the simulation's own swing decrement
+    law (``_decrement_law`` on that direction's pairs, or on both directions' where one has fewer than
+    two; a single pair's ratio held), down to 0 where that law leaves no swing (it sticks there); 0
+    where the simulation has no pair at all (it stuck sooner: no swing). So the ratio moves smoothly
+    where a value tried sticks the simulation a half cycle sooner or later, not by the jump from the
+    last pair's ratio to nothing."""
     own = sorted((s1, r) for s1, r, d, _ in sim_pairs if d == direction)
-    if not own:
+    every = sorted((s1, r) for s1, r, d, _ in sim_pairs)
+    if not every:
         return 0.0
-    return float(np.interp(swing, [q[0] for q in own], [q[1] for q in own]))
+    if own and own[0][0] <= swing <= own[-1][0]:
+        return float(np.interp(swing, [q[0] for q in own], [q[1] for q in own]))
+    law = _decrement_law(own) or _decrement_law(every)
+    if law is None:
+        return float((own or every)[0][1])
+    alpha, beta = law
+    return float(max(alpha - beta / max(swing, 1e-9), 0.0))
 
 
 def residuals(rec: list, sim: list) -> tuple[np.ndarray, dict]:
@@ -128,16 +168,19 @@ def residuals(rec: list, sim: list) -> tuple[np.ndarray, dict]:
     by = {q[0]: q for q in sim}
     have = {q[0]: q for q in rec}
     per, missing = [], 0
+    halves = {a: by[a + 1][2] - by[a][2] for a in by if a > 0 and a + 1 in by
+              and np.isfinite(by[a][2]) and np.isfinite(by[a + 1][2]) and by[a + 1][2] > by[a][2]}
     for a in sorted(have):
         b = a + 1
         if b not in have:
             continue
         ra, rb = have[a], have[b]
         if a > 0 and np.isfinite(ra[2]) and np.isfinite(rb[2]) and rb[2] > ra[2]:
-            sa, sb = by.get(a), by.get(b)
-            ok = sa is not None and sb is not None and np.isfinite(sa[2]) and np.isfinite(sb[2]) and sb[2] > sa[2]
-            per.append(math.log((sb[2] - sa[2]) / (rb[2] - ra[2])) / PERIOD_SD if ok else 0.0)
-            missing += 0 if ok else 1
+            dur = halves.get(a)
+            if dur is None and halves:  # the simulation's nearest half cycle (the later one on a tie)
+                dur = halves[min(halves, key=lambda j: (abs(j - a), -j))]
+            per.append(math.log(dur / (rb[2] - ra[2])) / PERIOD_SD if dur is not None else 0.0)
+            missing += 0 if a in halves else 1
     sp = _pairs(sim)
     rat = []
     for s1, r, d, _ in _pairs(rec):
@@ -177,28 +220,38 @@ def _run(ring, v) -> list:
     return turning_points(out["time_s"], out["stroke_mm"], int(np.argmin(np.abs(out["time_s"]))))
 
 
-def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = None, max_nfev: int = MAX_NFEV) -> dict:
-    """The spring scale and friction (``fitted``) read from the free ring-downs (module docstring).
-    ``rings``: per record (name, time_s, shock_mm, slam, push, dampers): ``slam`` a
-    ``bounce_replay.prepare_slam`` result, ``push`` its replay's push (``PUSH_NAMES``), ``dampers``
-    {"compression_N_s_per_m", "rebound_N_s_per_m"}. ``held``: values given (default the dampers'
-    scale 1). {"spring_scale", "spring_scale_ci95", "friction_N", ..., "halves", "line"} or
-    {"refused", "line"}."""
+MODELS = {"viscous": {"friction_N": 0.0}, "friction": {"damper_scale": 0.0}, "both": {}}
+MODEL_WORDS = {"viscous": "viscous damping only", "friction": "Coulomb friction only",
+               "both": "viscous damping and Coulomb friction"}
+CRITERION = ("AICc: n ln(RSS / n) + 2 k + 2 k (k + 1) / (n - k - 1), n the residuals, RSS their sum of squares in "
+             "their sd, k the values fitted and the residual's variance; the lowest chosen")
+
+
+def aicc(rss: float, n: int, p: int) -> float:
+    """The small-sample Akaike criterion of a least-squares fit of ``p`` values on ``n`` residuals whose
+    sum of squares is ``rss`` (the variance fitted too: k = p + 1); inf where n - k - 1 <= 0."""
+    k = p + 1
+    if n - k - 1 <= 0:
+        return math.inf
+    return n * math.log(max(rss / n, 1e-12)) + 2 * k + 2 * k * (k + 1) / (n - k - 1)
+
+
+def _fit_one(rings, recs, names, held, st, max_nfev, extra=()) -> dict:
+    """One model's least squares (``fit``): ``names`` fitted, ``held`` given; started from the best point
+    of the start grid of those fitted, and from each of ``extra`` (value dicts: the restricted models'
+    answers), the lowest sum of squares kept."""
     from scipy.optimize import least_squares
     from scipy.stats import t as student
 
-    held = {**({} if "damper_scale" in fitted else {"damper_scale": 1.0}), **(held or {})}
-    names = [k for k in fitted if k not in held]
-    st = {**START, **(start or {})}
-    recs = [_record_points(ring) for ring in rings]
-    x0 = np.array([math.log(st[k]) if k in LOG else st[k] for k in names])
-    lo = np.array([math.log(LIMITS[k][0]) if k in LOG else LIMITS[k][0] for k in names])
-    hi = np.array([math.log(LIMITS[k][1]) if k in LOG else LIMITS[k][1] for k in names])
+    def to_x(v):
+        return np.array([math.log(max(v[k], LIMITS[k][0])) if k in LOG else v[k] for k in names])
+
+    lo, hi = to_x({k: LIMITS[k][0] for k in names}), to_x({k: LIMITS[k][1] for k in names})
     scale = np.array([1.0 if k in LOG else 30.0 for k in names])
     counts = {}
 
-    def res(u):
-        v = _values(x0 + u * scale, names, held)
+    def res_x(x):
+        v = _values(x, names, held)
         parts, n = [], {"periods": 0, "ratios": 0, "missing": 0}
         for ring, rec in zip(rings, recs):
             r, c = residuals(rec, _run(ring, v))
@@ -207,41 +260,46 @@ def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = Non
         counts.update(n)
         return np.concatenate(parts) if parts else np.zeros(0)
 
-    # the start: the best of the grid SPRING_STARTS x FRICTION_STARTS x DAMPER_STARTS (those fitted)
     starts = {"spring_scale": SPRING_STARTS, "friction_N": FRICTION_STARTS, "damper_scale": DAMPER_STARTS}
+    base_v = {k: st[k] for k in names}
     grid = [(k, starts[k]) for k in names if k in starts]
-    if grid:
-        best, cols = (math.inf, None), [names.index(k) for k, _ in grid]
-        for point in itertools.product(*(g for _, g in grid)):
-            for j, (k, _), p in zip(cols, grid, point):
-                x0[j] = math.log(p) if k in LOG else p
-            r = res(np.zeros(len(names)))
-            best = min(best, (float(r @ r), point), key=lambda q: q[0])
-        for j, (k, _), p in zip(cols, grid, best[1]):
-            x0[j] = math.log(p) if k in LOG else p
-    r0 = res(np.zeros(len(names)))
-    n_res = r0.size
-    base = {"method": METHOD, "held": held, "records": len(rings),
-            "halves_in_records": sum(max(len(q) - 2, 0) for q in recs)}
+    best = (math.inf, base_v)
+    for point in (itertools.product(*(g for _, g in grid)) if grid else [()]):
+        v = {**base_v, **dict(zip((k for k, _ in grid), point))}
+        r = res_x(to_x(v))
+        best = min(best, (float(r @ r), v), key=lambda q: q[0])
+    n_res = res_x(to_x(best[1])).size
+    out = {"halves_in_records": sum(max(len(q) - 2, 0) for q in recs)}
     if n_res <= len(names):
         why = f"{n_res} residual(s) from the records' free half cycles for {len(names)} value(s)"
-        return {**base, "refused": f"the ring-down fit not read: {why}", "line": f"ring-down fit not read: {why}"}
-    sol = least_squares(res, np.zeros(len(names)), bounds=((lo - x0) / scale, (hi - x0) / scale),
-                        diff_step=STEP, max_nfev=max_nfev, x_scale=1.0)
-    r = res(sol.x)
+        return {**out, "refused": f"the ring-down fit not read: {why}", "line": f"ring-down fit not read: {why}"}
+    sol = None
+    for v in [best[1]] + [{k: e.get(k, best[1][k]) for k in names} for e in extra]:
+        x0 = np.clip(to_x(v), lo, hi)
+        s = least_squares(lambda u: res_x(x0 + u * scale), np.zeros(len(names)),
+                          bounds=((lo - x0) / scale, (hi - x0) / scale), diff_step=STEP, max_nfev=max_nfev,
+                          x_scale=1.0)
+        if sol is None or s.cost < sol[0].cost:
+            sol = (s, x0)
+    sol, x0 = sol
+    r = res_x(x0 + sol.x * scale)
     J = sol.jac / scale[None, :]
     dof = r.size - len(names)
-    s2 = float(r @ r) / dof
+    rss = float(r @ r)
     try:
-        cov = np.linalg.inv(J.T @ J) * s2
+        cov = np.linalg.inv(J.T @ J) * rss / dof
     except np.linalg.LinAlgError:
-        cov = np.linalg.pinv(J.T @ J) * s2
+        cov = np.linalg.pinv(J.T @ J) * rss / dof
     tq = float(student.ppf(0.975, dof))
     u = x0 + sol.x * scale
-    out = {**base, "residual_counts": dict(counts), "rms_scaled": float(math.sqrt(float(r @ r) / r.size)),
-           "dof": dof, "runs": int(sol.nfev)}
+    out.update({"residual_counts": dict(counts), "rms_scaled": float(math.sqrt(rss / r.size)), "dof": dof,
+                "runs": int(sol.nfev), "rss": rss, "n_residuals": int(r.size)})
     for j, k in enumerate(names):
         half = tq * math.sqrt(max(cov[j, j], 0.0))
+        if not np.any(J[:, j]):  # the residual did not move with it: its interval is its whole range, not 0 wide
+            out.setdefault("undetermined", []).append(k)
+            out[k], out[k + "_ci95"] = (math.exp(u[j]) if k in LOG else float(u[j])), list(LIMITS[k])
+            continue
         if k in LOG:
             out[k], out[k + "_ci95"] = math.exp(u[j]), [math.exp(u[j] - half), math.exp(u[j] + half)]
         else:
@@ -257,6 +315,53 @@ def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = Non
                f"(at most {MAX_RMS_SD:g}), {counts['missing']} of {r.size} halves and pairs missing in the simulation "
                f"(at most {MAX_MISSING:.0%}); at spring {out['spring_scale']:.2f} x")
         out["refused"] = f"the ring-down fit refused: {why}"
+    return out
+
+
+def fit(rings, fitted=FITTED, held: dict | None = None, start: dict | None = None, max_nfev: int = MAX_NFEV) -> dict:
+    """The spring scale and friction (``fitted``) read from the free ring-downs (module docstring).
+    ``rings``: per record (name, time_s, shock_mm, slam, push, dampers): ``slam`` a
+    ``bounce_replay.prepare_slam`` result, ``push`` its replay's push (``PUSH_NAMES``), ``dampers``
+    {"compression_N_s_per_m", "rebound_N_s_per_m"}. ``held``: values given (default the dampers'
+    scale 1). With the friction and the dampers' scale both fitted, the three models (``MODELS``:
+    viscous only, friction only, both) are each fitted, both started also from the other two's answers
+    (the value each holds at its start value), and one chosen by ``aicc``: ``"model"``, ``"models"``
+    (each one's values, intervals, RMS and criterion), ``"criterion"``; the values and intervals given
+    are both's. {"spring_scale",
+    "spring_scale_ci95", "friction_N", ..., "line"} or {"refused", "line"}."""
+    held = {**({} if "damper_scale" in fitted else {"damper_scale": 1.0}), **(held or {})}
+    names = [k for k in fitted if k not in held]
+    st = {**START, **(start or {})}
+    recs = [_record_points(ring) for ring in rings]
+    base = {"method": METHOD, "held": held, "records": len(rings)}
+    if not ("friction_N" in names and "damper_scale" in names):
+        out = {**base, **_fit_one(rings, recs, names, held, st, max_nfev)}
+        out["line"] = line(out)
+        return out
+    sub = {m: _fit_one(rings, recs, [k for k in names if k not in MODELS[m]], {**held, **MODELS[m]}, st, max_nfev)
+           for m in ("viscous", "friction")}
+    # both also from each restricted model's answer, the value it held at its start value (START: 30 N, 1 x)
+    extra = [{**s, **{k: st[k] for k in MODELS[m]}} for m, s in sub.items() if "rss" in s]
+    both = _fit_one(rings, recs, names, held, st, max_nfev, extra=extra)
+    out = {**base, **both}
+    models = {}
+    for m, s in (*sub.items(), ("both", both)):
+        p = len(names) - len(MODELS[m])
+        e = {"fitted": [k for k in names if k not in MODELS[m]], "held": dict(MODELS[m])}
+        if "rss" in s:
+            a = aicc(s["rss"], s["n_residuals"], p)  # null where too few residuals (fit.json has no inf)
+            e.update({k: s[k] for k in names}, rms_scaled=s["rms_scaled"], rss=s["rss"],
+                     aicc=a if math.isfinite(a) else None)
+            e.update({k + "_ci95": s[k + "_ci95"] for k in names if k + "_ci95" in s})
+            if s.get("undetermined"):
+                e["undetermined"] = s["undetermined"]
+        if "refused" in s:
+            e["refused"] = s["refused"]
+        models[m] = e
+    scored = {m: e["aicc"] for m, e in models.items() if e.get("aicc") is not None}
+    if scored:
+        out["model"] = min(scored, key=scored.get)
+    out.update(models=models, criterion=CRITERION)
     out["line"] = line(out)
     return out
 
@@ -278,10 +383,36 @@ def line(out: dict) -> str:
     return (f"ring-down fit (free half periods and swing ratios, {c['periods']} and {c['ratios']}, of "
             f"{out['records']} records): " + ", ".join(said)
             + ("; the friction's interval holds 0 (viscous only within the uncertainty)" if visc else "")
-            + (f"; at a bound: {', '.join(out['at_bound'])}" if out.get("at_bound") else ""))
+            + (f"; at a bound: {', '.join(out['at_bound'])}" if out.get("at_bound") else "")
+            + (f"; not determined (the residual does not move with it): {', '.join(out['undetermined'])}"
+               if out.get("undetermined") else "") + _model_words(out))
 
 
-__all__ = ["METHOD", "fit", "line", "residuals", "swing_ratio_at", "turning_points"]
+def _model_words(out: dict) -> str:
+    """The model the criterion chose with each model's AICc (``fit``) and, where it is not both, its own
+    values and intervals; nothing without a choice."""
+    if "model" not in out:
+        return ""
+    m = out["model"]
+    said = ", ".join(f"{k} {e['aicc']:.1f}" if e.get("aicc") is not None else f"{k} none (too few residuals)"
+                     for k, e in out["models"].items() if "aicc" in e)
+    own = ""
+    if m != "both":
+        e = out["models"][m]
+        vals = []
+        for k, unit, f in (("spring_scale", "x", ".2f"), ("friction_N", "N", ".0f"), ("damper_scale", "x", ".2f")):
+            if k + "_ci95" in e:
+                lo, hi = e[k + "_ci95"]
+                vals.append(f"{k.split('_')[0]} {e[k]:{f}} {unit} [{lo:{f}}, {hi:{f}}]")
+            elif k in e["held"]:
+                vals.append(f"{k.split('_')[0]} {e[k]:g} held")
+        own = ": " + ", ".join(vals) + ("" if "refused" not in e else " (the bike does not follow it: "
+                                        f"RMS {e['rms_scaled']:.1f} sd)")
+    return f"; model by AICc: {MODEL_WORDS[m]}{own} (AICc {said}; the values before are both's)" if m != "both" \
+        else f"; model by AICc: {MODEL_WORDS[m]} (AICc {said})"
+
+
+__all__ = ["CRITERION", "METHOD", "MODELS", "aicc", "fit", "line", "residuals", "swing_ratio_at", "turning_points"]
 
 
 DEFAULT_FITTED = ("spring_scale", "friction_N", "damper_scale")
