@@ -11,7 +11,9 @@ predicted's RMS error, the two baselines' (the fork's record delayed by wheelbas
 least-squares scale and offset; the rear's mean), the rear predicted's correlation with the record, the
 fork's record at the same moment with its own scale and offset (reported, not judged by), the rear
 with the share of its ground met at the front's moment fitted on its record (``at_once_fit``:
-``reconstruct(..., at_once=True)``, reported, not judged; the wall time includes it),
+``reconstruct(..., at_once=True)``, reported, not judged; the wall time includes it), what the fork's
+record holds about the rear (``checks.bound_fork_filter_rms_mm``: a linear filter from the fork's
+record fitted on the rear's itself, cross-validated; reported, not judged) beside the pass mark,
 the whole bike's passes and where it diverged (if it did), the share of the ride checked, the verdict
 and the wall time. Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
 reconstruct_rides.json``, outside the repository). Not a test: nothing is asserted.
@@ -83,7 +85,8 @@ def main(argv=None) -> int:
                    checks=s["checks"], wheelbase_at_sag_m=s["wheelbase_at_sag_m"], at_once_fit=s.get("at_once_fit"),
                    wall_s_includes="the at-once fit (two or three more runs of the whole bike than the command's)")
         rows.append(row)
-        print(f"{path.name}: {s['checks']['verdict']} ({row['wall_s']:.1f} s)", flush=True)
+        print(f"{path.name}: {s['checks']['verdict']} (the fork's filter {s['checks']['bound_fork_filter_rms_mm']:.1f} mm, "
+              f"the mark {s['checks']['pass_mark_rms_mm']:.1f}; {row['wall_s']:.1f} s)", flush=True)
     out = {"command": "python benchmarks/reconstruct_rides.py" + "".join(f" --rides {r}" for r in named)
                       + (" --shared" if args.shared else "")
                       + (f" --bike {args.bike}" if args.bike != "sst" else "")

@@ -811,7 +811,8 @@ def reconstruction_stand_in(monkeypatch) -> list:
 # --- a ride made by an independent whole bike -----------------------------------------------------
 # scipy's solve_ivp on its own equations, not the package's engines or laws' code: a frame that heaves
 # and pitches, a rider on legs and arms (vertical springs and dampers at the pedals and the bars) who
-# heaves and pitches on it and shifts a slow load fore and aft (a force pair at the bars and pedals),
+# heaves and pitches on it and shifts a slow load fore and aft (a force pair at the bars and pedals;
+# opt-in, ``pump_N``, pumps both ends at once at 0.5-2 Hz),
 # the fork's lower and wheel sliding along the steering axis, the rear wheel on the constant leverage
 # ratio RATIO, point-contact tyres that leave the ground, their contacts a wheelbase apart that
 # shortens as the fork and the rear go in (the front axle back along the steering axis, the rear axle
@@ -888,14 +889,17 @@ def whole_bike_terrain(length, seed=21, features=WHOLE_FEATURES):
 
 def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=40.0, profile=SpeedProfile(),
                     features=WHOLE_FEATURES, fork_reb=700.0, slow_load_N=80.0, slow_period_s=7.0, rider_forward_m=0.0,
-                    carried=True):
+                    carried=True, pump_N=0.0):
     """This file's bike (``bike_text``: the fork at ``fork_rate`` N/mm and ``fork_reb`` N s/m of
     rebound, the shock's rebound ``shock_reb_scale`` times SHOCK_REB) ridden for ``seconds`` by the
     independent whole bike above at ``profile``'s speed over ``whole_bike_terrain(seed, features)``,
     the rider's slow load ``slow_load_N`` (onto the bars, period ``slow_period_s``), the rider's centre
     of mass ``rider_forward_m`` ahead of where the bike file puts it the whole ride; ``carried=False``:
     the frame pitching about its own body's inertia alone, the masses it carries fore and aft left out
-    (the advice's rides, ``ADVISE_CARRIED``; not what the MuJoCo bike does). Written as
+    (the advice's rides, ``ADVISE_CARRIED``; not what the MuJoCo bike does); ``pump_N`` > 0: the rider
+    pumps and absorbs, his limbs pushing him up and the bike down at both ends at once (at the pedals
+    and the bars, half each) with a force of 0.5-2 Hz (a sum of 12 sines of random phase, drawn from
+    ``seed + 1000``) whose largest value over the ride is ``pump_N`` (default 0: none). Written as
     ``path``/bike.toml (the recorded setting) and ``path``/ride.SST (SST v3 integer counts through its
     [sensors]); returns the truth: bike, sst, t, fork_mm and rear_mm (wheel travel), h (the terrain),
     features, wb (the wheelbase along the ride, m), profile, airborne_front (share of the ride the front tyre is
@@ -942,6 +946,15 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
     P_leg, P_arm = mr_ * g * (r.arm_x - rx) / span, mr_ * g * (rx - r.leg_x) / span  # the limbs' preloads
     h, placed = whole_bike_terrain(float(profile.along(seconds)) + 10.0, seed, features)
     along = profile.along
+    pumps = np.random.default_rng(seed + 1000)
+    pump_f, pump_phase = pumps.uniform(0.5, 2.0, 12), pumps.uniform(0.0, 2 * np.pi, 12)
+    grid = np.arange(0.0, seconds + 1.0, 1e-3)
+    pump_peak = float(np.max(np.abs(np.sin(2 * np.pi * pump_f[:, None] * grid + pump_phase[:, None]).sum(0))))
+
+    def pump(t):  # N, the limbs pushing the rider up and the bike down at both ends (0 unless pump_N)
+        if not pump_N:
+            return 0.0
+        return pump_N * float(np.sin(2 * np.pi * pump_f * t + pump_phase).sum()) / pump_peak
 
     def forces(t, y):
         zf, th, zr, tr, zw, zq, vf, om, vr, orr, vw, vq = y
@@ -958,7 +971,8 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
             ed = (vf + (x - cx) * om) - (vr + (x - rx) * orr)
             limbs.append(P + k * e + c * ed)
         u = slow_load_N * math.sin(2 * math.pi * t / slow_period_s)  # +: onto the bars, off the pedals
-        leg, arm = limbs[0] - u, limbs[1] + u
+        p = pump(t)
+        leg, arm = limbs[0] - u + 0.5 * p, limbs[1] + u + 0.5 * p
         s = float(along(t))
         wb = wheelbase((wF + base[0]) / sa, wR + base[1])
         tF = max(0.0, tyre_k * (float(h(s)) - (zw + base[2] - radius)))

@@ -125,6 +125,32 @@ def test_the_right_bike_describes_the_ride(rebuilt, reconstruction):
     assert np.corrcoef(reconstruction.rear_predicted[v], reconstruction.rear[v])[0, 1] > 0.8
 
 
+TOO_LITTLE = "the fork's record holds too little about this ride's rear to check the model"
+
+
+def test_the_verdict_does_not_say_the_front_holds_too_little(reconstruction):
+    """Issue 51 item 3, the bound beside the baselines (mtbmj/ride/reconstruct_bound.py): on this ride
+    the rear meets the terrain a wheelbase after the front (its rider only shifts a slow load), so in
+    0.5-2 Hz the fork's record correlates with the rear's more a wheelbase later than at once, and the
+    verdict never blames the ride (tests/test_reconstruct_bound.py makes a ride where it does)."""
+    c = reconstruction.checks()
+    body = next(b["timing"] for b in c["bands"] if b["band_Hz"] == [0.5, 2.0])
+    assert body["fork_at_lag_correlation"] > body["fork_now_correlation"] + 0.2, body
+    assert c["front_holds_too_little"] is False and TOO_LITTLE not in c["verdict"]
+    assert c["bound_fork_filter_rms_mm"] < c["baseline_delayed_fork_rms_mm"]  # the fork carries the rear
+
+
+@pytest.mark.xfail(strict=True, reason="a linear filter from the fork's record cannot follow the whole bike's flights "
+                                       "and stops: fitted on the rear itself it reaches 4.81 mm RMS where it was not "
+                                       "fitted (5.74 and 3.74 per fold; with a fixed ridge in-sample on the whole ride "
+                                       "3.76), the pass mark is 4.14 mm and the model 3.63 mm")
+def test_the_fork_filter_meets_the_pass_mark_where_the_front_carries_the_rear(reconstruction):
+    """The bound below the pass mark on a ride whose rear the front's record carries (the model passes
+    here)."""
+    c = reconstruction.checks()
+    assert c["bound_fork_filter_rms_mm"] <= c["pass_mark_rms_mm"], c
+
+
 @pytest.mark.xfail(strict=True, reason="since the made bike and the reconstruction's carry the masses fore and aft in "
                                        "pitch (reconstruct_bike.carried_inertia): the rear predicted 3.63 mm RMS where "
                                        "the delayed fork gives 6.90 (0.53 of it, the target 0.5)")
@@ -180,7 +206,8 @@ def test_the_terrain_is_found_under_the_jumps_and_drops(made, reconstruction):
 def test_a_wrong_bike_fails_the_checks_and_says_why(made, tmp_path, capsys, wrong):
     """The same ride read through a bike that did not make it: its fork spring 1.5 times the made one,
     or its rider 25 kg heavier. The rear predicted from the fork's record must lose to a naive
-    baseline by the stated margin, and the line says so in words."""
+    baseline by the stated margin, and the line says so in words, without saying the ride cannot be
+    checked."""
     text = bike_text(18.0 if wrong == "fork_spring_x1.5" else 12.0)
     if wrong == "rider_25kg_heavier":
         from mtbmj.bike import spec as spec_mod
@@ -193,6 +220,8 @@ def test_a_wrong_bike_fails_the_checks_and_says_why(made, tmp_path, capsys, wron
     c = json.loads((tmp_path / "rec" / "reconstruction.json").read_text())["checks"]
     assert c["passes"] is False, c
     assert "the model does not describe this ride: it does not beat " in line
+    # the fault is the bike's: the verdict does not say the fork's record cannot check this ride's rear
+    assert c["front_holds_too_little"] is False and TOO_LITTLE not in line
 
 
 def test_the_whole_bike_rides_its_reconstruction(made, rebuilt, tmp_path, capsys):
@@ -302,3 +331,42 @@ def test_the_share_met_at_once_is_none_on_a_ride_whose_rear_meets_the_terrain_a_
     assert abs(fit["rear_predicted_rms_mm"] - c["rear_predicted_rms_mm"]) < 1e-9
     assert c["rear_predicted_rms_mm"] == plain["rear_predicted_rms_mm"] and c["passes"] == plain["passes"]
     assert "met at the front's moment" not in reconstruction.line() and rec.summary()["at_once_fit"] == fit
+
+
+@pytest.fixture(scope="module")
+def pumped(tmp_path_factory):
+    """The made ride again with its rider pumping and absorbing: his limbs push both ends down at once
+    with a force of 0.5-2 Hz of at most 300 N (``whole_bike_ride(pump_N=300)``), reconstructed."""
+    from types import SimpleNamespace
+
+    from mtbmj.cli.telemetry import decoding
+    from mtbmj.measured import telemetry
+    from mtbmj.ride import reconstruct
+
+    made = whole_bike_ride(tmp_path_factory.mktemp("pumped"), seconds=SECONDS, profile=PROFILE, pump_N=300.0)
+    record = telemetry.read_ride(made["sst"], **decoding(SimpleNamespace(bike=str(made["bike"]), fork_max_mm=None,
+                                                                         shock_max_mm=None)))
+    return reconstruct.reconstruct(record, str(made["bike"]))
+
+
+@pytest.mark.slow  # a ride made and reconstructed: 0.5 min
+def test_a_rider_pumping_at_300_n_fails_the_check_without_blaming_the_ride(pumped):
+    """What the check says on the pumped ride: the model fails (6.5 mm against the mark 4.7), the
+    fork's filter misses the mark too (6.0), but in 0.5-2 Hz the rear still follows the fork a
+    wheelbase later more than at once (0.71 against 0.58), so the verdict does not say the fork's
+    record holds too little: 300 N of pumping is not the shared rides' load on both ends."""
+    c = pumped.checks()
+    body = next(b["timing"] for b in c["bands"] if b["band_Hz"] == [0.5, 2.0])
+    assert c["passes"] is False and c["bound_misses_mark"] is True, c
+    assert body["fork_at_lag_correlation"] > body["fork_now_correlation"], body
+    assert c["front_holds_too_little"] is False and TOO_LITTLE not in c["verdict"]
+
+
+@pytest.mark.slow  # a ride made and reconstructed: 0.5 min
+@pytest.mark.xfail(strict=True, reason="the rider's pumping is not estimated: on the made ride with 0.5-2 Hz of at most "
+                                       "300 N at both ends the rear predicted is 6.53 mm RMS, the mark 4.67 (the "
+                                       "delayed fork 7.79; 3.63 against 4.14 without the pumping)")
+def test_the_model_describes_a_ride_whose_rider_pumps(pumped):
+    """Issue 51 item 2: the rider's loads (pumping among them) are an estimated input, bounded by what a
+    rider can do, so a ride with them is described as one without."""
+    assert pumped.checks()["passes"] is True

@@ -54,7 +54,12 @@ on the shared rides the rear follows the fork at once more than a wheelbase late
 (a load on both ends at once, a turn or a compression, rather than the terrain a wheelbase ahead),
 that share fitted on the rear's record (:func:`at_once_share`: the timing alone, one number, never a
 height; ``Reconstruction.at_once_fit``). Fitted, it would let a wrong bike pass (the made ride read
-with the fork spring 1.5 times did), so it is never judged.
+with the fork spring 1.5 times did), so it is never judged. Also beside, never judged by: what the
+fork's record holds about the rear (:mod:`mtbmj.ride.reconstruct_bound`: a linear filter from the
+fork's record fitted on the rear's itself, tested where it was not fitted); where the reconstruction
+fails, that bound misses the pass mark too and in 0.5-2 Hz the rear moves with the fork at once more
+than a wheelbase later, the line says the fork's record holds too little about the ride's rear to
+check the model (a load on both ends, which the front's record alone cannot tell from terrain).
 Where the whole bike diverges (finding
 the terrain or riding it) the line says where, and the ride is not described. Also the RMS in % of
 the rear travel the ride used and the distance between the two travel histograms.
@@ -69,13 +74,14 @@ docs/rolling.md and docs/measured.md.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from mtbmj.ride.reconstruct_inverse import QuarterCar, forward, ground_under, lowpass, runs, wheelbase_at
 from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ
 from mtbmj.ride.reconstruct_bands import BANDS, BEAT_MARGIN, band_checks  # noqa: F401 (BANDS: this module's name too)
+from mtbmj.ride.reconstruct_bound import fork_filter_bound
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
                                           check_length, merged, min_seconds, refine, speed_from_either,
                                           speed_from_lag, tracked)
@@ -135,6 +141,15 @@ class Reconstruction:
     stands: list = None  # (start s, end s) of the record: the bike standing unweighted mid-ride (its rider off it)
     at_once: float = 0.0  # the share of the rear's ground met at the front's moment (at_once_share), 0..1
     at_once_fit: dict | None = None  # reconstruct(at_once=True): the rear with that share fitted (fitted_summary)
+    _bound: dict | None = field(default=None, init=False, repr=False, compare=False)  # fork_bound's, once
+
+    def fork_bound(self) -> dict | None:
+        """What the fork's record holds about the rear on the samples checked
+        (``reconstruct_bound.fork_filter_bound``: a linear filter from the fork's record fitted on the
+        rear's itself, cross-validated), computed once."""
+        if self._bound is None:
+            self._bound = fork_filter_bound(self.t, self.front, self.rear, self.valid, self.lags) or {}
+        return self._bound or None
 
     @property
     def fork_delayed_or_front(self) -> np.ndarray:
@@ -170,7 +185,8 @@ class Reconstruction:
                         f"the whole bike diverged at {self.diverged_s:.2f} s (finding the terrain or riding it): "
                         if self.diverged_s is not None else "") + "no sample of it can be checked",
                     "rear_predicted_rms_percent_of_used": nan, "rear_histogram_distance_percent": nan,
-                    "samples_checked_percent": 0.0, "bands": []}
+                    "samples_checked_percent": 0.0, "bands": [], "bound_fork_filter_rms_mm": nan,
+                    "bound_misses_mark": False, "front_holds_too_little": False}
         used = float(np.ptp(self.rear[v]))
         rms_front = float(np.sqrt(np.mean((self.front_again[v] - self.front[v]) ** 2)))
         rms_rear = float(np.sqrt(np.mean((self.rear_predicted[v] - self.rear[v]) ** 2)))
@@ -179,6 +195,15 @@ class Reconstruction:
         rms_mean = float(np.sqrt(np.mean((base["mean_mm"] - self.rear[v]) ** 2)))
         need = (1.0 - BEAT_MARGIN) * min(rms_fork, rms_mean)
         passes = bool(rms_rear <= need) and self.diverged_s is None
+        bands = band_checks(self.t, self.rear, self.rear_predicted, self.fork_delayed_or_front, v, fork=self.front,
+                            lags=self.lags)
+        bound = self.fork_bound()  # reported beside, never judged by
+        rms_bound = bound["rms_mm"] if bound else float("nan")
+        misses = bool(rms_bound > need)
+        # the rear moving with the fork at once in the body's band: what the front's record cannot tell from terrain
+        body = next((b["timing"] for b in bands if b["band_Hz"] == [0.5, 2.0] and "timing" in b), None)
+        at_once = body is not None and body["fork_now_correlation"] > body["fork_at_lag_correlation"]
+        too_little = misses and at_once and not passes and self.diverged_s is None
         if self.diverged_s is not None:
             verdict = (f"the model does not describe this ride: the whole bike diverged at {self.diverged_s:.2f} s "
                        f"(finding the terrain or riding it); before it the rear predicted {rms_rear:.1f} mm RMS "
@@ -193,19 +218,27 @@ class Reconstruction:
                        f"{rms_rear:.1f} mm RMS against {min(rms_fork, rms_mean):.1f} mm (the delayed fork "
                        f"{rms_fork:.1f}, the mean {rms_mean:.1f}; a pass needs {100 * BEAT_MARGIN:.0f} % below "
                        f"the better, {need:.1f} mm)")
+        if too_little:
+            verdict += (f"; the fork's record holds too little about this ride's rear to check the model (a linear "
+                        f"filter from the fork's record fitted on the rear itself reaches {rms_bound:.1f} mm RMS where "
+                        f"it was not fitted, the mark is {need:.1f} mm): in 0.5-2 Hz the rear moves with the fork at "
+                        f"once (correlation {body['fork_now_correlation']:.2f}, a wheelbase later "
+                        f"{body['fork_at_lag_correlation']:.2f}), a load on both ends, which the front's record alone "
+                        f"cannot tell from terrain")
         A = np.column_stack((self.front[v], np.ones(int(v.sum()))))  # reported beside, not judged by
         rms_now = float(np.sqrt(np.mean((A @ np.linalg.lstsq(A, self.rear[v], rcond=None)[0] - self.rear[v]) ** 2)))
         return {"front_reproduced_rms_mm": rms_front, "rear_predicted_rms_mm": rms_rear,
                 "baseline_delayed_fork_rms_mm": rms_fork, "baseline_rear_mean_rms_mm": rms_mean,
                 "fork_at_once_rms_mm": rms_now,
                 "baseline_delayed_fork_scale": base["delayed_fork_scale"],
-                "beat_margin_percent": 100.0 * BEAT_MARGIN, "passes": passes, "verdict": verdict,
+                "beat_margin_percent": 100.0 * BEAT_MARGIN, "pass_mark_rms_mm": need, "passes": passes,
+                "verdict": verdict, "bound_fork_filter_rms_mm": rms_bound, "bound_fork_filter": bound,
+                "bound_misses_mark": misses, "front_holds_too_little": too_little,
                 "rear_travel_used_mm": used, "rear_predicted_rms_percent_of_used": 100.0 * rms_rear / used,
                 "rear_histogram_distance_percent": histogram_distance(self.rear[v], self.rear_predicted[v],
                                                                         self.rear_top),
                 "samples_checked_percent": 100.0 * float(np.mean(v)),
-                "bands": band_checks(self.t, self.rear, self.rear_predicted, self.fork_delayed_or_front, v,
-                                     fork=self.front, lags=self.lags)}
+                "bands": bands}
 
     def fitted_summary(self, valid) -> dict:
         """This reconstruction's rear on the ``valid`` samples of another (the one judged): its share of the
@@ -338,8 +371,9 @@ class Reconstruction:
                 f"{c['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted {c['rear_predicted_rms_mm']:.1f} mm RMS "
                 f"({c['rear_predicted_rms_percent_of_used']:.0f} % of the {c['rear_travel_used_mm']:.0f} mm used; "
                 f"baselines: delayed fork {c['baseline_delayed_fork_rms_mm']:.1f}, rear's mean "
-                f"{c['baseline_rear_mean_rms_mm']:.1f} mm; the fork at once {c['fork_at_once_rms_mm']:.1f}, not "
-                f"judged by), "
+                f"{c['baseline_rear_mean_rms_mm']:.1f} mm; the fork at once {c['fork_at_once_rms_mm']:.1f}, a linear "
+                f"filter from the fork fitted on the rear itself {c['bound_fork_filter_rms_mm']:.1f} (what the fork's "
+                f"record holds about the rear), neither judged by; the mark {c['pass_mark_rms_mm']:.1f}), "
                 + ("" if not self.at_once_fit else f"with {100 * self.at_once_fit['share']:.0f} % of the rear's ground "
                    f"met at the front's moment (fitted on the rear's record, not judged) the rear "
                    f"{self.at_once_fit['rear_predicted_rms_mm']:.1f} mm, ")
