@@ -85,7 +85,8 @@ def main(argv=None) -> int:
                    checks=s["checks"], wheelbase_at_sag_m=s["wheelbase_at_sag_m"], at_once_fit=s.get("at_once_fit"),
                    wall_s_includes="the at-once fit (two or three more runs of the whole bike than the command's)")
         rows.append(row)
-        print(f"{path.name}: {s['checks']['verdict']} (the fork's filter {s['checks']['bound_fork_filter_rms_mm']:.1f} mm, "
+        b = s['checks']['bound_fork_filter_rms_mm']
+        print(f"{path.name}: {s['checks']['verdict']} (the fork's filter " + ("none" if b is None else f"{b:.1f} mm") + ", "
               f"the mark {s['checks']['pass_mark_rms_mm']:.1f}; {row['wall_s']:.1f} s)", flush=True)
     out = {"command": "python benchmarks/reconstruct_rides.py" + "".join(f" --rides {r}" for r in named)
                       + (" --shared" if args.shared else "")

@@ -115,3 +115,23 @@ def test_a_rear_the_fork_carries_fails_the_model_without_the_sentence():
     assert c["bound_fork_filter_rms_mm"] < 0.5 * c["pass_mark_rms_mm"], c
     assert c["bound_misses_mark"] is False and c["front_holds_too_little"] is False
     assert SENTENCE not in c["verdict"]
+
+
+def test_a_ride_too_little_checked_for_the_bound_says_none(tmp_path):
+    """Too few samples checked for the filter's folds (2 s of 120 s: fewer than its taps in either half of a
+    fold): the bound is None, written as JSON null (strict JSON, no NaN), never the sentence; the check itself
+    still judged (the rear predicted exactly passes)."""
+    import json
+
+    few = np.zeros(t.size, bool)
+    few[int(10 * FS):int(12 * FS)] = True
+    fork = 40.0 + TERRAIN
+    rear = 12.0 + 0.8 * delayed(fork)
+    sp = {"windows": [], "speed_at": lambda x: np.interp(x, t, speed)}
+    rec = reconstruct.Reconstruction("r", "b", t, sp, t, t, few, fork, fork, rear, rear, 150.0, [],
+                                     fork_delayed=delayed(fork), wheelbase=WHEELBASE)
+    c = rec.checks()
+    assert c["bound_fork_filter_rms_mm"] is None and c["bound_misses_mark"] is False
+    assert c["passes"] and SENTENCE not in c["verdict"]
+    text = json.dumps(c["bound_fork_filter_rms_mm"], allow_nan=False)
+    assert text == "null"

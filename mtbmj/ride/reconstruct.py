@@ -185,7 +185,7 @@ class Reconstruction:
                         f"the whole bike diverged at {self.diverged_s:.2f} s (finding the terrain or riding it): "
                         if self.diverged_s is not None else "") + "no sample of it can be checked",
                     "rear_predicted_rms_percent_of_used": nan, "rear_histogram_distance_percent": nan,
-                    "samples_checked_percent": 0.0, "bands": [], "bound_fork_filter_rms_mm": nan,
+                    "samples_checked_percent": 0.0, "bands": [], "bound_fork_filter_rms_mm": None,
                     "bound_misses_mark": False, "front_holds_too_little": False}
         used = float(np.ptp(self.rear[v]))
         rms_front = float(np.sqrt(np.mean((self.front_again[v] - self.front[v]) ** 2)))
@@ -198,8 +198,8 @@ class Reconstruction:
         bands = band_checks(self.t, self.rear, self.rear_predicted, self.fork_delayed_or_front, v, fork=self.front,
                             lags=self.lags)
         bound = self.fork_bound()  # reported beside, never judged by
-        rms_bound = bound["rms_mm"] if bound else float("nan")
-        misses = bool(rms_bound > need)
+        rms_bound = bound["rms_mm"] if bound else None  # None (JSON null): too few samples checked for its folds
+        misses = bool(rms_bound is not None and rms_bound > need)
         # the rear moving with the fork at once in the body's band: what the front's record cannot tell from terrain
         body = next((b["timing"] for b in bands if b["band_Hz"] == [0.5, 2.0] and "timing" in b), None)
         at_once = body is not None and body["fork_now_correlation"] > body["fork_at_lag_correlation"]
@@ -372,7 +372,9 @@ class Reconstruction:
                 f"({c['rear_predicted_rms_percent_of_used']:.0f} % of the {c['rear_travel_used_mm']:.0f} mm used; "
                 f"baselines: delayed fork {c['baseline_delayed_fork_rms_mm']:.1f}, rear's mean "
                 f"{c['baseline_rear_mean_rms_mm']:.1f} mm; the fork at once {c['fork_at_once_rms_mm']:.1f}, a linear "
-                f"filter from the fork fitted on the rear itself {c['bound_fork_filter_rms_mm']:.1f} (what the fork's "
+                f"filter from the fork fitted on the rear itself " + (
+                    "none (too few samples checked)" if c['bound_fork_filter_rms_mm'] is None
+                    else f"{c['bound_fork_filter_rms_mm']:.1f}") + f" (what the fork's "
                 f"record holds about the rear), neither judged by; the mark {c['pass_mark_rms_mm']:.1f}), "
                 + ("" if not self.at_once_fit else f"with {100 * self.at_once_fit['share']:.0f} % of the rear's ground "
                    f"met at the front's moment (fitted on the rear's record, not judged) the rear "
