@@ -1099,3 +1099,18 @@ def slam_parts(scale: float, rest_mm: float) -> tuple:
     g_r, g_b = SLAM_RIDER_SHARE * SLAM_W_SHOCK, (1 - SLAM_RIDER_SHARE) * SLAM_W_SHOCK
     x_rest = rest_mm / 1e3
     return k, m_r, m_b, m_w, k_r, c_r, g_r, g_b, x_rest, SLAM_W_SHOCK - k * x_rest
+
+
+# The clock of the series the reconstruction's band and bound tests write themselves (tests/test_reconstruct_bands.py,
+# tests/test_reconstruct_bound.py): 200 Hz for 120 s, a wheelbase of 1.2 m ridden at 6 +- 1 m/s (a 40 s period)
+WRITTEN_FS, WRITTEN_SECONDS, WRITTEN_WHEELBASE = 200.0, 120.0, 1.2
+
+
+def written_clock():
+    """(t s, the speed m/s on it, the rear's lag behind the front s (0.17-0.24), the samples the checks count: all
+    but the first and last 5 s, where the filters' ends and the first wheelbase lie)."""
+    t = np.arange(int(WRITTEN_FS * WRITTEN_SECONDS)) / WRITTEN_FS
+    speed = 6.0 + 1.0 * np.sin(2 * math.pi * t / 40.0)
+    valid = np.zeros(t.size, bool)
+    valid[int(5 * WRITTEN_FS):-int(5 * WRITTEN_FS)] = True
+    return t, speed, WRITTEN_WHEELBASE / speed, valid

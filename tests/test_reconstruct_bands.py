@@ -15,12 +15,10 @@ from scipy.signal import butter, sosfiltfilt
 from mtbmj.ride import reconstruct
 from mtbmj.ride.reconstruct_bands import band_checks, timing
 
-FS, SECONDS, WHEELBASE = 200.0, 120.0, 1.2
-t = np.arange(int(FS * SECONDS)) / FS
-speed = 6.0 + 1.0 * np.sin(2 * math.pi * t / 40.0)  # m/s
-LAGS = WHEELBASE / speed  # s: 0.17-0.24
-valid = np.zeros(t.size, bool)
-valid[int(5 * FS):-int(5 * FS)] = True  # the filters' ends and the first wheelbase are not checked
+from helpers import WRITTEN_FS, WRITTEN_SECONDS, WRITTEN_WHEELBASE, written_clock
+
+FS, SECONDS, WHEELBASE = WRITTEN_FS, WRITTEN_SECONDS, WRITTEN_WHEELBASE
+t, speed, LAGS, valid = written_clock()  # speed m/s, LAGS s (0.17-0.24), valid: the checked samples
 
 
 def noise(seed, lo=2.5, hi=8.0, scale=40.0):

@@ -9,8 +9,6 @@ where the rear moves with the fork at once and the filter misses the pass mark, 
 carries the rear (a failing prediction there is the model's fault, not the ride's)."""
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 from scipy.signal import butter, sosfiltfilt
@@ -18,12 +16,10 @@ from scipy.signal import butter, sosfiltfilt
 from mtbmj.ride import reconstruct
 from mtbmj.ride.reconstruct_bound import fork_filter_bound
 
-FS, SECONDS, WHEELBASE = 200.0, 120.0, 1.2
-t = np.arange(int(FS * SECONDS)) / FS
-speed = 6.0 + 1.0 * np.sin(2 * math.pi * t / 40.0)  # m/s
-LAGS = WHEELBASE / speed  # s: 0.17-0.24
-valid = np.zeros(t.size, bool)
-valid[int(5 * FS):-int(5 * FS)] = True  # the filters' ends and the first wheelbase are not checked
+from helpers import WRITTEN_FS, WRITTEN_SECONDS, WRITTEN_WHEELBASE, written_clock
+
+FS, SECONDS, WHEELBASE = WRITTEN_FS, WRITTEN_SECONDS, WRITTEN_WHEELBASE
+t, speed, LAGS, valid = written_clock()  # speed m/s, LAGS s (0.17-0.24), valid: the checked samples
 SENTENCE = "the fork's record holds too little about this ride's rear to check the model"
 
 
