@@ -608,8 +608,8 @@ def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
                             if (r.get("whole_bike") or {}).get("diverged_s") is not None
                             else f"**fails** (not below the {better})")),
                         "reconstruct_rides.json", d["command"]))
-        bound = c.get("bound_fork_filter_rms_mm")  # results measured before the bound have none
-        if bound is not None and bound == bound:
+        bound = c.get("bound_fork_filter_rms_mm")  # None: measured before the bound, or too few samples checked
+        if bound is not None:
             rows.append(Row(f"{name}: what the fork's record holds about the rear, not judged", "report",
                             f"a linear filter from the fork, fitted on the rear: {mm(bound, 3)} (mark "
                             f"{mm(c['pass_mark_rms_mm'], 3)})"

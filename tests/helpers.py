@@ -946,10 +946,11 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
     P_leg, P_arm = mr_ * g * (r.arm_x - rx) / span, mr_ * g * (rx - r.leg_x) / span  # the limbs' preloads
     h, placed = whole_bike_terrain(float(profile.along(seconds)) + 10.0, seed, features)
     along = profile.along
-    pumps = np.random.default_rng(seed + 1000)
-    pump_f, pump_phase = pumps.uniform(0.5, 2.0, 12), pumps.uniform(0.0, 2 * np.pi, 12)
-    grid = np.arange(0.0, seconds + 1.0, 1e-3)
-    pump_peak = float(np.max(np.abs(np.sin(2 * np.pi * pump_f[:, None] * grid + pump_phase[:, None]).sum(0))))
+    if pump_N:  # the pumping force's sines and its largest value over the ride, drawn only where asked
+        pumps = np.random.default_rng(seed + 1000)
+        pump_f, pump_phase = pumps.uniform(0.5, 2.0, 12), pumps.uniform(0.0, 2 * np.pi, 12)
+        grid = np.arange(0.0, seconds + 1.0, 1e-3)
+        pump_peak = float(np.max(np.abs(np.sin(2 * np.pi * pump_f[:, None] * grid + pump_phase[:, None]).sum(0))))
 
     def pump(t):  # N, the limbs pushing the rider up and the bike down at both ends (0 unless pump_N)
         if not pump_N:

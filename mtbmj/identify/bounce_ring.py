@@ -263,12 +263,12 @@ def _fit_one(rings, recs, names, held, st, max_nfev, extra=()) -> dict:
     starts = {"spring_scale": SPRING_STARTS, "friction_N": FRICTION_STARTS, "damper_scale": DAMPER_STARTS}
     base_v = {k: st[k] for k in names}
     grid = [(k, starts[k]) for k in names if k in starts]
-    best = (math.inf, base_v)
+    best = (math.inf, base_v, 0)  # (sum of squares, values, residuals) of the best grid point
     for point in (itertools.product(*(g for _, g in grid)) if grid else [()]):
         v = {**base_v, **dict(zip((k for k, _ in grid), point))}
         r = res_x(to_x(v))
-        best = min(best, (float(r @ r), v), key=lambda q: q[0])
-    n_res = res_x(to_x(best[1])).size
+        best = min(best, (float(r @ r), v, r.size), key=lambda q: q[0])
+    n_res = best[2]
     out = {"halves_in_records": sum(max(len(q) - 2, 0) for q in recs)}
     if n_res <= len(names):
         why = f"{n_res} residual(s) from the records' free half cycles for {len(names)} value(s)"
