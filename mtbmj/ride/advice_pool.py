@@ -234,7 +234,6 @@ def pooled(records, bike, overrides=None, duration: float | None = None, progres
     from contextlib import ExitStack
 
     from mtbmj.bike import spec as spec_mod
-    from mtbmj.ride import advice_workers
     from mtbmj.ride.reconstruct_speed import ReconstructError
 
     start = time.perf_counter()
@@ -244,23 +243,26 @@ def pooled(records, bike, overrides=None, duration: float | None = None, progres
         raise AdviseError(twice)
     bike = spec_mod.resolve(bike)
     bike = bike.with_overrides(None) if bike.overrides else bike
-    with ExitStack() as stack:  # the pool started first: its processes warm while the rides are prepared
-        pool = advice_workers.started(stack, workers, bike) if workers > 1 else None
-        ready, refused = [], []
-        for record in records:
-            try:
-                ready.append(prepare(record, bike, overrides, duration, calibrated, True, tries, static_sag_mm,
-                                     carried_as))
-            except (AdviseError, ReconstructError) as exc:
-                refused.append({"ride": record.name, "why": str(exc)})
-        jobs = [ride.jobs() for ride in ready]
-        flat = [j for js in jobs for j in js]
-        offsets = np.cumsum([0] + [len(js) for js in jobs])
+    ready, refused = [], []
+    for record in records:
+        try:
+            ready.append(prepare(record, bike, overrides, duration, calibrated, True, tries, static_sag_mm, carried_as))
+        except (AdviseError, ReconstructError) as exc:
+            refused.append({"ride": record.name, "why": str(exc)})
+    jobs = [ride.jobs() for ride in ready]
+    flat = [j for js in jobs for j in js]
+    offsets = np.cumsum([0] + [len(js) for js in jobs])
 
-        def refusable(i):
-            k = int(np.searchsorted(offsets, i, side="right") - 1)
-            return ready[k].refusable(i - int(offsets[k]))
+    def refusable(i):
+        k = int(np.searchsorted(offsets, i, side="right") - 1)
+        return ready[k].refusable(i - int(offsets[k]))
 
+    with ExitStack() as stack:
+        pool = None
+        if workers > 1 and len(flat) > 1:
+            from mtbmj.workers import process_pool
+
+            pool = stack.enter_context(process_pool(min(workers, len(flat))))
         runs = run_jobs(flat, pool, refusable, counter(progress, len(flat)))
         each, kept = [], []
         for k, ride in enumerate(ready):

@@ -425,9 +425,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     """Advice for ``record`` (a two-ended ``TelemetryRecord``) on ``bike`` (preset, file or
     ``mtbmj.bike.spec.ResolvedBike``: read once, here or before), its keys ``overrides``;
     ``duration`` limits the simulated ride to its first seconds; the runs spread
-    over ``workers`` processes (started first, warming while the ride is prepared:
-    :mod:`mtbmj.ride.advice_workers`), ``progress(fraction, note)`` called as each ends. ``tries``: settings
-    to try (:class:`Trial`, from :func:`trial`),
+    over ``workers`` processes, ``progress(fraction, note)`` called as each ends. ``tries``: settings to try (:class:`Trial`, from :func:`trial`),
     simulated over the same terrain beside the recorded setting and predicted as the candidates are
     (``Advice.tries``); ``candidates`` False simulates the tried settings only (:func:`predict`).
     ``calibrated`` (the default; ``--no-calibrate`` is False): the bike's springs calibrated on the ride
@@ -447,14 +445,16 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     duration = checked_duration(duration)
     bike = spec_mod.resolve(bike)  # the bike file read once: every run below derives its setting from it
     bike = bike.with_overrides(None) if bike.overrides else bike
+    ride = prepare(record, bike, overrides, duration, calibrated, candidates, tries, static_sag_mm, carried_as)
+    jobs = ride.jobs()
     from contextlib import ExitStack
 
-    from mtbmj.ride import advice_workers
+    with ExitStack() as stack:
+        pool = None
+        if workers > 1 and len(jobs) > 1:
+            from mtbmj.workers import process_pool
 
-    with ExitStack() as stack:  # the pool started first: its processes warm while the ride is prepared
-        pool = advice_workers.started(stack, workers, bike) if workers > 1 and (candidates or tries) else None
-        ride = prepare(record, bike, overrides, duration, calibrated, candidates, tries, static_sag_mm, carried_as)
-        jobs = ride.jobs()
+            pool = stack.enter_context(process_pool(min(workers, len(jobs))))
         # a candidate its part refuses only when run is skipped (the recorded setting's own refusal and a
         # tried one's stay the user's error)
         runs = run_jobs(jobs, pool, ride.refusable, counter(progress, len(jobs)))
