@@ -30,6 +30,7 @@ import pytest
 from mtbmj.cli import main
 from mtbmj.ride import advise
 
+import helpers
 from helpers import (advise_ride, air_shock_bike, clicks_bike, generated_metrics, reconstruction_passing, ride,
                      write_sst)
 
@@ -154,6 +155,18 @@ def test_a_ride_too_short_is_refused_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert [line for line in err if line.startswith("mtbmj: error")] == [
         "mtbmj: error: short.SST: 10.0 s of ride cannot support advice (at least 15 s)"]
+    assert not out.exists()
+
+
+def test_a_ride_of_one_end_is_refused_in_one_line(tmp_path, capsys):
+    """A travel CSV of the fork alone (a logger with one sensor): the calibration read the rear that is
+    not there (an IndexError's traceback); refused as reconstruct refuses it, nothing written."""
+    t = np.arange(0.0, 40.0, 0.005)
+    fork = 40.0 + 25.0 * np.sin(2 * np.pi * 1.1 * t)
+    (tmp_path / "fork_only.csv").write_text("time_s,fork_mm\n" + "".join(f"{a:.3f},{b:.3f}\n" for a, b in zip(t, fork)))
+    out = tmp_path / "advice"
+    helpers.one_line(capsys, ["advise", tmp_path / "fork_only.csv", "--bike", "trail", "--out", out],
+                     "fork_only.csv", "needs both ends")
     assert not out.exists()
 
 
