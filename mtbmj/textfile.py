@@ -61,10 +61,12 @@ def read_bytes(path: Path, error: type[Exception], label: str, kind: str) -> byt
 def read_text(path: Path, error: type[Exception], label: str, not_text: str, kind: str = "config") -> str:
     """The file's text; ``error(f"{label}: cannot read (...)")`` when it cannot be read (see
     :func:`read_bytes` for what is refused) and ``error(f"{label}: {not_text}")`` when it is not
-    text (not UTF-8, or holding NUL bytes)."""
+    text (not UTF-8, or holding NUL bytes). A UTF-8 byte-order mark at the start (Excel's and
+    Notepad's "UTF-8" saving) is not part of the text: it would otherwise stick to the first column's
+    name or the first TOML key."""
     blob = read_bytes(Path(path), error, label, kind)
     try:
-        text = blob.decode()
+        text = blob.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise error(f"{label}: {not_text}") from None
     if "\x00" in text:

@@ -75,3 +75,19 @@ def test_missing_binary_and_not_mat_files(tmp_path):
     (tmp_path / "x.mat").write_text("hello")
     with pytest.raises(RecordError, match="not a readable MATLAB"):
         read_record(tmp_path / "x.mat")
+
+
+def test_a_byte_order_mark_is_not_part_of_the_record(tmp_path):
+    """Excel's "CSV UTF-8" starts the file with a byte-order mark: it stuck to the first line, so a
+    comment line read as the header ("line 3: 3 cells for 6 columns") and a header's first name as an
+    unknown column."""
+    text = "# synthetic dyno record\ntime_s;displacement_mm;force_N\r\n0;0;0\r\n0.1;10;100.5\r\n0.2;20;201\r\n"
+    (tmp_path / "plain.csv").write_text(text)
+    (tmp_path / "bom.csv").write_bytes(b"\xef\xbb\xbf" + text.encode())
+    (tmp_path / "bom_header.csv").write_bytes(b"\xef\xbb\xbf" + text.split("\n", 1)[1].encode())
+    plain = read_record(tmp_path / "plain.csv")
+    for name in ("bom.csv", "bom_header.csv"):
+        r = read_record(tmp_path / name).require("displacement", "force", min_points=3)
+        assert list(r.columns) == ["time", "displacement", "force"]
+        assert np.allclose(r["force"], [0.0, 100.5, 201.0]) and np.array_equal(r["force"], plain["force"])
+    assert read_record(tmp_path / "bom.csv").synthetic
