@@ -305,6 +305,10 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
         fork = front_v2.travel_mm(counts[:, 0]) if present[0] else None
         shock = rear_v2.travel_mm(counts[:, 1]) if present[1] else None
         notes = (V2_AMPLITUDE_NOTE,)
+    partial = (len(blob) - header.size) % RECORD_BYTES
+    if partial:  # a recorder writes whole samples: a file cut short in copying or at a power loss
+        notes += (f"ends inside a sample ({partial} of its {RECORD_BYTES} bytes): a truncated file? its {n} whole "
+                  f"samples ({n / float(rate):.1f} s) are read",)
     wheel = leverage.wheel_travel_mm(shock) if shock is not None else None
     return TelemetryRecord(
         path=name, version=int(version), sample_rate_Hz=float(rate), timestamp=int(timestamp),
