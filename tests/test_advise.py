@@ -170,6 +170,24 @@ def test_a_ride_of_one_end_is_refused_in_one_line(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_the_riders_mass_given_two_ways_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    """--rider-kg 80 beside --set rider.mass_kg=85: --rider-kg won without a word (the advice was
+    for an 80 kg rider where the user also said 85). Refused in one line before a ride is read; the
+    same mass twice, or either alone, is not refused for it."""
+    from mtbmj.cli import telemetry as cli_telemetry
+
+    read = []
+    monkeypatch.setattr(cli_telemetry, "ride_record", lambda *a, **k: read.append(a) or (_ for _ in ()).throw(
+        advise.AdviseError("reached the ride")))
+    out = tmp_path / "advice"
+    helpers.one_line(capsys, ["advise", "example", "--bike", "sst", "--rider-kg", "80", "--set", "rider.mass_kg=85",
+                              "--out", out], "--rider-kg 80 and --set rider.mass_kg=85", "given twice")
+    assert not read and not out.exists()
+    for given in (["--rider-kg", "80", "--set", "rider.mass_kg=80"], ["--rider-kg", "80"], ["--set", "rider.mass_kg=85"]):
+        helpers.one_line(capsys, ["advise", "example", "--bike", "sst", *given, "--out", out], "reached the ride")
+    assert len(read) == 3
+
+
 def test_no_candidate_leaves_what_the_part_allows(tmp_path):
     """Candidates stay within the part: clicks within the measured range (none past the last), a
     value within what any part has (``mtbmj.config.PLAUSIBLE``), no negative volume spacer."""
