@@ -603,15 +603,15 @@ def _is_preset(name: str) -> bool:
     return any(name.lower() == n.lower() for n in preset_names())
 
 
-def _base_path(base: str, including: Path, roots: tuple[Path, ...]) -> str:
-    """Where a ``base`` path of the file ``including`` points, if it is allowed there.
+def _base_path(base: str, including: Path, roots: tuple[Path, ...], what: str = "a TOML configuration") -> str:
+    """Where a ``base`` path of the file ``including`` (of ``what``) points, if it is allowed there.
 
-    The rule: a base is a preset name or a ``.toml`` file; a relative path is relative to the
-    folder of the file that names it; and the file must lie (symbolic links resolved) inside the
-    current directory or the folder of the configuration named on the command line, or below
-    either. So a configuration cannot make mtbmj read, or name keys of, files elsewhere."""
-    if Path(base).suffix.lower() != ".toml":
-        raise ConfigError(f"{including}: base {base!r} must be a preset name or a .toml file")
+    The rule: a base is a preset name or a ``.toml`` file, a relative path relative to the folder of the file
+    naming it, lying (symbolic links resolved) in or below the current directory or the folder of the configuration
+    named on the command line: a configuration cannot make mtbmj read, or name keys of, files elsewhere."""
+    if Path(base).suffix.lower() != ".toml":  # a bike file given for a fork's configuration names "trail"
+        raise ConfigError(f"{including}: base {base!r} must be a preset name or a .toml file ({base!r} is no preset "
+                          f"of {what}: is {including.name} a file of the other kind, a bike's or a fork's?)")
     path = Path(base) if Path(base).is_absolute() else including.parent / base
     try:
         real = path.resolve()
@@ -651,7 +651,7 @@ def read_chain(ref: str, locate=None, is_preset=None, what: str = "a TOML config
         if not isinstance(base, str):
             raise ConfigError(f"{location}: base must be a preset name or a path")
         if isinstance(location, Path) and not is_preset(base):
-            base = _base_path(base, location, _roots or ())
+            base = _base_path(base, location, _roots or (), what)
         chain = read_chain(base, locate, is_preset, what, _depth + 1, _roots)
     return chain + [(name, location, table)]
 

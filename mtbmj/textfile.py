@@ -61,10 +61,12 @@ def read_bytes(path: Path, error: type[Exception], label: str, kind: str) -> byt
 def read_text(path: Path, error: type[Exception], label: str, not_text: str, kind: str = "config") -> str:
     """The file's text; ``error(f"{label}: cannot read (...)")`` when it cannot be read (see
     :func:`read_bytes` for what is refused) and ``error(f"{label}: {not_text}")`` when it is not
-    text (not UTF-8, or holding NUL bytes)."""
+    text (not UTF-8, or holding NUL bytes). A UTF-8 byte-order mark at the start (Excel's and
+    Notepad's "UTF-8" saving) is not part of the text: it would otherwise stick to the first column's
+    name or the first TOML key."""
     blob = read_bytes(Path(path), error, label, kind)
     try:
-        text = blob.decode()
+        text = blob.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise error(f"{label}: {not_text}") from None
     if "\x00" in text:
@@ -76,3 +78,38 @@ def run_file_text(path: Path, error: type[Exception], kind: str) -> str:
     """A file of a run folder that mtbmj wrote (manifest, summary, time series), read as
     :func:`read_text` reads a user's file: a FIFO or device in its place is refused, not waited on."""
     return read_text(Path(path), error, str(path), "not a text file", kind)
+
+
+def number_table(text: str, label: str, error: type[Exception]) -> tuple:
+    """(column names, rows) of a comma-separated table that mtbmj wrote (a run folder's
+    ``timeseries.csv``; ``#`` lines and blank lines skipped), or ``error`` in one line naming the
+    line at fault: a file edited or cut short since (a spreadsheet's semicolons, a value that is not
+    a number, a row cut off) is said as such, not as numpy's or Python's own message."""
+    import numpy as np
+
+    lines = [(n, line) for n, line in enumerate(text.splitlines(), 1) if line.strip() and not line.startswith("#")]
+    if not lines:
+        raise error(f"{label}: empty")
+    names = [c.strip() for c in lines[0][1].split(",")]
+    try:  # numpy's reader at once; line by line only to name the line it stopped at
+        rows = np.loadtxt([line for _, line in lines[1:]], delimiter=",", ndmin=2, comments=None)
+    except ValueError:
+        rows = None
+    if rows is not None and (rows.shape[1] == len(names) or rows.size == 0):
+        return names, rows.reshape(-1, len(names))
+    for number, line in lines[1:]:
+        cells = line.split(",")
+        if len(cells) != len(names):
+            raise error(f"{label}: line {number}: {len(cells)} values for {len(names)} columns")
+        bad = [c for c in cells if not _is_number(c)]
+        if bad:
+            raise error(f"{label}: line {number}: {bad[0].strip()!r} is not a number")
+    raise error(f"{label}: not a table of numbers")  # not reached: a line above is at fault
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False

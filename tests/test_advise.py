@@ -30,6 +30,7 @@ import pytest
 from mtbmj.cli import main
 from mtbmj.ride import advise
 
+import helpers
 from helpers import (advise_ride, air_shock_bike, clicks_bike, generated_metrics, reconstruction_passing, ride,
                      write_sst)
 
@@ -155,6 +156,36 @@ def test_a_ride_too_short_is_refused_in_one_line(tmp_path, capsys):
     assert [line for line in err if line.startswith("mtbmj: error")] == [
         "mtbmj: error: short.SST: 10.0 s of ride cannot support advice (at least 15 s)"]
     assert not out.exists()
+
+
+def test_a_ride_of_one_end_is_refused_in_one_line(tmp_path, capsys):
+    """A travel CSV of the fork alone (a logger with one sensor): the calibration read the rear that is
+    not there (an IndexError's traceback); refused as reconstruct refuses it, nothing written."""
+    t = np.arange(0.0, 40.0, 0.005)
+    fork = 40.0 + 25.0 * np.sin(2 * np.pi * 1.1 * t)
+    (tmp_path / "fork_only.csv").write_text("time_s,fork_mm\n" + "".join(f"{a:.3f},{b:.3f}\n" for a, b in zip(t, fork)))
+    out = tmp_path / "advice"
+    helpers.one_line(capsys, ["advise", tmp_path / "fork_only.csv", "--bike", "trail", "--out", out],
+                     "fork_only.csv", "needs both ends")
+    assert not out.exists()
+
+
+def test_the_riders_mass_given_two_ways_is_refused_before_any_work(tmp_path, capsys, monkeypatch):
+    """--rider-kg 80 beside --set rider.mass_kg=85: --rider-kg won without a word (the advice was
+    for an 80 kg rider where the user also said 85). Refused in one line before a ride is read; the
+    same mass twice, or either alone, is not refused for it."""
+    from mtbmj.cli import telemetry as cli_telemetry
+
+    read = []
+    monkeypatch.setattr(cli_telemetry, "ride_record", lambda *a, **k: read.append(a) or (_ for _ in ()).throw(
+        advise.AdviseError("reached the ride")))
+    out = tmp_path / "advice"
+    helpers.one_line(capsys, ["advise", "example", "--bike", "sst", "--rider-kg", "80", "--set", "rider.mass_kg=85",
+                              "--out", out], "--rider-kg 80 and --set rider.mass_kg=85", "given twice")
+    assert not read and not out.exists()
+    for given in (["--rider-kg", "80", "--set", "rider.mass_kg=80"], ["--rider-kg", "80"], ["--set", "rider.mass_kg=85"]):
+        helpers.one_line(capsys, ["advise", "example", "--bike", "sst", *given, "--out", out], "reached the ride")
+    assert len(read) == 3
 
 
 def test_no_candidate_leaves_what_the_part_allows(tmp_path):

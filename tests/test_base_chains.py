@@ -57,3 +57,28 @@ def test_both_readers_refuse_the_same_chains(tmp_path, monkeypatch, kind):
     _bike(tmp_path, "missing.toml", 'base = "nowhere.toml"\n')
     with pytest.raises(ConfigError):
         load(str(tmp_path / "missing.toml"))
+
+
+@pytest.mark.parametrize("argv, file, base, kind", [
+    (["drop", "{dir}/bike.toml"], "bike.toml", "trail", "a TOML configuration"),
+    (["sag", "{dir}/bike.toml", "--load-kg", "70", "--sag-percent", "20"], "bike.toml", "trail", "a TOML configuration"),
+    (["bike", "{dir}/fork.toml", "flat", "--speed", "4"], "fork.toml", "S12", "a bike description"),
+])
+def test_a_file_of_the_other_kind_is_named_so(tmp_path, capsys, argv, file, base, kind):
+    """A rider's bike file given to drop or sag (without --bike), or a fork's configuration given to
+    bike, was refused as "base 'trail' must be a preset name or a .toml file": but trail is a preset
+    name (of bikes). The line now says which kind's preset it is not and asks whether the file is of
+    the other kind; the same files given to their own kind's commands run."""
+    from mtbmj.cli import main
+
+    (tmp_path / "bike.toml").write_text('base = "trail"\n[rider]\nmass_kg = 72.0\n')
+    (tmp_path / "fork.toml").write_text('base = "S12"\n[sled]\nbody_mass_kg = 60.0\n')
+    out = tmp_path / "out"
+    capsys.readouterr()
+    assert main([a.replace("{dir}", str(tmp_path)) for a in argv] + ["--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    assert (f"base '{base}' must be a preset name or a .toml file ('{base}' is no preset of {kind}: is {file} a file "
+            f"of the other kind" in err), err
+    assert not out.exists()
+    assert main(["presets", "--show", str(tmp_path / file)]) == 0  # each is a valid file of its own kind

@@ -46,6 +46,19 @@ def test_bad_overrides_are_one_line(tmp_path, monkeypatch, capsys, argv, words):
     assert err.count("\n") == 1 and words in err and not (tmp_path / "run").exists()
 
 
+def test_presets_shows_a_bike_file_saved_with_a_byte_order_mark(tmp_path, capsys):
+    """A bike file saved by Notepad as "UTF-8" (a byte-order mark first) was taken for a configuration
+    of the fork schema and refused as not valid TOML."""
+    text = 'base = "trail"\n[rider]\nmass_kg = 72.0\n'
+    (tmp_path / "plain.toml").write_text(text)
+    (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert main(["presets", "--show", str(tmp_path / "plain.toml")]) == 0
+    plain = capsys.readouterr().out
+    assert "rider.mass_kg = 72.0" in plain
+    assert main(["presets", "--show", str(tmp_path / "bom.toml")]) == 0
+    assert capsys.readouterr().out == plain
+
+
 def test_presets_lists_and_shows_the_bikes(capsys):
     assert main(["presets"]) == 0
     out = capsys.readouterr().out

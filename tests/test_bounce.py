@@ -181,6 +181,24 @@ def _bad_cases(tmp_path):
     ]
 
 
+def test_one_slam_given_twice_is_refused_naming_both(tmp_path, capsys):
+    """The same record given at two clicks (the file twice, or a copy under another name) fitted a law
+    "zeta = 0.176 + 0.0000 x clicks" from one ring-down: a damper the clicks do not change. Refused in
+    one line; two slams at those clicks are fitted (their law's slope the records', 0.01 per click)."""
+    first = write_v2(tmp_path / "0.SST", slam_mm(0.15, seed=2)[1])
+    (tmp_path / "copy.SST").write_bytes(first.read_bytes())
+    other = write_v2(tmp_path / "10.SST", slam_mm(0.25, seed=3)[1])
+    out = tmp_path / "out"
+    for twice, named in (([first, first], "0.SST: the same record as 0.SST"), ([first, tmp_path / "copy.SST"],
+                                                                            "copy.SST: the same record as 0.SST")):
+        assert cli.main(["fit", "bounce", *map(str, twice), "--clicks", "0,10", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and named in err and "given at 0 and 10 clicks" in err and "Traceback" not in err
+        assert not out.exists()
+    assert cli.main(["fit", "bounce", str(first), str(other), "--clicks", "0,10", "--out", str(out)]) == 0
+    assert json.loads((out / "fit.json").read_text())["law"]["shock"]["slope_per_click"] == pytest.approx(0.01, abs=0.001)
+
+
 def test_bad_input_is_one_line_exit_2_nothing_written(tmp_path, capsys):
     for argv, cause in _bad_cases(tmp_path):
         out = tmp_path / "out"

@@ -116,6 +116,23 @@ def test_fit_with_mismatched_clicks_exits_2(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_one_dyno_file_at_two_positions_is_refused_naming_both(tmp_path, capsys):
+    """The same file given at 0 and 6 clicks (twice, or a copy) was fitted as two positions: one test
+    read at two settings, an adjuster that changes nothing. Refused in one line naming both; the
+    same record made twice at another seed (another test of the same damper) is not refused for it."""
+    a = write_damper_record(tmp_path / "a.csv", seed=1)
+    b = write_damper_record(tmp_path / "b.csv", seed=2)
+    (tmp_path / "copy.csv").write_bytes(a.read_bytes())
+    out = tmp_path / "fit"
+    for files, named in (([a, a], "a.csv: the same record as"), ([a, tmp_path / "copy.csv"], "copy.csv: the same record as")):
+        assert cli.main(["fit", "damper", *map(str, files), "--clicks", "0,6", "--out", str(out)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and named in err and "labelled 0 clicks and 6 clicks" in err, err
+        assert not out.exists()
+    cli.main(["fit", "damper", str(a), str(b), "--clicks", "0,6", "--out", str(out)])
+    assert "the same record" not in capsys.readouterr().err
+
+
 def test_a_sweep_varies_clicks(tmp_path):
     from mtbmj.sweep import read_table, run_sweep
 

@@ -156,3 +156,28 @@ def test_a_timeseries_without_its_columns_is_refused(drops, tmp_path, capsys):
     (broken / "timeseries.csv").write_text("x\n")
     one_line(capsys, ["compare", drops / "base", broken, "--out", tmp_path / "o"], "no time_s column")
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("edit, said, told", [
+    # re-saved with semicolons: compare misses its columns, telemetry --compare reads one column of text
+    (lambda t: t.replace(",", ";"), "no time_s column", "is not a number"),
+    (lambda t: t.rsplit(",", 3)[0] + "\n", "values for", "values for"),  # cut off inside its last row
+    (lambda t: "\n".join(t.splitlines()[:8] + ["0.0055,x" + ",0" * 7] + t.splitlines()[8:]) + "\n",
+     "line 9: 'x' is not a number", "line 9: 'x' is not a number"),  # a value typed in by hand
+])
+def test_an_edited_timeseries_is_refused_naming_its_line(drops, tmp_path, capsys, edit, said, told):
+    """A run's timeseries.csv opened in a spreadsheet and saved, or copied short: numpy's own message
+    ("could not convert string ... at row 0, column 1", Python's "list index out of range") reached
+    the user; now the line at fault is named, by compare and by telemetry --compare alike."""
+    edited = tmp_path / "edited"
+    edited.mkdir()
+    for name in ("summary.json", "manifest.json", "config.toml"):
+        (edited / name).write_bytes((drops / "base" / name).read_bytes())
+    (edited / "timeseries.csv").write_text(edit((drops / "base" / "timeseries.csv").read_text()))
+    for argv, needle in ((["compare", drops / "base", edited], said),
+                         (["telemetry", "example", "--compare", edited], told)):
+        err = one_line(capsys, [*argv, "--out", tmp_path / "o"], f"{edited / 'timeseries.csv'}", needle)
+        assert "could not convert" not in err and "index out of range" not in err and "cannot read" not in err
+        assert needle == "no time_s column" or ": line " in err, err
+        assert not (tmp_path / "o").exists()
+    assert main(["compare", str(drops / "base"), str(drops / "firm"), "--out", str(tmp_path / "ok")]) == 0

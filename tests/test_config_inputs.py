@@ -340,3 +340,15 @@ def test_the_warning_and_the_tire_model_state_the_same_measured_range():
 
     assert [p / 6894.757293168 for p in tire.PRESSURE_RANGE] == pytest.approx(TIRE_PRESSURE_MEASURED_PSI, rel=1e-12)
     assert TIRE_PRESSURE_MEASURED_PSI == (15.0, 25.0)  # 1.03 to 1.72 bar (docs/reference.md section 3)
+
+
+def test_a_byte_order_mark_is_not_part_of_the_file(tmp_path, capsys):
+    """A configuration saved by Notepad or Excel as "UTF-8" starts with a byte-order mark: it was
+    refused as "not valid TOML (Invalid statement (at line 1, column 1))"."""
+    text = 'base = "S12"\r\n[sled]\r\nbody_mass_kg = 60.0\r\n'
+    (tmp_path / "plain.toml").write_text(text)
+    (tmp_path / "bom.toml").write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert load(str(tmp_path / "bom.toml")).values == load(str(tmp_path / "plain.toml")).values
+    assert load(str(tmp_path / "bom.toml")).values["sled.body_mass_kg"] == 60.0
+    assert cli.main(["drop", str(tmp_path / "bom.toml"), "--duration", "0.05", "--no-figure", "--quiet",
+                     "--out", str(tmp_path / "out")]) == 0, capsys.readouterr().err

@@ -44,6 +44,8 @@ def test_mat_export_reads_like_the_csv(tmp_path):
     ("# only a comment\n", "no header row"),
     ("displacement_mm,force_N\n", "no data rows"),
     ("displacement_mm,displacement_m\n1,2\n", "displacement appears twice"),
+    # a unit mtbmj does not read was said to be no unit at all
+    ("displacement_in,force_lbf\n1,2\n", "column 'displacement_in': unit 'in' is not one mtbmj reads"),
 ])
 def test_bad_csv_names_file_line_or_column(tmp_path, text, needle):
     path = tmp_path / "bad.csv"
@@ -75,3 +77,32 @@ def test_missing_binary_and_not_mat_files(tmp_path):
     (tmp_path / "x.mat").write_text("hello")
     with pytest.raises(RecordError, match="not a readable MATLAB"):
         read_record(tmp_path / "x.mat")
+
+
+def test_a_byte_order_mark_is_not_part_of_the_record(tmp_path):
+    """Excel's "CSV UTF-8" starts the file with a byte-order mark: it stuck to the first line, so a
+    comment line read as the header ("line 3: 3 cells for 6 columns") and a header's first name as an
+    unknown column."""
+    text = "# synthetic dyno record\ntime_s;displacement_mm;force_N\r\n0;0;0\r\n0.1;10;100.5\r\n0.2;20;201\r\n"
+    (tmp_path / "plain.csv").write_text(text)
+    (tmp_path / "bom.csv").write_bytes(b"\xef\xbb\xbf" + text.encode())
+    (tmp_path / "bom_header.csv").write_bytes(b"\xef\xbb\xbf" + text.split("\n", 1)[1].encode())
+    plain = read_record(tmp_path / "plain.csv")
+    for name in ("bom.csv", "bom_header.csv"):
+        r = read_record(tmp_path / name).require("displacement", "force", min_points=3)
+        assert list(r.columns) == ["time", "displacement", "force"]
+        assert np.allclose(r["force"], [0.0, 100.5, 201.0]) and np.array_equal(r["force"], plain["force"])
+    assert read_record(tmp_path / "bom.csv").synthetic
+
+
+def test_units_in_another_case_read_as_the_known_units(tmp_path):
+    """A spreadsheet's capitalised header (Displacement_MM, Force_n, Time_MS) was refused as "has no
+    unit in its name": each unit is read as the one of UNITS spelled so in lower case (none two differ
+    only in case), converted to SI as written in its own case."""
+    assert split_unit("Displacement_MM") == ("displacement", "mm")
+    assert split_unit("force_n") == ("force", "N") and split_unit("Force_KN") == ("force", "kN")
+    assert split_unit("Velocity_MM_PER_S") == ("velocity", "mm_per_s") and split_unit("displacement_in") is None
+    (tmp_path / "r.csv").write_text("Time_MS,Displacement_MM,Force_KN\n0,10,1.5\n100,20,2.5\n")
+    r = read_record(tmp_path / "r.csv")
+    assert np.allclose(r["time"], [0.0, 0.1]) and np.allclose(r["displacement"], [0.01, 0.02])
+    assert np.allclose(r["force"], [1500.0, 2500.0])

@@ -325,3 +325,24 @@ def test_the_comparison_is_the_python_api_s_as_the_command_s(tmp_path, capsys):
     assert (tmp_path / "api" / "telemetry.json").read_bytes() == (tmp_path / "cli" / "telemetry.json").read_bytes()
     assert printed == f"{result.line()}; wrote telemetry.json, telemetry.png to {tmp_path / 'cli'}"
     assert "compared 0 run(s)" in result.line() and result.summary["simulated"] == []
+
+
+def test_a_file_cut_inside_a_sample_is_read_with_a_warning(tmp_path, capsys):
+    """A recorder writes whole 4-byte samples (every real file here: the header and a whole number of
+    them); a file cut short in copying ends inside one. It was read without a word: now one warning
+    line says so, and the whole samples are read as before."""
+    from helpers import write_v3
+
+    t = np.arange(0.0, 40.0, 0.001)
+    whole = write_v3(tmp_path / "whole.SST", 60.0 + 40.0 * np.sin(2 * np.pi * 1.3 * t), 20.0 + 10.0 * np.sin(t))
+    cut = tmp_path / "cut.SST"
+    cut.write_bytes(whole.read_bytes() + b"\x07\x01\x00")  # three bytes of a 40 001st sample
+    assert cli.main(["telemetry", str(whole), "--bike", "sst", "--out", str(tmp_path / "a")]) == 0
+    said = capsys.readouterr()
+    assert "ends inside a sample" not in said.err
+    assert cli.main(["telemetry", str(cut), "--bike", "sst", "--out", str(tmp_path / "b")]) == 0
+    cut_said = capsys.readouterr()
+    warned = [line for line in cut_said.err.splitlines() if "ends inside a sample" in line]
+    assert warned == ["mtbmj: warning: cut.SST: ends inside a sample (3 of its 4 bytes): a truncated file? its "
+                      "40000 whole samples (40.0 s) are read"]
+    assert cut_said.out.replace("cut.SST", "whole.SST").replace(str(tmp_path / "b"), str(tmp_path / "a")) == said.out

@@ -65,3 +65,41 @@ def test_a_bad_csv_is_one_line_naming_the_line(tmp_path, monkeypatch, capsys, te
     err = capsys.readouterr().err
     assert said in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "tel").exists()
+
+
+def _exported(path, separator=",", newline="\n", bom=False, names=("time_s", "fork_mm"), closed=False):
+    """The same 40 s ride (fork 50 +- 40 mm at 1.3 Hz, 500 Hz) as a spreadsheet or logger exports it:
+    its separator, line ends, a UTF-8 byte-order mark, the names' case, a separator closing each row."""
+    t = np.arange(int(40.0 * RATE)) / RATE
+    fork = 50.0 + 40.0 * np.sin(2 * np.pi * 1.3 * t)
+    end = separator if closed else ""
+    lines = [separator.join(names) + end] + [f"{a:.6f}{separator}{b:.6f}{end}" for a, b in zip(t, fork)]
+    path.write_bytes((b"\xef\xbb\xbf" if bom else b"") + newline.join(lines + [""]).encode())
+    return path
+
+
+@pytest.mark.parametrize("export", [
+    {"bom": True},                                    # Excel's "CSV UTF-8": refused as column '\ufefftime_s'
+    {"separator": ";"}, {"separator": "\t"},          # a spreadsheet in a comma-decimal locale, a tab export:
+    {"separator": ";", "newline": "\r\n", "bom": True},  # refused as one unknown column 'time_s;fork_mm'
+    {"names": ("Time_s", "Fork_MM")},                 # the names in another case: refused as unknown
+    {"closed": True},                                 # a separator closing every row: refused as column ''
+])
+def test_a_travel_csv_as_spreadsheets_export_it_reads_as_the_plain_one(tmp_path, monkeypatch, capsys, export):
+    monkeypatch.chdir(tmp_path)
+    _exported(tmp_path / "ride.csv")
+    assert main(["telemetry", "ride.csv", "--out", "plain"]) == 0
+    plain = capsys.readouterr().out
+    assert "fork max 50 % (90.0 of 180 mm), 0 bottom-outs, dynamic sag 28 %" in plain  # 90 of 180; mean 50
+    _exported(tmp_path / "exported.csv", **export)
+    assert main(["telemetry", "exported.csv", "--out", "exported"]) == 0
+    assert capsys.readouterr().out.replace("exported", "ride") == plain.replace("plain", "ride")
+
+
+def test_a_decimal_comma_is_refused_saying_so(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "ride.csv").write_text("time_s;fork_mm\n0,000;50,5\n0,002;51,0\n")
+    assert main(["telemetry", "ride.csv", "--out", "tel"]) == 2
+    err = capsys.readouterr().err
+    assert "line 2: time_s is not a number: '0,000' (a decimal comma? write the point: 0.000)" in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "tel").exists()

@@ -25,6 +25,11 @@ def cmd_advise(args) -> int:
                           "--static-sag-mm FORK,SHOCK")
     carried = args.carried_as or "rider"
     if args.rider_kg is not None:
+        if "rider.mass_kg" in over and over["rider.mass_kg"] != args.rider_kg:  # one would silently win
+            from mtbmj.errors import ConfigError
+
+            raise ConfigError(f"--rider-kg {args.rider_kg:g} and --set rider.mass_kg={over['rider.mass_kg']}: the rider's "
+                              f"mass given twice; give one")
         over["rider.mass_kg"] = args.rider_kg
     sets = [parse_assignment(text) for text in args.try_set or ()]
     bike = spec.resolve(args.bike)  # the bike file read once: the decoding, the tries and the advice take it

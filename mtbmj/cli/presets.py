@@ -47,7 +47,7 @@ def is_bike(ref: str) -> bool:
         import tomllib
 
         try:
-            table = tomllib.loads(path.read_text())
+            table = tomllib.loads(path.read_text(encoding="utf-8-sig"))
         except (tomllib.TOMLDecodeError, OSError, UnicodeDecodeError):
             return False
         return any(k in table for k in ("bike", "leverage", "rider", "shock", "geometry", "linkage"))

@@ -97,6 +97,15 @@ def fit_settings(records: list[Record], settings: list[Mapping[str, float]], mod
             raise DamperFitError(f"--clicks: unknown adjuster {unknown[0]!r} (use {', '.join(ADJUSTERS)})")
         if any(not math.isfinite(v) or v < 0 or v != round(v) for v in label.values()):
             raise DamperFitError("--clicks: positions must be whole numbers of clicks from closed")
+    seen = {}  # one dyno file twice (or a copy) would be one test read at two settings: no change in clicks
+    for k, rec in enumerate(records):
+        first = seen.setdefault(tuple((q, np.asarray(v, float).tobytes()) for q, v in rec.columns.items()), k)
+        if first != k:
+            at = [f"{settings[i]['c']:g} clicks" if settings[i].keys() == {"c", "r"} and settings[i]["c"] == settings[i]["r"]
+                  else ",".join(f"{a}={v:g}" for a, v in settings[i].items()) for i in (first, k)]
+            raise DamperFitError(f"{rec.path}: the same record as {records[first].path} (the same values), labelled "
+                                 f"{at[0]} and {at[1]}: one test read at two settings would say the adjuster changes "
+                                 f"nothing; give each setting's file once")
     points = [peaks(r) for r in records]
     tables = [table_fit(r) for r in points]
     fits = tables if model == "table" else [parametric_fit(r, "digressive", "coulomb", "digressive") for r in points]

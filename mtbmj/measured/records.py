@@ -38,10 +38,15 @@ class RecordError(MtbmjError):
 
 
 def split_unit(name: str) -> tuple[str, str] | None:
-    """``displacement_mm`` -> (``displacement``, ``mm``); None when no known unit ends the name."""
+    """``displacement_mm`` -> (``displacement``, ``mm``); None when no known unit ends the name. A
+    name in another case (``Displacement_MM``, ``force_n``: a spreadsheet's) is read as the known one
+    (quantity in lower case, the unit as :data:`UNITS` spells it): no two units differ only in case."""
     for unit in _SUFFIXES:
         if name.endswith("_" + unit) and len(name) > len(unit) + 1:
             return name[: -len(unit) - 1], unit
+    for unit in _SUFFIXES:
+        if name.lower().endswith("_" + unit.lower()) and len(name) > len(unit) + 1:
+            return name[: -len(unit) - 1].lower(), unit
     return None
 
 
@@ -84,6 +89,9 @@ def _convert(path: str, names: list[str], data: np.ndarray, comments=()) -> Reco
     columns, units = {}, {}
     for j, name in enumerate(names):
         parsed = split_unit(name)
+        if parsed is None and "_" in name.strip("_"):
+            raise RecordError(f"{path}: column {name!r}: unit {name.rsplit('_', 1)[1]!r} is not one mtbmj reads "
+                              f"({', '.join(UNITS)}); convert the column and name it so")
         if parsed is None:
             raise RecordError(f"{path}: column {name!r} has no unit in its name (e.g. displacement_mm, force_N)")
         quantity, unit = parsed

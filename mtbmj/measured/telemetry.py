@@ -305,6 +305,10 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
         fork = front_v2.travel_mm(counts[:, 0]) if present[0] else None
         shock = rear_v2.travel_mm(counts[:, 1]) if present[1] else None
         notes = (V2_AMPLITUDE_NOTE,)
+    partial = (len(blob) - header.size) % RECORD_BYTES
+    if partial:  # a recorder writes whole samples: a file cut short in copying or at a power loss
+        notes += (f"ends inside a sample ({partial} of its {RECORD_BYTES} bytes): a truncated file? its {n} whole "
+                  f"samples ({n / float(rate):.1f} s) are read",)
     wheel = leverage.wheel_travel_mm(shock) if shock is not None else None
     return TelemetryRecord(
         path=name, version=int(version), sample_rate_Hz=float(rate), timestamp=int(timestamp),
@@ -337,7 +341,12 @@ def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
     rows = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip() and not line.lstrip().startswith("#")]
     if not rows:
         raise TelemetryError(f"{name}: no header (expected time_s and one or more of fork_mm, shock_mm, rear_mm)")
-    header_line, header = rows[0][0], [h.strip() for h in next(csv.reader([rows[0][1]]))]
+    # the separator as the record reader finds it (a comma, or a spreadsheet's semicolon or tab); names
+    # in any case (Fork_mm); a separator closing every row (a spreadsheet's empty last column) dropped
+    delimiter = max((",", ";", "\t"), key=rows[0][1].count)
+    header_line, header = rows[0][0], [h.strip() for h in next(csv.reader([rows[0][1]], delimiter=delimiter))]
+    closed = len(header) > 1 and header[-1] == ""
+    header = [h.lower() if h.lower() in CSV_COLUMNS else h for h in header[:len(header) - closed]]
     unknown = [h for h in header if h not in CSV_COLUMNS]
     if unknown:
         raise TelemetryError(f"{name}: line {header_line}: unknown column {unknown[0]!r} (known: {', '.join(CSV_COLUMNS)})")
@@ -347,14 +356,19 @@ def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
         raise TelemetryError(f"{name}: line {header_line}: needs time_s and one or more of fork_mm, shock_mm, rear_mm")
     values = np.empty((len(rows) - 1, len(header)))
     for k, (line_no, line) in enumerate(rows[1:]):
-        cells = next(csv.reader([line]))
+        cells = next(csv.reader([line], delimiter=delimiter))
+        if closed and len(cells) == len(header) + 1 and not cells[-1].strip():
+            cells = cells[:-1]
         if len(cells) != len(header):
             raise TelemetryError(f"{name}: line {line_no}: {len(cells)} values for {len(header)} columns")
         for j, cell in enumerate(cells):
             try:
                 x = float(cell)
             except ValueError:
-                raise TelemetryError(f"{name}: line {line_no}: {header[j]} is not a number: {cell.strip()!r}") from None
+                comma = "," in cell and _is_number(cell.replace(",", "."))
+                raise TelemetryError(f"{name}: line {line_no}: {header[j]} is not a number: {cell.strip()!r}"
+                                     + (" (a decimal comma? write the point: " + cell.strip().replace(",", ".") + ")"
+                                        if comma else "")) from None
             if not math.isfinite(x):
                 raise TelemetryError(f"{name}: line {line_no}: {header[j]} is not finite: {cell.strip()!r}")
             values[k, j] = x
@@ -396,6 +410,14 @@ def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
         rear_max_mm=float(leverage.wheel_travel_mm(shock_max_mm)), notes=("a travel CSV (version 0): the logger's own "
                                                                             "calibration",),
         columns=travel_columns)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
 
 
 MILLI = 1000.0

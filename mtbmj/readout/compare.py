@@ -26,7 +26,7 @@ import numpy as np
 
 from mtbmj import output
 from mtbmj.errors import MtbmjError
-from mtbmj.textfile import read_text
+from mtbmj.textfile import number_table, read_text
 
 SIGNALS = (("fork_mm", "fork travel (mm)"), ("tire_mm", "tire deflection (mm)"),
            ("fork_force_N", "fork force (N)"), ("tire_force_N", "tire force (N)"))
@@ -95,12 +95,7 @@ def _timeseries(path: Path, run: Path, needed=NEEDED) -> dict[str, np.ndarray]:
     missing = [n for n in needed if n not in names]
     if missing:
         raise MtbmjError(f"{label}: no {missing[0]} column: not a timeseries of mtbmj drop, roll or bike")
-    try:
-        table = np.loadtxt(lines[1:], delimiter=",", ndmin=2) if len(lines) > 1 else np.empty((0, len(names)))
-    except ValueError as exc:
-        raise MtbmjError(f"{label}: cannot read ({exc})") from None
-    if table.shape[1] != len(names):
-        raise MtbmjError(f"{label}: {table.shape[1]} values per row for {len(names)} columns")
+    names, table = number_table(text, label, MtbmjError)
     if table.shape[0] < 2:
         raise MtbmjError(f"{label}: fewer than two rows")
     columns = dict(zip(names, table.T))

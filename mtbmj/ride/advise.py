@@ -543,6 +543,7 @@ def prepare(record, bike, overrides=None, duration: float | None = None, calibra
     from mtbmj.bike import spec as spec_mod
     from mtbmj.ride import reconstruct as rc
 
+    rc.require_both_ends(record)  # before the calibration, which reads both ends too
     # a bike that stood unweighted mid-ride: its longest part ridden (the reconstruction cuts it too, and
     # says so in its summary), so the calibration and the length read what is reconstructed
     ridden = rc.ridden_part(record)[0]

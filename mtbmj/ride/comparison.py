@@ -14,7 +14,7 @@ from mtbmj import output
 from mtbmj.errors import MtbmjError
 from mtbmj.measured import metrics as ride_metrics
 from mtbmj.measured import telemetry
-from mtbmj.textfile import read_text
+from mtbmj.textfile import number_table, read_text
 
 try:
     import tomllib
@@ -77,14 +77,7 @@ def read_columns(run_dir: Path, error=MtbmjError) -> dict:
     if not csv_path.is_file():
         raise error(f"--compare {run_dir}: no timeseries.csv (write one with mtbmj drop, roll or bike ... --out {run_dir})")
     text = read_text(csv_path, error, str(csv_path), "not a text file", "record")
-    try:
-        lines = [line for line in text.splitlines() if line.strip() and not line.startswith("#")]
-        names = [n.strip() for n in lines[0].split(",")]
-        table = np.loadtxt(lines[1:], delimiter=",", ndmin=2)
-    except (OSError, ValueError, IndexError) as exc:
-        raise error(f"{csv_path}: cannot read ({exc})") from None
-    if table.shape[1] != len(names):
-        raise error(f"{csv_path}: {table.shape[1]} values per row for {len(names)} columns")
+    names, table = number_table(text, str(csv_path), error)
     return dict(zip(names, table.T))
 
 

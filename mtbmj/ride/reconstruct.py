@@ -517,6 +517,13 @@ def ridden_part(record):
     return part, (float(t[a]), float(t[b - 1])), [(float(t[i]), float(t[min(j, t.size - 1)])) for i, j in stands]
 
 
+def require_both_ends(record) -> None:
+    """One ``ReconstructError`` line for a record without the fork's or the rear's travel (a file of one
+    sensor): reconstruct and advise both read the two ends."""
+    if record.fork_mm is None or record.rear_mm is None:
+        raise ReconstructError(f"{record.name}: needs both ends' records (the rear meets what the front met)")
+
+
 def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstruction:
     """``record`` (a ``mtbmj.measured.telemetry.TelemetryRecord`` with both ends) through the bike
     ``bike`` (preset, file or ``mtbmj.bike.spec.ResolvedBike``, which is not read again; ``overrides``
@@ -525,8 +532,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
     from mtbmj.bike import run as bike_run
     from mtbmj.bike import spec as spec_mod
 
-    if record.fork_mm is None or record.rear_mm is None:
-        raise ReconstructError(f"{record.name}: needs both ends' records (the rear meets what the front met)")
+    require_both_ends(record)
     record = record.decimated(RATE_HZ)  # a 5 kHz version-2 record read at 1 kHz, low-passed first
     record, part_s, stands = ridden_part(record)
     spec = spec_mod.load(bike, overrides)  # a ResolvedBike is derived again, not read
