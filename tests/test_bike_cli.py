@@ -46,6 +46,20 @@ def test_bad_overrides_are_one_line(tmp_path, monkeypatch, capsys, argv, words):
     assert err.count("\n") == 1 and words in err and not (tmp_path / "run").exists()
 
 
+@pytest.mark.parametrize("text", ["", "[rider]\nmass_kg = 72.0\n"])
+def test_a_bike_file_lacking_keys_names_itself_and_a_base(tmp_path, monkeypatch, capsys, text):
+    """An empty bike file, or one of a few keys without a base, said only "bike.head_angle_deg: missing":
+    not which file, nor that a base gives the rest. A preset's keys stand in the message's place."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mine.toml").write_text(text)
+    assert main(["bike", "mine.toml", "flat", "--speed", "4", "--out", "run"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "mine.toml: bike." in err and ": missing" in err
+    assert 'base = "' in err and not (tmp_path / "run").exists()
+    (tmp_path / "mine.toml").write_text('base = "trail"\n' + text)  # the base the message names rides
+    assert main(["bike", "mine.toml", "flat", "--speed", "4", "--duration", "0.2", "--out", "run"]) == 0
+
+
 def test_presets_shows_a_bike_file_saved_with_a_byte_order_mark(tmp_path, capsys):
     """A bike file saved by Notepad as "UTF-8" (a byte-order mark first) was taken for a configuration
     of the fork schema and refused as not valid TOML."""

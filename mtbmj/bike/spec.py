@@ -280,7 +280,15 @@ def resolve(ref, overrides=None) -> ResolvedBike:
     if isinstance(ref, ResolvedBike):
         return ref if overrides is None else ref.with_overrides(overrides)
     table, source = read_table(str(ref))
-    return derive(source, table, overrides, {})
+    try:
+        return derive(source, table, overrides, {})
+    except ConfigError as exc:  # a key the file lacks: name the file (a preset lacks none)
+        said = str(exc)
+        if not said.endswith(": missing") or source in preset_names():
+            raise
+        bases = " or ".join(f'"{n}"' for n in preset_names())
+        raise ConfigError(f"{source}: {said} (a bike file gives every key or starts from a bike that does: "
+                          f"base = {bases}, or a file of your own)") from None
 
 
 def load(ref, overrides=None) -> BikeSpec:
