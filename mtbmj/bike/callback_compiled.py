@@ -512,6 +512,7 @@ class CompiledBikeCallback(CompiledShell, ctypes._CFuncPtr):
         self._scratch = np.zeros(2 * cap, dtype=np.float64)  # the search's, one wheel after the other
         self._run = rolling.run_scratch(n, front, rear)  # a run's pieces (run_minima), one wheel after the other
         self._sx, self._sz = rolling.stretch_arrays(front)  # the corners of the terrain's straight stretches
+        self._pfirst, self._pieces = rolling.piece_table(self._tx, self._tz, tire_model.PIECE_M)  # cut once, read by both
         lev = bike.spec.leverage
         self._lw, self._lr, self._ls = (np.array(v, dtype=np.float64) for v in lev.table)
         caliper = bike.spec.caliper_ratio  # a four-bar's rear caliper's turn per the arm's, on the same table
@@ -577,6 +578,8 @@ class CompiledBikeCallback(CompiledShell, ctypes._CFuncPtr):
                 n, cap, self._tx.ctypes.data, self._tz.ctypes.data, self._scratch.ctypes.data]
             wheel[[rolling.R_NS, rolling.R_SX, rolling.R_SZ]] = [self._sx.size, self._sx.ctypes.data,
                                                                  self._sz.ctypes.data]
+            wheel[[rolling.R_PFIRST, rolling.R_PIECES, rolling.R_NPIECES]] = [
+                self._pfirst.ctypes.data, self._pieces.ctypes.data, self._pieces.size // 4]
             wheel[[rolling.R_RUN, rolling.R_RUNCAP]] = [self._run.ctypes.data,
                                                          self._run.size // (rolling.RUN_BLOCKS + tire_model.SHARE_BLOCKS)]
             row = wheel_floats[k * WF:(k + 1) * WF]
@@ -624,6 +627,18 @@ class CompiledBikeCallback(CompiledShell, ctypes._CFuncPtr):
         """The drive's set speed (m/s) from the next evaluation on (``BikeCallback.set_speed``)."""
         self.speed = float(v)
         _FLOATS[self.slot, F_SPEED] = self.speed
+
+    @property
+    def plain_search(self) -> bool:
+        """True: both wheels' patch search as it was before its shortcuts (``R_PLAIN``: each segment
+        cut at each search, every run through ``share_depths``): the same patches to the bit, slower;
+        the baseline of ``tests/test_patch_search.py`` and ``benchmarks/patch_search.py``."""
+        return bool(_WINTS[self.slot, rolling.R_PLAIN])
+
+    @plain_search.setter
+    def plain_search(self, value: bool) -> None:
+        for k in (0, 1):
+            _WINTS[self.slot, k * WI + rolling.R_PLAIN] = int(bool(value))
 
     def reset(self) -> None:
         """Forget the patches: the next evaluation searches afresh (BikeCallback.reset)."""

@@ -58,7 +58,7 @@ from mtbmj.controllers.stops import STIFFENING_M
 from mtbmj.rolling import search_compiled as _search
 from mtbmj.rolling.search_compiled import *  # noqa: F401,F403 - the slot layout (R_*, F_*), the search's face
 from mtbmj.rolling.search_compiled import FLOAT_WIDTH, INT_WIDTH, MAX_PATCHES, PATCH_WIDTH, RUN_BLOCKS, \
-    run_scratch, stretch_arrays
+    piece_table, run_scratch, stretch_arrays
 from mtbmj.runpath.callbacks import CompiledShell
 
 SLOTS = 64
@@ -298,6 +298,8 @@ class CompiledRollCallback(CompiledShell, ctypes._CFuncPtr):
         self._run = run_scratch(n, tire)
         self._closed: dict = {}
         self._sx, self._sz = stretch_arrays(tire)
+        self._pfirst, self._pieces = (np.zeros(1, dtype=np.int64), np.zeros(0)) if drum else \
+            piece_table(self._ta, self._tb, tire_model.PIECE_M)  # the static profile cut into pieces once
 
         ints = np.zeros(INT_WIDTH, dtype=np.int64)
         ints[[R_XQ, R_XV, R_ZQ, R_ZV, R_FQ, R_FV]] = [self.xq, self.xv, self.zq, self.zv, self.fq, self.fv]
@@ -310,6 +312,8 @@ class CompiledRollCallback(CompiledShell, ctypes._CFuncPtr):
         ints[R_TX], ints[R_TZ] = self._ta.ctypes.data, self._tb.ctypes.data
         ints[R_SCRATCH], ints[R_ISCRATCH] = self._scratch.ctypes.data, self._iscratch.ctypes.data
         ints[R_NS], ints[R_SX], ints[R_SZ] = self._sx.size, self._sx.ctypes.data, self._sz.ctypes.data
+        ints[R_PFIRST], ints[R_PIECES], ints[R_NPIECES] = (self._pfirst.ctypes.data, self._pieces.ctypes.data,
+                                                           self._pieces.size // 4)
         ints[R_RUN], ints[R_RUNCAP] = self._run.ctypes.data, self._run.size // (RUN_BLOCKS + tire_model.SHARE_BLOCKS)
         floats = np.zeros(FLOAT_WIDTH, dtype=np.float64)
         floats[[F_X0, F_Z0, F_L, F_COS, F_SIN]] = [front.chassis_x0, front.chassis_z0, front.fork_length,
@@ -371,6 +375,16 @@ class CompiledRollCallback(CompiledShell, ctypes._CFuncPtr):
         n = int(_INTS[self.slot, R_NPATCH])
         rows = _FLOATS[self.slot, F_PATCHES:F_PATCHES + PATCH_WIDTH * n].reshape(n, PATCH_WIDTH)
         return [tuple(float(v) for v in row) for row in rows]
+
+    @property
+    def plain_search(self) -> bool:
+        """True: the patch search as it was before its shortcuts (``R_PLAIN``; the bike's
+        ``CompiledBikeCallback.plain_search``): the same patches to the bit, slower."""
+        return bool(_INTS[self.slot, R_PLAIN])
+
+    @plain_search.setter
+    def plain_search(self, value: bool) -> None:
+        _INTS[self.slot, R_PLAIN] = int(bool(value))
 
     def reset(self) -> None:
         """Forget the patches: the next step recomputes them (RollCallback.reset)."""
