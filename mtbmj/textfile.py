@@ -101,13 +101,14 @@ def number_table(text: str, label: str, error: type[Exception]) -> tuple:
         cells = line.split(",")
         if len(cells) != len(names):
             raise error(f"{label}: line {number}: {len(cells)} values for {len(names)} columns")
-        bad = [c for c in cells if not _is_number(c)]
+        bad = [c for c in cells if not parses_as_number(c)]
         if bad:
             raise error(f"{label}: line {number}: {bad[0].strip()!r} is not a number")
     raise error(f"{label}: not a table of numbers")  # not reached: a line above is at fault
 
 
-def _is_number(text: str) -> bool:
+def parses_as_number(text: str) -> bool:
+    """Whether ``float(text)`` reads ``text`` (a table's cell)."""
     try:
         float(text)
         return True

@@ -36,6 +36,18 @@ from mtbmj.rolling import terrain as T
 # --- refusals and processes -----------------------------------------------------------------------
 
 
+def compiled_search():
+    """``mtbmj.rolling.callback_compiled`` (the compiled patch search's callbacks), the test skipped where
+    numba or the compiled path is not there."""
+    import pytest
+
+    pytest.importorskip("numba")
+    CR = pytest.importorskip("mtbmj.rolling.callback_compiled")
+    if not CR.available():
+        pytest.skip("compiled path unavailable")
+    return CR
+
+
 def one_line(capsys, argv, *needles) -> str:
     """``mtbmj argv`` refuses with exit 2 and one stderr line naming every needle."""
     capsys.readouterr()

@@ -24,6 +24,7 @@ import mtbmj
 from mtbmj import compose
 from mtbmj.rolling import terrain as T
 from mtbmj.rolling.tire import PIECE_M, PatchSearch, RadialTire
+from helpers import compiled_search
 
 REACH_TOL = 1e-9  # relative: a closest point this near the reach is left to round-off (not compared)
 GAP_M = 5 * PIECE_M  # parts of the profile within reach closer than this along it: the 10 mm pieces may join them
@@ -219,12 +220,7 @@ def test_without_straight_stretches_every_refresh_searches():
 # ----------------------------------------------------------------------------------------------
 # the compiled search: the front end's slot and the bike's wheel rows
 # ----------------------------------------------------------------------------------------------
-def _compiled():
-    pytest.importorskip("numba")
-    CR = pytest.importorskip("mtbmj.rolling.callback_compiled")
-    if not CR.available():
-        pytest.skip("compiled path unavailable")
-    return CR
+_compiled = compiled_search  # tests/helpers.py: skipped where the compiled path is not there
 
 
 @pytest.mark.parametrize("name", ["root", "rock", "ledge", "ramp", "gap"])

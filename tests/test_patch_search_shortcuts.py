@@ -22,6 +22,7 @@ import pytest
 
 from mtbmj.rolling import terrain as T
 from mtbmj.rolling.tire import CAP_MIN_M, SHARE_BLOCKS, share_depths
+from helpers import compiled_search
 
 
 def rough_profile(length_m: float = 40.0, seed: int = 5, start_m: float = 1.0) -> T.Terrain:
@@ -56,12 +57,7 @@ def trajectory(terrain, x0, x1, radius, seed):
     return points
 
 
-def _compiled():
-    pytest.importorskip("numba")
-    CR = pytest.importorskip("mtbmj.rolling.callback_compiled")
-    if not CR.available():
-        pytest.skip("compiled path unavailable")
-    return CR
+_compiled = compiled_search  # tests/helpers.py: skipped where the compiled path is not there
 
 
 TERRAINS = {"rough": (rough_profile(), 5.5, 14.0),

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from mtbmj.errors import MtbmjError
-from mtbmj.textfile import read_bytes, read_text
+from mtbmj.textfile import parses_as_number, read_bytes, read_text
 
 # unit suffix -> factor to SI
 UNITS = {
@@ -133,7 +133,7 @@ def read_csv(path: str | Path) -> Record:
         try:
             values = [float(c) for c in cells]
         except ValueError:
-            bad = next(c for c in cells if not _is_float(c))
+            bad = next(c for c in cells if not parses_as_number(c))
             raise RecordError(f"{path}: line {number}: {bad!r} is not a number") from None
         if not all(math.isfinite(v) for v in values):
             raise RecordError(f"{path}: line {number}: NaN or infinite value")
@@ -161,14 +161,6 @@ def _numbers(lines: list[tuple[int, str]], delimiter: str, width: int) -> np.nda
     if table.shape != (len(lines), width) or not np.isfinite(table).all():
         return None
     return table
-
-
-def _is_float(text: str) -> bool:
-    try:
-        float(text)
-        return True
-    except ValueError:
-        return False
 
 
 def read_mat(path: str | Path) -> Record:

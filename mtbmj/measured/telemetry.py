@@ -39,7 +39,7 @@ import numpy as np
 from mtbmj.measured import metrics as ride_metrics
 from mtbmj.measured.leverage import Leverage
 from mtbmj.errors import MtbmjError
-from mtbmj.textfile import read_bytes
+from mtbmj.textfile import parses_as_number, read_bytes
 
 MAGIC = b"SST"
 VERSION = 3
@@ -365,7 +365,7 @@ def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
             try:
                 x = float(cell)
             except ValueError:
-                comma = "," in cell and _is_number(cell.replace(",", "."))
+                comma = "," in cell and parses_as_number(cell.replace(",", "."))
                 raise TelemetryError(f"{name}: line {line_no}: {header[j]} is not a number: {cell.strip()!r}"
                                      + (" (a decimal comma? write the point: " + cell.strip().replace(",", ".") + ")"
                                         if comma else "")) from None
@@ -410,14 +410,6 @@ def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
         rear_max_mm=float(leverage.wheel_travel_mm(shock_max_mm)), notes=("a travel CSV (version 0): the logger's own "
                                                                             "calibration",),
         columns=travel_columns)
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-        return True
-    except ValueError:
-        return False
 
 
 MILLI = 1000.0
