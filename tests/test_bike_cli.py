@@ -60,6 +60,21 @@ def test_a_bike_file_lacking_keys_names_itself_and_a_base(tmp_path, monkeypatch,
     assert main(["bike", "mine.toml", "flat", "--speed", "4", "--duration", "0.2", "--out", "run"]) == 0
 
 
+def test_a_bad_value_in_a_bike_file_names_the_file_and_one_typed_does_not(tmp_path, monkeypatch, capsys):
+    """A rider's mass of -5 kg in the file said only "rider.mass_kg: must be > 0": not which file. Typed
+    with --set, the option is where it came from, and the file is not blamed."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "mine.toml").write_text('base = "trail"\n[rider]\nmass_kg = -5\n')
+    assert main(["bike", "mine.toml", "flat", "--speed", "4", "--out", "run"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "mine.toml: rider.mass_kg: must be > 0" in err
+    (tmp_path / "mine.toml").write_text('base = "trail"\n')
+    assert main(["bike", "mine.toml", "flat", "--speed", "4", "--out", "run", "--set", "rider.mass_kg=-5"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "rider.mass_kg: must be > 0" in err and "mine.toml" not in err
+    assert not (tmp_path / "run").exists()
+
+
 def test_presets_shows_a_bike_file_saved_with_a_byte_order_mark(tmp_path, capsys):
     """A bike file saved by Notepad as "UTF-8" (a byte-order mark first) was taken for a configuration
     of the fork schema and refused as not valid TOML."""

@@ -364,8 +364,8 @@ def test_the_test_s_single_pivot_runs_on_the_trail_bike_s_own_stroke(tmp_path, c
     short = _write(tmp_path, 'base = "trail"\n[leverage]\nwheel_travel_mm = [0, 120]\nratio = [2.35, 2.35]\n')
     assert main(["bike", str(short), "flat", "--speed", "4", "--out", str(tmp_path / "o2")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == ["mtbmj: error: shock.stroke_mm: 50 mm is shorter than the leverage curve needs over 120 mm of "
-                   "wheel travel (51.06 mm)"], err
+    assert err == [f"mtbmj: error: {short}: shock.stroke_mm: 50 mm is shorter than the leverage curve needs over "
+                   f"120 mm of wheel travel (51.06 mm)"], err  # the file whose curve it is named
     near = _write(tmp_path, 'base = "trail"\n[leverage]\nwheel_travel_mm = [0, 120]\nratio = [2.3995, 2.3995]\n')
     assert spec.load(str(near)).leverage.full_stroke == pytest.approx(0.120 / 2.3995, rel=1e-12)
     assert not (tmp_path / "o2").exists()

@@ -282,13 +282,17 @@ def resolve(ref, overrides=None) -> ResolvedBike:
     table, source = read_table(str(ref))
     try:
         return derive(source, table, overrides, {})
-    except ConfigError as exc:  # a key the file lacks: name the file (a preset lacks none)
+    except ConfigError as exc:  # a key of the file at fault: name the file (not a preset's, nor one typed)
         said = str(exc)
-        if not said.endswith(": missing") or source in preset_names():
+        key = said.partition(":")[0]
+        typed = key.startswith("-") or any(key == k or key.startswith(f"{k}.") or k.endswith(f".{key}")
+                                           for k in (overrides or {}))
+        if source in preset_names() or typed or said.startswith(source):
             raise
         bases = " or ".join(f'"{n}"' for n in preset_names())
-        raise ConfigError(f"{source}: {said} (a bike file gives every key or starts from a bike that does: "
-                          f"base = {bases}, or a file of your own)") from None
+        hint = (f" (a bike file gives every key or starts from a bike that does: base = {bases}, or a file of "
+                f"your own)" if said.endswith(": missing") else "")
+        raise ConfigError(f"{source}: {said}{hint}") from None
 
 
 def load(ref, overrides=None) -> BikeSpec:
