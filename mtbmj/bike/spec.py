@@ -287,7 +287,8 @@ def resolve(ref, overrides=None) -> ResolvedBike:
         key = said.partition(":")[0]
         typed = key.startswith("-") or any(key == k or key.startswith(f"{k}.") or k.endswith(f".{key}")
                                            for k in (overrides or {}))
-        if source in preset_names() or typed or said.startswith(source):
+        if source in preset_names() or typed or said.startswith(source) or key.startswith("leverage.csv"):
+            # (the leverage CSV's own errors name that file, the one at fault)
             raise
         bases = " or ".join(f'"{n}"' for n in preset_names())
         hint = (f" (a bike file gives every key or starts from a bike that does: base = {bases}, or a file of "
