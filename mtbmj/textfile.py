@@ -107,6 +107,11 @@ def number_table(text: str, label: str, error: type[Exception]) -> tuple:
     raise error(f"{label}: not a table of numbers")  # not reached: a line above is at fault
 
 
+def delimiter_of(header: str) -> str:
+    """A table's separator as its header line shows it: a comma, or a spreadsheet's semicolon or tab."""
+    return max((",", ";", "\t"), key=header.count)
+
+
 def parses_as_number(text: str) -> bool:
     """Whether ``float(text)`` reads ``text`` (a table's cell)."""
     try:

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from mtbmj.errors import MtbmjError
-from mtbmj.textfile import parses_as_number, read_bytes, read_text
+from mtbmj.textfile import delimiter_of, parses_as_number, read_bytes, read_text
 
 # unit suffix -> factor to SI
 UNITS = {
@@ -118,7 +118,7 @@ def read_csv(path: str | Path) -> Record:
     if not lines:
         raise RecordError(f"{path}: no header row and no data")
     header_line = lines[0][1]
-    delimiter = max((",", ";", "\t"), key=header_line.count)
+    delimiter = delimiter_of(header_line)
     if header_line.count(delimiter) == 0 and len(header_line.split()) > 1:
         raise RecordError(f"{path}: line {lines[0][0]}: columns must be separated by ',', ';' or a tab")
     names = [n.strip() for n in next(csv.reader([header_line], delimiter=delimiter))]

@@ -39,7 +39,7 @@ import numpy as np
 from mtbmj.measured import metrics as ride_metrics
 from mtbmj.measured.leverage import Leverage
 from mtbmj.errors import MtbmjError
-from mtbmj.textfile import parses_as_number, read_bytes
+from mtbmj.textfile import delimiter_of, parses_as_number, read_bytes
 
 MAGIC = b"SST"
 VERSION = 3
@@ -343,7 +343,7 @@ def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
         raise TelemetryError(f"{name}: no header (expected time_s and one or more of fork_mm, shock_mm, rear_mm)")
     # the separator as the record reader finds it (a comma, or a spreadsheet's semicolon or tab); names
     # in any case (Fork_mm); a separator closing every row (a spreadsheet's empty last column) dropped
-    delimiter = max((",", ";", "\t"), key=rows[0][1].count)
+    delimiter = delimiter_of(rows[0][1])
     header_line, header = rows[0][0], [h.strip() for h in next(csv.reader([rows[0][1]], delimiter=delimiter))]
     closed = len(header) > 1 and header[-1] == ""
     header = [h.lower() if h.lower() in CSV_COLUMNS else h for h in header[:len(header) - closed]]
