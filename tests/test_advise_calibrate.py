@@ -139,13 +139,14 @@ def test_the_static_sag_measured_tells_a_soft_fork_from_a_rider_forward(forward,
 @pytest.mark.parametrize("given, why", [
     (["--static-sag-mm", "40"], "is not two sags in mm"),
     (["--static-sag-mm", "40,-3"], "is not two sags in mm"),
+    (["--static-sag-mm", "-40,20"], "is not two sags in mm"),
     (["--static-sag-mm", "forty,15"], "is not two sags in mm"),
     (["--static-sag-mm", "40,15", "--no-calibrate"], "cannot go with --no-calibrate"),
     (["--static-sag-mm", "400,15"], "the fork's 400 mm is not a static sag any fork spring rate"),
     (["--static-sag-mm", "15,13.9"], "would ride 458 mm from the pedals, past the bars"),
     (["--carried-as", "descent"], "--carried-as says how the runs carry the load a measured static sag leaves: it "
                                   "needs --static-sag-mm"),
-], ids=["one", "negative", "words", "uncalibrated", "past-any-spring", "load-past-the-bars", "carried-without-sag"])
+], ids=["one", "negative", "leading-minus", "words", "uncalibrated", "past-any-spring", "load-past-the-bars", "carried-without-sag"])
 def test_a_static_sag_that_cannot_be_is_refused_in_one_line(right, tmp_path, capsys, given, why):
     """A careless --static-sag-mm: one line naming the option and the cause, exit status 2, nothing written
     (a fork sag half the bike's own, 15 mm for 30.7: the stiff fork it gives leaves 221 N of the ride's front

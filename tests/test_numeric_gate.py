@@ -154,6 +154,16 @@ def test_fuzz_hostile_numbers_given_to_any_argument_are_refused_in_one_line(tmp_
         assert len(line) < 300, line
 
 
+@pytest.mark.parametrize("words,option", NUMERIC_OPTIONS, ids=[f"{' '.join(w)} {o}" for w, o in NUMERIC_OPTIONS])
+def test_a_value_starting_like_a_negative_number_is_judged_as_a_value(tmp_path, capsys, monkeypatch, words, option):
+    """``--speed -1e3`` or ``--static-sag-mm -40,20`` was "expected one argument" (argparse takes only
+    ``-40`` and ``-0.5`` for values): the value's own check now says what is wrong with it."""
+    monkeypatch.chdir(tmp_path)
+    for value in ("-1e400", "-4,5"):  # (an integer's gate: "is not a whole number")
+        line = _one_line_refusal(capsys, [*words, option, value, "--out", "out"], option, tmp_path)
+        assert "expected one argument" not in line and repr(value) in line, line
+
+
 def test_a_threshold_of_infinity_is_refused_by_the_parser(tmp_path, capsys, monkeypatch):
     """``telemetry example --threshold-mm-per-s inf`` ended "run diverged (invalid value
     encountered in multiply)"; it is refused before any work."""

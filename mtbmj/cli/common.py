@@ -6,6 +6,7 @@ import argparse
 import io
 import logging
 import os
+import re
 import sys
 import time
 import warnings
@@ -26,6 +27,13 @@ class Parser(argparse.ArgumentParser):
     passes the one numeric-input gate: an argument added with ``type=float`` or ``type=int`` is
     parsed by :func:`numeric` (its range from ``mtbmj.limits.ARGUMENTS``), so a command cannot
     take a number that is NaN, infinite, a huge integer or outside what the model allows."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        # a value that starts like a negative number (``-40,20``, ``-1e3``) is a value for the option
+        # before it, not an unknown option: its own check then names what is wrong with it (argparse
+        # takes only ``-40`` and ``-0.5`` so, and says "expected one argument" for the rest)
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
 
     def error(self, message):  # one line, not usage + message
         raise MtbmjError(message)
