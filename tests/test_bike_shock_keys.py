@@ -167,3 +167,26 @@ def test_air_shock_sag_and_run(tmp_path, monkeypatch):
     assert rear / w == pytest.approx(0.28, abs=0.01)
     r = run.run_bike("set/air_sag.toml", "drop:height_mm=300,at_m=0.4", 5.0, duration=1.0)
     assert r.summary["crash"] is None and r.summary["max_rear_travel_mm"] > rear * 1e3 + 20.0
+
+
+@pytest.mark.parametrize("typed, warned", [
+    ("--set shock.spring_rate_lb_per_in=5000", "shock.spring_rate_lb_per_in = 5000 lb/in is outside 150-1000"),
+    ("--set shock.rebound_N_s_per_m=90000", "shock.rebound_N_s_per_m = 90000"),
+])
+def test_a_shock_as_sold_out_of_range_is_warned_of_once_in_its_own_terms(tmp_path, typed, warned):
+    """A 5000 lb/in coil was warned of twice: as typed, and again as the 875.6 N/mm its configuration
+    holds, judged by a fork's range (0.5-200 N/mm), with the hint "probably meant 875.634 N/m", a
+    key the user never typed. Once now, as typed; the configuration key typed in a file keeps its
+    own warning (below)."""
+    p = subprocess.run([sys.executable, "-m", "mtbmj.cli", "bike", "sst", "flat", "--speed", "4", "--duration", "0.2",
+                        *typed.split(), "--out", str(tmp_path / "run")], capture_output=True, text=True)
+    lines = [ln for ln in p.stderr.splitlines() if ln.startswith("mtbmj: warning")]
+    assert p.returncode == 0 and len(lines) == 1 and warned in lines[0], p.stderr
+    assert "fork." not in p.stderr
+
+
+def test_a_shock_configuration_key_typed_in_a_file_keeps_its_warning(tmp_path):
+    path = write(tmp_path, "s.toml", 'base = "sst"\n[shock.set]\n"fork.spring.rate_N_per_mm" = 875.0\n')
+    p = subprocess.run([sys.executable, "-m", "mtbmj.cli", "bike", path, "flat", "--speed", "4", "--duration", "0.2",
+                        "--out", str(tmp_path / "run")], capture_output=True, text=True)
+    assert p.returncode == 0 and "fork.spring.rate_N_per_mm = 875 N/mm is far above" in p.stderr, p.stderr

@@ -124,10 +124,12 @@ def _check(speed, duration, pedal=None):
 
 def setups(spec) -> tuple[compose.Setup, compose.Setup]:
     """(fork, shock) setups: each configuration with the bike's overrides, composed by ``mtbmj.compose``."""
+    from mtbmj.bike.shock import judged_as_sold
     from mtbmj.config import ALTERNATIVES, load
 
     def part(section, config, over):  # a person's keys (--fork-set, not the files') checked to be read
-        c, mine = load(config, over or None), spec.overrides.get(section)
+        with judged_as_sold(spec.shock_sold if section == "shock.set" else ()):
+            c, mine = load(config, over or None), spec.overrides.get(section)
         typed = {ALTERNATIVES.get(k, (k,))[0] for k in mine} if getattr(mine, "typed", False) else set()
         try:
             return compose.setup(dataclasses.replace(c, given=typed))

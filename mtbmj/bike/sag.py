@@ -215,7 +215,7 @@ def _difference(written: str, bike: str, overrides: dict) -> str | None:
                          ("the shock's configuration", (setups[0][1], setups[1][1]))):
         if a.config.digest() != b.config.digest():
             return name
-    skip = {"name", "source", "overrides", "fork_config", "shock_config"}
+    skip = {"name", "source", "overrides", "fork_config", "shock_config", "shock_sold"}  # (which keys, not values)
     for f in dataclasses.fields(specs[0]):
         if f.name not in skip and getattr(specs[0], f.name) != getattr(specs[1], f.name):
             return f.name

@@ -24,10 +24,12 @@ go through the shock configuration's own checks.
 """
 from __future__ import annotations
 
+import contextlib
 import math
+import warnings
 
 from mtbmj.config import N_PER_MM_PER_LB_PER_IN  # the units' one table
-from mtbmj.errors import ConfigError
+from mtbmj.errors import ConfigError, ConfigWarning
 
 POLYTROPIC_INDEX = 1.3  # assumed, as the air fork preset: between isothermal (1.0) and adiabatic (1.4) for a 0.1-0.3 s stroke
 COIL = ("spring_rate_lb_per_in", "spring_rate_N_per_mm", "preload_mm")
@@ -140,3 +142,33 @@ def schema_keys(part: dict, given: dict, kind: str | None = None) -> dict:
 
 
 __all__ = ["schema_keys", "KEYS", "N_PER_MM_PER_LB_PER_IN"]
+
+
+def written(part: dict) -> frozenset:
+    """The shock configuration's keys that the ``[shock]`` keys as sold in ``part`` set (each judged
+    by its own key's plausible range, ``mtbmj.bike.keys``, in the shock's own terms)."""
+    mine = {k for k in KEYS if k in part}
+    out = set()
+    if mine & set(COIL):
+        out |= {"fork.spring.rate_N_per_mm", "fork.spring.preload_N"}
+    out |= {schema for key, schema in _AIR_NEEDED if key in mine}
+    out |= {schema for key, schema in (("negative_volume_cm3", "fork.spring.negative_volume_cm3"),
+                                       ("volume_spacers", "fork.spring.tokens"),
+                                       ("spacer_volume_cm3", "fork.spring.token_volume_cm3")) if key in mine}
+    out |= {f"fork.damper.{k}" for k in DAMPER if k in mine}
+    return frozenset(out)
+
+
+@contextlib.contextmanager
+def judged_as_sold(keys):
+    """Within: the plausibility warnings (``ConfigWarning``) on the shock configuration's ``keys``
+    (:func:`written`) are dropped, the others issued as they come. A shock's 5000 lb/in spring is
+    warned of once, as ``shock.spring_rate_lb_per_in``, not again as the 875.6 N/mm its configuration
+    holds, judged by a fork's range and given a wrong unit hint."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ConfigWarning)
+        yield
+    for w in caught:
+        text = str(w.message)
+        if not (issubclass(w.category, ConfigWarning) and any(text.startswith(f"{k} ") for k in keys)):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)

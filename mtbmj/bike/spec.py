@@ -23,6 +23,7 @@ import numpy as np
 from mtbmj import limits
 from mtbmj.bike import chart as _chart
 from mtbmj.bike import linkage as _linkage
+from mtbmj.bike import shock as _shock
 from mtbmj.bike.bikefile import (KNOWN, SENSOR_KEYS, gated, merge, overridden, preset_names,  # noqa: F401
                                   read_leverage_csv, read_table)
 from mtbmj.errors import ConfigError
@@ -84,6 +85,8 @@ class BikeSpec:
     # a four-bar's rear caliper on a link that turns otherwise than the bike's arm: d(its turn) /
     # d(the arm's turn) at each point of the leverage table (``linkage.caliper_ratio``); None: 1
     caliper_ratio: tuple | None = None
+    # the shock configuration's keys its [shock] keys as sold set (``mtbmj.bike.shock.written``)
+    shock_sold: frozenset = frozenset()
 
     @property
     def swingarm_length(self) -> float:
@@ -459,7 +462,7 @@ def derive(source: str, read: dict, overrides=None, csv: dict | None = None) -> 
         overrides=dict(overrides or {}),
         virtual_pivot=isinstance(hardpoints, dict) and hardpoints.get("kind") in ("horst_link", "short_link"),
         caliper_ratio=caliper,
-        sensors=_sensors(table))
+        sensors=_sensors(table), shock_sold=_shock.written(table.get("shock", {})))
     return ResolvedBike(source, read, dict(overrides or {}), table, spec, link, curves, csv)
 
 
