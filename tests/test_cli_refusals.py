@@ -13,6 +13,15 @@ def test_crosscheck_tolerance_must_be_positive(value, capsys):
     assert err.count("\n") == 1 and "--tolerance-mm" in err and "Traceback" not in err
 
 
+@pytest.mark.parametrize("engines", ["ode", "ode,ode"])
+def test_crosscheck_of_the_reference_alone_is_refused(engines, capsys):
+    """``crosscheck S1 --engines ode`` ran MuJoCo's cross-check instead, silently (the reference is what
+    every engine is checked against): one line naming the option, exit 2, before any run."""
+    assert cli.main(["crosscheck", "S1", "--engines", engines]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--engines: ode is the reference" in err and "Traceback" not in err
+
+
 @pytest.mark.parametrize("argv", [
     ["roll", "washboard:length_m=1e9", "--speed", "4"],
     ["bike", "trail", "washboard:length_m=1e9", "--speed", "4"],

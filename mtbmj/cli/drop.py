@@ -77,7 +77,10 @@ def cmd_crosscheck(args) -> int:
         raise MtbmjError("--speed, --drive and --head-angle: apply to a rolling cross-check (--roll SCENARIO)")
     _refuse_bike_options(args)
 
-    engines = [e for e in _engines(args.engines) if e != "ode"] or ["mujoco"]
+    engines = [e for e in _engines(args.engines) if e != "ode"]
+    if not engines:  # it was made mujoco's cross-check silently
+        raise MtbmjError("--engines: ode is the reference every engine is checked against, not an engine to check; "
+                         "name mujoco or fast (or both)")
     checks = crosscheck_all(args.config, engines, args.tolerance_mm, overrides(args.set), args.duration)
     for check in checks:
         print(check.line())
