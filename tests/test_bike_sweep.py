@@ -52,3 +52,16 @@ def test_bad_bike_sweeps_are_one_line(tmp_path, monkeypatch, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 3 and "Traceback" not in err and "--roll" in err and "rider.weight" in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_bike_sweep_whose_every_variant_failed_says_why_and_exits_1(tmp_path, capsys):
+    """A rider of -5 or -1 kg in every variant: "every variant failed (see sweep.csv)" with exit 0
+    before; now the first reason on the line, exit 1, the table of reasons written."""
+    from mtbmj.cli import main
+
+    out = tmp_path / "sw"
+    assert main(["sweep", "trail", "--roll", "flat", "--speed", "4", "--vary", "rider.mass_kg=-5:-1:2",
+                 "--duration", "0.2", "--quiet", "--out", str(out)]) == 1
+    line = capsys.readouterr().out
+    assert "every variant failed (the first: rider.mass_kg: must be > 0, got -5.0; see sweep.csv)" in line, line
+    assert (out / "sweep.csv").is_file()

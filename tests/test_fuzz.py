@@ -367,6 +367,9 @@ def test_generated_option_values(tmp_path, capfd, argv):
     argv = [str(record) if a == "RECORD" else a for a in argv]
     if argv[0] == "crosscheck":  # writes nothing: no --out
         check(argv, out, capfd, "options", results=(0, 1))
+    elif argv[0] == "sweep":  # exit 1: every variant failed, each with its reason in the table written
+        if check(argv + ["--out", out], out, capfd, "options", results=(0, 1)) == 1:
+            assert (out / "sweep.parquet").is_file()
     else:
         check(argv + ["--out", out], out, capfd, "options")
 

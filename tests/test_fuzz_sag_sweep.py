@@ -60,9 +60,12 @@ def _set(rng: random.Random) -> list[str]:
     return [option, f"{rng.choice(CONFIG_KEYS)}={rng.choice(VALUES)}"]
 
 
-def _check(status: int, err: str, out_dir) -> None:
+def _check(status: int, err: str, out_dir, out: str = "") -> None:
     assert "Traceback" not in err, err
     if status == 0:
+        return
+    if status == 1:  # a sweep whose every variant failed: the table of their reasons is written
+        assert (out_dir / "sweep.csv").is_file() and "every variant failed (the first: " in out, (out, err)
         return
     assert status == 2, (status, err)
     lines = [line for line in err.splitlines() if not line.startswith("mtbmj: warning:")]
@@ -144,7 +147,7 @@ def test_fuzz_bike_sweep(index, tmp_path, monkeypatch, capsys):
     _special_files(tmp_path)
     status = main(["sweep", "trail", *args, "--duration", "0.2", "--quiet", "--out", "sw"])
     captured = capsys.readouterr()
-    _check(status, captured.err, tmp_path / "sw")
+    _check(status, captured.err, tmp_path / "sw", captured.out)
     if status == 0:
         assert (tmp_path / "sw" / "sweep.csv").is_file()
 

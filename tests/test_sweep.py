@@ -313,3 +313,19 @@ def test_cli_sweep_wired_into_mtbmj(tmp_path, capsys):
     assert "sweep" in choices and "sensitivity" in choices
     assert cli.main(["sweep", "S1", "--vary", f"{RATE}=14:18:1", "--duration", "0.1", "--out", str(tmp_path), "--quiet"]) == 0
     assert "1 variants (1 computed" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("grid, status, failed", [("-6:-2:2", 1, "2 failed"), ("-6:14:2", 0, "1 failed")])
+def test_a_sweep_says_why_its_variants_failed_and_exits_1_when_all_did(tmp_path, capsys, grid, status, failed):
+    """A sweep whose variants fail (a spring of -6 N/mm) said only "2 failed" and exited 0 though
+    nothing ran: the line names the first failure's reason (the table holds each one), and a sweep
+    whose every variant failed exits 1 (its table written); one that ran some exits 0."""
+    from mtbmj import cli
+
+    out = tmp_path / "sw"
+    assert cli.main(["sweep", "S1", "--vary", f"{RATE}={grid}", "--duration", "0.1", "--out", str(out), "--quiet"]) \
+        == status
+    line = capsys.readouterr().out
+    assert f"{failed}: the first, variant 0: {RATE}: must be positive, got -6" in line, line
+    table = pd.read_parquet(out / "sweep.parquet")
+    assert (table["status"] == "failed").sum() == int(failed.split()[0])

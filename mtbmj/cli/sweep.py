@@ -74,9 +74,9 @@ def _bike_sweep(args) -> int:
     print(f"sweep bike {args.config} over {args.roll} at {args.speed:g} m/s: {len(ok)} of {len(table)} variants ran"
           f"{f', {crashes} crashed' if crashes else ''}; front travel peak {ok['max_front_travel_mm'].min():.1f}-"
           f"{ok['max_front_travel_mm'].max():.1f} mm; wrote {len(written)} files to {args.out}"
-          if len(ok) else f"sweep bike {args.config}: every variant failed (see sweep.csv); wrote {len(written)} "
+          if len(ok) else f"sweep bike {args.config}: every variant failed (the first: {table['reason'].iloc[0]}; see sweep.csv); wrote {len(written)} "
                           f"files to {args.out}")
-    return 0
+    return 0 if len(ok) else 1  # every variant failed: nothing to read
 
 
 def cmd_sweep(args) -> int:
@@ -110,7 +110,7 @@ def cmd_sweep(args) -> int:
     if pool is not None:
         pool.shutdown(wait=False, cancel_futures=True)
     print(f"sweep {args.config}: {result.line()}")
-    return 0
+    return 1 if result.total and result.failed == result.total else 0  # every variant failed: nothing to read
 
 
 def add_shared_options(p) -> None:

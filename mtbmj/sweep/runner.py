@@ -151,7 +151,7 @@ class SweepProgress:
         rate = self.done / elapsed if elapsed > 0 and self.done else 0.0
         eta = (todo - self.done) / rate if rate else float("nan")
         count = f"{self.already + self.done}/{self.total}"
-        failed = f", {self.failed} failed" if self.failed else ""
+        failed = f", {self.failed} failed: {self.first_failure()}" if self.failed else ""
         eta_text = _duration(eta) if math.isfinite(eta) else "?"
         return f"{count} variants{failed}, {rate:.1f}/s, elapsed {_duration(elapsed)}, ETA {eta_text}"
 
@@ -346,10 +346,20 @@ class SweepResult:
     problems: list[str] = field(default_factory=list)
 
     def line(self) -> str:
-        failed = f", {self.failed} failed" if self.failed else ""
+        failed = f", {self.failed} failed: {self.first_failure()}" if self.failed else ""
         return (f"{self.total} variants ({self.computed} computed, {self.reused} from the journal{failed}) in "
                 f"{self.wall_time_s:.1f} s{self.envelope()}; wrote {', '.join(p.name for p in self.files)} to "
                 f"{self.out_dir}")
+
+    def first_failure(self) -> str:
+        """"the first, variant 4: <its reason>" (the table's ``reason`` column holds every one)."""
+        if "status" not in self.table or "reason" not in self.table:
+            return "see the table's reason column"
+        rows = self.table[self.table["status"] != "ok"]
+        if not len(rows):
+            return "see the table's reason column"
+        row = rows.iloc[0]
+        return f"the first, variant {row.get('variant', rows.index[0])}: {row['reason']}"
 
     def envelope(self) -> str:
         """"; 12 variants bottomed out on the bumper (deepest 121.1 mm), 3 hit the hard stop ..."
