@@ -7,8 +7,11 @@ median speed over-drives its slow stretches and under-drives its fast ones. The 
 terrain out along the distance its speed profile integrates to (``mtbmj.ride.reconstruct``), so the
 speed at each place is known where the terrain is.
 
-How: the run is stepped in chunks of ``UPDATE_S`` of simulated time (``mtbmj.runpath.loop.chunked``),
-and between chunks the set speed is the profile's at the front axle's place (the frame's x from the
+How: the run is stepped in chunks (``mtbmj.runpath.loop.chunked``) of ``UPDATE_S`` of simulated time
+on a run at one step; under a refinement plan (the bike's, wherever its stepping refines near the stops,
+so nearly always) the plan's own chunks set the updates instead: ``REFINE_CHUNK`` coarse steps, 0.512 s
+at the 0.5 ms step, fewer after a fine stretch (measured; not mended, as mending it changes every
+answer made with a profile). Between chunks the set speed is the profile's at the front axle's place (the frame's x from the
 state, the front axle's offset at rest: the pitch's few millimetres left out). The drive then holds it
 within its limits (``controllers.drive.drive_force``: ``drive.push_N``, ``power_W``, ``brake_N``): where
 the ride accelerated harder than those allow, the run lags, and says nothing of it here (the run's own
@@ -22,7 +25,7 @@ import numpy as np
 
 from mtbmj.errors import ConfigError
 
-UPDATE_S = 0.25  # s of simulated time between updates of the set speed (0.1: 8 % slower runs)
+UPDATE_S = 0.25  # s between updates of the set speed on a run at one step (see the module doc; 0.1: 8 % slower)
 SPEED_RANGE = (0.3, 30.0)  # m/s: a profile beyond is not a ride's
 
 
