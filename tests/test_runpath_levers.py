@@ -119,8 +119,9 @@ def test_a_bike_run_with_every_lever_equals_the_unchanged_path_to_the_bit():
     assert not np.array_equal(nudged, states)
 
 
-def test_the_drawn_model_keeps_its_camera_and_light():
+def test_the_drawn_model_keeps_its_camera_light_and_passive_stage():
     p = bike_run.prepare("sst", "flat", 4.0)
     drawn = p.visual_model()
     assert drawn.ncam == 1 and drawn.nlight == 1 and drawn.ngeom > 0  # what a video draws
+    assert not drawn.opt.disableflags & PASSIVE  # a spring given to its tendons pushes (tests/test_bike_limbs.py)
     assert p.bike.model.ncam == 0 and p.bike.model.ngeom == 0
