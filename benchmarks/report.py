@@ -511,21 +511,14 @@ def advise_speed_rows(d: dict) -> dict[str, list[Row]]:
 
 def bike_step_levers_rows(d: dict) -> dict[str, list[Row]]:
     u, o, same = d["us_per_step"], d["over_none"], d["identical_to_none"]
-    names = {"timer": "MuJoCo's timers off", "passive": "the passive stage skipped",
-             "camera_light": "the camera and light left out", "all": "all three"}
-
-    def cell(key):
-        return (f"{names[key]} {num(u[key]['median'], 3)} us, / none {num(o[key]['median'], 3)} "
-                f"({spread(o[key]['min'], o[key]['max'], 3)})")
-
-    alike = "identical to the bit" if all(same.values()) else \
-        "NOT identical: " + ", ".join(k for k, v in same.items() if not v)
+    names = {"timer": "timers off", "passive": "passive skipped", "camera_light": "no camera, light", "all": "all"}
+    alike = "bit-identical" if all(same.values()) else "NOT identical: " + ", ".join(k for k, v in same.items() if not v)
     return {"bike": [
         Row(f"the bike's step on `mtbmj advise`'s run over the shipped ride ({d['steps']} steps of "
-            f"{ms(d['timestep_s'], 3)}, compiled callback, one core), CPU per step, each lever alone against none",
-            "report", f"none {num(u['none']['median'], 3)} us ({spread(u['none']['min'], u['none']['max'], 3, ' us')}); "
-            + "; ".join(cell(k) for k in ("timer", "passive", "camera_light", "all"))
-            + f"; states and sensors {alike}", "bike_step_levers.json", d["command"])]}
+            f"{ms(d['timestep_s'], 3)}, compiled callback, one core), CPU per step, each lever against none", "report",
+            ", ".join(f"{names[k]} {num(o[k]['median'], 3)}" for k in ("timer", "passive", "camera_light"))
+            + f", all {num(o['all']['median'], 3)} ({spread(o['all']['min'], o['all']['max'], 3)}) of none's "
+            f"{num(u['none']['median'], 3)} us; {alike}", "bike_step_levers.json", d["command"])]}
 
 
 def calibrate_speed_rows(d: dict) -> dict[str, list[Row]]:
