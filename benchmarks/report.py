@@ -509,6 +509,18 @@ def advise_speed_rows(d: dict) -> dict[str, list[Row]]:
             "advise_speed.json", d["command"])]}
 
 
+def bike_step_levers_rows(d: dict) -> dict[str, list[Row]]:
+    u, o, same = d["us_per_step"], d["over_none"], d["identical_to_none"]
+    names = {"timer": "timers off", "passive": "passive skipped", "camera_light": "no camera, light", "all": "all"}
+    alike = "bit-identical" if all(same.values()) else "NOT identical: " + ", ".join(k for k, v in same.items() if not v)
+    return {"bike": [
+        Row(f"the bike's step on `mtbmj advise`'s run over the shipped ride ({d['steps']} steps of "
+            f"{ms(d['timestep_s'], 3)}, compiled callback, one core), CPU per step, each lever against none", "report",
+            ", ".join(f"{names[k]} {num(o[k]['median'], 3)}" for k in ("timer", "passive", "camera_light"))
+            + f", all {num(o['all']['median'], 3)} ({spread(o['all']['min'], o['all']['max'], 3)}) of none's "
+            f"{num(u['none']['median'], 3)} us; {alike}", "bike_step_levers.json", d["command"])]}
+
+
 def calibrate_speed_rows(d: dict) -> dict[str, list[Row]]:
     r, c, p = d["ratio"], d["calibrate_cpu_s"], d["pass_cpu_s"]
     return {"bike": [
@@ -661,6 +673,7 @@ SOURCES = [
     ("bike_speed.json", bike_speed_rows),
     ("bike_pedal_speed.json", bike_pedal_speed_rows),
     ("advise_speed.json", advise_speed_rows),
+    ("bike_step_levers.json", bike_step_levers_rows),
     ("calibrate_speed.json", calibrate_speed_rows),
     ("reconstruct_rides.json", reconstruct_rides_rows),
     ("advise_rides.json", advise_rides_rows),

@@ -30,6 +30,8 @@ PEDAL_SHARE = 5.70 / (5.70 + 2.23)  # de Leva 1996, male: (foot + shank) / (foot
 JOINTS = ("bike_x", "bike_z", "pitch", "fork", "swingarm", "rider_z", "rider_pitch")
 # what a run can hold at its static values (``mtbmj.bike.run.prepare(lock=...)``): key -> joints
 LOCKS = {"rear": ("swingarm",), "pitch": ("pitch",), "rider": ("rider_z", "rider_pitch")}
+# what ``build_bike(visual=False)`` leaves out of the scene (``MjSpec`` lists): what only a picture uses
+NOT_STEPPED = ("geoms", "tendons", "cameras", "lights")
 
 
 def frame_body(spec) -> tuple[float, tuple[float, float], float]:
@@ -128,11 +130,14 @@ def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, g
                articulated=None) -> Bike:
     """Compile the bike scene for ``spec`` on ``terrain``; the front axle starts over ``start_x``
     (default the terrain's start); ``fork_length`` (axle to crown, m) places the drawn stanchions.
-    ``visual=False`` leaves out every geom (the drawn bike and the terrain) and the drawn legs and
-    arms (tendons): nothing in the physics depends on them (the inertias are given, nothing
-    collides, the callback applies the limbs' forces), and MuJoCo then places no geoms and computes
-    no tendon at each evaluation (~4 % and ~15 % of a step); the joints, bodies and their numbering
-    are the same. ``articulated``: (``rider_body.Body``, ``rider_body.Pose``), the articulated
+    ``visual=False`` leaves out every geom (the drawn bike and the terrain), the drawn legs and
+    arms (tendons), the camera and the light (``NOT_STEPPED``): nothing in the physics depends on
+    them (the inertias are given, nothing collides, the callback applies the limbs' forces), and
+    MuJoCo then places no geoms, cameras or lights and computes no tendon at each evaluation (~4 %,
+    ~0.5 % and ~15 % of a step); the joints, bodies and their numbering are the same; and its passive
+    stage is skipped where it has no springs or dampers of MuJoCo's (``mtbmj.runpath.loop.skip_passive``:
+    the articulated rider's joints may have some), decided once here: a spring given to the model
+    afterwards would not push. ``articulated``: (``rider_body.Body``, ``rider_body.Pose``), the articulated
     rider in place of the rigid one (``rider_body.attach``; ``--rider active``)."""
     ms = mujoco.MjSpec.from_file(str(mjcf.path(SCENE)))
     ms.option.timestep = timestep
@@ -202,10 +207,12 @@ def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, g
     if visual:
         _terrain_visual(ms, terrain)
     else:
-        for item in list(ms.geoms) + list(ms.tendons):
+        for item in [item for kind in NOT_STEPPED for item in getattr(ms, kind)]:
             ms.delete(item)
     model = ms.compile()
     loop.skip_collision(model)
+    if not visual:  # the drawn model stays whole: one may give its tendons springs (tests/test_bike_limbs.py)
+        loop.skip_passive(model)
     return Bike(model, spec, x0, z0, float(tire_radius), legs_rest, arms_rest)
 
 
@@ -222,4 +229,4 @@ def _terrain_visual(ms, terrain) -> None:
                           pos=[(x_lo + x_hi) / 2, 0.0, lo], contype=0, conaffinity=0, group=1, material="terrain")
 
 
-__all__ = ["Bike", "Limb", "build_bike", "crown", "frame_body", "rider_rest_lengths", "JOINTS", "LOCKS", "LOWER_INERTIA", "PEDAL_SHARE"]
+__all__ = ["Bike", "Limb", "build_bike", "crown", "frame_body", "rider_rest_lengths", "JOINTS", "LOCKS", "LOWER_INERTIA", "NOT_STEPPED", "PEDAL_SHARE"]

@@ -32,7 +32,9 @@ coarse grid (its ``grid`` mask), the rows every coarse-grid consumer (the logger
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Callable, Protocol
 
 import mujoco
@@ -53,6 +55,63 @@ def skip_collision(model) -> None:
     No contact could be found, so the steps are the same; the pass is a fifth of a front-end step."""
     if not np.any(model.geom_contype | model.geom_conaffinity):
         model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
+
+
+# Passive forces a model may have, each an array of its (or a count): all zero, MuJoCo's passive stage
+# computes nothing but zeros and may be skipped (``skip_passive``)
+PASSIVE = ("jnt_stiffness", "jnt_stiffnesspoly", "dof_damping", "dof_dampingpoly", "tendon_stiffness",
+           "tendon_stiffnesspoly", "tendon_damping", "tendon_dampingpoly", "actuator_damping", "actuator_dampingpoly",
+           "body_gravcomp", "ngravcomp", "nflex")
+
+
+def skip_passive(model) -> None:
+    """Skip MuJoCo's passive stage (joint and tendon springs and dampers, gravity compensation, fluid
+    forces, the passive callback) in ``model`` when it has none of them: every array of ``PASSIVE``
+    zero, no fluid (``opt.density``, ``opt.viscosity`` 0) and no ``mjcb_passive`` installed. The stage
+    then writes only zeros, so the steps are the same to the bit (``tests/test_runpath_levers.py``);
+    it was ~2 % of a bike step. A model given any of them is left as it is."""
+    if any(np.any(getattr(model, name, 0)) for name in PASSIVE) or model.opt.density or model.opt.viscosity:
+        return
+    if mujoco.get_mjcb_passive() is not None:
+        return
+    model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SPRING) | int(mujoco.mjtDisableBit.mjDSBL_DAMPER)
+
+
+@lru_cache(maxsize=1)
+def _time_hook():
+    """The ctypes cell of MuJoCo's global ``mjcb_time`` in the library the ``mujoco`` package loaded
+    (None where it is not found: then nothing is changed)."""
+    import ctypes
+    import glob
+    import os
+
+    here = os.path.dirname(mujoco.__file__)
+    for pattern in ("libmujoco.so*", "libmujoco*.dylib", "mujoco.dll"):
+        for path in sorted(glob.glob(os.path.join(here, pattern))):
+            try:
+                return ctypes.c_void_p.in_dll(ctypes.CDLL(path), "mjcb_time")
+            except (OSError, ValueError):
+                continue
+    return None
+
+
+@contextmanager
+def untimed():
+    """MuJoCo's timers off for the block: the ``mujoco`` package installs a clock as ``mjcb_time``
+    (``set_mjcb_time(None)`` does not remove it), and MuJoCo then reads the clock twice around each
+    of its stages, every evaluation, to fill ``mjData.timer``, which nothing here reads: 15 % of a
+    bike step (``benchmarks/bike_step_levers.py``). The clock is put back after the block; the
+    physics does not read it (the states are the same to the bit, ``tests/test_runpath_levers.py``)."""
+    hook = _time_hook()
+    if hook is None:
+        yield
+        return
+    saved = hook.value
+    hook.value = None
+    try:
+        yield
+    finally:
+        hook.value = saved
 
 
 class Plan(Protocol):
@@ -274,7 +333,8 @@ def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
     n = 0
     # numpy's overflow, division by zero and invalid value are divergence while the run steps (a
     # callback's force law, a plan's look at the states): one line naming the rig and the stretch
-    with guard.collected_warnings(messages), errors.diverging(rig, lambda: t0 + (done + max(n, 1)) * timestep):
+    with guard.collected_warnings(messages), errors.diverging(rig, lambda: t0 + (done + max(n, 1)) * timestep), \
+            untimed():
         try:
             while done < steps:
                 n = plan.size(steps - done)
