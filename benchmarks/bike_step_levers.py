@@ -14,7 +14,7 @@ light in the model), each lever alone, and ``all`` (the model as ``build_bike`` 
 as ``mtbmj.runpath.loop.stepped`` steps it). The levers:
 
 - ``timer``: MuJoCo's timers off (``loop.untimed``: the ``mujoco`` package's ``mjcb_time`` clock);
-- ``passive``: the passive stage skipped (``loop.skip_passive``: the bike has no springs or dampers
+- ``passive``: the passive stage skipped (``loop.passive_skipped``: the bike has no springs or dampers
   of MuJoCo's);
 - ``camera_light``: the scene's camera and light left out (``mtbmj.bike.model.NOT_STEPPED``).
 
@@ -96,9 +96,8 @@ def main(argv=None) -> int:
     add_out_option(ap, __file__)
     args = ap.parse_args(argv)
 
-    import mujoco
-
     from mtbmj.ride import advise, reconstruct
+    from mtbmj.runpath import loop
 
     record = read_ride(args)
     rec = reconstruct.reconstruct(record, args.bike)
@@ -106,7 +105,7 @@ def main(argv=None) -> int:
     speed = float(profile[1][0])
     built = prepared(args.bike, terrain, speed, profile, camera_light=True)
     viewed = prepared(args.bike, terrain, speed, profile, camera_light=False)
-    passive_skipped = bool(built.bike.model.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_SPRING))
+    passive_skipped = not loop.has_passive(built.bike.model)
     setups = {"none": (viewed, False, False), "timer": (viewed, True, False), "passive": (viewed, False, True),
               "camera_light": (built, False, False), "all": (built, True, passive_skipped)}
     us = {k: [] for k in VARIANTS}

@@ -134,10 +134,9 @@ def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, g
     arms (tendons), the camera and the light (``NOT_STEPPED``): nothing in the physics depends on
     them (the inertias are given, nothing collides, the callback applies the limbs' forces), and
     MuJoCo then places no geoms, cameras or lights and computes no tendon at each evaluation (~4 %,
-    ~0.5 % and ~15 % of a step); the joints, bodies and their numbering are the same; and its passive
-    stage is skipped where it has no springs or dampers of MuJoCo's (``mtbmj.runpath.loop.skip_passive``:
-    the articulated rider's joints may have some), decided once here: a spring given to the model
-    afterwards would not push. ``articulated``: (``rider_body.Body``, ``rider_body.Pose``), the articulated
+    ~0.5 % and ~15 % of a step); the joints, bodies and their numbering are the same (MuJoCo's passive
+    stage is skipped while a run steps where the model has nothing for it: ``mtbmj.runpath.loop.
+    passive_skipped``). ``articulated``: (``rider_body.Body``, ``rider_body.Pose``), the articulated
     rider in place of the rigid one (``rider_body.attach``; ``--rider active``)."""
     ms = mujoco.MjSpec.from_file(str(mjcf.path(SCENE)))
     ms.option.timestep = timestep
@@ -211,8 +210,6 @@ def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, g
             ms.delete(item)
     model = ms.compile()
     loop.skip_collision(model)
-    if not visual:  # the drawn model stays whole: one may give its tendons springs (tests/test_bike_limbs.py)
-        loop.skip_passive(model)
     return Bike(model, spec, x0, z0, float(tire_radius), legs_rest, arms_rest)
 
 

@@ -58,23 +58,35 @@ def skip_collision(model) -> None:
 
 
 # Passive forces a model may have, each an array of its (or a count): all zero, MuJoCo's passive stage
-# computes nothing but zeros and may be skipped (``skip_passive``)
+# computes nothing but zeros and may be skipped (``passive_skipped``)
 PASSIVE = ("jnt_stiffness", "jnt_stiffnesspoly", "dof_damping", "dof_dampingpoly", "tendon_stiffness",
            "tendon_stiffnesspoly", "tendon_damping", "tendon_dampingpoly", "actuator_damping", "actuator_dampingpoly",
            "body_gravcomp", "ngravcomp", "nflex")
 
 
-def skip_passive(model) -> None:
-    """Skip MuJoCo's passive stage (joint and tendon springs and dampers, gravity compensation, fluid
-    forces, the passive callback) in ``model`` when it has none of them: every array of ``PASSIVE``
-    zero, no fluid (``opt.density``, ``opt.viscosity`` 0) and no ``mjcb_passive`` installed. The stage
-    then writes only zeros, so the steps are the same to the bit (``tests/test_runpath_levers.py``);
-    it was ~2 % of a bike step. A model given any of them is left as it is."""
-    if any(np.any(getattr(model, name, 0)) for name in PASSIVE) or model.opt.density or model.opt.viscosity:
+def has_passive(model) -> bool:
+    """Whether MuJoCo's passive stage has anything to compute in ``model`` now: an array of ``PASSIVE``
+    not all zero, a fluid (``opt.density``, ``opt.viscosity``) or an ``mjcb_passive`` installed."""
+    return (any(np.any(getattr(model, name, 0)) for name in PASSIVE) or bool(model.opt.density)
+            or bool(model.opt.viscosity) or mujoco.get_mjcb_passive() is not None)
+
+
+@contextmanager
+def passive_skipped(model):
+    """MuJoCo's passive stage skipped (``mjDSBL_SPRING | mjDSBL_DAMPER``) for the block where ``model``
+    has nothing for it (:func:`has_passive`, judged when the block starts: a spring given to the model
+    after it was built, as the seated replay gives the saddle, pushes); the flags put back after. The
+    stage would write only zeros, so the steps are the same to the bit (``tests/test_runpath_levers.py``);
+    it was ~2 % of a bike step."""
+    if has_passive(model):
+        yield
         return
-    if mujoco.get_mjcb_passive() is not None:
-        return
-    model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SPRING) | int(mujoco.mjtDisableBit.mjDSBL_DAMPER)
+    saved = model.opt.disableflags
+    model.opt.disableflags = saved | int(mujoco.mjtDisableBit.mjDSBL_SPRING) | int(mujoco.mjtDisableBit.mjDSBL_DAMPER)
+    try:
+        yield
+    finally:
+        model.opt.disableflags = saved
 
 
 @lru_cache(maxsize=1)
@@ -334,7 +346,7 @@ def stepped(model, data, steps: int, timestep: float, rig: str, plan: Plan,
     # numpy's overflow, division by zero and invalid value are divergence while the run steps (a
     # callback's force law, a plan's look at the states): one line naming the rig and the stretch
     with guard.collected_warnings(messages), errors.diverging(rig, lambda: t0 + (done + max(n, 1)) * timestep), \
-            untimed():
+            untimed(), passive_skipped(model):
         try:
             while done < steps:
                 n = plan.size(steps - done)
