@@ -581,31 +581,3 @@ def test_the_rear_is_checked_band_by_band_against_series_written_here():
                                      t, t, valid, rear, rear, rear, 50.0 + slow + body + wheels(), 150.0, [],
                                      fork_delayed=fork_delayed)
     assert "the rear by band (correlation, described): 0.05-0.5 Hz 1.00 yes, 0.5-2 Hz 1.00 yes, 2-10 Hz" in rec.line()
-
-
-def test_the_frame_reference_keeps_a_drop():
-    """The whole bike's slow reference (reconstruct_inverse.kept_flights) keeps a drop's fall: a body
-    speed made here in closed form (a 0.02 m/s drift the integration left, a 2 Hz bob, a free fall from
-    rest for 0.32 s, 0.50 m, stopped at once by the landing) comes back as the true height, its drift
-    removed, within 10 mm from 3 s before to 3 s after; the 0.3 Hz high-pass the quarter car's body
-    takes (the reference before) and the same function without the flight's mask (a wrong input)
-    spread the step over the seconds around it and are 0.29 m off."""
-    from mtbmj.ride.reconstruct_inverse import _highpass, kept_flights
-
-    dt, g, fall = 1e-3, 9.81, 0.32
-    t = np.arange(0.0, 12.0, dt)
-    a, b = int(6.0 / dt), int(6.0 / dt) + int(fall / dt)
-    vel = 0.02 + 0.05 * np.sin(2 * math.pi * 2.0 * t)
-    vel[a:b] -= g * (t[a:b] - t[a])
-    truth = np.cumsum(vel - 0.02) * dt
-    air = np.zeros(t.size, bool)
-    air[a:b] = True
-    near = slice(int(3.0 / dt), int(9.0 / dt))
-
-    def off(h):
-        return float(np.max(np.abs((h[near] - h[near].mean()) - (truth[near] - truth[near].mean()))))
-
-    assert truth[b] - truth[a] < -0.49  # the made ride falls half a metre
-    assert off(kept_flights(vel, air, dt)) < 0.010
-    assert off(kept_flights(vel, np.zeros(t.size, bool), dt)) > 0.2
-    assert off(_highpass(np.cumsum(_highpass(vel - vel.mean(), dt)) * dt, dt)) > 0.2

@@ -34,8 +34,7 @@ tyres) rides with its fork's stroke prescribed by the record, the ground under t
 at every sample, its rear wheel over the ground of the pass before a wheelbase later, until the rear
 predicted settles. The fork's slow load (below 0.3 Hz) is the rider's; the frame's front is held
 near the quarter car's slow height by a load bounded by half the rider's weight (the rider's slow
-load, estimated); that height's drift is removed below 0.3 Hz around the flights, each flight's rise
-or fall kept whole (``reconstruct_inverse.kept_flights``: a drop's landing stays lower). Take-offs: where the tyre's force falls to zero or the fork hangs on its top-out
+load, estimated). Take-offs: where the tyre's force falls to zero or the fork hangs on its top-out
 stop (two such stretches one flight where the force between them averages under 10 % of its load at
 rest), a flight of 0.1 s or more from where the force last fell below 10 % of its load at rest
 (``reconstruct_inverse.unloaded``); a flight that long landing more than 0.15 m lower bridged by the
@@ -560,7 +559,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
     rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g, shock_setup.travel, rim)
     sin_a = math.sin(spec.head_angle)
     fork = fork_mm * 1e-3
-    ground, tyre, air, extra, _, stops, body = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
+    ground, tyre, air, extra, body, stops = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
     lev = spec.leverage
     rear = rear_mm * 1e-3
     shock = shock_mm * 1e-3 if shock_mm is not None else lev.strokes(rear)
@@ -639,7 +638,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
         for _ in range(REFINE_PASSES):
             try:
                 again = merged(first, refine(t, rear * 1e3, done["found"]["rear_rise"] * 1e3, done["lags"],
-                                             wheelbase, flights=result.jumps))
+                                             wheelbase))
                 again["from"] = ", ".join(sorted({s for s in first["sources"] if s} | {"the rear predicted"}))
                 done, speed = through(again), again
             except ReconstructError:

@@ -336,8 +336,7 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     is the rear's in the next, from ``first_ground`` (the quarter car's), until the rear predicted
     settles (``SETTLED_M``) or ``MAX_PASSES``. The fork's slow load (below the quarter car's high-pass)
     is the rider's, taken off the frame as the quarter car takes it (the tyre carries it); the frame's
-    front is held near ``reference`` (the quarter car's body, its drift removed around its flights kept
-    whole: ``reconstruct_inverse.kept_flights``) by the bounded slow
+    front is held near ``reference`` (the quarter car's body, its drift removed) by the bounded slow
     load of :func:`ride`. ``stops`` (N at the wheel, or None): the fork's hard-stop force across each
     bottom-out (not in the record; the quarter car's, keeping its body level after it). ``at_once``: the
     share of the rear's ground taken at the front's moment (:func:`rear_ground`). Flights: where the tyre's force is not positive or the fork hangs on its

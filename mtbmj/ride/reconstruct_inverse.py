@@ -206,9 +206,8 @@ def unloaded(tyre, static: float, dt: float) -> np.ndarray:
 
 def ground_under(t, rise, stroke, car: QuarterCar, ratio):
     """(ground height m, tyre force N, airborne mask, the rider's slow load N, the body's height m, its
-    drift removed, the hard stop's force N at the wheel found across each bottom-out, the body's height
-    m with its drift removed around the flights kept whole (:func:`kept_flights`; the whole bike's slow
-    reference)) under a quarter car whose
+    drift removed, the hard stop's force N at the wheel found across each bottom-out) under a quarter
+    car whose
     wheel rose ``rise`` (m) in the frame while its law's stroke was ``stroke`` (m), both on ``t``: the
     law's force acts on the wheel divided by ``ratio(rise)`` (wheel travel per stroke; virtual work).
 
@@ -244,11 +243,6 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio):
         kick = float(body @ tau / (tau @ tau))
         vel[k:] -= kick
         stops[start:k + 1] -= kick * car.sprung / ((k + 1 - start) * dt)
-    # the whole bike's reference keeps the flights (kept_flights): its slow load read with the bike
-    # carrying nothing where it hangs on the top-out stop (its true load there), so that a landing's
-    # impulse, which balances the flight's fall, is not taken for the rider's
-    held_extra = lowpass(np.where(top, 0.0, f) - weight, dt)
-    held = vel + np.cumsum(np.where(top, 0.0, extra - held_extra)) * dt / car.sprung
     vel = _highpass(vel - vel.mean(), dt)
     body = np.cumsum(vel) * dt
     body = _highpass(body - body.mean(), dt)
@@ -258,34 +252,7 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio):
     deflection = np.minimum(np.maximum(tyre, 0.0) / car.tyre_rate, car.max_deflection)  # the rim stops it
     ground = wheel - car.radius + deflection
     ground, air = bridge(ground, unloaded(tyre, (car.sprung + car.unsprung) * car.gravity, dt), dt, edges=False)
-    return ground - ground[0], tyre, air, extra, body, stops, kept_flights(held, air | top, dt)
-
-
-def _filled(x, mask):
-    """``x`` with each run of ``mask`` replaced by the line between its neighbours."""
-    y = np.array(x, float)
-    for a, b in runs(mask):
-        a0, b0 = max(a - 1, 0), min(b, y.size - 1)
-        y[a:b] = np.linspace(y[a0], y[b0], b - a + 2)[1:-1] if b0 > a0 else y[a0]
-    return y
-
-
-def kept_flights(vel, air, dt: float) -> np.ndarray:
-    """The body's height (m) from its speed ``vel`` (m/s on step ``dt``), its drift below
-    ``HIGHPASS_HZ`` removed around the flights (``air``) while they are kept whole: the speed's drift
-    read with each flight bridged by a line (the flight's ballistic speed left as integrated), the
-    height's drift read with each flight's rise or fall taken out (the stretches on the ground joined),
-    the flights' steps then put back. The high-pass of :func:`ground_under`'s body took a drop's 0.5 m
-    step out and spread it over the seconds around it (the frame's reference 0.4-0.6 m high for 3 s
-    after the drop of the tests' carried ride). Assumes the speed across a flight is the integrated
-    one: a take-off's wrong speed (a bottom-out's kick estimated short) is kept as a wrong step too."""
-    air = np.asarray(air, bool)
-    slow_v = _filled(vel, air)
-    v = vel - lowpass(slow_v - slow_v.mean(), dt) - slow_v.mean()
-    height = np.cumsum(v) * dt
-    inside = air | np.concatenate(([False], air[:-1]))  # each flight's steps, its landing's too
-    joined = height - np.cumsum(np.where(inside, np.diff(height, prepend=height[0]), 0.0))
-    return height - lowpass(joined - joined.mean(), dt) - joined.mean()
+    return ground - ground[0], tyre, air, extra, body, stops
 
 
 def flights(off, dt: float):
@@ -379,4 +346,4 @@ def runs(mask):
 
 
 
-__all__ = ["QuarterCar", "ground_under", "kept_flights", "flights", "bridge", "unloaded", "law_along", "derivatives", "hanging", "forward", "wheelbase_at", "lowpass", "runs"]
+__all__ = ["QuarterCar", "ground_under", "flights", "bridge", "unloaded", "law_along", "derivatives", "hanging", "forward", "wheelbase_at", "lowpass", "runs"]
