@@ -2,6 +2,7 @@
 the Dask backend against the local one, sensitivity indices and the command line's bad input."""
 from __future__ import annotations
 
+import io
 import json
 import os
 import signal
@@ -329,3 +330,13 @@ def test_a_sweep_says_why_its_variants_failed_and_exits_1_when_all_did(tmp_path,
     assert f"{failed}: the first, variant 0: {RATE}: must be positive, got -6" in line, line
     table = pd.read_parquet(out / "sweep.parquet")
     assert (table["status"] == "failed").sum() == int(failed.split()[0])
+
+
+def test_the_progress_of_a_sweep_with_failed_variants_counts_them():
+    """The progress line counts the failed variants (the closing line names the first's reason); a
+    replace meant for the closing line once made it call a method it does not have."""
+    from mtbmj.sweep.runner import SweepProgress
+
+    bar = SweepProgress(4, stream=io.StringIO(), enabled=True)
+    bar.update(2, failed=1)
+    assert "2/4 variants, 1 failed," in bar.text()

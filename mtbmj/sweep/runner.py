@@ -151,7 +151,7 @@ class SweepProgress:
         rate = self.done / elapsed if elapsed > 0 and self.done else 0.0
         eta = (todo - self.done) / rate if rate else float("nan")
         count = f"{self.already + self.done}/{self.total}"
-        failed = f", {self.failed} failed: {self.first_failure()}" if self.failed else ""
+        failed = f", {self.failed} failed" if self.failed else ""
         eta_text = _duration(eta) if math.isfinite(eta) else "?"
         return f"{count} variants{failed}, {rate:.1f}/s, elapsed {_duration(elapsed)}, ETA {eta_text}"
 
