@@ -102,3 +102,6 @@ def test_the_leverage_curve_in_numpy_is_its_lookup():
         w = np.concatenate([np.linspace(-0.03, lev.full_travel + 0.03, 2001), lev.table[0]])
         want = np.array([lev.stroke(x) for x in w])
         assert np.max(np.abs(lev.strokes(w) - want)) < 1e-15  # m: the same pieces, round-off apart
+        # the ratio over an array: the lookup's own arithmetic, to the bit, the ends held
+        assert np.array_equal(lev.ratios(w), [lev.ratio_at(x) for x in w])
+        assert lev.ratios(-0.03) == lev.table[1][0] and lev.ratios(lev.full_travel + 0.03) == lev.table[1][-1]

@@ -176,3 +176,25 @@ def test_the_share_met_at_once_from_the_command_line_is_reported_not_judged(tmp_
     fit = d["at_once_fit"]
     assert 0.0 <= fit["share"] <= 1.0 and fit["judged"] is False and fit["rear_predicted_rms_mm"] > 0.0
     assert d["checks"]["verdict"] == p["checks"]["verdict"] and p.get("at_once_fit") is None
+
+
+def test_the_checks_are_worked_out_once_and_again_where_a_field_is_set_anew(monkeypatch):
+    """``checks()`` is asked several times of one reconstruction (its own refinement, advice's gate, its
+    summary): worked out once while its fields stay the objects they were; set the prediction anew and
+    it is worked out again (a rear predicted as the rear itself then passes where a poor one failed);
+    a caller's change to the answer does not reach the next caller's."""
+    ground = noise(7, 0.1, 8.0)
+    rear = 40.0 + delayed(ground)
+    rec = reconstruct.Reconstruction("r", "b", t, {"windows": []}, t, t, valid, 40.0 + ground, 40.0 + ground, rear,
+                                     40.0 + noise(9, 0.1, 8.0), 150.0, [], fork_delayed=40.0 + delayed(ground))
+    worked = []
+    real = reconstruct.Reconstruction._checked
+    monkeypatch.setattr(reconstruct.Reconstruction, "_checked", lambda self: worked.append(1) or real(self))
+    first = rec.checks()
+    assert not first["passes"] and rec.checks() == first and len(worked) == 1
+    first["passes"] = "changed by a caller"
+    first["bands"].clear()
+    assert rec.checks()["passes"] is False and rec.checks()["bands"] and len(worked) == 1
+    rec.rear_predicted = rear.copy()
+    again = rec.checks()
+    assert len(worked) == 2 and again["passes"] and again["rear_predicted_rms_mm"] == 0.0

@@ -41,6 +41,14 @@ class Leverage:
         is held at its end value."""
         return leverage_stroke(self._w, self._r, self._s, bisect.bisect_right(self._w, w) - 1, w)
 
+    def ratios(self, w) -> np.ndarray:
+        """``ratio_at`` over an array of rear wheel travels (m): the same arithmetic in numpy, to the bit."""
+        w = np.asarray(w, dtype=float)
+        w_tab, r = np.asarray(self._w, dtype=float), np.asarray(self._r, dtype=float)
+        i = np.clip(np.searchsorted(w_tab, w, side="right") - 1, 0, w_tab.size - 2)
+        inside = r[i] + (r[i + 1] - r[i]) * (w - w_tab[i]) / (w_tab[i + 1] - w_tab[i])
+        return np.where(w <= w_tab[0], r[0], np.where(w >= w_tab[-1], r[-1], inside))
+
     def strokes(self, w) -> np.ndarray:
         """``stroke`` over an array of rear wheel travels (m): the same pieces, in numpy."""
         w = np.asarray(w, dtype=float)

@@ -272,7 +272,7 @@ def _geometry(whole, end: str, x_m):
     for the front: geometry, the same at every spring scale, so computed once per ride."""
     if end == "front":
         return None
-    return np.array([whole.lev.ratio_at(w) for w in x_m]), whole.lev.strokes(np.asarray(x_m, float))
+    return whole.lev.ratios(x_m), whole.lev.strokes(np.asarray(x_m, float))
 
 
 def _along(law, x, v):

@@ -74,7 +74,7 @@ docs/rolling.md and docs/measured.md.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -176,6 +176,17 @@ class Reconstruction:
                 "mean_mm": float(np.mean(self.rear[v]))}
 
     def checks(self) -> dict:  # noqa: D401 (the checks reported with every reconstruction)
+        """The checks (:meth:`_checked`), worked out once for the fields as they are (again where a field
+        was set anew); a copy each call, so a caller's change to it stays the caller's."""
+        import copy
+
+        now = tuple(getattr(self, f.name) for f in fields(self) if f.compare)  # not the memos (_bound)
+        memo = self.__dict__.get("_checks_memo")
+        if memo is None or len(memo[0]) != len(now) or any(a is not b for a, b in zip(memo[0], now)):
+            memo = self.__dict__["_checks_memo"] = (now, self._checked())
+        return copy.deepcopy(memo[1])
+
+    def _checked(self) -> dict:
         v = self.valid
         if not v.any():  # ``reconstruct`` refuses such a ride; no mean of nothing is taken here either
             nan = float("nan")
@@ -563,7 +574,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
     lev = spec.leverage
     rear = rear_mm * 1e-3
     shock = shock_mm * 1e-3 if shock_mm is not None else lev.strokes(rear)
-    ratios = np.vectorize(lev.ratio_at)
+    ratios = lev.ratios
     # the speed from the lag between the grounds each end's own inverse finds (each end's suspension
     # delays its travel behind its ground by its own phase; the grounds carry none)
     ground_back, *_ = ground_under(t, rear, shock, rear_car, ratios)
