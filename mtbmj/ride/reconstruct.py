@@ -649,7 +649,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
         for _ in range(REFINE_PASSES):
             try:
                 again = merged(first, refine(t, rear * 1e3, done["found"]["rear_rise"] * 1e3, done["lags"],
-                                             wheelbase))
+                                             wheelbase, flights=result.jumps))
                 again["from"] = ", ".join(sorted({s for s in first["sources"] if s} | {"the rear predicted"}))
                 done, speed = through(again), again
             except ReconstructError:
