@@ -737,6 +737,36 @@ def test_a_bad_hit_is_refused_in_one_line(tmp_path, capsys, bad):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("hit,says", [("80", "not less than the shock's whole stroke as the records are read (65 mm)"),
+                                       ("150", "in shock mm (not the rear wheel's travel)"), ("60", None)])
+def test_a_hit_past_the_whole_stroke_is_refused_in_one_line(five, tmp_path, capsys, hit, says):
+    """--hit-mm in the rear wheel's travel (150 mm) or past the shock's 65 mm stroke: no law answers for
+    a hit the shock cannot take; one line naming the stroke, nothing written (it was answered, "one
+    overshoot after a 500.0 mm hit"). A hit within the stroke is answered."""
+    import struct
+
+    from helpers import SHOCK, counts_of
+    from mtbmj import cli
+
+    _, xs, _ = five
+    paths = []
+    for (k, _), x in zip(FIVE[:2], xs):
+        shock = np.clip(np.rint(counts_of(x, *SHOCK)), 0, None).astype("<u2")
+        p = tmp_path / f"{k}.SST"
+        p.write_bytes(struct.pack("<3sBH", b"SST", 2, RATE) + np.column_stack((np.full_like(shock, 300), shock))
+                      .astype("<u2").tobytes())
+        paths.append(str(p))
+    out = tmp_path / "out"
+    rc = cli.main(["fit", "bounce", *paths, "--clicks", "0,4", "--hit-mm", hit, "--out", str(out)])
+    captured = capsys.readouterr()
+    if says is None:
+        assert rc == 0 and f"after a {float(hit):.1f} mm hit" in captured.out
+        return
+    err = captured.err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and err[0].startswith(f"mtbmj: error: --hit-mm {hit}:") and says in err[0], err
+    assert not out.exists()
+
+
 def test_the_fork_gets_its_law_prediction_and_answer_where_it_rings(five, tmp_path):
     """Item 5: the fork's clicks where it rings at two or more settings (the shared forks do not):
     both ends made by the three-mass model, the fork's damper 0.8 x the shock's, friction alike."""
