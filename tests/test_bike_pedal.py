@@ -245,8 +245,42 @@ def test_bob_command_against_records(tmp_path):
                                                                          rel=0.03)
     assert (tmp_path / "bob" / "bob.png").stat().st_size > 10000
     assert "00088.SST (standing): rear bob ridden" in p.stdout
+    # the one stall line is of the runs kept (a climb set again and left is not the bob reported): the
+    # standing record's third run at 8 s stalled, its kept one did not, and the line was printed
+    assert ("the rider stalled" in p.stderr) == any(r["min_speed_m_per_s"] < 0.5 for r in rows), p.stderr
     bad = run_cli("bob", str(SHARED / "00088.SST"), "--stance", "lying", "--out", "bad", cwd=tmp_path)
     assert bad.returncode == 2 and "lying" in bad.stderr and not (tmp_path / "bad").exists()
+
+
+@pytest.mark.shared_data("sst_v2", "00088.SST")
+def test_bob_says_what_the_run_it_kept_said_only(monkeypatch):
+    """Each run of the climb set again says something here (a ConfigWarning naming it); of them the
+    one whose bob is reported is said, the others (left: their cadence missed) are not."""
+    import warnings
+
+    from mtbmj.bike import run as bike_run
+    from mtbmj.config import ConfigWarning
+    from mtbmj.ride import pedalling
+
+    real, scenarios = bike_run.run_bike, []
+
+    def marking(spec, scenario, *args, **kwargs):
+        run = real(spec, scenario, *args, **kwargs)
+        scenarios.append(scenario)
+        warnings.warn(f"made here: run {len(scenarios)}", ConfigWarning)
+        return run
+
+    monkeypatch.setattr(bike_run, "run_bike", marking)
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        result = pedalling.against([SHARED / "00088.SST"], "sst", None, 250.0, None, 8.0)
+    (row,) = result.rows
+    assert len(scenarios) >= 2  # the climb was set again: runs were left
+    kept = [i + 1 for i, s in enumerate(scenarios) if f"grade_percent={row['grade_percent']:.3f}," in s]
+    assert len(kept) == 1
+    assert [str(w.message) for w in said if "made here" in str(w.message)] == [f"made here: run {kept[0]}"]
+    stalls = [w for w in said if "the rider stalled" in str(w.message)]
+    assert bool(stalls) == (row["min_speed_m_per_s"] < 0.5)
 
 
 def test_a_stalled_rider_is_said():
