@@ -252,6 +252,38 @@ def test_bob_command_against_records(tmp_path):
     assert bad.returncode == 2 and "lying" in bad.stderr and not (tmp_path / "bad").exists()
 
 
+def test_bob_takes_a_stance_in_capitals_and_says_the_power_allowed(tmp_path, monkeypatch, capsys):
+    """--stance Standing,SEATED is standing and seated (it was refused: "'Standing' is not standing or
+    seated"); a stance that is neither is still refused; --power 0 names the range it is outside of
+    without including 0 in it (it said "0 W is outside ... (0-1500 W)")."""
+    from mtbmj.cli import main
+    from mtbmj.ride import pedalling
+
+    records = []
+    for name in ("a.SST", "b.SST"):
+        wave = np.sin(np.arange(4000) / 1000 * 2 * np.pi * 1.8)
+        from helpers import write_sst
+
+        records.append(str(write_sst(tmp_path / name, 40.0 + 5.0 * wave, 30.0 + 5.0 * wave)))
+    seen = []
+
+    def reached(recs, bike, stances, *rest):
+        from mtbmj.errors import ConfigError
+
+        seen.append(stances)
+        raise ConfigError("reached the runs")
+
+    monkeypatch.setattr(pedalling, "against", reached)
+    assert main(["bob", *records, "--stance", "Standing, SEATED", "--out", str(tmp_path / "reached")]) == 2
+    assert seen == [["standing", "seated"]] and "reached the runs" in capsys.readouterr().err
+    monkeypatch.undo()
+    assert main(["bob", *records, "--stance", "standing,lying", "--out", str(tmp_path / "o")]) == 2
+    assert "'lying' is not standing or seated" in capsys.readouterr().err
+    assert main(["bob", records[0], "--power", "0", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "(above 0 W, at most 1500 W)" in err and not (tmp_path / "o").exists()
+
+
 @pytest.mark.shared_data("sst_v2", "00088.SST")
 def test_bob_says_what_the_run_it_kept_said_only(monkeypatch):
     """Each run of the climb set again says something here (a ConfigWarning naming it); of them the
