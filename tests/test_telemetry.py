@@ -284,6 +284,13 @@ def test_compare_given_a_file_or_another_command_s_folder_says_what_it_takes(tmp
     assert run_cli(["telemetry", str(SHIPPED), "--compare", str(empty), "--out", str(out)]) == 2
     assert "no timeseries.csv" in capsys.readouterr().err
     assert run_cli(["telemetry", str(SHIPPED), "--compare", str(run_dir), "--out", str(out)]) == 0
+    capsys.readouterr()
+    # one run twice (by two names of one folder): refused as mtbmj compare refuses it; it was drawn twice
+    again = f"{run_dir}/../s1"
+    assert run_cli(["telemetry", str(SHIPPED), "--compare", str(run_dir), str(again), "--out", str(tmp_path / "t2")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"--compare {again}: given twice (as {run_dir})" in err
+    assert not (tmp_path / "t2").exists()
 
 
 def test_comparison_figure_labels_each_travel_and_shows_every_tail(record):
