@@ -726,6 +726,19 @@ def test_fit_bounce_answers_in_clicks_on_the_cli_and_in_the_figure(five, tmp_pat
     assert any("at 6 clicks" in t.get_text() for t in trace_panel.get_legend().get_texts())
 
 
+def test_a_click_to_predict_given_twice_is_refused_in_one_line(tmp_path, capsys):
+    """--predict-clicks 4,4: refused before the records are read (it gave two entries in fit.json
+    and one ringdown_4_clicks.csv written over the other); 4,6 reaches the records (a missing file)."""
+    from mtbmj import cli
+
+    for predict, says in (("4,4", "--predict-clicks 4,4: 4 clicks given twice"), ("4,6", "a.SST")):
+        rc = cli.main(["fit", "bounce", str(tmp_path / "a.SST"), str(tmp_path / "b.SST"), "--clicks", "0,8",
+                       "--predict-clicks", predict, "--out", str(tmp_path / "o")])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert rc == 2 and len(err) == 1 and says in err[0], err
+    assert not (tmp_path / "o").exists()
+
+
 @pytest.mark.parametrize("bad", ["0", "-3", "nan"])
 def test_a_bad_hit_is_refused_in_one_line(tmp_path, capsys, bad):
     from mtbmj import cli
