@@ -260,11 +260,11 @@ def test_bob_takes_a_stance_in_capitals_and_says_the_power_allowed(tmp_path, mon
     from mtbmj.ride import pedalling
 
     records = []
-    for name in ("a.SST", "b.SST"):
+    for name, size in (("a.SST", 5.0), ("b.SST", 8.0)):
         wave = np.sin(np.arange(4000) / 1000 * 2 * np.pi * 1.8)
         from helpers import write_sst
 
-        records.append(str(write_sst(tmp_path / name, 40.0 + 5.0 * wave, 30.0 + 5.0 * wave)))
+        records.append(str(write_sst(tmp_path / name, 40.0 + size * wave, 30.0 + size * wave)))
     seen = []
 
     def reached(recs, bike, stances, *rest):
@@ -282,6 +282,13 @@ def test_bob_takes_a_stance_in_capitals_and_says_the_power_allowed(tmp_path, mon
     assert main(["bob", records[0], "--power", "0", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "(above 0 W, at most 1500 W)" in err and not (tmp_path / "o").exists()
+    # one record twice (a copy): refused before any run (it ran the same record twice)
+    import shutil
+
+    shutil.copy(records[0], tmp_path / "copy.SST")
+    assert main(["bob", records[0], str(tmp_path / "copy.SST"), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"copy.SST: the same record as {records[0]}" in err and not (tmp_path / "o").exists()
 
 
 @pytest.mark.shared_data("sst_v2", "00088.SST")
