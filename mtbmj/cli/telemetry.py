@@ -60,10 +60,11 @@ def add_sensor_spans(p) -> None:
     p.add_argument("--shock-max-mm", type=float, help="shock stroke the sensor spans (default: the bike's)")
 
 
-def decoding(args, bike=None) -> dict:
+def decoding(args, bike=None, overrides=None) -> dict:
     """read_sst's fork_max_mm, shock_max_mm and leverage: the --bike's (``bike``: that file
-    resolved already, ``mtbmj.bike.spec.resolve``), with --fork-max-mm and --shock-max-mm over
-    them; the SST example's bike without --bike."""
+    resolved already, ``mtbmj.bike.spec.resolve``; ``overrides``: the command's --set, --fork-set and
+    --shock-set over it, as its runs take them), with --fork-max-mm and --shock-max-mm over them; the
+    SST example's bike without --bike."""
     fork_max, shock_max = telemetry.FORK_TRAVEL_MAX_MM, telemetry.SHOCK_STROKE_MAX_MM
     leverage = telemetry.LeverageCurve()
     extra: dict = {}
@@ -71,7 +72,7 @@ def decoding(args, bike=None) -> dict:
         from mtbmj.bike import run as bike_run
         from mtbmj.bike import spec
 
-        bike = spec.load(args.bike if bike is None else bike)
+        bike = spec.load(args.bike if bike is None else bike, overrides or None)
         fork_setup, _ = bike_run.setups(bike)
         fork_max, shock_max = fork_setup.travel * 1e3, bike.shock_stroke * 1e3
         leverage = bike.leverage  # the one leverage class: the bike's curve decodes the ride as it is
@@ -101,14 +102,14 @@ def travel_keys(args) -> tuple[str, str]:
     return keys[0], keys[1]
 
 
-def ride_record(ride, args, bike=None):
+def ride_record(ride, args, bike=None, overrides=None):
     """The ride a command names (a recording or travel CSV, or "example": the shipped SST ride)
-    decoded through ``decoding(args, bike)``; refused when it travels past the travel it is read with
-    (``telemetry.beyond_travel``), else its quality warnings issued."""
+    decoded through ``decoding(args, bike, overrides)``; refused when it travels past the travel it is
+    read with (``telemetry.beyond_travel``), else its quality warnings issued."""
     from mtbmj.config import warn
 
     path = telemetry.example_path() if str(ride) == "example" else ride
-    record = telemetry.read_ride(path, **decoding(args, bike))
+    record = telemetry.read_ride(path, **decoding(args, bike, overrides))
     beyond = telemetry.beyond_travel(record, *travel_keys(args))
     warn(telemetry.quality(record) + beyond)
     return record
