@@ -291,6 +291,40 @@ def test_bob_takes_a_stance_in_capitals_and_says_the_power_allowed(tmp_path, mon
     assert err.count("\n") == 1 and f"copy.SST: the same record as {records[0]}" in err and not (tmp_path / "o").exists()
 
 
+def test_bob_reads_each_record_through_the_recorded_bike(tmp_path, monkeypatch):
+    """A record written here through a bike file's [sensors] and its constant leverage ratio (2.5):
+    bob reads its rear bob from the rear as written (the counts' rounding apart), not through the SST
+    example's sensors and leverage curve (which it did whatever --bike said: 9 mm off on 00088 with
+    --bike trail)."""
+    from helpers import bike_text, write_sst
+    from mtbmj.bike import run as bike_run
+    from mtbmj.ride import pedalling
+
+    t = np.arange(12000) / 1000
+    rear = 45.0 + 12.0 * np.sin(2 * np.pi * 1.8 * t)
+    sst = write_sst(tmp_path / "climb.SST", 50.0 + 5.0 * np.sin(2 * np.pi * 1.8 * t), rear)
+    bike = tmp_path / "bike.toml"
+    bike.write_text(bike_text())
+    seen = []
+    real_bob = pedalling.bob
+
+    def reading(time_s, travel_mm, *rest):
+        seen.append(np.asarray(travel_mm).copy())
+        return real_bob(time_s, travel_mm, *rest)
+
+    def no_run(*a, **k):
+        raise RuntimeError("the record was read")
+
+    monkeypatch.setattr(pedalling, "bob", reading)
+    monkeypatch.setattr(bike_run, "run_bike", no_run)
+    with pytest.raises(RuntimeError, match="the record was read"):
+        pedalling.against([sst], str(bike), overrides={"drive.chainring_teeth": 32, "drive.cog_teeth": 42})
+    assert np.max(np.abs(seen[0] - rear)) < 0.5  # the rear's record as the bike reads it: the rear made here
+    from mtbmj.measured.telemetry import read_sst
+
+    assert np.max(np.abs(read_sst(sst).rear_mm - rear)) > 5.0  # the SST example's reading is another
+
+
 @pytest.mark.shared_data("sst_v2", "00088.SST")
 def test_bob_says_what_the_run_it_kept_said_only(monkeypatch):
     """Each run of the climb set again says something here (a ConfigWarning naming it); of them the

@@ -520,5 +520,23 @@ def rear_axle_in_frame(spec: BikeSpec, phi) -> tuple[np.ndarray, np.ndarray]:
             pz - np.sin(phi) * rho[0] + np.cos(phi) * rho[1])
 
 
-__all__ = ["BikeSpec", "Leverage", "ResolvedBike", "Rider", "derive", "load", "resolve", "preset_names", "check_geometry", "level_pitch", "leverage_ratio", "leverage_stroke",
+def ride_decoding(bike) -> dict:
+    """How a ride recorded on ``bike`` (a loaded ``BikeSpec``) is read (``mtbmj.measured.telemetry``'s
+    read_sst / read_ride keywords): its fork travel and shock stroke, its leverage curve, and its
+    recorder's sensors (``[sensors]``; where absent, the reader's defaults, the SST example's)."""
+    from mtbmj.bike import run as bike_run
+    from mtbmj.measured import telemetry
+
+    fork_setup, _ = bike_run.setups(bike)
+    out = {"fork_max_mm": fork_setup.travel * 1e3, "shock_max_mm": bike.shock_stroke * 1e3,
+           "leverage": bike.leverage}  # the one leverage class: the bike's curve decodes the ride as it is
+    sensors = bike.sensors
+    if "fork_arm_mm" in sensors:
+        out["front"] = telemetry.IsoscelesTriangle(sensors["fork_arm_mm"], sensors["fork_max_mm"])
+    if "shock_arm1_mm" in sensors:
+        out["rear"] = telemetry.Triangle(sensors["shock_arm1_mm"], sensors["shock_arm2_mm"], sensors["shock_max_mm"])
+    return out
+
+
+__all__ = ["BikeSpec", "Leverage", "ResolvedBike", "Rider", "derive", "ride_decoding", "load", "resolve", "preset_names", "check_geometry", "level_pitch", "leverage_ratio", "leverage_stroke",
            "stroke_piece", "rear_axle_in_frame"]

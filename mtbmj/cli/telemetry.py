@@ -65,25 +65,16 @@ def decoding(args, bike=None, overrides=None) -> dict:
     resolved already, ``mtbmj.bike.spec.resolve``; ``overrides``: the command's --set, --fork-set and
     --shock-set over it, as its runs take them), with --fork-max-mm and --shock-max-mm over them; the
     SST example's bike without --bike."""
-    fork_max, shock_max = telemetry.FORK_TRAVEL_MAX_MM, telemetry.SHOCK_STROKE_MAX_MM
-    leverage = telemetry.LeverageCurve()
-    extra: dict = {}
+    out = {"fork_max_mm": telemetry.FORK_TRAVEL_MAX_MM, "shock_max_mm": telemetry.SHOCK_STROKE_MAX_MM,
+           "leverage": telemetry.LeverageCurve()}
     if args.bike is not None:
-        from mtbmj.bike import run as bike_run
         from mtbmj.bike import spec
 
-        bike = spec.load(args.bike if bike is None else bike, overrides or None)
-        fork_setup, _ = bike_run.setups(bike)
-        fork_max, shock_max = fork_setup.travel * 1e3, bike.shock_stroke * 1e3
-        leverage = bike.leverage  # the one leverage class: the bike's curve decodes the ride as it is
-        sensors = bike.sensors  # the recorder's calibration on this bike ([sensors]), else the SST example's
-        if "fork_arm_mm" in sensors:
-            extra["front"] = telemetry.IsoscelesTriangle(sensors["fork_arm_mm"], sensors["fork_max_mm"])
-        if "shock_arm1_mm" in sensors:
-            extra["rear"] = telemetry.Triangle(sensors["shock_arm1_mm"], sensors["shock_arm2_mm"], sensors["shock_max_mm"])
-    return {"fork_max_mm": fork_max if args.fork_max_mm is None else args.fork_max_mm,
-            "shock_max_mm": shock_max if args.shock_max_mm is None else args.shock_max_mm, "leverage": leverage,
-            **extra}
+        out = spec.ride_decoding(spec.load(args.bike if bike is None else bike, overrides or None))
+    for key in ("fork_max_mm", "shock_max_mm"):
+        if getattr(args, key) is not None:
+            out[key] = getattr(args, key)
+    return out
 
 
 def travel_keys(args) -> tuple[str, str]:

@@ -133,7 +133,7 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
     radius = setups(spec)[0].tire_radius
     rows, series = [], []
     for path, stance in zip(records, stances):
-        ride = telemetry.read_sst(path)
+        ride = telemetry.read_sst(path, **spec_mod.ride_decoding(spec))  # read as the recorded bike reads it
         if ride.rear_mm is None:
             raise BobError(f"{path}: has no shock sensor: no rear bob to compare")
         rear = bob(ride.time_s, ride.rear_mm)
