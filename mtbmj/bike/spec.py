@@ -524,11 +524,11 @@ def ride_decoding(bike) -> dict:
     """How a ride recorded on ``bike`` (a loaded ``BikeSpec``) is read (``mtbmj.measured.telemetry``'s
     read_sst / read_ride keywords): its fork travel and shock stroke, its leverage curve, and its
     recorder's sensors (``[sensors]``; where absent, the reader's defaults, the SST example's)."""
-    from mtbmj.bike import run as bike_run
+    from mtbmj.config import load as load_config
     from mtbmj.measured import telemetry
 
-    fork_setup, _ = bike_run.setups(bike)
-    out = {"fork_max_mm": fork_setup.travel * 1e3, "shock_max_mm": bike.shock_stroke * 1e3,
+    fork_travel_mm = load_config(bike.fork_config, bike.fork_overrides or None).require("fork.travel_mm")
+    out = {"fork_max_mm": float(fork_travel_mm), "shock_max_mm": bike.shock_stroke * 1e3,
            "leverage": bike.leverage}  # the one leverage class: the bike's curve decodes the ride as it is
     sensors = bike.sensors
     if "fork_arm_mm" in sensors:
