@@ -288,6 +288,38 @@ def test_a_stretch_too_short_is_refused_before_any_work(tmp_path, capsys, monkey
     assert reached and "reached the reconstruction" in capsys.readouterr().err
 
 
+def test_the_ride_is_decoded_through_the_bike_as_set_on_the_command_line(tmp_path, monkeypatch):
+    """--set sensors.* (the recorder's calibration) decodes the ride as the same keys in the bike file do
+    (it was left to the runs: the ride was read through the file's sensors, 20.5 mm against 21.1 mm of
+    the rear's RMS on the shipped ride); without the --set the ride reads otherwise (the check can fail)."""
+    from helpers import FORK_ARM, FORK_MAX, bike_text, write_sst
+    from mtbmj.ride import advise as advise_mod
+    from mtbmj.errors import MtbmjError
+
+    wave = np.sin(np.arange(16000) / 1000 * 2 * np.pi)
+    sst = write_sst(tmp_path / "ride.SST", 60.0 + 40.0 * wave, 40.0 + 30.0 * wave)
+    text = bike_text()
+    plain = tmp_path / "plain.toml"  # the recorder's fork sensor 10 % longer in the arm and base than written
+    plain.write_text(text)
+    other = text.replace(f"fork_arm_mm = {FORK_ARM}", f"fork_arm_mm = {FORK_ARM * 1.1}").replace(
+        f"fork_max_mm = {FORK_MAX}", f"fork_max_mm = {FORK_MAX * 1.1}")
+    assert other != text
+    (tmp_path / "other.toml").write_text(other)
+    read = []
+
+    def caught(record, *a, **k):
+        read.append(record.fork_mm.copy())
+        raise MtbmjError("caught the ride")
+
+    monkeypatch.setattr(advise_mod, "advise", caught)
+    sets = ["--set", f"sensors.fork_arm_mm={FORK_ARM * 1.1}", "--set", f"sensors.fork_max_mm={FORK_MAX * 1.1}"]
+    for bike, extra in ((plain, sets), (tmp_path / "other.toml", []), (plain, [])):
+        assert main(["advise", str(sst), "--bike", str(bike), *extra, "--out", str(tmp_path / "o")]) == 2
+    by_set, by_file, as_written = read
+    assert np.array_equal(by_set, by_file)
+    assert np.max(np.abs(by_set - as_written)) > 5.0
+
+
 def test_an_expected_value_keeps_the_metric_s_bounds():
     """What the advice expects on the ride: the model's change mapped through (bound, bound) and
     (simulated now, recorded). Closed forms: the trail bike's case (the model's 5 bottom-outs become

@@ -78,7 +78,14 @@ def test_a_bad_try_is_one_line_before_any_work(tmp_path, capsys, monkeypatch):
                        (["--try-set", "fork:fork.spring.rate_N_per_mm=900"], "far above what any bike"),
                        (["--try-set", "shock.pressure_psi=200"], "the shock is a coil"),
                        (["--try-set", "fork:fork.spring.rate_N_per_mm=soft"], "must be a number"),
-                       (["--try-set", "tyre:pressure=2"], "fork:KEY or shock:KEY")):
+                       (["--try-set", "tyre:pressure=2"], "fork:KEY or shock:KEY"),
+                       # the part's prefix left off: the key as it is tried (it was "--set ...: unknown key")
+                       (["--try-set", "fork.spring.rate_N_per_mm=14"], "tried as fork:fork.spring.rate_N_per_mm "
+                                                                       "(--try-set fork:fork.spring.rate_N_per_mm=14)"),
+                       (["--try-set", "shock.damper.rebound_N_s_per_m=900"], "shock:fork.damper.rebound_N_s_per_m"),
+                       # a key the part's model does not read: the try would be the recorded setting again
+                       (["--try-set", "fork:fork.spring.progressive_rate_N_per_mm=9"],
+                        "fork.spring.model = 'linear' does not read it, so it would change nothing")):
         assert main(["advise", str(sst), "--bike", str(bike), *args, "--out", str(out)]) == 2, args
         err = [ln for ln in capsys.readouterr().err.splitlines() if not ln.startswith("mtbmj: warning")]
         assert len(err) == 1 and err[0].startswith("mtbmj: error: --try") and says in err[0], (args, err)

@@ -38,12 +38,32 @@ def test_set_changes_the_bike_as_a_file_would(tmp_path, monkeypatch, capsys):
     (["--set", "mass_kg=78"], "SECTION.KEY"),
     (["--set", "wheels.size=29"], "unknown section"),
     (["--fork-set", "sled.body_mass_kg=10"], "not used by the bike"),
+    # a part's configuration key given as a bike key, and the other way round: the line says where it goes
+    (["--set", "fork.spring.air_pressure_psi=60"], "goes with --fork-set, e.g. --fork-set fork.spring.air_pressure_psi="),
+    (["--set", "shock.damper.rebound_N_s_per_m=900"], "--shock-set fork.damper.rebound_N_s_per_m="),
+    (["--fork-set", "spring.air_pressure_psi=60"], "did you mean 'fork.spring.air_pressure_psi'?"),
+    (["--shock-set", "shock.damper.rebound_N_s_per_m=900"], "did you mean 'fork.damper.rebound_N_s_per_m'?"),
+    (["--shock-set", "shock.spring_rate_lb_per_in=450"], "given on the command line with --set "
+                                                          "shock.spring_rate_lb_per_in=VALUE"),
+    (["--fork-set", "rider.mass_kg=78"], "with --set rider.mass_kg=VALUE"),
 ])
 def test_bad_overrides_are_one_line(tmp_path, monkeypatch, capsys, argv, words):
     monkeypatch.chdir(tmp_path)
     assert main(["bike", "trail", "flat", "--speed", "4", "--out", "run", *argv]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and words in err and not (tmp_path / "run").exists()
+
+
+def test_no_hint_where_the_key_is_no_part_s_either(tmp_path, monkeypatch, capsys):
+    """The hints above name a key that exists: a --set key that no part's configuration has either gets
+    the bike's table only, a --fork-set key with no near configuration key no guess."""
+    monkeypatch.chdir(tmp_path)
+    for argv in (["--set", "shock.rebound_clicks=8"], ["--set", "fork.spring.stiffness=8"],
+                 ["--fork-set", "spring.stiffness=8"]):
+        assert main(["bike", "trail", "flat", "--speed", "4", "--out", "run", *argv]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "-set" not in err.split(":", 2)[2].replace(argv[0], "") \
+            and "did you mean" not in err, err
 
 
 @pytest.mark.parametrize("text", ["", "[rider]\nmass_kg = 72.0\n"])

@@ -726,6 +726,19 @@ def test_fit_bounce_answers_in_clicks_on_the_cli_and_in_the_figure(five, tmp_pat
     assert any("at 6 clicks" in t.get_text() for t in trace_panel.get_legend().get_texts())
 
 
+def test_a_click_to_predict_given_twice_is_refused_in_one_line(tmp_path, capsys):
+    """--predict-clicks 4,4: refused before the records are read (it gave two entries in fit.json
+    and one ringdown_4_clicks.csv written over the other); 4,6 reaches the records (a missing file)."""
+    from mtbmj import cli
+
+    for predict, says in (("4,4", "--predict-clicks 4,4: 4 clicks given twice"), ("4,6", "a.SST")):
+        rc = cli.main(["fit", "bounce", str(tmp_path / "a.SST"), str(tmp_path / "b.SST"), "--clicks", "0,8",
+                       "--predict-clicks", predict, "--out", str(tmp_path / "o")])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert rc == 2 and len(err) == 1 and says in err[0], err
+    assert not (tmp_path / "o").exists()
+
+
 @pytest.mark.parametrize("bad", ["0", "-3", "nan"])
 def test_a_bad_hit_is_refused_in_one_line(tmp_path, capsys, bad):
     from mtbmj import cli
@@ -735,6 +748,36 @@ def test_a_bad_hit_is_refused_in_one_line(tmp_path, capsys, bad):
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 2 and len(err) == 1 and "--hit-mm" in err[0]
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("hit,says", [("80", "not less than the shock's whole stroke as the records are read (65 mm)"),
+                                       ("150", "in shock mm (not the rear wheel's travel)"), ("60", None)])
+def test_a_hit_past_the_whole_stroke_is_refused_in_one_line(five, tmp_path, capsys, hit, says):
+    """--hit-mm in the rear wheel's travel (150 mm) or past the shock's 65 mm stroke: no law answers for
+    a hit the shock cannot take; one line naming the stroke, nothing written (it was answered, "one
+    overshoot after a 500.0 mm hit"). A hit within the stroke is answered."""
+    import struct
+
+    from helpers import SHOCK, counts_of
+    from mtbmj import cli
+
+    _, xs, _ = five
+    paths = []
+    for (k, _), x in zip(FIVE[:2], xs):
+        shock = np.clip(np.rint(counts_of(x, *SHOCK)), 0, None).astype("<u2")
+        p = tmp_path / f"{k}.SST"
+        p.write_bytes(struct.pack("<3sBH", b"SST", 2, RATE) + np.column_stack((np.full_like(shock, 300), shock))
+                      .astype("<u2").tobytes())
+        paths.append(str(p))
+    out = tmp_path / "out"
+    rc = cli.main(["fit", "bounce", *paths, "--clicks", "0,4", "--hit-mm", hit, "--out", str(out)])
+    captured = capsys.readouterr()
+    if says is None:
+        assert rc == 0 and f"after a {float(hit):.1f} mm hit" in captured.out
+        return
+    err = captured.err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and err[0].startswith(f"mtbmj: error: --hit-mm {hit}:") and says in err[0], err
+    assert not out.exists()
 
 
 def test_the_fork_gets_its_law_prediction_and_answer_where_it_rings(five, tmp_path):

@@ -257,6 +257,42 @@ def test_compare_with_a_drop_run(tmp_path, capsys):
     assert "not a run directory" in capsys.readouterr().err
 
 
+def test_compare_given_a_file_or_another_command_s_folder_says_what_it_takes(tmp_path, capsys):
+    """--compare RUN/timeseries.csv names the run's folder to give; --compare a folder another
+    command wrote (a telemetry, a fit) names that command (it said "no timeseries.csv (write one
+    with ... --out TEL)", which would have overwritten it); a run's folder is still taken."""
+    import mtbmj
+
+    run_dir = tmp_path / "s1"
+    mtbmj.run_drop("S1", duration=0.4).write(run_dir)
+    out = tmp_path / "tel"
+    assert run_cli(["telemetry", str(SHIPPED), "--compare", str(run_dir / "timeseries.csv"), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"a file, not a run directory (give the folder that holds it: --compare {run_dir})" \
+        in err and not out.exists()
+    stray = tmp_path / "notes.csv"
+    stray.write_text("time_s,fork_mm\n0,1\n")
+    assert run_cli(["telemetry", str(SHIPPED), "--compare", str(stray), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "a file, not a run directory" in err and "give the folder" not in err
+    assert run_cli(["telemetry", str(SHIPPED), "--out", str(tmp_path / "ride")]) == 0
+    assert run_cli(["telemetry", str(SHIPPED), "--compare", str(tmp_path / "ride"), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "a folder of mtbmj telemetry, not a run" in err and not out.exists()
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert run_cli(["telemetry", str(SHIPPED), "--compare", str(empty), "--out", str(out)]) == 2
+    assert "no timeseries.csv" in capsys.readouterr().err
+    assert run_cli(["telemetry", str(SHIPPED), "--compare", str(run_dir), "--out", str(out)]) == 0
+    capsys.readouterr()
+    # one run twice (by two names of one folder): refused as mtbmj compare refuses it; it was drawn twice
+    again = f"{run_dir}/../s1"
+    assert run_cli(["telemetry", str(SHIPPED), "--compare", str(run_dir), str(again), "--out", str(tmp_path / "t2")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"--compare {again}: given twice (as {run_dir})" in err
+    assert not (tmp_path / "t2").exists()
+
+
 def test_comparison_figure_labels_each_travel_and_shows_every_tail(record):
     """A simulated run faster than the ride (a 120 mm fork, random amplitude) against the shipped
     ride (a 180 mm fork): each histogram is in % of its own travel and says so, the velocity axis

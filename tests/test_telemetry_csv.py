@@ -103,3 +103,28 @@ def test_a_decimal_comma_is_refused_saying_so(tmp_path, monkeypatch, capsys):
     err = capsys.readouterr().err
     assert "line 2: time_s is not a number: '0,000' (a decimal comma? write the point: 0.000)" in err
     assert len(err.strip().splitlines()) == 1 and not (tmp_path / "tel").exists()
+
+
+def test_a_shock_and_a_rear_column_that_disagree_are_said(tmp_path, monkeypatch, capsys):
+    """Both shock_mm and rear_mm given: each end is read from its own column, so one warning line says
+    where they disagree through the bike's leverage curve (a logger's rear at a constant 2.6 ratio on
+    the trail bike, whose curve is its own); the same ride with rear_mm made from shock_mm through that
+    curve (integrated here, not by the reader) is read without it."""
+    from mtbmj.bike import spec
+
+    monkeypatch.chdir(tmp_path)
+    lev = spec.load("trail").leverage
+    grid = np.linspace(0.0, 160.0, 4001)  # wheel mm; the stroke along it, ds = dw / LR(w), integrated here
+    ratio = np.array([lev.ratio_at(w * 1e-3) for w in grid])
+    stroke_at = np.concatenate(([0.0], np.cumsum(np.diff(grid) / (0.5 * (ratio[1:] + ratio[:-1])))))
+
+    def shock(t):
+        return 20.0 + 15.0 * np.sin(2 * np.pi * 1.1 * t)
+
+    _csv(tmp_path / "apart.csv", {"shock_mm": shock, "rear_mm": lambda t: 2.6 * shock(t)})
+    assert main(["telemetry", "apart.csv", "--bike", "trail", "--out", "a"]) == 0
+    err = capsys.readouterr().err
+    assert "apart.csv: shock_mm and rear_mm disagree through the leverage curve they are read with" in err, err
+    _csv(tmp_path / "one.csv", {"shock_mm": shock, "rear_mm": lambda t: np.interp(shock(t), stroke_at, grid)})
+    assert main(["telemetry", "one.csv", "--bike", "trail", "--out", "b"]) == 0
+    assert "disagree" not in capsys.readouterr().err

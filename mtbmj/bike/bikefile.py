@@ -193,6 +193,26 @@ KNOWN = {
 }
 
 
+def part_key(key: str) -> str | None:
+    """The key of the fork's or the shock's configuration that a bike key ``key`` not in the bike
+    file's tables reads as (``fork.spring.rate_N_per_mm``, ``shock.damper.rebound_N_s_per_m``: a
+    configuration's keys are ``fork.*``, the shock's too), else None: what a refusal points to."""
+    from mtbmj.config import ALTERNATIVES, SCHEMA
+
+    section, _, name = str(key).partition(".")
+    meant = f"fork.{name}"
+    if section not in ("fork", "shock") or (meant not in SCHEMA and meant not in ALTERNATIVES):
+        return None
+    return meant if section == "fork" or meant != "fork.length_mm" else None
+
+
+def bike_key(key: str) -> str | None:
+    """``key`` (a key given in a part's ``set`` table) as the bike key ``SECTION.NAME`` it names,
+    else None."""
+    section, _, name = str(key).partition(".")
+    return key if KNOWN.get(section) and name in KNOWN[section] and name not in ("set", "config") else None
+
+
 def gated(table: dict, location=None) -> dict:
     """``table`` (a bike file's, or overrides by key) with every number in it passed through the
     numeric-input gate (``mtbmj.limits.numbers_in``): a value that is NaN, infinite, an integer too
@@ -241,7 +261,9 @@ def overridden(table: dict, overrides) -> dict:
                               f"{', '.join(k for k, v in KNOWN.items() if v)})")
         if name not in KNOWN[section] or name == "set":
             raise ConfigError(f"--set {key}: unknown key (known in [{section}]: "
-                              f"{', '.join(sorted(k for k in KNOWN[section] if k != 'set'))})")
+                              f"{', '.join(sorted(k for k in KNOWN[section] if k != 'set'))})"
+                              + (f"; a key of the {section}'s own configuration goes with --{section}-set, e.g. "
+                                 f"--{section}-set {part_key(key)}=VALUE" if part_key(key) else ""))
         if section == "bike" and name in _chart.SETS and isinstance(out.get("geometry"), dict):
             raise ConfigError(f"--set {key}: this bike's frame is given by its geometry chart; set the chart's keys "
                               f"(geometry.{'head_angle_deg' if name == 'head_angle_deg' else 'wheelbase_mm'}, ...)")
@@ -268,4 +290,4 @@ def overridden(table: dict, overrides) -> dict:
     return out
 
 
-__all__ = ["KNOWN", "SENSOR_KEYS", "gated", "merge", "overridden", "preset_names", "read_leverage_csv", "read_table"]
+__all__ = ["KNOWN", "SENSOR_KEYS", "bike_key", "gated", "merge", "overridden", "part_key", "preset_names", "read_leverage_csv", "read_table"]

@@ -247,6 +247,24 @@ def _used(section: str, key: str) -> bool:
     return key.startswith("fork.") and key != "fork.length_mm"
 
 
+def _set_hint(section: str, key: str) -> str:
+    """What a key a part's configuration does not read was likely meant as: a bike key (given to
+    ``--shock-set`` or in a ``set`` table), or the configuration's ``fork.*`` key without or with
+    another first part (``spring.rate_N_per_mm``, ``shock.damper.rebound_N_s_per_m``)."""
+    from mtbmj.bike.bikefile import bike_key
+
+    if bike_key(key):
+        part, _, name = key.partition(".")
+        return f"; {key} is a key of the bike file ([{part}] {name}), given on the command line with --set {key}=VALUE"
+    from mtbmj.config import ALTERNATIVES, SCHEMA
+
+    first, _, rest = key.partition(".")
+    for meant in (f"fork.{key}", f"fork.{rest}" if rest and first in ("shock", "fork") else ""):
+        if meant and meant != key and (meant in SCHEMA or meant in ALTERNATIVES) and _used(section, meant):
+            return f"; did you mean {meant!r}?"
+    return ""
+
+
 @dataclass(frozen=True)
 class ResolvedBike:
     """A bike file resolved once (:func:`resolve`): the file's table as read (``read``: its bases,
@@ -423,7 +441,7 @@ def derive(source: str, read: dict, overrides=None, csv: dict | None = None) -> 
         for key in given:
             if not _used(section, str(key)):
                 raise ConfigError(f"{section}.set: {key!r} is not used by the bike (of the {section}'s configuration "
-                                  f"it reads {', '.join(USED[section])})")
+                                  f"it reads {', '.join(USED[section])}){_set_hint(section, str(key))}")
     drive = {}
     for key in ("push_N", "power_W", "brake_N", "traction"):
         if key in table.get("drive", {}):
@@ -502,5 +520,23 @@ def rear_axle_in_frame(spec: BikeSpec, phi) -> tuple[np.ndarray, np.ndarray]:
             pz - np.sin(phi) * rho[0] + np.cos(phi) * rho[1])
 
 
-__all__ = ["BikeSpec", "Leverage", "ResolvedBike", "Rider", "derive", "load", "resolve", "preset_names", "check_geometry", "level_pitch", "leverage_ratio", "leverage_stroke",
+def ride_decoding(bike) -> dict:
+    """How a ride recorded on ``bike`` (a loaded ``BikeSpec``) is read (``mtbmj.measured.telemetry``'s
+    read_sst / read_ride keywords): its fork travel and shock stroke, its leverage curve, and its
+    recorder's sensors (``[sensors]``; where absent, the reader's defaults, the SST example's)."""
+    from mtbmj.config import load as load_config
+    from mtbmj.measured import telemetry
+
+    fork_travel_mm = load_config(bike.fork_config, bike.fork_overrides or None).require("fork.travel_mm")
+    out = {"fork_max_mm": float(fork_travel_mm), "shock_max_mm": bike.shock_stroke * 1e3,
+           "leverage": bike.leverage}  # the one leverage class: the bike's curve decodes the ride as it is
+    sensors = bike.sensors
+    if "fork_arm_mm" in sensors:
+        out["front"] = telemetry.IsoscelesTriangle(sensors["fork_arm_mm"], sensors["fork_max_mm"])
+    if "shock_arm1_mm" in sensors:
+        out["rear"] = telemetry.Triangle(sensors["shock_arm1_mm"], sensors["shock_arm2_mm"], sensors["shock_max_mm"])
+    return out
+
+
+__all__ = ["BikeSpec", "Leverage", "ResolvedBike", "Rider", "derive", "ride_decoding", "load", "resolve", "preset_names", "check_geometry", "level_pitch", "leverage_ratio", "leverage_stroke",
            "stroke_piece", "rear_axle_in_frame"]

@@ -37,7 +37,8 @@ def cmd_advise(args) -> int:
     if args.try_file or sets:
         tries = [advise.trial(bike, over or None, other, sets) for other in (args.try_file or [None])]
     # every ride read (and a bad file refused in one line) before anything is simulated
-    records = [ride_record(path, args, bike) for path in args.ride]
+    # each ride decoded through the bike as ridden: its --set sensors, leverage and travels too
+    records = [ride_record(path, args, bike, over or None) for path in args.ride]
     if len(records) == 1:
         result = Progress("advise").around(
             lambda progress: advise.advise(records[0], bike, over or None, args.duration, progress, args.workers,

@@ -12,11 +12,15 @@ def cmd_bob(args) -> int:
     from mtbmj.ride import pedalling
     from mtbmj.measured.telemetry import read_sst
 
+    seen = {}
     for path in args.records:
-        read_sst(path)  # a bad record: one line before any work
-    stances = [s.strip() for s in args.stance.split(",")] if args.stance else None
+        record = read_sst(path)  # a bad record: one line before any work
+        first = seen.setdefault((record.sample_rate_Hz, record.counts.tobytes()), path)
+        if first is not path:  # one ride twice (the file twice, or a copy) is two runs of one record
+            raise ConfigError(f"{path}: the same record as {first} (the same samples); give each record once")
+    stances = [s.strip().lower() for s in args.stance.split(",")] if args.stance else None  # Standing = standing
     if args.power is not None and not 0.0 < args.power <= 1500.0:
-        raise ConfigError(f"--power: {args.power:g} W is outside what a rider keeps up (0-1500 W)")
+        raise ConfigError(f"--power: {args.power:g} W is outside what a rider keeps up (above 0 W, at most 1500 W)")
     if args.duration is not None and not args.duration >= 8.0:
         raise ConfigError(f"--duration: {args.duration:g} s is too short to read a bob over its second half (8 s "
                           f"at least)")

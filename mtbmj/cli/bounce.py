@@ -93,6 +93,9 @@ def cmd_fit_bounce(args) -> int:
 
     clicks = _numbers(args.clicks, "--clicks")
     predict = _numbers(args.predict_clicks, "--predict-clicks") if args.predict_clicks else []
+    twice = sorted({k for k in predict if predict.count(k) > 1})
+    if twice:  # one prediction twice: two entries in fit.json, one ringdown CSV written over the other
+        raise MtbmjError(f"--predict-clicks {args.predict_clicks}: {twice[0]:g} clicks given twice; give each once")
     if args.hit_mm is not None and not (math.isfinite(args.hit_mm) and args.hit_mm > 0):
         raise MtbmjError(f"--hit-mm {args.hit_mm:g}: the hit must be a positive number of millimetres")
     target = args.rebound_target_per_s

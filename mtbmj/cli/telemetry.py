@@ -60,29 +60,21 @@ def add_sensor_spans(p) -> None:
     p.add_argument("--shock-max-mm", type=float, help="shock stroke the sensor spans (default: the bike's)")
 
 
-def decoding(args, bike=None) -> dict:
+def decoding(args, bike=None, overrides=None) -> dict:
     """read_sst's fork_max_mm, shock_max_mm and leverage: the --bike's (``bike``: that file
-    resolved already, ``mtbmj.bike.spec.resolve``), with --fork-max-mm and --shock-max-mm over
-    them; the SST example's bike without --bike."""
-    fork_max, shock_max = telemetry.FORK_TRAVEL_MAX_MM, telemetry.SHOCK_STROKE_MAX_MM
-    leverage = telemetry.LeverageCurve()
-    extra: dict = {}
+    resolved already, ``mtbmj.bike.spec.resolve``; ``overrides``: the command's --set, --fork-set and
+    --shock-set over it, as its runs take them), with --fork-max-mm and --shock-max-mm over them; the
+    SST example's bike without --bike."""
+    out = {"fork_max_mm": telemetry.FORK_TRAVEL_MAX_MM, "shock_max_mm": telemetry.SHOCK_STROKE_MAX_MM,
+           "leverage": telemetry.LeverageCurve()}
     if args.bike is not None:
-        from mtbmj.bike import run as bike_run
         from mtbmj.bike import spec
 
-        bike = spec.load(args.bike if bike is None else bike)
-        fork_setup, _ = bike_run.setups(bike)
-        fork_max, shock_max = fork_setup.travel * 1e3, bike.shock_stroke * 1e3
-        leverage = bike.leverage  # the one leverage class: the bike's curve decodes the ride as it is
-        sensors = bike.sensors  # the recorder's calibration on this bike ([sensors]), else the SST example's
-        if "fork_arm_mm" in sensors:
-            extra["front"] = telemetry.IsoscelesTriangle(sensors["fork_arm_mm"], sensors["fork_max_mm"])
-        if "shock_arm1_mm" in sensors:
-            extra["rear"] = telemetry.Triangle(sensors["shock_arm1_mm"], sensors["shock_arm2_mm"], sensors["shock_max_mm"])
-    return {"fork_max_mm": fork_max if args.fork_max_mm is None else args.fork_max_mm,
-            "shock_max_mm": shock_max if args.shock_max_mm is None else args.shock_max_mm, "leverage": leverage,
-            **extra}
+        out = spec.ride_decoding(spec.load(args.bike if bike is None else bike, overrides or None))
+    for key in ("fork_max_mm", "shock_max_mm"):
+        if getattr(args, key) is not None:
+            out[key] = getattr(args, key)
+    return out
 
 
 def travel_keys(args) -> tuple[str, str]:
@@ -101,14 +93,14 @@ def travel_keys(args) -> tuple[str, str]:
     return keys[0], keys[1]
 
 
-def ride_record(ride, args, bike=None):
+def ride_record(ride, args, bike=None, overrides=None):
     """The ride a command names (a recording or travel CSV, or "example": the shipped SST ride)
-    decoded through ``decoding(args, bike)``; refused when it travels past the travel it is read with
-    (``telemetry.beyond_travel``), else its quality warnings issued."""
+    decoded through ``decoding(args, bike, overrides)``; refused when it travels past the travel it is
+    read with (``telemetry.beyond_travel``), else its quality warnings issued."""
     from mtbmj.config import warn
 
     path = telemetry.example_path() if str(ride) == "example" else ride
-    record = telemetry.read_ride(path, **decoding(args, bike))
+    record = telemetry.read_ride(path, **decoding(args, bike, overrides))
     beyond = telemetry.beyond_travel(record, *travel_keys(args))
     warn(telemetry.quality(record) + beyond)
     return record
@@ -117,6 +109,14 @@ def ride_record(ride, args, bike=None):
 def cmd_telemetry(args) -> int:
     from mtbmj.ride import comparison
 
+    from mtbmj.errors import MtbmjError
+
+    seen = {}
+    for d in args.compare or []:  # one run twice is drawn twice and counted twice: refused, as mtbmj compare does
+        key = Path(d).resolve()
+        if key in seen:
+            raise MtbmjError(f"--compare {d}: given twice (as {seen[key]}); give each run once")
+        seen[key] = d
     record = ride_record(args.sst, args)
     runs = [comparison.load_run(d) for d in args.compare or []]
     result = comparison.compare(record, runs, args.threshold_mm_per_s, args.bin_percent)

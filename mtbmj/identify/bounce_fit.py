@@ -329,6 +329,12 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
         out["answer"] = {}
         for end, (plaw, _) in plaws.items():
             hit = float(hit_mm) if hit_mm is not None else bc.default_hit(plaw)
+            stroke = max(r.shock_max_mm if end == "shock" else r.fork_max_mm for r in records)
+            if hit_mm is not None and hit >= stroke:  # a hit past the whole stroke: no law has an answer for it
+                raise MtbmjError(f"--hit-mm {hit:g}: not less than the {end}'s whole {'stroke' if end == 'shock' else 'travel'} "
+                                 f"as the records are read ({stroke:g} mm); the hit is the {end}'s own compression "
+                                 f"above its static position" + (", in shock mm (not the rear wheel's travel)"
+                                                                 if end == "shock" else ""))
             answers[end] = bc.answer(plaw, hit)
             out["answer"][end] = answers[end].summary()
     extra, replay_lines = {}, []

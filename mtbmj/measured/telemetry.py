@@ -320,6 +320,9 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
 
 CSV_COLUMNS = ("time_s", "fork_mm", "shock_mm", "rear_mm")
 CSV_JITTER = 0.01  # a time step may differ from the median step by at most this share
+# shock_mm and rear_mm both given: they may differ through the leverage by this much (mm, share of the
+# wheel's travel) before a note says so (a logger's own leverage curve rounds differently)
+CSV_BOTH_MM, CSV_BOTH_SHARE = 2.0, 0.03
 
 
 def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
@@ -399,17 +402,24 @@ def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
         raise TelemetryError(f"{name}: no column moved ({held} mm over all {t.size} samples): a missing or stuck "
                              f"sensor, nothing to read")
     fork, shock, rear = column.get("fork_mm"), column.get("shock_mm"), column.get("rear_mm")
+    notes = ("a travel CSV (version 0): the logger's own calibration",)
     if rear is None and shock is not None:
         rear = leverage.wheel_travel_mm(shock)
     elif shock is None and rear is not None:
         shock = leverage.stroke_mm(rear)
+    elif shock is not None:  # both given: each is read as given, so they should be one motion through the leverage
+        miss = np.abs(leverage.wheel_travel_mm(shock) - rear)
+        worst = int(np.argmax(miss))
+        if miss[worst] > max(CSV_BOTH_MM, CSV_BOTH_SHARE * travel_max["rear_mm"]):
+            notes += (f"shock_mm and rear_mm disagree through the leverage curve they are read with: at "
+                      f"{t[worst]:g} s the shock's {shock[worst]:.1f} mm is {leverage.wheel_travel_mm(shock[worst]):.1f} "
+                      f"mm of wheel travel where rear_mm says {rear[worst]:.1f}; each end is read from its own column "
+                      f"(give one of them to have the other follow the bike's leverage)",)
     rate = 1.0 / step
     return TelemetryRecord(
         path=name, version=0, sample_rate_Hz=rate, timestamp=0, time_s=np.arange(t.size) / rate, fork_mm=fork,
         shock_mm=shock, rear_mm=rear, fork_max_mm=float(fork_max_mm), shock_max_mm=float(shock_max_mm),
-        rear_max_mm=float(leverage.wheel_travel_mm(shock_max_mm)), notes=("a travel CSV (version 0): the logger's own "
-                                                                            "calibration",),
-        columns=travel_columns)
+        rear_max_mm=float(leverage.wheel_travel_mm(shock_max_mm)), notes=notes, columns=travel_columns)
 
 
 MILLI = 1000.0

@@ -390,6 +390,24 @@ def compose_setting(bike, overrides) -> list[str]:
     return [str(w.message) for w in caught if issubclass(w.category, ConfigWarning)]
 
 
+def _read_by_model(key: str, config, overrides: dict, canonical: str) -> None:
+    """Refuse ``--try-set key`` when the part's model (``config`` with ``overrides``, the tried value
+    among them) does not read ``canonical``: the try would predict the recorded setting again (as
+    ``--fork-set`` refuses it, ``mtbmj.compose``). Any other refusal (a value the part refuses) is
+    left to the whole bike's composition after, which names the try."""
+    import dataclasses
+
+    from mtbmj import compose
+    from mtbmj.config import load
+
+    try:
+        compose.setup(dataclasses.replace(load(config, overrides), given=frozenset({canonical})))
+    except compose.NotRead as exc:
+        raise ConfigError(f"--try-set {key}: {exc}") from None
+    except ConfigError:
+        pass
+
+
 def trial(bike, overrides=None, other=None, sets=()) -> Trial:
     """A setting to try on the ride, checked before any work: ``other`` (a bike file or preset: the
     bike as that file sets it, the recorded ``overrides`` not carried) or else the recorded
@@ -447,8 +465,16 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
                     f"any key of the {part}'s configuration is taken, docs/configuration.md") + ")")
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise ConfigError(f"--try-set {key}: must be a number, got {value!r}")
+            _read_by_model(key, cfg, {**cover, name: value}, canonical)
             over.setdefault(f"{part}.set", {})[name] = value
         else:
+            from mtbmj.bike.bikefile import part_key
+
+            meant = part_key(key)
+            if meant is not None:  # a part's configuration key typed as a bike key: it takes the part's prefix
+                part = key.partition(".")[0]
+                raise ConfigError(f"--try-set {key}: not a bike key; a key of the {part}'s own configuration is "
+                                  f"tried as {part}:{meant} (--try-set {part}:{meant}={value})")
             over[key] = value
     if not sets and other is None:
         raise ConfigError("--try-set: nothing to try (give --try FILE or --try-set KEY=VALUE)")

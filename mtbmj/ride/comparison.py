@@ -73,12 +73,32 @@ def read_columns(run_dir: Path, error=MtbmjError) -> dict:
     run_dir = Path(run_dir)
     csv_path = run_dir / "timeseries.csv"
     if not run_dir.is_dir():
+        if run_dir.is_file():  # the run's CSV (or another file) given for its folder
+            raise error(f"--compare {run_dir}: a file, not a run directory" + (
+                f" (give the folder that holds it: --compare {run_dir.parent})" if run_dir.name == csv_path.name
+                and (run_dir.parent / "summary.json").is_file() else ""))
         raise error(f"--compare {run_dir}: not a run directory")
     if not csv_path.is_file():
+        other = _written_by(run_dir)
+        if other:  # another command's folder (a telemetry, a reconstruction, a fit): not a run to compare
+            raise error(f"--compare {run_dir}: a folder of mtbmj {other}, not a run: --compare takes the folder of a "
+                        f"drop, roll or bike run (mtbmj drop, roll or bike ... --out DIR)")
         raise error(f"--compare {run_dir}: no timeseries.csv (write one with mtbmj drop, roll or bike ... --out {run_dir})")
     text = read_text(csv_path, error, str(csv_path), "not a text file", "record")
     names, table = number_table(text, str(csv_path), error)
     return dict(zip(names, table.T))
+
+
+def _written_by(folder: Path) -> str | None:
+    """The command that wrote ``folder`` (its ``mtbmj.output`` record), else None."""
+    from mtbmj.output import RECORD
+
+    try:
+        record = json.loads((folder / RECORD).read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return None
+    command = record.get("command") if isinstance(record, dict) else None
+    return command if isinstance(command, str) and command else None
 
 
 def _run_name(run_dir: Path, name: str) -> str:

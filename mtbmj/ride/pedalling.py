@@ -112,6 +112,7 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
     torque and the bob change the power the climb takes), the climb is set again: a first step of
     its sine by the miss (at most 5 %), then secant steps, at most four runs, the closest kept."""
     import math
+    import warnings
 
     from mtbmj.bike import spec as spec_mod
     from mtbmj.bike.run import run_bike, setups
@@ -132,7 +133,7 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
     radius = setups(spec)[0].tire_radius
     rows, series = [], []
     for path, stance in zip(records, stances):
-        ride = telemetry.read_sst(path)
+        ride = telemetry.read_sst(path, **spec_mod.ride_decoding(spec))  # read as the recorded bike reads it
         if ride.rear_mm is None:
             raise BobError(f"{path}: has no shock sensor: no rear bob to compare")
         rear = bob(ride.time_s, ride.rear_mm)
@@ -149,20 +150,25 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
         tried = []  # (sine, cadence the run had, run): the climb set again while its cadence misses
         for attempt in range(ATTEMPTS):
             grade = 100.0 * math.tan(math.asin(sine))
-            run = run_bike(spec, f"climb:grade_percent={grade:.3f},length_m={v * duration_s * 1.5 + 10:.1f},at_m=0.5",
-                           None, duration_s, pedal=(cadence, power_W), seated=stance == "seated", rider=rider)
+            with warnings.catch_warnings(record=True) as said:  # said of the run kept only (a stall of a
+                warnings.simplefilter("always")  # climb set again and left is no stall of the bob reported)
+                run = run_bike(spec, f"climb:grade_percent={grade:.3f},length_m={v * duration_s * 1.5 + 10:.1f},"
+                                     f"at_m=0.5", None, duration_s, pedal=(cadence, power_W),
+                               seated=stance == "seated", rider=rider)
             had = run_cadence(run, run_stretch(run.raw["time_s"]))
-            tried.append((sine, had, run, grade))
+            tried.append((sine, had, run, grade, said))
             if abs(had / cadence - 1.0) <= CADENCE_TOLERANCE:
                 break
             if len(tried) == 1:  # the speed the power holds goes as 1 / sin a; a step of at most 5 %
                 sine *= min(max(had / cadence, 0.95), 1.05)
             else:  # the secant through the last two, within 10 % of the last
-                (s0, c0, _, _), (s1, c1, _, _) = tried[-2], tried[-1]
+                (s0, c0, *_), (s1, c1, *_) = tried[-2], tried[-1]
                 step = (cadence - c1) * (s1 - s0) / (c1 - c0) if c1 != c0 else 0.0
                 sine = s1 + min(max(step, -0.1 * s1), 0.1 * s1)
             sine = min(sine, 0.4)
-        sine, had, run, grade = min(tried, key=lambda r: abs(r[1] - cadence))
+        sine, had, run, grade, said = min(tried, key=lambda r: abs(r[1] - cadence))
+        for w in said:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         t = run.raw["time_s"]
         window = run_stretch(t)
         sim = {"rear": bob(t, run.raw["rear_travel_mm"], *window).to_dict(),
@@ -170,7 +176,8 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
         rows.append({"record": ride.name, "stance": stance, "rider": rider, "notes": list(ride.notes), "cadence_rpm": cadence,
                      "simulated_cadence_rpm": had, "power_W": power_W, "grade_percent": grade, "speed_m_per_s": v,
                      "ride": {"rear": rear.to_dict(), "front": front.to_dict() if front else None},
-                     "simulated": sim, "crash": run.summary.get("crash")})
+                     "simulated": sim, "min_speed_m_per_s": run.summary["min_speed_m_per_s"],
+                     "crash": run.summary.get("crash")})
         series.append(((ride.time_s, ride.fork_mm, ride.rear_mm), (t, run.raw["front_travel_mm"],
                                                                    run.raw["rear_travel_mm"])))
     return Against(str(bike), rows, series)
