@@ -265,6 +265,7 @@ def test_compare_given_a_file_or_another_command_s_folder_says_what_it_takes(tmp
 
     run_dir = tmp_path / "s1"
     mtbmj.run_drop("S1", duration=0.4).write(run_dir)
+    capsys.readouterr()  # the drop's "compiling ..." notice where numba's cache is cold (a fresh clone) is not the CLI's
     out = tmp_path / "tel"
     assert run_cli(["telemetry", str(SHIPPED), "--compare", str(run_dir / "timeseries.csv"), "--out", str(out)]) == 2
     err = capsys.readouterr().err
