@@ -504,8 +504,9 @@ def advise_speed_rows(d: dict) -> dict[str, list[Row]]:
         Row(f"`mtbmj advise` on the shipped ride ({num(d['ride_seconds'], 3)} s, {d['repeats'][0]['candidates']} candidates, "
             f"{d['workers']} processes), wall time per 100 s of ride", f"≤ {tgt(d['target_s_per_100_s'])} s",
             f"{num(d['advise_s_per_100_s_of_ride'], 3)} s per 100 s; {sec(a['median'])} ({spread(a['min'], a['max'], 3, ' s')}) "
-            f"in all, of which the reconstruction {sec(c['median'])}; advise / one bike run over the same terrain "
-            f"{num(r['median'], 3)} ({spread(r['min'], r['max'], 3)}); CPU {sec(u['median'], 3)} (with its workers)",
+            f"in all, of which the reconstruction {sec(c['median'])}; advise / one bike run "
+            f"{num(r['median'], 3)} ({spread(r['min'], r['max'], 3)}); CPU {sec(u['median'], 3)} (with its workers)"
+            + (f", {sec(d['prepare_cpu_s']['median'], 3)} before any run" if "prepare_cpu_s" in d else ""),
             "advise_speed.json", d["command"])]}
 
 

@@ -87,8 +87,6 @@ travel it used, or fewer than ``MIN_CHECKED_PERCENT`` % of the samples checked).
 from __future__ import annotations
 
 import math
-import time
-from contextlib import ExitStack
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -439,22 +437,24 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     balances (:func:`mtbmj.ride.calibrate.sag_scales`), the load the ride carried fore-aft carried by every run
     as ``carried_as`` says ("rider" or "descent": ``mtbmj.ride.calibrate.spring_scales``). Several rides of one setting:
     :func:`mtbmj.ride.advice_pool.pooled`."""
+    import time
+
     from mtbmj.bike import spec as spec_mod
 
     start = time.perf_counter()
     duration = checked_duration(duration)
     bike = spec_mod.resolve(bike)  # the bike file read once: every run below derives its setting from it
     bike = bike.with_overrides(None) if bike.overrides else bike
+    ride = prepare(record, bike, overrides, duration, calibrated, candidates, tries, static_sag_mm, carried_as)
+    jobs = ride.jobs()
+    from contextlib import ExitStack
+
     with ExitStack() as stack:
         pool = None
-        if workers > 1 and (candidates or len(tries) > 0):  # more than the recorded setting to run
+        if workers > 1 and len(jobs) > 1:
             from mtbmj.workers import process_pool
 
-            pool = stack.enter_context(process_pool(workers))
-            for _ in range(workers):  # each worker readied while the ride is prepared here
-                pool.submit(warmed)
-        ride = prepare(record, bike, overrides, duration, calibrated, candidates, tries, static_sag_mm, carried_as)
-        jobs = ride.jobs()
+            pool = stack.enter_context(process_pool(min(workers, len(jobs))))
         # a candidate its part refuses only when run is skipped (the recorded setting's own refusal and a
         # tried one's stay the user's error)
         runs = run_jobs(jobs, pool, ride.refusable, counter(progress, len(jobs)))
@@ -462,12 +462,6 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
         decide(advice, [ride], pool, search)
     advice.wall_s = time.perf_counter() - start
     return advice
-
-
-def warmed() -> None:
-    """A worker readied for :func:`simulate` while :func:`prepare` runs: the bike's modules imported, its
-    compiled callback loaded from numba's cache (a first run in a fresh worker is otherwise ~0.5 s longer)."""
-    from mtbmj.bike import callback_compiled, run  # noqa: F401
 
 
 @dataclass
