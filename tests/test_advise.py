@@ -398,8 +398,12 @@ def test_a_candidate_refused_only_when_run_is_skipped_and_reported(tmp_path, mon
     sst = write_sst(tmp_path / "ride.SST", fork_mm, rear_mm)
     out = tmp_path / "advice"
     with reconstruction_passing():  # refused otherwise: the model does not describe the made ride (issue 51)
-        assert main(["advise", str(sst), "--bike", str(bike), "--workers", "1", "--out", str(out)]) == 0
+        assert main(["advise", str(sst), "--bike", str(bike), "--workers", "1", "--duration", "1000",
+                     "--out", str(out)]) == 0
     printed = capsys.readouterr().out
+    # a --duration past the ride's end is the whole ride, and said (it was silent)
+    said = [line for line in printed.splitlines() if line.startswith("--duration 1000 s is longer than ride.SST (")]
+    assert len(said) == 1 and said[0].endswith(" s): the whole ride was advised on"), printed
     advice = json.loads((out / "advice.json").read_text())
     assert sorted((s["label"], s["direction"]) for s in advice["skipped"]) == [
         ("shock rebound damping", "down"), ("shock rebound damping", "up")]

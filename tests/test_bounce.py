@@ -177,6 +177,8 @@ def _bad_cases(tmp_path):
         ([str(short), "--clicks", "0"], "truncated: 1 sample after the header"),
         ([str(good), str(good), "--clicks", "0"], "--clicks: 1 value(s) for 2 record(s)"),
         ([str(good), "--clicks", "zero"], "--clicks zero: expected comma-separated numbers"),
+        ([str(good), "--clicks", "8.5"], "--clicks 8.5: 8.5 is not a whole click"),
+        ([str(good), "--clicks", "0", "--predict-clicks", "4,4.5"], "--predict-clicks 4,4.5: 4.5 is not a whole click"),
         ([str(good), "--clicks", "0", "--predict-clicks", "4"], "--predict-clicks: no law in clicks"),
     ]
 

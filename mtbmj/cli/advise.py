@@ -52,6 +52,11 @@ def cmd_advise(args) -> int:
                                                 tries=tries, calibrated=args.calibrate, static_sag_mm=sag,
                                            carried_as=carried))
     written = result.write(args.out)
+    for rec in records:  # a --duration past a ride's end is its whole ride: said, not silent
+        length = float(rec.time_s[-1] - rec.time_s[0])
+        if args.duration is not None and args.duration > length:
+            print(f"--duration {args.duration:g} s is longer than {rec.name} ({length:.1f} s): the whole ride was "
+                  f"advised on")
     for r in getattr(result, "refused", ()):
         print(f"left out of the pool: {r['why']}")
     for r in getattr(result, "rides", ()):
@@ -114,7 +119,8 @@ def add_parser(sub) -> None:
     add_ride(p, "the recorded bike with the settings it was ridden with (preset or bike file)", many=True)
     p.add_argument("--rider-kg", type=float, metavar="KG", help="the whole rider's mass (rider.mass_kg)")
     add_bike_sets(p)  # the settings as ridden, where they differ from the bike file
-    p.add_argument("--duration", type=float, metavar="S", help="advise on the ride's first S seconds only")
+    p.add_argument("--duration", type=float, metavar="S",
+                   help="advise on the ride's first S seconds only (a ride shorter than S: the whole ride, said in a line)")
     p.add_argument("--try", action="append", dest="try_file", metavar="BIKE_FILE",
                    help="predict the ride's metrics at this bike file's settings beside the recorded ones (repeatable)")
     p.add_argument("--try-set", action="append", dest="try_set", metavar="KEY=VALUE",

@@ -35,6 +35,9 @@ def _numbers(text: str, option: str) -> list[float]:
         raise MtbmjError(f"{option} {text}: expected comma-separated numbers of clicks") from None
     if not values or not all(math.isfinite(v) and v >= 0 for v in values):
         raise MtbmjError(f"{option} {text}: clicks must be finite and not negative")
+    part = next((v for v in values if v != round(v)), None)
+    if part is not None:  # a damper is set at its detents: a slam was ridden at one, an answer is one
+        raise MtbmjError(f"{option} {text}: {part:g} is not a whole click (a damper is set at its detents, whole clicks)")
     return values
 
 
