@@ -362,6 +362,9 @@ def test_the_comparison_is_the_python_api_s_as_the_command_s(tmp_path, capsys):
     assert (tmp_path / "api" / "telemetry.json").read_bytes() == (tmp_path / "cli" / "telemetry.json").read_bytes()
     assert printed == f"{result.line()}; wrote telemetry.json, telemetry.png to {tmp_path / 'cli'}"
     assert "compared 0 run(s)" in result.line() and result.summary["simulated"] == []
+    # "EXAMPLE" typed as --bike SST is typed: the shipped ride, where no file of that name is there
+    assert main(["telemetry", "EXAMPLE", "--out", str(tmp_path / "upper")]) == 0
+    assert (tmp_path / "upper" / "telemetry.json").read_bytes() == (tmp_path / "cli" / "telemetry.json").read_bytes()
 
 
 def test_a_file_cut_inside_a_sample_is_read_with_a_warning(tmp_path, capsys):

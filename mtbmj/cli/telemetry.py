@@ -49,7 +49,7 @@ def add_ride(p, bike_help: str, many: bool = False) -> None:
     """The recorded ride (a positional RIDE; ``many``: one or more, a list) and its --bike, as
     :func:`ride_record` reads them."""
     p.add_argument("ride", type=Path, metavar="RIDE", nargs="+" if many else None,
-                   help="SST v3 or v2 recording or a travel CSV with both ends, or 'example' (the shipped 00649.SST)"
+                   help="SST v3 or v2 recording or a travel CSV with both ends, or 'example' (the shipped 00649.SST; in any case)"
                         + ("; several rides of one bike at one setting are pooled into one advice" if many else ""))
     p.add_argument("--bike", required=True, metavar="BIKE", help=bike_help)
 
@@ -99,7 +99,8 @@ def ride_record(ride, args, bike=None, overrides=None):
     read with (``telemetry.beyond_travel``), else its quality warnings issued."""
     from mtbmj.config import warn
 
-    path = telemetry.example_path() if str(ride) == "example" else ride
+    shipped = str(ride) == "example" or (str(ride).lower() == "example" and not Path(ride).exists())  # EXAMPLE too
+    path = telemetry.example_path() if shipped else ride
     record = telemetry.read_ride(path, **decoding(args, bike, overrides))
     beyond = telemetry.beyond_travel(record, *travel_keys(args))
     warn(telemetry.quality(record) + beyond)
