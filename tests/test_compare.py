@@ -133,11 +133,12 @@ def test_refusals_are_one_line_and_write_nothing(drops, rolls, tmp_path, capsys)
     cases = [
         ([drops / "base"], "at least two run folders"),
         ([drops / "base", drops / "base"], "given twice"),
-        ([drops / "base", mine], f"{mine}: not an mtbmj drop or roll result (no manifest.json)"),
-        ([drops / "base", sag], f"{sag}: not an mtbmj drop or roll result"),
+        ([drops / "base", mine], f"{mine}: not an mtbmj drop, roll or bike result (no manifest.json)"),
+        ([drops / "base", sag], f"{sag}: not an mtbmj drop, roll or bike result"),
         ([drops / "base", fake], "versions name no mtbmj"),
         ([drops / "base", mine / "notes.txt"], "not a folder"),
-        ([drops / "base", tmp_path / "missing"], "not a folder"),
+        ([drops / "base", tmp_path / "missing"],
+         "not a folder (give the --out folder of mtbmj drop, mtbmj roll or mtbmj bike)"),
         ([drops / "base", rolls / "v3"], "is a roll and"),
     ]
     for runs, needle in cases:

@@ -73,7 +73,7 @@ class Run:
 def _json(path: Path, run: Path) -> dict:
     label = str(path)
     if not path.is_file():
-        raise MtbmjError(f"{run}: not an mtbmj drop or roll result (no {path.name})")
+        raise MtbmjError(f"{run}: not an mtbmj drop, roll or bike result (no {path.name})")
     try:
         data = json.loads(read_text(path, MtbmjError, label, "not a text file"))
     except (ValueError, RecursionError) as exc:
@@ -86,7 +86,7 @@ def _json(path: Path, run: Path) -> dict:
 def _timeseries(path: Path, run: Path, needed=NEEDED) -> dict[str, np.ndarray]:
     label = str(path)
     if not path.is_file():
-        raise MtbmjError(f"{run}: not an mtbmj drop or roll result (no timeseries.csv)")
+        raise MtbmjError(f"{run}: not an mtbmj drop, roll or bike result (no timeseries.csv)")
     text = read_text(path, MtbmjError, label, "not a text file", "record")
     lines = [line for line in text.splitlines() if line.strip() and not line.startswith("#")]
     if not lines:
@@ -120,17 +120,17 @@ def _travel(run: Path) -> float | None:
 
 
 def load_run(path: str | Path, label: str | None = None) -> Run:
-    """The result folder ``path``, refused (one line naming it) when it is not an mtbmj drop or
-    roll result."""
+    """The result folder ``path``, refused (one line naming it) when it is not an mtbmj drop, roll or
+    bike result."""
     run = Path(path)
     if not run.is_dir():
-        raise MtbmjError(f"{run}: not a folder (give the --out folder of mtbmj drop or mtbmj roll)")
+        raise MtbmjError(f"{run}: not a folder (give the --out folder of mtbmj drop, mtbmj roll or mtbmj bike)")
     manifest = _json(run / "manifest.json", run)
     versions = manifest.get("versions")
     if not isinstance(versions, dict) or "mtbmj" not in versions:
         raise MtbmjError(f"{run / 'manifest.json'}: not the manifest of an mtbmj run (its versions name no mtbmj)")
     if "engine" not in manifest and "scenario" not in manifest:
-        raise MtbmjError(f"{run}: not an mtbmj drop or roll result (its manifest names neither an engine nor a "
+        raise MtbmjError(f"{run}: not an mtbmj drop, roll or bike result (its manifest names neither an engine nor a "
                          "scenario)")
     summary = _json(run / "summary.json", run)
     kind = "bike" if "bike_source" in manifest else "roll" if "scenario" in manifest else "drop"
