@@ -10,14 +10,13 @@ def cmd_bob(args) -> int:
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.errors import ConfigError
     from mtbmj.ride import pedalling
-    from mtbmj.measured.telemetry import read_sst
+    from mtbmj.measured.telemetry import read_sst, repeated_samples
 
-    seen = {}
-    for path in args.records:
-        record = read_sst(path)  # a bad record: one line before any work
-        first = seen.setdefault((record.sample_rate_Hz, record.counts.tobytes()), path)
-        if first is not path:  # one ride twice (the file twice, or a copy) is two runs of one record
-            raise ConfigError(f"{path}: the same record as {first} (the same samples); give each record once")
+    twice = repeated_samples([read_sst(path) for path in args.records])  # a bad record: one line before any work
+    if twice is not None:  # one ride twice (the file twice, or a copy) is two runs of one record
+        first, k = twice
+        raise ConfigError(f"{args.records[k]}: the same record as {args.records[first]} (the same samples); give each "
+                          f"record once")
     stances = [s.strip().lower() for s in args.stance.split(",")] if args.stance else None  # Standing = standing
     if args.power is not None and not 0.0 < args.power <= 1500.0:
         raise ConfigError(f"--power: {args.power:g} W is outside what a rider keeps up (above 0 W, at most 1500 W)")

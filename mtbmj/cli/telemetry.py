@@ -108,16 +108,10 @@ def ride_record(ride, args, bike=None, overrides=None):
 
 
 def cmd_telemetry(args) -> int:
+    from mtbmj.readout.compare import refuse_repeated
     from mtbmj.ride import comparison
 
-    from mtbmj.errors import MtbmjError
-
-    seen = {}
-    for d in args.compare or []:  # one run twice is drawn twice and counted twice: refused, as mtbmj compare does
-        key = Path(d).resolve()
-        if key in seen:
-            raise MtbmjError(f"--compare {d}: given twice (as {seen[key]}); give each run once")
-        seen[key] = d
+    refuse_repeated(args.compare or [], "--compare ")  # drawn and counted twice: refused, as mtbmj compare does
     record = ride_record(args.sst, args)
     runs = [comparison.load_run(d) for d in args.compare or []]
     result = comparison.compare(record, runs, args.threshold_mm_per_s, args.bin_percent)

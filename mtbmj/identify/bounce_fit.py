@@ -126,15 +126,15 @@ def _records(paths, clicks):
     """The records read, one slam each: the same samples twice (a file given twice, or copied) would be
     one ring-down read at two clicks, a damper the clicks do not change; refused naming both."""
     from mtbmj.errors import MtbmjError
-    from mtbmj.measured.telemetry import read_sst
+    from mtbmj.measured.telemetry import read_sst, repeated_samples
 
-    records, seen = [read_sst(p) for p in paths], {}
-    for k, record in enumerate(records):
-        first = seen.setdefault((record.sample_rate_Hz, record.counts.tobytes()), k)
-        if first != k:
-            raise MtbmjError(f"{record.name}: the same record as {records[first].name} (the same samples), given at "
-                             f"{clicks[first]:g} and {clicks[k]:g} clicks: one slam read twice would say the clicks do "
-                             f"not change the damping; give each slam once")
+    records = [read_sst(p) for p in paths]
+    twice = repeated_samples(records)
+    if twice is not None:
+        first, k = twice
+        raise MtbmjError(f"{records[k].name}: the same record as {records[first].name} (the same samples), given at "
+                         f"{clicks[first]:g} and {clicks[k]:g} clicks: one slam read twice would say the clicks do "
+                         f"not change the damping; give each slam once")
     return records
 
 

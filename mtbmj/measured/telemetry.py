@@ -543,6 +543,17 @@ def beyond_travel(record: TelemetryRecord, fork_key: str = "fork_max_mm", shock_
     return out
 
 
+def repeated_samples(records) -> tuple[int, int] | None:
+    """(first, k): the first record of ``records`` (read SST records) whose samples (rate and counts)
+    repeat an earlier one's, the file given twice or copied under another name; None where none does."""
+    seen = {}
+    for k, record in enumerate(records):
+        first = seen.setdefault((record.sample_rate_Hz, record.counts.tobytes()), k)
+        if first != k:
+            return first, k
+    return None
+
+
 def example_path() -> Path:
     """The shipped ride recording (00649.SST, MIT, from the Sufni Suspension Telemetry project)."""
     return Path(str(resources.files("mtbmj") / "data" / "sst" / "00649.SST"))

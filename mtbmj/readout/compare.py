@@ -148,17 +148,23 @@ def _labels(paths: Sequence[Path]) -> list[str]:
     return [str(p) if names.count(n) > 1 else n for p, n in zip(paths, names)]
 
 
+def refuse_repeated(paths, named: str = "") -> None:
+    """Refuse (one line) a run folder given twice, by the same name or another (``../s1`` beside ``s1``):
+    drawn and counted twice. ``named``: the option that gave them, put before the path in the line."""
+    seen = {}
+    for p in paths:
+        key = Path(p).resolve()
+        if key in seen:
+            raise MtbmjError(f"{named}{p}: given twice (as {seen[key]}); give each run once")
+        seen[key] = p
+
+
 def load_runs(paths: Sequence[str | Path]) -> list[Run]:
     """The runs to compare: at least two, each once, all drops or all rolls."""
     paths = [Path(p) for p in paths]
     if len(paths) < 2:
         raise MtbmjError(f"compare: give at least two run folders (got {len(paths)})")
-    seen = {}
-    for p in paths:
-        key = p.resolve()
-        if key in seen:
-            raise MtbmjError(f"{p}: given twice (as {seen[key]}); give each run once")
-        seen[key] = p
+    refuse_repeated(paths)
     runs = [load_run(p, label) for p, label in zip(paths, _labels(paths))]
     kinds = {r.kind for r in runs}
     if len(kinds) > 1:
@@ -307,5 +313,5 @@ def compare_runs(paths: Sequence[str | Path]) -> Comparison:
     return Comparison(load_runs(paths))
 
 
-__all__ = ["Run", "Comparison", "compare_runs", "load_run", "load_runs", "figures", "difference_rows",
+__all__ = ["Run", "Comparison", "compare_runs", "load_run", "load_runs", "refuse_repeated", "figures", "difference_rows",
            "difference_csv", "figure"]
