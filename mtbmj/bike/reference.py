@@ -433,7 +433,9 @@ def static_equilibrium(reference: Reference, guess=None, acceptable=None, held=(
 
     def solve(u0):  # u0 and the answer over q[1:], the held coordinates 0
         v, _, ok, msg = fsolve(residual, np.asarray(u0, float)[free - 1], full_output=True, xtol=1e-13)
-        good = ok == 1 and bool(np.all(np.isfinite(v))) and np.max(np.abs(residual(v))) <= 1e-6
+        # a root is judged by its balance: fsolve reports "not making good progress" (ok 5) at a root
+        # it has reached to round-off, where xtol 1e-13 asks for more than the forces' digits give
+        good = bool(np.all(np.isfinite(v))) and np.max(np.abs(residual(v))) <= 1e-6
         return (full(v) if good else None), " ".join(str(msg).split())
 
     u0 = np.array([-0.06, 0.0, 0.03, 0.2, -0.01, 0.0]) if guess is None else np.asarray(guess, float)
