@@ -329,6 +329,26 @@ def test_beside_the_real_sst_ride():
     assert [ax.get_ylabel() for ax in fig.axes] == ["front (fork)\n% of time", "rear (wheel)\n% of time"]
 
 
+def test_beside_a_ride_reads_it_through_the_bike_that_ran():
+    """``bike BIKE ... --ride FILE`` reads the ride through BIKE (its leverage, stroke and sensors),
+    as telemetry, advise and bob do; it read every ride through the shipped example's bike."""
+    from mtbmj.bike import spec
+    from mtbmj.bike.run import run_bike
+    from mtbmj.measured import telemetry
+    from mtbmj.ride import beside
+
+    r = run_bike("trail", "flat", 4.0, duration=0.1)
+    c = beside.compare(r, "example")
+    decoding = spec.ride_decoding(spec.load("trail"))
+    through_trail = telemetry.read_sst(telemetry.example_path(), **decoding)
+    as_sst = telemetry.read_sst(telemetry.example_path())
+    assert decoding["shock_max_mm"] != pytest.approx(as_sst.shock_max_mm)  # the two bikes read it otherwise
+    assert c["rear"]["ride_mean_percent"] == pytest.approx(
+        np.mean(through_trail.rear_mm) / through_trail.rear_max_mm * 100.0)
+    assert c["rear"]["ride_mean_percent"] != pytest.approx(np.mean(as_sst.rear_mm) / as_sst.rear_max_mm * 100.0,
+                                                           rel=1e-3)
+
+
 def test_bike_command_holds_parts_and_lifts_the_rear(tmp_path, capsys):
     import csv
     import json

@@ -16,13 +16,22 @@ import numpy as np
 from mtbmj.measured import bob as bob_mod
 
 
+def _read(result, sst: str):
+    """The ride ``sst`` (a path, or "example") read through the bike ``result`` rode (its sensors,
+    travels and leverage: ``mtbmj.bike.spec.ride_decoding``), as telemetry, advise and bob read it."""
+    from mtbmj.bike.spec import ride_decoding
+    from mtbmj.measured import telemetry
+
+    path = telemetry.example_path() if sst == "example" else sst
+    return telemetry.read_sst(path, **ride_decoding(result.prepared.spec))
+
+
 def compare(result, sst: str = "example", bin_percent: float = 5.0) -> dict:
     """Travel histograms and balance of ``result`` (a ``BikeResult``) and of the SST ride ``sst``
     (a path, or "example" for the shipped ride), JSON-ready."""
-    from mtbmj.measured import metrics, telemetry
+    from mtbmj.measured import metrics
 
-    path = telemetry.example_path() if sst == "example" else sst
-    ride = telemetry.read_sst(path)
+    ride = _read(result, sst)
     raw = result.raw
     sim_front_max = result.summary["front"]["travel_mm"]
     sim_rear_max = result.summary["rear_wheel_travel_mm"]
@@ -79,9 +88,7 @@ def bob_compare(result, sst: str) -> dict:
     """The pedal bob of a pedalling bike run (a ``BikeResult``) and of a recorded ride ``sst`` (a
     path, or "example" for the shipped ride), both ends, JSON-ready; the run's bob is its summary's,
     read over its second half (``run_stretch``)."""
-    from mtbmj.measured import telemetry
-
-    ride = telemetry.read_sst(telemetry.example_path() if sst == "example" else sst)
+    ride = _read(result, sst)
     raw = result.raw
     t = raw["time_s"]
     pedal = result.summary["drive"]["pedal"]
