@@ -43,11 +43,31 @@ def exit_with_parent(parent: int) -> None:
     threading.Thread(target=watch, name="mtbmj-exit-with-parent", daemon=True).start()
 
 
+BLAS_THREADS_ENV = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def one_blas_thread() -> None:
+    """This process's linear algebra on one thread, for the rest of its life: the BLAS libraries
+    loaded now (``threadpoolctl``) and those loaded later (their environment variables, where the
+    user set none). Only for a process of the package's own (a pool's worker, the ``mtbmj``
+    executable), never behind a caller: a pool already keeps every core busy, and BLAS threads
+    beside it spin against the other processes (on two busy cores a 122 x 122 eigh took 0.22 s
+    instead of 1 ms; docs/measured.md)."""
+    for name in BLAS_THREADS_ENV:
+        os.environ.setdefault(name, "1")
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # a core dependency; without it only the libraries loaded from here on are held
+        return
+    threadpool_limits(limits=1, user_api="blas")
+
+
 def _start_worker(parent: int, initializer: Callable | None, initargs: tuple) -> None:
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to report
     exit_with_parent(parent)
+    one_blas_thread()  # the worker is the pool's: one core each
     if initializer is not None:
         initializer(*initargs)
 

@@ -6,6 +6,13 @@ os.environ.setdefault("MUJOCO_GL", "disable")
 import mujoco
 import pytest
 
+from mtbmj.workers import one_blas_thread
+
+# Two test processes on two cores: BLAS threads beside them spin against the other (a test file of
+# reconstructions and calibrations took 113 s instead of 67); each test process, as the package's
+# own pool workers and executable, does its linear algebra on one thread.
+one_blas_thread()
+
 
 @pytest.fixture(autouse=True)
 def no_leaked_callback():

@@ -310,3 +310,35 @@ def test_a_symbolic_link_as_out_is_refused_before_the_work_and_nothing_is_left_b
     refused(capsys, ["drop", "S12", "--quiet", "--out", tmp_path / "link"], "symbolic link")
     assert time.perf_counter() - start < 3.0
     assert (snapshot(folder) if folder.exists() else None) == before
+
+
+def test_a_pools_workers_do_linear_algebra_on_one_thread_and_the_caller_keeps_its_own():
+    """The pool's workers are the package's: BLAS on one thread each (N workers on N cores; threads
+    beside them spin against the other workers). The caller's own process keeps its threads and its
+    environment. Run in a fresh interpreter without the test processes' own setting."""
+    script = textwrap.dedent("""
+        import json, os
+        import numpy
+        from threadpoolctl import threadpool_info
+        from mtbmj.workers import process_pool
+
+        def blas():
+            return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+
+        def in_worker():
+            return blas(), os.environ.get("OPENBLAS_NUM_THREADS")
+
+        if __name__ == "__main__":
+            before, env = blas(), dict(os.environ)
+            with process_pool(1) as pool:
+                worker = pool.submit(in_worker).result()
+            print(json.dumps({"before": before, "after": blas(), "worker": worker[0], "worker_env": worker[1],
+                              "env_kept": env == dict(os.environ)}))
+    """)
+    env = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS",
+                                                            "MKL_NUM_THREADS")}
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=120)
+    assert done.returncode == 0, done.stderr
+    out = json.loads(done.stdout)
+    assert out["before"] and out["before"] == out["after"] and out["env_kept"]
+    assert out["worker"] == [1] * len(out["worker"]) and out["worker"]

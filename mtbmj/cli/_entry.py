@@ -23,6 +23,10 @@ def _interrupted_outside_a_command(signum, frame) -> None:
 
 def main() -> int:  # never returns: exits with the command's status
     signal.signal(signal.SIGINT, _interrupted_outside_a_command)
+    # the executable's own process: linear algebra on one thread (mtbmj.workers.one_blas_thread), set
+    # before numpy loads its BLAS; a user's own setting of these variables is kept
+    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(name, "1")
     from mtbmj.cli import main as cli_main
 
     status = cli_main()
