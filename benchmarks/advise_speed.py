@@ -47,6 +47,9 @@ def main(argv=None) -> int:
     add_out_option(ap, __file__)
     args = ap.parse_args(argv)
 
+    from mtbmj.workers import one_blas_thread
+
+    one_blas_thread()  # as the mtbmj executable runs advise: linear algebra on one thread beside the pool
     from mtbmj.bike import run as bike_run, spec
     from mtbmj.ride import advise, reconstruct
 
