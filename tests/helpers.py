@@ -831,7 +831,8 @@ def reconstruction_stand_in(monkeypatch) -> list:
 # on its circle about the main pivot), at a speed that varies along the ride, over terrain made here. Shared with the package (inputs read from the same bike file): the laws' form
 # and values (``law``), the masses and geometry, the tyres' rate. Not shared: the pitch coupling, the
 # rider on his limbs and his slow load, the split of the rider's on-bike mass (half at the pedals,
-# half at the bars).
+# half at the bars). Its tyres are point contacts on the profile (a rock's face pushes the wheel straight
+# up) unless ``round_tyre``, where they meet the wheel centre's envelope (``round_wheel_ground``).
 
 WHOLE_RATE = 1000.0  # Hz, the made record's rate
 # the features along the terrain: (kind, where m, size m): a rock garden (12 rocks a third of the
@@ -899,9 +900,26 @@ def whole_bike_terrain(length, seed=21, features=WHOLE_FEATURES):
     return (lambda x: np.interp(x, s, h)), placed
 
 
+def round_wheel_ground(h, lo, hi, radius, step=0.005):
+    """The ground a point contact meets where a rigid round wheel of ``radius`` (m) rolls over the profile
+    ``h`` (m of s) between ``lo`` and ``hi``: the lowest centre clear of the profile, max over |u| <= radius of
+    h(s + u) + sqrt(radius^2 - u^2), less the radius (a wheel's centre path; the "basic curve" of tyre
+    enveloping models). A rock's steep face becomes the arc the wheel climbs it on; a hollow shorter than
+    the wheel is bridged. Returns h_met(s) on a ``step`` grid (linear between)."""
+    s = np.arange(lo, hi, step)
+    z = h(s)
+    n = int(radius / step)
+    padded = np.concatenate((np.full(n, z[0]), z, np.full(n, z[-1])))
+    met = np.full(z.size, -np.inf)
+    for k in range(-n, n + 1):
+        met = np.maximum(met, padded[n + k:n + k + z.size] + math.sqrt(max(radius * radius - (k * step) ** 2, 0.0)))
+    met -= radius
+    return lambda x: np.interp(x, s, met)
+
+
 def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=40.0, profile=SpeedProfile(),
                     features=WHOLE_FEATURES, fork_reb=700.0, slow_load_N=80.0, slow_period_s=7.0, rider_forward_m=0.0,
-                    carried=True, pump_N=0.0):
+                    carried=True, pump_N=0.0, round_tyre=False):
     """This file's bike (``bike_text``: the fork at ``fork_rate`` N/mm and ``fork_reb`` N s/m of
     rebound, the shock's rebound ``shock_reb_scale`` times SHOCK_REB) ridden for ``seconds`` by the
     independent whole bike above at ``profile``'s speed over ``whole_bike_terrain(seed, features)``,
@@ -911,7 +929,10 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
     (the advice's rides, ``ADVISE_CARRIED``; not what the MuJoCo bike does); ``pump_N`` > 0: the rider
     pumps and absorbs, his limbs pushing him up and the bike down at both ends at once (at the pedals
     and the bars, half each) with a force of 0.5-2 Hz (a sum of 12 sines of random phase, drawn from
-    ``seed + 1000``) whose largest value over the ride is ``pump_N`` (default 0: none). Written as
+    ``seed + 1000``) whose largest value over the ride is ``pump_N`` (default 0: none); ``round_tyre``: each
+    tyre meets the terrain as a round wheel of the tyre's radius does (:func:`round_wheel_ground`: the point
+    contact rides the wheel centre's envelope, less the radius, in place of the profile itself; default
+    False: the point contact on the profile, which takes a rock's whole face as a vertical push). Written as
     ``path``/bike.toml (the recorded setting) and ``path``/ride.SST (SST v3 integer counts through its
     [sensors]); returns the truth: bike, sst, t, fork_mm and rear_mm (wheel travel), h (the terrain),
     features, wb (the wheelbase along the ride, m), profile, airborne_front (share of the ride the front tyre is
@@ -957,6 +978,7 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
     span = r.arm_x - r.leg_x
     P_leg, P_arm = mr_ * g * (r.arm_x - rx) / span, mr_ * g * (rx - r.leg_x) / span  # the limbs' preloads
     h, placed = whole_bike_terrain(float(profile.along(seconds)) + 10.0, seed, features)
+    met = round_wheel_ground(h, -5.0, float(profile.along(seconds)) + 15.0, radius) if round_tyre else h
     along = profile.along
     if pump_N:  # the pumping force's sines and its largest value over the ride, drawn only where asked
         pumps = np.random.default_rng(seed + 1000)
@@ -988,8 +1010,8 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
         leg, arm = limbs[0] - u + 0.5 * p, limbs[1] + u + 0.5 * p
         s = float(along(t))
         wb = wheelbase((wF + base[0]) / sa, wR + base[1])
-        tF = max(0.0, tyre_k * (float(h(s)) - (zw + base[2] - radius)))
-        tR = max(0.0, tyre_k * (float(h(s - wb)) - (zq + base[3] - radius)))
+        tF = max(0.0, tyre_k * (float(met(s)) - (zw + base[2] - radius)))
+        tR = max(0.0, tyre_k * (float(met(s - wb)) - (zq + base[3] - radius)))
         return fF, fR, leg, arm, tF, tR
 
     def rhs(t, y):
@@ -1039,7 +1061,14 @@ ADVISE_SECONDS = 30.0
 # reconstruction until a flight thrown off a rock stopped being taken for a drop's edge; on seed 5 and at
 # 9-12 N/mm the carried bike's rides are reconstructed better than this bike's). The advice's logic is
 # checked on these rides until the advice holds on the carried bike's.
+# Why the carried bike's soft-fork rides crash on their reconstruction (docs/rolling.md): its point-contact
+# tyres take a rock's whole face as a vertical push and throw it into wheelies (+43 deg at 5 N/mm) the
+# MuJoCo bike does not ride on the same course (+3 deg there); with round tyres (``round_tyre``) the advice
+# at 5 N/mm raises the spring (tests/test_advise_carried.py). Measured once each way with ADVISE_ROUND_TYRE
+# True: ADVISE_CARRIED False, every slow advice test passes; True, 5 of tests/test_advise*.py's other
+# slow tests fail (6 with point contacts), none by a crash. Left False until the docs' numbers of the advice tests' rides are measured again on it.
 ADVISE_CARRIED = False
+ADVISE_ROUND_TYRE = False
 ADVISE_PROFILE = SpeedProfile(6.5, 0.5, 25.0)
 ADVISE_FEATURES = (("rocks", 10.0, 0.1), ("drop", 30.0, 0.5), ("rocks", 40.0, 0.1), ("g_out", 60.0, 0.3),
                    ("drop", 75.0, 0.5), ("rocks", 85.0, 0.1), ("jump", 105.0, 0.4), ("drop", 125.0, 0.6),
@@ -1064,11 +1093,12 @@ def engine_ride(folder, terrain, speed=6.0, seconds=40.0, from_s=3.0):
     return file, write_v3(folder / "ride.SST", np.clip(fork, 0, None), np.clip(rear, 0, None) / RATIO), made
 
 
-def advise_ride(path, seconds=ADVISE_SECONDS, carried=ADVISE_CARRIED, **settings):
+def advise_ride(path, seconds=ADVISE_SECONDS, carried=ADVISE_CARRIED, round_tyre=None, **settings):
     """``whole_bike_ride`` over the advice's course (``settings``: its bike's, e.g. fork_rate,
     fork_reb, shock_reb_scale): (bike file, SST file, fork mm, rear wheel mm, t)."""
     made = whole_bike_ride(path, seconds=seconds, profile=ADVISE_PROFILE, features=ADVISE_FEATURES,
-                           carried=carried, **settings)
+                           carried=carried, round_tyre=ADVISE_ROUND_TYRE if round_tyre is None else round_tyre,
+                           **settings)
     return made["bike"], made["sst"], made["fork_mm"], made["rear_mm"], made["t"]
 
 

@@ -10,22 +10,30 @@ wheel landing 0.3 m low, and the recorded setting went over the bars on its own 
 flight the ground threw the wheel into (the ground rising ``EDGE_RISE_M`` or more in the
 ``EDGE_RISE_S`` before the take-off) is now a chord, and it rides through (without that rule, it still
 goes over: checked here). Its advice at a fork far too soft is still inconclusive (a strict xfail), so
-the advice tests make their rides without the carried masses."""
+the advice tests make their rides without the carried masses.
+
+Why: its point-contact tyres take a rock's whole face as a vertical push, which throws the made bike into
+wheelies (+24 deg at 2.75 s, +43 deg at 4.25 s at 5 N/mm) where the MuJoCo bike on the same course and
+speed pitches +6 and +3 deg; the inverse cannot find the ground under those flights (a 0.6 m pit, a
+0.23 m ramp, the 0.5 m drop's landing a pit climbing 0.84 m). With the made bike's tyres meeting the
+ground as round wheels (``round_tyre``) the candidates ride its reconstruction and the soft fork's spring
+is raised (checked here)."""
 from __future__ import annotations
 
+import math
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from helpers import ADVISE_FEATURES, ADVISE_PROFILE, whole_bike_ride
+from helpers import ADVISE_CARRIED, ADVISE_FEATURES, ADVISE_PROFILE, ADVISE_ROUND_TYRE, whole_bike_ride
 
 SECONDS = 16.0
 
 
-def _made(folder, carried):
+def _made(folder, carried, round_tyre=ADVISE_ROUND_TYRE):
     return whole_bike_ride(folder, fork_rate=7.0, seconds=SECONDS, profile=ADVISE_PROFILE, features=ADVISE_FEATURES,
-                           carried=carried)
+                           carried=carried, round_tyre=round_tyre)
 
 
 def _ridden(made):
@@ -46,14 +54,14 @@ def _ridden(made):
 
 @pytest.mark.slow  # a 16 s made ride, its reconstruction and one bike run: about 30 s
 def test_the_advice_tests_ride_is_ridden_on_its_reconstruction(tmp_path):
-    assert _ridden(_made(tmp_path, carried=False)) is None
+    assert _ridden(_made(tmp_path, carried=ADVISE_CARRIED)) is None
 
 
 @pytest.mark.slow  # the same, made by the carried bike, with and without the take-off's rise rule: about a minute
 def test_the_carried_bike_s_ride_is_ridden_on_its_reconstruction(tmp_path, monkeypatch):
     from mtbmj.ride import reconstruct_inverse
 
-    made = _made(tmp_path, carried=True)
+    made = _made(tmp_path, carried=True, round_tyre=False)  # the point contact, which a rock's face throws up
     assert _ridden(made) is None
     monkeypatch.setattr(reconstruct_inverse, "EDGE_RISE_M", float("inf"))  # a thrown wheel's flight taken for a drop
     assert _ridden(made) is not None
@@ -105,7 +113,49 @@ def test_a_fork_far_too_soft_on_the_carried_bike_gets_a_stiffer_spring(tmp_path)
     from mtbmj.cli import main
     from helpers import advise_ride, reconstruction_passing
 
-    bike, sst, *_ = advise_ride(tmp_path, fork_rate=5.0, carried=True)
+    bike, sst, *_ = advise_ride(tmp_path, fork_rate=5.0, carried=True, round_tyre=False)
+    out = tmp_path / "advice"
+    with reconstruction_passing():
+        assert main(["advise", str(sst), "--bike", str(bike), "--out", str(out)]) == 0
+    rec = json.loads((out / "advice.json").read_text())["recommendation"]
+    assert rec is not None and rec["config_key"] == "fork.spring.rate_N_per_mm"
+    assert 1.2 <= rec["setting"]["to"] / rec["setting"]["from"] <= 2.5
+
+
+def test_the_made_bike_s_round_tyre_climbs_a_block_as_a_circle_s_centre_does():
+    """``helpers.round_wheel_ground`` (the made bike's ``round_tyre``) against the closed form of a rigid
+    circle rolling onto a block of height H < R: its centre at distance d before the face is at
+    max(R, H + sqrt(R^2 - d^2)), on the block at H + R, and a hollow narrower than the wheel is
+    bridged. The profile itself (the point contact) fails the same check before the face."""
+    from helpers import round_wheel_ground
+
+    R, H = 0.36, 0.2
+
+    def block(x):  # a block 0.5 m long from x = 1 m, and a 0.2 m wide, 0.1 m deep slot at 3 m
+        x = np.asarray(x, float)
+        return np.where((x >= 1.0) & (x <= 1.5), H, 0.0) - np.where((x >= 3.0) & (x <= 3.2), 0.1, 0.0)
+
+    met = round_wheel_ground(block, -2.0, 5.0, R, step=0.001)
+    d = np.array([0.5, 0.3, 0.2, 0.1, 0.02])
+    closed = np.maximum(0.0, H + np.sqrt(np.clip(R * R - d * d, 0.0, None)) - R)
+    assert met(1.0 - d) == pytest.approx(closed, abs=2e-3)
+    assert float(met(1.25)) == pytest.approx(H, abs=1e-6)
+    assert float(met(3.1)) > -0.02  # the slot bridged: the wheel sinks sqrt(R^2 - 0.1^2) - R deep, 14 mm
+    assert float(met(3.1)) == pytest.approx(math.sqrt(R * R - 0.1 ** 2) - R, abs=2e-3)
+    assert not np.allclose(block(1.0 - d), closed, atol=2e-3)  # the point contact meets the face only at it
+
+
+@pytest.mark.slow  # a 30 s made ride, its calibration, reconstruction and 12 candidates searched: about 3 min
+def test_a_fork_far_too_soft_on_the_carried_bike_with_round_tyres_gets_a_stiffer_spring(tmp_path):
+    """The strict xfail above on the carried bike whose tyres meet the ground as round wheels do (the
+    MuJoCo bike's are round): its wheelies off the rock garden's faces (+43 deg on the point contact) are
+    gone, and the fork far too soft gets its spring raised by 20-150 %."""
+    import json
+
+    from mtbmj.cli import main
+    from helpers import advise_ride, reconstruction_passing
+
+    bike, sst, *_ = advise_ride(tmp_path, fork_rate=5.0, carried=True, round_tyre=True)
     out = tmp_path / "advice"
     with reconstruction_passing():
         assert main(["advise", str(sst), "--bike", str(bike), "--out", str(out)]) == 0

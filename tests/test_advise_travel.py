@@ -79,9 +79,10 @@ def _advised(folder, **settings):
     the made ride's truth."""
     from mtbmj.cli import main
 
-    from helpers import ADVISE_CARRIED, ADVISE_PROFILE, reconstruction_passing, whole_bike_ride
+    from helpers import ADVISE_CARRIED, ADVISE_PROFILE, ADVISE_ROUND_TYRE, reconstruction_passing, whole_bike_ride
 
-    made = whole_bike_ride(folder, seconds=30.0, profile=ADVISE_PROFILE, seed=21, carried=ADVISE_CARRIED, **settings)
+    made = whole_bike_ride(folder, seconds=30.0, profile=ADVISE_PROFILE, seed=21, carried=ADVISE_CARRIED,
+                           round_tyre=ADVISE_ROUND_TYRE, **settings)
     out = folder / "advice"
     with reconstruction_passing():
         assert main(["advise", str(made["sst"]), "--bike", str(made["bike"]), "--out", str(out)]) == 0
