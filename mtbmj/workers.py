@@ -51,8 +51,9 @@ def one_blas_thread() -> None:
     loaded now (``threadpoolctl``) and those loaded later (their environment variables, where the
     user set none). Only for a process of the package's own (a pool's worker, the ``mtbmj``
     executable), never behind a caller: a pool already keeps every core busy, and BLAS threads
-    beside it spin against the other processes (on two busy cores a 122 x 122 eigh took 0.22 s
-    instead of 1 ms; docs/measured.md)."""
+    beside it spin against the other processes (measured on two cores with another process busy: a
+    122 x 122 eigh of the reconstruction's bound took 0.22 s with OpenBLAS's threads, 1 ms with one;
+    on a quiet machine no difference was measured)."""
     for name in BLAS_THREADS_ENV:
         os.environ.setdefault(name, "1")
     try:

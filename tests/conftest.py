@@ -8,8 +8,9 @@ import pytest
 
 from mtbmj.workers import one_blas_thread
 
-# Two test processes on two cores: BLAS threads beside them spin against the other (a test file of
-# reconstructions and calibrations took 113 s instead of 67); each test process, as the package's
+# Two test processes on two cores: BLAS threads beside them spin against the other when the machine
+# is busier still (five test files of reconstructions and calibrations took 113 s instead of 67 beside
+# another process's tests; on a quiet machine 62-71 s either way); each test process, as the package's
 # own pool workers and executable, does its linear algebra on one thread.
 one_blas_thread()
 
