@@ -861,3 +861,21 @@ def test_ring_fit_reads_a_friction_ring_down_without_damping():
     assert got["model"] == "friction"
     assert got["models"]["friction"]["friction_N"] == pytest.approx(80.0, rel=0.2)
     assert got["damper_scale_ci95"][0] * 1000.0 < 300.0
+
+
+def test_a_replay_that_diverges_writes_no_mujoco_log(seated, tmp_path, monkeypatch):
+    """A trial push far past the model's envelope makes MuJoCo warn (a value not finite, the state
+    reset); its warning is routed away from MUJOCO_LOG.TXT in the working directory (it was written
+    there: a file of the user's touched, found when a slow replay test's log landed beside another test)."""
+    from mtbmj.identify.bounce import BounceError
+    from mtbmj.identify.bounce_replay import NAMES
+
+    monkeypatch.chdir(tmp_path)
+    seated.set_rest(12.0, None)
+    p = dict.fromkeys(NAMES, 0.1)
+    p.update(lift_N=0.0, slam_N=1e12, spring_scale=0.5, damper_N_s_per_m=2000.0, friction_N=30.0)
+    try:
+        seated.run(p)
+    except BounceError:
+        pass
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()

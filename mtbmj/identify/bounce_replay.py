@@ -59,6 +59,7 @@ from mtbmj.errors import MtbmjError
 from mtbmj.identify.bounce import (QUIET_BEFORE_S, BounceError, find_slam, first_rebound, interval95, lag1,
                                    rebound_check)
 from mtbmj.identify.bounce_bike import RIDER_SOURCE, RIDER_ZETA
+from mtbmj.runpath import guard
 
 RIDER_HZ = 5.0  # the seated body's vertical resonance (Fairley and Griffin 1989: 5 Hz; 4-6 Hz, Griffin 1990, ISO 2631-1)
 BEFORE_S = 0.6  # the replay starts this long before the slam's peak (the rider at rest on the saddle, QUIET_BEFORE_S)
@@ -319,8 +320,8 @@ class SeatedReplay:
         fine = -before_s + (dt / substeps) * np.arange(n * substeps + 1)
         fz = push(fine, p)
         phi[0], fork[0], rz[0] = d.qpos[iphi], d.qpos[ifork], d.qpos[irz]
-        try:
-            with installed(self.p.callback):
+        try:  # MuJoCo's warnings (a diverging trial) routed away from MUJOCO_LOG.TXT in the working directory
+            with installed(self.p.callback), guard.collected_warnings([]):
                 for i in range(n):
                     for s in range(substeps):
                         d.xfrc_applied[self.rider_body, 2] = fz[i * substeps + s]
