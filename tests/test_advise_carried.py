@@ -108,13 +108,18 @@ def test_the_carried_bike_leaves_the_ground_as_the_engine_does(tmp_path):
 def test_a_fork_far_too_soft_on_the_carried_bike_gets_a_stiffer_spring(tmp_path):
     """issue 52's first target on the bike that pitches as the MuJoCo bike does: the fork's spring
     raised by 20-150 % (tests/test_advise.py checks it on the advice tests' rides)."""
+    _soft_fork_s_spring_is_raised(tmp_path, round_tyre=False)
+
+
+def _soft_fork_s_spring_is_raised(folder, round_tyre):
+    """The carried bike's ride at a fork far too soft (5 N/mm) advised: the fork's spring raised by 20-150 %."""
     import json
 
     from mtbmj.cli import main
     from helpers import advise_ride, reconstruction_passing
 
-    bike, sst, *_ = advise_ride(tmp_path, fork_rate=5.0, carried=True, round_tyre=False)
-    out = tmp_path / "advice"
+    bike, sst, *_ = advise_ride(folder, fork_rate=5.0, carried=True, round_tyre=round_tyre)
+    out = folder / "advice"
     with reconstruction_passing():
         assert main(["advise", str(sst), "--bike", str(bike), "--out", str(out)]) == 0
     rec = json.loads((out / "advice.json").read_text())["recommendation"]
@@ -150,15 +155,4 @@ def test_a_fork_far_too_soft_on_the_carried_bike_with_round_tyres_gets_a_stiffer
     """The strict xfail above on the carried bike whose tyres meet the ground as round wheels do (the
     MuJoCo bike's are round): its wheelies off the rock garden's faces (+43 deg on the point contact) are
     gone, and the fork far too soft gets its spring raised by 20-150 %."""
-    import json
-
-    from mtbmj.cli import main
-    from helpers import advise_ride, reconstruction_passing
-
-    bike, sst, *_ = advise_ride(tmp_path, fork_rate=5.0, carried=True, round_tyre=True)
-    out = tmp_path / "advice"
-    with reconstruction_passing():
-        assert main(["advise", str(sst), "--bike", str(bike), "--out", str(out)]) == 0
-    rec = json.loads((out / "advice.json").read_text())["recommendation"]
-    assert rec is not None and rec["config_key"] == "fork.spring.rate_N_per_mm"
-    assert 1.2 <= rec["setting"]["to"] / rec["setting"]["from"] <= 2.5
+    _soft_fork_s_spring_is_raised(tmp_path, round_tyre=True)
