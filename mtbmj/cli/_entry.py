@@ -23,10 +23,11 @@ def _interrupted_outside_a_command(signum, frame) -> None:
 
 def main() -> int:  # never returns: exits with the command's status
     signal.signal(signal.SIGINT, _interrupted_outside_a_command)
-    # the executable's own process: linear algebra on one thread (mtbmj.workers.one_blas_thread), set
-    # before numpy loads its BLAS; a user's own setting of these variables is kept
-    for name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(name, "1")
+    # the executable's own process: linear algebra on one thread, before numpy loads its BLAS (importing
+    # mtbmj.workers loads neither numpy nor scipy); a user's own setting of the variables is kept
+    from mtbmj.workers import one_blas_thread
+
+    one_blas_thread()
     from mtbmj.cli import main as cli_main
 
     status = cli_main()
