@@ -74,7 +74,7 @@ def read_ride(args, bike=None):
     from mtbmj.cli.telemetry import decoding
     from mtbmj.measured import telemetry
 
-    path = telemetry.example_path() if args.ride == "example" else Path(args.ride)
+    path = telemetry.ride_path(args.ride)
     how = SimpleNamespace(bike=args.bike, fork_max_mm=None, shock_max_mm=None)
     return telemetry.read_ride(path, **(decoding(how) if bike is None else decoding(how, bike)))
 

@@ -59,7 +59,7 @@ def main(argv=None) -> int:
         rides += sorted(str(p) for p in Path(ride).glob("*.SST")) if Path(ride).is_dir() else [ride]
     rows = []
     for ride in rides:
-        path = telemetry.example_path() if ride == "example" else Path(ride)
+        path = telemetry.ride_path(ride)
         row = {"ride": path.name, "folder": path.parent.name}
         t0 = time.perf_counter()
         try:

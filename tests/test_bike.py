@@ -349,6 +349,27 @@ def test_beside_a_ride_reads_it_through_the_bike_that_ran():
                                                            rel=1e-3)
 
 
+def test_beside_the_example_named_in_any_case(tmp_path, capsys, monkeypatch):
+    """``--ride EXAMPLE`` is the shipped ride, as ``mtbmj telemetry EXAMPLE`` is; it was refused as a
+    missing file. A file that is really named so is read as the file it is (here refused: not a ride)."""
+    import json
+
+    from mtbmj.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    args = ["bike", "sst", "flat", "--speed", "4", "--duration", "0.1", "--quiet", "--no-figure"]
+    assert main(args + ["--ride", "EXAMPLE", "--out", "upper"]) == 0
+    assert main(args + ["--ride", "example", "--out", "lower"]) == 0
+    upper = json.loads((tmp_path / "upper" / "ride_comparison.json").read_text())
+    assert upper == json.loads((tmp_path / "lower" / "ride_comparison.json").read_text())
+    assert upper["front"]["ride_mean_percent"] > 10.0  # the shipped ride's fork travels
+    (tmp_path / "Example").write_text("not a recording\n")
+    capsys.readouterr()
+    assert main(args + ["--ride", "Example", "--out", "file"]) == 2
+    assert "Example" in capsys.readouterr().err
+    assert not (tmp_path / "file").exists()
+
+
 def test_bike_command_holds_parts_and_lifts_the_rear(tmp_path, capsys):
     import csv
     import json

@@ -16,10 +16,10 @@ EXIT_CRASHED = 3
 def cmd_bike(args) -> int:
     from mtbmj.bike.run import run_bike
 
-    if args.ride is not None and args.ride != "example":
-        from mtbmj.measured.telemetry import read_sst
+    if args.ride is not None:
+        from mtbmj.measured.telemetry import read_sst, ride_path
 
-        read_sst(args.ride)  # a bad ride file: one line before any work
+        read_sst(ride_path(args.ride))  # a bad ride file: one line before any work
     if args.video:
         from mtbmj.rolling.render import gl_backend
 

@@ -99,9 +99,7 @@ def ride_record(ride, args, bike=None, overrides=None):
     read with (``telemetry.beyond_travel``), else its quality warnings issued."""
     from mtbmj.config import warn
 
-    shipped = str(ride) == "example" or (str(ride).lower() == "example" and not Path(ride).exists())  # EXAMPLE too
-    path = telemetry.example_path() if shipped else ride
-    record = telemetry.read_ride(path, **decoding(args, bike, overrides))
+    record = telemetry.read_ride(telemetry.ride_path(ride), **decoding(args, bike, overrides))
     beyond = telemetry.beyond_travel(record, *travel_keys(args))
     warn(telemetry.quality(record) + beyond)
     return record

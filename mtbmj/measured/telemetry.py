@@ -557,3 +557,12 @@ def repeated_samples(records) -> tuple[int, int] | None:
 def example_path() -> Path:
     """The shipped ride recording (00649.SST, MIT, from the Sufni Suspension Telemetry project)."""
     return Path(str(resources.files("mtbmj") / "data" / "sst" / "00649.SST"))
+
+
+def ride_path(ride) -> Path:
+    """The file a user's ride name means: "example" in any case (when no such file exists) is the
+    shipped ride, anything else a path as given. The one place commands resolve the name."""
+    text = str(ride)
+    if text.lower() == "example" and not Path(text).exists():
+        return example_path()
+    return Path(text)

@@ -22,8 +22,7 @@ def _read(result, sst: str):
     from mtbmj.bike.spec import ride_decoding
     from mtbmj.measured import telemetry
 
-    path = telemetry.example_path() if sst == "example" else sst
-    return telemetry.read_sst(path, **ride_decoding(result.prepared.spec))
+    return telemetry.read_sst(telemetry.ride_path(sst), **ride_decoding(result.prepared.spec))
 
 
 def compare(result, sst: str = "example", bin_percent: float = 5.0) -> dict:
