@@ -456,9 +456,11 @@ def static_equilibrium(reference: Reference, guess=None, acceptable=None, held=(
         planar.g = g
     if found is not None and acceptable(np.concatenate(([0.0], found))):
         return np.concatenate(([0.0], found))
-    for fork in np.linspace(0.0, 0.15, 7):  # starts spread over the fork's and the swingarm's travel
-        for arm in (-0.005, 0.0, 0.05, 0.15):
-            u, msg = solve(np.array([-0.06, 0.0, 0.03, fork, arm, 0.0]))
+    # starts spread over the swingarm's angle (rad) and the rider's height on the bike (m); u is q[1:]:
+    # the frame's height and pitch, the fork, the swingarm, the rider's height and pitch
+    for arm in np.linspace(0.0, 0.15, 7):
+        for rider in (-0.005, 0.0, 0.05, 0.15):
+            u, msg = solve(np.array([-0.06, 0.0, 0.03, arm, rider, 0.0]))
             if u is not None and acceptable(np.concatenate(([0.0], u))):
                 return np.concatenate(([0.0], u))
             why = msg if u is None else why
