@@ -260,3 +260,19 @@ def test_the_sst_bike_off_0_8_m_at_4_m_per_s_lands():
     assert np.any(after & (raw["front_tire_N"] > 0.0) & (raw["rear_tire_N"] > 0.0))  # both wheels down again
     end = raw["time_s"] > raw["time_s"][-1] - 0.2
     assert np.all(np.abs(raw["pitch_deg"][end]) < 5.0)
+
+
+def test_a_rider_that_cannot_settle_is_refused_for_that(tmp_path, monkeypatch):
+    """The articulated rider's second of settling in place steps MuJoCo: when it blows up there (here a
+    negative fore-aft hold, an impossible inertia) the run is refused naming the settling and MuJoCo's
+    cause, and MuJoCo's warning does not reach MUJOCO_LOG.TXT in the working directory (the run was
+    refused later, "diverged before t = 0", and numpy warned on the way)."""
+    from mtbmj.bike import run
+    from mtbmj.errors import RunError
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(run, "LOCK_ARMATURE", -1e6)
+    with pytest.raises(RunError, match=r"^(rider: the active rider did not settle on the bike in place \(.*MuJoCo|"
+                                       r"bike \(the rider settling\) run diverged \()"):
+        run_bike("sst", "flat", 4.0, duration=0.1, rider="active")
+    assert list(tmp_path.iterdir()) == []

@@ -99,7 +99,7 @@ import numpy as np
 from mtbmj.bike import rider_body as rb
 from mtbmj.bike.pedal_leg import PedalLeg, pedalling_hip
 from mtbmj.controllers.stops import DAMPING_RAMP
-from mtbmj.errors import ConfigError
+from mtbmj.errors import ConfigError, RunError, diverging
 
 JOINTS = ("hip", "knee", "ankle", "shoulder", "elbow")
 # one side's isometric strength (N m): (flexion, extension); the ankle's (dorsiflexion, plantar flexion)
@@ -634,6 +634,7 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     from mtbmj.bike.model import build_bike
     from mtbmj.controllers import installed
     from mtbmj.controllers.drive import Drive
+    from mtbmj.runpath import guard
 
     if p.lock or not p.rear_tire_on:
         raise ConfigError("rider: the active rider rides the whole bike (no --lock, no --lift-rear)")
@@ -656,28 +657,28 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     wheelbase = spec.front_axle[0] - spec.rear_axle[0]
     ctl = Controller(body, pedal, grip, hip, trunk, edges(p.terrain), p.speed, wheelbase, seated,
                      saddle_point(spec), old.x0 + spec.front_axle[0])
-    refresh = p.callback.refresh
     inner = make_inner(b)
     rc = RiderCallback(b.model, inner, body, pose0, ctl)
     if pedalling:
         ring, cog = spec.drive["chain_m"]
         rc.leg = PedalLeg(body, grip, cog / (ring * rear.radius), STRENGTH_ONE_SIDE_N_M, POWER_W).bind(b.model)
     data = mujoco.MjData(b.model)
-    names = ("bike_x", "bike_z", "pitch", "fork", "swingarm")
-    for name in names:
+    for name in ("bike_x", "bike_z", "pitch", "fork", "swingarm"):
         data.qpos[b.qpos_index(name)] = p.initial_qpos[old.qpos_index(name)]
     data.act[:] = p.initial_act
     # settle in place: held fore and aft, coasting, the Python callback (a second is 2000 steps)
     coast = BikeCallback(b, p.fork_law, p.shock_law, p.front_tire, rear, Drive("coast", 0.0), p.speed, p.traction,
-                         refresh)
+                         p.callback.refresh)
     # the pose the controller asks for at the start (the stance, or a drop's pose begun before it)
     settle = RiderCallback(b.model, coast, body, pose0, dataclasses.replace(ctl, hold_x=ctl.x_start))
     xdof = b.dof_index("bike_x")
-    keep = float(b.model.dof_armature[xdof])
-    b.model.dof_armature[xdof] = hold
-    with installed(settle):
+    keep, b.model.dof_armature[xdof] = float(b.model.dof_armature[xdof]), hold
+    with installed(settle), guard.collected_warnings(messages := []), diverging("bike (the rider settling)"):
         for _ in range(int(round(settle_s / p.timestep))):
             mujoco.mj_step(b.model, data)
+    if messages or guard.first_warning(data):  # MuJoCo reset a blown-up state: no stance to ride from
+        cause = guard.likely_cause(guard.first_warning(data), (messages or [None])[0], b.model)
+        raise RunError(f"rider: the active rider did not settle on the bike in place ({cause})")
     b.model.dof_armature[xdof] = keep
     data.time = 0.0
     data.qvel[:] = 0.0
