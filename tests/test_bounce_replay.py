@@ -865,8 +865,9 @@ def test_ring_fit_reads_a_friction_ring_down_without_damping():
 
 def test_a_replay_that_diverges_writes_no_mujoco_log(seated, tmp_path, monkeypatch):
     """A trial push far past the model's envelope makes MuJoCo warn (a value not finite, the state
-    reset); its warning is routed away from MUJOCO_LOG.TXT in the working directory (it was written
-    there: a file of the user's touched, found when a slow replay test's log landed beside another test)."""
+    reset); the replay is refused naming the cause (it was returned as a replay) and the warning is
+    routed away from MUJOCO_LOG.TXT in the working directory (it was written there: a file of the
+    user's touched, found when a slow replay test's log landed beside another test)."""
     from mtbmj.identify.bounce import BounceError
     from mtbmj.identify.bounce_replay import NAMES
 
@@ -874,8 +875,8 @@ def test_a_replay_that_diverges_writes_no_mujoco_log(seated, tmp_path, monkeypat
     seated.set_rest(12.0, None)
     p = dict.fromkeys(NAMES, 0.1)
     p.update(lift_N=0.0, slam_N=1e12, spring_scale=0.5, damper_N_s_per_m=2000.0, friction_N=30.0)
-    try:
-        seated.run(p)
-    except BounceError:
-        pass
+    with pytest.raises(BounceError, match=r"^replay: the simulated bike diverged \(.*MuJoCo BAD"):
+        seated.run(p)  # refused: MuJoCo reset the state, so the values stayed finite (it "ran" to 189.7 mm)
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+    p.update(slam_N=1500.0)  # the same bike slammed as a person slams still replays
+    assert np.all(np.isfinite(seated.run(p)["stroke_mm"]))

@@ -320,8 +320,9 @@ class SeatedReplay:
         fine = -before_s + (dt / substeps) * np.arange(n * substeps + 1)
         fz = push(fine, p)
         phi[0], fork[0], rz[0] = d.qpos[iphi], d.qpos[ifork], d.qpos[irz]
-        try:  # MuJoCo's warnings (a diverging trial) routed away from MUJOCO_LOG.TXT in the working directory
-            with installed(self.p.callback), guard.collected_warnings([]):
+        messages = []  # MuJoCo's warnings (a diverging trial), routed away from MUJOCO_LOG.TXT in the cwd
+        try:
+            with installed(self.p.callback), guard.collected_warnings(messages):
                 for i in range(n):
                     for s in range(substeps):
                         d.xfrc_applied[self.rider_body, 2] = fz[i * substeps + s]
@@ -331,8 +332,11 @@ class SeatedReplay:
             m.opt.timestep = dt
             d.xfrc_applied[self.rider_body, :] = 0.0
         force[:] = push(t, p)
-        if not (np.all(np.isfinite(phi)) and np.all(np.isfinite(fork))):
-            raise BounceError("replay: the simulated bike diverged (a value not finite): outside the model's envelope")
+        warned = guard.first_warning(d)  # MuJoCo resets a blown-up state: finite values, a wrong replay
+        if warned or messages or not (np.all(np.isfinite(phi)) and np.all(np.isfinite(fork))):
+            cause = guard.likely_cause(warned, messages[0] if messages else None, m) if warned or messages else \
+                "a value not finite"
+            raise BounceError(f"replay: the simulated bike diverged ({cause}): outside the model's envelope")
         return {"time_s": t, "stroke_mm": self.stroke_mm(phi), "fork_mm": fork * 1e3, "rider_mm": rz * 1e3,
                 "push_N": force}
 
