@@ -79,13 +79,12 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from mtbmj.ride.reconstruct_inverse import QuarterCar, forward, ground_under, lowpass, runs, wheelbase_at
-from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ
+from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ, within_stops
 from mtbmj.ride.reconstruct_bands import BANDS, BEAT_MARGIN, band_checks  # noqa: F401 (BANDS: this module's name too)
 from mtbmj.ride.reconstruct_bound import fork_filter_bound
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
                                           check_length, merged, min_seconds, refine, speed_from_either,
-                                          speed_from_lag, tracked)
-from mtbmj.ride.reconstruct_speed import TRACK_ANCHOR_S, TRACK_MARGIN, TRACK_SD
+                                          speed_from_lag, tracked, TRACK_ANCHOR_S, TRACK_MARGIN, TRACK_SD)
 # The rate a ride is read at (the version-3 recorder's): a faster record is low-passed and decimated
 # to it (``TelemetryRecord.decimated``), so two derivatives do not amplify its count steps and a
 # 100 s ride at 5 kHz costs what it costs at 1 kHz
@@ -141,6 +140,7 @@ class Reconstruction:
     stands: list = None  # (start s, end s) of the record: the bike standing unweighted mid-ride (its rider off it)
     at_once: float = 0.0  # the share of the rear's ground met at the front's moment (at_once_share), 0..1
     at_once_fit: dict | None = None  # reconstruct(at_once=True): the rear with that share fitted (fitted_summary)
+    cut: list = None  # an end's record read at most PAST_TRAVEL_M past its travel (within_stops), what was cut
     _bound: dict | None = field(default=None, init=False, repr=False, compare=False)  # fork_bound's, once
 
     def fork_bound(self) -> dict | None:
@@ -329,6 +329,7 @@ class Reconstruction:
             "record_part_why": "the bike stood unweighted mid-ride (both ends fully out, its rider off it), which the "
                                "whole bike with its rider on cannot ride: the longest part ridden is reconstructed, "
                                "its times from its own start"}
+        part.update({"read_within_stops": self.cut} if self.cut else {})  # past an end's stop: its calibration
         return {"ride": self.name, "bike": self.bike, "duration_s": float(self.t[-1] - self.t[0]), **part,
                 "speed_m_per_s": self.speed["speed_m_per_s"], "lag_s": self.speed["lag_s"],
                 "speed_from": self.speed.get("from"), "wheelbase_at_sag_m": float(self.wheelbase),
@@ -569,11 +570,12 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
     front_car = QuarterCar(total * share - m_front, m_front, fork_setup.fork, rate, radius, g, fork_setup.travel, rim)
     rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g, shock_setup.travel, rim)
     sin_a = math.sin(spec.head_angle)
-    fork = fork_mm * 1e-3
+    fork, cut_fork = within_stops(f"{record.name}: the fork", fork_mm * 1e-3, fork_setup.travel, dt)
     ground, tyre, air, extra, body, stops = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
     lev = spec.leverage
     rear = rear_mm * 1e-3
-    shock = shock_mm * 1e-3 if shock_mm is not None else lev.strokes(rear)
+    shock, cut_shock = within_stops(f"{record.name}: the shock", shock_mm * 1e-3 if shock_mm is not None else
+                                    lev.strokes(rear), shock_setup.travel, dt)
     ratios = lev.ratios
     # the speed from the lag between the grounds each end's own inverse finds (each end's suspension
     # delays its travel behind its ground by its own phase; the grounds carry none)
@@ -635,7 +637,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
                               front_again * 1e3, rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps,
                               done["unaligned"], np.interp(t - done["lags"], t, fork * 1e3), wheelbase,
                               found["passes"], found["settled_m"], min(diverged) if diverged else None, part_s,
-                              stands, at_once)
+                              stands, at_once, cut=[c for c in (cut_fork, cut_shock) if c])
 
     done = through(speed)
     result = built(done, speed)

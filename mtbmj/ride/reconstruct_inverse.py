@@ -22,6 +22,7 @@ EDGE_RISE_S = 0.1
 TAKE_OFF_SHARE = 0.1  # such a flight left where the tyre's force last fell below this share of its static load
 MAX_FLIGHT_S = 1.5  # a fork fully out longer than this is not flying (a bike standing unweighted): the law's force at 0
 BOTTOM_OUT_MARGIN_M = 0.5e-3  # a stroke this close to full travel is a bottom-out (the hard stop's force unseen)
+PAST_TRAVEL_M = 2e-3  # the most an end passes its travel into its hard stop (controllers/stops.py: a hard landing)
 BOTTOM_OUT_WINDOW_S = 1.0  # after a bottom-out the body's speed is set so its height stays level over this
 V2_LOWPASS_HZ = 100.0  # a version-2 record (5 kHz, coarse steps) is low-passed here before anything is differentiated
 G = 9.81
@@ -122,6 +123,32 @@ def law_along(law, stroke, dt: float, travel: float) -> np.ndarray:
     if f is None:
         f = np.array([_law_force(law, xi, vi, zi) for xi, vi, zi in zip(xf, v, z)])
     return f
+
+
+def within_stops(what: str, stroke, travel: float, dt: float) -> tuple[np.ndarray, dict | None]:
+    """An end's ``stroke`` (m, step ``dt``) read at most ``PAST_TRAVEL_M`` past its ``travel`` (m): a
+    record further past it carries its calibration's error (a version-2 record's approximate
+    amplitudes, or a calibrated one within ``telemetry.TRAVEL_MARGIN_PERCENT``), not an end deeper in
+    its stop, and a ground found from it asks the whole bike to press the stop's stiffening that far
+    (00100.SST's fork at 191 mm of 180: the whole bike diverged at 15.9 s). Returns (the stroke so
+    read, None or what was cut: {"end", "deepest_mm", "read_at_most_mm", "seconds"}), one
+    ``ConfigWarning`` naming ``what`` (the ride and the end) where it cut."""
+    import warnings
+
+    from mtbmj.errors import ConfigWarning
+
+    x = np.asarray(stroke, float)
+    top = travel + PAST_TRAVEL_M
+    past = x > top
+    if not past.any():
+        return x, None
+    cut = {"end": what.rsplit(" ", 1)[-1], "deepest_mm": 1e3 * float(x.max()), "read_at_most_mm": 1e3 * top,
+           "seconds": float(past.sum() * dt)}
+    warnings.warn(f"{what}'s record passes its travel ({travel * 1e3:g} mm) by {cut['deepest_mm'] - travel * 1e3:.1f} "
+                  f"mm: read at {cut['read_at_most_mm']:g} mm (an end passes its travel by at most "
+                  f"{PAST_TRAVEL_M * 1e3:g} mm into its stop; the rest is the record's calibration) over "
+                  f"{cut['seconds']:.3f} s", ConfigWarning, stacklevel=2)
+    return np.minimum(x, top), cut
 
 
 def hanging(stroke, dt: float) -> np.ndarray:
@@ -346,4 +373,5 @@ def runs(mask):
 
 
 
-__all__ = ["QuarterCar", "ground_under", "flights", "bridge", "unloaded", "law_along", "derivatives", "hanging", "forward", "wheelbase_at", "lowpass", "runs"]
+__all__ = ["QuarterCar", "ground_under", "flights", "bridge", "unloaded", "law_along", "derivatives", "hanging", "forward", "wheelbase_at", "lowpass", "runs",
+           "within_stops"]
