@@ -67,7 +67,7 @@ moved to that place (``Calibration.apply``: the reconstruction and every run car
 ride did; on the made forward ride the bike looped out at 21 s without the move), and a run's static
 sag is taken back to the file's place before the rules read it (``Calibration.level_offsets``,
 ``mtbmj.ride.advise.Advice.levelled``): the rules judge the sag the rider measured. Measured on the
-made rides: the forward ride's springs x0.97/x1.02 with 85 N carried forward (the rider 149 mm, made
+made rides: the forward ride's springs x0.97/x1.02 with 86 N carried forward (the rider 149 mm, made
 150); the soft fork's x0.68 (made 0.7) with none. Or (``carried_as="descent"``, ``--carried-as descent``) the rider stays in
 place and the runs ride the terrain laid on the steady descent that carries the load
 (``Calibration.descent_deg``, found through the engine: :mod:`mtbmj.ride.calibrate_descent`); the
