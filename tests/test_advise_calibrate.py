@@ -276,7 +276,8 @@ def test_a_well_set_bike_ridden_forward_is_not_given_a_stiffer_fork(forward, tmp
 def test_advice_on_the_forward_ride_with_its_static_sag_rides_it_as_carried(forward, tmp_path):
     """The forward ride advised with the static sag its rider measures (``--static-sag-mm``, the made bike
     at rest in the file's place): the springs as the file says, the rider moved to where the ride carried
-    the load (so the whole bike rides the reconstruction: without the move it looped out at 21 s), the
+    the load (so the whole bike rides the reconstruction: without the move it loops out at 5.9 s, at 21 s on
+    the point-contact ride), the
     model's fork sitting where the ride's sat (its mean travel within 3 points of the record's), the static
     sag the rules judge the one measured (within 2 points of the test bike's own at rest), and no stiffer
     fork advised (the per-end reading raised it 12 -> 14.52 N/mm)."""
