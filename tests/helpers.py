@@ -1054,21 +1054,20 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
 # drops of 0.5 and 0.6 m, a G-out, a tabletop), where a fork too soft bottoms several times
 ADVISE_SECONDS = 30.0
 # The advice's rides are made by the whole bike pitching about its frame body's inertia alone (3.2 kg m^2
-# where carrying the rider and the wheels fore and aft adds 12.0): on this course at the advice tests'
-# soft forks (5-7 N/mm) on seed 21, made by the carried bike (as the MuJoCo bike pitches: at 7 N/mm its
-# front is airborne 29 % of the first 16 s, the engine's 28 %), the soft fork's advice is inconclusive
-# (tests/test_advise_carried.py, a strict xfail; its recorded setting went over the bars on its own
-# reconstruction until a flight thrown off a rock stopped being taken for a drop's edge; on seed 5 and at
-# 9-12 N/mm the carried bike's rides are reconstructed better than this bike's). The advice's logic is
-# checked on these rides until the advice holds on the carried bike's.
-# Why the carried bike's soft-fork rides crash on their reconstruction (docs/rolling.md): its point-contact
-# tyres take a rock's whole face as a vertical push and throw it into wheelies (+43 deg at 5 N/mm) the
-# MuJoCo bike does not ride on the same course (+3 deg there); with round tyres (``round_tyre``) the advice
-# at 5 N/mm raises the spring (tests/test_advise_carried.py). Measured once each way with ADVISE_ROUND_TYRE
-# True: ADVISE_CARRIED False, every slow advice test passes; True, 5 of tests/test_advise*.py's other
-# slow tests fail (6 with point contacts), none by a crash. Left False until the docs' numbers of the advice tests' rides are measured again on it.
+# where carrying the rider and the wheels fore and aft adds 12.0), its tyres meeting the ground as round
+# wheels of the tyre's radius do (``round_tyre``: the wheel centre rides the envelope of the ground,
+# ``round_wheel_ground``), as the MuJoCo bike's do. Point contacts (ADVISE_ROUND_TYRE False: the advice tests'
+# rides before) take a rock's whole face as a vertical push and throw the carried bike into
+# wheelies (+43 deg at 5 N/mm) the MuJoCo bike does not ride on the same course (+3 deg there; docs/rolling.md);
+# on them the carried bike's soft-fork advice is inconclusive (tests/test_advise_carried.py, a strict xfail),
+# with round tyres it raises the spring. Measured with ADVISE_ROUND_TYRE True and ADVISE_CARRIED False (these
+# settings): every slow test of tests/test_advise*.py passes, and the numbers docs/rolling.md quotes from these
+# rides are theirs (the soft fork raised 5 -> 11.79 N/mm, as on point contacts; the slow rebound lowered
+# 2800 -> 1147 N s/m, 917.5 on point contacts). With ADVISE_CARRIED True as well (measured once, before the
+# numbers were measured again): 5 of tests/test_advise*.py's other slow tests fail (6 with point contacts),
+# none by a crash. The advice's logic is checked on these rides until the advice holds on the carried bike's.
 ADVISE_CARRIED = False
-ADVISE_ROUND_TYRE = False
+ADVISE_ROUND_TYRE = True
 ADVISE_PROFILE = SpeedProfile(6.5, 0.5, 25.0)
 ADVISE_FEATURES = (("rocks", 10.0, 0.1), ("drop", 30.0, 0.5), ("rocks", 40.0, 0.1), ("g_out", 60.0, 0.3),
                    ("drop", 75.0, 0.5), ("rocks", 85.0, 0.1), ("jump", 105.0, 0.4), ("drop", 125.0, 0.6),

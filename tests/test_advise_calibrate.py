@@ -143,14 +143,15 @@ def test_the_static_sag_measured_tells_a_soft_fork_from_a_rider_forward(forward,
     (["--static-sag-mm", "forty,15"], "is not two sags in mm"),
     (["--static-sag-mm", "40,15", "--no-calibrate"], "cannot go with --no-calibrate"),
     (["--static-sag-mm", "400,15"], "the fork's 400 mm is not a static sag any fork spring rate"),
-    (["--static-sag-mm", "15,13.9"], "would ride 458 mm from the pedals, past the bars"),
+    (["--static-sag-mm", "15,13.9"], "would ride 457 mm from the pedals, past the bars"),
     (["--carried-as", "descent"], "--carried-as says how the runs carry the load a measured static sag leaves: it "
                                   "needs --static-sag-mm"),
 ], ids=["one", "negative", "leading-minus", "words", "uncalibrated", "past-any-spring", "load-past-the-bars", "carried-without-sag"])
 def test_a_static_sag_that_cannot_be_is_refused_in_one_line(right, tmp_path, capsys, given, why):
     """A careless --static-sag-mm: one line naming the option and the cause, exit status 2, nothing written
-    (a fork sag half the bike's own, 15 mm for 30.7: the stiff fork it gives leaves 221 N of the ride's front
-    load to be carried forward, the rider past the bars: the ride is not described with that sag)."""
+    (a fork sag half the bike's own, 15 mm for 30.7: the stiff fork it gives leaves 220 N of the ride's front
+    load to be carried forward, the rider past the bars, 457 mm from the pedals for the bars' 455 (458 on the
+    point-contact ride): the ride is not described with that sag)."""
     sst, file, _ = right
     out = tmp_path / "advice"
     assert main(["advise", str(sst), "--bike", str(file), *given, "--out", str(out)]) == 2
@@ -275,7 +276,8 @@ def test_a_well_set_bike_ridden_forward_is_not_given_a_stiffer_fork(forward, tmp
 def test_advice_on_the_forward_ride_with_its_static_sag_rides_it_as_carried(forward, tmp_path):
     """The forward ride advised with the static sag its rider measures (``--static-sag-mm``, the made bike
     at rest in the file's place): the springs as the file says, the rider moved to where the ride carried
-    the load (so the whole bike rides the reconstruction: without the move it looped out at 21 s), the
+    the load (so the whole bike rides the reconstruction: without the move it loops out at 5.9 s, at 21 s on
+    the point-contact ride), the
     model's fork sitting where the ride's sat (its mean travel within 3 points of the record's), the static
     sag the rules judge the one measured (within 2 points of the test bike's own at rest), and no stiffer
     fork advised (the per-end reading raised it 12 -> 14.52 N/mm)."""
@@ -309,7 +311,8 @@ def test_a_ride_down_a_steady_descent_is_ridden_on_its_descent(tmp_path):
     forward read as the grade ridden (within 0.5 deg), every run on that grade sitting where the ride sat
     (mean travel within 3 points at both ends), the static sag judged the one measured, and the bike riding
     the whole ride. (On the made ride of a rider 150 mm forward on the flat, the descent is the wrong reading:
-    ridden so at the ride's own speed the bike loops out at its 0.4 m tabletop, and ``rider`` is right.)"""
+    on its point-contact ride, ridden so at the ride's own speed the bike looped out at its 0.4 m tabletop, and
+    ``rider`` is right; on its round-tyre ride both ride through.)"""
     from mtbmj.rolling import terrain as terrain_mod
 
     from helpers import engine_ride

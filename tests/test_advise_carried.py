@@ -3,21 +3,23 @@ MuJoCo bike does), and why the advice's tests make their rides without it (``hel
 
 The tests' whole bike (``helpers.whole_bike_ride``, scipy's solve_ivp on its own equations) with
 ``carried=True`` pitches as the MuJoCo bike does: the frame carries the rider and the wheels fore and
-aft. On the advice's course at a fork far too soft (7 N/mm), its front is in the air about 29 % of the
-first 16 s (the rock gardens throw it up, the drops); the engine's over the same terrain and speed,
-28 %. The reconstruction took the long flights after rocks (0.5-0.7 s) for drops' edges, its found
+aft. On the advice's course at a fork far too soft (7 N/mm), its front is in the air about 25 % of the
+first 16 s with round tyres (``round_tyre``, as the advice tests' rides: 22 % without the carried masses)
+and 29 % with point contacts (the rock gardens throw it up, the drops); the engine's over the same
+terrain and speed, 28 %. The reconstruction took the long flights after rocks (0.5-0.7 s) for drops' edges, its found
 wheel landing 0.3 m low, and the recorded setting went over the bars on its own terrain at 4.5 s; a
 flight the ground threw the wheel into (the ground rising ``EDGE_RISE_M`` or more in the
 ``EDGE_RISE_S`` before the take-off) is now a chord, and it rides through (without that rule, it still
-goes over: checked here). Its advice at a fork far too soft is still inconclusive (a strict xfail), so
-the advice tests make their rides without the carried masses.
+goes over: checked here). Its advice at a fork far too soft is still inconclusive with point contacts (a
+strict xfail), and with round tyres 5 of the advice's other slow tests fail on its rides (``helpers.ADVISE_CARRIED``),
+so the advice tests make their rides without the carried masses.
 
 Why: its point-contact tyres take a rock's whole face as a vertical push, which throws the made bike into
 wheelies (+24 deg at 2.75 s, +43 deg at 4.25 s at 5 N/mm) where the MuJoCo bike on the same course and
 speed pitches +6 and +3 deg; the inverse cannot find the ground under those flights (a 0.6 m pit, a
 0.23 m ramp, the 0.5 m drop's landing a pit climbing 0.84 m). With the made bike's tyres meeting the
 ground as round wheels (``round_tyre``) the candidates ride its reconstruction and the soft fork's spring
-is raised (checked here)."""
+is raised (checked here); the advice tests' rides are made so (``helpers.ADVISE_ROUND_TYRE``)."""
 from __future__ import annotations
 
 import math
@@ -104,7 +106,8 @@ def test_the_carried_bike_leaves_the_ground_as_the_engine_does(tmp_path):
                                        "terrain found, where the engine rides the true course at 5-20 N/mm through 16 s: "
                                        "the ground found, uncalibrated, 140 mm RMS off in 4-5 s after a 5 m high-pass, the 0.5 m "
                                        "drop after the made bike's +43 deg wheelie, 101 mm on the bike without the "
-                                       "carried masses); on the advice tests' rides, raised 5 -> 11.8 N/mm")
+                                       "carried masses); on the advice tests' rides (round tyres, as on point contacts), raised "
+                                       "5 -> 11.8 N/mm")
 def test_a_fork_far_too_soft_on_the_carried_bike_gets_a_stiffer_spring(tmp_path):
     """issue 52's first target on the bike that pitches as the MuJoCo bike does: the fork's spring
     raised by 20-150 % (tests/test_advise.py checks it on the advice tests' rides)."""

@@ -115,7 +115,7 @@ def test_a_well_set_bike_on_a_smooth_trail_is_not_told_to_use_more_travel(tmp_pa
 def test_a_fork_far_too_stiff_on_a_trail_with_big_hits_is_softened(tmp_path):
     """The fork at 20 N/mm (the bike's own 12) on the advice's hard course (rock gardens, drops of 0.5
     and 0.6 m, a G-out, a tabletop): the rear uses its travel on the big hits (about 92 %), the fork
-    about 72 %, short of 0.8 of the rear's: the travel-unused rule counts at the front, and the
+    about 70 %, short of 0.8 of the rear's: the travel-unused rule counts at the front, and the
     advice lowers the fork's spring."""
     from helpers import ADVISE_FEATURES
 

@@ -21,7 +21,8 @@ calibration reads the fork at x0.97 (the model's rider sits 6.5 cm further back 
 and that 3 % turned the right answer (rebound lowered 2800 -> 734 N s/m, the true 700) into
 "inconclusive"; the front then reproduced at 7.8 mm RMS against 4.6 with the file's spring (measured
 before the made ride's wheelbase shortened and every candidate was searched; since, calibrated advice
-lowers that rebound 2800 -> 734 N s/m and raises a soft fork 5 -> 11.79 N/mm: docs/rolling.md).
+lowers that rebound, 2800 -> 1147 N s/m on the tests' round-tyre rides (734, then 917.5, on their
+point-contact ones), and raises a soft fork 5 -> 11.79 N/mm: docs/rolling.md).
 
 **What is scored** (:func:`ride_metrics`, each end in % of its own travel): static sag (standing,
 the model's statics); dynamic sag (the mean travel); maximum travel and bottom-outs (within 3 mm

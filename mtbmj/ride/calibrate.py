@@ -64,10 +64,10 @@ The ride's balances then give what the ride carried (:func:`_carried`, ``Calibra
 the difference of the ends' excess mean forces a load carried forward (as the rider's place and a mean
 descent), their sum a weight the file's rider does not have. The calibrated bike rides with its rider
 moved to that place (``Calibration.apply``: the reconstruction and every run carry the load as the
-ride did; on the made forward ride the bike looped out at 21 s without the move), and a run's static
+ride did; on the made forward ride the bike loops out at 5.9 s without the move, 21 s on its point-contact ride), and a run's static
 sag is taken back to the file's place before the rules read it (``Calibration.level_offsets``,
 ``mtbmj.ride.advise.Advice.levelled``): the rules judge the sag the rider measured. Measured on the
-made rides: the forward ride's springs x0.97/x1.02 with 85 N carried forward (the rider 149 mm, made
+made rides: the forward ride's springs x0.97/x1.02 with 86 N carried forward (the rider 149 mm, made
 150); the soft fork's x0.68 (made 0.7) with none. Or (``carried_as="descent"``, ``--carried-as descent``) the rider stays in
 place and the runs ride the terrain laid on the steady descent that carries the load
 (``Calibration.descent_deg``, found through the engine: :mod:`mtbmj.ride.calibrate_descent`); the
