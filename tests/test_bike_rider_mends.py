@@ -171,6 +171,7 @@ def test_time_at_the_limits_is_reported(drop):
 # (the driving leg's statics, its reaction on the trunk and its work: tests/test_bike_pedal_leg.py)
 
 
+@pytest.mark.slow  # two pedalling runs of the active rider: 4-5 min on two busy cores
 @pytest.mark.shared_data("sst_v2", "00089.SST", "00090.SST")
 def test_standing_over_seated_bob_against_the_records():
     """Records 00089 (standing) and 00090 (seated) were pedalled at about 69 rpm. The active rider
@@ -207,6 +208,7 @@ def test_standing_over_seated_bob_against_the_records():
     assert ratio_ridden / 2.0 <= ratio <= 2.0 * ratio_ridden
 
 
+@pytest.mark.slow  # the active rider off a 1.5 m drop: 0.3-1.5 min a bike
 @pytest.mark.parametrize("bike", ["sst", "trail"])
 def test_a_1_5_m_drop_at_6_m_per_s_lands_on_both_bikes(bike):
     """The issue's second drop: 1.5 m to flat at 6 m/s lands with the active rider (the first
@@ -245,6 +247,7 @@ def test_after_the_drops_pose_a_nose_up_pitch_is_still_met():
     assert ctl.targets(before, math.radians(20.0), 2.0) == ctl.targets(before, 0.0, 0.0)
 
 
+@pytest.mark.slow  # the active rider off a 0.8 m drop: about a minute
 def test_the_sst_bike_off_0_8_m_at_4_m_per_s_lands():
     """The SST bike off 0.8 m at 4 m/s: its front wheel lands steep (the nose 43 deg down, the rim
     struck), the bike is thrown nose-up and comes down on its rear wheel pitching up; it looped out
