@@ -676,8 +676,7 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     with installed(settle), guard.collected_warnings(messages := []), diverging("bike (the rider settling)"):
         for _ in range(int(round(settle_s / p.timestep))):
             mujoco.mj_step(b.model, data)
-    if messages or guard.first_warning(data):  # MuJoCo reset a blown-up state: no stance to ride from
-        cause = guard.likely_cause(guard.first_warning(data), (messages or [None])[0], b.model)
+    if (cause := guard.warned_cause(data, messages, b.model)) is not None:  # MuJoCo reset a blown-up state
         raise RunError(f"rider: the active rider did not settle on the bike in place ({cause})")
     b.model.dof_armature[xdof] = keep
     data.time = 0.0

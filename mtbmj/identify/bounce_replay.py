@@ -332,10 +332,10 @@ class SeatedReplay:
             m.opt.timestep = dt
             d.xfrc_applied[self.rider_body, :] = 0.0
         force[:] = push(t, p)
-        warned = guard.first_warning(d)  # MuJoCo resets a blown-up state: finite values, a wrong replay
-        if warned or messages or not (np.all(np.isfinite(phi)) and np.all(np.isfinite(fork))):
-            cause = guard.likely_cause(warned, messages[0] if messages else None, m) if warned or messages else \
-                "a value not finite"
+        cause = guard.warned_cause(d, messages, m)  # MuJoCo resets a blown-up state: finite values, a wrong replay
+        if cause is None and not (np.all(np.isfinite(phi)) and np.all(np.isfinite(fork))):
+            cause = "a value not finite"
+        if cause is not None:
             raise BounceError(f"replay: the simulated bike diverged ({cause}): outside the model's envelope")
         return {"time_s": t, "stroke_mm": self.stroke_mm(phi), "fork_mm": fork * 1e3, "rider_mm": rz * 1e3,
                 "push_N": force}

@@ -82,6 +82,16 @@ def likely_cause(warning: str | None, text: str | None = None, model=None) -> st
     return f"{cause} [{tag}: non-finite or huge {value} at {element}]"
 
 
+def warned_cause(data, messages: list, model=None) -> str | None:
+    """``likely_cause`` of the first MuJoCo warning raised on ``data`` or collected in ``messages``
+    (``collected_warnings``), or None where MuJoCo raised none: a state it reset stays finite, so
+    this, not the values, says a run blew up."""
+    warning = first_warning(data)
+    if warning is None and not messages:
+        return None
+    return likely_cause(warning, messages[0] if messages else None, model)
+
+
 def diverged(rig: str, t: float, cause: str) -> RunError:
     """The one-line error for a run of ``rig`` that left the model's envelope before ``t`` s."""
     return RunError(f"{rig} run diverged before t = {t:.4f} s: {cause}")
@@ -90,9 +100,9 @@ def diverged(rig: str, t: float, cause: str) -> RunError:
 def check(rig: str, data, messages: list, start, states, t: float, model=None) -> None:
     """Raise one ``RunError`` line if the chunk ``states`` stepped from ``start`` (ending at ``t`` s)
     raised a MuJoCo warning, holds a non-finite value, or was reset by MuJoCo."""
-    warning = first_warning(data)
-    if warning is not None or messages:
-        raise diverged(rig, t, likely_cause(warning, messages[0] if messages else None, model))
+    cause = warned_cause(data, messages, model)
+    if cause is not None:
+        raise diverged(rig, t, cause)
     if not np.all(np.isfinite(states)):
         raise diverged(rig, t, "the state is not finite")
     if not steps_clean(start, states):
@@ -105,8 +115,7 @@ def prepared(rig: str, make, data_of=lambda p: p.data, model_of=None):
     messages: list[str] = []
     with collected_warnings(messages):
         p = make()
-    warning = first_warning(data_of(p))
-    if messages or warning is not None:
-        model = model_of(p) if model_of is not None else None
-        raise diverged(rig, 0.0, "at the start: " + likely_cause(warning, messages[0] if messages else None, model))
+    cause = warned_cause(data_of(p), messages, model_of(p) if model_of is not None else None)
+    if cause is not None:
+        raise diverged(rig, 0.0, "at the start: " + cause)
     return p
