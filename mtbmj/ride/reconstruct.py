@@ -570,11 +570,11 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
     front_car = QuarterCar(total * share - m_front, m_front, fork_setup.fork, rate, radius, g, fork_setup.travel, rim)
     rear_car = QuarterCar(total * (1.0 - share) - m_rear, m_rear, shock_setup.fork, rate, radius, g, shock_setup.travel, rim)
     sin_a = math.sin(spec.head_angle)
-    fork, cut_fork = within_stops(f"{record.name}: the fork", fork_mm * 1e-3, fork_setup.travel, dt)
+    fork, cut_fork = within_stops(record.name, "fork", fork_mm * 1e-3, fork_setup.travel, dt)
     ground, tyre, air, extra, body, stops = ground_under(t, fork * sin_a, fork, front_car, lambda w: sin_a)
     lev = spec.leverage
     rear = rear_mm * 1e-3
-    shock, cut_shock = within_stops(f"{record.name}: the shock", shock_mm * 1e-3 if shock_mm is not None else
+    shock, cut_shock = within_stops(record.name, "shock", shock_mm * 1e-3 if shock_mm is not None else
                                     lev.strokes(rear), shock_setup.travel, dt)
     ratios = lev.ratios
     # the speed from the lag between the grounds each end's own inverse finds (each end's suspension

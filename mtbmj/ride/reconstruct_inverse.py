@@ -125,14 +125,14 @@ def law_along(law, stroke, dt: float, travel: float) -> np.ndarray:
     return f
 
 
-def within_stops(what: str, stroke, travel: float, dt: float) -> tuple[np.ndarray, dict | None]:
+def within_stops(ride: str, end: str, stroke, travel: float, dt: float) -> tuple[np.ndarray, dict | None]:
     """An end's ``stroke`` (m, step ``dt``) read at most ``PAST_TRAVEL_M`` past its ``travel`` (m): a
     record further past it carries its calibration's error (a version-2 record's approximate
     amplitudes, or a calibrated one within ``telemetry.TRAVEL_MARGIN_PERCENT``), not an end deeper in
     its stop, and a ground found from it asks the whole bike to press the stop's stiffening that far
     (00100.SST's fork at 191 mm of 180: the whole bike diverged at 15.9 s). Returns (the stroke so
     read, None or what was cut: {"end", "deepest_mm", "read_at_most_mm", "seconds"}), one
-    ``ConfigWarning`` naming ``what`` (the ride and the end) where it cut."""
+    ``ConfigWarning`` naming the ``ride`` and the ``end`` ("fork", "shock") where it cut."""
     import warnings
 
     from mtbmj.errors import ConfigWarning
@@ -142,9 +142,9 @@ def within_stops(what: str, stroke, travel: float, dt: float) -> tuple[np.ndarra
     past = x > top
     if not past.any():
         return x, None
-    cut = {"end": what.rsplit(" ", 1)[-1], "deepest_mm": 1e3 * float(x.max()), "read_at_most_mm": 1e3 * top,
+    cut = {"end": end, "deepest_mm": 1e3 * float(x.max()), "read_at_most_mm": 1e3 * top,
            "seconds": float(past.sum() * dt)}
-    warnings.warn(f"{what}'s record passes its travel ({travel * 1e3:g} mm) by {cut['deepest_mm'] - travel * 1e3:.1f} "
+    warnings.warn(f"{ride}: the {end}'s record passes its travel ({travel * 1e3:g} mm) by {cut['deepest_mm'] - travel * 1e3:.1f} "
                   f"mm: read at {cut['read_at_most_mm']:g} mm (an end passes its travel by at most "
                   f"{PAST_TRAVEL_M * 1e3:g} mm into its stop; the rest is the record's calibration) over "
                   f"{cut['seconds']:.3f} s", ConfigWarning, stacklevel=2)
