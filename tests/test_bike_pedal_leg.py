@@ -203,7 +203,8 @@ def test_the_reaction_is_on_the_trunk():
     assert found >= 4
 
 
-@pytest.fixture(scope="module", params=["standing", pytest.param("seated", marks=pytest.mark.slow)])
+@pytest.fixture(scope="module", params=[pytest.param("standing", marks=pytest.mark.slow),  # 20-25 s of setup each
+                                        pytest.param("seated", marks=pytest.mark.slow)])
 def climbing(request):
     from mtbmj.bike.run import run_bike
 
@@ -356,6 +357,7 @@ def straining():
                     pedal=(50.0, 700.0))
 
 
+@pytest.mark.slow  # a pedalling active rider's bike run: 20-30 s of setup
 def test_a_stroke_past_strength_is_cut_in_the_engine(straining):
     """700 W at 50 rpm standing asks the driving leg past one side's strength: the stroke is cut so
     the side's torques reach their limits and never pass them; the crank gets less work than asked
@@ -453,6 +455,7 @@ def test_the_legs_swing_only_for_a_pedalling_active_rider():
         prepare("sst", "flat", None, pedal=(70.0, 250.0), legs_swing=True)
 
 
+@pytest.mark.slow  # a pedalling active rider's bike run: 15-20 s
 def test_the_legs_swing_from_the_command_line(tmp_path, capsys):
     """`mtbmj bike ... --legs-swing`: without a pedalling active rider one line naming the option, exit
     2, nothing written; with one, the run goes and its summary says the legs swung (off: they did not)."""

@@ -78,6 +78,7 @@ def test_diverging_run_reports_the_time():
         engine_fast.run(setup, 5.0)
 
 
+@pytest.mark.slow  # a cold compile of the fast engine: 30-40 s, moved out of the fast suite
 def test_cli_fast_drop_and_cold_compile_notice(tmp_path):
     """A cold numba cache says it compiles; the second process loads it from the cache (writes
     nothing to it) silently; same output."""

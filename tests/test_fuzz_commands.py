@@ -39,6 +39,7 @@ def _sets(pairs):
     return argv
 
 
+@pytest.mark.slow  # many generated runs: 30-40 s
 @fuzz_settings("air_study")
 @example(config="air120", duration="0.002", sets=[], workers="1")  # (the success side, whatever is drawn)
 @given(config=st.sampled_from(["air120", "air120", "S12", "nope", ""]), duration=SHORT, sets=SETS,
@@ -94,6 +95,7 @@ CLICK_ITEMS = st.one_of(NUMBERS, st.sampled_from(["0", "6", "12", "3"]),
                                   st.sampled_from(["0", "6", "12", "nan", "inf", "-1", "1.5", "abc"])).map("=".join))
 
 
+@pytest.mark.slow  # many generated runs: 30-40 s
 @fuzz_settings("clicks")
 @example(files=3, clicks=["0,6,12"], valid=True)
 @given(files=st.integers(1, 3), clicks=st.lists(st.lists(CLICK_ITEMS, min_size=1, max_size=4).map(",".join),

@@ -108,6 +108,7 @@ def rebuilt(made, tmp_path_factory):
     return out
 
 
+@pytest.mark.slow  # a ride made and reconstructed: 30-40 s of setup
 def test_the_speed_along_the_ride_comes_back(made, rebuilt):
     """Every window's speed within 3 % of the made speed at its centre, its standard error positive and
     under 10 %; the profile between the first and last accepted centre within 3 % RMS; the distance
@@ -140,6 +141,7 @@ def test_the_speed_along_the_ride_comes_back(made, rebuilt):
     assert d[j] - d[i] == pytest.approx(along(t[j]) - along(t[i]), rel=0.01)
 
 
+@pytest.mark.slow  # a ride made and reconstructed: 30-40 s of setup
 def test_two_quarter_cars_are_told_apart_from_the_whole_bike(rebuilt):
     """The ride made here by two independent quarter cars (rigid masses, no pitch coupling) read
     through the bike file, whose whole bike has a frame that pitches and a rider on his limbs: the
@@ -175,6 +177,7 @@ def test_a_wrong_bike_fails_the_checks_and_says_why(made, tmp_path, capsys, wron
     assert "the model does not describe this ride: it does not beat " in line
 
 
+@pytest.mark.slow  # a ride made and reconstructed: 30-40 s of setup
 def test_terrain_csv_is_taken_by_bike_and_roll_at_their_default_start(made, rebuilt, tmp_path):
     """terrain.csv starts on its own level lead-in (it started on the ride's first sample, where `mtbmj
     bike` refused it: "the front wheel ... does not start on level ground"): the whole bike and the
@@ -194,6 +197,7 @@ def test_terrain_csv_is_taken_by_bike_and_roll_at_their_default_start(made, rebu
     assert any(out_bike.iterdir()) and any(out_roll.iterdir())
 
 
+@pytest.mark.slow  # a ride made and reconstructed: 30-40 s of setup
 def test_advise_refuses_a_ride_the_model_does_not_describe(made, tmp_path, capsys):
     """The made ride read through the fork spring 1.5 times the made one: its reconstruction fails
     the baselines, so `mtbmj advise` refuses it in one line naming that, exit 2, nothing written."""
