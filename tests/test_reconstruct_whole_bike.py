@@ -124,6 +124,34 @@ def test_the_right_bike_describes_the_ride(rebuilt, reconstruction):
     assert np.corrcoef(reconstruction.rear_predicted[v], reconstruction.rear[v])[0, 1] > 0.8
 
 
+@pytest.mark.xfail(strict=True, reason="the ground found returns to the level above each drop: across the made 0.5 m "
+                                       "drop (-0.51 m from 1 s before to 2 s after) it reads +0.02 m, and from its start "
+                                       "it is 388 mm RMS off the made terrain, as far as the made terrain high-passed at "
+                                       "0.3 Hz (388 mm). Tried in the quarter car (the body's fall read across each edge "
+                                       "flight from its unfiltered speed): 177 mm here, but 2-4 m drops read on three shared "
+                                       "rides across flights whose ground fell 0.15-0.31 m, so not landed; with the made "
+                                       "terrain's own levels (below 0.3 Hz) in the whole bike's reference the advice ride "
+                                       "reads each drop within 0.09 m (58 mm RMS): the level trades against the rider's "
+                                       "slow load the loop estimates (docs/rolling.md)")
+def test_a_drops_level_is_kept(made, reconstruction):
+    """Issue 51 (the terrain under the wheels): the ground found 2 s past the made ride's 0.5 m drop lies
+    at least half the drop below where it was 1 s before it, and the ground found from its start is off
+    the made one by at most 0.6 of what a ground with no level below 0.3 Hz is off (the made terrain
+    high-passed here at 0.3 Hz, forward and back, as the body's drift is removed)."""
+    t, dt = made["t"], made["t"][1] - made["t"][0]
+    truth = made["h"](along(t))
+    truth = truth - truth[0]
+    found = reconstruction.ground - reconstruction.ground[0]
+    k = int(np.argmax(along(t) >= made["features"]["drop_0.5"]))
+    i, j = k - int(round(1.0 / dt)), k + int(round(2.0 / dt))
+    assert truth[j] - truth[i] == pytest.approx(-0.5, abs=0.05)  # the drop as made
+    lost = truth - sosfiltfilt(butter(2, 0.3, btype="highpass", fs=1 / dt, output="sos"), truth)
+    v = reconstruction.valid
+    err, baseline = (1e3 * float(np.sqrt(np.mean(e[v] ** 2))) for e in (found - truth, lost))
+    assert err <= 0.6 * baseline, (err, baseline)
+    assert found[j] - found[i] < -0.25, found[j] - found[i]
+
+
 TOO_LITTLE = "the fork's record holds too little about this ride's rear to check the model"
 
 
