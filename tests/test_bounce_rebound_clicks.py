@@ -8,7 +8,11 @@ zeta / sqrt(1 - zeta^2) sin wd t) after a sin^2 rise) with white noise of a know
 draws made here. A law and curves made here in closed form (coefficients on a line in clicks, a
 rate falling with the coefficient as r(c) = R / (1 + c / C)): the law, each record held out and the
 answer for a target the test sets come back; labels shuffled and a record that does not rise are
-refused in one line; an open side of the interval is said.
+refused in one line; an open side of the interval is said. Landings of the nuisance fit made here
+(each bending the middle record off the line by a known amount, the records' curves shifted so their
+own rates stay): the reproducibility part of each coefficient's interval and of the held-out sd is the
+test's own (a line through two points), with it every record holds where the noise alone misses, and
+a record off by 3 of the widened sd or with its clicks mislabelled misses (issue 53).
 
 (b) Slams made here by an independent model at four rebound settings (``slam``: its own fixed-step
 integrator, three masses on one line in the shock's stroke: the rider on a 5 Hz saddle, the body on
@@ -189,6 +193,35 @@ def test_held_out_carries_the_nuisance_fits_reproducibility():
     naive = held_out(main)
     assert naive[1]["reproducibility_sd_per_s"] is None and naive[1]["holds"] is False and abs(naive[1]["z"]) > 5
     assert "reproducibility not measured" in held_out_line(naive)
+
+
+def test_each_coefficients_interval_carries_the_restarts():
+    """``bounce_rebound.reproducibility`` on the made landings: each record's coefficients at the
+    restarts listed, their sd with the reading's (the test's own: the true coefficient plus each
+    landing's bend) and its interval's half-width the noise's and 1.96 of that sd in quadrature; a
+    restart that read no coefficient for a record is left out of its sd; no restarts, no part."""
+    from mtbmj.identify.bounce_rebound import reproducibility
+
+    main, again = landing(BENDS[0]), [landing(b) for b in BENDS[1:]]
+    reproducibility(main, again)
+    for j, e in enumerate(main):
+        own = [TRUE_C[int(e["clicks"])] + b[j] for b in BENDS]
+        assert e["rebound_restarts_N_s_per_m"] == pytest.approx(own[1:], abs=0.5)
+        sd = float(np.std(own, ddof=1))
+        assert e["rebound_reproducibility_sd_N_s_per_m"] == pytest.approx(sd, abs=0.5)
+        half = math.hypot(1.96 * SD_C, 1.959963984540054 * e["rebound_reproducibility_sd_N_s_per_m"])
+        assert e["rebound_N_s_per_m_ci95"] == pytest.approx([e["rebound_N_s_per_m"] - half,
+                                                             e["rebound_N_s_per_m"] + half], rel=1e-9)
+    main, again = landing(BENDS[0]), [landing(b) for b in BENDS[1:]]
+    del again[0][1]["rebound_N_s_per_m"]
+    reproducibility(main, again)
+    assert main[1]["rebound_restarts_N_s_per_m"][0] is None
+    assert main[1]["rebound_reproducibility_sd_N_s_per_m"] == pytest.approx(
+        np.std([3400.0 + b[1] for b in (BENDS[0], BENDS[2], BENDS[3])], ddof=1), abs=0.5)
+    main = landing(BENDS[0])
+    reproducibility(main, [])
+    assert main[1]["rebound_reproducibility_sd_N_s_per_m"] is None
+    assert main[1]["rebound_N_s_per_m_ci95"] == pytest.approx(main[1]["rebound_noise_ci95"], rel=1e-9)
 
 
 @pytest.mark.parametrize("j", [0, 1, 2])
