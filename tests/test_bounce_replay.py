@@ -546,8 +546,8 @@ def test_shared_rebound_dampers_rise_with_clicks(shared_rebound):
     top-out, and the ring-down period's spring, 0.46 x, refuses the 0-click slam, docs/identification.md): all three read (the
     17-click slam too, which the whole-trace replay refuses) and rising with the clicks, as the
     records' own rebounds slow; at the spring interval's upper end they rise too. Their intervals open
-    below, the law's slope above 0, each record held out (within its 2 sd: the next test, not reproducible
-    across machines), and the answer for 7 /s holding the clicks where the records' own rates reach it."""
+    below, the law's slope above 0, each record held out (within its 2 sd, the sd carrying the replay's
+    restarts: the next test), and the answer for 7 /s holding the clicks where the records' own rates reach it."""
     got = shared_rebound
     assert got["spring_from"].startswith("the whole-trace replay of")
     assert "the ring-down fit refused: the bike does not follow the records' free ring-downs" in got["spring_from"]
