@@ -8,7 +8,11 @@ zeta / sqrt(1 - zeta^2) sin wd t) after a sin^2 rise) with white noise of a know
 draws made here. A law and curves made here in closed form (coefficients on a line in clicks, a
 rate falling with the coefficient as r(c) = R / (1 + c / C)): the law, each record held out and the
 answer for a target the test sets come back; labels shuffled and a record that does not rise are
-refused in one line; an open side of the interval is said.
+refused in one line; an open side of the interval is said. Landings of the nuisance fit made here
+(each bending the middle record off the line by a known amount, the records' curves shifted so their
+own rates stay): the reproducibility part of each coefficient's interval and of the held-out sd is the
+test's own (a line through two points), with it every record holds where the noise alone misses, and
+a record off by 3 of the widened sd or with its clicks mislabelled misses (issue 53).
 
 (b) Slams made here by an independent model at four rebound settings (``slam``: its own fixed-step
 integrator, three masses on one line in the shock's stroke: the rider on a 5 Hz saddle, the body on
@@ -131,6 +135,122 @@ def test_held_out_holds_on_a_line_and_misses_a_kink():
     bent[-1]["record_mid_rebound_per_s"] = float(rate_of(bent[-1]["rebound_N_s_per_m"]))
     rows = held_out(bent)
     assert rows[-1]["holds"] is False and abs(rows[-1]["z"]) > 2
+
+
+TRUE_C = {0: 1000.0, 8: 3400.0, 17: 6100.0}  # made coefficients on the line 1000 + 300 x clicks
+BENDS = ([0.0, 60.0, 0.0], [0.0, -40.0, 0.0], [0.0, 20.0, 0.0], [0.0, -30.0, 0.0])  # N s/m: the reading's, then
+# three restarts': each landing bends the middle record off the line (as a landing of the nuisance fit does)
+SD_C = 5.0  # N s/m: each record's noise, small beside the bends (as on the shared slams)
+
+
+def landing(bend, labels=(0, 8, 17), off=(0.0, 0.0, 0.0)):
+    """Entries as ``rebound_dampers`` reads them at one landing of the nuisance fit: each record's curve is
+    the closed form shifted by its bend, rate(c) = rate_of(c - bend), so the record's own rate (fixed:
+    the record does not change with the landing) reads the coefficient true + bend; ``off`` (1/s) moves a
+    record's own rate, ``labels`` relabels its clicks."""
+    out = []
+    for (k, c), lab, b, o in zip(TRUE_C.items(), labels, bend, off):
+        rate = float(rate_of(c)) + o
+        read = float(C_HALF * (R / rate - 1.0)) + b  # the coefficient whose shifted curve gives that rate
+        out.append({"file": f"r{k}", "clicks": lab, "rebound_N_s_per_m": read,
+                    "rebound_noise_ci95": [read - 1.96 * SD_C, read + 1.96 * SD_C], "record_mid_rebound_per_s": rate,
+                    "record_rate_sd_per_s": float(R / C_HALF / (1 + c / C_HALF) ** 2) * SD_C,
+                    "rate_curve": [[x, float(rate_of(x - b))] for x in np.geomspace(50.0, 30000.0, 4000)]})
+    return out
+
+
+def own_residuals(j, labels=(0, 8, 17), off=(0.0, 0.0, 0.0)):
+    """The test's own held-out residuals of record ``j`` at every landing: the straight line through the
+    other two records' coefficients (two points: exact, no weights), at record j's clicks, through
+    record j's shifted curve, less its rate."""
+    out = []
+    for bend in BENDS:
+        e = landing(bend, labels, off)
+        others = [i for i in range(3) if i != j]
+        a, b = np.polyfit([e[i]["clicks"] for i in others], [e[i]["rebound_N_s_per_m"] for i in others], 1)
+        c = a * e[j]["clicks"] + b
+        out.append(float(rate_of(c - bend[j])) - e[j]["record_mid_rebound_per_s"])
+    return out
+
+
+def test_held_out_carries_the_nuisance_fits_reproducibility():
+    """Three records whose coefficients bend off their line by a different amount at every landing of
+    the nuisance fit (made here): the held-out sd's reproducibility part is the residuals' sd over the
+    reading and its three restarts, as the test computes it (a line through two points); with it every
+    record holds; with the noise alone (no restarts: the naive sd) the same reading misses."""
+    from mtbmj.identify.bounce_rebound_clicks import held_out, held_out_line
+
+    main, again = landing(BENDS[0]), [landing(b) for b in BENDS[1:]]
+    rows = held_out(main, again)
+    for j, row in enumerate(rows):
+        own = own_residuals(j)
+        assert row["residual_per_s"] == pytest.approx(own[0], rel=1e-3, abs=1e-6)
+        assert row["restart_residuals_per_s"] == pytest.approx(own[1:], rel=1e-3, abs=1e-6)
+        assert row["reproducibility_sd_per_s"] == pytest.approx(np.std(own, ddof=1), rel=1e-3)
+        assert row["sd_per_s"] > 3 * math.hypot(row["predicted_rate_sd_per_s"], row["record_rate_sd_per_s"])
+    assert all(r["holds"] for r in rows)
+    assert "reproducibility over 3 restart(s)" in held_out_line(rows)
+    naive = held_out(main)
+    assert naive[1]["reproducibility_sd_per_s"] is None and naive[1]["holds"] is False and abs(naive[1]["z"]) > 5
+    assert "reproducibility not measured" in held_out_line(naive)
+
+
+def test_each_coefficients_interval_carries_the_restarts():
+    """``bounce_rebound.reproducibility`` on the made landings: each record's coefficients at the
+    restarts listed, their sd with the reading's (the test's own: the true coefficient plus each
+    landing's bend) and its interval's half-width the noise's and 1.96 of that sd in quadrature; a
+    restart that read no coefficient for a record is left out of its sd; no restarts, no part."""
+    from mtbmj.identify.bounce_rebound import reproducibility
+
+    main, again = landing(BENDS[0]), [landing(b) for b in BENDS[1:]]
+    reproducibility(main, again)
+    for j, e in enumerate(main):
+        own = [TRUE_C[int(e["clicks"])] + b[j] for b in BENDS]
+        assert e["rebound_restarts_N_s_per_m"] == pytest.approx(own[1:], abs=0.5)
+        sd = float(np.std(own, ddof=1))
+        assert e["rebound_reproducibility_sd_N_s_per_m"] == pytest.approx(sd, abs=0.5)
+        half = math.hypot(1.96 * SD_C, 1.959963984540054 * e["rebound_reproducibility_sd_N_s_per_m"])
+        assert e["rebound_N_s_per_m_ci95"] == pytest.approx([e["rebound_N_s_per_m"] - half,
+                                                             e["rebound_N_s_per_m"] + half], rel=1e-9)
+    main, again = landing(BENDS[0]), [landing(b) for b in BENDS[1:]]
+    del again[0][1]["rebound_N_s_per_m"]
+    reproducibility(main, again)
+    assert main[1]["rebound_restarts_N_s_per_m"][0] is None
+    assert main[1]["rebound_reproducibility_sd_N_s_per_m"] == pytest.approx(
+        np.std([3400.0 + b[1] for b in (BENDS[0], BENDS[2], BENDS[3])], ddof=1), abs=0.5)
+    main = landing(BENDS[0])
+    reproducibility(main, [])
+    assert main[1]["rebound_reproducibility_sd_N_s_per_m"] is None
+    assert main[1]["rebound_N_s_per_m_ci95"] == pytest.approx(main[1]["rebound_noise_ci95"], rel=1e-9)
+
+
+@pytest.mark.parametrize("j", [0, 1, 2])
+def test_held_out_with_restarts_misses_a_record_off_by_3_sd(j):
+    """The reading on the line (the restarts bent as above) with record ``j``'s rate moved by 3 of its
+    widened sd (at every landing: the record is what is off), so its coefficient is read off by as
+    much: held out, it misses; consistent (not moved) it holds at z 0, and moved by 0.75 sd it holds."""
+    from mtbmj.identify.bounce_rebound_clicks import held_out
+
+    straight = [0.0, 0.0, 0.0]
+    rows = held_out(landing(straight), [landing(b) for b in BENDS[1:]])
+    assert rows[j]["holds"] and rows[j]["z"] == pytest.approx(0.0, abs=1e-3)
+    sd = rows[j]["sd_per_s"]
+    for k, holds in ((3.0, False), (-3.0, False), (0.75, True)):
+        off = tuple(k * sd if i == j else 0.0 for i in range(3))
+        rows = held_out(landing(straight, off=off), [landing(b, off=off) for b in BENDS[1:]])
+        assert rows[j]["holds"] is holds, (k, rows[j]["z"])
+        assert abs(rows[j]["z"]) > 2.5 if not holds else abs(rows[j]["z"]) < 1.0
+
+
+def test_held_out_with_restarts_misses_mislabelled_clicks():
+    """The 8-click record labelled 12 (its coefficients still rise with the labels, so the law is
+    fitted): held out, it misses by far more than the widened sd, at every landing alike."""
+    from mtbmj.identify.bounce_rebound_clicks import held_out
+
+    labels = (0, 12, 17)
+    rows = held_out(landing(BENDS[0], labels), [landing(b, labels) for b in BENDS[1:]])
+    assert rows[1]["holds"] is False and abs(rows[1]["z"]) > 10
+    assert rows[1]["residual_per_s"] == pytest.approx(own_residuals(1, labels)[0], rel=1e-3)
 
 
 @pytest.mark.parametrize("k_true", [3.0, 7.0, 12.0])

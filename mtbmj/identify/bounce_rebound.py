@@ -25,7 +25,11 @@ the record less its 10 ms moving average resampled in blocks onto the average, t
 its 95 % ends solved through on the same replay, ``rebound_noise_ci95``) and the spring's interval
 (the same solve with the spring at the ends of the interval given, ``spring_ci95``, which is what
 moves it most: 0.49 x gives 208, 2591, 5368 N s/m on the shared slams, 0.6 x 961, 3956, 7065), their
-half-widths added in quadrature on each side; a side whose end has no coefficient is open (None),
+half-widths added in quadrature on each side, and with them the nuisance fit's reproducibility
+(``reproducibility``: Z95 x the standard deviation of the coefficient over the reading and its
+``RESTARTS`` restarts: ``restarted`` fits the best whole-trace replay again from starts moved by its own
+finite-difference step, and every record is read again at each landing; where the spring, friction
+and compression come from the ring-down fit, none); a side whose end has no coefficient is open (None),
 said in ``interval_open`` (on the shared slams every interval is open below: at the spring's lower end
 the bike rebounds slower than the records even undamped). Refused for the record (a reason, no
 value) when no coefficient within ``BOUNDS`` gives the record's speed: the bike with the spring given
@@ -46,6 +50,9 @@ NOISE_S = 0.010  # the record's noise: what is left after a moving average over 
 DRAWS = 200  # the record's noise resampled this many times (rate_spread)
 Z95 = 1.959963984540054
 DAMPER = NAMES.index("damper_N_s_per_m")
+RESTARTS = 3  # the nuisance fit (the best whole-trace replay) fitted again this many times (``restarted``)
+RESTART_STEP = 1e-3  # ... each from a start moved by a normal draw of this times each value's scale: the fit's
+# own finite-difference step (``bounce_replay``'s diff_step), starts the fit cannot tell apart
 
 
 def replay_rebound(sl: Slam, x: np.ndarray, extra: dict) -> dict:
@@ -160,8 +167,9 @@ def _ends(cv: _Curve, target: float, sd, spring_scale: float) -> list:
     return out
 
 
-def combine(c: float, noise, spring) -> tuple[list, list]:
-    """The damper's 95 % interval: the half-widths from the record's noise and from the spring's interval
+def combine(c: float, noise, spring, restarts_half: float | None = None) -> tuple[list, list]:
+    """The damper's 95 % interval: the half-widths from the record's noise, from the spring's interval
+    and from the nuisance fit's restarts (``restarts_half``: Z95 x their sd, ``reproducibility``)
     added in quadrature on each side; a side whose end is missing (None: no coefficient within BOUNDS
     gives it) is open, with why. Returns ([low or None, high or None], [reasons for open sides])."""
     ends, why = [], []
@@ -175,7 +183,7 @@ def combine(c: float, noise, spring) -> tuple[list, list]:
             why.append(f"open {'below' if k == 0 else 'above'}: no coefficient within {BOUNDS[0]:g}-{BOUNDS[1]:g} "
                        f"N s/m at {which}")
             continue
-        half = float(np.hypot(c - n, 0.0 if sp is None else c - sp))
+        half = float(np.sqrt((c - n) ** 2 + (0.0 if sp is None else c - sp) ** 2 + (restarts_half or 0.0) ** 2))
         ends.append(max(c - half, 0.0) if k == 0 else c + half)
     return ends, why
 
@@ -245,7 +253,7 @@ def rises(entries) -> bool | None:
 
 
 def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | None = None,
-                 target_per_s: float | None = None, ring: dict | None = None) -> dict | None:
+                 target_per_s: float | None = None, ring: dict | None = None, restarts: int = RESTARTS) -> dict | None:
     """``fit bounce --replay``'s ``"rebound_dampers"``: every record's rebound coefficient, the friction
     and compression given by the best-determined whole-trace replay (``replayed``:
     ``bounce_replay.replay_records``' summary; the one whose spring interval is the narrowest; its one
@@ -276,6 +284,15 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
     compression = float(ring["compression_N_s_per_m"]) if own else float(best["damper_N_s_per_m"])
     entries = rebound_dampers(slams, ks, spring[0], friction, compression, spring[1]) + entries
     entries.sort(key=lambda e: e["clicks"])
+    again = []
+    if not own and restarts:  # the replay's values: its fit again from starts it cannot tell apart
+        rec = next(r for r in records if (getattr(r, "name", None) or str(getattr(r, "path", "record"))) == best["file"])
+        for v in restarted(rec, sr, restarts):
+            if "refused" not in v:
+                s_k = spring[0] if spring_from == RING_FROM else v["spring_scale"]
+                v["entries"] = rebound_dampers(slams, ks, s_k, v["friction_N"], v["compression_N_s_per_m"], None)
+            again.append(v)
+    reproducibility(entries, [v["entries"] for v in again if "entries" in v])
     up = rises(entries)
     read = [e for e in entries if "rebound_N_s_per_m" in e]
 
@@ -288,15 +305,65 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
     said_spring = ("the ring-down fit" if own else "the ring-down's period" if spring_from == RING_FROM
                    else f"{best['file']}'s replay")
     said_from = "the ring-down fit" if own else f"{best['file']}'s replay"
+    n_again = sum("entries" in v for v in again)
+    said_again = (f", the replay's reproducibility over {n_again} restart(s)" if n_again else "")
     line = (f"rebound dampers from the first rebounds (spring {spring[0]:.2f} x from {said_spring}, friction "
             f"{friction:.0f} N, compression {compression:.0f} N s/m from {said_from}): {', '.join(said(e) for e in read) or 'none'} N s/m (95 %: the record's noise and the spring's "
-            f"interval) at {at or 'no'} clicks"
+            f"interval{said_again}) at {at or 'no'} clicks"
             + ("" if up is None else ": they rise with the clicks" if up else ": they do not rise with the clicks"))
     out = {"from": best["file"], "spring_scale": spring[0], "spring_scale_ci95": list(spring[1]),
            "spring_from": spring_from, "friction_N": friction, "compression_N_s_per_m": compression,
+           "restarts": [{k: v for k, v in r.items() if k != "entries"} | ({"rebound_N_s_per_m": [
+               e.get("rebound_N_s_per_m") for e in sorted(r["entries"], key=lambda e: e["clicks"])]}
+               if "entries" in r else {}) for r in again],
            "records": entries, "rises": up, "line": line}
-    out.update(law_in_clicks(entries, target_per_s))
+    out.update(law_in_clicks(entries, target_per_s, [v["entries"] for v in again if "entries" in v]))
     return out
+
+
+def restarted(record, sr, n: int = RESTARTS, seed: int = 0) -> list[dict]:
+    """The whole-trace replay of ``record`` (``bounce_replay.replay``: the best-determined one, whose
+    spring, friction and damper the rebound dampers are given) fitted again ``n`` times, each from the
+    start it had moved by a normal draw of ``RESTART_STEP`` times each value's scale (seeded): what the
+    fit lands on from starts it cannot tell apart, as it lands differently from machine to machine
+    (its least squares stop after a set number of runs, the values barely determined). Per restart
+    {"spring_scale", "friction_N", "compression_N_s_per_m" (the replay's one damper)} or {"refused"}."""
+    from mtbmj.identify.bounce_replay import prepare_slam, replay
+
+    name = getattr(record, "name", None) or str(getattr(record, "path", "record"))
+    top = getattr(record, "shock_max_mm", None)
+    sl = prepare_slam(record.time_s, record.shock_mm, record.fork_mm, name, sr, top)
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        x = sl.x0 + RESTART_STEP * sl.base * rng.standard_normal(sl.x0.size)
+        try:
+            rp = replay(record.time_s, record.shock_mm, record.fork_mm, name=name, seated=sr, shock_max_mm=top,
+                        start=dict(zip(NAMES, (float(v) for v in x))))
+        except BounceError as e:
+            out.append({"refused": str(e)})
+            continue
+        out.append({"spring_scale": float(rp.values["spring_scale"]), "friction_N": float(rp.values["friction_N"]),
+                    "compression_N_s_per_m": float(rp.values["damper_N_s_per_m"])})
+    return out
+
+
+def reproducibility(entries, again) -> None:
+    """Each read record's coefficient at every restart's nuisance values (``again``: ``rebound_dampers``'
+    entries per restart) in ``rebound_restarts_N_s_per_m`` (None where that restart read none), their
+    standard deviation with the reading's own (``rebound_reproducibility_sd_N_s_per_m``, None with no
+    restart read), carried into its 95 % interval (``combine``: Z95 x that sd in quadrature)."""
+    for e in entries:
+        if "rebound_N_s_per_m" not in e:
+            continue
+        got = [next((a.get("rebound_N_s_per_m") for a in entries_k if a["file"] == e["file"]), None)
+               for entries_k in again]
+        e["rebound_restarts_N_s_per_m"] = got
+        read = [v for v in got if v is not None]
+        sd = float(np.std([e["rebound_N_s_per_m"]] + read, ddof=1)) if read else None
+        e["rebound_reproducibility_sd_N_s_per_m"] = sd
+        e["rebound_N_s_per_m_ci95"], e["interval_open"] = combine(
+            e["rebound_N_s_per_m"], e["rebound_noise_ci95"], e.get("at_spring_ci95"), None if sd is None else Z95 * sd)
 
 
 RING_FROM = "the ring-down's period"
@@ -321,9 +388,10 @@ def _is_fit(ring: dict | None) -> bool:
     return ring is not None and "refused" not in ring and "compression_N_s_per_m" in ring
 
 
-def law_in_clicks(entries, target_per_s: float | None = None) -> dict:
-    """The law in clicks, each record held out and the answer (``bounce_rebound_clicks``), with the
-    lines they print ("lines")."""
+def law_in_clicks(entries, target_per_s: float | None = None, again=()) -> dict:
+    """The law in clicks, each record held out (``again``: the records read at each restart's nuisance
+    values, carried into the held-out sd) and the answer (``bounce_rebound_clicks``), with the lines
+    they print ("lines")."""
     from mtbmj.identify import bounce_rebound_clicks as rc
 
     lines = []
@@ -336,7 +404,7 @@ def law_in_clicks(entries, target_per_s: float | None = None) -> dict:
     except BounceError as e:
         law = {"refused": str(e)}
         lines.append(f"rebound law refused: {e}")
-    rows = rc.held_out(entries) if "refused" not in law else []
+    rows = rc.held_out(entries, again) if "refused" not in law else []
     if rc.held_out_line(rows):
         lines.append(rc.held_out_line(rows))
     ans = rc.answer(entries, target_per_s) if "refused" not in law else {
@@ -345,5 +413,5 @@ def law_in_clicks(entries, target_per_s: float | None = None) -> dict:
     return {"law": law, "held_out": rows, "answer": ans, "lines": lines}
 
 
-__all__ = ["BOUNDS", "combine", "curve", "law_in_clicks", "rate_spread", "read_records", "rebound_dampers",
-           "replay_rebound", "rises", "solve", "solve_on"]
+__all__ = ["BOUNDS", "RESTARTS", "combine", "curve", "law_in_clicks", "rate_spread", "read_records", "rebound_dampers",
+           "replay_rebound", "reproducibility", "restarted", "rises", "solve", "solve_on"]
