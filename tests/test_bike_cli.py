@@ -108,6 +108,19 @@ def test_presets_shows_a_bike_file_saved_with_a_byte_order_mark(tmp_path, capsys
     assert capsys.readouterr().out == plain
 
 
+def test_presets_show_of_an_unknown_name_lists_both_kinds(capsys):
+    """``--show`` takes a configuration or a bike preset; a misspelt one listed the configurations
+    alone, as if sst and trail were not presets. A known name of each kind, typed in another case,
+    is shown (the check can pass)."""
+    from helpers import one_line
+
+    err = one_line(capsys, ["presets", "--show", "trial"], "trial: unknown preset", "S12", "air120", "bikes sst, trail")
+    assert "no such file" in err
+    for name in ("TRAIL", "s12"):
+        assert main(["presets", "--show", name]) == 0
+        assert " = " in capsys.readouterr().out
+
+
 def test_presets_lists_and_shows_the_bikes(capsys):
     assert main(["presets"]) == 0
     out = capsys.readouterr().out

@@ -67,6 +67,14 @@ def cmd_presets(args) -> int:
             for line in _bike_lines(args.show):
                 print(line)
             return 0
+        from pathlib import Path
+
+        if args.show.lower() not in {n.lower() for n in preset_names()} and not Path(args.show).exists() and \
+                Path(args.show).suffix.lower() != ".toml":  # neither kind's: both kinds' names (load's has the fork's)
+            from mtbmj.errors import ConfigError
+
+            raise ConfigError(f"{args.show}: unknown preset (known: configurations {', '.join(preset_names())}; bikes "
+                              f"{', '.join(spec.preset_names())}) and no such file")
         for key, value in load(args.show).lines():
             print(f"{key} = {value}")
         return 0
