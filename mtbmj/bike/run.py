@@ -533,7 +533,7 @@ class BikeResult(RunOutput):
         seated = bool(self.info.get("seated"))
         if seated and held is not None:  # the seated rider's hold is the seat's, said as "seated"
             held = [k for k in held if k != "rider"]
-        if held is not None or not self.info.get("rear_tire", True):
+        if held is not None or seated or not self.info.get("rear_tire", True):  # the active rider sits unheld
             parts = (["seated"] if seated else []) + ([f"held: {', '.join(held)}"] if held else [])
             parts += [] if self.info.get("rear_tire", True) else ["rear tire off"]
             held = f" ({'; '.join(parts)})"
