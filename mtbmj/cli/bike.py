@@ -32,6 +32,11 @@ def cmd_bike(args) -> int:
         profile = read_csv(args.speed_profile)
         if args.speed is None:  # the start's: the profile's first
             args.speed = float(profile.v[0])
+    if args.rider == "active" and (args.lock or args.lift_rear):  # the options set, not run_bike's lock=/rear_tire=
+        from mtbmj.errors import ConfigError
+
+        raise ConfigError(f"{'--lock' if args.lock else '--lift-rear'}: the active rider rides the whole bike (no "
+                          f"--lock, no --lift-rear; --rider passive holds parts)")
     pedal = pedal_option(args)
     if args.legs_swing and (pedal is None or args.rider != "active"):
         from mtbmj.errors import ConfigError
