@@ -165,6 +165,25 @@ def test_a_csv_in_the_wrong_units_is_named_in_one_warning(tmp_path, recwarn, cap
     assert [line for line in lines if line.startswith("mtbmj: warning: ")] == [f"mtbmj: warning: {mm[0]}"], lines
 
 
+def test_a_feature_typed_in_metres_is_named_in_one_warning(recwarn):
+    """``drop:height_mm=1.5`` (a 1.5 m drop typed in metres) made a 1.5 mm drop the run passed over
+    unnoticed; a feature's height or radius under 3 mm draws one warning naming the key and the value
+    in millimetres. Real features (and a zero height, the terrain's own flat) draw none."""
+    from mtbmj.errors import ConfigWarning
+
+    def said(spec):
+        recwarn.clear()
+        T.make(spec)
+        return [str(w.message) for w in recwarn.list if issubclass(w.category, ConfigWarning)]
+
+    assert said("drop:height_mm=1.5") == ["terrain drop: height_mm = 1.5 mm is under 3 mm, smaller than any trail "
+                                          "feature (a unit mistake? 1.5 m is height_mm=1500)"]
+    assert said("root:radius_mm=0.06") == ["terrain root: radius_mm = 0.06 mm is under 3 mm, smaller than any trail "
+                                           "feature (a unit mistake? 0.06 m is radius_mm=60)"]
+    for spec in ("drop:height_mm=1500", "root:radius_mm=60", "step_up:height_mm=0", "square_edge:height_mm=3"):
+        assert said(spec) == [], spec
+
+
 @pytest.mark.parametrize("spec, match", [
     ("cobbles", "unknown scenario"),
     ("step_up:height_mm=-20", "must not be negative"),

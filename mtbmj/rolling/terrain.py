@@ -355,11 +355,12 @@ def from_csv(path: str | Path) -> Terrain:
 # A terrain CSV's units, told apart from a careless user's: distances in millimetres make a profile of
 # a few metres kilometres long and its steepest grade a thousand times shallower (a 40 mm rock over
 # 0.5 m, a grade of 8 %, becomes 0.008 %); heights in metres make a 1.5 m drop 1.5 mm. No trail
-# feature a bike is run over is under CSV_LEAST_HEIGHT_MM high, nor a profile over CSV_LONG_M long with
+# feature a bike is run over (a CSV's, or a library terrain's height_mm or radius_mm) is under
+# LEAST_FEATURE_MM high, nor a profile over CSV_LONG_M long with
 # every grade under CSV_LEAST_GRADE (a road's camber and drainage are steeper).
 CSV_LONG_M = 100.0
 CSV_LEAST_GRADE = 0.002
-CSV_LEAST_HEIGHT_MM = 3.0
+LEAST_FEATURE_MM = 3.0
 
 
 def unit_mistakes(x, z) -> list[str]:
@@ -374,7 +375,7 @@ def unit_mistakes(x, z) -> list[str]:
     if run > CSV_LONG_M and not np.any(dz[dx == 0]) and (slope.size == 0 or slope.max() < CSV_LEAST_GRADE):
         out.append(f"distance_m spans {run:.6g} m and its steepest grade is {100 * slope.max():.2g} %: distances in "
                    f"millimetres? (a unit mistake: a run across it covers {run:.6g} m)")
-    if rise < CSV_LEAST_HEIGHT_MM * MM:
+    if rise < LEAST_FEATURE_MM * MM:
         out.append(f"height_mm rises and falls by {rise / MM:.3g} mm at most: heights in metres? (a unit mistake: "
                    f"{rise / MM:.3g} m would be {rise / MM * 1000:.4g} mm)")
     return out
@@ -428,6 +429,15 @@ def _value(name: str, key: str, kind: str, value):
         raise TerrainError(f"terrain {name}: {key} must not be negative, got {number:g}")
     if kind == "pos" and number <= 0:
         raise TerrainError(f"terrain {name}: {key} must be positive, got {number:g}")
+    if key.endswith("height_mm") or key == "radius_mm":
+        if 0.0 < number < LEAST_FEATURE_MM:
+            import warnings
+
+            from mtbmj.errors import ConfigWarning
+
+            warnings.warn(f"terrain {name}: {key} = {number:g} mm is under {LEAST_FEATURE_MM:g} mm, smaller than any "
+                          f"trail feature (a unit mistake? {number:g} m is {key}={number * 1000:g})", ConfigWarning,
+                          stacklevel=3)
     return number
 
 
