@@ -166,3 +166,25 @@ def test_overrides_leave_the_table_they_are_applied_to_as_it_was():
     assert table == before
     assert out["rider"]["mass_kg"] == 61.0 and out["fork"]["set"]["fork.spring.rate_N_per_mm"] == 7.0
     assert out != before
+
+
+@pytest.mark.parametrize("base", ["trail", "sst"])
+@pytest.mark.parametrize("section, value", [("rider", "5"), ("bike", "5"), ("rider", '""'), ("bike", "[]")])
+def test_a_section_given_as_a_value_is_refused_in_one_line(tmp_path, capsys, base, section, value):
+    """``rider = 5`` (a section written as a key) was a TypeError traceback from the geometry chart's
+    merge, which reads [bike] and [rider] before the sections are checked; every command reading the
+    file refuses it in one line naming the file and the section, nothing written. The same section as
+    a table runs (the check can pass)."""
+    from helpers import one_line
+
+    path = tmp_path / "bike.toml"
+    path.write_text(f'base = "{base}"\n{section} = {value}\n')
+    out = tmp_path / "out"
+    for argv in (["bike", path, "flat", "--speed", "4", "--duration", "0.05", "--out", out],
+                 ["linkage", path, "--out", out], ["presets", "--show", path],
+                 ["sag", path, "--bike", "--front-sag-percent", "20", "--rear-sag-percent", "30", "--out", out]):
+        one_line(capsys, argv, f"mtbmj: error: {path}: {section}: must be a table")
+        assert not out.exists()
+    path.write_text(f'base = "{base}"\n[rider]\nmass_kg = 80.0\n')
+    assert main(["presets", "--show", str(path)]) == 0
+    assert "rider.mass_kg = 80.0" in capsys.readouterr().out
