@@ -121,6 +121,24 @@ def test_presets_show_of_an_unknown_name_lists_both_kinds(capsys):
         assert " = " in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("text", ['[drive]\nchainring_teeth = 30\n', '[sensors]\nfork_arm_mm = 130.0\n',
+                                  '[fork.set]\n"fork.spring.preload_N" = 120.0\n', 'description = "mine"\n'])
+def test_presets_shows_a_bike_file_of_a_bike_s_base_and_bike_keys_alone(tmp_path, capsys, text):
+    """A bike file changing only [drive], [sensors] or [fork.set] of a bike preset (or nothing) was taken
+    for a fork's configuration and refused ("base 'trail' ... is it a file of the other kind?"), though
+    mtbmj bike runs it; it is a bike by its sections or its base, through a chain of files too. A fork's
+    configuration on S12 is still shown as one."""
+    (tmp_path / "mine.toml").write_text('base = "trail"\n' + text)
+    (tmp_path / "over.toml").write_text('base = "mine.toml"\n')
+    for name in ("mine.toml", "over.toml"):
+        assert main(["presets", "--show", str(tmp_path / name)]) == 0, capsys.readouterr().err
+        assert "rider.mass_kg = 85.0" in capsys.readouterr().out
+    (tmp_path / "fork.toml").write_text('base = "S12"\n[fork]\ntravel_mm = 110.0\n')
+    assert main(["presets", "--show", str(tmp_path / "fork.toml")]) == 0
+    out = capsys.readouterr().out
+    assert "fork.travel_mm = 110.0" in out and "rider.mass_kg" not in out
+
+
 def test_presets_lists_and_shows_the_bikes(capsys):
     assert main(["presets"]) == 0
     out = capsys.readouterr().out
