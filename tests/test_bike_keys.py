@@ -188,3 +188,19 @@ def test_a_section_given_as_a_value_is_refused_in_one_line(tmp_path, capsys, bas
     path.write_text(f'base = "{base}"\n[rider]\nmass_kg = 80.0\n')
     assert main(["presets", "--show", str(path)]) == 0
     assert "rider.mass_kg = 80.0" in capsys.readouterr().out
+
+
+def test_a_fork_preset_given_as_a_bike_is_named_a_fork_s(tmp_path, capsys):
+    """``mtbmj bike S12 ...`` or ``sag S12 --bike``: "S12: not a bike preset ... and no such file" left
+    the user to guess what S12 is; it says a fork's configuration and where it goes. An unknown name
+    is still no such file."""
+    from helpers import one_line
+
+    out = tmp_path / "out"
+    for argv in (["bike", "S12", "flat", "--speed", "4"], ["sag", "s12", "--bike", "--front-sag-percent", "20",
+                                                         "--rear-sag-percent", "30"]):
+        one_line(capsys, [*argv, "--out", out], f"{argv[1]}: not a bike preset (known: sst, trail) but a fork's "
+                 "configuration (mtbmj drop, curve, sag without --bike)")
+        assert not out.exists()
+    one_line(capsys, ["bike", "S99", "flat", "--speed", "4", "--out", out], "S99: not a bike preset (known: sst, "
+             "trail) and no such file")

@@ -27,7 +27,11 @@ def _locate(ref: str):
             return name, resources.files("mtbmj.bike.presets") / f"{name}.toml"
     path = Path(ref)
     if not path.exists():
-        raise ConfigError(f"{ref}: not a bike preset (known: {', '.join(preset_names())}) and no such file")
+        from mtbmj.config import preset_names as fork_presets
+
+        fork = any(ref.lower() == n.lower() for n in fork_presets())  # a fork's name where a bike is read
+        raise ConfigError(f"{ref}: not a bike preset (known: {', '.join(preset_names())})" + (
+            " but a fork's configuration (mtbmj drop, curve, sag without --bike)" if fork else " and no such file"))
     return path.stem, path
 
 
