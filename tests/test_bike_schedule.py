@@ -84,8 +84,6 @@ def test_a_bad_speed_profile_file_is_one_line_and_nothing_written(tmp_path, caps
 ])
 def test_a_speed_profile_with_an_option_that_cannot_hold_it_names_the_option(tmp_path, capsys, options, why):
     """The refusal named run_bike's argument ("speed_profile: ..."), not the options the user set."""
-    from mtbmj.cli import main
-
     from helpers import one_line
 
     good = tmp_path / "speed.csv"
