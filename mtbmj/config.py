@@ -595,8 +595,8 @@ def _locate(ref: str) -> tuple[str, Path | Any]:
         if not path.exists():
             raise ConfigError(f"{ref}: no such configuration file")
         return path.stem, path
-    known = ", ".join(preset_names())
-    raise ConfigError(f"{ref}: unknown preset (known: {known}) and no such file")
+    known, bikes = ", ".join(preset_names()), [b.name[:-5] for b in resources.files("mtbmj.bike.presets").iterdir() if b.name.endswith(".toml")]  # noqa: E501
+    raise ConfigError(f"{ref}: a bike preset (mtbmj bike, sag --bike), not a fork's configuration (known: {known})" if ref.lower() in bikes else f"{ref}: unknown preset (known: {known}) and no such file")  # noqa: E501
 
 
 def _is_preset(name: str) -> bool:

@@ -306,6 +306,25 @@ def test_a_start_on_an_obstacle_is_refused(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_a_csv_that_starts_on_its_feature_is_refused_without_naming_at_m(tmp_path, capsys):
+    """A user's CSV rising from its first row: a CSV has no at_m, which the refusal told to move; it
+    names the file and the level stretch it needs instead. The same profile begun with 1 m of level
+    ground passes the check (the run is a tenth of a second)."""
+    from mtbmj.cli import main
+
+    rising, level = tmp_path / "rising.csv", tmp_path / "level.csv"
+    rising.write_text("distance_m,height_mm\n0,0\n1,10\n2,0\n6,0\n")
+    level.write_text("distance_m,height_mm\n0,0\n1,0\n2,10\n3,0\n7,0\n")
+    out = tmp_path / "out"
+    assert main(["bike", "trail", str(rising), "--speed", "4", "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "front wheel" in err[0] and f"{rising} is not level within" in err[0], err
+    assert "at_m" not in err[0] and "begin the profile with a level stretch" in err[0]
+    assert not out.exists()
+    assert main(["bike", "trail", str(level), "--speed", "4", "--duration", "0.1", "--no-figure", "--out", str(out),
+                 "--quiet"]) == 0
+
+
 def test_beside_the_real_sst_ride():
     """Both ends' travel histograms, simulated and from the shipped SST ride of the same bike, each
     in % of its own travel; the ride's own numbers come from its file (mtbmj.measured.telemetry)."""

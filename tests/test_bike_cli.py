@@ -108,6 +108,37 @@ def test_presets_shows_a_bike_file_saved_with_a_byte_order_mark(tmp_path, capsys
     assert capsys.readouterr().out == plain
 
 
+def test_presets_show_of_an_unknown_name_lists_both_kinds(capsys):
+    """``--show`` takes a configuration or a bike preset; a misspelt one listed the configurations
+    alone, as if sst and trail were not presets. A known name of each kind, typed in another case,
+    is shown (the check can pass)."""
+    from helpers import one_line
+
+    err = one_line(capsys, ["presets", "--show", "trial"], "trial: unknown preset", "S12", "air120", "bikes sst, trail")
+    assert "no such file" in err
+    for name in ("TRAIL", "s12"):
+        assert main(["presets", "--show", name]) == 0
+        assert " = " in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("text", ['[drive]\nchainring_teeth = 30\n', '[sensors]\nfork_arm_mm = 130.0\n',
+                                  '[fork.set]\n"fork.spring.preload_N" = 120.0\n', 'description = "mine"\n'])
+def test_presets_shows_a_bike_file_of_a_bike_s_base_and_bike_keys_alone(tmp_path, capsys, text):
+    """A bike file changing only [drive], [sensors] or [fork.set] of a bike preset (or nothing) was taken
+    for a fork's configuration and refused ("base 'trail' ... is it a file of the other kind?"), though
+    mtbmj bike runs it; it is a bike by its sections or its base, through a chain of files too. A fork's
+    configuration on S12 is still shown as one."""
+    (tmp_path / "mine.toml").write_text('base = "trail"\n' + text)
+    (tmp_path / "over.toml").write_text('base = "mine.toml"\n')
+    for name in ("mine.toml", "over.toml"):
+        assert main(["presets", "--show", str(tmp_path / name)]) == 0, capsys.readouterr().err
+        assert "rider.mass_kg = 85.0" in capsys.readouterr().out
+    (tmp_path / "fork.toml").write_text('base = "S12"\n[fork]\ntravel_mm = 110.0\n')
+    assert main(["presets", "--show", str(tmp_path / "fork.toml")]) == 0
+    out = capsys.readouterr().out
+    assert "fork.travel_mm = 110.0" in out and "rider.mass_kg" not in out
+
+
 def test_presets_lists_and_shows_the_bikes(capsys):
     assert main(["presets"]) == 0
     out = capsys.readouterr().out

@@ -166,3 +166,41 @@ def test_overrides_leave_the_table_they_are_applied_to_as_it_was():
     assert table == before
     assert out["rider"]["mass_kg"] == 61.0 and out["fork"]["set"]["fork.spring.rate_N_per_mm"] == 7.0
     assert out != before
+
+
+@pytest.mark.parametrize("base", ["trail", "sst"])
+@pytest.mark.parametrize("section, value", [("rider", "5"), ("bike", "5"), ("rider", '""'), ("bike", "[]")])
+def test_a_section_given_as_a_value_is_refused_in_one_line(tmp_path, capsys, base, section, value):
+    """``rider = 5`` (a section written as a key) was a TypeError traceback from the geometry chart's
+    merge, which reads [bike] and [rider] before the sections are checked; every command reading the
+    file refuses it in one line naming the file and the section, nothing written. The same section as
+    a table runs (the check can pass)."""
+    from helpers import one_line
+
+    path = tmp_path / "bike.toml"
+    path.write_text(f'base = "{base}"\n{section} = {value}\n')
+    out = tmp_path / "out"
+    for argv in (["bike", path, "flat", "--speed", "4", "--duration", "0.05", "--out", out],
+                 ["linkage", path, "--out", out], ["presets", "--show", path],
+                 ["sag", path, "--bike", "--front-sag-percent", "20", "--rear-sag-percent", "30", "--out", out]):
+        one_line(capsys, argv, f"mtbmj: error: {path}: {section}: must be a table")
+        assert not out.exists()
+    path.write_text(f'base = "{base}"\n[rider]\nmass_kg = 80.0\n')
+    assert main(["presets", "--show", str(path)]) == 0
+    assert "rider.mass_kg = 80.0" in capsys.readouterr().out
+
+
+def test_a_fork_preset_given_as_a_bike_is_named_a_fork_s(tmp_path, capsys):
+    """``mtbmj bike S12 ...`` or ``sag S12 --bike``: "S12: not a bike preset ... and no such file" left
+    the user to guess what S12 is; it says a fork's configuration and where it goes. An unknown name
+    is still no such file."""
+    from helpers import one_line
+
+    out = tmp_path / "out"
+    for argv in (["bike", "S12", "flat", "--speed", "4"], ["sag", "s12", "--bike", "--front-sag-percent", "20",
+                                                         "--rear-sag-percent", "30"]):
+        one_line(capsys, [*argv, "--out", out], f"{argv[1]}: not a bike preset (known: sst, trail) but a fork's "
+                 "configuration (mtbmj drop, curve, sag without --bike)")
+        assert not out.exists()
+    one_line(capsys, ["bike", "S99", "flat", "--speed", "4", "--out", out], "S99: not a bike preset (known: sst, "
+             "trail) and no such file")

@@ -196,9 +196,12 @@ def test_bike_pedal_cli_writes_bob_beside_a_ride(tmp_path):
 
 @pytest.mark.parametrize("args, says", [
     (("--pedal", "60", "--set", "drive.chain=false"), "no chain to pedal through"),
-    (("--pedal", "200", "--set", "drive.chainring_teeth=32", "--set", "drive.cog_teeth=42"), "outside what a rider"),
+    (("--pedal", "200", "--set", "drive.chainring_teeth=32", "--set", "drive.cog_teeth=42"),
+     "--pedal: 200 rpm is outside what a rider turns (30-130 rpm)"),
+    # the option the user set, not the model's "pedal: power 5000.0 W"; 0 W was "outside (0-1500 W)"
     (("--pedal", "60", "--power", "5000", "--set", "drive.chainring_teeth=32", "--set", "drive.cog_teeth=42"),
-     "power 5000"),
+     "--power: 5000 W is outside what a rider turns (above 0 and at most 1500 W)"),
+    (("--pedal", "60", "--power", "0"), "--power: 0 W is outside what a rider turns (above 0 and at most 1500 W)"),
     (("--speed", "3", "--power", "200"), "--power"),
     (("--pedal", "60", "--drive", "coast"), "--pedal"),
     ((), "--speed"),

@@ -184,3 +184,15 @@ def test_active_rider_refuses_locks_in_one_line():
         run.prepare("sst", "flat", 4.0, rider="active", lock="rear")
     with pytest.raises(ConfigError, match="rider: must be one of passive, active"):
         run.prepare("sst", "flat", 4.0, rider="puppet")
+
+
+@pytest.mark.parametrize("option", [["--lock", "rear"], ["--lock", "pitch", "--lift-rear"], ["--lift-rear"]])
+def test_the_command_names_the_option_the_active_rider_refuses(tmp_path, capsys, option):
+    """On the command line the refusal named run_bike's "rider: ... (no lock, no lifted rear)"; it names
+    the option the user set, in one line, nothing written."""
+    from helpers import one_line
+
+    out = tmp_path / "out"
+    one_line(capsys, ["bike", "sst", "flat", "--speed", "4", "--rider", "active", *option, "--out", out],
+             f"mtbmj: error: {option[0]}: the active rider rides the whole bike (no --lock, no --lift-rear")
+    assert not out.exists()

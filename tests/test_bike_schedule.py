@@ -77,6 +77,23 @@ def test_a_bad_speed_profile_file_is_one_line_and_nothing_written(tmp_path, caps
     assert not out.exists()
 
 
+@pytest.mark.parametrize("options, why", [
+    (["--rider", "active"], "--rider active: the active rider's drive does not yet hold a set speed"),
+    (["--pedal", "80"], "--pedal: a pedalling rider's speed is its own"),
+    (["--drive", "coast"], "--drive coast: a coasting bike has no drive to hold it"),
+])
+def test_a_speed_profile_with_an_option_that_cannot_hold_it_names_the_option(tmp_path, capsys, options, why):
+    """The refusal named run_bike's argument ("speed_profile: ..."), not the options the user set."""
+    from helpers import one_line
+
+    good = tmp_path / "speed.csv"
+    good.write_text("distance_m,speed_m_per_s\n0,4\n10,5\n")
+    out = tmp_path / "out"
+    one_line(capsys, ["bike", "trail", "flat", "--speed-profile", good, *options, "--out", out],
+             f"mtbmj: error: --speed-profile with {why}")
+    assert not out.exists()
+
+
 def test_the_command_rides_a_speed_profile_file(tmp_path):
     """``mtbmj bike ... --speed-profile CSV``: the start's speed the profile's first, the summary's set range
     the profile's, and the run at the profile's speeds (4 then 6 m/s)."""

@@ -69,3 +69,16 @@ def test_a_bike_without_a_seated_rider_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "rider.seated_com_mm" in err[0]
     assert not out.exists()
+
+
+def test_the_active_rider_seated_is_said_in_the_headline():
+    """``--seated --rider active``: the body sits on the saddle unheld (no lock), and the headline (the
+    command's line), which said "(seated)" only beside a lock, said nothing of it. The same run's
+    headline without the info's "seated" (the manifest's engine_info) says none (the check can fail)."""
+    from mtbmj.bike.run import run_bike
+
+    result = run_bike("trail", "flat", 4.0, duration=0.05, rider="active", seated=True)
+    assert result.info["seated"] is True and result.info["rider"] == "active"
+    assert result.headline().startswith("bike trail (seated) (rider 85.0 kg")
+    del result.info["seated"]
+    assert result.headline().startswith("bike trail (rider 85.0 kg")

@@ -426,3 +426,19 @@ def test_directory_is_a_config_error(tmp_path):
     with pytest.raises(ConfigError) as exc:
         load(d)
     assert_names(exc, "dir.toml")
+
+
+@pytest.mark.parametrize("argv", [["curve", "trail"], ["drop", "SST", "--duration", "0.1"],
+                                  ["synth", "spring", "trail"]])
+def test_a_bike_preset_given_to_a_fork_command_is_named_a_bike(tmp_path, capsys, argv):
+    """A bike preset where a fork's configuration is read was "trail: unknown preset (known: S1, ...)":
+    a false cause, trail being a preset; the line says it is a bike's and where it goes. A name of
+    neither kind is still unknown (the check can fail)."""
+    from helpers import one_line
+
+    out = tmp_path / ("out.csv" if argv[0] == "synth" else "out")
+    one_line(capsys, [*argv, "--out", out], f"mtbmj: error: {argv[2 if argv[0] == 'synth' else 1]}: a bike preset (mtbmj bike, sag --bike), not a "
+             "fork's configuration (known: S1, ")
+    assert not out.exists()
+    with pytest.raises(ConfigError, match=r"^trial: unknown preset \(known: S1, .*\) and no such file$"):
+        load("trial")

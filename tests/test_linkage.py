@@ -304,6 +304,26 @@ def test_hardpoints_in_metres_are_refused_naming_the_mistake(tmp_path):
         spec.load(str(path))
 
 
+def test_mtbmj_linkage_names_hardpoints_in_metres_not_a_link_without_length(tmp_path, capsys):
+    """``mtbmj linkage`` on a Horst link typed in metres: the one line names the unit (it said "0.38 mm
+    apart: the chainstay has no length", the mechanism checked in the wrong unit); the same file in
+    millimetres runs (the check can pass)."""
+    from mtbmj.cli import main
+
+    from helpers import one_line
+
+    def bike(scale):
+        points = "\n".join(f"{k}_mm = [{v[0] / MM * scale:g}, {v[1] / MM * scale:g}]" for k, v in HORST.items())
+        return _write(tmp_path, 'base = "trail"\n[linkage]\nkind = "horst_link"\n' + points + "\n")
+
+    err = one_line(capsys, ["linkage", bike(1e-3), "--out", tmp_path / "m"], "look like metres",
+                   "these keys are in millimetres", "[-40, 70]")
+    assert "no length" not in err
+    assert not (tmp_path / "m").exists()
+    assert main(["linkage", str(bike(1.0)), "--out", str(tmp_path / "mm")]) == 0
+    assert (tmp_path / "mm" / "summary.json").is_file()
+
+
 @pytest.mark.parametrize("kind,pts,within", [("horst_link", HORST, 0.01e-3), ("short_link", SHORT, 0.3e-3)])
 def test_the_bike_runs_the_axle_on_the_linkage_s_path(tmp_path, kind, pts, within):
     """A Horst link and a short link from their hardpoints: over a run across a root the MuJoCo

@@ -61,3 +61,44 @@ def test_a_cut_time_series_is_refused(bike_dir, tmp_path, monkeypatch, capsys):
     (run / "timeseries.csv").write_text("".join(lines[: len(lines) // 2]))
     assert cli.main(["render", str(run), "--out", str(tmp_path / "v.gif"), "--width", "32", "--height", "32"]) == 2
     assert capsys.readouterr().err.count("\n") == 1
+
+
+@pytest.mark.slow  # 15 s: the active rider pedalling, run, replayed and replayed again
+def test_a_legs_swing_folder_replays(tmp_path, monkeypatch, capsys):
+    """A folder mtbmj bike had just written was refused as "does not reproduce ... (a bike changed in
+    Python or a bike file changed since)", a false cause: a pedalling active rider's whose legs swing
+    (the replay left the swing out; the summary records it). It replays to the sample and renders.
+    The same folder told its legs did not swing is still refused (the match is checked, not assumed)."""
+    from mtbmj.bike import replay
+    from mtbmj.bike.run import run_bike
+
+    monkeypatch.delenv("MUJOCO_GL", raising=False)
+    swing = tmp_path / "swing"
+    run_bike("trail", "flat", None, duration=0.1, rider="active", pedal=(80.0, 250.0), legs_swing=True).write(
+        swing, figure=False)
+    again = replay.rerun(swing)
+    assert again.summary["rider"]["pedal_leg"]["legs_swing"] is True
+    assert cli.main(["render", str(swing), "--out", str(tmp_path / "v.gif"), "--width", "32", "--height", "32"]) == 0
+    summary = json.loads((swing / "summary.json").read_text())
+    summary["rider"]["pedal_leg"]["legs_swing"] = False
+    (swing / "summary.json").write_text(json.dumps(summary))
+    capsys.readouterr()
+    assert cli.main(["render", str(swing), "--out", str(tmp_path / "w.gif"), "--width", "32", "--height", "32"]) == 2
+    assert "does not reproduce" in capsys.readouterr().err
+    assert not (tmp_path / "w.gif").exists()
+
+
+def test_a_speed_profile_folder_says_why_it_is_not_replayed(tmp_path, monkeypatch, capsys):
+    """A run along a speed profile, just written by mtbmj bike, was refused as "does not reproduce ...
+    (a bike changed in Python or a bike file changed since)": the replay ran it at the profile's first
+    speed. The folder keeps the profile's range, not the profile: the line says so, nothing written."""
+    from mtbmj.bike.run import run_bike
+
+    monkeypatch.delenv("MUJOCO_GL", raising=False)
+    profile = tmp_path / "profile"
+    run_bike("trail", "root:at_m=1", 4.0, duration=0.3, speed_profile=([0.0, 10.0], [4.0, 5.0])).write(
+        profile, figure=False)
+    assert cli.main(["render", str(profile), "--out", str(tmp_path / "p.gif"), "--width", "32", "--height", "32"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "a run along a speed profile (--speed-profile) is not replayed" in err, err
+    assert not (tmp_path / "p.gif").exists()

@@ -132,6 +132,58 @@ def test_csv_profile(tmp_path):
         T.make(str(back))
 
 
+def test_a_csv_in_the_wrong_units_is_named_in_one_warning(tmp_path, recwarn, capsys):
+    """The docs' profile (a 40 mm ledge 2-4.5 m along) with its distances typed in millimetres ran
+    silently over 8 km of what the run saw as flat ground (the default duration 2000 s at 4 m/s), and
+    with its heights typed in metres over a 0.04 mm ledge: each is one warning naming the column. The
+    profile as written, a flat one, a 90 m profile at 1 % and a 2 km one at 2 % draw none."""
+    from mtbmj.errors import ConfigWarning
+
+    rows = [(0, 0), (2, 0), (2.5, 40), (4, 40), (4.5, 0), (8, 0)]
+
+    def said(name, scale_x=1.0, scale_z=1.0, points=rows):
+        path = tmp_path / f"{name}.csv"
+        path.write_text("distance_m,height_mm\n" + "".join(f"{x * scale_x:g},{z * scale_z:g}\n" for x, z in points))
+        recwarn.clear()
+        T.make(str(path))
+        return [str(w.message) for w in recwarn.list if issubclass(w.category, ConfigWarning)]
+
+    assert said("as_written") == []
+    assert said("flat", points=[(0, 0), (8, 0)]) == []
+    assert said("long_hill", points=[(0, 0), (10, 0), (2000, 2000 * 0.02 * 1000)]) == []
+    assert said("gentle", points=[(0, 0), (3, 0), (90, 87 * 0.01 * 1000)]) == []
+    mm = said("mm", scale_x=1000.0)
+    assert len(mm) == 1 and "mm.csv: distance_m spans 8000 m" in mm[0] and "distances in millimetres?" in mm[0], mm
+    m = said("m", scale_z=1e-3)
+    assert len(m) == 1 and "m.csv: height_mm rises and falls by 0.04 mm" in m[0] and "heights in metres?" in m[0], m
+    from mtbmj.cli import main
+
+    out = tmp_path / "run"
+    assert main(["roll", str(tmp_path / "mm.csv"), "--speed", "4", "--duration", "0.05", "--quiet",
+                 "--no-figure", "--out", str(out)]) == 0
+    lines = capsys.readouterr().err.splitlines()
+    assert [line for line in lines if line.startswith("mtbmj: warning: ")] == [f"mtbmj: warning: {mm[0]}"], lines
+
+
+def test_a_feature_typed_in_metres_is_named_in_one_warning(recwarn):
+    """``drop:height_mm=1.5`` (a 1.5 m drop typed in metres) made a 1.5 mm drop the run passed over
+    unnoticed; a feature's height or radius under 3 mm draws one warning naming the key and the value
+    in millimetres. Real features (and a zero height, the terrain's own flat) draw none."""
+    from mtbmj.errors import ConfigWarning
+
+    def said(spec):
+        recwarn.clear()
+        T.make(spec)
+        return [str(w.message) for w in recwarn.list if issubclass(w.category, ConfigWarning)]
+
+    assert said("drop:height_mm=1.5") == ["terrain drop: height_mm = 1.5 mm is under 3 mm, smaller than any trail "
+                                          "feature (a unit mistake? 1.5 m is height_mm=1500)"]
+    assert said("root:radius_mm=0.06") == ["terrain root: radius_mm = 0.06 mm is under 3 mm, smaller than any trail "
+                                           "feature (a unit mistake? 0.06 m is radius_mm=60)"]
+    for spec in ("drop:height_mm=1500", "root:radius_mm=60", "step_up:height_mm=0", "square_edge:height_mm=3"):
+        assert said(spec) == [], spec
+
+
 @pytest.mark.parametrize("spec, match", [
     ("cobbles", "unknown scenario"),
     ("step_up:height_mm=-20", "must not be negative"),

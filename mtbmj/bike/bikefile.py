@@ -27,7 +27,11 @@ def _locate(ref: str):
             return name, resources.files("mtbmj.bike.presets") / f"{name}.toml"
     path = Path(ref)
     if not path.exists():
-        raise ConfigError(f"{ref}: not a bike preset (known: {', '.join(preset_names())}) and no such file")
+        from mtbmj.config import preset_names as fork_presets
+
+        fork = any(ref.lower() == n.lower() for n in fork_presets())  # a fork's name where a bike is read
+        raise ConfigError(f"{ref}: not a bike preset (known: {', '.join(preset_names())})" + (
+            " but a fork's configuration (mtbmj drop, curve, sag without --bike)" if fork else " and no such file"))
     return path.stem, path
 
 
@@ -75,6 +79,9 @@ def _chart_over_bases(table: dict, part: dict, location) -> tuple[dict, dict]:
     ``[fork.set]`` as if written there, and its saddle replaces their seated rider. A file whose own
     ``rider.seated_com_mm`` follows a chart with a saddle replaces that saddle; a chart without a
     saddle after one with a saddle keeps the seated rider the old saddle gave."""
+    for name in ("bike", "rider"):  # read here before the sections are checked (a section given as a value)
+        if part.get(name) is not None and not isinstance(part[name], dict):
+            raise ConfigError(f"{location}: {name}: must be a table")
     geo, bike, rider = part.get("geometry"), part.get("bike") or {}, part.get("rider") or {}
     old = table.get("geometry") if isinstance(table.get("geometry"), dict) else {}
     old_saddle = _chart.saddle(old)

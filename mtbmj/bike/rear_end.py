@@ -127,6 +127,7 @@ def for_bike(ref: str, overrides=None, chainring: int | None = None, cog: int | 
     """The rear end of the bike ``ref`` (preset, file or ``mtbmj.bike.spec.ResolvedBike``: a file is
     read once) from its ``[linkage]``, solved over its travel, with the bike's tyre radius, front
     axle and centre of mass for anti-squat and anti-rise."""
+    from mtbmj.bike import keys as keys_mod
     from mtbmj.bike import run as bike_run
     from mtbmj.bike import spec as spec_mod
 
@@ -134,6 +135,9 @@ def for_bike(ref: str, overrides=None, chainring: int | None = None, cog: int | 
     table = spec_mod.overridden(read, overrides)
     if "linkage" not in table:
         raise ConfigError(f"{ref}: has no [linkage] (the rear end's hardpoints); see docs/configuration.md")
+    metres = keys_mod.metres_for_millimetres(table)  # before the points are checked in the wrong unit
+    if metres is not None:
+        raise ConfigError(metres)
     part = dict(table["linkage"])
     for key, value in (("chainring_teeth", chainring), ("cog_teeth", cog), ("com_height_mm", com_height_mm)):
         if value is not None:

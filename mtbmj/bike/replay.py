@@ -53,6 +53,9 @@ def rerun(run_dir, duration: float | None = None, error=MtbmjError):
 
     run_dir = Path(run_dir)
     manifest, summary = _read(run_dir, error)
+    if summary.get("speed_profile_m_per_s") is not None:  # the folder keeps its range, not the profile itself
+        raise error(f"{run_dir}: a run along a speed profile (--speed-profile) is not replayed: the folder does not "
+                    f"keep the profile; write its video with mtbmj bike ... --speed-profile CSV --video")
     try:
         info = manifest.get("engine_info") or {}
         pedal = summary["drive"].get("pedal")  # a pedalling rider: its cadence and power again
@@ -61,6 +64,7 @@ def rerun(run_dir, duration: float | None = None, error=MtbmjError):
                   "rear_tire": bool(info.get("rear_tire", True)), "overrides": manifest.get("bike_overrides") or None,
                   "seated": bool(info.get("seated", False)),
                   "rider": str((summary.get("rider") or {}).get("kind", "passive")),  # the active rider again
+                  "legs_swing": bool(((summary.get("rider") or {}).get("pedal_leg") or {}).get("legs_swing", False)),
                   "pedal": (float(pedal["cadence_rpm"]), float(pedal["power_W"])) if pedal else None}
         whole = float(summary["duration_s"])
     except (KeyError, TypeError, ValueError) as exc:

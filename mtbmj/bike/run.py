@@ -382,9 +382,11 @@ def _check_start(p: Prepared, ref) -> None:
     where = {"front": b.x0 + b.spec.front_axle[0], "rear": b.x0 + b.spec.rear_axle[0]}
     for name, x in where.items():
         seg = ref.straight.segment(x)
-        if seg is None or seg[1] != seg[3]:
+        if seg is None or seg[1] != seg[3]:  # a CSV has no at_m: its first rows must be level
+            fix = (f"{p.terrain.params['csv']} is not level within {ref.straight.reach * 1e3:.0f} mm of it: begin the "
+                   f"profile with a level stretch" if "csv" in p.terrain.params else "put the feature farther ahead (at_m)")
             raise ConfigError(f"start: the {name} wheel (at x = {x:.3f} m) does not start on level ground clear of the "
-                              f"terrain's features; put the feature farther ahead (at_m) or start elsewhere (--start-m)")
+                              f"terrain's features; {fix} or start elsewhere (--start-m)")
 
 
 def _is_equilibrium(ref, q) -> bool:
@@ -531,7 +533,7 @@ class BikeResult(RunOutput):
         seated = bool(self.info.get("seated"))
         if seated and held is not None:  # the seated rider's hold is the seat's, said as "seated"
             held = [k for k in held if k != "rider"]
-        if held is not None or not self.info.get("rear_tire", True):
+        if held is not None or seated or not self.info.get("rear_tire", True):  # the active rider sits unheld
             parts = (["seated"] if seated else []) + ([f"held: {', '.join(held)}"] if held else [])
             parts += [] if self.info.get("rear_tire", True) else ["rear tire off"]
             held = f" ({'; '.join(parts)})"

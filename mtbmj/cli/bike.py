@@ -32,6 +32,18 @@ def cmd_bike(args) -> int:
         profile = read_csv(args.speed_profile)
         if args.speed is None:  # the start's: the profile's first
             args.speed = float(profile.v[0])
+    if args.rider == "active" and (args.lock or args.lift_rear):  # the options set, not run_bike's lock=/rear_tire=
+        from mtbmj.errors import ConfigError
+
+        raise ConfigError(f"{'--lock' if args.lock else '--lift-rear'}: the active rider rides the whole bike (no "
+                          f"--lock, no --lift-rear; --rider passive holds parts)")
+    why = ("--rider active: the active rider's drive does not yet hold a set speed along the terrain"
+           if args.rider == "active" else "--pedal: a pedalling rider's speed is its own" if args.pedal is not None
+           else "--drive coast: a coasting bike has no drive to hold it" if args.drive == "coast" else None)
+    if args.speed_profile is not None and why is not None:  # the options set, not run_bike's speed_profile=
+        from mtbmj.errors import ConfigError
+
+        raise ConfigError(f"--speed-profile with {why} (the passive rider's speed controller holds the profile)")
     pedal = pedal_option(args)
     if args.legs_swing and (pedal is None or args.rider != "active"):
         from mtbmj.errors import ConfigError
@@ -70,7 +82,15 @@ def pedal_option(args):
     if getattr(args, "ride", None) is not None and args.duration is not None and args.duration < 8.0:
         raise ConfigError(f"--duration: {args.duration:g} s is too short to read the pedal bob beside --ride (8 s at "
                           f"least: the bob is read over the run's second half)")
-    return (args.pedal, PEDAL_POWER_DEFAULT_W if args.power is None else args.power)
+    from mtbmj.controllers.drive import PEDAL_POWER_W, PEDAL_RPM
+
+    power = PEDAL_POWER_DEFAULT_W if args.power is None else args.power
+    for option, value, (low, high), unit in (("--pedal", args.pedal, PEDAL_RPM, "rpm"),
+                                             ("--power", power, PEDAL_POWER_W, "W")):
+        if not low <= value <= high or value <= 0.0:  # the model's range, named as the option the user set
+            span = f"{low:g}-{high:g}" if low > 0.0 else f"above {low:g} and at most {high:g}"
+            raise ConfigError(f"{option}: {value:g} {unit} is outside what a rider turns ({span} {unit})")
+    return (args.pedal, power)
 
 
 # a trail rider's steady climbing power (assumed: a round value for a fit amateur over minutes)

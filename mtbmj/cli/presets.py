@@ -35,7 +35,9 @@ def _bike_lines(ref: str) -> list[str]:
     return lines
 
 
-def is_bike(ref: str) -> bool:
+def is_bike(ref: str, depth: int = 0) -> bool:
+    """A bike preset, or a bike file: one with a section only bike files have, or whose ``base`` is a
+    bike (a file of ``base = "trail"`` and a [drive] or [fork.set] alone was taken for a fork's)."""
     from pathlib import Path
 
     from mtbmj.bike import spec
@@ -50,7 +52,11 @@ def is_bike(ref: str) -> bool:
             table = tomllib.loads(path.read_text(encoding="utf-8-sig"))
         except (tomllib.TOMLDecodeError, OSError, UnicodeDecodeError):
             return False
-        return any(k in table for k in ("bike", "leverage", "rider", "shock", "geometry", "linkage"))
+        if any(k in table for k in ("bike", "leverage", "rider", "shock", "geometry", "linkage", "drive", "sensors")):
+            return True
+        base = table.get("base")
+        return isinstance(base, str) and depth < 20 and is_bike(str(path.parent / base) if base.lower().endswith(
+            ".toml") else base, depth + 1)
     return False
 
 
@@ -67,6 +73,14 @@ def cmd_presets(args) -> int:
             for line in _bike_lines(args.show):
                 print(line)
             return 0
+        from pathlib import Path
+
+        if args.show.lower() not in {n.lower() for n in preset_names()} and not Path(args.show).exists() and \
+                Path(args.show).suffix.lower() != ".toml":  # neither kind's: both kinds' names (load's has the fork's)
+            from mtbmj.errors import ConfigError
+
+            raise ConfigError(f"{args.show}: unknown preset (known: configurations {', '.join(preset_names())}; bikes "
+                              f"{', '.join(spec.preset_names())}) and no such file")
         for key, value in load(args.show).lines():
             print(f"{key} = {value}")
         return 0

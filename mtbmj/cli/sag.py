@@ -12,6 +12,10 @@ def cmd_sag(args) -> int:
 
     if args.bike:
         return _bike_sag(args)
+    from mtbmj.cli.presets import is_bike
+
+    if is_bike(args.config):  # a bike's sag is both ends' (it was "unknown preset (known: S1, ...)")
+        raise MtbmjError(f"{args.config}: is a bike: give --bike with --front-sag-percent and --rear-sag-percent")
     if args.sag_percent is None:
         raise MtbmjError("--sag-percent: required (or --bike with --front-sag-percent and --rear-sag-percent)")
     if args.front_sag_percent is not None or args.rear_sag_percent is not None or args.fork_set or args.shock_set:
@@ -29,11 +33,11 @@ def _bike_sag(args) -> int:
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.errors import MtbmjError
 
-    if args.front_sag_percent is None or args.rear_sag_percent is None:
-        raise MtbmjError("--bike: give --front-sag-percent and --rear-sag-percent")
-    if args.sag_percent is not None or args.load_kg is not None:
+    if args.sag_percent is not None or args.load_kg is not None:  # before the two: what the user gave is named
         raise MtbmjError("--sag-percent, --load-kg: not with --bike (the bike's rider is its load; "
                          "--front-sag-percent and --rear-sag-percent set the sag)")
+    if args.front_sag_percent is None or args.rear_sag_percent is None:
+        raise MtbmjError("--bike: give --front-sag-percent and --rear-sag-percent")
     result = sag.solve(args.config, args.front_sag_percent, args.rear_sag_percent, bike_overrides(args))
     written = result.write(args.out)
     print(f"{result.line()}; wrote {written[0]}; run it with: mtbmj bike {shlex.quote(str(written[0]))} "

@@ -341,9 +341,44 @@ def from_csv(path: str | Path) -> Terrain:
     if np.any(np.diff(x) < 0):
         i = int(np.argmax(np.diff(x) < 0)) + 2
         raise TerrainError(f"{path}: distance_m decreases at data row {i}")
+    for text in unit_mistakes(x, z):
+        import warnings
+
+        from mtbmj.errors import ConfigWarning
+
+        warnings.warn(f"{path}: {text}", ConfigWarning, stacklevel=2)
     x0 = float(x[0])
     return _profile(Path(path).stem, [_flat(x0 - LEAD_IN_M, x0, z[0]), (x[1:], z[1:]), _flat(x[-1], x[-1] + RUN_OUT_M, z[-1])],
                     start_x=x0, length=float(x[-1] - x0) + 1.0, params={"csv": str(path)})
+
+
+# A terrain CSV's units, told apart from a careless user's: distances in millimetres make a profile of
+# a few metres kilometres long and its steepest grade a thousand times shallower (a 40 mm rock over
+# 0.5 m, a grade of 8 %, becomes 0.008 %); heights in metres make a 1.5 m drop 1.5 mm. No trail
+# feature a bike is run over (a CSV's, or a library terrain's height_mm or radius_mm) is under
+# LEAST_FEATURE_MM high, nor a profile over CSV_LONG_M long with
+# every grade under CSV_LEAST_GRADE (a road's camber and drainage are steeper).
+CSV_LONG_M = 100.0
+CSV_LEAST_GRADE = 0.002
+LEAST_FEATURE_MM = 3.0
+
+
+def unit_mistakes(x, z) -> list[str]:
+    """One line for each unit of a terrain CSV (``x`` in m, ``z`` in m as read) that looks mistaken:
+    distances in millimetres, heights in metres; none for a plausible profile or a flat one."""
+    rise = float(np.ptp(z))
+    if rise == 0.0:
+        return []
+    out = []
+    run, dx, dz = float(x[-1] - x[0]), np.diff(x), np.diff(z)
+    slope = np.abs(dz[dx > 0] / dx[dx > 0]) if np.any(dx > 0) else np.zeros(0)
+    if run > CSV_LONG_M and not np.any(dz[dx == 0]) and (slope.size == 0 or slope.max() < CSV_LEAST_GRADE):
+        out.append(f"distance_m spans {run:.6g} m and its steepest grade is {100 * slope.max():.2g} %: distances in "
+                   f"millimetres? (a unit mistake: a run across it covers {run:.6g} m)")
+    if rise < LEAST_FEATURE_MM * MM:
+        out.append(f"height_mm rises and falls by {rise / MM:.3g} mm at most: heights in metres? (a unit mistake: "
+                   f"{rise / MM:.3g} m would be {rise / MM * 1000:.4g} mm)")
+    return out
 
 
 # name -> (builder, {parameter: kind}); kinds: "height" (>= 0, mm), "pos" (> 0), "nonneg", "int", "text"
@@ -394,6 +429,15 @@ def _value(name: str, key: str, kind: str, value):
         raise TerrainError(f"terrain {name}: {key} must not be negative, got {number:g}")
     if kind == "pos" and number <= 0:
         raise TerrainError(f"terrain {name}: {key} must be positive, got {number:g}")
+    if key.endswith("height_mm") or key == "radius_mm":
+        if 0.0 < number < LEAST_FEATURE_MM:
+            import warnings
+
+            from mtbmj.errors import ConfigWarning
+
+            warnings.warn(f"terrain {name}: {key} = {number:g} mm is under {LEAST_FEATURE_MM:g} mm, smaller than any "
+                          f"trail feature (a unit mistake? {number:g} m is {key}={number * 1000:g})", ConfigWarning,
+                          stacklevel=3)
     return number
 
 
