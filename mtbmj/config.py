@@ -21,7 +21,6 @@ import json
 import sys
 import warnings as _warnings
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -32,6 +31,7 @@ else:  # pragma: no cover
 
 from mtbmj import limits
 from mtbmj.errors import ConfigError, ConfigWarning  # ConfigWarning: a value far outside what any bike has
+from mtbmj.presets import is_preset as _is_preset, locate as _locate, preset_names, study_presets  # noqa: F401
 from mtbmj.textfile import read_text
 
 # kinds: "pos" > 0, "nonneg" >= 0, "real" any finite number, "list" of finite numbers, "rows" a
@@ -453,16 +453,6 @@ def warn(messages, stacklevel: int = 2) -> None:
         _warnings.warn(message, ConfigWarning, stacklevel=stacklevel + 1)
 
 
-def preset_names() -> list[str]:
-    files = resources.files("mtbmj.presets").iterdir()
-    names = [f.name[:-5] for f in files if f.name.endswith(".toml")]
-    return sorted(names, key=lambda n: (not n.startswith("S"), int(n[1:]) if n[1:].isdigit() else 0, n))
-
-
-def study_presets() -> list[str]:
-    return [f"S{i}" for i in range(1, 15)]
-
-
 @dataclass(frozen=True)
 class Config:
     """A validated configuration: ``values`` maps dotted keys (``fork.spring.rate_N_per_mm``)
@@ -583,24 +573,6 @@ def _read_toml(path: Path, what: str = "a TOML configuration") -> dict[str, Any]
         raise ConfigError(f"{path}: not valid TOML ({exc})") from None
     except RecursionError:
         raise ConfigError(f"{path}: arrays or tables nested too deeply") from None
-
-
-def _locate(ref: str) -> tuple[str, Path | Any]:
-    """Resolve a preset name (case-insensitive) or a TOML path."""
-    for name in preset_names():
-        if ref.lower() == name.lower():
-            return name, resources.files("mtbmj.presets") / f"{name}.toml"
-    path = Path(ref)
-    if path.suffix.lower() == ".toml" or path.exists():
-        if not path.exists():
-            raise ConfigError(f"{ref}: no such configuration file")
-        return path.stem, path
-    known, bikes = ", ".join(preset_names()), [b.name[:-5] for b in resources.files("mtbmj.bike.presets").iterdir() if b.name.endswith(".toml")]  # noqa: E501
-    raise ConfigError(f"{ref}: a bike preset (mtbmj bike, sag --bike), not a fork's configuration (known: {known})" if ref.lower() in bikes else f"{ref}: unknown preset (known: {known}) and no such file")  # noqa: E501
-
-
-def _is_preset(name: str) -> bool:
-    return any(name.lower() == n.lower() for n in preset_names())
 
 
 def _base_path(base: str, including: Path, roots: tuple[Path, ...], what: str = "a TOML configuration") -> str:

@@ -1,0 +1,46 @@
+"""The bundled fork configurations (this folder's TOML files), and where a fork's configuration named on
+the command line lies: a bundled preset (named in any case) or a TOML file; a bike preset's name
+(``mtbmj/bike/presets``) given where a fork's configuration goes is said to be one, not an unknown name."""
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from mtbmj.errors import ConfigError
+
+
+def preset_names() -> list[str]:
+    """The bundled fork configurations, S1-S14 in order, then the rest by name."""
+    files = resources.files("mtbmj.presets").iterdir()
+    names = [f.name[:-5] for f in files if f.name.endswith(".toml")]
+    return sorted(names, key=lambda n: (not n.startswith("S"), int(n[1:]) if n[1:].isdigit() else 0, n))
+
+
+def study_presets() -> list[str]:
+    return [f"S{i}" for i in range(1, 15)]
+
+
+def _bike_presets() -> list[str]:
+    """The bundled bikes' names, read as files (no bike code imported here)."""
+    return [b.name[:-5] for b in resources.files("mtbmj.bike.presets").iterdir() if b.name.endswith(".toml")]
+
+
+def locate(ref: str) -> tuple[str, Path | Any]:
+    """Resolve a preset name (case-insensitive) or a TOML path: (its name, where it lies)."""
+    for name in preset_names():
+        if ref.lower() == name.lower():
+            return name, resources.files("mtbmj.presets") / f"{name}.toml"
+    path = Path(ref)
+    if path.suffix.lower() == ".toml" or path.exists():
+        if not path.exists():
+            raise ConfigError(f"{ref}: no such configuration file")
+        return path.stem, path
+    known = ", ".join(preset_names())
+    if ref.lower() in _bike_presets():
+        raise ConfigError(f"{ref}: a bike preset (mtbmj bike, sag --bike), not a fork's configuration (known: {known})")
+    raise ConfigError(f"{ref}: unknown preset (known: {known}) and no such file")
+
+
+def is_preset(name: str) -> bool:
+    return any(name.lower() == n.lower() for n in preset_names())
