@@ -343,6 +343,9 @@ def test_figure_shows_the_law_the_answer_and_open_sides():
     assert figure_png(got)[:4] == b"\x89PNG"
     assert len(bx.containers) == 2 * len(e)  # the records' and the held-out error bars
     assert "\n" not in ax.get_title()  # nothing to say: no spring source given, none refused
+    assert "(95 %: noise, spring)" in ax.get_title()  # no restarts read: their part not claimed
+    again = {**got, "records": [r | {"rebound_reproducibility_sd_N_s_per_m": 50.0} for r in e]}
+    assert "(95 %: noise, spring, restarts)" in figure(again).axes[0].get_title()
     # the spring's source and a refused record said in the title
     said = {**got, "spring_scale": 0.46, "spring_from": "the ring-down's period",
             "records": [{"clicks": -4, "refused": "no coefficient"}] + e}

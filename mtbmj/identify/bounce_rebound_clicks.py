@@ -406,7 +406,8 @@ def figure(got: dict):
     refused = ", ".join(format(e["clicks"], "g") for e in got["records"] if "refused" in e)
     said = [f"spring {got['spring_scale']:.2f} x from {got['spring_from'].split(' (')[0]}"] if "spring_from" in got else []
     said += [f"refused at {refused} clicks"] if refused else []
-    ax.set_title("rebound dampers from the first rebounds (95 %: noise and spring)"
+    again = any(e.get("rebound_reproducibility_sd_N_s_per_m") is not None for e in got["records"])
+    ax.set_title(f"rebound dampers from the first rebounds (95 %: noise, spring{', restarts' if again else ''})"
                  + ("\n" + "; ".join(said) if said else ""), fontsize=8)
     ax.legend(fontsize=7, loc="upper left")
     ax.grid(alpha=0.3)
