@@ -361,13 +361,18 @@ def find_slam(time_s: np.ndarray, x_mm: np.ndarray, name: str) -> int:
     return peak
 
 
+def record_name(record) -> str:
+    """What a record is called in lines and files: its ``name``, else its ``path``, else "record"."""
+    return getattr(record, "name", None) or str(getattr(record, "path", "record"))
+
+
 def fit_record(record) -> dict:
     """Each end's ring-down of one ``TelemetryRecord`` (end -> RingDown; an absent sensor is left out).
     Raises ``BounceError`` (naming the file) when the record holds no seat slam (:func:`find_slam`)
     or no end rings down freely after it."""
     series = {"shock": record.shock_mm, "fork": record.fork_mm}
     lead_end = "shock" if series["shock"] is not None else "fork"
-    name = getattr(record, "name", None) or str(getattr(record, "path", "record"))
+    name = record_name(record)
     if series[lead_end] is None:
         raise BounceError(f"{name}: no sensor present")
     slam = find_slam(record.time_s, series[lead_end], f"{name} ({lead_end})")

@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mtbmj.identify.bounce import BounceError, first_rebound
+from mtbmj.identify.bounce import BounceError, first_rebound, record_name
 from mtbmj.identify.bounce_decay import moving_average
 from mtbmj.identify.bounce_replay import NAMES, Slam, fit_push
 
@@ -271,7 +271,7 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
     sr = SeatedReplay(bike, RIDER_HZ if rider_hz is None else rider_hz)
     slams, ks, entries = [], [], []
     for rec, k in zip(records, clicks):
-        name = getattr(rec, "name", None) or str(getattr(rec, "path", "record"))
+        name = record_name(rec)
         try:
             slams.append(prepare_slam(rec.time_s, rec.shock_mm, rec.fork_mm, name, sr,
                                       getattr(rec, "shock_max_mm", None)))
@@ -286,13 +286,14 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
     entries.sort(key=lambda e: e["clicks"])
     again = []
     if not own and restarts:  # the replay's values: its fit again from starts it cannot tell apart
-        rec = next(r for r in records if (getattr(r, "name", None) or str(getattr(r, "path", "record"))) == best["file"])
+        rec = next(r for r in records if record_name(r) == best["file"])
         for v in restarted(rec, sr, restarts):
             if "refused" not in v:
                 s_k = spring[0] if spring_from == RING_FROM else v["spring_scale"]
                 v["entries"] = rebound_dampers(slams, ks, s_k, v["friction_N"], v["compression_N_s_per_m"], None)
             again.append(v)
-    reproducibility(entries, [v["entries"] for v in again if "entries" in v])
+    landed = [v["entries"] for v in again if "entries" in v]  # the records read at each restart that landed
+    reproducibility(entries, landed)
     up = rises(entries)
     read = [e for e in entries if "rebound_N_s_per_m" in e]
 
@@ -305,8 +306,7 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
     said_spring = ("the ring-down fit" if own else "the ring-down's period" if spring_from == RING_FROM
                    else f"{best['file']}'s replay")
     said_from = "the ring-down fit" if own else f"{best['file']}'s replay"
-    n_again = sum("entries" in v for v in again)
-    said_again = (f", the replay's reproducibility over {n_again} restart(s)" if n_again else "")
+    said_again = (f", the replay's reproducibility over {len(landed)} restart(s)" if landed else "")
     line = (f"rebound dampers from the first rebounds (spring {spring[0]:.2f} x from {said_spring}, friction "
             f"{friction:.0f} N, compression {compression:.0f} N s/m from {said_from}): {', '.join(said(e) for e in read) or 'none'} N s/m (95 %: the record's noise and the spring's "
             f"interval{said_again}) at {at or 'no'} clicks"
@@ -317,7 +317,7 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
                e.get("rebound_N_s_per_m") for e in sorted(r["entries"], key=lambda e: e["clicks"])]}
                if "entries" in r else {}) for r in again],
            "records": entries, "rises": up, "line": line}
-    out.update(law_in_clicks(entries, target_per_s, [v["entries"] for v in again if "entries" in v]))
+    out.update(law_in_clicks(entries, target_per_s, landed))
     return out
 
 
@@ -330,7 +330,7 @@ def restarted(record, sr, n: int = RESTARTS, seed: int = 0) -> list[dict]:
     {"spring_scale", "friction_N", "compression_N_s_per_m" (the replay's one damper)} or {"refused"}."""
     from mtbmj.identify.bounce_replay import prepare_slam, replay
 
-    name = getattr(record, "name", None) or str(getattr(record, "path", "record"))
+    name = record_name(record)
     top = getattr(record, "shock_max_mm", None)
     sl = prepare_slam(record.time_s, record.shock_mm, record.fork_mm, name, sr, top)
     rng = np.random.default_rng(seed)

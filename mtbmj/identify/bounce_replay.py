@@ -57,7 +57,7 @@ from mtbmj.bike import spec as spec_mod
 from mtbmj.bike.reference import NQ, Reference, static_equilibrium
 from mtbmj.errors import MtbmjError
 from mtbmj.identify.bounce import (QUIET_BEFORE_S, BounceError, find_slam, first_rebound, interval95, lag1,
-                                   rebound_check)
+                                   rebound_check, record_name)
 from mtbmj.identify.bounce_bike import RIDER_SOURCE, RIDER_ZETA
 from mtbmj.runpath import guard
 
@@ -638,7 +638,7 @@ def replay_records(records, clicks, bike="sst", rider_hz: float | None = None) -
     sr = SeatedReplay(bike, RIDER_HZ if rider_hz is None else rider_hz)
     out = {"summary": [], "csv": {}, "replays": [], "lines": []}
     for rec, k in zip(records, clicks):
-        name = getattr(rec, "name", None) or str(getattr(rec, "path", "record"))
+        name = record_name(rec)
         if rec.shock_mm is None:
             raise BounceError(f"{name}: no shock sensor: the replay fits the shock's slam")
         t, s = np.asarray(rec.time_s, float), np.asarray(rec.shock_mm, float)

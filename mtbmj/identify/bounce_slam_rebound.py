@@ -55,7 +55,7 @@ import math
 
 import numpy as np
 
-from mtbmj.identify.bounce import BounceError, first_rebound, interval95, lag1
+from mtbmj.identify.bounce import BounceError, first_rebound, interval95, lag1, record_name
 from mtbmj.identify.bounce_replay import (BOUNDS, MAX_RELATIVE_RMS, NAMES, PUSH_NAMES, Slam, correlations,
                                           covariance)
 
@@ -386,7 +386,7 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
     by_file = {e["file"]: e for e in done}
     slams, ks, starts, refused, rings = [], [], [], [], []
     for rec, k in zip(records, clicks):
-        name = getattr(rec, "name", None) or str(getattr(rec, "path", "record"))
+        name = record_name(rec)
         sr = SeatedReplay(bike, RIDER_HZ if rider_hz is None else rider_hz)
         own = by_file.get(name, best)
         try:
