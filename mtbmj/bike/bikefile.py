@@ -15,10 +15,11 @@ from mtbmj.bike import chart as _chart
 from mtbmj.bike import linkage as _linkage
 from mtbmj.bike import shock as _shock
 from mtbmj.errors import ConfigError
+from mtbmj.presets import bike_preset_names, is_preset as is_fork_preset
 
 
 def preset_names() -> list[str]:
-    return sorted(p.name[:-5] for p in resources.files("mtbmj.bike.presets").iterdir() if p.name.endswith(".toml"))
+    return bike_preset_names()
 
 
 def _locate(ref: str):
@@ -27,9 +28,7 @@ def _locate(ref: str):
             return name, resources.files("mtbmj.bike.presets") / f"{name}.toml"
     path = Path(ref)
     if not path.exists():
-        from mtbmj.config import preset_names as fork_presets
-
-        fork = any(ref.lower() == n.lower() for n in fork_presets())  # a fork's name where a bike is read
+        fork = is_fork_preset(ref)  # a fork's name where a bike is read
         raise ConfigError(f"{ref}: not a bike preset (known: {', '.join(preset_names())})" + (
             " but a fork's configuration (mtbmj drop, curve, sag without --bike)" if fork else " and no such file"))
     return path.stem, path

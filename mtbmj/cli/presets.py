@@ -2,7 +2,7 @@
 value of one of them, resolved through its base."""
 from __future__ import annotations
 
-from mtbmj.config import preset_names
+from mtbmj.presets import is_preset, preset_names
 
 
 def _bike_lines(ref: str) -> list[str]:
@@ -75,7 +75,7 @@ def cmd_presets(args) -> int:
             return 0
         from pathlib import Path
 
-        if args.show.lower() not in {n.lower() for n in preset_names()} and not Path(args.show).exists() and \
+        if not is_preset(args.show) and not Path(args.show).exists() and \
                 Path(args.show).suffix.lower() != ".toml":  # neither kind's: both kinds' names (load's has the fork's)
             from mtbmj.errors import ConfigError
 

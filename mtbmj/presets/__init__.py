@@ -21,9 +21,9 @@ def study_presets() -> list[str]:
     return [f"S{i}" for i in range(1, 15)]
 
 
-def _bike_presets() -> list[str]:
-    """The bundled bikes' names, read as files (no bike code imported here)."""
-    return [b.name[:-5] for b in resources.files("mtbmj.bike.presets").iterdir() if b.name.endswith(".toml")]
+def bike_preset_names() -> list[str]:
+    """The bundled bikes' names (``mtbmj/bike/presets``), sorted, read as files (no bike code imported here)."""
+    return sorted(b.name[:-5] for b in resources.files("mtbmj.bike.presets").iterdir() if b.name.endswith(".toml"))
 
 
 def locate(ref: str) -> tuple[str, Path | Any]:
@@ -37,7 +37,7 @@ def locate(ref: str) -> tuple[str, Path | Any]:
             raise ConfigError(f"{ref}: no such configuration file")
         return path.stem, path
     known = ", ".join(preset_names())
-    if ref.lower() in _bike_presets():
+    if ref.lower() in bike_preset_names():
         raise ConfigError(f"{ref}: a bike preset (mtbmj bike, sag --bike), not a fork's configuration (known: {known})")
     raise ConfigError(f"{ref}: unknown preset (known: {known}) and no such file")
 
