@@ -129,7 +129,8 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
     over = dict(overrides or {})
     over.setdefault("drive.chainring_teeth", GEAR[0])
     over.setdefault("drive.cog_teeth", GEAR[1])
-    spec = spec_mod.load(str(bike), over)
+    resolved = spec_mod.resolve(str(bike), over)  # the runs take it as read (a rider.height_m said of the rider's kind)
+    spec = resolved.spec
     radius = setups(spec)[0].tire_radius
     rows, series = [], []
     for path, stance in zip(records, stances):
@@ -152,7 +153,7 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
             grade = 100.0 * math.tan(math.asin(sine))
             with warnings.catch_warnings(record=True) as said:  # said of the run kept only (a stall of a
                 warnings.simplefilter("always")  # climb set again and left is no stall of the bob reported)
-                run = run_bike(spec, f"climb:grade_percent={grade:.3f},length_m={v * duration_s * 1.5 + 10:.1f},"
+                run = run_bike(resolved, f"climb:grade_percent={grade:.3f},length_m={v * duration_s * 1.5 + 10:.1f},"
                                      f"at_m=0.5", None, duration_s, pedal=(cadence, power_W),
                                seated=stance == "seated", rider=rider)
             had = run_cadence(run, run_stretch(run.raw["time_s"]))
