@@ -211,13 +211,13 @@ def check_value(key: str, value: Any) -> Any:
             first, *others = _STEMS[key]
             also = "".join(f" (or {k})" for k in others)
             raise ConfigError(f"{key}: value without its unit; the key is {first}{also}")
-        close = difflib.get_close_matches(key, list(SCHEMA), n=1, cutoff=0.6)
-        hint = f" (did you mean {close[0]}?)" if close else ""
-        raise ConfigError(f"{key}: unknown key{hint}")
+        raise ConfigError(f"{key}: unknown key{_hint(key)}")
     kind = SCHEMA[key]
     if kind == "bool":
         if not isinstance(value, bool):
-            raise ConfigError(f"{key}: must be true or false, got {value!r}")
+            meant = _STEMS.get(key) if _is_number(value) else None  # preload=60: the force is preload_N
+            raise ConfigError(f"{key}: must be true or false, got {value!r}" + (f" (a number is {meant[0]})" if meant
+                                                                                  else ""))
         return value
     if kind == "text":
         if not isinstance(value, str):
@@ -248,6 +248,25 @@ def check_value(key: str, value: Any) -> Any:
     if key in UPPER_LIMITS and value > UPPER_LIMITS[key][0]:
         raise ConfigError(f"{key}: {value:g} is more than {UPPER_LIMITS[key][1]}")
     return value
+
+
+def unit_keys(key: str, keys=SCHEMA) -> list[str] | None:
+    """The keys among ``keys`` of ``key``'s table in the unit its name holds alone (``fork.spring.psi``:
+    ``fork.spring.air_pressure_psi``), or None where its last part is no unit."""
+    table, _, last = key.rpartition(".")
+    if f"_{last}" not in UNITS:
+        return None
+    return [k for k in keys if k.rpartition(".")[0] == table and k.endswith(f"_{last}")]
+
+
+def _hint(key: str) -> str:
+    """The key meant: a unit alone in the name's place (``fork.spring.psi``) is the keys of that
+    table in that unit (spelling alone took it for ``fork.spring.tokens``), else the closest name."""
+    in_unit = unit_keys(key)
+    if in_unit:
+        return f" (a unit, not a key: did you mean {' or '.join(in_unit)}?)"
+    close = difflib.get_close_matches(key, list(SCHEMA), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]}?)" if close else ""
 
 
 def _is_number(value: Any) -> bool:

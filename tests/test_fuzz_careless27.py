@@ -110,3 +110,65 @@ def test_the_passive_rider_says_it_does_not_read_the_height(tmp_path, capfd):
         lines[name] = [line for line in err.splitlines() if "rider.height_m" in line]
     assert len(lines["passive"]) == 1 and "active rider only" in lines["passive"][0]
     assert lines["plain"] == [] and lines["active"] == []
+
+
+# --- one unknown-preset message; a unit typed as a key; sensitivity's outputs named ------------------
+
+def test_presets_show_and_the_lookup_give_one_message(capfd):
+    """presets --show had its own unknown-preset line beside mtbmj.presets.locate's; now it is
+    locate's, which names the bikes too where either kind is taken."""
+    from mtbmj.errors import ConfigError
+    from mtbmj.presets import bike_preset_names, locate, preset_names
+
+    status, err = _err(["presets", "--show", "S99"], capfd)
+    with pytest.raises(ConfigError) as said:
+        locate("S99", bikes=True)
+    assert status == 2 and err == f"mtbmj: error: {said.value}\n"
+    assert all(n in err for n in preset_names() + bike_preset_names())
+    with pytest.raises(ConfigError) as fork_only:  # where only a fork's configuration is taken: its names
+        locate("S99")
+    assert "bikes" not in str(fork_only.value) and "S12" in str(fork_only.value)
+
+
+@pytest.mark.parametrize("typed,meant", [("fork.spring.psi", "fork.spring.air_pressure_psi"),
+                                         ("tire.psi", "tire.pressure_psi"), ("fork.spring.N", "fork.spring.preload_N"),
+                                         ("fork.spring.preload", "fork.spring.preload_N")])
+def test_a_unit_typed_as_the_key_names_the_key_in_it(tmp_path, capfd, typed, meant):
+    """fork.spring.psi suggested fork.spring.tokens (spelling alone); fork.spring.preload=60 said
+    only 'must be true or false'. The same through a bike's --fork-set."""
+    _, out = fresh(tmp_path)
+    line = refused(["drop", "S12", "--set", f"{typed}=60", "--out", out], out, capfd, meant)
+    assert "tokens" not in line
+    refused(["bike", "sst", "flat", "--speed", "3", "--fork-set", f"{typed}=60", "--out", out], out, capfd, meant)
+
+
+def test_a_unit_typed_as_a_key_of_the_bikes_part_in_advise(tmp_path, capfd):
+    """advise --try-set fork:fork.spring.psi on a coil-sprung fork suggested fork.spring.model,
+    preload_N and knee_mm; now the adjusters the advice tries (the fork has no key in psi)."""
+    _, out = fresh(tmp_path)
+    line = refused(["advise", "example", "--bike", "sst", "--try-set", "fork:fork.spring.psi=60", "--out", out], out,
+                   capfd, "the adjusters the advice tries")
+    assert "knee_mm" not in line and "model" not in line
+
+
+def test_sweep_vary_of_a_switch_names_its_number(tmp_path, capfd):
+    _, out = fresh(tmp_path)
+    refused(["sweep", "S12", "--vary", "fork.spring.preload=100:300:2", "--out", out], out, capfd,
+            "did you mean fork.spring.preload_N?")
+
+
+def test_sensitivity_output_lists_the_outputs(tmp_path, capfd):
+    """--output peak said only that it was not an output; now every numeric output is named (the
+    events' grid as one pattern), and each named one is taken."""
+    from mtbmj.sweep.sensitivity import check_outputs
+    from mtbmj.sweep.variants import OUTPUT_COLUMNS
+
+    _, out = fresh(tmp_path)
+    line = refused(["sensitivity", "S12", "--vary", "fork.spring.preload_N=100:300", "--output", "peak", "--out",
+                    out], out, capfd, "{sled,fork,tire}_{peak1,topping,peak2,valley1,peak3}_{mm,s}")
+    listed = line.split("they are ", 1)[1].rstrip(")").split(", ")
+    named = [f"{s}_{e}_{u}" for s in ("sled", "fork", "tire") for e in ("peak1", "topping", "peak2", "valley1", "peak3")
+             for u in ("mm", "s")] + listed[1:]
+    assert sorted(named) == sorted(c for c in OUTPUT_COLUMNS if c not in
+                                   ("lifts_off", "fork_tops_out", "at_rest", "bottomed_out"))
+    assert check_outputs(named) == named

@@ -26,8 +26,10 @@ def bike_preset_names() -> list[str]:
     return sorted(b.name[:-5] for b in resources.files("mtbmj.bike.presets").iterdir() if b.name.endswith(".toml"))
 
 
-def locate(ref: str) -> tuple[str, Path | Any]:
-    """Resolve a preset name (case-insensitive) or a TOML path: (its name, where it lies)."""
+def locate(ref: str, bikes: bool = False) -> tuple[str, Path | Any]:
+    """Resolve a preset name (case-insensitive) or a TOML path: (its name, where it lies). An
+    unknown name is refused naming the known ones, with ``bikes`` the bike presets too (where either
+    kind is taken: ``mtbmj presets --show``)."""
     for name in preset_names():
         if ref.lower() == name.lower():
             return name, resources.files("mtbmj.presets") / f"{name}.toml"
@@ -39,6 +41,8 @@ def locate(ref: str) -> tuple[str, Path | Any]:
     known = ", ".join(preset_names())
     if ref.lower() in bike_preset_names():
         raise ConfigError(f"{ref}: a bike preset (mtbmj bike, sag --bike), not a fork's configuration (known: {known})")
+    if bikes:
+        known = f"configurations {known}; bikes {', '.join(bike_preset_names())}"
     raise ConfigError(f"{ref}: unknown preset (known: {known}) and no such file")
 
 

@@ -80,7 +80,9 @@ def numeric_key(key: str, flag: str = "--vary") -> str:
         except ConfigError as exc:
             raise ConfigError(f"{flag}: {exc}") from None
     if SCHEMA[key] not in NUMERIC_KINDS:
-        raise ConfigError(f"{flag}: {key} is not a number that can be varied (it is {SCHEMA[key]!r})")
+        twin = next((k for k in SCHEMA if k.startswith(f"{key}_") and SCHEMA[k] in NUMERIC_KINDS), None)  # preload_N
+        raise ConfigError(f"{flag}: {key} is not a number that can be varied (it is {SCHEMA[key]!r})"
+                          + (f"; did you mean {twin}?" if twin else ""))
     return key
 
 
