@@ -172,3 +172,34 @@ def test_sensitivity_output_lists_the_outputs(tmp_path, capfd):
     assert sorted(named) == sorted(c for c in OUTPUT_COLUMNS if c not in
                                    ("lifts_off", "fork_tops_out", "at_rest", "bottomed_out"))
     assert check_outputs(named) == named
+
+
+# --- fit: a record of the wrong kind names what it is ----------------------------------------------
+
+def _spring_record(path):
+    """A spring test as a dyno writes it: one slow stroke, 60 -> 110 mm at 50 mm/s, 200 Hz."""
+    import numpy as np
+
+    t = np.arange(0.0, 2.0, 0.005)
+    x = 60.0 + 50.0 * np.minimum(t, 1.0) - 50.0 * np.maximum(t - 1.0, 0.0)
+    rows = "\n".join(f"{a:.3f},{b:.4f},{200.0 + 8.0 * b:.2f}" for a, b in zip(t, x))
+    path.write_text("time_s,displacement_mm,force_N\n" + rows + "\n")
+    return path
+
+
+def test_fit_damper_given_a_spring_record_says_so(tmp_path, capfd):
+    """It said 'too few points (1, need at least 6)' of a file of 400 rows."""
+    inputs, out = fresh(tmp_path)
+    record = _spring_record(inputs / "spring.csv")
+    line = refused(["fit", "damper", record, "--out", out], out, capfd, "a spring test: fit spring")
+    assert "400 rows" in line
+    status, err = _err(["fit", "spring", record, "--out", out], capfd)  # and fit spring takes it
+    assert status in (0, 3), err
+
+
+def test_fit_tire_given_a_spring_record_names_the_columns(tmp_path, capfd):
+    """It asked for the drop's mass ('give mass_kg') of a file that is no drop at all."""
+    inputs, out = fresh(tmp_path)
+    record = _spring_record(inputs / "spring.csv")
+    refused(["fit", "tire", record, "--out", out], out, capfd,
+            "missing column deflection_<unit> (columns: time_s, displacement_mm, force_N)")
