@@ -203,3 +203,32 @@ def test_fit_tire_given_a_spring_record_names_the_columns(tmp_path, capfd):
     record = _spring_record(inputs / "spring.csv")
     refused(["fit", "tire", record, "--out", out], out, capfd,
             "missing column deflection_<unit> (columns: time_s, displacement_mm, force_N)")
+
+
+# --- --out onto a folder another command wrote ---------------------------------------------------------
+
+def test_a_folder_of_another_command_is_not_replaced(tmp_path, capfd):
+    """roll --out onto a drop's folder replaced the drop's result (each entry was mtbmj's); now it is
+    refused naming the command that wrote it, the drop untouched; the drop replaces its own."""
+    out = tmp_path / "mine"
+    drop = ["drop", "S12", "--duration", "0.02", "--quiet", "--no-figure", "--out", out]
+    status, err = _err(drop, capfd)
+    assert status == 0, err
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.name != ".lock"}
+    status, err = _err(["roll", "rock", "--speed", "3", "--duration", "0.02", "--quiet", "--no-figure", "--out", out],
+                       capfd)
+    assert status == 2 and err == (f"mtbmj: error: {out}: holds the result of mtbmj drop, which roll would replace: "
+                                   f"choose another --out (or remove the folder first)\n")
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.name != ".lock"} == before
+    assert not [p for p in out.parent.iterdir() if p.name.startswith(f".{out.name}.")]
+    status, err = _err(drop, capfd)  # its own: replaced as before
+    assert status == 0, err
+
+
+def test_the_kinds_of_fit_share_their_folder(tmp_path, capfd):
+    """fit spring and fit damper share out/fit by default: one replaces the other, as before."""
+    out = tmp_path / "fit"
+    for kind in ("spring", "damper"):
+        status, err = _err(["fit", kind, "example", "--out", out], capfd)
+        assert status in (0, 3), err
+    assert json.loads((out / ".mtbmj-output.json").read_text())["command"] == "fit damper"
