@@ -232,3 +232,28 @@ def test_the_kinds_of_fit_share_their_folder(tmp_path, capfd):
         status, err = _err(["fit", kind, "example", "--out", out], capfd)
         assert status in (0, 3), err
     assert json.loads((out / ".mtbmj-output.json").read_text())["command"] == "fit damper"
+
+
+# --- a finished sweep run again into its folder -------------------------------------------------------
+
+def test_a_finished_sweep_is_said_to_be_finished(tmp_path, capfd):
+    """A sweep run again into its finished folder was refused with 'pass --resume to continue it'
+    (nothing was left to continue). The refusal stays (the journal's guard, tests/test_sweep.py) and
+    says the sweep there finished and that --resume reuses its runs; --resume then answers."""
+    out = tmp_path / "sweep"
+
+    def argv(n, *more):
+        return ["sweep", "S12", "--vary", f"fork.spring.preload_N=100:300:{n}", "--duration", "0.02", "--workers", "1",
+                "--quiet", "--csv", *more, "--out", out]
+
+    status, err = _err(argv(2), capfd)
+    assert status == 0, err
+    before = (out / "sweep.csv").read_bytes()
+    status, err = _err(argv(3), capfd)
+    assert status == 2 and "holds a finished sweep (2 variants); pass --resume to reuse its runs" in err, err
+    assert "continue" not in err and (out / "sweep.csv").read_bytes() == before
+    status, err = _err(argv(3, "--resume"), capfd)
+    assert status == 0, err
+    rows = (out / "sweep.csv").read_text().splitlines()
+    column = rows[0].split(",").index("fork.spring.preload_N")
+    assert sorted(float(r.split(",")[column]) for r in rows[1:]) == [100.0, 200.0, 300.0]

@@ -135,6 +135,7 @@ def run(bike: str, scenario: str, speed: float, variants: list[dict], duration: 
 
     from mtbmj.bike.run import run_bike
     from mtbmj.sweep.runner import Journal
+    from mtbmj.sweep.variants import journal_records
 
     if not variants:
         raise ConfigError("sweep: no variants")
@@ -143,10 +144,7 @@ def run(bike: str, scenario: str, speed: float, variants: list[dict], duration: 
             raise ConfigError(f"--vary {key}: a bike sweep varies a bike key (rider.mass_kg) or fork:KEY / shock:KEY")
     check(bike, scenario, variants, base)
     journal = Journal(Path(out_dir)) if out_dir is not None else None
-    known = {} if journal is None else journal.records()
-    if known and not resume:
-        raise MtbmjError(f"{out_dir}: holds the journal of a sweep ({len(known)} variants); pass --resume to "
-                         f"continue it, or choose another --out")
+    known = {} if journal is None else journal_records(Path(out_dir), journal, resume)
     recipe = journal_recipe(bike, scenario, speed, duration, base)
     rows = []
     for i, variant in enumerate(variants):

@@ -72,6 +72,21 @@ class Range:
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 
 
+def journal_records(out: Path, journal, resume: bool) -> dict[str, dict]:
+    """The journal's records a sweep into ``out`` reuses (``journal``: the folder's
+    ``mtbmj.sweep.runner.Journal``): with ``resume``, all; without it a journal there is refused,
+    guarding its runs, in words that say whether the sweep was finished (its table written: it said
+    "pass --resume to continue it" of a sweep with nothing to continue) or interrupted."""
+    known = journal.records()
+    if known and not resume:
+        if (out / TABLE).is_file() or (out / TABLE_CSV).is_file():
+            raise MtbmjError(f"{out}: holds a finished sweep ({len(known)} variants); pass --resume to reuse its runs "
+                             f"(the variants it lacks are computed), or choose another --out")
+        raise MtbmjError(f"{out}: holds the journal of an interrupted sweep ({len(known)} variants); pass --resume "
+                         f"to continue it, or choose another --out")
+    return known
+
+
 def numeric_key(key: str, flag: str = "--vary") -> str:
     """``key`` if it names a numeric configuration key, else a ``ConfigError`` naming it."""
     if key not in SCHEMA:
