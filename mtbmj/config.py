@@ -494,7 +494,11 @@ class Config:
 
     def require(self, key: str, why: str = "") -> Any:
         if key not in self.values:
-            raise ConfigError(f"{key}: missing" + (f" ({why})" if why else ""))
+            first = Path(self.sources[0]) if self.sources else None  # the chain's start: a preset, or a file
+            unbased = first is not None and not (first.parent.name == "presets" and _is_preset(first.stem))
+            raise ConfigError(f"{key}: missing" + (f" ({why})" if why else "") + (
+                f" ({first.name} starts from no preset: a file gives every key or names one it changes, e.g. "
+                f'base = "S12"; mtbmj presets lists them)' if unbased else ""))
         return self.values[key]
 
     __getitem__ = require
@@ -569,11 +573,11 @@ def _toml_value(value: Any) -> str:
     return repr(float(value))
 
 
-def parse_assignment(text: str) -> tuple[str, Any]:
-    """Parse a ``--set key=value`` override; the value is read as TOML (numbers, lists) or,
-    failing that, as a bare word (model names)."""
+def parse_assignment(text: str, option: str = "--set") -> tuple[str, Any]:
+    """Parse a ``--set key=value`` override (``option``: the option it came with, as its refusal
+    names it); the value is read as TOML (numbers, lists) or, failing that, as a bare word."""
     if "=" not in text:
-        raise ConfigError(f"--set {text}: expected key=value")
+        raise ConfigError(f"{option} {text}: expected key=value")
     key, raw = (part.strip() for part in text.split("=", 1))
     try:
         value = tomllib.loads(f"v = {raw}")["v"]

@@ -257,3 +257,96 @@ def test_a_finished_sweep_is_said_to_be_finished(tmp_path, capfd):
     rows = (out / "sweep.csv").read_text().splitlines()
     column = rows[0].split(",").index("fork.spring.preload_N")
     assert sorted(float(r.split(",")[column]) for r in rows[1:]) == [100.0, 200.0, 300.0]
+
+
+# --- names as typed: a scenario in capitals, radians, a preset's file name, a file with no base ------
+
+def test_a_scenario_in_capitals_is_the_scenario(tmp_path, capfd):
+    """'Rock' was 'unknown scenario' beside a list holding rock (presets are named in any case)."""
+    runs = {}
+    for name in ("rock", "Rock"):
+        out = tmp_path / name
+        status, err = _err(["roll", name, "--speed", "3", "--duration", "0.3", "--quiet", "--no-figure", "--out",
+                            out], capfd)
+        assert status == 0, err
+        runs[name] = json.loads((out / "summary.json").read_text())
+    assert runs["Rock"]["max_fork_mm"] == runs["rock"]["max_fork_mm"] > 0.0
+    _, out = fresh(tmp_path)
+    refused(["roll", "Rocky", "--speed", "3", "--out", out], out, capfd, "unknown scenario 'Rocky'")
+
+
+def test_a_head_angle_in_radians_is_named_so(tmp_path, capfd):
+    _, out = fresh(tmp_path)
+    refused(["roll", "rock", "--speed", "3", "--head-angle", "1.13", "--out", out], out, capfd,
+            "(radians? 1.13 rad is 64.7 deg)")
+    line = refused(["roll", "rock", "--speed", "3", "--head-angle", "25", "--out", out], out, capfd, "got 25")
+    assert "radians" not in line
+
+
+@pytest.mark.parametrize("base,said", [('base = "S12.toml"', "(the preset is named without .toml: S12)"),
+                                       ("", 'starts from no preset: a file gives every key or names one it changes, '
+                                            'e.g. base = "S12"')])
+def test_a_configuration_file_without_a_preset_base_says_how_to_name_one(tmp_path, capfd, base, said):
+    """base = "S12.toml" said only 'no such configuration file'; a file without base said
+    'sled.wheel_mass_kg: missing', naming neither the file nor the way out."""
+    inputs, out = fresh(tmp_path)
+    config = inputs / "mine.toml"
+    config.write_text(f"{base}\n[fork.spring]\npreload_N = 300\n")
+    line = refused(["drop", config, "--out", out], out, capfd, said)
+    assert base or "mine.toml" in line
+
+
+def test_a_bike_base_named_as_a_file(tmp_path, capfd):
+    inputs, out = fresh(tmp_path)
+    bike = inputs / "mine.toml"
+    bike.write_text('base = "sst.toml"\n[rider]\nmass_kg = 80\n')
+    refused(["bike", bike, "flat", "--speed", "3", "--out", out], out, capfd, "(the preset is named without .toml: sst)")
+
+
+@pytest.mark.parametrize("argv,said", [
+    (["bike", "sst", "flat", "--speed", "3", "--set", "rider.kg=80"], "the unit is part of the key's name: rider.mass_kg"),
+    (["bike", "sst", "flat", "--speed", "3", "--set", "shock.spring_rate=500"],
+     "shock.spring_rate_N_per_mm or shock.spring_rate_lb_per_in"),
+    (["bike", "sst", "flat", "--speed", "3", "--fork-set", "fork.spring.preload_N"], "--fork-set fork.spring.preload_N: "
+                                                                                     "expected key=value"),
+    (["advise", "example", "--bike", "sst", "--try-set", "rider.mass_kg"], "--try-set rider.mass_kg: expected"),
+    (["advise", "example", "--bike", "sst", "--try-set", "shock.spring_rate=500"],
+     "--try-set shock.spring_rate=500: shock.spring_rate: unknown key; the unit is part")])
+def test_a_bike_key_without_its_unit_and_the_option_named_as_typed(tmp_path, capfd, argv, said):
+    """shock.spring_rate listed every key of [shock]; --try-set and --fork-set refusals said '--set'."""
+    _, out = fresh(tmp_path)
+    line = refused(argv + ["--out", out], out, capfd, said)
+    assert "--set" in argv or "--set" not in line  # named as typed
+
+
+# --- a travel CSV under the name .SST ----------------------------------------------------------------------
+
+def _travel_csv(path, seconds=20.0):
+    """Generated travel: a fork and a shock moving over bumps (both ends, 1 kHz)."""
+    import numpy as np
+
+    t = np.arange(0.0, seconds, 0.001)
+    fork = 40.0 + 25.0 * np.sin(2 * np.pi * 1.3 * t) ** 2 + 5.0 * np.sin(2 * np.pi * 7.0 * t)
+    shock = 15.0 + 8.0 * np.sin(2 * np.pi * 1.3 * (t - 0.3)) ** 2
+    path.write_text("time_s,fork_mm,shock_mm\n" + "\n".join(f"{a:.3f},{b:.3f},{c:.3f}" for a, b, c in
+                                                            zip(t, np.clip(fork, 0, 170), shock)) + "\n")
+    return path
+
+
+def test_a_travel_csv_renamed_sst_is_read_as_one(tmp_path, capfd):
+    """It was refused: 'not an SST file (starts with b'tim', expected b'SST')'. Read by its text, it
+    gives what the same file named .csv gives; a binary file that is no SST is still refused."""
+    results = {}
+    for name in ("ride.csv", "ride.SST"):
+        ride = _travel_csv(tmp_path / name)
+        out = tmp_path / f"out_{name}"
+        status, err = _err(["telemetry", ride, "--out", out], capfd)
+        assert status == 0, err
+        results[name] = json.loads((out / "telemetry.json").read_text())
+    text = {n: json.dumps(r, sort_keys=True).replace(n, "RIDE") for n, r in results.items()}  # its name apart
+    assert text["ride.csv"] == text["ride.SST"]
+    assert results["ride.SST"]["measured"]["duration_s"] == pytest.approx(20.0, abs=0.01)
+    inputs, out = fresh(tmp_path)
+    junk = inputs / "junk.SST"
+    junk.write_bytes(bytes(range(256)) * 4)
+    refused(["telemetry", junk, "--out", out], out, capfd, "not an SST file")

@@ -36,7 +36,9 @@ def locate(ref: str, bikes: bool = False) -> tuple[str, Path | Any]:
     path = Path(ref)
     if path.suffix.lower() == ".toml" or path.exists():
         if not path.exists():
-            raise ConfigError(f"{ref}: no such configuration file")
+            named = is_preset(path.stem) and path.suffix.lower() == ".toml"  # base = "S12.toml" for the preset
+            raise ConfigError(f"{ref}: no such configuration file" + (
+                f" (the preset is named without .toml: {path.stem})" if named else ""))
         return path.stem, path
     known = ", ".join(preset_names())
     if ref.lower() in bike_preset_names():

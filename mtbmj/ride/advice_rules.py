@@ -486,8 +486,9 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
     try:
         notes = compose_setting(file, over)
     except ConfigError as exc:
+        said = str(exc).removeprefix("--set ")  # the bike file's own refusal names --set: the key was tried here
         raise ConfigError(f"{what}{' ' + ', '.join(f'{k}={v}' for k, v in settings.items()) if settings else ''}: "
-                          f"{exc}") from None
+                          f"{said}") from None
     new = [n for n in notes if n not in base_notes]
     if new and settings:
         raise ConfigError(f"--try-set {', '.join(f'{k}={v}' for k, v in settings.items())}: {new[0]} (advise "
