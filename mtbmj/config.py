@@ -605,8 +605,11 @@ def _base_path(base: str, including: Path, roots: tuple[Path, ...], what: str = 
     naming it, lying (symbolic links resolved) in or below the current directory or the folder of the configuration
     named on the command line: a configuration cannot make mtbmj read, or name keys of, files elsewhere."""
     if Path(base).suffix.lower() != ".toml":  # a bike file given for a fork's configuration names "trail"
+        from mtbmj.presets import bike_preset_names
+
+        kind = "a bike's" if base.lower() in bike_preset_names() else "a fork's" if _is_preset(base) else None
         raise ConfigError(f"{including}: base {base!r} must be a preset name or a .toml file ({base!r} is no preset "
-                          f"of {what}: is {including.name} a file of the other kind, a bike's or a fork's?)")
+                          f"of {what}" + (f": {including.name} is {kind}, a file of the other kind)" if kind else ")"))
     path = Path(base) if Path(base).is_absolute() else including.parent / base
     try:
         real = path.resolve()

@@ -350,3 +350,17 @@ def test_a_travel_csv_renamed_sst_is_read_as_one(tmp_path, capfd):
     junk = inputs / "junk.SST"
     junk.write_bytes(bytes(range(256)) * 4)
     refused(["telemetry", junk, "--out", out], out, capfd, "not an SST file")
+
+
+def test_try_given_a_forks_configuration_says_it_is_one(tmp_path, capfd):
+    """advise --try my_fork.toml asked whether the file was 'of the other kind, a bike's or a fork's';
+    it says which, and a base that is no preset of either kind asks nothing."""
+    inputs, out = fresh(tmp_path)
+    fork = inputs / "fork.toml"
+    fork.write_text('base = "air120"\n[fork.spring]\nair_pressure_psi = 70\n')
+    refused(["advise", "example", "--bike", "sst", "--try", fork, "--out", out], out, capfd,
+            "fork.toml is a fork's, a file of the other kind")
+    odd = inputs / "odd.toml"
+    odd.write_text('base = "nonesuch"\n')
+    line = refused(["drop", odd, "--out", out], out, capfd, "'nonesuch' is no preset of a TOML configuration)")
+    assert "other kind" not in line
