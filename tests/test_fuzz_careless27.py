@@ -364,3 +364,30 @@ def test_try_given_a_forks_configuration_says_it_is_one(tmp_path, capfd):
     odd.write_text('base = "nonesuch"\n')
     line = refused(["drop", odd, "--out", out], out, capfd, "'nonesuch' is no preset of a TOML configuration)")
     assert "other kind" not in line
+
+
+# --- a choice typed in another case ------------------------------------------------------------------------
+
+def test_a_choice_in_another_case_is_the_choice(tmp_path, capfd):
+    """--engine MuJoCo, --rider Active, study --engines MuJoCo,ODE were refused as invalid choices
+    beside lists holding them (presets and stances are taken in any case); now each runs as the
+    choice in lower case, with the same result; a word that is no choice is still refused."""
+    results = {}
+    for engine in ("mujoco", "MuJoCo"):
+        out = tmp_path / engine
+        status, err = _err(["drop", "S12", "--engine", engine, "--duration", "0.05", "--quiet", "--no-figure",
+                            "--out", out], capfd)
+        assert status == 0, err
+        results[engine] = (out / "timeseries.csv").read_bytes()
+    assert results["mujoco"] == results["MuJoCo"]
+    out = tmp_path / "study"
+    status, err = _err(["study", "--engines", "MuJoCo,ODE", "--presets", "S1", "--duration", "0.02", "--quiet",
+                        "--out", out], capfd)
+    assert status == 0, err
+    _, out = fresh(tmp_path)
+    refused(["drop", "S12", "--engine", "Mujocoo", "--out", out], out, capfd,
+            "invalid choice: 'Mujocoo' (choose from 'mujoco', 'ode', 'fast')")
+    from mtbmj.cli import build_parser
+
+    args = build_parser().parse_args(["bike", "sst", "flat", "--speed", "3", "--rider", "Active"])
+    assert args.rider == "active"

@@ -52,7 +52,7 @@ def cmd_study(args) -> int:
 def _engines(text: str) -> list[str]:
     from mtbmj.errors import MtbmjError
 
-    engines = [e.strip() for e in text.split(",") if e.strip()]
+    engines = [e.strip().lower() for e in text.split(",") if e.strip()]  # MuJoCo,ODE as --engine takes them
     for e in engines:
         if e not in ENGINE_NAMES:
             raise MtbmjError(f"--engines: {e!r} is not one of {', '.join(ENGINE_NAMES)}")
