@@ -391,3 +391,35 @@ def test_a_choice_in_another_case_is_the_choice(tmp_path, capfd):
 
     args = build_parser().parse_args(["bike", "sst", "flat", "--speed", "3", "--rider", "Active"])
     assert args.rider == "active"
+
+
+# --- bob given a record that holds no pedalling ------------------------------------------------------------
+
+SST_SENSORS = {"fork_arm_mm": 134.9375, "fork_max_mm": 234.15625, "shock_arm1_mm": 98.9, "shock_arm2_mm": 202.8,
+               "shock_max_mm": 230.0}  # the sst bike's calibration (data/sst README)
+
+
+@pytest.mark.parametrize("kind,warned", [("pedalling", False), ("slam", True)])
+def test_bob_says_a_record_holds_no_steady_pedalling(tmp_path, capfd, kind, warned):
+    """A seat slam's ring-down (00083.SST) was read as a bob of 1.6 Hz and 25 mm and a climb pedalled
+    to match it, without a word; its strokes spread 8.5x. A generated slam says so in a warning
+    line; a generated steady pedalling record (the baseline) does not."""
+    import numpy as np
+
+    from helpers import write_v3
+
+    t = np.arange(0.0, 20.0, 0.001)
+    if kind == "pedalling":
+        shock = 16.0 + 4.0 * np.sin(2 * np.pi * 1.6 * t) + 0.3 * np.sin(2 * np.pi * 0.2 * t)
+    else:
+        after = np.clip(t - 5.0, 0.0, None)
+        shock = 16.0 + 30.0 * np.exp(-after / 0.8) * np.sin(2 * np.pi * 1.6 * after) * (t > 5.0)
+    ride = write_v3(tmp_path / "ride.SST", 40.0 + 0.2 * np.sin(2 * np.pi * 1.6 * t), np.clip(shock, 1.0, 60.0),
+                    SST_SENSORS)
+    out = tmp_path / "bob"
+    status, err = _err(["bob", ride, "--out", out], capfd)
+    assert status == 0, err
+    said = [line for line in err.splitlines() if "no steady pedalling" in line]
+    assert len(said) == (1 if warned else 0), err
+    notes = json.loads((out / "bob.json").read_text())["records"][0]["notes"]
+    assert any("no steady pedalling" in n for n in notes) == warned
