@@ -423,3 +423,21 @@ def test_bob_says_a_record_holds_no_steady_pedalling(tmp_path, capfd, kind, warn
     assert len(said) == (1 if warned else 0), err
     notes = json.loads((out / "bob.json").read_text())["records"][0]["notes"]
     assert any("no steady pedalling" in n for n in notes) == warned
+
+
+# --- a file named in another case --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("argv,there", [
+    (["reconstruct", "{in}/ride.sst", "--bike", "sst"], "ride.SST"),
+    (["drop", "{in}/mine.toml"], "Mine.toml"),
+    (["bike", "{in}/my_bike.toml", "flat", "--speed", "3"], "My_Bike.toml")])
+def test_a_file_named_in_another_case_is_pointed_at(tmp_path, capfd, argv, there):
+    """On a case-sensitive file system ride.sst for ride.SST said only 'No such file or directory'."""
+    inputs, out = fresh(tmp_path)
+    (inputs / there).write_text("whatever\n")
+    line = refused([a.replace("{in}", str(inputs)) for a in argv] + ["--out", out], out, capfd,
+                   f"(there is {inputs / there})")
+    assert "no such" in line.lower()
+    (inputs / there).unlink()  # nothing in any case: no pointer
+    line = refused([a.replace("{in}", str(inputs)) for a in argv] + ["--out", out], out, capfd, "o")
+    assert "there is" not in line

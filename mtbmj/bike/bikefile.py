@@ -31,8 +31,11 @@ def _locate(ref: str):
         raise ConfigError(f"{ref}: no such bike file (the preset is named without .toml: {path.stem})")
     if not path.exists():
         fork = is_fork_preset(ref)  # a fork's name where a bike is read
+        from mtbmj.textfile import other_case
+
         raise ConfigError(f"{ref}: not a bike preset (known: {', '.join(preset_names())})" + (
-            " but a fork's configuration (mtbmj drop, curve, sag without --bike)" if fork else " and no such file"))
+            " but a fork's configuration (mtbmj drop, curve, sag without --bike)" if fork else
+            f" and no such file{other_case(path)}"))
     return path.stem, path
 
 

@@ -37,8 +37,10 @@ def locate(ref: str, bikes: bool = False) -> tuple[str, Path | Any]:
     if path.suffix.lower() == ".toml" or path.exists():
         if not path.exists():
             named = is_preset(path.stem) and path.suffix.lower() == ".toml"  # base = "S12.toml" for the preset
+            from mtbmj.textfile import other_case
+
             raise ConfigError(f"{ref}: no such configuration file" + (
-                f" (the preset is named without .toml: {path.stem})" if named else ""))
+                f" (the preset is named without .toml: {path.stem})" if named else other_case(path)))
         return path.stem, path
     known = ", ".join(preset_names())
     if ref.lower() in bike_preset_names():
