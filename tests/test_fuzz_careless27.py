@@ -441,3 +441,15 @@ def test_a_file_named_in_another_case_is_pointed_at(tmp_path, capfd, argv, there
     (inputs / there).unlink()  # nothing in any case: no pointer
     line = refused([a.replace("{in}", str(inputs)) for a in argv] + ["--out", out], out, capfd, "o")
     assert "there is" not in line
+
+
+def test_a_bike_sweep_varying_a_parts_key_names_the_part_prefix(tmp_path, capfd):
+    """sweep sst --vary fork.spring.preload_N pointed at --fork-set (which sets one value for every
+    variant, not a range); a part's key is varied as fork:KEY, which runs."""
+    _, out = fresh(tmp_path)
+    line = refused(["sweep", "sst", "--roll", "rock", "--speed", "3", "--vary", "fork.spring.preload_N=100:300:2",
+                    "--out", out], out, capfd, "(--vary fork:fork.spring.preload_N=LO:HI:N)")
+    assert "--fork-set" not in line
+    status, err = _err(["sweep", "sst", "--roll", "rock", "--speed", "3", "--vary", "fork:fork.spring.preload_N=100:300:2",
+                        "--duration", "0.2", "--quiet", "--out", out], capfd)
+    assert status == 0, err

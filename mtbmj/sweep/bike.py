@@ -111,6 +111,13 @@ def check(bike: str, scenario: str, variants: list[dict], base: dict | None = No
     terrain.make(scenario)
     fork, shock = setups(spec_mod.load(str(bike), base))
     table = spec_mod.read_table(str(bike))[0]
+    from mtbmj.bike.bikefile import part_key
+
+    for key in variants[0]:  # a part's key varied as a bike key: the bike file's refusal pointed at --fork-set
+        meant = None if key.startswith(("fork:", "shock:")) else part_key(key)
+        if meant is not None:
+            raise ConfigError(f"--vary {key}: a key of the {key.partition('.')[0]}'s configuration is varied as "
+                              f"{key.partition('.')[0]}:{meant} (--vary {key.partition('.')[0]}:{meant}=LO:HI:N)")
     spec_mod.overridden(table, overrides_of(variants[0], base))  # where its keys go
     table = spec_mod.overridden(table, base)
     for key in variants[0]:
