@@ -193,8 +193,9 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
             raise ConfigError("speed_profile: the passive rider's drive holds a set speed along the terrain, the "
                               "active rider's does not yet")
         with warnings.catch_warnings():  # the passive rider's note on rider.height_m: this rider takes it
-            warnings.filterwarnings("ignore", message=HEIGHT_UNUSED.split(" = ")[0])
-            p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire, overrides, False, pedal)
+            warnings.filterwarnings("ignore", message=r"rider\.height_m = .* is read by the active rider only")
+            p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire, overrides, False,
+                        pedal)
         kind = callback_kind(p.callback)
         rear = p.rear_tire
         p = rider_control.activate(
