@@ -453,3 +453,11 @@ def test_a_bike_sweep_varying_a_parts_key_names_the_part_prefix(tmp_path, capfd)
     status, err = _err(["sweep", "sst", "--roll", "rock", "--speed", "3", "--vary", "fork:fork.spring.preload_N=100:300:2",
                         "--duration", "0.2", "--quiet", "--out", out], capfd)
     assert status == 0, err
+
+
+def test_sensitivity_given_a_grid_does_not_speak_of_samples(tmp_path, capfd):
+    """sensitivity --vary KEY=100:300:3 said 'with --samples give the range only', an option the
+    user never typed (sensitivity always samples)."""
+    _, out = fresh(tmp_path)
+    refused(["sensitivity", "S12", "--vary", "fork.spring.preload_N=100:300:3", "--out", out], out, capfd,
+            "a sampled range (sensitivity, sweep --samples) takes no count; give the range only, key=lo:hi")

@@ -124,7 +124,8 @@ def parse_vary(text: str, count: bool | None = None, check_key: bool = True) -> 
     if count is True and n is None:
         raise ConfigError(f"--vary {text}: a grid needs a count, key=lo:hi:n (or give --samples N)")
     if count is False and n is not None:
-        raise ConfigError(f"--vary {text}: with --samples give the range only, key=lo:hi")
+        raise ConfigError(f"--vary {text}: a sampled range (sensitivity, sweep --samples) takes no count; give "
+                          f"the range only, key=lo:hi")
     # an end far outside what any bike has (metres typed into a mm key): one warning, the sweep runs
     from mtbmj.config import plausibility, warn
 
