@@ -211,13 +211,13 @@ def check_value(key: str, value: Any) -> Any:
             first, *others = _STEMS[key]
             also = "".join(f" (or {k})" for k in others)
             raise ConfigError(f"{key}: value without its unit; the key is {first}{also}")
-        close = difflib.get_close_matches(key, list(SCHEMA), n=1, cutoff=0.6)
-        hint = f" (did you mean {close[0]}?)" if close else ""
-        raise ConfigError(f"{key}: unknown key{hint}")
+        raise ConfigError(f"{key}: unknown key{_hint(key)}")
     kind = SCHEMA[key]
     if kind == "bool":
         if not isinstance(value, bool):
-            raise ConfigError(f"{key}: must be true or false, got {value!r}")
+            meant = _STEMS.get(key) if _is_number(value) else None  # preload=60: the force is preload_N
+            raise ConfigError(f"{key}: must be true or false, got {value!r}" + (f" (a number is {meant[0]})" if meant
+                                                                                  else ""))
         return value
     if kind == "text":
         if not isinstance(value, str):
@@ -248,6 +248,25 @@ def check_value(key: str, value: Any) -> Any:
     if key in UPPER_LIMITS and value > UPPER_LIMITS[key][0]:
         raise ConfigError(f"{key}: {value:g} is more than {UPPER_LIMITS[key][1]}")
     return value
+
+
+def unit_keys(key: str, keys=SCHEMA) -> list[str] | None:
+    """The keys among ``keys`` of ``key``'s table in the unit its name holds alone (``fork.spring.psi``:
+    ``fork.spring.air_pressure_psi``), or None where its last part is no unit."""
+    table, _, last = key.rpartition(".")
+    if f"_{last}" not in UNITS:
+        return None
+    return [k for k in keys if k.rpartition(".")[0] == table and k.endswith(f"_{last}")]
+
+
+def _hint(key: str) -> str:
+    """The key meant: a unit alone in the name's place (``fork.spring.psi``) is the keys of that
+    table in that unit (spelling alone took it for ``fork.spring.tokens``), else the closest name."""
+    in_unit = unit_keys(key)
+    if in_unit:
+        return f" (a unit, not a key: did you mean {' or '.join(in_unit)}?)"
+    close = difflib.get_close_matches(key, list(SCHEMA), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]}?)" if close else ""
 
 
 def _is_number(value: Any) -> bool:
@@ -475,7 +494,11 @@ class Config:
 
     def require(self, key: str, why: str = "") -> Any:
         if key not in self.values:
-            raise ConfigError(f"{key}: missing" + (f" ({why})" if why else ""))
+            first = Path(self.sources[0]) if self.sources else None  # the chain's start: a preset, or a file
+            unbased = first is not None and not (first.parent.name == "presets" and _is_preset(first.stem))
+            raise ConfigError(f"{key}: missing" + (f" ({why})" if why else "") + (
+                f" ({first.name} starts from no preset: a file gives every key or names one it changes, e.g. "
+                f'base = "S12"; mtbmj presets lists them)' if unbased else ""))
         return self.values[key]
 
     __getitem__ = require
@@ -550,11 +573,11 @@ def _toml_value(value: Any) -> str:
     return repr(float(value))
 
 
-def parse_assignment(text: str) -> tuple[str, Any]:
-    """Parse a ``--set key=value`` override; the value is read as TOML (numbers, lists) or,
-    failing that, as a bare word (model names)."""
+def parse_assignment(text: str, option: str = "--set") -> tuple[str, Any]:
+    """Parse a ``--set key=value`` override (``option``: the option it came with, as its refusal
+    names it); the value is read as TOML (numbers, lists) or, failing that, as a bare word."""
     if "=" not in text:
-        raise ConfigError(f"--set {text}: expected key=value")
+        raise ConfigError(f"{option} {text}: expected key=value")
     key, raw = (part.strip() for part in text.split("=", 1))
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
@@ -582,8 +605,11 @@ def _base_path(base: str, including: Path, roots: tuple[Path, ...], what: str = 
     naming it, lying (symbolic links resolved) in or below the current directory or the folder of the configuration
     named on the command line: a configuration cannot make mtbmj read, or name keys of, files elsewhere."""
     if Path(base).suffix.lower() != ".toml":  # a bike file given for a fork's configuration names "trail"
+        from mtbmj.presets import bike_preset_names
+
+        kind = "a bike's" if base.lower() in bike_preset_names() else "a fork's" if _is_preset(base) else None
         raise ConfigError(f"{including}: base {base!r} must be a preset name or a .toml file ({base!r} is no preset "
-                          f"of {what}: is {including.name} a file of the other kind, a bike's or a fork's?)")
+                          f"of {what}" + (f": {including.name} is {kind}, a file of the other kind)" if kind else ")"))
     path = Path(base) if Path(base).is_absolute() else including.parent / base
     try:
         real = path.resolve()

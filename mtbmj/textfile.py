@@ -24,6 +24,16 @@ LIMITS = {
 }
 
 
+def other_case(path: Path) -> str:
+    """`` (there is NAME)`` where the folder holds the name in another case (``ride.sst`` typed for
+    ``ride.SST``), else ``""``."""
+    try:
+        names = [p.name for p in path.parent.iterdir() if p.name.lower() == path.name.lower()]
+    except OSError:
+        return ""
+    return f" (there is {path.parent / names[0] if str(path.parent) != '.' else names[0]})" if names else ""
+
+
 def read_bytes(path: Path, error: type[Exception], label: str, kind: str) -> bytes:
     """The bytes of a regular file of at most ``LIMITS[kind]`` bytes, or ``error(one line)``."""
     limit = LIMITS[kind]
@@ -31,6 +41,8 @@ def read_bytes(path: Path, error: type[Exception], label: str, kind: str) -> byt
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
     except IsADirectoryError:
         raise error(f"{label}: is a directory, not a file") from None
+    except FileNotFoundError as exc:
+        raise error(f"{label}: cannot read ({exc.strerror}){other_case(Path(path))}") from None
     except OSError as exc:
         raise error(f"{label}: cannot read ({exc.strerror})") from None
     try:

@@ -81,7 +81,8 @@ def test_a_file_of_the_other_kind_is_named_so(tmp_path, capsys, argv, file, base
     if argv[0] == "sag":  # sag tells a bike file from a fork's first, and says what a bike's sag takes
         assert f"{tmp_path / file}: is a bike: give --bike with --front-sag-percent and --rear-sag-percent" in err, err
     else:
-        assert (f"base '{base}' must be a preset name or a .toml file ('{base}' is no preset of {kind}: is {file} a "
-                f"file of the other kind" in err), err
+        other = "a fork's" if kind == "a bike description" else "a bike's"  # the kind it is, said (careless27)
+        assert (f"base '{base}' must be a preset name or a .toml file ('{base}' is no preset of {kind}: {file} is "
+                f"{other}, a file of the other kind)" in err), err
     assert not out.exists()
     assert main(["presets", "--show", str(tmp_path / file)]) == 0  # each is a valid file of its own kind

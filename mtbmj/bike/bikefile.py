@@ -27,10 +27,15 @@ def _locate(ref: str):
         if ref.lower() == name.lower():
             return name, resources.files("mtbmj.bike.presets") / f"{name}.toml"
     path = Path(ref)
+    if not path.exists() and path.suffix.lower() == ".toml" and _is_preset(path.stem):  # base = "sst.toml"
+        raise ConfigError(f"{ref}: no such bike file (the preset is named without .toml: {path.stem})")
     if not path.exists():
         fork = is_fork_preset(ref)  # a fork's name where a bike is read
+        from mtbmj.textfile import other_case
+
         raise ConfigError(f"{ref}: not a bike preset (known: {', '.join(preset_names())})" + (
-            " but a fork's configuration (mtbmj drop, curve, sag without --bike)" if fork else " and no such file"))
+            " but a fork's configuration (mtbmj drop, curve, sag without --bike)" if fork else
+            f" and no such file{other_case(path)}"))
     return path.stem, path
 
 
@@ -243,6 +248,16 @@ def over_set(old: dict, new: dict) -> dict:
     return {**{k: v for k, v in old.items() if canonical(k) not in given}, **new}
 
 
+def _in_units(section: str, name: str) -> list[str]:
+    """The keys of ``section`` that are ``name`` with a unit (``spring_rate``: ``spring_rate_N_per_mm``,
+    ``spring_rate_lb_per_in``) or, for a unit alone (``kg``), in that unit."""
+    from mtbmj.config import UNITS
+
+    keys = sorted(k for k in KNOWN.get(section) or () if k != "set")
+    with_unit = [k for k in keys if k.startswith(f"{name}_") and k[len(name):] in UNITS]
+    return with_unit or ([k for k in keys if k.endswith(f"_{name}")] if f"_{name}" in UNITS else [])
+
+
 def overridden(table: dict, overrides) -> dict:
     """``table`` with ``overrides`` applied: ``"section.key": value`` for a bike key (``rider.mass_kg``),
     ``"fork.set": {KEY: value}`` / ``"shock.set": {KEY: value}`` for keys of the fork's and the
@@ -266,6 +281,10 @@ def overridden(table: dict, overrides) -> dict:
             raise ConfigError(f"--set {key}: unknown section {section!r} (known: "
                               f"{', '.join(k for k, v in KNOWN.items() if v)})")
         if name not in KNOWN[section] or name == "set":
+            meant = _in_units(section, name)  # shock.spring_rate or rider.kg: the keys with the unit
+            if meant:
+                raise ConfigError(f"--set {key}: unknown key; the unit is part of the key's name: "
+                                  f"{' or '.join(f'{section}.{k}' for k in meant)}")
             raise ConfigError(f"--set {key}: unknown key (known in [{section}]: "
                               f"{', '.join(sorted(k for k in KNOWN[section] if k != 'set'))})"
                               + (f"; a key of the {section}'s own configuration goes with --{section}-set, e.g. "

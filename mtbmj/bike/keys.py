@@ -104,7 +104,8 @@ KEYS: dict[str, tuple[str, str, object]] = {
                                         "(a file giving both is refused).", POINT_MM,
                                         ((-150.0, 250.0), (50.0, 400.0))),
     "rider.height_m": ("The whole rider's stature (default 1.78 m): the active rider's segment lengths (de Leva's "
-                       "table scaled; `--rider active`).", "1.2-2.3", (1.5, 2.05)),
+                       "table scaled; `--rider active`). The passive rider does not read it; a run of it says so in "
+                       "a warning line.", "1.2-2.3", (1.5, 2.05)),
     "rider.pitch_inertia_kg_m2": ("The rider's body's pitch inertia about its centre of mass.", "> 0", (1.0, 25.0)),
     "rider.pedals_mm": ("Where the legs meet the frame (the feet), frame coordinates.", POINT_MM,
                         ((-150.0, 150.0), (-100.0, 150.0))),

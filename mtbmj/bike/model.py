@@ -22,6 +22,7 @@ import mujoco
 import numpy as np
 
 from mtbmj import mjcf
+from mtbmj.errors import ConfigError
 from mtbmj.runpath import loop
 
 SCENE = "bike_scene.xml"
@@ -125,6 +126,24 @@ def crown(spec, fork_length: float) -> tuple[float, float]:
     return fx - spec.fork_offset * s - fork_length * c, fz - spec.fork_offset * c + fork_length * s
 
 
+def _check_start(spec, terrain, start: float, radius: float) -> None:
+    """Refuse a front axle's start from which neither wheel meets the terrain's feature (or, on a
+    profile without one, past its end): such a run went on over the level ground beyond, its
+    feature window over nothing (--start-m 30 past a rock: "0 % tire-load variation over the feature")."""
+    from mtbmj.bike.summary import feature_span
+
+    span = feature_span(terrain)
+    rear = start - (spec.front_axle[0] - spec.rear_axle[0])
+    end = terrain.start_x + terrain.length
+    if span is None and start >= end:
+        raise ConfigError(f"start: the front axle's start (--start-m) {start:g} m is past the end of the terrain "
+                          f"{terrain.name} ({terrain.start_x:g} to {end:g} m): nothing ahead to ride over")
+    if span is not None and rear >= span[1] + radius:
+        raise ConfigError(f"start: from the front axle's start (--start-m) {start:g} m both wheels start past the "
+                          f"feature of {terrain.name} ({span[0]:g} to {span[1]:g} m; the rear axle at {rear:.2f} m): "
+                          f"nothing ahead to ride over")
+
+
 def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, gravity: float,
                start_x: float | None = None, fork_length: float = 0.58, visual: bool = True,
                articulated=None) -> Bike:
@@ -151,6 +170,7 @@ def build_bike(spec, tire_radius: float, terrain, timestep: float, integrator, g
     rx, rz = spec.rear_axle
     px, pz = spec.pivot
     start = terrain.start_x if start_x is None else float(start_x)
+    _check_start(spec, terrain, start, tire_radius)
     h0 = float(terrain.height(start))
     x0 = start - fx
     z0 = h0 + tire_radius - fz  # the front tread touches the ground at qpos = 0

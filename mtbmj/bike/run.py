@@ -29,6 +29,7 @@ import dataclasses
 
 import math
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -47,13 +48,15 @@ from mtbmj.result import RunOutput
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
 from mtbmj.bike.callback import BikeCallback
-from mtbmj.bike.summary import gear_speed, signals, summary
+from mtbmj.bike.summary import default_duration, gear_speed, signals, summary
 from mtbmj.bike.stepping import Stepping, stepping
 from mtbmj.runpath import callbacks, guard, loop
 
 CHUNK = 10000
 CALLBACKS = ("auto", "compiled", "python")
 RIDERS = ("passive", "active")
+HEIGHT_UNUSED = ("rider.height_m = {:g} m is read by the active rider only (--rider active): the passive rider is its "
+                 "mass at rider.com_mm on legs and arms of rider.leg_length_mm and arm_length_mm, whatever its height")
 VIDEO_SAMPLE_HZ = 240.0  # the bike's pose kept for a video (qpos rows per second)
 # Held degrees of freedom (``lock``): each held joint gets this armature (kg or kg m^2 added to its
 # own diagonal of the mass matrix, nothing else), so it keeps its start value and zero speed: under
@@ -189,7 +192,10 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
         if speed_profile is not None:
             raise ConfigError("speed_profile: the passive rider's drive holds a set speed along the terrain, the "
                               "active rider's does not yet")
-        p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire, overrides, False, pedal)
+        with warnings.catch_warnings():  # the passive rider's note on rider.height_m: this rider takes it
+            warnings.filterwarnings("ignore", message=r"rider\.height_m = .* is read by the active rider only")
+            p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire, overrides, False,
+                        pedal)
         kind = callback_kind(p.callback)
         rear = p.rear_tire
         p = rider_control.activate(
@@ -222,7 +228,12 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     lock = _check_lock(lock, rear_tire)
     if isinstance(bike, spec_mod.BikeSpec) and overrides:
         raise ConfigError("overrides: give them with a bike name or file, not a ready-made BikeSpec")
-    spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(bike, overrides)  # a ResolvedBike is not read again
+    resolved = None if isinstance(bike, spec_mod.BikeSpec) else spec_mod.resolve(bike, overrides)  # read once
+    spec = bike if resolved is None else resolved.spec
+    if resolved is not None and "height_m" in resolved.table.get("rider", {}):  # said, not refused (a file for both)
+        from mtbmj.config import warn
+
+        warn([HEIGHT_UNUSED.format(spec.rider.height)])
     if seated:
         if spec.rider.seated_com is None:
             raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider (the rider's centre of mass "
@@ -611,16 +622,6 @@ class BikeResult(RunOutput):
                                   ("pitch_deg", "pitch, nose up [deg]")), self.raw, axes,
                                  label or f"{self.name} over {self.scenario}", {"loc": "best", "fontsize": 8},
                                  **line_kwargs)
-
-
-def default_duration(p: Prepared) -> float:
-    """Both wheels across the terrain's length and ``summary.SETTLE_S`` more, so the summary's window
-    over the feature (to ``SETTLE_S`` after the rear tyre left it) closes within the run (it ended
-    before it at 5 m/s over every fixed feature when the settling was left out); at least 1 s."""
-    from mtbmj.bike.summary import SETTLE_S
-
-    wheelbase = p.spec.front_axle[0] - p.spec.rear_axle[0]
-    return max(1.0, (p.terrain.length + wheelbase) / p.speed + SETTLE_S)
 
 
 def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, duration: float | None = None,

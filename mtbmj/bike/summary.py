@@ -16,6 +16,17 @@ from mtbmj.readout.endtravel import end_of_travel
 SETTLE_S = 0.5
 
 
+def default_duration(p) -> float:
+    """Both wheels from where the front axle starts across the rest of the terrain and ``SETTLE_S``
+    more, so the summary's window over the feature (to ``SETTLE_S`` after the rear tyre left it)
+    closes within the run (it ended before it at 5 m/s over every fixed feature when the settling
+    was left out; a start before the terrain's was not counted, so from 5 m before a rock the rear
+    never reached it); at least 1 s. ``p``: a ``mtbmj.bike.run.Prepared``."""
+    wheelbase = p.spec.front_axle[0] - p.spec.rear_axle[0]
+    ahead = p.terrain.start_x + p.terrain.length - (p.bike.x0 + p.spec.front_axle[0])  # from the front axle's start
+    return max(1.0, (ahead + wheelbase) / p.speed + SETTLE_S)
+
+
 def signals(p, states, sensors) -> dict:
     """A run's signals by column (``COLUMNS`` and more) from the states and sensors ``loop.chunked`` returned."""
     model = p.bike.model

@@ -31,7 +31,7 @@ def cmd_advise(args) -> int:
             raise ConfigError(f"--rider-kg {args.rider_kg:g} and --set rider.mass_kg={over['rider.mass_kg']}: the rider's "
                               f"mass given twice; give one")
         over["rider.mass_kg"] = args.rider_kg
-    sets = [parse_assignment(text) for text in args.try_set or ()]
+    sets = [parse_assignment(text, "--try-set") for text in args.try_set or ()]
     bike = spec.resolve(args.bike)  # the bike file read once: the decoding, the tries and the advice take it
     tries = []  # checked before any work: a bad file, key or value is one line and nothing written
     if args.try_file or sets:

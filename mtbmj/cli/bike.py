@@ -118,7 +118,7 @@ def bike_overrides(args) -> dict:
         out[key] = value
     for option, section in (("fork_set", "fork.set"), ("shock_set", "shock.set")):
         for text in getattr(args, option) or ():
-            key, value = parse_assignment(text)
+            key, value = parse_assignment(text, f"--{option.replace('_', '-')}")
             out.setdefault(section, Typed())[key] = value  # a person's keys: each must be read (compose)
     return out
 

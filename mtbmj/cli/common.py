@@ -42,7 +42,19 @@ class Parser(argparse.ArgumentParser):
         if kwargs.get("type") in (float, int):
             option = next((a for a in args if a.startswith("--")), args[0] if args else "")
             kwargs["type"] = numeric(option, integer=kwargs["type"] is int)
+        choices = kwargs.get("choices")
+        if choices and "type" not in kwargs and all(isinstance(c, str) and c == c.lower() for c in choices):
+            kwargs["type"] = _in_any_case(choices)  # --engine MuJoCo, --rider Active: as presets are named
         return super().add_argument(*args, **kwargs)
+
+
+def _in_any_case(choices):
+    """A choice typed in another case taken as the choice; anything else left for argparse to refuse
+    naming the choices."""
+    def choice(text: str) -> str:
+        return text.lower() if text.lower() in choices else text
+
+    return choice
 
 
 def intermixed(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:

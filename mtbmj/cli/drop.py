@@ -24,7 +24,11 @@ def cmd_study(args) -> int:
 
     start = time.perf_counter()
     log = None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True))
-    presets = args.presets.split(",") if args.presets else None
+    presets = None if args.presets is None else [n.strip() for n in args.presets.split(",") if n.strip()]
+    if presets == []:  # an empty --presets is a mistake, not the whole study
+        from mtbmj.errors import MtbmjError
+
+        raise MtbmjError("--presets: no preset named (e.g. --presets S1,S12; leave it out for S1-S14)")
     engines = _engines(args.engines)
     results, checks = run_study(presets, overrides(args.set), args.duration, args.workers, log, engines)
     written = write_study(args.out, results, checks)
@@ -48,7 +52,7 @@ def cmd_study(args) -> int:
 def _engines(text: str) -> list[str]:
     from mtbmj.errors import MtbmjError
 
-    engines = [e.strip() for e in text.split(",") if e.strip()]
+    engines = [e.strip().lower() for e in text.split(",") if e.strip()]  # MuJoCo,ODE as --engine takes them
     for e in engines:
         if e not in ENGINE_NAMES:
             raise MtbmjError(f"--engines: {e!r} is not one of {', '.join(ENGINE_NAMES)}")

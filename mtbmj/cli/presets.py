@@ -2,7 +2,7 @@
 value of one of them, resolved through its base."""
 from __future__ import annotations
 
-from mtbmj.presets import is_preset, preset_names
+from mtbmj.presets import locate, preset_names
 
 
 def _bike_lines(ref: str) -> list[str]:
@@ -73,14 +73,7 @@ def cmd_presets(args) -> int:
             for line in _bike_lines(args.show):
                 print(line)
             return 0
-        from pathlib import Path
-
-        if not is_preset(args.show) and not Path(args.show).exists() and \
-                Path(args.show).suffix.lower() != ".toml":  # neither kind's: both kinds' names (load's has the fork's)
-            from mtbmj.errors import ConfigError
-
-            raise ConfigError(f"{args.show}: unknown preset (known: configurations {', '.join(preset_names())}; bikes "
-                              f"{', '.join(spec.preset_names())}) and no such file")
+        locate(args.show, bikes=True)  # neither kind's: the one unknown-preset message, naming both kinds
         for key, value in load(args.show).lines():
             print(f"{key} = {value}")
         return 0

@@ -52,8 +52,11 @@ def run_study(presets: Sequence[str] | None = None, overrides=None, duration: fl
     unknown = [e for e in engines if e not in ENGINES]
     if unknown:
         raise ConfigError(f"engines: {unknown[0]!r} is not one of {', '.join(ENGINES)}")
-    names = list(presets or study_presets())
-    configs = [resolve(n, overrides) for n in names]
+    configs = [resolve(n, overrides) for n in (presets or study_presets())]
+    names = [c.name for c in configs]  # as each run names itself ("s1" is S1, "my/air.toml" is air)
+    twice = next((n for i, n in enumerate(names) if n in names[:i]), None)
+    if twice is not None:  # one result each: a second would replace the first (a file named as a preset too)
+        raise ConfigError(f"--presets: {twice} is named twice (a configuration is run once per study)")
     for c in configs:  # refused here, before any worker starts
         setup = compose.setup(c)
         limits.check_run(setup.duration if duration is None else duration, setup.timestep, setup.sample_rate,

@@ -61,7 +61,18 @@ class DamperFitError(MtbmjError):
 def peaks(record: Record) -> Record:
     """The record as peak points (velocity, force): a time series is reduced first."""
     if "time" in record.columns and ("displacement" in record.columns or "velocity" in record.columns):
-        record = peak_points(record)
+        series = record
+        try:
+            record = peak_points(series)
+        except RecordError as exc:
+            if "no dyno strokes" not in str(exc):  # (a file too short or unordered: its own line)
+                raise
+            record = None
+        found = 0 if record is None else len(record)
+        if found < MIN_POINTS:  # it said "too few points (1, ...)" of a file of many rows
+            raise RecordError(f"{series.path}: {found} stroke(s) repeated at a steady speed in its {len(series)} rows "
+                              f"(a damper test strokes at {MIN_POINTS} speeds or more); one slow stroke is a spring "
+                              f"test: fit spring")
     record.require("velocity", "force", min_points=MIN_POINTS)
     v = record["velocity"]
     if np.sum(v > 0) < 2 or np.sum(v < 0) < 2:

@@ -191,8 +191,8 @@ def _crossing(p: np.ndarray, gravity: float, curvature: str, sign: int) -> tuple
 def fit_impact(record: Record, mass_kg: float | None = None, gravity: float = G, window_s: float = 0.05,
                guard_s: float = 0.005, curvature: str = "gravity", gravity_correction: bool = True) -> FitResult:
     """Impact stiffness and damping from the first impact of a tire drop record."""
+    record.require("time", "deflection", min_points=20)  # before the mass: a spring record lacks both
     m = record_mass(record, mass_kg)
-    record.require("time", "deflection", min_points=20)
     if curvature not in ("gravity", "free"):
         raise MtbmjError(f"tire: curvature must be 'gravity' or 'free', got {curvature!r}")
     t, d = record["time"], record["deflection"]
@@ -310,8 +310,8 @@ def _damped(p, tau):
 
 def fit_contact(record: Record, mass_kg: float | None = None, guard_s: float = 0.01, min_cycles: float = 2.0) -> FitResult:
     """In-contact stiffness and damping from the settled oscillation (after the last lift-off)."""
+    record.require("time", "deflection", min_points=20)  # before the mass: a spring record lacks both
     m = record_mass(record, mass_kg)
-    record.require("time", "deflection", min_points=20)
     t, d = record["time"], record["deflection"]
     if not np.any(d > 0.0):
         raise MtbmjError(f"{record.path}: no impact in the record (the deflection never turns positive after a fall)")

@@ -62,6 +62,15 @@ class TelemetryError(MtbmjError):
     """A telemetry file cannot be read: names the file and the cause."""
 
 
+class NotAnSST(TelemetryError):
+    """A file given as an SST recording that does not start as one; ``text``: it starts as text (a
+    travel CSV renamed .SST, which ``read_ride`` then reads as one)."""
+
+    def __init__(self, message: str, text: bool):
+        super().__init__(message)
+        self.text = text
+
+
 # What a suspension logger records at: Sufni's v3 files at 1000 Hz, its v2 files at 5000 Hz. Below
 # 100 Hz the velocity's 51 ms Savitzky-Golay window (``ride.metrics``) holds fewer than the 5
 # samples its cubic needs and a 1-5 Hz pedal bob is a few samples a stroke; above 20 kHz (four
@@ -257,7 +266,8 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
     name = str(path)
     blob = read_bytes(path, TelemetryError, name, "telemetry")
     if len(blob) >= 3 and blob[:3] != MAGIC:
-        raise TelemetryError(f"{name}: not an SST file (starts with {blob[:3]!r}, expected {MAGIC!r})")
+        raise NotAnSST(f"{name}: not an SST file (starts with {blob[:3]!r}, expected {MAGIC!r})",
+                       all(32 <= b < 127 or b in b"\t\r\n" for b in blob[:64]) or blob.startswith(b"\xef\xbb\xbf"))
     if len(blob) < 4:
         raise TelemetryError(f"{name}: truncated header ({len(blob)} of at least {HEADER_V2.size} bytes)")
     version = blob[3]
@@ -463,11 +473,17 @@ def _check_csv_travel(name: str, column: str, values: np.ndarray, travel_max_mm:
 
 
 def read_ride(path: str | Path, **decoding) -> TelemetryRecord:
-    """An SST file (versions 2 and 3) or a travel CSV (by its ``.csv`` suffix)."""
-    if Path(path).suffix.lower() == ".csv":
-        keep = {k: v for k, v in decoding.items() if k in ("fork_max_mm", "shock_max_mm", "leverage")}
-        return read_travel_csv(path, **keep)
-    return read_sst(path, **decoding)
+    """An SST file (versions 2 and 3) or a travel CSV: by its ``.csv`` suffix, or by its text where
+    another name was given to one (``ride.SST`` holding ``time_s,fork_mm,...``: it was refused as
+    "not an SST file")."""
+    if Path(path).suffix.lower() != ".csv":
+        try:
+            return read_sst(path, **decoding)
+        except NotAnSST as exc:
+            if not exc.text:
+                raise
+    keep = {k: v for k, v in decoding.items() if k in ("fork_max_mm", "shock_max_mm", "leverage")}
+    return read_travel_csv(path, **keep)
 
 
 SHORT_RIDE_S = 30.0  # a ride shorter than this has histograms that have not settled

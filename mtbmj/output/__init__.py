@@ -374,6 +374,19 @@ _CLAIMS: dict[str, Claim] = {}
 _CLAIMS_LOCK = threading.RLock()
 
 
+def _refuse_other_command(out: Path, command: str) -> None:
+    """A folder another command wrote is not replaced by this one (``advise --out out/reconstruct``
+    replaced the reconstruction a later ``bike --speed-profile`` reads): each command replaces its own
+    result only (``fit``'s kinds share one, as they share its default folder). A program's folder
+    (command ``python``), or a program writing, is not told apart."""
+    record = read_record(out) if out.is_dir() else None
+    other = str((record or {}).get("command") or "python")
+    if "python" in (command, other) or other.split()[0] == command.split()[0]:
+        return
+    raise MtbmjError(f"{out}: holds the result of mtbmj {other}, which {command} would replace: choose another --out "
+                     f"(or remove the folder first)")
+
+
 @contextlib.contextmanager
 def claim(out_dir: str | Path, command: str = "python", folders: Iterable[str] = (),
           inputs: Iterable[str | Path] = ()) -> Iterator[Claim]:
@@ -403,6 +416,7 @@ def claim(out_dir: str | Path, command: str = "python", folders: Iterable[str] =
     if (out / LOCK).is_file():
         _refuse_if_locked(out)
     check_target(out, inputs)
+    _refuse_other_command(out, command)
     held = Claim(out, command)
     created = missing_ancestors(out)
     try:

@@ -26,19 +26,27 @@ def bike_preset_names() -> list[str]:
     return sorted(b.name[:-5] for b in resources.files("mtbmj.bike.presets").iterdir() if b.name.endswith(".toml"))
 
 
-def locate(ref: str) -> tuple[str, Path | Any]:
-    """Resolve a preset name (case-insensitive) or a TOML path: (its name, where it lies)."""
+def locate(ref: str, bikes: bool = False) -> tuple[str, Path | Any]:
+    """Resolve a preset name (case-insensitive) or a TOML path: (its name, where it lies). An
+    unknown name is refused naming the known ones, with ``bikes`` the bike presets too (where either
+    kind is taken: ``mtbmj presets --show``)."""
     for name in preset_names():
         if ref.lower() == name.lower():
             return name, resources.files("mtbmj.presets") / f"{name}.toml"
     path = Path(ref)
     if path.suffix.lower() == ".toml" or path.exists():
         if not path.exists():
-            raise ConfigError(f"{ref}: no such configuration file")
+            named = is_preset(path.stem) and path.suffix.lower() == ".toml"  # base = "S12.toml" for the preset
+            from mtbmj.textfile import other_case
+
+            raise ConfigError(f"{ref}: no such configuration file" + (
+                f" (the preset is named without .toml: {path.stem})" if named else other_case(path)))
         return path.stem, path
     known = ", ".join(preset_names())
     if ref.lower() in bike_preset_names():
         raise ConfigError(f"{ref}: a bike preset (mtbmj bike, sag --bike), not a fork's configuration (known: {known})")
+    if bikes:
+        known = f"configurations {known}; bikes {', '.join(bike_preset_names())}"
     raise ConfigError(f"{ref}: unknown preset (known: {known}) and no such file")
 
 

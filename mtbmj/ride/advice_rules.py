@@ -422,7 +422,7 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
     from pathlib import Path
 
     from mtbmj.bike import spec as spec_mod
-    from mtbmj.config import ALTERNATIVES, load
+    from mtbmj.config import ALTERNATIVES, load, unit_keys
 
     if other is not None:
         ref, over, what = str(other), {}, f"--try {other}"
@@ -458,7 +458,8 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
             if canonical not in have:  # the keys nearest the one typed, else the adjusters the advice tries
                 import difflib
 
-                near = difflib.get_close_matches(name, sorted(have), n=3)
+                near = unit_keys(name, sorted(have))  # fork.spring.psi: the keys in psi the part has, else
+                near = difflib.get_close_matches(name, sorted(have), n=3) if near is None else near  # the nearest
                 raise ConfigError(f"--try-set {key}: the bike's {part} has no {name} (" + (
                     f"did you mean {' or '.join(part + ':' + k for k in near)}?" if near else "the adjusters the advice "
                     f"tries: {', '.join(a.name for a in adjusters(spec) if a.section == part + '.set') or 'none'}; "
@@ -485,8 +486,9 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
     try:
         notes = compose_setting(file, over)
     except ConfigError as exc:
+        said = str(exc).removeprefix("--set ")  # the bike file's own refusal names --set: the key was tried here
         raise ConfigError(f"{what}{' ' + ', '.join(f'{k}={v}' for k, v in settings.items()) if settings else ''}: "
-                          f"{exc}") from None
+                          f"{said}") from None
     new = [n for n in notes if n not in base_notes]
     if new and settings:
         raise ConfigError(f"--try-set {', '.join(f'{k}={v}' for k, v in settings.items())}: {new[0]} (advise "

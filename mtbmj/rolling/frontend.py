@@ -94,7 +94,10 @@ def _check_inputs(speed, head_angle_deg, duration):
     if not isinstance(speed, (int, float)) or isinstance(speed, bool) or not math.isfinite(speed) or speed <= 0:
         raise ConfigError(f"speed: must be a positive number of m/s, got {speed!r}")
     if not isinstance(head_angle_deg, (int, float)) or not math.isfinite(head_angle_deg) or not 45.0 < head_angle_deg <= 90.0:
-        raise ConfigError(f"head angle: must be in (45, 90] degrees from the horizontal, got {head_angle_deg!r}")
+        rad = ""
+        if isinstance(head_angle_deg, (int, float)) and math.pi / 4 < head_angle_deg <= math.pi / 2:  # 1.13: radians
+            rad = f" (radians? {head_angle_deg:g} rad is {math.degrees(head_angle_deg):.1f} deg)"
+        raise ConfigError(f"head angle: must be in (45, 90] degrees from the horizontal, got {head_angle_deg!r}{rad}")
     if duration is not None and not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
         raise ConfigError(f"duration: must be positive, got {duration!r}")
 

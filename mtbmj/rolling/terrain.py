@@ -455,6 +455,8 @@ def make(spec, **params) -> Terrain:
         return from_csv(text)
     name, given = parse(text)
     given.update(params)
+    if name not in LIBRARY and name.lower() in LIBRARY:  # "Rock" is rock, as presets are named in any case
+        name = name.lower()
     if name not in LIBRARY:
         raise TerrainError(f"terrain: unknown scenario {name!r} (known: {', '.join(LIBRARY)}, or a .csv profile)")
     builder, kinds = LIBRARY[name]

@@ -111,6 +111,13 @@ def check(bike: str, scenario: str, variants: list[dict], base: dict | None = No
     terrain.make(scenario)
     fork, shock = setups(spec_mod.load(str(bike), base))
     table = spec_mod.read_table(str(bike))[0]
+    from mtbmj.bike.bikefile import part_key
+
+    for key in variants[0]:  # a part's key varied as a bike key: the bike file's refusal pointed at --fork-set
+        meant = None if key.startswith(("fork:", "shock:")) else part_key(key)
+        if meant is not None:
+            raise ConfigError(f"--vary {key}: a key of the {key.partition('.')[0]}'s configuration is varied as "
+                              f"{key.partition('.')[0]}:{meant} (--vary {key.partition('.')[0]}:{meant}=LO:HI:N)")
     spec_mod.overridden(table, overrides_of(variants[0], base))  # where its keys go
     table = spec_mod.overridden(table, base)
     for key in variants[0]:
@@ -135,6 +142,7 @@ def run(bike: str, scenario: str, speed: float, variants: list[dict], duration: 
 
     from mtbmj.bike.run import run_bike
     from mtbmj.sweep.runner import Journal
+    from mtbmj.sweep.variants import journal_records
 
     if not variants:
         raise ConfigError("sweep: no variants")
@@ -143,10 +151,7 @@ def run(bike: str, scenario: str, speed: float, variants: list[dict], duration: 
             raise ConfigError(f"--vary {key}: a bike sweep varies a bike key (rider.mass_kg) or fork:KEY / shock:KEY")
     check(bike, scenario, variants, base)
     journal = Journal(Path(out_dir)) if out_dir is not None else None
-    known = {} if journal is None else journal.records()
-    if known and not resume:
-        raise MtbmjError(f"{out_dir}: holds the journal of a sweep ({len(known)} variants); pass --resume to "
-                         f"continue it, or choose another --out")
+    known = {} if journal is None else journal_records(Path(out_dir), journal, resume)
     recipe = journal_recipe(bike, scenario, speed, duration, base)
     rows = []
     for i, variant in enumerate(variants):

@@ -46,7 +46,7 @@ from mtbmj.config import SCHEMA, Config
 from mtbmj.errors import ConfigError, MtbmjError
 
 from mtbmj import output
-from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, MANIFEST, NUMERIC_KINDS, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TIMINGS, TRACES, Variant, canonical_value, check_types, flatten_summary, from_csv, grid, parse_vary, sample, variant_id)
+from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, MANIFEST, NUMERIC_KINDS, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TIMINGS, TRACES, Variant, canonical_value, check_types, flatten_summary, from_csv, grid, journal_records, parse_vary, sample, variant_id)
 from mtbmj.sweep.single import run_batch, run_variant
 
 
@@ -454,10 +454,7 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
     planned = plan(cfg, variants, engine, duration)
     with output.claim(out, "sweep", folders=(JOURNAL,)):
         journal = Journal(out)
-        known = journal.records()
-        if known and not resume:
-            raise MtbmjError(f"{out}: holds the journal of a sweep ({len(known)} variants); "
-                             f"pass --resume to continue it, or choose another --out")
+        known = journal_records(out, journal, resume)
         return _sweep(planned, cfg, out, journal, known, started, engine=engine, duration=duration,
                       base_overrides=base_overrides, workers=workers, batch_size=batch_size, backend=backend,
                       scheduler=scheduler, traces=traces, csv=csv, progress=progress, runner=runner,

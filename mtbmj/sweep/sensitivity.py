@@ -65,9 +65,24 @@ def check_outputs(outputs: Sequence[str]) -> list[str]:
             import difflib
 
             close = difflib.get_close_matches(o, [c for c in OUTPUT_COLUMNS if c not in boolean], n=1)
-            hint = f" (did you mean {close[0]}?)" if close else ""
-            raise ConfigError(f"--output: {o!r} is not a numeric sweep output{hint}")
+            hint = f"did you mean {close[0]}? " if close else ""
+            raise ConfigError(f"--output: {o!r} is not a numeric sweep output ({hint}they are "
+                              f"{_outputs([c for c in OUTPUT_COLUMNS if c not in boolean])})")
     return list(dict.fromkeys(outputs))
+
+
+def _outputs(columns: Sequence[str]) -> str:
+    """``columns`` in short: the events' columns of the three signals as one pattern
+    ({sled,fork,tire}_{peak1,...}_{mm,s}), the rest by name."""
+    import re
+
+    parts = [re.fullmatch(r"(sled|fork|tire)_(peak1|topping|peak2|valley1|peak3)_(mm|s)", c) for c in columns]
+    signals, events = ({m.group(i): None for m in parts if m} for i in (1, 2))
+    grid = [f"{s}_{e}_{u}" for s in signals for e in events for u in ("mm", "s")]
+    if not signals or sorted(grid) != sorted(c for c, m in zip(columns, parts) if m):  # not the whole grid: each
+        return ", ".join(columns)
+    pattern = f"{{{','.join(signals)}}}_{{{','.join(events)}}}_{{mm,s}}"
+    return ", ".join([pattern] + [c for c, m in zip(columns, parts) if not m])
 
 
 def samples(prob: dict, n: int, method: str, seed: int = 0, levels: int = 4) -> np.ndarray:

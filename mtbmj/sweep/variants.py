@@ -72,6 +72,21 @@ class Range:
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 
 
+def journal_records(out: Path, journal, resume: bool) -> dict[str, dict]:
+    """The journal's records a sweep into ``out`` reuses (``journal``: the folder's
+    ``mtbmj.sweep.runner.Journal``): with ``resume``, all; without it a journal there is refused,
+    guarding its runs, in words that say whether the sweep was finished (its table written: it said
+    "pass --resume to continue it" of a sweep with nothing to continue) or interrupted."""
+    known = journal.records()
+    if known and not resume:
+        if (out / TABLE).is_file() or (out / TABLE_CSV).is_file():
+            raise MtbmjError(f"{out}: holds a finished sweep ({len(known)} variants); pass --resume to reuse its runs "
+                             f"(the variants it lacks are computed), or choose another --out")
+        raise MtbmjError(f"{out}: holds the journal of an interrupted sweep ({len(known)} variants); pass --resume "
+                         f"to continue it, or choose another --out")
+    return known
+
+
 def numeric_key(key: str, flag: str = "--vary") -> str:
     """``key`` if it names a numeric configuration key, else a ``ConfigError`` naming it."""
     if key not in SCHEMA:
@@ -80,7 +95,9 @@ def numeric_key(key: str, flag: str = "--vary") -> str:
         except ConfigError as exc:
             raise ConfigError(f"{flag}: {exc}") from None
     if SCHEMA[key] not in NUMERIC_KINDS:
-        raise ConfigError(f"{flag}: {key} is not a number that can be varied (it is {SCHEMA[key]!r})")
+        twin = next((k for k in SCHEMA if k.startswith(f"{key}_") and SCHEMA[k] in NUMERIC_KINDS), None)  # preload_N
+        raise ConfigError(f"{flag}: {key} is not a number that can be varied (it is {SCHEMA[key]!r})"
+                          + (f"; did you mean {twin}?" if twin else ""))
     return key
 
 
@@ -107,7 +124,8 @@ def parse_vary(text: str, count: bool | None = None, check_key: bool = True) -> 
     if count is True and n is None:
         raise ConfigError(f"--vary {text}: a grid needs a count, key=lo:hi:n (or give --samples N)")
     if count is False and n is not None:
-        raise ConfigError(f"--vary {text}: with --samples give the range only, key=lo:hi")
+        raise ConfigError(f"--vary {text}: a sampled range (sensitivity, sweep --samples) takes no count; give "
+                          f"the range only, key=lo:hi")
     # an end far outside what any bike has (metres typed into a mm key): one warning, the sweep runs
     from mtbmj.config import plausibility, warn
 
