@@ -320,6 +320,111 @@ def test_recovers_spring_heavily_damped(generated):
     assert s["damper_N_s_per_m_ci95"][0] <= 5000.0 <= s["damper_N_s_per_m_ci95"][1]
 
 
+def _path_noise(rest_tol_mm):
+    """(the largest change of the replay's residual at one set of values when another run came between,
+    the largest change one finite-difference step of the fit, 1e-3 of the friction's scale, makes), mm."""
+    from mtbmj.identify.bounce_replay import NAMES, SeatedReplay, prepare_slam
+
+    t, x = slam(scale=0.55, c=2500.0, fc=30.0)
+    sl = prepare_slam(t, x, None, "generated", SeatedReplay("sst", rest_tol_mm=rest_tol_mm))
+    v, f = sl.x0.copy(), NAMES.index("friction_N")
+    first = sl.residual(v)
+    far = v.copy()
+    far[NAMES.index("spring_scale")] *= 1.2
+    far[f] *= 2.0
+    sl.residual(far)
+    again = sl.residual(v)
+    step = v.copy()
+    step[f] += 1e-3 * sl.base[f]
+    return float(np.max(np.abs(again - first))), float(np.max(np.abs(sl.residual(step) - again)))
+
+
+TIGHT_REST_MM = 1e-7  # the rest solved to this leaves the residual a function of its values alone
+
+
+def test_rest_solved_tightly_leaves_no_path_noise():
+    """Issue 53, why the whole-trace replay lands differently from start to start: at the default
+    ``REST_TOL_MM`` (5e-4 mm) each run solves the rest from the preload the last run left, and the same
+    values replayed after a run far from them give a stroke 6.7e-4 mm apart, 29 % of what the fit's own
+    finite-difference step in friction changes (more than 10 % here). With the rest solved to 1e-7 mm
+    the same values give the same stroke within 1e-3 of that step (measured 1.7e-8 mm)."""
+    from mtbmj.identify.bounce_replay import REST_TOL_MM
+
+    noise, step = _path_noise(TIGHT_REST_MM)
+    assert noise < 1e-3 * step
+    loose, step = _path_noise(REST_TOL_MM)
+    assert loose > 0.1 * step
+
+
+AGREE = 0.01  # landings from starts the fit cannot tell apart agree within this share of their 95 % intervals
+
+
+@pytest.fixture(scope="module")
+def moved_starts():
+    return landings_from_moved_starts()
+
+
+def landings_from_moved_starts():
+    """The replay of this file's lightly damped slam (0.55 x, 2500 N s/m, 30 N) from three starts moved
+    as ``bounce_rebound.restarted`` moves them (a normal draw of its ``RESTART_STEP``, 1e-3 of each value's
+    scale, seeded), with the rest solved to ``TIGHT_REST_MM`` and to the default ``REST_TOL_MM``:
+    {tolerance: [summary per start]}."""
+    from mtbmj.identify.bounce_rebound import RESTART_STEP
+    from mtbmj.identify.bounce_replay import NAMES, REST_TOL_MM, SeatedReplay, prepare_slam, replay
+
+    t, x = slam(scale=0.55, c=2500.0, fc=30.0)
+    out = {}
+    for tol in (TIGHT_REST_MM, REST_TOL_MM):
+        sr = SeatedReplay("sst", rest_tol_mm=tol)
+        sl = prepare_slam(t, x, None, "generated", sr)
+        rng = np.random.default_rng(0)
+        out[tol] = [replay(t, x, None, name="generated", seated=sr, start=dict(zip(NAMES, map(
+            float, sl.x0 + RESTART_STEP * sl.base * rng.standard_normal(sl.x0.size))))).summary() for _ in range(3)]
+    return out
+
+
+def _spread(summaries) -> dict:
+    """Per shock value, its landings' range over the mean width of their 95 % intervals."""
+    from mtbmj.identify.bounce_replay import SHOCK_NAMES
+
+    return {k: float(np.ptp([s[k] for s in summaries]) / np.mean([np.diff(s[k + "_ci95"])[0] for s in summaries]))
+            for k in SHOCK_NAMES}
+
+
+@pytest.mark.slow
+def test_landings_agree_with_the_rest_solved_tightly(moved_starts):
+    """From three starts the fit cannot tell apart, the rest solved to 1e-7 mm, the replay lands on one
+    spring, damper and friction within AGREE of their intervals (measured 3e-4 of each)."""
+    got = _spread(moved_starts[TIGHT_REST_MM])
+    assert all(v <= AGREE for v in got.values()), got
+
+
+@pytest.mark.slow
+def test_landings_spread_at_the_default_rest(moved_starts):
+    """The same starts at the default ``REST_TOL_MM`` (5e-4 mm) land apart by more than AGREE of the
+    intervals (measured 0.027 of the spring's, 0.046 of the damper's, 0.083 of the friction's): the
+    scatter ``bounce_rebound.restarted`` measures, which the tight rest removes."""
+    from mtbmj.identify.bounce_replay import REST_TOL_MM
+
+    got = _spread(moved_starts[REST_TOL_MM])
+    assert max(got.values()) > AGREE, got
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="the reproducible landing reads the generator worse than the default's: with the "
+                                       "rest solved to 1e-7 mm all three starts land at 0.467 x [0.384, 0.550] (15.1 % "
+                                       "low), 1692 N s/m (32 % low) and 89 N of friction for 30, where the default "
+                                       "(5e-4 mm) lands at 0.486-0.489 x, 1980-2054 N s/m, 41-52 N: the whole-trace "
+                                       "least squares, converging further, trades the damper for friction, and the "
+                                       "default's noise stops it nearer its start (2000 N s/m, 40 N): the objective's "
+                                       "own minimum, its cost 45.0 with the friction held at 30 N, 31.7 at 89 N; so "
+                                       "the default stays 5e-4 mm")
+def test_reproducible_landing_recovers_the_generator(moved_starts):
+    for s in moved_starts[TIGHT_REST_MM]:
+        assert s["spring_scale"] == pytest.approx(0.55, rel=0.15)
+        assert s["damper_N_s_per_m"] == pytest.approx(2500.0, rel=0.30)
+
+
 def test_travel_doubled_is_refused(seated):
     """(b) The record's travel x2 leaves the shock's 65 mm stroke: refused in one line naming the file."""
     from mtbmj.identify.bounce_replay import replay

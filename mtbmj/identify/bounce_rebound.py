@@ -325,8 +325,8 @@ def restarted(record, sr, n: int = RESTARTS, seed: int = 0) -> list[dict]:
     """The whole-trace replay of ``record`` (``bounce_replay.replay``: the best-determined one, whose
     spring, friction and damper the rebound dampers are given) fitted again ``n`` times, each from the
     start it had moved by a normal draw of ``RESTART_STEP`` times each value's scale (seeded): what the
-    fit lands on from starts it cannot tell apart, as it lands differently from machine to machine
-    (its least squares stop after a set number of runs, the values barely determined). Per restart
+    fit lands on from starts it cannot tell apart, as it lands differently from machine to machine (it
+    stops where the noise of its rest's solve, ``bounce_replay.REST_TOL_MM``, hides its slope). Per restart
     {"spring_scale", "friction_N", "compression_N_s_per_m" (the replay's one damper)} or {"refused"}."""
     from mtbmj.identify.bounce_replay import prepare_slam, replay
 

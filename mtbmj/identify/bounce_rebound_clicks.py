@@ -19,8 +19,9 @@ and compared with the record's rate: it holds when the two lie within 2 combined
 The combined sd has three parts in quadrature: the prediction's (the law's), the record's noise, and
 the nuisance fit's reproducibility. The last: the spring, friction and compression the replays are
 given come out of a whole-trace fit whose values are barely determined (their 95 % intervals span
-0-900 N and 0-6600 N s/m on the shared slams) and which stops after a set number of runs, so it lands
-differently from machine to machine, and the coefficients' bend in clicks follows where it lands
+0-900 N and 0-6600 N s/m on the shared slams) and which stops where the noise of its rest's solve
+(``bounce_replay.REST_TOL_MM``) hides its slope, so it lands differently from machine to machine,
+and the coefficients' bend in clicks follows where it lands
 (on the shared slams the 0/8/17-click records held out at +-0.4 sd at one landing, +-4 at another
 22 N and 250 N s/m away, the records' noise being 0.13 % of the rate). ``bounce_rebound.restarted``
 fits it again from starts moved by its own finite-difference step, the records are read again at

@@ -73,7 +73,7 @@ REST_ACC = 1e-3  # m/s^2 (rad/s^2): the start is at rest when every acceleration
 MAX_RELATIVE_RMS = 0.12  # the replay follows the record: RMS residual within this share of the slam's rise
 PRELOAD = "fork.spring.preload_N"
 PRELOAD_ITERATIONS = 40
-REST_TOL_MM = 5e-4  # the replay's rest within this of the record's (tight: a finite difference sees it)
+REST_TOL_MM = 5e-4  # the rest solved to this: noisy, but 1e-7's reproducible landing reads worse (identification.md)
 MAX_PITCH_RAD = math.radians(10.0)  # a standing bike's frame is within this of level
 SHOCK_KEYS = {"scale": "fork.spring.rate_N_per_mm", "rebound": "fork.damper.rebound_N_s_per_m",
               "compression": "fork.damper.compression_N_s_per_m", "friction": "fork.friction.coulomb_N"}
@@ -121,7 +121,8 @@ class SeatedReplay:
     """The MuJoCo bike of ``bike`` standing still with the compliant seated rider; :meth:`run` replays a
     push with the shock's spring scale, rebound damping and friction set."""
 
-    def __init__(self, bike="sst", rider_hz: float = RIDER_HZ, overrides=None, callback: str = "auto"):
+    def __init__(self, bike="sst", rider_hz: float = RIDER_HZ, overrides=None, callback: str = "auto",
+                 rest_tol_mm: float = REST_TOL_MM):
         spec = bike if isinstance(bike, spec_mod.BikeSpec) else spec_mod.load(str(bike), overrides)
         self.source_spec = spec
         self._linear = None
@@ -131,6 +132,7 @@ class SeatedReplay:
         b = self.p.bike
         self.model = b.model
         self.rider_hz = float(rider_hz)
+        self.rest_tol_mm = float(rest_tol_mm)
         self.dofs = [b.dof_index(n) for n in ("rider_z", "rider_pitch")]
         self.qadr = [b.qpos_index(n) for n in ("rider_z", "rider_pitch")]
         self.joints = [int(self.model.joint(n).id) for n in ("rider_z", "rider_pitch")]
@@ -226,7 +228,7 @@ class SeatedReplay:
             at = {"shock": float(self.stroke_mm(q[4])), "fork": float(q[3] * 1e3)}
             off = {end: at[end] - self.rest_mm[end] for end in at if self.rest_mm[end] is not None}
             # an end whose preload is 0 and still rests above the record's travel is as low as it goes
-            if all(abs(v) < REST_TOL_MM or (v < 0 and preload[e] <= PRELOAD_FLOOR_N) for e, v in off.items()):
+            if all(abs(v) < self.rest_tol_mm or (v < 0 and preload[e] <= PRELOAD_FLOOR_N) for e, v in off.items()):
                 break
             for end, miss in off.items():  # more preload per mm of sag: the main spring's rate (N/mm)
                 rate = float((self.p.shock_setup if end == "shock" else self.p.fork_setup).config.get(SHOCK_KEYS["scale"]))
