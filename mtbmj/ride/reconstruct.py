@@ -83,6 +83,7 @@ from mtbmj.ride.reconstruct_inverse import QuarterCar, forward, ground_under, lo
 from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ, within_stops
 from mtbmj.ride.reconstruct_bands import BANDS, BEAT_MARGIN, at_once_share, band_checks, timing_error  # noqa: F401 (BANDS: this module's name too)
 from mtbmj.ride.reconstruct_bound import fork_filter_bound
+from mtbmj.ride.reconstruct_flight import landed
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
                                           check_length, merged, min_seconds, refine, speed_from_either,
                                           speed_from_lag, tracked, TRACK_ANCHOR_S, TRACK_MARGIN, TRACK_SD)
@@ -657,7 +658,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
         for _ in range(REFINE_PASSES):
             try:
                 again = merged(first, refine(t, rear * 1e3, done["found"]["rear_rise"] * 1e3, done["lags"],
-                                             wheelbase, flights=result.jumps))
+                                             wheelbase, flights=result.jumps + landed(result.levels)))
                 again["from"] = ", ".join(sorted({s for s in first["sources"] if s} | {"the rear predicted"}))
                 done, speed = through(again), again
             except ReconstructError:

@@ -39,7 +39,6 @@ FAR = 2.0  # a window no neighbour supports, this many times off the median of t
 FAR_OTHERS = 3  # ... of at least this many, gives no speed
 STILL_MM = 1.0  # a window where either end's travel spans less than this is standing: it gives no speed
 REFINE_WINDOW_S = 2.5  # seconds per window of the speed found again from the rear predicted (refine)
-LANDED_S = 0.1  # refine leaves out the rear's flights and this much of each landing's compression (to its deepest point)
 REFINE_SPAN = 0.5  # the lag left is searched within +- this share of the first estimate's lag
 REFINE_MIN_CORRELATION = 0.5  # a refining window whose best correlation is below this gives no speed
 TRACK_ANCHOR_S = 20.0  # a tracked window's centre lies within this many seconds of a strict window's centre
@@ -264,10 +263,7 @@ def refine(t, recorded, predicted, lags, wheelbase: float, window_s: float = REF
     ``flights``: the front's flights ((start s, end s)); each one's stretch a lag later, the rear's
     flight, is left out of the alignment (both series' speeds set to 0 there): when the rear lands is
     the flight's, the drop's depth and the take-off's speed as the model found them, not the ride's
-    speed (kept in, the made whole-bike ride's worst window is 3.9 % off, left out 1.6 %), and so is the
-    landing's compression, ``LANDED_S`` past it (since a drop's level is kept, ``reconstruct_flight``,
-    the rear predicted lands off the 0.5 m drop a few hundredths of a second late, and with its
-    compression in that window read 5.0 % off; left out, 1.6 %).
+    speed (kept in, the made whole-bike ride's worst window is 3.9 % off, left out 1.6 %).
     Returns speed_from_lag's answer (``ReconstructError`` where no window gives a speed)."""
     from scipy.signal import butter, sosfiltfilt
 
@@ -280,9 +276,8 @@ def refine(t, recorded, predicted, lags, wheelbase: float, window_s: float = REF
     lags = np.asarray(lags, float)
     for f0, f1 in flights:  # the rear's flight (the front's a lag later): when it lands is the model's flight's
         i0, i1 = (min(int(np.searchsorted(t, f)), t.size - 1) for f in (f0, f1))
-        land = int(np.searchsorted(t, f1 + lags[i1] + LANDED_S))
-        a[int(np.searchsorted(t, f0 + lags[i0])):land] = 0.0
-        b[int(np.searchsorted(t, f0 + lags[i0])):land] = 0.0
+        a[int(np.searchsorted(t, f0 + lags[i0])):int(np.searchsorted(t, f1 + lags[i1]))] = 0.0
+        b[int(np.searchsorted(t, f0 + lags[i0])):int(np.searchsorted(t, f1 + lags[i1]))] = 0.0
     step = int(round(window_s / dt))
     far = int(math.ceil(REFINE_SPAN * float(np.max(lags)) / dt)) + 1
     windows, sds, whys = [], [], []
