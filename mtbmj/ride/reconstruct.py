@@ -81,7 +81,8 @@ import numpy as np
 
 from mtbmj.ride.reconstruct_inverse import QuarterCar, forward, ground_under, lowpass, runs, wheelbase_at
 from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ, within_stops
-from mtbmj.ride.reconstruct_bands import BANDS, BEAT_MARGIN, at_once_share, band_checks, timing_error  # noqa: F401 (BANDS: this module's name too)
+from mtbmj.ride.reconstruct_bands import BANDS, BEAT_MARGIN, band_checks  # noqa: F401 (BANDS: this module's name too)
+from mtbmj.ride.reconstruct_bands import at_once_share, timing_error
 from mtbmj.ride.reconstruct_bound import fork_filter_bound
 from mtbmj.ride.reconstruct_flight import landed
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,

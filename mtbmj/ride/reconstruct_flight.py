@@ -15,7 +15,8 @@ returned to the level above a drop within seconds. Here:
   from the record, the rear wheel still on top until it too leaves the edge, gravity).
 - **The guard** (what the flight's duration allows): a front wheel that leaves an edge level falls
   at most ``pivot_acceleration`` (the frame pitching about its rear axle under its own weight and
-  the rider's preloads, his inertia left out: the fastest its front can fall) for the flight's
+  the rider's preloads, his inertia left out: the fastest its front falls unless he pushes it down
+  harder than he rests on it, or it leaves the edge already falling) for the flight's
   duration T, plus what the fork extends in the air: a drop read deeper than
   ``1/2 a T^2 + (rise at take-off - rise at landing)`` is not kept (the flight is left, the level
   as it was), and neither is one that reads no drop.
@@ -134,5 +135,6 @@ def described(t, kept, left) -> list:
     return sorted(rows, key=lambda r: r["start_s"])
 
 
-__all__ = ["DEEPEST_S", "LEVEL_SETTLED_M", "LANDED_S", "landed", "pivot_acceleration", "edge_flights", "read", "response", "reference",
+__all__ = ["DEEPEST_S", "LEVEL_SETTLED_M", "LANDED_S", "landed", "pivot_acceleration", "edge_flights", "read",
+           "response", "reference",
            "settled", "described"]
