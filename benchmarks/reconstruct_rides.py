@@ -14,8 +14,9 @@ with the share of its ground met at the front's moment fitted on its record (``a
 ``reconstruct(..., at_once=True)``, reported, not judged; the wall time includes it), what the fork's
 record holds about the rear (``checks.bound_fork_filter_rms_mm``: a linear filter from the fork's
 record fitted on the rear's itself, cross-validated; reported, not judged) beside the pass mark,
-the whole bike's passes and where it diverged (if it did), the share of the ride checked, the verdict
-and the wall time. Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
+the whole bike's passes and where it diverged (if it did), the share of the ride checked, the verdict,
+the flights bridged and each drop's edge flight's level change read, kept or left (``drop_levels``,
+``mtbmj/ride/reconstruct_flight.py``) and the wall time. Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
 reconstruct_rides.json``, outside the repository). Not a test: nothing is asserted.
 """
 from __future__ import annotations
@@ -83,6 +84,7 @@ def main(argv=None) -> int:
                    speed_sd_median_m_per_s=statistics.median(sds) if sds else None,
                    rejected=sorted({w["rejected"].split(" (")[0].split(":")[0] for w in s["windows"] if w["rejected"]}),
                    checks=s["checks"], wheelbase_at_sag_m=s["wheelbase_at_sag_m"], at_once_fit=s.get("at_once_fit"),
+                   flights=len(s["flights"]), drop_levels=s["drop_levels"],
                    wall_s_includes="the at-once fit (two or three more runs of the whole bike than the command's)")
         rows.append(row)
         b = s['checks']['bound_fork_filter_rms_mm']

@@ -837,7 +837,9 @@ def reconstruction_stand_in(monkeypatch) -> list:
 WHOLE_RATE = 1000.0  # Hz, the made record's rate
 # the features along the terrain: (kind, where m, size m): a rock garden (12 rocks a third of the
 # size to the size high, 0.4-1 m long, over 15 m), a G-out (a dip this deep, 8 m long), a drop (this high), a tabletop
-# (up this high over 2.5 m, a 2 m table, down over 3 m)
+# (up this high over 2.5 m, a 2 m table, down over 3 m), a kicker (a straight ramp up this high over KICKER_M, then
+# the ground back at once to the level before it: a jump to a landing at the level it started from)
+KICKER_M = 1.5
 WHOLE_FEATURES = (("rocks", 45.0, 0.06), ("g_out", 95.0, 0.25), ("drop", 130.0, 0.3), ("jump", 165.0, 0.4),
                   ("drop", 215.0, 0.5))
 
@@ -883,7 +885,7 @@ def whole_bike_terrain(length, seed=21, features=WHOLE_FEATURES):
             rocks = [(c, *rng.uniform((low, 0.4), (size, 1.0))) for c in rng.uniform(at, at + 15.0, 12)]
         if at >= length:
             continue
-        name = kind if kind in ("rocks", "g_out", "jump") else f"{kind}_{size:g}"
+        name = kind if kind in ("rocks", "g_out", "jump", "kicker") else f"{kind}_{size:g}"
         name = name if name not in placed else f"{name}#{sum(k.split('#')[0] == name for k in placed) + 1}"
         placed[name] = at
         if kind == "rocks":
@@ -895,6 +897,8 @@ def whole_bike_terrain(length, seed=21, features=WHOLE_FEATURES):
             h -= size * smoothstep((s - at) / 0.05)
         elif kind == "jump":
             h += size * (smoothstep((s - at) / 2.5) - smoothstep((s - at - 4.5) / 3.0))
+        elif kind == "kicker":
+            h += size * np.clip((s - at) / KICKER_M, 0.0, 1.0) * (1.0 - smoothstep((s - at - KICKER_M) / 0.05))
         else:
             raise ValueError(f"no feature {kind!r}")
     return (lambda x: np.interp(x, s, h)), placed

@@ -39,7 +39,8 @@ stop (two such stretches one flight where the force between them averages under 
 rest), a flight of 0.1 s or more from where the force last fell below 10 % of its load at rest
 (``reconstruct_inverse.unloaded``); a flight that long landing more than 0.15 m lower bridged by the
 landing's level from the take-off on (a drop's edge), any other by the chord; the landing where the
-force returns.
+force returns. Each drop's edge flight's level change is read by the whole bike and kept in its slow
+reference where its duration allows it (:mod:`mtbmj.ride.reconstruct_flight`), else left.
 
 **Checks.** The whole bike free over the terrain found (the rider's slow load on its front)
 reproduces the front record (its RMS difference); the rear predicted (the whole bike's rear in the
@@ -81,7 +82,9 @@ import numpy as np
 from mtbmj.ride.reconstruct_inverse import QuarterCar, forward, ground_under, lowpass, runs, wheelbase_at
 from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ, within_stops
 from mtbmj.ride.reconstruct_bands import BANDS, BEAT_MARGIN, band_checks  # noqa: F401 (BANDS: this module's name too)
+from mtbmj.ride.reconstruct_bands import at_once_share, timing_error
 from mtbmj.ride.reconstruct_bound import fork_filter_bound
+from mtbmj.ride.reconstruct_flight import landed
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
                                           check_length, merged, min_seconds, refine, speed_from_either,
                                           speed_from_lag, tracked, TRACK_ANCHOR_S, TRACK_MARGIN, TRACK_SD)
@@ -141,6 +144,7 @@ class Reconstruction:
     at_once: float = 0.0  # the share of the rear's ground met at the front's moment (at_once_share), 0..1
     at_once_fit: dict | None = None  # reconstruct(at_once=True): the rear with that share fitted (fitted_summary)
     cut: list = None  # an end's record read at most PAST_TRAVEL_M past its travel (within_stops), what was cut
+    levels: list = None  # each drop's edge flight's level change read, kept or left (reconstruct_flight.described)
     _bound: dict | None = field(default=None, init=False, repr=False, compare=False)  # fork_bound's, once
 
     def fork_bound(self) -> dict | None:
@@ -340,6 +344,7 @@ class Reconstruction:
                 "terrain_length_m": float(self.distance[-1]),
                 "terrain_csv_lead_in_m": TERRAIN_LEAD_IN_M,
                 "flights": [{"start_s": float(a), "end_s": float(b)} for a, b in self.jumps],
+                "drop_levels": self.levels or [],
                 "left_out": [{"start_s": a, "end_s": b, "why": "no speed: standing, or the two ends do not align here"}
                              for a, b in (self.unaligned or [])],
                 "whole_bike": {"passes": int(self.passes),
@@ -351,7 +356,8 @@ class Reconstruction:
                            "the wheelbase at sag, point-contact tyres without damping, "
                            "the fork's slow load the rider's (the rear given none), the ground under a flight of "
                            "0.1 s or more the landing's level from the take-off on where the wheel lands more than "
-                           "0.15 m lower (a drop's edge), else the chord from take-off to landing, the speed linear "
+                           "0.15 m lower (a drop's edge; its level change kept where the flight's duration allows it), "
+                           "else the chord from take-off to landing, the speed linear "
                            "between the windows that gave one (mtbmj/ride/reconstruct.py)"}
 
     def speed_along(self) -> tuple:
@@ -367,6 +373,7 @@ class Reconstruction:
         c = s["checks"]
         rng = s["window_speed_range_m_per_s"]
         spread = f" (windows {rng[0]:.2f}-{rng[1]:.2f})" if rng else ""
+        kept = sum(r["kept"] for r in self.levels or [])
         p = s["speed_profile"]
         f = p.get("first_estimate")
         refined = ("" if f is None else f" of {p['window_s']:g} s aligning the rear predicted (and "
@@ -395,7 +402,8 @@ class Reconstruction:
                 + ("" if not c["bands"] else "; the rear by band (correlation, described): " + ", ".join(
                     f"{b['band_Hz'][0]:g}-{b['band_Hz'][1]:g} Hz {b['predicted_correlation']:.2f} "
                     f"{'yes' if b['described'] else 'no'}" for b in c["bands"]))
-                + f"; {len(self.jumps)} flight(s) bridged, "
+                + f"; {len(self.jumps)} flight(s) bridged, {kept} drop level(s) kept, {len(self.levels or []) - kept} "
+                f"left (no drop, or deeper than its flight allows), "
                 f"{len(self.unaligned or [])} stretch(es) without a speed left out ({c['samples_checked_percent']:.0f} % "
                 f"of the ride checked)")
 
@@ -637,7 +645,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
                               front_again * 1e3, rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps,
                               done["unaligned"], np.interp(t - done["lags"], t, fork * 1e3), wheelbase,
                               found["passes"], found["settled_m"], min(diverged) if diverged else None, part_s,
-                              stands, at_once, cut=[c for c in (cut_fork, cut_shock) if c])
+                              stands, at_once, cut=[c for c in (cut_fork, cut_shock) if c], levels=found["levels"])
 
     done = through(speed)
     result = built(done, speed)
@@ -651,7 +659,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
         for _ in range(REFINE_PASSES):
             try:
                 again = merged(first, refine(t, rear * 1e3, done["found"]["rear_rise"] * 1e3, done["lags"],
-                                             wheelbase, flights=result.jumps))
+                                             wheelbase, flights=result.jumps + landed(result.levels)))
                 again["from"] = ", ".join(sorted({s for s in first["sources"] if s} | {"the rear predicted"}))
                 done, speed = through(again), again
             except ReconstructError:
@@ -665,36 +673,10 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
         # without it; one that diverges earlier than the bike without it is not taken
         kept = [r for r in tried if r.diverged_s is None or (result.diverged_s is not None
                                                              and r.diverged_s >= result.diverged_s)]
-        best = min(kept, key=lambda r: _timing_error(r.rear, r.rear_predicted, result.valid))
+        best = min(kept, key=lambda r: timing_error(r.rear, r.rear_predicted, result.valid))
         result.at_once_fit = best.fitted_summary(result.valid)
     return result
 
-
-def _timing_error(rear, predicted, valid) -> float:
-    ok = valid & np.isfinite(predicted)
-    if not ok.any():
-        return math.inf
-    e = (predicted - rear)[ok]
-    return float(np.sqrt(np.mean((e - e.mean()) ** 2)) + (math.inf if ok.sum() < valid.sum() else 0.0))
-
-
-def at_once_share(rear, at_lag, at_once, valid) -> float:
-    """The share (0..1) of the rear's ground met at the front's moment that best matches the rear's
-    record (mm) on the ``valid`` samples, from the rear predicted with none of it (``at_lag``) and with
-    all of it (``at_once``): least squares on the series less their means (the timing alone, never a
-    height), the rear predicted taken linear in the share between the two, clipped to 0..1; 0 where
-    the two do not differ or there are fewer than 3 samples. The whole bike is not linear in it (the
-    terrain found moves with the rear's ground through the pitch): ``reconstruct`` rides the share
-    found and keeps whichever of none, all and it matches the record best."""
-    ok = valid & np.isfinite(at_lag) & np.isfinite(at_once)
-    if ok.sum() < 3:
-        return 0.0
-    e0 = (at_lag - rear)[ok]
-    d = (at_once - at_lag)[ok]
-    e0, d = e0 - e0.mean(), d - d.mean()
-    if not d @ d > 0.0:
-        return 0.0
-    return float(min(max(-(e0 @ d) / (d @ d), 0.0), 1.0))
 
 __all__ = ["min_seconds", "speed_from_lag", "ground_under", "forward", "histogram_distance", "reconstruct", "Reconstruction",
            "QuarterCar", "ReconstructError"]

@@ -15,8 +15,13 @@ the lag (``fork_at_lag_correlation``) and at the same moment (``fork_now_correla
 prediction whose timing is the ride's peaks at ``q`` = 0; one whose rear answers a wheelbase late
 where the ride's rear answered at once peaks at -1; a timing error of the speed alone moves the peak
 by the speed's relative error.
+
+The share of the rear's ground met at the front's moment (:func:`at_once_share`, reported beside,
+never judged by) and the error it is chosen by (:func:`timing_error`) are here too.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -76,4 +81,33 @@ def band_checks(t, rear, predicted, fork_delayed, valid, fork=None, lags=None) -
     return out
 
 
-__all__ = ["BANDS", "BEAT_MARGIN", "SHIFT_LAGS", "band_checks", "timing"]
+def timing_error(rear, predicted, valid) -> float:
+    """The RMS (mm) of the rear predicted less the record, each less its mean, on the ``valid`` samples
+    (its timing and shape, not its level); infinite where it is not a number on any of them."""
+    ok = valid & np.isfinite(predicted)
+    if not ok.any():
+        return math.inf
+    e = (predicted - rear)[ok]
+    return float(np.sqrt(np.mean((e - e.mean()) ** 2)) + (math.inf if ok.sum() < valid.sum() else 0.0))
+
+
+def at_once_share(rear, at_lag, at_once, valid) -> float:
+    """The share (0..1) of the rear's ground met at the front's moment that best matches the rear's
+    record (mm) on the ``valid`` samples, from the rear predicted with none of it (``at_lag``) and with
+    all of it (``at_once``): least squares on the series less their means (the timing alone, never a
+    height), the rear predicted taken linear in the share between the two, clipped to 0..1; 0 where
+    the two do not differ or there are fewer than 3 samples. The whole bike is not linear in it (the
+    terrain found moves with the rear's ground through the pitch): ``reconstruct`` rides the share
+    found and keeps whichever of none, all and it matches the record best."""
+    ok = valid & np.isfinite(at_lag) & np.isfinite(at_once)
+    if ok.sum() < 3:
+        return 0.0
+    e0 = (at_lag - rear)[ok]
+    d = (at_once - at_lag)[ok]
+    e0, d = e0 - e0.mean(), d - d.mean()
+    if not d @ d > 0.0:
+        return 0.0
+    return float(min(max(-(e0 @ d) / (d @ d), 0.0), 1.0))
+
+
+__all__ = ["BANDS", "BEAT_MARGIN", "SHIFT_LAGS", "band_checks", "timing", "timing_error", "at_once_share"]

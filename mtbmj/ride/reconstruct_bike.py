@@ -355,10 +355,13 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
         force = force + np.asarray(stops, float)
     top = hanging(x, dt)
     front = (x * b.sin_a, acc * b.sin_a, force - slow, force, top)
+    from mtbmj.ride import reconstruct_flight as flight
+
     ground = np.asarray(first_ground, float)
     before, change, passes = None, math.inf, 0
+    chosen, kept, left, ref, most = None, [], [], reference, flight.pivot_acceleration(b)
     while passes < MAX_PASSES:
-        out = ride(t, b, rear_ground(t, lag, ground, at_once), front=front, reference=reference)
+        out = ride(t, b, rear_ground(t, lag, ground, at_once), front=front, reference=ref)
         passes += 1
         ok = np.isfinite(out["front_ground"])
         found, air = bridge(np.where(ok, out["front_ground"], ground[-1] if not ok.all() else 0.0),
@@ -369,14 +372,19 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
         ground = found - found[0]
         if out["diverged_s"] is not None:
             break
+        if chosen is None:  # the flights whose level is read: those of the first pass that left at a drop's edge
+            chosen = flight.edge_flights(found, air, dt)
+        levels = kept
+        kept, left = flight.read(found, air, front[0], chosen, dt, most)
+        ref = flight.reference(reference, front[0], kept, dt)
         if before is not None:
             change = float(np.sqrt(np.mean((out["rear_rise"] - before) ** 2)))
-            if change < SETTLED_M:
+            if change < SETTLED_M and flight.settled(levels, kept):
                 break
         before = out["rear_rise"]
     return {"ground": ground, "airborne": air, "tyre": out["front_tyre"], "rear_rise": out["rear_rise"],
             "slow_load": out["slow_load"] - slow, "rider_slow_load": -slow, "passes": passes, "settled_m": change,
-            "diverged_s": out["diverged_s"]}
+            "diverged_s": out["diverged_s"], "levels": flight.described(t, kept, left)}
 
 
 __all__ = ["SLOW_HZ", "SLOW_BOUND", "COMPILED", "MAX_PASSES", "WholeBike", "carried_inertia", "whole_bike", "ride", "rear_ground",

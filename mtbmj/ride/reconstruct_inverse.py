@@ -83,7 +83,8 @@ def wheelbase_at(spec, fork: float, rear: float) -> float:
     return float(spec.front_axle[0] - fork * math.cos(spec.head_angle) - rear_x)
 
 
-def _highpass(x, dt):
+def highpass(x, dt):
+    """``x`` high-passed at ``HIGHPASS_HZ`` (2nd-order Butterworth, forward and back): the drift's removal."""
     from scipy.signal import butter, sosfiltfilt
 
     sos = butter(2, HIGHPASS_HZ, btype="highpass", fs=1.0 / dt, output="sos")
@@ -187,14 +188,21 @@ def bridge(ground, off, dt: float, edges: bool = True):
     for a, b in flights(off, dt):
         air[a:b] = True
         a0, b0 = max(a - 1, 0), min(b, ground.size - 1)  # the last sample on the ground, the first back on it
-        if (edges and ground[b0] < ground[a0] - EDGE_DROP_M and (b - a) * dt >= EDGE_FLIGHT_S
-                and not _thrown(ground, a0, dt)):  # fell away at an edge
+        if edges and edge(ground, a, b, dt):  # fell away at an edge
             under = np.full(b0 - a0 + 1, ground[b0])
             under[0] = ground[a0]
         else:
             under = np.linspace(ground[a0], ground[b0], b0 - a0 + 1)
         ground[a0:b0 + 1] = np.minimum(ground[a0:b0 + 1], under)
     return ground, air
+
+
+def edge(ground, a: int, b: int, dt: float) -> bool:
+    """Whether the flight of samples ``a``..``b`` (end exclusive) over ``ground`` left it at a drop's
+    edge: at least ``EDGE_FLIGHT_S`` long, landing more than ``EDGE_DROP_M`` lower than it took off,
+    the ground not thrown into the take-off (``EDGE_RISE_M`` over ``EDGE_RISE_S``)."""
+    a0, b0 = max(a - 1, 0), min(b, len(ground) - 1)
+    return bool(ground[b0] < ground[a0] - EDGE_DROP_M and (b - a) * dt >= EDGE_FLIGHT_S and not _thrown(ground, a0, dt))
 
 
 def _thrown(ground, a0: int, dt: float) -> bool:
@@ -270,9 +278,9 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio):
         kick = float(body @ tau / (tau @ tau))
         vel[k:] -= kick
         stops[start:k + 1] -= kick * car.sprung / ((k + 1 - start) * dt)
-    vel = _highpass(vel - vel.mean(), dt)
+    vel = highpass(vel - vel.mean(), dt)
     body = np.cumsum(vel) * dt
-    body = _highpass(body - body.mean(), dt)
+    body = highpass(body - body.mean(), dt)
     wheel = body + w
     _, wheel_acc = _derivatives(wheel, dt)
     tyre = np.where(top, 0.0, car.unsprung * (wheel_acc + car.gravity) + f)
@@ -373,5 +381,5 @@ def runs(mask):
 
 
 
-__all__ = ["QuarterCar", "ground_under", "flights", "bridge", "unloaded", "law_along", "derivatives", "hanging", "forward", "wheelbase_at", "lowpass", "runs",
+__all__ = ["QuarterCar", "ground_under", "flights", "bridge", "edge", "unloaded", "law_along", "derivatives", "highpass", "hanging", "forward", "wheelbase_at", "lowpass", "runs",
            "within_stops"]
