@@ -11,8 +11,9 @@ over the T seconds between them needs
 speed of the ride's speed profile over the stretch, P = ``PEDAL_POWER_W`` (a strong rider's 5 s
 sprint, 13 W/kg at 75 kg: generous, nobody sprints up a kicker's face) and m the bike with its
 rider. A ground found that rises more than that is not a trail the bike rode: it is the
-reconstruction's (00100.SST at 7.5 m/s: 4.3 m up in 1.0 s, 15.8-16.8 s, where 3.9 m is the most;
-the whole bike thrown up by the hard stop's impulse the quarter car found after a long fall).
+reconstruction's (00100.SST at 7.5 m/s, while the whole bike took the hard stop's impulse its quarter
+car found after a long fall: 4.3 m up in 1.0 s, 15.8-16.8 s, where 3.8 m is the most;
+``reconstruct_flight.stop_kicks`` since).
 Falls are not bounded (a drop is a trail's). The rise is looked for on the ground read every
 ``STEP_S``.
 
