@@ -16,7 +16,8 @@ record holds about the rear (``checks.bound_fork_filter_rms_mm``: a linear filte
 record fitted on the rear's itself, cross-validated; reported, not judged) beside the pass mark,
 the whole bike's passes and where it diverged (if it did), the share of the ride checked, the verdict,
 the flights bridged and each drop's edge flight's level change read, kept or left (``drop_levels``,
-``mtbmj/ride/reconstruct_flight.py``) and the wall time. Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
+``mtbmj/ride/reconstruct_flight.py``), the stretches whose ground found rises more than the bike could
+climb (``beyond_trail``, ``mtbmj/ride/reconstruct_envelope.py``) and the wall time. Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
 reconstruct_rides.json``, outside the repository). Not a test: nothing is asserted.
 """
 from __future__ import annotations
@@ -84,7 +85,7 @@ def main(argv=None) -> int:
                    speed_sd_median_m_per_s=statistics.median(sds) if sds else None,
                    rejected=sorted({w["rejected"].split(" (")[0].split(":")[0] for w in s["windows"] if w["rejected"]}),
                    checks=s["checks"], wheelbase_at_sag_m=s["wheelbase_at_sag_m"], at_once_fit=s.get("at_once_fit"),
-                   flights=len(s["flights"]), drop_levels=s["drop_levels"],
+                   flights=len(s["flights"]), drop_levels=s["drop_levels"], beyond_trail=s["beyond_trail"],
                    wall_s_includes="the at-once fit (two or three more runs of the whole bike than the command's)")
         rows.append(row)
         b = s['checks']['bound_fork_filter_rms_mm']

@@ -629,6 +629,11 @@ def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
                             f"{mm(c['pass_mark_rms_mm'], 3)})"
                             + ("; the rear moves with the fork at once" if c.get("front_holds_too_little") else ""),
                             "reconstruct_rides.json", d["command"]))
+        if r.get("beyond_trail"):  # the ground found past what the bike could climb (reconstruct_envelope)
+            rows.append(Row(f"{name}: ground no trail has, not checked", "report", "; ".join(
+                f"{num(b['start_s'], 3)}–{num(b['end_s'], 3)} s ({num(b['start_m'], 3)}–{num(b['end_m'], 3)} m): "
+                f"{num(b['rise_m'], 2)} m up, at most {num(b['allowed_m'], 2)}" for b in r["beyond_trail"]),
+                "reconstruct_rides.json", d["command"]))
         fit = r.get("at_once_fit")
         if fit and fit.get("rear_predicted_rms_mm") is not None and c.get("fork_at_once_rms_mm") is not None:
             rows.append(Row(f"{name}: beside the check, not judged", "report",

@@ -169,3 +169,31 @@ def test_a_drop_deeper_than_its_flight_allows_is_left():
     for (_, _, change, most), d in zip(kept + left, changes):
         assert change == pytest.approx(d, abs=1e-12) and most == pytest.approx(allowed, rel=1e-12)
     assert math.isclose(allowed, 0.4163, abs_tol=1e-3)
+
+
+def test_the_made_ride_s_ground_is_a_trail_and_a_hill_planted_in_it_is_not(made, rebuilt):
+    """What a trail can be (mtbmj/ride/reconstruct_envelope.py): the ground found on this made ride (two
+    drops and a kicker at 6 m/s) stays within what the bike could climb, so nothing is said and nothing
+    left out for it (``beyond_trail`` empty); the same ground with a 3 m hill planted 1 s after its
+    kicker (up over 1 s, down over 1.5 s, a deliberately wrong ground) is found, where it was planted."""
+    import warnings
+
+    from mtbmj.errors import ConfigWarning
+    from mtbmj.ride import reconstruct_envelope as envelope
+
+    assert rebuilt.beyond == [] and rebuilt.summary()["beyond_trail"] == []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        envelope.warn(rebuilt.name, rebuilt.beyond)
+    assert not [w for w in caught if issubclass(w.category, ConfigWarning)]
+    t = rebuilt.t
+    k = int(np.argmax(PROFILE.along(t) >= made["features"]["kicker"]))
+    t0 = float(t[k]) + 1.0
+    hill = 3.0 * np.interp(t, [t0, t0 + 1.0, t0 + 2.5], [0.0, 1.0, 0.0])
+    from mtbmj.bike.model import centre_of_mass
+    from mtbmj.bike.spec import load
+
+    total = centre_of_mass(load(str(made["bike"])))[0]  # the bike's mass with its rider: the bike file's
+    speed = rebuilt.speed["speed_at"](t)
+    found = envelope.beyond(t, rebuilt.distance, rebuilt.ground + hill, speed, total)
+    assert len(found) == 1 and t0 - 0.3 <= found[0]["start_s"] <= t0 + 0.1 and found[0]["end_s"] >= t0 + 1.0, found

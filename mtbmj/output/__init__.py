@@ -59,7 +59,11 @@ def csv_chunks(columns: Mapping[str, np.ndarray], header: str = "", rows: int = 
     n = len(arrays[0]) if arrays else 0
     for start in range(0, n, rows):
         buffer = io.StringIO()
-        np.savetxt(buffer, np.column_stack([a[start: start + rows] for a in arrays]), delimiter=",", fmt="%.9g")
+        block = np.column_stack([a[start: start + rows] for a in arrays])
+        # a subnormal is round-off where 0 is meant (a filter's tail run forward and back over a record's
+        # leading zeros decays to 1e-317), and -0 is 0: both written 0
+        block[np.abs(block) < np.finfo(float).tiny] = 0.0
+        np.savetxt(buffer, block, delimiter=",", fmt="%.9g")
         text = buffer.getvalue()
         buffer.close()  # savetxt leaves a reference cycle to the buffer: free its text now, not at the next GC
         yield text.encode()

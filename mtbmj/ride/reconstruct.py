@@ -84,6 +84,7 @@ from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ, within_st
 from mtbmj.ride.reconstruct_bands import BANDS, BEAT_MARGIN, band_checks  # noqa: F401 (BANDS: this module's name too)
 from mtbmj.ride.reconstruct_bands import at_once_share, timing_error
 from mtbmj.ride.reconstruct_bound import fork_filter_bound
+from mtbmj.ride import reconstruct_envelope as envelope
 from mtbmj.ride.reconstruct_flight import landed
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
                                           check_length, merged, min_seconds, refine, speed_from_either,
@@ -145,6 +146,7 @@ class Reconstruction:
     at_once_fit: dict | None = None  # reconstruct(at_once=True): the rear with that share fitted (fitted_summary)
     cut: list = None  # an end's record read at most PAST_TRAVEL_M past its travel (within_stops), what was cut
     levels: list = None  # each drop's edge flight's level change read, kept or left (reconstruct_flight.described)
+    beyond: list = None  # where the ground found rises more than the bike could climb (reconstruct_envelope.beyond)
     _bound: dict | None = field(default=None, init=False, repr=False, compare=False)  # fork_bound's, once
 
     def fork_bound(self) -> dict | None:
@@ -344,7 +346,7 @@ class Reconstruction:
                 "terrain_length_m": float(self.distance[-1]),
                 "terrain_csv_lead_in_m": TERRAIN_LEAD_IN_M,
                 "flights": [{"start_s": float(a), "end_s": float(b)} for a, b in self.jumps],
-                "drop_levels": self.levels or [],
+                "drop_levels": self.levels or [], "beyond_trail": self.beyond or [],
                 "left_out": [{"start_s": a, "end_s": b, "why": "no speed: standing, or the two ends do not align here"}
                              for a, b in (self.unaligned or [])],
                 "whole_bike": {"passes": int(self.passes),
@@ -641,11 +643,14 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
         jumps = [(float(t[i]), float(t[min(j, t.size - 1)])) for i, j in runs(found["airborne"])]
         v = speed["speed_at"](t)
         distance = np.concatenate(([0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)))
+        beyond = envelope.beyond(t, distance, found["ground"], v, total, g)  # no trail is so: not checked
+        bad = bad | envelope.mask(t, beyond)
         return Reconstruction(record.name, spec.name, t, speed, distance, found["ground"], ~bad, fork * 1e3,
                               front_again * 1e3, rear * 1e3, rear_predicted * 1e3, float(lev.full_travel * 1e3), jumps,
                               done["unaligned"], np.interp(t - done["lags"], t, fork * 1e3), wheelbase,
                               found["passes"], found["settled_m"], min(diverged) if diverged else None, part_s,
-                              stands, at_once, cut=[c for c in (cut_fork, cut_shock) if c], levels=found["levels"])
+                              stands, at_once, cut=[c for c in (cut_fork, cut_shock) if c], levels=found["levels"],
+                              beyond=beyond)
 
     done = through(speed)
     result = built(done, speed)
@@ -675,6 +680,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
                                                              and r.diverged_s >= result.diverged_s)]
         best = min(kept, key=lambda r: timing_error(r.rear, r.rear_predicted, result.valid))
         result.at_once_fit = best.fitted_summary(result.valid)
+    envelope.warn(record.name, result.beyond)
     return result
 
 

@@ -338,7 +338,8 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     is the rider's, taken off the frame as the quarter car takes it (the tyre carries it); the frame's
     front is held near ``reference`` (the quarter car's body, its drift removed) by the bounded slow
     load of :func:`ride`. ``stops`` (N at the wheel, or None): the fork's hard-stop force across each
-    bottom-out (not in the record; the quarter car's, keeping its body level after it). ``at_once``: the
+    bottom-out (not in the record; the quarter car's, keeping its body level after it, at first, then
+    the whole bike's own, ``reconstruct_flight.stop_kicks``). ``at_once``: the
     share of the rear's ground taken at the front's moment (:func:`rear_ground`). Flights: where the tyre's force is not positive or the fork hangs on its
     top-out stop, merged and bridged (``reconstruct_inverse.bridge``). Returns {"ground", "airborne",
     "tyre", "rear_rise", "slow_load" (N on the frame's front: the rider's and the loop's),
@@ -351,10 +352,12 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     _, acc = derivatives(x, dt)
     force = law_along(b.fork, x, dt, fork_travel) / b.sin_a
     slow = lowpass(force - b.fF0, dt, HIGHPASS_HZ)  # the rider's slow load at the front
-    if stops is not None:  # the fork's hard stop across each bottom-out, as the quarter car found it
-        force = force + np.asarray(stops, float)
+    # the fork's hard stop across each bottom-out: at first as the quarter car found it, then the whole
+    # bike's own (reconstruct_flight.stop_kicks)
+    first = np.zeros(x.size) if stops is None else np.asarray(stops, float)
+    kicks = first
     top = hanging(x, dt)
-    front = (x * b.sin_a, acc * b.sin_a, force - slow, force, top)
+    front = (x * b.sin_a, acc * b.sin_a, force + kicks - slow, force + kicks, top)
     from mtbmj.ride import reconstruct_flight as flight
 
     ground = np.asarray(first_ground, float)
@@ -372,6 +375,9 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
         ground = found - found[0]
         if out["diverged_s"] is not None:
             break
+        if first.any():  # the whole bike's own hard-stop impulses, kept level after each hit, never pulling
+            kicks = flight.stop_kicks(first, kicks, ground, dt, b.fF0 / b.g)
+            front = (x * b.sin_a, acc * b.sin_a, force + kicks - slow, force + kicks, top)
         if chosen is None:  # the flights whose level is read: those of the first pass that left at a drop's edge
             chosen = flight.edge_flights(found, air, dt)
         levels = kept
