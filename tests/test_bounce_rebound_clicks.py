@@ -331,6 +331,32 @@ def test_held_out_with_nuisance_ends_misses_mislabelled_clicks():
     assert rows[1]["holds"] is False and abs(rows[1]["z"]) > 10
 
 
+def test_spring_ends_are_the_records_as_read_there():
+    """``bounce_rebound.at_spring_ends``: each read record at the spring interval's ends as
+    ``rebound_dampers`` read it there (its coefficient and curve there, its noise interval moved with the
+    coefficient); an end where one record read none is None; held out there, the residual is the test's
+    own at that end's bend."""
+    from mtbmj.identify.bounce_rebound import at_spring_ends
+    from mtbmj.identify.bounce_rebound_clicks import held_out
+
+    lo, hi = landing([0.0, 50.0, 0.0]), landing([0.0, -45.0, 0.0])
+    main = landing(BENDS[0])
+    for e, a, b in zip(main, lo, hi):
+        e["at_spring_ci95"] = [a["rebound_N_s_per_m"], b["rebound_N_s_per_m"]]
+        e["rate_curve_at_spring_ci95"] = [a["rate_curve"], b["rate_curve"]]
+    got = at_spring_ends(main)
+    for e, a in zip(got[1], hi):
+        assert e["rebound_N_s_per_m"] == pytest.approx(a["rebound_N_s_per_m"])
+        assert e["rebound_noise_ci95"] == pytest.approx(a["rebound_noise_ci95"])
+    row = held_out(main, (), {"spring_scale": got})[1]
+    e = landing([0.0, -45.0, 0.0])
+    a, c0 = np.polyfit([0, 17], [e[0]["rebound_N_s_per_m"], e[2]["rebound_N_s_per_m"]], 1)
+    own = float(rate_of(a * 8 + c0 + 45.0)) - e[1]["record_mid_rebound_per_s"]
+    assert row["nuisance_residuals_per_s"]["spring_scale"][1] == pytest.approx(own, rel=1e-3)
+    main[0]["at_spring_ci95"][0] = None
+    assert at_spring_ends(main)[0] is None and at_spring_ends(main)[1] is not None
+
+
 def test_each_coefficients_interval_carries_the_nuisance_ends():
     """``bounce_rebound.combine`` with the coefficients at the nuisance values' ends: each side's half-width
     the noise's and, per value, the larger move of its ends on that side in quadrature (an end moving

@@ -306,6 +306,7 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
     entries = rebound_dampers(slams, ks, spring[0], friction, compression, spring[1]) + entries
     entries.sort(key=lambda e: e["clicks"])
     nuisance = {} if own else at_nuisance_ends(slams, ks, spring[0], best, entries)
+    nuisance["spring_scale"] = at_spring_ends(entries)  # already read: the held-out residual's moves there too
     again = []
     if not own and restarts:  # the replay's values: its fit again from starts it cannot tell apart
         rec = next(r for r in records if record_name(r) == best["file"])
@@ -329,7 +330,7 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
                    else f"{best['file']}'s replay")
     said_from = "the ring-down fit" if own else f"{best['file']}'s replay"
     said_again = (f", the replay's reproducibility over {len(landed)} restart(s)" if landed else "")
-    said_again += ", the friction's and compression's intervals" if nuisance else ""
+    said_again += ", the friction's and compression's intervals" if not own else ""
     line = (f"rebound dampers from the first rebounds (spring {spring[0]:.2f} x from {said_spring}, friction "
             f"{friction:.0f} N, compression {compression:.0f} N s/m from {said_from}): {', '.join(said(e) for e in read) or 'none'} N s/m (95 %: the record's noise and the spring's "
             f"interval{said_again}) at {at or 'no'} clicks"
@@ -340,8 +341,30 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
                e.get("rebound_N_s_per_m") for e in sorted(r["entries"], key=lambda e: e["clicks"])]}
                if "entries" in r else {}) for r in again],
            "records": entries, "rises": up, "line": line}
-    out["nuisance_ends"] = {k: [list(p) for p in v] for k, v in nuisance_ends(best).items()} if nuisance else None
+    out["nuisance_ends"] = None if own else {k: [list(p) for p in v] for k, v in nuisance_ends(best).items()}
     out.update(law_in_clicks(entries, target_per_s, landed, nuisance))
+    return out
+
+
+def at_spring_ends(entries) -> list:
+    """The records as read at each end of the spring's interval (``at_spring_ci95`` with its
+    ``rate_curve_at_spring_ci95``; the noise interval moved with the coefficient), for the held-out sd
+    beside the friction's and compression's: [at the lower end, at the upper end], None where a read
+    record has no coefficient there."""
+    read = [e for e in entries if "rebound_N_s_per_m" in e]
+    out = []
+    for i in (0, 1):
+        got = []
+        for e in read:
+            c = (e.get("at_spring_ci95") or [None, None])[i]
+            cv = (e.get("rate_curve_at_spring_ci95") or [None, None])[i]
+            if c is None or not cv:
+                got = None
+                break
+            move = c - e["rebound_N_s_per_m"]
+            got.append({**e, "rebound_N_s_per_m": c, "rate_curve": cv,
+                        "rebound_noise_ci95": [None if v is None else v + move for v in e["rebound_noise_ci95"]]})
+        out.append(got if read else None)
     return out
 
 
@@ -465,5 +488,5 @@ def law_in_clicks(entries, target_per_s: float | None = None, again=(), nuisance
     return {"law": law, "held_out": rows, "answer": ans, "lines": lines}
 
 
-__all__ = ["BOUNDS", "READ_REST_TOL_MM", "RESTARTS", "at_nuisance_ends", "combine", "curve", "law_in_clicks",
+__all__ = ["BOUNDS", "READ_REST_TOL_MM", "RESTARTS", "at_nuisance_ends", "at_spring_ends", "combine", "curve", "law_in_clicks",
            "nuisance_ends", "rate_spread", "read_records", "rebound_dampers", "replay_rebound", "reproducibility", "restarted", "rises", "solve", "solve_on"]

@@ -6,7 +6,8 @@ interval from the record's noise) as a straight line in clicks, c = c0 + slope x
 least squares with each record's standard deviation (the half-width of its noise interval / 1.96);
 with more records than two the covariance is widened by chi^2 / dof when that exceeds 1 (the records
 scatter more than their noise says). The spring's interval moves every record's coefficient the same
-way, so it is carried as a second answer at each of its ends rather than into the law. Refused (a
+way, so it is carried as a second answer at each of its ends rather than into the law (into the
+held-out check it is carried, below). Refused (a
 reason, no law) with fewer than two distinct clicks read, when a record's noise was not read, or when
 the coefficients do not rise with the clicks (a rebound adjuster adds damping one way: clicks
 mislabelled or a record that is not a clean slam); flagged when the records' own rates do not fall
@@ -17,11 +18,12 @@ record's clicks with the law's interval, carried to the record's first-rebound r
 height) through that record's own rate-against-coefficient curve (the replay at the spring given),
 and compared with the record's rate: it holds when the two lie within 2 combined standard deviations.
 The combined sd has four parts in quadrature: the prediction's (the law's), the record's noise, the
-values given (the friction's and the compression's 95 % intervals: the held-out residual again with
-every record read at each end, ``bounce_rebound.at_nuisance_ends``; per value the mean move over its
-ends / Z95, the values in quadrature: ``nuisance_sd_per_s``; on the shared slams the records' bend off
-the line changes sign between the ends of the compression's interval, so the check cannot tell the
-law's bend from the compression's, and says so by its sd), and the nuisance fit's reproducibility
+values given (the friction's, the compression's and the spring's 95 % intervals: the held-out
+residual again with every record read at each end, ``bounce_rebound.at_nuisance_ends`` and
+``at_spring_ends``; per value the mean move over the ends read / Z95, the values in quadrature:
+``nuisance_sd_per_s``; on the shared slams the records' bend off the line changes sign between the
+ends of the compression's interval and between the spring's and its upper end, so the check cannot
+tell the law's bend from theirs, and says so by its sd), and the nuisance fit's reproducibility
 (none by default). The last: the spring, friction and compression the replays are
 given come out of a whole-trace fit whose values are barely determined (their 95 % intervals span
 0-900 N and 0-6600 N s/m on the shared slams) and which stops where the noise of its rest's solve
@@ -367,7 +369,9 @@ def held_out_line(rows) -> str | None:
     names = sorted({m for r in done if r.get("nuisance_sd_per_s") is not None
                     for m, v in (r.get("nuisance_residuals_per_s") or {}).items() if any(x is not None for x in v)})
     said = ["the law's", "the record's noise"] + ([f"the replay's reproducibility over {k} restart(s)"] if k else [])
-    said += [f"the {' and '.join(SAID.get(m, m) for m in names)} given at their 95 % ends"] if names else []
+    named = [SAID.get(m, m) for m in names]
+    said += [f"the {' and '.join([', '.join(named[:-1])] + named[-1:] if len(named) > 1 else named)} given at "
+             f"their 95 % ends"] if names else []
     sd = ("sd: " + ", ".join(said[:-1]) + " and " + said[-1] if len(said) > 2 else
           "sd: the law's and the record's noise; the replay's reproducibility not measured")
     return (f"rebound law held out (each record from the others; {sd}): {'; '.join(parts)}: {n} of {len(done)} "
