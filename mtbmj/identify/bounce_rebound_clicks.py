@@ -464,10 +464,11 @@ def figure(got: dict):
     bx.plot([], [], "ko", label="record (95 % noise)")
     for row in got.get("held_out") or []:
         if "holds" in row:
-            err = Z95 * math.hypot(row["predicted_rate_sd_per_s"], row.get("reproducibility_sd_per_s") or 0.0)
+            err = Z95 * math.hypot(row["predicted_rate_sd_per_s"], row.get("reproducibility_sd_per_s") or 0.0,
+                                   row.get("nuisance_sd_per_s") or 0.0)
             bx.errorbar(row["clicks"] + 0.3, row["predicted_rate_per_s"], yerr=err,
                         fmt="s", color="C1" if row["holds"] else "C3", capsize=3)
-    bx.plot([], [], "s", color="C1", label="held out: predicted from the others (95 %: law, restarts)")
+    bx.plot([], [], "s", color="C1", label="held out: predicted from the others (95 %: law, values given, restarts)")
     if ans.get("target_per_s") is not None:
         bx.axhline(ans["target_per_s"], color="C2", ls=":", label=f"target {ans['target_per_s']:.2f} /s")
     bx.set_xlabel("rebound clicks")
