@@ -253,6 +253,124 @@ def test_held_out_with_restarts_misses_mislabelled_clicks():
     assert rows[1]["residual_per_s"] == pytest.approx(own_residuals(1, labels)[0], rel=1e-3)
 
 
+# the nuisance values' ends (issue 53): the records read again at each end of the friction's and the
+# compression's 95 % intervals bend the middle record off the line by a known amount (the test's own)
+ENDS = {"friction_N": ([0.0, -25.0, 0.0], [0.0, 35.0, 0.0]), "compression_N_s_per_m": ([0.0, 80.0, 0.0],
+                                                                                   [0.0, -70.0, 0.0])}
+
+
+def at_ends(labels=(0, 8, 17), off=(0.0, 0.0, 0.0)):
+    return {k: [landing(b, labels, off) for b in pair] for k, pair in ENDS.items()}
+
+
+def own_nuisance_sd(j, bend, labels=(0, 8, 17), off=(0.0, 0.0, 0.0)):
+    """The test's own nuisance part of record ``j``'s held-out sd: its residual (a line through the other
+    two) at each end less at the reading, the mean move per value / 1.96, the values in quadrature."""
+    def residual(b):
+        e = landing(b, labels, off)
+        others = [i for i in range(3) if i != j]
+        a, c0 = np.polyfit([e[i]["clicks"] for i in others], [e[i]["rebound_N_s_per_m"] for i in others], 1)
+        return float(rate_of(a * e[j]["clicks"] + c0 - b[j])) - e[j]["record_mid_rebound_per_s"]
+
+    r0 = residual(bend)
+    return math.sqrt(sum((np.mean([abs(residual(b) - r0) for b in pair]) / 1.959963984540054) ** 2
+                         for pair in ENDS.values()))
+
+
+def test_held_out_carries_the_nuisance_values_intervals():
+    """A reading bent off the line (60 N s/m at the middle record) with the records read again at the
+    ends of the friction's and compression's intervals (made here): the held-out sd's nuisance part is
+    the test's own (a line through two points at each end); with it every record holds, with the noise
+    alone the same reading misses; an end that read nothing is left out of its value's part."""
+    from mtbmj.identify.bounce_rebound_clicks import held_out, held_out_line
+
+    rows = held_out(landing(BENDS[0]), (), at_ends())
+    for j, row in enumerate(rows):
+        assert row["nuisance_sd_per_s"] == pytest.approx(own_nuisance_sd(j, BENDS[0]), rel=1e-3)
+        assert row["reproducibility_sd_per_s"] is None
+    assert all(r["holds"] for r in rows), [r["z"] for r in rows]
+    assert "the compression and friction given at their 95 % ends" in held_out_line(rows)
+    naive = held_out(landing(BENDS[0]))
+    assert naive[1]["holds"] is False and abs(naive[1]["z"]) > 5 and naive[1]["nuisance_sd_per_s"] is None
+    half = at_ends()
+    half["friction_N"][1] = None
+    row = held_out(landing(BENDS[0]), (), half)[1]
+    assert row["nuisance_residuals_per_s"]["friction_N"][1] is None
+    r0, got = row["residual_per_s"], row["nuisance_residuals_per_s"]
+    assert got["friction_N"][0] == pytest.approx(rows[1]["nuisance_residuals_per_s"]["friction_N"][0], rel=1e-9)
+    z95 = 1.959963984540054
+    assert row["nuisance_sd_per_s"] == pytest.approx(math.hypot(
+        abs(got["friction_N"][0] - r0) / z95, np.mean([abs(v - r0) for v in got["compression_N_s_per_m"]]) / z95))
+
+
+@pytest.mark.parametrize("j", [0, 1, 2])
+def test_held_out_with_nuisance_ends_misses_a_record_off_by_3_sd(j):
+    """The reading on the line, the records bent at the nuisance ends as above, record ``j``'s rate moved
+    by 3 of its widened sd (at every end: the record is what is off): held out, it misses; moved by
+    0.75 sd it holds."""
+    from mtbmj.identify.bounce_rebound_clicks import held_out
+
+    straight = [0.0, 0.0, 0.0]
+    rows = held_out(landing(straight), (), at_ends())
+    assert rows[j]["holds"] and rows[j]["nuisance_sd_per_s"] > 3 * rows[j]["record_rate_sd_per_s"]
+    sd = rows[j]["sd_per_s"]
+    for k, holds in ((3.0, False), (-3.0, False), (0.75, True)):
+        off = tuple(k * sd if i == j else 0.0 for i in range(3))
+        row = held_out(landing(straight, off=off), (), at_ends(off=off))[j]
+        assert row["holds"] is holds, (k, row["z"])
+
+
+def test_held_out_with_nuisance_ends_misses_mislabelled_clicks():
+    """The 8-click record labelled 12, read at the nuisance ends alike: held out, it misses by far more
+    than the widened sd."""
+    from mtbmj.identify.bounce_rebound_clicks import held_out
+
+    labels = (0, 12, 17)
+    rows = held_out(landing(BENDS[0], labels), (), at_ends(labels))
+    assert rows[1]["nuisance_sd_per_s"] == pytest.approx(own_nuisance_sd(1, BENDS[0], labels), rel=1e-3)
+    assert rows[1]["holds"] is False and abs(rows[1]["z"]) > 10
+
+
+def test_spring_ends_are_the_records_as_read_there():
+    """``bounce_rebound.at_spring_ends``: each read record at the spring interval's ends as
+    ``rebound_dampers`` read it there (its coefficient and curve there, its noise interval moved with the
+    coefficient); an end where one record read none is None; held out there, the residual is the test's
+    own at that end's bend."""
+    from mtbmj.identify.bounce_rebound import at_spring_ends
+    from mtbmj.identify.bounce_rebound_clicks import held_out
+
+    lo, hi = landing([0.0, 50.0, 0.0]), landing([0.0, -45.0, 0.0])
+    main = landing(BENDS[0])
+    for e, a, b in zip(main, lo, hi):
+        e["at_spring_ci95"] = [a["rebound_N_s_per_m"], b["rebound_N_s_per_m"]]
+        e["rate_curve_at_spring_ci95"] = [a["rate_curve"], b["rate_curve"]]
+    got = at_spring_ends(main)
+    for e, a in zip(got[1], hi):
+        assert e["rebound_N_s_per_m"] == pytest.approx(a["rebound_N_s_per_m"])
+        assert e["rebound_noise_ci95"] == pytest.approx(a["rebound_noise_ci95"])
+    row = held_out(main, (), {"spring_scale": got})[1]
+    e = landing([0.0, -45.0, 0.0])
+    a, c0 = np.polyfit([0, 17], [e[0]["rebound_N_s_per_m"], e[2]["rebound_N_s_per_m"]], 1)
+    own = float(rate_of(a * 8 + c0 + 45.0)) - e[1]["record_mid_rebound_per_s"]
+    assert row["nuisance_residuals_per_s"]["spring_scale"][1] == pytest.approx(own, rel=1e-3)
+    main[0]["at_spring_ci95"][0] = None
+    assert at_spring_ends(main)[0] is None and at_spring_ends(main)[1] is not None
+
+
+def test_each_coefficients_interval_carries_the_nuisance_ends():
+    """``bounce_rebound.combine`` with the coefficients at the nuisance values' ends: each side's half-width
+    the noise's and, per value, the larger move of its ends on that side in quadrature (an end moving
+    the coefficient down widens the low side only); an end that read none opens both sides."""
+    from mtbmj.identify.bounce_rebound import combine
+
+    c, noise = 1000.0, [990.0, 1010.0]
+    got, why = combine(c, noise, None, None, {"friction_N": [900.0, 1050.0], "compression_N_s_per_m": [1200.0, 1100.0]})
+    assert got == pytest.approx([c - math.hypot(10.0, 100.0), c + math.sqrt(10.0 ** 2 + 50.0 ** 2 + 200.0 ** 2)])
+    assert why == []
+    got, why = combine(c, noise, None, None, {"friction_N": [900.0, None]})
+    assert got == [None, None] and all("friction_N" in w for w in why)
+
+
 @pytest.mark.parametrize("k_true", [3.0, 7.0, 12.0])
 def test_answer_for_a_target_the_test_sets(k_true):
     """The target: the rate the closed-form curve has at the line's coefficient for ``k_true`` clicks;

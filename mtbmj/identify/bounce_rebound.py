@@ -25,11 +25,18 @@ the record less its 10 ms moving average resampled in blocks onto the average, t
 its 95 % ends solved through on the same replay, ``rebound_noise_ci95``) and the spring's interval
 (the same solve with the spring at the ends of the interval given, ``spring_ci95``, which is what
 moves it most: 0.49 x gives 208, 2591, 5368 N s/m on the shared slams, 0.6 x 961, 3956, 7065), their
-half-widths added in quadrature on each side, and with them the nuisance fit's reproducibility
-(``reproducibility``: Z95 x the standard deviation of the coefficient over the reading and its
-``RESTARTS`` restarts: ``restarted`` fits the best whole-trace replay again from starts moved by its own
-finite-difference step, and every record is read again at each landing; where the spring, friction
-and compression come from the ring-down fit, none); a side whose end has no coefficient is open (None),
+half-widths added in quadrature on each side, and with them the friction's and the compression's
+intervals (``at_nuisance_ends``: every record read again at each end of the best whole-trace replay's
+95 % interval of its friction and of its damper, each alone, the other held; per value the larger
+move on each side, ``at_nuisance_ci95``; the whole-trace replay barely determines them, [0, 874] N and
+[0, 6773] N s/m on the shared slams, and they move the coefficients as much as the spring does) and
+the nuisance fit's reproducibility (``reproducibility``: Z95 x the standard deviation of the
+coefficient over the reading and its ``RESTARTS`` restarts: ``restarted`` fits the best whole-trace
+replay again from starts moved by its own finite-difference step, and every record is read again at
+each landing; none by default, since the intervals carried hold the landings' scatter many times
+over; where the spring, friction and compression come from the ring-down fit, neither). The readings
+run on a seated bike whose rest is solved to ``READ_REST_TOL_MM`` (1e-7 mm, no path noise: the same
+values read the same coefficient whatever ran before). A side whose end has no coefficient is open (None),
 said in ``interval_open`` (on the shared slams every interval is open below: at the spring's lower end
 the bike rebounds slower than the records even undamped). Refused for the record (a reason, no
 value) when no coefficient within ``BOUNDS`` gives the record's speed: the bike with the spring given
@@ -50,7 +57,9 @@ NOISE_S = 0.010  # the record's noise: what is left after a moving average over 
 DRAWS = 200  # the record's noise resampled this many times (rate_spread)
 Z95 = 1.959963984540054
 DAMPER = NAMES.index("damper_N_s_per_m")
-RESTARTS = 3  # the nuisance fit (the best whole-trace replay) fitted again this many times (``restarted``)
+RESTARTS = 0  # the nuisance fit (the best whole-trace replay) fitted again this many times (``restarted``):
+# none by default since its friction's and compression's intervals are carried (``at_nuisance_ends``)
+READ_REST_TOL_MM = 1e-7  # the readings' seated rest solved to this (``SeatedReplay(rest_tol_mm=)``): no path noise
 RESTART_STEP = 1e-3  # ... each from a start moved by a normal draw of this times each value's scale: the fit's
 # own finite-difference step (``bounce_replay``'s diff_step), starts the fit cannot tell apart
 
@@ -167,13 +176,24 @@ def _ends(cv: _Curve, target: float, sd, spring_scale: float) -> list:
     return out
 
 
-def combine(c: float, noise, spring, restarts_half: float | None = None) -> tuple[list, list]:
-    """The damper's 95 % interval: the half-widths from the record's noise, from the spring's interval
-    and from the nuisance fit's restarts (``restarts_half``: Z95 x their sd, ``reproducibility``)
-    added in quadrature on each side; a side whose end is missing (None: no coefficient within BOUNDS
-    gives it) is open, with why. Returns ([low or None, high or None], [reasons for open sides])."""
+def combine(c: float, noise, spring, restarts_half: float | None = None, nuisance=None) -> tuple[list, list]:
+    """The damper's 95 % interval: the half-widths from the record's noise, from the spring's interval,
+    from the nuisance fit's restarts (``restarts_half``: Z95 x their sd, ``reproducibility``) and from
+    the friction's and compression's intervals (``nuisance``: {name: [coefficient at its lower end, at
+    its upper end]}, ``at_nuisance_ends``; either end may move the coefficient either way, so each side
+    takes the larger move of the ends on its side) added in quadrature on each side; a side whose end is
+    missing (None: no coefficient within BOUNDS gives it; a nuisance end read none: both sides) is
+    open, with why. Returns ([low or None, high or None], [reasons for open sides])."""
     ends, why = [], []
+    moves = [[max([0.0] + [abs(c - v) for v in pair if v is not None and (v < c if k == 0 else v > c)]) for k in (0, 1)]
+             for pair in (nuisance or {}).values()]
+    unread = [name for name, pair in (nuisance or {}).items() if None in pair]
     for side, k in (("low", 0), ("high", 1)):
+        if unread:
+            ends.append(None)
+            why.append(f"open {'below' if k == 0 else 'above'}: no coefficient within {BOUNDS[0]:g}-{BOUNDS[1]:g} "
+                       f"N s/m at an end of the {', '.join(unread)} interval")
+            continue
         n = None if noise is None else noise[k]
         sp = None if spring is None else spring[k]
         if n is None or (spring is not None and sp is None):
@@ -183,7 +203,8 @@ def combine(c: float, noise, spring, restarts_half: float | None = None) -> tupl
             why.append(f"open {'below' if k == 0 else 'above'}: no coefficient within {BOUNDS[0]:g}-{BOUNDS[1]:g} "
                        f"N s/m at {which}")
             continue
-        half = float(np.sqrt((c - n) ** 2 + (0.0 if sp is None else c - sp) ** 2 + (restarts_half or 0.0) ** 2))
+        half = float(np.sqrt((c - n) ** 2 + (0.0 if sp is None else c - sp) ** 2 + (restarts_half or 0.0) ** 2
+                             + sum(m[k] ** 2 for m in moves)))
         ends.append(max(c - half, 0.0) if k == 0 else c + half)
     return ends, why
 
@@ -268,7 +289,7 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
     if not done:
         return None
     best = min(done, key=lambda e: e["spring_scale_ci95"][1] - e["spring_scale_ci95"][0])
-    sr = SeatedReplay(bike, RIDER_HZ if rider_hz is None else rider_hz)
+    sr = SeatedReplay(bike, RIDER_HZ if rider_hz is None else rider_hz, rest_tol_mm=READ_REST_TOL_MM)
     slams, ks, entries = [], [], []
     for rec, k in zip(records, clicks):
         name = record_name(rec)
@@ -284,6 +305,8 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
     compression = float(ring["compression_N_s_per_m"]) if own else float(best["damper_N_s_per_m"])
     entries = rebound_dampers(slams, ks, spring[0], friction, compression, spring[1]) + entries
     entries.sort(key=lambda e: e["clicks"])
+    nuisance = {} if own else at_nuisance_ends(slams, ks, spring[0], best, entries)
+    nuisance["spring_scale"] = at_spring_ends(entries)  # already read: the held-out residual's moves there too
     again = []
     if not own and restarts:  # the replay's values: its fit again from starts it cannot tell apart
         rec = next(r for r in records if record_name(r) == best["file"])
@@ -307,6 +330,7 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
                    else f"{best['file']}'s replay")
     said_from = "the ring-down fit" if own else f"{best['file']}'s replay"
     said_again = (f", the replay's reproducibility over {len(landed)} restart(s)" if landed else "")
+    said_again += ", the friction's and compression's intervals" if not own else ""
     line = (f"rebound dampers from the first rebounds (spring {spring[0]:.2f} x from {said_spring}, friction "
             f"{friction:.0f} N, compression {compression:.0f} N s/m from {said_from}): {', '.join(said(e) for e in read) or 'none'} N s/m (95 %: the record's noise and the spring's "
             f"interval{said_again}) at {at or 'no'} clicks"
@@ -317,7 +341,56 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
                e.get("rebound_N_s_per_m") for e in sorted(r["entries"], key=lambda e: e["clicks"])]}
                if "entries" in r else {}) for r in again],
            "records": entries, "rises": up, "line": line}
-    out.update(law_in_clicks(entries, target_per_s, landed))
+    out["nuisance_ends"] = None if own else {k: [list(p) for p in v] for k, v in nuisance_ends(best).items()}
+    out.update(law_in_clicks(entries, target_per_s, landed, nuisance))
+    return out
+
+
+def at_spring_ends(entries) -> list:
+    """The records as read at each end of the spring's interval (``at_spring_ci95`` with its
+    ``rate_curve_at_spring_ci95``; the noise interval moved with the coefficient), for the held-out sd
+    beside the friction's and compression's: [at the lower end, at the upper end], None where a read
+    record has no coefficient there."""
+    read = [e for e in entries if "rebound_N_s_per_m" in e]
+    out = []
+    for i in (0, 1):
+        got = []
+        for e in read:
+            c = (e.get("at_spring_ci95") or [None, None])[i]
+            cv = (e.get("rate_curve_at_spring_ci95") or [None, None])[i]
+            if c is None or not cv:
+                got = None
+                break
+            move = c - e["rebound_N_s_per_m"]
+            got.append({**e, "rebound_N_s_per_m": c, "rate_curve": cv,
+                        "rebound_noise_ci95": [None if v is None else v + move for v in e["rebound_noise_ci95"]]})
+        out.append(got if read else None)
+    return out
+
+
+def nuisance_ends(best: dict) -> dict:
+    """{name: [(friction, compression) at the lower end of name's 95 % interval, at its upper end]} for
+    the friction and the compression of the whole-trace replay ``best`` (its summary: its friction and
+    its one damper with their intervals, each alone, the other held)."""
+    f, c = float(best["friction_N"]), float(best["damper_N_s_per_m"])
+    flo, fhi = best["friction_N_ci95"]
+    clo, chi = best["damper_N_s_per_m_ci95"]
+    return {"friction_N": [(float(flo), c), (float(fhi), c)],
+            "compression_N_s_per_m": [(f, float(clo)), (f, float(chi))]}
+
+
+def at_nuisance_ends(slams, ks, spring_scale: float, best: dict, entries) -> dict:
+    """Every record read again (``rebound_dampers``, the spring given, no spring ends) at each end of the
+    friction's and the compression's 95 % intervals (``nuisance_ends``): {name: [entries at the lower
+    end, at the upper end]}, for the held-out sd (``bounce_rebound_clicks.held_out``). Each read entry of
+    ``entries`` gets ``at_nuisance_ci95`` ({name: [coefficient at the lower end, at the upper end]},
+    None where none is read), carried into its interval by ``reproducibility`` (``combine``)."""
+    out = {name: [rebound_dampers(slams, ks, spring_scale, f, c, None) for f, c in ends]
+           for name, ends in nuisance_ends(best).items()}
+    for e in entries:
+        if "rebound_N_s_per_m" in e:
+            e["at_nuisance_ci95"] = {name: [next((a.get("rebound_N_s_per_m") for a in got if a["file"] == e["file"]),
+                                                 None) for got in pair] for name, pair in out.items()}
     return out
 
 
@@ -363,7 +436,8 @@ def reproducibility(entries, again) -> None:
         sd = float(np.std([e["rebound_N_s_per_m"]] + read, ddof=1)) if read else None
         e["rebound_reproducibility_sd_N_s_per_m"] = sd
         e["rebound_N_s_per_m_ci95"], e["interval_open"] = combine(
-            e["rebound_N_s_per_m"], e["rebound_noise_ci95"], e.get("at_spring_ci95"), None if sd is None else Z95 * sd)
+            e["rebound_N_s_per_m"], e["rebound_noise_ci95"], e.get("at_spring_ci95"), None if sd is None else Z95 * sd,
+            e.get("at_nuisance_ci95"))
 
 
 RING_FROM = "the ring-down's period"
@@ -388,9 +462,10 @@ def _is_fit(ring: dict | None) -> bool:
     return ring is not None and "refused" not in ring and "compression_N_s_per_m" in ring
 
 
-def law_in_clicks(entries, target_per_s: float | None = None, again=()) -> dict:
+def law_in_clicks(entries, target_per_s: float | None = None, again=(), nuisance=None) -> dict:
     """The law in clicks, each record held out (``again``: the records read at each restart's nuisance
-    values, carried into the held-out sd) and the answer (``bounce_rebound_clicks``), with the lines
+    values, ``nuisance``: at the ends of the friction's and compression's intervals, ``at_nuisance_ends``;
+    both carried into the held-out sd) and the answer (``bounce_rebound_clicks``), with the lines
     they print ("lines")."""
     from mtbmj.identify import bounce_rebound_clicks as rc
 
@@ -404,7 +479,7 @@ def law_in_clicks(entries, target_per_s: float | None = None, again=()) -> dict:
     except BounceError as e:
         law = {"refused": str(e)}
         lines.append(f"rebound law refused: {e}")
-    rows = rc.held_out(entries, again) if "refused" not in law else []
+    rows = rc.held_out(entries, again, nuisance) if "refused" not in law else []
     if rc.held_out_line(rows):
         lines.append(rc.held_out_line(rows))
     ans = rc.answer(entries, target_per_s) if "refused" not in law else {
@@ -413,5 +488,5 @@ def law_in_clicks(entries, target_per_s: float | None = None, again=()) -> dict:
     return {"law": law, "held_out": rows, "answer": ans, "lines": lines}
 
 
-__all__ = ["BOUNDS", "RESTARTS", "combine", "curve", "law_in_clicks", "rate_spread", "read_records", "rebound_dampers",
-           "replay_rebound", "reproducibility", "restarted", "rises", "solve", "solve_on"]
+__all__ = ["BOUNDS", "READ_REST_TOL_MM", "RESTARTS", "at_nuisance_ends", "at_spring_ends", "combine", "curve", "law_in_clicks",
+           "nuisance_ends", "rate_spread", "read_records", "rebound_dampers", "replay_rebound", "reproducibility", "restarted", "rises", "solve", "solve_on"]

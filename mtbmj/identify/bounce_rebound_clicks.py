@@ -6,7 +6,8 @@ interval from the record's noise) as a straight line in clicks, c = c0 + slope x
 least squares with each record's standard deviation (the half-width of its noise interval / 1.96);
 with more records than two the covariance is widened by chi^2 / dof when that exceeds 1 (the records
 scatter more than their noise says). The spring's interval moves every record's coefficient the same
-way, so it is carried as a second answer at each of its ends rather than into the law. Refused (a
+way, so it is carried as a second answer at each of its ends rather than into the law (into the
+held-out check it is carried, below). Refused (a
 reason, no law) with fewer than two distinct clicks read, when a record's noise was not read, or when
 the coefficients do not rise with the clicks (a rebound adjuster adds damping one way: clicks
 mislabelled or a record that is not a clean slam); flagged when the records' own rates do not fall
@@ -16,8 +17,14 @@ with the clicks.
 record's clicks with the law's interval, carried to the record's first-rebound rate (1/s per mm of
 height) through that record's own rate-against-coefficient curve (the replay at the spring given),
 and compared with the record's rate: it holds when the two lie within 2 combined standard deviations.
-The combined sd has three parts in quadrature: the prediction's (the law's), the record's noise, and
-the nuisance fit's reproducibility. The last: the spring, friction and compression the replays are
+The combined sd has four parts in quadrature: the prediction's (the law's), the record's noise, the
+values given (the friction's, the compression's and the spring's 95 % intervals: the held-out
+residual again with every record read at each end, ``bounce_rebound.at_nuisance_ends`` and
+``at_spring_ends``; per value the mean move over the ends read / Z95, the values in quadrature:
+``nuisance_sd_per_s``; on the shared slams the records' bend off the line changes sign between the
+ends of the compression's interval and between the spring's and its upper end, so the check cannot
+tell the law's bend from theirs, and says so by its sd), and the nuisance fit's reproducibility
+(none by default). The last: the spring, friction and compression the replays are
 given come out of a whole-trace fit whose values are barely determined (their 95 % intervals span
 0-900 N and 0-6600 N s/m on the shared slams) and which stops where the noise of its rest's solve
 (``bounce_replay.REST_TOL_MM``) hides its slope, so it lands differently from machine to machine,
@@ -153,14 +160,18 @@ def _readable(entries) -> list:
     return [e for e in entries if e.get("rebound_N_s_per_m") is not None and e.get("rate_curve")]
 
 
-def held_out(entries, restarts=()) -> list[dict]:
+def held_out(entries, restarts=(), nuisance=None) -> list[dict]:
     """Each read record predicted from a law fitted on the others (module docstring); [] with fewer than
     three read. Per record: predicted coefficient and rate with their sd, the record's, the residual,
     z, holds. ``restarts``: the same records read again at each restart's nuisance values
     (``bounce_rebound.rebound_dampers``' entries, one list per restart): the held-out residual's
     standard deviation over the reading and its restarts (``reproducibility_sd_per_s``, with
     ``restart_residuals_per_s``) is added to the combined sd; without restarts it is None and the sd
-    is the prediction's and the record's noise alone."""
+    is the prediction's and the record's noise alone. ``nuisance``: {name: [entries at its interval's
+    lower end, at its upper end]} (``bounce_rebound.at_nuisance_ends``; an end None where not read):
+    the held-out residual again at each end, per name the mean shift from the reading's over the ends
+    read / Z95 (the ends are 95 % ends), the names in quadrature (``nuisance_sd_per_s``, with
+    ``nuisance_residuals_per_s``) added to the combined sd; without it None and said so."""
     read = _readable(entries)
     out = []
     if len(read) < 3:
@@ -187,14 +198,42 @@ def held_out(entries, restarts=()) -> list[dict]:
             except BounceError:
                 continue
         rep = float(np.std([row["residual_per_s"]] + residuals, ddof=1)) if residuals else None
-        both = math.sqrt(row["predicted_rate_sd_per_s"] ** 2 + row["record_rate_sd_per_s"] ** 2 + (rep or 0.0) ** 2)
+        at_ends, nui = _nuisance_residuals(e["file"], nuisance or {}), None
+        shifts = [[abs(v - row["residual_per_s"]) for v in ends if v is not None] for ends in at_ends.values()]
+        if any(shifts):
+            nui = float(math.sqrt(sum((np.mean(s) / Z95) ** 2 for s in shifts if s)))
+        both = math.sqrt(row["predicted_rate_sd_per_s"] ** 2 + row["record_rate_sd_per_s"] ** 2 + (rep or 0.0) ** 2
+                         + (nui or 0.0) ** 2)
         z = row["residual_per_s"] / both if both > 0 else math.inf
-        row.update({"restart_residuals_per_s": residuals, "reproducibility_sd_per_s": rep, "sd_per_s": both,
+        row.update({"restart_residuals_per_s": residuals, "reproducibility_sd_per_s": rep,
+                    "nuisance_residuals_per_s": at_ends, "nuisance_sd_per_s": nui, "sd_per_s": both,
                     "z": float(z), "holds": bool(abs(z) <= HOLD_SIGMAS)})
         out.append(row)
     return out
 
 
+def _nuisance_residuals(name: str, nuisance: dict) -> dict:
+    """Record ``name``'s held-out residual (1/s) with the records read at each end of each nuisance
+    value's interval ({name: [entries or None, entries or None]}): {value: [at lower, at upper]}, None
+    where that end, the record or either of the others was not read or no law was fitted."""
+    out = {}
+    for key, ends in nuisance.items():
+        got = []
+        for ents in ends:
+            read = _readable(ents or [])
+            j = next((i for i, e in enumerate(read) if e["file"] == name), None)
+            if ents is None or j is None or len(read) < 3:
+                got.append(None)
+                continue
+            try:
+                got.append(_held_one(read[j], read[:j] + read[j + 1:])["residual_per_s"])
+            except BounceError:
+                got.append(None)
+        out[key] = got
+    return out
+
+
+SAID = {"friction_N": "friction", "compression_N_s_per_m": "compression", "spring_scale": "spring"}
 STEP = 0.05  # clicks searched in this step
 
 
@@ -327,7 +366,13 @@ def held_out_line(rows) -> str | None:
              f"({r['z']:+.1f} sd, {'holds' if r['holds'] else 'MISSES'})" for r in done]
     n = sum(r["holds"] for r in done)
     k = max(len(r.get("restart_residuals_per_s") or []) for r in done)
-    sd = (f"sd: the law's, the record's noise and the replay's reproducibility over {k} restart(s)" if k else
+    names = sorted({m for r in done if r.get("nuisance_sd_per_s") is not None
+                    for m, v in (r.get("nuisance_residuals_per_s") or {}).items() if any(x is not None for x in v)})
+    said = ["the law's", "the record's noise"] + ([f"the replay's reproducibility over {k} restart(s)"] if k else [])
+    named = [SAID.get(m, m) for m in names]
+    said += [f"the {' and '.join([', '.join(named[:-1])] + named[-1:] if len(named) > 1 else named)} given at "
+             f"their 95 % ends"] if names else []
+    sd = ("sd: " + ", ".join(said[:-1]) + " and " + said[-1] if len(said) > 2 else
           "sd: the law's and the record's noise; the replay's reproducibility not measured")
     return (f"rebound law held out (each record from the others; {sd}): {'; '.join(parts)}: {n} of {len(done)} "
             f"within 2 sd")
@@ -419,10 +464,11 @@ def figure(got: dict):
     bx.plot([], [], "ko", label="record (95 % noise)")
     for row in got.get("held_out") or []:
         if "holds" in row:
-            err = Z95 * math.hypot(row["predicted_rate_sd_per_s"], row.get("reproducibility_sd_per_s") or 0.0)
+            err = Z95 * math.hypot(row["predicted_rate_sd_per_s"], row.get("reproducibility_sd_per_s") or 0.0,
+                                   row.get("nuisance_sd_per_s") or 0.0)
             bx.errorbar(row["clicks"] + 0.3, row["predicted_rate_per_s"], yerr=err,
                         fmt="s", color="C1" if row["holds"] else "C3", capsize=3)
-    bx.plot([], [], "s", color="C1", label="held out: predicted from the others (95 %: law, restarts)")
+    bx.plot([], [], "s", color="C1", label="held out: predicted from the others (95 %: law, values given, restarts)")
     if ans.get("target_per_s") is not None:
         bx.axhline(ans["target_per_s"], color="C2", ls=":", label=f"target {ans['target_per_s']:.2f} /s")
     bx.set_xlabel("rebound clicks")
