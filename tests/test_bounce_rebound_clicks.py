@@ -464,6 +464,17 @@ def test_figure_shows_the_law_the_answer_and_open_sides():
     assert "(95 %: noise, spring)" in ax.get_title()  # no restarts read: their part not claimed
     again = {**got, "records": [r | {"rebound_reproducibility_sd_N_s_per_m": 50.0} for r in e]}
     assert "(95 %: noise, spring, restarts)" in figure(again).axes[0].get_title()
+    # the friction's and compression's ends carried: the title and the held-out legend say so, and no
+    # restarts are claimed where none were read
+    given = [r | {"at_nuisance_ci95": {"friction_N": [None, 2000.0], "compression_N_s_per_m": [1500.0, 2500.0]}}
+             for r in e]
+    carried = {**got, "records": given,
+               "held_out": [h | {"nuisance_sd_per_s": 0.2} for h in got["held_out"]]}
+    ax2, bx2 = figure(carried).axes
+    assert "(95 %: noise, spring, compression, friction)" in ax2.get_title()
+    labels = [h.get_label() for h in bx2.get_legend().legend_handles]
+    assert any(t.endswith("(95 %: law, values given)") for t in labels), labels
+    assert any(t.endswith("(95 %: law)") for t in (h.get_label() for h in bx.get_legend().legend_handles))
     # the spring's source and a refused record said in the title
     said = {**got, "spring_scale": 0.46, "spring_from": "the ring-down's period",
             "records": [{"clicks": -4, "refused": "no coefficient"}] + e}

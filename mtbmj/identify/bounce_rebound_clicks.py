@@ -444,7 +444,7 @@ def figure(got: dict):
         ax.axvspan(*ans["clicks_range95"], color="C2", alpha=0.15, label="answer's range (95 %)")
         ax.plot(ans["clicks_exact"], ans["needed_N_s_per_m"], "C2*", ms=12,
                 label=f"set {ans['set_clicks']} clicks for {ans['target_per_s']:.2f} /s")
-    ax.plot([], [], "k--", label="open side (spring's end reads none)")
+    ax.plot([], [], "k--", label="open side (an end given reads none)")
     ax.plot([], [], "C3-", lw=4, alpha=0.6, label="record's noise alone")
     ax.set_ylim(0.0, top)
     ax.set_xlabel("rebound clicks")
@@ -453,7 +453,9 @@ def figure(got: dict):
     said = [f"spring {got['spring_scale']:.2f} x from {got['spring_from'].split(' (')[0]}"] if "spring_from" in got else []
     said += [f"refused at {refused} clicks"] if refused else []
     again = any(e.get("rebound_reproducibility_sd_N_s_per_m") is not None for e in got["records"])
-    ax.set_title(f"rebound dampers from the first rebounds (95 %: noise, spring{', restarts' if again else ''})"
+    given = sorted({k for e in got["records"] for k in (e.get("at_nuisance_ci95") or {})})
+    parts = ["noise", "spring"] + [k.split("_")[0] for k in given] + (["restarts"] if again else [])
+    ax.set_title(f"rebound dampers from the first rebounds (95 %: {', '.join(parts)})"
                  + ("\n" + "; ".join(said) if said else ""), fontsize=8)
     ax.legend(fontsize=7, loc="upper left")
     ax.grid(alpha=0.3)
@@ -468,7 +470,10 @@ def figure(got: dict):
                                    row.get("nuisance_sd_per_s") or 0.0)
             bx.errorbar(row["clicks"] + 0.3, row["predicted_rate_per_s"], yerr=err,
                         fmt="s", color="C1" if row["holds"] else "C3", capsize=3)
-    bx.plot([], [], "s", color="C1", label="held out: predicted from the others (95 %: law, values given, restarts)")
+    held = [r for r in got.get("held_out") or [] if "holds" in r]
+    shares = ["law"] + (["values given"] if any(r.get("nuisance_sd_per_s") for r in held) else []) \
+        + (["restarts"] if any(r.get("reproducibility_sd_per_s") for r in held) else [])
+    bx.plot([], [], "s", color="C1", label=f"held out: predicted from the others (95 %: {', '.join(shares)})")
     if ans.get("target_per_s") is not None:
         bx.axhline(ans["target_per_s"], color="C2", ls=":", label=f"target {ans['target_per_s']:.2f} /s")
     bx.set_xlabel("rebound clicks")
