@@ -357,7 +357,11 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     first = np.zeros(x.size) if stops is None else np.asarray(stops, float)
     kicks = first
     top = hanging(x, dt)
-    front = (x * b.sin_a, acc * b.sin_a, force + kicks - slow, force + kicks, top)
+
+    def front_with(kicks):  # the fork's side of the whole bike with the hard stop's force ``kicks``
+        return (x * b.sin_a, acc * b.sin_a, force + kicks - slow, force + kicks, top)
+
+    front = front_with(kicks)
     from mtbmj.ride import reconstruct_flight as flight
 
     ground = np.asarray(first_ground, float)
@@ -377,7 +381,7 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
             break
         if first.any():  # the whole bike's own hard-stop impulses, kept level after each hit, never pulling
             kicks = flight.stop_kicks(first, kicks, ground, dt, b.fF0 / b.g)
-            front = (x * b.sin_a, acc * b.sin_a, force + kicks - slow, force + kicks, top)
+            front = front_with(kicks)
         if chosen is None:  # the flights whose level is read: those of the first pass that left at a drop's edge
             chosen = flight.edge_flights(found, air, dt)
         levels = kept
