@@ -169,3 +169,67 @@ def test_a_slow_speed_with_a_duration_runs(tmp_path, capfd):
     assert status == 0, err
     assert warned(err, "--speed")
     assert (tmp_path / "o").is_dir()
+
+
+# --- fuzzing what is new since session 26: a reconstruction's folder and files ---------------------------
+
+def _reconstruction_folder(folder):
+    """A folder as ``mtbmj reconstruct`` leaves it, written here: terrain.csv (a 20 m profile, 0.1 m rows,
+    a 40 mm bump) and a reconstruction.json beside it."""
+    folder.mkdir()
+    rows = [f"{0.1 * i:.1f},{40.0 if 80 <= i < 90 else 0.0:g}" for i in range(201)]
+    (folder / "terrain.csv").write_text("distance_m,height_mm\n" + "\n".join(rows) + "\n")
+    (folder / "reconstruction.json").write_text(json.dumps({"drop_levels": [], "beyond_trail": []}, indent=1))
+    return folder
+
+
+@pytest.mark.parametrize("command", [["roll"], ["bike", "sst"]])
+@pytest.mark.parametrize("given", ["rec", "rec/reconstruction.json"])
+def test_a_reconstructions_folder_or_json_as_the_terrain_names_its_terrain_csv(tmp_path, capfd, monkeypatch,
+                                                                               command, given):
+    """The folder was "unknown scenario 'rec'", its reconstruction.json "line 2: 2 cells for 1 columns";
+    now both name the profile beside them, rec/terrain.csv, which runs."""
+    monkeypatch.chdir(tmp_path)
+    _reconstruction_folder(tmp_path / "rec")
+    out = tmp_path / "o"
+    line = refused([*command, given, "--speed", "3", "--duration", "0.1", "--quiet", "--out", out], out, capfd,
+                   "rec/terrain.csv")
+    assert "not a terrain profile" in line
+    status, err = _err([*command, "rec/terrain.csv", "--speed", "3", "--duration", "0.1", "--quiet", "--no-figure",
+                        "--out", out], capfd)
+    assert status == 0, err
+
+
+def test_a_folder_named_as_a_scenario_is_the_scenario(tmp_path, capfd, monkeypatch):
+    """The folder check is not a blanket one: a folder called rock (an earlier run's --out) leaves
+    ``roll rock`` the rock."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "rock").mkdir()
+    status, err = _err(["roll", "rock", "--speed", "3", "--duration", "0.1", "--quiet", "--no-figure",
+                        "--out", tmp_path / "o"], capfd)
+    assert status == 0, err
+
+
+@pytest.mark.parametrize("typed, there", [("REC/TERRAIN.CSV", "rec/terrain.csv"), ("rec/Terrain.csv", "rec/terrain.csv")])
+def test_a_terrain_csv_in_another_case_is_pointed_at(tmp_path, capfd, monkeypatch, typed, there):
+    """'REC/TERRAIN.CSV: no such file' named nothing; a folder on the way in another case is followed too."""
+    monkeypatch.chdir(tmp_path)
+    _reconstruction_folder(tmp_path / "rec")
+    out = tmp_path / "o"
+    refused(["bike", "sst", typed, "--speed", "3", "--duration", "0.1", "--quiet", "--out", out], out, capfd,
+            f"(there is {there})")
+
+
+def test_advise_try_in_another_case_is_pointed_at(tmp_path, capfd, monkeypatch):
+    """--try BIKE.toml beside bike.toml said "no such bike file" only. Refused before the ride is read: the
+    ride here is a placeholder (the --try check comes first)."""
+    from helpers import write_sst
+    import numpy as np
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "bike.toml").write_text('base = "sst"\n')
+    t = np.arange(0.0, 20.0, 1e-3)
+    write_sst(tmp_path / "ride.SST", 40.0 + 5.0 * np.sin(t), 50.0 + 5.0 * np.sin(t))
+    out = tmp_path / "advice"
+    refused(["advise", "ride.SST", "--bike", "bike.toml", "--try", "BIKE.toml", "--out", out], out, capfd,
+            "(there is bike.toml)")
