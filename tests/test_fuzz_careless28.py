@@ -233,3 +233,21 @@ def test_advise_try_in_another_case_is_pointed_at(tmp_path, capfd, monkeypatch):
     out = tmp_path / "advice"
     refused(["advise", "ride.SST", "--bike", "bike.toml", "--try", "BIKE.toml", "--out", out], out, capfd,
             "(there is bike.toml)")
+
+
+@pytest.mark.parametrize("command", ["reconstruct", "telemetry"])
+def test_a_file_an_mtbmj_command_wrote_given_as_a_ride_says_so(tmp_path, capfd, command):
+    """A run folder's timeseries.csv (or reconstruct's series.csv) given as the ride was "unknown column
+    'time_s'..." alone; now the line says which command wrote it. A CSV of the user's with the same
+    header is not said to be mtbmj's."""
+    run = tmp_path / "run"
+    status, err = _err(["bike", "sst", "flat", "--speed", "3", "--duration", "0.1", "--quiet", "--no-figure",
+                        "--out", run], capfd)
+    assert status == 0, err
+    mine = tmp_path / "mine.csv"
+    mine.write_text((run / "timeseries.csv").read_text())
+    out = tmp_path / "o"
+    line = refused([command, run / "timeseries.csv", "--bike", "sst", "--out", out], out, capfd, "unknown column")
+    assert "what mtbmj bike wrote, not a ride" in line
+    line = refused([command, mine, "--bike", "sst", "--out", out], out, capfd, "unknown column")
+    assert "mtbmj bike" not in line
