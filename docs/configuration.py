@@ -349,9 +349,13 @@ def markdown() -> str:
         "(`--set`, or a bike's `--fork-set` / `--shock-set`) that the part's chosen model does not read is",
         "refused in one line naming the model and the keys it reads: on a progressive fork,",
         "`--fork-set fork.spring.rate_N_per_mm=9.75` would change nothing (its rate is",
-        "`fork.spring.progressive_rate_N_per_mm`). The keys a file carries for other models (the reference",
-        "preset holds every key; a bike file may change the model its base chose) are the file's and pass, as",
-        "do the keys a program sets (a sweep's variants, a fit's trials, `overrides=` from Python).",
+        "`fork.spring.progressive_rate_N_per_mm`). Such a key the file named on the command line sets itself",
+        "over its base (a configuration's own table, a bike file's own `[fork.set]` or `[shock.set]`) runs, with",
+        "one warning line naming the key, the file and the keys the model reads. A configuration without a base",
+        "is a whole one (as `mtbmj presets --show` writes) and, like the keys a file's bases carry",
+        "for other models (the reference preset holds every key; a bike file may change the model its base",
+        "chose), passes unsaid, as do the keys a program sets (a sweep's variants, a fit's trials, `overrides=`",
+        "from Python).",
         "",
     ]
     section = None

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mtbmj import controllers as law
-from mtbmj.config import PA_PER_PSI, Config
+from mtbmj.config import PA_PER_PSI, Config, warn
 from mtbmj.errors import ConfigError
 from mtbmj.runpath import steprule
 
@@ -480,19 +480,23 @@ def _composed(c: Config):
     """(fork law, tire law) of ``c``, refusing in one line a key a person typed (``Config.given``:
     ``--set``, a bike's ``--fork-set`` / ``--shock-set``; not a file's or a program's) that the part's
     model does not read: the spring, damper, friction or tire model chosen reads other keys, so the
-    setting would change nothing."""
+    setting would change nothing. Such a key the file named sets itself (``Config.filed``; not its
+    bases', which other files may build on) is said in one warning line naming the key and the file."""
     typed = sorted(k for k in c.given if k.startswith(MODEL_FAMILIES))
-    if not typed:
+    filed = sorted(k for k in c.filed if k.startswith(MODEL_FAMILIES) and k not in c.given)
+    if not typed and not filed:
         return fork_law(c), _tire(c)
     seen = _Reading(c)
     laws = fork_law(seen), _tire(seen)
-    for key in typed:
-        if key not in seen.read:
-            family = next(f for f in MODEL_FAMILIES if key.startswith(f))
-            model = f"{family}model"
-            reads = sorted(k[len(family):] for k in seen.read if k.startswith(family) and k != model and k in c.values)
-            raise NotRead(f"{key}: set, but {model} = {c.get(model)!r} does not read it, so it would change "
-                          f"nothing (that model reads {family}{{{', '.join(reads)}}})")
+    for key in [k for k in typed + filed if k not in seen.read]:
+        family = next(f for f in MODEL_FAMILIES if key.startswith(f))
+        model = f"{family}model"
+        reads = sorted(k[len(family):] for k in seen.read if k.startswith(family) and k != model and k in c.values)
+        said = (f"{key}: set, but {model} = {c.get(model)!r} does not read it, so it would change nothing (that "
+                f"model reads {family}{{{', '.join(reads)}}})")
+        if key in c.given:
+            raise NotRead(said)
+        warn([f"{c.filed[key]}: {said.replace('it would change', 'it changes')}"])
     return laws
 
 

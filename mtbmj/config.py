@@ -483,6 +483,9 @@ class Config:
     # the plausibility warnings of the values in effect, keyed by the key each concerns
     notes: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
     given: frozenset = field(default=frozenset(), compare=False, repr=False)  # the keys a person set
+    # the keys the file named sets itself on its base (not its bases', nor overrides): key -> that file; one
+    # its model does not read is said in a warning line (mtbmj.compose)
+    filed: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def warnings(self) -> list[str]:
@@ -511,7 +514,9 @@ class Config:
         _apply(values, notes, overrides)
         typed = getattr(overrides, "typed", False)  # a person's keys (mtbmj.cli.common.Typed): each must be read
         given = self.given | ({ALTERNATIVES.get(k, (k,))[0] for k in overrides} if typed else set())
-        return Config(self.name, values, self.sources, notes, given)
+        replaced = {ALTERNATIVES.get(k, (k,))[0] for k in overrides}
+        return Config(self.name, values, self.sources, notes, given,
+                      {k: f for k, f in self.filed.items() if k not in replaced})
 
     def digest(self) -> str:
         """SHA-256 of the canonical JSON of the values: the config hash in manifests."""
@@ -571,21 +576,6 @@ def _toml_value(value: Any) -> str:
             return "[" + ", ".join(_toml_value(row) for row in value) + "]"
         return "[" + ", ".join(repr(float(v)) for v in value) + "]"
     return repr(float(value))
-
-
-def parse_assignment(text: str, option: str = "--set") -> tuple[str, Any]:
-    """Parse a ``--set key=value`` override (``option``: the option it came with, as its refusal
-    names it); the value is read as TOML (numbers, lists) or, failing that, as a bare word."""
-    if "=" not in text:
-        raise ConfigError(f"{option} {text}: expected key=value")
-    key, raw = (part.strip() for part in text.split("=", 1))
-    try:
-        value = tomllib.loads(f"v = {raw}")["v"]
-    except tomllib.TOMLDecodeError:
-        value = raw
-    except RecursionError:
-        raise ConfigError(f"--set {key}: value nested too deeply") from None
-    return key, value
 
 
 def _read_toml(path: Path, what: str = "a TOML configuration") -> dict[str, Any]:
@@ -674,7 +664,10 @@ def load(ref: str | Path, overrides: Mapping[str, Any] | None = None) -> Config:
         except ConfigError as exc:
             raise ConfigError(f"{location}: {exc}") from None
         sources += (str(location),)
-    config = Config(chain[-1][0], values, sources, notes)
+    # a file of the user's on a base (one without is a whole configuration, as the reference, keys for every model)
+    mine = isinstance(location, Path) and not _is_preset(str(ref)) and len(chain) > 1
+    own = {ALTERNATIVES.get(k, (k,))[0]: str(location) for k in flat} if mine else {}
+    config = Config(chain[-1][0], values, sources, notes, filed=own)
     if overrides:
         config = config.with_overrides(overrides)
     warn(config.warnings)
@@ -694,5 +687,5 @@ def resolve(config: Config | str, overrides: Mapping | None = None) -> Config:
     return load(config, overrides)
 
 
-__all__ = ["Config", "ConfigError", "ConfigWarning", "load", "parse_assignment", "preset_names", "study_presets",
+__all__ = ["Config", "ConfigError", "ConfigWarning", "load", "preset_names", "study_presets",
            "sprung_front_mass", "resolve", "SCHEMA"]

@@ -25,13 +25,22 @@ LIMITS = {
 
 
 def other_case(path: Path) -> str:
-    """`` (there is NAME)`` where the folder holds the name in another case (``ride.sst`` typed for
-    ``ride.SST``), else ``""``."""
-    try:
-        names = [p.name for p in path.parent.iterdir() if p.name.lower() == path.name.lower()]
-    except OSError:
-        return ""
-    return f" (there is {path.parent / names[0] if str(path.parent) != '.' else names[0]})" if names else ""
+    """`` (there is NAME)`` where the name, or a folder on its way, is there in another case (``ride.sst``
+    typed for ``ride.SST``, ``REC/TERRAIN.CSV`` for ``rec/terrain.csv``), else ``""``."""
+    path = Path(path)
+    found = Path(path.anchor) if path.anchor else Path()
+    for part in path.parts[len(Path(path.anchor).parts) if path.anchor else 0:]:
+        if part in ("", ".", "..") or (found / part).exists():
+            found = found / part
+            continue
+        try:
+            names = sorted(p.name for p in found.iterdir() if p.name.lower() == part.lower())
+        except OSError:
+            return ""
+        if not names:
+            return ""
+        found = found / names[0]
+    return f" (there is {found})" if found != path else ""
 
 
 def read_bytes(path: Path, error: type[Exception], label: str, kind: str) -> bytes:

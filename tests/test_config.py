@@ -6,7 +6,8 @@ from pathlib import Path
 import pytest
 
 from mtbmj import compose
-from mtbmj.config import SCHEMA, Config, load, parse_assignment, preset_names, study_presets
+from mtbmj.cli.common import parse_assignment
+from mtbmj.config import SCHEMA, Config, load, preset_names, study_presets
 from mtbmj.errors import ConfigError
 
 PRESETS = [f"S{i}" for i in range(1, 15)] + ["air120", "reference"]

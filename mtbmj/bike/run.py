@@ -40,10 +40,11 @@ from mtbmj import compose, output
 from mtbmj.bike import crash
 from mtbmj.bike import spec as spec_mod
 from mtbmj.bike.model import LOCKS, Bike, build_bike
+from mtbmj.bike.parts import setups
 from mtbmj.controllers import installed
 from mtbmj.controllers.drive import Drive
 from mtbmj.errors import ConfigError
-from mtbmj.limits import check_run
+from mtbmj.limits import check_run, crossing
 from mtbmj.result import RunOutput
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
@@ -55,7 +56,7 @@ from mtbmj.runpath import callbacks, guard, loop
 CHUNK = 10000
 CALLBACKS = ("auto", "compiled", "python")
 RIDERS = ("passive", "active")
-HEIGHT_UNUSED = ("rider.height_m = {:g} m is read by the active rider only (--rider active): the passive rider is its "
+HEIGHT_UNUSED = ("{}rider.height_m = {:g} m is read by the active rider only (--rider active): the passive rider is its "
                  "mass at rider.com_mm on legs and arms of rider.leg_length_mm and arm_length_mm, whatever its height")
 VIDEO_SAMPLE_HZ = 240.0  # the bike's pose kept for a video (qpos rows per second)
 # Held degrees of freedom (``lock``): each held joint gets this armature (kg or kg m^2 added to its
@@ -125,28 +126,6 @@ def _check(speed, duration, pedal=None):
         raise ConfigError(f"duration: must be positive, got {duration!r}")
 
 
-def setups(spec) -> tuple[compose.Setup, compose.Setup]:
-    """(fork, shock) setups: each configuration with the bike's overrides, composed by ``mtbmj.compose``."""
-    from mtbmj.bike.shock import judged_as_sold
-    from mtbmj.config import ALTERNATIVES, load
-
-    def part(section, config, over):  # a person's keys (--fork-set, not the files') checked to be read
-        with judged_as_sold(spec.shock_sold if section == "shock.set" else ()):
-            c, mine = load(config, over or None), spec.overrides.get(section)
-        typed = {ALTERNATIVES.get(k, (k,))[0] for k in mine} if getattr(mine, "typed", False) else set()
-        try:
-            return compose.setup(dataclasses.replace(c, given=typed))
-        except compose.NotRead as exc:
-            raise ConfigError(f"--{section.replace('.', '-')} {exc}") from None
-
-    fork = part("fork.set", spec.fork_config, spec.fork_overrides)
-    shock = part("shock.set", spec.shock_config, {"fork.travel_mm": spec.shock_stroke * 1e3, **spec.shock_overrides})
-    if abs(shock.travel - spec.shock_stroke) > 1e-9:
-        raise ConfigError(f"shock.stroke_mm: {spec.shock_stroke * 1e3:g} mm, but the shock configuration's "
-                          f"fork.travel_mm is {shock.travel * 1e3:g} mm")
-    return fork, shock
-
-
 def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, drive: str = "rider",
             start_x: float | None = None, callback: str = "auto", lock=(), rear_tire: bool = True,
             overrides=None, seated: bool = False, pedal=None, rider: str = "passive",
@@ -193,7 +172,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
             raise ConfigError("speed_profile: the passive rider's drive holds a set speed along the terrain, the "
                               "active rider's does not yet")
         with warnings.catch_warnings():  # the passive rider's note on rider.height_m: this rider takes it
-            warnings.filterwarnings("ignore", message=r"rider\.height_m = .* is read by the active rider only")
+            warnings.filterwarnings("ignore", message=r".*rider\.height_m = .* is read by the active rider only")
             p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire, overrides, False,
                         pedal)
         kind = callback_kind(p.callback)
@@ -233,7 +212,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     if resolved is not None and "height_m" in resolved.table.get("rider", {}):  # said, not refused (a file for both)
         from mtbmj.config import warn
 
-        warn([HEIGHT_UNUSED.format(spec.rider.height)])
+        filed = "height_m" in resolved.read.get("rider", {}) and resolved.source not in spec_mod.preset_names()
+        warn([HEIGHT_UNUSED.format(f"{resolved.source}: " if filed else "", spec.rider.height)])
     if seated:
         if spec.rider.seated_com is None:
             raise ConfigError(f"rider.seated_com_mm: {spec.name} gives no seated rider (the rider's centre of mass "
@@ -649,6 +629,8 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
     p = guard.prepared("bike", lambda: prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire,
                                                overrides, seated, pedal, rider, legs_swing, speed_profile),
                        model_of=lambda p: p.bike.model)
+    if duration is None:  # the terrain crossed: a crawl refused before the run
+        crossing(p.speed, default_duration(p), p.terrain.name)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.timestep, 1.0 / p.timestep)
     start = time.perf_counter()

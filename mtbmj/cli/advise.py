@@ -13,7 +13,7 @@ def cmd_advise(args) -> int:
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.cli.common import Progress
     from mtbmj.cli.telemetry import ride_record
-    from mtbmj.config import parse_assignment
+    from mtbmj.cli.common import parse_assignment
     from mtbmj.ride import advice_report, advise
 
     over = bike_overrides(args)

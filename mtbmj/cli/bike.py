@@ -110,7 +110,7 @@ def add_pedal(p) -> None:
 def bike_overrides(args) -> dict:
     """The bike's overrides from ``--set`` (bike keys), ``--fork-set`` and ``--shock-set`` (keys of
     the fork's and the shock's configurations)."""
-    from mtbmj.config import parse_assignment
+    from mtbmj.cli.common import parse_assignment
 
     out: dict = {}
     for text in args.set or ():

@@ -9,12 +9,14 @@ import os
 import re
 import sys
 import time
+import tomllib
 import warnings
 from pathlib import Path
 
-from mtbmj.config import ConfigWarning, parse_assignment
+from mtbmj.config import ConfigError, ConfigWarning
 from mtbmj.errors import MtbmjError, RunError, check_interrupt, interrupt_handling, interrupted
 from mtbmj.limits import argument
+from mtbmj.textfile import parses_as_number
 
 EXIT_BAD_INPUT = 2
 # The drop engines (``mtbmj.drop.run.ENGINES``), named here so the parser needs no engine imported.
@@ -38,7 +40,13 @@ class Parser(argparse.ArgumentParser):
     def error(self, message):  # one line, not usage + message
         raise MtbmjError(message)
 
+    def parse_known_args(self, args=None, namespace=None):
+        _one_comma_list(getattr(self, "_comma_lists", ()), sys.argv[1:] if args is None else list(args))
+        return super().parse_known_args(args, namespace)
+
     def add_argument(self, *args, **kwargs):
+        if "," in str(kwargs.get("metavar", "")):  # a comma list (``--clicks K1,K2,...``): typed with spaces, said so
+            self._comma_lists = (*getattr(self, "_comma_lists", ()), *(a for a in args if a.startswith("--")))
         if kwargs.get("type") in (float, int):
             option = next((a for a in args if a.startswith("--")), args[0] if args else "")
             kwargs["type"] = numeric(option, integer=kwargs["type"] is int)
@@ -55,6 +63,29 @@ def _in_any_case(choices):
         return text.lower() if text.lower() in choices else text
 
     return choice
+
+
+def _one_comma_list(options, args) -> None:
+    """Refuse a comma-list option whose numbers were typed apart (``--clicks 0 8``, ``--clicks 0, 8``):
+    argparse would take the first and say "unrecognized arguments: 8" or read 8 as a file; the line
+    names the way out."""
+    def number(token: str) -> bool:  # a number, or numbers with commas (``0,``, ``0,8``)
+        parts = [part for part in token.split(",") if part]
+        return not token.startswith("--") and bool(parts) and all(parses_as_number(part) for part in parts)
+
+    for i, token in enumerate(args):
+        option, eq, first = str(token).partition("=")
+        if option not in options:
+            continue
+        values = [first] if eq else []
+        for later in args[i + 1:]:
+            if not number(str(later)):
+                break
+            values.append(str(later))
+        if len(values) > 1 and all(number(v) for v in values):
+            listed = ",".join(v.strip(",") for v in values if v.strip(","))
+            raise MtbmjError(f"{option} takes one comma list without spaces: {option} {listed} (not "
+                             f"{option} {' '.join(values)})")
 
 
 def intermixed(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -129,6 +160,21 @@ def numeric(option: str, integer: bool = False):
 
     parse.__name__ = "number"
     return parse
+
+
+def parse_assignment(text: str, option: str = "--set") -> tuple[str, object]:
+    """Parse a ``--set key=value`` override (``option``: the option it came with, as its refusal
+    names it); the value is read as TOML (numbers, lists) or, failing that, as a bare word."""
+    if "=" not in text:
+        raise ConfigError(f"{option} {text}: expected key=value")
+    key, raw = (part.strip() for part in text.split("=", 1))
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    except RecursionError:
+        raise ConfigError(f"--set {key}: value nested too deeply") from None
+    return key, value
 
 
 class Typed(dict):

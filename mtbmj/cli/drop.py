@@ -121,7 +121,7 @@ def _crosscheck_bike(args) -> int:
     if args.engines != "mujoco" or args.tolerance_mm != 0.1 or args.head_angle is not None:
         raise MtbmjError("--engines, --tolerance-mm and --head-angle: do not apply to a bike cross-check (the "
                          "bike's description sets its geometry and laws)")
-    from mtbmj.config import parse_assignment
+    from mtbmj.cli.common import parse_assignment
 
     bike_set = dict(parse_assignment(text) for text in args.set or ())  # bike keys (mtbmj bike --set)
     if args.drive not in (None, "rider", "coast"):

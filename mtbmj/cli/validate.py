@@ -9,7 +9,8 @@ import time
 from pathlib import Path
 
 from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, add_out, intermixed  # noqa: F401
-from mtbmj.config import parse_assignment, study_presets
+from mtbmj.cli.common import parse_assignment
+from mtbmj.config import study_presets
 from mtbmj.errors import ConfigError
 
 _RANGE = re.compile(r"^([A-Za-z_]*)(\d+)\.\.([A-Za-z_]*)(\d+)$")

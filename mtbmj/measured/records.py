@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from mtbmj.errors import MtbmjError
-from mtbmj.textfile import delimiter_of, parses_as_number, read_bytes, read_text
+from mtbmj.textfile import delimiter_of, other_case, parses_as_number, read_bytes, read_text
 
 # unit suffix -> factor to SI
 UNITS = {
@@ -199,7 +199,7 @@ def read_record(path: str | Path) -> Record:
     """Read a CSV or .mat record (by extension; anything but .mat is read as CSV)."""
     path = Path(path)
     if not path.exists():
-        raise RecordError(f"{path}: no such file")
+        raise RecordError(f"{path}: no such file{other_case(path)}")
     return read_mat(path) if path.suffix.lower() == ".mat" else read_csv(path)
 
 

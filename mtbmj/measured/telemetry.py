@@ -362,7 +362,12 @@ def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
     header = [h.lower() if h.lower() in CSV_COLUMNS else h for h in header[:len(header) - closed]]
     unknown = [h for h in header if h not in CSV_COLUMNS]
     if unknown:
-        raise TelemetryError(f"{name}: line {header_line}: unknown column {unknown[0]!r} (known: {', '.join(CSV_COLUMNS)})")
+        from mtbmj.output import read_record
+
+        wrote = read_record(Path(path).parent) or {}  # a file of an mtbmj output folder (reconstruct's series.csv)
+        ours = Path(path).name in wrote.get("files", ())
+        raise TelemetryError(f"{name}: line {header_line}: unknown column {unknown[0]!r} (known: {', '.join(CSV_COLUMNS)})"
+                             + (f"; it is what mtbmj {wrote.get('command')} wrote, not a ride" if ours else ""))
     if len(set(header)) != len(header):
         raise TelemetryError(f"{name}: line {header_line}: a column is named twice")
     if "time_s" not in header or len(header) < 2:

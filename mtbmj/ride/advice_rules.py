@@ -427,7 +427,10 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
     if other is not None:
         ref, over, what = str(other), {}, f"--try {other}"
         if not Path(ref).exists() and ref not in spec_mod.preset_names():
-            raise ConfigError(f"--try {other}: no such bike file (nor a preset: {', '.join(spec_mod.preset_names())})")
+            from mtbmj.textfile import other_case
+
+            raise ConfigError(f"--try {other}: no such bike file{other_case(Path(ref))} (nor a preset: "
+                              f"{', '.join(spec_mod.preset_names())})")
     else:  # the recorded bike: a ResolvedBike is not read again
         ref, over, what = getattr(bike, "source", None) or str(bike), dict(overrides or {}), "--try-set"
     try:

@@ -41,7 +41,7 @@ from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.terrain import DEFAULT_HEAD_ANGLE_DEG
 from mtbmj.config import Config
 from mtbmj.errors import ConfigError
-from mtbmj.limits import check_run
+from mtbmj.limits import check_run, crossing
 from mtbmj.result import RunOutput
 from mtbmj.rolling.callback import RollCallback
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
@@ -586,6 +586,8 @@ def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
     _check_inputs(speed_m_per_s, head_angle_deg, duration)
     p = guard.prepared("rolling", lambda: prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides,
                                                   callback=callback, drive=drive), model_of=lambda p: p.front.model)
+    if duration is None:  # the terrain crossed: a crawl refused before the run
+        crossing(p.speed, default_duration(p), p.terrain.name)
     duration = default_duration(p) if duration is None else duration
     check_run(duration, p.setup.timestep, p.setup.sample_rate)
     start = time.perf_counter()

@@ -441,6 +441,14 @@ def _value(name: str, key: str, kind: str, value):
     return number
 
 
+def _not_a_profile(text: str) -> None:
+    """Refuse a folder or a JSON file given as the terrain (a folder of ``mtbmj reconstruct``, its
+    reconstruction.json), naming the profile beside it (its terrain.csv) where there is one."""
+    beside = Path(text) / "terrain.csv" if Path(text).is_dir() else Path(text).with_name("terrain.csv")
+    raise TerrainError(f"terrain {text}: not a terrain profile (a scenario name or a CSV of distance_m, height_mm)"
+                       + (f"; the reconstruction's terrain is {beside}" if beside.is_file() else ""))
+
+
 def make(spec, **params) -> Terrain:
     """A terrain from a spec string (``"root:radius_mm=60"``), a CSV path, or a ``Terrain``;
     keyword parameters override those in the string."""
@@ -449,6 +457,8 @@ def make(spec, **params) -> Terrain:
             raise TerrainError("terrain: parameters given with a ready-made Terrain")
         return spec
     text = str(spec)
+    if Path(text).suffix.lower() == ".json" and Path(text).is_file():
+        _not_a_profile(text)
     if text.lower().endswith(".csv") or (Path(text).suffix and Path(text).exists()):
         if params:
             raise TerrainError(f"terrain {text}: a CSV profile takes no parameters")
@@ -457,6 +467,8 @@ def make(spec, **params) -> Terrain:
     given.update(params)
     if name not in LIBRARY and name.lower() in LIBRARY:  # "Rock" is rock, as presets are named in any case
         name = name.lower()
+    if name not in LIBRARY and Path(text).is_dir():
+        _not_a_profile(text)
     if name not in LIBRARY:
         raise TerrainError(f"terrain: unknown scenario {name!r} (known: {', '.join(LIBRARY)}, or a .csv profile)")
     builder, kinds = LIBRARY[name]

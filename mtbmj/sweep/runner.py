@@ -42,7 +42,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from mtbmj.config import SCHEMA, Config
+from mtbmj.config import SCHEMA, Config, warn
 from mtbmj.errors import ConfigError, MtbmjError
 
 from mtbmj import output
@@ -436,6 +436,9 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
     if isinstance(runner, str):
         if runner not in RUNNERS:
             raise ConfigError(f"--runner: {runner!r} is not one of {', '.join(RUNNERS)}")
+        if runner == "batch" and engine not in ("mujoco", "fast"):  # said, not refused: it runs, one by one
+            warn([f"--runner batch: the {engine} engine has no batched runner, so each variant runs alone (as "
+                  f"--runner single); --engine mujoco or fast steps the variants together"])
         if runner == "batch" and engine == "fast":
             from mtbmj.sweep.fast import run_batch_fast as runner
         elif runner == "batch":
