@@ -642,6 +642,6 @@ def test_a_shared_ride_past_its_fork_s_travel_is_ridden_to_its_end(monkeypatch):
     from mtbmj.ride import reconstruct_flight
 
     monkeypatch.setattr(reconstruct_flight, "edge_flights", lambda found, air, dt: [])
-    monkeypatch.setattr(reconstruct_flight, "stop_kicks", lambda first, now, ground, dt, mass: now)
+    monkeypatch.setattr(reconstruct_flight, "stop_kicks", lambda first, now, ground, air, dt, mass: now)
     unread, said = _reconstructed_with(record, "sst", past_m=1.0, monkeypatch=monkeypatch)
     assert said == [] and unread.diverged_s == pytest.approx(15.88, abs=0.05)
