@@ -210,11 +210,16 @@ def test_the_figure_shades_the_stretches_beyond_what_the_bike_could_climb(made):
     assert rec.beyond == []
     plain = spans(rec.figure())
     assert all(found == [] for found, _ in plain) and plain[0][1] is None
+    terrain = rec.figure().axes[0]
     a, b = 5.0, 6.5
     xa, xb = (float(np.interp(s, rec.t, rec.distance)) for s in (a, b))
     stretch = {"start_s": a, "end_s": b, "start_m": round(xa, 2), "end_m": round(xb, 2), "rise_m": 4.0,
                "allowed_m": 3.0, "speed_m_per_s": SPEED}
-    got = spans(dataclasses.replace(rec, beyond=[stretch]).figure())
+    fig = dataclasses.replace(rec, beyond=[stretch]).figure()
+    got = spans(fig)
+    # the terrain's panel keeps its metres: its range and its flights as without the stretch, and one more patch
+    assert fig.axes[0].get_xlim() == pytest.approx(terrain.get_xlim()) and terrain.get_xlim()[1] > 2.0 * rec.t[-1]
+    assert len(fig.axes[0].patches) == len(terrain.patches) + 1
     assert xb - xa > 5.0  # metres and seconds told apart
     assert got[0][0] == [pytest.approx((round(xa, 2), round(xb, 2)), abs=1e-9)] and LABEL in got[0][1]
     for found, legend in got[1:]:
