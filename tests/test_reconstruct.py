@@ -169,7 +169,7 @@ def test_the_figure_marks_what_was_left_out(made, tmp_path):
         "the model describes this ride" if c["passes"] else "the model does not describe this ride")
     assert "red, the front wheel off the ground (bridged, checked); grey, no speed (left out)" in fig.get_suptitle()
     shaded = [p for p in fig.axes[2].patches]
-    assert len(shaded) == len(rec.jumps) + len(rec.unaligned)  # each stretch left out is drawn
+    assert len(shaded) == len(rec.jumps) + len(rec.unaligned) + len(rec.beyond)  # each stretch left out is drawn
     # the speed along the ride: the profile the distance is integrated from, each window's speed
     speed = fig.axes[3]
     assert speed.get_title().startswith(f"Speed along the ride: median {rec.speed['speed_m_per_s']:.2f} m/s")
@@ -180,6 +180,50 @@ def test_the_figure_marks_what_was_left_out(made, tmp_path):
     labels = [t.get_text() for t in speed.get_legend().get_texts()]
     assert any(f"({len(accepted)}, +-2 standard errors)" in x for x in labels), labels
     assert SPEED * 0.97 < np.median(profile.get_ydata()) < SPEED * 1.03
+
+
+def test_the_figure_shades_the_stretches_beyond_what_the_bike_could_climb(made):
+    """``reconstruction.png`` (``Reconstruction.figure``): a stretch of ``beyond_trail`` written here
+    (5.0-6.5 s and its metres on the ride's distance) is shaded in each panel over its x-range, the
+    terrain's in metres and the others in seconds, one hatched artist per panel labelled in its legend;
+    the made ride's own reconstruction has none (nothing beyond), and then no such artist and no legend
+    on the terrain's panel."""
+    import dataclasses
+
+    from mtbmj.measured import telemetry
+    from mtbmj.ride import reconstruct
+    from mtbmj.ride.reconstruct_envelope import LABEL
+
+    bike, csv, *_ = made
+    rec = reconstruct.reconstruct(telemetry.read_travel_csv(csv), str(bike))
+
+    def spans(fig):
+        out = []
+        for ax in fig.axes:
+            mine = [p for p in ax.patches if p.get_label() == LABEL]
+            xs = [p.get_patch_transform().transform(p.get_path().vertices)[:, 0] for p in mine]
+            legend = ax.get_legend()
+            out.append(([(float(x.min()), float(x.max())) for x in xs],
+                        [t.get_text() for t in legend.get_texts()] if legend else None))
+        return out
+
+    assert rec.beyond == []
+    plain = spans(rec.figure())
+    assert all(found == [] for found, _ in plain) and plain[0][1] is None
+    terrain = rec.figure().axes[0]
+    a, b = 5.0, 6.5
+    xa, xb = (float(np.interp(s, rec.t, rec.distance)) for s in (a, b))
+    stretch = {"start_s": a, "end_s": b, "start_m": round(xa, 2), "end_m": round(xb, 2), "rise_m": 4.0,
+               "allowed_m": 3.0, "speed_m_per_s": SPEED}
+    fig = dataclasses.replace(rec, beyond=[stretch]).figure()
+    got = spans(fig)
+    # the terrain's panel keeps its metres: its range and its flights as without the stretch, and one more patch
+    assert fig.axes[0].get_xlim() == pytest.approx(terrain.get_xlim()) and terrain.get_xlim()[1] > 2.0 * rec.t[-1]
+    assert len(fig.axes[0].patches) == len(terrain.patches) + 1
+    assert xb - xa > 5.0  # metres and seconds told apart
+    assert got[0][0] == [pytest.approx((round(xa, 2), round(xb, 2)), abs=1e-9)] and LABEL in got[0][1]
+    for found, legend in got[1:]:
+        assert found == [pytest.approx((a, b), abs=1e-9)] and legend.count(LABEL) == 1
 
 
 def test_one_end_alone_or_no_alignment_is_refused_in_one_line(made, tmp_path, capsys):
@@ -642,6 +686,6 @@ def test_a_shared_ride_past_its_fork_s_travel_is_ridden_to_its_end(monkeypatch):
     from mtbmj.ride import reconstruct_flight
 
     monkeypatch.setattr(reconstruct_flight, "edge_flights", lambda found, air, dt: [])
-    monkeypatch.setattr(reconstruct_flight, "stop_kicks", lambda first, now, ground, dt, mass: now)
+    monkeypatch.setattr(reconstruct_flight, "stop_kicks", lambda first, now, ground, air, dt, mass: now)
     unread, said = _reconstructed_with(record, "sst", past_m=1.0, monkeypatch=monkeypatch)
     assert said == [] and unread.diverged_s == pytest.approx(15.88, abs=0.05)

@@ -227,7 +227,9 @@ def test_a_made_ride_whose_whole_bike_blew_up_rides_through(tmp_path, monkeypatc
     oscillation at the record's step that no position check saw until its rates were tens of millions
     of m/s (2.57 s), and 0.4 % of the ride was checked. With a step that changes a rate by more than
     ``RATE_JUMP`` (20 m/s: no body of a bike moves so) taken again in substeps, it rides through; without
-    that bound the same ride still blows up."""
+    that bound the same ride still blows up with the hard stop's impulse read over flights' chords
+    (``reconstruct_flight.SEEN_SHARE`` 0, the rule before; with the rule now it rides through without the
+    bound as well, measured when the rule was made)."""
     from argparse import Namespace
 
     from helpers import advise_ride
@@ -243,4 +245,10 @@ def test_a_made_ride_whose_whole_bike_blew_up_rides_through(tmp_path, monkeypatc
     through = reconstruct.reconstruct(rec, str(bike), statics)
     assert through.diverged_s is None and through.checks()["samples_checked_percent"] > 80.0
     monkeypatch.setattr(rb, "RATE_JUMP", math.inf)
+    from mtbmj.ride import reconstruct_flight
+
+    # the hard stop's impulse read over a flight's chord, as when the blow-up was found: without it (the
+    # impulse read only where the ground after the hit is seen, SEEN_SHARE) this ride rides through
+    # without the bound too
+    monkeypatch.setattr(reconstruct_flight, "SEEN_SHARE", 0.0)
     assert reconstruct.reconstruct(rec, str(bike), statics).diverged_s is not None

@@ -115,7 +115,7 @@ def test_the_shared_ride_s_hill_is_gone_and_with_the_quarter_car_s_impulse_said_
     assert json.loads((out / "reconstruction.json").read_text())["beyond_trail"] == []
     assert hill(out) < 1.0, hill(out)
 
-    monkeypatch.setattr(reconstruct_flight, "stop_kicks", lambda first, now, ground, dt, mass: now)
+    monkeypatch.setattr(reconstruct_flight, "stop_kicks", lambda first, now, ground, air, dt, mass: now)
     out = tmp_path / "before"
     assert main(["reconstruct", ride, "--bike", "sst", "--out", str(out)]) == 0
     err = capsys.readouterr().err

@@ -142,6 +142,41 @@ def test_the_front_of_a_rod_pivoting_on_its_rear_end_falls_at_one_and_a_half_g()
     assert pivot_acceleration(pushed) == pytest.approx(1.5 * g + 100.0 * 0.9 * L / (m * L * L / 3), rel=1e-12)
 
 
+def test_a_hard_stop_s_impulse_is_read_from_the_ground_seen_after_the_hit():
+    """``stop_kicks`` on a ground written here, two bottom-outs of 10 N s each (the quarter car's): after
+    the first the ground sinks at 0.1 m/s for the next second on the wheel (the stop pushed too little:
+    10 + 0.1 m/s x 40 kg = 14 N s); the second lands on a rock's top 20 ms before a 0.7 s flight whose
+    chord falls 0.3 m (the ground after it not seen for 70 % of the window): kept at 10 N s. Read with
+    the flight unknown (the rule before, a deliberately wrong input) the second is raised to level the
+    chord (24.8 N s); a 0.4 s flight (60 % seen) is read (26.9 N s)."""
+    from mtbmj.ride.reconstruct_flight import SEEN_SHARE, stop_kicks
+
+    dt, mass, n = 1e-3, 40.0, 6000
+    first, ground, air = np.zeros(n), np.zeros(n), np.zeros(n, bool)
+    for a in (1000, 3000):
+        first[a:a + 3] = 10.0 / (3 * dt)
+    ground[1003:2003] = -0.1 * np.arange(1000) * dt
+    ground[2003:] = ground[2002]
+
+    def flight(long_s):
+        g, off = ground.copy(), air.copy()
+        m = int(round(long_s / dt))
+        off[3023:3023 + m] = True
+        g[3023:3023 + m] = g[3022] - 0.3 * np.arange(m) / m
+        g[3023 + m:] = g[3022] - 0.3
+        return g, off
+
+    def impulses(out):
+        return [float(out[a:a + 3].sum() * dt) for a in (1000, 3000)]
+
+    g, off = flight(0.7)
+    assert 1.0 - off[3003:4003].mean() < SEEN_SHARE
+    assert impulses(stop_kicks(first, first, g, off, dt, mass)) == pytest.approx([14.0, 10.0], abs=1e-9)
+    assert impulses(stop_kicks(first, first, g, np.zeros(n, bool), dt, mass))[1] > 15.0
+    g, off = flight(0.4)
+    assert impulses(stop_kicks(first, first, g, off, dt, mass))[1] > 15.0
+
+
 def test_a_drop_deeper_than_its_flight_allows_is_left():
     """``read`` on a ground written here: three flights of 0.2 s, landing 0.1 m lower, 0.5 m lower and
     0.05 m higher, the front wheel's rise 20 mm at each take-off and 0 at each landing; at 2 g allowed,

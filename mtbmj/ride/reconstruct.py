@@ -452,8 +452,11 @@ class Reconstruction:
         ax[2].set(xlabel="time (s)", ylabel="rear wheel travel (mm)",
                   title="Rear: predicted from the front's terrain, beside the naive baseline (RMS over the checked samples)")
         self._speed_panel(ax[3])
+        for a, along in zip(ax, "msss"):  # where the ground found leaves what the bike could climb
+            envelope.shade(a, self.beyond, along)
+            if a is not ax[0] or self.beyond:
+                a.legend(loc="best" if a is ax[3] else "upper right")
         for a in ax[1:]:
-            a.legend(loc="best" if a is ax[3] else "upper right")
             a.set_xlim(float(self.t[0]), float(self.t[-1]))
             for s0, s1 in self.jumps:
                 a.axvspan(s0, s1, color="C3", alpha=0.2)

@@ -380,7 +380,7 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
         if out["diverged_s"] is not None:
             break
         if first.any():  # the whole bike's own hard-stop impulses, kept level after each hit, never pulling
-            kicks = flight.stop_kicks(first, kicks, ground, dt, b.fF0 / b.g)
+            kicks = flight.stop_kicks(first, kicks, ground, air, dt, b.fF0 / b.g)
             front = front_with(kicks)
         if chosen is None:  # the flights whose level is read: those of the first pass that left at a drop's edge
             chosen = flight.edge_flights(found, air, dt)

@@ -21,7 +21,8 @@ Falls are not bounded (a drop is a trail's). The rise is looked for on the groun
 falls back below the highest it could have reached from the low point (at most ``RISE_WINDOW_S``
 past the high point): the hump's back is the reconstruction's too. Its samples are not checked
 (``reconstruct`` leaves them out), ``reconstruction.json`` lists it (``beyond_trail``) and one
-``ConfigWarning`` names it (:func:`warn`).
+``ConfigWarning`` names it (:func:`warn`); ``reconstruction.png`` shades it, hatched, in each panel
+(:func:`shade`).
 """
 from __future__ import annotations
 
@@ -83,6 +84,16 @@ def mask(t, stretches) -> np.ndarray:
     return out
 
 
+LABEL = "beyond what the bike could climb (not checked)"  # the figure's legend for the stretches
+
+
+def shade(ax, stretches, along: str = "s") -> list:
+    """Each of ``stretches`` (``beyond``'s) shaded on ``ax`` over its times (``along`` "s") or its
+    places ("m"), hatched, labelled ``LABEL`` once for the legend: the artists drawn."""
+    return [ax.axvspan(s[f"start_{along}"], s[f"end_{along}"], facecolor="C4", alpha=0.25, hatch="//",
+                       label=LABEL if i == 0 else "_nolegend_") for i, s in enumerate(stretches or [])]
+
+
 def warn(ride: str, stretches) -> None:
     """One ``ConfigWarning`` naming where the ground found leaves what the bike could climb."""
     import warnings
@@ -97,4 +108,4 @@ def warn(ride: str, stretches) -> None:
                       f"own; not checked there", ConfigWarning, stacklevel=2)
 
 
-__all__ = ["RISE_WINDOW_S", "PEDAL_POWER_W", "STEP_S", "beyond", "mask", "warn"]
+__all__ = ["RISE_WINDOW_S", "PEDAL_POWER_W", "STEP_S", "LABEL", "beyond", "mask", "shade", "warn"]

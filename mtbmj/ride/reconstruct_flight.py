@@ -27,7 +27,8 @@ returned to the level above a drop within seconds. Here:
   reference so made, until the levels settle (``LEVEL_SETTLED_M``).
 - **A hard landing's stop** (``stop_kicks``): the fork's hard-stop impulse across each bottom-out,
   from the quarter car's, found again pass by pass as what keeps the whole bike's ground level after
-  the hit, never pulling.
+  the hit, never pulling; a hit the wheel leaves for a flight covering more than half of that window
+  (``SEEN_SHARE``: a rock's face that throws it) keeps the quarter car's.
 - **The speed found again** leaves out each kept drop's landing with the rear's flight (``landed``).
 """
 from __future__ import annotations
@@ -38,6 +39,7 @@ import numpy as np
 
 DEEPEST_S = 0.3  # the fork's deepest point after a landing (where the body stops falling) looked for within this
 LEVEL_SETTLED_M = 2e-3  # the passes go on until no level change read moves more than this from one pass to the next
+SEEN_SHARE = 0.5  # a hard stop's impulse is read from the ground seen after the hit: at least this share of its window
 LANDED_S = 0.1  # a kept drop's landing: its compression (to its deepest point, 0.08 s on the made 0.5 m drop)
 
 
@@ -129,22 +131,29 @@ def landed(levels) -> list:
     return [(r["start_s"], r["end_s"] + LANDED_S) for r in levels or [] if r["kept"]]
 
 
-def stop_kicks(first, now, ground, dt: float, front_mass: float) -> np.ndarray:
+def stop_kicks(first, now, ground, air, dt: float, front_mass: float) -> np.ndarray:
     """The fork's hard-stop force (N at the wheel) across each bottom-out of ``first`` (the quarter car's,
     ``reconstruct_inverse.ground_under``) found again for the whole bike: ``now`` (the pass before's)
-    changed by what keeps the ``ground`` the whole bike found level over
-    ``reconstruct_inverse.BOTTOM_OUT_WINDOW_S`` after the hit (its slope there by least squares, times
-    ``front_mass``, kg: the frame's front's share), never pulling (a stop pushes). The quarter car's
-    impulse stops its own body, which fell freely through a flight where the whole bike's frame is held
-    near its reference: given to the whole bike, the one it found after 00100.SST's 0.5 s flight (316 N s)
-    threw the frame up a 3.1 m hill (0.87 m without it; levelled, the whole bike asks for -157 N s there,
-    a stop that pulls: none)."""
+    changed by what keeps the ``ground`` the whole bike found level after the hit (its slope there by
+    least squares, times ``front_mass``, kg: the frame's front's share), never pulling (a stop pushes).
+    The slope is read over ``reconstruct_inverse.BOTTOM_OUT_WINDOW_S`` after the hit; a hit after which
+    the wheel is on the ground less than ``SEEN_SHARE`` of that window (``air``: the pass's flights,
+    whose chords are not ground seen; a rock's face that throws the wheel into a long flight) keeps
+    ``now``. Read over the chord, level with the rock's top, the carried bike's made
+    ride's 0.24 m rock got 64 N s (the quarter car's 1.4) and became a ledge 0.25 m high and 4 m long
+    that looped the recorded setting out. The quarter car's impulse stops its own body, which fell
+    freely through a flight where the whole bike's frame is held near its reference: given to the
+    whole bike, the one it found after 00100.SST's 0.5 s flight (316 N s) threw the frame up a 3.1 m
+    hill (0.87 m without it; levelled, the whole bike asks for -157 N s there, a stop that pulls:
+    none)."""
     from mtbmj.ride.reconstruct_inverse import BOTTOM_OUT_WINDOW_S, runs
 
     out = np.array(now, float)
+    air = np.asarray(air, bool)
     for a, k in runs(np.asarray(first) != 0.0):
         n = min(int(BOTTOM_OUT_WINDOW_S / dt), out.size - k)
-        if n < 3:
+        seen = ~air[k:k + n]
+        if seen.sum() < max(3.0, SEEN_SHARE * n):
             continue
         tau = np.arange(n) * dt
         slope = float((ground[k:k + n] - ground[k]) @ tau / (tau @ tau))
@@ -162,6 +171,6 @@ def described(t, kept, left) -> list:
     return sorted(rows, key=lambda r: r["start_s"])
 
 
-__all__ = ["DEEPEST_S", "LEVEL_SETTLED_M", "LANDED_S", "landed", "stop_kicks", "pivot_acceleration", "edge_flights", "read",
+__all__ = ["DEEPEST_S", "LEVEL_SETTLED_M", "SEEN_SHARE", "LANDED_S", "landed", "stop_kicks", "pivot_acceleration", "edge_flights", "read",
            "response", "reference",
            "settled", "described"]
