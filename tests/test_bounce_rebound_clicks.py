@@ -676,3 +676,104 @@ def test_generator_shuffled_labels_refused(generated):
     got = law_in_clicks(wrong, target)
     assert "mislabelled" in got["law"]["refused"] and "\n" not in got["law"]["refused"]
     assert got["answer"]["set_clicks"] is None and got["held_out"] == []
+
+
+# the friction and compression carried jointly, and the answer's range with them (issue 53): a world made
+# here in which the replay's rate of record k at coefficient c, friction f, compression q and spring s is
+# R / (1 + (c + A_k (f - F) + B_k (q - Q) + S_k (s - 0.5)) / C_HALF), the records' own rates those of the
+# line 1000 + 300 x clicks at the true F, Q and 0.5 x; the values given are off the truth along their trade
+F_TRUE, Q_TRUE, RHO = 60.0, 1800.0, -0.8
+A_K, B_K, S_K = (0.0, 4.0, 0.0), (0.0, -0.3, 0.0), (0.0, 3000.0, 0.0)  # N s/m per N, per N s/m, per x
+H_F, H_Q, H_S = 150.0, 1200.0, 0.1  # the values' 95 % half-widths
+
+
+def world(f, q, s=0.5, labels=(0, 8, 17)):
+    """Entries as ``rebound_dampers`` reads them with friction f, compression q and spring s given: each
+    record's coefficient solved on its own curve for its own (true) rate, the curve and the noise."""
+    out = []
+    for j, ((k, c), lab) in enumerate(zip(TRUE_C.items(), labels)):
+        shift = A_K[j] * (f - F_TRUE) + B_K[j] * (q - Q_TRUE) + S_K[j] * (s - 0.5)
+        rate = float(rate_of(c))
+        read = c - shift
+        out.append({"file": f"r{k}", "clicks": lab, "rebound_N_s_per_m": read,
+                    "rebound_noise_ci95": [read - 1.96 * SD_C, read + 1.96 * SD_C], "record_mid_rebound_per_s": rate,
+                    "record_rate_sd_per_s": float(R / C_HALF / (1 + c / C_HALF) ** 2) * SD_C,
+                    "rate_curve": [[x, float(rate_of(x + shift))] for x in np.geomspace(50.0, 30000.0, 4000)]})
+    return out
+
+
+def given_world(f, q, labels=(0, 8, 17)):
+    """The reading at the values given (f, q), the spring's ends read as well; the replay's summary as
+    ``bounce_replay`` gives it (its intervals and the friction's and damper's correlation)."""
+    from mtbmj.identify.bounce_ends import CORRELATION
+
+    main = world(f, q, labels=labels)
+    ends = [world(f, q, s, labels) for s in (0.5 - H_S, 0.5 + H_S)]
+    for j, e in enumerate(main):
+        e["at_spring_ci95"] = [x[j]["rebound_N_s_per_m"] for x in ends]
+        e["rate_curve_at_spring_ci95"] = [x[j]["rate_curve"] for x in ends]
+    best = {"friction_N": f, "friction_N_ci95": [max(f - H_F, 0.0), f + H_F], "damper_N_s_per_m": q,
+            "damper_N_s_per_m_ci95": [q - H_Q, q + H_Q], CORRELATION: RHO}
+    return main, best
+
+
+def test_joint_ends_carry_the_correlation():
+    """``bounce_ends.joint_ends``: for a reading linear in the friction and compression (g = u f + v q),
+    its moves at the two axes' ends, in quadrature, are 1.96 of g's standard deviation with their
+    correlation (the test's own: u^2 sf^2 + v^2 sq^2 + 2 rho u v sf sq); each value's own ends (the
+    correlation left out) miss it; a summary without the correlation gives None."""
+    from mtbmj.identify.bounce_ends import JOINT, joint_ends
+
+    f, q = 400.0, 3000.0
+    _, best = given_world(f, q)
+    ends = joint_ends(best)
+    assert sorted(ends) == sorted(JOINT)
+    for u, v in ((1.0, 0.125), (1.0, -0.125)):
+        sf, sq = H_F / 1.959963984540054, H_Q / 1.959963984540054
+        truth = 1.959963984540054 * math.sqrt(u * u * sf * sf + v * v * sq * sq + 2 * RHO * u * v * sf * sq)
+        moved = math.sqrt(sum(np.mean([abs(u * (a - f) + v * (b - q)) for a, b in pair]) ** 2 for pair in ends.values()))
+        assert moved == pytest.approx(truth, rel=1e-9)
+        alone = math.hypot(u * H_F, v * H_Q)
+        assert abs(alone - truth) > 0.1 * truth
+    assert joint_ends({k: v for k, v in best.items() if k != "friction_compression_correlation"}) is None
+    low = joint_ends({**best, "friction_N": 10.0, "friction_N_ci95": [0.0, 160.0]})
+    assert min(p[0] for pair in low.values() for p in pair) == 0.0  # cut at 0
+
+
+def test_answer_range_carries_the_values_given():
+    """The values given off the truth along their trade (half of the traded axis' 95 % end): the answer's
+    range with the friction's and compression's (jointly) and the spring's ends holds the true answer (the
+    test's own: where the line's rate reaches the target) and is the test's own quadrature of the law's
+    half-widths and the larger move of each value's ends per side (the answers at each end read from the
+    world's records there); the range made without them is narrower. Read at the truth, the bare range
+    is 7-8 clicks and the carried 6-9. Measured here: the values' bend of the middle record widens the
+    law itself (chi^2 / dof), so the bare range holds the truth as well off it (5-11 at 0.8 of the axis)."""
+    from mtbmj.identify.bounce_ends import joint_ends
+    from mtbmj.identify.bounce_rebound import at_spring_ends, law_in_clicks
+
+    k_true = 7.4
+    target = float(rate_of(1000.0 + 300.0 * k_true))
+    assert law_in_clicks(world(F_TRUE, Q_TRUE), target)["answer"]["clicks_exact"] == pytest.approx(k_true, abs=0.06)
+    w = math.sqrt((1.0 - RHO) / 2.0)
+    for frac, bare_range, carried_range in ((0.0, [7, 8], [6, 9]), (0.5, [6, 10], [5, 10])):
+        f, q = F_TRUE - frac * w * H_F, Q_TRUE + frac * w * H_Q
+        main, best = given_world(f, q)
+        pairs = joint_ends(best)
+        nuisance = {name: [world(a, b) for a, b in pair] for name, pair in pairs.items()}
+        nuisance["spring_scale"] = at_spring_ends(main)
+        got = law_in_clicks(main, target, (), nuisance)
+        ans, bare = got["answer"], law_in_clicks(main, target)["answer"]
+        assert bare["clicks_range95"] == bare_range and ans["clicks_range95"] == carried_range
+        assert ans["clicks_range95"][0] <= k_true <= ans["clicks_range95"][1]
+        assert ans["clicks_range95_law"] == bare["clicks_range95"] and ans["range_open"] == []
+        # the test's own range: the answer at each end from the world's records there
+        own_ends = [[law_in_clicks(world(a, b), target)["answer"]["clicks_exact"] for a, b in pair]
+                    for pair in pairs.values()]
+        own_ends.append([law_in_clicks(world(f, q, s), target)["answer"]["clicks_exact"]
+                         for s in (0.5 - H_S, 0.5 + H_S)])
+        k = ans["clicks_exact"]
+        lo_law, hi_law = ans["law_half_clicks"]
+        below = math.sqrt(lo_law ** 2 + sum(max([0.0] + [k - v for v in e if v < k]) ** 2 for e in own_ends))
+        above = math.sqrt(hi_law ** 2 + sum(max([0.0] + [v - k for v in e if v > k]) ** 2 for e in own_ends))
+        assert ans["clicks_range95"] == [max(math.floor(k - below), 0), min(math.ceil(k + above), 17)]
+        assert "with the friction and compression (jointly), spring given at their 95 % ends" in got["lines"][-1]

@@ -27,8 +27,9 @@ import math
 
 import numpy as np
 
-from mtbmj.identify.bounce_replay import (LOWER, MAX_RELATIVE_RMS, NAMES, ROUNDS, UPPER, Slam, at_bound,
-                                          correlations, covariance, finish, fit_push, lag1)
+from mtbmj.identify.bounce import lag1
+from mtbmj.identify.bounce_ends import correlations, covariance
+from mtbmj.identify.bounce_replay import LOWER, MAX_RELATIVE_RMS, NAMES, ROUNDS, UPPER, Slam, at_bound, finish, fit_push
 
 SHARED = ("spring_scale", "friction_N")  # the same shock's at every rebound click
 PER_RECORD = ("slam_N", "damper_N_s_per_m")

@@ -26,9 +26,10 @@ its 95 % ends solved through on the same replay, ``rebound_noise_ci95``) and the
 (the same solve with the spring at the ends of the interval given, ``spring_ci95``, which is what
 moves it most: 0.49 x gives 208, 2591, 5368 N s/m on the shared slams, 0.6 x 961, 3956, 7065), their
 half-widths added in quadrature on each side, and with them the friction's and the compression's
-intervals (``at_nuisance_ends``: every record read again at each end of the best whole-trace replay's
-95 % interval of its friction and of its damper, each alone, the other held; per value the larger
-move on each side, ``at_nuisance_ci95``; the whole-trace replay barely determines them, [0, 874] N and
+intervals (``at_nuisance_ends``: every record read again at each end of the two axes of the best
+whole-trace replay's joint 95 % interval of its friction and its damper, their correlation from its
+Jacobian, ``bounce_ends.joint_ends``; each alone, the other held, where its summary has no correlation;
+per axis the larger move on each side, ``at_nuisance_ci95``; the whole-trace replay barely determines them, [0, 874] N and
 [0, 6773] N s/m on the shared slams, and they move the coefficients as much as the spring does) and
 the nuisance fit's reproducibility (``reproducibility``: Z95 x the standard deviation of the
 coefficient over the reading and its ``RESTARTS`` restarts: ``restarted`` fits the best whole-trace
@@ -41,7 +42,8 @@ said in ``interval_open`` (on the shared slams every interval is open below: at 
 the bike rebounds slower than the records even undamped). Refused for the record (a reason, no
 value) when no coefficient within ``BOUNDS`` gives the record's speed: the bike with the spring given
 rebounds slower than the record even undamped, or faster even at the largest coefficient. The law in
-clicks, each record held out and the answer in clicks: ``law_in_clicks`` (``bounce_rebound_clicks``).
+clicks, each record held out and the answer in clicks, its range carrying the friction's, compression's
+and spring's ends: ``law_in_clicks`` (``bounce_rebound_clicks``).
 """
 from __future__ import annotations
 
@@ -49,6 +51,7 @@ import numpy as np
 
 from mtbmj.identify.bounce import BounceError, first_rebound, record_name
 from mtbmj.identify.bounce_decay import moving_average
+from mtbmj.identify.bounce_ends import CORRELATION, joint_ends
 from mtbmj.identify.bounce_replay import NAMES, Slam, fit_push
 
 BOUNDS = (50.0, 30000.0)  # N s/m: the rebound coefficient sought within these (bounce_replay's damper bounds)
@@ -330,7 +333,9 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
                    else f"{best['file']}'s replay")
     said_from = "the ring-down fit" if own else f"{best['file']}'s replay"
     said_again = (f", the replay's reproducibility over {len(landed)} restart(s)" if landed else "")
-    said_again += ", the friction's and compression's intervals" if not own else ""
+    rho = None if own else best.get(CORRELATION)
+    said_again += ("" if own else ", the friction's and compression's intervals" if rho is None else
+                   f", the friction's and compression's joint interval (correlated {rho:+.2f})")
     line = (f"rebound dampers from the first rebounds (spring {spring[0]:.2f} x from {said_spring}, friction "
             f"{friction:.0f} N, compression {compression:.0f} N s/m from {said_from}): {', '.join(said(e) for e in read) or 'none'} N s/m (95 %: the record's noise and the spring's "
             f"interval{said_again}) at {at or 'no'} clicks"
@@ -342,15 +347,16 @@ def read_records(records, clicks, replayed: list, bike="sst", rider_hz: float | 
                if "entries" in r else {}) for r in again],
            "records": entries, "rises": up, "line": line}
     out["nuisance_ends"] = None if own else {k: [list(p) for p in v] for k, v in nuisance_ends(best).items()}
+    out["friction_compression_correlation"] = rho
     out.update(law_in_clicks(entries, target_per_s, landed, nuisance))
     return out
 
 
-def at_spring_ends(entries) -> list:
+def at_spring_ends(entries, partial: bool = False) -> list:
     """The records as read at each end of the spring's interval (``at_spring_ci95`` with its
     ``rate_curve_at_spring_ci95``; the noise interval moved with the coefficient), for the held-out sd
     beside the friction's and compression's: [at the lower end, at the upper end], None where a read
-    record has no coefficient there."""
+    record has no coefficient there (``partial``: the records that have one, for the answer's range)."""
     read = [e for e in entries if "rebound_N_s_per_m" in e]
     out = []
     for i in (0, 1):
@@ -359,6 +365,8 @@ def at_spring_ends(entries) -> list:
             c = (e.get("at_spring_ci95") or [None, None])[i]
             cv = (e.get("rate_curve_at_spring_ci95") or [None, None])[i]
             if c is None or not cv:
+                if partial:
+                    continue
                 got = None
                 break
             move = c - e["rebound_N_s_per_m"]
@@ -369,9 +377,13 @@ def at_spring_ends(entries) -> list:
 
 
 def nuisance_ends(best: dict) -> dict:
-    """{name: [(friction, compression) at the lower end of name's 95 % interval, at its upper end]} for
-    the friction and the compression of the whole-trace replay ``best`` (its summary: its friction and
-    its one damper with their intervals, each alone, the other held)."""
+    """{name: [(friction, compression) at the lower end, at the upper end]} for the friction and the
+    compression of the whole-trace replay ``best`` (its summary: its friction and its one damper with
+    their intervals): their joint interval's two axes (``bounce_ends.joint_ends``) where the summary
+    carries their correlation, else each value's own ends, the other held."""
+    joint = joint_ends(best)
+    if joint is not None:
+        return joint
     f, c = float(best["friction_N"]), float(best["damper_N_s_per_m"])
     flo, fhi = best["friction_N_ci95"]
     clo, chi = best["damper_N_s_per_m_ci95"]
@@ -464,9 +476,10 @@ def _is_fit(ring: dict | None) -> bool:
 
 def law_in_clicks(entries, target_per_s: float | None = None, again=(), nuisance=None) -> dict:
     """The law in clicks, each record held out (``again``: the records read at each restart's nuisance
-    values, ``nuisance``: at the ends of the friction's and compression's intervals, ``at_nuisance_ends``;
-    both carried into the held-out sd) and the answer (``bounce_rebound_clicks``), with the lines
-    they print ("lines")."""
+    values, ``nuisance``: at the ends of the friction's and compression's intervals, ``at_nuisance_ends``,
+    and of the spring's, ``at_spring_ends``; both carried into the held-out sd) and the answer
+    (``bounce_rebound_clicks``; with ``nuisance`` its range carries the friction's and compression's ends
+    and the spring's, the records read at each), with the lines they print ("lines")."""
     from mtbmj.identify import bounce_rebound_clicks as rc
 
     lines = []
@@ -482,7 +495,10 @@ def law_in_clicks(entries, target_per_s: float | None = None, again=(), nuisance
     rows = rc.held_out(entries, again, nuisance) if "refused" not in law else []
     if rc.held_out_line(rows):
         lines.append(rc.held_out_line(rows))
-    ans = rc.answer(entries, target_per_s) if "refused" not in law else {
+    # the answer's range: the friction's and compression's ends and the spring's (the records read there)
+    carried = None if nuisance is None else {**{k: v for k, v in nuisance.items() if k != "spring_scale"},
+                                             "spring_scale": at_spring_ends(entries, partial=True)}
+    ans = rc.answer(entries, target_per_s, carried) if "refused" not in law else {
         "target_per_s": target_per_s, "set_clicks": None, "note": law["refused"]}
     lines.append(rc.answer_line(ans))
     return {"law": law, "held_out": rows, "answer": ans, "lines": lines}

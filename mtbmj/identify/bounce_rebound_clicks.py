@@ -18,9 +18,9 @@ record's clicks with the law's interval, carried to the record's first-rebound r
 height) through that record's own rate-against-coefficient curve (the replay at the spring given),
 and compared with the record's rate: it holds when the two lie within 2 combined standard deviations.
 The combined sd has four parts in quadrature: the prediction's (the law's), the record's noise, the
-values given (the friction's, the compression's and the spring's 95 % intervals: the held-out
-residual again with every record read at each end, ``bounce_rebound.at_nuisance_ends`` and
-``at_spring_ends``; per value the mean move over the ends read / Z95, the values in quadrature:
+values given (the friction's and the compression's joint 95 % interval, along its two axes, and the
+spring's: the held-out residual again with every record read at each end, ``bounce_rebound.at_nuisance_ends``
+and ``at_spring_ends``; per value the mean move over the ends read / Z95, the values in quadrature:
 ``nuisance_sd_per_s``; on the shared slams the records' bend off the line changes sign between the
 ends of the compression's interval and between the spring's and its upper end, so the check cannot
 tell the law's bend from theirs, and says so by its sd), and the nuisance fit's reproducibility
@@ -52,7 +52,12 @@ at one coefficient is not the same for every slam: on the shared slams at 7 /s t
 slams' curves alone give 8.0 and 4.9 clicks), then to whole clicks. Only the clicks between the
 records' are searched (the line is not extrapolated): a target past them is refused with its side.
 Repeated with the dampers and curves at the spring interval's ends (``at_spring_ci95``), each end's
-answer or why there is none. Beside it, model-free, the clicks where the records' own rates joined by straight lines
+answer or why there is none. With the values given read at their ends (``carry``: the friction's and
+compression's joint ends and the spring's, the records read at each), the range carries them: the answer
+again at every end, per value the larger move on each side added in quadrature to the law's own
+half-widths, then to whole clicks; an end whose answer lies past the records read there opens that side
+(to the records' end), one with no law opens both (``"range_open"``); the law's alone is kept
+(``"clicks_range95_law"``). Beside it, model-free, the clicks where the records' own rates joined by straight lines
 in clicks reach the target (``records_clicks``).
 """
 from __future__ import annotations
@@ -233,8 +238,12 @@ def _nuisance_residuals(name: str, nuisance: dict) -> dict:
     return out
 
 
-SAID = {"friction_N": "friction", "compression_N_s_per_m": "compression", "spring_scale": "spring"}
+SAID = {"friction_N": "friction", "compression_N_s_per_m": "compression", "spring_scale": "spring",
+        "friction_compression_together": "friction and compression (jointly)",
+        "friction_compression_traded": "friction and compression (jointly)"}
 STEP = 0.05  # clicks searched in this step
+SHORT = {"friction_compression_together": "friction & compression jointly",
+         "friction_compression_traded": "friction & compression jointly"}  # rebound.png's title
 
 
 def _rates(law_ab, ks, rows, curve_of, only: int | None = None) -> np.ndarray:
@@ -283,7 +292,7 @@ def _one_answer(entries, target: float, key: str, curve_of, seed: int = 0) -> di
     k = _crossing(ks, rates, target)
     if k is None:
         above = target < rates[-1]
-        row["set_clicks"] = None
+        row["set_clicks"], row["past"] = None, "above" if above else "below"
         row["note"] = (f"no answer within the records: the law's rebound at {hi if above else lo:g} clicks is "
                        f"{rates[-1] if above else rates[0]:.2f} /s, still {'faster' if above else 'slower'} than the "
                        f"target: {'more' if above else 'fewer'} than {hi if above else lo:g} clicks (the law is not "
@@ -306,6 +315,7 @@ def _one_answer(entries, target: float, key: str, curve_of, seed: int = 0) -> di
     span = [p_lo, p_hi] + [a for a in alone if a is not None]
     row["set_clicks"] = int(round(k))
     row["clicks_range95"] = [int(math.floor(max(min(span), lo))), int(math.ceil(min(max(span), hi)))]
+    row["law_half_clicks"] = [max(k - min(span), 0.0), max(max(span) - k, 0.0)]  # before whole clicks
     share = outside / (DRAWS // 4)
     row["draws_outside_searched"] = share
     if share > 0.025 or None in alone:
@@ -325,9 +335,52 @@ def records_clicks(entries, target: float) -> float | None:
     return float(np.interp(target, rs[::-1], ks[::-1]))
 
 
-def answer(entries, target_per_s: float | None) -> dict:
+def _end_clicks(ents, target: float):
+    """The answer's clicks (exact) with the records read at one end of a value given (``ents``), "below"
+    or "above" where it lies past the records read there, None where no law is read there."""
+    read = _readable(ents or [])
+    if len({e["clicks"] for e in read}) < 2:
+        return None
+    try:
+        r = _one_answer(read, target, "rebound_N_s_per_m", lambda e: e.get("rate_curve"))
+    except BounceError:
+        return None
+    return r.get("past") if r["set_clicks"] is None else r["clicks_exact"]
+
+
+def carry(row: dict, target: float, nuisance: dict) -> dict:
+    """The answer's range carrying the values given (``nuisance``: {name: [entries at the lower end of
+    its 95 % interval, at the upper end]}, the records read there): the answer again at each end
+    (``_end_clicks``), per value the larger move on each side, added in quadrature to the law's own
+    half-widths (its draws and either curve alone), then to whole clicks within the records'. An end
+    whose answer lies past the records read there opens that side (to the records' end); one where no
+    law is read opens both. Sets "clicks_range95" (the law's alone kept as "clicks_range95_law"),
+    "clicks_at_ends" and "range_open"."""
+    k = row["clicks_exact"]
+    lo, hi = row["searched_clicks"]
+    moves, opened, at = [[], []], set(), {}
+    for name, ends in nuisance.items():
+        got = [_end_clicks(ents, target) for ents in (ends or [None, None])]
+        at[name] = got
+        for v in got:
+            if v is None:
+                opened |= {f"below: no law read at an end of the {SAID.get(name, name)} given",
+                           f"above: no law read at an end of the {SAID.get(name, name)} given"}
+            elif isinstance(v, str):
+                opened.add(f"{v}: at an end of the {SAID.get(name, name)} given the answer lies {v} the records")
+        moves[0].append(max([0.0] + [k - v for v in got if isinstance(v, float) and v < k]))
+        moves[1].append(max([0.0] + [v - k for v in got if isinstance(v, float) and v > k]))
+    half = [math.sqrt(row["law_half_clicks"][i] ** 2 + sum(m * m for m in moves[i])) for i in (0, 1)]
+    low = lo if any(w.startswith("below") for w in opened) else int(math.floor(max(k - half[0], lo)))
+    high = hi if any(w.startswith("above") for w in opened) else int(math.ceil(min(k + half[1], hi)))
+    return {"clicks_range95_law": row["clicks_range95"], "clicks_range95": [int(low), int(high)],
+            "clicks_at_ends": at, "range_open": sorted(opened), "range_carries": sorted(nuisance)}
+
+
+def answer(entries, target_per_s: float | None, nuisance: dict | None = None) -> dict:
     """The setting for the target rate (module docstring), at the spring given and at its interval's ends.
-    {"target_per_s", "rule", "source", "set_clicks", ...}; with no target, why there is no answer."""
+    {"target_per_s", "rule", "source", "set_clicks", ...}; with no target, why there is no answer. With
+    ``nuisance`` ({name: [entries at its lower end, at its upper end]}) the range carries them (``carry``)."""
     base = {"target_per_s": target_per_s, "rule": RULE, "source": SOURCE}
     if target_per_s is None:
         return {**base, "set_clicks": None,
@@ -355,6 +408,8 @@ def answer(entries, target_per_s: float | None) -> dict:
             ends.append({k: r[k] for k in ("set_clicks", "clicks_exact", "note") if k in r})
         except BounceError as err:
             ends.append({"set_clicks": None, "note": f"none at the spring interval's {which} end: {err}"})
+    if nuisance:
+        row.update(carry(row, target_per_s, nuisance))
     return {**base, **row, "at_spring_ci95": ends, "records_clicks": records_clicks(entries, target_per_s)}
 
 
@@ -369,7 +424,7 @@ def held_out_line(rows) -> str | None:
     names = sorted({m for r in done if r.get("nuisance_sd_per_s") is not None
                     for m, v in (r.get("nuisance_residuals_per_s") or {}).items() if any(x is not None for x in v)})
     said = ["the law's", "the record's noise"] + ([f"the replay's reproducibility over {k} restart(s)"] if k else [])
-    named = [SAID.get(m, m) for m in names]
+    named = list(dict.fromkeys(SAID.get(m, m) for m in names))
     said += [f"the {' and '.join([', '.join(named[:-1])] + named[-1:] if len(named) > 1 else named)} given at "
              f"their 95 % ends"] if names else []
     sd = ("sd: " + ", ".join(said[:-1]) + " and " + said[-1] if len(said) > 2 else
@@ -384,9 +439,13 @@ def answer_line(ans: dict) -> str:
         head += f" (first rebound at {ans['target_per_s']:.2f} /s per mm of height)"
     if ans.get("set_clicks") is None:
         return f"{head}: {ans.get('note', 'none')}"
+    carried = [SAID.get(m, m) for m in ans.get("range_carries") or []]
+    said_range = ("95 % of the law's draws and either bracketing slam's curve alone" + (
+        f", with the {', '.join(dict.fromkeys(carried))} given at their 95 % ends" if carried else "") + (
+        f"; open {' and '.join(sorted({w.split(':')[0] for w in ans['range_open']}))}" if ans.get("range_open") else ""))
     text = (f"{head}: set {ans['set_clicks']} clicks ({ans['clicks_exact']:.1f} on the law, "
-            f"{ans['needed_N_s_per_m']:.0f} N s/m); within the uncertainty {ans['clicks_range95'][0]}-{ans['clicks_range95'][1]} clicks (95 % of the "
-            f"law's draws and either bracketing slam's curve alone)")
+            f"{ans['needed_N_s_per_m']:.0f} N s/m); within the uncertainty {ans['clicks_range95'][0]}-{ans['clicks_range95'][1]} clicks ("
+            f"{said_range})")
     ends = ans.get("at_spring_ci95") or []
     said = []
     for which, e in zip(("lower", "upper"), ends):
@@ -454,7 +513,8 @@ def figure(got: dict):
     said += [f"refused at {refused} clicks"] if refused else []
     again = any(e.get("rebound_reproducibility_sd_N_s_per_m") is not None for e in got["records"])
     given = sorted({k for e in got["records"] for k in (e.get("at_nuisance_ci95") or {})})
-    parts = ["noise", "spring"] + [k.split("_")[0] for k in given] + (["restarts"] if again else [])
+    parts = list(dict.fromkeys(["noise", "spring"] + [SHORT.get(k, k.split("_")[0]) for k in given]
+                               + (["restarts"] if again else [])))
     ax.set_title(f"rebound dampers from the first rebounds (95 %: {', '.join(parts)})"
                  + ("\n" + "; ".join(said) if said else ""), fontsize=8)
     ax.legend(fontsize=7, loc="upper left")

@@ -56,9 +56,10 @@ from mtbmj.bike import run as bike_run
 from mtbmj.bike import spec as spec_mod
 from mtbmj.bike.reference import NQ, Reference, static_equilibrium
 from mtbmj.errors import MtbmjError
-from mtbmj.identify.bounce import (QUIET_BEFORE_S, BounceError, find_slam, first_rebound, interval95, lag1,
+from mtbmj.identify.bounce import (QUIET_BEFORE_S, BounceError, find_slam, first_rebound, interval95,
                                    rebound_check, record_name)
 from mtbmj.identify.bounce_bike import RIDER_SOURCE, RIDER_ZETA
+from mtbmj.identify.bounce_ends import CORRELATION, correlations, covariance, friction_compression_correlation
 from mtbmj.runpath import guard
 
 RIDER_HZ = 5.0  # the seated body's vertical resonance (Fairley and Griffin 1989: 5 Hz; 4-6 Hz, Griffin 1990, ISO 2631-1)
@@ -382,6 +383,7 @@ class Replay:
         if self.shares is not None:
             out["mode_strain_energy_share"] = self.shares
         out["fork_rms_mm"] = self.fork_rms_mm
+        out[CORRELATION] = friction_compression_correlation(self.correlation)  # they trade (bounce_ends)
         return out
 
     def line(self) -> str:
@@ -510,25 +512,6 @@ def fit_push(sl: Slam, u: np.ndarray, max_nfev: int = 40, extra: dict | None = N
                         max_nfev=max_nfev)
     u[PUSH_INDEX] = sol.x
     return int(sol.nfev)
-
-
-def covariance(r: np.ndarray, J: np.ndarray, rho: float | None = None):
-    """(covariance of the values, t-quantile factor): the Jacobian ``J`` (d residual / d value) with the
-    residual's variance, inflated for its lag-1 autocorrelation (``rho``, or read from ``r``)."""
-    from scipy.stats import t as student
-
-    n, k = r.size, J.shape[1]
-    rho = lag1(r) if rho is None else rho
-    n_eff = max(n * (1 - rho) / (1 + rho), k + 2.0)
-    s2 = float(r @ r) / max(n - k, 1) * n / n_eff
-    cov = np.linalg.pinv(J.T @ J) * s2
-    return cov, float(student.ppf(0.975, max(n_eff - k, 1.0)) / 1.959963984540054)
-
-
-def correlations(cov: np.ndarray, names) -> dict:
-    dev = np.sqrt(np.maximum(np.diag(cov), 1e-300))
-    return {f"{a}|{b}": float(cov[i, j] / (dev[i] * dev[j]))
-            for i, a in enumerate(names) for j, b in enumerate(names) if i < j}
 
 
 def finish(sl: Slam, x: np.ndarray, sd: dict, rms: float, nfev: int, corr: dict | None,

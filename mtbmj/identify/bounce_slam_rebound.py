@@ -22,7 +22,7 @@ best-determined whole-trace replay's), not fitted. Fitted by
 ``scipy.optimize.least_squares`` on all records' residuals together, the Jacobian by forward
 differences record by record (a record's residual depends on the shared values and its own). 95 %
 intervals from that Jacobian with the residual's variance, inflated for its lag-1 autocorrelation
-(each record's effective samples n (1 - rho) / (1 + rho) summed; ``bounce_replay.covariance``),
+(each record's effective samples n (1 - rho) / (1 + rho) summed; ``bounce_ends.covariance``),
 Student's t; shared values ``held`` are given, not fitted, and the others' intervals are then
 conditional on them. The window does not identify the spring: on the shared slams the cost is flat
 from 0.45 to 0.73 x (113.6, 114.9, 115.6), the spring trading with the rebound coefficients
@@ -56,8 +56,8 @@ import math
 import numpy as np
 
 from mtbmj.identify.bounce import BounceError, first_rebound, interval95, lag1, record_name
-from mtbmj.identify.bounce_replay import (BOUNDS, MAX_RELATIVE_RMS, NAMES, PUSH_NAMES, Slam, correlations,
-                                          covariance)
+from mtbmj.identify.bounce_ends import correlations, covariance
+from mtbmj.identify.bounce_replay import BOUNDS, MAX_RELATIVE_RMS, NAMES, PUSH_NAMES, Slam
 
 SHARED = ("spring_scale", "compression_N_s_per_m")
 OWN = PUSH_NAMES + ("rebound_N_s_per_m",)
