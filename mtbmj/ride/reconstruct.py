@@ -632,7 +632,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
                                    f"off the ground, or in the ride's first wheelbase or its filters' start (or the rear "
                                    f"does not move there): no sample of the ride can be checked")
         found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel, stops,
-                                                  at_once=at_once)
+                                                  at_once=at_once, air=air)
         # the check: the whole bike free over the terrain found, the rider's slow load on its front
         again = reconstruct_bike.ride(t, whole, reconstruct_bike.rear_ground(t, lags, found["ground"], at_once),
                                       front_ground=found["ground"], push=found["rider_slow_load"])

@@ -329,13 +329,15 @@ def rear_ground(t, lag, ground, at_once: float = 0.0):
 
 
 def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference, fork_travel: float,
-                     stops=None, at_once: float = 0.0) -> dict:
+                     stops=None, at_once: float = 0.0, air=None) -> dict:
     """The terrain under the front wheel and the rear's travel predicted, from the fork's record alone
     (``fork_stroke`` m on ``t``): the whole bike rides with its fork's stroke prescribed, its rear
     wheel over the ground found under the front ``lag`` (s, on ``t``) earlier; the ground of one pass
     is the rear's in the next, from ``first_ground`` (the quarter car's), until the rear predicted
     settles (``SETTLED_M``) or ``MAX_PASSES``. The fork's slow load (below the quarter car's high-pass)
-    is the rider's, taken off the frame as the quarter car takes it (the tyre carries it); the frame's
+    is the rider's, taken off the frame as the quarter car takes it (the tyre carries it; with
+    ``reconstruct_inverse.FLIGHTS_OUT_OF_SLOW_LOAD`` the quarter car's flights ``air`` and the top-out's
+    hanging, with their take-offs and landings, kept out of it: ``reconstruct_inverse.slow_load``); the frame's
     front is held near ``reference`` (the quarter car's body, its drift removed) by the bounded slow
     load of :func:`ride`. ``stops`` (N at the wheel, or None): the fork's hard-stop force across each
     bottom-out (not in the record; the quarter car's, keeping its body level after it, at first, then
@@ -345,18 +347,19 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     "tyre", "rear_rise", "slow_load" (N on the frame's front: the rider's and the loop's),
     "rider_slow_load" (the rider's alone), "passes", "settled_m", "diverged_s" (where a pass diverged:
     the passes end there, the rear not a number past it)}."""
-    from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, bridge, derivatives, hanging, law_along, lowpass, unloaded
+    from mtbmj.ride.reconstruct_inverse import bridge, derivatives, hanging, law_along, slow_load, unloaded
 
     dt = float(t[1] - t[0])
     x = np.asarray(fork_stroke, float)
     _, acc = derivatives(x, dt)
     force = law_along(b.fork, x, dt, fork_travel) / b.sin_a
-    slow = lowpass(force - b.fF0, dt, HIGHPASS_HZ)  # the rider's slow load at the front
+    top = hanging(x, dt)
+    flying = top if air is None else top | np.asarray(air, bool)
+    slow = slow_load(force - b.fF0, flying, dt)  # the rider's slow load at the front, flights and landings kept out
     # the fork's hard stop across each bottom-out: at first as the quarter car found it, then the whole
     # bike's own (reconstruct_flight.stop_kicks)
     first = np.zeros(x.size) if stops is None else np.asarray(stops, float)
     kicks = first
-    top = hanging(x, dt)
 
     def front_with(kicks):  # the fork's side of the whole bike with the hard stop's force ``kicks``
         return (x * b.sin_a, acc * b.sin_a, force + kicks - slow, force + kicks, top)
