@@ -476,6 +476,15 @@ class _Reading:
         return _Reading(self._c.with_overrides(overrides), self.read)
 
 
+def unread(c: Config) -> list[str]:
+    """The keys of ``c``'s model families (``MODEL_FAMILIES``) that the spring, damper, friction and tire
+    models ``c`` chooses do not read: what a file written to stand alone (``mtbmj fit``'s fit.toml) leaves
+    out, so that it loads back without a warning about a key of its own."""
+    seen = _Reading(c)
+    fork_law(seen), _tire(seen)
+    return sorted(k for k in c.values if k.startswith(MODEL_FAMILIES) and k not in seen.read)
+
+
 def _composed(c: Config):
     """(fork law, tire law) of ``c``, refusing in one line a key a person typed (``Config.given``:
     ``--set``, a bike's ``--fork-set`` / ``--shock-set``; not a file's or a program's) that the part's

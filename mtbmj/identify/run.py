@@ -98,6 +98,9 @@ class Identification:
             # outside the fit's folder would not be read back: mtbmj.config's base rule)
             own = {k: v for k, v in load_config(base).values.items() if k not in ("description", "reading")}
             values, base = {**_without_counterparts(own, values), **values}, "reference"
+            from mtbmj.compose import unread  # keys the file carried that its models do not read: left out
+
+            values = {k: v for k, v in values.items() if k not in set(unread(load_config(base).with_overrides(values)))}
         return parameter_set_toml(values, base, f"{warning}mtbmj fit {self.kind} from {sources}{synthetic}", comments)
 
     def summary(self) -> dict:
