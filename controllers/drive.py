@@ -57,6 +57,29 @@ def drive_force(v_ref: float, v: float, kv: float, push: float, power: float, br
     return f
 
 
+# The whole bike's rider eases off the push as the front lifts (``eased``): with the front tyre off the
+# ground, the push is cut linearly from all of it at a frame pitch of LIFT_EASE_DEG[0] nose up to none at
+# LIFT_EASE_DEG[1] (what a rider does when the front comes up unasked: he stops pedalling, as a wheelie is
+# held down by easing the drive and raised by pedalling, as a motorcycle's wheelie control cuts the engine's
+# torque; the angles assumed, below the balance point over the rear tyre's contact, about 26 deg on the
+# tests' bike: its masses' centre 0.55 m ahead of the rear axle and 1.09 m above the ground).
+LIFT_EASE_DEG = (10.0, 20.0)
+
+
+def eased(f: float, pitch: float, front_loaded: bool, lo_deg: float, hi_deg: float) -> float:
+    """The drive force ``f`` (N, forward positive) as a rider gives it with the frame at ``pitch`` (rad,
+    nose up positive): unchanged while the front tyre carries load (``front_loaded``) or when it holds
+    back (f <= 0); with the front off the ground, cut from all of it at ``lo_deg`` to none at ``hi_deg``."""
+    if front_loaded or f <= 0.0:
+        return f
+    u = (pitch * 57.29577951308232 - lo_deg) / (hi_deg - lo_deg)
+    if u <= 0.0:
+        return f
+    if u >= 1.0:
+        return 0.0
+    return f * (1.0 - u)
+
+
 def at_patch(f: float, fx: float, fz: float, deflection: float, radius: float):
     """(dx, dz, torque): a tangential ground force ``f`` (forward positive) on a tyre whose radial
     force is (fx, fz), as a force at the axle, along the tyre's contact tangent, and the couple
@@ -219,4 +242,4 @@ class Drive:
         return drive_force(v_ref, v, self.kv, self.push, self.power, self.brake)
 
 
-__all__ = ["Drive", "chain_pull", "drive_force", "pedal_drive", "pedal_forces", "pedal_peak", "CRANK_LENGTH_M", "wheel_forces", "MODES", "RIDER_PUSH_N", "RIDER_POWER_W", "RIDER_BRAKE_N"]
+__all__ = ["Drive", "chain_pull", "drive_force", "eased", "LIFT_EASE_DEG", "pedal_drive", "pedal_forces", "pedal_peak", "CRANK_LENGTH_M", "wheel_forces", "MODES", "RIDER_PUSH_N", "RIDER_POWER_W", "RIDER_BRAKE_N"]

@@ -173,15 +173,46 @@ def test_a_ride_no_spring_can_carry_is_not_described(right, tmp_path):
 
 
 @pytest.mark.slow
-def test_advice_on_a_softer_fork_than_the_file_says_rides_the_calibrated_bike(softer, tmp_path, capsys):
-    """Uncalibrated (``--no-calibrate``), this ride's recorded setting loops out on the terrain found
-    through the file's stiffer fork (it is refused); calibrated (the default), it is ridden, the report carries the calibration, and a
-    change of the fork's spring is read in the file's units (from 12)."""
+@pytest.mark.xfail(strict=True, reason="since the whole bike's rider eases off the push as the front lifts "
+                                       "(controllers.drive.eased), the recorded setting rides the terrain found "
+                                       "through the file's stiffer fork (12 N/mm said, 8.4 ridden) uncalibrated: "
+                                       "0 of 12 candidates crash and the advice is inconclusive (exit 0), not refused")
+def test_advice_on_a_softer_fork_than_the_file_says_is_refused_uncalibrated(softer, tmp_path, capsys):
+    """Uncalibrated (``--no-calibrate``), this ride's recorded setting looped out on the terrain found
+    through the file's stiffer fork, driven over by the rider's speed controller on the rear wheel (it
+    was refused)."""
     sst, file, _ = softer
     out = tmp_path / "advice"
     with reconstruction_passing():
         assert main(["advise", str(sst), "--bike", str(file), "--no-calibrate", "--out", str(out)]) == 2
         assert "crashed" in capsys.readouterr().err and not out.exists()
+
+
+def test_a_recorded_setting_that_crashes_on_the_terrain_found_is_a_refusal():
+    """The refusal the uncalibrated soft-fork ride above reached by a loop-out, reached here by a run written
+    here that crashed: ``Prepared.assemble`` says the recorded setting crashed and that the model cannot ride
+    the ride as reconstructed; a run that did not crash is not refused at that point."""
+    from types import SimpleNamespace
+
+    from mtbmj.ride.advice_rules import RideNotDescribed
+    from mtbmj.ride.advise import Prepared
+
+    ride = SimpleNamespace(record=SimpleNamespace(name="made.SST"))
+    line = "crashed: looped out at 4.460 s (pitch 60.1 deg)"
+    with pytest.raises(RideNotDescribed, match=r"made.SST: the recorded setting crashed: looped out at 4.460 s.*"
+                                               r"cannot ride this ride as reconstructed"):
+        Prepared.assemble(ride, [SimpleNamespace(crash=line)])
+    with pytest.raises(AttributeError):  # not refused: it goes on to the candidates (absent from this stand-in)
+        Prepared.assemble(ride, [SimpleNamespace(crash=None)])
+
+
+@pytest.mark.slow
+def test_advice_on_a_softer_fork_than_the_file_says_rides_the_calibrated_bike(softer, tmp_path, capsys):
+    """Calibrated (the default), this ride is ridden, the report carries the calibration, and a change of
+    the fork's spring is read in the file's units (from 12)."""
+    sst, file, _ = softer
+    out = tmp_path / "advice"
+    with reconstruction_passing():
         assert main(["advise", str(sst), "--bike", str(file), "--out", str(out)]) == 0  # calibrated: the default
     printed = capsys.readouterr().out
     assert "calibrated on the ride: fork spring rate" in printed

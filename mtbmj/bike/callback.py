@@ -13,7 +13,7 @@ import numpy as np
 
 from mtbmj.bike.model import Bike
 from mtbmj.bike.spec import leverage_ratio
-from mtbmj.controllers.drive import Drive, chain_pull, pedal_drive, wheel_forces
+from mtbmj.controllers.drive import LIFT_EASE_DEG, Drive, chain_pull, eased, pedal_drive, wheel_forces
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, PatchSearch, RadialTire
 
 
@@ -60,6 +60,7 @@ class BikeCallback:
         self.chain = bike.spec.drive.get("chain_m")
         # pedalling (drive mode "pedal"): the crank turns with the distance rolled, through the chain
         self.xq = bike.qpos_index("bike_x")
+        self.pitchq = bike.qpos_index("pitch")
         self.rider = int(m.body("rider").id)
         # the legs and arms: (frame site, rider site, k, c, rest), on the rider's two joints
         self.limbs = tuple((int(m.site(lb.frame_site).id), int(m.site(lb.rider_site).id), lb.stiffness, lb.damping,
@@ -193,6 +194,8 @@ class BikeCallback:
         elif self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:
             mujoco.mj_mulM(m, d, self._momentum, qvel)
             f = self.drive.force(self.speed, self._momentum[self.xv] / self.total_mass)
+            # the rider eases off as the front lifts (controllers.drive.eased)
+            f = eased(f, qpos[self.pitchq], math.hypot(fxf, fzf) > 0.0, *LIFT_EASE_DEG)
             ground = wheel_forces(f, fxf, fzf, df, fxr, fzr, dr, self.traction, self.tires[1].radius)
         ctrl[self.a_drive[0]] = ground[3]  # the rear tyre's ground force (drive or brake), at its axle
         ctrl[self.a_drive[1]] = ground[4]

@@ -13,7 +13,7 @@ Design (the rolling front end's, ``mtbmj.rolling.callback_compiled``):
   the compiled kernels (``controllers.kernels.fork_force``, or ``fork_force_rate`` with a
   friction state); the tire and the rim
   by ``controllers.kernels.rolling_tire_force`` / ``rim_force``; the drive by
-  ``controllers.drive.drive_force`` compiled (``controllers.jit.law_function``); the leverage
+  ``controllers.drive.drive_force`` and ``eased`` compiled (``controllers.jit.law_function``); the leverage
   curve's lookups (``mtbmj.bike.spec.leverage_ratio`` / ``leverage_stroke``) are those plain
   functions compiled. Nothing of them is written here.
 * The patch search is the front end's compiled one (``update_patches``: ``PatchSearch``, with its
@@ -46,6 +46,7 @@ import weakref
 import numpy as np
 
 from mtbmj.controllers.compiled import unavailable_reason, warn_once
+from mtbmj.controllers.drive import LIFT_EASE_DEG
 from mtbmj.controllers.jit import FALLBACK_MESSAGE, callback, kernel, law_function, numba as _numba
 from mtbmj.controllers.lawcodes import FLOAT_WIDTH as LAW_FLOAT_WIDTH, INT_WIDTH as LAW_INT_WIDTH
 from mtbmj.controllers.lawcodes import UnsupportedLaw, flatten
@@ -65,16 +66,16 @@ WI, WF = rolling.INT_WIDTH, rolling.FLOAT_WIDTH  # a wheel's row in the front en
  R_A_TZ1, R_A_DX, R_A_DZ, R_A_PROBE0, R_A_PROBE1, R_A_SHOCK_PROBE, R_SITE0, R_SITE1, R_SBODY0, R_SBODY1, R_FRAME,
  R_ROOT0, R_ROOT1, R_NBODY, R_MASS, R_FORK_STATE, R_SHOCK_STATE, R_DRIVE, R_NL, R_LW, R_LR, R_LS, R_CALLS,
  R_REFRESHES, R_BODYROOT, R_WHEEL0, R_WHEEL1, R_LIMB_F0, R_LIMB_R0, R_LIMB_F1, R_LIMB_R1, R_JZ, R_JP, R_VZ,
- R_VP, R_REACT0, R_REACT1, R_A_GFX, R_A_GFZ, R_A_CF, R_A_CR, R_XQ, R_RIDER, R_CALIPER, R_ARM_JOINT) = range(58)
-INT_WIDTH = R_ARM_JOINT + 1  # one row per name above: the width follows the list
+ R_VP, R_REACT0, R_REACT1, R_A_GFX, R_A_GFZ, R_A_CF, R_A_CR, R_XQ, R_RIDER, R_CALIPER, R_ARM_JOINT, R_PITCHQ) = range(59)
+INT_WIDTH = R_PITCHQ + 1  # one row per name above: the width follows the list
 DRIVE_PEDAL = 2  # R_DRIVE: 0 coasting, 1 the rider's speed controller, 2 pedalling (controllers.drive.pedal_forces)
 # float row of a slot
 (F_SPEED, F_TRACTION, F_REFRESH, F_TOTAL_MASS, F_PIVOT_X, F_REAR_Z0, F_NEXT0, F_NEXT1, F_LAST0, F_LAST1,
  F_REFRESH_DISTANCE, F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE, F_LIMB_K0, F_LIMB_C0, F_LIMB_REST0,
- F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1, F_RADIUS, F_CHAIN_RING, F_CHAIN_COG) = range(24)
-FLOAT_WIDTH = F_CHAIN_COG + 1
+ F_LIMB_K1, F_LIMB_C1, F_LIMB_REST1, F_RADIUS, F_CHAIN_RING, F_CHAIN_COG, F_LIFT_LO, F_LIFT_HI) = range(26)
+FLOAT_WIDTH = F_LIFT_HI + 1
 
-REGISTRY = Registry("mtbmj_bike_registry_v9", SLOTS,
+REGISTRY = Registry("mtbmj_bike_registry_v10", SLOTS,
                     {"ints": (INT_WIDTH, np.int64), "floats": (FLOAT_WIDTH, np.float64),
                      "wheel_ints": (2 * WI, np.int64), "wheel_floats": (2 * WF, np.float64),
                      "fork_ints": (LAW_INT_WIDTH, np.int64), "fork_floats": (LAW_FLOAT_WIDTH, np.float64),
@@ -131,6 +132,7 @@ if _numba is not None:
     _fork_force, _fork_force_rate = _kernels.fork_force, _kernels.fork_force_rate
     _tire_force, _rim_force = _kernels.rolling_tire_force, _kernels.rim_force
     _drive_force = law_function(_drive.drive_force)
+    _eased = law_function(_drive.eased)
     law_function(_drive.at_patch)
     _wheel_forces = law_function(_drive.wheel_forces)
     _chain_pull = law_function(_drive.chain_pull)
@@ -347,6 +349,7 @@ if _numba is not None:
                 fx, fz, deflection, F[F_TRACTION])
         elif I[R_DRIVE] != 0 and math.hypot(fxf, fzf) + math.hypot(fx, fz) > 0.0:
             f = _drive_force(F[F_SPEED], vcom, F[F_DRIVE_KV], F[F_DRIVE_PUSH], F[F_DRIVE_POWER], F[F_DRIVE_BRAKE])
+            f = _eased(f, qpos[I[R_PITCHQ]], math.hypot(fxf, fzf) > 0.0, F[F_LIFT_LO], F[F_LIFT_HI])
             dxf, dzf, tf, dxr, dzr, tr = _wheel_forces(f, fxf, fzf, df, fx, fz, deflection, F[F_TRACTION],
                                                        F[F_RADIUS])
         ctrl[I[R_A_DX]] = dxr  # the rear tyre's ground force; the front's and the couples recorded beside
@@ -546,7 +549,7 @@ class CompiledBikeCallback(CompiledShell, ctypes._CFuncPtr):
                        R_LIMB_F1: int(m.site(arms.frame_site).id), R_LIMB_R1: int(m.site(arms.rider_site).id),
                        R_JZ: int(m.joint("rider_z").id), R_JP: int(m.joint("rider_pitch").id),
                        R_VZ: bike.dof_index("rider_z"), R_VP: bike.dof_index("rider_pitch"),
-                       R_XQ: bike.qpos_index("bike_x"), R_ARM_JOINT: int(m.joint("swingarm").id),
+                       R_XQ: bike.qpos_index("bike_x"), R_PITCHQ: bike.qpos_index("pitch"), R_ARM_JOINT: int(m.joint("swingarm").id),
                        R_RIDER: int(m.body("rider").id)})
         values[R_ACT_F] = int(m.actuator_actadr[values[R_A_FS]])
         values[R_ACT_S] = int(m.actuator_actadr[values[R_A_SS]])
@@ -566,6 +569,7 @@ class CompiledBikeCallback(CompiledShell, ctypes._CFuncPtr):
         floats[[F_DRIVE_KV, F_DRIVE_PUSH, F_DRIVE_POWER, F_DRIVE_BRAKE]] = [drive.kv, drive.push, drive.power,
                                                                           drive.brake]
         floats[F_RADIUS] = rear.radius
+        floats[[F_LIFT_LO, F_LIFT_HI]] = LIFT_EASE_DEG  # the rider eases off as the front lifts
         chain = bike.spec.drive.get("chain_m")  # (chainring, cog) pitch radii, m; 0: a hub drive
         if chain is not None:
             floats[[F_CHAIN_RING, F_CHAIN_COG]] = chain

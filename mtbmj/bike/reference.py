@@ -39,7 +39,7 @@ from scipy.integrate import solve_ivp
 
 from mtbmj.bike.model import JOINTS, LOCKS, LOWER_INERTIA, frame_body
 from mtbmj.bike.spec import leverage_ratio
-from mtbmj.controllers.drive import chain_pull, pedal_drive, wheel_forces
+from mtbmj.controllers.drive import LIFT_EASE_DEG, chain_pull, eased, pedal_drive, wheel_forces
 from mtbmj.errors import RunError
 
 NQ = 7
@@ -283,6 +283,7 @@ class Reference:
             ground, foot = out_p[:6], out_p[6:]
         elif self.drive.mode != "coast" and math.hypot(fxf, fzf) + math.hypot(fxr, fzr) > 0.0:
             f = self.drive.force(self.speed, self.com_speed(M, qd))  # the centre of mass's speed
+            f = eased(f, q[2], math.hypot(fxf, fzf) > 0.0, *LIFT_EASE_DEG)  # eased as the front lifts
             ground = wheel_forces(f, fxf, fzf, df, fxr, fzr, dr, self.traction, self.rear_tire.radius)
         if any(ground):
             pl.apply(Q, q, axles[0], ground[0], ground[1])
