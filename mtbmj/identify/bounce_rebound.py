@@ -38,8 +38,10 @@ each landing; none by default, since the intervals carried hold the landings' sc
 over; where the spring, friction and compression come from the ring-down fit, neither). The readings
 run on a seated bike whose rest is solved to ``READ_REST_TOL_MM`` (1e-7 mm, no path noise: the same
 values read the same coefficient whatever ran before). A side whose end has no coefficient is open (None),
-said in ``interval_open`` (on the shared slams every interval is open below: at the spring's lower end
-the bike rebounds slower than the records even undamped). Refused for the record (a reason, no
+said in ``interval_open`` (on the shared slams the 0- and 8-click intervals are open below: at the
+friction's and compression's together axis' upper end, and at the spring's lower end, where the bike
+rebounds slower than the record even undamped; the 17-click one closes below at 1778 N s/m, its
+reading at the spring's lower end). Refused for the record (a reason, no
 value) when no coefficient within ``BOUNDS`` gives the record's speed: the bike with the spring given
 rebounds slower than the record even undamped, or faster even at the largest coefficient (a replay's first
 rebound with no middle there, turning before 25 % of the slam's height, is slower than any: ``solve_on``
