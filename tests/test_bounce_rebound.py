@@ -277,13 +277,6 @@ def test_solve_on_refuses_a_bike_slower_than_the_record_undamped():
     assert solve_on(cv, 4.0, 0.33) == pytest.approx(cv.C * (cv.R / 4.0 - 1.0), abs=2 * XTOL)
 
 
-@pytest.mark.xfail(strict=True, reason="solve_on refuses a curve with no rate (NaN) at its upper bound as if the bike "
-                                       "rebounded faster than the record there: on the shared slams at 0.33 x (the "
-                                       "ring-down period's lower end) the 8- and 17-click slams read none for that, "
-                                       "where bisecting the bound down to a rebound with a middle (1225 and 6062 N s/m) "
-                                       "reads 418 and 3151 N s/m and the answer's range carried with the period's "
-                                       "interval is 0-8 (open below) instead of 0-17 (docs/identification.md, 'Which "
-                                       "spring interval the answer's range could carry')")
 def test_solve_on_reads_below_a_rebound_that_stalls_at_the_largest_coefficient():
     """The made curve stalls above 1500 N s/m; a record at 3 /s has its root, 1066.7 N s/m, below the
     stall: it is read (the NaN above it is a rebound slower than any, not a faster one)."""
@@ -291,3 +284,20 @@ def test_solve_on_reads_below_a_rebound_that_stalls_at_the_largest_coefficient()
 
     cv = _MadeCurve()
     assert solve_on(cv, 3.0, 0.33) == pytest.approx(cv.C * (cv.R / 3.0 - 1.0), abs=2 * XTOL)
+    # a record at 5 /s: its root, 320 N s/m, lies below the first bisection's 1225; read too
+    assert solve_on(_MadeCurve(), 5.0, 0.33) == pytest.approx(800.0 * (7.0 / 5.0 - 1.0), abs=2 * XTOL)
+    # the wrong way round: a curve that has no rate at 50 N s/m already is refused as such, not solved
+    with pytest.raises(BounceError, match="no middle even undamped"):
+        solve_on(_MadeCurve(stall=10.0), 3.0, 0.33)
+
+
+def test_solve_on_refuses_a_rebound_that_stalls_while_still_faster_than_the_record():
+    """The made curve stalls above 100 N s/m, where it still rebounds at 6.22 /s: a record at 3 /s has its
+    closed-form root (1066.7 N s/m) in the stall, where no rebound has a middle; refused, naming the
+    largest coefficient read faster (bisected to just below 100) and the stall above it, not solved."""
+    from mtbmj.identify.bounce_rebound import solve_on
+
+    cv = _MadeCurve(stall=100.0)
+    with pytest.raises(BounceError, match=r"still faster than the record \(6\.2\d /s\) at (9\d|100) N s/m and has "
+                                          r"no middle from 10\d N s/m up"):
+        solve_on(cv, 3.0, 0.33)

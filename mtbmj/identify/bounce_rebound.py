@@ -38,10 +38,15 @@ each landing; none by default, since the intervals carried hold the landings' sc
 over; where the spring, friction and compression come from the ring-down fit, neither). The readings
 run on a seated bike whose rest is solved to ``READ_REST_TOL_MM`` (1e-7 mm, no path noise: the same
 values read the same coefficient whatever ran before). A side whose end has no coefficient is open (None),
-said in ``interval_open`` (on the shared slams every interval is open below: at the spring's lower end
-the bike rebounds slower than the records even undamped). Refused for the record (a reason, no
+said in ``interval_open`` (on the shared slams the 0- and 8-click intervals are open below: at the
+friction's and compression's together axis' upper end, and at the spring's lower end, where the bike
+rebounds slower than the record even undamped; the 17-click one closes below at 1778 N s/m, its
+reading at the spring's lower end). Refused for the record (a reason, no
 value) when no coefficient within ``BOUNDS`` gives the record's speed: the bike with the spring given
-rebounds slower than the record even undamped, or faster even at the largest coefficient. The law in
+rebounds slower than the record even undamped, or faster even at the largest coefficient (a replay's first
+rebound with no middle there, turning before 25 % of the slam's height, is slower than any: ``solve_on``
+reads the coefficient below it, and refuses only where the rebound is still faster than the record where it
+stops having a middle). The law in
 clicks, each record held out and the answer in clicks, its range carrying the friction's, compression's
 and spring's ends: ``law_in_clicks`` (``bounce_rebound_clicks``).
 """
@@ -56,6 +61,7 @@ from mtbmj.identify.bounce_replay import NAMES, Slam, fit_push
 
 BOUNDS = (50.0, 30000.0)  # N s/m: the rebound coefficient sought within these (bounce_replay's damper bounds)
 XTOL = 1.0  # N s/m
+STALL_BISECTIONS = 14  # solve_on: the upper end bisected (in log) at most this often below a stalled rebound
 NOISE_S = 0.010  # the record's noise: what is left after a moving average over this (first_rebound's smoothing)
 DRAWS = 200  # the record's noise resampled this many times (rate_spread)
 Z95 = 1.959963984540054
@@ -115,16 +121,41 @@ def curve(sl: Slam, spring_scale: float, friction_N: float, compression: float) 
 
 def solve_on(cv: _Curve, target: float, spring_scale: float) -> float:
     """The coefficient whose replay's rate is ``target`` (1/s) on the curve ``cv``; BounceError when none
-    within BOUNDS gives it."""
+    within BOUNDS gives it. A first rebound with no middle at the largest coefficient (NaN: it turns before
+    25 % of the slam's height) is slower than the record, not faster: the bracket's upper end is bisected
+    down (in log, ``STALL_BISECTIONS`` times) to a coefficient whose rebound has a middle and is slower
+    than the record, and the root read below it."""
     from scipy.optimize import brentq
 
-    lo, hi = cv(BOUNDS[0]) - target, cv(BOUNDS[1]) - target
-    if not (np.isfinite(lo) and np.isfinite(hi)) or lo < 0.0 or hi > 0.0:
-        side = "slower than the record even undamped" if lo < 0.0 else "faster than the record at the largest"
-        raise BounceError(f"{cv.sl.name}: no rebound coefficient within {BOUNDS[0]:g}-{BOUNDS[1]:g} N s/m gives the "
-                          f"record's first rebound ({target:.2f} /s): with the spring at {spring_scale:.2f} x the bike "
-                          f"rebounds {side} coefficient")
-    return float(brentq(lambda c: cv(c) - target, *BOUNDS, xtol=XTOL))
+    a, b = BOUNDS
+    lo, hi = cv(a) - target, cv(b) - target
+    where = (f"{cv.sl.name}: no rebound coefficient within {a:g}-{b:g} N s/m gives the record's first rebound "
+             f"({target:.2f} /s): with the spring at {spring_scale:.2f} x the bike")
+    if not np.isfinite(lo):
+        raise BounceError(f"{where}'s first rebound has no middle even undamped (it turns before 25 % of the "
+                          f"slam's height)")
+    if lo < 0.0:
+        raise BounceError(f"{where} rebounds slower than the record even undamped")
+    if np.isfinite(hi) and hi > 0.0:
+        raise BounceError(f"{where} rebounds faster than the record at the largest coefficient")
+    top = b
+    if not np.isfinite(hi):  # stalled at the largest coefficient: find a coefficient with a middle below it
+        top = None
+        for _ in range(STALL_BISECTIONS):
+            m = float(np.sqrt(a * b))
+            v = cv(m) - target
+            if not np.isfinite(v):
+                b = m
+            elif v > 0.0:
+                a = m
+            else:
+                top = m
+                break
+        if top is None:
+            raise BounceError(f"{where}'s first rebound is still faster than the record ({cv(a):.2f} /s) at "
+                              f"{a:.0f} N s/m and has no middle from {b:.0f} N s/m up (it turns before 25 % of "
+                              f"the slam's height)")
+    return float(brentq(lambda c: cv(c) - target, BOUNDS[0], top, xtol=XTOL))
 
 
 def solve(sl: Slam, record: dict, spring_scale: float, friction_N: float, compression: float) -> float:
