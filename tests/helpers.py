@@ -60,6 +60,24 @@ def one_line(capsys, argv, *needles) -> str:
     return err
 
 
+def command_err(argv, capfd) -> tuple[int, str]:
+    """(exit status, stderr) of ``mtbmj argv``."""
+    capfd.readouterr()
+    status = main([str(a) for a in argv])
+    return status, capfd.readouterr().err
+
+
+def refused(argv, out, capfd, said: str) -> str:
+    """``mtbmj argv`` refused: exit 2, one line holding ``said``, no traceback, nothing at ``out`` or
+    beside it; the line."""
+    status, err = command_err(argv, capfd)
+    lines = err.splitlines()
+    assert status == 2 and len(lines) == 1 and lines[0].startswith("mtbmj: error: "), (status, err)
+    assert said in lines[0], lines[0]
+    assert not out.exists() and not [p for p in out.parent.iterdir() if p.name.startswith(f".{out.name}.")]
+    return lines[0]
+
+
 def gone(pids, timeout=10.0) -> bool:
     end = time.monotonic() + timeout
     while time.monotonic() < end:

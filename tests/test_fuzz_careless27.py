@@ -10,25 +10,7 @@ import json
 
 import pytest
 
-from helpers import fresh
-from mtbmj.cli import main
-
-
-def _err(argv, capfd) -> tuple[int, str]:
-    capfd.readouterr()
-    status = main([str(a) for a in argv])
-    return status, capfd.readouterr().err
-
-
-def refused(argv, out, capfd, said: str) -> str:
-    """``mtbmj argv`` refused: exit 2, one line holding ``said``, no traceback, nothing at ``out`` or
-    beside it; the line."""
-    status, err = _err(argv, capfd)
-    lines = err.splitlines()
-    assert status == 2 and len(lines) == 1 and lines[0].startswith("mtbmj: error: "), (status, err)
-    assert said in lines[0], lines[0]
-    assert not out.exists() and not [p for p in out.parent.iterdir() if p.name.startswith(f".{out.name}.")]
-    return lines[0]
+from helpers import command_err as _err, fresh, refused
 
 
 # --- study: a preset in another case, a file, a list with a space or a trailing comma ----------------

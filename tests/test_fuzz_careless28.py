@@ -10,7 +10,7 @@ import json
 
 import pytest
 
-from test_fuzz_careless27 import _err, refused  # the same refusal's checks
+from helpers import command_err as _err, refused
 
 
 def warned(err: str, *needles) -> list[str]:
