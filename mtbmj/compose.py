@@ -480,9 +480,14 @@ def unread(c: Config) -> list[str]:
     """The keys of ``c``'s model families (``MODEL_FAMILIES``) that the spring, damper, friction and tire
     models ``c`` chooses do not read: what a file written to stand alone (``mtbmj fit``'s fit.toml) leaves
     out, so that it loads back without a warning about a key of its own."""
+    _, read = _read_laws(c)
+    return sorted(k for k in c.values if k.startswith(MODEL_FAMILIES) and k not in read)
+
+
+def _read_laws(c: Config):
+    """((fork law, tire law) of ``c``, the keys their models asked for)."""
     seen = _Reading(c)
-    fork_law(seen), _tire(seen)
-    return sorted(k for k in c.values if k.startswith(MODEL_FAMILIES) and k not in seen.read)
+    return (fork_law(seen), _tire(seen)), seen.read
 
 
 def _composed(c: Config):
@@ -495,12 +500,11 @@ def _composed(c: Config):
     filed = sorted(k for k in c.filed if k.startswith(MODEL_FAMILIES) and k not in c.given)
     if not typed and not filed:
         return fork_law(c), _tire(c)
-    seen = _Reading(c)
-    laws = fork_law(seen), _tire(seen)
-    for key in [k for k in typed + filed if k not in seen.read]:
+    laws, read = _read_laws(c)
+    for key in [k for k in typed + filed if k not in read]:
         family = next(f for f in MODEL_FAMILIES if key.startswith(f))
         model = f"{family}model"
-        reads = sorted(k[len(family):] for k in seen.read if k.startswith(family) and k != model and k in c.values)
+        reads = sorted(k[len(family):] for k in read if k.startswith(family) and k != model and k in c.values)
         said = (f"{key}: set, but {model} = {c.get(model)!r} does not read it, so it would change nothing (that "
                 f"model reads {family}{{{', '.join(reads)}}})")
         if key in c.given:

@@ -630,8 +630,8 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
                                                overrides, seated, pedal, rider, legs_swing, speed_profile),
                        model_of=lambda p: p.bike.model)
     if duration is None:  # the terrain crossed: a crawl refused before the run
-        crossing(p.speed, default_duration(p), p.terrain.name)
-    duration = default_duration(p) if duration is None else duration
+        duration = default_duration(p)
+        crossing(p.speed, duration, p.terrain.name)
     check_run(duration, p.timestep, 1.0 / p.timestep)
     start = time.perf_counter()
     states, sensors = simulate(p, duration, progress)

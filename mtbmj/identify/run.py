@@ -100,7 +100,8 @@ class Identification:
             values, base = {**_without_counterparts(own, values), **values}, "reference"
             from mtbmj.compose import unread  # keys the file carried that its models do not read: left out
 
-            values = {k: v for k, v in values.items() if k not in set(unread(load_config(base).with_overrides(values)))}
+            idle = set(unread(load_config(base).with_overrides(values)))
+            values = {k: v for k, v in values.items() if k not in idle}
         return parameter_set_toml(values, base, f"{warning}mtbmj fit {self.kind} from {sources}{synthetic}", comments)
 
     def summary(self) -> dict:

@@ -587,8 +587,8 @@ def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
     p = guard.prepared("rolling", lambda: prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides,
                                                   callback=callback, drive=drive), model_of=lambda p: p.front.model)
     if duration is None:  # the terrain crossed: a crawl refused before the run
-        crossing(p.speed, default_duration(p), p.terrain.name)
-    duration = default_duration(p) if duration is None else duration
+        duration = default_duration(p)
+        crossing(p.speed, duration, p.terrain.name)
     check_run(duration, p.setup.timestep, p.setup.sample_rate)
     start = time.perf_counter()
     grid: list = []
