@@ -470,6 +470,24 @@ def _drive_summary(p: Prepared, raw: dict) -> dict:
     return out
 
 
+# A run that ends with the tyre this far or more above the ground, carrying nothing, ends before its
+# landing (a drop or a cliff edited into a terrain near its end): its peaks miss the landing's.
+IN_AIR_AT_END_MM = 5.0
+
+
+def in_air_at_end(tire_mm, tire_force_N) -> float | None:
+    """The tyre's height above the ground (mm) where the run ends in the air, else None."""
+    if tire_force_N[-1] <= 0.0 and -tire_mm[-1] >= IN_AIR_AT_END_MM:
+        return float(-tire_mm[-1])
+    return None
+
+
+def _air_line(s: dict) -> str:
+    h = s.get("in_air_at_end_mm")
+    return "" if h is None else (f"; the run ended with the wheel in the air, {h / 1e3:.2f} m above the ground: its "
+                                 f"landing is not in the run (a longer --duration)")
+
+
 def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
     travel_mm = p.setup.travel * 1e3
     fork = raw["fork_mm"]
@@ -493,6 +511,7 @@ def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
         "max_fork_velocity_mm_per_s": float(raw["fork_velocity_mm_per_s"].max()),
         "min_fork_velocity_mm_per_s": float(raw["fork_velocity_mm_per_s"].min()),
         "drive": _drive_summary(p, raw),
+        "in_air_at_end_mm": in_air_at_end(raw["tire_mm"], raw["tire_force_N"]),
     }
     try:
         from mtbmj.measured import metrics as ride_metrics
@@ -549,7 +568,7 @@ class RollResult(RunOutput):
         return (f"roll {self.scenario} at {s['speed_m_per_s']:g} m/s ({self.name}, head angle {s['head_angle_deg']:g} "
                 f"deg): fork peak {s['max_fork_mm']:.1f} mm ({s['travel_used_percent']:.0f} % of travel), tire peak "
                 f"{s['max_tire_mm']:.1f} mm, axle force peak {s['max_axle_force_z_N']:.0f} N up / "
-                f"{max(0.0, -s['min_axle_force_x_N']):.0f} N back{line(s)}{_drive_line(s['drive'])}")
+                f"{max(0.0, -s['min_axle_force_x_N']):.0f} N back{line(s)}{_drive_line(s['drive'])}{_air_line(s)}")
 
     def quicklook(self):
         """The quick-look figure (``mtbmj.readout.quicklook``): terrain, fork, tire (its clearance in the
