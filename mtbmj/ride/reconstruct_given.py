@@ -138,7 +138,7 @@ def compared(speed_at, lag, window_s_default: float = WINDOW_S) -> dict:
     (``lag``: ``reconstruct_speed``'s answer, or the ``ReconstructError`` that refused it): per lag window
     with a speed, the given speed's mean over it against it."""
     if isinstance(lag, Exception):
-        return {"windows_compared": 0, "lag_gives_none": str(lag).split(": ", 1)[-1]}
+        return {"windows_compared": 0, "lag_gives_none": str(lag)}
     w = lag.get("window_s", window_s_default)
     pairs = [(float(np.mean(speed_at(np.linspace(a, a + w, 51)))), v, kind)
              for (a, v, _), kind in zip(lag["windows"], lag.get("kinds") or [None] * len(lag["windows"])) if v is not None]
@@ -190,7 +190,7 @@ def words(speed: dict) -> str:
     c = speed["lag"]
     out = f"speed given ({speed['given']}, used), {speed['speed_m_per_s']:.2f} m/s median; "
     if not c["windows_compared"]:
-        return out + f"the lag gives none ({c['lag_gives_none']})"
+        return out + f"the lag gives none: {c['lag_gives_none']}"
     return out + (f"the lag gives {c['lag_median_m_per_s']:.2f} m/s median in {c['windows_compared']} windows "
                   f"({c['windows_tracked']} tracked): the given {c['given_over_lag_median']:.2f} times the lag's "
                   f"(median), {c['apart_median_m_per_s']:.2f} m/s apart (median, at most "
