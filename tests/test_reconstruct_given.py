@@ -8,7 +8,7 @@ tests/test_reconstruct.py's ride) ridden at a speed v(t) over a terrain h(s) wri
 wheelbase behind the front along the distance; both ends' travel written as a travel CSV at 1 kHz rounded
 to 0.1 mm. One terrain is a washboard met at a steady cadence (bumps about 1.0 m apart): its two ends' records
 align at every bump's lag, so the lag gives no speed and the ride is refused without a speed given. The other is
-tests/test_reconstruct.py's random bumps at 6 m/s, where the lag gives one, to compare with. The truth
+random bumps at 6 m/s (as tests/test_reconstruct.py's), where the lag gives one, to compare with. The truth
 (the speed, the distance) is this file's; the package only reads the travel CSV and the speed given.
 """
 from __future__ import annotations
@@ -205,10 +205,16 @@ def test_a_speed_one_and_a_half_times_too_high_is_worse_on_the_washboard(board, 
 
 @pytest.fixture(scope="module")
 def bumps(tmp_path_factory):
-    """tests/test_reconstruct.py's random bumps at 6 m/s: the lag gives a speed."""
-    from test_reconstruct import hidden_profile
-
-    return made_ride(tmp_path_factory.mktemp("bumps"), hidden_profile(), lambda t: 6.0 * t, seconds=16.0)
+    """Random bumps (40 bumps 5-25 mm high and 1.2-3 m long, as tests/test_reconstruct.py's) at 6 m/s: the
+    lag gives a speed."""
+    rng = np.random.default_rng(3)
+    centres, heights, lengths = np.sort(rng.uniform(8.0, 92.0, 40)), rng.uniform(0.005, 0.025, 40), rng.uniform(1.2, 3.0, 40)
+    grid = np.arange(-2.0, 97.0, 1e-3)
+    table = np.zeros_like(grid)
+    for c, a, L in zip(centres, heights, lengths):
+        table += a * np.sin(np.pi * np.clip((grid - c) / L + 0.5, 0.0, 1.0)) ** 2
+    return made_ride(tmp_path_factory.mktemp("bumps"), lambda x: np.interp(x, grid, table), lambda t: 6.0 * t,
+                     seconds=16.0)
 
 
 def test_a_speed_given_beside_the_lags_is_compared_with_it(bumps, tmp_path, capsys):

@@ -122,7 +122,9 @@ def given(speed) -> GivenSpeed:
     sequences, or a :class:`GivenSpeed`."""
     if isinstance(speed, GivenSpeed):
         return speed
-    if isinstance(speed, (int, float)) and not isinstance(speed, bool):
+    import numbers
+
+    if isinstance(speed, numbers.Real) and not isinstance(speed, bool):
         return constant(float(speed))
     if isinstance(speed, str) or hasattr(speed, "__fspath__"):
         return read_csv(speed)
