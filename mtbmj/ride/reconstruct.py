@@ -23,7 +23,8 @@ again at it (the rear's record sets when the rear met what the front met, never 
 version-2
 record (5 kHz of coarse encoder steps) is low-passed at ``V2_LOWPASS_HZ`` and read at ``RATE_HZ``. A
 ride with no window that gives a speed, or whose windows with one lie wholly where nothing can be
-checked, is refused: no speed estimate, one line, nothing written.
+checked, is refused: no speed estimate, one line, nothing written. A speed given by the rider (``speed=``:
+:mod:`mtbmj.ride.reconstruct_given`) is used in place of all this, the lag's sought and compared beside it.
 
 **Terrain** (:mod:`mtbmj.ride.reconstruct_bike`, from the fork's record alone: the rear's record is
 never used to make it). A first guess from the front's quarter car (:mod:`mtbmj.ride.
