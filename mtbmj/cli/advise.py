@@ -39,18 +39,21 @@ def cmd_advise(args) -> int:
     # every ride read (and a bad file refused in one line) before anything is simulated
     # each ride decoded through the bike as ridden: its --set sensors, leverage and travels too
     records = [ride_record(path, args, bike, over or None) for path in args.ride]
+    from mtbmj.cli.reconstruct import given_speeds
+
+    speeds = given_speeds(args, records)  # one per ride (--speed once: every ride's); a bad CSV: one line, no work
     if len(records) == 1:
         result = Progress("advise").around(
             lambda progress: advise.advise(records[0], bike, over or None, args.duration, progress, args.workers,
                                            tries=tries, calibrated=args.calibrate, static_sag_mm=sag,
-                                           carried_as=carried))
+                                           carried_as=carried, speed=speeds[0]))
     else:
         from mtbmj.ride import advice_pool
 
         result = Progress("advise").around(
             lambda progress: advice_pool.pooled(records, bike, over or None, args.duration, progress, args.workers,
                                                 tries=tries, calibrated=args.calibrate, static_sag_mm=sag,
-                                           carried_as=carried))
+                                                carried_as=carried, speeds=speeds))
     written = result.write(args.out)
     for rec in records:  # a --duration past a ride's end is its whole ride: said, not silent
         length = float(rec.time_s[-1] - rec.time_s[0])
@@ -64,7 +67,9 @@ def cmd_advise(args) -> int:
     if result.calibration is not None:
         print(result.calibration.line())
     checks = result.reconstruction["checks"]
-    print(f"reconstruction: speed {result.reconstruction['speed_m_per_s']:.2f} m/s; check: front reproduced within "
+    given = result.reconstruction.get("speed_given")
+    print(f"reconstruction: speed {result.reconstruction['speed_m_per_s']:.2f} m/s"
+          f"{' given (' + given['given'] + ')' if given else ''}; check: front reproduced within "
           f"{checks['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted within "
           f"{checks['rear_predicted_rms_percent_of_used']:.0f} % of the travel used")
     for tr in result.tried():
@@ -106,6 +111,7 @@ def static_sag(text, calibrate: bool):
 
 def add_parser(sub) -> None:
     from mtbmj.cli.bike import add_bike_sets
+    from mtbmj.cli.reconstruct import add_given_speed
     from mtbmj.cli.telemetry import add_ride, add_sensor_spans
 
     p = sub.add_parser("advise", help="setup advice: candidate settings simulated over the ride's reconstructed "
@@ -142,6 +148,7 @@ def add_parser(sub) -> None:
                         "on the mean descent that carries it, the rider in place)")
     p.add_argument("--workers", type=int, default=2, metavar="N",
                    help="processes the candidate runs spread over (default 2)")
+    add_given_speed(p, many=True)  # the reconstruction's speed given, per ride
     add_sensor_spans(p)
     add_out(p, "out/advise")
     p.set_defaults(func=cmd_advise)

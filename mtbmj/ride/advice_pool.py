@@ -227,10 +227,11 @@ def repeated(records) -> str | None:
 
 def pooled(records, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
            tries=(), calibrated: bool = True, search: bool = True, static_sag_mm=None,
-           carried_as: str = "rider") -> PooledAdvice:
+           carried_as: str = "rider", speeds=None) -> PooledAdvice:
     """One advice from ``records``, several rides of ``bike`` at one setting (``overrides``), as
     :func:`mtbmj.ride.advise.advise` gives for one (the module doc says how they are pooled). A ride
-    refused is left out and named; none left: :class:`AdviseError` naming each ride's reason."""
+    refused is left out and named; none left: :class:`AdviseError` naming each ride's reason. ``speeds``: each
+    ride's speed given (``reconstruct``'s ``speed=``, None where not), in the order of ``records``."""
     from contextlib import ExitStack
 
     from mtbmj.bike import spec as spec_mod
@@ -244,9 +245,10 @@ def pooled(records, bike, overrides=None, duration: float | None = None, progres
     bike = spec_mod.resolve(bike)
     bike = bike.with_overrides(None) if bike.overrides else bike
     ready, refused = [], []
-    for record in records:
+    for record, speed in zip(records, speeds or [None] * len(records)):
         try:
-            ready.append(prepare(record, bike, overrides, duration, calibrated, True, tries, static_sag_mm, carried_as))
+            ready.append(prepare(record, bike, overrides, duration, calibrated, True, tries, static_sag_mm, carried_as,
+                                 speed))
         except (AdviseError, ReconstructError) as exc:
             refused.append({"ride": record.name, "why": str(exc)})
     jobs = [ride.jobs() for ride in ready]

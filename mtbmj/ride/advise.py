@@ -422,7 +422,7 @@ def _json(o):
 
 def advise(record, bike, overrides=None, duration: float | None = None, progress=None, workers: int = 2,
            tries=(), candidates: bool = True, calibrated: bool = True, search: bool = True,
-           static_sag_mm=None, carried_as: str = "rider") -> Advice:
+           static_sag_mm=None, carried_as: str = "rider", speed=None) -> Advice:
     """Advice for ``record`` (a two-ended ``TelemetryRecord``) on ``bike`` (preset, file or
     ``mtbmj.bike.spec.ResolvedBike``: read once, here or before), its keys ``overrides``;
     ``duration`` limits the simulated ride to its first seconds; the runs spread
@@ -437,7 +437,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     mm, standing on level ground; ``--static-sag-mm``): the springs calibrated on it instead of the ride's
     balances (:func:`mtbmj.ride.calibrate.sag_scales`), the load the ride carried fore-aft carried by every run
     as ``carried_as`` says ("rider" or "descent": ``mtbmj.ride.calibrate.spring_scales``). Several rides of one setting:
-    :func:`mtbmj.ride.advice_pool.pooled`."""
+    :func:`mtbmj.ride.advice_pool.pooled`. ``speed``: the ride's speed given (``reconstruct``'s ``speed=``)."""
     import time
 
     from mtbmj.bike import spec as spec_mod
@@ -446,7 +446,7 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
     duration = checked_duration(duration)
     bike = spec_mod.resolve(bike)  # the bike file read once: every run below derives its setting from it
     bike = bike.with_overrides(None) if bike.overrides else bike
-    ride = prepare(record, bike, overrides, duration, calibrated, candidates, tries, static_sag_mm, carried_as)
+    ride = prepare(record, bike, overrides, duration, calibrated, candidates, tries, static_sag_mm, carried_as, speed)
     jobs = ride.jobs()
     from contextlib import ExitStack
 
@@ -537,7 +537,7 @@ class Prepared:
 
 
 def prepare(record, bike, overrides=None, duration: float | None = None, calibrated: bool = True,
-            candidates: bool = True, tries=(), static_sag_mm=None, carried_as: str = "rider") -> Prepared:
+            candidates: bool = True, tries=(), static_sag_mm=None, carried_as: str = "rider", speed=None) -> Prepared:
     """``record`` made ready for advice on ``bike`` (a ``ResolvedBike`` without overrides): its length
     checked, calibrated where asked, reconstructed and checked, its terrain, the adjusters and the
     candidates the parts allow (:func:`allowed`). Refused (:class:`AdviseError`) as :func:`advise` says."""
@@ -564,7 +564,7 @@ def prepare(record, bike, overrides=None, duration: float | None = None, calibra
         overrides, statics = cal.apply(bike, overrides), cal.apply(bike, overrides, statics=True)
     else:
         statics = overrides
-    rec = rc.reconstruct(record, bike, statics)
+    rec = rc.reconstruct(record, bike, statics, speed=speed)
     checks = rec.checks()
     if (checks["samples_checked_percent"] < MIN_CHECKED_PERCENT
             or not checks["rear_predicted_rms_percent_of_used"] <= MAX_REAR_MISS_PERCENT):

@@ -23,7 +23,8 @@ again at it (the rear's record sets when the rear met what the front met, never 
 version-2
 record (5 kHz of coarse encoder steps) is low-passed at ``V2_LOWPASS_HZ`` and read at ``RATE_HZ``. A
 ride with no window that gives a speed, or whose windows with one lie wholly where nothing can be
-checked, is refused: no speed estimate, one line, nothing written.
+checked, is refused: no speed estimate, one line, nothing written. A speed given by the rider (``speed=``:
+:mod:`mtbmj.ride.reconstruct_given`) is used in place of all this, the lag's sought and compared beside it.
 
 **Terrain** (:mod:`mtbmj.ride.reconstruct_bike`, from the fork's record alone: the rear's record is
 never used to make it). A first guess from the front's quarter car (:mod:`mtbmj.ride.
@@ -85,6 +86,7 @@ from mtbmj.ride.reconstruct_bands import BANDS, BEAT_MARGIN, band_checks  # noqa
 from mtbmj.ride.reconstruct_bands import at_once_share, timing_error
 from mtbmj.ride.reconstruct_bound import fork_filter_bound
 from mtbmj.ride import reconstruct_envelope as envelope
+from mtbmj.ride import reconstruct_given as given_mod
 from mtbmj.ride.reconstruct_flight import landed
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
                                           check_length, merged, min_seconds, refine, speed_from_either,
@@ -286,7 +288,7 @@ class Reconstruction:
                     continue
                 i, n = int(round(start / dt)), int(round(stage.get("window_s", WINDOW_S) / dt))
                 covered["any"][max(i, 0):i + n] = True
-                if kind != "tracked":
+                if kind not in ("tracked", "given"):
                     covered["strict"][max(i, 0):i + n] = True
                 tracked += kind == "tracked"
         return {"speed_covers_percent": 100.0 * float(np.mean(covered["any"])),
@@ -299,7 +301,7 @@ class Reconstruction:
             width = stage.get("window_s", WINDOW_S)
             kinds = stage.get("kinds") or [None if v is None else "strict" for _, v, _ in stage["windows"]]
             return [{"start_s": float(a), "end_s": float(a + width), "speed_m_per_s": None if v is None else float(v),
-                     "speed_sd_m_per_s": None if sd is None else float(sd), "correlation": float(c), "kind": kind,
+                     "speed_sd_m_per_s": None if sd is None else float(sd), "correlation": float(c) if c == c else None, "kind": kind,
                      "rejected": None if v is not None else (why or "no speed")}
                     for (a, v, c), sd, why, kind in zip(stage["windows"], sds, whys, kinds)]
 
@@ -312,7 +314,7 @@ class Reconstruction:
                    "windows_accepted": len(speeds),
                    "windows_rejected": len(windows) - len(speeds),
                    "window_s": float(self.speed.get("window_s", WINDOW_S)),
-                   "found_from": ("the lag left between the rear's record and the rear predicted over the terrain "
+                   "found_from": self.speed.get("found_from") or ("the lag left between the rear's record and the rear predicted over the terrain "
                                   "found (its timing only), the two ends' lag kept where those do not align"
                                   if first is not None else "the lag between the two ends"),
                    "between_windows": "linear between the accepted windows' centres, held past the "
@@ -339,7 +341,8 @@ class Reconstruction:
         return {"ride": self.name, "bike": self.bike, "duration_s": float(self.t[-1] - self.t[0]), **part,
                 "speed_m_per_s": self.speed["speed_m_per_s"], "lag_s": self.speed["lag_s"],
                 "speed_from": self.speed.get("from"), "wheelbase_at_sag_m": float(self.wheelbase),
-                "speed_profile": profile, **({} if self.at_once_fit is None else {"at_once_fit": self.at_once_fit}),
+                "speed_profile": profile, **given_mod.summary(self.speed),
+                **({} if self.at_once_fit is None else {"at_once_fit": self.at_once_fit}),
                 "windows": windows,
                 "window_speeds_m_per_s": [None if s is None else float(s) for _, s, _ in self.speed["windows"]],
                 "window_speed_range_m_per_s": [min(speeds), max(speeds)] if speeds else None,
@@ -383,11 +386,12 @@ class Reconstruction:
         part = ("" if self.part_s is None else
                 f" (the record's {self.part_s[0]:.1f}-{self.part_s[1]:.1f} s, its times from there: the bike stood "
                 f"unweighted at " + ", ".join(f"{a:.1f}-{b:.1f} s" for a, b in self.stands) + ")")
-        return (f"{self.name}{part} through {self.bike}: {c['verdict']}; speed {s['speed_m_per_s']:.2f} m/s median "
-                f"from a {1e3 * s['lag_s']:.0f} ms lag{spread}, {p['windows_accepted']} of "
-                f"{p['windows_accepted'] + p['windows_rejected']} windows{refined}, {p['windows_tracked']} tracked "
-                f"between strict ones: a speed over {p['speed_covers_percent']:.0f} % of the ride "
-                f"({p['strict_covers_percent']:.0f} % from strict windows); terrain {s['terrain_length_m']:.0f} m; "
+        said = given_mod.words(self.speed) if "given" in self.speed else (
+            f"speed {s['speed_m_per_s']:.2f} m/s median from a {1e3 * s['lag_s']:.0f} ms lag{spread}, "
+            f"{p['windows_accepted']} of {p['windows_accepted'] + p['windows_rejected']} windows{refined}, "
+            f"{p['windows_tracked']} tracked between strict ones: a speed over {p['speed_covers_percent']:.0f} % of "
+            f"the ride ({p['strict_covers_percent']:.0f} % from strict windows)")
+        return (f"{self.name}{part} through {self.bike}: {c['verdict']}; {said}; terrain {s['terrain_length_m']:.0f} m; "
                 f"check: front reproduced within "
                 f"{c['front_reproduced_rms_mm']:.2f} mm RMS, rear predicted {c['rear_predicted_rms_mm']:.1f} mm RMS "
                 f"({c['rear_predicted_rms_percent_of_used']:.0f} % of the {c['rear_travel_used_mm']:.0f} mm used; "
@@ -451,7 +455,7 @@ class Reconstruction:
                    label=f"baseline: the fork delayed, scaled ({c['baseline_delayed_fork_rms_mm']:.1f} mm RMS)")
         ax[2].set(xlabel="time (s)", ylabel="rear wheel travel (mm)",
                   title="Rear: predicted from the front's terrain, beside the naive baseline (RMS over the checked samples)")
-        self._speed_panel(ax[3])
+        given_mod.speed_panel(ax[3], self)
         for a, along in zip(ax, "msss"):  # where the ground found leaves what the bike could climb
             envelope.shade(a, self.beyond, along)
             if a is not ax[0] or self.beyond:
@@ -468,31 +472,6 @@ class Reconstruction:
         fig.suptitle(f"{self.name} through {self.bike}: {verdict}\nred, the front wheel off the ground (bridged, "
                      f"checked); grey, no speed (left out)")
         return fig
-
-    def _speed_panel(self, a) -> None:
-        """The speed along the ride: each window that gave one at its time with two standard errors,
-        the profile between them (what the distance is integrated from), and where the speed was found
-        again, the first estimate's windows (the two ends' lag) beside them."""
-        sp = self.speed
-        a.plot(self.t, sp["speed_at"](self.t), color="0.3", label="speed profile (the distance's)")
-        stages = [(sp, "C0", "o", "windows: " + ("the rear predicted aligned" if "first" in sp else "the two ends' lag"))]
-        if "first" in sp:
-            stages.append((sp["first"], "C1", "s", "first estimate: the two ends' lag"))
-        for stage, colour, marker, label in stages:
-            half = 0.5 * stage["window_s"]
-            kinds = stage.get("kinds") or [None] * len(stage["windows"])
-            for tracked_only in (False, True):
-                pts = [(start + half, v, sd) for (start, v, _), sd, kind in
-                       zip(stage["windows"], stage["sd"] or [None] * len(kinds), kinds)
-                       if v is not None and (kind == "tracked") == tracked_only]
-                if pts:
-                    a.errorbar([c for c, _, _ in pts], [v for _, v, _ in pts],
-                               yerr=[2.0 * (sd or 0.0) for _, _, sd in pts], fmt="x" if tracked_only else marker,
-                               color=colour, mfc="none" if stage is not sp else colour, ms=5, capsize=2,
-                               label=f"{label}{', tracked' if tracked_only else ''} ({len(pts)}, +-2 standard errors)")
-        a.set(xlabel="time (s)", ylabel="speed (m/s)",
-              title=f"Speed along the ride: median {sp['speed_m_per_s']:.2f} m/s "
-                    f"(wheelbase {self.wheelbase:.3f} m / the lag per window)")
 
     def write(self, out_dir) -> list:
         import json
@@ -549,16 +528,21 @@ def require_both_ends(record) -> None:
         raise ReconstructError(f"{record.name}: needs both ends' records (the rear meets what the front met)")
 
 
-def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstruction:
+def reconstruct(record, bike, overrides=None, at_once: bool = False, speed=None) -> Reconstruction:
     """``record`` (a ``mtbmj.measured.telemetry.TelemetryRecord`` with both ends) through the bike
     ``bike`` (preset, file or ``mtbmj.bike.spec.ResolvedBike``, which is not read again; ``overrides``
     its keys): see the module doc. ``at_once``: also the rear with the share of its ground met at the
-    front's moment fitted on the rear's record (``Reconstruction.at_once_fit``, reported, not judged)."""
+    front's moment fitted on the rear's record (``Reconstruction.at_once_fit``, reported, not judged).
+    ``speed``: the ride's speed given (m/s, a CSV's path or (time_s, speed_m_per_s) on the record's clock:
+    :mod:`mtbmj.ride.reconstruct_given`), used in place of the lag's, the lag's reported beside it."""
     from mtbmj.bike import run as bike_run
     from mtbmj.bike import spec as spec_mod
 
+    given = None if speed is None else given_mod.given(speed)  # a bad speed: one line before any work
     require_both_ends(record)
     record = record.decimated(RATE_HZ)  # a 5 kHz version-2 record read at 1 kHz, low-passed first
+    if given is not None:
+        given.check_covers(float(record.time_s[0]), float(record.time_s[-1]), record.name)
     record, part_s, stands = ridden_part(record)
     spec = spec_mod.load(bike, overrides)  # a ResolvedBike is derived again, not read
     t = np.asarray(record.time_s, float)
@@ -598,10 +582,14 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
     try:  # per window: the grounds' lag where they align, else the travels' (high-passed at 5 Hz)
         speed = speed_from_either(t, *pairs, wheelbase, names=("the two ends' grounds", "the two ends' travel"),
                                   travel=travel)
+        speed = tracked(t, pairs, speed, wheelbase, travel=travel)  # the gaps near strict windows tracked
+        speed["from"] = ", ".join(sorted({s for s in speed["sources"] if s})) or None
     except ReconstructError as exc:
-        raise ReconstructError(f"{record.name}: {exc}") from None
-    speed = tracked(t, pairs, speed, wheelbase, travel=travel)  # the gaps near strict windows tracked
-    speed["from"] = ", ".join(sorted({s for s in speed["sources"] if s})) or None
+        if given is None:
+            raise ReconstructError(f"{record.name}: {exc}") from None
+        speed = exc  # the given speed is used; the lag's refusal reported beside it
+    if given is not None:
+        speed = given_mod.profile(given, t, part_s[0] if part_s else 0.0, wheelbase, speed)
     from mtbmj.ride import reconstruct_bike
 
     whole = reconstruct_bike.whole_bike(spec, fork_setup, shock_setup)
@@ -663,7 +651,8 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False) -> Reconstr
     # timing is the model's more than the ride's, and would pull the speed
     first = speed
     c = result.checks()
-    if c["rear_predicted_rms_mm"] < min(c["baseline_delayed_fork_rms_mm"], c["baseline_rear_mean_rms_mm"]):
+    if given is None and c["rear_predicted_rms_mm"] < min(c["baseline_delayed_fork_rms_mm"],
+                                                          c["baseline_rear_mean_rms_mm"]):  # a given speed stands
         for _ in range(REFINE_PASSES):
             try:
                 again = merged(first, refine(t, rear * 1e3, done["found"]["rear_rise"] * 1e3, done["lags"],
