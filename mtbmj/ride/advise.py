@@ -395,7 +395,7 @@ class Advice:
         rest = (self.recommendation or {}).get("then") or []
         if not rest or (self.verdict or {}).get("answer", "change") != "change":
             return ""
-        return "Then, one at a time, recording again after each: " + "; ".join(
+        return "Then, one at a time, recording again after each (each predicted from the recorded setting): " + "; ".join(
             f"{'raise' if t['setting']['to'] > t['setting']['from'] else 'lower'} the {t['label']} from "
             f"{t['setting']['from']:g} to {t['setting']['to']:g} {t['setting']['unit']}" for t in rest)
 
