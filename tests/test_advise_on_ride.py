@@ -114,6 +114,30 @@ def test_packing_is_read_against_the_other_end_on_the_same_terrain():
     assert p["front_packing"] == pytest.approx(0.5) and p["rear_packing"] == pytest.approx(0.5)
 
 
+def test_a_change_that_speeds_an_end_far_past_the_other_pogoes():
+    """The packing rule's other side (issue 52: a soft fork's advice lowered its rebound 700 -> 117 N s/m, the
+    fork then rebounding at 1.34 of its compression speed where the rear rebounds at 0.70, and no rule
+    said so): a setting whose end rebounds above 1.25 of the other end's ratio on the ride as recorded
+    (and above its own there) costs one unit per 0.2 over. Read against the ride (0.56 fork, 0.70 rear):
+    the fork at 0.80 (1.14 of the rear's) pays nothing, at 1.34 it pays (1.34 / 0.70 - 1.25) / 0.2; a
+    rear sped to 0.80 (1.43 of the fork's 0.56) pays too; a setting that speeds the rear to 1.2 leaves the
+    fork's bound at 1.25 x 0.70. The ride's own imbalance is packing's: a ride whose fork packs (0.46
+    against 0.70) does not also make its rear pogo, and the well-set bike's rides (fork over rear 0.83,
+    0.97, 0.88) and a fork four times too slow pay no pogo."""
+    ride = ends(0.56, 0.70)
+    assert advise.penalties(ends(0.80, 0.70), ride)["front_pogo"] == 0.0
+    p = advise.penalties(ends(1.34, 0.70), ride)
+    assert p["front_pogo"] == pytest.approx((1.34 / 0.70 - 1.25) / 0.2) and p["rear_pogo"] == 0.0
+    assert advise.penalties(ends(0.56, 0.80), ride)["rear_pogo"] == pytest.approx((0.80 / 0.56 - 1.25) / 0.2)
+    assert advise.penalties(ends(0.9, 1.2), ride)["front_pogo"] == pytest.approx((0.9 / 0.70 - 1.25) / 0.2)
+    for f, r in ((0.46, 0.70), (0.52, 0.63), (0.59, 0.67), (0.56, 0.58), (0.26, 0.60)):
+        p = advise.penalties(ends(f, r))
+        assert p["front_pogo"] == 0.0 and p["rear_pogo"] == 0.0, (f, r, p)
+    p = advise.penalties(ends(0.46, 0.70))
+    assert p["front_packing"] > 0.0 and p["rear_pogo"] == 0.0  # the slower end blamed, not both
+    assert advise.rule_metric("front_pogo") == "front.rebound_over_compression"
+
+
 def test_slowing_the_other_end_does_not_mend_one_that_packs():
     """The fork packs on the ride (0.26 against the rear's 0.60); a setting that slows the rear to
     0.30 leaves the fork's target where the recorded ride set it (0.8 x 0.60), so the fork still

@@ -166,8 +166,8 @@ def test_the_balance_of_the_ends_is_recommended_before_the_rest():
     rec = a.recommendation
     assert rec["key"] == "fork:fork.spring.rate_N_per_mm" and "balance" in rec["improves"]
     assert [t["key"] for t in rec["then"]] == ["fork:fork.damper.rebound_N_s_per_m"]
-    assert a.then() == ("Then, one at a time, recording again after each: raise the fork rebound damping from 700 "
-                        "to 875 N s/m")
+    assert a.then() == ("Then, one at a time, recording again after each (each predicted from the recorded setting): "
+                        "raise the fork rebound damping from 700 to 875 N s/m")
     html = a.html(b"png")
     assert html.index('id="recommended"') < html.index('id="then"') < html.index("<table")
     # without a change that mends the balance, the best one: the rebound, nothing after it of the same adjuster

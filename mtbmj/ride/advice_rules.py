@@ -23,6 +23,7 @@ UNUSED_SHARE = 0.8  # assumed: ... where it is also less than this share of the 
 DEEP_PERCENT = 80.0  # the deep-travel share counts time beyond this % of travel
 PACKING_SHARE = 0.8  # assumed: an end whose rebound-over-compression is below this share of the other end's packs
 PACKING_FLOOR = 0.4  # assumed: rebound p95 below this share of compression p95 packs whatever the other end does
+POGO_SHARE = 1.0 / PACKING_SHARE  # an end whose rebound-over-compression is above this multiple of the other end's pogoes
 BALANCE_POINTS = 10.0  # assumed: the ends' dynamic sags this close move "about the same"
 GRIP_COMFORT_WEIGHT = 1.0  # penalty per relative change of tyre-load variation and rider acceleration
 MIN_GAIN = 0.1  # a recommendation lowers the penalty by at least this
@@ -56,6 +57,11 @@ RULES = {
                f"on the ride as recorded, the same terrain (front and rear rebound about the same: Motion Instruments' balance, read "
                f"secondhand; number assumed), and at least {PACKING_FLOOR:g} whatever the other end does (assumed); "
                f"one unit of penalty per 0.2 short of the stricter",
+    "pogo": f"a change leaves each end's rebound p95 speed over its compression p95 at most {POGO_SHARE:g} of the other "
+            f"end's on the ride as recorded, or the end's own there where that is more (the packing rule's other side: "
+            f"rebound 'about the same' at both ends, between pogo and packing, ShockWiz's 'Goldilocks Rebound', read "
+            f"secondhand; the number the packing rule's inverse, assumed; the ride's own imbalance is packing's, which "
+            f"blames the slower end); one unit of penalty per 0.2 over",
     "balance": f"front and rear dynamic sag within {BALANCE_POINTS:g} points (Motion Instruments; number assumed)",
     "grip_comfort": "lower tyre-load variation and rider acceleration, as tie-breakers (assumed weight)",
     "authority": "a change is advised only where a metric of a rule it improves moves by more than its uncertainty "
@@ -234,12 +240,14 @@ def ride_metrics(t, front_mm, rear_mm, front_top: float, rear_top: float, static
 
 def penalties(mt: dict, terrain: dict | None = None) -> dict:
     """Each rule's penalty (0 inside its window) of a metrics dict (:func:`ride_metrics`). ``terrain``:
-    the metrics of the ride as recorded, whose ends read the terrain for the packing and the
+    the metrics of the ride as recorded, whose ends read the terrain for the packing, pogo and the
     travel-unused rules (each end's rebound-over-compression against the other end's there, and its
     maximum travel against the other end's: a setting tried does not change the terrain, so slowing
     or stiffening the other end mends neither); default ``mt`` itself. The travel one end is asked to
     use is ``UNUSED_BELOW_PERCENT`` of its travel, or ``UNUSED_SHARE`` of the other end's maximum
-    where that is less: a smooth trail whose hits take the other end to 73 % asks for 58 %, not 85."""
+    where that is less: a smooth trail whose hits take the other end to 73 % asks for 58 %, not 85. Pogo
+    bounds a change (an end sped past ``POGO_SHARE`` of the other end's ratio there, and past its own):
+    the ride's own imbalance is packing's, read at the slower end."""
     terrain = mt if terrain is None else terrain
     p = {}
     for end in ("front", "rear"):
@@ -256,12 +264,17 @@ def penalties(mt: dict, terrain: dict | None = None) -> dict:
         r, o = e["rebound_over_compression"], terrain["rear" if end == "front" else "front"]["rebound_over_compression"]
         short = 0.0 if r is None else max(PACKING_FLOOR - r, PACKING_SHARE - r / o if o else 0.0, 0.0)
         p[f"{end}_packing"] = short / 0.2  # the terrain sets compression speeds: the other end reads it too
+        # too fast, it kicks: above POGO_SHARE of the other end's, and above its own on the ride as recorded (the
+        # bound of a change: packing reads the ride's own imbalance and blames the slower end, not both ends)
+        own = terrain[end]["rebound_over_compression"]
+        p[f"{end}_pogo"] = 0.0 if r is None or not o else max(r / o - max(POGO_SHARE, (own or 0.0) / o), 0.0) / 0.2
     p["balance"] = max(abs(mt["balance_points"]) - BALANCE_POINTS, 0.0) / BALANCE_POINTS
     return p
 
 
 RULE_METRICS = {"static_sag": "static_sag_percent", "bottom_outs": "bottom_outs_per_minute",
-                "travel_unused": "max_travel_percent", "packing": "rebound_over_compression"}
+                "travel_unused": "max_travel_percent", "packing": "rebound_over_compression",
+                "pogo": "rebound_over_compression"}
 
 
 def rule_metric(rule: str) -> str:

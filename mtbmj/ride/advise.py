@@ -46,7 +46,8 @@ guides' current editions), marked *assumed* where no source gives the number):
 - packing: an end's rebound p95 over its compression p95 below ``PACKING_SHARE`` of the other end's
   on the ride as recorded (the terrain sets the compression speeds, and the other end rides the same
   terrain: "front and rear rebound about the same", Motion Instruments' balance; the number assumed),
-  or below ``PACKING_FLOOR`` whatever the other end does (assumed; docs/rolling.md says why);
+  or below ``PACKING_FLOOR`` whatever the other end does (assumed; docs/rolling.md says why); pogo, its other
+  side: a change that speeds an end past ``POGO_SHARE`` of the other end's (and past its own) costs too;
 - balance: the ends' dynamic sags within ``BALANCE_POINTS`` points ("front and rear should move about
   the same", Motion Instruments; the number assumed);
 - grip and comfort: a small weight on the relative change of tyre-load variation and rider
@@ -394,7 +395,7 @@ class Advice:
         rest = (self.recommendation or {}).get("then") or []
         if not rest or (self.verdict or {}).get("answer", "change") != "change":
             return ""
-        return "Then, one at a time, recording again after each: " + "; ".join(
+        return "Then, one at a time, recording again after each (each predicted from the recorded setting): " + "; ".join(
             f"{'raise' if t['setting']['to'] > t['setting']['from'] else 'lower'} the {t['label']} from "
             f"{t['setting']['from']:g} to {t['setting']['to']:g} {t['setting']['unit']}" for t in rest)
 
