@@ -41,11 +41,13 @@ def split_unit(name: str) -> tuple[str, str] | None:
     """``displacement_mm`` -> (``displacement``, ``mm``); None when no known unit ends the name. A
     name in another case (``Displacement_MM``, ``force_n``: a spreadsheet's) is read as the known one
     (quantity in lower case, the unit as :data:`UNITS` spells it): no two units differ only in case."""
-    for unit in _SUFFIXES:
-        if name.endswith("_" + unit) and len(name) > len(unit) + 1:
+    for unit in _SUFFIXES:  # a rate's tail is no unit of its own (speed_ft_per_s is not a speed_ft_per in s)
+        if (name.endswith("_" + unit) and len(name) > len(unit) + 1
+                and not name[: -len(unit) - 1].lower().endswith("_per")):
             return name[: -len(unit) - 1], unit
     for unit in _SUFFIXES:
-        if name.lower().endswith("_" + unit.lower()) and len(name) > len(unit) + 1:
+        if (name.lower().endswith("_" + unit.lower()) and len(name) > len(unit) + 1
+                and not name[: -len(unit) - 1].lower().endswith("_per")):
             return name[: -len(unit) - 1].lower(), unit
     return None
 
@@ -85,12 +87,19 @@ class Record:
         return self
 
 
+def _unit_written(name: str) -> str:
+    """The unit a column name ends in as written, a rate whole (``speed_km_per_h``: ``km_per_h``, not ``h``)."""
+    parts = name.strip("_").split("_")
+    per = [k for k, p in enumerate(parts) if p.lower() == "per" and 1 < k < len(parts) - 1]
+    return "_".join(parts[per[-1] - 1:]) if per else parts[-1]
+
+
 def _convert(path: str, names: list[str], data: np.ndarray, comments=()) -> Record:
     columns, units = {}, {}
     for j, name in enumerate(names):
         parsed = split_unit(name)
         if parsed is None and "_" in name.strip("_"):
-            raise RecordError(f"{path}: column {name!r}: unit {name.rsplit('_', 1)[1]!r} is not one mtbmj reads "
+            raise RecordError(f"{path}: column {name!r}: unit {_unit_written(name)!r} is not one mtbmj reads "
                               f"({', '.join(UNITS)}); convert the column and name it so")
         if parsed is None:
             raise RecordError(f"{path}: column {name!r} has no unit in its name (e.g. displacement_mm, force_N)")

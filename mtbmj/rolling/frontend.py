@@ -488,6 +488,26 @@ def _air_line(s: dict) -> str:
                                  f"landing is not in the run (a longer --duration)")
 
 
+# A wheel rolled forward never moves back over ground it can ride (the library's features at 1.5 and 5 m/s: the
+# lowest speed 1.39 m/s, tests/test_fuzz_careless29b.py); a speed below this, backwards, is a wheel thrown back.
+THROWN_BACK_M_PER_S = -0.05
+
+
+def thrown_back(time_s, x_m, speed) -> dict | None:
+    """Where the wheel first moved backwards (``time_s`` s, ``x_m`` m) and its fastest backwards (m/s), else None."""
+    back = np.flatnonzero(np.asarray(speed) < THROWN_BACK_M_PER_S)
+    if not back.size:
+        return None
+    return {"time_s": float(time_s[back[0]]), "x_m": float(x_m[back[0]]), "speed_m_per_s": float(np.min(speed))}
+
+
+def _back_line(s: dict) -> str:
+    b = s.get("thrown_back")
+    return "" if b is None else (f"; the wheel was thrown back at {b['time_s']:.2f} s ({b['x_m']:.2f} m), backwards at "
+                                 f"up to {-b['speed_m_per_s']:.2f} m/s: the terrain stopped it (a wall or an edge it "
+                                 f"did not climb); its peaks are of that impact, no ride over it")
+
+
 def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
     travel_mm = p.setup.travel * 1e3
     fork = raw["fork_mm"]
@@ -512,6 +532,7 @@ def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
         "min_fork_velocity_mm_per_s": float(raw["fork_velocity_mm_per_s"].min()),
         "drive": _drive_summary(p, raw),
         "in_air_at_end_mm": in_air_at_end(raw["tire_mm"], raw["tire_force_N"]),
+        "thrown_back": thrown_back(raw["time_s"], raw["x_m"], raw["speed_m_per_s"]),
     }
     try:
         from mtbmj.measured import metrics as ride_metrics
@@ -568,7 +589,7 @@ class RollResult(RunOutput):
         return (f"roll {self.scenario} at {s['speed_m_per_s']:g} m/s ({self.name}, head angle {s['head_angle_deg']:g} "
                 f"deg): fork peak {s['max_fork_mm']:.1f} mm ({s['travel_used_percent']:.0f} % of travel), tire peak "
                 f"{s['max_tire_mm']:.1f} mm, axle force peak {s['max_axle_force_z_N']:.0f} N up / "
-                f"{max(0.0, -s['min_axle_force_x_N']):.0f} N back{line(s)}{_drive_line(s['drive'])}{_air_line(s)}")
+                f"{max(0.0, -s['min_axle_force_x_N']):.0f} N back{line(s)}{_drive_line(s['drive'])}{_back_line(s)}{_air_line(s)}")
 
     def quicklook(self):
         """The quick-look figure (``mtbmj.readout.quicklook``): terrain, fork, tire (its clearance in the

@@ -1,0 +1,115 @@
+"""Careless input, round 29b: the ride's speed given as a careless user writes it (``--speed-csv``: a column of
+zeros, a time in ms under ``time_s``, a GPS clock of the day, a speed in km/h) and a terrain edited by hand into
+a wall the front end cannot ride (thrown back, said). Every CSV is written here; the ride is the shipped example
+(00649.SST, 0-76.398 s)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from mtbmj.cli import main
+from mtbmj.ride import reconstruct_given as G
+from helpers import refused
+
+RIDE_S = 76.398  # the shipped example's last sample (s), its first at 0
+
+
+def _speed_csv(path, time, speed, header="time_s,speed_m_per_s"):
+    path.write_text(header + "\n" + "".join(f"{t:g},{v:g}\n" for t, v in zip(time, speed)))
+    return path
+
+
+def _run(argv, capfd) -> tuple[int, str]:
+    capfd.readouterr()
+    status = main([str(a) for a in argv])
+    got = capfd.readouterr()
+    return status, got.out + got.err
+
+
+SECONDS = np.arange(0.0, 80.0, 1.0)  # a 1 Hz GPS track over the ride and past it
+
+
+@pytest.mark.parametrize("command", [["reconstruct", "example", "--bike", "sst"],
+                                     ["advise", "example", "--bike", "sst"]])
+def test_a_speed_column_of_zeros_is_refused(tmp_path, capfd, command):
+    """A speed of 0 in every row: the bike never moves; before, taken as 0.3 m/s everywhere and the line said
+    "speed given ..., 0.30 m/s median" (on the shared 14 s 00083.SST: 4 m of terrain, written)."""
+    zeros = _speed_csv(tmp_path / "zeros.csv", SECONDS, 0.0 * SECONDS)
+    out = tmp_path / "out"
+    line = refused([*command, "--speed-csv", zeros, "--out", out], out, capfd, "below 0.3 m/s")
+    assert "zeros.csv" in line and "never moves" in line
+
+
+def test_a_ride_standing_part_of_the_time_is_not_refused():
+    """The refusal's other side: a ride that stands for its first half (0 m/s) and rolls at 5 m/s after."""
+    half = G.checked(SECONDS, np.where(SECONDS < 38.0, 0.0, 5.0), "half")
+    half.check_covers(0.0, RIDE_S, "00649.SST")
+    with pytest.raises(G.ConfigError, match="below 0.3 m/s"):
+        G.checked(SECONDS, np.full(SECONDS.size, 0.29), "crawl").check_covers(0.0, RIDE_S, "00649.SST")
+
+
+def test_a_time_in_ms_under_time_s_is_refused(tmp_path, capfd):
+    """A GPS track at 1 Hz with its time in ms written under time_s: rows 0, 1000, 2000 ... s, only row 1 within
+    the 76 s ride (it covers the ride, so the coverage check passed and the ride saw one straight line from row 1
+    to row 2). The same file's header made time_ms is read and covers the ride."""
+    ms = _speed_csv(tmp_path / "ms.csv", 1000.0 * SECONDS, 5.0 + np.sin(SECONDS))
+    out = tmp_path / "out"
+    line = refused(["reconstruct", "example", "--bike", "sst", "--speed-csv", ms, "--out", out], out, capfd,
+                   "a time in ms under time_s")
+    assert "only row 1 of 80" in line and "1000 s apart" in line
+    right = _speed_csv(tmp_path / "right.csv", 1000.0 * SECONDS, 5.0 + np.sin(SECONDS), "time_ms,speed_m_per_s")
+    G.read_csv(right).check_covers(0.0, RIDE_S, "00649.SST")
+
+
+def test_a_gps_clock_of_the_day_is_named(tmp_path, capfd):
+    """Time of day (10:00:00, 36000 s on) in place of the ride's clock: refused as before, now naming the clock;
+    a CSV starting 5 s late within the ride is refused without that word."""
+    gps = _speed_csv(tmp_path / "gps.csv", 36000.0 + SECONDS, 5.0 + 0.0 * SECONDS)
+    out = tmp_path / "out"
+    line = refused(["reconstruct", "example", "--bike", "sst", "--speed-csv", gps, "--out", out], out, capfd,
+                   "a clock of the day?")
+    assert "row 1 (time 36000 s)" in line
+    late = _speed_csv(tmp_path / "late.csv", 5.0 + SECONDS, 5.0 + 0.0 * SECONDS)
+    line = refused(["reconstruct", "example", "--bike", "sst", "--speed-csv", late, "--out", out], out, capfd,
+                   "starts after the ride's start")
+    assert "clock of the day" not in line
+
+
+@pytest.mark.parametrize("header, unit", [("time_s,speed_km_per_h", "km_per_h"), ("time_s,speed_mph", "mph"),
+                                          ("time_s,speed_ft_per_s", "ft_per_s")])
+def test_a_speed_in_another_unit_names_the_unit_whole(tmp_path, capfd, header, unit):
+    """km/h typed as speed_km_per_h: the unit named is km_per_h (before: 'h', not the unit written)."""
+    csv = _speed_csv(tmp_path / "s.csv", SECONDS, 18.0 + 0.0 * SECONDS, header)
+    out = tmp_path / "out"
+    refused(["reconstruct", "example", "--bike", "sst", "--speed-csv", csv, "--out", out], out, capfd,
+            f"unit '{unit}' is not one mtbmj reads")
+
+
+def _terrain(path, x, z_mm):
+    path.write_text("distance_m,height_mm\n" + "".join(f"{a:.2f},{b:.1f}\n" for a, b in zip(x, z_mm)))
+    return path
+
+
+@pytest.mark.parametrize("rows, thrown", [
+    ([(0.0, 0.0), (20.0, 0.0), (20.0, 500.0), (40.0, 500.0)], True),   # a wall, its distance repeated
+    ([(0.0, 0.0), (20.0, 0.0), (20.1, 500.0), (40.0, 500.0)], True),   # the same wall over one row
+    ([(0.0, 0.0), (20.0, 0.0), (20.0, 60.0), (40.0, 60.0)], False),    # a 60 mm step, ridden over
+    ([(0.0, 0.0), (40.0, 0.0)], False),                                # two rows of flat ground
+])
+def test_a_wall_edited_into_a_terrain_says_the_wheel_was_thrown_back(tmp_path, capfd, rows, thrown):
+    """A 0.5 m wall (taller than the 0.37 m wheel's radius) at 20 m: the wheel meets it at 5 m/s and is thrown
+    back (before: its peaks given as a ride over it, the only sign a negative lowest speed). Bounds, not fits:
+    the axle turns back within a wheel's radius before the wall (19-20 m), no later than 0.5 s after 5 m/s
+    would bring it there; ridden terrain (a 60 mm step, flat ground) says nothing of the kind."""
+    x, z = zip(*rows)
+    path = _terrain(tmp_path / "t.csv", x, z)
+    status, err = _run(["roll", path, "--speed", "5", "--quiet", "--no-figure", "--out", tmp_path / "o"], capfd)
+    assert status == 0, err
+    back = json.loads((tmp_path / "o" / "summary.json").read_text())["thrown_back"]
+    if not thrown:
+        assert back is None and "thrown back" not in err
+        return
+    assert 19.0 < back["x_m"] < 20.0 and back["time_s"] < 20.0 / 5.0 + 0.5 and back["speed_m_per_s"] < -0.5
+    assert "the wheel was thrown back" in err and "no ride over it" in err
