@@ -113,3 +113,32 @@ def test_a_wall_edited_into_a_terrain_says_the_wheel_was_thrown_back(tmp_path, c
         return
     assert 19.0 < back["x_m"] < 20.0 and back["time_s"] < 20.0 / 5.0 + 0.5 and back["speed_m_per_s"] < -0.5
     assert "the wheel was thrown back" in err and "no ride over it" in err
+
+
+@pytest.mark.parametrize("table, said", [
+    # the fork's progressive spring key in the coil shock's set table: its linear model does not read it
+    ('[shock.set]\n"fork.spring.progressive_rate_N_per_mm" = 7.0\n', "fork.spring.progressive_rate_N_per_mm"),
+    # the shock's linear rate in the progressive fork's set table
+    ('[fork.set]\n"fork.spring.rate_N_per_mm" = 90.0\n', "fork.spring.rate_N_per_mm"),
+    ('[shock.set]\n"fork.spring.rate_N_per_mm" = 90.0\n', None),  # a key the shock reads: a try, said nothing
+])
+def test_a_try_files_key_for_the_other_end_is_said(tmp_path, table, said):
+    """advise --try FILE whose key is one the part's model does not read: the try predicts the recorded
+    setting again. `mtbmj bike FILE` says so in a warning line; the try said nothing (its composition's
+    warnings were caught and compared with the same file's)."""
+    import warnings
+
+    from mtbmj.config import ConfigWarning
+    from mtbmj.ride import advise
+
+    path = tmp_path / "try.toml"
+    path.write_text('base = "sst"\n' + table)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        advise.trial("sst", None, str(path), [])
+    lines = [str(w.message) for w in caught if issubclass(w.category, ConfigWarning)]
+    if said is None:
+        assert lines == []
+        return
+    assert len(lines) == 1 and lines[0].startswith(f"--try {path}: ") and said in lines[0], lines
+    assert "does not read it, so it changes nothing" in lines[0]
