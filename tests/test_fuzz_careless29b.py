@@ -142,3 +142,28 @@ def test_a_try_files_key_for_the_other_end_is_said(tmp_path, table, said):
         return
     assert len(lines) == 1 and lines[0].startswith(f"--try {path}: ") and said in lines[0], lines
     assert "does not read it, so it changes nothing" in lines[0]
+
+
+@pytest.mark.parametrize("places, said", [
+    ([1000.0, 2000.0], "no place of 2 lies along the terrain"),                     # another terrain's profile
+    ([0.0, 5000.0, 10000.0, 15000.0, 20000.0], "only place 1 of 5 lies along"),   # distances in mm
+])
+def test_a_speed_profile_off_the_terrain_is_refused(tmp_path, capfd, places, said):
+    """``bike --speed-profile`` whose places miss the terrain (20 m of flat): before, held flat past its ends,
+    the run rode one speed (the profile's nearest) and said "along a speed profile"."""
+    prof = tmp_path / "speed.csv"
+    prof.write_text("distance_m,speed_m_per_s\n" + "".join(f"{x:g},{4 + i}\n" for i, x in enumerate(places)))
+    out = tmp_path / "out"
+    line = refused(["bike", "sst", "flat:length_m=20", "--speed-profile", prof, "--duration", "1", "--out", out],
+                   out, capfd, said)
+    assert str(prof) in line and "distances in mm" in line
+
+
+def test_a_speed_profile_along_the_terrain_is_taken():
+    """The refusal's other side: the same places in metres (0-20 m) lie along a 20 m terrain."""
+    from mtbmj.bike.schedule import SpeedProfile
+    from mtbmj.rolling import terrain as T
+
+    ter = T.make("flat:length_m=20")
+    prof = SpeedProfile.checked(([0.0, 5.0, 10.0, 15.0, 20.0], [4.0, 5.0, 6.0, 7.0, 8.0]))
+    assert prof.along(ter.start_x, ter.start_x + ter.length) is prof
