@@ -167,3 +167,21 @@ def test_a_speed_profile_along_the_terrain_is_taken():
     ter = T.make("flat:length_m=20")
     prof = SpeedProfile.checked(([0.0, 5.0, 10.0, 15.0, 20.0], [4.0, 5.0, 6.0, 7.0, 8.0]))
     assert prof.along(ter.start_x, ter.start_x + ter.length) is prof
+
+
+def test_a_speed_over_time_and_a_speed_along_the_distance_name_each_other(tmp_path, capfd):
+    """reconstruct's --speed-csv given a speed profile (distance_m, speed_m_per_s: the speed.csv reconstruct
+    writes) and bike's --speed-profile given a speed over time: each refusal names the option that takes it;
+    a file of neither (a typo) is refused without that word."""
+    along = tmp_path / "along.csv"
+    along.write_text("distance_m,speed_m_per_s\n0,5\n400,5\n")
+    over = _speed_csv(tmp_path / "over.csv", SECONDS, 5.0 + 0.0 * SECONDS)
+    typo = _speed_csv(tmp_path / "typo.csv", SECONDS, 5.0 + 0.0 * SECONDS, "time_s,sped_m_per_s")
+    out = tmp_path / "out"
+    refused(["reconstruct", "example", "--bike", "sst", "--speed-csv", along, "--out", out], out, capfd,
+            "what mtbmj bike --speed-profile takes")
+    refused(["bike", "sst", "flat:length_m=20", "--speed-profile", over, "--duration", "1", "--out", out], out, capfd,
+            "what reconstruct and advise --speed-csv take")
+    line = refused(["reconstruct", "example", "--bike", "sst", "--speed-csv", typo, "--out", out], out, capfd,
+                   "has time_s, sped_m_per_s")
+    assert "--speed-profile" not in line

@@ -86,8 +86,9 @@ def read_csv(path) -> SpeedProfile:
         raise ConfigError(f"--speed-profile: {exc}") from None
     if rec.units != {"distance": "m", "speed": "m_per_s"}:
         have = ", ".join(f"{q}_{u}" for q, u in rec.units.items())
+        over_time = ": a speed over time, what reconstruct and advise --speed-csv take" if "time" in rec.units else ""
         raise ConfigError(f"--speed-profile: {path}: a speed profile needs exactly the columns distance_m, "
-                          f"speed_m_per_s (has {have})")
+                          f"speed_m_per_s (has {have}{over_time})")
     return SpeedProfile.checked((rec["distance"], rec["speed"]), f"--speed-profile: {path}")
 
 

@@ -129,7 +129,10 @@ def read_csv(path) -> GivenSpeed:
         raise ConfigError(f"--speed-csv: {exc}") from None
     if set(rec.units) != {"time", "speed"}:
         have = ", ".join(f"{q}_{u}" for q, u in rec.units.items())
-        raise ConfigError(f"{said}: a speed over time needs exactly the columns time_s and speed_m_per_s (has {have})")
+        along = (": a speed along the distance, what mtbmj bike --speed-profile takes" if "distance" in rec.units
+                 else "")
+        raise ConfigError(f"{said}: a speed over time needs exactly the columns time_s and speed_m_per_s (has {have}"
+                          f"{along})")
     return checked(rec["time"], rec["speed"], said)
 
 
