@@ -185,3 +185,32 @@ def test_a_speed_over_time_and_a_speed_along_the_distance_name_each_other(tmp_pa
     line = refused(["reconstruct", "example", "--bike", "sst", "--speed-csv", typo, "--out", out], out, capfd,
                    "has time_s, sped_m_per_s")
     assert "--speed-profile" not in line
+
+
+@pytest.mark.parametrize("rows, into", [
+    ([(0.0, 0.0), (0.0, 500.0), (40.0, 500.0)], 500.0),     # a wall at the first distance: started on top of it
+    ([(0.0, 0.0), (0.01, 500.0), (40.0, 500.0)], 500.0),    # the same wall leaning 1 cm
+    ([(0.0, 0.0), (40.0, 8000.0)], None),                    # a 20 % climb from the first row
+])
+def test_a_roll_that_would_start_inside_the_terrain_is_refused(tmp_path, capfd, rows, into):
+    """roll over a terrain CSV that rises at once: before, the wheel was put on top of the wall (its height at
+    the start the wall's upper end) and rode flat ground, the wall never met ("fork peak 22.7 mm"), as
+    mtbmj bike refuses ("does not start on level ground"). The tyre (0.37 m) at rest on the first row's level
+    would hold the ground: for the wall all of it, for a 20 % grade s^2 r / 2 = 7.4 mm (at most, closed
+    form), over the 5 mm a start allows."""
+    x, z = zip(*rows)
+    out = tmp_path / "o"
+    line = refused(["roll", _terrain(tmp_path / "t.csv", x, z), "--speed", "5", "--out", out], out, capfd,
+                   "would start")
+    r_mm = 370.0
+    expected = into if into is not None else 0.2 ** 2 * r_mm / 2
+    got = float(line.split("would start ")[1].split(" mm")[0])
+    assert abs(got - expected) <= 1.0, line
+
+
+def test_a_gentle_climb_from_the_first_row_rolls(tmp_path, capfd):
+    """The refusal's other side: a 10 % grade from the first row (1.85 mm into the tyre at most) rolls."""
+    path = _terrain(tmp_path / "t.csv", [0.0, 40.0], [0.0, 4000.0])
+    status, err = _run(["roll", path, "--speed", "5", "--duration", "0.5", "--quiet", "--no-figure", "--out",
+                        tmp_path / "o"], capfd)
+    assert status == 0, err

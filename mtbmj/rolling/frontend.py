@@ -102,6 +102,23 @@ def _check_inputs(speed, head_angle_deg, duration):
         raise ConfigError(f"duration: must be positive, got {duration!r}")
 
 
+def _check_start(ter, radius: float) -> None:
+    """A terrain CSV's ground must not reach into the tyre where the wheel starts at rest (its first distance, on
+    the first row's level): a wall or a steep rise there would be started on top of or inside, never met."""
+    if "csv" not in ter.params or isinstance(ter, terrain_mod.DrumTerrain):
+        return
+    x0 = ter.start_x
+    x = np.union1d(np.linspace(x0, x0 + radius, 201), ter.x[(ter.x >= x0) & (ter.x <= x0 + radius)])
+    into = ter.height(x) - (ter.z[0] + radius - np.sqrt(np.maximum(radius ** 2 - (x - x0) ** 2, 0.0)))
+    if into.max() > START_INTO_M:
+        raise ConfigError(f"start: {ter.params['csv']} rises {(ter.height(x).max() - ter.z[0]) * 1e3:.0f} mm within "
+                          f"{radius * 1e3:.0f} mm of its first distance ({x0:g} m): the wheel at rest there would start "
+                          f"{into.max() * 1e3:.0f} mm into the ground; begin the profile with a level stretch")
+
+
+START_INTO_M = 0.005  # a terrain CSV's start: the ground this far into the tyre at rest is a feature, not a start
+
+
 def build_front_end(setup: compose.Setup, terrain, head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG) -> FrontEnd:
     """Compile the rolling scene for ``setup`` and ``terrain`` at ``head_angle_deg``."""
     from mtbmj.drop.scene import INTEGRATORS
@@ -245,6 +262,7 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
     ter = terrain_mod.make(scenario)
     cfg = resolve(config, overrides)
     setup = compose.setup(cfg)
+    _check_start(ter, setup.tire_radius)
     # a coarse step (the bike's) where no stop or rim acts, the drop's fine step where one may
     setup = steprule.at_fine_step(setup) if fine_throughout else steprule.rolling(setup)
     drum = isinstance(ter, terrain_mod.DrumTerrain)
