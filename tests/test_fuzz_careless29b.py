@@ -1,7 +1,8 @@
 """Careless input, round 29b: the ride's speed given as a careless user writes it (``--speed-csv``: a column of
-zeros, a time in ms under ``time_s``, a GPS clock of the day, a speed in km/h) and a terrain edited by hand into
-a wall the front end cannot ride (thrown back, said). Every CSV is written here; the ride is the shipped example
-(00649.SST, 0-76.398 s)."""
+zeros, a time in ms under ``time_s``, a GPS clock of the day, a speed in km/h; a speed profile for the other
+command; ``bike --speed-profile`` off the terrain), a terrain edited by hand into a wall (the front end went
+backwards, or would start on top of it: said, refused), and an ``advise --try`` file's key for the other end.
+Every input is written here; the ride is the shipped example (00649.SST, 0-76.398 s)."""
 from __future__ import annotations
 
 import json
@@ -92,13 +93,13 @@ def _terrain(path, x, z_mm):
     return path
 
 
-@pytest.mark.parametrize("rows, thrown", [
+@pytest.mark.parametrize("rows, back", [
     ([(0.0, 0.0), (20.0, 0.0), (20.0, 500.0), (40.0, 500.0)], True),   # a wall, its distance repeated
     ([(0.0, 0.0), (20.0, 0.0), (20.1, 500.0), (40.0, 500.0)], True),   # the same wall over one row
     ([(0.0, 0.0), (20.0, 0.0), (20.0, 60.0), (40.0, 60.0)], False),    # a 60 mm step, ridden over
     ([(0.0, 0.0), (40.0, 0.0)], False),                                # two rows of flat ground
 ])
-def test_a_wall_edited_into_a_terrain_says_the_wheel_was_thrown_back(tmp_path, capfd, rows, thrown):
+def test_a_wall_edited_into_a_terrain_says_the_wheel_went_back(tmp_path, capfd, rows, back):
     """A 0.5 m wall (taller than the 0.37 m wheel's radius) at 20 m: the wheel meets it at 5 m/s and is thrown
     back (before: its peaks given as a ride over it, the only sign a negative lowest speed). Bounds, not fits:
     the axle turns back within a wheel's radius before the wall (19-20 m), no later than 0.5 s after 5 m/s
@@ -107,12 +108,29 @@ def test_a_wall_edited_into_a_terrain_says_the_wheel_was_thrown_back(tmp_path, c
     path = _terrain(tmp_path / "t.csv", x, z)
     status, err = _run(["roll", path, "--speed", "5", "--quiet", "--no-figure", "--out", tmp_path / "o"], capfd)
     assert status == 0, err
-    back = json.loads((tmp_path / "o" / "summary.json").read_text())["thrown_back"]
-    if not thrown:
-        assert back is None and "thrown back" not in err
+    went = json.loads((tmp_path / "o" / "summary.json").read_text())["went_back"]
+    if not back:
+        assert went is None and "backwards" not in err
         return
-    assert 19.0 < back["x_m"] < 20.0 and back["time_s"] < 20.0 / 5.0 + 0.5 and back["speed_m_per_s"] < -0.5
-    assert "the wheel was thrown back" in err and "no ride over it" in err
+    assert 19.0 < went["x_m"] < 20.0 and went["time_s"] < 20.0 / 5.0 + 0.5 and went["speed_m_per_s"] < -0.5
+    assert "the wheel went backwards" in err and "did not get over the terrain there" in err
+
+
+def test_a_coasting_wheel_rolled_back_down_a_climb_is_said_too(tmp_path, capfd):
+    """Coasting up a 40 % climb at 1 m/s: the wheel stops and rolls back, no impact (the axle's largest backward
+    force some 60 N, not the wall's hundreds of kN); the line says it went backwards without calling it a
+    wall. Bound: it stops no later than v / (g sin(atan 0.4)) = 0.27 s on the climb plus the 1.5 m lead-in
+    and the climb's start (the run's own at_m) at 1 m/s, and backwards at most as fast as it came."""
+    import math
+
+    status, err = _run(["roll", "climb:grade_percent=40", "--speed", "1", "--drive", "coast", "--quiet",
+                        "--no-figure", "--out", tmp_path / "o"], capfd)
+    assert status == 0, err
+    s = json.loads((tmp_path / "o" / "summary.json").read_text())
+    went = s["went_back"]
+    assert went is not None and -1.05 < went["speed_m_per_s"] < -0.5, went
+    assert went["time_s"] < (1.5 + s["scenario"]["at_m"]) / 1.0 + 1.0 / (9.81 * math.sin(math.atan(0.4))) + 0.5
+    assert "the wheel went backwards" in err and "a climb beyond the drive" in err
 
 
 @pytest.mark.parametrize("table, said", [

@@ -506,24 +506,24 @@ def _air_line(s: dict) -> str:
                                  f"landing is not in the run (a longer --duration)")
 
 
-# A wheel rolled forward never moves back over ground it can ride (the library's features at 1.5 and 5 m/s: the
-# lowest speed 1.39 m/s, tests/test_fuzz_careless29b.py); a speed below this, backwards, is a wheel thrown back.
-THROWN_BACK_M_PER_S = -0.05
+# A wheel rolled forward never moves back over ground it gets over (the library's features at 1.5 and 5 m/s: the
+# lowest speed 1.39 m/s, tests/test_fuzz_careless29b.py); a speed below this, backwards, is a wheel that did not.
+BACKWARDS_M_PER_S = -0.05
 
 
-def thrown_back(time_s, x_m, speed) -> dict | None:
+def went_back(time_s, x_m, speed) -> dict | None:
     """Where the wheel first moved backwards (``time_s`` s, ``x_m`` m) and its fastest backwards (m/s), else None."""
-    back = np.flatnonzero(np.asarray(speed) < THROWN_BACK_M_PER_S)
+    back = np.flatnonzero(np.asarray(speed) < BACKWARDS_M_PER_S)
     if not back.size:
         return None
     return {"time_s": float(time_s[back[0]]), "x_m": float(x_m[back[0]]), "speed_m_per_s": float(np.min(speed))}
 
 
 def _back_line(s: dict) -> str:
-    b = s.get("thrown_back")
-    return "" if b is None else (f"; the wheel was thrown back at {b['time_s']:.2f} s ({b['x_m']:.2f} m), backwards at "
-                                 f"up to {-b['speed_m_per_s']:.2f} m/s: the terrain stopped it (a wall or an edge it "
-                                 f"did not climb); its peaks are of that impact, no ride over it")
+    b = s.get("went_back")
+    return "" if b is None else (f"; the wheel went backwards at {b['time_s']:.2f} s ({b['x_m']:.2f} m), up to "
+                                 f"{-b['speed_m_per_s']:.2f} m/s: it did not get over the terrain there (a wall, an "
+                                 f"edge, or a climb beyond the drive), no ride over it")
 
 
 def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
@@ -550,7 +550,7 @@ def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
         "min_fork_velocity_mm_per_s": float(raw["fork_velocity_mm_per_s"].min()),
         "drive": _drive_summary(p, raw),
         "in_air_at_end_mm": in_air_at_end(raw["tire_mm"], raw["tire_force_N"]),
-        "thrown_back": thrown_back(raw["time_s"], raw["x_m"], raw["speed_m_per_s"]),
+        "went_back": went_back(raw["time_s"], raw["x_m"], raw["speed_m_per_s"]),
     }
     try:
         from mtbmj.measured import metrics as ride_metrics
