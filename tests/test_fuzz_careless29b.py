@@ -232,3 +232,25 @@ def test_a_gentle_climb_from_the_first_row_rolls(tmp_path, capfd):
     status, err = _run(["roll", path, "--speed", "5", "--duration", "0.5", "--quiet", "--no-figure", "--out",
                         tmp_path / "o"], capfd)
     assert status == 0, err
+
+
+@pytest.mark.parametrize("delimiter", [",", ";", "\t"])
+def test_a_spreadsheets_trailing_delimiter_is_no_column(tmp_path, delimiter):
+    """A spreadsheet's export with a delimiter ending every line: before, refused as "line 2: '' is not a
+    number". Read as the same record as without it; a header with a nameless column between two named
+    ones is still refused, and so is a row with a value under the nameless trailing one."""
+    from mtbmj.measured.records import RecordError, read_record
+
+    d = delimiter
+    rows = "".join(f"{t:g}{d}{5 + t / 10:g}{d}\n" for t in SECONDS)
+    (tmp_path / "trail.csv").write_text(f"time_s{d}speed_m_per_s{d}\n" + rows)
+    (tmp_path / "plain.csv").write_text(f"time_s{d}speed_m_per_s\n" + rows.replace(f"{d}\n", "\n"))
+    got, want = read_record(tmp_path / "trail.csv"), read_record(tmp_path / "plain.csv")
+    assert got.units == want.units == {"time": "s", "speed": "m_per_s"}
+    assert np.array_equal(got["time"], want["time"]) and np.array_equal(got["speed"], want["speed"])
+    G.read_csv(tmp_path / "trail.csv").check_covers(0.0, RIDE_S, "00649.SST")
+    (tmp_path / "mid.csv").write_text(f"time_s{d}{d}speed_m_per_s\n" + "".join(f"{t:g}{d}{d}5\n" for t in SECONDS))
+    (tmp_path / "more.csv").write_text(f"time_s{d}speed_m_per_s{d}\n" + "".join(f"{t:g}{d}5{d}7\n" for t in SECONDS))
+    for bad in ("mid.csv", "more.csv"):
+        with pytest.raises(RecordError, match="line 2"):
+            read_record(tmp_path / bad)

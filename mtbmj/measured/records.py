@@ -2,8 +2,9 @@
 
 A CSV record has optional comment lines starting with ``#`` (a line ``# synthetic ...`` marks a
 generated record), one header row, then numbers; the delimiter is ``,``, ``;`` or a tab, found
-from the header. Every column name ends in its unit (``displacement_mm``, ``force_N``,
-``velocity_mm_per_s``, ``time_s``); values are converted to SI on reading. A .mat file holds one
+from the header (a trailing one on the header, as a spreadsheet writes on every line, is no column).
+Every column name ends in its unit (``displacement_mm``, ``force_N``, ``velocity_mm_per_s``,
+``time_s``); values are converted to SI on reading. A .mat file holds one
 1-D numeric variable per column under the same unit-suffixed names.
 """
 from __future__ import annotations
@@ -131,6 +132,9 @@ def read_csv(path: str | Path) -> Record:
     if header_line.count(delimiter) == 0 and len(header_line.split()) > 1:
         raise RecordError(f"{path}: line {lines[0][0]}: columns must be separated by ',', ';' or a tab")
     names = [n.strip() for n in next(csv.reader([header_line], delimiter=delimiter))]
+    if len(names) > 1 and names[-1] == "":  # a spreadsheet's trailing delimiter on every line: no column
+        names = names[:-1]
+        lines = lines[:1] + [(n, _without_trailing(line, delimiter)) for n, line in lines[1:]]
     table = _numbers(lines[1:], delimiter, len(names))
     if table is not None:
         return _convert(str(path), names, table, comments)
@@ -150,6 +154,12 @@ def read_csv(path: str | Path) -> Record:
     if not rows:
         raise RecordError(f"{path}: header but no data rows")
     return _convert(str(path), names, np.array(rows), comments)
+
+
+def _without_trailing(line: str, delimiter: str) -> str:
+    """A data line without one trailing delimiter (and what blank follows it): a row's empty last cell."""
+    text = line.rstrip(" \r\n")
+    return text[:-1] if text.endswith(delimiter) else line
 
 
 def _numbers(lines: list[tuple[int, str]], delimiter: str, width: int) -> np.ndarray | None:
