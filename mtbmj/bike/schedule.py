@@ -60,6 +60,18 @@ class SpeedProfile:
     def at(self, x: float) -> float:
         return float(np.interp(x, self.x, self.v))
 
+    def along(self, start: float, end: float, said: str = "speed_profile") -> SpeedProfile:
+        """Itself where at least two of its places lie along the terrain ``start``..``end`` (m); else a
+        ``ConfigError`` after ``said`` (held flat past its ends, it would set one speed, silently: distances
+        in mm, another terrain's profile)."""
+        inside = np.flatnonzero((self.x >= start) & (self.x <= end))
+        if inside.size < 2:
+            raise ConfigError(f"{said}: {'only place ' + str(inside[0] + 1) if inside.size else 'no place'} of "
+                              f"{self.x.size} lies along the terrain ({start:g}-{end:g} m; its places run "
+                              f"{self.x[0]:g}-{self.x[-1]:g} m): distances in mm, or another terrain's profile? (one "
+                              f"speed for the whole run: --speed)")
+        return self
+
 
 def read_csv(path) -> SpeedProfile:
     """A speed profile from a CSV of exactly the columns ``distance_m`` (the terrain's x, as a terrain CSV's)
@@ -74,8 +86,9 @@ def read_csv(path) -> SpeedProfile:
         raise ConfigError(f"--speed-profile: {exc}") from None
     if rec.units != {"distance": "m", "speed": "m_per_s"}:
         have = ", ".join(f"{q}_{u}" for q, u in rec.units.items())
+        over_time = ": a speed over time, what reconstruct and advise --speed-csv take" if "time" in rec.units else ""
         raise ConfigError(f"--speed-profile: {path}: a speed profile needs exactly the columns distance_m, "
-                          f"speed_m_per_s (has {have})")
+                          f"speed_m_per_s (has {have}{over_time})")
     return SpeedProfile.checked((rec["distance"], rec["speed"]), f"--speed-profile: {path}")
 
 

@@ -29,7 +29,11 @@ def cmd_bike(args) -> int:
     if args.speed_profile is not None:  # a bad file: one line before any work
         from mtbmj.bike.schedule import read_csv
 
-        profile = read_csv(args.speed_profile)
+        from mtbmj.rolling import terrain as terrain_mod
+
+        ter = terrain_mod.make(args.scenario)  # the profile along it: a bad scenario is said here as after
+        profile = read_csv(args.speed_profile).along(ter.start_x, ter.start_x + ter.length,
+                                                     f"--speed-profile: {args.speed_profile}")
         if args.speed is None:  # the start's: the profile's first
             args.speed = float(profile.v[0])
     if args.rider == "active" and (args.lock or args.lift_rear):  # the options set, not run_bike's lock=/rear_tire=

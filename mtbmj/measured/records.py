@@ -2,8 +2,9 @@
 
 A CSV record has optional comment lines starting with ``#`` (a line ``# synthetic ...`` marks a
 generated record), one header row, then numbers; the delimiter is ``,``, ``;`` or a tab, found
-from the header. Every column name ends in its unit (``displacement_mm``, ``force_N``,
-``velocity_mm_per_s``, ``time_s``); values are converted to SI on reading. A .mat file holds one
+from the header (a trailing one on the header, as a spreadsheet writes on every line, is no column).
+Every column name ends in its unit (``displacement_mm``, ``force_N``, ``velocity_mm_per_s``,
+``time_s``); values are converted to SI on reading. A .mat file holds one
 1-D numeric variable per column under the same unit-suffixed names.
 """
 from __future__ import annotations
@@ -41,11 +42,13 @@ def split_unit(name: str) -> tuple[str, str] | None:
     """``displacement_mm`` -> (``displacement``, ``mm``); None when no known unit ends the name. A
     name in another case (``Displacement_MM``, ``force_n``: a spreadsheet's) is read as the known one
     (quantity in lower case, the unit as :data:`UNITS` spells it): no two units differ only in case."""
-    for unit in _SUFFIXES:
-        if name.endswith("_" + unit) and len(name) > len(unit) + 1:
+    for unit in _SUFFIXES:  # a rate's tail is no unit of its own (speed_ft_per_s is not a speed_ft_per in s)
+        if (name.endswith("_" + unit) and len(name) > len(unit) + 1
+                and not name[: -len(unit) - 1].lower().endswith("_per")):
             return name[: -len(unit) - 1], unit
     for unit in _SUFFIXES:
-        if name.lower().endswith("_" + unit.lower()) and len(name) > len(unit) + 1:
+        if (name.lower().endswith("_" + unit.lower()) and len(name) > len(unit) + 1
+                and not name[: -len(unit) - 1].lower().endswith("_per")):
             return name[: -len(unit) - 1].lower(), unit
     return None
 
@@ -85,12 +88,19 @@ class Record:
         return self
 
 
+def _unit_written(name: str) -> str:
+    """The unit a column name ends in as written, a rate whole (``speed_km_per_h``: ``km_per_h``, not ``h``)."""
+    parts = name.strip("_").split("_")
+    per = [k for k, p in enumerate(parts) if p.lower() == "per" and 1 < k < len(parts) - 1]
+    return "_".join(parts[per[-1] - 1:]) if per else parts[-1]
+
+
 def _convert(path: str, names: list[str], data: np.ndarray, comments=()) -> Record:
     columns, units = {}, {}
     for j, name in enumerate(names):
         parsed = split_unit(name)
         if parsed is None and "_" in name.strip("_"):
-            raise RecordError(f"{path}: column {name!r}: unit {name.rsplit('_', 1)[1]!r} is not one mtbmj reads "
+            raise RecordError(f"{path}: column {name!r}: unit {_unit_written(name)!r} is not one mtbmj reads "
                               f"({', '.join(UNITS)}); convert the column and name it so")
         if parsed is None:
             raise RecordError(f"{path}: column {name!r} has no unit in its name (e.g. displacement_mm, force_N)")
@@ -122,6 +132,9 @@ def read_csv(path: str | Path) -> Record:
     if header_line.count(delimiter) == 0 and len(header_line.split()) > 1:
         raise RecordError(f"{path}: line {lines[0][0]}: columns must be separated by ',', ';' or a tab")
     names = [n.strip() for n in next(csv.reader([header_line], delimiter=delimiter))]
+    if len(names) > 1 and names[-1] == "":  # a spreadsheet's trailing delimiter on every line: no column
+        names = names[:-1]
+        lines = lines[:1] + [(n, _without_trailing(line, delimiter)) for n, line in lines[1:]]
     table = _numbers(lines[1:], delimiter, len(names))
     if table is not None:
         return _convert(str(path), names, table, comments)
@@ -141,6 +154,12 @@ def read_csv(path: str | Path) -> Record:
     if not rows:
         raise RecordError(f"{path}: header but no data rows")
     return _convert(str(path), names, np.array(rows), comments)
+
+
+def _without_trailing(line: str, delimiter: str) -> str:
+    """A data line without one trailing delimiter (and what blank follows it): a row's empty last cell."""
+    text = line.rstrip(" \r\n")
+    return text[:-1] if text.endswith(delimiter) else line
 
 
 def _numbers(lines: list[tuple[int, str]], delimiter: str, width: int) -> np.ndarray | None:

@@ -505,6 +505,14 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
         said = str(exc).removeprefix("--set ")  # the bike file's own refusal names --set: the key was tried here
         raise ConfigError(f"{what}{' ' + ', '.join(f'{k}={v}' for k, v in settings.items()) if settings else ''}: "
                           f"{said}") from None
+    if other is not None:  # the try file's own word (a key its part's model does not read: the try changes
+        from mtbmj.config import warn  # nothing there), said before any work where the recorded bike does not say it
+
+        try:
+            recorded = set(compose_setting(bike, overrides))
+        except ConfigError:
+            recorded = set()
+        warn([f"--try {other}: {n}" for n in dict.fromkeys(notes) if n not in recorded])
     new = [n for n in notes if n not in base_notes]
     if new and settings:
         raise ConfigError(f"--try-set {', '.join(f'{k}={v}' for k, v in settings.items())}: {new[0]} (advise "

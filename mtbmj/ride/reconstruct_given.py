@@ -7,7 +7,8 @@ A CSV has the columns ``time_s`` and ``speed_m_per_s`` (any unit ``mtbmj.measure
 quantities ``time`` and ``speed``), its time increasing, each speed from 0 to the plausible top of
 ``--speed`` (``mtbmj.limits``: 30 m/s), and it covers the ride (its first row at most ``COVER_S``
 after the ride's first sample, its last at most ``COVER_S`` before the ride's last; held flat past its
-ends). It is interpolated linearly onto the ride's samples. A row that breaks one of these is refused
+ends), at least two of its rows within the ride (not a time in ms under ``time_s``) and a speed of at least
+``MIN_USED`` somewhere on it (not a column of zeros). It is interpolated linearly onto the ride's samples. A row that breaks one of these is refused
 in one line naming the file and the row (the data rows counted from 1), before any work. A speed
 below ``MIN_USED`` (standing) is taken as ``MIN_USED`` for the rear's lag and the distance (the lag
 would be endless). The given speed is laid out in the lag's windows (their mean speed each, kind
@@ -56,16 +57,31 @@ class GivenSpeed:
         return np.maximum(v, MIN_USED)
 
     def check_covers(self, t0: float, t1: float, name: str = "") -> None:
-        """Refuse (one line) a CSV whose time does not cover the ride's ``t0``..``t1`` (s)."""
+        """Refuse (one line) a CSV whose time does not cover the ride's ``t0``..``t1`` (s), that holds
+        fewer than two rows within it (a time in ms under ``time_s``), or whose speed is below
+        ``MIN_USED`` over the whole ride (a column of zeros: the bike never moves)."""
         if self.time_s is None:
             return
+        t, v = self.time_s, self.speed
         ride = f"{name + ' runs' if name else 'the ride runs'} {t0:g}-{t1:g} s"
-        if self.time_s[0] > t0 + COVER_S:
-            raise ConfigError(f"{self.said}: row 1 (time {self.time_s[0]:g} s) starts after the ride's start: {ride}; "
-                              f"the speed must cover the ride (within {COVER_S:g} s)")
-        if self.time_s[-1] < t1 - COVER_S:
-            raise ConfigError(f"{self.said}: row {self.time_s.size} (time {self.time_s[-1]:g} s), its last, ends "
+        if t[0] > t0 + COVER_S:
+            after = (" (all of it after the ride's end: a clock of the day? the time is the ride's clock, "
+                     f"{t0:g} s at its first sample)") if t[0] > t1 else ""
+            raise ConfigError(f"{self.said}: row 1 (time {t[0]:g} s) starts after the ride's start: {ride}; "
+                              f"the speed must cover the ride (within {COVER_S:g} s){after}")
+        if t[-1] < t1 - COVER_S:
+            raise ConfigError(f"{self.said}: row {t.size} (time {t[-1]:g} s), its last, ends "
                               f"before the ride's end: {ride}; the speed must cover the ride (within {COVER_S:g} s)")
+        inside = np.flatnonzero((t >= t0 - COVER_S) & (t <= t1 + COVER_S))
+        if inside.size < 2:
+            raise ConfigError(f"{self.said}: {'only row ' + str(inside[0] + 1) if inside.size else 'no row'} of "
+                              f"{t.size} falls within the ride ({ride}), its rows {float(np.median(np.diff(t))):g} s "
+                              f"apart (median): a time in ms under time_s? (one speed for the whole ride: --speed)")
+        on_ride = np.interp(np.concatenate([np.linspace(t0, t1, 1001), t[inside]]), t, v)
+        if on_ride.max() < MIN_USED:
+            raise ConfigError(f"{self.said}: every speed over the ride ({ride}) is below {MIN_USED:g} m/s (at most "
+                              f"{on_ride.max():g} m/s): the bike never moves in it (a column of zeros?); the terrain "
+                              f"is found along the distance ridden")
 
 
 def checked(time_s, speed, said: str) -> GivenSpeed:
@@ -113,7 +129,10 @@ def read_csv(path) -> GivenSpeed:
         raise ConfigError(f"--speed-csv: {exc}") from None
     if set(rec.units) != {"time", "speed"}:
         have = ", ".join(f"{q}_{u}" for q, u in rec.units.items())
-        raise ConfigError(f"{said}: a speed over time needs exactly the columns time_s and speed_m_per_s (has {have})")
+        along = (": a speed along the distance, what mtbmj bike --speed-profile takes" if "distance" in rec.units
+                 else "")
+        raise ConfigError(f"{said}: a speed over time needs exactly the columns time_s and speed_m_per_s (has {have}"
+                          f"{along})")
     return checked(rec["time"], rec["speed"], said)
 
 

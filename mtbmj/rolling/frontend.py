@@ -102,6 +102,23 @@ def _check_inputs(speed, head_angle_deg, duration):
         raise ConfigError(f"duration: must be positive, got {duration!r}")
 
 
+def _check_start(ter, radius: float) -> None:
+    """A terrain CSV's ground must not reach into the tyre where the wheel starts at rest (its first distance, on
+    the first row's level): a wall or a steep rise there would be started on top of or inside, never met."""
+    if "csv" not in ter.params or isinstance(ter, terrain_mod.DrumTerrain):
+        return
+    x0 = ter.start_x
+    x = np.union1d(np.linspace(x0, x0 + radius, 201), ter.x[(ter.x >= x0) & (ter.x <= x0 + radius)])
+    into = ter.height(x) - (ter.z[0] + radius - np.sqrt(np.maximum(radius ** 2 - (x - x0) ** 2, 0.0)))
+    if into.max() > START_INTO_M:
+        raise ConfigError(f"start: {ter.params['csv']} rises {(ter.height(x).max() - ter.z[0]) * 1e3:.0f} mm within "
+                          f"{radius * 1e3:.0f} mm of its first distance ({x0:g} m): the wheel at rest there would start "
+                          f"{into.max() * 1e3:.0f} mm into the ground; begin the profile with a level stretch")
+
+
+START_INTO_M = 0.005  # a terrain CSV's start: the ground this far into the tyre at rest is a feature, not a start
+
+
 def build_front_end(setup: compose.Setup, terrain, head_angle_deg: float = DEFAULT_HEAD_ANGLE_DEG) -> FrontEnd:
     """Compile the rolling scene for ``setup`` and ``terrain`` at ``head_angle_deg``."""
     from mtbmj.drop.scene import INTEGRATORS
@@ -245,6 +262,7 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
     ter = terrain_mod.make(scenario)
     cfg = resolve(config, overrides)
     setup = compose.setup(cfg)
+    _check_start(ter, setup.tire_radius)
     # a coarse step (the bike's) where no stop or rim acts, the drop's fine step where one may
     setup = steprule.at_fine_step(setup) if fine_throughout else steprule.rolling(setup)
     drum = isinstance(ter, terrain_mod.DrumTerrain)
@@ -488,6 +506,26 @@ def _air_line(s: dict) -> str:
                                  f"landing is not in the run (a longer --duration)")
 
 
+# A wheel rolled forward never moves back over ground it gets over (the library's features at 1.5 and 5 m/s: the
+# lowest speed 1.39 m/s, tests/test_fuzz_careless29b.py); a speed below this, backwards, is a wheel that did not.
+BACKWARDS_M_PER_S = -0.05
+
+
+def went_back(time_s, x_m, speed) -> dict | None:
+    """Where the wheel first moved backwards (``time_s`` s, ``x_m`` m) and its fastest backwards (m/s), else None."""
+    back = np.flatnonzero(np.asarray(speed) < BACKWARDS_M_PER_S)
+    if not back.size:
+        return None
+    return {"time_s": float(time_s[back[0]]), "x_m": float(x_m[back[0]]), "speed_m_per_s": float(np.min(speed))}
+
+
+def _back_line(s: dict) -> str:
+    b = s.get("went_back")
+    return "" if b is None else (f"; the wheel went backwards at {b['time_s']:.2f} s ({b['x_m']:.2f} m), up to "
+                                 f"{-b['speed_m_per_s']:.2f} m/s: it did not get over the terrain there (a wall, an "
+                                 f"edge, or a climb beyond the drive), no ride over it")
+
+
 def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
     travel_mm = p.setup.travel * 1e3
     fork = raw["fork_mm"]
@@ -512,6 +550,7 @@ def _summary(p: Prepared, logged: dict, raw: dict) -> dict:
         "min_fork_velocity_mm_per_s": float(raw["fork_velocity_mm_per_s"].min()),
         "drive": _drive_summary(p, raw),
         "in_air_at_end_mm": in_air_at_end(raw["tire_mm"], raw["tire_force_N"]),
+        "went_back": went_back(raw["time_s"], raw["x_m"], raw["speed_m_per_s"]),
     }
     try:
         from mtbmj.measured import metrics as ride_metrics
@@ -568,7 +607,7 @@ class RollResult(RunOutput):
         return (f"roll {self.scenario} at {s['speed_m_per_s']:g} m/s ({self.name}, head angle {s['head_angle_deg']:g} "
                 f"deg): fork peak {s['max_fork_mm']:.1f} mm ({s['travel_used_percent']:.0f} % of travel), tire peak "
                 f"{s['max_tire_mm']:.1f} mm, axle force peak {s['max_axle_force_z_N']:.0f} N up / "
-                f"{max(0.0, -s['min_axle_force_x_N']):.0f} N back{line(s)}{_drive_line(s['drive'])}{_air_line(s)}")
+                f"{max(0.0, -s['min_axle_force_x_N']):.0f} N back{line(s)}{_drive_line(s['drive'])}{_back_line(s)}{_air_line(s)}")
 
     def quicklook(self):
         """The quick-look figure (``mtbmj.readout.quicklook``): terrain, fork, tire (its clearance in the
