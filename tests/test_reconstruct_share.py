@@ -63,17 +63,18 @@ def test_the_generator_is_iso_8608_class_c():
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_roughness_alone_is_met_a_wheelbase_later(seed):
     """ISO roughness only: the share is near 0 across the band and the rear's ground is the found ground
-    a wheelbase later (measured on seeds 1-3: the share at most 0.07 at 0.5-2.5 Hz, the part met at once
-    0.2-0.75 mm RMS of a ground of 11-12 mm, the rear's ground off the truth by 2.5-5.5 % of what the share
-    1 everywhere is off)."""
+    a wheelbase later (measured on seeds 1-3: the share at most 0.34 at 0.5-2.5 Hz, at 0.5 Hz, where a
+    4 s segment's window leaks the steep roughness below it; 0.07 with 8 s segments averaged, which a
+    drop's few seconds pull: see reconstruct_share.SEGMENT_S; the part met at once 0.7-1.4 mm RMS of a
+    ground of 11-12 mm, the rear's ground off the truth by 10-15 % of what the share 1 everywhere is off)."""
     g = iso_ground(seed)
     d = described(g, DT, INNER)
-    assert max(d["share_at_Hz"].values()) < 0.2, d["share_at_Hz"]
-    assert d["at_once_rms_mm"] < 0.1 * 1e3 * rms(g), (d["at_once_rms_mm"], rms(g))
+    assert max(d["share_at_Hz"].values()) < 0.5, d["share_at_Hz"]
+    assert d["at_once_rms_mm"] < 0.15 * 1e3 * rms(g), (d["at_once_rms_mm"], rms(g))
     truth = delayed(g)
     ours = rear_ground(T, LAG, g, spectral=True)
     wrong_all_at_once = g
-    assert rms(ours - truth) < 0.1 * rms(wrong_all_at_once - truth), (rms(ours - truth), rms(g - truth))
+    assert rms(ours - truth) < 0.25 * rms(wrong_all_at_once - truth), (rms(ours - truth), rms(g - truth))
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -82,7 +83,7 @@ def test_a_load_on_both_ends_is_met_at_once(seed):
     the share takes it (above 0.7 at 1.5 Hz, the part met at once within 30 % of the load's RMS and
     correlating above 0.9 with it), and the rear's ground is nearer the truth than both wrong variants
     (the share 0: the code before; the share 1 everywhere) by at least a third. Measured on seeds 1-3:
-    the share 0.94 at 1.5 Hz, 9.3-9.9 mm met at once (correlation 0.95-0.96), the rear's ground 4.1-4.4 mm
+    the share 0.94 at 1.5 Hz, 9.4-10.0 mm met at once (correlation 0.94-0.95), the rear's ground 4.5-4.7 mm
     off the truth where the share 0 is 15.8-16.0 mm off and the share 1 7.6."""
     terrain, pump = iso_ground(seed), load(seed + 10, 0.010)
     g = terrain + pump
@@ -95,7 +96,7 @@ def test_a_load_on_both_ends_is_met_at_once(seed):
     part = filtered(g, DT, f, s)
     assert np.corrcoef(part[INNER], pump[INNER])[0, 1] > 0.9
     truth = delayed(terrain) + pump
-    ours = met_at_once(delayed(g), g, DT)
+    ours = met_at_once(T, LAG, g)
     np.testing.assert_allclose(ours, rear_ground(T, LAG, g, spectral=True))
     none_at_once, all_at_once = delayed(g), g
     e = rms(ours - truth)
@@ -108,7 +109,22 @@ def test_a_level_or_short_ground_has_no_share():
     flat = np.zeros(5000)
     f, s, c = share(flat, DT)
     assert not s.any() and c == 0.0
-    behind = np.linspace(0, 1, 5000)
-    np.testing.assert_array_equal(met_at_once(behind, flat, DT), behind)
+    np.testing.assert_array_equal(met_at_once(T[:5000], LAG, flat), flat)
     f, s, _ = share(np.ones(3), DT)
     assert not s.any()
+
+
+def test_a_flights_level_change_stays_a_wheelbase_later():
+    """A 0.4 m drop (a step over a 0.3 s flight) on the roughness plus the 1-2 Hz load: the drop's step is
+    terrain, so the rear meets it a wheelbase later whatever share is met at once (the step's level change
+    left out of that share, reconstruct_share.levelled); without the flight given, the step filtered into
+    the band rings at the rear's moment. Measured (seed 1): the rear's ground off the truth by 4.6 mm RMS
+    with the flight given, 8.7 without (the share 0 everywhere 16.0, 1 everywhere 14.7)."""
+    terrain, pump = iso_ground(1), load(11, 0.010)
+    step = np.where(T > 60.3, -0.4, np.where(T > 60.0, -0.4 * (T - 60.0) / 0.3, 0.0))
+    air = (T > 60.0) & (T < 60.3)
+    g = terrain + step + pump
+    truth = delayed(terrain + step) + pump
+    given, not_given = rear_ground(T, LAG, g, spectral=True, air=air), rear_ground(T, LAG, g, spectral=True)
+    assert rms(given - truth) < 0.67 * rms(not_given - truth), (rms(given - truth), rms(not_given - truth))
+    assert rms(given - truth) < 0.67 * rms(delayed(g) - truth)

@@ -642,7 +642,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False, spectral: b
         found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel, stops,
                                                   at_once=at_once, air=air, spectral=spectral)
         # the check: the whole bike free over the terrain found, the rider's slow load on its front
-        behind = reconstruct_bike.rear_ground(t, lags, found["ground"], at_once, spectral)
+        behind = reconstruct_bike.rear_ground(t, lags, found["ground"], at_once, spectral, found["airborne"])
         again = reconstruct_bike.ride(t, whole, behind,
                                       front_ground=found["ground"], push=found["rider_slow_load"])
         return {"lags": lags, "bad": bad, "unaligned": unaligned, "found": found, "again": again}
@@ -662,7 +662,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False, spectral: b
                               done["unaligned"], np.interp(t - done["lags"], t, fork * 1e3), wheelbase,
                               found["passes"], found["settled_m"], min(diverged) if diverged else None, part_s,
                               stands, at_once, cut=[c for c in (cut_fork, cut_shock) if c], levels=found["levels"],
-                              beyond=beyond, spectral=described(found["ground"], dt, ~bad) if spectral else None)
+                              beyond=beyond, spectral=described(found["ground"], dt, ~bad, found["airborne"]) if spectral else None)
 
     done = through(speed)
     result = built(done, speed)

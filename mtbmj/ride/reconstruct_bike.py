@@ -322,15 +322,15 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
             "diverged_s": diverged}
 
 
-def rear_ground(t, lag, ground, at_once: float = 0.0, spectral: bool = False):
+def rear_ground(t, lag, ground, at_once: float = 0.0, spectral: bool = False, air=None):
     """The ground the rear wheel rides (m on ``t``): the ground found under the front ``lag`` (s) earlier,
     its share ``at_once`` taken at the same moment instead (what the fork felt as a load on both ends
     at once, a turn or a compression, rather than as the terrain a wheelbase ahead). ``spectral``: of
     that, the share the found ground's spectrum says is not terrain met at the front's moment too
-    (``reconstruct_share.met_at_once``)."""
-    behind = np.interp(t - lag, t, ground)
+    (``reconstruct_share.met_at_once``, ``air`` the flights whose level changes stay a wheelbase later)."""
+    behind = met_at_once(t, lag, ground, air) if spectral else np.interp(t - lag, t, ground)
     behind = behind if at_once == 0.0 else (1.0 - at_once) * behind + at_once * np.asarray(ground, float)
-    return met_at_once(behind, ground, float(t[1] - t[0])) if spectral else behind
+    return behind
 
 
 def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference, fork_travel: float,
@@ -377,7 +377,7 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     before, change, passes = None, math.inf, 0
     chosen, kept, left, ref, most = None, [], [], reference, flight.pivot_acceleration(b)
     while passes < MAX_PASSES:
-        out = ride(t, b, rear_ground(t, lag, ground, at_once, spectral), front=front, reference=ref)
+        out = ride(t, b, rear_ground(t, lag, ground, at_once, spectral, air), front=front, reference=ref)
         passes += 1
         ok = np.isfinite(out["front_ground"])
         found, air = bridge(np.where(ok, out["front_ground"], ground[-1] if not ok.all() else 0.0),
