@@ -620,6 +620,9 @@ def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
                         + ("**passes**" if c["passes"] else (
                             f"**fails** (the whole bike diverged at {num(r['whole_bike']['diverged_s'], 3)} s)"
                             if (r.get("whole_bike") or {}).get("diverged_s") is not None
+                            else f"**fails** (below the {better}, not by the margin)"
+                            if c["rear_predicted_rms_mm"] < min(c["baseline_delayed_fork_rms_mm"],
+                                                                c["baseline_rear_mean_rms_mm"])
                             else f"**fails** (not below the {better})")),
                         "reconstruct_rides.json", d["command"]))
         bound = c.get("bound_fork_filter_rms_mm")  # None: measured before the bound, or too few samples checked

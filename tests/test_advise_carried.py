@@ -49,7 +49,7 @@ def _ridden(made):
 
     record = telemetry.read_ride(made["sst"], **decoding(SimpleNamespace(bike=str(made["bike"]), fork_max_mm=None,
                                                                          shock_max_mm=None)))
-    rec = reconstruct.reconstruct(record, str(made["bike"]))
+    rec = reconstruct.reconstruct(record, str(made["bike"]), spectral=False)  # as advise reconstructs
     x, v = rec.speed_along()
     run = advise.simulate(str(made["bike"]), {}, advise.terrain_of(rec), float(np.median(v)),
                           float(rec.t[-1] - rec.t[0]) + 1.0, "recorded", 1.0, profile=(x, v))

@@ -627,8 +627,9 @@ def test_the_rear_is_checked_band_by_band_against_series_written_here():
     assert "the rear by band (correlation, described): 0.05-0.5 Hz 1.00 yes, 0.5-2 Hz 1.00 yes, 2-10 Hz" in rec.line()
 
 
-def _reconstructed_with(record, bike, past_m=None, monkeypatch=None):
-    """(the reconstruction, its warnings' texts), the stops' allowance ``past_m`` (m) where given."""
+def _reconstructed_with(record, bike, past_m=None, monkeypatch=None, spectral=True):
+    """(the reconstruction, its warnings' texts), the stops' allowance ``past_m`` (m) where given
+    (``spectral``: ``reconstruct``'s)."""
     import warnings
 
     from mtbmj.ride import reconstruct, reconstruct_inverse
@@ -637,7 +638,7 @@ def _reconstructed_with(record, bike, past_m=None, monkeypatch=None):
         monkeypatch.setattr(reconstruct_inverse, "PAST_TRAVEL_M", past_m)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        result = reconstruct.reconstruct(record, bike)
+        result = reconstruct.reconstruct(record, bike, spectral=spectral)
     return result, [str(w.message) for w in caught if "passes its travel" in str(w.message)]
 
 
@@ -672,8 +673,9 @@ def test_a_shared_ride_past_its_fork_s_travel_is_ridden_to_its_end(monkeypatch):
     docs/measured.md showed); read at most 2 mm past its travel it rides the whole ride. (Read so with
     each drop's level kept, mtbmj/ride/reconstruct_flight.py, it rides through as well: the unread
     record is checked with no level kept and the quarter car's hard-stop impulse given to the whole bike,
-    as the divergence was found; with the whole bike's own, reconstruct_flight.stop_kicks, it diverges at
-    16.03 s.)"""
+    as the divergence was found, the rear meeting all the ground a wheelbase later; with the whole bike's
+    own, reconstruct_flight.stop_kicks, it diverges at 16.03 s; with the found ground's spectral share met
+    at once, mtbmj/ride/reconstruct_share.py, at 19.16 s.)"""
     from conftest import SHARED_DATA
 
     from mtbmj.bike.spec import load, ride_decoding
@@ -687,5 +689,5 @@ def test_a_shared_ride_past_its_fork_s_travel_is_ridden_to_its_end(monkeypatch):
 
     monkeypatch.setattr(reconstruct_flight, "edge_flights", lambda found, air, dt: [])
     monkeypatch.setattr(reconstruct_flight, "stop_kicks", lambda first, now, ground, air, dt, mass: now)
-    unread, said = _reconstructed_with(record, "sst", past_m=1.0, monkeypatch=monkeypatch)
+    unread, said = _reconstructed_with(record, "sst", past_m=1.0, monkeypatch=monkeypatch, spectral=False)
     assert said == [] and unread.diverged_s == pytest.approx(15.88, abs=0.05)

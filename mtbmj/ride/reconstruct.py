@@ -44,9 +44,11 @@ force returns. Each drop's edge flight's level change is read by the whole bike 
 reference where its duration allows it (:mod:`mtbmj.ride.reconstruct_flight`), else left.
 
 **Checks.** The whole bike free over the terrain found (the rider's slow load on its front)
-reproduces the front record (its RMS difference); the rear predicted (the whole bike's rear in the
-last pass) is compared with the rear record beside two naive baselines on the same samples: the
-fork's record delayed by wheelbase / v(t) with a least-squares scale and offset, and the rear's mean.
+reproduces the front record (its RMS difference); the rear predicted (the whole bike's rear in the last
+pass; its rear wheel meets at the front's moment the share of the ground found that its own spectrum says
+is a load on both ends at once, :mod:`mtbmj.ride.reconstruct_share`) is compared with the rear record beside
+two naive baselines on the same samples: the fork's record delayed by wheelbase / v(t) with a least-squares
+scale and offset, and the rear's mean.
 The reconstruction passes only if its rear's RMS error is ``BEAT_MARGIN`` (40 %) below the better, and
 its line says in words whether the model describes the ride. Reported beside, never judged by: the
 fork's record at the same moment with its own least-squares scale and offset (``fork_at_once_rms_mm``:
@@ -85,6 +87,7 @@ from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ, within_st
 from mtbmj.ride.reconstruct_bands import BANDS, BEAT_MARGIN, band_checks  # noqa: F401 (BANDS: this module's name too)
 from mtbmj.ride.reconstruct_bands import at_once_share, timing_error
 from mtbmj.ride.reconstruct_bound import fork_filter_bound
+from mtbmj.ride.reconstruct_share import described
 from mtbmj.ride import reconstruct_envelope as envelope
 from mtbmj.ride import reconstruct_given as given_mod
 from mtbmj.ride.reconstruct_flight import landed
@@ -146,6 +149,7 @@ class Reconstruction:
     stands: list = None  # (start s, end s) of the record: the bike standing unweighted mid-ride (its rider off it)
     at_once: float = 0.0  # the share of the rear's ground met at the front's moment (at_once_share), 0..1
     at_once_fit: dict | None = None  # reconstruct(at_once=True): the rear with that share fitted (fitted_summary)
+    spectral: dict | None = None  # the found ground's share met at once (reconstruct_share.described), None: not used
     cut: list = None  # an end's record read at most PAST_TRAVEL_M past its travel (within_stops), what was cut
     levels: list = None  # each drop's edge flight's level change read, kept or left (reconstruct_flight.described)
     beyond: list = None  # where the ground found rises more than the bike could climb (reconstruct_envelope.beyond)
@@ -343,6 +347,7 @@ class Reconstruction:
                 "speed_from": self.speed.get("from"), "wheelbase_at_sag_m": float(self.wheelbase),
                 "speed_profile": profile, **given_mod.summary(self.speed),
                 **({} if self.at_once_fit is None else {"at_once_fit": self.at_once_fit}),
+                **({} if self.spectral is None else {"at_once_spectral": self.spectral}),
                 "windows": windows,
                 "window_speeds_m_per_s": [None if s is None else float(s) for _, s, _ in self.speed["windows"]],
                 "window_speed_range_m_per_s": [min(speeds), max(speeds)] if speeds else None,
@@ -404,6 +409,8 @@ class Reconstruction:
                 + ("" if not self.at_once_fit else f"with {100 * self.at_once_fit['share']:.0f} % of the rear's ground "
                    f"met at the front's moment (fitted on the rear's record, not judged) the rear "
                    f"{self.at_once_fit['rear_predicted_rms_mm']:.1f} mm, ")
+                + ("" if not self.spectral else f"the rear meeting {self.spectral['at_once_rms_mm']:.1f} mm RMS of the "
+                   f"ground found at the front's moment (its spectral share of a load on both ends), ")
                 + f"histograms {c['rear_histogram_distance_percent']:.0f} % apart"
                 + ("" if not c["bands"] else "; the rear by band (correlation, described): " + ", ".join(
                     f"{b['band_Hz'][0]:g}-{b['band_Hz'][1]:g} Hz {b['predicted_correlation']:.2f} "
@@ -528,13 +535,14 @@ def require_both_ends(record) -> None:
         raise ReconstructError(f"{record.name}: needs both ends' records (the rear meets what the front met)")
 
 
-def reconstruct(record, bike, overrides=None, at_once: bool = False, speed=None) -> Reconstruction:
+def reconstruct(record, bike, overrides=None, at_once: bool = False, speed=None, spectral: bool = True) -> Reconstruction:
     """``record`` (a ``mtbmj.measured.telemetry.TelemetryRecord`` with both ends) through the bike
     ``bike`` (preset, file or ``mtbmj.bike.spec.ResolvedBike``, which is not read again; ``overrides``
     its keys): see the module doc. ``at_once``: also the rear with the share of its ground met at the
     front's moment fitted on the rear's record (``Reconstruction.at_once_fit``, reported, not judged).
     ``speed``: the ride's speed given (m/s, a CSV's path or (time_s, speed_m_per_s) on the record's clock:
-    :mod:`mtbmj.ride.reconstruct_given`), used in place of the lag's, the lag's reported beside it."""
+    :mod:`mtbmj.ride.reconstruct_given`), used in place of the lag's, the lag's reported beside it. ``spectral``
+    (the check's): the rear meets the found ground's spectral share at once (False: all a wheelbase later)."""
     from mtbmj.bike import run as bike_run
     from mtbmj.bike import spec as spec_mod
 
@@ -620,9 +628,10 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False, speed=None)
                                    f"off the ground, or in the ride's first wheelbase or its filters' start (or the rear "
                                    f"does not move there): no sample of the ride can be checked")
         found = reconstruct_bike.terrain_and_rear(t, whole, fork, lags, ground, body, fork_setup.travel, stops,
-                                                  at_once=at_once, air=air)
+                                                  at_once=at_once, air=air, spectral=spectral)
         # the check: the whole bike free over the terrain found, the rider's slow load on its front
-        again = reconstruct_bike.ride(t, whole, reconstruct_bike.rear_ground(t, lags, found["ground"], at_once),
+        behind = reconstruct_bike.rear_ground(t, lags, found["ground"], at_once, spectral, found["airborne"])
+        again = reconstruct_bike.ride(t, whole, behind,
                                       front_ground=found["ground"], push=found["rider_slow_load"])
         return {"lags": lags, "bad": bad, "unaligned": unaligned, "found": found, "again": again}
 
@@ -641,7 +650,7 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False, speed=None)
                               done["unaligned"], np.interp(t - done["lags"], t, fork * 1e3), wheelbase,
                               found["passes"], found["settled_m"], min(diverged) if diverged else None, part_s,
                               stands, at_once, cut=[c for c in (cut_fork, cut_shock) if c], levels=found["levels"],
-                              beyond=beyond)
+                              beyond=beyond, spectral=described(found["ground"], dt, ~bad, found["airborne"]) if spectral else None)
 
     done = through(speed)
     result = built(done, speed)

@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mtbmj.ride.reconstruct_share import met_at_once
+
 SLOW_HZ = 0.3  # the rider's slow load: the loop that keeps the frame's front on its slow reference closes here
 SLOW_BOUND = 0.5  # ... bounded by this share of the rider's weight (what a rider can push or pull)
 MAX_PASSES = 8  # the terrain found again over the rear's ground of the pass before, at most this often
@@ -320,16 +322,19 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
             "diverged_s": diverged}
 
 
-def rear_ground(t, lag, ground, at_once: float = 0.0):
+def rear_ground(t, lag, ground, at_once: float = 0.0, spectral: bool = False, air=None):
     """The ground the rear wheel rides (m on ``t``): the ground found under the front ``lag`` (s) earlier,
     its share ``at_once`` taken at the same moment instead (what the fork felt as a load on both ends
-    at once, a turn or a compression, rather than as the terrain a wheelbase ahead)."""
-    behind = np.interp(t - lag, t, ground)
-    return behind if at_once == 0.0 else (1.0 - at_once) * behind + at_once * np.asarray(ground, float)
+    at once, a turn or a compression, rather than as the terrain a wheelbase ahead). ``spectral``: of
+    that, the share the found ground's spectrum says is not terrain met at the front's moment too
+    (``reconstruct_share.met_at_once``, ``air`` the flights whose level changes stay a wheelbase later)."""
+    behind = met_at_once(t, lag, ground, air) if spectral else np.interp(t - lag, t, ground)
+    behind = behind if at_once == 0.0 else (1.0 - at_once) * behind + at_once * np.asarray(ground, float)
+    return behind
 
 
 def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference, fork_travel: float,
-                     stops=None, at_once: float = 0.0, air=None) -> dict:
+                     stops=None, at_once: float = 0.0, air=None, spectral: bool = False) -> dict:
     """The terrain under the front wheel and the rear's travel predicted, from the fork's record alone
     (``fork_stroke`` m on ``t``): the whole bike rides with its fork's stroke prescribed, its rear
     wheel over the ground found under the front ``lag`` (s, on ``t``) earlier; the ground of one pass
@@ -342,7 +347,8 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     load of :func:`ride`. ``stops`` (N at the wheel, or None): the fork's hard-stop force across each
     bottom-out (not in the record; the quarter car's, keeping its body level after it, at first, then
     the whole bike's own, ``reconstruct_flight.stop_kicks``). ``at_once``: the
-    share of the rear's ground taken at the front's moment (:func:`rear_ground`). Flights: where the tyre's force is not positive or the fork hangs on its
+    share of the rear's ground taken at the front's moment, ``spectral`` the found ground's own share of a
+    load on both ends at once too (:func:`rear_ground`). Flights: where the tyre's force is not positive or the fork hangs on its
     top-out stop, merged and bridged (``reconstruct_inverse.bridge``). Returns {"ground", "airborne",
     "tyre", "rear_rise", "slow_load" (N on the frame's front: the rider's and the loop's),
     "rider_slow_load" (the rider's alone), "passes", "settled_m", "diverged_s" (where a pass diverged:
@@ -371,7 +377,7 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     before, change, passes = None, math.inf, 0
     chosen, kept, left, ref, most = None, [], [], reference, flight.pivot_acceleration(b)
     while passes < MAX_PASSES:
-        out = ride(t, b, rear_ground(t, lag, ground, at_once), front=front, reference=ref)
+        out = ride(t, b, rear_ground(t, lag, ground, at_once, spectral, air), front=front, reference=ref)
         passes += 1
         ok = np.isfinite(out["front_ground"])
         found, air = bridge(np.where(ok, out["front_ground"], ground[-1] if not ok.all() else 0.0),
