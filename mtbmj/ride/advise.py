@@ -577,8 +577,9 @@ def prepare(record, bike, overrides=None, duration: float | None = None, calibra
                                f"{MAX_REAR_MISS_PERCENT:g} % over {MIN_CHECKED_PERCENT:g} %): the model does not "
                                f"describe this ride well enough to predict a change")
     if not checks.get("passes", True):  # the rear predicted no better than a naive baseline (issue 51)
-        raise RideNotDescribed(f"{record.name}: its reconstruction fails its own check: {checks['verdict']}; advice "
-                               f"needs a model that beats both naive baselines, so it cannot predict a change")
+        raise RideNotDescribed(f"{record.name}: its reconstruction fails its own check (the rear meeting all of the ground "
+                               f"a wheelbase later, as the runs do): {checks['verdict']}; advice needs a model that beats "
+                               f"both naive baselines, so it cannot predict a change")
     spec = spec_mod.load(bike, overrides)
     profile = rec.speed_along()  # every run holds the ride's speed where the ride had it
     speed = float(profile[1][0])  # and the first metre's up to it
