@@ -44,3 +44,23 @@ def test_a_roll_that_ends_in_the_air_says_so(tmp_path, capfd):
     assert status == 0, err
     assert json.loads((tmp_path / "drop" / "summary.json").read_text())["in_air_at_end_mm"] is None
     assert "in the air" not in err
+
+
+def test_a_passive_rider_s_crash_at_a_drop_names_the_active_rider(tmp_path, capfd):
+    """A 1 m drop at 5 m/s: the passive rider (a rigid body on its limbs) goes over the bars in the air, and
+    the line said only that, as if no rider could ride it; it now says the passive rider does not shift its
+    weight and names --rider active, which lands it (no crash, checked here)."""
+    status, said = _run(["bike", "sst", "drop:height_mm=1000", "--speed", "5", "--no-figure", "--quiet",
+                         "--out", tmp_path / "passive"], capfd)
+    assert status == 3, said  # a crash's exit status
+    crash = json.loads((tmp_path / "passive" / "summary.json").read_text())["crash"]
+    assert crash["kind"] == "over the bars"
+    status, said = _run(["bike", "sst", "drop:height_mm=1000", "--speed", "5", "--no-figure",
+                         "--out", tmp_path / "passive_said"], capfd)
+    assert "with the passive rider" in said and "--rider active" in said
+    status, said = _run(["bike", "sst", "drop:height_mm=1000", "--speed", "5", "--rider", "active", "--no-figure",
+                         "--out", tmp_path / "active"], capfd)
+    assert status == 0, said
+    assert json.loads((tmp_path / "active" / "summary.json").read_text()).get("crash") is None
+    line = said.split("; wrote")[0]  # the line, not the folder's name
+    assert "crashed" not in line and "passive" not in line

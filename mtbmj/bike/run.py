@@ -126,6 +126,13 @@ def _check(speed, duration, pedal=None):
         raise ConfigError(f"duration: must be positive, got {duration!r}")
 
 
+def _passive(s: dict) -> str:
+    """What a pitch crash of the passive rider's run adds: that rider does not shift its weight."""
+    if (s.get("rider") or {}).get("kind") == "active" or s["crash"]["kind"] not in ("over the bars", "looped out"):
+        return ""
+    return " with the passive rider, a rigid body on spring-damper limbs that does not shift its weight (--rider active does)"
+
+
 def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, drive: str = "rider",
             start_x: float | None = None, callback: str = "auto", lock=(), rear_tire: bool = True,
             overrides=None, seated: bool = False, pedal=None, rider: str = "passive",
@@ -531,7 +538,7 @@ class BikeResult(RunOutput):
         else:
             held = ""
         m = s["mass_kg"]
-        crashed = f"{s['crash']['line']}: " if s.get("crash") else ""
+        crashed = f"{s['crash']['line']}{_passive(s)}: " if s.get("crash") else ""
         prof = s.get("speed_profile_m_per_s")
         at = (f"at {s['speed_m_per_s']:g} m/s set" if prof is None else
               f"along a speed profile ({prof[0]:.3g}-{prof[1]:.3g} m/s set)")
