@@ -280,7 +280,7 @@ def test_speed_options_given_wrongly_are_refused(bumps, tmp_path, capsys):
     path = gps_csv(tmp_path / "v.csv", [0.0, 17.0], [6.0, 6.0])
     cases = [(["reconstruct", "--speed", "6", "--speed-csv", str(path)], "the ride's speed given twice"),
              (["advise", "--speed-csv", str(path), "--speed-csv", str(path)], "--speed-csv given 2 times for 1 rides"),
-             (["reconstruct", "--speed", "45"], "a ride's speed is a number above 0 and at most 30 m/s"),
+             (["reconstruct", "--speed", "45"], "a ride's speed given is a number above 0 and at most 30 m/s, the fastest a bike is ridden"),
              (["reconstruct", "--speed", "-2"], "--speed")]
     for args, said in cases:
         out = tmp_path / "out"

@@ -112,7 +112,8 @@ def constant(v: float) -> GivenSpeed:
     """One speed (m/s) for the whole ride; a ``ConfigError`` where it is not a ridden one (> 0, at most 30)."""
     top = _top()
     if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.0 < v <= top):
-        raise ConfigError(f"--speed {v!r}: a ride's speed is a number above 0 and at most {top:g} m/s")
+        raise ConfigError(f"--speed {v!r}: a ride's speed given is a number above 0 and at most {top:g} m/s, the "
+                          f"fastest a bike is ridden (a run of the model's own, mtbmj bike or roll, may go faster)")
     return GivenSpeed(None, np.array([float(v)]), f"a constant {float(v):g} m/s")
 
 
