@@ -391,13 +391,11 @@ class Advice:
         return f"{v.get('answer', 'inconclusive').capitalize()}: {v.get('why', '')}"
 
     def then(self) -> str:
-        """The other changes advised, one line, after the recommended one (ride it first, then record again)."""
-        rest = (self.recommendation or {}).get("then") or []
-        if not rest or (self.verdict or {}).get("answer", "change") != "change":
-            return ""
-        return "Then, one at a time, recording again after each (each predicted from the recorded setting): " + "; ".join(
-            f"{'raise' if t['setting']['to'] > t['setting']['from'] else 'lower'} the {t['label']} from "
-            f"{t['setting']['from']:g} to {t['setting']['to']:g} {t['setting']['unit']}" for t in rest)
+        """The other changes advised, one line, after the recommended one: the values found after it
+        (:func:`mtbmj.ride.advice_combined.then_line`), or from the recorded setting where not searched."""
+        from mtbmj.ride.advice_combined import then_line
+
+        return then_line(self)
 
     def html(self, png: bytes) -> str:
         from mtbmj.ride import advice_report
@@ -462,6 +460,10 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
         runs = run_jobs(jobs, pool, ride.refusable, counter(progress, len(jobs)))
         advice = ride.assemble(runs)
         decide(advice, [ride], pool, search)
+        if search:  # the others searched again after the recommended change (mtbmj.ride.advice_combined)
+            from mtbmj.ride.advice_combined import combine
+
+            combine(advice, ride, pool, run_jobs, search_on, allowed)
     advice.wall_s = time.perf_counter() - start
     return advice
 
