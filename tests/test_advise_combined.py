@@ -25,11 +25,12 @@ COMP = advise.Adjuster("front", "fork.set", "fork.damper.compression_N_s_per_m",
                        "fork compression damping", unit="N s/m")
 
 
-def static_sag(spring, rebound, coupled=True):
+def static_sag(spring, rebound, coupled=True, comp=500.0, comp_points=0.0):
     """The stand-in fork's static sag (% of travel): 40 at the recorded 5 N/mm, 20 points less per N/mm;
     the rebound lowering it 11 points per +100 % of 700 N s/m times the spring's rise over 0.5 N/mm
     (``coupled``; none at the recorded spring, so no search from there finds it)."""
-    return 40.0 - 20.0 * (spring - 5.0) - (11.0 * (rebound / 700.0 - 1.0) * (spring - 5.0) / 0.5 if coupled else 0.0)
+    sag = 40.0 - 20.0 * (spring - 5.0) - (11.0 * (rebound / 700.0 - 1.0) * (spring - 5.0) / 0.5 if coupled else 0.0)
+    return sag - comp_points * (comp / 500.0 - 1.0) * (spring - 5.0) / 0.5  # the compression's the same way
 
 
 def run_at(static):
@@ -38,7 +39,7 @@ def run_at(static):
     return advise.Run("r", {}, m, advise.penalties(m), front, rear, None, T.copy())
 
 
-def made(monkeypatch, coupled=True):
+def made(monkeypatch, coupled=True, comp_points=0.0):
     """(the Advice by hand, its one ride, the settings ridden): the spring 5 -> 5.5 N/mm recommended (the
     sag 40 -> 30 %), the rebound and the compression advised after it (as found at the recorded setting);
     every run the stand-in engine's."""
@@ -48,7 +49,7 @@ def made(monkeypatch, coupled=True):
         s = overrides.get("fork.set", {})
         spring, reb = s.get(SPRING.key, 5.0), s.get(REBOUND.key, 700.0)
         ridden.append((spring, reb, s.get(COMP.key, 500.0)))
-        return run_at(static_sag(spring, reb, coupled))
+        return run_at(static_sag(spring, reb, coupled, s.get(COMP.key, 500.0), comp_points))
 
     monkeypatch.setattr(advise, "simulate", simulate)
     monkeypatch.setattr(advise, "allowed", lambda bike, items, merged: (list(items), []))
@@ -98,6 +99,22 @@ def test_without_the_coupling_nothing_follows_the_recommended_change(monkeypatch
     comb = advice_combined.combine(a, ride, None, advise.run_jobs, advise.search_on, advise.allowed)
     assert comb["joined"] == [] and "penalty_to" not in comb and comb["runs"] == len(ridden) == 2
     assert a.then().startswith("Then nothing more") and "record again" in a.then()
+
+
+def test_two_that_each_mend_it_alone_but_overshoot_together_are_not_combined(monkeypatch):
+    """The compression moving the sag too (12 points per +100 % at 5.5 N/mm): each alone from the
+    recommended setting reaches the static sag's window (the rebound 1093.75: 23.8 %, the compression
+    781.25: 23.25 %), both together overshoot it (17.1 %: penalty 0.59 where each alone has 0), so the
+    combination is ridden (one run more: 7 in all), found no better, and the best alone is the step, the
+    other said to spoil it."""
+    a, ride, ridden = made(monkeypatch, comp_points=12.0)
+    comb = advice_combined.combine(a, ride, None, advise.run_jobs, advise.search_on, advise.allowed)
+    assert static_sag(5.5, 1093.75, comp=781.25, comp_points=12.0) == pytest.approx(17.0625)
+    assert (5.5, 1093.75, 781.25) in ridden and comb["runs"] == len(ridden) == 7
+    assert comb["joined"] == [REBOUND.name] and comb["penalty_to"] == pytest.approx(comb["penalty_recommended"] - 1.0)  # the sag 30 % -> in its window
+    c = next(s for s in comb["changes"] if s["key"] == COMP.name)
+    assert c["to"] == pytest.approx(781.25) and not c["joins"] and c["spoils_the_combination"]
+    assert "no better than the best alone" in comb["note"]
 
 
 def test_a_change_lowers_the_penalty_only_beyond_its_uncertainty(monkeypatch):

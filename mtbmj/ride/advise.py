@@ -74,8 +74,8 @@ uncertainty; otherwise "inconclusive", naming why (never "keep" by default). Whe
 candidates are advised, one is recommended first, the balance of the ends before the rest (one that
 moves the balance beyond its uncertainty, if any; among changes the ride cannot tell apart, the spring
 before rebound before compression: ``advice_verdict.ties``), the others after it (``recommendation["then"]``,
-:meth:`Advice.then`). Several rides of one setting are pooled by :mod:`mtbmj.ride.advice_pool`
-(``mtbmj advise RIDE RIDE ...``). Every setting is also
+:meth:`Advice.then`; searched again from it, :mod:`mtbmj.ride.advice_combined`). Several rides of one setting are
+pooled by :mod:`mtbmj.ride.advice_pool` (``mtbmj advise RIDE RIDE ...``). Every setting is also
 given in the rider's words (:meth:`Adjuster.setting`: lb/in at the rates sold for a coil shock,
 psi, clicks where a click map exists). Any other setting can be tried on the ride beside the
 recorded one (:func:`trial`, :func:`predict`; ``--try``, ``--try-set``).
