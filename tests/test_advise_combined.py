@@ -177,7 +177,7 @@ def test_two_faults_the_second_change_is_found_after_the_first_and_rides_better(
     reb = next(s for s in comb["changes"] if s["key"] == "fork:fork.damper.rebound_N_s_per_m")
     assert reb["direction"] == "down" and reb["search"] and reb["driven_by"]
     assert comb["penalty_to"] <= comb["penalty_recommended"] - 0.1 and comb["advised"] and comb["runs"] >= 1
-    assert [s["setting"]["key"] for s in comb["setting"]] == [rec["setting"]["key"], reb["setting"]["key"]]
+    assert [s["key"] for s in comb["setting"]] == [rec["setting"]["key"], reb["setting"]["key"]]
     # the terminal's and the report's then line: the value found after the recommended change
     said = f"from {reb['setting']['from']:g} to {reb['setting']['to']:g} N s/m"
     assert "found from the recommended setting" in html and said in html
