@@ -7,7 +7,8 @@ bike run over the reconstructed terrain at the ride's speed for the ride's lengt
 one core, what every candidate costs); the serial preparation before any run (``advise.prepare``: the
 calibration, the reconstruction and its checks, and the reconstruction's summary; CPU of this process,
 while the workers would wait); and the whole advice (reconstruction, the recorded setting
-and every candidate, on ``--workers`` processes). Prints each repetition, then the medians and
+and every candidate, on ``--workers`` processes; ``combined_runs``: the runs of the combined step after
+the recommended change, ``mtbmj.ride.advice_combined``). Prints each repetition, then the medians and
 spreads (min-max) of the wall times, of the ratio advice / one run, and the advice's wall time per
 100 s of ride; and the advice's CPU time (this process and its workers: what it costs, whatever else
 the machine runs). Writes its results where ``--out`` says (default ``<tempdir>/mtbmj-benchmarks/
@@ -81,10 +82,12 @@ def main(argv=None) -> int:
         row = {"reconstruct_s": t_rec, "one_run_s": t_one, "advise_s": t_all, "ratio": t_all / t_one, "advise_cpu_s": c_all,
                "prepare_cpu_s": c_prep,
                "candidates": len(result.candidates), "search_steps": len((result.recommendation or {}).get("search", [])),
+               "combined_runs": ((result.recommendation or {}).get("combined") or {}).get("runs", 0),
                "answer": result.verdict.get("answer")}
         rows.append(row)
         print(f"repeat {i + 1}: reconstruct {t_rec:.1f} s, one bike run {t_one:.1f} s, advise {t_all:.1f} s "
-              f"({row['candidates']} candidates, {row['search_steps']} search steps, {row['answer']}; advise / one "
+              f"({row['candidates']} candidates, {row['search_steps']} search steps, {row['combined_runs']} runs of the "
+              f"combined step, {row['answer']}; advise / one "
               f"run {row['ratio']:.2f}; CPU {c_all:.1f} s in this process and its workers; the preparation alone "
               f"{c_prep:.2f} s of CPU)", flush=True)
 

@@ -941,9 +941,9 @@ def round_wheel_ground(h, lo, hi, radius, step=0.005):
 
 def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=40.0, profile=SpeedProfile(),
                     features=WHOLE_FEATURES, fork_reb=700.0, slow_load_N=80.0, slow_period_s=7.0, rider_forward_m=0.0,
-                    carried=True, pump_N=0.0, round_tyre=False):
+                    carried=True, pump_N=0.0, round_tyre=False, fork_comp=500.0):
     """This file's bike (``bike_text``: the fork at ``fork_rate`` N/mm and ``fork_reb`` N s/m of
-    rebound, the shock's rebound ``shock_reb_scale`` times SHOCK_REB) ridden for ``seconds`` by the
+    rebound, ``fork_comp`` of compression, the shock's rebound ``shock_reb_scale`` times SHOCK_REB) ridden for ``seconds`` by the
     independent whole bike above at ``profile``'s speed over ``whole_bike_terrain(seed, features)``,
     the rider's slow load ``slow_load_N`` (onto the bars, period ``slow_period_s``), the rider's centre
     of mass ``rider_forward_m`` ahead of where the bike file puts it the whole ride; ``carried=False``:
@@ -963,7 +963,7 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
 
     path.mkdir(parents=True, exist_ok=True)
     bike = path / "bike.toml"
-    bike.write_text(bike_text(fork_rate, fork_reb=fork_reb, shock_reb=SHOCK_REB * shock_reb_scale))
+    bike.write_text(bike_text(fork_rate, fork_comp, fork_reb=fork_reb, shock_reb=SHOCK_REB * shock_reb_scale))
     spec = spec_mod.load(str(bike))  # the bike file's numbers (inputs)
     fork_setup, _ = run.setups(spec)
     tyre_k, radius, g = fork_setup.tire.values(1).rate, fork_setup.tire_radius, 9.81
@@ -995,7 +995,7 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
 
     def wheelbase(stroke, rise):
         return xF - stroke * ca - (px - math.sqrt(arm * arm - (zR + rise - pz) ** 2))
-    fork_law = law(fork_rate * 1e3, 0.130, 500.0, fork_reb)
+    fork_law = law(fork_rate * 1e3, 0.130, fork_comp, fork_reb)
     shock_law = law(90e3, 0.050, SHOCK_COMP, SHOCK_REB * shock_reb_scale)
     span = r.arm_x - r.leg_x
     P_leg, P_arm = mr_ * g * (r.arm_x - rx) / span, mr_ * g * (rx - r.leg_x) / span  # the limbs' preloads
@@ -1126,10 +1126,11 @@ def advise_ride(path, seconds=ADVISE_SECONDS, carried=ADVISE_CARRIED, round_tyre
 # the issue's ranges for a well-set bike: a change of the fork's spring within +-20 %, of a rebound
 # damping within +-30 % (or no change: inconclusive, or keep)
 def outside_well_set_ranges(rec: dict) -> list:
-    """The changes of a recommendation (it and those after it) outside the well-set ranges: a fork
-    spring moved more than 20 %, a rebound (fork or shock) more than 30 %."""
+    """The changes of a recommendation (it, those after it and those its combined step joins) outside
+    the well-set ranges: a fork spring moved more than 20 %, a rebound (fork or shock) more than 30 %."""
     out = []
-    for change in [rec] + list(rec.get("then") or []):
+    joined = [s for s in (rec.get("combined") or {}).get("changes", []) if s["joins"]]  # found after the first
+    for change in [rec] + list(rec.get("then") or []) + joined:
         key, st = change["key"], change["setting"]
         move = abs(st["to"] / st["from"] - 1.0)
         limit = 0.2 if key == "fork:fork.spring.rate_N_per_mm" else 0.3 if "rebound" in key else None

@@ -15,14 +15,9 @@ shock before anything is simulated, and the report names every one skipped and w
 scaled so that its mean force over the ride is the static load it carries (the record alone, before
 the reconstruction finds anything through the springs); every run rides that bike, and each
 candidate is read in the bike file's units relative to it (``Adjuster.per_unit`` times the scale).
-No scale that carries an end is a refusal (:class:`RideNotDescribed`). It was opt-in while, on a ride
-made in the tests with the bike file's own springs and the fork's rebound four times too slow, the
-calibration reads the fork at x0.97 (the model's rider sits 6.5 cm further back than the test's),
-and that 3 % turned the right answer (rebound lowered 2800 -> 734 N s/m, the true 700) into
-"inconclusive"; the front then reproduced at 7.8 mm RMS against 4.6 with the file's spring (measured
-before the made ride's wheelbase shortened and every candidate was searched; since, calibrated advice
-lowers that rebound, 2800 -> 1147 N s/m on the tests' round-tyre rides (734, then 917.5, on their
-point-contact ones), and raises a soft fork 5 -> 11.79 N/mm: docs/rolling.md).
+No scale that carries an end is a refusal (:class:`RideNotDescribed`). On the tests' made rides calibrated
+advice lowers a rebound four times too slow, 2800 -> 1147 N s/m, and raises a soft fork 5 -> 11.79 N/mm
+(why it was opt-in before, and the numbers on each kind of made ride: docs/rolling.md).
 
 **What is scored** (:func:`ride_metrics`, each end in % of its own travel): static sag (standing,
 the model's statics); dynamic sag (the mean travel); maximum travel and bottom-outs (within 3 mm
@@ -74,8 +69,8 @@ uncertainty; otherwise "inconclusive", naming why (never "keep" by default). Whe
 candidates are advised, one is recommended first, the balance of the ends before the rest (one that
 moves the balance beyond its uncertainty, if any; among changes the ride cannot tell apart, the spring
 before rebound before compression: ``advice_verdict.ties``), the others after it (``recommendation["then"]``,
-:meth:`Advice.then`). Several rides of one setting are pooled by :mod:`mtbmj.ride.advice_pool`
-(``mtbmj advise RIDE RIDE ...``). Every setting is also
+:meth:`Advice.then`; searched again from it, :mod:`mtbmj.ride.advice_combined`). Several rides of one setting are
+pooled by :mod:`mtbmj.ride.advice_pool` (``mtbmj advise RIDE RIDE ...``). Every setting is also
 given in the rider's words (:meth:`Adjuster.setting`: lb/in at the rates sold for a coil shock,
 psi, clicks where a click map exists). Any other setting can be tried on the ride beside the
 recorded one (:func:`trial`, :func:`predict`; ``--try``, ``--try-set``).
@@ -391,13 +386,11 @@ class Advice:
         return f"{v.get('answer', 'inconclusive').capitalize()}: {v.get('why', '')}"
 
     def then(self) -> str:
-        """The other changes advised, one line, after the recommended one (ride it first, then record again)."""
-        rest = (self.recommendation or {}).get("then") or []
-        if not rest or (self.verdict or {}).get("answer", "change") != "change":
-            return ""
-        return "Then, one at a time, recording again after each (each predicted from the recorded setting): " + "; ".join(
-            f"{'raise' if t['setting']['to'] > t['setting']['from'] else 'lower'} the {t['label']} from "
-            f"{t['setting']['from']:g} to {t['setting']['to']:g} {t['setting']['unit']}" for t in rest)
+        """The other changes advised, one line, after the recommended one: the values found after it
+        (:func:`mtbmj.ride.advice_combined.then_line`), or from the recorded setting where not searched."""
+        from mtbmj.ride.advice_combined import then_line
+
+        return then_line(self)
 
     def html(self, png: bytes) -> str:
         from mtbmj.ride import advice_report
@@ -462,6 +455,10 @@ def advise(record, bike, overrides=None, duration: float | None = None, progress
         runs = run_jobs(jobs, pool, ride.refusable, counter(progress, len(jobs)))
         advice = ride.assemble(runs)
         decide(advice, [ride], pool, search)
+        if search:  # the others searched again after the recommended change (mtbmj.ride.advice_combined)
+            from mtbmj.ride.advice_combined import combine
+
+            combine(advice, ride, pool, run_jobs, search_on, allowed)
     advice.wall_s = time.perf_counter() - start
     return advice
 
