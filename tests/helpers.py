@@ -67,6 +67,14 @@ def command_err(argv, capfd) -> tuple[int, str]:
     return status, capfd.readouterr().err
 
 
+def command_said(argv, capfd) -> tuple[int, str]:
+    """(exit status, stdout and stderr together) of ``mtbmj argv``: a run's line and its warnings."""
+    capfd.readouterr()
+    status = main([str(a) for a in argv])
+    got = capfd.readouterr()
+    return status, got.out + got.err
+
+
 def refused(argv, out, capfd, said: str) -> str:
     """``mtbmj argv`` refused: exit 2, one line holding ``said``, no traceback, nothing at ``out`` or
     beside it; the line."""
@@ -776,6 +784,52 @@ positive_volume_cm3 = {positive_cm3}
 volume_spacers = {spacers}
 spacer_volume_cm3 = {spacer_cm3}
 ''')
+
+
+def quarter_car_ride(folder, h, place, seconds: float, rate: float = 1000.0) -> dict:
+    """Both ends' travel over the ground ``h`` (m at s m) made by two independent quarter cars (this file's
+    equations, scipy's DOP853; the fork's rate along its axis, the rear's through ``RATIO``), the front at
+    ``place(t)`` m and the rear a wheelbase behind; written as folder/ride.csv (time_s, fork_mm, rear_mm,
+    rounded to 0.1 mm) beside folder/bike.toml (``BIKE``). Returns the paths, the series, the wheelbase and
+    each end's samples with its tyre off the ground (``airborne``)."""
+    from mtbmj.bike import run, spec as spec_mod
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / "bike.toml"
+    path.write_text(BIKE)
+    spec = spec_mod.load(str(path))
+    fork_setup, _ = run.setups(spec)
+    tyre_k, radius, g = fork_setup.tire.values(1).rate, fork_setup.tire_radius, fork_setup.gravity
+    wb = spec.front_axle[0] - spec.rear_axle[0]
+    Mf, mf, Mr, mr = quarter_car_masses(spec)
+    sa = math.sin(spec.head_angle)
+    kf, cf, ks, cs = 9000.0, 600.0, 90000.0, 2500.0
+    t = np.arange(int(seconds * rate)) / rate
+    airborne: list = []
+
+    def end(M, m, k_wheel, c_wheel, behind):
+        def rhs(time, y):
+            zb, zw, vb, vw = y
+            f = k_wheel * (zw - zb) + c_wheel * (vw - vb)  # the suspension's force at the wheel
+            tyre = max(0.0, tyre_k * (float(h(place(time) - behind)) - (zw - radius)))
+            return [vb, vw, f / M - g, (tyre - f) / m - g]
+        w0, zw0 = M * g / k_wheel, radius - (M + m) * g / tyre_k  # at rest on flat ground
+        # rtol 1e-6, atol 1e-9 m: the travels are written rounded to 0.1 mm (1e-4 m); at 1e-8 and 1e-11
+        # the same ride (two of its 32 000 samples one rounding step apart) took 3.5 times as long
+        sol = solve_ivp(rhs, (0.0, t[-1]), [zw0 - w0, zw0, 0.0, 0.0], t_eval=t, method="DOP853", rtol=1e-6,
+                        atol=1e-9, max_step=2e-3)
+        assert sol.success
+        airborne.append(int(np.sum(h(place(t) - behind) - (sol.y[1] - radius) <= 0.0)))
+        return sol.y[1] - sol.y[0]
+
+    # the fork: stroke x along the axis, the wheel rises x sin(a): the wheel rate k sin^-2(a)
+    fork_mm = np.round(end(Mf, mf, kf / sa ** 2, cf / sa ** 2, 0.0) / sa * 1e3, 1)
+    rear_mm = np.round(end(Mr, mr, ks / RATIO ** 2, cs / RATIO ** 2, wb) * 1e3, 1)
+    csv = folder / "ride.csv"
+    csv.write_text("time_s,fork_mm,rear_mm\n" + "\n".join(f"{a:.4f},{b:.1f},{c:.1f}"
+                                                          for a, b, c in zip(t, fork_mm, rear_mm)))
+    return {"bike": path, "csv": csv, "t": t, "fork_mm": fork_mm, "rear_mm": rear_mm, "wb": wb, "airborne": airborne}
 
 
 def bumps_csv(path, seconds, lag_s=0.2, rate=1000, scale=1.0, seed=5):

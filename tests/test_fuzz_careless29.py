@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 
-from mtbmj.cli import main
+from helpers import command_said as _run
 
 
 def _terrain(path, edge_m, fall_mm, length_m=60.0):
@@ -16,13 +16,6 @@ def _terrain(path, edge_m, fall_mm, length_m=60.0):
     path.write_text("distance_m,height_mm\n" + "".join(f"{a:.2f},{b:.1f}\n" for a, b in zip(x, z)))
     return path
 
-
-def _run(argv, capfd) -> tuple[int, str]:
-    """(exit status, stdout and stderr) of ``mtbmj argv``."""
-    capfd.readouterr()
-    status = main([str(a) for a in argv])
-    got = capfd.readouterr()
-    return status, got.out + got.err
 
 
 def test_a_roll_that_ends_in_the_air_says_so(tmp_path, capfd):

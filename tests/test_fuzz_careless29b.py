@@ -10,9 +10,8 @@ import json
 import numpy as np
 import pytest
 
-from mtbmj.cli import main
 from mtbmj.ride import reconstruct_given as G
-from helpers import refused
+from helpers import command_said as _run, refused
 
 RIDE_S = 76.398  # the shipped example's last sample (s), its first at 0
 
@@ -21,12 +20,6 @@ def _speed_csv(path, time, speed, header="time_s,speed_m_per_s"):
     path.write_text(header + "\n" + "".join(f"{t:g},{v:g}\n" for t, v in zip(time, speed)))
     return path
 
-
-def _run(argv, capfd) -> tuple[int, str]:
-    capfd.readouterr()
-    status = main([str(a) for a in argv])
-    got = capfd.readouterr()
-    return status, got.out + got.err
 
 
 SECONDS = np.arange(0.0, 80.0, 1.0)  # a 1 Hz GPS track over the ride and past it

@@ -20,11 +20,10 @@ from pathlib import Path
 import numpy as np
 
 import pytest
-from scipy.integrate import solve_ivp
 
 from mtbmj.cli import main
 
-from helpers import BIKE, RATIO, bumps_csv, quarter_car_masses
+from helpers import BIKE, RATIO, bumps_csv, quarter_car_masses, quarter_car_ride
 
 SPEED = 6.0
 RATE = 1000.0
@@ -47,47 +46,11 @@ def hidden_profile(seed=3):
 
 
 def ride(tmp_path):
-    from mtbmj.bike import run, spec as spec_mod
-
-    path = tmp_path / "bike.toml"
-    path.write_text(BIKE)
-    spec = spec_mod.load(str(path))
-    fork_setup, _ = run.setups(spec)
-    tyre_k, radius, g = fork_setup.tire.values(1).rate, fork_setup.tire_radius, fork_setup.gravity
-    wb = spec.front_axle[0] - spec.rear_axle[0]
-    Mf, mf, Mr, mr = quarter_car_masses(spec)
-    sa = math.sin(spec.head_angle)
-    kf, cf, ks, cs = 9000.0, 600.0, 90000.0, 2500.0
+    """The made ride (``helpers.quarter_car_ride``) over the hidden profile at ``SPEED``."""
     h = hidden_profile()
-
-    airborne: list = []
-
-    def end(M, m, k_wheel, c_wheel, lag):
-        def rhs(t, y):
-            zb, zw, vb, vw = y
-            f = k_wheel * (zw - zb) + c_wheel * (vw - vb)  # the suspension's force at the wheel
-            tyre = max(0.0, tyre_k * (float(h(SPEED * t - lag)) - (zw - radius)))
-            return [vb, vw, f / M - g, (tyre - f) / m - g]
-        # at rest on flat ground
-        w0 = M * g / k_wheel
-        zw0 = radius - (M + m) * g / tyre_k
-        t = np.arange(int(SECONDS * RATE)) / RATE
-        # rtol 1e-6, atol 1e-9 m: the travels are written rounded to 0.1 mm (1e-4 m); at 1e-8 and 1e-11
-        # the same ride (two of its 32 000 samples one rounding step apart) took 3.5 times as long
-        sol = solve_ivp(rhs, (0.0, t[-1]), [zw0 - w0, zw0, 0.0, 0.0], t_eval=t, method="DOP853", rtol=1e-6,
-                        atol=1e-9, max_step=2e-3)
-        assert sol.success
-        airborne.append(int(np.sum(h(SPEED * t - lag) - (sol.y[1] - radius) <= 0.0)))
-        return t, sol.y[1] - sol.y[0]
-
-    # the fork: stroke x along the axis, the wheel rises x sin(a): the wheel rate k sin^-2(a)
-    t, wf = end(Mf, mf, kf / sa ** 2, cf / sa ** 2, 0.0)
-    _, wr = end(Mr, mr, ks / RATIO ** 2, cs / RATIO ** 2, wb)
-    assert max(airborne) < 0.02 * t.size, airborne  # the tyres leave the ground only briefly, at a few crests
-    fork_mm, rear_mm = np.round(wf / sa * 1e3, 1), np.round(wr * 1e3, 1)
-    csv = tmp_path / "ride.csv"
-    csv.write_text("time_s,fork_mm,rear_mm\n" + "\n".join(f"{a:.4f},{b:.1f},{c:.1f}" for a, b, c in zip(t, fork_mm, rear_mm)))
-    return path, csv, t, fork_mm, rear_mm, h, wb
+    m = quarter_car_ride(tmp_path, h, lambda t: SPEED * t, SECONDS, RATE)
+    assert max(m["airborne"]) < 0.02 * m["t"].size, m["airborne"]  # the tyres leave the ground only briefly, at a few crests
+    return m["bike"], m["csv"], m["t"], m["fork_mm"], m["rear_mm"], h, m["wb"]
 
 
 @pytest.fixture(scope="module")

@@ -14,15 +14,13 @@ random bumps at 6 m/s (as tests/test_reconstruct.py's), where the lag gives one,
 from __future__ import annotations
 
 import json
-import math
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 from mtbmj.cli import main
 
-from helpers import BIKE, RATIO, quarter_car_masses
+from helpers import quarter_car_ride
 
 RATE = 1000.0
 SECONDS = 20.0
@@ -58,40 +56,9 @@ washboard, CENTRES = _washboard()
 
 
 def made_ride(folder, h, place, seconds=SECONDS):
-    """Both ends' travel (two quarter cars, this file's equations) over ``h`` (m at s m), the front at
+    """Both ends' travel (two quarter cars: ``helpers.quarter_car_ride``) over ``h`` (m at s m), the front at
     ``place(t)`` m, the rear a wheelbase behind; written as folder/ride.csv beside folder/bike.toml."""
-    from mtbmj.bike import run, spec as spec_mod
-
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / "bike.toml"
-    path.write_text(BIKE)
-    spec = spec_mod.load(str(path))
-    fork_setup, _ = run.setups(spec)
-    tyre_k, radius, g = fork_setup.tire.values(1).rate, fork_setup.tire_radius, fork_setup.gravity
-    wb = spec.front_axle[0] - spec.rear_axle[0]
-    Mf, mf, Mr, mr = quarter_car_masses(spec)
-    sa = math.sin(spec.head_angle)
-    kf, cf, ks, cs = 9000.0, 600.0, 90000.0, 2500.0
-    t = np.arange(int(seconds * RATE)) / RATE
-
-    def end(M, m, k_wheel, c_wheel, behind):
-        def rhs(time, y):
-            zb, zw, vb, vw = y
-            f = k_wheel * (zw - zb) + c_wheel * (vw - vb)
-            tyre = max(0.0, tyre_k * (float(h(place(time) - behind)) - (zw - radius)))
-            return [vb, vw, f / M - g, (tyre - f) / m - g]
-        w0, zw0 = M * g / k_wheel, radius - (M + m) * g / tyre_k
-        sol = solve_ivp(rhs, (0.0, t[-1]), [zw0 - w0, zw0, 0.0, 0.0], t_eval=t, method="DOP853", rtol=1e-6,
-                        atol=1e-9, max_step=2e-3)
-        assert sol.success
-        return sol.y[1] - sol.y[0]
-
-    fork_mm = np.round(end(Mf, mf, kf / sa ** 2, cf / sa ** 2, 0.0) / sa * 1e3, 1)
-    rear_mm = np.round(end(Mr, mr, ks / RATIO ** 2, cs / RATIO ** 2, wb) * 1e3, 1)
-    csv = folder / "ride.csv"
-    csv.write_text("time_s,fork_mm,rear_mm\n" + "\n".join(f"{a:.4f},{b:.1f},{c:.1f}"
-                                                          for a, b, c in zip(t, fork_mm, rear_mm)))
-    return {"bike": path, "csv": csv, "t": t, "fork_mm": fork_mm, "rear_mm": rear_mm}
+    return quarter_car_ride(folder, h, place, seconds, RATE)
 
 
 def gps_csv(path, times, speeds, header="time_s,speed_m_per_s"):
