@@ -192,7 +192,26 @@ def _held(five, i):
     return p, float(np.sqrt(np.mean((rec[w] - p.travel_mm[w]) ** 2))), bp.held_out(seqs, ks, recs, xs, i)
 
 
-# measured (held out in turn, fitted on the other four): trace RMS 1.68, 1.07, 0.17, 0.34, 0.26 mm;
+def _plastic(five, i):
+    """The trace RMS of the law's plastic stop (no seated body): the baseline the body's trace must beat."""
+    recs, xs, seqs = five
+    ks = [k for k, _ in FIVE]
+    keep = [j for j in range(5) if j != i]
+    law = bp.decay_law("shock", [seqs[j] for j in keep], [ks[j] for j in keep], [recs[j] for j in keep],
+                       [xs[j] for j in keep])
+    law.body = (float("nan"), float("nan"), 0)  # no record to fit the body on: the plastic stop
+    p = law.predict(ks[i], recs[i], seqs[i], law.x_eq_of(seqs[i], ks[i]), ks[i], xs[i], 80.0)
+    rec = np.interp(p.time_s, recs[i].time_s, xs[i])
+    w = (p.time_s > p.slam_s) & (p.time_s < p.slam_s + 3.0)
+    assert p.body is None
+    return float(np.sqrt(np.mean((rec[w] - p.travel_mm[w]) ** 2)))
+
+
+# measured (held out in turn, fitted on the other four): trace RMS 0.565, 0.361, 0.19, 0.36, 0.27 mm (the
+# first two through the top-out stop with the seated body, its share 0.95 fitted on 4 and 8 clicks, then on
+# 0 clicks: at its bound; with the law's plastic stop 1.65 and 1.05 mm, its first rebound's top 3.6 and 1.7 mm
+# short and its timing 10 and 17 ms early: scaled x1.23 / x1.14 about x_eq after the stop alone the plastic
+# trace would miss by 0.90 / 0.81 mm, shifted alone by 1.61 / 0.68, both 0.81 / 0.35);
 # first half cycle's decay misses by 0.08, 0.07, 0.22, 0.53, 0.47 sd with the measured decay's scatter
 # (0.008, pooled over 0 and 4 clicks, 5 dof; 0.09, 0.17, 0.25, 0.63, 0.53 with its read error alone); frequency by 0.13, 0.89, 0.83,
 # 0.00, 1.00 sd (0.08, 1.02, 2.08, 0.48, 1.44 with the vertex timing's sd alone)
@@ -203,28 +222,87 @@ TRACE_RMS = 2.5 * NOISE
 def test_held_out_trace_within_the_noise_where_the_stop_is_not_reached(five, i):
     p, rms, _ = _held(five, i)
     assert p.inside_stroke()
+    assert p.body is None  # the closed form: no stop reached
     assert rms <= TRACE_RMS
 
 
 @pytest.mark.parametrize("i", range(5))
 def test_a_trace_that_reaches_the_stop_says_it_leaves_the_envelope(five, i):
     """The law reaches the top-out stop after the slam at 0 and 4 clicks (the generator's records reach
-    0.0 mm there, 0.4 mm at 8 clicks), not at 8, 12 and 17; where it does, the summary says so."""
+    0.0 mm there, 0.4 mm at 8 clicks), not at 8, 12 and 17; where it does, the summary says so, and that
+    the trace there is the seated body's."""
     p, _, _ = _held(five, i)
     reached = p.stop_reached_s() is not None
     assert reached == (i <= 1)
-    assert ("outside the law's envelope" in p.summary().get("note", "")) == reached
+    note = p.summary().get("note", "")
+    assert ("outside the law's envelope" in note) == reached
+    assert ("held on its stop by the seated rider's body" in note) == reached
 
 
-@pytest.mark.xfail(strict=True, reason="0 and 4 clicks reach the top-out bumper after the slam: the rider's body "
-                                         "holds the bike on it and drives it out (1.68 and 1.07 mm RMS); the law's "
-                                         "plastic stop restarts from rest, and a restitution read from the records "
-                                         "made it worse (7.4 and 3.8 mm)")
 @pytest.mark.parametrize("i", [0, 1])
-def test_held_out_trace_within_the_noise_where_the_stop_is_reached(five, i):
+def test_the_seated_body_beats_the_plastic_stop_by_half(five, i):
+    """Measured: 0.565 / 0.361 mm RMS with the body against 1.65 / 1.05 with the plastic stop (whose
+    misses the 2.5 x noise check fails)."""
     p, rms, _ = _held(five, i)
+    plastic = _plastic(five, i)
+    assert p.inside_stroke() and p.body is not None
+    assert plastic > TRACE_RMS
+    assert rms <= 0.5 * plastic
+
+
+def test_held_out_trace_within_the_noise_through_the_stop_at_4_clicks(five):
+    """4 clicks held out: 0.361 mm RMS through the stop (the body's share fitted on 0 clicks' record)."""
+    p, rms, _ = _held(five, 1)
+    assert p.inside_stroke() and p.body is not None and p.body[2] == 1
+    assert rms <= TRACE_RMS
+
+
+@pytest.mark.xfail(strict=True, reason="0 clicks held out reaches the top-out bumper after the slam: 0.565 mm RMS "
+                                         "with the seated body (two masses, 5 Hz, 0.475; its share fitted on 4 and 8 "
+                                         "clicks runs to its bound 0.95, 0.33 mm there) against 0.375; 1.65 with the "
+                                         "plastic stop. The generator's rider is 0.84 of the moving mass on two less "
+                                         "damped springs (0.35, 0.40) and pushed on the torso: its body returns more "
+                                         "of the energy the stop takes than the literature's 0.475 body does")
+def test_held_out_trace_within_the_noise_where_the_stop_is_reached(five):
+    p, rms, _ = _held(five, 0)
     assert p.inside_stroke()
     assert rms <= TRACE_RMS
+
+
+def test_the_two_masses_ring_at_the_laws_frequency_and_damping():
+    """The two masses made from the law (fn 1.44 Hz, zeta 0.13, share 0.8): the low mode's undamped
+    frequency and its modal damping ratio, from the matrices' eigenvectors written here, are the law's;
+    the body rings alone at 5 Hz, 0.475 (bounce_bike's and the replay's seated body)."""
+    from mtbmj.identify import bounce_bike, bounce_body as bb, bounce_replay
+
+    assert bb.BODY_ZETA == bounce_bike.RIDER_ZETA and bb.BODY_HZ == bounce_replay.RIDER_HZ
+    m = bb.TwoMass.of_law(0.8, 1.44, 0.13, 0.5)
+    M = np.diag([0.2, 0.8])
+    Km = np.array([[m.k + m.kr, -m.kr], [-m.kr, m.kr]])
+    C = np.array([[m.c + m.cr, -m.cr], [-m.cr, m.cr]])
+    w2, v = np.linalg.eig(np.linalg.solve(M, Km))
+    j = int(np.argmin(w2.real))
+    phi = v[:, j].real / v[0, j].real
+    assert math.sqrt(w2[j].real) / (2 * math.pi) == pytest.approx(1.44, rel=1e-9)
+    assert phi @ C @ phi / (2 * math.sqrt((phi @ Km @ phi) * (phi @ M @ phi))) == pytest.approx(0.13, rel=1e-9)
+    assert math.sqrt(m.kr / 0.8) / (2 * math.pi) == pytest.approx(5.0) and m.cr / (2 * math.sqrt(m.kr * 0.8)) == 0.475
+    wrong = bb.TwoMass.of_law(0.8, 1.60, 0.13, 0.5)  # another law's masses do not ring at 1.44 Hz
+    assert abs(math.sqrt(np.min(np.linalg.eigvals(np.linalg.solve(M, np.array(
+        [[wrong.k + wrong.kr, -wrong.kr], [-wrong.kr, wrong.kr]]))).real)) / (2 * math.pi) - 1.44) > 0.1
+
+
+def test_the_body_trace_stays_in_the_stroke_and_holds_on_the_stop():
+    """From rest at full travel (30 mm; x_eq 12 mm) the two masses reach full extension: the trace stays
+    within 0-30 mm, rests on the stop for a while (held by the body: 44 ms measured, more than 20 asked) and
+    comes to rest within the friction band of x_eq."""
+    from mtbmj.identify import bounce_body as bb
+
+    m = bb.TwoMass.of_law(0.85, 1.45, 0.05, 0.5)
+    t, x = bb.trace(m, 30.0, 12.0, 30.0, 3.0, 2e-4)
+    assert x.min() >= 0.0 and x.max() <= 30.0
+    on = t[x <= 1e-6]
+    assert on.size and on[-1] - on[0] > 0.02  # held on the stop, not bounced off it
+    assert abs(x[-1] - 12.0) <= 0.5 + 1e-6  # at rest within the friction band of x_eq
 
 
 @pytest.mark.parametrize("i", range(5))

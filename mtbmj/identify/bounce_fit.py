@@ -109,7 +109,8 @@ class BounceFit:
                        f"{_est(p.first_half_cycle_decay, 2)}, {_est(p.frequency_hz, 2)} Hz, rebound speed "
                        f"{_est(p.rebound_speed_mm_per_s, 0)} mm/s, inside the stroke: {'yes' if p.inside_stroke() else 'NO'}"
                        + (f" (reaches the stroke's end at {p.stop_reached_s():.3f} s: outside the law's envelope from "
-                          f"there)" if p.stop_reached_s() is not None else ""))
+                          f"there{'; held there by the seated body' if p.body else ''})" if p.stop_reached_s() is not None
+                          else ""))
         for end, ans in self.answers.items():
             out.append(ans.line())
         out.extend(self.replay_lines)
