@@ -370,7 +370,7 @@ def markdown() -> str:
         if key == list(cfg.SCHEMA)[-1] or (list(cfg.SCHEMA)[list(cfg.SCHEMA).index(key) + 1].rpartition(".")[0]
                                             or "top level") != section:
             lines.append("")
-    lines += bike_section()
+    lines += bike_section() + data_section()
     return "\n".join(lines).rstrip("\n") + "\n"
 
 
@@ -425,6 +425,43 @@ def bike_section() -> list[str]:
             value = round(spec.LIMBS_SHARE_PERCENT, 2)
         lines.append("| " + " | ".join(_cell(c) for c in (
             f"`{key}`", "none" if value is None else _plain(value), valid_, shown, meaning)) + " |")
+    return lines + [""]
+
+
+def data_section() -> list[str]:
+    """The data files the commands read beside the configuration and bike files: their columns."""
+    from mtbmj.measured.telemetry import CSV_COLUMNS
+
+    rows = [
+        ("terrain profile (`mtbmj roll TERRAIN`, `mtbmj bike BIKE TERRAIN`; `mtbmj reconstruct` writes one, "
+         "`terrain.csv`)", "`distance_m` (non-decreasing), `height_mm`",
+         "[docs/rolling.md](rolling.md), `mtbmj/rolling/terrain.py`"),
+        ("speed along the terrain (`mtbmj bike --speed-profile FILE`; `mtbmj reconstruct` writes one, `speed.csv`)",
+         "`distance_m`, `speed_m_per_s`", "[docs/bike.md](bike.md), `mtbmj/bike/schedule.py`"),
+        ("speed over the ride's clock (`mtbmj reconstruct` / `mtbmj advise --speed-csv FILE`: a GPS track, a bike "
+         "computer)", "`time_s`, `speed_m_per_s`", "[docs/rolling.md](rolling.md), `mtbmj/ride/reconstruct_given.py`"),
+        ("a ride's travel from any logger (`mtbmj telemetry`, `reconstruct`, `advise` RIDE as a CSV; or an SST "
+         "recording, v2 or v3, decoded through the bike's `[sensors]`)",
+         f"`{CSV_COLUMNS[0]}` and one or more of " + ", ".join(f"`{c}`" for c in CSV_COLUMNS[1:]),
+         "[docs/rolling.md](rolling.md), `mtbmj/measured/telemetry.py`"),
+        ("bench, tire and sled records (`mtbmj fit ...`, `mtbmj compare`)",
+         "by record kind: `displacement_mm`, `velocity_mm_per_s`, `force_N`, `deflection_mm`, `sled_mm`, "
+         "`fork_mm`, `tire_mm`, `time_s`", "[docs/fitting.md](fitting.md), `mtbmj/measured/records.py`"),
+    ]
+    lines = [
+        "## Data files",
+        "",
+        "CSV files with one header row: every column name ends in its unit (`time_s`, `height_mm`,",
+        "`speed_m_per_s`; also `ms`, `m`, `kN`, `mm_per_s`, `N_per_mm`, `N_per_m`, `kg`, `Hz`, converted to SI on",
+        "reading, `mtbmj/measured/records.py`); lines starting with `#` are comments; the delimiter `,`, `;` or a",
+        "tab. A unit not read is refused in one line naming the file and the column; a terrain or speed file",
+        "with other columns than its own is refused naming the file (and the option that takes it, where another",
+        "does).",
+        "",
+        "| file | columns | where |",
+        "|---|---|---|",
+    ]
+    lines += ["| " + " | ".join(_cell(c) for c in row) + " |" for row in rows]
     return lines + [""]
 
 
