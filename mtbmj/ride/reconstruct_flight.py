@@ -9,7 +9,8 @@ returned to the level above a drop within seconds. Here:
 - **Which flights.** The flights of the whole bike's first pass that left at a drop's edge
   (``reconstruct_inverse.edge``: at least ``EDGE_FLIGHT_S`` long, landing more than ``EDGE_DROP_M``
   lower, the ground not rising into the take-off: a wheel thrown off a kicker's lip or a rock's face
-  is not read, its level left as it was).
+  is not read, its level left as it was; the rise judged on the ground less what the drift's removal
+  lifts ahead of the flight's own fall, ``edge_flights``).
 - **The level change read** across each, in every pass: the ground found where the wheel is back on
   it less where it left (the whole bike falls across the flight under its own forces: the fork's
   from the record, the rear wheel still on top until it too leaves the edge, gravity).
