@@ -649,12 +649,12 @@ def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
 def _there(terrain: dict, record: dict) -> str:
     """The terrain found and the ride's own record at a crash, in a few words."""
     ter = (f"ground {num(terrain['height_m'], 3)} m" + (
-        f", steepest {num(terrain['slope_max_deg'], 2)} deg, a {num(terrain['step_m'], 2)} m step in 0.2 m"
+        f", steepest {num(terrain['slope_max_deg'], 2)} deg, {num(terrain['step_m'], 2)} m in 0.2 m"
         if terrain.get("slope_max_deg") is not None else ""))
-    rec = ("; the ride's record there: fork " + (f"{num(record['fork_max_mm'], 3)}" if record.get("fork_max_mm") is not None
+    rec = ("; its record: fork " + (f"{num(record['fork_max_mm'], 3)}" if record.get("fork_max_mm") is not None
                                                  else "none") + ", rear "
            + (f"{num(record['rear_max_mm'], 3)} mm" if record.get("rear_max_mm") is not None else "none")
-           + f", running on {num(record['record_runs_on_s'], 3)} s")
+           + f", {num(record['record_runs_on_s'], 3)} s more")
     return ter + rec
 
 
@@ -681,7 +681,7 @@ def ride_own_rows(d: dict) -> dict[str, list[Row]]:
         rows += [there] if there else []
         for a in r.get("advise", []):
             how = "calibrated" if a["calibrated"] else "the file's springs"
-            note = " (its check refuses it; ridden anyway)" if a.get("ridden_anyway") else ""
+            note = " (refused by its check; ridden)" if a.get("ridden_anyway") else ""
             if "refused" in a:
                 said = "refused: " + a["refused"].split(": ", 1)[-1][:150]
             elif a.get("crash"):

@@ -175,7 +175,11 @@ def as_advise(record, bike: str, calibrated: bool) -> dict:
         if calibrated:
             from mtbmj.ride import calibrate as cal_mod
 
-            cal = cal_mod.calibrate(ridden, bike, None, None, None, "rider")
+            try:
+                cal = cal_mod.calibrate(ridden, bike, None, None, None, "rider")
+            except MtbmjError as exc:  # the calibration's own refusal: advise rides nothing
+                out["refused"] = str(exc)[:300]
+                return out
             over, statics = cal.apply(bike, None), cal.apply(bike, None, statics=True)
         else:
             cal, statics = None, None

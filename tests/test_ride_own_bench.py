@@ -95,8 +95,8 @@ def test_the_rows_say_where_each_crash_was_and_what_rode_through(report):
     cells = {r.figure: r.measured for r in rows}
     assert cells["sst/A.SST (100 s): `mtbmj reconstruct`, then `mtbmj bike`"] == "rides it all"
     assert cells["sst/A.SST (100 s): as advise, the file's springs"].startswith(
-        "**over the bars** at 41.7 s, 232 m (its check refuses it; ridden anyway); ground 0.310 m, steepest 80 deg, "
-        "a 0.30 m step in 0.2 m; the ride's record there: fork 150, rear 50.0 mm, running on 11.9 s")
+        "**over the bars** at 41.7 s, 232 m (refused by its check; ridden); ground 0.310 m, steepest 80 deg, "
+        "0.30 m in 0.2 m; its record: fork 150, rear 50.0 mm, 11.9 s more")
     assert cells["sst/A.SST (100 s): as advise, calibrated"] == "rides it all"
     assert cells["sst_v2/B.SST (60.0 s): `mtbmj reconstruct`, then `mtbmj bike`"] == (
         "**looped out** at 8.10 s, 40.5 m, 5.0 m/s (a window's); ground beyond trail within 3 s")
