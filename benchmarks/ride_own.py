@@ -8,12 +8,12 @@ command, ``mtbmj reconstruct RIDE --bike BIKE --out DIR``, and its terrain ridde
 ``mtbmj bike BIKE DIR/terrain.csv --speed-profile DIR/speed.csv --out DIR2`` (the recorded setting:
 the bike file as it is, the rider's drive holding the speed found). A ride ``mtbmj reconstruct``
 refuses (no speed) is kept with its one-line reason. Then, unless ``--no-advise``, as ``mtbmj advise``
-rides it: ``mtbmj.ride.advise.prepare`` (the springs calibrated on the ride, and not) and
-``simulate`` of the recorded setting; where ``prepare`` refuses the ride (its reconstruction fails
+rides it: ``mtbmj.ride.advise.prepare`` (the springs calibrated on the ride, and not) and the recorded
+setting's run as ``advise.simulate`` makes it (its ``run_bike`` call, whose positions place a crash); where ``prepare`` refuses the ride (its reconstruction fails
 its own check) the same steps are taken without the check (``ridden_anyway``), the refusal kept.
 
-Per run: crashed or not, and where (the run's time, the ride's time and distance of the front
-axle); what the terrain found looks like there (height, the steepest slope and the largest step
+Per run: crashed or not, and where (the front axle's place on the ride and the ride's time there;
+a run that trails the ride's speed gets there later than the ride did); what the terrain found looks like there (height, the steepest slope and the largest step
 within 2 m before the crash, over 0.2 m; the ``beyond_trail`` stretches, flights and drop levels of
 ``reconstruction.json`` within 3 s); the speed there and whether a window gave it (or it is held or
 interpolated over a stretch without one, ``left_out``); and the ride's own record there (both ends'
@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import re
 import shutil
 import subprocess
 import sys
@@ -194,18 +193,25 @@ def as_advise(record, bike: str, calibrated: bool) -> dict:
         out["ridden_anyway"] = True
     else:
         rec, job, ride_s = ride.rec, ride.jobs()[0], ride.ride_s
-    run = advise.simulate(*job)
+    # advise.simulate's own call (its Run keeps no position): the crash placed by where the bike is, not
+    # by the ride's clock (a run that trails the ride's speed is short of where the ride was at that time)
+    from mtbmj.bike import run as bike_run
+
+    bk, over, terrain, speed, duration, _, lead_s, profile = job
+    r = bike_run.run_bike(bk, terrain, speed, duration=duration, drive="rider", overrides=over or None,
+                          speed_profile=profile)
     out["wall_s"] = time.perf_counter() - t0
-    out["crash"] = run.crash
-    if run.crash:
-        tc = float(re.search(r" at ([-0-9.]+) s", run.crash).group(1)) - job[6]  # ride time (lead-in off)
-        tr = float(rec.t[0]) + tc
-        out["ride_s"] = tr
-        at_m = float(np.interp(tr, rec.t, rec.distance))  # the front axle, from the time (the run keeps to the profile)
-        out["ride_m"] = at_m - float(rec.distance[0])
-        out["ridden_percent"] = 100.0 * tc / ride_s
-        ter = job[2]
-        out["terrain"] = terrain_there(np.asarray(ter.x), np.asarray(ter.z), at_m)
+    crash = r.summary.get("crash")
+    out["crash"] = crash["line"] if crash else None
+    if crash:
+        raw = r.raw
+        x_front = raw["x_m"] - raw["x_m"][0] + float(terrain.start_x)  # the front axle starts at the start
+        at_m = float(np.interp(crash["time_s"], raw["time_s"], x_front))
+        tr = float(np.interp(at_m, rec.distance, rec.t))  # the ride's time where the ride was there
+        out["ride_s"], out["ride_m"] = tr, at_m - float(rec.distance[0])
+        out["run_s"] = float(crash["time_s"]) - lead_s  # the run's own time from the ride's first metre
+        out["ridden_percent"] = 100.0 * (tr - float(rec.t[0])) / ride_s
+        out["terrain"] = terrain_there(np.asarray(terrain.x), np.asarray(terrain.z), at_m)
         out["record"] = record_there(np.asarray(rec.t), np.asarray(rec.front), np.asarray(rec.rear), tr)
     else:
         out["ridden_percent"] = 100.0
