@@ -646,6 +646,54 @@ def reconstruct_rides_rows(d: dict) -> dict[str, list[Row]]:
     return {"reconstruct": rows}
 
 
+def _there(terrain: dict, record: dict) -> str:
+    """The terrain found and the ride's own record at a crash, in a few words."""
+    ter = (f"ground {num(terrain['height_m'], 3)} m" + (
+        f", steepest {num(terrain['slope_max_deg'], 2)} deg, {num(terrain['step_m'], 2)} m in 0.2 m"
+        if terrain.get("slope_max_deg") is not None else ""))
+    rec = ("; its record: fork " + (f"{num(record['fork_max_mm'], 3)}" if record.get("fork_max_mm") is not None
+                                                 else "none") + ", rear "
+           + (f"{num(record['rear_max_mm'], 3)} mm" if record.get("rear_max_mm") is not None else "none")
+           + f", {num(record['record_runs_on_s'], 3)} s more")
+    return ter + rec
+
+
+def ride_own_rows(d: dict) -> dict[str, list[Row]]:
+    rows, name, target = [], "ride_own.json", "no crash (the rider came home)"
+    for r in d["rides"]:
+        figure = f"{r['folder']}/{r['ride']}" + (f" ({num(r['seconds'], 3)} s)" if "seconds" in r else "")
+        if "refused" in r:
+            rows.append(Row(f"{figure}: reconstruct", target, "refused: " + r["refused"].split(": ", 1)[-1][:150],
+                            name, d["command"]))
+            continue
+        there = None
+        if "bike_refused" in r:
+            said = "refused: " + r["bike_refused"][:150]
+        elif r.get("crash"):
+            a = r["at"]
+            said = (f"**{r['crash']['kind']}** at {num(a['ride_s'], 3)} s, {num(a['ride_m'], 3)} m, "
+                    f"{num(a['speed_m_per_s'], 2)} m/s ({a['speed_from']})"
+                    + (f"; ground beyond trail within {num(d['near_s'], 1)} s" if a["beyond_trail"] else ""))
+            there = Row(f"{figure}: there (the commands)", "report", _there(a["terrain"], a["record"]), name, d["command"])
+        else:
+            said = "rides it all"
+        rows.append(Row(f"{figure}: `mtbmj reconstruct`, then `mtbmj bike`", target, said, name, d["command"]))
+        rows += [there] if there else []
+        for a in r.get("advise", []):
+            how = "calibrated" if a["calibrated"] else "the file's springs"
+            note = " (refused by its check; ridden)" if a.get("ridden_anyway") else ""
+            if "refused" in a:
+                said = "refused: " + a["refused"].split(": ", 1)[-1][:150]
+            elif a.get("crash"):
+                kind = a["crash"].split(": ", 1)[-1].split(" at ")[0]
+                said = (f"**{kind}** at {num(a['ride_s'], 3)} s, {num(a['ride_m'], 3)} m{note}; "
+                        + _there(a["terrain"], a["record"]))
+            else:
+                said = "rides it all" + note
+            rows.append(Row(f"{figure}: as advise, {how}", target, said[:200], name, d["command"]))
+    return {"ride_own": rows}
+
+
 def suite_time_rows(d: dict) -> dict[str, list[Row]]:
     rows = []
     for name, what, target in (("suite", "the test suite (`-m \"not slow\"`), two processes", f"≤ {tgt(d['target_suite_minutes'])} min"),
@@ -686,6 +734,7 @@ SOURCES = [
     ("calibrate_speed.json", calibrate_speed_rows),
     ("reconstruct_rides.json", reconstruct_rides_rows),
     ("advise_rides.json", advise_rides_rows),
+    ("ride_own.json", ride_own_rows),
     ("suite_time.json", suite_time_rows),
 ]
 
@@ -812,6 +861,16 @@ two naive baselines on the same samples: the fork's record delayed by wheelbase 
 least-squares scale and offset (fitted on those very samples), and the rear's mean; it passes only
 40 % below the better. A ride whose whole bike diverges fails, its line saying where (past it nothing
 is checked). `mtbmj advise` refuses a ride that fails."""),
+    ("ride_own", "The bike rides its own reconstruction (issue 51)", """\
+Per shared ride that gives a speed (`benchmarks/results/reconstruct_rides.json`): as a user would run it,
+`mtbmj reconstruct RIDE --bike sst --out DIR`, then `mtbmj bike sst DIR/terrain.csv --speed-profile DIR/speed.csv`
+at the recorded setting (the bike file as it is); and as `mtbmj advise` rides its recorded setting
+(`mtbmj.ride.advise.prepare` and `simulate`: the reconstruction without the spectral share met at once), on
+the file's springs and calibrated on the ride. Where advise refuses the ride (its reconstruction fails its
+own check) the same steps are ridden without the check. At a crash: the ride's time and distance of the front
+axle, the speed there and whether a window gave it, the ground found within 2 m before it (height, the steepest
+slope, the largest rise or fall over 0.2 m) and the ride's own record within 1 s (both ends' largest travel,
+and how long the record runs on past it: every one of these rides came home). Nothing is set to pass."""),
 ]
 
 
