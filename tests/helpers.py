@@ -786,6 +786,24 @@ spacer_volume_cm3 = {spacer_cm3}
 ''')
 
 
+def bench_module(name: str, file: str):
+    """A script of benchmarks/ imported as module ``name`` (registered in sys.modules: a dataclass looks its
+    module up; the benchmarks folder on the path only while it loads)."""
+    import importlib.util
+    import sys
+
+    bench = Path(__file__).resolve().parents[1] / "benchmarks"
+    spec = importlib.util.spec_from_file_location(name, bench / file)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
+    sys.path.insert(0, str(bench))
+    try:
+        spec.loader.exec_module(module)
+    finally:
+        sys.path.remove(str(bench))
+    return module
+
+
 def quarter_car_ride(folder, h, place, seconds: float, rate: float = 1000.0) -> dict:
     """Both ends' travel over the ground ``h`` (m at s m) made by two independent quarter cars (this file's
     equations, scipy's DOP853; the fork's rate along its axis, the rear's through ``RATIO``), the front at

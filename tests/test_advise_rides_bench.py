@@ -3,36 +3,25 @@ docs/measured.md (benchmarks/report.py): whether the rides' intervals agree, and
 on results written here by hand (no ride is read, nothing simulated)."""
 from __future__ import annotations
 
-import importlib.util
 import sys
-from pathlib import Path
 
 import pytest
 
-BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
+from helpers import bench_module
 
 
-def _module(name: str, file: str):
-    spec = importlib.util.spec_from_file_location(name, BENCH / file)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # a dataclass looks its module up
-    sys.path.insert(0, str(BENCH))
-    try:
-        spec.loader.exec_module(module)
-    finally:
-        sys.path.remove(str(BENCH))
-    return module
+
 
 
 @pytest.fixture(scope="module")
 def bench():
-    yield _module("mtbmj_bench_advise_rides", "advise_rides.py")
+    yield bench_module("mtbmj_bench_advise_rides", "advise_rides.py")
     sys.modules.pop("mtbmj_bench_advise_rides", None)
 
 
 @pytest.fixture(scope="module")
 def report():
-    yield _module("mtbmj_bench_report_rides", "report.py")
+    yield bench_module("mtbmj_bench_report_rides", "report.py")
     sys.modules.pop("mtbmj_bench_report_rides", None)
 
 

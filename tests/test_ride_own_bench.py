@@ -3,38 +3,27 @@ docs/measured.md (benchmarks/report.py): what it reads at a crash, on terrains, 
 written here (no ride is read, nothing simulated)."""
 from __future__ import annotations
 
-import importlib.util
 import math
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
+from helpers import bench_module
 
 
-def _module(name: str, file: str):
-    spec = importlib.util.spec_from_file_location(name, BENCH / file)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    sys.path.insert(0, str(BENCH))
-    try:
-        spec.loader.exec_module(module)
-    finally:
-        sys.path.remove(str(BENCH))
-    return module
+
 
 
 @pytest.fixture(scope="module")
 def bench():
-    yield _module("mtbmj_bench_ride_own", "ride_own.py")
+    yield bench_module("mtbmj_bench_ride_own", "ride_own.py")
     sys.modules.pop("mtbmj_bench_ride_own", None)
 
 
 @pytest.fixture(scope="module")
 def report():
-    yield _module("mtbmj_bench_report_ride_own", "report.py")
+    yield bench_module("mtbmj_bench_report_ride_own", "report.py")
     sys.modules.pop("mtbmj_bench_report_ride_own", None)
 
 
