@@ -27,11 +27,8 @@ model's prediction of where the rest goes after it, not a setting to ride untest
 from __future__ import annotations
 
 import dataclasses
-import math
 from concurrent.futures import Future
 from types import SimpleNamespace
-
-import numpy as np
 
 from mtbmj.errors import ConfigError
 from mtbmj.ride.advice_rules import MIN_GAIN, beyond, flat_metrics
@@ -63,20 +60,9 @@ class _Counted:
 
 
 def uncertainty_from(advice, run, start) -> dict:
-    """Per metric: the uncertainty of ``run``'s change from ``start`` (a run of another setting on the
-    same ride): the model's error on the ride and the change's spread over the ride's segments in
-    quadrature, a count's at least its counting spread (``Advice.change_uncertainty``'s, from ``start``
-    in place of the recorded setting)."""
-    out = dict(advice.uncertainty())
-    if run.time_s is not None and start.time_s is not None:
-        for k, d in advice._segment_diffs(run, advice._run_segments(start)).items():
-            lo, hi = np.percentile(d[advice._boot(d.size)].mean(axis=1), [5, 95])
-            out[k] = float(math.hypot(out.get(k, 0.0), (hi - lo) / 2))
-        for end in ("front", "rear"):
-            if f"{end}.dynamic_sag_percent" in out:
-                out[f"{end}.static_sag_percent"] = out[f"{end}.dynamic_sag_percent"]
-    advice._floor_counts(out, run)
-    return out
+    """Per metric: the uncertainty of ``run``'s change from ``start`` (a run of another setting on the same
+    ride): ``Advice.change_uncertainty``'s, from ``start`` in place of the recorded setting."""
+    return advice.change_uncertainty(run, start)
 
 
 def lowers(advice, run, start) -> tuple[bool, list]:

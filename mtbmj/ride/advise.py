@@ -314,23 +314,25 @@ class Advice:
             out[f"{end}.bottom_outs"] = max(out.get(f"{end}.bottom_outs", 0.0), n)
             out[f"{end}.bottom_outs_per_minute"] = max(out.get(f"{end}.bottom_outs_per_minute", 0.0), n / minutes)
 
-    def spread(self, run: Run) -> dict:
+    def spread(self, run: Run, start: Run | None = None) -> dict:
         """Per metric: half the 5-95 % bootstrap interval of the mean over segments of ``run``'s change
-        from the recorded setting (the change's own part of its uncertainty; more segments narrow it)."""
+        from the recorded setting, or from ``start`` (the change's own part of its uncertainty)."""
         out = {}
-        if getattr(self, "_base_segments", None) is None:  # the recorded setting's, once for every candidate
+        if start is None and getattr(self, "_base_segments", None) is None:  # the recorded setting's, once
             self._base_segments = self._run_segments(self.base)
-        for k, d in self._segment_diffs(run, self._base_segments).items():
+        segments = self._base_segments if start is None else self._run_segments(start)
+        for k, d in self._segment_diffs(run, segments).items():
             lo, hi = np.percentile(d[self._boot(d.size)].mean(axis=1), [5, 95])
             out[k] = float(hi - lo) / 2
         return out
 
-    def change_uncertainty(self, run: Run) -> dict:
-        """Per metric: the uncertainty of ``run``'s change from the recorded setting (``UNCERTAINTY_METHOD``)."""
+    def change_uncertainty(self, run: Run, start: Run | None = None) -> dict:
+        """Per metric: the uncertainty of ``run``'s change from the recorded setting, or from ``start`` (a run
+        of another setting on the same ride) (``UNCERTAINTY_METHOD``)."""
         model = self.uncertainty()
         out = dict(model)
-        if run.time_s is not None and self.base.time_s is not None:
-            for k, half in self.spread(run).items():
+        if run.time_s is not None and (self.base if start is None else start).time_s is not None:
+            for k, half in self.spread(run, start).items():
                 out[k] = float(math.hypot(model.get(k, 0.0), half))
             for end in ("front", "rear"):
                 if f"{end}.dynamic_sag_percent" in out:
