@@ -180,7 +180,12 @@ def test_top_out_is_excluded_with_a_compliant_rider(five):
     assert seqs[0].levels_mm.min() > 1.0
 
 
+_HELD = {}  # the held-out predictions, each fitted once (the body's fit takes seconds)
+
+
 def _held(five, i):
+    if (id(five), i) in _HELD:
+        return _HELD[(id(five), i)]
     recs, xs, seqs = five
     ks = [k for k, _ in FIVE]
     keep = [j for j in range(5) if j != i]
@@ -189,7 +194,8 @@ def _held(five, i):
     p = law.predict(ks[i], recs[i], seqs[i], law.x_eq_of(seqs[i], ks[i]), ks[i], xs[i], 80.0)
     rec = np.interp(p.time_s, recs[i].time_s, xs[i])
     w = (p.time_s > p.slam_s) & (p.time_s < p.slam_s + 3.0)
-    return p, float(np.sqrt(np.mean((rec[w] - p.travel_mm[w]) ** 2))), bp.held_out(seqs, ks, recs, xs, i)
+    _HELD[(id(five), i)] = p, float(np.sqrt(np.mean((rec[w] - p.travel_mm[w]) ** 2))), bp.held_out(seqs, ks, recs, xs, i)
+    return _HELD[(id(five), i)]
 
 
 def _plastic(five, i):
@@ -199,7 +205,7 @@ def _plastic(five, i):
     keep = [j for j in range(5) if j != i]
     law = bp.decay_law("shock", [seqs[j] for j in keep], [ks[j] for j in keep], [recs[j] for j in keep],
                        [xs[j] for j in keep])
-    law.body = (float("nan"), float("nan"), 0)  # no record to fit the body on: the plastic stop
+    law.body = (float("nan"), float("nan"), 0, float("nan"))  # no record to fit the body on: the plastic stop
     p = law.predict(ks[i], recs[i], seqs[i], law.x_eq_of(seqs[i], ks[i]), ks[i], xs[i], 80.0)
     rec = np.interp(p.time_s, recs[i].time_s, xs[i])
     w = (p.time_s > p.slam_s) & (p.time_s < p.slam_s + 3.0)
@@ -207,9 +213,10 @@ def _plastic(five, i):
     return float(np.sqrt(np.mean((rec[w] - p.travel_mm[w]) ** 2)))
 
 
-# measured (held out in turn, fitted on the other four): trace RMS 0.565, 0.361, 0.19, 0.36, 0.27 mm (the
-# first two through the top-out stop with the seated body, its share 0.95 fitted on 4 and 8 clicks, then on
-# 0 clicks: at its bound; with the law's plastic stop 1.65 and 1.05 mm, its first rebound's top 3.6 and 1.7 mm
+# measured (held out in turn, fitted on the other four): trace RMS 0.313, 0.322, 0.19, 0.36, 0.27 mm (the
+# first two through the top-out stop with the seated body, its share and damping ratio fitted on 4 and 8
+# clicks (0.95 at its bound, 0.342), then on 0 clicks (0.95, 0.370); with the literature's 0.475 held and the
+# share alone fitted 0.565 and 0.361; with the law's plastic stop 1.65 and 1.05 mm, its first rebound's top 3.6 and 1.7 mm
 # short and its timing 10 and 17 ms early: scaled x1.23 / x1.14 about x_eq after the stop alone the plastic
 # trace would miss by 0.90 / 0.81 mm, shifted alone by 1.61 / 0.68, both 0.81 / 0.35);
 # first half cycle's decay misses by 0.08, 0.07, 0.22, 0.53, 0.47 sd with the measured decay's scatter
@@ -241,7 +248,7 @@ def test_a_trace_that_reaches_the_stop_says_it_leaves_the_envelope(five, i):
 
 @pytest.mark.parametrize("i", [0, 1])
 def test_the_seated_body_beats_the_plastic_stop_by_half(five, i):
-    """Measured: 0.565 / 0.361 mm RMS with the body against 1.65 / 1.05 with the plastic stop (whose
+    """Measured: 0.313 / 0.322 mm RMS with the body against 1.65 / 1.05 with the plastic stop (whose
     misses the 2.5 x noise check fails)."""
     p, rms, _ = _held(five, i)
     plastic = _plastic(five, i)
@@ -251,22 +258,65 @@ def test_the_seated_body_beats_the_plastic_stop_by_half(five, i):
 
 
 def test_held_out_trace_within_the_noise_through_the_stop_at_4_clicks(five):
-    """4 clicks held out: 0.361 mm RMS through the stop (the body's share fitted on 0 clicks' record)."""
+    """4 clicks held out: 0.322 mm RMS through the stop (the body's share and damping fitted on 0 clicks'
+    record: 0.95, 0.370)."""
     p, rms, _ = _held(five, 1)
     assert p.inside_stroke() and p.body is not None and p.body[2] == 1
     assert rms <= TRACE_RMS
 
 
-@pytest.mark.xfail(strict=True, reason="0 clicks held out reaches the top-out bumper after the slam: 0.565 mm RMS "
-                                         "with the seated body (two masses, 5 Hz, 0.475; its share fitted on 4 and 8 "
-                                         "clicks runs to its bound 0.95, 0.33 mm there) against 0.375; 1.65 with the "
-                                         "plastic stop. The generator's rider is 0.84 of the moving mass on two less "
-                                         "damped springs (0.35, 0.40) and pushed on the torso: its body returns more "
-                                         "of the energy the stop takes than the literature's 0.475 body does")
 def test_held_out_trace_within_the_noise_where_the_stop_is_reached(five):
+    """0 clicks held out reaches the top-out bumper after the slam: 0.313 mm RMS with the seated body's share
+    and damping ratio fitted on 4 and 8 clicks (0.95 at its bound, 0.342; 0.31 mm RMS there). The generator's
+    rider is 0.84 of the moving mass on two springs damped 0.35 and 0.40: the fitted damping is below the
+    literature's 0.475, as the generator's is."""
     p, rms, _ = _held(five, 0)
-    assert p.inside_stroke()
+    assert p.inside_stroke() and p.body is not None and p.body[2] == 2
+    assert p.body[3] < 0.475
     assert rms <= TRACE_RMS
+
+
+def test_the_literatures_body_damping_held_misses_where_the_stop_is_reached(five, monkeypatch):
+    """The baseline the fitted damping must beat: the body's damping held at Fairley and Griffin's 0.475 (its
+    share alone fitted, as before) misses 0 clicks held out by 0.565 mm RMS, past the 2.5 x noise check."""
+    from mtbmj.identify import bounce_body as bb
+
+    monkeypatch.setattr(bb, "BODY_ZETA_BOUNDS", (bb.BODY_ZETA - 1e-6, bb.BODY_ZETA + 1e-6))
+    recs, xs, seqs = five
+    ks = [k for k, _ in FIVE]
+    law = bp.decay_law("shock", seqs[1:], ks[1:], recs[1:], xs[1:])
+    p = law.predict(ks[0], recs[0], seqs[0], law.x_eq_of(seqs[0], ks[0]), ks[0], xs[0], 80.0)
+    rec = np.interp(p.time_s, recs[0].time_s, xs[0])
+    w = (p.time_s > p.slam_s) & (p.time_s < p.slam_s + 3.0)
+    assert p.body is not None and p.body[3] == pytest.approx(0.475, abs=1e-5)
+    assert float(np.sqrt(np.mean((rec[w] - p.travel_mm[w]) ** 2))) > TRACE_RMS
+
+
+def _body_of(z_torso, z_legs, monkeypatch):
+    """The seated body (share, RMS, records, damping ratio) fitted on this file's generator at 0, 4 and 8
+    clicks with its torso and legs damped ``z_torso`` and ``z_legs``."""
+    monkeypatch.setitem(globals(), "C_T", 2 * z_torso * math.sqrt(K_T * M_TORSO))
+    monkeypatch.setitem(globals(), "C_L", 2 * z_legs * math.sqrt(K_L * M_LEGS))
+    recs, xs, seqs, ks = [], [], [], []
+    for k, z in FIVE[:3]:
+        t, x = ring_down(c_of(z), seed=k + 1)
+        recs.append(SimpleNamespace(time_s=t, name=f"{k} clicks"))
+        xs.append(x)
+        seqs.append(bd.extrema(t, x, "shock", int(np.argmax(x))))
+        ks.append(k)
+    return bp.decay_law("shock", seqs, ks, recs, xs).body_share()
+
+
+@pytest.mark.slow
+def test_the_bodys_fitted_damping_tells_two_generators_apart(monkeypatch):
+    """Measured: the generator's body damped 0.35 (torso) and 0.40 (legs) reads 0.350, damped 0.55 and 0.55
+    reads 0.481 (the share at its bound 0.95 both times); a body held at the literature's 0.475 would read
+    the same for both. (Damped 0.20 it reads 0.276, at the search's lower bound 0.275.)"""
+    base = _body_of(Z_TORSO, Z_LEGS, monkeypatch)
+    stiff = _body_of(0.55, 0.55, monkeypatch)
+    assert base is not None and stiff is not None
+    assert stiff[3] - base[3] > 0.05
+    assert abs(base[3] - Z_TORSO) < 0.1 and abs(stiff[3] - 0.55) < 0.1
 
 
 def test_the_two_masses_ring_at_the_laws_frequency_and_damping():

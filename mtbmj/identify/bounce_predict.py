@@ -53,7 +53,7 @@ velocity is nil again). The stroke's ends are stops: a half cycle that reaches f
 or full travel is cut there and the motion restarts from rest at the stop (a plastic stop); a rest
 within d of x_eq is where it sticks. Where it reaches a stop and a record of the law reaches one too, the
 trace from the peak is instead the two masses' of :mod:`mtbmj.identify.bounce_body` (the seated rider's
-body holds the bike on its stop and drives it out; its share fitted on those records). So the trace never
+body holds the bike on its stop and drives it out; its share and damping fitted on those). So the trace never
 leaves the stroke (a test checks it on every trace written).
 
 **Intervals** (95 %): zeta and d from the law's covariance (delta method); the first half cycle's
@@ -419,7 +419,7 @@ class Prediction:
     slam_s: float
     time_s: np.ndarray = field(repr=False)
     travel_mm: np.ndarray = field(repr=False)
-    body: tuple | None = None  # (share, RMS mm, records): the trace through the stop is the two masses'
+    body: tuple | None = None  # (share, RMS mm, records, body zeta): the trace through the stop is the two masses'
 
     def inside_stroke(self) -> bool:
         return bool(np.all(self.travel_mm >= 0.0) and np.all(self.travel_mm <= self.stroke_mm))
@@ -443,8 +443,9 @@ class Prediction:
             return (f"{head} (a plastic stop, no record to fit the seated rider's body on; the body holds the end on "
                     f"its stop and drives it out: 1.1-1.7 mm RMS off in tests/test_bounce_predict.py)")
         return (f"{head}: the bike held on its stop by the seated rider's body (two masses, the body {bb.share_words(self.body[0])} "
-                f"of the moving mass at 5 Hz, 0.475, fitted on {self.body[2]} record(s), {self.body[1]:.2f} mm RMS there; "
-                f"0.36-0.57 mm RMS off in tests/test_bounce_predict.py, the noise 0.15 mm)")
+                f"of the moving mass at 5 Hz, damping ratio {bb.zeta_words(self.body[3])}, both fitted on {self.body[2]} "
+                f"record(s), {self.body[1]:.2f} mm RMS there; 0.31-0.32 mm RMS off in tests/test_bounce_predict.py, the "
+                f"noise 0.15 mm)")
 
     def summary(self) -> dict:
         out = {"clicks": self.clicks, "from_record": self.source, "from_clicks": self.source_clicks}
@@ -457,7 +458,7 @@ class Prediction:
                               f"law's motion from rest there " + (
                                   f"(plastic stops at 0 and {self.stroke_mm:g} mm, stuck within d of x_eq)" if
                                   self.body is None else
-                                  f"with the seated rider's body (share {self.body[0]:.3f}): the bike held on a stop "
+                                  f"with the seated rider's body (share {self.body[0]:.3f}, damping ratio {self.body[3]:.3f}): the bike held on a stop "
                                   f"or within the friction while the forces on it allow")),
                     "inside_stroke": self.inside_stroke(), "stop_reached_s": self.stop_reached_s()})
         if self.envelope_note():
@@ -482,12 +483,13 @@ class DecayLaw:
     scatter: HalfScatter | None = None  # the half periods' pooled scatter the timings carry (None: vertex only)
     records: list = field(default_factory=list)  # the records and their travel (mm), as ``seqs``: the body's fit
     travels: list = field(default_factory=list)
-    body: tuple | None = None  # (share, RMS mm, records) of the seated body fitted on them (:meth:`body_share`)
+    body: tuple | None = None  # (share, RMS mm, records, body zeta) of the seated body fitted on them (:meth:`body_share`)
 
     def body_share(self) -> tuple | None:
-        """The seated body's share of the moving mass (:func:`mtbmj.identify.bounce_body.fit_share`) fitted
-        on this law's records whose law motion from their slam's peak reaches the top-out stop, its RMS (mm)
-        and their count; None where none does. Fitted once."""
+        """The seated body's share of the moving mass and its damping ratio
+        (:func:`mtbmj.identify.bounce_body.fit_body`) fitted on this law's records whose law motion from their
+        slam's peak reaches the top-out stop: (share, RMS mm, their count, damping ratio); None where none
+        does. Fitted once."""
         from mtbmj.identify import bounce_body as bb
 
         if self.body is None:
@@ -500,8 +502,9 @@ class DecayLaw:
                 xe = self.x_eq_of(seq, k)
                 if free_motion(x0, xe, d, z, self.fn_hz, math.inf, bb.FIT_S, dt)[1].min() <= STOP_NEAR_MM:
                     cases.append((z, d, x0, xe, math.inf, np.asarray(x, float)[peak:], dt))
-            fit = bb.fit_share(cases, self.fn_hz)
-            self.body = (fit[0], fit[1], len(cases)) if fit else (float("nan"), float("nan"), 0)
+            fit = bb.fit_body(cases, self.fn_hz)
+            nan = float("nan")
+            self.body = (fit[0], fit[2], len(cases), fit[1]) if fit else (nan, nan, 0, nan)
         return self.body if self.body[2] else None
 
     def zeta_d(self, clicks: float) -> tuple[float, float, np.ndarray]:
@@ -559,7 +562,7 @@ class DecayLaw:
             from mtbmj.identify import bounce_body as bb
 
             body = self.body_share()  # through the stop: the two masses (the closed form elsewhere: faster)
-            tt, xx = bb.trace(bb.TwoMass.of_law(body[0], self.fn_hz, z, d), x0, x_eq, stroke_mm, after_s, dt)
+            tt, xx = bb.trace(bb.TwoMass.of_law(body[0], self.fn_hz, z, d, body[3]), x0, x_eq, stroke_mm, after_s, dt)
         rng = np.random.default_rng(0)
         draws = rng.multivariate_normal([z, d], cov, size=DRAWS)
         fns = rng.normal(self.fn_hz, self.fn_sd, size=DRAWS)
