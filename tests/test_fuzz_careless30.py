@@ -15,7 +15,7 @@ from mtbmj.bike import run as bike_run
 from mtbmj.cli.common import Parser
 from mtbmj.errors import ConfigError, MtbmjError
 from mtbmj.ride import reconstruct_given as G
-from helpers import refused
+from helpers import BIKE, bumps_csv, command_said, refused
 
 RIDE_S = 76.398  # the shipped example's last sample (s), its first at 0
 SECONDS = np.arange(0.0, 80.0, 1.0)  # a 1 Hz GPS track over the ride and past it
@@ -113,3 +113,57 @@ def test_a_bad_speed_profile_is_refused_before_the_model_is_built(monkeypatch, p
     monkeypatch.setattr(bike_run, "build_bike", built)
     with pytest.raises(ConfigError, match=said):
         bike_run.run_bike("sst", "flat:length_m=20", duration=0.1, speed_profile=profile)
+
+
+@pytest.mark.parametrize("seconds", [5.5])
+def test_a_short_ride_at_a_speed_given_is_reconstructed(tmp_path, capfd, seconds):
+    """A 5.5 s two-ended ride made here (bumps at the fork, the same 0.2 s later at the rear) with ``--speed 5``:
+    before, refused "a speed needs at least one 5 s window and the slowest lag searched ... 6.26 s: no speed
+    estimate", though the speed was given; now reconstructed at it, the lag's refusal reported beside it. Without
+    the speed it is refused as before."""
+    csv, *_ = bumps_csv(tmp_path / "short.csv", seconds)
+    bike = tmp_path / "bike.toml"
+    bike.write_text(BIKE)
+    out = tmp_path / "out"
+    status, said = command_said(["reconstruct", csv, "--bike", bike, "--speed", "5", "--out", out], capfd)
+    assert status == 0 and "Traceback" not in said, said
+    assert "speed given (a constant 5 m/s, used)" in said and "the lag gives none: the ride is 5.5 s" in said, said
+    assert (out / "reconstruction.json").exists()
+    refused(["reconstruct", csv, "--bike", bike, "--out", tmp_path / "lag"], tmp_path / "lag", capfd,
+            "the slowest lag searched")
+
+
+@pytest.mark.parametrize("seconds", [0.005, 1.0, 3.0])
+def test_a_ride_shorter_than_a_window_at_a_speed_given_is_refused(tmp_path, capfd, seconds):
+    """Shorter than one 5 s window, the speed given or not: one line naming the speed given (with the lag's
+    minimum lifted, 5 samples gave a traceback from the derivative filter and 1 s a reason about windows
+    'whose two ends aligned'), nothing written."""
+    csv, *_ = bumps_csv(tmp_path / "short.csv", seconds)
+    bike = tmp_path / "bike.toml"
+    bike.write_text(BIKE)
+    out = tmp_path / "out"
+    line = refused(["reconstruct", csv, "--bike", bike, "--speed", "5", "--out", out], out, capfd,
+                   "a reconstruction at the speed given (a constant 5 m/s) needs at least one 5 s window")
+    assert "short.csv: the ride is" in line
+
+
+@pytest.mark.parametrize("value", ["3", "-500", "80"])
+def test_a_tried_spring_rate_outside_the_bike_keys_range_is_refused(tmp_path, capfd, value):
+    """``--try-set shock.spring_rate_lb_per_in=3`` (a 3 lb/in spring; 80: N/mm typed under lb/in): before, set as
+    the shock configuration's fork.spring.rate_N_per_mm (0.53 N/mm), whose range is not the bike key's, and
+    taken (-500 was refused naming that internal key at -87.5634). Now the bike key's 150-1000 lb/in, named as
+    typed; a 5 s --duration makes the code before refuse on the duration instead, so this fails fast there."""
+    out = tmp_path / "out"
+    line = refused(["advise", "example", "--bike", "sst", "--try-set", f"shock.spring_rate_lb_per_in={value}",
+                    "--duration", "5", "--out", out], out, capfd,
+                   f"shock.spring_rate_lb_per_in = {value} lb/in is outside 150-1000 lb/in")
+    assert "fork.spring.rate_N_per_mm" not in line
+
+
+def test_a_tried_spring_rate_within_the_range_is_taken():
+    """The refusal's other side: 500 lb/in (the recorded 456.8 within 150-1000) is a try, set in N/mm."""
+    from mtbmj.bike import spec
+    from mtbmj.ride import advise
+
+    tr = advise.trial(spec.resolve("sst"), None, None, [("shock.spring_rate_lb_per_in", 500.0)])
+    assert tr.overrides["shock.set"]["fork.spring.rate_N_per_mm"] == pytest.approx(500.0 * 0.17512683524647638)

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mtbmj.errors import ConfigError
-from mtbmj.ride.reconstruct_speed import WINDOW_HOP, WINDOW_S
+from mtbmj.ride.reconstruct_speed import WINDOW_HOP, WINDOW_S, ReconstructError
 
 COVER_S = 1.0  # s a speed CSV may start after the ride's first sample or end before its last (a GPS's 1 Hz step)
 MIN_USED = 0.3  # m/s: a given speed below this (standing) is taken as it (``--speed``'s plausible low)
@@ -58,6 +58,15 @@ class GivenSpeed:
         t = np.asarray(t, float)
         v = np.full(t.shape, float(self.speed[0])) if self.time_s is None else np.interp(t, self.time_s, self.speed)
         return np.maximum(v, MIN_USED)
+
+    def check_length(self, t, name: str) -> None:
+        """Refuse (one line) a ride (samples ``t``, s) shorter than one speed window (``WINDOW_S``): the given
+        speed is laid out and its rear checked in such windows (the lag's longer minimum does not hold: where
+        the lag gives none, that is reported beside the speed given)."""
+        length = float(t[-1] - t[0]) if len(t) > 1 else 0.0
+        if length < WINDOW_S:
+            raise ReconstructError(f"{name}: the ride is {length:.1f} s: a reconstruction at the speed given "
+                                   f"({self.said}) needs at least one {WINDOW_S:g} s window of it to check the rear in")
 
     def check_covers(self, t0: float, t1: float, name: str = "", short: str = "") -> None:
         """Refuse (one line) a CSV whose time does not cover the ride's ``t0``..``t1`` (s), that holds
