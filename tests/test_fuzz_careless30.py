@@ -7,15 +7,17 @@ refused only after the model was built). Every input is written here; the ride i
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from mtbmj.bike import run as bike_run
+from mtbmj.bike import spec
 from mtbmj.cli.common import Parser
 from mtbmj.errors import ConfigError, MtbmjError
 from mtbmj.ride import reconstruct_given as G
-from helpers import BIKE, bumps_csv, command_said, refused
+from helpers import BIKE, SENSORS, bike_text, bumps_csv, command_said, refused, write_v3
 
 RIDE_S = 76.398  # the shipped example's last sample (s), its first at 0
 SECONDS = np.arange(0.0, 80.0, 1.0)  # a 1 Hz GPS track over the ride and past it
@@ -167,3 +169,25 @@ def test_a_tried_spring_rate_within_the_range_is_taken():
 
     tr = advise.trial(spec.resolve("sst"), None, None, [("shock.spring_rate_lb_per_in", 500.0)])
     assert tr.overrides["shock.set"]["fork.spring.rate_N_per_mm"] == pytest.approx(500.0 * 0.17512683524647638)
+
+
+def test_an_sst_ride_through_a_bike_without_sensors_says_whose_arms_read_it(tmp_path, capfd):
+    """An SST v3 ride (written here through this file's recorder's arms) with ``--bike`` a file without
+    ``[sensors]``: before, decoded silently with the SST example's arms (another recorder's travel wrong by as
+    much as they differ); now a warning line says so. The same ride through a bike file giving [sensors]: no
+    such line."""
+    t = np.arange(0.0, 20.0, 1e-3)
+    sst = write_v3(tmp_path / "ride.SST", 60.0 + 30.0 * np.sin(2.0 * t), 15.0 + 8.0 * np.sin(2.0 * t - 0.3), SENSORS)
+    bare, given = tmp_path / "bare.toml", tmp_path / "given.toml"
+    from mtbmj.bike import presets
+
+    sst_toml = (Path(presets.__file__).parent / "sst.toml").read_text()  # the SST preset without its [sensors]
+    head, _, tail = sst_toml.partition("[sensors]")
+    bare.write_text(head + tail[tail.index("\n["):] if "\n[" in tail else head)
+    assert "[sensors]" not in bare.read_text() and spec.load(str(bare)).sensors == {}
+    given.write_text(bike_text())
+    status, said = command_said(["telemetry", sst, "--bike", bare, "--out", tmp_path / "a"], capfd)
+    assert status == 0, said
+    assert f"--bike {bare} gives no [sensors] for its front and rear sensor: decoded with the SST example's" in said
+    status, said = command_said(["telemetry", sst, "--bike", given, "--out", tmp_path / "b"], capfd)
+    assert status == 0 and "[sensors]" not in said, said
