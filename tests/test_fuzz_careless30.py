@@ -191,3 +191,28 @@ def test_an_sst_ride_through_a_bike_without_sensors_says_whose_arms_read_it(tmp_
     assert f"--bike {bare} gives no [sensors] for its front and rear sensor: decoded with the SST example's" in said
     status, said = command_said(["telemetry", sst, "--bike", given, "--out", tmp_path / "b"], capfd)
     assert status == 0 and "[sensors]" not in said, said
+
+
+def _law(zeta_at_0, zeta_at_17):
+    """A decay law made here (``bounce_predict.DecayLaw``'s face the answer reads): the shock's damping ratio
+    linear between two records at 0 and 17 clicks, a 0.7 mm friction band."""
+    from types import SimpleNamespace
+
+    def zeta_d(k):
+        return zeta_at_0 + (zeta_at_17 - zeta_at_0) * float(k) / 17.0, 0.7
+
+    return SimpleNamespace(end="shock", clicks=[0.0, 17.0], zeta_d=zeta_d, fit=SimpleNamespace(names=("zeta0", "slope")))
+
+
+def test_clicks_whose_damping_falls_get_no_answer_in_clicks():
+    """``fit bounce 00083.SST 00085.SST --clicks 17,0`` (the shared slams' 0 and 8 clicks typed swapped): the
+    law's zeta falls from 0.202 at 0 clicks to 0.142 at 17, and the answer said "more than 17 clicks: record a
+    slam at more clicks", more of what the law says lowers damping. Now no answer, the clicks' order named. The
+    same law rising (as rebound clicks do) answers as before."""
+    from mtbmj.identify import bounce_clicks as bc
+
+    ans = bc.answer(_law(0.202, 0.142), 18.0)
+    assert ans.clicks is None and "the law's damping falls as the clicks rise" in ans.note
+    assert "zeta 0.202 at 0 clicks, 0.142 at 17" in ans.note and "more than" not in ans.line()
+    rising = bc.answer(_law(0.142, 0.202), 18.0)
+    assert "falls" not in (rising.note or "") and "clicks" in rising.line()
