@@ -248,3 +248,12 @@ def test_a_hit_with_no_law_to_answer_is_refused(tmp_path, capfd, hit):
             f"--hit-mm {hit}: the hit of the answer in clicks, which needs a decay law across two or more")
     status, said = command_said(["fit", "bounce", slam, "--clicks", "0", "--out", out], capfd)
     assert status == 0 and "slam.SST at 0 clicks: shock zeta" in said, said
+
+
+def test_one_speed_in_km_per_h_is_refused(tmp_path, capfd):
+    """``--speed 25`` (km/h typed): before, a whole ride at 25 m/s reconstructed (within the 30 m/s top); now
+    refused as the CSV's median is, with the m/s it would be. 19 m/s (68 km/h, a fast descent) is taken."""
+    out = tmp_path / "out"
+    refused(["reconstruct", "example", "--bike", "sst", "--speed", "25", "--out", out], out, capfd,
+            "--speed 25: a whole ride at over 20 m/s (72 km/h) is no trail ridden: km/h? (6.94 m/s if so")
+    assert G.constant(19.0).speed[0] == 19.0

@@ -129,11 +129,15 @@ def checked(time_s, speed, said: str) -> GivenSpeed:
 
 
 def constant(v: float) -> GivenSpeed:
-    """One speed (m/s) for the whole ride; a ``ConfigError`` where it is not a ridden one (> 0, at most 30)."""
+    """One speed (m/s) for the whole ride; a ``ConfigError`` where it is not a ridden one (> 0, at most 30 m/s,
+    the fastest a bike is ridden; a whole ride at most ``FAST``: km/h typed)."""
     top = _top()
     if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.0 < v <= top):
         raise ConfigError(f"--speed {v!r}: a ride's speed given is a number above 0 and at most {top:g} m/s, the "
                           f"fastest a bike is ridden (a run of the model's own, mtbmj bike or roll, may go faster)")
+    if v > FAST:  # a whole ride at it is no trail ridden (the CSV's median is held to the same)
+        raise ConfigError(f"--speed {v:g}: a whole ride at over {FAST:g} m/s ({3.6 * FAST:g} km/h) is no trail ridden: "
+                          f"km/h? ({v / 3.6:.3g} m/s if so: give it in m/s)")
     return GivenSpeed(None, np.array([float(v)]), f"a constant {float(v):g} m/s")
 
 
