@@ -200,6 +200,10 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     if speed_profile is not None and (pedal is not None or drive != "rider"):
         raise ConfigError("speed_profile: the rider's drive holds a set speed along the terrain; a pedalling or "
                           "coasting run has none")
+    if speed_profile is not None:  # checked before any work (the CLI's --speed-profile is, with the file named)
+        from mtbmj.bike.schedule import SpeedProfile
+
+        speed_profile = SpeedProfile.checked(speed_profile)
     if pedal is not None:
         if drive != "rider":
             raise ConfigError(f"pedal: a pedalling rider is the drive; drive {drive!r} cannot be given with it")
@@ -240,6 +244,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     ter = terrain_mod.make(scenario)
     if ter.moving:
         raise ConfigError("scenario: the drum rig holds a single wheel; a bike rolls on fixed terrain")
+    if speed_profile is not None:  # held flat past its ends, one off the terrain would set one speed, silently
+        speed_profile.along(ter.start_x, ter.start_x + ter.length)
     fork_setup, shock_setup = setups(spec)
     radius = fork_setup.tire_radius
     spec_mod.check_geometry(spec, radius)
@@ -293,10 +299,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
         mujoco.mj_forward(b.model, data)
     p.initial_qpos, p.initial_qvel, p.initial_act = data.qpos.copy(), data.qvel.copy(), data.act.copy()
     p.watch = crash.Watch(b.model, ter, b.qpos_index("pitch"), pitch_locked="pitch" in lock)
-    if speed_profile is not None:
-        from mtbmj.bike.schedule import SpeedProfile
-
-        p.speed_profile = SpeedProfile.checked(speed_profile)
+    p.speed_profile = speed_profile
     return p
 
 

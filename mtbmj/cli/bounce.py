@@ -108,6 +108,9 @@ def cmd_fit_bounce(args) -> int:
         raise MtbmjError("--rebound-target-per-s: the answer from the rebound dampers needs --replay (and --bike)")
     result = fit_bounce(args.records, clicks, predict, bike=args.bike, hit_mm=args.hit_mm, rider_hz=args.rider_hz,
                         replay=args.replay, rebound_target_per_s=target)
+    if args.hit_mm is not None and not result.answers:  # else it would change nothing, silently (a past-stroke hit too)
+        raise MtbmjError(f"--hit-mm {args.hit_mm:g}: the hit of the answer in clicks, which needs a decay law across "
+                         f"two or more different --clicks; these records give none (leave --hit-mm out)")
     written = result.write(args.out)
     for line in result.lines():
         print(line)

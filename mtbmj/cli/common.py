@@ -41,7 +41,9 @@ class Parser(argparse.ArgumentParser):
         raise MtbmjError(message)
 
     def parse_known_args(self, args=None, namespace=None):
-        _one_comma_list(getattr(self, "_comma_lists", ()), sys.argv[1:] if args is None else list(args))
+        given = sys.argv[1:] if args is None else list(args)
+        _one_comma_list(getattr(self, "_comma_lists", ()), given)
+        _one_side(self._actions, given)
         return super().parse_known_args(args, namespace)
 
     def add_argument(self, *args, **kwargs):
@@ -86,6 +88,17 @@ def _one_comma_list(options, args) -> None:
             listed = ",".join(v.strip(",") for v in values if v.strip(","))
             raise MtbmjError(f"{option} takes one comma list without spaces: {option} {listed} (not "
                              f"{option} {' '.join(values)})")
+
+
+def _one_side(actions, args) -> None:
+    """Refuse a switch given both ways (``--calibrate --no-calibrate``): argparse lets the last one win,
+    silently; the line names both."""
+    said = [str(a) for a in args]
+    for action in actions:
+        if isinstance(action, argparse.BooleanOptionalAction):
+            ways = [o for o in dict.fromkeys(said) if o in action.option_strings]  # in the order typed
+            if len({o.startswith("--no-") for o in ways}) == 2:
+                raise MtbmjError(f"{ways[0]} and {ways[1]} given both: one would silently win over the other; give one")
 
 
 def intermixed(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:

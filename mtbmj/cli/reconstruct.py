@@ -38,8 +38,11 @@ def given_speeds(args, records) -> list:
         raise ConfigError(f"{'--speed' if speeds else '--speed-csv'} given {many} times for {len(records)} rides: give "
                           f"one per ride, in the rides' order" + (" (or --speed once for all)" if speeds else ""))
     out = [given_mod.constant(v) for v in speeds] or [given_mod.read_csv(f) for f in files]
+    cut = getattr(args, "duration", None)  # advise's: it limits the runs, the reconstruction is of the whole ride
+    short = "" if cut is None else (f" (--duration {cut:g} s limits the runs over the ride; the ride is "
+                                    f"reconstructed whole, at the speed given)")
     for g, record in zip(out, records):
-        g.check_covers(float(record.time_s[0]), float(record.time_s[-1]), record.name)
+        g.check_covers(float(record.time_s[0]), float(record.time_s[-1]), record.name, short)
     return out
 
 

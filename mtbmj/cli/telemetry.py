@@ -99,8 +99,14 @@ def ride_record(ride, args, bike=None, overrides=None):
     read with (``telemetry.beyond_travel``), else its quality warnings issued."""
     from mtbmj.config import warn
 
-    record = telemetry.read_ride(telemetry.ride_path(ride), **decoding(args, bike, overrides))
+    read = decoding(args, bike, overrides)
+    record = telemetry.read_ride(telemetry.ride_path(ride), **read)
     beyond = telemetry.beyond_travel(record, *travel_keys(args))
+    unset = [end for end in ("front", "rear") if end not in read] if getattr(args, "bike", None) is not None else []
+    if unset and record.version == 3:  # the recorder's arms not given: the example's taken, said
+        beyond.append(f"{record.name}: --bike {args.bike} gives no [sensors] for its {' and '.join(unset)} sensor: "
+                      f"decoded with the SST example's recorder's arms (mtbmj/bike/presets/sst.toml [sensors]); "
+                      f"another recorder's travel is wrong by as much as its arms differ")
     warn(telemetry.quality(record) + beyond)
     return record
 

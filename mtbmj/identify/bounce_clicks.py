@@ -121,6 +121,11 @@ def answer(law, hit_mm: float) -> ClickAnswer:
         return ClickAnswer(law.end, hit_mm, searched, None, None, (False, False), None, 1.0,
                            "no answer: the chosen law has no damping that changes with the clicks (friction only)")
     d = z0d(lo)[1]
+    if zeta_at(hi) < zeta_at(lo):  # the window's "more clicks" / "fewer clicks" read clicks as adding damping
+        return ClickAnswer(law.end, hit_mm, searched, None, None, (False, False), None, 1.0,
+                           f"no answer: the law's damping falls as the clicks rise (zeta {zeta_at(lo):.3f} at {lo:g} "
+                           f"clicks, {zeta_at(hi):.3f} at {hi:g}) where rebound clicks add damping: --clicks not in "
+                           f"the records' order, or counted from closed?")
     a, b, where = window(zeta_at, d, hit_mm, lo, hi)
     if where == "above":
         return ClickAnswer(law.end, hit_mm, searched, None, None, (False, True), None, 1.0,

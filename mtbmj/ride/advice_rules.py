@@ -462,6 +462,13 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
         if named is not None and not colon:  # a key the advice names: set as its candidates are (a coil's
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise ConfigError(f"--try-set {key}: must be a number, got {value!r}")
+            # set under the part's own key (lb/in as the shock configuration's N/mm, whose range is not the bike
+            # key's): the bike key's range checked here, unless the recorded setting is outside it too
+            from mtbmj.bike.keys import warnings as odd
+
+            section, _, bare = key.partition(".")
+            for line in odd({section: {bare: value}}) if not odd({section: {bare: named.value / named.per_unit}}) else ():
+                raise ConfigError(f"--try-set {key}={value:g}: {line} (advise predicts only within what parts have)")
             over.setdefault(named.section, {})[named.key] = value * named.per_unit  # rate, its preload kept)
         elif colon:
             if part not in ("fork", "shock") or not name:

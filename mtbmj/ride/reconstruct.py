@@ -554,7 +554,10 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False, speed=None,
     record, part_s, stands = ridden_part(record)
     spec = spec_mod.load(bike, overrides)  # a ResolvedBike is derived again, not read
     t = np.asarray(record.time_s, float)
-    check_length(t, spec.front_axle[0] - spec.rear_axle[0], WINDOW_S, record.name)  # before any work
+    if given is None:  # before any work; the speed given: the lag's refusal reported beside it, one window needed
+        check_length(t, spec.front_axle[0] - spec.rear_axle[0], WINDOW_S, record.name)
+    else:
+        given.check_length(t, record.name)
     dt = float(t[1] - t[0])
     fork_mm, rear_mm = np.asarray(record.fork_mm, float), np.asarray(record.rear_mm, float)
     shock_mm = np.asarray(record.shock_mm, float) if record.shock_mm is not None else None

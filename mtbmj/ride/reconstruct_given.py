@@ -8,7 +8,8 @@ quantities ``time`` and ``speed``), its time increasing, each speed from 0 to th
 ``--speed`` (``mtbmj.limits``: 30 m/s), and it covers the ride (its first row at most ``COVER_S``
 after the ride's first sample, its last at most ``COVER_S`` before the ride's last; held flat past its
 ends), at least two of its rows within the ride (not a time in ms under ``time_s``) and a speed of at least
-``MIN_USED`` somewhere on it (not a column of zeros). It is interpolated linearly onto the ride's samples. A row that breaks one of these is refused
+``MIN_USED`` somewhere on it (not a column of zeros), its median over the ride at most ``FAST`` (not km/h
+read as m/s). It is interpolated linearly onto the ride's samples. A row that breaks one of these is refused
 in one line naming the file and the row (the data rows counted from 1), before any work. A speed
 below ``MIN_USED`` (standing) is taken as ``MIN_USED`` for the rear's lag and the distance (the lag
 would be endless). The given speed is laid out in the lag's windows (their mean speed each, kind
@@ -28,10 +29,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from mtbmj.errors import ConfigError
-from mtbmj.ride.reconstruct_speed import WINDOW_HOP, WINDOW_S
+from mtbmj.ride.reconstruct_speed import WINDOW_HOP, WINDOW_S, ReconstructError
 
 COVER_S = 1.0  # s a speed CSV may start after the ride's first sample or end before its last (a GPS's 1 Hz step)
 MIN_USED = 0.3  # m/s: a given speed below this (standing) is taken as it (``--speed``'s plausible low)
+FAST = 20.0  # m/s: a trail ridden at a median over this (72 km/h) is no ride: km/h read as m/s
 AGREE = 0.10  # the given speed and the lag's within this share of the lag's (median over windows): they agree
 
 
@@ -49,6 +51,7 @@ class GivenSpeed:
     time_s: np.ndarray | None
     speed: np.ndarray
     said: str
+    column: str = "speed_m_per_s"  # the CSV's speed column (a speed in another unit read into m/s)
 
     def at(self, t) -> np.ndarray:
         """The given speed at the times ``t`` (s, the ride's clock), at least ``MIN_USED``."""
@@ -56,10 +59,20 @@ class GivenSpeed:
         v = np.full(t.shape, float(self.speed[0])) if self.time_s is None else np.interp(t, self.time_s, self.speed)
         return np.maximum(v, MIN_USED)
 
-    def check_covers(self, t0: float, t1: float, name: str = "") -> None:
+    def check_length(self, t, name: str) -> None:
+        """Refuse (one line) a ride (samples ``t``, s) shorter than one speed window (``WINDOW_S``): the given
+        speed is laid out and its rear checked in such windows (the lag's longer minimum does not hold: where
+        the lag gives none, that is reported beside the speed given)."""
+        length = float(t[-1] - t[0]) if len(t) > 1 else 0.0
+        if length < WINDOW_S:
+            raise ReconstructError(f"{name}: the ride is {length:.1f} s: a reconstruction at the speed given "
+                                   f"({self.said}) needs at least one {WINDOW_S:g} s window of it to check the rear in")
+
+    def check_covers(self, t0: float, t1: float, name: str = "", short: str = "") -> None:
         """Refuse (one line) a CSV whose time does not cover the ride's ``t0``..``t1`` (s), that holds
-        fewer than two rows within it (a time in ms under ``time_s``), or whose speed is below
-        ``MIN_USED`` over the whole ride (a column of zeros: the bike never moves)."""
+        fewer than two rows within it (a time in ms under ``time_s``), whose speed is below ``MIN_USED``
+        over the whole ride (a column of zeros: the bike never moves) or its median above ``FAST`` (km/h);
+        ``short``: words added where it ends before the ride's end (why a shorter run does not do)."""
         if self.time_s is None:
             return
         t, v = self.time_s, self.speed
@@ -71,7 +84,7 @@ class GivenSpeed:
                               f"the speed must cover the ride (within {COVER_S:g} s){after}")
         if t[-1] < t1 - COVER_S:
             raise ConfigError(f"{self.said}: row {t.size} (time {t[-1]:g} s), its last, ends "
-                              f"before the ride's end: {ride}; the speed must cover the ride (within {COVER_S:g} s)")
+                              f"before the ride's end: {ride}; the speed must cover the ride (within {COVER_S:g} s){short}")
         inside = np.flatnonzero((t >= t0 - COVER_S) & (t <= t1 + COVER_S))
         if inside.size < 2:
             raise ConfigError(f"{self.said}: {'only row ' + str(inside[0] + 1) if inside.size else 'no row'} of "
@@ -82,6 +95,11 @@ class GivenSpeed:
             raise ConfigError(f"{self.said}: every speed over the ride ({ride}) is below {MIN_USED:g} m/s (at most "
                               f"{on_ride.max():g} m/s): the bike never moves in it (a column of zeros?); the terrain "
                               f"is found along the distance ridden")
+        median = float(np.median(np.interp(np.linspace(t0, t1, 1001), t, v)))
+        if median > FAST:
+            raise ConfigError(f"{self.said}: column {self.column}: a median of {median:.3g} m/s over the ride ({ride}) "
+                              f"is no trail ridden (at most {FAST:g} m/s, {3.6 * FAST:g} km/h): km/h under "
+                              f"{self.column}? ({median / 3.6:.3g} m/s if so: write it in m/s)")
 
 
 def checked(time_s, speed, said: str) -> GivenSpeed:
@@ -103,17 +121,23 @@ def checked(time_s, speed, said: str) -> GivenSpeed:
     out = np.flatnonzero((v < 0.0) | (v > top))
     if out.size:
         i = int(out[0])
-        raise ConfigError(f"{said}: row {i + 1} (time {t[i]:g} s): speed {v[i]:g} m/s is outside 0-{top:g} m/s "
-                          f"({'negative' if v[i] < 0 else 'no bike is ridden so fast'})")
+        why = "negative" if v[i] < 0 else "no bike is ridden so fast" + (
+            f"; km/h? {v[i] / 3.6:.3g} m/s if so: write it in m/s" if v[i] <= 3.6 * top else "")
+        raise ConfigError(f"{said}: row {i + 1} (time {t[i]:g} s): speed {v[i]:.3g} m/s is outside 0-{top:g} m/s "
+                          f"({why})")
     return GivenSpeed(t, v, said)
 
 
 def constant(v: float) -> GivenSpeed:
-    """One speed (m/s) for the whole ride; a ``ConfigError`` where it is not a ridden one (> 0, at most 30)."""
+    """One speed (m/s) for the whole ride; a ``ConfigError`` where it is not a ridden one (> 0, at most 30 m/s,
+    the fastest a bike is ridden; a whole ride at most ``FAST``: km/h typed)."""
     top = _top()
     if not (isinstance(v, (int, float)) and math.isfinite(v) and 0.0 < v <= top):
         raise ConfigError(f"--speed {v!r}: a ride's speed given is a number above 0 and at most {top:g} m/s, the "
                           f"fastest a bike is ridden (a run of the model's own, mtbmj bike or roll, may go faster)")
+    if v > FAST:  # a whole ride at it is no trail ridden (the CSV's median is held to the same)
+        raise ConfigError(f"--speed {v:g}: a whole ride at over {FAST:g} m/s ({3.6 * FAST:g} km/h) is no trail ridden: "
+                          f"km/h? ({v / 3.6:.3g} m/s if so: give it in m/s)")
     return GivenSpeed(None, np.array([float(v)]), f"a constant {float(v):g} m/s")
 
 
@@ -134,7 +158,9 @@ def read_csv(path) -> GivenSpeed:
                  else "")
         raise ConfigError(f"{said}: a speed over time needs exactly the columns time_s and speed_m_per_s (has {have}"
                           f"{along})")
-    return checked(rec["time"], rec["speed"], said)
+    import dataclasses
+
+    return dataclasses.replace(checked(rec["time"], rec["speed"], said), column=f"speed_{rec.units['speed']}")
 
 
 def given(speed) -> GivenSpeed:
@@ -254,5 +280,5 @@ def speed_panel(a, rec) -> None:
               f"(given: {sp['given']})" if given else f"(wheelbase {rec.wheelbase:.3f} m / the lag per window)"))
 
 
-__all__ = ["GivenSpeed", "COVER_S", "MIN_USED", "AGREE", "checked", "constant", "read_csv", "given", "compared",
+__all__ = ["GivenSpeed", "COVER_S", "MIN_USED", "FAST", "AGREE", "checked", "constant", "read_csv", "given", "compared",
            "profile", "summary", "words", "speed_panel"]
