@@ -36,8 +36,9 @@ at every sample, its rear wheel over the ground of the pass before a wheelbase l
 predicted settles. The fork's slow load (below 0.3 Hz) is the rider's; the frame's front is held
 near the quarter car's slow height by a load bounded by half the rider's weight (the rider's slow
 load, estimated). Take-offs: where the tyre's force falls to zero or the fork hangs on its top-out
-stop (two such stretches one flight where the force between them averages under 10 % of its load at
-rest), a flight of 0.1 s or more from where the force last fell below 10 % of its load at rest
+stop (a tyre light for long too with ``reconstruct_inverse.LIGHT_S``, off by default; two such
+stretches one flight where the force between them averages under 10 % of its load at rest), a
+flight of 0.1 s or more from where the force last fell below 10 % of its load at rest
 (``reconstruct_inverse.unloaded``); a flight that long landing more than 0.15 m lower bridged by the
 landing's level from the take-off on (a drop's edge), any other by the chord; the landing where the
 force returns. Each drop's edge flight's level change is read by the whole bike and kept in its slow
