@@ -257,3 +257,19 @@ def test_one_speed_in_km_per_h_is_refused(tmp_path, capfd):
     refused(["reconstruct", "example", "--bike", "sst", "--speed", "25", "--out", out], out, capfd,
             "--speed 25: a whole ride at over 20 m/s (72 km/h) is no trail ridden: km/h? (6.94 m/s if so")
     assert G.constant(19.0).speed[0] == 19.0
+
+
+def test_a_trail_s_profile_rides_a_short_section_of_it_and_a_stretched_segment_is_refused():
+    """Fewer than two places along the terrain is not itself wrong: a trail's profile with a place every 5 m
+    rides a 3 m section between two of them (the render test's run, refused by the check above when it asked
+    for two places on the terrain). One segment stretched over it (places 0 and 10000 m about a 20 m
+    terrain: a profile in mm) is still refused."""
+    from mtbmj.bike.schedule import SpeedProfile
+
+    trail = SpeedProfile.checked((np.arange(0.0, 105.0, 5.0), np.linspace(4.0, 6.0, 21)))
+    assert trail.along(0.0, 3.0) is trail
+    stretched = SpeedProfile.checked(([0.0, 10000.0], [4.0, 5.0]))
+    with pytest.raises(ConfigError, match="only place 1 of 2 lies along the terrain"):
+        stretched.along(0.0, 20.0)
+    with pytest.raises(ConfigError, match="no place of 2 lies along the terrain"):
+        SpeedProfile.checked(([500.0, 600.0], [4.0, 5.0])).along(0.0, 20.0)
