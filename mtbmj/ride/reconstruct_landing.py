@@ -3,7 +3,8 @@ uses it for the terrain it writes for riding, never for the ground the check pre
 
 **Which flights.** A flight of the front (``Reconstruction.jumps``: its tyre's force found near zero)
 during which the rear's record also hangs within ``HANG_MM`` of full extension for at least
-``BOTH_S``: both ends in the air together, the bike and its rider thrown free.
+``BOTH_S``: both ends in the air together, the bike and its rider thrown free; not one whose rear hangs
+from the record's first sample or either end to its last (no take-off or no landing in the record).
 
 **The bound.** Both wheels cross the same level change (the lip's level to the landing's). While both
 ends are in the air each axle falls with the frame at g less the pitch's pull toward the centre of
@@ -61,11 +62,14 @@ def com_height(spec) -> float:
     return float(cz - 0.5 * (spec.front_axle[1] + spec.rear_axle[1]))
 
 
-def _touchdown(travel_m, k0: int, dt: float) -> tuple[int, float]:
+def _touchdown(travel_m, k0: int, dt: float) -> tuple[int, float] | None:
     """(the first sample at or after ``k0`` where ``travel_m`` leaves its hang, the travel's largest
-    speed m/s over ``READ_S`` from there)."""
+    speed m/s over ``READ_S`` from there); None where it hangs to the record's end (no landing: the
+    rider off the bike at the end of 00642.SST and 00649.SST read a landing at 0 m/s there)."""
     up = np.flatnonzero(travel_m[k0:] > HANG_MM * 1e-3)
-    k = k0 + int(up[0]) if up.size else travel_m.size - 1
+    if not up.size:
+        return None
+    k = k0 + int(up[0])
     n = max(int(round(READ_S / dt)), 2)
     part = travel_m[max(k - 1, 0):k + n + 1]
     return k, float(np.max(np.diff(part)) / dt) if part.size > 1 else 0.0
@@ -93,8 +97,9 @@ def judged(t, distance, ground, fork_mm, rear_mm, jumps, speed, wheelbase: float
         p, q = max(both, key=lambda pq: pq[1] - pq[0])
         if (q - p) * dt < BOTH_S:
             continue
-        kr, v_rear = _touchdown(rear, q, dt)
-        kf, v_fork = _touchdown(fork, b, dt)
+        if p == 0 or _touchdown(rear, q, dt) is None or _touchdown(fork, b, dt) is None:
+            continue  # hanging from the record's start (the rider getting on) or to its end: no flight read whole
+        (kr, v_rear), (kf, v_fork) = _touchdown(rear, q, dt), _touchdown(fork, b, dt)
         first, k, v, extended = (("rear", kr, v_rear, rear[max(p - 1, 0)]) if kr <= kf else
                                  ("fork", kf, v_fork, fork[max(a - 1, 0)]))
         place = x[k] - (wheelbase if first == "rear" else 0.0)
