@@ -97,7 +97,7 @@ def judged(t, distance, ground, fork_mm, rear_mm, jumps, speed, wheelbase: float
         p, q = max(both, key=lambda pq: pq[1] - pq[0])
         if (q - p) * dt < BOTH_S:
             continue
-        if p == 0 or _touchdown(rear, q, dt) is None or _touchdown(fork, b, dt) is None:
+        if hang[:p + 1].all() or _touchdown(rear, q, dt) is None or _touchdown(fork, b, dt) is None:
             continue  # hanging from the record's start (the rider getting on) or to its end: no flight read whole
         (kr, v_rear), (kf, v_fork) = _touchdown(rear, q, dt), _touchdown(fork, b, dt)
         first, k, v, extended = (("rear", kr, v_rear, rear[max(p - 1, 0)]) if kr <= kf else
