@@ -133,7 +133,7 @@ def terrain_of(rec, descent_deg: float = 0.0):
     the start ``DESCENT_LEAD_M`` further back so the ride's first metre is on the steady grade."""
     from mtbmj.rolling.terrain import Terrain, on_grade
 
-    ground = np.array(rec.ground, float)
+    ground = np.array(rec.ridden_ground, float)  # a fall its landing cannot give cut (reconstruct_landing)
     for a, b in rec.jumps:
         i, j = int(np.searchsorted(rec.t, a)), int(np.searchsorted(rec.t, b))
         i, j = max(i - 1, 0), min(j, ground.size - 1)

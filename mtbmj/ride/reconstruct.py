@@ -42,7 +42,8 @@ flight of 0.1 s or more from where the force last fell below 10 % of its load at
 (``reconstruct_inverse.unloaded``); a flight that long landing more than 0.15 m lower bridged by the
 landing's level from the take-off on (a drop's edge), any other by the chord; the landing where the
 force returns. Each drop's edge flight's level change is read by the whole bike and kept in its slow
-reference where its duration allows it (:mod:`mtbmj.ride.reconstruct_flight`), else left.
+reference where its duration allows it (:mod:`mtbmj.ride.reconstruct_flight`), else left. The terrain written to ride
+(``terrain.csv``, advise's runs) has a fall its landing's speed cannot give cut (:mod:`mtbmj.ride.reconstruct_landing`).
 
 **Checks.** The whole bike free over the terrain found (the rider's slow load on its front)
 reproduces the front record (its RMS difference); the rear predicted (the whole bike's rear in the last
@@ -91,6 +92,7 @@ from mtbmj.ride.reconstruct_bound import fork_filter_bound
 from mtbmj.ride.reconstruct_share import described
 from mtbmj.ride import reconstruct_envelope as envelope
 from mtbmj.ride import reconstruct_given as given_mod
+from mtbmj.ride import reconstruct_landing as landing
 from mtbmj.ride.reconstruct_flight import landed
 from mtbmj.ride.reconstruct_speed import (GROUND_HIGHPASS_HZ, LAG_HIGHPASS_HZ, WINDOW_S, ReconstructError,
                                           check_length, merged, min_seconds, refine, speed_from_either,
@@ -154,7 +156,11 @@ class Reconstruction:
     cut: list = None  # an end's record read at most PAST_TRAVEL_M past its travel (within_stops), what was cut
     levels: list = None  # each drop's edge flight's level change read, kept or left (reconstruct_flight.described)
     beyond: list = None  # where the ground found rises more than the bike could climb (reconstruct_envelope.beyond)
+    ridden: np.ndarray = None  # m, the ground to ride (terrain.csv, advise): a fall its landing cannot give cut; None: ground
+    landings: list = None  # each flight of both ends judged by its landing's speed (reconstruct_landing.judged)
     _bound: dict | None = field(default=None, init=False, repr=False, compare=False)  # fork_bound's, once
+
+    ridden_ground = property(lambda self: self.ground if self.ridden is None else self.ridden)  # terrain.csv's
 
     def fork_bound(self) -> dict | None:
         """What the fork's record holds about the rear on the samples checked
@@ -355,7 +361,7 @@ class Reconstruction:
                 "terrain_length_m": float(self.distance[-1]),
                 "terrain_csv_lead_in_m": TERRAIN_LEAD_IN_M,
                 "flights": [{"start_s": float(a), "end_s": float(b)} for a, b in self.jumps],
-                "drop_levels": self.levels or [], "beyond_trail": self.beyond or [],
+                "drop_levels": self.levels or [], "beyond_trail": self.beyond or [], "landings": self.landings or [],
                 "left_out": [{"start_s": a, "end_s": b, "why": "no speed: standing, or the two ends do not align here"}
                              for a, b in (self.unaligned or [])],
                 "whole_bike": {"passes": int(self.passes),
@@ -417,7 +423,7 @@ class Reconstruction:
                     f"{b['band_Hz'][0]:g}-{b['band_Hz'][1]:g} Hz {b['predicted_correlation']:.2f} "
                     f"{'yes' if b['described'] else 'no'}" for b in c["bands"]))
                 + f"; {len(self.jumps)} flight(s) bridged, {kept} drop level(s) kept, {len(self.levels or []) - kept} "
-                f"left (no drop, or deeper than its flight allows), "
+                f"left (no drop, or deeper than its flight allows){landing.words(self.landings)}, "
                 f"{len(self.unaligned or [])} stretch(es) without a speed left out ({c['samples_checked_percent']:.0f} % "
                 f"of the ride checked)")
 
@@ -429,7 +435,7 @@ class Reconstruction:
         from mtbmj import output
 
         keep = np.concatenate(([True], np.diff(self.distance) > 1e-9))
-        x, z = self.distance[keep] + TERRAIN_LEAD_IN_M, self.ground[keep] * 1e3
+        x, z = self.distance[keep] + TERRAIN_LEAD_IN_M, self.ridden_ground[keep] * 1e3
         return output.csv_bytes({"distance_m": np.concatenate(([0.0], x)), "height_mm": np.concatenate(([z[0]], z))})
 
     def speed_csv(self) -> bytes:
@@ -685,7 +691,10 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False, speed=None,
                                                              and r.diverged_s >= result.diverged_s)]
         best = min(kept, key=lambda r: timing_error(r.rear, r.rear_predicted, result.valid))
         result.at_once_fit = best.fitted_summary(result.valid)
+    result.ridden, result.landings = landing.judged(t, result.distance, result.ground, result.front, result.rear, result.jumps,
+                                                    result.speed["speed_at"](t), wheelbase, sin_a, landing.com_height(spec), g)
     envelope.warn(record.name, result.beyond)
+    landing.warn(record.name, result.landings)  # the terrain to ride only: the check's ground is the fork's
     return result
 
 
