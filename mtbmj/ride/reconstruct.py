@@ -691,10 +691,8 @@ def reconstruct(record, bike, overrides=None, at_once: bool = False, speed=None,
                                                              and r.diverged_s >= result.diverged_s)]
         best = min(kept, key=lambda r: timing_error(r.rear, r.rear_predicted, result.valid))
         result.at_once_fit = best.fitted_summary(result.valid)
-    result.ridden, result.landings = landing.judged(t, result.distance, result.ground, result.front, result.rear, result.jumps,
-                                                    result.speed["speed_at"](t), wheelbase, sin_a, landing.com_height(spec), g)
     envelope.warn(record.name, result.beyond)
-    landing.warn(record.name, result.landings)  # the terrain to ride only: the check's ground is the fork's
+    landing.attach(result, t, wheelbase, sin_a, spec, g, record.name)  # the terrain to ride only: the check's is the fork's
     return result
 
 

@@ -147,4 +147,12 @@ def warn(ride: str, rows) -> None:
                       f"check's ground keeps the fork's)", ConfigWarning, stacklevel=2)
 
 
-__all__ = ["HANG_MM", "BOTH_S", "READ_S", "SLOPE_M", "READ_SHARE", "com_height", "judged", "words", "warn"]
+def attach(result, t, wheelbase: float, sin_a: float, spec, g: float, ride: str) -> None:
+    """``result`` (a ``Reconstruction``) given its ground to ride and its landings judged (:func:`judged` on its
+    own ground, records and speed), the landings' line said (:func:`warn`); the check's ground untouched."""
+    result.ridden, result.landings = judged(t, result.distance, result.ground, result.front, result.rear, result.jumps,
+                                            result.speed["speed_at"](t), wheelbase, sin_a, com_height(spec), g)
+    warn(ride, result.landings)
+
+
+__all__ = ["HANG_MM", "BOTH_S", "READ_S", "SLOPE_M", "READ_SHARE", "attach", "com_height", "judged", "words", "warn"]
