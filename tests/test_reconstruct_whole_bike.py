@@ -188,7 +188,9 @@ def test_the_fork_filter_meets_the_pass_mark_where_the_front_carries_the_rear(re
                                        "(a rock's 123 mm for 147, the ramp 290 mm for 396), lowered by the loop holding "
                                        "the frame's front near the quarter car's high-passed body: without it 2.51 mm "
                                        "(0.37) here, but worse on ten of the twelve shared rides (docs/rolling.md, "
-                                       "'Where the made ride's rear misses')")
+                                       "'Where the made ride's rear misses'); no rule from the fork's side "
+                                       "chooses the looser loop per ride without costing the shared rides "
+                                       "('Can the ride choose the loop's setting?')")
 def test_the_rear_is_predicted_within_half_the_delayed_forks_error(reconstruction):
     """Issue 51's rear target: the rear predicted from the fork's record within half the RMS error of
     the delayed-fork baseline, at a correlation of at least 0.9 with the record (0.44 of it at 0.914
