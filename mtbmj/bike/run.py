@@ -130,7 +130,9 @@ def _passive(s: dict) -> str:
     """What a pitch crash of the passive rider's run adds: that rider does not shift its weight."""
     if (s.get("rider") or {}).get("kind") == "active" or s["crash"]["kind"] not in ("over the bars", "looped out"):
         return ""
-    return " with the passive rider, a rigid body on spring-damper limbs that does not shift its weight (--rider active does)"
+    how = ("--rider active does, at one --speed: it holds no speed profile" if s.get("speed_profile_m_per_s")
+           else "--rider active does")
+    return f" with the passive rider, a rigid body on spring-damper limbs that does not shift its weight ({how})"
 
 
 def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, drive: str = "rider",
