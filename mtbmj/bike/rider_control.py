@@ -431,6 +431,12 @@ class RiderCallback:
     def reset(self) -> None:
         self.inner.reset()
 
+    def set_speed(self, v: float) -> None:
+        """The set speed (m/s) from now on (a run on a speed profile, ``mtbmj.bike.schedule``): the drive's
+        (``inner``) and the controller's look-ahead before an edge (``Controller.drop_share``'s lead)."""
+        self.inner.set_speed(v)
+        self.controller.speed = float(v)
+
     def angles(self, q) -> dict:
         """The anatomical angles (rad) at qpos ``q``: the pose's plus each joint's turn (``attach``'s
         signs: hip, shoulder and elbow flexion turn with their joints, knee flexion against it, the
