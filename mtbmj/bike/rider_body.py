@@ -13,6 +13,8 @@ the upper arm and forearm at the shoulder and the elbow. The shank's lower end i
 ankle's point on the frame and the forearm's to the grip (``mtbmj.bike.rider_control`` closes both
 loops with stiff springs), so the body keeps three degrees of freedom on the bike: the hips' fore-
 aft and height and the trunk's pitch, which the joints' torques move.
+Past a joint's range of motion an end stop pushes it back (``end_stops``: a spring, stiffer further
+out, and a damper ramped in; ``mtbmj.bike.rider_control`` adds them to the muscles' torques).
 
 Sources:
 
@@ -38,6 +40,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from mtbmj.controllers.stops import DAMPING_RAMP
 from mtbmj.errors import ConfigError
 from mtbmj.limits import RIDER_HEIGHT_M
 
@@ -63,6 +66,18 @@ FEET_FROM_PEDAL_MM = (-70.0, 50.0)  # assumed
 RANGES_DEG = {"hip": (-30.0, 120.0), "knee": (0.0, 135.0), "ankle": (-50.0, 20.0), "shoulder": (-60.0, 180.0),
               "elbow": (0.0, 150.0)}
 HEIGHT_RANGE_M = RIDER_HEIGHT_M  # refused outside (mtbmj.limits; the plausible range is mtbmj.bike.keys.KEYS')
+# each joint's end stop past its range of motion (``end_stops``; the muscles' are ``mtbmj.bike.rider_control``'s)
+STOP_N_M_PER_RAD, STOP_N_M_S_PER_RAD = 600.0, 20.0  # past the range of motion (assumed)
+# and, further than STOP_HARD_FROM_DEG past it, this stiffness (assumed: a joint's passive moment rises
+# steeply at the end of its range). At 600 N m/rad throughout the ankle was pushed 26 deg past its 20 deg
+# of dorsiflexion on landings with the arms softened, the body folded onto the bars and stayed there
+# (knee, ankle and shoulder at their limits 0.7-0.9 s to the run's end)
+STOP_HARD_N_M_PER_RAD, STOP_HARD_FROM_DEG = 3000.0, 5.0
+# the end stop's damping sets in over this much past the range, c tanh(DAMPING_RAMP p / p0) (the
+# suspension's stops' and the rim's ramp, ``controllers.stops``): at full strength from the range's
+# end it jumped by c times the joint's speed (69 N m at the elbow leaving its stop off the 1 m drop),
+# which a fixed step meets inside a step (assumed: 99.5 % of c at 2 deg past the range)
+STOP_RAMP_RAD = math.radians(2.0)
 
 
 @dataclass(frozen=True)
@@ -294,5 +309,38 @@ def attach(ms, spec, b: Body, p: Pose, pedal, visual: bool = True) -> None:
         ms.delete(tendon)
 
 
+def stop_penetration(a: float, lo: float, hi: float) -> float:
+    """How far (rad) the anatomical angle ``a`` is past its range (lo, hi): positive above ``hi``,
+    negative below ``lo``, 0 within."""
+    return a - hi if a > hi else (a - lo if a < lo else 0.0)
+
+
+def stop_damping(past: float) -> float:
+    """The end stop's damping (N m s/rad) at ``past`` rad beyond the range: ``STOP_N_M_S_PER_RAD``
+    ramped in over ``STOP_RAMP_RAD``, so the stop's torque is continuous where the joint enters or
+    leaves it."""
+    return STOP_N_M_S_PER_RAD * math.tanh(DAMPING_RAMP * abs(past) / STOP_RAMP_RAD)
+
+
+def stop_spring(past: float) -> tuple[float, float]:
+    """(torque N m, stored energy J) of the end stop's spring ``past`` rad beyond the range:
+    ``STOP_N_M_PER_RAD`` and, past ``STOP_HARD_FROM_DEG``, ``STOP_HARD_N_M_PER_RAD`` (continuous)."""
+    deep = max(abs(past) - math.radians(STOP_HARD_FROM_DEG), 0.0)
+    extra = STOP_HARD_N_M_PER_RAD - STOP_N_M_PER_RAD
+    torque = -STOP_N_M_PER_RAD * past - math.copysign(extra * deep, past)
+    return torque, 0.5 * STOP_N_M_PER_RAD * past * past + 0.5 * extra * deep * deep
+
+
+def end_stops(now: dict, speed: dict, ranges: dict) -> dict:
+    """Each joint's end-stop torque (N m, anatomical): a spring-damper past its range of motion
+    (``ranges``: (least, most) rad), its damping ramped in (``stop_damping``), 0 within it."""
+    out = {}
+    for k in RANGES_DEG:  # the joints (``rider_control.JOINTS``)
+        past = stop_penetration(now[k], *ranges[k])
+        out[k] = stop_spring(past)[0] - stop_damping(past) * speed[k] if past != 0.0 else 0.0
+    return out
+
+
 __all__ = ["Body", "Segment", "Pose", "body", "pose", "attach", "centre_of_mass", "trunk_for_reach", "DE_LEVA",
-           "RANGES_DEG", "STATURE_M", "HEIGHT_RANGE_M", "wrap_joint"]
+           "RANGES_DEG", "STATURE_M", "HEIGHT_RANGE_M", "wrap_joint", "end_stops", "stop_penetration",
+           "stop_damping", "stop_spring"]

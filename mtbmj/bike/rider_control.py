@@ -84,7 +84,7 @@ after landing), and after it a nose-up pitch is still met, a nose-down one not (
 the SST bike off 0.8 m at 4 m/s looped out without). As the pose is let go the arms' gains fall to
 ``ARM_LANDING_SHARE`` for the landing (``Controller.arm_share``, ``gains_at``, the ODE reference's too):
 stiff, the arms took the landing at their whole strength; the end stops' stiffening past
-``STOP_HARD_FROM_DEG`` (``stop_spring``) keeps a landing from folding the body onto the bars. The summary reports, per joint, the torque asked of it (``asked_peak_of_limit``,
+``STOP_HARD_FROM_DEG`` (``rider_body.stop_spring``) keeps a landing from folding the body onto the bars. The summary reports, per joint, the torque asked of it (``asked_peak_of_limit``,
 above 1 where the limit cut it) and the time spent at the limit (``at_limit_s``).
 """
 from __future__ import annotations
@@ -97,8 +97,10 @@ import mujoco
 import numpy as np
 
 from mtbmj.bike import rider_body as rb
+from mtbmj.bike.rider_body import (STOP_HARD_FROM_DEG, STOP_HARD_N_M_PER_RAD, STOP_N_M_PER_RAD,  # noqa: F401
+                                   STOP_N_M_S_PER_RAD, STOP_RAMP_RAD, end_stops, stop_damping, stop_penetration,
+                                   stop_spring)
 from mtbmj.bike.pedal_leg import PedalLeg, pedalling_hip
-from mtbmj.controllers.stops import DAMPING_RAMP
 from mtbmj.errors import ConfigError, RunError, diverging
 
 JOINTS = ("hip", "knee", "ankle", "shoulder", "elbow")
@@ -112,17 +114,6 @@ POWER_W = 1500.0
 GAINS = {"hip": (1500.0, 60.0), "knee": (1500.0, 60.0), "ankle": (800.0, 30.0), "shoulder": (400.0, 16.0),
          "elbow": (300.0, 12.0)}
 TISSUE_DAMPING = 2.0  # N m s/rad at every joint (assumed)
-STOP_N_M_PER_RAD, STOP_N_M_S_PER_RAD = 600.0, 20.0  # past the range of motion (assumed)
-# and, further than STOP_HARD_FROM_DEG past it, this stiffness (assumed: a joint's passive moment rises
-# steeply at the end of its range). At 600 N m/rad throughout the ankle was pushed 26 deg past its 20 deg
-# of dorsiflexion on landings with the arms softened, the body folded onto the bars and stayed there
-# (knee, ankle and shoulder at their limits 0.7-0.9 s to the run's end)
-STOP_HARD_N_M_PER_RAD, STOP_HARD_FROM_DEG = 3000.0, 5.0
-# the end stop's damping sets in over this much past the range, c tanh(DAMPING_RAMP p / p0) (the
-# suspension's stops' and the rim's ramp, ``controllers.stops``): at full strength from the range's
-# end it jumped by c times the joint's speed (69 N m at the elbow leaving its stop off the 1 m drop),
-# which a fixed step meets inside a step (assumed: 99.5 % of c at 2 deg past the range)
-STOP_RAMP_RAD = math.radians(2.0)
 PIN_N_PER_M, PIN_N_S_PER_M = 4e5, 1500.0  # the feet and hands pinned (assumed: shoe, pedal, grip)
 SADDLE_N_PER_M, SADDLE_N_S_PER_M = 6e4, 1200.0  # assumed: the seated body's 4-6 Hz vertical resonance
 ISCHIAL_BELOW_HIP_M = 0.08  # assumed: the sitting bones this far below the hip joints
@@ -382,38 +373,6 @@ def muscle_torques(want: dict, now: dict, speed: dict, gains: dict, strength: di
     return taus, demands, power
 
 
-def stop_penetration(a: float, lo: float, hi: float) -> float:
-    """How far (rad) the anatomical angle ``a`` is past its range (lo, hi): positive above ``hi``,
-    negative below ``lo``, 0 within."""
-    return a - hi if a > hi else (a - lo if a < lo else 0.0)
-
-
-def stop_damping(past: float) -> float:
-    """The end stop's damping (N m s/rad) at ``past`` rad beyond the range: ``STOP_N_M_S_PER_RAD``
-    ramped in over ``STOP_RAMP_RAD``, so the stop's torque is continuous where the joint enters or
-    leaves it."""
-    return STOP_N_M_S_PER_RAD * math.tanh(DAMPING_RAMP * abs(past) / STOP_RAMP_RAD)
-
-
-def stop_spring(past: float) -> tuple[float, float]:
-    """(torque N m, stored energy J) of the end stop's spring ``past`` rad beyond the range:
-    ``STOP_N_M_PER_RAD`` and, past ``STOP_HARD_FROM_DEG``, ``STOP_HARD_N_M_PER_RAD`` (continuous)."""
-    deep = max(abs(past) - math.radians(STOP_HARD_FROM_DEG), 0.0)
-    extra = STOP_HARD_N_M_PER_RAD - STOP_N_M_PER_RAD
-    torque = -STOP_N_M_PER_RAD * past - math.copysign(extra * deep, past)
-    return torque, 0.5 * STOP_N_M_PER_RAD * past * past + 0.5 * extra * deep * deep
-
-
-def end_stops(now: dict, speed: dict, ranges: dict) -> dict:
-    """Each joint's end-stop torque (N m, anatomical): a spring-damper past its range of motion
-    (``ranges``: (least, most) rad), its damping ramped in (``stop_damping``), 0 within it."""
-    out = {}
-    for k in JOINTS:
-        past = stop_penetration(now[k], *ranges[k])
-        out[k] = stop_spring(past)[0] - stop_damping(past) * speed[k] if past != 0.0 else 0.0
-    return out
-
-
 class RiderCallback:
     """The bike's callback (``inner``) and the articulated rider's forces (module doc)."""
 
@@ -471,6 +430,12 @@ class RiderCallback:
 
     def reset(self) -> None:
         self.inner.reset()
+
+    def set_speed(self, v: float) -> None:
+        """The set speed (m/s) from now on (a run on a speed profile, ``mtbmj.bike.schedule``): the drive's
+        (``inner``) and the controller's look-ahead before an edge (``Controller.drop_share``'s lead)."""
+        self.inner.set_speed(v)
+        self.controller.speed = float(v)
 
     def angles(self, q) -> dict:
         """The anatomical angles (rad) at qpos ``q``: the pose's plus each joint's turn (``attach``'s

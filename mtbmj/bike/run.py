@@ -130,9 +130,8 @@ def _passive(s: dict) -> str:
     """What a pitch crash of the passive rider's run adds: that rider does not shift its weight."""
     if (s.get("rider") or {}).get("kind") == "active" or s["crash"]["kind"] not in ("over the bars", "looped out"):
         return ""
-    how = ("--rider active does, at one --speed: it holds no speed profile" if s.get("speed_profile_m_per_s")
-           else "--rider active does")
-    return f" with the passive rider, a rigid body on spring-damper limbs that does not shift its weight ({how})"
+    return (" with the passive rider, a rigid body on spring-damper limbs that does not shift its weight "
+            "(--rider active does)")
 
 
 def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, drive: str = "rider",
@@ -167,7 +166,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     on the saddle's contact instead of held). ``legs_swing``: the pedalling active rider's two legs'
     swing on the trunk (``mtbmj.bike.pedal_leg.PedalLeg.swung``; off by default: docs/bike.md).
     ``speed_profile`` (x_m, v_m_per_s): the drive's set speed along the terrain at the front axle
-    (``mtbmj.bike.schedule``; the passive rider holding a speed only), ``speed_m_per_s`` the start's."""
+    (``mtbmj.bike.schedule``; the passive or active rider holding a speed, not a pedalling or coasting one),
+    ``speed_m_per_s`` the start's."""
     from mtbmj.bike.reference import Reference, static_equilibrium
 
     if rider not in RIDERS:
@@ -177,13 +177,10 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
 
         if lock or not rear_tire:
             raise ConfigError("rider: the active rider rides the whole bike (no lock, no lifted rear)")
-        if speed_profile is not None:
-            raise ConfigError("speed_profile: the passive rider's drive holds a set speed along the terrain, the "
-                              "active rider's does not yet")
         with warnings.catch_warnings():  # the passive rider's note on rider.height_m: this rider takes it
             warnings.filterwarnings("ignore", message=r".*rider\.height_m = .* is read by the active rider only")
             p = prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire, overrides, False,
-                        pedal)
+                        pedal, speed_profile=speed_profile)
         kind = callback_kind(p.callback)
         rear = p.rear_tire
         p = rider_control.activate(

@@ -15,8 +15,9 @@ answer made with a profile). Between chunks the set speed is the profile's at th
 state, the front axle's offset at rest: the pitch's few millimetres left out). The drive then holds it
 within its limits (``controllers.drive.drive_force``: ``drive.push_N``, ``power_W``, ``brake_N``): where
 the ride accelerated harder than those allow, the run lags, and says nothing of it here (the run's own
-speed is in its output). Only the passive rider's drive holds a set speed this way: a pedalling rider's
-speed is what the pedals make of it, and the active rider's wrapper is not taught it."""
+speed is in its output). The passive and the active rider's drive hold a set speed this way (the active
+rider's callback, ``mtbmj.bike.rider_control.RiderCallback.set_speed``, passes it to the drive it wraps and to
+its controller's look-ahead before an edge); a pedalling rider's speed is what the pedals make of it."""
 from __future__ import annotations
 
 from dataclasses import dataclass

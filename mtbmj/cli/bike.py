@@ -41,13 +41,12 @@ def cmd_bike(args) -> int:
 
         raise ConfigError(f"{'--lock' if args.lock else '--lift-rear'}: the active rider rides the whole bike (no "
                           f"--lock, no --lift-rear; --rider passive holds parts)")
-    why = ("--rider active: the active rider's drive does not yet hold a set speed along the terrain"
-           if args.rider == "active" else "--pedal: a pedalling rider's speed is its own" if args.pedal is not None
+    why = ("--pedal: a pedalling rider's speed is its own" if args.pedal is not None
            else "--drive coast: a coasting bike has no drive to hold it" if args.drive == "coast" else None)
     if args.speed_profile is not None and why is not None:  # the options set, not run_bike's speed_profile=
         from mtbmj.errors import ConfigError
 
-        raise ConfigError(f"--speed-profile with {why} (the passive rider's speed controller holds the profile)")
+        raise ConfigError(f"--speed-profile with {why} (the rider's drive, passive or active, holds the profile)")
     pedal = pedal_option(args)
     if args.legs_swing and (pedal is None or args.rider != "active"):
         from mtbmj.errors import ConfigError
