@@ -29,7 +29,9 @@ from mtbmj.errors import ConfigError
 UPDATE_S = 0.25  # s between updates of the set speed on a run at one step (see the module doc; 0.1: 8 % slower)
 SPEED_RANGE = (0.3, 30.0)  # m/s: a profile beyond is not a ride's
 SPAN_PER_LENGTH = 10.0  # a profile with fewer than two places along a terrain is taken where the places around it
-# span at most this many terrain lengths (places every 5 m, a 1 m section); a profile in mm spans 1000 times its metres
+# span at most this many terrain lengths (places every 5 m, a 1 m section) and at most SPAN_MAX_M: a profile in mm
+SPAN_MAX_M = 50.0  # spans 1000 times its metres, so on a long terrain only an absolute cap tells it (places every 10 m
+# of a 1 km trail written in mm span 10000 "m" about it, 10 terrain lengths)
 
 
 @dataclass(frozen=True)
@@ -65,14 +67,14 @@ class SpeedProfile:
 
     def along(self, start: float, end: float, said: str = "speed_profile") -> SpeedProfile:
         """Itself where at least two of its places lie along the terrain ``start``..``end`` (m), or where its
-        places bracket the terrain within a span of at most ``SPAN_PER_LENGTH`` terrain lengths (a trail's
+        places bracket the terrain within a span of at most ``SPAN_PER_LENGTH`` terrain lengths and ``SPAN_MAX_M`` (a trail's
         profile, a short section of it ridden); else a ``ConfigError`` after ``said`` (held flat past its
         ends, or one segment stretched over it, it would set about one speed, silently: distances in mm,
         another terrain's profile)."""
         inside = np.flatnonzero((self.x >= start) & (self.x <= end))
         below, above = self.x[self.x <= start], self.x[self.x >= end]
         bracketed = (below.size and above.size
-                     and above[0] - below[-1] <= SPAN_PER_LENGTH * max(end - start, 1e-9))
+                     and above[0] - below[-1] <= min(SPAN_PER_LENGTH * max(end - start, 1e-9), SPAN_MAX_M))
         if inside.size < 2 and not bracketed:
             raise ConfigError(f"{said}: {'only place ' + str(inside[0] + 1) if inside.size else 'no place'} of "
                               f"{self.x.size} lies along the terrain ({start:g}-{end:g} m; its places run "
@@ -113,4 +115,4 @@ def steering(profile: SpeedProfile, callback, watch, x_col: int, x_offset: float
     return stop
 
 
-__all__ = ["SpeedProfile", "UPDATE_S", "read_csv", "steering"]
+__all__ = ["SPAN_MAX_M", "SPAN_PER_LENGTH", "SpeedProfile", "UPDATE_S", "read_csv", "steering"]

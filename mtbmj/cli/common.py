@@ -94,6 +94,17 @@ def _one_side(actions, args) -> None:
     """Refuse a switch given both ways (``--calibrate --no-calibrate``): argparse lets the last one win,
     silently; the line names both."""
     said = [str(a) for a in args]
+    said = said[:said.index("--")] if "--" in said else said  # past "--" every word is a positional
+    options = [o for action in actions for o in action.option_strings]
+
+    def whole(word: str) -> str:  # an option as argparse reads it: its unique abbreviation taken whole
+        word = word.split("=", 1)[0]
+        if word in options:
+            return word
+        matches = [o for o in options if o.startswith(word)]
+        return matches[0] if len(matches) == 1 else word
+
+    said = [whole(w) for w in said if w.startswith("--")]
     for action in actions:
         if isinstance(action, argparse.BooleanOptionalAction):
             ways = [o for o in dict.fromkeys(said) if o in action.option_strings]  # in the order typed

@@ -63,9 +63,9 @@ class GivenSpeed:
         """Refuse (one line) a ride (samples ``t``, s) shorter than one speed window (``WINDOW_S``): the given
         speed is laid out and its rear checked in such windows (the lag's longer minimum does not hold: where
         the lag gives none, that is reported beside the speed given)."""
-        length = float(t[-1] - t[0]) if len(t) > 1 else 0.0
-        if length < WINDOW_S:
-            raise ReconstructError(f"{name}: the ride is {length:.1f} s: a reconstruction at the speed given "
+        length = float(len(t) * (t[1] - t[0])) if len(t) > 1 else 0.0  # samples times their step, as the windows count
+        if length < WINDOW_S - 1e-9:
+            raise ReconstructError(f"{name}: the ride is {length:.3g} s: a reconstruction at the speed given "
                                    f"({self.said}) needs at least one {WINDOW_S:g} s window of it to check the rear in")
 
     def check_covers(self, t0: float, t1: float, name: str = "", short: str = "") -> None:
