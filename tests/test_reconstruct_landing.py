@@ -107,6 +107,32 @@ def test_the_first_end_down_sets_the_bound_and_a_lone_flight_is_not_judged():
     assert rows == [] and np.array_equal(ridden, ground)
 
 
+def test_a_rear_taking_load_back_on_the_lip_does_not_bound_the_front_s_fall():
+    """A slow roll off a 0.5 m drop at 2 m/s, written here: the front falls freely over 2.00-2.32 s
+    (sqrt(2 h / g) = 0.32 s), landing at 3.1 m/s (read 0.83 of it, along the fork's axis at 0.9); the rear,
+    a wheelbase behind, hangs unweighted on the lip through the front's fall and takes load back there at
+    0.5 m/s at 2.30 s, before the front lands, 0.6 m short of the edge. Before (found in review), the rear
+    was taken as the first end down and its 0.5 m/s cut the 0.5 m drop to 0.025 m in the terrain to ride;
+    the rear's reading now bounds only a fall it crossed, so the fork's sets it and the real drop is kept."""
+    from mtbmj.ride.reconstruct_landing import judged
+
+    t = np.arange(0.0, 4.0, DT)
+    x = 2.0 * t
+    up, rear_down, fork_down = 2.0, 2.30, 2.32
+    fork, rear = np.full(t.size, 40.0), np.full(t.size, 50.0)
+    for travel, down, v, sag in ((rear, rear_down, 0.5, 50.0), (fork, fork_down, 0.83 * 3.13 / 0.9, 40.0)):
+        travel[(t >= up - 0.05) & (t < down)] = 0.0
+        land = t >= down
+        travel[land] = np.minimum(1e3 * v * (t[land] - down), max(sag, 1e3 * v * 0.04))
+        travel[t >= down + 0.2] = sag
+    ground = np.where(t >= up, -0.5, 0.0)
+    assert x[int(np.searchsorted(t, rear_down))] - WHEELBASE < x[int(np.searchsorted(t, up)) - 1]  # on the lip
+    ridden, rows = judged(t, x, ground, fork, rear, [(up, fork_down)], np.full(t.size, 2.0), WHEELBASE, 0.9, 0.7, G)
+    (row,) = rows
+    assert row["first_down"] == "fork" and row["raised_m"] == 0.0, row
+    assert ridden[0] - ridden[-1] == pytest.approx(0.5, abs=1e-9)
+
+
 PROFILE = SpeedProfile(6.0, 0.5, 20.0)
 
 

@@ -12,7 +12,8 @@ mass (omega^2 H, H the bike's centre of mass above its axles), and before (the f
 rear still on the lip) faster than g; from a take-off rising, level or falling, an axle that reaches
 its landing at vertical speed V has fallen at most V^2 / (2 a), a the least of those accelerations, plus
 what its suspension extended after the tyre left (its travel at the take-off). V is read from the
-record of **the end that lands first**: its wheel stops on the ground within the tyre's few
+record of **the end that lands first** (the rear only where it touched down past the front's take-off: a rear
+taking load back on the lip, hanging unweighted there, never fell; the fork's then): its wheel stops on the ground within the tyre's few
 millimetres, so its travel's speed just after the touchdown (the largest over ``READ_S``; the fork's
 along its axis times the sine of the head angle, the rear's wheel travel vertical as recorded) is the
 frame's falling speed at that axle (read low: the uncertainty), and nothing but gravity and the rider has acted on it since the
@@ -100,7 +101,10 @@ def judged(t, distance, ground, fork_mm, rear_mm, jumps, speed, wheelbase: float
         if hang[:p + 1].all() or _touchdown(rear, q, dt) is None or _touchdown(fork, b, dt) is None:
             continue  # hanging from the record's start (the rider getting on) or to its end: no flight read whole
         (kr, v_rear), (kf, v_fork) = _touchdown(rear, q, dt), _touchdown(fork, b, dt)
-        first, k, v, extended = (("rear", kr, v_rear, rear[max(p - 1, 0)]) if kr <= kf else
+        # the rear's reading bounds the fall only where it touched down past the front's take-off (it crossed the
+        # edge); one taking load back on the lip (hanging unweighted, not flying) did not fall it: the fork's then
+        crossed = x[kr] - wheelbase > x[max(a - 1, 0)]
+        first, k, v, extended = (("rear", kr, v_rear, rear[max(p - 1, 0)]) if kr <= kf and crossed else
                                  ("fork", kf, v_fork, fork[max(a - 1, 0)]))
         place = x[k] - (wheelbase if first == "rear" else 0.0)
         down = (np.interp(place, x, z) - np.interp(place + SLOPE_M, x, z)) / SLOPE_M
