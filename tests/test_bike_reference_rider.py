@@ -223,23 +223,24 @@ def test_end_stops_torque_is_continuous_at_the_range():
     k p + c w a few degrees past it, stiffer past STOP_HARD_FROM_DEG (closed forms of the stop's constants)."""
     import math
 
+    from mtbmj.bike import rider_body as rb
     from mtbmj.bike import rider_control as rc
 
     ranges = {k: (math.radians(-20.0), math.radians(120.0)) for k in rc.JOINTS}
     speed = dict.fromkeys(rc.JOINTS, 3.0)
     hi = ranges["elbow"][1]
-    just = rc.end_stops(dict.fromkeys(rc.JOINTS, hi + 1e-7), speed, ranges)["elbow"]
+    just = rb.end_stops(dict.fromkeys(rc.JOINTS, hi + 1e-7), speed, ranges)["elbow"]
     assert abs(just) < 1e-3  # it jumped to -60 N m (c w) here
     for past_deg in (5.0, 10.0):
         p = math.radians(past_deg)
-        deep = rc.end_stops(dict.fromkeys(rc.JOINTS, hi + p), speed, ranges)["elbow"]
-        hard = (rc.STOP_HARD_N_M_PER_RAD - rc.STOP_N_M_PER_RAD) * max(p - math.radians(rc.STOP_HARD_FROM_DEG), 0.0)
-        assert deep == pytest.approx(-rc.STOP_N_M_PER_RAD * p - hard - rc.STOP_N_M_S_PER_RAD * 3.0, rel=1e-4)
+        deep = rb.end_stops(dict.fromkeys(rc.JOINTS, hi + p), speed, ranges)["elbow"]
+        hard = (rb.STOP_HARD_N_M_PER_RAD - rb.STOP_N_M_PER_RAD) * max(p - math.radians(rb.STOP_HARD_FROM_DEG), 0.0)
+        assert deep == pytest.approx(-rb.STOP_N_M_PER_RAD * p - hard - rb.STOP_N_M_S_PER_RAD * 3.0, rel=1e-4)
     lo = ranges["knee"][0]
-    below = rc.end_stops(dict.fromkeys(rc.JOINTS, lo - math.radians(5.0)), {k: -3.0 for k in rc.JOINTS}, ranges)
-    assert below["knee"] == pytest.approx(rc.STOP_N_M_PER_RAD * math.radians(5.0) + rc.STOP_N_M_S_PER_RAD * 3.0,
+    below = rb.end_stops(dict.fromkeys(rc.JOINTS, lo - math.radians(5.0)), {k: -3.0 for k in rc.JOINTS}, ranges)
+    assert below["knee"] == pytest.approx(rb.STOP_N_M_PER_RAD * math.radians(5.0) + rb.STOP_N_M_S_PER_RAD * 3.0,
                                           rel=1e-4)
-    inside = rc.end_stops(dict.fromkeys(rc.JOINTS, 0.5 * (lo + hi)), speed, ranges)
+    inside = rb.end_stops(dict.fromkeys(rc.JOINTS, 0.5 * (lo + hi)), speed, ranges)
     assert all(v == 0.0 for v in inside.values())
 
 

@@ -61,15 +61,15 @@ def test_the_end_stop_holds_the_plantar_flexors_whole_strength_within_10_deg():
     now["ankle"] = hi + past
     ranges = {k: (-10.0, 10.0) for k in rc.JOINTS}
     ranges["ankle"] = (lo, hi)
-    stop = rc.end_stops(now, dict.fromkeys(rc.JOINTS, 0.0), ranges)["ankle"]
+    stop = rb.end_stops(now, dict.fromkeys(rc.JOINTS, 0.0), ranges)["ankle"]
     written = -(600.0 * past + 2400.0 * (past - math.radians(5.0)))
     assert stop == pytest.approx(written)  # at rest: the spring alone
     assert -stop > strength > 600.0 * past
     for p in (past, -past, math.radians(3.0)):
         x = np.linspace(0.0, p, 20001)
-        torque = np.array([rc.stop_spring(v)[0] for v in x])
+        torque = np.array([rb.stop_spring(v)[0] for v in x])
         work = -float(np.sum(0.5 * (torque[1:] + torque[:-1]) * np.diff(x)))
-        assert rc.stop_spring(p)[1] == pytest.approx(work, rel=1e-6)
+        assert rb.stop_spring(p)[1] == pytest.approx(work, rel=1e-6)
 
 
 @pytest.fixture(scope="module")

@@ -50,6 +50,7 @@ import math
 import mujoco
 import numpy as np
 
+from mtbmj.bike import rider_body as rb
 from mtbmj.bike import rider_control as rc
 from mtbmj.controllers import installed
 
@@ -77,10 +78,10 @@ def rider_terms(cb: rc.RiderCallback) -> dict:
         pw = taus[k] * w
         out["muscle_positive" if pw > 0.0 else "muscle_negative"] += pw
         out["tissue"] -= rc.TISSUE_DAMPING * w * w
-        past = rc.stop_penetration(last["now"][k], *cb.ranges[k])
+        past = rb.stop_penetration(last["now"][k], *cb.ranges[k])
         if past != 0.0:
-            out["stops_damping"] -= rc.stop_damping(past) * w * w
-            out["stops_spring"] += rc.stop_spring(past)[1]
+            out["stops_damping"] -= rb.stop_damping(past) * w * w
+            out["stops_spring"] += rb.stop_spring(past)[1]
     for f, rel, gap in last["pins"]:
         out["pins_damping"] -= rc.PIN_N_S_PER_M * (rel[0] * rel[0] + rel[2] * rel[2])
         out["pins_spring"] += 0.5 * rc.PIN_N_PER_M * (gap[0] * gap[0] + gap[2] * gap[2])
@@ -195,7 +196,7 @@ def rider_spring_power(cb: rc.RiderCallback) -> float:
     last = cb.last
     pins = sum(-rc.PIN_N_PER_M * (gap[0] * rel[0] + gap[2] * rel[2]) for _, rel, gap in last["pins"])
     stops = sum(last["stops"][k] * last["speed"][k]
-                + rc.stop_damping(rc.stop_penetration(last["now"][k], *cb.ranges[k])) * last["speed"][k] ** 2
+                + rb.stop_damping(rb.stop_penetration(last["now"][k], *cb.ranges[k])) * last["speed"][k] ** 2
                 for k in rc.JOINTS)
     return pins + stops
 

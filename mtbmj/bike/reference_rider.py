@@ -31,7 +31,7 @@ through its Jacobian.
 The muscles: the same controller object as the engine's run (``Controller.targets``, called with
 the reference's front axle place, pitch and pitch rate), the same targets' inverse kinematics and
 limits (``rider_control.aimed``), the same torque law, strength and power limit
-(``rider_control.muscle_torques``) and end stops (``rider_control.end_stops``) and tissue damping.
+(``rider_control.muscle_torques``) and end stops (``rider_body.end_stops``) and tissue damping.
 What the reference computes itself: the anatomical angles and speeds from its coordinates (each a
 fixed combination of the hinges, ``GRADIENTS``) and the torques' generalised forces by virtual
 work (Q = tau d angle / dq). Shared with the engine, then, and not checked by the cross-check: the
@@ -245,7 +245,7 @@ class ReferenceRider(Reference):
             f = -rc.PIN_N_PER_M * gap - rc.PIN_N_S_PER_M * (jd @ qd)
             Q += jd.T @ f
             pins.append(f)
-        stops = rc.end_stops(now, speed, self.ranges)
+        stops = rb.end_stops(now, speed, self.ranges)
         for k in rc.JOINTS:
             Q += (taus[k] + stops[k] - rc.TISSUE_DAMPING * speed[k]) * GRADIENTS[k]
         out["muscles"], out["pins"] = taus, pins

@@ -97,9 +97,6 @@ import mujoco
 import numpy as np
 
 from mtbmj.bike import rider_body as rb
-from mtbmj.bike.rider_body import (STOP_HARD_FROM_DEG, STOP_HARD_N_M_PER_RAD, STOP_N_M_PER_RAD,  # noqa: F401
-                                   STOP_N_M_S_PER_RAD, STOP_RAMP_RAD, end_stops, stop_damping, stop_penetration,
-                                   stop_spring)
 from mtbmj.bike.pedal_leg import PedalLeg, pedalling_hip
 from mtbmj.errors import ConfigError, RunError, diverging
 
@@ -490,7 +487,7 @@ class RiderCallback:
             Q += self._j1.T @ f - self._j2.T @ f
             pins.append((f, rel, pe - pa))
         # the muscles' torques (above), the end stops, the tissue
-        stops = end_stops(now, speed, self.ranges)
+        stops = rb.end_stops(now, speed, self.ranges)
         clamped = {k: demands[k] >= 1.0 for k in JOINTS}
         applied = {}
         for k in JOINTS:
@@ -660,5 +657,5 @@ def activate(p, make_inner, integrator, hold: float, seated: bool = False, settl
     return p
 
 
-__all__ = ["RiderCallback", "Controller", "activate", "aimed", "gains_at", "muscle_torques", "power_factors", "end_stops", "stop_penetration", "stop_damping", "stop_spring", "edges", "stance", "saddle_point", "STRENGTH_N_M",
+__all__ = ["RiderCallback", "Controller", "activate", "aimed", "gains_at", "muscle_torques", "power_factors", "edges", "stance", "saddle_point", "STRENGTH_N_M",
            "STRENGTH_ONE_SIDE_N_M", "POWER_W", "GAINS", "JOINTS"]
