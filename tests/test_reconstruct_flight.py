@@ -64,6 +64,17 @@ def read_at(rec, k):
     return rows[0] if rows else None
 
 
+def assert_level_kept(made, rec, name: str, size: float) -> None:
+    """The drop ``name`` (``size`` m, made) read and kept by ``rec``: its level change and the ground found
+    past it within ``TOLERANCE`` of the drop as made."""
+    truth, found, k = across(made, rec, name)
+    assert truth == pytest.approx(-size, abs=0.02)  # the drop as made
+    row = read_at(rec, k)
+    assert row is not None and row["kept"], (name, rec.levels)
+    assert row["level_change_m"] == pytest.approx(truth, abs=TOLERANCE * size), (name, row)
+    assert found == pytest.approx(truth, abs=TOLERANCE * size), (name, found, truth)
+
+
 def test_drops_levels_are_read_and_a_kicker_keeps_its_level(made, rebuilt, monkeypatch):
     """Each drop's level change is read across its flight within ``TOLERANCE`` of the drop and the
     ground found keeps it (2 s past the drop, from 1 s before it, within the same share), while the
@@ -76,12 +87,7 @@ def test_drops_levels_are_read_and_a_kicker_keeps_its_level(made, rebuilt, monke
     from mtbmj.ride import reconstruct_flight
 
     for name, size in (("drop_0.25", 0.25), ("drop_0.5", 0.5)):
-        truth, found, k = across(made, rebuilt, name)
-        assert truth == pytest.approx(-size, abs=0.02)  # the drop as made
-        row = read_at(rebuilt, k)
-        assert row is not None and row["kept"], (name, rebuilt.levels)
-        assert row["level_change_m"] == pytest.approx(truth, abs=TOLERANCE * size), (name, row)
-        assert found == pytest.approx(truth, abs=TOLERANCE * size), (name, found, truth)
+        assert_level_kept(made, rebuilt, name, size)
     truth, found, k = across(made, rebuilt, "kicker")
     assert abs(truth) < 0.02 and abs(found - truth) <= 0.05, (truth, found)
     assert not any(r["kept"] and made["features"]["kicker"] <= PROFILE.along(r["start_s"])
@@ -289,12 +295,7 @@ def test_one_and_one_and_a_half_metre_drops_keep_their_levels(tmp_path):
                            features=(("drop", 40.0, 1.0), ("drop", 100.0, 1.5)))
     rec = _reconstruct(made)
     for name, size in (("drop_1", 1.0), ("drop_1.5", 1.5)):
-        truth, found, k = across(made, rec, name)
-        assert truth == pytest.approx(-size, abs=0.02)  # the drop as made
-        row = read_at(rec, k)
-        assert row is not None and row["kept"], (name, rec.levels)
-        assert row["level_change_m"] == pytest.approx(truth, abs=TOLERANCE * size), (name, row)
-        assert found == pytest.approx(truth, abs=TOLERANCE * size), (name, found, truth)
+        assert_level_kept(made, rec, name, size)
     monkeypatch = pytest.MonkeyPatch()
     with monkeypatch.context() as m:
         m.setattr(reconstruct_flight, "edge_flights",

@@ -63,18 +63,14 @@ def edge_flights(found, air, dt: float) -> list:
     back, lifts the ground found ahead of a fall (on the made 1.5 m drop at 6 m/s by 0.073 m over the
     0.1 s before the take-off, a kicker's lip's 0.088; 1.0 m: 0.051), which read as a throw left every
     drop of 1 m or more out."""
-    from mtbmj.ride.reconstruct_inverse import EDGE_DROP_M, EDGE_FLIGHT_S, edge, flights
+    from mtbmj.ride.reconstruct_inverse import edge, flights
 
     found = np.asarray(found, float)
-    out = []
-    for a, b in flights(air, dt):
-        a0, b0 = max(a - 1, 0), min(b, found.size - 1)
-        if (b - a) * dt < EDGE_FLIGHT_S or found[b0] >= found[a0] - EDGE_DROP_M:
-            continue
-        approach = found - float(found[b0] - found[a0]) * response(found.size, a0, b0, dt)
-        if edge(found, a, b, dt, approach):
-            out.append((int(a), int(b)))
-    return out
+
+    def approach(a0: int, b0: int) -> np.ndarray:  # asked by edge only of a flight long and falling enough
+        return found - float(found[b0] - found[a0]) * response(found.size, a0, b0, dt)
+
+    return [(int(a), int(b)) for a, b in flights(air, dt) if edge(found, a, b, dt, approach)]
 
 
 def read(found, air, rise, chosen, dt: float, most: float) -> tuple[list, list]:

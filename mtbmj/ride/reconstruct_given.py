@@ -102,9 +102,9 @@ class GivenSpeed:
                               f"{self.column}? ({median / 3.6:.3g} m/s if so: write it in m/s)")
 
 
-def checked(time_s, speed, said: str) -> GivenSpeed:
-    """A speed over time (``time_s`` s, ``speed`` m/s) checked row by row: a ``ConfigError`` after ``said``
-    naming the first row (from 1) that is not plausible."""
+def checked(time_s, speed, said: str, column: str = "speed_m_per_s") -> GivenSpeed:
+    """A speed over time (``time_s`` s, ``speed`` m/s; ``column`` the CSV's name for it) checked row by row: a
+    ``ConfigError`` after ``said`` naming the first row (from 1) that is not plausible."""
     t, v = np.asarray(time_s, float).ravel(), np.asarray(speed, float).ravel()
     if t.size != v.size or t.size < 2:
         raise ConfigError(f"{said}: {t.size} time(s) and {v.size} speed(s): a speed over time needs at least two "
@@ -125,7 +125,7 @@ def checked(time_s, speed, said: str) -> GivenSpeed:
             f"; km/h? {v[i] / 3.6:.3g} m/s if so: write it in m/s" if v[i] <= 3.6 * top else "")
         raise ConfigError(f"{said}: row {i + 1} (time {t[i]:g} s): speed {v[i]:.3g} m/s is outside 0-{top:g} m/s "
                           f"({why})")
-    return GivenSpeed(t, v, said)
+    return GivenSpeed(t, v, said, column)
 
 
 def constant(v: float) -> GivenSpeed:
@@ -158,9 +158,7 @@ def read_csv(path) -> GivenSpeed:
                  else "")
         raise ConfigError(f"{said}: a speed over time needs exactly the columns time_s and speed_m_per_s (has {have}"
                           f"{along})")
-    import dataclasses
-
-    return dataclasses.replace(checked(rec["time"], rec["speed"], said), column=f"speed_{rec.units['speed']}")
+    return checked(rec["time"], rec["speed"], said, column=f"speed_{rec.units['speed']}")
 
 
 def given(speed) -> GivenSpeed:

@@ -276,12 +276,13 @@ def bridge(ground, off, dt: float, edges: bool = True):
 def edge(ground, a: int, b: int, dt: float, approach=None) -> bool:
     """Whether the flight of samples ``a``..``b`` (end exclusive) over ``ground`` left it at a drop's
     edge: at least ``EDGE_FLIGHT_S`` long, landing more than ``EDGE_DROP_M`` lower than it took off,
-    the ground not thrown into the take-off (``EDGE_RISE_M`` over ``EDGE_RISE_S``, read on ``approach``
-    where given: ``reconstruct_flight.edge_flights`` takes off it what the drift's removal lifts ahead
-    of the flight's own fall)."""
+    the ground not thrown into the take-off (``EDGE_RISE_M`` over ``EDGE_RISE_S``, read on
+    ``approach(a0, b0)`` where given, asked only of a flight long and falling enough:
+    ``reconstruct_flight.edge_flights`` takes off the ground what the drift's removal lifts ahead of the
+    flight's own fall)."""
     a0, b0 = max(a - 1, 0), min(b, len(ground) - 1)
     return bool(ground[b0] < ground[a0] - EDGE_DROP_M and (b - a) * dt >= EDGE_FLIGHT_S
-                and not _thrown(ground if approach is None else approach, a0, dt))
+                and not _thrown(ground if approach is None else approach(a0, b0), a0, dt))
 
 
 def _thrown(ground, a0: int, dt: float) -> bool:
