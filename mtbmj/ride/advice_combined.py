@@ -11,7 +11,7 @@ below the recommended change's, the same line search as before
 (``mtbmj.ride.advise.search_on``, its runs in the same pool, each search going on as its runs
 end). An adjuster **joins** the combined step where its search's end lowers the penalty by
 ``MIN_GAIN`` or more below the recommended change's and a metric of a rule it improves moves beyond
-the uncertainty of that change (the ride's segments, as every change's: :func:`uncertainty_from`).
+the uncertainty of that change (the ride's segments, as every change's: ``Advice.change_uncertainty`` from it).
 The recommended change and those that join are then ridden as one candidate (one run more where two
 or more join; one alone is its own search's end) and judged like any other: its penalty against the
 recorded setting's, a metric of a rule it improves moving beyond its uncertainty, and against the
@@ -59,12 +59,6 @@ class _Counted:
         return done
 
 
-def uncertainty_from(advice, run, start) -> dict:
-    """Per metric: the uncertainty of ``run``'s change from ``start`` (a run of another setting on the same
-    ride): ``Advice.change_uncertainty``'s, from ``start`` in place of the recorded setting."""
-    return advice.change_uncertainty(run, start)
-
-
 def lowers(advice, run, start) -> tuple[bool, list]:
     """(whether ``run`` lowers the penalty by ``MIN_GAIN`` or more below ``start``'s with a metric of a rule
     it improves moving beyond its uncertainty, those rules); a crash or a refusal never does."""
@@ -73,7 +67,7 @@ def lowers(advice, run, start) -> tuple[bool, list]:
     improved = [k for k in start.penalty if run.penalty[k] < start.penalty[k] - 1e-9]
     ok = (start.total - run.total >= MIN_GAIN
           and bool(beyond(improved, flat_metrics(start.metrics), flat_metrics(run.metrics),
-                          uncertainty_from(advice, run, start))))
+                          advice.change_uncertainty(run, start))))
     return ok, improved
 
 
@@ -204,4 +198,4 @@ def then_line(advice) -> str:
             + tail)
 
 
-__all__ = ["STOP_RULE", "combine", "lowers", "then_line", "uncertainty_from"]
+__all__ = ["STOP_RULE", "combine", "lowers", "then_line"]

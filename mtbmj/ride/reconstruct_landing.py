@@ -98,9 +98,10 @@ def judged(t, distance, ground, fork_mm, rear_mm, jumps, speed, wheelbase: float
         p, q = max(both, key=lambda pq: pq[1] - pq[0])
         if (q - p) * dt < BOTH_S:
             continue
-        if hang[:p + 1].all() or _touchdown(rear, q, dt) is None or _touchdown(fork, b, dt) is None:
+        down_rear, down_fork = _touchdown(rear, q, dt), _touchdown(fork, b, dt)
+        if hang[:p + 1].all() or down_rear is None or down_fork is None:
             continue  # hanging from the record's start (the rider getting on) or to its end: no flight read whole
-        (kr, v_rear), (kf, v_fork) = _touchdown(rear, q, dt), _touchdown(fork, b, dt)
+        (kr, v_rear), (kf, v_fork) = down_rear, down_fork
         # the rear's reading bounds the fall only where it touched down past the front's take-off (it crossed the
         # edge); one taking load back on the lip (hanging unweighted, not flying) did not fall it: the fork's then
         crossed = x[kr] - wheelbase > x[max(a - 1, 0)]
