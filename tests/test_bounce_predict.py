@@ -205,7 +205,7 @@ def _plastic(five, i):
     keep = [j for j in range(5) if j != i]
     law = bp.decay_law("shock", [seqs[j] for j in keep], [ks[j] for j in keep], [recs[j] for j in keep],
                        [xs[j] for j in keep])
-    law.body = (float("nan"), float("nan"), 0, float("nan"))  # no record to fit the body on: the plastic stop
+    law.body = bp.Body(math.nan, math.nan, 0, math.nan)  # no record to fit the body on: the plastic stop
     p = law.predict(ks[i], recs[i], seqs[i], law.x_eq_of(seqs[i], ks[i]), ks[i], xs[i], 80.0)
     rec = np.interp(p.time_s, recs[i].time_s, xs[i])
     w = (p.time_s > p.slam_s) & (p.time_s < p.slam_s + 3.0)
@@ -261,7 +261,7 @@ def test_held_out_trace_within_the_noise_through_the_stop_at_4_clicks(five):
     """4 clicks held out: 0.322 mm RMS through the stop (the body's share and damping fitted on 0 clicks'
     record: 0.95, 0.370)."""
     p, rms, _ = _held(five, 1)
-    assert p.inside_stroke() and p.body is not None and p.body[2] == 1
+    assert p.inside_stroke() and p.body is not None and p.body.records == 1
     assert rms <= TRACE_RMS
 
 
@@ -271,8 +271,8 @@ def test_held_out_trace_within_the_noise_where_the_stop_is_reached(five):
     rider is 0.84 of the moving mass on two springs damped 0.35 and 0.40: the fitted damping is below the
     literature's 0.475, as the generator's is."""
     p, rms, _ = _held(five, 0)
-    assert p.inside_stroke() and p.body is not None and p.body[2] == 2
-    assert p.body[3] < 0.475
+    assert p.inside_stroke() and p.body is not None and p.body.records == 2
+    assert p.body.zeta < 0.475
     assert rms <= TRACE_RMS
 
 
@@ -288,7 +288,7 @@ def test_the_literatures_body_damping_held_misses_where_the_stop_is_reached(five
     p = law.predict(ks[0], recs[0], seqs[0], law.x_eq_of(seqs[0], ks[0]), ks[0], xs[0], 80.0)
     rec = np.interp(p.time_s, recs[0].time_s, xs[0])
     w = (p.time_s > p.slam_s) & (p.time_s < p.slam_s + 3.0)
-    assert p.body is not None and p.body[3] == pytest.approx(0.475, abs=1e-5)
+    assert p.body is not None and p.body.zeta == pytest.approx(0.475, abs=1e-5)
     assert float(np.sqrt(np.mean((rec[w] - p.travel_mm[w]) ** 2))) > TRACE_RMS
 
 

@@ -66,6 +66,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -401,6 +402,14 @@ def rebound_speed(x_mm: np.ndarray, dt: float) -> float:
     return float(max(0.0, -float(np.min(v[:max(stop, 1)]))))
 
 
+class Body(NamedTuple):
+    """The seated rider's body fitted on a law's records that reach a stop (``DecayLaw.body_share``)."""
+    share: float  # of the moving mass
+    rms_mm: float  # the fit's RMS on those records
+    records: int  # how many
+    zeta: float  # its damping ratio
+
+
 @dataclass
 class Prediction:
     """One end's ring-down predicted at ``clicks``, from ``source``'s own state."""
@@ -419,7 +428,7 @@ class Prediction:
     slam_s: float
     time_s: np.ndarray = field(repr=False)
     travel_mm: np.ndarray = field(repr=False)
-    body: tuple | None = None  # (share, RMS mm, records, body zeta): the trace through the stop is the two masses'
+    body: Body | None = None  # the trace through the stop is the two masses'
 
     def inside_stroke(self) -> bool:
         return bool(np.all(self.travel_mm >= 0.0) and np.all(self.travel_mm <= self.stroke_mm))
@@ -442,9 +451,9 @@ class Prediction:
         if self.body is None:
             return (f"{head} (a plastic stop, no record to fit the seated rider's body on; the body holds the end on "
                     f"its stop and drives it out: 1.1-1.7 mm RMS off in tests/test_bounce_predict.py)")
-        return (f"{head}: the bike held on its stop by the seated rider's body (two masses, the body {bb.share_words(self.body[0])} "
-                f"of the moving mass at 5 Hz, damping ratio {bb.zeta_words(self.body[3])}, both fitted on {self.body[2]} "
-                f"record(s), {self.body[1]:.2f} mm RMS there; 0.31-0.32 mm RMS off in tests/test_bounce_predict.py, the "
+        return (f"{head}: the bike held on its stop by the seated rider's body (two masses, the body {bb.share_words(self.body.share)} "
+                f"of the moving mass at 5 Hz, damping ratio {bb.zeta_words(self.body.zeta)}, both fitted on {self.body.records} "
+                f"record(s), {self.body.rms_mm:.2f} mm RMS there; 0.31-0.32 mm RMS off in tests/test_bounce_predict.py, the "
                 f"noise 0.15 mm)")
 
     def summary(self) -> dict:
@@ -458,7 +467,7 @@ class Prediction:
                               f"law's motion from rest there " + (
                                   f"(plastic stops at 0 and {self.stroke_mm:g} mm, stuck within d of x_eq)" if
                                   self.body is None else
-                                  f"with the seated rider's body (share {self.body[0]:.3f}, damping ratio {self.body[3]:.3f}): the bike held on a stop "
+                                  f"with the seated rider's body (share {self.body.share:.3f}, damping ratio {self.body.zeta:.3f}): the bike held on a stop "
                                   f"or within the friction while the forces on it allow")),
                     "inside_stroke": self.inside_stroke(), "stop_reached_s": self.stop_reached_s()})
         if self.envelope_note():
@@ -483,7 +492,7 @@ class DecayLaw:
     scatter: HalfScatter | None = None  # the half periods' pooled scatter the timings carry (None: vertex only)
     records: list = field(default_factory=list)  # the records and their travel (mm), as ``seqs``: the body's fit
     travels: list = field(default_factory=list)
-    body: tuple | None = None  # (share, RMS mm, records, body zeta) of the seated body fitted on them (:meth:`body_share`)
+    body: Body | None = None  # the seated body fitted on them (:meth:`body_share`)
 
     def body_share(self) -> tuple | None:
         """The seated body's share of the moving mass and its damping ratio
@@ -503,9 +512,8 @@ class DecayLaw:
                 if free_motion(x0, xe, d, z, self.fn_hz, math.inf, bb.FIT_S, dt)[1].min() <= STOP_NEAR_MM:
                     cases.append((z, d, x0, xe, math.inf, np.asarray(x, float)[peak:], dt))
             fit = bb.fit_body(cases, self.fn_hz)
-            nan = float("nan")
-            self.body = (fit[0], fit[2], len(cases), fit[1]) if fit else (nan, nan, 0, nan)
-        return self.body if self.body[2] else None
+            self.body = Body(fit[0], fit[2], len(cases), fit[1]) if fit else Body(math.nan, math.nan, 0, math.nan)
+        return self.body if self.body.records else None
 
     def zeta_d(self, clicks: float) -> tuple[float, float, np.ndarray]:
         """zeta and d at ``clicks`` and their 2 x 2 covariance."""
@@ -562,7 +570,7 @@ class DecayLaw:
             from mtbmj.identify import bounce_body as bb
 
             body = self.body_share()  # through the stop: the two masses (the closed form elsewhere: faster)
-            tt, xx = bb.trace(bb.TwoMass.of_law(body[0], self.fn_hz, z, d, body[3]), x0, x_eq, stroke_mm, after_s, dt)
+            tt, xx = bb.trace(bb.TwoMass.of_law(body.share, self.fn_hz, z, d, body.zeta), x0, x_eq, stroke_mm, after_s, dt)
         rng = np.random.default_rng(0)
         draws = rng.multivariate_normal([z, d], cov, size=DRAWS)
         fns = rng.normal(self.fn_hz, self.fn_sd, size=DRAWS)
@@ -687,6 +695,6 @@ def held_out(seqs, clicks, records, ends_mm, i: int, model: str = "both") -> dic
     return out
 
 
-__all__ = ["DECAY_MODEL", "DecayLaw", "DecayScatter", "Estimate", "HalfScatter", "Prediction", "Timing", "common_fn", "decay_law", "decay_scatter", "free_motion",
+__all__ = ["Body", "DECAY_MODEL", "DecayLaw", "DecayScatter", "Estimate", "HalfScatter", "Prediction", "Timing", "common_fn", "decay_law", "decay_scatter", "free_motion",
            "half_decays", "half_scatter", "held_out", "held_out_decay", "honest_timing", "measured_decay", "read_sd", "rebound_speed", "record_timings", "timed_halves", "timing",
            "vertex_time"]

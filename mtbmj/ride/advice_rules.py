@@ -467,8 +467,9 @@ def trial(bike, overrides=None, other=None, sets=()) -> Trial:
             from mtbmj.bike.keys import warnings as odd
 
             section, _, bare = key.partition(".")
-            for line in odd({section: {bare: value}}) if not odd({section: {bare: named.value / named.per_unit}}) else ():
-                raise ConfigError(f"--try-set {key}={value:g}: {line} (advise predicts only within what parts have)")
+            lines = odd({section: {bare: value}})
+            if lines and not odd({section: {bare: named.value / named.per_unit}}):
+                raise ConfigError(f"--try-set {key}={value:g}: {lines[0]} (advise predicts only within what parts have)")
             over.setdefault(named.section, {})[named.key] = value * named.per_unit  # rate, its preload kept)
         elif colon:
             if part not in ("fork", "shock") or not name:
