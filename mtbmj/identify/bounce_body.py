@@ -151,12 +151,6 @@ def trace(m: TwoMass, x0: float, x_eq: float, stroke_mm: float, duration_s: floa
     return tt, np.clip(xx, 0.0, stroke_mm)
 
 
-def rms_after(x_pred: np.ndarray, x_rec: np.ndarray, dt: float, window_s: float = FIT_S) -> float:
-    n = min(x_pred.size, x_rec.size, int(window_s / dt) + 1)
-    r = x_pred[:n] - x_rec[:n]
-    return float(np.sqrt(np.mean(r * r)))
-
-
 def fit_body(cases, fn_hz: float) -> tuple[float, float, float] | None:
     """The body's share ``mu`` and damping ratio ``zeta_b`` that make the two-mass traces follow ``cases``
     best, and the RMS (mm) there: each case (zeta, d, x0, x_eq, stroke_mm, travel after the slam's peak
@@ -199,5 +193,5 @@ def zeta_words(zb: float) -> str:
     return f"{zb:.3f}" + ("" if at is None else f" (stopped at its bound {at:g})")
 
 
-__all__ = ["BODY_HZ", "BODY_ZETA", "BODY_ZETA_BOUNDS", "FIT_S", "SHARE_BOUNDS", "TwoMass", "at_bound", "fit_body", "rms_after",
+__all__ = ["BODY_HZ", "BODY_ZETA", "BODY_ZETA_BOUNDS", "FIT_S", "SHARE_BOUNDS", "TwoMass", "at_bound", "fit_body",
            "share_words", "trace", "zeta_words"]
