@@ -7,18 +7,13 @@ its front into a 0.8 s wheelie (2.55-3.36 s, the frame's front a metre up), it l
 bottoms out again, and a rock at 24.4 m throws it into a second of 0.93 s (3.64-4.57 s) over the 0.5 m drop at
 30 m. The reconstruction finds the ground where the wheel is down between them 0.48 m low (a false dip at 23 m): the
 quarter car's body (the whole bike's slow reference) high-passed through the wheelies sits 0.55 m below the
-frame's front across both. With the long flights' arcs kept out of the drift's removal
-(``reconstruct_inverse.WHEELIE_S`` = 0.3 s: ``highpass_around``, ``wheelies``) it is 0.25 m low; checked here
-beside the default, which fails the same check. It is off by default: with it the advice on this ride raises the
-fork's compression damping (500 -> 2384 N s/m) in place of its spring (tests/test_advise_carried.py).
+frame's front across both. Keeping the long flights' arcs out of the drift's removal (0.25 m low) and reading
+a touch that never carries half the static load as no landing were tried and removed (docs/rolling.md,
+"Wheelies' arcs", keeps what they measured).
 
 What does not hold yet (strict xfails, the default reading): the ground between the wheelies; the second wheelie
 is found as three flights, split by touches of 0.1 s and at most 160 N of 425 (the inverse's force about
-nothing), whose landings make a face at 25-29 m 0.23 m above the made ground (0.45 with the arcs kept); a touch
-that never carries 0.5 of the static load read as no landing (``reconstruct_inverse.CONTACT_S``, off) joins them
-and, with the arcs kept, brings the ground over 10-30 m to 178 mm RMS (228 by default, 222 with the arcs alone),
-but on the shared ride 00100.SST it raises a hill the bike could not climb (4.4 m at 117-128 m) and moves where
-its unread record diverges. The drop's level, inside a flight the rock threw, is not kept (a drop's edge is read
+nothing), whose landings make a face at 25-29 m 0.23 m above the made ground. The drop's level, inside a flight the rock threw, is not kept (a drop's edge is read
 only where the ground did not throw the wheel, ``reconstruct_inverse.edge``)."""
 from __future__ import annotations
 
@@ -29,7 +24,7 @@ import pytest
 
 from helpers import ADVISE_FEATURES, ADVISE_PROFILE, whole_bike_ride
 
-pytestmark = pytest.mark.slow  # a 16 s made ride and two reconstructions: about a minute
+pytestmark = pytest.mark.slow  # a 16 s made ride and its reconstruction
 
 SECONDS = 16.0
 LONG_S = 0.3  # the made bike's front flights this long are the wheelies
@@ -52,14 +47,9 @@ def _reconstructed(made):
 
 
 @pytest.fixture(scope="module")
-def both(made):
-    """(arcs, default): the reconstruction with the wheelies' arcs kept out of the drift's removal, and as it is."""
-    from mtbmj.ride import reconstruct_inverse
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(reconstruct_inverse, "WHEELIE_S", 0.3)
-        arcs = _reconstructed(made)
-    return arcs, _reconstructed(made)
+def rec(made):
+    """The reconstruction of the made ride."""
+    return _reconstructed(made)
 
 
 def _wheelies(made):
@@ -96,34 +86,27 @@ def test_the_made_ride_has_its_two_wheelies(made):
     assert w[0][0] == pytest.approx(2.55, abs=0.05) and w[1][1] == pytest.approx(4.57, abs=0.05), w
 
 
-def test_keeping_the_wheelies_arcs_finds_the_ground_between_them_nearer(made, both):
-    """The ground found where the wheel is down between the wheelies (3.36-3.64 s) on average within 0.35 m
-    of the made one with their arcs kept whole (measured: 0.25 m low); by default 0.48 m low (fails)."""
-    arcs, default = (_judged(made, rec) for rec in both)
-    assert arcs["landing_m"] > -0.35, arcs
-    assert default["landing_m"] < -0.35, default
-
-
 @pytest.mark.xfail(strict=True, reason="measured: by default the ground between the wheelies is found 0.48 m low "
-                                       "(0.25 with WHEELIE_S = 0.3 s, off: see the module doc)")
-def test_the_ground_between_the_wheelies_is_found_near_its_height(made, both):
-    assert _judged(made, both[1])["landing_m"] > -0.35
+                                       "(0.25 with the arcs kept out of the drift's removal, tried and removed: "
+                                       "see the module doc)")
+def test_the_ground_between_the_wheelies_is_found_near_its_height(made, rec):
+    assert _judged(made, rec)["landing_m"] > -0.35
 
 
 @pytest.mark.xfail(strict=True, reason="measured: the second wheelie (3.64-4.57 s) is found as hops at "
                                        "3.64-3.76 s, 3.84-4.27 and 4.36-4.54 s, split by touches of 0.1 s and at most 160 N of "
                                        "425; the ground over 10-30 m 228 mm RMS (178 with those touches read as no "
-                                       "landing and the arcs kept, both off: see the module doc)")
-def test_the_wheelies_are_found_whole(made, both):
-    got = _judged(made, both[1])
+                                       "landing and the arcs kept, both tried and removed: see the module doc)")
+def test_the_wheelies_are_found_whole(made, rec):
+    got = _judged(made, rec)
     assert got["matched"] and got["rms_m"] <= 0.2, got
 
 
 @pytest.mark.xfail(strict=True, reason="measured: the ground found over 10-30 m is 228 mm RMS from the made one, "
                                        "a flat line 46 mm (the made ground there is level but for its rocks)")
-def test_the_ground_through_the_wheelies_beats_a_flat_line(made, both):
-    e = _error(made, both[1])
-    x = ADVISE_PROFILE.along(both[1].t)
+def test_the_ground_through_the_wheelies_beats_a_flat_line(made, rec):
+    e = _error(made, rec)
+    x = ADVISE_PROFILE.along(rec.t)
     truth = made["h"](x) - made["h"](x[0])
     stretch = (x >= 10.0) & (x <= 30.0)
     assert np.sqrt(np.mean(e[stretch] ** 2)) <= np.sqrt(np.mean(truth[stretch] ** 2))
@@ -132,7 +115,6 @@ def test_the_ground_through_the_wheelies_beats_a_flat_line(made, both):
 @pytest.mark.xfail(strict=True, reason="measured: 2 s past the drop the ground found lies 0.55 m above the made "
                                        "one (0.51 with the arcs kept) (the drop's 0.5 m level is read only off an edge the ground did not "
                                        "throw the wheel from; this flight began at a rock's face)")
-def test_the_drop_inside_the_second_wheelie_keeps_its_level(made, both):
-    rec = both[1]
+def test_the_drop_inside_the_second_wheelie_keeps_its_level(made, rec):
     k = int(np.searchsorted(rec.t, _wheelies(made)[1][1] + 2.0))
     assert abs(_error(made, rec)[k]) <= 0.15

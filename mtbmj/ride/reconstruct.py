@@ -36,7 +36,7 @@ at every sample, its rear wheel over the ground of the pass before a wheelbase l
 predicted settles. The fork's slow load (below 0.3 Hz) is the rider's; the frame's front is held
 near the quarter car's slow height by a load bounded by half the rider's weight (the rider's slow
 load, estimated). Take-offs: where the tyre's force falls to zero or the fork hangs on its top-out
-stop (a tyre light for long too with ``reconstruct_inverse.LIGHT_S``, off by default; two such
+stop (a tyre light but above zero is not: docs/rolling.md, "A light tyre"; two such
 stretches one flight where the force between them averages under 10 % of its load at rest), a
 flight of 0.1 s or more from where the force last fell below 10 % of its load at rest
 (``reconstruct_inverse.unloaded``); a flight that long landing more than 0.15 m lower bridged by the

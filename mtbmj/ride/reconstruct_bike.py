@@ -340,9 +340,9 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     wheel over the ground found under the front ``lag`` (s, on ``t``) earlier; the ground of one pass
     is the rear's in the next, from ``first_ground`` (the quarter car's), until the rear predicted
     settles (``SETTLED_M``) or ``MAX_PASSES``. The fork's slow load (below the quarter car's high-pass)
-    is the rider's, taken off the frame as the quarter car takes it (the tyre carries it; with
-    ``reconstruct_inverse.FLIGHTS_OUT_OF_SLOW_LOAD`` the quarter car's flights ``air`` and the top-out's
-    hanging, with their take-offs and landings, kept out of it: ``reconstruct_inverse.slow_load``); the frame's
+    is the rider's, taken off the frame as the quarter car takes it (the tyre carries it;
+    ``reconstruct_inverse.slow_load``, low-passed through the flights: keeping them out was tried and
+    removed, docs/rolling.md, "pit"); the frame's
     front is held near ``reference`` (the quarter car's body, its drift removed) by the bounded slow
     load of :func:`ride`. ``stops`` (N at the wheel, or None): the fork's hard-stop force across each
     bottom-out (not in the record; the quarter car's, keeping its body level after it, at first, then

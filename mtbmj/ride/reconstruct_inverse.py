@@ -20,29 +20,10 @@ EDGE_DROP_M = 0.15  # ... lower by more than this (a rock's back falls less)
 EDGE_RISE_M = 0.05  # ... and the ground rose less than this into the take-off over EDGE_RISE_S (else thrown)
 EDGE_RISE_S = 0.1
 TAKE_OFF_SHARE = 0.1  # such a flight left where the tyre's force last fell below this share of its static load
-# a flight this long: the body's arc kept out of its drift's removal (highpass_around, wheelies); off (inf) by
-# default. At 0.3 s, on the carried bike's made ride at 5 N/mm, the ground between its two wheelies is found 0.25 m
-# low where it is 0.48 (tests/test_reconstruct_wheelies.py), but the advice on that ride then raises the fork's
-# compression damping 500 -> 2384 N s/m in place of its spring (tests/test_advise_carried.py fails)
-WHEELIE_S = math.inf
-LANDING_SHARE = 0.5  # a wheel lands where its force returns to this share of its static load ...
-LIGHT_SHARE = 0.5  # a tyre's force below this share of its static load for LIGHT_S or longer: a flight (unloaded)
-# ... off (inf) by default: on at 0.1 s (a flight that short lifts the wheel g T^2 / 8 = 12 mm over its chord) it
-# finds a made hop with the fork 6 mm short of its top-out (tests/test_reconstruct_hop.py), but on the shared rides
-# 00642 and 00643 as a user runs them crashed where they rode whole (docs/rolling.md, "A light tyre")
-LIGHT_S = math.inf
-CONTACT_S = 0.0  # ... a touch between two flights no longer than this never reaching it is none (0: off, see unloaded)
 MAX_FLIGHT_S = 1.5  # a fork fully out longer than this is not flying (a bike standing unweighted): the law's force at 0
 BOTTOM_OUT_MARGIN_M = 0.5e-3  # a stroke this close to full travel is a bottom-out (the hard stop's force unseen)
 PAST_TRAVEL_M = 2e-3  # the most an end passes its travel into its hard stop (controllers/stops.py: a hard landing)
 BOTTOM_OUT_WINDOW_S = 1.0  # after a bottom-out the body's speed is set so its height stays level over this
-LANDING_S = 0.5  # after a flight of at least EDGE_FLIGHT_S the landing's impact, kept out of the slow load too
-TAKE_OFF_S = 0.3  # ... and before it the take-off's push (a kicker's ramp)
-SIDE_S = 1.0  # such a stretch bridged between the force averaged over this of the ground either side
-# the slow load read with the flights kept out (slow_load); off: low-passed through them. Measured (docs/rolling.md,
-# "pit"): on made rides a 1 m drop's ground found within 0.05 m where it was 0.76 m off, on the shared rides
-# 00100's pit deeper (1.66 m for 1.31) and its rear 2.4 mm worse, 00094's whole bike diverging at 66.75 s: off
-FLIGHTS_OUT_OF_SLOW_LOAD = False
 V2_LOWPASS_HZ = 100.0  # a version-2 record (5 kHz, coarse steps) is low-passed here before anything is differentiated
 G = 9.81
 
@@ -88,44 +69,12 @@ def lowpass(x, dt, hz=HIGHPASS_HZ):
     return sosfiltfilt(butter(2, hz, btype="lowpass", fs=1.0 / dt, output="sos"), x)
 
 
-def masked(air, dt: float) -> np.ndarray:
-    """The samples kept out of the rider's slow load: each flight (``air``, stretches closer than
-    ``JUMP_GAP_S`` one) and, around one of at least ``EDGE_FLIGHT_S``, the take-off's push over
-    ``TAKE_OFF_S`` before it (a kicker's ramp) and the landing's impact over ``LANDING_S`` after it."""
-    out = np.asarray(air, bool).copy()
-    for a, b in flights(out.copy(), dt):
-        out[a:b] = True
-        if (b - a) * dt >= EDGE_FLIGHT_S:
-            out[max(a - int(round(TAKE_OFF_S / dt)), 0):a] = True
-            out[b:b + int(round(LANDING_S / dt))] = True
-    return out
-
-
 def slow_load(excess, air, dt: float, hz=HIGHPASS_HZ) -> np.ndarray:
     """The rider's slow load (N) from an end's force beyond its static load, ``excess`` (N): low-passed
-    at ``hz`` forward and back (:func:`lowpass`) with each flight of ``air`` and its take-off's push and
-    landing's impact (:func:`masked`) bridged by a straight line between the force averaged over
-    ``SIDE_S`` of the ground either side, and nothing in the flights themselves (ballistic: in the air
-    the rider has nothing to shift his load onto). Low-passed through them, a landing's kilonewtons
-    leaked back into the flight before it (00100.SST's 1.2 m pit: 199-286 N in the air) and a take-off's
-    into the landing; ``air`` None or empty, or ``FLIGHTS_OUT_OF_SLOW_LOAD`` off (the default): the
-    plain low-pass."""
-    x = np.asarray(excess, float)
-    if not FLIGHTS_OUT_OF_SLOW_LOAD or air is None or not np.any(air):
-        return lowpass(x, dt, hz)
-    out = masked(air, dt)
-    x = x.copy()
-    n = max(1, int(round(SIDE_S / dt)))
-    for a, b in runs(out):
-        left = x[max(a - n, 0):a][~out[max(a - n, 0):a]]
-        right = x[b:b + n][~out[b:b + n]]
-        lo = float(left.mean()) if left.size else (float(right.mean()) if right.size else 0.0)
-        hi = float(right.mean()) if right.size else lo
-        x[a:b] = np.linspace(lo, hi, b - a + 2)[1:-1]
-    slow = lowpass(x, dt, hz)
-    for a, b in flights(np.asarray(air, bool), dt):
-        slow[a:b] = 0.0
-    return slow
+    at ``hz`` forward and back (:func:`lowpass`) through the flights too. ``air`` (the flights) is not
+    read: keeping the flights, their take-offs and landings out of the load was tried and removed
+    (docs/rolling.md, "pit"); the argument stays for ``reconstruct_bike.whole_bike_ground``'s call."""
+    return lowpass(np.asarray(excess, float), dt, hz)
 
 
 def wheelbase_at(spec, fork: float, rear: float) -> float:
@@ -148,23 +97,6 @@ def highpass(x, dt):
 
     sos = butter(2, HIGHPASS_HZ, btype="highpass", fs=1.0 / dt, output="sos")
     return sosfiltfilt(sos, x)
-
-
-def highpass_around(x, dt, held=None):
-    """``x`` high-passed (:func:`highpass`) with the stretches of ``held`` (a mask, or None: the plain
-    high-pass) taken out of what is filtered: each replaced by the straight line between its ends, the
-    series so filled high-passed, and each stretch's own departure from its line added back whole. A
-    wheelie's or a long flight's arc (the frame's front a metre up for a second or two) is then neither
-    smeared into the ground either side nor pulled down by its own slow part."""
-    x = np.asarray(x, float)
-    if held is None or not np.any(held):
-        return highpass(x, dt)
-    filled = x.copy()
-    n = x.size
-    for a, b in runs(np.asarray(held, bool)):
-        a0, b0 = max(a - 1, 0), min(b, n - 1)
-        filled[a0:b0 + 1] = np.linspace(x[a0], x[b0], b0 - a0 + 1)
-    return highpass(filled, dt) + (x - filled)
 
 
 def _states(law, x, v, dt, compiled: bool = True):
@@ -292,16 +224,10 @@ def _thrown(ground, a0: int, dt: float) -> bool:
     return ground[a0] - before.min() >= EDGE_RISE_M
 
 
-def unloaded(tyre, static: float, dt: float, light: bool = True) -> np.ndarray:
-    """Where a tyre carries nothing: its force ``tyre`` (N) not positive; with ``light`` (the whole
-    bike's front; off in the quarter cars) also below ``LIGHT_SHARE`` of ``static`` for ``LIGHT_S`` (off,
-    infinite, by default) to ``MAX_FLIGHT_S``, not from the record's first or to its last sample
-    (:func:`hanging`'s guards: there the bike stands unweighted) and only where the zero finds no
-    flight of ``JUMP_GAP_S`` or more (there its take-off stands): a wheel in the air whose fork stays
-    short of its top-out, its law's force there read in place of the nothing it carried (00642.SST's
-    and 00643.SST's forks hopped 6-7 mm short for 0.1-0.5 s, the force read 30-250 N of 426 at rest,
-    never zero). Measured with it on, and why it is off: docs/rolling.md, "A light tyre". And before a
-    flight of at
+def unloaded(tyre, static: float, dt: float) -> np.ndarray:
+    """Where a tyre carries nothing: its force ``tyre`` (N) not positive (a tyre light but above zero,
+    as 00642.SST's and 00643.SST's forks 6-7 mm short of their top-out in hops, is not read as a flight:
+    tried and removed, docs/rolling.md, "A light tyre"); and before a flight of at
     least ``EDGE_FLIGHT_S`` back to where its force last rose above ``TAKE_OFF_SHARE`` of ``static``
     (its load at rest): the inverse follows a wheel down as it unloads off an edge (the force within a
     few tens of newtons of zero for up to 0.1 s before it reads zero), which put the take-off that
@@ -309,26 +235,15 @@ def unloaded(tyre, static: float, dt: float, light: bool = True) -> np.ndarray:
     of zero with a force between them that averages no more than ``TAKE_OFF_SHARE`` of ``static`` are one
     flight (the inverse's force, two derivatives of the record, flickers by tens of newtons about
     nothing: read stretch by stretch, a 0.19 s fall off a 0.35 m drop was two hops of 0.09 s and its
-    ground followed the wheel down), and so are two with a touch between them no longer than ``CONTACT_S``
-    whose force never reaches ``LANDING_SHARE`` of ``static`` (a landing is where the force returns). Off
-    (``CONTACT_S`` 0): at 0.15 s it joined the carried bike's made ride's 0.93 s flight over a drop, read
-    as three split by touches of 0.1 s and at most 160 N of 425 (with ``WHEELIE_S`` at 0.3 s the ground
-    over 10-30 m 178 mm RMS off the made one where it is 222 without it), but on the shared ride 00100.SST it raised a hill the bike could not
-    climb (4.4 m at 117-128 m) and moved where its unread record diverges (at 0.3 of the static load
-    the made ride's ground was 144 mm off, 00100.SST not checked; tests/test_reconstruct_wheelies.py)."""
+    ground followed the wheel down); any other touch between two flights is a landing, even one that
+    never carries half the static load (reading that as none was tried and removed: docs/rolling.md,
+    "Wheelies' arcs")."""
     tyre = np.asarray(tyre, float)
     off = tyre <= 0.0
-    read = [(a, b) for a, b in flights(off, dt) if (b - a) * dt >= JUMP_GAP_S]  # flights the zero finds
-    for a, b in runs(tyre <= LIGHT_SHARE * static) if light else []:  # long enough, not standing (hanging's)
-        if (LIGHT_S <= (b - a) * dt <= MAX_FLIGHT_S and a > 0 and b < tyre.size
-                and not any(p < b and q > a for p, q in read)):
-            off[a:b] = True
     low = tyre <= TAKE_OFF_SHARE * static
     zeros = runs(off)
     for (_, b), (a, _) in zip(zeros[:-1], zeros[1:]):
         if np.mean(tyre[b:a]) <= TAKE_OFF_SHARE * static:  # between two zeros the force carried next to nothing: one flight
-            off[b:a] = True
-        elif (a - b) * dt <= CONTACT_S and np.max(tyre[b:a]) < LANDING_SHARE * static:  # a touch, no landing
             off[b:a] = True
     out = off.copy()
     for a, b in flights(off, dt):
@@ -340,7 +255,7 @@ def unloaded(tyre, static: float, dt: float, light: bool = True) -> np.ndarray:
     return out
 
 
-def ground_under(t, rise, stroke, car: QuarterCar, ratio, light: bool = False):
+def ground_under(t, rise, stroke, car: QuarterCar, ratio):
     """(ground height m, tyre force N, airborne mask, the rider's slow load N, the body's height m, its
     drift removed, the hard stop's force N at the wheel found across each bottom-out) under a quarter
     car whose
@@ -354,12 +269,8 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio, light: bool = False):
     closer than ``JUMP_GAP_S`` merged (one flight); the ground under a flight is not seen by the
     wheel: it is bridged by the chord from take-off to landing (``bridge`` without edges: the whole bike
     puts a drop's edge where the quarter car's slow reference would put it late), kept below the wheel's
-    path; a long flight's take-off where the tyre's force first fell toward zero (``unloaded``; a tyre
-    light for long a flight only with ``light``, default off: the whole bike's passes read it). The
-    body's drift is removed again with the arcs of the long flights so found kept whole (``wheelies``; off by
-    default, ``WHEELIE_S``). The
-    rider's slow load is the force beyond the static load low-passed; with ``FLIGHTS_OUT_OF_SLOW_LOAD``
-    (off by default) through :func:`slow_load`, the flights a first reading finds kept out."""
+    path; a long flight's take-off where the tyre's force first fell toward zero (``unloaded``). The
+    rider's slow load is the force beyond the static load low-passed through the flights too."""
     dt = float(t[1] - t[0])
     w, x = np.asarray(rise, float), np.asarray(stroke, float)
     f = law_along(car.law, x, dt, car.travel) / ratio(w)
@@ -368,31 +279,13 @@ def ground_under(t, rise, stroke, car: QuarterCar, ratio, light: bool = False):
     _, w_acc = _derivatives(w, dt)
     excess = np.where(top, weight, f) - weight
     extra = lowpass(excess, dt)  # the rider's slow load shifts (braking, weight)
-    if FLIGHTS_OUT_OF_SLOW_LOAD:  # again with the flights that finds (and their landings) kept out
-        first = _found(dt, x, w, f, top, w_acc, car, extra)
-        extra = slow_load(excess, unloaded(first[1], (car.sprung + car.unsprung) * car.gravity, dt, light) | top, dt)
     ground, tyre, body, stops = _found(dt, x, w, f, top, w_acc, car, extra)
     static = (car.sprung + car.unsprung) * car.gravity
-    held = wheelies(unloaded(tyre, static, dt, light) | top, dt)
-    if held.any():  # the body's drift removed again with its long flights' arcs kept whole (WHEELIE_S, off)
-        ground, tyre, body, stops = _found(dt, x, w, f, top, w_acc, car, extra, held)
-    ground, air = bridge(ground, unloaded(tyre, static, dt, light), dt, edges=False)
+    ground, air = bridge(ground, unloaded(tyre, static, dt), dt, edges=False)
     return ground - ground[0], tyre, air, extra, body, stops
 
 
-def wheelies(off, dt: float) -> np.ndarray:
-    """The flights of ``off`` (:func:`flights`) of at least ``WHEELIE_S``: where the body's arc is its own
-    (:func:`highpass_around`). On the carried bike's made ride the frame's front rose a metre in each of
-    two wheelies (0.8 and 0.9 s); high-passed through them the body sat 0.55 m below it across both and
-    the first landing was found 0.5 m low (a false dip at 23 m)."""
-    out = np.zeros(len(off), bool)
-    for a, b in flights(np.asarray(off, bool), dt):
-        if (b - a) * dt >= WHEELIE_S:
-            out[a:b] = True
-    return out
-
-
-def _found(dt, x, w, f, top, w_acc, car: QuarterCar, extra, held=None):
+def _found(dt, x, w, f, top, w_acc, car: QuarterCar, extra):
     """(ground m, tyre force N, the body's height m, the hard stop's force N) of :func:`ground_under`
     with the rider's slow load ``extra`` (N), the flights not yet bridged."""
     acc = np.where(top, -car.gravity - car.unsprung / (car.sprung + car.unsprung) * w_acc,
@@ -412,9 +305,9 @@ def _found(dt, x, w, f, top, w_acc, car: QuarterCar, extra, held=None):
         kick = float(body @ tau / (tau @ tau))
         vel[k:] -= kick
         stops[start:k + 1] -= kick * car.sprung / ((k + 1 - start) * dt)
-    vel = highpass_around(vel - vel.mean(), dt, held)
+    vel = highpass(vel - vel.mean(), dt)
     body = np.cumsum(vel) * dt
-    body = highpass_around(body - body.mean(), dt, held)
+    body = highpass(body - body.mean(), dt)
     wheel = body + w
     _, wheel_acc = _derivatives(wheel, dt)
     tyre = np.where(top, 0.0, car.unsprung * (wheel_acc + car.gravity) + f)
@@ -513,5 +406,5 @@ def runs(mask):
 
 
 
-__all__ = ["QuarterCar", "ground_under", "flights", "bridge", "edge", "unloaded", "law_along", "derivatives", "highpass", "highpass_around", "wheelies", "hanging", "forward", "wheelbase_at", "lowpass", "runs", "slow_load", "masked", "FLIGHTS_OUT_OF_SLOW_LOAD",
+__all__ = ["QuarterCar", "ground_under", "flights", "bridge", "edge", "unloaded", "law_along", "derivatives", "highpass", "hanging", "forward", "wheelbase_at", "lowpass", "runs", "slow_load",
            "within_stops"]
