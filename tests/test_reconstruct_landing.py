@@ -288,9 +288,9 @@ def test_a_flight_s_duration_bounds_its_fall_off_a_ramp_up_level_and_down(u_up):
 
 def test_the_time_in_the_air_counts_from_before_the_wheel_extends_not_from_its_hang():
     """The tyres leave a ramp down (2 m/s downward) with the suspension at 50 mm, which extends to full over
-    80 ms in the air (the wheel pushed out under the frame): the axles fall 1.0 m in T = 0.29 s, the frame 0.95.
+    80 ms in the air (the wheel pushed out under the frame): the axles fall 1.0 m in T = 0.28 s, the frame 0.95.
     Counted from the hang (the travel within 5 mm of full extension) the time is 70 ms short and its bound
-    (0.85 m, computed here) would cut the real fall; counted from the travel's last compression (before the
+    (0.82 m, computed here) would cut the real fall; counted from the travel's last compression (before the
     take-off: the tyre left after it) with the wheel's extension added, it holds it and nothing is raised."""
     from mtbmj.ride.reconstruct_landing import READ_SHARE
 
