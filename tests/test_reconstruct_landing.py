@@ -8,7 +8,10 @@ each landing on a ramp of travel at a speed written in the test); the last rides
 independent whole bike of tests/helpers.py (``whole_bike_ride``: its own equations and integrator;
 what it shares with the package is listed in tests/test_reconstruct_whole_bike.py's module doc) off a
 1.0 m and a 1.5 m drop, and the deliberately wrong record is the fork's of the big drops given with the
-rear's of the same ride off small ones (0.3 and 0.4 m, the same seed and speed).
+rear's of the same ride off small ones (0.3 and 0.4 m, the same seed and speed). The flight's duration
+(issue 51 item 4, flight51) is tested on a ball-like frame written here in closed form (``_ball``: leaving
+upward, level and downward, T and V known), with a fall made deeper than its duration allows and a take-off
+whose wheel extends in the air (the hang alone would count the time short).
 """
 from __future__ import annotations
 
@@ -164,8 +167,8 @@ def test_real_drops_keep_their_depth_and_a_landing_deepened_by_hand_is_cut(tmp_p
     and 4.59 for 5.56 m/s). The bound without its uncertainty (V^2/2g of the reading, the naive rule)
     would cut the real 1.0 m drop (0.876 m for the 0.957 found, when written). Beside it, the deliberately
     wrong ground: the same ride's found ground with the 1.0 m drop's landing deepened by 3 m by hand is
-    cut back to what the landing allows (the records say the bike did not fall 4 m), where the ground as
-    written (the code before) keeps the 4 m."""
+    cut back to what the landing allows (its speed or, the tighter here, its time in the air; the records
+    say the bike did not fall 4 m), where the ground as written (the code before) keeps the 4 m."""
     from mtbmj.ride.reconstruct_landing import READ_SHARE, judged
 
     made = whole_bike_ride(tmp_path, seed=5, seconds=25.0, profile=PROFILE,
@@ -197,7 +200,12 @@ def test_real_drops_keep_their_depth_and_a_landing_deepened_by_hand_is_cut(tmp_p
     (cut,) = [r for r in rows if r["raised_m"] > 0.0]
     a0 = int(round(cut["start_s"] / dt))
     assert cut["fall_m"] > 3.5
-    assert ridden[land] - ridden[a0] == pytest.approx(-(cut["bound_m"] + cut["uncertainty_m"]), abs=1e-3)
+    # cut by the larger excess: the fall past the speed's allowance, or the fork's own fall past its duration's
+    by_speed = cut["fall_m"] - (cut["bound_m"] + cut["uncertainty_m"])
+    by_time = cut["own_fall_m"] - cut["duration_bound_m"]
+    assert cut["raised_m"] == pytest.approx(max(by_speed, by_time), abs=1e-3)
+    assert ridden[land] - ridden[a0] == pytest.approx(-(cut["fall_m"] - cut["raised_m"]), abs=1e-3)
+    assert ridden[land] - ridden[a0] >= -(cut["bound_m"] + cut["uncertainty_m"]) - 1e-3  # at most the speed allows
     assert ridden[land] - ridden[a0] > -3.5 and not deep[land] - deep[a0] > -3.5  # the ground as written fails
 
 
@@ -212,3 +220,90 @@ def _height(made) -> float:
     from mtbmj.ride.reconstruct_landing import com_height
 
     return com_height(spec_mod.load(str(made["bike"])))
+
+
+def _ball(u_up: float, fall: float, left_mm: float = 0.0, extend_s: float = 0.0, deeper: float = 0.0):
+    """A ball-like frame (no pitch: both axles move alike) written here in closed form: 4 s at 7 m/s, the rear's
+    sag 50 mm (the fork's the same along its axis at the head angle's sine 0.9); 0.10-0.05 s before the tyres
+    leave at 2.00 s a ramp loads both to 80 mm, then they extend: to ``left_mm`` when the tyres leave, and from
+    there to full extension over ``extend_s`` in the air (the wheels pushed out under the frame). The frame leaves
+    at ``u_up`` m/s upward (off a lip sloping up, level, down; the ground found level to the edge) and the axles land ``fall`` m below their take-off after
+    T = (u + sqrt(u^2 + 2 g (fall - left))) / g, the frame falling at V = g T - u, read 0.83 of it (the made
+    drops' share) over 40 ms after both touch down together. The ground found falls ``fall`` + ``deeper`` m at the
+    take-off. Returns (t, ground found, ground to ride, the row, T, V)."""
+    from mtbmj.ride.reconstruct_landing import judged
+
+    t = np.arange(0.0, 4.0, DT)
+    x = 7.0 * t
+    up = 2.0
+    frame_fall = fall - left_mm * 1e-3
+    T = (u_up + math.sqrt(u_up ** 2 + 2 * G * frame_fall)) / G
+    V = G * T - u_up
+    down = up + round(T / DT) * DT
+    rear = np.full(t.size, 50.0)
+    load = (t >= up - 0.15) & (t < up - 0.10)
+    rear[load] = 50.0 + 30.0 * (t[load] - (up - 0.15)) / 0.05
+    ext = (t >= up - 0.10) & (t < up)
+    rear[ext] = 80.0 + (left_mm - 80.0) * (t[ext] - (up - 0.10)) / 0.10
+    air = (t >= up) & (t < down)
+    rear[air] = np.maximum(left_mm * (1.0 - (t[air] - up) / extend_s), 0.0) if extend_s > 0 else 0.0
+    land = (t >= down) & (t < down + 0.04)
+    rear[land] = 1e3 * 0.83 * V * (t[land] - down)
+    after = t >= down + 0.04
+    rear[after] = np.maximum(50.0, 1e3 * 0.83 * V * 0.04 * np.exp(-(t[after] - down - 0.04) / 0.1))
+    ground = np.where(t >= up, -(fall + deeper), 0.0)
+    ridden, rows = judged(t, x, ground, rear / 0.9, rear, [(up, down)], np.full(t.size, 7.0), WHEELBASE, 0.9, 0.7, G)
+    (row,) = rows
+    return t, ground, ridden, row, T, V
+
+
+@pytest.mark.parametrize("u_up", [1.5, 0.0, -3.0])
+def test_a_flight_s_duration_bounds_its_fall_off_a_ramp_up_level_and_down(u_up):
+    """Off a ramp up (1.5 m/s), level and down (-3 m/s), a 1.0 m fall written in closed form (``_ball``): the
+    bound from the first end's time in the air (``in_air``: v T - g T^2/2 at the reading's upper end, T from its
+    travel's last compression to its touchdown) holds the true fall on each and nothing is raised; its time in
+    the air is at least the written T. Off the ramp down (leaving at 3 m/s downward, 0.24 s in the air, landing
+    at 5.35 m/s; its time counted from the ramp's load 0.10 s before, 0.34 s) the duration allows 1.40 m where
+    the landing's speed allows 1.57, so a fall found 0.5 m deeper than the one written is cut to what the
+    duration allows, where the speed alone (V^2/2g with its uncertainty) keeps it; off the ramp up the flight
+    outlasts V/g and the duration says no more than the speed (when written: level 1.16 m for 1.08, up 1.28 for
+    1.20)."""
+    from mtbmj.ride.reconstruct_landing import READ_SHARE
+
+    t, ground, ridden, row, T, V = _ball(u_up, 1.0)
+    assert row["first_down"] == "rear"
+    assert row["in_air_s"] >= T - DT and row["duration_bound_m"] >= 1.0, (row, T, V)
+    assert row["raised_m"] == 0.0 and np.array_equal(ridden, ground)
+    v_max = 0.83 * V / READ_SHARE
+    T_max = row["in_air_s"]
+    closed = v_max * min(T_max, v_max / G) - 0.5 * G * min(T_max, v_max / G) ** 2
+    assert closed <= row["duration_bound_m"] <= closed + 0.08 + 1e-9  # the 80 mm the wheel can extend in the air
+    speed_allows = row["bound_m"] + row["uncertainty_m"]
+    if u_up > 0:
+        assert T > v_max / G and row["smaller"] == "speed"
+        return
+    if u_up < 0:
+        assert row["smaller"] == "duration" and row["duration_bound_m"] < 1.5 < speed_allows, row
+        t, ground, ridden, row, _, _ = _ball(u_up, 1.0, deeper=0.5)
+        assert row["fall_m"] == pytest.approx(1.5, abs=1e-9) and row["own_fall_m"] == pytest.approx(1.5, abs=1e-9)
+        assert ridden[0] - ridden[-1] == pytest.approx(row["duration_bound_m"], abs=1e-4)  # the row rounded to 0.1 mm
+        assert ridden[0] - ridden[-1] < 1.5 - 0.05  # cut; the ground as found (the code before) keeps 1.5
+        assert np.array_equal(ridden[t < 2.0], ground[t < 2.0])
+
+
+def test_the_time_in_the_air_counts_from_before_the_wheel_extends_not_from_its_hang():
+    """The tyres leave a ramp down (2 m/s downward) with the suspension at 50 mm, which extends to full over
+    80 ms in the air (the wheel pushed out under the frame): the axles fall 1.0 m in T = 0.28 s, the frame 0.95.
+    Counted from the hang (the travel within 5 mm of full extension) the time is 70 ms short and its bound
+    (0.82 m, computed here) would cut the real fall; counted from the travel's last compression (before the
+    take-off: the tyre left after it) with the wheel's extension added, it holds it and nothing is raised."""
+    from mtbmj.ride.reconstruct_landing import READ_SHARE
+
+    t, ground, ridden, row, T, V = _ball(-2.0, 1.0, left_mm=50.0, extend_s=0.08)
+    v_max = 0.83 * V / READ_SHARE
+    hang_from = row["left_s"][1]
+    short = (2.0 + round(T / DT) * DT) - hang_from
+    assert short < T - 0.05
+    from_hang = v_max * short - 0.5 * G * short ** 2 + 0.005
+    assert from_hang < 1.0 - 0.1  # the hang alone: a bound the real fall breaks
+    assert row["duration_bound_m"] >= 1.0 and row["raised_m"] == 0.0 and np.array_equal(ridden, ground), row

@@ -77,7 +77,9 @@ def _ride_crop(tmp: Path, name: str, x, z, speed: float):
     "a speed profile) goes over the bars too (3.42 s). Measured again on land51 with a flight's fall bounded by its "
     "landing in the terrain to ride (mtbmj/ride/reconstruct_landing.py): the rear lands first at 3.70 m/s, V^2/2g "
     "0.70 m, 1.17 with its uncertainty, so the 1.20 m fall is cut by 0.03 m only and the run still goes over the "
-    "bars at 16.44 s"))
+    "bars at 16.44 s. Measured again on flight51 with the flight's duration bounding it too: the rear's take-off "
+    "window 15.300-15.404 s, at most 0.434 s in the air, allows 1.22 m for its own fall of 1.23, so the cut stays "
+    "0.033 m and the run goes over the bars at 16.437 s (pitch -45.1 deg)"))
 def test_00100_rides_whole_on_its_own_reconstruction_as_a_user_runs_it(found, tmp_path):
     """The rider came home through all of 00100.SST, so the recorded setting at the speed found should
     ride the terrain found without a crash."""

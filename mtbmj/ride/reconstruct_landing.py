@@ -33,15 +33,35 @@ end (0.8: a version-2 record's 100 Hz low-pass smooths the rise further, not mea
 the pitch rate at the landing moves one end's speed against the other's; the largest the two readings
 allow, omega = |V_fork - V_rear| / wheelbase, lowers the axle's acceleration by omega^2 H.
 
+**The duration** (issue 51 item 4: flight51). The same axle, landing at V after T in free flight, has fallen
+exactly V T - a T^2/2 (a its mean downward acceleration: g less omega^2 H as above), which is at most V^2/(2a)
+and rises with T up to T = V/a: so with the reading's upper end (V / ``READ_SHARE``), the least acceleration
+and the longest T the record allows, the fall is at most that, and V^2/(2a) past V/a (``in_air``); no
+take-off speed is needed. The longest T: the first end's tyre left after its travel last compressed (a tyre
+off the ground cannot load it; a rise of more than ``EXTEND_TOL_M`` counts) and no later than the hang began
+(``_left``); its hang alone starts late, since the suspension goes on extending after the tyre left (a take-off
+at 50 mm extending over 80 ms in the air: counted from the hang the bound would cut the real fall, in the
+tests). Each sample of that window is a take-off it may have made: the ground under that end there less
+under its touchdown (its own fall, the tyre's unloaded radius the same at both ends) against what that time
+allows plus the travel it could still extend; the records rule a fall out only where every take-off in the
+window does, and the ground is raised by the least such excess where it is more than the speed's. On
+00100.SST's pit (115.9 m) the rear's window is 15.300-15.404 s: T 0.434 s allows 1.22 m for its own fall of
+1.23 (the hang alone, 0.33 s, would allow 1.03), so the speed's 0.033 m stays the cut.
+
 **Cut.** Where the fall found across the front's flight (the ground where the front lands less where it
 left: ``reconstruct_flight.read``'s level change) exceeds the bound plus its uncertainty, the ground
-from that landing on is raised by the excess (the fall cut to the bound plus its uncertainty), its shape
-kept; across the flight each sample is raised by the share of the fall it lies below the take-off, so a
+from that landing on is raised by the excess (the fall cut to the bound plus its uncertainty; by the
+duration's excess where that is the larger), its shape kept; across the flight each sample is raised by the share of the fall it lies below the take-off, so a
 drop's face stays where it was found, only shallower. ``reconstruction.json`` lists each flight judged
-(``landings``), one ``ConfigWarning`` says where a fall was cut (:func:`warn`), and the line says how many.
+(``landings``: with ``left_s`` the window the first end left in, ``in_air_s`` its longest time in the air,
+``own_fall_m`` and ``duration_bound_m`` at the take-off that allows most, ``smaller`` which allowance is the
+smaller, ``cut_by`` which set the cut), one ``ConfigWarning`` says where a fall was cut (:func:`warn`), and the line says how many.
 Assumed: the bike and its rider free in the air (a rider who pulls the bike up under him lands it slower
-than its fall gives: the bound then cuts a real drop; pushing it down makes it faster, which the bound
-allows), both wheels across the same level change (the ground's roughness over a wheelbase is not in
+than its fall gives: the bound then cuts a real drop; one who pushes it down and is still pushing at the
+touchdown lands it faster, which both bounds allow; one who pushed it away early and holds it there has
+lowered the frame by his share of the mass (0.72 on ``sst``) times his limbs' stroke without landing it
+faster, which neither bound allows: about 0.2 m for a 0.3 m stroke, not in the uncertainty), both wheels
+across the same level change (the ground's roughness over a wheelbase is not in
 the uncertainty), the rear's wheel travel vertical.
 """
 from __future__ import annotations
@@ -53,6 +73,7 @@ BOTH_S = 0.1  # both ends hang together at least this long: a flight of the whol
 READ_S = 0.03  # an end's landing speed: its travel's fastest within this after its touchdown
 SLOPE_M = 0.5  # the landing's slope read over this much ground past the first end's touchdown
 READ_SHARE = 0.8  # the travel's fastest after a touchdown reads at least this share of the frame's speed (0.83 measured)
+EXTEND_TOL_M = 1e-3  # an end's travel compressed where it rose more than this to its most before the hang
 
 
 def com_height(spec) -> float:
@@ -74,6 +95,27 @@ def _touchdown(travel_m, k0: int, dt: float) -> tuple[int, float] | None:
     n = max(int(round(READ_S / dt)), 2)
     part = travel_m[max(k - 1, 0):k + n + 1]
     return k, float(np.max(np.diff(part)) / dt) if part.size > 1 else 0.0
+
+
+def _left(travel_m, k_down: int) -> tuple[int, int]:
+    """(the sample the end's travel last stopped compressing before its hang, the first of the hang) for the
+    hang ending at ``k_down``: the tyre left between them (compressing takes its load; in the air the
+    suspension extends to its hang after the tyre left, so the hang alone starts late)."""
+    k = k_down
+    while k > 0 and travel_m[k - 1] <= HANG_MM * 1e-3:
+        k -= 1
+    j = top = k
+    while j > 0 and travel_m[j - 1] + EXTEND_TOL_M >= travel_m[top]:
+        j -= 1
+        top = j if travel_m[j] >= travel_m[top] else top
+    return top, k
+
+
+def in_air(v_max: float, a_min: float, t_s) -> np.ndarray:
+    """The most an axle falls in ``t_s`` s of free flight landing at ``v_max`` m/s, its downward acceleration
+    at least ``a_min``: v T - a T^2/2 up to T = v/a, v^2/(2a) past it (the take-off's speed unknown)."""
+    t_s = np.minimum(np.asarray(t_s, float), v_max / a_min)
+    return v_max * t_s - 0.5 * a_min * t_s * t_s
 
 
 def judged(t, distance, ground, fork_mm, rear_mm, jumps, speed, wheelbase: float, sin_a: float, height: float,
@@ -114,9 +156,20 @@ def judged(t, distance, ground, fork_mm, rear_mm, jumps, speed, wheelbase: float
         a_least = max(g - omega * omega * height, 0.5 * g)
         bound = v_down * v_down / (2.0 * g) + max(float(extended), 0.0)
         spread = (v_down / READ_SHARE) ** 2 / (2.0 * a_least) - v_down * v_down / (2.0 * g)
+        # the duration: the first end's tyre left between its travel's last compression and its hang (_left)
+        # (each sample it may have left at: the ground under that end there less under its touchdown, against
+        # what that time in the air allows); the records rule out the fall only where every such take-off does
+        j, h = _left(rear if first == "rear" else fork, k)
+        ks = np.arange(j, h + 1)
+        travel = (rear if first == "rear" else fork)[ks]
+        timed = in_air(v_down / READ_SHARE, a_least, (k - ks) * dt) + travel
+        under = x[ks] - (x[k] - place)  # that end's place at each sample (the rear a wheelbase behind the front)
+        own = np.interp(under, x, z) - np.interp(place, x, z)
+        i = int(np.argmin(own - timed))
         a0, b0 = max(a - 1, 0), b
         fall = float(z[a0] - z[b0])
-        excess = fall - (bound + spread)
+        by_speed, by_time = fall - (bound + spread), float(own[i] - timed[i])
+        excess = max(by_speed, by_time)
         if excess > 0.0:
             share = np.clip((z[a0] - z[a0:b0 + 1]) / fall, 0.0, 1.0)
             ridden[a0:b0 + 1] += excess * share
@@ -126,6 +179,10 @@ def judged(t, distance, ground, fork_mm, rear_mm, jumps, speed, wheelbase: float
                      "landing_speed_m_per_s": round(v_down, 3), "fork_speed_m_per_s": round(v_fork, 3),
                      "rear_speed_m_per_s": round(v_rear, 3), "pitch_rate_rad_per_s": round(omega, 3),
                      "fall_m": round(fall, 4), "bound_m": round(bound, 4), "uncertainty_m": round(spread, 4),
+                     "left_s": [float(t[j]), float(t[h])], "in_air_s": round(float((k - j) * dt), 4),
+                     "own_fall_m": round(float(own[i]), 4), "duration_bound_m": round(float(timed[i]), 4),
+                     "smaller": "duration" if timed[i] < bound + spread else "speed",
+                     "cut_by": "duration" if by_time > max(by_speed, 0.0) else "speed" if by_speed > 0.0 else None,
                      "raised_m": round(max(excess, 0.0), 4)})
     return ridden, rows
 
@@ -146,9 +203,12 @@ def warn(ride: str, rows) -> None:
     if cut:
         where = ", ".join(f"{r['at_m']:.0f} m ({r['start_s']:.2f}-{r['end_s']:.2f} s: {r['fall_m']:.2f} m down, the "
                           f"{r['first_down']} landing first at {r['landing_speed_m_per_s']:.1f} m/s allows "
-                          f"{r['bound_m']:.2f}, {r['bound_m'] + r['uncertainty_m']:.2f} with its uncertainty)" for r in cut)
-        warnings.warn(f"{ride}: a fall found deeper than the bike's landing speed allows (V^2/2g, both ends in the "
-                      f"air) at {where}: the terrain to ride raised from there by the excess (terrain.csv; the "
+                          f"{r['bound_m']:.2f}, {r['bound_m'] + r['uncertainty_m']:.2f} with its uncertainty"
+                          + (f"; its own fall {r['own_fall_m']:.2f} m in at most {r['in_air_s']:.2f} s in the air "
+                             f"allows {r['duration_bound_m']:.2f}" if r.get("cut_by") == "duration" else "") + ")"
+                          for r in cut)
+        warnings.warn(f"{ride}: a fall found deeper than the bike's landing speed allows (V^2/2g or its time in the "
+                      f"air, both ends in the air) at {where}: the terrain to ride raised from there by the excess (terrain.csv; the "
                       f"check's ground keeps the fork's)", ConfigWarning, stacklevel=2)
 
 
@@ -160,4 +220,5 @@ def attach(result, t, wheelbase: float, sin_a: float, spec, g: float, ride: str)
     warn(ride, result.landings)
 
 
-__all__ = ["HANG_MM", "BOTH_S", "READ_S", "SLOPE_M", "READ_SHARE", "attach", "com_height", "judged", "words", "warn"]
+__all__ = ["HANG_MM", "BOTH_S", "READ_S", "SLOPE_M", "READ_SHARE", "EXTEND_TOL_M", "attach", "com_height", "in_air", "judged",
+           "words", "warn"]
