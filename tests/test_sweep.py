@@ -52,7 +52,7 @@ def test_grid_is_full_factorial_first_key_slowest():
     assert len(variants) == 6
     assert [v[RATE] for v in variants] == [14.0, 14.0, 16.0, 16.0, 18.0, 18.0]
     assert [v[TIRE] for v in variants] == [75.0, 95.0] * 3
-    assert sweep.grid([sweep.parse_vary(f"{RATE}=14:18:1")]) == [{RATE: 14.0}]
+    assert sweep.grid([sweep.parse_vary(f"{RATE}=14:18:2")]) == [{RATE: 14.0}, {RATE: 18.0}]
 
 
 @pytest.mark.parametrize("method", ["lhs", "sobol"])

@@ -24,7 +24,7 @@ from mtbmj import limits
 from mtbmj.bike import chart as _chart
 from mtbmj.bike import linkage as _linkage
 from mtbmj.bike import shock as _shock
-from mtbmj.bike.bikefile import (KNOWN, SENSOR_KEYS, gated, merge, overridden, preset_names,  # noqa: F401
+from mtbmj.bike.bikefile import (KNOWN, SENSOR_KEYS, gated, mapping, merge, overridden, preset_names,  # noqa: F401
                                   read_leverage_csv, read_table)
 from mtbmj.errors import ConfigError
 from mtbmj.measured.leverage import Leverage, leverage_ratio, leverage_stroke, stroke_piece  # noqa: F401
@@ -298,6 +298,7 @@ def resolve(ref, overrides=None) -> ResolvedBike:
     """A bike preset name (``preset_names()``) or a TOML path read (``mtbmj.bike.bikefile.read_table``),
     ``overrides`` applied (:func:`overridden`), derived and checked: the one resolution of a bike
     file. A :class:`ResolvedBike` is taken as it is (with ``overrides``: those over its file)."""
+    mapping(overrides)  # before the file's errors are told from the overrides' by their keys
     if isinstance(ref, ResolvedBike):
         return ref if overrides is None else ref.with_overrides(overrides)
     table, source = read_table(str(ref))

@@ -121,6 +121,9 @@ def parse_vary(text: str, count: bool | None = None, check_key: bool = True) -> 
         n = int(parts[2])
         if n < 1:
             raise ConfigError(f"--vary {text}: n must be at least 1, got {n}")
+        if n == 1:  # linspace(lo, hi, 1) is lo alone: the range typed would be dropped without a word
+            raise ConfigError(f"--vary {text}: a grid of 1 value runs lo ({lo:g}) alone, not the range to "
+                              f"{hi:g}; give n of 2 or more, or the one value with --set {key}={lo:g}")
     if count is True and n is None:
         raise ConfigError(f"--vary {text}: a grid needs a count, key=lo:hi:n (or give --samples N)")
     if count is False and n is not None:
