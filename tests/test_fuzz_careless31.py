@@ -128,3 +128,14 @@ def test_the_python_entry_points_given_the_right_types_run():
     assert drop.raw["time_s"][-1] == pytest.approx(0.05, abs=2e-3)
     bike = mtbmj.run_bike("sst", "drop", 5.0, duration=0.05, overrides={"rider.mass_kg": 78})
     assert bike.raw["time_s"][-1] == pytest.approx(0.05, abs=2e-3)
+
+
+def test_a_decimal_comma_in_a_number_option_is_named(tmp_path, capfd):
+    """``--speed 4,5`` (a European keyboard's 4.5): "'4,5' is not a number", the comma unnamed."""
+    out = tmp_path / "out"
+    refused(["roll", "root", "--speed", "4,5", "--out", out], out, capfd,
+            "'4,5' is not a number (a decimal comma? the decimal point is a dot: 4.5)")
+    # the other side: a list or a word is not taken for a decimal comma
+    for typed in ("4,5,6", "4.5,1", "fast"):
+        line = refused(["roll", "root", "--speed", typed, "--out", out], out, capfd, "is not a number")
+        assert "decimal comma" not in line
