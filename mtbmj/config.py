@@ -386,7 +386,7 @@ PLAUSIBLE: dict[str, tuple[float, float]] = {
 # The unit mistakes a value is checked against, in order: (what was typed, this unit per one of it).
 MISTAKES: dict[str, tuple[tuple[str, float], ...]] = {
     "mm": (("m", 1000.0), ("in", 25.4), ("cm", 10.0)),
-    "kg": (("g", 1e-3), ("lb", 0.45359237)),
+    "kg": (("g", 1e-3), ("lb", 0.45359237), ("st", 6.35029318)),
     "N/mm": (("N/m", 1e-3), ("lb/in", N_PER_MM_PER_LB_PER_IN)),
     "lb/in": (("N/mm", 1.0 / N_PER_MM_PER_LB_PER_IN), ("N/m", 1e-3 / N_PER_MM_PER_LB_PER_IN)),
     "N s/m": (("N s/mm", 1000.0),),

@@ -139,3 +139,23 @@ def test_a_decimal_comma_in_a_number_option_is_named(tmp_path, capfd):
     for typed in ("4,5,6", "4.5,1", "fast"):
         line = refused(["roll", "root", "--speed", typed, "--out", out], out, capfd, "is not a number")
         assert "decimal comma" not in line
+
+
+@pytest.mark.parametrize("section, typed, meant", [
+    ("rider", "mass_kg = 180", "probably meant 180 lb = 81.65 kg"),  # 180 lb typed as kg
+    ("rider", "mass_kg = 8", "probably meant 8 st = 50.8 kg"),  # stones
+    ("shock", 'spring = "air"\npressure_psi = 14\npiston_diameter_mm = 40\npositive_volume_cm3 = 60\n'
+              'negative_volume_cm3 = 50', "probably meant 14 bar = 203.1 psi"),  # bar under pressure_psi
+])
+def test_a_bike_keys_unit_slip_names_the_unit_meant(tmp_path, capfd, section, typed, meant):
+    """A bike file's value outside what bikes have was warned as "(a unit mistake?)" without the unit, where
+    a fork configuration's names it (1.8 psi: "probably meant 1.8 bar")."""
+    path = tmp_path / "mine.toml"
+    path.write_text(f'base = "trail"\n[{section}]\n{typed}\n')
+    status, said = command_said(["presets", "--show", path], capfd)
+    lines = [line for line in said.splitlines() if line.startswith("mtbmj: warning:")]
+    assert status == 0 and len(lines) == 1 and f"(a unit mistake? {meant})" in lines[0], said
+    # the other side: a mass no unit brings within 30-150 kg is only "a unit mistake?"
+    path.write_text('base = "trail"\n[rider]\nmass_kg = 2000\n')
+    status, said = command_said(["presets", "--show", path], capfd)
+    assert status == 0 and "(a unit mistake?)" in said and "probably meant" not in said, said
