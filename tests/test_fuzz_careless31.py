@@ -159,3 +159,19 @@ def test_a_bike_keys_unit_slip_names_the_unit_meant(tmp_path, capfd, section, ty
     path.write_text('base = "trail"\n[rider]\nmass_kg = 2000\n')
     status, said = command_said(["presets", "--show", path], capfd)
     assert status == 0 and "(a unit mistake?)" in said and "probably meant" not in said, said
+
+
+@pytest.mark.parametrize("vary, said", [
+    ("rider.mass_kg=70:nan:3", "lo and hi must be finite numbers, got 'nan'"),
+    ("rider.mass_kg=-inf:90:3", "lo and hi must be finite numbers, got '-inf'"),
+    ("fork:fork.spring.rate_N_per_mm=8:12:1", "or the one value with --fork-set fork.spring.rate_N_per_mm=8"),
+    ("rider.mass_kg=70:90:1", "or the one value with --set rider.mass_kg=70"),
+])
+def test_a_bike_sweeps_range_with_no_end_or_one_value_says_so(tmp_path, capfd, vary, said):
+    """``70:nan:3`` was refused as "expected key=lo:hi:n", the form it has; a bike sweep's one-value grid of a
+    fork key names the option that sets one (--fork-set), not --set."""
+    out = tmp_path / "out"
+    refused(["sweep", "sst", "--roll", "root", "--speed", "4", "--vary", vary, "--out", out], out, capfd, said)
+    # the other side: a form that is wrong is still said to be
+    refused(["sweep", "sst", "--roll", "root", "--speed", "4", "--vary", "rider.mass_kg=70:90:3:4", "--out", out],
+            out, capfd, "expected key=lo:hi:n")
