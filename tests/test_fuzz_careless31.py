@@ -175,3 +175,17 @@ def test_a_bike_sweeps_range_with_no_end_or_one_value_says_so(tmp_path, capfd, v
     # the other side: a form that is wrong is still said to be
     refused(["sweep", "sst", "--roll", "root", "--speed", "4", "--vary", "rider.mass_kg=70:90:3:4", "--out", out],
             out, capfd, "expected key=lo:hi:n")
+
+
+@pytest.mark.parametrize("leverage, csv, said", [
+    ("wheel_travel_mm = [0.0, 100.0, 80.0, 160.0]\nratio = [3.0, 2.9, 2.8, 2.6]", None, "value 3, 80 mm, follows 100 mm"),
+    ('csv = "curve.csv"', "wheel_travel_mm,ratio\n0,3.0\n160,2.6\n100,2.8\n", "value 3, 100 mm, follows 160 mm"),
+])
+def test_a_leverage_table_going_back_names_the_value(tmp_path, capfd, leverage, csv, said):
+    """A table not monotonic was refused as "must increase strictly" without the value at fault."""
+    if csv:
+        (tmp_path / "curve.csv").write_text(csv)
+    path = tmp_path / "mine.toml"
+    path.write_text(f'base = "trail"\n[leverage]\n{leverage}\n')
+    refused(["presets", "--show", path], tmp_path / "out", capfd, f"must increase strictly (the shock stroke must "
+                                                                  f"be monotonic in the wheel travel): {said}")

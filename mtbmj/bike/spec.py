@@ -393,9 +393,10 @@ def derive(source: str, read: dict, overrides=None, csv: dict | None = None) -> 
         raise ConfigError(f"leverage.ratio: {len(r)} values for {len(w)} wheel travels in leverage.wheel_travel_mm")
     if w[0] != 0.0:
         raise ConfigError(f"{label('leverage.wheel_travel_mm')}: must start at 0 mm, got {w[0]:g}")
-    if any(b <= a for a, b in zip(w, w[1:])):
+    back = next(((i, a, b) for i, (a, b) in enumerate(zip(w, w[1:]), 2) if b <= a), None)
+    if back is not None:  # the value at fault named, its place counted as a list's and a CSV's rows are
         raise ConfigError(f"{label('leverage.wheel_travel_mm')}: must increase strictly (the shock stroke must be "
-                          f"monotonic in the wheel travel)")
+                          f"monotonic in the wheel travel): value {back[0]}, {back[2]:g} mm, follows {back[1]:g} mm")
     if any(x <= 0.0 for x in r):
         raise ConfigError(f"{label('leverage.ratio')}: every leverage ratio must be > 0")
     leverage = Leverage(tuple(x * MM for x in w), tuple(float(x) for x in r))
