@@ -189,3 +189,19 @@ def test_a_leverage_table_going_back_names_the_value(tmp_path, capfd, leverage, 
     path.write_text(f'base = "trail"\n[leverage]\n{leverage}\n')
     refused(["presets", "--show", path], tmp_path / "out", capfd, f"must increase strictly (the shock stroke must "
                                                                   f"be monotonic in the wheel travel): {said}")
+
+
+def test_one_ride_under_one_name_in_two_folders_is_told_by_its_paths(tmp_path, capfd, monkeypatch):
+    """``advise example 00649.SST`` (the shipped ride and a copy of it): "00649.SST: the same ride as 00649.SST",
+    the two told apart by nothing. Now the paths, where the names alone are one."""
+    from mtbmj.measured.telemetry import ride_path
+
+    shipped = Path(ride_path("example"))
+    monkeypatch.chdir(tmp_path)
+    Path(shipped.name).write_bytes(shipped.read_bytes())
+    out = tmp_path / "advice"
+    refused(["advise", "example", shipped.name, "--bike", "sst", "--out", out], out, capfd,
+            f"{shipped.name}: the same ride as {shipped} (the same travels on the same clock)")
+    # the other side: one path twice is named by its name, as before
+    refused(["advise", shipped.name, shipped.name, "--bike", "sst", "--out", out], out, capfd,
+            f"{shipped.name}: the same ride as {shipped.name} (the same")
