@@ -205,3 +205,12 @@ def test_one_ride_under_one_name_in_two_folders_is_told_by_its_paths(tmp_path, c
     # the other side: one path twice is named by its name, as before
     refused(["advise", shipped.name, shipped.name, "--bike", "sst", "--out", out], out, capfd,
             f"{shipped.name}: the same ride as {shipped.name} (the same")
+
+
+def test_a_bike_sag_typed_as_a_fraction_says_so(tmp_path, capfd):
+    """``--front-sag-percent 0.2``: "no setting ... gives 0.2 % front": true, but the cause unsaid (its
+    plausibility warning is dropped from a refusal that does not name the option)."""
+    out = tmp_path / "sag"
+    refused(["sag", "trail", "--bike", "--front-sag-percent", "0.2", "--rear-sag-percent", "0.28", "--out", out],
+            out, capfd, "gives 0.2 % front and 0.28 % rear sag (0.2 % front and 0.28 % rear: a fraction typed for a "
+                        "percent? 0.2 is 20 %)")
