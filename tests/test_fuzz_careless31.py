@@ -214,3 +214,22 @@ def test_a_bike_sag_typed_as_a_fraction_says_so(tmp_path, capfd):
     refused(["sag", "trail", "--bike", "--front-sag-percent", "0.2", "--rear-sag-percent", "0.28", "--out", out],
             out, capfd, "gives 0.2 % front and 0.28 % rear sag (0.2 % front and 0.28 % rear: a fraction typed for a "
                         "percent? 0.2 is 20 %)")
+
+
+def test_a_washboards_wavelength_in_metres_is_named():
+    """``washboard:wavelength_mm=0.5`` (0.5 m typed in mm): the wheel rolled over 0.5 mm ripples it cannot feel,
+    the run the same as a flat one, unsaid (only heights and radii were held to 3 mm)."""
+    from mtbmj.rolling import terrain as T
+
+    with pytest.warns(Warning, match=r"wavelength_mm = 0.5 mm is under 3 mm, smaller than any trail feature \(a unit "
+                                     r"mistake\? 0.5 m is wavelength_mm=500\)"):
+        T.make("washboard:wavelength_mm=0.5")
+    with pytest.warns(Warning, match=r"width_mm = 0.1 mm is under 3 mm"):
+        T.make("square_edge:width_mm=0.1")
+    # the other side: a real wavelength, and the iso8608 road's sampling step (no feature), draw none
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        T.make("washboard:wavelength_mm=500")
+        T.make("iso8608:sample_mm=1")
