@@ -386,7 +386,7 @@ PLAUSIBLE: dict[str, tuple[float, float]] = {
 # The unit mistakes a value is checked against, in order: (what was typed, this unit per one of it).
 MISTAKES: dict[str, tuple[tuple[str, float], ...]] = {
     "mm": (("m", 1000.0), ("in", 25.4), ("cm", 10.0)),
-    "kg": (("g", 1e-3), ("lb", 0.45359237)),
+    "kg": (("g", 1e-3), ("lb", 0.45359237), ("st", 6.35029318)),
     "N/mm": (("N/m", 1e-3), ("lb/in", N_PER_MM_PER_LB_PER_IN)),
     "lb/in": (("N/mm", 1.0 / N_PER_MM_PER_LB_PER_IN), ("N/m", 1e-3 / N_PER_MM_PER_LB_PER_IN)),
     "N s/m": (("N s/mm", 1000.0),),
@@ -510,6 +510,9 @@ class Config:
         """A copy with ``overrides`` applied as one source: an alternative-unit key sets its
         canonical key, rider inputs set ``sled.body_mass_kg``; the copy's ``warnings`` cover them
         (issued by :func:`load`, not here: fits and solvers call this in their loops)."""
+        if not isinstance(overrides, Mapping):  # a list of "key=value" or a str from Python: not an AttributeError
+            raise ConfigError(f"overrides: must be a mapping of key to value, e.g. {{'sled.drop_height_mm': 300}}, "
+                              f"got a {type(overrides).__name__}")
         values, notes = dict(self.values), dict(self.notes)
         _apply(values, notes, overrides)
         typed = getattr(overrides, "typed", False)  # a person's keys (mtbmj.cli.common.Typed): each must be read

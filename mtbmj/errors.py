@@ -21,8 +21,10 @@ class MtbmjError(Exception):
     """Base class: a user-facing problem with a clear one-line cause."""
 
 
-class ConfigError(MtbmjError):
-    """A configuration is missing a key, misspells one, or holds an invalid value."""
+class ConfigError(MtbmjError, ValueError):
+    """A configuration is missing a key, misspells one, or holds an invalid value; from Python, a bad
+    argument's value too. A ``ValueError`` as well, as Python's own bad values are (``except ValueError``
+    catches it), like ``MetricsError`` and ``EventsError``."""
 
 
 class FallbackWarning(UserWarning):

@@ -235,7 +235,9 @@ def argument(option: str, text: str, integer: bool = False):
         try:
             value = float(raw)
         except ValueError:
-            raise ValueError(f"{typed} is not a number") from None
+            comma = raw.count(",") == 1 and raw.replace(",", ".", 1).replace(".", "", 1).lstrip("+-").isdigit()
+            hint = f" (a decimal comma? the decimal point is a dot: {raw.replace(',', '.')})" if comma else ""
+            raise ValueError(f"{typed} is not a number{hint}") from None
         if not math.isfinite(value):
             raise ValueError(f"must be a finite number, got {typed}")
     unit = f" {spec.unit}" if spec.unit else ""

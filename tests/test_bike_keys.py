@@ -148,7 +148,8 @@ def test_a_warning_names_the_keys_own_unit():
                                      "pitch_inertia_kg_m2": 100.0}})
     assert lines == [
         "rider.pitch_inertia_kg_m2 = 100 kg m2 is outside 1-25 kg m2, what bikes and riders have (a unit mistake?)",
-        "rider.leg_stiffness_N_per_mm = 3000 N/mm is outside 2-150 N/mm, what bikes and riders have (a unit mistake?)",
+        "rider.leg_stiffness_N_per_mm = 3000 N/mm is outside 2-150 N/mm, what bikes and riders have (a unit mistake? "
+        "probably meant 3000 N/m = 3 N/mm)",
         "rider.leg_damping_N_s_per_m = 100000 N s/m is outside 20-5000 N s/m, what bikes and riders have "
         "(a unit mistake?)"]
 

@@ -52,7 +52,7 @@ def test_grid_is_full_factorial_first_key_slowest():
     assert len(variants) == 6
     assert [v[RATE] for v in variants] == [14.0, 14.0, 16.0, 16.0, 18.0, 18.0]
     assert [v[TIRE] for v in variants] == [75.0, 95.0] * 3
-    assert sweep.grid([sweep.parse_vary(f"{RATE}=14:18:1")]) == [{RATE: 14.0}]
+    assert sweep.grid([sweep.parse_vary(f"{RATE}=14:18:2")]) == [{RATE: 14.0}, {RATE: 18.0}]
 
 
 @pytest.mark.parametrize("method", ["lhs", "sobol"])
@@ -312,8 +312,8 @@ def test_cli_sweep_wired_into_mtbmj(tmp_path, capsys):
     parser = cli.build_parser()
     choices = next(a for a in parser._actions if a.dest == "command").choices
     assert "sweep" in choices and "sensitivity" in choices
-    assert cli.main(["sweep", "S1", "--vary", f"{RATE}=14:18:1", "--duration", "0.1", "--out", str(tmp_path), "--quiet"]) == 0
-    assert "1 variants (1 computed" in capsys.readouterr().out
+    assert cli.main(["sweep", "S1", "--vary", f"{RATE}=14:18:2", "--duration", "0.1", "--out", str(tmp_path), "--quiet"]) == 0
+    assert "2 variants (2 computed" in capsys.readouterr().out  # (a grid of 1 value is refused: test_fuzz_careless31)
 
 
 @pytest.mark.parametrize("grid, status, failed", [("-6:-2:2", 1, "2 failed"), ("-6:14:2", 0, "1 failed")])

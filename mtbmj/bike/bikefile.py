@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
 
@@ -97,11 +98,14 @@ def _chart_over_bases(table: dict, part: dict, location) -> tuple[dict, dict]:
             table.setdefault("rider", {})["seated_com_mm"] = _chart.seated_com(old, from_saddle)
 
     if isinstance(geo, dict):
-        _chart.check_keys(geo)
+        try:  # the chart's own keys (misspelt, outside a bike's range): the line names the file that gives them
+            _chart.check_keys(geo)
+            fork = _chart.fork_keys(geo)
+        except ConfigError as exc:
+            raise ConfigError(f"{location}: {exc}") from None
         given = [k for k in _chart.SETS if k in bike]
         if given:
             raise ConfigError(f"{location}: bike.{given[0]} and [geometry] give the frame's geometry two ways; give one")
-        fork = _chart.fork_keys(geo)
         mine = part.get("fork", {}).get("set", {}) if isinstance(part.get("fork"), dict) else {}
         mine = mine if isinstance(mine, dict) else {}
         both = [k for k in fork if k in mine]
@@ -258,11 +262,19 @@ def _in_units(section: str, name: str) -> list[str]:
     return with_unit or ([k for k in keys if k.endswith(f"_{name}")] if f"_{name}" in UNITS else [])
 
 
+def mapping(overrides) -> None:
+    """Refuse ``overrides`` from Python that are not a mapping (a str, a list of "key=value"), in one line."""
+    if overrides is not None and not isinstance(overrides, Mapping):
+        raise ConfigError(f"overrides: must be a mapping of key to value, e.g. {{'rider.mass_kg': 78}}, got a "
+                          f"{type(overrides).__name__}")
+
+
 def overridden(table: dict, overrides) -> dict:
     """``table`` with ``overrides`` applied: ``"section.key": value`` for a bike key (``rider.mass_kg``),
     ``"fork.set": {KEY: value}`` / ``"shock.set": {KEY: value}`` for keys of the fork's and the
     shock's configurations (merged into the file's). Unknown keys are refused by ``load``. ``table``
     itself is left as it was (its nested tables too)."""
+    mapping(overrides)
     out = copy.deepcopy(table)
     for key, value in gated(dict(overrides or {})).items():
         if key in ("fork.set", "shock.set"):

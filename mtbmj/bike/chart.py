@@ -58,7 +58,11 @@ def number(chart: dict, key: str) -> float:
     v = limits.number(f"geometry.{key}", v)  # the numeric-input gate: finite, fits a float
     low, high = RANGES[key]
     if not low <= v <= high:
-        raise ConfigError(f"geometry.{key}: {v:g} is outside {low:g}-{high:g}")
+        unit = " mm" if key.endswith("_mm") else " deg" if key.endswith("_deg") else ""
+        hint = (f" (metres typed for mm? {v:g} m is {v * 1000.0:g} mm)" if unit == " mm" and low <= v * 1000.0 <= high
+                else f" (radians? {v:g} rad is {math.degrees(v):.1f} deg)" if unit == " deg"
+                and low <= math.degrees(v) <= high else "")
+        raise ConfigError(f"geometry.{key}: {v:g}{unit} is outside {low:g}-{high:g}{unit}{hint}")
     return float(v)
 
 

@@ -44,7 +44,7 @@ from mtbmj.bike.parts import setups
 from mtbmj.controllers import installed
 from mtbmj.controllers.drive import Drive
 from mtbmj.errors import ConfigError
-from mtbmj.limits import check_run, crossing
+from mtbmj.limits import check_duration, check_run, crossing
 from mtbmj.result import RunOutput
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
@@ -122,8 +122,7 @@ def _check(speed, duration, pedal=None):
         speed = 1.0
     if not isinstance(speed, (int, float)) or isinstance(speed, bool) or not math.isfinite(speed) or speed <= 0:
         raise ConfigError(f"speed: must be a positive number of m/s, got {speed!r}")
-    if duration is not None and not (isinstance(duration, (int, float)) and math.isfinite(duration) and duration > 0):
-        raise ConfigError(f"duration: must be positive, got {duration!r}")
+    check_duration("duration", duration)
 
 
 def _passive(s: dict) -> str:

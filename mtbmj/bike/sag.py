@@ -289,7 +289,10 @@ def solve(bike: str, front_percent: float, rear_percent: float, overrides: dict 
     except RunError as exc:
         raise ConfigError(f"sag: a trial setting has no static equilibrium ({exc})") from None
     if got is None or max(abs(r) for r in residual(sol.x)) > SAG_TOLERANCE:
+        small = [(p, end) for p, end in ((front_percent, "front"), (rear_percent, "rear")) if p < 1.0]
+        fraction = (f" ({' and '.join(f'{p:g} % {end}' for p, end in small)}: a fraction typed for a percent? "
+                    f"{small[0][0]:g} is {small[0][0] * 100:g} %)" if small else "")
         raise ConfigError(f"sag: no setting of {fk} within {flo:g}-{fhi:g} and {sk} within {slo:g}-{shi:g} gives "
-                          f"{front_percent:g} % front and {rear_percent:g} % rear sag")
+                          f"{front_percent:g} % front and {rear_percent:g} % rear sag{fraction}")
     return BikeSag(spec.name, str(bike), solved(fv, sv), fk, fv, sk, sv, got[0] * 1e3, got[1] * 1e3, got[2] * 1e3,
                    got[3] * 1e3)

@@ -24,7 +24,7 @@ from mtbmj import limits
 from mtbmj.bike import chart as _chart
 from mtbmj.bike import linkage as _linkage
 from mtbmj.bike import shock as _shock
-from mtbmj.bike.bikefile import (KNOWN, SENSOR_KEYS, gated, merge, overridden, preset_names,  # noqa: F401
+from mtbmj.bike.bikefile import (KNOWN, SENSOR_KEYS, gated, mapping, merge, overridden, preset_names,  # noqa: F401
                                   read_leverage_csv, read_table)
 from mtbmj.errors import ConfigError
 from mtbmj.measured.leverage import Leverage, leverage_ratio, leverage_stroke, stroke_piece  # noqa: F401
@@ -298,6 +298,7 @@ def resolve(ref, overrides=None) -> ResolvedBike:
     """A bike preset name (``preset_names()``) or a TOML path read (``mtbmj.bike.bikefile.read_table``),
     ``overrides`` applied (:func:`overridden`), derived and checked: the one resolution of a bike
     file. A :class:`ResolvedBike` is taken as it is (with ``overrides``: those over its file)."""
+    mapping(overrides)  # before the file's errors are told from the overrides' by their keys
     if isinstance(ref, ResolvedBike):
         return ref if overrides is None else ref.with_overrides(overrides)
     table, source = read_table(str(ref))
@@ -392,9 +393,10 @@ def derive(source: str, read: dict, overrides=None, csv: dict | None = None) -> 
         raise ConfigError(f"leverage.ratio: {len(r)} values for {len(w)} wheel travels in leverage.wheel_travel_mm")
     if w[0] != 0.0:
         raise ConfigError(f"{label('leverage.wheel_travel_mm')}: must start at 0 mm, got {w[0]:g}")
-    if any(b <= a for a, b in zip(w, w[1:])):
+    back = next(((i, a, b) for i, (a, b) in enumerate(zip(w, w[1:]), 2) if b <= a), None)
+    if back is not None:  # the value at fault named, its place counted as a list's and a CSV's rows are
         raise ConfigError(f"{label('leverage.wheel_travel_mm')}: must increase strictly (the shock stroke must be "
-                          f"monotonic in the wheel travel)")
+                          f"monotonic in the wheel travel): value {back[0]}, {back[2]:g} mm, follows {back[1]:g} mm")
     if any(x <= 0.0 for x in r):
         raise ConfigError(f"{label('leverage.ratio')}: every leverage ratio must be > 0")
     leverage = Leverage(tuple(x * MM for x in w), tuple(float(x) for x in r))

@@ -74,7 +74,13 @@ def cmd_presets(args) -> int:
                 print(line)
             return 0
         locate(args.show, bikes=True)  # neither kind's: the one unknown-preset message, naming both kinds
-        for key, value in load(args.show).lines():
+        lines = list(load(args.show).lines())
+        if not lines:  # an empty file (or comments only): no keys and no base, said rather than nothing printed
+            from mtbmj.errors import ConfigError
+
+            raise ConfigError(f"{args.show}: holds no keys (an empty file?): nothing to show; a configuration "
+                              f"names its base, e.g. base = \"S12\", and the keys it changes")
+        for key, value in lines:
             print(f"{key} = {value}")
         return 0
     print("configurations (mtbmj drop, roll, sweep, fit; the fork schema):")

@@ -107,6 +107,13 @@ def ride_record(ride, args, bike=None, overrides=None):
         beyond.append(f"{record.name}: --bike {args.bike} gives no [sensors] for its {' and '.join(unset)} sensor: "
                       f"decoded with the SST example's recorder's arms (mtbmj/bike/presets/sst.toml [sensors]); "
                       f"another recorder's travel is wrong by as much as its arms differ")
+    given = [end for end in ("front", "rear") if end in read] if getattr(args, "bike", None) is not None else []
+    from mtbmj.bike.spec import preset_names
+
+    preset = str(getattr(args, "bike", "")).lower() in {n.lower() for n in preset_names()}
+    if given and record.version == 2 and not preset:  # a file's arms are a version-3 recorder's: set aside, said
+        beyond.append(f"{record.name}: --bike {args.bike}'s [sensors] ({' and '.join(given)}) are a version-3 "
+                      f"recorder's arms: not used for this version-2 record, read with the calibration of its time")
     warn(telemetry.quality(record) + beyond)
     return record
 

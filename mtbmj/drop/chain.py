@@ -36,8 +36,7 @@ def prepare(config: Config | str, overrides: Mapping | None = None, duration: fl
         cfg = resolve(config, overrides)
     else:
         cfg = config.with_overrides(overrides) if overrides else config
-    if duration is not None and not duration > 0:
-        raise ConfigError(f"duration: must be positive, got {duration}")
+    limits.check_duration("duration", duration)  # a str, a NaN from Python: one line, not a TypeError
     setup = compose.setup(cfg)
     limits.check_run(setup.duration if duration is None else duration, setup.timestep, setup.sample_rate)
     return cfg, setup

@@ -48,6 +48,9 @@ def run_study(presets: Sequence[str] | None = None, overrides=None, duration: fl
     order, then engine)."""
     from mtbmj.drop.run import ENGINES
 
+    for label, given in (("presets", presets), ("engines", engines)):
+        if isinstance(given, str):  # "S12" read letter by letter would be refused as the preset "S"
+            raise ConfigError(f"{label}: must be a list of names, e.g. [{given!r}], got the str {given!r}")
     engines = list(dict.fromkeys(engines))
     unknown = [e for e in engines if e not in ENGINES]
     if unknown:

@@ -218,10 +218,12 @@ def repeated(records) -> str | None:
         key = hashlib.sha256(b"|".join(b"-" if a is None else np.ascontiguousarray(a, float).tobytes()
                                        for a in series)).hexdigest()
         if key in seen:
-            first = seen[key]
-            return (f"{record.name}: the same ride as {first} (the same travels on the same clock): a ride pooled with "
+            first, again = seen[key].name, record.name
+            if first == again and seen[key].path != record.path:  # "example" and the shipped file, a copy elsewhere
+                first, again = seen[key].path, record.path
+            return (f"{again}: the same ride as {first} (the same travels on the same clock): a ride pooled with "
                     f"itself counts twice and narrows the spread without anything new ridden; give each ride once")
-        seen[key] = record.name
+        seen[key] = record
     return None
 
 

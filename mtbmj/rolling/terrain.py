@@ -429,7 +429,7 @@ def _value(name: str, key: str, kind: str, value):
         raise TerrainError(f"terrain {name}: {key} must not be negative, got {number:g}")
     if kind == "pos" and number <= 0:
         raise TerrainError(f"terrain {name}: {key} must be positive, got {number:g}")
-    if key.endswith("height_mm") or key == "radius_mm":
+    if key.endswith("_mm") and key != "sample_mm":  # a feature's size (a wavelength, a width too), not a sampling
         if 0.0 < number < LEAST_FEATURE_MM:
             import warnings
 

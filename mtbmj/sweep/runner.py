@@ -45,7 +45,7 @@ import numpy as np
 from mtbmj.config import SCHEMA, Config, warn
 from mtbmj.errors import ConfigError, MtbmjError
 
-from mtbmj import output
+from mtbmj import limits, output
 from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, MANIFEST, NUMERIC_KINDS, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TIMINGS, TRACES, Variant, canonical_value, check_types, flatten_summary, from_csv, grid, journal_records, parse_vary, sample, variant_id)
 from mtbmj.sweep.single import run_batch, run_variant
 
@@ -415,8 +415,7 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
         raise ConfigError(f"engine: {engine!r} is not one of {', '.join(ENGINES)}")
     if backend not in BACKENDS:
         raise ConfigError(f"--backend: {backend!r} is not one of {', '.join(BACKENDS)}")
-    if duration is not None and not duration > 0:
-        raise ConfigError(f"duration: must be positive, got {duration}")
+    limits.check_duration("duration", duration)
     if workers is not None and workers < 1:
         raise ConfigError(f"--workers: must be at least 1, got {workers}")
     if batch_size is not None and batch_size < 1:

@@ -108,6 +108,9 @@ def parse_vary(text: str, count: bool | None = None, check_key: bool = True) -> 
     the key to its reader (a bike sweep's keys are the bike's, ``mtbmj.sweep.bike``)."""
     key, eq, span = (part.strip() for part in text.partition("="))
     parts = [p.strip() for p in span.split(":")]
+    endless = [p for p in parts[:2] if p.lower().lstrip("+-") in ("nan", "inf", "infinity")]
+    if eq and key and len(parts) in (2, 3) and endless:  # the form right, an end no number: said so
+        raise ConfigError(f"--vary {text}: lo and hi must be finite numbers, got {endless[0]!r}")
     if not eq or not key or len(parts) not in (2, 3) or not all(re.fullmatch(_NUMBER, p) for p in parts[:2]):
         raise ConfigError(f"--vary {text}: expected key=lo:hi:n (a grid) or key=lo:hi (with --samples)")
     key = numeric_key(key) if check_key else key
@@ -121,6 +124,11 @@ def parse_vary(text: str, count: bool | None = None, check_key: bool = True) -> 
         n = int(parts[2])
         if n < 1:
             raise ConfigError(f"--vary {text}: n must be at least 1, got {n}")
+        if n == 1:  # linspace(lo, hi, 1) is lo alone: the range typed would be dropped without a word
+            part, _, name = key.rpartition(":")  # a bike sweep's fork:KEY / shock:KEY go with --fork-set / --shock-set
+            option = f"--{part}-set {name}" if part in ("fork", "shock") else f"--set {key}"
+            raise ConfigError(f"--vary {text}: a grid of 1 value runs lo ({lo:g}) alone, not the range to "
+                              f"{hi:g}; give n of 2 or more, or the one value with {option}={lo:g}")
     if count is True and n is None:
         raise ConfigError(f"--vary {text}: a grid needs a count, key=lo:hi:n (or give --samples N)")
     if count is False and n is not None:
