@@ -307,3 +307,40 @@ def test_the_time_in_the_air_counts_from_before_the_wheel_extends_not_from_its_h
     from_hang = v_max * short - 0.5 * G * short ** 2 + 0.005
     assert from_hang < 1.0 - 0.1  # the hang alone: a bound the real fall breaks
     assert row["duration_bound_m"] >= 1.0 and row["raised_m"] == 0.0 and np.array_equal(ridden, ground), row
+
+
+def test_a_rear_s_own_fall_where_the_front_found_none_raises_nothing_and_the_cut_never_lifts_a_landing():
+    """Review31a: the duration reads the first end's OWN fall (under the rear, a wheelbase behind the front), over
+    other ground than the front's level change, so it can rule a fall out where the front found none or less. Ground
+    written here: level at the front's take-off and landing, 2.0 m lower over the stretch the rear lands on (0.3 m
+    short of the front's landing), and the same stretch with the front landing 0.2 m lower. The terrain to ride stays
+    finite (the code before divided by the front's zero fall: NaN over the flight), nothing is raised where the
+    front found no fall, and a cut never lifts the front's landing above its take-off (it lowered 0.2 m, the rear's
+    own 2.0 m ruled out by its time in the air: raised at most 0.2 m)."""
+    from mtbmj.ride.reconstruct_landing import judged
+
+    t, _, _, row0, T, V = _ball(-3.0, 1.0)
+    x = 7.0 * t
+    up, down = 2.0, 2.0 + round(T / DT) * DT
+    for landing in (0.0, 0.2):
+        ground = np.where((x >= 7.0 * up) & (x < 7.0 * down - 0.3), -2.0, 0.0)
+        ground[x >= 7.0 * down - 0.3] = -landing
+        rear = np.full(t.size, 50.0)
+        air = (t >= up) & (t < down)
+        rear[air] = 0.0
+        rear[(t >= up - 0.1) & (t < up)] = 30.0
+        land = (t >= down) & (t < down + 0.04)
+        rear[land] = 1e3 * 0.83 * V * (t[land] - down)
+        rear[t >= down + 0.04] = 50.0
+        ridden, rows = judged(t, x, ground, rear / 0.9, rear, [(up, down)], np.full(t.size, 7.0), WHEELBASE, 0.9, 0.7,
+                              G)
+        (row,) = rows
+        assert row["first_down"] == "rear" and row["own_fall_m"] > row["duration_bound_m"], row  # the duration rules it out
+        assert np.isfinite(ridden).all()
+        assert row["raised_m"] <= landing + 1e-12, row
+        k = int(np.searchsorted(t, down)) + 5
+        assert ridden[k] <= ground[int(np.searchsorted(t, up)) - 1] + 1e-9  # never above the take-off's level
+        if landing == 0.0:
+            assert np.array_equal(ridden, ground)
+        else:
+            assert row["raised_m"] > 0.0

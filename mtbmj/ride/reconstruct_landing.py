@@ -34,7 +34,8 @@ the pitch rate at the landing moves one end's speed against the other's; the lar
 allow, omega = |V_fork - V_rear| / wheelbase, lowers the axle's acceleration by omega^2 H.
 
 **The duration** (issue 51 item 4: flight51). The same axle, landing at V after T in free flight, has fallen
-exactly V T - a T^2/2 (a its mean downward acceleration: g less omega^2 H as above), which is at most V^2/(2a)
+at most V T - a T^2/2 (a the least downward acceleration at every moment: g less omega^2 H as above, and
+never less than g/2 in the code, ``a_least``; omega read from the two ends' later readings), which is at most V^2/(2a)
 and rises with T up to T = V/a: so with the reading's upper end (V / ``READ_SHARE``), the least acceleration
 and the longest T the record allows, the fall is at most that, and V^2/(2a) past V/a (``in_air``); no
 take-off speed is needed. The longest T: the first end's tyre left after its travel last compressed (a tyre
@@ -169,7 +170,9 @@ def judged(t, distance, ground, fork_mm, rear_mm, jumps, speed, wheelbase: float
         a0, b0 = max(a - 1, 0), b
         fall = float(z[a0] - z[b0])
         by_speed, by_time = fall - (bound + spread), float(own[i] - timed[i])
-        excess = max(by_speed, by_time)
+        # the cut lowers the front's fall only: never below its take-off's level (the duration reads the first end's
+        # own fall, over other ground, which can exceed it), nothing where the front found no fall at all
+        excess = min(max(by_speed, by_time), max(fall, 0.0))
         if excess > 0.0:
             share = np.clip((z[a0] - z[a0:b0 + 1]) / fall, 0.0, 1.0)
             ridden[a0:b0 + 1] += excess * share
@@ -190,7 +193,8 @@ def judged(t, distance, ground, fork_mm, rear_mm, jumps, speed, wheelbase: float
 def words(rows) -> str:
     """The line's clause: how many falls were cut to what their landing allows."""
     cut = [r for r in rows or [] if r["raised_m"] > 0.0]
-    return (f", {len(cut)} fall(s) in the terrain to ride cut to what the landing's speed allows" if cut else "")
+    return (f", {len(cut)} fall(s) in the terrain to ride cut to what the landing's speed or time in the air allows"
+            if cut else "")
 
 
 def warn(ride: str, rows) -> None:
