@@ -510,9 +510,7 @@ class Config:
         """A copy with ``overrides`` applied as one source: an alternative-unit key sets its
         canonical key, rider inputs set ``sled.body_mass_kg``; the copy's ``warnings`` cover them
         (issued by :func:`load`, not here: fits and solvers call this in their loops)."""
-        if not isinstance(overrides, Mapping):  # a list of "key=value" or a str from Python: not an AttributeError
-            raise ConfigError(f"overrides: must be a mapping of key to value, e.g. {{'sled.drop_height_mm': 300}}, "
-                              f"got a {type(overrides).__name__}")
+        limits.require_mapping(overrides, "'sled.drop_height_mm': 300", none_ok=False)  # not an AttributeError
         values, notes = dict(self.values), dict(self.notes)
         _apply(values, notes, overrides)
         typed = getattr(overrides, "typed", False)  # a person's keys (mtbmj.cli.common.Typed): each must be read

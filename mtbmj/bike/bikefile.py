@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
 
@@ -264,9 +263,7 @@ def _in_units(section: str, name: str) -> list[str]:
 
 def mapping(overrides) -> None:
     """Refuse ``overrides`` from Python that are not a mapping (a str, a list of "key=value"), in one line."""
-    if overrides is not None and not isinstance(overrides, Mapping):
-        raise ConfigError(f"overrides: must be a mapping of key to value, e.g. {{'rider.mass_kg': 78}}, got a "
-                          f"{type(overrides).__name__}")
+    limits.require_mapping(overrides, "'rider.mass_kg': 78")
 
 
 def overridden(table: dict, overrides) -> dict:
