@@ -132,3 +132,16 @@ def test_a_sensitivity_that_fails_for_a_range_in_metres_names_it(tmp_path, capfd
     lines = err.splitlines()
     assert status == 2 and len(lines) == 1 and "fork_peak1_mm is undefined in 6 of 6 runs" in lines[0], err
     assert "probably meant 0.1 m = 100 mm" in lines[0], err
+
+
+def test_study_takes_a_range_of_presets_as_validate_does(tmp_path, capfd):
+    """``mtbmj study --presets S1..S2`` (validate's syntax): "S1..S2: unknown preset"."""
+    out = tmp_path / "st"
+    status, said = command_said(["study", "--presets", "S1..S2", "--engines", "fast", "--duration", "0.3",
+                                 "--quiet", "--out", out], capfd)
+    assert status == 0 and "study: 2 configurations x 1 engines" in said, said
+    # the other side: a name that is no range nor preset is still refused naming it
+    from helpers import refused
+
+    refused(["study", "--presets", "S1..S2x", "--engines", "fast", "--out", tmp_path / "st2"], tmp_path / "st2",
+            capfd, "S1..S2x: unknown preset")
