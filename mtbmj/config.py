@@ -30,6 +30,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 from mtbmj import limits
+from mtbmj.limits import MISTAKES, N_PER_MM_PER_LB_PER_IN, PA_PER_PSI, PSI_PER_BAR  # noqa: F401 (re-exported)
 from mtbmj.errors import ConfigError, ConfigWarning  # ConfigWarning: a value far outside what any bike has
 from mtbmj.presets import is_preset as _is_preset, locate as _locate, preset_names, study_presets  # noqa: F401
 from mtbmj.textfile import read_text
@@ -285,13 +286,8 @@ MAX_MAGNITUDE = limits.MAX_MAGNITUDE
 # not both. A later source (a file over its base, overrides over the file) replaces the value
 # whichever key it uses.
 
-# The one table of lb/in and psi (compose reads PA_PER_PSI, bike.shock N_PER_MM_PER_LB_PER_IN).
-# 1 lb/in = 1 lbf / 1 in = (0.45359237 kg x 9.80665 m/s2) / 25.4 mm = 0.175126835 N/mm (the pound
-# and the inch are exact by definition, standard gravity too)
-N_PER_MM_PER_LB_PER_IN = 0.45359237 * 9.80665 / 25.4
-# 1 bar = 1e5 Pa; 1 psi = 1 lbf/in2 = 6894.757293168 Pa: 1 bar = 14.5037738 psi
-PSI_PER_BAR = 1e5 / (0.45359237 * 9.80665 / 0.0254 ** 2)
-PA_PER_PSI = 6894.757293168  # Pa per psi (1 lbf/in^2, exact by the definitions of the pound and the inch)
+# The one table of lb/in and psi, and the unit slips, are mtbmj.limits' (floor 0: a command's argument
+# names a slip as a key does); compose reads PA_PER_PSI here, bike.shock N_PER_MM_PER_LB_PER_IN.
 
 ALTERNATIVES: dict[str, tuple[str, float]] = {
     # key: (canonical key, its value per unit of the key)
@@ -383,21 +379,6 @@ PLAUSIBLE: dict[str, tuple[float, float]] = {
     "tire.pressure_bar": (0.35, 4.0),
 }
 
-# The unit mistakes a value is checked against, in order: (what was typed, this unit per one of it).
-MISTAKES: dict[str, tuple[tuple[str, float], ...]] = {
-    "mm": (("m", 1000.0), ("in", 25.4), ("cm", 10.0)),
-    "kg": (("g", 1e-3), ("lb", 0.45359237), ("st", 6.35029318)),
-    "N/mm": (("N/m", 1e-3), ("lb/in", N_PER_MM_PER_LB_PER_IN)),
-    "lb/in": (("N/mm", 1.0 / N_PER_MM_PER_LB_PER_IN), ("N/m", 1e-3 / N_PER_MM_PER_LB_PER_IN)),
-    "N s/m": (("N s/mm", 1000.0),),
-    "mm/s": (("m/s", 1000.0),),
-    "m/s2": (("mm/s2", 1e-3), ("ft/s2", 0.3048)),
-    "psi": (("bar", PSI_PER_BAR), ("kPa", PSI_PER_BAR / 100.0)),
-    "bar": (("psi", 1.0 / PSI_PER_BAR), ("kPa", 0.01)),
-    "%": (("as a fraction", 100.0),),
-    "N": (("kN", 1000.0),),
-    "cm3": (("litres", 1000.0), ("in3", 16.387064), ("mm3", 1e-3)),
-}
 
 # The tire's pressure-to-rate relation rests on measurements from 15 to 25 psi (Dressel & Sadauckas
 # 2020, secondhand; mtbmj.controllers.tire.PRESSURE_RANGE): outside it the rates are extrapolated.

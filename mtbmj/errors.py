@@ -24,7 +24,12 @@ class MtbmjError(Exception):
 class ConfigError(MtbmjError, ValueError):
     """A configuration is missing a key, misspells one, or holds an invalid value; from Python, a bad
     argument's value too. A ``ValueError`` as well, as Python's own bad values are (``except ValueError``
-    catches it), like ``MetricsError`` and ``EventsError``."""
+    catches it). Every error whose cause is what the user gave, a value, a spec or a file's content, is one:
+    ``ConfigError``, ``TerrainError`` (a terrain spec), ``RecordError`` and ``TelemetryError`` (a record or a
+    ride file), ``MetricsError`` and ``EventsError`` (signals too short or not finite). Not so: ``RunError``
+    (the model left its envelope), ``MissingExtra`` (the installation), ``RenderError`` (the machine's GL),
+    and the readers' and fits' own (``TouchError``, ``BobError``, ``BounceError``, the fit and
+    reconstruction errors): well-formed data that does not hold what they look for."""
 
 
 class FallbackWarning(UserWarning):

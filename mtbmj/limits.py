@@ -148,6 +148,40 @@ def numbers_in(key: str, value):
     return value
 
 
+# --- units and their slips ------------------------------------------------------------------------
+# The one table of lb/in and psi (mtbmj.config re-exports them).
+# 1 lb/in = 1 lbf / 1 in = (0.45359237 kg x 9.80665 m/s2) / 25.4 mm = 0.175126835 N/mm (the pound
+# and the inch are exact by definition, standard gravity too)
+N_PER_MM_PER_LB_PER_IN = 0.45359237 * 9.80665 / 25.4
+# 1 bar = 1e5 Pa; 1 psi = 1 lbf/in2 = 6894.757293168 Pa: 1 bar = 14.5037738 psi
+PSI_PER_BAR = 1e5 / (0.45359237 * 9.80665 / 0.0254 ** 2)
+PA_PER_PSI = 6894.757293168  # Pa per psi (1 lbf/in^2, exact by the definitions of the pound and the inch)
+
+# The unit mistakes a value is checked against, in order: (what was typed, this unit per one of it).
+MISTAKES: dict[str, tuple[tuple[str, float], ...]] = {
+    "mm": (("m", 1000.0), ("in", 25.4), ("cm", 10.0)),
+    "kg": (("g", 1e-3), ("lb", 0.45359237), ("st", 6.35029318)),
+    "N/mm": (("N/m", 1e-3), ("lb/in", N_PER_MM_PER_LB_PER_IN)),
+    "lb/in": (("N/mm", 1.0 / N_PER_MM_PER_LB_PER_IN), ("N/m", 1e-3 / N_PER_MM_PER_LB_PER_IN)),
+    "N s/m": (("N s/mm", 1000.0),),
+    "mm/s": (("m/s", 1000.0),),
+    "m/s2": (("mm/s2", 1e-3), ("ft/s2", 0.3048)),
+    "psi": (("bar", PSI_PER_BAR), ("kPa", PSI_PER_BAR / 100.0)),
+    "bar": (("psi", 1.0 / PSI_PER_BAR), ("kPa", 0.01)),
+    "%": (("as a fraction", 100.0),),
+    "N": (("kN", 1000.0),),
+    "cm3": (("litres", 1000.0), ("in3", 16.387064), ("mm3", 1e-3)),
+}
+
+
+def slip(value: float, unit: str, plausible: tuple[float, float]) -> str:
+    """The first unit slip of ``MISTAKES`` that brings ``value`` (in ``unit``) within ``plausible``, said as
+    " probably meant 0.16 m = 160 mm", else ""."""
+    lo, hi = plausible
+    return next((f" probably meant {value:g} {typed} = {value * per:.4g} {unit}" for typed, per in MISTAKES.get(unit, ())
+                 if lo <= value * per <= hi), "")
+
+
 class Argument:
     """A command's numeric argument: its unit, whether it is a whole number, the values the
     model allows (``low`` / ``high``, inclusive unless ``open_low``) and the plausible range
@@ -193,7 +227,9 @@ ARGUMENTS: dict[str, Argument] = {
     "--fork-max-mm": _TRAVEL_MM,
     "--shock-max-mm": Argument("mm", high=1000.0, plausible=(15.0, 150.0), **_POSITIVE),
     "--rider-kg": Argument("kg", high=1e4, plausible=(30.0, 150.0), **_POSITIVE),
-    "--load-kg": Argument("kg", high=1e4, plausible=(5.0, 300.0), **_POSITIVE),
+    # the mass a fork (or a shock) carries at sag is part of rider and bike: at most the heaviest rider's
+    # whole mass (rider.mass_kg's plausible 150 kg, mtbmj.bike.keys); 180 is more likely 180 lb = 81.6 kg
+    "--load-kg": Argument("kg", high=1e4, plausible=(5.0, 150.0), **_POSITIVE),
     "--mass-kg": Argument("kg", high=1e4, plausible=(1.0, 300.0), **_POSITIVE),
     "--pedal": Argument("rpm", high=1000.0, plausible=(20.0, 150.0), **_POSITIVE),
     "--power": Argument("W", low=0.0, high=1e5, plausible=(0.0, 2500.0)),
@@ -260,7 +296,7 @@ def argument(option: str, text: str, integer: bool = False):
     if spec.plausible is not None and not spec.plausible[0] <= value <= spec.plausible[1]:
         lo, hi = spec.plausible
         warnings.warn(f"{option} = {value:g}{unit} is outside {lo:g}-{hi:g}{unit}, what bikes, riders and records "
-                      f"have (a unit mistake?)", ConfigWarning, stacklevel=2)
+                      f"have (a unit mistake?{slip(value, spec.unit, spec.plausible)})", ConfigWarning, stacklevel=2)
     return value
 
 

@@ -29,6 +29,10 @@ def cmd_study(args) -> int:
         from mtbmj.errors import MtbmjError
 
         raise MtbmjError("--presets: no preset named (e.g. --presets S1,S12; leave it out for S1-S14)")
+    if presets is not None:  # validate's --presets, a range too (S1..S7,S12): "S1..S3" was an unknown preset here
+        from mtbmj.cli.validate import parse_presets
+
+        presets = parse_presets(args.presets)
     engines = _engines(args.engines)
     results, checks = run_study(presets, overrides(args.set), args.duration, args.workers, log, engines)
     written = write_study(args.out, results, checks)
@@ -149,7 +153,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser("study", help="run S1-S14 on the engines (MuJoCo and the ODE reference by default), write "
                                      "figures and the difference table")
     add_out(p, "out/study")
-    p.add_argument("--presets", help="comma-separated subset, e.g. S1,S12")
+    p.add_argument("--presets", help="comma-separated subset, e.g. S1,S12 or S1..S7,S12")
     p.add_argument("--workers", type=int, help="processes (default: one per core)")
     p.add_argument("--engines", default="mujoco,ode",
                    help="comma-separated engines to run (default mujoco,ode; e.g. mujoco,ode,fast): each is "

@@ -73,7 +73,12 @@ def cmd_validate(args) -> int:
     from mtbmj.measured.sled import example_path
 
     start = time.perf_counter()
-    configs = (parse_presets(args.presets) if args.presets else []) + list(args.configs or [])
+    presets = parse_presets(args.presets) if args.presets else []
+    configs = presets + list(args.configs or [])
+    twice = next((c for i, c in enumerate(configs) if c in configs[:i]), None)
+    if twice is not None:  # it ran twice (as S12 and S12-2), unsaid, as compare refuses a run given twice
+        where = "in --presets and as CONFIG" if twice in presets else "as CONFIG"
+        raise ConfigError(f"{twice}: given twice ({where}); give each configuration once")
     if not configs:
         configs = study_presets()
     if args.workers is not None and args.workers < 1:

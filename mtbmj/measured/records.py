@@ -34,8 +34,9 @@ UNITS = {
 _SUFFIXES = sorted(UNITS, key=len, reverse=True)
 
 
-class RecordError(MtbmjError):
-    """A record file cannot be used: says which file, line or column."""
+class RecordError(MtbmjError, ValueError):
+    """A record file cannot be used: says which file, line or column. An input error: a ``ValueError``
+    too, as ``ConfigError`` is."""
 
 
 def split_unit(name: str) -> tuple[str, str] | None:

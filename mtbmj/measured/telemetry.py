@@ -58,8 +58,9 @@ SHOCK_STROKE_MAX_MM = 65.0  # data/sst/notes.txt: rear_stroke
 HEAD_ANGLE_DEG = 63.5  # data/sst/notes.txt: head_angle (recorded for reference; travel is along the fork)
 
 
-class TelemetryError(MtbmjError):
-    """A telemetry file cannot be read: names the file and the cause."""
+class TelemetryError(MtbmjError, ValueError):
+    """A telemetry file cannot be read: names the file and the cause. An input error: a ``ValueError``
+    too, as ``ConfigError`` is."""
 
 
 class NotAnSST(TelemetryError):

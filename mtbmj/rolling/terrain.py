@@ -32,8 +32,9 @@ ISO8608_GD_N0 = {  # geometric mean of each class, Gd(n0 = 0.1 cycle/m) in m^3 (
 }
 
 
-class TerrainError(MtbmjError):
-    """A terrain spec that cannot be built: unknown name, bad parameter, bad CSV."""
+class TerrainError(MtbmjError, ValueError):
+    """A terrain spec that cannot be built: unknown name, bad parameter, bad CSV. An input error: a
+    ``ValueError`` too, as ``ConfigError`` is (``except ValueError`` catches it)."""
 
 
 @dataclass(frozen=True)
@@ -361,6 +362,12 @@ def from_csv(path: str | Path) -> Terrain:
 CSV_LONG_M = 100.0
 CSV_LEAST_GRADE = 0.002
 LEAST_FEATURE_MM = 3.0
+# Nor is any a wheel rolls up onto (an edge, a step, a rock, a root, a cleat, a bump) over TALLEST_FEATURE_MM
+# high, about three times a 29er's wheel radius (370 mm): no wheel climbs a wall; nor a ledge dropped off
+# over TALLEST_DROP_MM, the drop the sled's plausible range ends at (mtbmj.config.PLAUSIBLE). Warned, naming the key.
+TALLEST_FEATURE_MM = 1000.0
+TALLEST_DROP_MM = 5000.0
+HEIGHT_KEYS = ("height_mm", "cleat_height_mm")
 
 
 def unit_mistakes(x, z) -> list[str]:
@@ -438,6 +445,15 @@ def _value(name: str, key: str, kind: str, value):
             warnings.warn(f"terrain {name}: {key} = {number:g} mm is under {LEAST_FEATURE_MM:g} mm, smaller than any "
                           f"trail feature (a unit mistake? {number:g} m is {key}={number * 1000:g})", ConfigWarning,
                           stacklevel=3)
+        tallest = TALLEST_DROP_MM if name in ("drop", "step_down") else TALLEST_FEATURE_MM
+        if (key in HEIGHT_KEYS or (name, key) == ("root", "radius_mm")) and number > tallest:
+            import warnings
+
+            from mtbmj.errors import ConfigWarning
+
+            warnings.warn(f"terrain {name}: {key} = {number:g} mm is over {tallest:g} mm, taller than any trail "
+                          f"feature a wheel {'drops off' if tallest == TALLEST_DROP_MM else 'rolls over'} "
+                          f"(a unit mistake?)", ConfigWarning, stacklevel=3)
     return number
 
 

@@ -15,7 +15,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from mtbmj.errors import ConfigError, MtbmjError
+from mtbmj.errors import ConfigError, MtbmjError, RunError
 from mtbmj.sweep.runner import OUTPUT_COLUMNS, Range, run_sweep
 
 METHODS = ("sobol", "morris")
@@ -144,14 +144,16 @@ def run_sensitivity(config, ranges: Sequence[Range], outputs: Sequence[str], out
         """The indices, written with the sweep's table in one step; a failure writes neither."""
         failed = table[table["status"] != "ok"]
         if len(failed):
-            raise MtbmjError(f"sensitivity: {len(failed)} of {len(table)} runs failed (first: "
+            # RunError: the runs, not an argument, failed; the command line's line names every warning with it
+            # (an --vary range in metres for mm, the likeliest cause)
+            raise RunError(f"sensitivity: {len(failed)} of {len(table)} runs failed (first: "
                              f"{failed['reason'].iloc[0]}); narrow the --vary ranges (the runs are journaled in "
                              f"{Path(out_dir) / 'journal'})")
         indices = {}
         for out in outputs:
             y = table[out].to_numpy(dtype=float)
             if not np.all(np.isfinite(y)):
-                raise MtbmjError(f"sensitivity: {out} is undefined in {int(np.sum(~np.isfinite(y)))} of {len(y)} "
+                raise RunError(f"sensitivity: {out} is undefined in {int(np.sum(~np.isfinite(y)))} of {len(y)} "
                                  f"runs (the event does not occur); choose another --output or a longer --duration")
             indices[out] = analyze(prob, x, y, method, seed, levels)
         found["indices"] = indices
