@@ -190,7 +190,10 @@ def test_the_fork_filter_meets_the_pass_mark_where_the_front_carries_the_rear(re
                                        "(0.37) here, but worse on ten of the twelve shared rides (docs/rolling.md, "
                                        "'Where the made ride's rear misses'); no rule from the fork's side "
                                        "chooses the looser loop per ride without costing the shared rides "
-                                       "('Can the ride choose the loop's setting?')")
+                                       "('Can the ride choose the loop's setting?'); the loop's damping pushes the "
+                                       "frame at once at the faces (81 of its 81.4 N RMS at the rock): its slow "
+                                       "load fed forward instead passes here (2.71 mm, 0.40) and breaks three "
+                                       "of the advice's answers ('The rider's slow load fed forward')")
 def test_the_rear_is_predicted_within_half_the_delayed_forks_error(reconstruction):
     """Issue 51's rear target: the rear predicted from the fork's record within half the RMS error of
     the delayed-fork baseline, at a correlation of at least 0.9 with the record (0.44 of it at 0.914
