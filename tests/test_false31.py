@@ -1,0 +1,62 @@
+"""Refusals for false reasons on valid input (round false31): each refusal's line names its true cause,
+and good input beside it is not refused. Inputs are written here (the SST version-2 encoding inverted
+from its documented formula, /work/shared/data/sst_v2/README.md), never by the code under test."""
+from __future__ import annotations
+
+import math
+import struct
+
+import numpy as np
+import pytest
+
+RATE = 1000  # Hz, a version-2 header's sample rate
+
+
+def counts_of(stroke_mm, arm_mm, max_mm):
+    """SST v2 counts for a stroke: stroke = max - 2 arm cos(pi/4096 count + start), start = acos(max / 2 arm)."""
+    start = math.acos(max_mm / (2.0 * arm_mm))
+    return (np.arccos((max_mm - np.asarray(stroke_mm, float)) / (2.0 * arm_mm)) - start) * 4096.0 / math.pi
+
+
+def write_v2(path, fork_mm, shock_mm):
+    fork = np.rint(counts_of(fork_mm, 120.0, 218.0)).astype("<u2")  # the fork's placeholder arms of that time
+    shock = np.rint(counts_of(shock_mm, 88.0, 138.0)).astype("<u2")  # the shock's
+    path.write_bytes(struct.pack("<3sBH", b"SST", 2, RATE) + np.column_stack((fork, shock)).tobytes())
+    return path
+
+
+def rocking(path, hz, seconds=20.0):
+    """A record whose shock rocks at ``hz`` about 15 mm of stroke (5 mm either way), the fork at 40 mm
+    rocking with it: unloaded for the first second, as a rider gets on."""
+    t = np.arange(int(seconds * RATE)) / RATE
+    on = t >= 1.0
+    shock = np.where(on, 15.0 + 5.0 * np.sin(2 * np.pi * hz * t), 0.0)
+    fork = np.where(on, 40.0 + 8.0 * np.sin(2 * np.pi * hz * t + 1.0), 0.0)
+    return write_v2(path, fork, shock)
+
+
+def test_bob_names_the_simulated_crash_not_a_short_stretch_of_the_record(tmp_path):
+    """A record rocking at 1 Hz reads as 30 rpm: 250 W in the climbing gear sets a climb of about 30 %,
+    which the simulated bike loops out on at about 4 s. It was refused as "the pedalling stretch
+    2.1-4.3 s is shorter than 4 s", a stretch of the simulated run named as if it were the record's (the
+    record's own runs 3-18 s); the line now names the crash and the climb, and the lower power it points at
+    is taken (the same record at 100 W is answered)."""
+    from mtbmj.measured.bob import BobError, stretch
+    from mtbmj.measured.telemetry import read_sst
+    from mtbmj.ride import pedalling
+
+    path = rocking(tmp_path / "rock1hz.SST", 1.0)
+    ride = read_sst(path)
+    start, end = stretch(ride.time_s, ride.rear_mm)
+    assert end - start > 10.0  # the record's own stretch is long: a short one is not the cause
+    with pytest.raises(BobError) as info:
+        pedalling.against([str(path)], duration_s=8.0)
+    line = str(info.value)
+    assert "pedalling stretch" not in line, line
+    assert "crashed" in line and "% climb" in line and "--power" in line, line
+    assert "\n" not in line
+    # the remedy the line names works: the same record at 100 W climbs gently and is answered
+    result = pedalling.against([str(path)], power_W=100.0, duration_s=8.0)
+    row = result.rows[0]
+    assert row["crash"] is None
+    assert row["ride"]["rear"]["frequency_Hz"] == pytest.approx(1.0, abs=0.05)
