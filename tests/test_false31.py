@@ -60,3 +60,35 @@ def test_bob_names_the_simulated_crash_not_a_short_stretch_of_the_record(tmp_pat
     row = result.rows[0]
     assert row["crash"] is None
     assert row["ride"]["rear"]["frequency_Hz"] == pytest.approx(1.0, abs=0.05)
+
+
+def test_the_climb_warning_shows_the_rise_above_what_is_allowed():
+    """The ground found rising 0.62 m in 0.05 s at 3.2 m/s, a 100 kg bike: the bound allows v^2/2g
+    (0.522 m) and 1000 W of pedalling over the rise (0.05 s x 1.02 m/s), 0.573 m. The warning printed
+    "0.6 m up, at most 0.6" (00642's line read so four times): a rise that seemed within what it allows;
+    the numbers now show it above."""
+    import re
+    import warnings
+
+    from mtbmj.ride import reconstruct_envelope as envelope
+
+    t = np.arange(0.0, 6.0, 0.001)
+    ground = np.where(t < 3.0, 0.0, np.minimum((t - 3.0) / 0.05, 1.0) * 0.62)
+    v = np.full_like(t, 3.2)
+    stretches = envelope.beyond(t, 3.2 * t, ground, v, 100.0)
+    assert len(stretches) == 1
+    s = stretches[0]
+    allowed = 3.2 ** 2 / (2 * 9.81) + 1000.0 / (100.0 * 9.81) * 0.05
+    assert s["rise_m"] == pytest.approx(0.62, abs=0.002) and s["allowed_m"] == pytest.approx(allowed, abs=0.01)
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        envelope.warn("made", stretches)
+    line = str(said[0].message)
+    up, most = map(float, re.search(r"([0-9.]+) m up, at most ([0-9.]+)\)", line).groups())
+    assert up > most, line
+    assert up == pytest.approx(0.62, abs=0.005) and most == pytest.approx(allowed, abs=0.01), line
+    # a rise well above keeps its one decimal
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        envelope.warn("made", [dict(s, rise_m=1.2, allowed_m=0.5)])
+    assert "1.2 m up, at most 0.5)" in str(said[0].message)
