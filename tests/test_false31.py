@@ -92,3 +92,28 @@ def test_the_climb_warning_shows_the_rise_above_what_is_allowed():
         warnings.simplefilter("always")
         envelope.warn("made", [dict(s, rise_m=1.2, allowed_m=0.5)])
     assert "1.2 m up, at most 0.5)" in str(said[0].message)
+
+
+@pytest.mark.parametrize("argv, named, unnamed", [
+    (["trail", "--bike", "--roll", "root", "--speed", "4", "--tolerance-mm", "0.2"],
+     ["--tolerance-mm"], ["--engines", "--head-angle"]),
+    (["trail", "--bike", "--roll", "root", "--speed", "4", "--head-angle", "66"],
+     ["--head-angle"], ["--engines", "--tolerance-mm"]),
+    (["S12", "--speed", "4"], ["--speed"], ["--drive", "--head-angle"]),
+    (["S12", "--roll", "rock", "--speed", "3", "--tolerance-mm", "0.05"], ["--tolerance-mm"], ["--engines"]),
+    (["S12", "--roll", "rock", "--speed", "3", "--engines", "fast", "--tolerance-mm", "0.05"],
+     ["--engines", "--tolerance-mm"], []),
+], ids=["bike-tolerance", "bike-head-angle", "drop-speed", "roll-tolerance", "roll-both"])
+def test_crosscheck_refuses_naming_the_options_given_only(argv, named, unnamed, capsys):
+    """`crosscheck trail --bike --roll root --speed 4 --tolerance-mm 0.2` was refused as "--engines,
+    --tolerance-mm and --head-angle: do not apply", naming two options nobody typed; each refusal now
+    names what was given ("roll-both", both given, read the same before: the baseline)."""
+    from mtbmj import cli
+
+    assert cli.main(["crosscheck", *argv]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    for option in named:
+        assert option in err[0], err
+    for option in unnamed:
+        assert option not in err[0], err

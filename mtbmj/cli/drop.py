@@ -81,8 +81,9 @@ def cmd_crosscheck(args) -> int:
     from mtbmj.errors import MtbmjError
     from mtbmj.validation import crosscheck_all
 
-    if args.speed is not None or args.drive is not None or args.head_angle is not None:
-        raise MtbmjError("--speed, --drive and --head-angle: apply to a rolling cross-check (--roll SCENARIO)")
+    given = _given(args, speed=None, drive=None, head_angle=None)
+    if given:
+        raise MtbmjError(f"{given}: appl{'ies' if ' and ' not in given else 'y'} to a rolling cross-check (--roll SCENARIO)")
     _refuse_bike_options(args)
 
     engines = [e for e in _engines(args.engines) if e != "ode"]
@@ -95,6 +96,13 @@ def cmd_crosscheck(args) -> int:
     return 0 if all(c.passed for c in checks) else 1
 
 
+def _given(args, **defaults) -> str:
+    """The options of ``defaults`` (attribute: its default) the command line set, as the user typed them
+    ("--engines and --tolerance-mm"): a refusal names those only."""
+    names = [f"--{k.replace('_', '-')}" for k, default in defaults.items() if getattr(args, k, default) != default]
+    return ", ".join(names[:-1]) + (" and " if len(names) > 1 else "") + names[-1] if names else ""
+
+
 def _crosscheck_roll(args) -> int:
     """``crosscheck CONFIG --roll SCENARIO --speed V``: one line, exit 1 when not within the tolerances."""
     from mtbmj.errors import MtbmjError
@@ -103,9 +111,10 @@ def _crosscheck_roll(args) -> int:
     if args.speed is None:
         raise MtbmjError("--roll: give the speed with --speed M_PER_S")
     _refuse_bike_options(args)
-    if args.engines != "mujoco" or args.tolerance_mm != 0.1:
-        raise MtbmjError("--engines and --tolerance-mm: apply to a drop cross-check; a rolling one compares MuJoCo "
-                         "with the rolling reference at 0.02 mm and 1 %")
+    given = _given(args, engines="mujoco", tolerance_mm=0.1)
+    if given:
+        raise MtbmjError(f"{given}: appl{'ies' if ' and ' not in given else 'y'} to a drop cross-check; a rolling one "
+                         f"compares MuJoCo with the rolling reference at 0.02 mm and 1 %")
     check = crosscheck(args.roll, args.speed, args.config, args.head_angle, args.duration, overrides(args.set),
                        args.drive or "rider")
     print(check.line())
@@ -122,9 +131,10 @@ def _crosscheck_bike(args) -> int:
     if args.roll is None or (args.speed is None and args.pedal is None):
         raise MtbmjError("--bike: give the terrain with --roll SCENARIO and the speed with --speed M_PER_S (or --pedal "
                          "RPM)")
-    if args.engines != "mujoco" or args.tolerance_mm != 0.1 or args.head_angle is not None:
-        raise MtbmjError("--engines, --tolerance-mm and --head-angle: do not apply to a bike cross-check (the "
-                         "bike's description sets its geometry and laws)")
+    given = _given(args, engines="mujoco", tolerance_mm=0.1, head_angle=None)
+    if given:
+        raise MtbmjError(f"{given}: do{'es' if ' and ' not in given else ''} not apply to a bike cross-check (the "
+                         f"bike's description sets its geometry and laws)")
     from mtbmj.cli.common import parse_assignment
 
     bike_set = dict(parse_assignment(text) for text in args.set or ())  # bike keys (mtbmj bike --set)
