@@ -117,3 +117,29 @@ def test_crosscheck_refuses_naming_the_options_given_only(argv, named, unnamed, 
         assert option in err[0], err
     for option in unnamed:
         assert option not in err[0], err
+
+
+@pytest.mark.parametrize("argv, named, unnamed", [
+    (["crosscheck", "S12", "--power", "200"], ["--power"], ["--pedal", "--seated", "--rider"]),
+    (["sag", "air120", "--sag-percent", "20", "--load-kg", "70", "--fork-set", "fork.spring.air_pressure_psi=60"],
+     ["--fork-set"], ["--front-sag-percent", "--rear-sag-percent", "--shock-set"]),
+    (["sag", "trail", "--bike", "--sag-percent", "30"], ["--sag-percent"], ["--load-kg"]),
+    (["sag", "trail", "--bike", "--load-kg", "70", "--front-sag-percent", "20", "--rear-sag-percent", "28"],
+     ["--load-kg"], ["--sag-percent"]),
+    (["sweep", "S12", "--vary", "sled.drop_height_mm=100:600:3", "--speed", "4"], ["--speed"],
+     ["--roll", "--fork-set", "--shock-set"]),
+], ids=["crosscheck-power", "sag-fork-set", "sag-bike-sag-percent", "sag-bike-load", "sweep-speed"])
+def test_option_refusals_name_the_options_given_only(argv, named, unnamed, tmp_path, capsys):
+    """The same pattern in sag, sweep and the cross-check's bike options: "--sag-percent, --load-kg: not with
+    --bike" for --load-kg alone, "--roll, --speed, --fork-set, --shock-set: only for a bike sweep" for
+    --speed alone; each now names what was given."""
+    from mtbmj import cli
+
+    out = ["--out", str(tmp_path / "out")] if argv[0] != "crosscheck" else []
+    assert cli.main([*argv, *out]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    for option in named:
+        assert option in err[0], err
+    for option in unnamed:
+        assert option not in err[0], err

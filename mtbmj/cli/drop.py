@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 import time
 
-from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, Progress, add_out, add_run_options, overrides
+from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, Progress, add_out, add_run_options, given_options, overrides
 
 
 def cmd_drop(args) -> int:
@@ -69,8 +69,9 @@ def _refuse_bike_options(args) -> None:
     """A drop or rolling cross-check given an option only the bike's has: refused in one line."""
     from mtbmj.errors import MtbmjError
 
-    if args.pedal is not None or args.power is not None or args.seated or args.rider != "passive":
-        raise MtbmjError("--pedal, --power, --seated and --rider: apply to a bike cross-check (--bike)")
+    given = given_options(args, pedal=None, power=None, seated=False, rider="passive")
+    if given:
+        raise MtbmjError(f"{given}: appl{'ies' if ' and ' not in given else 'y'} to a bike cross-check (--bike)")
 
 
 def cmd_crosscheck(args) -> int:
@@ -81,7 +82,7 @@ def cmd_crosscheck(args) -> int:
     from mtbmj.errors import MtbmjError
     from mtbmj.validation import crosscheck_all
 
-    given = _given(args, speed=None, drive=None, head_angle=None)
+    given = given_options(args, speed=None, drive=None, head_angle=None)
     if given:
         raise MtbmjError(f"{given}: appl{'ies' if ' and ' not in given else 'y'} to a rolling cross-check (--roll SCENARIO)")
     _refuse_bike_options(args)
@@ -96,13 +97,6 @@ def cmd_crosscheck(args) -> int:
     return 0 if all(c.passed for c in checks) else 1
 
 
-def _given(args, **defaults) -> str:
-    """The options of ``defaults`` (attribute: its default) the command line set, as the user typed them
-    ("--engines and --tolerance-mm"): a refusal names those only."""
-    names = [f"--{k.replace('_', '-')}" for k, default in defaults.items() if getattr(args, k, default) != default]
-    return ", ".join(names[:-1]) + (" and " if len(names) > 1 else "") + names[-1] if names else ""
-
-
 def _crosscheck_roll(args) -> int:
     """``crosscheck CONFIG --roll SCENARIO --speed V``: one line, exit 1 when not within the tolerances."""
     from mtbmj.errors import MtbmjError
@@ -111,7 +105,7 @@ def _crosscheck_roll(args) -> int:
     if args.speed is None:
         raise MtbmjError("--roll: give the speed with --speed M_PER_S")
     _refuse_bike_options(args)
-    given = _given(args, engines="mujoco", tolerance_mm=0.1)
+    given = given_options(args, engines="mujoco", tolerance_mm=0.1)
     if given:
         raise MtbmjError(f"{given}: appl{'ies' if ' and ' not in given else 'y'} to a drop cross-check; a rolling one "
                          f"compares MuJoCo with the rolling reference at 0.02 mm and 1 %")
@@ -131,7 +125,7 @@ def _crosscheck_bike(args) -> int:
     if args.roll is None or (args.speed is None and args.pedal is None):
         raise MtbmjError("--bike: give the terrain with --roll SCENARIO and the speed with --speed M_PER_S (or --pedal "
                          "RPM)")
-    given = _given(args, engines="mujoco", tolerance_mm=0.1, head_angle=None)
+    given = given_options(args, engines="mujoco", tolerance_mm=0.1, head_angle=None)
     if given:
         raise MtbmjError(f"{given}: do{'es' if ' and ' not in given else ''} not apply to a bike cross-check (the "
                          f"bike's description sets its geometry and laws)")
