@@ -143,3 +143,22 @@ def test_option_refusals_name_the_options_given_only(argv, named, unnamed, tmp_p
         assert option in err[0], err
     for option in unnamed:
         assert option not in err[0], err
+
+
+def test_no_speed_from_the_lag_names_the_speed_that_can_be_given():
+    """Two ends that share nothing (independent noise made here): the lag gives no speed, a true
+    refusal; its line now names the remedy the commands take (--speed, --speed-csv), where it ended
+    "no speed from this ride" (00088-00091, 00096, 00098 and the slams 00085, 00087 refused so by
+    reconstruct and advise). The baseline: a rear that is the front 0.2 s later is timed at 1.26 / 0.2
+    = 6.3 m/s."""
+    from mtbmj.ride.reconstruct_speed import ReconstructError, speed_from_lag
+
+    rng = np.random.default_rng(7)
+    t = np.arange(0.0, 40.0, 0.005)
+    front = np.convolve(rng.normal(0, 5, t.size), np.ones(8) / 8, "same")
+    with pytest.raises(ReconstructError) as info:
+        speed_from_lag(t, front, np.convolve(rng.normal(0, 5, t.size), np.ones(8) / 8, "same"), 1.26)
+    line = str(info.value)
+    assert "no speed from this ride" in line and "--speed" in line and "--speed-csv" in line, line
+    found = speed_from_lag(t, front, np.roll(front, 40), 1.26)
+    assert found["speed_m_per_s"] == pytest.approx(6.3, rel=0.02)
