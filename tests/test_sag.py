@@ -260,7 +260,7 @@ def test_a_file_config_is_written_whole(tmp_path):
      "trail: is a bike: give --bike with --front-sag-percent and --rear-sag-percent"),
     (["trail", "--front-sag-percent", "20", "--rear-sag-percent", "30"], "trail: is a bike: give --bike"),
     # --bike with the fork's one sag named what to give, not what was given wrongly
-    (["trail", "--bike", "--sag-percent", "30"], "--sag-percent, --load-kg: not with --bike"),
+    (["trail", "--bike", "--sag-percent", "30"], "--sag-percent: not with --bike"),
 ])
 def test_bad_sag_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, args, needle):
     out = tmp_path / "sag"

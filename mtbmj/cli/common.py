@@ -428,3 +428,15 @@ def _silence_stdout() -> None:
         os.close(devnull)
     except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
         pass
+
+
+def given_options(args, **defaults) -> str:
+    """The options of ``defaults`` (attribute: its default) the command line set, as the user typed them
+    ("--engines and --tolerance-mm"): a refusal names those only."""
+    names = [f"--{k.replace('_', '-')}" for k, default in defaults.items() if _set(getattr(args, k, default), default)]
+    return ", ".join(names[:-1]) + (" and " if len(names) > 1 else "") + names[-1] if names else ""
+
+
+def _set(value, default) -> bool:
+    """An option's value differs from its default (an appending option's empty list is not set)."""
+    return value != default and not (isinstance(value, (list, tuple)) and not value)

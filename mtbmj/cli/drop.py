@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 import time
 
-from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, Progress, add_out, add_run_options, overrides
+from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, Progress, add_out, add_run_options, given_options, overrides
 
 
 def cmd_drop(args) -> int:
@@ -69,8 +69,9 @@ def _refuse_bike_options(args) -> None:
     """A drop or rolling cross-check given an option only the bike's has: refused in one line."""
     from mtbmj.errors import MtbmjError
 
-    if args.pedal is not None or args.power is not None or args.seated or args.rider != "passive":
-        raise MtbmjError("--pedal, --power, --seated and --rider: apply to a bike cross-check (--bike)")
+    given = given_options(args, pedal=None, power=None, seated=False, rider="passive")
+    if given:
+        raise MtbmjError(f"{given}: appl{'ies' if ' and ' not in given else 'y'} to a bike cross-check (--bike)")
 
 
 def cmd_crosscheck(args) -> int:
@@ -81,8 +82,9 @@ def cmd_crosscheck(args) -> int:
     from mtbmj.errors import MtbmjError
     from mtbmj.validation import crosscheck_all
 
-    if args.speed is not None or args.drive is not None or args.head_angle is not None:
-        raise MtbmjError("--speed, --drive and --head-angle: apply to a rolling cross-check (--roll SCENARIO)")
+    given = given_options(args, speed=None, drive=None, head_angle=None)
+    if given:
+        raise MtbmjError(f"{given}: appl{'ies' if ' and ' not in given else 'y'} to a rolling cross-check (--roll SCENARIO)")
     _refuse_bike_options(args)
 
     engines = [e for e in _engines(args.engines) if e != "ode"]
@@ -103,9 +105,10 @@ def _crosscheck_roll(args) -> int:
     if args.speed is None:
         raise MtbmjError("--roll: give the speed with --speed M_PER_S")
     _refuse_bike_options(args)
-    if args.engines != "mujoco" or args.tolerance_mm != 0.1:
-        raise MtbmjError("--engines and --tolerance-mm: apply to a drop cross-check; a rolling one compares MuJoCo "
-                         "with the rolling reference at 0.02 mm and 1 %")
+    given = given_options(args, engines="mujoco", tolerance_mm=0.1)
+    if given:
+        raise MtbmjError(f"{given}: appl{'ies' if ' and ' not in given else 'y'} to a drop cross-check; a rolling one "
+                         f"compares MuJoCo with the rolling reference at 0.02 mm and 1 %")
     check = crosscheck(args.roll, args.speed, args.config, args.head_angle, args.duration, overrides(args.set),
                        args.drive or "rider")
     print(check.line())
@@ -122,9 +125,10 @@ def _crosscheck_bike(args) -> int:
     if args.roll is None or (args.speed is None and args.pedal is None):
         raise MtbmjError("--bike: give the terrain with --roll SCENARIO and the speed with --speed M_PER_S (or --pedal "
                          "RPM)")
-    if args.engines != "mujoco" or args.tolerance_mm != 0.1 or args.head_angle is not None:
-        raise MtbmjError("--engines, --tolerance-mm and --head-angle: do not apply to a bike cross-check (the "
-                         "bike's description sets its geometry and laws)")
+    given = given_options(args, engines="mujoco", tolerance_mm=0.1, head_angle=None)
+    if given:
+        raise MtbmjError(f"{given}: do{'es' if ' and ' not in given else ''} not apply to a bike cross-check (the "
+                         f"bike's description sets its geometry and laws)")
     from mtbmj.cli.common import parse_assignment
 
     bike_set = dict(parse_assignment(text) for text in args.set or ())  # bike keys (mtbmj bike --set)

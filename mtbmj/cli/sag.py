@@ -18,8 +18,11 @@ def cmd_sag(args) -> int:
         raise MtbmjError(f"{args.config}: is a bike: give --bike with --front-sag-percent and --rear-sag-percent")
     if args.sag_percent is None:
         raise MtbmjError("--sag-percent: required (or --bike with --front-sag-percent and --rear-sag-percent)")
-    if args.front_sag_percent is not None or args.rear_sag_percent is not None or args.fork_set or args.shock_set:
-        raise MtbmjError("--front-sag-percent, --rear-sag-percent, --fork-set, --shock-set: only with --bike")
+    from mtbmj.cli.common import given_options
+
+    given = given_options(args, front_sag_percent=None, rear_sag_percent=None, fork_set=None, shock_set=None)
+    if given:
+        raise MtbmjError(f"{given}: only with --bike")
     setting = solve_sag(args.config, args.load_kg, args.sag_percent, overrides(args.set))
     written = setting.write(args.out)
     print(f"{setting.line()}; wrote {written[0]}; run it with: {setting.drop_command(written[0])}")
@@ -33,8 +36,11 @@ def _bike_sag(args) -> int:
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.errors import MtbmjError
 
-    if args.sag_percent is not None or args.load_kg is not None:  # before the two: what the user gave is named
-        raise MtbmjError("--sag-percent, --load-kg: not with --bike (the bike's rider is its load; "
+    from mtbmj.cli.common import given_options
+
+    given = given_options(args, sag_percent=None, load_kg=None)
+    if given:  # before the two: what the user gave is named
+        raise MtbmjError(f"{given}: not with --bike (the bike's rider is its load; "
                          "--front-sag-percent and --rear-sag-percent set the sag)")
     if args.front_sag_percent is None or args.rear_sag_percent is None:
         raise MtbmjError("--bike: give --front-sag-percent and --rear-sag-percent")

@@ -85,9 +85,11 @@ def cmd_sweep(args) -> int:
 
     if is_bike(args.config):
         return _bike_sweep(args)
-    if args.roll is not None or args.speed is not None or args.fork_set or args.shock_set:
-        raise ConfigError("--roll, --speed, --fork-set, --shock-set: only for a bike sweep (CONFIG a bike preset "
-                          "or bike file)")
+    from mtbmj.cli.common import given_options
+
+    given = given_options(args, roll=None, speed=None, fork_set=None, shock_set=None)
+    if given:
+        raise ConfigError(f"{given}: only for a bike sweep (CONFIG a bike preset or bike file)")
     check_shared_options(args)
     # the workers start now and load the compiled engine while the variants are drawn
     pool = start_pool(args.workers, args.engine) if args.backend == "local" else None

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mtbmj.measured.bob import BobError, bob, high_passed, run_stretch
+from mtbmj.measured.bob import MIN_STRETCH_S, BobError, bob, high_passed, run_stretch
 
 GEAR = (32, 42)  # assumed: a 1x climbing gear (the records do not say theirs)
 RUN_S = 14.0
@@ -183,6 +183,12 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         t = run.raw["time_s"]
         window = run_stretch(t)
+        if window[1] - window[0] < MIN_STRETCH_S - 0.01:  # the run ended early: its crash named, not the record's stretch
+            ended = (run.summary.get("crash") or {}).get("line") or f"ended at {float(t[-1]):.2f} s"
+            raise BobError(f"{path}: the bike pedalled as this record implies ({cadence:.0f} rpm from its rear's "
+                           f"{rear.frequency_Hz:.2f} Hz, {power_W:g} W in {GEAR[0]}x{GEAR[1]} up a {grade:.1f} % climb) "
+                           f"{ended}, before {MIN_STRETCH_S:g} s of its second half: no simulated bob (a record that is "
+                           f"not steady pedalling reads as a slow cadence; less --power climbs less steeply)")
         sim = {"rear": bob(t, run.raw["rear_travel_mm"], *window).to_dict(),
                "front": bob(t, run.raw["front_travel_mm"], *window).to_dict()}
         rows.append({"record": ride.name, "stance": stance, "rider": rider, "notes": notes, "cadence_rpm": cadence,

@@ -100,9 +100,13 @@ def warn(ride: str, stretches) -> None:
 
     from mtbmj.errors import ConfigWarning
 
+    def apart(rise, allowed):  # as few decimals as show the rise above what is allowed (0.62 for 0.58, not 0.6 for 0.6)
+        digits = next((d for d in (1, 2) if round(rise, d) > round(allowed, d)), 3)
+        return f"{rise:.{digits}f} m up, at most {allowed:.{digits}f}"
+
     if stretches:
         where = ", ".join(f"{s['start_m']:.0f}-{s['end_m']:.0f} m ({s['start_s']:.1f}-{s['end_s']:.1f} s: "
-                          f"{s['rise_m']:.1f} m up, at most {s['allowed_m']:.1f})" for s in stretches)
+                          f"{apart(s['rise_m'], s['allowed_m'])})" for s in stretches)
         warnings.warn(f"{ride}: the terrain found rises more than the bike at its speed could climb at {where} "
                       f"(v^2/2g and {PEDAL_POWER_W:g} W of pedalling): no trail is so, the reconstruction's "
                       f"own; not checked there", ConfigWarning, stacklevel=2)

@@ -359,7 +359,8 @@ def _profile(windows, sds, whys, wheelbase: float, window_s: float, sources=None
         reasons = "; ".join(f"{n} {why}" for why, n in counts.most_common())
         raise ReconstructError(f"the two ends' records do not align at any lag for {SPEED_RANGE[0]:g}-"
                                f"{SPEED_RANGE[1]:g} m/s in any {window_s:g} s window (best correlation {top:.2f}; "
-                               f"of {len(windows)} windows: {reasons}): no speed from this ride")
+                               f"of {len(windows)} windows: {reasons}): no speed from this ride; a speed given "
+                               f"(--speed M_PER_S or --speed-csv FILE; speed= from Python) is used in its place")
     centres, speeds = np.array([c for c, _ in good]), np.array([v for _, v in good])
     speed = float(np.median(speeds))
     return {"speed_m_per_s": speed, "lag_s": wheelbase / speed, "windows": windows, "sd": sds, "why": whys,
