@@ -323,7 +323,7 @@ _SPRING = (0.5, 200.0)        # N/mm: a fork coil (about 3-15) to a stiff rear-s
 _DAMPING = (10.0, 50000.0)    # N s/m: a bike damper's slopes are about 100-5000
 _TIRE_RATE = (10.0, 500.0)    # N/mm: 62-86 for the sled's 29 x 2.3 (docs/reference.md); fat to road tires
 PLAUSIBLE: dict[str, tuple[float, float]] = {
-    "sled.body_mass_kg": (5.0, 300.0),
+    "sled.body_mass_kg": (5.0, 150.0),  # the mass the fork carries (what --load-kg sets): at most a heavy rider's
     "sled.rider_mass_kg": (15.0, 250.0),
     "sled.bike_mass_kg": (3.0, 60.0),
     "sled.front_share_percent": (20.0, 80.0),

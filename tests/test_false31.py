@@ -162,3 +162,20 @@ def test_no_speed_from_the_lag_names_the_speed_that_can_be_given():
     assert "no speed from this ride" in line and "--speed" in line and "--speed-csv" in line, line
     found = speed_from_lag(t, front, np.roll(front, 40), 1.26)
     assert found["speed_m_per_s"] == pytest.approx(6.3, rel=0.02)
+
+
+@pytest.mark.parametrize("duration", [6.0, 7.99, "10"])
+def test_bob_from_python_refuses_a_run_too_short_for_its_second_half_before_any_run(tmp_path, duration):
+    """Review31b: ``pedalling.against(..., duration_s=6.0)`` ran its 6 s without a crash and was refused as a run
+    that "ended at 6.00 s" (a crash, a lower --power) where the cause was the duration: a bob is read over a run's
+    second half, at least ``MIN_STRETCH_S`` of it. Refused as the command's ``--duration`` is, before any run, naming
+    the argument (a str too)."""
+    from mtbmj.errors import ConfigError
+    from mtbmj.measured.bob import MIN_STRETCH_S
+    from mtbmj.ride import pedalling
+
+    path = rocking(tmp_path / "rock16.SST", 1.6)
+    with pytest.raises(ConfigError) as info:
+        pedalling.against([str(path)], duration_s=duration)
+    assert str(info.value).startswith("duration_s:") and f"{2 * MIN_STRETCH_S:g} s at least" in str(info.value)
+    assert "ended at" not in str(info.value)

@@ -123,6 +123,9 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
     from mtbmj.errors import ConfigError
     from mtbmj.measured import telemetry
 
+    if not (isinstance(duration_s, (int, float)) and duration_s >= 2.0 * MIN_STRETCH_S):  # as --duration is refused
+        raise ConfigError(f"duration_s: {duration_s!r} s is too short to read a bob over its second half "
+                          f"({2.0 * MIN_STRETCH_S:g} s at least)")
     stances = list(stances or ["standing"] * len(records))
     if len(stances) != len(records):
         raise ConfigError(f"stance: one per record ({len(records)}), got {len(stances)}")
