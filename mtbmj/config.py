@@ -402,9 +402,9 @@ def plausibility(key: str, value: Any) -> str | None:
                         f"(rate proportional to the gauge pressure, assumed)")
         return None
     said = f"{key} = {value:g} {unit} is far {'below' if value < low else 'above'} what any bike or sled has"
-    for typed, per in MISTAKES.get(unit, ()):
-        if low <= value * per <= high:
-            return f"{said} ({low:g}-{high:g} {unit}): probably meant {value:g} {typed} = {value * per:.4g} {unit}"
+    meant = limits.slip(value, unit, (low, high))
+    if meant:
+        return f"{said} ({low:g}-{high:g} {unit}):{meant}"
     return f"{said}: probably meant a value within {low:g}-{high:g} {unit}"
 
 

@@ -27,7 +27,7 @@ class ConfigError(MtbmjError, ValueError):
     catches it). Every error whose cause is what the user gave, a value, a spec or a file's content, is one:
     ``ConfigError``, ``TerrainError`` (a terrain spec), ``RecordError`` and ``TelemetryError`` (a record or a
     ride file), ``MetricsError`` and ``EventsError`` (signals too short or not finite). Not so: ``RunError``
-    (the model left its envelope), ``MissingExtra`` (the installation), ``RenderError`` (the machine's GL),
+    (the model left its envelope), ``MissingExtra`` (the installation), ``RenderError`` (the machine's GL, or a run folder it cannot replay: left outside ``ValueError``, as most of its causes are the machine's),
     and the readers' and fits' own (``TouchError``, ``BobError``, ``BounceError``, the fit and
     reconstruction errors): well-formed data that does not hold what they look for."""
 

@@ -15,16 +15,6 @@ from mtbmj.errors import ConfigError
 BYTES_PER_STEP = 1024
 
 
-
-def require_mapping(overrides, example: str, none_ok: bool = True) -> None:
-    """Refuse ``overrides`` from Python that are not a mapping (a str, a list of "key=value") in one line,
-    ``example`` a key of the caller's kind with a value (``'rider.mass_kg': 78``); None passes where ``none_ok``."""
-    from collections.abc import Mapping
-
-    if not (overrides is None and none_ok) and not isinstance(overrides, Mapping):
-        raise ConfigError(f"overrides: must be a mapping of key to value, e.g. {{{example}}}, got a "
-                          f"{type(overrides).__name__}")
-
 def available_memory() -> int:
     """Bytes of memory available to a new allocation (Linux ``MemAvailable``; else the physical
     memory)."""
@@ -180,6 +170,16 @@ def slip(value: float, unit: str, plausible: tuple[float, float]) -> str:
     lo, hi = plausible
     return next((f" probably meant {value:g} {typed} = {value * per:.4g} {unit}" for typed, per in MISTAKES.get(unit, ())
                  if lo <= value * per <= hi), "")
+
+
+def require_mapping(overrides, example: str, none_ok: bool = True) -> None:
+    """Refuse ``overrides`` from Python that are not a mapping (a str, a list of "key=value") in one line,
+    ``example`` a key of the caller's kind with a value (``'rider.mass_kg': 78``); None passes where ``none_ok``."""
+    from collections.abc import Mapping
+
+    if not (overrides is None and none_ok) and not isinstance(overrides, Mapping):
+        raise ConfigError(f"overrides: must be a mapping of key to value, e.g. {{{example}}}, got a "
+                          f"{type(overrides).__name__}")
 
 
 class Argument:

@@ -16,8 +16,9 @@ from __future__ import annotations
 
 import math
 
+from mtbmj import limits
 from mtbmj.bike.chart import RANGES as _CHART_RANGES
-from mtbmj.config import MISTAKES, unit_of
+from mtbmj.config import unit_of
 
 POINT_MM = "two numbers [x, z], mm"
 
@@ -256,8 +257,7 @@ def warnings(table: dict) -> list[str]:
         if odd:
             shown = f"{odd[0]:g}" if not isinstance(value, list) else f"{odd[0]:g} (of the list)"
             # one value a unit slip brings within the range (180 lb as 180 kg, 1.8 bar as 1.8 psi): said so
-            meant = next((f" probably meant {odd[0]:g} {typed} = {odd[0] * per:.4g} {unit}" for typed, per in
-                          MISTAKES.get(unit, ()) if not isinstance(value, list) and lo <= odd[0] * per <= hi), "")
+            meant = "" if isinstance(value, list) else limits.slip(odd[0], unit, rng)
             out.append(f"{key} = {shown} {unit} is outside {lo:g}-{hi:g} {unit}, what bikes and riders have "
                        f"(a unit mistake?{meant})".replace("  ", " "))
     return out
