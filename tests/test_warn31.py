@@ -90,6 +90,22 @@ def test_bike_ride_of_another_bike_is_refused_before_the_run(tmp_path, capfd):
     assert status == 0 and "beyond" not in err, err
 
 
+def test_bike_ride_not_an_sst_is_refused_before_the_run(tmp_path, capfd, monkeypatch):
+    """--ride reads an SST recording (beside.files); a travel CSV, which telemetry reads, is refused before
+    any run (the run stood in for by one that fails the test if reached)."""
+    from mtbmj.bike import run as bike_run
+
+    def no_run(*a, **k):
+        raise AssertionError("ran before refusing the ride")
+
+    monkeypatch.setattr(bike_run, "run_bike", no_run)
+    ride = tmp_path / "ride.csv"
+    ride.write_text("time_s,fork_mm,shock_mm\n" + "".join(f"{k / 100:g},{20 + k % 7},{10 + k % 5}\n" for k in range(4000)))
+    out = tmp_path / "b"
+    refused(["bike", "sst", "flat", "--speed", "5", "--quiet", "--ride", ride, "--out", out], out, capfd,
+            "not an SST file")
+
+
 # --- 3. bob: a trail ride is no steady pedalling ------------------------------------------------------------
 
 

@@ -77,8 +77,9 @@ def ride_checked(args, overrides) -> None:
     import argparse
 
     from mtbmj.cli.telemetry import ride_record
-    from mtbmj.measured.telemetry import TelemetryError
+    from mtbmj.measured.telemetry import TelemetryError, read_sst, ride_path
 
+    read_sst(ride_path(args.ride))  # an SST recording (beside.files reads one): else one line, no run
     as_read = argparse.Namespace(bike=args.bike, fork_max_mm=None, shock_max_mm=None)
     try:
         ride_record(args.ride, as_read, None, overrides or None, named=f"bike {args.bike}")
