@@ -220,6 +220,32 @@ def part_key(key: str) -> str | None:
     return meant if section == "fork" or meant != "fork.length_mm" else None
 
 
+# The keys of the fork's and the shock's configurations the bike reads: the fork's laws, tire,
+# gravity and integrator; the shock's laws (the fork schema read in shock coordinates; its length,
+# tire, sled and solver keys have no part in the bike). A key set in [fork.set] or [shock.set]
+# outside these changed nothing and is refused.
+USED = {"fork": ("fork.*", "tire.*", "sled.gravity_m_per_s2", "solver.integrator"),
+        "shock": ("fork.* but fork.length_mm",)}
+
+
+def reads_key(section: str, key: str) -> bool:
+    """Whether the bike reads ``key`` of the ``section`` (fork or shock) part's configuration (``USED``)."""
+    if section == "fork":
+        return key.startswith(("fork.", "tire.")) or key in ("sled.gravity_m_per_s2", "solver.integrator")
+    return key.startswith("fork.") and key != "fork.length_mm"
+
+
+def _configuration_option(key: str) -> str:
+    """Where a key that is no bike key but a fork's or shock's configuration key (``tire.pressure_psi``)
+    goes, as a refusal of ``--set`` ends: the option that takes it; "" for any other key."""
+    from mtbmj.config import ALTERNATIVES, SCHEMA
+
+    if (key not in SCHEMA and key not in ALTERNATIVES) or not reads_key("fork", str(key)):
+        return ""
+    both = " (its [tire] sets both tyres)" if str(key).startswith("tire.") else ""
+    return f"; a key of the fork's configuration goes with --fork-set {key}=VALUE{both}"
+
+
 def bike_key(key: str) -> str | None:
     """``key`` (a key given in a part's ``set`` table) as the bike key ``SECTION.NAME`` it names,
     else None."""
@@ -288,7 +314,7 @@ def overridden(table: dict, overrides) -> dict:
                               f"{', '.join(k for k, v in KNOWN.items() if v)})")
         if section not in KNOWN or not KNOWN[section]:
             raise ConfigError(f"--set {key}: unknown section {section!r} (known: "
-                              f"{', '.join(k for k, v in KNOWN.items() if v)})")
+                              f"{', '.join(k for k, v in KNOWN.items() if v)})" + _configuration_option(key))
         if name not in KNOWN[section] or name == "set":
             meant = _in_units(section, name)  # shock.spring_rate or rider.kg: the keys with the unit
             if meant:

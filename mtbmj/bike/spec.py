@@ -26,6 +26,7 @@ from mtbmj.bike import linkage as _linkage
 from mtbmj.bike import shock as _shock
 from mtbmj.bike.bikefile import (KNOWN, SENSOR_KEYS, gated, mapping, merge, overridden, preset_names,  # noqa: F401
                                   read_leverage_csv, read_table)
+from mtbmj.bike.bikefile import USED, reads_key  # the configurations' keys the bike reads
 from mtbmj.errors import ConfigError
 from mtbmj.measured.leverage import Leverage, leverage_ratio, leverage_stroke, stroke_piece  # noqa: F401
 
@@ -233,20 +234,6 @@ RETIRED = {"rider.on_bike_mass_kg": "rider.mass_kg is the whole rider; the share
                                     "is rider.limbs_share_percent (de Leva's 15.86 % by default)"}
 
 
-# The keys of the fork's and the shock's configurations the bike reads: the fork's laws, tire,
-# gravity and integrator; the shock's laws (the fork schema read in shock coordinates; its length,
-# tire, sled and solver keys have no part in the bike). A key set in [fork.set] or [shock.set]
-# outside these changed nothing and is refused.
-USED = {"fork": ("fork.*", "tire.*", "sled.gravity_m_per_s2", "solver.integrator"),
-        "shock": ("fork.* but fork.length_mm",)}
-
-
-def _used(section: str, key: str) -> bool:
-    if section == "fork":
-        return key.startswith(("fork.", "tire.")) or key in ("sled.gravity_m_per_s2", "solver.integrator")
-    return key.startswith("fork.") and key != "fork.length_mm"
-
-
 def _set_hint(section: str, key: str) -> str:
     """What a key a part's configuration does not read was likely meant as: a bike key (given to
     ``--shock-set`` or in a ``set`` table), or the configuration's ``fork.*`` key without or with
@@ -260,7 +247,7 @@ def _set_hint(section: str, key: str) -> str:
 
     first, _, rest = key.partition(".")
     for meant in (f"fork.{key}", f"fork.{rest}" if rest and first in ("shock", "fork") else ""):
-        if meant and meant != key and (meant in SCHEMA or meant in ALTERNATIVES) and _used(section, meant):
+        if meant and meant != key and (meant in SCHEMA or meant in ALTERNATIVES) and reads_key(section, meant):
             return f"; did you mean {meant!r}?"
     return ""
 
@@ -441,7 +428,7 @@ def derive(source: str, read: dict, overrides=None, csv: dict | None = None) -> 
         if not isinstance(given, dict):
             raise ConfigError(f"{section}.set: must be a table of configuration keys")
         for key in given:
-            if not _used(section, str(key)):
+            if not reads_key(section, str(key)):
                 raise ConfigError(f"{section}.set: {key!r} is not used by the bike (of the {section}'s configuration "
                                   f"it reads {', '.join(USED[section])}){_set_hint(section, str(key))}")
     drive = {}

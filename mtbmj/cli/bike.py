@@ -16,15 +16,13 @@ EXIT_CRASHED = 3
 def cmd_bike(args) -> int:
     from mtbmj.bike.run import run_bike
 
-    if args.ride is not None:
-        from mtbmj.measured.telemetry import read_sst, ride_path
-
-        read_sst(ride_path(args.ride))  # a bad ride file: one line before any work
+    overrides = bike_overrides(args)
+    if args.ride is not None:  # a bad ride file, or another bike's ride: one line before any work
+        ride_checked(args, overrides)
     if args.video:
         from mtbmj.rolling.render import gl_backend
 
         gl_backend()  # no headless OpenGL: one line before any work
-    overrides = bike_overrides(args)
     profile = None
     if args.speed_profile is not None:  # a bad file: one line before any work
         from mtbmj.bike.schedule import read_csv
@@ -67,6 +65,30 @@ def cmd_bike(args) -> int:
     print(f"{result.headline()}; {result.info['real_time_factor']:.2f}x real time; wrote {len(written)} files to "
           f"{args.out}")
     return EXIT_CRASHED if result.summary.get("crash") else 0
+
+
+def ride_checked(args, overrides) -> None:
+    """``--ride`` read as ``telemetry``, ``advise`` and ``bob`` read it, through the bike that runs (its
+    overrides too): the same warnings (a version-2 record's approximate amplitudes, its travel past the
+    bike's within that uncertainty, a short ride), and the same refusal of a ride that travels past the
+    bike's travel. Refused, not warned: the ride's histogram is drawn in % of this bike's travel, which
+    it passes, so the comparison would be false; another bike's ride is compared by reading it as its
+    own (``mtbmj telemetry RIDE --bike RECORDED --compare RUN_DIR``)."""
+    import argparse
+
+    from mtbmj.cli.telemetry import ride_record
+    from mtbmj.measured.telemetry import TelemetryError, read_sst, ride_path
+
+    read_sst(ride_path(args.ride))  # an SST recording (beside.files reads one): else one line, no run
+    as_read = argparse.Namespace(bike=args.bike, fork_max_mm=None, shock_max_mm=None)
+    try:
+        ride_record(args.ride, as_read, None, overrides or None, named=f"bike {args.bike}")
+    except TelemetryError as error:
+        if "a ride of another bike" not in str(error):
+            raise
+        raise TelemetryError(f"--ride {args.ride}: {error}; or run this bike without --ride and compare its "
+                             f"folder with the ride read as its own: mtbmj telemetry {args.ride} --bike RECORDED "
+                             f"--compare RUN_DIR") from None
 
 
 def pedal_option(args):
@@ -185,4 +207,4 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=cmd_bike)
 
 
-__all__ = ["add_parser", "add_pedal", "cmd_bike", "pedal_option"]
+__all__ = ["add_parser", "add_pedal", "cmd_bike", "pedal_option", "ride_checked"]

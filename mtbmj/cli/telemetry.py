@@ -77,34 +77,38 @@ def decoding(args, bike=None, overrides=None) -> dict:
     return out
 
 
-def travel_keys(args) -> tuple[str, str]:
+def travel_keys(args, named: str | None = None) -> tuple[str, str]:
     """What the fork travel and the shock stroke a ride is read with were set by (``decoding``), as
-    a refusal names them: --fork-max-mm, the --bike's key, or the default (the SST example's bike)."""
+    a refusal names them: --fork-max-mm, the --bike's key (``named``: how the command names its bike,
+    by default "--bike BIKE"), or the default (the SST example's bike)."""
     keys = []
+    named = named or f"--bike {getattr(args, 'bike', None)}"
     for option, attr, bike_key, default in (
             ("--fork-max-mm", "fork_max_mm", "geometry.fork_travel_mm", telemetry.FORK_TRAVEL_MAX_MM),
             ("--shock-max-mm", "shock_max_mm", "shock.stroke_mm", telemetry.SHOCK_STROKE_MAX_MM)):
         if getattr(args, attr, None) is not None:
             keys.append(option)
         elif getattr(args, "bike", None) is not None:
-            keys.append(f"{bike_key} of --bike {args.bike}")
+            keys.append(f"{bike_key} of {named}")
         else:
             keys.append(f"{option} default {default:g}, the SST example's bike; give --bike")
     return keys[0], keys[1]
 
 
-def ride_record(ride, args, bike=None, overrides=None):
+def ride_record(ride, args, bike=None, overrides=None, named: str | None = None):
     """The ride a command names (a recording or travel CSV, or "example": the shipped SST ride)
     decoded through ``decoding(args, bike, overrides)``; refused when it travels past the travel it is
-    read with (``telemetry.beyond_travel``), else its quality warnings issued."""
+    read with (``telemetry.beyond_travel``), else its quality warnings issued. ``named``: how the
+    command names its bike in those lines (default "--bike BIKE"; ``mtbmj bike``'s is positional)."""
     from mtbmj.config import warn
 
     read = decoding(args, bike, overrides)
     record = telemetry.read_ride(telemetry.ride_path(ride), **read)
-    beyond = telemetry.beyond_travel(record, *travel_keys(args))
+    named = named or f"--bike {getattr(args, 'bike', None)}"
+    beyond = telemetry.beyond_travel(record, *travel_keys(args, named))
     unset = [end for end in ("front", "rear") if end not in read] if getattr(args, "bike", None) is not None else []
     if unset and record.version == 3:  # the recorder's arms not given: the example's taken, said
-        beyond.append(f"{record.name}: --bike {args.bike} gives no [sensors] for its {' and '.join(unset)} sensor: "
+        beyond.append(f"{record.name}: {named} gives no [sensors] for its {' and '.join(unset)} sensor: "
                       f"decoded with the SST example's recorder's arms (mtbmj/bike/presets/sst.toml [sensors]); "
                       f"another recorder's travel is wrong by as much as its arms differ")
     given = [end for end in ("front", "rear") if end in read] if getattr(args, "bike", None) is not None else []
@@ -112,7 +116,7 @@ def ride_record(ride, args, bike=None, overrides=None):
 
     preset = str(getattr(args, "bike", "")).lower() in {n.lower() for n in preset_names()}
     if given and record.version == 2 and not preset:  # a file's arms are a version-3 recorder's: set aside, said
-        beyond.append(f"{record.name}: --bike {args.bike}'s [sensors] ({' and '.join(given)}) are a version-3 "
+        beyond.append(f"{record.name}: {named}'s [sensors] ({' and '.join(given)}) are a version-3 "
                       f"recorder's arms: not used for this version-2 record, read with the calibration of its time")
     warn(telemetry.quality(record) + beyond)
     return record

@@ -507,9 +507,10 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
         if not f_lo < 0.0 < f_hi:
             what = "softer" if f_lo >= 0.0 else "stiffer"
             raise RideNotDescribed(
-                f"{name}: no {adj.label} within x{lo:g}-x{hi:g} of the bike file's carries the {end} end's static "
-                f"load ({load:.0f} N) over the ride's travel (the ride's mean {series[end].mean():.1f} mm needs a "
-                f"spring {what} than that): the model does not describe this ride, so it cannot predict a change")
+                f"{name}: {_on_sag_load(bike, overrides, static_sag_mm, end, mean_force, load)}no {adj.label} within "
+                f"x{lo:g}-x{hi:g} of the bike file's carries the {end} end's static load ({load:.0f} N) over the ride's "
+                f"travel (the ride's mean {series[end].mean():.1f} mm needs a spring {what} than that): the model does "
+                f"not describe this ride, so it cannot predict a change")
         if static_sag_mm is not None:  # the springs come from the sag: this end's balance is only needed described
             continue
         s = float(brentq(lambda q: mean_force(q) - load, lo, hi, xtol=1e-4))
@@ -533,6 +534,26 @@ def spring_scales(t, front_mm, rear_mm, bike, overrides=None, name: str = "ride"
         return _on_the_sag(spec, whole, bike, overrides, static_sag_mm, len(segs), mean_forces, name, carried_as)
     split = _split(spec, whole, bike, overrides, scales, mean_forces) if len(scales) == 2 else None
     return Calibration(scales, over, split=split)
+
+
+def _on_sag_load(bike, overrides, static_sag_mm, end: str, mean_force, load: float) -> str:
+    """With a measured static sag, what a ride no spring balances says first: the load the ride carried
+    on ``end`` at the spring that sag gives, against the ``load`` bike and rider put on it at rest; ""
+    without one (or a sag no spring gives: ``sag_scales`` says that)."""
+    from mtbmj.errors import ConfigError
+
+    if static_sag_mm is None:
+        return ""
+    try:
+        q = sag_scales(bike, overrides, static_sag_mm)[end].value
+    except (ConfigError, KeyError):
+        return ""
+    carried = float(mean_force(q))
+    sag = static_sag_mm[0 if end == "front" else 1]
+    return (f"at the spring --static-sag-mm gives ({sag:g} mm, x{q:.2f} of the bike file's) the ride carried {carried:.0f} N "
+            f"on the {end} end, {100.0 * carried / load:.0f} % of the {load:.0f} N bike and rider weigh on it: the ride "
+            f"carries {'less' if carried < load else 'more'} than the bike and rider weigh (a climb or a rider off "
+            f"that end, or the sag of another setting or rider?); ")
 
 
 def _on_the_sag(spec, whole, bike, overrides, static_sag_mm, segments: int, mean_forces, name: str,

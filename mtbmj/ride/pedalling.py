@@ -92,6 +92,12 @@ ATTEMPTS = 4  # at most this many runs per record (the closest kept)
 # A record whose rear strokes' interquartile range spans more than this factor holds no steady pedalling
 # (measured on the shared records: pedalling 1.6-2.5, trail rides 2.0-3.5, seat slams 5.6-18.6)
 UNSTEADY = 4.0
+# A record whose fork's strokes reach further than this share of its travel above its median (99th
+# percentile less median over the stretch, so a deep sag is none) is moved by the terrain, not by pedal
+# strokes (measured on the shared records, the SST preset's decoding: pedalling 00088-00091 7-14 %, the
+# climbs 00096 and 00098 5-7 %, the descents 00092-00095, 00097, 00099-00101, 00642, 00643, 00649
+# 27-36 %): a trail ride's strokes spread as a pedalling record's (2.0-3.5x), so the spread alone passes it
+DESCENDING_FORK_PERCENT = 20.0
 
 
 def run_cadence(run, window) -> float:
@@ -103,6 +109,28 @@ def run_cadence(run, window) -> float:
     keep = (t >= window[0]) & (t <= window[1])
     turns = crank_turns(run.prepared, run.raw["x_m"][keep])
     return float(turns[-1] / (t[keep][-1] - t[keep][0]) * 60.0)
+
+
+def not_pedalling(ride, rear) -> str | None:
+    """Why the record ``ride`` (a read SST record) is no steady pedalling, read from its rear's bob
+    ``rear`` (``bob``): its strokes spread past ``UNSTEADY`` (a seat slam's ring-down), or its fork's
+    reaching further than ``DESCENDING_FORK_PERCENT`` of its travel above its median over the same
+    stretch (a descent: the terrain's strokes); None where neither holds."""
+    low, high = rear.amplitude_iqr_mm
+    if high > UNSTEADY * low:  # a seat slam's ring-down read as strokes: 8.5x (00083); pedalling 1.6-2.5x
+        return (f"its rear strokes spread {low:.1f}-{high:.1f} mm (interquartile): no steady pedalling (a "
+                f"pedalling record's spread within {UNSTEADY:g}x); a seat slam or a trail ride read as a bob?")
+    if ride.fork_mm is None:
+        return None
+    keep = (ride.time_s >= rear.window_s[0]) & (ride.time_s <= rear.window_s[1])
+    median, deep = (float(v) for v in np.percentile(ride.fork_mm[keep], [50.0, 99.0]))
+    reach = 100.0 * (deep - median) / ride.fork_max_mm
+    if reach <= DESCENDING_FORK_PERCENT:
+        return None
+    return (f"its fork strokes to {deep:.0f} mm from {median:.0f} mm ({reach:.0f} % of its {ride.fork_max_mm:g} mm "
+            f"above its median, 99th percentile): the terrain moves it, no steady pedalling (a pedalling record's "
+            f"within {DESCENDING_FORK_PERCENT:g} %); a trail ride read as a bob? its rear's {rear.frequency_Hz:.2f} Hz "
+            f"is then no cadence")
 
 
 def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, overrides=None,
@@ -144,14 +172,13 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
         if ride.rear_mm is None:
             raise BobError(f"{path}: has no shock sensor: no rear bob to compare")
         rear = bob(ride.time_s, ride.rear_mm)
-        low, high = rear.amplitude_iqr_mm
         notes = list(ride.notes)
-        if high > UNSTEADY * low:  # a seat slam's ring-down read as strokes: 8.5x (00083); pedalling 1.6-2.5x
+        unsteady = not_pedalling(ride, rear)
+        if unsteady:
             from mtbmj.config import warn
 
-            notes.append(f"its rear strokes spread {low:.1f}-{high:.1f} mm (interquartile): no steady pedalling (a "
-                         f"pedalling record's spread within {UNSTEADY:g}x); a seat slam or a trail ride read as a bob?")
-            warn([f"{ride.name}: {notes[-1]}"])
+            notes.append(unsteady)
+            warn([f"{ride.name}: {unsteady}"])
         try:
             front = bob(ride.time_s, ride.fork_mm) if ride.fork_mm is not None else None
         except BobError:
@@ -204,4 +231,5 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
     return Against(str(bike), rows, series)
 
 
-__all__ = ["Against", "against", "run_cadence", "GEAR", "RUN_S", "CADENCE_TOLERANCE"]
+__all__ = ["Against", "against", "not_pedalling", "run_cadence", "GEAR", "RUN_S", "CADENCE_TOLERANCE", "UNSTEADY",
+           "DESCENDING_FORK_PERCENT"]
