@@ -102,8 +102,9 @@ def test_bike_ride_not_an_sst_is_refused_before_the_run(tmp_path, capfd, monkeyp
     ride = tmp_path / "ride.csv"
     ride.write_text("time_s,fork_mm,shock_mm\n" + "".join(f"{k / 100:g},{20 + k % 7},{10 + k % 5}\n" for k in range(4000)))
     out = tmp_path / "b"
-    refused(["bike", "sst", "flat", "--speed", "5", "--quiet", "--ride", ride, "--out", out], out, capfd,
-            "not an SST file")
+    line = refused(["bike", "sst", "flat", "--speed", "5", "--quiet", "--ride", ride, "--out", out], out, capfd,
+                   "a travel CSV; --ride reads an SST recording")
+    assert f"mtbmj telemetry {ride} --bike BIKE --compare RUN_DIR" in line  # the comparison that takes it (review31c)
 
 
 # --- 3. bob: a trail ride is no steady pedalling ------------------------------------------------------------
@@ -201,3 +202,18 @@ def test_advise_says_the_ride_carries_less_than_the_weight_at_the_sag_given(tmp_
     line = refused(["advise", V2 / "00096.SST", "--bike", "sst", "--speed", "6", "--out", out], out, capfd,
                    "no fork spring rate")
     assert "weigh" not in line, line
+
+
+@pytest.mark.parametrize("end, carried, said", [
+    ("front", 100.0, "a climb or the rider back"), ("front", 1500.0, "a descent, braking or the rider forward"),
+    ("rear", 100.0, "a descent, braking or the rider forward"), ("rear", 1500.0, "a climb or the rider back")])
+def test_the_sag_load_line_names_the_cause_that_moves_load_that_way_on_that_end(end, carried, said):
+    """Review31c: the line named "a climb or a rider off that end" whatever the end and whichever way the load
+    was off. A climb moves load rearward, a descent, braking or the rider forward moves it onto the front: each end
+    carrying less or more gets the cause that would do it (the sag of another setting or rider in every case)."""
+    from mtbmj.ride.calibrate import _on_sag_load
+
+    line = _on_sag_load("sst", None, (37.6, 15.7), end, lambda q: carried, 700.0)
+    assert f"the ride carried {carried:.0f} N on the {end} end" in line, line
+    assert f"carries {'less' if carried < 700.0 else 'more'} than the bike and rider weigh" in line
+    assert f"({said}, or the sag of another setting or rider?)" in line, line

@@ -79,6 +79,9 @@ def ride_checked(args, overrides) -> None:
     from mtbmj.cli.telemetry import ride_record
     from mtbmj.measured.telemetry import TelemetryError, read_sst, ride_path
 
+    if str(args.ride).lower().endswith(".csv"):  # telemetry reads a travel CSV; the comparison beside a run does not
+        raise TelemetryError(f"--ride {args.ride}: a travel CSV; --ride reads an SST recording. Compare a CSV ride "
+                             f"with a run's folder: mtbmj telemetry {args.ride} --bike BIKE --compare RUN_DIR")
     read_sst(ride_path(args.ride))  # an SST recording (beside.files reads one): else one line, no run
     as_read = argparse.Namespace(bike=args.bike, fork_max_mm=None, shock_max_mm=None)
     try:

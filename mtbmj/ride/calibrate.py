@@ -550,10 +550,14 @@ def _on_sag_load(bike, overrides, static_sag_mm, end: str, mean_force, load: flo
         return ""
     carried = float(mean_force(q))
     sag = static_sag_mm[0 if end == "front" else 1]
+    less = carried < load
+    # a climb moves load rearward, a descent or braking forward, and so does the rider's place
+    cause = ("a climb or the rider back" if less == (end == "front") else
+             "a descent, braking or the rider forward")
     return (f"at the spring --static-sag-mm gives ({sag:g} mm, x{q:.2f} of the bike file's) the ride carried {carried:.0f} N "
             f"on the {end} end, {100.0 * carried / load:.0f} % of the {load:.0f} N bike and rider weigh on it: the ride "
-            f"carries {'less' if carried < load else 'more'} than the bike and rider weigh (a climb or a rider off "
-            f"that end, or the sag of another setting or rider?); ")
+            f"carries {'less' if less else 'more'} than the bike and rider weigh there ({cause}, or the sag of another "
+            f"setting or rider?); ")
 
 
 def _on_the_sag(spec, whole, bike, overrides, static_sag_mm, segments: int, mean_forces, name: str,
