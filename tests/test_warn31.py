@@ -217,3 +217,13 @@ def test_the_sag_load_line_names_the_cause_that_moves_load_that_way_on_that_end(
     assert f"the ride carried {carried:.0f} N on the {end} end" in line, line
     assert f"carries {'less' if carried < 700.0 else 'more'} than the bike and rider weigh" in line
     assert f"({said}, or the sag of another setting or rider?)" in line, line
+
+
+def test_a_tyre_key_given_to_shock_set_points_at_fork_set(tmp_path, capfd):
+    """Review31c: docs/bike.md says a key given to the wrong option is refused naming the option it goes with;
+    ``--shock-set tire.pressure_psi=20`` (the rear tyre, a natural slip) said only that the shock's configuration
+    does not use it. Both tyres are the fork's configuration's: the line points at ``--fork-set``."""
+    out = tmp_path / "b"
+    refused(["bike", "sst", "flat", "--speed", "5", "--duration", "0.3", "--quiet", "--shock-set",
+             "tire.pressure_psi=20", "--out", out], out, capfd,
+            "a key of the fork's configuration goes with --fork-set tire.pressure_psi=VALUE (its [tire] sets both tyres)")

@@ -235,7 +235,7 @@ def reads_key(section: str, key: str) -> bool:
     return key.startswith("fork.") and key != "fork.length_mm"
 
 
-def _configuration_option(key: str) -> str:
+def configuration_option(key: str) -> str:
     """Where a key that is no bike key but a fork's or shock's configuration key (``tire.pressure_psi``)
     goes, as a refusal of ``--set`` ends: the option that takes it; "" for any other key."""
     from mtbmj.config import ALTERNATIVES, SCHEMA
@@ -314,7 +314,7 @@ def overridden(table: dict, overrides) -> dict:
                               f"{', '.join(k for k, v in KNOWN.items() if v)})")
         if section not in KNOWN or not KNOWN[section]:
             raise ConfigError(f"--set {key}: unknown section {section!r} (known: "
-                              f"{', '.join(k for k, v in KNOWN.items() if v)})" + _configuration_option(key))
+                              f"{', '.join(k for k, v in KNOWN.items() if v)})" + configuration_option(key))
         if name not in KNOWN[section] or name == "set":
             meant = _in_units(section, name)  # shock.spring_rate or rider.kg: the keys with the unit
             if meant:

@@ -245,6 +245,12 @@ def _set_hint(section: str, key: str) -> str:
         return f"; {key} is a key of the bike file ([{part}] {name}), given on the command line with --set {key}=VALUE"
     from mtbmj.config import ALTERNATIVES, SCHEMA
 
+    if section == "shock" and str(key).startswith("tire."):  # both tyres are the fork's configuration's
+        from mtbmj.bike.bikefile import configuration_option
+
+        said = configuration_option(key)
+        if said:
+            return said
     first, _, rest = key.partition(".")
     for meant in (f"fork.{key}", f"fork.{rest}" if rest and first in ("shock", "fork") else ""):
         if meant and meant != key and (meant in SCHEMA or meant in ALTERNATIVES) and reads_key(section, meant):
