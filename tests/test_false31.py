@@ -93,6 +93,18 @@ def test_the_climb_warning_shows_the_rise_above_what_is_allowed():
         envelope.warn("made", [dict(s, rise_m=1.2, allowed_m=0.5)])
     assert "1.2 m up, at most 0.5)" in str(said[0].message)
 
+def names_only_given(argv, named, unnamed, capsys) -> None:
+    """``mtbmj argv`` refused in one line naming each of ``named`` and none of ``unnamed``."""
+    from mtbmj import cli
+
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    for option in named:
+        assert option in err[0], err
+    for option in unnamed:
+        assert option not in err[0], err
+
 
 @pytest.mark.parametrize("argv, named, unnamed", [
     (["trail", "--bike", "--roll", "root", "--speed", "4", "--tolerance-mm", "0.2"],
@@ -108,15 +120,7 @@ def test_crosscheck_refuses_naming_the_options_given_only(argv, named, unnamed, 
     """`crosscheck trail --bike --roll root --speed 4 --tolerance-mm 0.2` was refused as "--engines,
     --tolerance-mm and --head-angle: do not apply", naming two options nobody typed; each refusal now
     names what was given ("roll-both", both given, read the same before: the baseline)."""
-    from mtbmj import cli
-
-    assert cli.main(["crosscheck", *argv]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1, err
-    for option in named:
-        assert option in err[0], err
-    for option in unnamed:
-        assert option not in err[0], err
+    names_only_given(["crosscheck", *argv], named, unnamed, capsys)
 
 
 @pytest.mark.parametrize("argv, named, unnamed", [
@@ -133,16 +137,8 @@ def test_option_refusals_name_the_options_given_only(argv, named, unnamed, tmp_p
     """The same pattern in sag, sweep and the cross-check's bike options: "--sag-percent, --load-kg: not with
     --bike" for --load-kg alone, "--roll, --speed, --fork-set, --shock-set: only for a bike sweep" for
     --speed alone; each now names what was given."""
-    from mtbmj import cli
-
     out = ["--out", str(tmp_path / "out")] if argv[0] != "crosscheck" else []
-    assert cli.main([*argv, *out]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1, err
-    for option in named:
-        assert option in err[0], err
-    for option in unnamed:
-        assert option not in err[0], err
+    names_only_given([*argv, *out], named, unnamed, capsys)
 
 
 def test_no_speed_from_the_lag_names_the_speed_that_can_be_given():
