@@ -360,8 +360,7 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     _, acc = derivatives(x, dt)
     force = law_along(b.fork, x, dt, fork_travel) / b.sin_a
     top = hanging(x, dt)
-    flying = top if air is None else top | np.asarray(air, bool)
-    slow = slow_load(force - b.fF0, flying, dt)  # the rider's slow load at the front, flights and landings kept out
+    slow = slow_load(force - b.fF0, dt)  # the rider's slow load at the front (through the flights too)
     # the fork's hard stop across each bottom-out: at first as the quarter car found it, then the whole
     # bike's own (reconstruct_flight.stop_kicks)
     first = np.zeros(x.size) if stops is None else np.asarray(stops, float)

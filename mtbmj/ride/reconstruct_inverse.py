@@ -69,11 +69,10 @@ def lowpass(x, dt, hz=HIGHPASS_HZ):
     return sosfiltfilt(butter(2, hz, btype="lowpass", fs=1.0 / dt, output="sos"), x)
 
 
-def slow_load(excess, air, dt: float, hz=HIGHPASS_HZ) -> np.ndarray:
+def slow_load(excess, dt: float, hz=HIGHPASS_HZ) -> np.ndarray:
     """The rider's slow load (N) from an end's force beyond its static load, ``excess`` (N): low-passed
-    at ``hz`` forward and back (:func:`lowpass`) through the flights too. ``air`` (the flights) is not
-    read: keeping the flights, their take-offs and landings out of the load was tried and removed
-    (docs/rolling.md, "pit"); the argument stays for ``reconstruct_bike.terrain_and_rear``'s call."""
+    at ``hz`` forward and back (:func:`lowpass`) through the flights too (keeping the flights, their
+    take-offs and landings out of it was tried and removed: docs/rolling.md, "pit")."""
     return lowpass(np.asarray(excess, float), dt, hz)
 
 
