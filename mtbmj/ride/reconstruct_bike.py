@@ -341,8 +341,8 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     is the rear's in the next, from ``first_ground`` (the quarter car's), until the rear predicted
     settles (``SETTLED_M``) or ``MAX_PASSES``. The fork's slow load (below the quarter car's high-pass)
     is the rider's, taken off the frame as the quarter car takes it (the tyre carries it;
-    ``reconstruct_inverse.slow_load``, low-passed through the flights: keeping them out was tried and
-    removed, docs/rolling.md, "pit"); the frame's
+    ``reconstruct_inverse.lowpass`` at the quarter car's corner, through the flights: keeping them out was
+    tried and removed, docs/rolling.md, "pit"); the frame's
     front is held near ``reference`` (the quarter car's body, its drift removed) by the bounded slow
     load of :func:`ride`. ``stops`` (N at the wheel, or None): the fork's hard-stop force across each
     bottom-out (not in the record; the quarter car's, keeping its body level after it, at first, then
@@ -353,14 +353,14 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
     "tyre", "rear_rise", "slow_load" (N on the frame's front: the rider's and the loop's),
     "rider_slow_load" (the rider's alone), "passes", "settled_m", "diverged_s" (where a pass diverged:
     the passes end there, the rear not a number past it)}."""
-    from mtbmj.ride.reconstruct_inverse import bridge, derivatives, hanging, law_along, slow_load, unloaded
+    from mtbmj.ride.reconstruct_inverse import bridge, derivatives, hanging, law_along, lowpass, unloaded
 
     dt = float(t[1] - t[0])
     x = np.asarray(fork_stroke, float)
     _, acc = derivatives(x, dt)
     force = law_along(b.fork, x, dt, fork_travel) / b.sin_a
     top = hanging(x, dt)
-    slow = slow_load(force - b.fF0, dt)  # the rider's slow load at the front (through the flights too)
+    slow = lowpass(force - b.fF0, dt)  # the rider's slow load at the front, as the quarter car's (through the flights)
     # the fork's hard stop across each bottom-out: at first as the quarter car found it, then the whole
     # bike's own (reconstruct_flight.stop_kicks)
     first = np.zeros(x.size) if stops is None else np.asarray(stops, float)

@@ -69,13 +69,6 @@ def lowpass(x, dt, hz=HIGHPASS_HZ):
     return sosfiltfilt(butter(2, hz, btype="lowpass", fs=1.0 / dt, output="sos"), x)
 
 
-def slow_load(excess, dt: float, hz=HIGHPASS_HZ) -> np.ndarray:
-    """The rider's slow load (N) from an end's force beyond its static load, ``excess`` (N): low-passed
-    at ``hz`` forward and back (:func:`lowpass`) through the flights too (keeping the flights, their
-    take-offs and landings out of it was tried and removed: docs/rolling.md, "pit")."""
-    return lowpass(np.asarray(excess, float), dt, hz)
-
-
 def wheelbase_at(spec, fork: float, rear: float) -> float:
     """The wheelbase (m) with the fork ``fork`` (m of stroke) and the rear wheel ``rear`` (m of
     travel) in: the front axle moves back along the steering axis by fork cos(a), the rear axle on
@@ -405,5 +398,5 @@ def runs(mask):
 
 
 
-__all__ = ["QuarterCar", "ground_under", "flights", "bridge", "edge", "unloaded", "law_along", "derivatives", "highpass", "hanging", "forward", "wheelbase_at", "lowpass", "runs", "slow_load",
+__all__ = ["QuarterCar", "ground_under", "flights", "bridge", "edge", "unloaded", "law_along", "derivatives", "highpass", "hanging", "forward", "wheelbase_at", "lowpass", "runs",
            "within_stops"]
