@@ -437,6 +437,11 @@ def given_options(args, **defaults) -> str:
     return ", ".join(names[:-1]) + (" and " if len(names) > 1 else "") + names[-1] if names else ""
 
 
+def options_verb(given: str, one: str, many: str) -> str:
+    """``given`` (:func:`given_options`) with its verb agreeing: "--power: applies", "--pedal and --power: apply"."""
+    return f"{given}: {one if ' and ' not in given else many}"
+
+
 def _set(value, default) -> bool:
     """An option's value differs from its default (an appending option's empty list is not set)."""
     return value != default and not (isinstance(value, (list, tuple)) and not value)

@@ -5,7 +5,8 @@ from __future__ import annotations
 import sys
 import time
 
-from mtbmj.cli.common import ENGINE_HELP, ENGINE_NAMES, Progress, add_out, add_run_options, given_options, overrides
+from mtbmj.cli.common import (ENGINE_HELP, ENGINE_NAMES, Progress, add_out, add_run_options, given_options, options_verb,
+                              overrides)
 
 
 def cmd_drop(args) -> int:
@@ -71,7 +72,7 @@ def _refuse_bike_options(args) -> None:
 
     given = given_options(args, pedal=None, power=None, seated=False, rider="passive")
     if given:
-        raise MtbmjError(f"{given}: appl{'ies' if ' and ' not in given else 'y'} to a bike cross-check (--bike)")
+        raise MtbmjError(options_verb(given, "applies", "apply") + " to a bike cross-check (--bike)")
 
 
 def cmd_crosscheck(args) -> int:
@@ -84,7 +85,7 @@ def cmd_crosscheck(args) -> int:
 
     given = given_options(args, speed=None, drive=None, head_angle=None)
     if given:
-        raise MtbmjError(f"{given}: appl{'ies' if ' and ' not in given else 'y'} to a rolling cross-check (--roll SCENARIO)")
+        raise MtbmjError(options_verb(given, "applies", "apply") + " to a rolling cross-check (--roll SCENARIO)")
     _refuse_bike_options(args)
 
     engines = [e for e in _engines(args.engines) if e != "ode"]
@@ -107,8 +108,8 @@ def _crosscheck_roll(args) -> int:
     _refuse_bike_options(args)
     given = given_options(args, engines="mujoco", tolerance_mm=0.1)
     if given:
-        raise MtbmjError(f"{given}: appl{'ies' if ' and ' not in given else 'y'} to a drop cross-check; a rolling one "
-                         f"compares MuJoCo with the rolling reference at 0.02 mm and 1 %")
+        raise MtbmjError(options_verb(given, "applies", "apply") + " to a drop cross-check; a rolling one "
+                         "compares MuJoCo with the rolling reference at 0.02 mm and 1 %")
     check = crosscheck(args.roll, args.speed, args.config, args.head_angle, args.duration, overrides(args.set),
                        args.drive or "rider")
     print(check.line())
@@ -127,8 +128,8 @@ def _crosscheck_bike(args) -> int:
                          "RPM)")
     given = given_options(args, engines="mujoco", tolerance_mm=0.1, head_angle=None)
     if given:
-        raise MtbmjError(f"{given}: do{'es' if ' and ' not in given else ''} not apply to a bike cross-check (the "
-                         f"bike's description sets its geometry and laws)")
+        raise MtbmjError(options_verb(given, "does", "do") + " not apply to a bike cross-check (the "
+                         "bike's description sets its geometry and laws)")
     from mtbmj.cli.common import parse_assignment
 
     bike_set = dict(parse_assignment(text) for text in args.set or ())  # bike keys (mtbmj bike --set)
