@@ -77,12 +77,11 @@ def decoding(args, bike=None, overrides=None) -> dict:
     return out
 
 
-def travel_keys(args, named: str | None = None) -> tuple[str, str]:
+def travel_keys(args, named: str) -> tuple[str, str]:
     """What the fork travel and the shock stroke a ride is read with were set by (``decoding``), as
-    a refusal names them: --fork-max-mm, the --bike's key (``named``: how the command names its bike,
-    by default "--bike BIKE"), or the default (the SST example's bike)."""
+    a refusal names them: --fork-max-mm, the bike's key (``named``: how the command names its bike,
+    ``ride_record``'s), or the default (the SST example's bike)."""
     keys = []
-    named = named or f"--bike {getattr(args, 'bike', None)}"
     for option, attr, bike_key, default in (
             ("--fork-max-mm", "fork_max_mm", "geometry.fork_travel_mm", telemetry.FORK_TRAVEL_MAX_MM),
             ("--shock-max-mm", "shock_max_mm", "shock.stroke_mm", telemetry.SHOCK_STROKE_MAX_MM)):
