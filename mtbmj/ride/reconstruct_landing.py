@@ -160,9 +160,10 @@ def judged(t, distance, ground, fork_mm, rear_mm, jumps, speed, wheelbase: float
         # the duration: the first end's tyre left between its travel's last compression and its hang (_left)
         # (each sample it may have left at: the ground under that end there less under its touchdown, against
         # what that time in the air allows); the records rule out the fall only where every such take-off does
-        j, h = _left(rear if first == "rear" else fork, k)
+        own_travel = rear if first == "rear" else fork
+        j, h = _left(own_travel, k)
         ks = np.arange(j, h + 1)
-        travel = (rear if first == "rear" else fork)[ks]
+        travel = own_travel[ks]
         timed = in_air(v_down / READ_SHARE, a_least, (k - ks) * dt) + travel
         under = x[ks] - (x[k] - place)  # that end's place at each sample (the rear a wheelbase behind the front)
         own = np.interp(under, x, z) - np.interp(place, x, z)
