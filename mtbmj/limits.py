@@ -155,6 +155,8 @@ MISTAKES: dict[str, tuple[tuple[str, float], ...]] = {
     "lb/in": (("N/mm", 1.0 / N_PER_MM_PER_LB_PER_IN), ("N/m", 1e-3 / N_PER_MM_PER_LB_PER_IN)),
     "N s/m": (("N s/mm", 1000.0),),
     "mm/s": (("m/s", 1000.0),),
+    # 1 km/h = 1000 m / 3600 s; 1 mph = 1609.344 m / 3600 s = 0.44704 m/s (the mile exact by definition)
+    "m/s": (("km/h", 1.0 / 3.6), ("mph", 0.44704)),
     "m/s2": (("mm/s2", 1e-3), ("ft/s2", 0.3048)),
     "psi": (("bar", PSI_PER_BAR), ("kPa", PSI_PER_BAR / 100.0)),
     "bar": (("psi", 1.0 / PSI_PER_BAR), ("kPa", 0.01)),

@@ -454,6 +454,16 @@ def _value(name: str, key: str, kind: str, value):
             warnings.warn(f"terrain {name}: {key} = {number:g} mm is over {tallest:g} mm, taller than any trail "
                           f"feature a wheel {'drops off' if tallest == TALLEST_DROP_MM else 'rolls over'} "
                           f"(a unit mistake?)", ConfigWarning, stacklevel=3)
+    tallest_rock = max(height for _, _, height in ROCK_GARDEN)
+    if (name, key) == ("rock_garden", "height_scale") and number * tallest_rock > TALLEST_FEATURE_MM:
+        import warnings
+
+        from mtbmj.errors import ConfigWarning
+
+        warnings.warn(f"terrain {name}: {key} = {number:g} makes its tallest rock {number * tallest_rock:g} mm, over "
+                      f"{TALLEST_FEATURE_MM:g} mm, taller than any trail feature a wheel rolls over ({key} scales "
+                      f"rocks {min(h for _, _, h in ROCK_GARDEN):g}-{tallest_rock:g} mm high; 1 is the garden as "
+                      f"shipped)", ConfigWarning, stacklevel=3)
     return number
 
 
