@@ -10,6 +10,7 @@ import pytest
 
 from mtbmj import limits
 from mtbmj.rolling import terrain as T
+from helpers import refused
 
 KMH = 1000.0 / 3600.0  # m/s per km/h, by the definitions of the kilometre and the hour
 
@@ -38,3 +39,40 @@ def test_a_speed_typed_in_km_per_h_names_km_per_h():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert limits.argument("--speed", "12") == 12.0
+
+
+# --- 2. a terrain's size past what the tyre's search can cut: a traceback of numpy's MemoryError before ----------
+
+@pytest.mark.parametrize("spec, said", [
+    # one wave 3 km long: 6e5 points at 5 mm (washboard's docstring); wavelength_mm=1e9 was 38.7 GiB of scratch
+    ("washboard:wavelength_mm=3e6", "terrain washboard: wavelength_mm = 3e+06 mm is 3000 m, longer than the 2000 m"),
+    ("rock:length_mm=3e6", "terrain rock: length_mm = 3e+06 mm is 3000 m, longer than the 2000 m"),
+    # a rock 1e12 mm (1e9 m) high: up and down its flanks 2e9 m of surface, cut into 1 cm pieces (5.82 TiB)
+    ("rock:height_mm=1e12", "terrain rock: its surface, along its distances and up and down its heights, is 2e+09 m"),
+])
+def test_a_terrain_past_what_can_be_cut_is_refused_by_its_key(spec, said):
+    with pytest.raises(T.TerrainError, match=re.escape(said)):
+        T.make(spec)
+
+
+def test_a_csv_terrain_kilometres_long_or_high_is_refused_in_one_line(tmp_path, capfd):
+    """A CSV of distances typed in mm under distance_m (10 km), or a spike of 1e12 mm: numpy's MemoryError (exit 1,
+    a traceback) when the tyre's search cut the profile into 1 cm pieces. Now one line naming the file."""
+    long_ = tmp_path / "long.csv"
+    long_.write_text("distance_m,height_mm\n0,0\n5000,40\n10000,0\n")
+    tall = tmp_path / "tall.csv"
+    tall.write_text("distance_m,height_mm\n0,0\n10,0\n10.5,1e12\n11,0\n20,0\n")
+    for path, said in ((long_, "is 1e+04 m long, more than the 4000 m"), (tall, "is 2e+09 m long")):
+        stamp = path.stat().st_mtime_ns
+        line = refused(["roll", path, "--speed", "5", "--duration", "0.01", "--out", tmp_path / "out"],
+                       tmp_path / "out", capfd, f"{path}: its surface")
+        assert said in line and path.stat().st_mtime_ns == stamp, line
+    # the other side: a 2 km washboard and a 2 km climb at 40 % (its longest surface, 2.15 km) are terrains
+    for spec in ("washboard:length_m=2000", "climb:length_m=2000,grade_percent=40"):
+        assert T.make(spec).x.size > 2
+
+
+def test_a_terrain_key_given_twice_is_refused():
+    """``rock:height_mm=100,height_mm=200`` ran on 200 mm unsaid."""
+    with pytest.raises(T.TerrainError, match=re.escape("height_mm given twice ('100' and '200'); give it once")):
+        T.make("rock:height_mm=100,height_mm=200")
