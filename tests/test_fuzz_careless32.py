@@ -76,3 +76,25 @@ def test_a_terrain_key_given_twice_is_refused():
     """``rock:height_mm=100,height_mm=200`` ran on 200 mm unsaid."""
     with pytest.raises(T.TerrainError, match=re.escape("height_mm given twice ('100' and '200'); give it once")):
         T.make("rock:height_mm=100,height_mm=200")
+
+
+# --- 3. an output file on a read-only file system: the line said "permission denied" ---------------------------
+
+def test_a_read_only_file_system_is_named_so(tmp_path, monkeypatch):
+    """``mtbmj render S12 --out /mnt/ro/x.gif`` on a file system mounted read-only (tried on a tmpfs mounted ro):
+    "(permission denied)", where no permission would help. os.access fails alike for both (EROFS, EACCES); the
+    file system's flags, given here as statvfs gives them, tell them apart."""
+    import os
+    from types import SimpleNamespace
+
+    from mtbmj import output
+    from mtbmj.errors import MtbmjError
+
+    monkeypatch.setattr(os, "access", lambda *args, **kwargs: False)
+    real = os.statvfs
+    monkeypatch.setattr(os, "statvfs", lambda path: SimpleNamespace(f_flag=real(path).f_flag | os.ST_RDONLY))
+    with pytest.raises(MtbmjError, match=re.escape(f"cannot write in {tmp_path} (a read-only file system)")):
+        output.check_file_target(tmp_path / "x.gif")
+    monkeypatch.setattr(os, "statvfs", lambda path: SimpleNamespace(f_flag=real(path).f_flag & ~os.ST_RDONLY))
+    with pytest.raises(MtbmjError, match=re.escape(f"cannot write in {tmp_path} (permission denied)")):
+        output.check_file_target(tmp_path / "x.gif")

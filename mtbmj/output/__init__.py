@@ -186,7 +186,9 @@ def check_file_target(path: str | Path, what: str = "--out", error: type[MtbmjEr
     if not parent.is_dir():
         raise error(f"{what} {path}: {parent} is not a directory")
     if not os.access(parent, os.W_OK | os.X_OK):
-        raise error(f"{what} {path}: cannot write in {parent} (permission denied)")
+        read_only = bool(os.statvfs(parent).f_flag & os.ST_RDONLY)  # os.access says EROFS as it says EACCES
+        raise error(f"{what} {path}: cannot write in {parent} "
+                    f"({'a read-only file system' if read_only else 'permission denied'})")
     if path.parent.is_dir():
         _clear_stale(path)
     return path
