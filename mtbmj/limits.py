@@ -184,6 +184,24 @@ def require_mapping(overrides, example: str, none_ok: bool = True) -> None:
                           f"{type(overrides).__name__}")
 
 
+def _unit_typed(raw: str, unit: str) -> str:
+    """The note of a number typed with a unit after it (``6m/s``, ``20 km/h``, ``80kg``) for an option in ``unit``:
+    the number alone, converted where the unit is one of its slips (``MISTAKES``); "" for anything else."""
+    import re
+
+    found = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s].*)", raw)
+    if not found or not unit:
+        return ""
+    value, typed = float(found.group(1)), found.group(2).strip()
+    squeeze = typed.replace(" ", "").lower()
+    if squeeze in (unit.replace(" ", "").lower(), {"%": "percent", "deg": "degrees", "s": "sec"}.get(unit, unit)):
+        return f" (the unit is the option's, {unit}: give the number alone, {value:g})"
+    per = next((per for name, per in MISTAKES.get(unit, ()) if name.replace(" ", "").lower() == squeeze), None)
+    if per is not None:
+        return f" (the option is in {unit}: {value:g} {typed} = {value * per:.4g} {unit}, give {value * per:.4g})"
+    return f" (the option takes a number in {unit}, without a unit)"
+
+
 class Argument:
     """A command's numeric argument: its unit, whether it is a whole number, the values the
     model allows (``low`` / ``high``, inclusive unless ``open_low``) and the plausible range
@@ -278,14 +296,14 @@ def argument(option: str, text: str, integer: bool = False):
         try:
             value = int(raw)
         except ValueError:
-            raise ValueError(f"{typed} is not a whole number") from None
+            raise ValueError(f"{typed} is not a whole number{_unit_typed(raw, spec.unit)}") from None
     else:
         try:
             value = float(raw)
         except ValueError:
             comma = raw.count(",") == 1 and raw.replace(",", ".", 1).replace(".", "", 1).lstrip("+-").isdigit()
             hint = f" (a decimal comma? the decimal point is a dot: {raw.replace(',', '.')})" if comma else ""
-            raise ValueError(f"{typed} is not a number{hint}") from None
+            raise ValueError(f"{typed} is not a number{hint or _unit_typed(raw, spec.unit)}") from None
         if not math.isfinite(value):
             raise ValueError(f"must be a finite number, got {typed}")
     unit = f" {spec.unit}" if spec.unit else ""

@@ -98,3 +98,31 @@ def test_a_read_only_file_system_is_named_so(tmp_path, monkeypatch):
     monkeypatch.setattr(os, "statvfs", lambda path: SimpleNamespace(f_flag=real(path).f_flag & ~os.ST_RDONLY))
     with pytest.raises(MtbmjError, match=re.escape(f"cannot write in {tmp_path} (permission denied)")):
         output.check_file_target(tmp_path / "x.gif")
+
+
+# --- 4. a unit typed in an option's value: "'6m/s' is not a number", the way out unnamed -----------------------
+
+LB = 0.45359237  # kg per lb, by definition
+MPH = 1609.344 / 3600.0  # m/s per mph, by definition
+
+
+@pytest.mark.parametrize("argv, said", [
+    (["roll", "rock", "--speed", "6m/s"], "'6m/s' is not a number (the unit is the option's, m/s: give the number "
+                                          "alone, 6)"),
+    (["roll", "rock", "--speed", "20km/h"], f"(the option is in m/s: 20 km/h = {20 * KMH:.4g} m/s, give {20 * KMH:.4g})"),
+    (["roll", "rock", "--speed", "12mph"], f"12 mph = {12 * MPH:.4g} m/s"),
+    (["sag", "air120", "--load-kg", "80kg"], "'80kg' is not a number (the unit is the option's, kg"),
+    (["sag", "air120", "--load-kg", "180 lb"], f"(the option is in kg: 180 lb = {180 * LB:.4g} kg, give {180 * LB:.4g})"),
+    (["sag", "air120", "--load-kg", "70", "--sag-percent", "20%"], "(the unit is the option's, %: give the number alone, 20)"),
+    (["curve", "S12", "--max-velocity-mm-per-s", "3m/s"], "3 m/s = 3000 mm/s, give 3000"),
+    (["roll", "rock", "--speed", "5", "--duration", "2s"], "(the unit is the option's, s: give the number alone, 2)"),
+    (["linkage", "trail", "--chainring", "32t"], "'32t' is not a whole number (the option takes a number in teeth"),
+])
+def test_a_unit_typed_in_an_options_value_names_the_number_to_give(tmp_path, capfd, argv, said):
+    refused(argv + ["--out", tmp_path / "out"], tmp_path / "out", capfd, said)
+
+
+def test_a_word_that_is_no_number_draws_no_unit_note(tmp_path, capfd):
+    line = refused(["roll", "rock", "--speed", "fast", "--out", tmp_path / "out"], tmp_path / "out", capfd,
+                   "'fast' is not a number")
+    assert line.endswith("'fast' is not a number"), line
