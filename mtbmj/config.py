@@ -608,6 +608,9 @@ def read_chain(ref: str, locate=None, is_preset=None, what: str = "a TOML config
     is_preset = _is_preset if is_preset is None else is_preset
     if _depth > MAX_BASE_DEPTH:
         raise ConfigError(f"{ref}: base chain longer than {MAX_BASE_DEPTH} (a cycle?)")
+    if not str(ref).strip():  # Path("") is the current folder: "is a directory" was the line
+        raise ConfigError(f"{ref!r}: an empty name; give a preset or the path of {what} (mtbmj presets lists "
+                          f"the presets)")
     name, location = locate(str(ref))
     if isinstance(location, Path):
         table = _read_toml(location, what)

@@ -126,3 +126,37 @@ def test_a_word_that_is_no_number_draws_no_unit_note(tmp_path, capfd):
     line = refused(["roll", "rock", "--speed", "fast", "--out", tmp_path / "out"], tmp_path / "out", capfd,
                    "'fast' is not a number")
     assert line.endswith("'fast' is not a number"), line
+
+
+# --- 5. an empty name, an empty key, a bike key's value typed with its unit: lines for false reasons --------------
+
+@pytest.mark.parametrize("argv, said", [
+    (["drop", ""], "'': an empty name; give a preset or the path of a TOML configuration"),  # was ".: is a directory"
+    (["sag", " ", "--load-kg", "70", "--sag-percent", "20"], "' ': an empty name"),
+    (["bike", "", "root", "--speed", "4"], "'': an empty name; give a preset or the path of a bike description"),
+    (["drop", "S12", "--set", "=5"], "--set =5: no key before '='; expected key=value"),  # was ": unknown key"
+    (["bike", "sst", "root", "--speed", "4", "--set", "rider.mass_kg=78kg"],
+     "rider.mass_kg: must be a plain number (the unit is in the key name), got '78kg'"),  # was "a finite number"
+])
+def test_an_empty_name_or_key_and_a_unit_in_a_bike_value_say_their_cause(tmp_path, capfd, argv, said):
+    out = tmp_path / ("out.gif" if argv[0] == "render" else "out")
+    refused(argv + ["--out", out], out, capfd, said)
+
+
+def test_a_preset_and_a_bike_key_typed_right_are_taken():
+    from mtbmj.bike import spec
+    from mtbmj.config import load
+
+    assert load("S12").name == "S12"
+    rider = spec.load("sst", {"rider.mass_kg": 78}).rider
+    assert rider.mass + rider.on_bike_mass == pytest.approx(78.0)  # the rider's mass, split on and off the bike
+
+
+def test_render_of_an_empty_name_says_so():
+    """``mtbmj render ''`` said ".: not a run directory (no config.toml)" (the empty name read as the current
+    folder). Called below the headless-rendering check, which the tests' MUJOCO_GL=disable stops first."""
+    from mtbmj.errors import MtbmjError
+    from mtbmj.rolling import render
+
+    with pytest.raises(MtbmjError, match=re.escape("'': an empty name; give a preset or the path of a TOML")):
+        render.drop_trajectory("")

@@ -192,12 +192,14 @@ def parse_assignment(text: str, option: str = "--set") -> tuple[str, object]:
     if "=" not in text:
         raise ConfigError(f"{option} {text}: expected key=value")
     key, raw = (part.strip() for part in text.split("=", 1))
+    if not key:
+        raise ConfigError(f"{option} {text}: no key before '='; expected key=value")
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw
     except RecursionError:
-        raise ConfigError(f"--set {key}: value nested too deeply") from None
+        raise ConfigError(f"{option} {key}: value nested too deeply") from None
     return key, value
 
 
