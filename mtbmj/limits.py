@@ -326,6 +326,18 @@ def argument(option: str, text: str, integer: bool = False):
 CRAWL_S = 120.0
 
 
+def speed(value, label: str = "speed") -> float:
+    """A rig's speed given from Python (m/s): a positive finite number within ``--speed``'s range (a
+    command's argument is checked, and warned about, by :func:`argument` before), else one ConfigError line."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value <= 0:
+        raise ConfigError(f"{label}: must be a positive number of m/s, got {value!r}")
+    spec = ARGUMENTS["--speed"]
+    if value > spec.high:
+        raise ConfigError(f"{label}: {value:g} m/s is outside the range allowed: {spec.allowed()} ({spec.beyond} "
+                          f"faster than {spec.plausible[1]:g} m/s)")
+    return float(value)
+
+
 def crossing(speed: float, seconds: float, terrain: str) -> None:
     """Refuse (``ConfigError``) a default run length of ``seconds`` that crawls over ``terrain`` at ``speed``."""
     low = ARGUMENTS["--speed"].plausible[0]

@@ -160,3 +160,42 @@ def test_render_of_an_empty_name_says_so():
 
     with pytest.raises(MtbmjError, match=re.escape("'': an empty name; give a preset or the path of a TOML")):
         render.drop_trajectory("")
+
+
+# --- 6. the Python entry points given what the command line refuses: ran, or a false reason -------------------
+
+@pytest.mark.parametrize("call, said", [
+    # 1e6 m/s ran (the command line refuses above 100 m/s, beyond the model); before any model is built
+    (lambda m: m.run_roll("rock", 1e6, duration=0.01), "speed: 1e+06 m/s is outside the range allowed: above 0 and "
+                                                       "at most 100 m/s"),
+    (lambda m: m.run_bike("sst", "root", 1e6, duration=0.01), "speed: 1e+06 m/s is outside the range allowed"),
+    # "90" was unpacked as cadence "9", power "0": "cadence '9' rpm is outside what a rider turns"
+    (lambda m: m.run_bike("sst", "root", 4, duration=0.01, pedal="90"), "pedal: must be (cadence_rpm, power_W), "
+                                                                         "got '90'"),
+    # nan was "the front wheel (at x = nan m) does not start on level ground clear of the terrain's features"
+    (lambda m: m.run_bike("sst", "root", 4, duration=0.01, start_x=float("nan")), "start_x: must be a finite number "
+                                                                                   "of m"),
+    # a plain ValueError "sled: the tolerance must be a positive number" after the ODE reference had run
+    (lambda m: m.crosscheck("S12", tolerance_mm=0, duration=0.01), "tolerance_mm: must be a positive number of mm, "
+                                                                   "got 0"),
+    # the str '70' shown as 70: "must be a positive number of kg, got 70"
+    (lambda m: m.solve_sag("air120", "70", 20), "--load-kg: must be a positive number of kg, got '70'"),
+])
+def test_the_python_entry_points_refuse_what_the_commands_refuse_with_the_cause(monkeypatch, call, said):
+    import mtbmj
+    from mtbmj.drop import crosscheck
+    from mtbmj.errors import ConfigError
+
+    def ran(*args, **kwargs):
+        raise AssertionError("a run was made before the input was checked")
+
+    monkeypatch.setattr(crosscheck, "run_drop", ran)
+    with pytest.raises(ConfigError, match=re.escape(said)):
+        call(mtbmj)
+
+
+def test_a_ridden_speed_from_python_runs():
+    import mtbmj
+
+    result = mtbmj.run_roll("rock", 100.0, duration=0.002)  # the top of the range allowed is taken
+    assert result.summary is not None
