@@ -199,3 +199,23 @@ def test_a_ridden_speed_from_python_runs():
 
     result = mtbmj.run_roll("rock", 100.0, duration=0.002)  # the top of the range allowed is taken
     assert result.summary is not None
+
+
+# --- 7. files and names a careless user gives twice: which one, said -------------------------------------------
+
+def test_a_column_named_twice_is_named(tmp_path, capfd):
+    """"a column is named twice" did not say which (a spreadsheet's header of a dozen keys)."""
+    table = tmp_path / "variants.csv"
+    table.write_text("sled.drop_height_mm,sled.body_mass_kg,sled.drop_height_mm\n100,20,200\n")
+    refused(["sweep", "S12", "--from-csv", table, "--engine", "ode", "--out", tmp_path / "out"], tmp_path / "out",
+            capfd, "the column sled.drop_height_mm is named twice")
+    ride = tmp_path / "ride.csv"
+    ride.write_text("time_s,fork_mm,shock_mm,fork_mm\n0,1,2,3\n0.001,1,2,3\n")
+    refused(["telemetry", ride, "--out", tmp_path / "out"], tmp_path / "out", capfd,
+            "line 1: the column fork_mm is named twice")
+
+
+def test_fit_given_example_twice_says_so(tmp_path, capfd):
+    """``mtbmj fit spring example example``: "example: no such file", the first taken as the shipped record."""
+    refused(["fit", "spring", "example", "example", "--out", tmp_path / "out"], tmp_path / "out", capfd,
+            "'example' is the shipped record alone; give it once")
