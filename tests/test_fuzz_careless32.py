@@ -219,3 +219,11 @@ def test_fit_given_example_twice_says_so(tmp_path, capfd):
     """``mtbmj fit spring example example``: "example: no such file", the first taken as the shipped record."""
     refused(["fit", "spring", "example", "example", "--out", tmp_path / "out"], tmp_path / "out", capfd,
             "'example' is the shipped record alone; give it once")
+
+
+def test_minus_infinity_typed_as_an_options_value_is_refused_as_a_value(tmp_path, capfd):
+    """``--speed -inf`` was "argument --speed: expected one argument" (argparse read -inf as an option)."""
+    for option, typed in (("--speed", "-inf"), ("--start-m", "-INF"), ("--speed", "-nan")):
+        argv = ["bike", "sst", "root", "--speed", "4"] if option == "--start-m" else ["roll", "rock"]
+        refused(argv + [option, typed, "--out", tmp_path / "out"], tmp_path / "out", capfd,
+                f"argument {option}: must be a finite number, got '{typed}'")

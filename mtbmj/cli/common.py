@@ -34,8 +34,8 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
         # a value that starts like a negative number (``-40,20``, ``-1e3``) is a value for the option
         # before it, not an unknown option: its own check then names what is wrong with it (argparse
-        # takes only ``-40`` and ``-0.5`` so, and says "expected one argument" for the rest)
-        self._negative_number_matcher = re.compile(r"^-\.?\d")
+        # takes only ``-40`` and ``-0.5`` so, and says "expected one argument" for the rest, ``-inf`` among them)
+        self._negative_number_matcher = re.compile(r"^-(\.?\d|(inf|infinity|nan)$)", re.IGNORECASE)
 
     def error(self, message):  # one line, not usage + message
         raise MtbmjError(message)
