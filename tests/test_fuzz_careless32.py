@@ -227,3 +227,11 @@ def test_minus_infinity_typed_as_an_options_value_is_refused_as_a_value(tmp_path
         argv = ["bike", "sst", "root", "--speed", "4"] if option == "--start-m" else ["roll", "rock"]
         refused(argv + [option, typed, "--out", tmp_path / "out"], tmp_path / "out", capfd,
                 f"argument {option}: must be a finite number, got '{typed}'")
+
+
+def test_a_stock_fork_driven_through_its_stops_is_not_blamed_on_its_rates(tmp_path, capfd):
+    """``mtbmj roll step_up:height_mm=300 --speed 15`` on the stock S12: "a force law gave a non-finite or huge force
+    (a rate, damping or preload far beyond any bike's?)", where no key was changed; the cause is the impact."""
+    line = refused(["roll", "step_up:height_mm=300", "--speed", "15", "--out", tmp_path / "out"], tmp_path / "out",
+                   capfd, "rolling run diverged before t = ")
+    assert "an impact through the end stops harder than the step resolves, a feature that tall at that speed?" in line
