@@ -235,3 +235,19 @@ def test_a_stock_fork_driven_through_its_stops_is_not_blamed_on_its_rates(tmp_pa
     line = refused(["roll", "step_up:height_mm=300", "--speed", "15", "--out", tmp_path / "out"], tmp_path / "out",
                    capfd, "rolling run diverged before t = ")
     assert "an impact through the end stops harder than the step resolves, a feature that tall at that speed?" in line
+
+
+def test_an_out_under_a_tilde_the_shell_left_is_the_home_folder(tmp_path, capfd, monkeypatch):
+    """``--out=~/sag`` (bash expands no ~ after '='): a folder named '~' made in the current one, the line saying
+    "wrote ... to ~/sag" as if it were the home folder's."""
+    from helpers import command_said
+
+    home, here = tmp_path / "home", tmp_path / "here"
+    home.mkdir()
+    here.mkdir()
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.chdir(here)
+    status, said = command_said(["sag", "air120", "--load-kg", "70", "--sag-percent", "20", "--out=~/sag"], capfd)
+    assert status == 0, said
+    assert (home / "sag" / "config.toml").is_file() and not (here / "~").exists(), said
+    assert f"wrote {home / 'sag' / 'config.toml'}" in said, said

@@ -296,12 +296,14 @@ def write_and_say(result, out) -> int:
 
 def out_path(text: str) -> Path:
     """An ``--out`` name: refused when it holds a line break or another control character,
-    which would break every line that names it."""
+    which would break every line that names it; a leading ``~`` is the home folder."""
     if not text or any(ord(ch) < 32 or ord(ch) == 127 or ch in LINE_BREAKS for ch in text):
         shown = text.encode("unicode_escape").decode("ascii")
         raise argparse.ArgumentTypeError(f"{shown!r}: an output name must be non-empty and hold no line break or "
                                          f"control character")
-    return Path(text)
+    # ``--out=~/runs`` (bash expands no ~ after "=") or a quoted '~/runs': the home folder meant, as the shell
+    # would have read it, not a folder named "~" in the current one
+    return Path(text).expanduser() if text.startswith("~") else Path(text)
 
 
 def command_name(args) -> str:
