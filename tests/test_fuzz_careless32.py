@@ -251,3 +251,9 @@ def test_an_out_under_a_tilde_the_shell_left_is_the_home_folder(tmp_path, capfd,
     assert status == 0, said
     assert (home / "sag" / "config.toml").is_file() and not (here / "~").exists(), said
     assert f"wrote {home / 'sag' / 'config.toml'}" in said, said
+
+
+def test_bob_given_an_empty_stance_says_so(tmp_path, capfd):
+    """``--stance ''`` ran as the default (all standing) and ended on a crash of the standing rider's run."""
+    refused(["bob", "/work/shared/data/sst/00649.SST", "--bike", "sst", "--stance", "", "--out", tmp_path / "out"],
+            tmp_path / "out", capfd, "--stance '': names no stance; give standing or seated, one per record")
