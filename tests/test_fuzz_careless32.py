@@ -257,3 +257,14 @@ def test_bob_given_an_empty_stance_says_so(tmp_path, capfd):
     """``--stance ''`` ran as the default (all standing) and ended on a crash of the standing rider's run."""
     refused(["bob", "/work/shared/data/sst/00649.SST", "--bike", "sst", "--stance", "", "--out", tmp_path / "out"],
             tmp_path / "out", capfd, "--stance '': names no stance; give standing or seated, one per record")
+
+
+@pytest.mark.parametrize("argv, said", [
+    (["compare", "", ""], "argument RUN: '': an empty name"),  # was ".: given twice (as .)"
+    (["telemetry", "example", "--compare", ""], "argument --compare: '': an empty name"),  # ".: no timeseries.csv"
+    (["telemetry", ""], "argument FILE.SST: '': an empty name"),
+    (["sweep", "S12", "--from-csv", " "], "argument --from-csv: ' ': an empty name"),
+    (["validate", "example", "--presets", ""], "--presets: no preset names in ''"),  # ran S1-S14, the default
+])
+def test_an_empty_file_name_or_list_is_refused_as_empty(tmp_path, capfd, argv, said):
+    refused(argv + ["--out", tmp_path / "out"], tmp_path / "out", capfd, said)

@@ -52,10 +52,18 @@ class Parser(argparse.ArgumentParser):
         if kwargs.get("type") in (float, int):
             option = next((a for a in args if a.startswith("--")), args[0] if args else "")
             kwargs["type"] = numeric(option, integer=kwargs["type"] is int)
+        if kwargs.get("type") is Path:  # '' is no file: Path("") is the current folder ("given twice (as .)")
+            kwargs["type"] = _a_path
         choices = kwargs.get("choices")
         if choices and "type" not in kwargs and all(isinstance(c, str) and c == c.lower() for c in choices):
             kwargs["type"] = _in_any_case(choices)  # --engine MuJoCo, --rider Active: as presets are named
         return super().add_argument(*args, **kwargs)
+
+
+def _a_path(text: str) -> Path:
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"{text!r}: an empty name; give a file or a folder")
+    return Path(text)
 
 
 def _in_any_case(choices):
