@@ -212,6 +212,9 @@ def check_value(key: str, value: Any) -> Any:
             first, *others = _STEMS[key]
             also = "".join(f" (or {k})" for k in others)
             raise ConfigError(f"{key}: value without its unit; the key is {first}{also}")
+        inside = next((name for name in SCHEMA if name.startswith(f"{key}.")), None)
+        if inside is not None:  # `sled = 5` in a file, `--set fork=5`: a table given a value
+            raise ConfigError(f"{key}: is a table of keys (e.g. {inside}), not a value; got {value!r}")
         raise ConfigError(f"{key}: unknown key{_hint(key)}")
     kind = SCHEMA[key]
     if kind == "bool":

@@ -268,3 +268,15 @@ def test_bob_given_an_empty_stance_says_so(tmp_path, capfd):
 ])
 def test_an_empty_file_name_or_list_is_refused_as_empty(tmp_path, capfd, argv, said):
     refused(argv + ["--out", tmp_path / "out"], tmp_path / "out", capfd, said)
+
+
+def test_a_table_given_a_value_says_it_is_a_table(tmp_path, capfd):
+    """``sled = 5`` in a file (or ``--set fork.spring=5``): "sled: unknown key", where sled is the sled's table."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text('base = "S12"\nsled = 5\n')
+    refused(["drop", bad, "--out", tmp_path / "out"], tmp_path / "out", capfd,
+            f"{bad}: sled: is a table of keys (e.g. sled.")
+    refused(["drop", "S12", "--set", "fork.spring=5", "--out", tmp_path / "out"], tmp_path / "out", capfd,
+            "fork.spring: is a table of keys (e.g. fork.spring.")
+    refused(["drop", "S12", "--set", "slde=5", "--out", tmp_path / "out"], tmp_path / "out", capfd,
+            "slde: unknown key")  # the other side: no table of that name
