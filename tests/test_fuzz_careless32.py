@@ -280,3 +280,11 @@ def test_a_table_given_a_value_says_it_is_a_table(tmp_path, capfd):
             "fork.spring: is a table of keys (e.g. fork.spring.")
     refused(["drop", "S12", "--set", "slde=5", "--out", tmp_path / "out"], tmp_path / "out", capfd,
             "slde: unknown key")  # the other side: no table of that name
+
+
+def test_a_value_toml_reads_as_a_date_is_shown_as_typed(tmp_path, capfd):
+    """``drop_height_mm = 2024-05-27`` (a date typed where a number goes): "got datetime.date(2024, 5, 27)"."""
+    bad = tmp_path / "dated.toml"
+    bad.write_text('base = "S12"\n[sled]\ndrop_height_mm = 2024-05-27\n')
+    refused(["drop", bad, "--out", tmp_path / "out"], tmp_path / "out", capfd,
+            "sled.drop_height_mm: must be a number, got 2024-05-27 (TOML reads it as a date or a time)")
