@@ -10,7 +10,7 @@ import pytest
 
 from mtbmj import limits
 from mtbmj.rolling import terrain as T
-from helpers import refused
+from helpers import command_err, refused
 
 KMH = 1000.0 / 3600.0  # m/s per km/h, by the definitions of the kilometre and the hour
 
@@ -288,3 +288,19 @@ def test_a_value_toml_reads_as_a_date_is_shown_as_typed(tmp_path, capfd):
     bad.write_text('base = "S12"\n[sled]\ndrop_height_mm = 2024-05-27\n')
     refused(["drop", bad, "--out", tmp_path / "out"], tmp_path / "out", capfd,
             "sled.drop_height_mm: must be a number, got 2024-05-27 (TOML reads it as a date or a time)")
+
+
+def test_an_output_file_name_too_long_is_refused_before_its_folders_are_made(tmp_path, capfd):
+    """``synth spring S12 --out new/xxx...(300).csv``: "cannot write the record (File name too long)" after the run,
+    the folder new/ left made; render's alike ("File name too long", no --out named). NAME_MAX is 255 bytes here."""
+    from mtbmj import output
+    from mtbmj.errors import MtbmjError
+
+    long_name = "x" * 300
+    out = tmp_path / "new" / f"{long_name}.csv"
+    status, err = command_err(["synth", "spring", "S12", "--out", out], capfd)
+    assert status == 2 and err.count("\n") == 1 and "a name of 304 bytes, longer than the 255" in err, err
+    assert not (tmp_path / "new").exists() and not list(tmp_path.iterdir())
+    with pytest.raises(MtbmjError, match=re.escape("a name of 300 bytes, longer than the 255 the file system in")):
+        output.check_file_target(tmp_path / "new" / long_name / "run.gif")
+    assert output.check_file_target(tmp_path / "new" / ("x" * 255) / "run.gif")  # the other side: 255 bytes fit
