@@ -522,9 +522,10 @@ def make(spec, **params) -> Terrain:
 MAX_LENGTH_M = 2000.0
 MAX_POINTS = 1_000_000
 # The surface of a library terrain or a CSV profile (its distances, and its heights up and down) the tyre's
-# search cuts into 1 cm pieces (mtbmj.rolling.search_compiled.piece_table): a terrain MAX_LENGTH_M long with
-# its climbs and features is well under twice that; ``rock:height_mm=1e12`` asked for 5.82 TiB of pieces.
-MAX_SURFACE_M = 2.0 * MAX_LENGTH_M
+# search cuts into 1 cm pieces of 32 bytes (mtbmj.rolling.search_compiled.piece_table): 100 km is 320 MB of them.
+# A CSV's distances typed in millimetres run with their warning (an 8 m profile, 8 km: tests/test_rolling.py);
+# ``rock:height_mm=1e12`` asked for 5.82 TiB, a 10 km profile typed in millimetres (1e7 m) for 29.8 GiB.
+MAX_SURFACE_M = 100_000.0
 
 def _check_size(name: str, given: dict, kwargs: dict) -> None:
     for key in ("length_m", "at_m"):
