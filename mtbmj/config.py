@@ -212,6 +212,9 @@ def check_value(key: str, value: Any) -> Any:
             first, *others = _STEMS[key]
             also = "".join(f" (or {k})" for k in others)
             raise ConfigError(f"{key}: value without its unit; the key is {first}{also}")
+        inside = next((name for name in SCHEMA if name.startswith(f"{key}.")), None)
+        if inside is not None:  # `sled = 5` in a file, `--set fork=5`: a table given a value
+            raise ConfigError(f"{key}: is a table of keys (e.g. {inside}), not a value; got {value!r}")
         raise ConfigError(f"{key}: unknown key{_hint(key)}")
     kind = SCHEMA[key]
     if kind == "bool":
@@ -608,6 +611,9 @@ def read_chain(ref: str, locate=None, is_preset=None, what: str = "a TOML config
     is_preset = _is_preset if is_preset is None else is_preset
     if _depth > MAX_BASE_DEPTH:
         raise ConfigError(f"{ref}: base chain longer than {MAX_BASE_DEPTH} (a cycle?)")
+    if not str(ref).strip():  # Path("") is the current folder: "is a directory" was the line
+        raise ConfigError(f"{ref!r}: an empty name; give a preset or the path of {what} (mtbmj presets lists "
+                          f"the presets)")
     name, location = locate(str(ref))
     if isinstance(location, Path):
         table = _read_toml(location, what)

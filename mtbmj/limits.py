@@ -94,6 +94,8 @@ def number(key: str, value, what: str = "a number") -> float:
     ``key``: refused when it is not a number (a bool, a string), is NaN or infinite, or is an
     integer or float beyond ``MAX_MAGNITUDE`` (an integer that does not fit a float among them)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if hasattr(value, "isoformat"):  # TOML reads 2024-05-27 (or 12:30:00) as a date: not Python's repr of it
+            raise ConfigError(f"{key}: must be {what}, got {value.isoformat()} (TOML reads it as a date or a time)")
         raise ConfigError(f"{key}: must be {what}, got {value!r}")
     try:
         x = float(value)
@@ -155,6 +157,8 @@ MISTAKES: dict[str, tuple[tuple[str, float], ...]] = {
     "lb/in": (("N/mm", 1.0 / N_PER_MM_PER_LB_PER_IN), ("N/m", 1e-3 / N_PER_MM_PER_LB_PER_IN)),
     "N s/m": (("N s/mm", 1000.0),),
     "mm/s": (("m/s", 1000.0),),
+    # 1 km/h = 1000 m / 3600 s; 1 mph = 1609.344 m / 3600 s = 0.44704 m/s (the mile exact by definition)
+    "m/s": (("km/h", 1.0 / 3.6), ("mph", 0.44704)),
     "m/s2": (("mm/s2", 1e-3), ("ft/s2", 0.3048)),
     "psi": (("bar", PSI_PER_BAR), ("kPa", PSI_PER_BAR / 100.0)),
     "bar": (("psi", 1.0 / PSI_PER_BAR), ("kPa", 0.01)),
@@ -180,6 +184,24 @@ def require_mapping(overrides, example: str, none_ok: bool = True) -> None:
     if not (overrides is None and none_ok) and not isinstance(overrides, Mapping):
         raise ConfigError(f"overrides: must be a mapping of key to value, e.g. {{{example}}}, got a "
                           f"{type(overrides).__name__}")
+
+
+def _unit_typed(raw: str, unit: str) -> str:
+    """The note of a number typed with a unit after it (``6m/s``, ``20 km/h``, ``80kg``) for an option in ``unit``:
+    the number alone, converted where the unit is one of its slips (``MISTAKES``); "" for anything else."""
+    import re
+
+    found = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s].*)", raw)
+    if not found or not unit:
+        return ""
+    value, typed = float(found.group(1)), found.group(2).strip()
+    squeeze = typed.replace(" ", "").lower()
+    if squeeze in (unit.replace(" ", "").lower(), {"%": "percent", "deg": "degrees", "s": "sec"}.get(unit, unit)):
+        return f" (the unit is the option's, {unit}: give the number alone, {value:g})"
+    per = next((per for name, per in MISTAKES.get(unit, ()) if name.replace(" ", "").lower() == squeeze), None)
+    if per is not None:
+        return f" (the option is in {unit}: {value:g} {typed} = {value * per:.4g} {unit}, give {value * per:.4g})"
+    return f" (the option takes a number in {unit}, without a unit)"
 
 
 class Argument:
@@ -276,14 +298,14 @@ def argument(option: str, text: str, integer: bool = False):
         try:
             value = int(raw)
         except ValueError:
-            raise ValueError(f"{typed} is not a whole number") from None
+            raise ValueError(f"{typed} is not a whole number{_unit_typed(raw, spec.unit)}") from None
     else:
         try:
             value = float(raw)
         except ValueError:
             comma = raw.count(",") == 1 and raw.replace(",", ".", 1).replace(".", "", 1).lstrip("+-").isdigit()
             hint = f" (a decimal comma? the decimal point is a dot: {raw.replace(',', '.')})" if comma else ""
-            raise ValueError(f"{typed} is not a number{hint}") from None
+            raise ValueError(f"{typed} is not a number{hint or _unit_typed(raw, spec.unit)}") from None
         if not math.isfinite(value):
             raise ValueError(f"must be a finite number, got {typed}")
     unit = f" {spec.unit}" if spec.unit else ""
@@ -304,6 +326,18 @@ def argument(option: str, text: str, integer: bool = False):
 # ``--speed``) and longer than this, that is a crawl of hours of computing (``mtbmj roll rock --speed
 # 0.001``: 3800 s; at 0.3 m/s 13 s): refused before the run, naming the way out.
 CRAWL_S = 120.0
+
+
+def speed(value, label: str = "speed") -> float:
+    """A rig's speed given from Python (m/s): a positive finite number within ``--speed``'s range (a
+    command's argument is checked, and warned about, by :func:`argument` before), else one ConfigError line."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value <= 0:
+        raise ConfigError(f"{label}: must be a positive number of m/s, got {value!r}")
+    spec = ARGUMENTS["--speed"]
+    if value > spec.high:
+        raise ConfigError(f"{label}: {value:g} m/s is outside the range allowed: {spec.allowed()} ({spec.beyond} "
+                          f"faster than {spec.plausible[1]:g} m/s)")
+    return float(value)
 
 
 def crossing(speed: float, seconds: float, terrain: str) -> None:

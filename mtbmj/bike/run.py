@@ -44,7 +44,7 @@ from mtbmj.bike.parts import setups
 from mtbmj.controllers import installed
 from mtbmj.controllers.drive import Drive
 from mtbmj.errors import ConfigError
-from mtbmj.limits import check_duration, check_run, crossing
+from mtbmj.limits import check_duration, check_run, crossing, speed as ridden_speed
 from mtbmj.result import RunOutput
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
@@ -120,8 +120,7 @@ def _check(speed, duration, pedal=None):
     ConfigError line when it is not a positive number."""
     if speed is None and pedal is not None:
         speed = 1.0
-    if not isinstance(speed, (int, float)) or isinstance(speed, bool) or not math.isfinite(speed) or speed <= 0:
-        raise ConfigError(f"speed: must be a positive number of m/s, got {speed!r}")
+    ridden_speed(speed)
     check_duration("duration", duration)
 
 
@@ -208,6 +207,9 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
         cadence_rpm, power = _check_pedal(pedal)
         drive = "pedal"
     _check(speed_m_per_s, None, pedal)
+    if start_x is not None and (not isinstance(start_x, (int, float)) or isinstance(start_x, bool)
+                                or not math.isfinite(start_x)):  # nan was "does not start on level ground"
+        raise ConfigError(f"start_x: must be a finite number of m (the front axle's start), got {start_x!r}")
     if callback not in CALLBACKS:
         raise ConfigError(f"callback: must be one of {', '.join(CALLBACKS)}, got {callback!r}")
     if drive not in ("rider", "coast") and pedal is None:  # a pedalling rider comes with pedal=(rpm, W)
@@ -307,6 +309,8 @@ def _check_pedal(pedal) -> tuple[float, float]:
     from mtbmj.controllers.drive import PEDAL_POWER_W, PEDAL_RPM
 
     try:
+        if isinstance(pedal, (str, bytes)):  # "90" unpacked as cadence "9", power "0"
+            raise TypeError
         cadence, power = pedal
     except (TypeError, ValueError):
         raise ConfigError(f"pedal: must be (cadence_rpm, power_W), got {pedal!r}") from None

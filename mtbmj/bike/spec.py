@@ -187,7 +187,11 @@ def _number(table: dict, section: str, key: str, positive: bool = False, nonneg:
     full = f"{section}.{key}"
     if key not in table.get(section, {}):
         raise ConfigError(f"{full}: missing")
-    v = limits.number(full, table[section][key], "a finite number")
+    from mtbmj.config import unit_of
+
+    typed = table[section][key]
+    v = limits.number(full, typed, "a plain number (the unit is in the key name)"
+                      if isinstance(typed, str) and unit_of(key) else "a finite number")
     if positive and not v > 0:
         raise ConfigError(f"{full}: must be > 0, got {v!r}")
     if nonneg and v < 0:

@@ -17,6 +17,9 @@ def cmd_bob(args) -> int:
         first, k = twice
         raise ConfigError(f"{args.records[k]}: the same record as {args.records[first]} (the same samples); give each "
                           f"record once")
+    if args.stance is not None and not args.stance.strip(" ,"):  # `--stance ""`: a list left empty by mistake
+        raise ConfigError(f"--stance {args.stance!r}: names no stance; give standing or seated, one per record, "
+                          f"or leave --stance out for all standing")
     stances = [s.strip().lower() for s in args.stance.split(",")] if args.stance else None  # Standing = standing
     if args.power is not None and not 0.0 < args.power <= 1500.0:
         raise ConfigError(f"--power: {args.power:g} W is outside what a rider keeps up (above 0 W, at most 1500 W)")

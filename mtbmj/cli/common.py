@@ -34,8 +34,8 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
         # a value that starts like a negative number (``-40,20``, ``-1e3``) is a value for the option
         # before it, not an unknown option: its own check then names what is wrong with it (argparse
-        # takes only ``-40`` and ``-0.5`` so, and says "expected one argument" for the rest)
-        self._negative_number_matcher = re.compile(r"^-\.?\d")
+        # takes only ``-40`` and ``-0.5`` so, and says "expected one argument" for the rest, ``-inf`` among them)
+        self._negative_number_matcher = re.compile(r"^-(\.?\d|(inf|infinity|nan)$)", re.IGNORECASE)
 
     def error(self, message):  # one line, not usage + message
         raise MtbmjError(message)
@@ -52,10 +52,18 @@ class Parser(argparse.ArgumentParser):
         if kwargs.get("type") in (float, int):
             option = next((a for a in args if a.startswith("--")), args[0] if args else "")
             kwargs["type"] = numeric(option, integer=kwargs["type"] is int)
+        if kwargs.get("type") is Path:  # '' is no file: Path("") is the current folder ("given twice (as .)")
+            kwargs["type"] = _a_path
         choices = kwargs.get("choices")
         if choices and "type" not in kwargs and all(isinstance(c, str) and c == c.lower() for c in choices):
             kwargs["type"] = _in_any_case(choices)  # --engine MuJoCo, --rider Active: as presets are named
         return super().add_argument(*args, **kwargs)
+
+
+def _a_path(text: str) -> Path:
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"{text!r}: an empty name; give a file or a folder")
+    return Path(text)
 
 
 def _in_any_case(choices):
@@ -192,12 +200,14 @@ def parse_assignment(text: str, option: str = "--set") -> tuple[str, object]:
     if "=" not in text:
         raise ConfigError(f"{option} {text}: expected key=value")
     key, raw = (part.strip() for part in text.split("=", 1))
+    if not key:
+        raise ConfigError(f"{option} {text}: no key before '='; expected key=value")
     try:
         value = tomllib.loads(f"v = {raw}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw
     except RecursionError:
-        raise ConfigError(f"--set {key}: value nested too deeply") from None
+        raise ConfigError(f"{option} {key}: value nested too deeply") from None
     return key, value
 
 
@@ -294,12 +304,14 @@ def write_and_say(result, out) -> int:
 
 def out_path(text: str) -> Path:
     """An ``--out`` name: refused when it holds a line break or another control character,
-    which would break every line that names it."""
+    which would break every line that names it; a leading ``~`` is the home folder."""
     if not text or any(ord(ch) < 32 or ord(ch) == 127 or ch in LINE_BREAKS for ch in text):
         shown = text.encode("unicode_escape").decode("ascii")
         raise argparse.ArgumentTypeError(f"{shown!r}: an output name must be non-empty and hold no line break or "
                                          f"control character")
-    return Path(text)
+    # ``--out=~/runs`` (bash expands no ~ after "=") or a quoted '~/runs': the home folder meant, as the shell
+    # would have read it, not a folder named "~" in the current one
+    return Path(text).expanduser() if text.startswith("~") else Path(text)
 
 
 def command_name(args) -> str:

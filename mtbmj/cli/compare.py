@@ -2,6 +2,8 @@
 ``mtbmj bike``) overlaid on shared axes, and a table of their summaries' differences."""
 from __future__ import annotations
 
+from pathlib import Path
+
 from mtbmj.cli.common import add_out, write_and_say
 
 
@@ -20,7 +22,7 @@ def add_parser(sub) -> None:
                                    "(a bike's: front and rear wheel travel, pitch and both tyre loads), one colour per "
                                    "run named by its folder (compare.png); differences.csv holds one row per summary "
                                    "figure, one column per run and one per run's difference from the first.")
-    p.add_argument("runs", nargs="+", metavar="RUN",
+    p.add_argument("runs", nargs="+", metavar="RUN", type=Path,
                    help="result folder written by mtbmj drop, mtbmj roll or mtbmj bike --out")
     add_out(p, "out/compare")
     p.set_defaults(func=cmd_compare)

@@ -50,6 +50,9 @@ def cmd_fit(args) -> int:
                          "or leave --free out for the default ones")
     clicks = _clicks(args.clicks) if args.clicks else None
     data = list(args.data)
+    if len(data) > 1 and "example" in data and not Path("example").exists():  # "example: no such file" was the line
+        raise MtbmjError(f"fit {args.kind} {' '.join(data)}: 'example' is the shipped record alone; give it once, "
+                         f"or your records without it")
     if data == ["example"] and not Path("example").exists():
         from mtbmj.identify.examples import example_paths
 

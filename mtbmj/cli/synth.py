@@ -2,10 +2,13 @@
 laws (marked synthetic in its first comment line), to try ``mtbmj fit`` on a known truth."""
 from __future__ import annotations
 
+import contextlib
 import os
 
 from mtbmj.cli.common import out_path, overrides
 from mtbmj.errors import MtbmjError
+from mtbmj.output import check_file_target
+from mtbmj.output.filesystem import missing_ancestors
 
 
 def cmd_synth(args) -> int:
@@ -18,18 +21,23 @@ def cmd_synth(args) -> int:
         raise MtbmjError(f"--seed: must be 0 or more, got {args.seed}")
     if args.out.exists():
         raise MtbmjError(f"--out {args.out}: file exists; not overwriting it")
+    check_file_target(args.out)  # a folder in its place, a name too long, no permission: before the work
     config = resolve(args.config, overrides(args.set))
     truth = synth.config_truth(config, args.kind)
     if args.kind == "spring":
         record = synth.spring_record(truth, seed=args.seed)
     else:
         record = synth.damper_record(truth, seed=args.seed)
+    made = missing_ancestors(args.out.parent)
     try:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         staged = args.out.with_name(f".{args.out.stem}.partial{args.out.suffix}")
         synth.write_record(staged, record)
         os.replace(staged, args.out)  # the record appears whole or not at all
     except OSError as exc:
+        for folder in made:  # nothing half-written: the folders made for it go (the deepest first), if empty
+            with contextlib.suppress(OSError):
+                folder.rmdir()
         raise MtbmjError(f"--out {args.out}: cannot write the record ({exc.strerror})") from None
     print(f"wrote a synthetic {args.kind} dyno record of {config.name} to {args.out}")
     return 0

@@ -73,7 +73,7 @@ def cmd_validate(args) -> int:
     from mtbmj.measured.sled import example_path
 
     start = time.perf_counter()
-    presets = parse_presets(args.presets) if args.presets else []
+    presets = parse_presets(args.presets) if args.presets is not None else []  # "" is a list left empty
     configs = presets + list(args.configs or [])
     twice = next((c for i, c in enumerate(configs) if c in configs[:i]), None)
     if twice is not None:  # it ran twice (as S12 and S12-2), unsaid, as compare refuses a run given twice

@@ -3,9 +3,12 @@ the same configuration: sled, fork and tire compared sample by sample on the eng
 each within the tolerance (a ``mtbmj.runpath.crosscheck.CrosscheckResult``)."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from mtbmj.drop.chain import resolve
+from mtbmj.errors import ConfigError
 from mtbmj.drop.run import run_drop
 from mtbmj.drop.result import DISPLACEMENTS, DropResult
 from mtbmj.runpath.crosscheck import CrosscheckResult, compare_series
@@ -35,6 +38,9 @@ def crosscheck(config, tolerance_mm: float = DEFAULT_TOLERANCE_MM, overrides=Non
 def crosscheck_all(config, engines=("mujoco",), tolerance_mm: float = DEFAULT_TOLERANCE_MM, overrides=None,
                    duration=None) -> list[CrosscheckResult]:
     """One cross-check per engine of ``engines`` against one ODE reference run."""
+    if not isinstance(tolerance_mm, (int, float)) or isinstance(tolerance_mm, bool) \
+            or not (math.isfinite(tolerance_mm) and tolerance_mm > 0):  # refused before the runs, naming the argument
+        raise ConfigError(f"tolerance_mm: must be a positive number of mm, got {tolerance_mm!r}")
     cfg = resolve(config, overrides)
     ode = run_drop(cfg, "ode", duration=duration)
     return [from_results(run_drop(cfg, e, duration=duration), ode, tolerance_mm) for e in engines]

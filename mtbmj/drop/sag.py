@@ -164,7 +164,7 @@ def _check_load_kg(load_kg: float | None, overrides: Mapping[str, Any]) -> None:
                           f"--load-kg or {other}")
     if not (isinstance(load_kg, (int, float)) and not isinstance(load_kg, bool) and math.isfinite(load_kg)
             and load_kg > 0):
-        raise ConfigError(f"--load-kg: must be a positive number of kg, got {load_kg}")
+        raise ConfigError(f"--load-kg: must be a positive number of kg, got {load_kg!r}")
 
 
 def _load(cfg: Config, load_kg: float | None, overrides: Mapping[str, Any]) -> tuple[dict, str]:

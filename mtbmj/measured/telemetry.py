@@ -370,7 +370,8 @@ def read_travel_csv(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM,
         raise TelemetryError(f"{name}: line {header_line}: unknown column {unknown[0]!r} (known: {', '.join(CSV_COLUMNS)})"
                              + (f"; it is what mtbmj {wrote.get('command')} wrote, not a ride" if ours else ""))
     if len(set(header)) != len(header):
-        raise TelemetryError(f"{name}: line {header_line}: a column is named twice")
+        twice = next(column for column in header if header.count(column) > 1)
+        raise TelemetryError(f"{name}: line {header_line}: the column {twice} is named twice")
     if "time_s" not in header or len(header) < 2:
         raise TelemetryError(f"{name}: line {header_line}: needs time_s and one or more of fork_mm, shock_mm, rear_mm")
     values = np.empty((len(rows) - 1, len(header)))

@@ -185,8 +185,15 @@ def check_file_target(path: str | Path, what: str = "--out", error: type[MtbmjEr
     parent = existing_ancestor(path.parent)
     if not parent.is_dir():
         raise error(f"{what} {path}: {parent} is not a directory")
+    longest = os.pathconf(parent, "PC_NAME_MAX")  # refused here, before its folders are made and the work done
+    for name in Path(os.path.abspath(path)).relative_to(parent).parts:
+        if len(os.fsencode(name)) > longest:
+            raise error(f"{what} {path}: a name of {len(os.fsencode(name))} bytes, longer than the {longest} the "
+                        f"file system in {parent} allows")
     if not os.access(parent, os.W_OK | os.X_OK):
-        raise error(f"{what} {path}: cannot write in {parent} (permission denied)")
+        read_only = bool(os.statvfs(parent).f_flag & os.ST_RDONLY)  # os.access says EROFS as it says EACCES
+        raise error(f"{what} {path}: cannot write in {parent} "
+                    f"({'a read-only file system' if read_only else 'permission denied'})")
     if path.parent.is_dir():
         _clear_stale(path)
     return path

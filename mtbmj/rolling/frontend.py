@@ -41,7 +41,7 @@ from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.terrain import DEFAULT_HEAD_ANGLE_DEG
 from mtbmj.config import Config
 from mtbmj.errors import ConfigError
-from mtbmj.limits import check_duration, check_run, crossing
+from mtbmj.limits import check_duration, check_run, crossing, speed as ridden_speed
 from mtbmj.result import RunOutput
 from mtbmj.rolling.callback import RollCallback
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
@@ -91,8 +91,7 @@ class FrontEnd:
 
 
 def _check_inputs(speed, head_angle_deg, duration):
-    if not isinstance(speed, (int, float)) or isinstance(speed, bool) or not math.isfinite(speed) or speed <= 0:
-        raise ConfigError(f"speed: must be a positive number of m/s, got {speed!r}")
+    ridden_speed(speed)
     if not isinstance(head_angle_deg, (int, float)) or not math.isfinite(head_angle_deg) or not 45.0 < head_angle_deg <= 90.0:
         rad = ""
         if isinstance(head_angle_deg, (int, float)) and math.pi / 4 < head_angle_deg <= math.pi / 2:  # 1.13: radians

@@ -153,7 +153,7 @@ def drop_trajectory(source: str | Path, fps: float = 30.0, duration: float | Non
     from mtbmj.drop import scene as scene_mod
 
     path = Path(source)
-    if path.is_dir():
+    if path.is_dir() and str(source).strip():  # Path("") is the current folder: config.load names the empty name
         config_path = path / "config.toml"
         if not config_path.is_file():
             raise RenderError(f"{path}: not a run directory (no config.toml)")

@@ -128,6 +128,12 @@ def _profile(name, pieces, start_x=0.0, length=None, params=None) -> Terrain:
     z = np.concatenate([np.asarray(p[1], float) for p in pieces])
     if length is None:
         length = float(x[-1] - start_x)
+    surface = float(np.sum(np.hypot(np.diff(x), np.diff(z))))
+    if not surface <= MAX_SURFACE_M:  # the tyre's search cuts the surface into pieces: refused before they are
+        where = (params or {}).get("csv", f"terrain {name}")
+        raise TerrainError(f"{where}: its surface, along its distances and up and down its heights, is {surface:.4g} m "
+                           f"long, more than the {MAX_SURFACE_M:g} m a terrain may be (it spans {np.ptp(x):.4g} m; "
+                           f"its heights {np.ptp(z) / MM:.4g} mm)")
     return Terrain(name, x, z, start_x, length, dict(params or {}))
 
 
@@ -415,6 +421,9 @@ def parse(spec: str) -> tuple[str, dict]:
         key, eq, value = item.partition("=")
         if not eq or not key.strip():
             raise TerrainError(f"terrain {spec!r}: expected key=value, got {item!r}")
+        if key.strip() in params:
+            raise TerrainError(f"terrain {spec!r}: {key.strip()} given twice ({params[key.strip()]!r} and "
+                               f"{value.strip()!r}); give it once")
         params[key.strip()] = value.strip()
     return name.strip(), params
 
@@ -454,6 +463,16 @@ def _value(name: str, key: str, kind: str, value):
             warnings.warn(f"terrain {name}: {key} = {number:g} mm is over {tallest:g} mm, taller than any trail "
                           f"feature a wheel {'drops off' if tallest == TALLEST_DROP_MM else 'rolls over'} "
                           f"(a unit mistake?)", ConfigWarning, stacklevel=3)
+    tallest_rock = max(height for _, _, height in ROCK_GARDEN)
+    if (name, key) == ("rock_garden", "height_scale") and number * tallest_rock > TALLEST_FEATURE_MM:
+        import warnings
+
+        from mtbmj.errors import ConfigWarning
+
+        warnings.warn(f"terrain {name}: {key} = {number:g} makes its tallest rock {number * tallest_rock:g} mm, over "
+                      f"{TALLEST_FEATURE_MM:g} mm, taller than any trail feature a wheel rolls over ({key} scales "
+                      f"rocks {min(h for _, _, h in ROCK_GARDEN):g}-{tallest_rock:g} mm high; 1 is the garden as "
+                      f"shipped)", ConfigWarning, stacklevel=3)
     return number
 
 
@@ -498,14 +517,24 @@ def make(spec, **params) -> Terrain:
 
 
 # A terrain longer than this, or sampled at more points, is refused before anything is allocated
-# (a run of 2 km is 400 s at 5 m/s; ``washboard:length_m=1e9`` asked for 1.46 TiB).
+# (a run of 2 km is 400 s at 5 m/s; ``washboard:length_m=1e9`` asked for 1.46 TiB); so is a feature longer than
+# that (``washboard:wavelength_mm=1e9``, one wave of 1000 km sampled at 5 mm, asked for 38.7 GiB).
 MAX_LENGTH_M = 2000.0
 MAX_POINTS = 1_000_000
+# The surface of a library terrain or a CSV profile (its distances, and its heights up and down) the tyre's
+# search cuts into 1 cm pieces of 32 bytes (mtbmj.rolling.search_compiled.piece_table): 100 km is 320 MB of them.
+# A CSV's distances typed in millimetres run with their warning (an 8 m profile, 8 km: tests/test_rolling.py);
+# ``rock:height_mm=1e12`` asked for 5.82 TiB, a 10 km profile typed in millimetres (1e7 m) for 29.8 GiB.
+MAX_SURFACE_M = 100_000.0
 
 def _check_size(name: str, given: dict, kwargs: dict) -> None:
     for key in ("length_m", "at_m"):
         if key in given and kwargs[ARGUMENT.get(key, key)] > MAX_LENGTH_M:
             raise TerrainError(f"terrain {name}: {key} = {kwargs[ARGUMENT.get(key, key)]:g} m is longer than the "
+                               f"{MAX_LENGTH_M:g} m a terrain may be")
+    for key in ("width_mm", "length_mm", "wavelength_mm", "radius_mm"):
+        if key in given and kwargs[key] * MM > MAX_LENGTH_M:
+            raise TerrainError(f"terrain {name}: {key} = {kwargs[key]:g} mm is {kwargs[key] * MM:g} m, longer than the "
                                f"{MAX_LENGTH_M:g} m a terrain may be")
     if name == "iso8608":
         length = kwargs.get("length_m", 100.0)

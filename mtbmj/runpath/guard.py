@@ -18,7 +18,9 @@ from mtbmj.errors import RunError
 # What each MuJoCo warning most likely means in these models (the force laws are the only source
 # of control values; the contacts and laws the only stiff elements).
 _CAUSES = {
-    "BADCTRL": "a force law gave a non-finite or huge force (a rate, damping or preload far beyond any bike's?)",
+    # a stock fork too: ``mtbmj roll step_up:height_mm=300 --speed 15`` drives it through its hard stop in a step
+    "BADCTRL": "a force law gave a non-finite or huge force (an impact through the end stops harder than the step "
+               "resolves, a feature that tall at that speed? or a rate, damping or preload far beyond any bike's?)",
     "BADQACC": "the accelerations blew up (a stiffness or damping too large for the step, or a value far beyond "
                "any bike's?)",
     "BADQVEL": "the velocities blew up (a stiffness or damping too large for the step?)",

@@ -235,7 +235,8 @@ def from_csv(path: str | Path) -> list[dict[str, Any]]:
             except ConfigError as exc:
                 raise ConfigError(f"--from-csv {path}: column {exc}") from None
     if len(set(header)) != len(header):
-        raise ConfigError(f"--from-csv {path}: a column is named twice")
+        twice = next(name for name in header if header.count(name) > 1)
+        raise ConfigError(f"--from-csv {path}: the column {twice} is named twice")
     if len(rows) - 1 > MAX_VARIANTS:
         raise ConfigError(f"--from-csv {path}: {len(rows) - 1} rows, more than the {MAX_VARIANTS} variants a sweep may plan")
     variants = []
