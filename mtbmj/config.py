@@ -213,6 +213,10 @@ def check_value(key: str, value: Any) -> Any:
             also = "".join(f" (or {k})" for k in others)
             raise ConfigError(f"{key}: value without its unit; the key is {first}{also}")
         inside = next((name for name in SCHEMA if name.startswith(f"{key}.")), None)
+        if inside is not None and isinstance(value, dict):  # `--set 'sled={body_mass_kg=5}'` (a file flattens it)
+            first = next(iter(value), inside[len(key) + 1:])
+            raise ConfigError(f"{key}: a table given whole; set its keys one at a time, e.g. --set "
+                              f"{key}.{first}={value.get(first, '...')}")
         if inside is not None:  # `sled = 5` in a file, `--set fork=5`: a table given a value
             raise ConfigError(f"{key}: is a table of keys (e.g. {inside}), not a value; got {value!r}")
         raise ConfigError(f"{key}: unknown key{_hint(key)}")

@@ -50,6 +50,8 @@ def cmd_fit(args) -> int:
                          "or leave --free out for the default ones")
     clicks = _clicks(args.clicks) if args.clicks else None
     data = list(args.data)
+    if any(not name.strip() for name in data):  # '' is no file (read as the current folder: "is a directory" was the line)
+        raise MtbmjError(f"fit {args.kind}: an empty name among the records; give each record's file")
     if len(data) > 1 and "example" in data and not Path("example").exists():  # "example: no such file" was the line
         raise MtbmjError(f"fit {args.kind} {' '.join(data)}: 'example' is the shipped record alone; give it once, "
                          f"or your records without it")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import secrets
 
 from mtbmj.cli.common import out_path, overrides
 from mtbmj.errors import MtbmjError
@@ -31,9 +32,15 @@ def cmd_synth(args) -> int:
     made = missing_ancestors(args.out.parent)
     try:
         args.out.parent.mkdir(parents=True, exist_ok=True)
-        staged = args.out.with_name(f".{args.out.stem}.partial{args.out.suffix}")
-        synth.write_record(staged, record)
-        os.replace(staged, args.out)  # the record appears whole or not at all
+        # staged under a short name of its own beside it (the user's name plus a suffix could pass the file system's
+        # limit that the name itself keeps), then renamed: the record appears whole or not at all
+        staged = args.out.with_name(f".synth-{secrets.token_hex(4)}.partial{args.out.suffix}")
+        try:
+            synth.write_record(staged, record)
+            os.replace(staged, args.out)
+        finally:
+            with contextlib.suppress(OSError):
+                os.unlink(staged)
     except OSError as exc:
         for folder in made:  # nothing half-written: the folders made for it go (the deepest first), if empty
             with contextlib.suppress(OSError):
