@@ -110,15 +110,8 @@ def pedal_option(args):
     if getattr(args, "ride", None) is not None and args.duration is not None and args.duration < 8.0:
         raise ConfigError(f"--duration: {args.duration:g} s is too short to read the pedal bob beside --ride (8 s at "
                           f"least: the bob is read over the run's second half)")
-    from mtbmj.controllers.drive import PEDAL_POWER_W, PEDAL_RPM
-
-    power = PEDAL_POWER_DEFAULT_W if args.power is None else args.power
-    for option, value, (low, high), unit in (("--pedal", args.pedal, PEDAL_RPM, "rpm"),
-                                             ("--power", power, PEDAL_POWER_W, "W")):
-        if not low <= value <= high or value <= 0.0:  # the model's range, named as the option the user set
-            span = f"{low:g}-{high:g}" if low > 0.0 else f"above {low:g} and at most {high:g}"
-            raise ConfigError(f"{option}: {value:g} {unit} is outside what a rider turns ({span} {unit})")
-    return (args.pedal, power)
+    # the cadence and the power were held to the model's range by the numeric gate (mtbmj.limits.ARGUMENTS)
+    return (args.pedal, PEDAL_POWER_DEFAULT_W if args.power is None else args.power)
 
 
 # a trail rider's steady climbing power (assumed: a round value for a fit amateur over minutes)

@@ -21,8 +21,6 @@ def cmd_bob(args) -> int:
         raise ConfigError(f"--stance {args.stance!r}: names no stance; give standing or seated, one per record, "
                           f"or leave --stance out for all standing")
     stances = [s.strip().lower() for s in args.stance.split(",")] if args.stance else None  # Standing = standing
-    if args.power is not None and not 0.0 < args.power <= 1500.0:
-        raise ConfigError(f"--power: {args.power:g} W is outside what a rider keeps up (above 0 W, at most 1500 W)")
     if args.duration is not None and not args.duration >= 2.0 * pedalling.MIN_STRETCH_S:
         raise ConfigError(f"--duration: {args.duration:g} s is too short to read a bob over its second half "
                           f"({2.0 * pedalling.MIN_STRETCH_S:g} s at least)")

@@ -1,0 +1,43 @@
+"""Careless input, round 32b: what round 32 (``tests/test_fuzz_careless32.py``) left, then more of its kind.
+Each case failed before its fix: a line naming two ranges, an empty list run as none, argparse's line where the
+cause was a unit, a name read for a file it does not mean, a path not expanded, a Python call that said nothing
+where the command line warns. Inputs are written here."""
+from __future__ import annotations
+
+import re
+import warnings
+
+import pytest
+
+from helpers import command_err, refused
+
+MINIMAL_RECORD = "/work/shared/data/sst/00649.SST"
+
+
+# --- 1. a pedalling rider's power and cadence: one range, the model's -----------------------------------------
+
+@pytest.mark.parametrize("argv, said", [
+    # was "--power: 5000 W is outside what a rider keeps up (above 0 W, at most 1500 W) (note: --power = 5000 W is
+    # outside 0-2500 W, what bikes, riders and records have (a unit mistake?))": two ranges, one of them false
+    (["bob", MINIMAL_RECORD, "--power", "5000"], "--power: 5000 W is outside the range allowed: above 0 and at most "
+                                                 "1500 W (what a rider keeps up)"),
+    (["bike", "sst", "root", "--pedal", "90", "--power", "5000"], "--power: 5000 W is outside the range allowed: "
+                                                                  "above 0 and at most 1500 W"),
+    # --pedal 200 named 20-150 rpm beside 30-130 rpm
+    (["bike", "sst", "root", "--pedal", "200"], "--pedal: 200 rpm is outside the range allowed: at least 30 and at "
+                                                "most 130 rpm (what a rider turns)"),
+    (["bike", "sst", "root", "--pedal", "25"], "--pedal: 25 rpm is outside the range allowed: at least 30"),
+])
+def test_a_pedalling_riders_power_or_cadence_names_one_range(tmp_path, capfd, argv, said):
+    line = refused(argv + ["--out", tmp_path / "out"], tmp_path / "out", capfd, said)
+    assert "note:" not in line and line.count(" W") + line.count(" rpm") <= 3, line  # no second range beside it
+
+
+def test_the_gates_pedalling_range_is_the_models():
+    """The numeric gate (floor 0) cannot import the drive's law (floor 1): the two are held equal here."""
+    from mtbmj.controllers.drive import PEDAL_POWER_W, PEDAL_RPM
+    from mtbmj.limits import ARGUMENTS
+
+    power, cadence = ARGUMENTS["--power"], ARGUMENTS["--pedal"]
+    assert (power.low or 0.0, power.high) == PEDAL_POWER_W and power.open_low and power.plausible is None
+    assert (cadence.low, cadence.high) == PEDAL_RPM and cadence.plausible is None
