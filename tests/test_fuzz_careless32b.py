@@ -41,3 +41,13 @@ def test_the_gates_pedalling_range_is_the_models():
     power, cadence = ARGUMENTS["--power"], ARGUMENTS["--pedal"]
     assert (power.low or 0.0, power.high) == PEDAL_POWER_W and power.open_low and power.plausible is None
     assert (cadence.low, cadence.high) == PEDAL_RPM and cadence.plausible is None
+
+
+# --- 2. an empty list of parts to lock: ran with none locked -------------------------------------------------
+
+@pytest.mark.parametrize("typed", ["", " , "])
+def test_bike_given_an_empty_lock_says_so(tmp_path, capfd, typed):
+    """``mtbmj bike sst root --speed 4 --lock ''`` ran with nothing locked (the empty list read as no --lock), as
+    ``bob --stance ''`` ran as all standing before round 32."""
+    refused(["bike", "sst", "root", "--speed", "4", "--duration", "0.01", "--lock", typed, "--out", tmp_path / "out"],
+            tmp_path / "out", capfd, f"--lock {typed!r}: names no part; give rear, pitch, rider, comma-separated")

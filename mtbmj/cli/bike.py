@@ -16,6 +16,12 @@ EXIT_CRASHED = 3
 def cmd_bike(args) -> int:
     from mtbmj.bike.run import run_bike
 
+    if args.lock is not None and not args.lock.strip(" ,"):  # `--lock ""`: a list left empty by mistake (ran unlocked)
+        from mtbmj.bike.model import LOCKS
+        from mtbmj.errors import ConfigError
+
+        raise ConfigError(f"--lock {args.lock!r}: names no part; give {', '.join(LOCKS)}, comma-separated, or leave "
+                          f"--lock out to lock none")
     overrides = bike_overrides(args)
     if args.ride is not None:  # a bad ride file, or another bike's ride: one line before any work
         ride_checked(args, overrides)
