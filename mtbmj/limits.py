@@ -204,6 +204,21 @@ def _unit_typed(raw: str, unit: str) -> str:
     return f" (the option takes a number in {unit}, without a unit)"
 
 
+def unit_apart(option: str, value: str, word: str) -> str:
+    """The note on ``word`` typed apart after ``value`` of ``option`` (``--speed 20 km/h``) where ``word`` is a unit,
+    the option's own or one of the table's (``MISTAKES``), said and converted as ``_unit_typed`` says ``20km/h``;
+    "" for any other word (a positional argument after the value, left to its parser)."""
+    unit = ARGUMENTS[option].unit if option in ARGUMENTS else ""
+    units = {name.replace(" ", "").lower() for key, slips in MISTAKES.items() for name in (key, *(n for n, _ in slips))}
+    if not unit or word.replace(" ", "").lower() not in units | {unit.replace(" ", "").lower()}:
+        return ""
+    try:
+        float(value)
+    except ValueError:
+        return ""
+    return _unit_typed(f"{value} {word}", unit)
+
+
 class Argument:
     """A command's numeric argument: its unit, whether it is a whole number, the values the
     model allows (``low`` / ``high``, inclusive unless ``open_low``) and the plausible range

@@ -51,3 +51,37 @@ def test_bike_given_an_empty_lock_says_so(tmp_path, capfd, typed):
     ``bob --stance ''`` ran as all standing before round 32."""
     refused(["bike", "sst", "root", "--speed", "4", "--duration", "0.01", "--lock", typed, "--out", tmp_path / "out"],
             tmp_path / "out", capfd, f"--lock {typed!r}: names no part; give rear, pitch, rider, comma-separated")
+
+
+# --- 3. a unit typed apart after an option's number: argparse's "unrecognized arguments: km/h" -----------------
+
+KMH = 1000.0 / 3600.0  # m/s per km/h, by the definitions of the kilometre and the hour
+LB = 0.45359237  # kg per lb, by definition
+
+
+@pytest.mark.parametrize("argv, said", [
+    (["roll", "rock", "--speed", "20", "km/h"], f"argument --speed: '20 km/h' is a number and its unit (the option is "
+                                                f"in m/s: 20 km/h = {20 * KMH:.4g} m/s, give {20 * KMH:.4g})"),
+    (["roll", "rock", "--speed=20", "km/h"], f"20 km/h = {20 * KMH:.4g} m/s"),
+    # the unit taken for the terrain, the terrain then unrecognized: "unrecognized arguments: rock"
+    (["roll", "--speed", "20", "km/h", "rock"], f"20 km/h = {20 * KMH:.4g} m/s"),
+    (["roll", "rock", "--speed", "6", "m/s"], "'6 m/s' is a number and its unit (the unit is the option's, m/s: give "
+                                              "the number alone, 6)"),
+    (["roll", "rock", "--speed", "5", "--duration", "2", "s"], "(the unit is the option's, s: give the number alone, 2)"),
+    (["linkage", "trail", "--chainring", "32", "teeth"], "'32 teeth' is a number and its unit"),
+])
+def test_a_unit_typed_apart_names_the_number_to_give(tmp_path, capfd, argv, said):
+    refused(argv + ["--out", tmp_path / "out"], tmp_path / "out", capfd, said)
+
+
+def test_a_unit_typed_apart_draws_no_note_of_the_number_read_without_it(tmp_path, capfd):
+    """180 read as kg warns (5-150 kg); beside the line saying it was 180 lb, that note would call it 180 kg."""
+    line = refused(["sag", "air120", "--load-kg", "180", "lb", "--sag-percent", "20", "--out", tmp_path / "out"],
+                   tmp_path / "out", capfd, f"(the option is in kg: 180 lb = {180 * LB:.4g} kg, give {180 * LB:.4g})")
+    assert "note:" not in line and "180 kg" not in line, line
+
+
+def test_a_word_after_a_number_that_is_no_unit_is_left_to_argparse(tmp_path, capfd):
+    line = refused(["roll", "rock", "--speed", "5", "fast", "--out", tmp_path / "out"], tmp_path / "out", capfd,
+                   "unrecognized arguments: fast")
+    assert "a number and its unit" not in line, line

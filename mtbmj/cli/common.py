@@ -44,7 +44,10 @@ class Parser(argparse.ArgumentParser):
         given = sys.argv[1:] if args is None else list(args)
         _one_comma_list(getattr(self, "_comma_lists", ()), given)
         _one_side(self._actions, given)
-        return super().parse_known_args(args, namespace)
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras:  # ``--speed 20 km/h``: argparse's "unrecognized arguments: km/h" where the cause is the unit
+            _unit_apart(self._actions, given, extras)
+        return namespace, extras
 
     def add_argument(self, *args, **kwargs):
         if "," in str(kwargs.get("metavar", "")):  # a comma list (``--clicks K1,K2,...``): typed with spaces, said so
@@ -64,6 +67,27 @@ def _a_path(text: str) -> Path:
     if not text.strip():
         raise argparse.ArgumentTypeError(f"{text!r}: an empty name; give a file or a folder")
     return Path(text)
+
+
+def _unit_apart(actions, args, extras) -> None:
+    """Refuse a unit typed apart after a numeric option's value (``--speed 20 km/h``, ``--load-kg=180 lb``),
+    where argparse found an argument it did not expect (the unit, or the positional the unit displaced), naming
+    the number to give (``limits.unit_apart``)."""
+    from mtbmj.limits import unit_apart
+
+    numeric_options = {o: a.type.option for a in actions if hasattr(a.type, "option") for o in a.option_strings}
+    said = [str(a) for a in args]
+    for i, word in enumerate(said[1:], 1):
+        option, eq, value = said[i - 1].partition("=")
+        if not eq and i >= 2 and said[i - 2] in numeric_options:  # ``--speed 20 km/h``: the value the word before
+            option, value = said[i - 2], said[i - 1]
+        elif not (eq and option in numeric_options):  # ``--speed=20 km/h``
+            continue
+        note = unit_apart(numeric_options[option], value, word)  # the unit may have been taken as a positional
+        if note:
+            error = MtbmjError(f"argument {option}: '{value} {word}' is a number and its unit{note}")
+            error.alone = True  # no note of the number's range beside it: the number was read without its unit
+            raise error
 
 
 def _in_any_case(choices):
@@ -191,6 +215,7 @@ def numeric(option: str, integer: bool = False):
             raise argparse.ArgumentTypeError(str(exc)) from None
 
     parse.__name__ = "number"
+    parse.option = option  # the option whose number it reads (``_unit_apart``)
     return parse
 
 
@@ -396,7 +421,7 @@ def _run_parsed(parser: argparse.ArgumentParser, argv=None) -> int:
         _report(f"{exc}{config_warnings.suffix()}")
         return EXIT_BAD_INPUT
     except MtbmjError as exc:
-        _report(f"{exc}{config_warnings.suffix(str(exc))}")
+        _report(f"{exc}{'' if getattr(exc, 'alone', False) else config_warnings.suffix(str(exc))}")
         return EXIT_BAD_INPUT
     except (RuntimeWarning, FloatingPointError) as exc:  # a numerical failure no guard named (none is known)
         _report(f"numerical failure ({exc}){config_warnings.suffix()}")
