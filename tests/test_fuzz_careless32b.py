@@ -85,3 +85,20 @@ def test_a_word_after_a_number_that_is_no_unit_is_left_to_argparse(tmp_path, cap
     line = refused(["roll", "rock", "--speed", "5", "fast", "--out", tmp_path / "out"], tmp_path / "out", capfd,
                    "unrecognized arguments: fast")
     assert "a number and its unit" not in line, line
+
+
+# --- 4. bob given 'example', the shipped ride the other ride commands take: "example: cannot read" -------------
+
+@pytest.mark.parametrize("name", ["example", "Example"])
+def test_bob_given_the_shipped_example_says_it_is_a_trail_ride(tmp_path, capfd, name):
+    refused(["bob", name, "--out", tmp_path / "out"], tmp_path / "out", capfd,
+            f"{name}: the shipped example (00649.SST) is a trail ride, no pedalling; bob reads Sufni SST recordings "
+            f"of pedalling")
+
+
+def test_bob_given_a_file_named_example_reads_it(tmp_path, capfd, monkeypatch):
+    """The other side: a file of that name in the current folder is the user's (as ``ride_path`` has it)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "example").write_bytes(b"not an SST file")
+    line = refused(["bob", "example", "--out", tmp_path / "out"], tmp_path / "out", capfd, "example")
+    assert "shipped" not in line, line

@@ -10,8 +10,12 @@ def cmd_bob(args) -> int:
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.errors import ConfigError
     from mtbmj.ride import pedalling
-    from mtbmj.measured.telemetry import read_sst, repeated_samples
+    from mtbmj.measured.telemetry import example_path, read_sst, repeated_samples, ride_path
 
+    shipped = next((r for r in args.records if ride_path(r) == example_path()), None)
+    if shipped is not None:  # the other ride commands' 'example': a trail ride, no pedal bob to read (00649 descends)
+        raise ConfigError(f"{shipped}: the shipped example (00649.SST) is a trail ride, no pedalling; bob reads "
+                          f"Sufni SST recordings of pedalling (docs/bike.md: 00088-00091)")
     twice = repeated_samples([read_sst(path) for path in args.records])  # a bad record: one line before any work
     if twice is not None:  # one ride twice (the file twice, or a copy) is two runs of one record
         first, k = twice
@@ -37,7 +41,8 @@ def add_parser(sub) -> None:
     from mtbmj.cli.bike import add_bike_sets
 
     p = sub.add_parser("bob", help="pedal bob of recorded pedalling rides beside the bike pedalled as each was")
-    p.add_argument("records", nargs="+", metavar="RECORD", help="Sufni SST recordings of pedalling")
+    p.add_argument("records", nargs="+", metavar="RECORD", help="Sufni SST recordings of pedalling (not 'example', the shipped "
+                                                                "trail ride)")
     p.add_argument("--bike", default="sst", help="bike preset or bike TOML file (default sst)")
     p.add_argument("--stance", help="standing or seated, one per record, comma-separated (default all standing)")
     p.add_argument("--power", type=float, help="the rider's power in W (default 250)")
