@@ -102,3 +102,54 @@ def test_bob_given_a_file_named_example_reads_it(tmp_path, capfd, monkeypatch):
     (tmp_path / "example").write_bytes(b"not an SST file")
     line = refused(["bob", "example", "--out", tmp_path / "out"], tmp_path / "out", capfd, "example")
     assert "shipped" not in line, line
+
+
+# --- 5. an input path under a ~ the shell left (quoted, or after '='): "cannot read", where --out was expanded -------
+
+@pytest.mark.parametrize("argv, said", [
+    (["telemetry", "~/ride.SST"], None),  # typed as Path
+    (["telemetry", "--bike=sst", "~/ride.SST"], None),
+    (["bike", "sst", "root", "--speed", "4", "--ride=~/ride.SST", "--duration", "0.01"], None),  # typed as str
+    (["roll", "rock", "--speed", "5", "--config=~/none.toml"], "{home}/none.toml: no such configuration file"),
+    (["drop", "~/none.toml"], "{home}/none.toml: no such configuration file"),
+])
+def test_an_input_under_a_tilde_is_in_the_home_folder(tmp_path, capfd, monkeypatch, argv, said):
+    import shutil
+
+    home, here = tmp_path / "home", tmp_path / "here"
+    home.mkdir()
+    here.mkdir()
+    shutil.copy(MINIMAL_RECORD, home / "ride.SST")
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.chdir(here)
+    out = tmp_path / "out"
+    if said is not None:  # a file that is not there is named where it was looked for: the home folder
+        refused(argv + ["--out", out], out, capfd, said.format(home=home))
+        return
+    status, err = command_err(argv + ["--out", out], capfd)
+    assert status == 0 and "cannot read" not in err and out.is_dir(), err
+
+
+def test_every_argument_typed_as_str_is_an_input_or_no_path():
+    """The arguments left untyped (str) across every command name no file: each that does is typed through
+    ``common.INPUT_NAMES`` (its ~ expanded). A new input added untyped fails here, naming it."""
+    import argparse
+
+    from mtbmj.cli import build_parser
+
+    not_paths = {"bound", "clicks", "engines", "fork_set", "free", "friction", "lock", "model", "output", "presets",
+                 "scheduler", "set", "shock_set", "stance", "static_sag_mm", "try_set", "vary", "predict_clicks"}
+    untyped = set()
+
+    def walk(parser):
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub in action.choices.values():
+                    walk(sub)
+            elif type(action) in (argparse._StoreAction, argparse._AppendAction, argparse._ExtendAction) \
+                    and action.type is None and not action.choices:
+                untyped.add(action.dest)
+
+    walk(build_parser())
+    assert untyped and untyped <= not_paths, sorted(untyped - not_paths)
+    assert "bike" not in untyped and "ride" not in untyped  # the other side: inputs are typed

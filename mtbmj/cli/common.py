@@ -57,16 +57,43 @@ class Parser(argparse.ArgumentParser):
             kwargs["type"] = numeric(option, integer=kwargs["type"] is int)
         if kwargs.get("type") is Path:  # '' is no file: Path("") is the current folder ("given twice (as .)")
             kwargs["type"] = _a_path
+        if "type" not in kwargs and kwargs.get("action") in (None, "store", "append", "extend") and \
+                _dest(args, kwargs) in INPUT_NAMES:  # a preset's name or a file's path, kept a str
+            kwargs["type"] = _an_input
         choices = kwargs.get("choices")
         if choices and "type" not in kwargs and all(isinstance(c, str) and c == c.lower() for c in choices):
             kwargs["type"] = _in_any_case(choices)  # --engine MuJoCo, --rider Active: as presets are named
         return super().add_argument(*args, **kwargs)
 
 
+# The arguments typed as str that name an input file (or a preset, a terrain, 'example'), by their dest in every
+# command: a leading ~ in them is the home folder, as in the arguments typed as Path and in --out
+INPUT_NAMES = frozenset({"config", "configs", "bike", "scenario", "speed_profile", "ride", "records", "data", "source",
+                         "show", "roll", "try_file", "speed_csv"})
+
+
+def home(text: str) -> str:
+    """``text`` with a leading ``~`` (``~/x``, ``~user/x``) made the home folder, as the shell makes it where it
+    sees one (it does not after ``=``, ``--ride=~/x.SST``, nor in quotes): the one place every path a user gives
+    (an input or ``--out``) is so read."""
+    return os.path.expanduser(text) if text.startswith("~") else text
+
+
+def _dest(args, kwargs) -> str:
+    if "dest" in kwargs:
+        return kwargs["dest"]
+    long = next((a for a in args if a.startswith("--")), None)
+    return (long[2:] if long else args[0] if args else "").replace("-", "_")
+
+
+def _an_input(text: str) -> str:
+    return home(text)
+
+
 def _a_path(text: str) -> Path:
     if not text.strip():
         raise argparse.ArgumentTypeError(f"{text!r}: an empty name; give a file or a folder")
-    return Path(text)
+    return Path(home(text))
 
 
 def _unit_apart(actions, args, extras) -> None:
@@ -336,7 +363,7 @@ def out_path(text: str) -> Path:
                                          f"control character")
     # ``--out=~/runs`` (bash expands no ~ after "=") or a quoted '~/runs': the home folder meant, as the shell
     # would have read it, not a folder named "~" in the current one
-    return Path(text).expanduser() if text.startswith("~") else Path(text)
+    return Path(home(text))
 
 
 def command_name(args) -> str:
