@@ -305,10 +305,6 @@ def argument(option: str, text: str, integer: bool = False):
     whole-number option), or ``ValueError`` with the one-line reason; ``ConfigWarning`` when
     outside its plausible range. An option the table lacks is a finite number (``integer``: a
     whole number) within ``MAX_MAGNITUDE``."""
-    import warnings
-
-    from mtbmj.errors import ConfigWarning
-
     spec = ARGUMENTS.get(option) or Argument(low=-MAX_MAGNITUDE, high=MAX_MAGNITUDE, integer=integer)
     raw = text.strip()
     typed = repr(text) if len(text) <= 30 else f"{text[:12]!r}... ({len(text)} characters)"
@@ -334,11 +330,26 @@ def argument(option: str, text: str, integer: bool = False):
         shown = _shown(value) if spec.integer else f"{value:g}"
         raise ValueError(f"{shown}{unit if not spec.integer or abs(value) < 10 ** 20 else ''} is outside the range "
                          f"allowed: {spec.allowed()}{beyond}")
+    if option in ARGUMENTS:
+        plausible(option, value, stacklevel=3)
+    return value
+
+
+def plausible(option: str, value: float, stacklevel: int = 2) -> None:
+    """Warn (``ConfigWarning``) where ``value`` of ``option`` (a key of ``ARGUMENTS``) lies outside its plausible
+    range, naming a unit slip that brings it within: the one line of a command's argument (:func:`argument`) and
+    of the same number given to a Python entry point (``run_roll``'s speed, ``solve_sag``'s load)."""
+    import warnings
+
+    from mtbmj.errors import ConfigWarning
+
+    spec = ARGUMENTS[option]
     if spec.plausible is not None and not spec.plausible[0] <= value <= spec.plausible[1]:
         lo, hi = spec.plausible
+        unit = f" {spec.unit}" if spec.unit else ""
         warnings.warn(f"{option} = {value:g}{unit} is outside {lo:g}-{hi:g}{unit}, what bikes, riders and records "
-                      f"have (a unit mistake?{slip(value, spec.unit, spec.plausible)})", ConfigWarning, stacklevel=2)
-    return value
+                      f"have (a unit mistake?{slip(value, spec.unit, spec.plausible)})", ConfigWarning,
+                      stacklevel=stacklevel + 1)
 
 
 # A run's default length is the terrain crossed at its speed. Below a ridden speed (the plausible low of
@@ -347,15 +358,18 @@ def argument(option: str, text: str, integer: bool = False):
 CRAWL_S = 120.0
 
 
-def speed(value, label: str = "speed") -> float:
-    """A rig's speed given from Python (m/s): a positive finite number within ``--speed``'s range (a
-    command's argument is checked, and warned about, by :func:`argument` before), else one ConfigError line."""
+def speed(value, label: str = "speed", warn: bool = True) -> float:
+    """A rig's speed given from Python (m/s): a positive finite number within ``--speed``'s range, else one
+    ConfigError line; outside its plausible range warned about with ``--speed``'s line (:func:`plausible`; a
+    command's argument, warned about by :func:`argument` before, is warned once: the command keeps each line once)."""
     if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value <= 0:
         raise ConfigError(f"{label}: must be a positive number of m/s, got {value!r}")
     spec = ARGUMENTS["--speed"]
     if value > spec.high:
         raise ConfigError(f"{label}: {value:g} m/s is outside the range allowed: {spec.allowed()} ({spec.beyond} "
                           f"faster than {spec.plausible[1]:g} m/s)")
+    if warn:  # the command line's warning, said to a caller from Python too (once: a run checks it twice)
+        plausible("--speed", value, stacklevel=3)
     return float(value)
 
 

@@ -153,3 +153,46 @@ def test_every_argument_typed_as_str_is_an_input_or_no_path():
     walk(build_parser())
     assert untyped and untyped <= not_paths, sorted(untyped - not_paths)
     assert "bike" not in untyped and "ride" not in untyped  # the other side: inputs are typed
+
+
+# --- 6. the Python entry points given what the command line warns about: nothing said --------------------------
+
+def _speed_line(value):
+    return (f"--speed = {value:g} m/s is outside 0.3-30 m/s, what bikes, riders and records have (a unit mistake? "
+            f"probably meant {value:g} km/h = {value * KMH:.4g} m/s)")
+
+
+@pytest.mark.parametrize("call, said", [
+    (lambda m: m.run_roll("rock", 40, duration=0.002), _speed_line(40)),
+    (lambda m: m.run_bike("sst", "root", 40, duration=0.002), _speed_line(40)),
+    (lambda m: m.solve_sag("air120", 180, 20), f"--load-kg = 180 kg is outside 5-150 kg, what bikes, riders and records "
+                                                f"have (a unit mistake? probably meant 180 lb = {180 * LB:.4g} kg)"),
+    (lambda m: m.solve_sag("air120", 70, 0.2), "--sag-percent = 0.2 % is outside 5-50 %, what bikes, riders and "
+                                               "records have (a unit mistake? probably meant 0.2 as a fraction = 20 %)"),
+])
+def test_the_python_entry_points_warn_as_the_command_line_does(call, said):
+    """Each warning once (a run checks its speed twice), the line the command line gives (``limits.plausible``)."""
+    import mtbmj
+    from mtbmj.errors import ConfigWarning, MtbmjError
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            call(mtbmj)
+        except MtbmjError:  # 0.2 % sag: no pressure gives it; the warning names the slip
+            pass
+    lines = [str(w.message) for w in caught if issubclass(w.category, ConfigWarning)]
+    assert lines.count(said) == 1, lines
+
+
+def test_the_command_line_warns_once_and_a_ridden_speed_warns_nothing(tmp_path, capfd):
+    from helpers import command_said
+
+    status, said = command_said(["roll", "rock", "--speed", "40", "--duration", "0.002", "--out", tmp_path / "o"], capfd)
+    assert status == 0 and said.count("mtbmj: warning:") == 1 and _speed_line(40) in said, said
+    import mtbmj
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mtbmj.run_roll("rock", 5, duration=0.002)
+        mtbmj.solve_sag("air120", 70, 20)

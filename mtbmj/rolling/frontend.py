@@ -90,8 +90,8 @@ class FrontEnd:
         return self.chassis_x0 + qx + (self.fork_length - qf) * c, self.chassis_z0 + qz - (self.fork_length - qf) * s
 
 
-def _check_inputs(speed, head_angle_deg, duration):
-    ridden_speed(speed)
+def _check_inputs(speed, head_angle_deg, duration, warn=True):
+    ridden_speed(speed, warn=warn)
     if not isinstance(head_angle_deg, (int, float)) or not math.isfinite(head_angle_deg) or not 45.0 < head_angle_deg <= 90.0:
         rad = ""
         if isinstance(head_angle_deg, (int, float)) and math.pi / 4 < head_angle_deg <= math.pi / 2:  # 1.13: radians
@@ -639,7 +639,7 @@ def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
     cross the feature and settle (the drum: its revolutions). ``callback``: ``"auto"`` (compiled
     when numba is available), ``"compiled"`` or ``"python"`` (the specification; same results);
     ``drive``: see ``prepare`` (default ``"rider"``: within a rider's force, power and braking)."""
-    _check_inputs(speed_m_per_s, head_angle_deg, duration)
+    _check_inputs(speed_m_per_s, head_angle_deg, duration, warn=False)  # warned by prepare's check
     p = guard.prepared("rolling", lambda: prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides,
                                                   callback=callback, drive=drive), model_of=lambda p: p.front.model)
     if duration is None:  # the terrain crossed: a crawl refused before the run
@@ -668,7 +668,7 @@ def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12"
                     overrides: Mapping | None = None, fps: float = 60.0, drive: str | Drive = "rider"):
     """(model, times, qpos) of a rolling run sampled at ``fps`` for rendering; the model has the
     terrain as a visual heightfield (group 1) or the drum with its cleat. ``drive`` as ``prepare``."""
-    _check_inputs(speed_m_per_s, head_angle_deg, duration)
+    _check_inputs(speed_m_per_s, head_angle_deg, duration, warn=False)  # warned by prepare's check
     p = guard.prepared("rolling", lambda: prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, drive=drive),
                        model_of=lambda p: p.front.model)
     duration = default_duration(p) if duration is None else duration
