@@ -165,6 +165,7 @@ MISTAKES: dict[str, tuple[tuple[str, float], ...]] = {
     "%": (("as a fraction", 100.0),),
     "N": (("kN", 1000.0),),
     "cm3": (("litres", 1000.0), ("in3", 16.387064), ("mm3", 1e-3)),
+    "deg": (("rad", 180.0 / math.pi),),
 }
 
 
@@ -226,14 +227,15 @@ class Argument:
 
     def __init__(self, unit: str = "", low: float | None = None, high: float | None = None,
                  plausible: tuple[float, float] | None = None, integer: bool = False, open_low: bool = False,
-                 beyond: str = "", why: str = ""):
+                 beyond: str = "", why: str = "", open_high: bool = False):
         self.unit, self.low, self.high, self.plausible = unit, low, high, plausible
-        self.integer, self.open_low, self.beyond, self.why = integer, open_low, beyond, why
+        self.integer, self.open_low, self.open_high, self.beyond, self.why = integer, open_low, open_high, beyond, why
 
     def allowed(self) -> str:
         unit = f" {self.unit}" if self.unit else ""
         if self.low is not None and self.high is not None:
-            return f"{'above' if self.open_low else 'at least'} {self.low:g} and at most {self.high:g}{unit}"
+            return (f"{'above' if self.open_low else 'at least'} {self.low:g} and {'below' if self.open_high else 'at most'} "
+                    f"{self.high:g}{unit}")
         if self.low is not None:
             return f"{'above' if self.open_low else 'at least'} {self.low:g}{unit}"
         return f"at most {self.high:g}{unit}"
@@ -247,7 +249,7 @@ _SEED = Argument("", low=0, high=2 ** 63 - 1, integer=True)
 _TRAVEL_MM = Argument("mm", high=1000.0, plausible=(20.0, 400.0), **_POSITIVE)
 _FORCE_N = Argument("N", low=0.0, high=1e6, plausible=(0.0, 2500.0))
 _OFFSET_MM = Argument("mm", low=-1000.0, high=1000.0, plausible=(-50.0, 50.0))
-_SAG_PERCENT = Argument("%", high=100.0, plausible=(5.0, 50.0), **_POSITIVE)
+_SAG_PERCENT = Argument("%", high=100.0, plausible=(5.0, 50.0), open_high=True, **_POSITIVE)  # 100 %: no travel left
 
 # Every numeric argument of every command, by its option (the same option means the same
 # quantity in every command that has it). ``plausible``: what bikes, riders and records have,
@@ -276,7 +278,8 @@ ARGUMENTS: dict[str, Argument] = {
     "--drive-push-N": _FORCE_N,
     "--drive-power-W": Argument("W", low=0.0, high=1e5, plausible=(0.0, 2500.0)),
     "--drive-brake-N": _FORCE_N,
-    "--head-angle": Argument("deg", high=90.0, plausible=(55.0, 80.0), **_POSITIVE),
+    # the rolling front end's head angle: the model holds (45, 90] deg (mtbmj.rolling.frontend)
+    "--head-angle": Argument("deg", low=45.0, high=90.0, plausible=(55.0, 80.0), open_low=True),
     "--com-height-mm": Argument("mm", high=1e4, plausible=(300.0, 2000.0), **_POSITIVE),
     "--chainring": Argument("teeth", low=1, high=1000, plausible=(20, 60), integer=True),
     "--cog": Argument("teeth", low=1, high=1000, plausible=(9, 60), integer=True),
@@ -324,12 +327,14 @@ def argument(option: str, text: str, integer: bool = False):
             raise ValueError(f"must be a finite number, got {typed}")
     unit = f" {spec.unit}" if spec.unit else ""
     low_bad = spec.low is not None and (value <= spec.low if spec.open_low else value < spec.low)
-    if low_bad or (spec.high is not None and value > spec.high):
+    if low_bad or (spec.high is not None and (value >= spec.high if spec.open_high else value > spec.high)):
         beyond = f" ({spec.beyond} faster than {spec.plausible[1]:g}{unit})" if spec.beyond and not low_bad else ""
         beyond = beyond or (f" ({spec.why})" if spec.why else "")
         shown = _shown(value) if spec.integer else f"{value:g}"
+        near = spec.plausible or (spec.low if spec.low is not None else -MAX_MAGNITUDE, spec.high)
+        meant = slip(value, spec.unit, near) if not spec.integer else ""  # --head-angle 1.13: radians
         raise ValueError(f"{shown}{unit if not spec.integer or abs(value) < 10 ** 20 else ''} is outside the range "
-                         f"allowed: {spec.allowed()}{beyond}")
+                         f"allowed: {spec.allowed()}{beyond}{f' (a unit mistake?{meant})' if meant else ''}")
     if option in ARGUMENTS:
         plausible(option, value, stacklevel=3)
     return value

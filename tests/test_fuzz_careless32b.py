@@ -196,3 +196,31 @@ def test_the_command_line_warns_once_and_a_ridden_speed_warns_nothing(tmp_path, 
         warnings.simplefilter("error")
         mtbmj.run_roll("rock", 5, duration=0.002)
         mtbmj.solve_sag("air120", 70, 20)
+
+
+# --- 7. the hunt: ranges the gate named that were not the model's ---------------------------------------------
+
+@pytest.mark.parametrize("argv, said", [
+    # "--sag-percent: must be between 0 and 100 (percent of travel), got 100.0 (note: ... outside 5-50 %)": the gate
+    # had let 100 through ("at most 100"); bike sag's "must be within 0-100 %, got 100.0" said 100 was within
+    (["sag", "air120", "--load-kg", "70", "--sag-percent", "100"], "argument --sag-percent: 100 % is outside the range "
+                                                                  "allowed: above 0 and below 100 %"),
+    (["sag", "sst", "--bike", "--front-sag-percent", "100", "--rear-sag-percent", "30"],
+     "argument --front-sag-percent: 100 % is outside the range allowed: above 0 and below 100 %"),
+    # "head angle: must be in (45, 90]" after the gate let 40 through as (0, 90] with a warning left off the line
+    (["roll", "rock", "--speed", "5", "--head-angle", "40"], "argument --head-angle: 40 deg is outside the range "
+                                                             "allowed: above 45 and at most 90 deg"),
+    # the radians the rig's own line named, kept where the gate now refuses first
+    (["roll", "rock", "--speed", "5", "--head-angle", "1.13"], "(a unit mistake? probably meant 1.13 rad = 64.74 deg)"),
+])
+def test_a_range_the_gate_names_is_the_models(tmp_path, capfd, argv, said):
+    line = refused(argv + ["--out", tmp_path / "out"], tmp_path / "out", capfd, said)
+    assert "note:" not in line, line
+
+
+def test_the_python_sag_line_names_an_open_range():
+    from mtbmj.bike import sag
+    from mtbmj.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=re.escape("--front-sag-percent: must be above 0 and below 100 %, got 100")):
+        sag.solve("sst", 100, 30)
