@@ -224,3 +224,43 @@ def test_the_python_sag_line_names_an_open_range():
 
     with pytest.raises(ConfigError, match=re.escape("--front-sag-percent: must be above 0 and below 100 %, got 100")):
         sag.solve("sst", 100, 30)
+
+
+# --- 8. the hunt: a comma list typed with a comma too many or in capitals --------------------------------------
+
+def test_a_lock_in_capitals_or_with_a_comma_too_many_is_read(tmp_path, capfd, monkeypatch):
+    """``--lock rear,`` was "lock: '' is not one of rear, pitch, rider" (the empty word read as a part, the line naming
+    run_bike's argument); ``--lock Rear`` refused where ``--stance Standing`` and ``--engine MuJoCo`` are read."""
+    from mtbmj.bike import run as bike_run
+    from mtbmj.errors import ConfigError
+
+    seen = []
+
+    def reached(*args, lock=(), **kwargs):
+        seen.append(lock)
+        raise ConfigError("reached the run")
+
+    monkeypatch.setattr(bike_run, "run_bike", reached)
+    for typed, parts in (("rear,", ("rear",)), ("Rear, PITCH", ("rear", "pitch"))):
+        refused(["bike", "sst", "root", "--speed", "4", "--lock", typed, "--out", tmp_path / "out"], tmp_path / "out",
+                capfd, "reached the run")
+        assert seen.pop() == parts
+    refused(["bike", "sst", "root", "--speed", "4", "--lock", "fork", "--out", tmp_path / "out"], tmp_path / "out",
+            capfd, "--lock: 'fork' is not one of rear, pitch, rider")  # the other side: no such part
+
+
+def test_a_stance_with_a_comma_too_many_is_one_stance(tmp_path, capfd, monkeypatch):
+    """``bob REC --stance standing,`` was "stance: one per record (1), got 2": the empty word counted as a stance."""
+    from mtbmj.errors import ConfigError
+    from mtbmj.ride import pedalling
+
+    seen = []
+
+    def reached(records, bike, stances, *rest):
+        seen.append(stances)
+        raise ConfigError("reached the runs")
+
+    monkeypatch.setattr(pedalling, "against", reached)
+    refused(["bob", MINIMAL_RECORD, "--stance", "standing,", "--out", tmp_path / "out"], tmp_path / "out", capfd,
+            "reached the runs")
+    assert seen == [["standing"]]

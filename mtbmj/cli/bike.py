@@ -16,12 +16,7 @@ EXIT_CRASHED = 3
 def cmd_bike(args) -> int:
     from mtbmj.bike.run import run_bike
 
-    if args.lock is not None and not args.lock.strip(" ,"):  # `--lock ""`: a list left empty by mistake (ran unlocked)
-        from mtbmj.bike.model import LOCKS
-        from mtbmj.errors import ConfigError
-
-        raise ConfigError(f"--lock {args.lock!r}: names no part; give {', '.join(LOCKS)}, comma-separated, or leave "
-                          f"--lock out to lock none")
+    lock = lock_option(args.lock)
     overrides = bike_overrides(args)
     if args.ride is not None:  # a bad ride file, or another bike's ride: one line before any work
         ride_checked(args, overrides)
@@ -58,7 +53,7 @@ def cmd_bike(args) -> int:
         raise ConfigError("--legs-swing: the legs swing only for a pedalling active rider (--pedal RPM --rider active)")
     result = Progress(f"bike {args.bike} over {args.scenario}", not args.quiet).around(
         lambda progress: run_bike(args.bike, args.scenario, args.speed, args.duration, args.drive, args.start_m,
-                                  progress, lock=tuple(k.strip() for k in args.lock.split(",")) if args.lock else (),
+                                  progress, lock=lock,
                                   rear_tire=not args.lift_rear, overrides=overrides, seated=args.seated, rider=args.rider,
                                   pedal=pedal, legs_swing=args.legs_swing,
                                   speed_profile=None if profile is None else (profile.x, profile.v)))
@@ -71,6 +66,25 @@ def cmd_bike(args) -> int:
     print(f"{result.headline()}; {result.info['real_time_factor']:.2f}x real time; wrote {len(written)} files to "
           f"{args.out}")
     return EXIT_CRASHED if result.summary.get("crash") else 0
+
+
+def lock_option(text) -> tuple[str, ...]:
+    """The parts ``--lock`` names (``Rear,pitch,``: rear and pitch), or one line naming ``--lock``: a list left empty
+    (``--lock ''`` ran with nothing locked), a part that is none of ``LOCKS`` (the line said "lock: ...")."""
+    from mtbmj.bike.model import LOCKS
+    from mtbmj.cli.common import comma_words
+    from mtbmj.errors import ConfigError
+
+    if text is None:
+        return ()
+    parts = comma_words(text)
+    if not parts:
+        raise ConfigError(f"--lock {text!r}: names no part; give {', '.join(LOCKS)}, comma-separated, or leave "
+                          f"--lock out to lock none")
+    bad = [part for part in parts if part not in LOCKS]
+    if bad:
+        raise ConfigError(f"--lock: {bad[0]!r} is not one of {', '.join(LOCKS)}")
+    return tuple(parts)
 
 
 def ride_checked(args, overrides) -> None:

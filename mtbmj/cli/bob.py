@@ -3,7 +3,7 @@ bike pedalled as each was, their pedal bob side by side (``mtbmj.ride.pedalling.
 bob.png, one line per record."""
 from __future__ import annotations
 
-from mtbmj.cli.common import add_out
+from mtbmj.cli.common import add_out, comma_words
 
 
 def cmd_bob(args) -> int:
@@ -24,7 +24,7 @@ def cmd_bob(args) -> int:
     if args.stance is not None and not args.stance.strip(" ,"):  # `--stance ""`: a list left empty by mistake
         raise ConfigError(f"--stance {args.stance!r}: names no stance; give standing or seated, one per record, "
                           f"or leave --stance out for all standing")
-    stances = [s.strip().lower() for s in args.stance.split(",")] if args.stance else None  # Standing = standing
+    stances = comma_words(args.stance) if args.stance else None  # Standing = standing; 'standing,' one
     if args.duration is not None and not args.duration >= 2.0 * pedalling.MIN_STRETCH_S:
         raise ConfigError(f"--duration: {args.duration:g} s is too short to read a bob over its second half "
                           f"({2.0 * pedalling.MIN_STRETCH_S:g} s at least)")

@@ -494,6 +494,12 @@ def _silence_stdout() -> None:
         pass
 
 
+def comma_words(text: str) -> list[str]:
+    """The words of a comma list a user typed (``--lock Rear,pitch,``, ``--stance standing, seated``): stripped, in
+    lower case, an empty one (a comma too many) left out, as ``--presets S1,,S2`` is read."""
+    return [word.strip().lower() for word in text.split(",") if word.strip()]
+
+
 def given_options(args, **defaults) -> str:
     """The options of ``defaults`` (attribute: its default) the command line set, as the user typed them
     ("--engines and --tolerance-mm"): a refusal names those only."""
