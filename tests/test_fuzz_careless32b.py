@@ -264,3 +264,22 @@ def test_a_stance_with_a_comma_too_many_is_one_stance(tmp_path, capfd, monkeypat
     refused(["bob", MINIMAL_RECORD, "--stance", "standing,", "--out", tmp_path / "out"], tmp_path / "out", capfd,
             "reached the runs")
     assert seen == [["standing"]]
+
+
+def test_a_head_angle_from_python_warns_as_the_command_line_does(tmp_path, capfd):
+    """``run_roll(..., head_angle_deg=50)`` said nothing; ``--head-angle 50`` warns (55-80 deg)."""
+    import mtbmj
+    from mtbmj.errors import ConfigWarning
+    from helpers import command_said
+
+    said = "--head-angle = 50 deg is outside 55-80 deg, what bikes, riders and records have (a unit mistake?)"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        mtbmj.run_roll("rock", 5, head_angle_deg=50, duration=0.002)
+    assert [str(w.message) for w in caught if issubclass(w.category, ConfigWarning)] == [said]
+    status, out = command_said(["roll", "rock", "--speed", "5", "--head-angle", "50", "--duration", "0.002", "--out",
+                                tmp_path / "o"], capfd)
+    assert status == 0 and out.count(said) == 1, out
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mtbmj.run_roll("rock", 5, head_angle_deg=65, duration=0.002)  # the other side

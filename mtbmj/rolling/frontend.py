@@ -41,7 +41,7 @@ from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.terrain import DEFAULT_HEAD_ANGLE_DEG
 from mtbmj.config import Config
 from mtbmj.errors import ConfigError
-from mtbmj.limits import check_duration, check_run, crossing, speed as ridden_speed
+from mtbmj.limits import check_duration, check_run, crossing, plausible, speed as ridden_speed
 from mtbmj.result import RunOutput
 from mtbmj.rolling.callback import RollCallback
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
@@ -97,6 +97,8 @@ def _check_inputs(speed, head_angle_deg, duration, warn=True):
         if isinstance(head_angle_deg, (int, float)) and math.pi / 4 < head_angle_deg <= math.pi / 2:  # 1.13: radians
             rad = f" (radians? {head_angle_deg:g} rad is {math.degrees(head_angle_deg):.1f} deg)"
         raise ConfigError(f"head angle: must be in (45, 90] degrees from the horizontal, got {head_angle_deg!r}{rad}")
+    if warn:  # the command line's line (--head-angle 50: outside 55-80 deg), said to a caller from Python too
+        plausible("--head-angle", head_angle_deg, stacklevel=3)
     check_duration("duration", duration)
 
 
