@@ -283,3 +283,24 @@ def test_a_head_angle_from_python_warns_as_the_command_line_does(tmp_path, capfd
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         mtbmj.run_roll("rock", 5, head_angle_deg=65, duration=0.002)  # the other side
+
+
+def test_a_crosscheck_tolerance_from_python_is_held_as_the_command_lines(monkeypatch):
+    """``crosscheck("S12", tolerance_mm=5000)`` ran (``--tolerance-mm 5000`` is refused, at most 1000 mm) and 50 mm
+    said nothing (``--tolerance-mm 50`` warns, 1e-4-10 mm)."""
+    import mtbmj
+    from mtbmj.drop import crosscheck
+    from mtbmj.errors import ConfigError, ConfigWarning
+
+    def ran(*args, **kwargs):
+        raise ConfigError("a run was made")
+
+    monkeypatch.setattr(crosscheck, "run_drop", ran)
+    with pytest.raises(ConfigError, match=re.escape("tolerance_mm: 5000 mm is outside the range allowed: above 0 and "
+                                                    "at most 1000 mm")):
+        mtbmj.crosscheck("S12", tolerance_mm=5000)
+    with warnings.catch_warnings(record=True) as caught, pytest.raises(ConfigError, match="a run was made"):
+        warnings.simplefilter("always")
+        mtbmj.crosscheck("S12", tolerance_mm=50)
+    assert [str(w.message) for w in caught if issubclass(w.category, ConfigWarning)] == [
+        "--tolerance-mm = 50 mm is outside 0.0001-10 mm, what bikes, riders and records have (a unit mistake?)"]
