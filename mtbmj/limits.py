@@ -187,6 +187,10 @@ def require_mapping(overrides, example: str, none_ok: bool = True) -> None:
                           f"{type(overrides).__name__}")
 
 
+# A unit as people also type it after a number (``20 percent``, ``30 fps``)
+UNIT_WORDS = {"%": "percent", "deg": "degrees", "s": "sec", "frames/s": "fps"}
+
+
 def _unit_typed(raw: str, unit: str) -> str:
     """The note of a number typed with a unit after it (``6m/s``, ``20 km/h``, ``80kg``) for an option in ``unit``:
     the number alone, converted where the unit is one of its slips (``MISTAKES``); "" for anything else."""
@@ -197,7 +201,7 @@ def _unit_typed(raw: str, unit: str) -> str:
         return ""
     value, typed = float(found.group(1)), found.group(2).strip()
     squeeze = typed.replace(" ", "").lower()
-    if squeeze in (unit.replace(" ", "").lower(), {"%": "percent", "deg": "degrees", "s": "sec"}.get(unit, unit)):
+    if squeeze in (unit.replace(" ", "").lower(), UNIT_WORDS.get(unit, unit)):
         return f" (the unit is the option's, {unit}: give the number alone, {value:g})"
     per = next((per for name, per in MISTAKES.get(unit, ()) if name.replace(" ", "").lower() == squeeze), None)
     if per is not None:
@@ -211,7 +215,7 @@ def unit_apart(option: str, value: str, word: str) -> str:
     "" for any other word (a positional argument after the value, left to its parser)."""
     unit = ARGUMENTS[option].unit if option in ARGUMENTS else ""
     units = {name.replace(" ", "").lower() for key, slips in MISTAKES.items() for name in (key, *(n for n, _ in slips))}
-    if not unit or word.replace(" ", "").lower() not in units | {unit.replace(" ", "").lower()}:
+    if not unit or word.replace(" ", "").lower() not in units | {unit.replace(" ", "").lower(), UNIT_WORDS.get(unit)}:
         return ""
     try:
         float(value)

@@ -304,3 +304,25 @@ def test_a_crosscheck_tolerance_from_python_is_held_as_the_command_lines(monkeyp
         mtbmj.crosscheck("S12", tolerance_mm=50)
     assert [str(w.message) for w in caught if issubclass(w.category, ConfigWarning)] == [
         "--tolerance-mm = 50 mm is outside 0.0001-10 mm, what bikes, riders and records have (a unit mistake?)"]
+
+
+# --- 9. the hunt: a model named in capitals, frames per second typed as fps ------------------------------------
+
+def test_a_fit_model_in_capitals_is_the_model(tmp_path, capfd):
+    """``fit spring example --model Linear``: "unknown model 'Linear' (one of linear, ...)"; ``--engine MuJoCo`` and
+    ``--rider Active`` are read in any case."""
+    from mtbmj.cli import build_parser
+
+    for kind in ("spring", "damper"):
+        args = build_parser().parse_args(["fit", kind, "example", "--model", "Linear", "--friction", "LuGre"])
+        assert (args.model, args.friction) == ("linear", "lugre")
+    refused(["fit", "spring", "example", "--model", "Nope", "--out", tmp_path / "out"], tmp_path / "out", capfd,
+            "unknown model 'nope' (one of linear,")  # the other side: no such model
+
+
+def test_frames_per_second_typed_as_fps_names_the_number(tmp_path, capfd):
+    """``render S12 --fps 30 fps``: "unrecognized arguments: fps"; ``30fps``: "(the option takes a number in
+    frames/s, without a unit)", as if fps were another unit."""
+    for argv in (["--fps", "30", "fps"], ["--fps", "30fps"]):
+        refused(["render", "S12", *argv, "--out", tmp_path / "out.gif"], tmp_path / "out.gif", capfd,
+                "(the unit is the option's, frames/s: give the number alone, 30)")
