@@ -326,3 +326,10 @@ def test_frames_per_second_typed_as_fps_names_the_number(tmp_path, capfd):
     for argv in (["--fps", "30", "fps"], ["--fps", "30fps"]):
         refused(["render", "S12", *argv, "--out", tmp_path / "out.gif"], tmp_path / "out.gif", capfd,
                 "(the unit is the option's, frames/s: give the number alone, 30)")
+
+
+def test_fit_bounce_given_example_says_it_has_none(tmp_path, capfd):
+    """``fit bounce example --clicks 0``: "example: cannot read (No such file or directory)", where ``fit spring
+    example`` takes its shipped record."""
+    refused(["fit", "bounce", "example", "--clicks", "0", "--out", tmp_path / "out"], tmp_path / "out", capfd,
+            "example: fit bounce has no shipped example (the shipped ride, 00649.SST, is a trail ride, no seat slam)")
