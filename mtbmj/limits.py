@@ -165,6 +165,7 @@ MISTAKES: dict[str, tuple[tuple[str, float], ...]] = {
     "%": (("as a fraction", 100.0),),
     "N": (("kN", 1000.0),),
     "cm3": (("litres", 1000.0), ("in3", 16.387064), ("mm3", 1e-3)),
+    "deg": (("rad", 180.0 / math.pi),),
 }
 
 
@@ -186,6 +187,10 @@ def require_mapping(overrides, example: str, none_ok: bool = True) -> None:
                           f"{type(overrides).__name__}")
 
 
+# A unit as people also type it after a number (``20 percent``, ``30 fps``)
+UNIT_WORDS = {"%": "percent", "deg": "degrees", "s": "sec", "frames/s": "fps"}
+
+
 def _unit_typed(raw: str, unit: str) -> str:
     """The note of a number typed with a unit after it (``6m/s``, ``20 km/h``, ``80kg``) for an option in ``unit``:
     the number alone, converted where the unit is one of its slips (``MISTAKES``); "" for anything else."""
@@ -196,12 +201,27 @@ def _unit_typed(raw: str, unit: str) -> str:
         return ""
     value, typed = float(found.group(1)), found.group(2).strip()
     squeeze = typed.replace(" ", "").lower()
-    if squeeze in (unit.replace(" ", "").lower(), {"%": "percent", "deg": "degrees", "s": "sec"}.get(unit, unit)):
+    if squeeze in (unit.replace(" ", "").lower(), UNIT_WORDS.get(unit, unit)):
         return f" (the unit is the option's, {unit}: give the number alone, {value:g})"
     per = next((per for name, per in MISTAKES.get(unit, ()) if name.replace(" ", "").lower() == squeeze), None)
     if per is not None:
         return f" (the option is in {unit}: {value:g} {typed} = {value * per:.4g} {unit}, give {value * per:.4g})"
     return f" (the option takes a number in {unit}, without a unit)"
+
+
+def unit_apart(option: str, value: str, word: str) -> str:
+    """The note on ``word`` typed apart after ``value`` of ``option`` (``--speed 20 km/h``) where ``word`` is a unit,
+    the option's own or one of the table's (``MISTAKES``), said and converted as ``_unit_typed`` says ``20km/h``;
+    "" for any other word (a positional argument after the value, left to its parser)."""
+    unit = ARGUMENTS[option].unit if option in ARGUMENTS else ""
+    units = {name.replace(" ", "").lower() for key, slips in MISTAKES.items() for name in (key, *(n for n, _ in slips))}
+    if not unit or word.replace(" ", "").lower() not in units | {unit.replace(" ", "").lower(), UNIT_WORDS.get(unit)}:
+        return ""
+    try:
+        float(value)
+    except ValueError:
+        return ""
+    return _unit_typed(f"{value} {word}", unit)
 
 
 class Argument:
@@ -211,14 +231,15 @@ class Argument:
 
     def __init__(self, unit: str = "", low: float | None = None, high: float | None = None,
                  plausible: tuple[float, float] | None = None, integer: bool = False, open_low: bool = False,
-                 beyond: str = ""):
+                 beyond: str = "", why: str = "", open_high: bool = False):
         self.unit, self.low, self.high, self.plausible = unit, low, high, plausible
-        self.integer, self.open_low, self.beyond = integer, open_low, beyond
+        self.integer, self.open_low, self.open_high, self.beyond, self.why = integer, open_low, open_high, beyond, why
 
     def allowed(self) -> str:
         unit = f" {self.unit}" if self.unit else ""
         if self.low is not None and self.high is not None:
-            return f"{'above' if self.open_low else 'at least'} {self.low:g} and at most {self.high:g}{unit}"
+            return (f"{'above' if self.open_low else 'at least'} {self.low:g} and {'below' if self.open_high else 'at most'} "
+                    f"{self.high:g}{unit}")
         if self.low is not None:
             return f"{'above' if self.open_low else 'at least'} {self.low:g}{unit}"
         return f"at most {self.high:g}{unit}"
@@ -232,7 +253,7 @@ _SEED = Argument("", low=0, high=2 ** 63 - 1, integer=True)
 _TRAVEL_MM = Argument("mm", high=1000.0, plausible=(20.0, 400.0), **_POSITIVE)
 _FORCE_N = Argument("N", low=0.0, high=1e6, plausible=(0.0, 2500.0))
 _OFFSET_MM = Argument("mm", low=-1000.0, high=1000.0, plausible=(-50.0, 50.0))
-_SAG_PERCENT = Argument("%", high=100.0, plausible=(5.0, 50.0), **_POSITIVE)
+_SAG_PERCENT = Argument("%", high=100.0, plausible=(5.0, 50.0), open_high=True, **_POSITIVE)  # 100 %: no travel left
 
 # Every numeric argument of every command, by its option (the same option means the same
 # quantity in every command that has it). ``plausible``: what bikes, riders and records have,
@@ -253,12 +274,16 @@ ARGUMENTS: dict[str, Argument] = {
     # whole mass (rider.mass_kg's plausible 150 kg, mtbmj.bike.keys); 180 is more likely 180 lb = 81.6 kg
     "--load-kg": Argument("kg", high=1e4, plausible=(5.0, 150.0), **_POSITIVE),
     "--mass-kg": Argument("kg", high=1e4, plausible=(1.0, 300.0), **_POSITIVE),
-    "--pedal": Argument("rpm", high=1000.0, plausible=(20.0, 150.0), **_POSITIVE),
-    "--power": Argument("W", low=0.0, high=1e5, plausible=(0.0, 2500.0)),
+    # a pedalling rider's cadence and power: the model's range is what any rider turns and keeps up for a few
+    # seconds, ``mtbmj.controllers.drive.PEDAL_RPM`` and ``PEDAL_POWER_W`` (a floor above: the test of
+    # tests/test_fuzz_careless32b.py holds the two equal); one range, refused, no plausible one beside it
+    "--pedal": Argument("rpm", low=30.0, high=130.0, why="what a rider turns"),
+    "--power": Argument("W", high=1500.0, why="what a rider keeps up", **_POSITIVE),
     "--drive-push-N": _FORCE_N,
     "--drive-power-W": Argument("W", low=0.0, high=1e5, plausible=(0.0, 2500.0)),
     "--drive-brake-N": _FORCE_N,
-    "--head-angle": Argument("deg", high=90.0, plausible=(55.0, 80.0), **_POSITIVE),
+    # the rolling front end's head angle: the model holds (45, 90] deg (mtbmj.rolling.frontend)
+    "--head-angle": Argument("deg", low=45.0, high=90.0, plausible=(55.0, 80.0), open_low=True),
     "--com-height-mm": Argument("mm", high=1e4, plausible=(300.0, 2000.0), **_POSITIVE),
     "--chainring": Argument("teeth", low=1, high=1000, plausible=(20, 60), integer=True),
     "--cog": Argument("teeth", low=1, high=1000, plausible=(9, 60), integer=True),
@@ -287,10 +312,6 @@ def argument(option: str, text: str, integer: bool = False):
     whole-number option), or ``ValueError`` with the one-line reason; ``ConfigWarning`` when
     outside its plausible range. An option the table lacks is a finite number (``integer``: a
     whole number) within ``MAX_MAGNITUDE``."""
-    import warnings
-
-    from mtbmj.errors import ConfigWarning
-
     spec = ARGUMENTS.get(option) or Argument(low=-MAX_MAGNITUDE, high=MAX_MAGNITUDE, integer=integer)
     raw = text.strip()
     typed = repr(text) if len(text) <= 30 else f"{text[:12]!r}... ({len(text)} characters)"
@@ -310,16 +331,34 @@ def argument(option: str, text: str, integer: bool = False):
             raise ValueError(f"must be a finite number, got {typed}")
     unit = f" {spec.unit}" if spec.unit else ""
     low_bad = spec.low is not None and (value <= spec.low if spec.open_low else value < spec.low)
-    if low_bad or (spec.high is not None and value > spec.high):
+    if low_bad or (spec.high is not None and (value >= spec.high if spec.open_high else value > spec.high)):
         beyond = f" ({spec.beyond} faster than {spec.plausible[1]:g}{unit})" if spec.beyond and not low_bad else ""
+        beyond = beyond or (f" ({spec.why})" if spec.why else "")
         shown = _shown(value) if spec.integer else f"{value:g}"
+        near = spec.plausible or (spec.low if spec.low is not None else -MAX_MAGNITUDE, spec.high)
+        meant = slip(value, spec.unit, near) if not spec.integer else ""  # --head-angle 1.13: radians
         raise ValueError(f"{shown}{unit if not spec.integer or abs(value) < 10 ** 20 else ''} is outside the range "
-                         f"allowed: {spec.allowed()}{beyond}")
+                         f"allowed: {spec.allowed()}{beyond}{f' (a unit mistake?{meant})' if meant else ''}")
+    if option in ARGUMENTS:
+        plausible(option, value, stacklevel=3)
+    return value
+
+
+def plausible(option: str, value: float, stacklevel: int = 2) -> None:
+    """Warn (``ConfigWarning``) where ``value`` of ``option`` (a key of ``ARGUMENTS``) lies outside its plausible
+    range, naming a unit slip that brings it within: the one line of a command's argument (:func:`argument`) and
+    of the same number given to a Python entry point (``run_roll``'s speed, ``solve_sag``'s load)."""
+    import warnings
+
+    from mtbmj.errors import ConfigWarning
+
+    spec = ARGUMENTS[option]
     if spec.plausible is not None and not spec.plausible[0] <= value <= spec.plausible[1]:
         lo, hi = spec.plausible
+        unit = f" {spec.unit}" if spec.unit else ""
         warnings.warn(f"{option} = {value:g}{unit} is outside {lo:g}-{hi:g}{unit}, what bikes, riders and records "
-                      f"have (a unit mistake?{slip(value, spec.unit, spec.plausible)})", ConfigWarning, stacklevel=2)
-    return value
+                      f"have (a unit mistake?{slip(value, spec.unit, spec.plausible)})", ConfigWarning,
+                      stacklevel=stacklevel + 1)
 
 
 # A run's default length is the terrain crossed at its speed. Below a ridden speed (the plausible low of
@@ -328,15 +367,18 @@ def argument(option: str, text: str, integer: bool = False):
 CRAWL_S = 120.0
 
 
-def speed(value, label: str = "speed") -> float:
-    """A rig's speed given from Python (m/s): a positive finite number within ``--speed``'s range (a
-    command's argument is checked, and warned about, by :func:`argument` before), else one ConfigError line."""
+def speed(value, label: str = "speed", warn: bool = True) -> float:
+    """A rig's speed given from Python (m/s): a positive finite number within ``--speed``'s range, else one
+    ConfigError line; outside its plausible range warned about with ``--speed``'s line (:func:`plausible`; a
+    command's argument, warned about by :func:`argument` before, is warned once: the command keeps each line once)."""
     if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value <= 0:
         raise ConfigError(f"{label}: must be a positive number of m/s, got {value!r}")
     spec = ARGUMENTS["--speed"]
     if value > spec.high:
         raise ConfigError(f"{label}: {value:g} m/s is outside the range allowed: {spec.allowed()} ({spec.beyond} "
                           f"faster than {spec.plausible[1]:g} m/s)")
+    if warn:  # the command line's warning, said to a caller from Python too (once: a run checks it twice)
+        plausible("--speed", value, stacklevel=3)
     return float(value)
 
 

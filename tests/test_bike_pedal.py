@@ -197,11 +197,11 @@ def test_bike_pedal_cli_writes_bob_beside_a_ride(tmp_path):
 @pytest.mark.parametrize("args, says", [
     (("--pedal", "60", "--set", "drive.chain=false"), "no chain to pedal through"),
     (("--pedal", "200", "--set", "drive.chainring_teeth=32", "--set", "drive.cog_teeth=42"),
-     "--pedal: 200 rpm is outside what a rider turns (30-130 rpm)"),
+     "--pedal: 200 rpm is outside the range allowed: at least 30 and at most 130 rpm (what a rider turns)"),
     # the option the user set, not the model's "pedal: power 5000.0 W"; 0 W was "outside (0-1500 W)"
     (("--pedal", "60", "--power", "5000", "--set", "drive.chainring_teeth=32", "--set", "drive.cog_teeth=42"),
-     "--power: 5000 W is outside what a rider turns (above 0 and at most 1500 W)"),
-    (("--pedal", "60", "--power", "0"), "--power: 0 W is outside what a rider turns (above 0 and at most 1500 W)"),
+     "--power: 5000 W is outside the range allowed: above 0 and at most 1500 W (what a rider keeps up)"),
+    (("--pedal", "60", "--power", "0"), "--power: 0 W is outside the range allowed: above 0 and at most 1500 W"),
     (("--speed", "3", "--power", "200"), "--power"),
     (("--pedal", "60", "--drive", "coast"), "--pedal"),
     ((), "--speed"),
@@ -284,7 +284,7 @@ def test_bob_takes_a_stance_in_capitals_and_says_the_power_allowed(tmp_path, mon
     assert "'lying' is not standing or seated" in capsys.readouterr().err
     assert main(["bob", records[0], "--power", "0", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "(above 0 W, at most 1500 W)" in err and not (tmp_path / "o").exists()
+    assert err.count("\n") == 1 and "above 0 and at most 1500 W (what a rider keeps up)" in err and not (tmp_path / "o").exists()
     # one record twice (a copy): refused before any run (it ran the same record twice)
     import shutil
 

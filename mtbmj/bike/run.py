@@ -115,12 +115,12 @@ class Prepared:
                           articulated=self.articulated).model
 
 
-def _check(speed, duration, pedal=None):
+def _check(speed, duration, pedal=None, warn=True):
     """The speed (None with ``pedal``: the gear's speed at its cadence) and the duration, each one
     ConfigError line when it is not a positive number."""
     if speed is None and pedal is not None:
         speed = 1.0
-    ridden_speed(speed)
+    ridden_speed(speed, warn=warn)
     check_duration("duration", duration)
 
 
@@ -637,7 +637,7 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
     rigid rider on spring-damper limbs) or "active" (the articulated rider with muscles and a
     riding controller, ``mtbmj.bike.rider_control``; the summary's ``rider`` then reports each
     joint's largest torque against its limit); ``legs_swing`` and ``speed_profile`` (``prepare``)."""
-    _check(speed_m_per_s, duration, pedal)
+    _check(speed_m_per_s, duration, pedal, warn=False)  # warned by prepare's check
     p = guard.prepared("bike", lambda: prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire,
                                                overrides, seated, pedal, rider, legs_swing, speed_profile),
                        model_of=lambda p: p.bike.model)

@@ -244,7 +244,7 @@ def solve(bike: str, front_percent: float, rear_percent: float, overrides: dict 
 
     for name, value in (("--front-sag-percent", front_percent), ("--rear-sag-percent", rear_percent)):
         if not (isinstance(value, (int, float)) and math.isfinite(value) and 0.0 < value < 100.0):
-            raise ConfigError(f"{name}: must be within 0-100 %, got {value!r}")
+            raise ConfigError(f"{name}: must be above 0 and below 100 %, got {value!r}")  # 100 % was "within 0-100"
     overrides = dict(overrides or {})
     spec = spec_mod.load(str(bike), _ordered(overrides))
     fork_setup, shock_setup = bike_run.setups(spec)

@@ -16,6 +16,7 @@ EXIT_CRASHED = 3
 def cmd_bike(args) -> int:
     from mtbmj.bike.run import run_bike
 
+    lock = lock_option(args.lock)
     overrides = bike_overrides(args)
     if args.ride is not None:  # a bad ride file, or another bike's ride: one line before any work
         ride_checked(args, overrides)
@@ -52,7 +53,7 @@ def cmd_bike(args) -> int:
         raise ConfigError("--legs-swing: the legs swing only for a pedalling active rider (--pedal RPM --rider active)")
     result = Progress(f"bike {args.bike} over {args.scenario}", not args.quiet).around(
         lambda progress: run_bike(args.bike, args.scenario, args.speed, args.duration, args.drive, args.start_m,
-                                  progress, lock=tuple(k.strip() for k in args.lock.split(",")) if args.lock else (),
+                                  progress, lock=lock,
                                   rear_tire=not args.lift_rear, overrides=overrides, seated=args.seated, rider=args.rider,
                                   pedal=pedal, legs_swing=args.legs_swing,
                                   speed_profile=None if profile is None else (profile.x, profile.v)))
@@ -65,6 +66,25 @@ def cmd_bike(args) -> int:
     print(f"{result.headline()}; {result.info['real_time_factor']:.2f}x real time; wrote {len(written)} files to "
           f"{args.out}")
     return EXIT_CRASHED if result.summary.get("crash") else 0
+
+
+def lock_option(text) -> tuple[str, ...]:
+    """The parts ``--lock`` names (``Rear,pitch,``: rear and pitch), or one line naming ``--lock``: a list left empty
+    (``--lock ''`` ran with nothing locked), a part that is none of ``LOCKS`` (the line said "lock: ...")."""
+    from mtbmj.bike.model import LOCKS
+    from mtbmj.cli.common import comma_words
+    from mtbmj.errors import ConfigError
+
+    if text is None:
+        return ()
+    parts = comma_words(text)
+    if not parts:
+        raise ConfigError(f"--lock {text!r}: names no part; give {', '.join(LOCKS)}, comma-separated, or leave "
+                          f"--lock out to lock none")
+    bad = [part for part in parts if part not in LOCKS]
+    if bad:
+        raise ConfigError(f"--lock: {bad[0]!r} is not one of {', '.join(LOCKS)}")
+    return tuple(parts)
 
 
 def ride_checked(args, overrides) -> None:
@@ -110,15 +130,8 @@ def pedal_option(args):
     if getattr(args, "ride", None) is not None and args.duration is not None and args.duration < 8.0:
         raise ConfigError(f"--duration: {args.duration:g} s is too short to read the pedal bob beside --ride (8 s at "
                           f"least: the bob is read over the run's second half)")
-    from mtbmj.controllers.drive import PEDAL_POWER_W, PEDAL_RPM
-
-    power = PEDAL_POWER_DEFAULT_W if args.power is None else args.power
-    for option, value, (low, high), unit in (("--pedal", args.pedal, PEDAL_RPM, "rpm"),
-                                             ("--power", power, PEDAL_POWER_W, "W")):
-        if not low <= value <= high or value <= 0.0:  # the model's range, named as the option the user set
-            span = f"{low:g}-{high:g}" if low > 0.0 else f"above {low:g} and at most {high:g}"
-            raise ConfigError(f"{option}: {value:g} {unit} is outside what a rider turns ({span} {unit})")
-    return (args.pedal, power)
+    # the cadence and the power were held to the model's range by the numeric gate (mtbmj.limits.ARGUMENTS)
+    return (args.pedal, PEDAL_POWER_DEFAULT_W if args.power is None else args.power)
 
 
 # a trail rider's steady climbing power (assumed: a round value for a fit amateur over minutes)

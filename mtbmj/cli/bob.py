@@ -3,15 +3,19 @@ bike pedalled as each was, their pedal bob side by side (``mtbmj.ride.pedalling.
 bob.png, one line per record."""
 from __future__ import annotations
 
-from mtbmj.cli.common import add_out
+from mtbmj.cli.common import add_out, comma_words
 
 
 def cmd_bob(args) -> int:
     from mtbmj.cli.bike import bike_overrides
     from mtbmj.errors import ConfigError
     from mtbmj.ride import pedalling
-    from mtbmj.measured.telemetry import read_sst, repeated_samples
+    from mtbmj.measured.telemetry import example_path, read_sst, repeated_samples, ride_path
 
+    shipped = next((r for r in args.records if ride_path(r) == example_path()), None)
+    if shipped is not None:  # the other ride commands' 'example': a trail ride, no pedal bob to read (00649 descends)
+        raise ConfigError(f"{shipped}: the shipped example (00649.SST) is a trail ride, no pedalling; bob reads "
+                          f"Sufni SST recordings of pedalling (docs/bike.md: 00088-00091)")
     twice = repeated_samples([read_sst(path) for path in args.records])  # a bad record: one line before any work
     if twice is not None:  # one ride twice (the file twice, or a copy) is two runs of one record
         first, k = twice
@@ -20,9 +24,7 @@ def cmd_bob(args) -> int:
     if args.stance is not None and not args.stance.strip(" ,"):  # `--stance ""`: a list left empty by mistake
         raise ConfigError(f"--stance {args.stance!r}: names no stance; give standing or seated, one per record, "
                           f"or leave --stance out for all standing")
-    stances = [s.strip().lower() for s in args.stance.split(",")] if args.stance else None  # Standing = standing
-    if args.power is not None and not 0.0 < args.power <= 1500.0:
-        raise ConfigError(f"--power: {args.power:g} W is outside what a rider keeps up (above 0 W, at most 1500 W)")
+    stances = comma_words(args.stance) if args.stance else None  # Standing = standing; 'standing,' one
     if args.duration is not None and not args.duration >= 2.0 * pedalling.MIN_STRETCH_S:
         raise ConfigError(f"--duration: {args.duration:g} s is too short to read a bob over its second half "
                           f"({2.0 * pedalling.MIN_STRETCH_S:g} s at least)")
@@ -39,7 +41,8 @@ def add_parser(sub) -> None:
     from mtbmj.cli.bike import add_bike_sets
 
     p = sub.add_parser("bob", help="pedal bob of recorded pedalling rides beside the bike pedalled as each was")
-    p.add_argument("records", nargs="+", metavar="RECORD", help="Sufni SST recordings of pedalling")
+    p.add_argument("records", nargs="+", metavar="RECORD", help="Sufni SST recordings of pedalling (not 'example', the shipped "
+                                                                "trail ride)")
     p.add_argument("--bike", default="sst", help="bike preset or bike TOML file (default sst)")
     p.add_argument("--stance", help="standing or seated, one per record, comma-separated (default all standing)")
     p.add_argument("--power", type=float, help="the rider's power in W (default 250)")

@@ -93,7 +93,12 @@ def add_bounce_parser(fit_parser) -> None:
 
 def cmd_fit_bounce(args) -> int:
     from mtbmj.identify.bounce_fit import fit_bounce
+    from mtbmj.measured.telemetry import example_path, ride_path
 
+    shipped = next((r for r in args.records if ride_path(r) == example_path()), None)
+    if shipped is not None:  # fit's other kinds take 'example' (their shipped records); bounce has none
+        raise MtbmjError(f"{shipped}: fit bounce has no shipped example (the shipped ride, 00649.SST, is a trail "
+                         f"ride, no seat slam); give SST recordings of seat slams, one each")
     clicks = _numbers(args.clicks, "--clicks")
     predict = _numbers(args.predict_clicks, "--predict-clicks") if args.predict_clicks else []
     twice = sorted({k for k in predict if predict.count(k) > 1})

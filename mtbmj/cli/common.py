@@ -44,7 +44,10 @@ class Parser(argparse.ArgumentParser):
         given = sys.argv[1:] if args is None else list(args)
         _one_comma_list(getattr(self, "_comma_lists", ()), given)
         _one_side(self._actions, given)
-        return super().parse_known_args(args, namespace)
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras:  # ``--speed 20 km/h``: argparse's "unrecognized arguments: km/h" where the cause is the unit
+            _unit_apart(self._actions, given, extras)
+        return namespace, extras
 
     def add_argument(self, *args, **kwargs):
         if "," in str(kwargs.get("metavar", "")):  # a comma list (``--clicks K1,K2,...``): typed with spaces, said so
@@ -54,16 +57,64 @@ class Parser(argparse.ArgumentParser):
             kwargs["type"] = numeric(option, integer=kwargs["type"] is int)
         if kwargs.get("type") is Path:  # '' is no file: Path("") is the current folder ("given twice (as .)")
             kwargs["type"] = _a_path
+        if "type" not in kwargs and kwargs.get("action") in (None, "store", "append", "extend") and \
+                _dest(args, kwargs) in INPUT_NAMES:  # a preset's name or a file's path, kept a str
+            kwargs["type"] = _an_input
         choices = kwargs.get("choices")
         if choices and "type" not in kwargs and all(isinstance(c, str) and c == c.lower() for c in choices):
             kwargs["type"] = _in_any_case(choices)  # --engine MuJoCo, --rider Active: as presets are named
         return super().add_argument(*args, **kwargs)
 
 
+# The arguments typed as str that name an input file (or a preset, a terrain, 'example'), by their dest in every
+# command: a leading ~ in them is the home folder, as in the arguments typed as Path and in --out
+INPUT_NAMES = frozenset({"config", "configs", "bike", "scenario", "speed_profile", "ride", "records", "data", "source",
+                         "show", "roll", "try_file", "speed_csv"})
+
+
+def home(text: str) -> str:
+    """``text`` with a leading ``~`` (``~/x``, ``~user/x``) made the home folder, as the shell makes it where it
+    sees one (it does not after ``=``, ``--ride=~/x.SST``, nor in quotes): the one place every path a user gives
+    (an input or ``--out``) is so read."""
+    return os.path.expanduser(text) if text.startswith("~") else text
+
+
+def _dest(args, kwargs) -> str:
+    if "dest" in kwargs:
+        return kwargs["dest"]
+    long = next((a for a in args if a.startswith("--")), None)
+    return (long[2:] if long else args[0] if args else "").replace("-", "_")
+
+
+def _an_input(text: str) -> str:
+    return home(text)
+
+
 def _a_path(text: str) -> Path:
     if not text.strip():
         raise argparse.ArgumentTypeError(f"{text!r}: an empty name; give a file or a folder")
-    return Path(text)
+    return Path(home(text))
+
+
+def _unit_apart(actions, args, extras) -> None:
+    """Refuse a unit typed apart after a numeric option's value (``--speed 20 km/h``, ``--load-kg=180 lb``),
+    where argparse found an argument it did not expect (the unit, or the positional the unit displaced), naming
+    the number to give (``limits.unit_apart``)."""
+    from mtbmj.limits import unit_apart
+
+    numeric_options = {o: a.type.option for a in actions if hasattr(a.type, "option") for o in a.option_strings}
+    said = [str(a) for a in args]
+    for i, word in enumerate(said[1:], 1):
+        option, eq, value = said[i - 1].partition("=")
+        if not eq and i >= 2 and said[i - 2] in numeric_options:  # ``--speed 20 km/h``: the value the word before
+            option, value = said[i - 2], said[i - 1]
+        elif not (eq and option in numeric_options):  # ``--speed=20 km/h``
+            continue
+        note = unit_apart(numeric_options[option], value, word)  # the unit may have been taken as a positional
+        if note:
+            error = MtbmjError(f"argument {option}: '{value} {word}' is a number and its unit{note}")
+            error.alone = True  # no note of the number's range beside it: the number was read without its unit
+            raise error
 
 
 def _in_any_case(choices):
@@ -191,6 +242,7 @@ def numeric(option: str, integer: bool = False):
             raise argparse.ArgumentTypeError(str(exc)) from None
 
     parse.__name__ = "number"
+    parse.option = option  # the option whose number it reads (``_unit_apart``)
     return parse
 
 
@@ -311,7 +363,7 @@ def out_path(text: str) -> Path:
                                          f"control character")
     # ``--out=~/runs`` (bash expands no ~ after "=") or a quoted '~/runs': the home folder meant, as the shell
     # would have read it, not a folder named "~" in the current one
-    return Path(text).expanduser() if text.startswith("~") else Path(text)
+    return Path(home(text))
 
 
 def command_name(args) -> str:
@@ -396,7 +448,7 @@ def _run_parsed(parser: argparse.ArgumentParser, argv=None) -> int:
         _report(f"{exc}{config_warnings.suffix()}")
         return EXIT_BAD_INPUT
     except MtbmjError as exc:
-        _report(f"{exc}{config_warnings.suffix(str(exc))}")
+        _report(f"{exc}{'' if getattr(exc, 'alone', False) else config_warnings.suffix(str(exc))}")
         return EXIT_BAD_INPUT
     except (RuntimeWarning, FloatingPointError) as exc:  # a numerical failure no guard named (none is known)
         _report(f"numerical failure ({exc}){config_warnings.suffix()}")
@@ -440,6 +492,12 @@ def _silence_stdout() -> None:
         os.close(devnull)
     except (OSError, ValueError, AttributeError, io.UnsupportedOperation):
         pass
+
+
+def comma_words(text: str) -> list[str]:
+    """The words of a comma list a user typed (``--lock Rear,pitch,``, ``--stance standing, seated``): stripped, in
+    lower case, an empty one (a comma too many) left out, as ``--presets S1,,S2`` is read."""
+    return [word.strip().lower() for word in text.split(",") if word.strip()]
 
 
 def given_options(args, **defaults) -> str:

@@ -148,12 +148,13 @@ def _choices(kind: str, what: str) -> str:
 # for that kind}; a callable help is given the kind). The command's parser takes them all (so
 # ``mtbmj fit KIND DATA...`` parses as it always has); ``fit KIND --help`` shows the kind's own.
 OPTIONS = (
-    (("--model",), dict(default="auto"), "spring/damper model to write (default: best by BIC)",
+    # a model's name in any case (LuGre, Linear), as --engine's and --rider's choices are read
+    (("--model",), dict(default="auto", type=str.lower), "spring/damper model to write (default: best by BIC)",
      {"spring": lambda k: f"spring law to write: {_choices(k, 'model')} (air with an air --config; default: "
                           "the lowest BIC)",
       "damper": lambda k: f"hydraulic law to write: {_choices(k, 'model')} (default: the lowest BIC); with "
                           "--clicks, the law each dyno file is read through: table (default) or digressive"}),
-    (("--friction",), dict(default="auto"), "damper friction model to write (default: best by BIC)",
+    (("--friction",), dict(default="auto", type=str.lower), "damper friction model to write (default: best by BIC)",
      {"damper": lambda k: f"friction law to write: {_choices(k, 'friction')} (default: the lowest BIC)"}),
     (("--mass-kg",), dict(type=float), "tire: the mass dropped on the tire",
      {"tire": "the mass dropped on the tire (kg)"}),

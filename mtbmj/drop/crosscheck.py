@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from mtbmj.drop.chain import resolve
+from mtbmj import limits
 from mtbmj.errors import ConfigError
 from mtbmj.drop.run import run_drop
 from mtbmj.drop.result import DISPLACEMENTS, DropResult
@@ -41,6 +42,10 @@ def crosscheck_all(config, engines=("mujoco",), tolerance_mm: float = DEFAULT_TO
     if not isinstance(tolerance_mm, (int, float)) or isinstance(tolerance_mm, bool) \
             or not (math.isfinite(tolerance_mm) and tolerance_mm > 0):  # refused before the runs, naming the argument
         raise ConfigError(f"tolerance_mm: must be a positive number of mm, got {tolerance_mm!r}")
+    gate = limits.ARGUMENTS["--tolerance-mm"]  # the command line's range and warning, from Python too
+    if tolerance_mm > gate.high:  # 5000 mm ran from Python where --tolerance-mm 5000 is refused
+        raise ConfigError(f"tolerance_mm: {tolerance_mm:g} mm is outside the range allowed: {gate.allowed()}")
+    limits.plausible("--tolerance-mm", tolerance_mm, stacklevel=3)
     cfg = resolve(config, overrides)
     ode = run_drop(cfg, "ode", duration=duration)
     return [from_results(run_drop(cfg, e, duration=duration), ode, tolerance_mm) for e in engines]

@@ -30,7 +30,7 @@ from typing import Any, Mapping
 import numpy as np
 from scipy.optimize import brentq
 
-from mtbmj import compose
+from mtbmj import compose, limits
 from mtbmj.config import BODY_KEY, RIDER_KEYS, WHEEL_KEY, Config, parameter_set_toml, preset_names
 from mtbmj.controllers import friction as friction_laws
 from mtbmj.errors import ConfigError
@@ -195,6 +195,9 @@ def solve_sag(config: Config | str, load_kg: float | None, sag_percent: float,
     _check_load_kg(load_kg, overrides)
     if not (isinstance(sag_percent, (int, float)) and 0 < sag_percent < 100):
         raise ConfigError(f"--sag-percent: must be between 0 and 100 (percent of travel), got {sag_percent}")
+    if load_kg is not None:  # the command line's warnings, said to a caller from Python too (70 kg as 0.2 %: 20 %?)
+        limits.plausible("--load-kg", load_kg, stacklevel=2)
+    limits.plausible("--sag-percent", sag_percent, stacklevel=2)
     cfg = resolve(config, overrides)
     fixed, load_from = _load(cfg, load_kg, overrides)
     model = cfg.require("fork.spring.model")

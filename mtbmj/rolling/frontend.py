@@ -41,7 +41,7 @@ from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.terrain import DEFAULT_HEAD_ANGLE_DEG
 from mtbmj.config import Config
 from mtbmj.errors import ConfigError
-from mtbmj.limits import check_duration, check_run, crossing, speed as ridden_speed
+from mtbmj.limits import check_duration, check_run, crossing, plausible, speed as ridden_speed
 from mtbmj.result import RunOutput
 from mtbmj.rolling.callback import RollCallback
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
@@ -90,13 +90,15 @@ class FrontEnd:
         return self.chassis_x0 + qx + (self.fork_length - qf) * c, self.chassis_z0 + qz - (self.fork_length - qf) * s
 
 
-def _check_inputs(speed, head_angle_deg, duration):
-    ridden_speed(speed)
+def _check_inputs(speed, head_angle_deg, duration, warn=True):
+    ridden_speed(speed, warn=warn)
     if not isinstance(head_angle_deg, (int, float)) or not math.isfinite(head_angle_deg) or not 45.0 < head_angle_deg <= 90.0:
         rad = ""
         if isinstance(head_angle_deg, (int, float)) and math.pi / 4 < head_angle_deg <= math.pi / 2:  # 1.13: radians
             rad = f" (radians? {head_angle_deg:g} rad is {math.degrees(head_angle_deg):.1f} deg)"
         raise ConfigError(f"head angle: must be in (45, 90] degrees from the horizontal, got {head_angle_deg!r}{rad}")
+    if warn:  # the command line's line (--head-angle 50: outside 55-80 deg), said to a caller from Python too
+        plausible("--head-angle", head_angle_deg, stacklevel=3)
     check_duration("duration", duration)
 
 
@@ -639,7 +641,7 @@ def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
     cross the feature and settle (the drum: its revolutions). ``callback``: ``"auto"`` (compiled
     when numba is available), ``"compiled"`` or ``"python"`` (the specification; same results);
     ``drive``: see ``prepare`` (default ``"rider"``: within a rider's force, power and braking)."""
-    _check_inputs(speed_m_per_s, head_angle_deg, duration)
+    _check_inputs(speed_m_per_s, head_angle_deg, duration, warn=False)  # warned by prepare's check
     p = guard.prepared("rolling", lambda: prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides,
                                                   callback=callback, drive=drive), model_of=lambda p: p.front.model)
     if duration is None:  # the terrain crossed: a crawl refused before the run
@@ -668,7 +670,7 @@ def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12"
                     overrides: Mapping | None = None, fps: float = 60.0, drive: str | Drive = "rider"):
     """(model, times, qpos) of a rolling run sampled at ``fps`` for rendering; the model has the
     terrain as a visual heightfield (group 1) or the drum with its cleat. ``drive`` as ``prepare``."""
-    _check_inputs(speed_m_per_s, head_angle_deg, duration)
+    _check_inputs(speed_m_per_s, head_angle_deg, duration, warn=False)  # warned by prepare's check
     p = guard.prepared("rolling", lambda: prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, drive=drive),
                        model_of=lambda p: p.front.model)
     duration = default_duration(p) if duration is None else duration
