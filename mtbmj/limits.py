@@ -191,21 +191,34 @@ def require_mapping(overrides, example: str, none_ok: bool = True) -> None:
 UNIT_WORDS = {"%": "percent", "deg": "degrees", "s": "sec", "frames/s": "fps"}
 
 
-def _unit_typed(raw: str, unit: str) -> str:
+# What a unit typed after a number looks like: letters (µ, °, % among them), a slash between them, a square at the
+# end (``km/h``, ``N s/mm``, ``m/s2``); a lone ``e`` is an exponent left unfinished (``1e``), not a unit
+_UNIT_TOKEN = r"(?!(?:[eE][-+]?)$)[A-Za-zµ°%](?:[A-Za-zµ°% /]*[A-Za-zµ°%2²])?"
+
+
+def _unit_typed(raw: str, unit: str, spec: "Argument | None" = None) -> str:
     """The note of a number typed with a unit after it (``6m/s``, ``20 km/h``, ``80kg``) for an option in ``unit``:
-    the number alone, converted where the unit is one of its slips (``MISTAKES``); "" for anything else."""
+    the number alone (as typed), converted where the unit is one of its slips (``MISTAKES``), and the range allowed
+    in its place where that number is outside it (``spec``); "" for anything else (``4-6``, ``5/2``, ``1e``)."""
     import re
 
-    found = re.fullmatch(r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([^\d\s].*)", raw)
+    found = re.fullmatch(rf"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*({_UNIT_TOKEN})", raw)
     if not found or not unit:
         return ""
-    value, typed = float(found.group(1)), found.group(2).strip()
+    number, typed = found.group(1), found.group(2).strip()
+    value = float(number)
     squeeze = typed.replace(" ", "").lower()
     if squeeze in (unit.replace(" ", "").lower(), UNIT_WORDS.get(unit, unit)):
-        return f" (the unit is the option's, {unit}: give the number alone, {value:g})"
+        if spec is not None and spec.outside(value):
+            return f" (the unit is the option's, {unit}: {number} is outside the range allowed: {spec.allowed()})"
+        return f" (the unit is the option's, {unit}: give the number alone, {number})"
     per = next((per for name, per in MISTAKES.get(unit, ()) if name.replace(" ", "").lower() == squeeze), None)
     if per is not None:
-        return f" (the option is in {unit}: {value:g} {typed} = {value * per:.4g} {unit}, give {value * per:.4g})"
+        meant = f"{value * per:.4g}"
+        if spec is not None and spec.outside(float(meant)):
+            return (f" (the option is in {unit}: {value:g} {typed} = {meant} {unit}, outside the range allowed: "
+                    f"{spec.allowed()})")
+        return f" (the option is in {unit}: {value:g} {typed} = {meant} {unit}, give {meant})"
     return f" (the option takes a number in {unit}, without a unit)"
 
 
@@ -221,7 +234,7 @@ def unit_apart(option: str, value: str, word: str) -> str:
         float(value)
     except ValueError:
         return ""
-    return _unit_typed(f"{value} {word}", unit)
+    return _unit_typed(f"{value} {word}", unit, ARGUMENTS[option])
 
 
 class Argument:
@@ -234,6 +247,11 @@ class Argument:
                  beyond: str = "", why: str = "", open_high: bool = False):
         self.unit, self.low, self.high, self.plausible = unit, low, high, plausible
         self.integer, self.open_low, self.open_high, self.beyond, self.why = integer, open_low, open_high, beyond, why
+
+    def outside(self, value: float) -> bool:
+        """Whether ``value`` is outside the values the model allows (refused by :func:`argument`)."""
+        low_bad = self.low is not None and (value <= self.low if self.open_low else value < self.low)
+        return low_bad or (self.high is not None and (value >= self.high if self.open_high else value > self.high))
 
     def allowed(self) -> str:
         unit = f" {self.unit}" if self.unit else ""
@@ -319,19 +337,19 @@ def argument(option: str, text: str, integer: bool = False):
         try:
             value = int(raw)
         except ValueError:
-            raise ValueError(f"{typed} is not a whole number{_unit_typed(raw, spec.unit)}") from None
+            raise ValueError(f"{typed} is not a whole number{_unit_typed(raw, spec.unit, spec)}") from None
     else:
         try:
             value = float(raw)
         except ValueError:
             comma = raw.count(",") == 1 and raw.replace(",", ".", 1).replace(".", "", 1).lstrip("+-").isdigit()
             hint = f" (a decimal comma? the decimal point is a dot: {raw.replace(',', '.')})" if comma else ""
-            raise ValueError(f"{typed} is not a number{hint or _unit_typed(raw, spec.unit)}") from None
+            raise ValueError(f"{typed} is not a number{hint or _unit_typed(raw, spec.unit, spec)}") from None
         if not math.isfinite(value):
             raise ValueError(f"must be a finite number, got {typed}")
     unit = f" {spec.unit}" if spec.unit else ""
     low_bad = spec.low is not None and (value <= spec.low if spec.open_low else value < spec.low)
-    if low_bad or (spec.high is not None and (value >= spec.high if spec.open_high else value > spec.high)):
+    if spec.outside(value):
         beyond = f" ({spec.beyond} faster than {spec.plausible[1]:g}{unit})" if spec.beyond and not low_bad else ""
         beyond = beyond or (f" ({spec.why})" if spec.why else "")
         shown = _shown(value) if spec.integer else f"{value:g}"
