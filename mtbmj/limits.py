@@ -358,14 +358,15 @@ def argument(option: str, text: str, integer: bool = False):
         raise ValueError(f"{shown}{unit if not spec.integer or abs(value) < 10 ** 20 else ''} is outside the range "
                          f"allowed: {spec.allowed()}{beyond}{f' (a unit mistake?{meant})' if meant else ''}")
     if option in ARGUMENTS:
-        plausible(option, value, stacklevel=3)
+        plausible(option, value)
     return value
 
 
-def plausible(option: str, value: float, stacklevel: int = 2) -> None:
+def plausible(option: str, value: float) -> None:
     """Warn (``ConfigWarning``) where ``value`` of ``option`` (a key of ``ARGUMENTS``) lies outside its plausible
     range, naming a unit slip that brings it within: the one line of a command's argument (:func:`argument`) and
-    of the same number given to a Python entry point (``run_roll``'s speed, ``solve_sag``'s load)."""
+    of the same number given to a Python entry point (``run_roll``'s speed, ``solve_sag``'s load), said at the
+    caller's line outside the package (:func:`caller_level`)."""
     import warnings
 
     from mtbmj.errors import ConfigWarning
@@ -376,7 +377,20 @@ def plausible(option: str, value: float, stacklevel: int = 2) -> None:
         unit = f" {spec.unit}" if spec.unit else ""
         warnings.warn(f"{option} = {value:g}{unit} is outside {lo:g}-{hi:g}{unit}, what bikes, riders and records "
                       f"have (a unit mistake?{slip(value, spec.unit, spec.plausible)})", ConfigWarning,
-                      stacklevel=stacklevel + 1)
+                      stacklevel=caller_level())
+
+
+def caller_level() -> int:
+    """The ``stacklevel`` of ``warnings.warn``, called in the function that calls this, that names the first line
+    outside the package (the user's call, however deep in the package the check sits)."""
+    import os
+    import sys
+
+    package = os.path.dirname(os.path.abspath(__file__)) + os.sep
+    frame, level = sys._getframe(1), 1  # the function that warns
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package):
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 # A run's default length is the terrain crossed at its speed. Below a ridden speed (the plausible low of
@@ -396,7 +410,7 @@ def speed(value, label: str = "speed", warn: bool = True) -> float:
         raise ConfigError(f"{label}: {value:g} m/s is outside the range allowed: {spec.allowed()} ({spec.beyond} "
                           f"faster than {spec.plausible[1]:g} m/s)")
     if warn:  # the command line's warning, said to a caller from Python too (once: a run checks it twice)
-        plausible("--speed", value, stacklevel=3)
+        plausible("--speed", value)
     return float(value)
 
 

@@ -61,3 +61,45 @@ def test_a_value_with_no_unit_in_it_is_not_told_it_has_one(typed):
     with pytest.raises(ValueError) as caught:
         limits.argument("--speed", typed)
     assert str(caught.value) == f"{typed!r} is not a number"
+
+
+# --- review32b: the Python API's plausibility warnings (careless32b) said where no one typed the value ----------
+
+def _config_warnings(call):
+    import warnings
+
+    from mtbmj.errors import ConfigWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = call()
+    return result, [w for w in caught if issubclass(w.category, ConfigWarning)]
+
+
+def test_a_still_rig_and_a_saved_run_replayed_are_not_warned_of_a_speed_nobody_typed():
+    """``fit bounce --replay`` builds the bike standing still (1 mm/s, ``bounce_replay.STILL_M_PER_S``) through
+    ``bike.run.prepare``: it warned "--speed = 0.001 m/s is outside 0.3-30 m/s"; ``render`` of a saved roll run at
+    head angle 50 warned "--head-angle = 50 deg" (render has no such option). Warned where a caller gives them:
+    ``run_roll`` and ``run_bike``, at the caller's own line (not a line inside the package)."""
+    from mtbmj.bike import run as bike_run
+    from mtbmj.rolling import frontend
+
+    _, said = _config_warnings(lambda: bike_run.prepare("sst", "flat", 1e-3, drive="coast", seated=True))
+    assert said == []
+    _, said = _config_warnings(lambda: frontend.roll_trajectory("flat", 4.0, head_angle_deg=50.0, duration=0.02))
+    assert said == []
+    _, said = _config_warnings(lambda: frontend.run_roll("flat", 4.0, head_angle_deg=50.0, duration=0.02))
+    assert [w.filename for w in said] == [__file__] and "--head-angle = 50 deg is outside 55-80 deg" in str(said[0].message)
+
+
+def test_a_config_file_named_like_a_unit_is_read_by_validate(tmp_path, capfd, monkeypatch):
+    """``validate example --duration 0.5 s`` with a configuration file named ``s`` was refused as "'0.5 s' is a
+    number and its unit": validate's parse goes in two passes whose first leaves its positionals over."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s").write_text('base = "S12"\n')
+    status, err = command_err(["validate", "example", "--duration", "0.5", "s", "--out", tmp_path / "out", "--quiet"],
+                              capfd)
+    assert status == 0 and "is a number and its unit" not in err, err
+    assert (tmp_path / "out" / "validation_report.html").exists()
+    status, err = command_err(["roll", "flat", "--speed", "20", "km/h", "--out", tmp_path / "r"], capfd)  # the other side
+    assert status == 2 and "'20 km/h' is a number and its unit" in err, err

@@ -12,11 +12,12 @@ no longer describes it, or a bike file changed since).
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
 
-from mtbmj.errors import MtbmjError
+from mtbmj.errors import ConfigWarning, MtbmjError
 from mtbmj.textfile import run_file_text
 
 MATCH_MM = 1e-3
@@ -76,8 +77,10 @@ def rerun(run_dir, duration: float | None = None, error=MtbmjError):
         raise error(f"{run_dir}: summary.json says {whole:g} s but timeseries.csv holds {held:.4g} s "
                     f"({times.size} samples): the folder was changed since mtbmj wrote it; not replayed")
     try:
-        result = run_bike(manifest["bike_source"], manifest["scenario"], float(summary["speed_m_per_s"]),
-                          whole if duration is None else min(whole, float(duration)), **kwargs)
+        with warnings.catch_warnings():  # the saved speed's plausibility was said when the run was made
+            warnings.filterwarnings("ignore", message=r"--speed = ", category=ConfigWarning)
+            result = run_bike(manifest["bike_source"], manifest["scenario"], float(summary["speed_m_per_s"]),
+                              whole if duration is None else min(whole, float(duration)), **kwargs)
     except MtbmjError as exc:
         raise error(f"{run_dir}: cannot replay this bike run ({exc})") from None
     except (KeyError, TypeError, ValueError) as exc:

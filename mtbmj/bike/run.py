@@ -206,7 +206,7 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
             raise ConfigError(f"pedal: a pedalling rider is the drive; drive {drive!r} cannot be given with it")
         cadence_rpm, power = _check_pedal(pedal)
         drive = "pedal"
-    _check(speed_m_per_s, None, pedal)
+    _check(speed_m_per_s, None, pedal, warn=False)  # warned by run_bike (a replay, a still rig: not)
     if start_x is not None and (not isinstance(start_x, (int, float)) or isinstance(start_x, bool)
                                 or not math.isfinite(start_x)):  # nan was "does not start on level ground"
         raise ConfigError(f"start_x: must be a finite number of m (the front axle's start), got {start_x!r}")
@@ -637,7 +637,7 @@ def run_bike(bike="sst", scenario="drop", speed_m_per_s: float | None = 4.0, dur
     rigid rider on spring-damper limbs) or "active" (the articulated rider with muscles and a
     riding controller, ``mtbmj.bike.rider_control``; the summary's ``rider`` then reports each
     joint's largest torque against its limit); ``legs_swing`` and ``speed_profile`` (``prepare``)."""
-    _check(speed_m_per_s, duration, pedal, warn=False)  # warned by prepare's check
+    _check(speed_m_per_s, duration, pedal)  # the plausible speed warned here, at the caller's line, not in prepare
     p = guard.prepared("bike", lambda: prepare(bike, scenario, speed_m_per_s, drive, start_x, callback, lock, rear_tire,
                                                overrides, seated, pedal, rider, legs_swing, speed_profile),
                        model_of=lambda p: p.bike.model)

@@ -45,7 +45,9 @@ class Parser(argparse.ArgumentParser):
         _one_comma_list(getattr(self, "_comma_lists", ()), given)
         _one_side(self._actions, given)
         namespace, extras = super().parse_known_args(args, namespace)
-        if extras:  # ``--speed 20 km/h``: argparse's "unrecognized arguments: km/h" where the cause is the unit
+        # ``--speed 20 km/h``: argparse's "unrecognized arguments: km/h" where the cause is the unit (not in an
+        # intermixed parse's first pass, whose extras are its positionals: checked on its final extras, ``intermixed``)
+        if extras and not getattr(self, "_intermixing", False):
             _unit_apart(self._actions, given, extras)
         return namespace, extras
 
@@ -182,10 +184,15 @@ def intermixed(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
         if busy:
             return plain(args, namespace)
         busy.append(True)
+        parser._intermixing = True  # its two passes leave positionals over on the first: no unit check in them
         try:
-            return parser.parse_known_intermixed_args(args, namespace)
+            namespace, extras = parser.parse_known_intermixed_args(args, namespace)
         finally:
             busy.pop()
+            parser._intermixing = False
+        if extras:  # what is left over at the end: a unit typed apart named, as in the other commands
+            _unit_apart(parser._actions, sys.argv[1:] if args is None else list(args), extras)
+        return namespace, extras
 
     parser.parse_known_args = parse_known_args
     return parser

@@ -45,7 +45,7 @@ def crosscheck_all(config, engines=("mujoco",), tolerance_mm: float = DEFAULT_TO
     gate = limits.ARGUMENTS["--tolerance-mm"]  # the command line's range and warning, from Python too
     if tolerance_mm > gate.high:  # 5000 mm ran from Python where --tolerance-mm 5000 is refused
         raise ConfigError(f"tolerance_mm: {tolerance_mm:g} mm is outside the range allowed: {gate.allowed()}")
-    limits.plausible("--tolerance-mm", tolerance_mm, stacklevel=3)
+    limits.plausible("--tolerance-mm", tolerance_mm)
     cfg = resolve(config, overrides)
     ode = run_drop(cfg, "ode", duration=duration)
     return [from_results(run_drop(cfg, e, duration=duration), ode, tolerance_mm) for e in engines]

@@ -98,7 +98,7 @@ def _check_inputs(speed, head_angle_deg, duration, warn=True):
             rad = f" (radians? {head_angle_deg:g} rad is {math.degrees(head_angle_deg):.1f} deg)"
         raise ConfigError(f"head angle: must be in (45, 90] degrees from the horizontal, got {head_angle_deg!r}{rad}")
     if warn:  # the command line's line (--head-angle 50: outside 55-80 deg), said to a caller from Python too
-        plausible("--head-angle", head_angle_deg, stacklevel=3)
+        plausible("--head-angle", head_angle_deg)
     check_duration("duration", duration)
 
 
@@ -256,7 +256,7 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
     directly, without the run path's refinement: the dm_control environment)."""
     from mtbmj.drop.chain import resolve
 
-    _check_inputs(speed_m_per_s, head_angle_deg, None)
+    _check_inputs(speed_m_per_s, head_angle_deg, None, warn=False)  # warned by run_roll (a replay, a rig: not)
     if callback not in CALLBACKS:
         raise ConfigError(f"callback: must be one of {', '.join(CALLBACKS)}, got {callback!r}")
     ter = terrain_mod.make(scenario)
@@ -641,7 +641,7 @@ def run_roll(scenario, speed_m_per_s: float, config: Config | str = "S12",
     cross the feature and settle (the drum: its revolutions). ``callback``: ``"auto"`` (compiled
     when numba is available), ``"compiled"`` or ``"python"`` (the specification; same results);
     ``drive``: see ``prepare`` (default ``"rider"``: within a rider's force, power and braking)."""
-    _check_inputs(speed_m_per_s, head_angle_deg, duration, warn=False)  # warned by prepare's check
+    _check_inputs(speed_m_per_s, head_angle_deg, duration)  # the plausible ranges warned here, not in prepare
     p = guard.prepared("rolling", lambda: prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides,
                                                   callback=callback, drive=drive), model_of=lambda p: p.front.model)
     if duration is None:  # the terrain crossed: a crawl refused before the run
@@ -670,7 +670,7 @@ def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12"
                     overrides: Mapping | None = None, fps: float = 60.0, drive: str | Drive = "rider"):
     """(model, times, qpos) of a rolling run sampled at ``fps`` for rendering; the model has the
     terrain as a visual heightfield (group 1) or the drum with its cleat. ``drive`` as ``prepare``."""
-    _check_inputs(speed_m_per_s, head_angle_deg, duration, warn=False)  # warned by prepare's check
+    _check_inputs(speed_m_per_s, head_angle_deg, duration, warn=False)  # a saved run's values: warned when it ran
     p = guard.prepared("rolling", lambda: prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, drive=drive),
                        model_of=lambda p: p.front.model)
     duration = default_duration(p) if duration is None else duration
