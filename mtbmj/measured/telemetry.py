@@ -302,6 +302,7 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
         if present[column]:
             bad = np.flatnonzero(counts[:, column] > limits[column])
             if bad.size:
+                _refuse_joined(name, blob, header.size, int(bad[0]), rate)
                 raise TelemetryError(f"{name}: {label} count {int(counts[bad[0], column])} at sample {int(bad[0])} "
                                      f"is outside 0..{limits[column]}")
     moving = [int(np.ptp(counts[:, k])) > 0 for k in (0, 1) if present[k]]
@@ -327,6 +328,19 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
         fork_max_mm=float(fork_max_mm), shock_max_mm=float(shock_max_mm),
         rear_max_mm=float(leverage.wheel_travel_mm(shock_max_mm)), counts=counts.copy(), notes=notes,
     )
+
+
+def _refuse_joined(name: str, blob: bytes, start: int, bad: int, rate: int) -> None:
+    """Where the first count out of range (sample ``bad``) is a second file's header (``SST`` and a version:
+    the magic's ``S`` as a count's high byte is out of range however the bytes fall), the cause in one line:
+    two recordings joined into one file (``cat a.SST b.SST``), not a sensor gone wild."""
+    at = blob.find(MAGIC, start, start + RECORD_BYTES * (bad + 1) + len(MAGIC))
+    if at < 0 or at + len(MAGIC) >= len(blob) or blob[at + len(MAGIC)] not in VERSIONS:
+        return
+    whole = (at - start) // RECORD_BYTES
+    raise TelemetryError(f"{name}: a second SST header (version {blob[at + len(MAGIC)]}) at byte {at}, after "
+                         f"{whole} samples ({whole / float(rate):.1f} s): two recordings joined into one file? "
+                         f"read each on its own")
 
 
 CSV_COLUMNS = ("time_s", "fork_mm", "shock_mm", "rear_mm")

@@ -1,0 +1,77 @@
+"""Careless input, round 32c: the ride commands (telemetry, reconstruct, advise, bob, bike --ride, fit bounce,
+sag --bike) and ``mtbmj.ride``'s readers given the shared records damaged as a rider damages them. Each case
+failed before its fix. Records are written here from the formats of /work/shared/data/sst/README.md and
+/work/shared/data/sst_v2/README.md (header and 4-byte samples), never by the code under test."""
+from __future__ import annotations
+
+import struct
+
+import numpy as np
+import pytest
+
+from helpers import refused
+from mtbmj.measured.telemetry import TelemetryError
+from mtbmj.ride import read_sst
+
+
+def v3_record(seconds: float, rate: int = 1000, phase: float = 0.0) -> bytes:
+    """An SST v3 file: the 16-byte header (magic, version 3, rate, padding, Unix time) and counts of both
+    sensors moving within 0..1024 (both ends within their travel)."""
+    t = np.arange(int(seconds * rate)) / rate
+    fork = 300 + 200 * np.sin(2 * np.pi * 1.3 * t + phase)
+    shock = 400 + 150 * np.sin(2 * np.pi * 0.9 * t + phase)
+    body = np.column_stack((fork, shock)).round().astype("<u2").tobytes()
+    return struct.pack("<3sBHHq", b"SST", 3, rate, 0, 1_650_000_000) + body
+
+
+def v2_record(seconds: float, rate: int = 5000) -> bytes:
+    """An SST v2 file: the 6-byte header (magic, version 2, rate) and counts within the v2 fork's and shock's
+    range (0..1485 and 0..1071 by the README's placeholder arms)."""
+    t = np.arange(int(seconds * rate)) / rate
+    fork = 300 + 200 * np.sin(2 * np.pi * 1.3 * t)
+    shock = 400 + 150 * np.sin(2 * np.pi * 0.9 * t)
+    return struct.pack("<3sBH", b"SST", 2, rate) + np.column_stack((fork, shock)).round().astype("<u2").tobytes()
+
+
+# --- 1. two recordings joined into one file (cat a.SST b.SST > ride.SST) ------------------------------------
+
+@pytest.mark.parametrize("first, second, cut, said", [
+    # was "fork count 21331 at sample 40000 is outside 0..4095": true, but a rider reads a sensor gone wild
+    (v3_record(40.0), v3_record(35.0, phase=1.0), 0, "a second SST header (version 3) at byte 160016, after 40000 "
+                                                     "samples (40.0 s): two recordings joined into one file?"),
+    (v2_record(8.0), v2_record(6.0), 0, "a second SST header (version 2) at byte 160006, after 40000 samples "
+                                        "(8.0 s): two recordings joined into one file?"),
+    (v3_record(40.0), v2_record(6.0), 0, "a second SST header (version 2) at byte 160016"),
+    # the first cut inside a sample (head -c): the second header falls across two samples
+    (v3_record(40.0), v3_record(35.0), 3, "a second SST header (version 3) at byte 160013, after 39999 samples"),
+])
+def test_two_recordings_joined_name_the_second_header(tmp_path, capfd, first, second, cut, said):
+    ride = tmp_path / "joined.SST"
+    ride.write_bytes(first[:len(first) - cut] + second)
+    mtime = ride.stat().st_mtime_ns
+    out = tmp_path / "out"
+    for argv in (["telemetry", ride, "--out", out], ["reconstruct", ride, "--bike", "sst", "--out", out]):
+        line = refused(argv, out, capfd, said)
+        assert "read each on its own" in line
+    with pytest.raises(TelemetryError, match="two recordings joined into one file"):
+        read_sst(ride)
+    assert ride.stat().st_mtime_ns == mtime
+
+
+def test_a_count_out_of_range_that_is_no_header_is_named_as_before(tmp_path, capfd):
+    """The baseline: a sensor's count past the encoder's 4095 with no second header in the file keeps its line."""
+    blob = bytearray(v3_record(5.0))
+    struct.pack_into("<H", blob, 16 + 4 * 1234, 5000)  # the fork's count of sample 1234
+    ride = tmp_path / "wild.SST"
+    ride.write_bytes(bytes(blob))
+    refused(["telemetry", ride, "--out", tmp_path / "out"], tmp_path / "out", capfd,
+            "wild.SST: fork count 5000 at sample 1234 is outside 0..4095")
+
+
+def test_one_recording_whole_is_read(tmp_path):
+    """The two records of the joined cases, each on its own, are read: the line is for the joint only."""
+    for k, blob in enumerate((v3_record(40.0), v2_record(8.0))):
+        ride = tmp_path / f"{k}.SST"
+        ride.write_bytes(blob)
+        record = read_sst(ride)
+        assert record.time_s.size == 40000 and record.version == (3 if k == 0 else 2)
