@@ -16,10 +16,10 @@ from mtbmj.ride import read_sst
 
 def v3_record(seconds: float, rate: int = 1000, phase: float = 0.0) -> bytes:
     """An SST v3 file: the 16-byte header (magic, version 3, rate, padding, Unix time) and counts of both
-    sensors moving within 0..1024 (both ends within their travel)."""
+    sensors moving (by the README's formulas the fork 23-159 mm of 180, the shock 14-43 mm of 65)."""
     t = np.arange(int(seconds * rate)) / rate
     fork = 300 + 200 * np.sin(2 * np.pi * 1.3 * t + phase)
-    shock = 400 + 150 * np.sin(2 * np.pi * 0.9 * t + phase)
+    shock = 200 + 100 * np.sin(2 * np.pi * 0.9 * t + phase)
     body = np.column_stack((fork, shock)).round().astype("<u2").tobytes()
     return struct.pack("<3sBHHq", b"SST", 3, rate, 0, 1_650_000_000) + body
 
@@ -75,3 +75,80 @@ def test_one_recording_whole_is_read(tmp_path):
         ride.write_bytes(blob)
         record = read_sst(ride)
         assert record.time_s.size == 40000 and record.version == (3 if k == 0 else 2)
+
+
+# --- 2. a sensor unplugged, stuck or saturated all the ride: reconstruct and advise -------------------------
+
+def still(column: int, count: int) -> bytes:
+    """``v3_record(40 s)`` with one sensor's count held all the ride (0: unplugged or at full extension;
+    4095: saturated, which the v3 fork's calibration reads as 0 mm too)."""
+    blob = bytearray(v3_record(40.0))
+    counts = np.frombuffer(bytes(blob[16:]), dtype="<u2").reshape(-1, 2).copy()
+    counts[:, column] = count
+    return bytes(blob[:16]) + counts.tobytes()
+
+
+@pytest.mark.parametrize("column, count, said", [
+    (0, 0, "the fork's travel never moves (0 mm, count 0 over all 40000 samples): its sensor unplugged"),
+    (0, 4095, "the fork's travel never moves (0 mm, count 4095 over all 40000 samples)"),
+    (1, 0, "the shock's travel never moves (0 mm, count 0 over all 40000 samples)"),
+])
+def test_an_end_that_never_moves_is_refused_by_reconstruct_and_advise(tmp_path, capfd, column, count, said):
+    """Was: with a speed given, reconstructed from a fork that never moved (no terrain at all); without one,
+    "the two ends' records do not align at any lag ... a speed given is used in its place": a false lead."""
+    from mtbmj.ride.reconstruct import reconstruct
+    from mtbmj.ride.reconstruct_speed import ReconstructError
+
+    ride = tmp_path / "unplugged.SST"
+    ride.write_bytes(still(column, count))
+    mtime = ride.stat().st_mtime_ns
+    out = tmp_path / "out"
+    for argv in (["reconstruct", ride, "--bike", "sst", "--speed", "5", "--out", out],
+                 ["reconstruct", ride, "--bike", "sst", "--out", out],
+                 ["advise", ride, "--bike", "sst", "--out", out]):
+        refused(argv, out, capfd, said)
+    with pytest.raises(ReconstructError, match="never moves"):
+        reconstruct(read_sst(ride), "sst", speed=5.0)
+    assert ride.stat().st_mtime_ns == mtime
+
+
+def test_an_end_that_never_moves_is_still_read_by_telemetry_and_a_moving_one_passes(tmp_path, capfd):
+    """telemetry reads the other end and says the still one in a warning (as before); a record whose two ends
+    move passes the check reconstruct and advise make."""
+    from helpers import command_err
+    from mtbmj.measured.telemetry import both_ends
+
+    ride = tmp_path / "unplugged.SST"
+    ride.write_bytes(still(0, 0))
+    status, err = command_err(["telemetry", ride, "--out", tmp_path / "out"], capfd)
+    assert status == 0 and "the fork sensor never moved: missing or stuck" in err, err
+    moving = tmp_path / "moving.SST"
+    moving.write_bytes(v3_record(40.0))
+    assert both_ends(read_sst(moving)) is None
+    assert "never moves" in both_ends(read_sst(ride))
+
+
+# --- 3. bob given a record too short for its stretch ---------------------------------------------------------
+
+def test_bob_of_a_short_record_names_it_before_any_run(tmp_path, capfd, monkeypatch):
+    """Was "bob: the pedalling stretch 2.0--1.5 s is shorter than 4 s": no file named (of two records, which?),
+    a span read as a minus, and said after the first record's runs (10 s of work for nothing)."""
+    import mtbmj.bike.run
+    from mtbmj.measured.bob import BobError
+    from mtbmj.ride.pedalling import against
+
+    good, short = tmp_path / "pedalling.SST", tmp_path / "short.SST"
+    good.write_bytes(v2_record(8.0))
+    short.write_bytes(v2_record(0.5))
+    out = tmp_path / "out"
+    line = refused(["bob", short, "--out", out], out, capfd, f"{short}: 0.5 s of record; the rear's pedalling "
+                   "stretch (2 s after the travel first rises above 2 mm, at 0.0 s, to 2 s before it last does, at "
+                   "0.5 s) is empty: shorter than 4 s")
+    assert "--" not in line
+
+    def no_run(*args, **kwargs):
+        raise AssertionError("a run before every record was read")
+
+    monkeypatch.setattr(mtbmj.bike.run, "run_bike", no_run)
+    with pytest.raises(BobError, match=f"{short}: 0.5 s of record"):
+        against([good, short])

@@ -507,6 +507,22 @@ def read_ride(path: str | Path, **decoding) -> TelemetryRecord:
     return read_travel_csv(path, **keep)
 
 
+def both_ends(record) -> str | None:
+    """Why ``record`` cannot be read end against end (the fork's travel giving the terrain the rear is checked on:
+    ``reconstruct``, ``advise``), in words; None where it can. An end missing from the file, or one whose travel
+    never moves (a sensor unplugged, stuck or saturated: 0 mm all the ride reads as no terrain at all)."""
+    if record.fork_mm is None or record.rear_mm is None:
+        return "needs both ends' records (the rear meets what the front met)"
+    for column, label, travel in ((0, "fork", record.fork_mm), (1, "shock", record.rear_mm)):
+        if np.ptp(travel) == 0.0:
+            counts = getattr(record, "counts", None)
+            count = f", count {int(counts[0, column])}" if counts is not None else ""
+            return (f"the {label}'s travel never moves ({float(travel[0]):g} mm{count} over all {travel.size} "
+                    f"samples): its sensor unplugged, stuck or saturated; the terrain is read from the fork and "
+                    f"checked on the rear, both moving")
+    return None
+
+
 SHORT_RIDE_S = 30.0  # a ride shorter than this has histograms that have not settled
 SATURATED_FRACTION = 0.005  # samples at an encoder's end beyond this share: the sensor saturated
 
