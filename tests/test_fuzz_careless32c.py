@@ -4,6 +4,7 @@ failed before its fix. Records are written here from the formats of /work/shared
 /work/shared/data/sst_v2/README.md (header and 4-byte samples), never by the code under test."""
 from __future__ import annotations
 
+import re
 import struct
 
 import numpy as np
@@ -177,3 +178,42 @@ def test_a_hit_typed_in_metres_is_named(tmp_path, capfd):
     assert status == 0 and "warning" not in said and "after a 5.0 mm hit" in said, said
     with pytest.warns(ConfigWarning, match=r"probably meant 0\.03 m = 30 mm"):
         fit_bounce(SLAMS, [0.0, 8.0], hit_mm=0.03)
+
+
+# --- 5. mtbmj.ride.summarize given a travel in metres, a clock going back ----------------------------------
+
+def fork_ride(seconds: float = 20.0, rate: int = 1000):
+    """A fork's travel written here: 60 mm of sag, a 1.3 Hz stroke of 40 mm, a 180 mm fork."""
+    t = np.arange(int(seconds * rate)) / rate
+    return t, 60.0 + 40.0 * np.sin(2 * np.pi * 1.3 * t)
+
+
+@pytest.mark.parametrize("scale, top, said", [
+    # was answered: max 55.6 % with both in metres (its velocities in m/s split at 100 "mm/s"), 55556 % with the
+    # travel in mm and its top in metres
+    (1e-3, 0.18, "travel_max_mm: 0.18 mm: no suspension end travels under 10 mm; metres? (180 mm if so"),
+    (1.0, 0.18, "travel_max_mm: 0.18 mm: no suspension end travels under 10 mm"),
+    (1.0, 40.0, "travel_mm reaches 100 mm, 2.5 times travel_max_mm (40 mm): the two in different units, or another "
+                "end's travel"),
+])
+def test_summarize_of_a_travel_in_another_unit_says_so(scale, top, said):
+    from mtbmj.ride import summarize
+
+    t, x = fork_ride()
+    with pytest.raises(ValueError, match=re.escape(said)):
+        summarize(t, x * scale, top)
+    assert summarize(t, x, 180.0)["travel"]["max_percent"] == pytest.approx(100.0 * 100.0 / 180.0, abs=0.01)
+    assert summarize(t, x, 60.0)["travel"]["max_percent"] > 100.0  # past its travel, within a bottom-out: read
+
+
+def test_summarize_of_a_clock_going_back_names_the_sample():
+    """Was "time_s: samples are not uniformly spaced (resample first)": a clock that goes back is not resampled."""
+    from mtbmj.ride import summarize
+
+    t, x = fork_ride()
+    t[500] = t[499]
+    with pytest.raises(ValueError, match=re.escape("time_s: sample 500 (0.499 s) does not come after sample 499 "
+                                                   "(0.499 s): the time must increase")):
+        summarize(t, x, 180.0)
+    with pytest.raises(ValueError, match="time_s: sample 1 .* does not come after sample 0"):
+        summarize(t[::-1], x, 180.0)
