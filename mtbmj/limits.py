@@ -308,6 +308,9 @@ ARGUMENTS: dict[str, Argument] = {
     "--sag-percent": _SAG_PERCENT,
     "--front-sag-percent": _SAG_PERCENT,
     "--rear-sag-percent": _SAG_PERCENT,
+    # the hit an answer in clicks is for: an end's own compression above its static position; under 1 mm it lies
+    # within the friction band the decay law fits (0.3-1.2 mm on the shared slams): 0.03 is 0.03 m typed
+    "--hit-mm": Argument("mm", high=1e4, plausible=(1.0, 1000.0), **_POSITIVE),
     "--max-velocity-mm-per-s": Argument("mm/s", high=1e6, plausible=(100.0, 20000.0), **_POSITIVE),
     "--tolerance-mm": Argument("mm", high=1000.0, plausible=(1e-4, 10.0), **_POSITIVE),
     "--sled-offset-mm": _OFFSET_MM,

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mtbmj import limits
 from mtbmj.errors import MtbmjError
 
 
@@ -196,6 +197,8 @@ def fit_bounce(paths, clicks, predict=(), bike=None, hit_mm=None, rider_hz=None,
     coefficient per record with its interval)."""
     from mtbmj.identify import bounce
 
+    if isinstance(hit_mm, (int, float)) and hit_mm > 0:  # the command line's warning, said to a caller from Python too
+        limits.plausible("--hit-mm", float(hit_mm))
     paths = [Path(p) for p in paths]
     if len(clicks) != len(paths):
         raise MtbmjError(f"--clicks: {len(clicks)} value(s) for {len(paths)} record(s); give one number of clicks "

@@ -85,7 +85,10 @@ def bob(time_s, travel_mm, start_s: float | None = None, end_s: float | None = N
     start = auto[0] if start_s is None else float(start_s)
     end = auto[1] if end_s is None else float(end_s)
     if end - start < MIN_STRETCH_S - 0.01:  # (a run's last sample lies a step before its end)
-        raise BobError(f"bob: the pedalling stretch {start:.1f}-{end:.1f} s is shorter than {MIN_STRETCH_S:g} s")
+        found = (f" ({TRIM_S:g} s after the travel first rises above {ON_BIKE_MM:g} mm, at {start - TRIM_S:.1f} s, to "
+                 f"{TRIM_S:g} s before it last does, at {end + TRIM_S:.1f} s)") if start_s is None and end_s is None else ""
+        span = f"{start:.1f}-{end:.1f} s" if end > start else "empty"
+        raise BobError(f"bob: the pedalling stretch{found} is {span}: shorter than {MIN_STRETCH_S:g} s")
     t, x, y, fs = _high_passed(t, x, (start, end))
     f, p = _power_spectrum(y, fs)
     band = np.flatnonzero((f >= BAND_HZ[0]) & (f <= BAND_HZ[1]))

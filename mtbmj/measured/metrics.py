@@ -40,6 +40,10 @@ VELOCITY_LIMIT_MM_PER_S = 3000.0
 SPLIT_NAMES = ("high_speed_compression", "low_speed_compression", "low_speed_rebound", "high_speed_rebound")
 
 
+TRAVEL_MIN_MM = 10.0  # no suspension end travels less (a short shock strokes 15 mm: limits' --shock-max-mm)
+TRAVEL_OVER = 2.0  # travel past this many times its end's travel is no bottom-out: units or another end's
+
+
 class MetricsError(MtbmjError, ValueError):
     """Signals the metrics cannot use: empty, not finite, unevenly sampled, mismatched."""
 
@@ -72,7 +76,12 @@ def sample_interval(time_s) -> float:
         raise MetricsError("time_s: needs at least two samples")
     steps = np.diff(t)
     dt = float(np.median(steps))
-    if not dt > 0 or np.max(np.abs(steps - dt)) > 0.01 * dt:
+    back = np.flatnonzero(steps <= 0.0)
+    if back.size:  # a clock going back (or held) is its own cause, not an uneven grid to resample
+        i = int(back[0]) + 1
+        raise MetricsError(f"time_s: sample {i} ({t[i]:g} s) does not come after sample {i - 1} ({t[i - 1]:g} s): "
+                           f"the time must increase")
+    if np.max(np.abs(steps - dt)) > 0.01 * dt:
         raise MetricsError("time_s: samples are not uniformly spaced (resample first)")
     return dt
 
@@ -315,6 +324,13 @@ def summarize(time_s, travel_mm, travel_max_mm: float, velocity_mm_per_s=None, t
     if t.size != x.size:
         raise MetricsError("time_s and travel_mm differ in length")
     top = _positive(travel_max_mm, "travel_max_mm")
+    if top < TRAVEL_MIN_MM:  # 0.18 for a 180 mm fork: metres, and every percentage of travel 1000 times off
+        raise MetricsError(f"travel_max_mm: {top:g} mm: no suspension end travels under {TRAVEL_MIN_MM:g} mm; metres? "
+                           f"({1000.0 * top:g} mm if so: travel_mm and travel_max_mm in mm)")
+    deepest = float(np.max(x))
+    if deepest > TRAVEL_OVER * top:  # beyond any bottom-out: the two in different units, or another end's travel
+        raise MetricsError(f"travel_mm reaches {deepest:.4g} mm, {deepest / top:.3g} times travel_max_mm ({top:g} mm): "
+                           f"the two in different units, or another end's travel")
     dt = sample_interval(t)
     v = velocity(t, x) if velocity_mm_per_s is None else _array(velocity_mm_per_s, "velocity_mm_per_s")
     if v.size != x.size:

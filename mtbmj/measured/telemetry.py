@@ -302,6 +302,7 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
         if present[column]:
             bad = np.flatnonzero(counts[:, column] > limits[column])
             if bad.size:
+                _refuse_joined(name, blob, header.size, int(bad[0]), rate)
                 raise TelemetryError(f"{name}: {label} count {int(counts[bad[0], column])} at sample {int(bad[0])} "
                                      f"is outside 0..{limits[column]}")
     moving = [int(np.ptp(counts[:, k])) > 0 for k in (0, 1) if present[k]]
@@ -327,6 +328,19 @@ def read_sst(path: str | Path, fork_max_mm: float = FORK_TRAVEL_MAX_MM, shock_ma
         fork_max_mm=float(fork_max_mm), shock_max_mm=float(shock_max_mm),
         rear_max_mm=float(leverage.wheel_travel_mm(shock_max_mm)), counts=counts.copy(), notes=notes,
     )
+
+
+def _refuse_joined(name: str, blob: bytes, start: int, bad: int, rate: int) -> None:
+    """Where the first count out of range (sample ``bad``) is a second file's header (``SST`` and a version:
+    the magic's ``S`` as a count's high byte is out of range however the bytes fall), the cause in one line:
+    two recordings joined into one file (``cat a.SST b.SST``), not a sensor gone wild."""
+    at = blob.find(MAGIC, start, start + RECORD_BYTES * (bad + 1) + len(MAGIC))
+    if at < 0 or at + len(MAGIC) >= len(blob) or blob[at + len(MAGIC)] not in VERSIONS:
+        return
+    whole = (at - start) // RECORD_BYTES
+    raise TelemetryError(f"{name}: a second SST header (version {blob[at + len(MAGIC)]}) at byte {at}, after "
+                         f"{whole} samples ({whole / float(rate):.1f} s): two recordings joined into one file? "
+                         f"read each on its own")
 
 
 CSV_COLUMNS = ("time_s", "fork_mm", "shock_mm", "rear_mm")
@@ -491,6 +505,22 @@ def read_ride(path: str | Path, **decoding) -> TelemetryRecord:
                 raise
     keep = {k: v for k, v in decoding.items() if k in ("fork_max_mm", "shock_max_mm", "leverage")}
     return read_travel_csv(path, **keep)
+
+
+def both_ends(record) -> str | None:
+    """Why ``record`` cannot be read end against end (the fork's travel giving the terrain the rear is checked on:
+    ``reconstruct``, ``advise``), in words; None where it can. An end missing from the file, or one whose travel
+    never moves (a sensor unplugged, stuck or saturated: 0 mm all the ride reads as no terrain at all)."""
+    if record.fork_mm is None or record.rear_mm is None:
+        return "needs both ends' records (the rear meets what the front met)"
+    for column, label, travel in ((0, "fork", record.fork_mm), (1, "shock", record.rear_mm)):
+        if np.ptp(travel) == 0.0:
+            counts = getattr(record, "counts", None)
+            count = f", count {int(counts[0, column])}" if counts is not None else ""
+            return (f"the {label}'s travel never moves ({float(travel[0]):g} mm{count} over all {travel.size} "
+                    f"samples): its sensor unplugged, stuck or saturated; the terrain is read from the fork and "
+                    f"checked on the rear, both moving")
+    return None
 
 
 SHORT_RIDE_S = 30.0  # a ride shorter than this has histograms that have not settled

@@ -167,11 +167,17 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
     spec = resolved.spec
     radius = setups(spec)[0].tire_radius
     rows, series = [], []
-    for path, stance in zip(records, stances):
+    read = []  # every record read and its bob found before any run: a bad one refused before another's runs
+    for path in records:
         ride = telemetry.read_sst(path, **spec_mod.ride_decoding(spec))  # read as the recorded bike reads it
         if ride.rear_mm is None:
             raise BobError(f"{path}: has no shock sensor: no rear bob to compare")
-        rear = bob(ride.time_s, ride.rear_mm)
+        try:
+            read.append((ride, bob(ride.time_s, ride.rear_mm)))
+        except BobError as error:  # the record's own stretch: named by its file and its length
+            raise BobError(f"{path}: {ride.duration_s:.1f} s of record; the rear's "
+                           f"{str(error).removeprefix('bob: the ')}") from None
+    for path, stance, (ride, rear) in zip(records, stances, read):
         notes = list(ride.notes)
         unsteady = not_pedalling(ride, rear)
         if unsteady:

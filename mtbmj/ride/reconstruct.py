@@ -84,6 +84,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from mtbmj.measured.telemetry import both_ends
 from mtbmj.ride.reconstruct_inverse import QuarterCar, forward, ground_under, lowpass, runs, wheelbase_at
 from mtbmj.ride.reconstruct_inverse import HIGHPASS_HZ, V2_LOWPASS_HZ, within_stops
 from mtbmj.ride.reconstruct_bands import BANDS, BEAT_MARGIN, band_checks  # noqa: F401 (BANDS: this module's name too)
@@ -536,10 +537,9 @@ def ridden_part(record):
 
 
 def require_both_ends(record) -> None:
-    """One ``ReconstructError`` line for a record without the fork's or the rear's travel (a file of one
-    sensor): reconstruct and advise both read the two ends."""
-    if record.fork_mm is None or record.rear_mm is None:
-        raise ReconstructError(f"{record.name}: needs both ends' records (the rear meets what the front met)")
+    """One ``ReconstructError`` line for a record whose two ends cannot be read (``telemetry.both_ends``)."""
+    if why := both_ends(record):
+        raise ReconstructError(f"{record.name}: {why}")
 
 
 def reconstruct(record, bike, overrides=None, at_once: bool = False, speed=None, spectral: bool = True) -> Reconstruction:
