@@ -84,3 +84,21 @@ def test_a_ridden_ledge_is_no_crash(tmp_path, monkeypatch):
     assert main(["bike", "trail", "drop:height_mm=300", "--speed", "5", "--out", "run", "--quiet",
                  "--no-figure"]) == 0
     assert json.loads((tmp_path / "run" / "summary.json").read_text())["crash"] is None
+
+
+def test_a_crosscheck_of_a_run_that_crashed_says_it_compared_only_up_to_the_crash():
+    """drift32: the passive rider off a 1 m ledge goes over the bars before the landing, so the
+    cross-check of a 1.2 s run compares 0.54 s of flight. Its line said only "within the
+    tolerances" (docs/bike.md quoted it as a landing's check); it now names the crash and the time
+    compared, as the run's headline does. The same command off the 300 mm ledge lands: no crash said."""
+    from mtbmj.bike.crosscheck import crosscheck
+
+    crashed = crosscheck("trail", "drop:height_mm=1000,at_m=0.4", 5.0, duration=1.2)
+    line = crashed.line()
+    assert crashed.context["crash"]["kind"] == "over the bars"
+    at = crashed.context["crash"]["time_s"]
+    assert 0.3 < at < 1.2  # the run stopped inside what was asked
+    assert f"crashed: over the bars at {at:.3f} s" in line and "the run ended there and is compared up to it" in line
+    assert all(s.at_time_s <= at + 1e-9 for s in crashed.signals)
+    landed = crosscheck("trail", "drop:at_m=0.4", 5.0, duration=1.2)
+    assert landed.context["crash"] is None and "crashed" not in landed.line()

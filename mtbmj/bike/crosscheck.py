@@ -53,10 +53,12 @@ def crosscheck(bike, scenario, speed_m_per_s: float | None, duration: float | No
                                judged=("peak", "series")) for column, name in TIRES.items()]
     if engine.prepared.articulated is not None:
         drive += ", active rider"
-    return CrosscheckResult("bike", f"{engine.name} over {scenario} at {float(speed_m_per_s):g} m/s (drive {drive})",
+    crash = engine.summary.get("crash")  # a crash ends the run: what follows it is compared nowhere, so the line says so
+    ended = f"; {crash['line']}: the run ended there and is compared up to it" if crash else ""
+    return CrosscheckResult("bike", f"{engine.name} over {scenario} at {float(speed_m_per_s):g} m/s (drive {drive}{ended})",
                             "mujoco", "bike's ODE reference", signals, engine.wall_time_s, got["wall_time_s"],
                             {"bike": engine.name, "scenario": str(scenario), "speed_m_per_s": float(speed_m_per_s),
-                             "drive": drive, "reference_rtol": reference_rtol,
+                             "drive": drive, "reference_rtol": reference_rtol, "crash": crash,
                              # the engine's chunks stepped at the fine step (a stop or rim near)
                              "refined_fraction": engine.info["refined_fraction"]})
 
