@@ -92,7 +92,7 @@ def still(column: int, count: int) -> bytes:
 @pytest.mark.parametrize("column, count, said", [
     (0, 0, "the fork's travel never moves (0 mm, count 0 over all 40000 samples): its sensor unplugged"),
     (0, 4095, "the fork's travel never moves (0 mm, count 4095 over all 40000 samples)"),
-    (1, 0, "the shock's travel never moves (0 mm, count 0 over all 40000 samples)"),
+    (1, 0, "the rear's travel never moves (0 mm, count 0 over all 40000 samples)"),
 ])
 def test_an_end_that_never_moves_is_refused_by_reconstruct_and_advise(tmp_path, capfd, column, count, said):
     """Was: with a speed given, reconstructed from a fork that never moved (no terrain at all); without one,

@@ -513,7 +513,7 @@ def both_ends(record) -> str | None:
     never moves (a sensor unplugged, stuck or saturated: 0 mm all the ride reads as no terrain at all)."""
     if record.fork_mm is None or record.rear_mm is None:
         return "needs both ends' records (the rear meets what the front met)"
-    for column, label, travel in ((0, "fork", record.fork_mm), (1, "shock", record.rear_mm)):
+    for column, label, travel in ((0, "fork", record.fork_mm), (1, "rear", record.rear_mm)):  # rear: the wheel's mm
         if np.ptp(travel) == 0.0:
             counts = getattr(record, "counts", None)
             count = f", count {int(counts[0, column])}" if counts is not None else ""
