@@ -248,10 +248,14 @@ class Argument:
         self.unit, self.low, self.high, self.plausible = unit, low, high, plausible
         self.integer, self.open_low, self.open_high, self.beyond, self.why = integer, open_low, open_high, beyond, why
 
+    def below(self, value: float) -> bool:
+        """Whether ``value`` is below the values the model allows."""
+        return self.low is not None and (value <= self.low if self.open_low else value < self.low)
+
     def outside(self, value: float) -> bool:
         """Whether ``value`` is outside the values the model allows (refused by :func:`argument`)."""
-        low_bad = self.low is not None and (value <= self.low if self.open_low else value < self.low)
-        return low_bad or (self.high is not None and (value >= self.high if self.open_high else value > self.high))
+        above = self.high is not None and (value >= self.high if self.open_high else value > self.high)
+        return self.below(value) or above
 
     def allowed(self) -> str:
         unit = f" {self.unit}" if self.unit else ""
@@ -351,7 +355,7 @@ def argument(option: str, text: str, integer: bool = False):
         if not math.isfinite(value):
             raise ValueError(f"must be a finite number, got {typed}")
     unit = f" {spec.unit}" if spec.unit else ""
-    low_bad = spec.low is not None and (value <= spec.low if spec.open_low else value < spec.low)
+    low_bad = spec.below(value)
     if spec.outside(value):
         beyond = f" ({spec.beyond} faster than {spec.plausible[1]:g}{unit})" if spec.beyond and not low_bad else ""
         beyond = beyond or (f" ({spec.why})" if spec.why else "")

@@ -61,7 +61,7 @@ class Parser(argparse.ArgumentParser):
             kwargs["type"] = _a_path
         if "type" not in kwargs and kwargs.get("action") in (None, "store", "append", "extend") and \
                 _dest(args, kwargs) in INPUT_NAMES:  # a preset's name or a file's path, kept a str
-            kwargs["type"] = _an_input
+            kwargs["type"] = home
         choices = kwargs.get("choices")
         if choices and "type" not in kwargs and all(isinstance(c, str) and c == c.lower() for c in choices):
             kwargs["type"] = _in_any_case(choices)  # --engine MuJoCo, --rider Active: as presets are named
@@ -86,10 +86,6 @@ def _dest(args, kwargs) -> str:
         return kwargs["dest"]
     long = next((a for a in args if a.startswith("--")), None)
     return (long[2:] if long else args[0] if args else "").replace("-", "_")
-
-
-def _an_input(text: str) -> str:
-    return home(text)
 
 
 def _a_path(text: str) -> Path:
@@ -178,17 +174,14 @@ def intermixed(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     (``validate my.csv --presets S12 mine.toml``): its parse goes through argparse's
     ``parse_known_intermixed_args``, which itself calls ``parse_known_args`` twice."""
     plain = parser.parse_known_args
-    busy = []
 
     def parse_known_args(args=None, namespace=None):
-        if busy:
+        if getattr(parser, "_intermixing", False):  # one of its two passes: the plain parse, no unit check in it
             return plain(args, namespace)
-        busy.append(True)
-        parser._intermixing = True  # its two passes leave positionals over on the first: no unit check in them
+        parser._intermixing = True  # its two passes leave positionals over on the first
         try:
             namespace, extras = parser.parse_known_intermixed_args(args, namespace)
         finally:
-            busy.pop()
             parser._intermixing = False
         if extras:  # what is left over at the end: a unit typed apart named, as in the other commands
             _unit_apart(parser._actions, sys.argv[1:] if args is None else list(args), extras)
