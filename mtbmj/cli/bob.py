@@ -21,10 +21,10 @@ def cmd_bob(args) -> int:
         first, k = twice
         raise ConfigError(f"{args.records[k]}: the same record as {args.records[first]} (the same samples); give each "
                           f"record once")
-    if args.stance is not None and not args.stance.strip(" ,"):  # `--stance ""`: a list left empty by mistake
+    stances = None if args.stance is None else comma_words(args.stance)  # Standing = standing; 'standing,' one
+    if stances == []:  # `--stance ""`: a list left empty by mistake
         raise ConfigError(f"--stance {args.stance!r}: names no stance; give standing or seated, one per record, "
                           f"or leave --stance out for all standing")
-    stances = comma_words(args.stance) if args.stance else None  # Standing = standing; 'standing,' one
     if args.duration is not None and not args.duration >= 2.0 * pedalling.MIN_STRETCH_S:
         raise ConfigError(f"--duration: {args.duration:g} s is too short to read a bob over its second half "
                           f"({2.0 * pedalling.MIN_STRETCH_S:g} s at least)")
