@@ -79,7 +79,11 @@ def _ride_crop(tmp: Path, name: str, x, z, speed: float):
     "0.70 m, 1.17 with its uncertainty, so the 1.20 m fall is cut by 0.03 m only and the run still goes over the "
     "bars at 16.44 s. Measured again on flight51 with the flight's duration bounding it too: the rear's take-off "
     "window 15.300-15.404 s, at most 0.434 s in the air, allows 1.22 m for its own fall of 1.23, so the cut stays "
-    "0.033 m and the run goes over the bars at 16.437 s (pitch -45.1 deg)"))
+    "0.033 m and the run goes over the bars at 16.437 s (pitch -45.1 deg). Read again on pit100 (docs/rolling.md, "
+    "'00100 read again from its record'): both ends left within 0.011 s of each other over ground found level "
+    "(the rider lifted the bike; rolling off the face puts the rear a wheelbase, 0.18 s, later), so the fall is at "
+    "most V^2/2g, 0.70 m as read and 1.01 with the reading's share, which pit51's crop does not ride; the exit "
+    "climb is the quarter car's reference, its hard stop's kick at 15.85 s (7.91 m/s) the integral's drift"))
 def test_00100_rides_whole_on_its_own_reconstruction_as_a_user_runs_it(found, tmp_path):
     """The rider came home through all of 00100.SST, so the recorded setting at the speed found should
     ride the terrain found without a crash."""
