@@ -83,7 +83,10 @@ def _ride_crop(tmp: Path, name: str, x, z, speed: float):
     "'00100 read again from its record'): both ends left within 0.011 s of each other over ground found level "
     "(the rider lifted the bike; rolling off the face puts the rear a wheelbase, 0.18 s, later), so the fall is at "
     "most V^2/2g, 0.70 m as read and 1.01 with the reading's share, which pit51's crop does not ride; the exit "
-    "climb is the quarter car's reference, its hard stop's kick at 15.85 s (7.91 m/s) the integral's drift"))
+    "climb is the quarter car's reference, its hard stop's kick at 15.85 s (7.91 m/s) the integral's drift. Tried on "
+    "hop51 (docs/rolling.md, 'A hop tried at 00100's pit'): an open-loop hop on the active rider's targets at the "
+    "muscles' limits unloads both ends at a made lip within 0.001 s but hops the bike 0.08 s, the frame turning nose "
+    "down (27-47 deg/s); on the crop it goes over the bars or lands the front first at -35 to -42 deg"))
 def test_00100_rides_whole_on_its_own_reconstruction_as_a_user_runs_it(found, tmp_path):
     """The rider came home through all of 00100.SST, so the recorded setting at the speed found should
     ride the terrain found without a crash."""
