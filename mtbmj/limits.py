@@ -257,6 +257,14 @@ class Argument:
         above = self.high is not None and (value >= self.high if self.open_high else value > self.high)
         return self.below(value) or above
 
+    def reason(self, value: float) -> str:
+        """Why ``value``, outside the values allowed, is (" (no bike is ridden faster than 30 m/s)", " (what a
+        rider turns)"), or ""."""
+        unit = f" {self.unit}" if self.unit else ""
+        if self.beyond and not self.below(value):
+            return f" ({self.beyond} faster than {self.plausible[1]:g}{unit})"
+        return f" ({self.why})" if self.why else ""
+
     def allowed(self) -> str:
         unit = f" {self.unit}" if self.unit else ""
         if self.low is not None and self.high is not None:
@@ -355,10 +363,8 @@ def argument(option: str, text: str, integer: bool = False):
         if not math.isfinite(value):
             raise ValueError(f"must be a finite number, got {typed}")
     unit = f" {spec.unit}" if spec.unit else ""
-    low_bad = spec.below(value)
     if spec.outside(value):
-        beyond = f" ({spec.beyond} faster than {spec.plausible[1]:g}{unit})" if spec.beyond and not low_bad else ""
-        beyond = beyond or (f" ({spec.why})" if spec.why else "")
+        beyond = spec.reason(value)
         shown = _shown(value) if spec.integer else f"{value:g}"
         near = spec.plausible or (spec.low if spec.low is not None else -MAX_MAGNITUDE, spec.high)
         meant = slip(value, spec.unit, near) if not spec.integer else ""  # --head-angle 1.13: radians
@@ -406,19 +412,32 @@ def caller_level() -> int:
 CRAWL_S = 120.0
 
 
+def given(option: str, label: str, value, what: str = "", warn: bool = True) -> float:
+    """``value``, given from Python as ``label`` for what the command line takes as ``option`` (a key of
+    ``ARGUMENTS``), as a float: refused (one ConfigError line naming ``label``) where it is not a finite number
+    (``what`` says what it is: " (the front axle's start)"), not positive for an option that must be, or outside
+    the option's range; outside its plausible range warned about with the option's line (:func:`plausible`) where
+    ``warn``. The one check of a command option's number given from Python (a rig's speed, the cross-check's
+    tolerance, the bike's start)."""
+    spec = ARGUMENTS[option]
+    positive = spec.low == 0 and spec.open_low
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) \
+            or (positive and spec.below(value)):
+        raise ConfigError(f"{label}: must be a {'positive' if positive else 'finite'} number of {spec.unit}{what}, "
+                          f"got {value!r}")
+    if spec.outside(value):
+        raise ConfigError(f"{label}: {value:g} {spec.unit} is outside the range allowed: {spec.allowed()}"
+                          f"{spec.reason(value)}")
+    if warn:
+        plausible(option, value)
+    return float(value)
+
+
 def speed(value, label: str = "speed", warn: bool = True) -> float:
     """A rig's speed given from Python (m/s): a positive finite number within ``--speed``'s range, else one
-    ConfigError line; outside its plausible range warned about with ``--speed``'s line (:func:`plausible`; a
+    ConfigError line; outside its plausible range warned about with ``--speed``'s line (:func:`given`; a
     command's argument, warned about by :func:`argument` before, is warned once: the command keeps each line once)."""
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value <= 0:
-        raise ConfigError(f"{label}: must be a positive number of m/s, got {value!r}")
-    spec = ARGUMENTS["--speed"]
-    if value > spec.high:
-        raise ConfigError(f"{label}: {value:g} m/s is outside the range allowed: {spec.allowed()} ({spec.beyond} "
-                          f"faster than {spec.plausible[1]:g} m/s)")
-    if warn:  # the command line's warning, said to a caller from Python too (once: a run checks it twice)
-        plausible("--speed", value)
-    return float(value)
+    return given("--speed", label, value, warn=warn)
 
 
 def crossing(speed: float, seconds: float, terrain: str) -> None:
