@@ -29,3 +29,28 @@ def test_a_start_given_from_python_is_held_to_the_start_options_range():
         except ConfigError:  # 500 m before a 10 m flat is its own matter (the terrain's); the number passed the gate
             pass
 
+
+# --- 2. bob's run length: one rule, from Python and from the command line -------------------------------------
+
+def test_bobs_run_length_is_one_rule_from_python_and_the_command(tmp_path, capfd):
+    """``against(duration_s=...)`` and ``mtbmj bob --duration`` wrote the rule twice and told it apart: 5.0 s
+    said "5.0 s" from Python and "5 s" from the command, a string '20' and NaN were "too short" (NaN is no
+    length, '20' no number). Now one check (``pedalling.check_run_s``), naming each side's own label."""
+    import shutil
+
+    from mtbmj.ride import pedalling
+    from helpers import refused
+
+    record = tmp_path / "ride.SST"  # a copy: the shipped example by its own path is refused for another reason
+    shutil.copy("/work/shared/data/sst/00649.SST", record)
+    out = tmp_path / "out"
+    line = refused(["bob", record, "--duration", "5", "--out", out], out, capfd, "--duration: 5 s is too short")
+    with pytest.raises(ConfigError) as python:
+        pedalling.against([record], duration_s=5.0)
+    assert str(python.value) == line.removeprefix("mtbmj: error: ").replace("--duration", "duration_s")
+    with pytest.raises(ConfigError, match=re.escape("duration_s: must be a number of seconds, got '20'")):
+        pedalling.against([record], duration_s="20")
+    with pytest.raises(ConfigError, match=re.escape("duration_s: must be a positive finite number of seconds, "
+                                                    "got nan")):
+        pedalling.against([record], duration_s=float("nan"))
+
