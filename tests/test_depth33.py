@@ -54,3 +54,36 @@ def test_bobs_run_length_is_one_rule_from_python_and_the_command(tmp_path, capfd
                                                     "got nan")):
         pedalling.against([record], duration_s=float("nan"))
 
+
+# --- 3. a unit typed apart, read as the positional after it ------------------------------------------------------
+
+@pytest.mark.parametrize("argv, said", [
+    # the unit taken as a record, a scenario, a configuration: "W: cannot read", "unknown scenario 's'",
+    # "km/h: unknown preset" before
+    (["bob", "--power", "250", "W", "REC.SST"],
+     "argument --power: '250 W' is a number and its unit (the unit is the option's, W: give the number alone, 250)"),
+    (["roll", "--speed", "4", "--duration", "0.2", "s"],
+     "argument --duration: '0.2 s' is a number and its unit (the unit is the option's, s: give the number alone, "
+     "0.2)"),
+    (["validate", "example", "--duration", "0.5", "km/h"],
+     "argument --duration: '0.5 km/h' is a number and its unit (the option takes a number in s, without a unit)"),
+])
+def test_a_unit_typed_apart_and_read_as_a_positional_is_named(argv, said, tmp_path, capfd, monkeypatch):
+    from helpers import refused
+
+    monkeypatch.chdir(tmp_path)  # no file named as the unit here (one so named is read: tests/test_review32.py)
+    out = tmp_path / "out"
+    refused([*argv, "--out", out], out, capfd, said)
+
+
+def test_a_file_named_as_a_unit_after_a_number_is_still_read(tmp_path, capfd, monkeypatch):
+    """The other side: ``bob --power 250 W`` with a record named ``W`` in the folder reads it (a trail ride, not a
+    pedalling one: refused for what it is, not for a unit)."""
+    import shutil
+
+    from helpers import command_err
+
+    monkeypatch.chdir(tmp_path)
+    shutil.copy("/work/shared/data/sst/00649.SST", tmp_path / "W")
+    status, err = command_err(["bob", "--power", "250", "W", "--duration", "5", "--out", tmp_path / "out"], capfd)
+    assert status == 2 and "is a number and its unit" not in err and "--duration: 5 s is too short" in err, err
