@@ -3,6 +3,8 @@ number of seconds, at least one logger sample long, and a number of steps whose 
 the memory this machine has available (the message says how much would be needed)."""
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 import os
 
@@ -38,10 +40,35 @@ def size_text(nbytes: float) -> str:
     return f"{nbytes / 1024:.3g} KiB"
 
 
+# The numbers a command's user typed, by option, while the command runs (``command_line``; None outside one): a
+# number given to the library as the option was (``--duration 1e9`` as ``run_drop``'s duration) is refused
+# naming the option (:func:`named`), not the Python argument it became.
+_TYPED: contextvars.ContextVar = contextvars.ContextVar("mtbmj_typed", default=None)
+
+
+@contextlib.contextmanager
+def command_line():
+    """The run of one command: the numbers its arguments pass (:func:`argument`) are kept for :func:`named`."""
+    token = _TYPED.set({})
+    try:
+        yield
+    finally:
+        _TYPED.reset(token)
+
+
+def named(label: str, value) -> str:
+    """``label``, a Python argument's name (``duration``), as the user gave ``value``: the command's option
+    (``--duration``) where a command runs and its user typed that option with this value; else ``label``."""
+    option = "--" + label.replace("_", "-")
+    typed = _TYPED.get()
+    return option if typed is not None and option in typed and typed[option] == value else label
+
+
 def check_duration(label: str, duration) -> None:
     """A duration given by the user: a finite positive number of seconds."""
     if duration is None:
         return
+    label = named(label, duration)
     if isinstance(duration, bool) or not isinstance(duration, (int, float)):
         raise ConfigError(f"{label}: must be a number of seconds, got {duration!r}")
     if not (math.isfinite(duration) and duration > 0):
@@ -54,6 +81,7 @@ def check_run(duration: float, timestep: float, sample_rate_Hz: float, label: st
     when the duration is not finite, shorter than one logger sample, or the steps would need more
     memory than is available."""
     check_duration(label, duration)
+    label = named(label, duration)
     shortest = 1.0 / sample_rate_Hz
     if duration < shortest:
         raise ConfigError(f"{label}: {duration:g} s is shorter than one logger sample "
@@ -372,6 +400,9 @@ def argument(option: str, text: str, integer: bool = False):
                          f"allowed: {spec.allowed()}{beyond}{f' (a unit mistake?{meant})' if meant else ''}")
     if option in ARGUMENTS:
         plausible(option, value)
+    typed = _TYPED.get()
+    if typed is not None:  # within a command: the number its user typed as option (``named``)
+        typed[option] = value
     return value
 
 

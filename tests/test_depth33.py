@@ -87,3 +87,31 @@ def test_a_file_named_as_a_unit_after_a_number_is_still_read(tmp_path, capfd, mo
     shutil.copy("/work/shared/data/sst/00649.SST", tmp_path / "W")
     status, err = command_err(["bob", "--power", "250", "W", "--duration", "5", "--out", tmp_path / "out"], capfd)
     assert status == 2 and "is a number and its unit" not in err and "--duration: 5 s is too short" in err, err
+
+
+# --- 4. a run length refused deep in a run names the option typed, or the key it came from ---------------------
+
+@pytest.mark.parametrize("argv, said", [
+    (["drop", "S12", "--duration", "1e9"], "mtbmj: error: --duration: 1e+09 s in steps of 0.001 s"),
+    (["drop", "S12", "--duration", "1e-6"], "mtbmj: error: --duration: 1e-06 s is shorter than one logger sample"),
+    (["roll", "flat", "--speed", "4", "--duration", "1e9"], "mtbmj: error: --duration: 1e+09 s in steps of"),
+    (["study", "--presets", "S12,S1", "--duration", "1e9"], "mtbmj: error: S12: --duration: 1e+09 s in steps of"),
+    # no --duration typed: the configuration's length, by its key
+    (["drop", "S12", "--set", "solver.timestep_s=1e-7", "--set", "solver.duration_s=1000"],
+     "mtbmj: error: solver.duration_s: 1000 s in steps of 1e-07 s"),
+])
+def test_a_run_length_refused_in_the_run_names_the_option_typed(argv, said, tmp_path, capfd):
+    """``mtbmj drop S12 --duration 1e9`` said "duration: ... needing about 931 TiB" where every other option's
+    refusal names the option (``--duration:``); a configuration's solver.duration_s so refused said "duration" too."""
+    from helpers import refused
+
+    out = tmp_path / "out"
+    assert refused([*argv, "--out", out], out, capfd, said).startswith(said)
+
+
+def test_a_run_length_from_python_keeps_its_argument_name():
+    from mtbmj.drop.run import run_drop
+
+    with pytest.raises(ConfigError, match=re.escape("duration: 1e+09 s in steps of 0.001 s")) as caught:
+        run_drop("S12", duration=1e9)
+    assert not str(caught.value).startswith("--")

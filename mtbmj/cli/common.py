@@ -15,7 +15,7 @@ from pathlib import Path
 
 from mtbmj.config import ConfigError, ConfigWarning
 from mtbmj.errors import MtbmjError, RunError, check_interrupt, interrupt_handling, interrupted
-from mtbmj.limits import argument
+from mtbmj.limits import argument, command_line
 from mtbmj.textfile import parses_as_number
 
 EXIT_BAD_INPUT = 2
@@ -442,7 +442,7 @@ def _report_line(line: str) -> None:
 def _run_parsed(parser: argparse.ArgumentParser, argv=None) -> int:
     config_warnings = _ConfigWarnings()
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), command_line():  # a number refused deep in a run names the option typed
             # numpy's RuntimeWarnings (overflow, invalid value) are errors only where a run steps
             # (``mtbmj.errors.diverging``, around every rig's stepping); elsewhere (a fit, a reader,
             # a library that meets such a value and handles it) they are not the user's concern
