@@ -115,3 +115,20 @@ def test_a_run_length_from_python_keeps_its_argument_name():
     with pytest.raises(ConfigError, match=re.escape("duration: 1e+09 s in steps of 0.001 s")) as caught:
         run_drop("S12", duration=1e9)
     assert not str(caught.value).startswith("--")
+
+
+# --- 5. an empty lock from Python ---------------------------------------------------------------------------------
+
+def test_an_empty_lock_from_python_is_refused_as_the_commands_is(tmp_path, capfd):
+    """``run_bike(lock='')`` ran with nothing locked where ``mtbmj bike --lock ''`` is refused; now refused alike,
+    before any work. A part given as a str stays one part."""
+    from mtbmj.bike import run as R
+    from helpers import refused
+
+    out = tmp_path / "out"
+    refused(["bike", "sst", "flat", "--speed", "4", "--lock", "", "--out", out], out, capfd, "names no part")
+    for empty in ("", "  "):
+        with pytest.raises(ConfigError, match=re.escape(f"lock {empty!r}: names no part; give rear, pitch, rider")):
+            R.run_bike("sst", "flat", 4.0, duration=0.01, lock=empty)
+    with pytest.raises(ConfigError, match=re.escape("lock: 'seat' is not one of rear, pitch, rider")):  # one part
+        R.run_bike("sst", "flat", 4.0, duration=0.01, lock="seat")  # still read as one part

@@ -323,7 +323,10 @@ def _check_pedal(pedal) -> tuple[float, float]:
 
 def _check_lock(lock, rear_tire) -> tuple[str, ...]:
     if isinstance(lock, str):
-        lock = (lock,) if lock else ()
+        if not lock.strip():  # '' locked nothing where ``mtbmj bike --lock ''`` is refused (cli.bike.lock_option)
+            raise ConfigError(f"lock {lock!r}: names no part; give {', '.join(LOCKS)} (one, or a list of them), or "
+                              f"leave lock out to lock none")
+        lock = (lock,)
     try:
         lock = tuple(dict.fromkeys(lock))
     except TypeError:
