@@ -303,6 +303,13 @@ class Argument:
         return f"at most {self.high:g}{unit}"
 
 
+# What a pedalling rider's legs can do: cadence and power bound what any rider turns and keeps up for a few seconds
+# (assumed round values: sprint peaks of trained riders stay under about 1500 W, cadences within 30-130 rpm); the
+# one source of ``--pedal`` and ``--power``, of ``run_bike(pedal=...)``'s check and of the drive's law
+# (``mtbmj.controllers.drive``, which reads them from here)
+PEDAL_RPM = (30.0, 130.0)
+PEDAL_POWER_W = (0.0, 1500.0)  # power above 0: the floor is open
+
 _POSITIVE = dict(low=0.0, open_low=True)
 _SECONDS = Argument("s", plausible=None, **_POSITIVE)  # how long a run may be: the memory check (check_run)
 _WORKERS = Argument("", low=1, high=1024, plausible=(1, 256), integer=True)
@@ -332,11 +339,10 @@ ARGUMENTS: dict[str, Argument] = {
     # whole mass (rider.mass_kg's plausible 150 kg, mtbmj.bike.keys); 180 is more likely 180 lb = 81.6 kg
     "--load-kg": Argument("kg", high=1e4, plausible=(5.0, 150.0), **_POSITIVE),
     "--mass-kg": Argument("kg", high=1e4, plausible=(1.0, 300.0), **_POSITIVE),
-    # a pedalling rider's cadence and power: the model's range is what any rider turns and keeps up for a few
-    # seconds, ``mtbmj.controllers.drive.PEDAL_RPM`` and ``PEDAL_POWER_W`` (a floor above: the test of
-    # tests/test_fuzz_careless32b.py holds the two equal); one range, refused, no plausible one beside it
-    "--pedal": Argument("rpm", low=30.0, high=130.0, why="what a rider turns"),
-    "--power": Argument("W", high=1500.0, why="what a rider keeps up", **_POSITIVE),
+    # a pedalling rider's cadence and power: the model's range (``PEDAL_RPM``, ``PEDAL_POWER_W``, the drive's law
+    # too); one range, refused, no plausible one beside it
+    "--pedal": Argument("rpm", low=PEDAL_RPM[0], high=PEDAL_RPM[1], why="what a rider turns"),
+    "--power": Argument("W", high=PEDAL_POWER_W[1], why="what a rider keeps up", **_POSITIVE),
     "--drive-push-N": _FORCE_N,
     "--drive-power-W": Argument("W", low=0.0, high=1e5, plausible=(0.0, 2500.0)),
     "--drive-brake-N": _FORCE_N,

@@ -304,8 +304,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
 
 def _check_pedal(pedal) -> tuple[float, float]:
     """(cadence_rpm, power_W) of a pedalling rider, each within what riders do
-    (``controllers.drive.PEDAL_RPM``, ``PEDAL_POWER_W``), else one ConfigError line."""
-    from mtbmj.controllers.drive import PEDAL_POWER_W, PEDAL_RPM
+    (``limits.PEDAL_RPM``, ``PEDAL_POWER_W``: ``--pedal``'s and ``--power``'s), else one ConfigError line."""
+    from mtbmj.limits import PEDAL_POWER_W, PEDAL_RPM
 
     try:
         if isinstance(pedal, (str, bytes)):  # "90" unpacked as cadence "9", power "0"
