@@ -132,3 +132,60 @@ def test_an_empty_lock_from_python_is_refused_as_the_commands_is(tmp_path, capfd
             R.run_bike("sst", "flat", 4.0, duration=0.01, lock=empty)
     with pytest.raises(ConfigError, match=re.escape("lock: 'seat' is not one of rear, pitch, rider")):  # one part
         R.run_bike("sst", "flat", 4.0, duration=0.01, lock="seat")  # still read as one part
+
+
+# --- 7. a sensor unplugged partway through a ride ------------------------------------------------------------------
+
+def unplugged(tmp_path, column: int, fraction: float = 0.4):
+    """A copy of the shipped ride (SST version 3: a 16-byte header, then fork and shock uint16 counts) whose
+    ``column`` (0 fork, 1 shock) holds its count from ``1 - fraction`` of the ride to the end, as a sensor unplugged
+    then reads; the sample it holds from."""
+    import numpy as np
+
+    raw = open("/work/shared/data/sst/00649.SST", "rb").read()
+    counts = np.frombuffer(raw[16:], "<u2").reshape(-1, 2).copy()
+    start = int(round((1.0 - fraction) * len(counts)))
+    counts[start:, column] = counts[start, column]
+    path = tmp_path / f"unplugged{column}.SST"
+    path.write_bytes(raw[:16] + counts.tobytes())
+    return path, start
+
+
+@pytest.mark.parametrize("column, end, other", [(0, "fork", "shock"), (1, "shock", "fork")])
+def test_a_sensor_unplugged_partway_is_warned_about_naming_the_end_and_when(tmp_path, column, end, other):
+    """A fork or shock reading one count over the last 40 % of the ride (76.4 s at 1000 Hz: from 45.8 s) was read
+    silently as a ride whose end stopped moving; now one line naming the end and from when."""
+    from mtbmj.measured import telemetry
+
+    path, start = unplugged(tmp_path, column)
+    lines = telemetry.quality(telemetry.read_ride(path))
+    said = [line for line in lines if "unplugged or stuck partway" in line]
+    assert len(said) == 1, lines
+    assert said[0].startswith(f"{path.name}: the {end}'s travel holds at ") and \
+        f"mm from {start / 1000.0:.1f} s to the end (the last 30.6 s, 40 % of the ride) while the {other}'s moves" \
+        in said[0], said[0]
+    # the other side: the shipped ride itself (its ends' held tails 1.0 and 1.6 s), and a held tail shorter than
+    # HELD_TAIL_S (a rider rolled to a stop)
+    assert not [line for line in telemetry.quality(telemetry.read_ride("/work/shared/data/sst/00649.SST"))
+                if "partway" in line]
+    short, _ = unplugged(tmp_path, column, fraction=0.05)  # the last 3.8 s
+    assert not [line for line in telemetry.quality(telemetry.read_ride(short)) if "partway" in line]
+
+
+@pytest.mark.parametrize("argv", [["telemetry"], ["reconstruct", "--bike", "sst"], ["advise", "--bike", "sst"]])
+def test_the_ride_commands_warn_of_a_sensor_unplugged_partway(tmp_path, capfd, monkeypatch, argv):
+    """``mtbmj telemetry`` (the ride summarized), ``reconstruct`` and ``advise``: the line, before any work (their
+    runs stood in for here by a run that stops: its refusal carries the warnings said before it)."""
+    from mtbmj.errors import RunError
+    from mtbmj.ride import advise, reconstruct
+    from helpers import command_said
+
+    def stop(*args, **kwargs):
+        raise RunError("stood in: stopped before the run")
+
+    monkeypatch.setattr(reconstruct, "reconstruct", stop)
+    monkeypatch.setattr(advise, "advise", stop)
+    path, _ = unplugged(tmp_path, 0)
+    status, said = command_said([argv[0], path, *argv[1:], "--out", tmp_path / "out"], capfd)
+    assert "the fork's travel holds at" in said and "from 45.8 s to the end" in said, said
+    assert status == (0 if argv[0] == "telemetry" else 2), said
