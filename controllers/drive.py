@@ -28,15 +28,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from mtbmj.limits import PEDAL_POWER_W, PEDAL_RPM
+
 MODES = ("rider", "servo", "coast")
 SERVO, RIDER, COAST = 0, 1, 2  # codes the compiled callback reads
 # Pedalling (the whole bike's ``pedal`` mode, ``pedal_forces``): the crank's length and what a
 # rider's legs can do. 170 mm is the commonest crank on trail bikes (assumed); cadence and power
-# bound what any rider turns and keeps up for a few seconds (assumed round values: sprint peaks of
-# trained riders stay under about 1500 W, cadences within 30-130 rpm).
+# (``PEDAL_RPM``, ``PEDAL_POWER_W``) are the numeric gate's, ``mtbmj.limits``: one range for the
+# command's arguments, the Python check and this law.
 CRANK_LENGTH_M = 0.170
-PEDAL_RPM = (30.0, 130.0)
-PEDAL_POWER_W = (0.0, 1500.0)
 FRONT_SHARE = 0.58
 RIDER_PUSH_N = round(FRONT_SHARE * 720.0)  # 418 N
 RIDER_POWER_W = round(FRONT_SHARE * 1000.0)  # 580 W

@@ -3,6 +3,8 @@ number of seconds, at least one logger sample long, and a number of steps whose 
 the memory this machine has available (the message says how much would be needed)."""
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 import os
 
@@ -38,10 +40,35 @@ def size_text(nbytes: float) -> str:
     return f"{nbytes / 1024:.3g} KiB"
 
 
+# The numbers a command's user typed, by option, while the command runs (``command_line``; None outside one): a
+# number given to the library as the option was (``--duration 1e9`` as ``run_drop``'s duration) is refused
+# naming the option (:func:`named`), not the Python argument it became.
+_TYPED: contextvars.ContextVar = contextvars.ContextVar("mtbmj_typed", default=None)
+
+
+@contextlib.contextmanager
+def command_line():
+    """The run of one command: the numbers its arguments pass (:func:`argument`) are kept for :func:`named`."""
+    token = _TYPED.set({})
+    try:
+        yield
+    finally:
+        _TYPED.reset(token)
+
+
+def named(label: str, value) -> str:
+    """``label``, a Python argument's name (``duration``), as the user gave ``value``: the command's option
+    (``--duration``) where a command runs and its user typed that option with this value; else ``label``."""
+    option = "--" + label.replace("_", "-")
+    typed = _TYPED.get()
+    return option if typed is not None and option in typed and typed[option] == value else label
+
+
 def check_duration(label: str, duration) -> None:
     """A duration given by the user: a finite positive number of seconds."""
     if duration is None:
         return
+    label = named(label, duration)
     if isinstance(duration, bool) or not isinstance(duration, (int, float)):
         raise ConfigError(f"{label}: must be a number of seconds, got {duration!r}")
     if not (math.isfinite(duration) and duration > 0):
@@ -54,6 +81,7 @@ def check_run(duration: float, timestep: float, sample_rate_Hz: float, label: st
     when the duration is not finite, shorter than one logger sample, or the steps would need more
     memory than is available."""
     check_duration(label, duration)
+    label = named(label, duration)
     shortest = 1.0 / sample_rate_Hz
     if duration < shortest:
         raise ConfigError(f"{label}: {duration:g} s is shorter than one logger sample "
@@ -257,6 +285,14 @@ class Argument:
         above = self.high is not None and (value >= self.high if self.open_high else value > self.high)
         return self.below(value) or above
 
+    def reason(self, value: float) -> str:
+        """Why ``value``, outside the values allowed, is (" (no bike is ridden faster than 30 m/s)", " (what a
+        rider turns)"), or ""."""
+        unit = f" {self.unit}" if self.unit else ""
+        if self.beyond and not self.below(value):
+            return f" ({self.beyond} faster than {self.plausible[1]:g}{unit})"
+        return f" ({self.why})" if self.why else ""
+
     def allowed(self) -> str:
         unit = f" {self.unit}" if self.unit else ""
         if self.low is not None and self.high is not None:
@@ -266,6 +302,13 @@ class Argument:
             return f"{'above' if self.open_low else 'at least'} {self.low:g}{unit}"
         return f"at most {self.high:g}{unit}"
 
+
+# What a pedalling rider's legs can do: cadence and power bound what any rider turns and keeps up for a few seconds
+# (assumed round values: sprint peaks of trained riders stay under about 1500 W, cadences within 30-130 rpm); the
+# one source of ``--pedal`` and ``--power``, of ``run_bike(pedal=...)``'s check and of the drive's law
+# (``mtbmj.controllers.drive``, which reads them from here)
+PEDAL_RPM = (30.0, 130.0)
+PEDAL_POWER_W = (0.0, 1500.0)  # power above 0: the floor is open
 
 _POSITIVE = dict(low=0.0, open_low=True)
 _SECONDS = Argument("s", plausible=None, **_POSITIVE)  # how long a run may be: the memory check (check_run)
@@ -296,11 +339,10 @@ ARGUMENTS: dict[str, Argument] = {
     # whole mass (rider.mass_kg's plausible 150 kg, mtbmj.bike.keys); 180 is more likely 180 lb = 81.6 kg
     "--load-kg": Argument("kg", high=1e4, plausible=(5.0, 150.0), **_POSITIVE),
     "--mass-kg": Argument("kg", high=1e4, plausible=(1.0, 300.0), **_POSITIVE),
-    # a pedalling rider's cadence and power: the model's range is what any rider turns and keeps up for a few
-    # seconds, ``mtbmj.controllers.drive.PEDAL_RPM`` and ``PEDAL_POWER_W`` (a floor above: the test of
-    # tests/test_fuzz_careless32b.py holds the two equal); one range, refused, no plausible one beside it
-    "--pedal": Argument("rpm", low=30.0, high=130.0, why="what a rider turns"),
-    "--power": Argument("W", high=1500.0, why="what a rider keeps up", **_POSITIVE),
+    # a pedalling rider's cadence and power: the model's range (``PEDAL_RPM``, ``PEDAL_POWER_W``, the drive's law
+    # too); one range, refused, no plausible one beside it
+    "--pedal": Argument("rpm", low=PEDAL_RPM[0], high=PEDAL_RPM[1], why="what a rider turns"),
+    "--power": Argument("W", high=PEDAL_POWER_W[1], why="what a rider keeps up", **_POSITIVE),
     "--drive-push-N": _FORCE_N,
     "--drive-power-W": Argument("W", low=0.0, high=1e5, plausible=(0.0, 2500.0)),
     "--drive-brake-N": _FORCE_N,
@@ -355,10 +397,8 @@ def argument(option: str, text: str, integer: bool = False):
         if not math.isfinite(value):
             raise ValueError(f"must be a finite number, got {typed}")
     unit = f" {spec.unit}" if spec.unit else ""
-    low_bad = spec.below(value)
     if spec.outside(value):
-        beyond = f" ({spec.beyond} faster than {spec.plausible[1]:g}{unit})" if spec.beyond and not low_bad else ""
-        beyond = beyond or (f" ({spec.why})" if spec.why else "")
+        beyond = spec.reason(value)
         shown = _shown(value) if spec.integer else f"{value:g}"
         near = spec.plausible or (spec.low if spec.low is not None else -MAX_MAGNITUDE, spec.high)
         meant = slip(value, spec.unit, near) if not spec.integer else ""  # --head-angle 1.13: radians
@@ -366,6 +406,9 @@ def argument(option: str, text: str, integer: bool = False):
                          f"allowed: {spec.allowed()}{beyond}{f' (a unit mistake?{meant})' if meant else ''}")
     if option in ARGUMENTS:
         plausible(option, value)
+    typed = _TYPED.get()
+    if typed is not None:  # within a command: the number its user typed as option (``named``)
+        typed[option] = value
     return value
 
 
@@ -406,19 +449,32 @@ def caller_level() -> int:
 CRAWL_S = 120.0
 
 
+def given(option: str, label: str, value, what: str = "", warn: bool = True) -> float:
+    """``value``, given from Python as ``label`` for what the command line takes as ``option`` (a key of
+    ``ARGUMENTS``), as a float: refused (one ConfigError line naming ``label``) where it is not a finite number
+    (``what`` says what it is: " (the front axle's start)"), not positive for an option that must be, or outside
+    the option's range; outside its plausible range warned about with the option's line (:func:`plausible`) where
+    ``warn``. The one check of a command option's number given from Python (a rig's speed, the cross-check's
+    tolerance, the bike's start)."""
+    spec = ARGUMENTS[option]
+    positive = spec.low == 0 and spec.open_low
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) \
+            or (positive and spec.below(value)):
+        raise ConfigError(f"{label}: must be a {'positive' if positive else 'finite'} number of {spec.unit}{what}, "
+                          f"got {value!r}")
+    if spec.outside(value):
+        raise ConfigError(f"{label}: {value:g} {spec.unit} is outside the range allowed: {spec.allowed()}"
+                          f"{spec.reason(value)}")
+    if warn:
+        plausible(option, value)
+    return float(value)
+
+
 def speed(value, label: str = "speed", warn: bool = True) -> float:
     """A rig's speed given from Python (m/s): a positive finite number within ``--speed``'s range, else one
-    ConfigError line; outside its plausible range warned about with ``--speed``'s line (:func:`plausible`; a
+    ConfigError line; outside its plausible range warned about with ``--speed``'s line (:func:`given`; a
     command's argument, warned about by :func:`argument` before, is warned once: the command keeps each line once)."""
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value <= 0:
-        raise ConfigError(f"{label}: must be a positive number of m/s, got {value!r}")
-    spec = ARGUMENTS["--speed"]
-    if value > spec.high:
-        raise ConfigError(f"{label}: {value:g} m/s is outside the range allowed: {spec.allowed()} ({spec.beyond} "
-                          f"faster than {spec.plausible[1]:g} m/s)")
-    if warn:  # the command line's warning, said to a caller from Python too (once: a run checks it twice)
-        plausible("--speed", value)
-    return float(value)
+    return given("--speed", label, value, warn=warn)
 
 
 def crossing(speed: float, seconds: float, terrain: str) -> None:

@@ -34,13 +34,15 @@ def test_a_pedalling_riders_power_or_cadence_names_one_range(tmp_path, capfd, ar
 
 
 def test_the_gates_pedalling_range_is_the_models():
-    """The numeric gate (floor 0) cannot import the drive's law (floor 1): the two are held equal here."""
-    from mtbmj.controllers.drive import PEDAL_POWER_W, PEDAL_RPM
-    from mtbmj.limits import ARGUMENTS
+    """One source (round depth33): the drive's law (floor 1) reads the numeric gate's range (floor 0), where the
+    two were written apart and held equal by this test."""
+    from mtbmj import limits
+    from mtbmj.controllers import drive
 
-    power, cadence = ARGUMENTS["--power"], ARGUMENTS["--pedal"]
-    assert (power.low or 0.0, power.high) == PEDAL_POWER_W and power.open_low and power.plausible is None
-    assert (cadence.low, cadence.high) == PEDAL_RPM and cadence.plausible is None
+    assert drive.PEDAL_RPM is limits.PEDAL_RPM and drive.PEDAL_POWER_W is limits.PEDAL_POWER_W
+    power, cadence = limits.ARGUMENTS["--power"], limits.ARGUMENTS["--pedal"]
+    assert (power.low or 0.0, power.high) == limits.PEDAL_POWER_W and power.open_low and power.plausible is None
+    assert (cadence.low, cadence.high) == limits.PEDAL_RPM and cadence.plausible is None
 
 
 # --- 2. an empty list of parts to lock: ran with none locked -------------------------------------------------

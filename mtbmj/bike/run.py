@@ -44,7 +44,7 @@ from mtbmj.bike.parts import setups
 from mtbmj.controllers import installed
 from mtbmj.controllers.drive import Drive
 from mtbmj.errors import ConfigError
-from mtbmj.limits import check_duration, check_run, crossing, speed as ridden_speed
+from mtbmj.limits import check_duration, check_run, crossing, given, speed as ridden_speed
 from mtbmj.result import RunOutput
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
@@ -207,9 +207,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
         cadence_rpm, power = _check_pedal(pedal)
         drive = "pedal"
     _check(speed_m_per_s, None, pedal, warn=False)  # warned by run_bike (a replay, a still rig: not)
-    if start_x is not None and (not isinstance(start_x, (int, float)) or isinstance(start_x, bool)
-                                or not math.isfinite(start_x)):  # nan was "does not start on level ground"
-        raise ConfigError(f"start_x: must be a finite number of m (the front axle's start), got {start_x!r}")
+    if start_x is not None:  # nan was "does not start on level ground"; within --start-m's range, as the command's
+        start_x = given("--start-m", "start_x", start_x, " (the front axle's start)")
     if callback not in CALLBACKS:
         raise ConfigError(f"callback: must be one of {', '.join(CALLBACKS)}, got {callback!r}")
     if drive not in ("rider", "coast") and pedal is None:  # a pedalling rider comes with pedal=(rpm, W)
@@ -305,8 +304,8 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
 
 def _check_pedal(pedal) -> tuple[float, float]:
     """(cadence_rpm, power_W) of a pedalling rider, each within what riders do
-    (``controllers.drive.PEDAL_RPM``, ``PEDAL_POWER_W``), else one ConfigError line."""
-    from mtbmj.controllers.drive import PEDAL_POWER_W, PEDAL_RPM
+    (``limits.PEDAL_RPM``, ``PEDAL_POWER_W``: ``--pedal``'s and ``--power``'s), else one ConfigError line."""
+    from mtbmj.limits import PEDAL_POWER_W, PEDAL_RPM
 
     try:
         if isinstance(pedal, (str, bytes)):  # "90" unpacked as cadence "9", power "0"
@@ -324,7 +323,10 @@ def _check_pedal(pedal) -> tuple[float, float]:
 
 def _check_lock(lock, rear_tire) -> tuple[str, ...]:
     if isinstance(lock, str):
-        lock = (lock,) if lock else ()
+        if not lock.strip():  # '' locked nothing where ``mtbmj bike --lock ''`` is refused (cli.bike.lock_option)
+            raise ConfigError(f"lock {lock!r}: names no part; give {', '.join(LOCKS)} (one, or a list of them), or "
+                              f"leave lock out to lock none")
+        lock = (lock,)
     try:
         lock = tuple(dict.fromkeys(lock))
     except TypeError:

@@ -25,9 +25,8 @@ def cmd_bob(args) -> int:
     if stances == []:  # `--stance ""`: a list left empty by mistake
         raise ConfigError(f"--stance {args.stance!r}: names no stance; give standing or seated, one per record, "
                           f"or leave --stance out for all standing")
-    if args.duration is not None and not args.duration >= 2.0 * pedalling.MIN_STRETCH_S:
-        raise ConfigError(f"--duration: {args.duration:g} s is too short to read a bob over its second half "
-                          f"({2.0 * pedalling.MIN_STRETCH_S:g} s at least)")
+    if args.duration is not None:  # before any run, named as typed (against's own check names duration_s)
+        pedalling.check_run_s(args.duration, "--duration")
     result = pedalling.against(args.records, args.bike, stances, args.power or 250.0, bike_overrides(args) or None,
                          args.duration or pedalling.RUN_S, args.rider)
     result.write(args.out)

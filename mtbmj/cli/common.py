@@ -15,7 +15,7 @@ from pathlib import Path
 
 from mtbmj.config import ConfigError, ConfigWarning
 from mtbmj.errors import MtbmjError, RunError, check_interrupt, interrupt_handling, interrupted
-from mtbmj.limits import argument
+from mtbmj.limits import argument, command_line
 from mtbmj.textfile import parses_as_number
 
 EXIT_BAD_INPUT = 2
@@ -45,9 +45,10 @@ class Parser(argparse.ArgumentParser):
         _one_comma_list(getattr(self, "_comma_lists", ()), given)
         _one_side(self._actions, given)
         namespace, extras = super().parse_known_args(args, namespace)
-        # ``--speed 20 km/h``: argparse's "unrecognized arguments: km/h" where the cause is the unit (not in an
-        # intermixed parse's first pass, whose extras are its positionals: checked on its final extras, ``intermixed``)
-        if extras and not getattr(self, "_intermixing", False):
+        # ``--speed 20 km/h``: argparse's "unrecognized arguments: km/h", or the unit read as the positional after it
+        # ("W: cannot read"), where the cause is the unit (not in an intermixed parse's first pass, whose extras are
+        # its positionals: checked on its final parse, ``intermixed``)
+        if not getattr(self, "_intermixing", False):
             _unit_apart(self._actions, given, extras)
         return namespace, extras
 
@@ -96,11 +97,17 @@ def _a_path(text: str) -> Path:
 
 def _unit_apart(actions, args, extras) -> None:
     """Refuse a unit typed apart after a numeric option's value (``--speed 20 km/h``, ``--load-kg=180 lb``),
-    where argparse found an argument it did not expect (the unit, or the positional the unit displaced), naming
-    the number to give (``limits.unit_apart``)."""
+    naming the number to give (``limits.unit_apart``): where argparse found an argument it did not expect (the
+    unit, or the positional the unit displaced), or took the unit as a positional (``bob --power 250 W REC``:
+    the record "W"; ``roll --duration 0.2 s``: the scenario "s"). A unit's word taken as a positional is the
+    positional where it is one: a file so named (``validate example --duration 0.5 s`` with a configuration
+    ``s``) or one of its choices (no preset, terrain or choice is named as a unit)."""
     from mtbmj.limits import unit_apart
 
+    if not extras and not any(not a.option_strings for a in actions):
+        return  # nothing left over and no positional to take a unit
     numeric_options = {o: a.type.option for a in actions if hasattr(a.type, "option") for o in a.option_strings}
+    choices = {str(c) for a in actions if not a.option_strings and a.choices for c in a.choices}
     said = [str(a) for a in args]
     for i, word in enumerate(said[1:], 1):
         option, eq, value = said[i - 1].partition("=")
@@ -108,7 +115,9 @@ def _unit_apart(actions, args, extras) -> None:
             option, value = said[i - 2], said[i - 1]
         elif not (eq and option in numeric_options):  # ``--speed=20 km/h``
             continue
-        note = unit_apart(numeric_options[option], value, word)  # the unit may have been taken as a positional
+        if word not in extras and (word in choices or os.path.exists(home(word))):
+            continue  # read as the positional it names
+        note = unit_apart(numeric_options[option], value, word)
         if note:
             error = MtbmjError(f"argument {option}: '{value} {word}' is a number and its unit{note}")
             error.alone = True  # no note of the number's range beside it: the number was read without its unit
@@ -183,8 +192,8 @@ def intermixed(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
             namespace, extras = parser.parse_known_intermixed_args(args, namespace)
         finally:
             parser._intermixing = False
-        if extras:  # what is left over at the end: a unit typed apart named, as in the other commands
-            _unit_apart(parser._actions, sys.argv[1:] if args is None else list(args), extras)
+        # a unit typed apart named, left over at the end or read as a positional, as in the other commands
+        _unit_apart(parser._actions, sys.argv[1:] if args is None else list(args), extras)
         return namespace, extras
 
     parser.parse_known_args = parse_known_args
@@ -433,7 +442,7 @@ def _report_line(line: str) -> None:
 def _run_parsed(parser: argparse.ArgumentParser, argv=None) -> int:
     config_warnings = _ConfigWarnings()
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), command_line():  # a number refused deep in a run names the option typed
             # numpy's RuntimeWarnings (overflow, invalid value) are errors only where a run steps
             # (``mtbmj.errors.diverging``, around every rig's stepping); elsewhere (a fit, a reader,
             # a library that meets such a value and handles it) they are not the user's concern

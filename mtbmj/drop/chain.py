@@ -38,7 +38,8 @@ def prepare(config: Config | str, overrides: Mapping | None = None, duration: fl
         cfg = config.with_overrides(overrides) if overrides else config
     limits.check_duration("duration", duration)  # a str, a NaN from Python: one line, not a TypeError
     setup = compose.setup(cfg)
-    limits.check_run(setup.duration if duration is None else duration, setup.timestep, setup.sample_rate)
+    limits.check_run(setup.duration if duration is None else duration, setup.timestep, setup.sample_rate,
+                     "solver.duration_s" if duration is None else "duration")  # the length given, by its name
     return cfg, setup
 
 

@@ -3,13 +3,10 @@ the same configuration: sled, fork and tire compared sample by sample on the eng
 each within the tolerance (a ``mtbmj.runpath.crosscheck.CrosscheckResult``)."""
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from mtbmj.drop.chain import resolve
 from mtbmj import limits
-from mtbmj.errors import ConfigError
 from mtbmj.drop.run import run_drop
 from mtbmj.drop.result import DISPLACEMENTS, DropResult
 from mtbmj.runpath.crosscheck import CrosscheckResult, compare_series
@@ -39,13 +36,9 @@ def crosscheck(config, tolerance_mm: float = DEFAULT_TOLERANCE_MM, overrides=Non
 def crosscheck_all(config, engines=("mujoco",), tolerance_mm: float = DEFAULT_TOLERANCE_MM, overrides=None,
                    duration=None) -> list[CrosscheckResult]:
     """One cross-check per engine of ``engines`` against one ODE reference run."""
-    if not isinstance(tolerance_mm, (int, float)) or isinstance(tolerance_mm, bool) \
-            or not (math.isfinite(tolerance_mm) and tolerance_mm > 0):  # refused before the runs, naming the argument
-        raise ConfigError(f"tolerance_mm: must be a positive number of mm, got {tolerance_mm!r}")
-    gate = limits.ARGUMENTS["--tolerance-mm"]  # the command line's range and warning, from Python too
-    if tolerance_mm > gate.high:  # 5000 mm ran from Python where --tolerance-mm 5000 is refused
-        raise ConfigError(f"tolerance_mm: {tolerance_mm:g} mm is outside the range allowed: {gate.allowed()}")
-    limits.plausible("--tolerance-mm", tolerance_mm)
+    # refused before the runs, naming the argument, within --tolerance-mm's range (5000 mm ran from Python where
+    # --tolerance-mm 5000 is refused) and warned about outside its plausible one, as the command line is
+    limits.given("--tolerance-mm", "tolerance_mm", tolerance_mm)
     cfg = resolve(config, overrides)
     ode = run_drop(cfg, "ode", duration=duration)
     return [from_results(run_drop(cfg, e, duration=duration), ode, tolerance_mm) for e in engines]

@@ -63,7 +63,8 @@ def run_study(presets: Sequence[str] | None = None, overrides=None, duration: fl
     for c in configs:  # refused here, before any worker starts
         setup = compose.setup(c)
         limits.check_run(setup.duration if duration is None else duration, setup.timestep, setup.sample_rate,
-                         f"{c.name}: duration", runs=len(engines))
+                         f"{c.name}: {'solver.duration_s' if duration is None else limits.named('duration', duration)}",
+                         runs=len(engines))
     # the reference first: it is the slowest, so the pool starts on it
     order = sorted(engines, key=lambda e: e != "ode")
     jobs = [(c, e, duration) for c in configs for e in order]

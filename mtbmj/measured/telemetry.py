@@ -557,6 +557,36 @@ def quality(record: TelemetryRecord) -> list[str]:
             if at_end > SATURATED_FRACTION:
                 out.append(f"{record.name}: the {label} sensor sits at the end of its range for {100 * at_end:.1f} % "
                            f"of the ride: saturated (its calibration or mounting?)")
+    return out + held_tail(record)
+
+
+# An end's travel held at one value over at least this long at the end of a ride, while the other end moves, is a
+# sensor unplugged (or stuck) partway. The shipped rides' longest such tails are 4.05 s (00098.SST's shock, the fork
+# moving for 2 s of it) and 3.52 s (00643.SST's shock, version 3): a rider rolling to a stop before the recording
+# ends; a stop with the rider off the bike holds both ends (00094.SST: 25 s at 0 mm mid-ride), not warned about.
+HELD_TAIL_S = 5.0
+
+
+def held_tail(record: TelemetryRecord) -> list[str]:
+    """One line for each end whose travel reads one value from some time to the end of the ride, for at least
+    ``HELD_TAIL_S``, while the other end moves over that stretch: its sensor unplugged or stuck partway, what the
+    ride reads of that end after then false. (An end that never moves is ``quality``'s line and ``both_ends``'
+    refusal; a record of one end is not judged: a stop cannot be told from a sensor held.)"""
+    rear = ("shock", record.shock_mm) if record.shock_mm is not None else ("rear", record.rear_mm)
+    ends = [("fork", record.fork_mm), rear]
+    out = []
+    for k, (label, travel) in enumerate(ends):
+        other = ends[1 - k][1]
+        if travel is None or other is None or travel.size < 2 or np.ptp(travel) == 0.0:
+            continue
+        start = int(np.flatnonzero(np.diff(travel) != 0.0)[-1]) + 1  # the first sample of the held stretch
+        seconds = (travel.size - start) / record.sample_rate_Hz
+        if seconds >= HELD_TAIL_S and np.ptp(other[start:]) > 0.0:
+            out.append(f"{record.name}: the {label}'s travel holds at {float(travel[start]):.1f} mm from "
+                       f"{float(record.time_s[start]):.1f} s to the end (the last {seconds:.1f} s, "
+                       f"{100.0 * seconds / record.duration_s:.0f} % of the ride) while the "
+                       f"{ends[1 - k][0]}'s moves: its sensor unplugged or stuck partway; what the ride reads of "
+                       f"the {label} after {float(record.time_s[start]):.1f} s is false")
     return out
 
 

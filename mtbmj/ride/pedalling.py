@@ -14,6 +14,20 @@ GEAR = (32, 42)  # assumed: a 1x climbing gear (the records do not say theirs)
 RUN_S = 14.0
 
 
+def check_run_s(value, label: str = "duration_s") -> float:
+    """The simulated seconds of one record's run (``against``'s ``duration_s``, ``mtbmj bob --duration``): a
+    positive finite number long enough for its second half, where the bob is read, to be a stretch
+    (``MIN_STRETCH_S``); else one ConfigError line naming ``label``."""
+    from mtbmj.errors import ConfigError
+    from mtbmj.limits import check_duration
+
+    check_duration(label, value)
+    if value < 2.0 * MIN_STRETCH_S:
+        raise ConfigError(f"{label}: {value:g} s is too short to read a bob over its second half "
+                          f"({2.0 * MIN_STRETCH_S:g} s at least)")
+    return float(value)
+
+
 @dataclass
 class Against:
     """Recorded pedalling rides and the bike pedalled as each was (``against``)."""
@@ -151,9 +165,7 @@ def against(records, bike: str = "sst", stances=None, power_W: float = 250.0, ov
     from mtbmj.errors import ConfigError
     from mtbmj.measured import telemetry
 
-    if not (isinstance(duration_s, (int, float)) and duration_s >= 2.0 * MIN_STRETCH_S):  # as --duration is refused
-        raise ConfigError(f"duration_s: {duration_s!r} s is too short to read a bob over its second half "
-                          f"({2.0 * MIN_STRETCH_S:g} s at least)")
+    duration_s = check_run_s(duration_s)  # the rule of bob's --duration too
     stances = list(stances or ["standing"] * len(records))
     if len(stances) != len(records):
         raise ConfigError(f"stance: one per record ({len(records)}), got {len(stances)}")

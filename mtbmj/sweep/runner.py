@@ -451,7 +451,8 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
         from mtbmj.limits import check_run
 
         base_setup = compose_setup(cfg)
-        check_run(base_setup.duration if duration is None else duration, base_setup.timestep, base_setup.sample_rate)
+        check_run(base_setup.duration if duration is None else duration, base_setup.timestep, base_setup.sample_rate,
+                  "solver.duration_s" if duration is None else "duration")  # the length given, by its name
     out = Path(out_dir)
     planned = plan(cfg, variants, engine, duration)
     with output.claim(out, "sweep", folders=(JOURNAL,)):
