@@ -213,6 +213,61 @@ def require_mapping(overrides, example: str, none_ok: bool = True) -> None:
     if not (overrides is None and none_ok) and not isinstance(overrides, Mapping):
         raise ConfigError(f"overrides: must be a mapping of key to value, e.g. {{{example}}}, got a "
                           f"{type(overrides).__name__}")
+    odd = [k for k in (overrides if isinstance(overrides, Mapping) else ()) if not isinstance(k, str)]
+    if odd:  # {1: 300} met str methods deep inside ("'int' object has no attribute 'rpartition'")
+        raise ConfigError(f"overrides: each key must be a str naming the key, e.g. {{{example}}}, got {odd[0]!r}")
+
+
+# --- the kinds of a Python argument that is no number: a list of names, a switch, a count -------------------------
+# Each refused in one line naming the argument, before any work: a str where a list goes is read letter by letter
+# ("S12" as the preset "S"), a str where a switch goes is true whatever it says ("no" too), "2" where a count goes
+# meets a comparison deep inside ("'<' not supported between instances of 'str' and 'int'").
+
+def names(label: str, value, example, none_ok: bool = True, what: str = "names", as_item: bool = True) -> list | None:
+    """``value`` (a list or tuple of names, or None where ``none_ok``) as a list, or ``ConfigError`` naming ``label``:
+    a str, a mapping, a number or an empty list is refused (``example`` one item the list may hold, ``what`` its
+    items: "names", "files"; a str given is shown in a list as the way to give it, unless not ``as_item``)."""
+    from collections.abc import Iterable, Mapping
+
+    if value is None and none_ok:
+        return None
+    if isinstance(value, str) and as_item:
+        raise ConfigError(f"{label}: must be a list of {what}, e.g. [{value!r}], got the str {value!r}")
+    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Iterable):
+        shown = f"the str {value!r}" if isinstance(value, str) else described(value)
+        raise ConfigError(f"{label}: must be a list of {what}, e.g. [{example!r}], got {shown}")
+    value = list(value)
+    if not value:
+        raise ConfigError(f"{label}: an empty list; give at least one, e.g. [{example!r}]"
+                          + (" (or None for the default)" if none_ok else ""))
+    return value
+
+
+def switch(label: str, value) -> bool:
+    """``value`` as a bool when it is True or False (numpy's too), else ``ConfigError`` naming ``label``."""
+    if isinstance(value, bool) or (type(value).__module__ == "numpy" and type(value).__name__ in ("bool_", "bool")):
+        return bool(value)
+    raise ConfigError(f"{label}: must be True or False, got {value!r}")
+
+
+def whole(label: str, value, least: int, none_ok: bool = True) -> int | None:
+    """``value`` as an int when it is a whole number (numpy's too, not a bool or a float) of at least ``least``
+    (None passes where ``none_ok``), else ``ConfigError`` naming ``label``."""
+    import numbers
+
+    if value is None and none_ok:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise ConfigError(f"{label}: must be a whole number, got {value!r}")
+    if value < least:
+        raise ConfigError(f"{label}: must be at least {least}, got {value}")
+    return int(value)
+
+
+def described(value) -> str:
+    """``value``'s kind as a refusal says it: "None", "a str", "a dict"."""
+    name = type(value).__name__
+    return "None" if value is None else f"{'an' if name[0] in 'aeiou' else 'a'} {name}"
 
 
 # A unit as people also type it after a number (``20 percent``, ``30 fps``)
@@ -456,9 +511,11 @@ def given(option: str, label: str, value, what: str = "", warn: bool = True) -> 
     the option's range; outside its plausible range warned about with the option's line (:func:`plausible`) where
     ``warn``. The one check of a command option's number given from Python (a rig's speed, the cross-check's
     tolerance, the bike's start)."""
+    import numbers
+
     spec = ARGUMENTS[option]
     positive = spec.low == 0 and spec.open_low
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) \
+    if not isinstance(value, numbers.Real) or isinstance(value, bool) or not math.isfinite(value) \
             or (positive and spec.below(value)):
         raise ConfigError(f"{label}: must be a {'positive' if positive else 'finite'} number of {spec.unit}{what}, "
                           f"got {value!r}")

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mtbmj import output
+from mtbmj import limits, output
+from mtbmj.errors import ConfigError
 
 def _optional_version(name: str) -> str | None:
     from importlib import metadata
@@ -107,6 +108,13 @@ class RunOutput:
                 return result.raw
             return {k: np.asarray(v)[rows] for k, v in result.raw.items()}
 
+        if not isinstance(other, RunOutput):  # None met "'NoneType' object has no attribute 'raw'"
+            raise ConfigError(f"other: must be a run's result to difference with ({type(self).__name__}), got "
+                              f"{limits.described(other)}")
+        missing = [c for c in self.COMPARED if c not in other.raw]
+        if missing:  # a RollResult beside a DropResult was "results are not on the same time grid"
+            raise ConfigError(f"other: a {type(other).__name__} has no {missing[0]} to difference with this "
+                              f"{type(self).__name__}'s; give a result of the same rig")
         a, b = (on_grid(self), on_grid(other)) if raw else (self.signals, other.signals)
         n = min(len(a["time_s"]), len(b["time_s"]))
         if not np.allclose(a["time_s"][:n], b["time_s"][:n], atol=1e-9):

@@ -26,8 +26,18 @@ LIMITS = {
 
 def other_case(path: Path) -> str:
     """`` (there is NAME)`` where the name, or a folder on its way, is there in another case (``ride.sst``
-    typed for ``ride.SST``, ``REC/TERRAIN.CSV`` for ``rec/terrain.csv``), else ``""``."""
+    typed for ``ride.SST``, ``REC/TERRAIN.CSV`` for ``rec/terrain.csv``); where the name is a symbolic link that
+    leads nowhere, `` (NAME is a symbolic link to TARGET, a loop of links)`` or ``…, which is not there)``; else
+    ``""``."""
     path = Path(path)
+    if path.is_symlink():  # a loop was "no such file", the file a user made in plain sight
+        try:
+            os.stat(path)
+        except OSError as exc:
+            import errno
+
+            why = "a loop of links" if exc.errno == errno.ELOOP else "which is not there"
+            return f" ({path} is a symbolic link to {os.readlink(path)}, {why})"
     found = Path(path.anchor) if path.anchor else Path()
     for part in path.parts[len(Path(path.anchor).parts) if path.anchor else 0:]:
         if part in ("", ".", "..") or (found / part).exists():

@@ -44,7 +44,7 @@ from mtbmj.bike.parts import setups
 from mtbmj.controllers import installed
 from mtbmj.controllers.drive import Drive
 from mtbmj.errors import ConfigError
-from mtbmj.limits import check_duration, check_run, crossing, given, speed as ridden_speed
+from mtbmj.limits import check_duration, check_run, crossing, given, speed as ridden_speed, switch
 from mtbmj.result import RunOutput
 from mtbmj.rolling import terrain as terrain_mod
 from mtbmj.rolling.tire import REFRESH_DISTANCE_M, REFRESH_S, RadialTire
@@ -168,6 +168,9 @@ def prepare(bike="sst", scenario="flat", speed_m_per_s: float | None = 4.0, driv
     ``speed_m_per_s`` the start's."""
     from mtbmj.bike.reference import Reference, static_equilibrium
 
+    # "no" is true to Python: seated="no" ran seated
+    rear_tire, seated, legs_swing = (switch(k, v) for k, v in (("rear_tire", rear_tire), ("seated", seated),
+                                                               ("legs_swing", legs_swing)))
     if rider not in RIDERS:
         raise ConfigError(f"rider: must be one of {', '.join(RIDERS)}, got {rider!r}")
     if rider == "active":

@@ -52,9 +52,11 @@ def is_bike(ref: str, depth: int = 0) -> bool:
             table = tomllib.loads(path.read_text(encoding="utf-8-sig"))
         except (tomllib.TOMLDecodeError, OSError, UnicodeDecodeError):
             return False
+        base = table.get("base")
+        if isinstance(base, str) and any(base.lower() == n.lower() for n in preset_names()):
+            return False  # a fork preset as its base: a fork's file (a bike's [rider] in it is then named as an unknown key)
         if any(k in table for k in ("bike", "leverage", "rider", "shock", "geometry", "linkage", "drive", "sensors")):
             return True
-        base = table.get("base")
         return isinstance(base, str) and depth < 20 and is_bike(str(path.parent / base) if base.lower().endswith(
             ".toml") else base, depth + 1)
     return False

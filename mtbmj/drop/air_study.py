@@ -45,6 +45,9 @@ def run_air_study(config: Config | str = "air120", overrides: Mapping | None = N
     """Every variant on MuJoCo and on the ODE reference, in parallel processes. Returns
     ``(base, results, checks)``: ``results[name][engine]`` and one cross-check
     (``CrosscheckResult``) per variant."""
+    from mtbmj import limits
+
+    workers = limits.whole("--workers", workers, 1)
     base = resolve(config, overrides)
     if base.get("fork.spring.model") != "air":
         from mtbmj.errors import ConfigError
@@ -57,10 +60,6 @@ def run_air_study(config: Config | str = "air120", overrides: Mapping | None = N
         compose.setup(c)  # every variant is valid before any runs
         configs.append(Config(name, c.values, c.sources))
     jobs = [(c, e, duration) for c in configs for e in ("ode", "mujoco")]
-    if workers is not None and workers < 1:
-        from mtbmj.errors import ConfigError
-
-        raise ConfigError(f"--workers: must be at least 1, got {workers}")
     workers = min(workers or os.cpu_count() or 1, len(jobs))
     results: dict[str, dict] = {c.name: {} for c in configs}
     with process_pool(workers) as pool:

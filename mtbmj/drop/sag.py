@@ -193,8 +193,8 @@ def solve_sag(config: Config | str, load_kg: float | None, sag_percent: float,
 
     overrides = dict(overrides or {})
     _check_load_kg(load_kg, overrides)
-    if not (isinstance(sag_percent, (int, float)) and 0 < sag_percent < 100):
-        raise ConfigError(f"--sag-percent: must be between 0 and 100 (percent of travel), got {sag_percent}")
+    if not (isinstance(sag_percent, (int, float)) and not isinstance(sag_percent, bool) and 0 < sag_percent < 100):
+        raise ConfigError(f"--sag-percent: must be between 0 and 100 (percent of travel), got {sag_percent!r}")
     if load_kg is not None:  # the command line's warnings, said to a caller from Python too (70 kg as 0.2 %: 20 %?)
         limits.plausible("--load-kg", load_kg)
     limits.plausible("--sag-percent", sag_percent)

@@ -48,10 +48,11 @@ def run_study(presets: Sequence[str] | None = None, overrides=None, duration: fl
     order, then engine)."""
     from mtbmj.drop.run import ENGINES
 
-    for label, given in (("presets", presets), ("engines", engines)):
-        if isinstance(given, str):  # "S12" read letter by letter would be refused as the preset "S"
-            raise ConfigError(f"{label}: must be a list of names, e.g. [{given!r}], got the str {given!r}")
-    engines = list(dict.fromkeys(engines))
+    # "S12" read letter by letter would be refused as the preset "S"; [] of presets ran the whole study, of engines
+    # said "workers: must be at least 1, got 0"; workers="2" met "'<' not supported between ..."
+    presets = limits.names("presets", presets, "S12")
+    engines = list(dict.fromkeys(limits.names("engines", engines, "mujoco", none_ok=False)))
+    workers = limits.whole("--workers", workers, 1)
     unknown = [e for e in engines if e not in ENGINES]
     if unknown:
         raise ConfigError(f"engines: {unknown[0]!r} is not one of {', '.join(ENGINES)}")
@@ -68,8 +69,6 @@ def run_study(presets: Sequence[str] | None = None, overrides=None, duration: fl
     # the reference first: it is the slowest, so the pool starts on it
     order = sorted(engines, key=lambda e: e != "ode")
     jobs = [(c, e, duration) for c in configs for e in order]
-    if workers is not None and workers < 1:
-        raise ConfigError(f"--workers: must be at least 1, got {workers}")
     workers = min(workers or os.cpu_count() or 1, len(jobs))  # never more processes than jobs
     results: dict[str, dict[str, DropResult]] = {n: {} for n in names}
     with process_pool(workers) as pool:

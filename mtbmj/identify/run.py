@@ -374,6 +374,32 @@ def _friction_said(results: dict[str, FitResult], hydraulic: str, friction: str,
     return notes
 
 
+def _check_arguments(engine, starts, free, bounds, mass_kg, touch_s, clicks) -> None:
+    """``identify``'s arguments from Python, each refused in one line naming it before any record is read: a str
+    where a list goes was read letter by letter (free="fork.spring.rate_N_per_mm": "a free parameter is listed
+    twice"; clicks="1,2": "3 positions for 1 dyno files"), starts=0 or "2" ran, engine="x" was "the fit did not
+    converge", touch_s="0.1" met numpy's isfinite."""
+    from collections.abc import Mapping
+
+    from mtbmj import limits
+    from mtbmj.drop.run import ENGINES
+    from mtbmj.errors import ConfigError
+
+    if engine not in ENGINES:
+        raise ConfigError(f"engine: {engine!r} is not one of {', '.join(ENGINES)}")
+    limits.whole("starts", starts, 1, none_ok=False)
+    if free is not None and not (isinstance(free, (list, tuple)) and not free):  # None and () are the default
+        limits.names("free", free, "fork.spring.rate_N_per_mm", none_ok=False, what="keys")
+    if bounds is not None and not isinstance(bounds, Mapping):
+        raise ConfigError(f"bounds: must be a mapping of key to (low, high), e.g. "
+                          f"{{'fork.spring.rate_N_per_mm': (5, 15)}}, got {limits.described(bounds)}")
+    for label, value, what in (("mass_kg", mass_kg, "a number of kg"), ("touch_s", touch_s, "a number of s")):
+        if value is not None:
+            limits.number(label, value, what)
+    if clicks is not None:
+        limits.names("clicks", clicks, 12, none_ok=False, what="positions, one per file", as_item=False)
+
+
 def identify(kind: str, data: Sequence[str | Path], model: str = "auto", friction: str = "auto",
              mass_kg: float | None = None, config: str = "S12", free: Sequence[str] = (),
              bounds: dict | None = None, engine: str = "mujoco", starts: int = 1,
@@ -387,14 +413,19 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
     positions by label (``damper_clicks.ADJUSTERS``: lsc, hsc, lsr, hsr, c, r), giving a ``clicks`` damper;
     ``overrides``: drop fits run on ``config`` with these keys set (written into fit.toml too);
     ``progress(fraction)``: called as a damper fit's laws are fitted (a progress bar)."""
-    if kind not in KINDS:
-        raise MtbmjError(f"fit: unknown kind {kind!r} (one of {', '.join(KINDS)})")
+    from mtbmj import limits
+    from mtbmj.errors import ConfigError
+
+    if kind not in KINDS:  # a bad argument: a ConfigError, a ValueError as Python's own bad values are
+        raise ConfigError(f"fit: unknown kind {kind!r} (one of {', '.join(KINDS)})")
     if overrides and kind != "drop":
-        raise MtbmjError(f"fit {kind}: --set applies to drop fits (the configuration they run on)")
-    if kind not in KINDS:
-        raise MtbmjError(f"fit: unknown kind {kind!r} (one of {', '.join(KINDS)})")
-    if not data:
-        raise MtbmjError(f"fit {kind}: no data file given")
+        raise ConfigError(f"fit {kind}: --set applies to drop fits (the configuration they run on)")
+    if data is None or (isinstance(data, (list, tuple)) and not data):
+        raise ConfigError(f"fit {kind}: no data file given")
+    if isinstance(data, Path):  # one file, not in a list: "dyno.csv" read letter by letter was "d: no such file"
+        data = [data]
+    data = limits.names("data", data, "dyno.csv", what="files", none_ok=False)
+    _check_arguments(engine, starts, free, bounds, mass_kg, touch_s, clicks)
     records = [read_record(p) for p in data]
     if kind in ("spring", "damper"):
         force = records[0].columns.get("force")

@@ -54,7 +54,12 @@ AIRTIME_RULE = ("both ends (the fork alone without a rear sensor) within {extens
 
 
 def _array(values, name: str) -> np.ndarray:
-    a = np.asarray(values, dtype=float).ravel()
+    if values is None or isinstance(values, (str, bytes)):  # None was "not finite at sample 0", "x" numpy's own line
+        raise MetricsError(f"{name}: must be a sequence of numbers, got {values!r}")
+    try:
+        a = np.asarray(values, dtype=float).ravel()
+    except (TypeError, ValueError) as exc:
+        raise MetricsError(f"{name}: must be a sequence of numbers ({exc})") from None
     if a.size == 0:
         raise MetricsError(f"{name}: no samples")
     if not np.all(np.isfinite(a)):
@@ -63,6 +68,8 @@ def _array(values, name: str) -> np.ndarray:
 
 
 def _positive(value: float, name: str) -> float:
+    if value is None or isinstance(value, (str, bytes, bool)):  # "180" was taken, None met float()
+        raise MetricsError(f"{name}: must be a number, got {value!r}")
     value = float(value)
     if not value > 0:
         raise MetricsError(f"{name}: must be positive, got {value:g}")
@@ -224,8 +231,9 @@ def bottom_out_indices(travel_mm, travel_max_mm: float, margin_mm: float = 3.0, 
     """Sample indices where each bottom-out event starts (see ``bottom_outs``)."""
     x = _array(travel_mm, "travel_mm")
     top = _positive(travel_max_mm, "travel_max_mm")
-    if margin_mm < 0 or release_mm < 0:
-        raise MetricsError("margin_mm and release_mm must not be negative")
+    for name, given in (("margin_mm", margin_mm), ("release_mm", release_mm)):
+        if given is None or isinstance(given, (str, bytes, bool)) or not given >= 0:  # nan counted no bottom-out
+            raise MetricsError(f"{name}: must be a number of mm, not negative, got {given!r}")
     enter = x >= top - margin_mm
     leave = x < top - margin_mm - release_mm
     # only the samples where the state can change (enter and leave exclude each other): an event
@@ -336,7 +344,9 @@ def summarize(time_s, travel_mm, travel_max_mm: float, velocity_mm_per_s=None, t
     if v.size != x.size:
         raise MetricsError("velocity_mm_per_s and travel_mm differ in length")
     air = airtime(x, top, t) if airborne is None else airborne
-    keep = ~air.mask(t) if exclude_airtime else np.ones(x.size, dtype=bool)
+    from mtbmj.limits import switch
+
+    keep = ~air.mask(t) if switch("exclude_airtime", exclude_airtime) else np.ones(x.size, dtype=bool)
     if not np.any(keep):
         keep[:] = True
     xs, vs = x[keep], v[keep]

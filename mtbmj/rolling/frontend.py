@@ -34,7 +34,7 @@ from mtbmj import mjcf
 from mtbmj.controllers import installed
 from mtbmj.controllers.drive import MODES as DRIVE_MODES, Drive
 from mtbmj.controllers.tire import TIRE_DAMPING_DEPTH_M
-from mtbmj import compose, output
+from mtbmj import compose, limits, output
 from mtbmj.drop import measure
 from mtbmj.readout.endtravel import end_of_travel
 from mtbmj.rolling import terrain as terrain_mod
@@ -290,6 +290,8 @@ def prepare(scenario, speed_m_per_s: float, config: Config | str = "S12", head_a
         if drive not in DRIVE_MODES:
             raise ConfigError(f"drive: {drive!r} is not one of {', '.join(DRIVE_MODES)}")
         drive = Drive(drive)
+    elif not isinstance(drive, Drive):  # None met "'NoneType' object has no attribute 'mode'"
+        raise ConfigError(f"drive: must be one of {', '.join(DRIVE_MODES)} or a controllers.drive.Drive, got {drive!r}")
     drive = Drive("servo", kv) if drum else Drive(drive.mode, kv, drive.push, drive.power, drive.brake)
     for name in ("push", "power", "brake"):
         value = getattr(drive, name)
@@ -671,6 +673,7 @@ def roll_trajectory(scenario, speed_m_per_s: float, config: Config | str = "S12"
     """(model, times, qpos) of a rolling run sampled at ``fps`` for rendering; the model has the
     terrain as a visual heightfield (group 1) or the drum with its cleat. ``drive`` as ``prepare``."""
     _check_inputs(speed_m_per_s, head_angle_deg, duration, warn=False)  # a saved run's values: warned when it ran
+    fps = limits.given("--fps", "fps", fps, warn=False)
     p = guard.prepared("rolling", lambda: prepare(scenario, speed_m_per_s, config, head_angle_deg, overrides, drive=drive),
                        model_of=lambda p: p.front.model)
     duration = default_duration(p) if duration is None else duration

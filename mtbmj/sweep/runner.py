@@ -46,7 +46,7 @@ from mtbmj.config import SCHEMA, Config, warn
 from mtbmj.errors import ConfigError, MtbmjError
 
 from mtbmj import limits, output
-from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, MANIFEST, NUMERIC_KINDS, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TIMINGS, TRACES, Variant, canonical_value, check_types, flatten_summary, from_csv, grid, journal_records, parse_vary, sample, variant_id)
+from mtbmj.sweep.variants import (BACKENDS, BatchJob, JOURNAL, MANIFEST, NUMERIC_KINDS, OUTPUT_COLUMNS, RUNNERS, Range, SIGNALS, STATUS_COLUMNS, TABLE, TABLE_CSV, TIMINGS, TRACES, Variant, canonical_value, variant_list, check_types, flatten_summary, from_csv, grid, journal_records, parse_vary, sample, variant_id)
 from mtbmj.sweep.single import run_batch, run_variant
 
 
@@ -416,14 +416,12 @@ def run_sweep(config: Config | str, variants: Sequence[Mapping[str, Any]], out_d
     if backend not in BACKENDS:
         raise ConfigError(f"--backend: {backend!r} is not one of {', '.join(BACKENDS)}")
     limits.check_duration("duration", duration)
-    if workers is not None and workers < 1:
-        raise ConfigError(f"--workers: must be at least 1, got {workers}")
-    if batch_size is not None and batch_size < 1:
-        raise ConfigError(f"--batch-size: must be at least 1, got {batch_size}")
-    if threads < 1:
-        raise ConfigError(f"threads: must be at least 1, got {threads}")
-    if not variants:
-        raise ConfigError("sweep: no variants")
+    workers = limits.whole("--workers", workers, 1)
+    batch_size = limits.whole("--batch-size", batch_size, 1)
+    threads = limits.whole("threads", threads, 1, none_ok=False)
+    traces, csv, resume = (limits.switch(label, given) for label, given in
+                           (("traces", traces), ("csv", csv), ("resume", resume)))
+    variants = variant_list(variants)
     from mtbmj.extras import require
 
     # before any work: the table needs pandas and pyarrow, the traces h5py

@@ -15,6 +15,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from mtbmj import limits
 from mtbmj.errors import ConfigError, MtbmjError, RunError
 from mtbmj.sweep.runner import OUTPUT_COLUMNS, Range, run_sweep
 
@@ -56,6 +57,11 @@ def problem(ranges: Sequence[Range]) -> dict:
 
 
 def check_outputs(outputs: Sequence[str]) -> list[str]:
+    if not isinstance(outputs, (list, tuple)):  # "fork_peak1_mm" was read letter by letter: "'f' is not an output"
+        limits.names("outputs", outputs, "fork_peak1_mm", none_ok=False)
+    odd = [o for o in outputs if not isinstance(o, str)]
+    if odd:
+        raise ConfigError(f"outputs: each must be an output's name, e.g. 'fork_peak1_mm', got {odd[0]!r}")
     outputs = [o.strip() for o in outputs if o.strip()]
     if not outputs:
         raise ConfigError("--output: name at least one output, e.g. fork_peak1_mm")
@@ -89,8 +95,8 @@ def samples(prob: dict, n: int, method: str, seed: int = 0, levels: int = 4) -> 
     """SALib's design: Saltelli/Sobol (n (D + 2) rows, no second order) or Morris (n (D + 1) rows)."""
     if method not in METHODS:
         raise ConfigError(f"--method: {method!r} is not one of {', '.join(METHODS)}")
-    if n < 2:
-        raise ConfigError(f"--samples: must be at least 2, got {n}")
+    n, seed, levels = limits.whole("--samples", n, 2, False), limits.whole("--seed", seed, 0, False), \
+        limits.whole("--levels", levels, 2, False)
     with warnings.catch_warnings():  # SALib's "N should be a power of 2" note
         warnings.simplefilter("ignore")
         if method == "sobol":
@@ -99,8 +105,6 @@ def samples(prob: dict, n: int, method: str, seed: int = 0, levels: int = 4) -> 
             return sobol.sample(prob, n, calc_second_order=False, seed=seed)
         from SALib.sample import morris
 
-        if levels < 2:
-            raise ConfigError(f"--levels: must be at least 2, got {levels}")
         return morris.sample(prob, n, num_levels=levels, seed=seed)
 
 

@@ -19,6 +19,7 @@ import numpy as np
 from mtbmj.config import SCHEMA, Config, check_value
 from mtbmj.readout.endtravel import TABLE_COLUMNS as END_OF_TRAVEL_COLUMNS
 from mtbmj.errors import ConfigError, MtbmjError
+from mtbmj import limits
 from mtbmj.textfile import read_text
 
 if sys.version_info >= (3, 11):
@@ -106,6 +107,9 @@ def parse_vary(text: str, count: bool | None = None, check_key: bool = True) -> 
 
     ``count`` True requires ``n``, False forbids it, None accepts both; ``check_key`` False leaves
     the key to its reader (a bike sweep's keys are the bike's, ``mtbmj.sweep.bike``)."""
+    if not isinstance(text, str):  # None met "'NoneType' object has no attribute 'partition'"
+        raise ConfigError(f"--vary: must be a str key=lo:hi:n (a grid) or key=lo:hi, e.g. "
+                          f"'sled.drop_height_mm=100:600:6', got {text!r}")
     key, eq, span = (part.strip() for part in text.partition("="))
     parts = [p.strip() for p in span.split(":")]
     endless = [p for p in parts[:2] if p.lower().lstrip("+-") in ("nan", "inf", "infinity")]
@@ -143,7 +147,32 @@ def parse_vary(text: str, count: bool | None = None, check_key: bool = True) -> 
     return Range(key, lo, hi, n)
 
 
+def variant_list(variants) -> list:
+    """``variants`` from Python as a list of mappings, or ``ConfigError``: one mapping (not in a list) or a str
+    met "'str' object has no attribute 'items'"."""
+    from collections.abc import Iterable, Mapping
+
+    example = "[{'sled.drop_height_mm': 300}, {'sled.drop_height_mm': 400}]"
+    if isinstance(variants, (str, bytes, Mapping)) or not isinstance(variants, Iterable):
+        one = " (one variant: put it in a list)" if isinstance(variants, Mapping) else ""
+        raise ConfigError(f"variants: must be a list of mappings of key to value, e.g. {example}, got "
+                          f"{limits.described(variants)}{one}")
+    variants = list(variants)
+    if not variants:
+        raise ConfigError("sweep: no variants")
+    for i, v in enumerate(variants):
+        if not isinstance(v, Mapping):
+            raise ConfigError(f"variants[{i}]: must be a mapping of key to value, e.g. {{'sled.drop_height_mm': 300}}, "
+                              f"got {limits.described(v)}")
+    return variants
+
+
 def _unique_keys(ranges: Sequence[Range]) -> None:
+    """Refuse a key given twice; ``ranges`` from Python that are not each a ``Range`` (a str typed as on the command
+    line met "'str' object has no attribute 'key'") are named so."""
+    if isinstance(ranges, str) or any(not isinstance(r, Range) for r in ranges):
+        raise ConfigError(f"ranges: must be a list of Range (parse_vary('sled.drop_height_mm=100:600:6') makes one), "
+                          f"got {ranges!r}")
     seen = set()
     for r in ranges:
         if r.key in seen:
@@ -183,8 +212,8 @@ def sample(ranges: Sequence[Range], n: int, method: str = "lhs", seed: int = 0) 
     if not ranges:
         raise ConfigError("--samples: needs at least one --vary key=lo:hi range")
     _unique_keys(ranges)
-    if n < 1:
-        raise ConfigError(f"--samples: must be at least 1, got {n}")
+    n = limits.whole("--samples", n, 1, none_ok=False)
+    seed = limits.whole("--seed", seed, 0, none_ok=False)  # "a" met numpy's SeedSequence, -1 "expected non-negative"
     if n > MAX_VARIANTS:
         raise ConfigError(f"--samples: {n} is more than the {MAX_VARIANTS} variants a sweep may plan")
     if method not in SAMPLING_METHODS:
