@@ -29,8 +29,6 @@ SLOW_BOUND = 0.5  # ... bounded by this share of the rider's weight (what a ride
 MAX_PASSES = 8  # the terrain found again over the rear's ground of the pass before, at most this often
 SETTLED_M = 0.2e-3  # ... until the rear predicted moves less than this (RMS) from one pass to the next
 RATE_JUMP = 20.0  # m/s (rad/s): no body of a bike moves at this (a 20 m fall): a step changing a rate by more is unstable
-OWN_ABOVE_HZ = 2.0  # above this the loop's reference is the whole bike's own frame front of the pass before (the
-# top of the body's heave and pitch band, ``reconstruct_bands.BANDS``): the quarter car's body is not how the frame's front moves there
 COMPILED = True  # ``ride`` steps compiled where it can (``reconstruct_bike_compiled``); False: in Python
 
 
@@ -324,28 +322,6 @@ def ride(t, b: WholeBike, rear_ground, front=None, front_ground=None, reference=
             "diverged_s": diverged}
 
 
-def frame_front(b: WholeBike, out: dict, rise, top) -> np.ndarray:
-    """The frame's front axle point's height (m, from rest) along a prescribed :func:`ride`'s ``out``:
-    its front ground less the front wheel's ``rise`` in the frame and the tyre's deflection (none
-    where the fork hangs on its top-out stop, ``top``), plus the tyre's loaded radius."""
-    zF_pt0 = b.radius - (b.fF0 + b.mF * b.g) / b.tyre - b.wF0
-    tyre = np.where(top, 0.0, out["front_tyre"])
-    return out["front_ground"] - zF_pt0 - np.asarray(rise, float) + b.radius - np.minimum(
-        np.maximum(tyre, 0.0) / b.tyre, b.max_deflection)
-
-
-def above(x, dt: float, hz: float | None = None) -> np.ndarray:
-    """``x`` (on step ``dt``) above ``hz`` (default ``OWN_ABOVE_HZ``): ``x`` less its low-pass there
-    (``reconstruct_inverse.lowpass``, forward and back); zero where ``x`` is not finite anywhere (a
-    pass that diverged keeps the reference it had)."""
-    from mtbmj.ride.reconstruct_inverse import lowpass
-
-    x = np.asarray(x, float)
-    if not np.isfinite(x).all():
-        return np.zeros_like(x)
-    return x - lowpass(x, dt, OWN_ABOVE_HZ if hz is None else hz)
-
-
 def rear_ground(t, lag, ground, at_once: float = 0.0, spectral: bool = False, air=None):
     """The ground the rear wheel rides (m on ``t``): the ground found under the front ``lag`` (s) earlier,
     its share ``at_once`` taken at the same moment instead (what the fork felt as a load on both ends
@@ -419,7 +395,6 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
         levels = kept
         kept, left = flight.read(found, air, front[0], chosen, dt, most)
         ref = flight.reference(reference, front[0], kept, dt)
-        ref = ref + above(frame_front(b, out, front[0], top) - ref, dt)  # the whole bike's own fast path
         if before is not None:
             change = float(np.sqrt(np.mean((out["rear_rise"] - before) ** 2)))
             if change < SETTLED_M and flight.settled(levels, kept):
@@ -430,5 +405,5 @@ def terrain_and_rear(t, b: WholeBike, fork_stroke, lag, first_ground, reference,
             "diverged_s": out["diverged_s"], "levels": flight.described(t, kept, left)}
 
 
-__all__ = ["SLOW_HZ", "SLOW_BOUND", "OWN_ABOVE_HZ", "frame_front", "above", "COMPILED", "MAX_PASSES", "WholeBike", "carried_inertia", "whole_bike", "ride", "rear_ground",
+__all__ = ["SLOW_HZ", "SLOW_BOUND", "COMPILED", "MAX_PASSES", "WholeBike", "carried_inertia", "whole_bike", "ride", "rear_ground",
            "terrain_and_rear"]
