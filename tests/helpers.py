@@ -1030,7 +1030,8 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
     ``path``/bike.toml (the recorded setting) and ``path``/ride.SST (SST v3 integer counts through its
     [sensors]); returns the truth: bike, sst, t, fork_mm and rear_mm (wheel travel), h (the terrain),
     features, wb (the wheelbase along the ride, m), profile, airborne_front (share of the ride the front tyre is
-    off the ground), front_tyre_N (the front tyre's force, N, on tyre_t: every tenth sample), front_frame_m (the frame's front axle point's height from rest, m), dynamic_index, residual (the rest state's largest acceleration, m/s2)."""
+    off the ground), front_tyre_N (the front tyre's force, N, on tyre_t: every tenth sample), front_frame_m (the frame's front axle point's height from rest, m), front_wheel_m (the front wheel's centre's height from rest, m),
+front_tyre_full_N (the front tyre's force, N, on t), dynamic_index, residual (the rest state's largest acceleration, m/s2)."""
     from mtbmj.bike import run, spec as spec_mod
 
     path.mkdir(parents=True, exist_ok=True)
@@ -1141,7 +1142,9 @@ def whole_bike_ride(path, fork_rate=12.0, shock_reb_scale=1.0, seed=21, seconds=
     wb = np.array([wheelbase(f * 1e-3, r) for f, r in zip(fork_mm, wR)])
     return {"bike": bike, "sst": sst, "t": t, "h": h, "features": placed, "wb": wb, "fork_mm": fork_mm,
             "rear_mm": rear_mm, "profile": profile, "airborne_front": float(np.mean(tyres[:, 0] <= 0.0)),
-            "front_tyre_N": tyres[:, 0], "tyre_t": t[::10], "front_frame_m": y[0] + (xF - cx) * y[1], "dynamic_index": I / (M * (xF - cx) * (cx - xR)), "residual": float(np.max(np.abs(info["fvec"])))}
+            "front_tyre_N": tyres[:, 0], "tyre_t": t[::10], "front_frame_m": y[0] + (xF - cx) * y[1],
+            "front_wheel_m": y[4], "front_tyre_full_N": np.maximum(0.0, tyre_k * (met(along(t)) - (y[4] + base[2] - radius))),
+            "dynamic_index": I / (M * (xF - cx) * (cx - xR)), "residual": float(np.max(np.abs(info["fvec"])))}
 
 
 # the advice's rides: 30 s at 6.5 +- 0.5 m/s over a hard course (rock gardens of rocks up to 0.1 m,
