@@ -384,7 +384,11 @@ ARGUMENTS: dict[str, Argument] = {
     "--speed": Argument("m/s", high=100.0, plausible=(0.3, 30.0), beyond="no bike is ridden", **_POSITIVE),
     "--duration": _SECONDS,
     "--touch-s": Argument("s", low=0.0),
-    "--start-m": Argument("m", low=-1e4, high=1e4, plausible=(-100.0, 100.0)),
+    # where on the terrain the front axle starts: a terrain's surface may be 100 km long (rolling.terrain's
+    # MAX_SURFACE_M) and a reconstructed one hundreds of metres, so no plausible range (a start off the terrain is
+    # refused by the terrain, naming its ends): -100-100 m warned of a start 300 m into a ride's terrain.csv, and
+    # render refused a saved run that started at 12 km
+    "--start-m": Argument("m", low=-1e5, high=1e5, plausible=None),
     "--threshold-mm-per-s": Argument("mm/s", high=1e6, plausible=(1.0, 5000.0), **_POSITIVE),
     "--bin-percent": Argument("%", high=100.0, plausible=(0.5, 50.0), **_POSITIVE),
     "--fork-max-mm": _TRAVEL_MM,

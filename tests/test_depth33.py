@@ -16,18 +16,42 @@ def test_a_start_given_from_python_is_held_to_the_start_options_range():
     work: at least -10000 m); now the same range, named ``start_x``, as speed and tolerance_mm are held."""
     from mtbmj.bike import run as R
 
-    for start, shown in ((-1e5, "-100000"), (2e4, "20000")):
+    for start, shown in ((-1e6, "-1e+06"), (2e5, "200000")):
         with pytest.raises(ConfigError, match=re.escape(f"start_x: {shown} m is outside the range allowed: at least "
-                                                        f"-10000 and at most 10000 m")):
+                                                        f"-100000 and at most 100000 m")):
             R.prepare("sst", "flat", 4.0, start_x=start)
     with pytest.raises(ConfigError, match=re.escape("start_x: must be a finite number of m (the front axle's start), "
                                                     "got nan")):
         R.prepare("sst", "flat", 4.0, start_x=float("nan"))
-    with pytest.warns(Warning, match=re.escape("--start-m = -500 m is outside -100-100 m")):  # the command's warning
-        try:
-            R.prepare("sst", "flat", 4.0, start_x=-500.0)
-        except ConfigError:  # 500 m before a 10 m flat is its own matter (the terrain's); the number passed the gate
-            pass
+
+
+def test_a_saved_bike_run_far_along_its_terrain_renders_without_a_word_about_its_start(tmp_path, capfd):
+    """review33a: a bike run on a CSV terrain whose distances start at 12 km (its default start, the terrain's) was
+    refused by render ("cannot replay this bike run (start_x: 12000 m is outside the range allowed ...)"), and one
+    starting at 150 m warned "--start-m = 150 m is outside -100-100 m" where nobody typed --start-m: the saved start
+    is the terrain's. A start typed past 100 m (a reconstructed ride's terrain.csv runs for hundreds) is no slip either: no warning."""
+    import numpy as np
+
+    from mtbmj.bike import replay
+    from mtbmj.cli import main
+
+    for start in (12000.0, 150.0):
+        x = start + np.linspace(0.0, 30.0, 301)
+        z = np.where(x < start + 5.0, 0.0, 20.0 * np.sin(x - start))  # mm: level for its first 5 m
+        csv = tmp_path / f"far{start:g}.csv"
+        np.savetxt(csv, np.c_[x, z], delimiter=",", header="distance_m,height_mm", comments="", fmt="%.6f")
+        run = tmp_path / f"run{start:g}"
+        assert main(["bike", "sst", str(csv), "--speed", "4", "--duration", "0.3", "--out", str(run), "--quiet",
+                     "--no-figure"]) == 0
+        capfd.readouterr()
+        with warnings.catch_warnings():  # what render replays the run through (the tests run without a GL)
+            warnings.simplefilter("error")
+            replay.rerun(run, duration=0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(["bike", "sst", str(tmp_path / "far150.csv"), "--speed", "4", "--duration", "0.2", "--start-m",
+                     "152", "--out", str(tmp_path / "run152"), "--quiet", "--no-figure"]) == 0
+    assert "outside" not in capfd.readouterr().err
 
 
 # --- 2. bob's run length: one rule, from Python and from the command line -------------------------------------
