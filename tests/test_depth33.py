@@ -7,6 +7,7 @@ import warnings
 import pytest
 
 from mtbmj.errors import ConfigError
+from conftest import SHARED_DATA
 
 
 # --- 1. a command option's number given from Python: one check against the option's range -------------------
@@ -66,7 +67,7 @@ def test_bobs_run_length_is_one_rule_from_python_and_the_command(tmp_path, capfd
     from helpers import refused
 
     record = tmp_path / "ride.SST"  # a copy: the shipped example by its own path is refused for another reason
-    shutil.copy("/work/shared/data/sst/00649.SST", record)
+    shutil.copy(f"{SHARED_DATA}/sst/00649.SST", record)
     out = tmp_path / "out"
     line = refused(["bob", record, "--duration", "5", "--out", out], out, capfd, "--duration: 5 s is too short")
     with pytest.raises(ConfigError) as python:
@@ -108,7 +109,7 @@ def test_a_file_named_as_a_unit_after_a_number_is_still_read(tmp_path, capfd, mo
     from helpers import command_err
 
     monkeypatch.chdir(tmp_path)
-    shutil.copy("/work/shared/data/sst/00649.SST", tmp_path / "W")
+    shutil.copy(f"{SHARED_DATA}/sst/00649.SST", tmp_path / "W")
     status, err = command_err(["bob", "--power", "250", "W", "--duration", "5", "--out", tmp_path / "out"], capfd)
     assert status == 2 and "is a number and its unit" not in err and "--duration: 5 s is too short" in err, err
 
@@ -166,7 +167,7 @@ def unplugged(tmp_path, column: int, fraction: float = 0.4):
     then reads; the sample it holds from."""
     import numpy as np
 
-    raw = open("/work/shared/data/sst/00649.SST", "rb").read()
+    raw = open(f"{SHARED_DATA}/sst/00649.SST", "rb").read()
     counts = np.frombuffer(raw[16:], "<u2").reshape(-1, 2).copy()
     start = int(round((1.0 - fraction) * len(counts)))
     counts[start:, column] = counts[start, column]
@@ -190,10 +191,35 @@ def test_a_sensor_unplugged_partway_is_warned_about_naming_the_end_and_when(tmp_
         in said[0], said[0]
     # the other side: the shipped ride itself (its ends' held tails 1.0 and 1.6 s), and a held tail shorter than
     # HELD_TAIL_S (a rider rolled to a stop)
-    assert not [line for line in telemetry.quality(telemetry.read_ride("/work/shared/data/sst/00649.SST"))
+    assert not [line for line in telemetry.quality(telemetry.read_ride(f"{SHARED_DATA}/sst/00649.SST"))
                 if "partway" in line]
     short, _ = unplugged(tmp_path, column, fraction=0.05)  # the last 3.8 s
     assert not [line for line in telemetry.quality(telemetry.read_ride(short)) if "partway" in line]
+
+
+def test_a_rider_who_stops_is_not_a_sensor_unplugged(tmp_path):
+    """review33a: a ride that ends with the rider stopped, the shock still from 30.1 s and the fork from 31.4 s
+    (00094's first 50 s), was warned as "the shock's travel holds ... while the fork's moves: its sensor unplugged
+    or stuck partway": the fork's last second of settling fell inside the shock's held stretch. Made here from the
+    shipped ride: the shock held over the last 30 %, the fork 1.3 s later; warned only where the other end moves
+    on for HELD_TAIL_S or more (the fork held from 10 s later: warned)."""
+    import numpy as np
+
+    from mtbmj.measured import telemetry
+
+    raw = open(f"{SHARED_DATA}/sst/00649.SST", "rb").read()
+    counts = np.frombuffer(raw[16:], "<u2").reshape(-1, 2).copy()
+    start = int(round(0.7 * len(counts)))
+    for later, warned in ((1300, False), (10000, True)):  # samples at 1000 Hz: the fork held 1.3 s / 10 s later
+        c = counts.copy()
+        c[start:, 1] = c[start, 1]
+        c[start + later:, 0] = c[start + later, 0]
+        path = tmp_path / f"stopped{later}.SST"
+        path.write_bytes(raw[:16] + c.tobytes())
+        said = [line for line in telemetry.quality(telemetry.read_ride(path)) if "unplugged or stuck partway" in line]
+        assert bool(said) == warned, (later, said)
+        if warned:
+            assert len(said) == 1 and "the shock's travel holds at" in said[0], said
 
 
 @pytest.mark.parametrize("argv", [["telemetry"], ["reconstruct", "--bike", "sst"], ["advise", "--bike", "sst"]])

@@ -17,8 +17,9 @@ from mtbmj.bike import run as bike_run
 from mtbmj.errors import ConfigError, MtbmjError
 from mtbmj.sweep import grid, parse_vary
 from helpers import SENSORS_TOML, command_err, command_said, refused
+from conftest import SHARED_DATA
 
-V2_RIDE = Path("/work/shared/data/sst_v2/00083.SST")
+V2_RIDE = Path(f"{SHARED_DATA}/sst_v2/00083.SST")
 DROP = "sled.drop_height_mm"
 
 

@@ -11,6 +11,7 @@ import pytest
 from mtbmj import limits
 from mtbmj.rolling import terrain as T
 from helpers import command_err, refused
+from conftest import SHARED_DATA
 
 KMH = 1000.0 / 3600.0  # m/s per km/h, by the definitions of the kilometre and the hour
 
@@ -256,7 +257,7 @@ def test_an_out_under_a_tilde_the_shell_left_is_the_home_folder(tmp_path, capfd,
 
 def test_bob_given_an_empty_stance_says_so(tmp_path, capfd):
     """``--stance ''`` ran as the default (all standing) and ended on a crash of the standing rider's run."""
-    refused(["bob", "/work/shared/data/sst/00649.SST", "--bike", "sst", "--stance", "", "--out", tmp_path / "out"],
+    refused(["bob", f"{SHARED_DATA}/sst/00649.SST", "--bike", "sst", "--stance", "", "--out", tmp_path / "out"],
             tmp_path / "out", capfd, "--stance '': names no stance; give standing or seated, one per record")
 
 

@@ -10,8 +10,9 @@ import warnings
 import pytest
 
 from helpers import command_err, refused
+from conftest import SHARED_DATA
 
-MINIMAL_RECORD = "/work/shared/data/sst/00649.SST"
+MINIMAL_RECORD = f"{SHARED_DATA}/sst/00649.SST"
 
 
 # --- 1. a pedalling rider's power and cadence: one range, the model's -----------------------------------------

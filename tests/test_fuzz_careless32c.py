@@ -13,6 +13,7 @@ import pytest
 from helpers import refused
 from mtbmj.measured.telemetry import TelemetryError
 from mtbmj.ride import read_sst
+from conftest import SHARED_DATA
 
 
 def v3_record(seconds: float, rate: int = 1000, phase: float = 0.0) -> bytes:
@@ -157,7 +158,7 @@ def test_bob_of_a_short_record_names_it_before_any_run(tmp_path, capfd, monkeypa
 
 # --- 4. fit bounce's hit typed in metres --------------------------------------------------------------------
 
-SLAMS = ["/work/shared/data/sst_v2/00083.SST", "/work/shared/data/sst_v2/00085.SST"]  # 0 and 8 rebound clicks
+SLAMS = [f"{SHARED_DATA}/sst_v2/00083.SST", f"{SHARED_DATA}/sst_v2/00085.SST"]  # 0 and 8 rebound clicks
 
 
 def test_a_hit_typed_in_metres_is_named(tmp_path, capfd):

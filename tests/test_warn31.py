@@ -11,9 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers import command_err, one_line, refused
+from conftest import SHARED_DATA
 
-V2 = Path("/work/shared/data/sst_v2")
-V3 = Path("/work/shared/data/sst")
+V2 = Path(f"{SHARED_DATA}/sst_v2")
+V3 = Path(f"{SHARED_DATA}/sst")
 RATE = 1000  # Hz, the records written here
 FORK_ARM, FORK_MAX, SHOCK_ARM, SHOCK_MAX = 120.0, 218.0, 88.0, 138.0  # the v2 placeholder calibration
 
