@@ -121,7 +121,9 @@ def number(key: str, value, what: str = "a number") -> float:
     """``value`` (a key's, as read from TOML or ``--set``) as a float, or ``ConfigError`` naming
     ``key``: refused when it is not a number (a bool, a string), is NaN or infinite, or is an
     integer or float beyond ``MAX_MAGNITUDE`` (an integer that does not fit a float among them)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    import numbers
+
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):  # numpy's numbers too (np.int64(5) from Python)
         if hasattr(value, "isoformat"):  # TOML reads 2024-05-27 (or 12:30:00) as a date: not Python's repr of it
             raise ConfigError(f"{key}: must be {what}, got {value.isoformat()} (TOML reads it as a date or a time)")
         raise ConfigError(f"{key}: must be {what}, got {value!r}")

@@ -107,6 +107,12 @@ def _unit_apart(actions, args, extras) -> None:
     if not extras and not any(not a.option_strings for a in actions):
         return  # nothing left over and no positional to take a unit
     numeric_options = {o: a.type.option for a in actions if hasattr(a.type, "option") for o in a.option_strings}
+    every = [o for a in actions for o in a.option_strings if o.startswith("--")]
+    full = {}  # a prefix typed: the option it stands for, named in the refusal
+    for typed in {str(a).partition("=")[0] for a in args if str(a).startswith("--")} - set(every):
+        whole = [o for o in every if o.startswith(typed)]  # argparse takes a long option's unique prefix (``--pow``)
+        if len(whole) == 1 and whole[0] in numeric_options:
+            numeric_options[typed], full[typed] = numeric_options[whole[0]], whole[0]
     choices = {str(c) for a in actions if not a.option_strings and a.choices for c in a.choices}
     said = [str(a) for a in args]
     for i, word in enumerate(said[1:], 1):
@@ -119,7 +125,7 @@ def _unit_apart(actions, args, extras) -> None:
             continue  # read as the positional it names
         note = unit_apart(numeric_options[option], value, word)
         if note:
-            error = MtbmjError(f"argument {option}: '{value} {word}' is a number and its unit{note}")
+            error = MtbmjError(f"argument {full.get(option, option)}: '{value} {word}' is a number and its unit{note}")
             error.alone = True  # no note of the number's range beside it: the number was read without its unit
             raise error
 

@@ -374,7 +374,7 @@ def _friction_said(results: dict[str, FitResult], hydraulic: str, friction: str,
     return notes
 
 
-def _check_arguments(engine, starts, free, bounds, mass_kg, touch_s, clicks) -> None:
+def _check_arguments(engine, starts, free, bounds, mass_kg, touch_s, clicks) -> tuple:
     """``identify``'s arguments from Python, each refused in one line naming it before any record is read: a str
     where a list goes was read letter by letter (free="fork.spring.rate_N_per_mm": "a free parameter is listed
     twice"; clicks="1,2": "3 positions for 1 dyno files"), starts=0 or "2" ran, engine="x" was "the fit did not
@@ -389,7 +389,7 @@ def _check_arguments(engine, starts, free, bounds, mass_kg, touch_s, clicks) -> 
         raise ConfigError(f"engine: {engine!r} is not one of {', '.join(ENGINES)}")
     limits.whole("starts", starts, 1, none_ok=False)
     if free is not None and not (isinstance(free, (list, tuple)) and not free):  # None and () are the default
-        limits.names("free", free, "fork.spring.rate_N_per_mm", none_ok=False, what="keys")
+        free = limits.names("free", free, "fork.spring.rate_N_per_mm", none_ok=False, what="keys")
     if bounds is not None and not isinstance(bounds, Mapping):
         raise ConfigError(f"bounds: must be a mapping of key to (low, high), e.g. "
                           f"{{'fork.spring.rate_N_per_mm': (5, 15)}}, got {limits.described(bounds)}")
@@ -397,7 +397,8 @@ def _check_arguments(engine, starts, free, bounds, mass_kg, touch_s, clicks) -> 
         if value is not None:
             limits.number(label, value, what)
     if clicks is not None:
-        limits.names("clicks", clicks, 12, none_ok=False, what="positions, one per file", as_item=False)
+        clicks = limits.names("clicks", clicks, 12, none_ok=False, what="positions, one per file", as_item=False)
+    return free, clicks  # as lists: a generator given is read once, here
 
 
 def identify(kind: str, data: Sequence[str | Path], model: str = "auto", friction: str = "auto",
@@ -425,7 +426,7 @@ def identify(kind: str, data: Sequence[str | Path], model: str = "auto", frictio
     if isinstance(data, Path):  # one file, not in a list: "dyno.csv" read letter by letter was "d: no such file"
         data = [data]
     data = limits.names("data", data, "dyno.csv", what="files", none_ok=False)
-    _check_arguments(engine, starts, free, bounds, mass_kg, touch_s, clicks)
+    free, clicks = _check_arguments(engine, starts, free, bounds, mass_kg, touch_s, clicks)
     records = [read_record(p) for p in data]
     if kind in ("spring", "damper"):
         force = records[0].columns.get("force")

@@ -58,7 +58,7 @@ def problem(ranges: Sequence[Range]) -> dict:
 
 def check_outputs(outputs: Sequence[str]) -> list[str]:
     if not isinstance(outputs, (list, tuple)):  # "fork_peak1_mm" was read letter by letter: "'f' is not an output"
-        limits.names("outputs", outputs, "fork_peak1_mm", none_ok=False)
+        outputs = limits.names("outputs", outputs, "fork_peak1_mm", none_ok=False)  # a generator read once, here
     odd = [o for o in outputs if not isinstance(o, str)]
     if odd:
         raise ConfigError(f"outputs: each must be an output's name, e.g. 'fork_peak1_mm', got {odd[0]!r}")
@@ -95,8 +95,9 @@ def samples(prob: dict, n: int, method: str, seed: int = 0, levels: int = 4) -> 
     """SALib's design: Saltelli/Sobol (n (D + 2) rows, no second order) or Morris (n (D + 1) rows)."""
     if method not in METHODS:
         raise ConfigError(f"--method: {method!r} is not one of {', '.join(METHODS)}")
-    n, seed, levels = limits.whole("--samples", n, 2, False), limits.whole("--seed", seed, 0, False), \
-        limits.whole("--levels", levels, 2, False)
+    n, seed = limits.whole("--samples", n, 2, False), limits.whole("--seed", seed, 0, False)
+    if method == "morris":  # sobol has no levels: its default levels=4 passed whatever was given
+        levels = limits.whole("--levels", levels, 2, False)
     with warnings.catch_warnings():  # SALib's "N should be a power of 2" note
         warnings.simplefilter("ignore")
         if method == "sobol":
