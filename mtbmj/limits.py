@@ -123,12 +123,15 @@ def number(key: str, value, what: str = "a number") -> float:
     integer or float beyond ``MAX_MAGNITUDE`` (an integer that does not fit a float among them)."""
     import numbers
 
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):  # numpy's numbers too (np.int64(5) from Python)
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or getattr(getattr(value, "dtype", None), "kind", "f") not in "iuf":  # numpy's numbers, not its times
         if hasattr(value, "isoformat"):  # TOML reads 2024-05-27 (or 12:30:00) as a date: not Python's repr of it
             raise ConfigError(f"{key}: must be {what}, got {value.isoformat()} (TOML reads it as a date or a time)")
         raise ConfigError(f"{key}: must be {what}, got {value!r}")
     try:
         x = float(value)
+        if math.isinf(x) and value != x:  # a numpy long double beyond the float range (inf itself equals it)
+            raise OverflowError
     except OverflowError:  # an integer beyond the float range
         raise ConfigError(f"{key}: {_shown(value)} is too large for any number the model holds "
                           f"(at most {MAX_MAGNITUDE:g} in its unit)") from None

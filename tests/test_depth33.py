@@ -57,6 +57,7 @@ def test_a_saved_bike_run_far_along_its_terrain_renders_without_a_word_about_its
 
 # --- 2. bob's run length: one rule, from Python and from the command line -------------------------------------
 
+@pytest.mark.shared_data("sst", "00649.SST")
 def test_bobs_run_length_is_one_rule_from_python_and_the_command(tmp_path, capfd):
     """``against(duration_s=...)`` and ``mtbmj bob --duration`` wrote the rule twice and told it apart: 5.0 s
     said "5.0 s" from Python and "5 s" from the command, a string '20' and NaN were "too short" (NaN is no
@@ -101,6 +102,7 @@ def test_a_unit_typed_apart_and_read_as_a_positional_is_named(argv, said, tmp_pa
     refused([*argv, "--out", out], out, capfd, said)
 
 
+@pytest.mark.shared_data("sst", "00649.SST")
 def test_a_file_named_as_a_unit_after_a_number_is_still_read(tmp_path, capfd, monkeypatch):
     """The other side: ``bob --power 250 W`` with a record named ``W`` in the folder reads it (a trail ride, not a
     pedalling one: refused for what it is, not for a unit)."""
@@ -176,6 +178,7 @@ def unplugged(tmp_path, column: int, fraction: float = 0.4):
     return path, start
 
 
+@pytest.mark.shared_data("sst", "00649.SST")
 @pytest.mark.parametrize("column, end, other", [(0, "fork", "shock"), (1, "shock", "fork")])
 def test_a_sensor_unplugged_partway_is_warned_about_naming_the_end_and_when(tmp_path, column, end, other):
     """A fork or shock reading one count over the last 40 % of the ride (76.4 s at 1000 Hz: from 45.8 s) was read
@@ -197,12 +200,15 @@ def test_a_sensor_unplugged_partway_is_warned_about_naming_the_end_and_when(tmp_
     assert not [line for line in telemetry.quality(telemetry.read_ride(short)) if "partway" in line]
 
 
+@pytest.mark.shared_data("sst", "00649.SST")
 def test_a_rider_who_stops_is_not_a_sensor_unplugged(tmp_path):
     """review33a: a ride that ends with the rider stopped, the shock still from 30.1 s and the fork from 31.4 s
     (00094's first 50 s), was warned as "the shock's travel holds ... while the fork's moves: its sensor unplugged
     or stuck partway": the fork's last second of settling fell inside the shock's held stretch. Made here from the
     shipped ride: the shock held over the last 30 %, the fork 1.3 s later; warned only where the other end moves
-    on for HELD_TAIL_S or more (the fork held from 10 s later: warned)."""
+    on HELD_MOVING_S (3 s) into the held stretch or more (the fork held from 10 s later: warned). review33b: the
+    rule first written (the other end moving on for HELD_TAIL_S) left a fork unplugged 5-6.5 s before the end
+    silent, the other end's own stop at the ride's end counted against it: warned now."""
     import numpy as np
 
     from mtbmj.measured import telemetry
@@ -220,8 +226,18 @@ def test_a_rider_who_stops_is_not_a_sensor_unplugged(tmp_path):
         assert bool(said) == warned, (later, said)
         if warned:
             assert len(said) == 1 and "the shock's travel holds at" in said[0], said
+    n = len(counts)
+    for seconds in (5.0, 5.5, 6.5):  # the fork alone unplugged that long before the end (the shock rides on)
+        c = counts.copy()
+        held = n - int(seconds * 1000)
+        c[held:, 0] = c[held, 0]
+        path = tmp_path / f"fork_last{seconds:g}.SST"
+        path.write_bytes(raw[:16] + c.tobytes())
+        said = [line for line in telemetry.quality(telemetry.read_ride(path)) if "unplugged or stuck partway" in line]
+        assert len(said) == 1 and "the fork's travel holds at" in said[0], (seconds, said)
 
 
+@pytest.mark.shared_data("sst", "00649.SST")
 @pytest.mark.parametrize("argv", [["telemetry"], ["reconstruct", "--bike", "sst"], ["advise", "--bike", "sst"]])
 def test_the_ride_commands_warn_of_a_sensor_unplugged_partway(tmp_path, capfd, monkeypatch, argv):
     """``mtbmj telemetry`` (the ride summarized), ``reconstruct`` and ``advise``: the line, before any work (their

@@ -58,3 +58,31 @@ def test_a_unit_typed_apart_after_an_abbreviated_option_is_named(tmp_path, capfd
     status, err = command_err([*argv, "--out", str(tmp_path / "out")], capfd)
     assert status == 2 and f"argument {option}: '" in err and "is a number and its unit" in err, err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_start_far_before_the_terrain_is_refused_naming_its_ends(tmp_path, capfd):
+    """review33b: with --start-m's range widened to 100 km, ``--start-m -99999`` rode 100 km of level ground before
+    the terrain, silently (a sign or mm-for-m slip); a start more than 100 m before it begins is refused naming its
+    ends, one 50 m before still runs."""
+    status, err = command_err(["bike", "sst", "flat", "--speed", "5", "--duration", "0.2", "--start-m", "-5000",
+                               "--out", tmp_path / "far", "--quiet", "--no-figure"], capfd)
+    assert status == 2 and "start: the front axle's start (--start-m) -5000 m is 5000 m before the terrain flat " \
+        "begins (0 to 10 m): start within 100 m of its beginning" in err, err
+    assert not (tmp_path / "far").exists()
+    status, err = command_err(["bike", "sst", "flat", "--speed", "5", "--duration", "0.2", "--start-m", "-50",
+                               "--out", tmp_path / "near", "--quiet", "--no-figure"], capfd)
+    assert status == 0, err
+
+
+def test_numpys_times_are_no_numbers_and_a_long_double_past_the_float_range_is_too_large():
+    """review33b: taking numpy's numbers let np.timedelta64(5) through as 5.0 (identify then met a TypeError);
+    np.longdouble('1e400') was "must be finite ... got inf" for a finite number."""
+    from mtbmj.limits import number
+
+    for value in (np.timedelta64(5), np.timedelta64(5, "s"), np.datetime64("2020-01-01")):
+        with pytest.raises(ValueError, match="k: must be a number, got "):
+            number("k", value)
+    with pytest.raises(ValueError, match="is too large for any number the model holds"):
+        number("k", np.longdouble("1e400"))
+    with pytest.raises(ValueError, match="must be finite"):
+        number("k", np.float64("inf"))

@@ -126,15 +126,24 @@ def crown(spec, fork_length: float) -> tuple[float, float]:
     return fx - spec.fork_offset * s - fork_length * c, fz - spec.fork_offset * c + fork_length * s
 
 
+START_BEFORE_M = 100.0  # how far before a terrain's beginning a run may start (its level lead-in ridden first)
+
+
 def _check_start(spec, terrain, start: float, radius: float) -> None:
     """Refuse a front axle's start from which neither wheel meets the terrain's feature (or, on a
     profile without one, past its end): such a run went on over the level ground beyond, its
-    feature window over nothing (--start-m 30 past a rock: "0 % tire-load variation over the feature")."""
+    feature window over nothing (--start-m 30 past a rock: "0 % tire-load variation over the feature");
+    and one more than ``START_BEFORE_M`` before the terrain begins (--start-m -5000 rode 5 km of level ground
+    first, silently)."""
     from mtbmj.bike.summary import feature_span
 
     span = feature_span(terrain)
     rear = start - (spec.front_axle[0] - spec.rear_axle[0])
     end = terrain.start_x + terrain.length
+    if start < terrain.start_x - START_BEFORE_M:  # a sign slip or mm for m: that much level ground ridden first
+        raise ConfigError(f"start: the front axle's start (--start-m) {start:g} m is {terrain.start_x - start:g} m "
+                          f"before the terrain {terrain.name} begins ({terrain.start_x:g} to {end:g} m): start within "
+                          f"{START_BEFORE_M:g} m of its beginning")
     if span is None and start >= end:
         raise ConfigError(f"start: the front axle's start (--start-m) {start:g} m is past the end of the terrain "
                           f"{terrain.name} ({terrain.start_x:g} to {end:g} m): nothing ahead to ride over")

@@ -565,11 +565,14 @@ def quality(record: TelemetryRecord) -> list[str]:
 # moving for 2 s of it) and 3.52 s (00643.SST's shock, version 3): a rider rolling to a stop before the recording
 # ends; a stop with the rider off the bike holds both ends (00094.SST: 25 s at 0 mm mid-ride), not warned about.
 HELD_TAIL_S = 5.0
+# ... while the other end moves on this long into it: a rider who stops settles one end a second or two after the
+# other (00094's first 50 s: 1.3 s; the shipped rides' other ends move at most 2.75 s into a held tail)
+HELD_MOVING_S = 3.0
 
 
 def held_tail(record: TelemetryRecord) -> list[str]:
     """One line for each end whose travel reads one value from some time to the end of the ride, for at least
-    ``HELD_TAIL_S``, while the other end moves on for at least ``HELD_TAIL_S`` of that stretch: its sensor
+    ``HELD_TAIL_S``, while the other end moves on ``HELD_MOVING_S`` into that stretch or more: its sensor
     unplugged or stuck partway, what the ride reads of that end after then false. (An end that never moves is ``quality``'s line and ``both_ends``'
     refusal; a record of one end is not judged: a stop cannot be told from a sensor held.)"""
     rear = ("shock", record.shock_mm) if record.shock_mm is not None else ("rear", record.rear_mm)
@@ -581,9 +584,9 @@ def held_tail(record: TelemetryRecord) -> list[str]:
             continue
         start = int(np.flatnonzero(np.diff(travel) != 0.0)[-1]) + 1  # the first sample of the held stretch
         seconds = (travel.size - start) / record.sample_rate_Hz
-        moved = np.flatnonzero(np.diff(other) != 0.0)  # the other end still moving HELD_TAIL_S into the stretch:
-        # two ends that settle a second apart as the rider stops are a stop, not a sensor (00094's first 50 s)
-        if seconds >= HELD_TAIL_S and moved.size and (moved[-1] + 1 - start) / record.sample_rate_Hz >= HELD_TAIL_S:
+        moved = np.flatnonzero(np.diff(other) != 0.0)  # the other end moving on HELD_MOVING_S into the stretch or
+        # more: two ends that settle a second apart as the rider stops are a stop, not a sensor (00094's first 50 s)
+        if seconds >= HELD_TAIL_S and moved.size and (moved[-1] + 2 - start) / record.sample_rate_Hz >= HELD_MOVING_S:
             out.append(f"{record.name}: the {label}'s travel holds at {float(travel[start]):.1f} mm from "
                        f"{float(record.time_s[start]):.1f} s to the end (the last {seconds:.1f} s, "
                        f"{100.0 * seconds / record.duration_s:.0f} % of the ride) while the "
