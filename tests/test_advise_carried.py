@@ -147,15 +147,18 @@ def test_a_fork_far_too_soft_on_the_carried_bike_gets_a_stiffer_spring(tmp_path)
 
 
 def _fork_rebound_after_is_the_made_bike_s(folder, rec):
-    """The advice's fork rebound step after its spring step (``then``), ridden by the made bike (the tests'
+    """The advice's fork rebound step after its spring step (``then``'s ``after_recommended``), ridden by the made bike (the tests'
     independent whole bike over the ride's own terrain) at the recommended spring: it lowers the rules'
     penalty there by ``MIN_GAIN`` or more and leaves the fork's rebound over compression within
     ``POGO_SHARE`` of the rear's on the recorded ride; the -83 % the one-sided rule gave fails it."""
     from helpers import ADVISE_SECONDS
     from mtbmj.ride.advice_rules import MIN_GAIN, POGO_SHARE, penalties, ride_metrics
 
-    step = next((t for t in rec.get("then") or [] if t["key"] == "fork:fork.damper.rebound_N_s_per_m"), None)
-    assert step is not None, rec.get("then")  # the made bike says the rebound is worth lowering at 8.053 (above)
+    then = next((t for t in rec.get("then") or [] if t["key"] == "fork:fork.damper.rebound_N_s_per_m"), None)
+    assert then is not None, rec.get("then")  # the made bike says the rebound is worth lowering at 8.053 (above)
+    # the step found from the recommended setting (what the advice says of riding after the spring step), not the
+    # one found from the recorded setting at the 5 N/mm spring (``then``'s own ``setting``: a search on another bike)
+    step = then["after_recommended"]
     spring = rec["setting"]["to"]
 
     def made(reb, rate):
