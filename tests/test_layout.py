@@ -4,6 +4,7 @@ included)."""
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -11,6 +12,18 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGE_DIRS = {"mtbmj": "mtbmj", "controllers": "mtbmj.controllers", "validation": "mtbmj.validation",
                 "mjcf": "mtbmj.mjcf"}
 MAX_TOP_LEVEL_MODULES = 12
+
+
+@functools.lru_cache(maxsize=None)
+def _parsed(path: Path, stamp: tuple) -> ast.Module:
+    return ast.parse(path.read_text(), str(path))
+
+
+def parsed(path: Path) -> ast.Module:
+    """``path``'s syntax tree, parsed once per file as it is on disk (its size and time: a file written by a
+    test parses again); the tests below read every module's several times (about 2 s a pass)."""
+    st = path.stat()
+    return _parsed(path, (st.st_size, st.st_mtime_ns))
 
 
 def modules() -> dict[str, Path]:
@@ -46,7 +59,7 @@ def import_graph() -> dict[str, set[str]]:
     known = modules()
     graph: dict[str, set[str]] = {}
     for name, path in known.items():
-        tree = ast.parse(path.read_text(), str(path))
+        tree = parsed(path)
         package = name if path.name == "__init__.py" else name.rpartition(".")[0]
         edges = set(_lazy_table(tree))
         for node in ast.walk(tree):
@@ -110,7 +123,7 @@ def test_command_line_code_lives_in_the_cli_package():
     for name, path in modules().items():
         if name == "mtbmj.cli" or name.startswith("mtbmj.cli."):
             continue
-        tree = ast.parse(path.read_text())
+        tree = parsed(path)
         imported = {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
         imported |= {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module}
         assert "argparse" not in imported, f"{name} builds a command line outside mtbmj.cli"
@@ -206,7 +219,7 @@ def private_imports() -> set[tuple[str, str]]:
     known = modules()
     found = set()
     for name, path in known.items():
-        found |= private_imports_in(name, ast.parse(path.read_text(), str(path)), known)
+        found |= private_imports_in(name, parsed(path), known)
     return found
 
 
@@ -316,7 +329,7 @@ def moved_shims() -> dict[str, str]:
     else; it names its new place as a string, so it draws no arrow."""
     found = {}
     for name, path in modules().items():
-        tree = ast.parse(path.read_text())
+        tree = parsed(path)
         calls = [n for n in ast.walk(tree) if isinstance(n, ast.Call) and getattr(n.func, "id", None) == "moved"]
         if calls:
             body = [n for n in tree.body if not (isinstance(n, ast.Expr) and isinstance(n.value, ast.Constant))]
@@ -352,7 +365,7 @@ def test_the_floor_check_fails_on_a_planted_upward_import(tmp_path):
     known["mtbmj.bike.run"] = scratch / "bike" / "run.py"
     graph = {}
     for name, path in known.items():
-        tree = ast.parse(path.read_text())
+        tree = parsed(path)
         graph[name] = {f"{n.module}" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)
                        and n.module in known and n.module != name}
     assert upward_imports(graph) == ["mtbmj.measured.metrics (floor 3) -> mtbmj.bike.run (floor 5)"]
@@ -361,9 +374,11 @@ def test_the_floor_check_fails_on_a_planted_upward_import(tmp_path):
 def test_no_two_folders_import_each_other():
     """Between two subpackages the arrows run one way only (a two-way tie is two floors' worth of
     coupling on one)."""
+    known = modules()  # once: it walks every folder
+
     def folder(m):
         parts = m.split(".")
-        return ".".join(parts[:2]) if len(parts) > 2 or (len(parts) == 2 and modules()[m].name == "__init__.py") else m
+        return ".".join(parts[:2]) if len(parts) > 2 or (len(parts) == 2 and known[m].name == "__init__.py") else m
 
     graph = import_graph()
     ties = {(folder(a), folder(b)) for a, edges in graph.items() for b in edges if folder(a) != folder(b)}
@@ -403,7 +418,7 @@ def imports_of_test_modules(folder: Path) -> list[str]:
     for path in sorted([*folder.glob("test_*.py"), folder / "conftest.py", folder / "helpers.py"]):
         if not path.exists():
             continue
-        for node in ast.walk(ast.parse(path.read_text())):
+        for node in ast.walk(parsed(path)):
             if isinstance(node, ast.Import):
                 names = [a.name for a in node.names]
             elif isinstance(node, ast.ImportFrom) and not node.level:
