@@ -142,15 +142,16 @@ def test_a_fork_far_too_soft_on_the_carried_bike_gets_a_stiffer_spring(tmp_path)
     a change speeding an end past 1.25 of the other end's ratio) it is 700 -> 358.4 (-49 %), where the
     made bike at the recommended spring has its rules' least penalty (6.13 at 700, 3.00 at 358, 3.40 at
     287, 5.43 at 117): checked here on the made bike itself, the old answer failing the same check."""
-    rec = _soft_fork_s_spring_is_raised(tmp_path, round_tyre=False)
-    _fork_rebound_after_is_the_made_bike_s(tmp_path, rec)
+    rec, recorded = _soft_fork_s_spring_is_raised(tmp_path, round_tyre=False)
+    _fork_rebound_after_is_the_made_bike_s(tmp_path, rec, recorded)
 
 
-def _fork_rebound_after_is_the_made_bike_s(folder, rec):
+def _fork_rebound_after_is_the_made_bike_s(folder, rec, recorded):
     """The advice's fork rebound step after its spring step (``then``'s ``after_recommended``), ridden by the made bike (the tests'
     independent whole bike over the ride's own terrain) at the recommended spring: it lowers the rules'
     penalty there by ``MIN_GAIN`` or more and leaves the fork's rebound over compression within
-    ``POGO_SHARE`` of the rear's on the recorded ride; the -83 % the one-sided rule gave fails it."""
+    ``POGO_SHARE`` of the rear's on the recorded ride (``recorded``: its fork, rear wheel travel and time, as
+    ``_soft_fork_s_spring_is_raised`` made it); the -83 % the one-sided rule gave fails it."""
     from helpers import ADVISE_SECONDS
     from mtbmj.ride.advice_rules import MIN_GAIN, POGO_SHARE, penalties, ride_metrics
 
@@ -165,7 +166,8 @@ def _fork_rebound_after_is_the_made_bike_s(folder, rec):
         m = whole_bike_ride(folder / f"made_{rate:g}_{reb:g}", fork_rate=rate, fork_reb=reb, seconds=ADVISE_SECONDS,
                             profile=ADVISE_PROFILE, features=ADVISE_FEATURES, carried=True, round_tyre=False)
         return ride_metrics(m["t"], m["fork_mm"], m["rear_mm"], 130.0, 125.0)
-    ride = made(step["setting"]["from"], 5.0)  # the ride as recorded
+    assert step["setting"]["from"] == 700.0  # the recorded rebound: the ride as recorded is the one advised on
+    ride = ride_metrics(recorded[2], recorded[0], recorded[1], 130.0, 125.0)
     bound = POGO_SHARE * ride["rear"]["rebound_over_compression"]
     kept = sum(penalties(made(step["setting"]["from"], spring), ride).values())  # the spring step alone
 
@@ -179,20 +181,21 @@ def _fork_rebound_after_is_the_made_bike_s(folder, rec):
 
 
 def _soft_fork_s_spring_is_raised(folder, round_tyre):
-    """The carried bike's ride at a fork far too soft (5 N/mm) advised: the fork's spring raised by 20-150 %."""
+    """The carried bike's ride at a fork far too soft (5 N/mm) advised: the fork's spring raised by 20-150 %.
+    Returns the recommendation and the made ride's fork and rear wheel travel (mm) and time."""
     import json
 
     from mtbmj.cli import main
     from helpers import advise_ride, reconstruction_passing
 
-    bike, sst, *_ = advise_ride(folder, fork_rate=5.0, carried=True, round_tyre=round_tyre)
+    bike, sst, *made = advise_ride(folder, fork_rate=5.0, carried=True, round_tyre=round_tyre)
     out = folder / "advice"
     with reconstruction_passing():
         assert main(["advise", str(sst), "--bike", str(bike), "--out", str(out)]) == 0
     rec = json.loads((out / "advice.json").read_text())["recommendation"]
     assert rec is not None and rec["config_key"] == "fork.spring.rate_N_per_mm"
     assert 1.2 <= rec["setting"]["to"] / rec["setting"]["from"] <= 2.5
-    return rec
+    return rec, made
 
 
 def test_the_made_bike_s_round_tyre_climbs_a_block_as_a_circle_s_centre_does():
