@@ -35,9 +35,20 @@ from helpers import ADVISE_CARRIED, ADVISE_FEATURES, ADVISE_PROFILE, ADVISE_ROUN
 SECONDS = 16.0
 
 
-def _made(folder, carried, round_tyre=ADVISE_ROUND_TYRE):
-    return whole_bike_ride(folder, fork_rate=7.0, seconds=SECONDS, profile=ADVISE_PROFILE, features=ADVISE_FEATURES,
-                           carried=carried, round_tyre=round_tyre)
+@pytest.fixture(scope="module")
+def made_rides(tmp_path_factory):
+    """``made(carried, round_tyre)``: the 16 s ride at 7 N/mm made once per pair in this module (the generator is
+    deterministic; no test here writes into a made folder)."""
+    done = {}
+
+    def made(carried, round_tyre=ADVISE_ROUND_TYRE):
+        key = (bool(carried), bool(round_tyre))
+        if key not in done:
+            done[key] = whole_bike_ride(tmp_path_factory.mktemp(f"made_{key[0]}_{key[1]}"), fork_rate=7.0,
+                                        seconds=SECONDS, profile=ADVISE_PROFILE, features=ADVISE_FEATURES,
+                                        carried=carried, round_tyre=round_tyre)
+        return done[key]
+    return made
 
 
 def _ridden(made):
@@ -57,12 +68,12 @@ def _ridden(made):
 
 
 @pytest.mark.slow  # a 16 s made ride, its reconstruction and one bike run: about 30 s
-def test_the_advice_tests_ride_is_ridden_on_its_reconstruction(tmp_path):
-    assert _ridden(_made(tmp_path, carried=ADVISE_CARRIED)) is None
+def test_the_advice_tests_ride_is_ridden_on_its_reconstruction(made_rides):
+    assert _ridden(made_rides(carried=ADVISE_CARRIED)) is None
 
 
 @pytest.mark.slow  # the same, made by the carried bike: about 30 s
-def test_the_carried_bike_s_ride_is_ridden_on_its_reconstruction(tmp_path):
+def test_the_carried_bike_s_ride_is_ridden_on_its_reconstruction(made_rides):
     """With point contacts. At 2.52 s the made bike's fork bottoms out on a 0.24 m rock's face and the
     rock throws its front into a 0.7 s flight (2.55-3.25 s). The whole bike's own hard-stop impulse
     (``reconstruct_flight.stop_kicks``) read over the chord bridging that flight, anchored at the rock's
@@ -73,11 +84,11 @@ def test_the_carried_bike_s_ride_is_ridden_on_its_reconstruction(tmp_path):
     60 deg), a strict xfail. A hit whose window is mostly flight (``SEEN_SHARE``) now keeps the quarter
     car's impulse: the ground found over 2.45-4.3 s is within 0.113 m RMS of the made one (0.241 m
     before) and the ride goes through."""
-    assert _ridden(_made(tmp_path, carried=True, round_tyre=False)) is None
+    assert _ridden(made_rides(carried=True, round_tyre=False)) is None
 
 
 @pytest.mark.slow  # the same with the quarter car's hard-stop impulse, with and without the take-off's rise rule: about a minute
-def test_the_take_off_s_rise_rule_keeps_the_carried_bike_s_ride_ridden(tmp_path, monkeypatch):
+def test_the_take_off_s_rise_rule_keeps_the_carried_bike_s_ride_ridden(made_rides, monkeypatch):
     """The take-off's rise rule (a flight the ground threw the wheel into is a chord) as it was found: with
     the quarter car's hard-stop impulse given to the whole bike the recorded setting rides the carried
     bike's point-contact ride's reconstruction through, and without the rule (and no drop's level kept) it
@@ -85,7 +96,7 @@ def test_the_take_off_s_rise_rule_keeps_the_carried_bike_s_ride_ridden(tmp_path,
     from mtbmj.ride import reconstruct_flight, reconstruct_inverse
 
     monkeypatch.setattr(reconstruct_flight, "stop_kicks", lambda first, now, ground, air, dt, mass: now)
-    made = _made(tmp_path, carried=True, round_tyre=False)  # the point contact, which a rock's face throws up
+    made = made_rides(carried=True, round_tyre=False)  # the point contact, which a rock's face throws up
     assert _ridden(made) is None
     monkeypatch.setattr(reconstruct_inverse, "EDGE_RISE_M", float("inf"))  # a thrown wheel's flight taken for a drop
     monkeypatch.setattr(reconstruct_flight, "edge_flights", lambda found, air, dt: [])
@@ -93,7 +104,7 @@ def test_the_take_off_s_rise_rule_keeps_the_carried_bike_s_ride_ridden(tmp_path,
 
 
 @pytest.mark.slow  # the engine over 16 s of the course: about 20 s
-def test_the_carried_bike_leaves_the_ground_as_the_engine_does(tmp_path):
+def test_the_carried_bike_leaves_the_ground_as_the_engine_does(made_rides):
     """The carried bike's front airborne share, fork maximum and p95 compression speed over the first
     16 s of the course at 7 N/mm against the MuJoCo bike's over the same terrain and speed profile (the
     engine shares the bike file, the speed and the terrain, not the equations); the bike without the
@@ -101,7 +112,7 @@ def test_the_carried_bike_leaves_the_ground_as_the_engine_does(tmp_path):
     from mtbmj.bike.run import run_bike
     from mtbmj.rolling.terrain import Terrain
 
-    made = {c: _made(tmp_path / str(c), carried=c) for c in (True, False)}
+    made = {c: made_rides(carried=c) for c in (True, False)}
     h = made[True]["h"]
     x = np.arange(-60.0, float(ADVISE_PROFILE.along(SECONDS)) + 20.0, 0.005)
     ter = Terrain("course", x, h(x), -1.0, float(ADVISE_PROFILE.along(SECONDS)) + 2.0, {})
