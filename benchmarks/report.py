@@ -840,9 +840,10 @@ rest of the front's a load carried forward (a descent, braking, the rider's stan
 alone cannot tell from a fork softer and a shock stiffer than the file (`mtbmj/ride/calibrate.py`); the
 last row gives the range of that one scale over the rides. Nothing is set to pass."""),
     ("suite", "The test suite", """\
-The README's two test commands, one after the other, from the repository root: the suite and the
-long physics checks that CI also runs (`tests/` marks them `slow`). A wall time on two cores shared
-with other work (the load average is in the results file) is longer than on a quiet machine."""),
+The suite (`-m "not slow"`) and the long physics checks (`-m slow`), one after the other, from the
+repository root, as the README's commands run them (CI runs both in one command, the README's first).
+A wall time on two cores shared with other work (the load average is in the results file) is longer
+than on a quiet machine."""),
     ("reconstruct", "Rides reconstructed (issue 51)", """\
 Per ride: the speed's median and range over the accepted windows, accepted / all windows and the
 median of their standard errors (m/s); the rear predicted's RMS error and the two baselines' (mm);

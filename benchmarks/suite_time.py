@@ -33,13 +33,13 @@ def main(argv=None) -> int:
     for name, marks in COMMANDS.items():
         if args.only and name != args.only:
             continue
-        command = [sys.executable, "-m", "pytest", "-q", "-n", "2", "--dist", "loadfile", *marks, "-p", "no:cacheprovider"]
+        command = [sys.executable, "-m", "pytest", "-q", "-n", "2", "--dist", "loadfile", "--no-loadscope-reorder", *marks, "-p", "no:cacheprovider"]
         before = load_average()
         start = time.perf_counter()
         done = subprocess.run(command, cwd=REPO, capture_output=True, text=True)
         wall = time.perf_counter() - start
         lines = [ln for ln in done.stdout.splitlines() if ln.strip()]
-        runs[name] = {"command": " ".join(["python", "-m", "pytest", "-q", "-n", "2", "--dist", "loadfile",
+        runs[name] = {"command": " ".join(["python", "-m", "pytest", "-q", "-n", "2", "--dist", "loadfile", "--no-loadscope-reorder",
                                            marks[0], repr(marks[1]) if " " in marks[1] else marks[1]]),
                       "wall_s": wall, "exit": done.returncode, "summary": lines[-1] if lines else "",
                       "load_before": before, "load_after": load_average()}

@@ -51,3 +51,27 @@ def pytest_runtest_setup(item):
         missing = [f for f in files or [""] if not os.path.exists(os.path.join(where, f))]
         if missing:
             pytest.skip(f"needs the shared data {where}{os.sep}{missing[0]}, which is not beside this clone")
+
+
+# The longest test files first. pytest-xdist's ``--dist loadfile`` hands each process the next file in
+# collection order as it finishes one (with ``--no-loadscope-reorder``: by default it sorts the files by
+# their number of tests, which put the few long advice and replay tests last, one process running them
+# alone for many minutes while the other had finished); so the longest start first and the many short
+# files fill the end. Wall seconds of each file on two processes (this machine, 2026-12-07, the whole
+# suite's run, slow tests included); a file not listed keeps its place after these. Only the order
+# depends on it: a stale number costs time, never a result.
+FILE_SECONDS = {
+    "test_bounce_replay.py": 1080, "test_advise_carried.py": 550, "test_advise_trails.py": 500,
+    "test_advise_travel.py": 400, "test_advise_calibrate.py": 360, "test_advise_pool.py": 300,
+    "test_advise.py": 300, "test_bounce_rebound_clicks.py": 200, "test_bounce_predict.py": 210,
+    "test_reconstruct_whole_bike.py": 200, "test_advise_combined.py": 200, "test_bike_rider_mends.py": 200,
+    "test_reconstruct_checks.py": 150, "test_reconstruct_wheelies.py": 120, "test_reconstruct_loop.py": 120,
+    "test_every_rig.py": 120, "test_reconstruct_ridden.py": 100, "test_advise_try.py": 100,
+    "test_reconstruct_given.py": 100, "test_bike_reference.py": 114, "test_rolling_reference.py": 131,
+    "test_fuzz.py": 95, "test_guest.py": 79, "test_envelope.py": 74, "test_numeric_gate.py": 70,
+}
+
+
+def pytest_collection_modifyitems(session, config, items):
+    """The longest files first (``FILE_SECONDS``), each file's tests kept together in their order."""
+    items.sort(key=lambda item: -FILE_SECONDS.get(os.path.basename(str(item.path)), 0.0))  # a stable sort

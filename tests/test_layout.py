@@ -480,3 +480,19 @@ def test_no_module_of_the_package_is_longer_than_the_limit():
     long = {str(p.relative_to(root)): n for d in ("mtbmj", "controllers", "validation")
             for p in (root / d).rglob("*.py") if (n := len(p.read_text().splitlines())) > MAX_MODULE_LINES}
     assert long == {}
+
+
+def test_the_longest_test_files_are_collected_first_each_file_whole():
+    """``conftest.pytest_collection_modifyitems`` puts the files of ``FILE_SECONDS`` first, longest first,
+    each file's tests together in their own order, and every other file after them in collection order."""
+    from types import SimpleNamespace
+
+    from conftest import FILE_SECONDS, pytest_collection_modifyitems
+
+    longest, shorter = sorted(FILE_SECONDS, key=FILE_SECONDS.get, reverse=True)[:2]
+    names = ["test_a_short.py", shorter, "test_b_short.py", longest]
+    items = [SimpleNamespace(path=ROOT / "tests" / n, i=i) for n in names for i in range(3)]
+    pytest_collection_modifyitems(None, None, items)
+    got = [(it.path.name, it.i) for it in items]
+    assert got == [(n, i) for n in (longest, shorter, "test_a_short.py", "test_b_short.py") for i in range(3)]
+    assert all((ROOT / "tests" / n).exists() for n in FILE_SECONDS)  # no stale name: each is a file here
