@@ -365,10 +365,11 @@ def moved_starts():
 
 
 def landings_from_moved_starts():
-    """The replay of this file's lightly damped slam (0.55 x, 2500 N s/m, 30 N) from three starts moved
+    """The replay of this file's lightly damped slam (0.55 x, 2500 N s/m, 30 N) from two starts moved
     as ``bounce_rebound.restarted`` moves them (a normal draw of its ``RESTART_STEP``, 1e-3 of each value's
     scale, seeded), with the rest solved to ``TIGHT_REST_MM`` and to the default ``REST_TOL_MM``:
-    {tolerance: [summary per start]}."""
+    {tolerance: [summary per start]}. Two, not the three it once took: two starts that agree or land apart
+    are what the tests below read (the third was two whole replays more, about 2 min on a busy machine)."""
     from mtbmj.identify.bounce_rebound import RESTART_STEP
     from mtbmj.identify.bounce_replay import NAMES, REST_TOL_MM, SeatedReplay, prepare_slam, replay
 
@@ -379,7 +380,7 @@ def landings_from_moved_starts():
         sl = prepare_slam(t, x, None, "generated", sr)
         rng = np.random.default_rng(0)
         out[tol] = [replay(t, x, None, name="generated", seated=sr, start=dict(zip(NAMES, map(
-            float, sl.x0 + RESTART_STEP * sl.base * rng.standard_normal(sl.x0.size))))).summary() for _ in range(3)]
+            float, sl.x0 + RESTART_STEP * sl.base * rng.standard_normal(sl.x0.size))))).summary() for _ in range(2)]
     return out
 
 
@@ -393,7 +394,7 @@ def _spread(summaries) -> dict:
 
 @pytest.mark.slow
 def test_landings_agree_with_the_rest_solved_tightly(moved_starts):
-    """From three starts the fit cannot tell apart, the rest solved to 1e-7 mm, the replay lands on one
+    """From two starts the fit cannot tell apart, the rest solved to 1e-7 mm, the replay lands on one
     spring, damper and friction within AGREE of their intervals (measured 3e-4 of each)."""
     got = _spread(moved_starts[TIGHT_REST_MM])
     assert all(v <= AGREE for v in got.values()), got
@@ -402,8 +403,10 @@ def test_landings_agree_with_the_rest_solved_tightly(moved_starts):
 @pytest.mark.slow
 def test_landings_spread_at_the_default_rest(moved_starts):
     """The same starts at the default ``REST_TOL_MM`` (5e-4 mm) land apart by more than AGREE of the
-    intervals (measured 0.027 of the spring's, 0.046 of the damper's, 0.083 of the friction's): the
-    scatter ``bounce_rebound.restarted`` measures, which the tight rest removes."""
+    intervals (measured 0.073 of the spring's, 0.100 of the damper's, 0.136 of the friction's on
+    2026-12-07's machine; 0.027, 0.046 and 0.083 over three starts on another: the scatter is the path's
+    rounding, which moves with the machine): the scatter ``bounce_rebound.restarted`` measures, which the
+    tight rest removes."""
     from mtbmj.identify.bounce_replay import REST_TOL_MM
 
     got = _spread(moved_starts[REST_TOL_MM])
@@ -412,9 +415,9 @@ def test_landings_spread_at_the_default_rest(moved_starts):
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason="the reproducible landing reads the generator worse than the default's: with the "
-                                       "rest solved to 1e-7 mm all three starts land at 0.467 x [0.384, 0.550] (15.1 % "
+                                       "rest solved to 1e-7 mm both starts land at 0.467 x [0.384, 0.550] (15.1 % "
                                        "low), 1692 N s/m (32 % low) and 89 N of friction for 30, where the default "
-                                       "(5e-4 mm) lands at 0.486-0.489 x, 1980-2054 N s/m, 41-52 N: the whole-trace "
+                                       "(5e-4 mm) lands at 0.476-0.489 x, 1815-2054 N s/m, 41-73 N: the whole-trace "
                                        "least squares, converging further, trades the damper for friction, and the "
                                        "default's noise stops it nearer its start (2000 N s/m, 40 N): the objective's "
                                        "own minimum, its cost 45.0 with the friction held at 30 N, 31.7 at 89 N; so "
