@@ -57,18 +57,19 @@ def pytest_runtest_setup(item):
 # collection order as it finishes one (with ``--no-loadscope-reorder``: by default it sorts the files by
 # their number of tests, which put the few long advice and replay tests last, one process running them
 # alone for many minutes while the other had finished); so the longest start first and the many short
-# files fill the end. Wall seconds of each file on two processes (this machine, 2026-12-07, the whole
-# suite's run, slow tests included); a file not listed keeps its place after these. Only the order
+# files fill the end. Seconds each file's tests took on two processes (2026-12-07, the suite's and the
+# slow checks' runs on one machine, tests over 0.2 s); a file not listed keeps its place after these. Only the order
 # depends on it: a stale number costs time, never a result.
 FILE_SECONDS = {
-    "test_bounce_replay.py": 1080, "test_advise_carried.py": 550, "test_advise_trails.py": 500,
-    "test_advise_travel.py": 400, "test_advise_calibrate.py": 360, "test_advise_pool.py": 300,
-    "test_advise.py": 300, "test_bounce_rebound_clicks.py": 200, "test_bounce_predict.py": 210,
-    "test_reconstruct_whole_bike.py": 200, "test_advise_combined.py": 200, "test_bike_rider_mends.py": 200,
-    "test_reconstruct_checks.py": 150, "test_reconstruct_wheelies.py": 120, "test_reconstruct_loop.py": 120,
-    "test_every_rig.py": 120, "test_reconstruct_ridden.py": 100, "test_advise_try.py": 100,
-    "test_reconstruct_given.py": 100, "test_bike_reference.py": 114, "test_rolling_reference.py": 131,
-    "test_fuzz.py": 95, "test_guest.py": 79, "test_envelope.py": 74, "test_numeric_gate.py": 70,
+    "test_bounce_replay.py": 3236, "test_bike_reference_rider.py": 488, "test_advise_carried.py": 452,
+    "test_bike_rider_mends.py": 314, "test_advise_calibrate.py": 302, "test_advise.py": 302,
+    "test_bounce_predict.py": 248, "test_advise_pool.py": 231, "test_bike_active_profile.py": 230,
+    "test_bounce_rebound_clicks.py": 201, "test_reconstruct_whole_bike.py": 174, "test_advise_trails.py": 166,
+    "test_advise_travel.py": 164, "test_bike_pedal_leg.py": 139, "test_rolling_reference.py": 131,
+    "test_bike_pedal.py": 114, "test_bike_reference.py": 114, "test_fuzz.py": 95, "test_bike_rider_landing.py": 87,
+    "test_guest.py": 79, "test_envelope.py": 74, "test_every_rig.py": 72, "test_numeric_gate.py": 70,
+    "test_reconstruct_checks.py": 65, "test_reconstruct_loop.py": 62, "test_compiled.py": 58,
+    "test_reconstruct_given.py": 56, "test_bike_energy_rider.py": 52, "test_fit_cli.py": 51,
 }
 
 
