@@ -86,18 +86,28 @@ class TwoMass:
         return -(self.kr * (q[1] - q[0]) + self.cr * (q[3] - q[2])) / self.mu
 
 
+def _force_row(m: TwoMass) -> np.ndarray:
+    """``TwoMass.bike_force`` as coefficients on (u, y, u', y')."""
+    return np.array([-m.k - m.kr, m.kr, -m.c - m.cr, m.cr])
+
+
+def _body_row(m: TwoMass) -> np.ndarray:
+    """``TwoMass.body_acc`` as coefficients on (u, y, u', y')."""
+    return np.array([m.kr, -m.kr, m.cr, -m.cr]) / m.mu
+
+
 def _system(m: TwoMass, held: bool, s: float) -> np.ndarray:
     """The stretch's linear system on (u, y, u', y', 1): free (sliding in direction ``s``, friction
     against it) or with the bike held (u and u' fixed, the body moving on it)."""
-    mb, mu = 1.0 - m.mu, m.mu
+    mb = 1.0 - m.mu
     a = np.zeros((5, 5))
     a[1, 3] = 1.0
-    a[3, :4] = (m.kr / mu, -m.kr / mu, m.cr / mu, -m.cr / mu)  # the body's acceleration
+    a[3, :4] = _body_row(m)  # the body's acceleration
     if held:
         a[3, 2] = 0.0  # u' = 0 while held
     else:
         a[0, 2] = 1.0
-        a[2, :4] = (np.array([-m.k - m.kr, m.kr, -m.c - m.cr, m.cr])) / mb  # bike_force / mb
+        a[2, :4] = _force_row(m) / mb
         a[2, 4] = -m.fc * s / mb
     return a
 
@@ -105,10 +115,9 @@ def _system(m: TwoMass, held: bool, s: float) -> np.ndarray:
 def _switches(m: TwoMass, held: bool, s: float, u: float, lo: float, hi: float) -> list:
     """The stretch's switches as (g, direction): each fires where g . (u, y, u', y', 1) crosses zero in
     ``direction`` (+1 rising, -1 falling), as ``solve_ivp``'s terminal events did."""
-    force = np.array([-m.k - m.kr, m.kr, -m.c - m.cr, m.cr, 0.0])  # bike_force as a row
     out = []
     if held:
-        lin = force.copy()
+        lin = np.append(_force_row(m), 0.0)
         lin[2] = 0.0
         if not u >= hi - 1e-9:
             out.append((lin - np.array([0, 0, 0, 0, m.fc]), 1))  # pushed into compression past friction

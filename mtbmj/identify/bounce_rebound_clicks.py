@@ -286,12 +286,12 @@ def _one_answer(entries, target: float, key: str, curve_of, seed: int = 0) -> di
     rows = sorted((e for e in entries if e.get(key) is not None and curve_of(e)), key=lambda e: e["clicks"])
     arrays = {id(e): np.asarray(curve_of(e), float) for e in rows}  # each curve read into an array once, not at
 
-    def curve_of(e):  # every draw's every bracket (a curve of thousands of points: 93 % of the answer's time)
+    def curve(e):  # every draw's every bracket (a curve of thousands of points: 93 % of the answer's time)
         return arrays[id(e)]
     lo, hi = min(law["clicks"]), max(law["clicks"])
     ks = np.arange(lo, hi + 0.5 * STEP, STEP)
     ab = (law["c0_N_s_per_m"], law["slope_N_s_per_m_per_click"])
-    rates = _rates(ab, ks, rows, curve_of)
+    rates = _rates(ab, ks, rows, curve)
     row = {"law": law, "searched_clicks": [lo, hi], "rate_at_searched_ends_per_s": [float(rates[0]), float(rates[-1])]}
     k = _crossing(ks, rates, target)
     if k is None:
@@ -307,13 +307,13 @@ def _one_answer(entries, target: float, key: str, curve_of, seed: int = 0) -> di
     rng = np.random.default_rng(seed)
     got, outside = [], 0
     for th in rng.multivariate_normal(ab, np.asarray(law["cov"]), size=DRAWS // 4):
-        r = _rates(th, ks, rows, curve_of)
+        r = _rates(th, ks, rows, curve)
         kk = _crossing(ks, r, target)
         if kk is None:
             outside += 1
             kk = hi + 1.0 if target < r[-1] else lo - 1.0
         got.append(kk)
-    alone = [_crossing(ks, _rates(ab, ks, rows, curve_of, only), target) for only in (0, 1)]
+    alone = [_crossing(ks, _rates(ab, ks, rows, curve, only), target) for only in (0, 1)]
     row["clicks_by_curve"] = {"lower_record": alone[0], "upper_record": alone[1]}
     p_lo, p_hi = np.percentile(got, [2.5, 97.5])
     span = [p_lo, p_hi] + [a for a in alone if a is not None]
